@@ -1,0 +1,22 @@
+//! Rust core of `bouc_wen_id`: identification of Wiener systems `u -> G(s) -> x -> Bouc-Wen -> w`
+//! from sine experiments.
+//!
+//! Implements the seed paper (Wiener system identification in presence of hysteresis nonlinearity):
+//! the Wiener model (1a-c) with the Bouc-Wen hysteresis (2a), periodic averaging (4a-b), the phase
+//! estimator (9), the separable least-squares estimator (18)-(24) and the gain estimator (27b).
+//! The numerical contract, shared with the NumPy reference `bouc_wen_id.reference`, is
+//! `docs/design.md`; every module follows it step by step so that the two agree to rounding.
+//!
+//! The numerics take `&[f64]` and return [`error::Result`]; the pyo3 bindings (feature `python`)
+//! live in one private module and only borrow, convert and call.
+
+pub mod average;
+pub mod bouc_wen;
+pub mod error;
+pub mod estimate;
+pub mod linear;
+pub mod simulate;
+pub mod solve;
+
+#[cfg(feature = "python")]
+mod python;

@@ -1,0 +1,542 @@
+//! Simulation of the Wiener system (1a)-(1b) of the seed paper: `x = g * u` through the
+//! controllable canonical realisation of `G(s)`, then the Bouc-Wen hysteresis (2a), integrated
+//! together by classical fourth-order Runge-Kutta (`docs/design.md` §1).
+//!
+//! State `z = [xs (n), w]`, `f(t, z)`: `xsdot = A xs + B v`, `xdot = C xsdot + D vdot`,
+//! `wdot` from (2a), with `v(t) = u(t - tau)` (0 before the delay has elapsed).
+//!
+//! The step is written for speed: no allocation per step, the companion structure makes `A xs`
+//! O(n), one `powf` per stage, the input is evaluated once for the two mid-step stages, and a
+//! value is reused when a stage time repeats bitwise.
+
+use crate::bouc_wen::BoucWen;
+use crate::error::{all_finite, finite, CoreError, Result};
+use crate::linear::{Companion, TransferFunction};
+
+/// Input signal `u(t)`, `t >= 0` (`u = 0` before).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Input<'a> {
+    /// `u(t) = amplitude cos(omega t)`; `omega` in rad/s.
+    Sine {
+        /// Amplitude `U` (units of `u`).
+        amplitude: f64,
+        /// Angular frequency (rad/s), `> 0`.
+        omega: f64,
+    },
+    /// Samples `u_k = u(k dt)` on the output grid (length >= 2), interpolated by cubic Hermite
+    /// with Catmull-Rom slopes; after the last sample `u` holds the last value (slope 0).
+    Sampled {
+        /// The samples.
+        u: &'a [f64],
+    },
+}
+
+impl Input<'_> {
+    /// Checks the input alone (the sampled interpolant also needs `dt`, checked by
+    /// [`simulate`]).
+    ///
+    /// Errors: [`CoreError::NonFinite`] for NaN/inf, [`CoreError::InvalidParameter`] for
+    /// `omega <= 0`, [`CoreError::InsufficientData`] for fewer than 2 samples.
+    pub fn validate(&self) -> Result<()> {
+        match *self {
+            Input::Sine { amplitude, omega } => {
+                finite("amplitude", amplitude)?;
+                finite("omega", omega)?;
+                if omega <= 0.0 {
+                    return Err(CoreError::InvalidParameter(format!(
+                        "omega = {omega} rad/s must be > 0"
+                    )));
+                }
+                Ok(())
+            }
+            Input::Sampled { u } => {
+                all_finite("u", u)?;
+                if u.len() < 2 {
+                    return Err(CoreError::InsufficientData(format!(
+                        "a sampled input needs at least 2 samples, got {}",
+                        u.len()
+                    )));
+                }
+                Ok(())
+            }
+        }
+    }
+}
+
+/// Simulated inner signals on the output grid `t_k = k dt`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Simulation {
+    /// `x_k = C xs(t_k) + D v(t_k)`, length `n_samples`.
+    pub x: Vec<f64>,
+    /// `w_k = w(t_k)`, length `n_samples`.
+    pub w: Vec<f64>,
+}
+
+/// Number of RK4 steps [`simulate`] takes: `(n_samples - 1) substeps`.
+pub fn rk4_step_count(n_samples: usize, substeps: usize) -> usize {
+    n_samples.saturating_sub(1).saturating_mul(substeps)
+}
+
+/// Simulates the Wiener system `tf` -> `bw` driven by `input` (RK4, `docs/design.md` §1).
+///
+/// `dt` (s) is the output grid step, `n_samples >= 1` the number of output samples (`t_k = k dt`,
+/// k = 0..n_samples-1), `substeps >= 1` the RK4 steps per sample (`h = dt/substeps`). The state
+/// starts at rest: `xs(0) = 0`, `w(0) = w0`. A sampled input shares the output grid; past its end
+/// it holds its last value.
+///
+/// Returns `x` and `w`, each of length `n_samples`.
+///
+/// Errors: [`CoreError::NonFinite`], [`CoreError::InvalidParameter`] (`dt <= 0`, `substeps < 1`,
+/// `n_samples < 1`, `omega <= 0`, output too large to allocate), [`CoreError::InsufficientData`]
+/// (fewer than 2 input samples).
+pub fn simulate(
+    tf: &TransferFunction,
+    bw: &BoucWen,
+    input: Input<'_>,
+    dt: f64,
+    n_samples: usize,
+    substeps: usize,
+) -> Result<Simulation> {
+    input.validate()?;
+    let dt = check_dt(dt)?;
+    if substeps < 1 {
+        return Err(CoreError::InvalidParameter(format!(
+            "substeps = {substeps} must be >= 1"
+        )));
+    }
+    if n_samples < 1 {
+        return Err(CoreError::InvalidParameter(format!(
+            "n_samples = {n_samples} must be >= 1"
+        )));
+    }
+    let mut out = Simulation {
+        x: try_zeros(n_samples)?,
+        w: try_zeros(n_samples)?,
+    };
+    let comp = tf.realize();
+    let grid = Grid {
+        dt,
+        n_samples,
+        substeps,
+        delay: tf.delay(),
+    };
+    match input {
+        Input::Sine { amplitude, omega } => {
+            let src = Sine {
+                amplitude,
+                omega,
+                neg_amplitude_omega: -amplitude * omega,
+            };
+            integrate(&comp, bw, &src, &grid, &mut out);
+        }
+        Input::Sampled { u } => {
+            let src = Hermite::new(u, dt);
+            integrate(&comp, bw, &src, &grid, &mut out);
+        }
+    }
+    Ok(out)
+}
+
+/// `Ok(dt)` for a finite time step `dt > 0` (s).
+///
+/// Errors: [`CoreError::NonFinite`], [`CoreError::InvalidParameter`].
+pub fn check_dt(dt: f64) -> Result<f64> {
+    let dt = finite("dt", dt)?;
+    if dt <= 0.0 {
+        return Err(CoreError::InvalidParameter(format!(
+            "dt = {dt} s must be > 0"
+        )));
+    }
+    Ok(dt)
+}
+
+/// A zeroed `Vec` of length `n`, or an error (rather than an abort) when it cannot be allocated.
+fn try_zeros(n: usize) -> Result<Vec<f64>> {
+    let mut v = Vec::new();
+    v.try_reserve_exact(n).map_err(|_| {
+        CoreError::InvalidParameter(format!(
+            "n_samples = {n} is too large to allocate; simulate a shorter record"
+        ))
+    })?;
+    v.resize(n, 0.0);
+    Ok(v)
+}
+
+/// Time grid of a simulation.
+struct Grid {
+    dt: f64,
+    n_samples: usize,
+    substeps: usize,
+    delay: f64,
+}
+
+/// Undelayed input `(u(tau), udot(tau))` for `tau >= 0`.
+trait Source {
+    fn at(&self, tau: f64) -> (f64, f64);
+}
+
+struct Sine {
+    amplitude: f64,
+    omega: f64,
+    /// `-U omega`, hoisted out of the stage evaluations.
+    neg_amplitude_omega: f64,
+}
+
+impl Source for Sine {
+    #[inline(always)]
+    fn at(&self, tau: f64) -> (f64, f64) {
+        let arg = self.omega * tau;
+        (
+            self.amplitude * arg.cos(),
+            self.neg_amplitude_omega * arg.sin(),
+        )
+    }
+}
+
+/// Cubic Hermite interpolant of samples on the grid `k dt`, Catmull-Rom slopes.
+struct Hermite<'a> {
+    u: &'a [f64],
+    /// Slopes `m_k` (units of u per second), same length as `u`.
+    m: Vec<f64>,
+    dt: f64,
+}
+
+impl<'a> Hermite<'a> {
+    /// `u.len() >= 2` (checked by [`Input::validate`]).
+    fn new(u: &'a [f64], dt: f64) -> Self {
+        let n = u.len();
+        let mut m = vec![0.0; n];
+        if n >= 2 {
+            for k in 1..n - 1 {
+                m[k] = (u[k + 1] - u[k - 1]) / (2.0 * dt);
+            }
+            // One-sided at the ends: no sample beyond to centre on.
+            m[0] = (u[1] - u[0]) / dt;
+            m[n - 1] = (u[n - 1] - u[n - 2]) / dt;
+        }
+        Self { u, m, dt }
+    }
+}
+
+impl Source for Hermite<'_> {
+    #[inline(always)]
+    fn at(&self, tau: f64) -> (f64, f64) {
+        let last = self.u.len() - 1;
+        let q = tau / self.dt;
+        let kf = q.floor();
+        // Compared as floats so that a huge `tau` cannot overflow the index.
+        if kf >= last as f64 {
+            return (self.u[last], 0.0);
+        }
+        let k = kf as usize;
+        let s = q - kf;
+        let (s2, s3) = (s * s, s * s * s);
+        let h00 = 2.0 * s3 - 3.0 * s2 + 1.0;
+        let h10 = s3 - 2.0 * s2 + s;
+        let h01 = -2.0 * s3 + 3.0 * s2;
+        let h11 = s3 - s2;
+        let (u0, u1, m0, m1) = (self.u[k], self.u[k + 1], self.m[k], self.m[k + 1]);
+        let dt = self.dt;
+        let val = h00 * u0 + h10 * dt * m0 + h01 * u1 + h11 * dt * m1;
+        let d00 = 6.0 * s2 - 6.0 * s;
+        let d10 = 3.0 * s2 - 4.0 * s + 1.0;
+        let d01 = -6.0 * s2 + 6.0 * s;
+        let d11 = 3.0 * s2 - 2.0 * s;
+        let der = (d00 * u0 + d01 * u1) / dt + d10 * m0 + d11 * m1;
+        (val, der)
+    }
+}
+
+/// The linear part (companion form) and the hysteresis.
+struct System<'a> {
+    comp: &'a Companion,
+    bw: &'a BoucWen,
+}
+
+impl System<'_> {
+    /// `f(t, z)` with the input already evaluated: writes `xsdot` into `dxs`, returns `wdot`.
+    #[inline(always)]
+    fn rhs(&self, xs: &[f64], w: f64, (v, vdot): (f64, f64), dxs: &mut [f64]) -> f64 {
+        self.comp.state_derivative(xs, v, dxs);
+        let xdot = self.comp.output_row(dxs) + self.comp.d * vdot;
+        self.bw.wdot(xdot, w)
+    }
+
+    /// `x = C xs + D v`.
+    #[inline(always)]
+    fn output(&self, xs: &[f64], v: f64) -> f64 {
+        self.comp.output_row(xs) + self.comp.d * v
+    }
+}
+
+/// `xs + k * hk`, elementwise into `out` (all of the same length).
+#[inline(always)]
+fn axpy(out: &mut [f64], xs: &[f64], hk: f64, k: &[f64]) {
+    for ((o, x), ki) in out.iter_mut().zip(xs).zip(k) {
+        *o = x + hk * ki;
+    }
+}
+
+/// RK4 from rest over the whole grid, writing the samples into `out`.
+///
+/// The five state-sized buffers are allocated once; the loops run over them with iterators (no
+/// bounds checks). Fixed-size stack arrays for small orders were measured and bought nothing: the
+/// step is bound by its four `powf` and its `sin`/`cos` pairs.
+fn integrate<S: Source>(
+    comp: &Companion,
+    bw: &BoucWen,
+    src: &S,
+    grid: &Grid,
+    out: &mut Simulation,
+) {
+    let n = comp.order();
+    let sys = System { comp, bw };
+    let delay = grid.delay;
+    // One-entry cache keyed on the exact stage time: a step's last stage `ts + h` often rounds
+    // to the next step's first `t + (s+1) h` (or the next sample's `k dt`), and reusing the value
+    // only when the times are bitwise equal changes no result while saving a sin/cos pair.
+    let mut cached: (f64, (f64, f64)) = (f64::NAN, (0.0, 0.0));
+    let mut input = |t: f64| {
+        if t == cached.0 {
+            return cached.1;
+        }
+        let tau = t - delay;
+        let value = if tau < 0.0 { (0.0, 0.0) } else { src.at(tau) };
+        cached = (t, value);
+        value
+    };
+    let dt = grid.dt;
+    let h = dt / grid.substeps as f64;
+    let half_h = 0.5 * h;
+    let h_sixth = h / 6.0;
+
+    let mut xs = vec![0.0; n];
+    let mut w = bw.w0();
+    let (mut k1, mut k2, mut k3, mut k4, mut tmp) = (
+        vec![0.0; n],
+        vec![0.0; n],
+        vec![0.0; n],
+        vec![0.0; n],
+        vec![0.0; n],
+    );
+    let last = grid.n_samples - 1;
+    for (k, (xo, wo)) in out.x.iter_mut().zip(out.w.iter_mut()).enumerate() {
+        let t = k as f64 * dt;
+        *xo = sys.output(&xs, input(t).0);
+        *wo = w;
+        if k == last {
+            break;
+        }
+        for s in 0..grid.substeps {
+            let ts = t + s as f64 * h;
+            let kw1 = sys.rhs(&xs, w, input(ts), &mut k1);
+            // Stages 2 and 3 share the time t + h/2: evaluate the input once.
+            let mid = input(ts + half_h);
+            axpy(&mut tmp, &xs, half_h, &k1);
+            let kw2 = sys.rhs(&tmp, w + half_h * kw1, mid, &mut k2);
+            axpy(&mut tmp, &xs, half_h, &k2);
+            let kw3 = sys.rhs(&tmp, w + half_h * kw2, mid, &mut k3);
+            axpy(&mut tmp, &xs, h, &k3);
+            let kw4 = sys.rhs(&tmp, w + h * kw3, input(ts + h), &mut k4);
+            for ((((x, a), b), c), d) in xs.iter_mut().zip(&k1).zip(&k2).zip(&k3).zip(&k4) {
+                *x += h_sixth * (a + 2.0 * b + 2.0 * c + d);
+            }
+            w += h_sixth * (kw1 + 2.0 * kw2 + 2.0 * kw3 + kw4);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+
+    fn sine(amplitude: f64, omega: f64) -> Input<'static> {
+        Input::Sine { amplitude, omega }
+    }
+
+    /// `alpha = 1, beta = gamma = 0`: `w = x + w0 - x(0)`.
+    fn linear_bw(w0: f64) -> BoucWen {
+        BoucWen::new_unchecked(1.0, 0.0, 0.0, 2.0, w0)
+    }
+
+    /// Exact response of `1/(s+1)` to `U cos(omega t)` from rest.
+    fn first_order_exact(u: f64, omega: f64, t: f64) -> f64 {
+        u / (1.0 + omega * omega) * ((omega * t).cos() + omega * (omega * t).sin() - (-t).exp())
+    }
+
+    #[test]
+    fn first_order_converges_to_steady_state_sine() {
+        // G = e^{-0.3 s}/(s + 1): x -> U |G| cos(omega t - phi), phi = atan(omega) + 0.3 omega.
+        let (u, omega, tau) = (1.7, 2.0, 0.3);
+        let tf = TransferFunction::new(&[1.0], &[1.0, 1.0], tau).unwrap();
+        let bw = BoucWen::new(1.0, 0.5, 0.1, 2.0, 0.0).unwrap();
+        let dt = 0.01;
+        let sim = simulate(&tf, &bw, sine(u, omega), dt, 3001, 4).unwrap();
+        let (re, im) = tf.freq_response(omega);
+        let (gain, phi) = (re.hypot(im), -im.atan2(re));
+        assert_relative_eq!(phi, omega.atan() + omega * tau, max_relative = 1e-12);
+        for k in 2500..3001 {
+            let t = k as f64 * dt;
+            let expected = u * gain * (omega * t - phi).cos();
+            assert_relative_eq!(sim.x[k], expected, epsilon = 1e-9);
+        }
+    }
+
+    #[test]
+    fn rk4_error_shrinks_sixteenfold_when_step_halves() {
+        let (u, omega) = (1.0, 2.0);
+        let tf = TransferFunction::new(&[1.0], &[1.0, 1.0], 0.0).unwrap();
+        let dt = 0.25;
+        let n = 41;
+        let errors: Vec<f64> = [1, 2, 4]
+            .iter()
+            .map(|&sub| {
+                let sim = simulate(&tf, &linear_bw(0.4), sine(u, omega), dt, n, sub).unwrap();
+                // alpha = 1, beta = gamma = 0 and D = 0: w - C xs is invariant under RK4.
+                for k in 0..n {
+                    assert_relative_eq!(sim.w[k], sim.x[k] + 0.4 - sim.x[0], epsilon = 1e-14);
+                }
+                (0..n)
+                    .map(|k| (sim.x[k] - first_order_exact(u, omega, k as f64 * dt)).abs())
+                    .fold(0.0, f64::max)
+            })
+            .collect();
+        for pair in errors.windows(2) {
+            let ratio = pair[0] / pair[1];
+            assert!((13.0..19.0).contains(&ratio), "errors {errors:?}");
+        }
+    }
+
+    #[test]
+    fn seventh_order_reaches_its_frequency_response() {
+        let bw = BoucWen::new(1.0, 0.8, 0.2, 1.5, 0.1).unwrap();
+        let den7 = [1.0, 7.0, 21.0, 35.0, 35.0, 21.0, 7.0, 1.0]; // (s+1)^7
+        let tf7 = TransferFunction::new(&[1.0, 0.5], &den7, 0.2).unwrap();
+        let (u, omega) = (1.0, 0.8);
+        let sim = simulate(&tf7, &bw, sine(u, omega), 0.05, 2001, 2).unwrap();
+        let (re, im) = tf7.freq_response(omega);
+        for k in 1900..2001 {
+            let t = k as f64 * 0.05;
+            let expected = u * (re * (omega * t).cos() - im * (omega * t).sin());
+            assert_relative_eq!(sim.x[k], expected, epsilon = 1e-6);
+        }
+    }
+
+    #[test]
+    fn static_gain_with_delay_is_a_shifted_cosine() {
+        let (u, omega, tau) = (0.9, 3.0, 0.37);
+        let tf = TransferFunction::new(&[2.0], &[1.0], tau).unwrap();
+        let sim = simulate(&tf, &linear_bw(0.0), sine(u, omega), 0.01, 500, 2).unwrap();
+        for (k, &x) in sim.x.iter().enumerate() {
+            let t = k as f64 * 0.01;
+            let expected = if t < tau {
+                0.0
+            } else {
+                2.0 * u * (omega * (t - tau)).cos()
+            };
+            assert_relative_eq!(x, expected, epsilon = 1e-15, max_relative = 1e-14);
+        }
+    }
+
+    #[test]
+    fn sampled_input_is_catmull_rom() {
+        let dt = 0.1;
+        // A quadratic is reproduced exactly in the interior (central slopes are exact), and a
+        // half-step delay puts every output in the middle of an interval.
+        let u: Vec<f64> = (0..50).map(|k| (k as f64 * dt).powi(2) - 0.5).collect();
+        let tf = TransferFunction::new(&[1.0], &[1.0], 0.5 * dt).unwrap();
+        let bw = linear_bw(0.25);
+        let sim = simulate(&tf, &bw, Input::Sampled { u: &u }, dt, 60, 3).unwrap();
+        for k in 2..49 {
+            let tau = k as f64 * dt - 0.5 * dt;
+            assert_relative_eq!(sim.x[k], tau * tau - 0.5, epsilon = 1e-13);
+        }
+        assert_eq!(sim.x[0], 0.0);
+        // Past the end the input holds its last value.
+        for k in 51..60 {
+            assert_eq!(sim.x[k], u[49]);
+        }
+
+        // A ramp is exact everywhere, and w integrates its constant slope exactly.
+        let ramp: Vec<f64> = (0..20).map(|k| 3.0 * k as f64 * dt + 1.0).collect();
+        let tf = TransferFunction::new(&[1.0], &[1.0], 0.0).unwrap();
+        let sim = simulate(&tf, &bw, Input::Sampled { u: &ramp }, dt, 20, 2).unwrap();
+        for k in 0..19 {
+            assert_relative_eq!(sim.x[k], ramp[k], max_relative = 1e-14);
+            assert_relative_eq!(sim.w[k], 0.25 + ramp[k] - ramp[0], max_relative = 1e-13);
+        }
+        // The last RK4 stage lands on the last sample, where the input already holds (slope 0):
+        // the final step misses that stage's h/6 share of the slope.
+        let h = dt / 2.0;
+        assert_relative_eq!(sim.x[19], ramp[19], max_relative = 1e-14);
+        assert_relative_eq!(
+            sim.w[19],
+            0.25 + ramp[19] - ramp[0] - h / 6.0 * 3.0,
+            max_relative = 1e-13
+        );
+
+        // A finely sampled sine matches the analytic sine input.
+        let (amp, omega, dt) = (1.2, 2.0, 0.002);
+        let us: Vec<f64> = (0..3000)
+            .map(|k| amp * (omega * k as f64 * dt).cos())
+            .collect();
+        let tf = TransferFunction::new(&[1.0], &[0.5, 1.0], 0.0).unwrap();
+        let bw = BoucWen::new(1.0, 1.0, 0.5, 1.5, 0.0).unwrap();
+        let a = simulate(&tf, &bw, Input::Sampled { u: &us }, dt, 3000, 1).unwrap();
+        let b = simulate(&tf, &bw, sine(amp, omega), dt, 3000, 1).unwrap();
+        for k in 0..3000 {
+            assert_relative_eq!(a.x[k], b.x[k], epsilon = 1e-7);
+            assert_relative_eq!(a.w[k], b.w[k], epsilon = 1e-7);
+        }
+    }
+
+    #[test]
+    fn validation() {
+        let tf = TransferFunction::new(&[1.0], &[1.0, 1.0], 0.0).unwrap();
+        let bw = BoucWen::new(1.0, 1.0, 0.0, 2.0, 0.0).unwrap();
+        let inv = |r: Result<Simulation>, text: &str| {
+            let e = r.unwrap_err();
+            assert!(matches!(e, CoreError::InvalidParameter(_)), "{e}");
+            assert!(e.to_string().contains(text), "{e}");
+        };
+        inv(simulate(&tf, &bw, sine(1.0, 1.0), 0.0, 10, 1), "dt = 0");
+        inv(
+            simulate(&tf, &bw, sine(1.0, 1.0), 0.1, 10, 0),
+            "substeps = 0",
+        );
+        inv(
+            simulate(&tf, &bw, sine(1.0, 1.0), 0.1, 0, 1),
+            "n_samples = 0",
+        );
+        inv(
+            simulate(&tf, &bw, sine(1.0, -1.0), 0.1, 10, 1),
+            "omega = -1",
+        );
+        inv(
+            simulate(&tf, &bw, sine(1.0, 1.0), 0.1, usize::MAX / 2, 1),
+            "too large",
+        );
+        let e = simulate(&tf, &bw, sine(f64::NAN, 1.0), 0.1, 10, 1).unwrap_err();
+        assert!(matches!(e, CoreError::NonFinite(_)), "{e}");
+        let e = simulate(&tf, &bw, sine(1.0, 1.0), f64::INFINITY, 10, 1).unwrap_err();
+        assert!(matches!(e, CoreError::NonFinite(_)), "{e}");
+        let e = simulate(&tf, &bw, Input::Sampled { u: &[1.0] }, 0.1, 1, 1).unwrap_err();
+        assert!(matches!(e, CoreError::InsufficientData(_)), "{e}");
+        let e = simulate(
+            &tf,
+            &bw,
+            Input::Sampled {
+                u: &[1.0, f64::NAN],
+            },
+            0.1,
+            2,
+            1,
+        )
+        .unwrap_err();
+        assert!(matches!(e, CoreError::NonFinite(_)), "{e}");
+        assert_eq!(rk4_step_count(11, 4), 40);
+        let one = simulate(&tf, &bw, sine(1.0, 1.0), 0.1, 1, 1).unwrap();
+        assert_eq!((one.x, one.w), (vec![0.0], vec![0.0]));
+    }
+}
