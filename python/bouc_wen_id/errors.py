@@ -1,0 +1,67 @@
+"""Named errors raised by bouc_wen_id.
+
+Every failure the library can detect ends in one of these exceptions.  They all derive from
+:class:`BoucWenIdError`, itself a :class:`ValueError`, so ``except ValueError`` keeps working for callers
+that do not care which check failed.  The Rust core raises the same classes (it imports them from this
+module), and so does the NumPy reference implementation, so a test can hold both to the same behaviour.
+"""
+
+from __future__ import annotations
+
+__all__ = [
+    "BoucWenIdError",
+    "InvalidParameterError",
+    "NonFiniteError",
+    "UnstableSystemError",
+    "ImproperTransferFunctionError",
+    "InsufficientDataError",
+    "FrequencyMismatchError",
+    "ZeroAmplitudeError",
+    "SingularNormalMatrixError",
+    "SearchAtBoundError",
+    "FileFormatError",
+]
+
+
+class BoucWenIdError(ValueError):
+    """Base class of every error raised by bouc_wen_id."""
+
+
+class InvalidParameterError(BoucWenIdError):
+    """A model or method parameter is out of its admissible range (e.g. mu <= 1, dt <= 0)."""
+
+
+class NonFiniteError(BoucWenIdError):
+    """An input array or parameter holds NaN or infinity."""
+
+
+class UnstableSystemError(BoucWenIdError):
+    """The transfer function has a pole in the closed right half-plane."""
+
+
+class ImproperTransferFunctionError(BoucWenIdError):
+    """The transfer function has more zeros than poles (or a zero leading denominator coefficient)."""
+
+
+class InsufficientDataError(BoucWenIdError):
+    """The recording is too short for the requested settling and averaged periods."""
+
+
+class FrequencyMismatchError(BoucWenIdError):
+    """The stated frequency does not give a whole number of samples per period on the recording's grid."""
+
+
+class ZeroAmplitudeError(BoucWenIdError):
+    """The input amplitude is zero (or the output is constant), so nothing can be identified."""
+
+
+class SingularNormalMatrixError(BoucWenIdError):
+    """The least-squares normal matrix is singular or too badly conditioned to be solved."""
+
+
+class SearchAtBoundError(BoucWenIdError):
+    """The golden-section search for mu ended on an end of its bracket."""
+
+
+class FileFormatError(BoucWenIdError):
+    """A recording or result file cannot be read: a missing column, a bad header, an unknown version."""

@@ -1,0 +1,82 @@
+"""Figures of an identification result.  matplotlib is imported here only, and only when asked for."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Optional
+
+import numpy as np
+
+if TYPE_CHECKING:  # pragma: no cover - typing only
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
+
+    from .identification import IdentificationResult
+
+__all__ = ["plot_loop", "plot_bode"]
+
+
+def _new_figure(
+    ncols: int = 1, nrows: int = 1, size: tuple[float, float] = (6.0, 4.5)
+) -> tuple[Figure, list[Axes]]:
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=size, layout="constrained")
+    axes = fig.subplots(nrows, ncols, squeeze=False)
+    return fig, list(axes.ravel())
+
+
+def plot_loop(
+    result: IdentificationResult, experiment: Optional[int] = None, ax: Optional[Axes] = None
+) -> Figure:
+    """Averaged output ybar against the identified steady input x = U|G|cos(omega t - phi).
+
+    With the truth known, the true loop (true x against the noise-free w) is drawn dashed beside it.
+    """
+    if ax is None:
+        fig, (ax,) = _new_figure()
+    else:
+        fig = ax.get_figure()  # type: ignore[assignment]
+    chosen = range(len(result.experiments)) if experiment is None else [experiment]
+    for i in chosen:
+        e = result.experiments[i]
+        x = np.append(e.model_input(), e.model_input()[:1])
+        y = np.append(e.ybar, e.ybar[:1])
+        ax.plot(x, y, lw=1.4, label=f"omega = {e.frequency:.3g} rad/s")
+    ax.set_xlabel("identified x = U|G| cos(omega t - phi)")
+    ax.set_ylabel("averaged output ybar")
+    ax.set_title(
+        f"Averaged hysteresis loops (beta={result.beta:.3g}, gamma={result.gamma:.3g}, mu={result.mu:.3g})"
+    )
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=7)
+    return fig
+
+
+def plot_bode(result: IdentificationResult, axes: Optional[Sequence[Axes]] = None) -> Figure:
+    """Identified |G(j omega_i)| and phi(omega_i), with the true curves when the plant is known."""
+    if axes is None:
+        fig, axes = _new_figure(nrows=2, size=(6.0, 6.0))
+    else:
+        fig = axes[0].get_figure()  # type: ignore[assignment]
+    ax_g, ax_p = axes[0], axes[1]
+    w = result.frequencies
+    phases = result.phases
+    if result.truth is not None:
+        wd = np.geomspace(w.min() / 2, w.max() * 2, 400)
+        g, ph = result.truth.plant.linear.gain_phase(wd)
+        ax_g.loglog(wd, g, "k-", lw=1, label="truth (alpha-normalised)")
+        ax_p.semilogx(wd, ph, "k-", lw=1, label="truth")
+        # Put each estimated phase on the truth's branch so that the points sit on the curve.
+        _, ph_true = result.truth.plant.linear.gain_phase(w)
+        phases = ph_true + (np.pi - np.mod(np.pi - (phases - ph_true), 2 * np.pi))
+    ax_g.loglog(w, result.gains, "o", color="C3", label="identified")
+    ax_p.semilogx(w, phases, "o", color="C3", label="identified")
+    ax_g.set_ylabel("|G(j omega)|")
+    ax_p.set_ylabel("phi = -angle G (rad)")
+    ax_p.set_xlabel("omega (rad/s)")
+    for ax in (ax_g, ax_p):
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=8)
+    ax_g.set_title("Frequency response of the linear part")
+    return fig
