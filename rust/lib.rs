@@ -15,8 +15,11 @@ pub mod bouc_wen;
 pub mod error;
 pub mod estimate;
 pub mod linear;
+pub mod profile;
+pub mod refine;
 pub mod simulate;
 pub mod solve;
+pub mod steady;
 
 #[cfg(feature = "python")]
 mod python;

@@ -1,0 +1,424 @@
+//! Steady-state Bouc-Wen loop under a sine, computed directly, with its parameter sensitivities.
+//!
+//! With alpha = 1 (2b) and `x = A cos(theta)`, `theta = omega t - phi` (3a), Bouc-Wen is rate
+//! independent, so the loop obeys
+//! `dw/dtheta = x'(theta) (1 - beta sgn(x') sgn(w) |w|^mu - gamma |w|^mu)`, `x' = -A sin(theta)`.
+//! Its steady state is odd-symmetric, `w(theta + pi) = -w(theta)` (Proposition 2 and the
+//! symmetry of the sine), so one half cycle suffices: RK4 from `theta = 0` to `pi`, and a
+//! safeguarded Newton iteration on `w(0)` until `w(pi) = -w(0)`. No settling is simulated.
+//!
+//! The forward sensitivity equations ride along: `Phi = dw/dw(0)` and `S_p = dw/dp` for
+//! `p = beta, gamma, mu, A`. Periodicity fixes the sensitivity of the start value,
+//! `dw(0)/dp = -S_p(pi) / (1 + Phi(pi))`, and `dw/dphi = -dw/dtheta`.
+//!
+//! The half cycle is integrated on the lattice that the sample grid `theta_j = 2 pi j/P - phi`
+//! folds onto modulo pi, so every sample is hit exactly, without interpolation.
+
+use crate::bouc_wen::sgn;
+use crate::error::{finite, CoreError, Result};
+use std::f64::consts::PI;
+
+/// Newton iterations allowed for the shooting on `w(0)`.
+const SHOOT_MAX_ITER: usize = 60;
+/// Relative tolerance of the periodicity condition `|w(pi) + w(0)| <= tol * w_bound`.
+const SHOOT_RTOL: f64 = 1e-13;
+
+/// Number of state components integrated: `w`, `Phi`, `S_beta`, `S_gamma`, `S_mu`, `S_A`.
+const NS: usize = 6;
+
+/// Index of each sensitivity in [`SteadyLoop::jac`] rows.
+pub const D_BETA: usize = 0;
+/// d w / d gamma.
+pub const D_GAMMA: usize = 1;
+/// d w / d mu.
+pub const D_MU: usize = 2;
+/// d w / d A (A = U |G| signed: the amplitude of x).
+pub const D_AMPLITUDE: usize = 3;
+/// d w / d phi.
+pub const D_PHI: usize = 4;
+
+/// The steady loop on the sample grid and its Jacobian.
+#[derive(Debug, Clone)]
+pub struct SteadyLoop {
+    /// `w(t_j)`, `t_j = j T / P`, j = 0..P.
+    pub w: Vec<f64>,
+    /// `d w(t_j) / d(beta, gamma, mu, A, phi)`, one row per sample.
+    pub jac: Vec<[f64; 5]>,
+    /// `w` at `theta = 0` (the top of `x`).
+    pub w_top: f64,
+    /// Newton iterations of the shooting.
+    pub iterations: usize,
+}
+
+#[derive(Clone, Copy)]
+struct Params {
+    a: f64,
+    beta: f64,
+    gamma: f64,
+    mu: f64,
+}
+
+/// Rate of the augmented state at `theta`.
+#[inline(always)]
+fn rhs(p: &Params, theta: f64, y: &[f64; NS]) -> [f64; NS] {
+    let sin_t = theta.sin();
+    let xt = -p.a * sin_t;
+    let w = y[0];
+    let aw = w.abs();
+    let sw = sgn(w);
+    let sx = sgn(xt);
+    let (wmu, wmu1, lnw) = if aw > 0.0 {
+        let lnw = aw.ln();
+        let wmu = (p.mu * lnw).exp();
+        (wmu, wmu / aw, lnw)
+    } else {
+        (0.0, 0.0, 0.0)
+    };
+    let bracket = 1.0 - p.beta * sx * sw * wmu - p.gamma * wmu;
+    let f = xt * bracket;
+    // d/dw of sgn(w)|w|^mu is mu |w|^(mu-1); of |w|^mu it is mu |w|^(mu-1) sgn(w).
+    let fw = xt * (-p.beta * sx * p.mu * wmu1 - p.gamma * p.mu * wmu1 * sw);
+    let fbeta = -xt * sx * sw * wmu;
+    let fgamma = -xt * wmu;
+    let fmu = xt * (-p.beta * sx * sw - p.gamma) * wmu * lnw;
+    let fa = -sin_t * bracket;
+    [
+        f,
+        fw * y[1],
+        fw * y[2] + fbeta,
+        fw * y[3] + fgamma,
+        fw * y[4] + fmu,
+        fw * y[5] + fa,
+    ]
+}
+
+#[inline(always)]
+fn axpy(y: &[f64; NS], h: f64, k: &[f64; NS]) -> [f64; NS] {
+    let mut out = *y;
+    for i in 0..NS {
+        out[i] += h * k[i];
+    }
+    out
+}
+
+/// One classical RK4 step of length `h` from `theta`.
+#[inline(always)]
+fn rk4(p: &Params, theta: f64, y: &mut [f64; NS], h: f64) {
+    let k1 = rhs(p, theta, y);
+    let k2 = rhs(p, theta + 0.5 * h, &axpy(y, 0.5 * h, &k1));
+    let k3 = rhs(p, theta + 0.5 * h, &axpy(y, 0.5 * h, &k2));
+    let k4 = rhs(p, theta + h, &axpy(y, h, &k3));
+    for i in 0..NS {
+        y[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
+    }
+}
+
+/// The lattice `delta + k L`, k = 0..n, that the sample phases fold onto modulo pi.
+struct Lattice {
+    spacing: f64,
+    offset: f64,
+    len: usize,
+    /// Per sample: (lattice index, sign of the half cycle).
+    map: Vec<(usize, f64)>,
+}
+
+impl Lattice {
+    fn new(p: usize, phi: f64) -> Self {
+        // theta_j = 2 pi j / P - phi = (c j - phi/L) L with L = 2 pi/P (P even) or pi/P (P odd).
+        let (c, len) = if p % 2 == 0 {
+            (1_i64, p / 2)
+        } else {
+            (2_i64, p)
+        };
+        let spacing = PI / len as f64;
+        let q = phi / spacing;
+        let qf = q.floor();
+        let r = q - qf;
+        let (offset, shift) = if r > 0.0 {
+            ((1.0 - r) * spacing, qf as i64 + 1)
+        } else {
+            (0.0, qf as i64)
+        };
+        let n = len as i64;
+        let map = (0..p as i64)
+            .map(|j| {
+                let i = c * j - shift;
+                let half = i.div_euclid(n);
+                let m = i.rem_euclid(n) as usize;
+                (m, if half % 2 == 0 { 1.0 } else { -1.0 })
+            })
+            .collect();
+        Self {
+            spacing,
+            offset,
+            len,
+            map,
+        }
+    }
+}
+
+/// Integrates the half cycle from `w(0) = w_top`, recording the state at every lattice point.
+/// Returns the state at `theta = pi`.
+fn half_cycle(
+    p: &Params,
+    lat: &Lattice,
+    w_top: f64,
+    substeps: usize,
+    rec: &mut [[f64; NS]],
+) -> [f64; NS] {
+    let mut y = [w_top, 1.0, 0.0, 0.0, 0.0, 0.0];
+    let mut theta = 0.0;
+    let sub = substeps as f64;
+    if lat.offset > 0.0 {
+        let h = lat.offset / sub;
+        for s in 0..substeps {
+            rk4(p, s as f64 * h, &mut y, h);
+        }
+        theta = lat.offset;
+    }
+    let h = lat.spacing / sub;
+    for (k, slot) in rec.iter_mut().enumerate() {
+        *slot = y;
+        let start = lat.offset + k as f64 * lat.spacing;
+        // The last lattice interval ends at pi, not at the next lattice point.
+        let (len, base) = if k + 1 == lat.len {
+            (PI - start, start)
+        } else {
+            (lat.spacing, start)
+        };
+        let hh = if k + 1 == lat.len { len / sub } else { h };
+        for s in 0..substeps {
+            rk4(p, base + s as f64 * hh, &mut y, hh);
+        }
+        theta = base + len;
+    }
+    debug_assert!((theta - PI).abs() < 1e-9);
+    y
+}
+
+/// Steady loop of (2b) driven by `x = amplitude cos(omega t - phi)`, sampled at `P` points per
+/// period (`t_j = j T / P`), with `substeps` RK4 steps per lattice interval.
+///
+/// `amplitude` is `A = U |G|` (units of x, may be negative); `beta`, `gamma` in `1/[w]^mu`;
+/// `phi` in rad. Returns `w` (length P) and its Jacobian rows `d/d(beta, gamma, mu, A, phi)`.
+///
+/// Errors: non-finite inputs, `mu <= 1`, `beta + gamma <= 0` (unbounded loop), `P < 4`,
+/// `substeps < 1`, `amplitude == 0`.
+pub fn steady_loop(
+    amplitude: f64,
+    beta: f64,
+    gamma: f64,
+    mu: f64,
+    phi: f64,
+    samples_per_period: usize,
+    substeps: usize,
+) -> Result<SteadyLoop> {
+    for (name, v) in [
+        ("amplitude", amplitude),
+        ("beta", beta),
+        ("gamma", gamma),
+        ("mu", mu),
+        ("phi", phi),
+    ] {
+        finite(name, v)?;
+    }
+    if mu <= 1.0 {
+        return Err(CoreError::InvalidParameter(format!(
+            "mu = {mu} must be > 1 in the identification model"
+        )));
+    }
+    if beta + gamma <= 0.0 {
+        return Err(CoreError::InvalidParameter(format!(
+            "beta + gamma = {} must be > 0: otherwise the loop is unbounded and has no steady state",
+            beta + gamma
+        )));
+    }
+    if amplitude == 0.0 {
+        return Err(CoreError::ZeroAmplitude(
+            "the amplitude of x is 0: the loop is a point".into(),
+        ));
+    }
+    if samples_per_period < 4 {
+        return Err(CoreError::InsufficientData(format!(
+            "samples_per_period = {samples_per_period}: at least 4 are needed"
+        )));
+    }
+    if substeps < 1 {
+        return Err(CoreError::InvalidParameter(format!(
+            "substeps = {substeps} must be >= 1"
+        )));
+    }
+    let p = Params {
+        a: amplitude,
+        beta,
+        gamma,
+        mu,
+    };
+    let lat = Lattice::new(samples_per_period, phi.rem_euclid(2.0 * PI));
+    let mut rec = vec![[0.0; NS]; lat.len];
+    // |w| never exceeds the bound of Proposition 1 in steady state.
+    let bound = (1.0 / (beta + gamma)).powf(1.0 / mu);
+    let (mut lo, mut hi) = (-bound, bound);
+    let mut w_top = 0.0;
+    let mut iterations = 0;
+    let end = loop {
+        let end = half_cycle(&p, &lat, w_top, substeps, &mut rec);
+        let h = end[0] + w_top;
+        if h.abs() <= SHOOT_RTOL * bound {
+            break end;
+        }
+        iterations += 1;
+        if iterations > SHOOT_MAX_ITER {
+            return Err(CoreError::InvalidParameter(format!(
+                "the steady-loop shooting did not converge in {SHOOT_MAX_ITER} iterations \
+                 (residual {h:.3e}); the parameters (A = {amplitude}, beta = {beta}, \
+                 gamma = {gamma}, mu = {mu}) are far from a physical loop"
+            )));
+        }
+        // h is increasing in w_top (dh/dw_top = Phi(pi) + 1 > 0): keep a bracket.
+        if h > 0.0 {
+            hi = w_top;
+        } else {
+            lo = w_top;
+        }
+        let newton = w_top - h / (end[1] + 1.0);
+        w_top = if newton > lo && newton < hi && newton.is_finite() {
+            newton
+        } else {
+            0.5 * (lo + hi)
+        };
+    };
+    let denom = 1.0 + end[1];
+    let dtop = [
+        -end[2] / denom,
+        -end[3] / denom,
+        -end[4] / denom,
+        -end[5] / denom,
+    ];
+    let mut w = Vec::with_capacity(samples_per_period);
+    let mut jac = Vec::with_capacity(samples_per_period);
+    for &(m, sign) in &lat.map {
+        let y = &rec[m];
+        let theta = lat.offset + m as f64 * lat.spacing;
+        let slope = rhs(&p, theta, y)[0];
+        w.push(sign * y[0]);
+        jac.push([
+            sign * (y[2] + y[1] * dtop[0]),
+            sign * (y[3] + y[1] * dtop[1]),
+            sign * (y[4] + y[1] * dtop[2]),
+            sign * (y[5] + y[1] * dtop[3]),
+            -sign * slope,
+        ]);
+    }
+    Ok(SteadyLoop {
+        w,
+        jac,
+        w_top,
+        iterations,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+
+    fn loop_at(a: f64, beta: f64, gamma: f64, mu: f64, phi: f64, p: usize) -> SteadyLoop {
+        steady_loop(a, beta, gamma, mu, phi, p, 8).unwrap()
+    }
+
+    #[test]
+    fn loop_is_odd_symmetric_and_periodic() {
+        let l = loop_at(1.5, 0.8, 0.2, 1.6, 0.7, 256);
+        for j in 0..128 {
+            assert_relative_eq!(l.w[j], -l.w[j + 128], epsilon = 1e-12);
+        }
+        let bound = 1.0_f64;
+        assert!(l.w.iter().all(|w| w.abs() <= bound + 1e-12));
+    }
+
+    #[test]
+    fn odd_and_even_sample_counts_agree() {
+        // The same loop sampled at P = 200 and P = 201 must agree where the grids meet (t = 0).
+        let a = loop_at(1.2, 0.6, 0.3, 2.0, 0.3, 200);
+        let b = loop_at(1.2, 0.6, 0.3, 2.0, 0.3, 201);
+        assert_relative_eq!(a.w[0], b.w[0], epsilon = 1e-9);
+        assert_relative_eq!(a.w_top, b.w_top, epsilon = 1e-9);
+    }
+
+    #[test]
+    fn matches_a_long_time_domain_simulation() {
+        use crate::bouc_wen::BoucWen;
+        use crate::linear::TransferFunction;
+        use crate::simulate::{simulate, Input};
+        let (a, beta, gamma, mu, phi, omega) = (1.7, 0.8, 0.2, 1.6, 1.1, 3.0);
+        let p = 256;
+        // x = A cos(omega t - phi) from a static gain behind a delay phi/omega.
+        let tf = TransferFunction::new(&[a], &[1.0], phi / omega).unwrap();
+        let bw = BoucWen::new(1.0, beta, gamma, mu, 0.0).unwrap();
+        let dt = 2.0 * PI / omega / p as f64;
+        let periods = 40;
+        let sim = simulate(
+            &tf,
+            &bw,
+            Input::Sine {
+                amplitude: 1.0,
+                omega,
+            },
+            dt,
+            periods * p,
+            32,
+        )
+        .unwrap();
+        let l = loop_at(a, beta, gamma, mu, phi, p);
+        let last = &sim.w[(periods - 1) * p..];
+        for (a, b) in l.w.iter().zip(last) {
+            assert_relative_eq!(a, b, epsilon = 5e-7);
+        }
+    }
+
+    #[test]
+    fn jacobian_matches_finite_differences() {
+        let (a, beta, gamma, mu, phi) = (1.4, 0.7, 0.25, 1.8, 0.9);
+        let p = 128;
+        let base = loop_at(a, beta, gamma, mu, phi, p);
+        let h = 1e-6;
+        let params = [beta, gamma, mu, a, phi];
+        for k in 0..5 {
+            let mut up = params;
+            let mut dn = params;
+            up[k] += h;
+            dn[k] -= h;
+            let lu = loop_at(up[3], up[0], up[1], up[2], up[4], p);
+            let ld = loop_at(dn[3], dn[0], dn[1], dn[2], dn[4], p);
+            for j in 0..p {
+                let fd = (lu.w[j] - ld.w[j]) / (2.0 * h);
+                assert!(
+                    (fd - base.jac[j][k]).abs() < 2e-5 * (1.0 + fd.abs()),
+                    "param {k}, sample {j}: fd {fd} vs {}",
+                    base.jac[j][k]
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn rejects_bad_parameters() {
+        assert!(matches!(
+            steady_loop(1.0, 0.5, 0.5, 1.0, 0.0, 64, 4),
+            Err(CoreError::InvalidParameter(_))
+        ));
+        assert!(matches!(
+            steady_loop(1.0, -0.5, 0.2, 1.5, 0.0, 64, 4),
+            Err(CoreError::InvalidParameter(_))
+        ));
+        assert!(matches!(
+            steady_loop(0.0, 0.5, 0.2, 1.5, 0.0, 64, 4),
+            Err(CoreError::ZeroAmplitude(_))
+        ));
+        assert!(matches!(
+            steady_loop(f64::NAN, 0.5, 0.2, 1.5, 0.0, 64, 4),
+            Err(CoreError::NonFinite(_))
+        ));
+    }
+}
