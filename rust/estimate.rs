@@ -3,6 +3,8 @@
 //! derivative `ydot` of `ybar` that feeds the regressor (23); and the gain estimator (27b) at the
 //! further frequencies, once `beta`, `gamma`, `mu` are known.
 
+use rustfft::num_complex::Complex;
+use rustfft::FftPlanner;
 use std::f64::consts::PI;
 
 use crate::error::{all_finite, finite, CoreError, Result};
@@ -52,8 +54,7 @@ pub fn max_harmonics(samples_per_period: usize) -> usize {
 /// truncated to harmonics `1..=harmonics` (`docs/design.md` §4).
 ///
 /// `c_k = (1/P) sum_j ybar_j e^{-2 pi i jk/P}`, `ydot_j = sum_k 2 Re(i k omega c_k e^{2 pi i jk/P})`,
-/// evaluated as a direct DFT of the K harmonics with one table of `cos`, `sin` of `2 pi m/P`
-/// indexed by `jk mod P`: O(P K), exact up to rounding. The interpolant is periodic, so the
+/// evaluated with FFTs (rustfft, any P): O(P log P), exact up to rounding. The interpolant is periodic, so the
 /// derivative is right at the period's edges where a finite difference would wrap badly.
 ///
 /// Errors: [`CoreError::NonFinite`], [`CoreError::InvalidParameter`] (`harmonics` outside
@@ -74,38 +75,20 @@ pub fn spectral_derivative(ybar: &[f64], omega: f64, harmonics: usize) -> Result
             "omega = {omega} rad/s must be > 0"
         )));
     }
-    let (cos_tab, sin_tab): (Vec<f64>, Vec<f64>) = (0..p)
-        .map(|m| {
-            let angle = 2.0 * PI * m as f64 / p as f64;
-            (angle.cos(), angle.sin())
-        })
-        .unzip();
+    // Forward FFT, multiply harmonic k by i k omega (and its mirror P - k by the conjugate), drop
+    // every other bin, inverse FFT: O(P log P) for any P.
+    let mut planner = FftPlanner::<f64>::new();
+    let mut buf: Vec<Complex<f64>> = ybar.iter().map(|&y| Complex::new(y, 0.0)).collect();
+    planner.plan_fft_forward(p).process(&mut buf);
+    let mut spec = vec![Complex::new(0.0, 0.0); p];
     let inv_p = 1.0 / p as f64;
-    let mut ydot = vec![0.0; p];
     for k in 1..=harmonics {
-        // c_k = C_k - i S_k with C_k = (1/P) sum y cos, S_k = (1/P) sum y sin; then
-        // 2 Re(i k omega c_k e^{i theta}) = 2 k omega (S_k cos theta - C_k sin theta).
-        let (mut ck, mut sk) = (0.0, 0.0);
-        let mut idx = 0;
-        for &y in ybar {
-            ck += y * cos_tab[idx];
-            sk += y * sin_tab[idx];
-            idx += k;
-            if idx >= p {
-                idx -= p;
-            }
-        }
-        let scale = 2.0 * k as f64 * omega * inv_p;
-        let (a, b) = (scale * sk, scale * ck);
-        let mut idx = 0;
-        for d in ydot.iter_mut() {
-            *d += a * cos_tab[idx] - b * sin_tab[idx];
-            idx += k;
-            if idx >= p {
-                idx -= p;
-            }
-        }
+        let factor = Complex::new(0.0, k as f64 * omega * inv_p);
+        spec[k] = buf[k] * factor;
+        spec[p - k] = spec[k].conj();
     }
+    planner.plan_fft_inverse(p).process(&mut spec);
+    let ydot = spec.iter().map(|c| c.re).collect();
     Ok(ydot)
 }
 
