@@ -16,6 +16,7 @@ use crate::estimate;
 use crate::linear::TransferFunction;
 use crate::simulate::{self, Input};
 use crate::solve::{self, SlsProblem, GOLDEN_MAX_ITER};
+use crate::{profile, refine, steady};
 
 pyo3::import_exception!(bouc_wen_id.errors, InvalidParameterError);
 pyo3::import_exception!(bouc_wen_id.errors, NonFiniteError);
@@ -400,6 +401,170 @@ fn gain_estimate(
     )?)
 }
 
+/// Steady loop of (2b) under `x = amplitude cos(omega t - phi)` on P samples per period:
+/// `(w, jac, w_top, iterations)` with `jac` of shape (P, 5), `d w/d(beta, gamma, mu, A, phi)`.
+#[pyfunction]
+#[pyo3(signature = (amplitude, beta, gamma, mu, phi, samples_per_period, substeps))]
+#[allow(clippy::type_complexity, clippy::too_many_arguments)]
+fn steady_loop<'py>(
+    py: Python<'py>,
+    amplitude: f64,
+    beta: f64,
+    gamma: f64,
+    mu: f64,
+    phi: f64,
+    samples_per_period: i64,
+    substeps: i64,
+) -> PyResult<(
+    Bound<'py, PyArray1<f64>>,
+    Bound<'py, PyArray2<f64>>,
+    f64,
+    usize,
+)> {
+    let p = count("samples_per_period", samples_per_period, 0)?;
+    let substeps = count("substeps", substeps, 0)?;
+    let l = py.detach(|| steady::steady_loop(amplitude, beta, gamma, mu, phi, p, substeps))?;
+    let flat: Vec<f64> = l.jac.iter().flatten().copied().collect();
+    let jac = Array2::from_shape_vec((l.w.len(), 5), flat)
+        .map_err(|e| CoreError::InvalidParameter(e.to_string()))?;
+    Ok((
+        l.w.into_pyarray(py),
+        jac.into_pyarray(py),
+        l.w_top,
+        l.iterations,
+    ))
+}
+
+/// Profile-phase separable least squares (phase as a fit parameter, `sgn(xdot)` from the
+/// candidate phase): `(phi, mu, gain, beta, gamma, cost, skipped)`, canonical (`gain > 0`).
+#[pyfunction]
+#[pyo3(signature = (ybar, ydot, amplitude, omega, lo, hi, tol, grid))]
+#[allow(clippy::too_many_arguments)]
+fn profile_phase_sls(
+    py: Python<'_>,
+    ybar: PyReadonlyArray1<'_, f64>,
+    ydot: PyReadonlyArray1<'_, f64>,
+    amplitude: f64,
+    omega: f64,
+    lo: f64,
+    hi: f64,
+    tol: f64,
+    grid: i64,
+) -> PyResult<(f64, f64, f64, f64, f64, f64, usize)> {
+    let (ybar, ydot) = (slice("ybar", &ybar)?, slice("ydot", &ydot)?);
+    let grid = count("grid", grid, 0)?;
+    let f =
+        py.detach(|| profile::profile_phase_sls(ybar, ydot, amplitude, omega, lo, hi, tol, grid))?;
+    Ok((f.phi, f.mu, f.gain, f.beta, f.gamma, f.cost, f.skipped))
+}
+
+/// Gain and phase at a further frequency with the hysteresis known: `(gain, phi, cost)`.
+#[pyfunction]
+#[pyo3(signature = (ybar, ydot, amplitude, omega, beta, gamma, mu, grid))]
+#[allow(clippy::too_many_arguments)]
+fn profile_phase_gain(
+    py: Python<'_>,
+    ybar: PyReadonlyArray1<'_, f64>,
+    ydot: PyReadonlyArray1<'_, f64>,
+    amplitude: f64,
+    omega: f64,
+    beta: f64,
+    gamma: f64,
+    mu: f64,
+    grid: i64,
+) -> PyResult<(f64, f64, f64)> {
+    let (ybar, ydot) = (slice("ybar", &ybar)?, slice("ydot", &ydot)?);
+    let grid = count("grid", grid, 0)?;
+    Ok(py.detach(|| {
+        profile::profile_phase_gain(ybar, ydot, amplitude, omega, beta, gamma, mu, grid)
+    })?)
+}
+
+/// What [`refine_fit`] returns to Python: `(params, cost, iterations, converged, fisher, loops)`.
+type RefineOut<'py> = (
+    Bound<'py, PyArray1<f64>>,
+    f64,
+    usize,
+    bool,
+    Bound<'py, PyArray2<f64>>,
+    Vec<Bound<'py, PyArray1<f64>>>,
+);
+
+/// Joint output-error Levenberg-Marquardt over every experiment. Parameters are ordered
+/// `[beta, gamma, mu, g_0, phi_0, g_1, phi_1, ...]`; `fisher` is `J^T W J` at the minimiser.
+#[pyfunction]
+#[pyo3(name = "refine", signature = (ybars, amplitudes, weights, beta, gamma, mu, gains, phases, max_iter=200, substeps=4, ftol=1e-12, xtol=1e-10))]
+#[allow(clippy::too_many_arguments)]
+fn refine_fit<'py>(
+    py: Python<'py>,
+    ybars: Vec<PyReadonlyArray1<'py, f64>>,
+    amplitudes: Vec<f64>,
+    weights: Vec<f64>,
+    beta: f64,
+    gamma: f64,
+    mu: f64,
+    gains: Vec<f64>,
+    phases: Vec<f64>,
+    max_iter: i64,
+    substeps: i64,
+    ftol: f64,
+    xtol: f64,
+) -> PyResult<RefineOut<'py>> {
+    let slices = ybars
+        .iter()
+        .enumerate()
+        .map(|(i, y)| slice(&format!("ybars[{i}]"), y))
+        .collect::<PyResult<Vec<_>>>()?;
+    if amplitudes.len() != slices.len() || weights.len() != slices.len() {
+        return Err(CoreError::InvalidParameter(format!(
+            "{} experiments but {} amplitudes and {} weights",
+            slices.len(),
+            amplitudes.len(),
+            weights.len()
+        ))
+        .into());
+    }
+    let opts = refine::Options {
+        max_iter: count("max_iter", max_iter, 1)?,
+        substeps: count("substeps", substeps, 1)?,
+        ftol,
+        xtol,
+    };
+    let exps: Vec<refine::Experiment> = slices
+        .iter()
+        .zip(amplitudes.iter().zip(&weights))
+        .map(|(y, (&a, &w))| refine::Experiment {
+            ybar: y,
+            amplitude: a,
+            weight: w,
+        })
+        .collect();
+    let start = refine::Params {
+        beta,
+        gamma,
+        mu,
+        gains,
+        phases,
+    };
+    let fit = py.detach(|| refine::refine(&exps, &start, &opts))?;
+    let mut params = vec![fit.params.beta, fit.params.gamma, fit.params.mu];
+    for (g, p) in fit.params.gains.iter().zip(&fit.params.phases) {
+        params.push(*g);
+        params.push(*p);
+    }
+    let n = fit.fisher.nrows();
+    let fisher = Array2::from_shape_fn((n, n), |(i, j)| fit.fisher[(i, j)]);
+    let loops = fit.loops.into_iter().map(|l| l.into_pyarray(py)).collect();
+    Ok((
+        params.into_pyarray(py),
+        fit.cost,
+        fit.iterations,
+        fit.converged,
+        fisher.into_pyarray(py),
+        loops,
+    ))
+}
+
 /// Rust core of bouc_wen_id (simulation, averaging, estimators); see docs/design.md.
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -415,5 +580,9 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(golden_section, m)?)?;
     m.add_function(wrap_pyfunction!(sls_search, m)?)?;
     m.add_function(wrap_pyfunction!(gain_estimate, m)?)?;
+    m.add_function(wrap_pyfunction!(steady_loop, m)?)?;
+    m.add_function(wrap_pyfunction!(profile_phase_sls, m)?)?;
+    m.add_function(wrap_pyfunction!(profile_phase_gain, m)?)?;
+    m.add_function(wrap_pyfunction!(refine_fit, m)?)?;
     Ok(())
 }

@@ -1,11 +1,29 @@
 """Type stubs of the Rust extension module (see rust/python.rs and docs/design.md)."""
 
+from collections.abc import Sequence
 from typing import Callable
 
 import numpy as np
 from numpy.typing import NDArray
 
 __version__: str
+__all__ = [
+    "simulate_sine",
+    "simulate_sampled",
+    "periodic_average",
+    "phase_from_max",
+    "spectral_derivative",
+    "sls_regressor",
+    "solve_normal",
+    "sls_theta",
+    "golden_section",
+    "sls_search",
+    "gain_estimate",
+    "steady_loop",
+    "profile_phase_sls",
+    "profile_phase_gain",
+    "refine",
+]
 
 _F = NDArray[np.float64]
 
@@ -62,3 +80,26 @@ def sls_search(
 def gain_estimate(
     ybar: _F, ydot: _F, amplitude: float, omega: float, phi: float, beta: float, gamma: float, mu: float
 ) -> float: ...
+def steady_loop(
+    amplitude: float, beta: float, gamma: float, mu: float, phi: float, samples_per_period: int, substeps: int
+) -> tuple[_F, _F, float, int]: ...
+def profile_phase_sls(
+    ybar: _F, ydot: _F, amplitude: float, omega: float, lo: float, hi: float, tol: float, grid: int
+) -> tuple[float, float, float, float, float, float, int]: ...
+def profile_phase_gain(
+    ybar: _F, ydot: _F, amplitude: float, omega: float, beta: float, gamma: float, mu: float, grid: int
+) -> tuple[float, float, float]: ...
+def refine(
+    ybars: Sequence[_F],
+    amplitudes: Sequence[float] | _F,
+    weights: Sequence[float] | _F,
+    beta: float,
+    gamma: float,
+    mu: float,
+    gains: Sequence[float] | _F,
+    phases: Sequence[float] | _F,
+    max_iter: int = 200,
+    substeps: int = 4,
+    ftol: float = 1e-12,
+    xtol: float = 1e-10,
+) -> tuple[_F, float, int, bool, _F, list[_F]]: ...
