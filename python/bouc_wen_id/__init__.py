@@ -13,6 +13,7 @@ from .errors import (
     BoucWenIdError,
     FileFormatError,
     FrequencyMismatchError,
+    IdentifiabilityWarning,
     ImproperTransferFunctionError,
     InsufficientDataError,
     InvalidParameterError,
@@ -22,7 +23,7 @@ from .errors import (
     UnstableSystemError,
     ZeroAmplitudeError,
 )
-from .identification import ExperimentEstimate, IdentificationResult, Truth, identify
+from .identification import Adequacy, ExperimentEstimate, IdentificationResult, Truth, identify
 from .io import load_recordings, save_recordings
 from .model import BoucWen, Recording, SinePlan, TransferFunction, WienerPlant
 from .simulation import simulate
@@ -56,4 +57,6 @@ __all__ = [
     "SingularNormalMatrixError",
     "SearchAtBoundError",
     "FileFormatError",
+    "IdentifiabilityWarning",
+    "Adequacy",
 ]

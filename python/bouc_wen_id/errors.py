@@ -20,6 +20,7 @@ __all__ = [
     "SingularNormalMatrixError",
     "SearchAtBoundError",
     "FileFormatError",
+    "IdentifiabilityWarning",
 ]
 
 
@@ -65,3 +66,7 @@ class SearchAtBoundError(BoucWenIdError):
 
 class FileFormatError(BoucWenIdError):
     """A recording or result file cannot be read: a missing column, a bad header, an unknown version."""
+
+
+class IdentifiabilityWarning(UserWarning):
+    """The data do not pin the parameters down (ill-conditioned Fisher, intervals wider than values)."""

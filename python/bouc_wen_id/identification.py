@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Literal, Optional
@@ -13,7 +14,9 @@ from numpy.typing import NDArray
 
 from ._backend import Backend, get_backend
 from .errors import (
+    BoucWenIdError,
     FrequencyMismatchError,
+    IdentifiabilityWarning,
     InsufficientDataError,
     InvalidParameterError,
 )
@@ -23,10 +26,19 @@ if TYPE_CHECKING:  # pragma: no cover - typing only
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
-__all__ = ["identify", "IdentificationResult", "ExperimentEstimate", "Truth", "Method"]
+__all__ = [
+    "identify",
+    "IdentificationResult",
+    "ExperimentEstimate",
+    "Truth",
+    "Adequacy",
+    "Method",
+    "noise_variance",
+    "auto_harmonics",
+]
 
 FloatArray = NDArray[np.float64]
-Method = Literal["paper"]
+Method = Literal["paper", "profile", "refined"]
 
 TWO_PI = 2.0 * math.pi
 #: Largest relative misfit of ``u`` to ``U cos(omega t)`` before the stated frequency is called wrong.
@@ -61,6 +73,11 @@ class ExperimentEstimate:
     periods: int
     harmonics: int
     ybar: FloatArray = field(repr=False)
+    noise_sd: float = math.nan
+    gain_se: Optional[float] = None
+    phase_se: Optional[float] = None
+    nrmse: float = math.nan
+    model: Optional[FloatArray] = field(default=None, repr=False)
 
     @property
     def response(self) -> complex:
@@ -83,6 +100,10 @@ class ExperimentEstimate:
             "settle_periods": self.settle_periods,
             "periods": self.periods,
             "harmonics": self.harmonics,
+            "noise_sd": _num(self.noise_sd),
+            "gain_se": _num(self.gain_se),
+            "phase_se": _num(self.phase_se),
+            "nrmse": _num(self.nrmse),
         }
 
 
@@ -127,13 +148,23 @@ class IdentificationResult:
     beta, gamma, mu : float
         Bouc-Wen parameters of (2b).
     cost : float
-        The separable least-squares cost I_N(mu) of (21) on the reference experiment.
+        ``paper``/``profile``: the separable least-squares cost I_N(mu) of (21) on the reference
+        experiment; ``refined``: the weighted output-error cost, a chi-square statistic.
     experiments : tuple of ExperimentEstimate
         One frequency-response point per recording, in input order.
     reference : int
         Index of the experiment used for (beta, gamma, mu).
     truth : Truth or None
         The simulated plant's values when every recording carries the same plant.
+    standard_errors : dict or None
+        Standard errors of beta, gamma, mu (``refined`` only); per-experiment ones sit on each
+        :class:`ExperimentEstimate`.
+    covariance : ndarray or None
+        Covariance of ``[beta, gamma, mu, |G_0|, phi_0, |G_1|, phi_1, ...]`` (``refined`` only).
+    adequacy : Adequacy or None
+        Residual power of the fitted loops against the noise floor.
+    warnings : tuple of str
+        Identifiability warnings (also issued as :class:`IdentifiabilityWarning`).
     """
 
     method: str
@@ -147,6 +178,25 @@ class IdentificationResult:
     experiments: tuple[ExperimentEstimate, ...]
     settings: dict[str, Any]
     truth: Optional[Truth] = None
+    standard_errors: Optional[dict[str, float]] = None
+    covariance: Optional[FloatArray] = field(default=None, repr=False)
+    adequacy: Optional[Adequacy] = None
+    warnings: tuple[str, ...] = ()
+    confidence: float = 0.95
+
+    def interval(self, name: str) -> tuple[float, float]:
+        """Confidence interval (at ``self.confidence``) of ``beta``, ``gamma`` or ``mu``.
+
+        Raises
+        ------
+        InvalidParameterError
+            When the method gives no uncertainty (only ``method="refined"`` does).
+        """
+        if self.standard_errors is None:
+            raise InvalidParameterError(f"method={self.method!r} gives no uncertainty; use method='refined'")
+        z = _z(self.confidence)
+        v, se = float(getattr(self, name)), self.standard_errors[name]
+        return v - z * se, v + z * se
 
     @property
     def frequencies(self) -> FloatArray:
@@ -186,42 +236,62 @@ class IdentificationResult:
         }
 
     def summary(self) -> str:
-        """A plain-text table of the estimates (and the truth, when known)."""
+        """A plain-text table of the estimates, their uncertainty, the loop fit and the truth."""
         tr = self.truth
+        se = self.standard_errors
+        z = _z(self.confidence)
         lines = [f"Wiener-Bouc-Wen identification (method={self.method}, backend={self.backend})"]
+        what = "LM iterations" if self.method == "refined" else "golden-section iterations"
         lines.append(
-            f"  reference experiment {self.reference}, {self.iterations} golden-section iterations, "
-            f"cost I_N(mu) = {self.cost:.4g}"
+            f"  reference experiment {self.reference}, {self.iterations} {what}, cost = {self.cost:.4g}"
         )
         head = f"  {'parameter':<12}{'estimate':>13}"
+        if se is not None:
+            head += f"{'std.err':>11}{f'{self.confidence:.0%} interval':>24}"
         if tr is not None:
             head += f"{'truth':>13}{'error':>12}{'rel.err':>10}"
         lines.append(head)
-        scal = [("beta", self.beta), ("gamma", self.gamma), ("mu", self.mu)]
-        for name, val in scal:
+        for name in ("beta", "gamma", "mu"):
+            val = float(getattr(self, name))
             row = f"  {name:<12}{val:>13.6g}"
+            if se is not None:
+                row += f"{se[name]:>11.3g}{f'[{val - z * se[name]:.4g}, {val + z * se[name]:.4g}]':>24}"
             if tr is not None:
                 t = float(getattr(tr, name))
                 row += f"{t:>13.6g}{val - t:>12.3g}{_rel(val, t):>10}"
             lines.append(row)
         lines.append("")
         head = f"  {'omega':>9}{'U':>8}{'|G| est':>11}{'phi est':>10}"
+        if se is not None:
+            head += f"{'se|G|':>10}{'se phi':>10}"
         if tr is not None:
             head += f"{'|G| true':>11}{'phi true':>10}{'|G| rel.err':>12}{'phi err':>10}"
-        head += f"{'P':>6}{'N':>5}"
+        head += f"{'P':>6}{'N':>5}{'noise sd':>10}{'NRMSE':>10}"
         lines.append(head)
         for i, e in enumerate(self.experiments):
             row = f"  {e.frequency:>9.4g}{e.amplitude:>8.3g}{e.gain:>11.5g}{e.phase:>10.4f}"
+            if se is not None:
+                row += f"{_fmt(e.gain_se):>10}{_fmt(e.phase_se):>10}"
             if tr is not None:
                 dphi = float(phase_error(e.phase, tr.phase[i]))
                 row += (
                     f"{tr.gain[i]:>11.5g}{tr.phase[i]:>10.4f}{_rel(e.gain, float(tr.gain[i])):>12}"
                     f"{dphi:>10.2e}"
                 )
-            row += f"{e.samples_per_period:>6}{e.periods:>5}"
+            row += f"{e.samples_per_period:>6}{e.periods:>5}{_fmt(e.noise_sd):>10}{_fmt(e.nrmse):>10}"
             if i == self.reference:
                 row += "  (reference)"
             lines.append(row)
+        if self.adequacy is not None:
+            a = self.adequacy
+            lines.append("")
+            lines.append(
+                f"  adequacy: chi2 = {a.statistic:.4g} on {a.dof} dof (noise floor from {a.noise_dof} dof), "
+                f"p = {a.p_value:.3g}"
+                + ("  -> the model does not explain the data" if a.p_value < 0.05 else "")
+            )
+        for w in self.warnings:
+            lines.append(f"  warning: {w}")
         return "\n".join(lines)
 
     def __str__(self) -> str:
@@ -251,6 +321,11 @@ class IdentificationResult:
             "settings": self.settings,
             "experiments": [e.to_dict() for e in self.experiments],
             "truth": None if self.truth is None else self.truth.to_dict(),
+            "confidence": self.confidence,
+            "standard_errors": self.standard_errors,
+            "covariance": None if self.covariance is None else self.covariance.tolist(),
+            "adequacy": None if self.adequacy is None else self.adequacy.to_dict(),
+            "warnings": list(self.warnings),
         }
         if self.truth is not None:
             err = self.errors()
@@ -279,25 +354,76 @@ def _rel(est: float, true: float) -> str:
     return f"{(est - true) / abs(true):.2e}" if true != 0 else "-"
 
 
+def _fmt(v: Optional[float]) -> str:
+    return "-" if v is None or not math.isfinite(v) else f"{v:.3g}"
+
+
+def _num(v: Optional[float]) -> Optional[float]:
+    """JSON has no NaN: unknown values are written as null."""
+    return None if v is None or not math.isfinite(v) else float(v)
+
+
+def _z(confidence: float) -> float:
+    """Two-sided normal quantile for a confidence level."""
+    from statistics import NormalDist
+
+    return NormalDist().inv_cdf(0.5 + confidence / 2.0)
+
+
+@dataclass(frozen=True)
+class Adequacy:
+    """Residual power of the fitted loops against the noise floor (an F-test).
+
+    ``statistic = sum_i (N_i / sigma_i^2) ||ybar_i - w_i||^2`` is chi-square with ``dof`` degrees of
+    freedom when the model is right and the noise white; the noise variances come from the
+    period-to-period spread with ``noise_dof`` degrees of freedom, so ``(statistic / dof)`` is compared
+    with an F(dof, noise_dof) distribution.
+    """
+
+    statistic: float
+    dof: int
+    noise_dof: int
+    p_value: float
+
+    def rejects(self, level: float = 0.05) -> bool:
+        """True when the model is rejected at ``level``."""
+        return self.p_value < level
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "statistic": self.statistic,
+            "dof": self.dof,
+            "noise_dof": self.noise_dof,
+            "p_value": self.p_value,
+        }
+
+
 def _check_input(rec: Recording, start: int, stop: int) -> None:
-    """Refuse a recording whose ``u`` is not ``U cos(omega t)`` on its own time axis."""
+    """Refuse a recording whose ``u`` is not ``U cos(omega t)`` on its own time axis.
+
+    Over whole periods, cos, sin and the constant are orthogonal on the sample grid, so their
+    least-squares coefficients are plain projections (no linear solve needed).
+    """
     t = rec.t[start:stop]
     u = rec.u[start:stop]
-    basis = np.column_stack([np.cos(rec.frequency * t), np.sin(rec.frequency * t), np.ones_like(t)])
-    coef, *_ = np.linalg.lstsq(basis, u, rcond=None)
-    spread = float(np.linalg.norm(u - u.mean()))
-    misfit = float(np.linalg.norm(u - basis @ coef)) / spread if spread > 0 else math.inf
+    c, s = np.cos(rec.frequency * t), np.sin(rec.frequency * t)
+    a_cos = 2.0 * float(np.dot(u, c)) / u.size
+    a_sin = 2.0 * float(np.dot(u, s)) / u.size
+    centred = u - u.mean()
+    spread = float(np.dot(centred, centred))
+    fitted = 0.5 * u.size * (a_cos**2 + a_sin**2)
+    misfit = math.sqrt(max(spread - fitted, 0.0) / spread) if spread > 0 else math.inf
     if misfit > INPUT_MISFIT_MAX:
         raise FrequencyMismatchError(
             f"the recorded input is not a sine at omega = {rec.frequency:.6g} rad/s "
             f"(relative misfit {misfit:.2g} > {INPUT_MISFIT_MAX}); check the stated frequency and its units"
         )
-    amp = float(math.hypot(coef[0], coef[1]))
+    amp = math.hypot(a_cos, a_sin)
     if abs(amp - abs(rec.amplitude)) > INPUT_MISFIT_MAX * abs(rec.amplitude):
         raise InvalidParameterError(
             f"the stated amplitude U = {rec.amplitude:.6g} does not match the recorded input's {amp:.6g}"
         )
-    phase = math.atan2(coef[1], coef[0] * np.sign(rec.amplitude))
+    phase = math.atan2(a_sin, a_cos * np.sign(rec.amplitude))
     if abs(phase) > INPUT_PHASE_MAX:
         raise InvalidParameterError(
             f"the recorded input is U cos(omega t - {phase:.3g}) rather than U cos(omega t) on its time "
@@ -305,68 +431,61 @@ def _check_input(rec: Recording, start: int, stop: int) -> None:
         )
 
 
-def identify(
-    recordings: Recording | Sequence[Recording],
-    method: Method = "paper",
-    *,
-    reference: int = 0,
-    settle_periods: Optional[int] = None,
-    periods: Optional[int] = None,
-    harmonics: Optional[int] = None,
-    mu_bracket: tuple[float, float] = (1.0, 10.0),
-    tol: float = 1e-8,
-    backend: Backend = "rust",
-) -> IdentificationResult:
-    """Identify beta, gamma, mu and G(j omega_i) from sine recordings.
+def noise_variance(y: FloatArray, samples_per_period: int, settle_periods: int, periods: int) -> float:
+    """Noise variance from the period-to-period spread of the raw samples (needs >= 2 periods).
 
-    ``method="paper"`` runs the seed paper's estimators: periodic averaging (4a-b), the phase from the
-    time of the averaged output's maximum (9), separable least squares for (mu, |G(j omega_1)|, beta,
-    gamma) on the reference experiment (18)-(24), and the gain (27b) at every other frequency.
-
-    Parameters
-    ----------
-    recordings : Recording or sequence of Recording
-        One recording per frequency.  Each needs a whole number of samples per period.
-    method : {"paper"}
-        The estimator.
-    reference : int
-        Index of the recording used for the hysteresis parameters (omega_1 in the paper).
-    settle_periods : int, optional
-        Leading periods dropped as transient; default: each recording's own ``settle_periods``.
-    periods : int, optional
-        Periods averaged; default: every whole period after the settling ones.
-    harmonics : int, optional
-        Harmonics K kept in the spectral derivative of the averaged output.  Default: every harmonic
-        below Nyquist, ``floor((P - 1) / 2)``, i.e. the exact derivative of the trigonometric interpolant.
-        Fewer harmonics smooth noise at the price of a truncation bias.
-    mu_bracket : (float, float)
-        Search interval for mu; the lower end is excluded (mu > 1).
-    tol : float
-        Final width of the golden-section bracket on mu.
-    backend : {"rust", "numpy"}
-        The Rust core (default) or the NumPy reference implementation.
-
-    Returns
-    -------
-    IdentificationResult
-
-    Raises
-    ------
-    FrequencyMismatchError, InsufficientDataError, ZeroAmplitudeError, SingularNormalMatrixError,
-    SearchAtBoundError, InvalidParameterError, NonFiniteError
+    ``sum_j sum_k (y_kj - ybar_j)^2 / (P (N - 1))``: unbiased for white noise, free of the signal.
     """
-    if method != "paper":
-        raise InvalidParameterError(f"method must be 'paper', got {method!r}")
-    recs = as_recordings(recordings)
-    if not -len(recs) <= reference < len(recs):
-        raise InvalidParameterError(f"reference = {reference} is not an index of the {len(recs)} recordings")
-    reference = reference % len(recs)
-    lo, hi = (float(v) for v in mu_bracket)
-    if not 1.0 <= lo < hi:
-        raise InvalidParameterError(f"mu_bracket = {mu_bracket} must satisfy 1 <= lo < hi (mu > 1)")
-    core = get_backend(backend)
+    if periods < 2:
+        return math.nan
+    p = samples_per_period
+    seg = np.asarray(y[settle_periods * p : (settle_periods + periods) * p]).reshape(periods, p)
+    return float(np.mean(np.var(seg, axis=0, ddof=1)))
 
-    prepared = []
+
+#: A harmonic is signal when its power exceeds this multiple of the noise floor sigma^2/(N P): the
+#: noise power of one bin is exponential, so a false alarm has probability e^-16 ~ 1e-7 per bin.
+HARMONIC_SNR = 16.0
+
+
+def auto_harmonics(ybar: FloatArray, noise_var: float, periods: int) -> int:
+    """Highest harmonic of ``ybar`` standing above the noise floor (all of them when noise-free)."""
+    p = ybar.size
+    k_max = (p - 1) // 2
+    if not math.isfinite(noise_var) or noise_var <= 0.0:
+        return k_max
+    power = np.abs(np.fft.rfft(ybar)[1 : k_max + 1] / p) ** 2
+    above = np.flatnonzero(power > HARMONIC_SNR * noise_var / (periods * p))
+    return int(above[-1]) + 1 if above.size else 1
+
+
+@dataclass
+class _Prepared:
+    """One recording reduced to its averaged period and what the estimators need of it."""
+
+    rec: Recording
+    p: int
+    s: int
+    n: int
+    k: int
+    ybar: FloatArray
+    ydot: FloatArray
+    noise_var: float
+
+
+def _steady_substeps(p: int) -> int:
+    """RK4 steps per sample of the steady-loop solver: a step of at most 2 pi/2048 rad."""
+    return max(2, math.ceil(2048 / p))
+
+
+def _prepare(
+    recs: Sequence[Recording],
+    core: Any,
+    settle_periods: Optional[int],
+    periods: Optional[int],
+    harmonics: int | str,
+) -> list[_Prepared]:
+    out = []
     for i, rec in enumerate(recs):
         p = rec.samples_per_period
         s = rec.settle_periods if settle_periods is None else int(settle_periods)
@@ -379,46 +498,272 @@ def identify(
                 "periods do not fit. Record longer or lower settle_periods/periods"
             )
         _check_input(rec, s * p, (s + n) * p)
-        k = (p - 1) // 2 if harmonics is None else int(harmonics)
         ybar = np.asarray(core.periodic_average(np.ascontiguousarray(rec.y), p, s, n))
-        # The averaged window starts at t[0] + s periods; its local phase is shifted by omega t[0].
-        phi_local = float(core.phase_from_max(ybar))
+        noise_var = noise_variance(rec.y, p, s, n)
+        if harmonics == "auto":
+            k = auto_harmonics(ybar, noise_var, n)
+        elif harmonics == "all":
+            k = (p - 1) // 2
+        elif isinstance(harmonics, (int, np.integer)) and not isinstance(harmonics, bool):
+            k = int(harmonics)
+        else:
+            raise InvalidParameterError(f"harmonics must be 'auto', 'all' or an int, got {harmonics!r}")
         ydot = np.asarray(core.spectral_derivative(ybar, rec.frequency, k))
-        prepared.append((rec, p, s, n, k, ybar, ydot, phi_local))
+        out.append(_Prepared(rec, p, s, n, k, ybar, ydot, noise_var))
+    return out
 
-    rec, p, s, n, k, ybar, ydot, phi1 = prepared[reference]
-    mu, theta, cost, iterations = core.sls_search(ybar, ydot, rec.amplitude, rec.frequency, phi1, lo, hi, tol)
-    theta = np.asarray(theta)
-    beta = float(theta[1] / theta[0])
-    gamma = float(theta[2] / theta[0])
+
+def _loop_fit(
+    core: Any, e: _Prepared, gain: float, phi_local: float, beta: float, gamma: float, mu: float
+) -> tuple[Optional[FloatArray], float]:
+    """The identified model's steady loop on the data grid and its NRMSE against ybar."""
+    try:
+        w = np.asarray(
+            core.steady_loop(e.rec.amplitude * gain, beta, gamma, mu, phi_local, e.p, _steady_substeps(e.p))[
+                0
+            ]
+        )
+    except BoucWenIdError:
+        return None, math.nan
+    spread = float(np.linalg.norm(e.ybar - e.ybar.mean()))
+    return w, float(np.linalg.norm(e.ybar - w)) / spread if spread > 0 else math.nan
+
+
+def _weights(prepared: Sequence[_Prepared]) -> FloatArray:
+    """N / sigma^2 per experiment; the variance is floored at rounding level for noise-free data."""
+    out = []
+    for e in prepared:
+        floor = (1e-13 * float(np.max(np.abs(e.ybar)))) ** 2 + np.finfo(float).tiny
+        out.append(e.n / max(e.noise_var, floor))
+    return np.array(out)
+
+
+def _adequacy(
+    prepared: Sequence[_Prepared], loops: Sequence[Optional[FloatArray]], n_params: int
+) -> Optional[Adequacy]:
+    fitted = [w for w in loops if w is not None]
+    if len(fitted) != len(loops) or any(not math.isfinite(e.noise_var) for e in prepared):
+        return None
+    from scipy import stats  # type: ignore[import-untyped]
+
+    wts = _weights(prepared)
+    statistic = float(sum(wt * np.sum((e.ybar - w) ** 2) for wt, e, w in zip(wts, prepared, fitted)))
+    dof = sum(e.p for e in prepared) - n_params
+    noise_dof = sum(e.p * (e.n - 1) for e in prepared)
+    if dof < 1:
+        return None
+    p_value = float(stats.f.sf(statistic / dof, dof, noise_dof))
+    return Adequacy(statistic, dof, noise_dof, p_value)
+
+
+#: Identifiability alarm: condition number of the Fisher matrix after scaling to unit diagonal.
+FISHER_COND_MAX = 1e10
+
+
+def identify(
+    recordings: Recording | Sequence[Recording],
+    method: Method = "refined",
+    *,
+    reference: int = 0,
+    settle_periods: Optional[int] = None,
+    periods: Optional[int] = None,
+    harmonics: int | str = "auto",
+    mu_bracket: tuple[float, float] = (1.0, 10.0),
+    tol: float = 1e-8,
+    phase_grid: int = 48,
+    max_iter: int = 200,
+    confidence: float = 0.95,
+    backend: Backend = "rust",
+) -> IdentificationResult:
+    """Identify beta, gamma, mu and G(j omega_i) from sine recordings.
+
+    Methods
+    -------
+    ``"paper"``
+        The seed paper exactly: periodic averaging (4a-b), the phase from the time of the averaged
+        output's maximum (9), separable least squares for (mu, |G(j omega_1)|, beta, gamma) with
+        ``sgn(d ybar/dt)`` in the regressor (18)-(24) on the reference experiment, and the gain (27b)
+        at every other frequency.
+    ``"profile"``
+        The separable fit with the phase as a parameter: the cost (21) is profiled over phi (coarse
+        grid, golden refinement), ``sgn(xdot)`` comes from the candidate phase (Proposition 2), and the
+        other frequencies get gain and phase by the same profiling of (27b).
+    ``"refined"`` (default)
+        ``"profile"`` as a start, then a joint output-error fit of every averaged period by
+        Levenberg-Marquardt on the steady-state loop (shared beta, gamma, mu; per experiment |G|, phi),
+        weighted by N/sigma^2 with the noise variance from the period-to-period spread.  Gives standard
+        errors, confidence intervals and an adequacy test.  Needs at least 2 averaged periods.
+
+    Parameters
+    ----------
+    recordings : Recording or sequence of Recording
+        One recording per frequency.  Each needs a whole number of samples per period.
+    method : {"refined", "profile", "paper"}
+        The estimator (see above).
+    reference : int
+        Index of the recording used for the separable fit of (beta, gamma, mu) (omega_1 in the paper).
+    settle_periods : int, optional
+        Leading periods dropped as transient; default: each recording's own ``settle_periods``.
+    periods : int, optional
+        Periods averaged; default: every whole period after the settling ones.
+    harmonics : "auto", "all" or int
+        Harmonics K kept in the spectral derivative of the averaged output (used by the separable
+        fits).  ``"auto"`` (default) keeps harmonics up to the last one whose power stands 16x above the
+        noise floor sigma^2/(N P), all of them when the data are noise-free; ``"all"`` keeps every
+        harmonic below Nyquist (the exact derivative of the trigonometric interpolant).
+    mu_bracket : (float, float)
+        Search interval for mu; the lower end is excluded (mu > 1).
+    tol : float
+        Final width of the golden-section bracket on mu.
+    phase_grid : int
+        Coarse phase candidates of the profiled fits.
+    max_iter : int
+        Levenberg-Marquardt iteration cap (``refined``).
+    confidence : float
+        Level of the reported confidence intervals.
+    backend : {"rust", "numpy"}
+        The Rust core (default) or the NumPy reference implementation.
+
+    Returns
+    -------
+    IdentificationResult
+
+    Raises
+    ------
+    FrequencyMismatchError, InsufficientDataError, ZeroAmplitudeError, SingularNormalMatrixError,
+    SearchAtBoundError, InvalidParameterError, NonFiniteError
+
+    Warns
+    -----
+    IdentifiabilityWarning
+        When the parameters are poorly determined by the data (``refined``).
+    """
+    if method not in ("paper", "profile", "refined"):
+        raise InvalidParameterError(f"method must be 'refined', 'profile' or 'paper', got {method!r}")
+    if not 0.0 < confidence < 1.0:
+        raise InvalidParameterError(f"confidence = {confidence} must be in (0, 1)")
+    recs = as_recordings(recordings)
+    if not -len(recs) <= reference < len(recs):
+        raise InvalidParameterError(f"reference = {reference} is not an index of the {len(recs)} recordings")
+    reference = reference % len(recs)
+    lo, hi = (float(v) for v in mu_bracket)
+    if not 1.0 <= lo < hi:
+        raise InvalidParameterError(f"mu_bracket = {mu_bracket} must satisfy 1 <= lo < hi (mu > 1)")
+    core = get_backend(backend)
+    prepared = _prepare(recs, core, settle_periods, periods, harmonics)
+    m = len(prepared)
+    # Local phases (relative to the averaged window's first sample) and signed gains.
+    phis = np.zeros(m)
+    gains = np.zeros(m)
+    ref = prepared[reference]
+    if method == "paper":
+        phis = np.array([float(core.phase_from_max(e.ybar)) for e in prepared])
+        mu, theta, cost, iterations = core.sls_search(
+            ref.ybar, ref.ydot, ref.rec.amplitude, ref.rec.frequency, phis[reference], lo, hi, tol
+        )
+        theta = np.asarray(theta)
+        beta, gamma = float(theta[1] / theta[0]), float(theta[2] / theta[0])
+        for i, e in enumerate(prepared):
+            gains[i] = (
+                float(theta[0])
+                if i == reference
+                else float(
+                    core.gain_estimate(
+                        e.ybar, e.ydot, e.rec.amplitude, e.rec.frequency, phis[i], beta, gamma, mu
+                    )
+                )
+            )
+    else:
+        phi_r, mu, g_r, beta, gamma, cost, _ = core.profile_phase_sls(
+            ref.ybar, ref.ydot, ref.rec.amplitude, ref.rec.frequency, lo, hi, tol, phase_grid
+        )
+        iterations = 0
+        for i, e in enumerate(prepared):
+            if i == reference:
+                gains[i], phis[i] = g_r, phi_r
+            else:
+                gains[i], phis[i], _ = core.profile_phase_gain(
+                    e.ybar, e.ydot, e.rec.amplitude, e.rec.frequency, beta, gamma, mu, phase_grid
+                )
+    mu = float(mu)
+    cov = None
+    se_shared = None
+    fits: list[Optional[FloatArray]]
+    if method == "refined":
+        short = [i for i, e in enumerate(prepared) if e.n < 2]
+        if short:
+            raise InsufficientDataError(
+                f"method='refined' estimates the noise floor from the period-to-period spread and needs at "
+                f"least 2 averaged periods; recordings {short} have 1. Use method='paper' or record longer"
+            )
+        weights = _weights(prepared)
+        substeps = max(_steady_substeps(e.p) for e in prepared)
+        params, cost, iterations, _, fisher, loops = core.refine(
+            [e.ybar for e in prepared],
+            [e.rec.amplitude for e in prepared],
+            weights,
+            beta,
+            gamma,
+            mu,
+            gains,
+            phis,
+            max_iter=max_iter,
+            substeps=substeps,
+        )
+        params = np.asarray(params)
+        beta, gamma, mu = (float(v) for v in params[:3])
+        gains = params[3::2].copy()
+        phis = params[4::2].copy()
+        fits = [np.asarray(w) for w in loops]
+        fisher = np.asarray(fisher)
+        # Flip the sign of g_i rows/columns where the canonical branch (|G| > 0) is reported.
+        flip = np.ones(3 + 2 * m)
+        flip[3::2] = np.where(gains < 0, -1.0, 1.0)
+        fisher = fisher * np.outer(flip, flip)
+        try:
+            cov = np.linalg.inv(fisher)
+        except np.linalg.LinAlgError:
+            cov = np.full_like(fisher, np.nan)
+        se_all = np.sqrt(np.abs(np.diag(cov)))
+        se_shared = {"beta": float(se_all[0]), "gamma": float(se_all[1]), "mu": float(se_all[2])}
+    else:
+        fits = []
+        for i, e in enumerate(prepared):
+            w, _ = _loop_fit(core, e, gains[i], phis[i], beta, gamma, mu)
+            fits.append(w)
 
     experiments = []
-    for i, (rec, p, s, n, k, ybar, ydot, phi_local) in enumerate(prepared):
-        if i == reference:
-            gain = float(theta[0])
-        else:
-            gain = float(
-                core.gain_estimate(ybar, ydot, rec.amplitude, rec.frequency, phi_local, beta, gamma, mu)
-            )
+    for i, e in enumerate(prepared):
         # (G, phi) and (-G, phi + pi) draw the same x: report the one with |G| > 0.  A negative U is
         # folded in the same way, so that the table always reads against u = |U| cos(omega t).
-        phase = phi_local + rec.frequency * float(rec.t[0])
-        if gain * rec.amplitude < 0:
+        phase = phis[i] + e.rec.frequency * float(e.rec.t[0])
+        if gains[i] * e.rec.amplitude < 0:
             phase += math.pi
+        w = fits[i]
+        spread = float(np.linalg.norm(e.ybar - e.ybar.mean()))
+        nrmse = float(np.linalg.norm(e.ybar - w)) / spread if w is not None and spread > 0 else math.nan
         experiments.append(
             ExperimentEstimate(
-                frequency=rec.frequency,
-                amplitude=abs(rec.amplitude),
-                gain=abs(gain),
+                frequency=e.rec.frequency,
+                amplitude=abs(e.rec.amplitude),
+                gain=abs(float(gains[i])),
                 phase=float(wrap_phase(phase)),
-                samples_per_period=p,
-                settle_periods=s,
-                periods=n,
-                harmonics=k,
-                ybar=ybar,
+                samples_per_period=e.p,
+                settle_periods=e.s,
+                periods=e.n,
+                harmonics=e.k,
+                ybar=e.ybar,
+                noise_sd=math.sqrt(e.noise_var) if math.isfinite(e.noise_var) else math.nan,
+                gain_se=None if cov is None else float(math.sqrt(abs(cov[3 + 2 * i, 3 + 2 * i]))),
+                phase_se=None if cov is None else float(math.sqrt(abs(cov[4 + 2 * i, 4 + 2 * i]))),
+                nrmse=nrmse,
+                model=w,
             )
         )
 
+    notes = _identifiability(beta, gamma, mu, experiments, cov, se_shared, confidence)
+    for note in notes:
+        warnings.warn(note, IdentifiabilityWarning, stacklevel=2)
     plants = [r.plant for r in recs]
     truth = None
     if plants[0] is not None and all(pl is not None and pl.to_dict() == plants[0].to_dict() for pl in plants):
@@ -429,17 +774,62 @@ def identify(
         "harmonics": harmonics,
         "mu_bracket": [lo, hi],
         "tol": tol,
+        "phase_grid": phase_grid,
+        "max_iter": max_iter,
     }
     return IdentificationResult(
         method=method,
         backend=backend,
-        beta=beta,
-        gamma=gamma,
-        mu=float(mu),
+        beta=float(beta),
+        gamma=float(gamma),
+        mu=mu,
         cost=float(cost),
         iterations=int(iterations),
         reference=reference,
         experiments=tuple(experiments),
         settings=settings,
         truth=truth,
+        standard_errors=se_shared,
+        covariance=cov,
+        adequacy=_adequacy(prepared, fits, 3 + 2 * m),
+        warnings=tuple(notes),
+        confidence=confidence,
     )
+
+
+def _identifiability(
+    beta: float,
+    gamma: float,
+    mu: float,
+    experiments: Sequence[ExperimentEstimate],
+    cov: Optional[FloatArray],
+    se: Optional[dict[str, float]],
+    confidence: float,
+) -> list[str]:
+    """Plain-language warnings when the data do not pin the parameters down."""
+    if cov is None or se is None:
+        return []
+    notes = []
+    if not np.all(np.isfinite(cov)):
+        return ["the Fisher information is singular: some parameters are not identifiable from these data"]
+    d = np.sqrt(np.abs(np.diag(cov)))
+    corr = cov / np.outer(d, d)
+    cond = float(np.linalg.cond(corr))
+    if cond > FISHER_COND_MAX:
+        notes.append(
+            f"the Fisher information is ill-conditioned (condition number {cond:.2g} after scaling): "
+            "very different parameter sets draw nearly the same loops; check the loop-fit NRMSE rather "
+            "than the individual parameters"
+        )
+    z = _z(confidence)
+    wide = [name for name, v in (("beta", beta), ("gamma", gamma), ("mu", mu)) if z * se[name] > abs(v)]
+    wide += [
+        f"|G(j{e.frequency:g})|" for e in experiments if e.gain_se is not None and z * e.gain_se > e.gain
+    ]
+    if wide:
+        notes.append(
+            f"the {confidence:.0%} intervals of {', '.join(wide)} are wider than the values themselves: "
+            "these parameters are poorly identifiable from these data (more periods, amplitudes that "
+            "reach saturation, or less noise would help)"
+        )
+    return notes
