@@ -27,6 +27,7 @@ from .identification import Adequacy, ExperimentEstimate, IdentificationResult, 
 from .io import load_recordings, save_recordings
 from .model import BoucWen, Recording, SinePlan, TransferFunction, WienerPlant
 from .simulation import simulate
+from .uncertainty import CramerRao, cramer_rao
 
 __all__ = [
     "__version__",
@@ -59,4 +60,6 @@ __all__ = [
     "FileFormatError",
     "IdentifiabilityWarning",
     "Adequacy",
+    "CramerRao",
+    "cramer_rao",
 ]
