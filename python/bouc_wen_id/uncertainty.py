@@ -94,7 +94,7 @@ def cramer_rao(
         full[:, 4 + 2 * i] = jac[:, 4]
         fisher += weight * full.T @ full
     try:
-        cov: FloatArray = np.linalg.inv(fisher)
+        cov = np.asarray(np.linalg.inv(fisher), dtype=np.float64)
     except np.linalg.LinAlgError as exc:
         raise InvalidParameterError(
             "the Fisher information of this design is singular: it cannot identify every parameter"
