@@ -10,6 +10,9 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Optional
 
+import numpy as np
+from numpy.typing import NDArray
+
 from .demo import DEMO_FREQUENCIES, demo_plan, demo_plant, design_amplitudes
 from .errors import BoucWenIdError
 from .identification import IdentificationResult, identify
@@ -30,10 +33,20 @@ def _write_report(result: IdentificationResult, out: Path) -> list[Path]:
 
 
 def _add_identify_options(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--method",
+        choices=("refined", "profile", "paper"),
+        default="refined",
+        help="estimator: refined (default: joint output-error fit with uncertainty), profile, or paper",
+    )
     p.add_argument("--reference", type=int, default=0, help="experiment used for beta, gamma, mu (default 0)")
     p.add_argument("--settle-periods", type=int, default=None, help="periods dropped as transient")
     p.add_argument("--periods", type=int, default=None, help="periods averaged (default: all remaining)")
-    p.add_argument("--harmonics", type=int, default=None, help="harmonics of the spectral derivative")
+    p.add_argument(
+        "--harmonics",
+        default="auto",
+        help="harmonics of the spectral derivative: auto (above the noise floor), all, or a number",
+    )
     p.add_argument("--mu-bracket", type=float, nargs=2, default=(1.0, 10.0), metavar=("LO", "HI"))
     p.add_argument("--tol", type=float, default=1e-8, help="golden-section tolerance on mu")
     p.add_argument("--backend", choices=("rust", "numpy"), default="rust")
@@ -41,12 +54,14 @@ def _add_identify_options(p: argparse.ArgumentParser) -> None:
 
 
 def _identify_from_args(args: argparse.Namespace, recordings: list) -> IdentificationResult:  # type: ignore[type-arg]
+    harmonics = args.harmonics if args.harmonics in ("auto", "all") else int(args.harmonics)
     return identify(
         recordings,
+        method=args.method,
         reference=args.reference,
         settle_periods=args.settle_periods,
         periods=args.periods,
-        harmonics=args.harmonics,
+        harmonics=harmonics,
         mu_bracket=tuple(args.mu_bracket),
         tol=args.tol,
         backend=args.backend,
@@ -70,9 +85,35 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     t2 = time.perf_counter()
     print(f"simulated {len(recs)} experiments in {t1 - t0:.3f} s, identified in {t2 - t1:.3f} s\n")
     print(result.summary())
+    if args.compare:
+        print(_compare_methods(recs, args))
     for f in _write_report(result, args.out):
         print(f"wrote {f}")
     return 0
+
+
+def _compare_methods(recs: list, args: argparse.Namespace) -> str:  # type: ignore[type-arg]
+    """Errors of every method on the same recordings (the truth is known in the demo)."""
+    lines = ["", "  the same recordings, every method (estimate - truth; worst over the frequencies):"]
+    lines.append(f"  {'method':<9}{'beta':>11}{'gamma':>11}{'mu':>11}{'|G| rel':>11}{'phi':>11}")
+    for method in ("paper", "profile", "refined"):
+        try:
+            err = _identify_from_args(argparse.Namespace(**{**vars(args), "method": method}), recs).errors()
+        except BoucWenIdError as exc:
+            lines.append(f"  {method:<9}failed: {type(exc).__name__}: {exc}")
+            continue
+        truth_gain = np.abs(err["gain"]) / np.maximum(np.abs(_truth_gains(recs)), 1e-300)
+        lines.append(
+            f"  {method:<9}{err['beta']:>11.2e}{err['gamma']:>11.2e}{err['mu']:>11.2e}"
+            f"{np.max(truth_gain):>11.2e}{np.max(np.abs(err['phase'])):>11.2e}"
+        )
+    return "\n".join(lines)
+
+
+def _truth_gains(recs: list) -> NDArray[np.float64]:  # type: ignore[type-arg]
+    plant = recs[0].plant.normalized()
+    gains: NDArray[np.float64] = plant.linear.gain_phase([r.frequency for r in recs])[0]
+    return gains
 
 
 def _cmd_simulate(args: argparse.Namespace) -> int:
@@ -118,6 +159,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--periods-sim", type=int, default=40, help="periods simulated after settling")
     p.add_argument("--noise", type=float, default=0.005, help="output noise standard deviation")
     p.add_argument("--seed", type=int, default=2024)
+    p.add_argument(
+        "--compare",
+        action=argparse.BooleanOptionalAction,
+        default=True,
+        help="also run every method on the same recordings and print their errors",
+    )
     _add_identify_options(p)
     p.set_defaults(func=_cmd_demo)
 

@@ -29,10 +29,8 @@ def _new_figure(
 def plot_loop(
     result: IdentificationResult, experiment: Optional[int] = None, ax: Optional[Axes] = None
 ) -> Figure:
-    """Averaged output ybar against the identified steady input x = U|G|cos(omega t - phi).
-
-    With the truth known, the true loop (true x against the noise-free w) is drawn dashed beside it.
-    """
+    """Averaged output ybar (solid) and the identified model's steady loop (dashed, black) against the
+    identified steady input x = U|G|cos(omega t - phi)."""
     if ax is None:
         fig, (ax,) = _new_figure()
     else:
@@ -42,9 +40,11 @@ def plot_loop(
         e = result.experiments[i]
         x = np.append(e.model_input(), e.model_input()[:1])
         y = np.append(e.ybar, e.ybar[:1])
-        ax.plot(x, y, lw=1.4, label=f"omega = {e.frequency:.3g} rad/s")
+        ax.plot(x, y, lw=1.4, label=f"omega = {e.frequency:.3g} rad/s (NRMSE {e.nrmse:.2g})")
+        if e.model is not None:
+            ax.plot(x, np.append(e.model, e.model[:1]), "--", color="k", lw=0.8, alpha=0.8)
     ax.set_xlabel("identified x = U|G| cos(omega t - phi)")
-    ax.set_ylabel("averaged output ybar")
+    ax.set_ylabel("averaged output ybar (solid), model (dashed)")
     ax.set_title(
         f"Averaged hysteresis loops (beta={result.beta:.3g}, gamma={result.gamma:.3g}, mu={result.mu:.3g})"
     )
@@ -70,8 +70,15 @@ def plot_bode(result: IdentificationResult, axes: Optional[Sequence[Axes]] = Non
         # Put each estimated phase on the truth's branch so that the points sit on the curve.
         _, ph_true = result.truth.plant.linear.gain_phase(w)
         phases = ph_true + (np.pi - np.mod(np.pi - (phases - ph_true), 2 * np.pi))
-    ax_g.loglog(w, result.gains, "o", color="C3", label="identified")
-    ax_p.semilogx(w, phases, "o", color="C3", label="identified")
+    z = 1.959963984540054  # 95 % two-sided normal quantile
+    g_err = [z * (e.gain_se or 0.0) for e in result.experiments]
+    p_err = [z * (e.phase_se or 0.0) for e in result.experiments]
+    label = "identified (95 % CI)" if result.standard_errors is not None else "identified"
+    ax_g.errorbar(w, result.gains, yerr=g_err, fmt="o", color="C3", capsize=3, label=label)
+    ax_p.errorbar(w, phases, yerr=p_err, fmt="o", color="C3", capsize=3, label=label)
+    ax_g.set_xscale("log")
+    ax_g.set_yscale("log")
+    ax_p.set_xscale("log")
     ax_g.set_ylabel("|G(j omega)|")
     ax_p.set_ylabel("phi = -angle G (rad)")
     ax_p.set_xlabel("omega (rad/s)")
