@@ -557,6 +557,8 @@ def _adequacy(
     return Adequacy(statistic, dof, noise_dof, p_value)
 
 
+#: Smallest beta + gamma the refinement starts from (the loop is unbounded below 0).
+MIN_BETA_PLUS_GAMMA = 1e-3
 #: Identifiability alarm: condition number of the Fisher matrix after scaling to unit diagonal.
 FISHER_COND_MAX = 1e10
 
@@ -699,6 +701,11 @@ def identify(
             )
         weights = _weights(prepared)
         substeps = max(_steady_substeps(e.p) for e in prepared)
+        if beta + gamma <= 0.0:
+            # A loop too linear to fix beta + gamma can start the separable fit outside the region
+            # where a steady loop exists; start just inside it and let the data speak.
+            shift = 0.5 * (MIN_BETA_PLUS_GAMMA - (beta + gamma))
+            beta, gamma = beta + shift, gamma + shift
         params, cost, iterations, _, fisher, loops = core.refine(
             [e.ybar for e in prepared],
             [e.rec.amplitude for e in prepared],
