@@ -38,7 +38,7 @@ pub struct ProfileFit {
     pub gamma: f64,
     /// `I_N` at the optimum.
     pub cost: f64,
-    /// Grid points skipped because their normal matrix was singular or mu hit the bracket.
+    /// Grid points skipped because their normal matrix was singular.
     pub skipped: usize,
 }
 
@@ -57,7 +57,18 @@ fn problem_at(
     Ok(prob)
 }
 
-/// Profiled cost at `phi`: the best `(mu, theta, cost)`, or `None` where the fit is undefined.
+/// The separable fit at one candidate phase.
+#[derive(Debug, Clone, Copy)]
+struct Candidate {
+    mu: f64,
+    theta: Vector3<f64>,
+    cost: f64,
+    /// The mu search ended on this end of the bracket (`Some(true)` = lower).
+    at_bound: Option<bool>,
+}
+
+/// Profiled cost at `phi`, or `None` where the normal matrix is singular. A mu search that ends on
+/// its bracket gives the cost at that bound, flagged, so that a bound never wins silently.
 fn profile_at(
     ybar: &[f64],
     ydot: &[f64],
@@ -65,7 +76,7 @@ fn profile_at(
     omega: f64,
     phi: f64,
     bracket: (f64, f64, f64),
-) -> Result<Option<(f64, Vector3<f64>, f64)>> {
+) -> Result<Option<Candidate>> {
     let prob = problem_at(ybar, ydot, amplitude, omega, phi)?;
     match sls_search(
         &prob,
@@ -74,10 +85,23 @@ fn profile_at(
         bracket.2,
         crate::solve::GOLDEN_MAX_ITER,
     ) {
-        Ok(fit) => Ok(Some((fit.mu, fit.theta, fit.cost))),
-        Err(CoreError::SingularNormalMatrix { .. }) | Err(CoreError::SearchAtBound { .. }) => {
-            Ok(None)
-        }
+        Ok(fit) => Ok(Some(Candidate {
+            mu: fit.mu,
+            theta: fit.theta,
+            cost: fit.cost,
+            at_bound: None,
+        })),
+        Err(CoreError::SearchAtBound { bound, lower, .. }) => match prob.cost(bound) {
+            Ok((theta, cost)) => Ok(Some(Candidate {
+                mu: bound,
+                theta,
+                cost,
+                at_bound: Some(lower),
+            })),
+            Err(CoreError::SingularNormalMatrix { .. }) => Ok(None),
+            Err(e) => Err(e),
+        },
+        Err(CoreError::SingularNormalMatrix { .. }) => Ok(None),
         Err(e) => Err(e),
     }
 }
@@ -112,9 +136,9 @@ pub fn profile_phase_sls(
     let mut skipped = 0;
     for k in 0..grid {
         match profile_at(ybar, ydot, amplitude, omega, k as f64 * step, bracket)? {
-            Some((_, _, cost)) => {
-                if best.is_none_or(|(_, c)| cost < c) {
-                    best = Some((k, cost));
+            Some(cand) => {
+                if best.is_none_or(|(_, c)| cand.cost < c) {
+                    best = Some((k, cand.cost));
                 }
             }
             None => skipped += 1,
@@ -130,23 +154,24 @@ pub fn profile_phase_sls(
     };
     // Refine on the two grid cells around the best point; a failed point counts as +inf cost.
     let centre = k as f64 * step;
-    let refine = golden_section(
-        |phi| {
-            Ok(profile_at(ybar, ydot, amplitude, omega, phi, bracket)?
-                .map_or(f64::MAX, |(_, _, c)| c))
-        },
-        centre - step,
-        centre + step,
-        PHASE_TOL,
-        crate::solve::GOLDEN_MAX_ITER,
-    );
+    let refine =
+        golden_section(
+            |phi| {
+                Ok(profile_at(ybar, ydot, amplitude, omega, phi, bracket)?
+                    .map_or(f64::MAX, |c| c.cost))
+            },
+            centre - step,
+            centre + step,
+            PHASE_TOL,
+            crate::solve::GOLDEN_MAX_ITER,
+        );
     let phi = match refine {
         Ok(g) => g.x,
         // The grid point itself is the best that can be said when the refinement cannot move.
         Err(CoreError::SearchAtBound { .. }) => centre,
         Err(e) => return Err(e),
     };
-    let (mu, theta, cost) = match profile_at(ybar, ydot, amplitude, omega, phi, bracket)? {
+    let cand = match profile_at(ybar, ydot, amplitude, omega, phi, bracket)? {
         Some(v) => v,
         None => profile_at(ybar, ydot, amplitude, omega, centre, bracket)?.ok_or_else(|| {
             CoreError::SingularNormalMatrix {
@@ -155,6 +180,14 @@ pub fn profile_phase_sls(
             }
         })?,
     };
+    if let Some(lower) = cand.at_bound {
+        return Err(CoreError::SearchAtBound {
+            bound: cand.mu,
+            lower,
+            tol,
+        });
+    }
+    let (mu, theta, cost) = (cand.mu, cand.theta, cand.cost);
     let (mut gain, mut beta, gamma) = (theta[0], theta[1] / theta[0], theta[2] / theta[0]);
     let mut phi = phi;
     if gain < 0.0 {

@@ -493,7 +493,7 @@ type RefineOut<'py> = (
 /// Joint output-error Levenberg-Marquardt over every experiment. Parameters are ordered
 /// `[beta, gamma, mu, g_0, phi_0, g_1, phi_1, ...]`; `fisher` is `J^T W J` at the minimiser.
 #[pyfunction]
-#[pyo3(name = "refine", signature = (ybars, amplitudes, weights, beta, gamma, mu, gains, phases, max_iter=200, substeps=4, ftol=1e-12, xtol=1e-10))]
+#[pyo3(name = "refine", signature = (ybars, amplitudes, weights, beta, gamma, mu, gains, phases, max_iter=200, substeps=4, ftol=1e-12, xtol=1e-10, mu_lo=1.0, mu_hi=f64::INFINITY))]
 #[allow(clippy::too_many_arguments)]
 fn refine_fit<'py>(
     py: Python<'py>,
@@ -509,6 +509,8 @@ fn refine_fit<'py>(
     substeps: i64,
     ftol: f64,
     xtol: f64,
+    mu_lo: f64,
+    mu_hi: f64,
 ) -> PyResult<RefineOut<'py>> {
     let slices = ybars
         .iter()
@@ -529,6 +531,8 @@ fn refine_fit<'py>(
         substeps: count("substeps", substeps, 1)?,
         ftol,
         xtol,
+        mu_lo,
+        mu_hi,
     };
     let exps: Vec<refine::Experiment> = slices
         .iter()

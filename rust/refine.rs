@@ -62,6 +62,10 @@ pub struct Options {
     pub ftol: f64,
     /// Stop when every step component is below `xtol * (|p| + xtol)`.
     pub xtol: f64,
+    /// Lower end of the admissible mu (exclusive; at least 1).
+    pub mu_lo: f64,
+    /// Upper end of the admissible mu (inclusive).
+    pub mu_hi: f64,
 }
 
 impl Default for Options {
@@ -71,6 +75,8 @@ impl Default for Options {
             substeps: 4,
             ftol: 1e-12,
             xtol: 1e-10,
+            mu_lo: 1.0,
+            mu_hi: f64::INFINITY,
         }
     }
 }
@@ -195,6 +201,14 @@ fn fisher(bl: &Blocks) -> DMatrix<f64> {
     f
 }
 
+/// The Bouc-Wen conditions of (2a) (`beta + gamma > 0`, `beta >= gamma`) and the mu bracket.
+fn admissible(p: &Params, opts: &Options) -> bool {
+    p.mu > opts.mu_lo.max(1.0) + MU_MARGIN
+        && p.mu <= opts.mu_hi
+        && p.beta + p.gamma > 0.0
+        && p.beta >= p.gamma
+}
+
 fn validate(exps: &[Experiment], p: &Params, opts: &Options) -> Result<()> {
     if exps.is_empty() {
         return Err(CoreError::InsufficientData(
@@ -227,13 +241,28 @@ fn validate(exps: &[Experiment], p: &Params, opts: &Options) -> Result<()> {
             "max_iter and substeps must be >= 1".into(),
         ));
     }
+    if !admissible(p, opts) {
+        return Err(CoreError::InvalidParameter(format!(
+            "the starting point (beta = {}, gamma = {}, mu = {}) must satisfy beta >= |gamma|, \
+             beta + gamma > 0 and {} < mu <= {}",
+            p.beta,
+            p.gamma,
+            p.mu,
+            opts.mu_lo.max(1.0),
+            opts.mu_hi
+        )));
+    }
     Ok(())
 }
 
 /// Levenberg-Marquardt from `start` (e.g. the profile-phase SLS estimates).
 ///
-/// Errors: the start is not a valid loop (see [`steady_loop`]), inconsistent lengths, non-finite
-/// data, a non-positive weight.
+/// Every trial point must satisfy the Bouc-Wen conditions and the mu bracket (see `admissible`):
+/// a step that leaves them is rejected and the damping grows, so the fit stays admissible and may
+/// end on a constraint.
+///
+/// Errors: an inadmissible start, the start is not a valid loop (see [`steady_loop`]), inconsistent
+/// lengths, non-finite data, a non-positive weight.
 pub fn refine(exps: &[Experiment], start: &Params, opts: &Options) -> Result<Fit> {
     validate(exps, start, opts)?;
     let mut p = start.clone();
@@ -270,7 +299,7 @@ pub fn refine(exps: &[Experiment], start: &Params, opts: &Options) -> Result<Fit
                 .iter()
                 .all(|(d, v)| d.abs() <= opts.xtol * (v.abs() + opts.xtol))
         };
-        let admissible = trial.mu > 1.0 + MU_MARGIN && trial.beta + trial.gamma > 0.0;
+        let admissible = admissible(&trial, opts);
         let trial_ev = if admissible {
             evaluate(exps, &trial, opts.substeps).ok()
         } else {

@@ -102,4 +102,6 @@ def refine(
     substeps: int = 4,
     ftol: float = 1e-12,
     xtol: float = 1e-10,
+    mu_lo: float = 1.0,
+    mu_hi: float = ...,
 ) -> tuple[_F, float, int, bool, _F, list[_F]]: ...

@@ -61,7 +61,13 @@ class SingularNormalMatrixError(BoucWenIdError):
 
 
 class SearchAtBoundError(BoucWenIdError):
-    """The golden-section search for mu ended on an end of its bracket."""
+    """The golden-section search for mu ended on an end of its bracket.
+
+    ``bound`` and ``lower`` name the end when the raiser knows it (``None`` otherwise).
+    """
+
+    bound: float | None = None
+    lower: bool | None = None
 
 
 class FileFormatError(BoucWenIdError):

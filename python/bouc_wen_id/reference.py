@@ -477,11 +477,13 @@ def golden_section(
             fd = f(d)
         it += 1
     if a == lo or b == hi:
-        raise SearchAtBoundError(
+        err = SearchAtBoundError(
             f"the minimum lies at the {'lower' if a == lo else 'upper'} end "
             f"{lo if a == lo else hi} of the bracket [{lo}, {hi}] (tol {tol:g}); widen the bracket, "
             "or check that the data excite the hysteresis"
         )
+        err.lower, err.bound = a == lo, lo if a == lo else hi
+        raise err
     x = 0.5 * (a + b)
     return x, f(x), it
 
@@ -693,16 +695,24 @@ def _profile_at(
     lo: float,
     hi: float,
     tol: float,
-) -> Optional[tuple[float, FloatArray, float]]:
+) -> Optional[tuple[float, FloatArray, float, Optional[bool]]]:
+    """``(mu, theta, cost, at_bound)`` at phi; a search ending on the bracket gives the bound's cost."""
     yb, yd, s, sgn, dt = _phase_sign_inputs(ybar, ydot, amplitude, omega, phi)
     if lo < 1.0:
         raise InvalidParameterError(f"the mu bracket starts at {lo} < 1; the model needs mu > 1")
     try:
         mu, _, _ = golden_section(lambda nu: _sls_cost_signed(yb, yd, s, sgn, dt, nu)[1], lo, hi, tol)
         theta, cost = _sls_cost_signed(yb, yd, s, sgn, dt, mu)
-    except (SingularNormalMatrixError, SearchAtBoundError):
+        return mu, theta, cost, None
+    except SingularNormalMatrixError:
         return None
-    return mu, theta, cost
+    except SearchAtBoundError as exc:
+        assert exc.bound is not None
+        try:
+            theta, cost = _sls_cost_signed(yb, yd, s, sgn, dt, exc.bound)
+        except SingularNormalMatrixError:
+            return None
+        return exc.bound, theta, cost, exc.lower
 
 
 #: Final bracket width (rad) of the phase refinement.
@@ -757,7 +767,14 @@ def profile_phase_sls(
         out = _profile_at(yb, yd, amplitude, omega, centre, lo, hi, tol)
         if out is None:
             raise SingularNormalMatrixError("the refined phase gave no solvable fit")
-    mu, theta, cost = out
+    mu, theta, cost, at_bound = out
+    if at_bound is not None:
+        err = SearchAtBoundError(
+            f"the minimum lies at the {'lower' if at_bound else 'upper'} end {mu} of the mu bracket "
+            f"[{lo}, {hi}] (tol {tol:g}); widen the bracket, or check that the data excite the hysteresis"
+        )
+        err.lower, err.bound = at_bound, mu
+        raise err
     gain, beta, gamma = theta[0], theta[1] / theta[0], theta[2] / theta[0]
     if gain < 0.0:
         gain, phi, beta = -gain, phi + np.pi, -beta
@@ -846,6 +863,8 @@ def refine(
     substeps: int = 4,
     ftol: float = 1e-12,
     xtol: float = 1e-10,
+    mu_lo: float = 1.0,
+    mu_hi: float = float("inf"),
 ) -> tuple[FloatArray, float, int, bool, FloatArray, list[FloatArray]]:
     """Joint output-error Levenberg-Marquardt over every experiment (Schur complement on the shared part).
 
@@ -870,6 +889,21 @@ def refine(
     if max_iter < 1 or substeps < 1:
         raise InvalidParameterError("max_iter and substeps must be >= 1")
     params = np.concatenate([[beta, gamma, mu], np.column_stack([g0, p0]).ravel()])
+
+    def admissible(par: FloatArray) -> bool:
+        """The Bouc-Wen conditions of (2a) and the mu bracket."""
+        return bool(
+            par[2] > max(mu_lo, 1.0) + LM_MU_MARGIN
+            and par[2] <= mu_hi
+            and par[0] + par[1] > 0
+            and par[0] >= par[1]
+        )
+
+    if not admissible(params):
+        raise InvalidParameterError(
+            f"the starting point (beta = {beta}, gamma = {gamma}, mu = {mu}) must satisfy beta >= |gamma|, "
+            f"beta + gamma > 0 and {max(mu_lo, 1.0)} < mu <= {mu_hi}"
+        )
 
     def evaluate(par: FloatArray) -> tuple[float, list[FloatArray], list[FloatArray]]:
         cost, resid, jacs = 0.0, [], []
@@ -915,7 +949,7 @@ def refine(
         trial = params + delta
         small = bool(np.all(np.abs(delta) <= xtol * (np.abs(params) + xtol)))
         out = None
-        if trial[2] > 1.0 + LM_MU_MARGIN and trial[0] + trial[1] > 0.0:
+        if admissible(trial):
             try:
                 out = evaluate(trial)
             except BoucWenIdErrorBase:
