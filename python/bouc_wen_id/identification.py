@@ -19,6 +19,7 @@ from .errors import (
     IdentifiabilityWarning,
     InsufficientDataError,
     InvalidParameterError,
+    SearchAtBoundError,
 )
 from .model import Recording, WienerPlant, as_recordings
 
@@ -544,6 +545,9 @@ def _adequacy(
     fitted = [w for w in loops if w is not None]
     if len(fitted) != len(loops) or any(not math.isfinite(e.noise_var) for e in prepared):
         return None
+    if any(e.noise_var <= (NOISE_FREE_RTOL * float(np.max(np.abs(e.ybar)))) ** 2 for e in prepared):
+        # Noise-free (simulated) data: the floor is rounding, and any discretisation error "rejects".
+        return None
     # scipy.special, not scipy.stats: the latter takes over a second to import.
     from scipy.special import fdtrc  # type: ignore[import-untyped]
 
@@ -557,8 +561,14 @@ def _adequacy(
     return Adequacy(statistic, dof, noise_dof, p_value)
 
 
-#: Smallest beta + gamma the refinement starts from (the loop is unbounded below 0).
+#: Smallest margin of beta over |gamma| the refinement starts from (no steady loop below 0).
 MIN_BETA_PLUS_GAMMA = 1e-3
+#: The refinement starts at least this fraction of the mu bracket away from its ends.
+START_MU_MARGIN = 1e-2
+#: A refined mu closer than this fraction of the bracket to one of its ends is "at the bound".
+AT_BOUND_FRACTION = 1e-4
+#: Below this noise sd relative to the loop's peak, data count as noise-free (no adequacy test).
+NOISE_FREE_RTOL = 1e-9
 #: Identifiability alarm: condition number of the Fisher matrix after scaling to unit diagonal.
 FISHER_COND_MAX = 1e10
 
@@ -701,11 +711,12 @@ def identify(
             )
         weights = _weights(prepared)
         substeps = max(_steady_substeps(e.p) for e in prepared)
-        if beta + gamma <= 0.0:
-            # A loop too linear to fix beta + gamma can start the separable fit outside the region
-            # where a steady loop exists; start just inside it and let the data speak.
-            shift = 0.5 * (MIN_BETA_PLUS_GAMMA - (beta + gamma))
-            beta, gamma = beta + shift, gamma + shift
+        # The separable fit knows nothing of the Bouc-Wen conditions (beta >= |gamma|) and a loop too
+        # linear to fix beta + gamma can put it outside them, where no steady loop exists: start the
+        # joint fit just inside, and within the mu bracket, and let the data speak.
+        beta = max(beta, abs(gamma) + MIN_BETA_PLUS_GAMMA)
+        margin = START_MU_MARGIN * (hi - lo)
+        mu = min(max(mu, lo + margin), hi - margin)
         params, cost, iterations, _, fisher, loops = core.refine(
             [e.ybar for e in prepared],
             [e.rec.amplitude for e in prepared],
@@ -717,9 +728,20 @@ def identify(
             phis,
             max_iter=max_iter,
             substeps=substeps,
+            mu_lo=lo,
+            mu_hi=hi,
         )
         params = np.asarray(params)
         beta, gamma, mu = (float(v) for v in params[:3])
+        if min(mu - lo, hi - mu) <= AT_BOUND_FRACTION * (hi - lo):
+            lower = mu - lo <= hi - mu
+            err = SearchAtBoundError(
+                f"the joint fit ended on the {'lower' if lower else 'upper'} end of the mu bracket "
+                f"[{lo}, {hi}] (mu = {mu:.6g}); widen the bracket, or check that the data excite the "
+                "hysteresis"
+            )
+            err.lower, err.bound = lower, lo if lower else hi
+            raise err
         gains = params[3::2].copy()
         phis = params[4::2].copy()
         fits = [np.asarray(w) for w in loops]
@@ -742,10 +764,10 @@ def identify(
 
     experiments = []
     for i, e in enumerate(prepared):
-        # (G, phi) and (-G, phi + pi) draw the same x: report the one with |G| > 0.  A negative U is
-        # folded in the same way, so that the table always reads against u = |U| cos(omega t).
+        # (G, phi) and (-G, phi + pi) draw the same x = U G cos(omega t - phi): report |G| > 0.  The
+        # phase is that of G itself, whatever the sign of U.
         phase = phis[i] + e.rec.frequency * float(e.rec.t[0])
-        if gains[i] * e.rec.amplitude < 0:
+        if gains[i] < 0:
             phase += math.pi
         w = fits[i]
         spread = float(np.linalg.norm(e.ybar - e.ybar.mean()))
@@ -753,7 +775,7 @@ def identify(
         experiments.append(
             ExperimentEstimate(
                 frequency=e.rec.frequency,
-                amplitude=abs(e.rec.amplitude),
+                amplitude=e.rec.amplitude,
                 gain=abs(float(gains[i])),
                 phase=float(wrap_phase(phase)),
                 samples_per_period=e.p,
@@ -770,6 +792,12 @@ def identify(
         )
 
     notes = _identifiability(beta, gamma, mu, experiments, cov, se_shared, confidence)
+    if not (beta >= abs(gamma) and beta + gamma > 0):
+        notes.append(
+            f"the estimates violate the Bouc-Wen conditions beta >= |gamma|, beta + gamma > 0 (beta = "
+            f"{beta:.4g}, gamma = {gamma:.4g}): the data do not support this model, or the mu bracket "
+            "excludes the truth; method='refined' keeps the fit inside the conditions"
+        )
     for note in notes:
         warnings.warn(note, IdentifiabilityWarning, stacklevel=2)
     plants = [r.plant for r in recs]
