@@ -178,8 +178,9 @@ def test_negative_amplitude_gives_the_same_model() -> None:
         assert getattr(neg, name) == pytest.approx(getattr(pos, name), abs=1e-6)
     assert neg.gains[0] == pytest.approx(pos.gains[0], rel=1e-6)
     assert neg.gains[0] > 0
-    # The table reads against |U|: u = -2 cos(wt) = 2 cos(wt - pi), so phi moves by pi.
-    assert abs(bw.identification.phase_error(neg.phases[0], pos.phases[0] + np.pi)) < 1e-6
+    # The phase is that of G(j omega) itself, whatever the sign of U.
+    assert abs(bw.identification.phase_error(neg.phases[0], pos.phases[0])) < 1e-6
+    assert abs(bw.identification.phase_error(pos.phases[0], 1.1)) < 1e-4
 
 
 # --------------------------------------------------------------------------------------------------
@@ -221,7 +222,10 @@ def test_refined_beats_paper_on_noisy_data() -> None:
     for seed in range(6):
         recs = bw.simulate(plant, plan1(0.05, 50, seed))
         for method in errs:
-            e = bw.identify(recs, method=method).errors()
+            with warnings.catch_warnings():
+                # The paper's estimates often violate beta >= |gamma| on noisy data, and say so.
+                warnings.simplefilter("ignore", bw.IdentifiabilityWarning)
+                e = bw.identify(recs, method=method).errors()
             errs[method].append([e["beta"], e["gamma"]])
     rmse = {m: np.sqrt(np.mean(np.square(v), axis=0)) for m, v in errs.items()}
     assert np.all(rmse["refined"] * 5 < rmse["paper"]), rmse
@@ -231,7 +235,9 @@ def test_refined_needs_two_periods() -> None:
     recs = bw.simulate(single_plant(), plan1(0.01, 1))
     with pytest.raises(bw.InsufficientDataError, match="2 averaged periods"):
         bw.identify(recs)
-    assert bw.identify(recs, method="paper").mu > 1  # the paper method has no such need
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", bw.IdentifiabilityWarning)
+        assert bw.identify(recs, method="paper").mu > 1  # the paper method has no such need
 
 
 # --------------------------------------------------------------------------------------------------
@@ -272,16 +278,19 @@ def test_adequacy_does_not_flag_model_data_too_often(monte_carlo: list[bw.Identi
 
 
 def test_adequacy_flags_a_model_that_is_wrong() -> None:
-    # A dead zone in front of the hysteresis: not a Wiener-Bouc-Wen system.
+    # A linear spring in parallel with the hysteresis (y = w + 0.1 x): not a Wiener-Bouc-Wen system.
     plant = single_plant()
     rec = bw.simulate(plant, plan1(0.01, 40))[0]
-    y = np.where(np.abs(rec.y) < 0.3, 0.0, rec.y)
+    assert rec.x is not None
+    y = rec.y + 0.1 * rec.x
     bad = bw.Recording(rec.t, rec.u, y, rec.amplitude, rec.frequency, settle_periods=rec.settle_periods)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", bw.IdentifiabilityWarning)
         res = bw.identify(bad)
     assert res.adequacy.rejects(0.01)
-    assert res.experiments[0].nrmse > 0.01
+    e = res.experiments[0]
+    noise_only = e.noise_sd / math.sqrt(e.periods) / float(np.std(e.ybar))  # NRMSE of a perfect model
+    assert e.nrmse > 2 * noise_only
 
 
 def test_standard_errors_match_the_cramer_rao_bound() -> None:

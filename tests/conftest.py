@@ -1,0 +1,142 @@
+"""Shared helpers of the test suite: random stable plants, random Bouc-Wen elements, exact averaged loops.
+
+Everything random is drawn from ``np.random.default_rng(seed)`` with an explicit seed, so a failure
+reproduces bit for bit.
+
+The helpers reach the tests through the ``helpers`` fixture (a namespace of the functions below) rather
+than ``from conftest import ...``: ``scripts/test.sh`` runs pytest with ``--import-mode=importlib``, under
+which a test module cannot import the conftest by name.
+"""
+
+from __future__ import annotations
+
+import math
+from types import ModuleType, SimpleNamespace
+from typing import Any
+
+import numpy as np
+import pytest
+from bouc_wen_id import _core, reference
+
+#: Both implementations of the core routines, by the names ``identify(backend=...)`` uses.
+BACKENDS: dict[str, ModuleType] = {"rust": _core, "numpy": reference}
+
+TWO_PI = 2.0 * math.pi
+
+
+@pytest.fixture(params=sorted(BACKENDS))
+def core(request: pytest.FixtureRequest) -> ModuleType:
+    """Each backend in turn (the Rust extension and the NumPy reference)."""
+    return BACKENDS[request.param]
+
+
+def random_stable_den(rng: np.random.Generator, order: int) -> np.ndarray:
+    """A denominator of the given order with every root strictly in the left half-plane.
+
+    Roots: complex pairs with real part in [-3, -0.3] and imaginary part in [0.5, 6], plus a real root
+    in [-4, -0.3] when the order is odd; the leading coefficient is a random positive or negative scale
+    (a negative ``den[0]`` must be accepted: stability is decided after normalising ``den[0] = 1``).
+    """
+    roots: list[complex] = []
+    for _ in range(order // 2):
+        z = complex(-rng.uniform(0.3, 3.0), rng.uniform(0.5, 6.0))
+        roots += [z, z.conjugate()]
+    if order % 2:
+        roots.append(complex(-rng.uniform(0.3, 4.0), 0.0))
+    lead = rng.uniform(0.5, 2.0) * rng.choice([-1.0, 1.0])
+    den = lead * np.real(np.poly(roots)) if roots else np.array([lead])
+    return np.asarray(den, dtype=np.float64)
+
+
+def random_tf(
+    rng: np.random.Generator, order: int, *, delay: bool = True
+) -> tuple[np.ndarray, np.ndarray, float]:
+    """``(num, den, delay)`` of a random proper, stable G of the given order (delay 0 half the time)."""
+    den = random_stable_den(rng, order)
+    num_deg = int(rng.integers(0, order + 1))
+    num = rng.uniform(-2.0, 2.0, num_deg + 1)
+    num[0] = np.copysign(max(abs(num[0]), 0.3), num[0])
+    tau = float(rng.uniform(0.0, 0.8)) if (delay and rng.random() < 0.5) else 0.0
+    return num, den, tau
+
+
+def random_bouc_wen(rng: np.random.Generator) -> tuple[float, float, float, float, float]:
+    """``(alpha, beta, gamma, mu, w0)`` inside the admissible set: alpha > 0, beta >= |gamma|, mu >= 1."""
+    alpha = float(rng.uniform(0.5, 2.5))
+    beta = float(rng.uniform(0.2, 1.5))
+    gamma = float(rng.uniform(-0.95, 0.95) * beta)
+    mu = float(rng.uniform(1.0, 4.0))
+    w0 = float(rng.uniform(-0.3, 0.3))
+    return alpha, beta, gamma, mu, w0
+
+
+def averaged_loop(
+    gain: float,
+    phi: float,
+    beta: float,
+    gamma: float,
+    mu: float,
+    amplitude: float,
+    omega: float,
+    samples_per_period: int,
+    *,
+    settle_periods: int = 20,
+    periods: int = 1,
+    substeps: int = 2,
+    core: ModuleType = _core,
+) -> np.ndarray:
+    """Noise-free averaged loop ``ybar`` of the alpha = 1 Bouc-Wen element driven by
+    ``x = U |G| cos(omega t - phi)``.
+
+    The linear part is a static gain ``|G|`` behind a pure delay ``tau = phi / omega``, so after
+    ``t >= tau`` the simulated ``x`` is the steady sine exactly (no linear transient): the only error of
+    ``ybar`` is the RK4 error of ``w`` and whatever transient of ``w`` survives ``settle_periods``.
+    """
+    p = int(samples_per_period)
+    dt = TWO_PI / omega / p
+    phi = float(np.mod(phi, TWO_PI))
+    _, w = core.simulate_sine(
+        np.array([gain]),
+        np.array([1.0]),
+        phi / omega,
+        1.0,
+        beta,
+        gamma,
+        mu,
+        0.0,
+        amplitude,
+        omega,
+        dt,
+        (settle_periods + periods) * p,
+        substeps,
+    )
+    return np.asarray(core.periodic_average(np.ascontiguousarray(w), p, settle_periods, periods))
+
+
+def loop_problem(
+    gain: float = 1.5,
+    phi: float = 1.1,
+    beta: float = 0.8,
+    gamma: float = 0.2,
+    mu: float = 1.6,
+    amplitude: float = 0.8,
+    omega: float = 2.0,
+    samples_per_period: int = 256,
+) -> dict[str, Any]:
+    """An averaged loop and its spectral derivative, ready for the SLS routines (true phase ``phi``)."""
+    ybar = averaged_loop(gain, phi, beta, gamma, mu, amplitude, omega, samples_per_period)
+    ydot = np.asarray(_core.spectral_derivative(ybar, omega, (samples_per_period - 1) // 2))
+    return {"ybar": ybar, "ydot": ydot, "amplitude": amplitude, "omega": omega, "phi": phi}
+
+
+@pytest.fixture(scope="session")
+def helpers() -> SimpleNamespace:
+    """The helper functions of this module, as one namespace."""
+    return SimpleNamespace(
+        BACKENDS=BACKENDS,
+        random_stable_den=random_stable_den,
+        random_tf=random_tf,
+        random_bouc_wen=random_bouc_wen,
+        averaged_loop=averaged_loop,
+        loop_problem=loop_problem,
+    )
