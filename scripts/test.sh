@@ -1,0 +1,14 @@
+#!/usr/bin/env bash
+# Set up (virtualenv + build) and run every check: Rust format/lint/tests, Python lint, stub check, pytest.
+set -euo pipefail
+source "$(dirname "${BASH_SOURCE[0]}")/_venv.sh" "test"
+cd "$ROOT"
+echo "==> cargo fmt --check";      cargo fmt --check
+echo "==> cargo clippy";           cargo clippy --all-targets --features python -- -D warnings
+echo "==> cargo test";             cargo test
+echo "==> ruff";                   "$VENV/bin/ruff" check python tests benches
+echo "==> mypy (strict)";          "$VENV/bin/mypy" python/bouc_wen_id
+echo "==> stubtest _core.pyi";     (cd /tmp && "$VENV/bin/python" -m mypy.stubtest bouc_wen_id._core)
+echo "==> pytest"
+# Run against the installed wheel, not the source tree, so that a packaging slip shows up here.
+"$VENV/bin/python" -m pytest -p no:cacheprovider --rootdir "$ROOT" --import-mode=importlib "$ROOT/tests" "$@"
