@@ -8,6 +8,7 @@ from numpy.typing import NDArray
 
 __version__: str
 __all__ = [
+    "__version__",
     "simulate_sine",
     "simulate_sampled",
     "periodic_average",
