@@ -20,7 +20,12 @@ __all__ = [
     "SingularNormalMatrixError",
     "SearchAtBoundError",
     "FileFormatError",
+    "TimeAxisError",
+    "ClippingError",
+    "UndersampledError",
+    "NotPeriodicError",
     "IdentifiabilityWarning",
+    "DistortedInputWarning",
 ]
 
 
@@ -74,5 +79,25 @@ class FileFormatError(BoucWenIdError):
     """A recording or result file cannot be read: a missing column, a bad header, an unknown version."""
 
 
+class TimeAxisError(BoucWenIdError):
+    """The time column is not usable: not strictly increasing, or its step jitters beyond tolerance."""
+
+
+class ClippingError(BoucWenIdError):
+    """A channel is clipped or saturated: flat tops at its extremes (sensor or DAQ out of range)."""
+
+
+class UndersampledError(BoucWenIdError):
+    """Too few samples per period (< 16), or the excitation frequency is too close to Nyquist."""
+
+
+class NotPeriodicError(BoucWenIdError):
+    """The input is not a periodic (sine) excitation, so no period can be averaged."""
+
+
 class IdentifiabilityWarning(UserWarning):
     """The data do not pin the parameters down (ill-conditioned Fisher, intervals wider than values)."""
+
+
+class DistortedInputWarning(UserWarning):
+    """The recorded input is far from a pure sine (high total harmonic distortion)."""
