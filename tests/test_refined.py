@@ -325,3 +325,35 @@ def test_poorly_identifiable_design_warns() -> None:
         res = bw.identify(recs)
     assert res.warnings
     assert "warning:" in res.summary()
+
+
+@pytest.mark.parametrize("method", ["paper", "profile", "refined"])
+def test_units_do_not_matter(method: str) -> None:
+    """Forces of 1500 N and strokes of 5 mm identify as well as unit-scale data, reported in user units."""
+    recs = bw.simulate(single_plant(), plan1(0.02, 30, seed=3))
+    s_u, s_y = 0.005, 1500.0
+    scaled = [
+        bw.Recording(r.t, r.u * s_u, r.y * s_y, r.amplitude * s_u, r.frequency, r.settle_periods)
+        for r in recs
+    ]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", bw.IdentifiabilityWarning)
+        a = bw.identify(recs, method=method)
+        b = bw.identify(scaled, method=method)
+    # w = s_y w', x = s_y x': |G| -> |G| s_y / s_u, beta -> beta / s_y^mu, gamma likewise.
+    assert b.mu == pytest.approx(a.mu, rel=1e-6)
+    assert b.beta == pytest.approx(a.beta / s_y**a.mu, rel=1e-5)
+    assert b.gamma == pytest.approx(a.gamma / s_y**a.mu, rel=1e-5)
+    assert_allclose(b.gains, a.gains * s_y / s_u, rtol=1e-6)
+    assert_allclose(b.phases, a.phases, atol=1e-6)
+    assert b.experiments[0].nrmse == pytest.approx(a.experiments[0].nrmse, rel=1e-5)
+    if method == "refined":
+        assert b.standard_errors["mu"] == pytest.approx(a.standard_errors["mu"], rel=1e-4)
+        assert b.experiments[0].gain_se == pytest.approx(a.experiments[0].gain_se * s_y / s_u, rel=1e-4)
+        # The covariance maps through (beta, gamma) -> (beta, gamma) / s_y^mu (delta method): beta's
+        # interval in N^-mu carries mu's uncertainty times beta ln(s_y).
+        jac = np.diag([s_y**-a.mu, s_y**-a.mu, 1.0])
+        jac[0, 2] = -b.beta * math.log(s_y)
+        jac[1, 2] = -b.gamma * math.log(s_y)
+        assert_allclose(b.covariance[:3, :3], jac @ a.covariance[:3, :3] @ jac.T, rtol=1e-3)
+        assert b.adequacy.p_value == pytest.approx(a.adequacy.p_value, rel=1e-4, abs=1e-9)

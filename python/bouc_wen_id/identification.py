@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 import warnings
@@ -21,7 +22,7 @@ from .errors import (
     InvalidParameterError,
     SearchAtBoundError,
 )
-from .model import Recording, WienerPlant, as_recordings
+from .model import Recording, WienerPlant
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
     from matplotlib.axes import Axes
@@ -71,7 +72,7 @@ class ExperimentEstimate:
     phase: float
     samples_per_period: int
     settle_periods: int
-    periods: int
+    periods: float
     harmonics: int
     ybar: FloatArray = field(repr=False)
     noise_sd: float = math.nan
@@ -79,6 +80,7 @@ class ExperimentEstimate:
     phase_se: Optional[float] = None
     nrmse: float = math.nan
     model: Optional[FloatArray] = field(default=None, repr=False)
+    source: str = ""
 
     @property
     def response(self) -> complex:
@@ -105,6 +107,7 @@ class ExperimentEstimate:
             "gain_se": _num(self.gain_se),
             "phase_se": _num(self.phase_se),
             "nrmse": _num(self.nrmse),
+            "source": self.source,
         }
 
 
@@ -279,7 +282,7 @@ class IdentificationResult:
                     f"{tr.gain[i]:>11.5g}{tr.phase[i]:>10.4f}{_rel(e.gain, float(tr.gain[i])):>12}"
                     f"{dphi:>10.2e}"
                 )
-            row += f"{e.samples_per_period:>6}{e.periods:>5}{_fmt(e.noise_sd):>10}{_fmt(e.nrmse):>10}"
+            row += f"{e.samples_per_period:>6}{e.periods:>5.4g}{_fmt(e.noise_sd):>10}{_fmt(e.nrmse):>10}"
             if i == self.reference:
                 row += "  (reference)"
             lines.append(row)
@@ -449,7 +452,7 @@ def noise_variance(y: FloatArray, samples_per_period: int, settle_periods: int, 
 HARMONIC_SNR = 16.0
 
 
-def auto_harmonics(ybar: FloatArray, noise_var: float, periods: int) -> int:
+def auto_harmonics(ybar: FloatArray, noise_var: float, periods: float) -> int:
     """Highest harmonic of ``ybar`` standing above the noise floor (all of them when noise-free)."""
     p = ybar.size
     k_max = (p - 1) // 2
@@ -462,16 +465,22 @@ def auto_harmonics(ybar: FloatArray, noise_var: float, periods: int) -> int:
 
 @dataclass
 class _Prepared:
-    """One recording reduced to its averaged period and what the estimators need of it."""
+    """One experiment reduced to its averaged period and what the estimators need of it."""
 
-    rec: Recording
+    amplitude: float
+    frequency: float
+    #: Added to the local phase (that of the averaged window's first sample) to give the phase of G.
+    phase_shift: float
     p: int
     s: int
-    n: int
+    n: float
     k: int
     ybar: FloatArray
     ydot: FloatArray
     noise_var: float
+    noise_dof: int
+    plant: Optional[WienerPlant]
+    source: str
 
 
 def _steady_substeps(p: int) -> int:
@@ -479,38 +488,108 @@ def _steady_substeps(p: int) -> int:
     return max(2, math.ceil(2048 / p))
 
 
+def _harmonics(harmonics: int | str, ybar: FloatArray, noise_var: float, n: float) -> int:
+    p = ybar.size
+    if harmonics == "auto":
+        return auto_harmonics(ybar, noise_var, n)
+    if harmonics == "all":
+        return (p - 1) // 2
+    if isinstance(harmonics, (int, np.integer)) and not isinstance(harmonics, bool):
+        return int(harmonics)
+    raise InvalidParameterError(f"harmonics must be 'auto', 'all' or an int, got {harmonics!r}")
+
+
+def _prepare_recording(
+    i: int,
+    rec: Recording,
+    core: Any,
+    settle_periods: Optional[int],
+    periods: Optional[int],
+    harmonics: int | str,
+) -> _Prepared:
+    """The paper's path: a whole number of samples per period and the periodic average (4a-b)."""
+    p = rec.samples_per_period
+    s = rec.settle_periods if settle_periods is None else int(settle_periods)
+    if s < 0:
+        raise InvalidParameterError(f"settle_periods = {s} must be >= 0")
+    n = rec.whole_periods - s if periods is None else int(periods)
+    if n < 1 or s + n > rec.whole_periods:
+        raise InsufficientDataError(
+            f"recording {i} holds {rec.whole_periods} whole periods; {s} settling + {max(n, 1)} averaged "
+            "periods do not fit. Record longer or lower settle_periods/periods"
+        )
+    _check_input(rec, s * p, (s + n) * p)
+    ybar = np.asarray(core.periodic_average(np.ascontiguousarray(rec.y), p, s, n))
+    noise_var = noise_variance(rec.y, p, s, n)
+    k = _harmonics(harmonics, ybar, noise_var, n)
+    ydot = np.asarray(core.spectral_derivative(ybar, rec.frequency, k))
+    # The averaged window starts at t[0] + s whole periods: the local phase is shifted by omega t[0].
+    return _Prepared(
+        rec.amplitude,
+        rec.frequency,
+        rec.frequency * float(rec.t[0]),
+        p,
+        s,
+        n,
+        k,
+        ybar,
+        ydot,
+        noise_var,
+        p * (n - 1),
+        rec.plant,
+        rec.metadata.get("name", f"recording {i}"),
+    )
+
+
+def _prepare_averaged(ap: Any, core: Any, harmonics: int | str) -> _Prepared:
+    """A period averaged from lab data (any sampling rate): its grid starts at the input's phase zero."""
+    ybar = np.ascontiguousarray(ap.ybar, dtype=np.float64)
+    k = _harmonics(harmonics, ybar, ap.noise_var, ap.periods)
+    ydot = np.asarray(core.spectral_derivative(ybar, ap.frequency, k))
+    return _Prepared(
+        ap.amplitude,
+        ap.frequency,
+        0.0,
+        ybar.size,
+        0,
+        float(ap.periods),
+        k,
+        ybar,
+        ydot,
+        float(ap.noise_var),
+        int(ap.noise_dof),
+        None,
+        str(ap.source),
+    )
+
+
 def _prepare(
-    recs: Sequence[Recording],
+    items: Sequence[Any],
     core: Any,
     settle_periods: Optional[int],
     periods: Optional[int],
     harmonics: int | str,
 ) -> list[_Prepared]:
     out = []
-    for i, rec in enumerate(recs):
-        p = rec.samples_per_period
-        s = rec.settle_periods if settle_periods is None else int(settle_periods)
-        if s < 0:
-            raise InvalidParameterError(f"settle_periods = {s} must be >= 0")
-        n = rec.whole_periods - s if periods is None else int(periods)
-        if n < 1 or s + n > rec.whole_periods:
-            raise InsufficientDataError(
-                f"recording {i} holds {rec.whole_periods} whole periods; {s} settling + {max(n, 1)} averaged "
-                "periods do not fit. Record longer or lower settle_periods/periods"
-            )
-        _check_input(rec, s * p, (s + n) * p)
-        ybar = np.asarray(core.periodic_average(np.ascontiguousarray(rec.y), p, s, n))
-        noise_var = noise_variance(rec.y, p, s, n)
-        if harmonics == "auto":
-            k = auto_harmonics(ybar, noise_var, n)
-        elif harmonics == "all":
-            k = (p - 1) // 2
-        elif isinstance(harmonics, (int, np.integer)) and not isinstance(harmonics, bool):
-            k = int(harmonics)
+    for i, item in enumerate(items):
+        if isinstance(item, Recording):
+            out.append(_prepare_recording(i, item, core, settle_periods, periods, harmonics))
+            continue
+        # Lab data: imported here so that the paper's path does not pay for the preprocessing modules.
+        from .measurement import Measurement
+        from .signal import AveragedPeriod, average_measurement
+
+        if isinstance(item, AveragedPeriod):
+            out.append(_prepare_averaged(item, core, harmonics))
+        elif isinstance(item, Measurement):
+            out.extend(_prepare_averaged(ap, core, harmonics) for ap in average_measurement(item))
         else:
-            raise InvalidParameterError(f"harmonics must be 'auto', 'all' or an int, got {harmonics!r}")
-        ydot = np.asarray(core.spectral_derivative(ybar, rec.frequency, k))
-        out.append(_Prepared(rec, p, s, n, k, ybar, ydot, noise_var))
+            raise InvalidParameterError(
+                f"item {i} is a {type(item).__name__}; identify takes Recording, Measurement or "
+                "AveragedPeriod objects"
+            )
+    if not out:
+        raise InsufficientDataError("nothing to identify: no recording gave an averaged period")
     return out
 
 
@@ -520,9 +599,7 @@ def _loop_fit(
     """The identified model's steady loop on the data grid and its NRMSE against ybar."""
     try:
         w = np.asarray(
-            core.steady_loop(e.rec.amplitude * gain, beta, gamma, mu, phi_local, e.p, _steady_substeps(e.p))[
-                0
-            ]
+            core.steady_loop(e.amplitude * gain, beta, gamma, mu, phi_local, e.p, _steady_substeps(e.p))[0]
         )
     except BoucWenIdError:
         return None, math.nan
@@ -554,7 +631,7 @@ def _adequacy(
     wts = _weights(prepared)
     statistic = float(sum(wt * np.sum((e.ybar - w) ** 2) for wt, e, w in zip(wts, prepared, fitted)))
     dof = sum(e.p for e in prepared) - n_params
-    noise_dof = sum(e.p * (e.n - 1) for e in prepared)
+    noise_dof = sum(e.noise_dof for e in prepared)
     if dof < 1:
         return None
     p_value = float(fdtrc(dof, noise_dof, statistic / dof))
@@ -655,127 +732,64 @@ def identify(
         raise InvalidParameterError(f"method must be 'refined', 'profile' or 'paper', got {method!r}")
     if not 0.0 < confidence < 1.0:
         raise InvalidParameterError(f"confidence = {confidence} must be in (0, 1)")
-    recs = as_recordings(recordings)
-    if not -len(recs) <= reference < len(recs):
-        raise InvalidParameterError(f"reference = {reference} is not an index of the {len(recs)} recordings")
-    reference = reference % len(recs)
+    items: list[Any] = [recordings] if not isinstance(recordings, (list, tuple)) else list(recordings)
+    if not items:
+        raise InsufficientDataError("no recordings were given")
     lo, hi = (float(v) for v in mu_bracket)
     if not 1.0 <= lo < hi:
         raise InvalidParameterError(f"mu_bracket = {mu_bracket} must satisfy 1 <= lo < hi (mu > 1)")
     core = get_backend(backend)
-    prepared = _prepare(recs, core, settle_periods, periods, harmonics)
+    prepared = _prepare(items, core, settle_periods, periods, harmonics)
     m = len(prepared)
-    # Local phases (relative to the averaged window's first sample) and signed gains.
-    phis = np.zeros(m)
-    gains = np.zeros(m)
-    ref = prepared[reference]
-    if method == "paper":
-        phis = np.array([float(core.phase_from_max(e.ybar)) for e in prepared])
-        mu, theta, cost, iterations = core.sls_search(
-            ref.ybar, ref.ydot, ref.rec.amplitude, ref.rec.frequency, phis[reference], lo, hi, tol
+    if not -m <= reference < m:
+        raise InvalidParameterError(f"reference = {reference} is not an index of the {m} experiments")
+    reference = reference % m
+    # Work in units where the output and the input are of order one (forces of 1500 N and strokes of
+    # 5 mm fit as well as unit-scale data), then map back: with y = s_y y', u = s_u u',
+    # |G| = |G'| s_y / s_u, beta = beta' / s_y^mu, gamma = gamma' / s_y^mu.
+    s_y = max(float(np.max(np.abs(e.ybar))) for e in prepared) or 1.0
+    s_u = max(abs(e.amplitude) for e in prepared)
+    scaled = [
+        dataclasses.replace(
+            e,
+            amplitude=e.amplitude / s_u,
+            ybar=e.ybar / s_y,
+            ydot=e.ydot / s_y,
+            noise_var=e.noise_var / s_y**2,
         )
-        theta = np.asarray(theta)
-        beta, gamma = float(theta[1] / theta[0]), float(theta[2] / theta[0])
-        for i, e in enumerate(prepared):
-            gains[i] = (
-                float(theta[0])
-                if i == reference
-                else float(
-                    core.gain_estimate(
-                        e.ybar, e.ydot, e.rec.amplitude, e.rec.frequency, phis[i], beta, gamma, mu
-                    )
-                )
-            )
-    else:
-        phi_r, mu, g_r, beta, gamma, cost, _ = core.profile_phase_sls(
-            ref.ybar, ref.ydot, ref.rec.amplitude, ref.rec.frequency, lo, hi, tol, phase_grid
-        )
-        iterations = 0
-        for i, e in enumerate(prepared):
-            if i == reference:
-                gains[i], phis[i] = g_r, phi_r
-            else:
-                gains[i], phis[i], _ = core.profile_phase_gain(
-                    e.ybar, e.ydot, e.rec.amplitude, e.rec.frequency, beta, gamma, mu, phase_grid
-                )
-    mu = float(mu)
+        for e in prepared
+    ]
+    fit = _fit(scaled, core, method, reference, lo, hi, tol, phase_grid, max_iter)
+    beta, gamma, mu = fit.beta / s_y**fit.mu, fit.gamma / s_y**fit.mu, fit.mu
+    gains = fit.gains * (s_y / s_u)
     cov = None
     se_shared = None
-    fits: list[Optional[FloatArray]]
-    if method == "refined":
-        short = [i for i, e in enumerate(prepared) if e.n < 2]
-        if short:
-            raise InsufficientDataError(
-                f"method='refined' estimates the noise floor from the period-to-period spread and needs at "
-                f"least 2 averaged periods; recordings {short} have 1. Use method='paper' or record longer"
-            )
-        weights = _weights(prepared)
-        substeps = max(_steady_substeps(e.p) for e in prepared)
-        # The separable fit knows nothing of the Bouc-Wen conditions (beta >= |gamma|) and a loop too
-        # linear to fix beta + gamma can put it outside them, where no steady loop exists: start the
-        # joint fit just inside, and within the mu bracket, and let the data speak.
-        beta = max(beta, abs(gamma) + MIN_BETA_PLUS_GAMMA)
-        margin = START_MU_MARGIN * (hi - lo)
-        mu = min(max(mu, lo + margin), hi - margin)
-        params, cost, iterations, _, fisher, loops = core.refine(
-            [e.ybar for e in prepared],
-            [e.rec.amplitude for e in prepared],
-            weights,
-            beta,
-            gamma,
-            mu,
-            gains,
-            phis,
-            max_iter=max_iter,
-            substeps=substeps,
-            mu_lo=lo,
-            mu_hi=hi,
-        )
-        params = np.asarray(params)
-        beta, gamma, mu = (float(v) for v in params[:3])
-        if min(mu - lo, hi - mu) <= AT_BOUND_FRACTION * (hi - lo):
-            lower = mu - lo <= hi - mu
-            err = SearchAtBoundError(
-                f"the joint fit ended on the {'lower' if lower else 'upper'} end of the mu bracket "
-                f"[{lo}, {hi}] (mu = {mu:.6g}); widen the bracket, or check that the data excite the "
-                "hysteresis"
-            )
-            err.lower, err.bound = lower, lo if lower else hi
-            raise err
-        gains = params[3::2].copy()
-        phis = params[4::2].copy()
-        fits = [np.asarray(w) for w in loops]
-        fisher = np.asarray(fisher)
-        # Flip the sign of g_i rows/columns where the canonical branch (|G| > 0) is reported.
-        flip = np.ones(3 + 2 * m)
-        flip[3::2] = np.where(gains < 0, -1.0, 1.0)
-        fisher = fisher * np.outer(flip, flip)
-        try:
-            cov = np.linalg.inv(fisher)
-        except np.linalg.LinAlgError:
-            cov = np.full_like(fisher, np.nan)
+    if fit.cov is not None:
+        # Delta method through the back-transformation (beta and gamma depend on mu through s_y^mu).
+        jac = np.eye(3 + 2 * m)
+        jac[0, 0] = jac[1, 1] = s_y**-fit.mu
+        jac[0, 2] = -beta * math.log(s_y)
+        jac[1, 2] = -gamma * math.log(s_y)
+        jac[3::2, 3::2] *= s_y / s_u
+        cov = jac @ fit.cov @ jac.T
         se_all = np.sqrt(np.abs(np.diag(cov)))
         se_shared = {"beta": float(se_all[0]), "gamma": float(se_all[1]), "mu": float(se_all[2])}
-    else:
-        fits = []
-        for i, e in enumerate(prepared):
-            w, _ = _loop_fit(core, e, gains[i], phis[i], beta, gamma, mu)
-            fits.append(w)
 
     experiments = []
     for i, e in enumerate(prepared):
         # (G, phi) and (-G, phi + pi) draw the same x = U G cos(omega t - phi): report |G| > 0.  The
         # phase is that of G itself, whatever the sign of U.
-        phase = phis[i] + e.rec.frequency * float(e.rec.t[0])
+        phase = fit.phis[i] + e.phase_shift
         if gains[i] < 0:
             phase += math.pi
-        w = fits[i]
+        loop = fit.loops[i]
+        w = None if loop is None else np.asarray(loop * s_y, dtype=np.float64)
         spread = float(np.linalg.norm(e.ybar - e.ybar.mean()))
         nrmse = float(np.linalg.norm(e.ybar - w)) / spread if w is not None and spread > 0 else math.nan
         experiments.append(
             ExperimentEstimate(
-                frequency=e.rec.frequency,
-                amplitude=e.rec.amplitude,
+                frequency=e.frequency,
+                amplitude=e.amplitude,
                 gain=abs(float(gains[i])),
                 phase=float(wrap_phase(phase)),
                 samples_per_period=e.p,
@@ -788,6 +802,7 @@ def identify(
                 phase_se=None if cov is None else float(math.sqrt(abs(cov[4 + 2 * i, 4 + 2 * i]))),
                 nrmse=nrmse,
                 model=w,
+                source=e.source,
             )
         )
 
@@ -800,10 +815,11 @@ def identify(
         )
     for note in notes:
         warnings.warn(note, IdentifiabilityWarning, stacklevel=2)
-    plants = [r.plant for r in recs]
+    plants = [e.plant for e in prepared]
     truth = None
-    if plants[0] is not None and all(pl is not None and pl.to_dict() == plants[0].to_dict() for pl in plants):
-        truth = Truth.from_plant(plants[0], np.array([e.frequency for e in experiments]))
+    first = plants[0]
+    if first is not None and all(pl is not None and pl.to_dict() == first.to_dict() for pl in plants):
+        truth = Truth.from_plant(first, np.array([e.frequency for e in experiments]))
     settings = {
         "settle_periods": settle_periods,
         "periods": periods,
@@ -812,24 +828,145 @@ def identify(
         "tol": tol,
         "phase_grid": phase_grid,
         "max_iter": max_iter,
+        "scales": {"y": s_y, "u": s_u},
     }
     return IdentificationResult(
         method=method,
         backend=backend,
         beta=float(beta),
         gamma=float(gamma),
-        mu=mu,
-        cost=float(cost),
-        iterations=int(iterations),
+        mu=float(mu),
+        cost=float(fit.cost),
+        iterations=int(fit.iterations),
         reference=reference,
         experiments=tuple(experiments),
         settings=settings,
         truth=truth,
         standard_errors=se_shared,
         covariance=cov,
-        adequacy=_adequacy(prepared, fits, 3 + 2 * m),
+        adequacy=_adequacy(
+            prepared, [None if w is None else w for w in (ex.model for ex in experiments)], 3 + 2 * m
+        ),
         warnings=tuple(notes),
         confidence=confidence,
+    )
+
+
+@dataclass
+class _Fit:
+    """Estimates in the scaled units the estimators worked in."""
+
+    beta: float
+    gamma: float
+    mu: float
+    gains: FloatArray
+    phis: FloatArray
+    cost: float
+    iterations: int
+    cov: Optional[FloatArray]
+    loops: list[Optional[FloatArray]]
+
+
+def _fit(
+    prepared: Sequence[_Prepared],
+    core: Any,
+    method: str,
+    reference: int,
+    lo: float,
+    hi: float,
+    tol: float,
+    phase_grid: int,
+    max_iter: int,
+) -> _Fit:
+    """Run the chosen estimator; phases are local (relative to each averaged window's first sample)."""
+    m = len(prepared)
+    phis = np.zeros(m)
+    gains = np.zeros(m)
+    ref = prepared[reference]
+    if method == "paper":
+        phis = np.array([float(core.phase_from_max(e.ybar)) for e in prepared])
+        mu, theta, cost, iterations = core.sls_search(
+            ref.ybar, ref.ydot, ref.amplitude, ref.frequency, phis[reference], lo, hi, tol
+        )
+        theta = np.asarray(theta)
+        beta, gamma = float(theta[1] / theta[0]), float(theta[2] / theta[0])
+        for i, e in enumerate(prepared):
+            gains[i] = (
+                float(theta[0])
+                if i == reference
+                else float(
+                    core.gain_estimate(e.ybar, e.ydot, e.amplitude, e.frequency, phis[i], beta, gamma, mu)
+                )
+            )
+    else:
+        phi_r, mu, g_r, beta, gamma, cost, _ = core.profile_phase_sls(
+            ref.ybar, ref.ydot, ref.amplitude, ref.frequency, lo, hi, tol, phase_grid
+        )
+        iterations = 0
+        for i, e in enumerate(prepared):
+            if i == reference:
+                gains[i], phis[i] = g_r, phi_r
+            else:
+                gains[i], phis[i], _ = core.profile_phase_gain(
+                    e.ybar, e.ydot, e.amplitude, e.frequency, beta, gamma, mu, phase_grid
+                )
+    mu = float(mu)
+    if method != "refined":
+        loops = [_loop_fit(core, e, gains[i], phis[i], beta, gamma, mu)[0] for i, e in enumerate(prepared)]
+        return _Fit(beta, gamma, mu, gains, phis, float(cost), int(iterations), None, loops)
+
+    short = [e.source for e in prepared if e.n < 2]
+    if short:
+        raise InsufficientDataError(
+            f"method='refined' estimates the noise floor from the period-to-period spread and needs at "
+            f"least 2 averaged periods; {', '.join(short)} have fewer. Use method='paper' or record longer"
+        )
+    weights = _weights(prepared)
+    substeps = max(_steady_substeps(e.p) for e in prepared)
+    # The separable fit knows nothing of the Bouc-Wen conditions (beta >= |gamma|) and a loop too
+    # linear to fix beta + gamma can put it outside them, where no steady loop exists: start the
+    # joint fit just inside, and within the mu bracket, and let the data speak.
+    beta = max(beta, abs(gamma) + MIN_BETA_PLUS_GAMMA)
+    margin = START_MU_MARGIN * (hi - lo)
+    mu = min(max(mu, lo + margin), hi - margin)
+    params, cost, iterations, _, fisher, loops = core.refine(
+        [e.ybar for e in prepared],
+        [e.amplitude for e in prepared],
+        weights,
+        beta,
+        gamma,
+        mu,
+        gains,
+        phis,
+        max_iter=max_iter,
+        substeps=substeps,
+        mu_lo=lo,
+        mu_hi=hi,
+    )
+    params = np.asarray(params)
+    beta, gamma, mu = (float(v) for v in params[:3])
+    if min(mu - lo, hi - mu) <= AT_BOUND_FRACTION * (hi - lo):
+        lower = mu - lo <= hi - mu
+        err = SearchAtBoundError(
+            f"the joint fit ended on the {'lower' if lower else 'upper'} end of the mu bracket "
+            f"[{lo}, {hi}] (mu = {mu:.6g}); widen the bracket, or check that the data excite the "
+            "hysteresis"
+        )
+        err.lower, err.bound = lower, lo if lower else hi
+        raise err
+    gains = params[3::2].copy()
+    phis = params[4::2].copy()
+    fisher = np.asarray(fisher)
+    # Flip the sign of g_i rows/columns where the canonical branch (|G| > 0) is reported.
+    flip = np.ones(3 + 2 * m)
+    flip[3::2] = np.where(gains < 0, -1.0, 1.0)
+    fisher = fisher * np.outer(flip, flip)
+    try:
+        cov = np.linalg.inv(fisher)
+    except np.linalg.LinAlgError:
+        cov = np.full_like(fisher, np.nan)
+    return _Fit(
+        beta, gamma, mu, gains, phis, float(cost), int(iterations), cov, [np.asarray(w) for w in loops]
     )
 
 
