@@ -24,12 +24,28 @@ __all__ = ["main"]
 
 
 def _write_report(result: IdentificationResult, out: Path) -> list[Path]:
+    """The report folder: result.json, the loops per experiment, the Bode points, the residuals."""
+    from .plotting import plot_loops, plot_residuals
+
     out.mkdir(parents=True, exist_ok=True)
-    files = [out / "result.json", out / "loops.png", out / "bode.png"]
+    files = [out / "result.json", out / "loops.png", out / "bode.png", out / "residuals.png"]
     files[0].write_text(result.to_json() + "\n", encoding="utf-8")
-    result.plot_loop().savefig(files[1], dpi=120)
+    plot_loops(result).savefig(files[1], dpi=120)
     result.plot_bode().savefig(files[2], dpi=120)
+    plot_residuals(result).savefig(files[3], dpi=120)
     return files
+
+
+def _progress(done: int, total: int, label: str) -> None:
+    """A one-line progress bar on stderr (plain lines when stderr is not a terminal)."""
+    width = 30
+    filled = width * done // max(total, 1)
+    bar = f"[{'#' * filled}{'.' * (width - filled)}] {done}/{total} {label}"
+    if sys.stderr.isatty():
+        sys.stderr.write("\r" + bar[:120].ljust(120) + ("\n" if done == total else ""))
+    else:
+        sys.stderr.write(bar + "\n")
+    sys.stderr.flush()
 
 
 def _add_identify_options(p: argparse.ArgumentParser) -> None:

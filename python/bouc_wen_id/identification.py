@@ -81,6 +81,8 @@ class ExperimentEstimate:
     nrmse: float = math.nan
     model: Optional[FloatArray] = field(default=None, repr=False)
     source: str = ""
+    #: omega t of the averaged grid's first sample (the grid's phase relative to u = U cos(omega t)).
+    grid_phase: float = 0.0
 
     @property
     def response(self) -> complex:
@@ -90,7 +92,16 @@ class ExperimentEstimate:
     def model_input(self) -> FloatArray:
         """The steady ``x(t) = U |G| cos(omega t - phi)`` on the averaged period's grid."""
         t = np.arange(self.samples_per_period) * (TWO_PI / self.frequency / self.samples_per_period)
-        out: FloatArray = self.amplitude * self.gain * np.cos(self.frequency * t - self.phase)
+        out: FloatArray = (
+            self.amplitude * self.gain * np.cos(self.frequency * t - self.phase + self.grid_phase)
+        )
+        return out
+
+    def times(self) -> FloatArray:
+        """Times (s) of the averaged period's samples, from the grid's first sample."""
+        out: FloatArray = np.arange(self.samples_per_period) * (
+            TWO_PI / self.frequency / self.samples_per_period
+        )
         return out
 
     def to_dict(self) -> dict[str, Any]:
@@ -803,6 +814,7 @@ def identify(
                 nrmse=nrmse,
                 model=w,
                 source=e.source,
+                grid_phase=float(wrap_phase(e.phase_shift)),
             )
         )
 

@@ -13,7 +13,7 @@ if TYPE_CHECKING:  # pragma: no cover - typing only
 
     from .identification import IdentificationResult
 
-__all__ = ["plot_loop", "plot_bode"]
+__all__ = ["plot_loop", "plot_loops", "plot_bode", "plot_residuals"]
 
 
 def _new_figure(
@@ -86,4 +86,52 @@ def plot_bode(result: IdentificationResult, axes: Optional[Sequence[Axes]] = Non
         ax.grid(True, which="both", alpha=0.3)
         ax.legend(fontsize=8)
     ax_g.set_title("Frequency response of the linear part")
+    return fig
+
+
+def _grid(n: int, size: float = 2.6) -> tuple[Figure, list[Axes]]:
+    ncols = min(n, 5)
+    nrows = -(-n // ncols)
+    return _new_figure(ncols=ncols, nrows=nrows, size=(size * ncols + 0.5, size * nrows + 0.5))
+
+
+def plot_loops(result: IdentificationResult) -> Figure:
+    """One panel per experiment: the measured averaged loop (solid) and the model's (dashed)."""
+    n = len(result.experiments)
+    fig, axes = _grid(n)
+    for ax in axes[n:]:
+        ax.set_visible(False)
+    for i, (ax, e) in enumerate(zip(axes, result.experiments)):
+        x = np.append(e.model_input(), e.model_input()[:1])
+        ax.plot(x, np.append(e.ybar, e.ybar[:1]), lw=1.2, color="C0", label="measured")
+        if e.model is not None:
+            ax.plot(x, np.append(e.model, e.model[:1]), "--", lw=1.0, color="C3", label="model")
+        title = e.source or f"experiment {i}"
+        ax.set_title(f"{title}\nomega={e.frequency:.3g}, NRMSE={e.nrmse:.2g}", fontsize=7)
+        ax.tick_params(labelsize=6)
+        ax.grid(True, alpha=0.3)
+    axes[0].legend(fontsize=6)
+    fig.suptitle("Averaged loops against the identified x: measured (solid), model (dashed)", fontsize=9)
+    return fig
+
+
+def plot_residuals(result: IdentificationResult) -> Figure:
+    """One panel per experiment: the averaged output minus the model over one period, against time,
+    with the +-2 sigma band of the averaged noise (sigma / sqrt(N))."""
+    n = len(result.experiments)
+    fig, axes = _grid(n)
+    for ax in axes[n:]:
+        ax.set_visible(False)
+    for i, (ax, e) in enumerate(zip(axes, result.experiments)):
+        t = e.times()
+        if e.model is not None:
+            ax.plot(t, e.ybar - e.model, lw=1.0, color="C0")
+        if np.isfinite(e.noise_sd) and e.periods > 0:
+            band = 2 * e.noise_sd / np.sqrt(e.periods)
+            ax.axhspan(-band, band, color="0.85", zorder=0)
+        ax.set_title(e.source or f"experiment {i}", fontsize=7)
+        ax.tick_params(labelsize=6)
+        ax.grid(True, alpha=0.3)
+    fig.suptitle("Residual ybar - model over one period (grey: +-2 sigma/sqrt(N) noise band)", fontsize=9)
+    fig.supxlabel("time within the period (s)", fontsize=8)
     return fig
