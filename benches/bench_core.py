@@ -68,6 +68,7 @@ import os
 import platform
 import sys
 import time
+import warnings
 from typing import Any, Callable
 
 # One BLAS thread unless the caller says otherwise (export OPENBLAS_NUM_THREADS=... to override): the Rust
@@ -620,7 +621,9 @@ def main(argv: list[str] | None = None) -> int:
     size = f"{n_tot:,} samples"
     min_time = 0.02 if quick else 0.5
     reps = 3 if quick else 5
-    # The paper's method with every harmonic (the issue-2 pipeline that core_calls() below mirrors).
+    # The paper's method with every harmonic (the issue-2 pipeline that core_calls() below mirrors).  Its
+    # estimates on these noisy data break beta >= |gamma|, which identify() reports with a warning.
+    warnings.simplefilter("ignore", bouc_wen_id.IdentifiabilityWarning)
     paper = {"method": "paper", "harmonics": "all"}
     t_ir, res_r = best_per_call(lambda: bouc_wen_id.identify(recs, backend="rust", **paper), reps, min_time)
     rep.row(label, 'rust  identify(method="paper")', size, fmt_time(t_ir), "per identification")
@@ -680,7 +683,10 @@ def main(argv: list[str] | None = None) -> int:
     rep.row(label, "  rust core calls only", size, fmt_time(t_cr), "per identification")
     t_cn, mu_cn = best_per_call(lambda: core_calls(reference), reps, min_time)
     rep.row(label, "  numpy core calls only", size, fmt_time(t_cn), "per identification")
-    assert mu_cr == res_r.mu and mu_cn == res_n.mu, "core_calls() no longer mirrors identify()"
+    # identify() works in normalised units, so the mirror agrees to the golden search's tolerance only.
+    assert abs(mu_cr - res_r.mu) < 1e-6 and abs(mu_cn - res_n.mu) < 1e-6, (
+        "core_calls() no longer mirrors identify()"
+    )
     # The one core call per recording whose cost grows as P * K: the spectral derivative with identify()'s
     # default K = (P - 1) // 2 (diagnostic row: it dominates the Rust core calls above).
     r_sd = recs[0]
