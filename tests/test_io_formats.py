@@ -1,0 +1,645 @@
+"""Lab measurements and the CSV, NPZ and MAT formats: round trips, layouts, malformed files, clipping."""
+
+from __future__ import annotations
+
+import io as _stdio
+import json
+import math
+import struct
+import zlib
+from pathlib import Path
+from typing import Any, Callable
+
+import bouc_wen_id as bw
+import numpy as np
+import pytest
+import scipy.io
+import scipy.sparse
+from bouc_wen_id import io
+from bouc_wen_id.errors import (
+    ClippingError,
+    FileFormatError,
+    InsufficientDataError,
+    InvalidParameterError,
+    NonFiniteError,
+    TimeAxisError,
+)
+from bouc_wen_id.measurement import Measurement, clipping_check
+
+REAL = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "real"
+
+
+def _measurement(n: int = 400, rate: float = 1000.0, **kw: Any) -> Measurement:
+    """A lab-like record: 7.3 Hz sine (not a whole number of samples per period) and a lagging response."""
+    k = np.arange(n)
+    u = 4.2 * np.sin(2 * np.pi * 7.3 * k / rate) - 29.9
+    y = 1500.0 * np.sin(2 * np.pi * 7.3 * k / rate + 1.2) + 40.0
+    defaults: dict[str, Any] = {
+        "nominal_frequency": 2 * np.pi * 7.2,
+        "units": {"u": "mm", "y": "N"},
+        "channels": {"u": "CHANNEL0", "y": "CHANNEL1"},
+        "name": "ME5mm3Hz, 0.5 A",
+        "metadata": {"operator": "M. Quiroz", "note": 'quotes " and, commas; µm Выход'},
+    }
+    defaults.update(kw)
+    return Measurement.from_rate(rate, u, y, **defaults)
+
+
+def _assert_same(a: io.Item, b: io.Item, exact: bool = True) -> None:
+    assert type(a) is type(b)
+    for name in ("t", "u", "y", "x", "w"):
+        va, vb = getattr(a, name, None), getattr(b, name, None)
+        assert (va is None) == (vb is None), name
+        if va is not None:
+            if exact:
+                assert np.array_equal(va, vb), name
+            else:
+                np.testing.assert_allclose(vb, va, rtol=1e-15, atol=0, err_msg=name)
+    if isinstance(a, Measurement) and isinstance(b, Measurement):
+        assert a.name == b.name
+        assert a.nominal_frequency == b.nominal_frequency
+        assert dict(a.units) == dict(b.units)
+        assert dict(a.channels) == dict(b.channels)
+        assert dict(a.metadata) == dict(b.metadata)
+    if isinstance(a, bw.Recording) and isinstance(b, bw.Recording):
+        assert (a.amplitude, a.frequency, a.settle_periods) == (b.amplitude, b.frequency, b.settle_periods)
+        assert dict(a.metadata) == dict(b.metadata)
+        assert (a.plant is None) == (b.plant is None)
+        if a.plant is not None and b.plant is not None:
+            assert a.plant.to_dict() == b.plant.to_dict()
+
+
+@pytest.fixture(scope="module")
+def recordings() -> list[bw.Recording]:
+    plan = bw.SinePlan([2.0, 5.0], [0.5, -0.25], settle_periods=1, periods=2, samples_per_period=32, seed=1)
+    return bw.simulate(bw.demo_plant(), plan)
+
+
+# --------------------------------------------------------------------------------------------------
+# Measurement
+# --------------------------------------------------------------------------------------------------
+
+
+def test_measurement_copies_and_freezes_its_arrays() -> None:
+    t, u, y = np.arange(10) * 0.01, np.arange(10.0), np.ones(10)
+    m = Measurement(t, u, y, units={"u": "V"})
+    u[0] = 99.0
+    assert m.u[0] == 0.0
+    for arr in (m.t, m.u, m.y):
+        assert not arr.flags.writeable
+        assert arr.dtype == np.float64
+    assert dict(m.units) == {"t": "s", "u": "V"}
+    assert m.nominal_frequency is None and m.name == "" and dict(m.metadata) == {}
+    assert len(m) == 10 and m.dt == pytest.approx(0.01) and m.sample_rate == pytest.approx(100.0)
+    assert m.duration == pytest.approx(0.09)
+
+
+def test_from_rate_builds_t_as_k_over_rate() -> None:
+    m = Measurement.from_rate(10240, np.zeros(7), np.ones(7), nominal_frequency=2 * np.pi * 16)
+    assert np.array_equal(m.t, np.arange(7) / 10240.0)
+    assert m.nominal_frequency == 2 * np.pi * 16
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "error", "match"),
+    [
+        ({"t": np.arange(5.0), "u": np.zeros(4)}, InvalidParameterError, "equal lengths"),
+        ({"y": [0, 1, np.nan, 3, 4]}, NonFiniteError, "y holds a non-finite value"),
+        ({"u": [0, np.inf, 2, 3, 4]}, NonFiniteError, "u holds"),
+        ({"t": [0, 1, 2, 2, 3]}, TimeAxisError, "not strictly increasing"),
+        ({"t": [0, 1, 3, 2, 4]}, TimeAxisError, "not strictly increasing"),
+        ({"t": [0, 1, 2.02, 3, 4]}, TimeAxisError, "not uniformly sampled"),
+        ({"t": [0.0], "u": [0.0], "y": [0.0]}, InsufficientDataError, "at least 2"),
+        ({"t": np.zeros((5, 1))}, InvalidParameterError, "1-D"),
+        ({"u": np.array([1j, 0, 0, 0, 0])}, InvalidParameterError, "real numbers"),
+        ({"nominal_frequency": 0.0}, InvalidParameterError, "> 0"),
+        ({"nominal_frequency": math.nan}, NonFiniteError, "not finite"),
+        ({"units": {"t": "ms"}}, InvalidParameterError, "seconds"),
+        ({"units": {"force": "N"}}, InvalidParameterError, "keyed by"),
+        ({"channels": {"u": 3}}, InvalidParameterError, "string"),
+        ({"metadata": {"units": "mm"}}, InvalidParameterError, "reserved"),
+        ({"metadata": {"a: b": "c"}}, InvalidParameterError, "metadata key"),
+        ({"metadata": {"line\nbreak": "c"}}, InvalidParameterError, "metadata key"),
+    ],
+)
+def test_measurement_refuses_bad_input(kwargs: dict[str, Any], error: type[Exception], match: str) -> None:
+    args: dict[str, Any] = {"t": np.arange(5.0), "u": np.zeros(5), "y": np.zeros(5)}
+    args.update(kwargs)
+    with pytest.raises(error, match=match):
+        Measurement(args.pop("t"), args.pop("u"), args.pop("y"), **args)
+
+
+def test_small_jitter_is_accepted() -> None:
+    t = np.arange(100) * 1e-3
+    t[50] += 0.4e-5  # steps of 1.004 ms and 0.996 ms: within 1 % of the median step
+    Measurement(t, np.zeros(100), np.zeros(100))
+
+
+def test_segment_scaled_and_to_recording(recordings: list[bw.Recording]) -> None:
+    m = _measurement()
+    seg = m.segment(0.1, 0.2)
+    assert seg.t[0] >= 0.1 and seg.t[-1] < 0.2 and seg.t.size == 100
+    assert seg.name == m.name and dict(seg.units) == dict(m.units)
+    s = m.scaled(u=10.0, y=980.665, units={"y": "N (scaled)"})
+    assert np.array_equal(s.u, m.u * 10.0) and s.units["y"] == "N (scaled)" and s.units["u"] == "mm"
+    # A measurement of known U and omega becomes a recording that identifies like the original.
+    rec = recordings[0]
+    meas = Measurement(rec.t, rec.u, rec.y, name="exp 0", units={"u": "mm"}, metadata={"rig": "A"})
+    back = meas.to_recording(rec.amplitude, rec.frequency, settle_periods=rec.settle_periods)
+    assert isinstance(back, bw.Recording)
+    assert np.array_equal(back.y, rec.y) and back.samples_per_period == rec.samples_per_period
+    assert back.metadata["name"] == "exp 0" and back.metadata["rig"] == "A"
+    assert json.loads(back.metadata["units"]) == {"t": "s", "u": "mm"}
+    assert bw.identify([back], method="paper").mu == bw.identify([rec], method="paper").mu
+
+
+# --------------------------------------------------------------------------------------------------
+# Clipping
+# --------------------------------------------------------------------------------------------------
+
+
+def _sine(periods: float = 20, p: float = 400.3, amp: float = 1.0, phase: float = 0.3) -> np.ndarray:
+    k = np.arange(int(periods * p))
+    out: np.ndarray = amp * np.cos(2 * np.pi * k / p + phase)
+    return out
+
+
+def test_clean_and_quantised_sines_are_not_clipped() -> None:
+    clipping_check(_sine(), "clean")
+    rng = np.random.default_rng(3)
+    for levels in (16, 78, 256, 4096):
+        q = 2.0 / levels
+        # An 8-bit-like scope trace repeats its top level for tens of samples per period: legitimate.
+        clipping_check(np.round(_sine() / q) * q, f"quantised {levels}")
+        noisy = _sine() + 0.3 * q * rng.standard_normal(_sine().size)
+        clipping_check(np.round(noisy / q) * q, f"noisy quantised {levels}")
+    clipping_check(np.full(100, 3.0), "constant")  # no extremes to judge: other checks refuse it
+    # Settles onto its plateau (exactly 1.0 in floating point for a stretch of every period), no cut.
+    saturating = np.tanh(40 * _sine())
+    assert np.count_nonzero(saturating == 1.0) > 0.05 * saturating.size
+    clipping_check(saturating, "saturating")
+
+
+@pytest.mark.parametrize("levels", [None, 256, 4096])
+def test_clipped_sines_are_refused(levels: int | None) -> None:
+    x = np.clip(_sine(), -2.0, 0.9)  # a rail at 90 % of the amplitude, on one side only
+    if levels is not None:
+        q = 2.0 / levels
+        x = np.round(x / q) * q
+    with pytest.raises(ClippingError, match="clipped at its maximum"):
+        clipping_check(x, "force")
+
+
+def test_a_few_flat_runs_are_not_clipping() -> None:
+    x = _sine(periods=20)
+    x[: int(2.2 * 400.3)] = np.minimum(x[: int(2.2 * 400.3)], 0.8)  # only two clipped peaks
+    x[int(2.2 * 400.3) :] *= 0.9
+    clipping_check(x, "two runs")
+
+
+def test_measurement_check_names_the_channel() -> None:
+    x = _sine()
+    m = Measurement.from_rate(1000, np.clip(x, -0.8, 0.8), x, channels={"u": "LVDT 2"}, name="run 7")
+    with pytest.raises(ClippingError, match=r"run 7: u \(LVDT 2\)"):
+        m.check()
+    Measurement.from_rate(1000, x, x).check()
+
+
+def test_simulated_recordings_pass_the_clipping_check() -> None:
+    plan = bw.SinePlan([1.0, 8.0], 3.0, settle_periods=2, periods=4, samples_per_period=512)
+    for rec in bw.simulate(bw.demo_plant(), plan):
+        Measurement(rec.t, rec.u, rec.y).check()
+
+
+def _real(folder: str) -> Path:
+    path = REAL / folder
+    if not path.is_dir():
+        pytest.fail(f"the real-data folder {path} is missing: these tests need ../shared/data/real/")
+    return path
+
+
+def test_real_scope_captures_load_headerless_and_are_not_clipped() -> None:
+    """The microwire B-H captures: 8-bit scope, no header, no time column (the dt of PROVENANCE.md)."""
+    folder = _real("bh-loop-microwire")
+    dt = {"50kHz": 5e-8, "100kHz": 2e-8, "200kHz": 1e-8, "250kHz": 1e-8}
+    for stem, step in dt.items():
+        (m,) = io.load(folder / f"{stem}.csv", columns={"u": 1, "y": 0}, sample_rate=1 / step)
+        assert isinstance(m, Measurement) and m.t.size == 1200 and m.name == stem
+        assert dict(m.channels) == {"u": "column 1", "y": "column 0"}
+        assert m.sample_rate == pytest.approx(1 / step)
+        m.check()  # the reference channel repeats its top level for ~30 samples: not a clip
+
+
+def test_real_lab_channels_are_not_clipped() -> None:
+    rope = np.loadtxt(_real("wire-rope-isolator") / "18Hz_A4.txt")
+    Measurement.from_rate(10240, rope[:, 1], rope[:, 0]).check()
+    data = json.loads((_real("friction-damper-brfd") / "1Hz30lbtension1amplitude.json").read_text())
+    arr = np.array(data["data"])
+    Measurement(arr[:, 0], arr[:, 1], arr[:, 2], units={"u": "in", "y": "kip"}).check()
+    lines = (_real("mr-damper-utfsm") / "ME2mm5Hz.txt").read_text(encoding="latin-1").splitlines()[7:]
+    cols = np.array([[float(c) for c in line.split(",")[2:4]] for line in lines])
+    m = Measurement.from_rate(200, cols[:, 1] * 10, cols[:, 0] * 980.665, units={"u": "mm", "y": "N"})
+    m.check()
+    # The same force channel cut at a rail is caught.
+    rail = np.percentile(m.y, 97)
+    with pytest.raises(ClippingError):
+        clipping_check(np.minimum(m.y, rail), "force")
+
+
+# --------------------------------------------------------------------------------------------------
+# Round trips
+# --------------------------------------------------------------------------------------------------
+
+
+def test_csv_round_trip_of_a_measurement(tmp_path: Path) -> None:
+    m = _measurement()
+    path = tmp_path / "m.csv"
+    io.write_csv(path, m)
+    text = path.read_text(encoding="utf-8")
+    assert text.startswith('# format: "bouc_wen_id.measurement"\n# version: 1\n')
+    assert '# units: {"t": "s", "u": "mm", "y": "N"}' in text and "\nt,u,y\n" in text
+    back = io.read_csv(path)
+    _assert_same(m, back, exact=False)
+    _assert_same(m, back)  # %.17g round-trips a double exactly
+    # No nominal frequency, no name, no units: still the same after the trip.
+    bare = Measurement(m.t, m.u, m.y)
+    io.write_csv(path, bare)
+    _assert_same(bare, io.read_csv(path))
+
+
+def test_csv_sample_rate_variant(tmp_path: Path) -> None:
+    m = _measurement(rate=10240.0)
+    path = tmp_path / "rate.csv"
+    io.write_csv(path, m, sample_rate=10240)
+    text = path.read_text(encoding="utf-8")
+    assert "# sample_rate: 10240.0\n" in text and "\nu,y\n" in text
+    _assert_same(m, io.read_csv(path))
+    with pytest.raises(InvalidParameterError, match="not t = k"):
+        io.write_csv(path, m, sample_rate=1000)
+    # The same file without the header line reads with the rate as an argument.
+    body = "\n".join(line for line in text.splitlines() if not line.startswith("# sample_rate")) + "\n"
+    path.write_text(body, encoding="utf-8")
+    _assert_same(m, io.read_csv(path, sample_rate=10240.0))
+    with pytest.raises(FileFormatError, match="no time column"):
+        io.read_csv(path)
+
+
+def test_hand_written_csv_with_named_columns_and_units(tmp_path: Path) -> None:
+    k = np.arange(64)
+    disp, force = np.sin(k / 5.0), np.cos(k / 5.0)
+    rows = "\n".join(
+        f"{f!r},{i},{d!r},{i * 0.5!r}" for i, d, f in zip(k.tolist(), disp.tolist(), force.tolist())
+    )
+    path = tmp_path / "lab.csv"
+    path.write_text(
+        '# units: {"u": "mm", "y": "N"}\n'
+        "# nominal_frequency_hz: 2.0\n"
+        '# name: "damper A"\n'
+        "# operator: J. Smith\n"
+        "# temperature_C: 21.5\n"
+        "# sample_rate: 500\n"
+        "force_N,sample,disp_mm,time_s\n" + rows + "\n",
+        encoding="utf-8",
+    )
+    (m,) = io.load(path, columns={"u": "disp_mm", "y": "force_N"})
+    assert isinstance(m, Measurement)
+    assert np.array_equal(m.u, disp) and np.array_equal(m.y, force)
+    assert np.array_equal(m.t, k / 500.0)
+    assert m.nominal_frequency == pytest.approx(4 * np.pi, rel=1e-15)
+    assert m.name == "damper A"
+    assert dict(m.units) == {"t": "s", "u": "mm", "y": "N"}
+    assert dict(m.channels) == {"u": "disp_mm", "y": "force_N"}
+    # A header value that is not JSON is kept as its text; a JSON number as its JSON text.
+    assert dict(m.metadata) == {"operator": "J. Smith", "temperature_C": "21.5"}
+    # The time column can be mapped too; it must then agree with the stated rate (0.5 s is not 500 Hz).
+    with pytest.raises(FileFormatError, match="not at the stated sample rate"):
+        io.load(path, columns={"u": "disp_mm", "y": "force_N", "t": "time_s"})
+
+
+def test_mapped_time_column_must_match_the_stated_rate(tmp_path: Path) -> None:
+    path = tmp_path / "t.csv"
+    path.write_text("# sample_rate: 500\nsec,u,y\n" + "".join(f"{i * 0.5},{i},{-i}\n" for i in range(20)))
+    with pytest.raises(FileFormatError, match="not at the stated sample rate"):
+        io.load(path, columns={"t": "sec"})
+    path.write_text("sec,u,y\n" + "".join(f"{i * 0.5},{i},{-i}\n" for i in range(20)))
+    (m,) = io.load(path, columns={"t": "sec"})
+    assert isinstance(m, Measurement) and m.sample_rate == 2.0 and m.channels["t"] == "sec"
+
+
+def test_headerless_and_other_delimiters(tmp_path: Path) -> None:
+    data = np.column_stack([np.linspace(-1, 1, 30), np.linspace(2, 3, 30)])
+    for delim in (",", ";", "\t", " "):
+        path = tmp_path / "raw.csv"
+        path.write_text("\n".join(delim.join(f"{float(v)!r}" for v in row) for row in data) + "\n")
+        (m,) = io.load(path, columns={"u": 1, "y": 0}, sample_rate=10240)
+        assert isinstance(m, Measurement)
+        assert np.array_equal(m.u, data[:, 1]) and np.array_equal(m.y, data[:, 0]), delim
+    with pytest.raises(FileFormatError, match="no line of column names"):
+        io.load(path, sample_rate=10240)
+
+
+def test_recording_csv_reads_as_recording_and_plain_csv_as_measurement(
+    tmp_path: Path, recordings: list[bw.Recording]
+) -> None:
+    io.write_csv(tmp_path / "rec.csv", recordings[0])
+    (rec,) = io.load(tmp_path / "rec.csv")
+    _assert_same(recordings[0], rec)
+    t = np.arange(40) * 0.01
+    text = "t,u,y\n" + "".join(f"{a!r},{math.cos(a)!r},{math.sin(a)!r}\n" for a in t.tolist())
+    (tmp_path / "meas.csv").write_text(text)
+    (meas,) = io.load(tmp_path / "meas.csv")
+    assert isinstance(meas, Measurement) and meas.name == "meas"
+    # amplitude and frequency in the header, no format line: the paper's Recording.
+    (tmp_path / "meas.csv").write_text(f"# amplitude: 1.0\n# frequency: {2 * np.pi / 0.4!r}\n" + text)
+    (rec2,) = io.load(tmp_path / "meas.csv")
+    assert isinstance(rec2, bw.Recording) and rec2.samples_per_period == 40
+
+
+def test_load_recordings_refuses_measurements(tmp_path: Path, recordings: list[bw.Recording]) -> None:
+    io.save(tmp_path / "mixed.npz", [recordings[0], _measurement()])
+    assert len(io.load(tmp_path / "mixed.npz")) == 2
+    with pytest.raises(FileFormatError, match="holds a measurement"):
+        io.load_recordings(tmp_path / "mixed.npz")
+
+
+def test_npz_bundle_mixes_recordings_and_measurements(tmp_path: Path, recordings: list[bw.Recording]) -> None:
+    items: list[io.Item] = [
+        recordings[0],
+        _measurement(),
+        recordings[1],
+        _measurement(nominal_frequency=None),
+    ]
+    path = tmp_path / "bundle.npz"
+    assert io.save(path, items) == [path]
+    back = io.load(path)
+    assert [type(b) for b in back] == [type(a) for a in items]
+    for a, b in zip(items, back):
+        _assert_same(a, b)
+    with np.load(path) as z:
+        kinds = [h["format"] for h in json.loads(str(z["meta"]))]
+    assert kinds == [io.FORMAT, io.MEASUREMENT_FORMAT, io.FORMAT, io.MEASUREMENT_FORMAT]
+
+
+def test_plain_npz_archives(tmp_path: Path) -> None:
+    u, y = np.linspace(0, 1, 50), np.linspace(1, 2, 50)
+    np.savez(tmp_path / "a.npz", disp=u, force=y, fs=np.float64(200.0))
+    (m,) = io.load(tmp_path / "a.npz", columns={"u": "disp", "y": "force"})
+    assert isinstance(m, Measurement) and np.array_equal(m.t, np.arange(50) / 200.0)
+    assert dict(m.channels) == {"u": "disp", "y": "force"} and m.name == "a"
+    meta = json.dumps({"name": "plain", "units": {"u": "mm"}, "nominal_frequency_hz": 1.5})
+    np.savez(tmp_path / "b.npz", t=np.arange(50) * 0.1, u=u, y=y, meta=np.array(meta))
+    (m,) = io.load(tmp_path / "b.npz")
+    assert isinstance(m, Measurement) and m.name == "plain" and m.units["u"] == "mm"
+    assert m.nominal_frequency == pytest.approx(3 * np.pi)
+
+
+def test_mat_round_trips(tmp_path: Path, recordings: list[bw.Recording]) -> None:
+    m = _measurement()
+    single = tmp_path / "one.mat"
+    io.save(single, [m])
+    raw = scipy.io.loadmat(single, simplify_cells=True)
+    assert {"t", "u", "y", "meta"} <= set(raw) and "experiments" not in raw
+    assert json.loads(raw["meta"])["format"] == io.MEASUREMENT_FORMAT
+    (back,) = io.load(single)
+    _assert_same(m, back)
+    # Several measurements: a struct array; recordings (with x, w) and measurements: a cell array.
+    for name, items in (
+        ("same.mat", [m, _measurement(name="other")]),
+        ("mixed.mat", [recordings[0], m, recordings[1]]),
+    ):
+        path = tmp_path / name
+        io.save(path, items)
+        back_items = io.load(path)
+        assert len(back_items) == len(items)
+        for a, b in zip(items, back_items):
+            _assert_same(a, b)
+    raw = scipy.io.loadmat(tmp_path / "same.mat")
+    assert raw["experiments"].dtype.names is not None  # a struct array
+    io.write_mat(tmp_path / "b1.mat", [m], bundle=True)
+    (b1,) = io.load(tmp_path / "b1.mat")
+    _assert_same(m, b1)
+
+
+def test_matlab_written_files(tmp_path: Path) -> None:
+    """What a MATLAB user saves: own variable names, a sampling frequency, column vectors, integers."""
+    u = np.arange(-50, 50, dtype=np.int16).reshape(-1, 1)
+    y = np.linspace(0, 1, 100).reshape(1, -1)
+    scipy.io.savemat(tmp_path / "lab.mat", {"disp": u, "force": y, "fs": 1000.0})
+    (m,) = io.load(tmp_path / "lab.mat", columns={"u": "disp", "y": "force"})
+    assert isinstance(m, Measurement)
+    assert np.array_equal(m.u, u.ravel().astype(float)) and np.array_equal(m.y, y.ravel())
+    assert np.array_equal(m.t, np.arange(100) / 1000.0) and m.name == "lab"
+    exps = np.empty((1, 2), dtype=object)
+    exps[0, 0] = {"u": u.ravel().astype(float), "y": y.ravel(), "sample_rate": 500.0}
+    exps[0, 1] = {"u": y.ravel(), "y": y.ravel(), "t": np.arange(100) * 0.5, "meta": '{"name": "second"}'}
+    scipy.io.savemat(tmp_path / "cells.mat", {"experiments": exps})
+    first, second = io.load(tmp_path / "cells.mat")
+    assert isinstance(first, Measurement) and first.sample_rate == pytest.approx(500.0)
+    assert first.name == "cells[0]" and isinstance(second, Measurement) and second.name == "second"
+
+
+def test_folders_and_save_layouts(tmp_path: Path, recordings: list[bw.Recording]) -> None:
+    items: list[io.Item] = [recordings[0], _measurement(), recordings[1]]
+    for fmt in ("csv", "npz", "mat"):
+        folder = tmp_path / fmt
+        files = io.save(folder, items, fmt=fmt)  # type: ignore[arg-type]
+        assert [f.name for f in files] == [f"exp_{i:03d}.{fmt}" for i in range(3)]
+        back = io.load(folder)
+        for a, b in zip(items, back):
+            _assert_same(a, b)
+    # A folder of mixed formats loads in name order; hidden files and other suffixes are skipped.
+    mixed = tmp_path / "mixed"
+    mixed.mkdir()
+    io.save(mixed / "b.mat", [items[1]])
+    io.save(mixed / "a.csv", [items[0]])
+    io.save(mixed / "c.npz", [items[2], items[1]])
+    (mixed / "notes.txt").write_text("not data")
+    (mixed / ".hidden.csv").write_text("garbage")
+    back = io.load(mixed)
+    for a, b in zip([items[0], items[1], items[2], items[1]], back):
+        _assert_same(a, b)
+    assert len(io.load([mixed / "c.npz", mixed / "a.csv"])) == 3
+    with pytest.raises(InvalidParameterError, match="one experiment"):
+        io.save(tmp_path / "two.csv", items[:2])
+    with pytest.raises(InvalidParameterError, match="nothing to save"):
+        io.save(tmp_path / "none.npz", [])
+    with pytest.raises(InvalidParameterError, match="fmt"):
+        io.save(tmp_path / "f", items, fmt="xls")  # type: ignore[arg-type]
+    with pytest.raises(InvalidParameterError, match="columns"):
+        io.load(mixed, columns={"force": "y"})
+    with pytest.raises(InvalidParameterError, match="sample_rate"):
+        io.load(mixed, sample_rate=-1.0)
+
+
+def test_save_recordings_keeps_todays_layout(tmp_path: Path, recordings: list[bw.Recording]) -> None:
+    files = io.save_recordings(tmp_path / "recs", recordings)
+    assert [f.name for f in files] == ["exp_000.csv", "exp_001.csv"]
+    for a, b in zip(recordings, io.load_recordings(tmp_path / "recs")):
+        _assert_same(a, b)
+    assert io.save_recordings(tmp_path / "r.mat", recordings) == [tmp_path / "r.mat"]
+    for a, b in zip(recordings, io.load_recordings(tmp_path / "r.mat")):
+        _assert_same(a, b)
+
+
+# --------------------------------------------------------------------------------------------------
+# Malformed files
+# --------------------------------------------------------------------------------------------------
+
+ROWS = "".join(f"{i * 0.01!r},{math.sin(i)!r},{math.cos(i)!r}\n" for i in range(20))
+
+
+def _npz(**arrays: Any) -> Callable[[Path], None]:
+    def write(path: Path) -> None:
+        with open(path, "wb") as fh:
+            np.savez(fh, **arrays)
+
+    return write
+
+
+def _mat(**variables: Any) -> Callable[[Path], None]:
+    return lambda path: scipy.io.savemat(path, variables)
+
+
+def _text(text: str) -> Callable[[Path], None]:
+    return lambda path: path.write_text(text, encoding="utf-8")
+
+
+def _bytes(data: bytes) -> Callable[[Path], None]:
+    return lambda path: path.write_bytes(data)
+
+
+def _patched_mat(
+    variables: dict[str, Any], patches: dict[int, int], compressed: bool = False
+) -> Callable[[Path], None]:
+    """A MAT file with bytes of its (inflated) first variable overwritten: offsets from the variable's tag."""
+
+    def write(path: Path) -> None:
+        buf = _stdio.BytesIO()
+        scipy.io.savemat(buf, variables, do_compression=compressed)
+        data = bytearray(buf.getvalue())
+        if not compressed:
+            for at, byte in patches.items():
+                data[128 + at] = byte
+        else:
+            (count,) = struct.unpack_from("<I", data, 132)
+            raw = bytearray(zlib.decompress(bytes(data[136 : 136 + count])))
+            for at, byte in patches.items():
+                raw[at] = byte
+            body = zlib.compress(bytes(raw))
+            data = data[:128] + struct.pack("<II", 15, len(body)) + body + data[136 + count :]
+        path.write_bytes(bytes(data))
+
+    return write
+
+
+U = np.linspace(0, 1, 20)
+MALFORMED: list[tuple[str, Callable[[Path], None], str]] = [
+    ("empty.csv", _text(""), "empty"),
+    ("blank.csv", _text("\n  \n"), "empty"),
+    ("header_only.csv", _text('# name: "x"\n'), "no column names and no data"),
+    ("names_only.csv", _text("t,u,y\n"), "no data rows"),
+    ("missing_column.csv", _text("t,u\n0,1\n1,2\n"), "no 'y' data"),
+    ("non_numeric.csv", _text("t,u,y\n" + ROWS + "0.2,abc,1\n"), "line 22, field 2: 'abc' is not a number"),
+    ("ragged.csv", _text("t,u,y\n" + ROWS + "0.2,1\n"), "line 22 has 2 fields"),
+    ("too_many_fields.csv", _text("t,u,y\n0,1,2,3\n1,2,3,4\n"), "3 column names but 4 columns"),
+    ("bad_units_json.csv", _text('# units: {"u": "mm"\nt,u,y\n' + ROWS), "'units' is not valid JSON"),
+    ("units_not_object.csv", _text('# units: "mm"\nt,u,y\n' + ROWS), "must be a JSON object"),
+    ("nominal_not_number.csv", _text('# nominal_frequency: "fast"\nt,u,y\n' + ROWS), "must be a number"),
+    ("duplicate_key.csv", _text("# name: 1\n# name: 2\nt,u,y\n" + ROWS), "appears twice"),
+    ("duplicate_column.csv", _text("t,u,u,y\n0,1,2,3\n"), "more than once"),
+    ("empty_column_name.csv", _text("t,,y\n0,1,2\n"), "has no name"),
+    ("no_separator.csv", _text("# just a comment\nt,u,y\n" + ROWS), "is not '# key: value'"),
+    ("amplitude_only.csv", _text("# amplitude: 1.0\nt,u,y\n" + ROWS), "no 'frequency'"),
+    ("unknown_format.csv", _text('# format: "other"\nt,u,y\n' + ROWS), "format 'other'"),
+    ("newer.csv", _text('# format: "bouc_wen_id.measurement"\n# version: 2\nt,u,y\n' + ROWS), "newer"),
+    ("bad_version.csv", _text("# version: 1.5\nt,u,y\n" + ROWS), "integer"),
+    ("bad_plant.csv", _text('# amplitude: 1\n# frequency: 2\n# plant: {"a": 1}\nt,u,y\n' + ROWS), "plant"),
+    ("no_time.csv", _text("u,y\n1,2\n3,4\n"), "no time column"),
+    ("binary.csv", _bytes(b"\xff\xfe\x00\x81garbage\x00"), "not a UTF-8 text file"),
+    ("unknown.txt", _text("t,u,y\n" + ROWS), "unknown recording format '.txt'"),
+    ("unequal.npz", _npz(t=np.arange(20.0), u=U, y=U[:19]), "unequal lengths"),
+    ("no_meta.npz", _npz(t_0=np.arange(20.0), u_0=U, y_0=U), "no 'meta' entry"),
+    (
+        "meta_json.npz",
+        _npz(t_0=np.arange(20.0), u_0=U, y_0=U, meta=np.array("[{")),
+        "'meta' is not valid JSON",
+    ),
+    ("meta_type.npz", _npz(u=U, y=U, meta=np.array("3")), "JSON list"),
+    ("meta_empty.npz", _npz(meta=np.array("[]")), "no experiments"),
+    ("meta_short.npz", _npz(u_0=U, y_0=U, u_1=U, y_1=U, meta=np.array('[{"sample_rate": 1}]')), "'u_1'"),
+    ("strings.npz", _npz(t=np.arange(20.0), u=np.array(["a"] * 20), y=U), "not real numbers"),
+    ("matrix.npz", _npz(t=np.arange(20.0), u=np.ones((4, 5)), y=U), "must be a vector"),
+    ("garbage.npz", _bytes(b"PK\x03\x04 this is not a zip archive"), "not a readable NPZ archive"),
+    ("no_uy.mat", _mat(a=np.ones(3)), "no variables 'u' and 'y'"),
+    ("meta_not_json.mat", _mat(t=np.arange(20.0), u=U, y=U, meta="{oops"), "'meta' is not valid JSON"),
+    ("meta_not_text.mat", _mat(t=np.arange(20.0), u=U, y=U, meta=np.ones(3)), "JSON string"),
+    ("unequal.mat", _mat(t=np.arange(20.0), u=U, y=U[:5]), "unequal lengths"),
+    ("bad_fs.mat", _mat(u=U, y=U, fs=np.ones(2)), "one number"),
+    ("bad_experiments.mat", _mat(experiments=np.ones(3)), "struct"),
+    ("garbage.mat", _bytes(b"MATLAB 5.0 MAT-file" + bytes(range(256)) * 2), "not a readable MAT file"),
+    # Files that crash scipy's reader (a segfault, scipy/scipy#25349 and a 0-d char conversion) are refused
+    # before it sees them: an unknown data-type code on the numeric data (offset 48: the real part's tag) ...
+    ("dtype_code.mat", _patched_mat({"u": U, "y": U}, {48: 10}), "unknown data type code 10"),
+    ("dtype_empty.mat", _patched_mat({"u": U, "y": U}, {48: 0, 52: 0}), "unknown data type code 0"),
+    ("dtype_zip.mat", _patched_mat({"u": U, "y": U}, {48: 8}, compressed=True), "unknown data type code 8"),
+    # ... a char array without dimensions (the dims element's byte count, offset 28, set to 1) ...
+    ("char_no_dims.mat", _patched_mat({"meta": "{}", "u": U, "y": U}, {28: 1}), "0 dimensions"),
+    # ... and classes this library does not read.
+    ("sparse.mat", _mat(u=scipy.sparse.csc_array(np.eye(3)), y=U), "class 5"),
+    ("hdf5.mat", _bytes(b"MATLAB 7.3 MAT-file".ljust(124) + b"\x00\x02IM" + b"\x00" * 64), "v7.3"),
+]
+
+
+@pytest.mark.parametrize(("name", "write", "match"), MALFORMED, ids=[m[0] for m in MALFORMED])
+def test_malformed_files_raise_file_format_error_naming_the_file(
+    tmp_path: Path, name: str, write: Callable[[Path], None], match: str
+) -> None:
+    path = tmp_path / name
+    write(path)
+    with pytest.raises(FileFormatError, match=match) as info:
+        io.load(path)
+    assert str(path) in str(info.value)
+
+
+def test_data_errors_keep_their_names_and_name_the_file(tmp_path: Path) -> None:
+    path = tmp_path / "nan.csv"
+    path.write_text("t,u,y\n" + ROWS + "0.2,nan,1\n")
+    with pytest.raises(NonFiniteError, match=f"{path}: u holds a non-finite value"):
+        io.load(path)
+    path.write_text("t,u,y\n" + ROWS + "0.1,1,1\n")
+    with pytest.raises(TimeAxisError, match=f"{path}: t is not strictly increasing"):
+        io.load(path)
+    path.write_text('# units: {"t": "ms"}\nt,u,y\n' + ROWS)
+    with pytest.raises(InvalidParameterError, match="seconds"):
+        io.load(path)
+    path.write_text("# sample_rate: 0\nu,y\n1,2\n3,4\n")
+    with pytest.raises(InvalidParameterError, match="sample_rate"):
+        io.load(path)
+    path.write_text("# sample_rate: 1000\nu,y\n1,2\n3,4\n")
+    with pytest.raises(FileFormatError, match="disagrees"):
+        io.load(path, sample_rate=2000)
+
+
+def test_column_mapping_errors(tmp_path: Path) -> None:
+    path = tmp_path / "c.csv"
+    path.write_text("t,a,b\n" + ROWS)
+    with pytest.raises(FileFormatError, match="no column 'disp'"):
+        io.load(path, columns={"u": "disp", "y": "b"})
+    with pytest.raises(FileFormatError, match="has 3 columns"):
+        io.load(path, columns={"u": 7, "y": "b"})
+    with pytest.raises(InvalidParameterError, match="both read"):
+        io.load(path, columns={"u": "b", "y": "b"})
+    with pytest.raises(InvalidParameterError, match="0-based"):
+        io.load(path, columns={"u": -1, "y": "b"})
+    (m,) = io.load(path, columns={"u": "a", "y": 2})
+    assert isinstance(m, Measurement) and dict(m.channels) == {"u": "a", "y": "b"}
+
+
+def test_writers_refuse_keys_a_header_cannot_hold(tmp_path: Path) -> None:
+    t = np.arange(64) * (2 * np.pi / 2.0 / 32)
+    rec = bw.Recording(t, np.cos(2.0 * t), np.sin(2.0 * t), 1.0, 2.0, metadata={"bad: key": "x"})
+    with pytest.raises(InvalidParameterError, match="metadata key"):
+        io.write_csv(tmp_path / "r.csv", rec)
+    # NPZ and MAT headers are JSON: any key survives there.
+    (back,) = io.load(io.save(tmp_path / "r.npz", [rec]))
+    assert isinstance(back, bw.Recording) and back.metadata["bad: key"] == "x"
