@@ -88,7 +88,13 @@ pub fn spectral_derivative(ybar: &[f64], omega: f64, harmonics: usize) -> Result
         spec[p - k] = spec[k].conj();
     }
     planner.plan_fft_inverse(p).process(&mut spec);
-    let ydot = spec.iter().map(|c| c.re).collect();
+    let ydot: Vec<f64> = spec.iter().map(|c| c.re).collect();
+    if !ydot.iter().all(|v| v.is_finite()) {
+        return Err(CoreError::NonFinite(format!(
+            "the derivative overflowed (omega = {omega}, max |ybar| = {:e}); rescale ybar or omega",
+            ybar.iter().fold(0.0f64, |m, v| m.max(v.abs()))
+        )));
+    }
     Ok(ydot)
 }
 

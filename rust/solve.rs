@@ -337,6 +337,16 @@ where
         ))
         .into());
     }
+    // Below a few ulps of the bracket's scale the interior points stop moving and the search
+    // would only burn `max_iter` evaluations on rounding noise.
+    let resolution = 8.0 * f64::EPSILON * lo.abs().max(hi.abs()).max(f64::MIN_POSITIVE);
+    if tol < resolution {
+        return Err(CoreError::InvalidParameter(format!(
+            "tol = {tol:e} is below the floating-point resolution {resolution:e} of the bracket \
+             [{lo}, {hi}]; pass tol >= {resolution:e}"
+        ))
+        .into());
+    }
     if max_iter < 1 {
         return Err(
             CoreError::InvalidParameter(format!("max_iter = {max_iter} must be >= 1")).into(),
@@ -529,6 +539,10 @@ mod tests {
         inv(golden_section(f, 0.0, 1.0, 0.0, 200), "tol = 0");
         inv(golden_section(f, 0.0, 1.0, 2.0, 200), "bracket width 1");
         inv(golden_section(f, 0.0, 1.0, 1e-3, 0), "max_iter = 0");
+        inv(
+            golden_section(f, 1.0, 3.0, 1e-300, usize::MAX),
+            "below the floating-point resolution",
+        );
         let e = golden_section(f, f64::NAN, 1.0, 1e-3, 200).unwrap_err();
         assert!(matches!(e, CoreError::NonFinite(_)), "{e}");
         let e = golden_section(|x| Ok(1.0 / (x - 0.5)), 0.0, 1.0, 1e-3, 200);

@@ -196,6 +196,11 @@ fn half_cycle(
     y
 }
 
+/// Largest lattice [`steady_loop`] accepts (memory: about 50 bytes per sample).
+pub const MAX_SAMPLES_PER_PERIOD: usize = 1 << 24;
+/// Largest number of RK4 steps per period [`steady_loop`] accepts (time: about 0.1 us per step).
+pub const MAX_STEPS_PER_PERIOD: usize = 1 << 27;
+
 /// Steady loop of (2b) driven by `x = amplitude cos(omega t - phi)`, sampled at `P` points per
 /// period (`t_j = j T / P`), with `substeps` RK4 steps per lattice interval.
 ///
@@ -203,7 +208,8 @@ fn half_cycle(
 /// `phi` in rad. Returns `w` (length P) and its Jacobian rows `d/d(beta, gamma, mu, A, phi)`.
 ///
 /// Errors: non-finite inputs, `mu <= 1`, `beta + gamma <= 0` (unbounded loop), `P < 4`,
-/// `substeps < 1`, `amplitude == 0`.
+/// `substeps < 1`, `amplitude == 0`, a lattice above [`MAX_SAMPLES_PER_PERIOD`] or
+/// [`MAX_STEPS_PER_PERIOD`], and a loop that overflows.
 pub fn steady_loop(
     amplitude: f64,
     beta: f64,
@@ -246,6 +252,15 @@ pub fn steady_loop(
     if substeps < 1 {
         return Err(CoreError::InvalidParameter(format!(
             "substeps = {substeps} must be >= 1"
+        )));
+    }
+    if samples_per_period > MAX_SAMPLES_PER_PERIOD
+        || samples_per_period.saturating_mul(substeps) > MAX_STEPS_PER_PERIOD
+    {
+        return Err(CoreError::InvalidParameter(format!(
+            "samples_per_period = {samples_per_period} with substeps = {substeps} exceeds the \
+             limits ({MAX_SAMPLES_PER_PERIOD} samples, {MAX_STEPS_PER_PERIOD} RK4 steps per \
+             period); a loop this fine gains nothing over a few thousand samples"
         )));
     }
     let p = Params {
@@ -309,6 +324,12 @@ pub fn steady_loop(
             sign * (y[5] + y[1] * dtop[3]),
             -sign * slope,
         ]);
+    }
+    if !(w.iter().all(|v| v.is_finite()) && jac.iter().flatten().all(|v| v.is_finite())) {
+        return Err(CoreError::NonFinite(format!(
+            "the steady loop or its sensitivities overflowed for A = {amplitude:e}, beta = {beta:e}, \
+             gamma = {gamma:e}, mu = {mu}; rescale the data so that the parameters are of moderate size"
+        )));
     }
     Ok(SteadyLoop {
         w,
@@ -418,6 +439,26 @@ mod tests {
         ));
         assert!(matches!(
             steady_loop(f64::NAN, 0.5, 0.2, 1.5, 0.0, 64, 4),
+            Err(CoreError::NonFinite(_))
+        ));
+        // Sizes that would panic on allocation (or run for hours) are refused up front.
+        for (p, sub) in [(1usize << 62, 1usize), (1 << 40, 1), (1 << 20, 1 << 20)] {
+            assert!(matches!(
+                steady_loop(1.0, 1.0, 0.5, 2.0, 0.0, p, sub),
+                Err(CoreError::InvalidParameter(_))
+            ));
+        }
+        // Parameters at the edge of the float range: an error, never NaN sensitivities.
+        assert!(matches!(
+            steady_loop(
+                6.1457403761690284e-96,
+                4.49423283715579e307,
+                0.0,
+                4.0,
+                0.0,
+                4,
+                1
+            ),
             Err(CoreError::NonFinite(_))
         ));
     }

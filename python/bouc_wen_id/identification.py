@@ -21,6 +21,7 @@ from .errors import (
     InsufficientDataError,
     InvalidParameterError,
     SearchAtBoundError,
+    ZeroAmplitudeError,
 )
 from .model import Recording, WienerPlant
 
@@ -99,9 +100,8 @@ class ExperimentEstimate:
 
     def times(self) -> FloatArray:
         """Times (s) of the averaged period's samples, from the grid's first sample."""
-        out: FloatArray = np.arange(self.samples_per_period) * (
-            TWO_PI / self.frequency / self.samples_per_period
-        )
+        step = TWO_PI / self.frequency / self.samples_per_period
+        out: FloatArray = np.arange(self.samples_per_period, dtype=np.float64) * np.float64(step)
         return out
 
     def to_dict(self) -> dict[str, Any]:
@@ -659,6 +659,9 @@ AT_BOUND_FRACTION = 1e-4
 NOISE_FREE_RTOL = 1e-9
 #: Identifiability alarm: condition number of the Fisher matrix after scaling to unit diagonal.
 FISHER_COND_MAX = 1e10
+#: Range of output and input scales identify accepts: beyond it, squares of the data leave the
+#: floating-point range (s^2 underflows below 1e-154) and s^mu with mu up to 10 overflows past 1e30.
+_SCALE_MIN, _SCALE_MAX = 1e-30, 1e30
 
 
 def identify(
@@ -760,6 +763,13 @@ def identify(
     # |G| = |G'| s_y / s_u, beta = beta' / s_y^mu, gamma = gamma' / s_y^mu.
     s_y = max(float(np.max(np.abs(e.ybar))) for e in prepared) or 1.0
     s_u = max(abs(e.amplitude) for e in prepared)
+    for what, scale in (("output", s_y), ("input amplitude", s_u)):
+        # Squares and powers of the scales must stay inside the floating-point range.
+        if not _SCALE_MIN <= scale <= _SCALE_MAX:
+            raise ZeroAmplitudeError(
+                f"the {what} is of size {scale:.3e}, outside [{_SCALE_MIN:g}, {_SCALE_MAX:g}]: "
+                "express the data in units that keep it there (e.g. mm instead of km)"
+            )
     scaled = [
         dataclasses.replace(
             e,

@@ -33,7 +33,12 @@ GRID_RTOL = 1e-6
 
 
 def _frozen_array(name: str, values: ArrayLike, ndim: int = 1) -> FloatArray:
-    arr = np.array(values, dtype=np.float64, copy=True)
+    raw = np.asarray(values)
+    if raw.dtype.kind not in "biuf":
+        raise InvalidParameterError(
+            f"{name} must hold real numbers, got dtype {raw.dtype}; take the real part or convert it first"
+        )
+    arr = np.array(raw, dtype=np.float64, copy=True)
     if arr.ndim != ndim:
         raise InvalidParameterError(f"{name} must be {ndim}-D, got shape {arr.shape}")
     if not np.all(np.isfinite(arr)):
@@ -44,7 +49,12 @@ def _frozen_array(name: str, values: ArrayLike, ndim: int = 1) -> FloatArray:
 
 
 def _finite(name: str, value: float) -> float:
-    v = float(value)
+    if isinstance(value, (complex, np.complexfloating, str, bytes)):
+        raise InvalidParameterError(f"{name} = {value!r} must be a real number")
+    try:
+        v = float(value)
+    except (TypeError, ValueError, OverflowError) as exc:
+        raise InvalidParameterError(f"{name} = {value!r} is not a real number: {exc}") from None
     if not math.isfinite(v):
         raise NonFiniteError(f"{name} = {v} is not finite")
     return v
@@ -324,9 +334,10 @@ class Recording:
             raise InvalidParameterError(f"frequency = {omega} rad/s must be > 0")
         object.__setattr__(self, "amplitude", amp)
         object.__setattr__(self, "frequency", omega)
-        if int(self.settle_periods) != self.settle_periods or self.settle_periods < 0:
+        settle = _finite("settle_periods", self.settle_periods)
+        if int(settle) != settle or settle < 0:
             raise InvalidParameterError(f"settle_periods = {self.settle_periods} must be an integer >= 0")
-        object.__setattr__(self, "settle_periods", int(self.settle_periods))
+        object.__setattr__(self, "settle_periods", int(settle))
         steps = np.diff(self.t)
         dt = float(np.mean(steps))
         if dt <= 0 or np.max(np.abs(steps - dt)) > GRID_RTOL * dt * 10 + 1e-12 * abs(self.t[-1]):
