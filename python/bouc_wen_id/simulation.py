@@ -7,11 +7,13 @@ from concurrent.futures import ThreadPoolExecutor
 from typing import Optional
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from ._backend import Backend, get_backend
+from .errors import InvalidParameterError
 from .model import Recording, SinePlan, WienerPlant
 
-__all__ = ["simulate"]
+__all__ = ["simulate", "simulate_input"]
 
 
 def simulate(
@@ -96,3 +98,40 @@ def simulate(
         return [run(i) for i in range(len(plan))]
     with ThreadPoolExecutor(max_workers=workers) as pool:
         return list(pool.map(run, range(len(plan))))
+
+
+def simulate_input(
+    plant: WienerPlant,
+    t: ArrayLike,
+    u: ArrayLike,
+    *,
+    substeps: int = 4,
+    backend: Backend = "rust",
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """The inner signals ``(x, w)`` of ``plant`` driven by any uniformly sampled input ``u(t)``, from rest.
+
+    For inputs that are not a clean sine: ramps, idle stretches, bursts, recorded commands.  Between
+    samples the input is interpolated linearly at the RK4 stage times (``substeps`` RK4 steps per sample
+    interval).  Add noise to ``w`` yourself, from a seeded generator.
+
+    Raises
+    ------
+    InvalidParameterError
+        ``t`` and ``u`` of unequal lengths, fewer than 2 samples, or a time axis that is not uniform.
+    """
+    core = get_backend(backend)
+    tt = np.asarray(t, dtype=np.float64)
+    uu = np.ascontiguousarray(u, dtype=np.float64)
+    if tt.ndim != 1 or uu.ndim != 1 or tt.size != uu.size or tt.size < 2:
+        raise InvalidParameterError(
+            f"t and u must be 1-D of equal lengths >= 2, got shapes {tt.shape} and {uu.shape}"
+        )
+    steps = np.diff(tt)
+    dt = float(np.mean(steps))
+    if not dt > 0 or float(np.max(np.abs(steps - dt))) > 1e-6 * dt:
+        raise InvalidParameterError("t must be strictly increasing with a constant step (to 1e-6)")
+    h, lin = plant.hysteresis, plant.linear
+    x, w = core.simulate_sampled(
+        lin.num, lin.den, lin.delay, h.alpha, h.beta, h.gamma, h.mu, h.w0, uu, dt, int(substeps)
+    )
+    return np.asarray(x, dtype=np.float64), np.asarray(w, dtype=np.float64)
