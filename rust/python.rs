@@ -45,7 +45,16 @@ impl From<CoreError> for PyErr {
             CoreError::InsufficientData(_) => InsufficientDataError::new_err(msg),
             CoreError::ZeroAmplitude(_) => ZeroAmplitudeError::new_err(msg),
             CoreError::SingularNormalMatrix { .. } => SingularNormalMatrixError::new_err(msg),
-            CoreError::SearchAtBound { .. } => SearchAtBoundError::new_err(msg),
+            CoreError::SearchAtBound { bound, lower, .. } => Python::attach(|py| {
+                // The Python class carries the bracket end, so callers can tell mu = 1 from a
+                // bracket that is merely too narrow.
+                let err = SearchAtBoundError::new_err(msg);
+                let value = err.value(py);
+                match (value.setattr("bound", bound), value.setattr("lower", lower)) {
+                    (Ok(()), Ok(())) => err,
+                    (Err(e), _) | (_, Err(e)) => e,
+                }
+            }),
         }
     }
 }

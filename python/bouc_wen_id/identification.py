@@ -281,7 +281,7 @@ class IdentificationResult:
             head += f"{'se|G|':>10}{'se phi':>10}"
         if tr is not None:
             head += f"{'|G| true':>11}{'phi true':>10}{'|G| rel.err':>12}{'phi err':>10}"
-        head += f"{'P':>6}{'N':>5}{'noise sd':>10}{'NRMSE':>10}"
+        head += f"{'P':>7}{'N':>8}{'noise sd':>10}{'NRMSE':>10}"
         lines.append(head)
         for i, e in enumerate(self.experiments):
             row = f"  {e.frequency:>9.4g}{e.amplitude:>8.3g}{e.gain:>11.5g}{e.phase:>10.4f}"
@@ -293,10 +293,17 @@ class IdentificationResult:
                     f"{tr.gain[i]:>11.5g}{tr.phase[i]:>10.4f}{_rel(e.gain, float(tr.gain[i])):>12}"
                     f"{dphi:>10.2e}"
                 )
-            row += f"{e.samples_per_period:>6}{e.periods:>5.4g}{_fmt(e.noise_sd):>10}{_fmt(e.nrmse):>10}"
+            row += f"{e.samples_per_period:>7}{e.periods:>8.4g}{_fmt(e.noise_sd):>10}{_fmt(e.nrmse):>10}"
             if i == self.reference:
                 row += "  (reference)"
             lines.append(row)
+        lines.append(
+            "  (P: points of the averaged period; N: samples averaged per point "
+            "(periods x samples per period / P),"
+        )
+        lines.append(
+            "   so each point's noise sd is noise sd / sqrt(N); NRMSE: |ybar - model| / |ybar - mean|)"
+        )
         if self.adequacy is not None:
             a = self.adequacy
             lines.append("")
@@ -780,7 +787,20 @@ def identify(
         )
         for e in prepared
     ]
-    fit = _fit(scaled, core, method, reference, lo, hi, tol, phase_grid, max_iter)
+    try:
+        fit = _fit(scaled, core, method, reference, lo, hi, tol, phase_grid, max_iter)
+    except SearchAtBoundError as exc:
+        if not (exc.lower and exc.bound is not None and exc.bound <= 1.0):
+            raise
+        # mu = 1 is the model's own limit, so "widen the bracket" is no advice here: say what it means.
+        err = SearchAtBoundError(
+            "the fit drove mu to 1, the lower end of the model's range (mu > 1): after each reversal the "
+            "data rise steeply and then keep growing instead of saturating, a shape no Bouc-Wen loop with "
+            "mu > 1 draws (typical of viscous damping beside friction, as in MR dampers). The plain "
+            "Wiener-Bouc-Wen model does not describe these data; the physics it leaves out must be modelled"
+        )
+        err.lower, err.bound = exc.lower, exc.bound
+        raise err from exc
     beta, gamma, mu = fit.beta / s_y**fit.mu, fit.gamma / s_y**fit.mu, fit.mu
     gains = fit.gains * (s_y / s_u)
     cov = None
