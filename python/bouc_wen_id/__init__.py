@@ -6,11 +6,13 @@ reference implementation of the same routines.  Start with :func:`simulate` and 
 
 from __future__ import annotations
 
-from . import errors, reference
+from . import errors, io, reference, signal
 from ._core import __version__
 from .demo import demo_plan, demo_plant
 from .errors import (
     BoucWenIdError,
+    ClippingError,
+    DistortedInputWarning,
     FileFormatError,
     FrequencyMismatchError,
     IdentifiabilityWarning,
@@ -18,33 +20,49 @@ from .errors import (
     InsufficientDataError,
     InvalidParameterError,
     NonFiniteError,
+    NotPeriodicError,
     SearchAtBoundError,
     SingularNormalMatrixError,
+    TimeAxisError,
+    UndersampledError,
     UnstableSystemError,
     ZeroAmplitudeError,
 )
 from .identification import Adequacy, ExperimentEstimate, IdentificationResult, Truth, identify
-from .io import load_recordings, save_recordings
+from .io import load, load_recordings, save, save_recordings
+from .measurement import Measurement
 from .model import BoucWen, Recording, SinePlan, TransferFunction, WienerPlant
-from .simulation import simulate
+from .signal import AveragedPeriod, SineFit, analyse_sine, average_measurement, find_steady_segments
+from .simulation import simulate, simulate_input
 from .uncertainty import CramerRao, cramer_rao
 
 __all__ = [
     "__version__",
     "errors",
+    "io",
     "reference",
+    "signal",
     "TransferFunction",
     "BoucWen",
     "WienerPlant",
     "SinePlan",
     "Recording",
+    "Measurement",
     "simulate",
+    "simulate_input",
     "identify",
     "IdentificationResult",
     "ExperimentEstimate",
     "Truth",
+    "load",
+    "save",
     "load_recordings",
     "save_recordings",
+    "analyse_sine",
+    "find_steady_segments",
+    "average_measurement",
+    "SineFit",
+    "AveragedPeriod",
     "demo_plant",
     "demo_plan",
     "BoucWenIdError",
@@ -58,7 +76,12 @@ __all__ = [
     "SingularNormalMatrixError",
     "SearchAtBoundError",
     "FileFormatError",
+    "TimeAxisError",
+    "ClippingError",
+    "UndersampledError",
+    "NotPeriodicError",
     "IdentifiabilityWarning",
+    "DistortedInputWarning",
     "Adequacy",
     "CramerRao",
     "cramer_rao",

@@ -4,19 +4,22 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 import time
+import warnings
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Optional
+from typing import Any, Optional, Union
 
 import numpy as np
 from numpy.typing import NDArray
 
 from .demo import DEMO_FREQUENCIES, demo_plan, demo_plant, design_amplitudes
-from .errors import BoucWenIdError
+from .errors import BoucWenIdError, InsufficientDataError, InvalidParameterError
 from .identification import IdentificationResult, identify
-from .io import load_recordings, save_recordings
+from .io import load, save_recordings
+from .measurement import Measurement
 from .model import SinePlan, WienerPlant
 from .simulation import simulate
 
@@ -69,7 +72,7 @@ def _add_identify_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--out", type=Path, default=Path("bouc_wen_id_report"), help="report folder")
 
 
-def _identify_from_args(args: argparse.Namespace, recordings: list) -> IdentificationResult:  # type: ignore[type-arg]
+def _identify_from_args(args: argparse.Namespace, recordings: Sequence[Any]) -> IdentificationResult:
     harmonics = args.harmonics if args.harmonics in ("auto", "all") else int(args.harmonics)
     return identify(
         recordings,
@@ -154,13 +157,119 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     return 0
 
 
+def _columns(specs: Optional[Sequence[str]]) -> Optional[dict[str, Union[str, int]]]:
+    """``["u=disp", "y=3"]`` -> ``{"u": "disp", "y": 3}`` (an integer is a 0-based column index)."""
+    if not specs:
+        return None
+    out: dict[str, Union[str, int]] = {}
+    for spec in specs:
+        role, sep, column = spec.partition("=")
+        if not sep or not role or not column:
+            raise InvalidParameterError(f"--columns {spec!r}: expected ROLE=COLUMN, e.g. u=disp_mm or y=2")
+        out[role.strip()] = int(column) if column.strip().lstrip("-").isdigit() else column.strip()
+    return out
+
+
+def _experiments(args: argparse.Namespace) -> tuple[list[Any], list[dict[str, Any]]]:
+    """Load the files and turn every measurement into its steady, averaged periods (with a progress bar).
+
+    Returns what ``identify`` takes (recordings and averaged periods) and, per measurement, what was kept
+    and dropped, for the report.
+    """
+    from .signal import AveragedPeriod, find_steady_segments, synchronous_average
+
+    items = load(args.paths, columns=_columns(args.columns), sample_rate=args.sample_rate)
+    out: list[Any] = []
+    segments: list[dict[str, Any]] = []
+    measurements = [m for m in items if isinstance(m, Measurement)]
+    done = 0
+    for item in items:
+        if not isinstance(item, Measurement):
+            out.append(item)
+            continue
+        name = item.name or f"measurement {done}"
+        _progress(done, len(measurements), f"steady segments of {name}")
+        report = find_steady_segments(
+            item.t, item.u, item.y, nominal_frequency=item.nominal_frequency, min_periods=args.min_periods
+        )
+        averaged: list[AveragedPeriod] = [
+            synchronous_average(
+                item.t, item.y, fit, start=seg.start, stop=seg.stop, source=f"{name} segment {i}"
+            )
+            for i, (seg, fit) in enumerate(zip(report.kept, report.fits))
+        ]
+        done += 1
+        _progress(done, len(measurements), f"steady segments of {name}")
+        print(f"{name}: {report.summary()}")
+        segments.append(
+            {
+                "measurement": name,
+                "kept": [
+                    {
+                        "start": seg.start,
+                        "stop": seg.stop,
+                        "periods": seg.periods,
+                        "frequency_hz": fit.frequency / (2 * math.pi),
+                        "amplitude": fit.amplitude,
+                        "thd": fit.thd,
+                        "noise_sd": math.sqrt(ap.noise_var) if math.isfinite(ap.noise_var) else None,
+                    }
+                    for seg, fit, ap in zip(report.kept, report.fits, averaged)
+                ],
+                "dropped": [{"start": a, "stop": b, "reason": why} for a, b, why in report.dropped],
+            }
+        )
+        out.extend(averaged)
+    if not out:
+        raise InsufficientDataError(
+            "no steady segment of at least --min-periods periods was found in any file; see the dropped "
+            "stretches above"
+        )
+    return out, segments
+
+
 def _cmd_identify(args: argparse.Namespace) -> int:
-    recs = load_recordings(args.paths)
-    result = _identify_from_args(args, recs)
-    print(result.summary())
-    for f in _write_report(result, args.out):
-        print(f"wrote {f}")
-    return 0
+    experiments, segments = _experiments(args)
+    groups = [[e] for e in experiments] if args.separately else [experiments]
+    failures = 0
+    for i, group in enumerate(groups):
+        out = args.out / f"experiment_{i:02d}" if args.separately else args.out
+        label = _label(group[0]) if args.separately else f"{len(group)} experiment(s), jointly"
+        _progress(i, len(groups), f"identifying {label}")
+        try:
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always")
+                result = _identify_from_args(args, group)
+        except BoucWenIdError as exc:
+            if not args.separately:
+                raise
+            failures += 1
+            print(f"\n{label}: refused: {type(exc).__name__}: {exc}")
+            out.mkdir(parents=True, exist_ok=True)
+            refusal = {"source": label, "error": type(exc).__name__, "message": str(exc)}
+            (out / "refused.json").write_text(json.dumps(refusal, indent=2) + "\n", encoding="utf-8")
+            continue
+        finally:
+            _progress(i + 1, len(groups), f"identifying {label}")
+        print(f"\n{label}:" if args.separately else "")
+        print(result.summary())
+        for w in caught:
+            print(f"warning: {w.category.__name__}: {w.message}")
+        for f in _write_report(result, out):
+            print(f"wrote {f}")
+    if segments:
+        args.out.mkdir(parents=True, exist_ok=True)
+        seg_file = args.out / "segments.json"
+        seg_file.write_text(json.dumps(segments, indent=2) + "\n", encoding="utf-8")
+        print(f"wrote {seg_file}")
+    if failures:
+        print(f"{failures} of {len(groups)} experiment(s) refused (see refused.json in their folders)")
+    return 0 if failures < len(groups) else 2
+
+
+def _label(item: Any) -> str:
+    source = getattr(item, "source", None) or getattr(item, "metadata", {}).get("name")
+    return str(source) if source else type(item).__name__
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -204,8 +313,29 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--backend", choices=("rust", "numpy"), default="rust")
     p.set_defaults(func=_cmd_simulate)
 
-    p = sub.add_parser("identify", help="identify from recording files (.csv, .npz) or folders")
-    p.add_argument("paths", nargs="+", type=Path)
+    p = sub.add_parser(
+        "identify",
+        help="identify from files (.csv, .npz, .mat) or folders: simulated recordings or lab measurements",
+        description="Identify from recordings (U and omega known) or lab measurements (any sampling rate: "
+        "the input's frequency and amplitude are estimated, the steady stretches found and averaged).",
+    )
+    p.add_argument("paths", nargs="+", type=Path, help="files or folders of files")
+    p.add_argument(
+        "--columns",
+        nargs="+",
+        default=None,
+        metavar="ROLE=COLUMN",
+        help="which column is t, u, y (names or 0-based indices), e.g. --columns u=disp_mm y=force_N",
+    )
+    p.add_argument("--sample-rate", type=float, default=None, help="Hz, for files without a time column")
+    p.add_argument(
+        "--min-periods", type=float, default=2.0, help="shortest steady stretch kept, in periods (default 2)"
+    )
+    p.add_argument(
+        "--separately",
+        action="store_true",
+        help="identify each experiment on its own (a report subfolder each) instead of one joint fit",
+    )
     _add_identify_options(p)
     p.set_defaults(func=_cmd_identify)
     return parser
