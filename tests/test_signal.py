@@ -292,7 +292,10 @@ def test_idle_ramp_steady_pause_steady() -> None:
     check_tiling(report, t.size)
     assert len(report.kept) == 2
     for seg, fit, (lo, hi), amp in zip(report.kept, report.fits, (b[2], b[4]), (1.0, 0.6)):
-        assert abs(seg.start - lo) <= P_SEG and abs(seg.stop - hi) <= P_SEG, (seg, lo, hi)
+        # The hysteresis output needs a period or two to reach its steady loop after a ramp or a jump
+        # (the first loops start from a smaller reversal); at 2e-3 noise over 10 periods that settling is
+        # visible in the average, so it may be dropped as well.
+        assert abs(seg.stop - hi) <= P_SEG and seg.start - lo <= 3 * P_SEG, (seg, lo, hi)
         assert lo <= seg.start and seg.stop <= hi  # never into the unsteady parts
         assert abs(seg.periods - round(seg.periods)) < 0.01
         assert fit.amplitude == pytest.approx(amp, rel=2e-3)
@@ -663,3 +666,25 @@ def test_real_recordings_do_not_crash() -> None:
             check_tiling(report, t.size)
             assert np.all(np.isfinite(ap.ybar)) and ap.ybar.size == 2 * ap.harmonics + 1
     assert seen == 22
+
+
+def test_settling_that_one_period_cannot_see_is_trimmed() -> None:
+    # A lightly damped plant still settling after the ramp: a decaying change of the output's waveform of
+    # 10 % of the fundamental at first, within the per-period tolerance of the run test, but it biases the
+    # 40-period average by over 3 of its standard errors.
+    trims = []
+    for seed in range(6):
+        rng = np.random.default_rng(seed)
+        pieces = [("idle", 2, 0.0), ("ramp", 2, 1.0), ("steady", 40, 1.0), ("idle", 2, 0.0)]
+        t, u, y, b = composed(pieces, rng, 0.05)
+        lo = b[2][0]
+        settle = np.where(np.arange(t.size) >= lo, np.exp(-(np.arange(t.size) - lo) / (2.0 * P_SEG)), 0.0)
+        y_settling = y + 0.1 * settle * np.cos(OMEGA * t + 0.3)
+        plain = find_steady_segments(t, u, y).kept[0]
+        trimmed = find_steady_segments(t, u, y_settling).kept[0]
+        assert plain.start - lo <= 1.5 * P_SEG  # without the settling: at most the first loop dropped
+        trims.append((trimmed.start - plain.start) / P_SEG)
+        assert abs(trimmed.stop - plain.stop) <= 1  # the end is untouched
+    # At least one more period dropped (periods are 97.3 samples: 0.997 is one whole window), at most 4
+    # time constants (8 periods).
+    assert min(trims) >= 0.99 and max(trims) <= 8.0, trims

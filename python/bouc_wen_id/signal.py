@@ -52,6 +52,7 @@ from typing import TYPE_CHECKING, Optional
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import solve_triangular  # type: ignore[import-untyped]
+from scipy.special import chdtri  # type: ignore[import-untyped]
 
 from .errors import (
     DistortedInputWarning,
@@ -135,6 +136,15 @@ EDGE_Z = 4.0
 #: ... and than these fractions of its median input amplitude and output harmonic norm (plus noise).
 EDGE_RTOL_U = 0.01
 EDGE_RTOL_Y = 0.02
+#: A run's leading (trailing) windows are dropped while their mean output waveform differs from the mean
+#: of the rest of the run at this significance (a chi-square test at the precision of the average, with
+#: the per-period scatter from successive differences): an output still settling after the ramp, which
+#: the per-window test above misses when it is small against one period's noise but not against N's.
+SETTLE_ALPHA = 1e-3
+#: ... but at most this fraction of a run is dropped from each end that way (slow drift is not settling).
+SETTLE_MAX_FRACTION = 0.25
+#: ... and only in runs of at least this many periods (the scatter of a shorter run is not known well).
+SETTLE_MIN_WINDOWS = 8
 #: Harmonics of ``y`` compared from period to period (the waveform).
 WINDOW_HARMONICS = 8
 
@@ -736,6 +746,51 @@ def _trim_edges(windows: Sequence[_Window], i: int, j: int) -> tuple[int, int]:
     return i, j
 
 
+def _trim_settling(windows: Sequence[_Window], i: int, j: int) -> tuple[int, int]:
+    """Drop the leading and trailing windows of a run ``[i, j)`` whose mean output waveform differs from
+    the mean of the rest at the precision of the final average (see :data:`SETTLE_ALPHA`).
+
+    Harmonic by harmonic (settling of the linear part shows mostly in the fundamental, and a test on all
+    harmonics at once would dilute it), the mean of the first ``k`` windows is compared with the mean of
+    the others for every split ``k`` up to half the run: a chi-square statistic on 2 degrees of freedom
+    with the harmonic's per-window scatter from successive differences (noise and fast wander, not a slow
+    trend), Bonferroni-corrected over the splits and harmonics scanned.
+    """
+    n0 = j - i
+    if n0 < SETTLE_MIN_WINDOWS:
+        return i, j
+    cap = max(1, int(SETTLE_MAX_FRACTION * n0))
+    h_all = np.array([w.harm_y for w in windows[i:j]])  # (n, K) complex
+    # E|d|^2 of a successive difference is 2 * (2 s^2) per harmonic; the median of chi2_2 is 2 ln 2.
+    # White noise has the same scatter at every harmonic (an orthogonal basis): the pooled estimate is the
+    # stable one on a short run, the per-harmonic one keeps a harmonic's own wander.
+    d2 = np.abs(np.diff(h_all, axis=0)) ** 2 / (4.0 * math.log(2.0))
+    s2 = np.maximum(np.median(d2, axis=0), float(np.median(d2)))
+    usable = s2 > 0.0
+    if not np.any(usable):
+        return i, j
+    h_all, s2 = h_all[:, usable], s2[usable]
+
+    def head_differs(h: NDArray[np.complex128]) -> bool:
+        n = h.shape[0]
+        if n < 4:
+            return False
+        m = n // 2
+        csum = np.cumsum(h, axis=0)
+        k = np.arange(1, m + 1)
+        head = csum[:m] / k[:, None]
+        tail = (csum[-1] - csum[:m]) / (n - k)[:, None]
+        q = np.abs(head - tail) ** 2 / (s2[None, :] * (1.0 / k + 1.0 / (n - k))[:, None])
+        return bool(np.max(q) > float(chdtri(2, SETTLE_ALPHA / q.size)))
+
+    lo, hi = 0, n0
+    while lo < cap and head_differs(h_all[lo:hi]):
+        lo += 1
+    while n0 - hi < cap and head_differs(h_all[lo:hi][::-1]):
+        hi -= 1
+    return i + lo, i + hi
+
+
 def _outliers(run: Sequence[_Window]) -> NDArray[np.bool_]:
     """Windows of a run off its median by more than 4 robust standard deviations of the run's scatter
     (and more than 1 % of the input amplitude or 2 % of the output's harmonics, and their noise)."""
@@ -941,6 +996,7 @@ def find_steady_segments(
         if not changed:
             break
     runs = [r for r in (_trim_edges(windows, i, j) for i, j in runs) if r[1] - r[0] >= 2]
+    runs = [_trim_settling(windows, i, j) for i, j in runs]
 
     # Kept segments: whole periods of each segment's own frequency (its sine fitted on it), up to the
     # block's end or the next segment.  A run whose input the fit refuses is not steady after all.
