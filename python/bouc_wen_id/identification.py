@@ -597,6 +597,13 @@ def _prepare(
         from .measurement import Measurement
         from .signal import AveragedPeriod, average_measurement
 
+        if isinstance(item, (Measurement, AveragedPeriod)) and (settle_periods, periods) != (None, None):
+            raise InvalidParameterError(
+                f"item {i}: settle_periods and periods apply to Recordings only; the steady stretch of a "
+                "Measurement is detected from the data. To average a chosen stretch, call "
+                "signal.find_steady_segments and signal.synchronous_average(..., start=, stop=)"
+            )
+
         if isinstance(item, AveragedPeriod):
             out.append(_prepare_averaged(item, core, harmonics))
         elif isinstance(item, Measurement):

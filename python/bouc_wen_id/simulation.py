@@ -111,8 +111,9 @@ def simulate_input(
     """The inner signals ``(x, w)`` of ``plant`` driven by any uniformly sampled input ``u(t)``, from rest.
 
     For inputs that are not a clean sine: ramps, idle stretches, bursts, recorded commands.  Between
-    samples the input is interpolated linearly at the RK4 stage times (``substeps`` RK4 steps per sample
-    interval).  Add noise to ``w`` yourself, from a seeded generator.
+    samples the input is interpolated at the RK4 stage times by cubic Hermite polynomials with
+    Catmull-Rom slopes (``substeps`` RK4 steps per sample interval; docs/design.md section 1).  Add noise
+    to ``w`` yourself, from a seeded generator.
 
     Raises
     ------
