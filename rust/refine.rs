@@ -209,6 +209,22 @@ fn admissible(p: &Params, opts: &Options) -> bool {
         && p.beta >= p.gamma
 }
 
+/// Projects a trial point onto the closed constraints it crossed, so that the fit can slide along
+/// `beta = gamma` or a bracket end instead of stalling at the first contact: `beta < gamma` becomes
+/// `beta = gamma = (beta + gamma) / 2` (the nearest point of the plane, same `beta + gamma`), and `mu`
+/// is clipped into the bracket. `beta + gamma <= 0` has no nearest admissible point and stays rejected.
+fn project(p: &mut Params, opts: &Options) {
+    if p.beta < p.gamma {
+        let mid = 0.5 * (p.beta + p.gamma);
+        p.beta = mid;
+        p.gamma = mid;
+    }
+    let mu_min = opts.mu_lo.max(1.0) + 2.0 * MU_MARGIN;
+    if p.mu.is_finite() {
+        p.mu = p.mu.clamp(mu_min, opts.mu_hi.max(mu_min));
+    }
+}
+
 fn validate(exps: &[Experiment], p: &Params, opts: &Options) -> Result<()> {
     if exps.is_empty() {
         return Err(CoreError::InsufficientData(
@@ -257,9 +273,10 @@ fn validate(exps: &[Experiment], p: &Params, opts: &Options) -> Result<()> {
 
 /// Levenberg-Marquardt from `start` (e.g. the profile-phase SLS estimates).
 ///
-/// Every trial point must satisfy the Bouc-Wen conditions and the mu bracket (see `admissible`):
-/// a step that leaves them is rejected and the damping grows, so the fit stays admissible and may
-/// end on a constraint.
+/// Every trial point must satisfy the Bouc-Wen conditions and the mu bracket (see `admissible`): a
+/// step that crosses `beta = gamma` or a bracket end is projected back onto it (see `project`), one
+/// that makes `beta + gamma <= 0` is rejected and the damping grows. So the fit stays admissible and
+/// may end on a constraint.
 ///
 /// Errors: an inadmissible start, the start is not a valid loop (see [`steady_loop`]), inconsistent
 /// lengths, non-finite data, a non-positive weight.
@@ -299,6 +316,7 @@ pub fn refine(exps: &[Experiment], start: &Params, opts: &Options) -> Result<Fit
                 .iter()
                 .all(|(d, v)| d.abs() <= opts.xtol * (v.abs() + opts.xtol))
         };
+        project(&mut trial, opts);
         let admissible = admissible(&trial, opts);
         let trial_ev = if admissible {
             evaluate(exps, &trial, opts.substeps).ok()

@@ -948,6 +948,13 @@ def refine(
             continue
         trial = params + delta
         small = bool(np.all(np.abs(delta) <= xtol * (np.abs(params) + xtol)))
+        # Project onto the closed constraints the step crossed: beta < gamma -> the nearest point of
+        # beta = gamma (same beta + gamma), mu clipped into the bracket (beta + gamma <= 0 stays rejected).
+        if trial[0] < trial[1]:
+            trial[0] = trial[1] = 0.5 * (trial[0] + trial[1])
+        mu_min = max(mu_lo, 1.0) + 2.0 * LM_MU_MARGIN
+        if np.isfinite(trial[2]):
+            trial[2] = min(max(trial[2], mu_min), max(mu_hi, mu_min))
         out = None
         if admissible(trial):
             try:
