@@ -390,8 +390,8 @@ def _lab_measurement(
     env = np.clip(ramp, 0, 1)
     u = amp * env * np.cos(omega * t)
     if viscous:
-        v = -env * np.sin(omega * t)  # a Bingham damper: viscous plus a Coulomb jump at each reversal
-        w = v + 0.5 * np.sign(v)
+        v = -env * np.sin(omega * t)  # Coulomb friction: a force that jumps at each reversal
+        w = 0.5 * np.sign(v)
     else:
         w = bw.simulate_input(plant, t, u)[1]
     rng = np.random.default_rng(seed)
@@ -425,8 +425,8 @@ def test_cli_identify_lab_measurements(tmp_path: Path, capsys: pytest.CaptureFix
 
 
 def test_cli_identify_separately_reports_refusals(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    # A Bingham damper (viscous plus Coulomb) is not a Bouc-Wen loop: mu runs to 1 and that experiment is
-    # refused with a named reason that says so, while the other one is identified.
+    # Coulomb friction (a force that jumps at each reversal) is not a Bouc-Wen loop: mu runs to 1 and that
+    # experiment is refused with a named reason that says so, while the other one is identified.
     bw.save(tmp_path / "a.npz", [_lab_measurement(2.0, "hysteretic", 3)])
     bw.save(tmp_path / "b.npz", [_lab_measurement(2.0, "viscous", 4, viscous=True)])
     assert cli.main(["identify", str(tmp_path), "--separately", "--out", str(tmp_path / "rep")]) == 0

@@ -84,6 +84,9 @@ class ExperimentEstimate:
     source: str = ""
     #: omega t of the averaged grid's first sample (the grid's phase relative to u = U cos(omega t)).
     grid_phase: float = 0.0
+    #: NRMSE of the best linear model (spring + dashpot: ybar's fundamental alone), the baseline a
+    #: hysteresis model must beat to explain anything nonlinear.
+    linear_nrmse: float = math.nan
 
     @property
     def response(self) -> complex:
@@ -118,6 +121,7 @@ class ExperimentEstimate:
             "gain_se": _num(self.gain_se),
             "phase_se": _num(self.phase_se),
             "nrmse": _num(self.nrmse),
+            "linear_nrmse": _num(self.linear_nrmse),
             "source": self.source,
         }
 
@@ -801,10 +805,11 @@ def identify(
             raise
         # mu = 1 is the model's own limit, so "widen the bracket" is no advice here: say what it means.
         err = SearchAtBoundError(
-            "the fit drove mu to 1, the lower end of the model's range (mu > 1): after each reversal the "
-            "data rise steeply and then keep growing instead of saturating, a shape no Bouc-Wen loop with "
-            "mu > 1 draws (typical of viscous damping beside friction, as in MR dampers). The plain "
-            "Wiener-Bouc-Wen model does not describe these data; the physics it leaves out must be modelled"
+            "the fit drove mu to 1, the lower end of the model's range (mu > 1): the data turn at each "
+            "reversal in a way no Bouc-Wen loop with mu > 1 draws (typically a force that jumps at the "
+            "reversal, as Coulomb friction, or keeps growing with velocity, as viscous damping beside "
+            "friction in MR dampers). The plain Wiener-Bouc-Wen model does not describe these data; the "
+            "physics it leaves out must be modelled"
         )
         err.lower, err.bound = exc.lower, exc.bound
         raise err from exc
@@ -849,6 +854,7 @@ def identify(
                 gain_se=None if cov is None else float(math.sqrt(abs(cov[3 + 2 * i, 3 + 2 * i]))),
                 phase_se=None if cov is None else float(math.sqrt(abs(cov[4 + 2 * i, 4 + 2 * i]))),
                 nrmse=nrmse,
+                linear_nrmse=_linear_nrmse(e.ybar),
                 model=w,
                 source=e.source,
                 grid_phase=float(wrap_phase(e.phase_shift)),
@@ -856,6 +862,19 @@ def identify(
         )
 
     notes = _identifiability(beta, gamma, mu, experiments, cov, se_shared, confidence)
+    if method == "refined" and beta - abs(gamma) <= _ON_CONSTRAINT_RTOL * max(abs(beta), abs(gamma), 1e-300):
+        face = "beta = gamma" if gamma > 0 else "beta = -gamma"
+        notes.append(
+            f"the fit ends on the Bouc-Wen constraint {face} (beta = {beta:.4g}, gamma = {gamma:.4g}): the "
+            "data pull beyond the loops the model can draw, so the intervals of beta and gamma do not hold "
+            "there; judge the model by the NRMSE and the adequacy test, not by these parameters"
+        )
+    worse = [e.source or f"experiment {i}" for i, e in enumerate(experiments) if e.nrmse > e.linear_nrmse]
+    if worse:
+        notes.append(
+            f"the fitted loops explain {', '.join(worse)} less well than a linear spring + dashpot (NRMSE "
+            "above linear_nrmse): the hysteresis model adds nothing there"
+        )
     if not (beta >= abs(gamma) and beta + gamma > 0):
         notes.append(
             f"the estimates violate the Bouc-Wen conditions beta >= |gamma|, beta + gamma > 0 (beta = "
@@ -948,9 +967,17 @@ def _fit(
                 )
             )
     else:
-        phi_r, mu, g_r, beta, gamma, cost, _ = core.profile_phase_sls(
-            ref.ybar, ref.ydot, ref.amplitude, ref.frequency, lo, hi, tol, phase_grid
-        )
+        try:
+            phi_r, mu, g_r, beta, gamma, cost, _ = core.profile_phase_sls(
+                ref.ybar, ref.ydot, ref.amplitude, ref.frequency, lo, hi, tol, phase_grid
+            )
+        except SearchAtBoundError as exc:
+            # The separable fit is only the refinement's start: when it runs to mu's lower end, the
+            # output-error fit still gets its chance from generic starts (and is refused only if it
+            # ends there too).
+            if method != "refined" or not exc.lower:
+                raise
+            return _refine(prepared, core, None, lo, hi, max_iter, profile_error=exc)
         iterations = 0
         for i, e in enumerate(prepared):
             if i == reference:
@@ -964,6 +991,90 @@ def _fit(
         loops = [_loop_fit(core, e, gains[i], phis[i], beta, gamma, mu)[0] for i, e in enumerate(prepared)]
         return _Fit(beta, gamma, mu, gains, phis, float(cost), int(iterations), None, loops)
 
+    return _refine(prepared, core, (float(beta), float(gamma), mu, gains, phis), lo, hi, max_iter)
+
+
+#: Generic starts of the joint fit (see :func:`_generic_starts`): mu values, gamma/beta ratios, and the
+#: depth of saturation A / w_sat.
+_START_MUS = (1.15, 1.6, 2.5, 5.0)
+_START_RATIOS = (0.5, -0.5)
+_START_DEPTHS = (1.5, 4.0)
+#: Assumed lag (rad) of the loop's fundamental behind x for the generic starts.
+_START_LAG = 0.3
+#: A fit is checked from the generic starts when it ends this close (relative) to beta = |gamma|.
+_ON_CONSTRAINT_RTOL = 1e-6
+
+
+def _fundamental(ybar: FloatArray) -> complex:
+    """``c`` with ``ybar`` ~ Re(c exp(i 2 pi j / P)): the averaged output's first harmonic."""
+    return complex(2.0 * np.fft.rfft(ybar)[1] / ybar.size)
+
+
+def _linear_nrmse(ybar: FloatArray) -> float:
+    """NRMSE of ybar's fundamental alone (the best linear model) against ybar, as ``nrmse``."""
+    theta = TWO_PI * np.arange(ybar.size) / ybar.size
+    spread = float(np.linalg.norm(ybar - ybar.mean()))
+    if spread == 0.0:
+        return math.nan
+    return float(np.linalg.norm(ybar - np.real(_fundamental(ybar) * np.exp(1j * theta)))) / spread
+
+
+def _linear_cost(prepared: Sequence[_Prepared], weights: FloatArray) -> float:
+    """The weighted cost of the best linear (spring + dashpot) model: each ybar's fundamental alone.
+
+    A Bouc-Wen loop driven far below saturation is x itself, of any amplitude and phase, so the joint
+    fit can always reach this cost; a fit above it sits in a wrong basin.
+    """
+    total = 0.0
+    for e, wt in zip(prepared, weights):
+        c = _fundamental(e.ybar)
+        theta = TWO_PI * np.arange(e.p) / e.p
+        total += float(wt) * float(np.sum((e.ybar - np.real(c * np.exp(1j * theta))) ** 2))
+    return total
+
+
+def _generic_starts(
+    prepared: Sequence[_Prepared], lo: float, hi: float
+) -> list[tuple[float, float, float, FloatArray, FloatArray]]:
+    """Starting points spread over the shapes a Bouc-Wen loop can take, scaled to the data.
+
+    The saturation level ``w_sat = (beta + gamma)^(-1/mu)`` is set a little above the largest averaged
+    output; each experiment's x reaches ``depth`` times its loop's amplitude, with the phase of its
+    fundamental less a typical hysteretic lag.
+    """
+    fund = [_fundamental(e.ybar) for e in prepared]
+    peak = max(max(float(np.max(np.abs(e.ybar))) for e in prepared), 1e-300)
+    margin = START_MU_MARGIN * (hi - lo)
+    starts = []
+    for mu in _START_MUS:
+        mu = min(max(mu, lo + margin), hi - margin)
+        total = (1.1 * peak) ** (-mu)
+        for ratio in _START_RATIOS:
+            beta = total / (1.0 + ratio)
+            gamma = ratio * beta
+            for depth in _START_DEPTHS:
+                gains = np.array([depth * 1.1 * abs(c) / e.amplitude for c, e in zip(fund, prepared)])
+                phis = np.array([-math.atan2(c.imag, c.real) - _START_LAG for c in fund])
+                starts.append((beta, gamma, mu, gains, phis))
+    return starts
+
+
+def _refine(
+    prepared: Sequence[_Prepared],
+    core: Any,
+    start: Optional[tuple[float, float, float, FloatArray, FloatArray]],
+    lo: float,
+    hi: float,
+    max_iter: int,
+    profile_error: Optional[SearchAtBoundError] = None,
+) -> _Fit:
+    """The joint output-error fit from ``start`` (the profile estimates), safeguarded by generic starts.
+
+    The generic starts run when there is no profile start (its mu ran to the lower bound), or when the
+    fit from it ends on the Bouc-Wen constraint beta = |gamma| or costs more than the best linear model
+    (both signs of a wrong basin); the lowest cost wins.
+    """
+    m = len(prepared)
     short = [e.source for e in prepared if e.n < 2]
     if short:
         raise InsufficientDataError(
@@ -972,26 +1083,52 @@ def _fit(
         )
     weights = _weights(prepared)
     substeps = max(_steady_substeps(e.p) for e in prepared)
-    # The separable fit knows nothing of the Bouc-Wen conditions (beta >= |gamma|) and a loop too
-    # linear to fix beta + gamma can put it outside them, where no steady loop exists: start the
-    # joint fit just inside, and within the mu bracket, and let the data speak.
-    beta = max(beta, abs(gamma) + MIN_BETA_PLUS_GAMMA)
     margin = START_MU_MARGIN * (hi - lo)
-    mu = min(max(mu, lo + margin), hi - margin)
-    params, cost, iterations, _, fisher, loops = core.refine(
-        [e.ybar for e in prepared],
-        [e.amplitude for e in prepared],
-        weights,
-        beta,
-        gamma,
-        mu,
-        gains,
-        phis,
-        max_iter=max_iter,
-        substeps=substeps,
-        mu_lo=lo,
-        mu_hi=hi,
-    )
+
+    def run(beta: float, gamma: float, mu: float, gains: FloatArray, phis: FloatArray) -> Optional[Any]:
+        # The separable fit knows nothing of the Bouc-Wen conditions (beta >= |gamma|) and a loop too
+        # linear to fix beta + gamma can put it outside them, where no steady loop exists: start the
+        # joint fit just inside, and within the mu bracket, and let the data speak.
+        beta = max(beta, abs(gamma) + MIN_BETA_PLUS_GAMMA)
+        mu = min(max(mu, lo + margin), hi - margin)
+        try:
+            return core.refine(
+                [e.ybar for e in prepared],
+                [e.amplitude for e in prepared],
+                weights,
+                beta,
+                gamma,
+                mu,
+                gains,
+                phis,
+                max_iter=max_iter,
+                substeps=substeps,
+                mu_lo=lo,
+                mu_hi=hi,
+            )
+        except BoucWenIdError:
+            if start is None:
+                return None  # a generic start that is no valid loop: the others decide
+            raise
+
+    best = None if start is None else run(*start)
+    linear = _linear_cost(prepared, weights)
+
+    def suspicious(out: Any) -> bool:
+        b, g = (float(v) for v in np.asarray(out[0])[:2])
+        on_constraint = b - abs(g) <= _ON_CONSTRAINT_RTOL * max(abs(b), abs(g), 1e-300)
+        return on_constraint or float(out[1]) > linear
+
+    if best is None or suspicious(best):
+        for candidate in _generic_starts(prepared, lo, hi):
+            out = run(*candidate)
+            if out is not None and (best is None or float(out[1]) < float(best[1])):
+                best = out
+    if best is None:
+        if profile_error is not None:
+            raise profile_error
+        raise SearchAtBoundError("no start of the joint fit gave a valid steady loop")
+    params, cost, iterations, _, fisher, loops = best
     params = np.asarray(params)
     beta, gamma, mu = (float(v) for v in params[:3])
     if min(mu - lo, hi - mu) <= AT_BOUND_FRACTION * (hi - lo):
