@@ -29,6 +29,12 @@ if TYPE_CHECKING:  # pragma: no cover - typing only
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
+    from .measurement import Measurement
+    from .signal import AveragedPeriod
+
+    #: What identify takes: simulated recordings, raw lab measurements, or averaged periods.
+    Experiment = Recording | Measurement | AveragedPeriod
+
 __all__ = [
     "identify",
     "IdentificationResult",
@@ -683,7 +689,7 @@ _SCALE_MIN, _SCALE_MAX = 1e-30, 1e30
 
 
 def identify(
-    recordings: Recording | Sequence[Recording],
+    recordings: Experiment | Sequence[Experiment],
     method: Method = "refined",
     *,
     reference: int = 0,
