@@ -1005,6 +1005,8 @@ def _fit(
 _START_MUS = (1.15, 1.6, 2.5, 5.0)
 _START_RATIOS = (0.5, -0.5)
 _START_DEPTHS = (1.5, 4.0)
+#: LM iterations of each generic start's screening fit (the best one is then run to convergence).
+_SCREEN_ITER = 25
 #: Assumed lag (rad) of the loop's fundamental behind x for the generic starts.
 _START_LAG = 0.3
 #: A fit is checked from the generic starts when it ends this close (relative) to beta = |gamma|.
@@ -1091,7 +1093,9 @@ def _refine(
     substeps = max(_steady_substeps(e.p) for e in prepared)
     margin = START_MU_MARGIN * (hi - lo)
 
-    def run(beta: float, gamma: float, mu: float, gains: FloatArray, phis: FloatArray) -> Optional[Any]:
+    def run(
+        beta: float, gamma: float, mu: float, gains: FloatArray, phis: FloatArray, iters: int = max_iter
+    ) -> Optional[Any]:
         # The separable fit knows nothing of the Bouc-Wen conditions (beta >= |gamma|) and a loop too
         # linear to fix beta + gamma can put it outside them, where no steady loop exists: start the
         # joint fit just inside, and within the mu bracket, and let the data speak.
@@ -1107,7 +1111,7 @@ def _refine(
                 mu,
                 gains,
                 phis,
-                max_iter=max_iter,
+                max_iter=iters,
                 substeps=substeps,
                 mu_lo=lo,
                 mu_hi=hi,
@@ -1126,10 +1130,16 @@ def _refine(
         return on_constraint or float(out[1]) > linear
 
     if best is None or suspicious(best):
+        # Screen every generic start with a short fit, then finish the most promising one.
+        screened = None
         for candidate in _generic_starts(prepared, lo, hi):
-            out = run(*candidate)
-            if out is not None and (best is None or float(out[1]) < float(best[1])):
-                best = out
+            out = run(*candidate, iters=min(_SCREEN_ITER, max_iter))
+            if out is not None and (screened is None or float(out[1]) < float(screened[1])):
+                screened = out
+        if screened is not None and (best is None or float(screened[1]) < float(best[1])):
+            par = np.asarray(screened[0])
+            final = run(float(par[0]), float(par[1]), float(par[2]), par[3::2].copy(), par[4::2].copy())
+            best = final if final is not None and float(final[1]) <= float(screened[1]) else screened
     if best is None:
         if profile_error is not None:
             raise profile_error
