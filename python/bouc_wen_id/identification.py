@@ -1018,13 +1018,19 @@ def _fundamental(ybar: FloatArray) -> complex:
     return complex(2.0 * np.fft.rfft(ybar)[1] / ybar.size)
 
 
+def _linear_residual(ybar: FloatArray) -> FloatArray:
+    """``ybar`` minus its fundamental: the residual of the best linear (spring + dashpot) model."""
+    theta = TWO_PI * np.arange(ybar.size) / ybar.size
+    out: FloatArray = ybar - np.real(_fundamental(ybar) * np.exp(1j * theta))
+    return out
+
+
 def _linear_nrmse(ybar: FloatArray) -> float:
     """NRMSE of ybar's fundamental alone (the best linear model) against ybar, as ``nrmse``."""
-    theta = TWO_PI * np.arange(ybar.size) / ybar.size
     spread = float(np.linalg.norm(ybar - ybar.mean()))
     if spread == 0.0:
         return math.nan
-    return float(np.linalg.norm(ybar - np.real(_fundamental(ybar) * np.exp(1j * theta)))) / spread
+    return float(np.linalg.norm(_linear_residual(ybar))) / spread
 
 
 def _linear_cost(prepared: Sequence[_Prepared], weights: FloatArray) -> float:
@@ -1033,12 +1039,7 @@ def _linear_cost(prepared: Sequence[_Prepared], weights: FloatArray) -> float:
     A Bouc-Wen loop driven far below saturation is x itself, of any amplitude and phase, so the joint
     fit can always reach this cost; a fit above it sits in a wrong basin.
     """
-    total = 0.0
-    for e, wt in zip(prepared, weights):
-        c = _fundamental(e.ybar)
-        theta = TWO_PI * np.arange(e.p) / e.p
-        total += float(wt) * float(np.sum((e.ybar - np.real(c * np.exp(1j * theta))) ** 2))
-    return total
+    return sum(float(wt) * float(np.sum(_linear_residual(e.ybar) ** 2)) for e, wt in zip(prepared, weights))
 
 
 def _generic_starts(

@@ -58,12 +58,12 @@ from .errors import (
     DistortedInputWarning,
     InsufficientDataError,
     InvalidParameterError,
-    NonFiniteError,
     NotPeriodicError,
     TimeAxisError,
     UndersampledError,
     ZeroAmplitudeError,
 )
+from .reference import _finite_array
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
     from .measurement import Measurement
@@ -153,14 +153,8 @@ WINDOW_HARMONICS = 8
 # Validation helpers
 
 
-def _array(name: str, values: ArrayLike) -> FloatArray:
-    arr = np.asarray(values, dtype=np.float64)
-    if arr.ndim != 1:
-        raise InvalidParameterError(f"{name} must be a 1-D array, got shape {arr.shape}")
-    if not np.all(np.isfinite(arr)):
-        bad = int(np.flatnonzero(~np.isfinite(arr))[0])
-        raise NonFiniteError(f"{name} holds a non-finite value at index {bad}; clean or drop it first")
-    return arr
+# 1-D float64, finite: the same check as the NumPy reference's inputs.
+_array = _finite_array
 
 
 def _arrays(**named: ArrayLike) -> list[FloatArray]:
