@@ -1,0 +1,203 @@
+"""Experiments as the diagnosis sees them: the averaged period with its DC, and the period-by-period record.
+
+The identification removes the output's DC and pools the period-to-period spread into one noise floor.
+The diagnosis needs both back: the DC is the signature of an offset or an asymmetry, and the periods one by
+one are the only witness of a loop that drifts (degradation, an unsettled transient).  So each experiment
+is reduced to
+
+- ``ybar`` with its DC, on the grid ``t_j = j T/P`` whose first sample sits at input phase ``grid_phase``
+  (``u_j = U cos(2 pi j/P + grid_phase)``);
+- ``noise_var``: the variance of one raw sample, from differences of neighbouring periods, which a slow
+  drift does not inflate (the spread about the mean period, which the identification uses, it does);
+- ``spread_var``: that spread-based variance, for the drift comparison;
+- ``dc`` and ``h1``: the DC and the complex fundamental of each period, for the drift test.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..errors import InsufficientDataError, InvalidParameterError
+
+FloatArray = NDArray[np.float64]
+ComplexArray = NDArray[np.complex128]
+TWO_PI = 2.0 * math.pi
+
+
+@dataclass(frozen=True, eq=False)
+class DiagExperiment:
+    """One sine experiment reduced for the diagnosis (see the module docstring)."""
+
+    frequency: float
+    amplitude: float
+    grid_phase: float
+    ybar: FloatArray = field(repr=False)
+    periods: float
+    noise_var: float
+    spread_var: float
+    noise_dof: int
+    dc: FloatArray = field(repr=False)
+    h1: ComplexArray = field(repr=False)
+    source: str
+
+    @property
+    def samples_per_period(self) -> int:
+        return int(self.ybar.size)
+
+    @property
+    def weight(self) -> float:
+        """``N / sigma^2``: the weight of one squared residual of ``ybar``."""
+        floor = (1e-13 * float(np.max(np.abs(self.ybar)))) ** 2 + np.finfo(float).tiny
+        return self.periods / max(self.noise_var, floor)
+
+    def input(self) -> FloatArray:
+        """``u_j`` on the averaged grid (without the input's DC)."""
+        theta = TWO_PI * np.arange(self.samples_per_period) / self.samples_per_period
+        out: FloatArray = self.amplitude * np.cos(theta + self.grid_phase)
+        return out
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "source": self.source,
+            "frequency": self.frequency,
+            "amplitude": self.amplitude,
+            "samples_per_period": self.samples_per_period,
+            "periods": self.periods,
+            "noise_sd": math.sqrt(self.noise_var) if self.noise_var >= 0 else math.nan,
+            "dc": float(np.mean(self.ybar)),
+        }
+
+
+def _period_features(rows: FloatArray) -> tuple[FloatArray, ComplexArray]:
+    """DC and complex fundamental ``c_1`` of each row (one period on a uniform grid)."""
+    spec = np.fft.rfft(rows, axis=1) / rows.shape[1]
+    return spec[:, 0].real.copy(), (2.0 * spec[:, 1]).astype(np.complex128)
+
+
+def _from_recording(i: int, rec: Any) -> DiagExperiment:
+    p = int(rec.samples_per_period)
+    s = int(rec.settle_periods)
+    n = int(rec.whole_periods) - s
+    if n < 3:
+        raise InsufficientDataError(
+            f"recording {i} leaves {n} periods after {s} settling ones; the diagnosis needs at least 3 "
+            "(the noise floor and the drift test come from differences of neighbouring periods)"
+        )
+    rows = np.asarray(rec.y[s * p : (s + n) * p], dtype=np.float64).reshape(n, p)
+    ybar = rows.mean(axis=0)
+    spread = float(np.mean(np.var(rows, axis=0, ddof=1)))
+    diff = float(np.mean(np.diff(rows, axis=0) ** 2)) / 2.0
+    dc, h1 = _period_features(rows)
+    name = rec.metadata.get("name", f"recording {i}") if hasattr(rec, "metadata") else f"recording {i}"
+    return DiagExperiment(
+        frequency=float(rec.frequency),
+        amplitude=float(rec.amplitude),
+        grid_phase=float(np.mod(rec.frequency * float(rec.t[0]), TWO_PI)),
+        ybar=ybar,
+        periods=float(n),
+        noise_var=diff,
+        spread_var=spread,
+        noise_dof=p * (n - 1),
+        dc=dc,
+        h1=h1,
+        source=str(name),
+    )
+
+
+def _from_averaged(ap: Any, t: FloatArray | None, y: FloatArray | None) -> DiagExperiment:
+    """A lab period (any sampling rate); with the raw samples, the per-period record too."""
+    ybar = np.asarray(ap.ybar, dtype=np.float64) + float(ap.offset_y)
+    noise_var = spread_var = float(ap.noise_var)
+    dc = np.array([float(np.mean(ybar))])
+    h1 = np.array([complex(2.0 * np.fft.rfft(ybar)[1] / ybar.size)])
+    if t is not None and y is not None:
+        omega = float(ap.frequency)
+        period = TWO_PI / omega
+        seg_t = t[ap.start : ap.stop]
+        seg_y = y[ap.start : ap.stop]
+        # All the harmonics the averaging kept (the signal's), so the within-period residual is noise only.
+        k_fit = max(1, int(ap.harmonics))
+        first = float(ap.time_origin)
+        n_per = int(math.floor((seg_t[-1] - first) / period)) if seg_t.size else 0
+        dcs, h1s, rss, dof = [], [], 0.0, 0
+        for k in range(n_per):
+            sel = (seg_t >= first + k * period) & (seg_t < first + (k + 1) * period)
+            m = int(np.count_nonzero(sel))
+            if m < 2 * k_fit + 4:
+                continue
+            th = omega * (seg_t[sel] - first)
+            cols = [np.ones(m)]
+            for h in range(1, k_fit + 1):
+                cols += [np.cos(h * th), np.sin(h * th)]
+            basis = np.column_stack(cols)
+            coef, res, *_ = np.linalg.lstsq(basis, seg_y[sel], rcond=None)
+            dcs.append(coef[0])
+            h1s.append(complex(coef[1], -coef[2]))
+            rss += float(res[0]) if res.size else float(np.sum((seg_y[sel] - basis @ coef) ** 2))
+            dof += m - basis.shape[1]
+        if len(dcs) >= 3:
+            dc, h1 = np.array(dcs), np.array(h1s, dtype=np.complex128)
+            if dof > 0 and rss > 0:
+                # Within-period residual of a K-harmonic fit: free of any drift from period to period.
+                noise_var = rss / dof
+    return DiagExperiment(
+        frequency=float(ap.frequency),
+        amplitude=float(ap.amplitude),
+        grid_phase=0.0,
+        ybar=ybar,
+        periods=float(ap.periods),
+        noise_var=noise_var,
+        spread_var=spread_var,
+        noise_dof=int(ap.noise_dof),
+        dc=dc,
+        h1=h1,
+        source=str(ap.source),
+    )
+
+
+def prepare(items: Any) -> list[DiagExperiment]:
+    """Reduce Recordings, Measurements or AveragedPeriods (or a mix) to :class:`DiagExperiment`.
+
+    Raises
+    ------
+    InvalidParameterError
+        For an item of another type.
+    InsufficientDataError
+        When nothing is left to diagnose or a recording is too short.
+    """
+    from ..measurement import Measurement
+    from ..model import Recording
+    from ..signal import AveragedPeriod, average_measurement
+
+    seq: Sequence[Any] = items if isinstance(items, (list, tuple)) else [items]
+    out: list[DiagExperiment] = []
+    for i, item in enumerate(seq):
+        if isinstance(item, Recording):
+            out.append(_from_recording(i, item))
+        elif isinstance(item, Measurement):
+            for ap in average_measurement(item):
+                out.append(_from_averaged(ap, np.asarray(item.t), np.asarray(item.y)))
+        elif isinstance(item, AveragedPeriod):
+            out.append(_from_averaged(item, None, None))
+        elif isinstance(item, DiagExperiment):
+            out.append(item)
+        else:
+            raise InvalidParameterError(
+                f"item {i} is a {type(item).__name__}; diagnose takes Recording, Measurement or "
+                "AveragedPeriod objects"
+            )
+    if not out:
+        raise InsufficientDataError("nothing to diagnose: no item gave an averaged period")
+    for e in out:
+        if not (math.isfinite(e.noise_var) and e.noise_var > 0):
+            raise InsufficientDataError(
+                f"{e.source}: no noise floor (noise-free or single-period data); the diagnosis tests every "
+                "claim against the period-to-period noise and needs noisy, repeated periods"
+            )
+    return out
