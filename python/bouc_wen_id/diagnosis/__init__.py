@@ -1,0 +1,18 @@
+"""The diagnosis of missing physics: where the model misses, which term it left out, and the proof.
+
+``diagnose(experiments)`` fits the plain Wiener-Bouc-Wen model and the library's candidate terms jointly,
+names a term only when it passes a nested test at a controlled false-alarm rate, explains a material share
+of the misfit and improves the fit on held-out experiments, and says "unexplained" (and where) otherwise.
+Modules, one job each: ``data`` (experiments with their DC and period record), ``locate`` (where),
+``fitting`` (the augmented fits in scaled units), ``select`` (forward selection, held-out), ``result``
+(the Diagnosis value), ``run`` (the orchestration), ``report`` (figures and the HTML page).
+"""
+
+from __future__ import annotations
+
+from .data import DiagExperiment, prepare
+from .locate import Localisation, locate
+from .result import Diagnosis, NamedTerm
+from .run import diagnose
+
+__all__ = ["diagnose", "Diagnosis", "NamedTerm", "Localisation", "DiagExperiment", "locate", "prepare"]

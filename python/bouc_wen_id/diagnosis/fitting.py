@@ -1,0 +1,314 @@
+"""The diagnosis's view of the augmented fit: scaled units, starts, and the held-out refit.
+
+All fits of a diagnosis run on data scaled to unit size (``y / s_y``, ``u / s_u``, with ``s_y`` the largest
+``|ybar|`` and ``s_u`` the largest ``U``), so that the Levenberg-Marquardt sees parameters of order one
+whatever the units; :func:`physical` maps a term's value back (design.md 10.1).
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
+from typing import Any, Optional
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..augmented import AugExperiment, AugFit, AugParams, fit_augmented
+from ..errors import BoucWenIdError, SearchAtBoundError
+from .data import DiagExperiment
+
+FloatArray = NDArray[np.float64]
+TWO_PI = 2.0 * math.pi
+
+#: Coulomb smoothing of design.md 9.1 (sign over 1 % of the peak input velocity).
+COULOMB_EPS = 0.01
+#: Output terms whose contribution is linear in the parameter: their start is the residual's projection.
+LINEAR_TERMS = ("offset", "stiffness", "viscous", "inertia", "coulomb")
+#: Iterations of the held-out refit of one experiment's (g, phi) with the physics frozen.
+OWN_MAX_ITER = 50
+
+
+@dataclass(frozen=True)
+class Scale:
+    """Data scales: ``y -> y / y``, ``u -> u / u``."""
+
+    y: float
+    u: float
+
+    def factor(self, term: str, mu: float) -> float:
+        """Physical value of a term's parameter per unit of its scaled value."""
+        if term in ("offset", "coulomb", "play"):
+            return self.y
+        if term in ("stiffness", "viscous", "inertia"):
+            return self.y / self.u
+        if term == "asymmetry":
+            return float(self.y ** (-mu))
+        return 1.0  # sensor_lag (seconds)
+
+
+def scale_of(exps: Sequence[DiagExperiment]) -> Scale:
+    sy = max(float(np.max(np.abs(e.ybar))) for e in exps)
+    su = max(abs(e.amplitude) for e in exps)
+    return Scale(sy if sy > 0 else 1.0, su if su > 0 else 1.0)
+
+
+def scaled(exps: Sequence[DiagExperiment], s: Scale) -> list[AugExperiment]:
+    return [
+        AugExperiment(
+            ybar=np.ascontiguousarray(e.ybar / s.y),
+            amplitude=e.amplitude / s.u,
+            frequency=e.frequency,
+            grid_phase=e.grid_phase,
+            weight=e.weight * s.y**2,
+            source=e.source,
+        )
+        for e in exps
+    ]
+
+
+def regressor(term: str, e: AugExperiment) -> FloatArray:
+    """The contribution per unit parameter of a linear output term on the experiment's grid."""
+    p = e.ybar.size
+    th = TWO_PI * np.arange(p) / p + e.grid_phase
+    u, om = e.amplitude, e.frequency
+    if term == "offset":
+        return np.ones(p)
+    if term == "stiffness":
+        return np.asarray(u * np.cos(th))
+    if term == "viscous":
+        return np.asarray(-u * om * np.sin(th))
+    if term == "inertia":
+        return np.asarray(-u * om**2 * np.cos(th))
+    if term == "coulomb":
+        return np.asarray(np.tanh(-np.sin(th) * np.sign(u) / COULOMB_EPS))
+    raise ValueError(term)
+
+
+def _fit(exps: Sequence[AugExperiment], start: AugParams, max_iter: int = 200) -> Optional[AugFit]:
+    """One augmented fit; None when the start leads nowhere (no steady loop, a rejected constraint)."""
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            return fit_augmented(exps, start, max_iter=max_iter)
+    except BoucWenIdError:
+        return None
+
+
+def best_of(fits: Sequence[Optional[AugFit]]) -> Optional[AugFit]:
+    ok = [f for f in fits if f is not None and math.isfinite(f.cost)]
+    return min(ok, key=lambda f: f.cost) if ok else None
+
+
+def plain_start(items: Any, exps: Sequence[DiagExperiment], s: Scale) -> list[AugParams]:
+    """Starts for the plain model: the library's own identification, then generic ones (scaled units)."""
+    from ..identification import identify
+
+    starts: list[AugParams] = []
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            res = identify(_dc_free(items))
+        if len(res.experiments) == len(exps):
+            mu = res.mu
+            starts.append(
+                AugParams(
+                    beta=res.beta * s.y**mu,
+                    gamma=res.gamma * s.y**mu,
+                    mu=mu,
+                    terms=(),
+                    values=np.zeros(0),
+                    gains=np.array([x.gain * s.u / s.y for x in res.experiments]),
+                    phases=np.array([float(np.mod(x.phase - x.grid_phase, TWO_PI)) for x in res.experiments]),
+                )
+            )
+    except (BoucWenIdError, SearchAtBoundError):
+        pass
+    starts.extend(_generic_starts(scaled(exps, s)))
+    return starts
+
+
+def _dc_free(items: Any) -> Any:
+    """The items with each recording's output mean removed (the plain identification has no offset)."""
+    from ..model import Recording
+
+    seq = items if isinstance(items, (list, tuple)) else [items]
+    out = []
+    for it in seq:
+        if isinstance(it, Recording):
+            p = it.samples_per_period
+            s = it.settle_periods
+            dc = float(np.mean(it.y[s * p : it.whole_periods * p]))
+            out.append(
+                Recording(
+                    it.t,
+                    it.u,
+                    it.y - dc,
+                    it.amplitude,
+                    it.frequency,
+                    settle_periods=it.settle_periods,
+                    metadata=dict(it.metadata),
+                )
+            )
+        else:
+            out.append(it)
+    return out
+
+
+def _generic_starts(exps: Sequence[AugExperiment]) -> list[AugParams]:
+    """A small lattice in the spirit of design.md 7.4: mu, gamma/beta, saturation just above the data."""
+    peak = max(float(np.max(np.abs(e.ybar - e.ybar.mean()))) for e in exps)
+    h1 = [complex(2.0 * np.fft.rfft(e.ybar)[1] / e.ybar.size) for e in exps]
+    out = []
+    for mu in (1.5, 3.0):
+        for ratio in (0.0, 0.5):
+            for stretch in (1.5, 4.0):
+                bg = (1.1 * peak) ** (-mu)  # beta + gamma for a saturation at 1.1 peak
+                beta = bg / (1.0 + ratio)
+                out.append(
+                    AugParams(
+                        beta=beta,
+                        gamma=ratio * beta,
+                        mu=mu,
+                        terms=(),
+                        values=np.zeros(0),
+                        gains=np.array([stretch * abs(c) / e.amplitude for c, e in zip(h1, exps)]),
+                        # x leads the loop's fundamental: its phase is the fundamental's less 0.3 rad.
+                        phases=np.array([float(np.mod(-np.angle(c) - 0.3, TWO_PI)) for c in h1]),
+                    )
+                )
+    return out
+
+
+def fit_plain(items: Any, exps: Sequence[DiagExperiment], s: Scale) -> AugFit:
+    """The plain Wiener-Bouc-Wen model on the data with their DC (the null of every test)."""
+    sx = scaled(exps, s)
+    starts = plain_start(items, exps, s)
+    first = _fit(sx, starts[0]) if starts else None
+    fits: list[Optional[AugFit]] = [first]
+    if first is None or first.params.beta - abs(first.params.gamma) < 1e-6 * first.params.beta:
+        fits += [_fit(sx, st, max_iter=25) for st in starts[1:]]
+        screened = best_of(fits)
+        if screened is not None and screened is not first:
+            fits.append(_fit(sx, screened.params))
+    best = best_of(fits)
+    if best is None:
+        raise SearchAtBoundError(
+            "no start of the plain model gave a valid steady loop on these data; the diagnosis needs the "
+            "plain fit as its null"
+        )
+    return best
+
+
+def candidate_starts(exps: Sequence[AugExperiment], fit: AugFit, term: str) -> list[AugParams]:
+    """Starts for ``fit``'s model plus ``term``: its parameter at 0 and at an informed guess."""
+    par = fit.params
+    outs = fit.outputs
+    if term in LINEAR_TERMS:
+        num = den = 0.0
+        for e, y in zip(exps, outs):
+            g = regressor(term, e)
+            num += e.weight * float(np.dot(g, e.ybar - y))
+            den += e.weight * float(np.dot(g, g))
+        guess = num / den if den > 0 else 0.0
+        return [par.with_term(term, guess), par.with_term(term, 0.0)]
+    amps = [abs(e.amplitude * g) for e, g in zip(exps, par.gains)]
+    if term == "play":
+        return [par.with_term(term, f * min(amps)) for f in (0.01, 0.1, 0.3)]
+    if term == "sensor_lag":
+        om = max(e.frequency for e in exps)
+        return [par.with_term(term, f / om) for f in (0.01, 0.1)]
+    if term == "asymmetry":
+        bg = par.beta + par.gamma
+        return [par.with_term(term, v * bg) for v in (0.0, 0.3, -0.3)]
+    return [par.with_term(term, 0.0)]
+
+
+def fit_with(exps: Sequence[AugExperiment], fit: AugFit, term: str) -> Optional[AugFit]:
+    """``fit``'s model plus ``term``, from every start of :func:`candidate_starts`; the best, or None."""
+    return best_of([_fit(exps, st) for st in candidate_starts(exps, fit, term)])
+
+
+def subset(
+    exps: Sequence[AugExperiment], fit_params: AugParams, keep: Sequence[int]
+) -> tuple[list[AugExperiment], AugParams]:
+    """The experiments ``keep`` and the parameters restricted to them."""
+    ks = list(keep)
+    return [exps[i] for i in ks], replace(
+        fit_params, gains=fit_params.gains[ks].copy(), phases=fit_params.phases[ks].copy()
+    )
+
+
+def fit_own(
+    e: AugExperiment, params: AugParams, gain: float, phase: float, substeps: int
+) -> tuple[float, FloatArray]:
+    """Held-out refit: only the experiment's own ``(g, phi)``, the physics frozen; (cost, output)."""
+    from .. import _core
+
+    shared = np.concatenate([[params.beta, params.gamma, params.mu], params.values]).astype(np.float64)
+    terms = list(params.terms)
+    p = e.ybar.size
+
+    def evaluate(g: float, ph: float) -> tuple[FloatArray, FloatArray]:
+        y, _, jo = _core.augmented_output(
+            p, e.amplitude, e.frequency, e.grid_phase, terms, shared, g, ph, substeps
+        )
+        return np.asarray(y), np.asarray(jo)
+
+    x = np.array([gain, phase])
+    try:
+        y, jo = evaluate(*x)
+    except BoucWenIdError:
+        return math.inf, np.full(p, np.nan)
+    r = e.ybar - y
+    cost = e.weight * float(r @ r)
+    lam = 1e-3
+    for _ in range(OWN_MAX_ITER):
+        a = e.weight * (jo.T @ jo)
+        b = e.weight * (jo.T @ r)
+        step = np.linalg.solve(a + lam * np.diag(np.diag(a) + 1e-300), b) if np.all(np.isfinite(a)) else None
+        if step is None:
+            break
+        trial = x + step
+        try:
+            y2, jo2 = evaluate(*trial)
+        except BoucWenIdError:
+            lam *= 10.0
+            continue
+        r2 = e.ybar - y2
+        c2 = e.weight * float(r2 @ r2)
+        if c2 < cost:
+            done = (cost - c2) <= 1e-10 * cost
+            x, y, jo, r, cost = trial, y2, jo2, r2, c2
+            lam = max(lam * 0.2, 1e-12)
+            if done:
+                break
+        else:
+            lam *= 10.0
+            if lam > 1e12:
+                break
+    return cost, y
+
+
+def physical(fit: AugFit, s: Scale, term: str) -> tuple[float, float]:
+    """A term's value and standard error in physical units."""
+    par = fit.params
+    i = par.terms.index(term)
+    f = s.factor(term, par.mu)
+    v = float(par.values[i]) * f
+    se = fit.standard_error(term) * abs(f)
+    if term == "asymmetry":
+        # delta = delta~ s^-mu: the delta method through mu as well.
+        cov = fit.covariance
+        j = 3 + i
+        ln = math.log(s.y)
+        var = f**2 * (cov[j, j] + (par.values[i] * ln) ** 2 * cov[2, 2] - 2 * par.values[i] * ln * cov[j, 2])
+        se = math.sqrt(var) if var >= 0 else math.nan
+    return v, se
+
+
+def nrmse(e: AugExperiment, y: FloatArray) -> float:
+    spread = float(np.linalg.norm(e.ybar - e.ybar.mean()))
+    return float(np.linalg.norm(e.ybar - y)) / spread if spread > 0 else math.nan

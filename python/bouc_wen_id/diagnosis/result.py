@@ -1,0 +1,229 @@
+"""The diagnosis as a value: verdict first, every claim with its statistic, p-value and comparison."""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field
+from typing import Any, Literal, Optional
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .data import DiagExperiment
+from .locate import Localisation
+from .select import Alternative, HeldOut, Step
+
+FloatArray = NDArray[np.float64]
+Status = Literal["adequate", "explained", "unexplained"]
+
+#: Human names of the terms (code name -> phrase), in the order of design.md 9.1.
+TERM_LABELS = {
+    "offset": "output offset",
+    "stiffness": "parallel stiffness",
+    "viscous": "viscous damping",
+    "inertia": "inertia",
+    "coulomb": "dry (Coulomb) friction",
+    "sensor_lag": "sensor lag",
+    "asymmetry": "asymmetry",
+    "play": "play (backlash)",
+}
+#: Parameter symbol and unit template ({y}: output unit, {u}: input unit) of each term.
+TERM_UNITS = {
+    "offset": ("y0", "{y}"),
+    "stiffness": ("k", "{y}/{u}"),
+    "viscous": ("c", "{y} s/{u}"),
+    "inertia": ("m", "{y} s^2/{u}"),
+    "coulomb": ("f", "{y}"),
+    "sensor_lag": ("tau", "s"),
+    "asymmetry": ("delta", "1/{y}^mu"),
+    "play": ("b", "{y} (x units)"),
+}
+
+
+def _unit(template: str, y_unit: str, u_unit: str) -> str:
+    return template.replace("{y}", y_unit or "[y]").replace("{u}", u_unit or "[u]")
+
+
+@dataclass(frozen=True)
+class NamedTerm:
+    """A term the diagnosis named (or tried), with its value in physical units."""
+
+    term: str
+    symbol: str
+    value: float
+    standard_error: float
+    unit: str
+
+    @property
+    def label(self) -> str:
+        return TERM_LABELS.get(self.term, self.term)
+
+    def __str__(self) -> str:
+        se = f" ± {self.standard_error:.3g}" if math.isfinite(self.standard_error) else ""
+        return f"{self.label} {self.symbol} = {self.value:.4g}{se} {self.unit}".rstrip()
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "term": self.term,
+            "label": self.label,
+            "symbol": self.symbol,
+            "value": self.value,
+            "standard_error": self.standard_error if math.isfinite(self.standard_error) else None,
+            "unit": self.unit,
+        }
+
+
+@dataclass(frozen=True)
+class ModelSummary:
+    """One fitted model: its terms, hysteresis (alpha = 1, physical units), costs and per-experiment NRMSE."""
+
+    terms: tuple[NamedTerm, ...]
+    beta: float
+    gamma: float
+    mu: float
+    cost: float
+    dof: int
+    p_value: float
+    nrmse: tuple[float, ...]
+    outputs: tuple[FloatArray, ...] = field(repr=False)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "terms": [t.to_dict() for t in self.terms],
+            "beta": self.beta,
+            "gamma": self.gamma,
+            "mu": self.mu,
+            "cost": self.cost,
+            "dof": self.dof,
+            "p_value": self.p_value,
+            "nrmse": list(self.nrmse),
+        }
+
+
+@dataclass(frozen=True, eq=False)
+class Diagnosis:
+    """What the model leaves out, where, and how much better the fit gets once it is modelled.
+
+    Attributes
+    ----------
+    status : {"adequate", "explained", "unexplained"}
+        ``adequate``: the plain model is at the noise floor. ``explained``: the named terms bring it there
+        (or remove at least ``explained_fraction`` of the excess). ``unexplained``: structure remains.
+    verdict : str
+        One sentence, first in every report.
+    named : tuple of NamedTerm
+        Terms named (only with status ``explained``).
+    partial : tuple of NamedTerm
+        Terms that passed the tests but leave structure unexplained (status ``unexplained``).
+    alternatives : tuple of Alternative
+        Terms the experiments cannot tell from a named one, with the experiment that would separate them.
+    before, after : Localisation
+        Where the plain and the final model miss the data.
+    steps : tuple of Step
+        The forward selection, every candidate with its F statistic, p-value and held-out check.
+    held_out : HeldOut or None
+        Leave-one-experiment-out NRMSE of the plain and the final model.
+    plain, final : ModelSummary
+    """
+
+    status: Status
+    verdict: str
+    named: tuple[NamedTerm, ...]
+    partial: tuple[NamedTerm, ...]
+    alternatives: tuple[Alternative, ...]
+    before: Localisation
+    after: Localisation
+    steps: tuple[Step, ...]
+    held_out: Optional[HeldOut]
+    plain: ModelSummary
+    final: ModelSummary
+    experiments: tuple[DiagExperiment, ...] = field(repr=False)
+    explained_fraction: float
+    settings: dict[str, Any]
+    seconds: float
+    #: The fitted plain and final augmented models in scaled units (see ``settings["scale"]``), for
+    #: further held-out or what-if work; not serialised.
+    plain_fit: Any = field(default=None, repr=False)
+    final_fit: Any = field(default=None, repr=False)
+
+    @property
+    def named_terms(self) -> tuple[str, ...]:
+        return tuple(t.term for t in self.named)
+
+    def summary(self) -> str:
+        """A plain-text report: verdict, named terms, selection table, held-out comparison, location."""
+        lines = [f"Diagnosis: {self.verdict}", ""]
+        for label, m in (("plain", self.plain), ("final", self.final)):
+            lines.append(f"{label} model: chi2/dof = {m.cost / max(m.dof, 1):.3g} (p = {m.p_value:.2g})")
+        lines.append(f"share of the plain model's excess explained: {100 * self.explained_fraction:.1f} %")
+        for a in self.alternatives:
+            rival, term = TERM_LABELS.get(a.rival, a.rival), TERM_LABELS.get(a.term, a.term)
+            lines.append(
+                f"alternative: {rival} fits as well as {term} (parameter correlation {a.correlation:+.3f}); "
+                f"to separate them: {a.separating_experiment}"
+            )
+        for k, st in enumerate(self.steps, 1):
+            lines.append("")
+            chosen = st.chosen or "none"
+            lines.append(
+                f"step {k}: from chi2 = {st.before_cost:.6g} (dof {st.before_dof}); chosen: {chosen}"
+            )
+            lines.append(f"  {'term':<12} {'chi2':>12} {'F':>10} {'p adj':>9} {'share':>7} {'held-out':>10}")
+            for t in st.trials:
+                ho = "" if t.held_out is None else ("better" if t.held_out.improves else "worse")
+                row = f"  {t.term:<12} {t.cost:12.6g} {t.statistic:10.4g} {t.p_adjusted:9.2g} {t.share:7.2f}"
+                lines.append(f"{row} {ho:>10}")
+        if self.held_out is not None:
+            lines.append("")
+            lines.append("held-out NRMSE (one experiment left out, physics fitted on the others):")
+            for j, b, a in zip(self.held_out.folds, self.held_out.nrmse_before, self.held_out.nrmse_after):
+                src = self.experiments[j].source
+                lines.append(
+                    f"  {src:<32} plain {b:.4f}  final {a:.4f}  ratio {a / b if b else math.nan:.3f}"
+                )
+        lines.append("")
+        lines.append(f"where the plain model misses: {self.before.describe() or 'nowhere above the noise'}")
+        lines.append(f"where the final model misses: {self.after.describe() or 'nowhere above the noise'}")
+        return "\n".join(lines)
+
+    def __str__(self) -> str:
+        return self.summary()
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "status": self.status,
+            "verdict": self.verdict,
+            "named": [t.to_dict() for t in self.named],
+            "partial": [t.to_dict() for t in self.partial],
+            "alternatives": [a.to_dict() for a in self.alternatives],
+            "explained_fraction": self.explained_fraction,
+            "before": self.before.to_dict(),
+            "after": self.after.to_dict(),
+            "steps": [s.to_dict() for s in self.steps],
+            "held_out": None if self.held_out is None else self.held_out.to_dict(),
+            "plain": self.plain.to_dict(),
+            "final": self.final.to_dict(),
+            "experiments": [e.to_dict() for e in self.experiments],
+            "settings": self.settings,
+            "seconds": self.seconds,
+        }
+
+    def to_json(self, indent: int = 2) -> str:
+        """Strict JSON (NaN and infinities become null)."""
+        return json.dumps(clean(self.to_dict()), indent=indent, allow_nan=False)
+
+
+def clean(v: Any) -> Any:
+    """``v`` with NumPy scalars and arrays made plain and non-finite floats made None."""
+    if isinstance(v, dict):
+        return {str(k): clean(x) for k, x in v.items()}
+    if isinstance(v, (list, tuple)):
+        return [clean(x) for x in v]
+    if isinstance(v, np.ndarray):
+        return clean(v.tolist())
+    if isinstance(v, (np.floating, np.integer, np.bool_)):
+        v = v.item()
+    if isinstance(v, float) and not math.isfinite(v):
+        return None
+    return v
