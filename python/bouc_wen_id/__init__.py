@@ -6,9 +6,10 @@ reference implementation of the same routines.  Start with :func:`simulate` and 
 
 from __future__ import annotations
 
-from . import errors, io, reference, signal
+from . import diagnosis, errors, io, reference, signal
 from ._core import __version__
 from .demo import demo_plan, demo_plant
+from .diagnosis import Diagnosis, diagnose
 from .errors import (
     BoucWenIdError,
     ClippingError,
@@ -42,6 +43,9 @@ __all__ = [
     "io",
     "reference",
     "signal",
+    "diagnosis",
+    "diagnose",
+    "Diagnosis",
     "TransferFunction",
     "BoucWen",
     "WienerPlant",

@@ -338,7 +338,17 @@ def build_parser() -> argparse.ArgumentParser:
     )
     _add_identify_options(p)
     p.set_defaults(func=_cmd_identify)
+
+    from .diagnosis import cli as diagnosis_cli
+
+    p = diagnosis_cli.add_parser(sub, "which column is t, u, y (names or 0-based indices)")
+    p.set_defaults(func=lambda a: diagnosis_cli.run(a, _load_items))
     return parser
+
+
+def _load_items(args: argparse.Namespace) -> list[Any]:
+    """The files' recordings and measurements, as they are (the diagnosis averages them itself)."""
+    return list(load(args.paths, columns=_columns(args.columns), sample_rate=args.sample_rate))
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:

@@ -1,0 +1,266 @@
+"""Figures and the self-contained HTML page of a :class:`~bouc_wen_id.diagnosis.Diagnosis`.
+
+matplotlib is imported here only, lazily; every plotting function takes an optional ``ax`` so a user can
+compose the figures, and returns the axes it drew on.
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+import io
+import math
+from pathlib import Path
+from typing import TYPE_CHECKING, Optional
+
+import numpy as np
+
+from .result import TERM_LABELS, Diagnosis, clean
+
+if TYPE_CHECKING:  # pragma: no cover
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
+
+TWO_PI = 2.0 * math.pi
+
+
+def _axes(ax: Optional[Axes], figsize: tuple[float, float] = (6.0, 3.2)) -> Axes:
+    if ax is not None:
+        return ax
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=figsize, dpi=100)
+    return fig.add_subplot(1, 1, 1)
+
+
+def plot_residual_cycle(d: Diagnosis, ax: Optional[Axes] = None) -> Axes:
+    """Residual against the phase of the input over one cycle, plain and final, with the noise band."""
+    ax = _axes(ax)
+    band = []
+    for i, e in enumerate(d.experiments):
+        p = e.samples_per_period
+        th = np.mod(TWO_PI * np.arange(p) / p + e.grid_phase, TWO_PI)
+        order = np.argsort(th)
+        r0 = (e.ybar - d.plain.outputs[i])[order]
+        r1 = (e.ybar - d.final.outputs[i])[order]
+        ax.plot(
+            np.degrees(th[order]), r0, color="tab:red", lw=0.8, alpha=0.6, label="plain" if i == 0 else None
+        )
+        ax.plot(
+            np.degrees(th[order]), r1, color="tab:blue", lw=0.8, alpha=0.8, label="final" if i == 0 else None
+        )
+        band.append(2.0 * math.sqrt(e.noise_var / e.periods))
+    b = float(np.median(band))
+    ax.axhspan(-b, b, color="0.85", zorder=0, label="±2 noise sd")
+    ax.set_xlabel("phase of the input u (deg)")
+    ax.set_ylabel("residual")
+    ax.set_xlim(0, 360)
+    ax.legend(loc="upper right", fontsize=7, frameon=False)
+    return ax
+
+
+def plot_loops(d: Diagnosis, ax: Optional[Axes] = None, max_loops: int = 4) -> Axes:
+    """Measured loops (output against input) with the plain and the final model."""
+    ax = _axes(ax)
+    n = len(d.experiments)
+    pick = sorted({int(round(v)) for v in np.linspace(0, n - 1, min(n, max_loops))})
+    for k, i in enumerate(pick):
+        e = d.experiments[i]
+        u = e.input()
+        ax.plot(u, e.ybar, ".", ms=2, color="0.3", label="data" if k == 0 else None)
+        ax.plot(u, d.plain.outputs[i], color="tab:red", lw=0.9, label="plain" if k == 0 else None)
+        ax.plot(u, d.final.outputs[i], color="tab:blue", lw=0.9, ls="--", label="final" if k == 0 else None)
+    ax.set_xlabel("input u")
+    ax.set_ylabel("output y")
+    ax.legend(loc="upper left", fontsize=7, frameon=False)
+    return ax
+
+
+def plot_harmonics(d: Diagnosis, ax: Optional[Axes] = None) -> Axes:
+    """Residual power per harmonic against its noise expectation, plain and final (log scale)."""
+    ax = _axes(ax)
+    hb = d.before.harmonics
+    ha = d.after.harmonics
+    k = np.array([h.harmonic for h in hb])
+    ax.bar(k - 0.2, [max(h.statistic / h.dof, 1e-3) for h in hb], width=0.4, color="tab:red", label="plain")
+    ax.bar(k + 0.2, [max(h.statistic / h.dof, 1e-3) for h in ha], width=0.4, color="tab:blue", label="final")
+    ax.axhline(1.0, color="k", lw=0.8)
+    ax.set_yscale("log")
+    ax.set_xticks(k)
+    ax.set_xticklabels(["DC" if v == 0 else str(v) for v in k], fontsize=7)
+    ax.set_xlabel("harmonic")
+    ax.set_ylabel("residual power / noise")
+    ax.legend(fontsize=7, frameon=False)
+    return ax
+
+
+def plot_held_out(d: Diagnosis, ax: Optional[Axes] = None) -> Axes:
+    """Held-out NRMSE per left-out experiment: plain against final."""
+    ax = _axes(ax)
+    ho = d.held_out
+    if ho is None:
+        ax.text(
+            0.5, 0.5, "no term named: nothing to hold out", ha="center", va="center", transform=ax.transAxes
+        )
+        ax.set_axis_off()
+        return ax
+    x = np.arange(len(ho.folds))
+    ax.bar(x - 0.2, ho.nrmse_before, width=0.4, color="tab:red", label="plain")
+    ax.bar(x + 0.2, ho.nrmse_after, width=0.4, color="tab:blue", label="final")
+    ax.set_xticks(x)
+    ax.set_xticklabels([str(j) for j in ho.folds], fontsize=7)
+    ax.set_xlabel("held-out experiment")
+    ax.set_ylabel("held-out NRMSE")
+    ax.set_yscale("log")
+    ax.legend(fontsize=7, frameon=False)
+    return ax
+
+
+FIGURES = {
+    "residual_cycle": plot_residual_cycle,
+    "loops": plot_loops,
+    "harmonics": plot_harmonics,
+    "held_out": plot_held_out,
+}
+
+
+def figure(d: Diagnosis, name: str) -> Figure:
+    ax = FIGURES[name](d)
+    fig = ax.figure
+    fig.subplots_adjust(left=0.14, right=0.97, bottom=0.16, top=0.95)
+    return fig  # type: ignore[return-value]
+
+
+def _png(fig: Figure) -> bytes:
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    FigureCanvasAgg(fig)
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png")
+    return buf.getvalue()
+
+
+def _table(rows: list[list[str]], head: list[str]) -> str:
+    h = "".join(f"<th>{html.escape(c)}</th>" for c in head)
+    body = "".join("<tr>" + "".join(f"<td>{html.escape(c)}</td>" for c in r) + "</tr>" for r in rows)
+    return f"<table><thead><tr>{h}</tr></thead><tbody>{body}</tbody></table>"
+
+
+def _g(v: float, fmt: str = ".3g") -> str:
+    return format(v, fmt) if isinstance(v, (int, float)) and math.isfinite(v) else "–"
+
+
+def html_page(d: Diagnosis, images: dict[str, bytes]) -> str:
+    """The report a person reads: verdict first, then evidence; figures inline (no external files)."""
+    parts = [
+        "<!doctype html><html><head><meta charset='utf-8'><title>bouc_wen_id diagnosis</title>",
+        "<style>body{font-family:sans-serif;max-width:980px;margin:2em auto;line-height:1.4}"
+        "table{border-collapse:collapse;margin:0.5em 0}td,th{border:1px solid #ccc;padding:2px 8px;"
+        "text-align:right;font-size:90%}th{background:#eee}.verdict{font-size:130%;padding:0.6em;"
+        "background:#f4f4ff;border-left:6px solid #446}img{max-width:100%}</style></head><body>",
+        "<h1>Diagnosis</h1>",
+        f"<p class='verdict'><b>{html.escape(d.status)}</b>: {html.escape(d.verdict)}</p>",
+        f"<p>Plain model: χ²/dof = {_g(d.plain.cost / max(d.plain.dof, 1))} "
+        f"(p = {_g(d.plain.p_value, '.2g')}); "
+        f"final model: χ²/dof = {_g(d.final.cost / max(d.final.dof, 1))} (p = {_g(d.final.p_value, '.2g')}); "
+        f"{100 * d.explained_fraction:.1f} % of the plain model's excess explained. "
+        f"{len(d.experiments)} experiments, {d.seconds:.1f} s.</p>",
+    ]
+    if d.named or d.partial:
+        rows = [
+            [t.label, t.symbol, _g(t.value, ".4g"), _g(t.standard_error), t.unit]
+            for t in (d.named or d.partial)
+        ]
+        parts.append("<h2>Terms</h2>" + _table(rows, ["term", "symbol", "value", "std. error", "unit"]))
+    for a in d.alternatives:
+        parts.append(
+            f"<p>Alternative: <b>{html.escape(TERM_LABELS.get(a.rival, a.rival))}</b> fits as well as "
+            f"{html.escape(TERM_LABELS.get(a.term, a.term))} (parameter correlation {a.correlation:+.3f}). "
+            f"To separate them: {html.escape(a.separating_experiment)}.</p>"
+        )
+    if d.held_out is not None:
+        rows = [
+            [d.experiments[j].source, _g(b, ".4f"), _g(a, ".4f"), _g(a / b if b else math.nan, ".3f")]
+            for j, b, a in zip(d.held_out.folds, d.held_out.nrmse_before, d.held_out.nrmse_after)
+        ]
+        parts.append(
+            "<h2>Held-out proof</h2><p>Each experiment left out in turn: the physics fitted on the "
+            "others, only its own |G| and phase refitted.</p>"
+            + _table(rows, ["held-out experiment", "plain NRMSE", "final NRMSE", "ratio"])
+        )
+    parts.append("<h2>Where the models miss</h2>")
+    parts.append(
+        f"<p>Plain: {html.escape(d.before.describe() or 'nowhere above the noise')}. "
+        f"Final: {html.escape(d.after.describe() or 'nowhere above the noise')}.</p>"
+    )
+    for name, title in (
+        ("residual_cycle", "Residual over the cycle"),
+        ("loops", "Loops"),
+        ("harmonics", "Residual per harmonic"),
+        ("held_out", "Held-out NRMSE"),
+    ):
+        if name in images:
+            b64 = base64.b64encode(images[name]).decode("ascii")
+            parts.append(f"<h3>{title}</h3><img alt='{name}' src='data:image/png;base64,{b64}'>")
+    parts.append("<h2>Selection</h2>")
+    for k, st in enumerate(d.steps, 1):
+        rows = [
+            [
+                t.term,
+                _g(t.cost, ".6g"),
+                _g(t.statistic, ".4g"),
+                _g(t.p_adjusted, ".2g"),
+                _g(t.share, ".2f"),
+                "" if t.held_out is None else ("better" if t.held_out.improves else "worse"),
+            ]
+            for t in st.trials
+        ]
+        parts.append(
+            f"<p>Step {k}: from χ² = {_g(st.before_cost, '.6g')} (dof {st.before_dof}); chosen: "
+            f"<b>{html.escape(st.chosen or 'none')}</b></p>"
+            + _table(rows, ["term", "χ²", "F", "p (Bonferroni)", "share of excess", "held-out"])
+        )
+    parts.append("<h2>Experiments</h2>")
+    rows = [
+        [
+            e.source,
+            _g(e.frequency / TWO_PI, ".4g"),
+            _g(e.amplitude, ".4g"),
+            _g(e.periods, ".4g"),
+            _g(p, ".4f"),
+            _g(f, ".4f"),
+        ]
+        for e, p, f in zip(d.experiments, d.plain.nrmse, d.final.nrmse)
+    ]
+    parts.append(_table(rows, ["experiment", "f (Hz)", "U", "periods", "plain NRMSE", "final NRMSE"]))
+    parts.append("</body></html>")
+    return "\n".join(parts)
+
+
+def write_report(d: Diagnosis, out: Path, figures: bool = True) -> list[Path]:
+    """``diagnosis.json`` first, then the figures (PNG) and ``report.html``, into the folder ``out``."""
+    out.mkdir(parents=True, exist_ok=True)
+    written = [out / "diagnosis.json"]
+    written[0].write_text(d.to_json())
+    images: dict[str, bytes] = {}
+    if figures:
+        for name in FIGURES:
+            images[name] = _png(figure(d, name))
+            path = out / f"{name}.png"
+            path.write_bytes(images[name])
+            written.append(path)
+    page = out / "report.html"
+    page.write_text(html_page(d, images))
+    written.append(page)
+    return written
+
+
+__all__ = [
+    "plot_residual_cycle",
+    "plot_loops",
+    "plot_harmonics",
+    "plot_held_out",
+    "write_report",
+    "html_page",
+    "clean",
+]
