@@ -1,0 +1,284 @@
+"""Recordings with a concealed effect: the generator behind ``benches/diagnosis.py`` (design.md 10.5).
+
+Every case is a seeded plant (first-order G with a small delay, a Bouc-Wen element saturating at w = 1),
+measured at four frequencies and two amplitudes (x at 0.8 and 2 times the saturation level), with white
+output noise of sd ``NOISE_SD`` and ``PERIODS`` averaged periods of ``P`` samples after ``SETTLE`` settling
+ones. The effect's size is the RMS of its contribution over the steady periods (output with the effect
+minus output without, noise-free), in units of the averaged output's noise sd ``NOISE_SD / sqrt(PERIODS)``.
+
+- Library terms are simulated by the library itself (``simulate`` with ``WienerPlant.terms``), time
+  domain, from rest: an integrator independent of the steady-loop fit that names them.
+- Physics outside the library (pinching, a hysteretic force fed back into a mass-spring, degradation) are
+  integrated here in NumPy, vectorised over the experiments.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import bouc_wen_id as bw
+import numpy as np
+from bouc_wen_id import terms as T
+from numpy.typing import NDArray
+
+FloatArray = NDArray[np.float64]
+TWO_PI = 2.0 * math.pi
+
+P = 128
+PERIODS = 16
+SETTLE = 10
+SUBSTEPS = 8
+NOISE_SD = 0.01
+FREQS_HZ = (0.5, 1.0, 2.0, 4.0)
+X_LEVELS = (0.8, 2.0)
+
+#: The library's terms and how to build each with a parameter value (plain units: y ~ 1, u ~ 1).
+LIBRARY: dict[str, Callable[[float], object]] = {
+    "offset": lambda v: T.Offset(v),
+    "stiffness": lambda v: T.Stiffness(v),
+    "viscous": lambda v: T.Viscous(v),
+    "inertia": lambda v: T.Inertia(v),
+    "coulomb": lambda v: T.Coulomb(v),
+    "sensor_lag": lambda v: T.SensorLag(v),
+    "asymmetry": lambda v: T.Asymmetry(v),
+    "play": lambda v: T.Play(v),
+}
+#: Terms whose contribution is linear in the parameter (the size is set in one shot).
+LINEAR = ("offset", "stiffness", "viscous", "inertia", "coulomb")
+
+
+@dataclass(frozen=True)
+class Base:
+    """A seeded plant and its experiment plan."""
+
+    plant: bw.WienerPlant
+    omegas: FloatArray
+    amplitudes: FloatArray
+    gains: FloatArray
+    phases: FloatArray
+
+
+def base(seed: int) -> Base:
+    rng = np.random.default_rng(seed)
+    tc = float(rng.uniform(0.02, 0.15))
+    delay = float(rng.uniform(0.0, 0.02))
+    k = float(rng.uniform(0.5, 2.0))
+    mu = float(rng.uniform(1.3, 2.5))
+    ratio = float(rng.uniform(-0.3, 0.6))  # gamma / beta
+    beta = 1.0 / (1.0 + ratio)  # beta + gamma = 1: saturation at |w| = 1
+    lin = bw.TransferFunction([k], [tc, 1.0], delay=delay)
+    plant = bw.WienerPlant(lin, bw.BoucWen(beta=beta, gamma=ratio * beta, mu=mu))
+    om = np.repeat(TWO_PI * np.asarray(FREQS_HZ), len(X_LEVELS))
+    xs = np.tile(np.asarray(X_LEVELS), len(FREQS_HZ))
+    g, ph = lin.gain_phase(om)
+    return Base(plant, om, xs / g, g, ph)
+
+
+def _plan(b: Base, noise_sd: float, seed: int) -> bw.SinePlan:
+    return bw.SinePlan(
+        b.omegas,
+        b.amplitudes,
+        settle_periods=SETTLE,
+        periods=PERIODS,
+        samples_per_period=P,
+        substeps=SUBSTEPS,
+        noise_sd=noise_sd,
+        seed=seed,
+    )
+
+
+def _steady(recs: Sequence[bw.Recording]) -> FloatArray:
+    return np.concatenate([np.asarray(r.y[SETTLE * P :]) for r in recs])
+
+
+def _with_terms(b: Base, terms: tuple[object, ...]) -> bw.WienerPlant:
+    return bw.WienerPlant(b.plant.linear, b.plant.hysteresis, terms=terms)  # type: ignore[call-arg]
+
+
+def contribution_rms(b: Base, term: str, value: float) -> float:
+    plain = _steady(bw.simulate(b.plant, _plan(b, 0.0, 0)))
+    aug = _steady(bw.simulate(_with_terms(b, (LIBRARY[term](value),)), _plan(b, 0.0, 0)))
+    return float(np.sqrt(np.mean((aug - plain) ** 2)))
+
+
+def calibrate(b: Base, term: str, size: float) -> float:
+    """The term's parameter whose contribution has RMS ``size * NOISE_SD / sqrt(PERIODS)``."""
+    target = size * NOISE_SD / math.sqrt(PERIODS)
+    if term in LINEAR:
+        return target / contribution_rms(b, term, 1.0)
+    hi = {"sensor_lag": 0.5 / float(b.omegas.max()), "asymmetry": 0.9, "play": 0.5 * float(X_LEVELS[0])}[term]
+    lo = hi * 1e-6
+    for _ in range(40):  # bisection in log: the contribution grows with the parameter
+        mid = math.sqrt(lo * hi)
+        if contribution_rms(b, term, mid) < target:
+            lo = mid
+        else:
+            hi = mid
+        if hi / lo < 1.01:
+            break
+    return math.sqrt(lo * hi)
+
+
+def library_case(term: str | None, size: float, seed: int) -> tuple[list[bw.Recording], float]:
+    """A case with ``term`` (None: the plain model) at ``size``; (recordings, parameter value)."""
+    b = base(seed)
+    if term is None:
+        return bw.simulate(b.plant, _plan(b, NOISE_SD, seed)), 0.0
+    value = calibrate(b, term, size)
+    return bw.simulate(_with_terms(b, (LIBRARY[term](value),)), _plan(b, NOISE_SD, seed)), value
+
+
+# --------------------------------------------------------------------------------------------------------
+# Physics outside the library, integrated here (vectorised over the experiments).
+
+
+def _bw_rate(w: FloatArray, xd: FloatArray, beta: float, gamma: float, mu: float) -> FloatArray:
+    aw = np.abs(w) ** mu
+    out: FloatArray = xd - beta * np.abs(xd) * aw * np.sign(w) - gamma * xd * aw
+    return out
+
+
+def _record(b: Base, y_steady_period: FloatArray, seed: int) -> list[bw.Recording]:
+    """Recordings made of the steady period repeated, plus seeded noise (settling already done)."""
+    rng = np.random.default_rng(seed)
+    recs = []
+    for i, (om, amp) in enumerate(zip(b.omegas, b.amplitudes)):
+        t = np.arange(PERIODS * P) * (TWO_PI / om / P)
+        y = np.tile(y_steady_period[i], PERIODS) + rng.normal(0.0, NOISE_SD, t.size)
+        recs.append(
+            bw.Recording(
+                t,
+                amp * np.cos(om * t),
+                y,
+                float(amp),
+                float(om),
+                settle_periods=0,
+                metadata={"name": f"exp{i}"},
+            )
+        )
+    return recs
+
+
+def pinched_period(b: Base, zeta1: float, zeta2: float = 0.2, q: float = 0.1, cycles: int = 6) -> FloatArray:
+    """The steady loop of Baber-Noori pinching, h(w) = 1 - zeta1 exp(-((w sgn xdot - q)/zeta2)^2)."""
+    h = b.plant.hysteresis
+    a = b.gains * b.amplitudes
+    n = P * SUBSTEPS
+    dth = TWO_PI / n
+    w = np.zeros_like(a)
+    out = np.zeros((a.size, P))
+    for c in range(cycles):
+        for k in range(n):
+            th = k * dth - b.phases  # x = A cos(theta - phi), grid theta = omega t
+
+            def f(ww: FloatArray, t: FloatArray) -> FloatArray:
+                xd = -a * np.sin(t)
+                pinch = 1.0 - zeta1 * np.exp(-((((ww * np.sign(xd)) - q) / zeta2) ** 2))
+                return pinch * _bw_rate(ww, xd, h.beta, h.gamma, h.mu)
+
+            if c == cycles - 1 and k % SUBSTEPS == 0:
+                out[:, k // SUBSTEPS] = w
+            k1 = f(w, th)
+            k2 = f(w + 0.5 * dth * k1, th + 0.5 * dth)
+            k3 = f(w + 0.5 * dth * k2, th + 0.5 * dth)
+            k4 = f(w + dth * k3, th + dth)
+            w = w + dth / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
+    return out
+
+
+def feedback_period(b: Base, mass: float, cycles: int = 8) -> FloatArray:
+    """The hysteretic force fed back into a mass-spring (not a Wiener cascade), steady output z.
+
+    ``m q'' = k_s (x - q) - z - c q'``, ``z' = BW(q')``, driven by the Wiener x of the base plant; the
+    output is the hysteretic force z. Integrated in theta = omega t (vectorised over the experiments).
+    """
+    h = b.plant.hysteresis
+    a = b.gains * b.amplitudes
+    om = b.omegas
+    ks, damp = 4.0, 0.4
+    n = P * SUBSTEPS
+    dth = TWO_PI / n
+    s = np.zeros((3, a.size))  # q, qdot, z
+    out = np.zeros((a.size, P))
+
+    def f(st: FloatArray, th: float) -> FloatArray:
+        q, qd, z = st
+        x = a * np.cos(th - b.phases)
+        qdd = (ks * (x - q) - z - damp * qd) / mass
+        return np.stack([qd, qdd, _bw_rate(z, qd, h.beta, h.gamma, h.mu)]) / om
+
+    for c in range(cycles):
+        for k in range(n):
+            th = k * dth
+            if c == cycles - 1 and k % SUBSTEPS == 0:
+                out[:, k // SUBSTEPS] = s[2]
+            k1 = f(s, th)
+            k2 = f(s + 0.5 * dth * k1, th + 0.5 * dth)
+            k3 = f(s + 0.5 * dth * k2, th + 0.5 * dth)
+            k4 = f(s + dth * k3, th + dth)
+            s = s + dth / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
+    return out
+
+
+def degrading_records(b: Base, rate: float, seed: int) -> list[bw.Recording]:
+    """Baber-Noori strength degradation: ``nu = 1 + rate e`` with ``e' = w x'`` (dissipated energy).
+
+    Integrated from rest over settle + averaged periods, so the loop drifts through the record.
+    """
+    h = b.plant.hysteresis
+    a = b.gains * b.amplitudes
+    rng = np.random.default_rng(seed)
+    total = (SETTLE + PERIODS) * P
+    n = total * SUBSTEPS
+    dth = TWO_PI / (P * SUBSTEPS)
+    w = np.zeros_like(a)
+    e = np.zeros_like(a)
+    ys = np.zeros((a.size, total))
+
+    def f(ww: FloatArray, ee: FloatArray, t: float) -> tuple[FloatArray, FloatArray]:
+        xd = -a * np.sin(t - b.phases)
+        nu = 1.0 + rate * ee
+        aw = np.abs(ww) ** h.mu
+        wd = xd - nu * (h.beta * np.abs(xd) * aw * np.sign(ww) + h.gamma * xd * aw)
+        return wd, ww * xd
+
+    for k in range(n):
+        if k % SUBSTEPS == 0:
+            ys[:, k // SUBSTEPS] = w
+        th = k * dth
+        k1 = f(w, e, th)
+        k2 = f(w + 0.5 * dth * k1[0], e + 0.5 * dth * k1[1], th + 0.5 * dth)
+        k3 = f(w + 0.5 * dth * k2[0], e + 0.5 * dth * k2[1], th + 0.5 * dth)
+        k4 = f(w + dth * k3[0], e + dth * k3[1], th + dth)
+        w = w + dth / 6.0 * (k1[0] + 2 * k2[0] + 2 * k3[0] + k4[0])
+        e = e + dth / 6.0 * (k1[1] + 2 * k2[1] + 2 * k3[1] + k4[1])
+    recs = []
+    for i, (om, amp) in enumerate(zip(b.omegas, b.amplitudes)):
+        t = np.arange(total) * (TWO_PI / om / P)
+        y = ys[i] + rng.normal(0.0, NOISE_SD, total)
+        recs.append(
+            bw.Recording(
+                t,
+                amp * np.cos(om * t),
+                y,
+                float(amp),
+                float(om),
+                settle_periods=SETTLE,
+                metadata={"name": f"exp{i}"},
+            )
+        )
+    return recs
+
+
+def outside_case(kind: str, seed: int) -> list[bw.Recording]:
+    """A case of physics outside the library: ``pinching``, ``feedback`` or ``degradation``."""
+    b = base(seed)
+    if kind == "pinching":
+        return _record(b, pinched_period(b, zeta1=0.6), seed)
+    if kind == "feedback":
+        return _record(b, feedback_period(b, mass=0.02), seed)
+    if kind == "degradation":
+        return degrading_records(b, rate=0.002, seed=seed)
+    raise ValueError(kind)

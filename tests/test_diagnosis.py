@@ -1,0 +1,214 @@
+"""The diagnosis: localisation statistics, the nested tests, selection on small seeded cases, the report."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import bouc_wen_id as bw
+import numpy as np
+import pytest
+from bouc_wen_id import terms as T
+from bouc_wen_id.diagnosis.data import DiagExperiment
+from bouc_wen_id.diagnosis.locate import benjamini_hochberg, locate
+from bouc_wen_id.diagnosis.select import f_test
+from bouc_wen_id.errors import InsufficientDataError, InvalidParameterError
+
+TWO_PI = 2.0 * math.pi
+
+
+def _exp(
+    ybar: np.ndarray,
+    noise_var: float = 1e-4,
+    periods: float = 10.0,
+    h1: np.ndarray | None = None,
+    dc: np.ndarray | None = None,
+    source: str = "e",
+) -> DiagExperiment:
+    n = int(periods)
+    return DiagExperiment(
+        frequency=TWO_PI,
+        amplitude=1.0,
+        grid_phase=0.0,
+        ybar=ybar,
+        periods=periods,
+        noise_var=noise_var,
+        spread_var=noise_var,
+        noise_dof=ybar.size * (n - 1),
+        dc=np.zeros(n) if dc is None else dc,
+        h1=np.ones(n, dtype=complex) if h1 is None else h1,
+        source=source,
+    )
+
+
+def _noise(rng: np.random.Generator, p: int, var: float, periods: float) -> np.ndarray:
+    return rng.normal(0.0, math.sqrt(var / periods), p)
+
+
+# ------------------------------------------------------------------ localisation (pure NumPy, exact cases)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_white_residual_is_adequate_and_flags_no_harmonic(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    p, var, n = 128, 1e-4, 10.0
+    exps = [_exp(_noise(rng, p, var, n)) for _ in range(4)]
+    loc = locate(exps, [np.zeros(p)] * 4, [1.0] * 4, [0.0] * 4, n_params=0)
+    assert loc.adequate
+    assert loc.significant_harmonics() == []
+    assert 0.7 < loc.statistic / loc.dof < 1.3
+
+
+def test_offset_residual_sits_at_dc() -> None:
+    rng = np.random.default_rng(5)
+    p, var, n = 128, 1e-4, 10.0
+    sd = math.sqrt(var / n)
+    exps = [_exp(_noise(rng, p, var, n) + 10 * sd) for _ in range(4)]
+    loc = locate(exps, [np.zeros(p)] * 4, [1.0] * 4, [0.0] * 4, n_params=0)
+    assert not loc.adequate
+    assert loc.significant_harmonics() == [0]
+    assert loc.harmonics[0].share > 0.95
+
+
+def test_third_harmonic_and_region_near_reversals() -> None:
+    rng = np.random.default_rng(6)
+    p, var, n = 256, 1e-4, 10.0
+    th = TWO_PI * np.arange(p) / p
+    # A spike where x = cos(theta) reverses: |sin| small.
+    spike = 0.05 * np.exp(-((np.sin(th)) ** 2) / 0.01)
+    exps = [_exp(_noise(rng, p, var, n) + spike) for _ in range(3)]
+    loc = locate(exps, [np.zeros(p)] * 3, [1.0] * 3, [0.0] * 3, n_params=0)
+    assert loc.where().startswith("near the reversals")
+    harm = np.fft.rfft(spike)
+    assert 0 in loc.significant_harmonics() and 2 in loc.significant_harmonics()  # even: both reversals alike
+    assert abs(harm[1]) < 1e-9 * abs(harm[0])  # the spike pair has no fundamental: not flagged at 1
+    assert 1 not in loc.significant_harmonics()
+
+
+def test_drift_detected_only_when_the_loop_drifts() -> None:
+    rng = np.random.default_rng(7)
+    p, n = 64, 30
+    steady = _exp(np.zeros(p), periods=n, h1=1 + rng.normal(0, 1e-3, n) + 0j)
+    drifting = _exp(np.zeros(p), periods=n, h1=1 - 0.002 * np.arange(n) + rng.normal(0, 1e-3, n) + 0j)
+    loc0 = locate([steady], [np.zeros(p)], [1.0], [0.0], 0)
+    loc1 = locate([drifting], [np.zeros(p)], [1.0], [0.0], 0)
+    assert not loc0.drift_detected
+    assert loc1.drift_detected and loc1.drift[0].h1_slope < 0
+
+
+def test_frequency_exponent_of_a_viscous_like_misfit() -> None:
+    rng = np.random.default_rng(8)
+    p, var, n = 128, 1e-6, 10.0
+    exps, outs = [], []
+    for om in (1.0, 2.0, 4.0, 8.0):
+        th = TWO_PI * np.arange(p) / p
+        r = 0.01 * om * np.sin(th)
+        e = DiagExperiment(
+            om,
+            1.0,
+            0.0,
+            r + _noise(rng, p, var, n),
+            n,
+            var,
+            var,
+            p * 9,
+            np.zeros(10),
+            np.ones(10, dtype=complex),
+            f"w{om}",
+        )
+        exps.append(e)
+        outs.append(np.zeros(p))
+    loc = locate(exps, outs, [1.0] * 4, [0.0] * 4, 0)
+    assert loc.frequency_exponent == pytest.approx(1.0, abs=0.05)
+
+
+def test_benjamini_hochberg_against_hand_example() -> None:
+    p = [0.001, 0.008, 0.039, 0.041, 0.042, 0.06, 0.074, 0.205, 0.212, 0.216]
+    # Level 0.05, m = 10: thresholds 0.005 k; the largest k with p_(k) <= 0.005 k is k = 2.
+    assert benjamini_hochberg(p).tolist() == [True, True] + [False] * 8
+
+
+def test_f_test_matches_scipy_and_halves_on_the_boundary() -> None:
+    from scipy import stats
+
+    f, pv = f_test(130.0, 100.0, 90)
+    assert f == pytest.approx(27.0)
+    assert pv == pytest.approx(stats.f.sf(27.0, 1, 90))
+    _, pb = f_test(130.0, 100.0, 90, boundary=True)
+    assert pb == pytest.approx(pv / 2)
+    assert f_test(100.0, 100.0, 90)[1] == 1.0
+
+
+# ------------------------------------------------------------------ selection on small seeded cases
+
+
+def _plant(terms: tuple[object, ...] = ()) -> bw.WienerPlant:
+    return bw.WienerPlant(bw.TransferFunction([1.0], [0.05, 1.0]), bw.BoucWen(0.7, 0.3, 1.8), terms=terms)  # type: ignore[call-arg]
+
+
+def _recs(terms: tuple[object, ...] = (), seed: int = 3, noise: float = 0.01) -> list[bw.Recording]:
+    om = np.repeat(TWO_PI * np.array([0.5, 1.5, 4.0]), 2)
+    lin = bw.TransferFunction([1.0], [0.05, 1.0])
+    g, _ = lin.gain_phase(om)
+    amps = np.tile([0.8, 2.0], 3) / g
+    plan = bw.SinePlan(
+        om, amps, settle_periods=8, periods=12, samples_per_period=64, substeps=8, noise_sd=noise, seed=seed
+    )
+    return bw.simulate(_plant(terms), plan)
+
+
+@pytest.fixture(scope="module")
+def plain_diagnosis() -> bw.diagnosis.Diagnosis:
+    return bw.diagnose(_recs())
+
+
+def test_plain_data_is_adequate_and_names_nothing(plain_diagnosis: bw.diagnosis.Diagnosis) -> None:
+    d = plain_diagnosis
+    assert d.status == "adequate"
+    assert d.named == ()
+    assert d.verdict.startswith("adequate")
+
+
+@pytest.mark.parametrize(
+    ("term", "value"),
+    [(T.Offset(0.02), 0.02), (T.Viscous(0.004), 0.004)],
+    ids=["offset", "viscous"],
+)
+def test_hidden_term_is_named_with_its_value(term: object, value: float) -> None:
+    d = bw.diagnose(_recs((term,)))
+    assert d.status == "explained", d.summary()
+    assert d.named_terms == (type(term).name,)  # type: ignore[attr-defined]
+    got = d.named[0]
+    assert abs(got.value - value) < 4 * got.standard_error, d.summary()
+    assert d.held_out is not None and d.held_out.improves
+    assert d.verdict.startswith("explained by: ")
+
+
+def test_report_is_strict_json_and_self_contained_html(
+    plain_diagnosis: bw.diagnosis.Diagnosis, tmp_path: Path
+) -> None:
+    from bouc_wen_id.diagnosis.report import write_report
+
+    files = write_report(plain_diagnosis, tmp_path / "diag")
+    data = json.loads((tmp_path / "diag" / "diagnosis.json").read_text())
+    assert data["status"] == "adequate" and data["verdict"] == plain_diagnosis.verdict
+    page = (tmp_path / "diag" / "report.html").read_text()
+    assert page.index("adequate") < page.index("<img")  # the verdict comes first
+    assert "http://" not in page and "https://" not in page
+    assert {f.name for f in files} >= {"diagnosis.json", "report.html", "loops.png"}
+
+
+def test_bad_candidates_and_alpha_are_named_errors() -> None:
+    recs = _recs()
+    with pytest.raises(InvalidParameterError, match="candidates"):
+        bw.diagnose(recs, candidates=["viscous", "magic"])
+    with pytest.raises(InvalidParameterError, match="alpha"):
+        bw.diagnose(recs, alpha=1.5)
+
+
+def test_too_few_periods_is_insufficient_data() -> None:
+    rec = _recs()[0]
+    short = bw.Recording(rec.t[: 2 * 64], rec.u[: 2 * 64], rec.y[: 2 * 64], rec.amplitude, rec.frequency)
+    with pytest.raises(InsufficientDataError, match="at least 3"):
+        bw.diagnose([short])
