@@ -20,6 +20,7 @@ pub mod refine;
 pub mod simulate;
 pub mod solve;
 pub mod steady;
+pub mod terms;
 
 #[cfg(feature = "python")]
 mod python;

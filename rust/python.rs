@@ -16,7 +16,7 @@ use crate::estimate;
 use crate::linear::TransferFunction;
 use crate::simulate::{self, Input};
 use crate::solve::{self, SlsProblem, GOLDEN_MAX_ITER};
-use crate::{profile, refine, steady};
+use crate::{profile, refine, steady, terms};
 
 pyo3::import_exception!(bouc_wen_id.errors, InvalidParameterError);
 pyo3::import_exception!(bouc_wen_id.errors, NonFiniteError);
@@ -578,6 +578,152 @@ fn refine_fit<'py>(
     ))
 }
 
+/// Row-major `(rows, cols)` data as a new 2-D array.
+fn matrix<'py>(
+    py: Python<'py>,
+    rows: usize,
+    cols: usize,
+    flat: Vec<f64>,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let arr = Array2::from_shape_vec((rows, cols), flat)
+        .map_err(|e| CoreError::InvalidParameter(format!("internal shape error: {e}")))?;
+    Ok(arr.into_pyarray(py))
+}
+
+/// `(y, jac_shared, jac_own)` of [`augmented_output`].
+type AugOutputPy<'py> = (
+    Bound<'py, PyArray1<f64>>,
+    Bound<'py, PyArray2<f64>>,
+    Bound<'py, PyArray2<f64>>,
+);
+
+/// The augmented model's output of one experiment (design.md 9.1) on `ybar_len` samples per
+/// period: `(y (P,), jac_shared (P, 3 + T), jac_own (P, 2))`, shared columns
+/// `[beta, gamma, mu, q_1 .. q_T]` in the order of `terms`, own columns `[g, phi]`.
+#[pyfunction]
+#[pyo3(signature = (ybar_len, amplitude, frequency, grid_phase, terms, shared, gain, phase, substeps))]
+#[allow(clippy::too_many_arguments)]
+fn augmented_output<'py>(
+    py: Python<'py>,
+    ybar_len: i64,
+    amplitude: f64,
+    frequency: f64,
+    grid_phase: f64,
+    terms: Vec<String>,
+    shared: PyReadonlyArray1<'py, f64>,
+    gain: f64,
+    phase: f64,
+    substeps: i64,
+) -> PyResult<AugOutputPy<'py>> {
+    let terms = terms::Terms::parse(&terms)?;
+    let shared = slice("shared", &shared)?;
+    let exc = terms::Excitation {
+        samples: count("ybar_len", ybar_len, 0)?,
+        amplitude,
+        frequency,
+        grid_phase,
+    };
+    let substeps = count("substeps", substeps, 1)?;
+    let out =
+        py.detach(|| terms::augmented_output(&exc, &terms, shared, gain, phase, substeps))?;
+    let p = out.y.len();
+    let own: Vec<f64> = out.jac_own.iter().flatten().copied().collect();
+    Ok((
+        out.y.into_pyarray(py),
+        matrix(py, p, terms.n_shared(), out.jac_shared)?,
+        matrix(py, p, 2, own)?,
+    ))
+}
+
+/// What [`augmented_refine`] returns to Python:
+/// `(shared, gains, phases, cost, iterations, converged, fisher, outputs)`.
+type AugRefineOut<'py> = (
+    Bound<'py, PyArray1<f64>>,
+    Bound<'py, PyArray1<f64>>,
+    Bound<'py, PyArray1<f64>>,
+    f64,
+    usize,
+    bool,
+    Bound<'py, PyArray2<f64>>,
+    Vec<Bound<'py, PyArray1<f64>>>,
+);
+
+/// Joint Levenberg-Marquardt of the augmented model (design.md 9.3). `fisher` is `J^T W J`
+/// ordered `[beta, gamma, mu, q_1 .. q_T, g_0, phi_0, g_1, phi_1, ...]`.
+#[pyfunction]
+#[pyo3(signature = (ybars, amplitudes, frequencies, grid_phases, weights, terms, shared0, gains0, phases0, *, max_iter=200, substeps=4, mu_lo=1.0, mu_hi=f64::INFINITY))]
+#[allow(clippy::too_many_arguments)]
+fn augmented_refine<'py>(
+    py: Python<'py>,
+    ybars: Vec<PyReadonlyArray1<'py, f64>>,
+    amplitudes: Vec<f64>,
+    frequencies: Vec<f64>,
+    grid_phases: Vec<f64>,
+    weights: Vec<f64>,
+    terms: Vec<String>,
+    shared0: Vec<f64>,
+    gains0: Vec<f64>,
+    phases0: Vec<f64>,
+    max_iter: i64,
+    substeps: i64,
+    mu_lo: f64,
+    mu_hi: f64,
+) -> PyResult<AugRefineOut<'py>> {
+    let terms = terms::Terms::parse(&terms)?;
+    let slices = ybars
+        .iter()
+        .enumerate()
+        .map(|(i, y)| slice(&format!("ybars[{i}]"), y))
+        .collect::<PyResult<Vec<_>>>()?;
+    let m = slices.len();
+    if amplitudes.len() != m
+        || frequencies.len() != m
+        || grid_phases.len() != m
+        || weights.len() != m
+    {
+        return Err(CoreError::InvalidParameter(format!(
+            "{m} experiments but {} amplitudes, {} frequencies, {} grid phases and {} weights",
+            amplitudes.len(),
+            frequencies.len(),
+            grid_phases.len(),
+            weights.len()
+        ))
+        .into());
+    }
+    let opts = terms::AugOptions {
+        max_iter: count("max_iter", max_iter, 1)?,
+        substeps: count("substeps", substeps, 1)?,
+        mu_lo,
+        mu_hi,
+        ..terms::AugOptions::default()
+    };
+    let exps: Vec<terms::AugExperiment> = (0..m)
+        .map(|i| terms::AugExperiment {
+            ybar: slices[i],
+            amplitude: amplitudes[i],
+            frequency: frequencies[i],
+            grid_phase: grid_phases[i],
+            weight: weights[i],
+        })
+        .collect();
+    let fit = py.detach(|| {
+        terms::augmented_refine(&exps, &terms, &shared0, &gains0, &phases0, &opts)
+    })?;
+    let n = fit.fisher.nrows();
+    let fisher = Array2::from_shape_fn((n, n), |(i, j)| fit.fisher[(i, j)]);
+    let outputs = fit.outputs.into_iter().map(|y| y.into_pyarray(py)).collect();
+    Ok((
+        fit.shared.into_pyarray(py),
+        fit.gains.into_pyarray(py),
+        fit.phases.into_pyarray(py),
+        fit.cost,
+        fit.iterations,
+        fit.converged,
+        fisher.into_pyarray(py),
+        outputs,
+    ))
+}
+
 /// Rust core of bouc_wen_id (simulation, averaging, estimators); see docs/design.md.
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -597,5 +743,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(profile_phase_sls, m)?)?;
     m.add_function(wrap_pyfunction!(profile_phase_gain, m)?)?;
     m.add_function(wrap_pyfunction!(refine_fit, m)?)?;
+    m.add_function(wrap_pyfunction!(augmented_output, m)?)?;
+    m.add_function(wrap_pyfunction!(augmented_refine, m)?)?;
     Ok(())
 }

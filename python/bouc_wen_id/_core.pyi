@@ -24,6 +24,8 @@ __all__ = [
     "profile_phase_sls",
     "profile_phase_gain",
     "refine",
+    "augmented_output",
+    "augmented_refine",
 ]
 
 _F = NDArray[np.float64]
@@ -106,3 +108,30 @@ def refine(
     mu_lo: float = 1.0,
     mu_hi: float = ...,
 ) -> tuple[_F, float, int, bool, _F, list[_F]]: ...
+def augmented_output(
+    ybar_len: int,
+    amplitude: float,
+    frequency: float,
+    grid_phase: float,
+    terms: Sequence[str],
+    shared: _F,
+    gain: float,
+    phase: float,
+    substeps: int,
+) -> tuple[_F, _F, _F]: ...
+def augmented_refine(
+    ybars: Sequence[_F],
+    amplitudes: Sequence[float] | _F,
+    frequencies: Sequence[float] | _F,
+    grid_phases: Sequence[float] | _F,
+    weights: Sequence[float] | _F,
+    terms: Sequence[str],
+    shared0: Sequence[float] | _F,
+    gains0: Sequence[float] | _F,
+    phases0: Sequence[float] | _F,
+    *,
+    max_iter: int = 200,
+    substeps: int = 4,
+    mu_lo: float = 1.0,
+    mu_hi: float = ...,
+) -> tuple[_F, _F, _F, float, int, bool, _F, list[_F]]: ...
