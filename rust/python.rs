@@ -16,7 +16,7 @@ use crate::estimate;
 use crate::linear::TransferFunction;
 use crate::simulate::{self, Input};
 use crate::solve::{self, SlsProblem, GOLDEN_MAX_ITER};
-use crate::{profile, refine, steady, terms};
+use crate::{path_loop as pathloop, profile, refine, steady, terms};
 
 pyo3::import_exception!(bouc_wen_id.errors, InvalidParameterError);
 pyo3::import_exception!(bouc_wen_id.errors, NonFiniteError);
@@ -26,6 +26,7 @@ pyo3::import_exception!(bouc_wen_id.errors, InsufficientDataError);
 pyo3::import_exception!(bouc_wen_id.errors, ZeroAmplitudeError);
 pyo3::import_exception!(bouc_wen_id.errors, SingularNormalMatrixError);
 pyo3::import_exception!(bouc_wen_id.errors, SearchAtBoundError);
+pyo3::import_exception!(bouc_wen_id.errors, NotConvergedError);
 
 // The Python defaults `max_iter=200` are literals so that `__text_signature__` shows them.
 const _: () = assert!(GOLDEN_MAX_ITER == 200);
@@ -45,6 +46,7 @@ impl From<CoreError> for PyErr {
             CoreError::InsufficientData(_) => InsufficientDataError::new_err(msg),
             CoreError::ZeroAmplitude(_) => ZeroAmplitudeError::new_err(msg),
             CoreError::SingularNormalMatrix { .. } => SingularNormalMatrixError::new_err(msg),
+            CoreError::NotConverged(_) => NotConvergedError::new_err(msg),
             CoreError::SearchAtBound { bound, lower, .. } => Python::attach(|py| {
                 // The Python class carries the bracket end, so callers can tell mu = 1 from a
                 // bracket that is merely too narrow.
@@ -444,6 +446,35 @@ fn steady_loop<'py>(
     ))
 }
 
+/// Steady loop of the generalised Bouc-Wen (asymmetry `delta`) behind a play of half-width `play`,
+/// under `x = amplitude cos(omega t - phi)` on P samples per period (design.md 9.2):
+/// `(w, jac, iterations)` with `jac` of shape (P, 7), `d w/d(beta, gamma, mu, A, phi, delta, b)`.
+#[pyfunction]
+#[pyo3(signature = (amplitude, beta, gamma, mu, delta, play, phi, samples_per_period, substeps))]
+#[allow(clippy::type_complexity, clippy::too_many_arguments)]
+fn path_loop<'py>(
+    py: Python<'py>,
+    amplitude: f64,
+    beta: f64,
+    gamma: f64,
+    mu: f64,
+    delta: f64,
+    play: f64,
+    phi: f64,
+    samples_per_period: i64,
+    substeps: i64,
+) -> PyResult<(Bound<'py, PyArray1<f64>>, Bound<'py, PyArray2<f64>>, usize)> {
+    let p = count("samples_per_period", samples_per_period, 0)?;
+    let substeps = count("substeps", substeps, 0)?;
+    let l = py.detach(|| {
+        pathloop::path_loop(amplitude, beta, gamma, mu, delta, play, phi, p, substeps)
+    })?;
+    let flat: Vec<f64> = l.jac.iter().flatten().copied().collect();
+    let jac = Array2::from_shape_vec((l.w.len(), 7), flat)
+        .map_err(|e| CoreError::InvalidParameter(e.to_string()))?;
+    Ok((l.w.into_pyarray(py), jac.into_pyarray(py), l.iterations))
+}
+
 /// Profile-phase separable least squares (phase as a fit parameter, `sgn(xdot)` from the
 /// candidate phase): `(phi, mu, gain, beta, gamma, cost, skipped)`, canonical (`gain > 0`).
 #[pyfunction]
@@ -624,8 +655,7 @@ fn augmented_output<'py>(
         grid_phase,
     };
     let substeps = count("substeps", substeps, 1)?;
-    let out =
-        py.detach(|| terms::augmented_output(&exc, &terms, shared, gain, phase, substeps))?;
+    let out = py.detach(|| terms::augmented_output(&exc, &terms, shared, gain, phase, substeps))?;
     let p = out.y.len();
     let own: Vec<f64> = out.jac_own.iter().flatten().copied().collect();
     Ok((
@@ -706,12 +736,15 @@ fn augmented_refine<'py>(
             weight: weights[i],
         })
         .collect();
-    let fit = py.detach(|| {
-        terms::augmented_refine(&exps, &terms, &shared0, &gains0, &phases0, &opts)
-    })?;
+    let fit =
+        py.detach(|| terms::augmented_refine(&exps, &terms, &shared0, &gains0, &phases0, &opts))?;
     let n = fit.fisher.nrows();
     let fisher = Array2::from_shape_fn((n, n), |(i, j)| fit.fisher[(i, j)]);
-    let outputs = fit.outputs.into_iter().map(|y| y.into_pyarray(py)).collect();
+    let outputs = fit
+        .outputs
+        .into_iter()
+        .map(|y| y.into_pyarray(py))
+        .collect();
     Ok((
         fit.shared.into_pyarray(py),
         fit.gains.into_pyarray(py),
@@ -740,6 +773,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(sls_search, m)?)?;
     m.add_function(wrap_pyfunction!(gain_estimate, m)?)?;
     m.add_function(wrap_pyfunction!(steady_loop, m)?)?;
+    m.add_function(wrap_pyfunction!(path_loop, m)?)?;
     m.add_function(wrap_pyfunction!(profile_phase_sls, m)?)?;
     m.add_function(wrap_pyfunction!(profile_phase_gain, m)?)?;
     m.add_function(wrap_pyfunction!(refine_fit, m)?)?;

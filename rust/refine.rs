@@ -272,16 +272,15 @@ fn step(st: &State, lambda: f64) -> Option<(DVector<f64>, Vec<Vector2<f64>>)> {
         }
         let inv = a.try_inverse()?;
         // B A^-1, n x 2.
-        let ba: Vec<[f64; 2]> = e
-            .b
-            .iter()
-            .map(|r| {
-                [
-                    r[0] * inv[(0, 0)] + r[1] * inv[(1, 0)],
-                    r[0] * inv[(0, 1)] + r[1] * inv[(1, 1)],
-                ]
-            })
-            .collect();
+        let ba: Vec<[f64; 2]> =
+            e.b.iter()
+                .map(|r| {
+                    [
+                        r[0] * inv[(0, 0)] + r[1] * inv[(1, 0)],
+                        r[0] * inv[(0, 1)] + r[1] * inv[(1, 1)],
+                    ]
+                })
+                .collect();
         for k in 0..n {
             for l in 0..n {
                 s[(k, l)] -= ba[k][0] * e.b[l][0] + ba[k][1] * e.b[l][1];

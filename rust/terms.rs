@@ -20,8 +20,12 @@ use rustfft::num_complex::Complex;
 use rustfft::FftPlanner;
 
 use crate::error::{all_finite, finite, CoreError, Result};
+use crate::path_loop::{
+    path_loop, PD_AMPLITUDE, PD_BETA, PD_DELTA, PD_GAMMA, PD_MU, PD_PHI, PD_PLAY,
+};
 use crate::refine::{
-    hysteresis_admissible, levenberg_marquardt, project_hysteresis, JointModel, LmOptions, ModelEval,
+    hysteresis_admissible, levenberg_marquardt, project_hysteresis, JointModel, LmOptions,
+    ModelEval,
 };
 use crate::steady::{steady_loop, D_AMPLITUDE, D_BETA, D_GAMMA, D_MU, D_PHI};
 
@@ -255,25 +259,21 @@ fn hysteresis(
     if terms.needs_path_loop() {
         let delta = terms.value(shared, TermKind::Asymmetry);
         let b = terms.value(shared, TermKind::Play);
-        let _ = (amplitude, beta, gamma, mu, delta, b, phi, p, substeps);
-        Err(CoreError::InvalidParameter(
-            "asymmetry and play need the path loop (pending merge)".into(),
-        ))
+        let l = path_loop(amplitude, beta, gamma, mu, delta, b, phi, p, substeps)?;
+        Ok((l.w, l.jac))
     } else {
         let l = steady_loop(amplitude, beta, gamma, mu, phi, p, substeps)?;
         let jac = l
             .jac
             .iter()
             .map(|r| {
-                [
-                    r[D_BETA],
-                    r[D_GAMMA],
-                    r[D_MU],
-                    r[D_AMPLITUDE],
-                    r[D_PHI],
-                    0.0,
-                    0.0,
-                ]
+                let mut row = [0.0; 7];
+                row[PD_BETA] = r[D_BETA];
+                row[PD_GAMMA] = r[D_GAMMA];
+                row[PD_MU] = r[D_MU];
+                row[PD_AMPLITUDE] = r[D_AMPLITUDE];
+                row[PD_PHI] = r[D_PHI];
+                row
             })
             .collect();
         Ok((l.w, jac))
@@ -388,9 +388,9 @@ pub fn augmented_output(
         let fric = (udot / (COULOMB_EPS * u_amp.abs() * omega)).tanh();
         let h = &hjac[j];
         let mut f = w[j];
-        cols[1][j] = h[0];
-        cols[2][j] = h[1];
-        cols[3][j] = h[2];
+        cols[1][j] = h[PD_BETA];
+        cols[2][j] = h[PD_GAMMA];
+        cols[3][j] = h[PD_MU];
         for (t, &kind) in terms.kinds().iter().enumerate() {
             let q = shared[N_HYSTERESIS + t];
             let col = &mut cols[1 + N_HYSTERESIS + t];
@@ -413,13 +413,13 @@ pub fn augmented_output(
                     col[j] = fric;
                 }
                 TermKind::SensorLag => lag_col = Some(1 + N_HYSTERESIS + t),
-                TermKind::Asymmetry => col[j] = h[5],
-                TermKind::Play => col[j] = h[6],
+                TermKind::Asymmetry => col[j] = h[PD_DELTA],
+                TermKind::Play => col[j] = h[PD_PLAY],
             }
         }
         cols[0][j] = f;
-        cols[1 + ns][j] = u_amp * h[3];
-        cols[2 + ns][j] = h[4];
+        cols[1 + ns][j] = u_amp * h[PD_AMPLITUDE];
+        cols[2 + ns][j] = h[PD_PHI];
     }
     if let Some(lc) = lag_col {
         let tau = shared[lc - 1];
@@ -445,9 +445,7 @@ pub fn augmented_output(
             jac_shared[j * ns + c] = *v;
         }
     }
-    let jac_own = (0..p)
-        .map(|j| [cols[1 + ns][j], cols[2 + ns][j]])
-        .collect();
+    let jac_own = (0..p).map(|j| [cols[1 + ns][j], cols[2 + ns][j]]).collect();
     let y = std::mem::take(&mut cols[0]);
     all_finite("model output", &y)?;
     Ok(AugOutput {
@@ -655,7 +653,10 @@ fn validate_refine(
             "max_iter and substeps must be >= 1".into(),
         ));
     }
-    if !opts.mu_lo.is_finite() || opts.mu_lo < 1.0 || opts.mu_hi.is_nan() || opts.mu_hi <= opts.mu_lo
+    if !opts.mu_lo.is_finite()
+        || opts.mu_lo < 1.0
+        || opts.mu_hi.is_nan()
+        || opts.mu_hi <= opts.mu_lo
     {
         return Err(CoreError::InvalidParameter(format!(
             "the mu bracket ({}, {}] must have a finite lower end >= 1 below its upper end",
@@ -671,11 +672,7 @@ fn validate_refine(
         )));
     }
     let b = terms.value(shared, TermKind::Play);
-    let model = AugModel {
-        exps,
-        terms,
-        opts,
-    };
+    let model = AugModel { exps, terms, opts };
     let own: Vec<[f64; 2]> = gains.iter().zip(phases).map(|(&g, &p)| [g, p]).collect();
     if b > model.play_max(&own) {
         return Err(CoreError::InvalidParameter(format!(
@@ -705,11 +702,7 @@ pub fn augmented_refine(
     opts: &AugOptions,
 ) -> Result<AugFit> {
     validate_refine(exps, terms, shared0, gains0, phases0, opts)?;
-    let model = AugModel {
-        exps,
-        terms,
-        opts,
-    };
+    let model = AugModel { exps, terms, opts };
     let own: Vec<[f64; 2]> = gains0.iter().zip(phases0).map(|(&g, &p)| [g, p]).collect();
     let fit = levenberg_marquardt(
         &model,

@@ -21,6 +21,7 @@ __all__ = [
     "sls_search",
     "gain_estimate",
     "steady_loop",
+    "path_loop",
     "profile_phase_sls",
     "profile_phase_gain",
     "refine",
@@ -86,6 +87,17 @@ def gain_estimate(
 def steady_loop(
     amplitude: float, beta: float, gamma: float, mu: float, phi: float, samples_per_period: int, substeps: int
 ) -> tuple[_F, _F, float, int]: ...
+def path_loop(
+    amplitude: float,
+    beta: float,
+    gamma: float,
+    mu: float,
+    delta: float,
+    play: float,
+    phi: float,
+    samples_per_period: int,
+    substeps: int,
+) -> tuple[_F, _F, int]: ...
 def profile_phase_sls(
     ybar: _F, ydot: _F, amplitude: float, omega: float, lo: float, hi: float, tol: float, grid: int
 ) -> tuple[float, float, float, float, float, float, int]: ...
