@@ -725,3 +725,207 @@ pub fn augmented_refine(
         outputs: fit.outputs,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const EXC: Excitation = Excitation {
+        samples: 64,
+        amplitude: 1.7,
+        frequency: 3.0,
+        grid_phase: 0.4,
+    };
+
+    #[test]
+    fn names_round_trip_and_bad_names_are_named_errors() {
+        for k in TermKind::ALL {
+            assert_eq!(TermKind::from_name(k.name()).unwrap(), k);
+        }
+        let e = Terms::parse(&["offset", "frobnicate"]).unwrap_err();
+        assert!(e.to_string().contains("unknown term \"frobnicate\""), "{e}");
+        let e = Terms::parse(&["viscous", "offset", "viscous"]).unwrap_err();
+        assert!(e.to_string().contains("given twice"), "{e}");
+        let t = Terms::parse(&["play", "offset"]).unwrap();
+        assert_eq!(t.column(TermKind::Offset), Some(4));
+        assert!(t.needs_path_loop());
+    }
+
+    #[test]
+    fn lag_filter_is_identity_at_zero_and_a_lag_of_the_fundamental() {
+        // A pure fundamental through tau: amplitude 1/sqrt(1 + (omega tau)^2), lag atan(omega tau).
+        let (p, omega, tau) = (32usize, 2.0, 0.3);
+        let x: Vec<f64> = (0..p)
+            .map(|j| (2.0 * std::f64::consts::PI * j as f64 / p as f64).cos())
+            .collect();
+        let mut y0 = x.clone();
+        apply_lag(&mut [&mut y0[..]], omega, 0.0, false);
+        let mut y = x.clone();
+        apply_lag(&mut [&mut y[..]], omega, tau, false);
+        let g = 1.0 / (1.0 + (omega * tau).powi(2)).sqrt();
+        let lag = (omega * tau).atan();
+        for j in 0..p {
+            assert!((y0[j] - x[j]).abs() < 1e-14);
+            let th = 2.0 * std::f64::consts::PI * j as f64 / p as f64;
+            assert!((y[j] - g * (th - lag).cos()).abs() < 1e-14);
+        }
+    }
+
+    /// Central differences of every shared and own column, with step `h` and relative tolerance.
+    fn check_jacobian(terms: &[&str], shared: &[f64], exc: &Excitation, substeps: usize) {
+        let terms = Terms::parse(terms).unwrap();
+        let (g, phi) = (0.9, 1.1);
+        let out = augmented_output(exc, &terms, shared, g, phi, substeps).unwrap();
+        let ns = shared.len();
+        let h = 1e-6;
+        let f = |s: &[f64], g: f64, phi: f64| {
+            augmented_output(exc, &terms, s, g, phi, substeps)
+                .unwrap()
+                .y
+        };
+        for c in 0..ns + 2 {
+            let (mut sp, mut sm) = (shared.to_vec(), shared.to_vec());
+            let (mut gp, mut gm, mut pp, mut pm) = (g, g, phi, phi);
+            match c {
+                c if c < ns => {
+                    sp[c] += h;
+                    sm[c] -= h;
+                }
+                c if c == ns => {
+                    gp += h;
+                    gm -= h;
+                }
+                _ => {
+                    pp += h;
+                    pm -= h;
+                }
+            }
+            let (yp, ym) = (f(&sp, gp, pp), f(&sm, gm, pm));
+            let col: Vec<f64> = (0..exc.samples)
+                .map(|j| {
+                    if c < ns {
+                        out.jac_shared[j * ns + c]
+                    } else {
+                        out.jac_own[j][c - ns]
+                    }
+                })
+                .collect();
+            let scale = col.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+            let err = (0..exc.samples)
+                .map(|j| ((yp[j] - ym[j]) / (2.0 * h) - col[j]).abs())
+                .fold(0.0, f64::max);
+            // Central differences err by O(h^2) truncation plus O(eps / h) rounding, about 1e-9
+            // relative. The phase column of the plain loop is its continuous rate (7.2), the
+            // derivative of the discrete map only up to the RK4 error near w = 0 where |w|^mu is
+            // not smooth: 1e-5 relative at 4 substeps, 1e-7 at 256 (measured), hence 256 here.
+            assert!(err <= 1e-6 * scale.max(1e-3), "column {c}: {err} vs {scale}");
+        }
+    }
+
+    #[test]
+    fn jacobian_matches_central_differences() {
+        check_jacobian(
+            &["offset", "stiffness", "viscous", "inertia", "coulomb", "sensor_lag"],
+            &[0.8, 0.2, 1.6, 0.3, 0.5, 0.05, 0.002, 0.2, 0.01],
+            &EXC,
+            256,
+        );
+        check_jacobian(
+            &["sensor_lag", "asymmetry", "play", "viscous"],
+            &[0.8, 0.2, 1.6, 0.02, 0.3, 0.2, 0.05],
+            &Excitation { samples: 65, ..EXC },
+            256,
+        );
+    }
+
+    #[test]
+    fn refinement_is_bitwise_identical_across_thread_counts() {
+        let terms = Terms::parse(&["offset", "viscous", "sensor_lag"]).unwrap();
+        let truth = [0.8, 0.2, 1.6, 0.3, 0.05, 0.01];
+        let m = 6;
+        let ys: Vec<Vec<f64>> = (0..m)
+            .map(|i| {
+                let exc = Excitation {
+                    samples: 64,
+                    amplitude: 1.0 + (i % 2) as f64,
+                    frequency: 1.0 + i as f64,
+                    grid_phase: 0.3 * i as f64,
+                };
+                let y = augmented_output(&exc, &terms, &truth, 1.0, 0.5 + 0.1 * i as f64, 4)
+                    .unwrap()
+                    .y;
+                // Deterministic pseudo-noise so that the fit does not end at zero cost.
+                y.iter()
+                    .enumerate()
+                    .map(|(j, v)| v + 1e-3 * ((j * 7 + i * 13) as f64).sin())
+                    .collect()
+            })
+            .collect();
+        let exps: Vec<AugExperiment> = (0..m)
+            .map(|i| AugExperiment {
+                ybar: &ys[i],
+                amplitude: 1.0 + (i % 2) as f64,
+                frequency: 1.0 + i as f64,
+                grid_phase: 0.3 * i as f64,
+                weight: 1e6,
+            })
+            .collect();
+        let start = [0.7, 0.25, 1.8, 0.2, 0.06, 0.02];
+        let gains = vec![1.1; m];
+        let phases: Vec<f64> = (0..m).map(|i| 0.55 + 0.1 * i as f64).collect();
+        let run = |threads: usize| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| {
+                    augmented_refine(
+                        &exps,
+                        &terms,
+                        &start,
+                        &gains,
+                        &phases,
+                        &AugOptions::default(),
+                    )
+                    .unwrap()
+                })
+        };
+        let (a, b) = (run(1), run(2));
+        assert!(a.converged && a.iterations > 3);
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&a.shared), bits(&b.shared));
+        assert_eq!(bits(&a.gains), bits(&b.gains));
+        assert_eq!(a.cost.to_bits(), b.cost.to_bits());
+        assert_eq!(bits(a.fisher.as_slice()), bits(b.fisher.as_slice()));
+        for (x, y) in a.shared.iter().zip(&truth) {
+            assert!((x - y).abs() < 0.05 * y.abs(), "{:?}", a.shared);
+        }
+    }
+
+    #[test]
+    fn refinement_rejects_bad_input_by_name() {
+        let y = vec![0.0; 16];
+        let terms = Terms::parse(&["sensor_lag"]).unwrap();
+        let exps = [AugExperiment {
+            ybar: &y,
+            amplitude: 1.0,
+            frequency: 1.0,
+            grid_phase: 0.0,
+            weight: 1.0,
+        }];
+        let go = |shared: &[f64], opts: &AugOptions| {
+            augmented_refine(&exps, &terms, shared, &[1.0], &[0.0], opts).unwrap_err()
+        };
+        let ok = AugOptions::default();
+        assert!(go(&[0.5, 0.1, 1.5], &ok).to_string().contains("need 4"));
+        assert!(go(&[0.5, 0.1, 1.5, -0.1], &ok).to_string().contains(">= 0"));
+        let bad = AugOptions {
+            mu_lo: 2.0,
+            mu_hi: 1.5,
+            ..ok
+        };
+        assert!(go(&[0.5, 0.1, 1.7, 0.1], &bad)
+            .to_string()
+            .contains("mu bracket"));
+    }
+}
