@@ -10,8 +10,10 @@ use _core::average::periodic_average;
 use _core::bouc_wen::BoucWen;
 use _core::estimate::{max_harmonics, spectral_derivative};
 use _core::linear::TransferFunction;
+use _core::path_loop::path_loop;
 use _core::simulate::{rk4_step_count, simulate, Input};
 use _core::solve::{sls_search, SlsProblem, GOLDEN_MAX_ITER};
+use _core::steady::steady_loop;
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 
 const P: usize = 1024;
@@ -81,12 +83,47 @@ fn bench_sls(c: &mut Criterion) {
     });
 }
 
+/// The steady loop along the input path (design.md 9.2), called (LM iterations x experiments)
+/// times per augmented fit: P = 256, 4 substeps, with asymmetry and play; the plain half-cycle
+/// loop (7.2) at the same grid for comparison.
+fn bench_path_loop(c: &mut Criterion) {
+    let (p, substeps) = (256, 4);
+    c.bench_function("path_loop_p256_sub4", |b| {
+        b.iter(|| {
+            path_loop(
+                black_box(1.4),
+                black_box(0.7),
+                black_box(0.25),
+                black_box(1.8),
+                black_box(0.2),
+                black_box(0.1),
+                black_box(PHI),
+                p,
+                substeps,
+            )
+        })
+    });
+    c.bench_function("steady_loop_p256_sub4", |b| {
+        b.iter(|| {
+            steady_loop(
+                black_box(1.4),
+                black_box(0.7),
+                black_box(0.25),
+                black_box(1.8),
+                black_box(PHI),
+                p,
+                substeps,
+            )
+        })
+    });
+}
+
 criterion_group! {
     name = benches;
     config = Criterion::default()
         .sample_size(20)
         .measurement_time(Duration::from_secs(2))
         .warm_up_time(Duration::from_millis(500));
-    targets = bench_rk4, bench_average, bench_sls
+    targets = bench_rk4, bench_average, bench_sls, bench_path_loop
 }
 criterion_main!(benches);

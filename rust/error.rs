@@ -38,6 +38,9 @@ pub enum CoreError {
         /// Where the matrix came from and what was wrong with it.
         context: String,
     },
+    /// An iterative solve (the path-loop shooting) ended without meeting its tolerance.
+    #[error("not converged: {0}")]
+    NotConverged(String),
     /// The golden-section search never left one end of its bracket.
     #[error(
         "the minimum lies at the {} end {bound} of the search bracket (tol {tol:e}); widen the \

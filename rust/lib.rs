@@ -15,11 +15,13 @@ pub mod bouc_wen;
 pub mod error;
 pub mod estimate;
 pub mod linear;
+pub mod path_loop;
 pub mod profile;
 pub mod refine;
 pub mod simulate;
 pub mod solve;
 pub mod steady;
+pub mod terms;
 
 #[cfg(feature = "python")]
 mod python;

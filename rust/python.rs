@@ -16,7 +16,7 @@ use crate::estimate;
 use crate::linear::TransferFunction;
 use crate::simulate::{self, Input};
 use crate::solve::{self, SlsProblem, GOLDEN_MAX_ITER};
-use crate::{profile, refine, steady};
+use crate::{path_loop as pathloop, profile, refine, steady, terms};
 
 pyo3::import_exception!(bouc_wen_id.errors, InvalidParameterError);
 pyo3::import_exception!(bouc_wen_id.errors, NonFiniteError);
@@ -26,6 +26,7 @@ pyo3::import_exception!(bouc_wen_id.errors, InsufficientDataError);
 pyo3::import_exception!(bouc_wen_id.errors, ZeroAmplitudeError);
 pyo3::import_exception!(bouc_wen_id.errors, SingularNormalMatrixError);
 pyo3::import_exception!(bouc_wen_id.errors, SearchAtBoundError);
+pyo3::import_exception!(bouc_wen_id.errors, NotConvergedError);
 
 // The Python defaults `max_iter=200` are literals so that `__text_signature__` shows them.
 const _: () = assert!(GOLDEN_MAX_ITER == 200);
@@ -45,6 +46,7 @@ impl From<CoreError> for PyErr {
             CoreError::InsufficientData(_) => InsufficientDataError::new_err(msg),
             CoreError::ZeroAmplitude(_) => ZeroAmplitudeError::new_err(msg),
             CoreError::SingularNormalMatrix { .. } => SingularNormalMatrixError::new_err(msg),
+            CoreError::NotConverged(_) => NotConvergedError::new_err(msg),
             CoreError::SearchAtBound { bound, lower, .. } => Python::attach(|py| {
                 // The Python class carries the bracket end, so callers can tell mu = 1 from a
                 // bracket that is merely too narrow.
@@ -444,6 +446,35 @@ fn steady_loop<'py>(
     ))
 }
 
+/// Steady loop of the generalised Bouc-Wen (asymmetry `delta`) behind a play of half-width `play`,
+/// under `x = amplitude cos(omega t - phi)` on P samples per period (design.md 9.2):
+/// `(w, jac, iterations)` with `jac` of shape (P, 7), `d w/d(beta, gamma, mu, A, phi, delta, b)`.
+#[pyfunction]
+#[pyo3(signature = (amplitude, beta, gamma, mu, delta, play, phi, samples_per_period, substeps))]
+#[allow(clippy::type_complexity, clippy::too_many_arguments)]
+fn path_loop<'py>(
+    py: Python<'py>,
+    amplitude: f64,
+    beta: f64,
+    gamma: f64,
+    mu: f64,
+    delta: f64,
+    play: f64,
+    phi: f64,
+    samples_per_period: i64,
+    substeps: i64,
+) -> PyResult<(Bound<'py, PyArray1<f64>>, Bound<'py, PyArray2<f64>>, usize)> {
+    let p = count("samples_per_period", samples_per_period, 0)?;
+    let substeps = count("substeps", substeps, 0)?;
+    let l = py.detach(|| {
+        pathloop::path_loop(amplitude, beta, gamma, mu, delta, play, phi, p, substeps)
+    })?;
+    let flat: Vec<f64> = l.jac.iter().flatten().copied().collect();
+    let jac = Array2::from_shape_vec((l.w.len(), 7), flat)
+        .map_err(|e| CoreError::InvalidParameter(e.to_string()))?;
+    Ok((l.w.into_pyarray(py), jac.into_pyarray(py), l.iterations))
+}
+
 /// Profile-phase separable least squares (phase as a fit parameter, `sgn(xdot)` from the
 /// candidate phase): `(phi, mu, gain, beta, gamma, cost, skipped)`, canonical (`gain > 0`).
 #[pyfunction]
@@ -578,6 +609,154 @@ fn refine_fit<'py>(
     ))
 }
 
+/// Row-major `(rows, cols)` data as a new 2-D array.
+fn matrix<'py>(
+    py: Python<'py>,
+    rows: usize,
+    cols: usize,
+    flat: Vec<f64>,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let arr = Array2::from_shape_vec((rows, cols), flat)
+        .map_err(|e| CoreError::InvalidParameter(format!("internal shape error: {e}")))?;
+    Ok(arr.into_pyarray(py))
+}
+
+/// `(y, jac_shared, jac_own)` of [`augmented_output`].
+type AugOutputPy<'py> = (
+    Bound<'py, PyArray1<f64>>,
+    Bound<'py, PyArray2<f64>>,
+    Bound<'py, PyArray2<f64>>,
+);
+
+/// The augmented model's output of one experiment (design.md 9.1) on `ybar_len` samples per
+/// period: `(y (P,), jac_shared (P, 3 + T), jac_own (P, 2))`, shared columns
+/// `[beta, gamma, mu, q_1 .. q_T]` in the order of `terms`, own columns `[g, phi]`.
+#[pyfunction]
+#[pyo3(signature = (ybar_len, amplitude, frequency, grid_phase, terms, shared, gain, phase, substeps))]
+#[allow(clippy::too_many_arguments)]
+fn augmented_output<'py>(
+    py: Python<'py>,
+    ybar_len: i64,
+    amplitude: f64,
+    frequency: f64,
+    grid_phase: f64,
+    terms: Vec<String>,
+    shared: PyReadonlyArray1<'py, f64>,
+    gain: f64,
+    phase: f64,
+    substeps: i64,
+) -> PyResult<AugOutputPy<'py>> {
+    let terms = terms::Terms::parse(&terms)?;
+    let shared = slice("shared", &shared)?;
+    let exc = terms::Excitation {
+        samples: count("ybar_len", ybar_len, 0)?,
+        amplitude,
+        frequency,
+        grid_phase,
+    };
+    let substeps = count("substeps", substeps, 1)?;
+    let out = py.detach(|| terms::augmented_output(&exc, &terms, shared, gain, phase, substeps))?;
+    let p = out.y.len();
+    let own: Vec<f64> = out.jac_own.iter().flatten().copied().collect();
+    Ok((
+        out.y.into_pyarray(py),
+        matrix(py, p, terms.n_shared(), out.jac_shared)?,
+        matrix(py, p, 2, own)?,
+    ))
+}
+
+/// What [`augmented_refine`] returns to Python:
+/// `(shared, gains, phases, cost, iterations, converged, fisher, outputs)`.
+type AugRefineOut<'py> = (
+    Bound<'py, PyArray1<f64>>,
+    Bound<'py, PyArray1<f64>>,
+    Bound<'py, PyArray1<f64>>,
+    f64,
+    usize,
+    bool,
+    Bound<'py, PyArray2<f64>>,
+    Vec<Bound<'py, PyArray1<f64>>>,
+);
+
+/// Joint Levenberg-Marquardt of the augmented model (design.md 9.3). `fisher` is `J^T W J`
+/// ordered `[beta, gamma, mu, q_1 .. q_T, g_0, phi_0, g_1, phi_1, ...]`.
+#[pyfunction]
+#[pyo3(signature = (ybars, amplitudes, frequencies, grid_phases, weights, terms, shared0, gains0, phases0, *, max_iter=200, substeps=4, mu_lo=1.0, mu_hi=f64::INFINITY))]
+#[allow(clippy::too_many_arguments)]
+fn augmented_refine<'py>(
+    py: Python<'py>,
+    ybars: Vec<PyReadonlyArray1<'py, f64>>,
+    amplitudes: Vec<f64>,
+    frequencies: Vec<f64>,
+    grid_phases: Vec<f64>,
+    weights: Vec<f64>,
+    terms: Vec<String>,
+    shared0: Vec<f64>,
+    gains0: Vec<f64>,
+    phases0: Vec<f64>,
+    max_iter: i64,
+    substeps: i64,
+    mu_lo: f64,
+    mu_hi: f64,
+) -> PyResult<AugRefineOut<'py>> {
+    let terms = terms::Terms::parse(&terms)?;
+    let slices = ybars
+        .iter()
+        .enumerate()
+        .map(|(i, y)| slice(&format!("ybars[{i}]"), y))
+        .collect::<PyResult<Vec<_>>>()?;
+    let m = slices.len();
+    if amplitudes.len() != m
+        || frequencies.len() != m
+        || grid_phases.len() != m
+        || weights.len() != m
+    {
+        return Err(CoreError::InvalidParameter(format!(
+            "{m} experiments but {} amplitudes, {} frequencies, {} grid phases and {} weights",
+            amplitudes.len(),
+            frequencies.len(),
+            grid_phases.len(),
+            weights.len()
+        ))
+        .into());
+    }
+    let opts = terms::AugOptions {
+        max_iter: count("max_iter", max_iter, 1)?,
+        substeps: count("substeps", substeps, 1)?,
+        mu_lo,
+        mu_hi,
+        ..terms::AugOptions::default()
+    };
+    let exps: Vec<terms::AugExperiment> = (0..m)
+        .map(|i| terms::AugExperiment {
+            ybar: slices[i],
+            amplitude: amplitudes[i],
+            frequency: frequencies[i],
+            grid_phase: grid_phases[i],
+            weight: weights[i],
+        })
+        .collect();
+    let fit =
+        py.detach(|| terms::augmented_refine(&exps, &terms, &shared0, &gains0, &phases0, &opts))?;
+    let n = fit.fisher.nrows();
+    let fisher = Array2::from_shape_fn((n, n), |(i, j)| fit.fisher[(i, j)]);
+    let outputs = fit
+        .outputs
+        .into_iter()
+        .map(|y| y.into_pyarray(py))
+        .collect();
+    Ok((
+        fit.shared.into_pyarray(py),
+        fit.gains.into_pyarray(py),
+        fit.phases.into_pyarray(py),
+        fit.cost,
+        fit.iterations,
+        fit.converged,
+        fisher.into_pyarray(py),
+        outputs,
+    ))
+}
+
 /// Rust core of bouc_wen_id (simulation, averaging, estimators); see docs/design.md.
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -594,8 +773,11 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(sls_search, m)?)?;
     m.add_function(wrap_pyfunction!(gain_estimate, m)?)?;
     m.add_function(wrap_pyfunction!(steady_loop, m)?)?;
+    m.add_function(wrap_pyfunction!(path_loop, m)?)?;
     m.add_function(wrap_pyfunction!(profile_phase_sls, m)?)?;
     m.add_function(wrap_pyfunction!(profile_phase_gain, m)?)?;
     m.add_function(wrap_pyfunction!(refine_fit, m)?)?;
+    m.add_function(wrap_pyfunction!(augmented_output, m)?)?;
+    m.add_function(wrap_pyfunction!(augmented_refine, m)?)?;
     Ok(())
 }

@@ -9,11 +9,17 @@
 //! The shared parameters `(beta, gamma, mu)` touch every residual, each `(g_i, phi_i)` only its
 //! own: the damped normal equations are solved through the 3x3 Schur complement, so one
 //! iteration costs O(m) small solves for m experiments.
+//!
+//! The Levenberg-Marquardt itself ([`levenberg_marquardt`]) is generic over a [`JointModel`]
+//! (shared vector of any size, two own parameters per experiment): the plain model here and the
+//! augmented model of design.md 9.3 ([`crate::terms`]) share one damping schedule, stopping rules
+//! and Schur solve. The experiments are evaluated in parallel and summed in a fixed order.
 
-use nalgebra::{DMatrix, Matrix2, Matrix3, Matrix3x2, Vector2, Vector3};
+use nalgebra::{DMatrix, DVector, Matrix2, Vector2};
+use rayon::prelude::*;
 
 use crate::error::{all_finite, finite, CoreError, Result};
-use crate::steady::{steady_loop, SteadyLoop, D_AMPLITUDE, D_BETA, D_GAMMA, D_MU, D_PHI};
+use crate::steady::{steady_loop, D_AMPLITUDE, D_BETA, D_GAMMA, D_MU, D_PHI};
 
 /// Initial Marquardt damping, relative to the diagonal of `J^T W J`.
 const LAMBDA_START: f64 = 1e-3;
@@ -98,130 +104,385 @@ pub struct Fit {
     pub loops: Vec<Vec<f64>>,
 }
 
-struct Eval {
+/// One experiment's model at one point, as the joint Levenberg-Marquardt needs it.
+#[derive(Debug, Clone)]
+pub struct ModelEval {
+    /// The model output on the experiment's grid, length P.
+    pub y: Vec<f64>,
+    /// `dy_j / d shared`, row-major (P, n_shared).
+    pub jac_shared: Vec<f64>,
+    /// `dy_j / d(own_0, own_1)`, one row per sample.
+    pub jac_own: Vec<[f64; 2]>,
+}
+
+/// A per-experiment model whose parameters split into a shared vector (touching every
+/// experiment) and two own parameters per experiment, fitted by [`levenberg_marquardt`].
+pub trait JointModel: Sync {
+    /// Size of the shared vector.
+    fn n_shared(&self) -> usize;
+    /// Number of experiments m.
+    fn n_experiments(&self) -> usize;
+    /// Experiment `i`'s data `ybar` (length P) and the weight of each squared residual.
+    fn data(&self, i: usize) -> (&[f64], f64);
+    /// Experiment `i`'s model output and Jacobian at `(shared, own)`.
+    fn evaluate(&self, i: usize, shared: &[f64], own: [f64; 2]) -> Result<ModelEval>;
+    /// Moves a trial point onto the closed constraints it crossed (in place).
+    fn project(&self, shared: &mut [f64], own: &[[f64; 2]]);
+    /// Whether a (projected) trial point may be evaluated; an inadmissible one is rejected.
+    fn admissible(&self, shared: &[f64], own: &[[f64; 2]]) -> bool;
+}
+
+/// Stopping rules of [`levenberg_marquardt`].
+#[derive(Debug, Clone, Copy)]
+pub struct LmOptions {
+    /// Iteration cap (accepted plus rejected steps).
+    pub max_iter: usize,
+    /// Stop when the relative cost decrease of an accepted step is below this.
+    pub ftol: f64,
+    /// Stop when every step component is below `xtol * (|p| + xtol)`.
+    pub xtol: f64,
+}
+
+/// Outcome of [`levenberg_marquardt`].
+#[derive(Debug, Clone)]
+pub struct JointFit {
+    /// The shared parameters at the minimiser.
+    pub shared: Vec<f64>,
+    /// Each experiment's own parameters at the minimiser.
+    pub own: Vec<[f64; 2]>,
+    /// Weighted residual sum of squares at the minimiser.
+    pub cost: f64,
+    /// Accepted plus rejected LM iterations.
+    pub iterations: usize,
+    /// Whether a stopping rule other than the iteration cap ended the search.
+    pub converged: bool,
+    /// `J^T W J` at the minimiser, order `[shared.., own_0 (2), own_1 (2), ...]`.
+    pub fisher: DMatrix<f64>,
+    /// Model outputs at the minimiser.
+    pub outputs: Vec<Vec<f64>>,
+}
+
+/// One experiment's contribution to `J^T W J` and `J^T W r` (J of the model output).
+struct ExpBlocks {
     cost: f64,
-    loops: Vec<SteadyLoop>,
-    resid: Vec<Vec<f64>>,
+    y: Vec<f64>,
+    /// Shared-shared block, row-major (n, n).
+    c: Vec<f64>,
+    /// Shared part of `J^T W r`.
+    gs: Vec<f64>,
+    /// Own-own block.
+    a: Matrix2<f64>,
+    /// Shared-own block, n rows.
+    b: Vec<[f64; 2]>,
+    /// Own part of `J^T W r`.
+    gi: Vector2<f64>,
 }
 
-fn evaluate(exps: &[Experiment], p: &Params, substeps: usize) -> Result<Eval> {
-    let mut cost = 0.0;
-    let mut loops = Vec::with_capacity(exps.len());
-    let mut resid = Vec::with_capacity(exps.len());
-    for (i, e) in exps.iter().enumerate() {
-        let l = steady_loop(
-            e.amplitude * p.gains[i],
-            p.beta,
-            p.gamma,
-            p.mu,
-            p.phases[i],
-            e.ybar.len(),
-            substeps,
-        )?;
-        let r: Vec<f64> = e.ybar.iter().zip(&l.w).map(|(y, w)| y - w).collect();
-        cost += e.weight * r.iter().map(|v| v * v).sum::<f64>();
-        loops.push(l);
-        resid.push(r);
-    }
-    Ok(Eval { cost, loops, resid })
+/// The sums of the experiments' blocks at one point.
+struct State {
+    cost: f64,
+    c: DMatrix<f64>,
+    gs: DVector<f64>,
+    exps: Vec<ExpBlocks>,
 }
 
-/// Per-experiment blocks of `J^T W J` and `J^T W r` (J of the model `w`).
-struct Blocks {
-    c: Matrix3<f64>,
-    gs: Vector3<f64>,
-    a: Vec<Matrix2<f64>>,
-    b: Vec<Matrix3x2<f64>>,
-    gi: Vec<Vector2<f64>>,
-}
-
-fn blocks(exps: &[Experiment], ev: &Eval) -> Blocks {
-    let m = exps.len();
-    let mut out = Blocks {
-        c: Matrix3::zeros(),
-        gs: Vector3::zeros(),
-        a: Vec::with_capacity(m),
-        b: Vec::with_capacity(m),
-        gi: Vec::with_capacity(m),
+fn exp_blocks<M: JointModel>(
+    model: &M,
+    i: usize,
+    shared: &[f64],
+    own: [f64; 2],
+) -> Result<ExpBlocks> {
+    let n = model.n_shared();
+    let (ybar, weight) = model.data(i);
+    let ev = model.evaluate(i, shared, own)?;
+    let mut out = ExpBlocks {
+        cost: 0.0,
+        c: vec![0.0; n * n],
+        gs: vec![0.0; n],
+        a: Matrix2::zeros(),
+        b: vec![[0.0; 2]; n],
+        gi: Vector2::zeros(),
+        y: Vec::new(),
     };
-    for (i, e) in exps.iter().enumerate() {
-        let (mut a, mut b, mut g) = (Matrix2::zeros(), Matrix3x2::zeros(), Vector2::zeros());
-        for (row, &r) in ev.loops[i].jac.iter().zip(&ev.resid[i]) {
-            let js = Vector3::new(row[D_BETA], row[D_GAMMA], row[D_MU]);
-            let jl = Vector2::new(row[D_AMPLITUDE] * e.amplitude, row[D_PHI]);
-            out.c += e.weight * js * js.transpose();
-            out.gs += e.weight * r * js;
-            a += e.weight * jl * jl.transpose();
-            b += e.weight * js * jl.transpose();
-            g += e.weight * r * jl;
+    let mut sq = 0.0;
+    for (j, (&yj, &mj)) in ybar.iter().zip(&ev.y).enumerate() {
+        let r = yj - mj;
+        sq += r * r;
+        let js = &ev.jac_shared[j * n..(j + 1) * n];
+        let jl = Vector2::new(ev.jac_own[j][0], ev.jac_own[j][1]);
+        let wr = weight * r;
+        for (k, &jk) in js.iter().enumerate() {
+            let wk = weight * jk;
+            for (c, &jl_) in out.c[k * n..(k + 1) * n].iter_mut().zip(js) {
+                *c += wk * jl_;
+            }
+            out.gs[k] += wr * jk;
+            out.b[k][0] += wk * jl[0];
+            out.b[k][1] += wk * jl[1];
         }
-        out.a.push(a);
-        out.b.push(b);
-        out.gi.push(g);
+        out.a += weight * jl * jl.transpose();
+        out.gi += wr * jl;
     }
-    out
+    out.cost = weight * sq;
+    out.y = ev.y;
+    Ok(out)
 }
 
-/// Damped Gauss-Newton step through the Schur complement of the per-experiment blocks.
-fn step(bl: &Blocks, lambda: f64) -> Option<(Vector3<f64>, Vec<Vector2<f64>>)> {
-    let mut s = bl.c;
-    for k in 0..3 {
-        s[(k, k)] += lambda * bl.c[(k, k)].max(f64::MIN_POSITIVE);
+/// Every experiment evaluated in parallel, the sums formed in experiment order, so the result is
+/// bit-identical whatever the number of threads. The first failing experiment's error wins.
+fn evaluate_all<M: JointModel>(model: &M, shared: &[f64], own: &[[f64; 2]]) -> Result<State> {
+    let per: Vec<Result<ExpBlocks>> = (0..model.n_experiments())
+        .into_par_iter()
+        .map(|i| exp_blocks(model, i, shared, own[i]))
+        .collect();
+    let n = model.n_shared();
+    let mut st = State {
+        cost: 0.0,
+        c: DMatrix::zeros(n, n),
+        gs: DVector::zeros(n),
+        exps: Vec::with_capacity(per.len()),
+    };
+    for e in per {
+        let e = e?;
+        st.cost += e.cost;
+        for k in 0..n {
+            for l in 0..n {
+                st.c[(k, l)] += e.c[k * n + l];
+            }
+            st.gs[k] += e.gs[k];
+        }
+        st.exps.push(e);
     }
-    let mut rhs = bl.gs;
-    let mut a_inv = Vec::with_capacity(bl.a.len());
-    for i in 0..bl.a.len() {
-        let mut a = bl.a[i];
+    Ok(st)
+}
+
+/// Damped Gauss-Newton step through the Schur complement of the per-experiment 2x2 blocks.
+fn step(st: &State, lambda: f64) -> Option<(DVector<f64>, Vec<Vector2<f64>>)> {
+    let n = st.gs.len();
+    let mut s = st.c.clone();
+    for k in 0..n {
+        s[(k, k)] += lambda * st.c[(k, k)].max(f64::MIN_POSITIVE);
+    }
+    let mut rhs = st.gs.clone();
+    let mut a_inv = Vec::with_capacity(st.exps.len());
+    for e in &st.exps {
+        let mut a = e.a;
         for k in 0..2 {
-            a[(k, k)] += lambda * bl.a[i][(k, k)].max(f64::MIN_POSITIVE);
+            a[(k, k)] += lambda * e.a[(k, k)].max(f64::MIN_POSITIVE);
         }
         let inv = a.try_inverse()?;
-        s -= bl.b[i] * inv * bl.b[i].transpose();
-        rhs -= bl.b[i] * inv * bl.gi[i];
+        // B A^-1, n x 2.
+        let ba: Vec<[f64; 2]> =
+            e.b.iter()
+                .map(|r| {
+                    [
+                        r[0] * inv[(0, 0)] + r[1] * inv[(1, 0)],
+                        r[0] * inv[(0, 1)] + r[1] * inv[(1, 1)],
+                    ]
+                })
+                .collect();
+        for k in 0..n {
+            for l in 0..n {
+                s[(k, l)] -= ba[k][0] * e.b[l][0] + ba[k][1] * e.b[l][1];
+            }
+            rhs[k] -= ba[k][0] * e.gi[0] + ba[k][1] * e.gi[1];
+        }
         a_inv.push(inv);
     }
     let ds = s.cholesky()?.solve(&rhs);
-    let dl = (0..bl.a.len())
-        .map(|i| a_inv[i] * (bl.gi[i] - bl.b[i].transpose() * ds))
+    let dl = st
+        .exps
+        .iter()
+        .zip(&a_inv)
+        .map(|(e, inv)| {
+            let mut v = e.gi;
+            for k in 0..n {
+                v[0] -= e.b[k][0] * ds[k];
+                v[1] -= e.b[k][1] * ds[k];
+            }
+            inv * v
+        })
         .collect();
     Some((ds, dl))
 }
 
-fn fisher(bl: &Blocks) -> DMatrix<f64> {
-    let m = bl.a.len();
-    let n = 3 + 2 * m;
-    let mut f = DMatrix::zeros(n, n);
-    f.view_mut((0, 0), (3, 3)).copy_from(&bl.c);
-    for i in 0..m {
-        let o = 3 + 2 * i;
-        f.view_mut((o, o), (2, 2)).copy_from(&bl.a[i]);
-        f.view_mut((0, o), (3, 2)).copy_from(&bl.b[i]);
-        f.view_mut((o, 0), (2, 3)).copy_from(&bl.b[i].transpose());
+fn fisher(st: &State) -> DMatrix<f64> {
+    let n = st.gs.len();
+    let m = st.exps.len();
+    let mut f = DMatrix::zeros(n + 2 * m, n + 2 * m);
+    f.view_mut((0, 0), (n, n)).copy_from(&st.c);
+    for (i, e) in st.exps.iter().enumerate() {
+        let o = n + 2 * i;
+        f.view_mut((o, o), (2, 2)).copy_from(&e.a);
+        for k in 0..n {
+            for l in 0..2 {
+                f[(k, o + l)] = e.b[k][l];
+                f[(o + l, k)] = e.b[k][l];
+            }
+        }
     }
     f
 }
 
-/// The Bouc-Wen conditions of (2a) (`beta + gamma > 0`, `beta >= gamma`) and the mu bracket.
-fn admissible(p: &Params, opts: &Options) -> bool {
-    p.mu > opts.mu_lo.max(1.0) + MU_MARGIN
-        && p.mu <= opts.mu_hi
-        && p.beta + p.gamma > 0.0
-        && p.beta >= p.gamma
+/// Levenberg-Marquardt with Marquardt scaling over every experiment of `model` (design.md 7.4,
+/// 9.3): damping `lambda diag(J'WJ)` from [`LAMBDA_START`], times [`LAMBDA_DOWN`] on success and
+/// [`LAMBDA_UP`] on failure, a minimum once it exceeds [`LAMBDA_MAX`]; trial points projected by
+/// the model and rejected when inadmissible or when the model fails there. The experiments are
+/// evaluated in parallel (rayon) and reduced in a fixed order.
+///
+/// Errors: only those of the model at the start point (callers validate the start first).
+pub fn levenberg_marquardt<M: JointModel>(
+    model: &M,
+    shared0: &[f64],
+    own0: &[[f64; 2]],
+    opts: &LmOptions,
+) -> Result<JointFit> {
+    let mut shared = shared0.to_vec();
+    let mut own = own0.to_vec();
+    let mut st = evaluate_all(model, &shared, &own)?;
+    let mut lambda = LAMBDA_START;
+    let mut iterations = 0;
+    let mut converged = false;
+    while iterations < opts.max_iter {
+        iterations += 1;
+        let Some((ds, dl)) = step(&st, lambda) else {
+            lambda *= LAMBDA_UP;
+            if lambda > LAMBDA_MAX {
+                converged = true;
+                break;
+            }
+            continue;
+        };
+        let mut t_shared: Vec<f64> = shared.iter().zip(ds.iter()).map(|(p, d)| p + d).collect();
+        let t_own: Vec<[f64; 2]> = own
+            .iter()
+            .zip(&dl)
+            .map(|(p, d)| [p[0] + d[0], p[1] + d[1]])
+            .collect();
+        let within = |d: f64, v: f64| d.abs() <= opts.xtol * (v.abs() + opts.xtol);
+        let small = ds.iter().zip(&shared).all(|(&d, &v)| within(d, v))
+            && dl
+                .iter()
+                .zip(&own)
+                .all(|(d, v)| within(d[0], v[0]) && within(d[1], v[1]));
+        model.project(&mut t_shared, &t_own);
+        let trial = if model.admissible(&t_shared, &t_own) {
+            evaluate_all(model, &t_shared, &t_own).ok()
+        } else {
+            None
+        };
+        match trial {
+            Some(tst) if tst.cost <= st.cost => {
+                let decrease = (st.cost - tst.cost) / st.cost.max(f64::MIN_POSITIVE);
+                shared = t_shared;
+                own = t_own;
+                st = tst;
+                lambda = (lambda * LAMBDA_DOWN).max(1e-15);
+                if decrease < opts.ftol || small {
+                    converged = true;
+                    break;
+                }
+            }
+            _ => {
+                if small {
+                    converged = true;
+                    break;
+                }
+                lambda *= LAMBDA_UP;
+                if lambda > LAMBDA_MAX {
+                    converged = true;
+                    break;
+                }
+            }
+        }
+    }
+    Ok(JointFit {
+        fisher: fisher(&st),
+        cost: st.cost,
+        outputs: st.exps.into_iter().map(|e| e.y).collect(),
+        shared,
+        own,
+        iterations,
+        converged,
+    })
+}
+
+/// The plain model of 7.4: `w_i` the steady loop of (2b), shared `[beta, gamma, mu]`, own
+/// `[g_i, phi_i]`.
+struct PlainModel<'a> {
+    exps: &'a [Experiment<'a>],
+    opts: &'a Options,
+}
+
+impl JointModel for PlainModel<'_> {
+    fn n_shared(&self) -> usize {
+        3
+    }
+
+    fn n_experiments(&self) -> usize {
+        self.exps.len()
+    }
+
+    fn data(&self, i: usize) -> (&[f64], f64) {
+        (self.exps[i].ybar, self.exps[i].weight)
+    }
+
+    fn evaluate(&self, i: usize, shared: &[f64], own: [f64; 2]) -> Result<ModelEval> {
+        let e = &self.exps[i];
+        let l = steady_loop(
+            e.amplitude * own[0],
+            shared[0],
+            shared[1],
+            shared[2],
+            own[1],
+            e.ybar.len(),
+            self.opts.substeps,
+        )?;
+        let mut jac_shared = Vec::with_capacity(3 * l.w.len());
+        for r in &l.jac {
+            jac_shared.extend_from_slice(&[r[D_BETA], r[D_GAMMA], r[D_MU]]);
+        }
+        let jac_own = l
+            .jac
+            .iter()
+            .map(|r| [r[D_AMPLITUDE] * e.amplitude, r[D_PHI]])
+            .collect();
+        Ok(ModelEval {
+            y: l.w,
+            jac_shared,
+            jac_own,
+        })
+    }
+
+    fn project(&self, shared: &mut [f64], _own: &[[f64; 2]]) {
+        project_hysteresis(shared, self.opts.mu_lo, self.opts.mu_hi);
+    }
+
+    fn admissible(&self, shared: &[f64], _own: &[[f64; 2]]) -> bool {
+        hysteresis_admissible(shared, self.opts.mu_lo, self.opts.mu_hi)
+    }
+}
+
+/// The Bouc-Wen conditions of (2a) (`beta + gamma > 0`, `beta >= gamma`) and the mu bracket, on
+/// `shared[..3] = [beta, gamma, mu]`.
+pub(crate) fn hysteresis_admissible(shared: &[f64], mu_lo: f64, mu_hi: f64) -> bool {
+    let (beta, gamma, mu) = (shared[0], shared[1], shared[2]);
+    mu > mu_lo.max(1.0) + MU_MARGIN && mu <= mu_hi && beta + gamma > 0.0 && beta >= gamma
 }
 
 /// Projects a trial point onto the closed constraints it crossed, so that the fit can slide along
 /// `beta = gamma` or a bracket end instead of stalling at the first contact: `beta < gamma` becomes
 /// `beta = gamma = (beta + gamma) / 2` (the nearest point of the plane, same `beta + gamma`), and `mu`
 /// is clipped into the bracket. `beta + gamma <= 0` has no nearest admissible point and stays rejected.
-fn project(p: &mut Params, opts: &Options) {
-    if p.beta < p.gamma {
-        let mid = 0.5 * (p.beta + p.gamma);
-        p.beta = mid;
-        p.gamma = mid;
+pub(crate) fn project_hysteresis(shared: &mut [f64], mu_lo: f64, mu_hi: f64) {
+    if shared[0] < shared[1] {
+        let mid = 0.5 * (shared[0] + shared[1]);
+        shared[0] = mid;
+        shared[1] = mid;
     }
-    let mu_min = opts.mu_lo.max(1.0) + 2.0 * MU_MARGIN;
-    if p.mu.is_finite() {
-        p.mu = p.mu.clamp(mu_min, opts.mu_hi.max(mu_min));
+    let mu_min = mu_lo.max(1.0) + 2.0 * MU_MARGIN;
+    if shared[2].is_finite() {
+        shared[2] = shared[2].clamp(mu_min, mu_hi.max(mu_min));
     }
 }
 
@@ -257,7 +518,7 @@ fn validate(exps: &[Experiment], p: &Params, opts: &Options) -> Result<()> {
             "max_iter and substeps must be >= 1".into(),
         ));
     }
-    if !admissible(p, opts) {
+    if !hysteresis_admissible(&[p.beta, p.gamma, p.mu], opts.mu_lo, opts.mu_hi) {
         return Err(CoreError::InvalidParameter(format!(
             "the starting point (beta = {}, gamma = {}, mu = {}) must satisfy beta >= |gamma|, \
              beta + gamma > 0 and {} < mu <= {}",
@@ -273,8 +534,8 @@ fn validate(exps: &[Experiment], p: &Params, opts: &Options) -> Result<()> {
 
 /// Levenberg-Marquardt from `start` (e.g. the profile-phase SLS estimates).
 ///
-/// Every trial point must satisfy the Bouc-Wen conditions and the mu bracket (see `admissible`): a
-/// step that crosses `beta = gamma` or a bracket end is projected back onto it (see `project`), one
+/// Every trial point must satisfy the Bouc-Wen conditions and the mu bracket (see `hysteresis_admissible`): a
+/// step that crosses `beta = gamma` or a bracket end is projected back onto it (see `project_hysteresis`), one
 /// that makes `beta + gamma <= 0` is rejected and the damping grows. So the fit stays admissible and
 /// may end on a constraint.
 ///
@@ -282,79 +543,36 @@ fn validate(exps: &[Experiment], p: &Params, opts: &Options) -> Result<()> {
 /// lengths, non-finite data, a non-positive weight.
 pub fn refine(exps: &[Experiment], start: &Params, opts: &Options) -> Result<Fit> {
     validate(exps, start, opts)?;
-    let mut p = start.clone();
-    let mut ev = evaluate(exps, &p, opts.substeps)?;
-    let mut bl = blocks(exps, &ev);
-    let mut lambda = LAMBDA_START;
-    let mut iterations = 0;
-    let mut converged = false;
-    while iterations < opts.max_iter {
-        iterations += 1;
-        let Some((ds, dl)) = step(&bl, lambda) else {
-            lambda *= LAMBDA_UP;
-            if lambda > LAMBDA_MAX {
-                converged = true;
-                break;
-            }
-            continue;
-        };
-        let mut trial = p.clone();
-        trial.beta += ds[0];
-        trial.gamma += ds[1];
-        trial.mu += ds[2];
-        for (i, d) in dl.iter().enumerate() {
-            trial.gains[i] += d[0];
-            trial.phases[i] += d[1];
-        }
-        let small = {
-            let mut pairs = vec![(ds[0], p.beta), (ds[1], p.gamma), (ds[2], p.mu)];
-            for (i, d) in dl.iter().enumerate() {
-                pairs.push((d[0], p.gains[i]));
-                pairs.push((d[1], p.phases[i]));
-            }
-            pairs
-                .iter()
-                .all(|(d, v)| d.abs() <= opts.xtol * (v.abs() + opts.xtol))
-        };
-        project(&mut trial, opts);
-        let admissible = admissible(&trial, opts);
-        let trial_ev = if admissible {
-            evaluate(exps, &trial, opts.substeps).ok()
-        } else {
-            None
-        };
-        match trial_ev {
-            Some(tev) if tev.cost <= ev.cost => {
-                let decrease = (ev.cost - tev.cost) / ev.cost.max(f64::MIN_POSITIVE);
-                p = trial;
-                ev = tev;
-                bl = blocks(exps, &ev);
-                lambda = (lambda * LAMBDA_DOWN).max(1e-15);
-                if decrease < opts.ftol || small {
-                    converged = true;
-                    break;
-                }
-            }
-            _ => {
-                if small {
-                    converged = true;
-                    break;
-                }
-                lambda *= LAMBDA_UP;
-                if lambda > LAMBDA_MAX {
-                    converged = true;
-                    break;
-                }
-            }
-        }
-    }
+    let model = PlainModel { exps, opts };
+    let own: Vec<[f64; 2]> = start
+        .gains
+        .iter()
+        .zip(&start.phases)
+        .map(|(&g, &p)| [g, p])
+        .collect();
+    let fit = levenberg_marquardt(
+        &model,
+        &[start.beta, start.gamma, start.mu],
+        &own,
+        &LmOptions {
+            max_iter: opts.max_iter,
+            ftol: opts.ftol,
+            xtol: opts.xtol,
+        },
+    )?;
     Ok(Fit {
-        fisher: fisher(&bl),
-        loops: ev.loops.into_iter().map(|l| l.w).collect(),
-        cost: ev.cost,
-        params: p,
-        iterations,
-        converged,
+        params: Params {
+            beta: fit.shared[0],
+            gamma: fit.shared[1],
+            mu: fit.shared[2],
+            gains: fit.own.iter().map(|o| o[0]).collect(),
+            phases: fit.own.iter().map(|o| o[1]).collect(),
+        },
+        cost: fit.cost,
+        iterations: fit.iterations,
+        converged: fit.converged,
+        fisher: fit.fisher,
+        loops: fit.outputs,
     })
 }
 

@@ -21,9 +21,12 @@ __all__ = [
     "sls_search",
     "gain_estimate",
     "steady_loop",
+    "path_loop",
     "profile_phase_sls",
     "profile_phase_gain",
     "refine",
+    "augmented_output",
+    "augmented_refine",
 ]
 
 _F = NDArray[np.float64]
@@ -84,6 +87,17 @@ def gain_estimate(
 def steady_loop(
     amplitude: float, beta: float, gamma: float, mu: float, phi: float, samples_per_period: int, substeps: int
 ) -> tuple[_F, _F, float, int]: ...
+def path_loop(
+    amplitude: float,
+    beta: float,
+    gamma: float,
+    mu: float,
+    delta: float,
+    play: float,
+    phi: float,
+    samples_per_period: int,
+    substeps: int,
+) -> tuple[_F, _F, int]: ...
 def profile_phase_sls(
     ybar: _F, ydot: _F, amplitude: float, omega: float, lo: float, hi: float, tol: float, grid: int
 ) -> tuple[float, float, float, float, float, float, int]: ...
@@ -106,3 +120,30 @@ def refine(
     mu_lo: float = 1.0,
     mu_hi: float = ...,
 ) -> tuple[_F, float, int, bool, _F, list[_F]]: ...
+def augmented_output(
+    ybar_len: int,
+    amplitude: float,
+    frequency: float,
+    grid_phase: float,
+    terms: Sequence[str],
+    shared: _F,
+    gain: float,
+    phase: float,
+    substeps: int,
+) -> tuple[_F, _F, _F]: ...
+def augmented_refine(
+    ybars: Sequence[_F],
+    amplitudes: Sequence[float] | _F,
+    frequencies: Sequence[float] | _F,
+    grid_phases: Sequence[float] | _F,
+    weights: Sequence[float] | _F,
+    terms: Sequence[str],
+    shared0: Sequence[float] | _F,
+    gains0: Sequence[float] | _F,
+    phases0: Sequence[float] | _F,
+    *,
+    max_iter: int = 200,
+    substeps: int = 4,
+    mu_lo: float = 1.0,
+    mu_hi: float = ...,
+) -> tuple[_F, _F, _F, float, int, bool, _F, list[_F]]: ...

@@ -19,6 +19,7 @@ __all__ = [
     "ZeroAmplitudeError",
     "SingularNormalMatrixError",
     "SearchAtBoundError",
+    "NotConvergedError",
     "FileFormatError",
     "TimeAxisError",
     "ClippingError",
@@ -73,6 +74,10 @@ class SearchAtBoundError(BoucWenIdError):
 
     bound: float | None = None
     lower: bool | None = None
+
+
+class NotConvergedError(BoucWenIdError):
+    """An iterative solve (the steady path-loop shooting) ended without meeting its tolerance."""
 
 
 class FileFormatError(BoucWenIdError):

@@ -1,0 +1,434 @@
+"""The augmented model: the Wiener-Bouc-Wen plant plus extra physical terms, fitted jointly (design.md 9).
+
+Per sine experiment ``i`` on its averaged period's grid ``theta_j = 2 pi j/P``::
+
+    y_j = y0 + H_tau[ w_j + k u_j + c udot_j + m uddot_j + f tanh(udot_j / (eps |U| omega)) ]_j
+
+with the measured input ``u_j = U cos(theta_j + psi)``, the hysteresis ``w`` of the latent
+``x_j = U g_i cos(theta_j - phi_i)`` (asymmetry ``delta`` and play ``b`` act inside it) and ``H_tau`` the
+periodic first-order sensor lag.  Each term has one parameter, shared by every experiment in physical units;
+an inactive term is absent (not zero).  :func:`fit_augmented` runs the joint Levenberg-Marquardt of design.md
+9.3 (Rust core, or the NumPy reference with ``backend="numpy"``) and returns the estimates with their Fisher
+information and covariance.
+
+Example
+-------
+>>> start = AugParams(0.8, 0.2, 1.6, ("offset",), np.array([0.0]), gains, phases)  # doctest: +SKIP
+>>> fit = fit_augmented(experiments, start)  # doctest: +SKIP
+>>> fit.params.value("offset"), fit.standard_error("offset")  # doctest: +SKIP
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from types import MappingProxyType
+from typing import Any, Literal, Optional
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .errors import InsufficientDataError, InvalidParameterError, NonFiniteError, ZeroAmplitudeError
+from .reference_augmented import TERM_NAMES, parse_terms
+
+__all__ = [
+    "TERM_NAMES",
+    "TERM_SYMBOLS",
+    "TERM_UNITS",
+    "HYSTERESIS_NAMES",
+    "term_unit",
+    "AugExperiment",
+    "AugParams",
+    "AugFit",
+    "fit_augmented",
+    "augmented_output",
+]
+
+FloatArray = NDArray[np.float64]
+
+#: The shared hysteresis parameters ahead of the terms' parameters.
+HYSTERESIS_NAMES: tuple[str, ...] = ("beta", "gamma", "mu")
+
+#: Symbol of each term's parameter (design.md 9.1).
+TERM_SYMBOLS: Mapping[str, str] = MappingProxyType(
+    {
+        "offset": "y0",
+        "stiffness": "k",
+        "viscous": "c",
+        "inertia": "m",
+        "coulomb": "f",
+        "sensor_lag": "tau",
+        "asymmetry": "delta",
+        "play": "b",
+    }
+)
+
+#: Unit template of each term's parameter: ``{y}``, ``{u}``, ``{x}``, ``{w}`` stand for the output's, the
+#: input's, the latent x's and the hysteresis' units (format with :func:`term_unit`).
+TERM_UNITS: Mapping[str, str] = MappingProxyType(
+    {
+        "offset": "{y}",
+        "stiffness": "{y}/{u}",
+        "viscous": "{y} s/{u}",
+        "inertia": "{y} s^2/{u}",
+        "coulomb": "{y}",
+        "sensor_lag": "s",
+        "asymmetry": "1/{w}^mu",
+        "play": "{x}",
+    }
+)
+
+
+def term_unit(
+    name: str, *, y: str = "[y]", u: str = "[u]", x: Optional[str] = None, w: Optional[str] = None
+) -> str:
+    """The unit of term ``name``'s parameter with the given channel units.
+
+    In the identified model (alpha = 1) w has the output's units and x those of w, so ``x`` and ``w``
+    default to ``y``.
+    """
+    parse_terms([name])
+    return TERM_UNITS[name].format(y=y, u=u, x=y if x is None else x, w=y if w is None else w)
+
+
+def _frozen_array(name: str, values: ArrayLike, *, ndim: int = 1) -> FloatArray:
+    """A read-only float64 copy of ``values``; non-finite entries are :class:`NonFiniteError`."""
+    try:
+        arr = np.array(values, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise InvalidParameterError(f"{name} must be an array of real numbers: {exc}") from None
+    if arr.ndim != ndim:
+        raise InvalidParameterError(f"{name} must be {ndim}-D, got shape {arr.shape}")
+    bad = np.flatnonzero(~np.isfinite(arr))
+    if bad.size:
+        raise NonFiniteError(f"{name} holds a non-finite value ({arr.flat[bad[0]]}) at index {bad[0]}")
+    arr.flags.writeable = False
+    return arr
+
+
+def _finite(name: str, value: float) -> float:
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise InvalidParameterError(f"{name} must be a real number, got {value!r}") from None
+    if not math.isfinite(v):
+        raise NonFiniteError(f"{name} = {v} is not finite")
+    return v
+
+
+@dataclass(frozen=True)
+class AugExperiment:
+    """One sine experiment as the augmented fit sees it.
+
+    Parameters
+    ----------
+    ybar : ndarray, shape (P,)
+        Averaged output over one period, on ``t_j = j T/P``, with its DC (``offset_y`` added back).
+    amplitude : float
+        Input amplitude U (units of u, non-zero).
+    frequency : float
+        Angular frequency omega (rad/s, > 0).
+    grid_phase : float
+        Phase psi (rad) of the input on the grid: ``u_j = U cos(2 pi j/P + psi)``.
+    weight : float
+        Weight of each squared residual, ``N / sigma^2`` (periods averaged over noise variance), > 0.
+    source : str
+        Where the experiment came from (for messages).
+    """
+
+    ybar: FloatArray
+    amplitude: float
+    frequency: float
+    grid_phase: float
+    weight: float
+    source: str = ""
+
+    def __post_init__(self) -> None:
+        ybar = _frozen_array("ybar", self.ybar)
+        if ybar.size < 4:
+            raise InsufficientDataError(f"ybar has {ybar.size} samples per period; at least 4 are needed")
+        amplitude = _finite("amplitude", self.amplitude)
+        if amplitude == 0.0:
+            raise ZeroAmplitudeError("the input amplitude U is 0: nothing excites the plant")
+        frequency = _finite("frequency", self.frequency)
+        if frequency <= 0.0:
+            raise InvalidParameterError(f"frequency = {frequency} rad/s must be > 0")
+        weight = _finite("weight", self.weight)
+        if weight <= 0.0:
+            raise InvalidParameterError(f"weight = {weight} must be > 0 (N / noise variance)")
+        object.__setattr__(self, "ybar", ybar)
+        object.__setattr__(self, "amplitude", amplitude)
+        object.__setattr__(self, "frequency", frequency)
+        object.__setattr__(self, "grid_phase", _finite("grid_phase", self.grid_phase))
+        object.__setattr__(self, "weight", weight)
+
+
+@dataclass(frozen=True)
+class AugParams:
+    """Parameters of the augmented model.
+
+    Parameters
+    ----------
+    beta, gamma, mu : float
+        Bouc-Wen parameters (alpha = 1).
+    terms : tuple of str
+        Active terms (code names of :data:`TERM_NAMES`), in the order of ``values``.
+    values : ndarray, shape (T,)
+        One parameter per term, units :data:`TERM_UNITS`.
+    gains : ndarray, shape (m,)
+        Signed ``g_i`` with ``x_i = U_i g_i cos(theta_j - phi_i)``.
+    phases : ndarray, shape (m,)
+        ``phi_i`` (rad, grid frame).
+    """
+
+    beta: float
+    gamma: float
+    mu: float
+    terms: tuple[str, ...]
+    values: FloatArray
+    gains: FloatArray
+    phases: FloatArray
+
+    def __post_init__(self) -> None:
+        for name in HYSTERESIS_NAMES:
+            object.__setattr__(self, name, _finite(name, getattr(self, name)))
+        terms = parse_terms(self.terms)
+        values = _frozen_array("values", self.values)
+        if values.size != len(terms):
+            raise InvalidParameterError(f"{len(terms)} terms {terms} but {values.size} values")
+        gains = _frozen_array("gains", self.gains)
+        phases = _frozen_array("phases", self.phases)
+        if gains.size != phases.size:
+            raise InvalidParameterError(f"{gains.size} gains but {phases.size} phases")
+        object.__setattr__(self, "terms", terms)
+        object.__setattr__(self, "values", values)
+        object.__setattr__(self, "gains", gains)
+        object.__setattr__(self, "phases", phases)
+
+    @property
+    def shared(self) -> FloatArray:
+        """``[beta, gamma, mu, q_1 .. q_T]``, the order of the Fisher matrix's shared block."""
+        return np.concatenate([[self.beta, self.gamma, self.mu], self.values])
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """Names of :attr:`shared`: ``beta, gamma, mu`` and the terms."""
+        return HYSTERESIS_NAMES + self.terms
+
+    def value(self, name: str) -> float:
+        """The value of a shared parameter (``beta``, ``gamma``, ``mu`` or an active term)."""
+        if name in HYSTERESIS_NAMES:
+            return float(getattr(self, name))
+        parse_terms([name])
+        if name not in self.terms:
+            raise InvalidParameterError(f"term {name!r} is not active; the active terms are {self.terms}")
+        return float(self.values[self.terms.index(name)])
+
+    def with_term(self, name: str, value: float = 0.0) -> AugParams:
+        """A new :class:`AugParams` with term ``name`` appended at ``value`` (already active: an error)."""
+        return AugParams(
+            self.beta,
+            self.gamma,
+            self.mu,
+            self.terms + (name,),
+            np.append(self.values, _finite(name, value)),
+            self.gains,
+            self.phases,
+        )
+
+
+@dataclass(frozen=True)
+class AugFit:
+    """Outcome of :func:`fit_augmented`.
+
+    Attributes
+    ----------
+    params : AugParams
+        The estimates.
+    cost : float
+        Weighted residual sum of squares (chi-square of the averaged data).
+    iterations : int
+        Accepted plus rejected LM iterations.
+    converged : bool
+        Whether a stopping rule other than the iteration cap ended the search.
+    fisher : ndarray, shape (3 + T + 2m, 3 + T + 2m)
+        ``J^T W J`` ordered ``[beta, gamma, mu, q_1 .. q_T, g_0, phi_0, g_1, phi_1, ...]``.
+    covariance : ndarray
+        Its inverse, NaN-filled when the Fisher matrix is singular.
+    outputs : tuple of ndarray
+        Model outputs ``y_i`` at the estimates.
+    """
+
+    params: AugParams
+    cost: float
+    iterations: int
+    converged: bool
+    fisher: FloatArray
+    covariance: FloatArray
+    outputs: tuple[FloatArray, ...] = field(default_factory=tuple)
+
+    def standard_error(self, name: str) -> float:
+        """Standard error of a shared parameter (``beta``, ``gamma``, ``mu`` or an active term); NaN when
+        the Fisher matrix is singular."""
+        names = self.params.names
+        if name not in names:
+            if name not in HYSTERESIS_NAMES:
+                parse_terms([name])
+            raise InvalidParameterError(f"{name!r} is not a fitted parameter; the fitted ones are {names}")
+        i = names.index(name)
+        return float(np.sqrt(self.covariance[i, i]))
+
+
+def _auto_substeps(p: int) -> int:
+    """RK4 steps per sample of the loop solvers: a step of at most 2 pi/2048 rad (identify's rule)."""
+    return max(2, math.ceil(2048 / p))
+
+
+def _covariance(fisher: FloatArray) -> FloatArray:
+    """``fisher^-1``, NaN-filled when it is not positive definite."""
+    try:
+        np.linalg.cholesky(fisher)
+        cov = np.linalg.inv(fisher)
+    except np.linalg.LinAlgError:
+        return np.full_like(fisher, np.nan)
+    return np.asarray(0.5 * (cov + cov.T), dtype=np.float64)
+
+
+def _core_module(backend: str) -> Any:
+    if backend == "rust":
+        from . import _core
+
+        return _core
+    if backend == "numpy":
+        from . import reference_augmented
+
+        return reference_augmented
+    raise InvalidParameterError(f"backend must be 'rust' or 'numpy', got {backend!r}")
+
+
+def _count(name: str, value: int, minimum: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < minimum:
+        raise InvalidParameterError(f"{name} = {value!r} must be an integer >= {minimum}")
+    return int(value)
+
+
+def fit_augmented(
+    experiments: Sequence[AugExperiment],
+    start: AugParams,
+    *,
+    max_iter: int = 200,
+    substeps: Optional[int] = None,
+    mu_lo: float = 1.0,
+    mu_hi: float = float("inf"),
+    backend: Literal["rust", "numpy"] = "rust",
+) -> AugFit:
+    """Joint Levenberg-Marquardt of the augmented model over every experiment (design.md 9.3).
+
+    Parameters
+    ----------
+    experiments : sequence of AugExperiment
+        At least one.
+    start : AugParams
+        Starting point: its terms are the ones fitted; one gain and phase per experiment.
+    max_iter : int
+        Iteration cap (accepted plus rejected steps).
+    substeps : int, optional
+        RK4 steps per sample of the loop solvers; default ``max(2, ceil(2048/P))`` for the largest need.
+    mu_lo, mu_hi : float
+        The admissible mu bracket ``(mu_lo, mu_hi]``, ``mu_lo >= 1``.
+    backend : {"rust", "numpy"}
+        The Rust core or the NumPy reference.
+
+    Returns
+    -------
+    AugFit
+
+    Raises
+    ------
+    InvalidParameterError
+        Mismatched lengths, an inadmissible start, a bad bracket or backend.
+    InsufficientDataError
+        No experiment.
+    """
+    exps = tuple(experiments)
+    if not exps:
+        raise InsufficientDataError("fit_augmented needs at least one experiment")
+    for i, e in enumerate(exps):
+        if not isinstance(e, AugExperiment):
+            raise InvalidParameterError(f"experiments[{i}] is a {type(e).__name__}, not an AugExperiment")
+    if not isinstance(start, AugParams):
+        raise InvalidParameterError(f"start is a {type(start).__name__}, not an AugParams")
+    if start.gains.size != len(exps):
+        raise InvalidParameterError(
+            f"{len(exps)} experiments but the start has {start.gains.size} gains and phases"
+        )
+    max_iter = _count("max_iter", max_iter, 1)
+    steps = (
+        max(_auto_substeps(e.ybar.size) for e in exps)
+        if substeps is None
+        else _count("substeps", substeps, 1)
+    )
+    mu_lo, mu_hi = float(mu_lo), float(mu_hi)
+    if not math.isfinite(mu_lo) or mu_lo < 1.0 or math.isnan(mu_hi) or mu_hi <= mu_lo:
+        raise InvalidParameterError(
+            f"the mu bracket ({mu_lo}, {mu_hi}] must have a finite lower end >= 1 below its upper end"
+        )
+    core = _core_module(backend)
+    shared, gains, phases, cost, iterations, converged, fisher, outputs = core.augmented_refine(
+        [e.ybar for e in exps],
+        np.array([e.amplitude for e in exps]),
+        np.array([e.frequency for e in exps]),
+        np.array([e.grid_phase for e in exps]),
+        np.array([e.weight for e in exps]),
+        list(start.terms),
+        start.shared,
+        np.asarray(start.gains),
+        np.asarray(start.phases),
+        max_iter=max_iter,
+        substeps=steps,
+        mu_lo=mu_lo,
+        mu_hi=mu_hi,
+    )
+    shared = np.asarray(shared, dtype=np.float64)
+    params = AugParams(
+        float(shared[0]), float(shared[1]), float(shared[2]), start.terms, shared[3:], gains, phases
+    )
+    fisher = np.asarray(fisher, dtype=np.float64)
+    fisher.flags.writeable = False
+    covariance = _covariance(fisher)
+    covariance.flags.writeable = False
+    outs = tuple(np.asarray(y, dtype=np.float64) for y in outputs)
+    for y in outs:
+        y.flags.writeable = False
+    return AugFit(params, float(cost), int(iterations), bool(converged), fisher, covariance, outs)
+
+
+def augmented_output(
+    experiment: AugExperiment,
+    params: AugParams,
+    i: int,
+    *,
+    substeps: Optional[int] = None,
+    backend: Literal["rust", "numpy"] = "rust",
+) -> FloatArray:
+    """The model output ``y`` on ``experiment``'s grid with ``params`` and experiment index ``i``'s gain and
+    phase (shape (P,), units of the output)."""
+    if not isinstance(experiment, AugExperiment):
+        raise InvalidParameterError(f"experiment is a {type(experiment).__name__}, not an AugExperiment")
+    if isinstance(i, bool) or not isinstance(i, (int, np.integer)) or not 0 <= i < params.gains.size:
+        raise InvalidParameterError(f"i = {i!r} must index one of the {params.gains.size} gains")
+    p = experiment.ybar.size
+    steps = _auto_substeps(p) if substeps is None else _count("substeps", substeps, 1)
+    y, _, _ = _core_module(backend).augmented_output(
+        p,
+        experiment.amplitude,
+        experiment.frequency,
+        experiment.grid_phase,
+        list(params.terms),
+        params.shared,
+        float(params.gains[i]),
+        float(params.phases[i]),
+        steps,
+    )
+    return np.asarray(y, dtype=np.float64)

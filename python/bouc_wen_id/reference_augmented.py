@@ -1,0 +1,385 @@
+"""NumPy reference of the augmented model (``docs/design.md`` 9.1 and 9.3).
+
+Written line by line from the design text, readable and unoptimised, to hold the Rust core
+(``_core.augmented_output`` and ``_core.augmented_refine``, ``rust/terms.rs``) to account: same signatures,
+same named errors.  The output terms act on the measured input ``u_j = U cos(2 pi j/P + psi)``, the sensor lag
+is applied on the DFT of the period, and the hysteresis is the plain steady loop of :mod:`.reference` (7.2)
+unless asymmetry or play is active, then the loop along the input path (9.2).  The Levenberg-Marquardt follows
+:func:`.reference.refine` (same damping schedule, stopping rules and projections) with a shared block of size
+``3 + T``; like it, it solves the full damped normal equations instead of their Schur complement (the same
+step up to rounding).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .errors import BoucWenIdError, InsufficientDataError, InvalidParameterError, ZeroAmplitudeError
+from .reference import (
+    LM_LAMBDA_DOWN,
+    LM_LAMBDA_MAX,
+    LM_LAMBDA_START,
+    LM_LAMBDA_UP,
+    LM_MU_MARGIN,
+    _finite_array,
+    _finite_scalar,
+    steady_loop,
+)
+
+__all__ = [
+    "TERM_NAMES",
+    "COULOMB_EPS",
+    "PLAY_MAX_FRACTION",
+    "parse_terms",
+    "lag_filter",
+    "augmented_output",
+    "augmented_refine",
+]
+
+FloatArray = NDArray[np.float64]
+
+#: The term code names in the order of the table of design.md 9.1.
+TERM_NAMES: tuple[str, ...] = (
+    "offset",
+    "stiffness",
+    "viscous",
+    "inertia",
+    "coulomb",
+    "sensor_lag",
+    "asymmetry",
+    "play",
+)
+#: Width of the Coulomb term's smoothed sign, as a fraction of the peak input velocity |U| omega.
+COULOMB_EPS = 0.01
+#: Largest play as a fraction of the smallest |A_i| during a refinement.
+PLAY_MAX_FRACTION = 0.95
+
+
+def parse_terms(terms: Sequence[str]) -> tuple[str, ...]:
+    """The term names as a tuple; an unknown or repeated name is :class:`InvalidParameterError`."""
+    if isinstance(terms, str):
+        raise InvalidParameterError(f"terms must be a sequence of names, not the string {terms!r}")
+    out: list[str] = []
+    for name in terms:
+        if name not in TERM_NAMES:
+            raise InvalidParameterError(f"unknown term {name!r}; the terms are {', '.join(TERM_NAMES)}")
+        if name in out:
+            raise InvalidParameterError(
+                f"term {name!r} is given twice; each term has one parameter and may appear once"
+            )
+        out.append(name)
+    return tuple(out)
+
+
+def _value(terms: tuple[str, ...], shared: FloatArray, name: str) -> float:
+    return float(shared[3 + terms.index(name)]) if name in terms else 0.0
+
+
+def _check_shared(terms: tuple[str, ...], shared: FloatArray) -> None:
+    if shared.size != 3 + len(terms):
+        raise InvalidParameterError(
+            f"the shared parameters hold {shared.size} values but [beta, gamma, mu] and {len(terms)} terms "
+            f"need {3 + len(terms)}"
+        )
+    _finite_array("shared parameters", shared)
+    tau = _value(terms, shared, "sensor_lag")
+    if tau < 0.0:
+        raise InvalidParameterError(f"sensor_lag tau = {tau} s must be >= 0")
+    b = _value(terms, shared, "play")
+    if b < 0.0:
+        raise InvalidParameterError(f"play b = {b} must be >= 0 (the half-width of the backlash)")
+    delta = _value(terms, shared, "asymmetry")
+    if "asymmetry" in terms and abs(delta) >= shared[0] + shared[1]:
+        raise InvalidParameterError(
+            f"asymmetry |delta| = {abs(delta)} must be below beta + gamma = {shared[0] + shared[1]}"
+        )
+
+
+def _check_excitation(amplitude: float, frequency: float, grid_phase: float) -> None:
+    _finite_scalar("amplitude", amplitude)
+    _finite_scalar("frequency", frequency)
+    _finite_scalar("grid_phase", grid_phase)
+    if amplitude == 0.0:
+        raise ZeroAmplitudeError("the input amplitude U is 0: nothing excites the plant")
+    if frequency <= 0.0:
+        raise InvalidParameterError(f"frequency = {frequency} rad/s must be > 0")
+
+
+def lag_filter(p: int, omega: float, tau: float) -> tuple[NDArray[np.complex128], NDArray[np.complex128]]:
+    """The first-order lag on the bins of a P-point DFT and its tau-derivative.
+
+    ``H_k = 1/(1 + i k omega tau)`` with ``k = n`` below P/2 and ``n - P`` above; the Nyquist bin of an even
+    P takes the real ``Re H``.  ``dH_k/dtau = -i k omega H_k^2``.
+    """
+    n = np.arange(p)
+    k = np.where(2 * n < p, n, n - p).astype(np.float64)
+    iw = 1j * k * omega
+    h: NDArray[np.complex128] = np.asarray(1.0 / (1.0 + iw * tau), dtype=np.complex128)
+    dh: NDArray[np.complex128] = np.asarray(-iw * h * h, dtype=np.complex128)
+    if p % 2 == 0:
+        a = (p // 2) * omega
+        d = 1.0 + a * a * tau * tau
+        h[p // 2] = 1.0 / d
+        dh[p // 2] = -2.0 * a * a * tau / (d * d)
+    return h, dh
+
+
+def _apply(filt: NDArray[np.complex128], cols: FloatArray) -> FloatArray:
+    """The filter applied to every column of ``cols`` (P, n) on the DFT of the period."""
+    return np.real(np.fft.ifft(np.fft.fft(cols, axis=0) * filt[:, None], axis=0))
+
+
+def _hysteresis(
+    terms: tuple[str, ...], shared: FloatArray, amplitude: float, phi: float, p: int, substeps: int
+) -> tuple[FloatArray, FloatArray]:
+    """``w`` and its columns ``d/d(beta, gamma, mu, A, phi, delta, b)`` (last two 0 for the plain loop)."""
+    beta, gamma, mu = (float(v) for v in shared[:3])
+    if "asymmetry" in terms or "play" in terms:
+        raise InvalidParameterError("asymmetry and play need the path loop (pending merge)")
+    w, jac5, _, _ = steady_loop(amplitude, beta, gamma, mu, phi, p, substeps)
+    jac = np.zeros((p, 7))
+    jac[:, :5] = jac5
+    return w, jac
+
+
+def augmented_output(
+    ybar_len: int,
+    amplitude: float,
+    frequency: float,
+    grid_phase: float,
+    terms: Sequence[str],
+    shared: ArrayLike,
+    gain: float,
+    phase: float,
+    substeps: int,
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """The augmented model's output of one experiment (design.md 9.1) and its Jacobian.
+
+    Returns ``(y (P,), jac_shared (P, 3 + T), jac_own (P, 2))``: shared columns
+    ``[beta, gamma, mu, q_1 .. q_T]`` in the order of ``terms``, own columns ``[g, phi]``.
+    """
+    names = parse_terms(terms)
+    sh = np.asarray(shared, dtype=np.float64).ravel()
+    if ybar_len < 0:
+        raise InvalidParameterError(f"ybar_len = {ybar_len} must be >= 0")
+    if substeps < 1:
+        raise InvalidParameterError(f"substeps = {substeps} must be >= 1")
+    _check_excitation(amplitude, frequency, grid_phase)
+    _check_shared(names, sh)
+    _finite_scalar("gain", gain)
+    _finite_scalar("phase", phase)
+    p = int(ybar_len)
+    w, hj = _hysteresis(names, sh, amplitude * gain, phase, p, substeps)
+    theta = 2.0 * np.pi * np.arange(p) / p + grid_phase
+    u = amplitude * np.cos(theta)
+    udot = -amplitude * frequency * np.sin(theta)
+    uddot = -amplitude * frequency**2 * np.cos(theta)
+    fric = np.tanh(udot / (COULOMB_EPS * abs(amplitude) * frequency))
+    inputs = {"stiffness": u, "viscous": udot, "inertia": uddot, "coulomb": fric}
+    ns = 3 + len(names)
+    f = w.copy()
+    jac_shared = np.zeros((p, ns))
+    jac_shared[:, :3] = hj[:, :3]
+    for t, name in enumerate(names):
+        if name in inputs:
+            f = f + sh[3 + t] * inputs[name]
+            jac_shared[:, 3 + t] = inputs[name]
+        elif name == "asymmetry":
+            jac_shared[:, 3 + t] = hj[:, 5]
+        elif name == "play":
+            jac_shared[:, 3 + t] = hj[:, 6]
+    jac_own = np.column_stack([amplitude * hj[:, 3], hj[:, 4]])
+    y = f
+    if "sensor_lag" in names:
+        col = 3 + names.index("sensor_lag")
+        h, dh = lag_filter(p, frequency, sh[col])
+        y = _apply(h, f[:, None])[:, 0]
+        jac_shared = _apply(h, jac_shared)
+        jac_own = _apply(h, jac_own)
+        jac_shared[:, col] = _apply(dh, f[:, None])[:, 0]
+    if "offset" in names:
+        col = 3 + names.index("offset")
+        y = y + sh[col]
+        jac_shared[:, col] = 1.0
+    _finite_array("model output", y)
+    return y, jac_shared, jac_own
+
+
+def augmented_refine(
+    ybars: Sequence[ArrayLike],
+    amplitudes: ArrayLike,
+    frequencies: ArrayLike,
+    grid_phases: ArrayLike,
+    weights: ArrayLike,
+    terms: Sequence[str],
+    shared0: ArrayLike,
+    gains0: ArrayLike,
+    phases0: ArrayLike,
+    *,
+    max_iter: int = 200,
+    substeps: int = 4,
+    mu_lo: float = 1.0,
+    mu_hi: float = float("inf"),
+) -> tuple[FloatArray, FloatArray, FloatArray, float, int, bool, FloatArray, list[FloatArray]]:
+    """Joint Levenberg-Marquardt of the augmented model over every experiment (design.md 9.3).
+
+    Returns ``(shared, gains, phases, cost, iterations, converged, fisher, outputs)`` with ``fisher`` ordered
+    ``[beta, gamma, mu, q_1 .. q_T, g_0, phi_0, g_1, phi_1, ...]``.
+    """
+    ftol, xtol = 1e-12, 1e-10
+    names = parse_terms(terms)
+    ys = [np.asarray(y, dtype=np.float64) for y in ybars]
+    m = len(ys)
+    amps, freqs, psis, wts = (
+        np.asarray(v, dtype=np.float64).ravel() for v in (amplitudes, frequencies, grid_phases, weights)
+    )
+    if not (amps.size == freqs.size == psis.size == wts.size == m):
+        raise InvalidParameterError(
+            f"{m} experiments but {amps.size} amplitudes, {freqs.size} frequencies, {psis.size} grid phases "
+            f"and {wts.size} weights"
+        )
+    if max_iter < 1 or substeps < 1:
+        raise InvalidParameterError("max_iter and substeps must be >= 1")
+    sh0 = np.asarray(shared0, dtype=np.float64).ravel()
+    g0 = np.asarray(gains0, dtype=np.float64).ravel()
+    p0 = np.asarray(phases0, dtype=np.float64).ravel()
+    if m == 0:
+        raise InsufficientDataError("the refinement needs at least one experiment")
+    if g0.size != m or p0.size != m:
+        raise InvalidParameterError(f"{m} experiments but {g0.size} gains and {p0.size} phases")
+    for i in range(m):
+        _finite_array(f"ybar[{i}]", ys[i])
+        _check_excitation(float(amps[i]), float(freqs[i]), float(psis[i]))
+        _finite_scalar("weight", float(wts[i]))
+        if wts[i] <= 0.0:
+            raise InvalidParameterError(f"experiment {i}: weight {wts[i]} must be > 0 (N / noise variance)")
+    _finite_array("gains", g0)
+    _finite_array("phases", p0)
+    if not np.isfinite(mu_lo) or mu_lo < 1.0 or np.isnan(mu_hi) or mu_hi <= mu_lo:
+        raise InvalidParameterError(
+            f"the mu bracket ({mu_lo}, {mu_hi}] must have a finite lower end >= 1 below its upper end"
+        )
+    _check_shared(names, sh0)
+    ns = 3 + len(names)
+    col = {name: 3 + t for t, name in enumerate(names)}
+
+    def play_max(par: FloatArray) -> float:
+        return PLAY_MAX_FRACTION * float(np.min(np.abs(amps * par[ns::2])))
+
+    def admissible(par: FloatArray) -> bool:
+        ok = bool(
+            par[2] > max(mu_lo, 1.0) + LM_MU_MARGIN
+            and par[2] <= mu_hi
+            and par[0] + par[1] > 0
+            and par[0] >= par[1]
+        )
+        if "asymmetry" in col:
+            ok = ok and abs(par[col["asymmetry"]]) < par[0] + par[1]
+        if "sensor_lag" in col:
+            ok = ok and par[col["sensor_lag"]] >= 0.0
+        if "play" in col:
+            ok = ok and 0.0 <= par[col["play"]] <= play_max(par)
+        return ok
+
+    params = np.concatenate([sh0, np.column_stack([g0, p0]).ravel()])
+    if not admissible(np.concatenate([params[:3], np.zeros(len(names)), params[ns:]])):
+        raise InvalidParameterError(
+            f"the starting point (beta = {sh0[0]}, gamma = {sh0[1]}, mu = {sh0[2]}) must satisfy "
+            f"beta >= |gamma|, beta + gamma > 0 and {mu_lo} < mu <= {mu_hi}"
+        )
+    if "play" in col and params[col["play"]] > play_max(params):
+        raise InvalidParameterError(
+            f"the starting play b = {params[col['play']]} must be below {PLAY_MAX_FRACTION} min |U_i g_i| = "
+            f"{play_max(params)}"
+        )
+
+    def evaluate(par: FloatArray) -> tuple[float, list[FloatArray], FloatArray, FloatArray]:
+        n = par.size
+        cost = 0.0
+        outputs = []
+        fisher = np.zeros((n, n))
+        grad = np.zeros(n)
+        for i in range(m):
+            y, js, jo = augmented_output(
+                ys[i].size,
+                amps[i],
+                freqs[i],
+                psis[i],
+                names,
+                par[:ns],
+                par[ns + 2 * i],
+                par[ns + 1 + 2 * i],
+                substeps,
+            )
+            r = ys[i] - y
+            cost += wts[i] * float(np.sum(r * r))
+            full = np.zeros((ys[i].size, n))
+            full[:, :ns] = js
+            full[:, ns + 2 * i : ns + 2 * i + 2] = jo
+            fisher += wts[i] * full.T @ full
+            grad += wts[i] * full.T @ r
+            outputs.append(y)
+        return cost, outputs, fisher, grad
+
+    cost, outputs, fisher, grad = evaluate(params)
+    lam = LM_LAMBDA_START
+    it = 0
+    converged = False
+    while it < max_iter:
+        it += 1
+        damped = fisher + lam * np.diag(np.maximum(np.diag(fisher), np.finfo(float).tiny))
+        try:
+            delta = np.linalg.solve(damped, grad)
+        except np.linalg.LinAlgError:
+            lam *= LM_LAMBDA_UP
+            if lam > LM_LAMBDA_MAX:
+                converged = True
+                break
+            continue
+        trial = params + delta
+        small = bool(np.all(np.abs(delta) <= xtol * (np.abs(params) + xtol)))
+        # The projections of reference.refine, then tau and b clipped into their ranges.
+        if trial[0] < trial[1]:
+            trial[0] = trial[1] = 0.5 * (trial[0] + trial[1])
+        mu_min = max(mu_lo, 1.0) + 2.0 * LM_MU_MARGIN
+        if np.isfinite(trial[2]):
+            trial[2] = min(max(trial[2], mu_min), max(mu_hi, mu_min))
+        if "sensor_lag" in col:
+            trial[col["sensor_lag"]] = max(trial[col["sensor_lag"]], 0.0)
+        if "play" in col:
+            trial[col["play"]] = max(min(trial[col["play"]], play_max(trial)), 0.0)
+        out = None
+        if admissible(trial):
+            try:
+                out = evaluate(trial)
+            except BoucWenIdError:
+                out = None
+        if out is not None and out[0] <= cost:
+            decrease = (cost - out[0]) / max(cost, np.finfo(float).tiny)
+            params = trial
+            cost, outputs, fisher, grad = out
+            lam = max(lam * LM_LAMBDA_DOWN, 1e-15)
+            if decrease < ftol or small:
+                converged = True
+                break
+        else:
+            if small:
+                converged = True
+                break
+            lam *= LM_LAMBDA_UP
+            if lam > LM_LAMBDA_MAX:
+                converged = True
+                break
+    return (
+        params[:ns].copy(),
+        params[ns::2].copy(),
+        params[ns + 1 :: 2].copy(),
+        float(cost),
+        it,
+        converged,
+        fisher,
+        outputs,
+    )
