@@ -167,9 +167,7 @@ class Viscous(Term):
     symbol: ClassVar[str] = "c"
     unit: ClassVar[str] = "{y} s/{u}"
     description: ClassVar[str] = "viscous force proportional to the input velocity (dashpot)"
-    signature: ClassVar[str] = (
-        "a residual in quadrature with u, growing as omega: loops widen with frequency"
-    )
+    signature: ClassVar[str] = "a residual in quadrature with u, growing as omega: loops widen with frequency"
 
 
 @dataclass(frozen=True)
