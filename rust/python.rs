@@ -5,16 +5,19 @@
 //! (1a)-(27b) in the sibling modules, and maps [`CoreError`] onto the named exceptions of
 //! `bouc_wen_id.errors`.
 
+use std::collections::HashMap;
+
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
+use pyo3::types::PyTuple;
 
 use crate::average;
 use crate::bouc_wen::BoucWen;
 use crate::error::CoreError;
 use crate::estimate;
 use crate::linear::TransferFunction;
-use crate::simulate::{self, Input};
+use crate::simulate::{self, Input, Terms};
 use crate::solve::{self, SlsProblem, GOLDEN_MAX_ITER};
 use crate::{path_loop as pathloop, profile, refine, steady, terms};
 
@@ -105,10 +108,48 @@ fn run_simulation<'py>(
     Ok((sim.x.into_pyarray(py), sim.w.into_pyarray(py)))
 }
 
+/// [`run_simulation`] with the §9.4 terms, `{code name: value}`: `(x, w, y)` when `terms` is
+/// given, else the plain `(x, w)` (the plain path untouched).
+#[allow(clippy::too_many_arguments)]
+fn run_with_terms<'py>(
+    py: Python<'py>,
+    linear: (Vec<f64>, Vec<f64>, f64),
+    bouc_wen: (f64, f64, f64, f64, f64),
+    terms: Option<HashMap<String, f64>>,
+    input: Input<'_>,
+    dt: f64,
+    n_samples: i64,
+    substeps: i64,
+) -> PyResult<Bound<'py, PyTuple>> {
+    let Some(named) = terms else {
+        let pair = run_simulation(py, linear, bouc_wen, input, dt, n_samples, substeps)?;
+        return pair.into_pyobject(py);
+    };
+    let (num, den, delay) = linear;
+    let (alpha, beta, gamma, mu, w0) = bouc_wen;
+    // The reference's check order: G, the hysteresis, dt, substeps, n_samples, then the terms.
+    let tf = TransferFunction::new(&num, &den, delay)?;
+    let bw = BoucWen::new(alpha, beta, gamma, mu, w0)?;
+    let dt = simulate::check_dt(dt)?;
+    let substeps = count("substeps", substeps, 1)?;
+    let n_samples = count("n_samples", n_samples, 1)?;
+    let terms = Terms::from_named(named.iter().map(|(k, v)| (k.as_str(), *v)))?;
+    let sim = py.detach(|| {
+        simulate::simulate_with_terms(&tf, &bw, &terms, input, dt, n_samples, substeps)
+    })?;
+    (
+        sim.x.into_pyarray(py),
+        sim.w.into_pyarray(py),
+        sim.y.into_pyarray(py),
+    )
+        .into_pyobject(py)
+}
+
 /// RK4 simulation of `G(s) = e^{-delay s} num/den` -> Bouc-Wen driven by
-/// `u(t) = amplitude cos(omega t)`; returns `(x, w)` at `t_k = k dt`, k < n_samples.
+/// `u(t) = amplitude cos(omega t)`; returns `(x, w)` at `t_k = k dt`, k < n_samples, or
+/// `(x, w, y)` with the §9.4 `terms` ({code name: value}).
 #[pyfunction]
-#[pyo3(signature = (num, den, delay, alpha, beta, gamma, mu, w0, amplitude, omega, dt, n_samples, substeps))]
+#[pyo3(signature = (num, den, delay, alpha, beta, gamma, mu, w0, amplitude, omega, dt, n_samples, substeps, *, terms=None))]
 #[allow(clippy::too_many_arguments)]
 fn simulate_sine<'py>(
     py: Python<'py>,
@@ -125,13 +166,15 @@ fn simulate_sine<'py>(
     dt: f64,
     n_samples: i64,
     substeps: i64,
-) -> PyResult<Pair<'py>> {
+    terms: Option<HashMap<String, f64>>,
+) -> PyResult<Bound<'py, PyTuple>> {
     let input = Input::Sine { amplitude, omega };
     input.validate()?;
-    run_simulation(
+    run_with_terms(
         py,
         (num, den, delay),
         (alpha, beta, gamma, mu, w0),
+        terms,
         input,
         dt,
         n_samples,
@@ -140,9 +183,9 @@ fn simulate_sine<'py>(
 }
 
 /// RK4 simulation driven by samples `u` on the grid `k dt` (Catmull-Rom interpolation);
-/// returns `(x, w)` of the length of `u`.
+/// returns `(x, w)` of the length of `u`, or `(x, w, y)` with the §9.4 `terms`.
 #[pyfunction]
-#[pyo3(signature = (num, den, delay, alpha, beta, gamma, mu, w0, u, dt, substeps))]
+#[pyo3(signature = (num, den, delay, alpha, beta, gamma, mu, w0, u, dt, substeps, *, terms=None))]
 #[allow(clippy::too_many_arguments)]
 fn simulate_sampled<'py>(
     py: Python<'py>,
@@ -157,17 +200,19 @@ fn simulate_sampled<'py>(
     u: PyReadonlyArray1<'py, f64>,
     dt: f64,
     substeps: i64,
-) -> PyResult<Pair<'py>> {
+    terms: Option<HashMap<String, f64>>,
+) -> PyResult<Bound<'py, PyTuple>> {
     let u = slice("u", &u)?;
     let input = Input::Sampled { u };
     input.validate()?;
     // dt before G, as the reference does for a sampled input.
     let dt = simulate::check_dt(dt)?;
     let n_samples = i64::try_from(u.len()).unwrap_or(i64::MAX);
-    run_simulation(
+    run_with_terms(
         py,
         (num, den, delay),
         (alpha, beta, gamma, mu, w0),
+        terms,
         input,
         dt,
         n_samples,

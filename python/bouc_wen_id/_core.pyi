@@ -1,7 +1,7 @@
 """Type stubs of the Rust extension module (see rust/python.rs and docs/design.md)."""
 
-from collections.abc import Sequence
-from typing import Callable
+from collections.abc import Mapping, Sequence
+from typing import Callable, overload
 
 import numpy as np
 from numpy.typing import NDArray
@@ -31,6 +31,7 @@ __all__ = [
 
 _F = NDArray[np.float64]
 
+@overload
 def simulate_sine(
     num: _F,
     den: _F,
@@ -45,7 +46,28 @@ def simulate_sine(
     dt: float,
     n_samples: int,
     substeps: int,
+    *,
+    terms: None = None,
 ) -> tuple[_F, _F]: ...
+@overload
+def simulate_sine(
+    num: _F,
+    den: _F,
+    delay: float,
+    alpha: float,
+    beta: float,
+    gamma: float,
+    mu: float,
+    w0: float,
+    amplitude: float,
+    omega: float,
+    dt: float,
+    n_samples: int,
+    substeps: int,
+    *,
+    terms: Mapping[str, float],
+) -> tuple[_F, _F, _F]: ...
+@overload
 def simulate_sampled(
     num: _F,
     den: _F,
@@ -58,7 +80,25 @@ def simulate_sampled(
     u: _F,
     dt: float,
     substeps: int,
+    *,
+    terms: None = None,
 ) -> tuple[_F, _F]: ...
+@overload
+def simulate_sampled(
+    num: _F,
+    den: _F,
+    delay: float,
+    alpha: float,
+    beta: float,
+    gamma: float,
+    mu: float,
+    w0: float,
+    u: _F,
+    dt: float,
+    substeps: int,
+    *,
+    terms: Mapping[str, float],
+) -> tuple[_F, _F, _F]: ...
 def periodic_average(y: _F, samples_per_period: int, settle_periods: int, periods: int) -> _F: ...
 def phase_from_max(ybar: _F) -> float: ...
 def spectral_derivative(ybar: _F, omega: float, harmonics: int) -> _F: ...

@@ -21,6 +21,7 @@ from .errors import (
     InvalidParameterError,
     ZeroAmplitudeError,
 )
+from .terms import Asymmetry, Term, term_from_dict
 from .validation import (
     EXACT_GRID_RTOL,
     check_bouc_wen,
@@ -124,25 +125,67 @@ class BoucWen:
 
 @dataclass(frozen=True)
 class WienerPlant:
-    """The Wiener system ``x = g * u``, ``w = F[x]``, ``y = w + noise``."""
+    """The Wiener system ``x = g * u``, ``w = F[x]``, ``y = w + noise``, with optional physical terms.
+
+    ``terms`` (design.md 9.1, :mod:`bouc_wen_id.terms`) make it the augmented model
+    ``y = y0 + Lag[w + k u + c udot + m uddot + f tanh(udot/(eps Vmax))]`` with ``w`` the asymmetric
+    Bouc-Wen output of the played ``xp = Play_b[x]``; each kind at most once, and an asymmetry needs
+    ``beta + gamma > |delta|``.  Any sequence of terms is stored as a tuple, in the order given.
+    """
 
     linear: TransferFunction
     hysteresis: BoucWen
+    terms: tuple[Term, ...] = ()
+
+    def __post_init__(self) -> None:
+        if isinstance(self.terms, Term):
+            raise InvalidParameterError("terms must be a sequence of terms: wrap a single one as (term,)")
+        terms = tuple(self.terms)
+        seen: set[str] = set()
+        for t in terms:
+            if not isinstance(t, Term):
+                raise InvalidParameterError(
+                    f"terms must be bouc_wen_id.terms objects, got {type(t).__name__}"
+                )
+            if t.kind in seen:
+                raise InvalidParameterError(f"the term {t.kind!r} is given twice; each kind at most once")
+            seen.add(t.kind)
+            if isinstance(t, Asymmetry):
+                bound = self.hysteresis.beta + self.hysteresis.gamma
+                if not abs(t.delta) < bound:
+                    raise InvalidParameterError(
+                        f"asymmetry |delta| = {abs(t.delta)} must be < beta + gamma = {bound} "
+                        "for a bounded output on both sides"
+                    )
+        object.__setattr__(self, "terms", terms)
+
+    def term(self, kind: str) -> Optional[Term]:
+        """The plant's term of code name ``kind`` (e.g. ``"play"``), or None."""
+        return next((t for t in self.terms if t.kind == kind), None)
 
     def normalized(self) -> WienerPlant:
-        """The equivalent plant with alpha = 1: ``G -> alpha G, beta -> beta/alpha, gamma -> gamma/alpha``."""
+        """The equivalent plant with alpha = 1: ``G -> alpha G, beta -> beta/alpha, gamma -> gamma/alpha``.
+
+        Terms follow: ``delta -> delta/alpha``, ``b -> alpha b`` (play is in units of x); the output
+        terms are unchanged.
+        """
         h = self.hysteresis
         return WienerPlant(
             self.linear.scaled(h.alpha),
             BoucWen(h.beta / h.alpha, h.gamma / h.alpha, h.mu, 1.0, h.w0),
+            tuple(t.normalized(h.alpha) for t in self.terms),
         )
 
     def to_dict(self) -> dict[str, Any]:
-        return {"linear": self.linear.to_dict(), "hysteresis": self.hysteresis.to_dict()}
+        out: dict[str, Any] = {"linear": self.linear.to_dict(), "hysteresis": self.hysteresis.to_dict()}
+        if self.terms:  # a plain plant's dict stays as it was
+            out["terms"] = [t.to_dict() for t in self.terms]
+        return out
 
     @classmethod
     def from_dict(cls, d: Mapping[str, Any]) -> WienerPlant:
-        return cls(TransferFunction.from_dict(d["linear"]), BoucWen.from_dict(d["hysteresis"]))
+        terms = tuple(term_from_dict(t) for t in d.get("terms", ()))
+        return cls(TransferFunction.from_dict(d["linear"]), BoucWen.from_dict(d["hysteresis"]), terms)
 
 
 @dataclass(frozen=True, eq=False, init=False)

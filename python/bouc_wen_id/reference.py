@@ -11,8 +11,8 @@ them), but they are slow: the RK4 loop is plain Python.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-from typing import Callable, Optional
+from collections.abc import Mapping, Sequence
+from typing import Any, Callable, Optional
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -162,15 +162,24 @@ def simulate_sine(
     dt: float,
     n_samples: int,
     substeps: int,
-) -> tuple[FloatArray, FloatArray]:
+    *,
+    terms: Optional[Mapping[str, float]] = None,
+) -> Any:
     """RK4 simulation of the Wiener system driven by ``u(t) = amplitude cos(omega t)``, t >= 0.
 
-    Returns ``(x, w)`` at the ``n_samples`` grid times ``k dt`` (s); ``omega`` in rad/s.
+    Returns ``(x, w)`` at the ``n_samples`` grid times ``k dt`` (s); ``omega`` in rad/s.  With ``terms``
+    (design.md 9.4, ``{code name: value}``) returns ``(x, w, y)`` (:mod:`.reference_terms`).
     """
     amplitude = _finite_scalar("amplitude", amplitude)
     omega = _finite_scalar("omega", omega)
     if omega <= 0.0:
         raise InvalidParameterError(f"omega = {omega} rad/s must be > 0")
+    if terms is not None:
+        from . import reference_terms
+
+        bw = (alpha, beta, gamma, mu, w0)
+        args = (amplitude, omega, dt, n_samples, substeps, terms)
+        return reference_terms.simulate_sine(np.asarray(num), np.asarray(den), delay, bw, *args)
 
     def source(tau: float) -> tuple[float, float]:
         return amplitude * np.cos(omega * tau), -amplitude * omega * np.sin(omega * tau)
@@ -190,8 +199,13 @@ def simulate_sampled(
     u: ArrayLike,
     dt: float,
     substeps: int,
-) -> tuple[FloatArray, FloatArray]:
-    """RK4 simulation driven by samples ``u`` on the grid ``k dt``, interpolated by Catmull-Rom cubics."""
+    *,
+    terms: Optional[Mapping[str, float]] = None,
+) -> Any:
+    """RK4 simulation driven by samples ``u`` on the grid ``k dt``, interpolated by Catmull-Rom cubics.
+
+    With ``terms`` (design.md 9.4) returns ``(x, w, y)`` (:mod:`.reference_terms`).
+    """
     uu = _finite_array("u", u)
     if uu.size < 2:
         raise InsufficientDataError("a sampled input needs at least 2 samples")
@@ -202,6 +216,12 @@ def simulate_sampled(
     m[1:-1] = (uu[2:] - uu[:-2]) / (2.0 * dt_f)
     m[0] = (uu[1] - uu[0]) / dt_f
     m[-1] = (uu[-1] - uu[-2]) / dt_f
+    if terms is not None:
+        from . import reference_terms
+
+        bw = (alpha, beta, gamma, mu, w0)
+        args = (uu, m, dt_f, substeps, terms)
+        return reference_terms.simulate_sampled(np.asarray(num), np.asarray(den), delay, bw, *args)
     last = uu.size - 1
 
     def source(tau: float) -> tuple[float, float]:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 from concurrent.futures import ThreadPoolExecutor
-from typing import Optional
+from typing import Literal, Optional, overload
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -12,6 +12,7 @@ from numpy.typing import ArrayLike, NDArray
 from ._backend import Backend, get_backend
 from .errors import InvalidParameterError
 from .model import Recording, SinePlan, WienerPlant
+from .terms import core_terms
 from .validation import EXACT_GRID_RTOL, check_time_axis, finite_array
 
 __all__ = ["simulate", "simulate_input"]
@@ -28,7 +29,10 @@ def simulate(
 
     Each experiment starts from rest at t = 0 with ``u = U cos(omega t)`` and lasts
     ``settle_periods + periods`` periods of ``samples_per_period`` samples; the output is
-    ``y = w + noise`` with white Gaussian noise of standard deviation ``plan.noise_sd``.
+    ``y = w + noise`` with white Gaussian noise of standard deviation ``plan.noise_sd``.  A plant with
+    ``terms`` is simulated as the augmented model (docs/design.md 9.4): ``y = F + noise`` with
+    ``F = y0 + Lag[w + k u + c udot + m uddot + f tanh(udot/(eps U omega))]`` and ``w`` the
+    (asymmetric) hysteresis of the played ``x``; a plant without terms takes the plain path, unchanged.
 
     Parameters
     ----------
@@ -55,12 +59,14 @@ def simulate(
     n = (plan.settle_periods + plan.periods) * p
     # One independent child stream per experiment: the result does not depend on thread scheduling.
     streams = np.random.SeedSequence(plan.seed).spawn(len(plan))
+    # Only a plant with terms goes through the augmented integrator (which also returns y).
+    extra = {"terms": core_terms(plant.terms)} if plant.terms else {}
 
     def run(i: int) -> Recording:
         omega = float(plan.frequencies[i])
         amp = float(plan.amplitudes[i])
         dt = 2.0 * math.pi / omega / p
-        x, w = core.simulate_sine(
+        x, w, *clean = core.simulate_sine(
             lin.num,
             lin.den,
             lin.delay,
@@ -74,6 +80,7 @@ def simulate(
             dt,
             n,
             plan.substeps,
+            **extra,
         )
         t = np.arange(n, dtype=np.float64) * dt
         u = amp * np.cos(omega * t)
@@ -81,7 +88,7 @@ def simulate(
         return Recording(
             t=t,
             u=u,
-            y=w + noise,
+            y=(clean[0] if clean else w) + noise,
             amplitude=amp,
             frequency=omega,
             settle_periods=plan.settle_periods,
@@ -101,6 +108,7 @@ def simulate(
         return list(pool.map(run, range(len(plan))))
 
 
+@overload
 def simulate_input(
     plant: WienerPlant,
     t: ArrayLike,
@@ -108,13 +116,38 @@ def simulate_input(
     *,
     substeps: int = 4,
     backend: Backend = "rust",
-) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    output: Literal[False] = False,
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]: ...
+@overload
+def simulate_input(
+    plant: WienerPlant,
+    t: ArrayLike,
+    u: ArrayLike,
+    *,
+    substeps: int = 4,
+    backend: Backend = "rust",
+    output: Literal[True],
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]: ...
+def simulate_input(
+    plant: WienerPlant,
+    t: ArrayLike,
+    u: ArrayLike,
+    *,
+    substeps: int = 4,
+    backend: Backend = "rust",
+    output: bool = False,
+) -> tuple[NDArray[np.float64], ...]:
     """The inner signals ``(x, w)`` of ``plant`` driven by any uniformly sampled input ``u(t)``, from rest.
 
     For inputs that are not a clean sine: ramps, idle stretches, bursts, recorded commands.  Between
     samples the input is interpolated at the RK4 stage times by cubic Hermite polynomials with
     Catmull-Rom slopes (``substeps`` RK4 steps per sample interval; docs/design.md section 1).  Add noise
     to ``w`` yourself, from a seeded generator.
+
+    With ``output=True`` returns ``(x, w, y)``: ``y`` the noise-free measured output, which differs from
+    ``w`` when the plant has terms (docs/design.md 9.4: the mechanical terms use the interpolant's
+    ``u, udot, uddot`` at the samples and ``Vmax = max |udot|`` of the interpolant).  ``w`` honours the
+    asymmetry and play terms either way.
 
     Raises
     ------
@@ -132,7 +165,11 @@ def simulate_input(
     check_time_axis(finite_array("t", tt), rtol=EXACT_GRID_RTOL)
     dt = float(np.mean(np.diff(tt)))
     h, lin = plant.hysteresis, plant.linear
-    x, w = core.simulate_sampled(
-        lin.num, lin.den, lin.delay, h.alpha, h.beta, h.gamma, h.mu, h.w0, uu, dt, int(substeps)
-    )
-    return np.asarray(x, dtype=np.float64), np.asarray(w, dtype=np.float64)
+    args = (lin.num, lin.den, lin.delay, h.alpha, h.beta, h.gamma, h.mu, h.w0, uu, dt, int(substeps))
+    if not plant.terms:
+        x, w = core.simulate_sampled(*args)
+        y = w
+    else:
+        x, w, y = core.simulate_sampled(*args, terms=core_terms(plant.terms))
+    pair = (np.asarray(x, dtype=np.float64), np.asarray(w, dtype=np.float64))
+    return (*pair, np.asarray(y, dtype=np.float64)) if output else pair

@@ -1,0 +1,337 @@
+"""NumPy reference of the simulation with physical terms (design.md 9.4; rust/simulate/with_terms.rs).
+
+Step by step the same scheme as the Rust core, so that the parity tests hold the two to rounding:
+
+- the plain Wiener-Bouc-Wen RK4 of section 1 on ``[xs, w, xp]``, with the generalised rate
+  ``wdot = alpha xpdot - beta |xpdot| |w|^(mu-1) w - gamma xpdot |w|^mu - delta xpdot |w|^(mu-1) w``;
+- the play's mode frozen per step (up: ``xpdot = max(xdot, 0)``, down: ``min(xdot, 0)``, dwell: 0),
+  then ``xp`` clamped into ``[x - b, x + b]`` and ``w`` moved along the path by the clamped travel;
+- the sensor lag integrated exponentially over each step with the quadratic through ``F`` at the step's
+  start, middle (RK4 continuous extension of ``w``) and end;
+- output terms ``k u + c udot + m uddot + f tanh(udot/(eps Vmax))`` on the undelayed input.
+
+Without asymmetry, play or lag the plain :func:`bouc_wen_id.reference._simulate` gives ``x, w`` and the
+terms are added at the samples.  Called through ``reference.simulate_sine(..., terms=...)`` and
+``reference.simulate_sampled(..., terms=...)``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from typing import Callable
+
+import numpy as np
+from numpy.typing import NDArray
+
+from . import reference as _ref
+from .errors import InvalidParameterError
+
+__all__ = ["TERM_NAMES", "check_terms", "lag_weights", "simulate_sine", "simulate_sampled"]
+
+FloatArray = NDArray[np.float64]
+
+#: Keys of the ``terms`` mapping (the code names, plus the Coulomb smoothing).
+TERM_NAMES = (
+    "offset",
+    "stiffness",
+    "viscous",
+    "inertia",
+    "coulomb",
+    "coulomb_smoothing",
+    "sensor_lag",
+    "asymmetry",
+    "play",
+)
+COULOMB_SMOOTHING = 0.01
+COULOMB_SMOOTHING_MAX = 0.5
+#: Relative slack of the play's engagement test (after a clamp ``x - xp`` is ``b`` only to rounding).
+PLAY_ENGAGE_RTOL = 1e-12
+#: Below this ``r = h/tau`` the phi functions are Taylor series of PHI_TERMS terms.
+PHI_SERIES_BELOW = 1.0
+PHI_TERMS = 20
+
+
+def check_terms(terms: Mapping[str, float], beta: float, gamma: float) -> dict[str, float]:
+    """The full set of term parameters (absent ones 0) after the Rust core's checks, in its order."""
+    out = {name: 0.0 for name in TERM_NAMES}
+    out["coulomb_smoothing"] = COULOMB_SMOOTHING
+    for name, value in terms.items():
+        if name not in out:
+            raise InvalidParameterError(f"unknown term {name!r}; the terms are {', '.join(TERM_NAMES)}")
+        out[name] = float(value)
+    for name in TERM_NAMES:
+        _ref._finite_scalar(name, out[name])
+    if out["sensor_lag"] < 0.0:
+        raise InvalidParameterError(f"sensor_lag tau = {out['sensor_lag']} s must be >= 0")
+    if out["play"] < 0.0:
+        raise InvalidParameterError(f"play b = {out['play']} must be >= 0 (it is a half-width)")
+    if not 0.0 < out["coulomb_smoothing"] <= COULOMB_SMOOTHING_MAX:
+        raise InvalidParameterError(
+            f"coulomb_smoothing eps = {out['coulomb_smoothing']} must be in (0, {COULOMB_SMOOTHING_MAX}]"
+        )
+    if abs(out["asymmetry"]) >= beta + gamma:
+        raise InvalidParameterError(
+            f"asymmetry |delta| = {abs(out['asymmetry'])} must be < beta + gamma = {beta + gamma}"
+        )
+    return out
+
+
+def lag_weights(r: float) -> tuple[float, float, float, float]:
+    """``(e^-r, r c_0, r c_m, r c_1)`` of the exponential lag step over ``r = h/tau``."""
+    if not math.isfinite(r):
+        return 0.0, 0.0, 0.0, 1.0
+    z = -r
+    if r < PHI_SERIES_BELOW:
+        fact = [1.0] * (PHI_TERMS + 4)
+        for i in range(1, len(fact)):
+            fact[i] = fact[i - 1] * i
+
+        def phi(k: int) -> float:
+            acc = 0.0
+            for j in range(PHI_TERMS - 1, -1, -1):
+                acc = acc * z + 1.0 / fact[j + k]
+            return acc
+
+        p1, p2, p3 = phi(1), phi(2), phi(3)
+    else:
+        p1 = math.expm1(z) / z
+        p2 = (p1 - 1.0) / z
+        p3 = (p2 - 0.5) / z
+    return (
+        math.exp(z),
+        r * (p1 - 3.0 * p2 + 4.0 * p3),
+        r * (4.0 * p2 - 8.0 * p3),
+        r * (4.0 * p3 - p2),
+    )
+
+
+Source = Callable[[float], tuple[float, float]]
+
+
+def _simulate_terms(
+    num: NDArray[np.float64],
+    den: NDArray[np.float64],
+    delay: float,
+    bw: tuple[float, float, float, float, float],
+    source: Source,
+    second: Callable[[float], float],
+    peak_rate: float,
+    dt: float,
+    n_samples: int,
+    substeps: int,
+    terms: Mapping[str, float],
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    a, c, d, delay = _ref.realize(num, den, delay)
+    alpha, beta, gamma, mu, w0 = bw
+    _ref._check_bouc_wen(alpha, beta, gamma, mu, w0)
+    dt = _ref._finite_scalar("dt", dt)
+    if dt <= 0.0:
+        raise InvalidParameterError(f"dt = {dt} must be > 0")
+    if substeps < 1:
+        raise InvalidParameterError(f"substeps = {substeps} must be >= 1")
+    if n_samples < 1:
+        raise InvalidParameterError(f"n_samples = {n_samples} must be >= 1")
+    p = check_terms(terms, beta, gamma)
+    stiff, visc, iner, coul = p["stiffness"], p["viscous"], p["inertia"], p["coulomb"]
+    scale = p["coulomb_smoothing"] * peak_rate
+    delta, b, tau = p["asymmetry"], p["play"], p["sensor_lag"]
+
+    def mech(t: float) -> float:
+        u, udot = source(t)
+        uddot = second(t)
+        friction = coul * math.tanh(udot / scale) if scale > 0.0 else 0.0
+        return stiff * u + visc * udot + iner * uddot + friction
+
+    if not (delta != 0.0 or b > 0.0 or tau > 0.0):
+        x_out, w_out = _ref._simulate(num, den, delay, bw, source, dt, n_samples, substeps)
+        y_out = np.array([p["offset"] + (float(w_out[k]) + mech(k * dt)) for k in range(n_samples)])
+        return x_out, w_out, y_out
+
+    n = a.size
+
+    def delayed(t: float) -> tuple[float, float]:
+        if t - delay < 0.0:
+            return 0.0, 0.0
+        return source(t - delay)
+
+    def rate(xpdot: float, w: float) -> float:
+        wmu = float(abs(w) ** mu)
+        sw = float(np.sign(w))
+        return alpha * xpdot - beta * abs(xpdot) * sw * wmu - gamma * xpdot * wmu - delta * xpdot * sw * wmu
+
+    def linear(xs: FloatArray, vin: tuple[float, float]) -> tuple[FloatArray, float]:
+        v, vdot = vin
+        dxs = np.empty(n)
+        if n:
+            dxs[0] = -float(np.dot(a, xs)) + v
+            dxs[1:] = xs[: n - 1]
+        return dxs, float(np.dot(c, dxs)) + d * vdot
+
+    def path(w: float, dxp: float) -> float:
+        k1 = rate(dxp, w)
+        k2 = rate(dxp, w + 0.5 * k1)
+        k3 = rate(dxp, w + 0.5 * k2)
+        k4 = rate(dxp, w + k3)
+        return w + (k1 + 2.0 * k2 + 2.0 * k3 + k4) / 6.0
+
+    h = dt / substeps
+    half_h, h_sixth = 0.5 * h, h / 6.0
+    has_play, has_lag = b > 0.0, tau > 0.0
+    decay, l0, lm, l1 = lag_weights(h / tau) if has_lag else (0.0, 0.0, 0.0, 0.0)
+
+    xs = np.zeros(n)
+    w = w0
+    x0 = float(np.dot(c, xs)) + d * delayed(0.0)[0]
+    xp = min(max(0.0, x0 - b), x0 + b)
+    ys = 0.0
+    x_out, w_out, y_out = np.empty(n_samples), np.empty(n_samples), np.empty(n_samples)
+    for k in range(n_samples):
+        t = k * dt
+        x_out[k] = float(np.dot(c, xs)) + d * delayed(t)[0]
+        w_out[k] = w
+        y_out[k] = p["offset"] + (ys if has_lag else w + mech(t))
+        if k == n_samples - 1:
+            break
+        for s in range(substeps):
+            ts = t + s * h
+            tm, te = ts + half_h, ts + h
+            in1, inm, in4 = delayed(ts), delayed(tm), delayed(te)
+            k1, xdot1 = linear(xs, in1)
+            mode = 0  # +1 up, -1 down, 0 dwell
+            if has_play:
+                x = float(np.dot(c, xs)) + d * in1[0]
+                e = x - xp
+                slack = PLAY_ENGAGE_RTOL * (b + abs(x))
+                if xdot1 > 0.0 and e >= b - slack:
+                    mode = 1
+                elif xdot1 < 0.0 and e <= -b + slack:
+                    mode = -1
+
+            def played(xdot: float, mode: int = mode) -> float:
+                if not has_play:
+                    return xdot
+                return max(xdot, 0.0) if mode == 1 else min(xdot, 0.0) if mode == -1 else 0.0
+
+            p1 = played(xdot1)
+            kw1 = rate(p1, w)
+            w2 = w + half_h * kw1
+            k2, xdot2 = linear(xs + half_h * k1, inm)
+            p2 = played(xdot2)
+            kw2 = rate(p2, w2)
+            w3 = w + half_h * kw2
+            k3, xdot3 = linear(xs + half_h * k2, inm)
+            p3 = played(xdot3)
+            kw3 = rate(p3, w3)
+            w4 = w + h * kw3
+            k4, xdot4 = linear(xs + h * k3, in4)
+            p4 = played(xdot4)
+            kw4 = rate(p4, w4)
+
+            w_mid = w + h * (5.0 * kw1 + 4.0 * (kw2 + kw3) - kw4) / 24.0
+            f0 = w + mech(ts)
+            xs = xs + h_sixth * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+            w = w + h_sixth * (kw1 + 2.0 * kw2 + 2.0 * kw3 + kw4)
+            if has_play:
+                xp = xp + h_sixth * (p1 + 2.0 * p2 + 2.0 * p3 + p4)
+                x_end = float(np.dot(c, xs)) + d * in4[0]
+                clamped = min(max(xp, x_end - b), x_end + b)
+                travel = clamped - xp
+                if travel != 0.0:
+                    w = path(w, travel)
+                xp = clamped
+            if has_lag:
+                fm = w_mid + mech(tm)
+                f1 = w + mech(te)
+                ys = decay * ys + (l0 * f0 + lm * fm + l1 * f1)
+    return x_out, w_out, y_out
+
+
+def simulate_sine(
+    num: NDArray[np.float64],
+    den: NDArray[np.float64],
+    delay: float,
+    bw: tuple[float, float, float, float, float],
+    amplitude: float,
+    omega: float,
+    dt: float,
+    n_samples: int,
+    substeps: int,
+    terms: Mapping[str, float],
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """``(x, w, y)`` for ``u = amplitude cos(omega t)`` (already checked by the caller)."""
+    neg_amplitude_omega = -amplitude * omega
+
+    def source(tau: float) -> tuple[float, float]:
+        arg = omega * tau
+        return amplitude * math.cos(arg), neg_amplitude_omega * math.sin(arg)
+
+    def second(tau: float) -> float:
+        return neg_amplitude_omega * omega * math.cos(omega * tau)
+
+    return _simulate_terms(
+        num, den, delay, bw, source, second, abs(amplitude) * omega, dt, n_samples, substeps, terms
+    )
+
+
+def hermite_peak_rate(u: FloatArray, m: FloatArray, dt: float) -> float:
+    """Exact ``max |udot|`` of the Catmull-Rom interpolant: knot slopes and interior vertices."""
+    peak = 0.0
+    for k in range(u.size - 1):
+        m0, m1 = float(m[k]), float(m[k + 1])
+        slope = (float(u[k + 1]) - float(u[k])) / dt
+        qa = 3.0 * (m0 + m1) - 6.0 * slope
+        qb = 6.0 * slope - 4.0 * m0 - 2.0 * m1
+        peak = max(peak, abs(m0), abs(m1))
+        if qa != 0.0:
+            s = -qb / (2.0 * qa)
+            if 0.0 < s < 1.0:
+                peak = max(peak, abs(m0 + s * (qb + s * qa)))
+    return peak
+
+
+def simulate_sampled(
+    num: NDArray[np.float64],
+    den: NDArray[np.float64],
+    delay: float,
+    bw: tuple[float, float, float, float, float],
+    u: FloatArray,
+    m: FloatArray,
+    dt: float,
+    substeps: int,
+    terms: Mapping[str, float],
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """``(x, w, y)`` for samples ``u`` with Catmull-Rom slopes ``m`` (already checked by the caller)."""
+    last = u.size - 1
+
+    def locate(tau: float) -> tuple[int, float]:
+        q = tau / dt
+        kf = math.floor(q)
+        return int(kf), q - kf
+
+    def source(tau: float) -> tuple[float, float]:
+        k, s = locate(tau)
+        if k >= last:
+            return float(u[last]), 0.0
+        s2, s3 = s * s, s * s * s
+        u0, u1, m0, m1 = float(u[k]), float(u[k + 1]), float(m[k]), float(m[k + 1])
+        h00, h10 = 2.0 * s3 - 3.0 * s2 + 1.0, s3 - 2.0 * s2 + s
+        h01, h11 = -2.0 * s3 + 3.0 * s2, s3 - s2
+        val = h00 * u0 + h10 * dt * m0 + h01 * u1 + h11 * dt * m1
+        d00, d10 = 6.0 * s2 - 6.0 * s, 3.0 * s2 - 4.0 * s + 1.0
+        d01, d11 = -6.0 * s2 + 6.0 * s, 3.0 * s2 - 2.0 * s
+        der = (d00 * u0 + d01 * u1) / dt + d10 * m0 + d11 * m1
+        return val, der
+
+    def second(tau: float) -> float:
+        k, s = locate(tau)
+        if k >= last:
+            return 0.0
+        u0, u1, m0, m1 = float(u[k]), float(u[k + 1]), float(m[k]), float(m[k + 1])
+        return ((12.0 * s - 6.0) * u0 + (6.0 - 12.0 * s) * u1) / (dt * dt) + (
+            (6.0 * s - 4.0) * m0 + (6.0 * s - 2.0) * m1
+        ) / dt
+
+    return _simulate_terms(
+        num, den, delay, bw, source, second, hermite_peak_rate(u, m, dt), dt, u.size, substeps, terms
+    )

@@ -1,0 +1,306 @@
+"""Physical terms of the augmented model (docs/design.md section 9.1), as first-class parts of a plant.
+
+Each term is a frozen value with exactly one fitted parameter (plus, for Coulomb friction, a fixed
+smoothing), in the spirit of lmfit's model components: it knows its code name, its parameter's symbol
+and units, what it means physically and what its absence leaves in the residual of a plain fit.  A
+:class:`~bouc_wen_id.model.WienerPlant` carries a tuple of them::
+
+    y = y0 + Lag_tau[ w + k u + c udot + m uddot + f tanh(udot / (eps Vmax)) ]
+    wdot = alpha xpdot - beta |xpdot| |w|^(mu-1) w - gamma xpdot |w|^mu - delta xpdot |w|^(mu-1) w
+    xp = Play_b[x]
+
+The units are templates in ``{y}`` (the output's unit) and ``{u}`` (the input's); fill them with
+:meth:`Term.units`.  ``x`` has the units of ``y`` in the identified (alpha = 1) model, so play is in
+``{y}`` there.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, fields, replace
+from typing import Any, ClassVar
+
+import numpy as np
+
+from .errors import InvalidParameterError, NonFiniteError
+
+__all__ = [
+    "Term",
+    "Offset",
+    "Stiffness",
+    "Viscous",
+    "Inertia",
+    "Coulomb",
+    "SensorLag",
+    "Asymmetry",
+    "Play",
+    "TERMS",
+    "COULOMB_SMOOTHING",
+    "term_from_dict",
+    "core_terms",
+]
+
+#: Default ``eps`` of the smoothed Coulomb sign: 1 % of the peak input velocity (design.md 9.1).
+COULOMB_SMOOTHING = 0.01
+
+#: Largest admissible ``eps``: beyond half the peak velocity the ``tanh`` no longer resembles a sign.
+COULOMB_SMOOTHING_MAX = 0.5
+
+
+def _real(name: str, value: Any) -> float:
+    """``value`` as a finite float, else a named error."""
+    if isinstance(value, (complex, np.complexfloating, str, bytes)):
+        raise InvalidParameterError(f"{name} = {value!r} must be a real number")
+    try:
+        v = float(value)
+    except (TypeError, ValueError, OverflowError) as exc:
+        raise InvalidParameterError(f"{name} = {value!r} is not a real number: {exc}") from None
+    if not math.isfinite(v):
+        raise NonFiniteError(f"{name} = {v} is not finite")
+    return v
+
+
+@dataclass(frozen=True)
+class Term:
+    """Base of the physical terms: one fitted parameter, named by :attr:`symbol`.
+
+    Subclasses set the class attributes below and one float field named :attr:`symbol`.
+    """
+
+    #: Code name (the key of :data:`TERMS` and of the Rust core's ``terms`` mapping).
+    kind: ClassVar[str] = ""
+    #: Symbol of the parameter, also the name of its field.
+    symbol: ClassVar[str] = ""
+    #: Units of the parameter, a template in ``{y}`` and ``{u}``.
+    unit: ClassVar[str] = ""
+    #: What the term is, physically (one line).
+    description: ClassVar[str] = ""
+    #: What leaving it out of a plain fit leaves in the residual (one line).
+    signature: ClassVar[str] = ""
+    #: ``"output"`` for terms added to y, ``"hysteresis"`` for terms inside the Bouc-Wen path.
+    acts_on: ClassVar[str] = "output"
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            object.__setattr__(self, f.name, _real(f"{self.kind}.{f.name}", getattr(self, f.name)))
+        self._check()
+
+    def _check(self) -> None:
+        """Extra admissibility of the parameter (after the finiteness check)."""
+
+    @property
+    def value(self) -> float:
+        """The parameter's value (units :meth:`units`)."""
+        return float(getattr(self, self.symbol))
+
+    def with_value(self, value: float) -> Term:
+        """The same term with its parameter set to ``value`` (validated)."""
+        return replace(self, **{self.symbol: value})
+
+    @classmethod
+    def units(cls, y: str = "[y]", u: str = "[u]") -> str:
+        """The parameter's units with the output's unit ``y`` and the input's unit ``u`` filled in."""
+        return cls.unit.format(y=y, u=u)
+
+    def normalized(self, alpha: float) -> Term:
+        """The term of the equivalent plant with alpha = 1 (``G -> alpha G``); output terms are unchanged."""
+        return self
+
+    def to_dict(self) -> dict[str, Any]:
+        """``{"kind": code name, field: value, ...}`` (JSON-ready)."""
+        out: dict[str, Any] = {"kind": self.kind}
+        for f in fields(self):
+            out[f.name] = getattr(self, f.name)
+        return out
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any]) -> Term:
+        """Inverse of :meth:`to_dict` (the ``kind`` must be this class's, when present)."""
+        kind = d.get("kind", cls.kind)
+        if kind != cls.kind:
+            raise InvalidParameterError(f"a {cls.__name__} needs kind {cls.kind!r}, got {kind!r}")
+        names = {f.name for f in fields(cls)}
+        unknown = sorted(set(d) - names - {"kind"})
+        if unknown:
+            raise InvalidParameterError(f"{cls.kind}: unknown field(s) {unknown}; expected {sorted(names)}")
+        if cls.symbol not in d:
+            raise InvalidParameterError(f"{cls.kind}: the parameter {cls.symbol!r} is missing")
+        return cls(**{k: d[k] for k in names if k in d})
+
+
+@dataclass(frozen=True)
+class Offset(Term):
+    """Output offset ``y0``: a constant added to the measured output (sensor zero, preload)."""
+
+    y0: float
+
+    kind: ClassVar[str] = "offset"
+    symbol: ClassVar[str] = "y0"
+    unit: ClassVar[str] = "{y}"
+    description: ClassVar[str] = "constant output offset (sensor zero, static preload)"
+    signature: ClassVar[str] = "a constant residual: the loop is shifted up or down as a whole (DC)"
+
+
+@dataclass(frozen=True)
+class Stiffness(Term):
+    """Parallel stiffness ``k``: ``k u`` added to the output (a spring beside the hysteresis)."""
+
+    k: float
+
+    kind: ClassVar[str] = "stiffness"
+    symbol: ClassVar[str] = "k"
+    unit: ClassVar[str] = "{y}/{u}"
+    description: ClassVar[str] = "elastic force proportional to the input, in parallel with the hysteresis"
+    signature: ClassVar[str] = (
+        "a residual in phase with u at every frequency: the loop is tilted, not saturating at large u"
+    )
+
+
+@dataclass(frozen=True)
+class Viscous(Term):
+    """Viscous damping ``c``: ``c udot`` added to the output (a dashpot beside the hysteresis)."""
+
+    c: float
+
+    kind: ClassVar[str] = "viscous"
+    symbol: ClassVar[str] = "c"
+    unit: ClassVar[str] = "{y} s/{u}"
+    description: ClassVar[str] = "viscous force proportional to the input velocity (dashpot)"
+    signature: ClassVar[str] = "a residual in quadrature with u, growing as omega: loops widen with frequency"
+
+
+@dataclass(frozen=True)
+class Inertia(Term):
+    """Inertia ``m``: ``m uddot`` added to the output (a moving mass seen by the force sensor)."""
+
+    m: float
+
+    kind: ClassVar[str] = "inertia"
+    symbol: ClassVar[str] = "m"
+    unit: ClassVar[str] = "{y} s^2/{u}"
+    description: ClassVar[str] = "inertial force of a moving mass, proportional to the input acceleration"
+    signature: ClassVar[str] = (
+        "a residual in antiphase with u growing as omega^2: the loop tilts down at high frequency"
+    )
+
+
+@dataclass(frozen=True)
+class Coulomb(Term):
+    """Dry (Coulomb) friction ``f``: ``f tanh(udot / (eps Vmax))``, a sign smoothed over ``eps Vmax``.
+
+    ``Vmax`` is the peak input velocity (``|U| omega`` for a sine); ``smoothing`` is ``eps``, fixed, in
+    ``(0, 0.5]``.
+    """
+
+    f: float
+    smoothing: float = COULOMB_SMOOTHING
+
+    kind: ClassVar[str] = "coulomb"
+    symbol: ClassVar[str] = "f"
+    unit: ClassVar[str] = "{y}"
+    description: ClassVar[str] = "dry friction of constant level opposing the input velocity"
+    signature: ClassVar[str] = (
+        "a square wave in phase with udot: steps at each reversal of u, odd harmonics falling as 1/k"
+    )
+
+    def _check(self) -> None:
+        if not 0.0 < self.smoothing <= COULOMB_SMOOTHING_MAX:
+            raise InvalidParameterError(
+                f"coulomb.smoothing eps = {self.smoothing} must be in (0, {COULOMB_SMOOTHING_MAX}]"
+            )
+
+
+@dataclass(frozen=True)
+class SensorLag(Term):
+    """First-order output (sensor) lag ``tau``: the output is seen through ``1/(tau s + 1)``."""
+
+    tau: float
+
+    kind: ClassVar[str] = "sensor_lag"
+    symbol: ClassVar[str] = "tau"
+    unit: ClassVar[str] = "s"
+    description: ClassVar[str] = "first-order lag of the output sensor or its filter, 1/(tau s + 1)"
+    signature: ClassVar[str] = (
+        "the whole output delayed by about tau: a residual like -tau ydot, growing with frequency"
+    )
+
+    def _check(self) -> None:
+        if self.tau < 0.0:
+            raise InvalidParameterError(f"sensor_lag tau = {self.tau} s must be >= 0")
+
+
+@dataclass(frozen=True)
+class Asymmetry(Term):
+    """Asymmetry ``delta`` of the Bouc-Wen element (the ``sgn(w)`` term of Song & Der Kiureghian).
+
+    The loop saturates at ``(beta + gamma + delta)^(-1/mu)`` above and ``-(beta + gamma - delta)^(-1/mu)``
+    below (alpha = 1); the plant requires ``beta + gamma > |delta|``.
+    """
+
+    delta: float
+
+    kind: ClassVar[str] = "asymmetry"
+    symbol: ClassVar[str] = "delta"
+    unit: ClassVar[str] = "1/{y}^mu"
+    description: ClassVar[str] = "different saturation levels of the hysteresis in the two directions"
+    signature: ClassVar[str] = (
+        "upper and lower branches saturate at different levels: even harmonics and a DC shift"
+    )
+    acts_on: ClassVar[str] = "hysteresis"
+
+    def normalized(self, alpha: float) -> Term:
+        return Asymmetry(self.delta / alpha)
+
+
+@dataclass(frozen=True)
+class Play(Term):
+    """Play (backlash) of half-width ``b`` between the linear part and the hysteresis: ``xp = Play_b[x]``.
+
+    ``b`` is in units of ``x`` (those of ``y`` in the identified alpha = 1 model); per experiment it must
+    stay below the latent amplitude ``|A|``.
+    """
+
+    b: float
+
+    kind: ClassVar[str] = "play"
+    symbol: ClassVar[str] = "b"
+    unit: ClassVar[str] = "{y}"
+    description: ClassVar[str] = "backlash (dead travel of 2b) before the hysteresis, after each reversal"
+    signature: ClassVar[str] = (
+        "flat stretches after each reversal: the output dwells for 2b of travel before it follows"
+    )
+    acts_on: ClassVar[str] = "hysteresis"
+
+    def _check(self) -> None:
+        if self.b < 0.0:
+            raise InvalidParameterError(f"play b = {self.b} must be >= 0 (it is a half-width)")
+
+    def normalized(self, alpha: float) -> Term:
+        return Play(self.b * alpha)
+
+
+#: Code name -> term class, in the order of the design.md 9.1 table.
+TERMS: dict[str, type[Term]] = {
+    cls.kind: cls for cls in (Offset, Stiffness, Viscous, Inertia, Coulomb, SensorLag, Asymmetry, Play)
+}
+
+
+def term_from_dict(d: Mapping[str, Any]) -> Term:
+    """The term a :meth:`Term.to_dict` mapping describes (dispatch on its ``kind``)."""
+    if not isinstance(d, Mapping):
+        raise InvalidParameterError(f"a term must be a mapping with a 'kind', got {type(d).__name__}")
+    kind = d.get("kind")
+    if kind not in TERMS:
+        raise InvalidParameterError(f"unknown term kind {kind!r}; the terms are {', '.join(TERMS)}")
+    return TERMS[str(kind)].from_dict(d)
+
+
+def core_terms(terms: Iterable[Term]) -> dict[str, float]:
+    """``{code name: value}`` (plus ``coulomb_smoothing``) as the simulation core takes them."""
+    out: dict[str, float] = {}
+    for t in terms:
+        out[t.kind] = t.value
+        if isinstance(t, Coulomb):
+            out["coulomb_smoothing"] = t.smoothing
+    return out

@@ -1,0 +1,820 @@
+//! Time-domain simulation of the augmented model (`docs/design.md` §9.4): the Wiener system of §1
+//! with the physical terms of §9.1,
+//!
+//! ```text
+//! y = y0 + Lag_tau[ w + k u + c udot + m uddot + f tanh(udot / (eps Vmax)) ],
+//! wdot = alpha xpdot - beta |xpdot| |w|^(mu-1) w - gamma xpdot |w|^mu - delta xpdot |w|^(mu-1) w,
+//! xp = Play_b[x],
+//! ```
+//!
+//! i.e. with alpha = 1 the generalised Bouc-Wen rate of §9.2,
+//! `wdot = xpdot [1 - |w|^mu (beta sgn(xpdot w) + gamma + delta sgn(w))]` (the asymmetry is the
+//! `sgn(w)` term of Song & Der Kiureghian, J. Eng. Mech. 132(6), 2006), driven by the play operator
+//! (backlash of half-width `b`) of `x`. With `G -> alpha G` the map `delta -> delta/alpha`,
+//! `b -> alpha b` leaves `y` unchanged. `u` is the plant's (undelayed) input: analytic for a sine,
+//! the Catmull-Rom interpolant of §1 for samples; `Vmax = |U| omega` for a sine and the exact
+//! maximum of the interpolant's `|udot|` for samples.
+//!
+//! The plain simulation ([`super::simulate`]) is not touched: this is a separate integrator chosen
+//! once per simulation, and when no term needs a state (no asymmetry, play or lag) the plain one is
+//! called and the output terms are added at the samples, so `x` and `w` stay bit-identical.
+//!
+//! Scheme, per RK4 step `[t, t + h]` (classical RK4 on `[xs, w, xp]`, §1):
+//! - **play**: the mode is frozen over the step from its start: *up* when `x - xp >= b` and
+//!   `xdot > 0`, *down* when `x - xp <= -b` and `xdot < 0`, else *dwell*. In the up (down) mode
+//!   `xpdot = max(xdot, 0)` (`min(xdot, 0)`) at every stage, in the dwell mode 0. After the step
+//!   `xp` is clamped into `[x - b, x + b]` (the exact play operator for a monotone step), and the
+//!   clamped travel `dxp` is fed through the rate-independent path map `dw/dxp` (one RK4 step in
+//!   `xp`), so that an engagement inside a dwell step moves `w` too. The scheme is fourth order
+//!   between events; a step holding a reversal or an engagement costs `O(h^2)` locally, so with two
+//!   of each per period the global error is `O(h^2)`, as the plain integrator's own kinks at the
+//!   reversals of x (measured on a first-order G: w's error falls 4-6x per halving of h, with or
+//!   without play).
+//!   `b = 0` is the identity (`xp = x`, no state). `xp(0) = clamp(0, x(0) - b, x(0) + b)`.
+//! - **sensor lag** `tau ysdot = F - ys`, `ys(0) = 0`: `ys` does not feed back, so it is integrated
+//!   exponentially over each step (exponential time differencing, as in the final stage of Cox &
+//!   Matthews' ETDRK4, J. Comput. Phys. 176, 2002) with `F` replaced by the quadratic through
+//!   `F_0 = F(t)`, `F_m = F(t + h/2)`, `F_1 = F(t + h)`: `ys+ = e^-r ys + r [c_0 F_0 + c_m F_m +
+//!   c_1 F_1]`, `r = h/tau`, `c_0 = phi_1 - 3 phi_2 + 4 phi_3`, `c_m = 4 phi_2 - 8 phi_3`,
+//!   `c_1 = 4 phi_3 - phi_2` at `-r`. `F_0`, `F_1` use the accepted states, `w(t + h/2)` the RK4
+//!   step's third-order continuous extension `w + h (5 k_1 + 4 k_2 + 4 k_3 - k_4)/24`. It is exact
+//!   for the decay, stable for every `tau > 0` (explicit RK4 would blow up for `h > 2.79 tau`),
+//!   tends to Simpson's weights as `r -> 0` and to `ys = F` as `r -> inf` (so a vanishing lag
+//!   gives the lag-free output). `tau = 0` is no lag (`y` from `F` at the samples).
+//! - the **output terms** are evaluated at the sample times (and, inside `F`, at the stage times).
+
+use super::{check_dt, simulate, try_zeros, Hermite, Input, Simulation, Sine, Source};
+use crate::bouc_wen::{sgn, BoucWen};
+use crate::error::{finite, CoreError, Result};
+use crate::linear::{Companion, TransferFunction};
+
+/// Default `eps` of the smoothed Coulomb sign: 1 % of the peak input velocity (§9.1).
+pub const COULOMB_SMOOTHING: f64 = 0.01;
+
+/// Largest admissible `eps` of the smoothed Coulomb sign: beyond half the peak velocity the
+/// `tanh` no longer resembles a sign.
+pub const COULOMB_SMOOTHING_MAX: f64 = 0.5;
+
+/// Relative slack of the play's engagement test `|x - xp| >= b`: after a clamp `x - xp` equals `b`
+/// only to the rounding of `x`.
+const PLAY_ENGAGE_RTOL: f64 = 1e-12;
+
+/// Below this `r = h/tau` the `phi` functions of the lag are summed as Taylor series (the closed
+/// forms cancel there); [`PHI_TERMS`] terms make the truncation below `1/23! < 1e-22`.
+const PHI_SERIES_BELOW: f64 = 1.0;
+const PHI_TERMS: usize = 20;
+
+/// Names accepted by [`Terms::from_named`], in the order of the §9.1 table (plus the Coulomb
+/// smoothing).
+pub const TERM_NAMES: [&str; 9] = [
+    "offset",
+    "stiffness",
+    "viscous",
+    "inertia",
+    "coulomb",
+    "coulomb_smoothing",
+    "sensor_lag",
+    "asymmetry",
+    "play",
+];
+
+/// Parameters of the §9.1 terms; an absent term is 0 (which is also what a zero parameter
+/// means physically: `Play(0)` is the identity, `SensorLag(0)` no lag).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Terms {
+    /// Output offset `y0` (units of `y`).
+    pub offset: f64,
+    /// Parallel stiffness `k` (`[y]/[u]`).
+    pub stiffness: f64,
+    /// Viscous damping `c` (`[y] s/[u]`).
+    pub viscous: f64,
+    /// Inertia `m` (`[y] s^2/[u]`).
+    pub inertia: f64,
+    /// Coulomb friction level `f` (units of `y`).
+    pub coulomb: f64,
+    /// `eps` of `tanh(udot / (eps Vmax))`, in `(0, 0.5]`.
+    pub coulomb_smoothing: f64,
+    /// Sensor lag `tau` (s), `>= 0`.
+    pub sensor_lag: f64,
+    /// Asymmetry `delta` (`1/[w]^mu`), `|delta| < beta + gamma`.
+    pub asymmetry: f64,
+    /// Play half-width `b` (units of `x`), `>= 0`.
+    pub play: f64,
+}
+
+impl Default for Terms {
+    fn default() -> Self {
+        Self {
+            offset: 0.0,
+            stiffness: 0.0,
+            viscous: 0.0,
+            inertia: 0.0,
+            coulomb: 0.0,
+            coulomb_smoothing: COULOMB_SMOOTHING,
+            sensor_lag: 0.0,
+            asymmetry: 0.0,
+            play: 0.0,
+        }
+    }
+}
+
+impl Terms {
+    /// Terms from `(code name, value)` pairs (names of [`TERM_NAMES`]); missing ones are absent.
+    ///
+    /// Errors: [`CoreError::InvalidParameter`] for an unknown name. Values are checked by
+    /// [`Terms::validate`].
+    pub fn from_named<'a>(pairs: impl IntoIterator<Item = (&'a str, f64)>) -> Result<Self> {
+        let mut t = Self::default();
+        for (name, v) in pairs {
+            let slot = match name {
+                "offset" => &mut t.offset,
+                "stiffness" => &mut t.stiffness,
+                "viscous" => &mut t.viscous,
+                "inertia" => &mut t.inertia,
+                "coulomb" => &mut t.coulomb,
+                "coulomb_smoothing" => &mut t.coulomb_smoothing,
+                "sensor_lag" => &mut t.sensor_lag,
+                "asymmetry" => &mut t.asymmetry,
+                "play" => &mut t.play,
+                other => {
+                    return Err(CoreError::InvalidParameter(format!(
+                        "unknown term {other:?}; the terms are {}",
+                        TERM_NAMES.join(", ")
+                    )))
+                }
+            };
+            *slot = v;
+        }
+        Ok(t)
+    }
+
+    /// Checks the §9.1 admissibility against the hysteresis `bw`: all finite, `tau >= 0`,
+    /// `b >= 0`, `0 < eps <= 0.5`, `|delta| < beta + gamma`.
+    ///
+    /// Errors: [`CoreError::NonFinite`], [`CoreError::InvalidParameter`].
+    pub fn validate(&self, bw: &BoucWen) -> Result<()> {
+        for (name, v) in [
+            ("offset", self.offset),
+            ("stiffness", self.stiffness),
+            ("viscous", self.viscous),
+            ("inertia", self.inertia),
+            ("coulomb", self.coulomb),
+            ("coulomb_smoothing", self.coulomb_smoothing),
+            ("sensor_lag", self.sensor_lag),
+            ("asymmetry", self.asymmetry),
+            ("play", self.play),
+        ] {
+            finite(name, v)?;
+        }
+        if self.sensor_lag < 0.0 {
+            return Err(CoreError::InvalidParameter(format!(
+                "sensor_lag tau = {} s must be >= 0",
+                self.sensor_lag
+            )));
+        }
+        if self.play < 0.0 {
+            return Err(CoreError::InvalidParameter(format!(
+                "play b = {} must be >= 0 (it is a half-width)",
+                self.play
+            )));
+        }
+        if !(self.coulomb_smoothing > 0.0 && self.coulomb_smoothing <= COULOMB_SMOOTHING_MAX) {
+            return Err(CoreError::InvalidParameter(format!(
+                "coulomb_smoothing eps = {} must be in (0, {COULOMB_SMOOTHING_MAX}]",
+                self.coulomb_smoothing
+            )));
+        }
+        let bound = bw.beta() + bw.gamma();
+        if self.asymmetry.abs() >= bound {
+            return Err(CoreError::InvalidParameter(format!(
+                "asymmetry |delta| = {} must be < beta + gamma = {bound} for a bounded output on \
+                 both sides",
+                self.asymmetry.abs()
+            )));
+        }
+        Ok(())
+    }
+
+    /// `true` when a term needs a state or changes `w` (asymmetry, play, sensor lag).
+    pub fn is_dynamic(&self) -> bool {
+        self.asymmetry != 0.0 || self.play > 0.0 || self.sensor_lag > 0.0
+    }
+}
+
+/// Simulated signals with terms, on the output grid `t_k = k dt`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TermSimulation {
+    /// Linear output `x_k` (units of `x`).
+    pub x: Vec<f64>,
+    /// Hysteresis output `w_k` (driven by the played `xp`).
+    pub w: Vec<f64>,
+    /// Measured output `y_k` before noise (units of `y`).
+    pub y: Vec<f64>,
+}
+
+/// Simulates the augmented model (§9.4): `tf` -> play -> generalised Bouc-Wen `bw` + `delta`,
+/// plus the output terms and the sensor lag, driven by `input`.
+///
+/// Grid, `substeps` and the initial state as in [`simulate`]; `xp(0) = clamp(0, x(0) ± b)`,
+/// `ys(0) = 0`. Returns `x`, `w`, `y`, each of length `n_samples`.
+///
+/// Errors: those of [`simulate`], then [`Terms::validate`]'s.
+pub fn simulate_with_terms(
+    tf: &TransferFunction,
+    bw: &BoucWen,
+    terms: &Terms,
+    input: Input<'_>,
+    dt: f64,
+    n_samples: usize,
+    substeps: usize,
+) -> Result<TermSimulation> {
+    input.validate()?;
+    let dt = check_dt(dt)?;
+    if substeps < 1 {
+        return Err(CoreError::InvalidParameter(format!(
+            "substeps = {substeps} must be >= 1"
+        )));
+    }
+    if n_samples < 1 {
+        return Err(CoreError::InvalidParameter(format!(
+            "n_samples = {n_samples} must be >= 1"
+        )));
+    }
+    terms.validate(bw)?;
+    match input {
+        Input::Sine { amplitude, omega } => {
+            let src = Sine {
+                amplitude,
+                omega,
+                neg_amplitude_omega: -amplitude * omega,
+            };
+            run(tf, bw, terms, input, &src, dt, n_samples, substeps)
+        }
+        Input::Sampled { u } => {
+            let src = Hermite::new(u, dt);
+            run(tf, bw, terms, input, &src, dt, n_samples, substeps)
+        }
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
+fn run<S: Derivatives>(
+    tf: &TransferFunction,
+    bw: &BoucWen,
+    terms: &Terms,
+    input: Input<'_>,
+    src: &S,
+    dt: f64,
+    n_samples: usize,
+    substeps: usize,
+) -> Result<TermSimulation> {
+    let mech = Mechanical::new(terms, src);
+    if !terms.is_dynamic() {
+        // Nothing changes x or w: the plain integrator, untouched, and the terms at the samples.
+        let Simulation { x, w } = simulate(tf, bw, input, dt, n_samples, substeps)?;
+        let mut y = try_zeros(n_samples)?;
+        for (k, (yk, wk)) in y.iter_mut().zip(&w).enumerate() {
+            *yk = terms.offset + (wk + mech.at(k as f64 * dt));
+        }
+        return Ok(TermSimulation { x, w, y });
+    }
+    let mut out = TermSimulation {
+        x: try_zeros(n_samples)?,
+        w: try_zeros(n_samples)?,
+        y: try_zeros(n_samples)?,
+    };
+    let comp = tf.realize();
+    let sys = Augmented {
+        comp: &comp,
+        alpha: bw.alpha(),
+        beta: bw.beta(),
+        gamma: bw.gamma(),
+        mu: bw.mu(),
+        delta: terms.asymmetry,
+        delay: tf.delay(),
+        src,
+        mech,
+    };
+    sys.integrate(bw.w0(), terms, dt, substeps, &mut out);
+    Ok(out)
+}
+
+/// The input's second derivative and peak rate, beyond the `(u, udot)` of [`Source`].
+trait Derivatives: Source {
+    /// `uddot(tau)` (units of u per s^2), `tau >= 0`.
+    fn second(&self, tau: f64) -> f64;
+    /// `Vmax = max |udot|` over `t >= 0` (units of u per s).
+    fn peak_rate(&self) -> f64;
+}
+
+impl Derivatives for Sine {
+    fn second(&self, tau: f64) -> f64 {
+        self.neg_amplitude_omega * self.omega * (self.omega * tau).cos()
+    }
+
+    fn peak_rate(&self) -> f64 {
+        self.amplitude.abs() * self.omega
+    }
+}
+
+impl Derivatives for Hermite<'_> {
+    /// The right-hand second derivative of the cubic on `[t_k, t_{k+1})` (it jumps at the knots);
+    /// 0 past the last sample.
+    fn second(&self, tau: f64) -> f64 {
+        let last = self.u.len() - 1;
+        let q = tau / self.dt;
+        let kf = q.floor();
+        if kf >= last as f64 {
+            return 0.0;
+        }
+        let k = kf as usize;
+        let s = q - kf;
+        let (u0, u1, m0, m1) = (self.u[k], self.u[k + 1], self.m[k], self.m[k + 1]);
+        let dt = self.dt;
+        ((12.0 * s - 6.0) * u0 + (6.0 - 12.0 * s) * u1) / (dt * dt)
+            + ((6.0 * s - 4.0) * m0 + (6.0 * s - 2.0) * m1) / dt
+    }
+
+    /// Exact: on each interval `udot` is the quadratic `A s^2 + B s + m_k` in `s = (t - t_k)/dt`,
+    /// so its extremes are the knot slopes and an interior vertex.
+    fn peak_rate(&self) -> f64 {
+        let mut peak = 0.0f64;
+        for k in 0..self.u.len() - 1 {
+            let (m0, m1) = (self.m[k], self.m[k + 1]);
+            let slope = (self.u[k + 1] - self.u[k]) / self.dt;
+            let a = 3.0 * (m0 + m1) - 6.0 * slope;
+            let b = 6.0 * slope - 4.0 * m0 - 2.0 * m1;
+            peak = peak.max(m0.abs()).max(m1.abs());
+            if a != 0.0 {
+                let s = -b / (2.0 * a);
+                if s > 0.0 && s < 1.0 {
+                    peak = peak.max((m0 + s * (b + s * a)).abs());
+                }
+            }
+        }
+        peak
+    }
+}
+
+/// The output terms on the measured input: `k u + c udot + m uddot + f tanh(udot/(eps Vmax))`.
+struct Mechanical<'a, S> {
+    src: &'a S,
+    stiffness: f64,
+    viscous: f64,
+    inertia: f64,
+    coulomb: f64,
+    /// `eps Vmax`; 0 when the input never moves (then the friction term is 0).
+    velocity_scale: f64,
+}
+
+impl<'a, S: Derivatives> Mechanical<'a, S> {
+    fn new(terms: &Terms, src: &'a S) -> Self {
+        Self {
+            src,
+            stiffness: terms.stiffness,
+            viscous: terms.viscous,
+            inertia: terms.inertia,
+            coulomb: terms.coulomb,
+            velocity_scale: terms.coulomb_smoothing * src.peak_rate(),
+        }
+    }
+
+    /// The terms at time `t >= 0` (units of y).
+    fn at(&self, t: f64) -> f64 {
+        let (u, udot) = self.src.at(t);
+        let uddot = self.src.second(t);
+        let friction = if self.velocity_scale > 0.0 {
+            self.coulomb * (udot / self.velocity_scale).tanh()
+        } else {
+            0.0
+        };
+        self.stiffness * u + self.viscous * udot + self.inertia * uddot + friction
+    }
+}
+
+/// Play mode of one RK4 step (frozen from the step's start).
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Mode {
+    Up,
+    Down,
+    Dwell,
+}
+
+impl Mode {
+    #[inline]
+    fn rate(self, xdot: f64) -> f64 {
+        match self {
+            Mode::Up => xdot.max(0.0),
+            Mode::Down => xdot.min(0.0),
+            Mode::Dwell => 0.0,
+        }
+    }
+}
+
+/// Weights of the exponential lag step (module header): `(e^-r, r c_0, r c_m, r c_1)`.
+fn lag_weights(r: f64) -> (f64, f64, f64, f64) {
+    if !r.is_finite() {
+        // tau so small that h/tau overflows: the sensor follows F at once.
+        return (0.0, 0.0, 0.0, 1.0);
+    }
+    let z = -r;
+    let (p1, p2, p3) = if r < PHI_SERIES_BELOW {
+        // phi_k(z) = sum_j z^j / (j + k)!, summed from the smallest term.
+        let mut fact = [1.0f64; PHI_TERMS + 4];
+        for i in 1..fact.len() {
+            fact[i] = fact[i - 1] * i as f64;
+        }
+        let phi = |k: usize| {
+            let mut acc = 0.0;
+            for j in (0..PHI_TERMS).rev() {
+                acc = acc * z + 1.0 / fact[j + k];
+            }
+            acc
+        };
+        (phi(1), phi(2), phi(3))
+    } else {
+        let p1 = z.exp_m1() / z;
+        let p2 = (p1 - 1.0) / z;
+        let p3 = (p2 - 0.5) / z;
+        (p1, p2, p3)
+    };
+    (
+        z.exp(),
+        r * (p1 - 3.0 * p2 + 4.0 * p3),
+        r * (4.0 * p2 - 8.0 * p3),
+        r * (4.0 * p3 - p2),
+    )
+}
+
+/// The augmented right-hand side: linear part, generalised Bouc-Wen with `delta`, the input.
+struct Augmented<'a, S> {
+    comp: &'a Companion,
+    alpha: f64,
+    beta: f64,
+    gamma: f64,
+    mu: f64,
+    delta: f64,
+    delay: f64,
+    src: &'a S,
+    mech: Mechanical<'a, S>,
+}
+
+impl<S: Derivatives> Augmented<'_, S> {
+    /// Delayed input `(v, vdot)` at time `t` (0 before the delay has elapsed).
+    #[inline]
+    fn delayed(&self, t: f64) -> (f64, f64) {
+        let tau = t - self.delay;
+        if tau < 0.0 {
+            (0.0, 0.0)
+        } else {
+            self.src.at(tau)
+        }
+    }
+
+    /// `wdot = alpha xpdot - beta |xpdot| |w|^(mu-1) w - gamma xpdot |w|^mu
+    /// - delta xpdot |w|^(mu-1) w` (positively homogeneous of degree 1 in `xpdot`, so it is also
+    /// `dw` for a path increment `dxp`).
+    #[inline]
+    fn rate(&self, xpdot: f64, w: f64) -> f64 {
+        let wmu = w.abs().powf(self.mu);
+        let sw = sgn(w);
+        self.alpha * xpdot
+            - self.beta * xpdot.abs() * sw * wmu
+            - self.gamma * xpdot * wmu
+            - self.delta * xpdot * sw * wmu
+    }
+
+    /// `xsdot` into `dxs` and `xdot`, at state `xs` and delayed input `(v, vdot)`.
+    #[inline]
+    fn linear(&self, xs: &[f64], (v, vdot): (f64, f64), dxs: &mut [f64]) -> f64 {
+        self.comp.state_derivative(xs, v, dxs);
+        self.comp.output_row(dxs) + self.comp.d * vdot
+    }
+
+    /// `w` moved along the hysteresis path by the play's clamped travel `dxp` (one RK4 step of
+    /// `dw/dsigma = rate(dxp, w)`, `sigma in [0, 1]`).
+    fn path(&self, w: f64, dxp: f64) -> f64 {
+        let k1 = self.rate(dxp, w);
+        let k2 = self.rate(dxp, w + 0.5 * k1);
+        let k3 = self.rate(dxp, w + 0.5 * k2);
+        let k4 = self.rate(dxp, w + k3);
+        w + (k1 + 2.0 * k2 + 2.0 * k3 + k4) / 6.0
+    }
+
+    fn integrate(
+        &self,
+        w0: f64,
+        terms: &Terms,
+        dt: f64,
+        substeps: usize,
+        out: &mut TermSimulation,
+    ) {
+        let n = self.comp.order();
+        let d = self.comp.d;
+        let h = dt / substeps as f64;
+        let half_h = 0.5 * h;
+        let h_sixth = h / 6.0;
+        let b = terms.play;
+        let has_play = b > 0.0;
+        let tau = terms.sensor_lag;
+        let has_lag = tau > 0.0;
+        let (decay, l0, lm, l1) = if has_lag {
+            lag_weights(h / tau)
+        } else {
+            (0.0, 0.0, 0.0, 0.0)
+        };
+
+        let mut xs = vec![0.0; n];
+        let mut w = w0;
+        let x0 = self.comp.output_row(&xs) + d * self.delayed(0.0).0;
+        let mut xp = 0.0f64.max(x0 - b).min(x0 + b);
+        let mut ys = 0.0;
+        let (mut k1, mut k2, mut k3, mut k4, mut tmp) = (
+            vec![0.0; n],
+            vec![0.0; n],
+            vec![0.0; n],
+            vec![0.0; n],
+            vec![0.0; n],
+        );
+        let last = out.x.len() - 1;
+        for k in 0..out.x.len() {
+            let t = k as f64 * dt;
+            out.x[k] = self.comp.output_row(&xs) + d * self.delayed(t).0;
+            out.w[k] = w;
+            out.y[k] = terms.offset + if has_lag { ys } else { w + self.mech.at(t) };
+            if k == last {
+                break;
+            }
+            for s in 0..substeps {
+                let ts = t + s as f64 * h;
+                let (tm, te) = (ts + half_h, ts + h);
+                let (in1, inm, in4) = (self.delayed(ts), self.delayed(tm), self.delayed(te));
+
+                let xdot1 = self.linear(&xs, in1, &mut k1);
+                let mode = if has_play {
+                    let x = self.comp.output_row(&xs) + d * in1.0;
+                    let e = x - xp;
+                    let slack = PLAY_ENGAGE_RTOL * (b + x.abs());
+                    if xdot1 > 0.0 && e >= b - slack {
+                        Mode::Up
+                    } else if xdot1 < 0.0 && e <= -b + slack {
+                        Mode::Down
+                    } else {
+                        Mode::Dwell
+                    }
+                } else {
+                    Mode::Up // unused: without play xpdot = xdot
+                };
+                let played = |xdot: f64| if has_play { mode.rate(xdot) } else { xdot };
+
+                let p1 = played(xdot1);
+                let kw1 = self.rate(p1, w);
+                let w2 = w + half_h * kw1;
+                axpy(&mut tmp, &xs, half_h, &k1);
+                let p2 = played(self.linear(&tmp, inm, &mut k2));
+                let kw2 = self.rate(p2, w2);
+                let w3 = w + half_h * kw2;
+                axpy(&mut tmp, &xs, half_h, &k2);
+                let p3 = played(self.linear(&tmp, inm, &mut k3));
+                let kw3 = self.rate(p3, w3);
+                let w4 = w + h * kw3;
+                axpy(&mut tmp, &xs, h, &k3);
+                let p4 = played(self.linear(&tmp, in4, &mut k4));
+                let kw4 = self.rate(p4, w4);
+
+                // Third-order continuous extension of the RK4 step at its midpoint.
+                let w_mid = w + h * (5.0 * kw1 + 4.0 * (kw2 + kw3) - kw4) / 24.0;
+                let f0 = w + self.mech.at(ts);
+                for ((((x, a), b2), c3), d4) in xs.iter_mut().zip(&k1).zip(&k2).zip(&k3).zip(&k4) {
+                    *x += h_sixth * (a + 2.0 * b2 + 2.0 * c3 + d4);
+                }
+                w += h_sixth * (kw1 + 2.0 * kw2 + 2.0 * kw3 + kw4);
+                if has_play {
+                    xp += h_sixth * (p1 + 2.0 * p2 + 2.0 * p3 + p4);
+                    let x_end = self.comp.output_row(&xs) + d * in4.0;
+                    let clamped = xp.max(x_end - b).min(x_end + b);
+                    let travel = clamped - xp;
+                    if travel != 0.0 {
+                        w = self.path(w, travel);
+                    }
+                    xp = clamped;
+                }
+                if has_lag {
+                    let fm = w_mid + self.mech.at(tm);
+                    let f1 = w + self.mech.at(te);
+                    ys = decay * ys + (l0 * f0 + lm * fm + l1 * f1);
+                }
+            }
+        }
+    }
+}
+
+/// `xs + k * hk`, elementwise into `out` (all of the same length).
+#[inline]
+fn axpy(out: &mut [f64], xs: &[f64], hk: f64, k: &[f64]) {
+    for ((o, x), ki) in out.iter_mut().zip(xs).zip(k) {
+        *o = x + hk * ki;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+
+    fn sine(amplitude: f64, omega: f64) -> Input<'static> {
+        Input::Sine { amplitude, omega }
+    }
+
+    fn plant() -> (TransferFunction, BoucWen) {
+        (
+            TransferFunction::new(&[1.0], &[0.2, 1.0], 0.05).unwrap(),
+            BoucWen::new(1.0, 1.0, 0.5, 1.5, 0.0).unwrap(),
+        )
+    }
+
+    #[test]
+    fn without_dynamic_terms_x_and_w_are_the_plain_ones() {
+        let (tf, bw) = plant();
+        let terms = Terms {
+            offset: 0.3,
+            stiffness: 0.5,
+            viscous: 0.1,
+            inertia: 0.01,
+            coulomb: 0.2,
+            ..Terms::default()
+        };
+        let (u, om, dt) = (1.3, 2.0, 0.02);
+        let a = simulate(&tf, &bw, sine(u, om), dt, 400, 3).unwrap();
+        let b = simulate_with_terms(&tf, &bw, &terms, sine(u, om), dt, 400, 3).unwrap();
+        assert_eq!((a.x, a.w.clone()), (b.x, b.w));
+        for k in 0..400 {
+            let t = k as f64 * dt;
+            let (c, s) = ((om * t).cos(), (om * t).sin());
+            let extra = 0.5 * u * c - 0.1 * u * om * s - 0.01 * u * om * om * c
+                + 0.2 * (-u * om * s / (0.01 * u * om)).tanh();
+            assert_relative_eq!(b.y[k], 0.3 + a.w[k] + extra, epsilon = 1e-13);
+        }
+    }
+
+    #[test]
+    fn zero_dynamic_terms_reproduce_the_plain_path() {
+        // delta = 0 and b = 0 on the augmented integrator: only rounding apart from simulate().
+        let (tf, bw) = plant();
+        let terms = Terms {
+            sensor_lag: 1e-300, // forces the augmented path; h/tau overflows -> ys = F
+            ..Terms::default()
+        };
+        let a = simulate(&tf, &bw, sine(1.0, 3.0), 0.01, 600, 2).unwrap();
+        let b = simulate_with_terms(&tf, &bw, &terms, sine(1.0, 3.0), 0.01, 600, 2).unwrap();
+        for k in 0..600 {
+            assert_relative_eq!(a.x[k], b.x[k], epsilon = 1e-14);
+            assert_relative_eq!(a.w[k], b.w[k], epsilon = 1e-13);
+        }
+        // with ys = F (after the first sample, where ys(0) = 0)
+        for k in 1..600 {
+            assert_relative_eq!(b.y[k], b.w[k], epsilon = 1e-13);
+        }
+    }
+
+    #[test]
+    fn lag_weights_limits() {
+        // r -> 0: Simpson's weights (1, 4, 1)/6 scaled by r.
+        let r = 1e-6;
+        let (e, c0, cm, c1) = lag_weights(r);
+        assert_relative_eq!(e, (-r).exp(), max_relative = 1e-15);
+        assert_relative_eq!(c0 / r, 1.0 / 6.0, max_relative = 1e-5);
+        assert_relative_eq!(cm / r, 2.0 / 3.0, max_relative = 1e-5);
+        assert_relative_eq!(c1 / r, 1.0 / 6.0, max_relative = 1e-5);
+        // Exact for quadratic F, on both sides of the series switch. Constant F = 1:
+        // ys+ = e ys + (1 - e). Linear F = s/h from ys(0) = 0: 1 - (1 - e^-r)/r. Quadratic
+        // F = (s/h)^2: 1 - 2/r + 2 (1 - e^-r)/r^2.
+        for r in [0.3, 0.999, 1.0, 2.5, 40.0] {
+            let (e, c0, cm, c1) = lag_weights(r);
+            assert_relative_eq!(c0 + cm + c1, 1.0 - e, max_relative = 1e-13);
+            assert_relative_eq!(0.5 * cm + c1, 1.0 - (1.0 - e) / r, max_relative = 1e-13);
+            let quad = 1.0 - 2.0 / r + 2.0 * (1.0 - e) / (r * r);
+            assert_relative_eq!(0.25 * cm + c1, quad, max_relative = 1e-12);
+        }
+        assert_eq!(lag_weights(f64::INFINITY), (0.0, 0.0, 0.0, 1.0));
+    }
+
+    #[test]
+    fn hermite_second_derivative_and_peak_rate() {
+        // A cubic on the interior is not reproduced by Catmull-Rom, but a quadratic is:
+        // u = t^2 gives uddot = 2 in the interior intervals and max |udot| = 2 t at the end slope.
+        let dt = 0.1;
+        let u: Vec<f64> = (0..30).map(|k| (k as f64 * dt).powi(2)).collect();
+        let src = Hermite::new(&u, dt);
+        for k in 1..27 {
+            for s in [0.0, 0.25, 0.5, 0.9] {
+                assert_relative_eq!(src.second((k as f64 + s) * dt), 2.0, epsilon = 1e-9);
+            }
+        }
+        assert_eq!(src.second(40.0), 0.0);
+        // Largest slope: on the last interval, between the central slope 5.6 and the one-sided
+        // end slope 5.7 the cubic's slope peaks at its vertex, 5.7 + 1/30 (by hand).
+        assert_relative_eq!(src.peak_rate(), 5.7 + 1.0 / 30.0, max_relative = 1e-12);
+        // A sine's peak comes from interior vertices: it bounds a dense scan of the interpolant's
+        // slope and is attained by it, and it is U omega up to the Catmull-Rom slope error
+        // (omega dt)^2/6 = 1.5e-4.
+        let (amp, om, dt) = (2.0, 3.0, 0.01);
+        let us: Vec<f64> = (0..400).map(|k| amp * (om * k as f64 * dt).cos()).collect();
+        let src = Hermite::new(&us, dt);
+        let scan = (0..400_000)
+            .map(|i| src.at(i as f64 * dt / 1000.0).1.abs())
+            .fold(0.0, f64::max);
+        assert!(
+            src.peak_rate() >= scan * (1.0 - 1e-14),
+            "{} < {scan}",
+            src.peak_rate()
+        );
+        assert_relative_eq!(src.peak_rate(), scan, max_relative = 1e-7);
+        assert_relative_eq!(src.peak_rate(), amp * om, max_relative = 2e-4);
+        let s = Sine {
+            amplitude: -amp,
+            omega: om,
+            neg_amplitude_omega: amp * om,
+        };
+        assert_eq!(s.peak_rate(), amp * om);
+    }
+
+    #[test]
+    fn asymmetry_saturates_at_the_two_levels() {
+        // A large slow sine drives w to (beta + gamma +- delta)^(-1/mu) at the top and bottom.
+        let tf = TransferFunction::new(&[1.0], &[1.0], 0.0).unwrap();
+        let bw = BoucWen::new(1.0, 1.0, 0.5, 2.0, 0.0).unwrap();
+        let terms = Terms {
+            asymmetry: 0.6,
+            ..Terms::default()
+        };
+        let (amp, om) = (30.0, 1.0);
+        let n = 2000;
+        let dt = 4.0 * std::f64::consts::PI / om / n as f64;
+        let sim = simulate_with_terms(&tf, &bw, &terms, sine(amp, om), dt, n, 4).unwrap();
+        let top = sim.w.iter().cloned().fold(f64::MIN, f64::max);
+        let bottom = sim.w.iter().cloned().fold(f64::MAX, f64::min);
+        assert_relative_eq!(top, (1.5f64 + 0.6).powf(-0.5), max_relative = 1e-6);
+        assert_relative_eq!(bottom, -(1.5f64 - 0.6).powf(-0.5), max_relative = 1e-6);
+    }
+
+    #[test]
+    fn validation() {
+        let (tf, bw) = plant();
+        let bad = |t: Terms, text: &str, nonfinite: bool| {
+            let e = simulate_with_terms(&tf, &bw, &t, sine(1.0, 1.0), 0.1, 10, 1).unwrap_err();
+            if nonfinite {
+                assert!(matches!(e, CoreError::NonFinite(_)), "{e}");
+            } else {
+                assert!(matches!(e, CoreError::InvalidParameter(_)), "{e}");
+            }
+            assert!(e.to_string().contains(text), "{e}");
+        };
+        let d = Terms::default();
+        bad(
+            Terms {
+                sensor_lag: -1.0,
+                ..d
+            },
+            "sensor_lag",
+            false,
+        );
+        bad(Terms { play: -0.1, ..d }, "play", false);
+        bad(
+            Terms {
+                coulomb_smoothing: 0.0,
+                ..d
+            },
+            "coulomb_smoothing",
+            false,
+        );
+        bad(
+            Terms {
+                coulomb_smoothing: 0.6,
+                ..d
+            },
+            "coulomb_smoothing",
+            false,
+        );
+        bad(
+            Terms {
+                asymmetry: -1.5,
+                ..d
+            },
+            "beta + gamma",
+            false,
+        );
+        bad(
+            Terms {
+                viscous: f64::NAN,
+                ..d
+            },
+            "viscous",
+            true,
+        );
+        let e = Terms::from_named([("offset", 1.0), ("spring", 2.0)]).unwrap_err();
+        assert!(e.to_string().contains("\"spring\""), "{e}");
+        let t = Terms::from_named([("play", 0.2), ("coulomb_smoothing", 0.05)]).unwrap();
+        assert_eq!((t.play, t.coulomb_smoothing, t.offset), (0.2, 0.05, 0.0));
+    }
+}
