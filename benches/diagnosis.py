@@ -47,7 +47,7 @@ def _held_out_ratio(d: Any, term: Optional[str]) -> float:
     from bouc_wen_id.diagnosis.fitting import Scale
 
     sx = scaled(list(d.experiments), Scale(s["y"], s["u"]))
-    true_fit = d.plain_fit if term is None else fit_with(sx, d.plain_fit, term)
+    true_fit = d.plain_fit if term is None else fit_with(sx, d.plain_fit, term, d.settings["substeps"])
     if true_fit is None:
         return math.nan
     ho = held_out(sx, chosen, true_fit, d.settings["substeps"])

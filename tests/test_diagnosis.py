@@ -178,7 +178,7 @@ def test_plain_data_is_adequate_and_names_nothing(plain_diagnosis: bw.diagnosis.
 def test_hidden_term_is_named_with_its_value(term: object, value: float) -> None:
     d = bw.diagnose(_recs((term,)))
     assert d.status == "explained", d.summary()
-    assert d.named_terms == (type(term).name,)  # type: ignore[attr-defined]
+    assert d.named_terms == (type(term).kind,)  # type: ignore[attr-defined]
     got = d.named[0]
     assert abs(got.value - value) < 4 * got.standard_error, d.summary()
     assert d.held_out is not None and d.held_out.improves

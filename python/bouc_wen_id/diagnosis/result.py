@@ -28,21 +28,14 @@ TERM_LABELS = {
     "asymmetry": "asymmetry",
     "play": "play (backlash)",
 }
-#: Parameter symbol and unit template ({y}: output unit, {u}: input unit) of each term.
-TERM_UNITS = {
-    "offset": ("y0", "{y}"),
-    "stiffness": ("k", "{y}/{u}"),
-    "viscous": ("c", "{y} s/{u}"),
-    "inertia": ("m", "{y} s^2/{u}"),
-    "coulomb": ("f", "{y}"),
-    "sensor_lag": ("tau", "s"),
-    "asymmetry": ("delta", "1/{y}^mu"),
-    "play": ("b", "{y} (x units)"),
-}
 
 
-def _unit(template: str, y_unit: str, u_unit: str) -> str:
-    return template.replace("{y}", y_unit or "[y]").replace("{u}", u_unit or "[u]")
+def term_symbol_unit(term: str, y_unit: str, u_unit: str) -> tuple[str, str]:
+    """The parameter's symbol and its units with the output's and the input's units filled in."""
+    from ..terms import TERMS
+
+    cls = TERMS[term]
+    return cls.symbol, cls.units(y_unit or "[y]", u_unit or "[u]")
 
 
 @dataclass(frozen=True)
@@ -177,10 +170,11 @@ class Diagnosis:
         if self.held_out is not None:
             lines.append("")
             lines.append("held-out NRMSE (one experiment left out, physics fitted on the others):")
-            for j, b, a in zip(self.held_out.folds, self.held_out.nrmse_before, self.held_out.nrmse_after):
+            hold = self.held_out
+            for j, nb, na in zip(hold.folds, hold.nrmse_before, hold.nrmse_after):
                 src = self.experiments[j].source
                 lines.append(
-                    f"  {src:<32} plain {b:.4f}  final {a:.4f}  ratio {a / b if b else math.nan:.3f}"
+                    f"  {src:<32} plain {nb:.4f}  final {na:.4f}  ratio {na / nb if nb else math.nan:.3f}"
                 )
         lines.append("")
         lines.append(f"where the plain model misses: {self.before.describe() or 'nowhere above the noise'}")

@@ -12,19 +12,14 @@ import numpy as np
 from ..augmented import TERM_NAMES, AugExperiment, AugFit
 from ..errors import InvalidParameterError
 from .data import DiagExperiment, prepare
-from .fitting import Scale, fit_plain, physical, scale_of, scaled
+from .fitting import Scale, fit_plain, physical, scale_of, scaled, substeps_for
 from .locate import Localisation, adequacy_p, locate
-from .result import TERM_UNITS, Diagnosis, ModelSummary, NamedTerm, Status, _unit
-from .select import ALPHA, forward_select, held_out
+from .result import Diagnosis, ModelSummary, NamedTerm, Status, term_symbol_unit
+from .select import ALPHA, FoldCache, forward_select, held_out
 
 #: The named terms must remove at least this share of the plain model's excess residual for the verdict
 #: "explained" when the final model is still rejected; below it the verdict is "unexplained".
 EXPLAINED_FRACTION = 0.9
-
-
-def _substeps(p: int) -> int:
-    """RK4 steps per sample of the steady loops: a step of at most 2 pi/2048 rad (as identify)."""
-    return max(2, math.ceil(2048 / p))
 
 
 def _check_candidates(candidates: Optional[Sequence[str]]) -> tuple[str, ...]:
@@ -55,8 +50,8 @@ def _summary(
     terms = []
     for t in par.terms:
         v, se = physical(fit, s, t)
-        sym, tmpl = TERM_UNITS[t]
-        terms.append(NamedTerm(t, sym, v, se, _unit(tmpl, *units)))
+        sym, unit = term_symbol_unit(t, *units)
+        terms.append(NamedTerm(t, sym, v, se, unit))
     dof = sum(e.ybar.size for e in sx) - (3 + len(par.terms) + 2 * len(sx))
     noise_dof = sum(e.noise_dof for e in exps)
     nr = []
@@ -150,7 +145,7 @@ def diagnose(
     exps = prepare(experiments)
     s = scale_of(exps)
     sx = scaled(exps, s)
-    substeps = max(_substeps(e.ybar.size) for e in sx)
+    substeps = max(substeps_for(e.ybar.size) for e in sx)
     noise_dof = sum(e.noise_dof for e in exps)
 
     def adequate(fit: AugFit) -> bool:
@@ -158,10 +153,11 @@ def diagnose(
         p = adequacy_p(fit.cost, dof, noise_dof)
         return bool(math.isfinite(p) and p >= alpha)
 
-    plain = fit_plain(experiments, exps, s)
+    plain = fit_plain(experiments, exps, s, substeps)
     before = _localise(exps, sx, plain, s)
+    cache: FoldCache = {}
     final, steps = forward_select(
-        sx, plain, cands, adequate, substeps, alpha=alpha, use_held_out=held_out_test
+        sx, plain, cands, adequate, substeps, alpha=alpha, use_held_out=held_out_test, cache=cache
     )
     after = _localise(exps, sx, final, s)
     units = (y_unit, u_unit)
@@ -178,7 +174,7 @@ def diagnose(
     named = final_sum.terms if status == "explained" else ()
     partial = final_sum.terms if status == "unexplained" else ()
     alternatives = tuple(a for st in steps for a in st.alternatives)
-    ho = held_out(sx, plain, final, substeps) if final.params.terms else None
+    ho = held_out(sx, plain, final, substeps, cache) if final.params.terms else None
     return Diagnosis(
         status=status,
         verdict=_verdict(status, named, partial, after, fraction),

@@ -28,7 +28,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..augmented import AugExperiment, AugFit
-from .fitting import _fit, best_of, fit_own, fit_with, subset
+from .fitting import best_of, fit_from, fit_own, fit_with, subset
 
 FloatArray = NDArray[np.float64]
 
@@ -168,32 +168,49 @@ def folds(m: int) -> list[int]:
     return sorted({int(round(v)) for v in np.linspace(0, m - 1, MAX_FOLDS)})
 
 
+#: Held-out results per (model, fold), so a model's folds are fitted once per diagnosis.
+FoldCache = dict[tuple[int, int], Optional[tuple[float, FloatArray]]]
+
+
+def _fold(
+    exps: Sequence[AugExperiment], model: AugFit, j: int, substeps: int, cache: FoldCache
+) -> Optional[tuple[float, FloatArray]]:
+    """Fit ``model``'s physics without experiment j, then only j's own (g, phi): (cost, output) on j."""
+    key = (id(model), j)
+    if key not in cache:
+        keep = [i for i in range(len(exps)) if i != j]
+        sub, start = subset(exps, model.params, keep)
+        f = fit_from(sub, start, substeps)
+        g, ph = float(model.params.gains[j]), float(model.params.phases[j])
+        cache[key] = None if f is None else fit_own(exps[j], f.params, g, ph, substeps)
+    return cache[key]
+
+
 def held_out(
-    exps: Sequence[AugExperiment], before: AugFit, after: AugFit, substeps: int
+    exps: Sequence[AugExperiment],
+    before: AugFit,
+    after: AugFit,
+    substeps: int,
+    cache: Optional[FoldCache] = None,
 ) -> Optional[HeldOut]:
-    """Leave-one-experiment-out comparison of two fitted models (design.md 10.4)."""
+    """Leave-one-experiment-out comparison of two fitted models (design.md 10.4).
+
+    ``cache`` keeps each model's folds (keyed by the model object, which must stay alive meanwhile).
+    """
     m = len(exps)
     if m < 2:
         return None
+    memo: FoldCache = {} if cache is None else cache
     cb, ca, nb, na, used = [], [], [], [], []
     for j in folds(m):
-        keep = [i for i in range(m) if i != j]
-        outs = []
-        for model in (before, after):
-            sub, start = subset(exps, model.params, keep)
-            f = _fit(sub, start)
-            if f is None:
-                break
-            cost, y = fit_own(
-                exps[j], f.params, float(model.params.gains[j]), float(model.params.phases[j]), substeps
-            )
-            outs.append((cost, y))
-        if len(outs) != 2:
+        o0 = _fold(exps, before, j, substeps, memo)
+        o1 = _fold(exps, after, j, substeps, memo)
+        if o0 is None or o1 is None:
             continue
         used.append(j)
         e = exps[j]
         spread = float(np.linalg.norm(e.ybar - e.ybar.mean())) or 1.0
-        (c0, y0), (c1, y1) = outs
+        (c0, y0), (c1, y1) = o0, o1
         cb.append(c0)
         ca.append(c1)
         nb.append(float(np.linalg.norm(e.ybar - y0)) / spread)
@@ -217,7 +234,7 @@ def _separating(exps: Sequence[AugExperiment], fa: AugFit, fb: AugFit, substeps:
     best = (0.0, "")
     for i, e in enumerate(exps):
         for mult in (0.5, 2.0, 4.0):
-            ys = []
+            ys: list[FloatArray] = []
             for f in (fa, fb):
                 par = f.params
                 shared = np.concatenate([[par.beta, par.gamma, par.mu], par.values]).astype(np.float64)
@@ -256,8 +273,10 @@ def forward_select(
     substeps: int,
     alpha: float = ALPHA,
     use_held_out: bool = True,
+    cache: Optional[FoldCache] = None,
 ) -> tuple[AugFit, list[Step]]:
     """Forward selection from ``plain``; ``adequate(fit) -> bool`` is the stopping test."""
+    memo: FoldCache = {} if cache is None else cache
     current = plain
     steps: list[Step] = []
     while not adequate(current):
@@ -269,7 +288,7 @@ def forward_select(
         excess = max(c0 - d0, 0.0)
         trials = []
         for t in remaining:
-            f = fit_with(exps, current, t)
+            f = fit_with(exps, current, t, substeps)
             if f is None:
                 trials.append(Trial(t, math.nan, math.nan, math.nan, math.nan, math.nan, math.nan, False))
                 continue
@@ -284,7 +303,7 @@ def forward_select(
         final_trials = {tr.term: tr for tr in trials}
         for tr in order:
             assert tr.fit is not None
-            ho = held_out(exps, current, tr.fit, substeps) if use_held_out else None
+            ho = held_out(exps, current, tr.fit, substeps, memo) if use_held_out else None
             tr2 = Trial(
                 tr.term,
                 tr.cost,
@@ -308,7 +327,7 @@ def forward_select(
                     continue
                 if tr.improvement < ALTERNATIVE_IMPROVEMENT * chosen.improvement:
                     continue
-                both = fit_with(exps, chosen.fit, tr.term)
+                both = fit_with(exps, chosen.fit, tr.term, substeps)
                 rho = _correlation(both, chosen.term, tr.term) if both is not None else math.nan
                 if math.isfinite(rho) and abs(rho) >= ALTERNATIVE_CORRELATION:
                     alternatives.append(
