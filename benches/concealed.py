@@ -161,7 +161,7 @@ def _record(b: Base, y_steady_period: FloatArray, seed: int) -> list[bw.Recordin
     return recs
 
 
-def pinched_period(b: Base, zeta1: float, zeta2: float = 0.2, q: float = 0.1, cycles: int = 6) -> FloatArray:
+def pinched_period(b: Base, zeta1: float, zeta2: float = 0.2, q: float = 0.1, cycles: int = 16) -> FloatArray:
     """The steady loop of Baber-Noori pinching, h(w) = 1 - zeta1 exp(-((w sgn xdot - q)/zeta2)^2)."""
     h = b.plant.hysteresis
     a = b.gains * b.amplitudes

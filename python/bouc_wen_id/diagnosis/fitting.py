@@ -115,14 +115,19 @@ def best_of(fits: Sequence[Optional[AugFit]]) -> Optional[AugFit]:
 
 
 def plain_start(items: Any, exps: Sequence[DiagExperiment], s: Scale) -> list[AugParams]:
-    """Starts for the plain model: the library's own identification, then generic ones (scaled units)."""
+    """Starts for the plain model: the separable (profile) estimate, then generic ones (scaled units).
+
+    The profile estimator is the cheap, data-driven start; the joint refinement that follows is the
+    diagnosis's own (with generic restarts when the start is suspicious, :func:`fit_plain`), so the
+    library's refined identification with its restarts is not run twice.
+    """
     from ..identification import identify
 
     starts: list[AugParams] = []
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            res = identify(_dc_free(items))
+            res = identify(_dc_free(items), method="profile")
         if len(res.experiments) == len(exps):
             mu = res.mu
             starts.append(
@@ -238,9 +243,28 @@ def candidate_starts(exps: Sequence[AugExperiment], fit: AugFit, term: str) -> l
     return [par.with_term(term, 0.0)]
 
 
+#: LM iterations of the screening of several starts (the best is then run to convergence).
+SCREEN_ITER = 20
+
+
 def fit_with(exps: Sequence[AugExperiment], fit: AugFit, term: str, substeps: int) -> Optional[AugFit]:
-    """``fit``'s model plus ``term``, from every start of :func:`candidate_starts`; the best, or None."""
-    return best_of([fit_from(exps, st, substeps) for st in candidate_starts(exps, fit, term)])
+    """``fit``'s model plus ``term`` from the starts of :func:`candidate_starts`; the best, or None.
+
+    The first start that converges to a valid model is kept for a linear output term (its informed start
+    is the least-squares value on the current residual); for the others every start is screened with
+    ``SCREEN_ITER`` iterations and the best is finished.
+    """
+    starts = candidate_starts(exps, fit, term)
+    if term in LINEAR_TERMS:
+        for st in starts:
+            f = fit_from(exps, st, substeps)
+            if f is not None:
+                return f
+        return None
+    screened = best_of([fit_from(exps, st, substeps, max_iter=SCREEN_ITER) for st in starts])
+    if screened is None:
+        return None
+    return best_of([screened, fit_from(exps, screened.params, substeps)])
 
 
 def subset(

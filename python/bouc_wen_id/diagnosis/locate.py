@@ -312,7 +312,9 @@ def _drift(exps: Sequence[DiagExperiment]) -> tuple[list[DriftFinding], bool]:
         p = min(1.0, 2.0 * min(_t_sf2(ht, dof), _t_sf2(dt, dof)))
         ratio = e.spread_var / e.noise_var if e.noise_var > 0 else math.nan
         out.append(DriftFinding(e.source, n, hs, ht, ds, dt, p, ratio))
-    detected = bool(out) and min(d.p_value for d in out) < LEVEL / max(len(out), 1)
+    # Half the level: with the adequacy gate at LEVEL, a plain model at the noise floor is called
+    # "not adequate" in at most about 1.5 LEVEL of null cases.
+    detected = bool(out) and min(d.p_value for d in out) < 0.5 * LEVEL / max(len(out), 1)
     return out, detected
 
 

@@ -89,6 +89,8 @@ def _verdict(
     if status == "explained":
         return "explained by: " + ", ".join(str(t) for t in named) + drift
     where = after.describe() or "spread over the cycle"
+    if after.drift_detected:
+        drift = ""  # describe() says it already
     tail = ""
     if partial:
         tail = (
