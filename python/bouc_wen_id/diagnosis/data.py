@@ -7,8 +7,9 @@ is reduced to
 
 - ``ybar`` with its DC, on the grid ``t_j = j T/P`` whose first sample sits at input phase ``grid_phase``
   (``u_j = U cos(2 pi j/P + grid_phase)``);
-- ``noise_var``: the variance of one raw sample, from differences of neighbouring periods, which a slow
-  drift does not inflate (the spread about the mean period, which the identification uses, it does);
+- ``noise_var``: the variance of one raw sample; for recordings from differences of neighbouring periods,
+  which a slow drift does not inflate (the spread about the mean period, which the identification uses,
+  it does); for lab records the averaging's own;
 - ``spread_var``: that spread-based variance, for the drift comparison;
 - ``dc`` and ``h1``: the DC and the complex fundamental of each period, for the drift test.
 """
@@ -111,49 +112,41 @@ def _from_recording(i: int, rec: Any) -> DiagExperiment:
 
 
 def _from_averaged(ap: Any, t: FloatArray | None, y: FloatArray | None) -> DiagExperiment:
-    """A lab period (any sampling rate); with the raw samples, the per-period record too."""
+    """A lab period (any sampling rate); with the raw samples, the per-period DC and fundamental too.
+
+    The noise floor stays the averaging's (the residual of its harmonic fit over the stretch): a lab record
+    holds too few samples per period for a within-period fit of every harmonic the loop needs, and the
+    drift test on the per-period record is the guard against a floor a drift inflates.
+    """
     ybar = np.asarray(ap.ybar, dtype=np.float64) + float(ap.offset_y)
-    noise_var = spread_var = float(ap.noise_var)
     dc = np.array([float(np.mean(ybar))])
     h1 = np.array([complex(2.0 * np.fft.rfft(ybar)[1] / ybar.size)])
     if t is not None and y is not None:
         omega = float(ap.frequency)
-        period = TWO_PI / omega
-        seg_t = t[ap.start : ap.stop]
+        seg_t = t[ap.start : ap.stop] - float(ap.time_origin)
         seg_y = y[ap.start : ap.stop]
-        # All the harmonics the averaging kept (the signal's), so the within-period residual is noise only.
-        k_fit = max(1, int(ap.harmonics))
-        first = float(ap.time_origin)
-        n_per = int(math.floor((seg_t[-1] - first) / period)) if seg_t.size else 0
-        dcs, h1s, rss, dof = [], [], 0.0, 0
-        for k in range(n_per):
-            sel = (seg_t >= first + k * period) & (seg_t < first + (k + 1) * period)
-            m = int(np.count_nonzero(sel))
-            if m < 2 * k_fit + 4:
+        # Whole periods from the input's phase zero: DC and fundamental by least squares on each.
+        k = np.floor(seg_t * omega / TWO_PI).astype(np.int64)
+        th = omega * seg_t
+        dcs, h1s = [], []
+        for j in range(int(k.min()) if k.size else 0, int(k.max()) if k.size else 0):
+            sel = k == j
+            if np.count_nonzero(sel) < 8:
                 continue
-            th = omega * (seg_t[sel] - first)
-            cols = [np.ones(m)]
-            for h in range(1, k_fit + 1):
-                cols += [np.cos(h * th), np.sin(h * th)]
-            basis = np.column_stack(cols)
-            coef, res, *_ = np.linalg.lstsq(basis, seg_y[sel], rcond=None)
+            basis = np.column_stack([np.ones(np.count_nonzero(sel)), np.cos(th[sel]), np.sin(th[sel])])
+            coef = np.linalg.lstsq(basis, seg_y[sel], rcond=None)[0]
             dcs.append(coef[0])
             h1s.append(complex(coef[1], -coef[2]))
-            rss += float(res[0]) if res.size else float(np.sum((seg_y[sel] - basis @ coef) ** 2))
-            dof += m - basis.shape[1]
         if len(dcs) >= 3:
             dc, h1 = np.array(dcs), np.array(h1s, dtype=np.complex128)
-            if dof > 0 and rss > 0:
-                # Within-period residual of a K-harmonic fit: free of any drift from period to period.
-                noise_var = rss / dof
     return DiagExperiment(
         frequency=float(ap.frequency),
         amplitude=float(ap.amplitude),
         grid_phase=0.0,
         ybar=ybar,
         periods=float(ap.periods),
-        noise_var=noise_var,
-        spread_var=spread_var,
+        noise_var=float(ap.noise_var),
+        spread_var=float(ap.noise_var),
         noise_dof=int(ap.noise_dof),
         dc=dc,
         h1=h1,

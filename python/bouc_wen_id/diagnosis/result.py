@@ -15,7 +15,7 @@ from .locate import Localisation
 from .select import Alternative, HeldOut, Step
 
 FloatArray = NDArray[np.float64]
-Status = Literal["adequate", "explained", "unexplained"]
+Status = Literal["adequate", "explained", "partly explained", "unexplained"]
 
 #: Human names of the terms (code name -> phrase), in the order of design.md 9.1.
 TERM_LABELS = {
@@ -100,13 +100,14 @@ class Diagnosis:
 
     Attributes
     ----------
-    status : {"adequate", "explained", "unexplained"}
+    status : {"adequate", "explained", "partly explained", "unexplained"}
         ``adequate``: the plain model is at the noise floor. ``explained``: the named terms bring it there
-        (or remove at least ``explained_fraction`` of the excess). ``unexplained``: structure remains.
+        (or remove at least 90 % of the excess). ``partly explained``: they remove at least half of it and
+        the structure left is located. ``unexplained``: nothing or too little is explained.
     verdict : str
         One sentence, first in every report.
     named : tuple of NamedTerm
-        Terms named (only with status ``explained``).
+        Terms named (status ``explained`` or ``partly explained``).
     partial : tuple of NamedTerm
         Terms that passed the tests but leave structure unexplained (status ``unexplained``).
     alternatives : tuple of Alternative

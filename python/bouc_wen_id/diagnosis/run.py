@@ -18,8 +18,11 @@ from .result import Diagnosis, ModelSummary, NamedTerm, Status, term_symbol_unit
 from .select import ALPHA, FoldCache, forward_select, held_out
 
 #: The named terms must remove at least this share of the plain model's excess residual for the verdict
-#: "explained" when the final model is still rejected; below it the verdict is "unexplained".
+#: "explained" when the final model is still rejected.
 EXPLAINED_FRACTION = 0.9
+#: Between this share and EXPLAINED_FRACTION the verdict is "partly explained" (the terms are named, and the
+#: structure left is located); below it "unexplained" (the terms are reported as partial, not named).
+PARTLY_EXPLAINED_FRACTION = 0.5
 
 
 def _check_candidates(candidates: Optional[Sequence[str]]) -> tuple[str, ...]:
@@ -79,25 +82,25 @@ def _verdict(
     after: Localisation,
     fraction: float,
 ) -> str:
-    drift = (
-        "; the loop drifts from period to period (degradation or an unsettled transient, not modelled)"
-        if after.drift_detected
-        else ""
-    )
     if status == "adequate":
         return "adequate: the plain Wiener-Bouc-Wen model fits at the noise floor"
-    if status == "explained":
-        return "explained by: " + ", ".join(str(t) for t in named) + drift
     where = after.describe() or "spread over the cycle"
-    if after.drift_detected:
-        drift = ""  # describe() says it already
+    if status == "explained":
+        drift = "; the loop drifts from period to period (not modelled)" if after.drift_detected else ""
+        return "explained by: " + ", ".join(str(t) for t in named) + drift
+    if status == "partly explained":
+        return (
+            "explained in part by: "
+            + ", ".join(str(t) for t in named)
+            + f" ({100 * fraction:.0f} % of the excess); unexplained structure remains {where}"
+        )
     tail = ""
     if partial:
         tail = (
             f" (tested terms {', '.join(t.label for t in partial)} remove {100 * fraction:.0f} % of the "
             "excess but leave structure the library does not model)"
         )
-    return f"unexplained structure remains {where}{tail}{drift}"
+    return f"unexplained structure remains {where}{tail}"
 
 
 def diagnose(
@@ -171,9 +174,11 @@ def diagnose(
         status: Status = "adequate"
     elif final.params.terms and (adequate(final) or fraction >= EXPLAINED_FRACTION):
         status = "explained"
+    elif final.params.terms and fraction >= PARTLY_EXPLAINED_FRACTION:
+        status = "partly explained"
     else:
         status = "unexplained"
-    named = final_sum.terms if status == "explained" else ()
+    named = final_sum.terms if status in ("explained", "partly explained") else ()
     partial = final_sum.terms if status == "unexplained" else ()
     alternatives = tuple(a for st in steps for a in st.alternatives)
     ho = held_out(sx, plain, final, substeps, cache) if final.params.terms else None
