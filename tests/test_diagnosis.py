@@ -123,6 +123,23 @@ def test_frequency_exponent_of_a_viscous_like_misfit() -> None:
     assert loc.frequency_exponent == pytest.approx(1.0, abs=0.05)
 
 
+@pytest.mark.parametrize(
+    ("plain_ok", "terms", "final_ok", "fraction", "status"),
+    [
+        (True, False, True, 0.0, "adequate"),
+        (False, True, True, 0.4, "explained"),
+        (False, True, False, 0.95, "explained"),
+        (False, True, False, 0.7, "partly explained"),
+        (False, True, False, 0.3, "unexplained"),
+        (False, False, False, 0.0, "unexplained"),
+    ],
+)
+def test_status_rules(plain_ok: bool, terms: bool, final_ok: bool, fraction: float, status: str) -> None:
+    from bouc_wen_id.diagnosis.run import classify
+
+    assert classify(plain_ok, terms, final_ok, fraction) == status
+
+
 def test_benjamini_hochberg_against_hand_example() -> None:
     p = [0.001, 0.008, 0.039, 0.041, 0.042, 0.06, 0.074, 0.205, 0.212, 0.216]
     # Level 0.05, m = 10: thresholds 0.005 k; the largest k with p_(k) <= 0.005 k is k = 2.

@@ -75,6 +75,17 @@ def _summary(
     )
 
 
+def classify(plain_adequate: bool, has_terms: bool, final_adequate: bool, fraction: float) -> Status:
+    """The verdict's status from the plain model's test, the final model's and the excess explained."""
+    if plain_adequate:
+        return "adequate"
+    if has_terms and (final_adequate or fraction >= EXPLAINED_FRACTION):
+        return "explained"
+    if has_terms and fraction >= PARTLY_EXPLAINED_FRACTION:
+        return "partly explained"
+    return "unexplained"
+
+
 def _verdict(
     status: Status,
     named: Sequence[NamedTerm],
@@ -170,14 +181,9 @@ def diagnose(
     final_sum = _summary(exps, sx, final, s, units)
     excess = plain_sum.cost - plain_sum.dof
     fraction = (plain_sum.cost - final_sum.cost) / excess if excess > 0 else 0.0
-    if adequate(plain) and not before.drift_detected:
-        status: Status = "adequate"
-    elif final.params.terms and (adequate(final) or fraction >= EXPLAINED_FRACTION):
-        status = "explained"
-    elif final.params.terms and fraction >= PARTLY_EXPLAINED_FRACTION:
-        status = "partly explained"
-    else:
-        status = "unexplained"
+    status = classify(
+        adequate(plain) and not before.drift_detected, bool(final.params.terms), adequate(final), fraction
+    )
     named = final_sum.terms if status in ("explained", "partly explained") else ()
     partial = final_sum.terms if status == "unexplained" else ()
     alternatives = tuple(a for st in steps for a in st.alternatives)
