@@ -202,6 +202,30 @@ def test_hidden_term_is_named_with_its_value(term: object, value: float) -> None
     assert d.verdict.startswith("explained by: ")
 
 
+def test_terms_one_frequency_cannot_separate_are_alternatives() -> None:
+    """Stiffness k u and inertia m uddot = -m omega^2 u are the same term at one frequency."""
+    om = np.full(3, TWO_PI * 1.0)
+    lin = bw.TransferFunction([1.0], [0.05, 1.0])
+    g, _ = lin.gain_phase(om)
+    plan = bw.SinePlan(
+        om,
+        np.array([0.6, 1.2, 2.4]) / g,
+        settle_periods=8,
+        periods=12,
+        samples_per_period=64,
+        substeps=8,
+        noise_sd=0.005,
+        seed=11,
+    )
+    d = bw.diagnose(bw.simulate(_plant((T.Stiffness(0.02),)), plan))
+    assert d.status == "explained", d.summary()
+    assert set(d.named_terms) <= {"stiffness", "inertia"}
+    alt = [a for a in d.alternatives if {a.term, a.rival} == {"stiffness", "inertia"}]
+    assert alt, d.summary()
+    assert abs(alt[0].correlation) > 0.99
+    assert "frequency" in alt[0].separating_experiment
+
+
 def test_report_is_strict_json_and_self_contained_html(
     plain_diagnosis: bw.diagnosis.Diagnosis, tmp_path: Path
 ) -> None:

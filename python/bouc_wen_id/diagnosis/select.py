@@ -227,13 +227,22 @@ def _correlation(fit: AugFit, a: str, b: str) -> float:
     return float(c[i, j] / d) if d > 0 and math.isfinite(d) else math.nan
 
 
+#: Candidate designs for separating two alternatives: (amplitude multiple, frequency multiple).
+SEPARATING_DESIGNS = ((0.5, 1.0), (2.0, 1.0), (4.0, 1.0), (1.0, 0.5), (1.0, 2.0))
+
+
 def _separating(exps: Sequence[AugExperiment], fa: AugFit, fb: AugFit, substeps: int) -> str:
-    """The tested frequency and amplitude multiple at which the two fitted models differ most."""
+    """The design (a tested experiment at another amplitude or frequency) where the two fits differ most.
+
+    Each fitted model is evaluated with its own |G| and phase of that experiment; at another frequency G is
+    taken as at the tested one, so the difference there is the terms' own (an approximation for a G that
+    changes quickly with frequency, which the message says).
+    """
     from .. import _core
 
     best = (0.0, "")
     for i, e in enumerate(exps):
-        for mult in (0.5, 2.0, 4.0):
+        for amult, fmult in SEPARATING_DESIGNS:
             ys: list[FloatArray] = []
             for f in (fa, fb):
                 par = f.params
@@ -241,8 +250,8 @@ def _separating(exps: Sequence[AugExperiment], fa: AugFit, fb: AugFit, substeps:
                 try:
                     y, _, _ = _core.augmented_output(
                         e.ybar.size,
-                        e.amplitude * mult,
-                        e.frequency,
+                        e.amplitude * amult,
+                        e.frequency * fmult,
                         e.grid_phase,
                         list(par.terms),
                         shared,
@@ -257,12 +266,14 @@ def _separating(exps: Sequence[AugExperiment], fa: AugFit, fb: AugFit, substeps:
             if len(ys) == 2:
                 sep = float(np.sqrt(np.mean((ys[0] - ys[1]) ** 2) * e.weight))
                 if sep > best[0]:
+                    what = f"{amult:g}x its amplitude" if fmult == 1.0 else f"{fmult:g}x its frequency"
+                    note = "" if fmult == 1.0 else ", G taken as at the tested frequency"
                     best = (
                         sep,
-                        f"{e.source or f'experiment {i}'} repeated at {mult:g}x its amplitude "
-                        f"(predicted difference {sep:.1f} noise sd)",
+                        f"{e.source or f'experiment {i}'} repeated at {what} (predicted difference "
+                        f"{sep:.1f} noise sd{note})",
                     )
-    return best[1] or "none of the tested conditions at 0.5-4x amplitude"
+    return best[1] or "none of the designs tried (0.5-4x amplitude, 0.5-2x frequency)"
 
 
 def forward_select(
