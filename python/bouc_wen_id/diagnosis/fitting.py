@@ -87,14 +87,16 @@ def regressor(term: str, e: AugExperiment) -> FloatArray:
     raise ValueError(term)
 
 
-def substeps_for(p: int) -> int:
-    """RK4 steps per sample of the diagnosis's loops: a step of at most 2 pi/512 rad.
+def substeps_for(sizes: Sequence[int]) -> int:
+    """RK4 steps per sample of the diagnosis's loops, one count for all experiments (the core takes one).
 
+    A step of at most 2 pi/512 rad on the finest grid, and at least 128 steps per period on the coarsest.
     Coarser than identify's 2 pi/2048: every reversal is a node of the loop solvers (design.md 9.2), so the
-    steps stay fourth order and the discretisation error (~1e-8 of the loop) sits far below any noise floor,
-    at a quarter of the cost over the hundred fits of a diagnosis.
+    steps stay fourth order and the discretisation error (below 1e-6 of the loop at 128 steps per period)
+    sits far below any noise floor, at a fraction of the cost over the hundred fits of a diagnosis; and
+    experiments with very different grids (lab records) do not all pay for the coarsest one.
     """
-    return max(2, math.ceil(512 / p))
+    return max(2, math.ceil(512 / max(sizes)), math.ceil(128 / min(sizes)))
 
 
 def fit_from(

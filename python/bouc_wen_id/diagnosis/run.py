@@ -161,7 +161,7 @@ def diagnose(
     exps = prepare(experiments)
     s = scale_of(exps)
     sx = scaled(exps, s)
-    substeps = max(substeps_for(e.ybar.size) for e in sx)
+    substeps = substeps_for([e.ybar.size for e in sx])
     noise_dof = sum(e.noise_dof for e in exps)
 
     def adequate(fit: AugFit) -> bool:
