@@ -349,3 +349,15 @@ def test_typed_api_errors_and_immutability() -> None:
         fit_augmented([], p)
     with pytest.raises(InvalidParameterError, match="index"):
         augmented_output(e, p, 1)
+
+
+def test_singular_fisher_gives_a_nan_covariance() -> None:
+    """Two terms that the data cannot tell apart: at a single frequency the inertia column uddot is
+    -omega^2 times the stiffness column u, so the Fisher matrix is singular and no standard error exists."""
+    exps, truth = _make_data(["stiffness"], [0.2], seed=4, freqs=(2.0,), amps=(1.0,), p=32)
+    start = AugParams(*HYST, ("stiffness", "inertia"), np.array([0.2, 0.0]), truth.gains, truth.phases)
+    fit = fit_augmented(exps, start, max_iter=5, substeps=4)
+    assert np.all(np.isnan(fit.covariance))
+    assert np.isnan(fit.standard_error("inertia"))
+    # The estimate itself stays finite: the LM's damping handles the flat direction.
+    assert np.all(np.isfinite(fit.params.shared))
