@@ -709,7 +709,7 @@ fn path_loop_with(
     for _ in 0..SHOOT_MAX_ITER {
         let (e, m) = shoot_pass(&shape, &coarse, &whole, &[w0], COARSE_SUBSTEPS);
         let g = e[0] - w0;
-        if !(g.abs() > tol) {
+        if g.abs() <= tol || g.is_nan() {
             break;
         }
         if g > 0.0 {
