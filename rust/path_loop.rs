@@ -56,6 +56,10 @@ const FULL_PASS_STEP: f64 = 1e-6;
 const COARSE_SEGMENTS: usize = 32;
 /// RK4 steps per coarse segment.
 const COARSE_SUBSTEPS: usize = 2;
+/// Classical RK4 is stable on `y' = -L y` for steps up to about 2.785 / L.
+const RK4_STABLE: f64 = 2.785;
+/// Largest coarse RK4 step in x, times the loop's stiffness bound `max |dh/dw|`.
+const COARSE_STIFF: f64 = 0.5;
 /// The coarse shooting stops after a Newton step below this fraction of `w_b`.
 const COARSE_STEP: f64 = 1e-6;
 /// Pieces of the cycle shot at once (their RK4 chains are independent, so a core overlaps them).
@@ -539,11 +543,13 @@ fn shoot<const K: usize>(
 }
 
 /// The coarse cycle: the fine segments merged, within each piece and each half cycle, into runs
-/// of `group`, each one RK4 segment; returns the segments and the pieces over them.
+/// of up to `group` and up to `max_dx` of travel (unless one fine segment is longer), each one
+/// RK4 segment; returns the segments and the pieces over them.
 fn coarse_segments<const K: usize>(
     segs: &[Segment],
     pc: &Pieces<K>,
     group: usize,
+    max_dx: f64,
 ) -> (Vec<Segment>, Pieces<K>) {
     let mut out = Vec::with_capacity(segs.len() / group + 2 * K + 2);
     let mut cp = Pieces {
@@ -557,7 +563,11 @@ fn coarse_segments<const K: usize>(
             let s = segs[k].s;
             let mut dx = 0.0;
             let mut n = 0;
-            while k < pc.end[i] && segs[k].s == s && n < group {
+            while k < pc.end[i]
+                && segs[k].s == s
+                && n < group
+                && (n == 0 || (dx + segs[k].dx).abs() <= max_dx)
+            {
                 dx += segs[k].dx;
                 n += 1;
                 k += 1;
@@ -699,7 +709,11 @@ fn path_loop_with(
     // about COARSE_SEGMENTS, then the coarse loop's values at the starts of the pieces.
     let pieces = Pieces::<PIECES>::split(segs.len());
     let group = segs.len().div_ceil(COARSE_SEGMENTS).max(1);
-    let (coarse, coarse_pieces) = coarse_segments(&segs, &pieces, group);
+    // |dh/dw| <= L on |w| <= w_b: coarse RK4 steps of at most COARSE_STIFF / L in x keep the
+    // coarse map stable and accurate (RK4 is unstable beyond 2.8 / L) however stiff the loop.
+    let stiffness = mu * bound.powf(mu - 1.0) * (beta.abs() + gamma.abs() + delta.abs());
+    let max_dx = COARSE_SUBSTEPS as f64 * COARSE_STIFF / stiffness;
+    let (coarse, coarse_pieces) = coarse_segments(&segs, &pieces, group, max_dx);
     let whole = Pieces::<1> {
         start: [0],
         end: [coarse.len()],
@@ -758,13 +772,14 @@ fn path_loop_with(
     };
     let iterations = match found {
         Ok(n) => n,
-        Err(Failure::Unsafe) => {
+        // Multiple shooting strayed (or was not asked for): bracketed single shooting.
+        Err(_) => {
             let start = if w0.is_finite() { w0 } else { 0.0 };
             let whole = Pieces::<1> {
                 start: [0],
                 end: [segs.len()],
             };
-            match shoot(
+            let single = shoot(
                 &shape,
                 &segs,
                 &whole,
@@ -773,26 +788,38 @@ fn path_loop_with(
                 bound,
                 SHOOT_MAX_ITER,
                 &mut out,
-            ) {
-                Ok(n) => n,
-                Err(f) => {
-                    let why = match f {
-                        Failure::Diverged(wn) => format!("diverged (w reached {wn:e} within one cycle)"),
-                        Failure::Iterations(g) => format!(
-                            "found no periodic loop in {SHOOT_MAX_ITER} iterations (residual {g:.3e})"
-                        ),
-                        Failure::Unsafe => "left its bracket".to_string(),
-                    };
-                    return Err(CoreError::NotConverged(format!(
-                        "the path-loop shooting {why}, bound {bound:.3e}, for A = {amplitude}, \
-                         beta = {beta}, gamma = {gamma}, mu = {mu}, delta = {delta}, play = {play}; \
-                         with beta < 0 the unloading branch runs away at large amplitudes: check \
-                         the parameters' signs and scale"
-                    )));
-                }
-            }
+            );
+            single.map_err(|f| {
+                let longest = segs.iter().map(|g| g.dx.abs()).fold(0.0, f64::max);
+                let why = match f {
+                    Failure::Diverged(wn) => {
+                        format!("diverged (w reached {wn:e} within one cycle)")
+                    }
+                    Failure::Iterations(g) => format!(
+                        "found no periodic loop in {SHOOT_MAX_ITER} iterations (residual {g:.3e})"
+                    ),
+                    Failure::Unsafe => "left its bracket".to_string(),
+                };
+                let hint = if longest / substeps as f64 * stiffness > RK4_STABLE {
+                    format!(
+                        "its RK4 steps (up to {:.3e} in x) times the loop's stiffness (|dh/dw| up \
+                         to {stiffness:.3e}) exceed RK4's stability limit {RK4_STABLE}: raise \
+                         substeps to at least {}",
+                        longest / substeps as f64,
+                        (longest * stiffness / RK4_STABLE).ceil()
+                    )
+                } else {
+                    "with beta < 0 the unloading branch runs away at large amplitudes: check the \
+                     parameters' signs and scale"
+                        .to_string()
+                };
+                CoreError::NotConverged(format!(
+                    "the path-loop shooting {why}, bound {bound:.3e}, for A = {amplitude}, \
+                     beta = {beta}, gamma = {gamma}, mu = {mu}, delta = {delta}, play = {play}; \
+                     {hint}"
+                ))
+            })?
         }
-        Err(_) => unreachable!("multiple shooting only fails as Unsafe"),
     };
     if !(w.iter().all(|v| v.is_finite()) && jac.iter().flatten().all(|v| v.is_finite())) {
         return Err(CoreError::NonFinite(format!(
