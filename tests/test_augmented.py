@@ -39,8 +39,6 @@ TERM_VALUES = {
     "play": 0.15,
 }
 HYST = (0.8, 0.2, 1.6)
-#: Terms that need the path loop (9.2), reached through the NumPy reference only once it is merged.
-PATH_TERMS = ("asymmetry", "play")
 
 
 def _fd_columns(
@@ -113,11 +111,10 @@ def _random_case(rng: np.random.Generator, terms: Sequence[str]) -> tuple[object
     )
 
 
-@pytest.mark.parametrize("seed", range(6))
+@pytest.mark.parametrize("seed", range(10))
 def test_output_parity_rust_numpy(seed: int) -> None:
     rng = np.random.default_rng(seed)
-    pool = [t for t in TERM_NAMES if t not in PATH_TERMS]
-    terms = list(rng.permutation(pool)[: rng.integers(0, len(pool) + 1)])
+    terms = list(rng.permutation(TERM_NAMES)[: rng.integers(0, len(TERM_NAMES) + 1)])
     args = _random_case(rng, terms)
     r = _core.augmented_output(*args)  # type: ignore[arg-type]
     n = ra.augmented_output(*args)  # type: ignore[arg-type]
@@ -209,15 +206,25 @@ def test_plain_model_through_the_augmented_path_matches_refine() -> None:
     np.testing.assert_allclose(out[6], ref[4], rtol=1e-9, atol=1e-9 * np.abs(ref[4]).max())
 
 
-def test_full_fit_parity_rust_numpy() -> None:
-    terms = ("offset", "viscous", "sensor_lag")
-    exps, truth = _make_data(terms, [0.3, 0.03, 0.02], seed=5, freqs=(1.0, 4.0), amps=(1.0,), p=32)
-    start = AugParams(0.7, 0.25, 1.8, terms, np.array([0.2, 0.02, 0.01]), truth.gains * 1.05, truth.phases)
+@pytest.mark.parametrize(
+    ("terms", "values", "start_values"),
+    [
+        (("offset", "viscous", "sensor_lag"), [0.3, 0.03, 0.02], [0.2, 0.02, 0.01]),
+        (("asymmetry", "play"), [0.3, 0.15], [0.1, 0.1]),
+    ],
+)
+def test_full_fit_parity_rust_numpy(
+    terms: tuple[str, ...], values: list[float], start_values: list[float]
+) -> None:
+    exps, truth = _make_data(terms, values, seed=5, freqs=(1.0, 4.0), amps=(1.0,), p=32)
+    start = AugParams(0.7, 0.25, 1.8, terms, np.array(start_values), truth.gains * 1.05, truth.phases)
     r = fit_augmented(exps, start, substeps=2, backend="rust")
     n = fit_augmented(exps, start, substeps=2, backend="numpy")
     # The reference solves the full damped system, the core its Schur complement: equal steps up to
     # rounding (~1e-13), which a converged LM carries to its minimiser at the cost's flatness, ~1e-9.
-    assert r.iterations == n.iterations and r.converged and n.converged
+    # Near the minimum the relative cost decrease is at ftol = 1e-12, where the two loop solvers' rounding
+    # (~1e-13; the path loops shoot differently) can add or drop a last step or two.
+    assert abs(r.iterations - n.iterations) <= 3 and r.converged and n.converged
     np.testing.assert_allclose(r.params.shared, n.params.shared, rtol=1e-8)
     np.testing.assert_allclose(r.params.gains, n.params.gains, rtol=1e-8)
     np.testing.assert_allclose(r.cost, n.cost, rtol=1e-9)
