@@ -368,3 +368,12 @@ def test_singular_fisher_gives_a_nan_covariance() -> None:
     assert np.isnan(fit.standard_error("inertia"))
     # The estimate itself stays finite: the LM's damping handles the flat direction.
     assert np.all(np.isfinite(fit.params.shared))
+
+
+def test_converged_is_false_when_the_iteration_cap_ends_the_search() -> None:
+    exps, truth = _make_data(["viscous"], [0.03], seed=6, freqs=(1.0, 4.0), amps=(1.0,), p=32)
+    start = AugParams(0.6, 0.3, 2.0, ("viscous",), np.array([0.0]), truth.gains * 1.2, truth.phases + 0.1)
+    capped = fit_augmented(exps, start, max_iter=2, substeps=4)
+    assert capped.iterations == 2 and not capped.converged
+    full = fit_augmented(exps, start, substeps=4)
+    assert full.converged and full.iterations > 2 and full.cost < capped.cost
