@@ -14,6 +14,9 @@ use _core::path_loop::path_loop;
 use _core::simulate::{rk4_step_count, simulate, Input};
 use _core::solve::{sls_search, SlsProblem, GOLDEN_MAX_ITER};
 use _core::steady::steady_loop;
+use _core::terms::{
+    augmented_output, augmented_refine, AugExperiment, AugOptions, Excitation, Terms,
+};
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 
 const P: usize = 1024;
@@ -118,12 +121,61 @@ fn bench_path_loop(c: &mut Criterion) {
     });
 }
 
+/// One augmented refinement (design.md 9.3) on 10 experiments (P = 256, 5 frequencies x 2
+/// amplitudes) with the terms [offset, viscous], from a start 10-20 % off, the data made by the
+/// model itself plus a deterministic pseudo-noise; and one model output with its Jacobian.
+fn bench_augmented(c: &mut Criterion) {
+    let (p, m) = (256, 10);
+    let terms = Terms::parse(&["offset", "viscous"]).expect("valid terms");
+    let truth = [0.8, 0.2, 1.6, 0.3, 0.05];
+    let exc: Vec<Excitation> = (0..m)
+        .map(|i| Excitation {
+            samples: p,
+            amplitude: if i % 2 == 0 { 1.0 } else { 2.0 },
+            frequency: 1.0 + (i / 2) as f64 * 2.0,
+            grid_phase: 0.37 * i as f64,
+        })
+        .collect();
+    let gains: Vec<f64> = (0..m).map(|i| 1.0 / (1.0 + 0.1 * i as f64)).collect();
+    let phases: Vec<f64> = (0..m).map(|i| 0.3 + 0.1 * i as f64).collect();
+    let ys: Vec<Vec<f64>> = (0..m)
+        .map(|i| {
+            let y = augmented_output(&exc[i], &terms, &truth, gains[i], phases[i], 8)
+                .expect("model output")
+                .y;
+            y.iter()
+                .enumerate()
+                .map(|(j, v)| v + 1e-3 * ((7 * j + 13 * i) as f64).sin())
+                .collect()
+        })
+        .collect();
+    let exps: Vec<AugExperiment> = (0..m)
+        .map(|i| AugExperiment {
+            ybar: &ys[i],
+            amplitude: exc[i].amplitude,
+            frequency: exc[i].frequency,
+            grid_phase: exc[i].grid_phase,
+            weight: 1e6,
+        })
+        .collect();
+    let start = [0.7, 0.25, 1.8, 0.25, 0.06];
+    let g0: Vec<f64> = gains.iter().map(|g| g * 1.1).collect();
+    let ph0: Vec<f64> = phases.iter().map(|v| v + 0.05).collect();
+    let opts = AugOptions::default();
+    c.bench_function("augmented_refine_m10_p256_offset_viscous", |b| {
+        b.iter(|| augmented_refine(black_box(&exps), &terms, &start, &g0, &ph0, &opts))
+    });
+    c.bench_function("augmented_output_p256_offset_viscous", |b| {
+        b.iter(|| augmented_output(black_box(&exc[3]), &terms, &truth, 0.9, 0.4, 4))
+    });
+}
+
 criterion_group! {
     name = benches;
     config = Criterion::default()
         .sample_size(20)
         .measurement_time(Duration::from_secs(2))
         .warm_up_time(Duration::from_millis(500));
-    targets = bench_rk4, bench_average, bench_sls, bench_path_loop
+    targets = bench_rk4, bench_average, bench_sls, bench_path_loop, bench_augmented
 }
 criterion_main!(benches);

@@ -49,11 +49,23 @@ const SHOOT_MAX_ITER: usize = 60;
 const SHOOT_RTOL: f64 = 1e-13;
 /// A Newton step below this fraction of `w_b` predicts (quadratic convergence) that the next pass
 /// meets [`SHOOT_RTOL`], so that pass carries the sensitivities and is not repeated.
-const FULL_PASS_STEP: f64 = 1e-5;
-/// RK4 steps per half cycle of the coarse cycle map (two segments, no samples) whose fixed point
-/// starts the shooting: `w_0` within about `1e-7 w_b` of the fine one for moderate `mu`, so that
-/// the fine map needs one Newton step before the converged pass.
-const COARSE_STEPS: usize = 24;
+const FULL_PASS_STEP: f64 = 1e-6;
+/// Segments (merged runs of the fine ones) of the coarse cycle whose fixed point gives the start
+/// values, and the RK4 steps on each: about 1e-6 w_b from the fine fixed point, so that the fine
+/// map usually needs one Newton step before the converged pass.
+const COARSE_SEGMENTS: usize = 32;
+/// RK4 steps per coarse segment.
+const COARSE_SUBSTEPS: usize = 2;
+/// Classical RK4 is stable on `y' = -L y` for steps up to about 2.785 / L.
+const RK4_STABLE: f64 = 2.785;
+/// Largest coarse RK4 step in x, times the loop's stiffness bound `max |dh/dw|`.
+const COARSE_STIFF: f64 = 0.5;
+/// The coarse shooting stops after a Newton step below this fraction of `w_b`.
+const COARSE_STEP: f64 = 1e-6;
+/// Pieces of the cycle shot at once (their RK4 chains are independent, so a core overlaps them).
+const PIECES: usize = 4;
+/// Newton updates allowed to the multiple shooting before bracketed single shooting takes over.
+const MULTI_MAX_ITER: usize = 8;
 
 /// The steady loop along the path on the sample grid and its Jacobian.
 #[derive(Debug, Clone)]
@@ -129,81 +141,6 @@ fn rate(p: &Shape, s: f64, w: f64) -> Rate {
         sw,
         c,
     }
-}
-
-/// Segment map for the shooting: `(w_end, dw_end/dw_start)` after `substeps` RK4 steps of
-/// `dw/dsigma = dx h(w, s)`.
-#[inline(always)]
-fn segment_shoot(p: &Shape, s: f64, dx: f64, w: f64, substeps: usize) -> (f64, f64) {
-    let hs = 1.0 / substeps as f64;
-    let (mut w, mut phi) = (w, 1.0);
-    for _ in 0..substeps {
-        let r1 = rate(p, s, w);
-        let (k1, q1) = (dx * r1.h, dx * r1.hw * phi);
-        let r2 = rate(p, s, w + 0.5 * hs * k1);
-        let (k2, q2) = (dx * r2.h, dx * r2.hw * (phi + 0.5 * hs * q1));
-        let r3 = rate(p, s, w + 0.5 * hs * k2);
-        let (k3, q3) = (dx * r3.h, dx * r3.hw * (phi + 0.5 * hs * q2));
-        let r4 = rate(p, s, w + hs * k3);
-        let (k4, q4) = (dx * r4.h, dx * r4.hw * (phi + hs * q3));
-        w += hs / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
-        phi += hs / 6.0 * (q1 + 2.0 * q2 + 2.0 * q3 + q4);
-    }
-    (w, phi)
-}
-
-/// Number of components of the full segment state.
-const NF: usize = 7;
-
-/// Rate of the full segment state `[w, dw/dw_a, dw/d dx, dw/d beta, dw/d gamma, dw/d mu,
-/// dw/d delta]` in sigma.
-#[inline(always)]
-fn rhs_full(p: &Shape, s: f64, dx: f64, y: &[f64; NF]) -> [f64; NF] {
-    let r = rate(p, s, y[0]);
-    let fw = dx * r.hw;
-    let dwmu = dx * r.wmu;
-    [
-        dx * r.h,
-        fw * y[1],
-        fw * y[2] + r.h,
-        fw * y[3] - dwmu * s * r.sw,
-        fw * y[4] - dwmu,
-        fw * y[5] - dwmu * r.lnw * r.c,
-        fw * y[6] - dwmu * r.sw,
-    ]
-}
-
-#[inline(always)]
-fn axpy(y: &[f64; NF], h: f64, k: &[f64; NF]) -> [f64; NF] {
-    let mut out = *y;
-    for i in 0..NF {
-        out[i] += h * k[i];
-    }
-    out
-}
-
-/// Segment map with every sensitivity: the full state after `substeps` RK4 steps from
-/// `[w, 1, 0, 0, 0, 0, 0]`.
-#[inline(always)]
-fn segment_full(p: &Shape, s: f64, dx: f64, w: f64, substeps: usize) -> [f64; NF] {
-    let mut y = [w, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0];
-    if dx == 0.0 {
-        // A dwell: the map is the identity, and its only non-zero sensitivity is
-        // d/d dx = h(w) (the RK4 weights sum to 1), needed when dx moves off 0.
-        y[2] = rate(p, s, w).h;
-        return y;
-    }
-    let hs = 1.0 / substeps as f64;
-    for _ in 0..substeps {
-        let k1 = rhs_full(p, s, dx, &y);
-        let k2 = rhs_full(p, s, dx, &axpy(&y, 0.5 * hs, &k1));
-        let k3 = rhs_full(p, s, dx, &axpy(&y, 0.5 * hs, &k2));
-        let k4 = rhs_full(p, s, dx, &axpy(&y, hs, &k3));
-        for i in 0..NF {
-            y[i] += hs / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
-        }
-    }
-    y
 }
 
 /// Play output of the sine and its derivatives `d/d(A, phi, b)` at cycle phase `zeta`
@@ -282,47 +219,369 @@ fn segments(amplitude: f64, phi: f64, b: f64, p: usize) -> Vec<Segment> {
     segs
 }
 
-/// One cycle of segment maps from `w0`: `(W(w0), dW/dw0)`.
-fn cycle(shape: &Shape, segs: &[Segment], w0: f64, substeps: usize) -> (f64, f64) {
-    let (mut w, mut phi) = (w0, 1.0);
-    for seg in segs {
-        if seg.dx == 0.0 {
+/// Pieces of the cycle integrated side by side: piece i is `segs[start[i]..end[i]]`. With
+/// `K > 1` the K chains are independent until the pieces are joined, so their `ln`/`exp`
+/// latencies overlap (multiple shooting); `K = 1` is plain single shooting.
+#[derive(Clone, Copy)]
+struct Pieces<const K: usize> {
+    start: [usize; K],
+    end: [usize; K],
+}
+
+impl<const K: usize> Pieces<K> {
+    /// K contiguous pieces of `n` segments, as equal as they come.
+    fn split(n: usize) -> Self {
+        Self {
+            start: std::array::from_fn(|i| i * n / K),
+            end: std::array::from_fn(|i| (i + 1) * n / K),
+        }
+    }
+
+    fn longest(&self) -> usize {
+        (0..K)
+            .map(|i| self.end[i] - self.start[i])
+            .max()
+            .unwrap_or(0)
+    }
+
+    /// Segment `m` of every piece (a dwell `dx = 0` past a piece's end).
+    #[inline(always)]
+    fn row(&self, segs: &[Segment], m: usize) -> [Segment; K] {
+        std::array::from_fn(|i| {
+            let k = self.start[i] + m;
+            if k < self.end[i] {
+                segs[k]
+            } else {
+                Segment {
+                    dx: 0.0,
+                    ddx: [0.0; 3],
+                    s: 1.0,
+                    end: REVERSAL,
+                }
+            }
+        })
+    }
+}
+
+/// Sensitivities of one RK4 step to `[dx, beta, gamma, mu, delta]` at a fixed step start.
+const NQ: usize = 5;
+
+/// One RK4 step of length `hs` in sigma of `dw/dsigma = dx h(w, s)` for K chains side by side
+/// (stage by stage, so that the chains' `ln`/`exp` overlap). Returns the new `w`, the step's
+/// derivative `R = dw_new/dw` and (`FULL`) its derivatives at fixed `w` to `[dx, beta, gamma,
+/// mu, delta]`.
+///
+/// The derivatives are those of the augmented RK4 (forward sensitivities riding along), summed
+/// in reverse: with `k_i = dx h(w_i)`, `a_i = dx dh/dw(w_i)` and `b_i = d k_i/dq` at fixed
+/// `w_i`, the weights `l_4 = hs/6`, `l_3 = hs/3 + l_4 a_4 hs`, `l_2 = hs/3 + l_3 a_3 hs/2`,
+/// `l_1 = hs/6 + l_2 a_2 hs/2` give `R = 1 + sum l_i a_i` and `dw_new/dq = sum l_i b_i`: the
+/// same numbers with five multiplications per parameter instead of a 7-component RK4 state.
+#[inline(always)]
+fn rk4_step<const K: usize, const FULL: bool>(
+    p: &Shape,
+    row: &[Segment; K],
+    w: &[f64; K],
+    hs: f64,
+) -> ([f64; K], [f64; K], [[f64; NQ]; K]) {
+    let r1: [Rate; K] = std::array::from_fn(|i| rate(p, row[i].s, w[i]));
+    let k1: [f64; K] = std::array::from_fn(|i| row[i].dx * r1[i].h);
+    let r2: [Rate; K] = std::array::from_fn(|i| rate(p, row[i].s, w[i] + 0.5 * hs * k1[i]));
+    let k2: [f64; K] = std::array::from_fn(|i| row[i].dx * r2[i].h);
+    let r3: [Rate; K] = std::array::from_fn(|i| rate(p, row[i].s, w[i] + 0.5 * hs * k2[i]));
+    let k3: [f64; K] = std::array::from_fn(|i| row[i].dx * r3[i].h);
+    let r4: [Rate; K] = std::array::from_fn(|i| rate(p, row[i].s, w[i] + hs * k3[i]));
+    let mut wn = [0.0; K];
+    let mut rr = [0.0; K];
+    let mut inc = [[0.0; NQ]; K];
+    for i in 0..K {
+        let dx = row[i].dx;
+        let k4 = dx * r4[i].h;
+        wn[i] = w[i] + hs / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4);
+        let rs = [&r1[i], &r2[i], &r3[i], &r4[i]];
+        let a = rs.map(|r| dx * r.hw);
+        let l4 = hs / 6.0;
+        let l3 = hs / 3.0 + l4 * a[3] * hs;
+        let l2 = hs / 3.0 + l3 * a[2] * 0.5 * hs;
+        let l1 = hs / 6.0 + l2 * a[1] * 0.5 * hs;
+        let l = [l1, l2, l3, l4];
+        rr[i] = 1.0 + l1 * a[0] + l2 * a[1] + l3 * a[2] + l4 * a[3];
+        if FULL {
+            let s = row[i].s;
+            let mut q = [0.0; NQ];
+            for (li, r) in l.iter().zip(rs) {
+                // d k/d dx = h; d k/d(beta, gamma, mu, delta) = -dx |w|^mu (s sgn w, 1,
+                // ln|w| c, sgn w).
+                let e = li * dx * r.wmu;
+                q[0] += li * r.h;
+                q[1] -= e * s * r.sw;
+                q[2] -= e;
+                q[3] -= e * r.lnw * r.c;
+                q[4] -= e * r.sw;
+            }
+            inc[i] = q;
+        }
+    }
+    (wn, rr, inc)
+}
+
+/// Every piece's map from its start value `v[i]`: `(w_end, dw_end/dv)` per piece, by
+/// `substeps` RK4 steps per segment.
+fn shoot_pass<const K: usize>(
+    p: &Shape,
+    segs: &[Segment],
+    pc: &Pieces<K>,
+    v: &[f64; K],
+    substeps: usize,
+) -> ([f64; K], [f64; K]) {
+    let hs = 1.0 / substeps as f64;
+    let (mut w, mut ph) = (*v, [1.0; K]);
+    for m in 0..pc.longest() {
+        let row = pc.row(segs, m);
+        if row.iter().all(|g| g.dx == 0.0) {
+            // A dwell (or the end of every piece): the identity.
             continue;
         }
-        let (wn, d) = segment_shoot(shape, seg.s, seg.dx, w, substeps);
-        w = wn;
-        phi *= d;
-    }
-    (w, phi)
-}
-
-/// Newton on `g(w0) = W(w0) - w0`, safeguarded by bisection on `[lo, hi]`. `g` is positive at
-/// `lo` and negative at `hi` (W maps the bracket into itself), so a positive residual raises `lo`.
-/// Returns `(w0, W'(w0))` on convergence, `Err((w0, residual))` after `max_iter` updates.
-struct Shooting {
-    lo: f64,
-    hi: f64,
-    w0: f64,
-}
-
-impl Shooting {
-    /// Next iterate from the residual `g` and the slope `W'` at the current one.
-    fn update(&mut self, g: f64, dw: f64) -> f64 {
-        if g > 0.0 {
-            self.lo = self.w0;
-        } else {
-            self.hi = self.w0;
+        for _ in 0..substeps {
+            let (wn, rr, _) = rk4_step::<K, false>(p, &row, &w, hs);
+            w = wn;
+            for i in 0..K {
+                ph[i] *= rr[i];
+            }
         }
-        let newton = self.w0 + g / (1.0 - dw);
-        let next = if newton > self.lo && newton < self.hi && newton.is_finite() {
-            newton
-        } else {
-            0.5 * (self.lo + self.hi)
-        };
-        let step = next - self.w0;
-        self.w0 = next;
-        step
     }
+    (w, ph)
+}
+
+/// Every piece's map with all sensitivities, recording at each sample its `w`, its partials
+/// `T_j` at a fixed piece start (into `jac`) and `Phi_j = dw_j/dv` (into `phis`). Returns per
+/// piece `(w_end, dw_end/dv, T_end)`.
+#[allow(clippy::type_complexity)]
+fn full_pass<const K: usize>(
+    p: &Shape,
+    segs: &[Segment],
+    pc: &Pieces<K>,
+    v: &[f64; K],
+    substeps: usize,
+    out: &mut Record<'_>,
+) -> ([f64; K], [f64; K], [[f64; 7]; K]) {
+    let hs = 1.0 / substeps as f64;
+    let mut w = *v;
+    let mut ph = [1.0; K];
+    let mut t = [[0.0; 7]; K];
+    for m in 0..pc.longest() {
+        let row = pc.row(segs, m);
+        for _ in 0..substeps {
+            let (wn, rr, inc) = rk4_step::<K, true>(p, &row, &w, hs);
+            w = wn;
+            for i in 0..K {
+                // Chain rule through the step: T <- R T + dw_new/dq (through dx for A, phi, b).
+                let (ti, q, g) = (&mut t[i], &inc[i], &row[i]);
+                for x in ti.iter_mut() {
+                    *x *= rr[i];
+                }
+                ti[PD_AMPLITUDE] += q[0] * g.ddx[0];
+                ti[PD_PHI] += q[0] * g.ddx[1];
+                ti[PD_PLAY] += q[0] * g.ddx[2];
+                ti[PD_BETA] += q[1];
+                ti[PD_GAMMA] += q[2];
+                ti[PD_MU] += q[3];
+                ti[PD_DELTA] += q[4];
+                ph[i] *= rr[i];
+            }
+        }
+        for i in 0..K {
+            let end = row[i].end;
+            if end != REVERSAL {
+                out.w[end] = w[i];
+                out.jac[end] = t[i];
+                out.phis[end] = ph[i];
+            }
+        }
+    }
+    (w, ph, t)
+}
+
+/// The output being filled: `w_j`, the partials `T_j` at a fixed piece start, `dw_j/dv`.
+struct Record<'a> {
+    w: &'a mut [f64],
+    jac: &'a mut [[f64; 7]],
+    phis: &'a mut [f64],
+}
+
+/// Newton correction of the piece starts from the joins' residuals `r_i = M_i(v_i) - v_{i+1}`
+/// and slopes `m_i`: `delta_{i+1} = m_i delta_i + r_i` around the cycle, closed by
+/// `delta_0 = c / (1 - prod m)`. For `K = 1` this is Newton on `W(w_0) - w_0`.
+fn newton_steps<const K: usize>(r: &[f64; K], m: &[f64; K]) -> [f64; K] {
+    let (mut c, mut prod) = (0.0, 1.0);
+    for i in 0..K {
+        c = m[i] * c + r[i];
+        prod *= m[i];
+    }
+    let mut d = [0.0; K];
+    d[0] = c / (1.0 - prod);
+    for i in 0..K - 1 {
+        d[i + 1] = m[i] * d[i] + r[i];
+    }
+    d
+}
+
+/// How a shooting ended without a loop.
+enum Failure {
+    /// Too many updates; the last residual.
+    Iterations(f64),
+    /// A non-finite value within a cycle.
+    Diverged(f64),
+    /// Multiple shooting left the bracket or oscillated: retry with single shooting.
+    Unsafe,
+}
+
+/// Shooting on the piece starts `v` to `sum |r_i| <= tol`, then one pass with every sensitivity
+/// at the converged starts, folded into `out` by the chain rule across pieces and around the
+/// cycle. With `bracket` (single shooting only), Newton is safeguarded by bisection on
+/// `[-bound, bound]`: `g = W(w_0) - w_0` is positive at `-bound` and negative at `bound`
+/// (W maps the bracket into itself), so a positive residual raises the lower end. Returns the
+/// number of updates.
+#[allow(clippy::too_many_arguments)]
+fn shoot<const K: usize>(
+    p: &Shape,
+    segs: &[Segment],
+    pc: &Pieces<K>,
+    mut v: [f64; K],
+    substeps: usize,
+    bound: f64,
+    max_iter: usize,
+    out: &mut Record<'_>,
+) -> std::result::Result<usize, Failure> {
+    let tol = SHOOT_RTOL * bound;
+    let bracketed = K == 1;
+    let (mut lo, mut hi) = (-bound, bound);
+    let mut iterations = 0;
+    let mut full = false;
+    loop {
+        let (e, m, t) = if full {
+            full_pass(p, segs, pc, &v, substeps, out)
+        } else {
+            let (e, m) = shoot_pass(p, segs, pc, &v, substeps);
+            (e, m, [[0.0; 7]; K])
+        };
+        let r: [f64; K] = std::array::from_fn(|i| e[i] - v[(i + 1) % K]);
+        let resid: f64 = r.iter().map(|x| x.abs()).sum();
+        if !resid.is_finite() {
+            let worst = e.iter().copied().fold(
+                0.0,
+                |a: f64, b| if b.is_finite() { a.max(b.abs()) } else { b },
+            );
+            return Err(if bracketed {
+                Failure::Diverged(worst)
+            } else {
+                Failure::Unsafe
+            });
+        }
+        if resid <= tol {
+            if !full {
+                // Converged on a cheap pass: repeat it with the sensitivities (same w).
+                full = true;
+                continue;
+            }
+            // dv/dq around the cycle (the same recurrence as the Newton step, with the
+            // partials T_end in place of the residuals); then every sample T_j + Phi_j dv_i/dq.
+            let mut dv = [[0.0; 7]; K];
+            for q in 0..7 {
+                let tq: [f64; K] = std::array::from_fn(|i| t[i][q]);
+                let d = newton_steps(&tq, &m);
+                for i in 0..K {
+                    dv[i][q] = d[i];
+                }
+            }
+            for i in 0..K {
+                for seg in &segs[pc.start[i]..pc.end[i]] {
+                    if seg.end != REVERSAL {
+                        let ph = out.phis[seg.end];
+                        for (x, d) in out.jac[seg.end].iter_mut().zip(dv[i]) {
+                            *x += ph * d;
+                        }
+                    }
+                }
+            }
+            return Ok(iterations);
+        }
+        iterations += 1;
+        if iterations > max_iter {
+            return Err(if bracketed {
+                Failure::Iterations(resid)
+            } else {
+                Failure::Unsafe
+            });
+        }
+        let d = newton_steps(&r, &m);
+        let step = if bracketed {
+            if r[0] > 0.0 {
+                lo = v[0];
+            } else {
+                hi = v[0];
+            }
+            let newton = v[0] + d[0];
+            let next = if newton > lo && newton < hi && newton.is_finite() {
+                newton
+            } else {
+                0.5 * (lo + hi)
+            };
+            let step = next - v[0];
+            v[0] = next;
+            step.abs()
+        } else {
+            for i in 0..K {
+                v[i] += d[i];
+            }
+            if !v.iter().all(|x| x.abs() <= bound) {
+                return Err(Failure::Unsafe);
+            }
+            d.iter().map(|x| x.abs()).fold(0.0, f64::max)
+        };
+        full = step <= FULL_PASS_STEP * bound;
+    }
+}
+
+/// The coarse cycle: the fine segments merged, within each piece and each half cycle, into runs
+/// of up to `group` and up to `max_dx` of travel (unless one fine segment is longer), each one
+/// RK4 segment; returns the segments and the pieces over them.
+fn coarse_segments<const K: usize>(
+    segs: &[Segment],
+    pc: &Pieces<K>,
+    group: usize,
+    max_dx: f64,
+) -> (Vec<Segment>, Pieces<K>) {
+    let mut out = Vec::with_capacity(segs.len() / group + 2 * K + 2);
+    let mut cp = Pieces {
+        start: [0; K],
+        end: [0; K],
+    };
+    for i in 0..K {
+        cp.start[i] = out.len();
+        let mut k = pc.start[i];
+        while k < pc.end[i] {
+            let s = segs[k].s;
+            let mut dx = 0.0;
+            let mut n = 0;
+            while k < pc.end[i]
+                && segs[k].s == s
+                && n < group
+                && (n == 0 || (dx + segs[k].dx).abs() <= max_dx)
+            {
+                dx += segs[k].dx;
+                n += 1;
+                k += 1;
+            }
+            out.push(Segment {
+                dx,
+                ddx: [0.0; 3],
+                s,
+                end: REVERSAL,
+            });
+        }
+        cp.end[i] = out.len();
+    }
+    (out, cp)
 }
 
 /// Steady loop of the generalised Bouc-Wen (alpha = 1, asymmetry `delta`) behind a play of
@@ -351,6 +610,18 @@ pub fn path_loop(
     phi: f64,
     samples_per_period: usize,
     substeps: usize,
+) -> Result<PathLoop> {
+    let args = (amplitude, beta, gamma, mu, delta, play, phi);
+    path_loop_with(args, samples_per_period, substeps, true)
+}
+
+/// [`path_loop`], with the multiple shooting (`multiple`) or bracketed single shooting alone
+/// (the fallback, exercised by the tests).
+fn path_loop_with(
+    (amplitude, beta, gamma, mu, delta, play, phi): (f64, f64, f64, f64, f64, f64, f64),
+    samples_per_period: usize,
+    substeps: usize,
+    multiple: bool,
 ) -> Result<PathLoop> {
     for (name, v) in [
         ("amplitude", amplitude),
@@ -423,93 +694,133 @@ pub fn path_loop(
     // |w| stays below the larger of the two saturation levels (beta + gamma -+ delta)^(-1/mu).
     let bound = (1.0 / margin).powf(1.0 / mu);
     let tol = SHOOT_RTOL * bound;
-    let travel = 2.0 * (amplitude.abs() - play);
-
-    // Start: the fixed point of the coarse map (two segments of COARSE_STEPS steps), an
-    // approximation of the exact loop's top value that is independent of the samples.
-    let coarse = [
-        Segment {
-            dx: -travel,
-            ddx: [0.0; 3],
-            s: -1.0,
-            end: REVERSAL,
-        },
-        Segment {
-            dx: travel,
-            ddx: [0.0; 3],
-            s: 1.0,
-            end: REVERSAL,
-        },
-    ];
-    let mut sh = Shooting {
-        lo: -bound,
-        hi: bound,
-        w0: 0.0,
-    };
-    for _ in 0..SHOOT_MAX_ITER {
-        let (wn, d) = cycle(&shape, &coarse, sh.w0, COARSE_STEPS);
-        let g = wn - sh.w0;
-        if g.abs() <= tol || sh.update(g, d).abs() <= tol {
-            break;
-        }
-    }
-    // The coarse fixed point is a start, not a bracket: the fine root may lie on either side.
-    let start = sh.w0;
-    sh = Shooting {
-        lo: -bound,
-        hi: bound,
-        w0: start,
-    };
 
     let mut w = vec![0.0; p];
     let mut jac = vec![[0.0; 7]; p];
-    // dw_j / dw_0 of each sample.
+    // dw_j / dv of each sample (v the start of its piece).
     let mut phis = vec![0.0; p];
-    let mut iterations = 0;
-    let mut full = false;
-    loop {
-        let (wn, d, t) = if full {
-            full_cycle(&shape, &segs, sh.w0, substeps, &mut w, &mut jac, &mut phis)
+    let mut out = Record {
+        w: &mut w,
+        jac: &mut jac,
+        phis: &mut phis,
+    };
+
+    // Start values: single shooting (bracketed) on a coarse cycle, the fine segments merged into
+    // about COARSE_SEGMENTS, then the coarse loop's values at the starts of the pieces.
+    let pieces = Pieces::<PIECES>::split(segs.len());
+    let group = segs.len().div_ceil(COARSE_SEGMENTS).max(1);
+    // |dh/dw| <= L on |w| <= w_b: coarse RK4 steps of at most COARSE_STIFF / L in x keep the
+    // coarse map stable and accurate (RK4 is unstable beyond 2.8 / L) however stiff the loop.
+    let stiffness = mu * bound.powf(mu - 1.0) * (beta.abs() + gamma.abs() + delta.abs());
+    let max_dx = COARSE_SUBSTEPS as f64 * COARSE_STIFF / stiffness;
+    let (coarse, coarse_pieces) = coarse_segments(&segs, &pieces, group, max_dx);
+    let whole = Pieces::<1> {
+        start: [0],
+        end: [coarse.len()],
+    };
+    let mut lo_hi = (-bound, bound);
+    let mut w0 = 0.0;
+    for _ in 0..SHOOT_MAX_ITER {
+        let (e, m) = shoot_pass(&shape, &coarse, &whole, &[w0], COARSE_SUBSTEPS);
+        let g = e[0] - w0;
+        if g.abs() <= tol || g.is_nan() {
+            break;
+        }
+        if g > 0.0 {
+            lo_hi.0 = w0;
         } else {
-            let (wn, d) = cycle(&shape, &segs, sh.w0, substeps);
-            (wn, d, [0.0; 7])
+            lo_hi.1 = w0;
+        }
+        let newton = w0 + g / (1.0 - m[0]);
+        let next = if newton > lo_hi.0 && newton < lo_hi.1 {
+            newton
+        } else {
+            0.5 * (lo_hi.0 + lo_hi.1)
         };
-        let g = wn - sh.w0;
-        if g.abs() <= tol {
-            if full {
-                // dw_0/dq = (dW/dq) / (1 - dW/dw_0); every sample: T_j + Phi_j dw_0/dq.
-                let dtop = t.map(|v| v / (1.0 - d));
-                for (row, &ph) in jac.iter_mut().zip(&phis) {
-                    for (v, dt) in row.iter_mut().zip(dtop) {
-                        *v += ph * dt;
-                    }
-                }
-                break;
-            }
-            // Converged on a cheap pass: repeat it with the sensitivities (same w trajectory).
-            full = true;
-            continue;
+        let step = next - w0;
+        w0 = next;
+        // Quadratic convergence: the error after this step is about step^2 / w_b, far below
+        // the coarse map's own distance to the fine one (>= 1e-9 w_b).
+        if step.abs() <= COARSE_STEP * bound {
+            break;
         }
-        iterations += 1;
-        if iterations > SHOOT_MAX_ITER || !g.is_finite() {
-            let why = if g.is_finite() {
-                format!("found no periodic loop in {SHOOT_MAX_ITER} iterations (residual {g:.3e})")
-            } else {
-                format!(
-                    "diverged (w reached {wn:e} within one cycle from w_0 = {:e})",
-                    sh.w0
-                )
-            };
-            return Err(CoreError::NotConverged(format!(
-                "the path-loop shooting {why}, bound {bound:.3e}, for A = {amplitude}, \
-                 beta = {beta}, gamma = {gamma}, mu = {mu}, delta = {delta}, play = {play}; with \
-                 beta < 0 the unloading branch runs away at large amplitudes: check the \
-                 parameters' signs and scale"
-            )));
-        }
-        let step = sh.update(g, d);
-        full = step.abs() <= FULL_PASS_STEP * bound;
     }
+    let mut v = [w0; PIECES];
+    for i in 1..PIECES {
+        let piece = Pieces::<1> {
+            start: [coarse_pieces.start[i - 1]],
+            end: [coarse_pieces.end[i - 1]],
+        };
+        v[i] = shoot_pass(&shape, &coarse, &piece, &[v[i - 1]], COARSE_SUBSTEPS).0[0];
+    }
+
+    // Multiple shooting from there; should it stray, bracketed single shooting from the coarse
+    // top value, which always has a safe step.
+    let found = if multiple && v.iter().all(|x| x.is_finite() && x.abs() <= bound) {
+        shoot(
+            &shape,
+            &segs,
+            &pieces,
+            v,
+            substeps,
+            bound,
+            MULTI_MAX_ITER,
+            &mut out,
+        )
+    } else {
+        Err(Failure::Unsafe)
+    };
+    let iterations = match found {
+        Ok(n) => n,
+        // Multiple shooting strayed (or was not asked for): bracketed single shooting.
+        Err(_) => {
+            let start = if w0.is_finite() { w0 } else { 0.0 };
+            let whole = Pieces::<1> {
+                start: [0],
+                end: [segs.len()],
+            };
+            let single = shoot(
+                &shape,
+                &segs,
+                &whole,
+                [start],
+                substeps,
+                bound,
+                SHOOT_MAX_ITER,
+                &mut out,
+            );
+            single.map_err(|f| {
+                let longest = segs.iter().map(|g| g.dx.abs()).fold(0.0, f64::max);
+                let why = match f {
+                    Failure::Diverged(wn) => {
+                        format!("diverged (w reached {wn:e} within one cycle)")
+                    }
+                    Failure::Iterations(g) => format!(
+                        "found no periodic loop in {SHOOT_MAX_ITER} iterations (residual {g:.3e})"
+                    ),
+                    Failure::Unsafe => "left its bracket".to_string(),
+                };
+                let hint = if longest / substeps as f64 * stiffness > RK4_STABLE {
+                    format!(
+                        "its RK4 steps (up to {:.3e} in x) times the loop's stiffness (|dh/dw| up \
+                         to {stiffness:.3e}) exceed RK4's stability limit {RK4_STABLE}: raise \
+                         substeps to at least {}",
+                        longest / substeps as f64,
+                        (longest * stiffness / RK4_STABLE).ceil()
+                    )
+                } else {
+                    "with beta < 0 the unloading branch runs away at large amplitudes: check the \
+                     parameters' signs and scale"
+                        .to_string()
+                };
+                CoreError::NotConverged(format!(
+                    "the path-loop shooting {why}, bound {bound:.3e}, for A = {amplitude}, \
+                     beta = {beta}, gamma = {gamma}, mu = {mu}, delta = {delta}, play = {play}; \
+                     {hint}"
+                ))
+            })?
+        }
+    };
     if !(w.iter().all(|v| v.is_finite()) && jac.iter().flatten().all(|v| v.is_finite())) {
         return Err(CoreError::NonFinite(format!(
             "the path loop or its sensitivities overflowed for A = {amplitude:e}, beta = {beta:e}, \
@@ -518,43 +829,6 @@ pub fn path_loop(
         )));
     }
     Ok(PathLoop { w, jac, iterations })
-}
-
-/// One cycle with every sensitivity from `w0`, recording each sample's `w`, its partials `T_j`
-/// at fixed `w0` (into `jac`) and `Phi_j = dw_j/dw0`. Returns `(W, dW/dw0, dW/dq)`.
-fn full_cycle(
-    shape: &Shape,
-    segs: &[Segment],
-    w0: f64,
-    substeps: usize,
-    w_out: &mut [f64],
-    jac: &mut [[f64; 7]],
-    phis: &mut [f64],
-) -> (f64, f64, [f64; 7]) {
-    let (mut w, mut phi) = (w0, 1.0);
-    let mut t = [0.0; 7];
-    for seg in segs {
-        let y = segment_full(shape, seg.s, seg.dx, w, substeps);
-        let pw = y[1];
-        for v in t.iter_mut() {
-            *v *= pw;
-        }
-        t[PD_BETA] += y[3];
-        t[PD_GAMMA] += y[4];
-        t[PD_MU] += y[5];
-        t[PD_DELTA] += y[6];
-        t[PD_AMPLITUDE] += y[2] * seg.ddx[0];
-        t[PD_PHI] += y[2] * seg.ddx[1];
-        t[PD_PLAY] += y[2] * seg.ddx[2];
-        phi *= pw;
-        w = y[0];
-        if seg.end != REVERSAL {
-            w_out[seg.end] = w;
-            jac[seg.end] = t;
-            phis[seg.end] = phi;
-        }
-    }
-    (w, phi, t)
 }
 
 #[cfg(test)]
@@ -754,6 +1028,30 @@ mod tests {
         }
         // Odd P works too.
         assert_eq!(pl(1.3, beta, gamma, mu, delta, b, 0.77, 7, 4).w.len(), 7);
+    }
+
+    #[test]
+    fn multiple_and_single_shooting_find_the_same_loop() {
+        // The same discrete fixed point, reached two ways: the joins of the four pieces meet to
+        // 1e-13 w_b, so w agrees to a few 1e-13 and the Jacobian to rounding of the chain rule.
+        for (args, p) in [
+            ((1.4, 0.7, 0.25, 1.8, 0.2, 0.15, 0.9), 64),
+            ((-2.5, 0.9, -0.3, 2.5, -0.35, 0.6, 2.0), 37),
+            ((0.2, 1.0, 0.2, 1.2, 0.5, 0.0, -1.0), 16),
+        ] {
+            let m = path_loop_with(args, p, 4, true).unwrap();
+            let s = path_loop_with(args, p, 4, false).unwrap();
+            for j in 0..p {
+                assert!((m.w[j] - s.w[j]).abs() < 1e-12, "{args:?} sample {j}");
+                for k in 0..7 {
+                    let (a, b) = (m.jac[j][k], s.jac[j][k]);
+                    assert!(
+                        (a - b).abs() < 1e-9 * (1.0 + b.abs()),
+                        "{args:?} {j} {k}: {a} {b}"
+                    );
+                }
+            }
+        }
     }
 
     type Args = (f64, f64, f64, f64, f64, f64, f64, usize, usize);

@@ -818,14 +818,24 @@ mod tests {
             // relative. The phase column of the plain loop is its continuous rate (7.2), the
             // derivative of the discrete map only up to the RK4 error near w = 0 where |w|^mu is
             // not smooth: 1e-5 relative at 4 substeps, 1e-7 at 256 (measured), hence 256 here.
-            assert!(err <= 1e-6 * scale.max(1e-3), "column {c}: {err} vs {scale}");
+            assert!(
+                err <= 1e-6 * scale.max(1e-3),
+                "column {c}: {err} vs {scale}"
+            );
         }
     }
 
     #[test]
     fn jacobian_matches_central_differences() {
         check_jacobian(
-            &["offset", "stiffness", "viscous", "inertia", "coulomb", "sensor_lag"],
+            &[
+                "offset",
+                "stiffness",
+                "viscous",
+                "inertia",
+                "coulomb",
+                "sensor_lag",
+            ],
             &[0.8, 0.2, 1.6, 0.3, 0.5, 0.05, 0.002, 0.2, 0.01],
             &EXC,
             256,

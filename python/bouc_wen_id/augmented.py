@@ -285,13 +285,23 @@ def _auto_substeps(p: int) -> int:
     return max(2, math.ceil(2048 / p))
 
 
+#: Smallest reciprocal condition number of the Jacobi-scaled Fisher matrix that is inverted (as design.md 5).
+COVARIANCE_RCOND_MIN = 1e-12
+
+
 def _covariance(fisher: FloatArray) -> FloatArray:
-    """``fisher^-1``, NaN-filled when it is not positive definite."""
-    try:
-        np.linalg.cholesky(fisher)
-        cov = np.linalg.inv(fisher)
-    except np.linalg.LinAlgError:
-        return np.full_like(fisher, np.nan)
+    """``fisher^-1``, NaN-filled when the Jacobi-scaled matrix is not positive definite or its reciprocal
+    condition number is below :data:`COVARIANCE_RCOND_MIN` (a direction the data do not fix)."""
+    nan = np.full_like(fisher, np.nan)
+    diag = np.diag(fisher)
+    if not np.all(np.isfinite(fisher)) or np.any(diag <= 0.0):
+        return nan
+    d = np.sqrt(diag)
+    scaled = fisher / np.outer(d, d)
+    eig = np.linalg.eigvalsh(0.5 * (scaled + scaled.T))
+    if eig[0] <= COVARIANCE_RCOND_MIN * eig[-1]:
+        return nan
+    cov = np.linalg.inv(scaled) / np.outer(d, d)
     return np.asarray(0.5 * (cov + cov.T), dtype=np.float64)
 
 

@@ -28,6 +28,7 @@ from .reference import (
     _finite_scalar,
     steady_loop,
 )
+from .reference_path import path_loop
 
 __all__ = [
     "TERM_NAMES",
@@ -138,7 +139,9 @@ def _hysteresis(
     """``w`` and its columns ``d/d(beta, gamma, mu, A, phi, delta, b)`` (last two 0 for the plain loop)."""
     beta, gamma, mu = (float(v) for v in shared[:3])
     if "asymmetry" in terms or "play" in terms:
-        raise InvalidParameterError("asymmetry and play need the path loop (pending merge)")
+        delta, b = _value(terms, shared, "asymmetry"), _value(terms, shared, "play")
+        w, jac, _ = path_loop(amplitude, beta, gamma, mu, delta, b, phi, p, substeps)
+        return w, jac
     w, jac5, _, _ = steady_loop(amplitude, beta, gamma, mu, phi, p, substeps)
     jac = np.zeros((p, 7))
     jac[:, :5] = jac5

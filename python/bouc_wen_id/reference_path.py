@@ -1,0 +1,265 @@
+"""NumPy reference of the hysteresis steady loop along the input path (``docs/design.md`` 9.2).
+
+Generalised Bouc-Wen with alpha = 1 and the ``sgn(w)`` asymmetry term of Song & Der Kiureghian (J. Eng.
+Mech. 132(6), 2006), driven through a play (backlash) operator of half-width ``b``::
+
+    wdot = xpdot [1 - |w|^mu (beta sgn(xpdot w) + gamma + delta sgn(w))],   xp = Play_b[x]
+
+with ``x = A cos(theta - phi)``.  Rate independence lets the loop be integrated in ``xp`` from node to node
+(the P samples and the two reversals of x): each segment is RK4 on ``dw/dsigma = dx h(w, s)``,
+``sigma in [0, 1]``, with the forward sensitivities riding along, and the steady state is the fixed point
+of one cycle of segment maps, found by Newton shooting on the top value safeguarded by bisection.
+
+This is the plain, step-by-step version (one chain, a 7-component RK4 state per segment) that the Rust
+core :func:`bouc_wen_id._core.path_loop` is held to; the core reaches the same discrete fixed point by a
+faster route (multiple shooting, derivatives summed in reverse), so the two agree to the shooting tolerance,
+not bit for bit, and their ``iterations`` counts differ.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .errors import (
+    InsufficientDataError,
+    InvalidParameterError,
+    NonFiniteError,
+    NotConvergedError,
+    ZeroAmplitudeError,
+)
+from .reference import FloatArray, _finite_scalar
+
+__all__ = ["path_loop", "PD_BETA", "PD_GAMMA", "PD_MU", "PD_AMPLITUDE", "PD_PHI", "PD_DELTA", "PD_PLAY"]
+
+#: Columns of the Jacobian returned by :func:`path_loop` (as ``rust/path_loop.rs``).
+PD_BETA, PD_GAMMA, PD_MU, PD_AMPLITUDE, PD_PHI, PD_DELTA, PD_PLAY = range(7)
+
+#: Newton (or bisection) updates of the top value allowed.
+PATH_SHOOT_MAX_ITER = 60
+#: Periodicity tolerance ``|W(w_0) - w_0| <= PATH_SHOOT_RTOL * w_b``.
+PATH_SHOOT_RTOL = 1e-13
+
+# A node: (xp, d xp / d(A, phi, b)).
+_Node = tuple[float, tuple[float, float, float]]
+
+
+def _rate(
+    beta: float, gamma: float, mu: float, delta: float, s: float, dx: float, y: FloatArray
+) -> FloatArray:
+    """Rate in sigma of ``[w, dw/dw_a, dw/d dx, dw/d beta, dw/d gamma, dw/d mu, dw/d delta]``."""
+    w = float(y[0])
+    aw = abs(w)
+    sw = float(np.sign(w))
+    if aw > 0.0:
+        lnw = float(np.log(aw))
+        wmu = float(np.exp(mu * lnw))
+        wmu1 = wmu / aw
+    else:
+        lnw = wmu = wmu1 = 0.0
+    c = gamma + (beta * s + delta) * sw
+    h = 1.0 - wmu * c
+    # d/dw |w|^mu = mu |w|^(mu-1) sgn(w); d/dw sgn(w) |w|^mu = mu |w|^(mu-1).
+    fw = dx * (-mu * wmu1 * (gamma * sw + beta * s + delta))
+    return np.array(
+        [
+            dx * h,
+            fw * y[1],
+            fw * y[2] + h,
+            fw * y[3] - dx * wmu * s * sw,
+            fw * y[4] - dx * wmu,
+            fw * y[5] - dx * wmu * lnw * c,
+            fw * y[6] - dx * wmu * sw,
+        ]
+    )
+
+
+def _segment(
+    beta: float, gamma: float, mu: float, delta: float, s: float, dx: float, w: float, substeps: int
+) -> FloatArray:
+    """The segment map and its sensitivities: RK4 from ``[w, 1, 0, 0, 0, 0, 0]`` over sigma in [0, 1]."""
+    y = np.array([w, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0])
+    hs = 1.0 / substeps
+    for _ in range(substeps):
+        k1 = _rate(beta, gamma, mu, delta, s, dx, y)
+        k2 = _rate(beta, gamma, mu, delta, s, dx, y + 0.5 * hs * k1)
+        k3 = _rate(beta, gamma, mu, delta, s, dx, y + 0.5 * hs * k2)
+        k4 = _rate(beta, gamma, mu, delta, s, dx, y + hs * k3)
+        y = y + hs / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+    return y
+
+
+def _play_node(a: float, sa: float, b: float, zeta: float, descending: bool) -> _Node:
+    """``xp`` at cycle phase ``zeta`` (0 at the top of x) and its derivatives on the active branch."""
+    x = a * np.cos(zeta)
+    dxa, dxphi = sa * np.cos(zeta), a * np.sin(zeta)
+    if descending:
+        # After the top, xp dwells at a - b until x has come down by 2b, then follows x + b.
+        if x < a - 2.0 * b:
+            return float(x + b), (float(dxa), float(dxphi), 1.0)
+        return a - b, (sa, 0.0, -1.0)
+    if x > -a + 2.0 * b:
+        return float(x - b), (float(dxa), float(dxphi), -1.0)
+    return -a + b, (-sa, 0.0, 1.0)
+
+
+def _segments(amplitude: float, phi: float, b: float, p: int) -> list[tuple[float, FloatArray, float, int]]:
+    """The P + 2 segments ``(dx, d dx/d(A, phi, b), s, sample or -1)`` of one cycle, from the top around."""
+    a = abs(amplitude)
+    sa = float(np.sign(amplitude))
+    # Cycle phase of sample j as a fraction of the period: frac(j/P - phi'/(2 pi)),
+    # phi' = phi (+ pi for A < 0, whose top is at theta - phi = pi).
+    shift = 0.5 if amplitude < 0.0 else 0.0
+    r = (phi / (2.0 * np.pi) + shift) % 1.0
+    u = np.arange(p) / p - r
+    u = np.where(u < 0.0, u + 1.0, u)
+    j0 = int(np.argmin(u))
+    top: _Node = (a - b, (sa, 0.0, -1.0))
+    bottom: _Node = (-a + b, (-sa, 0.0, 1.0))
+    nodes: list[tuple[_Node, float, int]] = []
+    passed_bottom = False
+    for m in range(p):
+        j = (j0 + m) % p
+        descending = bool(u[j] <= 0.5)
+        if not descending and not passed_bottom:
+            nodes.append((bottom, -1.0, -1))
+            passed_bottom = True
+        nodes.append(
+            (_play_node(a, sa, b, 2.0 * np.pi * float(u[j]), descending), -1.0 if descending else 1.0, j)
+        )
+    if not passed_bottom:
+        nodes.append((bottom, -1.0, -1))
+    nodes.append((top, 1.0, -1))
+    segs = []
+    prev = top
+    for node, s, j in nodes:
+        segs.append((node[0] - prev[0], np.subtract(node[1], prev[1]), s, j))
+        prev = node
+    return segs
+
+
+def path_loop(
+    amplitude: float,
+    beta: float,
+    gamma: float,
+    mu: float,
+    delta: float,
+    play: float,
+    phi: float,
+    samples_per_period: int,
+    substeps: int,
+) -> tuple[FloatArray, FloatArray, int]:
+    """Steady loop of the generalised Bouc-Wen behind a play, along the path of ``x = A cos(theta - phi)``.
+
+    Parameters
+    ----------
+    amplitude : float
+        ``A``, the amplitude of x (units of x; may be negative, its top is then at ``theta - phi = pi``).
+    beta, gamma, delta : float
+        Shape parameters (``1/[w]^mu``); ``delta`` is the asymmetry. ``beta + gamma - |delta| > 0``.
+    mu : float
+        Exponent, ``> 1``.
+    play : float
+        Half-width ``b`` of the play before the hysteresis (units of x), ``0 <= b < |A|``.
+    phi : float
+        Phase of x (rad) on the grid ``theta_j = 2 pi j / P``.
+    samples_per_period : int
+        ``P >= 4``.
+    substeps : int
+        RK4 steps per segment between nodes, ``>= 1``.
+
+    Returns
+    -------
+    w : ndarray, shape (P,)
+        The steady loop at the samples (units of w).
+    jac : ndarray, shape (P, 7)
+        ``d w_j / d(beta, gamma, mu, A, phi, delta, b)`` (columns ``PD_*``).
+    iterations : int
+        Newton (or bisection) updates of the top value.
+
+    Raises
+    ------
+    NonFiniteError, InvalidParameterError, ZeroAmplitudeError, InsufficientDataError, NotConvergedError
+        As :func:`bouc_wen_id._core.path_loop`.
+    """
+    for name, v in (
+        ("amplitude", amplitude),
+        ("beta", beta),
+        ("gamma", gamma),
+        ("mu", mu),
+        ("delta", delta),
+        ("play", play),
+        ("phi", phi),
+    ):
+        _finite_scalar(name, v)
+    if mu <= 1.0:
+        raise InvalidParameterError(f"mu = {mu} must be > 1 in the identification model")
+    margin = beta + gamma - abs(delta)
+    if margin <= 0.0:
+        raise InvalidParameterError(
+            f"beta + gamma - |delta| = {margin} must be > 0: otherwise one side of the loop is unbounded"
+        )
+    if amplitude == 0.0:
+        raise ZeroAmplitudeError("the amplitude of x is 0: the loop is a point")
+    if play < 0.0:
+        raise InvalidParameterError(f"play = {play} must be >= 0")
+    if play >= abs(amplitude):
+        raise ZeroAmplitudeError(
+            f"play = {play} >= |amplitude| = {abs(amplitude)}: no motion reaches the hysteresis"
+        )
+    p = int(samples_per_period)
+    if p < 4:
+        raise InsufficientDataError(f"samples_per_period = {p}: at least 4 are needed")
+    if substeps < 1:
+        raise InvalidParameterError(f"substeps = {substeps} must be >= 1")
+
+    segs = _segments(amplitude, phi, play, p)
+    bound = (1.0 / margin) ** (1.0 / mu)
+    w = np.zeros(p)
+    t_rows = np.zeros((p, 7))
+    phis = np.zeros(p)
+
+    def cycle(w0: float) -> tuple[float, float, FloatArray]:
+        """One cycle from ``w0``: ``W``, ``dW/dw0``, ``dW/dq`` at fixed ``w0``; records the samples."""
+        wc, ph, t = w0, 1.0, np.zeros(7)
+        for dx, ddx, s, j in segs:
+            y = _segment(beta, gamma, mu, delta, s, dx, wc, substeps)
+            # Chain rule through the segment: T <- Psi_w T + Psi_q (+ Psi_dx d dx/dq for A, phi, b).
+            t = y[1] * t
+            t[[PD_BETA, PD_GAMMA, PD_MU, PD_DELTA]] += y[3:7]
+            t[[PD_AMPLITUDE, PD_PHI, PD_PLAY]] += y[2] * ddx
+            ph *= y[1]
+            wc = float(y[0])
+            if j >= 0:
+                w[j], t_rows[j], phis[j] = wc, t, ph
+        return wc, ph, t
+
+    lo, hi = -bound, bound
+    w0 = 0.0
+    iterations = 0
+    while True:
+        # A runaway cycle overflows to inf/NaN, which the residual test below turns into NotConvergedError.
+        with np.errstate(over="ignore", invalid="ignore"):
+            wn, dw, t_end = cycle(w0)
+        g = wn - w0
+        if not np.isfinite(g):
+            raise NotConvergedError(f"the path-loop shooting diverged (w reached {wn} within one cycle)")
+        if abs(g) <= PATH_SHOOT_RTOL * bound:
+            break
+        iterations += 1
+        if iterations > PATH_SHOOT_MAX_ITER:
+            raise NotConvergedError(
+                f"the path-loop shooting found no periodic loop in {PATH_SHOOT_MAX_ITER} iterations "
+                f"(residual {g:.3e})"
+            )
+        # g = W(w0) - w0 is positive at -w_b and negative at w_b: keep a bracket.
+        if g > 0.0:
+            lo = w0
+        else:
+            hi = w0
+        newton = w0 + g / (1.0 - dw)
+        w0 = newton if lo < newton < hi and np.isfinite(newton) else 0.5 * (lo + hi)
+    # dw_0/dq = (dW/dq) / (1 - dW/dw_0); every sample T_j + Phi_j dw_0/dq.
+    jac = t_rows + phis[:, None] * (t_end / (1.0 - dw))[None, :]
+    if not (np.all(np.isfinite(w)) and np.all(np.isfinite(jac))):
+        raise NonFiniteError("the path loop or its sensitivities overflowed; rescale the data")
+    return w, jac, iterations
