@@ -538,11 +538,13 @@ fn shoot<const K: usize>(
             v[0] = next;
             step.abs()
         } else {
-            for i in 0..K {
-                v[i] += d[i];
-            }
-            if !v.iter().all(|x| x.abs() <= bound) {
+            if !d.iter().all(|x| x.is_finite()) {
                 return Err(Failure::Unsafe);
+            }
+            // |w| <= w_b holds for the loop (a saturated one touches it to rounding), so a
+            // step beyond is clamped back, and the residual test decides.
+            for i in 0..K {
+                v[i] = (v[i] + d[i]).clamp(-bound, bound);
             }
             d.iter().map(|x| x.abs()).fold(0.0, f64::max)
         };
@@ -996,6 +998,16 @@ mod tests {
         let bottom = -(beta + gamma - delta).powf(-1.0 / mu);
         assert!((max - top).abs() < 1e-9, "{max} vs {top}");
         assert!((min - bottom).abs() < 1e-9, "{min} vs {bottom}");
+        // Symmetric (delta = 0): both sides saturate at w_b itself, the edge of the shooting's
+        // bracket.
+        let sym = pl(60.0, beta, gamma, mu, 0.0, 0.0, 0.0, 256, 16);
+        let wb = (beta + gamma).powf(-1.0 / mu);
+        let max = sym.w.iter().copied().fold(f64::MIN, f64::max);
+        let min = sym.w.iter().copied().fold(f64::MAX, f64::min);
+        assert!(
+            (max - wb).abs() < 1e-9 && (min + wb).abs() < 1e-9,
+            "{max} {min} {wb}"
+        );
         // Swapping the sign of delta and of x mirrors the loop: w -> -w.
         let m = pl(-60.0, beta, gamma, mu, -delta, 0.0, 0.0, 256, 16);
         for (a, b) in l.w.iter().zip(&m.w) {
