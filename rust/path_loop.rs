@@ -779,6 +779,13 @@ fn path_loop_with(
     let segs = segments(amplitude, phi, play, p);
     // |w| stays below the larger of the two saturation levels (beta + gamma -+ delta)^(-1/mu).
     let bound = (1.0 / margin).powf(1.0 / mu);
+    if !(bound.is_finite() && bound > 0.0) {
+        return Err(CoreError::InvalidParameter(format!(
+            "beta + gamma - |delta| = {margin:e} with mu = {mu}: the loop's bound \
+             (beta + gamma - |delta|)^(-1/mu) = {bound:e} is not a usable number; rescale w so \
+             that the shape parameters are of moderate size"
+        )));
+    }
 
     let mut w = vec![0.0; p];
     let mut jac = vec![[0.0; 7]; p];
@@ -1176,6 +1183,9 @@ mod tests {
         // no periodic loop; the shooting says so instead of returning garbage.
         let r = path_loop(20.0, -0.4, 1.0, 2.0, 0.0, 0.0, 0.0, 64, 4);
         assert!(matches!(r, Err(CoreError::NotConverged(_))), "{r:?}");
+        // A bound that overflows (denormal margin) is refused, not iterated on.
+        let r = path_loop(1.0, 5e-324, 0.0, 3.0, 0.0, 0.0, 0.0, 16, 2);
+        assert!(matches!(r, Err(CoreError::InvalidParameter(_))), "{r:?}");
         // Parameters at the edge of the float range: an error, never a panic or NaN.
         let r = path_loop(6.1e-96, 4.49e307, 0.0, 4.0, 0.0, 0.0, 0.0, 4, 1);
         assert!(
