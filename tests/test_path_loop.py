@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 from bouc_wen_id import _core
 from bouc_wen_id.errors import (
+    BoucWenIdError,
     InsufficientDataError,
     InvalidParameterError,
     NonFiniteError,
@@ -193,6 +194,7 @@ BAD: list[tuple[str, dict[str, Any], type[Exception]]] = [
     ("unbounded_negative_side", {"delta": -0.75}, InvalidParameterError),
     ("negative_play", {"play": -0.01}, InvalidParameterError),
     ("zero_substeps", {"substeps": 0}, InvalidParameterError),
+    ("bound_overflows", {"beta": 5e-324, "gamma": 0.0, "delta": 0.0, "mu": 3.0}, InvalidParameterError),
     ("zero_amplitude", {"amplitude": 0.0}, ZeroAmplitudeError),
     ("play_equals_amplitude", {"play": 1.0}, ZeroAmplitudeError),
     ("play_beyond_negative_amplitude", {"amplitude": -0.5, "play": 0.6}, ZeroAmplitudeError),
@@ -236,3 +238,23 @@ def test_oversized_grid_is_refused_before_any_work() -> None:
         _core.path_loop(**{**GOOD, "samples_per_period": 1 << 20, "substeps": 1 << 20})
     with pytest.raises(InvalidParameterError):
         _core.path_loop(**{**GOOD, "samples_per_period": -5})
+
+
+def test_extreme_inputs_give_a_finite_loop_or_a_named_error() -> None:
+    """Admissible cases with one or two parameters set across the float range: finite, or a named error."""
+    rng = np.random.default_rng(4242)
+    values = [0.0, 5e-324, 1e-300, 1e-12, 0.5, 1.0, 1.0000001, 3.0, 50.0, 1e6, 1e300, 1.7e308, -1e-300, -0.5]
+    outcomes = {"ok": 0, "error": 0}
+    for i in range(400):
+        c = _random_case(i)
+        c["samples_per_period"] = min(c["samples_per_period"], 12)
+        for name in rng.choice(PARAMS, size=int(rng.integers(1, 3)), replace=False):
+            c[str(name)] = float(rng.choice(values)) * float(rng.choice([1.0, -1.0, 1.37]))
+        try:
+            w, jac, _ = _core.path_loop(**c)
+        except BoucWenIdError:
+            outcomes["error"] += 1
+            continue
+        outcomes["ok"] += 1
+        assert np.all(np.isfinite(w)) and np.all(np.isfinite(jac)), c
+    assert outcomes["ok"] > 40 and outcomes["error"] > 40, outcomes

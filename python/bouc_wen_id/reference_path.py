@@ -213,7 +213,10 @@ def path_loop(
         raise InvalidParameterError(f"substeps = {substeps} must be >= 1")
 
     segs = _segments(amplitude, phi, play, p)
-    bound = (1.0 / margin) ** (1.0 / mu)
+    with np.errstate(over="ignore", divide="ignore"):
+        bound = float(np.float64(1.0) / margin) ** (1.0 / mu)
+    if not (np.isfinite(bound) and bound > 0.0):
+        raise InvalidParameterError(f"the bound (beta + gamma - |delta|)^(-1/mu) = {bound} is unusable")
     w = np.zeros(p)
     t_rows = np.zeros((p, 7))
     phis = np.zeros(p)
