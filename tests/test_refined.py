@@ -14,12 +14,14 @@ from __future__ import annotations
 
 import math
 import warnings
+from typing import Any
 
 import bouc_wen_id as bw
 import numpy as np
 import pytest
 from bouc_wen_id import _core
 from bouc_wen_id import reference as ref
+from bouc_wen_id.identification import Method
 from bouc_wen_id.result import phase_error
 from numpy.testing import assert_allclose
 
@@ -110,9 +112,13 @@ def test_steady_loop_parity_with_reference(seed: int) -> None:
         ((0.0, 0.5, 0.2, 1.5, 0.0, 64, 4), bw.ZeroAmplitudeError),
         ((math.nan, 0.5, 0.2, 1.5, 0.0, 64, 4), bw.NonFiniteError),
         ((1.0, 0.5, 0.2, 1.5, 0.0, 3, 4), bw.InsufficientDataError),
+        # Valid parameters whose shooting does not converge in 60 Newton steps on a coarse lattice: its
+        # own error, not an InvalidParameterError.
+        ((100.0, 0.5, 0.0, 1.01, 0.3, 8, 2), bw.ConvergenceError),
+        ((1.0, 1000.0, -999.0, 1.01, 0.3, 8, 2), bw.ConvergenceError),
     ],
 )
-def test_steady_loop_errors_match_reference(args: tuple, error: type) -> None:
+def test_steady_loop_errors_match_reference(args: tuple[Any, ...], error: type[Exception]) -> None:
     with pytest.raises(error):
         _core.steady_loop(*args)
     with pytest.raises(error):
@@ -203,6 +209,17 @@ def test_refine_parity_with_reference() -> None:
     assert got[3] and want[3]
 
 
+def test_refined_reports_whether_the_lm_converged() -> None:
+    recs = bw.simulate(bw.demo_plant(), bw.demo_plan(samples_per_period=128, periods=4, noise_sd=0.01))
+    res = bw.identify(recs)
+    assert res.converged is True and res.to_dict()["converged"] is True
+    with pytest.warns(bw.ConvergenceWarning, match="cap of 2 iterations"):
+        capped = bw.identify(recs, max_iter=2)
+    assert capped.converged is False and capped.iterations == 2
+    assert "before converging" in capped.summary()
+    assert bw.identify(recs, method="profile").converged is None
+
+
 def test_refined_noise_free_recovery_is_tight() -> None:
     plant = bw.demo_plant()
     recs = bw.simulate(
@@ -210,6 +227,7 @@ def test_refined_noise_free_recovery_is_tight() -> None:
     )
     res = bw.identify(recs)
     err = res.errors()
+    assert res.truth is not None
     # Left: the time-domain RK4 of the simulation (step T/1024) and the transient after 40 periods.
     assert abs(err["beta"]) < 1e-5 and abs(err["gamma"]) < 1e-5 and abs(err["mu"]) < 1e-5
     assert np.max(np.abs(err["gain"]) / res.truth.gain) < 1e-5
@@ -219,7 +237,7 @@ def test_refined_noise_free_recovery_is_tight() -> None:
 
 def test_refined_beats_paper_on_noisy_data() -> None:
     plant = single_plant()
-    errs = {"paper": [], "refined": []}
+    errs: dict[Method, list[list[float]]] = {"paper": [], "refined": []}
     for seed in range(6):
         recs = bw.simulate(plant, plan1(0.05, 50, seed))
         for method in errs:
@@ -270,10 +288,12 @@ def test_intervals_cover_the_truth(monte_carlo: list[bw.IdentificationResult]) -
 
 
 def test_adequacy_does_not_flag_model_data_too_often(monte_carlo: list[bw.IdentificationResult]) -> None:
-    rejections = sum(r.adequacy.rejects(0.05) for r in monte_carlo)
+    adequacies = [r.adequacy for r in monte_carlo if r.adequacy is not None]
+    assert len(adequacies) == len(monte_carlo)
+    rejections = sum(a.rejects(0.05) for a in adequacies)
     # Binomial(30, 0.05): P(>= 6 rejections) = 0.016; a broken statistic rejects far more (or never).
     assert rejections <= 5
-    pvals = np.array([r.adequacy.p_value for r in monte_carlo])
+    pvals = np.array([a.p_value for a in adequacies])
     # Uniform p-values under the null: the mean of 30 is 0.5 +- 0.053 (1 sd).
     assert 0.3 < pvals.mean() < 0.7
 
@@ -288,7 +308,7 @@ def test_adequacy_flags_a_model_that_is_wrong() -> None:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", bw.IdentifiabilityWarning)
         res = bw.identify(bad)
-    assert res.adequacy.rejects(0.01)
+    assert res.adequacy is not None and res.adequacy.rejects(0.01)
     e = res.experiments[0]
     noise_only = e.noise_sd / math.sqrt(e.periods) / float(np.std(e.ybar))  # NRMSE of a perfect model
     assert e.nrmse > 2 * noise_only
@@ -299,6 +319,7 @@ def test_standard_errors_match_the_cramer_rao_bound() -> None:
     plan = plan1(0.05, 50, 0)
     crb = bw.cramer_rao(plant, plan)
     res = bw.identify(bw.simulate(plant, plan))
+    assert res.standard_errors is not None
     # The estimated noise variance and the Fisher matrix at the estimate differ from the truth's by
     # O(1/sqrt(P (N-1))) and O(error) respectively: a few percent.
     assert res.standard_errors["beta"] == pytest.approx(crb.beta, rel=0.1)
@@ -329,7 +350,7 @@ def test_poorly_identifiable_design_warns() -> None:
 
 
 @pytest.mark.parametrize("method", ["paper", "profile", "refined"])
-def test_units_do_not_matter(method: str) -> None:
+def test_units_do_not_matter(method: Method) -> None:
     """Forces of 1500 N and strokes of 5 mm identify as well as unit-scale data, reported in user units."""
     recs = bw.simulate(single_plant(), plan1(0.02, 30, seed=3))
     s_u, s_y = 0.005, 1500.0
@@ -349,6 +370,10 @@ def test_units_do_not_matter(method: str) -> None:
     assert_allclose(b.phases, a.phases, atol=1e-6)
     assert b.experiments[0].nrmse == pytest.approx(a.experiments[0].nrmse, rel=1e-5)
     if method == "refined":
+        assert a.standard_errors is not None and b.standard_errors is not None
+        assert a.covariance is not None and b.covariance is not None
+        assert a.adequacy is not None and b.adequacy is not None
+        assert a.experiments[0].gain_se is not None
         assert b.standard_errors["mu"] == pytest.approx(a.standard_errors["mu"], rel=1e-4)
         assert b.experiments[0].gain_se == pytest.approx(a.experiments[0].gain_se * s_y / s_u, rel=1e-4)
         # The covariance maps through (beta, gamma) -> (beta, gamma) / s_y^mu (delta method): beta's

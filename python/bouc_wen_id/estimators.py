@@ -11,6 +11,13 @@ All work on :class:`~bouc_wen_id.prepare.Prepared` experiments in scaled units (
 ``"refined"``
     The profile estimates as a start, then Levenberg-Marquardt on the steady loops of every experiment at
     once (design.md section 7), safeguarded by generic starts against wrong basins.
+
+References
+----------
+*Wiener System Identification in Presence of Hysteresis Nonlinearity*, the seed paper whose equation
+numbers are cited; for the Bouc-Wen properties it relies on (Propositions 1-2): F. Ikhouane and
+J. Rodellar, *Systems with Hysteresis: Analysis, Identification and Control using the Bouc-Wen Model*,
+Wiley, 2007.
 """
 
 from __future__ import annotations
@@ -112,6 +119,8 @@ class Fit:
     iterations: int
     cov: Optional[FloatArray]
     loops: list[Optional[FloatArray]]
+    #: Whether the Levenberg-Marquardt run the estimates come from converged (None: no such run).
+    converged: Optional[bool] = None
 
 
 def steady_substeps(p: int) -> int:
@@ -207,15 +216,15 @@ def fit(
 
 def _at_model_limit(exc: SearchAtBoundError) -> SearchAtBoundError:
     """mu = 1 is the model's own limit, so "widen the bracket" is no advice there: say what it means."""
-    err = SearchAtBoundError(
+    return SearchAtBoundError(
         "the fit drove mu to 1, the lower end of the model's range (mu > 1): the data turn at each "
         "reversal in a way no Bouc-Wen loop with mu > 1 draws (typically a force that jumps at the "
         "reversal, as Coulomb friction, or keeps growing with velocity, as viscous damping beside "
         "friction in MR dampers). The plain Wiener-Bouc-Wen model does not describe these data; the "
-        "physics it leaves out must be modelled"
+        "physics it leaves out must be modelled",
+        bound=exc.bound,
+        lower=exc.lower,
     )
-    err.lower, err.bound = exc.lower, exc.bound
-    return err
 
 
 def _paper(
@@ -240,7 +249,13 @@ def _paper(
 
 
 def _profile(
-    prepared: Sequence[Prepared], core: Any, reference: int, lo: float, hi: float, tol: float, phase_grid: int
+    prepared: Sequence[Prepared],
+    core: Any,
+    reference: int,
+    lo: float,
+    hi: float,
+    tol: float,
+    phase_grid: int,
 ) -> tuple[Start, float]:
     """The separable fit profiled over the phase on the reference, then gain and phase elsewhere."""
     ref = prepared[reference]
@@ -412,13 +427,13 @@ def _refined_fit(best: LMRun, m: int, lo: float, hi: float) -> Fit:
     beta, gamma, mu = (float(v) for v in best.params[:3])
     if min(mu - lo, hi - mu) <= AT_BOUND_FRACTION * (hi - lo):
         lower = mu - lo <= hi - mu
-        err = SearchAtBoundError(
+        raise SearchAtBoundError(
             f"the joint fit ended on the {'lower' if lower else 'upper'} end of the mu bracket "
             f"[{lo}, {hi}] (mu = {mu:.6g}); widen the bracket, or check that the data excite the "
-            "hysteresis"
+            "hysteresis",
+            bound=lo if lower else hi,
+            lower=lower,
         )
-        err.lower, err.bound = lower, lo if lower else hi
-        raise err
     gains = best.params[3::2].copy()
     phis = best.params[4::2].copy()
     # Flip the sign of g_i rows/columns where the canonical branch (|G| > 0) is reported.
@@ -430,4 +445,4 @@ def _refined_fit(best: LMRun, m: int, lo: float, hi: float) -> Fit:
     except np.linalg.LinAlgError:
         cov = np.full_like(fisher, np.nan)
     loops: list[Optional[FloatArray]] = list(best.loops)
-    return Fit(beta, gamma, mu, gains, phis, best.cost, best.iterations, cov, loops)
+    return Fit(beta, gamma, mu, gains, phis, best.cost, best.iterations, cov, loops, best.converged)

@@ -4,6 +4,13 @@ Each experiment becomes one :class:`Prepared` record: its averaged period ``ybar
 average (4a-b) for a :class:`~bouc_wen_id.model.Recording`, the synchronous average of every steady segment
 for a :class:`~bouc_wen_id.measurement.Measurement`), the spectral derivative, the noise variance from the
 period-to-period spread, and the harmonics kept.  :func:`scale` then expresses them in units of order one.
+
+References
+----------
+*Wiener System Identification in Presence of Hysteresis Nonlinearity*, the seed paper whose equation
+numbers are cited; for the Bouc-Wen properties it relies on (Propositions 1-2): F. Ikhouane and
+J. Rodellar, *Systems with Hysteresis: Analysis, Identification and Control using the Bouc-Wen Model*,
+Wiley, 2007.
 """
 
 from __future__ import annotations
