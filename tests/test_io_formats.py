@@ -13,8 +13,8 @@ from typing import Any, Callable
 import bouc_wen_id as bw
 import numpy as np
 import pytest
-import scipy.io
-import scipy.sparse
+import scipy.io  # type: ignore[import-untyped]
+import scipy.sparse  # type: ignore[import-untyped]
 from bouc_wen_id import io
 from bouc_wen_id.errors import (
     ClippingError,
@@ -49,6 +49,7 @@ def _assert_same(a: io.Item, b: io.Item, exact: bool = True) -> None:
         va, vb = getattr(a, name, None), getattr(b, name, None)
         assert (va is None) == (vb is None), name
         if va is not None:
+            assert vb is not None
             if exact:
                 assert np.array_equal(va, vb), name
             else:
@@ -396,10 +397,11 @@ def test_mat_round_trips(tmp_path: Path, recordings: list[bw.Recording]) -> None
     (back,) = io.load(single)
     _assert_same(m, back)
     # Several measurements: a struct array; recordings (with x, w) and measurements: a cell array.
-    for name, items in (
+    cases: list[tuple[str, list[io.Item]]] = [
         ("same.mat", [m, _measurement(name="other")]),
         ("mixed.mat", [recordings[0], m, recordings[1]]),
-    ):
+    ]
+    for name, items in cases:
         path = tmp_path / name
         io.save(path, items)
         back_items = io.load(path)
@@ -435,7 +437,7 @@ def test_folders_and_save_layouts(tmp_path: Path, recordings: list[bw.Recording]
     items: list[io.Item] = [recordings[0], _measurement(), recordings[1]]
     for fmt in ("csv", "npz", "mat"):
         folder = tmp_path / fmt
-        files = io.save(folder, items, fmt=fmt)  # type: ignore[arg-type]
+        files = io.save(folder, items, fmt=fmt)
         assert [f.name for f in files] == [f"exp_{i:03d}.{fmt}" for i in range(3)]
         back = io.load(folder)
         for a, b in zip(items, back):
@@ -481,7 +483,7 @@ def test_save_recordings_keeps_todays_layout(tmp_path: Path, recordings: list[bw
 ROWS = "".join(f"{i * 0.01!r},{math.sin(i)!r},{math.cos(i)!r}\n" for i in range(20))
 
 
-def _npz(**arrays: Any) -> Callable[[Path], None]:
+def _npz(**arrays: Any) -> Callable[[Path], object]:
     def write(path: Path) -> None:
         with open(path, "wb") as fh:
             np.savez(fh, **arrays)
@@ -489,21 +491,21 @@ def _npz(**arrays: Any) -> Callable[[Path], None]:
     return write
 
 
-def _mat(**variables: Any) -> Callable[[Path], None]:
+def _mat(**variables: Any) -> Callable[[Path], object]:
     return lambda path: scipy.io.savemat(path, variables)
 
 
-def _text(text: str) -> Callable[[Path], None]:
+def _text(text: str) -> Callable[[Path], object]:
     return lambda path: path.write_text(text, encoding="utf-8")
 
 
-def _bytes(data: bytes) -> Callable[[Path], None]:
+def _bytes(data: bytes) -> Callable[[Path], object]:
     return lambda path: path.write_bytes(data)
 
 
 def _patched_mat(
     variables: dict[str, Any], patches: dict[int, int], compressed: bool = False
-) -> Callable[[Path], None]:
+) -> Callable[[Path], object]:
     """A MAT file with bytes of its (inflated) first variable overwritten: offsets from the variable's tag."""
 
     def write(path: Path) -> None:
@@ -526,7 +528,7 @@ def _patched_mat(
 
 
 U = np.linspace(0, 1, 20)
-MALFORMED: list[tuple[str, Callable[[Path], None], str]] = [
+MALFORMED: list[tuple[str, Callable[[Path], object], str]] = [
     ("empty.csv", _text(""), "empty"),
     ("blank.csv", _text("\n  \n"), "empty"),
     ("header_only.csv", _text('# name: "x"\n'), "no column names and no data"),
@@ -585,7 +587,7 @@ MALFORMED: list[tuple[str, Callable[[Path], None], str]] = [
 
 @pytest.mark.parametrize(("name", "write", "match"), MALFORMED, ids=[m[0] for m in MALFORMED])
 def test_malformed_files_raise_file_format_error_naming_the_file(
-    tmp_path: Path, name: str, write: Callable[[Path], None], match: str
+    tmp_path: Path, name: str, write: Callable[[Path], object], match: str
 ) -> None:
     path = tmp_path / name
     write(path)

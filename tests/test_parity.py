@@ -211,7 +211,8 @@ def _random_spd(rng: np.random.Generator, log_cond: float) -> np.ndarray:
     s = q @ np.diag(lam) @ q.T
     d = 10.0 ** rng.uniform(-3, 3, 3)  # badly scaled columns: what the Jacobi scaling is for
     m = d[:, None] * s * d[None, :]
-    return 0.5 * (m + m.T)
+    out: np.ndarray = 0.5 * (m + m.T)
+    return out
 
 
 @pytest.mark.parametrize("seed", SEEDS)
@@ -367,14 +368,14 @@ _SINE = (1.0, 2.0, 0.01, 50, 2)  # amplitude, omega, dt, n_samples, substeps
 
 
 def _with_nan(a: np.ndarray, i: int = 5) -> np.ndarray:
-    b = a.copy()
+    b: np.ndarray = a.copy()
     b[i] = np.nan
     return b
 
 
 def _sim(
     num: Any = (1.0,), den: Any = (1.0, 1.0), delay: float = 0.0, bw: Any = _BW, sine: Any = _SINE
-) -> tuple:
+) -> tuple[Any, ...]:
     return ("simulate_sine", (np.asarray(num, float), np.asarray(den, float), delay, *bw, *sine))
 
 
@@ -390,7 +391,7 @@ def _sine(**kw: Any) -> tuple[Any, ...]:
     return tuple(d.values())
 
 
-def _search_at(mu_lo: float, mu_hi: float) -> tuple:
+def _search_at(mu_lo: float, mu_hi: float) -> tuple[Any, ...]:
     return ("sls_search", "LOOP", mu_lo, mu_hi)
 
 
@@ -398,7 +399,7 @@ def _parabola(x: float) -> float:
     return (x - 2.0) ** 2
 
 
-BAD_INPUTS: list[tuple[str, tuple, type[Exception]]] = [
+BAD_INPUTS: list[tuple[str, tuple[Any, ...], type[Exception]]] = [
     # periodic averaging
     ("nan_in_y", ("periodic_average", (_with_nan(np.tile(_Y, 4)), 64, 1, 2)), NonFiniteError),
     ("inf_in_y", ("periodic_average", (np.r_[np.tile(_Y, 4)[:-1], np.inf], 64, 1, 2)), NonFiniteError),
@@ -520,7 +521,9 @@ BAD_INPUTS: list[tuple[str, tuple, type[Exception]]] = [
 @pytest.mark.parametrize(
     ("call", "error"), [(c, e) for _, c, e in BAD_INPUTS], ids=[n for n, _, _ in BAD_INPUTS]
 )
-def test_same_named_error_from_both_backends(helpers: Any, call: tuple, error: type[Exception]) -> None:
+def test_same_named_error_from_both_backends(
+    helpers: Any, call: tuple[Any, ...], error: type[Exception]
+) -> None:
     name, args = call[0], call[1]
     if args == "LOOP":
         pr = helpers.loop_problem(samples_per_period=128)
@@ -539,7 +542,7 @@ def test_same_named_error_from_both_backends(helpers: Any, call: tuple, error: t
 # --------------------------------------------------------------------------------------------------
 
 
-def _all_calls(helpers: Any) -> list[tuple[str, tuple]]:
+def _all_calls(helpers: Any) -> list[tuple[str, tuple[Any, ...]]]:
     pr = helpers.loop_problem(samples_per_period=64)
     yb, yd = pr["ybar"], pr["ydot"]
     a, om, ph = pr["amplitude"], pr["omega"], pr["phi"]

@@ -30,6 +30,7 @@ from typing import Any, Optional
 import numpy as np
 from numpy.typing import NDArray
 
+from ._backend import Core
 from .errors import BoucWenIdError, InsufficientDataError, SearchAtBoundError
 from .prepare import Prepared
 from .result import Adequacy
@@ -129,7 +130,7 @@ def steady_substeps(p: int) -> int:
 
 
 def loop_fit(
-    core: Any, e: Prepared, gain: float, phi_local: float, beta: float, gamma: float, mu: float
+    core: Core, e: Prepared, gain: float, phi_local: float, beta: float, gamma: float, mu: float
 ) -> tuple[Optional[FloatArray], float]:
     """The identified model's steady loop on the data grid and its NRMSE against ybar."""
     try:
@@ -176,7 +177,7 @@ def adequacy(
 
 def fit(
     prepared: Sequence[Prepared],
-    core: Any,
+    core: Core,
     method: str,
     reference: int,
     lo: float,
@@ -228,7 +229,7 @@ def _at_model_limit(exc: SearchAtBoundError) -> SearchAtBoundError:
 
 
 def _paper(
-    prepared: Sequence[Prepared], core: Any, reference: int, lo: float, hi: float, tol: float
+    prepared: Sequence[Prepared], core: Core, reference: int, lo: float, hi: float, tol: float
 ) -> tuple[Start, float, int]:
     """The seed paper's estimator: phase (9), separable search (18)-(24), gains (27b)."""
     ref = prepared[reference]
@@ -250,7 +251,7 @@ def _paper(
 
 def _profile(
     prepared: Sequence[Prepared],
-    core: Any,
+    core: Core,
     reference: int,
     lo: float,
     hi: float,
@@ -274,7 +275,7 @@ def _profile(
     return Start(float(beta), float(gamma), float(mu), gains, phis), float(cost)
 
 
-def _with_loops(prepared: Sequence[Prepared], core: Any, est: Start, cost: float, iterations: int) -> Fit:
+def _with_loops(prepared: Sequence[Prepared], core: Core, est: Start, cost: float, iterations: int) -> Fit:
     """A separable fit's estimates with the steady loops they draw (no covariance)."""
     loops = [
         loop_fit(core, e, est.gains[i], est.phis[i], est.beta, est.gamma, est.mu)[0]
@@ -343,7 +344,7 @@ def on_constraint(beta: float, gamma: float) -> bool:
 
 def refine(
     prepared: Sequence[Prepared],
-    core: Any,
+    core: Core,
     start: Optional[Start],
     lo: float,
     hi: float,

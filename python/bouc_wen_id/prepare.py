@@ -24,6 +24,7 @@ from typing import TYPE_CHECKING, Any, Optional
 import numpy as np
 from numpy.typing import NDArray
 
+from ._backend import Core
 from .errors import (
     FrequencyMismatchError,
     InsufficientDataError,
@@ -151,7 +152,7 @@ def _harmonics(harmonics: int | str, ybar: FloatArray, noise_var: float, n: floa
 def _prepare_recording(
     i: int,
     rec: Recording,
-    core: Any,
+    core: Core,
     settle_periods: Optional[int],
     periods: Optional[int],
     harmonics: int | str,
@@ -190,7 +191,7 @@ def _prepare_recording(
     )
 
 
-def _prepare_averaged(ap: AveragedPeriod, core: Any, harmonics: int | str) -> Prepared:
+def _prepare_averaged(ap: AveragedPeriod, core: Core, harmonics: int | str) -> Prepared:
     """A period averaged from lab data (any sampling rate): its grid starts at the input's phase zero."""
     ybar = np.ascontiguousarray(ap.ybar, dtype=np.float64)
     k = _harmonics(harmonics, ybar, ap.noise_var, ap.periods)
@@ -214,7 +215,7 @@ def _prepare_averaged(ap: AveragedPeriod, core: Any, harmonics: int | str) -> Pr
 
 def prepare(
     items: Sequence[Any],
-    core: Any,
+    core: Core,
     settle_periods: Optional[int],
     periods: Optional[int],
     harmonics: int | str,
