@@ -320,44 +320,6 @@ def test_noise_is_seeded_and_independent_of_threading() -> None:
 #: (identical mu measured), the 3x3 solve differs by ~1e-15.  profile: nested golden searches over phi and
 #: mu stop where the costs differ by rounding only; measured 1.2e-9 relative on beta.  refined: LM from
 #: the profile start, measured 1.6e-15.  Allowed: 1e-8 relative (paper, refined), 1e-7 (profile).
-BACKEND_RTOL = {"paper": 1e-8, "profile": 1e-7, "refined": 1e-8}
-
-
-@pytest.mark.parametrize("method", METHODS)
-def test_identify_numpy_backend_agrees_with_rust(method: Method) -> None:
-    plant = bw.demo_plant()
-    recs = bw.simulate(plant, _plan(plant, (2.0, 5.0), 64, settle_periods=10, periods=3))
-    r_rust = bw.identify(recs, method=method, backend="rust")
-    r_np = bw.identify(recs, method=method, backend="numpy")
-    assert r_rust.backend == "rust" and r_np.backend == "numpy"
-    rtol = BACKEND_RTOL.get(method, 1e-8)
-    assert abs(r_rust.mu - r_np.mu) < rtol * 10
-    assert r_rust.beta == pytest.approx(r_np.beta, rel=rtol)
-    assert r_rust.gamma == pytest.approx(r_np.gamma, rel=rtol)
-    assert r_rust.iterations == r_np.iterations
-    assert_allclose(r_rust.gains, r_np.gains, rtol=rtol)
-    assert_allclose(r_rust.phases, r_np.phases, rtol=0, atol=rtol)
-    if method == "paper":
-        assert np.array_equal(r_rust.phases, r_np.phases)  # argmax of the same averaged loop
-    assert r_rust.cost == pytest.approx(r_np.cost, rel=1e-6)
-    # Both are accurate (noise-free, P = 64), so agreement is not agreement on nonsense.
-    assert abs(r_rust.mu - 1.6) < 0.02
-
-
-def test_simulate_numpy_backend_agrees_with_rust() -> None:
-    plant = bw.demo_plant()
-    plan = _plan(plant, (2.0, 5.0), 32, settle_periods=2, periods=2, noise_sd=0.01, seed=3)
-    a = bw.simulate(plant, plan, backend="rust")
-    b = bw.simulate(plant, plan, backend="numpy")
-    for ra, rb in zip(a, b):
-        assert ra.x is not None and rb.x is not None and ra.w is not None and rb.w is not None
-        # See test_parity: RK4 rounding only (measured <= 3e-15 of the peak).
-        assert_allclose(ra.x, rb.x, rtol=1e-11, atol=1e-11 * np.max(np.abs(rb.x)))
-        assert_allclose(ra.w, rb.w, rtol=1e-11, atol=1e-11 * np.max(np.abs(rb.w)))
-        assert_allclose(ra.y - ra.w, rb.y - rb.w, atol=1e-12)  # the same noise stream
-        assert np.array_equal(ra.t, rb.t) and np.array_equal(ra.u, rb.u)
-
-
 # --------------------------------------------------------------------------------------------------
 # Canonicalisation
 # --------------------------------------------------------------------------------------------------
