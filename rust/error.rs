@@ -38,7 +38,8 @@ pub enum CoreError {
         /// Where the matrix came from and what was wrong with it.
         context: String,
     },
-    /// An iterative solve (the path-loop shooting) ended without meeting its tolerance.
+    /// An iteration that must converge did not: the steady-loop shootings (plain and along the
+    /// input path).
     #[error("not converged: {0}")]
     NotConverged(String),
     /// The golden-section search never left one end of its bracket.

@@ -4,6 +4,12 @@
 //! `ValueError`, never a panic), releases the interpreter around long work, calls the numerics of
 //! (1a)-(27b) in the sibling modules, and maps [`CoreError`] onto the named exceptions of
 //! `bouc_wen_id.errors`.
+//!
+//! ## Reference
+//! *Wiener System Identification in Presence of Hysteresis Nonlinearity*, the seed paper whose
+//! equation numbers are cited; for the Bouc-Wen properties it relies on (Propositions 1-2):
+//! F. Ikhouane and J. Rodellar, *Systems with Hysteresis: Analysis, Identification and Control
+//! using the Bouc-Wen Model*, Wiley, 2007.
 
 use std::collections::HashMap;
 
@@ -49,17 +55,12 @@ impl From<CoreError> for PyErr {
             CoreError::InsufficientData(_) => InsufficientDataError::new_err(msg),
             CoreError::ZeroAmplitude(_) => ZeroAmplitudeError::new_err(msg),
             CoreError::SingularNormalMatrix { .. } => SingularNormalMatrixError::new_err(msg),
+            // The Python class carries the bracket end, so callers can tell mu = 1 from a
+            // bracket that is merely too narrow.
+            CoreError::SearchAtBound { bound, lower, .. } => {
+                SearchAtBoundError::new_err((msg, bound, lower))
+            }
             CoreError::NotConverged(_) => NotConvergedError::new_err(msg),
-            CoreError::SearchAtBound { bound, lower, .. } => Python::attach(|py| {
-                // The Python class carries the bracket end, so callers can tell mu = 1 from a
-                // bracket that is merely too narrow.
-                let err = SearchAtBoundError::new_err(msg);
-                let value = err.value(py);
-                match (value.setattr("bound", bound), value.setattr("lower", lower)) {
-                    (Ok(()), Ok(())) => err,
-                    (Err(e), _) | (_, Err(e)) => e,
-                }
-            }),
         }
     }
 }

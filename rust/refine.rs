@@ -1,4 +1,4 @@
-//! Joint output-error refinement over every experiment (beyond the paper; issue #3).
+//! Joint output-error refinement over every experiment (beyond the paper).
 //!
 //! Minimises `sum_i weight_i ||ybar_i - w_i(beta, gamma, mu, g_i, phi_i)||^2` by
 //! Levenberg-Marquardt, where `w_i` is the steady loop of (2b) under `x_i = U_i g_i cos(omega_i t -
@@ -14,6 +14,12 @@
 //! (shared vector of any size, two own parameters per experiment): the plain model here and the
 //! augmented model of design.md 9.3 ([`crate::terms`]) share one damping schedule, stopping rules
 //! and Schur solve. The experiments are evaluated in parallel and summed in a fixed order.
+//!
+//! ## Reference
+//! *Wiener System Identification in Presence of Hysteresis Nonlinearity*, the seed paper whose
+//! equation numbers are cited; for the Bouc-Wen properties it relies on (Propositions 1-2):
+//! F. Ikhouane and J. Rodellar, *Systems with Hysteresis: Analysis, Identification and Control
+//! using the Bouc-Wen Model*, Wiley, 2007.
 
 use nalgebra::{DMatrix, DVector, Matrix2, Vector2};
 use rayon::prelude::*;

@@ -33,8 +33,8 @@ _F = NDArray[np.float64]
 
 @overload
 def simulate_sine(
-    num: _F,
-    den: _F,
+    num: Sequence[float] | _F,
+    den: Sequence[float] | _F,
     delay: float,
     alpha: float,
     beta: float,
@@ -69,8 +69,8 @@ def simulate_sine(
 ) -> tuple[_F, _F, _F]: ...
 @overload
 def simulate_sampled(
-    num: _F,
-    den: _F,
+    num: Sequence[float] | _F,
+    den: Sequence[float] | _F,
     delay: float,
     alpha: float,
     beta: float,

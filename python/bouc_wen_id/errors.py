@@ -26,6 +26,7 @@ __all__ = [
     "UndersampledError",
     "NotPeriodicError",
     "IdentifiabilityWarning",
+    "ConvergenceWarning",
     "DistortedInputWarning",
 ]
 
@@ -67,17 +68,25 @@ class SingularNormalMatrixError(BoucWenIdError):
 
 
 class SearchAtBoundError(BoucWenIdError):
-    """The golden-section search for mu ended on an end of its bracket.
+    """The search for mu ended on an end of its bracket.
 
     ``bound`` and ``lower`` name the end when the raiser knows it (``None`` otherwise).
     """
 
-    bound: float | None = None
-    lower: bool | None = None
+    def __init__(self, message: str, bound: float | None = None, lower: bool | None = None) -> None:
+        super().__init__(message)
+        self.bound = bound
+        self.lower = lower
+
+    def __reduce__(self) -> tuple[type[SearchAtBoundError], tuple[str, float | None, bool | None]]:
+        return type(self), (str(self), self.bound, self.lower)
 
 
 class NotConvergedError(BoucWenIdError):
-    """An iterative solve (the steady path-loop shooting) ended without meeting its tolerance."""
+    """An iteration that must converge did not: the steady-loop shootings (plain and along the input path).
+
+    The parameters are then far from any loop the model can draw; it is not a bad parameter value as such.
+    """
 
 
 class FileFormatError(BoucWenIdError):
@@ -106,6 +115,10 @@ class NotPeriodicError(BoucWenIdError):
 
 class IdentifiabilityWarning(UserWarning):
     """The data do not pin the parameters down (ill-conditioned Fisher, intervals wider than values)."""
+
+
+class ConvergenceWarning(UserWarning):
+    """The Levenberg-Marquardt refinement stopped at its iteration cap before converging."""
 
 
 class DistortedInputWarning(UserWarning):
