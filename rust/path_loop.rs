@@ -546,7 +546,7 @@ fn shoot<const K: usize>(
             // |w| <= w_b holds for the loop (a saturated one touches it to rounding), so a
             // step beyond is clamped back, and the residual test decides.
             for i in 0..K {
-                v[i] = (v[i] + d[i]).clamp(-bound, bound);
+                v[i] = (v[i] + d[i]).max(-bound).min(bound);
             }
             d.iter().map(|x| x.abs()).fold(0.0, f64::max)
         };
@@ -604,8 +604,24 @@ fn coarse_multiple(
     coarse: &[Segment],
     pc: &Pieces<PIECES>,
     bound: f64,
+    xp_top: f64,
 ) -> Option<[f64; PIECES]> {
+    // Guess: w ~ xp (slope 1 through the origin, the small loop's limit) clipped to the two
+    // saturation levels (the large loop's).
+    let upper = (p.beta + p.gamma + p.delta).powf(-1.0 / p.mu);
+    let lower = -(p.beta + p.gamma - p.delta).powf(-1.0 / p.mu);
     let mut v = [0.0; PIECES];
+    let mut xp = xp_top;
+    for i in 0..PIECES {
+        v[i] = xp.max(lower).min(upper);
+        xp += coarse[pc.start[i]..pc.end[i]]
+            .iter()
+            .map(|g| g.dx)
+            .sum::<f64>();
+    }
+    if !v.iter().all(|x| x.is_finite()) {
+        v = [0.0; PIECES];
+    }
     for _ in 0..COARSE_MULTI_MAX_ITER {
         let (e, m) = shoot_pass(p, coarse, pc, &v, COARSE_SUBSTEPS);
         let r: [f64; PIECES] = std::array::from_fn(|i| e[i] - v[(i + 1) % PIECES]);
@@ -616,7 +632,7 @@ fn coarse_multiple(
         // From w = 0 the first steps overshoot where the loop saturates: |w| <= w_b holds for
         // the loop, so clamping keeps the iterate admissible without losing the step's sense.
         for i in 0..PIECES {
-            v[i] = (v[i] + d[i]).clamp(-bound, bound);
+            v[i] = (v[i] + d[i]).max(-bound).min(bound);
         }
         if d.iter().all(|x| x.abs() <= COARSE_STEP * bound) {
             return Some(v);
@@ -809,7 +825,13 @@ fn path_loop_with(
     // Multiple shooting on it from w = 0 at every piece start (the K chains overlap); should it
     // stray, bracketed single shooting, which always has a safe step.
     let v = match multiple {
-        true => coarse_multiple(&shape, &coarse, &coarse_pieces, bound),
+        true => coarse_multiple(
+            &shape,
+            &coarse,
+            &coarse_pieces,
+            bound,
+            amplitude.abs() - play,
+        ),
         false => None,
     }
     .unwrap_or_else(|| coarse_single(&shape, &coarse, &coarse_pieces, bound));
