@@ -198,6 +198,13 @@ def test_plant_dicts_round_trip_and_old_dicts_load(tmp_path: Path) -> None:
     assert loaded.plant.terms == plant.terms
 
 
+def test_cramer_rao_refuses_a_plant_with_terms() -> None:
+    plan = SinePlan([2.0], 1.0, noise_sd=0.01)
+    with pytest.raises(InvalidParameterError, match="plain Wiener-Bouc-Wen model.*viscous, play"):
+        bw.cramer_rao(_plant((Viscous(0.1), Play(0.1))), plan)
+    assert bw.cramer_rao(_plant(), plan).beta > 0
+
+
 def test_normalized_maps_the_terms_and_keeps_the_output() -> None:
     alpha = 2.5
     plant = _plant(ONE_OF_EACH, alpha=alpha)
@@ -382,6 +389,34 @@ def test_sensor_lag_is_a_first_order_filter_of_the_output() -> None:
         assert err < bound
         assert _scale(lagged.y - plain.y) > 100 * bound  # and the lag is far from negligible
         assert lagged.y[0] == 0.0  # ys(0) = 0
+
+
+def test_sensor_lag_matches_the_exact_response_from_rest() -> None:
+    # A hysteresis so weak (beta = 1e-12) that w = w0 + x - x(0) and a static G: F is a constant plus a
+    # sinusoid, whose lag from ys(0) = 0 is known in closed form.  The step is exact for a quadratic F:
+    # third order (design.md 9.4), on both sides of the series switch at h/tau = 1 and for a sensor far
+    # faster than the step (h/tau = 20, where explicit RK4 would blow up).
+    g, w0, k, c, amp, om = 1.5, 0.1, 0.4, 0.2, 0.8, 3.0
+
+    def exact(t: np.ndarray, tau: float) -> np.ndarray:
+        # F = (w0 - g U) + (g + k) U cos(om t) - c U om sin(om t) = c0 + Re(z e^{i om t})
+        c0, z = w0 - g * amp, (g + k) * amp + 1j * c * amp * om
+        steady = lambda tt: np.real(z * np.exp(1j * om * tt) / (1 + 1j * om * tau))  # noqa: E731
+        return c0 * (1 - np.exp(-t / tau)) + steady(t) - steady(0.0) * np.exp(-t / tau)
+
+    def error(p: int, ratio: float) -> float:
+        tau = TWO_PI / om / p / ratio
+        terms = (Stiffness(k), Viscous(c), SensorLag(tau))
+        plant = WienerPlant(TransferFunction([g], [1.0]), BoucWen(1e-12, 0.0, 2.0, 1.0, w0), terms)
+        plan = SinePlan([om], amp, settle_periods=0, periods=2, samples_per_period=p, substeps=1)
+        (rec,) = bw.simulate(plant, plan)
+        return float(np.max(np.abs(rec.y - exact(rec.t, tau))))
+
+    for ratio in (20.0, 2.0, 0.667, 0.1):
+        coarse, fine = error(64, ratio), error(128, ratio)
+        # Measured at 64 samples per period: 4.6e-6 (h/tau = 20) down to 1.7e-7 (0.1), of a peak of 1.8.
+        assert coarse < 2e-5
+        assert coarse / fine > 6.0  # third order: 8x per halving of h
 
 
 def _play_operator(x: np.ndarray, b: float, xp0: float = 0.0) -> np.ndarray:

@@ -68,11 +68,18 @@ def cramer_rao(
     Raises
     ------
     InvalidParameterError
-        When the plan is noise-free (the bound is zero) or the Fisher matrix is singular.
+        When the plan is noise-free (the bound is zero), the Fisher matrix is singular, or the plant has
+        physical terms (the bound is the plain model's).
     """
     if plan.noise_sd <= 0:
         raise InvalidParameterError(
             "the Cramer-Rao bound of a noise-free design is zero; set plan.noise_sd > 0"
+        )
+    if plant.terms:
+        # The sensitivities below are the plain model's: a bound for it would silently ignore the terms.
+        raise InvalidParameterError(
+            "cramer_rao covers the plain Wiener-Bouc-Wen model, and this plant has terms "
+            f"({', '.join(t.kind for t in plant.terms)}); pass the plant without them"
         )
     core = get_backend(backend)
     norm = plant.normalized()
