@@ -13,7 +13,6 @@ from .diagnosis import Diagnosis, diagnose
 from .errors import (
     BoucWenIdError,
     ClippingError,
-    NotConvergedError,
     ConvergenceWarning,
     DistortedInputWarning,
     FileFormatError,
@@ -23,6 +22,7 @@ from .errors import (
     InsufficientDataError,
     InvalidParameterError,
     NonFiniteError,
+    NotConvergedError,
     NotPeriodicError,
     SearchAtBoundError,
     SingularNormalMatrixError,

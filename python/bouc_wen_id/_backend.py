@@ -6,8 +6,8 @@
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-from typing import TYPE_CHECKING, Callable, Literal, Protocol
+from collections.abc import Mapping, Sequence
+from typing import TYPE_CHECKING, Callable, Literal, Protocol, overload
 
 import numpy as np
 from numpy.typing import NDArray
@@ -28,6 +28,7 @@ class Core(Protocol):
     per-experiment vectors may also be sequences of floats.  Shapes and units: ``rust/python.rs``.
     """
 
+    @overload
     def simulate_sine(
         self,
         num: Sequence[float] | _F,
@@ -43,8 +44,31 @@ class Core(Protocol):
         dt: float,
         n_samples: int,
         substeps: int,
+        *,
+        terms: None = None,
     ) -> tuple[_F, _F]: ...
 
+    @overload
+    def simulate_sine(
+        self,
+        num: Sequence[float] | _F,
+        den: Sequence[float] | _F,
+        delay: float,
+        alpha: float,
+        beta: float,
+        gamma: float,
+        mu: float,
+        w0: float,
+        amplitude: float,
+        omega: float,
+        dt: float,
+        n_samples: int,
+        substeps: int,
+        *,
+        terms: Mapping[str, float],
+    ) -> tuple[_F, _F, _F]: ...
+
+    @overload
     def simulate_sampled(
         self,
         num: Sequence[float] | _F,
@@ -58,7 +82,27 @@ class Core(Protocol):
         u: _F,
         dt: float,
         substeps: int,
+        *,
+        terms: None = None,
     ) -> tuple[_F, _F]: ...
+
+    @overload
+    def simulate_sampled(
+        self,
+        num: Sequence[float] | _F,
+        den: Sequence[float] | _F,
+        delay: float,
+        alpha: float,
+        beta: float,
+        gamma: float,
+        mu: float,
+        w0: float,
+        u: _F,
+        dt: float,
+        substeps: int,
+        *,
+        terms: Mapping[str, float],
+    ) -> tuple[_F, _F, _F]: ...
 
     def periodic_average(self, y: _F, samples_per_period: int, settle_periods: int, periods: int) -> _F: ...
 

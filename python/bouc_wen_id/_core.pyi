@@ -51,8 +51,8 @@ def simulate_sine(
 ) -> tuple[_F, _F]: ...
 @overload
 def simulate_sine(
-    num: _F,
-    den: _F,
+    num: Sequence[float] | _F,
+    den: Sequence[float] | _F,
     delay: float,
     alpha: float,
     beta: float,
@@ -85,8 +85,8 @@ def simulate_sampled(
 ) -> tuple[_F, _F]: ...
 @overload
 def simulate_sampled(
-    num: _F,
-    den: _F,
+    num: Sequence[float] | _F,
+    den: Sequence[float] | _F,
     delay: float,
     alpha: float,
     beta: float,

@@ -26,10 +26,10 @@ from numpy.typing import ArrayLike, NDArray
 
 from .errors import BoucWenIdError as BoucWenIdErrorBase
 from .errors import (
-    NotConvergedError,
     InsufficientDataError,
     InvalidParameterError,
     NonFiniteError,
+    NotConvergedError,
     SearchAtBoundError,
     SingularNormalMatrixError,
     ZeroAmplitudeError,

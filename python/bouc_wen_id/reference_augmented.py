@@ -24,11 +24,11 @@ from .reference import (
     LM_LAMBDA_START,
     LM_LAMBDA_UP,
     LM_MU_MARGIN,
-    _finite_array,
-    _finite_scalar,
     steady_loop,
 )
 from .reference_path import path_loop
+from .validation import finite_array as _finite_array
+from .validation import finite_scalar as _finite_scalar
 
 __all__ = [
     "TERM_NAMES",

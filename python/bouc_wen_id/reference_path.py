@@ -27,7 +27,8 @@ from .errors import (
     NotConvergedError,
     ZeroAmplitudeError,
 )
-from .reference import FloatArray, _finite_scalar
+from .reference import FloatArray
+from .validation import finite_scalar as _finite_scalar
 
 __all__ = ["path_loop", "PD_BETA", "PD_GAMMA", "PD_MU", "PD_AMPLITUDE", "PD_PHI", "PD_DELTA", "PD_PLAY"]
 

@@ -26,6 +26,7 @@ from numpy.typing import NDArray
 
 from . import reference as _ref
 from .errors import InvalidParameterError
+from .validation import check_bouc_wen, finite_scalar
 
 __all__ = ["TERM_NAMES", "check_terms", "lag_weights", "simulate_sine", "simulate_sampled"]
 
@@ -61,7 +62,7 @@ def check_terms(terms: Mapping[str, float], beta: float, gamma: float) -> dict[s
             raise InvalidParameterError(f"unknown term {name!r}; the terms are {', '.join(TERM_NAMES)}")
         out[name] = float(value)
     for name in TERM_NAMES:
-        _ref._finite_scalar(name, out[name])
+        finite_scalar(name, out[name])
     if out["sensor_lag"] < 0.0:
         raise InvalidParameterError(f"sensor_lag tau = {out['sensor_lag']} s must be >= 0")
     if out["play"] < 0.0:
@@ -124,8 +125,8 @@ def _simulate_terms(
 ) -> tuple[FloatArray, FloatArray, FloatArray]:
     a, c, d, delay = _ref.realize(num, den, delay)
     alpha, beta, gamma, mu, w0 = bw
-    _ref._check_bouc_wen(alpha, beta, gamma, mu, w0)
-    dt = _ref._finite_scalar("dt", dt)
+    check_bouc_wen(alpha, beta, gamma, mu, w0)
+    dt = finite_scalar("dt", dt)
     if dt <= 0.0:
         raise InvalidParameterError(f"dt = {dt} must be > 0")
     if substeps < 1:
