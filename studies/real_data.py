@@ -224,18 +224,9 @@ def identify_record(
                 reference=reference,
                 mu_bracket=mu_bracket,
             )
-    except bw.BoucWenIdError as exc:
+    except Exception as exc:  # noqa: BLE001 - a named refusal, or a library bug recorded, not fatal
         return {
-            "outcome": "refused",
-            "method": method,
-            "mu_bracket": list(mu_bracket),
-            "reference": reference,
-            "error": _error(exc),
-            "warnings": warns,
-        }, None
-    except Exception as exc:  # noqa: BLE001 - a library bug is recorded, not fatal
-        return {
-            "outcome": "library bug",
+            "outcome": "refused" if isinstance(exc, bw.BoucWenIdError) else "library bug",
             "method": method,
             "mu_bracket": list(mu_bracket),
             "reference": reference,
