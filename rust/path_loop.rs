@@ -441,16 +441,16 @@ enum Failure {
     Iterations(f64),
     /// A non-finite value within a cycle.
     Diverged(f64),
-    /// Multiple shooting left the bracket or oscillated: retry with single shooting.
+    /// Multiple shooting overflowed or took too many steps: retry with single shooting.
     Unsafe,
 }
 
 /// Shooting on the piece starts `v` to `sum |r_i| <= tol`, then one pass with every sensitivity
 /// at the converged starts, folded into `out` by the chain rule across pieces and around the
-/// cycle. With `bracket` (single shooting only), Newton is safeguarded by bisection on
+/// cycle. For `K = 1` (single shooting) Newton is safeguarded by bisection on
 /// `[-bound, bound]`: `g = W(w_0) - w_0` is positive at `-bound` and negative at `bound`
-/// (W maps the bracket into itself), so a positive residual raises the lower end. Returns the
-/// number of updates.
+/// (W maps the bracket into itself), so a positive residual raises the lower end; for `K > 1`
+/// the iterates are clamped into `[-bound, bound]`. Returns the number of updates.
 #[allow(clippy::too_many_arguments)]
 fn shoot<const K: usize>(
     p: &Shape,
