@@ -14,6 +14,7 @@ from bouc_wen_id.diagnosis.data import DiagExperiment
 from bouc_wen_id.diagnosis.locate import benjamini_hochberg, locate
 from bouc_wen_id.diagnosis.select import f_test
 from bouc_wen_id.errors import InsufficientDataError, InvalidParameterError
+from bouc_wen_id.terms import Term
 
 TWO_PI = 2.0 * math.pi
 
@@ -147,7 +148,7 @@ def test_benjamini_hochberg_against_hand_example() -> None:
 
 
 def test_f_test_matches_scipy_and_halves_on_the_boundary() -> None:
-    from scipy import stats
+    from scipy import stats  # type: ignore[import-untyped]
 
     f, pv = f_test(130.0, 100.0, 90)
     assert f == pytest.approx(27.0)
@@ -160,11 +161,11 @@ def test_f_test_matches_scipy_and_halves_on_the_boundary() -> None:
 # ------------------------------------------------------------------ selection on small seeded cases
 
 
-def _plant(terms: tuple[object, ...] = ()) -> bw.WienerPlant:
-    return bw.WienerPlant(bw.TransferFunction([1.0], [0.05, 1.0]), bw.BoucWen(0.7, 0.3, 1.8), terms=terms)  # type: ignore[call-arg]
+def _plant(terms: tuple[Term, ...] = ()) -> bw.WienerPlant:
+    return bw.WienerPlant(bw.TransferFunction([1.0], [0.05, 1.0]), bw.BoucWen(0.7, 0.3, 1.8), terms=terms)
 
 
-def _recs(terms: tuple[object, ...] = (), seed: int = 3, noise: float = 0.01) -> list[bw.Recording]:
+def _recs(terms: tuple[Term, ...] = (), seed: int = 3, noise: float = 0.01) -> list[bw.Recording]:
     om = np.repeat(TWO_PI * np.array([0.5, 1.5, 4.0]), 2)
     lin = bw.TransferFunction([1.0], [0.05, 1.0])
     g, _ = lin.gain_phase(om)
@@ -192,10 +193,10 @@ def test_plain_data_is_adequate_and_names_nothing(plain_diagnosis: bw.diagnosis.
     [(T.Offset(0.02), 0.02), (T.Viscous(0.004), 0.004)],
     ids=["offset", "viscous"],
 )
-def test_hidden_term_is_named_with_its_value(term: object, value: float) -> None:
+def test_hidden_term_is_named_with_its_value(term: Term, value: float) -> None:
     d = bw.diagnose(_recs((term,)))
     assert d.status == "explained", d.summary()
-    assert d.named_terms == (type(term).kind,)  # type: ignore[attr-defined]
+    assert d.named_terms == (term.kind,)
     got = d.named[0]
     assert abs(got.value - value) < 4 * got.standard_error, d.summary()
     assert d.held_out is not None and d.held_out.improves
