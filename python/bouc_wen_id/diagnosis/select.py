@@ -221,10 +221,25 @@ def held_out(
 
 
 def _correlation(fit: AugFit, a: str, b: str) -> float:
-    i, j = 3 + fit.params.terms.index(a), 3 + fit.params.terms.index(b)
-    c = fit.covariance
-    d = math.sqrt(abs(c[i, i] * c[j, j]))
-    return float(c[i, j] / d) if d > 0 and math.isfinite(d) else math.nan
+    """Correlation of two terms' estimates from the Fisher matrix, the other parameters profiled out.
+
+    From the information of the pair after the others, ``I = F_pp - F_po F_oo^+ F_op``, the correlation of
+    the pair's covariance ``I^-1`` is ``-I_01 / sqrt(I_00 I_11)``: finite, and +-1 exactly, when the two
+    columns are collinear and the covariance itself does not exist.
+    """
+    f = np.asarray(fit.fisher, dtype=np.float64)
+    pair = [3 + fit.params.terms.index(a), 3 + fit.params.terms.index(b)]
+    rest = [k for k in range(f.shape[0]) if k not in pair]
+    d = np.sqrt(np.abs(np.diag(f))) + 1e-300  # Jacobi scaling keeps the pseudo-inverse well posed
+    fs = f / np.outer(d, d)
+    info = (
+        fs[np.ix_(pair, pair)]
+        - fs[np.ix_(pair, rest)] @ np.linalg.pinv(fs[np.ix_(rest, rest)]) @ fs[np.ix_(rest, pair)]
+    )
+    denom = math.sqrt(max(info[0, 0] * info[1, 1], 0.0))
+    if not (denom > 0 and math.isfinite(denom)):
+        return math.nan
+    return float(np.clip(-info[0, 1] / denom, -1.0, 1.0))
 
 
 #: Candidate designs for separating two alternatives: (amplitude multiple, frequency multiple).
