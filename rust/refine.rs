@@ -289,6 +289,7 @@ pub fn refine(exps: &[Experiment], start: &Params, opts: &Options) -> Result<Fit
     let mut iterations = 0;
     let mut converged = false;
     while iterations < opts.max_iter {
+        crate::cancel::checkpoint()?;
         iterations += 1;
         let Some((ds, dl)) = step(&bl, lambda) else {
             lambda *= LAMBDA_UP;

@@ -36,6 +36,10 @@ from .signal import AveragedPeriod, SineFit, analyse_sine, average_measurement, 
 from .simulation import simulate, simulate_input
 from .uncertainty import CramerRao, cramer_rao
 
+# Budgets (issue #9): imported eagerly so that BOUC_WEN_ID_MAX_* environment variables reach the core.
+from . import budget  # noqa: E402
+from .errors import BudgetExceededError, ConvergenceWarning  # noqa: E402
+
 __all__ = [
     "__version__",
     "errors",
@@ -86,3 +90,5 @@ __all__ = [
     "CramerRao",
     "cramer_rao",
 ]
+
+__all__ += ["budget", "BudgetExceededError", "ConvergenceWarning"]

@@ -19,12 +19,14 @@ __all__ = [
     "ZeroAmplitudeError",
     "SingularNormalMatrixError",
     "SearchAtBoundError",
+    "BudgetExceededError",
     "FileFormatError",
     "TimeAxisError",
     "ClippingError",
     "UndersampledError",
     "NotPeriodicError",
     "IdentifiabilityWarning",
+    "ConvergenceWarning",
     "DistortedInputWarning",
 ]
 
@@ -73,6 +75,18 @@ class SearchAtBoundError(BoucWenIdError):
 
     bound: float | None = None
     lower: bool | None = None
+
+
+class BudgetExceededError(InvalidParameterError):
+    """A call would exceed a work or memory budget (see :mod:`bouc_wen_id.budget`).
+
+    The message gives the estimated size and the limit, and how to raise it
+    (``bouc_wen_id.budget.set_budget(...)`` or a ``BOUC_WEN_ID_MAX_*`` environment variable).
+    """
+
+
+class ConvergenceWarning(UserWarning):
+    """An iterative fit stopped at its iteration cap before meeting its tolerances."""
 
 
 class FileFormatError(BoucWenIdError):
