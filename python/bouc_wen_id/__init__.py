@@ -6,12 +6,15 @@ reference implementation of the same routines.  Start with :func:`simulate` and 
 
 from __future__ import annotations
 
-from . import errors, io, reference, signal
+# budget is imported eagerly so that the BOUC_WEN_ID_MAX_* environment variables reach the core.
+from . import budget, errors, io, reference, signal
 from ._core import __version__
 from .demo import demo_plan, demo_plant
 from .errors import (
     BoucWenIdError,
+    BudgetExceededError,
     ClippingError,
+    ConvergenceWarning,
     DistortedInputWarning,
     FileFormatError,
     FrequencyMismatchError,
@@ -35,10 +38,6 @@ from .model import BoucWen, Recording, SinePlan, TransferFunction, WienerPlant
 from .signal import AveragedPeriod, SineFit, analyse_sine, average_measurement, find_steady_segments
 from .simulation import simulate, simulate_input
 from .uncertainty import CramerRao, cramer_rao
-
-# Budgets (issue #9): imported eagerly so that BOUC_WEN_ID_MAX_* environment variables reach the core.
-from . import budget  # noqa: E402
-from .errors import BudgetExceededError, ConvergenceWarning  # noqa: E402
 
 __all__ = [
     "__version__",

@@ -16,6 +16,7 @@ from numpy.typing import NDArray
 from ._backend import Backend, get_backend
 from .errors import (
     BoucWenIdError,
+    ConvergenceWarning,
     FrequencyMismatchError,
     IdentifiabilityWarning,
     InsufficientDataError,
@@ -190,6 +191,9 @@ class IdentificationResult:
         Residual power of the fitted loops against the noise floor.
     warnings : tuple of str
         Identifiability warnings (also issued as :class:`IdentifiabilityWarning`).
+    converged : bool or None
+        Whether the joint fit met its tolerances before ``max_iter`` (``refined``; None for the direct
+        estimators).  ``False`` is also issued as a :class:`ConvergenceWarning`.
     """
 
     method: str
@@ -208,6 +212,7 @@ class IdentificationResult:
     adequacy: Optional[Adequacy] = None
     warnings: tuple[str, ...] = ()
     confidence: float = 0.95
+    converged: Optional[bool] = None
 
     def interval(self, name: str) -> tuple[float, float]:
         """Confidence interval (at ``self.confidence``) of ``beta``, ``gamma`` or ``mu``.
@@ -768,6 +773,21 @@ def identify(
     """
     if method not in ("paper", "profile", "refined"):
         raise InvalidParameterError(f"method must be 'refined', 'profile' or 'paper', got {method!r}")
+    # Counts must be integers (not 0.5, not True) before anything indexes or loops with them.
+    counts = (("reference", reference, None), ("phase_grid", phase_grid, 3), ("max_iter", max_iter, 1))
+    for name, value, low in counts:
+        if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+            raise InvalidParameterError(f"{name} = {value!r} must be an integer")
+        if low is not None and value < low:
+            raise InvalidParameterError(f"{name} = {value} must be >= {low}")
+    reference, phase_grid, max_iter = int(reference), int(phase_grid), int(max_iter)
+    if isinstance(harmonics, str):
+        if harmonics not in ("auto", "all"):
+            raise InvalidParameterError(f"harmonics = {harmonics!r} must be 'auto', 'all' or an integer >= 1")
+    elif isinstance(harmonics, bool) or not isinstance(harmonics, (int, np.integer)) or harmonics < 1:
+        raise InvalidParameterError(f"harmonics = {harmonics!r} must be 'auto', 'all' or an integer >= 1")
+    if not isinstance(confidence, (int, float, np.floating)) or isinstance(confidence, bool):
+        raise InvalidParameterError(f"confidence = {confidence!r} must be a number in (0, 1)")
     if not 0.0 < confidence < 1.0:
         raise InvalidParameterError(f"confidence = {confidence} must be in (0, 1)")
     items: list[Any] = [recordings] if not isinstance(recordings, (list, tuple)) else list(recordings)
@@ -889,6 +909,13 @@ def identify(
         )
     for note in notes:
         warnings.warn(note, IdentifiabilityWarning, stacklevel=2)
+    if fit.converged is False:
+        warnings.warn(
+            f"the joint fit stopped at max_iter = {max_iter} iterations before meeting its tolerances: the "
+            "estimates and their intervals are those of an unfinished fit; raise max_iter",
+            ConvergenceWarning,
+            stacklevel=2,
+        )
     plants = [e.plant for e in prepared]
     truth = None
     first = plants[0]
@@ -923,6 +950,7 @@ def identify(
         ),
         warnings=tuple(notes),
         confidence=confidence,
+        converged=fit.converged,
     )
 
 
@@ -939,6 +967,8 @@ class _Fit:
     iterations: int
     cov: Optional[FloatArray]
     loops: list[Optional[FloatArray]]
+    #: Whether the iterative fit met its tolerances (None for the direct estimators).
+    converged: Optional[bool] = None
 
 
 def _fit(
@@ -1145,7 +1175,7 @@ def _refine(
         if profile_error is not None:
             raise profile_error
         raise SearchAtBoundError("no start of the joint fit gave a valid steady loop")
-    params, cost, iterations, _, fisher, loops = best
+    params, cost, iterations, converged, fisher, loops = best
     params = np.asarray(params)
     beta, gamma, mu = (float(v) for v in params[:3])
     if min(mu - lo, hi - mu) <= AT_BOUND_FRACTION * (hi - lo):
@@ -1169,7 +1199,16 @@ def _refine(
     except np.linalg.LinAlgError:
         cov = np.full_like(fisher, np.nan)
     return _Fit(
-        beta, gamma, mu, gains, phis, float(cost), int(iterations), cov, [np.asarray(w) for w in loops]
+        beta,
+        gamma,
+        mu,
+        gains,
+        phis,
+        float(cost),
+        int(iterations),
+        cov,
+        [np.asarray(w) for w in loops],
+        bool(converged),
     )
 
 

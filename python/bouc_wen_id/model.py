@@ -48,6 +48,15 @@ def _frozen_array(name: str, values: ArrayLike, ndim: int = 1) -> FloatArray:
     return arr
 
 
+def _refreeze(obj: object, state: Mapping[str, Any]) -> None:
+    """``__setstate__`` of the frozen value types: unpickled arrays come back writeable, so freeze them."""
+    for name, value in state.items():
+        if isinstance(value, np.ndarray):
+            value = np.array(value, dtype=value.dtype, copy=True)
+            value.setflags(write=False)
+        object.__setattr__(obj, name, value)
+
+
 def _finite(name: str, value: float) -> float:
     if isinstance(value, (complex, np.complexfloating, str, bytes)):
         raise InvalidParameterError(f"{name} = {value!r} must be a real number")
@@ -75,6 +84,9 @@ class TransferFunction:
     num: FloatArray
     den: FloatArray
     delay: float
+
+    def __setstate__(self, state: Mapping[str, Any]) -> None:
+        _refreeze(self, state)
 
     def __init__(self, num: ArrayLike, den: ArrayLike, delay: float = 0.0) -> None:
         object.__setattr__(self, "num", _frozen_array("num", num))
@@ -201,6 +213,9 @@ class SinePlan:
     noise_sd: float
     seed: Optional[int]
 
+    def __setstate__(self, state: Mapping[str, Any]) -> None:
+        _refreeze(self, state)
+
     def __init__(
         self,
         frequencies: ArrayLike,
@@ -223,8 +238,13 @@ class SinePlan:
             raise InvalidParameterError("the plan needs at least one frequency")
         if np.any(freqs <= 0):
             raise InvalidParameterError(f"frequencies must be > 0 rad/s, got {freqs.tolist()}")
-        amps = np.broadcast_to(np.asarray(amplitudes, dtype=np.float64), freqs.shape)
-        amps = _frozen_array("amplitudes", amps)
+        amps_raw = _frozen_array("amplitudes", np.atleast_1d(np.asarray(amplitudes, dtype=np.float64)))
+        if amps_raw.size not in (1, freqs.size):
+            raise InvalidParameterError(
+                f"amplitudes: {amps_raw.size} values for {freqs.size} frequencies; give one amplitude per "
+                "frequency, or a single one for all"
+            )
+        amps = _frozen_array("amplitudes", np.broadcast_to(amps_raw, freqs.shape))
         if np.any(amps == 0):
             raise ZeroAmplitudeError("every experiment needs a non-zero amplitude U")
         object.__setattr__(self, "frequencies", freqs)
@@ -238,6 +258,11 @@ class SinePlan:
         if noise < 0:
             raise InvalidParameterError(f"noise_sd = {noise} must be >= 0")
         object.__setattr__(self, "noise_sd", noise)
+        if seed is not None:
+            # numpy's SeedSequence takes only non-negative integers; say so here, not at simulate time.
+            if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+                raise InvalidParameterError(f"seed = {seed!r} must be a non-negative integer or None")
+            object.__setattr__(self, "seed", int(seed))
 
     def __len__(self) -> int:
         return int(self.frequencies.size)
@@ -297,6 +322,9 @@ class Recording:
     plant: Optional[WienerPlant]
     metadata: Mapping[str, str]
 
+    def __setstate__(self, state: Mapping[str, Any]) -> None:
+        _refreeze(self, state)
+
     def __init__(
         self,
         t: ArrayLike,
@@ -317,7 +345,13 @@ class Recording:
         object.__setattr__(self, "amplitude", amplitude)
         object.__setattr__(self, "frequency", frequency)
         object.__setattr__(self, "settle_periods", settle_periods)
+        if plant is not None and not isinstance(plant, WienerPlant):
+            raise InvalidParameterError(f"plant must be a WienerPlant or None, got {type(plant).__name__}")
         object.__setattr__(self, "plant", plant)
+        if metadata is not None and not isinstance(metadata, Mapping):
+            raise InvalidParameterError(
+                f"metadata must be a mapping of strings, got {type(metadata).__name__}"
+            )
         object.__setattr__(self, "metadata", dict(metadata or {}))
         lengths = {
             n: getattr(self, n).size for n in ("t", "u", "y", "x", "w") if getattr(self, n) is not None

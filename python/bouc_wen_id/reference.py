@@ -227,10 +227,10 @@ def _simulate(
         # The model's blow-up, not the caller's data (rust/simulate.rs check_blow_up).
         name, k = min(((nm, kk) for nm, kk in zip(("x", "w"), bad) if kk is not None), key=lambda p: p[1])
         raise NonFiniteError(
-            f"the simulation blew up: {name} is not finite from sample {k} (t = {k * dt:.6e} s) on; the model "
-            f"parameters (alpha = {alpha:e}, beta = {beta:e}, gamma = {gamma:e}, mu = {mu}, w0 = {w0:e}) or "
-            "the input level make the Bouc-Wen state overflow; use parameters of moderate size, a smaller "
-            "amplitude or a finer step (substeps)"
+            f"the simulation blew up: {name} is not finite from sample {k} (t = {k * dt:.6e} s) on; the "
+            f"model parameters (alpha = {alpha:e}, beta = {beta:e}, gamma = {gamma:e}, mu = {mu}, "
+            f"w0 = {w0:e}) or the input level make the Bouc-Wen state overflow; use parameters of "
+            "moderate size, a smaller amplitude or a finer step (substeps)"
         )
     return x_out, w_out
 
