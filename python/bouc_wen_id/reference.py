@@ -162,7 +162,10 @@ def _check_bouc_wen(alpha: float, beta: float, gamma: float, mu: float, w0: floa
 
 def _bw_rate(xdot: float, w: float, alpha: float, beta: float, gamma: float, mu: float) -> float:
     """Bouc-Wen (2a): alpha xdot - beta |xdot| |w|^(mu-1) w - gamma xdot |w|^mu."""
-    wmu = abs(w) ** mu
+    try:
+        wmu = abs(w) ** mu
+    except OverflowError:  # a blow-up: let it run to inf/NaN as the core does, and be reported at the end
+        wmu = float("inf")
     return float(alpha * xdot - beta * abs(xdot) * np.sign(w) * wmu - gamma * xdot * wmu)
 
 
@@ -209,19 +212,21 @@ def _simulate(
     z[n] = w0
     x_out = np.empty(n_samples)
     w_out = np.empty(n_samples)
-    for k in range(n_samples):
-        t = k * dt
-        x_out[k] = float(np.dot(c, z[:n])) + d * delayed(t)[0]
-        w_out[k] = z[n]
-        if k == n_samples - 1:
-            break
-        for s in range(substeps):
-            ts = t + s * h
-            k1 = rhs(ts, z)
-            k2 = rhs(ts + 0.5 * h, z + 0.5 * h * k1)
-            k3 = rhs(ts + 0.5 * h, z + 0.5 * h * k2)
-            k4 = rhs(ts + h, z + h * k3)
-            z = z + (h / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+    # A blow-up runs on to inf/NaN silently here and is reported, with the parameters, just below.
+    with np.errstate(all="ignore"):
+        for k in range(n_samples):
+            t = k * dt
+            x_out[k] = float(np.dot(c, z[:n])) + d * delayed(t)[0]
+            w_out[k] = z[n]
+            if k == n_samples - 1:
+                break
+            for s in range(substeps):
+                ts = t + s * h
+                k1 = rhs(ts, z)
+                k2 = rhs(ts + 0.5 * h, z + 0.5 * h * k1)
+                k3 = rhs(ts + 0.5 * h, z + 0.5 * h * k2)
+                k4 = rhs(ts + h, z + h * k3)
+                z = z + (h / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
     bad = [int(np.argmax(~np.isfinite(v))) if not np.all(np.isfinite(v)) else None for v in (x_out, w_out)]
     if bad != [None, None]:
         # The model's blow-up, not the caller's data (rust/simulate.rs check_blow_up).
