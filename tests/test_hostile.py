@@ -21,10 +21,9 @@ import zipfile
 from collections.abc import Iterator
 from pathlib import Path
 
+import bouc_wen_id as bw
 import numpy as np
 import pytest
-
-import bouc_wen_id as bw
 from bouc_wen_id import _core, budget, cli, reference
 from bouc_wen_id.errors import (
     BoucWenIdError,
@@ -185,7 +184,9 @@ def test_budget_refuses_oversized_work_in_microseconds(
         lambda: bw.simulate(plant, bw.SinePlan([3.0], substeps=10**12)),
         lambda: bw.identify(recordings, phase_grid=10**8),
         lambda: bw.identify(recordings, max_iter=10**9),
-        lambda: _core.simulate_sine([1.0], [1.0, 1.0], 0.0, 1.0, 0.5, 0.1, 2.0, 0.0, 1.0, 1.0, 0.1, 10**12, 1),
+        lambda: _core.simulate_sine(
+            [1.0], [1.0, 1.0], 0.0, 1.0, 0.5, 0.1, 2.0, 0.0, 1.0, 1.0, 0.1, 10**12, 1
+        ),
         lambda: _core.steady_loop(1.0, 0.5, 0.1, 2.0, 0.0, 1 << 20, 64),
     ]
     for case in cases:
@@ -211,7 +212,9 @@ def test_budget_is_configurable_restored_and_validated() -> None:
 
 
 def test_budget_reads_the_environment() -> None:
-    code = "from bouc_wen_id import budget, _core; print(budget.get_budget().max_steps, _core.get_budget()[1])"
+    code = (
+        "from bouc_wen_id import budget, _core; print(budget.get_budget().max_steps, _core.get_budget()[1])"
+    )
     env = dict(os.environ, BOUC_WEN_ID_MAX_STEPS="4242")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, check=True)
     assert out.stdout.split() == ["4242", "4242"]
@@ -260,7 +263,9 @@ def test_an_unconverged_fit_warns_and_says_so(recordings: list[bw.Recording]) ->
         warnings.simplefilter("always")
         res = bw.identify(recordings, max_iter=1)
     assert res.converged is False
-    assert any(issubclass(w.category, ConvergenceWarning) and "max_iter = 1" in str(w.message) for w in caught)
+    assert any(
+        issubclass(w.category, ConvergenceWarning) and "max_iter = 1" in str(w.message) for w in caught
+    )
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         res = bw.identify(recordings)
