@@ -435,9 +435,75 @@ def test_cli_ctrl_c_leaves_nothing_half_written(tmp_path: Path) -> None:
     assert list(tmp_path.iterdir()) == []
 
 
-def test_measurement_of_a_constant_output_is_zero_amplitude() -> None:
+@pytest.mark.parametrize("noise", [0.0, 1e-3])
+def test_measurement_of_a_constant_output_is_zero_amplitude(noise: float) -> None:
     t = np.arange(4000) / 400.0
     u = np.cos(2 * math.pi * 2.0 * t)
-    m = bw.Measurement(t, u, np.full_like(t, 2.0))
+    y = 2.0 + noise * np.random.default_rng(0).standard_normal(t.size)
     with pytest.raises(bw.ZeroAmplitudeError):
-        bw.identify(bw.average_measurement(m))
+        bw.identify(bw.Measurement(t, u, y))
+
+
+# --------------------------------------------------------------------------------------------------
+# The recording path treats an offset and a leftover transient as the measurement path does
+# --------------------------------------------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def noisy() -> list[bw.Recording]:
+    plan = bw.SinePlan(
+        [3.0, 5.0, 7.0], [1.0, 0.8, 1.2], settle_periods=10, periods=20, samples_per_period=128, noise_sd=0.01
+    )
+    return bw.simulate(bw.demo_plant(), plan)
+
+
+def _quiet_identify(recs: list[bw.Recording], **kw: object) -> bw.IdentificationResult:
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", bw.IdentifiabilityWarning)
+        return bw.identify(recs, **kw)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize("offset", [1.0, 0.01, -250.0])
+def test_an_output_offset_is_estimated_reported_and_removed(noisy: list[bw.Recording], offset: float) -> None:
+    base = _quiet_identify(noisy)
+    shifted = [
+        bw.Recording(r.t, r.u, r.y + offset, r.amplitude, r.frequency, settle_periods=r.settle_periods)
+        for r in noisy
+    ]
+    res = _quiet_identify(shifted)
+    # Removing the window mean is exact up to rounding: the fit is that of the unshifted data.
+    for name in ("beta", "gamma", "mu"):
+        assert getattr(res, name) == pytest.approx(getattr(base, name), rel=1e-6)
+    assert res.adequacy is not None and base.adequacy is not None
+    assert res.adequacy.p_value == pytest.approx(base.adequacy.p_value, rel=1e-4)
+    for e, e0 in zip(res.experiments, base.experiments):
+        assert e.offset - e0.offset == pytest.approx(offset, abs=1e-9 * max(1.0, abs(offset)))
+    assert "offset" in res.experiments[0].to_dict()
+
+
+def test_a_leftover_transient_is_trimmed_with_a_warning(noisy: list[bw.Recording]) -> None:
+    base = _quiet_identify(noisy)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        res = bw.identify(noisy, settle_periods=0)
+    assert any(issubclass(w.category, bw.errors.TransientWarning) for w in caught)
+    assert all(e.settle_periods > 0 for e in res.experiments)
+    # The noise floor is not inflated by the transient (it was 2.3x before), and the adequacy p-value is
+    # not pinned at 1.
+    for e, e0 in zip(res.experiments, base.experiments):
+        assert e.noise_sd == pytest.approx(e0.noise_sd, rel=0.2)
+    assert res.adequacy is not None and res.adequacy.p_value < 0.999
+    assert res.mu == pytest.approx(base.mu, rel=0.01)
+
+
+def test_a_steady_recording_is_not_trimmed(noisy: list[bw.Recording]) -> None:
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", bw.errors.TransientWarning)
+        _quiet_identify(noisy)
+
+
+def test_a_constant_recording_is_zero_amplitude(noisy: list[bw.Recording]) -> None:
+    r = noisy[0]
+    const = bw.Recording(r.t, r.u, np.full_like(r.y, 2.0), r.amplitude, r.frequency)
+    with pytest.raises(bw.ZeroAmplitudeError, match="constant"):
+        bw.identify(const)

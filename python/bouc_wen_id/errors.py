@@ -27,6 +27,7 @@ __all__ = [
     "NotPeriodicError",
     "IdentifiabilityWarning",
     "ConvergenceWarning",
+    "TransientWarning",
     "DistortedInputWarning",
 ]
 
@@ -87,6 +88,10 @@ class BudgetExceededError(InvalidParameterError):
 
 class ConvergenceWarning(UserWarning):
     """An iterative fit stopped at its iteration cap before meeting its tolerances."""
+
+
+class TransientWarning(UserWarning):
+    """Leading periods of a recording were still transient and were dropped (more settling periods)."""
 
 
 class FileFormatError(BoucWenIdError):

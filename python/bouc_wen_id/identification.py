@@ -283,6 +283,7 @@ def _experiment_estimates(
                 model=w,
                 source=e.source,
                 grid_phase=float(wrap_phase(e.phase_shift)),
+                offset=e.offset,
             )
         )
     return experiments
