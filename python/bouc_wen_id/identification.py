@@ -184,12 +184,17 @@ def _check_arguments(
     """The experiments as a list, and the mu bracket; refuses a bad method, confidence or bracket."""
     if method not in ("paper", "profile", "refined"):
         raise InvalidParameterError(f"method must be 'refined', 'profile' or 'paper', got {method!r}")
+    if isinstance(confidence, bool) or not isinstance(confidence, (int, float, np.integer, np.floating)):
+        raise InvalidParameterError(f"confidence = {confidence!r} must be a number in (0, 1)")
     if not 0.0 < confidence < 1.0:
         raise InvalidParameterError(f"confidence = {confidence} must be in (0, 1)")
     items: list[Any] = [recordings] if not isinstance(recordings, (list, tuple)) else list(recordings)
     if not items:
         raise InsufficientDataError("no recordings were given")
-    lo, hi = (float(v) for v in mu_bracket)
+    try:
+        lo, hi = (float(v) for v in mu_bracket)
+    except (TypeError, ValueError) as exc:
+        raise InvalidParameterError(f"mu_bracket = {mu_bracket!r} must be two numbers: {exc}") from None
     if not 1.0 <= lo < hi:
         raise InvalidParameterError(f"mu_bracket = {mu_bracket} must satisfy 1 <= lo < hi (mu > 1)")
     return items, (lo, hi)

@@ -558,6 +558,7 @@ def read_csv(
     p = Path(path)
     where = str(p)
     lines = [line.rstrip("\r") for line in _read_text(p).split("\n")]
+    _budget.check_samples(f"{where}: the CSV rows", len(lines))
     if not any(line.strip() for line in lines):
         raise FileFormatError(f"{where}: the file is empty")
     head: dict[str, Any] = {}
@@ -715,7 +716,9 @@ def _guard_npz(z: Any, where: str) -> None:
                 shape, _, dtype = np.lib.format.read_array_header_1_0(member)
             else:
                 shape, _, dtype = np.lib.format.read_array_header_2_0(member)
-        allocated += math.prod(int(n) for n in shape) * int(dtype.itemsize)
+        count = math.prod(int(n) for n in shape)
+        _budget.check_samples(f"{where}: array {info.filename[:-4]!r}", count)
+        allocated += count * int(dtype.itemsize)
     _budget.check_bytes(f"{where}: the arrays of the NPZ archive", max(declared, allocated))
 
 
@@ -949,6 +952,8 @@ def _guard_mat5(data: bytes, wanted: set[str], where: str) -> None:
                     )
                 raise top.fail("a compressed variable inflates beyond 2 GiB")
             inflated_total += len(inflated)
+            # At least one byte per element (8 for the float64 signals): an upper bound of the samples.
+            _budget.check_samples(f"{where}: a compressed variable of the MAT file", len(inflated) // 8)
             walk = _Mat5Walk(inflated, order, where)
             code, count = walk.pair()
         else:

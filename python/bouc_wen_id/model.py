@@ -38,6 +38,23 @@ FloatArray = NDArray[np.float64]
 GRID_RTOL = 1e-6
 
 
+def _real_array(name: str, values: object) -> FloatArray:
+    """``values`` as float64, or an :class:`InvalidParameterError` (complex, text, ragged, objects)."""
+    raw = np.asarray(values)
+    if raw.dtype.kind not in "biuf":
+        raise InvalidParameterError(f"{name} must hold real numbers, got dtype {raw.dtype}")
+    return np.asarray(raw, dtype=np.float64)
+
+
+def _is_count(v: object) -> bool:
+    """A whole number (int, numpy integer, or an integral finite float), not a bool."""
+    if isinstance(v, bool):
+        return False
+    if isinstance(v, (int, np.integer)):
+        return True
+    return isinstance(v, (float, np.floating)) and math.isfinite(v) and float(v).is_integer()
+
+
 def _refreeze(obj: object, state: Mapping[str, Any]) -> None:
     """``__setstate__`` of the frozen value types: unpickled arrays come back writeable, so freeze them."""
     for name, value in state.items():
@@ -211,12 +228,12 @@ class SinePlan:
         object.__setattr__(self, "substeps", substeps)
         object.__setattr__(self, "noise_sd", noise_sd)
         object.__setattr__(self, "seed", seed)
-        freqs = _frozen_array("frequencies", np.atleast_1d(np.asarray(frequencies, dtype=np.float64)))
+        freqs = _frozen_array("frequencies", np.atleast_1d(_real_array("frequencies", frequencies)))
         if freqs.size == 0:
             raise InvalidParameterError("the plan needs at least one frequency")
         if np.any(freqs <= 0):
             raise InvalidParameterError(f"frequencies must be > 0 rad/s, got {freqs.tolist()}")
-        amps_raw = _frozen_array("amplitudes", np.atleast_1d(np.asarray(amplitudes, dtype=np.float64)))
+        amps_raw = _frozen_array("amplitudes", np.atleast_1d(_real_array("amplitudes", amplitudes)))
         if amps_raw.size not in (1, freqs.size):
             raise InvalidParameterError(
                 f"amplitudes: {amps_raw.size} values for {freqs.size} frequencies; give one amplitude per "
@@ -229,7 +246,7 @@ class SinePlan:
         object.__setattr__(self, "amplitudes", amps)
         for name, low in (("settle_periods", 0), ("periods", 1), ("samples_per_period", 8), ("substeps", 1)):
             v = getattr(self, name)
-            if int(v) != v or v < low:
+            if not _is_count(v) or v < low:
                 raise InvalidParameterError(f"{name} = {v} must be an integer >= {low}")
             object.__setattr__(self, name, int(v))
         noise = _finite("noise_sd", self.noise_sd)

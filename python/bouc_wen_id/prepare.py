@@ -218,6 +218,8 @@ def _prepare_recording(
             "periods do not fit. Record longer or lower settle_periods/periods"
         )
     source = rec.metadata.get("name", f"recording {i}")
+    # The input first: a wrong frequency misaligns the periods, which is no transient.
+    check_input(rec, s * p, (s + n) * p)
     if periods is None:
         # A transient left in would inflate the noise floor and bias the loop: trim it, as the measurement
         # path keeps only steady stretches, and say so.
@@ -231,7 +233,6 @@ def _prepare_recording(
                 stacklevel=4,
             )
             s, n = s + extra, n - extra
-    check_input(rec, s * p, (s + n) * p)
     averaged = np.asarray(core.periodic_average(np.ascontiguousarray(rec.y), p, s, n))
     noise_var = noise_variance(rec.y, p, s, n)
     # The model's steady loop has no mean: the output's mean is an offset (sensor, conditioning), removed
