@@ -146,17 +146,14 @@ where
                 }
             };
             let mut signal: Option<PyErr> = None;
-            loop {
-                match finished.recv_timeout(cancel::POLL_INTERVAL) {
-                    Err(RecvTimeoutError::Timeout) => {
-                        if signal.is_none() {
-                            if let Err(e) = Python::attach(|py| py.check_signals()) {
-                                token.cancel();
-                                signal = Some(e);
-                            }
-                        }
+            // Until the worker reports (or drops its end by panicking), poll for signals.
+            while let Err(RecvTimeoutError::Timeout) = finished.recv_timeout(cancel::POLL_INTERVAL)
+            {
+                if signal.is_none() {
+                    if let Err(e) = Python::attach(|py| py.check_signals()) {
+                        token.cancel();
+                        signal = Some(e);
                     }
-                    Ok(()) | Err(RecvTimeoutError::Disconnected) => break,
                 }
             }
             let outcome = match handle.join() {

@@ -281,7 +281,9 @@ pub fn solve_normal(m: &Matrix3<f64>, r: &Vector3<f64>) -> Result<(Vector3<f64>,
     // triangle would silently turn into a wrong answer.
     for (i, j) in [(1, 0), (2, 0), (2, 1)] {
         let gap = (m[(i, j)] - m[(j, i)]).abs();
-        if !(gap <= SYMMETRY_RTOL * d[i] * d[j]) {
+        // Written so that a NaN gap (inf - inf) is refused too.
+        let symmetric = gap <= SYMMETRY_RTOL * d[i] * d[j];
+        if !symmetric {
             return Err(CoreError::InvalidParameter(format!(
                 "the normal matrix is not symmetric: m[{i}][{j}] = {:e} but m[{j}][{i}] = {:e} \
                  (relative gap {:.1e} > {SYMMETRY_RTOL:e}); pass Psi^T Psi",
