@@ -184,6 +184,10 @@ def test_budget_refuses_oversized_work_in_microseconds(
         lambda: bw.simulate(plant, bw.SinePlan([3.0], substeps=10**12)),
         lambda: bw.identify(recordings, phase_grid=10**8),
         lambda: bw.identify(recordings, max_iter=10**9),
+        # The NumPy reference refuses the same work (it would run for days).
+        lambda: bw.identify(recordings, method="profile", phase_grid=10**8, backend="numpy"),
+        lambda: bw.simulate(plant, bw.SinePlan([3.0], substeps=10**12), backend="numpy"),
+        lambda: bw.simulate(plant, bw.SinePlan(np.linspace(1, 9, 200), samples_per_period=2**16)),
         lambda: _core.simulate_sine(
             [1.0], [1.0, 1.0], 0.0, 1.0, 0.5, 0.1, 2.0, 0.0, 1.0, 1.0, 0.1, 10**12, 1
         ),

@@ -24,6 +24,8 @@ __all__ = [
     "profile_phase_sls",
     "profile_phase_gain",
     "refine",
+    "get_budget",
+    "set_budget",
 ]
 
 _F = NDArray[np.float64]
