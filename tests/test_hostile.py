@@ -249,7 +249,15 @@ def test_value_types_validate_every_field(recordings: list[bw.Recording]) -> Non
 def test_frozen_arrays_stay_frozen_through_pickle(recordings: list[bw.Recording]) -> None:
     plan = bw.SinePlan([1.0, 2.0])
     tf = bw.TransferFunction([1.0], [1.0, 1.0])
-    for obj, names in ((recordings[0], ("t", "u", "y", "x", "w")), (plan, ("frequencies",)), (tf, ("num",))):
+    r = recordings[0]
+    meas = bw.Measurement(r.t, r.u, r.y)
+    cases = (
+        (r, ("t", "u", "y", "x", "w")),
+        (plan, ("frequencies", "amplitudes")),
+        (tf, ("num", "den")),
+        (meas, ("t", "u", "y")),
+    )
+    for obj, names in cases:
         back = pickle.loads(pickle.dumps(obj))
         for name in names:
             arr = getattr(back, name)
