@@ -436,7 +436,9 @@ def test_cli_identify_report_is_unmixed(tmp_path: Path, recordings: list[bw.Reco
 
 def test_cli_ctrl_c_leaves_nothing_half_written(tmp_path: Path) -> None:
     out = tmp_path / "R"
-    args = ["-m", "bouc_wen_id", "simulate", "--out", str(out), "--samples-per-period", "200000"]
+    # One experiment of 700 000 samples x 1000 RK4 substeps: within the budgets, about a minute of work.
+    args = ["-m", "bouc_wen_id", "simulate", "--out", str(out), "--frequencies", "1"]
+    args += ["--samples-per-period", "10000", "--substeps", "1000"]
     env = dict(os.environ, MPLBACKEND="Agg")
     proc = subprocess.Popen([sys.executable, *args], stderr=subprocess.PIPE, text=True, env=env)
     time.sleep(2.0)

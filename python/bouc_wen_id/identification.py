@@ -17,9 +17,10 @@ from typing import TYPE_CHECKING, Any, Literal, Optional
 import numpy as np
 from numpy.typing import NDArray
 
+from . import budget
 from ._backend import Backend, get_backend
 from .errors import ConvergenceWarning, IdentifiabilityWarning, InsufficientDataError, InvalidParameterError
-from .estimators import Fit, adequacy, fit, linear_nrmse, on_constraint
+from .estimators import Fit, adequacy, fit, linear_nrmse, on_constraint, steady_substeps
 from .model import Recording
 from .prepare import Prepared, Scales, auto_harmonics, noise_variance, prepare, scale
 from .result import Adequacy, ExperimentEstimate, IdentificationResult, Truth, wrap_phase
@@ -132,6 +133,7 @@ def identify(
     reference, phase_grid, max_iter = _check_counts(reference, phase_grid, max_iter, harmonics)
     core = get_backend(backend)
     prepared = prepare(items, core, settle_periods, periods, harmonics)
+    _check_work(prepared, method, phase_grid, max_iter)
     reference = _reference_index(reference, len(prepared))
     scaled, scales = scale(prepared)
     fitted = fit(scaled, core, method, reference, lo, hi, tol, phase_grid, max_iter)
@@ -214,6 +216,28 @@ def _check_counts(reference: Any, phase_grid: Any, max_iter: Any, harmonics: Any
     elif isinstance(harmonics, bool) or not isinstance(harmonics, (int, np.integer)) or harmonics < 1:
         raise InvalidParameterError(f"harmonics = {harmonics!r} must be 'auto', 'all' or an integer >= 1")
     return int(reference), int(phase_grid), int(max_iter)
+
+
+#: Work estimates of the budget checks, as rust/python.rs: golden reductions of one mu search, shooting
+#: passes of one steady loop.
+_GOLDEN_ITER_ESTIMATE = 50
+_SHOOT_ITER_ESTIMATE = 4
+
+
+def _check_work(prepared: Sequence[Prepared], method: str, phase_grid: int, max_iter: int) -> None:
+    """Refuse, before any fit and for either backend, work beyond the budget (:mod:`bouc_wen_id.budget`)."""
+    p_max = max(e.p for e in prepared)
+    if method in ("profile", "refined"):
+        budget.check_steps(
+            "the phase profile (phase_grid x samples per period x mu search)",
+            phase_grid * p_max * _GOLDEN_ITER_ESTIMATE,
+        )
+    if method == "refined":
+        substeps = max(steady_substeps(e.p) for e in prepared)
+        budget.check_steps(
+            "the refinement (max_iter x samples x substeps)",
+            max_iter * sum(e.p for e in prepared) * substeps * _SHOOT_ITER_ESTIMATE,
+        )
 
 
 def _reference_index(reference: int, m: int) -> int:

@@ -17,7 +17,6 @@ from typing import Callable, Optional
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from . import budget as _budget
 from .errors import BoucWenIdError as BoucWenIdErrorBase
 from .errors import (
     InsufficientDataError,
@@ -58,9 +57,6 @@ FloatArray = NDArray[np.float64]
 GOLDEN_RATIO_CONJ = 0.6180339887498949
 #: Smallest reciprocal condition number of the Jacobi-scaled normal matrix that we agree to solve.
 RCOND_MIN = 1e-12
-#: Work estimates of the budget checks, as rust/python.rs: golden reductions of one search, shooting passes.
-_GOLDEN_ITER_ESTIMATE = 50
-_SHOOT_ITER_ESTIMATE = 4
 #: Largest |m_ij - m_ji| / sqrt(m_ii m_jj) solve_normal accepts (rust/solve.rs SYMMETRY_RTOL).
 SYMMETRY_RTOL = 1e-10
 #: Default iteration cap of the golden-section search (0.618**200 is far below any double tolerance).
@@ -118,7 +114,6 @@ def _simulate(
         raise InvalidParameterError(f"substeps = {substeps} must be >= 1")
     if n_samples < 1:
         raise InvalidParameterError(f"n_samples = {n_samples} must be >= 1")
-    _budget.check_simulation(n_samples, substeps)
     n = a.size
 
     def delayed(t: float) -> tuple[float, float]:
@@ -558,7 +553,6 @@ def steady_loop(
         raise InsufficientDataError(f"samples_per_period = {p}: at least {MIN_AVERAGE_SAMPLES} are needed")
     if substeps < 1:
         raise InvalidParameterError(f"substeps = {substeps} must be >= 1")
-    _budget.check_steps("the steady loop", p * int(substeps) * _SHOOT_ITER_ESTIMATE)
     phi = float(np.mod(phi, 2.0 * np.pi))
     # The sample phases theta_j = 2 pi j/P - phi fold, modulo pi, onto a lattice offset + k L.
     c, n_lat = (1, p // 2) if p % 2 == 0 else (2, p)
@@ -698,9 +692,6 @@ def profile_phase_sls(
     yd = _finite_array("ydot", ydot)
     if grid < 3:
         raise InvalidParameterError(f"the phase grid needs at least 3 points, got {grid}")
-    _budget.check_steps(
-        "the phase profile (grid x samples per period x mu search)", grid * yb.size * _GOLDEN_ITER_ESTIMATE
-    )
     step = np.pi / grid
     best: Optional[tuple[int, float]] = None
     skipped = 0
@@ -766,7 +757,6 @@ def profile_phase_gain(
     yd = _finite_array("ydot", ydot)
     if grid < 3:
         raise InvalidParameterError(f"the phase grid needs at least 3 points, got {grid}")
-    _budget.check_steps("the phase profile (grid x samples per period)", grid * yb.size)
 
     def fit(phi: float) -> Optional[tuple[float, float]]:
         _, _, s, sgn, dt = _phase_sign_inputs(yb, yd, amplitude, omega, phi)
@@ -851,10 +841,6 @@ def refine(
         raise InvalidParameterError("weights must be finite and > 0 (N / noise variance)")
     if max_iter < 1 or substeps < 1:
         raise InvalidParameterError("max_iter and substeps must be >= 1")
-    _budget.check_steps(
-        "the refinement (max_iter x samples x substeps)",
-        max_iter * sum(y.size for y in ys) * substeps * _SHOOT_ITER_ESTIMATE,
-    )
     params = np.concatenate([[beta, gamma, mu], np.column_stack([g0, p0]).ravel()])
 
     def admissible(par: FloatArray) -> bool:
