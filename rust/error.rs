@@ -59,6 +59,9 @@ pub enum CoreError {
     /// The computation was cancelled through its token (`rust/cancel.rs`), e.g. by Ctrl-C.
     #[error("interrupted: {0}")]
     Interrupted(String),
+    /// An iteration that must converge did not (the steady-loop shooting).
+    #[error("not converged: {0}")]
+    NotConverged(String),
 }
 
 /// Result alias of the core.

@@ -4,6 +4,12 @@
 //! `ValueError`, never a panic), releases the interpreter around long work, calls the numerics of
 //! (1a)-(27b) in the sibling modules, and maps [`CoreError`] onto the named exceptions of
 //! `bouc_wen_id.errors`.
+//!
+//! ## Reference
+//! *Wiener System Identification in Presence of Hysteresis Nonlinearity*, the seed paper whose
+//! equation numbers are cited; for the Bouc-Wen properties it relies on (Propositions 1-2):
+//! F. Ikhouane and J. Rodellar, *Systems with Hysteresis: Analysis, Identification and Control
+//! using the Bouc-Wen Model*, Wiley, 2007.
 
 use numpy::ndarray::Array2;
 use std::sync::mpsc::{self, RecvTimeoutError};
@@ -32,6 +38,7 @@ pyo3::import_exception!(bouc_wen_id.errors, ZeroAmplitudeError);
 pyo3::import_exception!(bouc_wen_id.errors, SingularNormalMatrixError);
 pyo3::import_exception!(bouc_wen_id.errors, SearchAtBoundError);
 pyo3::import_exception!(bouc_wen_id.errors, BudgetExceededError);
+pyo3::import_exception!(bouc_wen_id.errors, ConvergenceError);
 
 // The Python defaults `max_iter=200` are literals so that `__text_signature__` shows them.
 const _: () = assert!(GOLDEN_MAX_ITER == 200);
@@ -53,16 +60,12 @@ impl From<CoreError> for PyErr {
             CoreError::SingularNormalMatrix { .. } => SingularNormalMatrixError::new_err(msg),
             CoreError::BudgetExceeded(_) => BudgetExceededError::new_err(msg),
             CoreError::Interrupted(_) => PyKeyboardInterrupt::new_err(msg),
-            CoreError::SearchAtBound { bound, lower, .. } => Python::attach(|py| {
-                // The Python class carries the bracket end, so callers can tell mu = 1 from a
-                // bracket that is merely too narrow.
-                let err = SearchAtBoundError::new_err(msg);
-                let value = err.value(py);
-                match (value.setattr("bound", bound), value.setattr("lower", lower)) {
-                    (Ok(()), Ok(())) => err,
-                    (Err(e), _) | (_, Err(e)) => e,
-                }
-            }),
+            // The Python class carries the bracket end, so callers can tell mu = 1 from a
+            // bracket that is merely too narrow.
+            CoreError::SearchAtBound { bound, lower, .. } => {
+                SearchAtBoundError::new_err((msg, bound, lower))
+            }
+            CoreError::NotConverged(_) => ConvergenceError::new_err(msg),
         }
     }
 }
@@ -306,7 +309,7 @@ fn periodic_average<'py>(
         (Ok(p), Ok(s), Ok(n)) => (p, s, n),
         // A negative count: report it as the core would, in the reference's order.
         _ => {
-            crate::error::all_finite("y", y)?;
+            error::all_finite("y", y)?;
             return Err(if samples_per_period < 0 {
                 CoreError::InsufficientData(format!(
                     "samples_per_period = {samples_per_period}: at least 4 samples per period \
@@ -352,8 +355,8 @@ fn spectral_derivative<'py>(
 ) -> PyResult<Bound<'py, PyArray1<f64>>> {
     let ybar = slice("ybar", &ybar)?;
     let Ok(k) = usize::try_from(harmonics) else {
-        crate::error::all_finite("ybar", ybar)?;
-        crate::error::finite("omega", omega)?;
+        error::all_finite("ybar", ybar)?;
+        error::finite("omega", omega)?;
         return Err(CoreError::InvalidParameter(format!(
             "harmonics = {harmonics} must be in [1, {}] for {} samples per period",
             estimate::max_harmonics(ybar.len()),

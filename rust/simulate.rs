@@ -8,6 +8,12 @@
 //! The step is written for speed: no allocation per step, the companion structure makes `A xs`
 //! O(n), one `powf` per stage, the input is evaluated once for the two mid-step stages, and a
 //! value is reused when a stage time repeats bitwise.
+//!
+//! ## Reference
+//! *Wiener System Identification in Presence of Hysteresis Nonlinearity*, the seed paper whose
+//! equation numbers are cited; for the Bouc-Wen properties it relies on (Propositions 1-2):
+//! F. Ikhouane and J. Rodellar, *Systems with Hysteresis: Analysis, Identification and Control
+//! using the Bouc-Wen Model*, Wiley, 2007.
 
 use crate::bouc_wen::BoucWen;
 use crate::error::{all_finite, finite, CoreError, Result};

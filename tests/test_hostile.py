@@ -18,7 +18,7 @@ import textwrap
 import time
 import warnings
 import zipfile
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import bouc_wen_id as bw
@@ -35,12 +35,12 @@ from bouc_wen_id.errors import (
 )
 
 # A small, quick experiment set of the demo plant.
-PLAN = dict(settle_periods=10, periods=6, samples_per_period=64)
+PLAN: dict[str, int] = dict(settle_periods=10, periods=6, samples_per_period=64)
 
 
 @pytest.fixture(scope="module")
 def recordings() -> list[bw.Recording]:
-    plan = bw.SinePlan([3.0, 5.0, 7.0], [1.0, 0.8, 1.2], noise_sd=0.002, seed=7, **PLAN)  # type: ignore[arg-type]
+    plan = bw.SinePlan([3.0, 5.0, 7.0], [1.0, 0.8, 1.2], noise_sd=0.002, seed=7, **PLAN)
     return bw.simulate(bw.demo_plant(), plan)
 
 
@@ -50,11 +50,11 @@ def small_budget() -> Iterator[budget.Budget]:
         yield b
 
 
-def _run(args: list[str], **kw: object) -> subprocess.CompletedProcess[str]:
+def _run(args: list[str]) -> subprocess.CompletedProcess[str]:
     env = dict(os.environ, MPLBACKEND="Agg")
     return subprocess.run(
-        [sys.executable, *args], capture_output=True, text=True, timeout=120, env=env, check=False, **kw
-    )  # type: ignore[call-overload]
+        [sys.executable, *args], capture_output=True, text=True, timeout=120, env=env, check=False
+    )
 
 
 # --------------------------------------------------------------------------------------------------
@@ -193,6 +193,7 @@ def test_budget_refuses_oversized_work_in_microseconds(
         ),
         lambda: _core.steady_loop(1.0, 0.5, 0.1, 2.0, 0.0, 1 << 20, 64),
     ]
+    case: Callable[[], object]
     for case in cases:
         t0 = time.perf_counter()
         with pytest.raises(BudgetExceededError) as info:
@@ -336,7 +337,7 @@ def test_an_npz_whose_header_lies_is_refused_before_allocating(tmp_path: Path) -
     path = tmp_path / "liar.npz"
     with zipfile.ZipFile(path, "w") as z:
         with z.open("y.npy", "w") as fh:
-            np.lib.format.write_array_header_1_0(fh, header)  # type: ignore[no-untyped-call]
+            np.lib.format.write_array_header_1_0(fh, header)
             fh.write(b"\0" * 64)
     with pytest.raises(BudgetExceededError):
         bw.load(path)

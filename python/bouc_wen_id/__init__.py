@@ -14,6 +14,7 @@ from .errors import (
     BoucWenIdError,
     BudgetExceededError,
     ClippingError,
+    ConvergenceError,
     ConvergenceWarning,
     DistortedInputWarning,
     FileFormatError,
@@ -79,6 +80,7 @@ __all__ = [
     "ZeroAmplitudeError",
     "SingularNormalMatrixError",
     "SearchAtBoundError",
+    "ConvergenceError",
     "FileFormatError",
     "TimeAxisError",
     "ClippingError",
@@ -86,9 +88,10 @@ __all__ = [
     "NotPeriodicError",
     "IdentifiabilityWarning",
     "DistortedInputWarning",
+    "ConvergenceWarning",
     "Adequacy",
     "CramerRao",
     "cramer_rao",
 ]
 
-__all__ += ["budget", "BudgetExceededError", "ConvergenceWarning"]
+__all__ += ["budget", "BudgetExceededError"]
