@@ -276,9 +276,7 @@ def test_an_unconverged_fit_warns_and_says_so(recordings: list[bw.Recording]) ->
         warnings.simplefilter("always")
         res = bw.identify(recordings, max_iter=1)
     assert res.converged is False
-    assert any(
-        issubclass(w.category, ConvergenceWarning) and "max_iter = 1" in str(w.message) for w in caught
-    )
+    assert any(issubclass(w.category, ConvergenceWarning) and "max_iter" in str(w.message) for w in caught)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         res = bw.identify(recordings)
