@@ -56,6 +56,13 @@ pub enum CoreError {
         /// The requested bracket width.
         tol: f64,
     },
+    /// A call would exceed a work or memory budget (`rust/budget.rs`); the message gives the size
+    /// and how to raise the limit.
+    #[error("budget exceeded: {0}")]
+    BudgetExceeded(String),
+    /// The computation was cancelled through its token (`rust/cancel.rs`), e.g. by Ctrl-C.
+    #[error("interrupted: {0}")]
+    Interrupted(String),
 }
 
 /// Result alias of the core.

@@ -18,6 +18,8 @@
 
 pub mod average;
 pub mod bouc_wen;
+pub mod budget;
+pub mod cancel;
 pub mod error;
 pub mod estimate;
 pub mod linear;

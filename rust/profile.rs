@@ -141,6 +141,7 @@ pub fn profile_phase_sls(
     let mut best: Option<(usize, f64)> = None;
     let mut skipped = 0;
     for k in 0..grid {
+        crate::cancel::checkpoint()?;
         match profile_at(ybar, ydot, amplitude, omega, k as f64 * step, bracket)? {
             Some(cand) => {
                 if best.is_none_or(|(_, c)| cand.cost < c) {
@@ -266,6 +267,7 @@ pub fn profile_phase_gain(
     let step = 2.0 * PI / grid as f64;
     let mut best: Option<(usize, f64)> = None;
     for k in 0..grid {
+        crate::cancel::checkpoint()?;
         if let Some((g, c)) = fit(k as f64 * step)? {
             // Only the positive-gain branch is the physical one for a fixed (beta, gamma).
             if g > 0.0 && best.is_none_or(|(_, b)| c < b) {

@@ -14,17 +14,22 @@
 use std::collections::HashMap;
 
 use numpy::ndarray::Array2;
+use std::sync::mpsc::{self, RecvTimeoutError};
+use std::sync::Arc;
+
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
+use pyo3::exceptions::{PyKeyboardInterrupt, PyOverflowError, PyTypeError};
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 
 use crate::average;
 use crate::bouc_wen::BoucWen;
-use crate::error::CoreError;
+use crate::error::{self, CoreError};
 use crate::estimate;
 use crate::linear::TransferFunction;
 use crate::simulate::{self, Input, Terms};
 use crate::solve::{self, SlsProblem, GOLDEN_MAX_ITER};
+use crate::{budget, cancel};
 use crate::{path_loop as pathloop, profile, refine, steady, terms};
 
 pyo3::import_exception!(bouc_wen_id.errors, InvalidParameterError);
@@ -36,6 +41,7 @@ pyo3::import_exception!(bouc_wen_id.errors, ZeroAmplitudeError);
 pyo3::import_exception!(bouc_wen_id.errors, SingularNormalMatrixError);
 pyo3::import_exception!(bouc_wen_id.errors, SearchAtBoundError);
 pyo3::import_exception!(bouc_wen_id.errors, NotConvergedError);
+pyo3::import_exception!(bouc_wen_id.errors, BudgetExceededError);
 
 // The Python defaults `max_iter=200` are literals so that `__text_signature__` shows them.
 const _: () = assert!(GOLDEN_MAX_ITER == 200);
@@ -55,6 +61,8 @@ impl From<CoreError> for PyErr {
             CoreError::InsufficientData(_) => InsufficientDataError::new_err(msg),
             CoreError::ZeroAmplitude(_) => ZeroAmplitudeError::new_err(msg),
             CoreError::SingularNormalMatrix { .. } => SingularNormalMatrixError::new_err(msg),
+            CoreError::BudgetExceeded(_) => BudgetExceededError::new_err(msg),
+            CoreError::Interrupted(_) => PyKeyboardInterrupt::new_err(msg),
             // The Python class carries the bracket end, so callers can tell mu = 1 from a
             // bracket that is merely too narrow.
             CoreError::SearchAtBound { bound, lower, .. } => {
@@ -63,6 +71,108 @@ impl From<CoreError> for PyErr {
             CoreError::NotConverged(_) => NotConvergedError::new_err(msg),
         }
     }
+}
+
+/// Extracts an argument, turning pyo3's conversion failures (a `TypeError` for a wrong type or
+/// dtype, an `OverflowError` for an integer beyond 64 bits) into the library's
+/// [`InvalidParameterError`] (a `ValueError`), as the module promises; pyo3 adds the argument's
+/// name as a note. Used as `#[pyo3(from_py_with = arg)]`.
+fn arg<'a, 'py, T>(obj: &'a Bound<'py, PyAny>) -> PyResult<T>
+where
+    T: FromPyObject<'a, 'py>,
+{
+    obj.extract::<T>().map_err(|e| {
+        let e: PyErr = e.into();
+        let py = obj.py();
+        if !(e.is_instance_of::<PyTypeError>(py) || e.is_instance_of::<PyOverflowError>(py)) {
+            return e;
+        }
+        let got = match (obj.getattr("dtype"), obj.getattr("shape")) {
+            (Ok(dtype), Ok(shape)) => format!("an array of dtype {dtype} and shape {shape}"),
+            _ => match obj.get_type().name() {
+                Ok(name) => format!("an object of type {name}"),
+                Err(_) => "an object of unknown type".into(),
+            },
+        };
+        InvalidParameterError::new_err(format!(
+            "invalid parameter: got {got}, which cannot be used here ({}); numbers must be \
+             float, counts int in [-2^63, 2^63), arrays 1-D C-contiguous float64 (pass \
+             numpy.ascontiguousarray(a, dtype=numpy.float64))",
+            e.value(py).to_string().replace('\n', " ")
+        ))
+    })
+}
+
+/// Typical golden-section reductions of a search (`0.618^50 ~ 4e-11` of the bracket), for the
+/// work estimates.
+const GOLDEN_ITER_ESTIMATE: u128 = 50;
+/// Typical shooting passes of a steady loop, for the work estimates.
+const SHOOT_ITER_ESTIMATE: u128 = 4;
+
+/// Below this many elementary steps a call runs inline: a worker thread (about 20 us) would cost
+/// more than the few milliseconds the user waits for Ctrl-C.
+const INTERRUPTIBLE_MIN_STEPS: u128 = 1 << 16;
+
+/// Runs `work` with the interpreter released; when `steps` (an estimate of its elementary steps)
+/// is large, runs it on a scoped worker thread under a fresh [`cancel::Token`] while this thread
+/// polls `Python::check_signals` every [`cancel::POLL_INTERVAL`]. On a signal (Ctrl-C) the token
+/// is cancelled, the worker stops at its next checkpoint (nothing of its result is kept), and the
+/// signal's exception (`KeyboardInterrupt`) is raised.
+fn run_detached<T, F>(py: Python<'_>, steps: u128, work: F) -> PyResult<T>
+where
+    T: Send,
+    F: FnOnce() -> error::Result<T> + Send,
+{
+    if steps < INTERRUPTIBLE_MIN_STEPS {
+        return Ok(py.detach(work)?);
+    }
+    let token = Arc::new(cancel::Token::new());
+    let (outcome, signal) = py.detach(|| {
+        std::thread::scope(|scope| {
+            let (done, finished) = mpsc::channel::<()>();
+            let worker_token = Some(token.clone());
+            let spawned = std::thread::Builder::new()
+                .name("bouc_wen_id-core".into())
+                .spawn_scoped(scope, move || {
+                    let out = cancel::with_token(worker_token, work);
+                    // The receiver only ends with this scope; a failed send changes nothing.
+                    let _ = done.send(());
+                    out
+                });
+            let handle = match spawned {
+                Ok(h) => h,
+                // No thread to be had (the OS refused one): the work never ran; say so.
+                Err(e) => {
+                    return (
+                        Err(CoreError::InvalidParameter(format!(
+                            "could not start a worker thread for an interruptible call: {e}"
+                        ))),
+                        None,
+                    )
+                }
+            };
+            let mut signal: Option<PyErr> = None;
+            // Until the worker reports (or drops its end by panicking), poll for signals.
+            while let Err(RecvTimeoutError::Timeout) = finished.recv_timeout(cancel::POLL_INTERVAL)
+            {
+                if signal.is_none() {
+                    if let Err(e) = Python::attach(|py| py.check_signals()) {
+                        token.cancel();
+                        signal = Some(e);
+                    }
+                }
+            }
+            let outcome = match handle.join() {
+                Ok(out) => out,
+                Err(panic) => std::panic::resume_unwind(panic),
+            };
+            (outcome, signal)
+        })
+    });
+    if let Some(e) = signal {
+        return Err(e);
+    }
+    Ok(outcome?)
 }
 
 /// Borrows a 1-D array as a slice; a non-contiguous array is a `ValueError`
@@ -105,7 +215,11 @@ fn run_simulation<'py>(
     let dt = simulate::check_dt(dt)?;
     let substeps = count("substeps", substeps, 1)?;
     let n_samples = count("n_samples", n_samples, 1)?;
-    let sim = py.detach(|| simulate::simulate(&tf, &bw, input, dt, n_samples, substeps))?;
+    budget::check_simulation(n_samples, substeps)?;
+    let steps = simulate::rk4_step_count(n_samples, substeps) as u128;
+    let sim = run_detached(py, steps, || {
+        simulate::simulate(&tf, &bw, input, dt, n_samples, substeps)
+    })?;
     Ok((sim.x.into_pyarray(py), sim.w.into_pyarray(py)))
 }
 
@@ -135,7 +249,9 @@ fn run_with_terms<'py>(
     let substeps = count("substeps", substeps, 1)?;
     let n_samples = count("n_samples", n_samples, 1)?;
     let terms = Terms::from_named(named.iter().map(|(k, v)| (k.as_str(), *v)))?;
-    let sim = py.detach(|| {
+    budget::check_simulation(n_samples, substeps)?;
+    let steps = simulate::rk4_step_count(n_samples, substeps) as u128;
+    let sim = run_detached(py, steps, || {
         simulate::simulate_with_terms(&tf, &bw, &terms, input, dt, n_samples, substeps)
     })?;
     (
@@ -154,20 +270,20 @@ fn run_with_terms<'py>(
 #[allow(clippy::too_many_arguments)]
 fn simulate_sine<'py>(
     py: Python<'py>,
-    num: Vec<f64>,
-    den: Vec<f64>,
-    delay: f64,
-    alpha: f64,
-    beta: f64,
-    gamma: f64,
-    mu: f64,
-    w0: f64,
-    amplitude: f64,
-    omega: f64,
-    dt: f64,
-    n_samples: i64,
-    substeps: i64,
-    terms: Option<HashMap<String, f64>>,
+    #[pyo3(from_py_with = arg)] num: Vec<f64>,
+    #[pyo3(from_py_with = arg)] den: Vec<f64>,
+    #[pyo3(from_py_with = arg)] delay: f64,
+    #[pyo3(from_py_with = arg)] alpha: f64,
+    #[pyo3(from_py_with = arg)] beta: f64,
+    #[pyo3(from_py_with = arg)] gamma: f64,
+    #[pyo3(from_py_with = arg)] mu: f64,
+    #[pyo3(from_py_with = arg)] w0: f64,
+    #[pyo3(from_py_with = arg)] amplitude: f64,
+    #[pyo3(from_py_with = arg)] omega: f64,
+    #[pyo3(from_py_with = arg)] dt: f64,
+    #[pyo3(from_py_with = arg)] n_samples: i64,
+    #[pyo3(from_py_with = arg)] substeps: i64,
+    #[pyo3(from_py_with = arg)] terms: Option<HashMap<String, f64>>,
 ) -> PyResult<Bound<'py, PyTuple>> {
     let input = Input::Sine { amplitude, omega };
     input.validate()?;
@@ -190,18 +306,18 @@ fn simulate_sine<'py>(
 #[allow(clippy::too_many_arguments)]
 fn simulate_sampled<'py>(
     py: Python<'py>,
-    num: Vec<f64>,
-    den: Vec<f64>,
-    delay: f64,
-    alpha: f64,
-    beta: f64,
-    gamma: f64,
-    mu: f64,
-    w0: f64,
-    u: PyReadonlyArray1<'py, f64>,
-    dt: f64,
-    substeps: i64,
-    terms: Option<HashMap<String, f64>>,
+    #[pyo3(from_py_with = arg)] num: Vec<f64>,
+    #[pyo3(from_py_with = arg)] den: Vec<f64>,
+    #[pyo3(from_py_with = arg)] delay: f64,
+    #[pyo3(from_py_with = arg)] alpha: f64,
+    #[pyo3(from_py_with = arg)] beta: f64,
+    #[pyo3(from_py_with = arg)] gamma: f64,
+    #[pyo3(from_py_with = arg)] mu: f64,
+    #[pyo3(from_py_with = arg)] w0: f64,
+    #[pyo3(from_py_with = arg)] u: PyReadonlyArray1<'py, f64>,
+    #[pyo3(from_py_with = arg)] dt: f64,
+    #[pyo3(from_py_with = arg)] substeps: i64,
+    #[pyo3(from_py_with = arg)] terms: Option<HashMap<String, f64>>,
 ) -> PyResult<Bound<'py, PyTuple>> {
     let u = slice("u", &u)?;
     let input = Input::Sampled { u };
@@ -226,10 +342,10 @@ fn simulate_sampled<'py>(
 #[pyo3(signature = (y, samples_per_period, settle_periods, periods))]
 fn periodic_average<'py>(
     py: Python<'py>,
-    y: PyReadonlyArray1<'py, f64>,
-    samples_per_period: i64,
-    settle_periods: i64,
-    periods: i64,
+    #[pyo3(from_py_with = arg)] y: PyReadonlyArray1<'py, f64>,
+    #[pyo3(from_py_with = arg)] samples_per_period: i64,
+    #[pyo3(from_py_with = arg)] settle_periods: i64,
+    #[pyo3(from_py_with = arg)] periods: i64,
 ) -> PyResult<Bound<'py, PyArray1<f64>>> {
     let y = slice("y", &y)?;
     let (p, s, n) = match (
@@ -240,7 +356,7 @@ fn periodic_average<'py>(
         (Ok(p), Ok(s), Ok(n)) => (p, s, n),
         // A negative count: report it as the core would, in the reference's order.
         _ => {
-            crate::error::all_finite("y", y)?;
+            error::all_finite("y", y)?;
             return Err(if samples_per_period < 0 {
                 CoreError::InsufficientData(format!(
                     "samples_per_period = {samples_per_period}: at least 4 samples per period \
@@ -270,7 +386,7 @@ fn periodic_average<'py>(
 /// Phase estimator (9): `2 pi j*/P` (rad) with `j*` the first maximum of `ybar`.
 #[pyfunction]
 #[pyo3(signature = (ybar))]
-fn phase_from_max(ybar: PyReadonlyArray1<'_, f64>) -> PyResult<f64> {
+fn phase_from_max(#[pyo3(from_py_with = arg)] ybar: PyReadonlyArray1<'_, f64>) -> PyResult<f64> {
     Ok(estimate::phase_from_max(slice("ybar", &ybar)?)?)
 }
 
@@ -280,14 +396,14 @@ fn phase_from_max(ybar: PyReadonlyArray1<'_, f64>) -> PyResult<f64> {
 #[pyo3(signature = (ybar, omega, harmonics))]
 fn spectral_derivative<'py>(
     py: Python<'py>,
-    ybar: PyReadonlyArray1<'py, f64>,
-    omega: f64,
-    harmonics: i64,
+    #[pyo3(from_py_with = arg)] ybar: PyReadonlyArray1<'py, f64>,
+    #[pyo3(from_py_with = arg)] omega: f64,
+    #[pyo3(from_py_with = arg)] harmonics: i64,
 ) -> PyResult<Bound<'py, PyArray1<f64>>> {
     let ybar = slice("ybar", &ybar)?;
     let Ok(k) = usize::try_from(harmonics) else {
-        crate::error::all_finite("ybar", ybar)?;
-        crate::error::finite("omega", omega)?;
+        error::all_finite("ybar", ybar)?;
+        error::finite("omega", omega)?;
         return Err(CoreError::InvalidParameter(format!(
             "harmonics = {harmonics} must be in [1, {}] for {} samples per period",
             estimate::max_harmonics(ybar.len()),
@@ -309,12 +425,12 @@ fn spectral_derivative<'py>(
 #[pyo3(signature = (ybar, ydot, amplitude, omega, phi, nu))]
 fn sls_regressor<'py>(
     py: Python<'py>,
-    ybar: PyReadonlyArray1<'py, f64>,
-    ydot: PyReadonlyArray1<'py, f64>,
-    amplitude: f64,
-    omega: f64,
-    phi: f64,
-    nu: f64,
+    #[pyo3(from_py_with = arg)] ybar: PyReadonlyArray1<'py, f64>,
+    #[pyo3(from_py_with = arg)] ydot: PyReadonlyArray1<'py, f64>,
+    #[pyo3(from_py_with = arg)] amplitude: f64,
+    #[pyo3(from_py_with = arg)] omega: f64,
+    #[pyo3(from_py_with = arg)] phi: f64,
+    #[pyo3(from_py_with = arg)] nu: f64,
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
     let problem = SlsProblem::new(
         slice("ybar", &ybar)?,
@@ -338,8 +454,8 @@ fn sls_regressor<'py>(
 #[pyo3(signature = (m, r))]
 fn solve_normal<'py>(
     py: Python<'py>,
-    m: PyReadonlyArray2<'py, f64>,
-    r: PyReadonlyArray1<'py, f64>,
+    #[pyo3(from_py_with = arg)] m: PyReadonlyArray2<'py, f64>,
+    #[pyo3(from_py_with = arg)] r: PyReadonlyArray1<'py, f64>,
 ) -> PyResult<(Bound<'py, PyArray1<f64>>, f64)> {
     let (mv, rv) = (m.as_array(), r.as_array());
     if mv.shape() != [3, 3] || rv.shape() != [3] {
@@ -361,12 +477,12 @@ fn solve_normal<'py>(
 #[pyo3(signature = (ybar, ydot, amplitude, omega, phi, nu))]
 fn sls_theta<'py>(
     py: Python<'py>,
-    ybar: PyReadonlyArray1<'py, f64>,
-    ydot: PyReadonlyArray1<'py, f64>,
-    amplitude: f64,
-    omega: f64,
-    phi: f64,
-    nu: f64,
+    #[pyo3(from_py_with = arg)] ybar: PyReadonlyArray1<'py, f64>,
+    #[pyo3(from_py_with = arg)] ydot: PyReadonlyArray1<'py, f64>,
+    #[pyo3(from_py_with = arg)] amplitude: f64,
+    #[pyo3(from_py_with = arg)] omega: f64,
+    #[pyo3(from_py_with = arg)] phi: f64,
+    #[pyo3(from_py_with = arg)] nu: f64,
 ) -> PyResult<(Bound<'py, PyArray1<f64>>, f64)> {
     let problem = SlsProblem::new(
         slice("ybar", &ybar)?,
@@ -385,10 +501,10 @@ fn sls_theta<'py>(
 #[pyo3(signature = (func, lo, hi, tol, max_iter=200))]
 fn golden_section(
     func: &Bound<'_, PyAny>,
-    lo: f64,
-    hi: f64,
-    tol: f64,
-    max_iter: i64,
+    #[pyo3(from_py_with = arg)] lo: f64,
+    #[pyo3(from_py_with = arg)] hi: f64,
+    #[pyo3(from_py_with = arg)] tol: f64,
+    #[pyo3(from_py_with = arg)] max_iter: i64,
 ) -> PyResult<(f64, f64, usize)> {
     let max_iter = count("max_iter", max_iter, 1)?;
     let g = solve::golden_section_with::<PyErr, _>(
@@ -407,19 +523,24 @@ fn golden_section(
 #[allow(clippy::too_many_arguments)]
 fn sls_search<'py>(
     py: Python<'py>,
-    ybar: PyReadonlyArray1<'py, f64>,
-    ydot: PyReadonlyArray1<'py, f64>,
-    amplitude: f64,
-    omega: f64,
-    phi: f64,
-    lo: f64,
-    hi: f64,
-    tol: f64,
-    max_iter: i64,
+    #[pyo3(from_py_with = arg)] ybar: PyReadonlyArray1<'py, f64>,
+    #[pyo3(from_py_with = arg)] ydot: PyReadonlyArray1<'py, f64>,
+    #[pyo3(from_py_with = arg)] amplitude: f64,
+    #[pyo3(from_py_with = arg)] omega: f64,
+    #[pyo3(from_py_with = arg)] phi: f64,
+    #[pyo3(from_py_with = arg)] lo: f64,
+    #[pyo3(from_py_with = arg)] hi: f64,
+    #[pyo3(from_py_with = arg)] tol: f64,
+    #[pyo3(from_py_with = arg)] max_iter: i64,
 ) -> PyResult<(f64, Bound<'py, PyArray1<f64>>, f64, usize)> {
     let (ybar, ydot) = (slice("ybar", &ybar)?, slice("ydot", &ydot)?);
     let max_iter = count("max_iter", max_iter, 1)?;
-    let fit = py.detach(|| {
+    budget::check_steps(
+        "the mu search",
+        (max_iter as u128).saturating_mul(ybar.len() as u128),
+    )?;
+    let steps = (ybar.len() as u128) * GOLDEN_ITER_ESTIMATE;
+    let fit = run_detached(py, steps, || {
         solve::check_mu_bracket(lo)?;
         let problem = SlsProblem::new(ybar, ydot, amplitude, omega, phi)?;
         solve::sls_search(&problem, lo, hi, tol, max_iter)
@@ -437,14 +558,14 @@ fn sls_search<'py>(
 #[pyo3(signature = (ybar, ydot, amplitude, omega, phi, beta, gamma, mu))]
 #[allow(clippy::too_many_arguments)]
 fn gain_estimate(
-    ybar: PyReadonlyArray1<'_, f64>,
-    ydot: PyReadonlyArray1<'_, f64>,
-    amplitude: f64,
-    omega: f64,
-    phi: f64,
-    beta: f64,
-    gamma: f64,
-    mu: f64,
+    #[pyo3(from_py_with = arg)] ybar: PyReadonlyArray1<'_, f64>,
+    #[pyo3(from_py_with = arg)] ydot: PyReadonlyArray1<'_, f64>,
+    #[pyo3(from_py_with = arg)] amplitude: f64,
+    #[pyo3(from_py_with = arg)] omega: f64,
+    #[pyo3(from_py_with = arg)] phi: f64,
+    #[pyo3(from_py_with = arg)] beta: f64,
+    #[pyo3(from_py_with = arg)] gamma: f64,
+    #[pyo3(from_py_with = arg)] mu: f64,
 ) -> PyResult<f64> {
     Ok(estimate::gain_estimate(
         slice("ybar", &ybar)?,
@@ -465,13 +586,13 @@ fn gain_estimate(
 #[allow(clippy::type_complexity, clippy::too_many_arguments)]
 fn steady_loop<'py>(
     py: Python<'py>,
-    amplitude: f64,
-    beta: f64,
-    gamma: f64,
-    mu: f64,
-    phi: f64,
-    samples_per_period: i64,
-    substeps: i64,
+    #[pyo3(from_py_with = arg)] amplitude: f64,
+    #[pyo3(from_py_with = arg)] beta: f64,
+    #[pyo3(from_py_with = arg)] gamma: f64,
+    #[pyo3(from_py_with = arg)] mu: f64,
+    #[pyo3(from_py_with = arg)] phi: f64,
+    #[pyo3(from_py_with = arg)] samples_per_period: i64,
+    #[pyo3(from_py_with = arg)] substeps: i64,
 ) -> PyResult<(
     Bound<'py, PyArray1<f64>>,
     Bound<'py, PyArray2<f64>>,
@@ -480,7 +601,11 @@ fn steady_loop<'py>(
 )> {
     let p = count("samples_per_period", samples_per_period, 0)?;
     let substeps = count("substeps", substeps, 0)?;
-    let l = py.detach(|| steady::steady_loop(amplitude, beta, gamma, mu, phi, p, substeps))?;
+    let steps = (p as u128).saturating_mul(substeps as u128) * SHOOT_ITER_ESTIMATE;
+    budget::check_steps("the steady loop", steps)?;
+    let l = run_detached(py, steps, || {
+        steady::steady_loop(amplitude, beta, gamma, mu, phi, p, substeps)
+    })?;
     let flat: Vec<f64> = l.jac.iter().flatten().copied().collect();
     let jac = Array2::from_shape_vec((l.w.len(), 5), flat)
         .map_err(|e| CoreError::InvalidParameter(e.to_string()))?;
@@ -512,7 +637,11 @@ fn path_loop<'py>(
 ) -> PyResult<(Bound<'py, PyArray1<f64>>, Bound<'py, PyArray2<f64>>, usize)> {
     let p = count("samples_per_period", samples_per_period, 0)?;
     let substeps = count("substeps", substeps, 0)?;
-    let l = py.detach(|| {
+    let steps = (p as u128)
+        .saturating_mul(substeps as u128)
+        .saturating_mul(SHOOT_ITER_ESTIMATE);
+    budget::check_steps("the path loop (samples x substeps)", steps)?;
+    let l = run_detached(py, steps, || {
         pathloop::path_loop(amplitude, beta, gamma, mu, delta, play, phi, p, substeps)
     })?;
     let flat: Vec<f64> = l.jac.iter().flatten().copied().collect();
@@ -528,19 +657,28 @@ fn path_loop<'py>(
 #[allow(clippy::too_many_arguments)]
 fn profile_phase_sls(
     py: Python<'_>,
-    ybar: PyReadonlyArray1<'_, f64>,
-    ydot: PyReadonlyArray1<'_, f64>,
-    amplitude: f64,
-    omega: f64,
-    lo: f64,
-    hi: f64,
-    tol: f64,
-    grid: i64,
+    #[pyo3(from_py_with = arg)] ybar: PyReadonlyArray1<'_, f64>,
+    #[pyo3(from_py_with = arg)] ydot: PyReadonlyArray1<'_, f64>,
+    #[pyo3(from_py_with = arg)] amplitude: f64,
+    #[pyo3(from_py_with = arg)] omega: f64,
+    #[pyo3(from_py_with = arg)] lo: f64,
+    #[pyo3(from_py_with = arg)] hi: f64,
+    #[pyo3(from_py_with = arg)] tol: f64,
+    #[pyo3(from_py_with = arg)] grid: i64,
 ) -> PyResult<(f64, f64, f64, f64, f64, f64, usize)> {
     let (ybar, ydot) = (slice("ybar", &ybar)?, slice("ydot", &ydot)?);
     let grid = count("grid", grid, 0)?;
-    let f =
-        py.detach(|| profile::profile_phase_sls(ybar, ydot, amplitude, omega, lo, hi, tol, grid))?;
+    // Each grid point runs a golden search over mu, each step one pass over the period.
+    let steps = (grid as u128)
+        .saturating_mul(ybar.len() as u128)
+        .saturating_mul(GOLDEN_ITER_ESTIMATE);
+    budget::check_steps(
+        "the phase profile (grid x samples per period x mu search)",
+        steps,
+    )?;
+    let f = run_detached(py, steps, || {
+        profile::profile_phase_sls(ybar, ydot, amplitude, omega, lo, hi, tol, grid)
+    })?;
     Ok((f.phi, f.mu, f.gain, f.beta, f.gamma, f.cost, f.skipped))
 }
 
@@ -550,20 +688,22 @@ fn profile_phase_sls(
 #[allow(clippy::too_many_arguments)]
 fn profile_phase_gain(
     py: Python<'_>,
-    ybar: PyReadonlyArray1<'_, f64>,
-    ydot: PyReadonlyArray1<'_, f64>,
-    amplitude: f64,
-    omega: f64,
-    beta: f64,
-    gamma: f64,
-    mu: f64,
-    grid: i64,
+    #[pyo3(from_py_with = arg)] ybar: PyReadonlyArray1<'_, f64>,
+    #[pyo3(from_py_with = arg)] ydot: PyReadonlyArray1<'_, f64>,
+    #[pyo3(from_py_with = arg)] amplitude: f64,
+    #[pyo3(from_py_with = arg)] omega: f64,
+    #[pyo3(from_py_with = arg)] beta: f64,
+    #[pyo3(from_py_with = arg)] gamma: f64,
+    #[pyo3(from_py_with = arg)] mu: f64,
+    #[pyo3(from_py_with = arg)] grid: i64,
 ) -> PyResult<(f64, f64, f64)> {
     let (ybar, ydot) = (slice("ybar", &ybar)?, slice("ydot", &ydot)?);
     let grid = count("grid", grid, 0)?;
-    Ok(py.detach(|| {
+    let steps = (grid as u128).saturating_mul(ybar.len() as u128);
+    budget::check_steps("the phase profile (grid x samples per period)", steps)?;
+    run_detached(py, steps, || {
         profile::profile_phase_gain(ybar, ydot, amplitude, omega, beta, gamma, mu, grid)
-    })?)
+    })
 }
 
 /// What [`refine_fit`] returns to Python: `(params, cost, iterations, converged, fisher, loops)`.
@@ -583,20 +723,20 @@ type RefineOut<'py> = (
 #[allow(clippy::too_many_arguments)]
 fn refine_fit<'py>(
     py: Python<'py>,
-    ybars: Vec<PyReadonlyArray1<'py, f64>>,
-    amplitudes: Vec<f64>,
-    weights: Vec<f64>,
-    beta: f64,
-    gamma: f64,
-    mu: f64,
-    gains: Vec<f64>,
-    phases: Vec<f64>,
-    max_iter: i64,
-    substeps: i64,
-    ftol: f64,
-    xtol: f64,
-    mu_lo: f64,
-    mu_hi: f64,
+    #[pyo3(from_py_with = arg)] ybars: Vec<PyReadonlyArray1<'py, f64>>,
+    #[pyo3(from_py_with = arg)] amplitudes: Vec<f64>,
+    #[pyo3(from_py_with = arg)] weights: Vec<f64>,
+    #[pyo3(from_py_with = arg)] beta: f64,
+    #[pyo3(from_py_with = arg)] gamma: f64,
+    #[pyo3(from_py_with = arg)] mu: f64,
+    #[pyo3(from_py_with = arg)] gains: Vec<f64>,
+    #[pyo3(from_py_with = arg)] phases: Vec<f64>,
+    #[pyo3(from_py_with = arg)] max_iter: i64,
+    #[pyo3(from_py_with = arg)] substeps: i64,
+    #[pyo3(from_py_with = arg)] ftol: f64,
+    #[pyo3(from_py_with = arg)] xtol: f64,
+    #[pyo3(from_py_with = arg)] mu_lo: f64,
+    #[pyo3(from_py_with = arg)] mu_hi: f64,
 ) -> PyResult<RefineOut<'py>> {
     let slices = ybars
         .iter()
@@ -636,7 +776,14 @@ fn refine_fit<'py>(
         gains,
         phases,
     };
-    let fit = py.detach(|| refine::refine(&exps, &start, &opts))?;
+    // Each iteration evaluates every steady loop (a few shooting passes of P x substeps steps).
+    let samples: u128 = slices.iter().map(|y| y.len() as u128).sum();
+    let steps = (opts.max_iter as u128)
+        .saturating_mul(samples)
+        .saturating_mul(opts.substeps as u128)
+        .saturating_mul(SHOOT_ITER_ESTIMATE);
+    budget::check_steps("the refinement (max_iter x samples x substeps)", steps)?;
+    let fit = run_detached(py, steps, || refine::refine(&exps, &start, &opts))?;
     let mut params = vec![fit.params.beta, fit.params.gamma, fit.params.mu];
     for (g, p) in fit.params.gains.iter().zip(&fit.params.phases) {
         params.push(*g);
@@ -782,8 +929,16 @@ fn augmented_refine<'py>(
             weight: weights[i],
         })
         .collect();
-    let fit =
-        py.detach(|| terms::augmented_refine(&exps, &terms, &shared0, &gains0, &phases0, &opts))?;
+    // Each iteration evaluates every steady loop (a few shooting passes of P x substeps steps).
+    let samples: u128 = exps.iter().map(|e| e.ybar.len() as u128).sum();
+    let steps = (opts.max_iter as u128)
+        .saturating_mul(samples)
+        .saturating_mul(opts.substeps as u128)
+        .saturating_mul(SHOOT_ITER_ESTIMATE);
+    budget::check_steps("the augmented refinement (max_iter x samples x substeps)", steps)?;
+    let fit = run_detached(py, steps, || {
+        terms::augmented_refine(&exps, &terms, &shared0, &gains0, &phases0, &opts)
+    })?;
     let n = fit.fisher.nrows();
     let fisher = Array2::from_shape_fn((n, n), |(i, j)| fit.fisher[(i, j)]);
     let outputs = fit
@@ -801,6 +956,30 @@ fn augmented_refine<'py>(
         fisher.into_pyarray(py),
         outputs,
     ))
+}
+
+/// The work and memory budgets in force: `(max_samples, max_steps, max_bytes)`
+/// (`rust/budget.rs`; set them through `bouc_wen_id.budget`).
+#[pyfunction]
+fn get_budget() -> (u64, u64, u64) {
+    let l = budget::limits();
+    (l.max_samples, l.max_steps, l.max_bytes)
+}
+
+/// Sets the budgets (each >= 1); returns the previous `(max_samples, max_steps, max_bytes)`.
+#[pyfunction]
+#[pyo3(signature = (max_samples, max_steps, max_bytes))]
+fn set_budget(
+    #[pyo3(from_py_with = arg)] max_samples: u64,
+    #[pyo3(from_py_with = arg)] max_steps: u64,
+    #[pyo3(from_py_with = arg)] max_bytes: u64,
+) -> PyResult<(u64, u64, u64)> {
+    let old = budget::set_limits(budget::Limits {
+        max_samples,
+        max_steps,
+        max_bytes,
+    })?;
+    Ok((old.max_samples, old.max_steps, old.max_bytes))
 }
 
 /// Rust core of bouc_wen_id (simulation, averaging, estimators); see docs/design.md.
@@ -825,5 +1004,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(refine_fit, m)?)?;
     m.add_function(wrap_pyfunction!(augmented_output, m)?)?;
     m.add_function(wrap_pyfunction!(augmented_refine, m)?)?;
+    m.add_function(wrap_pyfunction!(get_budget, m)?)?;
+    m.add_function(wrap_pyfunction!(set_budget, m)?)?;
     Ok(())
 }

@@ -350,6 +350,7 @@ pub fn levenberg_marquardt<M: JointModel>(
     let mut iterations = 0;
     let mut converged = false;
     while iterations < opts.max_iter {
+        crate::cancel::checkpoint()?;
         iterations += 1;
         let Some((ds, dl)) = step(&st, lambda) else {
             lambda *= LAMBDA_UP;

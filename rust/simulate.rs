@@ -119,6 +119,7 @@ pub fn simulate(
             "n_samples = {n_samples} must be >= 1"
         )));
     }
+    crate::budget::check_simulation(n_samples, substeps)?;
     let mut out = Simulation {
         x: try_zeros(n_samples)?,
         w: try_zeros(n_samples)?,
@@ -144,7 +145,37 @@ pub fn simulate(
             integrate(&comp, bw, &src, &grid, &mut out);
         }
     }
+    crate::cancel::checkpoint()?;
+    check_blow_up(tf, bw, dt, &out)?;
     Ok(out)
+}
+
+/// A non-finite `x` or `w` is the model's blow-up, not the caller's data (the inputs were checked
+/// finite): name the parameters and where it happened.
+///
+/// Errors: [`CoreError::NonFinite`].
+fn check_blow_up(tf: &TransferFunction, bw: &BoucWen, dt: f64, out: &Simulation) -> Result<()> {
+    let bad = |v: &[f64]| v.iter().position(|v| !v.is_finite());
+    let (signal, k) = match (bad(&out.x), bad(&out.w)) {
+        (None, None) => return Ok(()),
+        (Some(i), Some(j)) if j < i => ("w", j),
+        (Some(i), _) => ("x", i),
+        (None, Some(j)) => ("w", j),
+    };
+    Err(CoreError::NonFinite(format!(
+        "the simulation blew up: {signal} is not finite from sample {k} (t = {:.6e} s) on; the \
+         model parameters (alpha = {:e}, beta = {:e}, gamma = {:e}, mu = {}, w0 = {:e}, G = \
+         {:?}/{:?}) or the input level make the Bouc-Wen state overflow; use parameters of \
+         moderate size, a smaller amplitude or a finer step (substeps)",
+        k as f64 * dt,
+        bw.alpha(),
+        bw.beta(),
+        bw.gamma(),
+        bw.mu(),
+        bw.w0(),
+        tf.num(),
+        tf.den(),
+    )))
 }
 
 /// `Ok(dt)` for a finite time step `dt > 0` (s).
@@ -330,11 +361,16 @@ fn integrate<S: Source>(
         vec![0.0; n],
     );
     let last = grid.n_samples - 1;
+    // A power of two, so the test is a mask rather than a division.
+    let check_mask = (crate::cancel::CHECK_EVERY_STEPS / grid.substeps)
+        .max(1)
+        .next_power_of_two()
+        - 1;
     for (k, (xo, wo)) in out.x.iter_mut().zip(out.w.iter_mut()).enumerate() {
         let t = k as f64 * dt;
         *xo = sys.output(&xs, input(t).0);
         *wo = w;
-        if k == last {
+        if k == last || (k & check_mask == 0 && crate::cancel::requested()) {
             break;
         }
         for s in 0..grid.substeps {
@@ -523,10 +559,9 @@ mod tests {
             simulate(&tf, &bw, sine(1.0, -1.0), 0.1, 10, 1),
             "omega = -1",
         );
-        inv(
-            simulate(&tf, &bw, sine(1.0, 1.0), 0.1, usize::MAX / 2, 1),
-            "too large",
-        );
+        // Refused by the budget before any allocation (rust/budget.rs).
+        let e = simulate(&tf, &bw, sine(1.0, 1.0), 0.1, usize::MAX / 2, 1).unwrap_err();
+        assert!(matches!(e, CoreError::BudgetExceeded(_)), "{e}");
         let e = simulate(&tf, &bw, sine(f64::NAN, 1.0), 0.1, 10, 1).unwrap_err();
         assert!(matches!(e, CoreError::NonFinite(_)), "{e}");
         let e = simulate(&tf, &bw, sine(1.0, 1.0), f64::INFINITY, 10, 1).unwrap_err();
@@ -548,5 +583,18 @@ mod tests {
         assert_eq!(rk4_step_count(11, 4), 40);
         let one = simulate(&tf, &bw, sine(1.0, 1.0), 0.1, 1, 1).unwrap();
         assert_eq!((one.x, one.w), (vec![0.0], vec![0.0]));
+    }
+
+    #[test]
+    fn a_blow_up_names_the_parameters_not_the_data() {
+        let tf = TransferFunction::new(&[1.0], &[1.0, 1.0], 0.0).unwrap();
+        let bw = BoucWen::new(1.0, 1e300, 0.1, 2.0, 0.0).unwrap();
+        let e = simulate(&tf, &bw, sine(1.0, 1.0), 0.1, 50, 4).unwrap_err();
+        assert!(matches!(e, CoreError::NonFinite(_)), "{e}");
+        let msg = e.to_string();
+        assert!(
+            msg.contains("blew up") && msg.contains("beta = 1e300"),
+            "{msg}"
+        );
     }
 }

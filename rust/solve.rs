@@ -257,14 +257,19 @@ impl SlsProblem {
     }
 }
 
+/// Largest `|m_ij - m_ji| / sqrt(m_ii m_jj)` [`solve_normal`] accepts: rounding of a sum of P
+/// products is about `P eps` (2e-13 for P = 1000), an asymmetric matrix far above.
+pub const SYMMETRY_RTOL: f64 = 1e-10;
+
 /// Solves the 3x3 normal equations `m theta = r` (`docs/design.md` §5).
 ///
 /// Jacobi scaling `d_i = sqrt(m_ii)`, `S = m_ij/(d_i d_j)`; `rcond = lambda_min(S)/lambda_max(S)`
-/// from the symmetric eigenvalues; `theta = D^-1 S^-1 D^-1 r` by Cholesky of `S`. Only the lower
-/// triangle of `m` is read (as LAPACK's). Returns `(theta, rcond)`.
+/// from the symmetric eigenvalues; `theta = D^-1 S^-1 D^-1 r` by Cholesky of `S`. `m` must be
+/// symmetric to [`SYMMETRY_RTOL`]. Returns `(theta, rcond)`.
 ///
 /// Errors: [`CoreError::NonFinite`] for a NaN/inf entry, [`CoreError::SingularNormalMatrix`] when
-/// a diagonal entry is `<= 0` or `rcond < 1e-12`.
+/// a diagonal entry is `<= 0` or `rcond < 1e-12`, [`CoreError::InvalidParameter`] when `m` is not
+/// symmetric.
 pub fn solve_normal(m: &Matrix3<f64>, r: &Vector3<f64>) -> Result<(Vector3<f64>, f64)> {
     if !(m.iter().all(|v| v.is_finite()) && r.iter().all(|v| v.is_finite())) {
         return Err(CoreError::NonFinite(
@@ -278,6 +283,22 @@ pub fn solve_normal(m: &Matrix3<f64>, r: &Vector3<f64>) -> Result<(Vector3<f64>,
         });
     }
     let d = m.diagonal().map(f64::sqrt);
+    // A normal matrix is symmetric; an asymmetric one is a caller's error that reading one
+    // triangle would silently turn into a wrong answer.
+    for (i, j) in [(1, 0), (2, 0), (2, 1)] {
+        let gap = (m[(i, j)] - m[(j, i)]).abs();
+        // Written so that a NaN gap (inf - inf) is refused too.
+        let symmetric = gap <= SYMMETRY_RTOL * d[i] * d[j];
+        if !symmetric {
+            return Err(CoreError::InvalidParameter(format!(
+                "the normal matrix is not symmetric: m[{i}][{j}] = {:e} but m[{j}][{i}] = {:e} \
+                 (relative gap {:.1e} > {SYMMETRY_RTOL:e}); pass Psi^T Psi",
+                m[(i, j)],
+                m[(j, i)],
+                gap / (d[i] * d[j])
+            )));
+        }
+    }
     let scaled = Matrix3::from_fn(|i, j| m[(i, j)] / (d[i] * d[j]));
     let singular = |rcond: f64, context: &str| CoreError::SingularNormalMatrix {
         rcond,

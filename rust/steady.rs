@@ -183,7 +183,15 @@ fn half_cycle(
         theta = lat.offset;
     }
     let h = lat.spacing / sub;
+    let check_mask = (crate::cancel::CHECK_EVERY_STEPS / substeps)
+        .max(1)
+        .next_power_of_two()
+        - 1;
     for (k, slot) in rec.iter_mut().enumerate() {
+        // A cancelled half cycle stops early; the caller's checkpoint turns it into the error.
+        if k & check_mask == 0 && crate::cancel::requested() {
+            return y;
+        }
         *slot = y;
         let start = lat.offset + k as f64 * lat.spacing;
         // The last lattice interval ends at pi, not at the next lattice point.
@@ -285,6 +293,7 @@ pub fn steady_loop(
     let mut iterations = 0;
     let end = loop {
         let end = half_cycle(&p, &lat, w_top, substeps, &mut rec);
+        crate::cancel::checkpoint()?;
         let h = end[0] + w_top;
         if h.abs() <= SHOOT_RTOL * bound {
             break end;

@@ -6,12 +6,14 @@ reference implementation of the same routines.  Start with :func:`simulate` and 
 
 from __future__ import annotations
 
-from . import diagnosis, errors, io, reference, signal
+# budget is imported eagerly so that the BOUC_WEN_ID_MAX_* environment variables reach the core.
+from . import budget, diagnosis, errors, io, reference, signal
 from ._core import __version__
 from .demo import demo_plan, demo_plant
 from .diagnosis import Diagnosis, diagnose
 from .errors import (
     BoucWenIdError,
+    BudgetExceededError,
     ClippingError,
     ConvergenceWarning,
     DistortedInputWarning,
@@ -95,3 +97,5 @@ __all__ = [
     "CramerRao",
     "cramer_rao",
 ]
+
+__all__ += ["budget", "BudgetExceededError"]

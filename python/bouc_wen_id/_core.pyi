@@ -27,6 +27,8 @@ __all__ = [
     "refine",
     "augmented_output",
     "augmented_refine",
+    "get_budget",
+    "set_budget",
 ]
 
 _F = NDArray[np.float64]
@@ -187,3 +189,5 @@ def augmented_refine(
     mu_lo: float = 1.0,
     mu_hi: float = ...,
 ) -> tuple[_F, _F, _F, float, int, bool, _F, list[_F]]: ...
+def get_budget() -> tuple[int, int, int]: ...
+def set_budget(max_samples: int, max_steps: int, max_bytes: int) -> tuple[int, int, int]: ...

@@ -4,18 +4,23 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
+import os
+import shutil
 import sys
+import tempfile
 import time
 import warnings
-from collections.abc import Sequence
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
 from pathlib import Path
-from typing import Any, Optional, Union
+from typing import Any, NoReturn, Optional, Union
 
 import numpy as np
 from numpy.typing import NDArray
 
 from .demo import DEMO_FREQUENCIES, demo_plan, demo_plant, design_amplitudes
-from .errors import BoucWenIdError, InsufficientDataError, InvalidParameterError
+from .errors import BoucWenIdError, FileFormatError, InsufficientDataError, InvalidParameterError
 from .identification import identify
 from .io import load, save_recordings
 from .measurement import Measurement
@@ -24,6 +29,62 @@ from .result import IdentificationResult
 from .simulation import simulate
 
 __all__ = ["main"]
+
+
+# --------------------------------------------------------------------------------------------------
+# Output folders: checked before any work, built beside the target and moved into place whole
+# --------------------------------------------------------------------------------------------------
+
+
+def _check_out(out: Path, overwrite: bool, what: str) -> None:
+    """Refuse, before any work, an output that would mix runs or cannot be written."""
+    if out.exists() or out.is_symlink():
+        holds = not out.is_dir() or any(out.iterdir())
+        if holds and not overwrite:
+            kind = "folder holding files" if out.is_dir() else "file"
+            raise InvalidParameterError(
+                f"--out {out}: a {kind} of another run is there; pass --overwrite to replace it whole, or "
+                f"choose another {what}"
+            )
+    parent = out.absolute().parent
+    while not parent.exists():
+        parent = parent.parent
+    if not parent.is_dir() or not os.access(parent, os.W_OK | os.X_OK):
+        raise InvalidParameterError(f"--out {out}: {parent} is not a writable folder")
+
+
+@contextmanager
+def _staged(out: Path) -> Iterator[Path]:
+    """A path beside ``out`` to write the whole output to; on success it replaces ``out`` in one rename.
+
+    On any failure (an error, Ctrl-C) the staged files are removed and ``out`` is left as it was; a kill
+    leaves at most a ``.<name>.partial-*`` folder beside it, never a half-written ``out``.
+    """
+    parent = out.absolute().parent
+    parent.mkdir(parents=True, exist_ok=True)
+    stage = Path(tempfile.mkdtemp(prefix=f".{out.name}.partial-", dir=parent))
+    try:
+        yield stage / out.name
+        trash = stage / ".replaced"
+        replacing = out.exists() or out.is_symlink()
+        if replacing:
+            os.replace(out, trash)
+        try:
+            os.replace(stage / out.name, out)
+        except BaseException:
+            if replacing:
+                os.replace(trash, out)  # put the previous output back rather than lose it
+            raise
+    finally:
+        shutil.rmtree(stage, ignore_errors=True)
+
+
+def _shown(path: Path, staged: Path, out: Path) -> Path:
+    """Where a staged file ends up."""
+    try:
+        return out / path.relative_to(staged)
+    except ValueError:
+        return path
 
 
 def _write_report(result: IdentificationResult, out: Path) -> list[Path]:
@@ -58,18 +119,27 @@ def _add_identify_options(p: argparse.ArgumentParser) -> None:
         default="refined",
         help="estimator: refined (default: joint output-error fit with uncertainty), profile, or paper",
     )
-    p.add_argument("--reference", type=int, default=0, help="experiment used for beta, gamma, mu (default 0)")
-    p.add_argument("--settle-periods", type=int, default=None, help="periods dropped as transient")
-    p.add_argument("--periods", type=int, default=None, help="periods averaged (default: all remaining)")
+    p.add_argument(
+        "--reference",
+        type=_integer(-(1 << 31)),
+        default=0,
+        help="experiment used for beta, gamma, mu (default 0)",
+    )
+    p.add_argument("--settle-periods", type=_integer(0), default=None, help="periods dropped as transient")
+    p.add_argument(
+        "--periods", type=_integer(1), default=None, help="periods averaged (default: all remaining)"
+    )
     p.add_argument(
         "--harmonics",
+        type=_harmonics,
         default="auto",
         help="harmonics of the spectral derivative: auto (above the noise floor), all, or a number",
     )
-    p.add_argument("--mu-bracket", type=float, nargs=2, default=(1.0, 10.0), metavar=("LO", "HI"))
-    p.add_argument("--tol", type=float, default=1e-8, help="golden-section tolerance on mu")
+    p.add_argument("--mu-bracket", type=_real(), nargs=2, default=(1.0, 10.0), metavar=("LO", "HI"))
+    p.add_argument("--tol", type=_real(positive=True), default=1e-8, help="golden-section tolerance on mu")
     p.add_argument("--backend", choices=("rust", "numpy"), default="rust")
     p.add_argument("--out", type=Path, default=Path("bouc_wen_id_report"), help="report folder")
+    _add_overwrite(p)
 
 
 def _identify_from_args(args: argparse.Namespace, recordings: Sequence[Any]) -> IdentificationResult:
@@ -97,6 +167,7 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     )
     print(f"plant: {plant.linear!r}, {plant.hysteresis!r}")
     print(f"plan:  {plan!r}")
+    _check_out(args.out, args.overwrite, "report folder")
     t0 = time.perf_counter()
     recs = simulate(plant, plan, backend=args.backend)
     t1 = time.perf_counter()
@@ -106,8 +177,10 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     print(result.summary())
     if args.compare:
         print(_compare_methods(recs, args))
-    for f in _write_report(result, args.out):
-        print(f"wrote {f}")
+    with _staged(args.out) as staged:
+        written = _write_report(result, staged)
+    for f in written:
+        print(f"wrote {_shown(f, staged, args.out)}")
     return 0
 
 
@@ -135,12 +208,35 @@ def _truth_gains(recs: list) -> NDArray[np.float64]:  # type: ignore[type-arg]
     return gains
 
 
+def _load_plant(path: Path) -> WienerPlant:
+    """A plant JSON file (``WienerPlant.to_dict``), every failure a :class:`FileFormatError`."""
+    if not path.is_file():
+        raise FileFormatError(f"--plant {path}: no such regular file")
+    if path.stat().st_size > 1 << 20:
+        raise FileFormatError(f"--plant {path}: {path.stat().st_size} bytes is no plant JSON file")
+    try:
+        spec = json.loads(path.read_text(encoding="utf-8"))
+        if not isinstance(spec, dict):
+            raise TypeError(f"a JSON {type(spec).__name__}, not an object")
+        return WienerPlant.from_dict(spec)
+    except BoucWenIdError:
+        raise
+    except (OSError, ValueError, TypeError, KeyError, AttributeError) as exc:
+        raise FileFormatError(
+            f"--plant {path}: not a plant JSON file ({type(exc).__name__}: {exc}); expected "
+            '{"linear": {"num": [...], "den": [...], "delay": 0}, "hysteresis": {"beta": ..., "gamma": ..., '
+            '"mu": ...}}'
+        ) from None
+
+
 def _cmd_simulate(args: argparse.Namespace) -> int:
-    plant = (
-        WienerPlant.from_dict(json.loads(Path(args.plant).read_text(encoding="utf-8")))
-        if args.plant
-        else demo_plant()
-    )
+    _check_out(args.out, args.overwrite, "--out")
+    plant = _load_plant(args.plant) if args.plant else demo_plant()
+    if args.amplitude is not None and len(args.amplitude) not in (1, len(args.frequencies)):
+        raise InvalidParameterError(
+            f"--amplitude: {len(args.amplitude)} values for {len(args.frequencies)} frequencies; give one "
+            "per frequency, or one for all"
+        )
     plan = SinePlan(
         frequencies=args.frequencies,
         amplitudes=design_amplitudes(plant, args.frequencies) if args.amplitude is None else args.amplitude,
@@ -152,8 +248,10 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         seed=args.seed,
     )
     recs = simulate(plant, plan, backend=args.backend)
-    for f in save_recordings(args.out, recs):
-        print(f"wrote {f}")
+    with _staged(args.out) as staged:
+        written = save_recordings(staged, recs)
+    for f in written:
+        print(f"wrote {_shown(f, staged, args.out)}")
     return 0
 
 
@@ -204,11 +302,27 @@ def _experiments(args: argparse.Namespace) -> tuple[list[Any], list[dict[str, An
 
 
 def _cmd_identify(args: argparse.Namespace) -> int:
+    _check_out(args.out, args.overwrite, "report folder")
     experiments, segments = _experiments(args)
+    with _staged(args.out) as staged:
+        code, written, notes = _identify_into(args, experiments, segments, staged)
+    for f in written:
+        print(f"wrote {_shown(f, staged, args.out)}")
+    for note in notes:
+        print(note)
+    return code
+
+
+def _identify_into(
+    args: argparse.Namespace, experiments: list[Any], segments: list[dict[str, Any]], root: Path
+) -> tuple[int, list[Path], list[str]]:
+    """Every result of the run under ``root`` (the staged report folder)."""
     groups = [[e] for e in experiments] if args.separately else [experiments]
     failures = 0
+    written: list[Path] = []
+    notes: list[str] = []
     for i, group in enumerate(groups):
-        out = args.out / f"experiment_{i:02d}" if args.separately else args.out
+        out = root / f"experiment_{i:02d}" if args.separately else root
         label = _label(group[0]) if args.separately else f"{len(group)} experiment(s), jointly"
         _progress(i, len(groups), f"identifying {label}")
         try:
@@ -223,6 +337,7 @@ def _cmd_identify(args: argparse.Namespace) -> int:
             out.mkdir(parents=True, exist_ok=True)
             refusal = {"source": label, "error": type(exc).__name__, "message": str(exc)}
             (out / "refused.json").write_text(json.dumps(refusal, indent=2) + "\n", encoding="utf-8")
+            written.append(out / "refused.json")
             continue
         finally:
             _progress(i + 1, len(groups), f"identifying {label}")
@@ -230,16 +345,15 @@ def _cmd_identify(args: argparse.Namespace) -> int:
         print(result.summary())
         for w in caught:
             print(f"warning: {w.category.__name__}: {w.message}")
-        for f in _write_report(result, out):
-            print(f"wrote {f}")
+        written.extend(_write_report(result, out))
+    root.mkdir(parents=True, exist_ok=True)
     if segments:
-        args.out.mkdir(parents=True, exist_ok=True)
-        seg_file = args.out / "segments.json"
+        seg_file = root / "segments.json"
         seg_file.write_text(json.dumps(segments, indent=2) + "\n", encoding="utf-8")
-        print(f"wrote {seg_file}")
+        written.append(seg_file)
     if failures:
-        print(f"{failures} of {len(groups)} experiment(s) refused (see refused.json in their folders)")
-    return 0 if failures < len(groups) else 2
+        notes.append(f"{failures} of {len(groups)} experiment(s) refused (see refused.json in their folders)")
+    return (0 if failures < len(groups) else 2), written, notes
 
 
 def _label(item: Any) -> str:
@@ -247,18 +361,77 @@ def _label(item: Any) -> str:
     return str(source) if source else type(item).__name__
 
 
+class _Parser(argparse.ArgumentParser):
+    """An argument error is one line and exit status 2 (argparse's usage block is on ``--help``)."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"{self.prog}: error: {message} (usage: {self.prog} --help)\n")
+
+
+def _integer(low: int) -> Callable[[str], int]:
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{text!r} is not an integer") from None
+        if value < low:
+            raise argparse.ArgumentTypeError(f"{value} must be >= {low}")
+        return value
+
+    return parse
+
+
+def _real(positive: bool = False, nonnegative: bool = False) -> Callable[[str], float]:
+    def parse(text: str) -> float:
+        try:
+            value = float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+        if not math.isfinite(value):
+            raise argparse.ArgumentTypeError(f"{text!r} is not finite")
+        if positive and not value > 0:
+            raise argparse.ArgumentTypeError(f"{value:g} must be > 0")
+        if nonnegative and not value >= 0:
+            raise argparse.ArgumentTypeError(f"{value:g} must be >= 0")
+        return value
+
+    return parse
+
+
+def _harmonics(text: str) -> Union[str, int]:
+    if text in ("auto", "all"):
+        return text
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not auto, all or an integer") from None
+    if not 1 <= value <= 1 << 20:
+        raise argparse.ArgumentTypeError(f"{value} must be in [1, 2**20]")
+    return value
+
+
+def _add_overwrite(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--overwrite",
+        action="store_true",
+        help="replace an --out that holds another run's files (it is replaced whole, never mixed)",
+    )
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="bouc-wen-id",
         description="Identify Wiener systems with Bouc-Wen hysteresis from sine experiments.",
     )
     sub = parser.add_subparsers(dest="command", required=True)
 
     p = sub.add_parser("demo", help="simulate the built-in plant and identify it")
-    p.add_argument("--samples-per-period", type=int, default=1024)
-    p.add_argument("--periods-sim", type=int, default=40, help="periods simulated after settling")
-    p.add_argument("--noise", type=float, default=0.005, help="output noise standard deviation")
-    p.add_argument("--seed", type=int, default=2024)
+    p.add_argument("--samples-per-period", type=_integer(8), default=1024)
+    p.add_argument("--periods-sim", type=_integer(1), default=40, help="periods simulated after settling")
+    p.add_argument(
+        "--noise", type=_real(nonnegative=True), default=0.005, help="output noise standard deviation"
+    )
+    p.add_argument("--seed", type=_integer(0), default=2024)
     p.add_argument(
         "--compare",
         action=argparse.BooleanOptionalAction,
@@ -270,21 +443,24 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("simulate", help="simulate sine experiments and write recordings")
     p.add_argument("--out", type=Path, required=True, help="folder of CSV files, or a .npz bundle")
+    _add_overwrite(p)
     p.add_argument("--plant", type=Path, default=None, help="plant JSON (default: the demo plant)")
-    p.add_argument("--frequencies", type=float, nargs="+", default=list(DEMO_FREQUENCIES), help="rad/s")
+    p.add_argument(
+        "--frequencies", type=_real(positive=True), nargs="+", default=list(DEMO_FREQUENCIES), help="rad/s"
+    )
     p.add_argument(
         "--amplitude",
-        type=float,
+        type=_real(),
         nargs="+",
         default=None,
         help="U per frequency, or one for all (default: designed so that |alpha G| U = 1.2 w_0)",
     )
-    p.add_argument("--settle-periods", type=int, default=30)
-    p.add_argument("--periods", type=int, default=40)
-    p.add_argument("--samples-per-period", type=int, default=1024)
-    p.add_argument("--substeps", type=int, default=2)
-    p.add_argument("--noise", type=float, default=0.005)
-    p.add_argument("--seed", type=int, default=2024)
+    p.add_argument("--settle-periods", type=_integer(0), default=30)
+    p.add_argument("--periods", type=_integer(1), default=40)
+    p.add_argument("--samples-per-period", type=_integer(8), default=1024)
+    p.add_argument("--substeps", type=_integer(1), default=2)
+    p.add_argument("--noise", type=_real(nonnegative=True), default=0.005)
+    p.add_argument("--seed", type=_integer(0), default=2024)
     p.add_argument("--backend", choices=("rust", "numpy"), default="rust")
     p.set_defaults(func=_cmd_simulate)
 
@@ -302,9 +478,14 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="ROLE=COLUMN",
         help="which column is t, u, y (names or 0-based indices), e.g. --columns u=disp_mm y=force_N",
     )
-    p.add_argument("--sample-rate", type=float, default=None, help="Hz, for files without a time column")
     p.add_argument(
-        "--min-periods", type=float, default=2.0, help="shortest steady stretch kept, in periods (default 2)"
+        "--sample-rate", type=_real(positive=True), default=None, help="Hz, for files without a time column"
+    )
+    p.add_argument(
+        "--min-periods",
+        type=_real(positive=True),
+        default=2.0,
+        help="shortest steady stretch kept, in periods (default 2)",
     )
     p.add_argument(
         "--separately",
@@ -326,13 +507,39 @@ def _load_items(args: argparse.Namespace) -> list[Any]:
     return list(load(args.paths, columns=_columns(args.columns), sample_rate=args.sample_rate))
 
 
+def _one_line(text: str) -> str:
+    return " ".join(text.split())
+
+
 def main(argv: Optional[Sequence[str]] = None) -> int:
+    """Run the command line; every failure is one line on stderr, never a traceback.
+
+    Exit status: 0 done, 2 refused (a bad argument, file or value: the line names it), 130 interrupted
+    (nothing was written), 1 an internal error (a bug: please report the line).
+    """
     args = build_parser().parse_args(argv)
     try:
         return int(args.func(args))
     except BoucWenIdError as exc:
-        print(f"error: {type(exc).__name__}: {exc}", file=sys.stderr)
+        print(f"error: {type(exc).__name__}: {_one_line(str(exc))}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:
+        print("interrupted: nothing was written", file=sys.stderr)
+        return 130
+    except OSError as exc:
+        print(f"error: {type(exc).__name__}: {_one_line(str(exc))}", file=sys.stderr)
+        return 2
+    except MemoryError:
+        print(
+            "error: MemoryError: out of memory; use a smaller problem or lower bouc_wen_id.budget limits",
+            file=sys.stderr,
+        )
+        return 2
+    except Exception as exc:  # noqa: BLE001 - no traceback reaches a terminal user
+        print(
+            f"internal error: {type(exc).__name__}: {_one_line(str(exc))} (please report it)", file=sys.stderr
+        )
+        return 1
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -20,6 +20,7 @@ __all__ = [
     "SingularNormalMatrixError",
     "SearchAtBoundError",
     "NotConvergedError",
+    "BudgetExceededError",
     "FileFormatError",
     "TimeAxisError",
     "ClippingError",
@@ -27,6 +28,7 @@ __all__ = [
     "NotPeriodicError",
     "IdentifiabilityWarning",
     "ConvergenceWarning",
+    "TransientWarning",
     "DistortedInputWarning",
 ]
 
@@ -87,6 +89,18 @@ class NotConvergedError(BoucWenIdError):
 
     The parameters are then far from any loop the model can draw; it is not a bad parameter value as such.
     """
+
+
+class BudgetExceededError(InvalidParameterError):
+    """A call would exceed a work or memory budget (see :mod:`bouc_wen_id.budget`).
+
+    The message gives the estimated size and the limit, and how to raise it
+    (``bouc_wen_id.budget.set_budget(...)`` or a ``BOUC_WEN_ID_MAX_*`` environment variable).
+    """
+
+
+class TransientWarning(UserWarning):
+    """Leading periods of a recording were still transient and were dropped (more settling periods)."""
 
 
 class FileFormatError(BoucWenIdError):

@@ -24,9 +24,10 @@ from typing import TYPE_CHECKING, Any, Literal, Optional
 import numpy as np
 from numpy.typing import NDArray
 
+from . import budget
 from ._backend import Backend, get_backend
 from .errors import ConvergenceWarning, IdentifiabilityWarning, InsufficientDataError, InvalidParameterError
-from .estimators import Fit, adequacy, fit, linear_nrmse, on_constraint
+from .estimators import Fit, adequacy, fit, linear_nrmse, on_constraint, steady_substeps
 from .model import Recording
 from .prepare import Prepared, Scales, auto_harmonics, noise_variance, prepare, scale
 from .result import NOT_CONVERGED, Adequacy, ExperimentEstimate, IdentificationResult, Truth, wrap_phase
@@ -158,8 +159,10 @@ def identify(
         (``result.converged`` is False).
     """
     items, (lo, hi) = _check_arguments(recordings, method, confidence, mu_bracket)
+    reference, phase_grid, max_iter = _check_counts(reference, phase_grid, max_iter, harmonics)
     core = get_backend(backend)
     prepared = prepare(items, core, settle_periods, periods, harmonics)
+    _check_work(prepared, method, phase_grid, max_iter)
     reference = _reference_index(reference, len(prepared))
     scaled, scales = scale(prepared)
     fitted = fit(scaled, core, method, reference, lo, hi, tol, phase_grid, max_iter)
@@ -207,15 +210,58 @@ def _check_arguments(
     """The experiments as a list, and the mu bracket; refuses a bad method, confidence or bracket."""
     if method not in ("paper", "profile", "refined"):
         raise InvalidParameterError(f"method must be 'refined', 'profile' or 'paper', got {method!r}")
+    if isinstance(confidence, bool) or not isinstance(confidence, (int, float, np.integer, np.floating)):
+        raise InvalidParameterError(f"confidence = {confidence!r} must be a number in (0, 1)")
     if not 0.0 < confidence < 1.0:
         raise InvalidParameterError(f"confidence = {confidence} must be in (0, 1)")
     items: list[Any] = [recordings] if not isinstance(recordings, (list, tuple)) else list(recordings)
     if not items:
         raise InsufficientDataError("no recordings were given")
-    lo, hi = (float(v) for v in mu_bracket)
+    try:
+        lo, hi = (float(v) for v in mu_bracket)
+    except (TypeError, ValueError) as exc:
+        raise InvalidParameterError(f"mu_bracket = {mu_bracket!r} must be two numbers: {exc}") from None
     if not 1.0 <= lo < hi:
         raise InvalidParameterError(f"mu_bracket = {mu_bracket} must satisfy 1 <= lo < hi (mu > 1)")
     return items, (lo, hi)
+
+
+def _check_counts(reference: Any, phase_grid: Any, max_iter: Any, harmonics: Any) -> tuple[int, int, int]:
+    """Counts must be integers (not 0.5, not True) before anything indexes or loops with them."""
+    counts = (("reference", reference, None), ("phase_grid", phase_grid, 3), ("max_iter", max_iter, 1))
+    for name, value, low in counts:
+        if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+            raise InvalidParameterError(f"{name} = {value!r} must be an integer")
+        if low is not None and value < low:
+            raise InvalidParameterError(f"{name} = {value} must be >= {low}")
+    if isinstance(harmonics, str):
+        if harmonics not in ("auto", "all"):
+            raise InvalidParameterError(f"harmonics = {harmonics!r} must be 'auto', 'all' or an integer >= 1")
+    elif isinstance(harmonics, bool) or not isinstance(harmonics, (int, np.integer)) or harmonics < 1:
+        raise InvalidParameterError(f"harmonics = {harmonics!r} must be 'auto', 'all' or an integer >= 1")
+    return int(reference), int(phase_grid), int(max_iter)
+
+
+#: Work estimates of the budget checks, as rust/python.rs: golden reductions of one mu search, shooting
+#: passes of one steady loop.
+_GOLDEN_ITER_ESTIMATE = 50
+_SHOOT_ITER_ESTIMATE = 4
+
+
+def _check_work(prepared: Sequence[Prepared], method: str, phase_grid: int, max_iter: int) -> None:
+    """Refuse, before any fit and for either backend, work beyond the budget (:mod:`bouc_wen_id.budget`)."""
+    p_max = max(e.p for e in prepared)
+    if method in ("profile", "refined"):
+        budget.check_steps(
+            "the phase profile (phase_grid x samples per period x mu search)",
+            phase_grid * p_max * _GOLDEN_ITER_ESTIMATE,
+        )
+    if method == "refined":
+        substeps = max(steady_substeps(e.p) for e in prepared)
+        budget.check_steps(
+            "the refinement (max_iter x samples x substeps)",
+            max_iter * sum(e.p for e in prepared) * substeps * _SHOOT_ITER_ESTIMATE,
+        )
 
 
 def _reference_index(reference: int, m: int) -> int:
@@ -290,6 +336,7 @@ def _experiment_estimates(
                 model=w,
                 source=e.source,
                 grid_phase=float(wrap_phase(e.phase_shift)),
+                offset=e.offset,
             )
         )
     return experiments

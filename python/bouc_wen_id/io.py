@@ -41,6 +41,7 @@ from typing import Any, Literal, Optional, Union
 import numpy as np
 from numpy.typing import NDArray
 
+from . import budget as _budget
 from .errors import BoucWenIdError, FileFormatError, InvalidParameterError, NonFiniteError
 from .measurement import RESERVED_KEYS, Measurement, check_metadata_key
 from .model import Recording, WienerPlant
@@ -461,9 +462,50 @@ def write_csv(path: PathLike, item: Item, *, sample_rate: Optional[float] = None
         np.savetxt(fh, data, delimiter=",", fmt="%.17g")
 
 
-def _read_text(path: Path) -> str:
+#: Memory a parsed CSV takes per byte of text (the text, its lines, the parsed table): the file size cap
+#: is ``max_bytes / CSV_MEMORY_FACTOR``.
+CSV_MEMORY_FACTOR = 8
+
+
+def _regular_file(path: Path, what: str, memory_factor: int = 1) -> int:
+    """The size of ``path`` after checking it is a regular file within the byte budget.
+
+    A FIFO would block forever and a device (``/dev/zero`` behind a ``.csv`` symlink) never ends: only
+    regular files are read, and only up to ``max_bytes / memory_factor`` bytes.
+    """
+    import stat
+
     try:
-        return path.read_text(encoding="utf-8-sig")
+        st = os.stat(path)  # follows symlinks: the target is what would be read
+    except OSError as exc:
+        raise FileFormatError(f"{path}: cannot be read ({exc})") from exc
+    if not stat.S_ISREG(st.st_mode):
+        kind = (
+            "a FIFO"
+            if stat.S_ISFIFO(st.st_mode)
+            else "a device"
+            if stat.S_ISCHR(st.st_mode) or stat.S_ISBLK(st.st_mode)
+            else "a folder"
+            if stat.S_ISDIR(st.st_mode)
+            else "not a regular file"
+        )
+        raise FileFormatError(f"{path}: is {kind}, not a regular {what} file; only regular files are read")
+    limit = _budget.get_budget().max_bytes // memory_factor
+    if st.st_size > limit:
+        _budget.check_bytes(
+            f"reading {path} ({st.st_size} bytes, about {memory_factor}x that in memory)",
+            st.st_size * memory_factor,
+        )
+    return int(st.st_size)
+
+
+def _read_text(path: Path) -> str:
+    size = _regular_file(path, "CSV", CSV_MEMORY_FACTOR)
+    try:
+        with open(path, "rb") as fh:
+            # Never more than the size checked: a file that grows while read is cut at its checked size.
+            raw = fh.read(size)
+        return raw.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
         raise FileFormatError(f"{path}: not a UTF-8 text file ({exc})") from exc
     except OSError as exc:
@@ -516,6 +558,7 @@ def read_csv(
     p = Path(path)
     where = str(p)
     lines = [line.rstrip("\r") for line in _read_text(p).split("\n")]
+    _budget.check_samples(f"{where}: the CSV rows", len(lines))
     if not any(line.strip() for line in lines):
         raise FileFormatError(f"{where}: the file is empty")
     head: dict[str, Any] = {}
@@ -616,6 +659,7 @@ def read_npz(
     rate = _check_rate(sample_rate)
     p = Path(path)
     where = str(p)
+    _regular_file(p, "NPZ")
     try:
         # Our own handle: numpy leaks the one it opens when the archive is corrupt.
         with open(p, "rb") as fh:
@@ -623,6 +667,7 @@ def read_npz(
             if not isinstance(z, np.lib.npyio.NpzFile):
                 raise FileFormatError(f"{where}: holds a single .npy array, not an NPZ archive")
             with z:
+                _guard_npz(z, where)
                 contents = {k: z[k] for k in z.files}
     except BoucWenIdError:
         raise
@@ -651,6 +696,30 @@ def read_npz(
             f"(arrays: {', '.join(sorted(names)) or 'none'})"
         )
     return [_read_single(contents, names, picked, meta or {}, where, p.stem, rate)]
+
+
+def _guard_npz(z: Any, where: str) -> None:
+    """Refuse an archive whose arrays would inflate beyond ``max_bytes``, before inflating any.
+
+    Both what the zip directory declares (the inflater stops there) and what each ``.npy`` header
+    declares (numpy allocates that before reading) are summed.
+    """
+    declared = 0
+    allocated = 0
+    for info in z.zip.infolist():
+        declared += info.file_size
+        if not info.filename.endswith(".npy"):
+            continue
+        with z.zip.open(info) as member:
+            version = np.lib.format.read_magic(member)
+            if version == (1, 0):
+                shape, _, dtype = np.lib.format.read_array_header_1_0(member)
+            else:
+                shape, _, dtype = np.lib.format.read_array_header_2_0(member)
+        count = math.prod(int(n) for n in shape)
+        _budget.check_samples(f"{where}: array {info.filename[:-4]!r}", count)
+        allocated += count * int(dtype.itemsize)
+    _budget.check_bytes(f"{where}: the arrays of the NPZ archive", max(declared, allocated))
 
 
 def _read_single(
@@ -861,6 +930,7 @@ def _guard_mat5(data: bytes, wanted: set[str], where: str) -> None:
         return
     order = "<" if data[126:128] == b"IM" else ">"
     pos = 128
+    inflated_total = 0
     while pos < len(data):
         top = _Mat5Walk(data, order, where)
         top.pos = pos
@@ -871,11 +941,19 @@ def _guard_mat5(data: bytes, wanted: set[str], where: str) -> None:
         if code == _MAT_COMPRESSED:
             inflater = zlib.decompressobj()
             try:
-                inflated = inflater.decompress(data[top.pos : pos], _MAT_MAX_INFLATED)
+                limit = min(_MAT_MAX_INFLATED, _budget.get_budget().max_bytes - inflated_total)
+                inflated = inflater.decompress(data[top.pos : pos], max(limit, 0) + 1)
             except zlib.error as exc:
                 raise top.fail(f"corrupt compressed variable: {exc}") from exc
-            if inflater.unconsumed_tail:
+            if inflater.unconsumed_tail or len(inflated) > limit:
+                if limit < _MAT_MAX_INFLATED:
+                    _budget.check_bytes(
+                        f"{where}: the compressed variables of the MAT file", inflated_total + len(inflated)
+                    )
                 raise top.fail("a compressed variable inflates beyond 2 GiB")
+            inflated_total += len(inflated)
+            # At least one byte per element (8 for the float64 signals): an upper bound of the samples.
+            _budget.check_samples(f"{where}: a compressed variable of the MAT file", len(inflated) // 8)
             walk = _Mat5Walk(inflated, order, where)
             code, count = walk.pair()
         else:
@@ -914,6 +992,7 @@ def read_mat(
     where = str(p)
     wanted = {"t", "u", "y", "x", "w", "fs", "sample_rate", "meta", "experiments"}
     wanted |= {c for c in cols.values() if isinstance(c, str)}
+    _regular_file(p, "MAT")
     try:
         data = p.read_bytes()
     except OSError as exc:

@@ -27,7 +27,7 @@ from .errors import (
     InvalidParameterError,
     NonFiniteError,
 )
-from .model import Recording
+from .model import Recording, _refreeze
 from .validation import check_time_axis
 
 __all__ = ["Measurement", "clipping_check", "RESERVED_KEYS"]
@@ -230,6 +230,10 @@ class Measurement:
     channels: Mapping[str, str]
     name: str
     metadata: Mapping[str, str]
+
+    def __setstate__(self, state: Mapping[str, object]) -> None:
+        # Unpickled arrays come back writeable: freeze them again.
+        _refreeze(self, state)
 
     def __init__(
         self,

@@ -46,6 +46,32 @@ FloatArray = NDArray[np.float64]
 GRID_RTOL = 1e-6
 
 
+def _real_array(name: str, values: object) -> FloatArray:
+    """``values`` as float64, or an :class:`InvalidParameterError` (complex, text, ragged, objects)."""
+    raw = np.asarray(values)
+    if raw.dtype.kind not in "biuf":
+        raise InvalidParameterError(f"{name} must hold real numbers, got dtype {raw.dtype}")
+    return np.asarray(raw, dtype=np.float64)
+
+
+def _is_count(v: object) -> bool:
+    """A whole number (int, numpy integer, or an integral finite float), not a bool."""
+    if isinstance(v, bool):
+        return False
+    if isinstance(v, (int, np.integer)):
+        return True
+    return isinstance(v, (float, np.floating)) and math.isfinite(v) and float(v).is_integer()
+
+
+def _refreeze(obj: object, state: Mapping[str, Any]) -> None:
+    """``__setstate__`` of the frozen value types: unpickled arrays come back writeable, so freeze them."""
+    for name, value in state.items():
+        if isinstance(value, np.ndarray):
+            value = np.array(value, dtype=value.dtype, copy=True)
+            value.setflags(write=False)
+        object.__setattr__(obj, name, value)
+
+
 @dataclass(frozen=True, eq=False, init=False)
 class TransferFunction:
     """``G(s) = exp(-delay s) num(s) / den(s)``: proper, asymptotically stable, with a pure delay.
@@ -61,6 +87,9 @@ class TransferFunction:
     num: FloatArray
     den: FloatArray
     delay: float
+
+    def __setstate__(self, state: Mapping[str, Any]) -> None:
+        _refreeze(self, state)
 
     def __init__(self, num: ArrayLike, den: ArrayLike, delay: float = 0.0) -> None:
         object.__setattr__(self, "num", _frozen_array("num", num))
@@ -229,6 +258,9 @@ class SinePlan:
     noise_sd: float
     seed: Optional[int]
 
+    def __setstate__(self, state: Mapping[str, Any]) -> None:
+        _refreeze(self, state)
+
     def __init__(
         self,
         frequencies: ArrayLike,
@@ -246,26 +278,36 @@ class SinePlan:
         object.__setattr__(self, "substeps", substeps)
         object.__setattr__(self, "noise_sd", noise_sd)
         object.__setattr__(self, "seed", seed)
-        freqs = _frozen_array("frequencies", np.atleast_1d(np.asarray(frequencies, dtype=np.float64)))
+        freqs = _frozen_array("frequencies", np.atleast_1d(_real_array("frequencies", frequencies)))
         if freqs.size == 0:
             raise InvalidParameterError("the plan needs at least one frequency")
         if np.any(freqs <= 0):
             raise InvalidParameterError(f"frequencies must be > 0 rad/s, got {freqs.tolist()}")
-        amps = np.broadcast_to(np.asarray(amplitudes, dtype=np.float64), freqs.shape)
-        amps = _frozen_array("amplitudes", amps)
+        amps_raw = _frozen_array("amplitudes", np.atleast_1d(_real_array("amplitudes", amplitudes)))
+        if amps_raw.size not in (1, freqs.size):
+            raise InvalidParameterError(
+                f"amplitudes: {amps_raw.size} values for {freqs.size} frequencies; give one amplitude per "
+                "frequency, or a single one for all"
+            )
+        amps = _frozen_array("amplitudes", np.broadcast_to(amps_raw, freqs.shape))
         if np.any(amps == 0):
             raise ZeroAmplitudeError("every experiment needs a non-zero amplitude U")
         object.__setattr__(self, "frequencies", freqs)
         object.__setattr__(self, "amplitudes", amps)
         for name, low in (("settle_periods", 0), ("periods", 1), ("samples_per_period", 8), ("substeps", 1)):
             v = getattr(self, name)
-            if int(v) != v or v < low:
+            if not _is_count(v) or v < low:
                 raise InvalidParameterError(f"{name} = {v} must be an integer >= {low}")
             object.__setattr__(self, name, int(v))
         noise = _finite("noise_sd", self.noise_sd)
         if noise < 0:
             raise InvalidParameterError(f"noise_sd = {noise} must be >= 0")
         object.__setattr__(self, "noise_sd", noise)
+        if seed is not None:
+            # numpy's SeedSequence takes only non-negative integers; say so here, not at simulate time.
+            if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+                raise InvalidParameterError(f"seed = {seed!r} must be a non-negative integer or None")
+            object.__setattr__(self, "seed", int(seed))
 
     def __len__(self) -> int:
         return int(self.frequencies.size)
@@ -325,6 +367,9 @@ class Recording:
     plant: Optional[WienerPlant]
     metadata: Mapping[str, str]
 
+    def __setstate__(self, state: Mapping[str, Any]) -> None:
+        _refreeze(self, state)
+
     def __init__(
         self,
         t: ArrayLike,
@@ -345,7 +390,13 @@ class Recording:
         object.__setattr__(self, "amplitude", amplitude)
         object.__setattr__(self, "frequency", frequency)
         object.__setattr__(self, "settle_periods", settle_periods)
+        if plant is not None and not isinstance(plant, WienerPlant):
+            raise InvalidParameterError(f"plant must be a WienerPlant or None, got {type(plant).__name__}")
         object.__setattr__(self, "plant", plant)
+        if metadata is not None and not isinstance(metadata, Mapping):
+            raise InvalidParameterError(
+                f"metadata must be a mapping of strings, got {type(metadata).__name__}"
+            )
         object.__setattr__(self, "metadata", dict(metadata or {}))
         lengths = {
             n: getattr(self, n).size for n in ("t", "u", "y", "x", "w") if getattr(self, n) is not None

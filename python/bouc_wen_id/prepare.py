@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Optional
@@ -29,6 +30,7 @@ from .errors import (
     FrequencyMismatchError,
     InsufficientDataError,
     InvalidParameterError,
+    TransientWarning,
     ZeroAmplitudeError,
 )
 from .model import Recording, WienerPlant
@@ -136,6 +138,61 @@ class Prepared:
     noise_dof: int
     plant: Optional[WienerPlant]
     source: str
+    #: The output's mean over the averaged window, removed from ``ybar`` (the model's steady loop has
+    #: none): a sensor or conditioning offset, as ``AveragedPeriod.offset_y`` on the measurement path.
+    offset: float = 0.0
+
+
+#: A steady period's mean-square deviation from the steady average stays below ``noise (1 + 1/N_tail)``
+#: times this factor ``1 + TRANSIENT_CHI2_SD / sqrt(P)`` (about 4 standard deviations of a chi-square
+#: with P degrees of freedom over its mean); noise-free, below ``TRANSIENT_RTOL^2`` of the loop's power.
+TRANSIENT_CHI2_SD = 6.0
+TRANSIENT_RTOL = 1e-6
+#: Fewest periods a recording needs for its transient to be checked (half of them form the reference).
+TRANSIENT_MIN_PERIODS = 4
+#: A peak-to-peak swing of ybar within this many ulps of its level is a constant output.
+CONSTANT_ULPS = 64.0
+
+
+def transient_periods(y: FloatArray, p: int, s: int, n: int) -> int:
+    """Leading periods of ``y[s p : (s + n) p]`` still in transient (at most ``n // 2``).
+
+    Each period is compared with the average of the last half of the window (the steady reference, whose
+    period-to-period spread gives the noise level): the recording path's counterpart of the measurement
+    path's steady-segment detection.
+    """
+    if n < TRANSIENT_MIN_PERIODS:
+        return 0
+    seg = np.asarray(y[s * p : (s + n) * p], dtype=np.float64).reshape(n, p)
+    tail = seg[n // 2 :]
+    ref = tail.mean(axis=0)
+    noise = float(np.mean(np.var(tail, axis=0, ddof=1)))
+    centred_power = float(np.mean((ref - ref.mean()) ** 2))
+    tol = noise * (1.0 + 1.0 / tail.shape[0]) * (1.0 + TRANSIENT_CHI2_SD / math.sqrt(p))
+    tol += TRANSIENT_RTOL**2 * centred_power
+    dev = np.mean((seg[: n // 2] - ref) ** 2, axis=1)
+    k = 0
+    while k < dev.size and dev[k] > tol:
+        k += 1
+    return k
+
+
+def _check_response(ybar: FloatArray, level: float, noise_var: float, n: float, source: str) -> None:
+    """Refuse an output with no response at the excitation: constant, or nowhere above the noise floor."""
+    swing = float(np.ptp(ybar))
+    constant = swing <= CONSTANT_ULPS * np.finfo(np.float64).eps * max(level, float(np.max(np.abs(ybar))))
+    buried = False
+    if not constant and math.isfinite(noise_var) and noise_var > 0.0 and n > 0:
+        p = ybar.size
+        power = np.abs(np.fft.rfft(ybar - ybar.mean())[1:] / p) ** 2
+        buried = not bool(np.any(power > HARMONIC_SNR * noise_var / (n * p)))
+    if constant or buried:
+        what = "is constant" if constant else "holds no harmonic above the noise floor"
+        raise ZeroAmplitudeError(
+            f"{source}: the averaged output {what} (peak-to-peak {swing:.3g} at level {level:.3g}): the "
+            "system shows no response to this excitation, so nothing can be identified; check the output "
+            "channel and its range"
+        )
 
 
 def _harmonics(harmonics: int | str, ybar: FloatArray, noise_var: float, n: float) -> int:
@@ -168,9 +225,29 @@ def _prepare_recording(
             f"recording {i} holds {rec.whole_periods} whole periods; {s} settling + {max(n, 1)} averaged "
             "periods do not fit. Record longer or lower settle_periods/periods"
         )
+    source = rec.metadata.get("name", f"recording {i}")
+    # The input first: a wrong frequency misaligns the periods, which is no transient.
     check_input(rec, s * p, (s + n) * p)
-    ybar = np.asarray(core.periodic_average(np.ascontiguousarray(rec.y), p, s, n))
+    if periods is None:
+        # A transient left in would inflate the noise floor and bias the loop: trim it, as the measurement
+        # path keeps only steady stretches, and say so.
+        extra = transient_periods(rec.y, p, s, n)
+        if extra:
+            warnings.warn(
+                f"{source}: the first {extra} of the {n} periods after {s} settling ones are still "
+                f"transient (they differ from the steady periods beyond the noise); they were dropped, "
+                f"settle_periods = {s + extra} is used. Pass settle_periods to choose",
+                TransientWarning,
+                stacklevel=4,
+            )
+            s, n = s + extra, n - extra
+    averaged = np.asarray(core.periodic_average(np.ascontiguousarray(rec.y), p, s, n))
     noise_var = noise_variance(rec.y, p, s, n)
+    # The model's steady loop has no mean: the output's mean is an offset (sensor, conditioning), removed
+    # and reported as the measurement path does.
+    offset = float(np.mean(averaged))
+    _check_response(averaged, abs(offset), noise_var, n, source)
+    ybar = averaged - offset
     k = _harmonics(harmonics, ybar, noise_var, n)
     ydot = np.asarray(core.spectral_derivative(ybar, rec.frequency, k))
     # The averaged window starts at t[0] + s whole periods: the local phase is shifted by omega t[0].
@@ -187,13 +264,15 @@ def _prepare_recording(
         noise_var=noise_var,
         noise_dof=p * (n - 1),
         plant=rec.plant,
-        source=rec.metadata.get("name", f"recording {i}"),
+        source=source,
+        offset=offset,
     )
 
 
 def _prepare_averaged(ap: AveragedPeriod, core: Core, harmonics: int | str) -> Prepared:
     """A period averaged from lab data (any sampling rate): its grid starts at the input's phase zero."""
     ybar = np.ascontiguousarray(ap.ybar, dtype=np.float64)
+    _check_response(ybar, abs(float(ap.offset_y)), float(ap.noise_var), float(ap.periods), str(ap.source))
     k = _harmonics(harmonics, ybar, ap.noise_var, ap.periods)
     ydot = np.asarray(core.spectral_derivative(ybar, ap.frequency, k))
     return Prepared(
@@ -210,6 +289,7 @@ def _prepare_averaged(ap: AveragedPeriod, core: Core, harmonics: int | str) -> P
         noise_dof=int(ap.noise_dof),
         plant=None,
         source=str(ap.source),
+        offset=float(ap.offset_y),
     )
 
 

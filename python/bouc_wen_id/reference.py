@@ -65,6 +65,8 @@ FloatArray = NDArray[np.float64]
 GOLDEN_RATIO_CONJ = 0.6180339887498949
 #: Smallest reciprocal condition number of the Jacobi-scaled normal matrix that we agree to solve.
 RCOND_MIN = 1e-12
+#: Largest |m_ij - m_ji| / sqrt(m_ii m_jj) solve_normal accepts (rust/solve.rs SYMMETRY_RTOL).
+SYMMETRY_RTOL = 1e-10
 #: Default iteration cap of the golden-section search (0.618**200 is far below any double tolerance).
 GOLDEN_MAX_ITER = 200
 
@@ -93,7 +95,10 @@ def realize(
 
 def _bw_rate(xdot: float, w: float, alpha: float, beta: float, gamma: float, mu: float) -> float:
     """Bouc-Wen (2a): alpha xdot - beta |xdot| |w|^(mu-1) w - gamma xdot |w|^mu."""
-    wmu = abs(w) ** mu
+    try:
+        wmu = abs(w) ** mu
+    except OverflowError:  # a blow-up: let it run to inf/NaN as the core does, and be reported at the end
+        wmu = float("inf")
     return float(alpha * xdot - beta * abs(xdot) * np.sign(w) * wmu - gamma * xdot * wmu)
 
 
@@ -140,19 +145,31 @@ def _simulate(
     z[n] = w0
     x_out = np.empty(n_samples)
     w_out = np.empty(n_samples)
-    for k in range(n_samples):
-        t = k * dt
-        x_out[k] = float(np.dot(c, z[:n])) + d * delayed(t)[0]
-        w_out[k] = z[n]
-        if k == n_samples - 1:
-            break
-        for s in range(substeps):
-            ts = t + s * h
-            k1 = rhs(ts, z)
-            k2 = rhs(ts + 0.5 * h, z + 0.5 * h * k1)
-            k3 = rhs(ts + 0.5 * h, z + 0.5 * h * k2)
-            k4 = rhs(ts + h, z + h * k3)
-            z = z + (h / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+    # A blow-up runs on to inf/NaN silently here and is reported, with the parameters, just below.
+    with np.errstate(all="ignore"):
+        for k in range(n_samples):
+            t = k * dt
+            x_out[k] = float(np.dot(c, z[:n])) + d * delayed(t)[0]
+            w_out[k] = z[n]
+            if k == n_samples - 1:
+                break
+            for s in range(substeps):
+                ts = t + s * h
+                k1 = rhs(ts, z)
+                k2 = rhs(ts + 0.5 * h, z + 0.5 * h * k1)
+                k3 = rhs(ts + 0.5 * h, z + 0.5 * h * k2)
+                k4 = rhs(ts + h, z + h * k3)
+                z = z + (h / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+    bad = [int(np.argmax(~np.isfinite(v))) if not np.all(np.isfinite(v)) else None for v in (x_out, w_out)]
+    if bad != [None, None]:
+        # The model's blow-up, not the caller's data (rust/simulate.rs check_blow_up).
+        name, k = min(((nm, kk) for nm, kk in zip(("x", "w"), bad) if kk is not None), key=lambda p: p[1])
+        raise NonFiniteError(
+            f"the simulation blew up: {name} is not finite from sample {k} (t = {k * dt:.6e} s) on; the "
+            f"model parameters (alpha = {alpha:e}, beta = {beta:e}, gamma = {gamma:e}, mu = {mu}, "
+            f"w0 = {w0:e}) or the input level make the Bouc-Wen state overflow; use parameters of "
+            "moderate size, a smaller amplitude or a finer step (substeps)"
+        )
     return x_out, w_out
 
 
@@ -365,6 +382,15 @@ def solve_normal(m: ArrayLike, r: ArrayLike) -> tuple[FloatArray, float]:
             "every term of the model"
         )
     dsq = np.sqrt(diag)
+    # A normal matrix is symmetric (rust/solve.rs SYMMETRY_RTOL): refuse one that is not rather than
+    # read one triangle of it.
+    gap = np.abs(mm - mm.T) / np.outer(dsq, dsq)
+    if not np.all(gap <= SYMMETRY_RTOL):
+        i, j = np.unravel_index(int(np.argmax(np.where(np.isnan(gap), np.inf, gap))), gap.shape)
+        raise InvalidParameterError(
+            f"the normal matrix is not symmetric: m[{i}][{j}] = {mm[i, j]:e} but m[{j}][{i}] = {mm[j, i]:e} "
+            f"(relative gap {gap[i, j]:.1e} > {SYMMETRY_RTOL:g}); pass Psi^T Psi"
+        )
     sm = mm / np.outer(dsq, dsq)
     eig = np.linalg.eigvalsh(sm)
     rcond = float(eig[0] / eig[-1]) if eig[-1] > 0 else 0.0

@@ -79,6 +79,9 @@ class ExperimentEstimate:
     #: NRMSE of the best linear model (spring + dashpot: ybar's fundamental alone), the baseline a
     #: hysteresis model must beat to explain anything nonlinear.
     linear_nrmse: float = math.nan
+    #: The output's offset (its mean over the averaged window), removed before the fit: the model's loop
+    #: has none.
+    offset: float = 0.0
 
     @property
     def response(self) -> complex:
@@ -114,6 +117,7 @@ class ExperimentEstimate:
             "phase_se": _num(self.phase_se),
             "nrmse": _num(self.nrmse),
             "linear_nrmse": _num(self.linear_nrmse),
+            "offset": _num(self.offset),
             "source": self.source,
         }
 

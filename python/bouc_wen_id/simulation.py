@@ -9,6 +9,7 @@ from typing import Literal, Optional, overload
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from . import budget as _budget
 from ._backend import Backend, get_backend
 from .errors import InvalidParameterError
 from .model import Recording, SinePlan, WienerPlant
@@ -57,6 +58,9 @@ def simulate(
     lin = plant.linear
     p = plan.samples_per_period
     n = (plan.settle_periods + plan.periods) * p
+    # Refuse before any work: each experiment's RK4 cost, and the six signals of every recording.
+    _budget.check_simulation(n, plan.substeps)
+    _budget.check_bytes(f"the {len(plan)} simulated recordings (six signals each)", 48 * n * len(plan))
     # One independent child stream per experiment: the result does not depend on thread scheduling.
     streams = np.random.SeedSequence(plan.seed).spawn(len(plan))
     # Only a plant with terms goes through the augmented integrator (which also returns y).

@@ -1,0 +1,522 @@
+"""Hostile and careless inputs (issue #9): every reproducer ends in a named error, a correct result or a
+warning; never a raw exception, a silent wrong answer, a hang or a memory blow-up.
+
+Budgets are set small here (the ``small_budget`` fixture) so that the refusals are reached in
+milliseconds; the defaults are exercised by the probe script ``benches/probe_hostile.py``.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import pickle
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+import warnings
+import zipfile
+from collections.abc import Callable, Iterator
+from pathlib import Path
+
+import bouc_wen_id as bw
+import numpy as np
+import pytest
+from bouc_wen_id import _core, budget, cli, reference
+from bouc_wen_id.errors import (
+    BoucWenIdError,
+    BudgetExceededError,
+    ConvergenceWarning,
+    FileFormatError,
+    InvalidParameterError,
+    NonFiniteError,
+)
+
+# A small, quick experiment set of the demo plant.
+PLAN: dict[str, int] = dict(settle_periods=10, periods=6, samples_per_period=64)
+
+
+@pytest.fixture(scope="module")
+def recordings() -> list[bw.Recording]:
+    plan = bw.SinePlan([3.0, 5.0, 7.0], [1.0, 0.8, 1.2], noise_sd=0.002, seed=7, **PLAN)
+    return bw.simulate(bw.demo_plant(), plan)
+
+
+@pytest.fixture
+def small_budget() -> Iterator[budget.Budget]:
+    with budget.budget(max_samples=100_000, max_steps=5_000_000, max_bytes=2_000_000) as b:
+        yield b
+
+
+def _run(args: list[str]) -> subprocess.CompletedProcess[str]:
+    env = dict(os.environ, MPLBACKEND="Agg")
+    return subprocess.run(
+        [sys.executable, *args], capture_output=True, text=True, timeout=120, env=env, check=False
+    )
+
+
+# --------------------------------------------------------------------------------------------------
+# Interruptible: Ctrl-C stops a long core call with KeyboardInterrupt
+# --------------------------------------------------------------------------------------------------
+
+LONG_CALLS = {
+    # 10^6 samples x 900 substeps: minutes of RK4 without the interrupt.
+    "simulate": "_core.simulate_sine([1.0], [1.0, 1.0], 0.0, 1.0, 0.5, 0.1, 2.0, 0.0, 1.0, 1.0, 1e-3, "
+    "10**6, 900)",
+    # A lattice of 2^22 samples with 32 substeps: each shooting pass is ~10 s.
+    "steady_loop": "_core.steady_loop(1.0, 0.5, 0.1, 2.0, 0.3, 1 << 22, 32)",
+    # 2 x 10^5 grid points, each a golden search: minutes.
+    "profile": "_core.profile_phase_sls(np.cos(th), -np.sin(th), 1.0, 1.0, 1.01, 5.0, 1e-9, 200_000)",
+}
+
+
+@pytest.mark.parametrize("call", sorted(LONG_CALLS))
+def test_ctrl_c_stops_a_long_core_call_with_keyboard_interrupt(call: str) -> None:
+    script = textwrap.dedent(
+        f"""
+        import sys, time
+        import numpy as np
+        from bouc_wen_id import _core, budget
+        budget.set_budget(max_steps=10**14, max_samples=10**8)
+        th = 2 * np.pi * np.arange(256) / 256
+        print("ready", flush=True)
+        t0 = time.monotonic()
+        try:
+            {LONG_CALLS[call]}
+        except KeyboardInterrupt:
+            print("interrupted", flush=True)
+            sys.exit(0)
+        print("finished", time.monotonic() - t0, flush=True)
+        """
+    )
+    proc = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, text=True)
+    assert proc.stdout is not None
+    assert proc.stdout.readline().strip() == "ready"
+    time.sleep(0.8)  # well inside the call
+    sent = time.monotonic()
+    proc.send_signal(signal.SIGINT)
+    out, _ = proc.communicate(timeout=60)
+    waited = time.monotonic() - sent
+    assert out.strip() == "interrupted", out
+    # The contract is "about half a second"; a loaded CI machine gets a generous margin.
+    assert waited < 5.0, f"Ctrl-C took {waited:.2f} s to stop the {call} call"
+
+
+# --------------------------------------------------------------------------------------------------
+# _core keeps its promise: conversion failures are the library's ValueErrors
+# --------------------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    "bad",
+    [
+        np.arange(10),  # int64
+        np.ones((3, 3)),  # 2-D
+        np.ones(20)[::2],  # not contiguous
+        [1.0, 2.0, 3.0],  # a list
+        "abc",
+        np.ones(10, dtype=np.float32),
+    ],
+    ids=["int64", "2d", "strided", "list", "str", "float32"],
+)
+def test_core_array_conversion_failures_are_invalid_parameter(bad: object) -> None:
+    with pytest.raises(InvalidParameterError, match="float64|contiguous"):
+        _core.phase_from_max(bad)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize("harmonics", [2**70, -(2**70), 1e3, "3", None], ids=str)
+def test_core_integer_conversion_failures_are_invalid_parameter(harmonics: object) -> None:
+    with pytest.raises(InvalidParameterError):
+        _core.spectral_derivative(np.ones(16), 1.0, harmonics)  # type: ignore[arg-type]
+
+
+def test_core_float_and_sequence_conversion_failures_are_invalid_parameter() -> None:
+    with pytest.raises(InvalidParameterError):
+        _core.gain_estimate(np.ones(16), np.ones(16), "one", 1.0, 0.0, 0.5, 0.1, 2.0)  # type: ignore[arg-type]
+    with pytest.raises(InvalidParameterError):
+        _core.simulate_sine("1", [1.0, 1.0], 0.0, 1.0, 0.5, 0.1, 2.0, 0.0, 1.0, 1.0, 0.1, 10, 1)  # type: ignore[arg-type]
+
+
+# --------------------------------------------------------------------------------------------------
+# The 3x3 solve checks symmetry; a blow-up names the parameters
+# --------------------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("core", [_core, reference], ids=["rust", "numpy"])
+def test_solve_normal_refuses_an_asymmetric_matrix(core: object) -> None:
+    m = np.array([[2.0, 1.0, 0.0], [0.0, 2.0, 0.0], [0.0, 0.0, 2.0]])
+    with pytest.raises(InvalidParameterError, match="not symmetric"):
+        core.solve_normal(m, np.ones(3))  # type: ignore[attr-defined]
+    # Symmetric up to rounding is accepted and solved.
+    sym = np.array([[2.0, 1.0, 0.0], [1.0 + 1e-15, 2.0, 0.0], [0.0, 0.0, 2.0]])
+    theta, _ = core.solve_normal(sym, np.ones(3))  # type: ignore[attr-defined]
+    np.testing.assert_allclose(sym @ theta, np.ones(3), rtol=1e-12)
+
+
+@pytest.mark.parametrize("backend", ["rust", "numpy"])
+def test_a_simulation_blow_up_names_the_parameters_not_the_data(backend: str) -> None:
+    plant = bw.WienerPlant(bw.TransferFunction([1.0], [1.0, 1.0]), bw.BoucWen(1e300, 0.1, 2.0))
+    t = np.arange(40) * 0.1
+    with pytest.raises(NonFiniteError, match="blew up") as info:
+        bw.simulate_input(plant, t, np.sin(t), backend=backend)  # type: ignore[arg-type]
+    assert "beta = 1" in str(info.value) and "holds a non-finite" not in str(info.value)
+
+
+def test_a_huge_amplitude_is_a_named_error_not_an_overflow() -> None:
+    plan = bw.SinePlan([3.0], [1e300], settle_periods=1, periods=2, samples_per_period=16)
+    with pytest.raises(BoucWenIdError):
+        bw.simulate(bw.demo_plant(), plan)
+
+
+# --------------------------------------------------------------------------------------------------
+# Budgets up front
+# --------------------------------------------------------------------------------------------------
+
+
+def test_budget_refuses_oversized_work_in_microseconds(
+    small_budget: budget.Budget, recordings: list[bw.Recording]
+) -> None:
+    plant = bw.demo_plant()
+    cases = [
+        lambda: bw.simulate(plant, bw.SinePlan([3.0], samples_per_period=10**7)),
+        lambda: bw.simulate(plant, bw.SinePlan([3.0], substeps=10**12)),
+        lambda: bw.identify(recordings, phase_grid=10**8),
+        lambda: bw.identify(recordings, max_iter=10**9),
+        # The NumPy reference refuses the same work (it would run for days).
+        lambda: bw.identify(recordings, method="profile", phase_grid=10**8, backend="numpy"),
+        lambda: bw.simulate(plant, bw.SinePlan([3.0], substeps=10**12), backend="numpy"),
+        lambda: bw.simulate(plant, bw.SinePlan(np.linspace(1, 9, 200), samples_per_period=2**16)),
+        lambda: _core.simulate_sine(
+            [1.0], [1.0, 1.0], 0.0, 1.0, 0.5, 0.1, 2.0, 0.0, 1.0, 1.0, 0.1, 10**12, 1
+        ),
+        lambda: _core.steady_loop(1.0, 0.5, 0.1, 2.0, 0.0, 1 << 20, 64),
+    ]
+    case: Callable[[], object]
+    for case in cases:
+        t0 = time.perf_counter()
+        with pytest.raises(BudgetExceededError) as info:
+            case()
+        assert time.perf_counter() - t0 < 1.0
+        msg = str(info.value)
+        assert "budget" in msg and ("set_budget(" in msg or "substeps" in msg), msg
+        assert isinstance(info.value, InvalidParameterError)  # and hence a ValueError
+
+
+def test_budget_is_configurable_restored_and_validated() -> None:
+    before = budget.get_budget()
+    assert _core.get_budget() == (before.max_samples, before.max_steps, before.max_bytes)
+    with budget.budget(max_steps=123) as inside:
+        assert inside.max_steps == 123 and _core.get_budget()[1] == 123
+    assert budget.get_budget() == before and _core.get_budget()[1] == before.max_steps
+    for bad in (0, -1, 1.5, True, 2**64):
+        with pytest.raises(InvalidParameterError):
+            budget.set_budget(max_samples=bad)  # type: ignore[arg-type]
+    assert budget.get_budget() == before
+
+
+def test_budget_reads_the_environment() -> None:
+    code = (
+        "from bouc_wen_id import budget, _core; print(budget.get_budget().max_steps, _core.get_budget()[1])"
+    )
+    env = dict(os.environ, BOUC_WEN_ID_MAX_STEPS="4242")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, check=True)
+    assert out.stdout.split() == ["4242", "4242"]
+
+
+# --------------------------------------------------------------------------------------------------
+# Value types validate every field; frozen arrays stay frozen through pickle
+# --------------------------------------------------------------------------------------------------
+
+
+def test_value_types_validate_every_field(recordings: list[bw.Recording]) -> None:
+    with pytest.raises(InvalidParameterError, match="amplitudes"):
+        bw.SinePlan([1.0, 2.0, 3.0], [1.0, 2.0])
+    for seed in (-1, 1.5, "0"):
+        with pytest.raises(InvalidParameterError, match="seed"):
+            bw.SinePlan([1.0], seed=seed)  # type: ignore[arg-type]
+    r = recordings[0]
+    with pytest.raises(InvalidParameterError, match="WienerPlant"):
+        bw.Recording(r.t, r.u, r.y, r.amplitude, r.frequency, plant="not a plant")  # type: ignore[arg-type]
+    with pytest.raises(InvalidParameterError, match="reference"):
+        bw.identify(recordings, reference=0.5)  # type: ignore[arg-type]
+    with pytest.raises(InvalidParameterError):
+        bw.identify(recordings, harmonics=2**70, method="paper")
+    with pytest.raises(InvalidParameterError, match="harmonics"):
+        bw.identify(recordings, harmonics=1e3)  # type: ignore[arg-type]
+
+
+def test_frozen_arrays_stay_frozen_through_pickle(recordings: list[bw.Recording]) -> None:
+    plan = bw.SinePlan([1.0, 2.0])
+    tf = bw.TransferFunction([1.0], [1.0, 1.0])
+    r = recordings[0]
+    meas = bw.Measurement(r.t, r.u, r.y)
+    cases = (
+        (r, ("t", "u", "y", "x", "w")),
+        (plan, ("frequencies", "amplitudes")),
+        (tf, ("num", "den")),
+        (meas, ("t", "u", "y")),
+    )
+    for obj, names in cases:
+        back = pickle.loads(pickle.dumps(obj))
+        for name in names:
+            arr = getattr(back, name)
+            assert not arr.flags.writeable, name
+            np.testing.assert_array_equal(arr, getattr(obj, name))
+
+
+# --------------------------------------------------------------------------------------------------
+# Nothing silent: convergence is a field and a warning
+# --------------------------------------------------------------------------------------------------
+
+
+def test_an_unconverged_fit_warns_and_says_so(recordings: list[bw.Recording]) -> None:
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        res = bw.identify(recordings, max_iter=1)
+    assert res.converged is False
+    assert any(issubclass(w.category, ConvergenceWarning) and "max_iter" in str(w.message) for w in caught)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        res = bw.identify(recordings)
+    assert res.converged is True
+    assert not any(issubclass(w.category, ConvergenceWarning) for w in caught)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        assert bw.identify(recordings, method="paper").converged is None
+
+
+# --------------------------------------------------------------------------------------------------
+# Loaders: regular files only, sizes capped before reading or inflating
+# --------------------------------------------------------------------------------------------------
+
+
+def test_loaders_refuse_a_fifo_and_a_device(tmp_path: Path) -> None:
+    fifo = tmp_path / "x.csv"
+    os.mkfifo(fifo)
+    t0 = time.perf_counter()
+    with pytest.raises(FileFormatError, match="FIFO"):
+        bw.load(fifo)
+    assert time.perf_counter() - t0 < 1.0
+    dev = tmp_path / "zero.csv"
+    dev.symlink_to("/dev/zero")
+    with pytest.raises(FileFormatError, match="device"):
+        bw.load(dev)
+    for suffix in (".npz", ".mat"):
+        link = tmp_path / f"zero{suffix}"
+        link.symlink_to("/dev/zero")
+        with pytest.raises(FileFormatError, match="device"):
+            bw.load(link)
+
+
+def test_loaders_cap_sizes_before_reading(tmp_path: Path, recordings: list[bw.Recording]) -> None:
+    path = tmp_path / "big.csv"
+    bw.save(path, recordings[0])
+    with budget.budget(max_bytes=path.stat().st_size):  # CSV needs 8x its size in memory
+        with pytest.raises(BudgetExceededError, match="max_bytes"):
+            bw.load(path)
+    assert len(bw.load(path)) == 1
+
+
+def test_an_npz_bomb_is_refused_before_inflating(tmp_path: Path) -> None:
+    bomb = tmp_path / "bomb.npz"
+    n = 4_000_000  # 32 MB of zeros, a few tens of KB compressed
+    np.savez_compressed(bomb, t=np.zeros(n), u=np.zeros(n), y=np.zeros(n))
+    assert bomb.stat().st_size < 1_000_000
+    with budget.budget(max_bytes=10_000_000):
+        with pytest.raises(BudgetExceededError, match="NPZ"):
+            bw.load(bomb)
+
+
+def test_an_npz_whose_header_lies_is_refused_before_allocating(tmp_path: Path) -> None:
+    # A .npy header declaring 10^12 float64 (8 TB) over a few bytes of data.
+    header = {"descr": "<f8", "fortran_order": False, "shape": (10**12,)}
+    path = tmp_path / "liar.npz"
+    with zipfile.ZipFile(path, "w") as z:
+        with z.open("y.npy", "w") as fh:
+            np.lib.format.write_array_header_1_0(fh, header)
+            fh.write(b"\0" * 64)
+    with pytest.raises(BudgetExceededError):
+        bw.load(path)
+
+
+def test_a_mat_bomb_is_refused_before_loadmat_inflates_it(tmp_path: Path) -> None:
+    scipy_io = pytest.importorskip("scipy.io")
+    bomb = tmp_path / "bomb.mat"
+    n = 4_000_000
+    scipy_io.savemat(bomb, {"t": np.zeros(n), "u": np.zeros(n), "y": np.zeros(n)}, do_compression=True)
+    with budget.budget(max_bytes=10_000_000):
+        with pytest.raises(BudgetExceededError, match="MAT"):
+            bw.load(bomb)
+
+
+# --------------------------------------------------------------------------------------------------
+# The command line: one line, exit 2, never a traceback; reports unmixed and atomic
+# --------------------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["demo", "--harmonics", "1e3"],
+        ["demo", "--seed", "-1"],
+        ["simulate", "--out", "{out}", "--frequencies", "1", "2", "3", "--amplitude", "1", "2"],
+        ["simulate", "--out", "{out}", "--seed", "-1"],
+        ["simulate", "--out", "{out}", "--samples-per-period", "abc"],
+        ["simulate", "--out", "{out}", "--frequencies", "nan"],
+        ["simulate", "--out", "{out}", "--plant", "{notjson}"],
+        ["simulate", "--out", "{out}", "--plant", "{wrongkeys}"],
+        ["simulate", "--out", "{out}", "--plant", "{missing}"],
+        ["simulate", "--out", "{blocked}/sub"],
+        ["simulate", "--out", "{out}", "--samples-per-period", "10000000"],
+        ["identify", "{fifo}", "--out", "{out}"],
+    ],
+    ids=[
+        "harmonics_float",
+        "seed_negative",
+        "amplitude_count",
+        "sim_seed_negative",
+        "samples_not_int",
+        "frequency_nan",
+        "plant_not_json",
+        "plant_wrong_keys",
+        "plant_missing",
+        "out_not_writable",
+        "samples_over_budget",
+        "fifo",
+    ],
+)
+def test_cli_failures_are_one_line_exit_2(tmp_path: Path, argv: list[str]) -> None:
+    (tmp_path / "notjson.json").write_text("{not json", encoding="utf-8")
+    (tmp_path / "wrongkeys.json").write_text(json.dumps({"linear": {"num": [1]}}), encoding="utf-8")
+    (tmp_path / "blocked").write_text("a file, not a folder", encoding="utf-8")
+    os.mkfifo(tmp_path / "x.csv")
+    paths = {
+        "out": tmp_path / "out",
+        "notjson": tmp_path / "notjson.json",
+        "wrongkeys": tmp_path / "wrongkeys.json",
+        "missing": tmp_path / "nope.json",
+        "blocked": tmp_path / "blocked",
+        "fifo": tmp_path / "x.csv",
+    }
+    proc = _run(["-m", "bouc_wen_id", *[a.format(**paths) for a in argv]])
+    assert proc.returncode == 2, proc.stderr
+    assert "Traceback" not in proc.stderr
+    assert len(proc.stderr.strip().splitlines()) == 1, proc.stderr
+    assert not (tmp_path / "out").exists()
+
+
+def test_cli_refuses_to_mix_runs_and_replaces_whole_with_overwrite(tmp_path: Path) -> None:
+    out = tmp_path / "R"
+    small = ["--settle-periods", "2", "--periods", "2", "--samples-per-period", "32"]
+    assert cli.main(["simulate", "--out", str(out), "--frequencies", "2", "3", "4", *small]) == 0
+    assert sorted(p.name for p in out.iterdir()) == ["exp_000.csv", "exp_001.csv", "exp_002.csv"]
+    # Another run into the same folder is refused before any work ...
+    assert cli.main(["simulate", "--out", str(out), "--frequencies", "5", *small]) == 2
+    assert len(list(out.iterdir())) == 3
+    # ... and --overwrite replaces it whole: no old exp_02.csv next to the new files.
+    assert cli.main(["simulate", "--out", str(out), "--frequencies", "5", *small, "--overwrite"]) == 0
+    assert sorted(p.name for p in out.iterdir()) == ["exp_000.csv"]
+    assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == []
+
+
+def test_cli_identify_report_is_unmixed(tmp_path: Path, recordings: list[bw.Recording]) -> None:
+    recs = tmp_path / "recs"
+    bw.save_recordings(recs, recordings)
+    out = tmp_path / "report"
+    assert cli.main(["identify", str(recs), "--separately", "--method", "paper", "--out", str(out)]) == 0
+    assert sorted(p.name for p in out.iterdir()) == ["experiment_00", "experiment_01", "experiment_02"]
+    assert cli.main(["identify", str(recs), "--method", "paper", "--out", str(out)]) == 2
+    assert cli.main(["identify", str(recs), "--method", "paper", "--out", str(out), "--overwrite"]) == 0
+    names = sorted(p.name for p in out.iterdir())
+    assert "experiment_01" not in names and "result.json" in names
+
+
+def test_cli_ctrl_c_leaves_nothing_half_written(tmp_path: Path) -> None:
+    out = tmp_path / "R"
+    # One experiment of 700 000 samples x 1000 RK4 substeps: within the budgets, about a minute of work.
+    args = ["-m", "bouc_wen_id", "simulate", "--out", str(out), "--frequencies", "1"]
+    args += ["--samples-per-period", "10000", "--substeps", "1000"]
+    env = dict(os.environ, MPLBACKEND="Agg")
+    proc = subprocess.Popen([sys.executable, *args], stderr=subprocess.PIPE, text=True, env=env)
+    time.sleep(2.0)
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130, err
+    assert "Traceback" not in err and len(err.strip().splitlines()) == 1, err
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("noise", [0.0, 1e-3])
+def test_measurement_of_a_constant_output_is_zero_amplitude(noise: float) -> None:
+    t = np.arange(4000) / 400.0
+    u = np.cos(2 * math.pi * 2.0 * t)
+    y = 2.0 + noise * np.random.default_rng(0).standard_normal(t.size)
+    with pytest.raises(bw.ZeroAmplitudeError):
+        bw.identify(bw.Measurement(t, u, y))
+
+
+# --------------------------------------------------------------------------------------------------
+# The recording path treats an offset and a leftover transient as the measurement path does
+# --------------------------------------------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def noisy() -> list[bw.Recording]:
+    plan = bw.SinePlan(
+        [3.0, 5.0, 7.0], [1.0, 0.8, 1.2], settle_periods=10, periods=20, samples_per_period=128, noise_sd=0.01
+    )
+    return bw.simulate(bw.demo_plant(), plan)
+
+
+def _quiet_identify(recs: list[bw.Recording], **kw: object) -> bw.IdentificationResult:
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", bw.IdentifiabilityWarning)
+        return bw.identify(recs, **kw)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize("offset", [1.0, 0.01, -250.0])
+def test_an_output_offset_is_estimated_reported_and_removed(noisy: list[bw.Recording], offset: float) -> None:
+    base = _quiet_identify(noisy)
+    shifted = [
+        bw.Recording(r.t, r.u, r.y + offset, r.amplitude, r.frequency, settle_periods=r.settle_periods)
+        for r in noisy
+    ]
+    res = _quiet_identify(shifted)
+    # Removing the window mean is exact up to rounding: the fit is that of the unshifted data.
+    for name in ("beta", "gamma", "mu"):
+        assert getattr(res, name) == pytest.approx(getattr(base, name), rel=1e-6)
+    assert res.adequacy is not None and base.adequacy is not None
+    assert res.adequacy.p_value == pytest.approx(base.adequacy.p_value, rel=1e-4)
+    for e, e0 in zip(res.experiments, base.experiments):
+        assert e.offset - e0.offset == pytest.approx(offset, abs=1e-9 * max(1.0, abs(offset)))
+    assert "offset" in res.experiments[0].to_dict()
+
+
+def test_a_leftover_transient_is_trimmed_with_a_warning(noisy: list[bw.Recording]) -> None:
+    base = _quiet_identify(noisy)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        res = bw.identify(noisy, settle_periods=0)
+    assert any(issubclass(w.category, bw.errors.TransientWarning) for w in caught)
+    assert all(e.settle_periods > 0 for e in res.experiments)
+    # The noise floor is not inflated by the transient (it was 2.3x before), and the adequacy p-value is
+    # not pinned at 1.
+    for e, e0 in zip(res.experiments, base.experiments):
+        assert e.noise_sd == pytest.approx(e0.noise_sd, rel=0.2)
+    assert res.adequacy is not None and res.adequacy.p_value < 0.999
+    assert res.mu == pytest.approx(base.mu, rel=0.01)
+
+
+def test_a_steady_recording_is_not_trimmed(noisy: list[bw.Recording]) -> None:
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", bw.errors.TransientWarning)
+        _quiet_identify(noisy)
+
+
+def test_a_constant_recording_is_zero_amplitude(noisy: list[bw.Recording]) -> None:
+    r = noisy[0]
+    const = bw.Recording(r.t, r.u, np.full_like(r.y, 2.0), r.amplitude, r.frequency)
+    with pytest.raises(bw.ZeroAmplitudeError, match="constant"):
+        bw.identify(const)
