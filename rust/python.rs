@@ -935,7 +935,10 @@ fn augmented_refine<'py>(
         .saturating_mul(samples)
         .saturating_mul(opts.substeps as u128)
         .saturating_mul(SHOOT_ITER_ESTIMATE);
-    budget::check_steps("the augmented refinement (max_iter x samples x substeps)", steps)?;
+    budget::check_steps(
+        "the augmented refinement (max_iter x samples x substeps)",
+        steps,
+    )?;
     let fit = run_detached(py, steps, || {
         terms::augmented_refine(&exps, &terms, &shared0, &gains0, &phases0, &opts)
     })?;
