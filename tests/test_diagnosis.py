@@ -254,3 +254,26 @@ def test_too_few_periods_is_insufficient_data() -> None:
     short = bw.Recording(rec.t[: 2 * 64], rec.u[: 2 * 64], rec.y[: 2 * 64], rec.amplitude, rec.frequency)
     with pytest.raises(InsufficientDataError, match="at least 3"):
         bw.diagnose([short])
+
+
+def test_cli_diagnose_writes_the_verdict_first_and_refuses_bad_input(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from bouc_wen_id.cli import main
+
+    data = tmp_path / "data"
+    bw.save_recordings(data, _recs((T.Offset(0.02),)))
+    out = tmp_path / "diag"
+    assert main(["diagnose", str(data), "--out", str(out), "--no-figures"]) == 0
+    printed = capsys.readouterr().out
+    assert printed.startswith("Diagnosis: explained by: output offset")
+    saved = json.loads((out / "diagnosis.json").read_text())
+    assert saved["status"] == "explained" and [t["term"] for t in saved["named"]] == ["offset"]
+    assert (out / "report.html").exists() and not (out / "loops.png").exists()
+    # Another run's folder is refused before any work, a bad candidate by the parser: one line, exit 2.
+    assert main(["diagnose", str(data), "--out", str(out)]) == 2
+    assert "--overwrite" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as exc:
+        main(["diagnose", str(data), "--out", str(tmp_path / "x"), "--candidates", "viscous,magic"])
+    assert exc.value.code == 2
+    assert len(capsys.readouterr().err.strip().splitlines()) == 1

@@ -160,7 +160,7 @@ def test_a_simulation_blow_up_names_the_parameters_not_the_data(backend: str) ->
     plant = bw.WienerPlant(bw.TransferFunction([1.0], [1.0, 1.0]), bw.BoucWen(1e300, 0.1, 2.0))
     t = np.arange(40) * 0.1
     with pytest.raises(NonFiniteError, match="blew up") as info:
-        bw.simulate_input(plant, t, np.sin(t), backend=backend)  # type: ignore[arg-type]
+        bw.simulate_input(plant, t, np.sin(t), backend=backend)  # type: ignore[call-overload]
     assert "beta = 1" in str(info.value) and "holds a non-finite" not in str(info.value)
 
 

@@ -19,6 +19,7 @@ from typing import Any, NoReturn, Optional, Union
 import numpy as np
 from numpy.typing import NDArray
 
+from .augmented import TERM_NAMES
 from .demo import DEMO_FREQUENCIES, demo_plan, demo_plant, design_amplitudes
 from .errors import BoucWenIdError, FileFormatError, InsufficientDataError, InvalidParameterError
 from .identification import identify
@@ -495,16 +496,74 @@ def build_parser() -> argparse.ArgumentParser:
     _add_identify_options(p)
     p.set_defaults(func=_cmd_identify)
 
-    from .diagnosis import cli as diagnosis_cli
-
-    p = diagnosis_cli.add_parser(sub, "which column is t, u, y (names or 0-based indices)")
-    p.set_defaults(func=lambda a: diagnosis_cli.run(a, _load_items))
+    p = sub.add_parser(
+        "diagnose",
+        help="diagnose what the model leaves out: where, which physics, and the held-out proof",
+        description="Fit the plain model and the library's candidate terms jointly; name a term only when "
+        "it passes a nested F-test (Bonferroni over the candidates), explains a material share of the misfit "
+        "and improves the fit on held-out experiments. The verdict comes first.",
+    )
+    p.add_argument("paths", nargs="+", type=Path, help="files or folders of files")
+    p.add_argument(
+        "--columns", nargs="+", default=None, metavar="ROLE=COLUMN", help="which column is t, u, y"
+    )
+    p.add_argument(
+        "--sample-rate", type=_real(positive=True), default=None, help="Hz, for files without a time column"
+    )
+    p.add_argument(
+        "--candidates",
+        type=_candidates,
+        default=None,
+        help="comma-separated terms to try (default: all of " + ",".join(TERM_NAMES) + ")",
+    )
+    p.add_argument("--alpha", type=_level, default=0.05, help="false-alarm level per step (default 0.05)")
+    p.add_argument("--no-held-out", action="store_true", help="skip the held-out check (faster, weaker)")
+    p.add_argument("--no-figures", action="store_true", help="write the JSON and a text-only HTML page")
+    p.add_argument("--out", type=Path, default=Path("bouc_wen_id_diagnosis"), help="report folder")
+    _add_overwrite(p)
+    p.set_defaults(func=_cmd_diagnose)
     return parser
 
 
-def _load_items(args: argparse.Namespace) -> list[Any]:
-    """The files' recordings and measurements, as they are (the diagnosis averages them itself)."""
-    return list(load(args.paths, columns=_columns(args.columns), sample_rate=args.sample_rate))
+def _candidates(text: str) -> list[str]:
+    names = [c.strip() for c in text.split(",") if c.strip()]
+    bad = [c for c in names if c not in TERM_NAMES]
+    if not names or bad or len(set(names)) != len(names):
+        raise argparse.ArgumentTypeError(
+            f"{text!r}: give distinct names among {','.join(TERM_NAMES)}, separated by commas"
+        )
+    return names
+
+
+def _level(text: str) -> float:
+    value = _real(positive=True)(text)
+    if not value < 1:
+        raise argparse.ArgumentTypeError(f"{value:g} must lie in (0, 1)")
+    return value
+
+
+def _cmd_diagnose(args: argparse.Namespace) -> int:
+    """Diagnose the files jointly; the verdict first, then diagnosis.json, the figures and report.html."""
+    from .diagnosis import diagnose
+    from .diagnosis.report import write_report
+
+    _check_out(args.out, args.overwrite, "report folder")
+    items = list(load(args.paths, columns=_columns(args.columns), sample_rate=args.sample_rate))
+    units = next((m.units for m in items if isinstance(m, Measurement)), {})
+    d = diagnose(
+        items,
+        candidates=args.candidates,
+        alpha=args.alpha,
+        held_out_test=not args.no_held_out,
+        y_unit=str(units.get("y", "")),
+        u_unit=str(units.get("u", "")),
+    )
+    print(d.summary())
+    with _staged(args.out) as staged:
+        written = write_report(d, staged, figures=not args.no_figures)
+    for f in written:
+        print(f"wrote {_shown(f, staged, args.out)}")
+    return 0
 
 
 def _one_line(text: str) -> str:
