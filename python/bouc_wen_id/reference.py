@@ -204,7 +204,9 @@ def simulate_sine(
 
         bw = (alpha, beta, gamma, mu, w0)
         args = (amplitude, omega, dt, n_samples, substeps, terms)
-        return reference_terms.simulate_sine(np.asarray(num), np.asarray(den), delay, bw, *args)
+        return reference_terms.simulate_sine(
+            np.asarray(num), np.asarray(den), delay, bw, *args, plain=(realize, _simulate)
+        )
 
     def source(tau: float) -> tuple[float, float]:
         return amplitude * np.cos(omega * tau), -amplitude * omega * np.sin(omega * tau)
@@ -246,7 +248,9 @@ def simulate_sampled(
 
         bw = (alpha, beta, gamma, mu, w0)
         args = (uu, m, dt_f, substeps, terms)
-        return reference_terms.simulate_sampled(np.asarray(num), np.asarray(den), delay, bw, *args)
+        return reference_terms.simulate_sampled(
+            np.asarray(num), np.asarray(den), delay, bw, *args, plain=(realize, _simulate)
+        )
     last = uu.size - 1
 
     def source(tau: float) -> tuple[float, float]:

@@ -19,12 +19,11 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from typing import Callable
+from typing import Any, Callable
 
 import numpy as np
 from numpy.typing import NDArray
 
-from . import reference as _ref
 from .errors import InvalidParameterError
 from .validation import check_bouc_wen, finite_scalar
 
@@ -108,6 +107,10 @@ def lag_weights(r: float) -> tuple[float, float, float, float]:
 
 
 Source = Callable[[float], tuple[float, float]]
+#: The plain oracle this module extends, handed in by :mod:`.reference` (which imports this module, so
+#: this one must not import it back): ``realize(num, den, delay)`` and
+#: ``simulate(num, den, delay, bw, source, dt, n_samples, substeps) -> (x, w)``.
+Plain = tuple[Callable[..., Any], Callable[..., Any]]
 
 
 def _simulate_terms(
@@ -122,8 +125,10 @@ def _simulate_terms(
     n_samples: int,
     substeps: int,
     terms: Mapping[str, float],
+    plain: Plain,
 ) -> tuple[FloatArray, FloatArray, FloatArray]:
-    a, c, d, delay = _ref.realize(num, den, delay)
+    realize, simulate_plain = plain
+    a, c, d, delay = realize(num, den, delay)
     alpha, beta, gamma, mu, w0 = bw
     check_bouc_wen(alpha, beta, gamma, mu, w0)
     dt = finite_scalar("dt", dt)
@@ -145,7 +150,7 @@ def _simulate_terms(
         return stiff * u + visc * udot + iner * uddot + friction
 
     if not (delta != 0.0 or b > 0.0 or tau > 0.0):
-        x_out, w_out = _ref._simulate(num, den, delay, bw, source, dt, n_samples, substeps)
+        x_out, w_out = simulate_plain(num, den, delay, bw, source, dt, n_samples, substeps)
         y_out = np.array([p["offset"] + (float(w_out[k]) + mech(k * dt)) for k in range(n_samples)])
         return x_out, w_out, y_out
 
@@ -259,6 +264,7 @@ def simulate_sine(
     n_samples: int,
     substeps: int,
     terms: Mapping[str, float],
+    plain: Plain,
 ) -> tuple[FloatArray, FloatArray, FloatArray]:
     """``(x, w, y)`` for ``u = amplitude cos(omega t)`` (already checked by the caller)."""
     neg_amplitude_omega = -amplitude * omega
@@ -271,7 +277,7 @@ def simulate_sine(
         return neg_amplitude_omega * omega * math.cos(omega * tau)
 
     return _simulate_terms(
-        num, den, delay, bw, source, second, abs(amplitude) * omega, dt, n_samples, substeps, terms
+        num, den, delay, bw, source, second, abs(amplitude) * omega, dt, n_samples, substeps, terms, plain
     )
 
 
@@ -301,6 +307,7 @@ def simulate_sampled(
     dt: float,
     substeps: int,
     terms: Mapping[str, float],
+    plain: Plain,
 ) -> tuple[FloatArray, FloatArray, FloatArray]:
     """``(x, w, y)`` for samples ``u`` with Catmull-Rom slopes ``m`` (already checked by the caller)."""
     last = u.size - 1
@@ -334,5 +341,5 @@ def simulate_sampled(
         ) / dt
 
     return _simulate_terms(
-        num, den, delay, bw, source, second, hermite_peak_rate(u, m, dt), dt, u.size, substeps, terms
+        num, den, delay, bw, source, second, hermite_peak_rate(u, m, dt), dt, u.size, substeps, terms, plain
     )
