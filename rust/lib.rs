@@ -15,6 +15,7 @@ pub mod bouc_wen;
 pub mod error;
 pub mod estimate;
 pub mod linear;
+pub mod multistart;
 pub mod profile;
 pub mod refine;
 pub mod simulate;

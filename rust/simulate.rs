@@ -8,6 +8,14 @@
 //! The step is written for speed: no allocation per step, the companion structure makes `A xs`
 //! O(n), one `powf` per stage, the input is evaluated once for the two mid-step stages, and a
 //! value is reused when a stage time repeats bitwise.
+//!
+//! Low orders (static gain, first and second order; up to [`FIXED_MAX_ORDER`]) run on fixed-size
+//! stack arrays, so the state loops unroll and vanish for a static gain. A sine input is not
+//! evaluated by `cos`/`sin` at every stage: at each output sample `cos`/`sin` of the sample's phase
+//! are computed once, and the stage phases `theta_k + j omega h / 2` follow by the angle-addition
+//! formula from a table of `cos(j omega h / 2)`, `sin(j omega h / 2)` built once per simulation (a
+//! few ulps from the direct evaluation, with no accumulation across samples). `|w|^mu` is `w * w`
+//! or `|w|` when `mu` is 2 or 1 (exact, as `powf` there), else one `powf`.
 
 use crate::bouc_wen::BoucWen;
 use crate::error::{all_finite, finite, CoreError, Result};
@@ -122,16 +130,13 @@ pub fn simulate(
     };
     match input {
         Input::Sine { amplitude, omega } => {
-            let src = Sine {
-                amplitude,
-                omega,
-                neg_amplitude_omega: -amplitude * omega,
-            };
-            integrate(&comp, bw, &src, &grid, &mut out);
+            let mut src = SineStages::new(amplitude, omega, &grid);
+            integrate_any(&comp, bw, &mut src, &grid, &mut out);
         }
         Input::Sampled { u } => {
             let src = Hermite::new(u, dt);
-            integrate(&comp, bw, &src, &grid, &mut out);
+            let mut stages = CachedStages::new(&src, grid.delay);
+            integrate_any(&comp, bw, &mut stages, &grid, &mut out);
         }
     }
     Ok(out)
@@ -175,20 +180,120 @@ trait Source {
     fn at(&self, tau: f64) -> (f64, f64);
 }
 
-struct Sine {
-    amplitude: f64,
-    omega: f64,
-    /// `-U omega`, hoisted out of the stage evaluations.
-    neg_amplitude_omega: f64,
+/// The delayed input `(v, vdot)` at the stage times of one output sample.
+///
+/// The integrator calls [`Stages::sample`] once per output sample `k` (time `t = k dt`), then
+/// [`Stages::stage`] for stage `j` in `0..=2 substeps` at the time `t + j h / 2` (as computed by
+/// the integrator: `t + s h`, `+ h/2`, `+ h`).
+trait Stages {
+    /// Moves to the output sample at time `t`; returns `v(t)` (for `x = C xs + D v`).
+    fn sample(&mut self, t: f64) -> f64;
+    /// `(v, vdot)` at stage `j` of the current sample, whose time is `time`.
+    fn stage(&mut self, j: usize, time: f64) -> (f64, f64);
 }
 
-impl Source for Sine {
+/// Any [`Source`], evaluated at every stage time, with a one-entry cache keyed on the exact stage
+/// time: a step's last stage `ts + h` often rounds to the next step's first `t + (s+1) h` (or the
+/// next sample's `k dt`), and reusing the value only when the times are bitwise equal changes no
+/// result while saving an evaluation.
+struct CachedStages<'s, S: Source> {
+    src: &'s S,
+    delay: f64,
+    cached: (f64, (f64, f64)),
+}
+
+impl<'s, S: Source> CachedStages<'s, S> {
+    fn new(src: &'s S, delay: f64) -> Self {
+        Self {
+            src,
+            delay,
+            cached: (f64::NAN, (0.0, 0.0)),
+        }
+    }
+
     #[inline(always)]
-    fn at(&self, tau: f64) -> (f64, f64) {
+    fn input(&mut self, t: f64) -> (f64, f64) {
+        if t == self.cached.0 {
+            return self.cached.1;
+        }
+        let tau = t - self.delay;
+        let value = if tau < 0.0 {
+            (0.0, 0.0)
+        } else {
+            self.src.at(tau)
+        };
+        self.cached = (t, value);
+        value
+    }
+}
+
+impl<S: Source> Stages for CachedStages<'_, S> {
+    #[inline(always)]
+    fn sample(&mut self, t: f64) -> f64 {
+        self.input(t).0
+    }
+    #[inline(always)]
+    fn stage(&mut self, _j: usize, time: f64) -> (f64, f64) {
+        self.input(time)
+    }
+}
+
+/// `u = U cos(omega tau)` at the stage times by angle addition: `cos`/`sin` of the sample's phase
+/// once per output sample, and of the stage offsets `j omega h / 2` once per simulation.
+struct SineStages {
+    amplitude: f64,
+    /// `-U omega`, hoisted out of the stage evaluations.
+    neg_amplitude_omega: f64,
+    omega: f64,
+    delay: f64,
+    /// `(cos, sin)` of `j omega h / 2`, `j = 0..=2 substeps`.
+    offsets: Vec<(f64, f64)>,
+    /// `(cos, sin)` of the current sample's phase `omega (t - delay)`.
+    anchor: (f64, f64),
+}
+
+impl SineStages {
+    fn new(amplitude: f64, omega: f64, grid: &Grid) -> Self {
+        let half_h = 0.5 * (grid.dt / grid.substeps as f64);
+        let offsets = (0..=2 * grid.substeps)
+            .map(|j| {
+                let arg = omega * (j as f64 * half_h);
+                (arg.cos(), arg.sin())
+            })
+            .collect();
+        Self {
+            amplitude,
+            neg_amplitude_omega: -amplitude * omega,
+            omega,
+            delay: grid.delay,
+            offsets,
+            anchor: (1.0, 0.0),
+        }
+    }
+}
+
+impl Stages for SineStages {
+    #[inline(always)]
+    fn sample(&mut self, t: f64) -> f64 {
+        let tau = t - self.delay;
         let arg = self.omega * tau;
+        self.anchor = (arg.cos(), arg.sin());
+        if tau < 0.0 {
+            0.0
+        } else {
+            self.amplitude * self.anchor.0
+        }
+    }
+    #[inline(always)]
+    fn stage(&mut self, j: usize, time: f64) -> (f64, f64) {
+        if time - self.delay < 0.0 {
+            return (0.0, 0.0);
+        }
+        let (c0, s0) = self.anchor;
+        let (cj, sj) = self.offsets[j];
         (
-            self.amplitude * arg.cos(),
-            self.neg_amplitude_omega * arg.sin(),
+            self.amplitude * (c0 * cj - s0 * sj),
+            self.neg_amplitude_omega * (s0 * cj + c0 * sj),
         )
     }
 }
@@ -277,34 +382,185 @@ fn axpy(out: &mut [f64], xs: &[f64], hk: f64, k: &[f64]) {
     }
 }
 
-/// RK4 from rest over the whole grid, writing the samples into `out`.
-///
-/// The five state-sized buffers are allocated once; the loops run over them with iterators (no
-/// bounds checks). Fixed-size stack arrays for small orders were measured and bought nothing: the
-/// step is bound by its four `powf` and its `sin`/`cos` pairs.
-fn integrate<S: Source>(
+/// Largest order run on fixed-size arrays by [`integrate_fixed`].
+const FIXED_MAX_ORDER: usize = 4;
+
+/// RK4 from rest over the whole grid, on fixed-size arrays for orders up to [`FIXED_MAX_ORDER`].
+fn integrate_any<I: Stages>(
     comp: &Companion,
     bw: &BoucWen,
-    src: &S,
+    src: &mut I,
+    grid: &Grid,
+    out: &mut Simulation,
+) {
+    // The arms below go up to FIXED_MAX_ORDER.
+    const _: () = assert!(FIXED_MAX_ORDER == 4);
+    match comp.order() {
+        0 => integrate_fixed::<0, I>(comp, bw, src, grid, out),
+        1 => integrate_fixed::<1, I>(comp, bw, src, grid, out),
+        2 => integrate_fixed::<2, I>(comp, bw, src, grid, out),
+        3 => integrate_fixed::<3, I>(comp, bw, src, grid, out),
+        4 => integrate_fixed::<4, I>(comp, bw, src, grid, out),
+        _ => integrate(comp, bw, src, grid, out),
+    }
+}
+
+/// How `|w|^mu` is computed: exactly as `powf` for `mu = 1` and `mu = 2`, else by `powf`.
+#[derive(Clone, Copy)]
+enum Power {
+    One,
+    Two,
+    General(f64),
+}
+
+impl Power {
+    fn new(mu: f64) -> Self {
+        if mu == 1.0 {
+            Power::One
+        } else if mu == 2.0 {
+            Power::Two
+        } else {
+            Power::General(mu)
+        }
+    }
+
+    #[inline(always)]
+    fn of_abs(self, w: f64) -> f64 {
+        let a = w.abs();
+        match self {
+            Power::One => a,
+            Power::Two => a * a,
+            Power::General(mu) => a.powf(mu),
+        }
+    }
+}
+
+/// The companion form of order `N` and the hysteresis, by value, for [`integrate_fixed`].
+struct Fixed<const N: usize> {
+    a: [f64; N],
+    c: [f64; N],
+    d: f64,
+    alpha: f64,
+    beta: f64,
+    gamma: f64,
+    power: Power,
+}
+
+impl<const N: usize> Fixed<N> {
+    fn new(comp: &Companion, bw: &BoucWen) -> Self {
+        let mut a = [0.0; N];
+        let mut c = [0.0; N];
+        a.copy_from_slice(&comp.a);
+        c.copy_from_slice(&comp.c);
+        Self {
+            a,
+            c,
+            d: comp.d,
+            alpha: bw.alpha(),
+            beta: bw.beta(),
+            gamma: bw.gamma(),
+            power: Power::new(bw.mu()),
+        }
+    }
+
+    /// `f(t, z)` with the input evaluated: `(xsdot, wdot)`, in the operation order of
+    /// [`Companion::state_derivative`], [`Companion::output_row`] and [`BoucWen::wdot`].
+    #[inline(always)]
+    fn rhs(&self, xs: &[f64; N], w: f64, (v, vdot): (f64, f64)) -> ([f64; N], f64) {
+        let mut dxs = [0.0; N];
+        let mut xdot = 0.0;
+        if N > 0 {
+            let mut acc = 0.0;
+            for i in 0..N {
+                acc += self.a[i] * xs[i];
+            }
+            dxs[0] = -acc + v;
+            dxs[1..].copy_from_slice(&xs[..N - 1]);
+            for i in 0..N {
+                xdot += self.c[i] * dxs[i];
+            }
+        }
+        xdot += self.d * vdot;
+        let wmu = self.power.of_abs(w);
+        let wdot = self.alpha * xdot
+            - self.beta * xdot.abs() * crate::bouc_wen::sgn(w) * wmu
+            - self.gamma * xdot * wmu;
+        (dxs, wdot)
+    }
+
+    #[inline(always)]
+    fn output(&self, xs: &[f64; N], v: f64) -> f64 {
+        let mut acc = 0.0;
+        for i in 0..N {
+            acc += self.c[i] * xs[i];
+        }
+        acc + self.d * v
+    }
+}
+
+/// `xs + k * hk` for fixed-size states.
+#[inline(always)]
+fn axpy_fixed<const N: usize>(xs: &[f64; N], hk: f64, k: &[f64; N]) -> [f64; N] {
+    let mut out = [0.0; N];
+    for i in 0..N {
+        out[i] = xs[i] + hk * k[i];
+    }
+    out
+}
+
+/// [`integrate`] for a state of compile-time order `N` (same steps and operation order).
+fn integrate_fixed<const N: usize, I: Stages>(
+    comp: &Companion,
+    bw: &BoucWen,
+    src: &mut I,
+    grid: &Grid,
+    out: &mut Simulation,
+) {
+    let sys = Fixed::<N>::new(comp, bw);
+    let dt = grid.dt;
+    let h = dt / grid.substeps as f64;
+    let half_h = 0.5 * h;
+    let h_sixth = h / 6.0;
+    let mut xs = [0.0; N];
+    let mut w = bw.w0();
+    let last = grid.n_samples - 1;
+    for (k, (xo, wo)) in out.x.iter_mut().zip(out.w.iter_mut()).enumerate() {
+        let t = k as f64 * dt;
+        *xo = sys.output(&xs, src.sample(t));
+        *wo = w;
+        if k == last {
+            break;
+        }
+        for s in 0..grid.substeps {
+            let ts = t + s as f64 * h;
+            let (k1, kw1) = sys.rhs(&xs, w, src.stage(2 * s, ts));
+            // Stages 2 and 3 share the time t + h/2: evaluate the input once.
+            let mid = src.stage(2 * s + 1, ts + half_h);
+            let (k2, kw2) = sys.rhs(&axpy_fixed(&xs, half_h, &k1), w + half_h * kw1, mid);
+            let (k3, kw3) = sys.rhs(&axpy_fixed(&xs, half_h, &k2), w + half_h * kw2, mid);
+            let end = src.stage(2 * s + 2, ts + h);
+            let (k4, kw4) = sys.rhs(&axpy_fixed(&xs, h, &k3), w + h * kw3, end);
+            for i in 0..N {
+                xs[i] += h_sixth * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
+            }
+            w += h_sixth * (kw1 + 2.0 * kw2 + 2.0 * kw3 + kw4);
+        }
+    }
+}
+
+/// RK4 from rest over the whole grid, writing the samples into `out` (any order).
+///
+/// The five state-sized buffers are allocated once; the loops run over them with iterators (no
+/// bounds checks).
+fn integrate<I: Stages>(
+    comp: &Companion,
+    bw: &BoucWen,
+    src: &mut I,
     grid: &Grid,
     out: &mut Simulation,
 ) {
     let n = comp.order();
     let sys = System { comp, bw };
-    let delay = grid.delay;
-    // One-entry cache keyed on the exact stage time: a step's last stage `ts + h` often rounds
-    // to the next step's first `t + (s+1) h` (or the next sample's `k dt`), and reusing the value
-    // only when the times are bitwise equal changes no result while saving a sin/cos pair.
-    let mut cached: (f64, (f64, f64)) = (f64::NAN, (0.0, 0.0));
-    let mut input = |t: f64| {
-        if t == cached.0 {
-            return cached.1;
-        }
-        let tau = t - delay;
-        let value = if tau < 0.0 { (0.0, 0.0) } else { src.at(tau) };
-        cached = (t, value);
-        value
-    };
     let dt = grid.dt;
     let h = dt / grid.substeps as f64;
     let half_h = 0.5 * h;
@@ -322,22 +578,22 @@ fn integrate<S: Source>(
     let last = grid.n_samples - 1;
     for (k, (xo, wo)) in out.x.iter_mut().zip(out.w.iter_mut()).enumerate() {
         let t = k as f64 * dt;
-        *xo = sys.output(&xs, input(t).0);
+        *xo = sys.output(&xs, src.sample(t));
         *wo = w;
         if k == last {
             break;
         }
         for s in 0..grid.substeps {
             let ts = t + s as f64 * h;
-            let kw1 = sys.rhs(&xs, w, input(ts), &mut k1);
+            let kw1 = sys.rhs(&xs, w, src.stage(2 * s, ts), &mut k1);
             // Stages 2 and 3 share the time t + h/2: evaluate the input once.
-            let mid = input(ts + half_h);
+            let mid = src.stage(2 * s + 1, ts + half_h);
             axpy(&mut tmp, &xs, half_h, &k1);
             let kw2 = sys.rhs(&tmp, w + half_h * kw1, mid, &mut k2);
             axpy(&mut tmp, &xs, half_h, &k2);
             let kw3 = sys.rhs(&tmp, w + half_h * kw2, mid, &mut k3);
             axpy(&mut tmp, &xs, h, &k3);
-            let kw4 = sys.rhs(&tmp, w + h * kw3, input(ts + h), &mut k4);
+            let kw4 = sys.rhs(&tmp, w + h * kw3, src.stage(2 * s + 2, ts + h), &mut k4);
             for ((((x, a), b), c), d) in xs.iter_mut().zip(&k1).zip(&k2).zip(&k3).zip(&k4) {
                 *x += h_sixth * (a + 2.0 * b + 2.0 * c + d);
             }

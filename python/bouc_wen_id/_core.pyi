@@ -106,3 +106,18 @@ def refine(
     mu_lo: float = 1.0,
     mu_hi: float = ...,
 ) -> tuple[_F, float, int, bool, _F, list[_F]]: ...
+def refine_many(
+    ybars: Sequence[_F],
+    amplitudes: Sequence[float] | _F,
+    weights: Sequence[float] | _F,
+    starts: Sequence[Sequence[float] | _F],
+    max_iter: int = 200,
+    substeps: int = 4,
+    ftol: float = 1e-12,
+    xtol: float = 1e-10,
+    mu_lo: float = 1.0,
+    mu_hi: float = ...,
+    abandon_after: int = 0,
+    abandon_ratio: float = 10.0,
+    threads: int = 0,
+) -> list[tuple[_F, float, int, bool, bool] | None]: ...
