@@ -14,6 +14,7 @@ pub mod average;
 pub mod bouc_wen;
 pub mod error;
 pub mod estimate;
+pub mod lab;
 pub mod linear;
 pub mod multistart;
 pub mod profile;

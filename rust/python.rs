@@ -16,7 +16,7 @@ use crate::estimate;
 use crate::linear::TransferFunction;
 use crate::simulate::{self, Input};
 use crate::solve::{self, SlsProblem, GOLDEN_MAX_ITER};
-use crate::{multistart, profile, refine, steady};
+use crate::{lab, multistart, profile, refine, steady};
 
 pyo3::import_exception!(bouc_wen_id.errors, InvalidParameterError);
 pyo3::import_exception!(bouc_wen_id.errors, NonFiniteError);
@@ -689,6 +689,44 @@ fn refine_many<'py>(
         .collect())
 }
 
+/// Complex moments of the harmonic basis (`rust/lab.rs`): `(mu_re, mu_im, r_re, r_im)` with
+/// `mu_q = sum e^{i q theta}`, `q <= 2 kmax`, and `r_q = sum y e^{-i q theta}`, `q <= kmax`.
+#[pyfunction]
+fn harmonic_moments<'py>(
+    py: Python<'py>,
+    theta: PyReadonlyArray1<'py, f64>,
+    y: PyReadonlyArray1<'py, f64>,
+    kmax: i64,
+) -> PyResult<(
+    Bound<'py, PyArray1<f64>>,
+    Bound<'py, PyArray1<f64>>,
+    Bound<'py, PyArray1<f64>>,
+    Bound<'py, PyArray1<f64>>,
+)> {
+    let (theta, y) = (slice("theta", &theta)?, slice("y", &y)?);
+    let kmax = count("kmax", kmax, 1)?;
+    let ((mr, mi), (rr, ri)) = py.detach(|| lab::harmonic_moments(theta, y, kmax))?;
+    Ok((
+        mr.into_pyarray(py),
+        mi.into_pyarray(py),
+        rr.into_pyarray(py),
+        ri.into_pyarray(py),
+    ))
+}
+
+/// `coef[0] + sum_k coef[2k-1] cos(k theta) + coef[2k] sin(k theta)` at every phase
+/// (`rust/lab.rs`).
+#[pyfunction]
+fn harmonic_series<'py>(
+    py: Python<'py>,
+    theta: PyReadonlyArray1<'py, f64>,
+    coef: PyReadonlyArray1<'py, f64>,
+) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    let (theta, coef) = (slice("theta", &theta)?, slice("coef", &coef)?);
+    let out = py.detach(|| lab::harmonic_series(theta, coef))?;
+    Ok(out.into_pyarray(py))
+}
+
 /// Rust core of bouc_wen_id (simulation, averaging, estimators); see docs/design.md.
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -709,5 +747,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(profile_phase_gain, m)?)?;
     m.add_function(wrap_pyfunction!(refine_fit, m)?)?;
     m.add_function(wrap_pyfunction!(refine_many, m)?)?;
+    m.add_function(wrap_pyfunction!(harmonic_moments, m)?)?;
+    m.add_function(wrap_pyfunction!(harmonic_series, m)?)?;
     Ok(())
 }
