@@ -652,12 +652,12 @@ def main(argv: list[str] | None = None) -> int:
 
     # identify() = a Python driver (same for both backends; its input check fits U cos(omega t) to every
     # recorded input by least squares) + the backend's core calls.  Time the two parts on their own.
-    from bouc_wen_id.identification import _check_input
+    from bouc_wen_id.prepare import check_input
 
     def check_all() -> None:
         for r in recs:
             p = r.samples_per_period
-            _check_input(r, r.settle_periods * p, r.whole_periods * p)
+            check_input(r, r.settle_periods * p, r.whole_periods * p)
 
     def core_calls(core: Any) -> float:
         """The backend calls identify() makes, in its order, with its defaults; returns mu."""
@@ -678,7 +678,7 @@ def main(argv: list[str] | None = None) -> int:
         return float(mu)
 
     t_chk, _ = best_per_call(check_all, reps, min_time)
-    rep.row(label, "  shared driver part: _check_input x7", size, fmt_time(t_chk), "per identification")
+    rep.row(label, "  shared driver part: check_input x7", size, fmt_time(t_chk), "per identification")
     t_cr, mu_cr = best_per_call(lambda: core_calls(_core), reps, min_time)
     rep.row(label, "  rust core calls only", size, fmt_time(t_cr), "per identification")
     t_cn, mu_cn = best_per_call(lambda: core_calls(reference), reps, min_time)

@@ -11,6 +11,8 @@ which a test module cannot import the conftest by name.
 from __future__ import annotations
 
 import math
+import os
+from pathlib import Path
 from types import ModuleType, SimpleNamespace
 from typing import Any
 
@@ -22,6 +24,41 @@ from bouc_wen_id import _core, reference
 BACKENDS: dict[str, ModuleType] = {"rust": _core, "numpy": reference}
 
 TWO_PI = 2.0 * math.pi
+
+#: The real recordings: where ``BOUC_WEN_ID_REAL_DATA`` says, else ``../shared/data/real`` next to the
+#: repository (read in place, never copied into it).
+REAL_DATA = Path(
+    os.environ.get("BOUC_WEN_ID_REAL_DATA")
+    or Path(__file__).resolve().parents[1].parent / "shared" / "data" / "real"
+)
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    config.addinivalue_line("markers", "real_data: reads the real recordings (skipped when they are absent)")
+
+
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    """Skip the ``real_data`` tests, saying why, when the recordings are absent.
+
+    ``BOUC_WEN_ID_REQUIRE_REAL_DATA=1`` (for CI, which has them) makes their absence a failure instead.
+    """
+    if REAL_DATA.is_dir():
+        return
+    why = (
+        f"the real recordings are not in {REAL_DATA}: put them in ../shared/data/real next to the "
+        "repository, or point BOUC_WEN_ID_REAL_DATA at them"
+    )
+    if os.environ.get("BOUC_WEN_ID_REQUIRE_REAL_DATA") == "1":
+        raise pytest.UsageError(why)
+    for item in items:
+        if "real_data" in item.keywords:
+            item.add_marker(pytest.mark.skip(reason=why))
+
+
+@pytest.fixture(scope="session")
+def real_data() -> Path:
+    """The folder of the real recordings (the ``real_data`` marker skips a test when it is absent)."""
+    return REAL_DATA
 
 
 @pytest.fixture(params=sorted(BACKENDS))

@@ -41,7 +41,7 @@ import numpy as np
 import pytest
 from bouc_wen_id import _core
 from bouc_wen_id.demo import DEMO_FREQUENCIES, design_amplitudes
-from bouc_wen_id.identification import phase_error
+from bouc_wen_id.result import phase_error
 from numpy.testing import assert_allclose
 
 TWO_PI = 2.0 * math.pi

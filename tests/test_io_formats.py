@@ -26,8 +26,6 @@ from bouc_wen_id.errors import (
 )
 from bouc_wen_id.measurement import Measurement, clipping_check
 
-REAL = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "real"
-
 
 def _measurement(n: int = 400, rate: float = 1000.0, **kw: Any) -> Measurement:
     """A lab-like record: 7.3 Hz sine (not a whole number of samples per period) and a lagging response."""
@@ -211,16 +209,10 @@ def test_simulated_recordings_pass_the_clipping_check() -> None:
         Measurement(rec.t, rec.u, rec.y).check()
 
 
-def _real(folder: str) -> Path:
-    path = REAL / folder
-    if not path.is_dir():
-        pytest.fail(f"the real-data folder {path} is missing: these tests need ../shared/data/real/")
-    return path
-
-
-def test_real_scope_captures_load_headerless_and_are_not_clipped() -> None:
+@pytest.mark.real_data
+def test_real_scope_captures_load_headerless_and_are_not_clipped(real_data: Path) -> None:
     """The microwire B-H captures: 8-bit scope, no header, no time column (the dt of PROVENANCE.md)."""
-    folder = _real("bh-loop-microwire")
+    folder = real_data / "bh-loop-microwire"
     dt = {"50kHz": 5e-8, "100kHz": 2e-8, "200kHz": 1e-8, "250kHz": 1e-8}
     for stem, step in dt.items():
         (m,) = io.load(folder / f"{stem}.csv", columns={"u": 1, "y": 0}, sample_rate=1 / step)
@@ -230,13 +222,14 @@ def test_real_scope_captures_load_headerless_and_are_not_clipped() -> None:
         m.check()  # the reference channel repeats its top level for ~30 samples: not a clip
 
 
-def test_real_lab_channels_are_not_clipped() -> None:
-    rope = np.loadtxt(_real("wire-rope-isolator") / "18Hz_A4.txt")
+@pytest.mark.real_data
+def test_real_lab_channels_are_not_clipped(real_data: Path) -> None:
+    rope = np.loadtxt(real_data / "wire-rope-isolator" / "18Hz_A4.txt")
     Measurement.from_rate(10240, rope[:, 1], rope[:, 0]).check()
-    data = json.loads((_real("friction-damper-brfd") / "1Hz30lbtension1amplitude.json").read_text())
+    data = json.loads((real_data / "friction-damper-brfd" / "1Hz30lbtension1amplitude.json").read_text())
     arr = np.array(data["data"])
     Measurement(arr[:, 0], arr[:, 1], arr[:, 2], units={"u": "in", "y": "kip"}).check()
-    lines = (_real("mr-damper-utfsm") / "ME2mm5Hz.txt").read_text(encoding="latin-1").splitlines()[7:]
+    lines = (real_data / "mr-damper-utfsm" / "ME2mm5Hz.txt").read_text(encoding="latin-1").splitlines()[7:]
     cols = np.array([[float(c) for c in line.split(",")[2:4]] for line in lines])
     m = Measurement.from_rate(200, cols[:, 1] * 10, cols[:, 0] * 980.665, units={"u": "mm", "y": "N"})
     m.check()

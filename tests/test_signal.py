@@ -15,7 +15,7 @@ from typing import Callable
 
 import numpy as np
 import pytest
-from bouc_wen_id import _core
+from bouc_wen_id import _core, reference
 from bouc_wen_id import signal as sig
 from bouc_wen_id.errors import (
     BoucWenIdError,
@@ -32,8 +32,8 @@ from bouc_wen_id.signal import (
     AveragedPeriod,
     SegmentReport,
     SineFit,
+    _harmonic_ls,
     analyse_sine,
-    average_exact,
     find_steady_segments,
     synchronous_average,
 )
@@ -41,7 +41,6 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 TWO_PI = 2.0 * math.pi
-REAL = Path(__file__).parents[1].parent / "shared" / "data" / "real"
 
 Arrays = tuple[np.ndarray, np.ndarray, np.ndarray]
 
@@ -401,7 +400,7 @@ def test_reduces_to_the_periodic_average_for_integer_periods(
 ) -> None:
     """(4a-b): integer odd P, whole periods, all harmonics -> the plain average minus its mean."""
     if path == "moments":
-        monkeypatch.setattr(sig, "QR_WORK_MAX", 0.0)
+        monkeypatch.setattr(_harmonic_ls, "QR_WORK_MAX", 0.0)
     p, settle, periods = 33, 2, 7
     rng = np.random.default_rng(5)
     n = (settle + periods + 1) * p
@@ -412,7 +411,7 @@ def test_reduces_to_the_periodic_average_for_integer_periods(
     fit = SineFit(omega, 1.3, 0.0, 0.0, 0.0, 0.0, 0.0)
     k = (p - 1) // 2
     ap = synchronous_average(t, y, fit, start=settle * p, stop=(settle + periods) * p, harmonics=k)
-    plain = average_exact(y, p, settle, periods)
+    plain = reference.periodic_average(y, p, settle, periods)
     np.testing.assert_allclose(ap.ybar, plain - plain.mean(), rtol=0, atol=1e-12)
     assert ap.offset_y == pytest.approx(plain.mean(), abs=1e-12)
     assert ap.periods == pytest.approx(periods) and ap.noise_dof == periods * p - p
@@ -432,7 +431,7 @@ def test_moment_and_qr_paths_agree(monkeypatch: pytest.MonkeyPatch) -> None:
     y = np.sign(u) * np.abs(u) ** 0.7 + 0.05 * rng.normal(size=t.size)
     fit = analyse_sine(t, u)
     qr = synchronous_average(t, y, fit, start=13)
-    monkeypatch.setattr(sig, "QR_WORK_MAX", 0.0)
+    monkeypatch.setattr(_harmonic_ls, "QR_WORK_MAX", 0.0)
     mom = synchronous_average(t, y, fit, start=13)
     assert mom.harmonics == qr.harmonics
     np.testing.assert_allclose(mom.ybar, qr.ybar, rtol=0, atol=1e-10)
@@ -574,9 +573,9 @@ def test_synchronous_average_errors() -> None:
     with pytest.raises(UndersampledError):
         synchronous_average(t, u, SineFit(TWO_PI / (10 * 1e-3), 1.0, 0.0, 0.0, 0.0, 0.0, 0.0))
     with pytest.raises(InsufficientDataError):
-        average_exact(u, 50, 10, 40)
+        reference.periodic_average(u, 50, 10, 40)
     with pytest.raises(InvalidParameterError):
-        average_exact(u, 50, -1, 2)
+        reference.periodic_average(u, 50, -1, 2)
 
 
 # ------------------------------------------------------------------------------------------------------
@@ -639,13 +638,12 @@ LOADERS: dict[str, tuple[str, Callable[[Path], Arrays]]] = {
 }
 
 
-def test_real_recordings_do_not_crash() -> None:
-    if not REAL.is_dir():
-        pytest.fail(f"the real recordings are missing: expected them in {REAL} (see the project README)")
+@pytest.mark.real_data
+def test_real_recordings_do_not_crash(real_data: Path) -> None:
     seen = 0
     for folder, (pattern, load) in LOADERS.items():
-        files = sorted((REAL / folder).glob(pattern))
-        assert files, f"no {pattern} files in {REAL / folder}"
+        files = sorted((real_data / folder).glob(pattern))
+        assert files, f"no {pattern} files in {real_data / folder}"
         for path in files:
             seen += 1
             t, u, y = load(path)

@@ -28,10 +28,11 @@ from .errors import (
     UnstableSystemError,
     ZeroAmplitudeError,
 )
-from .identification import Adequacy, ExperimentEstimate, IdentificationResult, Truth, identify
+from .identification import identify
 from .io import load, load_recordings, save, save_recordings
 from .measurement import Measurement
 from .model import BoucWen, Recording, SinePlan, TransferFunction, WienerPlant
+from .result import Adequacy, ExperimentEstimate, IdentificationResult, Truth
 from .signal import AveragedPeriod, SineFit, analyse_sine, average_measurement, find_steady_segments
 from .simulation import simulate, simulate_input
 from .uncertainty import CramerRao, cramer_rao

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import sys
 import time
 import warnings
@@ -17,10 +16,11 @@ from numpy.typing import NDArray
 
 from .demo import DEMO_FREQUENCIES, demo_plan, demo_plant, design_amplitudes
 from .errors import BoucWenIdError, InsufficientDataError, InvalidParameterError
-from .identification import IdentificationResult, identify
+from .identification import identify
 from .io import load, save_recordings
 from .measurement import Measurement
 from .model import SinePlan, WienerPlant
+from .result import IdentificationResult
 from .simulation import simulate
 
 __all__ = ["main"]
@@ -176,7 +176,7 @@ def _experiments(args: argparse.Namespace) -> tuple[list[Any], list[dict[str, An
     Returns what ``identify`` takes (recordings and averaged periods) and, per measurement, what was kept
     and dropped, for the report.
     """
-    from .signal import AveragedPeriod, find_steady_segments, synchronous_average
+    from .signal import average_segments
 
     items = load(args.paths, columns=_columns(args.columns), sample_rate=args.sample_rate)
     out: list[Any] = []
@@ -189,37 +189,12 @@ def _experiments(args: argparse.Namespace) -> tuple[list[Any], list[dict[str, An
             continue
         name = item.name or f"measurement {done}"
         _progress(done, len(measurements), f"steady segments of {name}")
-        report = find_steady_segments(
-            item.t, item.u, item.y, nominal_frequency=item.nominal_frequency, min_periods=args.min_periods
-        )
-        averaged: list[AveragedPeriod] = [
-            synchronous_average(
-                item.t, item.y, fit, start=seg.start, stop=seg.stop, source=f"{name} segment {i}"
-            )
-            for i, (seg, fit) in enumerate(zip(report.kept, report.fits))
-        ]
+        found = average_segments(item, min_periods=args.min_periods, name=name)
         done += 1
         _progress(done, len(measurements), f"steady segments of {name}")
-        print(f"{name}: {report.summary()}")
-        segments.append(
-            {
-                "measurement": name,
-                "kept": [
-                    {
-                        "start": seg.start,
-                        "stop": seg.stop,
-                        "periods": seg.periods,
-                        "frequency_hz": fit.frequency / (2 * math.pi),
-                        "amplitude": fit.amplitude,
-                        "thd": fit.thd,
-                        "noise_sd": math.sqrt(ap.noise_var) if math.isfinite(ap.noise_var) else None,
-                    }
-                    for seg, fit, ap in zip(report.kept, report.fits, averaged)
-                ],
-                "dropped": [{"start": a, "stop": b, "reason": why} for a, b, why in report.dropped],
-            }
-        )
-        out.extend(averaged)
+        print(f"{name}: {found.report.summary()}")
+        segments.append(found.to_dict())
+        out.extend(found.periods)
     if not out:
         raise InsufficientDataError(
             "no steady segment of at least --min-periods periods was found in any file; see the dropped "

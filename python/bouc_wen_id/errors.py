@@ -79,8 +79,12 @@ class FileFormatError(BoucWenIdError):
     """A recording or result file cannot be read: a missing column, a bad header, an unknown version."""
 
 
-class TimeAxisError(BoucWenIdError):
-    """The time column is not usable: not strictly increasing, or its step jitters beyond tolerance."""
+class TimeAxisError(InvalidParameterError):
+    """The time column is not usable: not strictly increasing, or its step jitters beyond tolerance.
+
+    An :class:`InvalidParameterError`: every time axis is checked by one function
+    (:func:`bouc_wen_id.validation.check_time_axis`), for lab data and exact grids alike.
+    """
 
 
 class ClippingError(BoucWenIdError):

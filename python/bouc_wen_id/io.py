@@ -42,8 +42,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .errors import BoucWenIdError, FileFormatError, InvalidParameterError, NonFiniteError
-from .measurement import RESERVED_KEYS, Measurement, check_metadata_key, check_time_axis
+from .measurement import RESERVED_KEYS, Measurement, check_metadata_key
 from .model import Recording, WienerPlant
+from .validation import check_time_axis
 
 __all__ = [
     "Item",

@@ -24,19 +24,16 @@ from numpy.typing import ArrayLike, NDArray
 
 from .errors import (
     ClippingError,
-    InsufficientDataError,
     InvalidParameterError,
     NonFiniteError,
-    TimeAxisError,
 )
 from .model import Recording
+from .validation import check_time_axis
 
-__all__ = ["Measurement", "clipping_check", "TIME_JITTER_MAX", "RESERVED_KEYS"]
+__all__ = ["Measurement", "clipping_check", "RESERVED_KEYS"]
 
 FloatArray = NDArray[np.float64]
 
-#: Largest deviation of a time step from the median step, as a fraction of the median step.
-TIME_JITTER_MAX = 0.01
 #: Header keys of the file formats; metadata may not use them (see :mod:`bouc_wen_id.io`).
 RESERVED_KEYS = frozenset(
     {
@@ -106,37 +103,6 @@ def check_metadata_key(key: object) -> str:
             f"metadata key {key!r} must be a non-empty printable string without ':' or surrounding spaces"
         )
     return key
-
-
-def check_time_axis(t: FloatArray, name: str = "t") -> float:
-    """Refuse a time axis that is not strictly increasing or whose step jitters; return the median step.
-
-    The step may deviate from the median step by at most ``TIME_JITTER_MAX`` (1 %) of it.
-    """
-    if t.size < 2:
-        raise InsufficientDataError(f"{name} needs at least 2 samples, got {t.size}")
-    with np.errstate(over="ignore", invalid="ignore"):
-        steps = np.diff(t)
-        span = float(t[-1]) - float(t[0])
-    if not (np.all(np.isfinite(steps)) and math.isfinite(span)):
-        raise TimeAxisError(f"the steps of {name} overflow: its values are too large ({t[0]:g} .. {t[-1]:g})")
-    down = np.flatnonzero(steps <= 0)
-    if down.size:
-        i = int(down[0])
-        raise TimeAxisError(
-            f"{name} is not strictly increasing: {name}[{i}] = {t[i]!r}, {name}[{i + 1}] = {t[i + 1]!r}"
-        )
-    dt = float(np.median(steps))
-    if not math.isfinite(1.0 / dt):
-        raise TimeAxisError(f"the step of {name} ({dt:g} s) is too small: its sample rate overflows")
-    dev = np.abs(steps - dt)
-    worst = int(np.argmax(dev))
-    if dev[worst] > TIME_JITTER_MAX * dt:
-        raise TimeAxisError(
-            f"{name} is not uniformly sampled: step {worst} is {steps[worst]:.9g} s against a median step of "
-            f"{dt:.9g} s (more than {TIME_JITTER_MAX:.0%} apart); resample, or split the record at the gap"
-        )
-    return dt
 
 
 def _runs(mask: NDArray[np.bool_]) -> tuple[NDArray[np.intp], NDArray[np.intp]]:

@@ -15,49 +15,27 @@ from typing import Any, Optional
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from . import reference as _ref
 from .errors import (
     FrequencyMismatchError,
     InsufficientDataError,
     InvalidParameterError,
-    NonFiniteError,
     ZeroAmplitudeError,
 )
+from .validation import (
+    EXACT_GRID_RTOL,
+    check_bouc_wen,
+    check_time_axis,
+    check_transfer_function,
+)
+from .validation import frozen_array as _frozen_array
+from .validation import real_number as _finite
 
 __all__ = ["TransferFunction", "BoucWen", "WienerPlant", "SinePlan", "Recording"]
 
 FloatArray = NDArray[np.float64]
 
-#: Relative tolerance for "the period holds a whole number of samples" and "the time grid is uniform".
+#: Relative tolerance for "the period holds a whole number of samples".
 GRID_RTOL = 1e-6
-
-
-def _frozen_array(name: str, values: ArrayLike, ndim: int = 1) -> FloatArray:
-    raw = np.asarray(values)
-    if raw.dtype.kind not in "biuf":
-        raise InvalidParameterError(
-            f"{name} must hold real numbers, got dtype {raw.dtype}; take the real part or convert it first"
-        )
-    arr = np.array(raw, dtype=np.float64, copy=True)
-    if arr.ndim != ndim:
-        raise InvalidParameterError(f"{name} must be {ndim}-D, got shape {arr.shape}")
-    if not np.all(np.isfinite(arr)):
-        bad = int(np.flatnonzero(~np.isfinite(arr.ravel()))[0])
-        raise NonFiniteError(f"{name} holds a non-finite value at index {bad}; clean or drop it first")
-    arr.setflags(write=False)
-    return arr
-
-
-def _finite(name: str, value: float) -> float:
-    if isinstance(value, (complex, np.complexfloating, str, bytes)):
-        raise InvalidParameterError(f"{name} = {value!r} must be a real number")
-    try:
-        v = float(value)
-    except (TypeError, ValueError, OverflowError) as exc:
-        raise InvalidParameterError(f"{name} = {value!r} is not a real number: {exc}") from None
-    if not math.isfinite(v):
-        raise NonFiniteError(f"{name} = {v} is not finite")
-    return v
 
 
 @dataclass(frozen=True, eq=False, init=False)
@@ -81,7 +59,7 @@ class TransferFunction:
         object.__setattr__(self, "den", _frozen_array("den", den))
         object.__setattr__(self, "delay", _finite("delay", delay))
         # One validation path for both backends: proper, stable, finite, delay >= 0.
-        _ref.realize(self.num, self.den, self.delay)
+        check_transfer_function(self.num, self.den, self.delay)
 
     def __call__(self, s: ArrayLike) -> NDArray[np.complex128]:
         """Evaluate ``G(s)`` at complex ``s``."""
@@ -129,7 +107,7 @@ class BoucWen:
     def __post_init__(self) -> None:
         for name in ("beta", "gamma", "mu", "alpha", "w0"):
             object.__setattr__(self, name, _finite(name, getattr(self, name)))
-        _ref._check_bouc_wen(self.alpha, self.beta, self.gamma, self.mu, self.w0)
+        check_bouc_wen(self.alpha, self.beta, self.gamma, self.mu, self.w0)
 
     @property
     def w_bound(self) -> float:
@@ -338,13 +316,7 @@ class Recording:
         if int(settle) != settle or settle < 0:
             raise InvalidParameterError(f"settle_periods = {self.settle_periods} must be an integer >= 0")
         object.__setattr__(self, "settle_periods", int(settle))
-        steps = np.diff(self.t)
-        dt = float(np.mean(steps))
-        if dt <= 0 or np.max(np.abs(steps - dt)) > GRID_RTOL * dt * 10 + 1e-12 * abs(self.t[-1]):
-            raise InvalidParameterError(
-                "the time column must be strictly increasing with a constant step "
-                f"(steps range over [{steps.min():.6g}, {steps.max():.6g}] s)"
-            )
+        check_time_axis(self.t, rtol=EXACT_GRID_RTOL)
 
     @property
     def dt(self) -> float:

@@ -7,11 +7,13 @@ from typing import TYPE_CHECKING, Optional
 
 import numpy as np
 
+from .validation import z_value
+
 if TYPE_CHECKING:  # pragma: no cover - typing only
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
-    from .identification import IdentificationResult
+    from .result import IdentificationResult
 
 __all__ = ["plot_loop", "plot_loops", "plot_bode", "plot_residuals"]
 
@@ -93,7 +95,7 @@ def plot_bode(result: IdentificationResult, axes: Optional[Sequence[Axes]] = Non
         # Put each estimated phase on the truth's branch so that the points sit on the curve.
         _, ph_true = result.truth.plant.linear.gain_phase(w)
         phases = ph_true + (np.pi - np.mod(np.pi - (phases - ph_true), 2 * np.pi))
-    z = 1.959963984540054  # 95 % two-sided normal quantile
+    z = z_value(0.95)
     g_err = [z * (e.gain_se or 0.0) for e in result.experiments]
     p_err = [z * (e.phase_se or 0.0) for e in result.experiments]
     label = "identified (95 % CI)" if result.standard_errors is not None else "identified"

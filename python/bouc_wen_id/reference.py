@@ -19,15 +19,17 @@ from numpy.typing import ArrayLike, NDArray
 
 from .errors import BoucWenIdError as BoucWenIdErrorBase
 from .errors import (
-    ImproperTransferFunctionError,
     InsufficientDataError,
     InvalidParameterError,
     NonFiniteError,
     SearchAtBoundError,
     SingularNormalMatrixError,
-    UnstableSystemError,
     ZeroAmplitudeError,
 )
+from .validation import MIN_AVERAGE_SAMPLES, check_transfer_function, routh_hurwitz_stable
+from .validation import check_bouc_wen as _check_bouc_wen
+from .validation import finite_array as _finite_array
+from .validation import finite_scalar as _finite_scalar
 
 __all__ = [
     "realize",
@@ -59,51 +61,9 @@ RCOND_MIN = 1e-12
 GOLDEN_MAX_ITER = 200
 
 
-def _finite_array(name: str, values: ArrayLike) -> FloatArray:
-    arr = np.asarray(values, dtype=np.float64)
-    if arr.ndim != 1:
-        raise InvalidParameterError(f"{name} must be a 1-D array, got shape {arr.shape}")
-    if not np.all(np.isfinite(arr)):
-        bad = int(np.flatnonzero(~np.isfinite(arr))[0])
-        raise NonFiniteError(f"{name} holds a non-finite value at index {bad}; clean or drop it first")
-    return arr
-
-
-def _finite_scalar(name: str, value: float) -> float:
-    v = float(value)
-    if not np.isfinite(v):
-        raise NonFiniteError(f"{name} = {v} is not finite")
-    return v
-
-
 # --------------------------------------------------------------------------------------------------
 # 1. Linear part: validation and controllable canonical realisation
 # --------------------------------------------------------------------------------------------------
-
-
-def routh_hurwitz_stable(den: ArrayLike) -> bool:
-    """True when every root of ``den`` (highest power first) has a strictly negative real part."""
-    a = np.asarray(den, dtype=np.float64)
-    a = a / a[0]
-    n = a.size - 1
-    if n == 0:
-        return True
-    # Build the Routh array row by row; stability <=> every first-column entry is > 0.
-    row_prev = a[0::2].copy()
-    row_cur = a[1::2].copy()
-    width = row_prev.size
-    row_prev = np.pad(row_prev, (0, width - row_prev.size))
-    row_cur = np.pad(row_cur, (0, width - row_cur.size))
-    firsts = [row_prev[0], row_cur[0]]
-    for _ in range(n - 1):
-        if row_cur[0] <= 0.0:
-            return False
-        nxt = np.zeros(width)
-        for j in range(width - 1):
-            nxt[j] = (row_cur[0] * row_prev[j + 1] - row_prev[0] * row_cur[j + 1]) / row_cur[0]
-        row_prev, row_cur = row_cur, nxt
-        firsts.append(row_cur[0])
-    return all(f > 0.0 for f in firsts)
 
 
 def realize(
@@ -114,48 +74,13 @@ def realize(
     Returns ``(a, c, d, delay)`` where ``a`` holds the monic denominator's coefficients ``a_1..a_n`` (the
     companion matrix's first row is ``-a``), ``c`` the output row and ``d`` the feed-through.
     """
-    b = _finite_array("num", num)
-    a = _finite_array("den", den)
-    delay = _finite_scalar("delay", delay)
-    if delay < 0.0:
-        raise InvalidParameterError(f"delay = {delay} s is negative; a pure delay must be >= 0")
-    if a.size == 0 or a[0] == 0.0:
-        raise ImproperTransferFunctionError(
-            "den must start with a non-zero coefficient (highest power of s first)"
-        )
-    nz = np.flatnonzero(b)
-    b = b[nz[0] :] if nz.size else np.zeros(1)
-    if b.size > a.size:
-        raise ImproperTransferFunctionError(
-            f"G(s) is improper: numerator degree {b.size - 1} > denominator degree {a.size - 1}; "
-            "a physical linear part must be proper"
-        )
-    if not routh_hurwitz_stable(a):
-        raise UnstableSystemError(
-            f"G(s) is not asymptotically stable: den = {a.tolist()} has a root with Re >= 0 "
-            "(Routh-Hurwitz); the sine steady state the method relies on does not exist"
-        )
+    b, a, delay = check_transfer_function(num, den, delay)
     n = a.size - 1
     an = a / a[0]
     bn = np.concatenate([np.zeros(n + 1 - b.size), b]) / a[0]
     d = float(bn[0])
     c = bn[1:] - d * an[1:]
     return an[1:].copy(), c, d, delay
-
-
-def _check_bouc_wen(alpha: float, beta: float, gamma: float, mu: float, w0: float) -> None:
-    for name, v in (("alpha", alpha), ("beta", beta), ("gamma", gamma), ("mu", mu), ("w0", w0)):
-        _finite_scalar(name, v)
-    if alpha <= 0.0:
-        raise InvalidParameterError(f"alpha = {alpha} must be > 0")
-    if beta + gamma <= 0.0:
-        raise InvalidParameterError(
-            f"beta + gamma = {beta + gamma} must be > 0 for a bounded Bouc-Wen output (Proposition 1)"
-        )
-    if beta - gamma < 0.0:
-        raise InvalidParameterError(f"beta - gamma = {beta - gamma} must be >= 0 (eq. 2a conditions)")
-    if mu < 1.0:
-        raise InvalidParameterError(f"mu = {mu} must be >= 1")
 
 
 def _bw_rate(xdot: float, w: float, alpha: float, beta: float, gamma: float, mu: float) -> float:
@@ -308,8 +233,10 @@ def periodic_average(y: ArrayLike, samples_per_period: int, settle_periods: int,
     """Periodic average (4a-b) over ``periods`` whole periods after ``settle_periods`` dropped ones."""
     yy = _finite_array("y", y)
     p, s, n = int(samples_per_period), int(settle_periods), int(periods)
-    if p < 4:
-        raise InsufficientDataError(f"samples_per_period = {p}: at least 4 samples per period are needed")
+    if p < MIN_AVERAGE_SAMPLES:
+        raise InsufficientDataError(
+            f"samples_per_period = {p}: at least {MIN_AVERAGE_SAMPLES} samples per period are needed"
+        )
     if n < 1:
         raise InsufficientDataError(f"periods = {n}: at least one period must be averaged")
     if s < 0:
@@ -327,8 +254,8 @@ def periodic_average(y: ArrayLike, samples_per_period: int, settle_periods: int,
 def phase_from_max(ybar: ArrayLike) -> float:
     """Phase estimator (9): ``omega * t_max = 2 pi j*/P`` with ``j*`` the first maximum of ``ybar``."""
     yb = _finite_array("ybar", ybar)
-    if yb.size < 4:
-        raise InsufficientDataError("ybar needs at least 4 samples")
+    if yb.size < MIN_AVERAGE_SAMPLES:
+        raise InsufficientDataError(f"ybar needs at least {MIN_AVERAGE_SAMPLES} samples")
     if np.ptp(yb) == 0.0:
         raise ZeroAmplitudeError("the averaged output is constant: it has no maximum to time the phase by")
     return 2.0 * np.pi * int(np.argmax(yb)) / yb.size
@@ -370,8 +297,8 @@ def _sls_inputs(
     yd = _finite_array("ydot", ydot)
     if yb.size != yd.size:
         raise InvalidParameterError(f"ybar ({yb.size}) and ydot ({yd.size}) must have the same length")
-    if yb.size < 4:
-        raise InsufficientDataError("ybar needs at least 4 samples per period")
+    if yb.size < MIN_AVERAGE_SAMPLES:
+        raise InsufficientDataError(f"ybar needs at least {MIN_AVERAGE_SAMPLES} samples per period")
     amplitude = _finite_scalar("amplitude", amplitude)
     omega = _finite_scalar("omega", omega)
     phi = _finite_scalar("phi", phi)
@@ -596,8 +523,8 @@ def steady_loop(
     if amplitude == 0.0:
         raise ZeroAmplitudeError("the amplitude of x is 0: the loop is a point")
     p = int(samples_per_period)
-    if p < 4:
-        raise InsufficientDataError(f"samples_per_period = {p}: at least 4 are needed")
+    if p < MIN_AVERAGE_SAMPLES:
+        raise InsufficientDataError(f"samples_per_period = {p}: at least {MIN_AVERAGE_SAMPLES} are needed")
     if substeps < 1:
         raise InvalidParameterError(f"substeps = {substeps} must be >= 1")
     phi = float(np.mod(phi, 2.0 * np.pi))

@@ -12,6 +12,7 @@ from numpy.typing import ArrayLike, NDArray
 from ._backend import Backend, get_backend
 from .errors import InvalidParameterError
 from .model import Recording, SinePlan, WienerPlant
+from .validation import EXACT_GRID_RTOL, check_time_axis, finite_array
 
 __all__ = ["simulate", "simulate_input"]
 
@@ -118,7 +119,8 @@ def simulate_input(
     Raises
     ------
     InvalidParameterError
-        ``t`` and ``u`` of unequal lengths, fewer than 2 samples, or a time axis that is not uniform.
+        ``t`` and ``u`` of unequal lengths, fewer than 2 samples, or a time axis that is not uniform
+        (:class:`TimeAxisError`, to ``validation.EXACT_GRID_RTOL``).
     """
     core = get_backend(backend)
     tt = np.asarray(t, dtype=np.float64)
@@ -127,10 +129,8 @@ def simulate_input(
         raise InvalidParameterError(
             f"t and u must be 1-D of equal lengths >= 2, got shapes {tt.shape} and {uu.shape}"
         )
-    steps = np.diff(tt)
-    dt = float(np.mean(steps))
-    if not dt > 0 or float(np.max(np.abs(steps - dt))) > 1e-6 * dt:
-        raise InvalidParameterError("t must be strictly increasing with a constant step (to 1e-6)")
+    check_time_axis(finite_array("t", tt), rtol=EXACT_GRID_RTOL)
+    dt = float(np.mean(np.diff(tt)))
     h, lin = plant.hysteresis, plant.linear
     x, w = core.simulate_sampled(
         lin.num, lin.den, lin.delay, h.alpha, h.beta, h.gamma, h.mu, h.w0, uu, dt, int(substeps)

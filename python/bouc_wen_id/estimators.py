@@ -1,0 +1,433 @@
+"""The estimators: the paper's separable fit, its phase-profiled form, and the joint output-error refinement.
+
+All work on :class:`~bouc_wen_id.prepare.Prepared` experiments in scaled units (see
+:func:`~bouc_wen_id.prepare.scale`), with phases local to each averaged window's first sample.
+
+``"paper"``
+    Phase from the averaged output's maximum (9), golden-section search of the separable least-squares
+    cost (21) over mu with ``sgn(d ybar/dt)`` in the regressor (18)-(24), and the gain (27b) elsewhere.
+``"profile"``
+    The same cost profiled over the phase (Proposition 2), at every frequency.
+``"refined"``
+    The profile estimates as a start, then Levenberg-Marquardt on the steady loops of every experiment at
+    once (design.md section 7), safeguarded by generic starts against wrong basins.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any, Optional
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .errors import BoucWenIdError, InsufficientDataError, SearchAtBoundError
+from .prepare import Prepared
+from .result import Adequacy
+
+__all__ = ["Fit", "Start", "LMRun", "fit", "refine", "adequacy", "linear_nrmse", "loop_fit", "weights"]
+
+FloatArray = NDArray[np.float64]
+TWO_PI = 2.0 * math.pi
+
+#: Smallest margin of beta over |gamma| the refinement starts from (no steady loop below 0).
+MIN_BETA_PLUS_GAMMA = 1e-3
+#: The refinement starts at least this fraction of the mu bracket away from its ends.
+START_MU_MARGIN = 1e-2
+#: A refined mu closer than this fraction of the bracket to one of its ends is "at the bound".
+AT_BOUND_FRACTION = 1e-4
+#: Below this noise sd relative to the loop's peak, data count as noise-free (no adequacy test).
+NOISE_FREE_RTOL = 1e-9
+#: Generic starts of the joint fit (see :func:`_generic_starts`): mu values, gamma/beta ratios, and the
+#: depth of saturation A / w_sat.
+START_MUS = (1.15, 1.6, 2.5, 5.0)
+START_RATIOS = (0.5, -0.5)
+START_DEPTHS = (1.5, 4.0)
+#: LM iterations of each generic start's screening fit (the best one is then run to convergence).
+SCREEN_ITER = 25
+#: Assumed lag (rad) of the loop's fundamental behind x for the generic starts.
+START_LAG = 0.3
+#: A fit is checked from the generic starts when it ends this close (relative) to beta = |gamma|.
+ON_CONSTRAINT_RTOL = 1e-6
+#: RK4 steps per period of the steady-loop solver: a step of at most 2 pi / 2048 rad.
+STEADY_STEPS_PER_PERIOD = 2048
+
+
+@dataclass(frozen=True)
+class Start:
+    """A starting point of the joint fit: shared ``beta, gamma, mu`` and per-experiment ``|G|, phi``."""
+
+    beta: float
+    gamma: float
+    mu: float
+    gains: FloatArray
+    phis: FloatArray
+
+
+@dataclass(frozen=True)
+class LMRun:
+    """One Levenberg-Marquardt run of the core's ``refine``.
+
+    ``params`` is ``[beta, gamma, mu, g_0, phi_0, g_1, phi_1, ...]``; ``fisher`` the Gauss-Newton
+    information matrix at the end; ``loops`` the fitted steady loops.
+    """
+
+    params: FloatArray
+    cost: float
+    iterations: int
+    converged: bool
+    fisher: FloatArray
+    loops: list[FloatArray]
+
+    @classmethod
+    def from_core(cls, out: tuple[Any, ...]) -> LMRun:
+        params, cost, iterations, converged, fisher, loops = out
+        return cls(
+            np.asarray(params),
+            float(cost),
+            int(iterations),
+            bool(converged),
+            np.asarray(fisher),
+            [np.asarray(w) for w in loops],
+        )
+
+    def start(self) -> Start:
+        """The run's end as a start of another run."""
+        p = self.params
+        return Start(float(p[0]), float(p[1]), float(p[2]), p[3::2].copy(), p[4::2].copy())
+
+
+@dataclass
+class Fit:
+    """Estimates in the scaled units the estimators worked in."""
+
+    beta: float
+    gamma: float
+    mu: float
+    gains: FloatArray
+    phis: FloatArray
+    cost: float
+    iterations: int
+    cov: Optional[FloatArray]
+    loops: list[Optional[FloatArray]]
+
+
+def steady_substeps(p: int) -> int:
+    """RK4 steps per sample of the steady-loop solver on ``p`` samples per period."""
+    return max(2, math.ceil(STEADY_STEPS_PER_PERIOD / p))
+
+
+def loop_fit(
+    core: Any, e: Prepared, gain: float, phi_local: float, beta: float, gamma: float, mu: float
+) -> tuple[Optional[FloatArray], float]:
+    """The identified model's steady loop on the data grid and its NRMSE against ybar."""
+    try:
+        w = np.asarray(
+            core.steady_loop(e.amplitude * gain, beta, gamma, mu, phi_local, e.p, steady_substeps(e.p))[0]
+        )
+    except BoucWenIdError:
+        return None, math.nan
+    spread = float(np.linalg.norm(e.ybar - e.ybar.mean()))
+    return w, float(np.linalg.norm(e.ybar - w)) / spread if spread > 0 else math.nan
+
+
+def weights(prepared: Sequence[Prepared]) -> FloatArray:
+    """N / sigma^2 per experiment; the variance is floored at rounding level for noise-free data."""
+    out = []
+    for e in prepared:
+        floor = (1e-13 * float(np.max(np.abs(e.ybar)))) ** 2 + np.finfo(float).tiny
+        out.append(e.n / max(e.noise_var, floor))
+    return np.array(out)
+
+
+def adequacy(
+    prepared: Sequence[Prepared], loops: Sequence[Optional[FloatArray]], n_params: int
+) -> Optional[Adequacy]:
+    """The F-test of the fitted loops' residual power against the noise floor (None when it cannot be run)."""
+    fitted = [w for w in loops if w is not None]
+    if len(fitted) != len(loops) or any(not math.isfinite(e.noise_var) for e in prepared):
+        return None
+    if any(e.noise_var <= (NOISE_FREE_RTOL * float(np.max(np.abs(e.ybar)))) ** 2 for e in prepared):
+        # Noise-free (simulated) data: the floor is rounding, and any discretisation error "rejects".
+        return None
+    # scipy.special, not scipy.stats: the latter takes over a second to import.
+    from scipy.special import fdtrc  # type: ignore[import-untyped]
+
+    wts = weights(prepared)
+    statistic = float(sum(wt * np.sum((e.ybar - w) ** 2) for wt, e, w in zip(wts, prepared, fitted)))
+    dof = sum(e.p for e in prepared) - n_params
+    noise_dof = sum(e.noise_dof for e in prepared)
+    if dof < 1:
+        return None
+    p_value = float(fdtrc(dof, noise_dof, statistic / dof))
+    return Adequacy(statistic, dof, noise_dof, p_value)
+
+
+def fit(
+    prepared: Sequence[Prepared],
+    core: Any,
+    method: str,
+    reference: int,
+    lo: float,
+    hi: float,
+    tol: float,
+    phase_grid: int,
+    max_iter: int,
+) -> Fit:
+    """Run the chosen estimator; phases are local (relative to each averaged window's first sample).
+
+    Raises
+    ------
+    SearchAtBoundError
+        mu ended on an end of its bracket; at mu = 1, the model's own limit, the message says what that
+        means for the data.
+    """
+    try:
+        if method == "paper":
+            return _with_loops(prepared, core, *_paper(prepared, core, reference, lo, hi, tol))
+        try:
+            start, cost = _profile(prepared, core, reference, lo, hi, tol, phase_grid)
+        except SearchAtBoundError as exc:
+            # The separable fit is only the refinement's start: when it runs to mu's lower end, the
+            # output-error fit still gets its chance from generic starts (and is refused only if it
+            # ends there too).
+            if method != "refined" or not exc.lower:
+                raise
+            return refine(prepared, core, None, lo, hi, max_iter, profile_error=exc)
+        if method != "refined":
+            return _with_loops(prepared, core, start, cost, 0)
+        return refine(prepared, core, start, lo, hi, max_iter)
+    except SearchAtBoundError as exc:
+        if not (exc.lower and exc.bound is not None and exc.bound <= 1.0):
+            raise
+        raise _at_model_limit(exc) from exc
+
+
+def _at_model_limit(exc: SearchAtBoundError) -> SearchAtBoundError:
+    """mu = 1 is the model's own limit, so "widen the bracket" is no advice there: say what it means."""
+    err = SearchAtBoundError(
+        "the fit drove mu to 1, the lower end of the model's range (mu > 1): the data turn at each "
+        "reversal in a way no Bouc-Wen loop with mu > 1 draws (typically a force that jumps at the "
+        "reversal, as Coulomb friction, or keeps growing with velocity, as viscous damping beside "
+        "friction in MR dampers). The plain Wiener-Bouc-Wen model does not describe these data; the "
+        "physics it leaves out must be modelled"
+    )
+    err.lower, err.bound = exc.lower, exc.bound
+    return err
+
+
+def _paper(
+    prepared: Sequence[Prepared], core: Any, reference: int, lo: float, hi: float, tol: float
+) -> tuple[Start, float, int]:
+    """The seed paper's estimator: phase (9), separable search (18)-(24), gains (27b)."""
+    ref = prepared[reference]
+    phis = np.array([float(core.phase_from_max(e.ybar)) for e in prepared])
+    mu, theta, cost, iterations = core.sls_search(
+        ref.ybar, ref.ydot, ref.amplitude, ref.frequency, phis[reference], lo, hi, tol
+    )
+    theta = np.asarray(theta)
+    beta, gamma = float(theta[1] / theta[0]), float(theta[2] / theta[0])
+    gains = np.zeros(len(prepared))
+    for i, e in enumerate(prepared):
+        gains[i] = (
+            float(theta[0])
+            if i == reference
+            else float(core.gain_estimate(e.ybar, e.ydot, e.amplitude, e.frequency, phis[i], beta, gamma, mu))
+        )
+    return Start(beta, gamma, float(mu), gains, phis), float(cost), int(iterations)
+
+
+def _profile(
+    prepared: Sequence[Prepared], core: Any, reference: int, lo: float, hi: float, tol: float, phase_grid: int
+) -> tuple[Start, float]:
+    """The separable fit profiled over the phase on the reference, then gain and phase elsewhere."""
+    ref = prepared[reference]
+    phi_r, mu, g_r, beta, gamma, cost, _ = core.profile_phase_sls(
+        ref.ybar, ref.ydot, ref.amplitude, ref.frequency, lo, hi, tol, phase_grid
+    )
+    m = len(prepared)
+    gains, phis = np.zeros(m), np.zeros(m)
+    for i, e in enumerate(prepared):
+        if i == reference:
+            gains[i], phis[i] = g_r, phi_r
+        else:
+            gains[i], phis[i], _ = core.profile_phase_gain(
+                e.ybar, e.ydot, e.amplitude, e.frequency, beta, gamma, mu, phase_grid
+            )
+    return Start(float(beta), float(gamma), float(mu), gains, phis), float(cost)
+
+
+def _with_loops(prepared: Sequence[Prepared], core: Any, est: Start, cost: float, iterations: int) -> Fit:
+    """A separable fit's estimates with the steady loops they draw (no covariance)."""
+    loops = [
+        loop_fit(core, e, est.gains[i], est.phis[i], est.beta, est.gamma, est.mu)[0]
+        for i, e in enumerate(prepared)
+    ]
+    return Fit(est.beta, est.gamma, est.mu, est.gains, est.phis, cost, iterations, None, loops)
+
+
+def _fundamental(ybar: FloatArray) -> complex:
+    """``c`` with ``ybar`` ~ Re(c exp(i 2 pi j / P)): the averaged output's first harmonic."""
+    return complex(2.0 * np.fft.rfft(ybar)[1] / ybar.size)
+
+
+def _linear_residual(ybar: FloatArray) -> FloatArray:
+    """``ybar`` minus its fundamental: the residual of the best linear (spring + dashpot) model."""
+    theta = TWO_PI * np.arange(ybar.size) / ybar.size
+    out: FloatArray = ybar - np.real(_fundamental(ybar) * np.exp(1j * theta))
+    return out
+
+
+def linear_nrmse(ybar: FloatArray) -> float:
+    """NRMSE of ybar's fundamental alone (the best linear model) against ybar, as ``nrmse``."""
+    spread = float(np.linalg.norm(ybar - ybar.mean()))
+    if spread == 0.0:
+        return math.nan
+    return float(np.linalg.norm(_linear_residual(ybar))) / spread
+
+
+def _linear_cost(prepared: Sequence[Prepared], wts: FloatArray) -> float:
+    """The weighted cost of the best linear (spring + dashpot) model: each ybar's fundamental alone.
+
+    A Bouc-Wen loop driven far below saturation is x itself, of any amplitude and phase, so the joint
+    fit can always reach this cost; a fit above it sits in a wrong basin.
+    """
+    return sum(float(wt) * float(np.sum(_linear_residual(e.ybar) ** 2)) for e, wt in zip(prepared, wts))
+
+
+def _generic_starts(prepared: Sequence[Prepared], lo: float, hi: float) -> list[Start]:
+    """Starting points spread over the shapes a Bouc-Wen loop can take, scaled to the data.
+
+    The saturation level ``w_sat = (beta + gamma)^(-1/mu)`` is set a little above the largest averaged
+    output; each experiment's x reaches ``depth`` times its loop's amplitude, with the phase of its
+    fundamental less a typical hysteretic lag.
+    """
+    fund = [_fundamental(e.ybar) for e in prepared]
+    peak = max(max(float(np.max(np.abs(e.ybar))) for e in prepared), 1e-300)
+    margin = START_MU_MARGIN * (hi - lo)
+    starts = []
+    for mu in START_MUS:
+        mu = min(max(mu, lo + margin), hi - margin)
+        total = (1.1 * peak) ** (-mu)
+        for ratio in START_RATIOS:
+            beta = total / (1.0 + ratio)
+            gamma = ratio * beta
+            for depth in START_DEPTHS:
+                gains = np.array([depth * 1.1 * abs(c) / e.amplitude for c, e in zip(fund, prepared)])
+                phis = np.array([-math.atan2(c.imag, c.real) - START_LAG for c in fund])
+                starts.append(Start(beta, gamma, mu, gains, phis))
+    return starts
+
+
+def on_constraint(beta: float, gamma: float) -> bool:
+    """True when ``(beta, gamma)`` lies on the Bouc-Wen constraint beta = |gamma| (to rounding)."""
+    return beta - abs(gamma) <= ON_CONSTRAINT_RTOL * max(abs(beta), abs(gamma), 1e-300)
+
+
+def refine(
+    prepared: Sequence[Prepared],
+    core: Any,
+    start: Optional[Start],
+    lo: float,
+    hi: float,
+    max_iter: int,
+    profile_error: Optional[SearchAtBoundError] = None,
+) -> Fit:
+    """The joint output-error fit from ``start`` (the profile estimates), safeguarded by generic starts.
+
+    The generic starts run when there is no profile start (its mu ran to the lower bound), or when the
+    fit from it ends on the Bouc-Wen constraint beta = |gamma| or costs more than the best linear model
+    (both signs of a wrong basin); the lowest cost wins.
+    """
+    short = [e.source for e in prepared if e.n < 2]
+    if short:
+        raise InsufficientDataError(
+            f"method='refined' estimates the noise floor from the period-to-period spread and needs at "
+            f"least 2 averaged periods; {', '.join(short)} have fewer. Use method='paper' or record longer"
+        )
+    wts = weights(prepared)
+    substeps = max(steady_substeps(e.p) for e in prepared)
+    margin = START_MU_MARGIN * (hi - lo)
+
+    def run(s: Start, iters: int = max_iter) -> Optional[LMRun]:
+        # The separable fit knows nothing of the Bouc-Wen conditions (beta >= |gamma|) and a loop too
+        # linear to fix beta + gamma can put it outside them, where no steady loop exists: start the
+        # joint fit just inside, and within the mu bracket, and let the data speak.
+        beta = max(s.beta, abs(s.gamma) + MIN_BETA_PLUS_GAMMA)
+        mu = min(max(s.mu, lo + margin), hi - margin)
+        try:
+            out = core.refine(
+                [e.ybar for e in prepared],
+                [e.amplitude for e in prepared],
+                wts,
+                beta,
+                s.gamma,
+                mu,
+                s.gains,
+                s.phis,
+                max_iter=iters,
+                substeps=substeps,
+                mu_lo=lo,
+                mu_hi=hi,
+            )
+        except BoucWenIdError:
+            if start is None:
+                return None  # a generic start that is no valid loop: the others decide
+            raise
+        return LMRun.from_core(out)
+
+    best = None if start is None else run(start)
+    linear = _linear_cost(prepared, wts)
+
+    def suspicious(r: LMRun) -> bool:
+        return on_constraint(float(r.params[0]), float(r.params[1])) or r.cost > linear
+
+    if best is None or suspicious(best):
+        # Screen every generic start with a short fit, then finish the most promising one.
+        screened: Optional[LMRun] = None
+        for candidate in _generic_starts(prepared, lo, hi):
+            out = run(candidate, iters=min(SCREEN_ITER, max_iter))
+            if out is not None and (screened is None or out.cost < screened.cost):
+                screened = out
+        if screened is not None and (best is None or screened.cost < best.cost):
+            final = run(screened.start())
+            best = final if final is not None and final.cost <= screened.cost else screened
+    if best is None:
+        if profile_error is not None:
+            raise profile_error
+        raise SearchAtBoundError("no start of the joint fit gave a valid steady loop")
+    return _refined_fit(best, len(prepared), lo, hi)
+
+
+def _refined_fit(best: LMRun, m: int, lo: float, hi: float) -> Fit:
+    """The winning run as a :class:`Fit` with its covariance, on the canonical branch (|G| > 0).
+
+    Raises
+    ------
+    SearchAtBoundError
+        mu ended on an end of its bracket.
+    """
+    beta, gamma, mu = (float(v) for v in best.params[:3])
+    if min(mu - lo, hi - mu) <= AT_BOUND_FRACTION * (hi - lo):
+        lower = mu - lo <= hi - mu
+        err = SearchAtBoundError(
+            f"the joint fit ended on the {'lower' if lower else 'upper'} end of the mu bracket "
+            f"[{lo}, {hi}] (mu = {mu:.6g}); widen the bracket, or check that the data excite the "
+            "hysteresis"
+        )
+        err.lower, err.bound = lower, lo if lower else hi
+        raise err
+    gains = best.params[3::2].copy()
+    phis = best.params[4::2].copy()
+    # Flip the sign of g_i rows/columns where the canonical branch (|G| > 0) is reported.
+    flip = np.ones(3 + 2 * m)
+    flip[3::2] = np.where(gains < 0, -1.0, 1.0)
+    fisher = best.fisher * np.outer(flip, flip)
+    try:
+        cov = np.asarray(np.linalg.inv(fisher), dtype=np.float64)
+    except np.linalg.LinAlgError:
+        cov = np.full_like(fisher, np.nan)
+    loops: list[Optional[FloatArray]] = list(best.loops)
+    return Fit(beta, gamma, mu, gains, phis, best.cost, best.iterations, cov, loops)

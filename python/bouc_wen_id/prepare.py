@@ -1,0 +1,293 @@
+"""Experiment preparation: from recordings, measurements or averaged periods to what the estimators need.
+
+Each experiment becomes one :class:`Prepared` record: its averaged period ``ybar`` (the paper's periodic
+average (4a-b) for a :class:`~bouc_wen_id.model.Recording`, the synchronous average of every steady segment
+for a :class:`~bouc_wen_id.measurement.Measurement`), the spectral derivative, the noise variance from the
+period-to-period spread, and the harmonics kept.  :func:`scale` then expresses them in units of order one.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, Optional
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .errors import (
+    FrequencyMismatchError,
+    InsufficientDataError,
+    InvalidParameterError,
+    ZeroAmplitudeError,
+)
+from .model import Recording, WienerPlant
+from .validation import HARMONIC_SNR
+
+if TYPE_CHECKING:  # pragma: no cover - typing only
+    from .signal import AveragedPeriod
+
+__all__ = [
+    "Prepared",
+    "Scales",
+    "prepare",
+    "scale",
+    "check_input",
+    "noise_variance",
+    "auto_harmonics",
+]
+
+FloatArray = NDArray[np.float64]
+
+#: Largest relative misfit of ``u`` to ``U cos(omega t)`` before the stated frequency is called wrong.
+INPUT_MISFIT_MAX = 0.05
+#: Largest phase (rad) of the recorded input relative to ``cos(omega t)`` on the given time axis.
+INPUT_PHASE_MAX = 0.02
+#: Range of output and input scales identify accepts: beyond it, squares of the data leave the
+#: floating-point range (s^2 underflows below 1e-154) and s^mu with mu up to 10 overflows past 1e30.
+SCALE_MIN, SCALE_MAX = 1e-30, 1e30
+
+
+def check_input(rec: Recording, start: int, stop: int) -> None:
+    """Refuse a recording whose ``u`` is not ``U cos(omega t)`` on its own time axis.
+
+    Over whole periods, cos, sin and the constant are orthogonal on the sample grid, so their
+    least-squares coefficients are plain projections (no linear solve needed).
+    """
+    t = rec.t[start:stop]
+    u = rec.u[start:stop]
+    c, s = np.cos(rec.frequency * t), np.sin(rec.frequency * t)
+    a_cos = 2.0 * float(np.dot(u, c)) / u.size
+    a_sin = 2.0 * float(np.dot(u, s)) / u.size
+    centred = u - u.mean()
+    spread = float(np.dot(centred, centred))
+    fitted = 0.5 * u.size * (a_cos**2 + a_sin**2)
+    misfit = math.sqrt(max(spread - fitted, 0.0) / spread) if spread > 0 else math.inf
+    if misfit > INPUT_MISFIT_MAX:
+        raise FrequencyMismatchError(
+            f"the recorded input is not a sine at omega = {rec.frequency:.6g} rad/s "
+            f"(relative misfit {misfit:.2g} > {INPUT_MISFIT_MAX}); check the stated frequency and its units"
+        )
+    amp = math.hypot(a_cos, a_sin)
+    if abs(amp - abs(rec.amplitude)) > INPUT_MISFIT_MAX * abs(rec.amplitude):
+        raise InvalidParameterError(
+            f"the stated amplitude U = {rec.amplitude:.6g} does not match the recorded input's {amp:.6g}"
+        )
+    phase = math.atan2(a_sin, a_cos * np.sign(rec.amplitude))
+    if abs(phase) > INPUT_PHASE_MAX:
+        raise InvalidParameterError(
+            f"the recorded input is U cos(omega t - {phase:.3g}) rather than U cos(omega t) on its time "
+            "axis; shift the time column so that the input peaks at t = 0"
+        )
+
+
+def noise_variance(y: FloatArray, samples_per_period: int, settle_periods: int, periods: int) -> float:
+    """Noise variance from the period-to-period spread of the raw samples (needs >= 2 periods).
+
+    ``sum_j sum_k (y_kj - ybar_j)^2 / (P (N - 1))``: unbiased for white noise, free of the signal.
+    """
+    if periods < 2:
+        return math.nan
+    p = samples_per_period
+    seg = np.asarray(y[settle_periods * p : (settle_periods + periods) * p]).reshape(periods, p)
+    return float(np.mean(np.var(seg, axis=0, ddof=1)))
+
+
+def auto_harmonics(ybar: FloatArray, noise_var: float, periods: float) -> int:
+    """Highest harmonic of ``ybar`` standing above the noise floor (all of them when noise-free)."""
+    p = ybar.size
+    k_max = (p - 1) // 2
+    if not math.isfinite(noise_var) or noise_var <= 0.0:
+        return k_max
+    power = np.abs(np.fft.rfft(ybar)[1 : k_max + 1] / p) ** 2
+    above = np.flatnonzero(power > HARMONIC_SNR * noise_var / (periods * p))
+    return int(above[-1]) + 1 if above.size else 1
+
+
+@dataclass(frozen=True)
+class Prepared:
+    """One experiment reduced to its averaged period and what the estimators need of it."""
+
+    amplitude: float
+    frequency: float
+    #: Added to the local phase (that of the averaged window's first sample) to give the phase of G.
+    phase_shift: float
+    #: Points of the averaged period.
+    p: int
+    #: Settling periods dropped (0 for lab data, whose steady stretch is detected).
+    s: int
+    #: Periods averaged (effective, for lab data).
+    n: float
+    #: Harmonics kept in the spectral derivative.
+    k: int
+    ybar: FloatArray
+    ydot: FloatArray
+    noise_var: float
+    noise_dof: int
+    plant: Optional[WienerPlant]
+    source: str
+
+
+def _harmonics(harmonics: int | str, ybar: FloatArray, noise_var: float, n: float) -> int:
+    p = ybar.size
+    if harmonics == "auto":
+        return auto_harmonics(ybar, noise_var, n)
+    if harmonics == "all":
+        return (p - 1) // 2
+    if isinstance(harmonics, (int, np.integer)) and not isinstance(harmonics, bool):
+        return int(harmonics)
+    raise InvalidParameterError(f"harmonics must be 'auto', 'all' or an int, got {harmonics!r}")
+
+
+def _prepare_recording(
+    i: int,
+    rec: Recording,
+    core: Any,
+    settle_periods: Optional[int],
+    periods: Optional[int],
+    harmonics: int | str,
+) -> Prepared:
+    """The paper's path: a whole number of samples per period and the periodic average (4a-b)."""
+    p = rec.samples_per_period
+    s = rec.settle_periods if settle_periods is None else int(settle_periods)
+    if s < 0:
+        raise InvalidParameterError(f"settle_periods = {s} must be >= 0")
+    n = rec.whole_periods - s if periods is None else int(periods)
+    if n < 1 or s + n > rec.whole_periods:
+        raise InsufficientDataError(
+            f"recording {i} holds {rec.whole_periods} whole periods; {s} settling + {max(n, 1)} averaged "
+            "periods do not fit. Record longer or lower settle_periods/periods"
+        )
+    check_input(rec, s * p, (s + n) * p)
+    ybar = np.asarray(core.periodic_average(np.ascontiguousarray(rec.y), p, s, n))
+    noise_var = noise_variance(rec.y, p, s, n)
+    k = _harmonics(harmonics, ybar, noise_var, n)
+    ydot = np.asarray(core.spectral_derivative(ybar, rec.frequency, k))
+    # The averaged window starts at t[0] + s whole periods: the local phase is shifted by omega t[0].
+    return Prepared(
+        amplitude=rec.amplitude,
+        frequency=rec.frequency,
+        phase_shift=rec.frequency * float(rec.t[0]),
+        p=p,
+        s=s,
+        n=n,
+        k=k,
+        ybar=ybar,
+        ydot=ydot,
+        noise_var=noise_var,
+        noise_dof=p * (n - 1),
+        plant=rec.plant,
+        source=rec.metadata.get("name", f"recording {i}"),
+    )
+
+
+def _prepare_averaged(ap: AveragedPeriod, core: Any, harmonics: int | str) -> Prepared:
+    """A period averaged from lab data (any sampling rate): its grid starts at the input's phase zero."""
+    ybar = np.ascontiguousarray(ap.ybar, dtype=np.float64)
+    k = _harmonics(harmonics, ybar, ap.noise_var, ap.periods)
+    ydot = np.asarray(core.spectral_derivative(ybar, ap.frequency, k))
+    return Prepared(
+        amplitude=ap.amplitude,
+        frequency=ap.frequency,
+        phase_shift=0.0,
+        p=ybar.size,
+        s=0,
+        n=float(ap.periods),
+        k=k,
+        ybar=ybar,
+        ydot=ydot,
+        noise_var=float(ap.noise_var),
+        noise_dof=int(ap.noise_dof),
+        plant=None,
+        source=str(ap.source),
+    )
+
+
+def prepare(
+    items: Sequence[Any],
+    core: Any,
+    settle_periods: Optional[int],
+    periods: Optional[int],
+    harmonics: int | str,
+) -> list[Prepared]:
+    """One :class:`Prepared` per recording or averaged period, and per steady segment of a measurement.
+
+    Raises
+    ------
+    InvalidParameterError
+        An item of another type, or ``settle_periods``/``periods`` given for lab data.
+    InsufficientDataError
+        Nothing gave an averaged period.
+    """
+    out: list[Prepared] = []
+    for i, item in enumerate(items):
+        if isinstance(item, Recording):
+            out.append(_prepare_recording(i, item, core, settle_periods, periods, harmonics))
+            continue
+        # Lab data: imported here so that the paper's path does not pay for the preprocessing modules.
+        from .measurement import Measurement
+        from .signal import AveragedPeriod, average_measurement
+
+        if isinstance(item, (Measurement, AveragedPeriod)) and (settle_periods, periods) != (None, None):
+            raise InvalidParameterError(
+                f"item {i}: settle_periods and periods apply to Recordings only; the steady stretch of a "
+                "Measurement is detected from the data. To average a chosen stretch, call "
+                "signal.find_steady_segments and signal.synchronous_average(..., start=, stop=)"
+            )
+
+        if isinstance(item, AveragedPeriod):
+            out.append(_prepare_averaged(item, core, harmonics))
+        elif isinstance(item, Measurement):
+            out.extend(_prepare_averaged(ap, core, harmonics) for ap in average_measurement(item))
+        else:
+            raise InvalidParameterError(
+                f"item {i} is a {type(item).__name__}; identify takes Recording, Measurement or "
+                "AveragedPeriod objects"
+            )
+    if not out:
+        raise InsufficientDataError("nothing to identify: no recording gave an averaged period")
+    return out
+
+
+@dataclass(frozen=True)
+class Scales:
+    """Units in which the output and the input are of order one: ``y = y_scale y'``, ``u = u_scale u'``.
+
+    Forces of 1500 N and strokes of 5 mm then fit as well as unit-scale data; the estimates map back by
+    ``|G| = |G'| y_scale / u_scale``, ``beta = beta' / y_scale^mu``, ``gamma = gamma' / y_scale^mu``.
+    """
+
+    y: float
+    u: float
+
+
+def scale(prepared: Sequence[Prepared]) -> tuple[list[Prepared], Scales]:
+    """The experiments in units of order one, and those units.
+
+    Raises
+    ------
+    ZeroAmplitudeError
+        An output or input scale outside ``[SCALE_MIN, SCALE_MAX]``, where squares and powers of the data
+        leave the floating-point range.
+    """
+    s_y = max(float(np.max(np.abs(e.ybar))) for e in prepared) or 1.0
+    s_u = max(abs(e.amplitude) for e in prepared)
+    for what, size in (("output", s_y), ("input amplitude", s_u)):
+        if not SCALE_MIN <= size <= SCALE_MAX:
+            raise ZeroAmplitudeError(
+                f"the {what} is of size {size:.3e}, outside [{SCALE_MIN:g}, {SCALE_MAX:g}]: "
+                "express the data in units that keep it there (e.g. mm instead of km)"
+            )
+    scaled = [
+        dataclasses.replace(
+            e,
+            amplitude=e.amplitude / s_u,
+            ybar=e.ybar / s_y,
+            ydot=e.ydot / s_y,
+            noise_var=e.noise_var / s_y**2,
+        )
+        for e in prepared
+    ]
+    return scaled, Scales(s_y, s_u)
