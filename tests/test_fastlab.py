@@ -1,5 +1,5 @@
 """Parity of the Rust-backed harmonic least squares (``bouc_wen_id._fastlab``, ``rust/lab.rs``) with the NumPy
-reference paths of :mod:`bouc_wen_id.signal` (the QR of the harmonic basis and the NumPy moment loop)."""
+reference paths of ``bouc_wen_id.signal._harmonic_ls`` (the QR of the harmonic basis and the NumPy moment loop)."""
 
 from __future__ import annotations
 
@@ -7,7 +7,8 @@ import math
 
 import numpy as np
 import pytest
-from bouc_wen_id import _core, _fastlab, signal
+from bouc_wen_id import _core, _fastlab
+from bouc_wen_id.signal import _harmonic_ls as hls
 from bouc_wen_id.errors import InvalidParameterError, NonFiniteError
 from numpy.testing import assert_allclose
 
@@ -34,7 +35,7 @@ def test_moment_kernels_match_the_numpy_recurrence(seed: int) -> None:
             assert abs(complex(rr[q], ri[q]) - np.dot(y, p.conj())) <= 1e-12 * float(np.sum(np.abs(y)))
         p = p * z
     coef = np.random.default_rng(seed).standard_normal(2 * k + 1)
-    basis = signal._harmonic_basis(theta, k)
+    basis = hls.harmonic_basis(theta, k)
     assert_allclose(
         _core.harmonic_series(theta, coef), basis @ coef, rtol=0, atol=1e-11 * np.sum(np.abs(coef))
     )
@@ -46,7 +47,7 @@ def test_moment_fit_matches_the_reference(seed: int) -> None:
     k = 40 + 10 * seed
     fast = _fastlab.moment_fit(theta, y, k)
     assert fast is not None
-    r_ref, qty_ref, rss_ref = signal._moment_fit(theta, y, k)
+    r_ref, qty_ref, rss_ref = hls._moment_fit(theta, y, k)
     r, qty, rss = fast
     # Normal equations of a Gram matrix with condition ~1: the factors agree to the rounding of the
     # moments (n eps relative), far below the noise (5 %).
@@ -59,8 +60,8 @@ def test_moment_fit_matches_the_reference(seed: int) -> None:
 def test_harmonic_lsq_matches_the_qr_path(seed: int) -> None:
     theta, y = _record(seed, 20_000, 300.0 + 7.7 * seed)
     for k in (1, 4, 10):
-        coef_ref, r_ref = signal._solve_qr(signal._harmonic_basis(theta, k), y)
-        resid = y - signal._harmonic_basis(theta, k) @ coef_ref
+        coef_ref, r_ref = hls.solve_qr(hls.harmonic_basis(theta, k), y)
+        resid = y - hls.harmonic_basis(theta, k) @ coef_ref
         fast = _fastlab.harmonic_lsq(theta, y, k)
         assert fast is not None
         coef, r, rss = fast

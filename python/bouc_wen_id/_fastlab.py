@@ -1,13 +1,13 @@
 """Fast harmonic least squares for the lab preprocessing (issue #8), on the Rust moment kernels.
 
-:mod:`bouc_wen_id.signal` fits harmonic series ``c + sum_k a_k cos(k theta) + b_k sin(k theta)`` to long
-records: K <= 10 harmonics of the input in the sine analysis, up to 200 of the output in the synchronous
+``bouc_wen_id.signal._harmonic_ls`` fits harmonic series ``c + sum_k a_k cos(k theta) + b_k sin(k theta)``
+to long records: K <= 10 harmonics of the input in the sine analysis, up to 200 of the output in the synchronous
 average.  Its reference paths form the basis (O(n K)) and reduce it by Householder QR (O(n K^2)), or
-(:func:`signal._moment_fit`) build the Gram matrix from complex moments computed by a NumPy loop of 2K + 1
+(``_moment_fit``) build the Gram matrix from complex moments computed by a NumPy loop of 2K + 1
 passes over the record.  Here the moments come from one pass of ``_core.harmonic_moments`` and the
 explicit residual from ``_core.harmonic_series`` (``rust/lab.rs``); the Gram matrix (Toeplitz-plus-Hankel in
 the moments), its conditioning check and the Cholesky factor are formed exactly as in
-:func:`signal._moment_fit`.  The conditioning check is first tried by Gershgorin's theorem on the scaled
+``_moment_fit``.  The conditioning check is first tried by Gershgorin's theorem on the scaled
 Gram matrix (which certifies ``cond <= 1e4`` without an eigen-decomposition when the harmonics are nearly
 orthogonal, as over several periods); only when it cannot certify are the eigenvalues computed, so the
 decision is the reference's.
@@ -27,7 +27,7 @@ from numpy.typing import NDArray
 FloatArray = NDArray[np.float64]
 
 #: Largest condition number of the scaled Gram matrix for which the normal equations are used (as
-#: ``signal._moment_fit``).
+#: ``signal._harmonic_ls._moment_fit``).
 GRAM_COND_MAX = 1e4
 
 
@@ -37,7 +37,7 @@ def gram_from_moments(
     """Real Gram matrix of ``[1, c1, s1, c2, s2, ...]`` and ``X^T y`` from the complex moments.
 
     ``mom[q] = sum e^{i q theta}`` (q = 0..2K), ``rhs[q] = sum y e^{-i q theta}`` (q = 0..K); the same
-    formulas as :func:`bouc_wen_id.signal._moment_fit`.
+    formulas as ``signal._harmonic_ls._moment_fit``.
     """
     m = 2 * kmax + 1
     mu = np.concatenate([np.conj(mom[:0:-1]), mom])
@@ -62,7 +62,7 @@ def gram_from_moments(
 
 
 def well_conditioned(gram: FloatArray) -> bool:
-    """``cond(D^-1/2 G D^-1/2) <= 1e4`` (and positive definite), as ``signal._moment_fit`` decides it.
+    """``cond(D^-1/2 G D^-1/2) <= 1e4`` (and positive definite), as ``_harmonic_ls._moment_fit`` decides.
 
     Gershgorin first: every eigenvalue of the unit-diagonal scaled matrix lies within ``r`` of 1, ``r`` its
     largest off-diagonal absolute row sum, so ``r < 1`` and ``(1 + r)/(1 - r) <= 1e4`` certify the check.
@@ -80,7 +80,7 @@ def well_conditioned(gram: FloatArray) -> bool:
 
 
 def moment_fit(theta: FloatArray, y: FloatArray, kmax: int) -> Optional[tuple[FloatArray, FloatArray, float]]:
-    """``(R, Q^T y, residual^2)`` of the K-harmonic fit, as :func:`signal._moment_fit`; ``None`` when
+    """``(R, Q^T y, residual^2)`` of the K-harmonic fit, as ``signal._harmonic_ls._moment_fit``; ``None`` when
     ill-conditioned (use the QR path)."""
     from scipy.linalg import solve_triangular  # type: ignore[import-untyped]
 
