@@ -1,9 +1,9 @@
 """Fast harmonic least squares for the lab preprocessing (issue #8), on the Rust moment kernels.
 
 ``bouc_wen_id.signal._harmonic_ls`` fits harmonic series ``c + sum_k a_k cos(k theta) + b_k sin(k theta)``
-to long records: K <= 10 harmonics of the input in the sine analysis, up to 200 of the output in the synchronous
-average.  Its reference paths form the basis (O(n K)) and reduce it by Householder QR (O(n K^2)), or
-(``_moment_fit``) build the Gram matrix from complex moments computed by a NumPy loop of 2K + 1
+to long records: K <= 10 harmonics of the input in the sine analysis, up to 200 of the output in the
+synchronous average.  Its reference paths form the basis (O(n K)) and reduce it by Householder QR
+(O(n K^2)), or (``_moment_fit``) build the Gram matrix from complex moments computed by a NumPy loop of 2K + 1
 passes over the record.  Here the moments come from one pass of ``_core.harmonic_moments`` and the
 explicit residual from ``_core.harmonic_series`` (``rust/lab.rs``); the Gram matrix (Toeplitz-plus-Hankel in
 the moments), its conditioning check and the Cholesky factor are formed exactly as in

@@ -10,11 +10,10 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Optional
+from typing import Any, Optional
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.linalg import solve_triangular  # type: ignore[import-untyped]
 
 from .. import _fastlab
 
@@ -40,6 +39,14 @@ QR_CHUNK = 8192
 #: below.  ``False`` selects the NumPy paths throughout: the reference that tests/test_fastlab.py holds the
 #: fast path to.
 USE_RUST_KERNELS = True
+
+
+def solve_triangular(a: FloatArray, b: FloatArray, **kwargs: Any) -> Any:
+    """``scipy.linalg.solve_triangular``, imported on first use: ``import bouc_wen_id`` stays free of
+    SciPy (issue #8: import in under 0.2 s)."""
+    from scipy.linalg import solve_triangular as solve  # type: ignore[import-untyped]
+
+    return solve(a, b, **kwargs)
 
 
 def harmonic_basis(theta: FloatArray, harmonics: int) -> FloatArray:
