@@ -112,7 +112,7 @@ def test_kernels_refuse_bad_input() -> None:
 
 
 def _lab_record(seed: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
-    """20,000 samples at 317.3 (non-integer) samples per period: idle, ramps, offsets, noise, a distorted y."""
+    """20,000 samples, 317.3 (non-integer) samples per period: idle, ramps, offsets, noise, a distorted y."""
     rng = np.random.default_rng(seed)
     n, p = 20_000, 317.3 + 0.1 * seed
     omega = 2.0 * math.pi * 50.0 / p  # sampled at 50 Hz
