@@ -689,6 +689,14 @@ fn refine_many<'py>(
         .collect())
 }
 
+/// `(mu_re, mu_im, r_re, r_im)` of [`harmonic_moments`].
+type Moments<'py> = (
+    Bound<'py, PyArray1<f64>>,
+    Bound<'py, PyArray1<f64>>,
+    Bound<'py, PyArray1<f64>>,
+    Bound<'py, PyArray1<f64>>,
+);
+
 /// Complex moments of the harmonic basis (`rust/lab.rs`): `(mu_re, mu_im, r_re, r_im)` with
 /// `mu_q = sum e^{i q theta}`, `q <= 2 kmax`, and `r_q = sum y e^{-i q theta}`, `q <= kmax`.
 #[pyfunction]
@@ -697,12 +705,7 @@ fn harmonic_moments<'py>(
     theta: PyReadonlyArray1<'py, f64>,
     y: PyReadonlyArray1<'py, f64>,
     kmax: i64,
-) -> PyResult<(
-    Bound<'py, PyArray1<f64>>,
-    Bound<'py, PyArray1<f64>>,
-    Bound<'py, PyArray1<f64>>,
-    Bound<'py, PyArray1<f64>>,
-)> {
+) -> PyResult<Moments<'py>> {
     let (theta, y) = (slice("theta", &theta)?, slice("y", &y)?);
     let kmax = count("kmax", kmax, 1)?;
     let ((mr, mi), (rr, ri)) = py.detach(|| lab::harmonic_moments(theta, y, kmax))?;

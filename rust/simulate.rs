@@ -471,13 +471,13 @@ impl<const N: usize> Fixed<N> {
         let mut xdot = 0.0;
         if N > 0 {
             let mut acc = 0.0;
-            for i in 0..N {
-                acc += self.a[i] * xs[i];
+            for (ai, xi) in self.a.iter().zip(xs) {
+                acc += ai * xi;
             }
             dxs[0] = -acc + v;
             dxs[1..].copy_from_slice(&xs[..N - 1]);
-            for i in 0..N {
-                xdot += self.c[i] * dxs[i];
+            for (ci, di) in self.c.iter().zip(&dxs) {
+                xdot += ci * di;
             }
         }
         xdot += self.d * vdot;
@@ -491,8 +491,8 @@ impl<const N: usize> Fixed<N> {
     #[inline(always)]
     fn output(&self, xs: &[f64; N], v: f64) -> f64 {
         let mut acc = 0.0;
-        for i in 0..N {
-            acc += self.c[i] * xs[i];
+        for (ci, xi) in self.c.iter().zip(xs) {
+            acc += ci * xi;
         }
         acc + self.d * v
     }
@@ -502,8 +502,8 @@ impl<const N: usize> Fixed<N> {
 #[inline(always)]
 fn axpy_fixed<const N: usize>(xs: &[f64; N], hk: f64, k: &[f64; N]) -> [f64; N] {
     let mut out = [0.0; N];
-    for i in 0..N {
-        out[i] = xs[i] + hk * k[i];
+    for ((o, x), ki) in out.iter_mut().zip(xs).zip(k) {
+        *o = x + hk * ki;
     }
     out
 }
@@ -540,8 +540,8 @@ fn integrate_fixed<const N: usize, I: Stages>(
             let (k3, kw3) = sys.rhs(&axpy_fixed(&xs, half_h, &k2), w + half_h * kw2, mid);
             let end = src.stage(2 * s + 2, ts + h);
             let (k4, kw4) = sys.rhs(&axpy_fixed(&xs, h, &k3), w + h * kw3, end);
-            for i in 0..N {
-                xs[i] += h_sixth * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
+            for ((((x, a), b), c), d) in xs.iter_mut().zip(&k1).zip(&k2).zip(&k3).zip(&k4) {
+                *x += h_sixth * (a + 2.0 * b + 2.0 * c + d);
             }
             w += h_sixth * (kw1 + 2.0 * kw2 + 2.0 * kw3 + kw4);
         }
