@@ -24,6 +24,9 @@ __all__ = [
     "profile_phase_sls",
     "profile_phase_gain",
     "refine",
+    "refine_many",
+    "harmonic_moments",
+    "harmonic_series",
 ]
 
 _F = NDArray[np.float64]
