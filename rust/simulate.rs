@@ -10,12 +10,11 @@
 //! value is reused when a stage time repeats bitwise.
 //!
 //! Low orders (static gain, first and second order; up to [`FIXED_MAX_ORDER`]) run on fixed-size
-//! stack arrays, so the state loops unroll and vanish for a static gain. A sine input is not
-//! evaluated by `cos`/`sin` at every stage: at each output sample `cos`/`sin` of the sample's phase
-//! are computed once, and the stage phases `theta_k + j omega h / 2` follow by the angle-addition
-//! formula from a table of `cos(j omega h / 2)`, `sin(j omega h / 2)` built once per simulation (a
-//! few ulps from the direct evaluation, with no accumulation across samples). `|w|^mu` is `w * w`
-//! or `|w|` when `mu` is 2 or 1 (exact, as `powf` there), else one `powf`.
+//! stack arrays, so the state loops unroll and vanish for a static gain, in the operation order of
+//! the generic path (the results are bitwise those of the generic path: an identification of
+//! exactly negated data must stay exactly symmetric). Evaluating the sine input by angle addition
+//! and `|w|^2` as `w * w` were tried (issue #8) and bought a few percent at most: the step is bound
+//! by its four `powf`, as the C peer's (`benches/rk4_peer.c`).
 
 use crate::bouc_wen::BoucWen;
 use crate::error::{all_finite, finite, CoreError, Result};
@@ -130,8 +129,13 @@ pub fn simulate(
     };
     match input {
         Input::Sine { amplitude, omega } => {
-            let mut src = SineStages::new(amplitude, omega, &grid);
-            integrate_any(&comp, bw, &mut src, &grid, &mut out);
+            let src = Sine {
+                amplitude,
+                omega,
+                neg_amplitude_omega: -amplitude * omega,
+            };
+            let mut stages = CachedStages::new(&src, grid.delay);
+            integrate_any(&comp, bw, &mut stages, &grid, &mut out);
         }
         Input::Sampled { u } => {
             let src = Hermite::new(u, dt);
@@ -238,62 +242,20 @@ impl<S: Source> Stages for CachedStages<'_, S> {
     }
 }
 
-/// `u = U cos(omega tau)` at the stage times by angle addition: `cos`/`sin` of the sample's phase
-/// once per output sample, and of the stage offsets `j omega h / 2` once per simulation.
-struct SineStages {
+struct Sine {
     amplitude: f64,
+    omega: f64,
     /// `-U omega`, hoisted out of the stage evaluations.
     neg_amplitude_omega: f64,
-    omega: f64,
-    delay: f64,
-    /// `(cos, sin)` of `j omega h / 2`, `j = 0..=2 substeps`.
-    offsets: Vec<(f64, f64)>,
-    /// `(cos, sin)` of the current sample's phase `omega (t - delay)`.
-    anchor: (f64, f64),
 }
 
-impl SineStages {
-    fn new(amplitude: f64, omega: f64, grid: &Grid) -> Self {
-        let half_h = 0.5 * (grid.dt / grid.substeps as f64);
-        let offsets = (0..=2 * grid.substeps)
-            .map(|j| {
-                let arg = omega * (j as f64 * half_h);
-                (arg.cos(), arg.sin())
-            })
-            .collect();
-        Self {
-            amplitude,
-            neg_amplitude_omega: -amplitude * omega,
-            omega,
-            delay: grid.delay,
-            offsets,
-            anchor: (1.0, 0.0),
-        }
-    }
-}
-
-impl Stages for SineStages {
+impl Source for Sine {
     #[inline(always)]
-    fn sample(&mut self, t: f64) -> f64 {
-        let tau = t - self.delay;
+    fn at(&self, tau: f64) -> (f64, f64) {
         let arg = self.omega * tau;
-        self.anchor = (arg.cos(), arg.sin());
-        if tau < 0.0 {
-            0.0
-        } else {
-            self.amplitude * self.anchor.0
-        }
-    }
-    #[inline(always)]
-    fn stage(&mut self, j: usize, time: f64) -> (f64, f64) {
-        if time - self.delay < 0.0 {
-            return (0.0, 0.0);
-        }
-        let (c0, s0) = self.anchor;
-        let (cj, sj) = self.offsets[j];
         (
-            self.amplitude * (c0 * cj - s0 * sj),
-            self.neg_amplitude_omega * (s0 * cj + c0 * sj),
+            self.amplitude * arg.cos(),
+            self.neg_amplitude_omega * arg.sin(),
         )
     }
 }
@@ -405,36 +367,6 @@ fn integrate_any<I: Stages>(
     }
 }
 
-/// How `|w|^mu` is computed: exactly as `powf` for `mu = 1` and `mu = 2`, else by `powf`.
-#[derive(Clone, Copy)]
-enum Power {
-    One,
-    Two,
-    General(f64),
-}
-
-impl Power {
-    fn new(mu: f64) -> Self {
-        if mu == 1.0 {
-            Power::One
-        } else if mu == 2.0 {
-            Power::Two
-        } else {
-            Power::General(mu)
-        }
-    }
-
-    #[inline(always)]
-    fn of_abs(self, w: f64) -> f64 {
-        let a = w.abs();
-        match self {
-            Power::One => a,
-            Power::Two => a * a,
-            Power::General(mu) => a.powf(mu),
-        }
-    }
-}
-
 /// The companion form of order `N` and the hysteresis, by value, for [`integrate_fixed`].
 struct Fixed<const N: usize> {
     a: [f64; N],
@@ -443,7 +375,7 @@ struct Fixed<const N: usize> {
     alpha: f64,
     beta: f64,
     gamma: f64,
-    power: Power,
+    mu: f64,
 }
 
 impl<const N: usize> Fixed<N> {
@@ -459,7 +391,7 @@ impl<const N: usize> Fixed<N> {
             alpha: bw.alpha(),
             beta: bw.beta(),
             gamma: bw.gamma(),
-            power: Power::new(bw.mu()),
+            mu: bw.mu(),
         }
     }
 
@@ -481,7 +413,7 @@ impl<const N: usize> Fixed<N> {
             }
         }
         xdot += self.d * vdot;
-        let wmu = self.power.of_abs(w);
+        let wmu = w.abs().powf(self.mu);
         let wdot = self.alpha * xdot
             - self.beta * xdot.abs() * crate::bouc_wen::sgn(w) * wmu
             - self.gamma * xdot * wmu;
