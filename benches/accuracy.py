@@ -1,5 +1,5 @@
 #!/usr/bin/env python
-"""Seeded Monte Carlo of the three estimators against the Cramer-Rao bound (issue #3's accuracy targets).
+"""Seeded Monte Carlo of the three estimators against the Cramer-Rao bound (the accuracy targets).
 
 Run in an environment where the package is installed (or built with ``maturin develop --release``)::
 
@@ -9,7 +9,7 @@ Run in an environment where the package is installed (or built with ``maturin de
 
 Design points
 -------------
-The issue's plant: ``|G| = 0.9``, ``phi = 1.1`` at ``omega = 3`` rad/s (a static gain behind a pure delay
+The delayed-gain plant: ``|G| = 0.9``, ``phi = 1.1`` at ``omega = 3`` rad/s (a static gain behind a pure delay
 ``1.1/3`` s), Bouc-Wen ``beta = 0.8, gamma = 0.2, mu = 1.6`` (alpha = 1), ``U = 2``, ``P = 256`` samples per
 period, 20 settling periods, RK4 with 2 substeps per sample, at (noise sd, periods N) =
 
@@ -44,7 +44,7 @@ mu; ``+-1.96 gain_se / phase_se`` for |G| and phi), and the rejection rate of th
 (``result.adequacy.p_value < 0.05``) on this model-generated data, each with its binomial standard error
 ``sqrt(r (1 - r) / n)`` and, in brackets, the standard error at the nominal rate.
 
-Targets (PASS / MISS), issue #3:
+Targets (PASS / MISS) of the refined estimator:
 
 - refined RMSE <= 1.2 x CRB for every parameter at sd 0.05 and sd 0.1;
 - paper/refined >= 10 on beta and gamma (at sd 0.05 and sd 0.1);
@@ -233,7 +233,7 @@ class Verdicts:
         self.lines.append((text, ok, distance_se))
 
     def print(self) -> None:
-        print("\n== issue #3 targets ==")
+        print("\n== accuracy targets ==")
         for text, ok, dist in self.lines:
             flag = "PASS" if ok else "MISS"
             if not ok and dist < 2.0:

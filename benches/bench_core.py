@@ -621,7 +621,7 @@ def main(argv: list[str] | None = None) -> int:
     size = f"{n_tot:,} samples"
     min_time = 0.02 if quick else 0.5
     reps = 3 if quick else 5
-    # The paper's method with every harmonic (the issue-2 pipeline that core_calls() below mirrors).  Its
+    # The paper's method with every harmonic (the pipeline that core_calls() below mirrors).  Its
     # estimates on these noisy data break beta >= |gamma|, which identify() reports with a warning.
     warnings.simplefilter("ignore", bouc_wen_id.IdentifiabilityWarning)
     paper = {"method": "paper", "harmonics": "all"}

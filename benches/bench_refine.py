@@ -1,5 +1,5 @@
 #!/usr/bin/env python
-"""Speed of the refined identification against the same fit built from SciPy (issue #3: >= 100x).
+"""Speed of the refined identification against the same fit built from SciPy (target: >= 100x).
 
 Run in an environment where the package is installed (or built with ``maturin develop --release``)::
 

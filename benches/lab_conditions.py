@@ -1,5 +1,5 @@
 #!/usr/bin/env python
-"""Seeded Monte Carlo: refined identification on lab-like records against clean simulated ones (issue #4).
+"""Seeded Monte Carlo: refined identification on lab-like records against clean simulated ones.
 
 Run in an environment where the package is installed (or built with ``maturin develop --release``)::
 
@@ -51,7 +51,7 @@ the plant needs to settle after the ramp-up, and telling those apart is the stea
 
 Design points
 -------------
-- ``issue``: issue #3's plant, ``|G| = 0.9`` behind a pure delay of ``1.1/3`` s (``phi = 1.1`` at 3 rad/s),
+- ``issue``: the delayed-gain plant, ``|G| = 0.9`` behind a delay of ``1.1/3`` s (``phi = 1.1`` at 3 rad/s),
   Bouc-Wen beta = 0.8, gamma = 0.2, mu = 1.6, ``U = 2``, at omega = 3 and 5 rad/s (a joint fit of two
   experiments), ``P = 317``, ``N = 40``, sigma = 0.05;
 - ``demo``: the library's demo plant (``bw.demo_plant()``: a resonance at 5 rad/s, zeta = 0.2, behind a
@@ -90,7 +90,7 @@ spread), the averaged grid (LAB: ``P = 2K + 1`` points, N the effective ``n / P`
 
 Exit status: 1 on any MISS, on any seed whose identification raised (a ``BoucWenIdError`` is a failure to
 report, not a crash to hide; anything else is reported with the file and line it came from), 0 otherwise.
-Coverage and adequacy are reported for information; the issue's target is the RMSE ratio.
+Coverage and adequacy are reported for information; the target is the RMSE ratio.
 """
 
 from __future__ import annotations
@@ -151,7 +151,7 @@ SETTLED_RTOL = 1e-3
 
 
 def issue_plant() -> bw.WienerPlant:
-    """|G| = 0.9, phi = 1.1 at omega = 3 rad/s; beta = 0.8, gamma = 0.2, mu = 1.6 (issue #3)."""
+    """|G| = 0.9, phi = 1.1 at omega = 3 rad/s; beta = 0.8, gamma = 0.2, mu = 1.6 (the delayed-gain plant)."""
     return bw.WienerPlant(
         bw.TransferFunction([0.9], [1.0], delay=1.1 / 3.0), bw.BoucWen(beta=0.8, gamma=0.2, mu=1.6)
     )
@@ -194,7 +194,7 @@ class Point:
 
 
 POINTS = (
-    Point("issue", "issue #3 plant (|G| = 0.9 behind a delay), omega = 3, 5 rad/s, U = 2", (3.0, 5.0)),
+    Point("issue", "delayed-gain plant (|G| = 0.9 behind a delay), omega = 3, 5 rad/s, U = 2", (3.0, 5.0)),
     Point("demo", "demo plant (resonance at 5 rad/s, alpha = 2), omega = 2, 5, 8 rad/s", (2.0, 5.0, 8.0)),
 )
 
@@ -493,7 +493,7 @@ class Verdicts:
         self.lines.append((text, ok, distance_se))
 
     def print(self) -> None:
-        print(f"\n== issue #4 target: LAB RMSE <= {RATIO_MAX:g} x CLEAN RMSE, every parameter ==")
+        print(f"\n== lab-conditions target: LAB RMSE <= {RATIO_MAX:g} x CLEAN RMSE, every parameter ==")
         for text, ok, dist in self.lines:
             flag = "PASS" if ok else "MISS"
             if not ok and dist < 2.0:
@@ -720,7 +720,7 @@ def main(argv: Optional[list[str]] = None) -> int:
     except OSError:  # pragma: no cover
         load_txt = "load average n/a"
     print(
-        f"bouc_wen_id {bw.__version__} lab-conditions Monte Carlo (issue #4): {n_seeds} seeds per point"
+        f"bouc_wen_id {bw.__version__} lab-conditions Monte Carlo: {n_seeds} seeds per point"
         f"{' (--quick: smoke run, not for conclusions)' if args.quick else ''}; seed = {args.seed}"
     )
     print(f"python {platform.python_version()}, numpy {np.__version__}, {os.cpu_count()} CPUs, {load_txt}")

@@ -1,6 +1,12 @@
 //! Periodic averaging (4a-b) of the seed paper (`docs/design.md` §2):
 //! `ybar[j] = (1/N) sum_{k=0..N-1} y[(S + k) P + j]`, j = 0..P-1, after dropping S settling
 //! periods. Averaging N periods divides the variance of zero-mean noise by N, see (5)-(6).
+//!
+//! ## Reference
+//! *Wiener System Identification in Presence of Hysteresis Nonlinearity*, the seed paper whose
+//! equation numbers are cited; for the Bouc-Wen properties it relies on (Propositions 1-2):
+//! F. Ikhouane and J. Rodellar, *Systems with Hysteresis: Analysis, Identification and Control
+//! using the Bouc-Wen Model*, Wiley, 2007.
 
 use crate::error::{all_finite, CoreError, Result};
 

@@ -3,6 +3,12 @@
 //!
 //! Admissible parameters (`docs/design.md` §1, after (2a) in the paper): `alpha > 0`,
 //! `beta + gamma > 0` (bounded output), `beta - gamma >= 0`, `mu >= 1`, all finite.
+//!
+//! ## Reference
+//! *Wiener System Identification in Presence of Hysteresis Nonlinearity*, the seed paper whose
+//! equation numbers are cited; for the Bouc-Wen properties it relies on (Propositions 1-2):
+//! F. Ikhouane and J. Rodellar, *Systems with Hysteresis: Analysis, Identification and Control
+//! using the Bouc-Wen Model*, Wiley, 2007.
 
 use crate::error::{finite, CoreError, Result};
 

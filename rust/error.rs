@@ -52,6 +52,9 @@ pub enum CoreError {
         /// The requested bracket width.
         tol: f64,
     },
+    /// An iteration that must converge did not (the steady-loop shooting).
+    #[error("not converged: {0}")]
+    NotConverged(String),
 }
 
 /// Result alias of the core.

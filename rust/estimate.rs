@@ -2,6 +2,12 @@
 //! the phase estimator (9) `phi = omega tbar` from the first maximum of `ybar`; the spectral
 //! derivative `ydot` of `ybar` that feeds the regressor (23); and the gain estimator (27b) at the
 //! further frequencies, once `beta`, `gamma`, `mu` are known.
+//!
+//! ## Reference
+//! *Wiener System Identification in Presence of Hysteresis Nonlinearity*, the seed paper whose
+//! equation numbers are cited; for the Bouc-Wen properties it relies on (Propositions 1-2):
+//! F. Ikhouane and J. Rodellar, *Systems with Hysteresis: Analysis, Identification and Control
+//! using the Bouc-Wen Model*, Wiley, 2007.
 
 use rustfft::num_complex::Complex;
 use rustfft::FftPlanner;

@@ -9,6 +9,12 @@
 //!
 //! The numerics take `&[f64]` and return [`error::Result`]; the pyo3 bindings (feature `python`)
 //! live in one private module and only borrow, convert and call.
+//!
+//! ## Reference
+//! *Wiener System Identification in Presence of Hysteresis Nonlinearity*, the seed paper whose
+//! equation numbers are cited; for the Bouc-Wen properties it relies on (Propositions 1-2):
+//! F. Ikhouane and J. Rodellar, *Systems with Hysteresis: Analysis, Identification and Control
+//! using the Bouc-Wen Model*, Wiley, 2007.
 
 pub mod average;
 pub mod bouc_wen;

@@ -3,6 +3,12 @@
 //! frequency response. See `docs/design.md` §1.
 //!
 //! Coefficients are ordered highest power of `s` first (the scipy.signal convention).
+//!
+//! ## Reference
+//! *Wiener System Identification in Presence of Hysteresis Nonlinearity*, the seed paper whose
+//! equation numbers are cited; for the Bouc-Wen properties it relies on (Propositions 1-2):
+//! F. Ikhouane and J. Rodellar, *Systems with Hysteresis: Analysis, Identification and Control
+//! using the Bouc-Wen Model*, Wiley, 2007.
 
 use nalgebra::Complex;
 

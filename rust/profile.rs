@@ -1,4 +1,4 @@
-//! Phase as a parameter of the separable fit (beyond the paper; issue #3).
+//! Phase as a parameter of the separable fit (beyond the paper).
 //!
 //! The paper's phase estimator (9) times the averaged output's maximum, which is flat once the
 //! hysteresis saturates and quantised to `2 pi / P`; and its regressor (23) takes `sgn(ydot)` from
@@ -10,6 +10,12 @@
 //! With the candidate's sign, `phi -> phi + pi` flips `s` and `sgn(xdot)` together, which maps
 //! `(G, beta, gamma)` to `(-G, -beta, gamma)` at the same cost: the profile is pi-periodic, so the
 //! grid spans `[0, pi)` and the estimate is mapped to the branch with `|G| > 0`.
+//!
+//! ## Reference
+//! *Wiener System Identification in Presence of Hysteresis Nonlinearity*, the seed paper whose
+//! equation numbers are cited; for the Bouc-Wen properties it relies on (Propositions 1-2):
+//! F. Ikhouane and J. Rodellar, *Systems with Hysteresis: Analysis, Identification and Control
+//! using the Bouc-Wen Model*, Wiley, 2007.
 
 use nalgebra::Vector3;
 

@@ -4,6 +4,12 @@
 //! `ValueError`, never a panic), releases the interpreter around long work, calls the numerics of
 //! (1a)-(27b) in the sibling modules, and maps [`CoreError`] onto the named exceptions of
 //! `bouc_wen_id.errors`.
+//!
+//! ## Reference
+//! *Wiener System Identification in Presence of Hysteresis Nonlinearity*, the seed paper whose
+//! equation numbers are cited; for the Bouc-Wen properties it relies on (Propositions 1-2):
+//! F. Ikhouane and J. Rodellar, *Systems with Hysteresis: Analysis, Identification and Control
+//! using the Bouc-Wen Model*, Wiley, 2007.
 
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
@@ -26,6 +32,7 @@ pyo3::import_exception!(bouc_wen_id.errors, InsufficientDataError);
 pyo3::import_exception!(bouc_wen_id.errors, ZeroAmplitudeError);
 pyo3::import_exception!(bouc_wen_id.errors, SingularNormalMatrixError);
 pyo3::import_exception!(bouc_wen_id.errors, SearchAtBoundError);
+pyo3::import_exception!(bouc_wen_id.errors, ConvergenceError);
 
 // The Python defaults `max_iter=200` are literals so that `__text_signature__` shows them.
 const _: () = assert!(GOLDEN_MAX_ITER == 200);
@@ -45,16 +52,12 @@ impl From<CoreError> for PyErr {
             CoreError::InsufficientData(_) => InsufficientDataError::new_err(msg),
             CoreError::ZeroAmplitude(_) => ZeroAmplitudeError::new_err(msg),
             CoreError::SingularNormalMatrix { .. } => SingularNormalMatrixError::new_err(msg),
-            CoreError::SearchAtBound { bound, lower, .. } => Python::attach(|py| {
-                // The Python class carries the bracket end, so callers can tell mu = 1 from a
-                // bracket that is merely too narrow.
-                let err = SearchAtBoundError::new_err(msg);
-                let value = err.value(py);
-                match (value.setattr("bound", bound), value.setattr("lower", lower)) {
-                    (Ok(()), Ok(())) => err,
-                    (Err(e), _) | (_, Err(e)) => e,
-                }
-            }),
+            // The Python class carries the bracket end, so callers can tell mu = 1 from a
+            // bracket that is merely too narrow.
+            CoreError::SearchAtBound { bound, lower, .. } => {
+                SearchAtBoundError::new_err((msg, bound, lower))
+            }
+            CoreError::NotConverged(_) => ConvergenceError::new_err(msg),
         }
     }
 }

@@ -1,4 +1,4 @@
-//! Joint output-error refinement over every experiment (beyond the paper; issue #3).
+//! Joint output-error refinement over every experiment (beyond the paper).
 //!
 //! Minimises `sum_i weight_i ||ybar_i - w_i(beta, gamma, mu, g_i, phi_i)||^2` by
 //! Levenberg-Marquardt, where `w_i` is the steady loop of (2b) under `x_i = U_i g_i cos(omega_i t -
@@ -9,6 +9,12 @@
 //! The shared parameters `(beta, gamma, mu)` touch every residual, each `(g_i, phi_i)` only its
 //! own: the damped normal equations are solved through the 3x3 Schur complement, so one
 //! iteration costs O(m) small solves for m experiments.
+//!
+//! ## Reference
+//! *Wiener System Identification in Presence of Hysteresis Nonlinearity*, the seed paper whose
+//! equation numbers are cited; for the Bouc-Wen properties it relies on (Propositions 1-2):
+//! F. Ikhouane and J. Rodellar, *Systems with Hysteresis: Analysis, Identification and Control
+//! using the Bouc-Wen Model*, Wiley, 2007.
 
 use nalgebra::{DMatrix, Matrix2, Matrix3, Matrix3x2, Vector2, Vector3};
 

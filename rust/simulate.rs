@@ -15,6 +15,12 @@
 //! exactly negated data must stay exactly symmetric). Evaluating the sine input by angle addition
 //! and `|w|^2` as `w * w` were tried (issue #8) and bought a few percent at most: the step is bound
 //! by its four `powf`, as the C peer's (`benches/rk4_peer.c`).
+//!
+//! ## Reference
+//! *Wiener System Identification in Presence of Hysteresis Nonlinearity*, the seed paper whose
+//! equation numbers are cited; for the Bouc-Wen properties it relies on (Propositions 1-2):
+//! F. Ikhouane and J. Rodellar, *Systems with Hysteresis: Analysis, Identification and Control
+//! using the Bouc-Wen Model*, Wiley, 2007.
 
 use crate::bouc_wen::BoucWen;
 use crate::error::{all_finite, finite, CoreError, Result};

@@ -6,6 +6,12 @@
 //!
 //! Integrals over one period are rectangle sums times `dt = T/P` (spectrally accurate for periodic
 //! integrands).
+//!
+//! ## Reference
+//! *Wiener System Identification in Presence of Hysteresis Nonlinearity*, the seed paper whose
+//! equation numbers are cited; for the Bouc-Wen properties it relies on (Propositions 1-2):
+//! F. Ikhouane and J. Rodellar, *Systems with Hysteresis: Analysis, Identification and Control
+//! using the Bouc-Wen Model*, Wiley, 2007.
 
 use nalgebra::{Matrix3, SymmetricEigen, Vector3};
 

@@ -13,6 +13,12 @@
 //!
 //! The half cycle is integrated on the lattice that the sample grid `theta_j = 2 pi j/P - phi`
 //! folds onto modulo pi, so every sample is hit exactly, without interpolation.
+//!
+//! ## Reference
+//! *Wiener System Identification in Presence of Hysteresis Nonlinearity*, the seed paper whose
+//! equation numbers are cited; for the Bouc-Wen properties it relies on (Propositions 1-2):
+//! F. Ikhouane and J. Rodellar, *Systems with Hysteresis: Analysis, Identification and Control
+//! using the Bouc-Wen Model*, Wiley, 2007.
 
 use crate::bouc_wen::sgn;
 use crate::error::{finite, CoreError, Result};
@@ -310,7 +316,8 @@ fn coarse_top(
 ///
 /// Errors: non-finite inputs, `mu <= 1`, `beta + gamma <= 0` (unbounded loop), `P < 4`,
 /// `substeps < 1`, `amplitude == 0`, a lattice above [`MAX_SAMPLES_PER_PERIOD`] or
-/// [`MAX_STEPS_PER_PERIOD`], and a loop that overflows.
+/// [`MAX_STEPS_PER_PERIOD`], and a loop that overflows; [`CoreError::NotConverged`] when the
+/// shooting does not converge in `SHOOT_MAX_ITER` iterations.
 pub fn steady_loop(
     amplitude: f64,
     beta: f64,
@@ -395,7 +402,7 @@ pub fn steady_loop(
         }
         iterations += 1;
         if iterations > SHOOT_MAX_ITER {
-            return Err(CoreError::InvalidParameter(format!(
+            return Err(CoreError::NotConverged(format!(
                 "the steady-loop shooting did not converge in {SHOOT_MAX_ITER} iterations \
                  (residual {h:.3e}); the parameters (A = {amplitude}, beta = {beta}, \
                  gamma = {gamma}, mu = {mu}) are far from a physical loop"

@@ -1,13 +1,16 @@
 #!/usr/bin/env bash
-# Set up (virtualenv + build) and run every check: Rust format/lint/tests, Python lint, stub check, pytest.
+# Set up (virtualenv + build) and run every check: Rust format/lint/tests, Python lint and format, types
+# (the package, its tests and examples), stub check, pytest.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/_venv.sh" "test"
 cd "$ROOT"
 echo "==> cargo fmt --check";      cargo fmt --check
 echo "==> cargo clippy";           cargo clippy --all-targets --features python -- -D warnings
 echo "==> cargo test";             cargo test
-echo "==> ruff";                   "$VENV/bin/ruff" check python tests benches
+echo "==> ruff";                   "$VENV/bin/ruff" check python tests benches examples studies
+echo "==> ruff format --check";    "$VENV/bin/ruff" format --check python tests benches examples studies
 echo "==> mypy (strict)";          "$VENV/bin/mypy" python/bouc_wen_id
+echo "==> mypy (strict): tests, examples"; "$VENV/bin/mypy" --strict tests examples
 echo "==> stubtest _core.pyi";     (cd /tmp && "$VENV/bin/python" -m mypy.stubtest bouc_wen_id._core)
 echo "==> pytest"
 # Run against the installed wheel, not the source tree, so that a packaging slip shows up here.

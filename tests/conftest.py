@@ -16,6 +16,7 @@ from pathlib import Path
 from types import ModuleType, SimpleNamespace
 from typing import Any
 
+import bouc_wen_id as bw
 import numpy as np
 import pytest
 from bouc_wen_id import _core, reference
@@ -177,3 +178,13 @@ def helpers() -> SimpleNamespace:
         averaged_loop=averaged_loop,
         loop_problem=loop_problem,
     )
+
+
+@pytest.fixture(scope="session")
+def recordings() -> list[bw.Recording]:
+    """Two short noisy demo recordings (2 and 5 rad/s, one of negative amplitude), for file and CLI tests."""
+    plant = bw.demo_plant()
+    plan = bw.SinePlan(
+        [2.0, 5.0], [0.5, -0.25], settle_periods=3, periods=2, samples_per_period=64, noise_sd=0.01, seed=4
+    )
+    return bw.simulate(plant, plan)

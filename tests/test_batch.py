@@ -7,7 +7,7 @@ import warnings
 
 import bouc_wen_id as bw
 import pytest
-from bouc_wen_id.batch import identify_many
+from bouc_wen_id.batch import Job, identify_many
 from bouc_wen_id.errors import InsufficientDataError, InvalidParameterError
 
 
@@ -17,7 +17,7 @@ def recordings() -> list[bw.Recording]:
     return bw.simulate(bw.demo_plant(), plan)
 
 
-def _jobs(recs: list[bw.Recording]) -> list[object]:
+def _jobs(recs: list[bw.Recording]) -> list[Job]:
     # Four different joint fits: pairs of experiments, one with its own method.
     return [
         [recs[0], recs[1]],
@@ -32,10 +32,10 @@ def test_local_pool_is_identical_to_serial_and_to_identify(recordings: list[bw.R
     serial = identify_many(jobs, workers=1)
     pooled = identify_many(jobs, workers=2)
     one_by_one = [
-        bw.identify(jobs[0]),  # type: ignore[arg-type]
-        bw.identify(jobs[1]),  # type: ignore[arg-type]
+        bw.identify([recordings[0], recordings[1]]),
+        bw.identify([recordings[2], recordings[3]]),
         bw.identify([recordings[4], recordings[5]], method="profile"),
-        bw.identify(jobs[3]),  # type: ignore[arg-type]
+        bw.identify([recordings[1], recordings[6]]),
     ]
     assert [r.to_json() for r in serial] == [r.to_json() for r in one_by_one]  # type: ignore[union-attr]
     assert [r.to_json() for r in pooled] == [r.to_json() for r in serial]  # type: ignore[union-attr]
@@ -76,10 +76,10 @@ def test_dask_local_cluster_is_identical_to_local(recordings: list[bw.Recording]
         # distributed's own start-up warnings (ports, resources) are not ours to fail on.
         warnings.simplefilter("ignore")
         with (
-            distributed.LocalCluster(
+            distributed.LocalCluster(  # type: ignore[no-untyped-call]
                 n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
             ) as cluster,
-            distributed.Client(cluster) as client,
+            distributed.Client(cluster) as client,  # type: ignore[no-untyped-call]
         ):
             remote = identify_many(jobs, client=client)
     assert [r.to_json() for r in remote] == [r.to_json() for r in local]  # type: ignore[union-attr]

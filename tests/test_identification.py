@@ -34,20 +34,21 @@ import json
 import math
 import typing
 import warnings
-from typing import Any
+from typing import Any, Callable
 
 import bouc_wen_id as bw
 import numpy as np
 import pytest
 from bouc_wen_id import _core
 from bouc_wen_id.demo import DEMO_FREQUENCIES, design_amplitudes
+from bouc_wen_id.identification import Method
 from bouc_wen_id.result import phase_error
 from numpy.testing import assert_allclose
 
 TWO_PI = 2.0 * math.pi
 P_VALUES = (128, 256, 512, 1024)
 #: Every estimator identify offers.
-METHODS = typing.get_args(bw.identification.Method)
+METHODS: tuple[Method, ...] = typing.get_args(Method)
 
 
 def _all_harmonics(p: int) -> int:
@@ -165,12 +166,15 @@ def test_noise_free_error_shrinks_with_p_over_phase_alignments() -> None:
 #: Measured worst noise-free errors over both plants (beta, gamma, mu absolute; |G| relative; phase rad)
 #: at P = 128: profile 9.3e-3 (falling ~P^-2: 4.1e-5 at 1024), refined 3.3e-5 (the steady-loop solver's
 #: RK4 error).  Bounds: profile 0.02 (128/P)^2, refined 1e-4.
-OTHER_METHOD_BOUNDS = {"profile": lambda p: 0.02 * (128 / p) ** 2, "refined": lambda p: 1e-4}
+OTHER_METHOD_BOUNDS: dict[str, Callable[[int], float]] = {
+    "profile": lambda p: 0.02 * (128 / p) ** 2,
+    "refined": lambda p: 1e-4,
+}
 
 
 @pytest.mark.parametrize("method", [m for m in METHODS if m != "paper"])
 @pytest.mark.parametrize("name", sorted(PLANTS))
-def test_noise_free_recovery_of_the_phase_fitting_methods(name: str, method: str) -> None:
+def test_noise_free_recovery_of_the_phase_fitting_methods(name: str, method: Method) -> None:
     """Fitting the phase removes the quantisation error of (9): far below the paper's budget."""
     plant, freqs = PLANTS[name]
     for p in P_VALUES:
@@ -218,7 +222,7 @@ def _mc_recordings(periods: int) -> list[list[bw.Recording]]:
     return out
 
 
-def _mc_errors(runs: list[list[bw.Recording]], method: str, harmonics: Any = None) -> np.ndarray:
+def _mc_errors(runs: list[list[bw.Recording]], method: Method, harmonics: Any = None) -> np.ndarray:
     """Errors (beta, gamma, mu, |G| rel x2, phase x2) of each seed's identification."""
     out = []
     for recs in runs:
@@ -235,7 +239,8 @@ def _mc_errors(runs: list[list[bw.Recording]], method: str, harmonics: Any = Non
 
 
 def _rmse(errors: np.ndarray) -> np.ndarray:
-    return np.sqrt(np.mean(errors**2, axis=0))
+    out: np.ndarray = np.sqrt(np.mean(errors**2, axis=0))
+    return out
 
 
 @pytest.fixture(scope="module")
@@ -270,7 +275,7 @@ MC_RATIO_MIN = {"profile": 1.5, "refined": 2.5}
 
 @pytest.mark.parametrize("method", [m for m in METHODS if m != "paper"])
 def test_noise_rmse_falls_with_the_number_of_averaged_periods(
-    mc_runs: dict[int, list[list[bw.Recording]]], method: str
+    mc_runs: dict[int, list[list[bw.Recording]]], method: Method
 ) -> None:
     rmse = {n: _rmse(_mc_errors(runs, method)) for n, runs in mc_runs.items()}
     assert np.all(rmse[10] / rmse[160] > MC_RATIO_MIN[method]), rmse
@@ -302,6 +307,7 @@ def test_noise_is_seeded_and_independent_of_threading() -> None:
         noise = ra.y - ra.w
         assert 0.07 < np.std(noise) < 0.13  # sd 0.1 over 320 samples
     # Each experiment has its own stream.
+    assert a[0].w is not None and a[1].w is not None
     assert not np.allclose(a[0].y - a[0].w, a[1].y - a[1].w)
 
 
@@ -314,51 +320,13 @@ def test_noise_is_seeded_and_independent_of_threading() -> None:
 #: (identical mu measured), the 3x3 solve differs by ~1e-15.  profile: nested golden searches over phi and
 #: mu stop where the costs differ by rounding only; measured 1.2e-9 relative on beta.  refined: LM from
 #: the profile start, measured 1.6e-15.  Allowed: 1e-8 relative (paper, refined), 1e-7 (profile).
-BACKEND_RTOL = {"paper": 1e-8, "profile": 1e-7, "refined": 1e-8}
-
-
-@pytest.mark.parametrize("method", METHODS)
-def test_identify_numpy_backend_agrees_with_rust(method: str) -> None:
-    plant = bw.demo_plant()
-    recs = bw.simulate(plant, _plan(plant, (2.0, 5.0), 64, settle_periods=10, periods=3))
-    r_rust = bw.identify(recs, method=method, backend="rust")
-    r_np = bw.identify(recs, method=method, backend="numpy")
-    assert r_rust.backend == "rust" and r_np.backend == "numpy"
-    rtol = BACKEND_RTOL.get(method, 1e-8)
-    assert abs(r_rust.mu - r_np.mu) < rtol * 10
-    assert r_rust.beta == pytest.approx(r_np.beta, rel=rtol)
-    assert r_rust.gamma == pytest.approx(r_np.gamma, rel=rtol)
-    assert r_rust.iterations == r_np.iterations
-    assert_allclose(r_rust.gains, r_np.gains, rtol=rtol)
-    assert_allclose(r_rust.phases, r_np.phases, rtol=0, atol=rtol)
-    if method == "paper":
-        assert np.array_equal(r_rust.phases, r_np.phases)  # argmax of the same averaged loop
-    assert r_rust.cost == pytest.approx(r_np.cost, rel=1e-6)
-    # Both are accurate (noise-free, P = 64), so agreement is not agreement on nonsense.
-    assert abs(r_rust.mu - 1.6) < 0.02
-
-
-def test_simulate_numpy_backend_agrees_with_rust() -> None:
-    plant = bw.demo_plant()
-    plan = _plan(plant, (2.0, 5.0), 32, settle_periods=2, periods=2, noise_sd=0.01, seed=3)
-    a = bw.simulate(plant, plan, backend="rust")
-    b = bw.simulate(plant, plan, backend="numpy")
-    for ra, rb in zip(a, b):
-        assert ra.x is not None and rb.x is not None and ra.w is not None and rb.w is not None
-        # See test_parity: RK4 rounding only (measured <= 3e-15 of the peak).
-        assert_allclose(ra.x, rb.x, rtol=1e-11, atol=1e-11 * np.max(np.abs(rb.x)))
-        assert_allclose(ra.w, rb.w, rtol=1e-11, atol=1e-11 * np.max(np.abs(rb.w)))
-        assert_allclose(ra.y - ra.w, rb.y - rb.w, atol=1e-12)  # the same noise stream
-        assert np.array_equal(ra.t, rb.t) and np.array_equal(ra.u, rb.u)
-
-
 # --------------------------------------------------------------------------------------------------
 # Canonicalisation
 # --------------------------------------------------------------------------------------------------
 
 
 @pytest.mark.parametrize("method", METHODS)
-def test_negative_amplitude_gives_the_same_frequency_response(method: str) -> None:
+def test_negative_amplitude_gives_the_same_frequency_response(method: Method) -> None:
     plant = bw.demo_plant()
     freqs = (2.0, 5.0)
     amps = design_amplitudes(plant, freqs)
@@ -405,7 +373,8 @@ def demo_recording() -> bw.Recording:
 
 
 def _relabel(rec: bw.Recording, **kw: Any) -> bw.Recording:
-    fields = {"t": rec.t, "u": rec.u, "y": rec.y, "amplitude": rec.amplitude, "frequency": rec.frequency}
+    fields: dict[str, Any] = {"t": rec.t, "u": rec.u, "y": rec.y, "amplitude": rec.amplitude}
+    fields["frequency"] = rec.frequency
     fields["settle_periods"] = rec.settle_periods
     fields.update(kw)
     return bw.Recording(**fields)
@@ -469,7 +438,7 @@ def test_identify_search_at_bound(demo_recording: bw.Recording) -> None:
 
 @pytest.mark.parametrize("method", METHODS)
 def test_identify_with_a_bracket_that_misses_mu_never_returns_an_inadmissible_model_silently(
-    demo_recording: bw.Recording, method: str
+    demo_recording: bw.Recording, method: Method
 ) -> None:
     """Either the search reports that it ended on its bracket, or what it returns lies inside the bracket
     and satisfies the model's constraints (beta + gamma > 0, beta >= gamma), or it says loudly that it
@@ -632,3 +601,16 @@ def test_result_frequency_response_and_plots(demo_result: bw.IdentificationResul
     assert len(fig.axes[0].lines) >= 3
     fig = demo_result.plot_bode()
     assert len(fig.axes) == 2
+    # The panel figures draw into axes the caller owns (a study's grid), or make their own.
+    from bouc_wen_id.plotting import panel_grid, plot_loops, plot_residuals
+
+    n = len(demo_result.experiments)
+    fig, axes = panel_grid(n + 1, ncols=3)
+    assert len(axes) % 3 == 0 and len(axes) - 3 < n + 1 <= len(axes)
+    assert all(ax.get_visible() for ax in axes[: n + 1]) and not any(ax.get_visible() for ax in axes[n + 1 :])
+    assert plot_loops(demo_result, axes=axes[:n]) is fig
+    assert all(len(ax.lines) >= 2 for ax in axes[:n])
+    assert plot_residuals(demo_result, axes=axes[:n]) is fig
+    with pytest.raises(bw.InvalidParameterError, match="axes"):
+        plot_loops(demo_result, axes=axes[:1])
+    assert len(plot_residuals(demo_result).axes) >= n

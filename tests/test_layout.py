@@ -57,6 +57,7 @@ def _imports(path: Path, name: str) -> set[str]:
 
     def visit(node: ast.AST) -> None:
         if isinstance(node, ast.If) and _is_type_checking(node):
+            child: ast.AST
             for child in node.orelse:
                 visit(child)
             return

@@ -12,11 +12,14 @@ arrays, and the Rust core refuses non-contiguous arrays with a ValueError instea
 from __future__ import annotations
 
 import math
+import typing
 from typing import Any, Callable
 
+import bouc_wen_id as bw
 import numpy as np
 import pytest
 from bouc_wen_id import _core, reference
+from bouc_wen_id.demo import design_amplitudes
 from bouc_wen_id.errors import (
     ImproperTransferFunctionError,
     InsufficientDataError,
@@ -27,6 +30,7 @@ from bouc_wen_id.errors import (
     UnstableSystemError,
     ZeroAmplitudeError,
 )
+from bouc_wen_id.identification import Method
 from numpy.testing import assert_allclose
 
 SEEDS = (0, 1, 2)
@@ -211,7 +215,8 @@ def _random_spd(rng: np.random.Generator, log_cond: float) -> np.ndarray:
     s = q @ np.diag(lam) @ q.T
     d = 10.0 ** rng.uniform(-3, 3, 3)  # badly scaled columns: what the Jacobi scaling is for
     m = d[:, None] * s * d[None, :]
-    return 0.5 * (m + m.T)
+    out: np.ndarray = 0.5 * (m + m.T)
+    return out
 
 
 @pytest.mark.parametrize("seed", SEEDS)
@@ -357,6 +362,107 @@ def test_gain_estimate_parity(helpers: Any) -> None:
 
 
 # --------------------------------------------------------------------------------------------------
+# 5. Steady loop, joint refinement, and the whole identification on both backends
+# --------------------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_steady_loop_parity_with_reference(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    amp = rng.uniform(0.3, 3.0) * rng.choice([-1, 1])
+    beta = rng.uniform(0.2, 1.5)
+    gamma = rng.uniform(-0.5, 0.9) * beta
+    mu = rng.uniform(1.1, 3.0)
+    phi = rng.uniform(0, 2 * np.pi)
+    p = int(rng.integers(16, 80))
+    got = _core.steady_loop(amp, beta, gamma, mu, phi, p, 3)
+    want = reference.steady_loop(amp, beta, gamma, mu, phi, p, 3)
+    assert_allclose(got[0], want[0], rtol=1e-11, atol=1e-12)
+    assert_allclose(got[1], want[1], rtol=1e-9, atol=1e-10)
+    assert got[3] == want[3]
+
+
+@pytest.mark.parametrize(
+    "args, error",
+    [
+        ((1.0, 0.5, 0.2, 1.0, 0.0, 64, 4), bw.InvalidParameterError),  # mu <= 1
+        ((1.0, -0.5, 0.2, 1.5, 0.0, 64, 4), bw.InvalidParameterError),  # beta + gamma <= 0
+        ((0.0, 0.5, 0.2, 1.5, 0.0, 64, 4), bw.ZeroAmplitudeError),
+        ((math.nan, 0.5, 0.2, 1.5, 0.0, 64, 4), bw.NonFiniteError),
+        ((1.0, 0.5, 0.2, 1.5, 0.0, 3, 4), bw.InsufficientDataError),
+        # Valid parameters whose shooting does not converge in 60 Newton steps on a coarse lattice: its
+        # own error, not an InvalidParameterError.
+        ((100.0, 0.5, 0.0, 1.01, 0.3, 8, 2), bw.ConvergenceError),
+        ((1.0, 1000.0, -999.0, 1.01, 0.3, 8, 2), bw.ConvergenceError),
+    ],
+)
+def test_steady_loop_errors_match_reference(args: tuple[Any, ...], error: type[Exception]) -> None:
+    with pytest.raises(error):
+        _core.steady_loop(*args)
+    with pytest.raises(error):
+        reference.steady_loop(*args)
+
+
+def test_refine_parity_with_reference() -> None:
+    ys = [_core.steady_loop(a, 0.8, 0.2, 1.6, ph, 48, 4)[0] for a, ph in ((1.8, 1.1), (1.2, 2.5))]
+    rng = np.random.default_rng(5)
+    ys = [y + 0.01 * rng.standard_normal(y.size) for y in ys]
+    args = (ys, [2.0, 1.0], [1e4, 2e4], 0.7, 0.3, 1.7, [0.85, 1.25], [1.05, 2.45])
+    got = _core.refine(*args, max_iter=50, substeps=3)
+    want = reference.refine(*args, max_iter=50, substeps=3)
+    # Same damping schedule and acceptance rule; the dense and Schur solves differ by rounding only.
+    assert_allclose(got[0], want[0], rtol=1e-7, atol=1e-9)
+    assert got[1] == pytest.approx(want[1], rel=1e-8)
+    assert_allclose(got[4], want[4], rtol=1e-6)
+    assert got[3] and want[3]
+
+
+def _demo_plan(p: int, **kw: Any) -> bw.SinePlan:
+    """The demo plant's design at 2 and 5 rad/s with P samples per period."""
+    freqs = (2.0, 5.0)
+    return bw.SinePlan(
+        freqs, design_amplitudes(bw.demo_plant(), freqs), samples_per_period=p, substeps=2, **kw
+    )
+
+
+BACKEND_RTOL = {"paper": 1e-8, "profile": 1e-7, "refined": 1e-8}
+
+
+@pytest.mark.parametrize("method", typing.get_args(Method))
+def test_identify_numpy_backend_agrees_with_rust(method: Method) -> None:
+    recs = bw.simulate(bw.demo_plant(), _demo_plan(64, settle_periods=10, periods=3))
+    r_rust = bw.identify(recs, method=method, backend="rust")
+    r_np = bw.identify(recs, method=method, backend="numpy")
+    assert r_rust.backend == "rust" and r_np.backend == "numpy"
+    rtol = BACKEND_RTOL.get(method, 1e-8)
+    assert abs(r_rust.mu - r_np.mu) < rtol * 10
+    assert r_rust.beta == pytest.approx(r_np.beta, rel=rtol)
+    assert r_rust.gamma == pytest.approx(r_np.gamma, rel=rtol)
+    assert r_rust.iterations == r_np.iterations
+    assert_allclose(r_rust.gains, r_np.gains, rtol=rtol)
+    assert_allclose(r_rust.phases, r_np.phases, rtol=0, atol=rtol)
+    if method == "paper":
+        assert np.array_equal(r_rust.phases, r_np.phases)  # argmax of the same averaged loop
+    assert r_rust.cost == pytest.approx(r_np.cost, rel=1e-6)
+    # Both are accurate (noise-free, P = 64), so agreement is not agreement on nonsense.
+    assert abs(r_rust.mu - 1.6) < 0.02
+
+
+def test_simulate_numpy_backend_agrees_with_rust() -> None:
+    plant = bw.demo_plant()
+    plan = _demo_plan(32, settle_periods=2, periods=2, noise_sd=0.01, seed=3)
+    a = bw.simulate(plant, plan, backend="rust")
+    b = bw.simulate(plant, plan, backend="numpy")
+    for ra, rb in zip(a, b):
+        assert ra.x is not None and rb.x is not None and ra.w is not None and rb.w is not None
+        # See test_parity: RK4 rounding only (measured <= 3e-15 of the peak).
+        assert_allclose(ra.x, rb.x, rtol=1e-11, atol=1e-11 * np.max(np.abs(rb.x)))
+        assert_allclose(ra.w, rb.w, rtol=1e-11, atol=1e-11 * np.max(np.abs(rb.w)))
+        assert_allclose(ra.y - ra.w, rb.y - rb.w, atol=1e-12)  # the same noise stream
+        assert np.array_equal(ra.t, rb.t) and np.array_equal(ra.u, rb.u)
+
+
+# --------------------------------------------------------------------------------------------------
 # Same named errors from both backends
 # --------------------------------------------------------------------------------------------------
 
@@ -367,14 +473,14 @@ _SINE = (1.0, 2.0, 0.01, 50, 2)  # amplitude, omega, dt, n_samples, substeps
 
 
 def _with_nan(a: np.ndarray, i: int = 5) -> np.ndarray:
-    b = a.copy()
+    b: np.ndarray = a.copy()
     b[i] = np.nan
     return b
 
 
 def _sim(
     num: Any = (1.0,), den: Any = (1.0, 1.0), delay: float = 0.0, bw: Any = _BW, sine: Any = _SINE
-) -> tuple:
+) -> tuple[Any, ...]:
     return ("simulate_sine", (np.asarray(num, float), np.asarray(den, float), delay, *bw, *sine))
 
 
@@ -390,7 +496,7 @@ def _sine(**kw: Any) -> tuple[Any, ...]:
     return tuple(d.values())
 
 
-def _search_at(mu_lo: float, mu_hi: float) -> tuple:
+def _search_at(mu_lo: float, mu_hi: float) -> tuple[Any, ...]:
     return ("sls_search", "LOOP", mu_lo, mu_hi)
 
 
@@ -398,7 +504,7 @@ def _parabola(x: float) -> float:
     return (x - 2.0) ** 2
 
 
-BAD_INPUTS: list[tuple[str, tuple, type[Exception]]] = [
+BAD_INPUTS: list[tuple[str, tuple[Any, ...], type[Exception]]] = [
     # periodic averaging
     ("nan_in_y", ("periodic_average", (_with_nan(np.tile(_Y, 4)), 64, 1, 2)), NonFiniteError),
     ("inf_in_y", ("periodic_average", (np.r_[np.tile(_Y, 4)[:-1], np.inf], 64, 1, 2)), NonFiniteError),
@@ -520,7 +626,9 @@ BAD_INPUTS: list[tuple[str, tuple, type[Exception]]] = [
 @pytest.mark.parametrize(
     ("call", "error"), [(c, e) for _, c, e in BAD_INPUTS], ids=[n for n, _, _ in BAD_INPUTS]
 )
-def test_same_named_error_from_both_backends(helpers: Any, call: tuple, error: type[Exception]) -> None:
+def test_same_named_error_from_both_backends(
+    helpers: Any, call: tuple[Any, ...], error: type[Exception]
+) -> None:
     name, args = call[0], call[1]
     if args == "LOOP":
         pr = helpers.loop_problem(samples_per_period=128)
@@ -539,7 +647,7 @@ def test_same_named_error_from_both_backends(helpers: Any, call: tuple, error: t
 # --------------------------------------------------------------------------------------------------
 
 
-def _all_calls(helpers: Any) -> list[tuple[str, tuple]]:
+def _all_calls(helpers: Any) -> list[tuple[str, tuple[Any, ...]]]:
     pr = helpers.loop_problem(samples_per_period=64)
     yb, yd = pr["ybar"], pr["ydot"]
     a, om, ph = pr["amplitude"], pr["omega"], pr["phi"]

@@ -3,7 +3,7 @@
 The data live next to the repository (``<repo>/../shared/data/real``, or where ``BOUC_WEN_ID_REAL_DATA``
 says), never inside it; without them these tests are skipped with the reason (the ``real_data`` marker),
 and ``BOUC_WEN_ID_REQUIRE_REAL_DATA=1`` turns that into a failure.  The adapters and the script are loaded
-by path from ``examples/`` (not a package).  What is asserted comes from each folder's PROVENANCE.md
+by path from ``studies/`` (not a package).  What is asserted comes from each folder's PROVENANCE.md
 (channel order, scales, sample counts, frequencies, steady periods) and from physics (the force of a
 damper leads its displacement); the identification is held to its contract on real data: a finite result
 or a named :class:`bouc_wen_id.BoucWenIdError`, never another exception.
@@ -25,15 +25,15 @@ import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-EXAMPLES = ROOT / "examples"
+STUDIES = ROOT / "studies"
 TWO_PI = 2.0 * math.pi
 
 
 def _load(name: str) -> ModuleType:
     if name in sys.modules:
         return sys.modules[name]
-    spec = importlib.util.spec_from_file_location(name, EXAMPLES / f"{name}.py")
-    assert spec is not None and spec.loader is not None, f"cannot load examples/{name}.py"
+    spec = importlib.util.spec_from_file_location(name, STUDIES / f"{name}.py")
+    assert spec is not None and spec.loader is not None, f"cannot load studies/{name}.py"
     module = importlib.util.module_from_spec(spec)
     sys.modules[name] = module  # real_data.py imports _adapters by name
     spec.loader.exec_module(module)
@@ -449,14 +449,14 @@ def test_mr_identified_phase_is_physical(outcomes: list[Any]) -> None:
 def test_generated_page_matches_results_and_figures_exist() -> None:
     results = ROOT / "docs" / "real-data" / "results.json"
     page = ROOT / "docs" / "real-data.md"
-    assert results.is_file() and page.is_file(), "run: PYTHONPATH=python python examples/real_data.py"
+    assert results.is_file() and page.is_file(), "run: python studies/real_data.py"
     doc = json.loads(results.read_text(encoding="utf-8"))
     assert len(doc["experiments"]) == 30 + 6 + 6 + 4
     assert {r["status"] for r in doc["experiments"]} <= {"identified", "refused"}
     regenerated = rd.render(doc, page, results.parent)
     assert regenerated == page.read_text(encoding="utf-8"), (
-        "docs/real-data.md is not what examples/real_data.py generates from results.json: "
-        "run `PYTHONPATH=python python examples/real_data.py --doc-only` (never edit the page by hand)"
+        "docs/real-data.md is not what studies/real_data.py generates from results.json: "
+        "run `python studies/real_data.py --doc-only` (never edit the page by hand)"
     )
     pngs = sorted(results.parent.glob("*.png"))
     assert 0 < len(pngs) < 40 and sum(p.stat().st_size for p in pngs) < 4_000_000

@@ -63,7 +63,7 @@ def dop853_solution(
 
 # G(s) = (2 s + 6)/(s^2 + 2 s + 5), relative degree 1; Bouc-Wen with w0 > 0 driven hard (x up to 1.24
 # against the bound w_0 = 1): the hysteresis term is far from negligible.
-SMOOTH_CASE = {
+SMOOTH_CASE: dict[str, Any] = {
     "num": [2.0, 6.0],
     "den": [1.0, 2.0, 5.0],
     "bw": (1.0, 0.8, 0.2, 1.6, 0.05),

@@ -9,6 +9,7 @@ from __future__ import annotations
 import json
 import math
 import warnings
+from collections.abc import Sequence
 from pathlib import Path
 from types import SimpleNamespace
 from typing import Callable
@@ -229,7 +230,7 @@ def bouc_wen_output(u: np.ndarray, dt: float = DT) -> np.ndarray:
 
 
 def composed(
-    pieces: list[tuple[str, float, float]], rng: np.random.Generator, noise: float = 2e-3
+    pieces: Sequence[tuple[str, float, float]], rng: np.random.Generator, noise: float = 2e-3
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[tuple[int, int]]]:
     """A record of (kind, periods, amplitude) pieces: "idle", "ramp" (from the previous amplitude to this
     one), "steady".  Returns t, u, y and the sample range of each piece."""

@@ -3,11 +3,12 @@
 from __future__ import annotations
 
 import math
+import pickle
 
 import bouc_wen_id as bw
 import numpy as np
 import pytest
-from bouc_wen_id import _core
+from bouc_wen_id import _core, reference
 
 
 @pytest.mark.parametrize("p", [256, 1024])
@@ -36,6 +37,17 @@ def test_simulate_input_validates() -> None:
     u[3] = np.nan
     with pytest.raises(bw.NonFiniteError):
         bw.simulate_input(plant, t, u)
+
+
+def test_search_at_bound_error_is_constructed_with_its_bracket_end() -> None:
+    err = bw.SearchAtBoundError("at the end", bound=1.0, lower=True)
+    assert (str(err), err.bound, err.lower) == ("at the end", 1.0, True)
+    assert bw.SearchAtBoundError("no end known").bound is None
+    back = pickle.loads(pickle.dumps(err))
+    assert (str(back), back.bound, back.lower) == ("at the end", 1.0, True)
+    with pytest.raises(bw.SearchAtBoundError) as info:
+        reference.golden_section(lambda v: v, 1.0, 3.0, 1e-6)
+    assert info.value.lower is True and info.value.bound == 1.0
 
 
 def test_search_at_bound_from_rust_names_the_bracket_end() -> None:

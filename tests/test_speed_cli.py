@@ -47,7 +47,7 @@ def test_scheduler_runs_on_dask_with_the_local_results(folder: Path, tmp_path: P
     assert cli.main(["identify", str(folder), "--out", str(tmp_path / "local"), "--no-figures"]) == 0
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # distributed's start-up notices
-        with distributed.LocalCluster(
+        with distributed.LocalCluster(  # type: ignore[no-untyped-call]
             n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
         ) as cluster:
             argv = ["identify", str(folder), "--out", str(tmp_path / "dask"), "--no-figures", "--separately"]

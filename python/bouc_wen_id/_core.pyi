@@ -32,8 +32,8 @@ __all__ = [
 _F = NDArray[np.float64]
 
 def simulate_sine(
-    num: _F,
-    den: _F,
+    num: Sequence[float] | _F,
+    den: Sequence[float] | _F,
     delay: float,
     alpha: float,
     beta: float,
@@ -47,8 +47,8 @@ def simulate_sine(
     substeps: int,
 ) -> tuple[_F, _F]: ...
 def simulate_sampled(
-    num: _F,
-    den: _F,
+    num: Sequence[float] | _F,
+    den: Sequence[float] | _F,
     delay: float,
     alpha: float,
     beta: float,

@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING, Any, Literal, Optional, Union
 from .errors import BoucWenIdError, InvalidParameterError
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
-    from .identification import IdentificationResult
+    from .result import IdentificationResult
 
 __all__ = ["identify_many", "Job"]
 

@@ -19,12 +19,14 @@ __all__ = [
     "ZeroAmplitudeError",
     "SingularNormalMatrixError",
     "SearchAtBoundError",
+    "ConvergenceError",
     "FileFormatError",
     "TimeAxisError",
     "ClippingError",
     "UndersampledError",
     "NotPeriodicError",
     "IdentifiabilityWarning",
+    "ConvergenceWarning",
     "DistortedInputWarning",
 ]
 
@@ -66,13 +68,23 @@ class SingularNormalMatrixError(BoucWenIdError):
 
 
 class SearchAtBoundError(BoucWenIdError):
-    """The golden-section search for mu ended on an end of its bracket.
+    """The search for mu ended on an end of its bracket.
 
     ``bound`` and ``lower`` name the end when the raiser knows it (``None`` otherwise).
     """
 
-    bound: float | None = None
-    lower: bool | None = None
+    def __init__(self, message: str, bound: float | None = None, lower: bool | None = None) -> None:
+        super().__init__(message)
+        self.bound = bound
+        self.lower = lower
+
+    def __reduce__(self) -> tuple[type[SearchAtBoundError], tuple[str, float | None, bool | None]]:
+        return type(self), (str(self), self.bound, self.lower)
+
+
+class ConvergenceError(BoucWenIdError):
+    """An iteration that must converge did not: the steady-loop shooting (the parameters are far from a
+    loop the model can draw)."""
 
 
 class FileFormatError(BoucWenIdError):
@@ -101,6 +113,10 @@ class NotPeriodicError(BoucWenIdError):
 
 class IdentifiabilityWarning(UserWarning):
     """The data do not pin the parameters down (ill-conditioned Fisher, intervals wider than values)."""
+
+
+class ConvergenceWarning(UserWarning):
+    """The Levenberg-Marquardt refinement stopped at its iteration cap before converging."""
 
 
 class DistortedInputWarning(UserWarning):

@@ -11,6 +11,13 @@ All work on :class:`~bouc_wen_id.prepare.Prepared` experiments in scaled units (
 ``"refined"``
     The profile estimates as a start, then Levenberg-Marquardt on the steady loops of every experiment at
     once (design.md section 7), safeguarded by generic starts against wrong basins.
+
+References
+----------
+*Wiener System Identification in Presence of Hysteresis Nonlinearity*, the seed paper whose equation
+numbers are cited; for the Bouc-Wen properties it relies on (Propositions 1-2): F. Ikhouane and
+J. Rodellar, *Systems with Hysteresis: Analysis, Identification and Control using the Bouc-Wen Model*,
+Wiley, 2007.
 """
 
 from __future__ import annotations
@@ -23,6 +30,7 @@ from typing import Any, Optional
 import numpy as np
 from numpy.typing import NDArray
 
+from ._backend import Core
 from .errors import BoucWenIdError, InsufficientDataError, SearchAtBoundError
 from .prepare import Prepared
 from .result import Adequacy
@@ -117,6 +125,8 @@ class Fit:
     iterations: int
     cov: Optional[FloatArray]
     loops: list[Optional[FloatArray]]
+    #: Whether the Levenberg-Marquardt run the estimates come from converged (None: no such run).
+    converged: Optional[bool] = None
 
 
 def steady_substeps(p: int) -> int:
@@ -125,7 +135,7 @@ def steady_substeps(p: int) -> int:
 
 
 def loop_fit(
-    core: Any, e: Prepared, gain: float, phi_local: float, beta: float, gamma: float, mu: float
+    core: Core, e: Prepared, gain: float, phi_local: float, beta: float, gamma: float, mu: float
 ) -> tuple[Optional[FloatArray], float]:
     """The identified model's steady loop on the data grid and its NRMSE against ybar."""
     try:
@@ -172,7 +182,7 @@ def adequacy(
 
 def fit(
     prepared: Sequence[Prepared],
-    core: Any,
+    core: Core,
     method: str,
     reference: int,
     lo: float,
@@ -212,19 +222,19 @@ def fit(
 
 def _at_model_limit(exc: SearchAtBoundError) -> SearchAtBoundError:
     """mu = 1 is the model's own limit, so "widen the bracket" is no advice there: say what it means."""
-    err = SearchAtBoundError(
+    return SearchAtBoundError(
         "the fit drove mu to 1, the lower end of the model's range (mu > 1): the data turn at each "
         "reversal in a way no Bouc-Wen loop with mu > 1 draws (typically a force that jumps at the "
         "reversal, as Coulomb friction, or keeps growing with velocity, as viscous damping beside "
         "friction in MR dampers). The plain Wiener-Bouc-Wen model does not describe these data; the "
-        "physics it leaves out must be modelled"
+        "physics it leaves out must be modelled",
+        bound=exc.bound,
+        lower=exc.lower,
     )
-    err.lower, err.bound = exc.lower, exc.bound
-    return err
 
 
 def _paper(
-    prepared: Sequence[Prepared], core: Any, reference: int, lo: float, hi: float, tol: float
+    prepared: Sequence[Prepared], core: Core, reference: int, lo: float, hi: float, tol: float
 ) -> tuple[Start, float, int]:
     """The seed paper's estimator: phase (9), separable search (18)-(24), gains (27b)."""
     ref = prepared[reference]
@@ -245,7 +255,13 @@ def _paper(
 
 
 def _profile(
-    prepared: Sequence[Prepared], core: Any, reference: int, lo: float, hi: float, tol: float, phase_grid: int
+    prepared: Sequence[Prepared],
+    core: Core,
+    reference: int,
+    lo: float,
+    hi: float,
+    tol: float,
+    phase_grid: int,
 ) -> tuple[Start, float]:
     """The separable fit profiled over the phase on the reference, then gain and phase elsewhere."""
     ref = prepared[reference]
@@ -264,7 +280,7 @@ def _profile(
     return Start(float(beta), float(gamma), float(mu), gains, phis), float(cost)
 
 
-def _with_loops(prepared: Sequence[Prepared], core: Any, est: Start, cost: float, iterations: int) -> Fit:
+def _with_loops(prepared: Sequence[Prepared], core: Core, est: Start, cost: float, iterations: int) -> Fit:
     """A separable fit's estimates with the steady loops they draw (no covariance)."""
     loops = [
         loop_fit(core, e, est.gains[i], est.phis[i], est.beta, est.gamma, est.mu)[0]
@@ -333,7 +349,7 @@ def on_constraint(beta: float, gamma: float) -> bool:
 
 def refine(
     prepared: Sequence[Prepared],
-    core: Any,
+    core: Core,
     start: Optional[Start],
     lo: float,
     hi: float,
@@ -473,13 +489,13 @@ def _refined_fit(best: LMRun, m: int, lo: float, hi: float) -> Fit:
     beta, gamma, mu = (float(v) for v in best.params[:3])
     if min(mu - lo, hi - mu) <= AT_BOUND_FRACTION * (hi - lo):
         lower = mu - lo <= hi - mu
-        err = SearchAtBoundError(
+        raise SearchAtBoundError(
             f"the joint fit ended on the {'lower' if lower else 'upper'} end of the mu bracket "
             f"[{lo}, {hi}] (mu = {mu:.6g}); widen the bracket, or check that the data excite the "
-            "hysteresis"
+            "hysteresis",
+            bound=lo if lower else hi,
+            lower=lower,
         )
-        err.lower, err.bound = lower, lo if lower else hi
-        raise err
     gains = best.params[3::2].copy()
     phis = best.params[4::2].copy()
     # Flip the sign of g_i rows/columns where the canonical branch (|G| > 0) is reported.
@@ -491,4 +507,4 @@ def _refined_fit(best: LMRun, m: int, lo: float, hi: float) -> Fit:
     except np.linalg.LinAlgError:
         cov = np.full_like(fisher, np.nan)
     loops: list[Optional[FloatArray]] = list(best.loops)
-    return Fit(beta, gamma, mu, gains, phis, best.cost, best.iterations, cov, loops)
+    return Fit(beta, gamma, mu, gains, phis, best.cost, best.iterations, cov, loops, best.converged)

@@ -4,6 +4,13 @@
 to units of order one, run the estimator (:mod:`.estimators`), map the estimates back with their
 covariance, build one :class:`~bouc_wen_id.result.ExperimentEstimate` per experiment, note what the data do
 not support, and return an :class:`~bouc_wen_id.result.IdentificationResult` (:mod:`.result`).
+
+References
+----------
+*Wiener System Identification in Presence of Hysteresis Nonlinearity*, the seed paper whose equation
+numbers are cited; for the Bouc-Wen properties it relies on (Propositions 1-2): F. Ikhouane and
+J. Rodellar, *Systems with Hysteresis: Analysis, Identification and Control using the Bouc-Wen Model*,
+Wiley, 2007.
 """
 
 from __future__ import annotations
@@ -18,19 +25,21 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ._backend import Backend, get_backend
-from .errors import IdentifiabilityWarning, InsufficientDataError, InvalidParameterError
+from .errors import ConvergenceWarning, IdentifiabilityWarning, InsufficientDataError, InvalidParameterError
 from .estimators import Fit, adequacy, fit, linear_nrmse, on_constraint
 from .model import Recording
 from .prepare import Prepared, Scales, auto_harmonics, noise_variance, prepare, scale
-from .result import Adequacy, ExperimentEstimate, IdentificationResult, Truth, wrap_phase
+from .result import NOT_CONVERGED, Adequacy, ExperimentEstimate, IdentificationResult, Truth, wrap_phase
 from .validation import z_value
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
+    from typing_extensions import TypeAlias
+
     from .measurement import Measurement
     from .signal import AveragedPeriod
 
     #: What identify takes: simulated recordings, raw lab measurements, or averaged periods.
-    Experiment = Recording | Measurement | AveragedPeriod
+    Experiment: TypeAlias = "Recording | Measurement | AveragedPeriod"
 
 __all__ = [
     "identify",
@@ -127,6 +136,9 @@ def identify(
     -----
     IdentifiabilityWarning
         When the parameters are poorly determined by the data (``refined``).
+    ConvergenceWarning
+        When the Levenberg-Marquardt refinement stops at ``max_iter`` before converging
+        (``result.converged`` is False).
     """
     items, (lo, hi) = _check_arguments(recordings, method, confidence, mu_bracket)
     core = get_backend(backend)
@@ -139,6 +151,8 @@ def identify(
     notes = _notes(method, est, experiments, confidence)
     for note in notes:
         warnings.warn(note, IdentifiabilityWarning, stacklevel=2)
+    if fitted.converged is False:
+        warnings.warn(NOT_CONVERGED.format(iterations=fitted.iterations), ConvergenceWarning, stacklevel=2)
     settings = {
         "settle_periods": settle_periods,
         "periods": periods,
@@ -166,6 +180,7 @@ def identify(
         adequacy=adequacy(prepared, [ex.model for ex in experiments], 3 + 2 * len(prepared)),
         warnings=tuple(notes),
         confidence=confidence,
+        converged=fitted.converged,
     )
 
 

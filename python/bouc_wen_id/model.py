@@ -3,6 +3,13 @@
 All are frozen dataclasses that validate themselves on construction, so a bad value is refused where it
 is written rather than deep inside a simulation.  Arrays handed in are copied and made read-only: nothing
 the user passes is modified, and a recording cannot be changed behind the library's back.
+
+References
+----------
+*Wiener System Identification in Presence of Hysteresis Nonlinearity*, the seed paper whose equation
+numbers are cited; for the Bouc-Wen properties it relies on (Propositions 1-2): F. Ikhouane and
+J. Rodellar, *Systems with Hysteresis: Analysis, Identification and Control using the Bouc-Wen Model*,
+Wiley, 2007.
 """
 
 from __future__ import annotations

@@ -7,6 +7,7 @@ from typing import TYPE_CHECKING, Optional
 
 import numpy as np
 
+from .errors import InvalidParameterError
 from .validation import z_value
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
@@ -15,7 +16,7 @@ if TYPE_CHECKING:  # pragma: no cover - typing only
 
     from .result import IdentificationResult
 
-__all__ = ["plot_loop", "plot_loops", "plot_bode", "plot_residuals"]
+__all__ = ["plot_loop", "plot_loops", "plot_bode", "plot_residuals", "panel_grid"]
 
 
 #: Fixed margins (inches) of every figure: a lean layout computed once, instead of matplotlib's
@@ -122,21 +123,32 @@ def plot_bode(result: IdentificationResult, axes: Optional[Sequence[Axes]] = Non
 _GRID_NBINS = 4
 
 
-def _grid(n: int, size: float = 2.6) -> tuple[Figure, list[Axes]]:
-    ncols = min(n, 5)
-    nrows = -(-n // ncols)
-    fig, axes = _new_figure(ncols=ncols, nrows=nrows, size=(size * ncols + 0.5, size * nrows + 0.5))
+def panel_grid(n: int, ncols: int = 5, size: tuple[float, float] = (2.6, 2.6)) -> tuple[Figure, list[Axes]]:
+    """A figure of ``n`` panels, ``ncols`` per row, each ``size`` inches; the spare panels are hidden."""
+    ncols = max(1, min(n, ncols))
+    nrows = -(-max(n, 1) // ncols)
+    fig, axes = _new_figure(ncols=ncols, nrows=nrows, size=(size[0] * ncols + 0.5, size[1] * nrows + 0.5))
     for ax in axes:
         ax.locator_params(nbins=_GRID_NBINS)
+    for ax in axes[n:]:
+        ax.set_visible(False)
     return fig, axes
 
 
-def plot_loops(result: IdentificationResult) -> Figure:
-    """One panel per experiment: the measured averaged loop (solid) and the model's (dashed)."""
-    n = len(result.experiments)
-    fig, axes = _grid(n)
-    for ax in axes[n:]:
-        ax.set_visible(False)
+def _panels(n: int, axes: Optional[Sequence[Axes]]) -> tuple[Figure, list[Axes]]:
+    if axes is None:
+        return panel_grid(n)
+    if len(axes) < n:
+        raise InvalidParameterError(f"{n} experiments need {n} axes, got {len(axes)}")
+    return axes[0].get_figure(), list(axes)  # type: ignore[return-value]
+
+
+def plot_loops(result: IdentificationResult, axes: Optional[Sequence[Axes]] = None) -> Figure:
+    """One panel per experiment: the measured averaged loop (solid) and the model's (dashed).
+
+    ``axes``: one per experiment (default: a new figure, :func:`panel_grid`).
+    """
+    fig, axes = _panels(len(result.experiments), axes)
     for i, (ax, e) in enumerate(zip(axes, result.experiments)):
         x = np.append(e.model_input(), e.model_input()[:1])
         ax.plot(x, np.append(e.ybar, e.ybar[:1]), lw=1.2, color="C0", label="measured")
@@ -151,13 +163,13 @@ def plot_loops(result: IdentificationResult) -> Figure:
     return fig
 
 
-def plot_residuals(result: IdentificationResult) -> Figure:
+def plot_residuals(result: IdentificationResult, axes: Optional[Sequence[Axes]] = None) -> Figure:
     """One panel per experiment: the averaged output minus the model over one period, against time,
-    with the +-2 sigma band of the averaged noise (sigma / sqrt(N))."""
-    n = len(result.experiments)
-    fig, axes = _grid(n)
-    for ax in axes[n:]:
-        ax.set_visible(False)
+    with the +-2 sigma band of the averaged noise (sigma / sqrt(N)).
+
+    ``axes``: one per experiment (default: a new figure, :func:`panel_grid`).
+    """
+    fig, axes = _panels(len(result.experiments), axes)
     for i, (ax, e) in enumerate(zip(axes, result.experiments)):
         t = e.times()
         if e.model is not None:

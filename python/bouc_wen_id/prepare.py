@@ -4,6 +4,13 @@ Each experiment becomes one :class:`Prepared` record: its averaged period ``ybar
 average (4a-b) for a :class:`~bouc_wen_id.model.Recording`, the synchronous average of every steady segment
 for a :class:`~bouc_wen_id.measurement.Measurement`), the spectral derivative, the noise variance from the
 period-to-period spread, and the harmonics kept.  :func:`scale` then expresses them in units of order one.
+
+References
+----------
+*Wiener System Identification in Presence of Hysteresis Nonlinearity*, the seed paper whose equation
+numbers are cited; for the Bouc-Wen properties it relies on (Propositions 1-2): F. Ikhouane and
+J. Rodellar, *Systems with Hysteresis: Analysis, Identification and Control using the Bouc-Wen Model*,
+Wiley, 2007.
 """
 
 from __future__ import annotations
@@ -17,6 +24,7 @@ from typing import TYPE_CHECKING, Any, Optional
 import numpy as np
 from numpy.typing import NDArray
 
+from ._backend import Core
 from .errors import (
     FrequencyMismatchError,
     InsufficientDataError,
@@ -144,7 +152,7 @@ def _harmonics(harmonics: int | str, ybar: FloatArray, noise_var: float, n: floa
 def _prepare_recording(
     i: int,
     rec: Recording,
-    core: Any,
+    core: Core,
     settle_periods: Optional[int],
     periods: Optional[int],
     harmonics: int | str,
@@ -183,7 +191,7 @@ def _prepare_recording(
     )
 
 
-def _prepare_averaged(ap: AveragedPeriod, core: Any, harmonics: int | str) -> Prepared:
+def _prepare_averaged(ap: AveragedPeriod, core: Core, harmonics: int | str) -> Prepared:
     """A period averaged from lab data (any sampling rate): its grid starts at the input's phase zero."""
     ybar = np.ascontiguousarray(ap.ybar, dtype=np.float64)
     k = _harmonics(harmonics, ybar, ap.noise_var, ap.periods)
@@ -207,7 +215,7 @@ def _prepare_averaged(ap: AveragedPeriod, core: Any, harmonics: int | str) -> Pr
 
 def prepare(
     items: Sequence[Any],
-    core: Any,
+    core: Core,
     settle_periods: Optional[int],
     periods: Optional[int],
     harmonics: int | str,

@@ -7,6 +7,13 @@ same named exceptions from :mod:`bouc_wen_id.errors`.
 
 The functions are usable on their own (``identify(..., backend="numpy")`` runs the whole identification on
 them), but they are slow: the RK4 loop is plain Python.
+
+References
+----------
+*Wiener System Identification in Presence of Hysteresis Nonlinearity*, the seed paper whose equation
+numbers are cited; for the Bouc-Wen properties it relies on (Propositions 1-2): F. Ikhouane and
+J. Rodellar, *Systems with Hysteresis: Analysis, Identification and Control using the Bouc-Wen Model*,
+Wiley, 2007.
 """
 
 from __future__ import annotations
@@ -19,6 +26,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .errors import BoucWenIdError as BoucWenIdErrorBase
 from .errors import (
+    ConvergenceError,
     InsufficientDataError,
     InvalidParameterError,
     NonFiniteError,
@@ -404,13 +412,13 @@ def golden_section(
             fd = f(d)
         it += 1
     if a == lo or b == hi:
-        err = SearchAtBoundError(
+        raise SearchAtBoundError(
             f"the minimum lies at the {'lower' if a == lo else 'upper'} end "
             f"{lo if a == lo else hi} of the bracket [{lo}, {hi}] (tol {tol:g}); widen the bracket, "
-            "or check that the data excite the hysteresis"
+            "or check that the data excite the hysteresis",
+            bound=lo if a == lo else hi,
+            lower=a == lo,
         )
-        err.lower, err.bound = a == lo, lo if a == lo else hi
-        raise err
     x = 0.5 * (a + b)
     return x, f(x), it
 
@@ -468,7 +476,7 @@ def gain_estimate(
 
 
 # --------------------------------------------------------------------------------------------------
-# Beyond the paper (issue #3): steady-state loop, profile-phase SLS, output-error refinement
+# Beyond the paper: steady-state loop, profile-phase SLS, output-error refinement
 # --------------------------------------------------------------------------------------------------
 
 #: Newton iterations allowed for the shooting on w(0) of the steady loop.
@@ -597,7 +605,7 @@ def steady_loop(
             break
         iterations += 1
         if iterations > SHOOT_MAX_ITER:
-            raise InvalidParameterError(
+            raise ConvergenceError(
                 f"the steady-loop shooting did not converge in {SHOOT_MAX_ITER} iterations "
                 f"(residual {resid:.3e})"
             )
@@ -718,12 +726,12 @@ def profile_phase_sls(
             raise SingularNormalMatrixError("the refined phase gave no solvable fit")
     mu, theta, cost, at_bound = out
     if at_bound is not None:
-        err = SearchAtBoundError(
+        raise SearchAtBoundError(
             f"the minimum lies at the {'lower' if at_bound else 'upper'} end {mu} of the mu bracket "
-            f"[{lo}, {hi}] (tol {tol:g}); widen the bracket, or check that the data excite the hysteresis"
+            f"[{lo}, {hi}] (tol {tol:g}); widen the bracket, or check that the data excite the hysteresis",
+            bound=mu,
+            lower=at_bound,
         )
-        err.lower, err.bound = at_bound, mu
-        raise err
     gain, beta, gamma = theta[0], theta[1] / theta[0], theta[2] / theta[0]
     if gain < 0.0:
         gain, phi, beta = -gain, phi + np.pi, -beta

@@ -35,6 +35,12 @@ __all__ = [
 FloatArray = NDArray[np.float64]
 TWO_PI = 2.0 * math.pi
 
+#: What a refinement that hit its iteration cap means, for the summary and the warning.
+NOT_CONVERGED = (
+    "the Levenberg-Marquardt refinement stopped at its cap of {iterations} iterations before converging: "
+    "the estimates and their intervals are those of an unfinished fit; raise max_iter"
+)
+
 
 def wrap_phase(phi: float | FloatArray) -> Any:
     """Map a phase to [0, 2 pi)."""
@@ -170,6 +176,9 @@ class IdentificationResult:
         Residual power of the fitted loops against the noise floor.
     warnings : tuple of str
         Identifiability warnings (also issued as :class:`IdentifiabilityWarning`).
+    converged : bool or None
+        ``refined``: whether the Levenberg-Marquardt run the estimates come from converged before
+        ``max_iter`` (``False`` is also issued as :class:`ConvergenceWarning`); None for the other methods.
     """
 
     method: str
@@ -188,6 +197,7 @@ class IdentificationResult:
     adequacy: Optional[Adequacy] = None
     warnings: tuple[str, ...] = ()
     confidence: float = 0.95
+    converged: Optional[bool] = None
 
     def interval(self, name: str) -> tuple[float, float]:
         """Confidence interval (at ``self.confidence``) of ``beta``, ``gamma`` or ``mu``.
@@ -302,6 +312,8 @@ class IdentificationResult:
                 f"p = {a.p_value:.3g}"
                 + ("  -> the model does not explain the data" if a.p_value < 0.05 else "")
             )
+        if self.converged is False:
+            lines.append(f"  warning: {NOT_CONVERGED.format(iterations=self.iterations)}")
         for w in self.warnings:
             lines.append(f"  warning: {w}")
         return "\n".join(lines)
@@ -338,6 +350,7 @@ class IdentificationResult:
             "covariance": None if self.covariance is None else self.covariance.tolist(),
             "adequacy": None if self.adequacy is None else self.adequacy.to_dict(),
             "warnings": list(self.warnings),
+            "converged": self.converged,
         }
         if self.truth is not None:
             err = self.errors()

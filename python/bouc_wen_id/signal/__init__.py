@@ -44,6 +44,13 @@ Reasons given for dropped stretches (:class:`SegmentReport`)
     Steady, but fewer whole periods than ``min_periods``.
 ``"partial period"``
     Less than one period left over at the end of a contiguous block or next to a kept segment.
+
+References
+----------
+*Wiener System Identification in Presence of Hysteresis Nonlinearity*, the seed paper whose equation
+numbers are cited; for the Bouc-Wen properties it relies on (Propositions 1-2): F. Ikhouane and
+J. Rodellar, *Systems with Hysteresis: Analysis, Identification and Control using the Bouc-Wen Model*,
+Wiley, 2007.
 """
 
 from __future__ import annotations

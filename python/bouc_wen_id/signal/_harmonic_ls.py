@@ -8,14 +8,13 @@ very long records.
 
 from __future__ import annotations
 
+import importlib
 import math
 from dataclasses import dataclass
 from typing import Any, Optional
 
 import numpy as np
 from numpy.typing import NDArray
-
-from .. import _fastlab
 
 __all__ = [
     "HarmonicFit",
@@ -39,6 +38,12 @@ QR_CHUNK = 8192
 #: below.  ``False`` selects the NumPy paths throughout: the reference that tests/test_fastlab.py holds the
 #: fast path to.
 USE_RUST_KERNELS = True
+
+
+def _fastlab() -> Any:
+    """:mod:`bouc_wen_id._fastlab`, imported on first use by name: a static import from here closes an
+    import cycle through the package that makes mypy lose ``identification.Experiment``."""
+    return importlib.import_module("bouc_wen_id._fastlab")
 
 
 def solve_triangular(a: FloatArray, b: FloatArray, **kwargs: Any) -> Any:
@@ -113,7 +118,7 @@ def fit_at(tau: FloatArray, x: FloatArray, omega: float, k: int) -> HarmonicFit:
     """Linear fit of ``x`` on harmonics 1..k of ``omega`` at times ``tau`` (and a constant)."""
     theta = phase_angle(omega, tau)
     basis = harmonic_basis(theta, k)
-    fast = _fastlab.harmonic_lsq(theta, x, k) if USE_RUST_KERNELS else None
+    fast = _fastlab().harmonic_lsq(theta, x, k) if USE_RUST_KERNELS else None
     if fast is not None:
         coef, r_factor, _ = fast
     else:
@@ -234,7 +239,7 @@ def _moment_fit(theta: FloatArray, y: FloatArray, kmax: int) -> tuple[FloatArray
 def nested_fit(theta: FloatArray, y: FloatArray, kmax: int) -> HarmonicLS:
     """The fit on harmonics up to ``kmax`` whose sub-fits on fewer harmonics come for free."""
     if USE_RUST_KERNELS:
-        fast = _fastlab.moment_fit(theta, y, kmax)
+        fast = _fastlab().moment_fit(theta, y, kmax)
         if fast is not None:
             return HarmonicLS(*fast)
     n, m = y.size, 2 * kmax + 1

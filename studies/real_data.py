@@ -2,12 +2,12 @@
 
 Run from the repository root (the package must be importable, e.g. ``PYTHONPATH=python``)::
 
-    PYTHONPATH=python .venv/bin/python examples/real_data.py            # all four data sets, ~2 min
-    PYTHONPATH=python .venv/bin/python examples/real_data.py --doc-only # docs/real-data.md from results.json
+    python studies/real_data.py            # all four data sets, ~2 min
+    python studies/real_data.py --doc-only # docs/real-data.md from results.json
 
 For every usable experiment (one steady stretch of one record) the script
 
-1. reads the raw files with the adapters of ``examples/_adapters.py`` into ``Measurement`` objects;
+1. reads the raw files with the adapters of ``studies/_adapters.py`` into ``Measurement`` objects;
 2. cuts the record into steady segments (``find_steady_segments``: kept and dropped stretches with reasons)
    and averages each kept segment (``synchronous_average``, any number of samples per period);
 3. identifies it on its own with ``identify(..., method="refined")`` (and ``"profile"`` for comparison),
@@ -50,17 +50,18 @@ import _adapters as ad  # examples/ is not a package: this file's folder is on s
 import bouc_wen_id as bw
 import numpy as np
 from bouc_wen_id import _core
-from bouc_wen_id.signal import AveragedPeriod, SegmentReport, find_steady_segments, synchronous_average
+from bouc_wen_id.plotting import panel_grid
+from bouc_wen_id.signal import AveragedPeriod, SegmentReport, average_segments
+from bouc_wen_id.validation import z_value
 from numpy.typing import NDArray
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
-    from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
 FloatArray = NDArray[np.float64]
 TWO_PI = 2.0 * math.pi
 #: Two-sided 95 % normal quantile.
-Z95 = 1.959963984540054
+Z95 = z_value(0.95)
 REPO = Path(__file__).resolve().parents[1]
 #: The library's default bracket, and the wider one tried when a fit ends on its upper end.
 MU_BRACKET = (1.0, 10.0)
@@ -465,7 +466,8 @@ def process(spec: Spec, *, cross: bool = True) -> list[Outcome]:
     try:
         with captured(pre_warns):
             m.check()
-            report = find_steady_segments(m.t, m.u, m.y, nominal_frequency=m.nominal_frequency)
+            found = average_segments(m, name=spec.label)
+            report = found.report
     except Exception as exc:  # noqa: BLE001 - named refusal or library bug, recorded
         status = "refused" if isinstance(exc, bw.BoucWenIdError) else "library bug"
         rec = {**base, "segment": None, "status": status, "stage": "preprocessing", "error": _error(exc)}
@@ -488,20 +490,9 @@ def process(spec: Spec, *, cross: bool = True) -> list[Outcome]:
         rec["periods"] = seg.periods
         rec["samples_per_period"] = TWO_PI / (fit.frequency * m.dt)
         rec["input"] = {"amplitude": fit.amplitude, "offset": fit.offset, "thd": _num(fit.thd)}
+        # Averaged with the segments (signal.average_segments): its warnings are the preprocessing's.
         avg_warns: list[dict[str, str]] = []
-        try:
-            with captured(avg_warns):
-                ap = synchronous_average(
-                    m.t, m.y, fit, start=seg.start, stop=seg.stop, source=f"{spec.label} segment {i}"
-                )
-        except Exception as exc:  # noqa: BLE001
-            rec.update(
-                status="refused" if isinstance(exc, bw.BoucWenIdError) else "library bug",
-                stage="averaging",
-                error=_error(exc),
-            )
-            outcomes.append(Outcome(rec, spec, report))
-            continue
+        ap = found.periods[i]
         amp1, lead, lin = fundamental(ap)
         rec["averaged"] = {
             "points": ap.samples_per_period,
@@ -602,19 +593,6 @@ def joint_fit(dataset: str, label: str, members: list[Outcome]) -> Joint:
 # Figures
 
 
-def _figure(nrows: int, ncols: int, size: tuple[float, float]) -> tuple[Figure, list[Axes]]:
-    from matplotlib.figure import Figure
-
-    fig = Figure(figsize=size, layout="constrained")
-    axes = fig.subplots(nrows, ncols, squeeze=False)
-    return fig, list(axes.ravel())
-
-
-def _grid_shape(n: int, ncols: int) -> tuple[int, int]:
-    ncols = max(1, min(n, ncols))
-    return -(-n // ncols), ncols
-
-
 def _short(o: Outcome) -> str:
     return (
         o.spec.label if o.record.get("segment", 0) in (0, None) else f"{o.spec.label} #{o.record['segment']}"
@@ -623,10 +601,7 @@ def _short(o: Outcome) -> str:
 
 def figure_segments(specs: Sequence[Spec], outcomes: Sequence[Outcome], ncols: int) -> Figure:
     """Each record's input and output (each scaled to its peak) against time, kept segments shaded."""
-    nrows, ncols = _grid_shape(len(specs), ncols)
-    fig, axes = _figure(nrows, ncols, (2.6 * ncols + 0.4, 1.7 * nrows + 0.6))
-    for ax in axes[len(specs) :]:
-        ax.set_visible(False)
+    fig, axes = panel_grid(len(specs), ncols, (2.6, 1.7))
     for ax, spec in zip(axes, specs):
         m = spec.measurement
         t = m.t - m.t[0]
@@ -666,10 +641,7 @@ def _model_loop(o: Outcome) -> tuple[Optional[FloatArray], str]:
 def figure_loops(outcomes: Sequence[Outcome], ncols: int) -> Figure:
     """Averaged loops against the measured input: data, the library's model, the cross-check's."""
     usable = [o for o in outcomes if o.averaged is not None]
-    nrows, ncols = _grid_shape(len(usable), ncols)
-    fig, axes = _figure(nrows, ncols, (2.6 * ncols + 0.4, 2.3 * nrows + 0.6))
-    for ax in axes[len(usable) :]:
-        ax.set_visible(False)
+    fig, axes = panel_grid(len(usable), ncols, (2.6, 2.3))
     for ax, o in zip(axes, usable):
         ap = o.averaged
         assert ap is not None
@@ -708,10 +680,7 @@ def figure_loops(outcomes: Sequence[Outcome], ncols: int) -> Figure:
 def figure_residuals(outcomes: Sequence[Outcome], ncols: int) -> Figure:
     """Averaged output minus model over one period (the library's fit, else the cross-check's)."""
     usable = [o for o in outcomes if o.averaged is not None and _model_loop(o)[0] is not None]
-    nrows, ncols = _grid_shape(max(len(usable), 1), ncols)
-    fig, axes = _figure(nrows, ncols, (2.6 * ncols + 0.4, 1.9 * nrows + 0.6))
-    for ax in axes[len(usable) :]:
-        ax.set_visible(False)
+    fig, axes = panel_grid(len(usable), ncols, (2.6, 1.9))
     for ax, o in zip(axes, usable):
         ap = o.averaged
         assert ap is not None
@@ -740,7 +709,7 @@ def figure_bode(
     outcomes: Sequence[Outcome], joints: Sequence[Joint], group_of: Callable[[Outcome], str]
 ) -> Figure:
     """|G| and phi at each experiment's frequency: single fits (95 % CI), joint fits, cross-checks."""
-    fig, (ax_g, ax_p) = _figure(2, 1, (6.4, 6.0))
+    fig, (ax_g, ax_p) = panel_grid(2, 1, (5.9, 2.75))
     groups: dict[str, list[Outcome]] = {}
     for o in outcomes:
         if o.averaged is not None:
@@ -858,7 +827,7 @@ def run(
         "format": "bouc_wen_id.real_data",
         "version": 1,
         "library_version": bw.__version__,
-        "command": "PYTHONPATH=python .venv/bin/python examples/real_data.py",
+        "command": "python studies/real_data.py",
         "settings": {
             "method": "refined",
             "mu_bracket": list(MU_BRACKET),
@@ -1175,243 +1144,20 @@ def tally(recs: Sequence[dict[str, Any]]) -> str:
     return "; ".join(parts) + "."
 
 
-INTRO = """\
-# Real data, honestly
+#: The page's prose, in a Markdown template next to this script (sections named like the keys below).
+TEMPLATE = Path(__file__).with_name("real_data.md.in")
 
-Generated by `examples/real_data.py` from `docs/real-data/results.json`; do not edit by hand (the prose
-lives in the script). Regenerate everything (about two minutes on two cores) from the repository root with
 
-```bash
-PYTHONPATH=python .venv/bin/python examples/real_data.py             # data from ../shared/data/real
-PYTHONPATH=python .venv/bin/python examples/real_data.py --doc-only  # this page from results.json only
-```
-
-> **Status of these numbers.** `results.json` and the tables below were produced by the library *before*
-> the fixes its *Library rough edges* section asked for (items 1-3): the refined fit now projects its steps
-> onto the Bouc-Wen constraint instead of stalling on it, restarts from 16 generic starts when the
-> separable start runs to mu = 1, ends on the constraint or fits worse than a linear model, and warns
-> (`IdentifiabilityWarning`) on a constrained fit and on a fit worse than linear (`linear_nrmse`). Spot
-> checks with the fixed library: ME10mm2Hz 1 A, refused here (mu -> 1), is identified with mu = 1.57 and
-> NRMSE 0.066 (the cross-check's optimum: mu 1.49, NRMSE 0.066), on beta = gamma with the warning;
-> ME5mm3Hz 0 A gives mu = 1.62, NRMSE 0.096; ME25mm0x25Hz 0.5 A, an NRMSE-1.03 fit here, is refused
-> (mu -> 1, where the cross-check also ends). Over the 30 MR blocks the fixed library identifies 21 and
-> refuses 9 (all `SearchAtBoundError`); all 6 friction tests are identified. A full rerun with the
-> fixed library takes over 25 minutes (the joint fits try every experiment as the reference, each now
-> with the generic restarts) and has not been done for this page; the prose below still describes the
-> earlier fits. `tests/test_real_data.py` runs the fixed library on a subset and asserts the new
-> behaviour (named refusals or fits that beat the linear model, with the constraint warning).
-
-Four sets of measured hysteresis recordings (see `../shared/data/real/*/PROVENANCE.md`; they are read in
-place and never copied: only the MR damper files are MIT-licensed) are cut into steady segments, averaged
-and identified with the plain Wiener-Bouc-Wen model, one experiment at a time
-(`identify(..., method="refined")`), then jointly. Every number below is what the library returned
-({library}) or the named error it refused with; nothing is tuned per experiment. Overall: {overall}
-
-**How to read the tables.** *f found* is the input's frequency as estimated by `analyse_sine` on the kept
-segment, against the nominal one of the file name. *periods* is the length of the kept steady segment;
-*samples/period* is the raw sampling (not an integer in general). *noise sd* is the sd of one output sample
-around the harmonic fit of the segment (the noise floor the adequacy test uses). *output lead* is the phase
-of the output's fundamental relative to the input's (90 deg: in phase with the velocity, as a dashpot or a
-rigid-plastic friction loop; 0: elastic). *linear NRMSE* is the loop error of the best *linear* model
-(spring + dashpot, i.e. the output's fundamental alone): a hysteresis model that does not beat it explains
-nothing nonlinear. In the identification table the intervals are the library's 95 % intervals;
-phi = -angle G(j omega) is shown on (-pi, pi]; *NRMSE* = |ybar - model| / |ybar - mean| of the averaged
-loop; *adequacy* is the library's chi-square statistic over its degrees of freedom and the p-value of its
-F-test (near 1 and p > 0.05 when the model explains the data down to the noise). "**on beta = gamma**" (or
-beta = -gamma) marks a fit that ended on the boundary of the admissible set beta >= |gamma|: the library's
-Levenberg-Marquardt rejects steps that leave the set, so such a fit is constrained, its Gaussian intervals
-are not valid, and it need not be a minimum of the output error (see *Library rough edges*).
-
-**Cross-check (outside the library).** To tell "the model cannot" from "the estimator did not", every
-averaged period is also fitted by a bounded multi-start least-squares (SciPy trust-region reflective, 16
-starts) of the same steady Bouc-Wen loop (the library's own solver `_core.steady_loop`), on the same
-admissible set (beta >= |gamma|, beta + gamma > 0, 1 < mu <= 40). Its NRMSE is the best the plain model
-reached from those starts, with its (mu, phi); it has no uncertainty. It is a diagnostic, not a result of
-the library. Scored by the library's own adequacy test, it too is rejected everywhere: chi2/dof
-{xc_adequacy} (p = {xc_p}).
-
-**The mu bracket.** Refusals at the upper end of mu's default bracket (1, 10] were retried once on
-(1, 40] (a sharper yield is physically meaningful): {retries}. Refusals at the lower end (mu -> 1, the
-library's most common answer here) were not retried: mu = 1 is already the lower end of the default
-bracket and the model's own limit (mu < 1 draws no Bouc-Wen loop), so no physically meaningful wider
-bracket exists, and raising the lower end would impose a shape the data do not ask for. The cross-check, free
-in (1, 40], also ends within 1e-4 of mu = 1 in {xc_mu1} of those {n_mu1} experiments.
-"""
-
-MR_PROSE_BEFORE = """\
-Six files, each holding five consecutive tests at coil currents 0, 0.25, 0.5, 0.75 and 1 A (one
-`Measurement` per DAQ block between Pause/Resume events; the channel order differs between the two
-sessions; force = channel x 980.665 N, displacement = channel x 10 mm). u = the measured actuator
-displacement (the MTS command is not recorded), y = the load-cell force.
-
-**Preprocessing.** The frequency is found {freq_range} above nominal in every block, as PROVENANCE says
-(DAQ clock against the MTS generator): the averaging works at the true, non-integer number of samples per
-period (39.2 at 5 Hz, where the 200 Hz sampling is coarse). Each block yields one steady segment.
-PROVENANCE counts 9-10 steady periods per block (peak-to-peak above 97 % of the maximum; about 4 at
-0.25 Hz); the library keeps {periods_range}: at constant stroke the force still drifts down by a few
-percent over the first periods (e.g. ME5mm3Hz 0 A: the force's fundamental goes 224, 218, 216, 215, ...
-212 N over 9 periods of constant stroke; fluid heating or settling), and the settling test of
-`find_steady_segments` drops those periods as "transient". The force leads the displacement by
-{lead_range} deg (output lead column).
-"""
-
-MR_PROSE_AFTER = """\
-**What the residuals show, and what the plain model leaves out.** Every loop, 0 A included, is a rounded
-rectangle: a yield force (half the peak-to-peak) of {f0} N at 0 A growing to {f1} N at 1 A, reached within
-a small fraction of the stroke after each reversal, then a plateau that bulges with the velocity.
-The best linear spring + dashpot leaves {lin_range} of the loop unexplained. The separable fit drives mu
-to 1 in {n_mu1} of 30 blocks (`SearchAtBoundError`; the library's message names the viscous part), and
-widening the bracket cannot help: mu < 1 is outside the model. {n_ident} blocks return a fit; they end on
-beta = gamma with an NRMSE of {lib_range} (no better than the zero model) and a phase phi of
-{lib_phi_range} rad (x leading u by a quarter period): a wrong branch, not a damper model (*Library rough
-edges*). The
-cross-check shows what the plain model can do at best on these loops: NRMSE {xc_range}, always on the edge
-beta = gamma (a linear "unloading" branch) and with mu {xc_mu_range}; its residuals (grey) are spikes at
-the knee right after each reversal (the rise is sharper, then rounder, than one mu draws), the viscous
-bulge of the plateaus, the asymmetry between the two half-cycles (even harmonics), and a fine ripple on
-the 0 A plateaus. Its phi of {xc_phi_range} rad puts x ahead of the measured displacement: G's phase
-absorbs the viscous lead although the displacement is measured at the damper. Physics the plain
-Wiener-Bouc-Wen model leaves out: a viscous term c xdot in parallel (the modified Bouc-Wen of Spencer et
-al.), a yield force that scales with current, the force offset and asymmetric loops (accumulator preload and
-load-cell zero: +20 to +78 N; e.g. -157 ... +253 N at 0 A / 3 Hz), the plateau/kink near +-400-500 N right
-after reversal at 5 Hz (compliance, clearance or fluid compressibility; visible in the bottom row),
-stick-slip chatter at 0.25 Hz and high current, and the MTS servo loop (the stroke falls short of nominal
-at high frequency; the command is not recorded).
-
-**Joint fits per coil current.** Shared beta, gamma, mu across 0.25-5 Hz, one |G| and phase per frequency,
-each experiment tried as the reference (the start of the fit); the lowest cost is reported.
-"""
-
-FRICTION_PROSE_BEFORE = """\
-Six tests at 30 lb band tension: a frequency sweep at 0.5 in (0.25, 0.5, 1, 2 Hz) and an amplitude sweep at
-1 Hz (0.5, 1, 1.5 in). u = the imposed displacement (in), y = the friction force (kip), 1024 Hz, the file's
-own time column.
-
-**Preprocessing.** PROVENANCE: 7 periods per record, an amplitude ramp over the first and the last two, 3
-steady periods in between. The library finds exactly that (3.00 periods from t = 2T, both ramps dropped as
-"amplitude ramp") in every file but the 1.5 in test, where it keeps {fr15_periods} periods: that test
-reached only 1.453 in, its displacement is flattened at the peaks (THD above 10 %,
-`DistortedInputWarning`) and its first full-amplitude period is dropped as "transient". The frequency is
-found within {fr_freq} of nominal (an integer number of samples per period). The force's fundamental leads
-the displacement by {lead_range} deg, between elastic and the 90 deg of a rigid-plastic friction loop: a
-finite pre-sliding stiffness and the backlash shoulder delay the force's reversal.
-"""
-
-FRICTION_PROSE_AFTER = """\
-**What the residuals show, and what the plain model leaves out.** The loops are Coulomb-like plateaus at
-about +-2-2.5 kip with an S-shaped *backlash* shoulder through zero force after each reversal (a pinched
-loop), a *break-away overshoot* right after reversal that is larger on the positive side (asymmetry: e.g.
--2.78 ... 3.14 kip at 1 Hz), and *ringing* of roughly 10 Hz and more after break-away (stick-slip and
-fixture dynamics; at 2 Hz it dominates the loop). The library's refined fits all end on the constraint
-beta = -gamma (no saturation on loading), with phi = {lib_phi_range} rad (x leading u by about a quarter
-period), an elliptic loop and NRMSE {lib_range}: worse than the best linear model ({lin_range}), i.e.
-nothing explained. The cross-check shows that the plain model does much better on the same averaged
-periods: NRMSE {xc_range}, mu {xc_mu_range}, phi {xc_phi_range} rad (x lagging u slightly, as a backlash
-would), and |G| {xc_gain_sweep} over the 0.25-2 Hz sweep at 0.5 in: a nearly rate-independent element
-with a nearly flat G, as PROVENANCE expects (mu and |G| trade off, so both wander). So
-the library's numbers here are an estimator failure (its start picks the quarter-period phase branch and
-the LM stalls on the constraint, see *Library rough edges*), not the model's limit. Even the cross-check's
-loops leave the backlash shoulder, the overshoot and the ringing in the residuals: backlash (a dead zone
-before the friction element), stiction (a break-away force above the sliding force), the asymmetry and the
-fixture's resonance are physics the plain Wiener-Bouc-Wen model does not contain. With only three steady
-periods per test the noise floor itself rests on few periods, and the ringing, which is not phase-locked,
-partly counts as noise.
-"""
-
-WIRE_PROSE_BEFORE = """\
-Six sine dwells: level A2 at 16, 18, 20 and 22 Hz, and the largest level A4 at 18 and 22 Hz. No time
-column: t = k / 10240 s; the adapter drops the first 1.2 s of each file (the previous level of the stepped
-test). u = minus the raw displacement (the repo's sign convention, which makes the loops dissipative; the
-x100 "cm to mm" factor of its script is inconsistent and not applied), y = the force; both uncalibrated.
-
-**Preprocessing.** The tones come out at {freqs} Hz ({offsets} off nominal), as PROVENANCE computes at
-10240 Hz. The input is distorted (2nd harmonic up to ~16 %): `DistortedInputWarning` in {distorted} of 6
-files. PROVENANCE counts {prov_periods} periods after the first 1.2 s; the library keeps {kept_periods}:
-at 22 Hz / A2 and at A4 it drops the start (and at 18 Hz / A4 also the end) as "transient", up to the cap
-of a quarter of the run at each end; its settling test sees a slow drift of the waveform at the precision
-of a 100-period average (*Library rough edges*). The force leads the displacement by {lead_a2} deg at A2
-and {lead_a4} deg at A4: close to quadrature, and beyond it at A4.
-"""
-
-WIRE_PROSE_AFTER = """\
-**What the residuals show, and what the plain model leaves out.** These loops are not quasi-static
-hysteresis: force and displacement are near quadrature, the phase moves with amplitude and frequency, the
-force grows strongly sub-linearly with the displacement (x6.6 displacement gives x1.7 force at 18 Hz), and
-the best linear spring + dashpot already explains all but {lin_range} of the loop. The isolator sits near
-a resonance of the shaker/stinger/frame: inertia and damping dominate, and a Wiener-Bouc-Wen model has to
-put them into G's phase and an almost elliptic w, hence mu -> 1 in {n_mu1} of 6 files. Where a fit is
-returned (NRMSE {lib_range}) the adequacy test still rejects it (chi2/dof {adeq_range}): with 60-230
-averaged periods the noise floor of the average is a small fraction of a percent of the loop, and the
-residual left is structured, a second and third harmonic (distorted input, asymmetric stiffness) plus, at
-A4, a high-frequency burst once per cycle just after the negative reversal (a rattle or strand slip in the
-isolator or its fixture, visible on the loops). The cross-check reaches NRMSE {xc_range}, mostly at mu -> 1.
-Physics missing from the model: the rig's dynamics (a Wiener model has no dynamics after the hysteresis,
-where the force is measured), amplitude-dependent stiffness and damping (softening), the impacts at A4,
-the distorted input (the model assumes a pure cosine) and any calibration.
-"""
-
-BH_PROSE_BEFORE = """\
-Four oscilloscope captures (1200 samples each, dt from the PROVENANCE table, 8-bit). The bridge output
-(col 0) is proportional to **dB/dt**, not to B: a Bouc-Wen output w cannot be compared with it directly
-(that would need an output differentiator, which the library does not model). The adapter therefore
-**integrates** col 0: its DC (bridge offset, scope zero) is estimated jointly with 10 harmonics of the
-reference tone and removed, the rest is integrated by the trapezoidal rule, and the remaining linear drift
-is removed (`_adapters.integrate_derivative`, tested on a synthetic derivative). u = the reference channel
-(~ H, current), y = the integrated B (V s). Both are relative (no bridge or geometry calibration); B comes
-out with the bridge's sign (|G| > 0 is reported, with phi shifted by pi; output lead near 160 deg).
-
-**Preprocessing.** Only 2.4-3 periods per capture: the library keeps {kept} whole periods, as PROVENANCE
-says (2 where the record holds 2.4). The tones are found at {freqs} kHz. The noise floor comes from the
-residual of the harmonic fit over these 2-3 periods (8-bit quantisation, scope noise), with few degrees of
-freedom.
-"""
-
-BH_PROSE_AFTER = """\
-**What the residuals show, and what the plain model leaves out.** The integrated loops are smooth,
-saturating hysteresis loops, the closest of the four data sets to a Bouc-Wen shape: the best linear model
-leaves {lin_range}, the cross-check {xc_range}, and the library's fits where it returns one {lib_range}
-(on beta = gamma). Still the adequacy test rejects every fit (chi2/dof {adeq_range}), and the numbers are
-soft: the integration constant and the drift removal are choices, and a residual bridge imbalance adds a
-term proportional to the integral of the current, in quadrature with H, that cannot be told from
-hysteresis loss with these data. The sweep is in frequency only, at one excitation amplitude, where
-eddy-current and relaxation effects make the loop *rate-dependent*, which a rate-independent Bouc-Wen
-element can only absorb into G's phase. The residuals are smooth and structured, a few cycles per period
-(3rd to 5th harmonics: the shape of the tips and of the waist differs from any single-mu loop), far above
-the noise band. Only 2-3 periods are recorded, so the noise floor rests on few degrees of freedom, and the
-reference channel is quantised in 0.4 V steps (~78 levels).
-"""
-
-ROUGH_EDGES = """\
-## Library rough edges seen on these data
-
-Observations for the next issue (mismatch diagnosis), with the experiments that show them:
-
-1. **Fits that end on the Bouc-Wen constraint are reported as ordinary results.** The refined LM rejects
-   steps that leave beta >= |gamma|, beta + gamma > 0, so it stops *on* the boundary (beta = gamma or
-   beta = -gamma to ten digits) when the descent leads out of the set. `identify` then returns
-   Gaussian 95 % intervals and no warning ({n_constraint} of {n_ident} single fits here, e.g.
-   {ex_constraint}). An end of the mu bracket, by contrast, is refused with `SearchAtBoundError`.
-   Suggested: an `IdentifiabilityWarning` (or a named error) when the estimate sits on the constraint, and
-   no interval for the active combination.
-2. **Refined fits no better than the zero model, without a warning.** {n_worse} single fits have an NRMSE
-   of 0.8 or more ({ex_worse}). They start from a separable estimate outside the admissible set
-   (beta < |gamma|, moved to beta = |gamma| + 1e-3 in scaled units, a very different loop) or on the
-   quarter-period phase branch, and stall on the constraint. The cross-check reaches much lower NRMSE on the
-   same averaged periods from other starts (e.g. {ex_branch}). Suggested: warn when the NRMSE exceeds the
-   best linear model's (or 1); start the refinement from several phases (a grid of phi with generic
-   (beta, gamma, mu)) as well as from the separable estimate, and keep the lowest cost; take projected
-   (active-set) steps that can slide along the constraint instead of stopping on it.
-3. **The refusal "mu driven to 1" is decided by the separable (derivative-domain) stage.** For the MR
-   damper the profile SLS, which does not enforce beta >= |gamma|, ends at mu = 1 and the output-error fit
-   never runs ({n_profile_mu1} of the {n_mu1_all} "mu -> 1" refusals here are refusals of
-   `method="profile"` too); the cross-check finds admissible output-error optima with mu well inside
-   (1, 40] in {n_interior} of the {n_mu1_mr} refused MR blocks (e.g. {ex_interior}). The refusal remains
-   the honest outcome (these loops are not Bouc-Wen loops), but its reason is the derivative fit's.
-4. **The settling trim of `find_steady_segments` drops up to a quarter of a long run at each end** when
-   the waveform drifts slowly: wire rope {ex_trim} (the force amplitude there drifts by a few 0.1 % over
-   the record, the input by less). Defensible (drift is not steady state), but it halves some records;
-   reporting the drift would let the user decide.
-"""
+def prose() -> dict[str, str]:
+    """The template's sections, by name (``intro``, ``mr_prose_before``, ..., ``rough_edges``)."""
+    sections: dict[str, list[str]] = {}
+    current: Optional[list[str]] = None
+    for line in TEMPLATE.read_text(encoding="utf-8").splitlines():
+        if line.startswith("<!-- section: ") and line.endswith(" -->"):
+            current = sections.setdefault(line[len("<!-- section: ") : -len(" -->")], [])
+        elif current is not None:
+            current.append(line)
+    return {name: "\n".join(body).strip("\n") + "\n" for name, body in sections.items()}
 
 
 def _range(values: Sequence[Optional[float]], fmt: str, unit: str = "") -> str:
@@ -1595,8 +1341,9 @@ def render(doc: dict[str, Any], doc_path: Path, out: Path) -> str:
     recs_all: list[dict[str, Any]] = doc["experiments"]
     rel = Path(os.path.relpath(out, doc_path.parent))
     xcs = [r["crosscheck"] for r in recs_all if r.get("crosscheck")]
+    text = prose()
     lines = [
-        INTRO.format(
+        text["intro"].format(
             library=f"bouc_wen_id {doc['library_version']}",
             overall=tally(recs_all),
             xc_adequacy=_range([x.get("adequacy_ratio") for x in xcs], ".3g"),
@@ -1606,17 +1353,12 @@ def render(doc: dict[str, Any], doc_path: Path, out: Path) -> str:
         "",
     ]
     lines += summary_table(recs_all, doc["joint"]) + [""]
-    prose = {
-        "mr-damper": (MR_PROSE_BEFORE, MR_PROSE_AFTER),
-        "friction-damper": (FRICTION_PROSE_BEFORE, FRICTION_PROSE_AFTER),
-        "wire-rope": (WIRE_PROSE_BEFORE, WIRE_PROSE_AFTER),
-        "bh-microwire": (BH_PROSE_BEFORE, BH_PROSE_AFTER),
-    }
+    key = {"mr-damper": "mr", "friction-damper": "friction", "wire-rope": "wire", "bh-microwire": "bh"}
     for dataset in DATASET_ORDER:
         recs = [r for r in recs_all if r["dataset"] == dataset]
         if not recs:
             continue
-        before, after = prose[dataset]
+        before, after = text[f"{key[dataset]}_prose_before"], text[f"{key[dataset]}_prose_after"]
         facts = _section_facts(dataset, recs)
         figs = doc["figures"].get(dataset, [])
         lines += [f"## {DATASET_TITLES[dataset]}", "", before.format(**facts).rstrip(), ""]
@@ -1640,7 +1382,7 @@ def render(doc: dict[str, Any], doc_path: Path, out: Path) -> str:
         for name in figs:
             if "-joint-" in name:
                 lines += [f"![joint fit loops]({(rel / name).as_posix()})", ""]
-    lines.append(ROUGH_EDGES.format(**_rough_facts(recs_all)).rstrip())
+    lines.append(text["rough_edges"].format(**_rough_facts(recs_all)).rstrip())
     bugs = [r for r in recs_all if r.get("status") == "library bug"]
     if bugs:
         lines += ["", "**Exceptions that are not named errors (library bugs):**", ""]
