@@ -11,6 +11,8 @@ Dask is optional (``pip install "bouc_wen_id[dask]"``) and imported only when a 
 
 from __future__ import annotations
 
+import atexit
+import copy
 import multiprocessing
 import os
 from collections.abc import Mapping, Sequence
@@ -51,6 +53,9 @@ def _run(experiments: Sequence[Any], options: Mapping[str, Any], errors: str) ->
     """One identification (in whatever process runs it)."""
     from .identification import identify
 
+    # Fresh copies of the experiments' arrays: a process that received them (Dask deserialises straight
+    # from its network frames) may hold read-only, unaligned buffers that the core cannot borrow.
+    experiments = copy.deepcopy(experiments)
     try:
         return identify(experiments, **options)
     except BoucWenIdError as exc:
@@ -131,9 +136,30 @@ def identify_many(
     workers = min(workers, len(split))
     if workers == 1:
         return [_run(e, o, errors) for e, o in split]
-    with ProcessPoolExecutor(max_workers=workers, mp_context=_context(), initializer=_init_worker) as pool:
-        futures = [pool.submit(_run, e, o, errors) for e, o in split]
-        return [f.result() for f in futures]
+    pool = _local_pool(workers)
+    futures = [pool.submit(_run, e, o, errors) for e, o in split]
+    return [f.result() for f in futures]
+
+
+#: Local pools kept for the life of the process (by size): starting worker processes costs more than a
+#: small batch, so a second batch reuses the first one's workers.
+_POOLS: dict[int, ProcessPoolExecutor] = {}
+
+
+def _local_pool(workers: int) -> ProcessPoolExecutor:
+    pool = _POOLS.get(workers)
+    if pool is None:
+        pool = ProcessPoolExecutor(max_workers=workers, mp_context=_context(), initializer=_init_worker)
+        _POOLS[workers] = pool
+        if len(_POOLS) == 1:
+            atexit.register(_shutdown_pools)
+    return pool
+
+
+def _shutdown_pools() -> None:
+    for pool in _POOLS.values():
+        pool.shutdown(wait=True, cancel_futures=True)
+    _POOLS.clear()
 
 
 def _on_dask(client: Any, split: Sequence[tuple[Sequence[Any], dict[str, Any]]], errors: str) -> list[Any]:
