@@ -34,7 +34,11 @@ What is measured
    speed-up >= 1.8x, results bit-identical.  The same batch on a 2-worker ``dask.distributed``
    ``LocalCluster`` (processes), its results compared with the local ones, and its wall time against
    the local 2-worker pool (cluster start-up excluded, reported apart).
-5. **import bouc_wen_id** in a fresh interpreter (best of 5); target <= 0.2 s.
+5. **import bouc_wen_id** in a fresh interpreter (best of 5); target <= 0.2 s (``import numpy`` alone
+   printed beside it, for scale).
+6. **Lab preprocessing** of the 10 records (``analyse_sine``, ``find_steady_segments``,
+   ``synchronous_average``) with the Rust kernels and with the NumPy reference paths
+   (``signal._harmonic_ls.USE_RUST_KERNELS``), alternated in this process; target speed-up >= 5.
 
 Each target line ends in PASS or MISS.
 """
@@ -490,6 +494,55 @@ def bench_batch(averaged: list[Any], repeats: int) -> None:
 
 
 # --------------------------------------------------------------------------------------------------
+# 6. Lab preprocessing: the Rust kernels against the NumPy reference paths
+
+
+def bench_preprocessing(measurements: Sequence[bw.Measurement], repeats: int) -> None:
+    print("\n6. Lab preprocessing of the 10 records: Rust kernels vs NumPy reference (alternated, best of)")
+    from bouc_wen_id import signal
+    from bouc_wen_id.signal import _harmonic_ls as hls
+
+    def parts() -> dict[str, float]:
+        out = {}
+        t0 = time.perf_counter()
+        for m in measurements:
+            signal.analyse_sine(m.t, m.u, nominal_frequency=m.nominal_frequency)
+        out["analyse_sine"] = time.perf_counter() - t0
+        t0 = time.perf_counter()
+        reps = [
+            signal.find_steady_segments(m.t, m.u, m.y, nominal_frequency=m.nominal_frequency)
+            for m in measurements
+        ]
+        out["find_steady_segments"] = time.perf_counter() - t0
+        t0 = time.perf_counter()
+        for m, rep in zip(measurements, reps):
+            for seg, fit in zip(rep.kept, rep.fits):
+                signal.synchronous_average(m.t, m.y, fit, start=seg.start, stop=seg.stop)
+        out["synchronous_average"] = time.perf_counter() - t0
+        return out
+
+    best: dict[bool, dict[str, float]] = {True: {}, False: {}}
+    saved = hls.USE_RUST_KERNELS
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            for _ in range(max(repeats, 2)):
+                for fast in (True, False):
+                    hls.USE_RUST_KERNELS = fast
+                    for k, v in parts().items():
+                        best[fast][k] = min(best[fast].get(k, math.inf), v)
+    finally:
+        hls.USE_RUST_KERNELS = saved
+    for k in best[True]:
+        record(
+            f"{k}: numpy {best[False][k]:.3f} s, rust {best[True][k]:.3f} s",
+            f"{best[False][k] / best[True][k]:.2f}x",
+        )
+    tr, tf = sum(best[False].values()), sum(best[True].values())
+    record(f"all three: numpy {tr:.3f} s, rust {tf:.3f} s", f"{tr / tf:.2f}x", ">= 5", tr / tf >= 5.0)
+
+
+# --------------------------------------------------------------------------------------------------
 # 5. Import
 
 
@@ -513,9 +566,14 @@ def bench_import() -> None:
 def main(argv: Sequence[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--quick", action="store_true", help="fewer repeats and shorter runs (smoke test)")
-    ap.add_argument("--only", nargs="+", choices=("cli", "restarts", "rk4", "batch", "import"), default=None)
+    ap.add_argument(
+        "--only",
+        nargs="+",
+        choices=("cli", "restarts", "rk4", "batch", "import", "preprocessing"),
+        default=None,
+    )
     args = ap.parse_args(argv)
-    only = set(args.only or ("cli", "restarts", "rk4", "batch", "import"))
+    only = set(args.only or ("cli", "restarts", "rk4", "batch", "import", "preprocessing"))
     repeats = 1 if args.quick else 3
     load = os.getloadavg() if hasattr(os, "getloadavg") else (math.nan,) * 3
     print(f"bouc_wen_id {getattr(bw, '__version__', '?')} from {Path(bw.__file__).parent}")
@@ -538,6 +596,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             bench_batch(averaged, repeats)
         if "import" in only:
             bench_import()
+        if "preprocessing" in only:
+            bench_preprocessing(lab_measurements(), repeats)
     misses = sum(v == "MISS" for *_, v in RESULTS)
     print(f"\n{misses} target(s) missed")
     return 0
