@@ -74,7 +74,14 @@ def identify(
     confidence: float = 0.95,
     backend: Backend = "rust",
 ) -> IdentificationResult:
-    """Identify beta, gamma, mu and G(j omega_i) from sine recordings.
+    """Identify beta, gamma, mu and G(j omega_i) from sine experiments.
+
+    Each experiment is reduced to one averaged period (:mod:`bouc_wen_id.prepare`): a
+    :class:`~bouc_wen_id.model.Recording` by the paper's periodic average (4a-b), a
+    :class:`~bouc_wen_id.measurement.Measurement` by the synchronous average of each of its steady
+    segments (:func:`bouc_wen_id.signal.average_segments`; one experiment per segment), an
+    :class:`~bouc_wen_id.signal.AveragedPeriod` as it is.  The data are scaled to units of order one, the
+    estimator runs (:mod:`bouc_wen_id.estimators`), and the estimates are mapped back with their covariance.
 
     Methods
     -------
@@ -90,21 +97,27 @@ def identify(
     ``"refined"`` (default)
         ``"profile"`` as a start, then a joint output-error fit of every averaged period by
         Levenberg-Marquardt on the steady-state loop (shared beta, gamma, mu; per experiment |G|, phi),
-        weighted by N/sigma^2 with the noise variance from the period-to-period spread.  Gives standard
-        errors, confidence intervals and an adequacy test.  Needs at least 2 averaged periods.
+        weighted by N/sigma^2 with the noise variance from the period-to-period spread.  When the profile
+        start runs mu to 1, or the fit ends on the constraint beta = |gamma| or costs more than a linear
+        spring + dashpot, generic starts spread over the loop shapes are screened and the best is
+        finished.  Gives standard errors, confidence intervals, an adequacy test and whether the LM
+        converged (``result.converged``).  Needs at least 2 averaged periods.
 
     Parameters
     ----------
-    recordings : Recording or sequence of Recording
-        One recording per frequency.  Each needs a whole number of samples per period.
+    recordings : Recording, Measurement or AveragedPeriod, or a sequence of them
+        The experiments, mixed freely.  A Recording states U and omega and needs a whole number of
+        samples per period; a Measurement is raw lab data at any sampling rate (its steady segments
+        are found and averaged); an AveragedPeriod is one already averaged.
     method : {"refined", "profile", "paper"}
         The estimator (see above).
     reference : int
         Index of the recording used for the separable fit of (beta, gamma, mu) (omega_1 in the paper).
     settle_periods : int, optional
-        Leading periods dropped as transient; default: each recording's own ``settle_periods``.
+        Leading periods dropped as transient; default: each recording's own ``settle_periods``
+        (Recordings only: a Measurement's steady stretch is detected from the data).
     periods : int, optional
-        Periods averaged; default: every whole period after the settling ones.
+        Periods averaged; default: every whole period after the settling ones (Recordings only).
     harmonics : "auto", "all" or int
         Harmonics K kept in the spectral derivative of the averaged output (used by the separable
         fits).  ``"auto"`` (default) keeps harmonics up to the last one whose power stands 16x above the
@@ -130,12 +143,18 @@ def identify(
     Raises
     ------
     FrequencyMismatchError, InsufficientDataError, ZeroAmplitudeError, SingularNormalMatrixError,
-    SearchAtBoundError, InvalidParameterError, NonFiniteError
+    SearchAtBoundError, InvalidParameterError, NonFiniteError, ConvergenceError
+        And, for Measurements, the errors of :func:`bouc_wen_id.signal.find_steady_segments`
+        (TimeAxisError, UndersampledError, NotPeriodicError, ...).
 
     Warns
     -----
     IdentifiabilityWarning
-        When the parameters are poorly determined by the data (``refined``).
+        When the parameters are poorly determined by the data, the fit ends on the constraint
+        beta = |gamma|, the loops explain less than a linear model, or the separable estimates violate
+        the Bouc-Wen conditions.
+    DistortedInputWarning
+        When a Measurement's input is far from a pure sine.
     ConvergenceWarning
         When the Levenberg-Marquardt refinement stops at ``max_iter`` before converging
         (``result.converged`` is False).
