@@ -1,6 +1,8 @@
 //! Criterion benches of the numerical core: one RK4 step of the Wiener system (1a)-(2a), periodic
 //! averaging (4a-b), one evaluation of the SLS cost (21), and the whole golden-section search
-//! (24a-b).
+//! (24a-b); the default method's hot path (issue #8): one steady loop with its sensitivities
+//! (`rust/steady.rs`) and the joint Levenberg-Marquardt refinement over 10 experiments
+//! (`rust/refine.rs`), serially and as 16 parallel starts (`rust/multistart.rs`).
 
 use std::f64::consts::PI;
 use std::hint::black_box;
@@ -10,7 +12,9 @@ use _core::average::periodic_average;
 use _core::bouc_wen::BoucWen;
 use _core::estimate::{max_harmonics, spectral_derivative};
 use _core::linear::TransferFunction;
+use _core::multistart::refine_many;
 use _core::path_loop::path_loop;
+use _core::refine::{refine, Experiment, Options, Params};
 use _core::simulate::{rk4_step_count, simulate, Input};
 use _core::solve::{sls_search, SlsProblem, GOLDEN_MAX_ITER};
 use _core::steady::steady_loop;
@@ -55,6 +59,19 @@ fn bench_rk4(c: &mut Criterion) {
     group.throughput(Throughput::Elements(
         rk4_step_count(n_samples, substeps) as u64
     ));
+    let static_gain = TransferFunction::new(&[1.5], &[1.0], 0.05).expect("valid G");
+    group.bench_function("rk4_step_static_gain", |b| {
+        b.iter(|| {
+            simulate(
+                black_box(&static_gain),
+                black_box(&bw),
+                black_box(input),
+                black_box(0.01),
+                n_samples,
+                substeps,
+            )
+        })
+    });
     group.bench_function("rk4_step", |b| {
         b.iter(|| {
             simulate(
@@ -170,12 +187,88 @@ fn bench_augmented(c: &mut Criterion) {
     });
 }
 
+/// Samples per period of the refinement benches (about what identify() averages lab data onto).
+const P_REFINE: usize = 1000;
+/// Experiments of the joint refinement bench.
+const M_REFINE: usize = 10;
+
+fn bench_steady_loop(c: &mut Criterion) {
+    c.bench_function("steady_loop_p1000", |b| {
+        b.iter(|| steady_loop(black_box(1.4), 0.8, 0.2, 1.6, 0.7, P_REFINE, 4))
+    });
+}
+
+/// Ten noise-free loops of one Bouc-Wen element at amplitudes 0.6..2.4 and phases 0.3..1.2.
+fn refine_data() -> (Vec<Vec<f64>>, Vec<f64>) {
+    let amps: Vec<f64> = (0..M_REFINE).map(|i| 0.6 + 0.2 * i as f64).collect();
+    let ys = amps
+        .iter()
+        .enumerate()
+        .map(|(i, a)| {
+            steady_loop(0.9 * a, 0.8, 0.2, 1.6, 0.3 + 0.1 * i as f64, P_REFINE, 4)
+                .expect("valid loop")
+                .w
+        })
+        .collect();
+    (ys, amps)
+}
+
+fn bench_refine(c: &mut Criterion) {
+    let (ys, amps) = refine_data();
+    let exps: Vec<Experiment> = ys
+        .iter()
+        .zip(&amps)
+        .map(|(y, &amplitude)| Experiment {
+            ybar: y,
+            amplitude,
+            weight: 1.0,
+        })
+        .collect();
+    // A start off in every parameter, as the separable estimates typically are.
+    let start = Params {
+        beta: 1.0,
+        gamma: 0.1,
+        mu: 1.9,
+        gains: vec![0.8; M_REFINE],
+        phases: (0..M_REFINE).map(|i| 0.25 + 0.1 * i as f64).collect(),
+    };
+    let opts = Options::default();
+    c.bench_function("refine_10x1000", |b| {
+        b.iter(|| refine(black_box(&exps), black_box(&start), &opts))
+    });
+    // 16 screening starts of 25 iterations (the generic restarts of identify), 1 thread vs all.
+    let starts: Vec<Params> = (0..16)
+        .map(|k| Params {
+            beta: 0.5 + 0.1 * k as f64,
+            gamma: if k % 2 == 0 { 0.2 } else { -0.2 },
+            mu: 1.15 + 0.25 * (k / 4) as f64,
+            gains: vec![1.2; M_REFINE],
+            phases: (0..M_REFINE).map(|i| 0.1 * i as f64).collect(),
+        })
+        .collect();
+    let screen = Options {
+        max_iter: 25,
+        ..Options::default()
+    };
+    for threads in [1, 0] {
+        let name = if threads == 1 {
+            "refine_many_16_starts_1_thread"
+        } else {
+            "refine_many_16_starts_all_cores"
+        };
+        c.bench_function(name, |b| {
+            b.iter(|| refine_many(black_box(&exps), &starts, &screen, None, threads))
+        });
+    }
+}
+
 criterion_group! {
     name = benches;
     config = Criterion::default()
         .sample_size(20)
         .measurement_time(Duration::from_secs(2))
         .warm_up_time(Duration::from_millis(500));
-    targets = bench_rk4, bench_average, bench_sls, bench_path_loop, bench_augmented
+    targets = bench_rk4, bench_average, bench_sls, bench_steady_loop, bench_refine, bench_path_loop,
+        bench_augmented
 }
 criterion_main!(benches);

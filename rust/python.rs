@@ -30,7 +30,7 @@ use crate::linear::TransferFunction;
 use crate::simulate::{self, Input, Terms};
 use crate::solve::{self, SlsProblem, GOLDEN_MAX_ITER};
 use crate::{budget, cancel};
-use crate::{path_loop as pathloop, profile, refine, steady, terms};
+use crate::{lab, multistart, path_loop as pathloop, profile, refine, steady, terms};
 
 pyo3::import_exception!(bouc_wen_id.errors, InvalidParameterError);
 pyo3::import_exception!(bouc_wen_id.errors, NonFiniteError);
@@ -985,6 +985,158 @@ fn set_budget(
     Ok((old.max_samples, old.max_steps, old.max_bytes))
 }
 
+/// One start's outcome for Python: `(params, cost, iterations, converged, abandoned)`, or `None`
+/// when `refine` refused that start (e.g. no valid steady loop there).
+type StartOut<'py> = Option<(Bound<'py, PyArray1<f64>>, f64, usize, bool, bool)>;
+
+/// Several starts of the joint refinement, run in parallel with the interpreter released
+/// (`rust/multistart.rs`). `starts` holds one `[beta, gamma, mu, g_0, phi_0, g_1, phi_1, ...]` per
+/// start; the outcomes come back in order and do not depend on `threads` (0: one per core).
+/// `abandon_after > 0` screens in two rounds: after that many iterations, starts whose cost is over
+/// `abandon_ratio` times the best are stopped.
+#[pyfunction]
+#[pyo3(signature = (ybars, amplitudes, weights, starts, max_iter=200, substeps=4, ftol=1e-12, xtol=1e-10, mu_lo=1.0, mu_hi=f64::INFINITY, abandon_after=0, abandon_ratio=10.0, threads=0))]
+#[allow(clippy::too_many_arguments)]
+fn refine_many<'py>(
+    py: Python<'py>,
+    ybars: Vec<PyReadonlyArray1<'py, f64>>,
+    amplitudes: Vec<f64>,
+    weights: Vec<f64>,
+    starts: Vec<Vec<f64>>,
+    max_iter: i64,
+    substeps: i64,
+    ftol: f64,
+    xtol: f64,
+    mu_lo: f64,
+    mu_hi: f64,
+    abandon_after: i64,
+    abandon_ratio: f64,
+    threads: i64,
+) -> PyResult<Vec<StartOut<'py>>> {
+    let slices = ybars
+        .iter()
+        .enumerate()
+        .map(|(i, y)| slice(&format!("ybars[{i}]"), y))
+        .collect::<PyResult<Vec<_>>>()?;
+    let m = slices.len();
+    if amplitudes.len() != m || weights.len() != m {
+        return Err(CoreError::InvalidParameter(format!(
+            "{m} experiments but {} amplitudes and {} weights",
+            amplitudes.len(),
+            weights.len()
+        ))
+        .into());
+    }
+    let params = starts
+        .iter()
+        .enumerate()
+        .map(|(k, v)| {
+            if v.len() != 3 + 2 * m {
+                return Err(CoreError::InvalidParameter(format!(
+                    "starts[{k}] has {} values; {m} experiments need 3 + 2 * {m} = {}",
+                    v.len(),
+                    3 + 2 * m
+                )));
+            }
+            Ok(refine::Params {
+                beta: v[0],
+                gamma: v[1],
+                mu: v[2],
+                gains: v[3..].iter().step_by(2).copied().collect(),
+                phases: v[4..].iter().step_by(2).copied().collect(),
+            })
+        })
+        .collect::<Result<Vec<_>, CoreError>>()?;
+    let opts = refine::Options {
+        max_iter: count("max_iter", max_iter, 1)?,
+        substeps: count("substeps", substeps, 1)?,
+        ftol,
+        xtol,
+        mu_lo,
+        mu_hi,
+    };
+    let abandon = match count("abandon_after", abandon_after, 0)? {
+        0 => None,
+        first_iter => Some(multistart::Abandon {
+            first_iter,
+            ratio: abandon_ratio,
+        }),
+    };
+    let threads = count("threads", threads, 0)?;
+    let exps: Vec<refine::Experiment> = slices
+        .iter()
+        .zip(amplitudes.iter().zip(&weights))
+        .map(|(y, (&a, &w))| refine::Experiment {
+            ybar: y,
+            amplitude: a,
+            weight: w,
+        })
+        .collect();
+    let outcomes =
+        py.detach(|| multistart::refine_many(&exps, &params, &opts, abandon, threads))?;
+    Ok(outcomes
+        .into_iter()
+        .map(|r| {
+            r.ok().map(|o| {
+                let p = &o.fit.params;
+                let mut flat = vec![p.beta, p.gamma, p.mu];
+                for (g, ph) in p.gains.iter().zip(&p.phases) {
+                    flat.push(*g);
+                    flat.push(*ph);
+                }
+                (
+                    flat.into_pyarray(py),
+                    o.fit.cost,
+                    o.fit.iterations,
+                    o.fit.converged,
+                    o.abandoned,
+                )
+            })
+        })
+        .collect())
+}
+
+/// `(mu_re, mu_im, r_re, r_im)` of [`harmonic_moments`].
+type Moments<'py> = (
+    Bound<'py, PyArray1<f64>>,
+    Bound<'py, PyArray1<f64>>,
+    Bound<'py, PyArray1<f64>>,
+    Bound<'py, PyArray1<f64>>,
+);
+
+/// Complex moments of the harmonic basis (`rust/lab.rs`): `(mu_re, mu_im, r_re, r_im)` with
+/// `mu_q = sum e^{i q theta}`, `q <= 2 kmax`, and `r_q = sum y e^{-i q theta}`, `q <= kmax`.
+#[pyfunction]
+fn harmonic_moments<'py>(
+    py: Python<'py>,
+    theta: PyReadonlyArray1<'py, f64>,
+    y: PyReadonlyArray1<'py, f64>,
+    kmax: i64,
+) -> PyResult<Moments<'py>> {
+    let (theta, y) = (slice("theta", &theta)?, slice("y", &y)?);
+    let kmax = count("kmax", kmax, 1)?;
+    let ((mr, mi), (rr, ri)) = py.detach(|| lab::harmonic_moments(theta, y, kmax))?;
+    Ok((
+        mr.into_pyarray(py),
+        mi.into_pyarray(py),
+        rr.into_pyarray(py),
+        ri.into_pyarray(py),
+    ))
+}
+
+/// `coef[0] + sum_k coef[2k-1] cos(k theta) + coef[2k] sin(k theta)` at every phase
+/// (`rust/lab.rs`).
+#[pyfunction]
+fn harmonic_series<'py>(
+    py: Python<'py>,
+    theta: PyReadonlyArray1<'py, f64>,
+    coef: PyReadonlyArray1<'py, f64>,
+) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    let (theta, coef) = (slice("theta", &theta)?, slice("coef", &coef)?);
+    let out = py.detach(|| lab::harmonic_series(theta, coef))?;
+    Ok(out.into_pyarray(py))
+}
+
 /// Rust core of bouc_wen_id (simulation, averaging, estimators); see docs/design.md.
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -1009,5 +1161,8 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(augmented_refine, m)?)?;
     m.add_function(wrap_pyfunction!(get_budget, m)?)?;
     m.add_function(wrap_pyfunction!(set_budget, m)?)?;
+    m.add_function(wrap_pyfunction!(refine_many, m)?)?;
+    m.add_function(wrap_pyfunction!(harmonic_moments, m)?)?;
+    m.add_function(wrap_pyfunction!(harmonic_series, m)?)?;
     Ok(())
 }

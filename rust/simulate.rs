@@ -9,6 +9,13 @@
 //! O(n), one `powf` per stage, the input is evaluated once for the two mid-step stages, and a
 //! value is reused when a stage time repeats bitwise.
 //!
+//! Low orders (static gain, first and second order; up to [`FIXED_MAX_ORDER`]) run on fixed-size
+//! stack arrays, so the state loops unroll and vanish for a static gain, in the operation order of
+//! the generic path (the results are bitwise those of the generic path: an identification of
+//! exactly negated data must stay exactly symmetric). Evaluating the sine input by angle addition
+//! and `|w|^2` as `w * w` were tried (issue #8) and bought a few percent at most: the step is bound
+//! by its four `powf`, as the C peer's (`benches/rk4_peer.c`).
+//!
 //! ## Reference
 //! *Wiener System Identification in Presence of Hysteresis Nonlinearity*, the seed paper whose
 //! equation numbers are cited; for the Bouc-Wen properties it relies on (Propositions 1-2):
@@ -138,11 +145,13 @@ pub fn simulate(
                 omega,
                 neg_amplitude_omega: -amplitude * omega,
             };
-            integrate(&comp, bw, &src, &grid, &mut out);
+            let mut stages = CachedStages::new(&src, grid.delay);
+            integrate_any(&comp, bw, &mut stages, &grid, &mut out);
         }
         Input::Sampled { u } => {
             let src = Hermite::new(u, dt);
-            integrate(&comp, bw, &src, &grid, &mut out);
+            let mut stages = CachedStages::new(&src, grid.delay);
+            integrate_any(&comp, bw, &mut stages, &grid, &mut out);
         }
     }
     crate::cancel::checkpoint()?;
@@ -214,6 +223,64 @@ struct Grid {
 /// Undelayed input `(u(tau), udot(tau))` for `tau >= 0`.
 trait Source {
     fn at(&self, tau: f64) -> (f64, f64);
+}
+
+/// The delayed input `(v, vdot)` at the stage times of one output sample.
+///
+/// The integrator calls [`Stages::sample`] once per output sample `k` (time `t = k dt`), then
+/// [`Stages::stage`] for stage `j` in `0..=2 substeps` at the time `t + j h / 2` (as computed by
+/// the integrator: `t + s h`, `+ h/2`, `+ h`).
+trait Stages {
+    /// Moves to the output sample at time `t`; returns `v(t)` (for `x = C xs + D v`).
+    fn sample(&mut self, t: f64) -> f64;
+    /// `(v, vdot)` at stage `j` of the current sample, whose time is `time`.
+    fn stage(&mut self, j: usize, time: f64) -> (f64, f64);
+}
+
+/// Any [`Source`], evaluated at every stage time, with a one-entry cache keyed on the exact stage
+/// time: a step's last stage `ts + h` often rounds to the next step's first `t + (s+1) h` (or the
+/// next sample's `k dt`), and reusing the value only when the times are bitwise equal changes no
+/// result while saving an evaluation.
+struct CachedStages<'s, S: Source> {
+    src: &'s S,
+    delay: f64,
+    cached: (f64, (f64, f64)),
+}
+
+impl<'s, S: Source> CachedStages<'s, S> {
+    fn new(src: &'s S, delay: f64) -> Self {
+        Self {
+            src,
+            delay,
+            cached: (f64::NAN, (0.0, 0.0)),
+        }
+    }
+
+    #[inline(always)]
+    fn input(&mut self, t: f64) -> (f64, f64) {
+        if t == self.cached.0 {
+            return self.cached.1;
+        }
+        let tau = t - self.delay;
+        let value = if tau < 0.0 {
+            (0.0, 0.0)
+        } else {
+            self.src.at(tau)
+        };
+        self.cached = (t, value);
+        value
+    }
+}
+
+impl<S: Source> Stages for CachedStages<'_, S> {
+    #[inline(always)]
+    fn sample(&mut self, t: f64) -> f64 {
+        self.input(t).0
+    }
+    #[inline(always)]
+    fn stage(&mut self, _j: usize, time: f64) -> (f64, f64) {
+        self.input(time)
+    }
 }
 
 struct Sine {
@@ -318,34 +385,155 @@ fn axpy(out: &mut [f64], xs: &[f64], hk: f64, k: &[f64]) {
     }
 }
 
-/// RK4 from rest over the whole grid, writing the samples into `out`.
-///
-/// The five state-sized buffers are allocated once; the loops run over them with iterators (no
-/// bounds checks). Fixed-size stack arrays for small orders were measured and bought nothing: the
-/// step is bound by its four `powf` and its `sin`/`cos` pairs.
-fn integrate<S: Source>(
+/// Largest order run on fixed-size arrays by [`integrate_fixed`].
+const FIXED_MAX_ORDER: usize = 4;
+
+/// RK4 from rest over the whole grid, on fixed-size arrays for orders up to [`FIXED_MAX_ORDER`].
+fn integrate_any<I: Stages>(
     comp: &Companion,
     bw: &BoucWen,
-    src: &S,
+    src: &mut I,
+    grid: &Grid,
+    out: &mut Simulation,
+) {
+    // The arms below go up to FIXED_MAX_ORDER.
+    const _: () = assert!(FIXED_MAX_ORDER == 4);
+    match comp.order() {
+        0 => integrate_fixed::<0, I>(comp, bw, src, grid, out),
+        1 => integrate_fixed::<1, I>(comp, bw, src, grid, out),
+        2 => integrate_fixed::<2, I>(comp, bw, src, grid, out),
+        3 => integrate_fixed::<3, I>(comp, bw, src, grid, out),
+        4 => integrate_fixed::<4, I>(comp, bw, src, grid, out),
+        _ => integrate(comp, bw, src, grid, out),
+    }
+}
+
+/// The companion form of order `N` and the hysteresis, by value, for [`integrate_fixed`].
+struct Fixed<const N: usize> {
+    a: [f64; N],
+    c: [f64; N],
+    d: f64,
+    alpha: f64,
+    beta: f64,
+    gamma: f64,
+    mu: f64,
+}
+
+impl<const N: usize> Fixed<N> {
+    fn new(comp: &Companion, bw: &BoucWen) -> Self {
+        let mut a = [0.0; N];
+        let mut c = [0.0; N];
+        a.copy_from_slice(&comp.a);
+        c.copy_from_slice(&comp.c);
+        Self {
+            a,
+            c,
+            d: comp.d,
+            alpha: bw.alpha(),
+            beta: bw.beta(),
+            gamma: bw.gamma(),
+            mu: bw.mu(),
+        }
+    }
+
+    /// `f(t, z)` with the input evaluated: `(xsdot, wdot)`, in the operation order of
+    /// [`Companion::state_derivative`], [`Companion::output_row`] and [`BoucWen::wdot`].
+    #[inline(always)]
+    fn rhs(&self, xs: &[f64; N], w: f64, (v, vdot): (f64, f64)) -> ([f64; N], f64) {
+        let mut dxs = [0.0; N];
+        let mut xdot = 0.0;
+        if N > 0 {
+            let mut acc = 0.0;
+            for (ai, xi) in self.a.iter().zip(xs) {
+                acc += ai * xi;
+            }
+            dxs[0] = -acc + v;
+            dxs[1..].copy_from_slice(&xs[..N - 1]);
+            for (ci, di) in self.c.iter().zip(&dxs) {
+                xdot += ci * di;
+            }
+        }
+        xdot += self.d * vdot;
+        let wmu = w.abs().powf(self.mu);
+        let wdot = self.alpha * xdot
+            - self.beta * xdot.abs() * crate::bouc_wen::sgn(w) * wmu
+            - self.gamma * xdot * wmu;
+        (dxs, wdot)
+    }
+
+    #[inline(always)]
+    fn output(&self, xs: &[f64; N], v: f64) -> f64 {
+        let mut acc = 0.0;
+        for (ci, xi) in self.c.iter().zip(xs) {
+            acc += ci * xi;
+        }
+        acc + self.d * v
+    }
+}
+
+/// `xs + k * hk` for fixed-size states.
+#[inline(always)]
+fn axpy_fixed<const N: usize>(xs: &[f64; N], hk: f64, k: &[f64; N]) -> [f64; N] {
+    let mut out = [0.0; N];
+    for ((o, x), ki) in out.iter_mut().zip(xs).zip(k) {
+        *o = x + hk * ki;
+    }
+    out
+}
+
+/// [`integrate`] for a state of compile-time order `N` (same steps and operation order).
+fn integrate_fixed<const N: usize, I: Stages>(
+    comp: &Companion,
+    bw: &BoucWen,
+    src: &mut I,
+    grid: &Grid,
+    out: &mut Simulation,
+) {
+    let sys = Fixed::<N>::new(comp, bw);
+    let dt = grid.dt;
+    let h = dt / grid.substeps as f64;
+    let half_h = 0.5 * h;
+    let h_sixth = h / 6.0;
+    let mut xs = [0.0; N];
+    let mut w = bw.w0();
+    let last = grid.n_samples - 1;
+    for (k, (xo, wo)) in out.x.iter_mut().zip(out.w.iter_mut()).enumerate() {
+        let t = k as f64 * dt;
+        *xo = sys.output(&xs, src.sample(t));
+        *wo = w;
+        if k == last {
+            break;
+        }
+        for s in 0..grid.substeps {
+            let ts = t + s as f64 * h;
+            let (k1, kw1) = sys.rhs(&xs, w, src.stage(2 * s, ts));
+            // Stages 2 and 3 share the time t + h/2: evaluate the input once.
+            let mid = src.stage(2 * s + 1, ts + half_h);
+            let (k2, kw2) = sys.rhs(&axpy_fixed(&xs, half_h, &k1), w + half_h * kw1, mid);
+            let (k3, kw3) = sys.rhs(&axpy_fixed(&xs, half_h, &k2), w + half_h * kw2, mid);
+            let end = src.stage(2 * s + 2, ts + h);
+            let (k4, kw4) = sys.rhs(&axpy_fixed(&xs, h, &k3), w + h * kw3, end);
+            for ((((x, a), b), c), d) in xs.iter_mut().zip(&k1).zip(&k2).zip(&k3).zip(&k4) {
+                *x += h_sixth * (a + 2.0 * b + 2.0 * c + d);
+            }
+            w += h_sixth * (kw1 + 2.0 * kw2 + 2.0 * kw3 + kw4);
+        }
+    }
+}
+
+/// RK4 from rest over the whole grid, writing the samples into `out` (any order).
+///
+/// The five state-sized buffers are allocated once; the loops run over them with iterators (no
+/// bounds checks).
+fn integrate<I: Stages>(
+    comp: &Companion,
+    bw: &BoucWen,
+    src: &mut I,
     grid: &Grid,
     out: &mut Simulation,
 ) {
     let n = comp.order();
     let sys = System { comp, bw };
-    let delay = grid.delay;
-    // One-entry cache keyed on the exact stage time: a step's last stage `ts + h` often rounds
-    // to the next step's first `t + (s+1) h` (or the next sample's `k dt`), and reusing the value
-    // only when the times are bitwise equal changes no result while saving a sin/cos pair.
-    let mut cached: (f64, (f64, f64)) = (f64::NAN, (0.0, 0.0));
-    let mut input = |t: f64| {
-        if t == cached.0 {
-            return cached.1;
-        }
-        let tau = t - delay;
-        let value = if tau < 0.0 { (0.0, 0.0) } else { src.at(tau) };
-        cached = (t, value);
-        value
-    };
     let dt = grid.dt;
     let h = dt / grid.substeps as f64;
     let half_h = 0.5 * h;
@@ -368,22 +556,22 @@ fn integrate<S: Source>(
         - 1;
     for (k, (xo, wo)) in out.x.iter_mut().zip(out.w.iter_mut()).enumerate() {
         let t = k as f64 * dt;
-        *xo = sys.output(&xs, input(t).0);
+        *xo = sys.output(&xs, src.sample(t));
         *wo = w;
         if k == last || (k & check_mask == 0 && crate::cancel::requested()) {
             break;
         }
         for s in 0..grid.substeps {
             let ts = t + s as f64 * h;
-            let kw1 = sys.rhs(&xs, w, input(ts), &mut k1);
+            let kw1 = sys.rhs(&xs, w, src.stage(2 * s, ts), &mut k1);
             // Stages 2 and 3 share the time t + h/2: evaluate the input once.
-            let mid = input(ts + half_h);
+            let mid = src.stage(2 * s + 1, ts + half_h);
             axpy(&mut tmp, &xs, half_h, &k1);
             let kw2 = sys.rhs(&tmp, w + half_h * kw1, mid, &mut k2);
             axpy(&mut tmp, &xs, half_h, &k2);
             let kw3 = sys.rhs(&tmp, w + half_h * kw2, mid, &mut k3);
             axpy(&mut tmp, &xs, h, &k3);
-            let kw4 = sys.rhs(&tmp, w + h * kw3, input(ts + h), &mut k4);
+            let kw4 = sys.rhs(&tmp, w + h * kw3, src.stage(2 * s + 2, ts + h), &mut k4);
             for ((((x, a), b), c), d) in xs.iter_mut().zip(&k1).zip(&k2).zip(&k3).zip(&k4) {
                 *x += h_sixth * (a + 2.0 * b + 2.0 * c + d);
             }

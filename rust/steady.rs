@@ -67,7 +67,12 @@ struct Params {
 /// Rate of the augmented state at `theta`.
 #[inline(always)]
 fn rhs(p: &Params, theta: f64, y: &[f64; NS]) -> [f64; NS] {
-    let sin_t = theta.sin();
+    rhs_sin(p, theta.sin(), y)
+}
+
+/// [`rhs`] with `sin(theta)` given (the half cycle takes it from tables, see [`SinTable`]).
+#[inline(always)]
+fn rhs_sin(p: &Params, sin_t: f64, y: &[f64; NS]) -> [f64; NS] {
     let xt = -p.a * sin_t;
     let w = y[0];
     let aw = w.abs();
@@ -110,12 +115,55 @@ fn axpy(y: &[f64; NS], h: f64, k: &[f64; NS]) -> [f64; NS] {
 /// One classical RK4 step of length `h` from `theta`.
 #[inline(always)]
 fn rk4(p: &Params, theta: f64, y: &mut [f64; NS], h: f64) {
-    let k1 = rhs(p, theta, y);
-    let k2 = rhs(p, theta + 0.5 * h, &axpy(y, 0.5 * h, &k1));
-    let k3 = rhs(p, theta + 0.5 * h, &axpy(y, 0.5 * h, &k2));
-    let k4 = rhs(p, theta + h, &axpy(y, h, &k3));
+    let sines = (theta.sin(), (theta + 0.5 * h).sin(), (theta + h).sin());
+    rk4_sin(p, sines, y, h);
+}
+
+/// One classical RK4 step of length `h` with `sin(theta)` at its start, middle and end given.
+#[inline(always)]
+fn rk4_sin(p: &Params, (s1, sm, s4): (f64, f64, f64), y: &mut [f64; NS], h: f64) {
+    let k1 = rhs_sin(p, s1, y);
+    let k2 = rhs_sin(p, sm, &axpy(y, 0.5 * h, &k1));
+    let k3 = rhs_sin(p, sm, &axpy(y, 0.5 * h, &k2));
+    let k4 = rhs_sin(p, s4, &axpy(y, h, &k3));
     for i in 0..NS {
         y[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
+    }
+}
+
+/// `sin` at every RK4 stage of the lattice intervals, for all the shooting passes of one loop.
+///
+/// Stage `j` (`0..=2 substeps`) of interval `k` sits at `offset + k L + j h/2`; its sine is
+/// `sin(theta_k) cos(j h/2) + cos(theta_k) sin(j h/2)` from one `sin`/`cos` pair per lattice point
+/// and per stage offset, computed once per [`steady_loop`] instead of one `sin` per stage and pass
+/// (a few ulps from the direct evaluation; issue #8). The first (offset) segment and the last
+/// interval, whose steps differ, are evaluated directly.
+struct SinTable {
+    /// `(sin, cos)` of `offset + k L`, per lattice point.
+    points: Vec<(f64, f64)>,
+    /// `(sin, cos)` of `j h / 2`, `j = 0..=2 substeps`, `h = L / substeps`.
+    stages: Vec<(f64, f64)>,
+}
+
+impl SinTable {
+    fn new(lat: &Lattice, substeps: usize) -> Self {
+        let h = lat.spacing / substeps as f64;
+        Self {
+            points: (0..lat.len)
+                .map(|k| (lat.offset + k as f64 * lat.spacing).sin_cos())
+                .collect(),
+            stages: (0..=2 * substeps)
+                .map(|j| (0.5 * j as f64 * h).sin_cos())
+                .collect(),
+        }
+    }
+
+    /// `sin(theta_k + j h/2)`.
+    #[inline(always)]
+    fn at(&self, k: usize, j: usize) -> f64 {
+        let (sk, ck) = self.points[k];
+        let (sj, cj) = self.stages[j];
+        sk * cj + ck * sj
     }
 }
 
@@ -168,6 +216,7 @@ impl Lattice {
 fn half_cycle(
     p: &Params,
     lat: &Lattice,
+    table: &SinTable,
     w_top: f64,
     substeps: usize,
     rec: &mut [[f64; NS]],
@@ -200,9 +249,20 @@ fn half_cycle(
         } else {
             (lat.spacing, start)
         };
-        let hh = if k + 1 == lat.len { len / sub } else { h };
-        for s in 0..substeps {
-            rk4(p, base + s as f64 * hh, &mut y, hh);
+        if k + 1 == lat.len {
+            let hh = len / sub;
+            for s in 0..substeps {
+                rk4(p, base + s as f64 * hh, &mut y, hh);
+            }
+        } else {
+            for s in 0..substeps {
+                let sines = (
+                    table.at(k, 2 * s),
+                    table.at(k, 2 * s + 1),
+                    table.at(k, 2 * s + 2),
+                );
+                rk4_sin(p, sines, &mut y, h);
+            }
         }
         theta = base + len;
     }
@@ -214,6 +274,47 @@ fn half_cycle(
 pub const MAX_SAMPLES_PER_PERIOD: usize = 1 << 24;
 /// Largest number of RK4 steps per period [`steady_loop`] accepts (time: about 0.1 us per step).
 pub const MAX_STEPS_PER_PERIOD: usize = 1 << 27;
+
+/// Relative tolerance of the coarse shooting (one RK4 step per lattice interval) that gives the
+/// fine shooting its start.
+const COARSE_RTOL: f64 = 1e-9;
+/// Newton iterations allowed for the coarse shooting (it only proposes a start).
+const COARSE_MAX_ITER: usize = 20;
+
+/// `w(0)` of the periodic half cycle with one RK4 step per lattice interval, or `None` when that
+/// shooting does not converge (the fine one then starts from 0, as it always did).
+fn coarse_top(
+    p: &Params,
+    lat: &Lattice,
+    table: &SinTable,
+    bound: f64,
+    rec: &mut [[f64; NS]],
+) -> Option<f64> {
+    let (mut lo, mut hi) = (-bound, bound);
+    let mut w_top = 0.0;
+    for _ in 0..COARSE_MAX_ITER {
+        let end = half_cycle(p, lat, table, w_top, 1, rec);
+        let h = end[0] + w_top;
+        if !h.is_finite() {
+            return None;
+        }
+        if h.abs() <= COARSE_RTOL * bound {
+            return Some(w_top);
+        }
+        if h > 0.0 {
+            hi = w_top;
+        } else {
+            lo = w_top;
+        }
+        let newton = w_top - h / (end[1] + 1.0);
+        w_top = if newton > lo && newton < hi && newton.is_finite() {
+            newton
+        } else {
+            0.5 * (lo + hi)
+        };
+    }
+    None
+}
 
 /// Steady loop of (2b) driven by `x = amplitude cos(omega t - phi)`, sampled at `P` points per
 /// period (`t_j = j T / P`), with `substeps` RK4 steps per lattice interval.
@@ -289,10 +390,20 @@ pub fn steady_loop(
     // |w| never exceeds the bound of Proposition 1 in steady state.
     let bound = (1.0 / (beta + gamma)).powf(1.0 / mu);
     let (mut lo, mut hi) = (-bound, bound);
-    let mut w_top = 0.0;
+    let table = SinTable::new(&lat, substeps);
+    // Coarse to fine: the shooting first converges with one RK4 step per lattice interval (a
+    // quarter or less of a pass's work), whose w(0) differs from the fine one by the small
+    // discretisation error; the fine passes then start there and need one Newton step or two
+    // instead of three to five (issue #8). The fine iteration below decides, as before.
+    let mut w_top = if substeps > 1 {
+        let coarse = SinTable::new(&lat, 1);
+        coarse_top(&p, &lat, &coarse, bound, &mut rec).unwrap_or(0.0)
+    } else {
+        0.0
+    };
     let mut iterations = 0;
     let end = loop {
-        let end = half_cycle(&p, &lat, w_top, substeps, &mut rec);
+        let end = half_cycle(&p, &lat, &table, w_top, substeps, &mut rec);
         crate::cancel::checkpoint()?;
         let h = end[0] + w_top;
         if h.abs() <= SHOOT_RTOL * bound {

@@ -35,11 +35,12 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import sys
 import time
 import traceback
 import warnings
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -567,7 +568,9 @@ def joint_fit(dataset: str, label: str, members: list[Outcome]) -> Joint:
 # Run
 
 
-def run(data_dir: Path, out: Path, datasets: Sequence[str], cross: bool = True) -> dict[str, Any]:
+def run(
+    data_dir: Path, out: Path, datasets: Sequence[str], cross: bool = True, workers: int = 1
+) -> dict[str, Any]:
     if not data_dir.is_dir():
         raise SystemExit(f"error: data directory {data_dir} not found (expected ../shared/data/real)")
     out.mkdir(parents=True, exist_ok=True)
@@ -587,22 +590,69 @@ def run(data_dir: Path, out: Path, datasets: Sequence[str], cross: bool = True) 
         "joint": [],
         "figures": {},
     }
-    for dataset in datasets:
-        t0 = time.perf_counter()
-        specs = load_specs(data_dir, dataset)
-        outcomes = [o for spec in specs for o in process(spec, cross=cross)]
-        joints = [joint_fit(ds, label, members) for ds, label, members in joint_groups(outcomes)]
-        doc["experiments"] += [o.record for o in outcomes]
-        doc["joint"] += [j.record for j in joints]
-        doc["figures"][dataset] = write_figures(dataset, specs, outcomes, joints, out)
-        done = sum(o.record["status"] == "identified" for o in outcomes)
-        print(
-            f"{dataset}: {len(specs)} records, {len(outcomes)} experiments, {done} identified, "
-            f"{len(outcomes) - done} refused ({time.perf_counter() - t0:.1f} s)",
-            flush=True,
-        )
+    with _pool(workers) as pool:
+        for dataset in datasets:
+            _run_dataset(doc, pool, data_dir, out, dataset, cross)
     (out / "results.json").write_text(json.dumps(doc, indent=1, allow_nan=False) + "\n", encoding="utf-8")
     return doc
+
+
+def _init_worker() -> None:
+    # One rayon thread per worker process: the parallelism is across the records.
+    os.environ["RAYON_NUM_THREADS"] = "1"
+
+
+class _Serial:
+    """A stand-in for a process pool: ``map`` in this process."""
+
+    def map(self, fn: Callable[..., Any], *items: Any) -> Iterator[Any]:
+        return map(fn, *items)
+
+    def __enter__(self) -> _Serial:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        return None
+
+
+def _pool(workers: int) -> Any:
+    """Worker processes for the independent records and joint fits (``workers == 1``: this process)."""
+    if workers <= 1:
+        return _Serial()
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
+
+    methods = multiprocessing.get_all_start_methods()
+    ctx = multiprocessing.get_context("forkserver" if "forkserver" in methods else "spawn")
+    return ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_init_worker)
+
+
+def _process_spec(spec: Spec, cross: bool) -> list[Outcome]:
+    return process(spec, cross=cross)
+
+
+def _joint_fit_args(args: tuple[str, str, list[Outcome]]) -> Joint:
+    return joint_fit(*args)
+
+
+def _run_dataset(
+    doc: dict[str, Any], pool: Any, data_dir: Path, out: Path, dataset: str, cross: bool
+) -> None:
+    """One data set's records (in parallel on ``pool``), joint fits and figures, into ``doc``."""
+    t0 = time.perf_counter()
+    specs = load_specs(data_dir, dataset)
+    batches = pool.map(_process_spec, specs, [cross] * len(specs))
+    outcomes = [o for batch in batches for o in batch]
+    joints = list(pool.map(_joint_fit_args, joint_groups(outcomes)))
+    doc["experiments"] += [o.record for o in outcomes]
+    doc["joint"] += [j.record for j in joints]
+    doc["figures"][dataset] = write_figures(dataset, specs, outcomes, joints, out)
+    done = sum(o.record["status"] == "identified" for o in outcomes)
+    print(
+        f"{dataset}: {len(specs)} records, {len(outcomes)} experiments, {done} identified, "
+        f"{len(outcomes) - done} refused ({time.perf_counter() - t0:.1f} s)",
+        flush=True,
+    )
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
@@ -613,12 +663,24 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     parser.add_argument("--datasets", nargs="+", choices=DATASET_ORDER, default=list(DATASET_ORDER))
     parser.add_argument("--no-crosscheck", action="store_true", help="skip the multi-start cross-check")
     parser.add_argument("--doc-only", action="store_true", help="regenerate the page from results.json")
+    parser.add_argument(
+        "--workers",
+        type=int,
+        default=os.cpu_count() or 1,
+        help="processes for the independent records (default: one per core; the results do not depend on it)",
+    )
     args = parser.parse_args(argv)
     t0 = time.perf_counter()
     if args.doc_only:
         doc = json.loads((args.out / "results.json").read_text(encoding="utf-8"))
     else:
-        doc = run(args.data.resolve(), args.out.resolve(), args.datasets, cross=not args.no_crosscheck)
+        doc = run(
+            args.data.resolve(),
+            args.out.resolve(),
+            args.datasets,
+            cross=not args.no_crosscheck,
+            workers=args.workers,
+        )
     args.doc.write_text(render(doc, args.doc.resolve(), args.out.resolve()), encoding="utf-8")
     what = f"{args.doc}" if args.doc_only else f"{args.out / 'results.json'}, the figures and {args.doc}"
     print(f"wrote {what} in {time.perf_counter() - t0:.1f} s")

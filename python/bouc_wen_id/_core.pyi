@@ -29,6 +29,9 @@ __all__ = [
     "augmented_refine",
     "get_budget",
     "set_budget",
+    "refine_many",
+    "harmonic_moments",
+    "harmonic_series",
 ]
 
 _F = NDArray[np.float64]
@@ -191,3 +194,20 @@ def augmented_refine(
 ) -> tuple[_F, _F, _F, float, int, bool, _F, list[_F]]: ...
 def get_budget() -> tuple[int, int, int]: ...
 def set_budget(max_samples: int, max_steps: int, max_bytes: int) -> tuple[int, int, int]: ...
+def refine_many(
+    ybars: Sequence[_F],
+    amplitudes: Sequence[float] | _F,
+    weights: Sequence[float] | _F,
+    starts: Sequence[Sequence[float] | _F],
+    max_iter: int = 200,
+    substeps: int = 4,
+    ftol: float = 1e-12,
+    xtol: float = 1e-10,
+    mu_lo: float = 1.0,
+    mu_hi: float = ...,
+    abandon_after: int = 0,
+    abandon_ratio: float = 10.0,
+    threads: int = 0,
+) -> list[tuple[_F, float, int, bool, bool] | None]: ...
+def harmonic_moments(theta: _F, y: _F, kmax: int) -> tuple[_F, _F, _F, _F]: ...
+def harmonic_series(theta: _F, coef: _F) -> _F: ...

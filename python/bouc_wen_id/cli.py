@@ -88,16 +88,25 @@ def _shown(path: Path, staged: Path, out: Path) -> Path:
         return path
 
 
-def _write_report(result: IdentificationResult, out: Path) -> list[Path]:
-    """The report folder: result.json, the loops per experiment, the Bode points, the residuals."""
+def _write_report(result: IdentificationResult, out: Path, figures: bool = True) -> list[Path]:
+    """The report folder: result.json, then (unless ``figures`` is False) the loops per experiment, the Bode
+    points, the residuals."""
+    out.mkdir(parents=True, exist_ok=True)
+    files = [out / "result.json"]
+    files[0].write_text(result.to_json() + "\n", encoding="utf-8")
+    if figures:
+        files += _write_figures(result, out)
+    return files
+
+
+def _write_figures(result: IdentificationResult, out: Path) -> list[Path]:
+    """The report's figures (matplotlib is imported here, only when figures are asked for)."""
     from .plotting import plot_loops, plot_residuals
 
-    out.mkdir(parents=True, exist_ok=True)
-    files = [out / "result.json", out / "loops.png", out / "bode.png", out / "residuals.png"]
-    files[0].write_text(result.to_json() + "\n", encoding="utf-8")
-    plot_loops(result).savefig(files[1], dpi=120)
-    result.plot_bode().savefig(files[2], dpi=120)
-    plot_residuals(result).savefig(files[3], dpi=120)
+    files = [out / "loops.png", out / "bode.png", out / "residuals.png"]
+    plot_loops(result).savefig(files[0], dpi=120)
+    result.plot_bode().savefig(files[1], dpi=120)
+    plot_residuals(result).savefig(files[2], dpi=120)
     return files
 
 
@@ -141,21 +150,58 @@ def _add_identify_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--backend", choices=("rust", "numpy"), default="rust")
     p.add_argument("--out", type=Path, default=Path("bouc_wen_id_report"), help="report folder")
     _add_overwrite(p)
+    p.add_argument(
+        "--no-figures",
+        dest="figures",
+        action="store_false",
+        help="write result.json and print the table only (batch use: no matplotlib)",
+    )
+
+
+def _identify_options(args: argparse.Namespace) -> dict[str, Any]:
+    """``identify`` keyword arguments from the command line."""
+    harmonics = args.harmonics if args.harmonics in ("auto", "all") else int(args.harmonics)
+    return {
+        "method": args.method,
+        "reference": args.reference,
+        "settle_periods": args.settle_periods,
+        "periods": args.periods,
+        "harmonics": harmonics,
+        "mu_bracket": tuple(args.mu_bracket),
+        "tol": args.tol,
+        "backend": args.backend,
+    }
 
 
 def _identify_from_args(args: argparse.Namespace, recordings: Sequence[Any]) -> IdentificationResult:
-    harmonics = args.harmonics if args.harmonics in ("auto", "all") else int(args.harmonics)
-    return identify(
-        recordings,
-        method=args.method,
-        reference=args.reference,
-        settle_periods=args.settle_periods,
-        periods=args.periods,
-        harmonics=harmonics,
-        mu_bracket=tuple(args.mu_bracket),
-        tol=args.tol,
-        backend=args.backend,
-    )
+    return identify(recordings, **_identify_options(args))
+
+
+def _identify_groups(args: argparse.Namespace, groups: list[list[Any]]) -> list[Any]:
+    """Identify every group: an ``IdentificationResult`` or the ``BoucWenIdError`` it raised, in order.
+
+    On the Dask scheduler at ``--scheduler`` (one task per group; identical results), else here, one group
+    after the other (each identification uses the cores itself, for its restarts).
+    """
+    options = _identify_options(args)
+    if args.scheduler is None:
+        out: list[Any] = []
+        for group in groups:
+            try:
+                out.append(identify(group, **options))
+            except BoucWenIdError as exc:
+                out.append(exc)
+        return out
+    from .batch import identify_many
+
+    try:
+        from distributed import Client
+    except ImportError as exc:
+        raise InvalidParameterError(
+            "--scheduler needs Dask: pip install 'bouc_wen_id[dask]' (or dask[distributed])"
+        ) from exc
+    with Client(args.scheduler) as client:  # type: ignore[no-untyped-call]
+        return identify_many(groups, client=client, errors="return", **options)
 
 
 def _cmd_demo(args: argparse.Namespace) -> int:
@@ -179,7 +225,7 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     if args.compare:
         print(_compare_methods(recs, args))
     with _staged(args.out) as staged:
-        written = _write_report(result, staged)
+        written = _write_report(result, staged, figures=args.figures)
     for f in written:
         print(f"wrote {_shown(f, staged, args.out)}")
     return 0
@@ -317,36 +363,37 @@ def _cmd_identify(args: argparse.Namespace) -> int:
 def _identify_into(
     args: argparse.Namespace, experiments: list[Any], segments: list[dict[str, Any]], root: Path
 ) -> tuple[int, list[Path], list[str]]:
-    """Every result of the run under ``root`` (the staged report folder)."""
+    """Every result of the run under ``root`` (the staged report folder): the numbers of every group
+    first (the table and result.json), the figures last."""
     groups = [[e] for e in experiments] if args.separately else [experiments]
+    label_of = [_label(g[0]) if args.separately else f"{len(g)} experiment(s), jointly" for g in groups]
+    _progress(0, len(groups), "identifying")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        results = _identify_groups(args, groups)
+    _progress(len(groups), len(groups), "identified")
     failures = 0
     written: list[Path] = []
     notes: list[str] = []
-    for i, group in enumerate(groups):
+    reported = []
+    for i, (label, result) in enumerate(zip(label_of, results)):
         out = root / f"experiment_{i:02d}" if args.separately else root
-        label = _label(group[0]) if args.separately else f"{len(group)} experiment(s), jointly"
-        _progress(i, len(groups), f"identifying {label}")
-        try:
-            with warnings.catch_warnings(record=True) as caught:
-                warnings.simplefilter("always")
-                result = _identify_from_args(args, group)
-        except BoucWenIdError as exc:
+        if isinstance(result, BoucWenIdError):
             if not args.separately:
-                raise
+                raise result
             failures += 1
-            print(f"\n{label}: refused: {type(exc).__name__}: {exc}")
+            print(f"\n{label}: refused: {type(result).__name__}: {result}")
             out.mkdir(parents=True, exist_ok=True)
-            refusal = {"source": label, "error": type(exc).__name__, "message": str(exc)}
+            refusal = {"source": label, "error": type(result).__name__, "message": str(result)}
             (out / "refused.json").write_text(json.dumps(refusal, indent=2) + "\n", encoding="utf-8")
             written.append(out / "refused.json")
             continue
-        finally:
-            _progress(i + 1, len(groups), f"identifying {label}")
         print(f"\n{label}:" if args.separately else "")
         print(result.summary())
-        for w in caught:
-            print(f"warning: {w.category.__name__}: {w.message}")
-        written.extend(_write_report(result, out))
+        written.extend(_write_report(result, out, figures=False))
+        reported.append((result, out))
+    for w in caught:
+        print(f"warning: {w.category.__name__}: {w.message}")
     root.mkdir(parents=True, exist_ok=True)
     if segments:
         seg_file = root / "segments.json"
@@ -354,6 +401,10 @@ def _identify_into(
         written.append(seg_file)
     if failures:
         notes.append(f"{failures} of {len(groups)} experiment(s) refused (see refused.json in their folders)")
+    if args.figures:
+        sys.stdout.flush()
+        for result, out in reported:
+            written.extend(_write_figures(result, out))
     return (0 if failures < len(groups) else 2), written, notes
 
 
@@ -492,6 +543,12 @@ def build_parser() -> argparse.ArgumentParser:
         "--separately",
         action="store_true",
         help="identify each experiment on its own (a report subfolder each) instead of one joint fit",
+    )
+    p.add_argument(
+        "--scheduler",
+        default=None,
+        metavar="ADDRESS",
+        help="run the identification on this Dask scheduler (e.g. tcp://10.0.0.5:8786; needs the dask extra)",
     )
     _add_identify_options(p)
     p.set_defaults(func=_cmd_identify)

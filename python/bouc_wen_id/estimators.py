@@ -55,6 +55,11 @@ START_RATIOS = (0.5, -0.5)
 START_DEPTHS = (1.5, 4.0)
 #: LM iterations of each generic start's screening fit (the best one is then run to convergence).
 SCREEN_ITER = 25
+#: The screening runs in two rounds (``rust/multistart.rs``): after this many iterations a start whose cost
+#: is still over SCREEN_ABANDON_RATIO times the best start's stops there; a wrong basin that far behind
+#: after a few LM steps does not catch up, and most generic starts are in one (issue #8).
+SCREEN_ABANDON_AFTER = 5
+SCREEN_ABANDON_RATIO = 10.0
 #: Assumed lag (rad) of the loop's fundamental behind x for the generic starts.
 START_LAG = 0.3
 #: A fit is checked from the generic starts when it ends this close (relative) to beta = |gamma|.
@@ -402,19 +407,75 @@ def refine(
 
     if best is None or suspicious(best):
         # Screen every generic start with a short fit, then finish the most promising one.
-        screened: Optional[LMRun] = None
-        for candidate in _generic_starts(prepared, lo, hi):
-            out = run(candidate, iters=min(SCREEN_ITER, max_iter))
-            if out is not None and (screened is None or out.cost < screened.cost):
-                screened = out
-        if screened is not None and (best is None or screened.cost < best.cost):
-            final = run(screened.start())
-            best = final if final is not None and final.cost <= screened.cost else screened
+        candidates = _generic_starts(prepared, lo, hi)
+        if hasattr(core, "refine_many"):
+            best = _screen_in_parallel(prepared, core, candidates, run, best, wts, substeps, lo, hi, max_iter)
+        else:
+            screened: Optional[LMRun] = None
+            for candidate in candidates:
+                out = run(candidate, iters=min(SCREEN_ITER, max_iter))
+                if out is not None and (screened is None or out.cost < screened.cost):
+                    screened = out
+            if screened is not None and (best is None or screened.cost < best.cost):
+                final = run(screened.start())
+                best = final if final is not None and final.cost <= screened.cost else screened
     if best is None:
         if profile_error is not None:
             raise profile_error
         raise SearchAtBoundError("no start of the joint fit gave a valid steady loop")
     return _refined_fit(best, len(prepared), lo, hi)
+
+
+def _screen_in_parallel(
+    prepared: Sequence[Prepared],
+    core: Any,
+    candidates: Sequence[Start],
+    run: Any,
+    best: Optional[LMRun],
+    wts: FloatArray,
+    substeps: int,
+    lo: float,
+    hi: float,
+    max_iter: int,
+) -> Optional[LMRun]:
+    """The generic starts screened by ``core.refine_many`` (all cores, the interpreter released; hopeless
+    starts abandoned after :data:`SCREEN_ABANDON_AFTER` iterations), then the best finished by ``run``.
+
+    Deterministic: the outcome does not depend on the number of cores (``rust/multistart.rs``).
+    """
+    margin = START_MU_MARGIN * (hi - lo)
+    flat = []
+    for c in candidates:
+        # As ``run``: just inside the Bouc-Wen conditions and the mu bracket.
+        beta = max(c.beta, abs(c.gamma) + MIN_BETA_PLUS_GAMMA)
+        mu = min(max(c.mu, lo + margin), hi - margin)
+        v = np.empty(3 + 2 * len(prepared))
+        v[:3] = (beta, c.gamma, mu)
+        v[3::2], v[4::2] = c.gains, c.phis
+        flat.append(v)
+    screen_iter = min(SCREEN_ITER, max_iter)
+    outs = core.refine_many(
+        [e.ybar for e in prepared],
+        [e.amplitude for e in prepared],
+        wts,
+        flat,
+        max_iter=screen_iter,
+        substeps=substeps,
+        mu_lo=lo,
+        mu_hi=hi,
+        abandon_after=SCREEN_ABANDON_AFTER if SCREEN_ABANDON_AFTER < screen_iter else 0,
+        abandon_ratio=SCREEN_ABANDON_RATIO,
+        threads=0,
+    )
+    scored = [(float(o[1]), np.asarray(o[0])) for o in outs if o is not None]
+    if not scored:
+        return best
+    cost, p = min(scored, key=lambda sp: sp[0])
+    if best is not None and cost >= best.cost:
+        return best
+    # LM accepts only decreasing steps: finishing from the screened point cannot cost more than it.
+    final: Optional[LMRun] = run(Start(float(p[0]), float(p[1]), float(p[2]), p[3::2].copy(), p[4::2].copy()))
+    return final if final is not None else best
 
 
 def _refined_fit(best: LMRun, m: int, lo: float, hi: float) -> Fit:

@@ -34,11 +34,13 @@ from .result import NOT_CONVERGED, Adequacy, ExperimentEstimate, IdentificationR
 from .validation import z_value
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
+    from typing_extensions import TypeAlias
+
     from .measurement import Measurement
     from .signal import AveragedPeriod
 
     #: What identify takes: simulated recordings, raw lab measurements, or averaged periods.
-    Experiment = Recording | Measurement | AveragedPeriod
+    Experiment: TypeAlias = "Recording | Measurement | AveragedPeriod"
 
 __all__ = [
     "identify",

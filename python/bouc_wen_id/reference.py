@@ -533,6 +533,9 @@ def gain_estimate(
 SHOOT_MAX_ITER = 60
 #: Relative tolerance of the periodicity condition |w(pi) + w(0)| <= tol * w_bound.
 SHOOT_RTOL = 1e-13
+#: Relative tolerance and iteration cap of the coarse shooting that starts the fine one (rust/steady.rs).
+COARSE_RTOL = 1e-9
+COARSE_MAX_ITER = 20
 
 
 def _loop_rhs(a: float, beta: float, gamma: float, mu: float, theta: float, y: FloatArray) -> FloatArray:
@@ -607,24 +610,43 @@ def steady_loop(
 
     rec = np.zeros((n_lat, 6))
 
-    def half_cycle(w_top: float) -> FloatArray:
+    def half_cycle(w_top: float, sub: int = substeps) -> FloatArray:
         y = np.array([w_top, 1.0, 0.0, 0.0, 0.0, 0.0])
         if offset > 0.0:
-            h = offset / substeps
-            for s in range(substeps):
+            h = offset / sub
+            for s in range(sub):
                 y = rk4(s * h, y, h)
         for k in range(n_lat):
             rec[k] = y
             start = offset + k * spacing
             length = np.pi - start if k + 1 == n_lat else spacing
-            h = length / substeps
-            for s in range(substeps):
+            h = length / sub
+            for s in range(sub):
                 y = rk4(start + s * h, y, h)
         return y
 
+    def coarse_top() -> Optional[float]:
+        # Coarse to fine (as rust/steady.rs): the shooting with one RK4 step per lattice interval
+        # proposes the fine shooting's start.
+        c_lo, c_hi, top = -bound, bound, 0.0
+        for _ in range(COARSE_MAX_ITER):
+            end = half_cycle(top, 1)
+            resid = float(end[0] + top)
+            if not np.isfinite(resid):
+                return None
+            if abs(resid) <= COARSE_RTOL * bound:
+                return top
+            if resid > 0.0:
+                c_hi = top
+            else:
+                c_lo = top
+            newton = top - resid / (end[1] + 1.0)
+            top = newton if c_lo < newton < c_hi and np.isfinite(newton) else 0.5 * (c_lo + c_hi)
+        return None
+
     bound = (1.0 / (beta + gamma)) ** (1.0 / mu)
     lo, hi = -bound, bound
-    w_top = 0.0
+    w_top = (coarse_top() or 0.0) if substeps > 1 else 0.0
     iterations = 0
     while True:
         end = half_cycle(w_top)

@@ -8,13 +8,13 @@ very long records.
 
 from __future__ import annotations
 
+import importlib
 import math
 from dataclasses import dataclass
-from typing import Optional
+from typing import Any, Optional
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.linalg import solve_triangular  # type: ignore[import-untyped]
 
 __all__ = [
     "HarmonicFit",
@@ -33,6 +33,25 @@ TWO_PI = 2.0 * math.pi
 QR_WORK_MAX = 1e9
 #: Rows per chunk of the blocked QR.
 QR_CHUNK = 8192
+#: Fit through the Rust moment kernels (:mod:`bouc_wen_id._fastlab`: O(n K), normal equations of the
+#: nearly orthogonal harmonics) whenever their Gram matrix is well conditioned, else the NumPy paths
+#: below.  ``False`` selects the NumPy paths throughout: the reference that tests/test_fastlab.py holds the
+#: fast path to.
+USE_RUST_KERNELS = True
+
+
+def _fastlab() -> Any:
+    """:mod:`bouc_wen_id._fastlab`, imported on first use by name: a static import from here closes an
+    import cycle through the package that makes mypy lose ``identification.Experiment``."""
+    return importlib.import_module("bouc_wen_id._fastlab")
+
+
+def solve_triangular(a: FloatArray, b: FloatArray, **kwargs: Any) -> Any:
+    """``scipy.linalg.solve_triangular``, imported on first use: ``import bouc_wen_id`` stays free of
+    SciPy (issue #8: import in under 0.2 s)."""
+    from scipy.linalg import solve_triangular as solve  # type: ignore[import-untyped]
+
+    return solve(a, b, **kwargs)
 
 
 def harmonic_basis(theta: FloatArray, harmonics: int) -> FloatArray:
@@ -97,8 +116,13 @@ class HarmonicFit:
 
 def fit_at(tau: FloatArray, x: FloatArray, omega: float, k: int) -> HarmonicFit:
     """Linear fit of ``x`` on harmonics 1..k of ``omega`` at times ``tau`` (and a constant)."""
-    basis = harmonic_basis(phase_angle(omega, tau), k)
-    coef, r_factor = solve_qr(basis, x)
+    theta = phase_angle(omega, tau)
+    basis = harmonic_basis(theta, k)
+    fast = _fastlab().harmonic_lsq(theta, x, k) if USE_RUST_KERNELS else None
+    if fast is not None:
+        coef, r_factor, _ = fast
+    else:
+        coef, r_factor = solve_qr(basis, x)
     r = x - basis @ coef
     return HarmonicFit(coef, float(r @ r), basis, r_factor)
 
@@ -125,7 +149,8 @@ class HarmonicLS:
     def unscaled_variance(self, k: int) -> FloatArray:
         """Diagonal of ``(X^T X)^-1`` for the first ``2k + 1`` columns."""
         m = 2 * k + 1
-        r_inv = np.linalg.inv(self.r[:m, :m])
+        # R is triangular: its inverse by back substitution, a third of a general inverse's work.
+        r_inv = solve_triangular(self.r[:m, :m], np.eye(m))
         out: FloatArray = np.sum(r_inv**2, axis=1)
         return out
 
@@ -213,6 +238,10 @@ def _moment_fit(theta: FloatArray, y: FloatArray, kmax: int) -> tuple[FloatArray
 
 def nested_fit(theta: FloatArray, y: FloatArray, kmax: int) -> HarmonicLS:
     """The fit on harmonics up to ``kmax`` whose sub-fits on fewer harmonics come for free."""
+    if USE_RUST_KERNELS:
+        fast = _fastlab().moment_fit(theta, y, kmax)
+        if fast is not None:
+            return HarmonicLS(*fast)
     n, m = y.size, 2 * kmax + 1
     fitter = _qr_fit if n * m * m <= QR_WORK_MAX else _moment_fit
     return HarmonicLS(*fitter(theta, y, kmax))

@@ -14,7 +14,6 @@ from typing import Optional
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.linalg import solve_triangular  # type: ignore[import-untyped]
 
 from ..errors import (
     DistortedInputWarning,
@@ -25,7 +24,7 @@ from ..errors import (
     ZeroAmplitudeError,
 )
 from ..validation import HARMONIC_SNR, MIN_SAMPLES_PER_PERIOD, check_time_axis, finite_arrays
-from ._harmonic_ls import fit_at
+from ._harmonic_ls import fit_at, solve_triangular
 
 __all__ = [
     "SineFit",

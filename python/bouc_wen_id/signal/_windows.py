@@ -15,7 +15,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.special import chdtri  # type: ignore[import-untyped]
 
 __all__ = [
     "Window",
@@ -205,6 +204,8 @@ def trim_settling(windows: Sequence[Window], i: int, j: int) -> tuple[int, int]:
         head = csum[:m] / k[:, None]
         tail = (csum[-1] - csum[:m]) / (n - k)[:, None]
         q = np.abs(head - tail) ** 2 / (s2[None, :] * (1.0 / k + 1.0 / (n - k))[:, None])
+        from scipy.special import chdtri  # type: ignore[import-untyped]  # on first use: a lean import
+
         return bool(np.max(q) > float(chdtri(2, SETTLE_ALPHA / q.size)))
 
     lo, hi = 0, n0

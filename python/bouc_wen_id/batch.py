@@ -1,0 +1,175 @@
+"""Many independent identifications at once: on the local cores, or on a Dask cluster (issue #8).
+
+:func:`identify_many` runs :func:`bouc_wen_id.identify` on every job of a batch (the folds of a
+cross-validation, the candidate models of a diagnosis, the files of a campaign) and returns the results in
+the order of the jobs.  Each identification is deterministic and independent of the others, so the
+results are identical, bit for bit, whether the batch runs serially, on a local pool of worker processes
+(the default: one per core) or on a ``dask.distributed`` cluster.
+
+Dask is optional (``pip install "bouc_wen_id[dask]"``) and imported only when a client is given.
+"""
+
+from __future__ import annotations
+
+import atexit
+import copy
+import multiprocessing
+import os
+from collections.abc import Mapping, Sequence
+from concurrent.futures import ProcessPoolExecutor
+from typing import TYPE_CHECKING, Any, Literal, Optional, Union
+
+from .errors import BoucWenIdError, InvalidParameterError
+
+if TYPE_CHECKING:  # pragma: no cover - typing only
+    from .result import IdentificationResult
+
+__all__ = ["identify_many", "Job"]
+
+#: A job: the experiments of one identification (what ``identify`` takes as its first argument), or a
+#: mapping ``{"experiments": [...], **identify_options}`` whose options override the batch's.
+Job = Union[Sequence[Any], Mapping[str, Any]]
+
+#: Environment of the worker processes: one rayon thread each, so that a batch on n cores does not run
+#: n x n threads (the parallelism is across the jobs).
+_WORKER_ENV = {"RAYON_NUM_THREADS": "1"}
+
+
+def _split(job: Job, common: Mapping[str, Any], index: int) -> tuple[Sequence[Any], dict[str, Any]]:
+    if isinstance(job, Mapping):
+        if "experiments" not in job:
+            raise InvalidParameterError(f"job {index} is a mapping without an 'experiments' key")
+        options = {**common, **{k: v for k, v in job.items() if k != "experiments"}}
+        return job["experiments"], options
+    if isinstance(job, (str, bytes)) or not isinstance(job, Sequence):
+        raise InvalidParameterError(
+            f"job {index} is a {type(job).__name__}; a job is a sequence of experiments or a mapping "
+            "{'experiments': [...], **identify_options}"
+        )
+    return job, dict(common)
+
+
+def _run(experiments: Sequence[Any], options: Mapping[str, Any], errors: str) -> Any:
+    """One identification (in whatever process runs it)."""
+    from .identification import identify
+
+    # Fresh copies of the experiments' arrays: a process that received them (Dask deserialises straight
+    # from its network frames) may hold read-only, unaligned buffers that the core cannot borrow.
+    experiments = copy.deepcopy(experiments)
+    try:
+        return identify(experiments, **options)
+    except BoucWenIdError as exc:
+        if errors == "return":
+            return exc
+        raise
+
+
+def _init_worker() -> None:
+    os.environ.update(_WORKER_ENV)
+
+
+def _context() -> Any:
+    """Worker processes from a fork server that has imported the package once (cheap to start, and free
+    of the parent's threads), else spawned ones."""
+    methods = multiprocessing.get_all_start_methods()
+    if "forkserver" in methods:
+        ctx = multiprocessing.get_context("forkserver")
+        ctx.set_forkserver_preload(["bouc_wen_id.identification"])
+        return ctx
+    return multiprocessing.get_context("spawn")
+
+
+def identify_many(
+    jobs: Sequence[Job],
+    *,
+    workers: Optional[int] = None,
+    client: Any = None,
+    errors: Literal["raise", "return"] = "raise",
+    **options: Any,
+) -> list[Union[IdentificationResult, BoucWenIdError]]:
+    """Run :func:`bouc_wen_id.identify` on every job; results in the order of the jobs.
+
+    Parameters
+    ----------
+    jobs : sequence of jobs
+        Each job is what ``identify`` takes as its first argument (a sequence of ``Recording``,
+        ``Measurement`` or ``AveragedPeriod``), or a mapping ``{"experiments": [...], **options}`` whose
+        options override the batch's ``options`` for that job.
+    workers : int, optional
+        Local worker processes.  Default: one per core (``os.cpu_count()``), at most one per job.  ``1``
+        runs the batch serially in this process.  Ignored when ``client`` is given.
+    client : distributed.Client, optional
+        Run the jobs on this Dask cluster instead (one task per job).  Needs the ``dask`` extra.
+    errors : {"raise", "return"}
+        What a job refused by ``identify`` (a :class:`~bouc_wen_id.errors.BoucWenIdError`) does: raise it
+        (default), or stand in the results list in that job's place.
+    **options
+        Keyword arguments of ``identify`` for every job (``method``, ``backend``, ``mu_bracket``, ...).
+
+    Returns
+    -------
+    list
+        One :class:`~bouc_wen_id.identification.IdentificationResult` per job (or, with
+        ``errors="return"``, the error it raised).  Identical whatever ``workers`` or ``client``: every
+        identification is deterministic and runs on its own.
+
+    Raises
+    ------
+    InvalidParameterError
+        A malformed job, ``workers < 1``, an unknown ``errors``.
+    ImportError
+        ``client`` given but ``dask.distributed`` is not installed.
+    BoucWenIdError
+        The first (in job order) error of ``identify``, with ``errors="raise"``.
+    """
+    if errors not in ("raise", "return"):
+        raise InvalidParameterError(f"errors must be 'raise' or 'return', got {errors!r}")
+    split = [_split(job, options, i) for i, job in enumerate(jobs)]
+    if not split:
+        return []
+    if client is not None:
+        return _on_dask(client, split, errors)
+    if workers is None:
+        workers = os.cpu_count() or 1
+    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
+        raise InvalidParameterError(f"workers = {workers!r} must be an integer >= 1")
+    workers = min(workers, len(split))
+    if workers == 1:
+        return [_run(e, o, errors) for e, o in split]
+    pool = _local_pool(workers)
+    futures = [pool.submit(_run, e, o, errors) for e, o in split]
+    return [f.result() for f in futures]
+
+
+#: Local pools kept for the life of the process (by size): starting worker processes costs more than a
+#: small batch, so a second batch reuses the first one's workers.
+_POOLS: dict[int, ProcessPoolExecutor] = {}
+
+
+def _local_pool(workers: int) -> ProcessPoolExecutor:
+    pool = _POOLS.get(workers)
+    if pool is None:
+        pool = ProcessPoolExecutor(max_workers=workers, mp_context=_context(), initializer=_init_worker)
+        _POOLS[workers] = pool
+        if len(_POOLS) == 1:
+            atexit.register(_shutdown_pools)
+    return pool
+
+
+def _shutdown_pools() -> None:
+    for pool in _POOLS.values():
+        pool.shutdown(wait=True, cancel_futures=True)
+    _POOLS.clear()
+
+
+def _on_dask(client: Any, split: Sequence[tuple[Sequence[Any], dict[str, Any]]], errors: str) -> list[Any]:
+    try:
+        import distributed  # noqa: F401
+    except ImportError as exc:  # pragma: no cover - exercised only without the extra
+        raise ImportError(
+            "identify_many(client=...) runs on Dask, which is not installed: pip install 'bouc_wen_id[dask]' "
+            "(or dask[distributed])"
+        ) from exc
+    # pure=False: the jobs are not hashed (their arrays can be large) and every call runs.
+    futures = [client.submit(_run, e, o, errors, pure=False) for e, o in split]
+    return list(client.gather(futures))

@@ -1,0 +1,156 @@
+"""Parity of the Rust-backed harmonic least squares (``bouc_wen_id._fastlab``, ``rust/lab.rs``) with the
+NumPy reference paths of ``signal._harmonic_ls`` (the QR of the harmonic basis and the NumPy moment loop)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from bouc_wen_id import _core, _fastlab
+from bouc_wen_id.errors import InvalidParameterError, NonFiniteError
+from bouc_wen_id.signal import _harmonic_ls as hls
+from numpy.testing import assert_allclose
+
+
+def _record(seed: int, n: int, p: float) -> tuple[np.ndarray, np.ndarray]:
+    """Phases of ``n`` samples at ``p`` (non-integer) samples per period, and a noisy distorted periodic y."""
+    rng = np.random.default_rng(seed)
+    theta = np.mod(2.0 * math.pi * (np.arange(n) / p + rng.uniform()), 2.0 * math.pi)
+    y = 0.3 + np.cos(theta) + 0.2 * np.sin(3 * theta) ** 3 + 0.05 * rng.standard_normal(n)
+    return theta, y
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_moment_kernels_match_the_numpy_recurrence(seed: int) -> None:
+    theta, y = _record(seed, 3001 + 17 * seed, 97.3 + seed)
+    k = 12
+    mr, mi, rr, ri = _core.harmonic_moments(theta, y, k)
+    z = np.exp(1j * theta)
+    p = np.ones_like(z)
+    for q in range(2 * k + 1):
+        # Same per-sample powers, another summation order: n eps relative to the sum of |terms| = n.
+        assert abs(complex(mr[q], mi[q]) - p.sum()) <= 1e-12 * theta.size
+        if q <= k:
+            assert abs(complex(rr[q], ri[q]) - np.dot(y, p.conj())) <= 1e-12 * float(np.sum(np.abs(y)))
+        p = p * z
+    coef = np.random.default_rng(seed).standard_normal(2 * k + 1)
+    basis = hls.harmonic_basis(theta, k)
+    assert_allclose(
+        _core.harmonic_series(theta, coef), basis @ coef, rtol=0, atol=1e-11 * np.sum(np.abs(coef))
+    )
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_moment_fit_matches_the_reference(seed: int) -> None:
+    theta, y = _record(seed, 20_000, 317.3 - 0.2 * seed)
+    k = 40 + 10 * seed
+    fast = _fastlab.moment_fit(theta, y, k)
+    assert fast is not None
+    r_ref, qty_ref, rss_ref = hls._moment_fit(theta, y, k)
+    r, qty, rss = fast
+    # Normal equations of a Gram matrix with condition ~1: the factors agree to the rounding of the
+    # moments (n eps relative), far below the noise (5 %).
+    assert_allclose(r, r_ref, rtol=1e-10, atol=1e-10 * float(np.max(np.abs(r_ref))))
+    assert_allclose(qty, qty_ref, rtol=1e-9, atol=1e-10 * float(np.max(np.abs(qty_ref))))
+    assert rss == pytest.approx(rss_ref, rel=1e-9)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_harmonic_lsq_matches_the_qr_path(seed: int) -> None:
+    theta, y = _record(seed, 20_000, 300.0 + 7.7 * seed)
+    for k in (1, 4, 10):
+        coef_ref, r_ref = hls.solve_qr(hls.harmonic_basis(theta, k), y)
+        resid = y - hls.harmonic_basis(theta, k) @ coef_ref
+        fast = _fastlab.harmonic_lsq(theta, y, k)
+        assert fast is not None
+        coef, r, rss = fast
+        assert_allclose(coef, coef_ref, rtol=1e-10, atol=1e-12)
+        # R up to the signs of its rows: the variances (row norms of R^-1) agree.
+        assert_allclose(np.abs(r), np.abs(r_ref), rtol=1e-9, atol=1e-9 * float(np.max(np.abs(r_ref))))
+        assert rss == pytest.approx(float(resid @ resid), rel=1e-9)
+
+
+def test_ill_conditioned_fits_are_left_to_the_qr_path() -> None:
+    # A third of a period with 6 harmonics: the harmonics are far from orthogonal.
+    theta = np.linspace(0.0, 2.0, 400)
+    y = np.cos(theta)
+    assert _fastlab.moment_fit(theta, y, 6) is None
+    assert _fastlab.harmonic_lsq(theta, y, 6) is None
+    # cond = 1.99999 / 1e-5 = 2e5 > 1e4; cond = 1.999 / 1e-3 = 1999 <= 1e4 (Gershgorin cannot certify it:
+    # the eigenvalue path decides).
+    assert not _fastlab.well_conditioned(np.array([[1.0, 0.99999], [0.99999, 1.0]]))
+    assert _fastlab.well_conditioned(np.array([[1.0, 0.999], [0.999, 1.0]]))
+    assert not _fastlab.well_conditioned(np.array([[1.0, 0.0], [0.0, -1.0]]))
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_conditioning_decision_is_the_reference_eigenvalue_test(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    for _ in range(200):
+        m = int(rng.integers(2, 8))
+        a = rng.standard_normal((m, m)) * rng.uniform(0.01, 0.6)
+        gram = np.eye(m) * rng.uniform(0.5, 4.0, m) + 0.5 * (a + a.T)
+        scale = np.sqrt(np.abs(np.diag(gram)))
+        eig = np.linalg.eigvalsh(gram / np.outer(scale, scale))
+        expected = bool(np.all(np.diag(gram) > 0) and eig[0] > 0 and eig[-1] / eig[0] <= 1e4)
+        assert _fastlab.well_conditioned(gram) == expected
+
+
+def test_kernels_refuse_bad_input() -> None:
+    theta = np.linspace(0.0, 6.0, 50)
+    with pytest.raises(InvalidParameterError):
+        _core.harmonic_moments(theta, theta[:10], 3)
+    with pytest.raises(InvalidParameterError):
+        _core.harmonic_moments(theta, theta, 0)
+    with pytest.raises(InvalidParameterError):
+        _core.harmonic_series(theta, np.ones(4))
+    bad = theta.copy()
+    bad[3] = np.nan
+    with pytest.raises(NonFiniteError):
+        _core.harmonic_moments(bad, theta, 2)
+
+
+def _lab_record(seed: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
+    """20,000 samples, 317.3 (non-integer) samples per period: idle, ramps, offsets, noise, a distorted y."""
+    rng = np.random.default_rng(seed)
+    n, p = 20_000, 317.3 + 0.1 * seed
+    omega = 2.0 * math.pi * 50.0 / p  # sampled at 50 Hz
+    t = np.arange(n) / 50.0
+    period = 2.0 * math.pi / omega
+    env = np.clip((t - 3 * period) / (2 * period), 0.0, 1.0) * np.clip(
+        (t[-1] - 3 * period - t) / (2 * period), 0, 1
+    )
+    u = 0.2 + env * 1.5 * np.cos(omega * t + rng.uniform(0, 6)) + 0.003 * rng.standard_normal(n)
+    y = -0.1 + np.tanh(1.3 * (u - 0.2)) ** 3 + 0.01 * rng.standard_normal(n)
+    return t, u, y, omega * 1.02
+
+
+@pytest.mark.parametrize("seed", range(2))
+def test_lab_pipeline_with_and_without_the_rust_kernels(seed: int, monkeypatch: pytest.MonkeyPatch) -> None:
+    from bouc_wen_id import signal
+
+    t, u, y, nominal = _lab_record(seed)
+
+    def run() -> tuple[signal.SineFit, signal.SegmentReport, list[signal.AveragedPeriod]]:
+        fit = signal.analyse_sine(t, u, nominal_frequency=nominal)
+        rep = signal.find_steady_segments(t, u, y, nominal_frequency=nominal)
+        avg = [
+            signal.synchronous_average(t, y, f, start=s.start, stop=s.stop)
+            for s, f in zip(rep.kept, rep.fits)
+        ]
+        return fit, rep, avg
+
+    fast = run()
+    monkeypatch.setattr(hls, "USE_RUST_KERNELS", False)
+    ref = run()
+    # The frequency: Gauss-Newton stops at 1e-4 of its standard error, so two paths whose residuals differ by
+    # rounding may stop one step apart: agreement to 1e-3 standard errors.
+    assert abs(fast[0].frequency - ref[0].frequency) <= 1e-3 * ref[0].frequency_se
+    assert fast[0].amplitude == pytest.approx(ref[0].amplitude, rel=1e-9)
+    assert fast[1].kept == ref[1].kept and fast[1].dropped == ref[1].dropped
+    assert len(fast[2]) == len(ref[2]) >= 1
+    for a, b in zip(fast[2], ref[2]):
+        assert a.harmonics == b.harmonics
+        assert_allclose(a.ybar, b.ybar, rtol=0, atol=1e-8 * float(np.max(np.abs(b.ybar))))
+        assert a.noise_var == pytest.approx(b.noise_var, rel=1e-7)
