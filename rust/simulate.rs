@@ -497,11 +497,16 @@ fn integrate_fixed<const N: usize, I: Stages>(
     let mut xs = [0.0; N];
     let mut w = bw.w0();
     let last = grid.n_samples - 1;
+    // As in `integrate`: a Ctrl-C check every ~CHECK_EVERY_STEPS steps, a mask on the sample index.
+    let check_mask = (crate::cancel::CHECK_EVERY_STEPS / grid.substeps)
+        .max(1)
+        .next_power_of_two()
+        - 1;
     for (k, (xo, wo)) in out.x.iter_mut().zip(out.w.iter_mut()).enumerate() {
         let t = k as f64 * dt;
         *xo = sys.output(&xs, src.sample(t));
         *wo = w;
-        if k == last {
+        if k == last || (k & check_mask == 0 && crate::cancel::requested()) {
             break;
         }
         for s in 0..grid.substeps {
