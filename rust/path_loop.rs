@@ -26,7 +26,6 @@
 
 use crate::bouc_wen::sgn;
 use crate::error::{finite, CoreError, Result};
-use crate::steady::{MAX_SAMPLES_PER_PERIOD, MAX_STEPS_PER_PERIOD};
 use std::f64::consts::PI;
 
 /// Column of d w / d beta in [`PathLoop::jac`] rows.
@@ -697,7 +696,8 @@ fn coarse_single(p: &Shape, coarse: &[Segment], pc: &Pieces<PIECES>, bound: f64)
 ///
 /// Errors: [`CoreError::NonFinite`] for a non-finite input or an overflowing loop;
 /// [`CoreError::InvalidParameter`] for `mu <= 1`, `beta + gamma - |delta| <= 0`, `play < 0`,
-/// `substeps < 1`, a grid above [`MAX_SAMPLES_PER_PERIOD`] / [`MAX_STEPS_PER_PERIOD`];
+/// `substeps < 1`, a grid above [`crate::steady::MAX_SAMPLES_PER_PERIOD`] /
+/// [`crate::steady::MAX_STEPS_PER_PERIOD`];
 /// [`CoreError::ZeroAmplitude`] for `amplitude == 0` or `play >= |amplitude|` (no motion reaches
 /// the hysteresis); [`CoreError::InsufficientData`] for `P < 4`; [`CoreError::NotConverged`]
 /// when the shooting finds no periodic loop.
@@ -766,25 +766,7 @@ fn path_loop_with(
             amplitude.abs()
         )));
     }
-    if samples_per_period < 4 {
-        return Err(CoreError::InsufficientData(format!(
-            "samples_per_period = {samples_per_period}: at least 4 are needed"
-        )));
-    }
-    if substeps < 1 {
-        return Err(CoreError::InvalidParameter(format!(
-            "substeps = {substeps} must be >= 1"
-        )));
-    }
-    if samples_per_period > MAX_SAMPLES_PER_PERIOD
-        || samples_per_period.saturating_mul(substeps) > MAX_STEPS_PER_PERIOD
-    {
-        return Err(CoreError::InvalidParameter(format!(
-            "samples_per_period = {samples_per_period} with substeps = {substeps} exceeds the \
-             limits ({MAX_SAMPLES_PER_PERIOD} samples, {MAX_STEPS_PER_PERIOD} RK4 steps per \
-             period); a loop this fine gains nothing over a few thousand samples"
-        )));
-    }
+    crate::steady::check_grid(samples_per_period, substeps)?;
     let shape = Shape {
         beta,
         gamma,

@@ -316,6 +316,31 @@ fn coarse_top(
     None
 }
 
+/// The sample grid and RK4 steps of a steady-loop solver (this one and the path loop): at least 4
+/// samples and 1 substep, within [`MAX_SAMPLES_PER_PERIOD`] and [`MAX_STEPS_PER_PERIOD`].
+pub(crate) fn check_grid(samples_per_period: usize, substeps: usize) -> Result<()> {
+    if samples_per_period < 4 {
+        return Err(CoreError::InsufficientData(format!(
+            "samples_per_period = {samples_per_period}: at least 4 are needed"
+        )));
+    }
+    if substeps < 1 {
+        return Err(CoreError::InvalidParameter(format!(
+            "substeps = {substeps} must be >= 1"
+        )));
+    }
+    if samples_per_period > MAX_SAMPLES_PER_PERIOD
+        || samples_per_period.saturating_mul(substeps) > MAX_STEPS_PER_PERIOD
+    {
+        return Err(CoreError::InvalidParameter(format!(
+            "samples_per_period = {samples_per_period} with substeps = {substeps} exceeds the \
+             limits ({MAX_SAMPLES_PER_PERIOD} samples, {MAX_STEPS_PER_PERIOD} RK4 steps per \
+             period); a loop this fine gains nothing over a few thousand samples"
+        )));
+    }
+    Ok(())
+}
+
 /// Steady loop of (2b) driven by `x = amplitude cos(omega t - phi)`, sampled at `P` points per
 /// period (`t_j = j T / P`), with `substeps` RK4 steps per lattice interval.
 ///
@@ -360,25 +385,7 @@ pub fn steady_loop(
             "the amplitude of x is 0: the loop is a point".into(),
         ));
     }
-    if samples_per_period < 4 {
-        return Err(CoreError::InsufficientData(format!(
-            "samples_per_period = {samples_per_period}: at least 4 are needed"
-        )));
-    }
-    if substeps < 1 {
-        return Err(CoreError::InvalidParameter(format!(
-            "substeps = {substeps} must be >= 1"
-        )));
-    }
-    if samples_per_period > MAX_SAMPLES_PER_PERIOD
-        || samples_per_period.saturating_mul(substeps) > MAX_STEPS_PER_PERIOD
-    {
-        return Err(CoreError::InvalidParameter(format!(
-            "samples_per_period = {samples_per_period} with substeps = {substeps} exceeds the \
-             limits ({MAX_SAMPLES_PER_PERIOD} samples, {MAX_STEPS_PER_PERIOD} RK4 steps per \
-             period); a loop this fine gains nothing over a few thousand samples"
-        )));
-    }
+    check_grid(samples_per_period, substeps)?;
     let p = Params {
         a: amplitude,
         beta,
