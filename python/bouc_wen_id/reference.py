@@ -857,6 +857,89 @@ LM_LAMBDA_START, LM_LAMBDA_DOWN, LM_LAMBDA_UP, LM_LAMBDA_MAX = 1e-3, 0.2, 10.0, 
 LM_MU_MARGIN = 1e-9
 
 
+def admissible_bouc_wen(par: FloatArray, mu_lo: float, mu_hi: float) -> bool:
+    """The Bouc-Wen conditions of (2a) on ``par[:3] = (beta, gamma, mu)`` and the mu bracket."""
+    return bool(
+        par[2] > max(mu_lo, 1.0) + LM_MU_MARGIN
+        and par[2] <= mu_hi
+        and par[0] + par[1] > 0
+        and par[0] >= par[1]
+    )
+
+
+def project_bouc_wen(trial: FloatArray, mu_lo: float, mu_hi: float) -> None:
+    """In place: ``beta < gamma`` onto ``beta = gamma`` (same sum), mu clipped into its bracket."""
+    if trial[0] < trial[1]:
+        trial[0] = trial[1] = 0.5 * (trial[0] + trial[1])
+    mu_min = max(mu_lo, 1.0) + 2.0 * LM_MU_MARGIN
+    if np.isfinite(trial[2]):
+        trial[2] = min(max(trial[2], mu_min), max(mu_hi, mu_min))
+
+
+def levenberg_marquardt(
+    params: FloatArray,
+    cost_of: Callable[[FloatArray], tuple[float, Any]],
+    linearize: Callable[[Any], tuple[FloatArray, FloatArray]],
+    project: Callable[[FloatArray], None],
+    admissible: Callable[[FloatArray], bool],
+    *,
+    max_iter: int,
+    ftol: float,
+    xtol: float,
+) -> tuple[FloatArray, float, int, bool, FloatArray, Any]:
+    """The one Levenberg-Marquardt of the reference (design.md 7.4), for the plain and the augmented model.
+
+    ``cost_of(par) -> (cost, state)`` (raises a library error where the model has no loop),
+    ``linearize(state) -> (J'WJ, J'Wr)`` at an accepted point, ``project(trial)`` in place onto the closed
+    constraints, ``admissible(trial)``. Marquardt damping ``lambda diag(J'WJ)`` from 1e-3, x0.2 on success,
+    x10 on failure, stop above 1e12; stop on a relative decrease below ``ftol`` or a step below
+    ``xtol (|p| + xtol)``. Returns ``(params, cost, iterations, converged, J'WJ, state)``.
+    """
+    cost, state = cost_of(params)
+    fisher, grad = linearize(state)
+    lam = LM_LAMBDA_START
+    it = 0
+    converged = False
+    while it < max_iter:
+        it += 1
+        damped = fisher + lam * np.diag(np.maximum(np.diag(fisher), np.finfo(float).tiny))
+        try:
+            delta = np.linalg.solve(damped, grad)
+        except np.linalg.LinAlgError:
+            lam *= LM_LAMBDA_UP
+            if lam > LM_LAMBDA_MAX:
+                converged = True
+                break
+            continue
+        trial = params + delta
+        small = bool(np.all(np.abs(delta) <= xtol * (np.abs(params) + xtol)))
+        project(trial)
+        out = None
+        if admissible(trial):
+            try:
+                out = cost_of(trial)
+            except BoucWenIdErrorBase:
+                out = None
+        if out is not None and out[0] <= cost:
+            decrease = (cost - out[0]) / max(cost, np.finfo(float).tiny)
+            params = trial
+            cost, state = out
+            fisher, grad = linearize(state)
+            lam = max(lam * LM_LAMBDA_DOWN, 1e-15)
+            if decrease < ftol or small:
+                converged = True
+                break
+        else:
+            if small:
+                converged = True
+                break
+            lam *= LM_LAMBDA_UP
+            if lam > LM_LAMBDA_MAX:
+                converged = True
+                break
+    return params, cost, it, converged, fisher, state
+
+
 def refine(
     ybars: Sequence[ArrayLike],
     amplitudes: ArrayLike,
@@ -899,12 +982,7 @@ def refine(
 
     def admissible(par: FloatArray) -> bool:
         """The Bouc-Wen conditions of (2a) and the mu bracket."""
-        return bool(
-            par[2] > max(mu_lo, 1.0) + LM_MU_MARGIN
-            and par[2] <= mu_hi
-            and par[0] + par[1] > 0
-            and par[0] >= par[1]
-        )
+        return admissible_bouc_wen(par, mu_lo, mu_hi)
 
     if not admissible(params):
         raise InvalidParameterError(
@@ -937,53 +1015,20 @@ def refine(
             grad += wts[i] * full.T @ resid[i]
         return fisher, grad
 
-    cost, resid, jacs = evaluate(params)
-    fisher, grad = blocks(resid, jacs)
-    lam = LM_LAMBDA_START
-    it = 0
-    converged = False
-    while it < max_iter:
-        it += 1
-        damped = fisher + lam * np.diag(np.maximum(np.diag(fisher), np.finfo(float).tiny))
-        try:
-            delta = np.linalg.solve(damped, grad)
-        except np.linalg.LinAlgError:
-            lam *= LM_LAMBDA_UP
-            if lam > LM_LAMBDA_MAX:
-                converged = True
-                break
-            continue
-        trial = params + delta
-        small = bool(np.all(np.abs(delta) <= xtol * (np.abs(params) + xtol)))
+    def project(trial: FloatArray) -> None:
         # Project onto the closed constraints the step crossed: beta < gamma -> the nearest point of
         # beta = gamma (same beta + gamma), mu clipped into the bracket (beta + gamma <= 0 stays rejected).
-        if trial[0] < trial[1]:
-            trial[0] = trial[1] = 0.5 * (trial[0] + trial[1])
-        mu_min = max(mu_lo, 1.0) + 2.0 * LM_MU_MARGIN
-        if np.isfinite(trial[2]):
-            trial[2] = min(max(trial[2], mu_min), max(mu_hi, mu_min))
-        out = None
-        if admissible(trial):
-            try:
-                out = evaluate(trial)
-            except BoucWenIdErrorBase:
-                out = None
-        if out is not None and out[0] <= cost:
-            decrease = (cost - out[0]) / max(cost, np.finfo(float).tiny)
-            params = trial
-            cost, resid, jacs = out
-            fisher, grad = blocks(resid, jacs)
-            lam = max(lam * LM_LAMBDA_DOWN, 1e-15)
-            if decrease < ftol or small:
-                converged = True
-                break
-        else:
-            if small:
-                converged = True
-                break
-            lam *= LM_LAMBDA_UP
-            if lam > LM_LAMBDA_MAX:
-                converged = True
-                break
+        project_bouc_wen(trial, mu_lo, mu_hi)
+
+    def linearize(state: tuple[list[FloatArray], list[FloatArray]]) -> tuple[FloatArray, FloatArray]:
+        return blocks(*state)
+
+    def trial_cost(par: FloatArray) -> tuple[float, tuple[list[FloatArray], list[FloatArray]]]:
+        cost, resid, jacs = evaluate(par)
+        return cost, (resid, jacs)
+
+    params, cost, it, converged, fisher, (resid, _) = levenberg_marquardt(
+        params, trial_cost, linearize, project, admissible, max_iter=max_iter, ftol=ftol, xtol=xtol
+    )
     loops = [ys[i] - resid[i] for i in range(m)]
     return params, cost, it, converged, fisher, loops

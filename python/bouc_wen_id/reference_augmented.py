@@ -17,15 +17,8 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .errors import BoucWenIdError, InsufficientDataError, InvalidParameterError, ZeroAmplitudeError
-from .reference import (
-    LM_LAMBDA_DOWN,
-    LM_LAMBDA_MAX,
-    LM_LAMBDA_START,
-    LM_LAMBDA_UP,
-    LM_MU_MARGIN,
-    steady_loop,
-)
+from .errors import InsufficientDataError, InvalidParameterError, ZeroAmplitudeError
+from .reference import admissible_bouc_wen, levenberg_marquardt, project_bouc_wen, steady_loop
 from .reference_path import path_loop
 from .validation import finite_array as _finite_array
 from .validation import finite_scalar as _finite_scalar
@@ -273,12 +266,7 @@ def augmented_refine(
         return PLAY_MAX_FRACTION * float(np.min(np.abs(amps * par[ns::2])))
 
     def admissible(par: FloatArray) -> bool:
-        ok = bool(
-            par[2] > max(mu_lo, 1.0) + LM_MU_MARGIN
-            and par[2] <= mu_hi
-            and par[0] + par[1] > 0
-            and par[0] >= par[1]
-        )
+        ok = admissible_bouc_wen(par, mu_lo, mu_hi)
         if "asymmetry" in col:
             ok = ok and abs(par[col["asymmetry"]]) < par[0] + par[1]
         if "sensor_lag" in col:
@@ -299,7 +287,7 @@ def augmented_refine(
             f"{play_max(params)}"
         )
 
-    def evaluate(par: FloatArray) -> tuple[float, list[FloatArray], FloatArray, FloatArray]:
+    def evaluate(par: FloatArray) -> tuple[float, tuple[list[FloatArray], FloatArray, FloatArray]]:
         n = par.size
         cost = 0.0
         outputs = []
@@ -325,57 +313,26 @@ def augmented_refine(
             fisher += wts[i] * full.T @ full
             grad += wts[i] * full.T @ r
             outputs.append(y)
-        return cost, outputs, fisher, grad
+        return cost, (outputs, fisher, grad)
 
-    cost, outputs, fisher, grad = evaluate(params)
-    lam = LM_LAMBDA_START
-    it = 0
-    converged = False
-    while it < max_iter:
-        it += 1
-        damped = fisher + lam * np.diag(np.maximum(np.diag(fisher), np.finfo(float).tiny))
-        try:
-            delta = np.linalg.solve(damped, grad)
-        except np.linalg.LinAlgError:
-            lam *= LM_LAMBDA_UP
-            if lam > LM_LAMBDA_MAX:
-                converged = True
-                break
-            continue
-        trial = params + delta
-        small = bool(np.all(np.abs(delta) <= xtol * (np.abs(params) + xtol)))
+    def project(trial: FloatArray) -> None:
         # The projections of reference.refine, then tau and b clipped into their ranges.
-        if trial[0] < trial[1]:
-            trial[0] = trial[1] = 0.5 * (trial[0] + trial[1])
-        mu_min = max(mu_lo, 1.0) + 2.0 * LM_MU_MARGIN
-        if np.isfinite(trial[2]):
-            trial[2] = min(max(trial[2], mu_min), max(mu_hi, mu_min))
+        project_bouc_wen(trial, mu_lo, mu_hi)
         if "sensor_lag" in col:
             trial[col["sensor_lag"]] = max(trial[col["sensor_lag"]], 0.0)
         if "play" in col:
             trial[col["play"]] = max(min(trial[col["play"]], play_max(trial)), 0.0)
-        out = None
-        if admissible(trial):
-            try:
-                out = evaluate(trial)
-            except BoucWenIdError:
-                out = None
-        if out is not None and out[0] <= cost:
-            decrease = (cost - out[0]) / max(cost, np.finfo(float).tiny)
-            params = trial
-            cost, outputs, fisher, grad = out
-            lam = max(lam * LM_LAMBDA_DOWN, 1e-15)
-            if decrease < ftol or small:
-                converged = True
-                break
-        else:
-            if small:
-                converged = True
-                break
-            lam *= LM_LAMBDA_UP
-            if lam > LM_LAMBDA_MAX:
-                converged = True
-                break
+
+    params, cost, it, converged, fisher, (outputs, _, _) = levenberg_marquardt(
+        params,
+        evaluate,
+        lambda state: (state[1], state[2]),
+        project,
+        admissible,
+        max_iter=max_iter,
+        ftol=ftol,
+        xtol=xtol,
+    )
     return (
         params[:ns].copy(),
         params[ns::2].copy(),
