@@ -31,6 +31,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .errors import InsufficientDataError, InvalidParameterError, NonFiniteError, ZeroAmplitudeError
 from .reference_augmented import TERM_NAMES, parse_terms
+from .terms import TERMS
 
 __all__ = [
     "TERM_NAMES",
@@ -50,34 +51,12 @@ FloatArray = NDArray[np.float64]
 #: The shared hysteresis parameters ahead of the terms' parameters.
 HYSTERESIS_NAMES: tuple[str, ...] = ("beta", "gamma", "mu")
 
-#: Symbol of each term's parameter (design.md 9.1).
-TERM_SYMBOLS: Mapping[str, str] = MappingProxyType(
-    {
-        "offset": "y0",
-        "stiffness": "k",
-        "viscous": "c",
-        "inertia": "m",
-        "coulomb": "f",
-        "sensor_lag": "tau",
-        "asymmetry": "delta",
-        "play": "b",
-    }
-)
+#: Symbol of each term's parameter (design.md 9.1), from the term value types.
+TERM_SYMBOLS: Mapping[str, str] = MappingProxyType({name: TERMS[name].symbol for name in TERM_NAMES})
 
-#: Unit template of each term's parameter: ``{y}``, ``{u}``, ``{x}``, ``{w}`` stand for the output's, the
-#: input's, the latent x's and the hysteresis' units (format with :func:`term_unit`).
-TERM_UNITS: Mapping[str, str] = MappingProxyType(
-    {
-        "offset": "{y}",
-        "stiffness": "{y}/{u}",
-        "viscous": "{y} s/{u}",
-        "inertia": "{y} s^2/{u}",
-        "coulomb": "{y}",
-        "sensor_lag": "s",
-        "asymmetry": "1/{w}^mu",
-        "play": "{x}",
-    }
-)
+#: Unit template of each term's parameter (``{y}``, ``{u}``: the output's and the input's units), from the
+#: term value types; format with :func:`term_unit`.
+TERM_UNITS: Mapping[str, str] = MappingProxyType({name: TERMS[name].unit for name in TERM_NAMES})
 
 
 def term_unit(
@@ -85,8 +64,8 @@ def term_unit(
 ) -> str:
     """The unit of term ``name``'s parameter with the given channel units.
 
-    In the identified model (alpha = 1) w has the output's units and x those of w, so ``x`` and ``w``
-    default to ``y``.
+    In the identified model (alpha = 1) w and x have the output's units, which the templates write as
+    ``{y}``; ``x`` and ``w`` are accepted for callers that name them.
     """
     parse_terms([name])
     return TERM_UNITS[name].format(y=y, u=u, x=y if x is None else x, w=y if w is None else w)

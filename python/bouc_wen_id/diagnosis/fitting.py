@@ -23,8 +23,6 @@ from .data import DiagExperiment
 FloatArray = NDArray[np.float64]
 TWO_PI = 2.0 * math.pi
 
-#: Coulomb smoothing of design.md 9.1 (sign over 1 % of the peak input velocity).
-COULOMB_EPS = 0.01
 #: Output terms whose contribution is linear in the parameter: their start is the residual's projection.
 LINEAR_TERMS = ("offset", "stiffness", "viscous", "inertia", "coulomb")
 #: Iterations of the held-out refit of one experiment's (g, phi) with the physics frozen.
@@ -69,22 +67,27 @@ def scaled(exps: Sequence[DiagExperiment], s: Scale) -> list[AugExperiment]:
     ]
 
 
-def regressor(term: str, e: AugExperiment) -> FloatArray:
-    """The contribution per unit parameter of a linear output term on the experiment's grid."""
-    p = e.ybar.size
-    th = TWO_PI * np.arange(p) / p + e.grid_phase
-    u, om = e.amplitude, e.frequency
-    if term == "offset":
-        return np.ones(p)
-    if term == "stiffness":
-        return np.asarray(u * np.cos(th))
-    if term == "viscous":
-        return np.asarray(-u * om * np.sin(th))
-    if term == "inertia":
-        return np.asarray(-u * om**2 * np.cos(th))
-    if term == "coulomb":
-        return np.asarray(np.tanh(-np.sin(th) * np.sign(u) / COULOMB_EPS))
-    raise ValueError(term)
+def regressor(term: str, e: AugExperiment, par: AugParams, i: int, substeps: int) -> FloatArray:
+    """The contribution per unit parameter of a linear output term on experiment i's grid.
+
+    It is the term's Jacobian column in the core's model output (design.md 9.1), through any sensor lag
+    the current model already has, so the formulas live in one place.
+    """
+    from .. import _core
+
+    trial = par.with_term(term, 0.0)
+    _, jac, _ = _core.augmented_output(
+        e.ybar.size,
+        e.amplitude,
+        e.frequency,
+        e.grid_phase,
+        list(trial.terms),
+        np.concatenate([[trial.beta, trial.gamma, trial.mu], trial.values]).astype(np.float64),
+        float(par.gains[i]),
+        float(par.phases[i]),
+        substeps,
+    )
+    return np.asarray(jac)[:, 3 + len(par.terms)]
 
 
 def substeps_for(sizes: Sequence[int]) -> int:
@@ -221,14 +224,14 @@ def fit_plain(items: Any, exps: Sequence[DiagExperiment], s: Scale, substeps: in
     return best
 
 
-def candidate_starts(exps: Sequence[AugExperiment], fit: AugFit, term: str) -> list[AugParams]:
+def candidate_starts(exps: Sequence[AugExperiment], fit: AugFit, term: str, substeps: int) -> list[AugParams]:
     """Starts for ``fit``'s model plus ``term``: its parameter at 0 and at an informed guess."""
     par = fit.params
     outs = fit.outputs
     if term in LINEAR_TERMS:
         num = den = 0.0
-        for e, y in zip(exps, outs):
-            g = regressor(term, e)
+        for i, (e, y) in enumerate(zip(exps, outs)):
+            g = regressor(term, e, par, i, substeps)
             num += e.weight * float(np.dot(g, e.ybar - y))
             den += e.weight * float(np.dot(g, g))
         guess = num / den if den > 0 else 0.0
@@ -256,7 +259,7 @@ def fit_with(exps: Sequence[AugExperiment], fit: AugFit, term: str, substeps: in
     is the least-squares value on the current residual); for the others every start is screened with
     ``SCREEN_ITER`` iterations and the best is finished.
     """
-    starts = candidate_starts(exps, fit, term)
+    starts = candidate_starts(exps, fit, term, substeps)
     if term in LINEAR_TERMS:
         for st in starts:
             f = fit_from(exps, st, substeps)
