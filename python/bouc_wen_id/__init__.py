@@ -99,3 +99,8 @@ __all__ = [
 ]
 
 __all__ += ["budget", "BudgetExceededError"]
+
+# Experiment planning (issue #11 part 3): the design that minimises a Cramer-Rao criterion within a budget.
+from .planning import ExperimentPlan, PlannedExperiment, plan_experiment  # noqa: E402
+
+__all__ += ["plan_experiment", "ExperimentPlan", "PlannedExperiment"]

@@ -579,6 +579,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", type=Path, default=Path("bouc_wen_id_diagnosis"), help="report folder")
     _add_overwrite(p)
     p.set_defaults(func=_cmd_diagnose)
+    _add_plan_parser(sub)
     return parser
 
 
@@ -625,6 +626,124 @@ def _cmd_diagnose(args: argparse.Namespace) -> int:
 
 def _one_line(text: str) -> str:
     return " ".join(text.split())
+
+
+# --------------------------------------------------------------------------------------------------
+# bouc-wen-id plan: the experiment planner (bouc_wen_id.planning)
+# --------------------------------------------------------------------------------------------------
+
+
+def _add_plan_parser(sub: Any) -> None:
+    p = sub.add_parser(
+        "plan",
+        help="plan sine experiments (frequencies, amplitudes, periods) for the best precision in a time budget",
+        description="From a prior plant, choose the experiments that minimise the Cramer-Rao bound of the "
+        "target within the test-time budget and the actuator and sampling limits; print the design, its "
+        "expected standard errors and the gain over a naive design of the same budget.",
+    )
+    p.add_argument(
+        "--plant",
+        type=Path,
+        default=None,
+        help="prior: a plant JSON, or a previous result JSON (then give G with --num/--den); default: the "
+        "demo plant, or the plant given by --num/--den/--beta/--gamma/--mu",
+    )
+    p.add_argument("--num", type=_real(), nargs="+", default=None, help="prior G numerator (descending powers)")
+    p.add_argument("--den", type=_real(), nargs="+", default=None, help="prior G denominator")
+    p.add_argument("--delay", type=_real(nonnegative=True), default=0.0, help="prior G pure delay, s")
+    p.add_argument("--beta", type=_real(), default=None)
+    p.add_argument("--gamma", type=_real(), default=None)
+    p.add_argument("--mu", type=_real(), default=None)
+    p.add_argument("--alpha", type=_real(positive=True), default=1.0)
+    p.add_argument("--budget", type=_real(positive=True), required=True, help="total test time, s")
+    p.add_argument(
+        "--band", type=_real(positive=True), nargs=2, required=True, metavar=("LOW", "HIGH"), help="rad/s"
+    )
+    p.add_argument("--max-amplitude", type=_real(positive=True), required=True, help="largest input U")
+    p.add_argument("--max-rate", type=_real(positive=True), default=None, help="largest U omega (velocity limit)")
+    p.add_argument("--noise", type=_real(positive=True), required=True, help="prior output noise sd per sample")
+    p.add_argument("--sample-rate", type=_real(positive=True), required=True, help="highest sampling rate, Hz")
+    p.add_argument("--target", choices=("bouc_wen", "beta", "gamma", "mu", "G"), default="bouc_wen")
+    p.add_argument("--frequencies", type=_integer(2), default=12, help="candidate frequencies (G: tested grid)")
+    p.add_argument("--amplitudes", type=_integer(1), default=4, help="candidate amplitudes per frequency")
+    p.add_argument("--settle-periods", type=_integer(0), default=20)
+    p.add_argument("--overhead", type=_real(nonnegative=True), default=0.0, help="set-up time per experiment, s")
+    p.add_argument("--max-samples-per-period", type=_integer(16), default=512)
+    p.add_argument("--min-periods", type=_integer(2), default=5)
+    p.add_argument("--max-experiments", type=_integer(2), default=None)
+    p.add_argument("--out", type=Path, default=None, help="write the plan as JSON to this file")
+    _add_overwrite(p)
+    p.set_defaults(func=_cmd_plan)
+
+
+def _prior_from_args(args: argparse.Namespace) -> WienerPlant:
+    """The prior plant of ``bouc-wen-id plan``: a plant JSON, a result JSON + --num/--den, or arguments."""
+    from .model import BoucWen, TransferFunction
+
+    bw_args = (args.beta, args.gamma, args.mu)
+    linear = None if args.num is None and args.den is None else (args.num, args.den)
+    if linear is not None and (args.num is None or args.den is None):
+        raise InvalidParameterError("--num and --den go together")
+    if args.plant is None:
+        if linear is None and all(v is None for v in bw_args):
+            return demo_plant()
+        if linear is None or any(v is None for v in bw_args):
+            raise InvalidParameterError(
+                "without --plant, give the prior as --num, --den, --beta, --gamma and --mu (or none: the demo plant)"
+            )
+        return WienerPlant(
+            TransferFunction(args.num, args.den, args.delay), BoucWen(args.beta, args.gamma, args.mu, args.alpha)
+        )
+    try:
+        spec = json.loads(args.plant.read_text(encoding="utf-8")) if args.plant.is_file() else None
+    except (OSError, ValueError):
+        spec = None
+    if isinstance(spec, dict) and spec.get("format") == "bouc_wen_id.result":
+        if linear is None:
+            raise InvalidParameterError(
+                f"--plant {args.plant}: a result JSON holds G only at its tested frequencies; give the prior "
+                "G(s) with --num/--den (and --delay), e.g. from bouc_wen_id.fit_transfer_function"
+            )
+        try:
+            values = [float(spec[k]) for k in ("beta", "gamma", "mu")]
+        except (KeyError, TypeError, ValueError):
+            raise FileFormatError(f"--plant {args.plant}: a result JSON without beta, gamma, mu") from None
+        # The result is alpha-normalised: its G is alpha G, so alpha = 1 with the G the user gives.
+        return WienerPlant(TransferFunction(args.num, args.den, args.delay), BoucWen(*values))
+    if linear is not None or any(v is not None for v in bw_args):
+        raise InvalidParameterError("--plant with a plant JSON takes no --num/--den/--beta/--gamma/--mu")
+    return _load_plant(args.plant)
+
+
+def _cmd_plan(args: argparse.Namespace) -> int:
+    from .planning import plan_experiment
+
+    if args.out is not None:
+        _check_out(args.out, args.overwrite, "--out")
+    prior = _prior_from_args(args)
+    plan = plan_experiment(
+        prior,
+        args.budget,
+        band=(args.band[0], args.band[1]),
+        max_amplitude=args.max_amplitude,
+        noise_sd=args.noise,
+        sample_rate=args.sample_rate,
+        target=args.target,
+        max_rate=args.max_rate,
+        n_frequencies=args.frequencies,
+        n_amplitudes=args.amplitudes,
+        settle_periods=args.settle_periods,
+        overhead=args.overhead,
+        max_samples_per_period=args.max_samples_per_period,
+        min_periods=args.min_periods,
+        max_experiments=args.max_experiments,
+    )
+    print(plan.summary())
+    if args.out is not None:
+        with _staged(args.out) as staged:
+            staged.write_text(plan.to_json() + "\n", encoding="utf-8")
+        print(f"wrote {args.out}")
+    return 0
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:

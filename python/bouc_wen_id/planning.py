@@ -1,0 +1,756 @@
+"""Plan sine experiments: the design that minimises a Cramer-Rao criterion within a test-time budget.
+
+From a prior guess of the plant and the noise level, :func:`plan_experiment` chooses the frequencies
+(within a band), the amplitudes (within the actuator's amplitude and rate limits), the samples per period
+(within a sampling-rate limit) and the number of averaged periods of each experiment so that the
+Cramer-Rao bound (:func:`bouc_wen_id.cramer_rao`) of what the user cares about is smallest, while the
+total test time ``sum_i overhead + (settle_periods + N_i) 2 pi / omega_i`` stays within the budget.
+
+Why it is cheap
+---------------
+The Fisher information of experiment i is ``(N_i / sigma^2) F_i`` with ``F_i`` the 5 x 5 block of one
+averaged period (:func:`bouc_wen_id.uncertainty.experiment_fisher`), in the parameters
+``[beta, gamma, mu, |G_i|, phi_i]``.  The gain and phase of experiment i are its own, so eliminating
+them leaves the Bouc-Wen information ``sum_i (N_i / sigma^2) S_i`` with ``S_i = A_i - B_i D_i^-1 B_i^T``
+the Schur complement of the block (``A`` the Bouc-Wen 3 x 3 part, ``D`` the gain-phase 2 x 2 part): the
+designs are scored with 3 x 3 inverses of sums of precomputed matrices, and the covariance of
+``(|G_i|, phi_i)`` is ``sigma^2 D_i^-1 / N_i + K_i C K_i^T`` with ``K_i = D_i^-1 B_i^T`` and ``C`` the
+Bouc-Wen covariance.  The reported standard errors are then recomputed by :func:`cramer_rao` itself.
+
+Criteria (``target``), all on the alpha-normalised model, all to minimise
+----------------------------------------------------------------------
+``"beta"``, ``"gamma"``, ``"mu"``
+    The relative variance ``var(theta) / theta^2`` of that parameter (the variance itself for a zero
+    parameter).
+``"bouc_wen"``
+    The geometric mean of the relative variances, ``det(C_rel)^(1/3)`` with
+    ``C_rel = C / (theta theta^T)``: D-optimal on (beta, gamma, mu), invariant to their units.
+``"G"``
+    G is pinned only where it is tested, so "G over the band" is scored on a fixed grid: the
+    ``n_frequencies`` log-spaced frequencies of the band are ALL tested, and the criterion is the mean
+    over them of ``var(|G|) / |G|^2 + var(phi)`` (the relative variance of the complex G(j omega)).
+    The planner then chooses the amplitude and the periods of each.
+
+Algorithm
+---------
+Candidates: ``n_frequencies`` frequencies log-spaced over the band times ``n_amplitudes`` amplitudes
+``(1/L, 2/L, ..., 1) x U_max(omega)``, with ``U_max(omega) = min(max_amplitude, max_rate / omega)``; the
+samples per period are the most the sampling rate allows, ``P = min(max_samples_per_period,
+floor(sample_rate 2 pi / omega))`` (at least :data:`MIN_SAMPLES_PER_PERIOD`).  At most one experiment
+per frequency.  A greedy phase spends the budget in chunks (about 1/50 of it): at each step it either
+adds periods to an experiment or opens a new one (paying its overhead and settling), whichever lowers the
+log-criterion most per second of test time.  A Fedorov-style exchange phase then tries budget-neutral
+moves (another amplitude at the same frequency, periods moved between experiments, an experiment
+closed and its time given to another, an experiment moved to an unused frequency) and keeps the best
+improving one until none improves; the greedy phase then spends what is left, down to single periods.
+Everything is deterministic.  A vague prior (relative standard deviation 10^4) keeps the criterion
+finite while the design cannot yet identify every parameter; it is not in the reported bounds.
+
+Assumptions of the bound (as :func:`cramer_rao`): white Gaussian output noise of the same standard
+deviation at any sampling rate (so more samples per period carry more information; a noise that is
+filtered before sampling does not gain as much), the steady loop after ``settle_periods``, and unbiased
+estimators.  The bound is local: it is only as good as the prior plant.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any, Literal, Optional
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ._backend import Backend
+from .errors import InvalidParameterError
+from .model import Recording, SinePlan, WienerPlant
+from .uncertainty import CramerRao, cramer_rao, experiment_fisher
+from .validation import real_number
+
+__all__ = ["Target", "PlannedExperiment", "Design", "ExperimentPlan", "plan_experiment", "TARGETS"]
+
+FloatArray = NDArray[np.float64]
+Target = Literal["beta", "gamma", "mu", "bouc_wen", "G"]
+TARGETS: tuple[str, ...] = ("beta", "gamma", "mu", "bouc_wen", "G")
+
+#: Fewest samples per period a candidate may have: the averaged period must resolve the loop's
+#: harmonics (the identification's spectral derivative and phase search work on it).
+MIN_SAMPLES_PER_PERIOD = 16
+#: Fraction of the budget the greedy phase spends per step (then single periods at the end).
+CHUNK_FRACTION = 1.0 / 50.0
+#: Prior precision of the vague prior, relative: 1 / (10^4 theta)^2 (keeps a rank-deficient design's
+#: criterion finite during the search; absent from the reported bounds).
+VAGUE_PRIOR = 1e-8
+#: Exchange iterations at most (each keeps the best improving move; it stops earlier when none improves).
+MAX_EXCHANGES = 200
+#: A move must lower the log-criterion by more than this to count as an improvement.
+IMPROVEMENT_TOL = 1e-9
+
+
+@dataclass(frozen=True)
+class PlannedExperiment:
+    """One sine experiment of a design: ``u = amplitude cos(frequency t)``.
+
+    ``frequency`` in rad/s; ``samples_per_period`` P (the sampling rate is ``P frequency / (2 pi)``
+    Hz); ``settle_periods`` played and discarded, then ``periods`` N measured and averaged;
+    ``overhead`` seconds of set-up counted against the budget.
+    """
+
+    frequency: float
+    amplitude: float
+    periods: int
+    samples_per_period: int
+    settle_periods: int
+    overhead: float = 0.0
+
+    @property
+    def period(self) -> float:
+        """One period, s."""
+        return 2.0 * math.pi / self.frequency
+
+    @property
+    def duration(self) -> float:
+        """Test time charged to the budget, s: overhead + (settle + N) periods."""
+        return self.overhead + (self.settle_periods + self.periods) * self.period
+
+    @property
+    def sample_rate(self) -> float:
+        """Sampling rate, Hz."""
+        return self.samples_per_period / self.period
+
+    def plan(self, noise_sd: float, seed: Optional[int] = 0, substeps: int = 4) -> SinePlan:
+        """This experiment as a one-frequency :class:`SinePlan` (for :func:`bouc_wen_id.simulate`)."""
+        return SinePlan(
+            frequencies=[self.frequency],
+            amplitudes=[self.amplitude],
+            settle_periods=self.settle_periods,
+            periods=self.periods,
+            samples_per_period=self.samples_per_period,
+            substeps=substeps,
+            noise_sd=noise_sd,
+            seed=seed,
+        )
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "frequency": self.frequency,
+            "amplitude": self.amplitude,
+            "periods": self.periods,
+            "samples_per_period": self.samples_per_period,
+            "settle_periods": self.settle_periods,
+            "overhead": self.overhead,
+            "duration": self.duration,
+            "sample_rate": self.sample_rate,
+        }
+
+
+@dataclass(frozen=True, eq=False)
+class Design:
+    """A set of experiments with its predicted standard errors (Cramer-Rao) and its criterion value."""
+
+    experiments: tuple[PlannedExperiment, ...]
+    noise_sd: float
+    predicted: CramerRao
+    criterion: float
+    total_time: float
+
+    def plans(self, seed: Optional[int] = 0, substeps: int = 4) -> list[SinePlan]:
+        """One :class:`SinePlan` per experiment (each its own N and P); the noise seeds are derived from
+        ``seed`` by ``numpy.random.SeedSequence(seed).spawn`` (``None``: fresh entropy)."""
+        if seed is None:
+            return [e.plan(self.noise_sd, None, substeps) for e in self.experiments]
+        children = np.random.SeedSequence(seed).spawn(len(self.experiments))
+        return [
+            e.plan(self.noise_sd, int(c.generate_state(1)[0]), substeps)
+            for e, c in zip(self.experiments, children)
+        ]
+
+    def simulate(
+        self, plant: WienerPlant, seed: Optional[int] = 0, substeps: int = 4, backend: Backend = "rust"
+    ) -> list[Recording]:
+        """Simulate every experiment on ``plant`` (e.g. the prior, or a truth for a Monte Carlo)."""
+        from .simulation import simulate
+
+        recs: list[Recording] = []
+        for plan in self.plans(seed, substeps):
+            recs.extend(simulate(plant, plan, backend=backend, workers=1))
+        return recs
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "experiments": [e.to_dict() for e in self.experiments],
+            "noise_sd": self.noise_sd,
+            "predicted_sd": self.predicted.to_dict(),
+            "criterion": self.criterion,
+            "total_time": self.total_time,
+        }
+
+
+@dataclass(frozen=True, eq=False)
+class ExperimentPlan:
+    """The planned design, the naive design of the same budget, and the constraints they obey.
+
+    ``design`` is what to run; ``naive`` (None when the budget cannot hold it) is the comparison:
+    evenly log-spaced frequencies over the band (for ``target="G"``: the same tested grid) at the
+    largest allowed amplitude, the same number of experiments, the same periods N each, the same
+    sampling-rate rule.  ``improvement`` is ``naive.criterion / design.criterion`` (>= 1 is a gain).
+    """
+
+    target: str
+    prior: WienerPlant
+    budget: float
+    design: Design
+    naive: Optional[Design]
+    settings: dict[str, Any] = field(repr=False)
+
+    @property
+    def experiments(self) -> tuple[PlannedExperiment, ...]:
+        return self.design.experiments
+
+    @property
+    def predicted(self) -> CramerRao:
+        return self.design.predicted
+
+    @property
+    def total_time(self) -> float:
+        return self.design.total_time
+
+    @property
+    def improvement(self) -> Optional[float]:
+        if self.naive is None:
+            return None
+        return self.naive.criterion / self.design.criterion
+
+    def plans(self, seed: Optional[int] = 0, substeps: int = 4) -> list[SinePlan]:
+        """The planned experiments as :class:`SinePlan` s (see :meth:`Design.plans`)."""
+        return self.design.plans(seed, substeps)
+
+    def simulate(
+        self,
+        plant: Optional[WienerPlant] = None,
+        seed: Optional[int] = 0,
+        substeps: int = 4,
+        backend: Backend = "rust",
+    ) -> list[Recording]:
+        """Simulate the planned experiments on ``plant`` (default: the prior)."""
+        return self.design.simulate(self.prior if plant is None else plant, seed, substeps, backend)
+
+    def summary(self) -> str:
+        lines = [
+            f"Experiment plan: target {self.target!r}, budget {self.budget:g} s "
+            f"(used {self.design.total_time:.1f} s), noise sd {self.design.noise_sd:g}",
+            f"  {'#':>2} {'omega rad/s':>11} {'f Hz':>8} {'U':>9} {'P':>5} {'fs Hz':>9} "
+            f"{'settle':>6} {'N':>6} {'time s':>8} {'sd|G|/|G|':>10} {'sd phi':>9}",
+        ]
+        gains, _ = self.prior.normalized().linear.gain_phase([e.frequency for e in self.experiments])
+        cr = self.design.predicted
+        for i, e in enumerate(self.experiments):
+            lines.append(
+                f"  {i:>2} {e.frequency:>11.4g} {e.frequency / (2 * math.pi):>8.4g} {e.amplitude:>9.4g} "
+                f"{e.samples_per_period:>5d} {e.sample_rate:>9.4g} {e.settle_periods:>6d} {e.periods:>6d} "
+                f"{e.duration:>8.2f} {cr.gain[i] / gains[i]:>10.3g} {cr.phase[i]:>9.3g}"
+            )
+        h = self.prior.normalized().hysteresis
+        lines.append("Predicted standard deviations (Cramer-Rao bound, alpha-normalised model):")
+        lines.append(f"  {'':<9} {'prior':>10} {'planned':>12} {'naive':>12}")
+        for name in ("beta", "gamma", "mu"):
+            value = getattr(h, name)
+            naive = "-" if self.naive is None else f"{getattr(self.naive.predicted, name):.3g}"
+            lines.append(
+                f"  {name:<9} {value:>10.4g} {getattr(cr, name):>12.3g} {naive:>12}"
+                + (f"   ({getattr(cr, name) / abs(value):.2%} of the value)" if value else "")
+            )
+        naive_c = "-" if self.naive is None else f"{self.naive.criterion:.3g}"
+        lines.append(
+            f"  {'criterion':<9} {'':>10} {self.design.criterion:>12.3g} {naive_c:>12}   "
+            f"({_CRITERION_TEXT[self.target]})"
+        )
+        if self.improvement is not None:
+            lines.append(
+                f"Naive design ({len(self.naive.experiments) if self.naive else 0} experiments at the largest "
+                f"amplitude, equal periods): the planned one's criterion is {self.improvement:.3g}x smaller."
+            )
+        return "\n".join(lines)
+
+    def __str__(self) -> str:
+        return self.summary()
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready description (format ``bouc_wen_id.plan``, version 1)."""
+        return {
+            "format": "bouc_wen_id.plan",
+            "version": 1,
+            "target": self.target,
+            "criterion": _CRITERION_TEXT[self.target],
+            "budget": self.budget,
+            "prior": self.prior.to_dict(),
+            "settings": self.settings,
+            "design": self.design.to_dict(),
+            "naive": None if self.naive is None else self.naive.to_dict(),
+            "improvement": self.improvement,
+        }
+
+    def to_json(self, indent: int = 2) -> str:
+        return json.dumps(self.to_dict(), indent=indent)
+
+
+_CRITERION_TEXT = {
+    "beta": "relative variance of beta",
+    "gamma": "relative variance of gamma",
+    "mu": "relative variance of mu",
+    "bouc_wen": "geometric mean of the relative variances of beta, gamma, mu",
+    "G": "mean over the tested grid of var|G|/|G|^2 + var(phi)",
+}
+
+
+def _positive(name: str, value: object) -> float:
+    v = real_number(name, value)
+    if not v > 0:
+        raise InvalidParameterError(f"{name} = {v} must be > 0")
+    return v
+
+
+def _count(name: str, value: object, low: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or int(value) < low:
+        raise InvalidParameterError(f"{name} = {value!r} must be an integer >= {low}")
+    return int(value)
+
+
+def _scales(theta: FloatArray) -> FloatArray:
+    """|theta|, with 1 in place of a zero parameter (its variance is then scored as it is)."""
+    out: FloatArray = np.where(theta != 0, np.abs(theta), 1.0)
+    return out
+
+
+def criterion_value(target: str, prior: WienerPlant, frequencies: FloatArray, cr: CramerRao) -> float:
+    """The criterion ``target`` (module docstring) of a bound ``cr`` for experiments at ``frequencies``."""
+    norm = prior.normalized()
+    h = norm.hysteresis
+    s = _scales(np.array([h.beta, h.gamma, h.mu]))
+    if target == "G":
+        gains, _ = norm.linear.gain_phase(frequencies)
+        return float(np.mean((cr.gain / gains) ** 2 + cr.phase**2))
+    rel = cr.covariance[:3, :3] / np.outer(s, s)
+    if target == "bouc_wen":
+        return float(np.linalg.det(rel) ** (1.0 / 3.0))
+    i = ("beta", "gamma", "mu").index(target)
+    return float(rel[i, i])
+
+
+class _Search:
+    """The candidate blocks and the design scoring of the greedy/exchange search."""
+
+    def __init__(
+        self,
+        target: str,
+        prior: WienerPlant,
+        omegas: FloatArray,
+        amps: FloatArray,
+        samples: NDArray[np.int64],
+        noise_sd: float,
+        settle: int,
+        overhead: float,
+        substeps: int,
+        backend: Backend,
+    ) -> None:
+        self.target = target
+        self.omegas, self.amps, self.samples = omegas, amps, samples
+        self.period = 2.0 * np.pi / omegas
+        self.var = noise_sd**2
+        self.settle, self.overhead = settle, overhead
+        norm = prior.normalized()
+        h = norm.hysteresis
+        self.theta_scale = _scales(np.array([h.beta, h.gamma, h.mu]))
+        self.gains, _ = norm.linear.gain_phase(omegas)
+        k, n_amp = amps.shape
+        self.schur = np.zeros((k, n_amp, 3, 3))
+        self.dinv = np.zeros((k, n_amp, 2, 2))
+        self.kmat = np.zeros((k, n_amp, 2, 3))
+        for i in range(k):
+            for a in range(n_amp):
+                f = experiment_fisher(
+                    norm, float(omegas[i]), float(amps[i, a]), int(samples[i]), substeps=substeps, backend=backend
+                )
+                dinv = np.linalg.pinv(f[3:, 3:])
+                self.dinv[i, a] = dinv
+                self.kmat[i, a] = dinv @ f[3:, :3]
+                self.schur[i, a] = f[:3, :3] - f[:3, 3:] @ dinv @ f[3:, :3]
+        self.prior_precision = VAGUE_PRIOR * np.diag(1.0 / self.theta_scale**2)
+
+    def cost(self, design: dict[int, tuple[int, int]]) -> float:
+        return float(sum(self.overhead + (self.settle + n) * self.period[k] for k, (_, n) in design.items()))
+
+    def score(self, design: dict[int, tuple[int, int]]) -> float:
+        """log of the criterion (with the vague prior)."""
+        info = self.prior_precision.copy()
+        for k, (a, n) in design.items():
+            info += (n / self.var) * self.schur[k, a]
+        try:
+            cov = np.linalg.inv(info)
+        except np.linalg.LinAlgError:
+            return math.inf
+        if self.target == "G":
+            total = 0.0
+            for k, (a, n) in design.items():
+                loc = self.var * self.dinv[k, a] / n + self.kmat[k, a] @ cov @ self.kmat[k, a].T
+                total += loc[0, 0] / self.gains[k] ** 2 + loc[1, 1]
+            # Untested grid points have no estimate: the search opens all of them first.
+            value = total / max(len(design), 1)
+        else:
+            rel = cov / np.outer(self.theta_scale, self.theta_scale)
+            if self.target == "bouc_wen":
+                det = float(np.linalg.det(rel))
+                return math.log(det) / 3.0 if det > 0 else math.inf
+            i = ("beta", "gamma", "mu").index(self.target)
+            value = float(rel[i, i])
+        return math.log(value) if value > 0 else math.inf
+
+
+def _spend(
+    s: _Search,
+    design: dict[int, tuple[int, int]],
+    budget: float,
+    chunk: float,
+    min_periods: int,
+    max_experiments: int,
+    may_open: bool,
+) -> dict[int, tuple[int, int]]:
+    """Greedy: add periods or open experiments, best log-criterion drop per second, until none fits."""
+    current = s.score(design)
+    while True:
+        rem = budget - s.cost(design)
+        best: Optional[tuple[float, dict[int, tuple[int, int]], float]] = None
+        options: list[tuple[dict[int, tuple[int, int]], float]] = []
+        for k, (a, n) in design.items():
+            dn = min(max(1, int(chunk // s.period[k])), int(rem // s.period[k]))
+            if dn >= 1:
+                options.append(({**design, k: (a, n + dn)}, dn * s.period[k]))
+        if may_open and len(design) < max_experiments:
+            for k in range(len(s.omegas)):
+                if k in design:
+                    continue
+                n0 = max(min_periods, int(chunk // s.period[k]))
+                price = s.overhead + (s.settle + n0) * s.period[k]
+                if price > rem:
+                    n0 = min_periods
+                    price = s.overhead + (s.settle + n0) * s.period[k]
+                    if price > rem:
+                        continue
+                for a in range(s.amps.shape[1]):
+                    options.append(({**design, k: (a, n0)}, price))
+        for cand, price in options:
+            value = s.score(cand)
+            rate = (current - value) / price
+            if value < current - IMPROVEMENT_TOL and (best is None or rate > best[0]):
+                best = (rate, cand, value)
+        if best is None:
+            return design
+        design, current = best[1], best[2]
+
+
+def _fill(s: _Search, design: dict[int, tuple[int, int]], k: int, budget: float) -> Optional[dict[int, tuple[int, int]]]:
+    """``design`` with experiment ``k``'s periods raised to use all the time left (None if none is left)."""
+    a, n = design[k]
+    extra = int((budget - s.cost(design)) // s.period[k])
+    return {**design, k: (a, n + extra)} if extra >= 1 else None
+
+
+def _exchange(
+    s: _Search,
+    design: dict[int, tuple[int, int]],
+    budget: float,
+    chunk: float,
+    min_periods: int,
+    fixed_frequencies: bool,
+) -> dict[int, tuple[int, int]]:
+    """Fedorov-style: apply the best improving budget-neutral move until none improves."""
+    current = s.score(design)
+    for _ in range(MAX_EXCHANGES):
+        options: list[dict[int, tuple[int, int]]] = []
+        for k, (a, n) in design.items():
+            for b in range(s.amps.shape[1]):  # another amplitude at the same frequency
+                if b != a:
+                    options.append({**design, k: (b, n)})
+            dn = max(1, int(chunk // s.period[k]))
+            if n - dn >= min_periods:  # periods moved from k to j
+                less = {**design, k: (a, n - dn)}
+                for j in design:
+                    if j != k:
+                        moved = _fill(s, less, j, budget)
+                        if moved is not None:
+                            options.append(moved)
+            if fixed_frequencies or len(design) < 2:
+                continue
+            rest = {j: v for j, v in design.items() if j != k}
+            for j in rest:  # k closed, its time given to j
+                moved = _fill(s, rest, j, budget)
+                if moved is not None:
+                    options.append(moved)
+            free = budget - s.cost(rest)
+            for j in range(len(s.omegas)):  # k moved to an unused frequency j
+                if j in design:
+                    continue
+                nj = int((free - s.overhead) // s.period[j]) - s.settle
+                if nj >= min_periods:
+                    for b in range(s.amps.shape[1]):
+                        options.append({**rest, j: (b, nj)})
+        best: Optional[tuple[float, dict[int, tuple[int, int]]]] = None
+        for cand in options:
+            value = s.score(cand)
+            if value < current - IMPROVEMENT_TOL and (best is None or value < best[0]):
+                best = (value, cand)
+        if best is None:
+            break
+        current, design = best
+    return design
+
+
+def plan_experiment(
+    prior_plant: WienerPlant,
+    budget: float,
+    *,
+    band: tuple[float, float],
+    max_amplitude: float,
+    noise_sd: float,
+    sample_rate: float,
+    target: Target = "bouc_wen",
+    max_rate: Optional[float] = None,
+    n_frequencies: int = 12,
+    n_amplitudes: int = 4,
+    settle_periods: int = 20,
+    overhead: float = 0.0,
+    max_samples_per_period: int = 512,
+    min_periods: int = 5,
+    max_experiments: Optional[int] = None,
+    substeps: int = 8,
+    backend: Backend = "rust",
+) -> ExperimentPlan:
+    """Plan sine experiments minimising the Cramer-Rao criterion ``target`` within a time budget.
+
+    Parameters
+    ----------
+    prior_plant : WienerPlant
+        The prior guess of the plant (a plain Wiener-Bouc-Wen plant, no terms).
+    budget : float
+        Total test time, s: ``sum_i overhead + (settle_periods + N_i) 2 pi / omega_i <= budget``.
+    band : (float, float)
+        Lowest and highest angular frequency allowed, rad/s (low < high).
+    max_amplitude : float
+        Largest input amplitude U the actuator allows (> 0; the planner uses positive amplitudes).
+    noise_sd : float
+        Prior standard deviation of the white output noise, per sample (> 0).
+    sample_rate : float
+        Highest sampling rate, Hz: ``P omega / (2 pi) <= sample_rate``.
+    target : {"bouc_wen", "beta", "gamma", "mu", "G"}
+        What to make precise (module docstring: the criteria).
+    max_rate : float, optional
+        Largest input rate ``U omega`` (a velocity limit, units of u per second).
+    n_frequencies : int
+        Log-spaced candidate frequencies over the band (for ``"G"``: the tested grid, all used).
+    n_amplitudes : int
+        Candidate amplitudes per frequency: ``(1/L, ..., 1) x min(max_amplitude, max_rate / omega)``.
+    settle_periods : int
+        Periods played before the measured ones, in every experiment (charged to the budget).
+    overhead : float
+        Set-up time charged per experiment, s.
+    max_samples_per_period : int
+        Cap on P (the planner takes the most the sampling rate allows, up to this).
+    min_periods : int
+        Fewest periods N of an experiment (the identification estimates the noise from their spread).
+    max_experiments : int, optional
+        Most experiments in the design (default: ``n_frequencies``).
+    substeps : int
+        RK4 steps per sample of the sensitivities (as :func:`cramer_rao`).
+
+    Returns
+    -------
+    ExperimentPlan
+        The design (experiments, predicted standard errors, criterion, total time), the naive design of
+        the same budget, and the settings; :meth:`ExperimentPlan.simulate` and
+        :meth:`ExperimentPlan.plans` run it.
+
+    Raises
+    ------
+    InvalidParameterError
+        A non-finite or out-of-range argument, an empty band, a plant with terms, no frequency of the
+        band sampled with at least :data:`MIN_SAMPLES_PER_PERIOD` samples per period, a budget too small
+        for even one experiment (or, for ``"G"``, for every grid point), or a budget whose best design
+        still cannot identify every parameter.
+    """
+    if not isinstance(prior_plant, WienerPlant):
+        raise InvalidParameterError(f"prior_plant must be a WienerPlant, got {type(prior_plant).__name__}")
+    if prior_plant.terms:
+        raise InvalidParameterError(
+            "plan_experiment plans for the plain Wiener-Bouc-Wen model (its Cramer-Rao bound); pass the "
+            "prior plant without terms"
+        )
+    if target not in TARGETS:
+        raise InvalidParameterError(f"target = {target!r} must be one of {', '.join(TARGETS)}")
+    budget = _positive("budget", budget)
+    try:
+        lo, hi = (real_number("band", b) for b in band)
+    except (TypeError, ValueError):
+        raise InvalidParameterError(f"band must be two frequencies (low, high) in rad/s, got {band!r}") from None
+    if not 0 < lo < hi:
+        raise InvalidParameterError(f"band = ({lo}, {hi}) must satisfy 0 < low < high (rad/s): it is empty")
+    max_amplitude = _positive("max_amplitude", max_amplitude)
+    noise_sd = _positive("noise_sd", noise_sd)
+    sample_rate = _positive("sample_rate", sample_rate)
+    rate = math.inf if max_rate is None else _positive("max_rate", max_rate)
+    overhead = real_number("overhead", overhead)
+    if overhead < 0:
+        raise InvalidParameterError(f"overhead = {overhead} must be >= 0 s")
+    n_freq = _count("n_frequencies", n_frequencies, 2)
+    n_amp = _count("n_amplitudes", n_amplitudes, 1)
+    settle = _count("settle_periods", settle_periods, 0)
+    p_cap = _count("max_samples_per_period", max_samples_per_period, MIN_SAMPLES_PER_PERIOD)
+    min_n = _count("min_periods", min_periods, 2)
+    max_exp = n_freq if max_experiments is None else _count("max_experiments", max_experiments, 2)
+    substeps = _count("substeps", substeps, 1)
+
+    # The band's top is cut where the sampling rate no longer gives MIN_SAMPLES_PER_PERIOD per period.
+    top = min(hi, 2.0 * math.pi * sample_rate / MIN_SAMPLES_PER_PERIOD)
+    if top < lo:
+        raise InvalidParameterError(
+            f"sample_rate = {sample_rate:g} Hz gives fewer than {MIN_SAMPLES_PER_PERIOD} samples per period "
+            f"at every frequency of the band ({lo:g}, {hi:g}) rad/s"
+        )
+    omegas = np.geomspace(lo, top, n_freq) if top > lo else np.array([lo])
+    omegas = np.unique(omegas)
+    samples = _samples(omegas, sample_rate, p_cap)
+    u_max = np.minimum(max_amplitude, rate / omegas)
+    amps = u_max[:, None] * (np.arange(1, n_amp + 1) / n_amp)[None, :]
+    period = 2.0 * np.pi / omegas
+    cheapest = float(np.min(overhead + (settle + min_n) * period))
+    if budget < cheapest:
+        raise InvalidParameterError(
+            f"budget = {budget:g} s is too small for even one experiment: the cheapest takes {cheapest:.4g} s "
+            f"({overhead:g} s overhead + {settle} settling + {min_n} measured periods at {float(omegas[-1]):.4g} "
+            "rad/s)"
+        )
+    search = _Search(target, prior_plant, omegas, amps, samples, noise_sd, settle, overhead, substeps, backend)
+    chunk = CHUNK_FRACTION * budget
+    fixed = target == "G"
+    design: dict[int, tuple[int, int]] = {}
+    if fixed:
+        need = float(np.sum(overhead + (settle + min_n) * period))
+        if budget < need:
+            raise InvalidParameterError(
+                f"budget = {budget:g} s is too small to test every one of the {len(omegas)} grid frequencies "
+                f"of target 'G' ({need:.4g} s at {min_n} periods each); raise the budget or lower n_frequencies"
+            )
+        # Open every grid point at min_periods, choosing its amplitude greedily, cheapest first.
+        for k in np.argsort(period):
+            k = int(k)
+            best = min(range(n_amp), key=lambda a: search.score({**design, k: (a, min_n)}))
+            design[k] = (best, min_n)
+    design = _spend(search, design, budget, chunk, min_n, max_exp, not fixed)
+    for _ in range(3):
+        before = dict(design)
+        design = _exchange(search, design, budget, chunk, min_n, fixed)
+        design = _spend(search, design, budget, 0.0, min_n, max_exp, not fixed)
+        if design == before:
+            break
+    experiments = tuple(
+        PlannedExperiment(
+            float(omegas[k]), float(amps[k, a]), int(n), int(samples[k]), settle, overhead
+        )
+        for k, (a, n) in sorted(design.items())
+    )
+    planned = _design(target, prior_plant, experiments, noise_sd, substeps, backend)
+    if planned is None:
+        raise InvalidParameterError(
+            f"within budget = {budget:g} s no design found identifies every parameter (the Fisher "
+            "information stays singular); raise the budget or widen the band"
+        )
+    naive = _naive(
+        target, prior_plant, budget, lo, top, len(experiments), omegas if fixed else None,
+        max_amplitude, rate, sample_rate, p_cap, settle, overhead, min_n, noise_sd, substeps, backend,
+    )
+    settings = {
+        "band": [lo, hi],
+        "max_amplitude": max_amplitude,
+        "max_rate": None if max_rate is None else rate,
+        "noise_sd": noise_sd,
+        "sample_rate": sample_rate,
+        "n_frequencies": n_freq,
+        "n_amplitudes": n_amp,
+        "settle_periods": settle,
+        "overhead": overhead,
+        "max_samples_per_period": p_cap,
+        "min_periods": min_n,
+        "max_experiments": max_exp,
+        "substeps": substeps,
+        "candidate_frequencies": omegas.tolist(),
+    }
+    return ExperimentPlan(target, prior_plant, budget, planned, naive, settings)
+
+
+def _samples(omegas: FloatArray, sample_rate: float, p_cap: int) -> NDArray[np.int64]:
+    """Most samples per period the sampling rate allows at each frequency, capped at ``p_cap``."""
+    # A hair below the exact ratio so that P omega / 2 pi never exceeds sample_rate by rounding.
+    p = np.floor(sample_rate * 2.0 * np.pi / omegas * (1.0 - 1e-12)).astype(np.int64)
+    out: NDArray[np.int64] = np.minimum(p, p_cap)
+    return out
+
+
+def _design(
+    target: str,
+    prior: WienerPlant,
+    experiments: Sequence[PlannedExperiment],
+    noise_sd: float,
+    substeps: int,
+    backend: Backend,
+) -> Optional[Design]:
+    """The design's exact bound by :func:`cramer_rao` (None when its Fisher matrix is singular)."""
+    plans = [e.plan(noise_sd) for e in experiments]
+    try:
+        cr = cramer_rao(prior, plans, substeps=substeps, backend=backend)
+    except InvalidParameterError:
+        return None
+    freqs = np.array([e.frequency for e in experiments])
+    value = criterion_value(target, prior, freqs, cr)
+    if not math.isfinite(value) or value <= 0:
+        return None
+    total = float(sum(e.duration for e in experiments))
+    return Design(tuple(experiments), noise_sd, cr, value, total)
+
+
+def _naive(
+    target: str,
+    prior: WienerPlant,
+    budget: float,
+    lo: float,
+    top: float,
+    count: int,
+    grid: Optional[FloatArray],
+    max_amplitude: float,
+    rate: float,
+    sample_rate: float,
+    p_cap: int,
+    settle: int,
+    overhead: float,
+    min_n: int,
+    noise_sd: float,
+    substeps: int,
+    backend: Backend,
+) -> Optional[Design]:
+    """Evenly log-spaced frequencies at the largest amplitude, equal N, fewer if the budget is short."""
+    for m in range(max(count, 2), 1, -1):
+        omegas = grid if grid is not None else np.geomspace(lo, top, m)
+        period = 2.0 * np.pi / omegas
+        n = int((budget - float(np.sum(overhead + settle * period))) // float(np.sum(period)))
+        if n < min_n:
+            if grid is not None:
+                return None
+            continue
+        samples = _samples(omegas, sample_rate, p_cap)
+        amps = np.minimum(max_amplitude, rate / omegas)
+        experiments = [
+            PlannedExperiment(float(w), float(u), n, int(p), settle, overhead)
+            for w, u, p in zip(omegas, amps, samples)
+        ]
+        return _design(target, prior, experiments, noise_sd, substeps, backend)
+    return None
