@@ -636,7 +636,7 @@ def _one_line(text: str) -> str:
 def _add_plan_parser(sub: Any) -> None:
     p = sub.add_parser(
         "plan",
-        help="plan sine experiments (frequencies, amplitudes, periods) for the best precision in a time budget",
+        help="plan sine experiments (frequencies, amplitudes, periods) for the best precision in a budget",
         description="From a prior plant, choose the experiments that minimise the Cramer-Rao bound of the "
         "target within the test-time budget and the actuator and sampling limits; print the design, its "
         "expected standard errors and the gain over a naive design of the same budget.",
@@ -648,7 +648,9 @@ def _add_plan_parser(sub: Any) -> None:
         help="prior: a plant JSON, or a previous result JSON (then give G with --num/--den); default: the "
         "demo plant, or the plant given by --num/--den/--beta/--gamma/--mu",
     )
-    p.add_argument("--num", type=_real(), nargs="+", default=None, help="prior G numerator (descending powers)")
+    p.add_argument(
+        "--num", type=_real(), nargs="+", default=None, help="prior G numerator (descending powers)"
+    )
     p.add_argument("--den", type=_real(), nargs="+", default=None, help="prior G denominator")
     p.add_argument("--delay", type=_real(nonnegative=True), default=0.0, help="prior G pure delay, s")
     p.add_argument("--beta", type=_real(), default=None)
@@ -660,14 +662,24 @@ def _add_plan_parser(sub: Any) -> None:
         "--band", type=_real(positive=True), nargs=2, required=True, metavar=("LOW", "HIGH"), help="rad/s"
     )
     p.add_argument("--max-amplitude", type=_real(positive=True), required=True, help="largest input U")
-    p.add_argument("--max-rate", type=_real(positive=True), default=None, help="largest U omega (velocity limit)")
-    p.add_argument("--noise", type=_real(positive=True), required=True, help="prior output noise sd per sample")
-    p.add_argument("--sample-rate", type=_real(positive=True), required=True, help="highest sampling rate, Hz")
+    p.add_argument(
+        "--max-rate", type=_real(positive=True), default=None, help="largest U omega (velocity limit)"
+    )
+    p.add_argument(
+        "--noise", type=_real(positive=True), required=True, help="prior output noise sd per sample"
+    )
+    p.add_argument(
+        "--sample-rate", type=_real(positive=True), required=True, help="highest sampling rate, Hz"
+    )
     p.add_argument("--target", choices=("bouc_wen", "beta", "gamma", "mu", "G"), default="bouc_wen")
-    p.add_argument("--frequencies", type=_integer(2), default=12, help="candidate frequencies (G: tested grid)")
+    p.add_argument(
+        "--frequencies", type=_integer(2), default=12, help="candidate frequencies (G: tested grid)"
+    )
     p.add_argument("--amplitudes", type=_integer(1), default=4, help="candidate amplitudes per frequency")
     p.add_argument("--settle-periods", type=_integer(0), default=20)
-    p.add_argument("--overhead", type=_real(nonnegative=True), default=0.0, help="set-up time per experiment, s")
+    p.add_argument(
+        "--overhead", type=_real(nonnegative=True), default=0.0, help="set-up time per experiment, s"
+    )
     p.add_argument("--max-samples-per-period", type=_integer(16), default=512)
     p.add_argument("--min-periods", type=_integer(2), default=5)
     p.add_argument("--max-experiments", type=_integer(2), default=None)
@@ -689,10 +701,12 @@ def _prior_from_args(args: argparse.Namespace) -> WienerPlant:
             return demo_plant()
         if linear is None or any(v is None for v in bw_args):
             raise InvalidParameterError(
-                "without --plant, give the prior as --num, --den, --beta, --gamma and --mu (or none: the demo plant)"
+                "without --plant, give the prior as --num, --den, --beta, --gamma and --mu "
+                "(or none of them: the demo plant)"
             )
         return WienerPlant(
-            TransferFunction(args.num, args.den, args.delay), BoucWen(args.beta, args.gamma, args.mu, args.alpha)
+            TransferFunction(args.num, args.den, args.delay),
+            BoucWen(args.beta, args.gamma, args.mu, args.alpha),
         )
     try:
         spec = json.loads(args.plant.read_text(encoding="utf-8")) if args.plant.is_file() else None

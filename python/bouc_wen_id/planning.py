@@ -269,7 +269,8 @@ class ExperimentPlan:
         )
         if self.improvement is not None:
             lines.append(
-                f"Naive design ({len(self.naive.experiments) if self.naive else 0} experiments at the largest "
+                f"Naive design ({len(self.naive.experiments) if self.naive else 0} experiments at the "
+                "largest "
                 f"amplitude, equal periods): the planned one's criterion is {self.improvement:.3g}x smaller."
             )
         return "\n".join(lines)
@@ -371,7 +372,12 @@ class _Search:
         for i in range(k):
             for a in range(n_amp):
                 f = experiment_fisher(
-                    norm, float(omegas[i]), float(amps[i, a]), int(samples[i]), substeps=substeps, backend=backend
+                    norm,
+                    float(omegas[i]),
+                    float(amps[i, a]),
+                    int(samples[i]),
+                    substeps=substeps,
+                    backend=backend,
                 )
                 dinv = np.linalg.pinv(f[3:, 3:])
                 self.dinv[i, a] = dinv
@@ -450,7 +456,9 @@ def _spend(
         design, current = best[1], best[2]
 
 
-def _fill(s: _Search, design: dict[int, tuple[int, int]], k: int, budget: float) -> Optional[dict[int, tuple[int, int]]]:
+def _fill(
+    s: _Search, design: dict[int, tuple[int, int]], k: int, budget: float
+) -> Optional[dict[int, tuple[int, int]]]:
     """``design`` with experiment ``k``'s periods raised to use all the time left (None if none is left)."""
     a, n = design[k]
     extra = int((budget - s.cost(design)) // s.period[k])
@@ -589,10 +597,9 @@ def plan_experiment(
     if target not in TARGETS:
         raise InvalidParameterError(f"target = {target!r} must be one of {', '.join(TARGETS)}")
     budget = _positive("budget", budget)
-    try:
-        lo, hi = (real_number("band", b) for b in band)
-    except (TypeError, ValueError):
-        raise InvalidParameterError(f"band must be two frequencies (low, high) in rad/s, got {band!r}") from None
+    if isinstance(band, (str, bytes)) or np.ndim(band) != 1 or len(band) != 2:
+        raise InvalidParameterError(f"band must be two frequencies (low, high) in rad/s, got {band!r}")
+    lo, hi = real_number("band low", band[0]), real_number("band high", band[1])
     if not 0 < lo < hi:
         raise InvalidParameterError(f"band = ({lo}, {hi}) must satisfy 0 < low < high (rad/s): it is empty")
     max_amplitude = _positive("max_amplitude", max_amplitude)
@@ -626,11 +633,14 @@ def plan_experiment(
     cheapest = float(np.min(overhead + (settle + min_n) * period))
     if budget < cheapest:
         raise InvalidParameterError(
-            f"budget = {budget:g} s is too small for even one experiment: the cheapest takes {cheapest:.4g} s "
-            f"({overhead:g} s overhead + {settle} settling + {min_n} measured periods at {float(omegas[-1]):.4g} "
+            f"budget = {budget:g} s is too small for even one experiment: the cheapest takes "
+            f"{cheapest:.4g} s ({overhead:g} s overhead + {settle} settling + {min_n} measured periods at "
+            f"{float(omegas[-1]):.4g} "
             "rad/s)"
         )
-    search = _Search(target, prior_plant, omegas, amps, samples, noise_sd, settle, overhead, substeps, backend)
+    search = _Search(
+        target, prior_plant, omegas, amps, samples, noise_sd, settle, overhead, substeps, backend
+    )
     chunk = CHUNK_FRACTION * budget
     fixed = target == "G"
     design: dict[int, tuple[int, int]] = {}
@@ -639,7 +649,8 @@ def plan_experiment(
         if budget < need:
             raise InvalidParameterError(
                 f"budget = {budget:g} s is too small to test every one of the {len(omegas)} grid frequencies "
-                f"of target 'G' ({need:.4g} s at {min_n} periods each); raise the budget or lower n_frequencies"
+                f"of target 'G' ({need:.4g} s at {min_n} periods each); raise the budget or lower "
+                "n_frequencies"
             )
         # Open every grid point at min_periods, choosing its amplitude greedily, cheapest first.
         for k in np.argsort(period):
@@ -654,9 +665,7 @@ def plan_experiment(
         if design == before:
             break
     experiments = tuple(
-        PlannedExperiment(
-            float(omegas[k]), float(amps[k, a]), int(n), int(samples[k]), settle, overhead
-        )
+        PlannedExperiment(float(omegas[k]), float(amps[k, a]), int(n), int(samples[k]), settle, overhead)
         for k, (a, n) in sorted(design.items())
     )
     planned = _design(target, prior_plant, experiments, noise_sd, substeps, backend)
@@ -666,8 +675,23 @@ def plan_experiment(
             "information stays singular); raise the budget or widen the band"
         )
     naive = _naive(
-        target, prior_plant, budget, lo, top, len(experiments), omegas if fixed else None,
-        max_amplitude, rate, sample_rate, p_cap, settle, overhead, min_n, noise_sd, substeps, backend,
+        target,
+        prior_plant,
+        budget,
+        lo,
+        top,
+        len(experiments),
+        omegas if fixed else None,
+        max_amplitude,
+        rate,
+        sample_rate,
+        p_cap,
+        settle,
+        overhead,
+        min_n,
+        noise_sd,
+        substeps,
+        backend,
     )
     settings = {
         "band": [lo, hi],
