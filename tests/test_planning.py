@@ -65,6 +65,38 @@ def test_planned_design_beats_or_equals_the_naive_one(target: str) -> None:
     assert all(e.amplitude == LIMITS["max_amplitude"] for e in naive)
 
 
+def test_no_random_design_on_the_candidate_grid_beats_the_plan() -> None:
+    """The greedy + exchange search is local: check it against 40 seeded random designs of 1-3
+    experiments on the same candidates, spending the same budget (whole periods, N >= min_periods)."""
+    budget = 300.0
+    plan = _plan("bouc_wen", budget)
+    omegas = np.array(plan.settings["candidate_frequencies"])
+    period = 2 * np.pi / omegas
+    rng = np.random.default_rng(11)
+    best = math.inf
+    for _ in range(40):
+        ks = rng.choice(len(omegas), int(rng.integers(1, 4)), replace=False)
+        free = budget - sum(LIMITS["overhead"] + LIMITS["settle_periods"] * period[k] for k in ks)
+        shares = rng.dirichlet(np.ones(len(ks)))
+        periods = [int(f * free // period[k]) for k, f in zip(ks, shares)]
+        if free <= 0 or min(periods) < 5:
+            continue
+        plans = [
+            bw.SinePlan(
+                [omegas[k]],
+                [LIMITS["max_amplitude"] * int(rng.integers(1, 4)) / 3],
+                periods=n,
+                samples_per_period=min(512, int(LIMITS["sample_rate"] * period[k])),
+                noise_sd=LIMITS["noise_sd"],
+            )
+            for k, n in zip(ks, periods)
+        ]
+        cr = bw.cramer_rao(PRIOR, plans)
+        best = min(best, criterion_value("bouc_wen", PRIOR, omegas[ks], cr))
+    assert math.isfinite(best)
+    assert plan.design.criterion <= best
+
+
 def test_a_sequence_of_plans_is_one_design_for_cramer_rao() -> None:
     plan = bw.SinePlan([2.0, 5.0, 8.0], [0.4, 0.3, 0.5], periods=30, samples_per_period=64, noise_sd=0.05)
     whole = bw.cramer_rao(PRIOR, plan)

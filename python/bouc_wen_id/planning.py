@@ -492,10 +492,11 @@ def _exchange(
             if fixed_frequencies or len(design) < 2:
                 continue
             rest = {j: v for j, v in design.items() if j != k}
-            for j in rest:  # k closed, its time given to j
-                moved = _fill(s, rest, j, budget)
-                if moved is not None:
-                    options.append(moved)
+            for j, (_aj, nj) in rest.items():  # k closed, its time given to j (at any amplitude)
+                for b in range(s.amps.shape[1]):
+                    moved = _fill(s, {**rest, j: (b, nj)}, j, budget)
+                    if moved is not None:
+                        options.append(moved)
             free = budget - s.cost(rest)
             for j in range(len(s.omegas)):  # k moved to an unused frequency j
                 if j in design:
