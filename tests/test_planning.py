@@ -178,6 +178,8 @@ def test_summary_names_the_design_and_the_gain() -> None:
         (dict(sample_rate=0.5), InvalidParameterError, "samples per period"),
         (dict(target="phase"), InvalidParameterError, "target"),
         (dict(n_frequencies=1), InvalidParameterError, "n_frequencies"),
+        (dict(n_frequencies=10**6), InvalidParameterError, "n_frequencies"),
+        (dict(n_amplitudes=2.5), InvalidParameterError, "n_amplitudes"),
         (dict(overhead=-1.0), InvalidParameterError, "overhead"),
         (dict(target="G", budget=100.0), InvalidParameterError, "every one of the 6 grid"),
     ],

@@ -83,6 +83,10 @@ CHUNK_FRACTION = 1.0 / 50.0
 #: Prior precision of the vague prior, relative: 1 / (10^4 theta)^2 (keeps a rank-deficient design's
 #: criterion finite during the search; absent from the reported bounds).
 VAGUE_PRIOR = 1e-8
+#: Largest candidate grid: the exchange phase weighs O(frequencies^2 x amplitudes) moves per iteration, so
+#: a careless ``n_frequencies=10**6`` is refused at once instead of running for hours.
+MAX_FREQUENCIES = 200
+MAX_AMPLITUDES = 50
 #: Exchange iterations at most (each keeps the best improving move; it stops earlier when none improves).
 MAX_EXCHANGES = 200
 #: A move must lower the log-criterion by more than this to count as an improvement.
@@ -612,6 +616,11 @@ def plan_experiment(
         raise InvalidParameterError(f"overhead = {overhead} must be >= 0 s")
     n_freq = _count("n_frequencies", n_frequencies, 2)
     n_amp = _count("n_amplitudes", n_amplitudes, 1)
+    if n_freq > MAX_FREQUENCIES or n_amp > MAX_AMPLITUDES:
+        raise InvalidParameterError(
+            f"n_frequencies = {n_freq} and n_amplitudes = {n_amp} must be <= {MAX_FREQUENCIES} and "
+            f"<= {MAX_AMPLITUDES}: a finer grid costs the search far more than it can gain"
+        )
     settle = _count("settle_periods", settle_periods, 0)
     p_cap = _count("max_samples_per_period", max_samples_per_period, MIN_SAMPLES_PER_PERIOD)
     min_n = _count("min_periods", min_periods, 2)
