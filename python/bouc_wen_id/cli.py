@@ -20,6 +20,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .augmented import TERM_NAMES
+
+#: diagnose's candidates: the steady-loop terms and degradation (diagnosis.run.ALL_CANDIDATES, kept here
+#: so that the CLI does not import the diagnosis to build its parser).
+_DIAG_CANDIDATES = (*TERM_NAMES, "degradation")
 from .demo import DEMO_FREQUENCIES, demo_plan, demo_plant, design_amplitudes
 from .errors import BoucWenIdError, FileFormatError, InsufficientDataError, InvalidParameterError
 from .identification import identify
@@ -571,7 +575,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--candidates",
         type=_candidates,
         default=None,
-        help="comma-separated terms to try (default: all of " + ",".join(TERM_NAMES) + ")",
+        help="comma-separated terms to try (default: all of " + ",".join(_DIAG_CANDIDATES) + ")",
     )
     p.add_argument("--alpha", type=_level, default=0.05, help="false-alarm level per step (default 0.05)")
     p.add_argument("--no-held-out", action="store_true", help="skip the held-out check (faster, weaker)")
@@ -584,10 +588,10 @@ def build_parser() -> argparse.ArgumentParser:
 
 def _candidates(text: str) -> list[str]:
     names = [c.strip() for c in text.split(",") if c.strip()]
-    bad = [c for c in names if c not in TERM_NAMES]
+    bad = [c for c in names if c not in _DIAG_CANDIDATES]
     if not names or bad or len(set(names)) != len(names):
         raise argparse.ArgumentTypeError(
-            f"{text!r}: give distinct names among {','.join(TERM_NAMES)}, separated by commas"
+            f"{text!r}: give distinct names among {','.join(_DIAG_CANDIDATES)}, separated by commas"
         )
     return names
 
