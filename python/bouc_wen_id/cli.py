@@ -20,10 +20,6 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .augmented import TERM_NAMES
-
-#: diagnose's candidates: the steady-loop terms and degradation (diagnosis.run.ALL_CANDIDATES, kept here
-#: so that the CLI does not import the diagnosis to build its parser).
-_DIAG_CANDIDATES = (*TERM_NAMES, "degradation")
 from .demo import DEMO_FREQUENCIES, demo_plan, demo_plant, design_amplitudes
 from .errors import BoucWenIdError, FileFormatError, InsufficientDataError, InvalidParameterError
 from .identification import identify
@@ -32,6 +28,10 @@ from .measurement import Measurement
 from .model import SinePlan, WienerPlant
 from .result import IdentificationResult
 from .simulation import simulate
+
+#: diagnose's candidates: the steady-loop terms and degradation (diagnosis.run.ALL_CANDIDATES, kept here
+#: so that the CLI does not import the diagnosis to build its parser).
+_DIAG_CANDIDATES = (*TERM_NAMES, "degradation")
 
 __all__ = ["main"]
 

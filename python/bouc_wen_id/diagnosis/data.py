@@ -170,6 +170,7 @@ def _from_averaged(ap: Any, t: FloatArray | None, y: FloatArray | None) -> DiagE
     """
     ybar = np.asarray(ap.ybar, dtype=np.float64) + float(ap.offset_y)
     blocks: tuple[ComplexArray, FloatArray, FloatArray] | None = None
+    empty = (np.zeros((0, 1), np.complex128), np.zeros(0), np.zeros(0))
     lead = math.nan
     dc = np.array([float(np.mean(ybar))])
     h1 = np.array([complex(2.0 * np.fft.rfft(ybar)[1] / ybar.size)])
@@ -208,7 +209,9 @@ def _from_averaged(ap: Any, t: FloatArray | None, y: FloatArray | None) -> DiagE
         h1=h1,
         source=str(ap.source),
         lead_periods=lead,
-        **({} if blocks is None else dict(zip(("block_coef", "block_samples", "block_center"), blocks))),
+        block_coef=empty[0] if blocks is None else blocks[0],
+        block_samples=empty[1] if blocks is None else blocks[1],
+        block_center=empty[2] if blocks is None else blocks[2],
     )
 
 

@@ -56,7 +56,7 @@ class DriftData:
     @property
     def dof(self) -> int:
         """Independent real components of the deviations: (B - 1) blocks of (2K + 1) each."""
-        return (self.dev.shape[0] - 1) * (2 * self.dev.shape[1] - 1)
+        return int((self.dev.shape[0] - 1) * (2 * self.dev.shape[1] - 1))
 
 
 def _inner(a: ComplexArray, b: ComplexArray) -> FloatArray:
@@ -198,7 +198,7 @@ class DegradationTest:
 
     @property
     def held_out_nrmse_ratio(self) -> float:
-        """Block-resolved held-out NRMSE with the drift model over without: ``sqrt(sum C_j(d_-j)/sum C_j(0))``."""
+        """Block-resolved held-out NRMSE, drift model over none: ``sqrt(sum C_j(d_-j) / sum C_j(0))``."""
         b = sum(self.held_out_before)
         return math.sqrt(sum(self.held_out_after) / b) if b > 0 else math.nan
 
@@ -256,7 +256,7 @@ def degradation_test(
     passed = bool(math.isfinite(padj) and padj < alpha and share >= DRIFT_MATERIAL_SHARE)
     hb, ha = [], []
     if len(data) >= 2:
-        for (cj, nj, dj) in sums:
+        for cj, nj, dj in sums:
             rest = den - dj
             dm = max((num - nj) / rest, 0.0) if rest > 0 else 0.0
             hb.append(cj)

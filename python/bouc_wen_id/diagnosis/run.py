@@ -267,7 +267,10 @@ def diagnose(
             fexps, fsx = corrected(exps, sx, fit, test.d, s.y, substeps)
             fit = best_of([fit_from(fsx, fit.params, substeps)]) or fit
             data = drift_data(exps, sx, fit, s.y, substeps, strengths(len(exps), data, test.d))
-            test = degradation_test(data, s.y, alpha, family=len(cands))
+            retest = degradation_test(data, s.y, alpha, family=len(cands))
+            if retest is None:
+                break
+            test = retest
         deg = test
         named_deg = deg.named if held_out_test else deg.passed
         if named_deg and deg.d > 0:
