@@ -51,7 +51,6 @@ class DriftData:
     jac: ComplexArray  # (K + 1,) harmonics of dy/d ln nu
     jac_grid: FloatArray  # dy/d ln nu on the averaged grid
     mean_age: float  # periods from the record's start to the middle of the averaged stretch (NaN: unknown)
-    ages: FloatArray  # (B,) the same for each block
 
     @property
     def dof(self) -> int:
@@ -146,8 +145,7 @@ def drift_data(
         t = e.block_center - float(np.dot(wts, e.block_center) / wts.sum())
         j, energy = regressor(a, fit, i, substeps, 1.0 if strength is None else float(strength[i]))
         age = e.lead_periods + float(np.dot(wts, e.block_center) / wts.sum()) + 0.5
-        ages = e.lead_periods + e.block_center + 0.5
-        out.append(DriftData(i, coef - mean, t, wts, energy, harmonics(j, k), j, age, ages))
+        out.append(DriftData(i, coef - mean, t, wts, energy, harmonics(j, k), j, age))
     return out
 
 
@@ -298,17 +296,6 @@ def strengths(m: int, data: Sequence[DriftData], d: float) -> list[float]:
     return out
 
 
-def block_strengths(
-    m: int, data: Sequence[DriftData], d: float
-) -> list[Optional[tuple[FloatArray, FloatArray]]]:
-    """Per experiment, ``(nu_b, weight_b)`` of its blocks (None where the age is unknown)."""
-    out: list[Optional[tuple[FloatArray, FloatArray]]] = [None] * m
-    for dd in data:
-        if math.isfinite(dd.mean_age):
-            out[dd.index] = (1.0 + max(d, 0.0) * dd.energy * dd.ages, dd.w / dd.w.sum())
-    return out
-
-
 def corrected(
     exps: Sequence[DiagExperiment],
     sx: Sequence[AugExperiment],
@@ -398,7 +385,6 @@ __all__ = [
     "detrended",
     "corrected",
     "strengths",
-    "block_strengths",
     "harmonics",
     "predicted_deviation",
     "regressor",
