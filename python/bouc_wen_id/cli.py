@@ -29,6 +29,10 @@ from .model import SinePlan, WienerPlant
 from .result import IdentificationResult
 from .simulation import simulate
 
+#: diagnose's candidates: the steady-loop terms and degradation (diagnosis.run.ALL_CANDIDATES, kept here
+#: so that the CLI does not import the diagnosis to build its parser).
+_DIAG_CANDIDATES = (*TERM_NAMES, "degradation")
+
 __all__ = ["main"]
 
 
@@ -571,7 +575,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--candidates",
         type=_candidates,
         default=None,
-        help="comma-separated terms to try (default: all of " + ",".join(TERM_NAMES) + ")",
+        help="comma-separated terms to try (default: all of " + ",".join(_DIAG_CANDIDATES) + ")",
     )
     p.add_argument("--alpha", type=_level, default=0.05, help="false-alarm level per step (default 0.05)")
     p.add_argument("--no-held-out", action="store_true", help="skip the held-out check (faster, weaker)")
@@ -585,10 +589,10 @@ def build_parser() -> argparse.ArgumentParser:
 
 def _candidates(text: str) -> list[str]:
     names = [c.strip() for c in text.split(",") if c.strip()]
-    bad = [c for c in names if c not in TERM_NAMES]
+    bad = [c for c in names if c not in _DIAG_CANDIDATES]
     if not names or bad or len(set(names)) != len(names):
         raise argparse.ArgumentTypeError(
-            f"{text!r}: give distinct names among {','.join(TERM_NAMES)}, separated by commas"
+            f"{text!r}: give distinct names among {','.join(_DIAG_CANDIDATES)}, separated by commas"
         )
     return names
 

@@ -202,7 +202,8 @@ class WienerPlant:
     def normalized(self) -> WienerPlant:
         """The equivalent plant with alpha = 1: ``G -> alpha G, beta -> beta/alpha, gamma -> gamma/alpha``.
 
-        Terms follow: ``delta -> delta/alpha``, ``b -> alpha b`` (play is in units of x); the output
+        Terms follow: ``delta -> delta/alpha``, ``b -> alpha b`` (play is in units of x), ``delta_nu ->
+        delta_nu/alpha`` (the dissipated energy is in units of x); the output
         terms are unchanged.
         """
         h = self.hysteresis

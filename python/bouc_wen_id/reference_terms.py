@@ -8,6 +8,8 @@ Step by step the same scheme as the Rust core, so that the parity tests hold the
   then ``xp`` clamped into ``[x - b, x + b]`` and ``w`` moved along the path by the clamped travel;
 - the sensor lag integrated exponentially over each step with the quadratic through ``F`` at the step's
   start, middle (RK4 continuous extension of ``w``) and end;
+- degradation (Baber-Noori): the dissipated energy ``e = int w dxp`` as one more RK4 state, and
+  ``nu = 1 + delta_nu e`` multiplying the beta, gamma and delta terms of the rate;
 - output terms ``k u + c udot + m uddot + f tanh(udot/(eps Vmax))`` on the undelayed input.
 
 Without asymmetry, play or lag the plain :func:`bouc_wen_id.reference._simulate` gives ``x, w`` and the
@@ -42,6 +44,7 @@ TERM_NAMES = (
     "sensor_lag",
     "asymmetry",
     "play",
+    "degradation",
 )
 COULOMB_SMOOTHING = 0.01
 COULOMB_SMOOTHING_MAX = 0.5
@@ -69,6 +72,11 @@ def check_terms(terms: Mapping[str, float], beta: float, gamma: float) -> dict[s
     if not 0.0 < out["coulomb_smoothing"] <= COULOMB_SMOOTHING_MAX:
         raise InvalidParameterError(
             f"coulomb_smoothing eps = {out['coulomb_smoothing']} must be in (0, {COULOMB_SMOOTHING_MAX}]"
+        )
+    if out["degradation"] < 0.0:
+        raise InvalidParameterError(
+            f"degradation delta_nu = {out['degradation']} must be >= 0 (the strength falls with dissipated "
+            "energy)"
         )
     if abs(out["asymmetry"]) >= beta + gamma:
         raise InvalidParameterError(
@@ -142,6 +150,7 @@ def _simulate_terms(
     stiff, visc, iner, coul = p["stiffness"], p["viscous"], p["inertia"], p["coulomb"]
     scale = p["coulomb_smoothing"] * peak_rate
     delta, b, tau = p["asymmetry"], p["play"], p["sensor_lag"]
+    dnu = p["degradation"]
 
     def mech(t: float) -> float:
         u, udot = source(t)
@@ -149,7 +158,7 @@ def _simulate_terms(
         friction = coul * math.tanh(udot / scale) if scale > 0.0 else 0.0
         return stiff * u + visc * udot + iner * uddot + friction
 
-    if not (delta != 0.0 or b > 0.0 or tau > 0.0):
+    if not (delta != 0.0 or b > 0.0 or tau > 0.0 or dnu > 0.0):
         x_out, w_out = simulate_plain(num, den, delay, bw, source, dt, n_samples, substeps)
         y_out = np.array([p["offset"] + (float(w_out[k]) + mech(k * dt)) for k in range(n_samples)])
         return x_out, w_out, y_out
@@ -161,10 +170,16 @@ def _simulate_terms(
             return 0.0, 0.0
         return source(t - delay)
 
-    def rate(xpdot: float, w: float) -> float:
+    def rate(xpdot: float, w: float, e: float) -> float:
         wmu = float(abs(w) ** mu)
         sw = float(np.sign(w))
-        return alpha * xpdot - beta * abs(xpdot) * sw * wmu - gamma * xpdot * wmu - delta * xpdot * sw * wmu
+        nu = 1.0 + dnu * e  # Baber-Noori strength degradation; each term times nu, as the core
+        return (
+            alpha * xpdot
+            - nu * (beta * abs(xpdot) * sw * wmu)
+            - nu * (gamma * xpdot * wmu)
+            - nu * (delta * xpdot * sw * wmu)
+        )
 
     def linear(xs: FloatArray, vin: tuple[float, float]) -> tuple[FloatArray, float]:
         v, vdot = vin
@@ -174,12 +189,15 @@ def _simulate_terms(
             dxs[1:] = xs[: n - 1]
         return dxs, float(np.dot(c, dxs)) + d * vdot
 
-    def path(w: float, dxp: float) -> float:
-        k1 = rate(dxp, w)
-        k2 = rate(dxp, w + 0.5 * k1)
-        k3 = rate(dxp, w + 0.5 * k2)
-        k4 = rate(dxp, w + k3)
-        return w + (k1 + 2.0 * k2 + 2.0 * k3 + k4) / 6.0
+    def path(w: float, e: float, dxp: float) -> tuple[float, float]:
+        k1 = rate(dxp, w, e)
+        w2, e2 = w + 0.5 * k1, e + 0.5 * w * dxp
+        k2 = rate(dxp, w2, e2)
+        w3, e3 = w + 0.5 * k2, e + 0.5 * w2 * dxp
+        k3 = rate(dxp, w3, e3)
+        w4, e4 = w + k3, e + w3 * dxp
+        k4 = rate(dxp, w4, e4)
+        return w + (k1 + 2.0 * k2 + 2.0 * k3 + k4) / 6.0, e + (w + 2.0 * w2 + 2.0 * w3 + w4) * dxp / 6.0
 
     h = dt / substeps
     half_h, h_sixth = 0.5 * h, h / 6.0
@@ -188,6 +206,7 @@ def _simulate_terms(
 
     xs = np.zeros(n)
     w = w0
+    en = 0.0  # dissipated energy int w dxp (the degradation's state)
     x0 = float(np.dot(c, xs)) + d * delayed(0.0)[0]
     xp = min(max(0.0, x0 - b), x0 + b)
     ys = 0.0
@@ -220,31 +239,36 @@ def _simulate_terms(
                 return max(xdot, 0.0) if mode == 1 else min(xdot, 0.0) if mode == -1 else 0.0
 
             p1 = played(xdot1)
-            kw1 = rate(p1, w)
-            w2 = w + half_h * kw1
+            kw1 = rate(p1, w, en)
+            ke1 = w * p1
+            w2, e2 = w + half_h * kw1, en + half_h * ke1
             k2, xdot2 = linear(xs + half_h * k1, inm)
             p2 = played(xdot2)
-            kw2 = rate(p2, w2)
-            w3 = w + half_h * kw2
+            kw2 = rate(p2, w2, e2)
+            ke2 = w2 * p2
+            w3, e3 = w + half_h * kw2, en + half_h * ke2
             k3, xdot3 = linear(xs + half_h * k2, inm)
             p3 = played(xdot3)
-            kw3 = rate(p3, w3)
-            w4 = w + h * kw3
+            kw3 = rate(p3, w3, e3)
+            ke3 = w3 * p3
+            w4, e4 = w + h * kw3, en + h * ke3
             k4, xdot4 = linear(xs + h * k3, in4)
             p4 = played(xdot4)
-            kw4 = rate(p4, w4)
+            kw4 = rate(p4, w4, e4)
+            ke4 = w4 * p4
 
             w_mid = w + h * (5.0 * kw1 + 4.0 * (kw2 + kw3) - kw4) / 24.0
             f0 = w + mech(ts)
             xs = xs + h_sixth * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
             w = w + h_sixth * (kw1 + 2.0 * kw2 + 2.0 * kw3 + kw4)
+            en = en + h_sixth * (ke1 + 2.0 * ke2 + 2.0 * ke3 + ke4)
             if has_play:
                 xp = xp + h_sixth * (p1 + 2.0 * p2 + 2.0 * p3 + p4)
                 x_end = float(np.dot(c, xs)) + d * in4[0]
                 clamped = min(max(xp, x_end - b), x_end + b)
                 travel = clamped - xp
                 if travel != 0.0:
-                    w = path(w, travel)
+                    w, en = path(w, en, travel)
                 xp = clamped
             if has_lag:
                 fm = w_mid + mech(tm)

@@ -35,6 +35,7 @@ __all__ = [
     "SensorLag",
     "Asymmetry",
     "Play",
+    "Degradation",
     "TERMS",
     "COULOMB_SMOOTHING",
     "term_from_dict",
@@ -280,9 +281,48 @@ class Play(Term):
         return Play(self.b * alpha)
 
 
+@dataclass(frozen=True)
+class Degradation(Term):
+    """Strength degradation with dissipated energy (Baber & Noori 1985): ``nu = 1 + delta_nu e``.
+
+    ``e = int w dxp`` is the hysteretic energy dissipated since the start, and ``nu`` multiplies the
+    beta, gamma (and delta) terms of the rate, so the loop's saturation level falls as
+    ``(alpha / (nu (beta + gamma)))^(1/mu)``. ``delta_nu >= 0`` in ``1/({y} x)``: ``1/{y}^2`` in the
+    identified (alpha = 1) model, where x has the units of y. The steady averaged period cannot see it
+    (to first order the mean loop is the loop at the mean strength); the diagnosis fits it from the
+    period-by-period record (design.md 10.6).
+    """
+
+    delta_nu: float
+
+    kind: ClassVar[str] = "degradation"
+    symbol: ClassVar[str] = "delta_nu"
+    unit: ClassVar[str] = "1/{y}^2"
+    description: ClassVar[str] = (
+        "hysteretic strength falling with the energy dissipated (Baber-Noori strength degradation)"
+    )
+    signature: ClassVar[str] = (
+        "a loop that drifts from period to period, faster for loops dissipating more energy (larger "
+        "amplitudes): the peak of w shrinks; the averaged loop is unchanged to first order"
+    )
+    acts_on: ClassVar[str] = "hysteresis"
+
+    def _check(self) -> None:
+        if self.delta_nu < 0.0:
+            raise InvalidParameterError(
+                f"degradation delta_nu = {self.delta_nu} must be >= 0 (the strength falls with dissipated "
+                "energy)"
+            )
+
+    def normalized(self, alpha: float) -> Term:
+        # e = int w dx grows by alpha under x -> alpha x (G -> alpha G), so delta_nu shrinks by it.
+        return Degradation(self.delta_nu / alpha)
+
+
 #: Code name -> term class, in the order of the design.md 9.1 table.
 TERMS: dict[str, type[Term]] = {
-    cls.kind: cls for cls in (Offset, Stiffness, Viscous, Inertia, Coulomb, SensorLag, Asymmetry, Play)
+    cls.kind: cls
+    for cls in (Offset, Stiffness, Viscous, Inertia, Coulomb, SensorLag, Asymmetry, Play, Degradation)
 }
 
 

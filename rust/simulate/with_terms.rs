@@ -3,8 +3,8 @@
 //!
 //! ```text
 //! y = y0 + Lag_tau[ w + k u + c udot + m uddot + f tanh(udot / (eps Vmax)) ],
-//! wdot = alpha xpdot - beta |xpdot| |w|^(mu-1) w - gamma xpdot |w|^mu - delta xpdot |w|^(mu-1) w,
-//! xp = Play_b[x],
+//! wdot = alpha xpdot - nu (beta |xpdot| |w|^(mu-1) w + gamma xpdot |w|^mu + delta xpdot |w|^(mu-1) w),
+//! xp = Play_b[x],   nu = 1 + delta_nu e,   edot = w xpdot,
 //! ```
 //!
 //! i.e. with alpha = 1 the generalised Bouc-Wen rate of §9.2,
@@ -41,6 +41,11 @@
 //!   for the decay, stable for every `tau > 0` (explicit RK4 would blow up for `h > 2.79 tau`),
 //!   tends to Simpson's weights as `r -> 0` and to `ys = F` as `r -> inf` (so a vanishing lag
 //!   gives the lag-free output). `tau = 0` is no lag (`y` from `F` at the samples).
+//! - **degradation** (Baber & Noori, J. Eng. Mech. 111(8), 1985, strength degradation only):
+//!   the dissipated hysteretic energy `e = int w dxp` rides along as one more RK4 state
+//!   (`edot = w xpdot`, `e(0) = 0`, moved with `w` along the play's clamped travel) and
+//!   `nu = 1 + delta_nu e` multiplies the beta, gamma and delta terms: the loop's saturation level
+//!   `(alpha/(nu (beta + gamma)))^(1/mu)` falls as energy is dissipated (§10.6).
 //! - the **output terms** are evaluated at the sample times (and, inside `F`, at the stage times).
 
 use super::{check_dt, simulate, try_zeros, Hermite, Input, Simulation, Sine, Source};
@@ -66,7 +71,7 @@ const PHI_TERMS: usize = 20;
 
 /// Names accepted by [`Terms::from_named`], in the order of the §9.1 table (plus the Coulomb
 /// smoothing).
-pub const TERM_NAMES: [&str; 9] = [
+pub const TERM_NAMES: [&str; 10] = [
     "offset",
     "stiffness",
     "viscous",
@@ -76,6 +81,7 @@ pub const TERM_NAMES: [&str; 9] = [
     "sensor_lag",
     "asymmetry",
     "play",
+    "degradation",
 ];
 
 /// Parameters of the §9.1 terms; an absent term is 0 (which is also what a zero parameter
@@ -100,6 +106,10 @@ pub struct Terms {
     pub asymmetry: f64,
     /// Play half-width `b` (units of `x`), `>= 0`.
     pub play: f64,
+    /// Strength degradation `delta_nu` (`1/([w] [x])`), `>= 0`: Baber-Noori
+    /// `nu = 1 + delta_nu e`, `e = int w dxp` (the hysteretic energy dissipated), multiplies the
+    /// beta, gamma and delta terms of the rate.
+    pub degradation: f64,
 }
 
 impl Default for Terms {
@@ -114,6 +124,7 @@ impl Default for Terms {
             sensor_lag: 0.0,
             asymmetry: 0.0,
             play: 0.0,
+            degradation: 0.0,
         }
     }
 }
@@ -136,6 +147,7 @@ impl Terms {
                 "sensor_lag" => &mut t.sensor_lag,
                 "asymmetry" => &mut t.asymmetry,
                 "play" => &mut t.play,
+                "degradation" => &mut t.degradation,
                 other => {
                     return Err(CoreError::InvalidParameter(format!(
                         "unknown term {other:?}; the terms are {}",
@@ -163,6 +175,7 @@ impl Terms {
             ("sensor_lag", self.sensor_lag),
             ("asymmetry", self.asymmetry),
             ("play", self.play),
+            ("degradation", self.degradation),
         ] {
             finite(name, v)?;
         }
@@ -184,6 +197,12 @@ impl Terms {
                 self.coulomb_smoothing
             )));
         }
+        if self.degradation < 0.0 {
+            return Err(CoreError::InvalidParameter(format!(
+                "degradation delta_nu = {} must be >= 0 (the strength falls with dissipated energy)",
+                self.degradation
+            )));
+        }
         let bound = bw.beta() + bw.gamma();
         if self.asymmetry.abs() >= bound {
             return Err(CoreError::InvalidParameter(format!(
@@ -195,9 +214,10 @@ impl Terms {
         Ok(())
     }
 
-    /// `true` when a term needs a state or changes `w` (asymmetry, play, sensor lag).
+    /// `true` when a term needs a state or changes `w` (asymmetry, play, sensor lag,
+    /// degradation).
     pub fn is_dynamic(&self) -> bool {
-        self.asymmetry != 0.0 || self.play > 0.0 || self.sensor_lag > 0.0
+        self.asymmetry != 0.0 || self.play > 0.0 || self.sensor_lag > 0.0 || self.degradation > 0.0
     }
 }
 
@@ -291,6 +311,7 @@ fn run<S: Derivatives>(
         gamma: bw.gamma(),
         mu: bw.mu(),
         delta: terms.asymmetry,
+        degradation: terms.degradation,
         delay: tf.delay(),
         src,
         mech,
@@ -454,6 +475,8 @@ struct Augmented<'a, S> {
     gamma: f64,
     mu: f64,
     delta: f64,
+    /// `delta_nu` of `nu = 1 + delta_nu e` (0: no energy state is needed, `nu = 1`).
+    degradation: f64,
     delay: f64,
     src: &'a S,
     mech: Mechanical<'a, S>,
@@ -471,17 +494,19 @@ impl<S: Derivatives> Augmented<'_, S> {
         }
     }
 
-    /// `wdot = alpha xpdot - beta |xpdot| |w|^(mu-1) w - gamma xpdot |w|^mu
-    /// - delta xpdot |w|^(mu-1) w` (positively homogeneous of degree 1 in `xpdot`, so it is also
-    /// `dw` for a path increment `dxp`).
+    /// `wdot = alpha xpdot - nu (beta |xpdot| |w|^(mu-1) w + gamma xpdot |w|^mu
+    /// + delta xpdot |w|^(mu-1) w)`, `nu = 1 + delta_nu e` (positively homogeneous of degree 1 in
+    /// `xpdot`, so it is also `dw` for a path increment `dxp`).
     #[inline]
-    fn rate(&self, xpdot: f64, w: f64) -> f64 {
+    fn rate(&self, xpdot: f64, w: f64, e: f64) -> f64 {
         let wmu = w.abs().powf(self.mu);
         let sw = sgn(w);
+        let nu = 1.0 + self.degradation * e;
+        // nu multiplies each term (not their sum) so that nu = 1 rounds exactly as before.
         self.alpha * xpdot
-            - self.beta * xpdot.abs() * sw * wmu
-            - self.gamma * xpdot * wmu
-            - self.delta * xpdot * sw * wmu
+            - nu * (self.beta * xpdot.abs() * sw * wmu)
+            - nu * (self.gamma * xpdot * wmu)
+            - nu * (self.delta * xpdot * sw * wmu)
     }
 
     /// `xsdot` into `dxs` and `xdot`, at state `xs` and delayed input `(v, vdot)`.
@@ -491,14 +516,20 @@ impl<S: Derivatives> Augmented<'_, S> {
         self.comp.output_row(dxs) + self.comp.d * vdot
     }
 
-    /// `w` moved along the hysteresis path by the play's clamped travel `dxp` (one RK4 step of
-    /// `dw/dsigma = rate(dxp, w)`, `sigma in [0, 1]`).
-    fn path(&self, w: f64, dxp: f64) -> f64 {
-        let k1 = self.rate(dxp, w);
-        let k2 = self.rate(dxp, w + 0.5 * k1);
-        let k3 = self.rate(dxp, w + 0.5 * k2);
-        let k4 = self.rate(dxp, w + k3);
-        w + (k1 + 2.0 * k2 + 2.0 * k3 + k4) / 6.0
+    /// `(w, e)` moved along the hysteresis path by the play's clamped travel `dxp` (one RK4 step
+    /// of `dw/dsigma = rate(dxp, w, e)`, `de/dsigma = w dxp`, `sigma in [0, 1]`).
+    fn path(&self, w: f64, e: f64, dxp: f64) -> (f64, f64) {
+        let k1 = self.rate(dxp, w, e);
+        let (w2, e2) = (w + 0.5 * k1, e + 0.5 * w * dxp);
+        let k2 = self.rate(dxp, w2, e2);
+        let (w3, e3) = (w + 0.5 * k2, e + 0.5 * w2 * dxp);
+        let k3 = self.rate(dxp, w3, e3);
+        let (w4, e4) = (w + k3, e + w3 * dxp);
+        let k4 = self.rate(dxp, w4, e4);
+        (
+            w + (k1 + 2.0 * k2 + 2.0 * k3 + k4) / 6.0,
+            e + (w + 2.0 * w2 + 2.0 * w3 + w4) * dxp / 6.0,
+        )
     }
 
     fn integrate(
@@ -526,6 +557,8 @@ impl<S: Derivatives> Augmented<'_, S> {
 
         let mut xs = vec![0.0; n];
         let mut w = w0;
+        // Dissipated energy `e = int w dxp` (stays 0 without degradation: `nu = 1` exactly).
+        let mut en = 0.0f64;
         let x0 = self.comp.output_row(&xs) + d * self.delayed(0.0).0;
         let mut xp = 0.0f64.max(x0 - b).min(x0 + b);
         let mut ys = 0.0;
@@ -568,19 +601,23 @@ impl<S: Derivatives> Augmented<'_, S> {
                 let played = |xdot: f64| if has_play { mode.rate(xdot) } else { xdot };
 
                 let p1 = played(xdot1);
-                let kw1 = self.rate(p1, w);
-                let w2 = w + half_h * kw1;
+                let kw1 = self.rate(p1, w, en);
+                let ke1 = w * p1;
+                let (w2, e2) = (w + half_h * kw1, en + half_h * ke1);
                 axpy(&mut tmp, &xs, half_h, &k1);
                 let p2 = played(self.linear(&tmp, inm, &mut k2));
-                let kw2 = self.rate(p2, w2);
-                let w3 = w + half_h * kw2;
+                let kw2 = self.rate(p2, w2, e2);
+                let ke2 = w2 * p2;
+                let (w3, e3) = (w + half_h * kw2, en + half_h * ke2);
                 axpy(&mut tmp, &xs, half_h, &k2);
                 let p3 = played(self.linear(&tmp, inm, &mut k3));
-                let kw3 = self.rate(p3, w3);
-                let w4 = w + h * kw3;
+                let kw3 = self.rate(p3, w3, e3);
+                let ke3 = w3 * p3;
+                let (w4, e4) = (w + h * kw3, en + h * ke3);
                 axpy(&mut tmp, &xs, h, &k3);
                 let p4 = played(self.linear(&tmp, in4, &mut k4));
-                let kw4 = self.rate(p4, w4);
+                let kw4 = self.rate(p4, w4, e4);
+                let ke4 = w4 * p4;
 
                 // Third-order continuous extension of the RK4 step at its midpoint.
                 let w_mid = w + h * (5.0 * kw1 + 4.0 * (kw2 + kw3) - kw4) / 24.0;
@@ -589,13 +626,14 @@ impl<S: Derivatives> Augmented<'_, S> {
                     *x += h_sixth * (a + 2.0 * b2 + 2.0 * c3 + d4);
                 }
                 w += h_sixth * (kw1 + 2.0 * kw2 + 2.0 * kw3 + kw4);
+                en += h_sixth * (ke1 + 2.0 * ke2 + 2.0 * ke3 + ke4);
                 if has_play {
                     xp += h_sixth * (p1 + 2.0 * p2 + 2.0 * p3 + p4);
                     let x_end = self.comp.output_row(&xs) + d * in4.0;
                     let clamped = xp.max(x_end - b).min(x_end + b);
                     let travel = clamped - xp;
                     if travel != 0.0 {
-                        w = self.path(w, travel);
+                        (w, en) = self.path(w, en, travel);
                     }
                     xp = clamped;
                 }

@@ -11,7 +11,10 @@ is reduced to
   which a slow drift does not inflate (the spread about the mean period, which the identification uses,
   it does); for lab records the averaging's own;
 - ``spread_var``: that spread-based variance, for the drift comparison;
-- ``dc`` and ``h1``: the DC and the complex fundamental of each period, for the drift test.
+- ``dc`` and ``h1``: the DC and the complex fundamental of each period, for the drift test;
+- the block record (design.md 10.6): the periods cut into up to ``MAX_BLOCKS`` runs of consecutive ones,
+  each run's averaged period as its harmonics 0..``MAX_DRIFT_HARMONIC`` (``block_coef``), with its sample
+  count and mean period index, for the degradation fit. Empty for an averaged period alone.
 """
 
 from __future__ import annotations
@@ -30,6 +33,13 @@ FloatArray = NDArray[np.float64]
 ComplexArray = NDArray[np.complex128]
 TWO_PI = 2.0 * math.pi
 
+#: Blocks of consecutive periods at most in the block record: enough to resolve a linear drift, few
+#: enough that each block's average keeps its noise manageable (noise sd / sqrt(periods per block)).
+MAX_BLOCKS = 8
+#: Highest harmonic kept per block: the localisation's range (a degrading loop's change is in the low
+#: harmonics), and a least-squares fit of a lab block stays well posed with few samples per period.
+MAX_DRIFT_HARMONIC = 15
+
 
 @dataclass(frozen=True, eq=False)
 class DiagExperiment:
@@ -46,6 +56,21 @@ class DiagExperiment:
     dc: FloatArray = field(repr=False)
     h1: ComplexArray = field(repr=False)
     source: str
+    #: (B, K + 1) harmonics ``c_0`` (real DC), ``c_k`` (``y = sum Re c_k e^{i k theta}``) of each block's
+    #: averaged period, on the grid of ``ybar``; B = 0 without a period-by-period record.
+    block_coef: ComplexArray = field(default_factory=lambda: np.zeros((0, 1), np.complex128), repr=False)
+    #: Raw samples in each block (the weight of its average is ``samples / noise_var``).
+    block_samples: FloatArray = field(default_factory=lambda: np.zeros(0), repr=False)
+    #: Mean period index of each block (periods from the first averaged one).
+    block_center: FloatArray = field(default_factory=lambda: np.zeros(0), repr=False)
+    #: Periods of excitation recorded before the first averaged one (settling), NaN when unknown: the
+    #: energy a degrading specimen has dissipated before the averaged stretch (design.md 10.6).
+    lead_periods: float = math.nan
+
+    @property
+    def blocks(self) -> int:
+        """Blocks in the block record (0 or 1: no drift can be resolved)."""
+        return int(self.block_coef.shape[0])
 
     @property
     def samples_per_period(self) -> int:
@@ -66,6 +91,7 @@ class DiagExperiment:
     def to_dict(self) -> dict[str, Any]:
         return {
             "source": self.source,
+            "blocks": self.blocks,
             "frequency": self.frequency,
             "amplitude": self.amplitude,
             "samples_per_period": self.samples_per_period,
@@ -79,6 +105,25 @@ def _period_features(rows: FloatArray) -> tuple[FloatArray, ComplexArray]:
     """DC and complex fundamental ``c_1`` of each row (one period on a uniform grid)."""
     spec = np.fft.rfft(rows, axis=1) / rows.shape[1]
     return spec[:, 0].real.copy(), (2.0 * spec[:, 1]).astype(np.complex128)
+
+
+def _harmonics_of(p: int) -> int:
+    return max(0, min(p // 2 - 1, MAX_DRIFT_HARMONIC))
+
+
+def _recording_blocks(rows: FloatArray) -> tuple[ComplexArray, FloatArray, FloatArray]:
+    """Up to MAX_BLOCKS runs of consecutive periods: their averaged period's harmonics, sizes, centres."""
+    n, p = rows.shape
+    k = _harmonics_of(p)
+    runs = np.array_split(np.arange(n), min(MAX_BLOCKS, n))
+    spec = np.stack([np.fft.rfft(rows[r].mean(axis=0)) / p for r in runs])[:, : k + 1]
+    spec[:, 1:] *= 2.0
+    spec[:, 0] = spec[:, 0].real
+    return (
+        spec.astype(np.complex128),
+        np.array([float(r.size * p) for r in runs]),
+        np.array([float(r.mean()) for r in runs]),
+    )
 
 
 def _from_recording(i: int, rec: Any) -> DiagExperiment:
@@ -95,6 +140,7 @@ def _from_recording(i: int, rec: Any) -> DiagExperiment:
     spread = float(np.mean(np.var(rows, axis=0, ddof=1)))
     diff = float(np.mean(np.diff(rows, axis=0) ** 2)) / 2.0
     dc, h1 = _period_features(rows)
+    coef, samples, center = _recording_blocks(rows)
     name = rec.metadata.get("name", f"recording {i}") if hasattr(rec, "metadata") else f"recording {i}"
     return DiagExperiment(
         frequency=float(rec.frequency),
@@ -108,6 +154,10 @@ def _from_recording(i: int, rec: Any) -> DiagExperiment:
         dc=dc,
         h1=h1,
         source=str(name),
+        block_coef=coef,
+        block_samples=samples,
+        block_center=center,
+        lead_periods=float(s),
     )
 
 
@@ -119,6 +169,9 @@ def _from_averaged(ap: Any, t: FloatArray | None, y: FloatArray | None) -> DiagE
     drift test on the per-period record is the guard against a floor a drift inflates.
     """
     ybar = np.asarray(ap.ybar, dtype=np.float64) + float(ap.offset_y)
+    blocks: tuple[ComplexArray, FloatArray, FloatArray] | None = None
+    empty = (np.zeros((0, 1), np.complex128), np.zeros(0), np.zeros(0))
+    lead = math.nan
     dc = np.array([float(np.mean(ybar))])
     h1 = np.array([complex(2.0 * np.fft.rfft(ybar)[1] / ybar.size)])
     if t is not None and y is not None:
@@ -128,7 +181,7 @@ def _from_averaged(ap: Any, t: FloatArray | None, y: FloatArray | None) -> DiagE
         # Whole periods from the input's phase zero: DC and fundamental by least squares on each.
         k = np.floor(seg_t * omega / TWO_PI).astype(np.int64)
         th = omega * seg_t
-        dcs, h1s = [], []
+        dcs, h1s, kept = [], [], []
         for j in range(int(k.min()) if k.size else 0, int(k.max()) if k.size else 0):
             sel = k == j
             if np.count_nonzero(sel) < 8:
@@ -137,8 +190,12 @@ def _from_averaged(ap: Any, t: FloatArray | None, y: FloatArray | None) -> DiagE
             coef = np.linalg.lstsq(basis, seg_y[sel], rcond=None)[0]
             dcs.append(coef[0])
             h1s.append(complex(coef[1], -coef[2]))
+            kept.append(j)
         if len(dcs) >= 3:
             dc, h1 = np.array(dcs), np.array(h1s, dtype=np.complex128)
+        blocks = _lab_blocks(k, th, seg_y, kept, ybar.size)
+        if kept:  # periods from the record's first sample to the first whole period used
+            lead = float((float(ap.time_origin) - float(t[0])) * omega / TWO_PI) + float(kept[0])
     return DiagExperiment(
         frequency=float(ap.frequency),
         amplitude=float(ap.amplitude),
@@ -151,7 +208,41 @@ def _from_averaged(ap: Any, t: FloatArray | None, y: FloatArray | None) -> DiagE
         dc=dc,
         h1=h1,
         source=str(ap.source),
+        lead_periods=lead,
+        block_coef=empty[0] if blocks is None else blocks[0],
+        block_samples=empty[1] if blocks is None else blocks[1],
+        block_center=empty[2] if blocks is None else blocks[2],
     )
+
+
+def _lab_blocks(
+    k: NDArray[np.int64], th: FloatArray, y: FloatArray, kept: Sequence[int], p: int
+) -> tuple[ComplexArray, FloatArray, FloatArray] | None:
+    """Block record of a lab stretch: harmonics 0..K by least squares over each run of whole periods.
+
+    ``th`` is the input's phase (``u = U cos th``), the frame of the averaged grid (grid phase 0).
+    """
+    if len(kept) < 2:
+        return None
+    harm = _harmonics_of(p)
+    runs = np.array_split(np.asarray(kept), min(MAX_BLOCKS, len(kept)))
+    coefs, samples, centers = [], [], []
+    for r in runs:
+        sel = np.isin(k, r)
+        n = int(np.count_nonzero(sel))
+        if n < 2 * (2 * harm + 1):
+            return None  # too few samples for the block's harmonics: no block record
+        cols = [np.ones(n)]
+        for h in range(1, harm + 1):
+            cols += [np.cos(h * th[sel]), np.sin(h * th[sel])]
+        sol = np.linalg.lstsq(np.column_stack(cols), y[sel], rcond=None)[0]
+        c = np.empty(harm + 1, np.complex128)
+        c[0] = sol[0]
+        c[1:] = sol[1::2] - 1j * sol[2::2]
+        coefs.append(c)
+        samples.append(float(n))
+        centers.append(float(np.mean(r)) - float(kept[0]))
+    return np.stack(coefs), np.array(samples), np.array(centers)
 
 
 def prepare(items: Any) -> list[DiagExperiment]:

@@ -220,6 +220,27 @@ def html_page(d: Diagnosis, images: dict[str, bytes]) -> str:
             f"<b>{html.escape(st.chosen or 'none')}</b></p>"
             + _table(rows, ["term", "χ²", "F", "p (Bonferroni)", "share of excess", "held-out"])
         )
+    deg = d.degradation
+    if deg is not None:  # degradation, tested in drift space (design.md 10.6)
+        ho = "better" if deg.held_out_improves else ("worse" if deg.held_out_after else "")
+        parts.append(
+            "<p>Degradation, from the period-by-period record (block deviations from the mean period): "
+            f"χ² {_g(deg.cost0, '.6g')} → {_g(deg.cost1, '.6g')} (dof {deg.dof0})</p>"
+            + _table(
+                [
+                    [
+                        "degradation",
+                        _g(deg.statistic, ".4g"),
+                        _g(deg.p_adjusted, ".2g"),
+                        _g(deg.share, ".2f"),
+                        ho,
+                    ]
+                ],
+                ["term", "F", "p (Bonferroni)", "share of drift excess", "held-out"],
+            )
+        )
+    for note in d.notes:
+        parts.append(f"<p>{html.escape(note)}</p>")
     parts.append("<h2>Experiments</h2>")
     rows = [
         [

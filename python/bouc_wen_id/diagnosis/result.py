@@ -27,6 +27,7 @@ TERM_LABELS = {
     "sensor_lag": "sensor lag",
     "asymmetry": "asymmetry",
     "play": "play (backlash)",
+    "degradation": "degradation",
 }
 
 
@@ -140,6 +141,10 @@ class Diagnosis:
     #: further held-out or what-if work; not serialised.
     plain_fit: Any = field(default=None, repr=False)
     final_fit: Any = field(default=None, repr=False)
+    #: The degradation candidate's test in drift space (design.md 10.6); None when not tested.
+    degradation: Any = field(default=None, repr=False)
+    #: Remarks on the selection, e.g. why a candidate was not tested.
+    notes: tuple[str, ...] = ()
 
     @property
     def named_terms(self) -> tuple[str, ...]:
@@ -168,6 +173,17 @@ class Diagnosis:
                 ho = "" if t.held_out is None else ("better" if t.held_out.improves else "worse")
                 row = f"  {t.term:<12} {t.cost:12.6g} {t.statistic:10.4g} {t.p_adjusted:9.2g} {t.share:7.2f}"
                 lines.append(f"{row} {ho:>10}")
+        deg = self.degradation
+        if deg is not None:
+            lines.append("")
+            ho = "better" if deg.held_out_improves else ("worse" if deg.held_out_after else "")
+            lines.append(
+                f"degradation (drift space, {len(deg.experiments)} experiments): chi2 {deg.cost0:.6g} -> "
+                f"{deg.cost1:.6g} (dof {deg.dof0}), F = {deg.statistic:.4g}, p adj = {deg.p_adjusted:.2g}, "
+                f"share {deg.share:.2f}, held-out {ho} (block NRMSE ratio {deg.held_out_nrmse_ratio:.3f})"
+            )
+        for note in self.notes:
+            lines.append(note)
         if self.held_out is not None:
             lines.append("")
             lines.append("held-out NRMSE (one experiment left out, physics fitted on the others):")
@@ -202,6 +218,8 @@ class Diagnosis:
             "experiments": [e.to_dict() for e in self.experiments],
             "settings": self.settings,
             "seconds": self.seconds,
+            "degradation": None if self.degradation is None else self.degradation.to_dict(),
+            "notes": list(self.notes),
         }
 
     def to_json(self, indent: int = 2) -> str:

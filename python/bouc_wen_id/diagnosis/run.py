@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Sequence
+from dataclasses import replace
 from typing import Any, Optional
 
 import numpy as np
@@ -12,7 +13,16 @@ import numpy as np
 from ..augmented import TERM_NAMES, AugExperiment, AugFit
 from ..errors import InvalidParameterError
 from .data import DiagExperiment, prepare
-from .fitting import Scale, fit_plain, physical, scale_of, scaled, substeps_for
+from .drift import (
+    DEGRADATION,
+    DegradationTest,
+    corrected,
+    degradation_test,
+    detrended,
+    drift_data,
+    strengths,
+)
+from .fitting import Scale, best_of, fit_from, fit_plain, physical, scale_of, scaled, substeps_for
 from .locate import Localisation, adequacy_p, locate
 from .result import Diagnosis, ModelSummary, NamedTerm, Status, term_symbol_unit
 from .select import ALPHA, FoldCache, forward_select, held_out
@@ -23,16 +33,25 @@ EXPLAINED_FRACTION = 0.9
 #: Between this share and EXPLAINED_FRACTION the verdict is "partly explained" (the terms are named, and the
 #: structure left is located); below it "unexplained" (the terms are reported as partial, not named).
 PARTLY_EXPLAINED_FRACTION = 0.5
+#: Every candidate: the steady-loop terms, then degradation, tested in drift space (design.md 10.6).
+ALL_CANDIDATES: tuple[str, ...] = (*TERM_NAMES, DEGRADATION)
+#: Passes of the virgin-strength correction of the averaged periods once degradation is named.
+CORRECTION_PASSES = 2
+#: Why degradation was not tested when the data hold no period-by-period record.
+NO_BLOCKS = (
+    "degradation not tested: it is seen only in the period-by-period record (at least 2 blocks of periods "
+    "per experiment), and these data are averaged periods only"
+)
 
 
 def _check_candidates(candidates: Optional[Sequence[str]]) -> tuple[str, ...]:
     if candidates is None:
-        return tuple(TERM_NAMES)
+        return ALL_CANDIDATES
     out = tuple(candidates)
-    bad = [c for c in out if c not in TERM_NAMES]
+    bad = [c for c in out if c not in ALL_CANDIDATES]
     if bad or len(set(out)) != len(out):
         raise InvalidParameterError(
-            f"candidates must be distinct names among {', '.join(TERM_NAMES)}; got {list(out)!r}"
+            f"candidates must be distinct names among {', '.join(ALL_CANDIDATES)}; got {list(out)!r}"
         )
     return out
 
@@ -114,6 +133,58 @@ def _verdict(
     return f"unexplained structure remains {where}{tail}"
 
 
+#: Bracket of the joint refinement of d around the drift-space estimate (relative), and its tolerance.
+REFINE_BRACKET = 0.3
+REFINE_XTOL = 1e-3
+
+
+def _refine_degradation(
+    exps: Sequence[DiagExperiment],
+    sx: Sequence[AugExperiment],
+    fit: AugFit,
+    data: Sequence[Any],
+    deg: DegradationTest,
+    s: Scale,
+    substeps: int,
+) -> tuple[DegradationTest, AugFit]:
+    """d refined on both spaces: the drift cost plus the steady cost of the virgin-strength data refitted.
+
+    The drift-space estimate is first order; the averaged periods carry d too (through the strength each
+    experiment has reached, design.md 10.6), so the value is refined by a bounded scalar search of
+    ``C_drift(d) + C_steady(d)`` within ``REFINE_BRACKET`` of it, and its standard error taken from the
+    curvature of that cost (``var = 2 / C''``). The tests stay those of the drift space.
+    """
+    from scipy.optimize import minimize_scalar  # type: ignore[import-untyped]
+
+    from .drift import _sums
+
+    sums = [_sums(dd) for dd in data]
+    fits: dict[float, AugFit] = {}
+
+    def cost(dv: float) -> float:
+        _, fs = corrected(exps, sx, fit, dv, s.y, substeps)
+        f = fit_from(fs, fit.params, substeps, max_iter=50)
+        if f is None:
+            return math.inf
+        fits[dv] = f
+        return f.cost + sum(c0 - 2.0 * dv * nm + dv * dv * dn for c0, nm, dn in sums)
+
+    d0 = deg.d
+    res = minimize_scalar(
+        cost,
+        bounds=((1 - REFINE_BRACKET) * d0, (1 + REFINE_BRACKET) * d0),
+        method="bounded",
+        options={"xatol": REFINE_XTOL * d0},
+    )
+    dv = float(res.x)
+    if not math.isfinite(float(res.fun)) or dv not in fits:
+        return deg, fit
+    h = 0.02 * dv
+    curv = (cost(dv + h) - 2.0 * float(res.fun) + cost(dv - h)) / (h * h)
+    se = math.sqrt(2.0 / curv) if curv > 0 else deg.standard_error * s.y**2
+    return replace(deg, d=dv, value=dv / s.y**2, standard_error=se / s.y**2), fits[dv]
+
+
 def diagnose(
     experiments: Any,
     *,
@@ -132,7 +203,9 @@ def diagnose(
         kept, so an offset can be named; the period-by-period record (Recordings, Measurements) feeds the
         drift test and a noise floor that drift does not inflate.
     candidates : sequence of str, optional
-        Term names to try (default: the whole library, :data:`bouc_wen_id.augmented.TERM_NAMES`).
+        Term names to try (default: the whole library, :data:`ALL_CANDIDATES`: the steady-loop terms of
+        :data:`bouc_wen_id.augmented.TERM_NAMES` and ``"degradation"``, which is fitted from the
+        period-by-period record and skipped, with the reason in ``Diagnosis.notes``, without one).
     alpha : float
         Family-wise false-alarm level of each step (Bonferroni over the candidates) and of the adequacy gate.
     held_out_test : bool
@@ -172,22 +245,67 @@ def diagnose(
     plain = fit_plain(experiments, exps, s, substeps)
     before = _localise(exps, sx, plain, s)
     cache: FoldCache = {}
+    steady = tuple(c for c in cands if c != DEGRADATION)
+    # Degradation first, in drift space (design.md 10.6), on the plain model's Jacobian: Bonferroni over
+    # all the candidates of the first step, as if it were one of them. When it is named, the averaged
+    # periods are brought back to one strength before the steady terms are selected on them.
+    deg: Optional[DegradationTest] = None
+    notes: list[str] = []
+    fexps, fsx, start = exps, sx, plain
+    if DEGRADATION in cands:
+        data = drift_data(exps, sx, plain, s.y, substeps)
+        if data:
+            deg = degradation_test(data, s.y, alpha, family=len(cands))
+        else:
+            notes.append(NO_BLOCKS)
+    named_deg = deg is not None and (deg.named if held_out_test else deg.passed)
+    if deg is not None and named_deg:
+        # Back to the virgin strength and re-estimate at each loop's own strength, twice: the first pass
+        # moves the fit from the plain model's average strength to the virgin one, the second settles it.
+        fit, test = plain, deg
+        for _ in range(CORRECTION_PASSES):
+            fexps, fsx = corrected(exps, sx, fit, test.d, s.y, substeps)
+            fit = best_of([fit_from(fsx, fit.params, substeps)]) or fit
+            data = drift_data(exps, sx, fit, s.y, substeps, strengths(len(exps), data, test.d))
+            retest = degradation_test(data, s.y, alpha, family=len(cands))
+            if retest is None:
+                break
+            test = retest
+        deg = test
+        named_deg = deg.named if held_out_test else deg.passed
+        if named_deg and deg.d > 0:
+            deg, fit = _refine_degradation(exps, sx, fit, data, deg, s, substeps)
+            fexps, fsx = corrected(exps, sx, fit, deg.d, s.y, substeps)
+        start = fit
+        if not named_deg:  # the refined test no longer names it: the steady selection on the data as is
+            fexps, fsx, start = exps, sx, plain
     final, steps = forward_select(
-        sx, plain, cands, adequate, substeps, alpha=alpha, use_held_out=held_out_test, cache=cache
+        fsx, start, steady, adequate, substeps, alpha=alpha, use_held_out=held_out_test, cache=cache
     )
-    after = _localise(exps, sx, final, s)
+    after = _localise(detrended(fexps, deg, s.y) if deg is not None and named_deg else fexps, fsx, final, s)
     units = (y_unit, u_unit)
     plain_sum = _summary(exps, sx, plain, s, units)
-    final_sum = _summary(exps, sx, final, s, units)
+    final_sum = _summary(fexps, fsx, final, s, units)
+    if deg is not None and named_deg:
+        sym, unit = term_symbol_unit(DEGRADATION, *units)
+        deg_term = NamedTerm(DEGRADATION, sym, deg.value, deg.standard_error, unit)
+        final_sum = replace(final_sum, terms=(*final_sum.terms, deg_term))
     excess = plain_sum.cost - plain_sum.dof
     fraction = (plain_sum.cost - final_sum.cost) / excess if excess > 0 else 0.0
+    if deg is not None and named_deg:
+        # Both spaces: the steady excess and the drift excess, and what the model removes of each.
+        total = max(excess, 0.0) + max(deg.cost0 - deg.dof0, 0.0)
+        fraction = (plain_sum.cost - final_sum.cost + deg.cost0 - deg.cost1) / total if total > 0 else 0.0
     status = classify(
-        adequate(plain) and not before.drift_detected, bool(final.params.terms), adequate(final), fraction
+        adequate(plain) and not before.drift_detected and not named_deg,
+        bool(final.params.terms) or named_deg,
+        adequate(final),
+        fraction,
     )
     named = final_sum.terms if status in ("explained", "partly explained") else ()
     partial = final_sum.terms if status == "unexplained" else ()
     alternatives = tuple(a for st in steps for a in st.alternatives)
-    ho = held_out(sx, plain, final, substeps, cache) if final.params.terms else None
+    ho = held_out(fsx, start, final, substeps, cache) if final.params.terms else None
     return Diagnosis(
         status=status,
         verdict=_verdict(status, named, partial, after, fraction),
@@ -212,4 +330,6 @@ def diagnose(
         seconds=time.perf_counter() - t0,
         plain_fit=plain,
         final_fit=final,
+        degradation=deg,
+        notes=tuple(notes),
     )

@@ -1,0 +1,392 @@
+"""Degradation from the period-by-period record: the first-order drift model and its test (design.md 10.6).
+
+The averaged period cannot see a slow strength degradation: to first order the mean loop is the steady loop
+at the mean strength, which the plain fit absorbs into beta and gamma. The blocks of consecutive periods can.
+With ``nu = 1 + delta_nu e`` and ``e`` growing by ``E_i`` (the fitted loop's area ``oint w dx``) per period
+of experiment i, block b (mean period index ``p_b``) sees the steady loop at
+``nu_b = nu_bar (1 + d E_i t_b)``, ``t_b = p_b - p_bar``, ``d = delta_nu / nu_bar``, and so deviates from
+the mean period by
+
+    D_ib = d E_i t_b J_i,    J_i = dy/d ln nu = beta dy/dbeta + gamma dy/dgamma (+ delta dy/ddelta),
+
+the steady model's own Jacobian columns. One shared ``d``: a one-parameter weighted linear least squares
+on the block deviations' harmonics 0..K, each block weighted by ``samples / sigma^2`` (sigma^2 from
+neighbouring periods, which a slow drift does not inflate). The fit is in *drift space*, apart from the
+steady F-tests of the other terms: the block deviations are orthogonal to the mean period.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
+from typing import Any, Optional
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..augmented import AugExperiment, AugFit
+from .data import DiagExperiment
+from .select import f_test
+
+FloatArray = NDArray[np.float64]
+ComplexArray = NDArray[np.complex128]
+TWO_PI = 2.0 * math.pi
+
+#: The code name of the term fitted here.
+DEGRADATION = "degradation"
+#: Output terms left out when the hysteresis output w alone is needed (for the loop's energy).
+_HYSTERESIS_TERMS = ("asymmetry", "play")
+
+
+@dataclass(frozen=True)
+class DriftData:
+    """One experiment's block deviations and the model's drift regressor, in scaled units."""
+
+    index: int
+    dev: ComplexArray  # (B, K + 1): block harmonics less their weighted mean
+    t: FloatArray  # (B,) block centre less the weighted mean centre (periods)
+    w: FloatArray  # (B,) samples / sigma^2 of each block
+    energy: float  # E_i: the fitted loop's area per period (scaled units)
+    jac: ComplexArray  # (K + 1,) harmonics of dy/d ln nu
+    jac_grid: FloatArray  # dy/d ln nu on the averaged grid
+    mean_age: float  # periods from the record's start to the middle of the averaged stretch (NaN: unknown)
+
+    @property
+    def dof(self) -> int:
+        """Independent real components of the deviations: (B - 1) blocks of (2K + 1) each."""
+        return int((self.dev.shape[0] - 1) * (2 * self.dev.shape[1] - 1))
+
+
+def _inner(a: ComplexArray, b: ComplexArray) -> FloatArray:
+    """Per-row weighted inner product of harmonic rows: ``Re a_0 b_0* + 1/2 sum_k Re a_k b_k*``.
+
+    By Parseval it is ``||y_a . y_b|| / P`` on the grid, so with ``samples / sigma^2`` in front it is the
+    chi-square of the block average.
+    """
+    prod = (a * np.conj(b)).real
+    out: FloatArray = prod[..., 0] + 0.5 * prod[..., 1:].sum(axis=-1)
+    return out
+
+
+def harmonics(y: FloatArray, k: int) -> ComplexArray:
+    """Harmonics 0..k of a period on a uniform grid, in the block record's convention."""
+    spec = np.fft.rfft(y) / y.size
+    out = spec[: k + 1].astype(np.complex128)
+    out[1:] *= 2.0
+    out[0] = out[0].real
+    return out
+
+
+def _at_strength(fit: AugFit, nu: float) -> FloatArray:
+    """The shared vector ``[beta, gamma, mu, q..]`` at strength ``nu`` (beta, gamma, delta times nu)."""
+    par = fit.params
+    vals = np.array(par.values, dtype=np.float64)
+    if "asymmetry" in par.terms:
+        vals[par.terms.index("asymmetry")] *= nu
+    return np.concatenate([[par.beta * nu, par.gamma * nu, par.mu], vals]).astype(np.float64)
+
+
+def regressor(
+    e: AugExperiment, fit: AugFit, i: int, substeps: int, nu: float = 1.0
+) -> tuple[FloatArray, float]:
+    """``(J_i on the grid, E_i)`` at strength ``nu``: ``dy/dnu`` (per unit of the virgin strength) from
+    the core's Jacobian at beta, gamma, delta times nu, and the loop's area ``oint w dx`` there.
+
+    ``E_i`` is the rectangle rule over the grid of ``w dx/dtheta``, ``x = A cos(theta - phi)``, with ``w``
+    the hysteresis output alone (the fitted asymmetry and play kept, the output terms left out): exact for
+    a band-limited loop, second order at the reversals' kinks.
+    """
+    from .. import _core
+
+    par = fit.params
+    shared = _at_strength(fit, nu)
+    p = e.ybar.size
+    g, ph = float(par.gains[i]), float(par.phases[i])
+    _, jac, _ = _core.augmented_output(
+        p, e.amplitude, e.frequency, e.grid_phase, list(par.terms), shared, g, ph, substeps
+    )
+    jac = np.asarray(jac)
+    j = par.beta * jac[:, 0] + par.gamma * jac[:, 1]
+    if "asymmetry" in par.terms:
+        k = par.terms.index("asymmetry")
+        j = j + float(par.values[k]) * jac[:, 3 + k]
+    keep = [k for k, t in enumerate(par.terms) if t in _HYSTERESIS_TERMS]
+    hshared = np.concatenate([shared[:3], shared[3:][keep]]).astype(np.float64)
+    w, _, _ = _core.augmented_output(
+        p, e.amplitude, e.frequency, e.grid_phase, [par.terms[k] for k in keep], hshared, g, ph, substeps
+    )
+    theta = TWO_PI * np.arange(p) / p
+    a = e.amplitude * g
+    energy = float(np.dot(np.asarray(w), -a * np.sin(theta - ph))) * TWO_PI / p
+    return np.asarray(j, dtype=np.float64), energy
+
+
+def drift_data(
+    exps: Sequence[DiagExperiment],
+    sx: Sequence[AugExperiment],
+    fit: AugFit,
+    y_scale: float,
+    substeps: int,
+    strength: Optional[Sequence[float]] = None,
+) -> list[DriftData]:
+    """The experiments with at least two blocks, reduced for the drift fit (scaled by ``y_scale``).
+
+    ``strength`` (per experiment, default 1) is each averaged loop's strength relative to ``fit``'s.
+    """
+    out = []
+    for i, (e, a) in enumerate(zip(exps, sx)):
+        if e.blocks < 2:
+            continue
+        k = e.block_coef.shape[1] - 1
+        wts = e.block_samples / max(e.noise_var, np.finfo(float).tiny) * y_scale**2
+        coef = e.block_coef / y_scale
+        mean = (wts[:, None] * coef).sum(axis=0) / wts.sum()
+        t = e.block_center - float(np.dot(wts, e.block_center) / wts.sum())
+        j, energy = regressor(a, fit, i, substeps, 1.0 if strength is None else float(strength[i]))
+        age = e.lead_periods + float(np.dot(wts, e.block_center) / wts.sum()) + 0.5
+        out.append(DriftData(i, coef - mean, t, wts, energy, harmonics(j, k), j, age))
+    return out
+
+
+def _sums(dd: DriftData) -> tuple[float, float, float]:
+    """``(C0, num, den)`` of one experiment: ``C(d) = C0 - 2 d num + d^2 den``."""
+    reg = dd.energy * dd.t[:, None] * dd.jac[None, :]
+    c0 = float(np.dot(dd.w, _inner(dd.dev, dd.dev)))
+    num = float(np.dot(dd.w, _inner(dd.dev, reg)))
+    den = float(np.dot(dd.w, _inner(reg, reg)))
+    return c0, num, den
+
+
+@dataclass(frozen=True)
+class DegradationTest:
+    """The degradation candidate tested in drift space (design.md 10.6).
+
+    ``d`` (scaled) and ``value``/``standard_error`` (physical, 1/[y]^2) are the first-order estimate of
+    ``delta_nu / nu_bar``; ``cost0``/``cost1`` the drift chi-square without and with it, ``dof0`` its
+    degrees of freedom; the held-out costs are leave-one-experiment-out (d from the others).
+    """
+
+    d: float
+    value: float
+    standard_error: float
+    cost0: float
+    cost1: float
+    dof0: int
+    statistic: float
+    p_value: float
+    p_adjusted: float
+    share: float
+    held_out_before: tuple[float, ...]
+    held_out_after: tuple[float, ...]
+    experiments: tuple[int, ...]
+    passed: bool
+    #: d E_i per experiment (relative strength change per period), for the predicted drift.
+    rate: tuple[float, ...] = ()
+    #: Harmonics 0..K of J_i (scaled), per experiment in ``experiments``.
+    jac: tuple[ComplexArray, ...] = ()
+
+    @property
+    def held_out_improves(self) -> bool:
+        return bool(self.held_out_after) and sum(self.held_out_after) < sum(self.held_out_before)
+
+    @property
+    def named(self) -> bool:
+        return self.passed and self.held_out_improves
+
+    @property
+    def held_out_nrmse_ratio(self) -> float:
+        """Block-resolved held-out NRMSE, drift model over none: ``sqrt(sum C_j(d_-j) / sum C_j(0))``."""
+        b = sum(self.held_out_before)
+        return math.sqrt(sum(self.held_out_after) / b) if b > 0 else math.nan
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "term": DEGRADATION,
+            "delta_nu": self.value,
+            "standard_error": self.standard_error,
+            "drift_cost_before": self.cost0,
+            "drift_cost_after": self.cost1,
+            "drift_dof": self.dof0,
+            "F": self.statistic,
+            "p_value": self.p_value,
+            "p_adjusted": self.p_adjusted,
+            "share_of_drift_excess": self.share,
+            "held_out_cost_before": list(self.held_out_before),
+            "held_out_cost_after": list(self.held_out_after),
+            "held_out_improves": self.held_out_improves,
+            "held_out_nrmse_ratio": self.held_out_nrmse_ratio,
+            "experiments": list(self.experiments),
+            "passed_in_sample": self.passed,
+            "named": self.named,
+        }
+
+
+#: Smallest share of the drift excess ``C0 - dof0`` the term must explain (as MATERIAL_SHARE in select).
+DRIFT_MATERIAL_SHARE = 0.1
+
+
+def degradation_test(
+    data: Sequence[DriftData], y_scale: float, alpha: float, family: int
+) -> Optional[DegradationTest]:
+    """Fit the shared ``d`` and test it: nested F (1 df, one-sided: ``d >= 0`` is a boundary, halved as for
+    tau and b), Bonferroni over ``family`` candidates, the share of the drift excess, and the held-out
+    check (d from the other experiments predicts each one's block deviations better than no drift).
+    None when no experiment has a block record.
+    """
+    if not data:
+        return None
+    sums = [_sums(dd) for dd in data]
+    c0 = sum(s[0] for s in sums)
+    num = sum(s[1] for s in sums)
+    den = sum(s[2] for s in sums)
+    dof0 = sum(dd.dof for dd in data)
+    d = num / den if den > 0 else 0.0
+    c1 = c0 - d * num
+    dof1 = dof0 - 1
+    if d > 0:
+        stat, p = f_test(c0, c1, dof1, boundary=True)
+    else:  # a strengthening loop is not degradation: the one-sided test does not pass
+        stat, p = 0.0, 1.0
+    padj = min(1.0, p * family) if math.isfinite(p) else math.nan
+    excess = c0 - dof0
+    share = (c0 - c1) / excess if excess > 0 else 0.0
+    passed = bool(math.isfinite(padj) and padj < alpha and share >= DRIFT_MATERIAL_SHARE)
+    hb, ha = [], []
+    if len(data) >= 2:
+        for cj, nj, dj in sums:
+            rest = den - dj
+            dm = max((num - nj) / rest, 0.0) if rest > 0 else 0.0
+            hb.append(cj)
+            ha.append(cj - 2.0 * dm * nj + dm * dm * dj)
+    scale = c1 / dof1 if dof1 > 0 else math.nan
+    se = math.sqrt(scale / den) if den > 0 and scale > 0 else math.nan
+    return DegradationTest(
+        d=d,
+        value=d / y_scale**2,
+        standard_error=se / y_scale**2,
+        cost0=c0,
+        cost1=c1,
+        dof0=dof0,
+        statistic=stat,
+        p_value=p,
+        p_adjusted=padj,
+        share=share,
+        held_out_before=tuple(hb),
+        held_out_after=tuple(ha),
+        experiments=tuple(dd.index for dd in data),
+        passed=passed,
+        rate=tuple(d * dd.energy for dd in data),
+        jac=tuple(dd.jac for dd in data),
+    )
+
+
+def predicted_deviation(dd: DriftData, d: float) -> ComplexArray:
+    """The first-order drift model's block deviations ``d E_i t_b J_i`` (scaled harmonics, (B, K + 1))."""
+    out: ComplexArray = d * dd.energy * dd.t[:, None] * dd.jac[None, :]
+    return out
+
+
+def strengths(m: int, data: Sequence[DriftData], d: float) -> list[float]:
+    """``nu_bar_i = 1 + d E_i a_i`` per experiment (1 where the age or the block record is unknown)."""
+    out = [1.0] * m
+    for dd in data:
+        if math.isfinite(dd.mean_age):
+            out[dd.index] = 1.0 + max(d, 0.0) * dd.energy * dd.mean_age
+    return out
+
+
+def corrected(
+    exps: Sequence[DiagExperiment],
+    sx: Sequence[AugExperiment],
+    fit: AugFit,
+    d: float,
+    y_scale: float,
+    substeps: int,
+) -> tuple[list[DiagExperiment], list[AugExperiment]]:
+    """The averaged periods brought back to the virgin strength (design.md 10.6).
+
+    Each experiment's averaged loop is not the steady loop at one strength: the strength differs between
+    experiments (each dissipates at its own rate from the virgin state at the start of its record, so
+    different amplitudes see different mean strengths, which shared beta and gamma cannot follow), it
+    spreads over the record, and it rises within each period (the two branches of a period see different
+    strengths: even harmonics). All three are in the time-domain simulation of the fitted hysteresis at
+    ``delta_nu = d`` (``simulate`` with the Degradation term, driven by the fitted latent
+    ``x = A cos(omega t - phi)`` from rest through the record's settling periods), averaged over the
+    recorded periods; its difference from the same simulation at ``d = 0`` is taken off the data.
+    Experiments of unknown age (no record) are left as they are.
+    """
+    from .. import _core
+
+    de, ds = list(exps), list(sx)
+    par = fit.params
+    terms = {t: float(v) for t, v in zip(par.terms, par.values) if t in _HYSTERESIS_TERMS}
+    for i, (e, a) in enumerate(zip(exps, sx)):
+        if e.blocks < 2 or not math.isfinite(e.lead_periods):
+            continue
+        p = a.ybar.size
+        lead = max(int(round(e.lead_periods)), 0)
+        n = max(int(round(e.periods)), 1)
+        om = a.frequency  # rad/s
+        phi = float(np.mod(par.phases[i], TWO_PI))
+        amp = float(a.amplitude * par.gains[i])
+        dt = TWO_PI / om / p
+        outs = []
+        for dv in (max(d, 0.0), 0.0):
+            _, w, _ = _core.simulate_sine(
+                np.array([amp]),
+                np.array([1.0]),
+                phi / om,
+                1.0,
+                float(par.beta),
+                float(par.gamma),
+                float(par.mu),
+                0.0,
+                1.0,
+                om,
+                dt,
+                (lead + n) * p,
+                max(substeps, SIM_SUBSTEPS),
+                terms={**terms, DEGRADATION: dv},
+            )
+            outs.append(np.asarray(w)[lead * p :].reshape(n, p).mean(axis=0))
+        shift = outs[0] - outs[1]
+        de[i] = replace(e, ybar=e.ybar - shift * y_scale)
+        ds[i] = replace(a, ybar=np.ascontiguousarray(a.ybar - shift))
+    return de, ds
+
+
+#: RK4 steps per sample, at least, of the record's simulation in :func:`corrected`.
+SIM_SUBSTEPS = 4
+
+
+def detrended(exps: Sequence[DiagExperiment], test: DegradationTest, y_scale: float) -> list[DiagExperiment]:
+    """The experiments with the fitted drift taken out of their per-period DC and fundamental.
+
+    For the "after" localisation: period p of experiment i moves by ``d E_i (p - p_bar) J_i``.
+    """
+    out = list(exps)
+    for i, rate, jac in zip(test.experiments, test.rate, test.jac):
+        e = exps[i]
+        n = e.h1.size
+        if n < 2:
+            continue
+        t = np.arange(n, dtype=np.float64) - (n - 1) / 2.0
+        shift = rate * t * y_scale
+        out[i] = replace(e, dc=e.dc - shift * jac[0].real, h1=e.h1 - shift * jac[1])
+    return out
+
+
+__all__ = [
+    "DEGRADATION",
+    "DegradationTest",
+    "DriftData",
+    "drift_data",
+    "detrended",
+    "corrected",
+    "strengths",
+    "harmonics",
+    "predicted_deviation",
+    "regressor",
+    "degradation_test",
+]
