@@ -126,6 +126,21 @@ class TransferFunction:
     def __repr__(self) -> str:
         return f"TransferFunction(num={self.num.tolist()}, den={self.den.tolist()}, delay={self.delay:g})"
 
+    # python-control interop (bouc_wen_id.interop; needs the optional "control" extra).
+    def to_control(self, pade_order: Optional[int] = None) -> Any:
+        """This G as a ``control.TransferFunction``; a delay needs ``pade_order`` (see
+        :func:`bouc_wen_id.interop.to_control`)."""
+        from .interop import to_control
+
+        return to_control(self, pade_order)
+
+    @classmethod
+    def from_control(cls, sys: Any, delay: float = 0.0) -> TransferFunction:
+        """From a SISO continuous-time ``control`` system, with an optional delay (s)."""
+        from .interop import from_control
+
+        return from_control(sys, delay)
+
 
 @dataclass(frozen=True)
 class BoucWen:
