@@ -69,6 +69,11 @@ MAX_NFEV = 100
 MIN_START_DELAY = 1e-3
 #: Two frequencies closer than this (relative) are one frequency tested twice: refused as duplicates.
 DUPLICATE_RTOL = 1e-9
+#: Candidates within this much of the lowest information criterion are "about as good" (a difference
+#: below 2 is not evidence, Burnham and Anderson 2002, section 2.6); the simplest of them is chosen.
+PARSIMONY = 2.0
+#: What the selection table says of a candidate set aside for an unpinned resonance.
+UNPINNED = "resonance not pinned down"
 #: Bound on the log-coefficients of the denominator sections (in the scaled frequency s' = s / w0).
 LOG_BOUND = 40.0
 #: A complex pole pair with damping ratio below 1/sqrt(2) has a peak in |G(j omega)|; the peak is pinned
@@ -650,7 +655,9 @@ def _fit_one(
         return out
 
     sol = least_squares(
-        fun, theta0, jac=jac, method="lm", x_scale="jac", xtol=1e-12, ftol=1e-12, gtol=1e-12,
+        # MINPACK's LM is the fastest here but needs at least as many residuals as parameters; an
+        # over-parameterised fit (forced by the user, warned about) takes the trust-region solver.
+        fun, theta0, jac=jac, method="lm" if 2 * s.size >= model.size else "trf", x_scale="jac", xtol=1e-12, ftol=1e-12, gtol=1e-12,
         max_nfev=MAX_NFEV,
     )
     theta = np.asarray(sol.x, dtype=np.float64)
@@ -768,13 +775,15 @@ def fit_transfer_function(
                 fits.append(None)
                 continue
             aicc, bic = _criteria(f.chi2, k, eqs, points.weighted)
-            rows.append(OrderCandidate(m, n, fitted, k, f.chi2, aicc, bic))
+            den = _Model(m, n, fitted, tau).den_coeffs(f.theta)
+            unpinned = bool(_resonance_warnings(np.real(den), points.omega / w0))
+            rows.append(OrderCandidate(m, n, fitted, k, f.chi2, aicc, bic, error=UNPINNED if unpinned else ""))
             fits.append(f)
     key = [(r.aicc if criterion == "aicc" else r.bic) if fits[i] is not None else math.inf for i, r in enumerate(rows)]
     if forced:
         best = 0 if fits[0] is not None else -1
     else:
-        best = int(np.argmin(key)) if np.isfinite(np.min(key)) else -1
+        best = _select(rows, key)
     if best < 0:
         raise InsufficientDataError(
             f"{points.omega.size} points ({eqs} real equations) support no candidate model: "
@@ -785,6 +794,23 @@ def fit_transfer_function(
     rows[best] = replace(rows[best], chosen=True)
     selection = _explain(rows, key, best, criterion, forced)
     return _finish(points, chosen, w0, delays, rows, selection, criterion, confidence, eqs)
+
+
+def _select(rows: list[OrderCandidate], key: list[float]) -> int:
+    """Index of the chosen candidate, or -1.
+
+    Candidates whose fitted resonance falls where no point pins it down are set aside (a narrow peak
+    slipped between two points buys chi-square the data cannot confirm) unless every candidate has one;
+    among the rest, the fewest parameters within ``PARSIMONY`` of the lowest criterion (ties: the lower).
+    """
+    ok = [i for i, k in enumerate(key) if math.isfinite(k) and rows[i].error != UNPINNED]
+    if not ok:
+        ok = [i for i, k in enumerate(key) if math.isfinite(k)]
+    if not ok:
+        return -1
+    low = min(key[i] for i in ok)
+    near = [i for i in ok if key[i] <= low + PARSIMONY]
+    return min(near, key=lambda i: (rows[i].parameters, key[i]))
 
 
 def _shapes(order: Union[None, int, tuple[int, int]], max_order: int) -> list[tuple[int, int]]:
@@ -813,17 +839,31 @@ def _explain(rows: list[OrderCandidate], key: list[float], best: int, criterion:
     if forced:
         return f"{what}: given by order=/delay=, not selected"
     name = criterion.upper()
-    others = sorted((key[i], i) for i in range(len(rows)) if i != best and math.isfinite(key[i]))
+    finite = [i for i in range(len(rows)) if math.isfinite(key[i])]
+    others = sorted((key[i], i) for i in finite if i != best)
     if not others:
         return f"{what}: the only candidate the points support"
-    runner = rows[others[0][1]]
-    gap = others[0][0] - key[best]
+    set_aside = sum(rows[i].error == UNPINNED for i in finite)
+    low = min(key[i] for i in finite if rows[i].error != UNPINNED or rows[best].error == UNPINNED)
+    if key[best] > low:
+        head = (
+            f"{what}: the fewest parameters ({rows[best].parameters}) within {PARSIMONY:g} of the lowest "
+            f"{name} ({key[best] - low:.3g} above it)"
+        )
+    else:
+        head = f"{what}: lowest {name} of {len(finite)} candidates"
+    runner_key, runner_i = next((k, i) for k, i in others if rows[i].error != UNPINNED) if any(
+        rows[i].error != UNPINNED for _, i in others) else others[0]
+    runner = rows[runner_i]
+    gap = runner_key - key[best]
     strength = "decisive" if gap > 10 else ("strong" if gap > 6 else ("positive" if gap > 2 else "weak"))
-    return (
-        f"{what}: lowest {name} of {sum(math.isfinite(k) for k in key)} candidates; the next best "
-        f"(m = {runner.m}, n = {runner.n}, delay {'fitted' if runner.delay else 'none'}) is {gap:.3g} higher "
-        f"({strength} preference)"
+    text = (
+        f"{head}; the next (m = {runner.m}, n = {runner.n}, delay {'fitted' if runner.delay else 'none'}) is "
+        f"{gap:.3g} {'higher' if gap >= 0 else 'lower'} ({strength if gap >= 0 else 'but has more parameters'})"
     )
+    if set_aside:
+        text += f"; {set_aside} candidate(s) set aside: a resonance no point pins down"
+    return text
 
 
 def _finish(
@@ -884,7 +924,7 @@ def _finish(
             f"{k} parameters from {eqs} real equations ({points.omega.size} points): the fit interpolates "
             "and its parameters are not determined; add frequencies or lower the order"
         )
-    found += _resonance_warnings(tf, points.omega)
+    found += _resonance_warnings(tf.den, points.omega)
     if f.reflected:
         notes.append(
             f"{f.reflected} unstable pole(s) of the Sanathanan-Koerner start reflected into the left half "
@@ -922,9 +962,10 @@ def _finish(
     )
 
 
-def _resonance_warnings(tf: TransferFunction, omega: FloatArray) -> list[str]:
+def _resonance_warnings(den: FloatArray, omega: FloatArray) -> list[str]:
+    """Warnings for each under-damped pole pair of ``den`` whose half-power band holds none of ``omega``."""
     out = []
-    for p in np.roots(tf.den):
+    for p in np.roots(den):
         if p.imag <= 0.0:
             continue
         wn = abs(p)
