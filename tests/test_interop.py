@@ -14,10 +14,16 @@ control = pytest.importorskip("control")  # in the test extra; skipped only in a
 @pytest.fixture(scope="module")
 def result() -> bw.IdentificationResult:
     plant = bw.WienerPlant(bw.TransferFunction([6.0], [1.0, 1.2, 4.0], delay=0.05), bw.BoucWen(0.8, 0.2, 1.6))
-    freqs = np.geomspace(0.5, 5.0, 8)
+    freqs = [float(f) for f in np.geomspace(0.5, 5.0, 8)]
     plan = bw.SinePlan(
-        frequencies=tuple(freqs), amplitudes=design_amplitudes(plant, freqs), settle_periods=10, periods=10,
-        samples_per_period=128, substeps=2, noise_sd=0.02, seed=8,
+        frequencies=tuple(freqs),
+        amplitudes=design_amplitudes(plant, freqs),
+        settle_periods=10,
+        periods=10,
+        samples_per_period=128,
+        substeps=2,
+        noise_sd=0.02,
+        seed=8,
     )
     return bw.identify(bw.simulate(plant, plan), method="profile")
 

@@ -11,7 +11,7 @@ import warnings
 import bouc_wen_id as bw
 import numpy as np
 import pytest
-import scipy.signal
+import scipy.signal  # type: ignore[import-untyped]
 from bouc_wen_id import tfit
 from bouc_wen_id.demo import design_amplitudes
 from bouc_wen_id.errors import (
@@ -32,7 +32,9 @@ KNOWN = {
 OMEGA = np.geomspace(0.3, 20.0, 24)
 
 
-def _noisy(tf: bw.TransferFunction, omega: np.ndarray, rel: float, seed: int) -> tuple[np.ndarray, np.ndarray]:
+def _noisy(
+    tf: bw.TransferFunction, omega: np.ndarray, rel: float, seed: int
+) -> tuple[np.ndarray, np.ndarray]:
     """Points with relative gain error and absolute phase error ``rel`` (sd), and their covariance."""
     rng = np.random.default_rng(seed)
     g = tf.freqresp(omega)
@@ -67,7 +69,9 @@ def test_exact_points_recover_the_coefficients(name: str) -> None:
 def test_noisy_points_give_the_true_response_within_its_interval(name: str) -> None:
     tf = KNOWN[name]
     g, cov = _noisy(tf, OMEGA, 0.01, seed=11)
-    fit = bw.fit_transfer_function(omega=OMEGA, response=g, covariance=cov, order=_orders(tf), delay=tf.delay > 0)
+    fit = bw.fit_transfer_function(
+        omega=OMEGA, response=g, covariance=cov, order=_orders(tf), delay=tf.delay > 0
+    )
     w = np.array([0.45, 2.5, 9.0])
     p = fit.predict(w)
     err = np.abs(p.response - tf.freqresp(w))
@@ -148,9 +152,9 @@ def test_interval_coverage_small_monte_carlo() -> None:
     g_true = tf.freqresp(w_new)[0]
     for seed in range(reps):
         g, cov = _noisy(tf, omega, 0.02, seed=1000 + seed)
-        p = bw.fit_transfer_function(omega=omega, response=g, covariance=cov, order=(0, 1), delay=True).predict(
-            w_new
-        )
+        p = bw.fit_transfer_function(
+            omega=omega, response=g, covariance=cov, order=(0, 1), delay=True
+        ).predict(w_new)
         lo, hi = p.gain_interval[0]
         hits_gain += lo <= abs(g_true) <= hi
         dphi = (p.phase[0] - (-np.angle(g_true)) + np.pi) % (2 * np.pi) - np.pi
@@ -182,10 +186,18 @@ def test_bad_points_are_named_errors(omega: list[float], response: list[complex]
 def test_bad_options_are_named_errors() -> None:
     w = np.array([1.0, 2.0, 3.0])
     g = KNOWN["first"].freqresp(w)
-    for kw in ({"order": (3, 2)}, {"order": -1}, {"order": "2"}, {"delay": -0.1}, {"criterion": "aic"},
-               {"max_order": 9}, {"covariance": np.ones((2, 2, 2))}, {"covariance": -np.ones((3, 2, 2))}):
+    for kw in (
+        {"order": (3, 2)},
+        {"order": -1},
+        {"order": "2"},
+        {"delay": -0.1},
+        {"criterion": "aic"},
+        {"max_order": 9},
+        {"covariance": np.ones((2, 2, 2))},
+        {"covariance": -np.ones((3, 2, 2))},
+    ):
         with pytest.raises(InvalidParameterError):
-            bw.fit_transfer_function(omega=w, response=g, **kw)  # type: ignore[arg-type]
+            bw.fit_transfer_function(omega=w, response=g, **kw)
     with pytest.raises(InvalidParameterError):
         bw.fit_transfer_function()
     g_in = g.copy()
@@ -207,10 +219,16 @@ def test_unweighted_points_and_a_known_delay() -> None:
 @pytest.fixture(scope="module")
 def identified() -> tuple[bw.WienerPlant, bw.IdentificationResult]:
     plant = bw.WienerPlant(bw.TransferFunction([6.0], [1.0, 1.2, 4.0]), bw.BoucWen(0.8, 0.2, 1.6))
-    freqs = np.geomspace(0.5, 5.0, 10)
+    freqs = [float(f) for f in np.geomspace(0.5, 5.0, 10)]
     plan = bw.SinePlan(
-        frequencies=tuple(freqs), amplitudes=design_amplitudes(plant, freqs), settle_periods=10, periods=10,
-        samples_per_period=128, substeps=2, noise_sd=0.02, seed=7,
+        frequencies=tuple(freqs),
+        amplitudes=design_amplitudes(plant, freqs),
+        settle_periods=10,
+        periods=10,
+        samples_per_period=128,
+        substeps=2,
+        noise_sd=0.02,
+        seed=7,
     )
     return plant, bw.identify(bw.simulate(plant, plan), method="refined")
 
@@ -231,7 +249,9 @@ def test_end_to_end_identify_then_fit(identified: tuple[bw.WienerPlant, bw.Ident
     assert d["format"] == "bouc_wen_id.tfit" and d["n"] == 2 and len(d["candidates"]) == 30
     # The fitted plant simulates.
     fitted_plant = bw.WienerPlant(fit.transfer_function, bw.BoucWen(result.beta, result.gamma, result.mu))
-    plan = bw.SinePlan(frequencies=(1.0,), amplitudes=(0.5,), settle_periods=2, periods=2, samples_per_period=64)
+    plan = bw.SinePlan(
+        frequencies=(1.0,), amplitudes=(0.5,), settle_periods=2, periods=2, samples_per_period=64
+    )
     (rec,) = bw.simulate(fitted_plant, plan)
     assert np.all(np.isfinite(rec.y)) and np.ptp(rec.y) > 0.0
 

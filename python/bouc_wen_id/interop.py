@@ -31,7 +31,7 @@ MAX_PADE_ORDER = 10
 
 def _control() -> Any:
     try:
-        import control
+        import control  # type: ignore[import-untyped]
     except ImportError as exc:  # pragma: no cover - exercised only without the extra
         raise ImportError(
             "this needs python-control, which is not installed: pip install 'bouc_wen_id[control]' "
@@ -88,9 +88,9 @@ def to_control(tf: TransferFunction, pade_order: Optional[int] = None) -> Any:
         return rational
     if pade_order is None:
         raise InvalidParameterError(
-            f"the transfer function has a delay of {tf.delay:g} s, which python-control cannot hold exactly: "
-            "pass pade_order=n for a Pade approximation, or convert TransferFunction(tf.num, tf.den) and keep "
-            "the delay apart"
+            f"the transfer function has a delay of {tf.delay:g} s, which python-control cannot hold "
+            "exactly: pass pade_order=n for a Pade approximation, or convert "
+            "TransferFunction(tf.num, tf.den) and keep the delay apart"
         )
     if isinstance(pade_order, bool) or not isinstance(pade_order, (int, np.integer)):
         raise InvalidParameterError(f"pade_order must be an integer, got {pade_order!r}")

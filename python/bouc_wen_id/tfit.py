@@ -240,7 +240,7 @@ class TransferFunctionFit:
         if np.any(w <= 0.0):
             raise InvalidParameterError("omega must be > 0 rad/s")
         model = _Model(self.m, self.n, self.delay_fitted, self._fixed_delay * self._w0)
-        s = 1j * w / self._w0
+        s = np.asarray(1j * w / self._w0, dtype=np.complex128)
         g, dg = model.response(self._theta, s, jacobian=True)
         cov = np.empty((w.size, 2, 2))
         gain_se = np.empty(w.size)
@@ -295,8 +295,10 @@ class TransferFunctionFit:
         if poles.size:
             lines.append("  poles: " + ", ".join(_cplx(p) for p in poles))
         lines.append("")
-        lines.append(f"  {'omega':>9}{'|G| point':>11}{'|G| fit':>11}{'phi point':>11}{'phi fit':>10}{'res Re':>9}"
-                     f"{'res Im':>9}")
+        lines.append(
+            f"  {'omega':>9}{'|G| point':>11}{'|G| fit':>11}{'phi point':>11}{'phi fit':>10}{'res Re':>9}"
+            f"{'res Im':>9}"
+        )
         fitted = tf.freqresp(self.omega)
         for k, w in enumerate(self.omega):
             lines.append(
@@ -429,10 +431,10 @@ class _Model:
         theta: list[float] = list(num)
         quad = [sec for sec in sections if len(sec) == 3]
         lin = [sec for sec in sections if len(sec) == 2]
-        for sec in quad:
-            theta += [math.log(sec[1]), math.log(sec[2])]
-        for sec in lin:
-            theta.append(math.log(sec[1]))
+        for q in quad:
+            theta += [math.log(q[1]), math.log(q[2])]
+        for one in lin:
+            theta.append(math.log(one[1]))
         if self.delay:
             theta.append(math.log(max(tau, MIN_START_DELAY)))
         return np.asarray(theta, dtype=np.float64)
@@ -500,9 +502,8 @@ def _points(
             full = np.asarray(result.covariance, dtype=np.float64)
             cov = np.stack([full[3 + 2 * i : 5 + 2 * i, 3 + 2 * i : 5 + 2 * i] for i in range(w.size)])
         elif all(e.gain_se is not None and e.phase_se is not None for e in result.experiments):
-            cov = np.stack(
-                [np.diag([float(e.gain_se) ** 2, float(e.phase_se) ** 2]) for e in result.experiments]  # type: ignore[arg-type]
-            )
+            var = np.array([[e.gain_se or 0.0, e.phase_se or 0.0] for e in result.experiments]) ** 2
+            cov = np.stack([np.diag(v) for v in var])
     else:
         if omega is None or response is None:
             raise InvalidParameterError("give an identification result, or omega and response")
@@ -577,14 +578,18 @@ class _Fit:
     reflected: int
 
 
-def _sk_start(points: _Points, s: ComplexArray, m: int, n: int, tau: float) -> tuple[FloatArray, ComplexArray]:
+def _sk_start(
+    points: _Points, s: ComplexArray, m: int, n: int, tau: float
+) -> tuple[FloatArray, ComplexArray]:
     """Sanathanan-Koerner fit of ``G exp(tau s)`` by ``N/D``; returns (num, den) in s', den monic."""
     g = points.g * np.exp(tau * s)
-    prev = np.ones_like(s)
-    num = np.zeros(m + 1)
-    den = np.ones(1)
+    prev: Any = np.ones_like(s)
+    num: Any = np.zeros(m + 1)
+    den: Any = np.ones(1)
     for _ in range(SK_ITERATIONS):
-        cols = [s ** (m - k) / prev for k in range(m + 1)] + [-g * s ** (n - k) / prev for k in range(1, n + 1)]
+        cols = [s ** (m - k) / prev for k in range(m + 1)] + [
+            -g * s ** (n - k) / prev for k in range(1, n + 1)
+        ]
         a = np.stack(cols, axis=1) if cols else np.zeros((s.size, 0), dtype=np.complex128)
         y = g * s**n / prev
         aw = _whiten(points, a).reshape(2 * s.size, -1)
@@ -622,14 +627,14 @@ def _phase_slope_delay(points: _Points, s: ComplexArray) -> float:
     return max(slope, 0.0)
 
 
-def _fit_one(
-    points: _Points, s: ComplexArray, m: int, n: int, delay: bool, fixed_tau: float
-) -> _Fit:
-    from scipy.optimize import least_squares
+def _fit_one(points: _Points, s: ComplexArray, m: int, n: int, delay: bool, fixed_tau: float) -> _Fit:
+    from scipy.optimize import least_squares  # type: ignore[import-untyped]
 
     model = _Model(m, n, delay, fixed_tau)
     taus = [fixed_tau] if not delay else [f * _phase_slope_delay(points, s) for f in DELAY_FRACTIONS]
     best: Optional[tuple[float, FloatArray, int]] = None
+    poles: Any
+    den: Any
     for tau in taus:
         if n > 0:
             _, den = _sk_start(points, s, m, n, tau)
@@ -657,7 +662,14 @@ def _fit_one(
     sol = least_squares(
         # MINPACK's LM is the fastest here but needs at least as many residuals as parameters; an
         # over-parameterised fit (forced by the user, warned about) takes the trust-region solver.
-        fun, theta0, jac=jac, method="lm" if 2 * s.size >= model.size else "trf", x_scale="jac", xtol=1e-12, ftol=1e-12, gtol=1e-12,
+        fun,
+        theta0,
+        jac=jac,
+        method="lm" if 2 * s.size >= model.size else "trf",
+        x_scale="jac",
+        xtol=1e-12,
+        ftol=1e-12,
+        gtol=1e-12,
         max_nfev=MAX_NFEV,
     )
     theta = np.asarray(sol.x, dtype=np.float64)
@@ -744,7 +756,7 @@ def fit_transfer_function(
     if not 0.0 < confidence < 1.0:
         raise InvalidParameterError(f"confidence must be in (0, 1), got {confidence}")
     w0 = float(np.exp(np.mean(np.log(points.omega))))  # geometric mean: the scaled s' is O(1)
-    s = 1j * points.omega / w0
+    s = np.asarray(1j * points.omega / w0, dtype=np.complex128)
     eqs = 2 * points.omega.size
 
     shapes = _shapes(order, max_order)
@@ -765,21 +777,30 @@ def fit_transfer_function(
         for fitted, tau in delays:
             k = (m + 1) + n + (1 if fitted else 0)
             if not forced and k >= eqs:
-                rows.append(OrderCandidate(m, n, fitted, k, math.nan, math.inf, math.inf, error="k >= equations"))
+                rows.append(
+                    OrderCandidate(m, n, fitted, k, math.nan, math.inf, math.inf, error="k >= equations")
+                )
                 fits.append(None)
                 continue
             try:
                 f = _fit_one(points, s, m, n, fitted, tau)
             except (np.linalg.LinAlgError, ValueError, OverflowError, FloatingPointError) as exc:
-                rows.append(OrderCandidate(m, n, fitted, k, math.nan, math.inf, math.inf, error=str(exc)[:60]))
+                rows.append(
+                    OrderCandidate(m, n, fitted, k, math.nan, math.inf, math.inf, error=str(exc)[:60])
+                )
                 fits.append(None)
                 continue
             aicc, bic = _criteria(f.chi2, k, eqs, points.weighted)
             den = _Model(m, n, fitted, tau).den_coeffs(f.theta)
             unpinned = bool(_resonance_warnings(np.real(den), points.omega / w0))
-            rows.append(OrderCandidate(m, n, fitted, k, f.chi2, aicc, bic, error=UNPINNED if unpinned else ""))
+            rows.append(
+                OrderCandidate(m, n, fitted, k, f.chi2, aicc, bic, error=UNPINNED if unpinned else "")
+            )
             fits.append(f)
-    key = [(r.aicc if criterion == "aicc" else r.bic) if fits[i] is not None else math.inf for i, r in enumerate(rows)]
+    key = [
+        (r.aicc if criterion == "aicc" else r.bic) if fits[i] is not None else math.inf
+        for i, r in enumerate(rows)
+    ]
     if forced:
         best = 0 if fits[0] is not None else -1
     else:
@@ -823,8 +844,10 @@ def _shapes(order: Union[None, int, tuple[int, int]], max_order: int) -> list[tu
         if not 0 <= order <= 8:
             raise bad()
         return [(m, int(order)) for m in range(int(order) + 1)]
-    if isinstance(order, Sequence) and len(order) == 2 and all(
-        isinstance(v, (int, np.integer)) and not isinstance(v, bool) for v in order
+    if (
+        isinstance(order, Sequence)
+        and len(order) == 2
+        and all(isinstance(v, (int, np.integer)) and not isinstance(v, bool) for v in order)
     ):
         m, n = int(order[0]), int(order[1])
         if not 0 <= m <= n <= 8:
@@ -852,14 +875,18 @@ def _explain(rows: list[OrderCandidate], key: list[float], best: int, criterion:
         )
     else:
         head = f"{what}: lowest {name} of {len(finite)} candidates"
-    runner_key, runner_i = next((k, i) for k, i in others if rows[i].error != UNPINNED) if any(
-        rows[i].error != UNPINNED for _, i in others) else others[0]
+    runner_key, runner_i = (
+        next((k, i) for k, i in others if rows[i].error != UNPINNED)
+        if any(rows[i].error != UNPINNED for _, i in others)
+        else others[0]
+    )
     runner = rows[runner_i]
     gap = runner_key - key[best]
     strength = "decisive" if gap > 10 else ("strong" if gap > 6 else ("positive" if gap > 2 else "weak"))
     text = (
         f"{head}; the next (m = {runner.m}, n = {runner.n}, delay {'fitted' if runner.delay else 'none'}) is "
-        f"{gap:.3g} {'higher' if gap >= 0 else 'lower'} ({strength if gap >= 0 else 'but has more parameters'})"
+        f"{gap:.3g} {'higher' if gap >= 0 else 'lower'} "
+        f"({strength if gap >= 0 else 'but has more parameters'})"
     )
     if set_aside:
         text += f"; {set_aside} candidate(s) set aside: a resonance no point pins down"
@@ -877,7 +904,7 @@ def _finish(
     confidence: float,
     eqs: int,
 ) -> TransferFunctionFit:
-    from scipy.stats import chi2 as chi2_dist
+    from scipy.stats import chi2 as chi2_dist  # type: ignore[import-untyped]
 
     fixed_tau = 0.0 if f.delay else next(t for d, t in delays if not d)
     model = _Model(f.m, f.n, f.delay, fixed_tau)
@@ -887,6 +914,7 @@ def _finish(
     theta_cov = np.linalg.pinv(info)
     if not points.weighted and dof > 0:
         theta_cov = theta_cov * (f.chi2 / dof)  # variance of the relative errors, from their scatter
+
     # Reported parameters (unscaled num, den after its leading 1, delay) and their covariance by the
     # delta method; the map is holomorphic in theta, so a complex step gives its Jacobian exactly.
     def reported(theta: Any) -> Any:
@@ -912,9 +940,14 @@ def _finish(
     den = np.concatenate([[1.0], values[f.m + 1 : f.m + 1 + f.n]])
     tau = float(values[-1]) if f.delay else fixed_tau / w0
     tf = TransferFunction(num, den, tau)
-    names = tuple([f"b{i}" for i in range(f.m + 1)] + [f"a{i}" for i in range(1, f.n + 1)]
-                  + (["delay"] if f.delay else []))
-    residuals = _whiten(points, model.response(f.theta, 1j * points.omega / w0) - points.g)
+    names = tuple(
+        [f"b{i}" for i in range(f.m + 1)]
+        + [f"a{i}" for i in range(1, f.n + 1)]
+        + (["delay"] if f.delay else [])
+    )
+    residuals = _whiten(
+        points, model.response(f.theta, np.asarray(1j * points.omega / w0, dtype=np.complex128)) - points.g
+    )
     p_value = float(chi2_dist.sf(f.chi2, dof)) if points.weighted and dof > 0 else None
 
     found: list[str] = []
@@ -975,9 +1008,7 @@ def _resonance_warnings(den: FloatArray, omega: FloatArray) -> list[str]:
         lo, hi = wn * (1.0 - zeta), wn * (1.0 + zeta)
         if np.any((omega >= lo) & (omega <= hi)):
             continue
-        where = (
-            "between two tested frequencies" if omega[0] < wn < omega[-1] else "outside the tested band"
-        )
+        where = "between two tested frequencies" if omega[0] < wn < omega[-1] else "outside the tested band"
         out.append(
             f"a resonance at {wn:.4g} rad/s (damping {zeta:.3g}) lies {where}, with no point in its "
             f"half-power band [{lo:.4g}, {hi:.4g}] rad/s: its peak is not pinned down; test a frequency there"
