@@ -118,8 +118,8 @@ class OrderCandidate:
 class FrequencyPrediction:
     """``G(j omega)`` predicted by a fitted transfer function, with delta-method standard errors.
 
-    ``phase`` follows the paper, ``phi = -angle G``, unwrapped along ``omega`` (as
-    :meth:`TransferFunction.gain_phase`).  ``covariance[k]`` is the 2x2 covariance of
+    ``phase`` follows the paper, ``phi = -angle G``, in [0, 2 pi) as the result's phases (an interval
+    near 0 or 2 pi is meant modulo 2 pi).  ``covariance[k]`` is the 2x2 covariance of
     ``(Re G, Im G)`` at ``omega[k]``; the intervals are ``+- z se`` at ``confidence``.
     """
 
@@ -257,9 +257,7 @@ class TransferFunctionFit:
             cp = jp @ c @ jp.T
             gain_se[k] = math.sqrt(max(cp[0, 0], 0.0))
             phase_se[k] = math.sqrt(max(cp[1, 1], 0.0))
-        order = np.argsort(w)
-        phase = np.empty(w.size)
-        phase[order] = -np.unwrap(np.angle(g[order]))
+        phase = np.mod(-np.angle(g), 2.0 * np.pi)  # as the result's phases: in [0, 2 pi)
         return FrequencyPrediction(
             omega=w,
             response=g,
