@@ -23,7 +23,7 @@ if TYPE_CHECKING:  # pragma: no cover - typing only
     from .model import TransferFunction
     from .result import IdentificationResult
 
-__all__ = ["to_frd", "to_control", "from_control"]
+__all__ = ["to_frd", "to_control", "tf_coefficients"]
 
 #: Highest Pade order accepted: beyond it ``control.pade``'s coefficients lose every digit.
 MAX_PADE_ORDER = 10
@@ -100,26 +100,18 @@ def to_control(tf: TransferFunction, pade_order: Optional[int] = None) -> Any:
     return rational * control.tf(num, den)
 
 
-def from_control(sys: Any, delay: float = 0.0) -> TransferFunction:
-    """A :class:`TransferFunction` from a SISO, continuous-time ``control`` system (tf or ss).
+def tf_coefficients(sys: Any) -> tuple[np.ndarray, np.ndarray]:
+    """``(num, den)`` (highest power first) of a SISO, continuous-time ``control`` system (tf or ss).
 
-    Parameters
-    ----------
-    sys : control.TransferFunction or control.StateSpace
-        Stable and proper (checked by :class:`TransferFunction`).
-    delay : float
-        Pure delay in seconds to attach (python-control systems carry none).
+    :meth:`TransferFunction.from_control <bouc_wen_id.model.TransferFunction.from_control>` builds the
+    library's transfer function from them (and checks it is proper and stable).
 
     Raises
     ------
     InvalidParameterError
-        Not a control LTI system, not SISO, or discrete time.
-    UnstableSystemError, ImproperTransferFunctionError
-        From :class:`TransferFunction`'s own checks.
+        Not a control LTI system (or an FRD), not SISO, or discrete time.
     """
     control = _control()
-    from .model import TransferFunction
-
     if not isinstance(sys, control.LTI) or isinstance(sys, control.FRD):
         raise InvalidParameterError(
             f"from_control needs a control.TransferFunction or StateSpace, got {type(sys).__name__}"
@@ -129,4 +121,4 @@ def from_control(sys: Any, delay: float = 0.0) -> TransferFunction:
     if sys.dt not in (0, None):
         raise InvalidParameterError(f"only continuous-time systems convert, got dt = {sys.dt}")
     num, den = control.tfdata(sys)
-    return TransferFunction(np.asarray(num[0][0], dtype=float), np.asarray(den[0][0], dtype=float), delay)
+    return np.asarray(num[0][0], dtype=float), np.asarray(den[0][0], dtype=float)

@@ -136,10 +136,15 @@ class TransferFunction:
 
     @classmethod
     def from_control(cls, sys: Any, delay: float = 0.0) -> TransferFunction:
-        """From a SISO continuous-time ``control`` system, with an optional delay (s)."""
-        from .interop import from_control
+        """From a SISO continuous-time ``control`` tf or ss, with an optional delay (s).
 
-        return from_control(sys, delay)
+        Raises InvalidParameterError (not SISO, discrete time, not a control system), and this class's
+        own errors (UnstableSystemError, ImproperTransferFunctionError).
+        """
+        from .interop import tf_coefficients
+
+        num, den = tf_coefficients(sys)
+        return cls(num, den, delay)
 
 
 @dataclass(frozen=True)
