@@ -496,8 +496,10 @@ def _points(
         g = result.frequency_response
         gains = result.gains
         cov: Optional[FloatArray] = None
-        if result.covariance is not None:
-            full = np.asarray(result.covariance, dtype=np.float64)
+        full = None if result.covariance is None else np.asarray(result.covariance, dtype=np.float64)
+        # The plain refined layout [beta, gamma, mu, |G_0|, phi_0, ...]; any other (a model with terms)
+        # falls back to the per-experiment standard errors.
+        if full is not None and full.shape == (3 + 2 * w.size, 3 + 2 * w.size):
             cov = np.stack([full[3 + 2 * i : 5 + 2 * i, 3 + 2 * i : 5 + 2 * i] for i in range(w.size)])
         elif all(e.gain_se is not None and e.phase_se is not None for e in result.experiments):
             var = np.array([[e.gain_se or 0.0, e.phase_se or 0.0] for e in result.experiments]) ** 2
