@@ -104,3 +104,10 @@ __all__ += ["budget", "BudgetExceededError"]
 from .planning import ExperimentPlan, PlannedExperiment, plan_experiment  # noqa: E402
 
 __all__ += ["plan_experiment", "ExperimentPlan", "PlannedExperiment"]
+
+# Issue #11 parts 1-2: G(s) from the points (scipy.optimize imported only when fitting); python-control
+# interop lives in bouc_wen_id.interop and imports control lazily.
+from . import interop  # noqa: E402
+from .tfit import FrequencyPrediction, TransferFunctionFit, fit_transfer_function  # noqa: E402
+
+__all__ += ["interop", "fit_transfer_function", "TransferFunctionFit", "FrequencyPrediction"]

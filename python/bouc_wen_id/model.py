@@ -126,6 +126,26 @@ class TransferFunction:
     def __repr__(self) -> str:
         return f"TransferFunction(num={self.num.tolist()}, den={self.den.tolist()}, delay={self.delay:g})"
 
+    # python-control interop (bouc_wen_id.interop; needs the optional "control" extra).
+    def to_control(self, pade_order: Optional[int] = None) -> Any:
+        """This G as a ``control.TransferFunction``; a delay needs ``pade_order`` (see
+        :func:`bouc_wen_id.interop.to_control`)."""
+        from .interop import to_control
+
+        return to_control(self, pade_order)
+
+    @classmethod
+    def from_control(cls, sys: Any, delay: float = 0.0) -> TransferFunction:
+        """From a SISO continuous-time ``control`` tf or ss, with an optional delay (s).
+
+        Raises InvalidParameterError (not SISO, discrete time, not a control system), and this class's
+        own errors (UnstableSystemError, ImproperTransferFunctionError).
+        """
+        from .interop import tf_coefficients
+
+        num, den = tf_coefficients(sys)
+        return cls(num, den, delay)
+
 
 @dataclass(frozen=True)
 class BoucWen:

@@ -23,6 +23,8 @@ if TYPE_CHECKING:  # pragma: no cover - typing only
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
+    from .tfit import TransferFunctionFit
+
 __all__ = [
     "IdentificationResult",
     "ExperimentEstimate",
@@ -377,6 +379,19 @@ class IdentificationResult:
         from .plotting import plot_bode
 
         return plot_bode(self, axes=axes)
+
+    # Issue #11 parts 1-2: a parametric G(s) from the points, and the points for python-control.
+    def fit_transfer_function(self, **options: Any) -> TransferFunctionFit:
+        """A stable, proper G(s) fitted to these points (:func:`bouc_wen_id.tfit.fit_transfer_function`)."""
+        from .tfit import fit_transfer_function
+
+        return fit_transfer_function(self, **options)
+
+    def to_frd(self) -> Any:
+        """The points as a ``control.FRD`` (:func:`bouc_wen_id.interop.to_frd`; needs the control extra)."""
+        from .interop import to_frd
+
+        return to_frd(self)
 
 
 def _rel(est: float, true: float) -> str:
