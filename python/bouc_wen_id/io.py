@@ -1130,7 +1130,8 @@ def _stated_rate(props: Mapping[str, Any], where: str, what: str) -> Optional[fl
             v = _plain(props[key])
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
                 raise FileFormatError(
-                    f"{where}: {what} attribute {key!r} = {props[key]!r} is not a positive "
+                    f"{where}: {what} attribute {key!r} = {props[key] if v is None else v!r} is not a "
+                    "positive "
                     f"{'step (s)' if is_step else 'rate (Hz)'}"
                 )
             return 1.0 / float(v) if is_step else float(v)
@@ -1144,7 +1145,7 @@ def _file_rate(
     rates = {}
     for role, ch in picked.items():
         if role != "t":
-            r = _stated_rate(ch.props, where, f"channel {ch.path!r}:")
+            r = _stated_rate(ch.props, where, f"{ch.path!r}:")
             if r is not None:
                 rates[ch.path] = r
     if rates:
@@ -1279,6 +1280,12 @@ def _container_items(
         if not any(cols.get(role, role) in g.channels for role in ("u", "y")):
             continue  # a group of other channels (settings, temperatures, ...)
         at = f"{where}, group {g.path!r}" if g.path else where
+        for role in ("u", "y"):
+            if cols.get(role, role) not in g.channels:
+                raise FileFormatError(
+                    f"{at}: no {what} {cols.get(role, role)!r} (for {role!r}); the group has "
+                    f"{', '.join(map(repr, names))}; map yours with columns={{{role!r}: ...}}"
+                )
         picked = {role: g.channels[names[j]] for role, j in _pick(names, cols, at, what).items()}
         out.append(_container_item(g, picked, chain, at, g.path.split("/")[-1] or stem, rate, what))
     if not out:
