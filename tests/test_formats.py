@@ -509,3 +509,19 @@ def test_a_missing_optional_package_says_which_extra_installs_it(
     monkeypatch.setitem(sys.modules, module, None)  # import now fails, as if not installed
     with pytest.raises(ImportError, match=rf"pip install 'bouc_wen_id\[{extra}\]'"):
         call(tmp_path)
+
+
+@pytest.mark.parametrize("suffix", [".tdms", ".h5"])
+def test_channel_sizes_are_checked_against_the_budget_before_reading(
+    tmp_path: Path, suffix: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    path = FORMATS[suffix](tmp_path / f"big{suffix}", _good(), RATE_PROPS)
+    reads: list[str] = []
+    original = io._array
+    monkeypatch.setattr(
+        io, "_array", lambda where, key, value: (reads.append(key), original(where, key, value))[1]
+    )
+    with bw.budget.budget(max_samples=399), pytest.raises(bw.BudgetExceededError) as info:
+        bw.load(path)
+    assert str(path) in str(info.value) and reads == []  # refused from the sizes the file declares
+    assert len(bw.load(path)[0]) == 400 and reads
