@@ -57,13 +57,22 @@ def recordings() -> list[bw.Recording]:
     return bw.simulate(bw.demo_plant(), plan)
 
 
+def _measurements(items: list[io.Item]) -> list[bw.Measurement]:
+    """The items, each checked to be a Measurement (lab data: no header)."""
+    out = [m for m in items if isinstance(m, bw.Measurement)]
+    assert len(out) == len(items), items
+    return out
+
+
 def _assert_same(a: io.Item, b: io.Item) -> None:
     assert type(a) is type(b)
     for name in ("t", "u", "y", "x", "w"):
         va, vb = getattr(a, name, None), getattr(b, name, None)
         assert (va is None) == (vb is None), name
         if va is not None:
-            assert np.array_equal(va, vb), name  # float64 channels: written and read bit for bit
+            assert vb is not None and np.array_equal(va, vb), (
+                name
+            )  # float64 channels: written and read bit for bit
     if isinstance(a, bw.Measurement) and isinstance(b, bw.Measurement):
         assert (a.name, a.nominal_frequency) == (b.name, b.nominal_frequency)
         assert dict(a.units) == dict(b.units) and dict(a.channels) == dict(b.channels)
@@ -147,7 +156,7 @@ def test_folders_include_tdms_and_hdf5(tmp_path: Path, recordings: list[bw.Recor
     bw.save(tmp_path / "a.tdms", recordings[:1])
     bw.save(tmp_path / "b.h5", recordings[1:])
     bw.save(tmp_path / "c.csv", recordings[0])
-    assert [r.frequency for r in bw.load(tmp_path)] == [2.0, 5.0, 2.0]
+    assert [r.frequency for r in bw.load_recordings(tmp_path)] == [2.0, 5.0, 2.0]
 
 
 # --------------------------------------------------------------------------------------------------
@@ -157,7 +166,7 @@ def test_folders_include_tdms_and_hdf5(tmp_path: Path, recordings: list[bw.Recor
 
 def test_tdms_lab_file_reads_each_group_with_the_mapped_channels(tmp_path: Path) -> None:
     path = _lab_tdms(tmp_path / "lab.tdms")
-    runs = bw.load(path, columns={"u": "Disp", "y": "Force"})
+    runs = _measurements(bw.load(path, columns={"u": "Disp", "y": "Force"}))
     assert [m.name for m in runs] == ["Run 1", "Run 2"]  # the Environment group holds neither: skipped
     first, second = runs
     assert isinstance(first, bw.Measurement) and isinstance(second, bw.Measurement)
@@ -184,10 +193,10 @@ def test_tdms_time_channel_and_sample_rate_argument(tmp_path: Path) -> None:
     u, y = _lab_signals()
     t = 5.0 + np.arange(u.size) / RATE
     path = _write_tdms(tmp_path / "t.tdms", {"g": {"time": (t, {}), "u": (u, {}), "y": (y, {})}})
-    (m,) = bw.load(path, columns={"t": "time"})
+    (m,) = _measurements(bw.load(path, columns={"t": "time"}))
     assert np.array_equal(m.t, t) and m.channels["t"] == "time"
     bare = _write_tdms(tmp_path / "bare.tdms", {"g": {"u": (u, {}), "y": (y, {})}})
-    (m,) = bw.load(bare, sample_rate=250.0)
+    (m,) = _measurements(bw.load(bare, sample_rate=250.0))
     assert m.sample_rate == pytest.approx(250.0)
     with pytest.raises(FileFormatError, match="disagrees"):
         bw.load(_lab_tdms(tmp_path / "lab.tdms"), columns={"u": "Disp", "y": "Force"}, sample_rate=999.0)
@@ -219,7 +228,7 @@ def test_hdf5_groups_time_dataset_and_paths(tmp_path: Path) -> None:
         {"runs/a/t": t, "runs/a/u": u, "runs/a/y": y, "runs/b/u": u, "runs/b/y": 2 * y, "info/gain": [1.0]},
         {"runs/b": {"dt": 2.0 / RATE, "operator": "C"}},
     )
-    a, b = bw.load(path)
+    a, b = _measurements(bw.load(path))
     assert (a.name, b.name) == ("a", "b") and np.array_equal(a.t, t)
     assert b.sample_rate == pytest.approx(RATE / 2) and b.metadata == {"operator": "C"}
     (only,) = bw.load(path, columns={"u": "/runs/b/u", "y": "runs/b/y"})
@@ -469,6 +478,7 @@ def test_result_to_dataframe(recordings: list[bw.Recording]) -> None:
     z = bw.validation.z_value(result.confidence)
     for i, e in enumerate(result.experiments):
         assert df.loc[i, "gain_se"] == e.gain_se and df.loc[i, "offset"] == e.offset
+        assert e.gain_se is not None
         assert df.loc[i, "gain_high"] - df.loc[i, "gain_low"] == pytest.approx(2 * z * e.gain_se)
     assert result.truth is not None
     np.testing.assert_array_equal(df["gain_true"], result.truth.gain)
@@ -518,10 +528,13 @@ def test_channel_sizes_are_checked_against_the_budget_before_reading(
     path = FORMATS[suffix](tmp_path / f"big{suffix}", _good(), RATE_PROPS)
     reads: list[str] = []
     original = io._array
-    monkeypatch.setattr(
-        io, "_array", lambda where, key, value: (reads.append(key), original(where, key, value))[1]
-    )
+
+    def counted(where: str, key: str, value: Any) -> Any:
+        reads.append(key)
+        return original(where, key, value)
+
+    monkeypatch.setattr(io, "_array", counted)
     with bw.budget.budget(max_samples=399), pytest.raises(bw.BudgetExceededError) as info:
         bw.load(path)
     assert str(path) in str(info.value) and reads == []  # refused from the sizes the file declares
-    assert len(bw.load(path)[0]) == 400 and reads
+    assert len(bw.load(path)[0].u) == 400 and reads
