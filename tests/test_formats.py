@@ -189,6 +189,16 @@ def test_tdms_group_channel_path_pins_one_experiment(tmp_path: Path) -> None:
     assert np.array_equal(m.y, _lab_signals(seed=1)[1])
 
 
+def test_tdms_channel_names_with_a_slash_are_names_not_paths(tmp_path: Path) -> None:
+    u, y = _lab_signals()
+    wf = {"wf_increment": 1.0 / RATE}
+    path = _write_tdms(tmp_path / "s.tdms", {"g": {"Disp/mm": (u, wf), "Force/kN": (y, wf)}})
+    (m,) = _measurements(bw.load(path, columns={"u": "Disp/mm", "y": "Force/kN"}))
+    assert np.array_equal(m.y, y) and dict(m.channels) == {"u": "Disp/mm", "y": "Force/kN"}
+    (same,) = bw.load(path, columns={"u": "g/Disp/mm", "y": "g/Force/kN"})
+    assert np.array_equal(same.y, y)
+
+
 def test_tdms_time_channel_and_sample_rate_argument(tmp_path: Path) -> None:
     u, y = _lab_signals()
     t = 5.0 + np.arange(u.size) / RATE
@@ -439,6 +449,7 @@ def test_from_dataframe_leaves_the_frame_unchanged() -> None:
         ("lab", {"output": "note"}, InvalidParameterError, "y (column 'note') holds"),
         ("nan", {}, NonFiniteError, "y (column 'force') holds a non-finite value (nan) at index 5"),
         ("range", {}, InvalidParameterError, "RangeIndex"),
+        ("filtered", {}, InvalidParameterError, "integers (row numbers, a Index)"),
         ("lab", {"sample_rate": 10.0}, InvalidParameterError, "sample_rate= is for a frame indexed by row"),
         ("shuffled", {}, TimeAxisError, ""),
         ("nat", {"time": "when"}, NonFiniteError, "NaT"),
@@ -454,6 +465,7 @@ def test_from_dataframe_refuses_bad_frames(
         "lab": lab,
         "nan": lab.assign(force=np.where(np.arange(u.size) == 5, np.nan, y)),
         "range": lab.reset_index(drop=True),
+        "filtered": lab.reset_index(drop=True).drop(index=3),  # rows dropped: no longer a RangeIndex
         "shuffled": lab.iloc[::-1],
         "nat": lab.reset_index(drop=True).assign(when=pd.NaT),
         "dup": pd.concat([lab[["disp"]], lab[["force"]].rename(columns={"force": "disp"})], axis=1),

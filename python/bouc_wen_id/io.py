@@ -1109,7 +1109,7 @@ def _plain(value: Any) -> Any:
     """A property value as a Python scalar (bytes decoded, one-element arrays unwrapped); None if it is
     not a string, number or time stamp."""
     if isinstance(value, np.ndarray) and value.size == 1:
-        value = value.reshape(()).item() if value.dtype.kind != "M" else value.reshape(())
+        value = value.reshape(())[()]  # a numpy scalar (datetime64 kept as such)
     if isinstance(value, np.generic) and value.dtype.kind != "M":
         value = value.item()
     if isinstance(value, bytes):
@@ -1259,7 +1259,13 @@ def _container_items(
     )
     chain = [("the file's", root)]
     by_path = {ch.path: (g, ch) for g in groups for ch in g.channels.values()}
-    pinned = {role: str(col).strip("/") for role, col in cols.items() if "/" in str(col)}
+    # A "/" pins a group, unless the whole name is a channel's (e.g. a channel called "Force/kN").
+    names_anywhere = {name for g in groups for name in g.channels}
+    pinned = {
+        role: str(col).strip("/")
+        for role, col in cols.items()
+        if "/" in str(col) and str(col) not in names_anywhere
+    }
     if pinned:
         chosen = {}
         for role, path in pinned.items():

@@ -458,13 +458,14 @@ class Measurement:
             channels["t"] = str(time)
             if sample_rate is not None:
                 raise InvalidParameterError("give time= or sample_rate=, not both")
-        elif isinstance(df.index, pd.RangeIndex) or sample_rate is not None:
+        elif _row_numbers(pd, df.index) or sample_rate is not None:
             if sample_rate is None:
                 raise InvalidParameterError(
-                    "the frame's index is row numbers (a RangeIndex), not times: pass time=<column>, "
-                    "sample_rate=<Hz>, or index the frame by time (e.g. df.set_index('t'))"
+                    f"the frame's index holds integers (row numbers, a {type(df.index).__name__}), not "
+                    "times: pass time=<column>, sample_rate=<Hz>, or index the frame by time in seconds "
+                    "or datetimes (e.g. df.set_index('t'))"
                 )
-            if not isinstance(df.index, pd.RangeIndex):
+            if not _row_numbers(pd, df.index):
                 raise InvalidParameterError(
                     f"sample_rate= is for a frame indexed by row numbers; this one has a "
                     f"{type(df.index).__name__} of times: drop sample_rate or reset the index"
@@ -541,6 +542,14 @@ def _rate(sample_rate: object) -> float:
     if rate <= 0:
         raise InvalidParameterError(f"sample_rate = {rate} Hz must be > 0")
     return rate
+
+
+def _row_numbers(pd: Any, index: Any) -> bool:
+    """An index of integers: row numbers (a RangeIndex, or what is left of one after filtering rows), which
+    would silently read as a 1 Hz time axis."""
+    return isinstance(index, pd.RangeIndex) or (
+        pd.api.types.is_integer_dtype(index.dtype) and not isinstance(index, pd.MultiIndex)
+    )
 
 
 def _frame_series(df: Any, label: Hashable, role: str) -> Any:
