@@ -522,7 +522,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser(
         "identify",
-        help="identify from files (.csv, .npz, .mat) or folders: simulated recordings or lab measurements",
+        help="identify from files (.csv, .npz, .mat, .tdms, .h5) or folders: simulated recordings or lab "
+        "measurements",
         description="Identify from recordings (U and omega known) or lab measurements (any sampling rate: "
         "the input's frequency and amplitude are estimated, the steady stretches found and averaged).",
     )
@@ -532,7 +533,8 @@ def build_parser() -> argparse.ArgumentParser:
         nargs="+",
         default=None,
         metavar="ROLE=COLUMN",
-        help="which column is t, u, y (names or 0-based indices), e.g. --columns u=disp_mm y=force_N",
+        help="which column is t, u, y (names or 0-based indices; TDMS/HDF5: channel names or "
+        "group/channel paths), e.g. --columns u=disp_mm y=force_N",
     )
     p.add_argument(
         "--sample-rate", type=_real(positive=True), default=None, help="Hz, for files without a time column"
@@ -566,7 +568,11 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("paths", nargs="+", type=Path, help="files or folders of files")
     p.add_argument(
-        "--columns", nargs="+", default=None, metavar="ROLE=COLUMN", help="which column is t, u, y"
+        "--columns",
+        nargs="+",
+        default=None,
+        metavar="ROLE=COLUMN",
+        help="which column (TDMS/HDF5: channel, or group/channel) is t, u, y",
     )
     p.add_argument(
         "--sample-rate", type=_real(positive=True), default=None, help="Hz, for files without a time column"
@@ -779,6 +785,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     except KeyboardInterrupt:
         print("interrupted: nothing was written", file=sys.stderr)
         return 130
+    except ImportError as exc:  # an optional extra (pandas, npTDMS, h5py) is missing: the line says which
+        print(f"error: {type(exc).__name__}: {_one_line(str(exc))}", file=sys.stderr)
+        return 2
     except OSError as exc:
         print(f"error: {type(exc).__name__}: {_one_line(str(exc))}", file=sys.stderr)
         return 2

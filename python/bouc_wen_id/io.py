@@ -11,6 +11,10 @@ Three file formats, each holding either kind, documented in the README:
   JSON string holding the list of per-experiment headers (the CSV header as a JSON object).  A plain
   archive with arrays ``u``, ``y`` (``t``, or a scalar ``fs``/``sample_rate``) and an optional ``meta`` JSON
   object reads as one experiment.
+* **TDMS** (``.tdms``, NI, extra ``tdms``) and **HDF5** (``.h5``, ``.hdf5``, extra ``hdf5``): one
+  experiment per group holding the ``u`` and ``y`` channels (datasets), found by name or through
+  ``columns`` (see :func:`read_tdms`, :func:`read_hdf5`); the sampling rate from the channels' attributes
+  (``wf_increment``, ``sample_rate``, ...), a ``t`` channel or ``sample_rate=``.
 * **MAT** (``.mat``, MATLAB v5/v7 via :func:`scipy.io.loadmat`): variables ``t``, ``u``, ``y`` (or a scalar
   ``fs``/``sample_rate`` instead of ``t``) and ``meta``, a JSON string; or a bundle, a variable
   ``experiments`` holding a struct array (or a cell array of structs) with the same fields.
@@ -33,14 +37,17 @@ import os
 import re
 import struct
 import zlib
-from collections.abc import Iterable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
+from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 from typing import Any, Literal, Optional, Union
 
 import numpy as np
 from numpy.typing import NDArray
 
+from . import _optional
 from . import budget as _budget
 from .errors import BoucWenIdError, FileFormatError, InvalidParameterError, NonFiniteError
 from .measurement import RESERVED_KEYS, Measurement, check_metadata_key
@@ -59,6 +66,10 @@ __all__ = [
     "write_npz",
     "read_mat",
     "write_mat",
+    "read_tdms",
+    "write_tdms",
+    "read_hdf5",
+    "write_hdf5",
     "FORMAT",
     "MEASUREMENT_FORMAT",
     "VERSION",
@@ -76,7 +87,7 @@ FORMAT = "bouc_wen_id.recording"
 MEASUREMENT_FORMAT = "bouc_wen_id.measurement"
 VERSION = 1
 #: File suffixes the loaders read (case-insensitive); folders are scanned for these.
-SUFFIXES = (".csv", ".npz", ".mat")
+SUFFIXES = (".csv", ".npz", ".mat", ".tdms", ".h5", ".hdf5")
 #: Header keys of the recording format (every other key is metadata).
 _RESERVED = {"format", "version", "amplitude", "frequency", "settle_periods", "plant", "sample_rate"}
 #: Signals a file can hold, in column order.
@@ -1052,6 +1063,469 @@ def _read_mat_struct(
 
 
 # --------------------------------------------------------------------------------------------------
+# Lab containers: NI TDMS and HDF5 (optional extras ``tdms`` and ``hdf5``, imported on first use)
+# --------------------------------------------------------------------------------------------------
+
+#: Group property (TDMS) or attribute (HDF5) holding an experiment's header as JSON (what :func:`write_tdms`
+#: and :func:`write_hdf5` write); a group without it is read as lab data.
+HEADER_KEY = "bouc_wen_id"
+#: Channel, group or file attributes that state the sampling rate in Hz ...
+RATE_ATTRS = ("sample_rate", "sampling_rate", "fs")
+#: ... or the sampling step in s (``wf_increment``: the step of an NI waveform channel).
+STEP_ATTRS = ("wf_increment", "dt")
+#: Channel attributes holding the channel's unit (``unit_string``: NI's).
+UNIT_ATTRS = ("unit_string", "units", "unit")
+#: Lab group properties that may set a header key (the others among RESERVED_KEYS would change the kind
+#: of experiment or clash with what the file states elsewhere, so they are left out).
+_LAB_HEADER_KEYS = ("nominal_frequency", "nominal_frequency_hz")
+#: HDF5 groups nested deeper than this are not searched (hard links can make cycles).
+_HDF5_MAX_DEPTH = 8
+#: Relative disagreement allowed between two stated sampling rates (they are copies of one number).
+_STATED_RTOL = 1e-9
+
+
+@dataclass(frozen=True)
+class _Channel:
+    """One channel of a lab container, read only when needed."""
+
+    name: str
+    #: ``group/channel`` (TDMS) or the dataset's path without its leading ``/`` (HDF5).
+    path: str
+    size: int
+    props: Mapping[str, Any]
+    read: Callable[[], Any]
+
+
+@dataclass(frozen=True)
+class _Group:
+    """A TDMS group or an HDF5 group (``path`` '' for the HDF5 root) and its channels by name."""
+
+    path: str
+    props: Mapping[str, Any]
+    channels: Mapping[str, _Channel]
+
+
+def _plain(value: Any) -> Any:
+    """A property value as a Python scalar (bytes decoded, one-element arrays unwrapped); None if it is
+    not a string, number or time stamp."""
+    if isinstance(value, np.ndarray) and value.size == 1:
+        value = value.reshape(())[()]  # a numpy scalar (datetime64 kept as such)
+    if isinstance(value, np.generic) and value.dtype.kind != "M":
+        value = value.item()
+    if isinstance(value, bytes):
+        return value.decode("utf-8", "replace")
+    if isinstance(value, np.datetime64):
+        return str(value)
+    if isinstance(value, (str, int, float)) and not isinstance(value, bool):
+        return value
+    return None
+
+
+def _stated_rate(props: Mapping[str, Any], where: str, what: str) -> Optional[float]:
+    """The sampling rate (Hz) that ``props`` state, if any."""
+    for keys, is_step in ((RATE_ATTRS, False), (STEP_ATTRS, True)):
+        for key in keys:
+            if key not in props:
+                continue
+            v = _plain(props[key])
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
+                raise FileFormatError(
+                    f"{where}: {what} attribute {key!r} = {props[key] if v is None else v!r} is not a "
+                    "positive "
+                    f"{'step (s)' if is_step else 'rate (Hz)'}"
+                )
+            return 1.0 / float(v) if is_step else float(v)
+    return None
+
+
+def _file_rate(
+    picked: Mapping[str, _Channel], chain: Sequence[tuple[str, Mapping[str, Any]]], where: str
+) -> Optional[float]:
+    """The rate the channels state (they must agree), else the first their group or the file states."""
+    rates = {}
+    for role, ch in picked.items():
+        if role != "t":
+            r = _stated_rate(ch.props, where, f"{ch.path!r}:")
+            if r is not None:
+                rates[ch.path] = r
+    if rates:
+        lo, hi = min(rates.values()), max(rates.values())
+        if hi - lo > _STATED_RTOL * hi:
+            shown = ", ".join(f"{k} {v:.9g} Hz" for k, v in rates.items())
+            raise FileFormatError(f"{where}: the channels are sampled at different rates ({shown})")
+        return hi
+    for what, props in chain:
+        r = _stated_rate(props, where, what)
+        if r is not None:
+            return r
+    return None
+
+
+def _group_header(group: _Group, picked: Mapping[str, _Channel], where: str) -> dict[str, Any]:
+    """The header this library wrote (HEADER_KEY), or one made of a lab group's properties and units."""
+    if HEADER_KEY in group.props:
+        text = _plain(group.props[HEADER_KEY])
+        if not isinstance(text, str):
+            raise FileFormatError(f"{where}: property {HEADER_KEY!r} must be a JSON string")
+        head = _parse_json(text, where, f"property {HEADER_KEY!r}")
+        if not isinstance(head, dict):
+            raise FileFormatError(
+                f"{where}: property {HEADER_KEY!r} must hold a JSON object, not {type(head).__name__}"
+            )
+        return head
+    head = {}
+    for key, raw in group.props.items():
+        value = _plain(raw)
+        if value is None or (key in RESERVED_KEYS and key not in _LAB_HEADER_KEYS):
+            continue
+        if key in STEP_ATTRS or key in RATE_ATTRS:
+            continue
+        try:
+            check_metadata_key(key)
+        except InvalidParameterError:
+            continue  # a property name no header line can carry: not kept
+        head[key] = value
+    units = {}
+    for role in ("u", "y"):
+        ch = picked.get(role)
+        unit = next((_plain(ch.props[k]) for k in UNIT_ATTRS if ch and k in ch.props), None)
+        if isinstance(unit, str) and unit:
+            units[role] = unit
+    if units:
+        head["units"] = units
+    start = picked["u"].props.get("wf_start_time") if "u" in picked else None
+    if start is not None and _plain(start) is not None and "start_time" not in head:
+        head["start_time"] = str(_plain(start))
+    return head
+
+
+def _container_item(
+    group: _Group,
+    picked: Mapping[str, _Channel],
+    chain: Sequence[tuple[str, Mapping[str, Any]]],
+    where: str,
+    default_name: str,
+    rate: Optional[float],
+    what: str,
+) -> Item:
+    """One experiment from the channels ``picked`` (role -> channel), sizes checked before reading."""
+    for ch in picked.values():
+        _budget.check_samples(f"{where}: {what} {ch.path!r}", ch.size)
+    _budget.check_bytes(f"{where}: the signals", 8 * sum(ch.size for ch in picked.values()))
+    arrays = {}
+    for role, ch in picked.items():
+        try:
+            raw = ch.read()
+        except BoucWenIdError:
+            raise
+        except Exception as exc:  # noqa: BLE001 - any decoder failure of an untrusted file is a format error
+            raise FileFormatError(
+                f"{where}: {what} {ch.path!r} cannot be read ({type(exc).__name__}: {exc})"
+            ) from exc
+        arrays[role] = _array(where, ch.path, raw)
+    head = _group_header(group, picked, where)
+    stated = _file_rate(picked, [(f"group {group.path!r}:", group.props), *chain], where)
+    if stated is not None and head.get("sample_rate") is None:
+        head["sample_rate"] = stated
+    if "t" not in arrays and head.get("sample_rate") is None and rate is None:
+        raise FileFormatError(
+            f"{where}: no sample rate: no time {what} 't' and no attribute "
+            f"{', '.join(map(repr, RATE_ATTRS + STEP_ATTRS))} on the channels, their group or the file; "
+            f"map a time {what} with columns={{'t': ...}} or pass sample_rate= (Hz)"
+        )
+    sources = {role: ch.name for role, ch in picked.items() if ch.name != role}
+    return _build(head, arrays, where, default_name=default_name, sample_rate=rate, sources=sources)
+
+
+def _container_items(
+    groups: Sequence[_Group],
+    root: Mapping[str, Any],
+    cols: Mapping[str, Union[str, int]],
+    where: str,
+    stem: str,
+    rate: Optional[float],
+    what: str,
+) -> list[Item]:
+    """The experiments of a TDMS or HDF5 file: one per group holding the ``u`` and ``y`` channels (their
+    own names or those ``cols`` maps), or the one that ``cols`` pins with ``group/channel`` paths."""
+    for role, col in cols.items():
+        if isinstance(col, int):
+            raise FileFormatError(
+                f"{where}: columns[{role!r}] = {col}: column indices apply to CSV files; name the {what} "
+                f"(or 'group/{what}')"
+            )
+    listing = "; ".join(
+        f"{g.path or '/'}: {', '.join(map(repr, g.channels)) or 'no ' + what + 's'}" for g in groups
+    )
+    chain = [("the file's", root)]
+    by_path = {ch.path: (g, ch) for g in groups for ch in g.channels.values()}
+    # A "/" pins a group, unless the whole name is a channel's (e.g. a channel called "Force/kN").
+    names_anywhere = {name for g in groups for name in g.channels}
+    pinned = {
+        role: str(col).strip("/")
+        for role, col in cols.items()
+        if "/" in str(col) and str(col) not in names_anywhere
+    }
+    if pinned:
+        chosen = {}
+        for role, path in pinned.items():
+            if path not in by_path:
+                raise FileFormatError(f"{where}: no {what} {path!r} (for {role!r}); the file has {listing}")
+            chosen[role] = by_path[path]
+        home = (chosen["u"] if "u" in chosen else next(iter(chosen.values())))[0]
+        at = f"{where}, group {home.path!r}" if home.path else where
+        rest = {role: col for role, col in cols.items() if role not in pinned}
+        names = list(home.channels)
+        picked = {role: home.channels[names[j]] for role, j in _pick(names, rest, at, what).items()}
+        picked = {r: c for r, c in picked.items() if c.path not in pinned.values()}
+        picked.update({role: ch for role, (_, ch) in chosen.items()})
+        return [_container_item(home, picked, chain, at, home.path.split("/")[-1] or stem, rate, what)]
+    out: list[Item] = []
+    for g in groups:
+        names = list(g.channels)
+        if not any(cols.get(role, role) in g.channels for role in ("u", "y")):
+            continue  # a group of other channels (settings, temperatures, ...)
+        at = f"{where}, group {g.path!r}" if g.path else where
+        for role in ("u", "y"):
+            if cols.get(role, role) not in g.channels:
+                raise FileFormatError(
+                    f"{at}: no {what} {cols.get(role, role)!r} (for {role!r}); the group has "
+                    f"{', '.join(map(repr, names))}; map yours with columns={{{role!r}: ...}}"
+                )
+        picked = {role: g.channels[names[j]] for role, j in _pick(names, cols, at, what).items()}
+        out.append(_container_item(g, picked, chain, at, g.path.split("/")[-1] or stem, rate, what))
+    if not out:
+        u, y = cols.get("u", "u"), cols.get("y", "y")
+        raise FileFormatError(
+            f"{where}: no group holds the {what}s {u!r} (u) and {y!r} (y); the file has "
+            f"{listing or 'nothing'}; "
+            f"map yours with columns={{'u': ..., 'y': ...}} ({what} names, or 'group/{what}' paths)"
+        )
+    return out
+
+
+class _LogRecords:
+    """Collects the warnings a library logs (npTDMS reports truncated files only through its logger)."""
+
+    def __init__(self, name: str) -> None:
+        import logging
+
+        self.messages: list[str] = []
+        records = self.messages
+
+        class Handler(logging.Handler):
+            def emit(self, record: logging.LogRecord) -> None:
+                records.append(record.getMessage())
+
+        self._logger = logging.getLogger(name)
+        self._handler = Handler(logging.WARNING)
+
+    def __enter__(self) -> list[str]:
+        self._logger.addHandler(self._handler)
+        return self.messages
+
+    def __exit__(self, *exc: object) -> None:
+        self._logger.removeHandler(self._handler)
+
+
+def read_tdms(
+    path: PathLike, *, columns: Optional[ColumnMap] = None, sample_rate: Optional[float] = None
+) -> list[Item]:
+    """Read the experiments of an NI TDMS file (needs the ``tdms`` extra: npTDMS).
+
+    Every group holding the channels ``u`` and ``y`` (their own names, or those ``columns`` maps, e.g.
+    ``{"u": "Displacement", "y": "Force"}``) is one experiment, named after the group; groups holding
+    neither are skipped.  A ``"group/channel"`` path in ``columns`` reads that one experiment.  The time
+    axis is the ``t`` channel when there is one, else ``t = k / rate`` with the rate from the channels'
+    ``wf_increment`` (NI waveforms; ``dt``, ``sample_rate``, ``sampling_rate`` or ``fs`` also read, on the
+    channels, their group or the file) or ``sample_rate=``.  Units come from the channels'
+    ``unit_string``; ``wf_start_time`` and the group's scalar properties go into the metadata.  A group
+    written by :func:`write_tdms` carries its header (property ``bouc_wen_id``) and reads back as written.
+    """
+    nptdms = _optional.require("nptdms", "reading .tdms files")
+    cols = _check_columns(columns)
+    rate = _check_rate(sample_rate)
+    p = Path(path)
+    where = str(p)
+    _regular_file(p, "TDMS")
+    with _LogRecords("nptdms") as logged, open(p, "rb") as fh:
+        try:
+            tdms = nptdms.TdmsFile.open(fh)
+        except Exception as exc:  # noqa: BLE001 - any decoder failure of an untrusted file is a format error
+            raise FileFormatError(f"{where}: not a readable TDMS file ({type(exc).__name__}: {exc})") from exc
+
+        def truncated() -> FileFormatError:
+            return FileFormatError(f"{where}: the TDMS file is truncated or corrupt (npTDMS: {logged[0]})")
+
+        with tdms:
+            if logged:
+                raise truncated()
+            groups = [
+                _Group(
+                    g.name,
+                    dict(g.properties),
+                    {
+                        c.name: _Channel(
+                            c.name, f"{g.name}/{c.name}", len(c), dict(c.properties), partial(_read_all, c)
+                        )
+                        for c in g.channels()
+                    },
+                )
+                for g in tdms.groups()
+            ]
+            try:
+                items = _container_items(groups, dict(tdms.properties), cols, where, p.stem, rate, "channel")
+            except BoucWenIdError as exc:
+                if logged:
+                    raise truncated() from exc
+                raise
+            if logged:
+                raise truncated()
+    return items
+
+
+def _read_all(channel: Any) -> Any:
+    return channel[:]
+
+
+def write_tdms(path: PathLike, items: Sequence[Item]) -> None:
+    """Write experiments to an NI TDMS file (needs the ``tdms`` extra): one group ``exp_<i>`` each, with
+    float64 channels ``t``, ``u``, ``y`` (``x``, ``w``), their ``wf_increment`` and ``unit_string``, and
+    the header as the group property ``bouc_wen_id`` (JSON)."""
+    nptdms = _optional.require("nptdms", "writing .tdms files")
+    seq = _items(items)
+    objects: list[Any] = [nptdms.RootObject({})]
+    for i, item in enumerate(seq):
+        group = f"exp_{i:03d}"
+        objects.append(nptdms.GroupObject(group, {HEADER_KEY: json.dumps(_header(item))}))
+        units = item.units if isinstance(item, Measurement) else {}
+        step = float(np.median(np.diff(item.t))) if item.t.size > 1 else None
+        for role in _ROLES:
+            data = getattr(item, role, None)
+            if data is None:
+                continue
+            props: dict[str, Any] = {}
+            if role == "t":
+                props["unit_string"] = "s"
+            else:
+                if step is not None:
+                    props["wf_increment"] = step
+                    props["wf_start_offset"] = float(item.t[0])
+                if role in units:
+                    props["unit_string"] = units[role]
+            objects.append(nptdms.ChannelObject(group, role, np.asarray(data, dtype=np.float64), props))
+    with nptdms.TdmsWriter(str(path)) as writer:
+        writer.write_segment(objects)
+
+
+def _hdf5_groups(h5py: Any, root: Any, where: str) -> list[_Group]:
+    """The root and every group below it (hard links only, to a bounded depth), with their datasets."""
+    out: list[_Group] = []
+
+    def visit(group: Any, prefix: str, depth: int) -> None:
+        channels: dict[str, _Channel] = {}
+        subgroups = []
+        for name in group:
+            link = group.get(name, getlink=True)
+            if not isinstance(link, h5py.HardLink):
+                continue  # soft and external links could point anywhere (another file)
+            obj = group[name]
+            if isinstance(obj, h5py.Dataset):
+                size = int(obj.size) if obj.shape is not None else 0
+                channels[name] = _Channel(
+                    name, prefix + name, size, dict(obj.attrs), _hdf5_reader(obj, where)
+                )
+            elif isinstance(obj, h5py.Group) and depth < _HDF5_MAX_DEPTH:
+                subgroups.append((obj, prefix + name + "/"))
+        out.append(_Group(prefix.rstrip("/"), dict(group.attrs), channels))
+        for obj, sub in subgroups:
+            visit(obj, sub, depth + 1)
+
+    visit(root, "", 0)
+    return out
+
+
+def _hdf5_reader(dataset: Any, where: str) -> Callable[[], Any]:
+    def read() -> Any:
+        if dataset.dtype.kind not in "fiu":  # refuse before reading strings or compound records
+            raise FileFormatError(
+                f"{where}: dataset {dataset.name.lstrip('/')!r} holds {dataset.dtype} values, not real "
+                "numbers"
+            )
+        return dataset[()]
+
+    return read
+
+
+def read_hdf5(
+    path: PathLike, *, columns: Optional[ColumnMap] = None, sample_rate: Optional[float] = None
+) -> list[Item]:
+    """Read the experiments of an HDF5 file (needs the ``hdf5`` extra: h5py).
+
+    Every group (the root included) holding the datasets ``u`` and ``y`` (their own names, or those
+    ``columns`` maps) is one experiment, named after the group; a ``"group/dataset"`` path in ``columns``
+    reads that one experiment.  The time axis is the ``t`` dataset when there is one, else
+    ``t = k / rate`` with the rate from an attribute of the datasets, their group or the file:
+    ``sample_rate``, ``sampling_rate`` or ``fs`` (Hz), ``dt`` or ``wf_increment`` (s); or from
+    ``sample_rate=``.  Units come from the datasets' ``units`` (or ``unit``, ``unit_string``) attribute and
+    the group's scalar attributes go into the metadata.  Datasets must be numeric vectors (or 1-row/column
+    matrices); soft and external links are not followed.  A group written by :func:`write_hdf5` carries
+    its header (attribute ``bouc_wen_id``) and reads back as written.
+    """
+    h5py = _optional.require("h5py", "reading .h5/.hdf5 files")
+    cols = _check_columns(columns)
+    rate = _check_rate(sample_rate)
+    p = Path(path)
+    where = str(p)
+    _regular_file(p, "HDF5")
+    try:
+        h5 = h5py.File(p, "r", locking=False)
+    except Exception as exc:  # noqa: BLE001 - any decoder failure of an untrusted file is a format error
+        raise FileFormatError(f"{where}: not a readable HDF5 file ({type(exc).__name__}: {exc})") from exc
+    with h5:
+        try:
+            groups = _hdf5_groups(h5py, h5, where)
+        except BoucWenIdError:
+            raise
+        except Exception as exc:  # noqa: BLE001
+            raise FileFormatError(f"{where}: a corrupt HDF5 file ({type(exc).__name__}: {exc})") from exc
+        root = groups[0].props
+        return _container_items(groups, root, cols, where, p.stem, rate, "dataset")
+
+
+def write_hdf5(path: PathLike, items: Sequence[Item]) -> None:
+    """Write experiments to an HDF5 file (needs the ``hdf5`` extra): one group ``exp_<i>`` each, with
+    float64 datasets ``t``, ``u``, ``y`` (``x``, ``w``), a ``units`` attribute on each, and the header as
+    the group attribute ``bouc_wen_id`` (JSON)."""
+    h5py = _optional.require("h5py", "writing .h5/.hdf5 files")
+    seq = _items(items)
+    with h5py.File(path, "w") as h5:
+        for i, item in enumerate(seq):
+            group = h5.create_group(f"exp_{i:03d}")
+            group.attrs[HEADER_KEY] = json.dumps(_header(item))
+            units = item.units if isinstance(item, Measurement) else {"t": "s"}
+            for role in _ROLES:
+                data = getattr(item, role, None)
+                if data is None:
+                    continue
+                ds = group.create_dataset(role, data=np.asarray(data, dtype=np.float64))
+                if role in units:
+                    ds.attrs["units"] = units[role]
+
+
+def _items(items: Sequence[Item]) -> list[Item]:
+    seq = list(items)
+    if not seq:
+        raise InvalidParameterError("nothing to write: no experiments")
+    for item in seq:
+        if not isinstance(item, (Recording, Measurement)):
+            raise InvalidParameterError(
+                f"expected Recording or Measurement objects, got {type(item).__name__}"
+            )
+    return seq
+
+
+# --------------------------------------------------------------------------------------------------
 # Files and folders
 # --------------------------------------------------------------------------------------------------
 
@@ -1064,7 +1538,13 @@ def _read_file(p: Path, cols: Optional[ColumnMap], rate: Optional[float]) -> lis
         return read_npz(p, columns=cols, sample_rate=rate)
     if suffix == ".mat":
         return read_mat(p, columns=cols, sample_rate=rate)
-    raise FileFormatError(f"{p}: unknown recording format {p.suffix!r} (expected .csv, .npz or .mat)")
+    if suffix == ".tdms":
+        return read_tdms(p, columns=cols, sample_rate=rate)
+    if suffix in (".h5", ".hdf5"):
+        return read_hdf5(p, columns=cols, sample_rate=rate)
+    raise FileFormatError(
+        f"{p}: unknown recording format {p.suffix!r} (expected .csv, .npz, .mat, .tdms, .h5 or .hdf5)"
+    )
 
 
 def _files(paths: PathLike | Iterable[PathLike]) -> list[Path]:
@@ -1079,7 +1559,9 @@ def _files(paths: PathLike | Iterable[PathLike]) -> list[Path]:
                 if f.is_file() and f.suffix.lower() in SUFFIXES and not f.name.startswith(".")
             )
             if not files:
-                raise FileFormatError(f"{p}: the folder holds no .csv or .npz recordings (nor .mat files)")
+                raise FileFormatError(
+                    f"{p}: the folder holds no .csv or .npz recordings (nor .mat, .tdms, .h5 or .hdf5 files)"
+                )
             out.extend(files)
         elif not p.exists():
             raise FileFormatError(f"{p}: no such file or folder")
@@ -1094,11 +1576,13 @@ def load(
     columns: Optional[ColumnMap] = None,
     sample_rate: Optional[float] = None,
 ) -> list[Item]:
-    """Load experiments from files (``.csv``, ``.npz``, ``.mat``) and folders of such files (sorted by name).
+    """Load experiments from files (``.csv``, ``.npz``, ``.mat``; ``.tdms``, ``.h5``, ``.hdf5`` with the
+    ``tdms``/``hdf5`` extras) and folders of such files (sorted by name).
 
     Each experiment is a :class:`Recording` when its header states the input's ``amplitude`` and
     ``frequency`` (or ``format: "bouc_wen_id.recording"``), a :class:`Measurement` otherwise.
-    ``columns`` and ``sample_rate`` apply to every file (see :func:`read_csv`).
+    ``columns`` and ``sample_rate`` apply to every file (see :func:`read_csv`; in TDMS and HDF5 files
+    ``columns`` names channels or datasets, or pins ``"group/channel"`` paths: see :func:`read_tdms`).
 
     Raises
     ------
@@ -1143,7 +1627,8 @@ def save(
     """Save experiments; return the files written.
 
     ``*.npz``: one bundle.  ``*.mat``: one MAT file (one experiment as plain variables, several as a
-    struct array).  ``*.csv``: one experiment.  Anything else is a folder (created if needed) of
+    struct array).  ``*.tdms``, ``*.h5``, ``*.hdf5``: one file, a group per experiment (needs the ``tdms``
+    or ``hdf5`` extra).  ``*.csv``: one experiment.  Anything else is a folder (created if needed) of
     ``exp_000.<fmt>``, ``exp_001.<fmt>``, ... (``fmt``: ``"csv"``, ``"npz"`` or ``"mat"``).
     """
     seq: list[Item] = [items] if isinstance(items, (Recording, Measurement)) else list(items)
@@ -1163,6 +1648,12 @@ def save(
         return [p]
     if suffix == ".mat":
         write_mat(p, seq)
+        return [p]
+    if suffix == ".tdms":
+        write_tdms(p, seq)
+        return [p]
+    if suffix in (".h5", ".hdf5"):
+        write_hdf5(p, seq)
         return [p]
     if suffix == ".csv":
         if len(seq) != 1:

@@ -15,13 +15,14 @@ from __future__ import annotations
 
 import json
 import math
-from collections.abc import Mapping
+from collections.abc import Hashable, Mapping
 from dataclasses import dataclass
-from typing import Optional
+from typing import Any, Optional
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from . import _optional
 from .errors import (
     ClippingError,
     InvalidParameterError,
@@ -51,6 +52,8 @@ RESERVED_KEYS = frozenset(
         "plant",
     }
 )
+#: ``DataFrame.attrs`` key of what :meth:`Measurement.to_dataframe` keeps beside the columns.
+FRAME_ATTR = "bouc_wen_id"
 #: Signals a measurement carries; ``units`` and ``channels`` are keyed by these names.
 SIGNALS = ("t", "u", "y")
 
@@ -394,6 +397,131 @@ class Measurement:
             self.t, self.u, self.y, amplitude, frequency, settle_periods=settle_periods, metadata=meta
         )
 
+    @classmethod
+    def from_dataframe(
+        cls,
+        df: Any,
+        *,
+        input: Hashable = "u",
+        output: Hashable = "y",
+        time: Optional[Hashable] = None,
+        sample_rate: Optional[float] = None,
+        units: Optional[Mapping[str, str]] = None,
+        nominal_frequency: Optional[float] = None,
+        name: Optional[str] = None,
+        metadata: Optional[Mapping[str, str]] = None,
+    ) -> Measurement:
+        """A measurement from a :class:`pandas.DataFrame` (needs pandas: the ``pandas`` extra).
+
+        Parameters
+        ----------
+        df : pandas.DataFrame
+            One row per sample.  It is read, never modified.
+        input, output : column label
+            The columns holding u (the excitation) and y (the response); their labels become
+            :attr:`channels`.
+        time : column label, optional
+            A column of times: seconds (numbers), ``datetime64`` or ``timedelta64`` (both made seconds from
+            the first row).  Without it the index is the time axis: a ``DatetimeIndex`` or
+            ``TimedeltaIndex`` (seconds from the first row), or a numeric index in seconds; a plain
+            ``RangeIndex`` of row numbers is refused unless ``sample_rate`` (Hz) gives
+            ``t = k / sample_rate``.
+        units : mapping, optional
+            Units keyed ``"u"``/``"y"``; by default taken from ``df.attrs["units"]`` when that maps the
+            chosen column labels to strings.
+        nominal_frequency, name, metadata
+            As for :class:`Measurement`; by default from ``df.attrs["bouc_wen_id"]`` (what
+            :meth:`to_dataframe` writes), else none.
+
+        Raises
+        ------
+        InvalidParameterError
+            Not a DataFrame, a missing or duplicated column, a non-numeric column, no time axis.
+        NonFiniteError
+            NaN/inf (or NaT) in a used column or the time axis.
+        TimeAxisError
+            Times that do not increase uniformly (to 1 %).
+        """
+        pd = _optional.require("pandas", "Measurement.from_dataframe")
+        if not isinstance(df, pd.DataFrame):
+            raise InvalidParameterError(f"df must be a pandas DataFrame, got {type(df).__name__}")
+        saved: Mapping[str, Any] = df.attrs.get(FRAME_ATTR) or {}
+        if not isinstance(saved, Mapping):
+            saved = {}
+        u = _frame_column(pd, df, input, "u")
+        y = _frame_column(pd, df, output, "y")
+        channels = {"u": str(input), "y": str(output)}
+        if time is not None:
+            if time in (input, output):
+                raise InvalidParameterError(f"time={time!r} is also the input or output column")
+            t = _frame_times(pd, _frame_series(df, time, "t"), f"t (column {time!r})")
+            channels["t"] = str(time)
+            if sample_rate is not None:
+                raise InvalidParameterError("give time= or sample_rate=, not both")
+        elif _row_numbers(pd, df.index) or sample_rate is not None:
+            if sample_rate is None:
+                raise InvalidParameterError(
+                    f"the frame's index holds integers (row numbers, a {type(df.index).__name__}), not "
+                    "times: pass time=<column>, sample_rate=<Hz>, or index the frame by time in seconds "
+                    "or datetimes (e.g. df.set_index('t'))"
+                )
+            if not _row_numbers(pd, df.index):
+                raise InvalidParameterError(
+                    f"sample_rate= is for a frame indexed by row numbers; this one has a "
+                    f"{type(df.index).__name__} of times: drop sample_rate or reset the index"
+                )
+            t = np.arange(len(df)) / _rate(sample_rate)
+        else:
+            if isinstance(df.index, pd.MultiIndex):
+                raise InvalidParameterError("a MultiIndex is not a time axis: pass time=<column>")
+            t = _frame_times(pd, df.index.to_series(), "t (the index)")
+        if units is None:
+            stated = df.attrs.get("units")
+            units = {}
+            if isinstance(stated, Mapping):
+                for role, col in (("u", input), ("y", output)):
+                    if isinstance(stated.get(col), str):
+                        units[role] = stated[col]
+        if nominal_frequency is None and isinstance(saved.get("nominal_frequency"), (int, float)):
+            nominal_frequency = saved["nominal_frequency"]
+        if name is None:
+            name = saved["name"] if isinstance(saved.get("name"), str) else ""
+        if metadata is None and isinstance(saved.get("metadata"), Mapping):
+            metadata = saved["metadata"]
+        if (input, output) == ("u", "y") and isinstance(saved.get("channels"), Mapping):
+            channels = dict(saved["channels"])  # the frame came from to_dataframe: the original names
+        return cls(
+            t,
+            u,
+            y,
+            nominal_frequency=nominal_frequency,
+            units=units,
+            channels=channels,
+            name=name,
+            metadata=metadata,
+        )
+
+    def to_dataframe(self) -> Any:
+        """This measurement as a :class:`pandas.DataFrame` (needs pandas: the ``pandas`` extra).
+
+        Columns ``u`` and ``y`` (copies, writeable), indexed by the times in seconds (index name ``t``);
+        ``df.attrs["units"]`` maps ``u``/``y`` to their units and ``df.attrs["bouc_wen_id"]`` holds the
+        name, nominal frequency, original channel names and metadata, so that
+        :meth:`from_dataframe` reads it back as it was.
+        """
+        pd = _optional.require("pandas", "Measurement.to_dataframe")
+        df = pd.DataFrame(
+            {"u": np.array(self.u), "y": np.array(self.y)}, index=pd.Index(np.array(self.t), name="t")
+        )
+        df.attrs["units"] = {k: v for k, v in self.units.items() if k != "t"}
+        df.attrs[FRAME_ATTR] = {
+            "name": self.name,
+            "nominal_frequency": self.nominal_frequency,
+            "channels": dict(self.channels),
+            "metadata": dict(self.metadata),
+        }
+        return df
+
     def __repr__(self) -> str:
         nominal = "" if self.nominal_frequency is None else f", nominal={self.nominal_frequency:g} rad/s"
         return (
@@ -414,3 +542,53 @@ def _rate(sample_rate: object) -> float:
     if rate <= 0:
         raise InvalidParameterError(f"sample_rate = {rate} Hz must be > 0")
     return rate
+
+
+def _row_numbers(pd: Any, index: Any) -> bool:
+    """An index of integers: row numbers (a RangeIndex, or what is left of one after filtering rows), which
+    would silently read as a 1 Hz time axis."""
+    return isinstance(index, pd.RangeIndex) or (
+        pd.api.types.is_integer_dtype(index.dtype) and not isinstance(index, pd.MultiIndex)
+    )
+
+
+def _frame_series(df: Any, label: Hashable, role: str) -> Any:
+    """The column ``label`` of ``df`` (one column, present)."""
+    if label not in df.columns:
+        shown = ", ".join(map(repr, list(df.columns)[:20]))
+        raise InvalidParameterError(
+            f"no column {label!r} for {role!r}; the frame has {shown or 'no columns'}"
+        )
+    col = df.loc[:, label]
+    if col.ndim != 1:
+        raise InvalidParameterError(f"column label {label!r} (for {role!r}) appears more than once")
+    return col
+
+
+def _frame_column(pd: Any, df: Any, label: Hashable, role: str) -> FloatArray:
+    """A numeric column as float64 (a copy), missing values as NaN for the finiteness check."""
+    col = _frame_series(df, label, role)
+    what = f"{role} (column {label!r})"
+    if pd.api.types.is_bool_dtype(col.dtype) or not pd.api.types.is_numeric_dtype(col.dtype):
+        raise InvalidParameterError(f"{what} holds {col.dtype} values, not real numbers")
+    if pd.api.types.is_complex_dtype(col.dtype):
+        raise InvalidParameterError(f"{what} holds complex values, not real numbers")
+    return _frozen(what, col.to_numpy(dtype=np.float64, na_value=np.nan, copy=True))
+
+
+def _frame_times(pd: Any, values: Any, what: str) -> FloatArray:
+    """Seconds from a numeric, datetime or timedelta series (the latter two from their first entry)."""
+    dtype = values.dtype
+    if pd.api.types.is_datetime64_any_dtype(dtype) or pd.api.types.is_timedelta64_dtype(dtype):
+        if len(values) == 0:
+            return _frozen(what, np.empty(0))
+        if values.isna().any():
+            bad = int(np.flatnonzero(values.isna().to_numpy())[0])
+            raise NonFiniteError(f"{what} holds a missing time (NaT) at row {bad}; clean or drop it")
+        seconds = (values - values.iloc[0]) / pd.Timedelta(seconds=1)
+        return _frozen(what, seconds.to_numpy(dtype=np.float64, copy=True))
+    if pd.api.types.is_bool_dtype(dtype) or not pd.api.types.is_numeric_dtype(dtype):
+        raise InvalidParameterError(
+            f"{what} holds {dtype} values: times must be numbers (s), datetimes or timedeltas"
+        )
+    return _frozen(what, values.to_numpy(dtype=np.float64, na_value=np.nan, copy=True))

@@ -368,6 +368,76 @@ class IdentificationResult:
     def to_json(self, indent: int = 2) -> str:
         return json.dumps(self.to_dict(), indent=indent)
 
+    def to_dataframe(self) -> Any:
+        """The frequency-response points as a :class:`pandas.DataFrame` (needs the ``pandas`` extra).
+
+        One row per experiment (index ``experiment``, in input order): ``frequency`` (rad/s),
+        ``frequency_hz``, ``amplitude``, ``gain`` (alpha-normalised ``|G|``), ``gain_se``, ``gain_low``,
+        ``gain_high``, ``phase`` (rad, ``phi = -angle G``), ``phase_se``, ``phase_low``, ``phase_high``
+        (the bounds at ``confidence``; NaN, like the SEs, for methods without uncertainty), ``offset``,
+        ``noise_sd``, ``nrmse``, ``linear_nrmse``, ``periods``, ``samples_per_period``,
+        ``settle_periods``, ``harmonics``, ``source``; with a known truth also ``gain_true`` and
+        ``phase_true``.
+
+        What the experiments share sits in ``df.attrs`` (a flat dict, kept by copies of the frame but not
+        by every pandas operation): ``beta``, ``gamma``, ``mu``, their ``*_se``, ``*_low``, ``*_high``
+        (NaN without uncertainty), ``confidence``, ``method``, ``backend``, ``reference``, ``cost``,
+        ``converged`` and ``warnings``.  :meth:`to_dict` holds all of it too, with the covariance.
+        """
+        from . import _optional
+
+        pd = _optional.require("pandas", "IdentificationResult.to_dataframe")
+        z = z_value(self.confidence)
+        rows = []
+        for e in self.experiments:
+            g_se, p_se = _nan(e.gain_se), _nan(e.phase_se)
+            rows.append(
+                {
+                    "frequency": e.frequency,
+                    "frequency_hz": e.frequency / TWO_PI,
+                    "amplitude": e.amplitude,
+                    "gain": e.gain,
+                    "gain_se": g_se,
+                    "gain_low": e.gain - z * g_se,
+                    "gain_high": e.gain + z * g_se,
+                    "phase": e.phase,
+                    "phase_se": p_se,
+                    "phase_low": e.phase - z * p_se,
+                    "phase_high": e.phase + z * p_se,
+                    "offset": e.offset,
+                    "noise_sd": e.noise_sd,
+                    "nrmse": e.nrmse,
+                    "linear_nrmse": e.linear_nrmse,
+                    "periods": e.periods,
+                    "samples_per_period": e.samples_per_period,
+                    "settle_periods": e.settle_periods,
+                    "harmonics": e.harmonics,
+                    "source": e.source,
+                }
+            )
+        df = pd.DataFrame(rows, index=pd.RangeIndex(len(rows), name="experiment"))
+        if self.truth is not None:
+            df["gain_true"] = np.asarray(self.truth.gain, dtype=np.float64)
+            df["phase_true"] = np.asarray(self.truth.phase, dtype=np.float64)
+        shared: dict[str, Any] = {}
+        for name in ("beta", "gamma", "mu"):
+            v = float(getattr(self, name))
+            se = _nan(None if self.standard_errors is None else self.standard_errors.get(name))
+            shared.update({name: v, f"{name}_se": se, f"{name}_low": v - z * se, f"{name}_high": v + z * se})
+        shared.update(
+            {
+                "confidence": self.confidence,
+                "method": self.method,
+                "backend": self.backend,
+                "reference": self.reference,
+                "cost": self.cost,
+                "converged": self.converged,
+                "warnings": list(self.warnings),
+            }
+        )
+        df.attrs.update(shared)
+        return df
+
     def plot_loop(self, experiment: Optional[int] = None, ax: Optional[Axes] = None) -> Figure:
         """Plot the averaged loop ybar against the identified x (all experiments, or one)."""
         from .plotting import plot_loop
@@ -400,6 +470,11 @@ def _rel(est: float, true: float) -> str:
 
 def _fmt(v: Optional[float]) -> str:
     return "-" if v is None or not math.isfinite(v) else f"{v:.3g}"
+
+
+def _nan(v: Optional[float]) -> float:
+    """None (no uncertainty) as NaN, for numeric table columns."""
+    return math.nan if v is None else float(v)
 
 
 def _num(v: Optional[float]) -> Optional[float]:
