@@ -644,8 +644,51 @@ fn path_loop<'py>(
     let l = run_detached(py, steps, || {
         pathloop::path_loop(amplitude, beta, gamma, mu, delta, play, phi, p, substeps)
     })?;
-    let flat: Vec<f64> = l.jac.iter().flatten().copied().collect();
+    // The sine path has no distortion column: the first seven.
+    let flat: Vec<f64> = l.jac.iter().flat_map(|r| r[..7].to_vec()).collect();
     let jac = Array2::from_shape_vec((l.w.len(), 7), flat)
+        .map_err(|e| CoreError::InvalidParameter(e.to_string()))?;
+    Ok((l.w.into_pyarray(py), jac.into_pyarray(py), l.iterations))
+}
+
+/// [`path_loop`] along a measured waveform `x = A xi(theta - phi)`, `xi = cos + lambda d`,
+/// `d = sum_k Re(c_k e^{i k zeta})` with `harmonics = [Re c_2, Im c_2, Re c_3, ...]`
+/// (design.md 9.5): `(w, jac, iterations)`, `jac` of shape (P, 8), the last column `d w/d lambda`.
+#[pyfunction]
+#[pyo3(signature = (amplitude, beta, gamma, mu, delta, play, phi, lam, harmonics, samples_per_period, substeps))]
+#[allow(clippy::type_complexity, clippy::too_many_arguments)]
+fn path_loop_distorted<'py>(
+    py: Python<'py>,
+    amplitude: f64,
+    beta: f64,
+    gamma: f64,
+    mu: f64,
+    delta: f64,
+    play: f64,
+    phi: f64,
+    lam: f64,
+    harmonics: PyReadonlyArray1<'py, f64>,
+    samples_per_period: i64,
+    substeps: i64,
+) -> PyResult<(Bound<'py, PyArray1<f64>>, Bound<'py, PyArray2<f64>>, usize)> {
+    let p = count("samples_per_period", samples_per_period, 0)?;
+    let substeps = count("substeps", substeps, 0)?;
+    let harmonics = slice("harmonics", &harmonics)?;
+    let steps = (p as u128)
+        .saturating_mul(substeps as u128)
+        .saturating_mul(SHOOT_ITER_ESTIMATE);
+    budget::check_steps("the path loop (samples x substeps)", steps)?;
+    let wf = pathloop::Waveform {
+        lambda: lam,
+        harmonics,
+    };
+    let l = run_detached(py, steps, || {
+        pathloop::path_loop_distorted(
+            amplitude, beta, gamma, mu, delta, play, phi, &wf, p, substeps,
+        )
+    })?;
+    let flat: Vec<f64> = l.jac.iter().flatten().copied().collect();
+    let jac = Array2::from_shape_vec((l.w.len(), pathloop::N_PD), flat)
         .map_err(|e| CoreError::InvalidParameter(e.to_string()))?;
     Ok((l.w.into_pyarray(py), jac.into_pyarray(py), l.iterations))
 }
@@ -1154,6 +1197,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(gain_estimate, m)?)?;
     m.add_function(wrap_pyfunction!(steady_loop, m)?)?;
     m.add_function(wrap_pyfunction!(path_loop, m)?)?;
+    m.add_function(wrap_pyfunction!(path_loop_distorted, m)?)?;
     m.add_function(wrap_pyfunction!(profile_phase_sls, m)?)?;
     m.add_function(wrap_pyfunction!(profile_phase_gain, m)?)?;
     m.add_function(wrap_pyfunction!(refine_fit, m)?)?;

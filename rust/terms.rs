@@ -21,7 +21,7 @@ use rustfft::FftPlanner;
 
 use crate::error::{all_finite, finite, CoreError, Result};
 use crate::path_loop::{
-    path_loop, PD_AMPLITUDE, PD_BETA, PD_DELTA, PD_GAMMA, PD_MU, PD_PHI, PD_PLAY,
+    path_loop, N_PD, PD_AMPLITUDE, PD_BETA, PD_DELTA, PD_GAMMA, PD_MU, PD_PHI, PD_PLAY,
 };
 use crate::refine::{
     hysteresis_admissible, levenberg_marquardt, project_hysteresis, JointModel, LmOptions,
@@ -254,7 +254,7 @@ fn hysteresis(
     phi: f64,
     p: usize,
     substeps: usize,
-) -> Result<(Vec<f64>, Vec<[f64; 7]>)> {
+) -> Result<(Vec<f64>, Vec<[f64; N_PD]>)> {
     let (beta, gamma, mu) = (shared[0], shared[1], shared[2]);
     if terms.needs_path_loop() {
         let delta = terms.value(shared, TermKind::Asymmetry);
@@ -267,7 +267,7 @@ fn hysteresis(
             .jac
             .iter()
             .map(|r| {
-                let mut row = [0.0; 7];
+                let mut row = [0.0; N_PD];
                 row[PD_BETA] = r[D_BETA];
                 row[PD_GAMMA] = r[D_GAMMA];
                 row[PD_MU] = r[D_MU];

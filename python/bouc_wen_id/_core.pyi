@@ -143,6 +143,19 @@ def path_loop(
     samples_per_period: int,
     substeps: int,
 ) -> tuple[_F, _F, int]: ...
+def path_loop_distorted(
+    amplitude: float,
+    beta: float,
+    gamma: float,
+    mu: float,
+    delta: float,
+    play: float,
+    phi: float,
+    lam: float,
+    harmonics: _F,
+    samples_per_period: int,
+    substeps: int,
+) -> tuple[_F, _F, int]: ...
 def profile_phase_sls(
     ybar: _F, ydot: _F, amplitude: float, omega: float, lo: float, hi: float, tol: float, grid: int
 ) -> tuple[float, float, float, float, float, float, int]: ...
