@@ -109,7 +109,9 @@ def main(argv: Optional[list[str]] = None) -> int:
     ap.add_argument("--cases", type=int, default=20)
     ap.add_argument("--null", type=int, default=60)
     ap.add_argument("--workers", type=int, default=2)
-    ap.add_argument("--terms", default="offset,stiffness,viscous,inertia,coulomb,sensor_lag,asymmetry,play")
+    ap.add_argument(
+        "--terms", default="offset,stiffness,viscous,inertia,coulomb,sensor_lag,asymmetry,play,distortion"
+    )
     ap.add_argument("--outside", default=",".join(OUTSIDE))
     ap.add_argument("--json", type=Path, default=None)
     args = ap.parse_args(argv)

@@ -868,7 +868,7 @@ type AugOutputPy<'py> = (
 /// period: `(y (P,), jac_shared (P, 3 + T), jac_own (P, 2))`, shared columns
 /// `[beta, gamma, mu, q_1 .. q_T]` in the order of `terms`, own columns `[g, phi]`.
 #[pyfunction]
-#[pyo3(signature = (ybar_len, amplitude, frequency, grid_phase, terms, shared, gain, phase, substeps))]
+#[pyo3(signature = (ybar_len, amplitude, frequency, grid_phase, terms, shared, gain, phase, substeps, waveform=None))]
 #[allow(clippy::too_many_arguments)]
 fn augmented_output<'py>(
     py: Python<'py>,
@@ -881,9 +881,14 @@ fn augmented_output<'py>(
     gain: f64,
     phase: f64,
     substeps: i64,
+    waveform: Option<PyReadonlyArray1<'py, f64>>,
 ) -> PyResult<AugOutputPy<'py>> {
     let terms = terms::Terms::parse(&terms)?;
     let shared = slice("shared", &shared)?;
+    let waveform = match &waveform {
+        Some(a) => slice("waveform", a)?,
+        None => &[],
+    };
     let exc = terms::Excitation {
         samples: count("ybar_len", ybar_len, 0)?,
         amplitude,
@@ -891,7 +896,9 @@ fn augmented_output<'py>(
         grid_phase,
     };
     let substeps = count("substeps", substeps, 1)?;
-    let out = py.detach(|| terms::augmented_output(&exc, &terms, shared, gain, phase, substeps))?;
+    let out = py.detach(|| {
+        terms::augmented_output_with(&exc, waveform, &terms, shared, gain, phase, substeps)
+    })?;
     let p = out.y.len();
     let own: Vec<f64> = out.jac_own.iter().flatten().copied().collect();
     Ok((
@@ -917,7 +924,7 @@ type AugRefineOut<'py> = (
 /// Joint Levenberg-Marquardt of the augmented model (design.md 9.3). `fisher` is `J^T W J`
 /// ordered `[beta, gamma, mu, q_1 .. q_T, g_0, phi_0, g_1, phi_1, ...]`.
 #[pyfunction]
-#[pyo3(signature = (ybars, amplitudes, frequencies, grid_phases, weights, terms, shared0, gains0, phases0, *, max_iter=200, substeps=4, mu_lo=1.0, mu_hi=f64::INFINITY))]
+#[pyo3(signature = (ybars, amplitudes, frequencies, grid_phases, weights, terms, shared0, gains0, phases0, *, max_iter=200, substeps=4, mu_lo=1.0, mu_hi=f64::INFINITY, waveforms=None))]
 #[allow(clippy::too_many_arguments)]
 fn augmented_refine<'py>(
     py: Python<'py>,
@@ -934,14 +941,28 @@ fn augmented_refine<'py>(
     substeps: i64,
     mu_lo: f64,
     mu_hi: f64,
+    waveforms: Option<Vec<PyReadonlyArray1<'py, f64>>>,
 ) -> PyResult<AugRefineOut<'py>> {
     let terms = terms::Terms::parse(&terms)?;
+    let waveforms = waveforms.unwrap_or_default();
+    let wave_slices = waveforms
+        .iter()
+        .enumerate()
+        .map(|(i, a)| slice(&format!("waveforms[{i}]"), a))
+        .collect::<PyResult<Vec<_>>>()?;
     let slices = ybars
         .iter()
         .enumerate()
         .map(|(i, y)| slice(&format!("ybars[{i}]"), y))
         .collect::<PyResult<Vec<_>>>()?;
     let m = slices.len();
+    if !(wave_slices.is_empty() || wave_slices.len() == m) {
+        return Err(CoreError::InvalidParameter(format!(
+            "{m} experiments but {} waveforms (give one per experiment, or none)",
+            wave_slices.len()
+        ))
+        .into());
+    }
     if amplitudes.len() != m
         || frequencies.len() != m
         || grid_phases.len() != m
@@ -970,6 +991,7 @@ fn augmented_refine<'py>(
             frequency: frequencies[i],
             grid_phase: grid_phases[i],
             weight: weights[i],
+            waveform: wave_slices.get(i).copied().unwrap_or(&[]),
         })
         .collect();
     // Each iteration evaluates every steady loop (a few shooting passes of P x substeps steps).

@@ -188,6 +188,7 @@ def augmented_output(
     gain: float,
     phase: float,
     substeps: int,
+    waveform: _F | None = None,
 ) -> tuple[_F, _F, _F]: ...
 def augmented_refine(
     ybars: Sequence[_F],
@@ -204,6 +205,7 @@ def augmented_refine(
     substeps: int = 4,
     mu_lo: float = 1.0,
     mu_hi: float = ...,
+    waveforms: Sequence[_F] | None = None,
 ) -> tuple[_F, _F, _F, float, int, bool, _F, list[_F]]: ...
 def get_budget() -> tuple[int, int, int]: ...
 def set_budget(max_samples: int, max_steps: int, max_bytes: int) -> tuple[int, int, int]: ...

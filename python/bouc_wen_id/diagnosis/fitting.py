@@ -44,7 +44,7 @@ class Scale:
             return self.y / self.u
         if term == "asymmetry":
             return float(self.y ** (-mu))
-        return 1.0  # sensor_lag (seconds)
+        return 1.0  # sensor_lag (seconds), distortion (dimensionless)
 
 
 def scale_of(exps: Sequence[DiagExperiment]) -> Scale:
@@ -62,6 +62,7 @@ def scaled(exps: Sequence[DiagExperiment], s: Scale) -> list[AugExperiment]:
             grid_phase=e.grid_phase,
             weight=e.weight * s.y**2,
             source=e.source,
+            waveform=e.waveform,
         )
         for e in exps
     ]
@@ -86,6 +87,7 @@ def regressor(term: str, e: AugExperiment, par: AugParams, i: int, substeps: int
         float(par.gains[i]),
         float(par.phases[i]),
         substeps,
+        e.waveform,
     )
     return np.asarray(jac)[:, 3 + len(par.terms)]
 
@@ -245,6 +247,10 @@ def candidate_starts(exps: Sequence[AugExperiment], fit: AugFit, term: str, subs
     if term == "asymmetry":
         bg = par.beta + par.gamma
         return [par.with_term(term, v * bg) for v in (0.0, 0.3, -0.3)]
+    if term == "distortion":
+        # lambda = 1: the measured waveform drives the model (the expected value under the quasi-static
+        # assumption of design.md 9.5); 0: the plain model's sine.
+        return [par.with_term(term, 1.0), par.with_term(term, 0.0)]
     return [par.with_term(term, 0.0)]
 
 
@@ -294,7 +300,7 @@ def fit_own(
 
     def evaluate(g: float, ph: float) -> tuple[FloatArray, FloatArray]:
         y, _, jo = _core.augmented_output(
-            p, e.amplitude, e.frequency, e.grid_phase, terms, shared, g, ph, substeps
+            p, e.amplitude, e.frequency, e.grid_phase, terms, shared, g, ph, substeps, e.waveform
         )
         return np.asarray(y), np.asarray(jo)
 
