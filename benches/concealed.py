@@ -317,7 +317,7 @@ def _x_path(b: Base, coeffs: NDArray[np.complex128], theta: FloatArray) -> tuple
 
 
 def distorted_period(b: Base, coeffs: NDArray[np.complex128], cycles: int = 8) -> FloatArray:
-    """The steady Bouc-Wen output y = w on the grid, driven along the exact steady x of the distorted input."""
+    """The steady Bouc-Wen output y = w on the grid, driven along the exact steady x of a distorted input."""
     h = b.plant.hysteresis
     n = P * SUBSTEPS
     dth = TWO_PI / n
@@ -356,7 +356,11 @@ def distortion_case(b: Base, size: float, seed: int) -> tuple[list[bw.Recording]
     recs = []
     for i, (om, amp) in enumerate(zip(b.omegas, b.amplitudes)):
         t = np.arange(PERIODS * P) * (TWO_PI / om / P)
-        u = amp * np.real(np.exp(1j * om * t) + sum(sc * c * np.exp(1j * k * om * t) for k, c in enumerate(shape, 2)))
+        u = amp * np.real(
+            np.exp(1j * om * t) + sum(sc * c * np.exp(1j * k * om * t) for k, c in enumerate(shape, 2))
+        )
         y = np.tile(y_period[i], PERIODS) + rng.normal(0.0, NOISE_SD, t.size)
-        recs.append(bw.Recording(t, u, y, float(amp), float(om), settle_periods=0, metadata={"name": f"exp{i}"}))
+        recs.append(
+            bw.Recording(t, u, y, float(amp), float(om), settle_periods=0, metadata={"name": f"exp{i}"})
+        )
     return recs, sc

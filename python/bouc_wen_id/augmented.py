@@ -148,7 +148,9 @@ class AugExperiment:
         object.__setattr__(self, "weight", weight)
         wave = np.array(self.waveform, dtype=np.float64).ravel()
         if wave.size % 2 or not np.all(np.isfinite(wave)):
-            raise InvalidParameterError("waveform must hold finite (re, im) pairs of the harmonics k = 2, 3, ...")
+            raise InvalidParameterError(
+                "waveform must hold finite (re, im) pairs of the harmonics k = 2, 3, ..."
+            )
         wave.flags.writeable = False
         object.__setattr__(self, "waveform", wave)
 

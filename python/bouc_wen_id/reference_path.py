@@ -225,7 +225,9 @@ def path_loop(
     if substeps < 1:
         raise InvalidParameterError(f"substeps = {substeps} must be >= 1")
 
-    jac, iterations, w = _solve(_segments(amplitude, phi, play, p), beta, gamma, mu, delta, margin, p, substeps)
+    jac, iterations, w = _solve(
+        _segments(amplitude, phi, play, p), beta, gamma, mu, delta, margin, p, substeps
+    )
     return w, jac[:, :7], iterations
 
 
@@ -407,7 +409,9 @@ def path_loop_distorted(
         )
     e = [waveform(z, lam, harmonics) for z in roots]
     top_first = amplitude * (e[0][0] - e[1][0]) > 0.0
-    (zt, et), (zb, eb) = ((roots[0], e[0]), (roots[1], e[1])) if top_first else ((roots[1], e[1]), (roots[0], e[0]))
+    (zt, et), (zb, eb) = (
+        ((roots[0], e[0]), (roots[1], e[1])) if top_first else ((roots[1], e[1]), (roots[0], e[0]))
+    )
     xt, xb = amplitude * et[0], amplitude * eb[0]
     b = play
     if b >= 0.5 * (xt - xb):
@@ -433,7 +437,9 @@ def path_loop_distorted(
         if descending:
             node = (x + b, np.array([xi, -amplitude * dxi, 1.0, amplitude * d])) if x < xt - 2.0 * b else top
         else:
-            node = (x - b, np.array([xi, -amplitude * dxi, -1.0, amplitude * d])) if x > xb + 2.0 * b else bottom
+            node = (
+                (x - b, np.array([xi, -amplitude * dxi, -1.0, amplitude * d])) if x > xb + 2.0 * b else bottom
+            )
         nodes.append((node, -1.0 if descending else 1.0, j))
     if not passed_bottom:
         nodes.append((bottom, -1.0, -1))

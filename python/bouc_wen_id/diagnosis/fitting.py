@@ -68,6 +68,68 @@ def scaled(exps: Sequence[DiagExperiment], s: Scale) -> list[AugExperiment]:
     ]
 
 
+def _g_of(freqs: FloatArray, logs: FloatArray, phases: FloatArray, omega: float) -> complex:
+    """``G(j omega)`` up to a common scale from ``log|G|`` and the unwrapped phase lag at the sorted, distinct
+    ``freqs``: linear in ``log omega`` between them, extended linearly from the two nearest beyond them
+    (a first-order roll-off, a delay); flat gain and a lag proportional to omega with one frequency."""
+    if freqs.size == 1:
+        return complex(np.exp(logs[0]) * np.exp(-1j * phases[0] * omega / freqs[0]))
+    lw = np.log(freqs)
+    x = math.log(omega)
+    if x <= lw[-1]:
+        lg = float(np.interp(x, lw, logs))
+        ph = float(np.interp(x, lw, phases))
+        if x < lw[0]:
+            ph = float(phases[0] * omega / freqs[0])
+    else:
+        slope = (logs[-1] - logs[-2]) / (lw[-1] - lw[-2])
+        lg = float(logs[-1] + slope * (x - lw[-1]))
+        dph = (phases[-1] - phases[-2]) / (freqs[-1] - freqs[-2])
+        ph = float(phases[-1] + dph * (omega - freqs[-1]))
+    return complex(math.exp(lg) * np.exp(-1j * ph))
+
+
+def carry_waveforms(exps: Sequence[AugExperiment], fit: AugFit) -> list[AugExperiment]:
+    """The inputs' waveforms carried through G at their own frequencies (design.md 9.5).
+
+    The latent x of experiment i has harmonic k ``c'_k = c_k G(j k w_i) / (|G(j w_i)| e^{-i k phi_G})``
+    relative to its fundamental, where ``c_k`` is the input's: 1 under the quasi-static G the term assumes
+    when nothing else is known. G is known (up to the Bouc-Wen scale, which cancels) at the experiments'
+    frequencies from ``fit``'s gains and phases, ``G(j w_i) ~ g_i e^{-i (phi_i + psi_i)}``; between them it is
+    interpolated, beyond them extended (:func:`_g_of`). Experiments without a waveform are returned as given.
+    """
+    if not any(e.waveform.size for e in exps):
+        return list(exps)
+    par = fit.params
+    # A signed g with its phase is the complex G itself (g < 0 is a half turn).
+    gs = np.array([g * np.exp(-1j * (ph + e.grid_phase)) for e, g, ph in zip(exps, par.gains, par.phases)])
+    om = np.array([e.frequency for e in exps])
+    freqs = np.unique(om)
+    # The mean G per frequency (the amplitudes of one frequency share G in a Wiener system).
+    gf = np.array([np.mean(gs[om == f]) for f in freqs])
+    logs = np.log(np.abs(gf))
+    lag = -np.unwrap(np.angle(gf))
+    # The phase lag of a causal G starts near 0 at low frequency: remove whole turns from the lowest one.
+    lag = lag - 2.0 * math.pi * np.round(lag[0] / (2.0 * math.pi))
+    out = []
+    for e in exps:
+        if not e.waveform.size:
+            out.append(e)
+            continue
+        g1 = _g_of(freqs, logs, lag, e.frequency)
+        c = e.waveform.reshape(-1, 2)
+        carried = np.zeros_like(c)
+        for idx, (re, im) in enumerate(c):
+            k = idx + 2
+            gk = _g_of(freqs, logs, lag, k * e.frequency)
+            # Relative to the quasi-static |G1| e^{-i k phi1}.
+            ratio = gk / (abs(g1) * (g1 / abs(g1)) ** k)
+            v = complex(re, im) * ratio
+            carried[idx] = (v.real, v.imag)
+        out.append(replace(e, waveform=carried.ravel()))
+    return out
+
+
 def regressor(term: str, e: AugExperiment, par: AugParams, i: int, substeps: int) -> FloatArray:
     """The contribution per unit parameter of a linear output term on experiment i's grid.
 

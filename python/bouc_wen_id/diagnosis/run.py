@@ -12,7 +12,7 @@ import numpy as np
 from ..augmented import TERM_NAMES, AugExperiment, AugFit
 from ..errors import InvalidParameterError
 from .data import DiagExperiment, prepare
-from .fitting import Scale, fit_plain, physical, scale_of, scaled, substeps_for
+from .fitting import Scale, carry_waveforms, fit_plain, physical, scale_of, scaled, substeps_for
 from .locate import Localisation, adequacy_p, locate
 from .result import Diagnosis, ModelSummary, NamedTerm, Status, term_symbol_unit
 from .select import ALPHA, FoldCache, forward_select, held_out
@@ -178,6 +178,8 @@ def diagnose(
         return bool(math.isfinite(p) and p >= alpha)
 
     plain = fit_plain(experiments, exps, s, substeps)
+    # The distortion term's waveforms through G at their own frequencies, as the plain fit sees G.
+    sx = carry_waveforms(sx, plain)
     before = _localise(exps, sx, plain, s)
     cache: FoldCache = {}
     final, steps = forward_select(
