@@ -1036,13 +1036,7 @@ fn path_loop_with(
     // Multiple shooting on it from w = 0 at every piece start (the K chains overlap); should it
     // stray, bracketed single shooting, which always has a safe step.
     let v = match multiple {
-        true => coarse_multiple(
-            &shape,
-            &coarse,
-            &coarse_pieces,
-            bound,
-            half_travel - play,
-        ),
+        true => coarse_multiple(&shape, &coarse, &coarse_pieces, bound, half_travel - play),
         false => None,
     }
     .unwrap_or_else(|| coarse_single(&shape, &coarse, &coarse_pieces, bound));
@@ -1425,5 +1419,51 @@ mod tests {
             matches!(r, Err(CoreError::NonFinite(_) | CoreError::NotConverged(_))),
             "{r:?}"
         );
+    }
+
+    #[test]
+    fn distorted_waveform_nests_the_sine_and_has_an_exact_lambda_column() {
+        // lambda = 0: the reversals land on 0 and pi to rounding, so the loop is the sine's.
+        let h = [0.03, -0.02, 0.04, 0.01];
+        let wf = |lambda| Waveform {
+            lambda,
+            harmonics: &h,
+        };
+        let (p, sub) = (36, 3);
+        for a in [1.3, -0.9] {
+            let d =
+                path_loop_distorted(a, 0.7, 0.25, 1.8, 0.2, 0.1, 0.4, &wf(0.0), p, sub).unwrap();
+            let s = path_loop(a, 0.7, 0.25, 1.8, 0.2, 0.1, 0.4, p, sub).unwrap();
+            for j in 0..p {
+                assert!((d.w[j] - s.w[j]).abs() < 1e-12);
+                for q in 0..7 {
+                    assert!((d.jac[j][q] - s.jac[j][q]).abs() < 1e-11);
+                }
+            }
+        }
+        // d w / d lambda against central differences (as jacobian_matches_central_differences).
+        let run = |l: f64| {
+            path_loop_distorted(1.4, 0.7, 0.25, 1.8, 0.1, 0.15, 0.9, &wf(l), p, sub).unwrap()
+        };
+        let base = run(1.0);
+        let step = 1e-5;
+        let (up, dn) = (run(1.0 + step), run(1.0 - step));
+        for j in 0..p {
+            let fd = (up.w[j] - dn.w[j]) / (2.0 * step);
+            let err = (fd - base.jac[j][PD_DISTORT]).abs() / (1.0 + fd.abs());
+            assert!(
+                err < 1e-6,
+                "sample {j}: {fd} vs {}",
+                base.jac[j][PD_DISTORT]
+            );
+        }
+        // Too strong a distortion (extra reversals) is a named refusal, not a wrong loop.
+        let strong = [0.0, 0.0, 0.5, 0.0];
+        let bad = Waveform {
+            lambda: 1.0,
+            harmonics: &strong,
+        };
+        let r = path_loop_distorted(1.0, 0.7, 0.25, 1.8, 0.0, 0.0, 0.0, &bad, p, sub);
+        assert!(matches!(r, Err(CoreError::InvalidParameter(_))), "{r:?}");
     }
 }

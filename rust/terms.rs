@@ -160,9 +160,12 @@ impl Terms {
 
     /// Whether the hysteresis needs the path loop of 9.2 (asymmetry or play active).
     pub fn needs_path_loop(&self) -> bool {
-        self.kinds
-            .iter()
-            .any(|k| matches!(k, TermKind::Asymmetry | TermKind::Play | TermKind::Distortion))
+        self.kinds.iter().any(|k| {
+            matches!(
+                k,
+                TermKind::Asymmetry | TermKind::Play | TermKind::Distortion
+            )
+        })
     }
 
     /// `kind`'s value in `shared`, 0 when inactive (every term vanishes at 0).
