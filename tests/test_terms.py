@@ -79,6 +79,7 @@ def test_registry_follows_the_design_table() -> None:
         "sensor_lag",
         "asymmetry",
         "play",
+        "distortion",
     ]
     units = {kind: cls.units(y="N", u="mm") for kind, cls in TERMS.items()}
     assert units == {
@@ -90,11 +91,12 @@ def test_registry_follows_the_design_table() -> None:
         "sensor_lag": "s",
         "asymmetry": "1/N^mu",
         "play": "N",
+        "distortion": "1",
     }
     for kind, cls in TERMS.items():
         assert cls.kind == kind
         assert cls.description and cls.signature and cls.symbol
-        assert cls.acts_on == ("hysteresis" if kind in ("asymmetry", "play") else "output")
+        assert cls.acts_on == ("hysteresis" if kind in ("asymmetry", "play", "distortion") else "output")
     for t in ONE_OF_EACH:
         assert t.value == getattr(t, t.symbol)
         assert t.with_value(0.07).value == 0.07
