@@ -319,8 +319,9 @@ impl Waveform<'_> {
     }
 }
 
-/// The P + 2 segments of one cycle of `x = A xi(theta - phi)` behind a play of half-width b
-/// (design.md 9.5), from the top of x around, and the half travel `(max x - min x) / 2`.
+/// The P + 2 segments of one cycle of `x = |A| xi(theta - phi')` (`phi' = phi`, `+ pi` for
+/// `A < 0`) behind a play of half-width b (design.md 9.5), from the top of x around, and the half
+/// travel `(max x - min x) / 2`.
 ///
 /// One maximum and one minimum per period: x is monotone between them, so the play output is the
 /// sine's rule with the extremes in place of `±a`: descending `xp = min(x_top - b, x + b)`,
@@ -334,6 +335,14 @@ fn distorted_segments(
     wf: &Waveform,
     p: usize,
 ) -> Result<(Vec<Segment>, f64)> {
+    // x = |A| xi(theta - phi'), phi' = phi (+ pi for A < 0): for a sine the same x as A cos(theta - phi),
+    // and the waveform stays the input's whatever the sign convention of (g, phi); d/dA = sgn(A) d/d|A|.
+    let sa = sgn(amplitude);
+    let (amplitude, phi) = if amplitude < 0.0 {
+        (-amplitude, phi + PI)
+    } else {
+        (amplitude, phi)
+    };
     let roots = wf.reversals();
     if roots.len() != 2 {
         return Err(CoreError::InvalidParameter(format!(
@@ -362,8 +371,8 @@ fn distorted_segments(
         )));
     }
     // Reversal nodes: d/d(A, phi, b, lambda).
-    let top = (xt - b, [et[0], 0.0, -1.0, amplitude * et[3]]);
-    let bottom = (xb + b, [eb[0], 0.0, 1.0, amplitude * eb[3]]);
+    let top = (xt - b, [sa * et[0], 0.0, -1.0, amplitude * et[3]]);
+    let bottom = (xb + b, [sa * eb[0], 0.0, 1.0, amplitude * eb[3]]);
     let r = ((phi + zt) / (2.0 * PI)).rem_euclid(1.0);
     let ub = ((zb - zt) / (2.0 * PI)).rem_euclid(1.0);
     let frac = |j: usize| {
@@ -399,7 +408,7 @@ fn distorted_segments(
         let zeta = 2.0 * PI * j as f64 / p as f64 - phi;
         let ev = wf.eval(zeta);
         let x = amplitude * ev[0];
-        let dx = [ev[0], -amplitude * ev[1], amplitude * ev[3]];
+        let dx = [sa * ev[0], -amplitude * ev[1], amplitude * ev[3]];
         let node = if descending {
             if x < xt - 2.0 * b {
                 (x + b, [dx[0], dx[1], 1.0, dx[2]])

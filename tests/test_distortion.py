@@ -169,3 +169,13 @@ def test_simulate_refuses_a_plant_with_the_distortion_term() -> None:
     plan = bw.SinePlan([1.0], [1.0], settle_periods=1, periods=2, samples_per_period=16, substeps=2)
     with pytest.raises(InvalidParameterError, match="distorted input itself"):
         bw.simulate(plant, plan)
+
+
+def test_the_loop_does_not_depend_on_the_sign_convention_of_the_gain() -> None:
+    # (A, phi) and (-A, phi + pi) are one latent sine; with a waveform they must stay one x (the even
+    # harmonics would flip otherwise), so the loop is the same up to the shooting tolerance.
+    h = _harmonics(11)
+    w1, j1, _ = _core.path_loop_distorted(1.2, 0.7, 0.25, 1.8, 0.1, 0.05, 0.3, 1.0, h, 40, 3)
+    w2, j2, _ = _core.path_loop_distorted(-1.2, 0.7, 0.25, 1.8, 0.1, 0.05, 0.3 + np.pi, 1.0, h, 40, 3)
+    assert np.max(np.abs(w1 - w2)) < 1e-9
+    assert np.max(np.abs(j1[:, 3] + j2[:, 3])) < 1e-8  # d/dA flips with the sign of A

@@ -402,6 +402,10 @@ def path_loop_distorted(
     p = int(samples_per_period)
     if p < 4:
         raise InsufficientDataError(f"samples_per_period = {p}: at least 4 are needed")
+    # x = |A| xi(theta - phi'), phi' = phi (+ pi for A < 0); d/dA = sgn(A) d/d|A| (as the core).
+    sa = 1.0 if amplitude > 0.0 else -1.0
+    if amplitude < 0.0:
+        amplitude, phi = -amplitude, phi + np.pi
     roots = reversals(lam, harmonics)
     if len(roots) != 2:
         raise InvalidParameterError(
@@ -416,8 +420,8 @@ def path_loop_distorted(
     b = play
     if b >= 0.5 * (xt - xb):
         raise ZeroAmplitudeError(f"play = {b} >= the half travel {0.5 * (xt - xb)} of x")
-    top: tuple[float, FloatArray] = (xt - b, np.array([et[0], 0.0, -1.0, amplitude * et[3]]))
-    bottom: tuple[float, FloatArray] = (xb + b, np.array([eb[0], 0.0, 1.0, amplitude * eb[3]]))
+    top: tuple[float, FloatArray] = (xt - b, np.array([sa * et[0], 0.0, -1.0, amplitude * et[3]]))
+    bottom: tuple[float, FloatArray] = (xb + b, np.array([sa * eb[0], 0.0, 1.0, amplitude * eb[3]]))
     r = ((phi + zt) / (2.0 * np.pi)) % 1.0
     ub = ((zb - zt) / (2.0 * np.pi)) % 1.0
     u = np.arange(p) / p - r
@@ -435,10 +439,16 @@ def path_loop_distorted(
         x = amplitude * xi
         # Descending: xp = min(x_top - b, x + b); ascending: xp = max(x_bot + b, x - b).
         if descending:
-            node = (x + b, np.array([xi, -amplitude * dxi, 1.0, amplitude * d])) if x < xt - 2.0 * b else top
+            node = (
+                (x + b, np.array([sa * xi, -amplitude * dxi, 1.0, amplitude * d]))
+                if x < xt - 2.0 * b
+                else top
+            )
         else:
             node = (
-                (x - b, np.array([xi, -amplitude * dxi, -1.0, amplitude * d])) if x > xb + 2.0 * b else bottom
+                (x - b, np.array([sa * xi, -amplitude * dxi, -1.0, amplitude * d]))
+                if x > xb + 2.0 * b
+                else bottom
             )
         nodes.append((node, -1.0 if descending else 1.0, j))
     if not passed_bottom:
