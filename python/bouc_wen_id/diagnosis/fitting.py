@@ -89,6 +89,45 @@ def _g_of(freqs: FloatArray, logs: FloatArray, phases: FloatArray, omega: float)
     return complex(math.exp(lg) * np.exp(-1j * ph))
 
 
+#: A first-order lag with a delay, ``K e^{-s T} / (1 + s tc)``, stands for G between and beyond the tested
+#: frequencies when it reproduces every tested ``G(j w_i)`` to this complex-log error (5 % in gain, 0.05
+#: rad)...
+FOPDT_TOL = 0.05
+#: ... and at least this many distinct frequencies pin its three parameters (else the interpolation).
+FOPDT_MIN_FREQS = 3
+
+
+def _fopdt(
+    freqs: FloatArray, logs: FloatArray, lag: FloatArray
+) -> Optional[tuple[float, float, float, float]]:
+    """``(log K, tc, T, theta0)`` of the first-order-plus-delay G (lag ``theta0 + atan(w tc) + w T``) closest
+    in complex log to the tested points, or None when it misses one by more than :data:`FOPDT_TOL`.
+
+    For each ``tc`` on a log grid the rest is linear least squares (``log K`` on the log-gains, ``theta0``
+    and ``T >= 0`` on the lags); the grid spans two decades beyond the tested band either side.
+    """
+    if freqs.size < FOPDT_MIN_FREQS:
+        return None
+    best: Optional[tuple[float, float, float, float, float]] = None
+    basis = np.column_stack([np.ones(freqs.size), freqs])
+    for tc in np.concatenate([[0.0], np.geomspace(1e-2 / freqs[-1], 1e2 / freqs[0], 400)]):
+        roll = 0.5 * np.log1p((freqs * tc) ** 2)
+        lk = float(np.mean(logs + roll))
+        rest = lag - np.arctan(freqs * tc)
+        (th0, delay), *_ = np.linalg.lstsq(basis, rest, rcond=None)
+        if delay < 0.0:
+            th0, delay = float(np.mean(rest)), 0.0
+        err = np.hypot(logs - (lk - roll), rest - th0 - freqs * delay)
+        cost = float(err @ err)
+        if best is None or cost < best[0]:
+            best = (cost, lk, float(tc), float(delay), float(th0))
+    assert best is not None
+    _, lk, tc, delay, th0 = best
+    roll = 0.5 * np.log1p((freqs * tc) ** 2)
+    err = np.hypot(logs - (lk - roll), lag - np.arctan(freqs * tc) - th0 - freqs * delay)
+    return (lk, tc, delay, th0) if float(np.max(err)) <= FOPDT_TOL else None
+
+
 def carry_waveforms(exps: Sequence[AugExperiment], fit: AugFit) -> list[AugExperiment]:
     """The inputs' waveforms carried through G at their own frequencies (design.md 9.5).
 
@@ -96,7 +135,9 @@ def carry_waveforms(exps: Sequence[AugExperiment], fit: AugFit) -> list[AugExper
     relative to its fundamental, where ``c_k`` is the input's: 1 under the quasi-static G the term assumes
     when nothing else is known. G is known (up to the Bouc-Wen scale, which cancels) at the experiments'
     frequencies from ``fit``'s gains and phases, ``G(j w_i) ~ g_i e^{-i (phi_i + psi_i)}``; between them it is
-    interpolated, beyond them extended (:func:`_g_of`). Experiments without a waveform are returned as given.
+    taken from a first-order lag with a delay when that reproduces the tested points (:func:`_fopdt`), else
+    interpolated between them and extended beyond (:func:`_g_of`). Experiments without a waveform are
+    returned as given.
     """
     if not any(e.waveform.size for e in exps):
         return list(exps)
@@ -111,17 +152,26 @@ def carry_waveforms(exps: Sequence[AugExperiment], fit: AugFit) -> list[AugExper
     lag = -np.unwrap(np.angle(gf))
     # The phase lag of a causal G starts near 0 at low frequency: remove whole turns from the lowest one.
     lag = lag - 2.0 * math.pi * np.round(lag[0] / (2.0 * math.pi))
+    model = _fopdt(freqs, logs, lag)
+
+    def g_at(omega: float) -> complex:
+        if model is None:
+            return _g_of(freqs, logs, lag, omega)
+        lk, tc, delay, th0 = model
+        mag = math.exp(lk - 0.5 * math.log1p((omega * tc) ** 2))
+        return complex(mag * np.exp(-1j * (th0 + math.atan(omega * tc) + omega * delay)))
+
     out = []
     for e in exps:
         if not e.waveform.size:
             out.append(e)
             continue
-        g1 = _g_of(freqs, logs, lag, e.frequency)
+        g1 = g_at(e.frequency)
         c = e.waveform.reshape(-1, 2)
         carried = np.zeros_like(c)
         for idx, (re, im) in enumerate(c):
             k = idx + 2
-            gk = _g_of(freqs, logs, lag, k * e.frequency)
+            gk = g_at(k * e.frequency)
             # Relative to the quasi-static |G1| e^{-i k phi1}.
             ratio = gk / (abs(g1) * (g1 / abs(g1)) ** k)
             v = complex(re, im) * ratio
