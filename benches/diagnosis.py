@@ -36,7 +36,7 @@ OUTSIDE = ("pinching", "feedback", "degradation")
 
 def _held_out_ratio(d: Any, term: Optional[str]) -> float:
     """Held-out NRMSE of the chosen model over the true structure's, on the same data."""
-    from bouc_wen_id.diagnosis.fitting import Scale, carry_waveforms, fit_with, scaled
+    from bouc_wen_id.diagnosis.fitting import Scale, carry_through_g, fit_with, scaled
     from bouc_wen_id.diagnosis.select import held_out
 
     chosen = d.final_fit
@@ -44,7 +44,9 @@ def _held_out_ratio(d: Any, term: Optional[str]) -> float:
     if tuple(chosen.params.terms) == truth_terms:
         return 1.0
     s = d.settings["scale"]
-    sx = carry_waveforms(scaled(list(d.experiments), Scale(s["y"], s["u"])), d.plain_fit)
+    sx = carry_through_g(
+        scaled(list(d.experiments), Scale(s["y"], s["u"])), d.plain_fit, d.settings["substeps"]
+    )
     true_fit = d.plain_fit if term is None else fit_with(sx, d.plain_fit, term, d.settings["substeps"])
     if true_fit is None:
         return math.nan

@@ -91,7 +91,7 @@ def test_registry_follows_the_design_table() -> None:
         "sensor_lag": "s",
         "asymmetry": "1/N^mu",
         "play": "N",
-        "distortion": "1",
+        "distortion": "",
     }
     for kind, cls in TERMS.items():
         assert cls.kind == kind

@@ -296,7 +296,7 @@ class Distortion(Term):
 
     kind: ClassVar[str] = "distortion"
     symbol: ClassVar[str] = "lam"
-    unit: ClassVar[str] = "1"
+    unit: ClassVar[str] = ""  # dimensionless
     description: ClassVar[str] = "the measured input's own harmonics (a distorted actuator) drive the model"
     signature: ClassVar[str] = (
         "the input's harmonics reflected in the output: the loop driven by the distortion, at the "

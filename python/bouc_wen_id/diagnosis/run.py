@@ -12,7 +12,7 @@ import numpy as np
 from ..augmented import TERM_NAMES, AugExperiment, AugFit
 from ..errors import InvalidParameterError
 from .data import DiagExperiment, prepare
-from .fitting import Scale, carry_waveforms, fit_plain, physical, scale_of, scaled, substeps_for
+from .fitting import Scale, carry_through_g, fit_plain, physical, scale_of, scaled, substeps_for
 from .locate import Localisation, adequacy_p, locate
 from .result import Diagnosis, ModelSummary, NamedTerm, Status, term_symbol_unit
 from .select import ALPHA, FoldCache, forward_select, held_out
@@ -179,7 +179,8 @@ def diagnose(
 
     plain = fit_plain(experiments, exps, s, substeps)
     # The distortion term's waveforms through G at their own frequencies, as the plain fit sees G.
-    sx = carry_waveforms(sx, plain)
+    if "distortion" in cands:
+        sx = carry_through_g(sx, plain, substeps)
     before = _localise(exps, sx, plain, s)
     cache: FoldCache = {}
     final, steps = forward_select(
