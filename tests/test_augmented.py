@@ -39,7 +39,7 @@ TERM_VALUES = {
     "play": 0.15,
 }
 HYST = (0.8, 0.2, 1.6)
-#: The terms that act on a pure sine (the distortion term needs the input's harmonics: tests/test_distortion.py).
+#: The terms that act on a pure sine (the distortion term needs the input's harmonics: test_distortion.py).
 SINE_TERMS = tuple(t for t in TERM_NAMES if t != "distortion")
 
 

@@ -10,10 +10,9 @@ from __future__ import annotations
 import math
 import warnings
 
+import bouc_wen_id as bw
 import numpy as np
 import pytest
-
-import bouc_wen_id as bw
 from bouc_wen_id import _core
 from bouc_wen_id import reference_augmented as RA
 from bouc_wen_id import reference_path as RP
