@@ -22,6 +22,7 @@ __all__ = [
     "gain_estimate",
     "steady_loop",
     "path_loop",
+    "path_loop_distorted",
     "profile_phase_sls",
     "profile_phase_gain",
     "refine",
