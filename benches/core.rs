@@ -173,6 +173,7 @@ fn bench_augmented(c: &mut Criterion) {
             frequency: exc[i].frequency,
             grid_phase: exc[i].grid_phase,
             weight: 1e6,
+            waveform: &[],
         })
         .collect();
     let start = [0.7, 0.25, 1.8, 0.25, 0.06];

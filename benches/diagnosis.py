@@ -40,7 +40,7 @@ OUTSIDE = ("pinching", "feedback")
 
 def _held_out_ratio(d: Any, term: Optional[str]) -> float:
     """Held-out NRMSE of the chosen model over the true structure's, on the same data."""
-    from bouc_wen_id.diagnosis.fitting import Scale, fit_with, scaled
+    from bouc_wen_id.diagnosis.fitting import Scale, carry_through_g, fit_with, scaled
     from bouc_wen_id.diagnosis.select import held_out
 
     if term == "degradation":
@@ -54,7 +54,9 @@ def _held_out_ratio(d: Any, term: Optional[str]) -> float:
     if tuple(chosen.params.terms) == truth_terms:
         return 1.0
     s = d.settings["scale"]
-    sx = scaled(list(d.experiments), Scale(s["y"], s["u"]))
+    sx = carry_through_g(
+        scaled(list(d.experiments), Scale(s["y"], s["u"])), d.plain_fit, d.settings["substeps"]
+    )
     true_fit = d.plain_fit if term is None else fit_with(sx, d.plain_fit, term, d.settings["substeps"])
     if true_fit is None:
         return math.nan
@@ -120,7 +122,8 @@ def main(argv: Optional[list[str]] = None) -> int:
     ap.add_argument("--null", type=int, default=60)
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument(
-        "--terms", default="offset,stiffness,viscous,inertia,coulomb,sensor_lag,asymmetry,play,degradation"
+        "--terms",
+        default="offset,stiffness,viscous,inertia,coulomb,sensor_lag,asymmetry,play,degradation,distortion",
     )
     ap.add_argument("--outside", default=",".join(OUTSIDE))
     ap.add_argument("--json", type=Path, default=None)

@@ -42,6 +42,10 @@ pub const PD_PHI: usize = 4;
 pub const PD_DELTA: usize = 5;
 /// d w / d b (play half-width).
 pub const PD_PLAY: usize = 6;
+/// d w / d lambda (the distortion of a measured input waveform, design.md 9.5).
+pub const PD_DISTORT: usize = 7;
+/// Columns of a [`PathLoop::jac`] row.
+pub const N_PD: usize = 8;
 
 /// Newton (or bisection) updates of `w_0` allowed on the full-resolution cycle map. Bisection
 /// alone halves `[-w_b, w_b]` to the tolerance in about 45 steps.
@@ -81,7 +85,7 @@ pub struct PathLoop {
     /// `w(t_j)`, `t_j = j T / P`, j = 0..P (units of w).
     pub w: Vec<f64>,
     /// `d w(t_j) / d(beta, gamma, mu, A, phi, delta, b)`, one row per sample (columns `PD_*`).
-    pub jac: Vec<[f64; 7]>,
+    pub jac: Vec<[f64; N_PD]>,
     /// Newton (or bisection) updates of the shooting on the full-resolution map (the coarse start
     /// not counted).
     pub iterations: usize,
@@ -101,8 +105,8 @@ struct Shape {
 struct Segment {
     /// `xp_end - xp_start`.
     dx: f64,
-    /// `d dx / d(A, phi, b)`.
-    ddx: [f64; 3],
+    /// `d dx / d(A, phi, b, lambda)`.
+    ddx: [f64; 4],
     /// Direction of xp on the segment (`-1` descending half, `+1` ascending).
     s: f64,
     /// The sample the segment ends on, or [`REVERSAL`].
@@ -203,6 +207,7 @@ fn segments(amplitude: f64, phi: f64, b: f64, p: usize) -> Vec<Segment> {
                 node.1[0] - prev.1[0],
                 node.1[1] - prev.1[1],
                 node.1[2] - prev.1[2],
+                0.0,
             ],
             s,
             end,
@@ -226,6 +231,202 @@ fn segments(amplitude: f64, phi: f64, b: f64, p: usize) -> Vec<Segment> {
     }
     push(&mut prev, top, 1.0, REVERSAL);
     segs
+}
+
+/// Grid points per period (at least, and per highest harmonic) on which the reversals of a
+/// distorted waveform are bracketed: the sign changes of `xi'` on the grid; a harmonic k turns at
+/// most `2k` times per period, so 8 points per highest harmonic's period separate its roots
+/// unless two nearly coincide (a nearly flat inflection, whose loop contribution is nil).
+const REVERSAL_GRID_MIN: usize = 64;
+/// See [`REVERSAL_GRID_MIN`].
+const REVERSAL_GRID_PER_HARMONIC: usize = 8;
+/// Safeguarded Newton steps allowed per reversal (bisection alone reaches 1e-15 rad in ~50).
+const REVERSAL_MAX_ITER: usize = 100;
+
+/// A measured input's waveform beyond its fundamental (design.md 9.5): the latent input is
+/// `x = A xi(theta - phi)`, `xi(zeta) = cos(zeta) + lambda d(zeta)`, with the normalised
+/// distortion `d(zeta) = sum_{k >= 2} Re(c_k e^{i k zeta})` measured on the input (`c_k` relative
+/// to the fundamental's amplitude and phase) and `lambda` the fitted scale (1: the measured
+/// waveform drives the model; 0: the pure sine).
+#[derive(Debug, Clone, Copy)]
+pub struct Waveform<'a> {
+    /// `lambda` (dimensionless).
+    pub lambda: f64,
+    /// `[Re c_2, Im c_2, Re c_3, Im c_3, ...]` (dimensionless, relative to the fundamental).
+    pub harmonics: &'a [f64],
+}
+
+impl Waveform<'_> {
+    /// `[xi, xi', xi'', d]` at `zeta` (derivatives in zeta).
+    fn eval(&self, zeta: f64) -> [f64; 4] {
+        let (mut d, mut d1, mut d2) = (0.0, 0.0, 0.0);
+        for (i, c) in self.harmonics.chunks_exact(2).enumerate() {
+            let k = (i + 2) as f64;
+            let (s, co) = (k * zeta).sin_cos();
+            let v = c[0] * co - c[1] * s;
+            d += v;
+            d1 -= k * (c[0] * s + c[1] * co);
+            d2 -= k * k * v;
+        }
+        let (s, co) = zeta.sin_cos();
+        let l = self.lambda;
+        [co + l * d, -s + l * d1, -co + l * d2, d]
+    }
+
+    /// The reversals of `xi` (roots of `xi'`) in `[0, 2 pi)`: sign changes on a grid, each
+    /// refined by Newton safeguarded by bisection in its bracket.
+    fn reversals(&self) -> Vec<f64> {
+        let m = REVERSAL_GRID_MIN.max(REVERSAL_GRID_PER_HARMONIC * (self.harmonics.len() / 2 + 1));
+        let h = 2.0 * PI / m as f64;
+        let f = |z: f64| self.eval(z)[1];
+        let mut roots = Vec::new();
+        for i in 0..m {
+            let (mut lo, mut hi) = (i as f64 * h, (i + 1) as f64 * h);
+            let (flo, fhi) = (f(lo), f(hi));
+            if flo == 0.0 {
+                roots.push(lo);
+                continue;
+            }
+            if flo * fhi >= 0.0 {
+                continue;
+            }
+            let mut z = 0.5 * (lo + hi);
+            for _ in 0..REVERSAL_MAX_ITER {
+                let e = self.eval(z);
+                if e[1] == 0.0 {
+                    break;
+                }
+                if (e[1] < 0.0) == (flo < 0.0) {
+                    lo = z;
+                } else {
+                    hi = z;
+                }
+                let newton = z - e[1] / e[2];
+                let next = if newton > lo && newton < hi {
+                    newton
+                } else {
+                    0.5 * (lo + hi)
+                };
+                let done = (next - z).abs() <= 4.0 * f64::EPSILON * (1.0 + z.abs());
+                z = next;
+                if done || hi - lo <= 4.0 * f64::EPSILON * (1.0 + z.abs()) {
+                    break;
+                }
+            }
+            roots.push(z);
+        }
+        roots
+    }
+}
+
+/// The P + 2 segments of one cycle of `x = |A| xi(theta - phi')` (`phi' = phi`, `+ pi` for
+/// `A < 0`) behind a play of half-width b (design.md 9.5), from the top of x around, and the half
+/// travel `(max x - min x) / 2`.
+///
+/// One maximum and one minimum per period: x is monotone between them, so the play output is the
+/// sine's rule with the extremes in place of `±a`: descending `xp = min(x_top - b, x + b)`,
+/// ascending `xp = max(x_bot + b, x - b)`. Node derivatives `d/d(A, phi, b, lambda)`: at a sample
+/// `x_A = xi`, `x_phi = -A xi'`, `x_lambda = A d`; at a reversal `xi' = 0`, so `x_phi = 0` there
+/// (the extreme moves with phi but its value does not).
+fn distorted_segments(
+    amplitude: f64,
+    phi: f64,
+    b: f64,
+    wf: &Waveform,
+    p: usize,
+) -> Result<(Vec<Segment>, f64)> {
+    // x = |A| xi(theta - phi'), phi' = phi (+ pi for A < 0): for a sine the same x as A cos(theta - phi),
+    // and the waveform stays the input's whatever the sign convention of (g, phi); d/dA = sgn(A) d/d|A|.
+    let sa = sgn(amplitude);
+    let (amplitude, phi) = if amplitude < 0.0 {
+        (-amplitude, phi + PI)
+    } else {
+        (amplitude, phi)
+    };
+    let roots = wf.reversals();
+    if roots.len() != 2 {
+        return Err(CoreError::InvalidParameter(format!(
+            "the input waveform xi = cos + lambda d (lambda = {}) has {} reversals per period; \
+             the path loop with a measured waveform supports one maximum and one minimum (a \
+             mildly distorted input): the distortion is too strong for this model",
+            wf.lambda,
+            roots.len()
+        )));
+    }
+    let e = [wf.eval(roots[0]), wf.eval(roots[1])];
+    // The top of x = A xi: the larger xi for A > 0, the smaller for A < 0.
+    let first_is_top = (amplitude * (e[0][0] - e[1][0])) > 0.0;
+    let (zt, zb, et, eb) = if first_is_top {
+        (roots[0], roots[1], e[0], e[1])
+    } else {
+        (roots[1], roots[0], e[1], e[0])
+    };
+    let xt = amplitude * et[0];
+    let xb = amplitude * eb[0];
+    let half = 0.5 * (xt - xb);
+    if b >= half {
+        return Err(CoreError::ZeroAmplitude(format!(
+            "play = {b} >= the half travel {half} of the distorted x: no motion reaches the \
+             hysteresis and its loop is undetermined; the play must be below it"
+        )));
+    }
+    // Reversal nodes: d/d(A, phi, b, lambda).
+    let top = (xt - b, [sa * et[0], 0.0, -1.0, amplitude * et[3]]);
+    let bottom = (xb + b, [sa * eb[0], 0.0, 1.0, amplitude * eb[3]]);
+    let r = ((phi + zt) / (2.0 * PI)).rem_euclid(1.0);
+    let ub = ((zb - zt) / (2.0 * PI)).rem_euclid(1.0);
+    let frac = |j: usize| {
+        let u = j as f64 / p as f64 - r;
+        if u < 0.0 {
+            u + 1.0
+        } else {
+            u
+        }
+    };
+    let j0 = (0..p)
+        .min_by(|&i, &k| frac(i).total_cmp(&frac(k)))
+        .unwrap_or(0);
+    let mut segs = Vec::with_capacity(p + 2);
+    let mut prev = top;
+    let mut push = |prev: &mut (f64, [f64; 4]), node: (f64, [f64; 4]), s: f64, end: usize| {
+        segs.push(Segment {
+            dx: node.0 - prev.0,
+            ddx: std::array::from_fn(|q| node.1[q] - prev.1[q]),
+            s,
+            end,
+        });
+        *prev = node;
+    };
+    let mut passed_bottom = false;
+    for m in 0..p {
+        let j = (j0 + m) % p;
+        let descending = frac(j) <= ub;
+        if !descending && !passed_bottom {
+            push(&mut prev, bottom, -1.0, REVERSAL);
+            passed_bottom = true;
+        }
+        let zeta = 2.0 * PI * j as f64 / p as f64 - phi;
+        let ev = wf.eval(zeta);
+        let x = amplitude * ev[0];
+        let dx = [sa * ev[0], -amplitude * ev[1], amplitude * ev[3]];
+        let node = if descending {
+            if x < xt - 2.0 * b {
+                (x + b, [dx[0], dx[1], 1.0, dx[2]])
+            } else {
+                top
+            }
+        } else if x > xb + 2.0 * b {
+            (x - b, [dx[0], dx[1], -1.0, dx[2]])
+        } else {
+            bottom
+        };
+        push(&mut prev, node, if descending { -1.0 } else { 1.0 }, j);
+    }
+    if !passed_bottom {
+        push(&mut prev, bottom, -1.0, REVERSAL);
+    }
+    push(&mut prev, top, 1.0, REVERSAL);
+    Ok((segs, half))
 }
 
 /// Pieces of the cycle integrated side by side: piece i is `segs[start[i]..end[i]]`. With
@@ -263,7 +464,7 @@ impl<const K: usize> Pieces<K> {
             } else {
                 Segment {
                     dx: 0.0,
-                    ddx: [0.0; 3],
+                    ddx: [0.0; 4],
                     s: 1.0,
                     end: REVERSAL,
                 }
@@ -372,11 +573,11 @@ fn full_pass<const K: usize>(
     v: &[f64; K],
     substeps: usize,
     out: &mut Record<'_>,
-) -> ([f64; K], [f64; K], [[f64; 7]; K]) {
+) -> ([f64; K], [f64; K], [[f64; N_PD]; K]) {
     let hs = 1.0 / substeps as f64;
     let mut w = *v;
     let mut ph = [1.0; K];
-    let mut t = [[0.0; 7]; K];
+    let mut t = [[0.0; N_PD]; K];
     for m in 0..pc.longest() {
         let row = pc.row(segs, m);
         for _ in 0..substeps {
@@ -391,6 +592,7 @@ fn full_pass<const K: usize>(
                 ti[PD_AMPLITUDE] += q[0] * g.ddx[0];
                 ti[PD_PHI] += q[0] * g.ddx[1];
                 ti[PD_PLAY] += q[0] * g.ddx[2];
+                ti[PD_DISTORT] += q[0] * g.ddx[3];
                 ti[PD_BETA] += q[1];
                 ti[PD_GAMMA] += q[2];
                 ti[PD_MU] += q[3];
@@ -413,7 +615,7 @@ fn full_pass<const K: usize>(
 /// The output being filled: `w_j`, the partials `T_j` at a fixed piece start, `dw_j/dv`.
 struct Record<'a> {
     w: &'a mut [f64],
-    jac: &'a mut [[f64; 7]],
+    jac: &'a mut [[f64; N_PD]],
     phis: &'a mut [f64],
 }
 
@@ -471,7 +673,7 @@ fn shoot<const K: usize>(
             full_pass(p, segs, pc, &v, substeps, out)
         } else {
             let (e, m) = shoot_pass(p, segs, pc, &v, substeps);
-            (e, m, [[0.0; 7]; K])
+            (e, m, [[0.0; N_PD]; K])
         };
         let r: [f64; K] = std::array::from_fn(|i| e[i] - v[(i + 1) % K]);
         let resid: f64 = r.iter().map(|x| x.abs()).sum();
@@ -494,8 +696,8 @@ fn shoot<const K: usize>(
             }
             // dv/dq around the cycle (the same recurrence as the Newton step, with the
             // partials T_end in place of the residuals); then every sample T_j + Phi_j dv_i/dq.
-            let mut dv = [[0.0; 7]; K];
-            for q in 0..7 {
+            let mut dv = [[0.0; N_PD]; K];
+            for q in 0..N_PD {
                 let tq: [f64; K] = std::array::from_fn(|i| t[i][q]);
                 let d = newton_steps(&tq, &m);
                 for i in 0..K {
@@ -585,7 +787,7 @@ fn coarse_segments<const K: usize>(
             }
             out.push(Segment {
                 dx,
-                ddx: [0.0; 3],
+                ddx: [0.0; 4],
                 s,
                 end: REVERSAL,
             });
@@ -714,13 +916,37 @@ pub fn path_loop(
     substeps: usize,
 ) -> Result<PathLoop> {
     let args = (amplitude, beta, gamma, mu, delta, play, phi);
-    path_loop_with(args, samples_per_period, substeps, true)
+    path_loop_with(args, None, samples_per_period, substeps, true)
+}
+
+/// [`path_loop`] along `x = A xi(theta - phi)`, a measured input waveform scaled by `lambda`
+/// (design.md 9.5): the same loop, the Jacobian's column [`PD_DISTORT`] is `d w / d lambda`.
+///
+/// Errors: those of [`path_loop`] (with the half travel of x in place of `|A|` for the play),
+/// and [`CoreError::InvalidParameter`] for a non-finite or odd-length `harmonics` or a waveform
+/// with more than one maximum per period.
+#[allow(clippy::too_many_arguments)]
+pub fn path_loop_distorted(
+    amplitude: f64,
+    beta: f64,
+    gamma: f64,
+    mu: f64,
+    delta: f64,
+    play: f64,
+    phi: f64,
+    waveform: &Waveform,
+    samples_per_period: usize,
+    substeps: usize,
+) -> Result<PathLoop> {
+    let args = (amplitude, beta, gamma, mu, delta, play, phi);
+    path_loop_with(args, Some(waveform), samples_per_period, substeps, true)
 }
 
 /// [`path_loop`], with the multiple shooting (`multiple`) or bracketed single shooting alone
 /// (the fallback, exercised by the tests).
 fn path_loop_with(
     (amplitude, beta, gamma, mu, delta, play, phi): (f64, f64, f64, f64, f64, f64, f64),
+    waveform: Option<&Waveform>,
     samples_per_period: usize,
     substeps: usize,
     multiple: bool,
@@ -759,7 +985,16 @@ fn path_loop_with(
             "play = {play} must be >= 0 (it is the half-width of the backlash, in units of x)"
         )));
     }
-    if play >= amplitude.abs() {
+    if let Some(wf) = waveform {
+        finite("lambda", wf.lambda)?;
+        if wf.harmonics.len() % 2 != 0 || !wf.harmonics.iter().all(|v| v.is_finite()) {
+            return Err(CoreError::InvalidParameter(format!(
+                "the waveform's harmonics must be finite (re, im) pairs for k = 2, 3, ...; got {} \
+                 numbers",
+                wf.harmonics.len()
+            )));
+        }
+    } else if play >= amplitude.abs() {
         return Err(CoreError::ZeroAmplitude(format!(
             "play = {play} >= |amplitude| = {}: x never travels past the play, so no motion \
              reaches the hysteresis and its loop is undetermined; the play must be below |A|",
@@ -774,7 +1009,10 @@ fn path_loop_with(
         delta,
     };
     let p = samples_per_period;
-    let segs = segments(amplitude, phi, play, p);
+    let (segs, half_travel) = match waveform {
+        None => (segments(amplitude, phi, play, p), amplitude.abs()),
+        Some(wf) => distorted_segments(amplitude, phi, play, wf, p)?,
+    };
     // |w| stays below the larger of the two saturation levels (beta + gamma -+ delta)^(-1/mu).
     let bound = (1.0 / margin).powf(1.0 / mu);
     if !(bound.is_finite() && bound > 0.0) {
@@ -786,7 +1024,7 @@ fn path_loop_with(
     }
 
     let mut w = vec![0.0; p];
-    let mut jac = vec![[0.0; 7]; p];
+    let mut jac = vec![[0.0; N_PD]; p];
     // dw_j / dv of each sample (v the start of its piece).
     let mut phis = vec![0.0; p];
     let mut out = Record {
@@ -807,13 +1045,7 @@ fn path_loop_with(
     // Multiple shooting on it from w = 0 at every piece start (the K chains overlap); should it
     // stray, bracketed single shooting, which always has a safe step.
     let v = match multiple {
-        true => coarse_multiple(
-            &shape,
-            &coarse,
-            &coarse_pieces,
-            bound,
-            amplitude.abs() - play,
-        ),
+        true => coarse_multiple(&shape, &coarse, &coarse_pieces, bound, half_travel - play),
         false => None,
     }
     .unwrap_or_else(|| coarse_single(&shape, &coarse, &coarse_pieces, bound));
@@ -1114,8 +1346,8 @@ mod tests {
             ((-2.5, 0.9, -0.3, 2.5, -0.35, 0.6, 2.0), 37),
             ((0.2, 1.0, 0.2, 1.2, 0.5, 0.0, -1.0), 16),
         ] {
-            let m = path_loop_with(args, p, 4, true).unwrap();
-            let s = path_loop_with(args, p, 4, false).unwrap();
+            let m = path_loop_with(args, None, p, 4, true).unwrap();
+            let s = path_loop_with(args, None, p, 4, false).unwrap();
             for j in 0..p {
                 assert!((m.w[j] - s.w[j]).abs() < 1e-12, "{args:?} sample {j}");
                 for k in 0..7 {
@@ -1196,5 +1428,51 @@ mod tests {
             matches!(r, Err(CoreError::NonFinite(_) | CoreError::NotConverged(_))),
             "{r:?}"
         );
+    }
+
+    #[test]
+    fn distorted_waveform_nests_the_sine_and_has_an_exact_lambda_column() {
+        // lambda = 0: the reversals land on 0 and pi to rounding, so the loop is the sine's.
+        let h = [0.03, -0.02, 0.04, 0.01];
+        let wf = |lambda| Waveform {
+            lambda,
+            harmonics: &h,
+        };
+        let (p, sub) = (36, 3);
+        for a in [1.3, -0.9] {
+            let d =
+                path_loop_distorted(a, 0.7, 0.25, 1.8, 0.2, 0.1, 0.4, &wf(0.0), p, sub).unwrap();
+            let s = path_loop(a, 0.7, 0.25, 1.8, 0.2, 0.1, 0.4, p, sub).unwrap();
+            for j in 0..p {
+                assert!((d.w[j] - s.w[j]).abs() < 1e-12);
+                for q in 0..7 {
+                    assert!((d.jac[j][q] - s.jac[j][q]).abs() < 1e-11);
+                }
+            }
+        }
+        // d w / d lambda against central differences (as jacobian_matches_central_differences).
+        let run = |l: f64| {
+            path_loop_distorted(1.4, 0.7, 0.25, 1.8, 0.1, 0.15, 0.9, &wf(l), p, sub).unwrap()
+        };
+        let base = run(1.0);
+        let step = 1e-5;
+        let (up, dn) = (run(1.0 + step), run(1.0 - step));
+        for j in 0..p {
+            let fd = (up.w[j] - dn.w[j]) / (2.0 * step);
+            let err = (fd - base.jac[j][PD_DISTORT]).abs() / (1.0 + fd.abs());
+            assert!(
+                err < 1e-6,
+                "sample {j}: {fd} vs {}",
+                base.jac[j][PD_DISTORT]
+            );
+        }
+        // Too strong a distortion (extra reversals) is a named refusal, not a wrong loop.
+        let strong = [0.0, 0.0, 0.5, 0.0];
+        let bad = Waveform {
+            lambda: 1.0,
+            harmonics: &strong,
+        };
+        let r = path_loop_distorted(1.0, 0.7, 0.25, 1.8, 0.0, 0.0, 0.0, &bad, p, sub);
+        assert!(matches!(r, Err(CoreError::InvalidParameter(_))), "{r:?}");
     }
 }

@@ -644,8 +644,51 @@ fn path_loop<'py>(
     let l = run_detached(py, steps, || {
         pathloop::path_loop(amplitude, beta, gamma, mu, delta, play, phi, p, substeps)
     })?;
-    let flat: Vec<f64> = l.jac.iter().flatten().copied().collect();
+    // The sine path has no distortion column: the first seven.
+    let flat: Vec<f64> = l.jac.iter().flat_map(|r| r[..7].to_vec()).collect();
     let jac = Array2::from_shape_vec((l.w.len(), 7), flat)
+        .map_err(|e| CoreError::InvalidParameter(e.to_string()))?;
+    Ok((l.w.into_pyarray(py), jac.into_pyarray(py), l.iterations))
+}
+
+/// [`path_loop`] along a measured waveform `x = A xi(theta - phi)`, `xi = cos + lambda d`,
+/// `d = sum_k Re(c_k e^{i k zeta})` with `harmonics = [Re c_2, Im c_2, Re c_3, ...]`
+/// (design.md 9.5): `(w, jac, iterations)`, `jac` of shape (P, 8), the last column `d w/d lambda`.
+#[pyfunction]
+#[pyo3(signature = (amplitude, beta, gamma, mu, delta, play, phi, lam, harmonics, samples_per_period, substeps))]
+#[allow(clippy::type_complexity, clippy::too_many_arguments)]
+fn path_loop_distorted<'py>(
+    py: Python<'py>,
+    amplitude: f64,
+    beta: f64,
+    gamma: f64,
+    mu: f64,
+    delta: f64,
+    play: f64,
+    phi: f64,
+    lam: f64,
+    harmonics: PyReadonlyArray1<'py, f64>,
+    samples_per_period: i64,
+    substeps: i64,
+) -> PyResult<(Bound<'py, PyArray1<f64>>, Bound<'py, PyArray2<f64>>, usize)> {
+    let p = count("samples_per_period", samples_per_period, 0)?;
+    let substeps = count("substeps", substeps, 0)?;
+    let harmonics = slice("harmonics", &harmonics)?;
+    let steps = (p as u128)
+        .saturating_mul(substeps as u128)
+        .saturating_mul(SHOOT_ITER_ESTIMATE);
+    budget::check_steps("the path loop (samples x substeps)", steps)?;
+    let wf = pathloop::Waveform {
+        lambda: lam,
+        harmonics,
+    };
+    let l = run_detached(py, steps, || {
+        pathloop::path_loop_distorted(
+            amplitude, beta, gamma, mu, delta, play, phi, &wf, p, substeps,
+        )
+    })?;
+    let flat: Vec<f64> = l.jac.iter().flatten().copied().collect();
+    let jac = Array2::from_shape_vec((l.w.len(), pathloop::N_PD), flat)
         .map_err(|e| CoreError::InvalidParameter(e.to_string()))?;
     Ok((l.w.into_pyarray(py), jac.into_pyarray(py), l.iterations))
 }
@@ -825,7 +868,7 @@ type AugOutputPy<'py> = (
 /// period: `(y (P,), jac_shared (P, 3 + T), jac_own (P, 2))`, shared columns
 /// `[beta, gamma, mu, q_1 .. q_T]` in the order of `terms`, own columns `[g, phi]`.
 #[pyfunction]
-#[pyo3(signature = (ybar_len, amplitude, frequency, grid_phase, terms, shared, gain, phase, substeps))]
+#[pyo3(signature = (ybar_len, amplitude, frequency, grid_phase, terms, shared, gain, phase, substeps, waveform=None))]
 #[allow(clippy::too_many_arguments)]
 fn augmented_output<'py>(
     py: Python<'py>,
@@ -838,9 +881,14 @@ fn augmented_output<'py>(
     gain: f64,
     phase: f64,
     substeps: i64,
+    waveform: Option<PyReadonlyArray1<'py, f64>>,
 ) -> PyResult<AugOutputPy<'py>> {
     let terms = terms::Terms::parse(&terms)?;
     let shared = slice("shared", &shared)?;
+    let waveform = match &waveform {
+        Some(a) => slice("waveform", a)?,
+        None => &[],
+    };
     let exc = terms::Excitation {
         samples: count("ybar_len", ybar_len, 0)?,
         amplitude,
@@ -848,7 +896,9 @@ fn augmented_output<'py>(
         grid_phase,
     };
     let substeps = count("substeps", substeps, 1)?;
-    let out = py.detach(|| terms::augmented_output(&exc, &terms, shared, gain, phase, substeps))?;
+    let out = py.detach(|| {
+        terms::augmented_output_with(&exc, waveform, &terms, shared, gain, phase, substeps)
+    })?;
     let p = out.y.len();
     let own: Vec<f64> = out.jac_own.iter().flatten().copied().collect();
     Ok((
@@ -874,7 +924,7 @@ type AugRefineOut<'py> = (
 /// Joint Levenberg-Marquardt of the augmented model (design.md 9.3). `fisher` is `J^T W J`
 /// ordered `[beta, gamma, mu, q_1 .. q_T, g_0, phi_0, g_1, phi_1, ...]`.
 #[pyfunction]
-#[pyo3(signature = (ybars, amplitudes, frequencies, grid_phases, weights, terms, shared0, gains0, phases0, *, max_iter=200, substeps=4, mu_lo=1.0, mu_hi=f64::INFINITY))]
+#[pyo3(signature = (ybars, amplitudes, frequencies, grid_phases, weights, terms, shared0, gains0, phases0, *, max_iter=200, substeps=4, mu_lo=1.0, mu_hi=f64::INFINITY, waveforms=None))]
 #[allow(clippy::too_many_arguments)]
 fn augmented_refine<'py>(
     py: Python<'py>,
@@ -891,14 +941,28 @@ fn augmented_refine<'py>(
     substeps: i64,
     mu_lo: f64,
     mu_hi: f64,
+    waveforms: Option<Vec<PyReadonlyArray1<'py, f64>>>,
 ) -> PyResult<AugRefineOut<'py>> {
     let terms = terms::Terms::parse(&terms)?;
+    let waveforms = waveforms.unwrap_or_default();
+    let wave_slices = waveforms
+        .iter()
+        .enumerate()
+        .map(|(i, a)| slice(&format!("waveforms[{i}]"), a))
+        .collect::<PyResult<Vec<_>>>()?;
     let slices = ybars
         .iter()
         .enumerate()
         .map(|(i, y)| slice(&format!("ybars[{i}]"), y))
         .collect::<PyResult<Vec<_>>>()?;
     let m = slices.len();
+    if !(wave_slices.is_empty() || wave_slices.len() == m) {
+        return Err(CoreError::InvalidParameter(format!(
+            "{m} experiments but {} waveforms (give one per experiment, or none)",
+            wave_slices.len()
+        ))
+        .into());
+    }
     if amplitudes.len() != m
         || frequencies.len() != m
         || grid_phases.len() != m
@@ -927,6 +991,7 @@ fn augmented_refine<'py>(
             frequency: frequencies[i],
             grid_phase: grid_phases[i],
             weight: weights[i],
+            waveform: wave_slices.get(i).copied().unwrap_or(&[]),
         })
         .collect();
     // Each iteration evaluates every steady loop (a few shooting passes of P x substeps steps).
@@ -1154,6 +1219,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(gain_estimate, m)?)?;
     m.add_function(wrap_pyfunction!(steady_loop, m)?)?;
     m.add_function(wrap_pyfunction!(path_loop, m)?)?;
+    m.add_function(wrap_pyfunction!(path_loop_distorted, m)?)?;
     m.add_function(wrap_pyfunction!(profile_phase_sls, m)?)?;
     m.add_function(wrap_pyfunction!(profile_phase_gain, m)?)?;
     m.add_function(wrap_pyfunction!(refine_fit, m)?)?;

@@ -21,7 +21,8 @@ use rustfft::FftPlanner;
 
 use crate::error::{all_finite, finite, CoreError, Result};
 use crate::path_loop::{
-    path_loop, PD_AMPLITUDE, PD_BETA, PD_DELTA, PD_GAMMA, PD_MU, PD_PHI, PD_PLAY,
+    path_loop, path_loop_distorted, Waveform, N_PD, PD_AMPLITUDE, PD_BETA, PD_DELTA, PD_DISTORT,
+    PD_GAMMA, PD_MU, PD_PHI, PD_PLAY,
 };
 use crate::refine::{
     hysteresis_admissible, levenberg_marquardt, project_hysteresis, JointModel, LmOptions,
@@ -55,11 +56,14 @@ pub enum TermKind {
     Asymmetry,
     /// Play (backlash) half-width `b` ([x]) before the hysteresis, `0 <= b < |A|`.
     Play,
+    /// Measured input waveform: `lambda` (dimensionless) scales the input's own harmonics in the
+    /// latent x (design.md 9.5); each experiment supplies its waveform.
+    Distortion,
 }
 
 impl TermKind {
     /// Every term, in the order of the table of design.md 9.1.
-    pub const ALL: [TermKind; 8] = [
+    pub const ALL: [TermKind; 9] = [
         TermKind::Offset,
         TermKind::Stiffness,
         TermKind::Viscous,
@@ -68,6 +72,7 @@ impl TermKind {
         TermKind::SensorLag,
         TermKind::Asymmetry,
         TermKind::Play,
+        TermKind::Distortion,
     ];
 
     /// The code name (design.md 9.1), e.g. `"sensor_lag"`.
@@ -81,6 +86,7 @@ impl TermKind {
             TermKind::SensorLag => "sensor_lag",
             TermKind::Asymmetry => "asymmetry",
             TermKind::Play => "play",
+            TermKind::Distortion => "distortion",
         }
     }
 
@@ -154,9 +160,12 @@ impl Terms {
 
     /// Whether the hysteresis needs the path loop of 9.2 (asymmetry or play active).
     pub fn needs_path_loop(&self) -> bool {
-        self.kinds
-            .iter()
-            .any(|k| matches!(k, TermKind::Asymmetry | TermKind::Play))
+        self.kinds.iter().any(|k| {
+            matches!(
+                k,
+                TermKind::Asymmetry | TermKind::Play | TermKind::Distortion
+            )
+        })
     }
 
     /// `kind`'s value in `shared`, 0 when inactive (every term vanishes at 0).
@@ -247,19 +256,30 @@ pub fn check_shared(terms: &Terms, shared: &[f64]) -> Result<()> {
 
 /// The hysteresis `w` and its columns `d/d(beta, gamma, mu, A, phi, delta, b)` (the last two 0
 /// for the plain loop).
+#[allow(clippy::too_many_arguments)]
 fn hysteresis(
     terms: &Terms,
     shared: &[f64],
     amplitude: f64,
     phi: f64,
+    waveform: &[f64],
     p: usize,
     substeps: usize,
-) -> Result<(Vec<f64>, Vec<[f64; 7]>)> {
+) -> Result<(Vec<f64>, Vec<[f64; N_PD]>)> {
     let (beta, gamma, mu) = (shared[0], shared[1], shared[2]);
     if terms.needs_path_loop() {
         let delta = terms.value(shared, TermKind::Asymmetry);
         let b = terms.value(shared, TermKind::Play);
-        let l = path_loop(amplitude, beta, gamma, mu, delta, b, phi, p, substeps)?;
+        let l = match terms.column(TermKind::Distortion) {
+            Some(c) => {
+                let wf = Waveform {
+                    lambda: shared[c],
+                    harmonics: waveform,
+                };
+                path_loop_distorted(amplitude, beta, gamma, mu, delta, b, phi, &wf, p, substeps)?
+            }
+            None => path_loop(amplitude, beta, gamma, mu, delta, b, phi, p, substeps)?,
+        };
         Ok((l.w, l.jac))
     } else {
         let l = steady_loop(amplitude, beta, gamma, mu, phi, p, substeps)?;
@@ -267,7 +287,7 @@ fn hysteresis(
             .jac
             .iter()
             .map(|r| {
-                let mut row = [0.0; 7];
+                let mut row = [0.0; N_PD];
                 row[PD_BETA] = r[D_BETA];
                 row[PD_GAMMA] = r[D_GAMMA];
                 row[PD_MU] = r[D_MU];
@@ -363,6 +383,21 @@ pub fn augmented_output(
     phase: f64,
     substeps: usize,
 ) -> Result<AugOutput> {
+    augmented_output_with(exc, &[], terms, shared, gain, phase, substeps)
+}
+
+/// [`augmented_output`] of an experiment whose measured input waveform (design.md 9.5) is
+/// `waveform = [Re c_2, Im c_2, Re c_3, ...]` (relative to the fundamental; empty: a pure sine),
+/// used by the `distortion` term. The mechanical terms still see the fundamental of u.
+pub fn augmented_output_with(
+    exc: &Excitation,
+    waveform: &[f64],
+    terms: &Terms,
+    shared: &[f64],
+    gain: f64,
+    phase: f64,
+    substeps: usize,
+) -> Result<AugOutput> {
     exc.validate()?;
     check_shared(terms, shared)?;
     finite("gain", gain)?;
@@ -370,7 +405,7 @@ pub fn augmented_output(
     let p = exc.samples;
     let ns = terms.n_shared();
     let (u_amp, omega) = (exc.amplitude, exc.frequency);
-    let (w, hjac) = hysteresis(terms, shared, u_amp * gain, phase, p, substeps)?;
+    let (w, hjac) = hysteresis(terms, shared, u_amp * gain, phase, waveform, p, substeps)?;
     // Column-major work space: F, then the shared columns, then g and phi.
     let ncol = 1 + ns + N_OWN;
     let mut cols = vec![vec![0.0; p]; ncol];
@@ -415,6 +450,7 @@ pub fn augmented_output(
                 TermKind::SensorLag => lag_col = Some(1 + N_HYSTERESIS + t),
                 TermKind::Asymmetry => col[j] = h[PD_DELTA],
                 TermKind::Play => col[j] = h[PD_PLAY],
+                TermKind::Distortion => col[j] = h[PD_DISTORT],
             }
         }
         cols[0][j] = f;
@@ -469,6 +505,9 @@ pub struct AugExperiment<'a> {
     pub grid_phase: f64,
     /// Weight of each squared residual, `N / sigma^2`.
     pub weight: f64,
+    /// The measured input's waveform beyond its fundamental, `[Re c_2, Im c_2, ...]` (design.md
+    /// 9.5; empty for a pure sine), used by the `distortion` term.
+    pub waveform: &'a [f64],
 }
 
 impl AugExperiment<'_> {
@@ -569,8 +608,9 @@ impl JointModel for AugModel<'_> {
     }
 
     fn evaluate(&self, i: usize, shared: &[f64], own: [f64; 2]) -> Result<ModelEval> {
-        let out = augmented_output(
+        let out = augmented_output_with(
             &self.exps[i].excitation(),
+            self.exps[i].waveform,
             self.terms,
             shared,
             own[0],
@@ -878,6 +918,7 @@ mod tests {
                 frequency: 1.0 + i as f64,
                 grid_phase: 0.3 * i as f64,
                 weight: 1e6,
+                waveform: &[],
             })
             .collect();
         let start = [0.7, 0.25, 1.8, 0.2, 0.06, 0.02];
@@ -922,6 +963,7 @@ mod tests {
             frequency: 1.0,
             grid_phase: 0.0,
             weight: 1.0,
+            waveform: &[],
         }];
         let go = |shared: &[f64], opts: &AugOptions| {
             augmented_refine(&exps, &terms, shared, &[1.0], &[0.0], opts).unwrap_err()

@@ -80,6 +80,7 @@ def test_registry_follows_the_design_table() -> None:
         "asymmetry",
         "play",
         "degradation",
+        "distortion",
     ]
     units = {kind: cls.units(y="N", u="mm") for kind, cls in TERMS.items()}
     assert units == {
@@ -92,11 +93,14 @@ def test_registry_follows_the_design_table() -> None:
         "asymmetry": "1/N^mu",
         "play": "N",
         "degradation": "1/N^2",
+        "distortion": "",
     }
     for kind, cls in TERMS.items():
         assert cls.kind == kind
         assert cls.description and cls.signature and cls.symbol
-        assert cls.acts_on == ("hysteresis" if kind in ("asymmetry", "play", "degradation") else "output")
+        assert cls.acts_on == (
+            "hysteresis" if kind in ("asymmetry", "play", "degradation", "distortion") else "output"
+        )
     for t in ONE_OF_EACH:
         assert t.value == getattr(t, t.symbol)
         assert t.with_value(0.07).value == 0.07

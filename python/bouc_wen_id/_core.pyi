@@ -22,6 +22,7 @@ __all__ = [
     "gain_estimate",
     "steady_loop",
     "path_loop",
+    "path_loop_distorted",
     "profile_phase_sls",
     "profile_phase_gain",
     "refine",
@@ -143,6 +144,19 @@ def path_loop(
     samples_per_period: int,
     substeps: int,
 ) -> tuple[_F, _F, int]: ...
+def path_loop_distorted(
+    amplitude: float,
+    beta: float,
+    gamma: float,
+    mu: float,
+    delta: float,
+    play: float,
+    phi: float,
+    lam: float,
+    harmonics: _F,
+    samples_per_period: int,
+    substeps: int,
+) -> tuple[_F, _F, int]: ...
 def profile_phase_sls(
     ybar: _F, ydot: _F, amplitude: float, omega: float, lo: float, hi: float, tol: float, grid: int
 ) -> tuple[float, float, float, float, float, float, int]: ...
@@ -175,6 +189,7 @@ def augmented_output(
     gain: float,
     phase: float,
     substeps: int,
+    waveform: _F | None = None,
 ) -> tuple[_F, _F, _F]: ...
 def augmented_refine(
     ybars: Sequence[_F],
@@ -191,6 +206,7 @@ def augmented_refine(
     substeps: int = 4,
     mu_lo: float = 1.0,
     mu_hi: float = ...,
+    waveforms: Sequence[_F] | None = None,
 ) -> tuple[_F, _F, _F, float, int, bool, _F, list[_F]]: ...
 def get_budget() -> tuple[int, int, int]: ...
 def set_budget(max_samples: int, max_steps: int, max_bytes: int) -> tuple[int, int, int]: ...

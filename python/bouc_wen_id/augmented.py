@@ -114,6 +114,10 @@ class AugExperiment:
         Weight of each squared residual, ``N / sigma^2`` (periods averaged over noise variance), > 0.
     source : str
         Where the experiment came from (for messages).
+    waveform : ndarray, shape (2 K,), optional
+        The measured input's harmonics beyond the fundamental, ``[Re c_2, Im c_2, Re c_3, ...]`` with
+        ``u = U Re[e^{i z} + sum_k c_k e^{i k z}]``, ``z = 2 pi j/P + psi`` (design.md 9.5): what the
+        ``distortion`` term scales. Empty (the default) for a pure sine.
     """
 
     ybar: FloatArray
@@ -122,6 +126,7 @@ class AugExperiment:
     grid_phase: float
     weight: float
     source: str = ""
+    waveform: FloatArray = field(default_factory=lambda: np.zeros(0))
 
     def __post_init__(self) -> None:
         ybar = _frozen_array("ybar", self.ybar)
@@ -141,6 +146,13 @@ class AugExperiment:
         object.__setattr__(self, "frequency", frequency)
         object.__setattr__(self, "grid_phase", _finite("grid_phase", self.grid_phase))
         object.__setattr__(self, "weight", weight)
+        wave = np.array(self.waveform, dtype=np.float64).ravel()
+        if wave.size % 2 or not np.all(np.isfinite(wave)):
+            raise InvalidParameterError(
+                "waveform must hold finite (re, im) pairs of the harmonics k = 2, 3, ..."
+            )
+        wave.flags.writeable = False
+        object.__setattr__(self, "waveform", wave)
 
 
 @dataclass(frozen=True)
@@ -378,6 +390,7 @@ def fit_augmented(
         substeps=steps,
         mu_lo=mu_lo,
         mu_hi=mu_hi,
+        waveforms=[e.waveform for e in exps],
     )
     shared = np.asarray(shared, dtype=np.float64)
     params = AugParams(
@@ -419,5 +432,6 @@ def augmented_output(
         float(params.gains[i]),
         float(params.phases[i]),
         steps,
+        experiment.waveform,
     )
     return np.asarray(y, dtype=np.float64)

@@ -13,13 +13,14 @@ step up to rounding).
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Optional
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .errors import InsufficientDataError, InvalidParameterError, ZeroAmplitudeError
 from .reference import admissible_bouc_wen, levenberg_marquardt, project_bouc_wen, steady_loop
-from .reference_path import path_loop
+from .reference_path import path_loop, path_loop_distorted
 from .validation import finite_array as _finite_array
 from .validation import finite_scalar as _finite_scalar
 
@@ -45,6 +46,7 @@ TERM_NAMES: tuple[str, ...] = (
     "sensor_lag",
     "asymmetry",
     "play",
+    "distortion",
 )
 #: Width of the Coulomb term's smoothed sign, as a fraction of the peak input velocity |U| omega.
 COULOMB_EPS = 0.01
@@ -127,16 +129,27 @@ def _apply(filt: NDArray[np.complex128], cols: FloatArray) -> FloatArray:
 
 
 def _hysteresis(
-    terms: tuple[str, ...], shared: FloatArray, amplitude: float, phi: float, p: int, substeps: int
+    terms: tuple[str, ...],
+    shared: FloatArray,
+    amplitude: float,
+    phi: float,
+    p: int,
+    substeps: int,
+    waveform: FloatArray,
 ) -> tuple[FloatArray, FloatArray]:
-    """``w`` and its columns ``d/d(beta, gamma, mu, A, phi, delta, b)`` (last two 0 for the plain loop)."""
+    """``w`` and its columns ``d/d(beta, gamma, mu, A, phi, delta, b, lambda)`` (0 where inactive)."""
     beta, gamma, mu = (float(v) for v in shared[:3])
+    if "distortion" in terms:
+        delta, b = _value(terms, shared, "asymmetry"), _value(terms, shared, "play")
+        lam = _value(terms, shared, "distortion")
+        w, jac, _ = path_loop_distorted(amplitude, beta, gamma, mu, delta, b, phi, lam, waveform, p, substeps)
+        return w, jac
     if "asymmetry" in terms or "play" in terms:
         delta, b = _value(terms, shared, "asymmetry"), _value(terms, shared, "play")
-        w, jac, _ = path_loop(amplitude, beta, gamma, mu, delta, b, phi, p, substeps)
-        return w, jac
+        w, jac7, _ = path_loop(amplitude, beta, gamma, mu, delta, b, phi, p, substeps)
+        return w, np.column_stack([jac7, np.zeros(p)])
     w, jac5, _, _ = steady_loop(amplitude, beta, gamma, mu, phi, p, substeps)
-    jac = np.zeros((p, 7))
+    jac = np.zeros((p, 8))
     jac[:, :5] = jac5
     return w, jac
 
@@ -151,8 +164,12 @@ def augmented_output(
     gain: float,
     phase: float,
     substeps: int,
+    waveform: Optional[ArrayLike] = None,
 ) -> tuple[FloatArray, FloatArray, FloatArray]:
     """The augmented model's output of one experiment (design.md 9.1) and its Jacobian.
+
+    ``waveform``: the measured input's harmonics ``[Re c_2, Im c_2, ...]`` for the ``distortion`` term
+    (design.md 9.5); None or empty for a pure sine.
 
     Returns ``(y (P,), jac_shared (P, 3 + T), jac_own (P, 2))``: shared columns
     ``[beta, gamma, mu, q_1 .. q_T]`` in the order of ``terms``, own columns ``[g, phi]``.
@@ -168,7 +185,8 @@ def augmented_output(
     _finite_scalar("gain", gain)
     _finite_scalar("phase", phase)
     p = int(ybar_len)
-    w, hj = _hysteresis(names, sh, amplitude * gain, phase, p, substeps)
+    wave = np.zeros(0) if waveform is None else np.asarray(waveform, dtype=np.float64).ravel()
+    w, hj = _hysteresis(names, sh, amplitude * gain, phase, p, substeps, wave)
     theta = 2.0 * np.pi * np.arange(p) / p + grid_phase
     u = amplitude * np.cos(theta)
     udot = -amplitude * frequency * np.sin(theta)
@@ -187,6 +205,8 @@ def augmented_output(
             jac_shared[:, 3 + t] = hj[:, 5]
         elif name == "play":
             jac_shared[:, 3 + t] = hj[:, 6]
+        elif name == "distortion":
+            jac_shared[:, 3 + t] = hj[:, 7]
     jac_own = np.column_stack([amplitude * hj[:, 3], hj[:, 4]])
     y = f
     if "sensor_lag" in names:
@@ -219,6 +239,7 @@ def augmented_refine(
     substeps: int = 4,
     mu_lo: float = 1.0,
     mu_hi: float = float("inf"),
+    waveforms: Optional[Sequence[ArrayLike]] = None,
 ) -> tuple[FloatArray, FloatArray, FloatArray, float, int, bool, FloatArray, list[FloatArray]]:
     """Joint Levenberg-Marquardt of the augmented model over every experiment (design.md 9.3).
 
@@ -259,6 +280,8 @@ def augmented_refine(
             f"the mu bracket ({mu_lo}, {mu_hi}] must have a finite lower end >= 1 below its upper end"
         )
     _check_shared(names, sh0)
+    if waveforms is not None and len(waveforms) != m:
+        raise InvalidParameterError(f"{m} experiments but {len(waveforms)} waveforms")
     ns = 3 + len(names)
     col = {name: 3 + t for t, name in enumerate(names)}
 
@@ -304,6 +327,7 @@ def augmented_refine(
                 par[ns + 2 * i],
                 par[ns + 1 + 2 * i],
                 substeps,
+                None if waveforms is None else waveforms[i],
             )
             r = ys[i] - y
             cost += wts[i] * float(np.sum(r * r))

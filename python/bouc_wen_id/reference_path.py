@@ -30,10 +30,22 @@ from .errors import (
 from .reference import FloatArray
 from .validation import finite_scalar as _finite_scalar
 
-__all__ = ["path_loop", "PD_BETA", "PD_GAMMA", "PD_MU", "PD_AMPLITUDE", "PD_PHI", "PD_DELTA", "PD_PLAY"]
+__all__ = [
+    "path_loop",
+    "path_loop_distorted",
+    "PD_BETA",
+    "PD_GAMMA",
+    "PD_MU",
+    "PD_AMPLITUDE",
+    "PD_PHI",
+    "PD_DELTA",
+    "PD_PLAY",
+    "PD_DISTORT",
+]
 
-#: Columns of the Jacobian returned by :func:`path_loop` (as ``rust/path_loop.rs``).
-PD_BETA, PD_GAMMA, PD_MU, PD_AMPLITUDE, PD_PHI, PD_DELTA, PD_PLAY = range(7)
+#: Columns of the Jacobian returned by :func:`path_loop` (as ``rust/path_loop.rs``);
+#: :func:`path_loop_distorted` adds ``PD_DISTORT``, ``d w / d lambda``.
+PD_BETA, PD_GAMMA, PD_MU, PD_AMPLITUDE, PD_PHI, PD_DELTA, PD_PLAY, PD_DISTORT = range(8)
 
 #: Newton (or bisection) updates of the top value allowed.
 PATH_SHOOT_MAX_ITER = 60
@@ -104,7 +116,7 @@ def _play_node(a: float, sa: float, b: float, zeta: float, descending: bool) -> 
 
 
 def _segments(amplitude: float, phi: float, b: float, p: int) -> list[tuple[float, FloatArray, float, int]]:
-    """The P + 2 segments ``(dx, d dx/d(A, phi, b), s, sample or -1)`` of one cycle, from the top around."""
+    """The P + 2 segments ``(dx, d dx/d(A, phi, b, lambda), s, sample or -1)`` of one cycle, from the top."""
     a = abs(amplitude)
     sa = float(np.sign(amplitude))
     # Cycle phase of sample j as a fraction of the period: frac(j/P - phi'/(2 pi)),
@@ -133,7 +145,7 @@ def _segments(amplitude: float, phi: float, b: float, p: int) -> list[tuple[floa
     segs = []
     prev = top
     for node, s, j in nodes:
-        segs.append((node[0] - prev[0], np.subtract(node[1], prev[1]), s, j))
+        segs.append((node[0] - prev[0], np.append(np.subtract(node[1], prev[1]), 0.0), s, j))
         prev = node
     return segs
 
@@ -213,24 +225,40 @@ def path_loop(
     if substeps < 1:
         raise InvalidParameterError(f"substeps = {substeps} must be >= 1")
 
-    segs = _segments(amplitude, phi, play, p)
+    jac, iterations, w = _solve(
+        _segments(amplitude, phi, play, p), beta, gamma, mu, delta, margin, p, substeps
+    )
+    return w, jac[:, :7], iterations
+
+
+def _solve(
+    segs: list[tuple[float, FloatArray, float, int]],
+    beta: float,
+    gamma: float,
+    mu: float,
+    delta: float,
+    margin: float,
+    p: int,
+    substeps: int,
+) -> tuple[FloatArray, int, FloatArray]:
+    """Single shooting on the cycle of segments: ``(jac (P, 8), iterations, w)``."""
     with np.errstate(over="ignore", divide="ignore"):
         bound = float(np.float64(1.0) / margin) ** (1.0 / mu)
     if not (np.isfinite(bound) and bound > 0.0):
         raise InvalidParameterError(f"the bound (beta + gamma - |delta|)^(-1/mu) = {bound} is unusable")
     w = np.zeros(p)
-    t_rows = np.zeros((p, 7))
+    t_rows = np.zeros((p, 8))
     phis = np.zeros(p)
 
     def cycle(w0: float) -> tuple[float, float, FloatArray]:
         """One cycle from ``w0``: ``W``, ``dW/dw0``, ``dW/dq`` at fixed ``w0``; records the samples."""
-        wc, ph, t = w0, 1.0, np.zeros(7)
+        wc, ph, t = w0, 1.0, np.zeros(8)
         for dx, ddx, s, j in segs:
             y = _segment(beta, gamma, mu, delta, s, dx, wc, substeps)
             # Chain rule through the segment: T <- Psi_w T + Psi_q (+ Psi_dx d dx/dq for A, phi, b).
             t = y[1] * t
             t[[PD_BETA, PD_GAMMA, PD_MU, PD_DELTA]] += y[3:7]
-            t[[PD_AMPLITUDE, PD_PHI, PD_PLAY]] += y[2] * ddx
+            t[[PD_AMPLITUDE, PD_PHI, PD_PLAY, PD_DISTORT]] += y[2] * ddx
             ph *= y[1]
             wc = float(y[0])
             if j >= 0:
@@ -266,4 +294,170 @@ def path_loop(
     jac = t_rows + phis[:, None] * (t_end / (1.0 - dw))[None, :]
     if not (np.all(np.isfinite(w)) and np.all(np.isfinite(jac))):
         raise NonFiniteError("the path loop or its sensitivities overflowed; rescale the data")
+    return jac, iterations, w
+
+
+# --------------------------------------------------------------------------------------------------------
+# A measured, non-sinusoidal input (design.md 9.5): x = A xi(theta - phi), xi = cos + lambda d.
+
+#: Grid points per period (at least, and per highest harmonic) bracketing the reversals (as the core).
+REVERSAL_GRID_MIN = 64
+REVERSAL_GRID_PER_HARMONIC = 8
+
+
+def waveform(zeta: float, lam: float, harmonics: FloatArray) -> tuple[float, float, float, float]:
+    """``(xi, xi', xi'', d)`` at ``zeta``; ``harmonics = [Re c_2, Im c_2, Re c_3, ...]``."""
+    c = np.asarray(harmonics, dtype=np.float64).reshape(-1, 2)
+    k = np.arange(2, 2 + c.shape[0], dtype=np.float64)
+    cz, sz = np.cos(k * zeta), np.sin(k * zeta)
+    v = c[:, 0] * cz - c[:, 1] * sz
+    d = float(np.sum(v))
+    d1 = float(np.sum(-k * (c[:, 0] * sz + c[:, 1] * cz)))
+    d2 = float(np.sum(-k * k * v))
+    return (
+        float(np.cos(zeta)) + lam * d,
+        -float(np.sin(zeta)) + lam * d1,
+        -float(np.cos(zeta)) + lam * d2,
+        d,
+    )
+
+
+def reversals(lam: float, harmonics: FloatArray) -> list[float]:
+    """Roots of ``xi'`` in ``[0, 2 pi)``: sign changes on a grid, each refined by bisection to rounding."""
+    n_h = np.asarray(harmonics).size // 2
+    m = max(REVERSAL_GRID_MIN, REVERSAL_GRID_PER_HARMONIC * (n_h + 1))
+    h = 2.0 * np.pi / m
+    roots = []
+    for i in range(m):
+        lo, hi = i * h, (i + 1) * h
+        flo, fhi = waveform(lo, lam, harmonics)[1], waveform(hi, lam, harmonics)[1]
+        if flo == 0.0:
+            roots.append(lo)
+            continue
+        if flo * fhi >= 0.0:
+            continue
+        for _ in range(200):  # plain bisection: slower than the core's Newton, the same root
+            mid = 0.5 * (lo + hi)
+            fm = waveform(mid, lam, harmonics)[1]
+            if fm == 0.0 or hi - lo <= 4.0 * np.finfo(float).eps * (1.0 + mid):
+                break
+            if (fm < 0.0) == (flo < 0.0):
+                lo = mid
+            else:
+                hi = mid
+        roots.append(0.5 * (lo + hi))
+    return roots
+
+
+def path_loop_distorted(
+    amplitude: float,
+    beta: float,
+    gamma: float,
+    mu: float,
+    delta: float,
+    play: float,
+    phi: float,
+    lam: float,
+    harmonics: FloatArray,
+    samples_per_period: int,
+    substeps: int,
+) -> tuple[FloatArray, FloatArray, int]:
+    """:func:`path_loop` along ``x = A xi(theta - phi)``, ``xi(zeta) = cos(zeta) + lam d(zeta)``.
+
+    Parameters
+    ----------
+    lam : float
+        ``lambda``, the scale of the measured distortion (1: the measured waveform; 0: the pure sine).
+    harmonics : ndarray, shape (2 K,)
+        ``[Re c_2, Im c_2, Re c_3, Im c_3, ...]``, ``d(zeta) = sum_k Re(c_k e^{i k zeta})``.
+    others
+        As :func:`path_loop` (``play`` below the half travel of x).
+
+    Returns
+    -------
+    w : ndarray, shape (P,)
+    jac : ndarray, shape (P, 8)
+        ``d w_j / d(beta, gamma, mu, A, phi, delta, b, lambda)``.
+    iterations : int
+
+    Raises
+    ------
+    InvalidParameterError
+        As :func:`path_loop`, and for a waveform with more than one maximum per period.
+    """
+    harmonics = np.asarray(harmonics, dtype=np.float64)
+    for name, v in (("amplitude", amplitude), ("beta", beta), ("gamma", gamma), ("mu", mu), ("lambda", lam)):
+        _finite_scalar(name, v)
+    if harmonics.size % 2 or not np.all(np.isfinite(harmonics)):
+        raise InvalidParameterError("the waveform's harmonics must be finite (re, im) pairs")
+    if mu <= 1.0:
+        raise InvalidParameterError(f"mu = {mu} must be > 1 in the identification model")
+    margin = beta + gamma - abs(delta)
+    if margin <= 0.0:
+        raise InvalidParameterError(f"beta + gamma - |delta| = {margin} must be > 0")
+    if amplitude == 0.0:
+        raise ZeroAmplitudeError("the amplitude of x is 0: the loop is a point")
+    if play < 0.0:
+        raise InvalidParameterError(f"play = {play} must be >= 0")
+    p = int(samples_per_period)
+    if p < 4:
+        raise InsufficientDataError(f"samples_per_period = {p}: at least 4 are needed")
+    # x = |A| xi(theta - phi'), phi' = phi (+ pi for A < 0); d/dA = sgn(A) d/d|A| (as the core).
+    sa = 1.0 if amplitude > 0.0 else -1.0
+    if amplitude < 0.0:
+        amplitude, phi = -amplitude, phi + np.pi
+    roots = reversals(lam, harmonics)
+    if len(roots) != 2:
+        raise InvalidParameterError(
+            f"the input waveform has {len(roots)} reversals per period: one maximum and one minimum supported"
+        )
+    e = [waveform(z, lam, harmonics) for z in roots]
+    top_first = amplitude * (e[0][0] - e[1][0]) > 0.0
+    (zt, et), (zb, eb) = (
+        ((roots[0], e[0]), (roots[1], e[1])) if top_first else ((roots[1], e[1]), (roots[0], e[0]))
+    )
+    xt, xb = amplitude * et[0], amplitude * eb[0]
+    b = play
+    if b >= 0.5 * (xt - xb):
+        raise ZeroAmplitudeError(f"play = {b} >= the half travel {0.5 * (xt - xb)} of x")
+    top: tuple[float, FloatArray] = (xt - b, np.array([sa * et[0], 0.0, -1.0, amplitude * et[3]]))
+    bottom: tuple[float, FloatArray] = (xb + b, np.array([sa * eb[0], 0.0, 1.0, amplitude * eb[3]]))
+    r = ((phi + zt) / (2.0 * np.pi)) % 1.0
+    ub = ((zb - zt) / (2.0 * np.pi)) % 1.0
+    u = np.arange(p) / p - r
+    u = np.where(u < 0.0, u + 1.0, u)
+    j0 = int(np.argmin(u))
+    nodes: list[tuple[tuple[float, FloatArray], float, int]] = []
+    passed_bottom = False
+    for m in range(p):
+        j = (j0 + m) % p
+        descending = bool(u[j] <= ub)
+        if not descending and not passed_bottom:
+            nodes.append((bottom, -1.0, -1))
+            passed_bottom = True
+        xi, dxi, _, d = waveform(2.0 * np.pi * j / p - phi, lam, harmonics)
+        x = amplitude * xi
+        # Descending: xp = min(x_top - b, x + b); ascending: xp = max(x_bot + b, x - b).
+        if descending:
+            node = (
+                (x + b, np.array([sa * xi, -amplitude * dxi, 1.0, amplitude * d]))
+                if x < xt - 2.0 * b
+                else top
+            )
+        else:
+            node = (
+                (x - b, np.array([sa * xi, -amplitude * dxi, -1.0, amplitude * d]))
+                if x > xb + 2.0 * b
+                else bottom
+            )
+        nodes.append((node, -1.0 if descending else 1.0, j))
+    if not passed_bottom:
+        nodes.append((bottom, -1.0, -1))
+    nodes.append((top, 1.0, -1))
+    segs = []
+    prev = top
+    for node, s, j in nodes:
+        segs.append((node[0] - prev[0], node[1] - prev[1], s, j))
+        prev = node
+    jac, iterations, w = _solve(segs, beta, gamma, mu, delta, margin, p, substeps)
     return w, jac, iterations

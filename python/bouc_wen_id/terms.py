@@ -36,6 +36,7 @@ __all__ = [
     "Asymmetry",
     "Play",
     "Degradation",
+    "Distortion",
     "TERMS",
     "COULOMB_SMOOTHING",
     "term_from_dict",
@@ -319,10 +320,45 @@ class Degradation(Term):
         return Degradation(self.delta_nu / alpha)
 
 
+@dataclass(frozen=True)
+class Distortion(Term):
+    """A measured, non-sinusoidal input (design.md 9.5): ``x = A xi(theta - phi)``, ``xi = cos + lam d``.
+
+    ``d`` is the input's own normalised harmonics (``k >= 2``, relative to its fundamental), measured per
+    experiment; ``lam`` scales them (1: the measured waveform drives the hysteresis; 0: the pure sine the
+    plain model assumes). G is taken as quasi-static over the harmonics that matter (flat gain, linear
+    phase). The diagnosis fits it on averaged periods; ``simulate`` takes the true input itself instead
+    (a sampled input), so a plant carrying this term is not simulated.
+    """
+
+    lam: float
+
+    kind: ClassVar[str] = "distortion"
+    symbol: ClassVar[str] = "lam"
+    unit: ClassVar[str] = ""  # dimensionless
+    description: ClassVar[str] = "the measured input's own harmonics (a distorted actuator) drive the model"
+    signature: ClassVar[str] = (
+        "the input's harmonics reflected in the output: the loop driven by the distortion, at the "
+        "harmonics the input carries"
+    )
+    acts_on: ClassVar[str] = "hysteresis"
+
+
 #: Code name -> term class, in the order of the design.md 9.1 table.
 TERMS: dict[str, type[Term]] = {
     cls.kind: cls
-    for cls in (Offset, Stiffness, Viscous, Inertia, Coulomb, SensorLag, Asymmetry, Play, Degradation)
+    for cls in (
+        Offset,
+        Stiffness,
+        Viscous,
+        Inertia,
+        Coulomb,
+        SensorLag,
+        Asymmetry,
+        Play,
+        Degradation,
+        Distortion,
+    )
 }
 
 
@@ -340,6 +376,12 @@ def core_terms(terms: Iterable[Term]) -> dict[str, float]:
     """``{code name: value}`` (plus ``coulomb_smoothing``) as the simulation core takes them."""
     out: dict[str, float] = {}
     for t in terms:
+        if isinstance(t, Distortion):
+            raise InvalidParameterError(
+                "the distortion term stands for the measured input's own harmonics, which simulate does not "
+                "know: simulate the plain plant with the distorted input itself (simulate_input with its "
+                "samples) instead"
+            )
         out[t.kind] = t.value
         if isinstance(t, Coulomb):
             out["coulomb_smoothing"] = t.smoothing

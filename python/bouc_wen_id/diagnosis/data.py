@@ -15,6 +15,8 @@ is reduced to
 - the block record (design.md 10.6): the periods cut into up to ``MAX_BLOCKS`` runs of consecutive ones,
   each run's averaged period as its harmonics 0..``MAX_DRIFT_HARMONIC`` (``block_coef``), with its sample
   count and mean period index, for the degradation fit. Empty for an averaged period alone.
+- ``waveform``: the averaged input's harmonics beyond the fundamental, relative to it (design.md 9.5), those
+  measurably above the input's own noise; empty for a pure sine (and when the input is not at hand).
 """
 
 from __future__ import annotations
@@ -39,6 +41,32 @@ MAX_BLOCKS = 8
 #: Highest harmonic kept per block: the localisation's range (a degrading loop's change is in the low
 #: harmonics), and a least-squares fit of a lab block stays well posed with few samples per period.
 MAX_DRIFT_HARMONIC = 15
+#: Highest harmonic of the input kept in its waveform (design.md 9.5).
+WAVEFORM_MAX_HARMONIC = 10
+#: A harmonic of the averaged input is kept when its amplitude exceeds this many standard deviations of its
+#: noise (each DFT bin of the mean period: variance ``2 sigma_u^2 / (N P)`` per real and imaginary part)...
+WAVEFORM_NOISE_SD = 5.0
+#: ... and this fraction of the fundamental (below, its loop contribution is far below any output noise,
+#: and quantisation or rounding in a noise-free input must not turn a pure sine into a "distorted" one).
+WAVEFORM_MIN_RELATIVE = 1e-4
+
+
+def input_waveform(rows: FloatArray) -> FloatArray:
+    """The normalised harmonics ``[Re c_2, Im c_2, ...]`` of an input given period by period (N, P).
+
+    ``u = |C_1| Re[e^{i z} + sum_k c_k e^{i k z}]``, ``z = 2 pi j/P + arg C_1``: ``c_k = C_k / (|C_1|
+    e^{i k arg C_1})`` with ``C_k`` the complex amplitude of harmonic k of the mean period. A harmonic is kept
+    when it stands above the input's noise (differences of neighbouring periods) and above
+    :data:`WAVEFORM_MIN_RELATIVE`; the waveform is trimmed after the last kept one (zeros in between).
+    """
+    n, p = rows.shape
+    mean = rows.mean(axis=0)
+    spec = 2.0 * np.fft.rfft(mean) / p
+    var_u = float(np.mean(np.diff(rows, axis=0) ** 2)) / 2.0 if n >= 2 else 0.0
+    # |C_k| of pure noise: sd sqrt(2 var / (N P)) per real and imaginary part.
+    floor = WAVEFORM_NOISE_SD * math.sqrt(2.0 * 2.0 * var_u / (n * p))
+    kmax = min(WAVEFORM_MAX_HARMONIC, (p - 1) // 2)
+    return _normalised(spec[1 : kmax + 1].astype(np.complex128), floor)
 
 
 @dataclass(frozen=True, eq=False)
@@ -72,6 +100,8 @@ class DiagExperiment:
         """Blocks in the block record (0 or 1: no drift can be resolved)."""
         return int(self.block_coef.shape[0])
 
+    waveform: FloatArray = field(default_factory=lambda: np.zeros(0), repr=False)
+
     @property
     def samples_per_period(self) -> int:
         return int(self.ybar.size)
@@ -82,10 +112,18 @@ class DiagExperiment:
         floor = (1e-13 * float(np.max(np.abs(self.ybar)))) ** 2 + np.finfo(float).tiny
         return self.periods / max(self.noise_var, floor)
 
+    @property
+    def distorted(self) -> bool:
+        """Whether the input carries measurable harmonics (the ``distortion`` term has something to test)."""
+        return bool(self.waveform.size)
+
     def input(self) -> FloatArray:
-        """``u_j`` on the averaged grid (without the input's DC)."""
-        theta = TWO_PI * np.arange(self.samples_per_period) / self.samples_per_period
-        out: FloatArray = self.amplitude * np.cos(theta + self.grid_phase)
+        """``u_j`` on the averaged grid (without the input's DC), with its measured harmonics."""
+        z = TWO_PI * np.arange(self.samples_per_period) / self.samples_per_period + self.grid_phase
+        c = np.asarray(self.waveform, dtype=np.float64).reshape(-1, 2)
+        k = np.arange(2, 2 + c.shape[0])
+        harm = (c[:, 0, None] * np.cos(k[:, None] * z) - c[:, 1, None] * np.sin(k[:, None] * z)).sum(axis=0)
+        out: FloatArray = self.amplitude * (np.cos(z) + harm)
         return out
 
     def to_dict(self) -> dict[str, Any]:
@@ -136,6 +174,7 @@ def _from_recording(i: int, rec: Any) -> DiagExperiment:
             "(the noise floor and the drift test come from differences of neighbouring periods)"
         )
     rows = np.asarray(rec.y[s * p : (s + n) * p], dtype=np.float64).reshape(n, p)
+    urows = np.asarray(rec.u[s * p : (s + n) * p], dtype=np.float64).reshape(n, p)
     ybar = rows.mean(axis=0)
     spread = float(np.mean(np.var(rows, axis=0, ddof=1)))
     diff = float(np.mean(np.diff(rows, axis=0) ** 2)) / 2.0
@@ -158,10 +197,48 @@ def _from_recording(i: int, rec: Any) -> DiagExperiment:
         block_samples=samples,
         block_center=center,
         lead_periods=float(s),
+        waveform=input_waveform(urows),
     )
 
 
-def _from_averaged(ap: Any, t: FloatArray | None, y: FloatArray | None) -> DiagExperiment:
+def _normalised(c: ComplexArray, floor: float) -> FloatArray:
+    """``[Re c_2, Im c_2, ...]`` from complex amplitudes ``c[k - 1]`` of harmonics k = 1.. (see
+    :func:`input_waveform`), keeping those above ``floor`` and :data:`WAVEFORM_MIN_RELATIVE`."""
+    c1 = complex(c[0])
+    if abs(c1) == 0.0:
+        return np.zeros(0)
+    rot = c1 / abs(c1)
+    out = np.zeros(2 * max(c.size - 1, 0))
+    last = 0
+    for k in range(2, c.size + 1):
+        ck = complex(c[k - 1])
+        if abs(ck) > floor and abs(ck) > WAVEFORM_MIN_RELATIVE * abs(c1):
+            v = ck / (abs(c1) * rot**k)
+            out[2 * (k - 2)], out[2 * (k - 2) + 1] = v.real, v.imag
+            last = k - 1
+    return out[: 2 * last]
+
+
+def _lab_waveform(th: FloatArray, u: FloatArray) -> FloatArray:
+    """The input's waveform (as :func:`input_waveform`) from raw samples at phase ``th = omega t``: least
+    squares on the DC and harmonics 1..:data:`WAVEFORM_MAX_HARMONIC`, noise from the fit's residual."""
+    kmax = WAVEFORM_MAX_HARMONIC
+    if u.size < 4 * (2 * kmax + 1):
+        return np.zeros(0)
+    k = np.arange(1, kmax + 1)
+    basis = np.column_stack([np.ones(u.size), np.cos(np.outer(th, k)), np.sin(np.outer(th, k))])
+    coef, *_ = np.linalg.lstsq(basis, u, rcond=None)
+    resid = u - basis @ coef
+    var_u = float(resid @ resid) / (u.size - basis.shape[1])
+    # Each coefficient's sd ~ sqrt(2 var / n) on whole periods; |C_k| of noise about sqrt(2) times that.
+    floor = WAVEFORM_NOISE_SD * math.sqrt(2.0 * 2.0 * var_u / u.size)
+    c = coef[1 : kmax + 1] - 1j * coef[kmax + 1 :]
+    return _normalised(c.astype(np.complex128), floor)
+
+
+def _from_averaged(
+    ap: Any, t: FloatArray | None, y: FloatArray | None, u: FloatArray | None = None
+) -> DiagExperiment:
     """A lab period (any sampling rate); with the raw samples, the per-period DC and fundamental too.
 
     The noise floor stays the averaging's (the residual of its harmonic fit over the stretch): a lab record
@@ -172,6 +249,7 @@ def _from_averaged(ap: Any, t: FloatArray | None, y: FloatArray | None) -> DiagE
     blocks: tuple[ComplexArray, FloatArray, FloatArray] | None = None
     empty = (np.zeros((0, 1), np.complex128), np.zeros(0), np.zeros(0))
     lead = math.nan
+    waveform = np.zeros(0)
     dc = np.array([float(np.mean(ybar))])
     h1 = np.array([complex(2.0 * np.fft.rfft(ybar)[1] / ybar.size)])
     if t is not None and y is not None:
@@ -196,6 +274,8 @@ def _from_averaged(ap: Any, t: FloatArray | None, y: FloatArray | None) -> DiagE
         blocks = _lab_blocks(k, th, seg_y, kept, ybar.size)
         if kept:  # periods from the record's first sample to the first whole period used
             lead = float((float(ap.time_origin) - float(t[0])) * omega / TWO_PI) + float(kept[0])
+        if u is not None:
+            waveform = _lab_waveform(th, np.asarray(u[ap.start : ap.stop], dtype=np.float64))
     return DiagExperiment(
         frequency=float(ap.frequency),
         amplitude=float(ap.amplitude),
@@ -212,6 +292,7 @@ def _from_averaged(ap: Any, t: FloatArray | None, y: FloatArray | None) -> DiagE
         block_coef=empty[0] if blocks is None else blocks[0],
         block_samples=empty[1] if blocks is None else blocks[1],
         block_center=empty[2] if blocks is None else blocks[2],
+        waveform=waveform,
     )
 
 
@@ -266,7 +347,7 @@ def prepare(items: Any) -> list[DiagExperiment]:
             out.append(_from_recording(i, item))
         elif isinstance(item, Measurement):
             for ap in average_measurement(item):
-                out.append(_from_averaged(ap, np.asarray(item.t), np.asarray(item.y)))
+                out.append(_from_averaged(ap, np.asarray(item.t), np.asarray(item.y), np.asarray(item.u)))
         elif isinstance(item, AveragedPeriod):
             out.append(_from_averaged(item, None, None))
         elif isinstance(item, DiagExperiment):

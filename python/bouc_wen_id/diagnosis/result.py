@@ -28,6 +28,7 @@ TERM_LABELS = {
     "asymmetry": "asymmetry",
     "play": "play (backlash)",
     "degradation": "degradation",
+    "distortion": "measured input waveform",
 }
 
 
@@ -156,6 +157,8 @@ class Diagnosis:
         for label, m in (("plain", self.plain), ("final", self.final)):
             lines.append(f"{label} model: chi2/dof = {m.cost / max(m.dof, 1):.3g} (p = {m.p_value:.2g})")
         lines.append(f"share of the plain model's excess explained: {100 * self.explained_fraction:.1f} %")
+        for term, why in dict(self.settings.get("skipped", {})).items():
+            lines.append(f"{TERM_LABELS.get(term, term)}: {why}")
         for a in self.alternatives:
             rival, term = TERM_LABELS.get(a.rival, a.rival), TERM_LABELS.get(a.term, a.term)
             lines.append(

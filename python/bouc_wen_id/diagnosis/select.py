@@ -273,6 +273,7 @@ def _separating(exps: Sequence[AugExperiment], fa: AugFit, fb: AugFit, substeps:
                         float(par.gains[i]),
                         float(par.phases[i]),
                         substeps,
+                        e.waveform,
                     )
                 except Exception:  # noqa: BLE001 - a design outside the model's range separates nothing
                     ys = []
