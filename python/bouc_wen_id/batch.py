@@ -66,6 +66,11 @@ def _run(experiments: Sequence[Any], options: Mapping[str, Any], errors: str) ->
 
 def _init_worker() -> None:
     os.environ.update(_WORKER_ENV)
+    # One BLAS thread too: n workers with OpenBLAS's default threads each spin 2n threads on n cores
+    # (see bouc_wen_id._threads).
+    from ._threads import limit_blas_threads
+
+    limit_blas_threads()
 
 
 def _context() -> Any:
