@@ -478,8 +478,11 @@ def _warm(pool: Any, workers: int) -> None:
     # A task per worker, so that every worker process is started (ProcessPoolExecutor starts them on
     # submit, and a start waits for the fork server's imports: off the main thread, that overlaps
     # with the loading of the files).
-    for f in [pool.submit(os.getpid) for _ in range(workers)]:
-        f.result()
+    try:
+        for f in [pool.submit(os.getpid) for _ in range(workers)]:
+            f.result()
+    except Exception:  # noqa: BLE001 - a pool that cannot start fails the main thread's first task, by name
+        pass
 
 
 @contextmanager
