@@ -131,3 +131,30 @@ def test_both_ends_keeps_the_order_and_the_first_error() -> None:
         assert [next(got) for _ in range(3)] == [0, 1, 4]
         with pytest.raises(InvalidParameterError, match="job 3"):  # job 6's error (maybe met first) waits
             next(got)
+
+
+def test_one_blas_thread_limits_the_loaded_and_later_blas_and_restores(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    import os
+
+    import numpy as np
+    from bouc_wen_id._threads import BLAS_THREAD_VARIABLES, one_blas_thread
+    from threadpoolctl import threadpool_info  # type: ignore[import-untyped]
+
+    for v in BLAS_THREAD_VARIABLES:
+        monkeypatch.delenv(v, raising=False)
+    np.linalg.cholesky(np.eye(2))  # NumPy's BLAS is loaded
+
+    def counts() -> list[int]:
+        return [int(i["num_threads"]) for i in threadpool_info() if i["user_api"] == "blas"]
+
+    before = counts()
+    with one_blas_thread():
+        assert set(counts()) == {1}
+        assert os.environ["OPENBLAS_NUM_THREADS"] == "1"  # for a BLAS loaded later, and worker processes
+    assert counts() == before
+    assert "OPENBLAS_NUM_THREADS" not in os.environ
+    monkeypatch.setenv("OPENBLAS_NUM_THREADS", "2")  # the user's choice stands
+    with one_blas_thread():
+        assert os.environ["OPENBLAS_NUM_THREADS"] == "2" and counts() == before

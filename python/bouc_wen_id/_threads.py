@@ -26,32 +26,48 @@ __all__ = ["BLAS_THREAD_VARIABLES", "one_blas_thread", "limit_blas_threads"]
 BLAS_THREAD_VARIABLES = ("OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "OMP_NUM_THREADS", "BLIS_NUM_THREADS")
 
 
+#: Set to 1 for the BLAS libraries loaded later (SciPy's own OpenBLAS comes with the first SciPy call,
+#: after the limit on the loaded ones; OpenBLAS, MKL and BLIS read these when they load).  Worker
+#: processes started meanwhile inherit them.
+_LATER = ("OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "BLIS_NUM_THREADS")
+
+
 def _user_chose() -> bool:
     return any(os.environ.get(v) for v in BLAS_THREAD_VARIABLES)
 
 
-def limit_blas_threads() -> None:
-    """One BLAS thread in this process from now on (for a worker process of the package), unless the user
-    chose a count; without ``threadpoolctl`` nothing changes."""
-    if _user_chose():
-        return
+def _limit_loaded() -> object:
+    """One thread for every BLAS loaded now; the handle restores them (``None`` without threadpoolctl)."""
     try:
         from threadpoolctl import threadpool_limits  # type: ignore[import-untyped]
     except ImportError:  # pragma: no cover - a declared dependency; a slower run, not a wrong one
+        return None
+    return threadpool_limits(limits=1, user_api="blas")
+
+
+def limit_blas_threads() -> None:
+    """One BLAS thread in this process from now on, for the BLAS loaded and those loaded later (a worker
+    process of the package), unless the user chose a count."""
+    if _user_chose():
         return
-    threadpool_limits(limits=1, user_api="blas")
+    os.environ.update(dict.fromkeys(_LATER, "1"))
+    _limit_loaded()
 
 
 @contextmanager
 def one_blas_thread() -> Iterator[None]:
-    """One BLAS thread inside the block, the previous counts restored after it (see the module notes)."""
+    """One BLAS thread inside the block (the BLAS loaded and those loaded in it, and the environment of
+    the processes started in it); the loaded ones and the environment restored after it."""
     if _user_chose():
         yield
         return
+    os.environ.update(dict.fromkeys(_LATER, "1"))
+    limits = _limit_loaded()
     try:
-        from threadpoolctl import threadpool_limits
-    except ImportError:  # pragma: no cover - a declared dependency; a slower run, not a wrong one
         yield
-        return
-    with threadpool_limits(limits=1, user_api="blas"):
-        yield
+    finally:
+        for v in _LATER:
+            os.environ.pop(v, None)
+        restore = getattr(limits, "restore_original_limits", None)
+        if restore is not None:
+            restore()
