@@ -57,7 +57,9 @@ def limit_blas_threads() -> None:
 @contextmanager
 def one_blas_thread() -> Iterator[None]:
     """One BLAS thread inside the block (the BLAS loaded and those loaded in it, and the environment of
-    the processes started in it); the loaded ones and the environment restored after it."""
+    the processes started in it).  After it the environment and the BLAS loaded before it are restored; a
+    BLAS first loaded inside it (SciPy's) keeps one thread: the CLI's process ends there, and an
+    in-process caller (a test, a bench) keeps a faster, not a different, SciPy."""
     if _user_chose():
         yield
         return
