@@ -184,6 +184,13 @@ def _supports_no_figures() -> bool:
     )
 
 
+def _identify_help() -> str:
+    from bouc_wen_id import cli
+
+    sub = cli.build_parser()._subparsers._group_actions[0]  # type: ignore[union-attr]
+    return str(sub.choices["identify"].format_help())
+
+
 @contextlib.contextmanager
 def _stage_timers(stages: dict[str, float]) -> Iterator[None]:
     """Wrap the pipeline's stage functions with timers (wherever the CLI finds them)."""
@@ -209,6 +216,7 @@ def _stage_timers(stages: dict[str, float]) -> Iterator[None]:
             ("bouc_wen_id.plotting", "plot_residuals"),
             ("bouc_wen_id.plotting", "plot_bode"),
             ("bouc_wen_id.plotting", "plot_report"),
+            ("bouc_wen_id.cli", "_write_figures"),
             ("matplotlib.figure", "Figure.savefig"),
         ],
     }
@@ -251,15 +259,18 @@ def _stage_timers(stages: dict[str, float]) -> Iterator[None]:
 
 def bench_cli(folder: Path, tmp: Path, repeats: int) -> None:
     print("\n1. bouc-wen-id identify on 10 lab-like files (20,000 samples each)")
-    walls = []
-    for _ in range(repeats):
-        wall, rc = _cli(folder, tmp / "report_fig")
-        walls.append(wall)
-    with_fig = min(walls)
-    record("CLI wall time with figures (fresh process)", f"{with_fig:.2f} s", "<= 2 s", with_fig <= 2.0)
+    # A fresh report folder per run: the CLI refuses (at once, exit 2) to write into another run's folder,
+    # and a refused run must not pass for a fast one.
+    runs = [_cli(folder, tmp / f"report_fig_{k}") for k in range(repeats)]
+    ok = all(rc == 0 for _, rc in runs)
+    with_fig = min(wall for wall, _ in runs)
+    shown = f"{with_fig:.2f} s" if ok else "FAILED (exit != 0)"
+    record("CLI wall time with figures (fresh process)", shown, "<= 2 s", ok and with_fig <= 2.0)
     if _supports_no_figures():
-        walls = [_cli(folder, tmp / "report_nofig", "--no-figures")[0] for _ in range(repeats)]
-        record("CLI wall time --no-figures (fresh process)", f"{min(walls):.2f} s")
+        runs = [_cli(folder, tmp / f"report_nofig_{k}", "--no-figures") for k in range(repeats)]
+        ok = all(rc == 0 for _, rc in runs)
+        shown = f"{min(wall for wall, _ in runs):.2f} s" if ok else "FAILED (exit != 0)"
+        record("CLI wall time --no-figures (fresh process)", shown)
     else:
         record("CLI wall time --no-figures", "no such option")
     from bouc_wen_id import cli
@@ -273,9 +284,12 @@ def bench_cli(folder: Path, tmp: Path, repeats: int) -> None:
         warnings.catch_warnings(),
     ):
         warnings.simplefilter("ignore")
-        cli.main(["identify", str(folder), "--out", str(tmp / "report_inproc")])
+        # --workers 1: every stage in this process, so that the timers see it (with workers, the files
+        # and figures run in other processes): what each stage costs on one core.
+        workers = ["--workers", "1"] if "--workers" in _identify_help() else []
+        cli.main(["identify", str(folder), "--out", str(tmp / "report_inproc"), *workers])
     total = time.perf_counter() - t0
-    print(f"  stages of one in-process run ({total:.2f} s, imports already done):")
+    print(f"  stages of one in-process run on one core ({total:.2f} s, imports already done):")
     rest = total - sum(stages.values())
     for label, sec in [*stages.items(), ("other (printing, bookkeeping)", rest)]:
         print(f"    {label:<48} {sec:7.3f} s  {100.0 * sec / total:5.1f} %")
@@ -455,7 +469,33 @@ def _same(a: Any, b: Any) -> bool:
     return bool(a.to_json() == b.to_json())
 
 
-def bench_batch(averaged: list[Any], repeats: int) -> None:
+#: The batch in a fresh interpreter: ``argv = [jobs.pickle, workers, pin, repeats]``; ``pin`` restricts the
+#: process (and the worker processes it starts, which inherit the mask) to CPU 0.  Prints the best wall
+#: time and a digest of the results' JSON.
+_BATCH_CHILD = """
+import hashlib, os, pickle, sys, time
+jobs_file, workers, pin, repeats = sys.argv[1], int(sys.argv[2]), sys.argv[3] == "1", int(sys.argv[4])
+if pin:
+    os.sched_setaffinity(0, {sorted(os.sched_getaffinity(0))[0]})
+from bouc_wen_id.batch import identify_many
+jobs = pickle.load(open(jobs_file, "rb"))
+identify_many(jobs[:workers], workers=workers)  # start the pool's workers (not timed)
+best = float("inf")
+for _ in range(repeats):
+    t0 = time.perf_counter()
+    res = identify_many(jobs, workers=workers)
+    best = min(best, time.perf_counter() - t0)
+print(best, hashlib.sha256("".join(r.to_json() for r in res).encode()).hexdigest())
+"""
+
+
+def _batch_child(jobs_file: Path, workers: int, pin: bool, repeats: int) -> tuple[float, str]:
+    argv = [sys.executable, "-c", _BATCH_CHILD, str(jobs_file), str(workers), str(int(pin)), str(repeats)]
+    out = subprocess.run(argv, capture_output=True, text=True, check=True).stdout.split()
+    return float(out[0]), out[1]
+
+
+def bench_batch(averaged: list[Any], repeats: int, tmp: Path) -> None:
     print("\n4. Batch of 20 identifications (identify_many)")
     try:
         from bouc_wen_id.batch import identify_many
@@ -463,13 +503,35 @@ def bench_batch(averaged: list[Any], repeats: int) -> None:
         record("identify_many", "not available")
         return
     jobs = _batch_jobs(averaged)
-    t1, serial = best_of(lambda: identify_many(jobs, workers=1), repeats)
-    t2, par = best_of(lambda: identify_many(jobs, workers=2), repeats)
-    same = all(_same(a, b) for a, b in zip(serial, par))
-    record(
-        f"1 worker {t1:.2f} s, 2 workers {t2:.2f} s: speed-up", f"{t1 / t2:.2f}x", ">= 1.8", t1 / t2 >= 1.8
-    )
-    record("results of 2 workers identical to 1 worker (JSON)", str(same), "True", same)
+    # "1 core against 2 cores" is measured as it reads: the serial batch in a process pinned to one CPU
+    # (workers=1 runs in-process, and an identification's own rayon threads would otherwise use the
+    # second core too, which is how 0.98x was once measured), against 2 workers on both CPUs.  Both
+    # in fresh interpreters, pools started before the clock.
+    serial = identify_many(jobs, workers=1)
+    if hasattr(os, "sched_setaffinity") and len(os.sched_getaffinity(0)) >= 2:
+        import pickle
+
+        jobs_file = tmp / "jobs.pickle"
+        jobs_file.write_bytes(pickle.dumps(jobs))
+        t1, h1 = _batch_child(jobs_file, 1, True, repeats)
+        t1u, h1u = _batch_child(jobs_file, 1, False, repeats)
+        t2, h2 = _batch_child(jobs_file, 2, False, repeats)
+        record(
+            f"1 core {t1:.2f} s, 2 cores (2 workers) {t2:.2f} s: speed-up",
+            f"{t1 / t2:.2f}x",
+            ">= 1.8",
+            t1 / t2 >= 1.8,
+        )
+        record(f"  (1 worker, unpinned: {t1u:.2f} s; its rayon threads use both cores)", f"{t1u / t2:.2f}x")
+        same = h1 == h2 == h1u
+    else:  # no affinity control here: the in-process comparison, labelled as such
+        t1, _ = best_of(lambda: identify_many(jobs, workers=1), repeats)
+        t2, par = best_of(lambda: identify_many(jobs, workers=2), repeats)
+        record(f"1 worker (unpinned) {t1:.2f} s, 2 workers {t2:.2f} s: speed-up", f"{t1 / t2:.2f}x")
+        same = all(_same(a, b) for a, b in zip(serial, par))
+    record("results of 1 core, 2 workers identical (JSON digest)", str(same), "True", same)
+    identify_many(jobs[:2], workers=2)  # this process's pool, started before the clock
+    t2, _ = best_of(lambda: identify_many(jobs, workers=2), repeats)  # the local reference for Dask
     try:
         from distributed import Client, LocalCluster
     except ImportError:
@@ -593,7 +655,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         if "rk4" in only:
             bench_rk4(tmp, args.quick)
         if "batch" in only:
-            bench_batch(averaged, repeats)
+            bench_batch(averaged, repeats, tmp)
         if "import" in only:
             bench_import()
         if "preprocessing" in only:

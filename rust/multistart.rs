@@ -15,8 +15,11 @@
 //! the scheduling. Continuing restarts the damping at its initial value, so a continued start is
 //! not bitwise the single run of `max_iter` iterations; it is the same for any thread count.
 
+use std::sync::Arc;
+
 use rayon::prelude::*;
 
+use crate::cancel::{self, Token};
 use crate::error::{CoreError, Result};
 use crate::refine::{refine, Experiment, Fit, Options, Params};
 
@@ -62,7 +65,10 @@ pub fn refine_many(
             )));
         }
     }
-    let run = || screen(exps, starts, opts, abandon, threads);
+    // Ctrl-C (rust/cancel.rs): the token installed on the calling thread (the binding's worker) is
+    // taken here, before any pool thread runs, and installed around every start (map_ordered).
+    let token = cancel::current();
+    let run = || screen(exps, starts, opts, abandon, threads, &token);
     match threads {
         0 | 1 => Ok(run()),
         n => {
@@ -77,16 +83,20 @@ pub fn refine_many(
     }
 }
 
-/// `f` over `items`, in order: serially when `threads == 1`, else on the current rayon pool.
+/// `f` over `items`, in order: serially when `threads == 1`, else on the current rayon pool; each
+/// call runs under `token` (whatever thread runs it) and, once the token is cancelled, is skipped
+/// with `CoreError::Interrupted` (a cancelled batch of starts stops within one start's checkpoint).
 fn map_ordered<T: Sync, U: Send>(
     items: &[T],
     threads: usize,
-    f: impl Fn(&T) -> U + Sync + Send,
-) -> Vec<U> {
+    token: &Option<Arc<Token>>,
+    f: impl Fn(&T) -> Result<U> + Sync + Send,
+) -> Vec<Result<U>> {
+    let g = |x: &T| cancel::with_token(token.clone(), || cancel::checkpoint().and_then(|()| f(x)));
     if threads == 1 {
-        items.iter().map(f).collect()
+        items.iter().map(g).collect()
     } else {
-        items.par_iter().map(f).collect()
+        items.par_iter().map(g).collect()
     }
 }
 
@@ -96,9 +106,10 @@ fn screen(
     opts: &Options,
     abandon: Option<Abandon>,
     threads: usize,
+    token: &Option<Arc<Token>>,
 ) -> Vec<Result<StartOutcome>> {
     let Some(ab) = abandon.filter(|ab| ab.first_iter < opts.max_iter) else {
-        return map_ordered(starts, threads, |s| {
+        return map_ordered(starts, threads, token, |s| {
             refine(exps, s, opts).map(|fit| StartOutcome {
                 fit,
                 abandoned: false,
@@ -109,7 +120,8 @@ fn screen(
         max_iter: ab.first_iter,
         ..*opts
     };
-    let first: Vec<Result<Fit>> = map_ordered(starts, threads, |s| refine(exps, s, &first_opts));
+    let first: Vec<Result<Fit>> =
+        map_ordered(starts, threads, token, |s| refine(exps, s, &first_opts));
     let best = first
         .iter()
         .filter_map(|r| r.as_ref().ok().map(|f| f.cost))
@@ -119,7 +131,7 @@ fn screen(
         ..*opts
     };
     let items: Vec<Result<Fit>> = first;
-    map_ordered(&items, threads, |r| {
+    map_ordered(&items, threads, token, |r| {
         let fit = r.as_ref().map_err(Clone::clone)?;
         if fit.converged || fit.cost > ab.ratio * best {
             return Ok(StartOutcome {
@@ -286,5 +298,32 @@ mod tests {
             ratio: 1.0,
         };
         assert!(refine_many(&exps, &starts, &opts, Some(bad), 1).is_err());
+    }
+
+    #[test]
+    fn a_cancelled_token_reaches_every_start_on_every_thread_count() {
+        let (ys, amps) = problem();
+        let exps = exps(&ys, &amps);
+        let opts = Options::default();
+        let ab = Some(Abandon {
+            first_iter: 3,
+            ratio: 2.0,
+        });
+        let token = Arc::new(Token::new());
+        token.cancel();
+        // 0: the global pool, 1: this thread, 2: a pool of its own; with and without the two rounds.
+        for threads in [0, 1, 2] {
+            for abandon in [None, ab] {
+                let out = cancel::with_token(Some(token.clone()), || {
+                    refine_many(&exps, &starts(), &opts, abandon, threads).unwrap()
+                });
+                for r in &out {
+                    assert!(matches!(r, Err(CoreError::Interrupted(_))), "{r:?}");
+                }
+            }
+        }
+        // Without a token nothing is cancelled.
+        let out = refine_many(&exps, &starts(), &opts, None, 2).unwrap();
+        assert!(out.iter().any(|r| r.is_ok()));
     }
 }

@@ -1137,8 +1137,17 @@ fn refine_many<'py>(
             weight: w,
         })
         .collect();
-    let outcomes =
-        py.detach(|| multistart::refine_many(&exps, &params, &opts, abandon, threads))?;
+    // Interruptible like the other long calls (Ctrl-C -> KeyboardInterrupt): every start is a
+    // refinement of up to max_iter iterations, each a few shooting passes over every lattice.
+    let samples: u128 = slices.iter().map(|y| y.len() as u128).sum();
+    let steps = (params.len() as u128)
+        .saturating_mul(opts.max_iter as u128)
+        .saturating_mul(samples)
+        .saturating_mul(opts.substeps as u128)
+        .saturating_mul(SHOOT_ITER_ESTIMATE);
+    let outcomes = run_detached(py, steps, || {
+        multistart::refine_many(&exps, &params, &opts, abandon, threads)
+    })?;
     Ok(outcomes
         .into_iter()
         .map(|r| {

@@ -69,6 +69,11 @@ LONG_CALLS = {
     "steady_loop": "_core.steady_loop(1.0, 0.5, 0.1, 2.0, 0.3, 1 << 22, 32)",
     # 2 x 10^5 grid points, each a golden search: minutes.
     "profile": "_core.profile_phase_sls(np.cos(th), -np.sin(th), 1.0, 1.0, 1.01, 5.0, 1e-9, 200_000)",
+    # 8 starts of the joint refinement on two lattices of 2^16 samples x 32 substeps: minutes (the starts
+    # run on rayon's pool threads, so this also checks that the cancel token reaches them).
+    "refine_many": "_core.refine_many([np.sin(2 * np.pi * np.arange(1 << 16) / (1 << 16) + 0.3 * k) "
+    "for k in range(2)], [1.0, 2.0], [1.0, 1.0], [[0.5 + 0.1 * s, 0.1, 2.0, 1.0, 0.3, 1.0, 0.6] "
+    "for s in range(8)], max_iter=200, substeps=32)",
 }
 
 

@@ -66,6 +66,11 @@ def _run(experiments: Sequence[Any], options: Mapping[str, Any], errors: str) ->
 
 def _init_worker() -> None:
     os.environ.update(_WORKER_ENV)
+    # One BLAS thread too: n workers with OpenBLAS's default threads each spin 2n threads on n cores
+    # (see bouc_wen_id._threads).
+    from ._threads import limit_blas_threads
+
+    limit_blas_threads()
 
 
 def _context() -> Any:
@@ -111,7 +116,9 @@ def identify_many(
     list
         One :class:`~bouc_wen_id.identification.IdentificationResult` per job (or, with
         ``errors="return"``, the error it raised).  Identical whatever ``workers`` or ``client``: every
-        identification is deterministic and runs on its own.
+        identification is deterministic and runs on its own, with BLAS on one thread (see
+        :mod:`bouc_wen_id._threads`; a plain ``identify`` of lab measurements in a process whose BLAS runs
+        several threads can differ from it in the last bits).
 
     Raises
     ------
@@ -135,7 +142,12 @@ def identify_many(
         raise InvalidParameterError(f"workers = {workers!r} must be an integer >= 1")
     workers = min(workers, len(split))
     if workers == 1:
-        return [_run(e, o, errors) for e, o in split]
+        # One BLAS thread here as in the workers (and Dask's, whose nannies set it too): the last bits of
+        # a threaded BLAS call can depend on its thread count, and the results must not on ``workers``.
+        from ._threads import one_blas_thread
+
+        with one_blas_thread():
+            return [_run(e, o, errors) for e, o in split]
     pool = _local_pool(workers)
     futures = [pool.submit(_run, e, o, errors) for e, o in split]
     return [f.result() for f in futures]
