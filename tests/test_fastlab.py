@@ -162,7 +162,7 @@ def test_gauss_newton_kernel_matches_the_basis_reference(seed: int) -> None:
 
     rng = np.random.default_rng(seed)
     n, k = 5003 + 11 * seed, 1 + 3 * seed
-    tau = (np.arange(n) - n / 2) * 1e-3
+    tau = (np.arange(n, dtype=np.float64) - n / 2) * 1e-3
     omega = 2.0 * math.pi * rng.uniform(3.0, 9.0)
     theta = hls.phase_angle(omega, tau)
     x = 0.2 + np.cos(theta + 0.4) + 0.05 * rng.standard_normal(n)
@@ -189,7 +189,7 @@ def test_frequency_fit_matches_the_reference(seed: int, monkeypatch: pytest.Monk
 
     rng = np.random.default_rng(seed)
     n, dt, k = 20_000, 1e-3, 1 + seed
-    tau = (np.arange(n) - n // 2) * dt
+    tau = (np.arange(n, dtype=np.float64) - n // 2) * dt
     omega = 2.0 * math.pi * rng.uniform(2.0, 6.0)
     x = 0.1 + 1.3 * np.cos(omega * tau + 0.7) + 0.05 * np.cos(2 * omega * tau) + 0.02 * rng.standard_normal(n)
     start = omega * (1.0 + 2e-3 * rng.uniform(-1.0, 1.0))
