@@ -2,7 +2,8 @@
 //! averaging (4a-b), one evaluation of the SLS cost (21), and the whole golden-section search
 //! (24a-b); the default method's hot path (issue #8): one steady loop with its sensitivities
 //! (`rust/steady.rs`) and the joint Levenberg-Marquardt refinement over 10 experiments
-//! (`rust/refine.rs`), serially and as 16 parallel starts (`rust/multistart.rs`).
+//! (`rust/refine.rs`), serially and as 16 parallel starts (`rust/multistart.rs`); the lab
+//! preprocessing kernels (`rust/lab.rs`) on a 20,000-sample record.
 
 use std::f64::consts::PI;
 use std::hint::black_box;
@@ -11,6 +12,7 @@ use std::time::Duration;
 use _core::average::periodic_average;
 use _core::bouc_wen::BoucWen;
 use _core::estimate::{max_harmonics, spectral_derivative};
+use _core::lab::{cholesky_upper, harmonic_gauss_newton, harmonic_moments, harmonic_rss};
 use _core::linear::TransferFunction;
 use _core::multistart::refine_many;
 use _core::path_loop::path_loop;
@@ -91,6 +93,46 @@ fn bench_average(c: &mut Criterion) {
     let y: Vec<f64> = (0..P * 200).map(|i| (i as f64 * 0.37).sin()).collect();
     c.bench_function("periodic_average", |b| {
         b.iter(|| periodic_average(black_box(&y), P, 0, 200))
+    });
+}
+
+/// The lab kernels on the bench_pipeline record size: 20,000 samples at 317.3 samples per period;
+/// the moments and the Gram factor at K = 200 (the synchronous average's largest), the frequency
+/// fit's terms at K = 1 (the sine fit).
+fn bench_lab(c: &mut Criterion) {
+    const N: usize = 20_000;
+    const K: usize = 200;
+    let tau: Vec<f64> = (0..N).map(|i| (i as f64 - 0.5 * N as f64) * 1e-3).collect();
+    let omega = 2.0 * PI / (317.3e-3);
+    let theta: Vec<f64> = tau
+        .iter()
+        .map(|t| (omega * t).rem_euclid(2.0 * PI))
+        .collect();
+    let x: Vec<f64> = theta.iter().map(|t| 0.2 + (t + 0.4).cos()).collect();
+    c.bench_function("harmonic_moments_20000_k200", |b| {
+        b.iter(|| harmonic_moments(black_box(&theta), &x, K))
+    });
+    let coef = [0.2, 0.9, -0.4];
+    c.bench_function("harmonic_gauss_newton_20000_k1", |b| {
+        b.iter(|| harmonic_gauss_newton(black_box(&theta), &tau, &x, &coef))
+    });
+    c.bench_function("harmonic_rss_20000_k1", |b| {
+        b.iter(|| harmonic_rss(black_box(&theta), &x, &coef))
+    });
+    // A unit-diagonal Gram matrix with small off-diagonal terms, as the harmonics over many periods.
+    let m = 2 * K + 1;
+    let gram: Vec<f64> = (0..m * m)
+        .map(|i| {
+            let (r, c) = (i / m, i % m);
+            if r == c {
+                1.0
+            } else {
+                1e-3 / (1.0 + r.abs_diff(c) as f64)
+            }
+        })
+        .collect();
+    c.bench_function("cholesky_upper_401", |b| {
+        b.iter(|| cholesky_upper(black_box(&gram), m))
     });
 }
 
@@ -270,6 +312,6 @@ criterion_group! {
         .measurement_time(Duration::from_secs(2))
         .warm_up_time(Duration::from_millis(500));
     targets = bench_rk4, bench_average, bench_sls, bench_steady_loop, bench_refine, bench_path_loop,
-        bench_augmented
+        bench_augmented, bench_lab
 }
 criterion_main!(benches);

@@ -127,6 +127,165 @@ pub fn harmonic_series(theta: &[f64], coef: &[f64]) -> Result<Vec<f64>> {
     Ok(out)
 }
 
+/// Residual sum of squares `sum_n (y_n - series(theta_n))^2` (units of `y` squared) of the harmonic
+/// series `coef` (as [`harmonic_series`]) against `y` (length n), without the n-vector of the series:
+/// the fast path's explicit residual needs no BLAS call (a threaded `ddot` on a long vector costs
+/// milliseconds on a loaded machine, more than the fit).
+///
+/// Errors: non-finite input, unequal lengths, an even `coef` length.
+pub fn harmonic_rss(theta: &[f64], y: &[f64], coef: &[f64]) -> Result<f64> {
+    check(theta, y, 1)?;
+    let series = harmonic_series(theta, coef)?;
+    // Summed in LANES partial sums, as the other kernels, so that the additions pipeline.
+    let mut acc = [0.0; LANES];
+    for (sb, yb) in series.chunks(LANES).zip(y.chunks(LANES)) {
+        for l in 0..sb.len() {
+            let r = yb[l] - sb[l];
+            acc[l] += r * r;
+        }
+    }
+    Ok(acc.iter().sum())
+}
+
+/// Upper Cholesky factor `R` (`R^T R = G`, row-major `m x m`, zeros below the diagonal) of the
+/// symmetric positive definite Gram matrix `gram` (row-major `m x m`, only its lower triangle read),
+/// as `numpy.linalg.cholesky(gram).T`. The synchronous average's Gram matrix has `m = 2K + 1` up to
+/// 401; LAPACK through a threaded OpenBLAS wakes its threads for it, which on a loaded 2-core machine
+/// cost hundreds of milliseconds per call (issue #8), against a few here (dot-product form, rows
+/// contiguous).
+///
+/// Errors: non-finite input, `gram.len() != m * m`, a matrix that is not positive definite.
+pub fn cholesky_upper(gram: &[f64], m: usize) -> Result<Vec<f64>> {
+    all_finite("gram", gram)?;
+    if gram.len() != m * m || m == 0 {
+        return Err(CoreError::InvalidParameter(format!(
+            "gram must hold m * m = {} values (m >= 1), got {}",
+            m * m,
+            gram.len()
+        )));
+    }
+    // Lower factor L, row-major: L[i][j] = (G[i][j] - L[i][..j] . L[j][..j]) / L[j][j].
+    let mut l = vec![0.0; m * m];
+    for i in 0..m {
+        for j in 0..=i {
+            let (ri, rj) = (&l[i * m..i * m + j], &l[j * m..j * m + j]);
+            let s = gram[i * m + j] - dot(ri, rj);
+            if i == j {
+                if s.is_nan() || s <= 0.0 {
+                    return Err(CoreError::InvalidParameter(format!(
+                        "the Gram matrix is not positive definite (pivot {i}: {s:e})"
+                    )));
+                }
+                l[i * m + i] = s.sqrt();
+            } else {
+                l[i * m + j] = s / l[j * m + j];
+            }
+        }
+    }
+    let mut r = vec![0.0; m * m];
+    for i in 0..m {
+        for j in 0..=i {
+            r[j * m + i] = l[i * m + j];
+        }
+    }
+    Ok(r)
+}
+
+/// `a . b` in LANES partial sums (independent additions pipeline and vectorise).
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    let mut acc = [0.0; LANES];
+    let (ca, cb) = (a.chunks_exact(LANES), b.chunks_exact(LANES));
+    let (ra, rb) = (ca.remainder(), cb.remainder());
+    for (xa, xb) in ca.zip(cb) {
+        for l in 0..LANES {
+            acc[l] += xa[l] * xb[l];
+        }
+    }
+    let tail: f64 = ra.iter().zip(rb).map(|(x, y)| x * y).sum();
+    acc.iter().sum::<f64>() + tail
+}
+
+/// Gauss-Newton terms of the frequency fit (variable projection, `signal._sine._nls`) at the phases
+/// `theta = omega tau` (rad), the times `tau` (s), the record `x` and the harmonic coefficients
+/// `coef = [c, a_1, b_1, ...]` (length `2K + 1`, `K >= 1`), in one pass without forming the basis:
+/// with the residual `r = x - X coef` and `d = d(X coef)/d omega = tau sum_k k (b_k cos k theta -
+/// a_k sin k theta)`, returns `(r.r, r.d, d.d, X^T d)` (`X^T d` of length `2K + 1`, ordered as
+/// `coef`). The NumPy reference forms `X` (`_harmonic_ls.harmonic_basis`) and `d`
+/// (`_sine._omega_column`) explicitly.
+///
+/// Errors: non-finite input, unequal lengths, an even `coef` length or `K = 0`.
+pub fn harmonic_gauss_newton(
+    theta: &[f64],
+    tau: &[f64],
+    x: &[f64],
+    coef: &[f64],
+) -> Result<(f64, f64, f64, Vec<f64>)> {
+    check(theta, x, 1)?;
+    all_finite("tau", tau)?;
+    all_finite("coef", coef)?;
+    if tau.len() != theta.len() {
+        return Err(CoreError::InvalidParameter(format!(
+            "theta and tau must have equal lengths, got {} and {}",
+            theta.len(),
+            tau.len()
+        )));
+    }
+    if coef.len() % 2 == 0 || coef.len() < 3 {
+        return Err(CoreError::InvalidParameter(format!(
+            "coef must hold 2K + 1 values [c, a_1, b_1, ...] with K >= 1, got {}",
+            coef.len()
+        )));
+    }
+    let kmax = coef.len() / 2;
+    let (mut rr, mut rd, mut dd) = (0.0, 0.0, 0.0);
+    let mut xtd = vec![0.0; coef.len()];
+    for ((th, tb), xb) in theta
+        .chunks(LANES)
+        .zip(tau.chunks(LANES))
+        .zip(x.chunks(LANES))
+    {
+        let lanes = th.len();
+        let mut z = [(0.0, 0.0); LANES];
+        let mut fitted = [coef[0]; LANES];
+        let mut slope = [0.0; LANES];
+        for l in 0..lanes {
+            z[l] = (th[l].cos(), th[l].sin());
+        }
+        // First sweep over the harmonics: the fitted series and its phase derivative.
+        let mut p = z;
+        for k in 1..=kmax {
+            let (a, b, kf) = (coef[2 * k - 1], coef[2 * k], k as f64);
+            for l in 0..lanes {
+                fitted[l] += a * p[l].0 + b * p[l].1;
+                slope[l] += kf * (b * p[l].0 - a * p[l].1);
+                p[l] = cmul(p[l], z[l]);
+            }
+        }
+        let mut d = [0.0; LANES];
+        for l in 0..lanes {
+            d[l] = tb[l] * slope[l];
+            let r = xb[l] - fitted[l];
+            rr += r * r;
+            rd += r * d[l];
+            dd += d[l] * d[l];
+            xtd[0] += d[l];
+        }
+        // Second sweep: the projections of d on the basis.
+        let mut p = z;
+        for k in 1..=kmax {
+            let (mut sc, mut ss) = (0.0, 0.0);
+            for l in 0..lanes {
+                sc += d[l] * p[l].0;
+                ss += d[l] * p[l].1;
+                p[l] = cmul(p[l], z[l]);
+            }
+            xtd[2 * k - 1] += sc;
+            xtd[2 * k] += ss;
+        }
+    }
+    Ok((rr, rd, dd, xtd))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -181,5 +340,87 @@ mod tests {
             harmonic_moments(&bad, &bad, 1),
             Err(CoreError::NonFinite(_))
         ));
+    }
+
+    #[test]
+    fn gauss_newton_terms_match_direct_sums_and_validate() {
+        let n = 29; // a partial last block
+        let tau: Vec<f64> = (0..n).map(|i| 0.01 * i as f64 - 0.1).collect();
+        let omega = 7.3;
+        let theta: Vec<f64> = tau.iter().map(|t| omega * t).collect();
+        let x: Vec<f64> = theta.iter().map(|t| 1.2 * (t + 0.3).sin() + 0.1).collect();
+        let coef = [0.05, 0.3, 1.1, -0.02, 0.04];
+        let (rr, rd, dd, xtd) = harmonic_gauss_newton(&theta, &tau, &x, &coef).unwrap();
+        let (mut err, mut erd, mut edd) = (0.0, 0.0, 0.0);
+        let mut extd = [0.0; 5];
+        for i in 0..n {
+            let t = theta[i];
+            let mut f = coef[0];
+            let mut sl = 0.0;
+            for k in 1..=2 {
+                let kf = k as f64;
+                f += coef[2 * k - 1] * (kf * t).cos() + coef[2 * k] * (kf * t).sin();
+                sl += kf * (coef[2 * k] * (kf * t).cos() - coef[2 * k - 1] * (kf * t).sin());
+            }
+            let d = tau[i] * sl;
+            let r = x[i] - f;
+            err += r * r;
+            erd += r * d;
+            edd += d * d;
+            extd[0] += d;
+            for k in 1..=2 {
+                extd[2 * k - 1] += d * (k as f64 * t).cos();
+                extd[2 * k] += d * (k as f64 * t).sin();
+            }
+        }
+        assert!((rr - err).abs() < 1e-12 && (rd - erd).abs() < 1e-12 && (dd - edd).abs() < 1e-12);
+        for (a, b) in xtd.iter().zip(&extd) {
+            assert!((a - b).abs() < 1e-12);
+        }
+        assert!(harmonic_gauss_newton(&theta, &tau, &x, &coef[..4]).is_err());
+        assert!(harmonic_gauss_newton(&theta, &tau, &x, &coef[..1]).is_err());
+        assert!(harmonic_gauss_newton(&theta, &tau[..3], &x, &coef).is_err());
+    }
+
+    #[test]
+    fn rss_matches_the_explicit_residual() {
+        let theta: Vec<f64> = (0..45).map(|i| 0.21 * i as f64).collect();
+        let y: Vec<f64> = theta.iter().map(|t| (t + 0.2).cos() + 0.1).collect();
+        let coef = [0.1, 0.9, -0.2, 0.05, 0.01];
+        let s = harmonic_series(&theta, &coef).unwrap();
+        let e: f64 = y.iter().zip(&s).map(|(a, b)| (a - b) * (a - b)).sum();
+        let got = harmonic_rss(&theta, &y, &coef).unwrap();
+        assert!((got - e).abs() <= 1e-14 * e.max(1.0));
+        assert!(harmonic_rss(&theta, &y[..4], &coef).is_err());
+        assert!(harmonic_rss(&theta, &y, &coef[..2]).is_err());
+    }
+
+    #[test]
+    fn cholesky_reproduces_the_matrix_and_refuses_indefinite_ones() {
+        let m = 11; // not a multiple of LANES
+        let a: Vec<f64> = (0..m * m)
+            .map(|i| ((i * 7 % 13) as f64 - 6.0) / 10.0)
+            .collect();
+        let mut g = vec![0.0; m * m];
+        for i in 0..m {
+            for j in 0..m {
+                g[i * m + j] = (0..m).map(|k| a[k * m + i] * a[k * m + j]).sum::<f64>()
+                    + if i == j { 1.0 } else { 0.0 };
+            }
+        }
+        let r = cholesky_upper(&g, m).unwrap();
+        for i in 0..m {
+            for j in 0..m {
+                let e: f64 = (0..m).map(|k| r[k * m + i] * r[k * m + j]).sum();
+                assert!((e - g[i * m + j]).abs() < 1e-12, "({i}, {j})");
+                if j < i {
+                    assert_eq!(r[i * m + j], 0.0);
+                }
+            }
+        }
+        let mut bad = g.clone();
+        bad[0] = -1.0;
+        assert!(cholesky_upper(&bad, m).is_err());
+        assert!(cholesky_upper(&g[..10], m).is_err());
     }
 }

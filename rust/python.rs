@@ -1211,6 +1211,51 @@ fn harmonic_series<'py>(
     Ok(out.into_pyarray(py))
 }
 
+/// Upper Cholesky factor of the row-major `m x m` Gram matrix `gram` (flat, length `m * m`), flat
+/// row-major (`rust/lab.rs`).
+#[pyfunction]
+fn cholesky_upper<'py>(
+    py: Python<'py>,
+    gram: PyReadonlyArray1<'py, f64>,
+    m: usize,
+) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    let gram = slice("gram", &gram)?;
+    let out = py.detach(|| lab::cholesky_upper(gram, m))?;
+    Ok(out.into_pyarray(py))
+}
+
+/// `sum (y - series(theta))^2` of the harmonic series `coef` against `y` (`rust/lab.rs`).
+#[pyfunction]
+fn harmonic_rss<'py>(
+    py: Python<'py>,
+    theta: PyReadonlyArray1<'py, f64>,
+    y: PyReadonlyArray1<'py, f64>,
+    coef: PyReadonlyArray1<'py, f64>,
+) -> PyResult<f64> {
+    let (theta, y, coef) = (
+        slice("theta", &theta)?,
+        slice("y", &y)?,
+        slice("coef", &coef)?,
+    );
+    Ok(py.detach(|| lab::harmonic_rss(theta, y, coef))?)
+}
+
+/// Gauss-Newton terms `(r.r, r.d, d.d, X^T d)` of the frequency fit of `x` on the harmonic series
+/// `coef` at phases `theta`, times `tau` (`rust/lab.rs`).
+#[pyfunction]
+fn harmonic_gauss_newton<'py>(
+    py: Python<'py>,
+    theta: PyReadonlyArray1<'py, f64>,
+    tau: PyReadonlyArray1<'py, f64>,
+    x: PyReadonlyArray1<'py, f64>,
+    coef: PyReadonlyArray1<'py, f64>,
+) -> PyResult<(f64, f64, f64, Bound<'py, PyArray1<f64>>)> {
+    let (theta, tau) = (slice("theta", &theta)?, slice("tau", &tau)?);
+    let (x, coef) = (slice("x", &x)?, slice("coef", &coef)?);
+    let (rr, rd, dd, xtd) = py.detach(|| lab::harmonic_gauss_newton(theta, tau, x, coef))?;
+    Ok((rr, rd, dd, xtd.into_pyarray(py)))
+}
+
 /// Rust core of bouc_wen_id (simulation, averaging, estimators); see docs/design.md.
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -1239,5 +1284,8 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(refine_many, m)?)?;
     m.add_function(wrap_pyfunction!(harmonic_moments, m)?)?;
     m.add_function(wrap_pyfunction!(harmonic_series, m)?)?;
+    m.add_function(wrap_pyfunction!(harmonic_gauss_newton, m)?)?;
+    m.add_function(wrap_pyfunction!(harmonic_rss, m)?)?;
+    m.add_function(wrap_pyfunction!(cholesky_upper, m)?)?;
     Ok(())
 }

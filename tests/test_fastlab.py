@@ -154,3 +154,73 @@ def test_lab_pipeline_with_and_without_the_rust_kernels(seed: int, monkeypatch: 
         assert a.harmonics == b.harmonics
         assert_allclose(a.ybar, b.ybar, rtol=0, atol=1e-8 * float(np.max(np.abs(b.ybar))))
         assert a.noise_var == pytest.approx(b.noise_var, rel=1e-7)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_gauss_newton_kernel_matches_the_basis_reference(seed: int) -> None:
+    from bouc_wen_id.signal import _sine
+
+    rng = np.random.default_rng(seed)
+    n, k = 5003 + 11 * seed, 1 + 3 * seed
+    tau = (np.arange(n, dtype=np.float64) - n / 2) * 1e-3
+    omega = 2.0 * math.pi * rng.uniform(3.0, 9.0)
+    theta = hls.phase_angle(omega, tau)
+    x = 0.2 + np.cos(theta + 0.4) + 0.05 * rng.standard_normal(n)
+    coef = rng.standard_normal(2 * k + 1)
+    rr, rd, dd, xtd = _core.harmonic_gauss_newton(theta, tau, x, coef)
+    basis = hls.harmonic_basis(theta, k)
+    d = _sine._omega_column(tau, coef, basis)
+    r = x - basis @ coef
+    # Same per-sample phasors as the basis recurrence, another summation order: n eps relative to the
+    # sums of |terms|.
+    assert rr == pytest.approx(float(r @ r), rel=1e-11)
+    assert rd == pytest.approx(float(r @ d), abs=1e-11 * float(np.abs(r) @ np.abs(d)))
+    assert dd == pytest.approx(float(d @ d), rel=1e-11)
+    assert_allclose(xtd, basis.T @ d, rtol=0, atol=1e-11 * float(np.sum(np.abs(d))))
+    with pytest.raises(InvalidParameterError):
+        _core.harmonic_gauss_newton(theta, tau[:-1], x, coef)
+    with pytest.raises(InvalidParameterError):
+        _core.harmonic_gauss_newton(theta, tau, x, coef[:1])
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_frequency_fit_matches_the_reference(seed: int, monkeypatch: pytest.MonkeyPatch) -> None:
+    from bouc_wen_id.signal import _sine
+
+    rng = np.random.default_rng(seed)
+    n, dt, k = 20_000, 1e-3, 1 + seed
+    tau = (np.arange(n, dtype=np.float64) - n // 2) * dt
+    omega = 2.0 * math.pi * rng.uniform(2.0, 6.0)
+    x = 0.1 + 1.3 * np.cos(omega * tau + 0.7) + 0.05 * np.cos(2 * omega * tau) + 0.02 * rng.standard_normal(n)
+    start = omega * (1.0 + 2e-3 * rng.uniform(-1.0, 1.0))
+    fast = _sine._nls(tau, x, start, dt, k)
+    monkeypatch.setattr(hls, "USE_RUST_KERNELS", False)
+    ref = _sine._nls(tau, x, start, dt, k)
+    # Gauss-Newton stops at 1e-4 of the standard error; residuals that differ by rounding may stop it one
+    # step apart: the frequencies agree to 1e-3 standard errors, the rest to the rounding of the fits.
+    assert abs(fast.omega - ref.omega) <= 1e-3 * ref.se
+    assert fast.se == pytest.approx(ref.se, rel=1e-6)
+    assert fast.rss == pytest.approx(ref.rss, rel=1e-9)
+    assert_allclose(fast.coef, ref.coef, rtol=0, atol=1e-6 * float(np.max(np.abs(ref.coef))))
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_cholesky_and_rss_kernels_match_numpy(seed: int) -> None:
+    theta, y = _record(seed, 4000 + seed, 61.7 + seed)
+    k = 5 + 20 * seed
+    mr, mi, rr, ri = _core.harmonic_moments(theta, y, k)
+    gram, _ = _fastlab.gram_from_moments(mr + 1j * mi, rr + 1j * ri, k)
+    m = 2 * k + 1
+    r = _core.cholesky_upper(np.ascontiguousarray(gram).ravel(), m).reshape(m, m)
+    # Another order of the same dot products as LAPACK's blocked factor, on a Gram matrix of condition
+    # ~1 (harmonics over 60+ periods): agreement to rounding, 1e-12 of the largest entry.
+    assert_allclose(r, np.linalg.cholesky(gram).T, rtol=0, atol=1e-12 * float(np.max(np.abs(r))))
+    coef = np.random.default_rng(seed).standard_normal(m)
+    resid = y - hls.harmonic_basis(theta, k) @ coef
+    assert _core.harmonic_rss(theta, y, coef) == pytest.approx(float(resid @ resid), rel=1e-11)
+    indefinite = gram.copy()
+    indefinite[0, 0] = -1.0
+    with pytest.raises(InvalidParameterError):
+        _core.cholesky_upper(indefinite.ravel(), m)
+    with pytest.raises(InvalidParameterError):
+        _core.harmonic_rss(theta, y[:-1], coef)

@@ -92,11 +92,14 @@ def moment_fit(theta: FloatArray, y: FloatArray, kmax: int) -> Optional[tuple[Fl
     gram, xty = gram_from_moments(mr + 1j * mi, rr + 1j * ri, kmax)
     if not well_conditioned(gram):
         return None
-    r = np.linalg.cholesky(gram).T
+    m = gram.shape[0]
+    # In Rust: LAPACK through a threaded OpenBLAS wakes its threads even for this small matrix (issue #8).
+    r = _core.cholesky_upper(np.ascontiguousarray(gram).ravel(), m).reshape(m, m)
     qty: FloatArray = solve_triangular(r, xty, trans="T")
     coef = solve_triangular(r, qty)
-    resid = yy - _core.harmonic_series(th, np.ascontiguousarray(coef))
-    return r, qty, float(resid @ resid)
+    # In Rust: a BLAS ddot on the n-vector wakes OpenBLAS's threads, which on a loaded machine costs
+    # milliseconds, more than the whole fit (issue #8, measured on the bench's records).
+    return r, qty, _core.harmonic_rss(th, yy, np.ascontiguousarray(coef))
 
 
 def harmonic_lsq(
@@ -113,3 +116,60 @@ def harmonic_lsq(
     r, qty, rss = out
     coef: FloatArray = solve_triangular(r, qty)
     return coef, r, rss
+
+
+def nls(
+    tau: FloatArray, x: FloatArray, omega0: float, dt: float, k: int
+) -> Optional[tuple[float, FloatArray, float, float]]:
+    """``(omega, coef, rss, se)`` of ``signal._sine._nls`` (the same Gauss-Newton on omega, step rule and
+    stopping rule) without forming the basis: each fit from :func:`harmonic_lsq`, the Gauss-Newton terms
+    ``r.d, d.d, X^T d`` from one pass of ``_core.harmonic_gauss_newton``.  ``None`` when a fit is
+    ill-conditioned (the caller then runs the reference)."""
+    from scipy.linalg import solve_triangular
+
+    from . import _core
+
+    tt = np.ascontiguousarray(tau, dtype=np.float64)
+    xx = np.ascontiguousarray(x, dtype=np.float64)
+    n = xx.size
+    bin_width = 2.0 * np.pi / (n * dt)
+    two_pi = 2.0 * np.pi
+
+    def fit(omega: float) -> Optional[tuple[FloatArray, tuple[FloatArray, FloatArray, float]]]:
+        theta = np.mod(omega * tt, two_pi)  # as _harmonic_ls.phase_angle
+        out = harmonic_lsq(theta, xx, k)
+        return None if out is None else (theta, out)
+
+    omega = omega0
+    cur = fit(omega)
+    if cur is None:
+        return None
+    theta, (coef, r_factor, rss) = cur
+    se = np.inf
+    dof = max(n - (2 * k + 1) - 1, 1)
+    for _ in range(60):
+        _, r_d, d_d, xtd = _core.harmonic_gauss_newton(theta, tt, xx, coef)
+        q_t_d = solve_triangular(r_factor, xtd, trans="T")
+        d_perp2 = d_d - float(q_t_d @ q_t_d)
+        if not d_perp2 > 0.0:
+            break
+        se = float(np.sqrt(rss / dof / d_perp2))
+        step = r_d / d_perp2
+        step = min(max(step, -0.5 * bin_width), 0.5 * bin_width)
+        if not np.isfinite(step) or abs(step) <= max(1e-12 * bin_width, 1e-4 * se):
+            break
+        previous = rss
+        for _half in range(10):
+            trial = omega + step
+            if trial > 0.0:
+                cand = fit(trial)
+                if cand is None:
+                    return None
+                if cand[1][2] <= rss:
+                    omega = trial
+                    theta, (coef, r_factor, rss) = cand
+                    break
+            step *= 0.5
+        if previous - rss <= 1e-14 * previous:
+            break
+    return omega, coef, rss, se

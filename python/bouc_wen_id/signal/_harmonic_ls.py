@@ -120,9 +120,10 @@ def fit_at(tau: FloatArray, x: FloatArray, omega: float, k: int) -> HarmonicFit:
     basis = harmonic_basis(theta, k)
     fast = _fastlab().harmonic_lsq(theta, x, k) if USE_RUST_KERNELS else None
     if fast is not None:
-        coef, r_factor, _ = fast
-    else:
-        coef, r_factor = solve_qr(basis, x)
+        # The residual sum of squares comes from the kernels too (no BLAS on the n-vectors).
+        coef, r_factor, rss = fast
+        return HarmonicFit(coef, rss, basis, r_factor)
+    coef, r_factor = solve_qr(basis, x)
     r = x - basis @ coef
     return HarmonicFit(coef, float(r @ r), basis, r_factor)
 

@@ -24,6 +24,7 @@ from ..errors import (
     ZeroAmplitudeError,
 )
 from ..validation import HARMONIC_SNR, MIN_SAMPLES_PER_PERIOD, check_time_axis, finite_arrays
+from . import _harmonic_ls
 from ._harmonic_ls import fit_at, solve_triangular
 
 __all__ = [
@@ -101,6 +102,13 @@ class SineFit:
         return self.phase / self.frequency
 
 
+def _dot(a: FloatArray, b: FloatArray) -> float:
+    """``a . b`` of two long vectors by NumPy's own loops (einsum), not BLAS: a threaded OpenBLAS ``ddot``
+    wakes its threads, which on a loaded 2-core machine cost milliseconds per call (issue #8), more than
+    the sine analysis itself.  Only the summation order differs (rounding, n eps relative)."""
+    return float(np.einsum("i,i->", a, b))
+
+
 def dft_peak(x: FloatArray, dt: float, nominal: Optional[float]) -> float:
     """Frequency (rad/s) of the largest spectral peak: Hann window, 4x zero padding, parabolic
     interpolation of the log magnitude.  With ``nominal``, the peak within +-10 % of it wins when it is a
@@ -108,7 +116,7 @@ def dft_peak(x: FloatArray, dt: float, nominal: Optional[float]) -> float:
     n = x.size
     idx = np.arange(n, dtype=np.float64) - 0.5 * (n - 1)
     # Remove offset and linear drift: their leakage would otherwise mask a low-frequency tone.
-    slope = float(np.dot(idx, x) / np.dot(idx, idx))
+    slope = _dot(idx, x) / _dot(idx, idx)
     xd = x - x.mean() - slope * idx
     nfft = 1 << math.ceil(math.log2(4 * n))
     spec = np.abs(np.fft.rfft(xd * np.hanning(n), nfft))
@@ -164,6 +172,11 @@ def _nls(tau: FloatArray, x: FloatArray, omega0: float, dt: float, k: int) -> _N
     step is below 1e-4 standard errors (or 1e-12 DFT bins, for noise-free data).  With K = 1 this is the
     4-parameter sine fit ``(omega, a, b, c)``.
     """
+    if _harmonic_ls.USE_RUST_KERNELS:
+        # The same iteration on the Rust kernels, without forming the basis (issue #8).
+        fast = _harmonic_ls._fastlab().nls(tau, x, omega0, dt, k)
+        if fast is not None:
+            return _NLS(*fast)
     n = x.size
     bin_width = TWO_PI / (n * dt)
     omega = omega0
@@ -264,7 +277,7 @@ def analyse_input(
     p = TWO_PI / (omega * dt)
     # How much of u do the fundamental and its harmonics explain (adjusted for their count)?
     centred = u - u.mean()
-    ss = float(centred @ centred)
+    ss = _dot(centred, centred)
     dof = n - basis.shape[1]
     if dof > 0 and ss > 0.0:
         explained = 1.0 - (rss / dof) / (ss / (n - 1))
@@ -283,7 +296,7 @@ def analyse_input(
         phase=float(np.mod(theta + omega * t_ref, TWO_PI)),
         offset=float(coef[0]),
         thd=thd,
-        residual_rms=math.sqrt(float(sine_only @ sine_only) / n),
+        residual_rms=math.sqrt(_dot(sine_only, sine_only) / n),
         frequency_se=nls.se,
     )
     return InputAnalysis(fit, explained, p, n * dt * omega / TWO_PI, dt)
