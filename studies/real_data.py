@@ -2,7 +2,7 @@
 
 Run from the repository root (the package must be importable, e.g. ``PYTHONPATH=python``)::
 
-    python studies/real_data.py            # all four data sets, ~2 min
+    python studies/real_data.py            # all four data sets, ~2.5 min on 2 cores
     python studies/real_data.py --doc-only # docs/real-data.md from results.json
 
 For every usable experiment (one steady stretch of one record) the script
