@@ -78,11 +78,12 @@ def figure(d: bw.Diagnosis, path: Path, title: str) -> None:
     fig.savefig(path)
 
 
-def _row(dataset: str, label: str, d: bw.Diagnosis) -> dict[str, Any]:
+def _row(dataset: str, label: str, d: bw.Diagnosis, y_unit: str = "") -> dict[str, Any]:
     ho = d.held_out
     return {
         "dataset": dataset,
         "group": label,
+        "y_unit": y_unit,
         "experiments": len(d.experiments),
         "status": d.status,
         "verdict": d.verdict,
@@ -98,6 +99,9 @@ def _row(dataset: str, label: str, d: bw.Diagnosis) -> dict[str, Any]:
         "where_final": d.after.describe(),
         "seconds": d.seconds,
         "steps": [s.to_dict() for s in d.steps],
+        "degradation": None if d.degradation is None else d.degradation.to_dict(),
+        "notes": list(getattr(d, "notes", ()) or ()),
+        "skipped": dict(d.settings.get("skipped", {}) or {}),
     }
 
 
@@ -160,6 +164,22 @@ def markdown(rows: list[dict[str, Any]], wall: float) -> str:
                 if t["share_of_excess"] is not None
             )
             lines.append(f"- step {k}: chosen **{st['chosen'] or 'none'}**; best candidates: {tried}")
+        deg = r.get("degradation")
+        if deg:
+            yu = r.get("y_unit") or "[y]"
+            du = f"1/({yu})^2" if " " in yu else f"1/{yu}^2"
+            lines.append(
+                f"- degradation (drift space, period blocks): delta_nu = {deg['delta_nu']:.3g} "
+                f"± {deg['standard_error']:.2g} {du}, p = {deg['p_adjusted']:.2g} (Bonferroni), "
+                f"share of the drift excess {deg['share_of_drift_excess']:.2f}, held-out "
+                f"{'better' if deg['held_out_improves'] else 'worse'}: "
+                f"{'named' if deg['named'] else 'not named'}"
+                + (" (a negative delta_nu is a stiffening, not a degradation)" if deg["delta_nu"] < 0 else "")
+            )
+        for why in r.get("notes", []):
+            lines.append(f"- note: {why}")
+        for term, why in r.get("skipped", {}).items():
+            lines.append(f"- {term} not tested: {why}")
         ho = r["held_out"]
         if ho:
             pairs = ", ".join(f"{b:.3f} -> {a:.3f}" for b, a in zip(ho["nrmse_before"], ho["nrmse_after"]))
@@ -196,7 +216,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"{dataset} {label}: {d.verdict} ({d.seconds:.1f} s)")
         slug = f"diagnosis-{dataset}-{label.replace(' ', '').replace('.', 'p')}.png"
         figure(d, figs / slug, f"{dataset}, {label}: {d.status}")
-        rows.append(_row(dataset, label, d))
+        rows.append(_row(dataset, label, d, units.get("y", "")))
     wall = time.perf_counter() - t0
     ok = [r for r in rows if "error" not in r]
     (figs / "diagnosis.json").write_text(json.dumps(clean(rows), indent=1, allow_nan=False))
