@@ -1,4 +1,4 @@
-"""Optional dependencies (pandas, npTDMS, h5py), imported on first use.
+"""Optional dependencies (pandas, npTDMS, h5py, python-control, Dask), imported on first use.
 
 ``import bouc_wen_id`` must stay fast and must work without them: only the functions that need one import
 it, through :func:`require`, which turns a missing package into an :class:`ImportError` that says which
@@ -17,6 +17,8 @@ EXTRAS = {
     "pandas": ("pandas", "pandas"),
     "nptdms": ("npTDMS", "tdms"),
     "h5py": ("h5py", "hdf5"),
+    "control": ("control", "control"),
+    "distributed": ("dask[distributed]", "dask"),
 }
 
 

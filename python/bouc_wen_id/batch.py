@@ -19,6 +19,7 @@ from collections.abc import Mapping, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from typing import TYPE_CHECKING, Any, Literal, Optional, Union
 
+from . import _optional
 from .errors import BoucWenIdError, InvalidParameterError
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
@@ -175,13 +176,7 @@ def _shutdown_pools() -> None:
 
 
 def _on_dask(client: Any, split: Sequence[tuple[Sequence[Any], dict[str, Any]]], errors: str) -> list[Any]:
-    try:
-        import distributed  # noqa: F401
-    except ImportError as exc:  # pragma: no cover - exercised only without the extra
-        raise ImportError(
-            "identify_many(client=...) runs on Dask, which is not installed: pip install 'bouc_wen_id[dask]' "
-            "(or dask[distributed])"
-        ) from exc
+    _optional.require("distributed", "identify_many(client=...)")
     # pure=False: the jobs are not hashed (their arrays can be large) and every call runs.
     futures = [client.submit(_run, e, o, errors, pure=False) for e, o in split]
     return list(client.gather(futures))

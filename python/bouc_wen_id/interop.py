@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING, Any, Optional
 
 import numpy as np
 
+from . import _optional
 from .errors import InvalidParameterError
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
@@ -30,14 +31,7 @@ MAX_PADE_ORDER = 10
 
 
 def _control() -> Any:
-    try:
-        import control  # type: ignore[import-untyped]
-    except ImportError as exc:  # pragma: no cover - exercised only without the extra
-        raise ImportError(
-            "this needs python-control, which is not installed: pip install 'bouc_wen_id[control]' "
-            "(or pip install control)"
-        ) from exc
-    return control
+    return _optional.require("control", "python-control interop")
 
 
 def to_frd(result: IdentificationResult) -> Any:
