@@ -30,6 +30,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import InsufficientDataError, InvalidParameterError
+from ..signal._harmonic_ls import harmonic_basis
 
 FloatArray = NDArray[np.float64]
 ComplexArray = NDArray[np.complex128]
@@ -225,14 +226,13 @@ def _lab_waveform(th: FloatArray, u: FloatArray) -> FloatArray:
     kmax = WAVEFORM_MAX_HARMONIC
     if u.size < 4 * (2 * kmax + 1):
         return np.zeros(0)
-    k = np.arange(1, kmax + 1)
-    basis = np.column_stack([np.ones(u.size), np.cos(np.outer(th, k)), np.sin(np.outer(th, k))])
+    basis = harmonic_basis(th, kmax)
     coef, *_ = np.linalg.lstsq(basis, u, rcond=None)
     resid = u - basis @ coef
     var_u = float(resid @ resid) / (u.size - basis.shape[1])
     # Each coefficient's sd ~ sqrt(2 var / n) on whole periods; |C_k| of noise about sqrt(2) times that.
     floor = WAVEFORM_NOISE_SD * math.sqrt(2.0 * 2.0 * var_u / u.size)
-    c = coef[1 : kmax + 1] - 1j * coef[kmax + 1 :]
+    c = coef[1::2] - 1j * coef[2::2]
     return _normalised(c.astype(np.complex128), floor)
 
 
@@ -313,10 +313,7 @@ def _lab_blocks(
         n = int(np.count_nonzero(sel))
         if n < 2 * (2 * harm + 1):
             return None  # too few samples for the block's harmonics: no block record
-        cols = [np.ones(n)]
-        for h in range(1, harm + 1):
-            cols += [np.cos(h * th[sel]), np.sin(h * th[sel])]
-        sol = np.linalg.lstsq(np.column_stack(cols), y[sel], rcond=None)[0]
+        sol = np.linalg.lstsq(harmonic_basis(th[sel], harm), y[sel], rcond=None)[0]
         c = np.empty(harm + 1, np.complex128)
         c[0] = sol[0]
         c[1:] = sol[1::2] - 1j * sol[2::2]
