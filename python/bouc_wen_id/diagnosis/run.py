@@ -195,6 +195,48 @@ def _refine_degradation(
     return replace(deg, d=dv, value=dv / s.y**2, standard_error=se / s.y**2), fits[dv]
 
 
+def _degradation_stage(
+    exps: Sequence[DiagExperiment],
+    sx: Sequence[AugExperiment],
+    plain: AugFit,
+    s: Scale,
+    substeps: int,
+    alpha: float,
+    family: int,
+    held_out_test: bool,
+) -> Optional[tuple[Optional[DegradationTest], list[DiagExperiment], list[AugExperiment], AugFit]]:
+    """The degradation candidate (design.md 10.6): its test, and the data and start the steady selection
+    then runs on (the test is None when it cannot be formed); None without a block record.
+
+    Tested on the plain model's Jacobian, Bonferroni over all ``family`` candidates of the first step as if
+    it were one of them. When it is named, the averaged periods are brought back to the virgin strength and
+    re-estimated at each loop's own strength, twice (the first pass moves the fit from the plain model's
+    average strength to the virgin one, the second settles it), then d is refined on both costs.
+    """
+    data = drift_data(exps, sx, plain, s.y, substeps)
+    if not data:
+        return None
+    deg = degradation_test(data, s.y, alpha, family=family)
+    if deg is None or not (deg.named if held_out_test else deg.passed):
+        return deg, list(exps), list(sx), plain
+    fit, fexps, fsx = plain, list(exps), list(sx)
+    for _ in range(CORRECTION_PASSES):
+        fexps, fsx = corrected(exps, sx, fit, deg.d, s.y, substeps)
+        fit = best_of([fit_from(fsx, fit.params, substeps)]) or fit
+        data = drift_data(exps, sx, fit, s.y, substeps, strengths(len(exps), data, deg.d))
+        retest = degradation_test(data, s.y, alpha, family=family)
+        if retest is None:
+            break
+        deg = retest
+    if not (deg.named if held_out_test else deg.passed):
+        # The refined test no longer names it: the steady selection on the data as they are.
+        return deg, list(exps), list(sx), plain
+    if deg.d > 0:
+        deg, fit = _refine_degradation(exps, sx, fit, data, deg, s, substeps)
+        fexps, fsx = corrected(exps, sx, fit, deg.d, s.y, substeps)
+    return deg, fexps, fsx, fit
+
+
 def diagnose(
     experiments: Any,
     *,
@@ -267,39 +309,18 @@ def diagnose(
     before = _localise(exps, sx, plain, s)
     cache: FoldCache = {}
     steady = tuple(c for c in cands if c != DEGRADATION)
-    # Degradation first, in drift space (design.md 10.6), on the plain model's Jacobian: Bonferroni over
-    # all the candidates of the first step, as if it were one of them. When it is named, the averaged
-    # periods are brought back to one strength before the steady terms are selected on them.
+    # Degradation first, in drift space (design.md 10.6); when it is named, the steady terms are selected on
+    # the averaged periods brought back to one strength.
     deg: Optional[DegradationTest] = None
     notes: list[str] = []
     fexps, fsx, start = exps, sx, plain
     if DEGRADATION in cands:
-        data = drift_data(exps, sx, plain, s.y, substeps)
-        if data:
-            deg = degradation_test(data, s.y, alpha, family=len(cands))
-        else:
+        stage = _degradation_stage(exps, sx, plain, s, substeps, alpha, len(cands), held_out_test)
+        if stage is None:
             notes.append(NO_BLOCKS)
+        else:
+            deg, fexps, fsx, start = stage
     named_deg = deg is not None and (deg.named if held_out_test else deg.passed)
-    if deg is not None and named_deg:
-        # Back to the virgin strength and re-estimate at each loop's own strength, twice: the first pass
-        # moves the fit from the plain model's average strength to the virgin one, the second settles it.
-        fit, test = plain, deg
-        for _ in range(CORRECTION_PASSES):
-            fexps, fsx = corrected(exps, sx, fit, test.d, s.y, substeps)
-            fit = best_of([fit_from(fsx, fit.params, substeps)]) or fit
-            data = drift_data(exps, sx, fit, s.y, substeps, strengths(len(exps), data, test.d))
-            retest = degradation_test(data, s.y, alpha, family=len(cands))
-            if retest is None:
-                break
-            test = retest
-        deg = test
-        named_deg = deg.named if held_out_test else deg.passed
-        if named_deg and deg.d > 0:
-            deg, fit = _refine_degradation(exps, sx, fit, data, deg, s, substeps)
-            fexps, fsx = corrected(exps, sx, fit, deg.d, s.y, substeps)
-        start = fit
-        if not named_deg:  # the refined test no longer names it: the steady selection on the data as is
-            fexps, fsx, start = exps, sx, plain
     final, steps = forward_select(
         fsx, start, steady, adequate, substeps, alpha=alpha, use_held_out=held_out_test, cache=cache
     )
