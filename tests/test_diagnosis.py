@@ -203,6 +203,19 @@ def test_hidden_term_is_named_with_its_value(term: Term, value: float) -> None:
     assert d.verdict.startswith("explained by: ")
 
 
+def test_targeted_step_names_a_lag_the_global_test_misses(plain_diagnosis: bw.diagnosis.Diagnosis) -> None:
+    # A 4 ms lag is a delay in G to first order: the global test accepts the plain model (p ~ 0.47 on this
+    # seed), but the lag's one-parameter F-test in the targeted first step (design.md 10.3) sees the rest.
+    d = bw.diagnose(_recs((T.SensorLag(0.004),), seed=4))
+    assert d.plain.p_value >= 0.5 * d.settings["alpha"], d.summary()
+    assert d.steps[0].targeted and d.steps[0].chosen == "sensor_lag", d.summary()
+    assert d.status == "explained" and d.named_terms == ("sensor_lag",)
+    got = d.named[0]
+    assert abs(got.value - 0.004) < 4 * got.standard_error, d.summary()
+    # On plain data the targeted step runs too, and names nothing.
+    assert plain_diagnosis.steps[0].targeted and plain_diagnosis.steps[0].chosen is None
+
+
 def test_terms_one_frequency_cannot_separate_are_alternatives() -> None:
     """Stiffness k u and inertia m uddot = -m omega^2 u are the same term at one frequency."""
     om = np.full(3, TWO_PI * 1.0)

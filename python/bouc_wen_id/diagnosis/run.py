@@ -297,10 +297,17 @@ def diagnose(
     substeps = substeps_for([e.ybar.size for e in sx])
     noise_dof = sum(e.noise_dof for e in exps)
 
-    def adequate(fit: AugFit) -> bool:
+    def p_of(fit: AugFit) -> float:
         dof = sum(e.ybar.size for e in sx) - (3 + len(fit.params.terms) + 2 * len(sx))
-        p = adequacy_p(fit.cost, dof, noise_dof)
+        return adequacy_p(fit.cost, dof, noise_dof)
+
+    def adequate(fit: AugFit) -> bool:
+        p = p_of(fit)
         return bool(math.isfinite(p) and p >= alpha)
+
+    def gate(fit: AugFit) -> bool:
+        p = p_of(fit)
+        return bool(math.isfinite(p) and p >= 0.5 * alpha)
 
     plain = fit_plain(experiments, exps, s, substeps)
     # The distortion term's waveforms through G at their own frequencies, as the plain fit sees G.
@@ -321,8 +328,19 @@ def diagnose(
         else:
             deg, fexps, fsx, start = stage
     named_deg = deg is not None and (deg.named if held_out_test else deg.passed)
+    # The plain model's gate: the global test at alpha / 2, and when it accepts, the targeted step's
+    # candidate tests at the other alpha / 2 (select.py's docstring; design.md 10.3).
+    targeted = not named_deg and not before.drift_detected and gate(start)
     final, steps = forward_select(
-        fsx, start, steady, adequate, substeps, alpha=alpha, use_held_out=held_out_test, cache=cache
+        fsx,
+        start,
+        steady,
+        adequate,
+        substeps,
+        alpha=alpha,
+        use_held_out=held_out_test,
+        cache=cache,
+        targeted=targeted,
     )
     after = _localise(detrended(fexps, deg, s.y) if deg is not None and named_deg else fexps, fsx, final, s)
     units = (y_unit, u_unit)
@@ -339,7 +357,7 @@ def diagnose(
         total = max(excess, 0.0) + max(deg.cost0 - deg.dof0, 0.0)
         fraction = (plain_sum.cost - final_sum.cost + deg.cost0 - deg.cost1) / total if total > 0 else 0.0
     status = classify(
-        adequate(plain) and not before.drift_detected and not named_deg,
+        targeted and not final.params.terms,
         bool(final.params.terms) or named_deg,
         adequate(final),
         fraction,
