@@ -129,15 +129,43 @@ def calibrate(b: Base, term: str, size: float) -> float:
     return math.sqrt(lo * hi)
 
 
-def library_case(term: str | None, size: float, seed: int) -> tuple[list[bw.Recording], float]:
+def library_case(
+    term: str | None, size: float, seed: int, noise_sd: float = NOISE_SD
+) -> tuple[list[bw.Recording], float]:
     """A case with ``term`` (None: the plain model) at ``size``; (recordings, parameter value)."""
     b = base(seed)
     if term == "distortion":
-        return distortion_case(b, size, seed)
+        return distortion_case(b, size, seed, noise_sd)
     if term is None:
-        return bw.simulate(b.plant, _plan(b, NOISE_SD, seed)), 0.0
+        return bw.simulate(b.plant, _plan(b, noise_sd, seed)), 0.0
     value = calibrate(b, term, size)
-    return bw.simulate(_with_terms(b, (LIBRARY[term](value),)), _plan(b, NOISE_SD, seed)), value
+    return bw.simulate(_with_terms(b, (LIBRARY[term](value),)), _plan(b, noise_sd, seed)), value
+
+
+#: Noise sd of a case's "noise-free" twin: small enough that the residual is the term's own, large enough
+#: for the estimators' noise-floor estimates to stay positive.
+TWIN_NOISE_SD = 1e-6
+
+
+def left_size(term: str, size: float, seed: int) -> float:
+    """What the plain model cannot absorb of a case's term: the RMS of the refined plain fit's residual on
+    the case's noise-free twin, in units of the averaged output's noise sd (NaN if that fit fails).
+
+    The size of a case is its term's whole contribution; a term the linear part absorbs to first order (a
+    sensor lag is a delay in G) leaves far less, and that remainder is all any test can see."""
+    import warnings
+
+    recs, _ = library_case(term, size, seed, noise_sd=TWIN_NOISE_SD)
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            r = bw.identify(recs)
+    except bw.BoucWenIdError:
+        return math.nan
+    res = np.concatenate(
+        [np.asarray(e.ybar) - np.asarray(e.model) for e in r.experiments if e.model is not None]
+    )
+    return float(np.sqrt(np.mean(res**2))) / (NOISE_SD / math.sqrt(PERIODS))
 
 
 # --------------------------------------------------------------------------------------------------------
@@ -347,7 +375,9 @@ def distorted_period(b: Base, coeffs: NDArray[np.complex128], cycles: int = 8) -
     return out
 
 
-def distortion_case(b: Base, size: float, seed: int) -> tuple[list[bw.Recording], float]:
+def distortion_case(
+    b: Base, size: float, seed: int, noise_sd: float = NOISE_SD
+) -> tuple[list[bw.Recording], float]:
     """Recordings of the plain plant under a distorted input whose effect has RMS ``size`` noise sd; (recs,
     the distortion scale s)."""
     shape = distortion_coefficients(seed)
@@ -368,7 +398,7 @@ def distortion_case(b: Base, size: float, seed: int) -> tuple[list[bw.Recording]
         u = amp * np.real(
             np.exp(1j * om * t) + sum(sc * c * np.exp(1j * k * om * t) for k, c in enumerate(shape, 2))
         )
-        y = np.tile(y_period[i], PERIODS) + rng.normal(0.0, NOISE_SD, t.size)
+        y = np.tile(y_period[i], PERIODS) + rng.normal(0.0, noise_sd, t.size)
         recs.append(
             bw.Recording(t, u, y, float(amp), float(om), settle_periods=0, metadata={"name": f"exp{i}"})
         )

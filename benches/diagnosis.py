@@ -12,9 +12,12 @@ degradation is not named) over the true structure's (degradation fitted), one ex
 
 Per row: detection rate (the plain model rejected), correct-name rate (the hidden term named, alone or as
 an alternative), wrong-name rate (a term named that is not the hidden one), the held-out NRMSE of the
-chosen model over that of the true structure fitted to the same data (median), and the seconds per
-diagnosis. Targets: at 10x and 30x the right term in >= 95 %; null: any name in <= 5 %; outside:
-"unexplained" in >= 90 % and a wrong name in <= 10 %; held-out ratio within 10 % (<= 1.10).
+chosen model over that of the true structure fitted to the same data (median), the seconds per
+diagnosis, and "left": what the plain model cannot absorb of the term (median RMS of the refined plain
+fit's residual on the case's noise-free twin, in the same noise-sd units as the size; a sensor lag is a
+delay in G to first order, so its 10x leaves ~0.15). Targets: at 10x and 30x the right term in >= 95 %;
+null: any name in <= 5 %; outside: "unexplained" in >= 90 % and a wrong name in <= 10 %; held-out ratio
+within 10 % (<= 1.10).
 
 Usage: ``python benches/diagnosis.py [--cases 20] [--null 60] [--workers 2] [--json out.json]``.
 """
@@ -98,6 +101,7 @@ def run_case(job: tuple[str, Optional[str], float, int]) -> dict[str, Any]:
     correct = truth is not None and (truth in named or (truth in alts and any(n in alts for n in named)))
     wrong = any(n != truth and not (truth in alts and n in alts) for n in named)
     ratio = _held_out_ratio(d, truth) if kind != "outside" else math.nan
+    left = C.left_size(term, size, seed) if kind == "library" and term is not None else math.nan
     return {
         "kind": kind,
         "term": term,
@@ -111,6 +115,7 @@ def run_case(job: tuple[str, Optional[str], float, int]) -> dict[str, Any]:
         "wrong": bool(wrong),
         "unexplained": d.status == "unexplained",
         "ratio": ratio,
+        "left": left,
         "seconds": secs,
         "verdict": d.verdict,
     }
@@ -147,7 +152,7 @@ def main(argv: Optional[list[str]] = None) -> int:
         groups.setdefault((r["kind"], r["term"] or "plain", r["size"]), []).append(r)
     head = (
         f"{'case':<26} {'n':>3} {'detect':>7} {'correct':>8} {'wrong':>6} {'unexpl':>7} {'HO ratio':>9} "
-        f"{'err':>4} {'s/diag':>7}  target"
+        f"{'err':>4} {'s/diag':>7} {'left':>6}  target"
     )
     print(head)
     print("-" * len(head))
@@ -161,6 +166,8 @@ def main(argv: Optional[list[str]] = None) -> int:
         ratios = [r["ratio"] for r in ok if math.isfinite(r["ratio"])]
         med = float(np.median(ratios)) if ratios else math.nan
         secs = float(np.mean([r["seconds"] for r in ok])) if ok else math.nan
+        lefts = [r["left"] for r in ok if math.isfinite(r.get("left", math.nan))]
+        left = float(np.median(lefts)) if lefts else math.nan
         label = f"{term} {size:g}x" if kind == "library" else (term if kind == "outside" else "null (plain)")
         if kind == "library":
             target = "correct >= 0.95, ratio <= 1.10" if size >= 10 else "(reported)"
@@ -170,7 +177,7 @@ def main(argv: Optional[list[str]] = None) -> int:
             target = "unexplained >= 0.90, wrong <= 0.10"
         print(
             f"{label:<26} {n:>3} {rate('detected'):7.2f} {rate('correct'):8.2f} {rate('wrong'):6.2f} "
-            f"{rate('unexplained'):7.2f} {med:9.3f} {n - len(ok):>4} {secs:7.2f}  {target}"
+            f"{rate('unexplained'):7.2f} {med:9.3f} {n - len(ok):>4} {secs:7.2f} {left:6.2f}  {target}"
         )
     print(f"\n{len(rows)} diagnoses in {wall:.0f} s wall on {args.workers} workers")
     if args.json:
