@@ -149,7 +149,9 @@ TWIN_NOISE_SD = 1e-6
 
 def left_size(term: str, size: float, seed: int) -> float:
     """What the plain model cannot absorb of a case's term: the RMS of the refined plain fit's residual on
-    the case's noise-free twin, in units of the averaged output's noise sd (NaN if that fit fails).
+    the case's noise-free twin (the output offset ``identify`` removes counted back in: the plain loop has
+    none), in units of the averaged output's noise sd; NaN when ``identify`` refuses the twin (a 30x
+    distorted input is not a sine: ``FrequencyMismatchError``).
 
     The size of a case is its term's whole contribution; a term the linear part absorbs to first order (a
     sensor lag is a delay in G) leaves far less, and that remainder is all any test can see."""
@@ -163,7 +165,7 @@ def left_size(term: str, size: float, seed: int) -> float:
     except bw.BoucWenIdError:
         return math.nan
     res = np.concatenate(
-        [np.asarray(e.ybar) - np.asarray(e.model) for e in r.experiments if e.model is not None]
+        [np.asarray(e.ybar) + e.offset - np.asarray(e.model) for e in r.experiments if e.model is not None]
     )
     return float(np.sqrt(np.mean(res**2))) / (NOISE_SD / math.sqrt(PERIODS))
 
