@@ -95,6 +95,10 @@ def _g_of(freqs: FloatArray, logs: FloatArray, phases: FloatArray, omega: float)
 FOPDT_TOL = 0.05
 #: ... and at least this many distinct frequencies pin its three parameters (else the interpolation).
 FOPDT_MIN_FREQS = 3
+#: Points of the corner-time grid, and golden-section steps refining the best between its neighbours
+#: (0.618^30 of a 2.7 % bracket).
+FOPDT_GRID = 400
+FOPDT_REFINE = 30
 
 
 def _fopdt(
@@ -103,29 +107,59 @@ def _fopdt(
     """``(log K, tc, T, theta0)`` of the first-order-plus-delay G (lag ``theta0 + atan(w tc) + w T``) closest
     in complex log to the tested points, or None when it misses one by more than :data:`FOPDT_TOL`.
 
-    For each ``tc`` on a log grid the rest is linear least squares (``log K`` on the log-gains, ``theta0``
-    and ``T >= 0`` on the lags); the grid spans two decades beyond the tested band either side.
+    ``theta0``, the lag at zero frequency, is a whole number of half turns (G is real there: 0, or pi for an
+    inverting path): the multiple of pi nearest the free least-squares constant, when the model with it held
+    there still reproduces the points; else the free constant. A free constant takes up the points' common
+    phase error and passes it to harmonic k multiplied by ``k - 1`` (design.md 9.5).
+    For each ``tc`` on a log grid the rest is linear least squares (``log K`` on the log-gains, ``T >= 0`` on
+    the lags), and the best ``tc`` is refined between its grid neighbours (golden section); the grid spans two
+    decades beyond the tested band either side.
     """
     if freqs.size < FOPDT_MIN_FREQS:
         return None
-    best: Optional[tuple[float, float, float, float, float]] = None
     basis = np.column_stack([np.ones(freqs.size), freqs])
-    for tc in np.concatenate([[0.0], np.geomspace(1e-2 / freqs[-1], 1e2 / freqs[0], 400)]):
+    grid = np.concatenate([[0.0], np.geomspace(1e-2 / freqs[-1], 1e2 / freqs[0], FOPDT_GRID)])
+
+    def solve(tc: float, th0: Optional[float]) -> tuple[float, float, float, float]:
         roll = 0.5 * np.log1p((freqs * tc) ** 2)
         lk = float(np.mean(logs + roll))
         rest = lag - np.arctan(freqs * tc)
-        (th0, delay), *_ = np.linalg.lstsq(basis, rest, rcond=None)
-        if delay < 0.0:
-            th0, delay = float(np.mean(rest)), 0.0
-        err = np.hypot(logs - (lk - roll), rest - th0 - freqs * delay)
-        cost = float(err @ err)
-        if best is None or cost < best[0]:
-            best = (cost, lk, float(tc), float(delay), float(th0))
-    assert best is not None
-    _, lk, tc, delay, th0 = best
-    roll = 0.5 * np.log1p((freqs * tc) ** 2)
-    err = np.hypot(logs - (lk - roll), lag - np.arctan(freqs * tc) - th0 - freqs * delay)
-    return (lk, tc, delay, th0) if float(np.max(err)) <= FOPDT_TOL else None
+        if th0 is None:
+            (t0, delay), *_ = np.linalg.lstsq(basis, rest, rcond=None)
+            if delay < 0.0:
+                t0, delay = float(np.mean(rest)), 0.0
+        else:
+            t0 = th0
+            delay = max(float(freqs @ (rest - t0)) / float(freqs @ freqs), 0.0)
+        err = np.hypot(logs - (lk - roll), rest - t0 - freqs * delay)
+        return float(err @ err), lk, float(delay), float(t0)
+
+    def fit(th0: Optional[float]) -> Optional[tuple[float, float, float, float]]:
+        costs = [solve(float(tc), th0)[0] for tc in grid]
+        i = int(np.argmin(costs))
+        tc = float(grid[i])
+        if 0 < i < grid.size - 1:
+            lo, hi = float(grid[i - 1]), float(grid[i + 1])
+            g = 0.5 * (math.sqrt(5.0) - 1.0)
+            for _ in range(FOPDT_REFINE):  # golden section on the unimodal cost between the neighbours
+                a, b = hi - g * (hi - lo), lo + g * (hi - lo)
+                if solve(a, th0)[0] < solve(b, th0)[0]:
+                    hi = b
+                else:
+                    lo = a
+            tc = 0.5 * (lo + hi)
+        _, lk, delay, t0 = solve(tc, th0)
+        roll = 0.5 * np.log1p((freqs * tc) ** 2)
+        err = np.hypot(logs - (lk - roll), lag - np.arctan(freqs * tc) - t0 - freqs * delay)
+        return (lk, tc, delay, t0) if float(np.max(err)) <= FOPDT_TOL else None
+
+    free = fit(None)
+    if free is None:
+        return None
+    # theta0 held at its whole half turns when that still reproduces the points (a plain fit biased by the
+    # distortion it leaves out may need the free constant; the fits that include the term do not).
+    held = fit(math.pi * round(free[3] / math.pi))
+    return held if held is not None else free
 
 
 def carry_waveforms(exps: Sequence[AugExperiment], fit: AugFit) -> list[AugExperiment]:
@@ -180,14 +214,19 @@ def carry_waveforms(exps: Sequence[AugExperiment], fit: AugFit) -> list[AugExper
     return out
 
 
-#: Refits of the distortion term whose G re-carries the waveforms (the plain fit's G is biased by the very
-#: distortion it leaves out; one refit took lambda from 0.85-0.96 to 0.98-1.0 on the bench's 30x cases).
-CARRY_REFITS = 2
+#: Refits of the distortion term whose G re-carries the waveforms, at most (the plain fit's G is biased by
+#: the very distortion it leaves out; each refit moves G towards the fixed point, linearly: on the bench's
+#: 30x cases two refits left the carried harmonics 2-5 % off and a spurious play term named beside the
+#: distortion in 40 % of them, converged ones are within 0.3 %)...
+CARRY_REFITS = 8
+#: ... stopping once the carried waveforms move by less than this fraction of their size.
+CARRY_RTOL = 1e-3
 
 
 def carry_through_g(exps: Sequence[AugExperiment], plain: AugFit, substeps: int) -> list[AugExperiment]:
     """:func:`carry_waveforms` from the plain fit's G, then from the G of the plain model plus the distortion
-    term fitted on them, :data:`CARRY_REFITS` times (``exps`` keep the inputs' own waveforms)."""
+    term fitted on them, until the carried waveforms settle (:data:`CARRY_RTOL`, at most
+    :data:`CARRY_REFITS` refits; ``exps`` keep the inputs' own waveforms)."""
     out = carry_waveforms(exps, plain)
     if not any(e.waveform.size for e in exps):
         return out
@@ -195,7 +234,12 @@ def carry_through_g(exps: Sequence[AugExperiment], plain: AugFit, substeps: int)
         f = fit_with(out, plain, "distortion", substeps)
         if f is None:
             break
-        out = carry_waveforms(exps, f)
+        new = carry_waveforms(exps, f)
+        a = np.concatenate([e.waveform for e in out])
+        b = np.concatenate([e.waveform for e in new])
+        out = new
+        if float(np.linalg.norm(b - a)) <= CARRY_RTOL * float(np.linalg.norm(b)):
+            break
     return out
 
 
