@@ -3,6 +3,7 @@ LocalCluster, with results identical to one-by-one ``identify`` calls."""
 
 from __future__ import annotations
 
+import os
 import warnings
 
 import bouc_wen_id as bw
@@ -95,3 +96,14 @@ def test_dask_local_cluster_is_identical_to_local(recordings: list[bw.Recording]
         r.to_json()  # type: ignore[union-attr]
         for r in identify_many(lab_jobs, workers=1)
     ]
+
+
+@pytest.mark.skipif(not hasattr(os, "sched_getaffinity"), reason="no CPU affinity on this platform")
+def test_a_pool_with_one_worker_per_cpu_pins_each_worker_to_one_cpu() -> None:
+    from bouc_wen_id.batch import _local_pool
+
+    cpus = os.sched_getaffinity(0)
+    pool = _local_pool(len(cpus))
+    seen = [pool.submit(os.sched_getaffinity, 0).result() for _ in range(4 * len(cpus))]
+    assert all(len(s) == 1 and s <= cpus for s in seen), seen
+    assert os.sched_getaffinity(0) == cpus  # the caller is not pinned
