@@ -169,7 +169,8 @@ class Diagnosis:
             lines.append("")
             chosen = st.chosen or "none"
             lines.append(
-                f"step {k}: from chi2 = {st.before_cost:.6g} (dof {st.before_dof}); chosen: {chosen}"
+                f"step {k}{' (targeted: the global test accepted the plain model)' if st.targeted else ''}: "
+                f"from chi2 = {st.before_cost:.6g} (dof {st.before_dof}); chosen: {chosen}"
             )
             lines.append(f"  {'term':<12} {'chi2':>12} {'F':>10} {'p adj':>9} {'share':>7} {'held-out':>10}")
             for t in st.trials:

@@ -356,6 +356,8 @@ def diagnose(
         # Both spaces: the steady excess and the drift excess, and what the model removes of each.
         total = max(excess, 0.0) + max(deg.cost0 - deg.dof0, 0.0)
         fraction = (plain_sum.cost - final_sum.cost + deg.cost0 - deg.cost1) / total if total > 0 else 0.0
+    # More than all of the excess is all of it (a model below the noise floor fitted some noise too).
+    fraction = min(fraction, 1.0)
     status = classify(
         targeted and not final.params.terms,
         bool(final.params.terms) or named_deg,

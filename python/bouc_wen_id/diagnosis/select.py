@@ -339,8 +339,9 @@ def forward_select(
             d1 = dof_of(exps, f)
             stat, p = f_test(c0, f.cost, d1, boundary=t in BOUNDARY_TERMS)
             padj = min(1.0, p * len(remaining)) if math.isfinite(p) else math.nan
-            # No excess at all (the targeted step): a term that removes cost explains all there is.
-            share = (c0 - f.cost) / excess if excess > 0 else (1.0 if first else 0.0)
+            # No excess at all (the targeted step): a term that removes cost explains all there is; a term
+            # cannot explain more than all of it (capped: the rest of its improvement is noise).
+            share = min((c0 - f.cost) / excess, 1.0) if excess > 0 else (1.0 if first else 0.0)
             ok = bool(math.isfinite(padj) and padj < level and share >= MATERIAL_SHARE)
             trials.append(Trial(t, f.cost, c0 - f.cost, stat, p, padj, share, ok, fit=f))
         order = sorted((tr for tr in trials if tr.passed), key=lambda tr: tr.cost)
