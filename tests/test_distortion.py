@@ -201,3 +201,15 @@ def test_fopdt_for_the_harmonics_holds_the_dc_lag_at_half_turns() -> None:
     # A constant the held model cannot reproduce (0.3 rad) stays free rather than failing the fit.
     free = _fopdt(freqs, logs, lag + 0.3)
     assert free is not None and abs(free[3] - 0.3) < 0.05
+
+
+def test_a_strongly_distorted_input_names_the_distortion_alone() -> None:
+    # Harmonics of 10 % and 20 % of the fundamental: carried from the plain fit's G (its phases biased by
+    # the distortion it leaves out) the waveforms settled on a G that named play and Coulomb friction
+    # beside the distortion.
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        d = bw.diagnose(_recordings(0.2, 1))
+    assert d.named_terms == ("distortion",), d.summary()
+    lam = d.named[0]
+    assert abs(lam.value - 1.0) < 4 * lam.standard_error, d.summary()
