@@ -1,29 +1,35 @@
-//! Hot loops of the lab preprocessing (`python/bouc_wen_id/signal.py`, issue #8): the harmonic
-//! least squares behind the sine analysis and the synchronous average.
+//! Hot loops of the lab preprocessing (`python/bouc_wen_id/signal/`, issue #8): the harmonic
+//! least squares behind the sine analysis, the steady segments and the synchronous average.
 //!
 //! A fit of `y` on `[1, cos k theta, sin k theta]`, `k = 1..K`, needs the Gram matrix of the basis
 //! and its products with `y`. With `z_n = e^{i theta_n}` both follow from the complex moments
 //! `mu_q = sum_n z_n^q` (`q = 0..2K`; the Gram matrix is Toeplitz-plus-Hankel in them) and
 //! `r_q = sum_n y_n conj(z_n)^q` (`q = 0..K`), in one pass of the phasor recurrence
 //! `z^(q+1) = z^q z`: O(n K) work instead of the O(n K^2) of forming the basis and its QR. The
-//! NumPy reference of the same recurrence is `signal._moment_fit`; the Gram assembly and the
-//! triangular solves stay in Python (they are O(K^2) to O(K^3) on small matrices).
+//! NumPy reference of the same recurrence is `signal._harmonic_ls._moment_fit`; [`fit`] does the
+//! rest of a fit (Gram matrix, conditioning check, Cholesky factor, solves, explicit residual) and
+//! the Gauss-Newton frequency fit of `signal._sine._nls`, so that a fit is one call.
 //!
-//! The samples are processed in blocks of [`LANES`] so that the recurrences of neighbouring
-//! samples (independent) overlap; each sample's powers are formed exactly as the NumPy reference
-//! forms them (`p *= z`, complex multiply without fused operations), only the summation order of
-//! the moments differs (rounding of order `n eps` relative, far below the noise of any record).
+//! The samples are processed in blocks of [`LANES`] held as separate real and imaginary arrays, so
+//! that the recurrences of neighbouring samples (independent) fill the vector registers; [`wide`]
+//! compiles the kernels for AVX2 when the CPU has it. Each sample's powers are formed as the NumPy
+//! reference forms them (`p *= z`, complex multiply without fused operations); the phasors come
+//! from [`sincos`] (within 2 ulp of `libm`) and the sums are taken in another order (rounding of
+//! order `n eps` relative, far below the noise of any record).
+
+pub mod fit;
+pub mod sincos;
+mod wide;
+
+use wide::wide_fn;
 
 use crate::error::{all_finite, CoreError, Result};
 
 /// Samples advanced together through the phasor recurrence.
-const LANES: usize = 8;
-
-/// `(a + ib)(c + id)` as NumPy computes it: `(ac - bd) + i(ad + bc)`.
-#[inline(always)]
-fn cmul(a: (f64, f64), b: (f64, f64)) -> (f64, f64) {
-    (a.0 * b.0 - a.1 * b.1, a.0 * b.1 + a.1 * b.0)
-}
+const LANES: usize = 16;
+/// Partial sums kept per moment (one AVX2 register): the lanes are folded to these per harmonic
+/// and to one number only at the end.
+const FOLD: usize = 4;
 
 fn check(theta: &[f64], y: &[f64], kmax: usize) -> Result<()> {
     all_finite("theta", theta)?;
@@ -43,6 +49,183 @@ fn check(theta: &[f64], y: &[f64], kmax: usize) -> Result<()> {
     Ok(())
 }
 
+fn check_coef(coef: &[f64], min_harmonics: usize) -> Result<()> {
+    all_finite("coef", coef)?;
+    if coef.len() % 2 == 0 || coef.len() < 2 * min_harmonics + 1 {
+        return Err(CoreError::InvalidParameter(format!(
+            "coef must hold 2K + 1 values [c, a_1, b_1, ...] with K >= {min_harmonics}, got {}",
+            coef.len()
+        )));
+    }
+    Ok(())
+}
+
+/// The phasors `e^{i theta_n}` of a record: `(cos theta, sin theta)`.
+pub(crate) struct Phasors {
+    pub re: Vec<f64>,
+    pub im: Vec<f64>,
+}
+
+impl Phasors {
+    #[inline(always)]
+    pub(crate) fn new(theta: &[f64]) -> Self {
+        let (mut re, mut im) = (vec![0.0; theta.len()], vec![0.0; theta.len()]);
+        sincos::sincos_into(theta, &mut im, &mut re);
+        Phasors { re, im }
+    }
+
+    /// Phasors of `theta_n = omega tau_n`, into `self` (resized to `tau`).
+    #[inline(always)]
+    pub(crate) fn set_scaled(&mut self, omega: f64, tau: &[f64], scratch: &mut Vec<f64>) {
+        scratch.clear();
+        scratch.extend(tau.iter().map(|t| omega * t));
+        self.re.resize(tau.len(), 0.0);
+        self.im.resize(tau.len(), 0.0);
+        sincos::sincos_into(scratch, &mut self.im, &mut self.re);
+    }
+
+    fn len(&self) -> usize {
+        self.re.len()
+    }
+}
+
+/// One block of at most [`LANES`] samples, zero-padded: its phasors, the record's values (and
+/// times) there, and how many lanes are real.
+struct Block {
+    zr: [f64; LANES],
+    zi: [f64; LANES],
+    y: [f64; LANES],
+    tau: [f64; LANES],
+    lanes: usize,
+}
+
+impl Block {
+    #[inline(always)]
+    fn load(z: &Phasors, y: &[f64], tau: Option<&[f64]>, start: usize) -> Self {
+        let lanes = LANES.min(y.len() - start);
+        let mut b = Block {
+            zr: [0.0; LANES],
+            zi: [0.0; LANES],
+            y: [0.0; LANES],
+            tau: [0.0; LANES],
+            lanes,
+        };
+        b.zr[..lanes].copy_from_slice(&z.re[start..start + lanes]);
+        b.zi[..lanes].copy_from_slice(&z.im[start..start + lanes]);
+        b.y[..lanes].copy_from_slice(&y[start..start + lanes]);
+        if let Some(t) = tau {
+            b.tau[..lanes].copy_from_slice(&t[start..start + lanes]);
+        }
+        b
+    }
+}
+
+/// `p <- p z` lane by lane, as NumPy multiplies complex numbers: `(ac - bd) + i(ad + bc)`.
+#[inline(always)]
+fn advance(pr: &mut [f64; LANES], pi: &mut [f64; LANES], zr: &[f64; LANES], zi: &[f64; LANES]) {
+    for l in 0..LANES {
+        let (a, b) = (pr[l], pi[l]);
+        pr[l] = a * zr[l] - b * zi[l];
+        pi[l] = a * zi[l] + b * zr[l];
+    }
+}
+
+/// `acc[f] += sum of lanes f, f + FOLD, f + 2 FOLD, ...` of `v`.
+#[inline(always)]
+fn fold_into(acc: &mut [f64; FOLD], v: &[f64; LANES]) {
+    let mut s = [0.0; FOLD];
+    for c in v.chunks_exact(FOLD) {
+        for f in 0..FOLD {
+            s[f] += c[f];
+        }
+    }
+    for f in 0..FOLD {
+        acc[f] += s[f];
+    }
+}
+
+/// `acc[f] += sum of lanes f, f + FOLD, ... of w * v`.
+#[inline(always)]
+fn fold_product_into(acc: &mut [f64; FOLD], w: &[f64; LANES], v: &[f64; LANES]) {
+    let mut prod = [0.0; LANES];
+    for l in 0..LANES {
+        prod[l] = w[l] * v[l];
+    }
+    fold_into(acc, &prod);
+}
+
+fn unfold(acc: &[[f64; FOLD]]) -> Vec<f64> {
+    acc.iter().map(|a| a.iter().sum()).collect()
+}
+
+/// The moments of [`harmonic_moments`] from the record's phasors.
+#[inline(always)]
+#[allow(clippy::type_complexity)]
+pub(crate) fn moments_of(
+    z: &Phasors,
+    y: &[f64],
+    kmax: usize,
+) -> ((Vec<f64>, Vec<f64>), (Vec<f64>, Vec<f64>)) {
+    let nq = 2 * kmax + 1;
+    let (mut mu_re, mut mu_im) = (vec![[0.0; FOLD]; nq], vec![[0.0; FOLD]; nq]);
+    let (mut r_re, mut r_im) = (vec![[0.0; FOLD]; kmax + 1], vec![[0.0; FOLD]; kmax + 1]);
+    for start in (0..z.len()).step_by(LANES) {
+        let b = Block::load(z, y, None, start);
+        // Padding lanes start from p = 0 and stay there: they add nothing.
+        let mut pr = [0.0; LANES];
+        pr[..b.lanes].fill(1.0);
+        let mut pi = [0.0; LANES];
+        let neg_y = b.y.map(|v| -v);
+        for q in 0..=kmax {
+            fold_into(&mut mu_re[q], &pr);
+            fold_into(&mut mu_im[q], &pi);
+            // y conj(p) = (y p_re) + i (-y p_im).
+            fold_product_into(&mut r_re[q], &b.y, &pr);
+            fold_product_into(&mut r_im[q], &neg_y, &pi);
+            advance(&mut pr, &mut pi, &b.zr, &b.zi);
+        }
+        for q in kmax + 1..nq {
+            fold_into(&mut mu_re[q], &pr);
+            fold_into(&mut mu_im[q], &pi);
+            advance(&mut pr, &mut pi, &b.zr, &b.zi);
+        }
+    }
+    (
+        (unfold(&mu_re), unfold(&mu_im)),
+        (unfold(&r_re), unfold(&r_im)),
+    )
+}
+
+/// The series `coef[0] + sum_k coef[2k-1] Re p_k + coef[2k] Im p_k` of one block, `p_k = z^k`.
+#[inline(always)]
+fn block_series(b: &Block, coef: &[f64]) -> [f64; LANES] {
+    let mut out = [coef[0]; LANES];
+    let (mut pr, mut pi) = (b.zr, b.zi);
+    for k in 1..=coef.len() / 2 {
+        let (a, c) = (coef[2 * k - 1], coef[2 * k]);
+        for l in 0..LANES {
+            out[l] += a * pr[l] + c * pi[l];
+        }
+        advance(&mut pr, &mut pi, &b.zr, &b.zi);
+    }
+    out
+}
+
+/// `sum_n (y_n - series_n)^2` from the record's phasors (see [`harmonic_rss`]).
+#[inline(always)]
+pub(crate) fn rss_of(z: &Phasors, y: &[f64], coef: &[f64]) -> f64 {
+    let mut acc = [0.0; LANES];
+    for start in (0..z.len()).step_by(LANES) {
+        let b = Block::load(z, y, None, start);
+        let s = block_series(&b, coef);
+        for l in 0..b.lanes {
+            let r = b.y[l] - s[l];
+            acc[l] += r * r;
+        }
+    }
+    acc.iter().sum()
+}
+
 /// Moments of the harmonic basis at the phases `theta` (rad, length n) against `y` (length n):
 /// `mu_q = sum_n e^{i q theta_n}`, `q = 0..=2 kmax`, and `r_q = sum_n y_n e^{-i q theta_n}`,
 /// `q = 0..=kmax`, each as `(real parts, imaginary parts)`.
@@ -55,43 +238,16 @@ pub fn harmonic_moments(
     kmax: usize,
 ) -> Result<((Vec<f64>, Vec<f64>), (Vec<f64>, Vec<f64>))> {
     check(theta, y, kmax)?;
-    let nq = 2 * kmax + 1;
-    let (mut mu_re, mut mu_im) = (vec![0.0; nq], vec![0.0; nq]);
-    let (mut r_re, mut r_im) = (vec![0.0; kmax + 1], vec![0.0; kmax + 1]);
-    for (th, yb) in theta.chunks(LANES).zip(y.chunks(LANES)) {
-        let lanes = th.len();
-        let mut z = [(0.0, 0.0); LANES];
-        let mut p = [(0.0, 0.0); LANES];
-        let mut yy = [0.0; LANES];
-        for l in 0..lanes {
-            z[l] = (th[l].cos(), th[l].sin());
-            p[l] = (1.0, 0.0);
-            yy[l] = yb[l];
-        }
-        for q in 0..nq {
-            let (mut sr, mut si) = (0.0, 0.0);
-            for pl in &p[..lanes] {
-                sr += pl.0;
-                si += pl.1;
-            }
-            mu_re[q] += sr;
-            mu_im[q] += si;
-            if q <= kmax {
-                // y conj(p): (y p_re) + i (-y p_im).
-                let (mut rr, mut ri) = (0.0, 0.0);
-                for l in 0..lanes {
-                    rr += yy[l] * p[l].0;
-                    ri -= yy[l] * p[l].1;
-                }
-                r_re[q] += rr;
-                r_im[q] += ri;
-            }
-            for l in 0..lanes {
-                p[l] = cmul(p[l], z[l]);
-            }
-        }
+    Ok(moments_wide(theta, y, kmax))
+}
+
+/// `(mu, r)` moments as (real, imaginary) parts.
+type Moments = ((Vec<f64>, Vec<f64>), (Vec<f64>, Vec<f64>));
+
+wide_fn! {
+    fn moments_wide(theta: &[f64], y: &[f64], kmax: usize) -> Moments {
+        moments_of(&Phasors::new(theta), y, kmax)
     }
-    Ok(((mu_re, mu_im), (r_re, r_im)))
 }
 
 /// The harmonic series `coef[0] + sum_k coef[2k-1] cos(k theta_n) + coef[2k] sin(k theta_n)` at
@@ -100,31 +256,21 @@ pub fn harmonic_moments(
 /// Errors: non-finite input, an even `coef` length.
 pub fn harmonic_series(theta: &[f64], coef: &[f64]) -> Result<Vec<f64>> {
     all_finite("theta", theta)?;
-    all_finite("coef", coef)?;
-    if coef.len() % 2 == 0 {
-        return Err(CoreError::InvalidParameter(format!(
-            "coef must hold 2K + 1 values [c, a_1, b_1, ...], got {}",
-            coef.len()
-        )));
-    }
-    let kmax = coef.len() / 2;
-    let mut out = vec![coef[0]; theta.len()];
-    for (th, ob) in theta.chunks(LANES).zip(out.chunks_mut(LANES)) {
-        let lanes = th.len();
-        let mut z = [(0.0, 0.0); LANES];
-        for l in 0..lanes {
-            z[l] = (th[l].cos(), th[l].sin());
+    check_coef(coef, 0)?;
+    Ok(series_wide(theta, coef))
+}
+
+wide_fn! {
+    fn series_wide(theta: &[f64], coef: &[f64]) -> Vec<f64> {
+        let z = Phasors::new(theta);
+        let mut out = vec![0.0; theta.len()];
+        for start in (0..theta.len()).step_by(LANES) {
+            let b = Block::load(&z, theta, None, start);
+            let s = block_series(&b, coef);
+            out[start..start + b.lanes].copy_from_slice(&s[..b.lanes]);
         }
-        let mut p = z;
-        for k in 1..=kmax {
-            let (a, b) = (coef[2 * k - 1], coef[2 * k]);
-            for l in 0..lanes {
-                ob[l] += a * p[l].0 + b * p[l].1;
-                p[l] = cmul(p[l], z[l]);
-            }
-        }
+        out
     }
-    Ok(out)
 }
 
 /// Residual sum of squares `sum_n (y_n - series(theta_n))^2` (units of `y` squared) of the harmonic
@@ -135,16 +281,14 @@ pub fn harmonic_series(theta: &[f64], coef: &[f64]) -> Result<Vec<f64>> {
 /// Errors: non-finite input, unequal lengths, an even `coef` length.
 pub fn harmonic_rss(theta: &[f64], y: &[f64], coef: &[f64]) -> Result<f64> {
     check(theta, y, 1)?;
-    let series = harmonic_series(theta, coef)?;
-    // Summed in LANES partial sums, as the other kernels, so that the additions pipeline.
-    let mut acc = [0.0; LANES];
-    for (sb, yb) in series.chunks(LANES).zip(y.chunks(LANES)) {
-        for l in 0..sb.len() {
-            let r = yb[l] - sb[l];
-            acc[l] += r * r;
-        }
+    check_coef(coef, 0)?;
+    Ok(rss_wide(theta, y, coef))
+}
+
+wide_fn! {
+    fn rss_wide(theta: &[f64], y: &[f64], coef: &[f64]) -> f64 {
+        rss_of(&Phasors::new(theta), y, coef)
     }
-    Ok(acc.iter().sum())
 }
 
 /// Upper Cholesky factor `R` (`R^T R = G`, row-major `m x m`, zeros below the diagonal) of the
@@ -164,6 +308,22 @@ pub fn cholesky_upper(gram: &[f64], m: usize) -> Result<Vec<f64>> {
             gram.len()
         )));
     }
+    cholesky_wide(gram, m).map_err(|(i, s)| {
+        CoreError::InvalidParameter(format!(
+            "the Gram matrix is not positive definite (pivot {i}: {s:e})"
+        ))
+    })
+}
+
+wide_fn! {
+    fn cholesky_wide(gram: &[f64], m: usize) -> std::result::Result<Vec<f64>, (usize, f64)> {
+        cholesky_of(gram, m)
+    }
+}
+
+/// The factor of [`cholesky_upper`], or the failing pivot `(index, value)`.
+#[inline(always)]
+pub(crate) fn cholesky_of(gram: &[f64], m: usize) -> std::result::Result<Vec<f64>, (usize, f64)> {
     // Lower factor L, row-major: L[i][j] = (G[i][j] - L[i][..j] . L[j][..j]) / L[j][j].
     let mut l = vec![0.0; m * m];
     for i in 0..m {
@@ -172,9 +332,7 @@ pub fn cholesky_upper(gram: &[f64], m: usize) -> Result<Vec<f64>> {
             let s = gram[i * m + j] - dot(ri, rj);
             if i == j {
                 if s.is_nan() || s <= 0.0 {
-                    return Err(CoreError::InvalidParameter(format!(
-                        "the Gram matrix is not positive definite (pivot {i}: {s:e})"
-                    )));
+                    return Err((i, s));
                 }
                 l[i * m + i] = s.sqrt();
             } else {
@@ -192,7 +350,8 @@ pub fn cholesky_upper(gram: &[f64], m: usize) -> Result<Vec<f64>> {
 }
 
 /// `a . b` in LANES partial sums (independent additions pipeline and vectorise).
-fn dot(a: &[f64], b: &[f64]) -> f64 {
+#[inline(always)]
+pub(crate) fn dot(a: &[f64], b: &[f64]) -> f64 {
     let mut acc = [0.0; LANES];
     let (ca, cb) = (a.chunks_exact(LANES), b.chunks_exact(LANES));
     let (ra, rb) = (ca.remainder(), cb.remainder());
@@ -222,7 +381,6 @@ pub fn harmonic_gauss_newton(
 ) -> Result<(f64, f64, f64, Vec<f64>)> {
     check(theta, x, 1)?;
     all_finite("tau", tau)?;
-    all_finite("coef", coef)?;
     if tau.len() != theta.len() {
         return Err(CoreError::InvalidParameter(format!(
             "theta and tau must have equal lengths, got {} and {}",
@@ -230,60 +388,63 @@ pub fn harmonic_gauss_newton(
             tau.len()
         )));
     }
-    if coef.len() % 2 == 0 || coef.len() < 3 {
-        return Err(CoreError::InvalidParameter(format!(
-            "coef must hold 2K + 1 values [c, a_1, b_1, ...] with K >= 1, got {}",
-            coef.len()
-        )));
+    check_coef(coef, 1)?;
+    Ok(gauss_newton_wide(theta, tau, x, coef))
+}
+
+wide_fn! {
+    fn gauss_newton_wide(theta: &[f64], tau: &[f64], x: &[f64], coef: &[f64]) -> (f64, f64, f64, Vec<f64>) {
+        gauss_newton_of(&Phasors::new(theta), tau, x, coef)
     }
+}
+
+/// The terms of [`harmonic_gauss_newton`] from the record's phasors.
+#[inline(always)]
+pub(crate) fn gauss_newton_of(
+    z: &Phasors,
+    tau: &[f64],
+    x: &[f64],
+    coef: &[f64],
+) -> (f64, f64, f64, Vec<f64>) {
     let kmax = coef.len() / 2;
-    let (mut rr, mut rd, mut dd) = (0.0, 0.0, 0.0);
-    let mut xtd = vec![0.0; coef.len()];
-    for ((th, tb), xb) in theta
-        .chunks(LANES)
-        .zip(tau.chunks(LANES))
-        .zip(x.chunks(LANES))
-    {
-        let lanes = th.len();
-        let mut z = [(0.0, 0.0); LANES];
+    let (mut rr, mut rd, mut dd) = ([0.0; LANES], [0.0; LANES], [0.0; LANES]);
+    let mut xtd = vec![[0.0; FOLD]; 2 * kmax + 1];
+    for start in (0..z.len()).step_by(LANES) {
+        let b = Block::load(z, x, Some(tau), start);
+        // First sweep over the harmonics: the fitted series and its phase derivative.
         let mut fitted = [coef[0]; LANES];
         let mut slope = [0.0; LANES];
-        for l in 0..lanes {
-            z[l] = (th[l].cos(), th[l].sin());
-        }
-        // First sweep over the harmonics: the fitted series and its phase derivative.
-        let mut p = z;
+        let (mut pr, mut pi) = (b.zr, b.zi);
         for k in 1..=kmax {
-            let (a, b, kf) = (coef[2 * k - 1], coef[2 * k], k as f64);
-            for l in 0..lanes {
-                fitted[l] += a * p[l].0 + b * p[l].1;
-                slope[l] += kf * (b * p[l].0 - a * p[l].1);
-                p[l] = cmul(p[l], z[l]);
+            let (a, c, kf) = (coef[2 * k - 1], coef[2 * k], k as f64);
+            for l in 0..LANES {
+                fitted[l] += a * pr[l] + c * pi[l];
+                slope[l] += kf * (c * pr[l] - a * pi[l]);
             }
+            advance(&mut pr, &mut pi, &b.zr, &b.zi);
         }
+        // Padding lanes have tau = 0, hence d = 0; their residual is masked out.
         let mut d = [0.0; LANES];
-        for l in 0..lanes {
-            d[l] = tb[l] * slope[l];
-            let r = xb[l] - fitted[l];
-            rr += r * r;
-            rd += r * d[l];
-            dd += d[l] * d[l];
-            xtd[0] += d[l];
+        for l in 0..LANES {
+            d[l] = b.tau[l] * slope[l];
         }
+        for l in 0..b.lanes {
+            let r = b.y[l] - fitted[l];
+            rr[l] += r * r;
+            rd[l] += r * d[l];
+            dd[l] += d[l] * d[l];
+        }
+        fold_into(&mut xtd[0], &d);
         // Second sweep: the projections of d on the basis.
-        let mut p = z;
+        let (mut pr, mut pi) = (b.zr, b.zi);
         for k in 1..=kmax {
-            let (mut sc, mut ss) = (0.0, 0.0);
-            for l in 0..lanes {
-                sc += d[l] * p[l].0;
-                ss += d[l] * p[l].1;
-                p[l] = cmul(p[l], z[l]);
-            }
-            xtd[2 * k - 1] += sc;
-            xtd[2 * k] += ss;
+            fold_product_into(&mut xtd[2 * k - 1], &d, &pr);
+            fold_product_into(&mut xtd[2 * k], &d, &pi);
+            advance(&mut pr, &mut pi, &b.zr, &b.zi);
         }
     }
-    Ok((rr, rd, dd, xtd))
+    let sum = |a: [f64; LANES]| a.iter().sum::<f64>();
+    (sum(rr), sum(rd), sum(dd), unfold(&xtd))
 }
 
 #[cfg(test)]

@@ -1256,6 +1256,78 @@ fn harmonic_gauss_newton<'py>(
     Ok((rr, rd, dd, xtd.into_pyarray(py)))
 }
 
+/// `(coef, R, Q^T y, rss)` of one harmonic least-squares fit (`rust/lab/fit.rs`), `R` flat
+/// row-major `m x m`; `None` when the Gram matrix is too ill-conditioned for the normal equations.
+type HarmonicFitOut<'py> = Option<(
+    Bound<'py, PyArray1<f64>>,
+    Bound<'py, PyArray1<f64>>,
+    Bound<'py, PyArray1<f64>>,
+    f64,
+)>;
+
+/// The whole harmonic least-squares fit of `y` on harmonics `1..=kmax` of `theta` in one call
+/// (`rust/lab/fit.rs`): `(coef, R (flat), Q^T y, rss)`, or `None` (ill-conditioned: use QR).
+#[pyfunction]
+fn harmonic_fit<'py>(
+    py: Python<'py>,
+    theta: PyReadonlyArray1<'py, f64>,
+    y: PyReadonlyArray1<'py, f64>,
+    kmax: i64,
+) -> PyResult<HarmonicFitOut<'py>> {
+    let (theta, y) = (slice("theta", &theta)?, slice("y", &y)?);
+    let kmax = count("kmax", kmax, 1)?;
+    let fit = py.detach(|| lab::fit::harmonic_fit(theta, y, kmax))?;
+    Ok(fit.map(|f| {
+        (
+            f.coef.into_pyarray(py),
+            f.r.into_pyarray(py),
+            f.qty.into_pyarray(py),
+            f.rss,
+        )
+    }))
+}
+
+/// The conditioning check of the fused fit (`rust/lab/fit.rs`): `cond(D^-1/2 G D^-1/2) <= 1e4`
+/// and positive definite, `G` flat row-major `m x m`.
+#[pyfunction]
+fn gram_well_conditioned(gram: PyReadonlyArray1<'_, f64>, m: usize) -> PyResult<bool> {
+    let g = slice("gram", &gram)?;
+    Ok(lab::fit::gram_well_conditioned(g, m)?)
+}
+
+/// Diagonal of `(R^T R)^-1` for the upper triangular `R` (flat row-major `m x m`,
+/// `rust/lab/fit.rs`): the unscaled variances of a fit.
+#[pyfunction]
+fn unscaled_variances<'py>(
+    py: Python<'py>,
+    r: PyReadonlyArray1<'py, f64>,
+    m: usize,
+) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    let r = slice("r", &r)?;
+    let out = py.detach(|| lab::fit::unscaled_variances(r, m))?;
+    Ok(out.into_pyarray(py))
+}
+
+/// `(omega, coef, rss, se)` of [`harmonic_nls`], or `None`.
+type FrequencyFitOut<'py> = Option<(f64, Bound<'py, PyArray1<f64>>, f64, f64)>;
+
+/// The Gauss-Newton frequency fit of `signal._sine._nls` in one call (`rust/lab/fit.rs`):
+/// `(omega, coef, rss, se)`, or `None` when a fit is ill-conditioned (run the reference).
+#[pyfunction]
+fn harmonic_nls<'py>(
+    py: Python<'py>,
+    tau: PyReadonlyArray1<'py, f64>,
+    x: PyReadonlyArray1<'py, f64>,
+    omega0: f64,
+    dt: f64,
+    k: i64,
+) -> PyResult<FrequencyFitOut<'py>> {
+    let (tau, x) = (slice("tau", &tau)?, slice("x", &x)?);
+    let k = count("k", k, 1)?;
+    let fit = py.detach(|| lab::fit::harmonic_nls(tau, x, omega0, dt, k))?;
+    Ok(fit.map(|f| (f.omega, f.coef.into_pyarray(py), f.rss, f.se)))
+}
+
 /// Rust core of bouc_wen_id (simulation, averaging, estimators); see docs/design.md.
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -1287,5 +1359,9 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(harmonic_gauss_newton, m)?)?;
     m.add_function(wrap_pyfunction!(harmonic_rss, m)?)?;
     m.add_function(wrap_pyfunction!(cholesky_upper, m)?)?;
+    m.add_function(wrap_pyfunction!(harmonic_fit, m)?)?;
+    m.add_function(wrap_pyfunction!(harmonic_nls, m)?)?;
+    m.add_function(wrap_pyfunction!(gram_well_conditioned, m)?)?;
+    m.add_function(wrap_pyfunction!(unscaled_variances, m)?)?;
     Ok(())
 }

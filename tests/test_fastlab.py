@@ -209,7 +209,7 @@ def test_cholesky_and_rss_kernels_match_numpy(seed: int) -> None:
     theta, y = _record(seed, 4000 + seed, 61.7 + seed)
     k = 5 + 20 * seed
     mr, mi, rr, ri = _core.harmonic_moments(theta, y, k)
-    gram, _ = _fastlab.gram_from_moments(mr + 1j * mi, rr + 1j * ri, k)
+    gram, _ = hls.gram_from_moments(mr + 1j * mi, rr + 1j * ri, k)
     m = 2 * k + 1
     r = _core.cholesky_upper(np.ascontiguousarray(gram).ravel(), m).reshape(m, m)
     # Another order of the same dot products as LAPACK's blocked factor, on a Gram matrix of condition
@@ -224,3 +224,40 @@ def test_cholesky_and_rss_kernels_match_numpy(seed: int) -> None:
         _core.cholesky_upper(indefinite.ravel(), m)
     with pytest.raises(InvalidParameterError):
         _core.harmonic_rss(theta, y[:-1], coef)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_unscaled_variances_match_the_triangular_inverse(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    m = int(rng.integers(3, 60))
+    r = np.triu(rng.standard_normal((m, m))) + np.diag(rng.uniform(1.0, 3.0, m) * rng.choice([-1, 1], m))
+    r_inv = hls.solve_triangular(r, np.eye(m))
+    # Another order of the same back substitution: rounding of R^-1's entries (cond(R) eps).
+    assert_allclose(_core.unscaled_variances(r.ravel(), m), np.sum(r_inv**2, axis=1), rtol=1e-12)
+    singular = r.copy()
+    singular[m // 2, m // 2] = 0.0
+    with pytest.raises(InvalidParameterError):
+        _core.unscaled_variances(singular.ravel(), m)
+    with pytest.raises(InvalidParameterError):
+        _core.unscaled_variances(r.ravel()[:-1], m)
+
+
+def test_fused_fits_refuse_bad_input() -> None:
+    tau = np.linspace(-1.0, 1.0, 200)
+    x = np.cos(7.0 * tau)
+    for bad in (
+        (tau, x, -7.0, 0.01, 1),
+        (tau, x, 7.0, 0.0, 1),
+        (tau, x[:-1], 7.0, 0.01, 1),
+        (tau, x, 7.0, 0.01, 0),
+    ):
+        with pytest.raises(InvalidParameterError):
+            _core.harmonic_nls(*bad)
+    nan = x.copy()
+    nan[5] = np.nan
+    with pytest.raises(NonFiniteError):
+        _core.harmonic_nls(tau, nan, 7.0, 0.01, 1)
+    with pytest.raises(NonFiniteError):
+        _core.harmonic_fit(tau, nan, 2)
+    with pytest.raises(InvalidParameterError):
+        _core.gram_well_conditioned(np.eye(3).ravel(), 2)

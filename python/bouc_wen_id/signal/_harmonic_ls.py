@@ -11,15 +11,19 @@ from __future__ import annotations
 import importlib
 import math
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Any, Optional
 
 import numpy as np
 from numpy.typing import NDArray
 
+from ..errors import InvalidParameterError
+
 __all__ = [
     "HarmonicFit",
     "HarmonicLS",
     "fit_at",
+    "gram_from_moments",
     "harmonic_basis",
     "nested_fit",
     "phase_angle",
@@ -38,6 +42,11 @@ QR_CHUNK = 8192
 #: below.  ``False`` selects the NumPy paths throughout: the reference that tests/test_fastlab.py holds the
 #: fast path to.
 USE_RUST_KERNELS = True
+
+
+def _core() -> Any:
+    """The Rust extension, imported on first use (as :func:`_fastlab`)."""
+    return importlib.import_module("bouc_wen_id._core")
 
 
 def _fastlab() -> Any:
@@ -94,38 +103,72 @@ def solve_qr(matrix: FloatArray, rhs: FloatArray) -> tuple[FloatArray, FloatArra
     return sol, r
 
 
+def _unscaled_variance(r: FloatArray) -> FloatArray:
+    """Diagonal of ``(R^T R)^-1``, the row sums of squares of ``R^-1`` (``R`` upper triangular)."""
+    m = r.shape[0]
+    if USE_RUST_KERNELS:
+        # R^-1 in one Rust call (m^3/6 multiply-adds) instead of a triangular solve against I (issue #8).
+        out: FloatArray = _core().unscaled_variances(np.ascontiguousarray(r, dtype=np.float64).ravel(), m)
+        return out
+    # R is triangular: its inverse by back substitution, a third of a general inverse's work.
+    r_inv = solve_triangular(r, np.eye(m))
+    ref: FloatArray = np.sum(r_inv**2, axis=1)
+    return ref
+
+
 @dataclass
 class HarmonicFit:
-    """A least-squares fit of ``x`` on the harmonic basis at a fixed omega."""
+    """A least-squares fit of ``x`` on the harmonic basis at the phases ``theta``."""
 
     coef: FloatArray  # [c, a_1, b_1, a_2, b_2, ...]
     rss: float
-    basis: FloatArray
     r_factor: FloatArray
+    theta: FloatArray
+
+    @property
+    def harmonics(self) -> int:
+        return (self.coef.size - 1) // 2
+
+    @cached_property
+    def basis(self) -> FloatArray:
+        """The basis ``[1, cos theta, sin theta, ...]`` (formed on first use: the fast path needs none)."""
+        return harmonic_basis(self.theta, self.harmonics)
 
     def variances(self) -> FloatArray:
         """The noise variance of each coefficient: residual variance times the diagonal of ``(X^T X)^-1``."""
-        dof = self.basis.shape[0] - self.basis.shape[1]
+        dof = self.theta.size - self.coef.size
         try:
-            r_inv = solve_triangular(self.r_factor, np.eye(self.basis.shape[1]))
-            out: FloatArray = np.sum(r_inv**2, axis=1) * (self.rss / dof if dof > 0 else 0.0)
-        except np.linalg.LinAlgError:
-            out = np.zeros(self.basis.shape[1])
+            out: FloatArray = _unscaled_variance(self.r_factor) * (self.rss / dof if dof > 0 else 0.0)
+        except (np.linalg.LinAlgError, InvalidParameterError):
+            out = np.zeros(self.coef.size)
         return out
+
+    def fundamental_rss(self, x: FloatArray) -> float:
+        """``|x - c - a_1 cos theta - b_1 sin theta|^2``: what offset and fundamental leave of ``x``."""
+        head = np.ascontiguousarray(self.coef[:3])
+        if USE_RUST_KERNELS:
+            return float(
+                _core().harmonic_rss(np.ascontiguousarray(self.theta), np.ascontiguousarray(x), head)
+            )
+        r = x - self.basis[:, :3] @ head
+        return float(np.einsum("i,i->", r, r))
 
 
 def fit_at(tau: FloatArray, x: FloatArray, omega: float, k: int) -> HarmonicFit:
     """Linear fit of ``x`` on harmonics 1..k of ``omega`` at times ``tau`` (and a constant)."""
     theta = phase_angle(omega, tau)
-    basis = harmonic_basis(theta, k)
     fast = _fastlab().harmonic_lsq(theta, x, k) if USE_RUST_KERNELS else None
     if fast is not None:
-        # The residual sum of squares comes from the kernels too (no BLAS on the n-vectors).
+        # The residual sum of squares comes from the kernels too (no BLAS on the n-vectors), and the
+        # basis is not formed.
         coef, r_factor, rss = fast
-        return HarmonicFit(coef, rss, basis, r_factor)
+        return HarmonicFit(coef, rss, r_factor, theta)
+    basis = harmonic_basis(theta, k)
     coef, r_factor = solve_qr(basis, x)
     r = x - basis @ coef
-    return HarmonicFit(coef, float(r @ r), basis, r_factor)
+    fit = HarmonicFit(coef, float(r @ r), r_factor, theta)
+    fit.basis = basis  # already formed: cached
+    return fit
 
 
 class HarmonicLS:
@@ -150,10 +193,7 @@ class HarmonicLS:
     def unscaled_variance(self, k: int) -> FloatArray:
         """Diagonal of ``(X^T X)^-1`` for the first ``2k + 1`` columns."""
         m = 2 * k + 1
-        # R is triangular: its inverse by back substitution, a third of a general inverse's work.
-        r_inv = solve_triangular(self.r[:m, :m], np.eye(m))
-        out: FloatArray = np.sum(r_inv**2, axis=1)
-        return out
+        return _unscaled_variance(self.r[:m, :m])
 
 
 def _qr_fit(theta: FloatArray, y: FloatArray, kmax: int) -> tuple[FloatArray, FloatArray, float]:
@@ -176,32 +216,17 @@ def _qr_fit(theta: FloatArray, y: FloatArray, kmax: int) -> tuple[FloatArray, Fl
     return rr[:m, :m], rr[:m, m], float(rr[m, m] ** 2)
 
 
-def _moment_fit(theta: FloatArray, y: FloatArray, kmax: int) -> tuple[FloatArray, FloatArray, float]:
-    """Same result as :func:`_qr_fit` for long records, in O(n K) instead of O(n K^2).
+def gram_from_moments(
+    mom: NDArray[np.complex128], rhs: NDArray[np.complex128], kmax: int
+) -> tuple[FloatArray, FloatArray]:
+    """Real Gram matrix of ``[1, c1, s1, c2, s2, ...]`` and ``X^T y`` from the complex moments
+    ``mom[q] = sum e^{i q theta}`` (q = 0..2K) and ``rhs[q] = sum y e^{-i q theta}`` (q = 0..K).
 
-    In complex form the Gram matrix of ``e^{i k theta}``, k = -K..K, is Toeplitz: ``G[k, l] = mu[l - k]``
-    with the moments ``mu[m] = sum_n e^{i m theta_n}``, m = 0..2K, and the right-hand side is
-    ``sum_n y_n e^{-i k theta_n}``; both come from one pass of the phasor recurrence.  Over two or more
-    periods the harmonics are nearly orthogonal (the Gram matrix is ``n I`` to within a few percent), so
-    its condition number is close to 1 and the normal equations lose nothing; it is checked (<= 1e4, else
-    the QR path is used).  The fit is returned as the R factor and ``Q^T y`` of the real basis so that the
-    nested sub-fits work as for the QR path; the residual is recomputed explicitly.
+    ``mu[d]``, d = -2K..2K (``mu[-d]`` the conjugate): ``cos a cos b = (cos(a-b) + cos(a+b))/2``,
+    ``sin a sin b = (cos(a-b) - cos(a+b))/2``, ``cos a sin b = (sin(a+b) - sin(a-b))/2``; the constant column
+    is the k = 0 cosine.  ``rust/lab/fit.rs`` assembles it by the same formulas.
     """
-    n = y.size
     m = 2 * kmax + 1
-    z = np.exp(1j * theta)
-    p = np.ones(n, dtype=np.complex128)
-    mom = np.empty(2 * kmax + 1, dtype=np.complex128)
-    rhs = np.empty(kmax + 1, dtype=np.complex128)
-    for q in range(2 * kmax + 1):
-        mom[q] = p.sum()
-        if q <= kmax:
-            rhs[q] = np.dot(y, p.conj())
-        p *= z
-
-    # Real Gram of [1, c1, s1, c2, s2, ...] from the complex moments mu[d], d = -2K..2K (mu[-d] is the
-    # conjugate): cos a cos b = (cos(a-b) + cos(a+b))/2, sin a sin b = (cos(a-b) - cos(a+b))/2,
-    # cos a sin b = (sin(a+b) - sin(a-b))/2; the constant column is the k = 0 cosine.
     mu = np.concatenate([np.conj(mom[:0:-1]), mom])
     ks = np.concatenate([[0], np.repeat(np.arange(1, kmax + 1), 2)])
     is_sin = np.concatenate([[False], np.tile([False, True], kmax)])
@@ -220,6 +245,32 @@ def _moment_fit(theta: FloatArray, y: FloatArray, kmax: int) -> tuple[FloatArray
     xty[0] = rhs[0].real
     xty[1::2] = rhs[1:].real
     xty[2::2] = -rhs[1:].imag
+    return gram, xty
+
+
+def _moment_fit(theta: FloatArray, y: FloatArray, kmax: int) -> tuple[FloatArray, FloatArray, float]:
+    """Same result as :func:`_qr_fit` for long records, in O(n K) instead of O(n K^2).
+
+    In complex form the Gram matrix of ``e^{i k theta}``, k = -K..K, is Toeplitz: ``G[k, l] = mu[l - k]``
+    with the moments ``mu[m] = sum_n e^{i m theta_n}``, m = 0..2K, and the right-hand side is
+    ``sum_n y_n e^{-i k theta_n}``; both come from one pass of the phasor recurrence.  Over two or more
+    periods the harmonics are nearly orthogonal (the Gram matrix is ``n I`` to within a few percent), so
+    its condition number is close to 1 and the normal equations lose nothing; it is checked (<= 1e4, else
+    the QR path is used).  The fit is returned as the R factor and ``Q^T y`` of the real basis so that the
+    nested sub-fits work as for the QR path; the residual is recomputed explicitly.
+    """
+    n = y.size
+    z = np.exp(1j * theta)
+    p = np.ones(n, dtype=np.complex128)
+    mom = np.empty(2 * kmax + 1, dtype=np.complex128)
+    rhs = np.empty(kmax + 1, dtype=np.complex128)
+    for q in range(2 * kmax + 1):
+        mom[q] = p.sum()
+        if q <= kmax:
+            rhs[q] = np.dot(y, p.conj())
+        p *= z
+
+    gram, xty = gram_from_moments(mom, rhs, kmax)
     scale = np.sqrt(np.diag(gram))
     eig = np.linalg.eigvalsh(gram / np.outer(scale, scale))
     if eig[0] <= 0.0 or eig[-1] / eig[0] > 1e4:

@@ -258,7 +258,7 @@ def analyse_input(
     p = TWO_PI / (nls.omega * dt)
     k_h = max(1, min(INPUT_HARMONICS, int((p - 1.0) // 2), (n // 4 - 1) // 2))
     hf = fit_at(tau, u, nls.omega, k_h)
-    coef, rss, var, basis = hf.coef, hf.rss, hf.variances(), hf.basis
+    coef, var = hf.coef, hf.variances()
     if harmonics and k_h > 1:
         # Refine omega with the harmonics that stand above the noise (none for a clean sine: fitting
         # noise harmonics would only add variance).
@@ -268,7 +268,7 @@ def analyse_input(
         if k_sig > 1:
             nls = _nls(tau, u, nls.omega, dt, k_sig)
             hf = fit_at(tau, u, nls.omega, k_h)
-    coef, rss, var, basis = hf.coef, hf.rss, hf.variances(), hf.basis
+    coef, rss, var = hf.coef, hf.rss, hf.variances()
     omega = nls.omega
     a1, b1 = float(coef[1]), float(coef[2])
     amp = math.hypot(a1, b1)
@@ -278,7 +278,7 @@ def analyse_input(
     # How much of u do the fundamental and its harmonics explain (adjusted for their count)?
     centred = u - u.mean()
     ss = _dot(centred, centred)
-    dof = n - basis.shape[1]
+    dof = n - coef.size
     if dof > 0 and ss > 0.0:
         explained = 1.0 - (rss / dof) / (ss / (n - 1))
     else:
@@ -288,7 +288,6 @@ def analyse_input(
         # Power of harmonics 2..K_h less the noise power of their coefficients.
         excess = coef[3::2] ** 2 + coef[4::2] ** 2 - (var[3::2] + var[4::2])
         thd = math.sqrt(max(float(np.sum(excess)), 0.0)) / amp
-    sine_only = u - coef[0] - a1 * basis[:, 1] - b1 * basis[:, 2]
     theta = math.atan2(b1, a1)
     fit = SineFit(
         frequency=omega,
@@ -296,7 +295,7 @@ def analyse_input(
         phase=float(np.mod(theta + omega * t_ref, TWO_PI)),
         offset=float(coef[0]),
         thd=thd,
-        residual_rms=math.sqrt(_dot(sine_only, sine_only) / n),
+        residual_rms=math.sqrt(hf.fundamental_rss(u) / n),
         frequency_se=nls.se,
     )
     return InputAnalysis(fit, explained, p, n * dt * omega / TWO_PI, dt)
