@@ -19,7 +19,9 @@
 
 pub mod fit;
 pub mod sincos;
+pub mod spectrum;
 mod wide;
+pub mod windows;
 
 use wide::wide_fn;
 
@@ -60,37 +62,104 @@ fn check_coef(coef: &[f64], min_harmonics: usize) -> Result<()> {
     Ok(())
 }
 
-/// The phasors `e^{i theta_n}` of a record: `(cos theta, sin theta)`.
+/// Where the phases of a record come from: given (`theta_n`), or `omega tau_n` (the frequency fit,
+/// whose trial frequencies change them). The phasors `e^{i theta_n}` are formed block by block as
+/// the kernels need them, never as whole-record arrays: fresh megabyte-sized buffers cost more in
+/// page faults than the vectorised [`sincos`] that recomputes them.
+#[derive(Clone, Copy)]
+pub(crate) enum Phases<'a> {
+    Given(&'a [f64]),
+    Scaled(f64, &'a [f64]),
+    /// Phasors already formed: `(cos theta, sin theta)` ([`Phasors`]).
+    Cached(&'a [f64], &'a [f64]),
+}
+
+impl Phases<'_> {
+    fn len(&self) -> usize {
+        match self {
+            Phases::Given(t) | Phases::Scaled(_, t) | Phases::Cached(t, _) => t.len(),
+        }
+    }
+
+    /// The samples `[from, to)` of the phases.
+    #[inline(always)]
+    fn sub(&self, from: usize, to: usize) -> Self {
+        match *self {
+            Phases::Given(t) => Phases::Given(&t[from..to]),
+            Phases::Scaled(w, t) => Phases::Scaled(w, &t[from..to]),
+            Phases::Cached(c, s) => Phases::Cached(&c[from..to], &s[from..to]),
+        }
+    }
+}
+
+/// The phasors of a record formed once for the passes of a fit (moments, residual, Gauss-Newton
+/// terms), in buffers that the caller reuses from fit to fit.
+#[derive(Default)]
 pub(crate) struct Phasors {
-    pub re: Vec<f64>,
-    pub im: Vec<f64>,
+    re: Vec<f64>,
+    im: Vec<f64>,
+    theta: Vec<f64>,
 }
 
 impl Phasors {
+    /// Forms the phasors of `phases` and returns them (one vectorised [`sincos`] pass over the
+    /// record: the loop the compiler vectorises best).
     #[inline(always)]
-    pub(crate) fn new(theta: &[f64]) -> Self {
-        let (mut re, mut im) = (vec![0.0; theta.len()], vec![0.0; theta.len()]);
-        sincos::sincos_into(theta, &mut im, &mut re);
-        Phasors { re, im }
+    pub(crate) fn fill(&mut self, phases: Phases<'_>) -> Phases<'_> {
+        let n = phases.len();
+        self.re.resize(n, 0.0);
+        self.im.resize(n, 0.0);
+        if let Phases::Scaled(w, t) = phases {
+            self.theta.clear();
+            self.theta.extend(t.iter().map(|v| w * v));
+        }
+        let theta: &[f64] = match phases {
+            Phases::Given(t) => t,
+            Phases::Scaled(..) => &self.theta,
+            Phases::Cached(c, s) => {
+                self.re.copy_from_slice(c);
+                self.im.copy_from_slice(s);
+                return Phases::Cached(&self.re, &self.im);
+            }
+        };
+        // Not split between threads: waking a second thread costs about what it would save here.
+        sincos_wide(theta, &mut self.im, &mut self.re);
+        Phases::Cached(&self.re, &self.im)
     }
 
-    /// Phasors of `theta_n = omega tau_n`, into `self` (resized to `tau`).
+    /// `f` with this thread's two phasor buffers: fresh record-sized buffers at every call cost
+    /// more in page faults than the passes over them (issue #8), so they are kept and reused.
     #[inline(always)]
-    pub(crate) fn set_scaled(&mut self, omega: f64, tau: &[f64], scratch: &mut Vec<f64>) {
-        scratch.clear();
-        scratch.extend(tau.iter().map(|t| omega * t));
-        self.re.resize(tau.len(), 0.0);
-        self.im.resize(tau.len(), 0.0);
-        sincos::sincos_into(scratch, &mut self.im, &mut self.re);
+    pub(crate) fn with<R>(f: impl FnOnce(&mut Phasors, &mut Phasors) -> R) -> R {
+        thread_local! {
+            static BUFFERS: std::cell::RefCell<(Phasors, Phasors)> =
+                std::cell::RefCell::new((Phasors::default(), Phasors::default()));
+        }
+        BUFFERS.with(|cell| match cell.try_borrow_mut() {
+            Ok(mut bufs) => {
+                let (a, b) = &mut *bufs;
+                f(a, b)
+            }
+            // Re-entered (not done by the kernels): fresh buffers.
+            Err(_) => f(&mut Phasors::default(), &mut Phasors::default()),
+        })
     }
 
-    fn len(&self) -> usize {
-        self.re.len()
+    /// The phasors formed by the last [`Phasors::fill`].
+    pub(crate) fn phases(&self) -> Phases<'_> {
+        Phases::Cached(&self.re, &self.im)
     }
 }
 
-/// One block of at most [`LANES`] samples, zero-padded: its phasors, the record's values (and
-/// times) there, and how many lanes are real.
+wide_fn! {
+    /// [`sincos::sincos_into`] compiled for the machine's vector width.
+    fn sincos_wide(x: &[f64], out_sin: &mut [f64], out_cos: &mut [f64]) -> () {
+        sincos::sincos_into(x, out_sin, out_cos)
+    }
+}
+
+/// One block of at most [`LANES`] samples, zero-padded: its phasors (padding lanes `1 + 0i`), the
+/// record's values (and times) there, and how many lanes are real.
 struct Block {
     zr: [f64; LANES],
     zi: [f64; LANES],
@@ -101,17 +170,22 @@ struct Block {
 
 impl Block {
     #[inline(always)]
-    fn load(z: &Phasors, y: &[f64], tau: Option<&[f64]>, start: usize) -> Self {
+    fn load(phases: Phases<'_>, y: &[f64], tau: Option<&[f64]>, start: usize) -> Self {
         let lanes = LANES.min(y.len() - start);
+        let Phases::Cached(c, si) = phases.sub(start, start + lanes) else {
+            unreachable!("the kernels read phasors formed by Phasors::fill")
+        };
+        // Padding lanes: 1 + 0i.
+        let (mut zr, mut zi) = ([1.0; LANES], [0.0; LANES]);
+        zr[..lanes].copy_from_slice(c);
+        zi[..lanes].copy_from_slice(si);
         let mut b = Block {
-            zr: [0.0; LANES],
-            zi: [0.0; LANES],
+            zr,
+            zi,
             y: [0.0; LANES],
             tau: [0.0; LANES],
             lanes,
         };
-        b.zr[..lanes].copy_from_slice(&z.re[start..start + lanes]);
-        b.zi[..lanes].copy_from_slice(&z.im[start..start + lanes]);
         b.y[..lanes].copy_from_slice(&y[start..start + lanes]);
         if let Some(t) = tau {
             b.tau[..lanes].copy_from_slice(&t[start..start + lanes]);
@@ -162,38 +236,68 @@ fn unfold(acc: &[[f64; FOLD]]) -> Vec<f64> {
 #[inline(always)]
 #[allow(clippy::type_complexity)]
 pub(crate) fn moments_of(
-    z: &Phasors,
+    z: Phases<'_>,
     y: &[f64],
     kmax: usize,
 ) -> ((Vec<f64>, Vec<f64>), (Vec<f64>, Vec<f64>)) {
-    let nq = 2 * kmax + 1;
-    let (mut mu_re, mut mu_im) = (vec![[0.0; FOLD]; nq], vec![[0.0; FOLD]; nq]);
-    let (mut r_re, mut r_im) = (vec![[0.0; FOLD]; kmax + 1], vec![[0.0; FOLD]; kmax + 1]);
-    for start in (0..z.len()).step_by(LANES) {
-        let b = Block::load(z, y, None, start);
-        // Padding lanes start from p = 0 and stay there: they add nothing.
-        let mut pr = [0.0; LANES];
-        pr[..b.lanes].fill(1.0);
-        let mut pi = [0.0; LANES];
-        let neg_y = b.y.map(|v| -v);
-        for q in 0..=kmax {
-            fold_into(&mut mu_re[q], &pr);
-            fold_into(&mut mu_im[q], &pi);
-            // y conj(p) = (y p_re) + i (-y p_im).
-            fold_product_into(&mut r_re[q], &b.y, &pr);
-            fold_product_into(&mut r_im[q], &neg_y, &pi);
-            advance(&mut pr, &mut pi, &b.zr, &b.zi);
+    let n = z.len();
+    let parts = if n * (2 * kmax + 1) >= SPLIT_WORK {
+        // Two halves on two threads (a fixed split: the same sums whatever the pool's size).
+        let mid = split_point(n);
+        let (a, b) = rayon::join(
+            || moments_part(z.sub(0, mid), &y[..mid], kmax),
+            || moments_part(z.sub(mid, n), &y[mid..], kmax),
+        );
+        a.into_iter()
+            .zip(b)
+            .map(|(u, v)| u.iter().zip(&v).map(|(p, q)| p + q).collect())
+            .collect()
+    } else {
+        moments_part(z, y, kmax)
+    };
+    let [mr, mi, rr, ri]: [Vec<f64>; 4] = parts.try_into().expect("four moment arrays");
+    ((mr, mi), (rr, ri))
+}
+
+/// Records at least this long (samples times harmonics, about half a millisecond of work) have
+/// their passes split between two threads (`rayon::join`, issue #8: both cores for the synchronous average's long fits); in the
+/// batch's worker processes the pool has one thread and the halves run one after the other.
+const SPLIT_WORK: usize = 1 << 20;
+
+/// Where a record of `n` samples is split in two: the middle, rounded to whole blocks.
+fn split_point(n: usize) -> usize {
+    (n / 2).div_ceil(LANES) * LANES
+}
+
+wide_fn! {
+    /// `[mu_re, mu_im, r_re, r_im]` of [`moments_of`] over one part of a record.
+    fn moments_part(z: Phases<'_>, y: &[f64], kmax: usize) -> Vec<Vec<f64>> {
+        let nq = 2 * kmax + 1;
+        let (mut mu_re, mut mu_im) = (vec![[0.0; FOLD]; nq], vec![[0.0; FOLD]; nq]);
+        let (mut r_re, mut r_im) = (vec![[0.0; FOLD]; kmax + 1], vec![[0.0; FOLD]; kmax + 1]);
+        for start in (0..z.len()).step_by(LANES) {
+            let b = Block::load(z, y, None, start);
+            // Padding lanes start from p = 0 and stay there: they add nothing.
+            let mut pr = [0.0; LANES];
+            pr[..b.lanes].fill(1.0);
+            let mut pi = [0.0; LANES];
+            let neg_y = b.y.map(|v| -v);
+            for q in 0..=kmax {
+                fold_into(&mut mu_re[q], &pr);
+                fold_into(&mut mu_im[q], &pi);
+                // y conj(p) = (y p_re) + i (-y p_im).
+                fold_product_into(&mut r_re[q], &b.y, &pr);
+                fold_product_into(&mut r_im[q], &neg_y, &pi);
+                advance(&mut pr, &mut pi, &b.zr, &b.zi);
+            }
+            for q in kmax + 1..nq {
+                fold_into(&mut mu_re[q], &pr);
+                fold_into(&mut mu_im[q], &pi);
+                advance(&mut pr, &mut pi, &b.zr, &b.zi);
+            }
         }
-        for q in kmax + 1..nq {
-            fold_into(&mut mu_re[q], &pr);
-            fold_into(&mut mu_im[q], &pi);
-            advance(&mut pr, &mut pi, &b.zr, &b.zi);
-        }
+        vec![unfold(&mu_re), unfold(&mu_im), unfold(&r_re), unfold(&r_im)]
     }
-    (
-        (unfold(&mu_re), unfold(&mu_im)),
-        (unfold(&r_re), unfold(&r_im)),
-    )
 }
 
 /// The series `coef[0] + sum_k coef[2k-1] Re p_k + coef[2k] Im p_k` of one block, `p_k = z^k`.
@@ -213,17 +317,33 @@ fn block_series(b: &Block, coef: &[f64]) -> [f64; LANES] {
 
 /// `sum_n (y_n - series_n)^2` from the record's phasors (see [`harmonic_rss`]).
 #[inline(always)]
-pub(crate) fn rss_of(z: &Phasors, y: &[f64], coef: &[f64]) -> f64 {
-    let mut acc = [0.0; LANES];
-    for start in (0..z.len()).step_by(LANES) {
-        let b = Block::load(z, y, None, start);
-        let s = block_series(&b, coef);
-        for l in 0..b.lanes {
-            let r = b.y[l] - s[l];
-            acc[l] += r * r;
-        }
+pub(crate) fn rss_of(z: Phases<'_>, y: &[f64], coef: &[f64]) -> f64 {
+    let n = z.len();
+    if n * coef.len() >= SPLIT_WORK {
+        let mid = split_point(n);
+        let (a, b) = rayon::join(
+            || rss_part(z.sub(0, mid), &y[..mid], coef),
+            || rss_part(z.sub(mid, n), &y[mid..], coef),
+        );
+        return a + b;
     }
-    acc.iter().sum()
+    rss_part(z, y, coef)
+}
+
+wide_fn! {
+    /// [`rss_of`] over one part of a record.
+    fn rss_part(z: Phases<'_>, y: &[f64], coef: &[f64]) -> f64 {
+        let mut acc = [0.0; LANES];
+        for start in (0..z.len()).step_by(LANES) {
+            let b = Block::load(z, y, None, start);
+            let s = block_series(&b, coef);
+            for l in 0..b.lanes {
+                let r = b.y[l] - s[l];
+                acc[l] += r * r;
+            }
+        }
+        acc.iter().sum()
+    }
 }
 
 /// Moments of the harmonic basis at the phases `theta` (rad, length n) against `y` (length n):
@@ -238,15 +358,15 @@ pub fn harmonic_moments(
     kmax: usize,
 ) -> Result<((Vec<f64>, Vec<f64>), (Vec<f64>, Vec<f64>))> {
     check(theta, y, kmax)?;
-    Ok(moments_wide(theta, y, kmax))
+    Ok(Phasors::with(|z, _| moments_wide(theta, y, kmax, z)))
 }
 
 /// `(mu, r)` moments as (real, imaginary) parts.
 type Moments = ((Vec<f64>, Vec<f64>), (Vec<f64>, Vec<f64>));
 
 wide_fn! {
-    fn moments_wide(theta: &[f64], y: &[f64], kmax: usize) -> Moments {
-        moments_of(&Phasors::new(theta), y, kmax)
+    fn moments_wide(theta: &[f64], y: &[f64], kmax: usize, z: &mut Phasors) -> Moments {
+        moments_of(z.fill(Phases::Given(theta)), y, kmax)
     }
 }
 
@@ -257,15 +377,15 @@ wide_fn! {
 pub fn harmonic_series(theta: &[f64], coef: &[f64]) -> Result<Vec<f64>> {
     all_finite("theta", theta)?;
     check_coef(coef, 0)?;
-    Ok(series_wide(theta, coef))
+    Ok(Phasors::with(|z, _| series_wide(theta, coef, z)))
 }
 
 wide_fn! {
-    fn series_wide(theta: &[f64], coef: &[f64]) -> Vec<f64> {
-        let z = Phasors::new(theta);
+    fn series_wide(theta: &[f64], coef: &[f64], buf: &mut Phasors) -> Vec<f64> {
         let mut out = vec![0.0; theta.len()];
+        let z = buf.fill(Phases::Given(theta));
         for start in (0..theta.len()).step_by(LANES) {
-            let b = Block::load(&z, theta, None, start);
+            let b = Block::load(z, theta, None, start);
             let s = block_series(&b, coef);
             out[start..start + b.lanes].copy_from_slice(&s[..b.lanes]);
         }
@@ -282,12 +402,12 @@ wide_fn! {
 pub fn harmonic_rss(theta: &[f64], y: &[f64], coef: &[f64]) -> Result<f64> {
     check(theta, y, 1)?;
     check_coef(coef, 0)?;
-    Ok(rss_wide(theta, y, coef))
+    Ok(Phasors::with(|z, _| rss_wide(theta, y, coef, z)))
 }
 
 wide_fn! {
-    fn rss_wide(theta: &[f64], y: &[f64], coef: &[f64]) -> f64 {
-        rss_of(&Phasors::new(theta), y, coef)
+    fn rss_wide(theta: &[f64], y: &[f64], coef: &[f64], z: &mut Phasors) -> f64 {
+        rss_of(z.fill(Phases::Given(theta)), y, coef)
     }
 }
 
@@ -324,26 +444,61 @@ wide_fn! {
 /// The factor of [`cholesky_upper`], or the failing pivot `(index, value)`.
 #[inline(always)]
 pub(crate) fn cholesky_of(gram: &[f64], m: usize) -> std::result::Result<Vec<f64>, (usize, f64)> {
-    // Lower factor L, row-major: L[i][j] = (G[i][j] - L[i][..j] . L[j][..j]) / L[j][j].
-    let mut l = vec![0.0; m * m];
-    for i in 0..m {
-        for j in 0..=i {
-            let (ri, rj) = (&l[i * m..i * m + j], &l[j * m..j * m + j]);
-            let s = gram[i * m + j] - dot(ri, rj);
-            if i == j {
-                if s.is_nan() || s <= 0.0 {
-                    return Err((i, s));
+    // Lower factor L, row-major with rows padded to whole chunks of CHOL_LANES and zero-filled:
+    // L[i][j] = (G[i][j] - L[i][..j] . L[j][..j]) / L[j][j]. Row j is zero beyond its diagonal and
+    // L[i][j] is still zero when its own dot product runs, so every dot product can run to the
+    // next whole chunk without a scalar tail (the same sum: the extra terms are exact zeros).
+    const CHOL_LANES: usize = 8;
+    let stride = m.div_ceil(CHOL_LANES) * CHOL_LANES;
+    let mut l = vec![0.0; m * stride];
+    let dot = |l: &[f64], i: usize, j: usize| -> f64 {
+        let len = j.div_ceil(CHOL_LANES) * CHOL_LANES;
+        let (ri, rj) = (
+            &l[i * stride..i * stride + len],
+            &l[j * stride..j * stride + len],
+        );
+        let mut acc = [0.0; CHOL_LANES];
+        for (a, b) in ri.chunks_exact(CHOL_LANES).zip(rj.chunks_exact(CHOL_LANES)) {
+            for k in 0..CHOL_LANES {
+                acc[k] += a[k] * b[k];
+            }
+        }
+        acc.iter().sum::<f64>()
+    };
+    // Rows in groups of CHOL_ROWS: each earlier row j is read once per group (not once per row),
+    // which keeps the factor of the synchronous average (m = 2K + 1 up to 401, over 1 MB) from
+    // being streamed m times through the cache.
+    const CHOL_ROWS: usize = 8;
+    for i0 in (0..m).step_by(CHOL_ROWS) {
+        let i1 = (i0 + CHOL_ROWS).min(m);
+        for j in 0..i0 {
+            let mut sums = [0.0; CHOL_ROWS];
+            for (i, sum) in (i0..i1).zip(sums.iter_mut()) {
+                *sum = dot(&l, i, j);
+            }
+            let d = l[j * stride + j];
+            for (i, sum) in (i0..i1).zip(sums) {
+                l[i * stride + j] = (gram[i * m + j] - sum) / d;
+            }
+        }
+        for i in i0..i1 {
+            for j in i0..=i {
+                let s = gram[i * m + j] - dot(&l, i, j);
+                if i == j {
+                    if s.is_nan() || s <= 0.0 {
+                        return Err((i, s));
+                    }
+                    l[i * stride + i] = s.sqrt();
+                } else {
+                    l[i * stride + j] = s / l[j * stride + j];
                 }
-                l[i * m + i] = s.sqrt();
-            } else {
-                l[i * m + j] = s / l[j * m + j];
             }
         }
     }
     let mut r = vec![0.0; m * m];
     for i in 0..m {
         for j in 0..=i {
-            r[j * m + i] = l[i * m + j];
+            r[j * m + i] = l[i * stride + j];
         }
     }
     Ok(r)
@@ -389,19 +544,27 @@ pub fn harmonic_gauss_newton(
         )));
     }
     check_coef(coef, 1)?;
-    Ok(gauss_newton_wide(theta, tau, x, coef))
+    Ok(Phasors::with(|z, _| {
+        gauss_newton_wide(theta, tau, x, coef, z)
+    }))
 }
 
 wide_fn! {
-    fn gauss_newton_wide(theta: &[f64], tau: &[f64], x: &[f64], coef: &[f64]) -> (f64, f64, f64, Vec<f64>) {
-        gauss_newton_of(&Phasors::new(theta), tau, x, coef)
+    fn gauss_newton_wide(
+        theta: &[f64],
+        tau: &[f64],
+        x: &[f64],
+        coef: &[f64],
+        z: &mut Phasors,
+    ) -> (f64, f64, f64, Vec<f64>) {
+        gauss_newton_of(z.fill(Phases::Given(theta)), tau, x, coef)
     }
 }
 
 /// The terms of [`harmonic_gauss_newton`] from the record's phasors.
 #[inline(always)]
 pub(crate) fn gauss_newton_of(
-    z: &Phasors,
+    z: Phases<'_>,
     tau: &[f64],
     x: &[f64],
     coef: &[f64],

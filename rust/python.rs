@@ -1308,6 +1308,76 @@ fn unscaled_variances<'py>(
     Ok(out.into_pyarray(py))
 }
 
+/// `(coef, rss)` of [`window_fits`].
+type WindowFitsOut<'py> = (Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<f64>>);
+
+/// The per-period fits of `u` and `y` in the windows `[starts[i], stops[i])` of a block at the
+/// phases `theta` (`rust/lab/windows.rs`): `(coef (windows x 2m), rss (windows x 2))`, NaN rows
+/// where a window's Gram matrix is ill-conditioned.
+#[pyfunction]
+fn window_fits<'py>(
+    py: Python<'py>,
+    theta: PyReadonlyArray1<'py, f64>,
+    u: PyReadonlyArray1<'py, f64>,
+    y: PyReadonlyArray1<'py, f64>,
+    starts: Vec<i64>,
+    stops: Vec<i64>,
+    k: i64,
+) -> PyResult<WindowFitsOut<'py>> {
+    let (theta, u, y) = (slice("theta", &theta)?, slice("u", &u)?, slice("y", &y)?);
+    let k = count("k", k, 1)?;
+    let index = |name: &str, v: &[i64]| -> PyResult<Vec<usize>> {
+        v.iter().map(|&i| count(name, i, 0)).collect()
+    };
+    let (starts, stops) = (index("starts", &starts)?, index("stops", &stops)?);
+    let f = py.detach(|| lab::windows::window_fits(theta, u, y, &starts, &stops, k))?;
+    let nw = starts.len();
+    let m2 = 2 * (2 * f.harmonics + 1);
+    let coef = Array2::from_shape_vec((nw, m2), f.coef)
+        .map_err(|e| PyTypeError::new_err(e.to_string()))?;
+    let rss =
+        Array2::from_shape_vec((nw, 2), f.rss).map_err(|e| PyTypeError::new_err(e.to_string()))?;
+    Ok((coef.into_pyarray(py), rss.into_pyarray(py)))
+}
+
+/// `|rfft(hann * detrended x, nfft)|` (`rust/lab/spectrum.rs`): the sine analysis's spectrum.
+#[pyfunction]
+fn padded_spectrum<'py>(
+    py: Python<'py>,
+    x: PyReadonlyArray1<'py, f64>,
+    nfft: i64,
+) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    let x = slice("x", &x)?;
+    let nfft = count("nfft", nfft, 2)?;
+    let out = py.detach(|| lab::spectrum::padded_spectrum(x, nfft))?;
+    Ok(out.into_pyarray(py))
+}
+
+/// The bin `dft_peak` takes and its neighbours, `(k, |X_{k-1}|, |X_k|, |X_{k+1}|)`
+/// (`rust/lab/spectrum.rs`); `band_lo`/`band_hi` < 0: no band.
+#[pyfunction]
+#[allow(clippy::too_many_arguments)]
+fn spectral_peak(
+    py: Python<'_>,
+    x: PyReadonlyArray1<'_, f64>,
+    nfft: i64,
+    lo: i64,
+    hi: i64,
+    band_lo: i64,
+    band_hi: i64,
+    peak_min: f64,
+) -> PyResult<(usize, f64, f64, f64)> {
+    let x = slice("x", &x)?;
+    let nfft = count("nfft", nfft, 2)?;
+    let (lo, hi) = (count("lo", lo, 1)?, count("hi", hi, 1)?);
+    let (band_lo, band_hi) = if band_lo < 0 || band_hi < 0 {
+        (0, 0)
+    } else {
+        (count("band_lo", band_lo, 0)?, count("band_hi", band_hi, 0)?)
+    };
+    Ok(py.detach(|| lab::spectrum::spectral_peak(x, nfft, lo, hi, band_lo, band_hi, peak_min))?)
+}
+
 /// `(omega, coef, rss, se)` of [`harmonic_nls`], or `None`.
 type FrequencyFitOut<'py> = Option<(f64, Bound<'py, PyArray1<f64>>, f64, f64)>;
 
@@ -1363,5 +1433,8 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(harmonic_nls, m)?)?;
     m.add_function(wrap_pyfunction!(gram_well_conditioned, m)?)?;
     m.add_function(wrap_pyfunction!(unscaled_variances, m)?)?;
+    m.add_function(wrap_pyfunction!(window_fits, m)?)?;
+    m.add_function(wrap_pyfunction!(padded_spectrum, m)?)?;
+    m.add_function(wrap_pyfunction!(spectral_peak, m)?)?;
     Ok(())
 }

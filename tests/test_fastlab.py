@@ -261,3 +261,68 @@ def test_fused_fits_refuse_bad_input() -> None:
         _core.harmonic_fit(tau, nan, 2)
     with pytest.raises(InvalidParameterError):
         _core.gram_well_conditioned(np.eye(3).ravel(), 2)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_spectrum_and_peak_match_the_numpy_reference(seed: int) -> None:
+    from bouc_wen_id.signal import _sine
+
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(50, 5000))
+    t = np.arange(n) * 0.01
+    x = 0.3 + 0.02 * t + np.cos(2 * math.pi * rng.uniform(1.0, 20.0) * t) + 0.1 * rng.standard_normal(n)
+    x += 0.5 * np.cos(2 * math.pi * rng.uniform(1.0, 20.0) * t)  # a second tone: the band decides
+    nfft = 1 << math.ceil(math.log2(4 * n))
+    idx = np.arange(n) - 0.5 * (n - 1)
+    xd = x - x.mean() - (idx @ x) / (idx @ idx) * idx
+    ref = np.abs(np.fft.rfft(xd * np.hanning(n), nfft))
+    # Another FFT and summation order: rounding of the largest bin.
+    assert_allclose(_core.padded_spectrum(x, nfft), ref, rtol=0, atol=1e-12 * float(ref.max()))
+    lo, hi = math.ceil(nfft / n), nfft // 2 - 1
+    for b_lo, b_hi in ((-1, -1), (lo + 5, lo + 200), (hi - 300, hi)):
+        k, *around = _core.spectral_peak(x, nfft, lo, hi, b_lo, b_hi, _sine.NOMINAL_PEAK_MIN)
+        assert k == _sine._peak_bin(ref, lo, hi, b_lo, b_hi)
+        assert_allclose(around, ref[k - 1 : k + 2], rtol=1e-10)
+    for nominal in (None, 2 * math.pi * 5.0):
+        fast = _sine.dft_peak(x, 0.01, nominal)
+        hls_saved = hls.USE_RUST_KERNELS
+        try:
+            hls.USE_RUST_KERNELS = False
+            slow = _sine.dft_peak(x, 0.01, nominal)
+        finally:
+            hls.USE_RUST_KERNELS = hls_saved
+        assert fast == pytest.approx(slow, rel=1e-9)
+    with pytest.raises(InvalidParameterError):
+        _core.spectral_peak(x, nfft, 0, hi, -1, -1, 0.1)
+    with pytest.raises(InvalidParameterError):
+        _core.padded_spectrum(x, n - 1)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_window_fits_match_the_basis_reference(seed: int) -> None:
+    from bouc_wen_id.signal import _windows
+
+    rng = np.random.default_rng(seed)
+    p, n = 63.7 + 10 * seed, 2000
+    theta = hls.phase_angle(2 * math.pi / p, np.arange(n, dtype=np.float64))
+    u = 0.1 + (1.0 + 0.001 * np.arange(n)) * np.cos(theta) + 0.01 * rng.standard_normal(n)
+    y = np.tanh(2 * u) + 0.01 * rng.standard_normal(n)
+    spans = [(math.floor(i * p), math.floor((i + 1) * p)) for i in range(int(n // p))]
+    fast = _windows.block_windows(1, 100, theta, u, y, spans, 5)
+    saved = hls.USE_RUST_KERNELS
+    try:
+        hls.USE_RUST_KERNELS = False
+        ref = _windows.block_windows(1, 100, theta, u, y, spans, 5)
+    finally:
+        hls.USE_RUST_KERNELS = saved
+    assert len(fast) == len(ref) == len(spans)
+    for a, b in zip(fast, ref):
+        assert (a.block, a.start, a.stop) == (b.block, b.start, b.stop)
+        # Normal equations (Cholesky of the moments' Gram matrix against LU of the basis's): rounding.
+        for f in ("amp_u", "off_u", "phase_u", "off_y"):
+            assert getattr(a, f) == pytest.approx(getattr(b, f), rel=1e-9, abs=1e-12)
+        assert a.var_u == pytest.approx(b.var_u, rel=1e-6)
+        assert a.var_y == pytest.approx(b.var_y, rel=1e-6)
+        assert_allclose(a.harm_y, b.harm_y, rtol=0, atol=1e-10)
+    with pytest.raises(InvalidParameterError):
+        _core.window_fits(theta, u, y, [5], [5], 3)

@@ -40,6 +40,9 @@ __all__ = [
     "harmonic_nls",
     "gram_well_conditioned",
     "unscaled_variances",
+    "window_fits",
+    "padded_spectrum",
+    "spectral_peak",
 ]
 
 _F = NDArray[np.float64]
@@ -243,3 +246,10 @@ def harmonic_nls(
 ) -> tuple[float, _F, float, float] | None: ...
 def gram_well_conditioned(gram: _F, m: int) -> bool: ...
 def unscaled_variances(r: _F, m: int) -> _F: ...
+def window_fits(
+    theta: _F, u: _F, y: _F, starts: Sequence[int], stops: Sequence[int], k: int
+) -> tuple[_F, _F]: ...
+def padded_spectrum(x: _F, nfft: int) -> _F: ...
+def spectral_peak(
+    x: _F, nfft: int, lo: int, hi: int, band_lo: int, band_hi: int, peak_min: float
+) -> tuple[int, float, float, float]: ...

@@ -9,7 +9,7 @@
 use nalgebra::{DMatrix, SymmetricEigen};
 
 use super::wide::wide_fn;
-use super::{check, cholesky_of, gauss_newton_of, moments_of, rss_of, Phasors};
+use super::{check, cholesky_of, gauss_newton_of, moments_of, rss_of, Phases, Phasors};
 use crate::error::{all_finite, CoreError, Result};
 
 /// Largest condition number of the scaled Gram matrix for which the normal equations are used
@@ -170,14 +170,26 @@ pub fn unscaled_variances(r: &[f64], m: usize) -> Result<Vec<f64>> {
             "R is singular: zero on its diagonal at {i}"
         )));
     }
-    Ok(unscaled_variances_wide(r, m))
+    // Column j costs j^2/2: the columns below m / sqrt 2 and those above are equal halves, run on
+    // two threads for the synchronous average's large R (a fixed split: the same sums whatever
+    // the pool's size).
+    if m >= 128 {
+        let cut = (m as f64 / std::f64::consts::SQRT_2) as usize;
+        let (a, b) = rayon::join(
+            || inverse_row_norms(r, m, 0, cut),
+            || inverse_row_norms(r, m, cut, m),
+        );
+        return Ok(a.iter().zip(&b).map(|(u, v)| u + v).collect());
+    }
+    Ok(inverse_row_norms(r, m, 0, m))
 }
 
 wide_fn! {
-    fn unscaled_variances_wide(r: &[f64], m: usize) -> Vec<f64> {
+    /// The contributions of the columns `[from, to)` of `R^-1` to its row sums of squares.
+    fn inverse_row_norms(r: &[f64], m: usize, from: usize, to: usize) -> Vec<f64> {
         let mut out = vec![0.0; m];
         let mut col = vec![0.0; m];
-        for j in 0..m {
+        for j in from..to {
             // Column j of R^-1 (zero below j): R[i, i..=j] . col[i..=j] = delta_ij.
             col[j] = 1.0 / r[j * m + j];
             for i in (0..j).rev() {
@@ -195,7 +207,17 @@ wide_fn! {
 /// The fit from the record's phasors; `None` when the Gram matrix is too ill-conditioned for the
 /// normal equations (the caller then uses its QR path).
 #[inline(always)]
-fn fit_of(z: &Phasors, y: &[f64], kmax: usize) -> Option<HarmonicFit> {
+pub(crate) fn fit_of(
+    phases: Phases<'_>,
+    y: &[f64],
+    kmax: usize,
+    buf: &mut Phasors,
+) -> Option<HarmonicFit> {
+    // Formed once for the two passes (when not given formed).
+    let z = match phases {
+        Phases::Cached(..) => phases,
+        _ => buf.fill(phases),
+    };
     let ((mr, mi), (rr, ri)) = moments_of(z, y, kmax);
     let (g, xty) = gram_from_moments((&mr, &mi), (&rr, &ri), kmax);
     let m = 2 * kmax + 1;
@@ -217,12 +239,12 @@ fn fit_of(z: &Phasors, y: &[f64], kmax: usize) -> Option<HarmonicFit> {
 /// Errors: non-finite input, unequal lengths, `kmax < 1`.
 pub fn harmonic_fit(theta: &[f64], y: &[f64], kmax: usize) -> Result<Option<HarmonicFit>> {
     check(theta, y, kmax)?;
-    Ok(fit_wide(theta, y, kmax))
+    Ok(Phasors::with(|z, _| fit_wide(theta, y, kmax, z)))
 }
 
 wide_fn! {
-    fn fit_wide(theta: &[f64], y: &[f64], kmax: usize) -> Option<HarmonicFit> {
-        fit_of(&Phasors::new(theta), y, kmax)
+    fn fit_wide(theta: &[f64], y: &[f64], kmax: usize, z: &mut Phasors) -> Option<HarmonicFit> {
+        fit_of(Phases::Given(theta), y, kmax, z)
     }
 }
 
@@ -263,35 +285,44 @@ pub fn harmonic_nls(
         }
     }
     all_finite("x", x)?;
-    Ok(nls_wide(tau, x, omega0, dt, k))
+    Ok(Phasors::with(|z, z_trial| {
+        nls_wide(tau, x, omega0, dt, k, z, z_trial)
+    }))
 }
 
 wide_fn! {
-    fn nls_wide(tau: &[f64], x: &[f64], omega0: f64, dt: f64, k: usize) -> Option<FrequencyFit> {
-        nls_of(tau, x, omega0, dt, k)
+    fn nls_wide(
+        tau: &[f64],
+        x: &[f64],
+        omega0: f64,
+        dt: f64,
+        k: usize,
+        z: &mut Phasors,
+        z_trial: &mut Phasors,
+    ) -> Option<FrequencyFit> {
+        nls_of(tau, x, omega0, dt, k, z, z_trial)
     }
 }
 
 #[inline(always)]
-fn nls_of(tau: &[f64], x: &[f64], omega0: f64, dt: f64, k: usize) -> Option<FrequencyFit> {
+fn nls_of<'b>(
+    tau: &[f64],
+    x: &[f64],
+    omega0: f64,
+    dt: f64,
+    k: usize,
+    mut z: &'b mut Phasors,
+    mut z_trial: &'b mut Phasors,
+) -> Option<FrequencyFit> {
     let n = x.len();
     let bin_width = 2.0 * std::f64::consts::PI / (n as f64 * dt);
     let dof = n.saturating_sub(2 * k + 2).max(1) as f64;
-    let mut scratch = Vec::with_capacity(n);
-    let mut z = Phasors {
-        re: Vec::new(),
-        im: Vec::new(),
-    };
-    let mut z_trial = Phasors {
-        re: Vec::new(),
-        im: Vec::new(),
-    };
     let mut omega = omega0;
-    z.set_scaled(omega, tau, &mut scratch);
-    let mut cur = fit_of(&z, x, k)?;
+    // The phasors of the current fit and of a trial, swapped when the trial is accepted.
+    let mut cur = fit_of(Phases::Scaled(omega, tau), x, k, z)?;
     let mut se = f64::INFINITY;
     for _ in 0..60 {
-        let (_, r_d, d_d, xtd) = gauss_newton_of(&z, tau, x, &cur.coef);
+        let (_, r_d, d_d, xtd) = gauss_newton_of(z.phases(), tau, x, &cur.coef);
         let q_t_d = solve_upper_transposed(&cur.r, &xtd);
         let d_perp2 = d_d - q_t_d.iter().map(|v| v * v).sum::<f64>();
         if d_perp2.is_nan() || d_perp2 <= 0.0 {
@@ -310,8 +341,7 @@ fn nls_of(tau: &[f64], x: &[f64], omega0: f64, dt: f64, k: usize) -> Option<Freq
         for _half in 0..10 {
             let trial = omega + step;
             if trial > 0.0 {
-                z_trial.set_scaled(trial, tau, &mut scratch);
-                let cand = fit_of(&z_trial, x, k)?;
+                let cand = fit_of(Phases::Scaled(trial, tau), x, k, z_trial)?;
                 if cand.rss <= cur.rss {
                     omega = trial;
                     cur = cand;

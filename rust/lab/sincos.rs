@@ -47,12 +47,17 @@ pub fn sincos(x: f64) -> (f64, f64) {
     let pc = ((((C[0] * z + C[1]) * z + C[2]) * z + C[3]) * z + C[4]) * z + C[5];
     let s = r + r * z * ps;
     let c = 1.0 - 0.5 * z + z * z * pc;
-    // Quadrant q = j mod 4 in floating point (vectorises where an integer conversion would not).
+    // Quadrant q = j mod 4, its parity and signs, in floating point and without selects (so that
+    // the compiler vectorises it): odd quadrants swap sin and cos; sin < 0 in quadrants 2, 3 and
+    // cos < 0 in quadrants 1, 2. Multiplying by 0 or 1 and adding is exact.
     let q = j - 4.0 * (j * 0.25).floor();
-    let odd = q == 1.0 || q == 3.0;
-    let (s0, c0) = if odd { (c, s) } else { (s, c) };
-    let sin = if q >= 2.0 { -s0 } else { s0 };
-    let cos = if q == 1.0 || q == 2.0 { -c0 } else { c0 };
+    let half = (q * 0.5).floor();
+    let odd = q - 2.0 * half;
+    let even = 1.0 - odd;
+    let q1 = q + 1.0;
+    let sign_c = 1.0 - 2.0 * ((q1 - 4.0 * (q1 * 0.25).floor()) * 0.5).floor();
+    let sin = (1.0 - 2.0 * half) * (even * s + odd * c);
+    let cos = sign_c * (even * c + odd * s);
     (sin, cos)
 }
 

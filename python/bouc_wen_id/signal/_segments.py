@@ -25,7 +25,7 @@ from ..errors import (
     ZeroAmplitudeError,
 )
 from ..validation import MIN_SAMPLES_PER_PERIOD, check_time_axis, finite_arrays
-from ._harmonic_ls import harmonic_basis, phase_angle
+from ._harmonic_ls import phase_angle
 from ._sine import (
     NYQUIST_MARGIN,
     SineFit,
@@ -41,11 +41,11 @@ from ._windows import (
     STEADY_RTOL_U,
     Level,
     Window,
+    block_windows,
     distance,
     level_of,
     trim_edges,
     trim_settling,
-    window_features,
     wrap,
 )
 
@@ -278,15 +278,12 @@ def _cut_windows(rec: _Record, blocks: _Blocks) -> list[Window]:
         blocks.omega.append(omega)
         p = TWO_PI / (omega * dt)
         k_w = max(1, min(WINDOW_HARMONICS, int((p - 1.0) // 2) - 1))
-        basis = harmonic_basis(phase_angle(omega, rec.t[a:b] - rec.t[a]), k_w)
         # Whole periods; the last may be up to 5 % short (a record of exactly N periods at a frequency
         # estimated a hair low).
         count = math.floor((b - a) / p + 0.05)
-        for i in range(count):
-            s, e = math.floor(i * p), min(math.floor((i + 1) * p), b - a)
-            windows.append(
-                window_features(bi, a + s, a + e, basis[s:e], rec.u[a + s : a + e], rec.y[a + s : a + e])
-            )
+        spans = [(math.floor(i * p), min(math.floor((i + 1) * p), b - a)) for i in range(count)]
+        theta = phase_angle(omega, rec.t[a:b] - rec.t[a])
+        windows.extend(block_windows(bi, a, theta, rec.u[a:b], rec.y[a:b], spans, k_w))
     if not windows:
         raise InsufficientDataError(
             f"the record holds {blocks.total_periods(dt):.3g} periods of {omega_main / TWO_PI:.6g} Hz: not "
@@ -298,8 +295,11 @@ def _cut_windows(rec: _Record, blocks: _Blocks) -> list[Window]:
 def _mark_idle(windows: Sequence[Window]) -> float:
     """Mark the idle windows; returns the record's steady amplitude (largest median of three windows)."""
     amps = np.array([w.amp_u for w in windows])
-    smooth = np.array([np.median(amps[max(i - 1, 0) : i + 2]) for i in range(amps.size)])
-    a_ref = float(np.max(smooth))
+    # The median of each window and its neighbours (two at the ends), vectorised over the interior.
+    smooth = [float(np.median(amps[:2])), float(np.median(amps[-2:]))]
+    if amps.size >= 3:
+        smooth.append(float(np.max(np.median(np.stack([amps[:-2], amps[1:-1], amps[2:]]), axis=0))))
+    a_ref = max(smooth)
     for w in windows:
         noise = math.sqrt(2.0 * w.var_u / w.size)
         w.idle = w.amp_u < IDLE_FRACTION * a_ref or w.amp_u < STEADY_NOISE_Z * noise

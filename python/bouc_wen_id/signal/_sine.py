@@ -109,35 +109,51 @@ def _dot(a: FloatArray, b: FloatArray) -> float:
     return float(np.einsum("i,i->", a, b))
 
 
+def _peak_bin(spec: FloatArray, lo: int, hi: int, b_lo: int, b_hi: int) -> int:
+    """The largest bin of ``spec[lo..=hi]``, or the largest of the band ``[b_lo..=b_hi]`` when that one is a
+    local maximum of at least ``NOMINAL_PEAK_MIN`` of it (``rust/lab/spectrum.rs`` chooses alike)."""
+    k = lo + int(np.argmax(spec[lo : hi + 1]))
+    if b_hi > b_lo:
+        kb = b_lo + int(np.argmax(spec[b_lo : b_hi + 1]))
+        if spec[kb - 1] < spec[kb] > spec[kb + 1] and spec[kb] >= NOMINAL_PEAK_MIN * spec[k]:
+            k = kb
+    return k
+
+
 def dft_peak(x: FloatArray, dt: float, nominal: Optional[float]) -> float:
     """Frequency (rad/s) of the largest spectral peak: Hann window, 4x zero padding, parabolic
     interpolation of the log magnitude.  With ``nominal``, the peak within +-10 % of it wins when it is a
     genuine local maximum of at least 10 % of the global one."""
     n = x.size
-    idx = np.arange(n, dtype=np.float64) - 0.5 * (n - 1)
-    # Remove offset and linear drift: their leakage would otherwise mask a low-frequency tone.
-    slope = _dot(idx, x) / _dot(idx, idx)
-    xd = x - x.mean() - slope * idx
     nfft = 1 << math.ceil(math.log2(4 * n))
-    spec = np.abs(np.fft.rfft(xd * np.hanning(n), nfft))
     pad = nfft / n
     lo = math.ceil(pad)  # one cycle per record
-    hi = spec.size - 2  # keep a neighbour on each side for the interpolation
-    if hi <= lo:
+    hi = nfft // 2 - 1  # keep a neighbour on each side for the interpolation
+    if n < 2 or hi <= lo:
         raise InsufficientDataError(f"{n} samples are too few to estimate a frequency")
-    k = lo + int(np.argmax(spec[lo : hi + 1]))
+    b_lo = b_hi = -1  # no band
     if nominal is not None:
         centre = nominal * n * dt / TWO_PI * pad  # the nominal frequency in padded bins
         b_lo = max(lo, math.floor(centre * (1.0 - NOMINAL_BAND)))
         b_hi = min(hi, math.ceil(centre * (1.0 + NOMINAL_BAND)))
-        if b_hi > b_lo:
-            kb = b_lo + int(np.argmax(spec[b_lo : b_hi + 1]))
-            if spec[kb - 1] < spec[kb] > spec[kb + 1] and spec[kb] >= NOMINAL_PEAK_MIN * spec[k]:
-                k = kb
-    if spec[k] <= 0.0:
+    if _harmonic_ls.USE_RUST_KERNELS:
+        # The same spectrum from a half-length complex FFT in Rust, and the same choice of bin, without
+        # handing the spectrum back (issue #8).
+        k, *around = _harmonic_ls._core().spectral_peak(
+            np.ascontiguousarray(x, dtype=np.float64), nfft, lo, hi, b_lo, b_hi, NOMINAL_PEAK_MIN
+        )
+    else:
+        idx = np.arange(n, dtype=np.float64) - 0.5 * (n - 1)
+        # Remove offset and linear drift: their leakage would otherwise mask a low-frequency tone.
+        slope = _dot(idx, x) / _dot(idx, idx)
+        xd = x - x.mean() - slope * idx
+        spec = np.abs(np.fft.rfft(xd * np.hanning(n), nfft))
+        k = _peak_bin(spec, lo, hi, b_lo, b_hi)
+        around = [float(v) for v in spec[k - 1 : k + 2]]
+    if around[1] <= 0.0:
         raise NotPeriodicError("the input has no spectral peak (it is a constant plus a linear drift)")
     tiny = np.finfo(np.float64).tiny
-    l0, l1, l2 = (math.log(max(float(v), tiny)) for v in spec[k - 1 : k + 2])
+    l0, l1, l2 = (math.log(max(v, tiny)) for v in around)
     den = l0 - 2.0 * l1 + l2
     delta = 0.5 * (l0 - l2) / den if den < 0.0 else 0.0
     delta = min(max(delta, -0.5), 0.5)

@@ -12,14 +12,20 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Optional
 
 import numpy as np
 from numpy.typing import NDArray
+
+from .. import _core
+from . import _harmonic_ls
+from ._harmonic_ls import harmonic_basis
 
 __all__ = [
     "Window",
     "Level",
     "window_features",
+    "block_windows",
     "level_of",
     "distance",
     "wrap",
@@ -85,7 +91,7 @@ class Window:
 def window_features(
     block: int, start: int, stop: int, basis: FloatArray, u: FloatArray, y: FloatArray
 ) -> Window:
-    k_w = (basis.shape[1] - 1) // 2
+    """The features of one window from its basis (the NumPy reference of :func:`block_windows`)."""
     rhs = np.column_stack([u, y])
     # Over one period the harmonics are orthogonal to within about 1/P (the Gram matrix is nearly
     # diagonal), so the small normal equations lose nothing here and are much cheaper than an SVD.
@@ -96,12 +102,61 @@ def window_features(
     resid = rhs - basis @ coef
     dof = max(u.size - basis.shape[1], 1)
     var_u, var_y = (float(v) for v in np.sum(resid**2, axis=0) / dof)
-    c_u = complex(coef[1, 0], -coef[2, 0])
-    h_y = coef[1::2, 1] - 1j * coef[2::2, 1]
+    return _features(block, start, stop, coef[:, 0], coef[:, 1], var_u, var_y)
+
+
+def _features(
+    block: int, start: int, stop: int, coef_u: FloatArray, coef_y: FloatArray, var_u: float, var_y: float
+) -> Window:
+    """A window from the harmonic coefficients ``[c, a_1, b_1, ...]`` of its ``u`` and ``y``."""
+    k_w = (coef_u.size - 1) // 2
+    c_u = complex(coef_u[1], -coef_u[2])
+    h_y = coef_y[1::2] - 1j * coef_y[2::2]
     ph = math.atan2(c_u.imag, c_u.real)
     # The output's harmonics relative to the input's phase: the waveform, whatever the window's start.
     h_rel = h_y * np.exp(-1j * np.arange(1, k_w + 1) * ph)
-    return Window(block, start, stop, abs(c_u), float(coef[0, 0]), ph, var_u, h_rel, float(coef[0, 1]), var_y)
+    return Window(block, start, stop, abs(c_u), float(coef_u[0]), ph, var_u, h_rel, float(coef_y[0]), var_y)
+
+
+def block_windows(
+    block: int,
+    offset: int,
+    theta: FloatArray,
+    u: FloatArray,
+    y: FloatArray,
+    spans: Sequence[tuple[int, int]],
+    k_w: int,
+) -> list[Window]:
+    """The windows ``[s, e)`` of ``spans`` of one block (``theta``, ``u``, ``y``: the block's phases and
+    samples; ``offset``: the block's first sample in the record), each fitted on ``k_w`` harmonics.
+
+    On the Rust kernels every window's fit is the fused moment fit of ``_core.window_fits`` (the block's
+    phasors computed once); a window whose Gram matrix that path refuses, and the reference path, solve
+    the normal equations of the explicit basis (:func:`window_features`).
+    """
+    if not spans:
+        return []
+    if not _harmonic_ls.USE_RUST_KERNELS:
+        basis = harmonic_basis(theta, k_w)
+        return [window_features(block, offset + s, offset + e, basis[s:e], u[s:e], y[s:e]) for s, e in spans]
+    starts, stops = [s for s, _ in spans], [e for _, e in spans]
+    coef, rss = _core.window_fits(
+        np.ascontiguousarray(theta), np.ascontiguousarray(u), np.ascontiguousarray(y), starts, stops, k_w
+    )
+    m = 2 * k_w + 1
+    out = []
+    basis: Optional[FloatArray] = None
+    for (s, e), row, r in zip(spans, coef, rss):
+        if not np.isfinite(r[0]):
+            if basis is None:
+                basis = harmonic_basis(theta, k_w)
+            out.append(window_features(block, offset + s, offset + e, basis[s:e], u[s:e], y[s:e]))
+            continue
+        dof = max(e - s - m, 1)
+        out.append(
+            _features(block, offset + s, offset + e, row[:m], row[m:], float(r[0]) / dof, float(r[1]) / dof)
+        )
+    return out
 
 
 def wrap(x: float) -> float:
