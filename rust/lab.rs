@@ -83,6 +83,14 @@ impl Phases<'_> {
 
     /// The samples `[from, to)` of the phases.
     #[inline(always)]
+    /// `theta` itself, or `omega theta` when `omega` is given (`theta` then holds times).
+    pub(crate) fn of(theta: &[f64], omega: Option<f64>) -> Phases<'_> {
+        match omega {
+            Some(w) => Phases::Scaled(w, theta),
+            None => Phases::Given(theta),
+        }
+    }
+
     fn sub(&self, from: usize, to: usize) -> Self {
         match *self {
             Phases::Given(t) => Phases::Given(&t[from..to]),
@@ -110,6 +118,10 @@ impl Phasors {
         self.re.resize(n, 0.0);
         self.im.resize(n, 0.0);
         if let Phases::Scaled(w, t) = phases {
+            if n >= 4 * LANES && uniform_blocks(t) {
+                self.fill_uniform(w, t);
+                return Phases::Cached(&self.re, &self.im);
+            }
             self.theta.clear();
             self.theta.extend(t.iter().map(|v| w * v));
         }
@@ -125,6 +137,39 @@ impl Phasors {
         // Not split between threads: waking a second thread costs about what it would save here.
         sincos_wide(theta, &mut self.im, &mut self.re);
         Phases::Cached(&self.re, &self.im)
+    }
+
+    /// The phasors of `omega tau` for times `tau` whose blocks of [`LANES`] are spaced alike
+    /// ([`uniform_blocks`]): `e^{i omega tau_b}` at each block's first sample (vectorised
+    /// [`sincos`], one in [`LANES`]) times the block template `e^{i omega (tau_l - tau_0)}`. The
+    /// template's phase differs from each block's own by at most `omega` times the spacing
+    /// tolerance (a few ulp of the times: below 1e-12 rad over any record), as small as the
+    /// rounding of `omega tau` itself.
+    #[inline(always)]
+    fn fill_uniform(&mut self, omega: f64, tau: &[f64]) {
+        let n = tau.len();
+        let (mut tr, mut ti) = ([0.0; LANES], [0.0; LANES]);
+        for l in 0..LANES {
+            (ti[l], tr[l]) = sincos::sincos(omega * (tau[l] - tau[0]));
+        }
+        self.theta.clear();
+        self.theta
+            .extend(tau.iter().step_by(LANES).map(|v| omega * v));
+        let nb = self.theta.len();
+        let (mut bs, mut bc) = (vec![0.0; nb], vec![0.0; nb]);
+        sincos::sincos_into(&self.theta, &mut bs, &mut bc);
+        for (b, (zr, zi)) in bc.iter().zip(&bs).enumerate() {
+            let start = b * LANES;
+            let lanes = LANES.min(n - start);
+            let (re, im) = (
+                &mut self.re[start..start + lanes],
+                &mut self.im[start..start + lanes],
+            );
+            for l in 0..lanes {
+                re[l] = zr * tr[l] - zi * ti[l];
+                im[l] = zr * ti[l] + zi * tr[l];
+            }
+        }
     }
 
     /// `f` with this thread's two phasor buffers: fresh record-sized buffers at every call cost
@@ -151,6 +196,42 @@ impl Phasors {
     }
 }
 
+/// Whether every block of [`LANES`] samples of `tau` is spaced as the first one, to within 4 ulp
+/// of the largest time: `|(tau_{b+l} - tau_b) - (tau_l - tau_0)| <= 4 eps max|tau|` (uniform
+/// sampling, as from `np.arange`; a jittered time axis fails and gets a [`sincos`] per sample).
+#[inline(always)]
+fn uniform_blocks(tau: &[f64]) -> bool {
+    // Comparisons ORed lane by lane (no early exit, no NaN-aware max): the scan vectorises.
+    let mut big = [0.0f64; LANES];
+    for block in tau.chunks_exact(LANES) {
+        for l in 0..LANES {
+            let a = block[l].abs();
+            big[l] = if a > big[l] { a } else { big[l] };
+        }
+    }
+    let big = tau[tau.len() / LANES * LANES..]
+        .iter()
+        .chain(&big)
+        .fold(0.0f64, |m, v| if v.abs() > m { v.abs() } else { m });
+    let tol = 4.0 * f64::EPSILON * big;
+    let mut step = [0.0; LANES];
+    for l in 0..LANES {
+        step[l] = tau[l] - tau[0];
+    }
+    let mut bad = [false; LANES];
+    for block in tau.chunks_exact(LANES) {
+        for l in 0..LANES {
+            bad[l] |= ((block[l] - block[0]) - step[l]).abs() > tol;
+        }
+    }
+    let rest = tau.chunks_exact(LANES).remainder();
+    let tail_bad = rest
+        .iter()
+        .enumerate()
+        .any(|(l, v)| ((v - rest[0]) - step[l]).abs() > tol);
+    !(tail_bad || bad.iter().any(|&b| b))
+}
+
 wide_fn! {
     /// [`sincos::sincos_into`] compiled for the machine's vector width.
     fn sincos_wide(x: &[f64], out_sin: &mut [f64], out_cos: &mut [f64]) -> () {
@@ -175,6 +256,17 @@ impl Block {
         let Phases::Cached(c, si) = phases.sub(start, start + lanes) else {
             unreachable!("the kernels read phasors formed by Phasors::fill")
         };
+        let full = |v: &[f64]| -> [f64; LANES] { v.try_into().expect("a whole block") };
+        if lanes == LANES {
+            // Whole blocks (all but the last): fixed-size copies, which compile to vector moves.
+            return Block {
+                zr: full(c),
+                zi: full(si),
+                y: full(&y[start..start + LANES]),
+                tau: tau.map_or([0.0; LANES], |t| full(&t[start..start + LANES])),
+                lanes,
+            };
+        }
         // Padding lanes: 1 + 0i.
         let (mut zr, mut zi) = ([1.0; LANES], [0.0; LANES]);
         zr[..lanes].copy_from_slice(c);
@@ -337,9 +429,16 @@ wide_fn! {
         for start in (0..z.len()).step_by(LANES) {
             let b = Block::load(z, y, None, start);
             let s = block_series(&b, coef);
-            for l in 0..b.lanes {
-                let r = b.y[l] - s[l];
-                acc[l] += r * r;
+            if b.lanes == LANES {
+                for l in 0..LANES {
+                    let r = b.y[l] - s[l];
+                    acc[l] += r * r;
+                }
+            } else {
+                for l in 0..b.lanes {
+                    let r = b.y[l] - s[l];
+                    acc[l] += r * r;
+                }
             }
         }
         acc.iter().sum()
@@ -400,14 +499,34 @@ wide_fn! {
 ///
 /// Errors: non-finite input, unequal lengths, an even `coef` length.
 pub fn harmonic_rss(theta: &[f64], y: &[f64], coef: &[f64]) -> Result<f64> {
+    harmonic_rss_at(theta, None, y, coef)
+}
+
+/// [`harmonic_rss`] at the phases `theta`, or at `omega tau` when `omega` (rad/s) is given and
+/// `theta` holds the times `tau` (s): no wrapped phase array is formed (the reduction of [`sincos`]
+/// is exact over a record's phases).
+///
+/// Errors: as [`harmonic_rss`], and a non-finite `omega`.
+pub fn harmonic_rss_at(theta: &[f64], omega: Option<f64>, y: &[f64], coef: &[f64]) -> Result<f64> {
     check(theta, y, 1)?;
     check_coef(coef, 0)?;
-    Ok(Phasors::with(|z, _| rss_wide(theta, y, coef, z)))
+    check_omega(omega)?;
+    Ok(Phasors::with(|z, _| rss_wide(theta, omega, y, coef, z)))
+}
+
+/// `omega`, when given, finite.
+pub(crate) fn check_omega(omega: Option<f64>) -> Result<()> {
+    match omega {
+        Some(w) if !w.is_finite() => {
+            Err(CoreError::NonFinite(format!("omega = {w} is not finite")))
+        }
+        _ => Ok(()),
+    }
 }
 
 wide_fn! {
-    fn rss_wide(theta: &[f64], y: &[f64], coef: &[f64], z: &mut Phasors) -> f64 {
-        rss_of(z.fill(Phases::Given(theta)), y, coef)
+    fn rss_wide(theta: &[f64], omega: Option<f64>, y: &[f64], coef: &[f64], z: &mut Phasors) -> f64 {
+        rss_of(z.fill(Phases::of(theta, omega)), y, coef)
     }
 }
 

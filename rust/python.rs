@@ -1226,18 +1226,20 @@ fn cholesky_upper<'py>(
 
 /// `sum (y - series(theta))^2` of the harmonic series `coef` against `y` (`rust/lab.rs`).
 #[pyfunction]
+#[pyo3(signature = (theta, y, coef, omega=None))]
 fn harmonic_rss<'py>(
     py: Python<'py>,
     theta: PyReadonlyArray1<'py, f64>,
     y: PyReadonlyArray1<'py, f64>,
     coef: PyReadonlyArray1<'py, f64>,
+    omega: Option<f64>,
 ) -> PyResult<f64> {
     let (theta, y, coef) = (
         slice("theta", &theta)?,
         slice("y", &y)?,
         slice("coef", &coef)?,
     );
-    Ok(py.detach(|| lab::harmonic_rss(theta, y, coef))?)
+    Ok(py.detach(|| lab::harmonic_rss_at(theta, omega, y, coef))?)
 }
 
 /// Gauss-Newton terms `(r.r, r.d, d.d, X^T d)` of the frequency fit of `x` on the harmonic series
@@ -1268,15 +1270,17 @@ type HarmonicFitOut<'py> = Option<(
 /// The whole harmonic least-squares fit of `y` on harmonics `1..=kmax` of `theta` in one call
 /// (`rust/lab/fit.rs`): `(coef, R (flat), Q^T y, rss)`, or `None` (ill-conditioned: use QR).
 #[pyfunction]
+#[pyo3(signature = (theta, y, kmax, omega=None))]
 fn harmonic_fit<'py>(
     py: Python<'py>,
     theta: PyReadonlyArray1<'py, f64>,
     y: PyReadonlyArray1<'py, f64>,
     kmax: i64,
+    omega: Option<f64>,
 ) -> PyResult<HarmonicFitOut<'py>> {
     let (theta, y) = (slice("theta", &theta)?, slice("y", &y)?);
     let kmax = count("kmax", kmax, 1)?;
-    let fit = py.detach(|| lab::fit::harmonic_fit(theta, y, kmax))?;
+    let fit = py.detach(|| lab::fit::harmonic_fit_at(theta, omega, y, kmax))?;
     Ok(fit.map(|f| {
         (
             f.coef.into_pyarray(py),
@@ -1315,6 +1319,8 @@ type WindowFitsOut<'py> = (Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<f64>>)
 /// phases `theta` (`rust/lab/windows.rs`): `(coef (windows x 2m), rss (windows x 2))`, NaN rows
 /// where a window's Gram matrix is ill-conditioned.
 #[pyfunction]
+#[pyo3(signature = (theta, u, y, starts, stops, k, omega=None))]
+#[allow(clippy::too_many_arguments)]
 fn window_fits<'py>(
     py: Python<'py>,
     theta: PyReadonlyArray1<'py, f64>,
@@ -1323,6 +1329,7 @@ fn window_fits<'py>(
     starts: Vec<i64>,
     stops: Vec<i64>,
     k: i64,
+    omega: Option<f64>,
 ) -> PyResult<WindowFitsOut<'py>> {
     let (theta, u, y) = (slice("theta", &theta)?, slice("u", &u)?, slice("y", &y)?);
     let k = count("k", k, 1)?;
@@ -1330,7 +1337,7 @@ fn window_fits<'py>(
         v.iter().map(|&i| count(name, i, 0)).collect()
     };
     let (starts, stops) = (index("starts", &starts)?, index("stops", &stops)?);
-    let f = py.detach(|| lab::windows::window_fits(theta, u, y, &starts, &stops, k))?;
+    let f = py.detach(|| lab::windows::window_fits_at(theta, omega, u, y, &starts, &stops, k))?;
     let nw = starts.len();
     let m2 = 2 * (2 * f.harmonics + 1);
     let coef = Array2::from_shape_vec((nw, m2), f.coef)

@@ -304,15 +304,16 @@ def test_window_fits_match_the_basis_reference(seed: int) -> None:
 
     rng = np.random.default_rng(seed)
     p, n = 63.7 + 10 * seed, 2000
-    theta = hls.phase_angle(2 * math.pi / p, np.arange(n, dtype=np.float64))
+    tau, omega = np.arange(n, dtype=np.float64), 2 * math.pi / p
+    theta = hls.phase_angle(omega, tau)
     u = 0.1 + (1.0 + 0.001 * np.arange(n)) * np.cos(theta) + 0.01 * rng.standard_normal(n)
     y = np.tanh(2 * u) + 0.01 * rng.standard_normal(n)
     spans = [(math.floor(i * p), math.floor((i + 1) * p)) for i in range(int(n // p))]
-    fast = _windows.block_windows(1, 100, theta, u, y, spans, 5)
+    fast = _windows.block_windows(1, 100, tau, omega, u, y, spans, 5)
     saved = hls.USE_RUST_KERNELS
     try:
         hls.USE_RUST_KERNELS = False
-        ref = _windows.block_windows(1, 100, theta, u, y, spans, 5)
+        ref = _windows.block_windows(1, 100, tau, omega, u, y, spans, 5)
     finally:
         hls.USE_RUST_KERNELS = saved
     assert len(fast) == len(ref) == len(spans)

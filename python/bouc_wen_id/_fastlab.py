@@ -40,11 +40,11 @@ def well_conditioned(gram: FloatArray) -> bool:
 
 
 def _fit(
-    theta: FloatArray, y: FloatArray, kmax: int
+    theta: FloatArray, y: FloatArray, kmax: int, omega: Optional[float]
 ) -> Optional[tuple[FloatArray, FloatArray, FloatArray, float]]:
     th = np.ascontiguousarray(theta, dtype=np.float64)
     yy = np.ascontiguousarray(y, dtype=np.float64)
-    out = _core.harmonic_fit(th, yy, kmax)
+    out = _core.harmonic_fit(th, yy, kmax, omega)
     if out is None:
         return None
     coef, r, qty, rss = out
@@ -52,20 +52,23 @@ def _fit(
     return coef, r.reshape(m, m), qty, rss
 
 
-def moment_fit(theta: FloatArray, y: FloatArray, kmax: int) -> Optional[tuple[FloatArray, FloatArray, float]]:
+def moment_fit(
+    theta: FloatArray, y: FloatArray, kmax: int, omega: Optional[float] = None
+) -> Optional[tuple[FloatArray, FloatArray, float]]:
     """``(R, Q^T y, residual^2)`` of the K-harmonic fit, as ``signal._harmonic_ls._moment_fit``; ``None`` when
-    ill-conditioned (use the QR path)."""
-    out = _fit(theta, y, kmax)
+    ill-conditioned (use the QR path).  With ``omega``, ``theta`` holds times and the phases are ``omega
+    theta`` (no wrapped phase array formed)."""
+    out = _fit(theta, y, kmax, omega)
     return None if out is None else (out[1], out[2], out[3])
 
 
 def harmonic_lsq(
-    theta: FloatArray, x: FloatArray, kmax: int
+    theta: FloatArray, x: FloatArray, kmax: int, omega: Optional[float] = None
 ) -> Optional[tuple[FloatArray, FloatArray, float]]:
     """``(coef, R, residual^2)`` of the K-harmonic least-squares fit (``R`` the Cholesky factor of the
     Gram matrix: the QR path's R up to the signs of its rows, which neither the solution nor the variances
-    see); ``None`` when ill-conditioned."""
-    out = _fit(theta, x, kmax)
+    see); ``None`` when ill-conditioned.  ``omega`` as :func:`moment_fit`."""
+    out = _fit(theta, x, kmax, omega)
     return None if out is None else (out[0], out[1], out[3])
 
 

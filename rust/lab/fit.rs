@@ -9,7 +9,9 @@
 use nalgebra::{DMatrix, SymmetricEigen};
 
 use super::wide::wide_fn;
-use super::{check, cholesky_of, gauss_newton_of, moments_of, rss_of, Phases, Phasors};
+use super::{
+    check, check_omega, cholesky_of, gauss_newton_of, moments_of, rss_of, Phases, Phasors,
+};
 use crate::error::{all_finite, CoreError, Result};
 
 /// Largest condition number of the scaled Gram matrix for which the normal equations are used
@@ -238,13 +240,33 @@ pub(crate) fn fit_of(
 ///
 /// Errors: non-finite input, unequal lengths, `kmax < 1`.
 pub fn harmonic_fit(theta: &[f64], y: &[f64], kmax: usize) -> Result<Option<HarmonicFit>> {
+    harmonic_fit_at(theta, None, y, kmax)
+}
+
+/// [`harmonic_fit`] at the phases `theta`, or at `omega tau` when `omega` (rad/s) is given and
+/// `theta` holds the times `tau` (s).
+///
+/// Errors: as [`harmonic_fit`], and a non-finite `omega`.
+pub fn harmonic_fit_at(
+    theta: &[f64],
+    omega: Option<f64>,
+    y: &[f64],
+    kmax: usize,
+) -> Result<Option<HarmonicFit>> {
     check(theta, y, kmax)?;
-    Ok(Phasors::with(|z, _| fit_wide(theta, y, kmax, z)))
+    check_omega(omega)?;
+    Ok(Phasors::with(|z, _| fit_wide(theta, omega, y, kmax, z)))
 }
 
 wide_fn! {
-    fn fit_wide(theta: &[f64], y: &[f64], kmax: usize, z: &mut Phasors) -> Option<HarmonicFit> {
-        fit_of(Phases::Given(theta), y, kmax, z)
+    fn fit_wide(
+        theta: &[f64],
+        omega: Option<f64>,
+        y: &[f64],
+        kmax: usize,
+        z: &mut Phasors,
+    ) -> Option<HarmonicFit> {
+        fit_of(Phases::of(theta, omega), y, kmax, z)
     }
 }
 

@@ -14,6 +14,7 @@ use rustfft::num_complex::Complex;
 use rustfft::{Fft, FftPlanner};
 
 use super::sincos::sincos;
+use super::wide::wide_fn;
 use crate::error::{all_finite, CoreError, Result};
 
 /// A plan for the complex transform of length `nfft/2`, and the unpacking twiddles
@@ -94,32 +95,13 @@ fn with_spectrum<R>(x: &[f64], nfft: usize, f: impl FnOnce(&[f64]) -> R) -> Resu
             "nfft = {nfft} must be even and >= the {n} samples (at least 2)"
         )));
     }
-    let centre = 0.5 * (n as f64 - 1.0);
-    let (mut sxx, mut sxy, mut sum) = (0.0, 0.0, 0.0);
-    for (i, v) in x.iter().enumerate() {
-        let d = i as f64 - centre;
-        sxx += d * d;
-        sxy += d * v;
-        sum += v;
-    }
-    let (slope, mean) = (sxy / sxx, sum / n as f64);
-    let step = 2.0 * PI / (n as f64 - 1.0);
-    let value = |i: usize| -> f64 {
-        if i >= n {
-            return 0.0;
-        }
-        let w = 0.5 - 0.5 * sincos(step * i as f64).1;
-        w * (x[i] - mean - slope * (i as f64 - centre))
-    };
-    let half = nfft / 2;
     let (fft, tw) = plan(nfft);
     thread_local! {
         static PACKED: RefCell<Vec<Complex<f64>>> = const { RefCell::new(Vec::new()) };
         static SPECTRUM: RefCell<Vec<f64>> = const { RefCell::new(Vec::new()) };
     }
     Ok(PACKED.with_borrow_mut(|z| {
-        z.clear();
-        z.extend((0..half).map(|k| Complex::new(value(2 * k), value(2 * k + 1))));
+        pack(x, nfft / 2, z);
         fft.process(z);
         SPECTRUM.with_borrow_mut(|out| {
             unpack(z, &tw, out);
@@ -128,25 +110,68 @@ fn with_spectrum<R>(x: &[f64], nfft: usize, f: impl FnOnce(&[f64]) -> R) -> Resu
     }))
 }
 
-/// Into `out`, the magnitude spectrum (`h + 1` bins) of the `2 h` reals packed in `z` (length `h`,
-/// transformed): `X_k = E_k + e^{-2 pi i k/(2h)} O_k`, `E_k = (Z_k + conj Z_{h-k})/2`,
-/// `O_k = (Z_k - conj Z_{h-k})/(2i)`.
-fn unpack(z: &[Complex<f64>], tw: &[Complex<f64>], out: &mut Vec<f64>) {
-    let half = z.len();
-    out.clear();
-    out.extend((0..=half).map(|k| {
-        let a = z[k % half];
-        let b = z[(half - k) % half].conj();
-        let e = (a + b) * 0.5;
-        let o = (a - b) * Complex::new(0.0, -0.5);
-        let t = if k < half {
-            tw[k]
-        } else {
-            Complex::new(-1.0, 0.0)
+wide_fn! {
+    /// Into `z` (`half` complex numbers), the detrended, Hann-windowed, zero-padded record `x`
+    /// packed two reals at a time.
+    fn pack(x: &[f64], half: usize, z: &mut Vec<Complex<f64>>) -> () {
+        let n = x.len();
+        let centre = 0.5 * (n as f64 - 1.0);
+        let (mut sxx, mut sxy, mut sum) = (0.0, 0.0, 0.0);
+        for (i, v) in x.iter().enumerate() {
+            let d = i as f64 - centre;
+            sxx += d * d;
+            sxy += d * v;
+            sum += v;
+        }
+        let (slope, mean) = (sxy / sxx, sum / n as f64);
+        let step = 2.0 * PI / (n as f64 - 1.0);
+        z.clear();
+        z.resize(half, Complex::new(0.0, 0.0));
+        // Safe view of the packed numbers as 2 half reals (Complex<f64> is repr(C) [re, im]).
+        let flat: &mut [f64] = as_reals(z);
+        for (i, (o, v)) in flat.iter_mut().zip(x).enumerate() {
+            let w = 0.5 - 0.5 * sincos(step * i as f64).1;
+            *o = w * (v - mean - slope * (i as f64 - centre));
+        }
+    }
+}
+
+/// The complex numbers of `z` as their real and imaginary parts in turn.
+fn as_reals(z: &mut [Complex<f64>]) -> &mut [f64] {
+    let len = 2 * z.len();
+    // SAFETY: `Complex<f64>` is `#[repr(C)]` with two `f64` fields (re, im), so a slice of them is a
+    // slice of twice as many `f64`, with the same alignment; the borrow is carried over.
+    unsafe { std::slice::from_raw_parts_mut(z.as_mut_ptr().cast::<f64>(), len) }
+}
+
+wide_fn! {
+    /// Into `out`, the magnitude spectrum (`h + 1` bins) of the `2 h` reals packed in `z` (length
+    /// `h`, transformed): `X_k = E_k + e^{-2 pi i k/(2h)} O_k`, `E_k = (Z_k + conj Z_{h-k})/2`,
+    /// `O_k = (Z_k - conj Z_{h-k})/(2i)`.
+    fn unpack(z: &[Complex<f64>], tw: &[Complex<f64>], out: &mut Vec<f64>) -> () {
+        let half = z.len();
+        out.clear();
+        out.resize(half + 1, 0.0);
+        // Bin k pairs Z_k with Z_{h-k}: bins 1..h-1 in one sweep, 0 and h apart.
+        let edge = |a: Complex<f64>, t: Complex<f64>| {
+            let b = a.conj();
+            let e = (a + b) * 0.5;
+            let o = (a - b) * Complex::new(0.0, -0.5);
+            (e + t * o).norm_sqr().sqrt()
         };
-        // sqrt(re^2 + im^2): no overflow at these magnitudes, and much faster than hypot.
-        (e + t * o).norm_sqr().sqrt()
-    }));
+        out[0] = edge(z[0], Complex::new(1.0, 0.0));
+        out[half] = edge(z[0], Complex::new(-1.0, 0.0));
+        for k in 1..half {
+            let (a, b) = (z[k], z[half - k].conj());
+            let (er, ei) = (0.5 * (a.re + b.re), 0.5 * (a.im + b.im));
+            // (a - b) / (2i) = ((a - b).im / 2) - i ((a - b).re / 2).
+            let (or, oi) = (0.5 * (a.im - b.im), -0.5 * (a.re - b.re));
+            let t = tw[k];
+            let (xr, xi) = (er + t.re * or - t.im * oi, ei + t.re * oi + t.im * or);
+            // sqrt(re^2 + im^2): no overflow at these magnitudes, and much faster than hypot.
+            out[k] = (xr * xr + xi * xi).sqrt();
+        }
+    }
 }
 
 #[cfg(test)]

@@ -6,7 +6,7 @@
 
 use super::fit::{fit_of, HarmonicFit};
 use super::wide::wide_fn;
-use super::{check, Phases, Phasors};
+use super::{check, check_omega, Phases, Phasors};
 use crate::error::{CoreError, Result};
 
 /// The fits of `u` and `y` in each window of a block.
@@ -33,8 +33,25 @@ pub fn window_fits(
     stops: &[usize],
     k: usize,
 ) -> Result<WindowFits> {
+    window_fits_at(theta, None, u, y, starts, stops, k)
+}
+
+/// [`window_fits`] at the phases `theta`, or at `omega tau` when `omega` (rad/s) is given and
+/// `theta` holds the block's times `tau` (s).
+///
+/// Errors: as [`window_fits`], and a non-finite `omega`.
+pub fn window_fits_at(
+    theta: &[f64],
+    omega: Option<f64>,
+    u: &[f64],
+    y: &[f64],
+    starts: &[usize],
+    stops: &[usize],
+    k: usize,
+) -> Result<WindowFits> {
     check(theta, u, k)?;
     check(theta, y, k)?;
+    check_omega(omega)?;
     if starts.len() != stops.len() {
         return Err(CoreError::InvalidParameter(format!(
             "starts and stops must have equal lengths, got {} and {}",
@@ -53,13 +70,14 @@ pub fn window_fits(
         )));
     }
     Ok(Phasors::with(|buf, unused| {
-        window_fits_wide(theta, u, y, starts, stops, k, buf, unused)
+        window_fits_wide(theta, omega, u, y, starts, stops, k, buf, unused)
     }))
 }
 
 wide_fn! {
     fn window_fits_wide(
         theta: &[f64],
+        omega: Option<f64>,
         u: &[f64],
         y: &[f64],
         starts: &[usize],
@@ -72,7 +90,7 @@ wide_fn! {
         let mut coef = vec![f64::NAN; starts.len() * 2 * m];
         let mut rss = vec![f64::NAN; starts.len() * 2];
         // The block's phasors, formed once for every window's fits.
-        let z = buf.fill(Phases::Given(theta));
+        let z = buf.fill(Phases::of(theta, omega));
         for (i, (&a, &b)) in starts.iter().zip(stops).enumerate() {
             let w = z.sub(a, b);
             let fits: [Option<HarmonicFit>; 2] =

@@ -16,7 +16,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..errors import InsufficientDataError, InvalidParameterError, UndersampledError
 from ..validation import HARMONIC_SNR, MIN_SAMPLES_PER_PERIOD, check_time_axis, finite_arrays
-from ._harmonic_ls import harmonic_basis, nested_fit, phase_angle
+from ._harmonic_ls import harmonic_basis, nested_fit
 from ._segments import SegmentReport, find_steady_segments
 from ._sine import SineFit
 
@@ -184,7 +184,6 @@ def synchronous_average(
         )
     base = fit.phase / omega
     origin = base + period * math.ceil((float(ts[0]) - base) / period - 1e-9)
-    theta = phase_angle(omega, ts - origin)
     if harmonics is None:
         kmax = max(1, min(MAX_HARMONICS, math.floor(p_s / 2.0 - 1.0), (n // 2 - 1) // 2))
     else:
@@ -197,7 +196,8 @@ def synchronous_average(
             )
         if 2 * kmax + 1 > n:
             raise InsufficientDataError(f"{kmax} harmonics need {2 * kmax + 1} samples, the range holds {n}")
-    ls = nested_fit(theta, ys, kmax)
+    # The phases omega (t - origin), wrapped by the reference path, formed in Rust on the fast one.
+    ls = nested_fit(ts - origin, ys, kmax, omega)
     k = kmax
     if harmonics is None:
         dof_max = n - (2 * kmax + 1)

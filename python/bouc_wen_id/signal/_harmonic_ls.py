@@ -118,16 +118,22 @@ def _unscaled_variance(r: FloatArray) -> FloatArray:
 
 @dataclass
 class HarmonicFit:
-    """A least-squares fit of ``x`` on the harmonic basis at the phases ``theta``."""
+    """A least-squares fit of ``x`` on the harmonic basis at the phases ``omega tau``."""
 
     coef: FloatArray  # [c, a_1, b_1, a_2, b_2, ...]
     rss: float
     r_factor: FloatArray
-    theta: FloatArray
+    tau: FloatArray
+    omega: float
 
     @property
     def harmonics(self) -> int:
         return (self.coef.size - 1) // 2
+
+    @cached_property
+    def theta(self) -> FloatArray:
+        """The phases ``omega tau`` wrapped to [0, 2 pi) (formed on first use: the fast path needs none)."""
+        return phase_angle(self.omega, self.tau)
 
     @cached_property
     def basis(self) -> FloatArray:
@@ -136,7 +142,7 @@ class HarmonicFit:
 
     def variances(self) -> FloatArray:
         """The noise variance of each coefficient: residual variance times the diagonal of ``(X^T X)^-1``."""
-        dof = self.theta.size - self.coef.size
+        dof = self.tau.size - self.coef.size
         try:
             out: FloatArray = _unscaled_variance(self.r_factor) * (self.rss / dof if dof > 0 else 0.0)
         except (np.linalg.LinAlgError, InvalidParameterError):
@@ -147,26 +153,25 @@ class HarmonicFit:
         """``|x - c - a_1 cos theta - b_1 sin theta|^2``: what offset and fundamental leave of ``x``."""
         head = np.ascontiguousarray(self.coef[:3])
         if USE_RUST_KERNELS:
-            return float(
-                _core().harmonic_rss(np.ascontiguousarray(self.theta), np.ascontiguousarray(x), head)
-            )
+            tau, xx = np.ascontiguousarray(self.tau), np.ascontiguousarray(x)
+            return float(_core().harmonic_rss(tau, xx, head, self.omega))
         r = x - self.basis[:, :3] @ head
         return float(np.einsum("i,i->", r, r))
 
 
 def fit_at(tau: FloatArray, x: FloatArray, omega: float, k: int) -> HarmonicFit:
     """Linear fit of ``x`` on harmonics 1..k of ``omega`` at times ``tau`` (and a constant)."""
-    theta = phase_angle(omega, tau)
-    fast = _fastlab().harmonic_lsq(theta, x, k) if USE_RUST_KERNELS else None
+    fast = _fastlab().harmonic_lsq(tau, x, k, omega) if USE_RUST_KERNELS else None
     if fast is not None:
-        # The residual sum of squares comes from the kernels too (no BLAS on the n-vectors), and the
-        # basis is not formed.
+        # The residual sum of squares comes from the kernels too (no BLAS on the n-vectors), and neither
+        # the wrapped phases nor the basis are formed.
         coef, r_factor, rss = fast
-        return HarmonicFit(coef, rss, r_factor, theta)
-    basis = harmonic_basis(theta, k)
+        return HarmonicFit(coef, rss, r_factor, tau, omega)
+    fit = HarmonicFit(np.empty(0), 0.0, np.empty((0, 0)), tau, omega)
+    basis = harmonic_basis(fit.theta, k)
     coef, r_factor = solve_qr(basis, x)
     r = x - basis @ coef
-    fit = HarmonicFit(coef, float(r @ r), r_factor, theta)
+    fit.coef, fit.rss, fit.r_factor = coef, float(r @ r), r_factor
     fit.basis = basis  # already formed: cached
     return fit
 
@@ -288,12 +293,18 @@ def _moment_fit(theta: FloatArray, y: FloatArray, kmax: int) -> tuple[FloatArray
     return r, qty, float(resid @ resid)
 
 
-def nested_fit(theta: FloatArray, y: FloatArray, kmax: int) -> HarmonicLS:
-    """The fit on harmonics up to ``kmax`` whose sub-fits on fewer harmonics come for free."""
+def nested_fit(theta: FloatArray, y: FloatArray, kmax: int, omega: Optional[float] = None) -> HarmonicLS:
+    """The fit on harmonics up to ``kmax`` whose sub-fits on fewer harmonics come for free.
+
+    With ``omega``, ``theta`` holds times and the phases are ``omega theta``: the Rust path forms them
+    itself (no wrapped phase array), the reference wraps them with :func:`phase_angle`.
+    """
     if USE_RUST_KERNELS:
-        fast = _fastlab().moment_fit(theta, y, kmax)
+        fast = _fastlab().moment_fit(theta, y, kmax, omega)
         if fast is not None:
             return HarmonicLS(*fast)
+    if omega is not None:
+        theta = phase_angle(omega, theta)
     n, m = y.size, 2 * kmax + 1
     fitter = _qr_fit if n * m * m <= QR_WORK_MAX else _moment_fit
     return HarmonicLS(*fitter(theta, y, kmax))

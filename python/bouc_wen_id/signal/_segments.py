@@ -25,7 +25,6 @@ from ..errors import (
     ZeroAmplitudeError,
 )
 from ..validation import MIN_SAMPLES_PER_PERIOD, check_time_axis, finite_arrays
-from ._harmonic_ls import phase_angle
 from ._sine import (
     NYQUIST_MARGIN,
     SineFit,
@@ -282,8 +281,7 @@ def _cut_windows(rec: _Record, blocks: _Blocks) -> list[Window]:
         # estimated a hair low).
         count = math.floor((b - a) / p + 0.05)
         spans = [(math.floor(i * p), min(math.floor((i + 1) * p), b - a)) for i in range(count)]
-        theta = phase_angle(omega, rec.t[a:b] - rec.t[a])
-        windows.extend(block_windows(bi, a, theta, rec.u[a:b], rec.y[a:b], spans, k_w))
+        windows.extend(block_windows(bi, a, rec.t[a:b] - rec.t[a], omega, rec.u[a:b], rec.y[a:b], spans, k_w))
     if not windows:
         raise InsufficientDataError(
             f"the record holds {blocks.total_periods(dt):.3g} periods of {omega_main / TWO_PI:.6g} Hz: not "

@@ -19,7 +19,7 @@ from numpy.typing import NDArray
 
 from .. import _core
 from . import _harmonic_ls
-from ._harmonic_ls import harmonic_basis
+from ._harmonic_ls import harmonic_basis, phase_angle
 
 __all__ = [
     "Window",
@@ -121,14 +121,16 @@ def _features(
 def block_windows(
     block: int,
     offset: int,
-    theta: FloatArray,
+    tau: FloatArray,
+    omega: float,
     u: FloatArray,
     y: FloatArray,
     spans: Sequence[tuple[int, int]],
     k_w: int,
 ) -> list[Window]:
-    """The windows ``[s, e)`` of ``spans`` of one block (``theta``, ``u``, ``y``: the block's phases and
-    samples; ``offset``: the block's first sample in the record), each fitted on ``k_w`` harmonics.
+    """The windows ``[s, e)`` of ``spans`` of one block (``tau``, ``u``, ``y``: the block's times from its
+    start and samples; ``offset``: its first sample in the record), each fitted on ``k_w`` harmonics of
+    ``omega``.
 
     On the Rust kernels every window's fit is the fused moment fit of ``_core.window_fits`` (the block's
     phasors computed once); a window whose Gram matrix that path refuses, and the reference path, solve
@@ -137,11 +139,11 @@ def block_windows(
     if not spans:
         return []
     if not _harmonic_ls.USE_RUST_KERNELS:
-        basis = harmonic_basis(theta, k_w)
+        basis = harmonic_basis(phase_angle(omega, tau), k_w)
         return [window_features(block, offset + s, offset + e, basis[s:e], u[s:e], y[s:e]) for s, e in spans]
     starts, stops = [s for s, _ in spans], [e for _, e in spans]
     coef, rss = _core.window_fits(
-        np.ascontiguousarray(theta), np.ascontiguousarray(u), np.ascontiguousarray(y), starts, stops, k_w
+        np.ascontiguousarray(tau), np.ascontiguousarray(u), np.ascontiguousarray(y), starts, stops, k_w, omega
     )
     m = 2 * k_w + 1
     out = []
@@ -149,7 +151,7 @@ def block_windows(
     for (s, e), row, r in zip(spans, coef, rss):
         if not np.isfinite(r[0]):
             if basis is None:
-                basis = harmonic_basis(theta, k_w)
+                basis = harmonic_basis(phase_angle(omega, tau), k_w)
             out.append(window_features(block, offset + s, offset + e, basis[s:e], u[s:e], y[s:e]))
             continue
         dof = max(e - s - m, 1)
