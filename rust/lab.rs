@@ -734,6 +734,42 @@ mod tests {
     use super::*;
 
     #[test]
+    fn uniform_times_get_block_templates_and_jittered_ones_do_not() {
+        let n = 1000;
+        let tau: Vec<f64> = (0..n).map(|i| i as f64 * 0.02 - 10.0).collect();
+        assert!(uniform_blocks(&tau));
+        let omega = 3.7;
+        let mut z = Phasors::default();
+        let Phases::Cached(re, im) = z.fill(Phases::Scaled(omega, &tau)) else {
+            unreachable!()
+        };
+        for (i, t) in tau.iter().enumerate() {
+            let (s, c) = (omega * t).sin_cos();
+            assert!(
+                (re[i] - c).abs() < 1e-13 && (im[i] - s).abs() < 1e-13,
+                "sample {i}"
+            );
+        }
+        // A time axis written with 6 decimals (1e-7 s jitter) is not uniform to a few ulp.
+        let mut j2: Vec<f64> = tau
+            .iter()
+            .map(|t| (t * 1e6 + 0.3).round() / 1e6 + 1e-7)
+            .collect();
+        j2[517] += 3e-7;
+        assert!(!uniform_blocks(&j2));
+        let Phases::Cached(re, im) = z.fill(Phases::Scaled(omega, &j2)) else {
+            unreachable!()
+        };
+        for (i, t) in j2.iter().enumerate() {
+            let (s, c) = (omega * t).sin_cos();
+            assert!(
+                (re[i] - c).abs() < 1e-15 && (im[i] - s).abs() < 1e-15,
+                "sample {i}"
+            );
+        }
+    }
+
+    #[test]
     fn moments_match_direct_sums() {
         let n = 37; // not a multiple of LANES: the last block is partial
         let theta: Vec<f64> = (0..n).map(|i| 0.37 * i as f64 + 0.1).collect();
