@@ -12,6 +12,7 @@ use std::time::Duration;
 use _core::average::periodic_average;
 use _core::bouc_wen::BoucWen;
 use _core::estimate::{max_harmonics, spectral_derivative};
+use _core::lab::fit::{harmonic_fit_at, harmonic_nls};
 use _core::lab::{cholesky_upper, harmonic_gauss_newton, harmonic_moments, harmonic_rss};
 use _core::linear::TransferFunction;
 use _core::multistart::refine_many;
@@ -98,7 +99,7 @@ fn bench_average(c: &mut Criterion) {
 
 /// The lab kernels on the bench_pipeline record size: 20,000 samples at 317.3 samples per period;
 /// the moments and the Gram factor at K = 200 (the synchronous average's largest), the frequency
-/// fit's terms at K = 1 (the sine fit).
+/// fit's terms at K = 1 (the sine fit), and the whole fits built on them.
 fn bench_lab(c: &mut Criterion) {
     const N: usize = 20_000;
     const K: usize = 200;
@@ -133,6 +134,14 @@ fn bench_lab(c: &mut Criterion) {
         .collect();
     c.bench_function("cholesky_upper_401", |b| {
         b.iter(|| cholesky_upper(black_box(&gram), m))
+    });
+    // Whole fits, one call each: the synchronous average's (K = 200, phases from omega and the
+    // times) and the sine analysis's frequency Gauss-Newton from 1e-4 off.
+    c.bench_function("harmonic_fit_20000_k200", |b| {
+        b.iter(|| harmonic_fit_at(black_box(&tau), Some(omega), &x, K))
+    });
+    c.bench_function("harmonic_nls_20000_k1", |b| {
+        b.iter(|| harmonic_nls(black_box(&tau), &x, omega * (1.0 + 1e-4), 1e-3, 1))
     });
 }
 
