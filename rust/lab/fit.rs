@@ -47,27 +47,40 @@ pub fn gram_from_moments(
         let i = d.unsigned_abs();
         (mu.0[i], if d < 0 { -mu.1[i] } else { mu.1[i] })
     };
-    let harmonic = |j: usize| j.div_ceil(2) as isize;
-    let is_sin = |j: usize| j > 0 && j % 2 == 0;
     let mut g = vec![0.0; m * m];
-    for i in 0..m {
-        for j in 0..m {
-            let (ki, kj) = (harmonic(i), harmonic(j));
-            let (lo, hi) = (at(ki - kj), at(ki + kj));
-            g[i * m + j] = match (is_sin(i), is_sin(j)) {
-                (true, true) => 0.5 * (lo.0 - hi.0),
-                (true, false) => 0.5 * (hi.1 + lo.1),
-                (false, true) => 0.5 * (hi.1 - lo.1),
-                (false, false) => 0.5 * (lo.0 + hi.0),
-            };
-        }
+    // The constant column is the k = 0 cosine: G[0][0] = Re mu_0, and with harmonic k's cosine
+    // and sine, Re mu_k and Im mu_k.
+    g[0] = mu.0[0];
+    for k in 1..=kmax {
+        let (c, s) = (0.5 * (mu.0[k] + mu.0[k]), 0.5 * (mu.1[k] + mu.1[k]));
+        g[2 * k - 1] = c;
+        g[2 * k] = s;
+        g[(2 * k - 1) * m] = c;
+        g[2 * k * m] = s;
     }
-    // Symmetric to the last bit, as the reference's 0.5 (G + G^T).
-    for i in 0..m {
-        for j in 0..i {
-            let v = 0.5 * (g[i * m + j] + g[j * m + i]);
-            g[i * m + j] = v;
-            g[j * m + i] = v;
+    // Harmonics a <= b: the 2 x 2 block of (cos a, sin a) x (cos b, sin b) from mu_{a-b} and
+    // mu_{a+b}, mirrored (the formulas give the transposed block exactly: a + (-x) = a - x).
+    for a in 1..=kmax as isize {
+        for b in a..=kmax as isize {
+            let (lo, hi) = (at(a - b), at(a + b));
+            let (ca, sa, cb, sb) = (
+                (2 * a - 1) as usize,
+                (2 * a) as usize,
+                (2 * b - 1) as usize,
+                (2 * b) as usize,
+            );
+            let cc = 0.5 * (lo.0 + hi.0);
+            let ss = 0.5 * (lo.0 - hi.0);
+            let sc = 0.5 * (hi.1 + lo.1); // row sin a, column cos b
+            let cs = 0.5 * (hi.1 - lo.1); // row cos a, column sin b
+            g[ca * m + cb] = cc;
+            g[cb * m + ca] = cc;
+            g[sa * m + sb] = ss;
+            g[sb * m + sa] = ss;
+            g[sa * m + cb] = sc;
+            g[cb * m + sa] = sc;
+            g[ca * m + sb] = cs;
+            g[sb * m + ca] = cs;
         }
     }
     let mut xty = vec![0.0; m];
@@ -89,12 +102,14 @@ pub fn well_conditioned(g: &[f64], m: usize) -> bool {
     }
     let scale: Vec<f64> = diag.iter().map(|d| d.sqrt()).collect();
     let scaled = |i: usize, j: usize| g[i * m + j] / (scale[i] * scale[j]);
+    // Off-diagonal absolute row sums of the scaled matrix, |g_ij| / (s_i s_j) summed over j != i
+    // (a row at a time, contiguous, so that it vectorises).
+    let inv: Vec<f64> = scale.iter().map(|s| 1.0 / s).collect();
     let radius = (0..m)
         .map(|i| {
-            (0..m)
-                .filter(|&j| j != i)
-                .map(|j| scaled(i, j).abs())
-                .sum::<f64>()
+            let row = &g[i * m..(i + 1) * m];
+            let total: f64 = row.iter().zip(&inv).map(|(v, w)| v.abs() * w).sum();
+            (total - diag[i] * inv[i]) * inv[i]
         })
         .fold(0.0, f64::max);
     if radius < 1.0 && (1.0 + radius) <= GRAM_COND_MAX * (1.0 - radius) {
@@ -189,14 +204,26 @@ pub fn unscaled_variances(r: &[f64], m: usize) -> Result<Vec<f64>> {
 wide_fn! {
     /// The contributions of the columns `[from, to)` of `R^-1` to its row sums of squares.
     fn inverse_row_norms(r: &[f64], m: usize, from: usize, to: usize) -> Vec<f64> {
+        // R^T row-major (R's columns contiguous): column j of R^-1 by column-oriented back
+        // substitution, col[i] /= R[i][i], then col[..i] -= col[i] R[..i][i], an update without the
+        // chain of dependent dot products of the row-oriented form.
+        let mut rt = vec![0.0; m * m];
+        for i in 0..m {
+            for k in i..m {
+                rt[k * m + i] = r[i * m + k];
+            }
+        }
         let mut out = vec![0.0; m];
         let mut col = vec![0.0; m];
         for j in from..to {
-            // Column j of R^-1 (zero below j): R[i, i..=j] . col[i..=j] = delta_ij.
-            col[j] = 1.0 / r[j * m + j];
-            for i in (0..j).rev() {
-                let s = super::dot(&r[i * m + i + 1..i * m + j + 1], &col[i + 1..j + 1]);
-                col[i] = -s / r[i * m + i];
+            col[..j].fill(0.0);
+            col[j] = 1.0;
+            for i in (0..=j).rev() {
+                let c = col[i] / r[i * m + i];
+                col[i] = c;
+                for (v, a) in col[..i].iter_mut().zip(&rt[i * m..i * m + i]) {
+                    *v -= c * a;
+                }
             }
             for i in 0..=j {
                 out[i] += col[i] * col[i];
