@@ -139,9 +139,10 @@ def dft_peak(x: FloatArray, dt: float, nominal: Optional[float]) -> float:
     if _harmonic_ls.USE_RUST_KERNELS:
         # The same spectrum from a half-length complex FFT in Rust, and the same choice of bin, without
         # handing the spectrum back (issue #8).
-        k, *around = _harmonic_ls._core().spectral_peak(
+        peak: tuple[int, float, float, float] = _harmonic_ls._core().spectral_peak(
             np.ascontiguousarray(x, dtype=np.float64), nfft, lo, hi, b_lo, b_hi, NOMINAL_PEAK_MIN
         )
+        k, around = peak[0], [peak[1], peak[2], peak[3]]
     else:
         idx = np.arange(n, dtype=np.float64) - 0.5 * (n - 1)
         # Remove offset and linear drift: their leakage would otherwise mask a low-frequency tone.
@@ -157,7 +158,7 @@ def dft_peak(x: FloatArray, dt: float, nominal: Optional[float]) -> float:
     den = l0 - 2.0 * l1 + l2
     delta = 0.5 * (l0 - l2) / den if den < 0.0 else 0.0
     delta = min(max(delta, -0.5), 0.5)
-    return TWO_PI * (k + delta) / (nfft * dt)
+    return float(TWO_PI * (k + delta) / (nfft * dt))
 
 
 @dataclass

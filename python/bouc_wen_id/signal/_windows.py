@@ -139,8 +139,8 @@ def block_windows(
     if not spans:
         return []
     if not _harmonic_ls.USE_RUST_KERNELS:
-        basis = harmonic_basis(phase_angle(omega, tau), k_w)
-        return [window_features(block, offset + s, offset + e, basis[s:e], u[s:e], y[s:e]) for s, e in spans]
+        full = harmonic_basis(phase_angle(omega, tau), k_w)
+        return [window_features(block, offset + s, offset + e, full[s:e], u[s:e], y[s:e]) for s, e in spans]
     starts, stops = [s for s, _ in spans], [e for _, e in spans]
     coef, rss = _core.window_fits(
         np.ascontiguousarray(tau), np.ascontiguousarray(u), np.ascontiguousarray(y), starts, stops, k_w, omega
