@@ -600,6 +600,19 @@ pub fn harmonic_rss_at(theta: &[f64], omega: Option<f64>, y: &[f64], coef: &[f64
     Ok(Phasors::with(|z, _| rss_wide(theta, omega, y, coef, z)))
 }
 
+/// `a` finite and holding an `m x m` matrix (`m >= 1`).
+pub(crate) fn check_square(name: &str, a: &[f64], m: usize) -> Result<()> {
+    all_finite(name, a)?;
+    if a.len() != m * m || m == 0 {
+        return Err(CoreError::InvalidParameter(format!(
+            "{name} must hold m * m = {} values (m >= 1), got {}",
+            m * m,
+            a.len()
+        )));
+    }
+    Ok(())
+}
+
 /// `omega`, when given, finite.
 pub(crate) fn check_omega(omega: Option<f64>) -> Result<()> {
     match omega {
@@ -625,14 +638,7 @@ wide_fn! {
 ///
 /// Errors: non-finite input, `gram.len() != m * m`, a matrix that is not positive definite.
 pub fn cholesky_upper(gram: &[f64], m: usize) -> Result<Vec<f64>> {
-    all_finite("gram", gram)?;
-    if gram.len() != m * m || m == 0 {
-        return Err(CoreError::InvalidParameter(format!(
-            "gram must hold m * m = {} values (m >= 1), got {}",
-            m * m,
-            gram.len()
-        )));
-    }
+    check_square("gram", gram, m)?;
     cholesky_wide(gram, m).map_err(|(i, s)| {
         CoreError::InvalidParameter(format!(
             "the Gram matrix is not positive definite (pivot {i}: {s:e})"

@@ -10,7 +10,8 @@ use nalgebra::{DMatrix, SymmetricEigen};
 
 use super::wide::wide_fn;
 use super::{
-    check, check_omega, cholesky_of, gauss_newton_of, moments_of, rss_of, Phases, Phasors,
+    check, check_omega, check_square, cholesky_of, gauss_newton_of, moments_of, rss_of, Phases,
+    Phasors,
 };
 use crate::error::{all_finite, CoreError, Result};
 
@@ -128,14 +129,7 @@ pub fn well_conditioned(g: &[f64], m: usize) -> bool {
 ///
 /// Errors: non-finite input, a length other than `m * m`.
 pub fn gram_well_conditioned(gram: &[f64], m: usize) -> Result<bool> {
-    all_finite("gram", gram)?;
-    if gram.len() != m * m || m == 0 {
-        return Err(CoreError::InvalidParameter(format!(
-            "gram must hold m * m = {} values (m >= 1), got {}",
-            m * m,
-            gram.len()
-        )));
-    }
+    check_square("gram", gram, m)?;
     Ok(well_conditioned(gram, m))
 }
 
@@ -170,18 +164,11 @@ pub(crate) fn solve_upper(r: &[f64], b: &[f64]) -> Vec<f64> {
 /// The diagonal of `(R^T R)^-1` (`R` upper, row-major `m x m`, non-zero diagonal): the unscaled
 /// variances of a least-squares fit whose normal matrix is `R^T R`, as the row sums of squares of
 /// `R^-1` (`signal._harmonic_ls.HarmonicLS.unscaled_variance`). `R^-1` is formed column by column
-/// (`m^3 / 6` multiply-adds, contiguous dot products).
+/// (`m^3 / 6` multiply-adds, column-oriented back substitution).
 ///
 /// Errors: non-finite input, a length other than `m * m`, a zero on the diagonal.
 pub fn unscaled_variances(r: &[f64], m: usize) -> Result<Vec<f64>> {
-    all_finite("r", r)?;
-    if r.len() != m * m || m == 0 {
-        return Err(CoreError::InvalidParameter(format!(
-            "r must hold m * m = {} values (m >= 1), got {}",
-            m * m,
-            r.len()
-        )));
-    }
+    check_square("r", r, m)?;
     if let Some(i) = (0..m).find(|&i| r[i * m + i] == 0.0) {
         return Err(CoreError::InvalidParameter(format!(
             "R is singular: zero on its diagonal at {i}"

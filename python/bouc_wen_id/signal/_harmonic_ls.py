@@ -167,12 +167,12 @@ def fit_at(tau: FloatArray, x: FloatArray, omega: float, k: int) -> HarmonicFit:
         # the wrapped phases nor the basis are formed.
         coef, r_factor, rss = fast
         return HarmonicFit(coef, rss, r_factor, tau, omega)
-    fit = HarmonicFit(np.empty(0), 0.0, np.empty((0, 0)), tau, omega)
-    basis = harmonic_basis(fit.theta, k)
+    theta = phase_angle(omega, tau)
+    basis = harmonic_basis(theta, k)
     coef, r_factor = solve_qr(basis, x)
     r = x - basis @ coef
-    fit.coef, fit.rss, fit.r_factor = coef, float(r @ r), r_factor
-    fit.basis = basis  # already formed: cached
+    fit = HarmonicFit(coef, float(r @ r), r_factor, tau, omega)
+    fit.theta, fit.basis = theta, basis  # already formed: cached
     return fit
 
 

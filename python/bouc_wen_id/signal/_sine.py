@@ -285,7 +285,8 @@ def analyse_input(
         if k_sig > 1:
             nls = _nls(tau, u, nls.omega, dt, k_sig)
             hf = fit_at(tau, u, nls.omega, k_h)
-    coef, rss, var = hf.coef, hf.rss, hf.variances()
+            var = hf.variances()
+    coef, rss = hf.coef, hf.rss
     omega = nls.omega
     a1, b1 = float(coef[1]), float(coef[2])
     amp = math.hypot(a1, b1)
