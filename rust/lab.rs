@@ -51,6 +51,18 @@ fn check(theta: &[f64], y: &[f64], kmax: usize) -> Result<()> {
     Ok(())
 }
 
+/// A fit on `kmax` harmonics has `2 kmax + 1` coefficients: `n` samples must hold at least that many
+/// (the check also bounds the `(2 kmax + 1)^2` Gram matrix by the record's own size).
+pub(crate) fn check_harmonics(n: usize, kmax: usize) -> Result<()> {
+    if kmax.saturating_mul(2).saturating_add(1) > n {
+        return Err(CoreError::InsufficientData(format!(
+            "{kmax} harmonics need {} samples, the record holds {n}",
+            kmax.saturating_mul(2).saturating_add(1)
+        )));
+    }
+    Ok(())
+}
+
 fn check_coef(coef: &[f64], min_harmonics: usize) -> Result<()> {
     all_finite("coef", coef)?;
     if coef.len() % 2 == 0 || coef.len() < 2 * min_harmonics + 1 {
@@ -535,7 +547,7 @@ wide_fn! {
 /// `mu_q = sum_n e^{i q theta_n}`, `q = 0..=2 kmax`, and `r_q = sum_n y_n e^{-i q theta_n}`,
 /// `q = 0..=kmax`, each as `(real parts, imaginary parts)`.
 ///
-/// Errors: non-finite input, unequal lengths, `kmax < 1`.
+/// Errors: non-finite input, unequal lengths, `kmax < 1`, fewer samples than `2 kmax + 1`.
 #[allow(clippy::type_complexity)]
 pub fn harmonic_moments(
     theta: &[f64],
@@ -543,6 +555,7 @@ pub fn harmonic_moments(
     kmax: usize,
 ) -> Result<((Vec<f64>, Vec<f64>), (Vec<f64>, Vec<f64>))> {
     check(theta, y, kmax)?;
+    check_harmonics(theta.len(), kmax)?;
     Ok(Phasors::with(|z, _| moments_wide(theta, y, kmax, z)))
 }
 

@@ -1183,9 +1183,9 @@ type Moments<'py> = (
 #[pyfunction]
 fn harmonic_moments<'py>(
     py: Python<'py>,
-    theta: PyReadonlyArray1<'py, f64>,
-    y: PyReadonlyArray1<'py, f64>,
-    kmax: i64,
+    #[pyo3(from_py_with = arg)] theta: PyReadonlyArray1<'py, f64>,
+    #[pyo3(from_py_with = arg)] y: PyReadonlyArray1<'py, f64>,
+    #[pyo3(from_py_with = arg)] kmax: i64,
 ) -> PyResult<Moments<'py>> {
     let (theta, y) = (slice("theta", &theta)?, slice("y", &y)?);
     let kmax = count("kmax", kmax, 1)?;
@@ -1203,8 +1203,8 @@ fn harmonic_moments<'py>(
 #[pyfunction]
 fn harmonic_series<'py>(
     py: Python<'py>,
-    theta: PyReadonlyArray1<'py, f64>,
-    coef: PyReadonlyArray1<'py, f64>,
+    #[pyo3(from_py_with = arg)] theta: PyReadonlyArray1<'py, f64>,
+    #[pyo3(from_py_with = arg)] coef: PyReadonlyArray1<'py, f64>,
 ) -> PyResult<Bound<'py, PyArray1<f64>>> {
     let (theta, coef) = (slice("theta", &theta)?, slice("coef", &coef)?);
     let out = py.detach(|| lab::harmonic_series(theta, coef))?;
@@ -1216,8 +1216,8 @@ fn harmonic_series<'py>(
 #[pyfunction]
 fn cholesky_upper<'py>(
     py: Python<'py>,
-    gram: PyReadonlyArray1<'py, f64>,
-    m: usize,
+    #[pyo3(from_py_with = arg)] gram: PyReadonlyArray1<'py, f64>,
+    #[pyo3(from_py_with = arg)] m: usize,
 ) -> PyResult<Bound<'py, PyArray1<f64>>> {
     let gram = slice("gram", &gram)?;
     let out = py.detach(|| lab::cholesky_upper(gram, m))?;
@@ -1229,10 +1229,10 @@ fn cholesky_upper<'py>(
 #[pyo3(signature = (theta, y, coef, omega=None))]
 fn harmonic_rss<'py>(
     py: Python<'py>,
-    theta: PyReadonlyArray1<'py, f64>,
-    y: PyReadonlyArray1<'py, f64>,
-    coef: PyReadonlyArray1<'py, f64>,
-    omega: Option<f64>,
+    #[pyo3(from_py_with = arg)] theta: PyReadonlyArray1<'py, f64>,
+    #[pyo3(from_py_with = arg)] y: PyReadonlyArray1<'py, f64>,
+    #[pyo3(from_py_with = arg)] coef: PyReadonlyArray1<'py, f64>,
+    #[pyo3(from_py_with = arg)] omega: Option<f64>,
 ) -> PyResult<f64> {
     let (theta, y, coef) = (
         slice("theta", &theta)?,
@@ -1247,10 +1247,10 @@ fn harmonic_rss<'py>(
 #[pyfunction]
 fn harmonic_gauss_newton<'py>(
     py: Python<'py>,
-    theta: PyReadonlyArray1<'py, f64>,
-    tau: PyReadonlyArray1<'py, f64>,
-    x: PyReadonlyArray1<'py, f64>,
-    coef: PyReadonlyArray1<'py, f64>,
+    #[pyo3(from_py_with = arg)] theta: PyReadonlyArray1<'py, f64>,
+    #[pyo3(from_py_with = arg)] tau: PyReadonlyArray1<'py, f64>,
+    #[pyo3(from_py_with = arg)] x: PyReadonlyArray1<'py, f64>,
+    #[pyo3(from_py_with = arg)] coef: PyReadonlyArray1<'py, f64>,
 ) -> PyResult<(f64, f64, f64, Bound<'py, PyArray1<f64>>)> {
     let (theta, tau) = (slice("theta", &theta)?, slice("tau", &tau)?);
     let (x, coef) = (slice("x", &x)?, slice("coef", &coef)?);
@@ -1273,10 +1273,10 @@ type HarmonicFitOut<'py> = Option<(
 #[pyo3(signature = (theta, y, kmax, omega=None))]
 fn harmonic_fit<'py>(
     py: Python<'py>,
-    theta: PyReadonlyArray1<'py, f64>,
-    y: PyReadonlyArray1<'py, f64>,
-    kmax: i64,
-    omega: Option<f64>,
+    #[pyo3(from_py_with = arg)] theta: PyReadonlyArray1<'py, f64>,
+    #[pyo3(from_py_with = arg)] y: PyReadonlyArray1<'py, f64>,
+    #[pyo3(from_py_with = arg)] kmax: i64,
+    #[pyo3(from_py_with = arg)] omega: Option<f64>,
 ) -> PyResult<HarmonicFitOut<'py>> {
     let (theta, y) = (slice("theta", &theta)?, slice("y", &y)?);
     let kmax = count("kmax", kmax, 1)?;
@@ -1294,7 +1294,10 @@ fn harmonic_fit<'py>(
 /// The conditioning check of the fused fit (`rust/lab/fit.rs`): `cond(D^-1/2 G D^-1/2) <= 1e4`
 /// and positive definite, `G` flat row-major `m x m`.
 #[pyfunction]
-fn gram_well_conditioned(gram: PyReadonlyArray1<'_, f64>, m: usize) -> PyResult<bool> {
+fn gram_well_conditioned(
+    #[pyo3(from_py_with = arg)] gram: PyReadonlyArray1<'_, f64>,
+    #[pyo3(from_py_with = arg)] m: usize,
+) -> PyResult<bool> {
     let g = slice("gram", &gram)?;
     Ok(lab::fit::gram_well_conditioned(g, m)?)
 }
@@ -1304,8 +1307,8 @@ fn gram_well_conditioned(gram: PyReadonlyArray1<'_, f64>, m: usize) -> PyResult<
 #[pyfunction]
 fn unscaled_variances<'py>(
     py: Python<'py>,
-    r: PyReadonlyArray1<'py, f64>,
-    m: usize,
+    #[pyo3(from_py_with = arg)] r: PyReadonlyArray1<'py, f64>,
+    #[pyo3(from_py_with = arg)] m: usize,
 ) -> PyResult<Bound<'py, PyArray1<f64>>> {
     let r = slice("r", &r)?;
     let out = py.detach(|| lab::fit::unscaled_variances(r, m))?;
@@ -1323,13 +1326,13 @@ type WindowFitsOut<'py> = (Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<f64>>)
 #[allow(clippy::too_many_arguments)]
 fn window_fits<'py>(
     py: Python<'py>,
-    theta: PyReadonlyArray1<'py, f64>,
-    u: PyReadonlyArray1<'py, f64>,
-    y: PyReadonlyArray1<'py, f64>,
-    starts: Vec<i64>,
-    stops: Vec<i64>,
-    k: i64,
-    omega: Option<f64>,
+    #[pyo3(from_py_with = arg)] theta: PyReadonlyArray1<'py, f64>,
+    #[pyo3(from_py_with = arg)] u: PyReadonlyArray1<'py, f64>,
+    #[pyo3(from_py_with = arg)] y: PyReadonlyArray1<'py, f64>,
+    #[pyo3(from_py_with = arg)] starts: Vec<i64>,
+    #[pyo3(from_py_with = arg)] stops: Vec<i64>,
+    #[pyo3(from_py_with = arg)] k: i64,
+    #[pyo3(from_py_with = arg)] omega: Option<f64>,
 ) -> PyResult<WindowFitsOut<'py>> {
     let (theta, u, y) = (slice("theta", &theta)?, slice("u", &u)?, slice("y", &y)?);
     let k = count("k", k, 1)?;
@@ -1351,8 +1354,8 @@ fn window_fits<'py>(
 #[pyfunction]
 fn padded_spectrum<'py>(
     py: Python<'py>,
-    x: PyReadonlyArray1<'py, f64>,
-    nfft: i64,
+    #[pyo3(from_py_with = arg)] x: PyReadonlyArray1<'py, f64>,
+    #[pyo3(from_py_with = arg)] nfft: i64,
 ) -> PyResult<Bound<'py, PyArray1<f64>>> {
     let x = slice("x", &x)?;
     let nfft = count("nfft", nfft, 2)?;
@@ -1366,13 +1369,13 @@ fn padded_spectrum<'py>(
 #[allow(clippy::too_many_arguments)]
 fn spectral_peak(
     py: Python<'_>,
-    x: PyReadonlyArray1<'_, f64>,
-    nfft: i64,
-    lo: i64,
-    hi: i64,
-    band_lo: i64,
-    band_hi: i64,
-    peak_min: f64,
+    #[pyo3(from_py_with = arg)] x: PyReadonlyArray1<'_, f64>,
+    #[pyo3(from_py_with = arg)] nfft: i64,
+    #[pyo3(from_py_with = arg)] lo: i64,
+    #[pyo3(from_py_with = arg)] hi: i64,
+    #[pyo3(from_py_with = arg)] band_lo: i64,
+    #[pyo3(from_py_with = arg)] band_hi: i64,
+    #[pyo3(from_py_with = arg)] peak_min: f64,
 ) -> PyResult<(usize, f64, f64, f64)> {
     let x = slice("x", &x)?;
     let nfft = count("nfft", nfft, 2)?;
@@ -1393,11 +1396,11 @@ type FrequencyFitOut<'py> = Option<(f64, Bound<'py, PyArray1<f64>>, f64, f64)>;
 #[pyfunction]
 fn harmonic_nls<'py>(
     py: Python<'py>,
-    tau: PyReadonlyArray1<'py, f64>,
-    x: PyReadonlyArray1<'py, f64>,
-    omega0: f64,
-    dt: f64,
-    k: i64,
+    #[pyo3(from_py_with = arg)] tau: PyReadonlyArray1<'py, f64>,
+    #[pyo3(from_py_with = arg)] x: PyReadonlyArray1<'py, f64>,
+    #[pyo3(from_py_with = arg)] omega0: f64,
+    #[pyo3(from_py_with = arg)] dt: f64,
+    #[pyo3(from_py_with = arg)] k: i64,
 ) -> PyResult<FrequencyFitOut<'py>> {
     let (tau, x) = (slice("tau", &tau)?, slice("x", &x)?);
     let k = count("k", k, 1)?;

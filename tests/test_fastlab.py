@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 from bouc_wen_id import _core, _fastlab
-from bouc_wen_id.errors import InvalidParameterError, NonFiniteError
+from bouc_wen_id.errors import InsufficientDataError, InvalidParameterError, NonFiniteError
 from bouc_wen_id.signal import _harmonic_ls as hls
 from numpy.testing import assert_allclose
 
@@ -261,6 +261,27 @@ def test_fused_fits_refuse_bad_input() -> None:
         _core.harmonic_fit(tau, nan, 2)
     with pytest.raises(InvalidParameterError):
         _core.gram_well_conditioned(np.eye(3).ravel(), 2)
+    # More coefficients than samples (a Gram matrix beyond memory for a huge count): refused, not
+    # an allocation failure; an empty record likewise.
+    with pytest.raises(InsufficientDataError):
+        _core.harmonic_fit(tau, x, 10**9)
+    with pytest.raises(InsufficientDataError):
+        _core.harmonic_fit(tau[:0], x[:0], 1)
+    with pytest.raises(InsufficientDataError):
+        _core.harmonic_nls(tau, x, 7.0, 0.01, 10**6)
+    with pytest.raises(InsufficientDataError):
+        _core.harmonic_moments(tau, x, 10**9)
+    with pytest.raises(InsufficientDataError):
+        _core.window_fits(tau, x, x, [0], [20], 10)
+    with pytest.raises(InvalidParameterError):
+        _core.padded_spectrum(x, 2**62)
+    # Wrong types go through the module's converter: the library's error, not pyo3's TypeError.
+    with pytest.raises(InvalidParameterError):
+        _core.harmonic_fit(tau.astype(np.float32), x, 2)
+    with pytest.raises(InvalidParameterError):
+        _core.harmonic_moments(tau, x, 2**70)
+    with pytest.raises(InvalidParameterError):
+        _core.unscaled_variances(np.eye(2).ravel(), -1)
 
 
 @pytest.mark.parametrize("seed", range(4))

@@ -10,8 +10,8 @@ use nalgebra::{DMatrix, SymmetricEigen};
 
 use super::wide::wide_fn;
 use super::{
-    check, check_omega, check_square, cholesky_of, gauss_newton_of, moments_of, rss_of, Phases,
-    Phasors,
+    check, check_harmonics, check_omega, check_square, cholesky_of, gauss_newton_of, moments_of,
+    rss_of, Phases, Phasors,
 };
 use crate::error::{all_finite, CoreError, Result};
 
@@ -252,7 +252,7 @@ pub(crate) fn fit_of(
 /// their Gram matrix is too ill-conditioned (`cond > 1e4`: less than about a period, or a harmonic
 /// near Nyquist), for the caller's QR path.
 ///
-/// Errors: non-finite input, unequal lengths, `kmax < 1`.
+/// Errors: non-finite input, unequal lengths, `kmax < 1`, fewer samples than `2 kmax + 1`.
 pub fn harmonic_fit(theta: &[f64], y: &[f64], kmax: usize) -> Result<Option<HarmonicFit>> {
     harmonic_fit_at(theta, None, y, kmax)
 }
@@ -268,6 +268,7 @@ pub fn harmonic_fit_at(
     kmax: usize,
 ) -> Result<Option<HarmonicFit>> {
     check(theta, y, kmax)?;
+    check_harmonics(theta.len(), kmax)?;
     check_omega(omega)?;
     Ok(Phasors::with(|z, _| fit_wide(theta, omega, y, kmax, z)))
 }
@@ -304,7 +305,8 @@ pub struct FrequencyFit {
 /// reduction of [`super::sincos`] is exact there). `Ok(None)` when a fit is ill-conditioned (the
 /// caller then runs the reference).
 ///
-/// Errors: non-finite input, unequal lengths, `k < 1`, `omega0` or `dt` not finite and positive.
+/// Errors: non-finite input, unequal lengths, `k < 1`, fewer samples than `2 k + 1`, `omega0` or `dt`
+/// not finite and positive.
 pub fn harmonic_nls(
     tau: &[f64],
     x: &[f64],
@@ -313,6 +315,7 @@ pub fn harmonic_nls(
     k: usize,
 ) -> Result<Option<FrequencyFit>> {
     check(tau, x, k)?;
+    check_harmonics(tau.len(), k)?;
     for (name, v) in [("omega0", omega0), ("dt", dt)] {
         if !(v.is_finite() && v > 0.0) {
             return Err(CoreError::InvalidParameter(format!(
@@ -461,6 +464,15 @@ mod tests {
         assert!(harmonic_fit(&theta, &y, 6).unwrap().is_none());
         assert!(harmonic_fit(&theta, &y[..10], 2).is_err());
         assert!(harmonic_fit(&theta, &y, 0).is_err());
+        // More coefficients than samples (and a Gram matrix larger than memory): refused.
+        assert!(matches!(
+            harmonic_fit(&theta, &y, 200),
+            Err(CoreError::InsufficientData(_))
+        ));
+        assert!(matches!(
+            harmonic_fit(&[], &[], 1),
+            Err(CoreError::InsufficientData(_))
+        ));
         assert!(!well_conditioned(&[1.0, 0.99999, 0.99999, 1.0], 2));
         assert!(well_conditioned(&[1.0, 0.999, 0.999, 1.0], 2));
         assert!(!well_conditioned(&[1.0, 0.0, 0.0, -1.0], 2));

@@ -42,7 +42,8 @@ fn plan(nfft: usize) -> Plan {
 /// least-squares slope of `x` on `idx`, `w` the Hann window `0.5 - 0.5 cos(2 pi i / (n-1))` (NumPy's
 /// `hanning`), zero padding to `nfft` (even, `>= n`).
 ///
-/// Errors: non-finite `x`, fewer than 2 samples, `nfft` odd or shorter than `x`.
+/// Errors: non-finite `x`, fewer than 2 samples, `nfft` odd, shorter than `x` or more than 16 times
+/// longer (zero padding beyond that buys nothing but memory).
 pub fn padded_spectrum(x: &[f64], nfft: usize) -> Result<Vec<f64>> {
     with_spectrum(x, nfft, |s| s.to_vec())
 }
@@ -90,9 +91,9 @@ pub fn spectral_peak(
 fn with_spectrum<R>(x: &[f64], nfft: usize, f: impl FnOnce(&[f64]) -> R) -> Result<R> {
     all_finite("x", x)?;
     let n = x.len();
-    if n < 2 || nfft < n || nfft % 2 != 0 {
+    if n < 2 || nfft < n || nfft % 2 != 0 || nfft / 16 > n {
         return Err(CoreError::InvalidParameter(format!(
-            "nfft = {nfft} must be even and >= the {n} samples (at least 2)"
+            "nfft = {nfft} must be even, >= the {n} samples (at least 2) and at most 16 times as many"
         )));
     }
     let (fft, tw) = plan(nfft);

@@ -6,7 +6,7 @@
 
 use super::fit::{fit_of, HarmonicFit};
 use super::wide::wide_fn;
-use super::{check, check_omega, Phases, Phasors};
+use super::{check, check_harmonics, check_omega, Phases, Phasors};
 use crate::error::{CoreError, Result};
 
 /// The fits of `u` and `y` in each window of a block.
@@ -24,7 +24,8 @@ pub struct WindowFits {
 /// Fits of `u` and `y` (length n, at the block's phases `theta`) on harmonics `1..=k` and a
 /// constant in each window `[starts[i], stops[i])`.
 ///
-/// Errors: non-finite input, unequal lengths, `k < 1`, a window outside `[0, n)` or empty.
+/// Errors: non-finite input, unequal lengths, `k < 1`, a window outside `[0, n)` or empty, a window
+/// shorter than the `2k + 1` coefficients of its fit.
 pub fn window_fits(
     theta: &[f64],
     u: &[f64],
@@ -68,6 +69,9 @@ pub fn window_fits_at(
             "window [{a}, {b}) is empty or outside the block of {} samples",
             theta.len()
         )));
+    }
+    for (a, b) in starts.iter().zip(stops) {
+        check_harmonics(b - a, k)?;
     }
     Ok(Phasors::with(|buf, unused| {
         window_fits_wide(theta, omega, u, y, starts, stops, k, buf, unused)
