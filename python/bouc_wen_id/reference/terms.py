@@ -1,11 +1,11 @@
-"""NumPy reference of the augmented model (``docs/design.md`` 9.1 and 9.3).
+"""NumPy reference of ``rust/terms.rs``: the augmented model (``docs/design.md`` 9.1 and 9.3).
 
 Written line by line from the design text, readable and unoptimised, to hold the Rust core
 (``_core.augmented_output`` and ``_core.augmented_refine``, ``rust/terms.rs``) to account: same signatures,
 same named errors.  The output terms act on the measured input ``u_j = U cos(2 pi j/P + psi)``, the sensor lag
-is applied on the DFT of the period, and the hysteresis is the plain steady loop of :mod:`.reference` (7.2)
+is applied on the DFT of the period, and the hysteresis is the plain steady loop of :mod:`.steady` (7.2)
 unless asymmetry or play is active, then the loop along the input path (9.2).  The Levenberg-Marquardt follows
-:func:`.reference.refine` (same damping schedule, stopping rules and projections) with a shared block of size
+:func:`.refine.refine` (same damping schedule, stopping rules and projections) with a shared block of size
 ``3 + T``; like it, it solves the full damped normal equations instead of their Schur complement (the same
 step up to rounding).
 """
@@ -18,11 +18,12 @@ from typing import Optional
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .errors import InsufficientDataError, InvalidParameterError, ZeroAmplitudeError
-from .reference import admissible_bouc_wen, levenberg_marquardt, project_bouc_wen, steady_loop
-from .reference_path import path_loop, path_loop_distorted
-from .validation import finite_array as _finite_array
-from .validation import finite_scalar as _finite_scalar
+from ..errors import InsufficientDataError, InvalidParameterError, ZeroAmplitudeError
+from ..validation import finite_array as _finite_array
+from ..validation import finite_scalar as _finite_scalar
+from .path_loop import path_loop, path_loop_distorted
+from .refine import admissible_bouc_wen, levenberg_marquardt, project_bouc_wen
+from .steady import steady_loop
 
 __all__ = [
     "TERM_NAMES",

@@ -19,16 +19,18 @@ not bit for bit, and their ``iterations`` counts differ.
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import NDArray
 
-from .errors import (
+from ..errors import (
     InsufficientDataError,
     InvalidParameterError,
     NonFiniteError,
     NotConvergedError,
     ZeroAmplitudeError,
 )
-from .reference import FloatArray
-from .validation import finite_scalar as _finite_scalar
+from ..validation import finite_scalar as _finite_scalar
+
+FloatArray = NDArray[np.float64]
 
 __all__ = [
     "path_loop",
