@@ -60,15 +60,10 @@ def _loop_rhs(a: float, beta: float, gamma: float, mu: float, theta: float, y: F
     )
 
 
-def steady_loop(
+def _check_loop(
     amplitude: float, beta: float, gamma: float, mu: float, phi: float, samples_per_period: int, substeps: int
-) -> tuple[FloatArray, FloatArray, float, int]:
-    """Steady loop of (2b) under ``x = amplitude cos(omega t - phi)`` on P samples per period.
-
-    Half a cycle of ``dw/dtheta`` by RK4 and Newton shooting on ``w(0)`` so that ``w(pi) = -w(0)``,
-    with forward sensitivities.  Returns ``(w, jac, w_top, iterations)``, ``jac`` of shape (P, 5):
-    ``d w / d(beta, gamma, mu, amplitude, phi)``.
-    """
+) -> int:
+    """The arguments of :func:`steady_loop` checked as the core does; the samples per period."""
     for name, v in (("amplitude", amplitude), ("beta", beta), ("gamma", gamma), ("mu", mu), ("phi", phi)):
         _finite_scalar(name, v)
     if mu <= 1.0:
@@ -82,6 +77,19 @@ def steady_loop(
         raise InsufficientDataError(f"samples_per_period = {p}: at least {MIN_AVERAGE_SAMPLES} are needed")
     if substeps < 1:
         raise InvalidParameterError(f"substeps = {substeps} must be >= 1")
+    return p
+
+
+def steady_loop(
+    amplitude: float, beta: float, gamma: float, mu: float, phi: float, samples_per_period: int, substeps: int
+) -> tuple[FloatArray, FloatArray, float, int]:
+    """Steady loop of (2b) under ``x = amplitude cos(omega t - phi)`` on P samples per period.
+
+    Half a cycle of ``dw/dtheta`` by RK4 and Newton shooting on ``w(0)`` so that ``w(pi) = -w(0)``,
+    with forward sensitivities.  Returns ``(w, jac, w_top, iterations)``, ``jac`` of shape (P, 5):
+    ``d w / d(beta, gamma, mu, amplitude, phi)``.
+    """
+    p = _check_loop(amplitude, beta, gamma, mu, phi, samples_per_period, substeps)
     phi = float(np.mod(phi, 2.0 * np.pi))
     # The sample phases theta_j = 2 pi j/P - phi fold, modulo pi, onto a lattice offset + k L.
     c, n_lat = (1, p // 2) if p % 2 == 0 else (2, p)
