@@ -98,8 +98,8 @@ def _runtime_nodes(tree: ast.AST) -> list[ast.AST]:
 
     def visit(node: ast.AST) -> None:
         if isinstance(node, ast.If) and _is_type_checking(node):
-            for child in node.orelse:
-                visit(child)
+            for branch in node.orelse:
+                visit(branch)
             return
         out.append(node)
         for child in ast.iter_child_nodes(node):
