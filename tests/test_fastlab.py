@@ -14,7 +14,7 @@ from bouc_wen_id.signal import _harmonic_ls as hls
 from numpy.testing import assert_allclose
 
 #: The Rust lab kernels, as the signal modules get them.
-_fastlab = get_backend("rust").lab
+_RUST_LAB = get_backend("rust").lab
 
 
 def _record(seed: int, n: int, p: float) -> tuple[np.ndarray, np.ndarray]:
@@ -49,7 +49,7 @@ def test_moment_kernels_match_the_numpy_recurrence(seed: int) -> None:
 def test_moment_fit_matches_the_reference(seed: int) -> None:
     theta, y = _record(seed, 20_000, 317.3 - 0.2 * seed)
     k = 40 + 10 * seed
-    fast = _fastlab.moment_fit(theta, y, k)
+    fast = _RUST_LAB.moment_fit(theta, y, k)
     assert fast is not None
     r_ref, qty_ref, rss_ref = hls._moment_fit(theta, y, k)
     r, qty, rss = fast
@@ -66,7 +66,7 @@ def test_harmonic_lsq_matches_the_qr_path(seed: int) -> None:
     for k in (1, 4, 10):
         coef_ref, r_ref = hls.solve_qr(hls.harmonic_basis(theta, k), y)
         resid = y - hls.harmonic_basis(theta, k) @ coef_ref
-        fast = _fastlab.harmonic_lsq(theta, y, k)
+        fast = _RUST_LAB.harmonic_lsq(theta, y, k)
         assert fast is not None
         coef, r, rss = fast
         assert_allclose(coef, coef_ref, rtol=1e-10, atol=1e-12)
@@ -79,13 +79,13 @@ def test_ill_conditioned_fits_are_left_to_the_qr_path() -> None:
     # A third of a period with 6 harmonics: the harmonics are far from orthogonal.
     theta = np.linspace(0.0, 2.0, 400)
     y = np.cos(theta)
-    assert _fastlab.moment_fit(theta, y, 6) is None
-    assert _fastlab.harmonic_lsq(theta, y, 6) is None
+    assert _RUST_LAB.moment_fit(theta, y, 6) is None
+    assert _RUST_LAB.harmonic_lsq(theta, y, 6) is None
     # cond = 1.99999 / 1e-5 = 2e5 > 1e4; cond = 1.999 / 1e-3 = 1999 <= 1e4 (Gershgorin cannot certify it:
     # the eigenvalue path decides).
-    assert not _fastlab.well_conditioned(np.array([[1.0, 0.99999], [0.99999, 1.0]]))
-    assert _fastlab.well_conditioned(np.array([[1.0, 0.999], [0.999, 1.0]]))
-    assert not _fastlab.well_conditioned(np.array([[1.0, 0.0], [0.0, -1.0]]))
+    assert not _RUST_LAB.well_conditioned(np.array([[1.0, 0.99999], [0.99999, 1.0]]))
+    assert _RUST_LAB.well_conditioned(np.array([[1.0, 0.999], [0.999, 1.0]]))
+    assert not _RUST_LAB.well_conditioned(np.array([[1.0, 0.0], [0.0, -1.0]]))
 
 
 @pytest.mark.parametrize("seed", range(3))
@@ -98,7 +98,7 @@ def test_conditioning_decision_is_the_reference_eigenvalue_test(seed: int) -> No
         scale = np.sqrt(np.abs(np.diag(gram)))
         eig = np.linalg.eigvalsh(gram / np.outer(scale, scale))
         expected = bool(np.all(np.diag(gram) > 0) and eig[0] > 0 and eig[-1] / eig[0] <= 1e4)
-        assert _fastlab.well_conditioned(gram) == expected
+        assert _RUST_LAB.well_conditioned(gram) == expected
 
 
 def test_kernels_refuse_bad_input() -> None:
