@@ -33,6 +33,7 @@ VALUE_MODULES = ("errors", "validation", "terms", "model", "result")
 #: The lab preprocessing asks the door for its kernels, but never reaches the estimators, the diagnosis or
 #: the command line, nor the oracle other than through the door.
 NUMERIC_MODULES = (
+    "io",
     "measurement",
     "signal",
     "signal._sine",

@@ -41,7 +41,7 @@ from .average import periodic_average
 from .estimate import gain_estimate, max_harmonics, phase_from_max, spectral_derivative
 from .linear import realize, routh_hurwitz_stable
 from .path_loop import path_loop, path_loop_distorted
-from .profile import _phase_sign_inputs, _sls_cost_signed, profile_phase_gain, profile_phase_sls
+from .profile import profile_phase_gain, profile_phase_sls
 from .refine import levenberg_marquardt, refine
 from .simulate import simulate_sampled, simulate_sine
 from .solve import golden_section, sls_regressor, sls_search, sls_theta, solve_normal
@@ -72,6 +72,4 @@ __all__ = [
     "refine",
     "augmented_output",
     "augmented_refine",
-    "_phase_sign_inputs",
-    "_sls_cost_signed",
 ]

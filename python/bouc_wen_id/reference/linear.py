@@ -9,6 +9,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..validation import check_transfer_function, routh_hurwitz_stable
 
+__all__ = ["realize", "routh_hurwitz_stable"]
+
 FloatArray = NDArray[np.float64]
 
 
@@ -27,6 +29,3 @@ def realize(
     d = float(bn[0])
     c = bn[1:] - d * an[1:]
     return an[1:].copy(), c, d, delay
-
-
-__all__ = ["realize", "routh_hurwitz_stable"]

@@ -1,4 +1,4 @@
-"""NumPy reference of the hysteresis steady loop along the input path (``docs/design.md`` 9.2).
+"""NumPy reference of ``rust/path_loop.rs``: the steady hysteresis loop along the input path (design.md 9.2).
 
 Generalised Bouc-Wen with alpha = 1 and the ``sgn(w)`` asymmetry term of Song & Der Kiureghian (J. Eng.
 Mech. 132(6), 2006), driven through a play (backlash) operator of half-width ``b``::

@@ -35,6 +35,28 @@ def _bw_rate(xdot: float, w: float, alpha: float, beta: float, gamma: float, mu:
     return float(alpha * xdot - beta * abs(xdot) * np.sign(w) * wmu - gamma * xdot * wmu)
 
 
+def _checked(
+    num: ArrayLike,
+    den: ArrayLike,
+    delay: float,
+    bw: tuple[float, float, float, float, float],
+    dt: float,
+    n_samples: int,
+    substeps: int,
+) -> tuple[tuple[FloatArray, FloatArray, float, float], float]:
+    """A run's arguments checked as the core does: the realisation ``(a, c, d, delay)`` and ``dt``."""
+    realization = realize(num, den, delay)
+    _check_bouc_wen(*bw)
+    dt = _finite_scalar("dt", dt)
+    if dt <= 0.0:
+        raise InvalidParameterError(f"dt = {dt} must be > 0")
+    if substeps < 1:
+        raise InvalidParameterError(f"substeps = {substeps} must be >= 1")
+    if n_samples < 1:
+        raise InvalidParameterError(f"n_samples = {n_samples} must be >= 1")
+    return realization, dt
+
+
 def _simulate(
     num: ArrayLike,
     den: ArrayLike,
@@ -45,16 +67,8 @@ def _simulate(
     n_samples: int,
     substeps: int,
 ) -> tuple[FloatArray, FloatArray]:
-    a, c, d, delay = realize(num, den, delay)
+    (a, c, d, delay), dt = _checked(num, den, delay, bw, dt, n_samples, substeps)
     alpha, beta, gamma, mu, w0 = bw
-    _check_bouc_wen(alpha, beta, gamma, mu, w0)
-    dt = _finite_scalar("dt", dt)
-    if dt <= 0.0:
-        raise InvalidParameterError(f"dt = {dt} must be > 0")
-    if substeps < 1:
-        raise InvalidParameterError(f"substeps = {substeps} must be >= 1")
-    if n_samples < 1:
-        raise InvalidParameterError(f"n_samples = {n_samples} must be >= 1")
     n = a.size
 
     def delayed(t: float) -> tuple[float, float]:
@@ -118,7 +132,8 @@ def _with_terms(
     terms: Mapping[str, float],
 ) -> tuple[FloatArray, FloatArray, FloatArray]:
     """``(x, w, y)`` with physical terms: the plain RK4 plus the output terms when no term has a state."""
-    model = with_terms.check(num, den, delay, bw, dt, n_samples, substeps, terms)
+    (a, c, d, delay_in), dt = _checked(num, den, delay, bw, dt, n_samples, substeps)
+    model = with_terms.Model(a, c, d, delay_in, bw, with_terms.check_terms(terms, bw[1], bw[2]))
     if with_terms.has_state(model):
         return with_terms.integrate(model, inp, dt, n_samples, substeps)
     x_out, w_out = _simulate(num, den, delay, bw, inp.source, dt, n_samples, substeps)

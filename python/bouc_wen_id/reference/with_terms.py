@@ -1,4 +1,4 @@
-"""NumPy reference of the simulation with physical terms (design.md 9.4; rust/simulate/with_terms.rs).
+"""NumPy reference of ``rust/simulate/with_terms.rs``: the simulation with physical terms (design.md 9.4).
 
 Step by step the same scheme as the Rust core, so that the parity tests hold the two to rounding:
 
@@ -27,13 +27,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import InvalidParameterError
-from ..validation import check_bouc_wen, finite_scalar
-from .linear import realize
+from ..validation import finite_scalar
 
 __all__ = [
     "TERM_NAMES",
     "Input",
-    "check",
+    "Model",
     "check_terms",
     "has_state",
     "integrate",
@@ -138,8 +137,9 @@ class Input(NamedTuple):
     peak_rate: float
 
 
-class _Model(NamedTuple):
-    """The checked model: realisation ``(a, c, d, delay)``, Bouc-Wen ``bw`` and the term parameters."""
+class Model(NamedTuple):
+    """The checked model: realisation ``(a, c, d, delay)`` and Bouc-Wen ``bw`` (checked by :mod:`.simulate`,
+    as the plain run's), and the full set of term parameters (:func:`check_terms`)."""
 
     a: FloatArray
     c: FloatArray
@@ -149,31 +149,7 @@ class _Model(NamedTuple):
     terms: dict[str, float]
 
 
-def check(
-    num: NDArray[np.float64],
-    den: NDArray[np.float64],
-    delay: float,
-    bw: tuple[float, float, float, float, float],
-    dt: float,
-    n_samples: int,
-    substeps: int,
-    terms: Mapping[str, float],
-) -> _Model:
-    """Every argument checked in the core's order; the realisation and the full set of term parameters."""
-    a, c, d, delay = realize(num, den, delay)
-    alpha, beta, gamma, mu, w0 = bw
-    check_bouc_wen(alpha, beta, gamma, mu, w0)
-    dt = finite_scalar("dt", dt)
-    if dt <= 0.0:
-        raise InvalidParameterError(f"dt = {dt} must be > 0")
-    if substeps < 1:
-        raise InvalidParameterError(f"substeps = {substeps} must be >= 1")
-    if n_samples < 1:
-        raise InvalidParameterError(f"n_samples = {n_samples} must be >= 1")
-    return _Model(a, c, d, delay, bw, check_terms(terms, beta, gamma))
-
-
-def has_state(model: _Model) -> bool:
+def has_state(model: Model) -> bool:
     """Whether a term changes the states (asymmetry, play, lag, degradation); if not, the plain RK4 of
     :mod:`.simulate` gives ``x, w`` and :func:`outputs` adds the output terms at the samples."""
     p = model.terms
@@ -194,7 +170,7 @@ def _mech(p: Mapping[str, float], inp: Input) -> Callable[[float], float]:
     return mech
 
 
-def outputs(model: _Model, w_out: FloatArray, inp: Input, dt: float) -> FloatArray:
+def outputs(model: Model, w_out: FloatArray, inp: Input, dt: float) -> FloatArray:
     """``y`` at the samples from the plain ``w`` (no state term)."""
     mech = _mech(model.terms, inp)
     return np.array([model.terms["offset"] + (float(w_out[k]) + mech(k * dt)) for k in range(w_out.size)])
@@ -245,7 +221,7 @@ def _play_mode(x: float, xp: float, b: float, xdot: float) -> int:
 
 
 def integrate(
-    model: _Model, inp: Input, dt: float, n_samples: int, substeps: int
+    model: Model, inp: Input, dt: float, n_samples: int, substeps: int
 ) -> tuple[FloatArray, FloatArray, FloatArray]:
     """``(x, w, y)`` by the RK4 on ``[xs, w, e]`` with the play's mode frozen per step and the lag's
     exponential step (module docstring)."""
