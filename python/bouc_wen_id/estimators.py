@@ -375,7 +375,8 @@ def refine(
 
     The generic starts run when there is no profile start (its mu ran to the lower bound), or when the
     fit from it ends on the Bouc-Wen constraint beta = |gamma| or costs more than the best linear model
-    (both signs of a wrong basin); the lowest cost wins.
+    (both signs of a wrong basin); the lowest cost wins.  With ``multistart`` (the Rust backend's) they are
+    screened all at once on every core; without it (the NumPy backend) one by one.
     """
     short = [e.source for e in prepared if e.n < 2]
     if short:
