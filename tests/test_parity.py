@@ -19,7 +19,7 @@ import bouc_wen_id as bw
 import numpy as np
 import pytest
 from bouc_wen_id import _core, reference
-from bouc_wen_id._backend import get_backend
+from bouc_wen_id._backend import current_lab, get_backend, selected
 from bouc_wen_id.demo import design_amplitudes
 from bouc_wen_id.errors import (
     ImproperTransferFunctionError,
@@ -500,6 +500,19 @@ def test_backend_means_the_same_for_a_measurements_lab_preprocessing(monkeypatch
     assert len(r_np.experiments) == len(r_rust.experiments) == len(meas)
     assert r_np.mu == pytest.approx(r_rust.mu, rel=1e-6)
     assert_allclose(r_np.gains, r_rust.gains, rtol=1e-6)
+
+
+def test_the_backend_in_force_is_scoped_and_named() -> None:
+    rust_lab = get_backend("rust").lab
+    assert current_lab() is rust_lab
+    with pytest.raises(InvalidParameterError, match="backend must be 'rust' or 'numpy'"):
+        get_backend("fortran")
+    with pytest.raises(RuntimeError, match="inside"):
+        with selected("numpy") as parts:
+            assert current_lab() is parts.lab is get_backend("numpy").lab
+            assert parts.multistart is None and parts.paper is reference
+            raise RuntimeError("inside")
+    assert current_lab() is rust_lab  # restored after an error too
 
 
 # --------------------------------------------------------------------------------------------------
