@@ -38,7 +38,7 @@ What is measured
    printed beside it, for scale).
 6. **Lab preprocessing** of the 10 records (``analyse_sine``, ``find_steady_segments``,
    ``synchronous_average``) with the Rust kernels and with the NumPy reference paths
-   (``signal._harmonic_ls.USE_RUST_KERNELS``), alternated in this process; target speed-up >= 5.
+   (``bouc_wen_id._backend.selected``), alternated in this process; target speed-up >= 5.
 
 Each target line ends in PASS or MISS.
 """
@@ -323,8 +323,8 @@ def _forced_restarts() -> Callable[[Sequence[Any]], Any]:
         from bouc_wen_id.prepare import prepare, scale
 
         def run(experiments: Sequence[Any]) -> Any:
-            scaled, _ = scale(prepare(experiments, core, None, None, "auto"))
-            return refine(scaled, core, None, 1.0, 10.0, 200)
+            scaled, _ = scale(prepare(experiments, core.paper, None, None, "auto"))
+            return refine(scaled, core.paper, None, 1.0, 10.0, 200, multistart=core.multistart)
 
     except ImportError:  # the layout before it
         from bouc_wen_id import identification as idf
@@ -562,7 +562,7 @@ def bench_batch(averaged: list[Any], repeats: int, tmp: Path) -> None:
 def bench_preprocessing(measurements: Sequence[bw.Measurement], repeats: int) -> None:
     print("\n6. Lab preprocessing of the 10 records: Rust kernels vs NumPy reference (alternated, best of)")
     from bouc_wen_id import signal
-    from bouc_wen_id.signal import _harmonic_ls as hls
+    from bouc_wen_id._backend import selected
 
     def parts() -> dict[str, float]:
         out = {}
@@ -584,17 +584,13 @@ def bench_preprocessing(measurements: Sequence[bw.Measurement], repeats: int) ->
         return out
 
     best: dict[bool, dict[str, float]] = {True: {}, False: {}}
-    saved = hls.USE_RUST_KERNELS
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            for _ in range(max(repeats, 2)):
-                for fast in (True, False):
-                    hls.USE_RUST_KERNELS = fast
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for _ in range(max(repeats, 2)):
+            for fast in (True, False):
+                with selected("rust" if fast else "numpy"):
                     for k, v in parts().items():
                         best[fast][k] = min(best[fast].get(k, math.inf), v)
-    finally:
-        hls.USE_RUST_KERNELS = saved
     for k in best[True]:
         record(
             f"{k}: numpy {best[False][k]:.3f} s, rust {best[True][k]:.3f} s",

@@ -13,7 +13,6 @@ from collections.abc import Sequence
 import numpy as np
 import pytest
 from bouc_wen_id import _core
-from bouc_wen_id import reference_augmented as ra
 from bouc_wen_id.augmented import (
     TERM_NAMES,
     TERM_SYMBOLS,
@@ -25,6 +24,7 @@ from bouc_wen_id.augmented import (
     term_unit,
 )
 from bouc_wen_id.errors import InsufficientDataError, InvalidParameterError, NonFiniteError
+from bouc_wen_id.reference import terms as ra
 
 #: A visible value of each term for the test plant (beta, gamma, mu = 0.8, 0.2, 1.6; U ~ 1, omega ~ 1..10,
 #: so w ~ 1 and udot ~ 1..10): each changes y by about 5-30 % of its range.

@@ -14,10 +14,10 @@ import bouc_wen_id as bw
 import numpy as np
 import pytest
 from bouc_wen_id import _core
-from bouc_wen_id import reference_augmented as RA
-from bouc_wen_id import reference_path as RP
 from bouc_wen_id.diagnosis.data import input_waveform
 from bouc_wen_id.errors import InvalidParameterError, ZeroAmplitudeError
+from bouc_wen_id.reference import terms as RA
+from bouc_wen_id.reference.path_loop import path_loop_distorted as ref_path_loop_distorted
 
 # [A, beta, gamma, mu, delta, b, phi, lambda] of mildly distorted loops (one maximum per period).
 CASES = [
@@ -38,7 +38,7 @@ def test_core_matches_reference_and_central_differences(case: int) -> None:
     h = _harmonics(case)
     p, sub = 32, 3
     w, jac, _ = _core.path_loop_distorted(a, beta, gamma, mu, delta, b, phi, lam, h, p, sub)
-    wr, jr, _ = RP.path_loop_distorted(a, beta, gamma, mu, delta, b, phi, lam, h, p, sub)
+    wr, jr, _ = ref_path_loop_distorted(a, beta, gamma, mu, delta, b, phi, lam, h, p, sub)
     # The same discrete map; the two shootings stop within 1e-13 w_b of the same fixed point (divided by
     # 1 - Phi for the sensitivities), so 1e-9 leaves a wide margin while a wrong node or term (O(1e-2)) fails.
     assert np.max(np.abs(w - wr)) < 1e-9
@@ -79,7 +79,7 @@ def test_bad_waveforms_are_named_errors() -> None:
     with pytest.raises(InvalidParameterError, match="reversals"):
         _core.path_loop_distorted(1.0, 0.7, 0.25, 1.8, 0.0, 0.0, 0.0, 1.0, strong, 40, 3)
     with pytest.raises(InvalidParameterError, match="reversals"):
-        RP.path_loop_distorted(1.0, 0.7, 0.25, 1.8, 0.0, 0.0, 0.0, 1.0, strong, 40, 3)
+        ref_path_loop_distorted(1.0, 0.7, 0.25, 1.8, 0.0, 0.0, 0.0, 1.0, strong, 40, 3)
     with pytest.raises(InvalidParameterError, match="pairs"):
         _core.path_loop_distorted(1.0, 0.7, 0.25, 1.8, 0.0, 0.0, 0.0, 1.0, np.array([0.1]), 40, 3)
     with pytest.raises(ZeroAmplitudeError):

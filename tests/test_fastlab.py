@@ -1,4 +1,4 @@
-"""Parity of the Rust-backed harmonic least squares (``bouc_wen_id._fastlab``, ``rust/lab.rs``) with the
+"""Parity of the Rust-backed harmonic least squares (the lab part of ``_backend``, ``rust/lab.rs``) with the
 NumPy reference paths of ``signal._harmonic_ls`` (the QR of the harmonic basis and the NumPy moment loop)."""
 
 from __future__ import annotations
@@ -7,10 +7,14 @@ import math
 
 import numpy as np
 import pytest
-from bouc_wen_id import _core, _fastlab
+from bouc_wen_id import _core
+from bouc_wen_id._backend import get_backend, selected
 from bouc_wen_id.errors import InsufficientDataError, InvalidParameterError, NonFiniteError
 from bouc_wen_id.signal import _harmonic_ls as hls
 from numpy.testing import assert_allclose
+
+#: The Rust lab kernels, as the signal modules get them.
+_RUST_LAB = get_backend("rust").lab
 
 
 def _record(seed: int, n: int, p: float) -> tuple[np.ndarray, np.ndarray]:
@@ -45,7 +49,7 @@ def test_moment_kernels_match_the_numpy_recurrence(seed: int) -> None:
 def test_moment_fit_matches_the_reference(seed: int) -> None:
     theta, y = _record(seed, 20_000, 317.3 - 0.2 * seed)
     k = 40 + 10 * seed
-    fast = _fastlab.moment_fit(theta, y, k)
+    fast = _RUST_LAB.moment_fit(theta, y, k)
     assert fast is not None
     r_ref, qty_ref, rss_ref = hls._moment_fit(theta, y, k)
     r, qty, rss = fast
@@ -62,7 +66,7 @@ def test_harmonic_lsq_matches_the_qr_path(seed: int) -> None:
     for k in (1, 4, 10):
         coef_ref, r_ref = hls.solve_qr(hls.harmonic_basis(theta, k), y)
         resid = y - hls.harmonic_basis(theta, k) @ coef_ref
-        fast = _fastlab.harmonic_lsq(theta, y, k)
+        fast = _RUST_LAB.harmonic_lsq(theta, y, k)
         assert fast is not None
         coef, r, rss = fast
         assert_allclose(coef, coef_ref, rtol=1e-10, atol=1e-12)
@@ -75,13 +79,13 @@ def test_ill_conditioned_fits_are_left_to_the_qr_path() -> None:
     # A third of a period with 6 harmonics: the harmonics are far from orthogonal.
     theta = np.linspace(0.0, 2.0, 400)
     y = np.cos(theta)
-    assert _fastlab.moment_fit(theta, y, 6) is None
-    assert _fastlab.harmonic_lsq(theta, y, 6) is None
+    assert _RUST_LAB.moment_fit(theta, y, 6) is None
+    assert _RUST_LAB.harmonic_lsq(theta, y, 6) is None
     # cond = 1.99999 / 1e-5 = 2e5 > 1e4; cond = 1.999 / 1e-3 = 1999 <= 1e4 (Gershgorin cannot certify it:
     # the eigenvalue path decides).
-    assert not _fastlab.well_conditioned(np.array([[1.0, 0.99999], [0.99999, 1.0]]))
-    assert _fastlab.well_conditioned(np.array([[1.0, 0.999], [0.999, 1.0]]))
-    assert not _fastlab.well_conditioned(np.array([[1.0, 0.0], [0.0, -1.0]]))
+    assert not _RUST_LAB.well_conditioned(np.array([[1.0, 0.99999], [0.99999, 1.0]]))
+    assert _RUST_LAB.well_conditioned(np.array([[1.0, 0.999], [0.999, 1.0]]))
+    assert not _RUST_LAB.well_conditioned(np.array([[1.0, 0.0], [0.0, -1.0]]))
 
 
 @pytest.mark.parametrize("seed", range(3))
@@ -94,7 +98,7 @@ def test_conditioning_decision_is_the_reference_eigenvalue_test(seed: int) -> No
         scale = np.sqrt(np.abs(np.diag(gram)))
         eig = np.linalg.eigvalsh(gram / np.outer(scale, scale))
         expected = bool(np.all(np.diag(gram) > 0) and eig[0] > 0 and eig[-1] / eig[0] <= 1e4)
-        assert _fastlab.well_conditioned(gram) == expected
+        assert _RUST_LAB.well_conditioned(gram) == expected
 
 
 def test_kernels_refuse_bad_input() -> None:
@@ -127,7 +131,7 @@ def _lab_record(seed: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
 
 
 @pytest.mark.parametrize("seed", range(2))
-def test_lab_pipeline_with_and_without_the_rust_kernels(seed: int, monkeypatch: pytest.MonkeyPatch) -> None:
+def test_lab_pipeline_with_and_without_the_rust_kernels(seed: int) -> None:
     from bouc_wen_id import signal
 
     t, u, y, nominal = _lab_record(seed)
@@ -142,8 +146,8 @@ def test_lab_pipeline_with_and_without_the_rust_kernels(seed: int, monkeypatch: 
         return fit, rep, avg
 
     fast = run()
-    monkeypatch.setattr(hls, "USE_RUST_KERNELS", False)
-    ref = run()
+    with selected("numpy"):
+        ref = run()
     # The frequency: Gauss-Newton stops at 1e-4 of its standard error, so two paths whose residuals differ by
     # rounding may stop one step apart: agreement to 1e-3 standard errors.
     assert abs(fast[0].frequency - ref[0].frequency) <= 1e-3 * ref[0].frequency_se
@@ -184,7 +188,7 @@ def test_gauss_newton_kernel_matches_the_basis_reference(seed: int) -> None:
 
 
 @pytest.mark.parametrize("seed", range(3))
-def test_frequency_fit_matches_the_reference(seed: int, monkeypatch: pytest.MonkeyPatch) -> None:
+def test_frequency_fit_matches_the_reference(seed: int) -> None:
     from bouc_wen_id.signal import _sine
 
     rng = np.random.default_rng(seed)
@@ -194,8 +198,8 @@ def test_frequency_fit_matches_the_reference(seed: int, monkeypatch: pytest.Monk
     x = 0.1 + 1.3 * np.cos(omega * tau + 0.7) + 0.05 * np.cos(2 * omega * tau) + 0.02 * rng.standard_normal(n)
     start = omega * (1.0 + 2e-3 * rng.uniform(-1.0, 1.0))
     fast = _sine._nls(tau, x, start, dt, k)
-    monkeypatch.setattr(hls, "USE_RUST_KERNELS", False)
-    ref = _sine._nls(tau, x, start, dt, k)
+    with selected("numpy"):
+        ref = _sine._nls(tau, x, start, dt, k)
     # Gauss-Newton stops at 1e-4 of the standard error; residuals that differ by rounding may stop it one
     # step apart: the frequencies agree to 1e-3 standard errors, the rest to the rounding of the fits.
     assert abs(fast.omega - ref.omega) <= 1e-3 * ref.se
@@ -306,12 +310,8 @@ def test_spectrum_and_peak_match_the_numpy_reference(seed: int) -> None:
         assert_allclose(around, ref[k - 1 : k + 2], rtol=1e-10)
     for nominal in (None, 2 * math.pi * 5.0):
         fast = _sine.dft_peak(x, 0.01, nominal)
-        hls_saved = hls.USE_RUST_KERNELS
-        try:
-            hls.USE_RUST_KERNELS = False
+        with selected("numpy"):
             slow = _sine.dft_peak(x, 0.01, nominal)
-        finally:
-            hls.USE_RUST_KERNELS = hls_saved
         assert fast == pytest.approx(slow, rel=1e-9)
     with pytest.raises(InvalidParameterError):
         _core.spectral_peak(x, nfft, 0, hi, -1, -1, 0.1)
@@ -331,12 +331,8 @@ def test_window_fits_match_the_basis_reference(seed: int) -> None:
     y = np.tanh(2 * u) + 0.01 * rng.standard_normal(n)
     spans = [(math.floor(i * p), math.floor((i + 1) * p)) for i in range(int(n // p))]
     fast = _windows.block_windows(1, 100, tau, omega, u, y, spans, 5)
-    saved = hls.USE_RUST_KERNELS
-    try:
-        hls.USE_RUST_KERNELS = False
+    with selected("numpy"):
         ref = _windows.block_windows(1, 100, tau, omega, u, y, spans, 5)
-    finally:
-        hls.USE_RUST_KERNELS = saved
     assert len(fast) == len(ref) == len(spans)
     for a, b in zip(fast, ref):
         assert (a.block, a.start, a.stop) == (b.block, b.start, b.stop)

@@ -19,6 +19,7 @@ import bouc_wen_id as bw
 import numpy as np
 import pytest
 from bouc_wen_id import _core, reference
+from bouc_wen_id._backend import current_lab, get_backend, selected
 from bouc_wen_id.demo import design_amplitudes
 from bouc_wen_id.errors import (
     ImproperTransferFunctionError,
@@ -460,6 +461,58 @@ def test_simulate_numpy_backend_agrees_with_rust() -> None:
         assert_allclose(ra.w, rb.w, rtol=1e-11, atol=1e-11 * np.max(np.abs(rb.w)))
         assert_allclose(ra.y - ra.w, rb.y - rb.w, atol=1e-12)  # the same noise stream
         assert np.array_equal(ra.t, rb.t) and np.array_equal(ra.u, rb.u)
+
+
+#: The Rust lab kernels signal/ asks for (the Lab part of bouc_wen_id._backend).
+LAB_KERNELS = (
+    "moment_fit",
+    "harmonic_lsq",
+    "nls",
+    "unscaled_variances",
+    "harmonic_rss",
+    "window_fits",
+    "spectral_peak",
+)
+
+
+def test_backend_means_the_same_for_a_measurements_lab_preprocessing(monkeypatch: pytest.MonkeyPatch) -> None:
+    # backend="numpy" runs every step on NumPy, the steady segments and synchronous averages of a
+    # Measurement too; backend="rust" runs them on the Rust kernels.
+    recs = bw.simulate(bw.demo_plant(), _demo_plan(64, settle_periods=2, periods=8, noise_sd=0.002, seed=5))
+    meas = [bw.Measurement(r.t, r.u, r.y, nominal_frequency=r.frequency) for r in recs]
+    lab = type(get_backend("rust").lab)
+    calls: list[str] = []
+
+    def counting(name: str, real: Callable[..., Any]) -> Callable[..., Any]:
+        def method(self: Any, *args: Any, **kwargs: Any) -> Any:
+            calls.append(name)
+            return real(self, *args, **kwargs)
+
+        return method
+
+    for name in LAB_KERNELS:
+        monkeypatch.setattr(lab, name, counting(name, getattr(lab, name)))
+    r_np = bw.identify(meas, method="paper", backend="numpy")
+    assert calls == [], f"backend='numpy' ran the Rust lab kernels {sorted(set(calls))}"
+    r_rust = bw.identify(meas, method="paper", backend="rust")
+    assert {"moment_fit", "window_fits", "spectral_peak"} <= set(calls)
+    # Two implementations of the same least squares: the same segments, estimates equal to rounding.
+    assert len(r_np.experiments) == len(r_rust.experiments) == len(meas)
+    assert r_np.mu == pytest.approx(r_rust.mu, rel=1e-6)
+    assert_allclose(r_np.gains, r_rust.gains, rtol=1e-6)
+
+
+def test_the_backend_in_force_is_scoped_and_named() -> None:
+    rust_lab = get_backend("rust").lab
+    assert current_lab() is rust_lab
+    with pytest.raises(InvalidParameterError, match="backend must be 'rust' or 'numpy'"):
+        get_backend("fortran")
+    with pytest.raises(RuntimeError, match="inside"):
+        with selected("numpy") as parts:
+            assert current_lab() is parts.lab is get_backend("numpy").lab
+            assert parts.multistart is None and parts.paper is reference
+            raise RuntimeError("inside")
+    assert current_lab() is rust_lab  # restored after an error too
 
 
 # --------------------------------------------------------------------------------------------------

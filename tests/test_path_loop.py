@@ -24,8 +24,8 @@ from bouc_wen_id.errors import (
     NotConvergedError,
     ZeroAmplitudeError,
 )
-from bouc_wen_id.reference_path import PD_AMPLITUDE, PD_DELTA, PD_PHI, PD_PLAY
-from bouc_wen_id.reference_path import path_loop as ref_path_loop
+from bouc_wen_id.reference.path_loop import PD_AMPLITUDE, PD_DELTA, PD_PHI, PD_PLAY
+from bouc_wen_id.reference.path_loop import path_loop as ref_path_loop
 
 TWO_PI = 2.0 * math.pi
 PARAMS = ("amplitude", "beta", "gamma", "mu", "delta", "play", "phi")

@@ -21,6 +21,7 @@ import pytest
 from bouc_wen_id import _core
 from bouc_wen_id import reference as ref
 from bouc_wen_id.identification import Method
+from bouc_wen_id.reference import profile as ref_profile
 from bouc_wen_id.result import phase_error
 from numpy.testing import assert_allclose
 
@@ -127,10 +128,10 @@ def test_symmetry_canonicalisation() -> None:
     """(G, phi, beta, gamma) ~ (-G, phi + pi, -beta, gamma): the profile must report |G| > 0."""
     w, wd = clean_loop(1.8, 1.1, 128)
     # The cost is pi-periodic in phi: the same fit at phi and phi + pi, with the mirrored parameters.
-    yb, yd, s, sgn, dt = ref._phase_sign_inputs(w, wd, 2.0, 3.0, 1.1)
-    th1, c1 = ref._sls_cost_signed(yb, yd, s, sgn, dt, MU)
-    yb, yd, s, sgn, dt = ref._phase_sign_inputs(w, wd, 2.0, 3.0, 1.1 + np.pi)
-    th2, c2 = ref._sls_cost_signed(yb, yd, s, sgn, dt, MU)
+    yb, yd, s, sgn, dt = ref_profile._phase_sign_inputs(w, wd, 2.0, 3.0, 1.1)
+    th1, c1 = ref_profile._sls_cost_signed(yb, yd, s, sgn, dt, MU)
+    yb, yd, s, sgn, dt = ref_profile._phase_sign_inputs(w, wd, 2.0, 3.0, 1.1 + np.pi)
+    th2, c2 = ref_profile._sls_cost_signed(yb, yd, s, sgn, dt, MU)
     assert c1 == pytest.approx(c2, rel=1e-9, abs=1e-15)
     assert th2[0] == pytest.approx(-th1[0], rel=1e-9)
     assert th2[1] / th2[0] == pytest.approx(-th1[1] / th1[0], rel=1e-9)  # beta -> -beta

@@ -24,14 +24,14 @@ import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from types import MappingProxyType
-from typing import Any, Literal, Optional
+from typing import Literal, Optional
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ._backend import get_backend
 from .errors import InsufficientDataError, InvalidParameterError, NonFiniteError, ZeroAmplitudeError
-from .reference_augmented import TERM_NAMES, parse_terms
-from .terms import TERMS
+from .terms import TERM_NAMES, TERMS, parse_terms
 
 __all__ = [
     "TERM_NAMES",
@@ -296,18 +296,6 @@ def _covariance(fisher: FloatArray) -> FloatArray:
     return np.asarray(0.5 * (cov + cov.T), dtype=np.float64)
 
 
-def _core_module(backend: str) -> Any:
-    if backend == "rust":
-        from . import _core
-
-        return _core
-    if backend == "numpy":
-        from . import reference_augmented
-
-        return reference_augmented
-    raise InvalidParameterError(f"backend must be 'rust' or 'numpy', got {backend!r}")
-
-
 def _count(name: str, value: int, minimum: int) -> int:
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < minimum:
         raise InvalidParameterError(f"{name} = {value!r} must be an integer >= {minimum}")
@@ -375,7 +363,7 @@ def fit_augmented(
         raise InvalidParameterError(
             f"the mu bracket ({mu_lo}, {mu_hi}] must have a finite lower end >= 1 below its upper end"
         )
-    core = _core_module(backend)
+    core = get_backend(backend).augmented
     shared, gains, phases, cost, iterations, converged, fisher, outputs = core.augmented_refine(
         [e.ybar for e in exps],
         np.array([e.amplitude for e in exps]),
@@ -422,7 +410,7 @@ def augmented_output(
         raise InvalidParameterError(f"i = {i!r} must index one of the {params.gains.size} gains")
     p = experiment.ybar.size
     steps = _auto_substeps(p) if substeps is None else _count("substeps", substeps, 1)
-    y, _, _ = _core_module(backend).augmented_output(
+    y, _, _ = get_backend(backend).augmented.augmented_output(
         p,
         experiment.amplitude,
         experiment.frequency,

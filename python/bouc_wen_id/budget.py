@@ -36,6 +36,7 @@ from typing import Optional
 
 import numpy as np
 
+from ._backend import push_budget
 from .errors import BudgetExceededError, InvalidParameterError
 
 __all__ = ["Budget", "get_budget", "set_budget", "budget", "check_samples", "check_steps", "check_bytes"]
@@ -71,12 +72,8 @@ def _positive_int(name: str, value: object) -> int:
 
 
 def _push(b: Budget) -> None:
-    """Writes the limits into the Rust core when it is importable (the NumPy reference reads ``_current``)."""
-    try:
-        from . import _core
-    except ImportError:  # pragma: no cover - a build without the extension
-        return
-    _core.set_budget(b.max_samples, b.max_steps, b.max_bytes)
+    """Writes the limits into the Rust core (the NumPy reference is held to ``_current`` in Python)."""
+    push_budget(b.max_samples, b.max_steps, b.max_bytes)
 
 
 def get_budget() -> Budget:

@@ -30,7 +30,7 @@ from typing import Any, Optional
 import numpy as np
 from numpy.typing import NDArray
 
-from ._backend import Core
+from ._backend import MultiStart, Paper, Parts
 from .errors import BoucWenIdError, InsufficientDataError, SearchAtBoundError
 from .prepare import Prepared
 from .result import Adequacy
@@ -148,7 +148,7 @@ def steady_substeps(p: int) -> int:
 
 
 def loop_fit(
-    core: Core, e: Prepared, gain: float, phi_local: float, beta: float, gamma: float, mu: float
+    core: Paper, e: Prepared, gain: float, phi_local: float, beta: float, gamma: float, mu: float
 ) -> tuple[Optional[FloatArray], float]:
     """The identified model's steady loop on the data grid and its NRMSE against ybar."""
     try:
@@ -195,7 +195,7 @@ def adequacy(
 
 def fit(
     prepared: Sequence[Prepared],
-    core: Core,
+    parts: Parts,
     method: str,
     reference: int,
     lo: float,
@@ -212,6 +212,7 @@ def fit(
         mu ended on an end of its bracket; at mu = 1, the model's own limit, the message says what that
         means for the data.
     """
+    core = parts.paper
     try:
         if method == "paper":
             return _with_loops(prepared, core, *_paper(prepared, core, reference, lo, hi, tol))
@@ -223,10 +224,10 @@ def fit(
             # ends there too).
             if method != "refined" or not exc.lower:
                 raise
-            return refine(prepared, core, None, lo, hi, max_iter, profile_error=exc)
+            return refine(prepared, core, None, lo, hi, max_iter, exc, parts.multistart)
         if method != "refined":
             return _with_loops(prepared, core, start, cost, 0)
-        return refine(prepared, core, start, lo, hi, max_iter)
+        return refine(prepared, core, start, lo, hi, max_iter, multistart=parts.multistart)
     except SearchAtBoundError as exc:
         if not (exc.lower and exc.bound is not None and exc.bound <= 1.0):
             raise
@@ -247,7 +248,7 @@ def _at_model_limit(exc: SearchAtBoundError) -> SearchAtBoundError:
 
 
 def _paper(
-    prepared: Sequence[Prepared], core: Core, reference: int, lo: float, hi: float, tol: float
+    prepared: Sequence[Prepared], core: Paper, reference: int, lo: float, hi: float, tol: float
 ) -> tuple[Start, float, int]:
     """The seed paper's estimator: phase (9), separable search (18)-(24), gains (27b)."""
     ref = prepared[reference]
@@ -269,7 +270,7 @@ def _paper(
 
 def _profile(
     prepared: Sequence[Prepared],
-    core: Core,
+    core: Paper,
     reference: int,
     lo: float,
     hi: float,
@@ -293,7 +294,7 @@ def _profile(
     return Start(float(beta), float(gamma), float(mu), gains, phis), float(cost)
 
 
-def _with_loops(prepared: Sequence[Prepared], core: Core, est: Start, cost: float, iterations: int) -> Fit:
+def _with_loops(prepared: Sequence[Prepared], core: Paper, est: Start, cost: float, iterations: int) -> Fit:
     """A separable fit's estimates with the steady loops they draw (no covariance)."""
     loops = [
         loop_fit(core, e, est.gains[i], est.phis[i], est.beta, est.gamma, est.mu)[0]
@@ -362,18 +363,20 @@ def on_constraint(beta: float, gamma: float) -> bool:
 
 def refine(
     prepared: Sequence[Prepared],
-    core: Core,
+    core: Paper,
     start: Optional[Start],
     lo: float,
     hi: float,
     max_iter: int,
     profile_error: Optional[SearchAtBoundError] = None,
+    multistart: Optional[MultiStart] = None,
 ) -> Fit:
     """The joint output-error fit from ``start`` (the profile estimates), safeguarded by generic starts.
 
     The generic starts run when there is no profile start (its mu ran to the lower bound), or when the
     fit from it ends on the Bouc-Wen constraint beta = |gamma| or costs more than the best linear model
-    (both signs of a wrong basin); the lowest cost wins.
+    (both signs of a wrong basin); the lowest cost wins.  With ``multistart`` (the Rust backend's) they are
+    screened all at once on every core; without it (the NumPy backend) one by one.
     """
     short = [e.source for e in prepared if e.n < 2]
     if short:
@@ -421,8 +424,10 @@ def refine(
     if best is None or suspicious(best):
         # Screen every generic start with a short fit, then finish the most promising one.
         candidates = _generic_starts(prepared, lo, hi)
-        if hasattr(core, "refine_many"):
-            best = _screen_in_parallel(prepared, core, candidates, run, best, wts, substeps, lo, hi, max_iter)
+        if multistart is not None:
+            best = _screen_in_parallel(
+                prepared, multistart, candidates, run, best, wts, substeps, lo, hi, max_iter
+            )
         else:
             screened: Optional[LMRun] = None
             for candidate in candidates:
@@ -441,7 +446,7 @@ def refine(
 
 def _screen_in_parallel(
     prepared: Sequence[Prepared],
-    core: Any,
+    multistart: MultiStart,
     candidates: Sequence[Start],
     run: Any,
     best: Optional[LMRun],
@@ -451,7 +456,7 @@ def _screen_in_parallel(
     hi: float,
     max_iter: int,
 ) -> Optional[LMRun]:
-    """The generic starts screened by ``core.refine_many`` (all cores, the interpreter released; hopeless
+    """The generic starts screened by ``refine_many`` (all cores, the interpreter released; hopeless
     starts abandoned after :data:`SCREEN_ABANDON_AFTER` iterations) on a coarse steady-loop lattice of
     :data:`SCREEN_STEPS_PER_PERIOD` RK4 steps per period; the best :data:`SCREEN_FINISH` are then finished
     by ``run`` at full resolution and the lowest full-resolution cost wins.
@@ -471,7 +476,7 @@ def _screen_in_parallel(
     screen_iter = min(SCREEN_ITER, max_iter)
     # The coarse lattice: as steady_substeps, at SCREEN_STEPS_PER_PERIOD (never finer than the finish).
     coarse = min(substeps, max(2, math.ceil(SCREEN_STEPS_PER_PERIOD / min(e.p for e in prepared))))
-    outs = core.refine_many(
+    outs = multistart.refine_many(
         [e.ybar for e in prepared],
         [e.amplitude for e in prepared],
         wts,

@@ -5,6 +5,33 @@ to units of order one, run the estimator (:mod:`.estimators`), map the estimates
 covariance, build one :class:`~bouc_wen_id.result.ExperimentEstimate` per experiment, note what the data do
 not support, and return an :class:`~bouc_wen_id.result.IdentificationResult` (:mod:`.result`).
 
+Each experiment is reduced to one averaged period (:mod:`bouc_wen_id.prepare`): a
+:class:`~bouc_wen_id.model.Recording` by the paper's periodic average (4a-b), a
+:class:`~bouc_wen_id.measurement.Measurement` by the synchronous average of each of its steady segments
+(:func:`bouc_wen_id.signal.average_segments`; one experiment per segment), an
+:class:`~bouc_wen_id.signal.AveragedPeriod` as it is.  The data are scaled to units of order one, the
+estimator runs (:mod:`bouc_wen_id.estimators`), and the estimates are mapped back with their covariance.
+
+Methods
+-------
+``"paper"``
+    The seed paper exactly: periodic averaging (4a-b), the phase from the time of the averaged
+    output's maximum (9), separable least squares for (mu, |G(j omega_1)|, beta, gamma) with
+    ``sgn(d ybar/dt)`` in the regressor (18)-(24) on the reference experiment, and the gain (27b)
+    at every other frequency.
+``"profile"``
+    The separable fit with the phase as a parameter: the cost (21) is profiled over phi (coarse
+    grid, golden refinement), ``sgn(xdot)`` comes from the candidate phase (Proposition 2), and the
+    other frequencies get gain and phase by the same profiling of (27b).
+``"refined"`` (default)
+    ``"profile"`` as a start, then a joint output-error fit of every averaged period by
+    Levenberg-Marquardt on the steady-state loop (shared beta, gamma, mu; per experiment |G|, phi),
+    weighted by N/sigma^2 with the noise variance from the period-to-period spread.  When the profile
+    start runs mu to 1, or the fit ends on the constraint beta = |gamma| or costs more than a linear
+    spring + dashpot, generic starts spread over the loop shapes are screened and the best is
+    finished.  Gives standard errors, confidence intervals, an adequacy test and whether the LM
+    converged (``result.converged``).  Needs at least 2 averaged periods.
+
 References
 ----------
 *Wiener System Identification in Presence of Hysteresis Nonlinearity*, the seed paper whose equation
@@ -25,7 +52,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from . import budget
-from ._backend import Backend, get_backend
+from ._backend import Backend, selected
 from .errors import ConvergenceWarning, IdentifiabilityWarning, InsufficientDataError, InvalidParameterError
 from .estimators import Fit, adequacy, fit, linear_nrmse, on_constraint, steady_substeps
 from .model import Recording
@@ -75,34 +102,7 @@ def identify(
     confidence: float = 0.95,
     backend: Backend = "rust",
 ) -> IdentificationResult:
-    """Identify beta, gamma, mu and G(j omega_i) from sine experiments.
-
-    Each experiment is reduced to one averaged period (:mod:`bouc_wen_id.prepare`): a
-    :class:`~bouc_wen_id.model.Recording` by the paper's periodic average (4a-b), a
-    :class:`~bouc_wen_id.measurement.Measurement` by the synchronous average of each of its steady
-    segments (:func:`bouc_wen_id.signal.average_segments`; one experiment per segment), an
-    :class:`~bouc_wen_id.signal.AveragedPeriod` as it is.  The data are scaled to units of order one, the
-    estimator runs (:mod:`bouc_wen_id.estimators`), and the estimates are mapped back with their covariance.
-
-    Methods
-    -------
-    ``"paper"``
-        The seed paper exactly: periodic averaging (4a-b), the phase from the time of the averaged
-        output's maximum (9), separable least squares for (mu, |G(j omega_1)|, beta, gamma) with
-        ``sgn(d ybar/dt)`` in the regressor (18)-(24) on the reference experiment, and the gain (27b)
-        at every other frequency.
-    ``"profile"``
-        The separable fit with the phase as a parameter: the cost (21) is profiled over phi (coarse
-        grid, golden refinement), ``sgn(xdot)`` comes from the candidate phase (Proposition 2), and the
-        other frequencies get gain and phase by the same profiling of (27b).
-    ``"refined"`` (default)
-        ``"profile"`` as a start, then a joint output-error fit of every averaged period by
-        Levenberg-Marquardt on the steady-state loop (shared beta, gamma, mu; per experiment |G|, phi),
-        weighted by N/sigma^2 with the noise variance from the period-to-period spread.  When the profile
-        start runs mu to 1, or the fit ends on the constraint beta = |gamma| or costs more than a linear
-        spring + dashpot, generic starts spread over the loop shapes are screened and the best is
-        finished.  Gives standard errors, confidence intervals, an adequacy test and whether the LM
-        converged (``result.converged``).  Needs at least 2 averaged periods.
+    """Identify beta, gamma, mu and G(j omega_i) from sine experiments (the steps: module docstring).
 
     Parameters
     ----------
@@ -111,7 +111,8 @@ def identify(
         samples per period; a Measurement is raw lab data at any sampling rate (its steady segments
         are found and averaged); an AveragedPeriod is one already averaged.
     method : {"refined", "profile", "paper"}
-        The estimator (see above).
+        The estimator: the seed paper exactly, the separable fit with the phase as a parameter, or
+        (default) the joint output-error fit from the profile start (module docstring, "Methods").
     reference : int
         Index of the recording used for the separable fit of (beta, gamma, mu) (omega_1 in the paper).
     settle_periods : int, optional
@@ -135,7 +136,7 @@ def identify(
     confidence : float
         Level of the reported confidence intervals.
     backend : {"rust", "numpy"}
-        The Rust core (default) or the NumPy reference implementation.
+        The Rust core (default) or the NumPy reference, for every step (a Measurement's lab kernels too).
 
     Returns
     -------
@@ -162,19 +163,16 @@ def identify(
     """
     items, (lo, hi) = _check_arguments(recordings, method, confidence, mu_bracket)
     reference, phase_grid, max_iter = _check_counts(reference, phase_grid, max_iter, harmonics)
-    core = get_backend(backend)
-    prepared = prepare(items, core, settle_periods, periods, harmonics)
+    with selected(backend) as parts:  # the lab preprocessing of Measurements runs on the same backend
+        prepared = prepare(items, parts.paper, settle_periods, periods, harmonics)
     _check_work(prepared, method, phase_grid, max_iter)
     reference = _reference_index(reference, len(prepared))
     scaled, scales = scale(prepared)
-    fitted = fit(scaled, core, method, reference, lo, hi, tol, phase_grid, max_iter)
+    fitted = fit(scaled, parts, method, reference, lo, hi, tol, phase_grid, max_iter)
     est = _unscale(fitted, scales)
     experiments = _experiment_estimates(prepared, fitted, est, scales)
     notes = _notes(method, est, experiments, confidence)
-    for note in notes:
-        warnings.warn(note, IdentifiabilityWarning, stacklevel=2)
-    if fitted.converged is False:
-        warnings.warn(NOT_CONVERGED.format(iterations=fitted.iterations), ConvergenceWarning, stacklevel=2)
+    _warn(notes, fitted)
     settings = {
         "settle_periods": settle_periods,
         "periods": periods,
@@ -185,6 +183,33 @@ def identify(
         "max_iter": max_iter,
         "scales": {"y": scales.y, "u": scales.u},
     }
+    return _result(
+        method, backend, reference, prepared, fitted, est, experiments, settings, notes, confidence
+    )
+
+
+def _warn(notes: Sequence[str], fitted: Fit) -> None:
+    """The notes as IdentifiabilityWarning, a refinement stopped at max_iter as ConvergenceWarning (both
+    pointing at identify's caller)."""
+    for note in notes:
+        warnings.warn(note, IdentifiabilityWarning, stacklevel=3)
+    if fitted.converged is False:
+        warnings.warn(NOT_CONVERGED.format(iterations=fitted.iterations), ConvergenceWarning, stacklevel=3)
+
+
+def _result(
+    method: Method,
+    backend: Backend,
+    reference: int,
+    prepared: Sequence[Prepared],
+    fitted: Fit,
+    est: _Estimates,
+    experiments: Sequence[ExperimentEstimate],
+    settings: dict[str, Any],
+    notes: Sequence[str],
+    confidence: float,
+) -> IdentificationResult:
+    """The result object of :func:`identify` from its pieces."""
     return IdentificationResult(
         method=method,
         backend=backend,

@@ -46,14 +46,6 @@ FloatArray = NDArray[np.float64]
 GRID_RTOL = 1e-6
 
 
-def _real_array(name: str, values: object) -> FloatArray:
-    """``values`` as float64, or an :class:`InvalidParameterError` (complex, text, ragged, objects)."""
-    raw = np.asarray(values)
-    if raw.dtype.kind not in "biuf":
-        raise InvalidParameterError(f"{name} must hold real numbers, got dtype {raw.dtype}")
-    return np.asarray(raw, dtype=np.float64)
-
-
 def _is_count(v: object) -> bool:
     """A whole number (int, numpy integer, or an integral finite float), not a bool."""
     if isinstance(v, bool):
@@ -299,12 +291,12 @@ class SinePlan:
         object.__setattr__(self, "substeps", substeps)
         object.__setattr__(self, "noise_sd", noise_sd)
         object.__setattr__(self, "seed", seed)
-        freqs = _frozen_array("frequencies", np.atleast_1d(_real_array("frequencies", frequencies)))
+        freqs = _frozen_array("frequencies", np.atleast_1d(np.asarray(frequencies)))
         if freqs.size == 0:
             raise InvalidParameterError("the plan needs at least one frequency")
         if np.any(freqs <= 0):
             raise InvalidParameterError(f"frequencies must be > 0 rad/s, got {freqs.tolist()}")
-        amps_raw = _frozen_array("amplitudes", np.atleast_1d(_real_array("amplitudes", amplitudes)))
+        amps_raw = _frozen_array("amplitudes", np.atleast_1d(np.asarray(amplitudes)))
         if amps_raw.size not in (1, freqs.size):
             raise InvalidParameterError(
                 f"amplitudes: {amps_raw.size} values for {freqs.size} frequencies; give one amplitude per "

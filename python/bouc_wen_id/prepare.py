@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING, Any, Optional
 import numpy as np
 from numpy.typing import NDArray
 
-from ._backend import Core
+from ._backend import Paper
 from .errors import (
     FrequencyMismatchError,
     InsufficientDataError,
@@ -209,7 +209,7 @@ def _harmonics(harmonics: int | str, ybar: FloatArray, noise_var: float, n: floa
 def _prepare_recording(
     i: int,
     rec: Recording,
-    core: Core,
+    core: Paper,
     settle_periods: Optional[int],
     periods: Optional[int],
     harmonics: int | str,
@@ -269,7 +269,7 @@ def _prepare_recording(
     )
 
 
-def _prepare_averaged(ap: AveragedPeriod, core: Core, harmonics: int | str) -> Prepared:
+def _prepare_averaged(ap: AveragedPeriod, core: Paper, harmonics: int | str) -> Prepared:
     """A period averaged from lab data (any sampling rate): its grid starts at the input's phase zero."""
     ybar = np.ascontiguousarray(ap.ybar, dtype=np.float64)
     _check_response(ybar, abs(float(ap.offset_y)), float(ap.noise_var), float(ap.periods), str(ap.source))
@@ -295,7 +295,7 @@ def _prepare_averaged(ap: AveragedPeriod, core: Core, harmonics: int | str) -> P
 
 def prepare(
     items: Sequence[Any],
-    core: Core,
+    core: Paper,
     settle_periods: Optional[int],
     periods: Optional[int],
     harmonics: int | str,

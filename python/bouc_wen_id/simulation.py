@@ -53,7 +53,7 @@ def simulate(
         With the inner signals ``x``, ``w`` and the plant attached, so that results can be compared with
         the truth.
     """
-    core = get_backend(backend)
+    core = get_backend(backend).paper
     h = plant.hysteresis
     lin = plant.linear
     p = plan.samples_per_period
@@ -159,7 +159,7 @@ def simulate_input(
         ``t`` and ``u`` of unequal lengths, fewer than 2 samples, or a time axis that is not uniform
         (:class:`TimeAxisError`, to ``validation.EXACT_GRID_RTOL``).
     """
-    core = get_backend(backend)
+    core = get_backend(backend).paper
     tt = np.asarray(t, dtype=np.float64)
     uu = np.ascontiguousarray(u, dtype=np.float64)
     if tt.ndim != 1 or uu.ndim != 1 or tt.size != uu.size or tt.size < 2:

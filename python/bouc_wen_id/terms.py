@@ -386,3 +386,25 @@ def core_terms(terms: Iterable[Term]) -> dict[str, float]:
         if isinstance(t, Coulomb):
             out["coulomb_smoothing"] = t.smoothing
     return out
+
+
+#: Code names of the terms the augmented model fits (design.md 9.1), in the registry's order: every term but
+#: the degradation, which only the simulation carries.
+TERM_NAMES: tuple[str, ...] = tuple(name for name, cls in TERMS.items() if cls is not Degradation)
+
+
+def parse_terms(terms: Iterable[str]) -> tuple[str, ...]:
+    """The augmented model's term names as a tuple; an unknown or repeated name is
+    :class:`InvalidParameterError`."""
+    if isinstance(terms, str):
+        raise InvalidParameterError(f"terms must be a sequence of names, not the string {terms!r}")
+    out: list[str] = []
+    for name in terms:
+        if name not in TERM_NAMES:
+            raise InvalidParameterError(f"unknown term {name!r}; the terms are {', '.join(TERM_NAMES)}")
+        if name in out:
+            raise InvalidParameterError(
+                f"term {name!r} is given twice; each term has one parameter and may appear once"
+            )
+        out.append(name)
+    return tuple(out)

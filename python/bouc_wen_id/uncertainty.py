@@ -77,7 +77,7 @@ def experiment_fisher(
     ndarray, shape (5, 5)
         ``J^T J`` with ``J`` (P x 5) the steady loop's exact sensitivities.
     """
-    core = get_backend(backend)
+    core = get_backend(backend).paper
     norm = plant.normalized()
     h = norm.hysteresis
     gains, phases = norm.linear.gain_phase(np.array([frequency], dtype=np.float64))

@@ -23,6 +23,10 @@ the averaged periods with the segment report.  The modules: ``_sine`` (step 1), 
 ``_segments`` (step 2), ``_averaging`` (step 3), ``_harmonic_ls`` (the least squares on harmonics they
 share).
 
+The least squares run on the lab kernels of the backend in force (``bouc_wen_id._backend``): the Rust ones by
+default, the NumPy paths throughout inside an entry point called with ``backend="numpy"`` (``identify`` of a
+Measurement, for one), so that ``backend=`` means the same thing for every step.
+
 Reasons given for dropped stretches (:class:`SegmentReport`)
 -------------------------------------------------------------
 ``"idle"``

@@ -16,7 +16,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..errors import InsufficientDataError, InvalidParameterError, UndersampledError
 from ..validation import HARMONIC_SNR, MIN_SAMPLES_PER_PERIOD, check_time_axis, finite_arrays
-from ._harmonic_ls import harmonic_basis, nested_fit
+from ._harmonic_ls import HarmonicLS, harmonic_basis, nested_fit
 from ._segments import SegmentReport, find_steady_segments
 from ._sine import SineFit
 
@@ -110,6 +110,40 @@ class AveragedPeriod:
         return out
 
 
+def _max_harmonics(harmonics: Optional[int], omega: float, dt: float, n: int, p_s: float) -> int:
+    """K of the first fit: the caller's (checked against Nyquist and the range's length), else the most the
+    record supports (:func:`synchronous_average`)."""
+    if harmonics is None:
+        return max(1, min(MAX_HARMONICS, math.floor(p_s / 2.0 - 1.0), (n // 2 - 1) // 2))
+    if isinstance(harmonics, bool) or int(harmonics) != harmonics or harmonics < 1:
+        raise InvalidParameterError(f"harmonics = {harmonics!r} must be an integer >= 1")
+    kmax = int(harmonics)
+    if kmax * omega * dt >= math.pi:
+        raise InvalidParameterError(
+            f"harmonic {kmax} of {omega / TWO_PI:.6g} Hz is at or above Nyquist ({0.5 / dt:.6g} Hz)"
+        )
+    if 2 * kmax + 1 > n:
+        raise InsufficientDataError(f"{kmax} harmonics need {2 * kmax + 1} samples, the range holds {n}")
+    return kmax
+
+
+def _kept_harmonics(ls: HarmonicLS, kmax: int, ys: FloatArray) -> int:
+    """K from the data: ``min(K_max, max(8, 4 K_sig))``, ``K_sig`` the last harmonic 16 times above its
+    noise power in the fit on ``kmax`` harmonics (all of them when the data are noise-free)."""
+    n = ys.size
+    dof_max = n - (2 * kmax + 1)
+    var_max = ls.rss(kmax) / dof_max if dof_max > 0 else 0.0
+    scale = max(float(np.max(np.abs(ys - ys.mean()))), np.finfo(float).tiny)
+    if not var_max > (1e-12 * scale) ** 2:
+        return kmax
+    coef = ls.coef(kmax)
+    var = ls.unscaled_variance(kmax) * var_max
+    z = coef[1::2] ** 2 / var[1::2] + coef[2::2] ** 2 / var[2::2]
+    sig = np.flatnonzero(z > 2.0 * HARMONIC_SNR)
+    k_sig = int(sig[-1]) + 1 if sig.size else 1
+    return min(kmax, max(MIN_HARMONICS, HARMONIC_SAFETY * k_sig))
+
+
 def synchronous_average(
     t: ArrayLike,
     y: ArrayLike,
@@ -128,9 +162,8 @@ def synchronous_average(
     evaluated at ``tau_j = j T / P``, ``P = 2K + 1``.  With an integer number of samples per period, whole
     periods and ``K = (P - 1) / 2`` (odd P) this is the plain periodic average (4a-b) minus its mean.
 
-    The least squares use a blocked Householder QR of the basis (O(n K^2)); for very long records the
-    Toeplitz Gram matrix of the near-orthogonal harmonics is formed from its moments in O(n K) and solved
-    by Cholesky after a check of its conditioning.
+    The least squares: the lab kernels' O(n K) moment fit, else a blocked Householder QR of the basis
+    (O(n K^2)), or for very long records the moments' Gram matrix once its conditioning is checked.
 
     Parameters
     ----------
@@ -184,32 +217,10 @@ def synchronous_average(
         )
     base = fit.phase / omega
     origin = base + period * math.ceil((float(ts[0]) - base) / period - 1e-9)
-    if harmonics is None:
-        kmax = max(1, min(MAX_HARMONICS, math.floor(p_s / 2.0 - 1.0), (n // 2 - 1) // 2))
-    else:
-        if isinstance(harmonics, bool) or int(harmonics) != harmonics or harmonics < 1:
-            raise InvalidParameterError(f"harmonics = {harmonics!r} must be an integer >= 1")
-        kmax = int(harmonics)
-        if kmax * omega * dt >= math.pi:
-            raise InvalidParameterError(
-                f"harmonic {kmax} of {omega / TWO_PI:.6g} Hz is at or above Nyquist ({0.5 / dt:.6g} Hz)"
-            )
-        if 2 * kmax + 1 > n:
-            raise InsufficientDataError(f"{kmax} harmonics need {2 * kmax + 1} samples, the range holds {n}")
-    # The phases omega (t - origin), wrapped by the reference path, formed in Rust on the fast one.
+    kmax = _max_harmonics(harmonics, omega, dt, n, p_s)
+    # The phases omega (t - origin), wrapped on the NumPy path, formed in Rust on the fast one.
     ls = nested_fit(ts - origin, ys, kmax, omega)
-    k = kmax
-    if harmonics is None:
-        dof_max = n - (2 * kmax + 1)
-        var_max = ls.rss(kmax) / dof_max if dof_max > 0 else 0.0
-        scale = max(float(np.max(np.abs(ys - ys.mean()))), np.finfo(float).tiny)
-        if var_max > (1e-12 * scale) ** 2:
-            coef = ls.coef(kmax)
-            var = ls.unscaled_variance(kmax) * var_max
-            z = coef[1::2] ** 2 / var[1::2] + coef[2::2] ** 2 / var[2::2]
-            sig = np.flatnonzero(z > 2.0 * HARMONIC_SNR)
-            k_sig = int(sig[-1]) + 1 if sig.size else 1
-            k = min(kmax, max(MIN_HARMONICS, HARMONIC_SAFETY * k_sig))
+    k = kmax if harmonics is not None else _kept_harmonics(ls, kmax, ys)
     coef = ls.coef(k)
     dof = n - (2 * k + 1)
     noise_var = ls.rss(k) / dof if dof > 0 else math.nan

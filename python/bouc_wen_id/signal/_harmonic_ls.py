@@ -8,7 +8,6 @@ very long records.
 
 from __future__ import annotations
 
-import importlib
 import math
 from dataclasses import dataclass
 from functools import cached_property
@@ -17,6 +16,7 @@ from typing import Any, Optional
 import numpy as np
 from numpy.typing import NDArray
 
+from .._backend import current_lab
 from ..errors import InvalidParameterError
 
 __all__ = [
@@ -37,22 +37,10 @@ TWO_PI = 2.0 * math.pi
 QR_WORK_MAX = 1e9
 #: Rows per chunk of the blocked QR.
 QR_CHUNK = 8192
-#: Fit through the Rust moment kernels (:mod:`bouc_wen_id._fastlab`: O(n K), normal equations of the
-#: nearly orthogonal harmonics) whenever their Gram matrix is well conditioned, else the NumPy paths
-#: below.  ``False`` selects the NumPy paths throughout: the reference that tests/test_fastlab.py holds the
-#: fast path to.
-USE_RUST_KERNELS = True
-
-
-def _core() -> Any:
-    """The Rust extension, imported on first use (as :func:`_fastlab`)."""
-    return importlib.import_module("bouc_wen_id._core")
-
-
-def _fastlab() -> Any:
-    """:mod:`bouc_wen_id._fastlab`, imported on first use by name: a static import from here closes an
-    import cycle through the package that makes mypy lose ``identification.Experiment``."""
-    return importlib.import_module("bouc_wen_id._fastlab")
+# The fits go through the lab kernels of the backend in force (``bouc_wen_id._backend.current_lab``: on
+# Rust, O(n K) moments and the normal equations of the nearly orthogonal harmonics) whenever their Gram
+# matrix is well conditioned, else through the NumPy paths below.  The NumPy backend has no kernels and
+# runs the NumPy paths throughout: the reference tests/test_fastlab.py holds the kernels to.
 
 
 def solve_triangular(a: FloatArray, b: FloatArray, **kwargs: Any) -> Any:
@@ -105,11 +93,10 @@ def solve_qr(matrix: FloatArray, rhs: FloatArray) -> tuple[FloatArray, FloatArra
 
 def _unscaled_variance(r: FloatArray) -> FloatArray:
     """Diagonal of ``(R^T R)^-1``, the row sums of squares of ``R^-1`` (``R`` upper triangular)."""
+    fast = current_lab().unscaled_variances(r)
+    if fast is not None:
+        return fast
     m = r.shape[0]
-    if USE_RUST_KERNELS:
-        # R^-1 in one Rust call (m^3/6 multiply-adds) instead of a triangular solve against I (issue #8).
-        out: FloatArray = _core().unscaled_variances(np.ascontiguousarray(r, dtype=np.float64).ravel(), m)
-        return out
     # R is triangular: its inverse by back substitution, a third of a general inverse's work.
     r_inv = solve_triangular(r, np.eye(m))
     ref: FloatArray = np.sum(r_inv**2, axis=1)
@@ -152,16 +139,16 @@ class HarmonicFit:
     def fundamental_rss(self, x: FloatArray) -> float:
         """``|x - c - a_1 cos theta - b_1 sin theta|^2``: what offset and fundamental leave of ``x``."""
         head = np.ascontiguousarray(self.coef[:3])
-        if USE_RUST_KERNELS:
-            tau, xx = np.ascontiguousarray(self.tau), np.ascontiguousarray(x)
-            return float(_core().harmonic_rss(tau, xx, head, self.omega))
+        fast = current_lab().harmonic_rss(self.tau, x, head, self.omega)
+        if fast is not None:
+            return fast
         r = x - self.basis[:, :3] @ head
         return float(np.einsum("i,i->", r, r))
 
 
 def fit_at(tau: FloatArray, x: FloatArray, omega: float, k: int) -> HarmonicFit:
     """Linear fit of ``x`` on harmonics 1..k of ``omega`` at times ``tau`` (and a constant)."""
-    fast = _fastlab().harmonic_lsq(tau, x, k, omega) if USE_RUST_KERNELS else None
+    fast = current_lab().harmonic_lsq(tau, x, k, omega)
     if fast is not None:
         # The residual sum of squares comes from the kernels too (no BLAS on the n-vectors), and neither
         # the wrapped phases nor the basis are formed.
@@ -299,10 +286,9 @@ def nested_fit(theta: FloatArray, y: FloatArray, kmax: int, omega: Optional[floa
     With ``omega``, ``theta`` holds times and the phases are ``omega theta``: the Rust path forms them
     itself (no wrapped phase array), the reference wraps them with :func:`phase_angle`.
     """
-    if USE_RUST_KERNELS:
-        fast = _fastlab().moment_fit(theta, y, kmax, omega)
-        if fast is not None:
-            return HarmonicLS(*fast)
+    fast = current_lab().moment_fit(theta, y, kmax, omega)
+    if fast is not None:
+        return HarmonicLS(*fast)
     if omega is not None:
         theta = phase_angle(omega, theta)
     n, m = y.size, 2 * kmax + 1

@@ -15,6 +15,7 @@ from typing import Optional
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._backend import current_lab
 from ..errors import (
     DistortedInputWarning,
     InsufficientDataError,
@@ -24,7 +25,6 @@ from ..errors import (
     ZeroAmplitudeError,
 )
 from ..validation import HARMONIC_SNR, MIN_SAMPLES_PER_PERIOD, check_time_axis, finite_arrays
-from . import _harmonic_ls
 from ._harmonic_ls import fit_at, solve_triangular
 
 __all__ = [
@@ -136,12 +136,10 @@ def dft_peak(x: FloatArray, dt: float, nominal: Optional[float]) -> float:
         centre = nominal * n * dt / TWO_PI * pad  # the nominal frequency in padded bins
         b_lo = max(lo, math.floor(centre * (1.0 - NOMINAL_BAND)))
         b_hi = min(hi, math.ceil(centre * (1.0 + NOMINAL_BAND)))
-    if _harmonic_ls.USE_RUST_KERNELS:
-        # The same spectrum from a half-length complex FFT in Rust, and the same choice of bin, without
-        # handing the spectrum back (issue #8).
-        peak: tuple[int, float, float, float] = _harmonic_ls._core().spectral_peak(
-            np.ascontiguousarray(x, dtype=np.float64), nfft, lo, hi, b_lo, b_hi, NOMINAL_PEAK_MIN
-        )
+    # On Rust the same spectrum from a half-length complex FFT, and the same choice of bin, without
+    # handing the spectrum back (issue #8).
+    peak = current_lab().spectral_peak(x, nfft, lo, hi, b_lo, b_hi, NOMINAL_PEAK_MIN)
+    if peak is not None:
         k, around = peak[0], [peak[1], peak[2], peak[3]]
     else:
         idx = np.arange(n, dtype=np.float64) - 0.5 * (n - 1)
@@ -189,11 +187,10 @@ def _nls(tau: FloatArray, x: FloatArray, omega0: float, dt: float, k: int) -> _N
     step is below 1e-4 standard errors (or 1e-12 DFT bins, for noise-free data).  With K = 1 this is the
     4-parameter sine fit ``(omega, a, b, c)``.
     """
-    if _harmonic_ls.USE_RUST_KERNELS:
-        # The same iteration on the Rust kernels, without forming the basis (issue #8).
-        fast = _harmonic_ls._fastlab().nls(tau, x, omega0, dt, k)
-        if fast is not None:
-            return _NLS(*fast)
+    # On Rust the same iteration in one call, without forming the basis (issue #8).
+    fast = current_lab().nls(tau, x, omega0, dt, k)
+    if fast is not None:
+        return _NLS(*fast)
     n = x.size
     bin_width = TWO_PI / (n * dt)
     omega = omega0

@@ -17,8 +17,7 @@ from typing import Optional
 import numpy as np
 from numpy.typing import NDArray
 
-from .. import _core
-from . import _harmonic_ls
+from .._backend import current_lab
 from ._harmonic_ls import harmonic_basis, phase_angle
 
 __all__ = [
@@ -132,19 +131,18 @@ def block_windows(
     start and samples; ``offset``: its first sample in the record), each fitted on ``k_w`` harmonics of
     ``omega``.
 
-    On the Rust kernels every window's fit is the fused moment fit of ``_core.window_fits`` (the block's
-    phasors computed once); a window whose Gram matrix that path refuses, and the reference path, solve
-    the normal equations of the explicit basis (:func:`window_features`).
+    On the Rust kernels every window's fit is the fused moment fit of ``window_fits`` (the block's phasors
+    computed once); a window whose Gram matrix that path refuses, and the NumPy backend, solve the normal
+    equations of the explicit basis (:func:`window_features`).
     """
     if not spans:
         return []
-    if not _harmonic_ls.USE_RUST_KERNELS:
+    starts, stops = [s for s, _ in spans], [e for _, e in spans]
+    fast = current_lab().window_fits(tau, u, y, starts, stops, k_w, omega)
+    if fast is None:
         full = harmonic_basis(phase_angle(omega, tau), k_w)
         return [window_features(block, offset + s, offset + e, full[s:e], u[s:e], y[s:e]) for s, e in spans]
-    starts, stops = [s for s, _ in spans], [e for _, e in spans]
-    coef, rss = _core.window_fits(
-        np.ascontiguousarray(tau), np.ascontiguousarray(u), np.ascontiguousarray(y), starts, stops, k_w, omega
-    )
+    coef, rss = fast
     m = 2 * k_w + 1
     out = []
     basis: Optional[FloatArray] = None

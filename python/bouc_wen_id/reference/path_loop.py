@@ -1,4 +1,4 @@
-"""NumPy reference of the hysteresis steady loop along the input path (``docs/design.md`` 9.2).
+"""NumPy reference of ``rust/path_loop.rs``: the steady hysteresis loop along the input path (design.md 9.2).
 
 Generalised Bouc-Wen with alpha = 1 and the ``sgn(w)`` asymmetry term of Song & Der Kiureghian (J. Eng.
 Mech. 132(6), 2006), driven through a play (backlash) operator of half-width ``b``::
@@ -19,16 +19,18 @@ not bit for bit, and their ``iterations`` counts differ.
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import NDArray
 
-from .errors import (
+from ..errors import (
     InsufficientDataError,
     InvalidParameterError,
     NonFiniteError,
     NotConvergedError,
     ZeroAmplitudeError,
 )
-from .reference import FloatArray
-from .validation import finite_scalar as _finite_scalar
+from ..validation import finite_scalar as _finite_scalar
+
+FloatArray = NDArray[np.float64]
 
 __all__ = [
     "path_loop",
@@ -349,6 +351,39 @@ def reversals(lam: float, harmonics: FloatArray) -> list[float]:
     return roots
 
 
+def _check_distorted(
+    amplitude: float,
+    beta: float,
+    gamma: float,
+    mu: float,
+    delta: float,
+    play: float,
+    lam: float,
+    harmonics: FloatArray,
+    samples_per_period: int,
+) -> tuple[FloatArray, float, int]:
+    """The arguments of :func:`path_loop_distorted` checked as the core does: ``(harmonics, beta + gamma -
+    |delta|, P)``."""
+    harmonics = np.asarray(harmonics, dtype=np.float64)
+    for name, v in (("amplitude", amplitude), ("beta", beta), ("gamma", gamma), ("mu", mu), ("lambda", lam)):
+        _finite_scalar(name, v)
+    if harmonics.size % 2 or not np.all(np.isfinite(harmonics)):
+        raise InvalidParameterError("the waveform's harmonics must be finite (re, im) pairs")
+    if mu <= 1.0:
+        raise InvalidParameterError(f"mu = {mu} must be > 1 in the identification model")
+    margin = beta + gamma - abs(delta)
+    if margin <= 0.0:
+        raise InvalidParameterError(f"beta + gamma - |delta| = {margin} must be > 0")
+    if amplitude == 0.0:
+        raise ZeroAmplitudeError("the amplitude of x is 0: the loop is a point")
+    if play < 0.0:
+        raise InvalidParameterError(f"play = {play} must be >= 0")
+    p = int(samples_per_period)
+    if p < 4:
+        raise InsufficientDataError(f"samples_per_period = {p}: at least 4 are needed")
+    return harmonics, margin, p
+
+
 def path_loop_distorted(
     amplitude: float,
     beta: float,
@@ -385,23 +420,9 @@ def path_loop_distorted(
     InvalidParameterError
         As :func:`path_loop`, and for a waveform with more than one maximum per period.
     """
-    harmonics = np.asarray(harmonics, dtype=np.float64)
-    for name, v in (("amplitude", amplitude), ("beta", beta), ("gamma", gamma), ("mu", mu), ("lambda", lam)):
-        _finite_scalar(name, v)
-    if harmonics.size % 2 or not np.all(np.isfinite(harmonics)):
-        raise InvalidParameterError("the waveform's harmonics must be finite (re, im) pairs")
-    if mu <= 1.0:
-        raise InvalidParameterError(f"mu = {mu} must be > 1 in the identification model")
-    margin = beta + gamma - abs(delta)
-    if margin <= 0.0:
-        raise InvalidParameterError(f"beta + gamma - |delta| = {margin} must be > 0")
-    if amplitude == 0.0:
-        raise ZeroAmplitudeError("the amplitude of x is 0: the loop is a point")
-    if play < 0.0:
-        raise InvalidParameterError(f"play = {play} must be >= 0")
-    p = int(samples_per_period)
-    if p < 4:
-        raise InsufficientDataError(f"samples_per_period = {p}: at least 4 are needed")
+    harmonics, margin, p = _check_distorted(
+        amplitude, beta, gamma, mu, delta, play, lam, harmonics, samples_per_period
+    )
     # x = |A| xi(theta - phi'), phi' = phi (+ pi for A < 0); d/dA = sgn(A) d/d|A| (as the core).
     sa = 1.0 if amplitude > 0.0 else -1.0
     if amplitude < 0.0:

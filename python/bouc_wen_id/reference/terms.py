@@ -1,11 +1,11 @@
-"""NumPy reference of the augmented model (``docs/design.md`` 9.1 and 9.3).
+"""NumPy reference of ``rust/terms.rs``: the augmented model (``docs/design.md`` 9.1 and 9.3).
 
 Written line by line from the design text, readable and unoptimised, to hold the Rust core
 (``_core.augmented_output`` and ``_core.augmented_refine``, ``rust/terms.rs``) to account: same signatures,
 same named errors.  The output terms act on the measured input ``u_j = U cos(2 pi j/P + psi)``, the sensor lag
-is applied on the DFT of the period, and the hysteresis is the plain steady loop of :mod:`.reference` (7.2)
+is applied on the DFT of the period, and the hysteresis is the plain steady loop of :mod:`.steady` (7.2)
 unless asymmetry or play is active, then the loop along the input path (9.2).  The Levenberg-Marquardt follows
-:func:`.reference.refine` (same damping schedule, stopping rules and projections) with a shared block of size
+:func:`.refine.refine` (same damping schedule, stopping rules and projections) with a shared block of size
 ``3 + T``; like it, it solves the full damped normal equations instead of their Schur complement (the same
 step up to rounding).
 """
@@ -13,16 +13,17 @@ step up to rounding).
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Optional
+from typing import NamedTuple, Optional
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .errors import InsufficientDataError, InvalidParameterError, ZeroAmplitudeError
-from .reference import admissible_bouc_wen, levenberg_marquardt, project_bouc_wen, steady_loop
-from .reference_path import path_loop, path_loop_distorted
-from .validation import finite_array as _finite_array
-from .validation import finite_scalar as _finite_scalar
+from ..errors import InsufficientDataError, InvalidParameterError, ZeroAmplitudeError
+from ..validation import finite_array as _finite_array
+from ..validation import finite_scalar as _finite_scalar
+from .path_loop import path_loop, path_loop_distorted
+from .refine import admissible_bouc_wen, levenberg_marquardt, project_bouc_wen
+from .steady import steady_loop
 
 __all__ = [
     "TERM_NAMES",
@@ -224,6 +225,128 @@ def augmented_output(
     return y, jac_shared, jac_own
 
 
+class _Problem(NamedTuple):
+    """The checked data of :func:`augmented_refine`, and the model's constraints and cost on them."""
+
+    ys: list[FloatArray]
+    amps: FloatArray
+    freqs: FloatArray
+    psis: FloatArray
+    wts: FloatArray
+    names: tuple[str, ...]
+    substeps: int
+    mu_lo: float
+    mu_hi: float
+    waveforms: Optional[Sequence[ArrayLike]]
+
+    @property
+    def ns(self) -> int:
+        """Size of the shared block ``[beta, gamma, mu, q_1 .. q_T]``."""
+        return 3 + len(self.names)
+
+    def col(self, name: str) -> int:
+        return 3 + self.names.index(name)
+
+    def play_max(self, par: FloatArray) -> float:
+        return PLAY_MAX_FRACTION * float(np.min(np.abs(self.amps * par[self.ns :: 2])))
+
+    def admissible(self, par: FloatArray) -> bool:
+        ok = admissible_bouc_wen(par, self.mu_lo, self.mu_hi)
+        if "asymmetry" in self.names:
+            ok = ok and abs(par[self.col("asymmetry")]) < par[0] + par[1]
+        if "sensor_lag" in self.names:
+            ok = ok and par[self.col("sensor_lag")] >= 0.0
+        if "play" in self.names:
+            ok = ok and 0.0 <= par[self.col("play")] <= self.play_max(par)
+        return ok
+
+    def evaluate(self, par: FloatArray) -> tuple[float, tuple[list[FloatArray], FloatArray, FloatArray]]:
+        """``(cost, (outputs, J'WJ, J'Wr))`` at ``par``."""
+        n, ns = par.size, self.ns
+        cost = 0.0
+        outputs = []
+        fisher = np.zeros((n, n))
+        grad = np.zeros(n)
+        for i, yi in enumerate(self.ys):
+            y, js, jo = augmented_output(
+                yi.size,
+                self.amps[i],
+                self.freqs[i],
+                self.psis[i],
+                self.names,
+                par[:ns],
+                par[ns + 2 * i],
+                par[ns + 1 + 2 * i],
+                self.substeps,
+                None if self.waveforms is None else self.waveforms[i],
+            )
+            r = yi - y
+            cost += self.wts[i] * float(np.sum(r * r))
+            full = np.zeros((yi.size, n))
+            full[:, :ns] = js
+            full[:, ns + 2 * i : ns + 2 * i + 2] = jo
+            fisher += self.wts[i] * full.T @ full
+            grad += self.wts[i] * full.T @ r
+            outputs.append(y)
+        return cost, (outputs, fisher, grad)
+
+    def project(self, trial: FloatArray) -> None:
+        """The projections of :func:`.refine.refine`, then tau and b clipped into their ranges."""
+        project_bouc_wen(trial, self.mu_lo, self.mu_hi)
+        if "sensor_lag" in self.names:
+            trial[self.col("sensor_lag")] = max(trial[self.col("sensor_lag")], 0.0)
+        if "play" in self.names:
+            trial[self.col("play")] = max(min(trial[self.col("play")], self.play_max(trial)), 0.0)
+
+
+def _check_refine(
+    ybars: Sequence[ArrayLike],
+    vectors: tuple[ArrayLike, ArrayLike, ArrayLike, ArrayLike],
+    terms: Sequence[str],
+    start: tuple[ArrayLike, ArrayLike, ArrayLike],
+    max_iter: int,
+    substeps: int,
+    mu_lo: float,
+    mu_hi: float,
+    waveforms: Optional[Sequence[ArrayLike]],
+) -> tuple[_Problem, FloatArray, FloatArray, FloatArray]:
+    """The arguments of :func:`augmented_refine` checked in the core's order: the problem and the start
+    ``(shared0, gains0, phases0)``."""
+    names = parse_terms(terms)
+    ys = [np.asarray(y, dtype=np.float64) for y in ybars]
+    m = len(ys)
+    amps, freqs, psis, wts = (np.asarray(v, dtype=np.float64).ravel() for v in vectors)
+    if not (amps.size == freqs.size == psis.size == wts.size == m):
+        raise InvalidParameterError(
+            f"{m} experiments but {amps.size} amplitudes, {freqs.size} frequencies, {psis.size} grid phases "
+            f"and {wts.size} weights"
+        )
+    if max_iter < 1 or substeps < 1:
+        raise InvalidParameterError("max_iter and substeps must be >= 1")
+    sh0, g0, p0 = (np.asarray(v, dtype=np.float64).ravel() for v in start)
+    if m == 0:
+        raise InsufficientDataError("the refinement needs at least one experiment")
+    if g0.size != m or p0.size != m:
+        raise InvalidParameterError(f"{m} experiments but {g0.size} gains and {p0.size} phases")
+    for i in range(m):
+        _finite_array(f"ybar[{i}]", ys[i])
+        _check_excitation(float(amps[i]), float(freqs[i]), float(psis[i]))
+        _finite_scalar("weight", float(wts[i]))
+        if wts[i] <= 0.0:
+            raise InvalidParameterError(f"experiment {i}: weight {wts[i]} must be > 0 (N / noise variance)")
+    _finite_array("gains", g0)
+    _finite_array("phases", p0)
+    if not np.isfinite(mu_lo) or mu_lo < 1.0 or np.isnan(mu_hi) or mu_hi <= mu_lo:
+        raise InvalidParameterError(
+            f"the mu bracket ({mu_lo}, {mu_hi}] must have a finite lower end >= 1 below its upper end"
+        )
+    _check_shared(names, sh0)
+    if waveforms is not None and len(waveforms) != m:
+        raise InvalidParameterError(f"{m} experiments but {len(waveforms)} waveforms")
+    problem = _Problem(ys, amps, freqs, psis, wts, names, substeps, mu_lo, mu_hi, waveforms)
+    return problem, sh0, g0, p0
+
+
 def augmented_refine(
     ybars: Sequence[ArrayLike],
     amplitudes: ArrayLike,
@@ -247,112 +370,29 @@ def augmented_refine(
     ``[beta, gamma, mu, q_1 .. q_T, g_0, phi_0, g_1, phi_1, ...]``.
     """
     ftol, xtol = 1e-12, 1e-10
-    names = parse_terms(terms)
-    ys = [np.asarray(y, dtype=np.float64) for y in ybars]
-    m = len(ys)
-    amps, freqs, psis, wts = (
-        np.asarray(v, dtype=np.float64).ravel() for v in (amplitudes, frequencies, grid_phases, weights)
+    vectors = (amplitudes, frequencies, grid_phases, weights)
+    start = (shared0, gains0, phases0)
+    prob, sh0, g0, p0 = _check_refine(
+        ybars, vectors, terms, start, max_iter, substeps, mu_lo, mu_hi, waveforms
     )
-    if not (amps.size == freqs.size == psis.size == wts.size == m):
-        raise InvalidParameterError(
-            f"{m} experiments but {amps.size} amplitudes, {freqs.size} frequencies, {psis.size} grid phases "
-            f"and {wts.size} weights"
-        )
-    if max_iter < 1 or substeps < 1:
-        raise InvalidParameterError("max_iter and substeps must be >= 1")
-    sh0 = np.asarray(shared0, dtype=np.float64).ravel()
-    g0 = np.asarray(gains0, dtype=np.float64).ravel()
-    p0 = np.asarray(phases0, dtype=np.float64).ravel()
-    if m == 0:
-        raise InsufficientDataError("the refinement needs at least one experiment")
-    if g0.size != m or p0.size != m:
-        raise InvalidParameterError(f"{m} experiments but {g0.size} gains and {p0.size} phases")
-    for i in range(m):
-        _finite_array(f"ybar[{i}]", ys[i])
-        _check_excitation(float(amps[i]), float(freqs[i]), float(psis[i]))
-        _finite_scalar("weight", float(wts[i]))
-        if wts[i] <= 0.0:
-            raise InvalidParameterError(f"experiment {i}: weight {wts[i]} must be > 0 (N / noise variance)")
-    _finite_array("gains", g0)
-    _finite_array("phases", p0)
-    if not np.isfinite(mu_lo) or mu_lo < 1.0 or np.isnan(mu_hi) or mu_hi <= mu_lo:
-        raise InvalidParameterError(
-            f"the mu bracket ({mu_lo}, {mu_hi}] must have a finite lower end >= 1 below its upper end"
-        )
-    _check_shared(names, sh0)
-    if waveforms is not None and len(waveforms) != m:
-        raise InvalidParameterError(f"{m} experiments but {len(waveforms)} waveforms")
-    ns = 3 + len(names)
-    col = {name: 3 + t for t, name in enumerate(names)}
-
-    def play_max(par: FloatArray) -> float:
-        return PLAY_MAX_FRACTION * float(np.min(np.abs(amps * par[ns::2])))
-
-    def admissible(par: FloatArray) -> bool:
-        ok = admissible_bouc_wen(par, mu_lo, mu_hi)
-        if "asymmetry" in col:
-            ok = ok and abs(par[col["asymmetry"]]) < par[0] + par[1]
-        if "sensor_lag" in col:
-            ok = ok and par[col["sensor_lag"]] >= 0.0
-        if "play" in col:
-            ok = ok and 0.0 <= par[col["play"]] <= play_max(par)
-        return ok
-
+    ns = prob.ns
     params = np.concatenate([sh0, np.column_stack([g0, p0]).ravel()])
-    if not admissible(np.concatenate([params[:3], np.zeros(len(names)), params[ns:]])):
+    if not prob.admissible(np.concatenate([params[:3], np.zeros(len(prob.names)), params[ns:]])):
         raise InvalidParameterError(
             f"the starting point (beta = {sh0[0]}, gamma = {sh0[1]}, mu = {sh0[2]}) must satisfy "
             f"beta >= |gamma|, beta + gamma > 0 and {mu_lo} < mu <= {mu_hi}"
         )
-    if "play" in col and params[col["play"]] > play_max(params):
+    if "play" in prob.names and params[prob.col("play")] > prob.play_max(params):
         raise InvalidParameterError(
-            f"the starting play b = {params[col['play']]} must be below {PLAY_MAX_FRACTION} min |U_i g_i| = "
-            f"{play_max(params)}"
+            f"the starting play b = {params[prob.col('play')]} must be below {PLAY_MAX_FRACTION} min "
+            f"|U_i g_i| = {prob.play_max(params)}"
         )
-
-    def evaluate(par: FloatArray) -> tuple[float, tuple[list[FloatArray], FloatArray, FloatArray]]:
-        n = par.size
-        cost = 0.0
-        outputs = []
-        fisher = np.zeros((n, n))
-        grad = np.zeros(n)
-        for i in range(m):
-            y, js, jo = augmented_output(
-                ys[i].size,
-                amps[i],
-                freqs[i],
-                psis[i],
-                names,
-                par[:ns],
-                par[ns + 2 * i],
-                par[ns + 1 + 2 * i],
-                substeps,
-                None if waveforms is None else waveforms[i],
-            )
-            r = ys[i] - y
-            cost += wts[i] * float(np.sum(r * r))
-            full = np.zeros((ys[i].size, n))
-            full[:, :ns] = js
-            full[:, ns + 2 * i : ns + 2 * i + 2] = jo
-            fisher += wts[i] * full.T @ full
-            grad += wts[i] * full.T @ r
-            outputs.append(y)
-        return cost, (outputs, fisher, grad)
-
-    def project(trial: FloatArray) -> None:
-        # The projections of reference.refine, then tau and b clipped into their ranges.
-        project_bouc_wen(trial, mu_lo, mu_hi)
-        if "sensor_lag" in col:
-            trial[col["sensor_lag"]] = max(trial[col["sensor_lag"]], 0.0)
-        if "play" in col:
-            trial[col["play"]] = max(min(trial[col["play"]], play_max(trial)), 0.0)
-
     params, cost, it, converged, fisher, (outputs, _, _) = levenberg_marquardt(
         params,
-        evaluate,
+        prob.evaluate,
         lambda state: (state[1], state[2]),
-        project,
-        admissible,
+        prob.project,
+        prob.admissible,
         max_iter=max_iter,
         ftol=ftol,
         xtol=xtol,

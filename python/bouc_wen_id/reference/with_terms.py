@@ -1,4 +1,4 @@
-"""NumPy reference of the simulation with physical terms (design.md 9.4; rust/simulate/with_terms.rs).
+"""NumPy reference of ``rust/simulate/with_terms.rs``: the simulation with physical terms (design.md 9.4).
 
 Step by step the same scheme as the Rust core, so that the parity tests hold the two to rounding:
 
@@ -12,24 +12,35 @@ Step by step the same scheme as the Rust core, so that the parity tests hold the
   ``nu = 1 + delta_nu e`` multiplying the beta, gamma and delta terms of the rate;
 - output terms ``k u + c udot + m uddot + f tanh(udot/(eps Vmax))`` on the undelayed input.
 
-Without asymmetry, play or lag the plain :func:`bouc_wen_id.reference._simulate` gives ``x, w`` and the
-terms are added at the samples.  Called through ``reference.simulate_sine(..., terms=...)`` and
-``reference.simulate_sampled(..., terms=...)``.
+Without asymmetry, play, lag or degradation the plain RK4 of :mod:`.simulate` gives ``x, w`` and the
+terms are added at the samples (:func:`outputs`).  Called through ``reference.simulate_sine(..., terms=...)``
+and ``reference.simulate_sampled(..., terms=...)`` (:mod:`.simulate`), which choose between the two.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from typing import Any, Callable
+from typing import Callable, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
 
-from .errors import InvalidParameterError
-from .validation import check_bouc_wen, finite_scalar
+from ..errors import InvalidParameterError
+from ..validation import finite_scalar
 
-__all__ = ["TERM_NAMES", "check_terms", "lag_weights", "simulate_sine", "simulate_sampled"]
+__all__ = [
+    "TERM_NAMES",
+    "Input",
+    "Model",
+    "check_terms",
+    "has_state",
+    "integrate",
+    "lag_weights",
+    "outputs",
+    "sampled_input",
+    "sine_input",
+]
 
 FloatArray = NDArray[np.float64]
 
@@ -115,81 +126,79 @@ def lag_weights(r: float) -> tuple[float, float, float, float]:
 
 
 Source = Callable[[float], tuple[float, float]]
-#: The plain oracle this module extends, handed in by :mod:`.reference` (which imports this module, so
-#: this one must not import it back): ``realize(num, den, delay)`` and
-#: ``simulate(num, den, delay, bw, source, dt, n_samples, substeps) -> (x, w)``.
-Plain = tuple[Callable[..., Any], Callable[..., Any]]
 
 
-def _simulate_terms(
-    num: NDArray[np.float64],
-    den: NDArray[np.float64],
-    delay: float,
-    bw: tuple[float, float, float, float, float],
-    source: Source,
-    second: Callable[[float], float],
-    peak_rate: float,
-    dt: float,
-    n_samples: int,
-    substeps: int,
-    terms: Mapping[str, float],
-    plain: Plain,
-) -> tuple[FloatArray, FloatArray, FloatArray]:
-    realize, simulate_plain = plain
-    a, c, d, delay = realize(num, den, delay)
-    alpha, beta, gamma, mu, w0 = bw
-    check_bouc_wen(alpha, beta, gamma, mu, w0)
-    dt = finite_scalar("dt", dt)
-    if dt <= 0.0:
-        raise InvalidParameterError(f"dt = {dt} must be > 0")
-    if substeps < 1:
-        raise InvalidParameterError(f"substeps = {substeps} must be >= 1")
-    if n_samples < 1:
-        raise InvalidParameterError(f"n_samples = {n_samples} must be >= 1")
-    p = check_terms(terms, beta, gamma)
+class Input(NamedTuple):
+    """The input as the terms see it: ``source(t) -> (u, udot)``, ``second(t) -> uddot`` and the peak
+    ``max |udot|`` that scales the Coulomb smoothing."""
+
+    source: Source
+    second: Callable[[float], float]
+    peak_rate: float
+
+
+class Model(NamedTuple):
+    """The checked model: realisation ``(a, c, d, delay)`` and Bouc-Wen ``bw`` (checked by :mod:`.simulate`,
+    as the plain run's), and the full set of term parameters (:func:`check_terms`)."""
+
+    a: FloatArray
+    c: FloatArray
+    d: float
+    delay: float
+    bw: tuple[float, float, float, float, float]
+    terms: dict[str, float]
+
+
+def has_state(model: Model) -> bool:
+    """Whether a term changes the states (asymmetry, play, lag, degradation); if not, the plain RK4 of
+    :mod:`.simulate` gives ``x, w`` and :func:`outputs` adds the output terms at the samples."""
+    p = model.terms
+    return p["asymmetry"] != 0.0 or p["play"] > 0.0 or p["sensor_lag"] > 0.0 or p["degradation"] > 0.0
+
+
+def _mech(p: Mapping[str, float], inp: Input) -> Callable[[float], float]:
+    """``k u + c udot + m uddot + f tanh(udot/(eps Vmax))`` at time t (the undelayed input)."""
     stiff, visc, iner, coul = p["stiffness"], p["viscous"], p["inertia"], p["coulomb"]
-    scale = p["coulomb_smoothing"] * peak_rate
-    delta, b, tau = p["asymmetry"], p["play"], p["sensor_lag"]
-    dnu = p["degradation"]
+    scale = p["coulomb_smoothing"] * inp.peak_rate
 
     def mech(t: float) -> float:
-        u, udot = source(t)
-        uddot = second(t)
+        u, udot = inp.source(t)
+        uddot = inp.second(t)
         friction = coul * math.tanh(udot / scale) if scale > 0.0 else 0.0
         return stiff * u + visc * udot + iner * uddot + friction
 
-    if not (delta != 0.0 or b > 0.0 or tau > 0.0 or dnu > 0.0):
-        x_out, w_out = simulate_plain(num, den, delay, bw, source, dt, n_samples, substeps)
-        y_out = np.array([p["offset"] + (float(w_out[k]) + mech(k * dt)) for k in range(n_samples)])
-        return x_out, w_out, y_out
+    return mech
 
-    n = a.size
 
-    def delayed(t: float) -> tuple[float, float]:
-        if t - delay < 0.0:
-            return 0.0, 0.0
-        return source(t - delay)
+def outputs(model: Model, w_out: FloatArray, inp: Input, dt: float) -> FloatArray:
+    """``y`` at the samples from the plain ``w`` (no state term)."""
+    mech = _mech(model.terms, inp)
+    return np.array([model.terms["offset"] + (float(w_out[k]) + mech(k * dt)) for k in range(w_out.size)])
 
-    def rate(xpdot: float, w: float, e: float) -> float:
-        wmu = float(abs(w) ** mu)
+
+class _Rates(NamedTuple):
+    """The generalised Bouc-Wen rate with degradation, and the RK4 along the play's path."""
+
+    alpha: float
+    beta: float
+    gamma: float
+    mu: float
+    delta: float
+    dnu: float
+
+    def rate(self, xpdot: float, w: float, e: float) -> float:
+        wmu = float(abs(w) ** self.mu)
         sw = float(np.sign(w))
-        nu = 1.0 + dnu * e  # Baber-Noori strength degradation; each term times nu, as the core
+        nu = 1.0 + self.dnu * e  # Baber-Noori strength degradation; each term times nu, as the core
         return (
-            alpha * xpdot
-            - nu * (beta * abs(xpdot) * sw * wmu)
-            - nu * (gamma * xpdot * wmu)
-            - nu * (delta * xpdot * sw * wmu)
+            self.alpha * xpdot
+            - nu * (self.beta * abs(xpdot) * sw * wmu)
+            - nu * (self.gamma * xpdot * wmu)
+            - nu * (self.delta * xpdot * sw * wmu)
         )
 
-    def linear(xs: FloatArray, vin: tuple[float, float]) -> tuple[FloatArray, float]:
-        v, vdot = vin
-        dxs = np.empty(n)
-        if n:
-            dxs[0] = -float(np.dot(a, xs)) + v
-            dxs[1:] = xs[: n - 1]
-        return dxs, float(np.dot(c, dxs)) + d * vdot
-
-    def path(w: float, e: float, dxp: float) -> tuple[float, float]:
+    def path(self, w: float, e: float, dxp: float) -> tuple[float, float]:
+        rate = self.rate
         k1 = rate(dxp, w, e)
         w2, e2 = w + 0.5 * k1, e + 0.5 * w * dxp
         k2 = rate(dxp, w2, e2)
@@ -198,6 +207,43 @@ def _simulate_terms(
         w4, e4 = w + k3, e + w3 * dxp
         k4 = rate(dxp, w4, e4)
         return w + (k1 + 2.0 * k2 + 2.0 * k3 + k4) / 6.0, e + (w + 2.0 * w2 + 2.0 * w3 + w4) * dxp / 6.0
+
+
+def _play_mode(x: float, xp: float, b: float, xdot: float) -> int:
+    """+1 when the play is engaged going up, -1 going down, 0 in its dwell."""
+    e = x - xp
+    slack = PLAY_ENGAGE_RTOL * (b + abs(x))
+    if xdot > 0.0 and e >= b - slack:
+        return 1
+    if xdot < 0.0 and e <= -b + slack:
+        return -1
+    return 0
+
+
+def integrate(
+    model: Model, inp: Input, dt: float, n_samples: int, substeps: int
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """``(x, w, y)`` by the RK4 on ``[xs, w, e]`` with the play's mode frozen per step and the lag's
+    exponential step (module docstring)."""
+    a, c, d, delay, (alpha, beta, gamma, mu, w0), p = model
+    mech = _mech(p, inp)
+    b, tau = p["play"], p["sensor_lag"]
+    rates = _Rates(alpha, beta, gamma, mu, p["asymmetry"], p["degradation"])
+    rate = rates.rate
+    n = a.size
+
+    def delayed(t: float) -> tuple[float, float]:
+        if t - delay < 0.0:
+            return 0.0, 0.0
+        return inp.source(t - delay)
+
+    def linear(xs: FloatArray, vin: tuple[float, float]) -> tuple[FloatArray, float]:
+        v, vdot = vin
+        dxs = np.empty(n)
+        if n:
+            dxs[0] = -float(np.dot(a, xs)) + v
+            dxs[1:] = xs[: n - 1]
+        return dxs, float(np.dot(c, dxs)) + d * vdot
 
     h = dt / substeps
     half_h, h_sixth = 0.5 * h, h / 6.0
@@ -223,15 +269,7 @@ def _simulate_terms(
             tm, te = ts + half_h, ts + h
             in1, inm, in4 = delayed(ts), delayed(tm), delayed(te)
             k1, xdot1 = linear(xs, in1)
-            mode = 0  # +1 up, -1 down, 0 dwell
-            if has_play:
-                x = float(np.dot(c, xs)) + d * in1[0]
-                e = x - xp
-                slack = PLAY_ENGAGE_RTOL * (b + abs(x))
-                if xdot1 > 0.0 and e >= b - slack:
-                    mode = 1
-                elif xdot1 < 0.0 and e <= -b + slack:
-                    mode = -1
+            mode = _play_mode(float(np.dot(c, xs)) + d * in1[0], xp, b, xdot1) if has_play else 0
 
             def played(xdot: float, mode: int = mode) -> float:
                 if not has_play:
@@ -268,7 +306,7 @@ def _simulate_terms(
                 clamped = min(max(xp, x_end - b), x_end + b)
                 travel = clamped - xp
                 if travel != 0.0:
-                    w, en = path(w, en, travel)
+                    w, en = rates.path(w, en, travel)
                 xp = clamped
             if has_lag:
                 fm = w_mid + mech(tm)
@@ -277,20 +315,8 @@ def _simulate_terms(
     return x_out, w_out, y_out
 
 
-def simulate_sine(
-    num: NDArray[np.float64],
-    den: NDArray[np.float64],
-    delay: float,
-    bw: tuple[float, float, float, float, float],
-    amplitude: float,
-    omega: float,
-    dt: float,
-    n_samples: int,
-    substeps: int,
-    terms: Mapping[str, float],
-    plain: Plain,
-) -> tuple[FloatArray, FloatArray, FloatArray]:
-    """``(x, w, y)`` for ``u = amplitude cos(omega t)`` (already checked by the caller)."""
+def sine_input(amplitude: float, omega: float) -> Input:
+    """``u = amplitude cos(omega t)`` (already checked by the caller)."""
     neg_amplitude_omega = -amplitude * omega
 
     def source(tau: float) -> tuple[float, float]:
@@ -300,9 +326,7 @@ def simulate_sine(
     def second(tau: float) -> float:
         return neg_amplitude_omega * omega * math.cos(omega * tau)
 
-    return _simulate_terms(
-        num, den, delay, bw, source, second, abs(amplitude) * omega, dt, n_samples, substeps, terms, plain
-    )
+    return Input(source, second, abs(amplitude) * omega)
 
 
 def hermite_peak_rate(u: FloatArray, m: FloatArray, dt: float) -> float:
@@ -321,19 +345,8 @@ def hermite_peak_rate(u: FloatArray, m: FloatArray, dt: float) -> float:
     return peak
 
 
-def simulate_sampled(
-    num: NDArray[np.float64],
-    den: NDArray[np.float64],
-    delay: float,
-    bw: tuple[float, float, float, float, float],
-    u: FloatArray,
-    m: FloatArray,
-    dt: float,
-    substeps: int,
-    terms: Mapping[str, float],
-    plain: Plain,
-) -> tuple[FloatArray, FloatArray, FloatArray]:
-    """``(x, w, y)`` for samples ``u`` with Catmull-Rom slopes ``m`` (already checked by the caller)."""
+def sampled_input(u: FloatArray, m: FloatArray, dt: float) -> Input:
+    """Samples ``u`` with Catmull-Rom slopes ``m`` (already checked by the caller)."""
     last = u.size - 1
 
     def locate(tau: float) -> tuple[int, float]:
@@ -364,6 +377,4 @@ def simulate_sampled(
             (6.0 * s - 4.0) * m0 + (6.0 * s - 2.0) * m1
         ) / dt
 
-    return _simulate_terms(
-        num, den, delay, bw, source, second, hermite_peak_rate(u, m, dt), dt, u.size, substeps, terms, plain
-    )
+    return Input(source, second, hermite_peak_rate(u, m, dt))
