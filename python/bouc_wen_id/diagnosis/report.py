@@ -158,8 +158,8 @@ def html_page(d: Diagnosis, images: dict[str, bytes]) -> str:
         "table{border-collapse:collapse;margin:0.5em 0}td,th{border:1px solid #ccc;padding:2px 8px;"
         "text-align:right;font-size:90%}th{background:#eee}.verdict{font-size:130%;padding:0.6em;"
         "background:#f4f4ff;border-left:6px solid #446}img{max-width:100%}</style></head><body>",
-        "<h1>Diagnosis</h1>",
         f"<p class='verdict'><b>{html.escape(d.status)}</b>: {html.escape(d.verdict)}</p>",
+        "<h1>Diagnosis</h1>",
         f"<p>Plain model: χ²/dof = {_g(d.plain.cost / max(d.plain.dof, 1))} "
         f"(p = {_g(d.plain.p_value, '.2g')}); "
         f"final model: χ²/dof = {_g(d.final.cost / max(d.final.dof, 1))} (p = {_g(d.final.p_value, '.2g')}); "
