@@ -100,10 +100,10 @@ def test_dask_local_cluster_is_identical_to_local(recordings: list[bw.Recording]
 
 @pytest.mark.skipif(not hasattr(os, "sched_getaffinity"), reason="no CPU affinity on this platform")
 def test_a_pool_with_one_worker_per_cpu_pins_each_worker_to_one_cpu() -> None:
-    from bouc_wen_id.batch import _local_pool
+    from bouc_wen_id._pool import get_pool
 
     cpus = os.sched_getaffinity(0)
-    pool = _local_pool(len(cpus))
+    pool = get_pool(len(cpus))
     seen = [pool.submit(os.sched_getaffinity, 0).result() for _ in range(4 * len(cpus))]
     assert all(len(s) == 1 and s <= cpus for s in seen), seen
     assert os.sched_getaffinity(0) == cpus  # the caller is not pinned

@@ -294,7 +294,9 @@ def test_cli_identify_separately_reports_refusals(
     # what is tested, whatever the estimator makes of the data); the other is identified.
     bw.save(tmp_path / "a.npz", [_lab_measurement(2.0, "hysteretic", 3)])
     bw.save(tmp_path / "b.npz", [_lab_measurement(2.0, "viscous", 4, viscous=True)])
-    real = cli.identify  # type: ignore[attr-defined]  # the name the CLI calls, patched below
+    import bouc_wen_id.identification as identification
+
+    real = identification.identify  # what identify_many calls, patched below
 
     def identify(items: Any, *args: Any, **kwargs: Any) -> Any:
         if any(str(getattr(it, "source", "")).startswith("viscous") for it in items):
@@ -303,7 +305,7 @@ def test_cli_identify_separately_reports_refusals(
             raise err
         return real(items, *args, **kwargs)
 
-    monkeypatch.setattr(cli, "identify", identify)
+    monkeypatch.setattr(identification, "identify", identify)
     assert cli.main(["identify", str(tmp_path), "--separately", "--out", str(tmp_path / "rep")]) == 0
     out = capsys.readouterr().out
     assert (tmp_path / "rep" / "experiment_00" / "result.json").exists()
@@ -312,7 +314,9 @@ def test_cli_identify_separately_reports_refusals(
     assert "drove mu to 1" in refused["message"]
     assert "1 of 2 experiment(s) refused" in out
     # Every experiment refused: exit status 2.
-    monkeypatch.setattr(cli, "identify", lambda *a, **k: (_ for _ in ()).throw(bw.InsufficientDataError("x")))
+    monkeypatch.setattr(
+        identification, "identify", lambda *a, **k: (_ for _ in ()).throw(bw.InsufficientDataError("x"))
+    )
     assert cli.main(["identify", str(tmp_path), "--separately", "--out", str(tmp_path / "rep2")]) == 2
 
 

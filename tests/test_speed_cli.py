@@ -9,7 +9,7 @@ from pathlib import Path
 
 import bouc_wen_id as bw
 import pytest
-from bouc_wen_id import cli
+from bouc_wen_id import _pool, cli
 
 
 @pytest.fixture(scope="module")
@@ -26,7 +26,7 @@ def test_no_figures_writes_the_numbers_only(
     out = tmp_path / "rep"
     assert cli.main(["identify", str(folder), "--out", str(out), "--no-figures"]) == 0
     printed = capsys.readouterr().out
-    assert sorted(p.name for p in out.iterdir()) == ["result.json"]
+    assert sorted(p.name for p in out.iterdir()) == [".bouc_wen_id-report", "result.json"]
     assert "beta" in printed and "png" not in printed
     assert json.loads((out / "result.json").read_text())["method"] == "refined"
 
@@ -37,7 +37,7 @@ def test_figures_come_after_the_numbers(
     out = tmp_path / "rep"
     assert cli.main(["identify", str(folder), "--out", str(out)]) == 0
     printed = capsys.readouterr().out
-    assert {p.name for p in out.iterdir()} == {"result.json", "loops.png", "bode.png", "residuals.png"}
+    assert {p.name for p in out.glob("[!.]*")} == {"result.json", "loops.png", "bode.png", "residuals.png"}
     assert printed.index("result.json") < printed.index("loops.png")
 
 
@@ -102,6 +102,7 @@ def test_workers_give_the_serial_report(
 ) -> None:
     # The folder is far below the size where the workers pay; lower the bar so that they run.
     monkeypatch.setattr(cli, "_PARALLEL_MIN_BYTES", 0)
+    monkeypatch.setattr(bw.batch, "PARALLEL_MIN_SAMPLES", 0)
     printed = {}
     for workers in ("1", "2"):
         out = tmp_path / f"w{workers}"
@@ -126,8 +127,8 @@ def test_both_ends_keeps_the_order_and_the_first_error() -> None:
         return i * i
 
     with ThreadPoolExecutor(1) as pool:
-        assert list(cli._both_ends(pool, job, [(i,) for i in range(3)])) == [0, 1, 4]
-        got = cli._both_ends(pool, job, [(i,) for i in range(8)])
+        assert list(_pool.ordered(pool, job, [(i,) for i in range(3)])) == [0, 1, 4]
+        got = _pool.ordered(pool, job, [(i,) for i in range(8)])
         assert [next(got) for _ in range(3)] == [0, 1, 4]
         with pytest.raises(InvalidParameterError, match="job 3"):  # job 6's error (maybe met first) waits
             next(got)
