@@ -107,3 +107,78 @@ def test_a_pool_with_one_worker_per_cpu_pins_each_worker_to_one_cpu() -> None:
     seen = [pool.submit(os.sched_getaffinity, 0).result() for _ in range(4 * len(cpus))]
     assert all(len(s) == 1 and s <= cpus for s in seen), seen
     assert os.sched_getaffinity(0) == cpus  # the caller is not pinned
+
+
+# --------------------------------------------------------------------------------------------------
+# The pool (bouc_wen_id._pool): capped, rebuilt after a dead worker, the caller's budget in every worker
+# --------------------------------------------------------------------------------------------------
+
+
+def test_workers_beyond_the_cpu_count_are_refused_before_any_process_starts(
+    recordings: list[bw.Recording],
+) -> None:
+    from bouc_wen_id import _pool
+
+    before = dict(_pool._POOLS)
+    for workers in (10**6, (os.cpu_count() or 1) + 1):
+        with pytest.raises(InvalidParameterError, match=r"workers = \d+ is more than the \d+ CPU"):
+            identify_many([[recordings[0]], [recordings[1]]], workers=workers)
+    for bad in (0, -3, 1.5, True, "2"):
+        with pytest.raises(InvalidParameterError, match="workers"):
+            identify_many([[recordings[0]]], workers=bad)  # type: ignore[arg-type]
+    assert _pool._POOLS == before  # no pool was started for a refused request
+
+
+class _KillsItsWorker:
+    """Unpickled in a worker process, it ends that process at once (a crash in native code, an OOM kill)."""
+
+    def __reduce__(self) -> tuple[object, tuple[int]]:
+        return (os._exit, (7,))
+
+
+def test_a_pool_whose_worker_died_is_rebuilt_for_the_next_call(recordings: list[bw.Recording]) -> None:
+    from concurrent.futures.process import BrokenProcessPool
+
+    jobs = _jobs(recordings)
+    first = identify_many(jobs, workers=2)
+    dying = [*jobs[:1], [_KillsItsWorker()], *jobs[1:]]
+    with pytest.raises(BrokenProcessPool, match="worker process died"):
+        identify_many(dying, workers=2)
+    # The next batch in this process starts new workers and gives the same results.
+    again = identify_many(jobs, workers=2)
+    assert [r.to_json() for r in again] == [r.to_json() for r in first]  # type: ignore[union-attr]
+
+
+def test_the_callers_budget_applies_in_the_workers(recordings: list[bw.Recording]) -> None:
+    jobs = _jobs(recordings)
+    # identify's phase profile needs ~3e5 steps: refused under max_steps = 1000, serial or pooled.
+    with bw.budget.budget(max_steps=1000):
+        for workers in (1, 2):
+            with pytest.raises(bw.BudgetExceededError, match="max_steps = 1000"):
+                identify_many(jobs, workers=workers)
+    # Outside the block the workers have the default budget again.
+    assert all(isinstance(r, bw.IdentificationResult) for r in identify_many(jobs, workers=2))
+
+
+def test_average_many_is_average_segments_of_each_in_order(recordings: list[bw.Recording]) -> None:
+    measurements = [
+        bw.Measurement(r.t, r.u, r.y, nominal_frequency=r.frequency, name=f"m{i}")
+        for i, r in enumerate(recordings[:3])
+    ]
+    items = [measurements[0], recordings[5], measurements[1], measurements[2]]
+    seen: list[tuple[int, str]] = []
+    for workers in (1, 2):
+        seen.clear()
+        experiments, segmented = bw.batch.average_many(
+            items, workers=workers, on_each=lambda i, s: seen.append((i, s.name))
+        )
+        assert seen == [(0, "m0"), (1, "m1"), (2, "m2")]
+        expected = [bw.signal.average_segments(m) for m in measurements]
+        assert [s.to_dict() for s in segmented] == [e.to_dict() for e in expected]
+        assert experiments[len(expected[0].periods)] is recordings[5]
+        assert len(experiments) == 1 + sum(len(e.periods) for e in expected)
+    # A measurement without a steady stretch is refused by average_segments, by name; nothing at all too.
+    with pytest.raises(InsufficientDataError, match="1000 steady periods"):
+        bw.batch.average_many(measurements[:1], min_periods=1000)
+    with pytest.raises(InsufficientDataError, match="no experiment"):
+        bw.batch.average_many([])

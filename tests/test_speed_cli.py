@@ -159,3 +159,28 @@ def test_one_blas_thread_limits_the_loaded_and_later_blas_and_restores(
     monkeypatch.setenv("OPENBLAS_NUM_THREADS", "2")  # the user's choice stands
     with one_blas_thread():
         assert os.environ["OPENBLAS_NUM_THREADS"] == "2" and counts() == before
+
+
+def test_workers_beyond_the_cpu_count_is_a_usage_error_naming_the_flag(
+    lab: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    import os
+
+    for workers in ("1000000", str((os.cpu_count() or 1) + 1), "0"):
+        with pytest.raises(SystemExit) as info:
+            cli.main(["identify", str(lab), "--out", str(tmp_path / "x"), "--workers", workers])
+        assert info.value.code == 2
+        err = capsys.readouterr().err
+        assert "argument --workers" in err and len(err.strip().splitlines()) == 1, err
+    assert not (tmp_path / "x").exists()
+
+
+def test_a_malformed_scheduler_address_is_a_named_error(
+    folder: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    argv = ["identify", str(folder), "--out", str(tmp_path / "x"), "--scheduler", "::::"]
+    assert cli.main(argv) == 2
+    err = capsys.readouterr().err
+    lines = [line for line in err.splitlines() if not line.startswith("[")]
+    assert len(lines) == 1 and lines[0].startswith("error: InvalidParameterError: --scheduler '::::'"), err
+    assert not (tmp_path / "x").exists()

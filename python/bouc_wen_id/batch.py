@@ -180,7 +180,8 @@ def average_many(
     Raises
     ------
     InsufficientDataError
-        No experiment is left: no steady segment of at least ``min_periods`` periods in any measurement.
+        A measurement without a steady segment of at least ``min_periods`` periods (from
+        :func:`~bouc_wen_id.signal.average_segments`), or no experiment at all.
     InvalidParameterError
         ``workers`` not in ``[1, os.cpu_count()]``.
     """
@@ -199,8 +200,8 @@ def average_many(
         out.extend(next(averaged).periods if isinstance(item, Measurement) else [item])
     if not out:
         raise InsufficientDataError(
-            f"no steady segment of at least min_periods = {min_periods:g} periods was found in any "
-            "measurement; see what was dropped, and why, in each measurement's segment report"
+            "no experiment: items is empty, or it holds only measurements without a steady segment of at "
+            f"least min_periods = {min_periods:g} periods"
         )
     return out, segmented
 
