@@ -562,3 +562,10 @@ def test_a_library_error_names_the_flag_not_the_python_argument(
     assert cli.main(argv) == 2
     line = _one_error_line(capsys.readouterr().err, "--settle-periods")
     assert "settle_periods" not in line
+
+
+def test_a_planning_error_names_the_flags(capsys: pytest.CaptureFixture[str]) -> None:
+    limits = ["--band", "1", "10", "--max-amplitude", "1", "--noise", "0.05", "--sample-rate", "100"]
+    assert cli.main(["plan", "--budget", "300", *limits, "--target", "G"]) == 2
+    line = _one_error_line(capsys.readouterr().err, "--budget 300 s", "--frequencies")
+    assert "n_frequencies" not in line and "budget =" not in line

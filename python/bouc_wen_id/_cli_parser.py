@@ -327,15 +327,33 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+#: Python argument names that differ from the flag's (``plan_experiment(n_frequencies=...)`` is
+#: ``--frequencies``; ``SinePlan(noise_sd=...)`` is ``--noise``).
+_PYTHON_NAMES = {
+    "plan": {"n_frequencies": "--frequencies", "n_amplitudes": "--amplitudes", "noise_sd": "--noise"},
+    "simulate": {"noise_sd": "--noise", "amplitudes": "--amplitude"},
+    "demo": {"noise_sd": "--noise", "periods": "--periods-sim"},
+}
+
+
 def flags_named(message: str, command: str) -> str:
-    """The message of a library error in the words of the command line: ``min_periods`` -> ``--min-periods``
-    for every option of ``command`` whose Python name has an underscore (the others, ``alpha``, ``budget``,
-    ``workers``, are also plain words: those messages name their flag themselves)."""
+    """The message of a library error in the words of the command line: ``min_periods`` -> ``--min-periods``,
+    ``budget = 300 s`` -> ``--budget 300 s``.
+
+    A Python name with an underscore is replaced wherever it stands; one without (``budget``, ``alpha``,
+    ``periods``: also plain words) only where the message states its value (``name = value``).
+    """
     sub = _subparser(command)
+    names = dict(_PYTHON_NAMES.get(command, {}))
     for action in sub._actions if sub is not None else ():
         flags = [f for f in action.option_strings if f.startswith("--")]
-        if flags and "_" in action.dest:
-            message = re.sub(rf"(?<![\w-]){re.escape(action.dest)}\b", flags[0], message)
+        if flags:
+            names.setdefault(action.dest, flags[0])
+    for name, flag in names.items():
+        if "_" in name:
+            message = re.sub(rf"(?<![\w-]){re.escape(name)}\b", flag, message)
+        else:
+            message = re.sub(rf"(?<![\w-]){re.escape(name)} = ", f"{flag} ", message)
     return message
 
 
