@@ -182,3 +182,39 @@ def test_average_many_is_average_segments_of_each_in_order(recordings: list[bw.R
         bw.batch.average_many(measurements[:1], min_periods=1000)
     with pytest.raises(InsufficientDataError, match="no experiment"):
         bw.batch.average_many([])
+
+
+@pytest.mark.skipif(not os.path.isdir("/proc"), reason="reads process states from /proc")
+def test_stop_all_ends_busy_workers_at_once_and_the_next_pool_works(recordings: list[bw.Recording]) -> None:
+    """What Ctrl-C and SIGTERM do to the command line's workers: no wait for their running tasks."""
+    import time
+
+    from bouc_wen_id import _pool
+
+    workers = min(2, os.cpu_count() or 1)
+    pool = _pool.get_pool(workers)
+    busy = pool.submit(time.sleep, 60)
+    pids = list(pool._processes)
+    while not busy.running():
+        time.sleep(0.01)
+    t0 = time.monotonic()
+    _pool.stop_all()
+    assert time.monotonic() - t0 < 5
+    deadline = time.monotonic() + 10
+    while any(_alive(pid) for pid in pids) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert not any(_alive(pid) for pid in pids)
+    assert _pool.get_pool(workers) is not pool
+    assert len(identify_many(_jobs(recordings), workers=workers)) == 4
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    try:  # a zombie (dead, not yet reaped) counts as ended
+        with open(f"/proc/{pid}/stat", encoding="ascii") as fh:
+            return fh.read().split(") ")[-1][:1] != "Z"
+    except OSError:
+        return True

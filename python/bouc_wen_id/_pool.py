@@ -30,7 +30,7 @@ import numpy as np
 from . import budget as _budget
 from .errors import BoucWenIdError, InvalidParameterError
 
-__all__ = ["cpu_count", "usable_cores", "check_workers", "get_pool", "submit", "ordered", "warm"]
+__all__ = ["cpu_count", "usable_cores", "check_workers", "get_pool", "submit", "ordered", "warm", "stop_all"]
 
 #: Environment of the worker processes: one rayon thread each, so that n workers do not run n x n threads.
 _WORKER_ENV = {"RAYON_NUM_THREADS": "1"}
@@ -157,6 +157,19 @@ def discard(pool: Executor) -> None:
         for workers, p in list(_POOLS.items()):
             if p is pool:
                 _discard_locked(workers, p)
+
+
+def stop_all() -> None:
+    """End every worker now, running tasks and all (after Ctrl-C or SIGTERM nobody wants their results,
+    and an exit that waited for them could take seconds)."""
+    with _LOCK:
+        pools = list(_POOLS.values())
+        _POOLS.clear()
+    for pool in pools:
+        workers = list((getattr(pool, "_processes", None) or {}).values())  # CPython's: pid -> process
+        pool.shutdown(wait=False, cancel_futures=True)
+        for worker in workers:
+            worker.terminate()
 
 
 def _shutdown_pools() -> None:

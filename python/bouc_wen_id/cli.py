@@ -541,9 +541,11 @@ def _run(args: argparse.Namespace) -> int:
     except BoucWenIdError as exc:
         return _fail(type(exc).__name__, exc, args.command)
     except KeyboardInterrupt:
+        _pool.stop_all()
         print("interrupted: nothing was written", file=sys.stderr)
         return 130
     except _output.Terminated:
+        _pool.stop_all()
         print("terminated (SIGTERM): nothing was written", file=sys.stderr)
         return _output.EXIT_TERMINATED
     except (ImportError, OSError) as exc:  # a missing extra (the line says which), an unreadable path
