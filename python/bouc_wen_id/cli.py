@@ -71,7 +71,7 @@ def _write_report(result: IdentificationResult, out: Path, figures: bool = True)
     return files
 
 
-#: The report's figures: file name -> how it is drawn (``_render_figure``).
+#: The report's figures, one file each (drawn by ``_render_figure``).
 _FIGURES = ("loops.png", "bode.png", "residuals.png")
 
 
