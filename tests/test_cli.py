@@ -569,3 +569,26 @@ def test_a_planning_error_names_the_flags(capsys: pytest.CaptureFixture[str]) ->
     assert cli.main(["plan", "--budget", "300", *limits, "--target", "G"]) == 2
     line = _one_error_line(capsys.readouterr().err, "--budget 300 s", "--frequencies")
     assert "n_frequencies" not in line and "budget =" not in line
+
+
+def test_overwrite_replaces_only_the_report_seen_before_the_work(tmp_path: Path) -> None:
+    """Two --overwrite runs into one report folder: the later-finishing one does not replace the report
+    the other wrote while it worked (the earlier one's is what --overwrite was for); it is refused."""
+    from bouc_wen_id import _output
+
+    out = tmp_path / "recs"
+    assert cli.main(["simulate", "--out", str(out), *SMALL_SIM]) == 0
+    target = _output.check_out(out, overwrite=True)
+    seen = _output.identity(target)
+    assert seen is not None
+    # Meanwhile another run replaces the report.
+    assert cli.main(["simulate", "--out", str(out), *SMALL_SIM, "--seed", "9", "--overwrite"]) == 0
+    theirs = _snapshot(out)
+    with (
+        pytest.raises(bw.InvalidParameterError, match="--out .*another run"),
+        _output.staged(target, command="simulate", replaces=seen) as staged,
+    ):
+        staged.mkdir()
+        (staged / "exp_000.csv").write_text("this run's\n")
+    assert _snapshot(out) == theirs
+    assert [p.name for p in tmp_path.iterdir()] == ["recs"]

@@ -31,7 +31,16 @@ from typing import Optional
 
 from .errors import InvalidParameterError
 
-__all__ = ["MARKER", "Terminated", "check_out", "staged", "shown", "terminate_on_sigterm", "EXIT_TERMINATED"]
+__all__ = [
+    "MARKER",
+    "EXIT_TERMINATED",
+    "Terminated",
+    "check_out",
+    "identity",
+    "staged",
+    "shown",
+    "terminate_on_sigterm",
+]
 
 #: The file that makes a folder a complete report of ours, written after everything else.
 MARKER = ".bouc_wen_id-report"
@@ -174,14 +183,27 @@ def _alive(pid: int) -> bool:
     return True
 
 
+def identity(path: Path) -> Optional[tuple[int, int]]:
+    """Which folder is at ``path`` now (device and inode; ``None`` if nothing or not a folder): a report
+    is replaced only if it is still the one the check saw (:func:`staged`'s ``replaces``)."""
+    try:
+        st = path.lstat()
+    except OSError:
+        return None
+    return (st.st_dev, st.st_ino) if stat.S_ISDIR(st.st_mode) else None
+
+
 @contextmanager
-def staged(target: Path, *, command: str, overwrite: bool, flag: str = "--out") -> Iterator[Path]:
+def staged(
+    target: Path, *, command: str, replaces: Optional[tuple[int, int]], flag: str = "--out"
+) -> Iterator[Path]:
     """A path to write the whole output to (named like ``target``, inside a hidden partial folder beside
     it); on success it replaces ``target`` in one rename (a folder gets the :data:`MARKER` first).
 
     On any failure (an error, Ctrl-C, SIGTERM) the partial folder is removed and ``target`` is left as it
-    was.  ``target`` is what :func:`check_out` returned; it is checked again at the rename, so that a report
-    another run put there meanwhile is never replaced without ``overwrite``.
+    was.  ``target`` is what :func:`check_out` returned; ``replaces`` is the :func:`identity` of the report
+    there that ``--overwrite`` replaces (``None``: replace nothing).  A report another run put there
+    meanwhile is never replaced: this run is refused instead, by name.
     """
     parent = target.parent
     parent.mkdir(parents=True, exist_ok=True)
@@ -192,14 +214,16 @@ def staged(target: Path, *, command: str, overwrite: bool, flag: str = "--out") 
         if staged_out.is_dir():
             marker = {"format": "bouc_wen_id.report", "command": command}
             (staged_out / MARKER).write_text(json.dumps(marker) + "\n", encoding="utf-8")
-        _publish(staged_out, target, stage / ".replaced", overwrite, flag)
+        _publish(staged_out, target, stage / ".replaced", replaces, flag)
     finally:
         shutil.rmtree(stage, ignore_errors=True)
 
 
-def _publish(staged_out: Path, target: Path, trash: Path, overwrite: bool, flag: str) -> None:
+def _publish(
+    staged_out: Path, target: Path, trash: Path, replaces: Optional[tuple[int, int]], flag: str
+) -> None:
     """Move ``staged_out`` onto ``target``; a report of ours already there goes to ``trash`` first."""
-    replacing = overwrite and target.is_dir() and not target.is_symlink() and _is_ours(target)
+    replacing = replaces is not None and identity(target) == replaces and _is_ours(target)
     if replacing:
         try:
             os.rename(target, trash)

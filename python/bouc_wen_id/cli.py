@@ -46,11 +46,13 @@ __all__ = ["main", "build_parser"]
 def _check_out(args: argparse.Namespace, inputs: Sequence[Path] = (), what: str = "report folder") -> None:
     """Refuse, before any work, an ``--out`` that is not ours to write (see :mod:`bouc_wen_id._output`)."""
     args.out_resolved = _output.check_out(args.out, overwrite=args.overwrite, inputs=inputs, what=what)
+    # The report --overwrite replaces: the one there now, not one another run puts there meanwhile.
+    args.out_replaces = _output.identity(args.out_resolved) if args.overwrite else None
 
 
 @contextmanager
 def _staged(args: argparse.Namespace) -> Iterator[Path]:
-    with _output.staged(args.out_resolved, command=args.command, overwrite=args.overwrite) as staged:
+    with _output.staged(args.out_resolved, command=args.command, replaces=args.out_replaces) as staged:
         yield staged
     args.out_staged = staged
 
