@@ -592,3 +592,17 @@ def test_overwrite_replaces_only_the_report_seen_before_the_work(tmp_path: Path)
         (staged / "exp_000.csv").write_text("this run's\n")
     assert _snapshot(out) == theirs
     assert [p.name for p in tmp_path.iterdir()] == ["recs"]
+
+
+def test_out_that_is_the_current_folder_is_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Even empty (an empty folder is otherwise replaced by the new one): the shell would be left in a deleted
+    folder.  The autouse fixture made tmp_path the current folder."""
+    here = tmp_path / "here"
+    here.mkdir()
+    os.chdir(here)
+    for out in ("", ".", str(here), "../here"):
+        assert cli.main(["simulate", "--out", out, *SMALL_SIM]) == 2
+        _one_error_line(capsys.readouterr().err, "--out", "current folder")
+    assert list(here.iterdir()) == [] and Path.cwd() == here

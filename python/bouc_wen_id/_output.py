@@ -136,6 +136,9 @@ def _check_existing(
     held = _holds_an_input(target, inputs)
     if held is not None:
         raise _refuse(flag, out, f"is (or holds) the input {held}; choose another {what} for the report")
+    if _holds_an_input(target, [Path.cwd()]) is not None:
+        # Replacing it would leave this process (and the user's shell) in a deleted folder.
+        raise _refuse(flag, out, f"is (or holds) the current folder; choose another {what}")
     if not any(target.iterdir()):
         return
     if not _is_ours(target):
