@@ -102,7 +102,6 @@ def test_workers_give_the_serial_report(
 ) -> None:
     # The folder is far below the size where the workers pay; lower the bar so that they run.
     monkeypatch.setattr(cli, "_PARALLEL_MIN_BYTES", 0)
-    monkeypatch.setattr(bw.batch, "PARALLEL_MIN_SAMPLES", 0)
     printed = {}
     for workers in ("1", "2"):
         out = tmp_path / f"w{workers}"
