@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 import sys
 import warnings
 from pathlib import Path
@@ -97,6 +98,7 @@ def lab(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return path
 
 
+@pytest.mark.skipif((os.cpu_count() or 1) < 2, reason="--workers is capped at the CPU count")
 def test_workers_give_the_serial_report(
     lab: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
@@ -136,8 +138,6 @@ def test_both_ends_keeps_the_order_and_the_first_error() -> None:
 def test_one_blas_thread_limits_the_loaded_and_later_blas_and_restores(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
-    import os
-
     import numpy as np
     from bouc_wen_id._threads import BLAS_THREAD_VARIABLES, one_blas_thread
     from threadpoolctl import threadpool_info  # type: ignore[import-untyped]
@@ -163,8 +163,6 @@ def test_one_blas_thread_limits_the_loaded_and_later_blas_and_restores(
 def test_workers_beyond_the_cpu_count_is_a_usage_error_naming_the_flag(
     lab: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    import os
-
     for workers in ("1000000", str((os.cpu_count() or 1) + 1), "0"):
         with pytest.raises(SystemExit) as info:
             cli.main(["identify", str(lab), "--out", str(tmp_path / "x"), "--workers", workers])
