@@ -206,7 +206,10 @@ def _stage_timers(stages: dict[str, float]) -> Iterator[None]:
             ("bouc_wen_id.signal", "synchronous_average"),
             ("bouc_wen_id.signal._averaging", "synchronous_average"),
         ],
-        "identification (averaged -> fit)": [("bouc_wen_id.cli", "identify")],
+        "identification (averaged -> fit)": [
+            ("bouc_wen_id.cli", "identify"),
+            ("bouc_wen_id.identification", "identify"),  # the CLI's identify_many calls it there
+        ],
         "report: JSON": [
             ("bouc_wen_id.identification", "IdentificationResult.to_json"),
             ("bouc_wen_id.result", "IdentificationResult.to_json"),

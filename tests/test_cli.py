@@ -8,8 +8,11 @@ from __future__ import annotations
 import json
 import os
 import shutil
+import signal
 import subprocess
 import sys
+import textwrap
+import time
 from pathlib import Path
 from typing import Any
 
@@ -294,7 +297,9 @@ def test_cli_identify_separately_reports_refusals(
     # what is tested, whatever the estimator makes of the data); the other is identified.
     bw.save(tmp_path / "a.npz", [_lab_measurement(2.0, "hysteretic", 3)])
     bw.save(tmp_path / "b.npz", [_lab_measurement(2.0, "viscous", 4, viscous=True)])
-    real = cli.identify  # type: ignore[attr-defined]  # the name the CLI calls, patched below
+    import bouc_wen_id.identification as identification
+
+    real = identification.identify  # what identify_many calls, patched below
 
     def identify(items: Any, *args: Any, **kwargs: Any) -> Any:
         if any(str(getattr(it, "source", "")).startswith("viscous") for it in items):
@@ -303,7 +308,7 @@ def test_cli_identify_separately_reports_refusals(
             raise err
         return real(items, *args, **kwargs)
 
-    monkeypatch.setattr(cli, "identify", identify)
+    monkeypatch.setattr(identification, "identify", identify)
     assert cli.main(["identify", str(tmp_path), "--separately", "--out", str(tmp_path / "rep")]) == 0
     out = capsys.readouterr().out
     assert (tmp_path / "rep" / "experiment_00" / "result.json").exists()
@@ -312,7 +317,9 @@ def test_cli_identify_separately_reports_refusals(
     assert "drove mu to 1" in refused["message"]
     assert "1 of 2 experiment(s) refused" in out
     # Every experiment refused: exit status 2.
-    monkeypatch.setattr(cli, "identify", lambda *a, **k: (_ for _ in ()).throw(bw.InsufficientDataError("x")))
+    monkeypatch.setattr(
+        identification, "identify", lambda *a, **k: (_ for _ in ()).throw(bw.InsufficientDataError("x"))
+    )
     assert cli.main(["identify", str(tmp_path), "--separately", "--out", str(tmp_path / "rep2")]) == 2
 
 
@@ -334,3 +341,268 @@ def test_identify_refuses_recording_options_for_measurements() -> None:
     for kwargs in ({"settle_periods": 3}, {"periods": 5}):
         with pytest.raises(bw.InvalidParameterError, match="apply to Recordings only"):
             bw.identify([m], **kwargs)  # type: ignore[arg-type]
+
+
+# --------------------------------------------------------------------------------------------------
+# --out is ours only (issue #19): never the inputs, a folder of other files, a file, a link, a device
+# --------------------------------------------------------------------------------------------------
+
+SMALL_SIM = [
+    "--frequencies",
+    "2",
+    "3",
+    "--settle-periods",
+    "2",
+    "--periods",
+    "2",
+    "--samples-per-period",
+    "32",
+]
+
+
+def _snapshot(folder: Path) -> dict[str, bytes]:
+    return {p.name: p.read_bytes() for p in sorted(folder.iterdir())}
+
+
+def _one_error_line(err: str, *words: str) -> str:
+    lines = [line for line in err.splitlines() if not line.startswith("[")]
+    assert len(lines) == 1 and "Traceback" not in err, err
+    for word in words:
+        assert word in lines[0], (word, lines[0])
+    return lines[0]
+
+
+def test_out_that_is_the_input_folder_is_refused_and_the_recordings_kept(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], recordings: list[bw.Recording]
+) -> None:
+    data = tmp_path / "data"
+    bw.save_recordings(data, recordings)
+    before = _snapshot(data)
+    for command in ("diagnose", "identify"):
+        assert cli.main([command, str(data), "--out", str(data), "--overwrite"]) == 2
+        _one_error_line(capsys.readouterr().err, "InvalidParameterError", "--out", "input")
+        assert _snapshot(data) == before
+    # Spelled another way (a/b/..) it is still the input folder.
+    (data / "sub").mkdir()
+    assert cli.main(["identify", str(data), "--out", str(data / "sub" / ".."), "--overwrite"]) == 2
+    _one_error_line(capsys.readouterr().err, "--out", "input")
+    (data / "sub").rmdir()
+    assert _snapshot(data) == before
+    # A report folder of ours that holds an input is not replaced either.
+    report = tmp_path / "report"
+    assert cli.main(["simulate", "--out", str(report), *SMALL_SIM]) == 0
+    assert cli.main(["identify", str(report / "exp_000.csv"), "--out", str(report), "--overwrite"]) == 2
+    assert (report / "exp_000.csv").is_file()
+
+
+def test_out_folder_of_other_files_is_refused_even_with_overwrite(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    notes = tmp_path / "notes"
+    notes.mkdir()
+    (notes / "thesis.tex").write_text("chapter 1\n")
+    (notes / "result.json").write_text("{}\n")  # looks like a report, has no marker
+    before = _snapshot(notes)
+    assert cli.main(["simulate", "--out", str(notes), *SMALL_SIM, "--overwrite"]) == 2
+    _one_error_line(capsys.readouterr().err, "InvalidParameterError", f"--out {notes}", "other files")
+    assert _snapshot(notes) == before
+    assert [p.name for p in tmp_path.iterdir()] == ["notes"]  # no partial folder left
+
+
+@pytest.mark.parametrize("kind", ["file", "symlink_to_folder", "symlink_dangling", "device"])
+def test_out_that_is_not_a_folder_is_never_replaced(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], kind: str
+) -> None:
+    target = tmp_path / "mine"
+    target.mkdir()
+    (target / "keep.txt").write_text("keep\n")
+    out = tmp_path / "out"
+    if kind == "file":
+        out.write_text("a file of the user's\n")
+    elif kind == "symlink_to_folder":
+        out.symlink_to(target, target_is_directory=True)
+    elif kind == "symlink_dangling":
+        out.symlink_to(tmp_path / "nowhere")
+    else:
+        out = Path(os.devnull)
+    assert cli.main(["simulate", "--out", str(out), *SMALL_SIM, "--overwrite"]) == 2
+    _one_error_line(capsys.readouterr().err, "InvalidParameterError", f"--out {out}")
+    assert (target / "keep.txt").read_text() == "keep\n"
+    if kind == "file":
+        assert out.read_text() == "a file of the user's\n"
+    elif kind.startswith("symlink"):
+        assert out.is_symlink()
+    else:
+        import stat
+
+        assert stat.S_ISCHR(out.stat().st_mode)
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]
+
+
+def test_a_report_of_ours_is_replaced_whole_with_overwrite_and_a_file_output_never(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    out = tmp_path / "recs"
+    assert cli.main(["simulate", "--out", str(out), *SMALL_SIM]) == 0
+    assert (out / ".bouc_wen_id-report").is_file()
+    assert cli.main(["simulate", "--out", str(out), *SMALL_SIM[:2], *SMALL_SIM[3:]]) == 2
+    assert "--overwrite" in capsys.readouterr().err
+    assert cli.main(["simulate", "--out", str(out), *SMALL_SIM[:2], *SMALL_SIM[3:], "--overwrite"]) == 0
+    assert sorted(p.name for p in out.iterdir()) == [".bouc_wen_id-report", "exp_000.csv"]
+    bundle = tmp_path / "r.npz"
+    assert cli.main(["simulate", "--out", str(bundle), *SMALL_SIM]) == 0
+    written = bundle.read_bytes()
+    assert cli.main(["simulate", "--out", str(bundle), *SMALL_SIM, "--overwrite"]) == 2
+    _one_error_line(capsys.readouterr().err, "--out", "never replaces a file")
+    assert bundle.read_bytes() == written
+
+
+def test_a_long_out_name_works(tmp_path: Path) -> None:
+    """A 240-character folder name is valid (NAME_MAX is 255): the partial folder's name must not grow it."""
+    out = tmp_path / ("r" * 240)
+    assert cli.main(["simulate", "--out", str(out), *SMALL_SIM]) == 0
+    assert (out / "exp_001.csv").is_file()
+    assert cli.main(["simulate", "--out", str(out), *SMALL_SIM, "--overwrite"]) == 0
+    assert [p.name for p in tmp_path.iterdir()] == [out.name]
+
+
+def test_partial_folders_of_dead_runs_are_cleaned_by_the_next_run(tmp_path: Path) -> None:
+    dead = subprocess.run(
+        [sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True, text=True
+    )
+    dead_pid = int(dead.stdout)
+    stale = tmp_path / f".partial-bouc_wen_id-{dead_pid}-abc123"
+    (stale / "recs").mkdir(parents=True)
+    (stale / "recs" / "exp_000.csv").write_text("half\n")
+    alive = tmp_path / f".partial-bouc_wen_id-{os.getpid()}-def456"  # a live run's: kept
+    alive.mkdir()
+    assert cli.main(["simulate", "--out", str(tmp_path / "recs"), *SMALL_SIM]) == 0
+    assert not stale.exists() and alive.is_dir()
+
+
+def _cli(args: list[str]) -> subprocess.Popen[str]:
+    env = dict(os.environ, MPLBACKEND="Agg")
+    cmd = [sys.executable, "-m", "bouc_wen_id", *args]
+    return subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+
+
+def test_two_runs_into_one_new_out_one_wins_the_other_is_refused(tmp_path: Path) -> None:
+    out = tmp_path / "recs"
+    args = ["simulate", "--out", str(out), "--frequencies", "1", "2", "--samples-per-period", "2048"]
+    procs = [_cli([*args, "--seed", str(seed)]) for seed in (1, 2)]
+    results = [(p.wait(timeout=120), *p.communicate()) for p in procs]
+    codes = sorted(code for code, _, _ in results)
+    assert codes == [0, 2], results
+    loser = next(err for code, _, err in results if code == 2)
+    _one_error_line(loser, "InvalidParameterError", "--out")
+    assert sorted(p.name for p in out.iterdir()) == [".bouc_wen_id-report", "exp_000.csv", "exp_001.csv"]
+    assert [p.name for p in tmp_path.iterdir()] == ["recs"]
+
+
+def test_sigterm_exits_143_and_leaves_nothing(tmp_path: Path) -> None:
+    out = tmp_path / "R"
+    # One experiment of 700 000 samples x 1000 RK4 substeps: about a minute of work, inside the core
+    # (which polls for signals as for Ctrl-C).
+    args = ["simulate", "--out", str(out), "--frequencies", "1", "--samples-per-period", "10000"]
+    proc = _cli([*args, "--substeps", "1000"])
+    time.sleep(2.0)
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 143, err
+    _one_error_line(err, "terminated")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_sigterm_while_writing_removes_the_partial_folder(tmp_path: Path) -> None:
+    """The handler unwinds through the staged write: its partial folder goes too."""
+    code = textwrap.dedent(
+        f"""
+        import os, signal, sys
+        from bouc_wen_id import cli, io
+        real = io.save_recordings
+        def slow(path, recs):
+            files = real(path, recs)
+            os.kill(os.getpid(), signal.SIGTERM)  # mid-write: the partial folder exists now
+            return files
+        cli.save_recordings = slow
+        sys.exit(cli.main(["simulate", "--out", {str(tmp_path / "R")!r}, *{SMALL_SIM!r}]))
+        """
+    )
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 143, proc.stderr
+    _one_error_line(proc.stderr, "terminated")
+    assert list(tmp_path.iterdir()) == []
+
+
+# --------------------------------------------------------------------------------------------------
+# Exit codes (README: 0 done, 2 refused, 130 Ctrl-C, 143 SIGTERM, 1 internal error) and flag names
+# --------------------------------------------------------------------------------------------------
+
+
+def test_an_internal_error_exits_1_with_one_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    def broken(*args: Any, **kwargs: Any) -> Any:
+        raise RuntimeError("a bug")
+
+    monkeypatch.setattr(cli, "simulate", broken)
+    assert cli.main(["simulate", "--out", str(tmp_path / "r"), *SMALL_SIM]) == 1
+    err = capsys.readouterr().err
+    assert err.startswith("internal error: RuntimeError: a bug") and len(err.splitlines()) == 1
+    assert "please report" in err and not (tmp_path / "r").exists()
+
+
+def test_a_library_error_names_the_flag_not_the_python_argument(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    m = _lab_measurement(3.0, "m", 7)
+    bw.save(tmp_path / "lab.npz", [m])
+    # identify refuses settle_periods for measurements: the line says --settle-periods.
+    argv = ["identify", str(tmp_path / "lab.npz"), "--settle-periods", "3", "--out", str(tmp_path / "r")]
+    assert cli.main(argv) == 2
+    line = _one_error_line(capsys.readouterr().err, "--settle-periods")
+    assert "settle_periods" not in line
+
+
+def test_a_planning_error_names_the_flags(capsys: pytest.CaptureFixture[str]) -> None:
+    limits = ["--band", "1", "10", "--max-amplitude", "1", "--noise", "0.05", "--sample-rate", "100"]
+    assert cli.main(["plan", "--budget", "300", *limits, "--target", "G"]) == 2
+    line = _one_error_line(capsys.readouterr().err, "--budget 300 s", "--frequencies")
+    assert "n_frequencies" not in line and "budget =" not in line
+
+
+def test_overwrite_replaces_only_the_report_seen_before_the_work(tmp_path: Path) -> None:
+    """Two --overwrite runs into one report folder: the later-finishing one does not replace the report
+    the other wrote while it worked (the earlier one's is what --overwrite was for); it is refused."""
+    from bouc_wen_id import _output
+
+    out = tmp_path / "recs"
+    assert cli.main(["simulate", "--out", str(out), *SMALL_SIM]) == 0
+    target = _output.check_out(out, overwrite=True)
+    seen = _output.identity(target)
+    assert seen is not None
+    # Meanwhile another run replaces the report.
+    assert cli.main(["simulate", "--out", str(out), *SMALL_SIM, "--seed", "9", "--overwrite"]) == 0
+    theirs = _snapshot(out)
+    with (
+        pytest.raises(bw.InvalidParameterError, match="--out .*another run"),
+        _output.staged(target, command="simulate", replaces=seen) as staged,
+    ):
+        staged.mkdir()
+        (staged / "exp_000.csv").write_text("this run's\n")
+    assert _snapshot(out) == theirs
+    assert [p.name for p in tmp_path.iterdir()] == ["recs"]
+
+
+def test_out_that_is_the_current_folder_is_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Even empty (an empty folder is otherwise replaced by the new one): the shell would be left in a deleted
+    folder.  The autouse fixture made tmp_path the current folder."""
+    here = tmp_path / "here"
+    here.mkdir()
+    os.chdir(here)
+    for out in ("", ".", str(here), "../here"):
+        assert cli.main(["simulate", "--out", out, *SMALL_SIM]) == 2
+        _one_error_line(capsys.readouterr().err, "--out", "current folder")
+    assert list(here.iterdir()) == [] and Path.cwd() == here

@@ -416,13 +416,13 @@ def test_cli_refuses_to_mix_runs_and_replaces_whole_with_overwrite(tmp_path: Pat
     out = tmp_path / "R"
     small = ["--settle-periods", "2", "--periods", "2", "--samples-per-period", "32"]
     assert cli.main(["simulate", "--out", str(out), "--frequencies", "2", "3", "4", *small]) == 0
-    assert sorted(p.name for p in out.iterdir()) == ["exp_000.csv", "exp_001.csv", "exp_002.csv"]
+    assert sorted(p.name for p in out.glob("[!.]*")) == ["exp_000.csv", "exp_001.csv", "exp_002.csv"]
     # Another run into the same folder is refused before any work ...
     assert cli.main(["simulate", "--out", str(out), "--frequencies", "5", *small]) == 2
-    assert len(list(out.iterdir())) == 3
+    assert len(list(out.glob("[!.]*"))) == 3
     # ... and --overwrite replaces it whole: no old exp_02.csv next to the new files.
     assert cli.main(["simulate", "--out", str(out), "--frequencies", "5", *small, "--overwrite"]) == 0
-    assert sorted(p.name for p in out.iterdir()) == ["exp_000.csv"]
+    assert sorted(p.name for p in out.glob("[!.]*")) == ["exp_000.csv"]
     assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == []
 
 
@@ -431,7 +431,7 @@ def test_cli_identify_report_is_unmixed(tmp_path: Path, recordings: list[bw.Reco
     bw.save_recordings(recs, recordings)
     out = tmp_path / "report"
     assert cli.main(["identify", str(recs), "--separately", "--method", "paper", "--out", str(out)]) == 0
-    assert sorted(p.name for p in out.iterdir()) == ["experiment_00", "experiment_01", "experiment_02"]
+    assert sorted(p.name for p in out.glob("[!.]*")) == ["experiment_00", "experiment_01", "experiment_02"]
     assert cli.main(["identify", str(recs), "--method", "paper", "--out", str(out)]) == 2
     assert cli.main(["identify", str(recs), "--method", "paper", "--out", str(out), "--overwrite"]) == 0
     names = sorted(p.name for p in out.iterdir())

@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 import json
+import os
 import sys
 import warnings
 from pathlib import Path
 
 import bouc_wen_id as bw
 import pytest
-from bouc_wen_id import cli
+from bouc_wen_id import _pool, cli
 
 
 @pytest.fixture(scope="module")
@@ -26,7 +27,7 @@ def test_no_figures_writes_the_numbers_only(
     out = tmp_path / "rep"
     assert cli.main(["identify", str(folder), "--out", str(out), "--no-figures"]) == 0
     printed = capsys.readouterr().out
-    assert sorted(p.name for p in out.iterdir()) == ["result.json"]
+    assert sorted(p.name for p in out.iterdir()) == [".bouc_wen_id-report", "result.json"]
     assert "beta" in printed and "png" not in printed
     assert json.loads((out / "result.json").read_text())["method"] == "refined"
 
@@ -37,7 +38,7 @@ def test_figures_come_after_the_numbers(
     out = tmp_path / "rep"
     assert cli.main(["identify", str(folder), "--out", str(out)]) == 0
     printed = capsys.readouterr().out
-    assert {p.name for p in out.iterdir()} == {"result.json", "loops.png", "bode.png", "residuals.png"}
+    assert {p.name for p in out.glob("[!.]*")} == {"result.json", "loops.png", "bode.png", "residuals.png"}
     assert printed.index("result.json") < printed.index("loops.png")
 
 
@@ -97,6 +98,7 @@ def lab(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return path
 
 
+@pytest.mark.skipif((os.cpu_count() or 1) < 2, reason="--workers is capped at the CPU count")
 def test_workers_give_the_serial_report(
     lab: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
@@ -126,8 +128,8 @@ def test_both_ends_keeps_the_order_and_the_first_error() -> None:
         return i * i
 
     with ThreadPoolExecutor(1) as pool:
-        assert list(cli._both_ends(pool, job, [(i,) for i in range(3)])) == [0, 1, 4]
-        got = cli._both_ends(pool, job, [(i,) for i in range(8)])
+        assert list(_pool.ordered(pool, job, [(i,) for i in range(3)])) == [0, 1, 4]
+        got = _pool.ordered(pool, job, [(i,) for i in range(8)])
         assert [next(got) for _ in range(3)] == [0, 1, 4]
         with pytest.raises(InvalidParameterError, match="job 3"):  # job 6's error (maybe met first) waits
             next(got)
@@ -136,8 +138,6 @@ def test_both_ends_keeps_the_order_and_the_first_error() -> None:
 def test_one_blas_thread_limits_the_loaded_and_later_blas_and_restores(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
-    import os
-
     import numpy as np
     from bouc_wen_id._threads import BLAS_THREAD_VARIABLES, one_blas_thread
     from threadpoolctl import threadpool_info  # type: ignore[import-untyped]
@@ -158,3 +158,26 @@ def test_one_blas_thread_limits_the_loaded_and_later_blas_and_restores(
     monkeypatch.setenv("OPENBLAS_NUM_THREADS", "2")  # the user's choice stands
     with one_blas_thread():
         assert os.environ["OPENBLAS_NUM_THREADS"] == "2" and counts() == before
+
+
+def test_workers_beyond_the_cpu_count_is_a_usage_error_naming_the_flag(
+    lab: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    for workers in ("1000000", str((os.cpu_count() or 1) + 1), "0"):
+        with pytest.raises(SystemExit) as info:
+            cli.main(["identify", str(lab), "--out", str(tmp_path / "x"), "--workers", workers])
+        assert info.value.code == 2
+        err = capsys.readouterr().err
+        assert "argument --workers" in err and len(err.strip().splitlines()) == 1, err
+    assert not (tmp_path / "x").exists()
+
+
+def test_a_malformed_scheduler_address_is_a_named_error(
+    folder: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    argv = ["identify", str(folder), "--out", str(tmp_path / "x"), "--scheduler", "::::"]
+    assert cli.main(argv) == 2
+    err = capsys.readouterr().err
+    lines = [line for line in err.splitlines() if not line.startswith("[")]
+    assert len(lines) == 1 and lines[0].startswith("error: InvalidParameterError: --scheduler '::::'"), err
+    assert not (tmp_path / "x").exists()

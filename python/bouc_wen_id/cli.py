@@ -1,28 +1,33 @@
-"""Command line: ``bouc-wen-id demo | simulate | identify``."""
+"""Command line: ``bouc-wen-id demo | simulate | identify | diagnose | plan``.
+
+Every command calls the functions a user calls (:func:`~bouc_wen_id.identify`,
+:func:`~bouc_wen_id.batch.identify_many`, :func:`~bouc_wen_id.batch.average_many`,
+:func:`~bouc_wen_id.diagnose`, :func:`~bouc_wen_id.plan_experiment`); what is the command line's own is the
+parsing, the printing, and the report folder (:mod:`bouc_wen_id._output`: only ever our own).
+"""
 
 from __future__ import annotations
 
 import argparse
 import json
-import math
-import os
-import shutil
+import signal
 import sys
-import tempfile
 import time
 import warnings
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Any, NoReturn, Optional, Union
+from typing import Any, Optional, Union
 
 import numpy as np
 from numpy.typing import NDArray
 
-from ._threads import limit_blas_threads, one_blas_thread
-from .augmented import TERM_NAMES
-from .demo import DEMO_FREQUENCIES, demo_plan, demo_plant, design_amplitudes
-from .errors import BoucWenIdError, FileFormatError, InsufficientDataError, InvalidParameterError
+from . import _output, _pool
+from ._cli_parser import build_parser, flags_named
+from ._threads import one_blas_thread
+from .batch import average_many, identify_many
+from .demo import demo_plan, demo_plant, design_amplitudes
+from .errors import BoucWenIdError, FileFormatError, InvalidParameterError
 from .identification import identify
 from .io import load, save_recordings
 from .measurement import Measurement
@@ -30,67 +35,31 @@ from .model import SinePlan, WienerPlant
 from .result import IdentificationResult
 from .simulation import simulate
 
-#: diagnose's candidates: the steady-loop terms and degradation (diagnosis.run.ALL_CANDIDATES, kept here
-#: so that the CLI does not import the diagnosis to build its parser).
-_DIAG_CANDIDATES = (*TERM_NAMES, "degradation")
-
-__all__ = ["main"]
+__all__ = ["main", "build_parser"]
 
 
 # --------------------------------------------------------------------------------------------------
-# Output folders: checked before any work, built beside the target and moved into place whole
+# The report: checked before any work, built in a partial folder and moved into place whole
 # --------------------------------------------------------------------------------------------------
 
 
-def _check_out(out: Path, overwrite: bool, what: str) -> None:
-    """Refuse, before any work, an output that would mix runs or cannot be written."""
-    if out.exists() or out.is_symlink():
-        holds = not out.is_dir() or any(out.iterdir())
-        if holds and not overwrite:
-            kind = "folder holding files" if out.is_dir() else "file"
-            raise InvalidParameterError(
-                f"--out {out}: a {kind} of another run is there; pass --overwrite to replace it whole, or "
-                f"choose another {what}"
-            )
-    parent = out.absolute().parent
-    while not parent.exists():
-        parent = parent.parent
-    if not parent.is_dir() or not os.access(parent, os.W_OK | os.X_OK):
-        raise InvalidParameterError(f"--out {out}: {parent} is not a writable folder")
+def _check_out(args: argparse.Namespace, inputs: Sequence[Path] = (), what: str = "report folder") -> None:
+    """Refuse, before any work, an ``--out`` that is not ours to write (see :mod:`bouc_wen_id._output`)."""
+    args.out_resolved = _output.check_out(args.out, overwrite=args.overwrite, inputs=inputs, what=what)
+    # The report --overwrite replaces: the one there now, not one another run puts there meanwhile.
+    args.out_replaces = _output.identity(args.out_resolved) if args.overwrite else None
 
 
 @contextmanager
-def _staged(out: Path) -> Iterator[Path]:
-    """A path beside ``out`` to write the whole output to; on success it replaces ``out`` in one rename.
-
-    On any failure (an error, Ctrl-C) the staged files are removed and ``out`` is left as it was; a kill
-    leaves at most a ``.<name>.partial-*`` folder beside it, never a half-written ``out``.
-    """
-    parent = out.absolute().parent
-    parent.mkdir(parents=True, exist_ok=True)
-    stage = Path(tempfile.mkdtemp(prefix=f".{out.name}.partial-", dir=parent))
-    try:
-        yield stage / out.name
-        trash = stage / ".replaced"
-        replacing = out.exists() or out.is_symlink()
-        if replacing:
-            os.replace(out, trash)
-        try:
-            os.replace(stage / out.name, out)
-        except BaseException:
-            if replacing:
-                os.replace(trash, out)  # put the previous output back rather than lose it
-            raise
-    finally:
-        shutil.rmtree(stage, ignore_errors=True)
+def _staged(args: argparse.Namespace) -> Iterator[Path]:
+    with _output.staged(args.out_resolved, command=args.command, replaces=args.out_replaces) as staged:
+        yield staged
+    args.out_staged = staged
 
 
-def _shown(path: Path, staged: Path, out: Path) -> Path:
-    """Where a staged file ends up."""
-    try:
-        return out / path.relative_to(staged)
-    except ValueError:
-        return path
+def _print_written(args: argparse.Namespace, written: Sequence[Path]) -> None:
+    for f in written:
+        print(f"wrote {_output.shown(f, args.out_staged, args.out)}")
 
 
 def _write_report(result: IdentificationResult, out: Path, figures: bool = True) -> list[Path]:
@@ -104,7 +73,7 @@ def _write_report(result: IdentificationResult, out: Path, figures: bool = True)
     return files
 
 
-#: The report's figures: file name -> how it is drawn (``_render_figure``).
+#: The report's figures, one file each (drawn by ``_render_figure``).
 _FIGURES = ("loops.png", "bode.png", "residuals.png")
 
 
@@ -138,40 +107,9 @@ def _progress(done: int, total: int, label: str) -> None:
     sys.stderr.flush()
 
 
-def _add_identify_options(p: argparse.ArgumentParser) -> None:
-    p.add_argument(
-        "--method",
-        choices=("refined", "profile", "paper"),
-        default="refined",
-        help="estimator: refined (default: joint output-error fit with uncertainty), profile, or paper",
-    )
-    p.add_argument(
-        "--reference",
-        type=_integer(-(1 << 31)),
-        default=0,
-        help="experiment used for beta, gamma, mu (default 0)",
-    )
-    p.add_argument("--settle-periods", type=_integer(0), default=None, help="periods dropped as transient")
-    p.add_argument(
-        "--periods", type=_integer(1), default=None, help="periods averaged (default: all remaining)"
-    )
-    p.add_argument(
-        "--harmonics",
-        type=_harmonics,
-        default="auto",
-        help="harmonics of the spectral derivative: auto (above the noise floor), all, or a number",
-    )
-    p.add_argument("--mu-bracket", type=_real(), nargs=2, default=(1.0, 10.0), metavar=("LO", "HI"))
-    p.add_argument("--tol", type=_real(positive=True), default=1e-8, help="golden-section tolerance on mu")
-    p.add_argument("--backend", choices=("rust", "numpy"), default="rust")
-    p.add_argument("--out", type=Path, default=Path("bouc_wen_id_report"), help="report folder")
-    _add_overwrite(p)
-    p.add_argument(
-        "--no-figures",
-        dest="figures",
-        action="store_false",
-        help="write result.json and print the table only (batch use: no matplotlib)",
-    )
+# --------------------------------------------------------------------------------------------------
+# demo and simulate
+# --------------------------------------------------------------------------------------------------
 
 
 def _identify_options(args: argparse.Namespace) -> dict[str, Any]:
@@ -189,37 +127,6 @@ def _identify_options(args: argparse.Namespace) -> dict[str, Any]:
     }
 
 
-def _identify_from_args(args: argparse.Namespace, recordings: Sequence[Any]) -> IdentificationResult:
-    return identify(recordings, **_identify_options(args))
-
-
-def _identify_groups(args: argparse.Namespace, groups: list[list[Any]]) -> list[Any]:
-    """Identify every group: an ``IdentificationResult`` or the ``BoucWenIdError`` it raised, in order.
-
-    On the Dask scheduler at ``--scheduler`` (one task per group; identical results), else here, one group
-    after the other (each identification uses the cores itself, for its restarts).
-    """
-    options = _identify_options(args)
-    if args.scheduler is None:
-        out: list[Any] = []
-        for group in groups:
-            try:
-                out.append(identify(group, **options))
-            except BoucWenIdError as exc:
-                out.append(exc)
-        return out
-    from .batch import identify_many
-
-    try:
-        from distributed import Client
-    except ImportError as exc:
-        raise InvalidParameterError(
-            "--scheduler needs Dask: pip install 'bouc_wen_id[dask]' (or dask[distributed])"
-        ) from exc
-    with Client(args.scheduler) as client:  # type: ignore[no-untyped-call]
-        return identify_many(groups, client=client, errors="return", **options)
-
-
 def _cmd_demo(args: argparse.Namespace) -> int:
     plant = demo_plant()
     plan = demo_plan(
@@ -230,20 +137,19 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     )
     print(f"plant: {plant.linear!r}, {plant.hysteresis!r}")
     print(f"plan:  {plan!r}")
-    _check_out(args.out, args.overwrite, "report folder")
+    _check_out(args)
     t0 = time.perf_counter()
     recs = simulate(plant, plan, backend=args.backend)
     t1 = time.perf_counter()
-    result = _identify_from_args(args, recs)
+    result = identify(recs, **_identify_options(args))
     t2 = time.perf_counter()
     print(f"simulated {len(recs)} experiments in {t1 - t0:.3f} s, identified in {t2 - t1:.3f} s\n")
     print(result.summary())
     if args.compare:
         print(_compare_methods(recs, args))
-    with _staged(args.out) as staged:
+    with _staged(args) as staged:
         written = _write_report(result, staged, figures=args.figures)
-    for f in written:
-        print(f"wrote {_shown(f, staged, args.out)}")
+    _print_written(args, written)
     return 0
 
 
@@ -253,7 +159,7 @@ def _compare_methods(recs: list, args: argparse.Namespace) -> str:  # type: igno
     lines.append(f"  {'method':<9}{'beta':>11}{'gamma':>11}{'mu':>11}{'|G| rel':>11}{'phi':>11}")
     for method in ("paper", "profile", "refined"):
         try:
-            err = _identify_from_args(argparse.Namespace(**{**vars(args), "method": method}), recs).errors()
+            err = identify(recs, **{**_identify_options(args), "method": method}).errors()
         except BoucWenIdError as exc:
             lines.append(f"  {method:<9}failed: {type(exc).__name__}: {exc}")
             continue
@@ -293,7 +199,7 @@ def _load_plant(path: Path) -> WienerPlant:
 
 
 def _cmd_simulate(args: argparse.Namespace) -> int:
-    _check_out(args.out, args.overwrite, "--out")
+    _check_out(args, what="--out")
     plant = _load_plant(args.plant) if args.plant else demo_plant()
     if args.amplitude is not None and len(args.amplitude) not in (1, len(args.frequencies)):
         raise InvalidParameterError(
@@ -311,11 +217,15 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         seed=args.seed,
     )
     recs = simulate(plant, plan, backend=args.backend)
-    with _staged(args.out) as staged:
+    with _staged(args) as staged:
         written = save_recordings(staged, recs)
-    for f in written:
-        print(f"wrote {_shown(f, staged, args.out)}")
+    _print_written(args, written)
     return 0
+
+
+# --------------------------------------------------------------------------------------------------
+# identify: files and folders, lab measurements prepared on every core (bouc_wen_id.batch.average_many)
+# --------------------------------------------------------------------------------------------------
 
 
 def _columns(specs: Optional[Sequence[str]]) -> Optional[dict[str, Union[str, int]]]:
@@ -331,130 +241,10 @@ def _columns(specs: Optional[Sequence[str]]) -> Optional[dict[str, Union[str, in
     return out
 
 
-def _experiments(args: argparse.Namespace) -> tuple[list[Any], list[dict[str, Any]]]:
-    """Load the files and turn every measurement into its steady, averaged periods (with a progress bar).
-
-    Returns what ``identify`` takes (recordings and averaged periods) and, per measurement, what was kept
-    and dropped, for the report.
-    """
-    from .signal import average_segments
-
-    items = load(args.paths, columns=_columns(args.columns), sample_rate=args.sample_rate)
-    out: list[Any] = []
-    segments: list[dict[str, Any]] = []
-    measurements = [m for m in items if isinstance(m, Measurement)]
-    names = [m.name or f"measurement {i}" for i, m in enumerate(measurements)]
-    jobs = [(m, args.min_periods, name) for m, name in zip(measurements, names)]
-    pool = getattr(args, "pool", None)
-    found_all = _both_ends(pool, _segment_job, jobs) if pool is not None else None
-    done = 0
-    for item in items:
-        if not isinstance(item, Measurement):
-            out.append(item)
-            continue
-        name = names[done]
-        _progress(done, len(measurements), f"steady segments of {name}")
-        found = (
-            next(found_all)
-            if found_all is not None
-            else average_segments(item, min_periods=args.min_periods, name=name)
-        )
-        done += 1
-        _progress(done, len(measurements), f"steady segments of {name}")
-        print(f"{name}: {found.report.summary()}")
-        segments.append(found.to_dict())
-        out.extend(found.periods)
-    if not out:
-        raise InsufficientDataError(
-            "no steady segment of at least --min-periods periods was found in any file; see the dropped "
-            "stretches above"
-        )
-    return out, segments
-
-
-def _cmd_identify(args: argparse.Namespace) -> int:
-    _check_out(args.out, args.overwrite, "report folder")
-    with _folder_pool(args) as args.pool:
-        experiments, segments = _experiments(args)
-        with _staged(args.out) as staged:
-            code, written, notes = _identify_into(args, experiments, segments, staged)
-    for f in written:
-        print(f"wrote {_shown(f, staged, args.out)}")
-    for note in notes:
-        print(note)
-    return code
-
-
-def _identify_into(
-    args: argparse.Namespace, experiments: list[Any], segments: list[dict[str, Any]], root: Path
-) -> tuple[int, list[Path], list[str]]:
-    """Every result of the run under ``root`` (the staged report folder): the numbers of every group
-    first (the table and result.json), the figures last."""
-    groups = [[e] for e in experiments] if args.separately else [experiments]
-    label_of = [_label(g[0]) if args.separately else f"{len(g)} experiment(s), jointly" for g in groups]
-    _progress(0, len(groups), "identifying")
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        results = _identify_groups(args, groups)
-    _progress(len(groups), len(groups), "identified")
-    failures = 0
-    written: list[Path] = []
-    notes: list[str] = []
-    reported = []
-    for i, (label, result) in enumerate(zip(label_of, results)):
-        out = root / f"experiment_{i:02d}" if args.separately else root
-        if isinstance(result, BoucWenIdError):
-            if not args.separately:
-                raise result
-            failures += 1
-            print(f"\n{label}: refused: {type(result).__name__}: {result}")
-            out.mkdir(parents=True, exist_ok=True)
-            refusal = {"source": label, "error": type(result).__name__, "message": str(result)}
-            (out / "refused.json").write_text(json.dumps(refusal, indent=2) + "\n", encoding="utf-8")
-            written.append(out / "refused.json")
-            continue
-        print(f"\n{label}:" if args.separately else "")
-        print(result.summary())
-        written.extend(_write_report(result, out, figures=False))
-        reported.append((result, out))
-    for w in caught:
-        print(f"warning: {w.category.__name__}: {w.message}")
-    root.mkdir(parents=True, exist_ok=True)
-    if segments:
-        seg_file = root / "segments.json"
-        seg_file.write_text(json.dumps(segments, indent=2) + "\n", encoding="utf-8")
-        written.append(seg_file)
-    if failures:
-        notes.append(f"{failures} of {len(groups)} experiment(s) refused (see refused.json in their folders)")
-    if args.figures:
-        sys.stdout.flush()
-        pool = getattr(args, "pool", None)
-        if pool is None:
-            for result, out in reported:
-                written.extend(_write_figures(result, out))
-        else:  # every figure a task, on every core
-            tasks = [(result, out / name) for result, out in reported for name in _FIGURES]
-            for _ in _both_ends(pool, _render_figure, tasks, here=False):
-                pass
-            written.extend(path for _, path in tasks)
-    return (0 if failures < len(groups) else 2), written, notes
-
-
-# --------------------------------------------------------------------------------------------------
-# Both cores for a folder (issue #8): the files' preprocessing and the figures in worker processes
-# --------------------------------------------------------------------------------------------------
-
 #: Below this many bytes of input files the folder is prepared here: starting the workers (a fork server
 #: that imports the package and matplotlib, ~0.5 s of one core) would cost more than it saves.  A lab
 #: file of 20,000 samples is about 1.2 MB of CSV.
 _PARALLEL_MIN_BYTES = 2_000_000
-
-
-def _usable_cores() -> int:
-    """The cores this process may run on (its affinity mask where the OS has one, e.g. under taskset)."""
-    if hasattr(os, "sched_getaffinity"):
-        return len(os.sched_getaffinity(0))
-    return os.cpu_count() or 1
 
 
 def _input_bytes(paths: Sequence[Path]) -> int:
@@ -471,98 +261,136 @@ def _input_bytes(paths: Sequence[Path]) -> int:
     return total
 
 
-def _init_worker() -> None:
-    """A worker of the command line: one rayon thread and one BLAS thread (the parallelism is across
-    the files and figures; nested threads would only compete for the same cores)."""
-    os.environ["RAYON_NUM_THREADS"] = "1"
-    limit_blas_threads()
-
-
-def _warm(pool: Any, workers: int) -> None:
-    # A task per worker, so that every worker process is started (ProcessPoolExecutor starts them on
-    # submit, and a start waits for the fork server's imports: off the main thread, that overlaps
-    # with the loading of the files).
-    try:
-        for f in [pool.submit(os.getpid) for _ in range(workers)]:
-            f.result()
-    except Exception:  # noqa: BLE001 - a pool that cannot start fails the main thread's first task, by name
-        pass
-
-
 @contextmanager
-def _folder_pool(args: argparse.Namespace) -> Iterator[Optional[Any]]:
-    """Worker processes for a large folder on a machine with several cores (else ``None``: all here).
-
-    ``--workers 1`` (or one usable core, or under 2 MB of input) keeps everything in this process.  The
-    workers come from a fork server that imports the package (and matplotlib, with figures) once, started
-    on a helper thread while this one loads the files.  Results are identical: each file's preprocessing
-    and each figure is deterministic and independent of where it runs.
-    """
-    workers = args.workers if args.workers is not None else _usable_cores()
+def _workers(args: argparse.Namespace) -> Iterator[int]:
+    """How many processes prepare the files and draw the figures: ``--workers`` (default one per usable
+    core), but 1 under 2 MB of input.  With several, their pool is started on a helper thread while this
+    one loads the files (the fork server imports the package, and matplotlib with figures, once)."""
+    workers = args.workers if args.workers is not None else _pool.usable_cores()
     if workers < 2 or _input_bytes(args.paths) < _PARALLEL_MIN_BYTES:
-        yield None
+        yield 1
         return
-    import multiprocessing
-    import threading
-    from concurrent.futures import ProcessPoolExecutor
-
-    ctx: Any
-    if "forkserver" in multiprocessing.get_all_start_methods():
-        ctx = multiprocessing.get_context("forkserver")
-        preload = ["bouc_wen_id.cli", "bouc_wen_id.signal"]
-        if args.figures:
-            preload += ["bouc_wen_id.plotting", "matplotlib.figure", "matplotlib.backends.backend_agg"]
-        ctx.set_forkserver_preload(preload)
-    else:  # pragma: no cover - Windows, macOS default: spawned workers import on their own
-        ctx = multiprocessing.get_context("spawn")
-    pool = ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_init_worker)
-    warm = threading.Thread(target=_warm, args=(pool, workers), daemon=True)
-    warm.start()
+    preload = [*_pool.DEFAULT_PRELOAD, "bouc_wen_id.cli"]
+    if args.figures:
+        preload += ["bouc_wen_id.plotting", "matplotlib.figure", "matplotlib.backends.backend_agg"]
+    starting = _pool.warm(_pool.get_pool(workers, preload), workers)
     try:
-        yield pool
+        yield workers
     finally:
-        warm.join()
-        pool.shutdown(wait=True, cancel_futures=True)
+        starting.join()
 
 
-def _segment_job(measurement: Measurement, min_periods: float, name: str) -> Any:
-    """One measurement's steady segments, averaged (a task of the folder's workers)."""
-    from .signal import average_segments
+def _prepare(args: argparse.Namespace, workers: int) -> tuple[list[Any], list[dict[str, Any]]]:
+    """Load the files; every lab measurement cut into its steady, averaged periods (a progress bar on
+    stderr, each file's kept and dropped stretches on stdout)."""
+    items = load(args.paths, columns=_columns(args.columns), sample_rate=args.sample_rate)
+    total = sum(isinstance(m, Measurement) for m in items)
 
-    return average_segments(measurement, min_periods=min_periods, name=name)
+    def report(i: int, found: Any) -> None:
+        _progress(i + 1, total, f"steady segments of {found.name}")
+        print(f"{found.name}: {found.report.summary()}")
+
+    if total:
+        _progress(0, total, "steady segments")
+    experiments, segmented = average_many(
+        items, min_periods=args.min_periods, workers=workers, on_each=report
+    )
+    return experiments, [s.to_dict() for s in segmented]
 
 
-def _both_ends(
-    pool: Any, fn: Callable[..., Any], jobs: Sequence[tuple[Any, ...]], here: bool = True
-) -> Iterator[Any]:
-    """``fn(*job)`` for every job, yielded in the jobs' order.
+def _cmd_identify(args: argparse.Namespace) -> int:
+    _check_out(args, inputs=args.paths)
+    with _workers(args) as workers:
+        experiments, segments = _prepare(args, workers)
+        with _staged(args) as staged:
+            code, written, notes = _identify_into(args, experiments, segments, staged, workers)
+    _print_written(args, written)
+    for note in notes:
+        print(note)
+    return code
 
-    The pool's workers take the jobs from the front; with ``here``, this process takes them from the back
-    (each job it can still withdraw from the pool) until the two meet, so that no core waits while the
-    workers start.  An error is raised when its job's turn comes, as a loop over the jobs would.
+
+def _identify_groups(args: argparse.Namespace, groups: list[list[Any]]) -> list[Any]:
+    """Identify every group: an ``IdentificationResult`` or the ``BoucWenIdError`` it raised, in order.
+
+    On the Dask scheduler at ``--scheduler`` (one task per group; identical results), else here, one group
+    after the other (each identification uses the cores itself, for its restarts).
     """
-    futures = [pool.submit(fn, *job) for job in jobs]
-    local: dict[int, tuple[bool, Any]] = {}
-    if here:
-        for i in reversed(range(len(jobs))):
-            if not futures[i].cancel():
-                break
-            try:
-                local[i] = (True, fn(*jobs[i]))
-            except BoucWenIdError as exc:
-                local[i] = (False, exc)
+    options = _identify_options(args)
+    if args.scheduler is None:
+        return identify_many(groups, workers=1, errors="return", **options)
     try:
-        for i, f in enumerate(futures):
-            if i in local:
-                ok, value = local.pop(i)
-                if not ok:
-                    raise value
-                yield value
-            else:
-                yield f.result()
-    finally:
-        for f in futures:
-            f.cancel()
+        from distributed import Client
+    except ImportError as exc:
+        raise InvalidParameterError(
+            "--scheduler needs Dask: pip install 'bouc_wen_id[dask]' (or dask[distributed])"
+        ) from exc
+    try:
+        client = Client(args.scheduler)  # type: ignore[no-untyped-call]
+    except (ValueError, TypeError, OSError) as exc:
+        raise InvalidParameterError(
+            f"--scheduler {args.scheduler!r}: no Dask scheduler there ({type(exc).__name__}: {exc}); give "
+            "its address, e.g. tcp://10.0.0.5:8786"
+        ) from None
+    with client:
+        return identify_many(groups, client=client, errors="return", **options)
+
+
+def _identify_into(
+    args: argparse.Namespace, experiments: list[Any], segments: list[dict[str, Any]], root: Path, workers: int
+) -> tuple[int, list[Path], list[str]]:
+    """Every result of the run under ``root`` (the staged report folder): the numbers of every group
+    first (the table and result.json), the figures last."""
+    groups = [[e] for e in experiments] if args.separately else [experiments]
+    _progress(0, len(groups), "identifying")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        results = _identify_groups(args, groups)
+    _progress(len(groups), len(groups), "identified")
+    written: list[Path] = []
+    reported = []
+    for i, (group, result) in enumerate(zip(groups, results)):
+        out = root / f"experiment_{i:02d}" if args.separately else root
+        label = _label(group[0]) if args.separately else f"{len(group)} experiment(s), jointly"
+        if isinstance(result, BoucWenIdError):
+            if not args.separately:
+                raise result
+            written.append(_write_refusal(label, result, out))
+            continue
+        print(f"\n{label}:" if args.separately else "")
+        print(result.summary())
+        written.extend(_write_report(result, out, figures=False))
+        reported.append((result, out))
+    for w in caught:
+        print(f"warning: {w.category.__name__}: {w.message}")
+    root.mkdir(parents=True, exist_ok=True)
+    if segments:
+        (root / "segments.json").write_text(json.dumps(segments, indent=2) + "\n", encoding="utf-8")
+        written.append(root / "segments.json")
+    if args.figures:
+        written.extend(_figures_of(reported, workers))
+    failures = len(groups) - len(reported)
+    notes = [f"{failures} of {len(groups)} experiment(s) refused (see refused.json in their folders)"]
+    return (0 if reported else 2), written, notes if failures else []
+
+
+def _write_refusal(label: str, error: BoucWenIdError, out: Path) -> Path:
+    print(f"\n{label}: refused: {type(error).__name__}: {error}")
+    out.mkdir(parents=True, exist_ok=True)
+    refusal = {"source": label, "error": type(error).__name__, "message": str(error)}
+    (out / "refused.json").write_text(json.dumps(refusal, indent=2) + "\n", encoding="utf-8")
+    return out / "refused.json"
+
+
+def _figures_of(reported: Sequence[tuple[IdentificationResult, Path]], workers: int) -> list[Path]:
+    """Every figure of every result: here, or one task each on the pool of ``workers``."""
+    sys.stdout.flush()
+    if workers < 2:
+        return [f for result, out in reported for f in _write_figures(result, out)]
+    tasks = [(result, out / name) for result, out in reported for name in _FIGURES]
+    for _ in _pool.ordered(_pool.get_pool(workers), _render_figure, tasks, here=False):
+        pass
+    return [path for _, path in tasks]
 
 
 def _label(item: Any) -> str:
@@ -570,204 +398,9 @@ def _label(item: Any) -> str:
     return str(source) if source else type(item).__name__
 
 
-class _Parser(argparse.ArgumentParser):
-    """An argument error is one line and exit status 2 (argparse's usage block is on ``--help``)."""
-
-    def error(self, message: str) -> NoReturn:
-        self.exit(2, f"{self.prog}: error: {message} (usage: {self.prog} --help)\n")
-
-
-def _integer(low: int) -> Callable[[str], int]:
-    def parse(text: str) -> int:
-        try:
-            value = int(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"{text!r} is not an integer") from None
-        if value < low:
-            raise argparse.ArgumentTypeError(f"{value} must be >= {low}")
-        return value
-
-    return parse
-
-
-def _real(positive: bool = False, nonnegative: bool = False) -> Callable[[str], float]:
-    def parse(text: str) -> float:
-        try:
-            value = float(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
-        if not math.isfinite(value):
-            raise argparse.ArgumentTypeError(f"{text!r} is not finite")
-        if positive and not value > 0:
-            raise argparse.ArgumentTypeError(f"{value:g} must be > 0")
-        if nonnegative and not value >= 0:
-            raise argparse.ArgumentTypeError(f"{value:g} must be >= 0")
-        return value
-
-    return parse
-
-
-def _harmonics(text: str) -> Union[str, int]:
-    if text in ("auto", "all"):
-        return text
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not auto, all or an integer") from None
-    if not 1 <= value <= 1 << 20:
-        raise argparse.ArgumentTypeError(f"{value} must be in [1, 2**20]")
-    return value
-
-
-def _add_overwrite(p: argparse.ArgumentParser) -> None:
-    p.add_argument(
-        "--overwrite",
-        action="store_true",
-        help="replace an --out that holds another run's files (it is replaced whole, never mixed)",
-    )
-
-
-def build_parser() -> argparse.ArgumentParser:
-    parser = _Parser(
-        prog="bouc-wen-id",
-        description="Identify Wiener systems with Bouc-Wen hysteresis from sine experiments.",
-    )
-    sub = parser.add_subparsers(dest="command", required=True)
-
-    p = sub.add_parser("demo", help="simulate the built-in plant and identify it")
-    p.add_argument("--samples-per-period", type=_integer(8), default=1024)
-    p.add_argument("--periods-sim", type=_integer(1), default=40, help="periods simulated after settling")
-    p.add_argument(
-        "--noise", type=_real(nonnegative=True), default=0.005, help="output noise standard deviation"
-    )
-    p.add_argument("--seed", type=_integer(0), default=2024)
-    p.add_argument(
-        "--compare",
-        action=argparse.BooleanOptionalAction,
-        default=True,
-        help="also run every method on the same recordings and print their errors",
-    )
-    _add_identify_options(p)
-    p.set_defaults(func=_cmd_demo)
-
-    p = sub.add_parser("simulate", help="simulate sine experiments and write recordings")
-    p.add_argument("--out", type=Path, required=True, help="folder of CSV files, or a .npz bundle")
-    _add_overwrite(p)
-    p.add_argument("--plant", type=Path, default=None, help="plant JSON (default: the demo plant)")
-    p.add_argument(
-        "--frequencies", type=_real(positive=True), nargs="+", default=list(DEMO_FREQUENCIES), help="rad/s"
-    )
-    p.add_argument(
-        "--amplitude",
-        type=_real(),
-        nargs="+",
-        default=None,
-        help="U per frequency, or one for all (default: designed so that |alpha G| U = 1.2 w_0)",
-    )
-    p.add_argument("--settle-periods", type=_integer(0), default=30)
-    p.add_argument("--periods", type=_integer(1), default=40)
-    p.add_argument("--samples-per-period", type=_integer(8), default=1024)
-    p.add_argument("--substeps", type=_integer(1), default=2)
-    p.add_argument("--noise", type=_real(nonnegative=True), default=0.005)
-    p.add_argument("--seed", type=_integer(0), default=2024)
-    p.add_argument("--backend", choices=("rust", "numpy"), default="rust")
-    p.set_defaults(func=_cmd_simulate)
-
-    p = sub.add_parser(
-        "identify",
-        help="identify from files (.csv, .npz, .mat, .tdms, .h5) or folders: simulated recordings or lab "
-        "measurements",
-        description="Identify from recordings (U and omega known) or lab measurements (any sampling rate: "
-        "the input's frequency and amplitude are estimated, the steady stretches found and averaged).",
-    )
-    p.add_argument("paths", nargs="+", type=Path, help="files or folders of files")
-    p.add_argument(
-        "--columns",
-        nargs="+",
-        default=None,
-        metavar="ROLE=COLUMN",
-        help="which column is t, u, y (names or 0-based indices; TDMS/HDF5: channel names or "
-        "group/channel paths), e.g. --columns u=disp_mm y=force_N",
-    )
-    p.add_argument(
-        "--sample-rate", type=_real(positive=True), default=None, help="Hz, for files without a time column"
-    )
-    p.add_argument(
-        "--min-periods",
-        type=_real(positive=True),
-        default=2.0,
-        help="shortest steady stretch kept, in periods (default 2)",
-    )
-    p.add_argument(
-        "--separately",
-        action="store_true",
-        help="identify each experiment on its own (a report subfolder each) instead of one joint fit",
-    )
-    p.add_argument(
-        "--scheduler",
-        default=None,
-        metavar="ADDRESS",
-        help="run the identification on this Dask scheduler (e.g. tcp://10.0.0.5:8786; needs the dask extra)",
-    )
-    p.add_argument(
-        "--workers",
-        type=_integer(1),
-        default=None,
-        help="processes preparing the files and drawing the figures (default: one per core; 1: all in this "
-        "process)",
-    )
-    _add_identify_options(p)
-    p.set_defaults(func=_cmd_identify)
-
-    p = sub.add_parser(
-        "diagnose",
-        help="diagnose what the model leaves out: where, which physics, and the held-out proof",
-        description="Fit the plain model and the library's candidate terms jointly; name a term only when "
-        "it passes a nested F-test (Bonferroni over the candidates), explains a material share of the misfit "
-        "and improves the fit on held-out experiments. The verdict comes first.",
-    )
-    p.add_argument("paths", nargs="+", type=Path, help="files or folders of files")
-    p.add_argument(
-        "--columns",
-        nargs="+",
-        default=None,
-        metavar="ROLE=COLUMN",
-        help="which column (TDMS/HDF5: channel, or group/channel) is t, u, y",
-    )
-    p.add_argument(
-        "--sample-rate", type=_real(positive=True), default=None, help="Hz, for files without a time column"
-    )
-    p.add_argument(
-        "--candidates",
-        type=_candidates,
-        default=None,
-        help="comma-separated terms to try (default: all of " + ",".join(_DIAG_CANDIDATES) + ")",
-    )
-    p.add_argument("--alpha", type=_level, default=0.05, help="false-alarm level per step (default 0.05)")
-    p.add_argument("--no-held-out", action="store_true", help="skip the held-out check (faster, weaker)")
-    p.add_argument("--no-figures", action="store_true", help="write the JSON and a text-only HTML page")
-    p.add_argument("--out", type=Path, default=Path("bouc_wen_id_diagnosis"), help="report folder")
-    _add_overwrite(p)
-    p.set_defaults(func=_cmd_diagnose)
-    _add_plan_parser(sub)
-    return parser
-
-
-def _candidates(text: str) -> list[str]:
-    names = [c.strip() for c in text.split(",") if c.strip()]
-    bad = [c for c in names if c not in _DIAG_CANDIDATES]
-    if not names or bad or len(set(names)) != len(names):
-        raise argparse.ArgumentTypeError(
-            f"{text!r}: give distinct names among {','.join(_DIAG_CANDIDATES)}, separated by commas"
-        )
-    return names
-
-
-def _level(text: str) -> float:
-    value = _real(positive=True)(text)
-    if not value < 1:
-        raise argparse.ArgumentTypeError(f"{value:g} must lie in (0, 1)")
-    return value
+# --------------------------------------------------------------------------------------------------
+# diagnose and plan
+# --------------------------------------------------------------------------------------------------
 
 
 def _cmd_diagnose(args: argparse.Namespace) -> int:
@@ -775,7 +408,7 @@ def _cmd_diagnose(args: argparse.Namespace) -> int:
     from .diagnosis import diagnose
     from .diagnosis.report import write_report
 
-    _check_out(args.out, args.overwrite, "report folder")
+    _check_out(args, inputs=args.paths)
     items = list(load(args.paths, columns=_columns(args.columns), sample_rate=args.sample_rate))
     units = next((m.units for m in items if isinstance(m, Measurement)), {})
     d = diagnose(
@@ -787,75 +420,10 @@ def _cmd_diagnose(args: argparse.Namespace) -> int:
         u_unit=str(units.get("u", "")),
     )
     print(d.summary())
-    with _staged(args.out) as staged:
+    with _staged(args) as staged:
         written = write_report(d, staged, figures=not args.no_figures)
-    for f in written:
-        print(f"wrote {_shown(f, staged, args.out)}")
+    _print_written(args, written)
     return 0
-
-
-def _one_line(text: str) -> str:
-    return " ".join(text.split())
-
-
-# --------------------------------------------------------------------------------------------------
-# bouc-wen-id plan: the experiment planner (bouc_wen_id.planning)
-# --------------------------------------------------------------------------------------------------
-
-
-def _add_plan_parser(sub: Any) -> None:
-    p = sub.add_parser(
-        "plan",
-        help="plan sine experiments (frequencies, amplitudes, periods) for the best precision in a budget",
-        description="From a prior plant, choose the experiments that minimise the Cramer-Rao bound of the "
-        "target within the test-time budget and the actuator and sampling limits; print the design, its "
-        "expected standard errors and the gain over a naive design of the same budget.",
-    )
-    p.add_argument(
-        "--plant",
-        type=Path,
-        default=None,
-        help="prior: a plant JSON, or a previous result JSON (then give G with --num/--den); default: the "
-        "demo plant, or the plant given by --num/--den/--beta/--gamma/--mu",
-    )
-    p.add_argument(
-        "--num", type=_real(), nargs="+", default=None, help="prior G numerator (descending powers)"
-    )
-    p.add_argument("--den", type=_real(), nargs="+", default=None, help="prior G denominator")
-    p.add_argument("--delay", type=_real(nonnegative=True), default=0.0, help="prior G pure delay, s")
-    p.add_argument("--beta", type=_real(), default=None)
-    p.add_argument("--gamma", type=_real(), default=None)
-    p.add_argument("--mu", type=_real(), default=None)
-    p.add_argument("--alpha", type=_real(positive=True), default=1.0)
-    p.add_argument("--budget", type=_real(positive=True), required=True, help="total test time, s")
-    p.add_argument(
-        "--band", type=_real(positive=True), nargs=2, required=True, metavar=("LOW", "HIGH"), help="rad/s"
-    )
-    p.add_argument("--max-amplitude", type=_real(positive=True), required=True, help="largest input U")
-    p.add_argument(
-        "--max-rate", type=_real(positive=True), default=None, help="largest U omega (velocity limit)"
-    )
-    p.add_argument(
-        "--noise", type=_real(positive=True), required=True, help="prior output noise sd per sample"
-    )
-    p.add_argument(
-        "--sample-rate", type=_real(positive=True), required=True, help="highest sampling rate, Hz"
-    )
-    p.add_argument("--target", choices=("bouc_wen", "beta", "gamma", "mu", "G"), default="bouc_wen")
-    p.add_argument(
-        "--frequencies", type=_integer(2), default=12, help="candidate frequencies (G: tested grid)"
-    )
-    p.add_argument("--amplitudes", type=_integer(1), default=4, help="candidate amplitudes per frequency")
-    p.add_argument("--settle-periods", type=_integer(0), default=20)
-    p.add_argument(
-        "--overhead", type=_real(nonnegative=True), default=0.0, help="set-up time per experiment, s"
-    )
-    p.add_argument("--max-samples-per-period", type=_integer(16), default=512)
-    p.add_argument("--min-periods", type=_integer(2), default=5)
-    p.add_argument("--max-experiments", type=_integer(2), default=None)
-    p.add_argument("--out", type=Path, default=None, help="write the plan as JSON to this file")
-    _add_overwrite(p)
-    p.set_defaults(func=_cmd_plan)
 
 
 def _prior_from_args(args: argparse.Namespace) -> WienerPlant:
@@ -903,7 +471,7 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     from .planning import plan_experiment
 
     if args.out is not None:
-        _check_out(args.out, args.overwrite, "--out")
+        _check_out(args, inputs=[args.plant] if args.plant else [], what="--out file")
     prior = _prior_from_args(args)
     plan = plan_experiment(
         prior,
@@ -924,34 +492,66 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     )
     print(plan.summary())
     if args.out is not None:
-        with _staged(args.out) as staged:
+        with _staged(args) as staged:
             staged.write_text(plan.to_json() + "\n", encoding="utf-8")
         print(f"wrote {args.out}")
     return 0
 
 
+#: What each command runs.
+_COMMANDS: dict[str, Callable[[argparse.Namespace], int]] = {
+    "demo": _cmd_demo,
+    "simulate": _cmd_simulate,
+    "identify": _cmd_identify,
+    "diagnose": _cmd_diagnose,
+    "plan": _cmd_plan,
+}
+
+
+def _one_line(text: str) -> str:
+    return " ".join(text.split())
+
+
+def _fail(kind: str, exc: BaseException, command: str = "") -> int:
+    print(f"error: {kind}: {flags_named(_one_line(str(exc)), command)}", file=sys.stderr)
+    return 2
+
+
 def main(argv: Optional[Sequence[str]] = None) -> int:
     """Run the command line; every failure is one line on stderr, never a traceback.
 
-    Exit status: 0 done, 2 refused (a bad argument, file or value: the line names it), 130 interrupted
-    (nothing was written), 1 an internal error (a bug: please report the line).
+    Exit status: 0 done, 2 refused (a bad argument, file or value: the line names it), 130 interrupted by
+    Ctrl-C and 143 by SIGTERM (nothing was written), 1 an internal error (a bug: please report the line).
     """
     args = build_parser().parse_args(argv)
+    previous = signal.getsignal(signal.SIGTERM)
+    try:
+        _output.terminate_on_sigterm()
+    except ValueError:  # not the main thread: SIGTERM keeps its handler
+        previous = None
+    try:
+        return _run(args)
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGTERM, previous)
+
+
+def _run(args: argparse.Namespace) -> int:
     try:
         with one_blas_thread():  # small matrices only: see bouc_wen_id._threads
-            return int(args.func(args))
+            return int(_COMMANDS[args.command](args))
     except BoucWenIdError as exc:
-        print(f"error: {type(exc).__name__}: {_one_line(str(exc))}", file=sys.stderr)
-        return 2
+        return _fail(type(exc).__name__, exc, args.command)
     except KeyboardInterrupt:
+        _pool.stop_all()
         print("interrupted: nothing was written", file=sys.stderr)
         return 130
-    except ImportError as exc:  # an optional extra (pandas, npTDMS, h5py) is missing: the line says which
-        print(f"error: {type(exc).__name__}: {_one_line(str(exc))}", file=sys.stderr)
-        return 2
-    except OSError as exc:
-        print(f"error: {type(exc).__name__}: {_one_line(str(exc))}", file=sys.stderr)
-        return 2
+    except _output.Terminated:
+        _pool.stop_all()
+        print("terminated (SIGTERM): nothing was written", file=sys.stderr)
+        return _output.EXIT_TERMINATED
+    except (ImportError, OSError) as exc:  # a missing extra (the line says which), an unreadable path
+        return _fail(type(exc).__name__, exc)
     except MemoryError:
         print(
             "error: MemoryError: out of memory; use a smaller problem or lower bouc_wen_id.budget limits",
