@@ -12,7 +12,6 @@ import bouc_wen_id as bw
 import numpy as np
 import pytest
 import scipy.signal  # type: ignore[import-untyped]
-from bouc_wen_id import tfit
 from bouc_wen_id.demo import design_amplitudes
 from bouc_wen_id.errors import (
     IdentifiabilityWarning,
@@ -20,6 +19,8 @@ from bouc_wen_id.errors import (
     InvalidParameterError,
     NonFiniteError,
 )
+from bouc_wen_id.tfit._points import _points
+from bouc_wen_id.tfit._refine import _sk_start
 
 #: Known transfer functions of orders 1-4 (two with a delay), the cases of the recovery tests.
 KNOWN = {
@@ -99,8 +100,8 @@ def test_an_unstable_best_fit_is_returned_stable() -> None:
     omega = np.geomspace(0.1, 10.0, 12)
     g = 1.0 / (1j * omega - 1.0)
     cov = np.stack([np.diag([1e-4 * abs(x) ** 2, 1e-4]) for x in g])
-    pts = tfit._points(None, omega, g, cov)
-    _, den = tfit._sk_start(pts, 1j * omega / np.exp(np.mean(np.log(omega))), 0, 1, 0.0)
+    pts = _points(None, omega, g, cov)
+    _, den = _sk_start(pts, 1j * omega / np.exp(np.mean(np.log(omega))), 0, 1, 0.0)
     assert np.roots(den)[0].real > 0.0  # the start really is unstable
     fit = bw.fit_transfer_function(omega=omega, response=g, covariance=cov, order=(0, 1), delay=False)
     assert np.all(fit.poles().real < 0.0)
