@@ -18,6 +18,7 @@ from bouc_wen_id.errors import (
     InsufficientDataError,
     InvalidParameterError,
     NonFiniteError,
+    PoorFitWarning,
 )
 from bouc_wen_id.tfit._points import _points
 from bouc_wen_id.tfit._refine import _sk_start
@@ -103,10 +104,12 @@ def test_an_unstable_best_fit_is_returned_stable() -> None:
     pts = _points(None, omega, g, cov)
     _, den = _sk_start(pts, 1j * omega / np.exp(np.mean(np.log(omega))), 0, 1, 0.0)
     assert np.roots(den)[0].real > 0.0  # the start really is unstable
-    fit = bw.fit_transfer_function(omega=omega, response=g, covariance=cov, order=(0, 1), delay=False)
+    with pytest.warns(PoorFitWarning, match="unstable G"):
+        fit = bw.fit_transfer_function(omega=omega, response=g, covariance=cov, order=(0, 1), delay=False)
     assert np.all(fit.poles().real < 0.0)
     assert any("reflected" in n for n in fit.notes)
     assert fit.p_value is not None and fit.p_value < 1e-6  # and the report says it does not fit
+    assert any("unstable G" in w for w in fit.warnings)
 
 
 def test_scipy_signal_crosscheck() -> None:

@@ -4,14 +4,16 @@ from __future__ import annotations
 
 import math
 import warnings
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any, Literal, Optional, Union
 
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..errors import IdentifiabilityWarning, InsufficientDataError, InvalidParameterError
+from ..errors import InsufficientDataError, InvalidParameterError
 from ..model import TransferFunction
+from ..validation import count, nonnegative_number, real_number
+from ._checks import findings
 from ._model import _Model
 from ._points import _Points, _points, _whiten
 from ._refine import _criteria, _Fit, _fit_one
@@ -79,35 +81,58 @@ def fit_transfer_function(
 
     Warns
     -----
+    PoorFitWarning
+        When the chosen model's own residuals refute it: a chi-square p-value below
+        :data:`~bouc_wen_id.tfit._checks.POOR_FIT_P` (points with a covariance), or a root-mean-square
+        relative error above :data:`~bouc_wen_id.tfit._checks.POOR_FIT_RELATIVE` (points without); the
+        message says when the points look like an unstable G.
     IdentifiabilityWarning
-        When the chosen model has at least as many parameters as real equations (2 per point), or
-        when a fitted resonance peak lies where no point pins it down.
+        When the chosen model has at least as many parameters as real equations (2 per point), a fitted
+        resonance peak lies where no point pins it down, a pole sits at the origin (as far as the band can
+        tell) or a zero cancels a pole.
     """
     if criterion not in ("aicc", "bic"):
         raise InvalidParameterError(f"criterion must be 'aicc' or 'bic', got {criterion!r}")
-    if isinstance(max_order, bool) or not isinstance(max_order, (int, np.integer)) or not 0 <= max_order <= 8:
-        raise InvalidParameterError(f"max_order must be an integer in 0..8, got {max_order!r}")
+    max_order = count("max_order", max_order, 0, 8)
     points = _points(result, omega, response, covariance)
     if confidence is None:
         confidence = result.confidence if result is not None else 0.95
+    confidence = real_number("confidence", confidence)
     if not 0.0 < confidence < 1.0:
         raise InvalidParameterError(f"confidence must be in (0, 1), got {confidence}")
     w0 = float(np.exp(np.mean(np.log(points.omega))))  # geometric mean: the scaled s' is O(1)
+    shapes = _shapes(order, max_order)
+    delays = _delay_options(delay, w0)
+    forced = len(shapes) * len(delays) == 1
+    fits, rows = _fit_candidates(points, w0, shapes, delays, forced)
+    best, key = _choose(points, fits, rows, criterion, forced)
+    chosen = fits[best]
+    assert chosen is not None
+    rows[best] = replace(rows[best], chosen=True)
+    selection = _explain(rows, key, best, criterion, forced)
+    out = _finish(points, chosen, w0, delays, tuple(rows), selection, criterion, confidence)
+    found = findings(points, chosen, out.transfer_function, out.p_value)
+    for msg, category in found:
+        warnings.warn(msg, category, stacklevel=2)
+    return replace(out, warnings=tuple(msg for msg, _ in found))
+
+
+def _delay_options(delay: Union[None, bool, float], w0: float) -> list[tuple[bool, float]]:
+    """(fitted, fixed scaled delay) of each delay option the candidates are fitted with."""
+    if delay is None:
+        return [(False, 0.0), (True, 0.0)]
+    if isinstance(delay, (bool, np.bool_)):
+        return [(bool(delay), 0.0)]
+    tau = nonnegative_number("delay", delay)
+    return [(False, tau * w0)]
+
+
+def _fit_candidates(
+    points: _Points, w0: float, shapes: list[tuple[int, int]], delays: list[tuple[bool, float]], forced: bool
+) -> tuple[list[Optional[_Fit]], list[OrderCandidate]]:
+    """Every candidate (m, n, delay) fitted, with its row of the selection table (None: not fitted)."""
     s = np.asarray(1j * points.omega / w0, dtype=np.complex128)
     eqs = 2 * points.omega.size
-
-    shapes = _shapes(order, max_order)
-    if delay is None:
-        delays: list[tuple[bool, float]] = [(False, 0.0), (True, 0.0)]
-    elif isinstance(delay, (bool, np.bool_)):
-        delays = [(bool(delay), 0.0)]
-    else:
-        tau = float(delay)
-        if not math.isfinite(tau) or tau < 0.0:
-            raise InvalidParameterError(f"delay must be None, a bool or a number >= 0 s, got {delay!r}")
-        delays = [(False, tau * w0)]
-    forced = len(shapes) * len(delays) == 1
-
     fits: list[Optional[_Fit]] = []
     rows: list[OrderCandidate] = []
     for m, n in shapes:
@@ -134,6 +159,13 @@ def fit_transfer_function(
                 OrderCandidate(m, n, fitted, k, f.chi2, aicc, bic, error=UNPINNED if unpinned else "")
             )
             fits.append(f)
+    return fits, rows
+
+
+def _choose(
+    points: _Points, fits: list[Optional[_Fit]], rows: list[OrderCandidate], criterion: str, forced: bool
+) -> tuple[int, list[float]]:
+    """Index of the chosen candidate and the criterion of each; InsufficientDataError when none fits."""
     key = [
         (r.aicc if criterion == "aicc" else r.bic) if fits[i] is not None else math.inf
         for i, r in enumerate(rows)
@@ -144,40 +176,31 @@ def fit_transfer_function(
         best = _select(rows, key)
     if best < 0:
         raise InsufficientDataError(
-            f"{points.omega.size} points ({eqs} real equations) support no candidate model: "
-            + "; ".join(f"m={r.m} n={r.n} delay={r.delay}: {r.error}" for r in rows)
+            f"{points.omega.size} points ({2 * points.omega.size} real equations) support no candidate "
+            "model: " + "; ".join(f"m={r.m} n={r.n} delay={r.delay}: {r.error}" for r in rows)
         )
-    chosen = fits[best]
-    assert chosen is not None
-    rows[best] = replace(rows[best], chosen=True)
-    selection = _explain(rows, key, best, criterion, forced)
-    return _finish(points, chosen, w0, delays, rows, selection, criterion, confidence, eqs)
+    return best, key
 
 
-def _finish(
-    points: _Points,
-    f: _Fit,
-    w0: float,
-    delays: list[tuple[bool, float]],
-    rows: list[OrderCandidate],
-    selection: str,
-    criterion: str,
-    confidence: float,
-    eqs: int,
-) -> TransferFunctionFit:
-    from scipy.stats import chi2 as chi2_dist  # type: ignore[import-untyped]
+@dataclass(frozen=True)
+class _Reported:
+    """The reported parameters of a fit (unscaled num, den after its leading 1, delay), their covariance
+    and the internal parameters' covariance."""
 
-    fixed_tau = 0.0 if f.delay else next(t for d, t in delays if not d)
-    model = _Model(f.m, f.n, f.delay, fixed_tau)
+    values: Any
+    covariance: Any
+    theta_cov: Any
+
+
+def _reported(points: _Points, f: _Fit, model: _Model, w0: float) -> _Reported:
+    """The delta method from the Hurwitz parameters to the reported ones; the map is holomorphic in
+    theta, so a complex step gives its Jacobian exactly."""
     k = model.size
-    dof = eqs - k
-    info = f.jac.T @ f.jac
-    theta_cov = np.linalg.pinv(info)
+    dof = 2 * points.omega.size - k
+    theta_cov = np.linalg.pinv(f.jac.T @ f.jac)
     if not points.weighted and dof > 0:
         theta_cov = theta_cov * (f.chi2 / dof)  # variance of the relative errors, from their scatter
 
-    # Reported parameters (unscaled num, den after its leading 1, delay) and their covariance by the
-    # delta method; the map is holomorphic in theta, so a complex step gives its Jacobian exactly.
     def reported(theta: Any) -> Any:
         b, _, _, tau = model.split(theta)
         den = model.den_coeffs(theta)
@@ -196,11 +219,30 @@ def _finish(
         t = f.theta.astype(np.complex128)
         t[i] += 1j * h
         jmap[:, i] = np.imag(reported(t)) / h
-    cov = jmap @ theta_cov @ jmap.T
+    return _Reported(values, jmap @ theta_cov @ jmap.T, theta_cov)
+
+
+def _finish(
+    points: _Points,
+    f: _Fit,
+    w0: float,
+    delays: list[tuple[bool, float]],
+    rows: tuple[OrderCandidate, ...],
+    selection: str,
+    criterion: str,
+    confidence: float,
+) -> TransferFunctionFit:
+    """The result of the chosen candidate ``f`` (its warnings are added by the caller)."""
+    from scipy.stats import chi2 as chi2_dist  # type: ignore[import-untyped]
+
+    fixed_tau = 0.0 if f.delay else next(t for d, t in delays if not d)
+    model = _Model(f.m, f.n, f.delay, fixed_tau)
+    dof = 2 * points.omega.size - model.size
+    rep = _reported(points, f, model, w0)
+    values = rep.values
     num = values[: f.m + 1]
     den = np.concatenate([[1.0], values[f.m + 1 : f.m + 1 + f.n]])
     tau = float(values[-1]) if f.delay else fixed_tau / w0
-    tf = TransferFunction(num, den, tau)
     names = tuple(
         [f"b{i}" for i in range(f.m + 1)]
         + [f"a{i}" for i in range(1, f.n + 1)]
@@ -209,16 +251,7 @@ def _finish(
     residuals = _whiten(
         points, model.response(f.theta, np.asarray(1j * points.omega / w0, dtype=np.complex128)) - points.g
     )
-    p_value = float(chi2_dist.sf(f.chi2, dof)) if points.weighted and dof > 0 else None
-
-    found: list[str] = []
     notes: list[str] = []
-    if k >= eqs:
-        found.append(
-            f"{k} parameters from {eqs} real equations ({points.omega.size} points): the fit interpolates "
-            "and its parameters are not determined; add frequencies or lower the order"
-        )
-    found += _resonance_warnings(tf.den, points.omega)
     if f.reflected:
         notes.append(
             f"{f.reflected} unstable pole(s) of the Sanathanan-Koerner start reflected into the left half "
@@ -226,31 +259,28 @@ def _finish(
         )
     if not points.weighted:
         notes.append("the points carry no uncertainty: relative weights, intervals from the residual scatter")
-    for msg in found:
-        warnings.warn(msg, IdentifiabilityWarning, stacklevel=3)
     return TransferFunctionFit(
-        transfer_function=tf,
+        transfer_function=TransferFunction(num, den, tau),
         m=f.m,
         n=f.n,
         delay_fitted=f.delay,
         parameter_names=names,
         parameters=values,
-        covariance=cov,
+        covariance=rep.covariance,
         omega=points.omega,
         response=points.g,
         residuals=residuals,
         chi2=f.chi2,
         dof=dof,
-        p_value=p_value,
+        p_value=float(chi2_dist.sf(f.chi2, dof)) if points.weighted and dof > 0 else None,
         weighted=points.weighted,
         criterion=criterion,
-        candidates=tuple(rows),
+        candidates=rows,
         selection=selection,
-        warnings=tuple(found),
         notes=tuple(notes),
         confidence=confidence,
         _theta=f.theta,
-        _theta_cov=theta_cov,
+        _theta_cov=rep.theta_cov,
         _w0=w0,
         _fixed_delay=fixed_tau / w0,
     )

@@ -17,6 +17,9 @@ FloatArray = NDArray[np.float64]
 #: Candidates within this much of the lowest information criterion are "about as good" (a difference
 #: below 2 is not evidence, Burnham and Anderson 2002, section 2.6); the simplest of them is chosen.
 PARSIMONY = 2.0
+#: A pinned candidate more than this above the best of all is refuted by the data (Burnham and Anderson
+#: 2002: "essentially no support"), so unpinned resonances are no longer set aside in its favour.
+DECISIVE = 10.0
 #: What the selection table says of a candidate set aside for an unpinned resonance.
 UNPINNED = "resonance not pinned down"
 #: A complex pole pair with damping ratio below 1/sqrt(2) has a peak in |G(j omega)|; the peak is pinned
@@ -24,16 +27,30 @@ UNPINNED = "resonance not pinned down"
 PEAK_DAMPING = 1.0 / math.sqrt(2.0)
 
 
-def _select(rows: list[OrderCandidate], key: list[float]) -> int:
-    """Index of the chosen candidate, or -1.
+def _eligible(rows: list[OrderCandidate], key: list[float]) -> tuple[list[int], int, float]:
+    """The candidates the selection chooses from, how many unpinned ones were set aside, and by how much
+    the best pinned candidate trails the best of all (inf when there is none).
 
-    Candidates whose fitted resonance falls where no point pins it down are set aside (a narrow peak
-    slipped between two points buys chi-square the data cannot confirm) unless every candidate has one;
-    among the rest, the fewest parameters within ``PARSIMONY`` of the lowest criterion (ties: the lower).
+    A candidate whose fitted resonance falls where no point pins it down is set aside (a narrow peak
+    slipped between two points buys chi-square the data cannot confirm), unless every candidate with a
+    pinned resonance (or none) is decisively worse, by more than ``DECISIVE``: then the data confirm a
+    resonance even if they do not pin its peak, and setting it aside would return a model its own
+    residuals refute (a resonant G tested an octave apart, its band edge 0.014 rad/s from a point).
     """
-    ok = [i for i, k in enumerate(key) if math.isfinite(k) and rows[i].error != UNPINNED]
-    if not ok:
-        ok = [i for i, k in enumerate(key) if math.isfinite(k)]
+    finite = [i for i, k in enumerate(key) if math.isfinite(k)]
+    pinned = [i for i in finite if rows[i].error != UNPINNED]
+    if not finite:
+        return [], 0, math.inf
+    trail = min(key[i] for i in pinned) - min(key[i] for i in finite) if pinned else math.inf
+    if trail <= DECISIVE:
+        return pinned, len(finite) - len(pinned), trail
+    return finite, 0, trail
+
+
+def _select(rows: list[OrderCandidate], key: list[float]) -> int:
+    """Index of the chosen candidate, or -1: among the eligible ones (:func:`_eligible`), the fewest
+    parameters within ``PARSIMONY`` of the lowest criterion (ties: the lower)."""
+    ok, _, _ = _eligible(rows, key)
     if not ok:
         return -1
     low = min(key[i] for i in ok)
@@ -64,29 +81,25 @@ def _shapes(order: Union[None, int, tuple[int, int]], max_order: int) -> list[tu
 
 
 def _explain(rows: list[OrderCandidate], key: list[float], best: int, criterion: str, forced: bool) -> str:
+    """Why the candidate ``best`` was chosen, in one sentence."""
     r = rows[best]
     what = f"m = {r.m}, n = {r.n}, " + ("delay fitted" if r.delay else "no fitted delay")
     if forced:
         return f"{what}: given by order=/delay=, not selected"
     name = criterion.upper()
-    finite = [i for i in range(len(rows)) if math.isfinite(key[i])]
-    others = sorted((key[i], i) for i in finite if i != best)
+    ok, set_aside, trail = _eligible(rows, key)
+    others = sorted((key[i], i) for i in ok if i != best)
     if not others:
         return f"{what}: the only candidate the points support"
-    set_aside = sum(rows[i].error == UNPINNED for i in finite)
-    low = min(key[i] for i in finite if rows[i].error != UNPINNED or rows[best].error == UNPINNED)
+    low = min(key[i] for i in ok)
     if key[best] > low:
         head = (
             f"{what}: the fewest parameters ({rows[best].parameters}) within {PARSIMONY:g} of the lowest "
             f"{name} ({key[best] - low:.3g} above it)"
         )
     else:
-        head = f"{what}: lowest {name} of {len(finite)} candidates"
-    runner_key, runner_i = (
-        next((k, i) for k, i in others if rows[i].error != UNPINNED)
-        if any(rows[i].error != UNPINNED for _, i in others)
-        else others[0]
-    )
+        head = f"{what}: lowest {name} of {len(ok)} candidates"
+    runner_key, runner_i = others[0]
     runner = rows[runner_i]
     gap = runner_key - key[best]
     strength = "decisive" if gap > 10 else ("strong" if gap > 6 else ("positive" if gap > 2 else "weak"))
@@ -97,6 +110,13 @@ def _explain(rows: list[OrderCandidate], key: list[float], best: int, criterion:
     )
     if set_aside:
         text += f"; {set_aside} candidate(s) set aside: a resonance no point pins down"
+    elif math.isinf(trail) and any(rows[i].error == UNPINNED for i in ok):
+        text += "; every candidate's resonance falls where no point pins it down"
+    elif any(rows[i].error == UNPINNED for i in ok):
+        text += (
+            "; candidates whose resonance no point pins down were kept: the best without one is "
+            f"decisively worse ({trail:.3g} higher)"
+        )
     return text
 
 
