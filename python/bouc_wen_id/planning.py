@@ -34,15 +34,18 @@ Criteria (``target``), all on the alpha-normalised model, all to minimise
 Algorithm
 ---------
 Candidates: ``n_frequencies`` frequencies log-spaced over the band times ``n_amplitudes`` amplitudes
-``(1/L, 2/L, ..., 1) x U_max(omega)``, with ``U_max(omega) = min(max_amplitude, max_rate / omega)``; the
-samples per period are the most the sampling rate allows, ``P = min(max_samples_per_period,
-floor(sample_rate 2 pi / omega))`` (at least :data:`MIN_SAMPLES_PER_PERIOD`).  At most one experiment
-per frequency.  A greedy phase spends the budget in chunks (about 1/50 of it): at each step it either
+``(1/L, 2/L, ..., 1) x U_max(omega)``, with ``U_max(omega) = min(max_amplitude, max_rate / omega)``.
+Every experiment is sampled at the lab's rate ``sample_rate``: a frequency is moved to
+``omega = 2 pi sample_rate / (d P)`` with P a whole number of samples per period (at least
+:data:`MIN_SAMPLES_PER_PERIOD`, at most ``max_samples_per_period``) and d = 1, or the smallest whole
+decimation that brings P under the cap.  Frequencies whose settling and ``min_periods`` alone exceed the
+budget are no candidates.  At most one experiment per frequency.  A greedy phase spends the budget in chunks (about 1/50 of it): at each step it either
 adds periods to an experiment or opens a new one (paying its overhead and settling), whichever lowers the
 log-criterion most per second of test time.  A Fedorov-style exchange phase then tries budget-neutral
 moves (another amplitude at the same frequency, periods moved between experiments, an experiment
 closed and its time given to another, an experiment moved to an unused frequency) and keeps the best
 improving one until none improves; the greedy phase then spends what is left, down to single periods.
+The search is local: when the naive design (below) scores better, it is the plan.
 Everything is deterministic.  A vague prior (relative standard deviation 10^4) keeps the criterion
 finite while the design cannot yet identify every parameter; it is not in the reported bounds.
 
@@ -67,7 +70,7 @@ from ._backend import Backend
 from .errors import InvalidParameterError
 from .model import Recording, SinePlan, WienerPlant
 from .uncertainty import CramerRao, cramer_rao, experiment_fisher
-from .validation import real_number
+from .validation import count, nonnegative_number, positive_number, real_number
 
 __all__ = ["Target", "PlannedExperiment", "Design", "ExperimentPlan", "plan_experiment", "TARGETS"]
 
@@ -87,6 +90,16 @@ VAGUE_PRIOR = 1e-8
 #: a careless ``n_frequencies=10**6`` is refused at once instead of running for hours.
 MAX_FREQUENCIES = 200
 MAX_AMPLITUDES = 50
+#: For ``"G"`` every grid point is an experiment, so the exchange phase weighs O(frequencies^2) moves
+#: over designs of that many experiments: 200 took over 100 s (44 s with the vectorised score, and the
+#: local search no longer beat the naive design), 100 take 7 s, 40 about 1 s.
+MAX_FREQUENCIES_G = 40
+#: Largest budget, s (about three years of test time): beyond it the periods and the information overflow
+#: long before a design could be run (a budget of 1e300 s ran the search forever).
+MAX_BUDGET = 1e8
+#: Noise levels the planner computes with, in the output's units: the bound scales as noise_sd^2, whose
+#: square must stay a float (1e-200 divided by zero, 1e300 overflowed); rescale the output's units outside.
+NOISE_SD_RANGE = (1e-100, 1e100)
 #: Exchange iterations at most (each keeps the best improving move; it stops earlier when none improves).
 MAX_EXCHANGES = 200
 #: A move must lower the log-criterion by more than this to count as an improvement.
@@ -310,19 +323,6 @@ _CRITERION_TEXT = {
 }
 
 
-def _positive(name: str, value: object) -> float:
-    v = real_number(name, value)
-    if not v > 0:
-        raise InvalidParameterError(f"{name} = {v} must be > 0")
-    return v
-
-
-def _count(name: str, value: object, low: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or int(value) < low:
-        raise InvalidParameterError(f"{name} = {value!r} must be an integer >= {low}")
-    return int(value)
-
-
 def _scales(theta: FloatArray) -> FloatArray:
     """|theta|, with 1 in place of a zero parameter (its variance is then scored as it is)."""
     out: FloatArray = np.where(theta != 0, np.abs(theta), 1.0)
@@ -345,74 +345,76 @@ def criterion_value(target: str, prior: WienerPlant, frequencies: FloatArray, cr
 
 
 class _Search:
-    """The candidate blocks and the design scoring of the greedy/exchange search."""
+    """The candidate blocks and the design scoring of the greedy/exchange search.
 
-    def __init__(
-        self,
-        target: str,
-        prior: WienerPlant,
-        omegas: FloatArray,
-        amps: FloatArray,
-        samples: NDArray[np.int64],
-        noise_sd: float,
-        settle: int,
-        overhead: float,
-        substeps: int,
-        backend: Backend,
-    ) -> None:
+    The search works at unit noise: the information ``sum_i N_i S_i + sigma^2 P`` (``P`` the vague prior)
+    is the true one times ``sigma^2``, so every criterion is the true one divided by ``sigma^2``, a
+    constant that changes no comparison; noise levels from 1e-100 to 1e100 neither divide by zero nor
+    overflow.  For ``"G"`` the per-point terms are precomputed: ``var(|G_i|)/|G_i|^2 + var(phi_i)`` is
+    ``c_i / N_i + tr(C M_i)`` with ``c_i`` from ``D_i^-1`` and ``M_i = K_i^T W_i K_i``.
+    """
+
+    def __init__(self, target: str, prior: WienerPlant, grid: _Grid, st: _Settings) -> None:
         self.target = target
+        omegas, amps, samples = grid.omegas, grid.amps, grid.samples
         self.omegas, self.amps, self.samples = omegas, amps, samples
         self.period = 2.0 * np.pi / omegas
-        self.var = noise_sd**2
-        self.settle, self.overhead = settle, overhead
+        self.settle, self.overhead = st.settle, st.overhead
         norm = prior.normalized()
         h = norm.hysteresis
         self.theta_scale = _scales(np.array([h.beta, h.gamma, h.mu]))
         self.gains, _ = norm.linear.gain_phase(omegas)
         k, n_amp = amps.shape
         self.schur = np.zeros((k, n_amp, 3, 3))
-        self.dinv = np.zeros((k, n_amp, 2, 2))
-        self.kmat = np.zeros((k, n_amp, 2, 3))
+        self.point = np.zeros((k, n_amp))  # c_i
+        self.mmat = np.zeros((k, n_amp, 3, 3))  # M_i
+        weight = np.diag([1.0, 1.0])
         for i in range(k):
+            weight[0, 0] = 1.0 / self.gains[i] ** 2
             for a in range(n_amp):
                 f = experiment_fisher(
                     norm,
                     float(omegas[i]),
                     float(amps[i, a]),
                     int(samples[i]),
-                    substeps=substeps,
-                    backend=backend,
+                    substeps=st.substeps,
+                    backend=st.backend,
                 )
                 dinv = np.linalg.pinv(f[3:, 3:])
-                self.dinv[i, a] = dinv
-                self.kmat[i, a] = dinv @ f[3:, :3]
-                self.schur[i, a] = f[:3, :3] - f[:3, 3:] @ dinv @ f[3:, :3]
-        self.prior_precision = VAGUE_PRIOR * np.diag(1.0 / self.theta_scale**2)
+                kmat = dinv @ f[3:, :3]
+                self.schur[i, a] = f[:3, :3] - f[:3, 3:] @ kmat
+                self.point[i, a] = dinv[0, 0] * weight[0, 0] + dinv[1, 1]
+                self.mmat[i, a] = kmat.T @ weight @ kmat
+        self.prior_precision = VAGUE_PRIOR * st.noise_sd**2 * np.diag(1.0 / self.theta_scale**2)
 
     def cost(self, design: dict[int, tuple[int, int]]) -> float:
         return float(sum(self.overhead + (self.settle + n) * self.period[k] for k, (_, n) in design.items()))
 
     def score(self, design: dict[int, tuple[int, int]]) -> float:
-        """log of the criterion (with the vague prior)."""
-        info = self.prior_precision.copy()
-        for k, (a, n) in design.items():
-            info += (n / self.var) * self.schur[k, a]
+        """log of the criterion at unit noise (with the vague prior)."""
+        if design:
+            cells = np.array([(k, a, n) for k, (a, n) in design.items()], dtype=np.int64)
+            ks, aa, ns = cells[:, 0], cells[:, 1], cells[:, 2].astype(np.float64)
+            info = self.prior_precision + np.einsum("i,ijk->jk", ns, self.schur[ks, aa])
+        else:
+            info = self.prior_precision.copy()
         try:
             cov = np.linalg.inv(info)
         except np.linalg.LinAlgError:
             return math.inf
         if self.target == "G":
-            total = 0.0
-            for k, (a, n) in design.items():
-                loc = self.var * self.dinv[k, a] / n + self.kmat[k, a] @ cov @ self.kmat[k, a].T
-                total += loc[0, 0] / self.gains[k] ** 2 + loc[1, 1]
             # Untested grid points have no estimate: the search opens all of them first.
-            value = total / max(len(design), 1)
+            if not design:
+                return math.inf
+            total = float(np.sum(self.point[ks, aa] / ns)) + float(
+                np.sum(cov * self.mmat[ks, aa].sum(axis=0))
+            )
+            value = total / len(design)
         else:
             rel = cov / np.outer(self.theta_scale, self.theta_scale)
             if self.target == "bouc_wen":
-                det = float(np.linalg.det(rel))
-                return math.log(det) / 3.0 if det > 0 else math.inf
+                sign, logdet = np.linalg.slogdet(rel)
+                return float(logdet) / 3.0 if sign > 0 else math.inf
             i = ("beta", "gamma", "mu").index(self.target)
             value = float(rel[i, i])
         return math.log(value) if value > 0 else math.inf
@@ -520,6 +522,72 @@ def _exchange(
     return design
 
 
+@dataclass(frozen=True)
+class _Settings:
+    """The validated lab limits and search settings of one plan (:func:`plan_experiment`'s keywords)."""
+
+    target: str
+    lo: float
+    hi: float
+    max_amplitude: float
+    noise_sd: float
+    sample_rate: float
+    max_rate: Optional[float]
+    n_freq: int
+    n_amp: int
+    settle: int
+    overhead: float
+    p_cap: int
+    min_n: int
+    max_exp: int
+    substeps: int
+    backend: Backend
+
+    @property
+    def rate(self) -> float:
+        """The rate limit, inf when there is none."""
+        return math.inf if self.max_rate is None else self.max_rate
+
+    @property
+    def top(self) -> float:
+        """The band's top, cut where the sampling rate no longer gives MIN_SAMPLES_PER_PERIOD per period."""
+        return min(self.hi, 2.0 * math.pi * self.sample_rate / MIN_SAMPLES_PER_PERIOD)
+
+    def to_dict(self, candidates: FloatArray) -> dict[str, Any]:
+        return {
+            "band": [self.lo, self.hi],
+            "max_amplitude": self.max_amplitude,
+            "max_rate": self.max_rate,
+            "noise_sd": self.noise_sd,
+            "sample_rate": self.sample_rate,
+            "n_frequencies": self.n_freq,
+            "n_amplitudes": self.n_amp,
+            "settle_periods": self.settle,
+            "overhead": self.overhead,
+            "max_samples_per_period": self.p_cap,
+            "min_periods": self.min_n,
+            "max_experiments": self.max_exp,
+            "substeps": self.substeps,
+            "candidate_frequencies": candidates.tolist(),
+        }
+
+
+@dataclass(frozen=True)
+class _Grid:
+    """The candidates: frequencies on the lab's sampling rate, their samples per period and amplitudes."""
+
+    omegas: FloatArray
+    samples: NDArray[np.int64]
+    amps: FloatArray
+    lo: float  # the usable band: frequencies the budget can afford, sampled well enough
+    top: float
+
+    @property
+    def period(self) -> FloatArray:
+        out: FloatArray = 2.0 * np.pi / self.omegas
+        return out
+
+
 def plan_experiment(
     prior_plant: WienerPlant,
     budget: float,
@@ -547,21 +615,27 @@ def plan_experiment(
     prior_plant : WienerPlant
         The prior guess of the plant (a plain Wiener-Bouc-Wen plant, no terms).
     budget : float
-        Total test time, s: ``sum_i overhead + (settle_periods + N_i) 2 pi / omega_i <= budget``.
+        Total test time, s: ``sum_i overhead + (settle_periods + N_i) 2 pi / omega_i <= budget``
+        (at most :data:`MAX_BUDGET`).
     band : (float, float)
-        Lowest and highest angular frequency allowed, rad/s (low < high).
+        Lowest and highest angular frequency allowed, rad/s (low < high).  Frequencies whose settling
+        and ``min_periods`` periods alone exceed the budget are not candidates.
     max_amplitude : float
         Largest input amplitude U the actuator allows (> 0; the planner uses positive amplitudes).
     noise_sd : float
-        Prior standard deviation of the white output noise, per sample (> 0).
+        Prior standard deviation of the white output noise, per sample (within :data:`NOISE_SD_RANGE`).
     sample_rate : float
-        Highest sampling rate, Hz: ``P omega / (2 pi) <= sample_rate``.
+        The lab's sampling rate, Hz.  Every experiment is sampled at it: each candidate frequency is moved
+        (by less than half a sample per period) so that a period holds a whole number P of samples; where
+        P would exceed ``max_samples_per_period``, the experiment is sampled at ``sample_rate / d`` for
+        the smallest whole d that fits (decimate the record by d).
     target : {"bouc_wen", "beta", "gamma", "mu", "G"}
         What to make precise (module docstring: the criteria).
     max_rate : float, optional
         Largest input rate ``U omega`` (a velocity limit, units of u per second).
     n_frequencies : int
-        Log-spaced candidate frequencies over the band (for ``"G"``: the tested grid, all used).
+        Log-spaced candidate frequencies over the band (for ``"G"``: the tested grid, all used), at most
+        :data:`MAX_FREQUENCIES` (:data:`MAX_FREQUENCIES_G` for ``"G"``).
     n_amplitudes : int
         Candidate amplitudes per frequency: ``(1/L, ..., 1) x min(max_amplitude, max_rate / omega)``.
     settle_periods : int
@@ -592,6 +666,45 @@ def plan_experiment(
         for even one experiment (or, for ``"G"``, for every grid point), or a budget whose best design
         still cannot identify every parameter.
     """
+    _check_prior(prior_plant, target)
+    budget = positive_number("budget", budget)
+    if budget > MAX_BUDGET:
+        raise InvalidParameterError(
+            f"budget = {budget:g} s is more than {MAX_BUDGET:g} s (about three years of test time): plan a "
+            "part of it and repeat the design"
+        )
+    st = _settings(
+        target, band, max_amplitude, noise_sd, sample_rate, max_rate, n_frequencies, n_amplitudes,
+        settle_periods, overhead, max_samples_per_period, min_periods, max_experiments, substeps, backend,
+    )  # fmt: skip
+    grid = _grid(st, budget)
+    search = _Search(target, prior_plant, grid, st)
+    design = _search_design(search, st, grid, budget)
+    experiments = tuple(
+        PlannedExperiment(
+            float(grid.omegas[k]),
+            float(grid.amps[k, a]),
+            int(n),
+            int(grid.samples[k]),
+            st.settle,
+            st.overhead,
+        )
+        for k, (a, n) in sorted(design.items())
+    )
+    planned = _design(st, prior_plant, experiments)
+    if planned is None:
+        raise InvalidParameterError(
+            f"within budget = {budget:g} s no design found identifies every parameter (the Fisher "
+            "information stays singular); raise the budget or widen the band"
+        )
+    naive = _naive(st, prior_plant, budget, len(experiments), grid)
+    if naive is not None and naive.criterion < planned.criterion:
+        planned = naive  # the search is local: never return a design worse than the naive one
+    return ExperimentPlan(target, prior_plant, budget, planned, naive, st.to_dict(grid.omegas))
+
+
+def _check_prior(prior_plant: object, target: object) -> None:
+    """The prior must be a plain Wiener-Bouc-Wen plant and the target one of :data:`TARGETS`."""
     if not isinstance(prior_plant, WienerPlant):
         raise InvalidParameterError(f"prior_plant must be a WienerPlant, got {type(prior_plant).__name__}")
     if prior_plant.terms:
@@ -601,190 +714,188 @@ def plan_experiment(
         )
     if target not in TARGETS:
         raise InvalidParameterError(f"target = {target!r} must be one of {', '.join(TARGETS)}")
-    budget = _positive("budget", budget)
+
+
+def _settings(
+    target: str,
+    band: tuple[float, float],
+    max_amplitude: float,
+    noise_sd: float,
+    sample_rate: float,
+    max_rate: Optional[float],
+    n_frequencies: int,
+    n_amplitudes: int,
+    settle_periods: int,
+    overhead: float,
+    max_samples_per_period: int,
+    min_periods: int,
+    max_experiments: Optional[int],
+    substeps: int,
+    backend: Backend,
+) -> _Settings:
+    """Every keyword of :func:`plan_experiment` checked, by name."""
     if isinstance(band, (str, bytes)) or np.ndim(band) != 1 or len(band) != 2:
         raise InvalidParameterError(f"band must be two frequencies (low, high) in rad/s, got {band!r}")
     lo, hi = real_number("band low", band[0]), real_number("band high", band[1])
     if not 0 < lo < hi:
         raise InvalidParameterError(f"band = ({lo}, {hi}) must satisfy 0 < low < high (rad/s): it is empty")
-    max_amplitude = _positive("max_amplitude", max_amplitude)
-    noise_sd = _positive("noise_sd", noise_sd)
-    sample_rate = _positive("sample_rate", sample_rate)
-    rate = math.inf if max_rate is None else _positive("max_rate", max_rate)
-    overhead = real_number("overhead", overhead)
-    if overhead < 0:
-        raise InvalidParameterError(f"overhead = {overhead} must be >= 0 s")
-    n_freq = _count("n_frequencies", n_frequencies, 2)
-    n_amp = _count("n_amplitudes", n_amplitudes, 1)
-    if n_freq > MAX_FREQUENCIES or n_amp > MAX_AMPLITUDES:
+    noise = positive_number("noise_sd", noise_sd)
+    if not NOISE_SD_RANGE[0] <= noise <= NOISE_SD_RANGE[1]:
         raise InvalidParameterError(
-            f"n_frequencies = {n_freq} and n_amplitudes = {n_amp} must be <= {MAX_FREQUENCIES} and "
-            f"<= {MAX_AMPLITUDES}: a finer grid costs the search far more than it can gain"
+            f"noise_sd = {noise:g} is outside {NOISE_SD_RANGE[0]:g}..{NOISE_SD_RANGE[1]:g}, where the bound "
+            "(which scales as noise_sd^2) stays a float: express the output in other units"
         )
-    settle = _count("settle_periods", settle_periods, 0)
-    p_cap = _count("max_samples_per_period", max_samples_per_period, MIN_SAMPLES_PER_PERIOD)
-    min_n = _count("min_periods", min_periods, 2)
-    max_exp = n_freq if max_experiments is None else _count("max_experiments", max_experiments, 2)
-    substeps = _count("substeps", substeps, 1)
-
-    # The band's top is cut where the sampling rate no longer gives MIN_SAMPLES_PER_PERIOD per period.
-    top = min(hi, 2.0 * math.pi * sample_rate / MIN_SAMPLES_PER_PERIOD)
-    if top < lo:
-        raise InvalidParameterError(
-            f"sample_rate = {sample_rate:g} Hz gives fewer than {MIN_SAMPLES_PER_PERIOD} samples per period "
-            f"at every frequency of the band ({lo:g}, {hi:g}) rad/s"
-        )
-    omegas = np.geomspace(lo, top, n_freq) if top > lo else np.array([lo])
-    omegas = np.unique(omegas)
-    samples = _samples(omegas, sample_rate, p_cap)
-    u_max = np.minimum(max_amplitude, rate / omegas)
-    amps = u_max[:, None] * (np.arange(1, n_amp + 1) / n_amp)[None, :]
-    period = 2.0 * np.pi / omegas
-    cheapest = float(np.min(overhead + (settle + min_n) * period))
-    if budget < cheapest:
-        raise InvalidParameterError(
-            f"budget = {budget:g} s is too small for even one experiment: the cheapest takes "
-            f"{cheapest:.4g} s ({overhead:g} s overhead + {settle} settling + {min_n} measured periods at "
-            f"{float(omegas[-1]):.4g} "
-            "rad/s)"
-        )
-    search = _Search(
-        target, prior_plant, omegas, amps, samples, noise_sd, settle, overhead, substeps, backend
+    n_freq = count("n_frequencies", n_frequencies, 2, MAX_FREQUENCIES_G if target == "G" else MAX_FREQUENCIES)
+    n_amp = count("n_amplitudes", n_amplitudes, 1, MAX_AMPLITUDES)
+    return _Settings(
+        target=target,
+        lo=lo,
+        hi=hi,
+        max_amplitude=positive_number("max_amplitude", max_amplitude),
+        noise_sd=noise,
+        sample_rate=positive_number("sample_rate", sample_rate),
+        max_rate=None if max_rate is None else positive_number("max_rate", max_rate),
+        n_freq=n_freq,
+        n_amp=n_amp,
+        settle=count("settle_periods", settle_periods, 0),
+        overhead=nonnegative_number("overhead", overhead),
+        p_cap=count("max_samples_per_period", max_samples_per_period, MIN_SAMPLES_PER_PERIOD),
+        min_n=count("min_periods", min_periods, 2),
+        max_exp=n_freq if max_experiments is None else count("max_experiments", max_experiments, 2),
+        substeps=count("substeps", substeps, 1),
+        backend=backend,
     )
+
+
+def _grid(st: _Settings, budget: float) -> _Grid:
+    """The candidate frequencies, log-spaced over the band's usable part and put on the lab's rate."""
+    top = st.top
+    if top < st.lo:
+        raise InvalidParameterError(
+            f"sample_rate = {st.sample_rate:g} Hz gives fewer than {MIN_SAMPLES_PER_PERIOD} samples per "
+            f"period at every frequency of the band ({st.lo:g}, {st.hi:g}) rad/s"
+        )
+    lo = st.lo
+    if st.target == "G":
+        _check_g_budget(st, np.geomspace(lo, top, st.n_freq) if top > lo else np.array([lo]), budget)
+    else:
+        # A frequency whose settling and fewest periods alone exceed the budget is no candidate.
+        lo = max(lo, 2.0 * math.pi * (st.settle + st.min_n) / max(budget - st.overhead, 1e-300))
+        if lo > top:
+            _too_small(st, budget, top)
+    omegas = np.unique(np.geomspace(lo, top, st.n_freq)) if top > lo else np.array([lo])
+    omegas, samples = _on_lab_rate(omegas, st.sample_rate, st.p_cap, lo, top)
+    u_max = np.minimum(st.max_amplitude, st.rate / omegas)
+    amps = u_max[:, None] * (np.arange(1, st.n_amp + 1) / st.n_amp)[None, :]
+    cheapest = float(np.min(st.overhead + (st.settle + st.min_n) * 2.0 * np.pi / omegas))
+    if budget < cheapest:
+        _too_small(st, budget, float(omegas[-1]))
+    return _Grid(omegas, samples, amps, lo, top)
+
+
+def _too_small(st: _Settings, budget: float, omega: float) -> None:
+    cheapest = st.overhead + (st.settle + st.min_n) * 2.0 * math.pi / omega
+    raise InvalidParameterError(
+        f"budget = {budget:g} s is too small for even one experiment: the cheapest takes "
+        f"{cheapest:.4g} s ({st.overhead:g} s overhead + {st.settle} settling + {st.min_n} measured "
+        f"periods at {omega:.4g} rad/s)"
+    )
+
+
+def _check_g_budget(st: _Settings, omegas: FloatArray, budget: float) -> None:
+    """Target "G" tests every grid point: the budget must hold each at ``min_periods``."""
+    need = float(np.sum(st.overhead + (st.settle + st.min_n) * 2.0 * np.pi / omegas))
+    if budget < need:
+        raise InvalidParameterError(
+            f"budget = {budget:g} s is too small to test every one of the {len(omegas)} grid frequencies "
+            f"of target 'G' ({need:.4g} s at {st.min_n} periods each); raise the budget or lower "
+            "n_frequencies"
+        )
+
+
+def _on_lab_rate(
+    omegas: FloatArray, sample_rate: float, p_cap: int, lo: float, top: float
+) -> tuple[FloatArray, NDArray[np.int64]]:
+    """Frequencies moved so that a period holds a whole number P of samples at the lab's rate
+    ``sample_rate / d`` (d = 1 unless P would exceed ``p_cap``), kept within ``[lo, top]``."""
+    out_w: list[float] = []
+    out_p: list[int] = []
+    for w in omegas:
+        full = 2.0 * math.pi * sample_rate / float(w)  # samples per period at the lab's rate
+        d = max(1, math.ceil(full / p_cap * (1.0 - 1e-12)))
+        p = max(MIN_SAMPLES_PER_PERIOD, min(p_cap, round(full / d)))
+        for cand in (p, p - 1, p + 1):
+            wc = 2.0 * math.pi * sample_rate / (d * cand)
+            if MIN_SAMPLES_PER_PERIOD <= cand <= p_cap and lo * (1 - 1e-12) <= wc <= top * (1 + 1e-12):
+                out_w.append(wc)
+                out_p.append(cand)
+                break
+    if not out_w:
+        raise InvalidParameterError(
+            f"no frequency of the band ({lo:g}, {top:g}) rad/s holds a whole number of samples per period "
+            f"at {sample_rate:g} Hz within {MIN_SAMPLES_PER_PERIOD}..{p_cap}; widen the band"
+        )
+    w_arr, idx = np.unique(np.array(out_w), return_index=True)
+    return w_arr, np.array(out_p, dtype=np.int64)[idx]
+
+
+def _search_design(s: _Search, st: _Settings, grid: _Grid, budget: float) -> dict[int, tuple[int, int]]:
+    """Greedy spending, then exchanges and spending until the design settles (module docstring)."""
     chunk = CHUNK_FRACTION * budget
-    fixed = target == "G"
+    fixed = st.target == "G"
     design: dict[int, tuple[int, int]] = {}
     if fixed:
-        need = float(np.sum(overhead + (settle + min_n) * period))
-        if budget < need:
-            raise InvalidParameterError(
-                f"budget = {budget:g} s is too small to test every one of the {len(omegas)} grid frequencies "
-                f"of target 'G' ({need:.4g} s at {min_n} periods each); raise the budget or lower "
-                "n_frequencies"
-            )
+        _check_g_budget(st, grid.omegas, budget)  # the grid moved onto the lab's rate
         # Open every grid point at min_periods, choosing its amplitude greedily, cheapest first.
-        for k in np.argsort(period):
+        for k in np.argsort(grid.period):
             k = int(k)
-            best = min(range(n_amp), key=lambda a: search.score({**design, k: (a, min_n)}))
-            design[k] = (best, min_n)
-    design = _spend(search, design, budget, chunk, min_n, max_exp, not fixed)
+            best = min(range(st.n_amp), key=lambda a: s.score({**design, k: (a, st.min_n)}))
+            design[k] = (best, st.min_n)
+    design = _spend(s, design, budget, chunk, st.min_n, st.max_exp, not fixed)
     for _ in range(3):
         before = dict(design)
-        design = _exchange(search, design, budget, chunk, min_n, fixed)
-        design = _spend(search, design, budget, 0.0, min_n, max_exp, not fixed)
+        design = _exchange(s, design, budget, chunk, st.min_n, fixed)
+        design = _spend(s, design, budget, 0.0, st.min_n, st.max_exp, not fixed)
         if design == before:
             break
-    experiments = tuple(
-        PlannedExperiment(float(omegas[k]), float(amps[k, a]), int(n), int(samples[k]), settle, overhead)
-        for k, (a, n) in sorted(design.items())
-    )
-    planned = _design(target, prior_plant, experiments, noise_sd, substeps, backend)
-    if planned is None:
-        raise InvalidParameterError(
-            f"within budget = {budget:g} s no design found identifies every parameter (the Fisher "
-            "information stays singular); raise the budget or widen the band"
-        )
-    naive = _naive(
-        target,
-        prior_plant,
-        budget,
-        lo,
-        top,
-        len(experiments),
-        omegas if fixed else None,
-        max_amplitude,
-        rate,
-        sample_rate,
-        p_cap,
-        settle,
-        overhead,
-        min_n,
-        noise_sd,
-        substeps,
-        backend,
-    )
-    settings = {
-        "band": [lo, hi],
-        "max_amplitude": max_amplitude,
-        "max_rate": None if max_rate is None else rate,
-        "noise_sd": noise_sd,
-        "sample_rate": sample_rate,
-        "n_frequencies": n_freq,
-        "n_amplitudes": n_amp,
-        "settle_periods": settle,
-        "overhead": overhead,
-        "max_samples_per_period": p_cap,
-        "min_periods": min_n,
-        "max_experiments": max_exp,
-        "substeps": substeps,
-        "candidate_frequencies": omegas.tolist(),
-    }
-    return ExperimentPlan(target, prior_plant, budget, planned, naive, settings)
+    return design
 
 
-def _samples(omegas: FloatArray, sample_rate: float, p_cap: int) -> NDArray[np.int64]:
-    """Most samples per period the sampling rate allows at each frequency, capped at ``p_cap``."""
-    # A hair below the exact ratio so that P omega / 2 pi never exceeds sample_rate by rounding.
-    p = np.floor(sample_rate * 2.0 * np.pi / omegas * (1.0 - 1e-12)).astype(np.int64)
-    out: NDArray[np.int64] = np.minimum(p, p_cap)
-    return out
-
-
-def _design(
-    target: str,
-    prior: WienerPlant,
-    experiments: Sequence[PlannedExperiment],
-    noise_sd: float,
-    substeps: int,
-    backend: Backend,
-) -> Optional[Design]:
+def _design(st: _Settings, prior: WienerPlant, experiments: Sequence[PlannedExperiment]) -> Optional[Design]:
     """The design's exact bound by :func:`cramer_rao` (None when its Fisher matrix is singular)."""
-    plans = [e.plan(noise_sd) for e in experiments]
+    plans = [e.plan(st.noise_sd) for e in experiments]
     try:
-        cr = cramer_rao(prior, plans, substeps=substeps, backend=backend)
+        cr = cramer_rao(prior, plans, substeps=st.substeps, backend=st.backend)
     except InvalidParameterError:
         return None
     freqs = np.array([e.frequency for e in experiments])
-    value = criterion_value(target, prior, freqs, cr)
+    value = criterion_value(st.target, prior, freqs, cr)
     if not math.isfinite(value) or value <= 0:
         return None
     total = float(sum(e.duration for e in experiments))
-    return Design(tuple(experiments), noise_sd, cr, value, total)
+    return Design(tuple(experiments), st.noise_sd, cr, value, total)
 
 
-def _naive(
-    target: str,
-    prior: WienerPlant,
-    budget: float,
-    lo: float,
-    top: float,
-    count: int,
-    grid: Optional[FloatArray],
-    max_amplitude: float,
-    rate: float,
-    sample_rate: float,
-    p_cap: int,
-    settle: int,
-    overhead: float,
-    min_n: int,
-    noise_sd: float,
-    substeps: int,
-    backend: Backend,
-) -> Optional[Design]:
-    """Evenly log-spaced frequencies at the largest amplitude, equal N, fewer if the budget is short."""
+def _naive(st: _Settings, prior: WienerPlant, budget: float, count: int, grid: _Grid) -> Optional[Design]:
+    """Evenly log-spaced frequencies of the usable band at the largest amplitude, equal N, fewer if the
+    budget is short (for "G": the tested grid)."""
+    fixed = st.target == "G"
     for m in range(max(count, 2), 1, -1):
-        omegas = grid if grid is not None else np.geomspace(lo, top, m)
+        if fixed:
+            omegas, samples = grid.omegas, grid.samples
+        else:
+            spaced = np.geomspace(grid.lo, grid.top, m)
+            omegas, samples = _on_lab_rate(spaced, st.sample_rate, st.p_cap, grid.lo, grid.top)
         period = 2.0 * np.pi / omegas
-        n = int((budget - float(np.sum(overhead + settle * period))) // float(np.sum(period)))
-        if n < min_n:
-            if grid is not None:
+        n = int((budget - float(np.sum(st.overhead + st.settle * period))) // float(np.sum(period)))
+        if n < st.min_n:
+            if fixed:
                 return None
             continue
-        samples = _samples(omegas, sample_rate, p_cap)
-        amps = np.minimum(max_amplitude, rate / omegas)
+        amps = np.minimum(st.max_amplitude, st.rate / omegas)
         experiments = [
-            PlannedExperiment(float(w), float(u), n, int(p), settle, overhead)
+            PlannedExperiment(float(w), float(u), n, int(p), st.settle, st.overhead)
             for w, u, p in zip(omegas, amps, samples)
         ]
-        return _design(target, prior, experiments, noise_sd, substeps, backend)
+        return _design(st, prior, experiments)
     return None
