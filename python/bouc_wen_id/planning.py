@@ -34,20 +34,20 @@ Criteria (``target``), all on the alpha-normalised model, all to minimise
 Algorithm
 ---------
 Candidates: ``n_frequencies`` frequencies log-spaced over the band times ``n_amplitudes`` amplitudes
-``(1/L, 2/L, ..., 1) x U_max(omega)``, with ``U_max(omega) = min(max_amplitude, max_rate / omega)``.
-Every experiment is sampled at the lab's rate ``sample_rate``: a frequency is moved to
-``omega = 2 pi sample_rate / (d P)`` with P a whole number of samples per period (at least
+``(1/L, 2/L, ..., 1) x U_max(omega)``, with ``U_max(omega) = min(max_amplitude, max_rate / omega)``. Every
+experiment is sampled at the lab's rate ``sample_rate``: a frequency is moved to ``omega = 2 pi
+sample_rate / (d P)`` with P a whole number of samples per period (at least
 :data:`MIN_SAMPLES_PER_PERIOD`, at most ``max_samples_per_period``) and d = 1, or the smallest whole
 decimation that brings P under the cap.  Frequencies whose settling and ``min_periods`` alone exceed the
-budget are no candidates.  At most one experiment per frequency.  A greedy phase spends the budget in chunks (about 1/50 of it): at each step it either
-adds periods to an experiment or opens a new one (paying its overhead and settling), whichever lowers the
-log-criterion most per second of test time.  A Fedorov-style exchange phase then tries budget-neutral
-moves (another amplitude at the same frequency, periods moved between experiments, an experiment
-closed and its time given to another, an experiment moved to an unused frequency) and keeps the best
-improving one until none improves; the greedy phase then spends what is left, down to single periods.
-The search is local: when the naive design (below) scores better, it is the plan.
-Everything is deterministic.  A vague prior (relative standard deviation 10^4) keeps the criterion
-finite while the design cannot yet identify every parameter; it is not in the reported bounds.
+budget are no candidates.  At most one experiment per frequency.  A greedy phase spends the budget in
+chunks (about 1/50 of it): at each step it either adds periods to an experiment or opens a new one (paying
+its overhead and settling), whichever lowers the log-criterion most per second of test time.  A
+Fedorov-style exchange phase then tries budget-neutral moves (another amplitude at the same frequency,
+periods moved between experiments, an experiment closed and its time given to another, an experiment moved
+to an unused frequency) and keeps the best improving one until none improves; the greedy phase then spends
+what is left, down to single periods. The search is local: when the naive design (below) scores better, it
+is the plan. Everything is deterministic.  A vague prior (relative standard deviation 10^4) keeps the
+criterion finite while the design cannot yet identify every parameter; it is not in the reported bounds.
 
 Assumptions of the bound (as :func:`cramer_rao`): white Gaussian output noise of the same standard
 deviation at any sampling rate (so more samples per period carry more information; a noise that is
@@ -667,12 +667,7 @@ def plan_experiment(
         still cannot identify every parameter.
     """
     _check_prior(prior_plant, target)
-    budget = positive_number("budget", budget)
-    if budget > MAX_BUDGET:
-        raise InvalidParameterError(
-            f"budget = {budget:g} s is more than {MAX_BUDGET:g} s (about three years of test time): plan a "
-            "part of it and repeat the design"
-        )
+    budget = _budget(budget)
     st = _settings(
         target, band, max_amplitude, noise_sd, sample_rate, max_rate, n_frequencies, n_amplitudes,
         settle_periods, overhead, max_samples_per_period, min_periods, max_experiments, substeps, backend,
@@ -680,17 +675,7 @@ def plan_experiment(
     grid = _grid(st, budget)
     search = _Search(target, prior_plant, grid, st)
     design = _search_design(search, st, grid, budget)
-    experiments = tuple(
-        PlannedExperiment(
-            float(grid.omegas[k]),
-            float(grid.amps[k, a]),
-            int(n),
-            int(grid.samples[k]),
-            st.settle,
-            st.overhead,
-        )
-        for k, (a, n) in sorted(design.items())
-    )
+    experiments = _experiments(st, grid, design)
     planned = _design(st, prior_plant, experiments)
     if planned is None:
         raise InvalidParameterError(
@@ -701,6 +686,34 @@ def plan_experiment(
     if naive is not None and naive.criterion < planned.criterion:
         planned = naive  # the search is local: never return a design worse than the naive one
     return ExperimentPlan(target, prior_plant, budget, planned, naive, st.to_dict(grid.omegas))
+
+
+def _budget(budget: object) -> float:
+    """The test-time budget, s: positive and at most :data:`MAX_BUDGET`."""
+    out = positive_number("budget", budget)
+    if out > MAX_BUDGET:
+        raise InvalidParameterError(
+            f"budget = {out:g} s is more than {MAX_BUDGET:g} s (about three years of test time): plan a "
+            "part of it and repeat the design"
+        )
+    return out
+
+
+def _experiments(
+    st: _Settings, grid: _Grid, design: dict[int, tuple[int, int]]
+) -> tuple[PlannedExperiment, ...]:
+    """The searched design as experiments, by frequency."""
+    return tuple(
+        PlannedExperiment(
+            float(grid.omegas[k]),
+            float(grid.amps[k, a]),
+            int(n),
+            int(grid.samples[k]),
+            st.settle,
+            st.overhead,
+        )
+        for k, (a, n) in sorted(design.items())
+    )
 
 
 def _check_prior(prior_plant: object, target: object) -> None:
