@@ -595,3 +595,66 @@ def test_tfit_warns_on_a_cancelling_pole_zero_pair() -> None:
     gaps = [np.min(np.abs(fit.zeros() - p)) / abs(p) for p in fit.poles()]
     assert min(gaps) < 0.02  # the pair named is the pair fitted
     assert not [c for c in caught if "origin" in str(c.message)]  # a cancelled pole is no integrator
+
+
+_PLAN_LAB: dict[str, object] = dict(
+    band=(1.0, 10.0), max_amplitude=1.0, noise_sd=0.05, sample_rate=100.0, settle_periods=10, overhead=2.0
+)
+
+
+def _plan_in(seconds: float, *args: object, **kw: object) -> bw.ExperimentPlan:
+    t0 = time.perf_counter()
+    try:
+        return bw.plan_experiment(bw.demo_plant(), *args, **{**_PLAN_LAB, **kw})  # type: ignore[arg-type]
+    finally:
+        assert time.perf_counter() - t0 < seconds
+
+
+def test_planner_refuses_an_astronomical_budget_at_once() -> None:
+    # plan_experiment(prior, 1e300, ...) ran forever.
+    with pytest.raises(InvalidParameterError, match="three years"):
+        _plan_in(1.0, 1e300)
+    plan = _plan_in(20.0, 1e8)  # the largest budget allowed plans in well under a second
+    assert plan.total_time <= 1e8 and all(e.periods >= 5 for e in plan.experiments)
+
+
+@pytest.mark.parametrize("noise_sd", [1e-200, 1e300, 1e-101, 1e101])
+def test_planner_refuses_a_noise_level_outside_its_range(noise_sd: float) -> None:
+    # 1e-200 raised ZeroDivisionError, 1e300 OverflowError.
+    with pytest.raises(InvalidParameterError, match="noise_sd"):
+        _plan_in(1.0, 300.0, noise_sd=noise_sd)
+
+
+@pytest.mark.parametrize("noise_sd", [1e-100, 1e-6, 1e6, 1e100])
+def test_planner_plans_at_any_noise_level_of_its_range(noise_sd: float) -> None:
+    # The design does not depend on the noise level (the bound scales as its square): one design for all.
+    plan = _plan_in(20.0, 300.0, noise_sd=noise_sd)
+    ref = _plan_in(20.0, 300.0)
+    assert [e.to_dict() for e in plan.experiments] == [e.to_dict() for e in ref.experiments]
+    assert plan.predicted.beta == pytest.approx(ref.predicted.beta * noise_sd / 0.05, rel=1e-6)
+
+
+def test_planner_band_of_extreme_frequencies() -> None:
+    # band=(1e-300, 1e300) printed samples_per_period = -9223372036854775808.
+    plan = _plan_in(20.0, 300.0, band=(1e-300, 1e300))
+    for e in plan.experiments:
+        assert 16 <= e.samples_per_period <= 512
+        assert e.sample_rate == pytest.approx(100.0, rel=1e-9)
+        assert e.duration <= 300.0
+    assert "-9223372036854775808" not in str(plan)
+
+
+def test_planner_target_g_at_its_documented_maximum_is_quick() -> None:
+    # n_frequencies=200 (then the documented maximum) took over 100 s; the maximum for "G" is now 40.
+    from bouc_wen_id.planning import MAX_FREQUENCIES_G
+
+    plan = _plan_in(20.0, 3000.0, target="G", n_frequencies=MAX_FREQUENCIES_G)
+    assert len(plan.experiments) == MAX_FREQUENCIES_G
+    with pytest.raises(InvalidParameterError, match="n_frequencies"):
+        _plan_in(1.0, 3000.0, target="G", n_frequencies=MAX_FREQUENCIES_G + 1)
+
+
+def test_planner_keeps_the_labs_sample_rate() -> None:
+    # The lab samples at 100 Hz; the planner answered 99.38 Hz.
+    plan = _plan_in(20.0, 300.0)
+    assert all(e.sample_rate == pytest.approx(100.0, rel=1e-12) for e in plan.experiments)

@@ -83,8 +83,8 @@ TARGETS: tuple[str, ...] = ("beta", "gamma", "mu", "bouc_wen", "G")
 MIN_SAMPLES_PER_PERIOD = 16
 #: Fraction of the budget the greedy phase spends per step (then single periods at the end).
 CHUNK_FRACTION = 1.0 / 50.0
-#: Prior precision of the vague prior, relative: 1 / (10^4 theta)^2 (keeps a rank-deficient design's
-#: criterion finite during the search; absent from the reported bounds).
+#: Prior precision of the vague prior, relative and per unit noise variance: 1 / (10^4 theta)^2 (keeps a
+#: rank-deficient design's criterion finite during the search; absent from the reported bounds).
 VAGUE_PRIOR = 1e-8
 #: Largest candidate grid: the exchange phase weighs O(frequencies^2 x amplitudes) moves per iteration, so
 #: a careless ``n_frequencies=10**6`` is refused at once instead of running for hours.
@@ -339,7 +339,8 @@ def criterion_value(target: str, prior: WienerPlant, frequencies: FloatArray, cr
         return float(np.mean((cr.gain / gains) ** 2 + cr.phase**2))
     rel = cr.covariance[:3, :3] / np.outer(s, s)
     if target == "bouc_wen":
-        return float(np.linalg.det(rel) ** (1.0 / 3.0))
+        sign, logdet = np.linalg.slogdet(rel)  # det itself under- or overflows at extreme noise levels
+        return math.exp(float(logdet) / 3.0) if sign > 0 else 0.0
     i = ("beta", "gamma", "mu").index(target)
     return float(rel[i, i])
 
@@ -347,10 +348,11 @@ def criterion_value(target: str, prior: WienerPlant, frequencies: FloatArray, cr
 class _Search:
     """The candidate blocks and the design scoring of the greedy/exchange search.
 
-    The search works at unit noise: the information ``sum_i N_i S_i + sigma^2 P`` (``P`` the vague prior)
-    is the true one times ``sigma^2``, so every criterion is the true one divided by ``sigma^2``, a
-    constant that changes no comparison; noise levels from 1e-100 to 1e100 neither divide by zero nor
-    overflow.  For ``"G"`` the per-point terms are precomputed: ``var(|G_i|)/|G_i|^2 + var(phi_i)`` is
+    The search works at unit noise: the information ``sum_i N_i S_i`` is the true one times ``sigma^2``,
+    so every criterion is the true one divided by ``sigma^2``, a constant that changes no comparison, and
+    noise levels from 1e-100 to 1e100 neither divide by zero nor overflow.  The vague prior ``P`` is added
+    at unit noise too, so it weighs the same against the data at any noise level and the design does not
+    depend on sigma.  For ``"G"`` the per-point terms are precomputed: ``var(|G_i|)/|G_i|^2 + var(phi_i)`` is
     ``c_i / N_i + tr(C M_i)`` with ``c_i`` from ``D_i^-1`` and ``M_i = K_i^T W_i K_i``.
     """
 
@@ -385,7 +387,7 @@ class _Search:
                 self.schur[i, a] = f[:3, :3] - f[:3, 3:] @ kmat
                 self.point[i, a] = dinv[0, 0] * weight[0, 0] + dinv[1, 1]
                 self.mmat[i, a] = kmat.T @ weight @ kmat
-        self.prior_precision = VAGUE_PRIOR * st.noise_sd**2 * np.diag(1.0 / self.theta_scale**2)
+        self.prior_precision = VAGUE_PRIOR * np.diag(1.0 / self.theta_scale**2)
 
     def cost(self, design: dict[int, tuple[int, int]]) -> float:
         return float(sum(self.overhead + (self.settle + n) * self.period[k] for k, (_, n) in design.items()))
