@@ -273,3 +273,38 @@ def test_warnings_are_not_issued_for_a_well_posed_fit() -> None:
         warnings.simplefilter("error")
         fit = bw.fit_transfer_function(omega=OMEGA, response=g, covariance=cov, order=1)
     assert fit.warnings == () and fit.n == 1 and len(fit.candidates) == 4  # m in 0..1, delay or not
+
+
+@pytest.mark.parametrize(
+    ("kw", "error"),
+    [
+        (dict(omega=["a", "b"], response=[1.0, 2.0]), InvalidParameterError),
+        (dict(response=["x"] * 4), InvalidParameterError),
+        (dict(omega=[[1.0, 2.0], [3.0]]), InvalidParameterError),
+        (dict(delay="x"), InvalidParameterError),
+        (dict(delay=-1.0), InvalidParameterError),
+        (dict(confidence="x"), InvalidParameterError),
+        (dict(max_order=2.0), InvalidParameterError),
+    ],
+)
+def test_misused_arguments_are_named_errors(kw: dict[str, object], error: type[Exception]) -> None:
+    w = np.array([1.0, 2.0, 4.0, 8.0])
+    args: dict[str, object] = {"omega": w, "response": 1.0 / (1j * w + 1.0), **kw}
+    with pytest.raises(error):
+        bw.fit_transfer_function(**args)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize(
+    ("omega", "error"),
+    [
+        ("a", InvalidParameterError),
+        ([1.0, np.nan], NonFiniteError),
+        ([[1.0, 2.0], [3.0]], InvalidParameterError),
+        (1 + 2j, InvalidParameterError),
+    ],
+)
+def test_predict_names_bad_frequencies(omega: object, error: type[Exception]) -> None:
+    w = np.array([1.0, 2.0, 4.0, 8.0])
+    fit = bw.fit_transfer_function(omega=w, response=1.0 / (1j * w + 1.0))
+    with pytest.raises(error):
+        fit.predict(omega)  # type: ignore[arg-type]

@@ -53,14 +53,19 @@ def _points(
     else:
         if omega is None or response is None:
             raise InvalidParameterError("give an identification result, or omega and response")
-        w = np.asarray(omega, dtype=np.float64)
-        g = np.asarray(response, dtype=np.complex128)
+        try:  # text, ragged lists and objects are the user's mistake, named as such
+            w = np.asarray(omega, dtype=np.float64)
+            g = np.asarray(response, dtype=np.complex128)
+            cov = None if covariance is None else np.array(covariance, dtype=np.float64)
+        except (TypeError, ValueError) as exc:
+            raise InvalidParameterError(
+                f"omega, response and covariance must be numeric arrays: {exc}"
+            ) from None
         if w.ndim != 1 or g.shape != w.shape:
             raise InvalidParameterError(
                 f"omega and response must be 1-D of the same length, got shapes {w.shape} and {g.shape}"
             )
         gains = np.abs(g)
-        cov = None if covariance is None else np.array(covariance, dtype=np.float64)
         if cov is not None and cov.shape != (w.size, 2, 2):
             raise InvalidParameterError(
                 f"covariance must have shape (k, 2, 2) (of |G|, phi per point), got {cov.shape}"

@@ -9,9 +9,9 @@ from typing import Any, Optional
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..errors import InvalidParameterError, NonFiniteError
+from ..errors import InvalidParameterError
 from ..model import TransferFunction
-from ..validation import z_value
+from ..validation import frozen_array, z_value
 from ._model import _Model
 
 FloatArray = NDArray[np.float64]
@@ -171,9 +171,11 @@ class TransferFunctionFit:
         The uncertainty is that of the fitted parameters only: it does not hold the error of a model
         order that is too low (check ``p_value`` and the residuals).
         """
-        w = np.atleast_1d(np.asarray(omega, dtype=np.float64))
-        if w.ndim != 1 or not np.all(np.isfinite(w)):
-            raise NonFiniteError("omega must be a 1-D array of finite frequencies")
+        try:
+            raw = np.atleast_1d(omega)
+        except ValueError as exc:  # a ragged list
+            raise InvalidParameterError(f"omega must be a 1-D array of frequencies: {exc}") from None
+        w = frozen_array("omega", raw)
         if np.any(w <= 0.0):
             raise InvalidParameterError("omega must be > 0 rad/s")
         model = _Model(self.m, self.n, self.delay_fitted, self._fixed_delay * self._w0)
