@@ -123,7 +123,7 @@ def test_constraints_hold() -> None:
         assert lo <= e.frequency <= hi
         assert 0 < e.amplitude <= LIMITS["max_amplitude"]
         assert e.amplitude * e.frequency <= 4.0 * (1 + 1e-12)
-        assert e.sample_rate <= LIMITS["sample_rate"]
+        assert e.sample_rate <= LIMITS["sample_rate"] * (1 + 1e-12)
         assert 16 <= e.samples_per_period <= 64
         assert e.periods >= 7 and e.settle_periods == LIMITS["settle_periods"]
         expected = LIMITS["overhead"] + (LIMITS["settle_periods"] + e.periods) * 2 * math.pi / e.frequency
@@ -135,7 +135,8 @@ def test_constraints_hold() -> None:
 def test_target_g_tests_every_grid_frequency_and_spends_the_budget() -> None:
     plan = _plan("G", budget=400.0)
     freqs = [e.frequency for e in plan.experiments]
-    np.testing.assert_allclose(freqs, np.geomspace(1.0, 10.0, LIMITS["n_frequencies"]))
+    # The grid, each point moved onto the lab's rate by less than half a sample in 16 per period.
+    np.testing.assert_allclose(freqs, np.geomspace(1.0, 10.0, LIMITS["n_frequencies"]), rtol=1 / 32)
     assert [e.frequency for e in plan.naive.experiments] == freqs  # type: ignore[union-attr]
     assert plan.total_time <= 400.0
 
@@ -253,3 +254,45 @@ def test_cli_plan_refuses_bad_input(tmp_path: Path, capsys: pytest.CaptureFixtur
     bad.write_text("[1, 2]", encoding="utf-8")
     with pytest.raises(FileFormatError):
         cli._prior_from_args(cli.build_parser().parse_args(["plan", "--plant", str(bad), *CLI_LIMITS]))
+
+
+def test_the_labs_sample_rate_is_kept() -> None:
+    # The planner turned the lab's 100 Hz into 99.38 Hz (P = 117 at 5.337 rad/s); now the frequency moves.
+    plan = _plan("bouc_wen", n_frequencies=12, max_samples_per_period=512)
+    for d in (plan.design, plan.naive):
+        assert d is not None
+        for e in d.experiments:
+            ratio = LIMITS["sample_rate"] / e.sample_rate  # a whole decimation factor, 1 where P fits
+            assert ratio == pytest.approx(round(ratio), rel=1e-12)
+            assert (round(ratio) == 1) == (2 * math.pi * LIMITS["sample_rate"] / e.frequency <= 512 + 1e-6)
+    # The simulated record's step is the lab's: 1 / 100 s.
+    rec = plan.simulate(seed=1)[0]
+    assert np.median(np.diff(rec.t)) == pytest.approx(1.0 / LIMITS["sample_rate"], rel=1e-9)
+
+
+def test_low_frequencies_are_decimated_whole() -> None:
+    # At 1 rad/s and 100 Hz a period holds 628 samples, over the cap of 64: sampled at 100 / d Hz.
+    plan = _plan("G", budget=400.0, max_samples_per_period=64)
+    for e in plan.experiments:
+        d = LIMITS["sample_rate"] / e.sample_rate
+        assert d == pytest.approx(round(d), rel=1e-12) and 16 <= e.samples_per_period <= 64
+
+
+def _readme_planning_example() -> str:
+    text = (Path(__file__).resolve().parents[1] / "README.md").read_text(encoding="utf-8")
+    section = text[text.index("## Planning an experiment") :]
+    start = section.index("```python") + len("```python")
+    return section[start : section.index("```", start)]
+
+
+@pytest.mark.parametrize("target", ["bouc_wen", "beta", "gamma", "mu", "G"])
+def test_the_readme_planning_example_runs_with_its_own_numbers(target: str) -> None:
+    # It failed for target="G" (budget too small); every target its comment names must run as written.
+    code = _readme_planning_example()
+    assert 'target="bouc_wen",' in code and f'"{target}"' in code
+    code = code.replace('target="bouc_wen",', f'target="{target}",')
+    scope: dict[str, Any] = {"bw": bw}
+    exec(compile(code, "README.md", "exec"), scope)  # noqa: S102 - the README's own example
+    plan = scope["plan"]
+    assert plan.target == target and plan.total_time <= plan.budget
+    assert plan.improvement is not None and plan.improvement >= 1.0

@@ -12,14 +12,16 @@ import bouc_wen_id as bw
 import numpy as np
 import pytest
 import scipy.signal  # type: ignore[import-untyped]
-from bouc_wen_id import tfit
 from bouc_wen_id.demo import design_amplitudes
 from bouc_wen_id.errors import (
     IdentifiabilityWarning,
     InsufficientDataError,
     InvalidParameterError,
     NonFiniteError,
+    PoorFitWarning,
 )
+from bouc_wen_id.tfit._points import _points
+from bouc_wen_id.tfit._refine import _sk_start
 
 #: Known transfer functions of orders 1-4 (two with a delay), the cases of the recovery tests.
 KNOWN = {
@@ -99,13 +101,15 @@ def test_an_unstable_best_fit_is_returned_stable() -> None:
     omega = np.geomspace(0.1, 10.0, 12)
     g = 1.0 / (1j * omega - 1.0)
     cov = np.stack([np.diag([1e-4 * abs(x) ** 2, 1e-4]) for x in g])
-    pts = tfit._points(None, omega, g, cov)
-    _, den = tfit._sk_start(pts, 1j * omega / np.exp(np.mean(np.log(omega))), 0, 1, 0.0)
+    pts = _points(None, omega, g, cov)
+    _, den = _sk_start(pts, 1j * omega / np.exp(np.mean(np.log(omega))), 0, 1, 0.0)
     assert np.roots(den)[0].real > 0.0  # the start really is unstable
-    fit = bw.fit_transfer_function(omega=omega, response=g, covariance=cov, order=(0, 1), delay=False)
+    with pytest.warns(PoorFitWarning, match="unstable G"):
+        fit = bw.fit_transfer_function(omega=omega, response=g, covariance=cov, order=(0, 1), delay=False)
     assert np.all(fit.poles().real < 0.0)
     assert any("reflected" in n for n in fit.notes)
     assert fit.p_value is not None and fit.p_value < 1e-6  # and the report says it does not fit
+    assert any("unstable G" in w for w in fit.warnings)
 
 
 def test_scipy_signal_crosscheck() -> None:
@@ -269,3 +273,38 @@ def test_warnings_are_not_issued_for_a_well_posed_fit() -> None:
         warnings.simplefilter("error")
         fit = bw.fit_transfer_function(omega=OMEGA, response=g, covariance=cov, order=1)
     assert fit.warnings == () and fit.n == 1 and len(fit.candidates) == 4  # m in 0..1, delay or not
+
+
+@pytest.mark.parametrize(
+    ("kw", "error"),
+    [
+        (dict(omega=["a", "b"], response=[1.0, 2.0]), InvalidParameterError),
+        (dict(response=["x"] * 4), InvalidParameterError),
+        (dict(omega=[[1.0, 2.0], [3.0]]), InvalidParameterError),
+        (dict(delay="x"), InvalidParameterError),
+        (dict(delay=-1.0), InvalidParameterError),
+        (dict(confidence="x"), InvalidParameterError),
+        (dict(max_order=2.0), InvalidParameterError),
+    ],
+)
+def test_misused_arguments_are_named_errors(kw: dict[str, object], error: type[Exception]) -> None:
+    w = np.array([1.0, 2.0, 4.0, 8.0])
+    args: dict[str, object] = {"omega": w, "response": 1.0 / (1j * w + 1.0), **kw}
+    with pytest.raises(error):
+        bw.fit_transfer_function(**args)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize(
+    ("omega", "error"),
+    [
+        ("a", InvalidParameterError),
+        ([1.0, np.nan], NonFiniteError),
+        ([[1.0, 2.0], [3.0]], InvalidParameterError),
+        (1 + 2j, InvalidParameterError),
+    ],
+)
+def test_predict_names_bad_frequencies(omega: object, error: type[Exception]) -> None:
+    w = np.array([1.0, 2.0, 4.0, 8.0])
+    fit = bw.fit_transfer_function(omega=w, response=1.0 / (1j * w + 1.0))
+    with pytest.raises(error):
+        fit.predict(omega)  # type: ignore[arg-type]

@@ -30,6 +30,7 @@ __all__ = [
     "ConvergenceWarning",
     "TransientWarning",
     "DistortedInputWarning",
+    "PoorFitWarning",
 ]
 
 
@@ -137,3 +138,7 @@ class ConvergenceWarning(UserWarning):
 
 class DistortedInputWarning(UserWarning):
     """The recorded input is far from a pure sine (high total harmonic distortion)."""
+
+
+class PoorFitWarning(UserWarning):
+    """A fitted model does not describe the data it was fitted to: its own residuals refute it."""

@@ -35,6 +35,9 @@ __all__ = [
     "finite_arrays",
     "finite_scalar",
     "real_number",
+    "positive_number",
+    "nonnegative_number",
+    "count",
     "frozen_array",
     "check_bouc_wen",
     "routh_hurwitz_stable",
@@ -109,6 +112,31 @@ def real_number(name: str, value: object) -> float:
     if not math.isfinite(v):
         raise NonFiniteError(f"{name} = {v} is not finite")
     return v
+
+
+def positive_number(name: str, value: object) -> float:
+    """:func:`real_number`, and > 0."""
+    v = real_number(name, value)
+    if not v > 0.0:
+        raise InvalidParameterError(f"{name} = {v} must be > 0")
+    return v
+
+
+def nonnegative_number(name: str, value: object) -> float:
+    """:func:`real_number`, and >= 0."""
+    v = real_number(name, value)
+    if not v >= 0.0:
+        raise InvalidParameterError(f"{name} = {v} must be >= 0")
+    return v
+
+
+def count(name: str, value: object, low: int, high: Optional[int] = None) -> int:
+    """A user-given integer in ``low..high`` (``high`` None: no upper end); refuses bools and floats."""
+    n = int(value) if isinstance(value, (int, np.integer)) and not isinstance(value, bool) else None
+    if n is None or n < low or (high is not None and n > high):
+        span = f">= {low}" if high is None else f"in {low}..{high}"
+        raise InvalidParameterError(f"{name} = {value!r} must be an integer {span}")
+    return n
 
 
 def frozen_array(name: str, values: ArrayLike, ndim: int = 1) -> FloatArray:
