@@ -58,12 +58,10 @@ KNOWN_LONG_FUNCTIONS_PENDING_MERGE = frozenset(
         "diagnosis.report:html_page",
         "diagnosis.run:diagnose",
         "measurement:Measurement.from_dataframe",
-        "planning:plan_experiment",
-        "tfit:fit_transfer_function",
     }
 )
 #: Modules over MODULE_LINES_MAX that other helpers are splitting (issue 17); emptied after the merge.
-KNOWN_LONG_MODULES_PENDING_MERGE = frozenset({"io", "tfit"})
+KNOWN_LONG_MODULES_PENDING_MERGE = frozenset({"io"})
 #: Modules other helpers of this round are routing through the door (issue 17/18): they still name
 #: ``_core`` today.  Emptied after the merge.
 KNOWN_CORE_USERS_PENDING_MERGE = frozenset({"diagnosis.fitting", "diagnosis.drift", "diagnosis.select"})
