@@ -34,10 +34,9 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Optional
 
-import numpy as np
-
 from ._backend import push_budget
 from .errors import BudgetExceededError, InvalidParameterError
+from .validation import count
 
 __all__ = ["Budget", "get_budget", "set_budget", "budget", "check_samples", "check_steps", "check_bytes"]
 
@@ -63,12 +62,7 @@ _current = Budget(DEFAULT_MAX_SAMPLES, DEFAULT_MAX_STEPS, DEFAULT_MAX_BYTES)
 
 
 def _positive_int(name: str, value: object) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
-        raise InvalidParameterError(f"budget {name} must be an int, got {type(value).__name__}")
-    v = int(value)
-    if not 1 <= v <= _LIMIT_CEILING:
-        raise InvalidParameterError(f"budget {name} = {v} must be in [1, 2**64 - 1]")
-    return v
+    return count(f"budget {name}", value, 1, _LIMIT_CEILING)
 
 
 def _push(b: Budget) -> None:

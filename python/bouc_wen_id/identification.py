@@ -58,7 +58,7 @@ from .estimators import Fit, adequacy, fit, linear_nrmse, on_constraint, steady_
 from .model import Recording
 from .prepare import Prepared, Scales, auto_harmonics, noise_variance, prepare, scale
 from .result import NOT_CONVERGED, Adequacy, ExperimentEstimate, IdentificationResult, Truth, wrap_phase
-from .validation import z_value
+from .validation import count, z_value
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
     from typing_extensions import TypeAlias
@@ -255,18 +255,14 @@ def _check_arguments(
 
 def _check_counts(reference: Any, phase_grid: Any, max_iter: Any, harmonics: Any) -> tuple[int, int, int]:
     """Counts must be integers (not 0.5, not True) before anything indexes or loops with them."""
-    counts = (("reference", reference, None), ("phase_grid", phase_grid, 3), ("max_iter", max_iter, 1))
-    for name, value, low in counts:
-        if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
-            raise InvalidParameterError(f"{name} = {value!r} must be an integer")
-        if low is not None and value < low:
-            raise InvalidParameterError(f"{name} = {value} must be >= {low}")
+    if isinstance(reference, bool) or not isinstance(reference, (int, np.integer)):
+        raise InvalidParameterError(f"reference = {reference!r} must be an integer")
     if isinstance(harmonics, str):
         if harmonics not in ("auto", "all"):
             raise InvalidParameterError(f"harmonics = {harmonics!r} must be 'auto', 'all' or an integer >= 1")
     elif isinstance(harmonics, bool) or not isinstance(harmonics, (int, np.integer)) or harmonics < 1:
         raise InvalidParameterError(f"harmonics = {harmonics!r} must be 'auto', 'all' or an integer >= 1")
-    return int(reference), int(phase_grid), int(max_iter)
+    return int(reference), count("phase_grid", phase_grid, 3), count("max_iter", max_iter, 1)
 
 
 #: Work estimates of the budget checks, as rust/python.rs: golden reductions of one mu search, shooting

@@ -19,6 +19,7 @@ import numpy as np
 
 from . import _optional
 from .errors import InvalidParameterError
+from .validation import count
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
     from .model import TransferFunction
@@ -86,11 +87,7 @@ def to_control(tf: TransferFunction, pade_order: Optional[int] = None) -> Any:
             "exactly: pass pade_order=n for a Pade approximation, or convert "
             "TransferFunction(tf.num, tf.den) and keep the delay apart"
         )
-    if isinstance(pade_order, bool) or not isinstance(pade_order, (int, np.integer)):
-        raise InvalidParameterError(f"pade_order must be an integer, got {pade_order!r}")
-    if not 1 <= pade_order <= MAX_PADE_ORDER:
-        raise InvalidParameterError(f"pade_order must be in 1..{MAX_PADE_ORDER}, got {pade_order}")
-    num, den = control.pade(tf.delay, int(pade_order))
+    num, den = control.pade(tf.delay, count("pade_order", pade_order, 1, MAX_PADE_ORDER))
     return rational * control.tf(num, den)
 
 
