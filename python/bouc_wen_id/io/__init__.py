@@ -47,12 +47,12 @@ from typing import Any, Literal, Optional, Union
 import numpy as np
 from numpy.typing import NDArray
 
-from . import _optional
-from . import budget as _budget
-from .errors import BoucWenIdError, FileFormatError, InvalidParameterError, NonFiniteError
-from .measurement import RESERVED_KEYS, Measurement, check_metadata_key
-from .model import Recording, WienerPlant
-from .validation import check_time_axis
+from .. import _optional
+from .. import budget as _budget
+from ..errors import BoucWenIdError, FileFormatError, InvalidParameterError, NonFiniteError
+from ..measurement import RESERVED_KEYS, Measurement, check_metadata_key
+from ..model import Recording, WienerPlant
+from ..validation import check_time_axis
 
 __all__ = [
     "Item",
