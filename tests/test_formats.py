@@ -19,8 +19,8 @@ import bouc_wen_id as bw
 import numpy as np
 import pytest
 from bouc_wen_id import cli, io
-from bouc_wen_id.io import _containers
 from bouc_wen_id.errors import FileFormatError, InvalidParameterError, NonFiniteError, TimeAxisError
+from bouc_wen_id.io import _containers
 
 pd = pytest.importorskip("pandas")
 nptdms = pytest.importorskip("nptdms")

@@ -6,6 +6,7 @@ from __future__ import annotations
 import io as _stdio
 import json
 import math
+import os
 import struct
 import zlib
 from pathlib import Path
@@ -779,3 +780,148 @@ def test_csv_data_errors_are_the_recordings_named_errors(
     path.write_text("\n".join(lines) + "\n", encoding="utf-8")
     with pytest.raises(bw.NonFiniteError):
         read_csv(path)
+
+
+# --------------------------------------------------------------------------------------------------
+# HDF5: only the file named is read (issue 19)
+# --------------------------------------------------------------------------------------------------
+
+SECRET = "TOP-SECRET 1234567890 do not read"
+
+
+def _h5py() -> Any:
+    return pytest.importorskip("h5py")
+
+
+def _h5_lab(path: Path, n: int = 200, **extra: Any) -> Path:
+    """A lab HDF5 file: group 'run' with u, y and a sample_rate attribute; ``extra`` adds to the root."""
+    h5py = _h5py()
+    m = _measurement(n)
+    with h5py.File(path, "w") as f:
+        g = f.create_group("run")
+        g["u"], g["y"] = m.u, m.y
+        g.attrs["sample_rate"] = 1000.0
+        for name, value in extra.items():
+            f[name] = value
+    return path
+
+
+def _assert_refused(path: Path, *words: str) -> str:
+    with pytest.raises(FileFormatError) as info:
+        bw.load(path)
+    msg = str(info.value)
+    assert str(path) in msg and "refused" in msg, msg
+    for word in words:
+        assert word in msg, msg
+    assert "SECRET" not in msg
+    return msg
+
+
+def test_hdf5_external_raw_storage_is_refused_and_its_file_not_read(tmp_path: Path) -> None:
+    h5py = _h5py()
+    secret = tmp_path / "secret.txt"
+    secret.write_text(SECRET * 8, encoding="ascii")
+    path = _h5_lab(tmp_path / "ext.h5")
+    with h5py.File(path, "a") as f:
+        del f["run/u"]
+        f["run"].create_dataset("u", shape=(200,), dtype="<f8", external=[(str(secret), 0, 1600)])
+    _assert_refused(path, "'run/u'", "external files", "secret.txt")
+    # The same through the CLI's folder reading.
+    with pytest.raises(FileFormatError, match="refused"):
+        bw.load(tmp_path)
+
+
+def test_hdf5_external_storage_on_a_fifo_is_refused_without_opening_it(tmp_path: Path) -> None:
+    """Before: a FIFO behind a dataset's external storage hung the reader (in a child, with a timeout)."""
+    import subprocess
+    import sys
+
+    h5py = _h5py()
+    fifo = tmp_path / "pipe"
+    path = _h5_lab(tmp_path / "fifo.h5")
+    with h5py.File(path, "a") as f:
+        del f["run/y"]
+        f["run"].create_dataset("y", shape=(200,), dtype="<f8", external=[(str(fifo), 0, 1600)])
+    os.mkfifo(fifo)
+    code = (
+        "import sys, bouc_wen_id as bw\n"
+        "try:\n    bw.load(sys.argv[1])\nexcept bw.FileFormatError as e:\n    print(e)\n"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code, str(path)], capture_output=True, text=True, timeout=60, check=True
+    )
+    assert "refused" in out.stdout and "'run/y'" in out.stdout, out.stdout + out.stderr
+
+
+def test_hdf5_virtual_dataset_is_refused(tmp_path: Path) -> None:
+    h5py = _h5py()
+    source = tmp_path / "source.h5"
+    with h5py.File(source, "w") as f:
+        f["data"] = np.frombuffer((SECRET * 8).encode()[:1600], dtype="<f8")
+    path = _h5_lab(tmp_path / "vds.h5")
+    layout = h5py.VirtualLayout(shape=(200,), dtype="<f8")
+    layout[:] = h5py.VirtualSource(str(source), "data", shape=(200,))
+    with h5py.File(path, "a") as f:
+        del f["run/y"]
+        f["run"].create_virtual_dataset("y", layout)
+    _assert_refused(path, "'run/y'", "virtual dataset", "source.h5")
+
+
+def test_hdf5_external_links_and_soft_links_through_them_are_refused(tmp_path: Path) -> None:
+    h5py = _h5py()
+    other = _h5_lab(tmp_path / "other.h5")
+    path = _h5_lab(tmp_path / "link.h5", elsewhere=h5py.ExternalLink(str(other), "/run"))
+    _assert_refused(path, "'elsewhere'", "external link", "other.h5")
+    # A soft link whose path runs through an external link (the external link itself in a group of its own).
+    path = _h5_lab(tmp_path / "soft.h5")
+    with h5py.File(path, "a") as f:
+        f.create_group("hidden")["door"] = h5py.ExternalLink(str(other), "/run")
+        f["run/alias"] = h5py.SoftLink("/hidden/door/u")
+    _assert_refused(path, "external link")
+    # A soft link inside the file is harmless: not followed, the file reads.
+    path = _h5_lab(tmp_path / "inside.h5", alias=h5py.SoftLink("/run/u"), dangling=h5py.SoftLink("/nowhere"))
+    (m,) = bw.load(path)
+    assert len(m) == 200
+
+
+def test_hdf5_hard_link_cycles_are_walked_once(tmp_path: Path) -> None:
+    """Before: 12 groups each holding hard links to all 12 made the walk visit 12^8 groups."""
+    import time
+
+    h5py = _h5py()
+    path = _h5_lab(tmp_path / "cycle.h5")
+    with h5py.File(path, "a") as f:
+        groups = [f.create_group(f"g{i}") for i in range(12)]
+        for g in groups:
+            for j, h in enumerate(groups):
+                g[f"to{j}"] = h
+            g["root"] = f["/"]
+    start = time.perf_counter()
+    (m,) = bw.load(path)
+    assert time.perf_counter() - start < 5.0
+    assert m.name == "run" and len(m) == 200
+
+
+def test_hdf5_memory_budget_is_per_file(tmp_path: Path) -> None:
+    """Before: the budget held per experiment, so a small compressed file of many groups exhausted memory.
+
+    Twelve experiments of 20,000 samples (a 10 Hz sine at 1 kHz repeats every 100 samples, so gzip keeps
+    the file small): each fits a 1 MB budget, the file as a whole (3.8 MB of signals) does not.
+    """
+    h5py = _h5py()
+    path = tmp_path / "many.h5"
+    n = 20_000
+    period = 2 * np.pi * np.arange(100) / 100
+    u, y = np.tile(np.sin(period), n // 100), np.tile(np.cos(period), n // 100)
+    with h5py.File(path, "w") as f:
+        for i in range(12):
+            g = f.create_group(f"run{i:02d}")
+            g.create_dataset("u", data=u, compression="gzip", chunks=(n,))
+            g.create_dataset("y", data=y, compression="gzip", chunks=(n,))
+            g.attrs["sample_rate"] = 1000.0
+    limit = 1_000_000
+    assert path.stat().st_size < limit // 4 and 2 * n * 8 < limit
+    with bw.budget.budget(max_bytes=limit), pytest.raises(bw.BudgetExceededError) as info:
+        bw.load(path)
+    assert str(path) in str(info.value) and "12 experiment" in str(info.value)
+    assert len(bw.load(path)) == 12

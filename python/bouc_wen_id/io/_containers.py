@@ -163,10 +163,8 @@ def _container_item(
     rate: Optional[float],
     what: str,
 ) -> Item:
-    """One experiment from the channels ``picked`` (role -> channel), sizes checked before reading."""
-    for ch in picked.values():
-        _budget.check_samples(f"{where}: {what} {ch.path!r}", ch.size)
-    _budget.check_bytes(f"{where}: the signals", 8 * sum(ch.size for ch in picked.values()))
+    """One experiment from the channels ``picked`` (role -> channel); :func:`_check_file_budget` has
+    checked their declared sizes before any is read."""
     arrays = {}
     for role, ch in picked.items():
         try:
@@ -192,6 +190,77 @@ def _container_item(
     return _build(head, arrays, where, default_name=default_name, sample_rate=rate, sources=sources)
 
 
+@dataclass(frozen=True)
+class _Plan:
+    """One experiment to read: its group, the channels by role, where it is named, its default name."""
+
+    group: _Group
+    picked: Mapping[str, _Channel]
+    at: str
+    name: str
+
+
+def _check_file_budget(plans: Sequence[_Plan], where: str, what: str) -> None:
+    """The memory budget of the whole file, from the sizes its channels declare, before any is read.
+
+    Per file, not per experiment: a small file of many groups whose channels declare huge sizes (or one
+    channel reached from many groups) is refused as a whole.
+    """
+    total = 0
+    for plan in plans:
+        for ch in plan.picked.values():
+            _budget.check_samples(f"{plan.at}: {what} {ch.path!r}", ch.size)
+            total += ch.size
+    _budget.check_bytes(f"{where}: the signals of its {len(plans)} experiment(s)", 8 * total)
+
+
+def _pinned_plan(
+    groups: Sequence[_Group],
+    pinned: Mapping[str, str],
+    cols: Mapping[str, Union[str, int]],
+    where: str,
+    stem: str,
+    what: str,
+    listing: str,
+) -> _Plan:
+    """The one experiment that ``group/channel`` paths in ``cols`` pin."""
+    by_path = {ch.path: (g, ch) for g in groups for ch in g.channels.values()}
+    chosen = {}
+    for role, path in pinned.items():
+        if path not in by_path:
+            raise FileFormatError(f"{where}: no {what} {path!r} (for {role!r}); the file has {listing}")
+        chosen[role] = by_path[path]
+    home = (chosen["u"] if "u" in chosen else next(iter(chosen.values())))[0]
+    at = f"{where}, group {home.path!r}" if home.path else where
+    rest = {role: col for role, col in cols.items() if role not in pinned}
+    names = list(home.channels)
+    picked = {role: home.channels[names[j]] for role, j in _pick(names, rest, at, what).items()}
+    picked = {r: c for r, c in picked.items() if c.path not in pinned.values()}
+    picked.update({role: ch for role, (_, ch) in chosen.items()})
+    return _Plan(home, picked, at, home.path.split("/")[-1] or stem)
+
+
+def _group_plans(
+    groups: Sequence[_Group], cols: Mapping[str, Union[str, int]], where: str, stem: str, what: str
+) -> list[_Plan]:
+    """One experiment per group holding the ``u`` and ``y`` channels (their names or those ``cols`` maps)."""
+    plans = []
+    for g in groups:
+        names = list(g.channels)
+        if not any(cols.get(role, role) in g.channels for role in ("u", "y")):
+            continue  # a group of other channels (settings, temperatures, ...)
+        at = f"{where}, group {g.path!r}" if g.path else where
+        for role in ("u", "y"):
+            if cols.get(role, role) not in g.channels:
+                raise FileFormatError(
+                    f"{at}: no {what} {cols.get(role, role)!r} (for {role!r}); the group has "
+                    f"{', '.join(map(repr, names))}; map yours with columns={{{role!r}: ...}}"
+                )
+        picked = {role: g.channels[names[j]] for role, j in _pick(names, cols, at, what).items()}
+        plans.append(_Plan(g, picked, at, g.path.split("/")[-1] or stem))
+    return plans
+
+
 def _container_items(
     groups: Sequence[_Group],
     root: Mapping[str, Any],
@@ -212,8 +281,6 @@ def _container_items(
     listing = "; ".join(
         f"{g.path or '/'}: {', '.join(map(repr, g.channels)) or 'no ' + what + 's'}" for g in groups
     )
-    chain = [("the file's", root)]
-    by_path = {ch.path: (g, ch) for g in groups for ch in g.channels.values()}
     # A "/" pins a group, unless the whole name is a channel's (e.g. a channel called "Force/kN").
     names_anywhere = {name for g in groups for name in g.channels}
     pinned = {
@@ -222,38 +289,16 @@ def _container_items(
         if "/" in str(col) and str(col) not in names_anywhere
     }
     if pinned:
-        chosen = {}
-        for role, path in pinned.items():
-            if path not in by_path:
-                raise FileFormatError(f"{where}: no {what} {path!r} (for {role!r}); the file has {listing}")
-            chosen[role] = by_path[path]
-        home = (chosen["u"] if "u" in chosen else next(iter(chosen.values())))[0]
-        at = f"{where}, group {home.path!r}" if home.path else where
-        rest = {role: col for role, col in cols.items() if role not in pinned}
-        names = list(home.channels)
-        picked = {role: home.channels[names[j]] for role, j in _pick(names, rest, at, what).items()}
-        picked = {r: c for r, c in picked.items() if c.path not in pinned.values()}
-        picked.update({role: ch for role, (_, ch) in chosen.items()})
-        return [_container_item(home, picked, chain, at, home.path.split("/")[-1] or stem, rate, what)]
-    out: list[Item] = []
-    for g in groups:
-        names = list(g.channels)
-        if not any(cols.get(role, role) in g.channels for role in ("u", "y")):
-            continue  # a group of other channels (settings, temperatures, ...)
-        at = f"{where}, group {g.path!r}" if g.path else where
-        for role in ("u", "y"):
-            if cols.get(role, role) not in g.channels:
-                raise FileFormatError(
-                    f"{at}: no {what} {cols.get(role, role)!r} (for {role!r}); the group has "
-                    f"{', '.join(map(repr, names))}; map yours with columns={{{role!r}: ...}}"
-                )
-        picked = {role: g.channels[names[j]] for role, j in _pick(names, cols, at, what).items()}
-        out.append(_container_item(g, picked, chain, at, g.path.split("/")[-1] or stem, rate, what))
-    if not out:
+        plans = [_pinned_plan(groups, pinned, cols, where, stem, what, listing)]
+    else:
+        plans = _group_plans(groups, cols, where, stem, what)
+    if not plans:
         u, y = cols.get("u", "u"), cols.get("y", "y")
         raise FileFormatError(
             f"{where}: no group holds the {what}s {u!r} (u) and {y!r} (y); the file has "
             f"{listing or 'nothing'}; "
             f"map yours with columns={{'u': ..., 'y': ...}} ({what} names, or 'group/{what}' paths)"
         )
-    return out
+    _check_file_budget(plans, where, what)
+    chain = [("the file's", root)]
+    return [_container_item(p.group, p.picked, chain, p.at, p.name, rate, what) for p in plans]

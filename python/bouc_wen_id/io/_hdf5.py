@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any, Optional
@@ -27,34 +28,92 @@ from ._header import (
     _header,
 )
 
-#: HDF5 groups nested deeper than this are not searched (hard links can make cycles).
-_HDF5_MAX_DEPTH = 8
+#: Links to groups and datasets a file may hold (each group is walked once, by its address, so hard-link
+#: cycles end): a file of millions of empty groups is refused rather than walked.
+_HDF5_MAX_OBJECTS = 100_000
+#: Soft links resolved through at most this many other soft links (a chain or a loop of them).
+_HDF5_MAX_SOFT_HOPS = 16
+
+
+def _refuse(where: str, path: str, what: str) -> FileFormatError:
+    return FileFormatError(
+        f"{where}: refused: {path!r} {what}; only the data inside the file named are read (copy the data "
+        "into the file, e.g. h5py's Dataset[...] into a new dataset, to read them)"
+    )
+
+
+def _check_soft_link(h5py: Any, root: Any, group: Any, path: str, target: str, where: str) -> None:
+    """Refuse a soft link whose target lies through an external link (in another file); follow it only
+    link by link, never opening what an external link names."""
+    current = root if target.startswith("/") else group
+    parts = [c for c in target.split("/") if c and c != "."]
+    hops = 0
+    while parts:
+        name = parts.pop(0)
+        if not isinstance(current, h5py.Group) or name not in current:
+            return  # dangling (or through a dataset): there is nothing it reaches
+        link = current.get(name, getlink=True)
+        if isinstance(link, h5py.SoftLink):
+            hops += 1
+            if hops > _HDF5_MAX_SOFT_HOPS:
+                raise _refuse(where, path, f"is a chain of more than {_HDF5_MAX_SOFT_HOPS} soft links")
+            current = root if link.path.startswith("/") else current
+            parts = [c for c in link.path.split("/") if c and c != "."] + parts
+        elif isinstance(link, h5py.HardLink):
+            current = current[name]
+        else:
+            raise _refuse(where, path, f"is a soft link to {target!r}, which leads into another file")
+
+
+def _check_dataset(dataset: Any, path: str, where: str) -> None:
+    """Refuse a dataset whose samples live outside the file (external raw storage, a virtual dataset)."""
+    if dataset.is_virtual:
+        sources = ", ".join(sorted({f"{s.file_name}:{s.dset_name}" for s in dataset.virtual_sources()}))
+        raise _refuse(where, path, f"is a virtual dataset (its samples come from {sources[:200]})")
+    if dataset.external:
+        files = ", ".join(sorted({os.fsdecode(name) for name, *_ in dataset.external}))
+        raise _refuse(where, path, f"stores its samples in external files ({files[:200]})")
 
 
 def _hdf5_groups(h5py: Any, root: Any, where: str) -> list[_Group]:
-    """The root and every group below it (hard links only, to a bounded depth), with their datasets."""
+    """The root and every group below it, each once, with their datasets; refused when any object or link
+    of the file leads outside it (external links, external raw storage, virtual datasets)."""
     out: list[_Group] = []
-
-    def visit(group: Any, prefix: str, depth: int) -> None:
+    info = h5py.h5o.get_info(root.id)
+    seen: set[tuple[int, int]] = {(info.fileno, info.addr)}
+    stack: list[tuple[Any, str]] = [(root, "")]
+    count = 0
+    while stack:
+        group, prefix = stack.pop()
         channels: dict[str, _Channel] = {}
         subgroups = []
         for name in group:
+            path = prefix + name
             link = group.get(name, getlink=True)
+            if isinstance(link, h5py.SoftLink):
+                # The object it names is read through its hard link (or is absent): check where it leads.
+                _check_soft_link(h5py, root, group, path, link.path, where)
+                continue
             if not isinstance(link, h5py.HardLink):
-                continue  # soft and external links could point anywhere (another file)
+                target = f" ({link.filename}:{link.path})" if isinstance(link, h5py.ExternalLink) else ""
+                raise _refuse(where, path, f"is an external link{target} into another file")
             obj = group[name]
+            count += 1
+            if count > _HDF5_MAX_OBJECTS:
+                raise FileFormatError(f"{where}: more than {_HDF5_MAX_OBJECTS} links to groups and datasets")
             if isinstance(obj, h5py.Dataset):
+                # A dataset shared by groups (hard links) is a channel of each; its size counts each time.
+                _check_dataset(obj, path, where)
                 size = int(obj.size) if obj.shape is not None else 0
-                channels[name] = _Channel(
-                    name, prefix + name, size, dict(obj.attrs), _hdf5_reader(obj, where)
-                )
-            elif isinstance(obj, h5py.Group) and depth < _HDF5_MAX_DEPTH:
-                subgroups.append((obj, prefix + name + "/"))
+                channels[name] = _Channel(name, path, size, dict(obj.attrs), _hdf5_reader(obj, where))
+            elif isinstance(obj, h5py.Group):
+                info = h5py.h5o.get_info(obj.id)
+                if (info.fileno, info.addr) in seen:
+                    continue  # a group already walked (a hard-link cycle, or a group linked twice)
+                seen.add((info.fileno, info.addr))
+                subgroups.append((obj, path + "/"))
         out.append(_Group(prefix.rstrip("/"), dict(group.attrs), channels))
-        for obj, sub in subgroups:
-            visit(obj, sub, depth + 1)
-
-    visit(root, "", 0)
+        stack.extend(reversed(subgroups))  # depth first, in the order of the file's listing
     return out
 
 
@@ -82,8 +141,14 @@ def read_hdf5(
     ``sample_rate``, ``sampling_rate`` or ``fs`` (Hz), ``dt`` or ``wf_increment`` (s); or from
     ``sample_rate=``.  Units come from the datasets' ``units`` (or ``unit``, ``unit_string``) attribute and
     the group's scalar attributes go into the metadata.  Datasets must be numeric vectors (or 1-row/column
-    matrices); soft and external links are not followed.  A group written by :func:`write_hdf5` carries
-    its header (attribute ``bouc_wen_id``) and reads back as written.
+    matrices).  A group written by :func:`write_hdf5` carries its header (attribute ``bouc_wen_id``) and
+    reads back as written.
+
+    Only the file named is read: a file holding an external link, a soft link that leads through one, a
+    dataset with external raw storage or a virtual dataset is refused (:class:`FileFormatError`, naming
+    the object), before any sample is read.  Soft links are not followed (what they name is read through
+    its hard link); each group and dataset is visited once, however many hard links lead to it; the
+    memory budget applies to all the experiments of the file together.
     """
     h5py = _optional.require("h5py", "reading .h5/.hdf5 files")
     cols = _check_columns(columns)
