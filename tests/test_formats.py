@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 from bouc_wen_id import cli, io
 from bouc_wen_id.errors import FileFormatError, InvalidParameterError, NonFiniteError, TimeAxisError
-from bouc_wen_id.io import _containers
+from bouc_wen_id.io import _common, _containers
 
 pd = pytest.importorskip("pandas")
 nptdms = pytest.importorskip("nptdms")
@@ -540,7 +540,7 @@ def test_channel_sizes_are_checked_against_the_budget_before_reading(
 ) -> None:
     path = FORMATS[suffix](tmp_path / f"big{suffix}", _good(), RATE_PROPS)
     reads: list[str] = []
-    original = _containers._array
+    original = _common._array
 
     def counted(where: str, key: str, value: Any) -> Any:
         reads.append(key)

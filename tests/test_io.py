@@ -881,7 +881,7 @@ def test_hdf5_external_links_and_soft_links_through_them_are_refused(tmp_path: P
     # A soft link inside the file is harmless: not followed, the file reads.
     path = _h5_lab(tmp_path / "inside.h5", alias=h5py.SoftLink("/run/u"), dangling=h5py.SoftLink("/nowhere"))
     (m,) = bw.load(path)
-    assert len(m) == 200
+    assert isinstance(m, Measurement) and len(m) == 200
 
 
 def test_hdf5_hard_link_cycles_are_walked_once(tmp_path: Path) -> None:
@@ -899,7 +899,7 @@ def test_hdf5_hard_link_cycles_are_walked_once(tmp_path: Path) -> None:
     start = time.perf_counter()
     (m,) = bw.load(path)
     assert time.perf_counter() - start < 5.0
-    assert m.name == "run" and len(m) == 200
+    assert isinstance(m, Measurement) and m.name == "run" and len(m) == 200
 
 
 def test_hdf5_memory_budget_is_per_file(tmp_path: Path) -> None:
