@@ -557,7 +557,7 @@ MALFORMED: list[tuple[str, Callable[[Path], object], str]] = [
     ("bad_plant.csv", _text('# amplitude: 1\n# frequency: 2\n# plant: {"a": 1}\nt,u,y\n' + ROWS), "plant"),
     ("no_time.csv", _text("u,y\n1,2\n3,4\n"), "no time column"),
     ("binary.csv", _bytes(b"\xff\xfe\x00\x81garbage\x00"), "not a UTF-8 text file"),
-    ("unknown.txt", _text("t,u,y\n" + ROWS), "unknown recording format '.txt'"),
+    ("unknown.xls", _text("t,u,y\n" + ROWS), "unknown recording format '.xls'"),
     ("unequal.npz", _npz(t=np.arange(20.0), u=U, y=U[:19]), "unequal lengths"),
     ("no_meta.npz", _npz(t_0=np.arange(20.0), u_0=U, y_0=U), "no 'meta' entry"),
     (
@@ -736,7 +736,7 @@ def _rows(n: int = 16, cols: int = 3) -> str:
         ("not_numeric.csv", GOOD_HEADER + "t,u,y\n" + "0,1,abc\n" * 16),
         ("column_count.csv", GOOD_HEADER + "t,u,y\n" + _rows(cols=4)),
         ("bad_header_line.csv", "# no separator here\n" + GOOD_HEADER + "t,u,y\n" + _rows()),
-        ("unknown_suffix.txt", GOOD_HEADER + "t,u,y\n" + _rows()),
+        ("unknown_suffix.xls", GOOD_HEADER + "t,u,y\n" + _rows()),
     ],
 )
 def test_malformed_files_raise_file_format_error(tmp_path: Path, name: str, content: str) -> None:

@@ -7,6 +7,10 @@ Three file formats, each holding either kind, documented in the README:
   for simulated recordings; any order, other columns ignored) or through ``columns={"u": "disp_mm", ...}``
   (names, or 0-based indices for a file without a line of names).  Without a ``t`` column the time axis is
   ``t = k / sample_rate`` from a ``# sample_rate: <Hz>`` header line or the ``sample_rate=`` argument.
+* **Text** (``.txt``, ``.dat``, and ``.csv`` too) as a DAQ exports it: ``Key: value`` lines before the
+  column names (``Sampling Rate: 1000`` sets the time axis; found by themselves or skipped with
+  ``skiprows=``), text columns beside the numeric ones, and one experiment per acquisition block when an
+  ``Events`` column marks ``DAQ Pause``/``DAQ Resume`` (see :func:`read_text`).
 * **NPZ** (``.npz``), a bundle: arrays ``t_<i>``, ``u_<i>``, ``y_<i>`` (``x_<i>``, ``w_<i>``) and ``meta``, a
   JSON string holding the list of per-experiment headers (the CSV header as a JSON object).  A plain
   archive with arrays ``u``, ``y`` (``t``, or a scalar ``fs``/``sample_rate``) and an optional ``meta`` JSON
@@ -44,7 +48,7 @@ from ._containers import RATE_ATTRS as RATE_ATTRS
 from ._containers import STEP_ATTRS as STEP_ATTRS
 from ._containers import UNIT_ATTRS as UNIT_ATTRS
 from ._csv import CSV_MEMORY_FACTOR as CSV_MEMORY_FACTOR
-from ._csv import read_csv, write_csv
+from ._csv import read_csv, read_text, write_csv
 from ._hdf5 import read_hdf5, write_hdf5
 from ._header import FORMAT, MEASUREMENT_FORMAT, VERSION
 from ._load import SUFFIXES, load, load_recordings, save, save_recordings
@@ -59,6 +63,7 @@ __all__ = [
     "load_recordings",
     "save_recordings",
     "read_csv",
+    "read_text",
     "write_csv",
     "read_npz",
     "write_npz",

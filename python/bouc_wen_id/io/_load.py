@@ -17,20 +17,26 @@ from ._common import (
     _check_columns,
     _check_rate,
 )
-from ._csv import read_csv, write_csv
+from ._csv import read_text, write_csv
 from ._hdf5 import read_hdf5, write_hdf5
 from ._mat import read_mat, write_mat
 from ._npz import read_npz, write_npz
 from ._tdms import read_tdms, write_tdms
+from ._text import check_skiprows, holds_numbers
 
 #: File suffixes the loaders read (case-insensitive); folders are scanned for these.
-SUFFIXES = (".csv", ".npz", ".mat", ".tdms", ".h5", ".hdf5")
+#: (``.txt`` and ``.dat`` files without a row of numbers, notes beside the data, are passed over in folders.)
+SUFFIXES = (".csv", ".txt", ".dat", ".npz", ".mat", ".tdms", ".h5", ".hdf5")
+#: Suffixes of delimited text (read by :func:`read_text`: CSV, and DAQ exports with header lines).
+TEXT_SUFFIXES = (".csv", ".txt", ".dat")
 
 
-def _read_file(p: Path, cols: Optional[ColumnMap], rate: Optional[float]) -> list[Item]:
+def _read_file(
+    p: Path, cols: Optional[ColumnMap], rate: Optional[float], skiprows: Optional[int] = None
+) -> list[Item]:
     suffix = p.suffix.lower()
-    if suffix == ".csv":
-        return [read_csv(p, columns=cols, sample_rate=rate)]
+    if suffix in TEXT_SUFFIXES:
+        return read_text(p, columns=cols, sample_rate=rate, skiprows=skiprows)
     if suffix == ".npz":
         return read_npz(p, columns=cols, sample_rate=rate)
     if suffix == ".mat":
@@ -40,7 +46,8 @@ def _read_file(p: Path, cols: Optional[ColumnMap], rate: Optional[float]) -> lis
     if suffix in (".h5", ".hdf5"):
         return read_hdf5(p, columns=cols, sample_rate=rate)
     raise FileFormatError(
-        f"{p}: unknown recording format {p.suffix!r} (expected .csv, .npz, .mat, .tdms, .h5 or .hdf5)"
+        f"{p}: unknown recording format {p.suffix!r} (expected .csv, .txt, .dat, .npz, .mat, .tdms, .h5 or "
+        ".hdf5)"
     )
 
 
@@ -53,11 +60,16 @@ def _files(paths: PathLike | Iterable[PathLike]) -> list[Path]:
             files = sorted(
                 f
                 for f in p.iterdir()
-                if f.is_file() and f.suffix.lower() in SUFFIXES and not f.name.startswith(".")
+                if f.is_file()
+                and f.suffix.lower() in SUFFIXES
+                and not f.name.startswith(".")
+                # Notes beside the data (a README.txt) are not recordings; a named file is always read.
+                and (f.suffix.lower() not in (".txt", ".dat") or holds_numbers(f))
             )
             if not files:
                 raise FileFormatError(
-                    f"{p}: the folder holds no .csv or .npz recordings (nor .mat, .tdms, .h5 or .hdf5 files)"
+                    f"{p}: the folder holds no .csv or .npz recordings (nor .txt, .dat, .mat, .tdms, .h5 or "
+                    ".hdf5 files)"
                 )
             out.extend(files)
         elif not p.exists():
@@ -72,14 +84,17 @@ def load(
     *,
     columns: Optional[ColumnMap] = None,
     sample_rate: Optional[float] = None,
+    skiprows: Optional[int] = None,
 ) -> list[Item]:
-    """Load experiments from files (``.csv``, ``.npz``, ``.mat``; ``.tdms``, ``.h5``, ``.hdf5`` with the
-    ``tdms``/``hdf5`` extras) and folders of such files (sorted by name).
+    """Load experiments from files (``.csv``, ``.txt``, ``.dat``, ``.npz``, ``.mat``; ``.tdms``, ``.h5``,
+    ``.hdf5`` with the ``tdms``/``hdf5`` extras) and folders of such files (sorted by name).
 
     Each experiment is a :class:`Recording` when its header states the input's ``amplitude`` and
     ``frequency`` (or ``format: "bouc_wen_id.recording"``), a :class:`Measurement` otherwise.
     ``columns`` and ``sample_rate`` apply to every file (see :func:`read_csv`; in TDMS and HDF5 files
     ``columns`` names channels or datasets, or pins ``"group/channel"`` paths: see :func:`read_tdms`).
+    Text files may start with a DAQ's ``Key: value`` lines (found by themselves, or skipped with
+    ``skiprows``) and hold one experiment per acquisition block: see :func:`read_text`.
 
     Raises
     ------
@@ -88,9 +103,10 @@ def load(
     """
     cols = _check_columns(columns)
     rate = _check_rate(sample_rate)
+    skip = check_skiprows(skiprows)
     out: list[Item] = []
     for f in _files(paths):
-        out.extend(_read_file(f, cols, rate))
+        out.extend(_read_file(f, cols, rate, skip))
     return out
 
 
