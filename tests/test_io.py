@@ -925,3 +925,174 @@ def test_hdf5_memory_budget_is_per_file(tmp_path: Path) -> None:
         bw.load(path)
     assert str(path) in str(info.value) and "12 experiment" in str(info.value)
     assert len(bw.load(path)) == 12
+
+
+# --------------------------------------------------------------------------------------------------
+# DAQ text with header lines (issue 19: the shipped MR damper files load as they are)
+# --------------------------------------------------------------------------------------------------
+
+
+def _daq_text(
+    path: Path,
+    blocks: tuple[int, ...] = (60, 40),
+    rate: float = 200.0,
+    preamble: dict[str, str] | None = None,
+) -> Path:
+    """A DAQami-like export: 'Key: value' lines, names, a date column, two raw channels, an event log
+    that marks DAQ Start / Pause / Resume (CRLF line ends, fields padded with spaces)."""
+    head = {
+        "Header Size": "7",
+        "Version": "2",
+        "Sampling Interval": f"{1 / rate:g}",
+        "Sampling Rate": f"{rate:g}",
+        "Sample Count": str(sum(blocks)),
+        "Device Serial Number": "0",
+        **(preamble or {}),
+    }
+    lines = [f"{k}:  {v}" for k, v in head.items()]
+    lines.append("Sample Number, Date/Time, CHANNEL0, CHANNEL1, Events")
+    n = 0
+    for b, size in enumerate(blocks):
+        for k in range(size):
+            n += 1
+            event = ""
+            if k == 0:
+                event = ", DAQ Start" if b == 0 else ", DAQ Resume"
+            elif k == size - 1 and b < len(blocks) - 1:
+                event = ", DAQ Pause"
+            disp = -2.99 + 0.1 * math.sin(2 * math.pi * 5 * n / rate)
+            force = 0.5 * math.cos(2 * math.pi * 5 * n / rate)
+            lines.append(f"{n:>10},   05/13/2022 05:00:{n / rate:06.3f} PM, {disp:.4f}, {force:.4f}{event}")
+    path.write_bytes(("\r\n".join(lines) + "\r\n").encode("ascii"))
+    return path
+
+
+def test_daq_text_with_header_lines_loads_one_experiment_per_block(tmp_path: Path) -> None:
+    path = _daq_text(tmp_path / "run.txt")
+    with pytest.raises(FileFormatError) as info:
+        bw.load(path)  # CHANNEL0 / CHANNEL1: which is the input cannot be told from the file
+    msg = str(info.value)
+    assert str(path) in msg and "which column is the input u" in msg
+    assert (
+        "'CHANNEL0', 'CHANNEL1' hold numbers" in msg and "columns={'u': 'CHANNEL0', 'y': 'CHANNEL1'}" in msg
+    )
+    first, second = bw.load(path, columns={"u": "CHANNEL0", "y": "CHANNEL1"})
+    assert isinstance(first, Measurement) and isinstance(second, Measurement)
+    assert (len(first), len(second)) == (60, 40)
+    assert first.name == "run[0]" and second.name == "run[1]"
+    assert first.t[1] == 1 / 200.0 and second.t[0] == 0.0  # t = k / (the stated Sampling Rate)
+    assert dict(first.channels) == {"u": "CHANNEL0", "y": "CHANNEL1"}
+    assert first.metadata["Sampling Rate"] == "200" and first.metadata["block"] == "0"
+    assert second.metadata["first_line"] == "68"  # 7 header lines, 60 rows of block 0
+    assert first.u[0] == pytest.approx(-2.99 + 0.1 * math.sin(2 * math.pi * 5 / 200), abs=1e-4)
+    # read_csv reads one experiment: a file of two blocks is named as such.
+    with pytest.raises(FileFormatError, match="2 acquisition blocks"):
+        io.read_csv(path, columns={"u": "CHANNEL0", "y": "CHANNEL1"})
+    (one,) = bw.load(
+        _daq_text(tmp_path / "one.dat", blocks=(80,)), columns={"u": "CHANNEL1", "y": "CHANNEL0"}
+    )
+    assert isinstance(one, Measurement) and len(one) == 80 and one.name == "one"
+
+
+def test_daq_text_columns_named_for_their_signal_are_inferred_with_units(tmp_path: Path) -> None:
+    k = np.arange(100)
+    rows = "\n".join(f"{i / 500:.4f}\t{math.sin(0.2 * i):.6f}\t{math.cos(0.2 * i):.6f}" for i in k)
+    path = tmp_path / "mts.txt"
+    path.write_text(
+        f"Operator: M. Q.\nSpecimen = damper 3\nTime (s)\tDisplacement [mm]\tForce (kN)\n{rows}\n"
+    )
+    (m,) = bw.load(path)
+    assert isinstance(m, Measurement) and len(m) == 100
+    assert dict(m.channels) == {"t": "Time (s)", "u": "Displacement [mm]", "y": "Force (kN)"}
+    assert dict(m.units) == {"t": "s", "u": "mm", "y": "kN"}
+    assert m.metadata["Operator"] == "M. Q." and m.metadata["Specimen"] == "damper 3"
+    assert m.sample_rate == pytest.approx(500.0)
+    # Two columns that could be the output: named, not guessed.
+    two = tmp_path / "two.txt"
+    two.write_text(
+        "time,disp,Force (N),force [kN]\n" + "\n".join(f"{i},{i},{i},{i}" for i in range(5)) + "\n"
+    )
+    with pytest.raises(FileFormatError, match=r"'Force \(N\)', 'force \[kN\]' could each be 'y'"):
+        bw.load(two)
+
+
+def test_daq_text_header_faults_are_named_and_skiprows_skips(tmp_path: Path) -> None:
+    body = "t,u,y\n" + "\n".join(f"{i / 100},{math.sin(i)},{math.cos(i)}" for i in range(50)) + "\n"
+    path = tmp_path / "free.txt"
+    path.write_text("MTS test 5 -- damper\nSampling Rate: 100\n" + body)
+    with pytest.raises(FileFormatError, match=r"line 1 'MTS test 5 -- damper'.*skiprows"):
+        bw.load(path)
+    (m,) = bw.load(path, skiprows=2)
+    assert len(m.u) == 50 and m.metadata["Sampling Rate"] == "100"
+    with pytest.raises(InvalidParameterError, match="skiprows"):
+        bw.load(path, skiprows=-1)
+    with pytest.raises(FileFormatError, match="skips all"):
+        bw.load(path, skiprows=99)
+    # A rate and an interval that disagree, a sample count that does not match the rows.
+    bad = _daq_text(tmp_path / "rate.txt", preamble={"Sampling Interval": "0.002"})
+    with pytest.raises(FileFormatError, match="different sampling rates"):
+        bw.load(bad, columns={"u": "CHANNEL0", "y": "CHANNEL1"})
+    short = _daq_text(tmp_path / "count.txt", preamble={"Sample Count": "101"})
+    with pytest.raises(FileFormatError, match="state 101 samples, the file has 100 rows"):
+        bw.load(short, columns={"u": "CHANNEL0", "y": "CHANNEL1"})
+    # A signal mapped to a text column is named by line and field.
+    with pytest.raises(FileFormatError, match=r"line 8, field 2: '05/13/2022"):
+        bw.load(_daq_text(tmp_path / "text.txt"), columns={"u": "Date/Time", "y": "CHANNEL1"})
+
+
+def test_folders_read_daq_text_and_pass_over_notes(tmp_path: Path) -> None:
+    _daq_text(tmp_path / "a.txt")
+    (tmp_path / "README.txt").write_text("Runs of 13 May.\nChannel 0: displacement, channel 1: force.\n")
+    items = bw.load(tmp_path, columns={"u": "CHANNEL0", "y": "CHANNEL1"})
+    assert [m.name for m in items if isinstance(m, Measurement)] == ["a[0]", "a[1]"]
+    with pytest.raises(FileFormatError, match="line 2 'Channel 0: .* is not a row of numbers"):
+        bw.load(tmp_path / "README.txt")  # named, it is read and refused
+
+
+#: PROVENANCE.md of mr-damper-utfsm: the channel order of each recording session.
+MR_SESSION_FILES = {
+    ("CHANNEL0", "CHANNEL1"): ("ME10mm2Hz.txt", "ME5mm3Hz.txt", "ME5mm4Hz.txt"),
+    ("CHANNEL1", "CHANNEL0"): ("ME25mm0x25Hz.txt", "ME25mm0x5Hz.txt", "ME2mm5Hz.txt"),
+}
+
+
+@pytest.mark.real_data
+@pytest.mark.parametrize("channels", list(MR_SESSION_FILES))
+def test_shipped_mr_damper_files_load_as_they_are(
+    real_data: Path, tmp_path: Path, channels: tuple[str, str]
+) -> None:
+    """The DAQ exports, read through the CLI's folder path with its --columns, equal the study adapter's
+    blocks (which parse the same files by hand and scale them: 10 mm and 980.665 N per raw unit)."""
+    import importlib.util
+    import sys
+
+    from bouc_wen_id import cli
+
+    folder = real_data / "mr-damper-utfsm"
+    spec = importlib.util.spec_from_file_location(
+        "_adapters", Path(__file__).parents[1] / "studies/_adapters.py"
+    )
+    assert spec is not None and spec.loader is not None
+    adapters = sys.modules.get("_adapters") or importlib.util.module_from_spec(spec)
+    if "_adapters" not in sys.modules:
+        sys.modules["_adapters"] = adapters
+        spec.loader.exec_module(adapters)
+    session = tmp_path / "session"
+    session.mkdir()
+    for name in MR_SESSION_FILES[channels]:
+        (session / name).symlink_to(folder / name)
+    u, y = channels
+    with pytest.raises(FileFormatError, match="which column is the input u"):
+        bw.load(session)
+    items = bw.load(session, columns=cli._columns([f"u={u}", f"y={y}"]))
+    assert len(items) == 15  # five coil currents per file
+    expected = [
+        b for name in sorted(MR_SESSION_FILES[channels]) for b in adapters.load_mr_damper(folder / name)
+    ]
+    for got, ref in zip(items, expected):
+        assert isinstance(got, Measurement)
+        assert dict(got.channels) == {"u": u, "y": y}
+        np.testing.assert_allclose(got.u * 10.0, ref.u, rtol=1e-12)
+        np.testing.assert_allclose(got.y * 980.665, ref.y, rtol=1e-12)
+        np.testing.assert_allclose(got.t, ref.t, rtol=1e-12, atol=1e-12)
+        assert -3.15 < float(np.median(got.u)) < -2.85  # the actuator's -29.9 mm offset: u is displacement

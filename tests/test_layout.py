@@ -26,6 +26,7 @@ VALUE_MODULES = (
     "io._common",
     "io._header",
     "io._csv",
+    "io._text",
     "io._npz",
     "io._matv5",
     "io._mat",

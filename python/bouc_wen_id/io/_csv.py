@@ -210,6 +210,11 @@ def _signals(
         names = [f"column {j}" for j in range(data.shape[1])]
         picked = _pick(names, cols, where)
         return {role: np.ascontiguousarray(data[:, j]) for role, j in picked.items()}, names, picked, {}
+    lineno, first = rows[0]
+    if not any(is_number(c) for c in split(first, delimiter)):
+        raise FileFormatError(
+            f"{where}: line {lineno} {first.strip()[:60]!r} is not a row of numbers (no data)"
+        )
     cols, units = infer_roles(names, cols, where)
     picked = _pick(names, cols, where)
     if "u" not in picked and "y" not in picked:

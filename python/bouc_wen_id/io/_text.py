@@ -125,6 +125,8 @@ def find_preamble(
         (k for k in range(start, len(lines)) if lines[k].strip() and _looks_like_data(lines[k], delimiter)),
         len(lines),
     )
+    if first_data == len(lines):
+        return [], start  # no row of numbers: the reader says so
     names_at = next((k for k in range(first_data - 1, start - 1, -1) if lines[k].strip()), start)
     preamble = [(k + 1, lines[k]) for k in range(start, names_at) if lines[k].strip()]
     for lineno, line in preamble:
@@ -202,16 +204,19 @@ def _role_of(name: str) -> tuple[str, Optional[str]]:
 def infer_roles(
     names: Sequence[str], columns: dict[str, Union[str, int]], where: str
 ) -> tuple[dict[str, Union[str, int]], dict[str, str]]:
-    """``columns`` completed with the signals a column's name states (``Displacement (mm)`` -> u), and the
-    units those names carry.  A signal is inferred only when no column bears its own name, ``columns``
-    does not map it, and exactly one column's name says it; two candidates are an error naming both."""
+    """``columns`` completed with the signals a column's name states, and the units the names carry.
+
+    ``Displacement (mm)`` is ``u`` (the whole name but its unit is one of the words; ``disp_mm`` is not).
+    A signal is inferred only when no column bears its own name, ``columns`` does not map it, and exactly
+    one column's name says it; two candidates are an error naming both.
+    """
     out = dict(columns)
     units: dict[str, str] = {}
     taken = {names[c] if isinstance(c, int) and c < len(names) else c for c in out.values()}
     for role, words in _ROLE_WORDS.items():
         if role in out or role in names:
             continue
-        found = [n for n in names if n not in taken and _role_of(n)[0].split(" ")[0] in words]
+        found = [n for n in names if n not in taken and _role_of(n)[0] in words]
         if len(found) > 1:
             raise FileFormatError(
                 f"{where}: columns {', '.join(map(repr, found))} could each be {role!r}; choose with "
