@@ -13,15 +13,8 @@ import numpy as np
 from .. import budget as _budget
 from ..errors import BoucWenIdError, FileFormatError, InvalidParameterError
 from ..measurement import RESERVED_KEYS, check_metadata_key
-from ._common import (
-    Item,
-    _array,
-    _parse_json,
-    _pick,
-)
-from ._header import (
-    _build,
-)
+from ._common import Item, _array, _parse_json, _pick
+from ._header import _build
 
 #: Group property (TDMS) or attribute (HDF5) holding an experiment's header as JSON (what :func:`write_tdms`
 #: and :func:`write_hdf5` write); a group without it is read as lab data.

@@ -1,4 +1,5 @@
-"""CSV: one experiment per file, ``# key: value`` header lines, a line of column names, the rows."""
+"""CSV and delimited text: ``# key: value`` header lines (or a DAQ's ``Key: value`` lines, see ``_text``), a
+line of column names, the rows; one experiment per file, or per acquisition block (:func:`read_text`)."""
 
 from __future__ import annotations
 
@@ -12,22 +13,8 @@ import numpy as np
 from .. import budget as _budget
 from ..errors import FileFormatError, InvalidParameterError
 from ..model import Recording
-from ._common import (
-    ColumnMap,
-    FloatArray,
-    Item,
-    PathLike,
-    _check_columns,
-    _check_rate,
-    _pick,
-    _regular_file,
-)
-from ._header import (
-    _STRICT,
-    _build,
-    _check_header_keys,
-    _header,
-)
+from ._common import ColumnMap, FloatArray, Item, PathLike, _check_columns, _check_rate, _pick, _regular_file
+from ._header import _STRICT, _build, _check_header_keys, _header
 from ._text import (
     Preamble,
     ambiguous,
@@ -82,7 +69,7 @@ CSV_MEMORY_FACTOR = 8
 
 
 def _read_text(path: Path) -> str:
-    size = _regular_file(path, "CSV", CSV_MEMORY_FACTOR)
+    size = _regular_file(path, "text", CSV_MEMORY_FACTOR)
     try:
         with open(path, "rb") as fh:
             # Never more than the size checked: a file that grows while read is cut at its checked size.
@@ -267,7 +254,7 @@ def read_text(
     p = Path(path)
     where = str(p)
     lines = [line.rstrip("\r") for line in _read_text(p).split("\n")]
-    _budget.check_samples(f"{where}: the CSV rows", len(lines))
+    _budget.check_samples(f"{where}: the text rows", len(lines))
     if not any(line.strip() for line in lines):
         raise FileFormatError(f"{where}: the file is empty")
     if skip is not None:

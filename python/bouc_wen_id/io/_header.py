@@ -15,13 +15,7 @@ from ..errors import BoucWenIdError, FileFormatError, InvalidParameterError
 from ..measurement import RESERVED_KEYS, Measurement, check_metadata_key
 from ..model import Recording, WienerPlant
 from ..validation import check_time_axis
-from ._common import (
-    FloatArray,
-    Item,
-    _array,
-    _rate_value,
-    _scalar_rate,
-)
+from ._common import FloatArray, Item, _array, _rate_value, _scalar_rate
 
 FORMAT = "bouc_wen_id.recording"
 MEASUREMENT_FORMAT = "bouc_wen_id.measurement"

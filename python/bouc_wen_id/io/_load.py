@@ -10,13 +10,7 @@ from typing import Literal, Optional
 from ..errors import FileFormatError, InvalidParameterError
 from ..measurement import Measurement
 from ..model import Recording
-from ._common import (
-    ColumnMap,
-    Item,
-    PathLike,
-    _check_columns,
-    _check_rate,
-)
+from ._common import ColumnMap, Item, PathLike, _check_columns, _check_rate
 from ._csv import read_text, write_csv
 from ._hdf5 import read_hdf5, write_hdf5
 from ._mat import read_mat, write_mat

@@ -22,10 +22,7 @@ from ._common import (
     _pick,
     _regular_file,
 )
-from ._header import (
-    _header,
-    _read_single,
-)
+from ._header import _header, _read_single
 from ._matv5 import _guard_mat5
 
 

@@ -25,11 +25,7 @@ from ._common import (
     _pick,
     _regular_file,
 )
-from ._header import (
-    _build,
-    _header,
-    _read_single,
-)
+from ._header import _build, _header, _read_single
 
 
 def write_npz(path: PathLike, items: Sequence[Item]) -> None:

@@ -13,20 +13,9 @@ import numpy as np
 from .. import _optional
 from ..errors import BoucWenIdError, FileFormatError
 from ..measurement import Measurement
-from ._common import (
-    _ROLES,
-    ColumnMap,
-    Item,
-    PathLike,
-    _check_columns,
-    _check_rate,
-    _items,
-    _regular_file,
-)
+from ._common import _ROLES, ColumnMap, Item, PathLike, _check_columns, _check_rate, _items, _regular_file
 from ._containers import HEADER_KEY, _Channel, _container_items, _Group
-from ._header import (
-    _header,
-)
+from ._header import _header
 
 
 class _LogRecords:
