@@ -206,9 +206,15 @@ def _signals(
     picked = _pick(names, cols, where)
     if "u" not in picked and "y" not in picked:
         raise ambiguous(names, split(rows[0][1], delimiter), where)
-    _check_widths(rows, delimiter, names, where)
     used = sorted(set(picked.values()))
-    data = _load_rows(rows, delimiter, used, where)
+    try:  # the common case, every field a number: one pass in numpy, which checks the widths itself
+        data = np.loadtxt([r for _, r in rows], delimiter=delimiter, ndmin=2, dtype=np.float64, comments=None)
+        if data.shape[1] != len(names):
+            raise ValueError("not one field per name")
+        data = data[:, used]
+    except (ValueError, TypeError, OverflowError):
+        _check_widths(rows, delimiter, names, where)
+        data = _load_rows(rows, delimiter, used, where)
     arrays = {role: np.ascontiguousarray(data[:, used.index(j)]) for role, j in picked.items()}
     return arrays, names, picked, units
 
