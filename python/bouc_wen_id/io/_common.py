@@ -154,10 +154,11 @@ def _regular_file(path: Path, what: str, memory_factor: int = 1) -> int:
     return int(st.st_size)
 
 
-def _items(items: Sequence[Item]) -> list[Item]:
+def _items(items: Sequence[Item], verb: str = "write") -> list[Item]:
+    """The experiments to write or save: at least one, each a Recording or a Measurement."""
     seq = list(items)
     if not seq:
-        raise InvalidParameterError("nothing to write: no experiments")
+        raise InvalidParameterError(f"nothing to {verb}: no experiments")
     for item in seq:
         if not isinstance(item, (Recording, Measurement)):
             raise InvalidParameterError(

@@ -10,7 +10,7 @@ from typing import Literal, Optional
 from ..errors import FileFormatError, InvalidParameterError
 from ..measurement import Measurement
 from ..model import Recording
-from ._common import ColumnMap, Item, PathLike, _check_columns, _check_rate
+from ._common import ColumnMap, Item, PathLike, _check_columns, _check_rate, _items
 from ._csv import read_text, write_csv
 from ._hdf5 import read_hdf5, write_hdf5
 from ._mat import read_mat, write_mat
@@ -138,14 +138,7 @@ def save(
     or ``hdf5`` extra).  ``*.csv``: one experiment.  Anything else is a folder (created if needed) of
     ``exp_000.<fmt>``, ``exp_001.<fmt>``, ... (``fmt``: ``"csv"``, ``"npz"`` or ``"mat"``).
     """
-    seq: list[Item] = [items] if isinstance(items, (Recording, Measurement)) else list(items)
-    if not seq:
-        raise InvalidParameterError("nothing to save: no experiments")
-    for item in seq:
-        if not isinstance(item, (Recording, Measurement)):
-            raise InvalidParameterError(
-                f"expected Recording or Measurement objects, got {type(item).__name__}"
-            )
+    seq = _items([items] if isinstance(items, (Recording, Measurement)) else items, "save")
     if fmt not in ("csv", "npz", "mat"):
         raise InvalidParameterError(f"fmt must be 'csv', 'npz' or 'mat', got {fmt!r}")
     p = Path(path)

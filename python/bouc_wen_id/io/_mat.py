@@ -10,7 +10,7 @@ from typing import Any, Optional, Union
 
 import numpy as np
 
-from ..errors import FileFormatError, InvalidParameterError
+from ..errors import FileFormatError
 from ._common import (
     _ROLES,
     ColumnMap,
@@ -18,6 +18,7 @@ from ._common import (
     PathLike,
     _check_columns,
     _check_rate,
+    _items,
     _parse_json,
     _pick,
     _regular_file,
@@ -50,9 +51,7 @@ def write_mat(path: PathLike, items: Sequence[Item], *, bundle: Optional[bool] =
     """
     savemat = _scipy_io().savemat
 
-    items = list(items)
-    if not items:
-        raise InvalidParameterError("nothing to write: no experiments")
+    items = _items(items)
     fields = [_mat_fields(item) for item in items]
     if len(items) == 1 and not bundle:
         variables: dict[str, Any] = fields[0]

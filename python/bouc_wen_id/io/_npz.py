@@ -12,7 +12,7 @@ from typing import Any, Optional
 import numpy as np
 
 from .. import budget as _budget
-from ..errors import BoucWenIdError, FileFormatError, InvalidParameterError
+from ..errors import BoucWenIdError, FileFormatError
 from ._common import (
     _ROLES,
     ColumnMap,
@@ -21,6 +21,7 @@ from ._common import (
     _array,
     _check_columns,
     _check_rate,
+    _items,
     _parse_json,
     _pick,
     _regular_file,
@@ -30,8 +31,7 @@ from ._header import _build, _header, _read_single
 
 def write_npz(path: PathLike, items: Sequence[Item]) -> None:
     """Write several experiments (recordings and measurements, mixed) into one compressed NPZ bundle."""
-    if not items:
-        raise InvalidParameterError("nothing to write: no experiments")
+    items = _items(items)
     arrays: dict[str, np.ndarray] = {}
     meta = []
     for i, item in enumerate(items):
