@@ -1035,6 +1035,17 @@ def test_daq_text_header_faults_are_named_and_skiprows_skips(tmp_path: Path) -> 
     short = _daq_text(tmp_path / "count.txt", preamble={"Sample Count": "101"})
     with pytest.raises(FileFormatError, match="state 101 samples, the file has 100 rows"):
         bw.load(short, columns={"u": "CHANNEL0", "y": "CHANNEL1"})
+    # A stated interval with a unit is read in it; a unit not understood is refused, not read as seconds.
+    (m,) = bw.load(
+        _daq_text(tmp_path / "ms.txt", (80,), preamble={"Sampling Interval": "5 ms"}),
+        columns={"u": 2, "y": 3},
+    )
+    assert isinstance(m, Measurement) and m.sample_rate == pytest.approx(200.0)
+    with pytest.raises(FileFormatError, match="unit 'fortnights' not understood"):
+        bw.load(
+            _daq_text(tmp_path / "odd.txt", preamble={"Sampling Interval": "5 fortnights"}),
+            columns={"u": 2, "y": 3},
+        )
     # A signal mapped to a text column is named by line and field.
     with pytest.raises(FileFormatError, match=r"line 8, field 2: '05/13/2022"):
         bw.load(_daq_text(tmp_path / "text.txt"), columns={"u": "Date/Time", "y": "CHANNEL1"})

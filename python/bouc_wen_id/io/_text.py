@@ -27,7 +27,11 @@ _PREAMBLE_RATE_KEYS = ("sampling rate", "sample rate", "sampling frequency", "sa
 #: ... or the sampling interval in s.
 _PREAMBLE_STEP_KEYS = ("sampling interval", "sample interval", "sampling period", "dt")
 #: Preamble keys stating how many rows of samples follow.
-_PREAMBLE_COUNT_KEYS = ("sample count", "samples", "number of samples")
+_PREAMBLE_COUNT_KEYS = ("sample count", "number of samples")
+#: Units a stated rate (Hz) or interval (s) may carry after its number, as factors to Hz or s; any other
+#: unit is refused rather than read as if it were Hz or s ("1 ms" is not 1 s).
+_RATE_UNITS = {"": 1.0, "hz": 1.0, "1/s": 1.0, "s/s": 1.0, "sps": 1.0, "khz": 1e3, "ks/s": 1e3, "mhz": 1e6}
+_STEP_UNITS = {"": 1.0, "s": 1.0, "sec": 1.0, "seconds": 1.0, "ms": 1e-3, "us": 1e-6, "µs": 1e-6, "ns": 1e-9}
 #: Relative disagreement allowed between a stated rate and a stated interval (copies of one number).
 _PREAMBLE_RTOL = 1e-6
 #: Column names (lower case, units removed) read as a signal when no column has the signal's own name.
@@ -147,14 +151,25 @@ def _is_rate_key(norm: str) -> bool:
     return norm in _PREAMBLE_RATE_KEYS or norm.replace(" ", "_") in _PREAMBLE_RATE_KEYS
 
 
-def _positive(value: str, key: str, lineno: int, where: str) -> float:
+def _positive(
+    value: str, key: str, lineno: int, where: str, units: Optional[dict[str, float]] = None
+) -> float:
+    """The positive number ``value`` states, times the factor of its unit (from ``units``; none allowed
+    without them)."""
+    number, _, unit = value.strip().partition(" ")
+    factor = (units or {"": 1.0}).get(unit.strip().lower())
     try:
-        v = float(value.split()[0]) if value.split() else math.nan
+        v = float(number)
     except ValueError:
         v = math.nan
     if not (math.isfinite(v) and v > 0):
         raise FileFormatError(f"{where}: line {lineno}: {key!r} = {value[:40]!r} is not a positive number")
-    return v
+    if factor is None:
+        raise FileFormatError(
+            f"{where}: line {lineno}: {key!r} = {value[:40]!r}: unit {unit.strip()[:20]!r} not understood "
+            f"(known: {', '.join(u for u in (units or {}) if u)})"
+        )
+    return v * factor
 
 
 def read_preamble(lines: Sequence[tuple[int, str]], where: str) -> Preamble:
@@ -170,9 +185,9 @@ def read_preamble(lines: Sequence[tuple[int, str]], where: str) -> Preamble:
         key, value = kv
         norm = _norm(key)
         if _is_rate_key(norm):
-            rates.append((key, _positive(value, key, lineno, where)))
+            rates.append((key, _positive(value, key, lineno, where, _RATE_UNITS)))
         elif norm in _PREAMBLE_STEP_KEYS:
-            rates.append((key, 1.0 / _positive(value, key, lineno, where)))
+            rates.append((key, 1.0 / _positive(value, key, lineno, where, _STEP_UNITS)))
         elif norm in _PREAMBLE_COUNT_KEYS:
             n = _positive(value, key, lineno, where)
             if not n.is_integer():
