@@ -1035,6 +1035,13 @@ def test_daq_text_header_faults_are_named_and_skiprows_skips(tmp_path: Path) -> 
     short = _daq_text(tmp_path / "count.txt", preamble={"Sample Count": "101"})
     with pytest.raises(FileFormatError, match="state 101 samples, the file has 100 rows"):
         bw.load(short, columns={"u": "CHANNEL0", "y": "CHANNEL1"})
+    # 'Key: value' lines right above the rows (no line of names): the columns are taken by index.
+    bare = tmp_path / "bare.txt"
+    bare.write_text(
+        "Sampling Rate: 100\n" + "\n".join(f"{math.sin(i)} {math.cos(i)}" for i in range(50)) + "\n"
+    )
+    (m,) = bw.load(bare, columns={"u": 0, "y": 1})
+    assert isinstance(m, Measurement) and len(m) == 50 and m.sample_rate == pytest.approx(100.0)
     # A stated interval with a unit is read in it; a unit not understood is refused, not read as seconds.
     (m,) = bw.load(
         _daq_text(tmp_path / "ms.txt", (80,), preamble={"Sampling Interval": "5 ms"}),

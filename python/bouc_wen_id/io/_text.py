@@ -132,6 +132,9 @@ def find_preamble(
     if first_data == len(lines):
         return [], start  # no row of numbers: the reader says so
     names_at = next((k for k in range(first_data - 1, start - 1, -1) if lines[k].strip()), start)
+    width = len(split(lines[first_data], delimiter))
+    if _key_value(lines[names_at]) and len(split(lines[names_at], delimiter)) != width:
+        names_at = first_data  # 'Key: value' right above the rows: no line of names
     preamble = [(k + 1, lines[k]) for k in range(start, names_at) if lines[k].strip()]
     for lineno, line in preamble:
         if line.startswith("#") or _key_value(line) is None:
