@@ -20,6 +20,7 @@ import numpy as np
 import pytest
 from bouc_wen_id import cli, io
 from bouc_wen_id.errors import FileFormatError, InvalidParameterError, NonFiniteError, TimeAxisError
+from bouc_wen_id.io import _common, _containers
 
 pd = pytest.importorskip("pandas")
 nptdms = pytest.importorskip("nptdms")
@@ -539,13 +540,13 @@ def test_channel_sizes_are_checked_against_the_budget_before_reading(
 ) -> None:
     path = FORMATS[suffix](tmp_path / f"big{suffix}", _good(), RATE_PROPS)
     reads: list[str] = []
-    original = io._array
+    original = _common._array
 
     def counted(where: str, key: str, value: Any) -> Any:
         reads.append(key)
         return original(where, key, value)
 
-    monkeypatch.setattr(io, "_array", counted)
+    monkeypatch.setattr(_containers, "_array", counted)  # where the TDMS and HDF5 readers find it
     with bw.budget.budget(max_samples=399), pytest.raises(bw.BudgetExceededError) as info:
         bw.load(path)
     assert str(path) in str(info.value) and reads == []  # refused from the sizes the file declares

@@ -6,6 +6,7 @@ from __future__ import annotations
 import io as _stdio
 import json
 import math
+import os
 import struct
 import zlib
 from pathlib import Path
@@ -556,7 +557,7 @@ MALFORMED: list[tuple[str, Callable[[Path], object], str]] = [
     ("bad_plant.csv", _text('# amplitude: 1\n# frequency: 2\n# plant: {"a": 1}\nt,u,y\n' + ROWS), "plant"),
     ("no_time.csv", _text("u,y\n1,2\n3,4\n"), "no time column"),
     ("binary.csv", _bytes(b"\xff\xfe\x00\x81garbage\x00"), "not a UTF-8 text file"),
-    ("unknown.txt", _text("t,u,y\n" + ROWS), "unknown recording format '.txt'"),
+    ("unknown.xls", _text("t,u,y\n" + ROWS), "unknown recording format '.xls'"),
     ("unequal.npz", _npz(t=np.arange(20.0), u=U, y=U[:19]), "unequal lengths"),
     ("no_meta.npz", _npz(t_0=np.arange(20.0), u_0=U, y_0=U), "no 'meta' entry"),
     (
@@ -735,7 +736,7 @@ def _rows(n: int = 16, cols: int = 3) -> str:
         ("not_numeric.csv", GOOD_HEADER + "t,u,y\n" + "0,1,abc\n" * 16),
         ("column_count.csv", GOOD_HEADER + "t,u,y\n" + _rows(cols=4)),
         ("bad_header_line.csv", "# no separator here\n" + GOOD_HEADER + "t,u,y\n" + _rows()),
-        ("unknown_suffix.txt", GOOD_HEADER + "t,u,y\n" + _rows()),
+        ("unknown_suffix.xls", GOOD_HEADER + "t,u,y\n" + _rows()),
     ],
 )
 def test_malformed_files_raise_file_format_error(tmp_path: Path, name: str, content: str) -> None:
@@ -779,3 +780,337 @@ def test_csv_data_errors_are_the_recordings_named_errors(
     path.write_text("\n".join(lines) + "\n", encoding="utf-8")
     with pytest.raises(bw.NonFiniteError):
         read_csv(path)
+
+
+# --------------------------------------------------------------------------------------------------
+# HDF5: only the file named is read (issue 19)
+# --------------------------------------------------------------------------------------------------
+
+SECRET = "TOP-SECRET 1234567890 do not read"
+
+
+def _h5py() -> Any:
+    return pytest.importorskip("h5py")
+
+
+def _h5_lab(path: Path, n: int = 200, **extra: Any) -> Path:
+    """A lab HDF5 file: group 'run' with u, y and a sample_rate attribute; ``extra`` adds to the root."""
+    h5py = _h5py()
+    m = _measurement(n)
+    with h5py.File(path, "w") as f:
+        g = f.create_group("run")
+        g["u"], g["y"] = m.u, m.y
+        g.attrs["sample_rate"] = 1000.0
+        for name, value in extra.items():
+            f[name] = value
+    return path
+
+
+def _assert_refused(path: Path, *words: str) -> str:
+    with pytest.raises(FileFormatError) as info:
+        bw.load(path)
+    msg = str(info.value)
+    assert str(path) in msg and "refused" in msg, msg
+    for word in words:
+        assert word in msg, msg
+    assert "SECRET" not in msg
+    return msg
+
+
+def test_hdf5_external_raw_storage_is_refused_and_its_file_not_read(tmp_path: Path) -> None:
+    h5py = _h5py()
+    secret = tmp_path / "secret.txt"
+    secret.write_text(SECRET * 8, encoding="ascii")
+    path = _h5_lab(tmp_path / "ext.h5")
+    with h5py.File(path, "a") as f:
+        del f["run/u"]
+        f["run"].create_dataset("u", shape=(200,), dtype="<f8", external=[(str(secret), 0, 1600)])
+    _assert_refused(path, "'run/u'", "external files", "secret.txt")
+    # The same through the CLI's folder reading.
+    with pytest.raises(FileFormatError, match="refused"):
+        bw.load(tmp_path)
+
+
+def test_hdf5_external_storage_on_a_fifo_is_refused_without_opening_it(tmp_path: Path) -> None:
+    """Before: a FIFO behind a dataset's external storage hung the reader (in a child, with a timeout)."""
+    import subprocess
+    import sys
+
+    h5py = _h5py()
+    fifo = tmp_path / "pipe"
+    path = _h5_lab(tmp_path / "fifo.h5")
+    with h5py.File(path, "a") as f:
+        del f["run/y"]
+        f["run"].create_dataset("y", shape=(200,), dtype="<f8", external=[(str(fifo), 0, 1600)])
+    os.mkfifo(fifo)
+    code = (
+        "import sys, bouc_wen_id as bw\n"
+        "try:\n    bw.load(sys.argv[1])\nexcept bw.FileFormatError as e:\n    print(e)\n"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code, str(path)], capture_output=True, text=True, timeout=60, check=True
+    )
+    assert "refused" in out.stdout and "'run/y'" in out.stdout, out.stdout + out.stderr
+
+
+def test_hdf5_virtual_dataset_is_refused(tmp_path: Path) -> None:
+    h5py = _h5py()
+    source = tmp_path / "source.h5"
+    with h5py.File(source, "w") as f:
+        f["data"] = np.frombuffer((SECRET * 8).encode()[:1600], dtype="<f8")
+    path = _h5_lab(tmp_path / "vds.h5")
+    layout = h5py.VirtualLayout(shape=(200,), dtype="<f8")
+    layout[:] = h5py.VirtualSource(str(source), "data", shape=(200,))
+    with h5py.File(path, "a") as f:
+        del f["run/y"]
+        f["run"].create_virtual_dataset("y", layout)
+    _assert_refused(path, "'run/y'", "virtual dataset", "source.h5")
+
+
+def test_hdf5_external_links_and_soft_links_through_them_are_refused(tmp_path: Path) -> None:
+    h5py = _h5py()
+    other = _h5_lab(tmp_path / "other.h5")
+    path = _h5_lab(tmp_path / "link.h5", elsewhere=h5py.ExternalLink(str(other), "/run"))
+    _assert_refused(path, "'elsewhere'", "external link", "other.h5")
+    # A soft link whose path runs through an external link (the external link itself in a group of its own).
+    path = _h5_lab(tmp_path / "soft.h5")
+    with h5py.File(path, "a") as f:
+        f.create_group("hidden")["door"] = h5py.ExternalLink(str(other), "/run")
+        f["run/alias"] = h5py.SoftLink("/hidden/door/u")
+    _assert_refused(path, "external link")
+    # A soft link inside the file is harmless: not followed, the file reads.
+    path = _h5_lab(tmp_path / "inside.h5", alias=h5py.SoftLink("/run/u"), dangling=h5py.SoftLink("/nowhere"))
+    (m,) = bw.load(path)
+    assert isinstance(m, Measurement) and len(m) == 200
+
+
+def test_hdf5_hard_link_cycles_are_walked_once(tmp_path: Path) -> None:
+    """Before: 12 groups each holding hard links to all 12 made the walk visit 12^8 groups."""
+    import time
+
+    h5py = _h5py()
+    path = _h5_lab(tmp_path / "cycle.h5")
+    with h5py.File(path, "a") as f:
+        groups = [f.create_group(f"g{i}") for i in range(12)]
+        for g in groups:
+            for j, h in enumerate(groups):
+                g[f"to{j}"] = h
+            g["root"] = f["/"]
+    start = time.perf_counter()
+    (m,) = bw.load(path)
+    assert time.perf_counter() - start < 5.0
+    assert isinstance(m, Measurement) and m.name == "run" and len(m) == 200
+
+
+def test_hdf5_memory_budget_is_per_file(tmp_path: Path) -> None:
+    """Before: the budget held per experiment, so a small compressed file of many groups exhausted memory.
+
+    Twelve experiments of 20,000 samples (a 10 Hz sine at 1 kHz repeats every 100 samples, so gzip keeps
+    the file small): each fits a 1 MB budget, the file as a whole (3.8 MB of signals) does not.
+    """
+    h5py = _h5py()
+    path = tmp_path / "many.h5"
+    n = 20_000
+    period = 2 * np.pi * np.arange(100) / 100
+    u, y = np.tile(np.sin(period), n // 100), np.tile(np.cos(period), n // 100)
+    with h5py.File(path, "w") as f:
+        for i in range(12):
+            g = f.create_group(f"run{i:02d}")
+            g.create_dataset("u", data=u, compression="gzip", chunks=(n,))
+            g.create_dataset("y", data=y, compression="gzip", chunks=(n,))
+            g.attrs["sample_rate"] = 1000.0
+    limit = 1_000_000
+    assert path.stat().st_size < limit // 4 and 2 * n * 8 < limit
+    with bw.budget.budget(max_bytes=limit), pytest.raises(bw.BudgetExceededError) as info:
+        bw.load(path)
+    assert str(path) in str(info.value) and "12 experiment" in str(info.value)
+    assert len(bw.load(path)) == 12
+
+
+# --------------------------------------------------------------------------------------------------
+# DAQ text with header lines (issue 19: the shipped MR damper files load as they are)
+# --------------------------------------------------------------------------------------------------
+
+
+def _daq_text(
+    path: Path,
+    blocks: tuple[int, ...] = (60, 40),
+    rate: float = 200.0,
+    preamble: dict[str, str] | None = None,
+) -> Path:
+    """A DAQami-like export: 'Key: value' lines, names, a date column, two raw channels, an event log
+    that marks DAQ Start / Pause / Resume (CRLF line ends, fields padded with spaces)."""
+    head = {
+        "Header Size": "7",
+        "Version": "2",
+        "Sampling Interval": f"{1 / rate:g}",
+        "Sampling Rate": f"{rate:g}",
+        "Sample Count": str(sum(blocks)),
+        "Device Serial Number": "0",
+        **(preamble or {}),
+    }
+    lines = [f"{k}:  {v}" for k, v in head.items()]
+    lines.append("Sample Number, Date/Time, CHANNEL0, CHANNEL1, Events")
+    n = 0
+    for b, size in enumerate(blocks):
+        for k in range(size):
+            n += 1
+            event = ""
+            if k == 0:
+                event = ", DAQ Start" if b == 0 else ", DAQ Resume"
+            elif k == size - 1 and b < len(blocks) - 1:
+                event = ", DAQ Pause"
+            disp = -2.99 + 0.1 * math.sin(2 * math.pi * 5 * n / rate)
+            force = 0.5 * math.cos(2 * math.pi * 5 * n / rate)
+            lines.append(f"{n:>10},   05/13/2022 05:00:{n / rate:06.3f} PM, {disp:.4f}, {force:.4f}{event}")
+    path.write_bytes(("\r\n".join(lines) + "\r\n").encode("ascii"))
+    return path
+
+
+def test_daq_text_with_header_lines_loads_one_experiment_per_block(tmp_path: Path) -> None:
+    path = _daq_text(tmp_path / "run.txt")
+    with pytest.raises(FileFormatError) as info:
+        bw.load(path)  # CHANNEL0 / CHANNEL1: which is the input cannot be told from the file
+    msg = str(info.value)
+    assert str(path) in msg and "which column is the input u" in msg
+    assert (
+        "'CHANNEL0', 'CHANNEL1' hold numbers" in msg and "columns={'u': 'CHANNEL0', 'y': 'CHANNEL1'}" in msg
+    )
+    first, second = bw.load(path, columns={"u": "CHANNEL0", "y": "CHANNEL1"})
+    assert isinstance(first, Measurement) and isinstance(second, Measurement)
+    assert (len(first), len(second)) == (60, 40)
+    assert first.name == "run[0]" and second.name == "run[1]"
+    assert first.t[1] == 1 / 200.0 and second.t[0] == 0.0  # t = k / (the stated Sampling Rate)
+    assert dict(first.channels) == {"u": "CHANNEL0", "y": "CHANNEL1"}
+    assert first.metadata["Sampling Rate"] == "200" and first.metadata["block"] == "0"
+    assert second.metadata["first_line"] == "68"  # 7 header lines, 60 rows of block 0
+    assert first.u[0] == pytest.approx(-2.99 + 0.1 * math.sin(2 * math.pi * 5 / 200), abs=1e-4)
+    # read_csv reads one experiment: a file of two blocks is named as such.
+    with pytest.raises(FileFormatError, match="2 acquisition blocks"):
+        io.read_csv(path, columns={"u": "CHANNEL0", "y": "CHANNEL1"})
+    (one,) = bw.load(
+        _daq_text(tmp_path / "one.dat", blocks=(80,)), columns={"u": "CHANNEL1", "y": "CHANNEL0"}
+    )
+    assert isinstance(one, Measurement) and len(one) == 80 and one.name == "one"
+
+
+def test_daq_text_columns_named_for_their_signal_are_inferred_with_units(tmp_path: Path) -> None:
+    k = np.arange(100)
+    rows = "\n".join(f"{i / 500:.4f}\t{math.sin(0.2 * i):.6f}\t{math.cos(0.2 * i):.6f}" for i in k)
+    path = tmp_path / "mts.txt"
+    path.write_text(
+        f"Operator: M. Q.\nSpecimen = damper 3\nTime (s)\tDisplacement [mm]\tForce (kN)\n{rows}\n"
+    )
+    (m,) = bw.load(path)
+    assert isinstance(m, Measurement) and len(m) == 100
+    assert dict(m.channels) == {"t": "Time (s)", "u": "Displacement [mm]", "y": "Force (kN)"}
+    assert dict(m.units) == {"t": "s", "u": "mm", "y": "kN"}
+    assert m.metadata["Operator"] == "M. Q." and m.metadata["Specimen"] == "damper 3"
+    assert m.sample_rate == pytest.approx(500.0)
+    # Two columns that could be the output: named, not guessed.
+    two = tmp_path / "two.txt"
+    two.write_text(
+        "time,disp,Force (N),force [kN]\n" + "\n".join(f"{i},{i},{i},{i}" for i in range(5)) + "\n"
+    )
+    with pytest.raises(FileFormatError, match=r"'Force \(N\)', 'force \[kN\]' could each be 'y'"):
+        bw.load(two)
+
+
+def test_daq_text_header_faults_are_named_and_skiprows_skips(tmp_path: Path) -> None:
+    body = "t,u,y\n" + "\n".join(f"{i / 100},{math.sin(i)},{math.cos(i)}" for i in range(50)) + "\n"
+    path = tmp_path / "free.txt"
+    path.write_text("MTS test 5 -- damper\nSampling Rate: 100\n" + body)
+    with pytest.raises(FileFormatError, match=r"line 1 'MTS test 5 -- damper'.*skiprows"):
+        bw.load(path)
+    (m,) = bw.load(path, skiprows=2)
+    assert len(m.u) == 50 and m.metadata["Sampling Rate"] == "100"
+    with pytest.raises(InvalidParameterError, match="skiprows"):
+        bw.load(path, skiprows=-1)
+    with pytest.raises(FileFormatError, match="skips all"):
+        bw.load(path, skiprows=99)
+    # A rate and an interval that disagree, a sample count that does not match the rows.
+    bad = _daq_text(tmp_path / "rate.txt", preamble={"Sampling Interval": "0.002"})
+    with pytest.raises(FileFormatError, match="different sampling rates"):
+        bw.load(bad, columns={"u": "CHANNEL0", "y": "CHANNEL1"})
+    short = _daq_text(tmp_path / "count.txt", preamble={"Sample Count": "101"})
+    with pytest.raises(FileFormatError, match="state 101 samples, the file has 100 rows"):
+        bw.load(short, columns={"u": "CHANNEL0", "y": "CHANNEL1"})
+    # 'Key: value' lines right above the rows (no line of names): the columns are taken by index.
+    bare = tmp_path / "bare.txt"
+    bare.write_text(
+        "Sampling Rate: 100\n" + "\n".join(f"{math.sin(i)} {math.cos(i)}" for i in range(50)) + "\n"
+    )
+    (m,) = bw.load(bare, columns={"u": 0, "y": 1})
+    assert isinstance(m, Measurement) and len(m) == 50 and m.sample_rate == pytest.approx(100.0)
+    # A stated interval with a unit is read in it; a unit not understood is refused, not read as seconds.
+    (m,) = bw.load(
+        _daq_text(tmp_path / "ms.txt", (80,), preamble={"Sampling Interval": "5 ms"}),
+        columns={"u": 2, "y": 3},
+    )
+    assert isinstance(m, Measurement) and m.sample_rate == pytest.approx(200.0)
+    with pytest.raises(FileFormatError, match="unit 'fortnights' not understood"):
+        bw.load(
+            _daq_text(tmp_path / "odd.txt", preamble={"Sampling Interval": "5 fortnights"}),
+            columns={"u": 2, "y": 3},
+        )
+    # A signal mapped to a text column is named by line and field.
+    with pytest.raises(FileFormatError, match=r"line 8, field 2: '05/13/2022"):
+        bw.load(_daq_text(tmp_path / "text.txt"), columns={"u": "Date/Time", "y": "CHANNEL1"})
+
+
+def test_folders_read_daq_text_and_pass_over_notes(tmp_path: Path) -> None:
+    _daq_text(tmp_path / "a.txt")
+    (tmp_path / "README.txt").write_text("Runs of 13 May.\nChannel 0: displacement, channel 1: force.\n")
+    items = bw.load(tmp_path, columns={"u": "CHANNEL0", "y": "CHANNEL1"})
+    assert [m.name for m in items if isinstance(m, Measurement)] == ["a[0]", "a[1]"]
+    with pytest.raises(FileFormatError, match="line 2 'Channel 0: .* is not a row of numbers"):
+        bw.load(tmp_path / "README.txt")  # named, it is read and refused
+
+
+#: PROVENANCE.md of mr-damper-utfsm: the channel order of each recording session.
+MR_SESSION_FILES = {
+    ("CHANNEL0", "CHANNEL1"): ("ME10mm2Hz.txt", "ME5mm3Hz.txt", "ME5mm4Hz.txt"),
+    ("CHANNEL1", "CHANNEL0"): ("ME25mm0x25Hz.txt", "ME25mm0x5Hz.txt", "ME2mm5Hz.txt"),
+}
+
+
+@pytest.mark.real_data
+@pytest.mark.parametrize("channels", list(MR_SESSION_FILES))
+def test_shipped_mr_damper_files_load_as_they_are(
+    real_data: Path, tmp_path: Path, channels: tuple[str, str]
+) -> None:
+    """The DAQ exports, read through the CLI's folder path with its --columns, equal the study adapter's
+    blocks (which parse the same files by hand and scale them: 10 mm and 980.665 N per raw unit)."""
+    import importlib.util
+    import sys
+
+    from bouc_wen_id import cli
+
+    folder = real_data / "mr-damper-utfsm"
+    spec = importlib.util.spec_from_file_location(
+        "_adapters", Path(__file__).parents[1] / "studies/_adapters.py"
+    )
+    assert spec is not None and spec.loader is not None
+    adapters = sys.modules.get("_adapters") or importlib.util.module_from_spec(spec)
+    if "_adapters" not in sys.modules:
+        sys.modules["_adapters"] = adapters
+        spec.loader.exec_module(adapters)
+    session = tmp_path / "session"
+    session.mkdir()
+    for name in MR_SESSION_FILES[channels]:
+        (session / name).symlink_to(folder / name)
+    u, y = channels
+    with pytest.raises(FileFormatError, match="which column is the input u"):
+        bw.load(session)
+    items = bw.load(session, columns=cli._columns([f"u={u}", f"y={y}"]))
+    assert len(items) == 15  # five coil currents per file
+    expected = [
+        b for name in sorted(MR_SESSION_FILES[channels]) for b in adapters.load_mr_damper(folder / name)
+    ]
+    for got, ref in zip(items, expected):
+        assert isinstance(got, Measurement)
+        assert dict(got.channels) == {"u": u, "y": y}
+        np.testing.assert_allclose(got.u * 10.0, ref.u, rtol=1e-12)
+        np.testing.assert_allclose(got.y * 980.665, ref.y, rtol=1e-12)
+        np.testing.assert_allclose(got.t, ref.t, rtol=1e-12, atol=1e-12)
+        assert -3.15 < float(np.median(got.u)) < -2.85  # the actuator's -29.9 mm offset: u is displacement

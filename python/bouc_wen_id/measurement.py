@@ -451,37 +451,11 @@ class Measurement:
         u = _frame_column(pd, df, input, "u")
         y = _frame_column(pd, df, output, "y")
         channels = {"u": str(input), "y": str(output)}
+        t = _frame_time_axis(pd, df, time, sample_rate, (input, output))
         if time is not None:
-            if time in (input, output):
-                raise InvalidParameterError(f"time={time!r} is also the input or output column")
-            t = _frame_times(pd, _frame_series(df, time, "t"), f"t (column {time!r})")
             channels["t"] = str(time)
-            if sample_rate is not None:
-                raise InvalidParameterError("give time= or sample_rate=, not both")
-        elif _row_numbers(pd, df.index) or sample_rate is not None:
-            if sample_rate is None:
-                raise InvalidParameterError(
-                    f"the frame's index holds integers (row numbers, a {type(df.index).__name__}), not "
-                    "times: pass time=<column>, sample_rate=<Hz>, or index the frame by time in seconds "
-                    "or datetimes (e.g. df.set_index('t'))"
-                )
-            if not _row_numbers(pd, df.index):
-                raise InvalidParameterError(
-                    f"sample_rate= is for a frame indexed by row numbers; this one has a "
-                    f"{type(df.index).__name__} of times: drop sample_rate or reset the index"
-                )
-            t = np.arange(len(df)) / _rate(sample_rate)
-        else:
-            if isinstance(df.index, pd.MultiIndex):
-                raise InvalidParameterError("a MultiIndex is not a time axis: pass time=<column>")
-            t = _frame_times(pd, df.index.to_series(), "t (the index)")
         if units is None:
-            stated = df.attrs.get("units")
-            units = {}
-            if isinstance(stated, Mapping):
-                for role, col in (("u", input), ("y", output)):
-                    if isinstance(stated.get(col), str):
-                        units[role] = stated[col]
+            units = _frame_units(df, input, output)
         if nominal_frequency is None and isinstance(saved.get("nominal_frequency"), (int, float)):
             nominal_frequency = saved["nominal_frequency"]
         if name is None:
@@ -550,6 +524,47 @@ def _row_numbers(pd: Any, index: Any) -> bool:
     return isinstance(index, pd.RangeIndex) or (
         pd.api.types.is_integer_dtype(index.dtype) and not isinstance(index, pd.MultiIndex)
     )
+
+
+def _frame_time_axis(
+    pd: Any, df: Any, time: Optional[Hashable], sample_rate: Optional[float], used: tuple[Hashable, Hashable]
+) -> FloatArray:
+    """The seconds of a frame's rows: its ``time`` column, ``k / sample_rate`` for row numbers, or its
+    index of times (a plain index of row numbers without ``sample_rate`` is refused, not read as 1 Hz)."""
+    if time is not None:
+        if time in used:
+            raise InvalidParameterError(f"time={time!r} is also the input or output column")
+        t = _frame_times(pd, _frame_series(df, time, "t"), f"t (column {time!r})")
+        if sample_rate is not None:
+            raise InvalidParameterError("give time= or sample_rate=, not both")
+        return t
+    if _row_numbers(pd, df.index) or sample_rate is not None:
+        if sample_rate is None:
+            raise InvalidParameterError(
+                f"the frame's index holds integers (row numbers, a {type(df.index).__name__}), not "
+                "times: pass time=<column>, sample_rate=<Hz>, or index the frame by time in seconds "
+                "or datetimes (e.g. df.set_index('t'))"
+            )
+        if not _row_numbers(pd, df.index):
+            raise InvalidParameterError(
+                f"sample_rate= is for a frame indexed by row numbers; this one has a "
+                f"{type(df.index).__name__} of times: drop sample_rate or reset the index"
+            )
+        return np.arange(len(df)) / _rate(sample_rate)
+    if isinstance(df.index, pd.MultiIndex):
+        raise InvalidParameterError("a MultiIndex is not a time axis: pass time=<column>")
+    return _frame_times(pd, df.index.to_series(), "t (the index)")
+
+
+def _frame_units(df: Any, input: Hashable, output: Hashable) -> dict[str, str]:
+    """The units ``df.attrs["units"]`` states for the chosen columns (label -> unit string)."""
+    stated = df.attrs.get("units")
+    units: dict[str, str] = {}
+    if isinstance(stated, Mapping):
+        for role, col in (("u", input), ("y", output)):
+            if isinstance(stated.get(col), str):
+                units[role] = stated[col]
+    return units
 
 
 def _frame_series(df: Any, label: Hashable, role: str) -> Any:

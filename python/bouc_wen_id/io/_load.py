@@ -1,0 +1,182 @@
+"""Files and folders: :func:`load` and :func:`save` choose the format by suffix."""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Iterable, Sequence
+from pathlib import Path
+from typing import Literal, Optional
+
+from ..errors import FileFormatError, InvalidParameterError
+from ..measurement import Measurement
+from ..model import Recording
+from ._common import ColumnMap, Item, PathLike, _check_columns, _check_rate, _items
+from ._csv import read_text, write_csv
+from ._hdf5 import read_hdf5, write_hdf5
+from ._mat import read_mat, write_mat
+from ._npz import read_npz, write_npz
+from ._tdms import read_tdms, write_tdms
+from ._text import check_skiprows, holds_numbers
+
+#: File suffixes the loaders read (case-insensitive); folders are scanned for these.
+#: (``.txt`` and ``.dat`` files without a row of numbers, notes beside the data, are passed over in folders.)
+SUFFIXES = (".csv", ".txt", ".dat", ".npz", ".mat", ".tdms", ".h5", ".hdf5")
+#: Suffixes of delimited text (read by :func:`read_text`: CSV, and DAQ exports with header lines).
+TEXT_SUFFIXES = (".csv", ".txt", ".dat")
+
+
+def _read_file(
+    p: Path, cols: Optional[ColumnMap], rate: Optional[float], skiprows: Optional[int] = None
+) -> list[Item]:
+    suffix = p.suffix.lower()
+    if suffix in TEXT_SUFFIXES:
+        return read_text(p, columns=cols, sample_rate=rate, skiprows=skiprows)
+    if suffix == ".npz":
+        return read_npz(p, columns=cols, sample_rate=rate)
+    if suffix == ".mat":
+        return read_mat(p, columns=cols, sample_rate=rate)
+    if suffix == ".tdms":
+        return read_tdms(p, columns=cols, sample_rate=rate)
+    if suffix in (".h5", ".hdf5"):
+        return read_hdf5(p, columns=cols, sample_rate=rate)
+    raise FileFormatError(
+        f"{p}: unknown recording format {p.suffix!r} (expected .csv, .txt, .dat, .npz, .mat, .tdms, .h5 or "
+        ".hdf5)"
+    )
+
+
+def _files(paths: PathLike | Iterable[PathLike]) -> list[Path]:
+    items = [paths] if isinstance(paths, (str, os.PathLike)) else list(paths)
+    out: list[Path] = []
+    for item in items:
+        p = Path(item)
+        if p.is_dir():
+            files = sorted(
+                f
+                for f in p.iterdir()
+                if f.is_file()
+                and f.suffix.lower() in SUFFIXES
+                and not f.name.startswith(".")
+                # Notes beside the data (a README.txt) are not recordings; a named file is always read.
+                and (f.suffix.lower() not in (".txt", ".dat") or holds_numbers(f))
+            )
+            if not files:
+                raise FileFormatError(
+                    f"{p}: the folder holds no .csv or .npz recordings (nor .txt, .dat, .mat, .tdms, .h5 or "
+                    ".hdf5 files)"
+                )
+            out.extend(files)
+        elif not p.exists():
+            raise FileFormatError(f"{p}: no such file or folder")
+        else:
+            out.append(p)
+    return out
+
+
+def load(
+    paths: PathLike | Iterable[PathLike],
+    *,
+    columns: Optional[ColumnMap] = None,
+    sample_rate: Optional[float] = None,
+    skiprows: Optional[int] = None,
+) -> list[Item]:
+    """Load experiments from files (``.csv``, ``.txt``, ``.dat``, ``.npz``, ``.mat``; ``.tdms``, ``.h5``,
+    ``.hdf5`` with the ``tdms``/``hdf5`` extras) and folders of such files (sorted by name).
+
+    Each experiment is a :class:`Recording` when its header states the input's ``amplitude`` and
+    ``frequency`` (or ``format: "bouc_wen_id.recording"``), a :class:`Measurement` otherwise.
+    ``columns`` and ``sample_rate`` apply to every file (see :func:`read_csv`; in TDMS and HDF5 files
+    ``columns`` names channels or datasets, or pins ``"group/channel"`` paths: see :func:`read_tdms`).
+    Text files may start with a DAQ's ``Key: value`` lines (found by themselves, or skipped with
+    ``skiprows``) and hold one experiment per acquisition block: see :func:`read_text`.
+
+    Raises
+    ------
+    FileFormatError
+        A missing file, an unknown suffix, or a malformed file (named, with what is wrong).
+    """
+    cols = _check_columns(columns)
+    rate = _check_rate(sample_rate)
+    skip = check_skiprows(skiprows)
+    out: list[Item] = []
+    for f in _files(paths):
+        out.extend(_read_file(f, cols, rate, skip))
+    return out
+
+
+def load_recordings(
+    paths: PathLike | Iterable[PathLike],
+    *,
+    columns: Optional[ColumnMap] = None,
+    sample_rate: Optional[float] = None,
+) -> list[Recording]:
+    """Load recordings (experiments with known U and omega) as :func:`load` does; refuse measurements."""
+    cols = _check_columns(columns)
+    rate = _check_rate(sample_rate)
+    out: list[Recording] = []
+    for f in _files(paths):
+        for item in _read_file(f, cols, rate):
+            if not isinstance(item, Recording):
+                raise FileFormatError(
+                    f"{f}: holds a measurement (no 'amplitude' and 'frequency' in its header), not a "
+                    "recording; read lab data with bouc_wen_id.io.load"
+                )
+            out.append(item)
+    return out
+
+
+def save(
+    path: PathLike,
+    items: Item | Sequence[Item],
+    *,
+    fmt: Literal["csv", "npz", "mat"] = "csv",
+) -> list[Path]:
+    """Save experiments; return the files written.
+
+    ``*.npz``: one bundle.  ``*.mat``: one MAT file (one experiment as plain variables, several as a
+    struct array).  ``*.tdms``, ``*.h5``, ``*.hdf5``: one file, a group per experiment (needs the ``tdms``
+    or ``hdf5`` extra).  ``*.csv``: one experiment.  Anything else is a folder (created if needed) of
+    ``exp_000.<fmt>``, ``exp_001.<fmt>``, ... (``fmt``: ``"csv"``, ``"npz"`` or ``"mat"``).
+    """
+    seq = _items([items] if isinstance(items, (Recording, Measurement)) else items, "save")
+    if fmt not in ("csv", "npz", "mat"):
+        raise InvalidParameterError(f"fmt must be 'csv', 'npz' or 'mat', got {fmt!r}")
+    p = Path(path)
+    suffix = p.suffix.lower()
+    if suffix == ".npz":
+        write_npz(p, seq)
+        return [p]
+    if suffix == ".mat":
+        write_mat(p, seq)
+        return [p]
+    if suffix == ".tdms":
+        write_tdms(p, seq)
+        return [p]
+    if suffix in (".h5", ".hdf5"):
+        write_hdf5(p, seq)
+        return [p]
+    if suffix == ".csv":
+        if len(seq) != 1:
+            raise InvalidParameterError(
+                f"a .csv file holds one experiment, got {len(seq)}: save to a folder, .npz or .mat"
+            )
+        write_csv(p, seq[0])
+        return [p]
+    p.mkdir(parents=True, exist_ok=True)
+    written = []
+    for i, item in enumerate(seq):
+        f = p / f"exp_{i:03d}.{fmt}"
+        if fmt == "csv":
+            write_csv(f, item)
+        elif fmt == "npz":
+            write_npz(f, [item])
+        else:
+            write_mat(f, [item])
+        written.append(f)
+    return written
+
+
+def save_recordings(path: PathLike, recordings: Sequence[Recording]) -> list[Path]:
+    """Save recordings: ``*.npz`` gives one bundle, ``*.mat`` one MAT file, anything else a folder of
+    ``exp_<i>.csv`` files (see :func:`save`)."""
+    return save(path, list(recordings))
