@@ -336,6 +336,30 @@ def test_cli_identify_csv_without_time_column(tmp_path: Path, capsys: pytest.Cap
     assert "--columns 'y'" in capsys.readouterr().err
 
 
+def test_cli_skiprows_passes_over_free_text_before_the_column_names(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    m = _lab_measurement(3.0, "txt", 5)
+    fs = 1.0 / float(m.t[1] - m.t[0])
+    rows = "\n".join(f"{y:.17g},{u:.17g}" for u, y in zip(m.u.tolist(), m.y.tolist()))
+    notes = "bench 3, operator's notes\nno key value pairs here, 12 3 4\n"
+    (tmp_path / "raw.txt").write_text(f"{notes}force,disp\n{rows}\n")
+    args = [
+        "identify",
+        str(tmp_path / "raw.txt"),
+        "--columns",
+        "u=disp",
+        "y=force",
+        "--sample-rate",
+        f"{fs!r}",
+    ]
+    assert cli.main([*args, "--skiprows", "2", "--out", str(tmp_path / "rep")]) == 0
+    assert "1 steady segment" in capsys.readouterr().out
+    with pytest.raises(SystemExit) as info:
+        cli.main([*args, "--skiprows", "-1", "--out", str(tmp_path / "rep2")])
+    assert info.value.code == 2 and "--skiprows" in capsys.readouterr().err
+
+
 def test_identify_refuses_recording_options_for_measurements() -> None:
     m = _lab_measurement(3.0, "m", 6)
     for kwargs in ({"settle_periods": 3}, {"periods": 5}):

@@ -123,6 +123,13 @@ def _add_inputs(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--sample-rate", type=_real(positive=True), default=None, help="Hz, for files without a time column"
     )
+    p.add_argument(
+        "--skiprows",
+        type=_integer(0),
+        default=None,
+        metavar="N",
+        help="text files: lines before the column names (found by themselves when left out)",
+    )
 
 
 def _add_identify_options(p: argparse.ArgumentParser) -> None:

@@ -283,7 +283,9 @@ def _workers(args: argparse.Namespace) -> Iterator[int]:
 def _prepare(args: argparse.Namespace, workers: int) -> tuple[list[Any], list[dict[str, Any]]]:
     """Load the files; every lab measurement cut into its steady, averaged periods (a progress bar on
     stderr, each file's kept and dropped stretches on stdout)."""
-    items = load(args.paths, columns=_columns(args.columns), sample_rate=args.sample_rate)
+    items = load(
+        args.paths, columns=_columns(args.columns), sample_rate=args.sample_rate, skiprows=args.skiprows
+    )
     total = sum(isinstance(m, Measurement) for m in items)
 
     def report(i: int, found: Any) -> None:
@@ -409,7 +411,9 @@ def _cmd_diagnose(args: argparse.Namespace) -> int:
     from .diagnosis.report import write_report
 
     _check_out(args, inputs=args.paths)
-    items = list(load(args.paths, columns=_columns(args.columns), sample_rate=args.sample_rate))
+    items = list(
+        load(args.paths, columns=_columns(args.columns), sample_rate=args.sample_rate, skiprows=args.skiprows)
+    )
     units = next((m.units for m in items if isinstance(m, Measurement)), {})
     d = diagnose(
         items,
