@@ -61,6 +61,16 @@ def test_cli_demo_writes_the_report(tmp_path: Path, capsys: pytest.CaptureFixtur
     # The demo also compares every method on the same recordings.
     for method in ("paper", "profile", "refined"):
         assert f"\n  {method} " in printed, method
+    # ... and shows the product's second half: the same plant with a dashpot hidden beside it fails the
+    # plain model's test, and the diagnosis names the dashpot with its value, in the same report folder.
+    assert "the plain model fails its adequacy test" in printed
+    diag = json.loads((out / "diagnosis" / "diagnosis.json").read_text(encoding="utf-8"))
+    assert diag["status"] == "explained" and [t["term"] for t in diag["named"]] == ["viscous"]
+    c, se = diag["named"][0]["value"], diag["named"][0]["standard_error"]
+    assert abs(c - bw.demo.DEMO_HIDDEN.value) <= 4 * se, (c, se)
+    assert (out / "diagnosis" / "report.html").is_file()
+    held = diag["held_out"]
+    assert held["improves"] and all(a < b for a, b in zip(held["nrmse_after"], held["nrmse_before"])), held
 
 
 #: Noise-free at P = 256 (see test_identification): the paper's phase-quantisation budget

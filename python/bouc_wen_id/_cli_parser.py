@@ -182,6 +182,12 @@ def _add_demo_parser(sub: Any) -> None:
         default=True,
         help="also run every method on the same recordings and print their errors",
     )
+    p.add_argument(
+        "--diagnosis",
+        action=argparse.BooleanOptionalAction,
+        default=True,
+        help="also diagnose the same plant with a hidden dashpot (report in OUT/diagnosis)",
+    )
     _add_identify_options(p)
 
 

@@ -26,7 +26,7 @@ from . import _output, _pool
 from ._cli_parser import build_parser, flags_named
 from ._threads import one_blas_thread
 from .batch import average_many, identify_many
-from .demo import demo_plan, demo_plant, design_amplitudes
+from .demo import DEMO_HIDDEN, demo_hidden_plant, demo_plan, demo_plant, design_amplitudes
 from .errors import BoucWenIdError, FileFormatError, InvalidParameterError
 from .identification import identify
 from .io import load, save_recordings
@@ -147,10 +147,38 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     print(result.summary())
     if args.compare:
         print(_compare_methods(recs, args))
+    diagnosis = _demo_diagnosis(plan, args) if args.diagnosis else None
     with _staged(args) as staged:
         written = _write_report(result, staged, figures=args.figures)
+        if diagnosis is not None:
+            from .diagnosis.report import write_report
+
+            written += write_report(diagnosis, staged / "diagnosis", figures=args.figures)
     _print_written(args, written)
     return 0
+
+
+def _demo_diagnosis(plan: SinePlan, args: argparse.Namespace) -> Any:
+    """The demo's second half: the same plant with a dashpot hidden beside it, identified (the plain
+    model fails its test) and diagnosed (the dashpot named, its value, the held-out gain)."""
+    from .diagnosis import diagnose
+
+    hidden = DEMO_HIDDEN
+    print(
+        f"\n--- diagnosis: the same plant with a hidden {hidden.description} "
+        f"({hidden.symbol} = {hidden.value:g}) ---"
+    )
+    recs = simulate(demo_hidden_plant(), plan, backend=args.backend)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        plain = identify(recs, **_identify_options(args))
+    adequacy = plain.adequacy
+    if adequacy is not None:
+        fails = "fails" if adequacy.rejects() else "passes"
+        print(f"identify: the plain model {fails} its adequacy test (p = {adequacy.p_value:.2g})")
+    d = diagnose(recs)
+    print(d.summary())
+    return d
 
 
 def _compare_methods(recs: list, args: argparse.Namespace) -> str:  # type: ignore[type-arg]
