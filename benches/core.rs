@@ -21,9 +21,7 @@ use _core::refine::{refine, Experiment, Options, Params};
 use _core::simulate::{rk4_step_count, simulate, Input};
 use _core::solve::{sls_search, SlsProblem, GOLDEN_MAX_ITER};
 use _core::steady::steady_loop;
-use _core::terms::{
-    augmented_output, augmented_refine, AugExperiment, AugOptions, Excitation, Terms,
-};
+use _core::terms::{augmented_output, augmented_refine, AugExperiment, Excitation, Terms};
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 
 const P: usize = 1024;
@@ -230,7 +228,7 @@ fn bench_augmented(c: &mut Criterion) {
     let start = [0.7, 0.25, 1.8, 0.25, 0.06];
     let g0: Vec<f64> = gains.iter().map(|g| g * 1.1).collect();
     let ph0: Vec<f64> = phases.iter().map(|v| v + 0.05).collect();
-    let opts = AugOptions::default();
+    let opts = Options::default();
     c.bench_function("augmented_refine_m10_p256_offset_viscous", |b| {
         b.iter(|| augmented_refine(black_box(&exps), &terms, &start, &g0, &ph0, &opts))
     });

@@ -34,4 +34,4 @@ pub mod steady;
 pub mod terms;
 
 #[cfg(feature = "python")]
-mod python;
+mod bindings;

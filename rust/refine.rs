@@ -63,12 +63,47 @@ pub struct Params {
     pub phases: Vec<f64>,
 }
 
-/// Stopping rules of [`refine`].
+impl Params {
+    /// The flat vector `[beta, gamma, mu, g_0, phi_0, g_1, phi_1, ...]` (the order of the Fisher
+    /// information).
+    pub fn flat(&self) -> Vec<f64> {
+        let mut v = vec![self.beta, self.gamma, self.mu];
+        for (g, p) in self.gains.iter().zip(&self.phases) {
+            v.push(*g);
+            v.push(*p);
+        }
+        v
+    }
+
+    /// The parameters of `m` experiments from their [`Params::flat`] vector `v`, called `name` in
+    /// the error.
+    ///
+    /// Errors: [`CoreError::InvalidParameter`] unless `v` holds `3 + 2 m` values.
+    pub fn from_flat(name: &str, v: &[f64], m: usize) -> Result<Self> {
+        if v.len() != 3 + 2 * m {
+            return Err(CoreError::InvalidParameter(format!(
+                "{name} has {} values; {m} experiments need 3 + 2 * {m} = {}",
+                v.len(),
+                3 + 2 * m
+            )));
+        }
+        Ok(Self {
+            beta: v[0],
+            gamma: v[1],
+            mu: v[2],
+            gains: v[3..].iter().step_by(2).copied().collect(),
+            phases: v[4..].iter().step_by(2).copied().collect(),
+        })
+    }
+}
+
+/// Options of the joint fits, [`refine`] and [`crate::terms::augmented_refine`]: the stopping
+/// rules of [`levenberg_marquardt`], the loop solver's resolution and the mu bracket.
 #[derive(Debug, Clone, Copy)]
 pub struct Options {
     /// Iteration cap.
     pub max_iter: usize,
-    /// RK4 steps per sample interval of the steady-loop solver.
+    /// RK4 steps per sample interval of the steady loop (per path segment of the path loop).
     pub substeps: usize,
     /// Stop when the relative cost decrease of an accepted step is below this.
     pub ftol: f64,
@@ -136,17 +171,6 @@ pub trait JointModel: Sync {
     fn project(&self, shared: &mut [f64], own: &[[f64; 2]]);
     /// Whether a (projected) trial point may be evaluated; an inadmissible one is rejected.
     fn admissible(&self, shared: &[f64], own: &[[f64; 2]]) -> bool;
-}
-
-/// Stopping rules of [`levenberg_marquardt`].
-#[derive(Debug, Clone, Copy)]
-pub struct LmOptions {
-    /// Iteration cap (accepted plus rejected steps).
-    pub max_iter: usize,
-    /// Stop when the relative cost decrease of an accepted step is below this.
-    pub ftol: f64,
-    /// Stop when every step component is below `xtol * (|p| + xtol)`.
-    pub xtol: f64,
 }
 
 /// Outcome of [`levenberg_marquardt`].
@@ -341,7 +365,7 @@ pub fn levenberg_marquardt<M: JointModel>(
     model: &M,
     shared0: &[f64],
     own0: &[[f64; 2]],
-    opts: &LmOptions,
+    opts: &Options,
 ) -> Result<JointFit> {
     let mut shared = shared0.to_vec();
     let mut own = own0.to_vec();
@@ -557,16 +581,7 @@ pub fn refine(exps: &[Experiment], start: &Params, opts: &Options) -> Result<Fit
         .zip(&start.phases)
         .map(|(&g, &p)| [g, p])
         .collect();
-    let fit = levenberg_marquardt(
-        &model,
-        &[start.beta, start.gamma, start.mu],
-        &own,
-        &LmOptions {
-            max_iter: opts.max_iter,
-            ftol: opts.ftol,
-            xtol: opts.xtol,
-        },
-    )?;
+    let fit = levenberg_marquardt(&model, &[start.beta, start.gamma, start.mu], &own, opts)?;
     Ok(Fit {
         params: Params {
             beta: fit.shared[0],

@@ -25,8 +25,7 @@ use crate::path_loop::{
     PD_GAMMA, PD_MU, PD_PHI, PD_PLAY,
 };
 use crate::refine::{
-    hysteresis_admissible, levenberg_marquardt, project_hysteresis, JointModel, LmOptions,
-    ModelEval,
+    hysteresis_admissible, levenberg_marquardt, project_hysteresis, JointModel, ModelEval, Options,
 };
 use crate::steady::{steady_loop, D_AMPLITUDE, D_BETA, D_GAMMA, D_MU, D_PHI};
 
@@ -521,36 +520,6 @@ impl AugExperiment<'_> {
     }
 }
 
-/// Options of [`augmented_refine`].
-#[derive(Debug, Clone, Copy)]
-pub struct AugOptions {
-    /// Iteration cap.
-    pub max_iter: usize,
-    /// RK4 steps per lattice interval / path segment of the loop solver.
-    pub substeps: usize,
-    /// Relative cost decrease that stops the search.
-    pub ftol: f64,
-    /// Relative step that stops the search.
-    pub xtol: f64,
-    /// Lower end of the admissible mu (exclusive, >= 1).
-    pub mu_lo: f64,
-    /// Upper end of the admissible mu (inclusive, may be infinite).
-    pub mu_hi: f64,
-}
-
-impl Default for AugOptions {
-    fn default() -> Self {
-        Self {
-            max_iter: 200,
-            substeps: 4,
-            ftol: 1e-12,
-            xtol: 1e-10,
-            mu_lo: 1.0,
-            mu_hi: f64::INFINITY,
-        }
-    }
-}
-
 /// Outcome of [`augmented_refine`].
 #[derive(Debug, Clone)]
 pub struct AugFit {
@@ -579,7 +548,7 @@ pub const PLAY_MAX_FRACTION: f64 = 0.95;
 struct AugModel<'a> {
     exps: &'a [AugExperiment<'a>],
     terms: &'a Terms,
-    opts: &'a AugOptions,
+    opts: &'a Options,
 }
 
 impl AugModel<'_> {
@@ -660,7 +629,7 @@ fn validate_refine(
     shared: &[f64],
     gains: &[f64],
     phases: &[f64],
-    opts: &AugOptions,
+    opts: &Options,
 ) -> Result<()> {
     if exps.is_empty() {
         return Err(CoreError::InsufficientData(
@@ -739,21 +708,12 @@ pub fn augmented_refine(
     shared0: &[f64],
     gains0: &[f64],
     phases0: &[f64],
-    opts: &AugOptions,
+    opts: &Options,
 ) -> Result<AugFit> {
     validate_refine(exps, terms, shared0, gains0, phases0, opts)?;
     let model = AugModel { exps, terms, opts };
     let own: Vec<[f64; 2]> = gains0.iter().zip(phases0).map(|(&g, &p)| [g, p]).collect();
-    let fit = levenberg_marquardt(
-        &model,
-        shared0,
-        &own,
-        &LmOptions {
-            max_iter: opts.max_iter,
-            ftol: opts.ftol,
-            xtol: opts.xtol,
-        },
-    )?;
+    let fit = levenberg_marquardt(&model, shared0, &own, opts)?;
     Ok(AugFit {
         gains: fit.own.iter().map(|o| o[0]).collect(),
         phases: fit.own.iter().map(|o| o[1]).collect(),
@@ -930,15 +890,8 @@ mod tests {
                 .build()
                 .unwrap()
                 .install(|| {
-                    augmented_refine(
-                        &exps,
-                        &terms,
-                        &start,
-                        &gains,
-                        &phases,
-                        &AugOptions::default(),
-                    )
-                    .unwrap()
+                    augmented_refine(&exps, &terms, &start, &gains, &phases, &Options::default())
+                        .unwrap()
                 })
         };
         let (a, b) = (run(1), run(2));
@@ -965,13 +918,13 @@ mod tests {
             weight: 1.0,
             waveform: &[],
         }];
-        let go = |shared: &[f64], opts: &AugOptions| {
+        let go = |shared: &[f64], opts: &Options| {
             augmented_refine(&exps, &terms, shared, &[1.0], &[0.0], opts).unwrap_err()
         };
-        let ok = AugOptions::default();
+        let ok = Options::default();
         assert!(go(&[0.5, 0.1, 1.5], &ok).to_string().contains("need 4"));
         assert!(go(&[0.5, 0.1, 1.5, -0.1], &ok).to_string().contains(">= 0"));
-        let bad = AugOptions {
+        let bad = Options {
             mu_lo: 2.0,
             mu_hi: 1.5,
             ..ok
