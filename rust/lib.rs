@@ -16,6 +16,7 @@
 //! F. Ikhouane and J. Rodellar, *Systems with Hysteresis: Analysis, Identification and Control
 //! using the Bouc-Wen Model*, Wiley, 2007.
 
+pub mod augmented;
 pub mod average;
 pub mod bouc_wen;
 pub mod budget;

@@ -12,7 +12,7 @@
 //!
 //! The Levenberg-Marquardt itself ([`levenberg_marquardt`]) is generic over a [`JointModel`]
 //! (shared vector of any size, two own parameters per experiment): the plain model here and the
-//! augmented model of design.md 9.3 ([`crate::terms`]) share one damping schedule, stopping rules
+//! augmented model of design.md 9.3 (`rust/augmented.rs`) share one damping schedule, stopping rules
 //! and Schur solve. The experiments are evaluated in parallel and summed in a fixed order.
 //!
 //! ## Reference
@@ -97,7 +97,7 @@ impl Params {
     }
 }
 
-/// Options of the joint fits, [`refine`] and [`crate::terms::augmented_refine`]: the stopping
+/// Options of the joint fits, [`refine`] and the augmented model's (`rust/augmented.rs`): the stopping
 /// rules of [`levenberg_marquardt`], the loop solver's resolution and the mu bracket.
 #[derive(Debug, Clone, Copy)]
 pub struct Options {

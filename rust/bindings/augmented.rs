@@ -7,11 +7,12 @@ use pyo3::prelude::*;
 use super::convert::{arg, count, matrix, per_experiment, rows, slice, slices, square};
 use super::convert::{Matrix, Vector};
 use super::detach;
+use crate::augmented::{self as model, AugExperiment, Excitation};
 use crate::budget::Work;
 use crate::error::CoreError;
 use crate::path_loop::{self as pathloop, PathLoop, Waveform, N_PD};
 use crate::refine::Options;
-use crate::terms::{self, AugExperiment, Excitation, Terms};
+use crate::terms::Terms;
 
 pub(super) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(path_loop, m)?)?;
@@ -136,7 +137,7 @@ fn augmented_output<'py>(
     };
     let substeps = count("substeps", substeps, 1)?;
     let out = py.detach(|| {
-        terms::augmented_output_with(&exc, waveform, &terms, shared, gain, phase, substeps)
+        model::augmented_output_with(&exc, waveform, &terms, shared, gain, phase, substeps)
     })?;
     let p = out.y.len();
     Ok((
@@ -242,7 +243,7 @@ fn augmented_refine<'py>(
     }
     .check()?;
     let fit = detach::interruptible(py, steps, || {
-        terms::augmented_refine(&exps, &terms, &shared0, &gains0, &phases0, &opts)
+        model::augmented_refine(&exps, &terms, &shared0, &gains0, &phases0, &opts)
     })?;
     let outputs = fit
         .outputs

@@ -12,7 +12,7 @@ use super::detach;
 use crate::bouc_wen::BoucWen;
 use crate::budget::Work;
 use crate::linear::TransferFunction;
-use crate::simulate::{self, Input, Terms};
+use crate::simulate::{self, Input, TermValues};
 
 pub(super) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(simulate_sine, m)?)?;
@@ -48,7 +48,7 @@ fn run<'py>(
     let substeps = count("substeps", substeps, 1)?;
     let n_samples = count("n_samples", n_samples, 1)?;
     let terms = terms
-        .map(|named| Terms::from_named(named.iter().map(|(k, v)| (k.as_str(), *v))))
+        .map(|named| TermValues::from_named(named.iter().map(|(k, v)| (k.as_str(), *v))))
         .transpose()?;
     let steps = Work::Simulation {
         n_samples,
