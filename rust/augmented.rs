@@ -306,6 +306,34 @@ pub fn augmented_output_with(
         cols[1 + ns][j] = u_amp * h[PD_AMPLITUDE];
         cols[2 + ns][j] = h[PD_PHI];
     }
+    lag_and_offset(&mut cols, shared, omega, lag_col, offset_col);
+    let mut jac_shared = vec![0.0; p * ns];
+    for (c, col) in cols[1..=ns].iter().enumerate() {
+        for (j, v) in col.iter().enumerate() {
+            jac_shared[j * ns + c] = *v;
+        }
+    }
+    let jac_own = (0..p).map(|j| [cols[1 + ns][j], cols[2 + ns][j]]).collect();
+    let y = std::mem::take(&mut cols[0]);
+    all_finite("model output", &y)?;
+    Ok(AugOutput {
+        y,
+        jac_shared,
+        jac_own,
+    })
+}
+
+/// The output stage of [`augmented_output_with`] on the work space `cols` (F, then the shared
+/// columns, then g and phi, each of P samples): the sensor lag filters every column but its own
+/// and the offset's, its own column becomes `dY/dtau`; the offset is added after the lag, its
+/// column is 1. `lag_col`, `offset_col` index `cols` (the parameter is `shared[col - 1]`).
+fn lag_and_offset(
+    cols: &mut [Vec<f64>],
+    shared: &[f64],
+    omega: f64,
+    lag_col: Option<usize>,
+    offset_col: Option<usize>,
+) {
     if let Some(lc) = lag_col {
         let tau = shared[lc - 1];
         let mut dtau = cols[0].clone();
@@ -324,20 +352,6 @@ pub fn augmented_output_with(
         cols[0].iter_mut().for_each(|v| *v += y0);
         cols[oc].iter_mut().for_each(|v| *v = 1.0);
     }
-    let mut jac_shared = vec![0.0; p * ns];
-    for (c, col) in cols[1..=ns].iter().enumerate() {
-        for (j, v) in col.iter().enumerate() {
-            jac_shared[j * ns + c] = *v;
-        }
-    }
-    let jac_own = (0..p).map(|j| [cols[1 + ns][j], cols[2 + ns][j]]).collect();
-    let y = std::mem::take(&mut cols[0]);
-    all_finite("model output", &y)?;
-    Ok(AugOutput {
-        y,
-        jac_shared,
-        jac_own,
-    })
 }
 
 /// One experiment of the augmented refinement: its averaged period (with its DC), excitation and
