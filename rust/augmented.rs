@@ -27,7 +27,8 @@ use crate::path_loop::{
     PD_GAMMA, PD_MU, PD_PHI, PD_PLAY,
 };
 use crate::refine::{
-    hysteresis_admissible, levenberg_marquardt, project_hysteresis, JointModel, ModelEval, Options,
+    check_joint_start, check_start_point, hysteresis_admissible, levenberg_marquardt,
+    project_hysteresis, JointModel, ModelEval, Options,
 };
 use crate::steady::{steady_loop, D_AMPLITUDE, D_BETA, D_GAMMA, D_MU, D_PHI};
 use crate::terms::{check_asymmetry, TermKind, Terms, COULOMB_SMOOTHING, N_HYSTERESIS};
@@ -495,37 +496,9 @@ fn validate_refine(
     phases: &[f64],
     opts: &Options,
 ) -> Result<()> {
-    if exps.is_empty() {
-        return Err(CoreError::InsufficientData(
-            "the refinement needs at least one experiment".into(),
-        ));
-    }
-    if gains.len() != exps.len() || phases.len() != exps.len() {
-        return Err(CoreError::InvalidParameter(format!(
-            "{} experiments but {} gains and {} phases",
-            exps.len(),
-            gains.len(),
-            phases.len()
-        )));
-    }
-    for (i, e) in exps.iter().enumerate() {
-        all_finite(&format!("ybar[{i}]"), e.ybar)?;
-        e.excitation().validate()?;
-        finite("weight", e.weight)?;
-        if e.weight <= 0.0 {
-            return Err(CoreError::InvalidParameter(format!(
-                "experiment {i}: weight {} must be > 0 (N / noise variance)",
-                e.weight
-            )));
-        }
-    }
-    all_finite("gains", gains)?;
-    all_finite("phases", phases)?;
-    if opts.max_iter == 0 || opts.substeps == 0 {
-        return Err(CoreError::InvalidParameter(
-            "max_iter and substeps must be >= 1".into(),
-        ));
-    }
+    let model = AugModel { exps, terms, opts };
+    let excitation = |i: usize| exps[i].excitation().validate();
+    check_joint_start(&model, excitation, (gains, phases), opts)?;
     if !opts.mu_lo.is_finite()
         || opts.mu_lo < 1.0
         || opts.mu_hi.is_nan()
@@ -537,15 +510,9 @@ fn validate_refine(
         )));
     }
     check_shared(terms, shared)?;
-    if !hysteresis_admissible(shared, opts.mu_lo, opts.mu_hi) {
-        return Err(CoreError::InvalidParameter(format!(
-            "the starting point (beta = {}, gamma = {}, mu = {}) must satisfy beta >= |gamma|, \
-             beta + gamma > 0 and {} < mu <= {}",
-            shared[0], shared[1], shared[2], opts.mu_lo, opts.mu_hi
-        )));
-    }
+    // mu_lo >= 1 here (the bracket is checked above): the message names the bracket as given.
+    check_start_point(shared, opts)?;
     let b = terms.value(shared, TermKind::Play);
-    let model = AugModel { exps, terms, opts };
     let own: Vec<[f64; 2]> = gains.iter().zip(phases).map(|(&g, &p)| [g, p]).collect();
     if b > model.play_max(&own) {
         return Err(CoreError::InvalidParameter(format!(

@@ -517,45 +517,71 @@ pub(crate) fn project_hysteresis(shared: &mut [f64], mu_lo: f64, mu_hi: f64) {
     }
 }
 
-fn validate(exps: &[Experiment], p: &Params, opts: &Options) -> Result<()> {
-    if exps.is_empty() {
+/// The checks every joint fit makes before it starts, in order: at least one experiment, one gain
+/// and one phase per experiment, each experiment's data finite, its excitation valid
+/// (`excitation(i)`) and its weight finite and > 0, the gains and phases finite, and
+/// `max_iter`, `substeps >= 1`. The model's own checks (start point, bracket) follow.
+///
+/// Errors: [`CoreError::InsufficientData`], [`CoreError::NonFinite`],
+/// [`CoreError::InvalidParameter`], and those of `excitation`.
+pub(crate) fn check_joint_start(
+    model: &impl JointModel,
+    excitation: impl Fn(usize) -> Result<()>,
+    (gains, phases): (&[f64], &[f64]),
+    opts: &Options,
+) -> Result<()> {
+    let m = model.n_experiments();
+    if m == 0 {
         return Err(CoreError::InsufficientData(
             "the refinement needs at least one experiment".into(),
         ));
     }
-    if p.gains.len() != exps.len() || p.phases.len() != exps.len() {
+    if gains.len() != m || phases.len() != m {
         return Err(CoreError::InvalidParameter(format!(
-            "{} experiments but {} gains and {} phases",
-            exps.len(),
-            p.gains.len(),
-            p.phases.len()
+            "{m} experiments but {} gains and {} phases",
+            gains.len(),
+            phases.len()
         )));
     }
-    for (i, e) in exps.iter().enumerate() {
-        all_finite(&format!("ybar[{i}]"), e.ybar)?;
-        finite("amplitude", e.amplitude)?;
-        finite("weight", e.weight)?;
-        if e.weight <= 0.0 {
+    for i in 0..m {
+        let (ybar, weight) = model.data(i);
+        all_finite(&format!("ybar[{i}]"), ybar)?;
+        excitation(i)?;
+        finite("weight", weight)?;
+        if weight <= 0.0 {
             return Err(CoreError::InvalidParameter(format!(
-                "experiment {i}: weight {} must be > 0 (N / noise variance)",
-                e.weight
+                "experiment {i}: weight {weight} must be > 0 (N / noise variance)"
             )));
         }
     }
-    all_finite("gains", &p.gains)?;
-    all_finite("phases", &p.phases)?;
+    all_finite("gains", gains)?;
+    all_finite("phases", phases)?;
     if opts.max_iter == 0 || opts.substeps == 0 {
         return Err(CoreError::InvalidParameter(
             "max_iter and substeps must be >= 1".into(),
         ));
     }
-    if !hysteresis_admissible(&[p.beta, p.gamma, p.mu], opts.mu_lo, opts.mu_hi) {
+    Ok(())
+}
+
+fn validate(model: &PlainModel, p: &Params, opts: &Options) -> Result<()> {
+    let amplitude = |i: usize| finite("amplitude", model.exps[i].amplitude).map(|_| ());
+    check_joint_start(model, amplitude, (&p.gains, &p.phases), opts)?;
+    check_start_point(&[p.beta, p.gamma, p.mu], opts)
+}
+
+/// Checks that a start `[beta, gamma, mu, ..]` satisfies the Bouc-Wen conditions and the mu
+/// bracket (see [`hysteresis_admissible`]).
+///
+/// Errors: [`CoreError::InvalidParameter`].
+pub(crate) fn check_start_point(shared: &[f64], opts: &Options) -> Result<()> {
+    if !hysteresis_admissible(shared, opts.mu_lo, opts.mu_hi) {
         return Err(CoreError::InvalidParameter(format!(
             "the starting point (beta = {}, gamma = {}, mu = {}) must satisfy beta >= |gamma|, \
              beta + gamma > 0 and {} < mu <= {}",
-            p.beta,
-            p.gamma,
-            p.mu,
+            shared[0],
+            shared[1],
+            shared[2],
             opts.mu_lo.max(1.0),
             opts.mu_hi
         )));
@@ -573,8 +599,8 @@ fn validate(exps: &[Experiment], p: &Params, opts: &Options) -> Result<()> {
 /// Errors: an inadmissible start, the start is not a valid loop (see [`steady_loop`]), inconsistent
 /// lengths, non-finite data, a non-positive weight.
 pub fn refine(exps: &[Experiment], start: &Params, opts: &Options) -> Result<Fit> {
-    validate(exps, start, opts)?;
     let model = PlainModel { exps, opts };
+    validate(&model, start, opts)?;
     let own: Vec<[f64; 2]> = start
         .gains
         .iter()
