@@ -3,7 +3,7 @@
 //! on the rest of the model.
 //!
 //! This is the one place in Rust where a term's code name is written: [`TermKind::name`]. The
-//! augmented (steady-loop) model of [`crate::augmented`] fits the terms of a [`Terms`] list; the
+//! augmented (steady-loop) model of `rust/augmented.rs` fits the terms of a [`Terms`] list; the
 //! time-domain simulation of `rust/simulate/with_terms.rs` takes a value per term. Adding a term
 //! is a variant here, its arm in [`TermKind::name`] (and [`TermKind::check_value`] if its range is
 //! one-sided), and its behaviour in the model(s) it acts in.
