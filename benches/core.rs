@@ -9,6 +9,7 @@ use std::f64::consts::PI;
 use std::hint::black_box;
 use std::time::Duration;
 
+use _core::augmented::{augmented_output, augmented_refine, AugExperiment, Excitation};
 use _core::average::periodic_average;
 use _core::bouc_wen::BoucWen;
 use _core::estimate::{max_harmonics, spectral_derivative};
@@ -21,9 +22,7 @@ use _core::refine::{refine, Experiment, Options, Params};
 use _core::simulate::{rk4_step_count, simulate, Input};
 use _core::solve::{sls_search, SlsProblem, GOLDEN_MAX_ITER};
 use _core::steady::steady_loop;
-use _core::terms::{
-    augmented_output, augmented_refine, AugExperiment, AugOptions, Excitation, Terms,
-};
+use _core::terms::{TermKind, Terms};
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 
 const P: usize = 1024;
@@ -194,7 +193,8 @@ fn bench_path_loop(c: &mut Criterion) {
 /// model itself plus a deterministic pseudo-noise; and one model output with its Jacobian.
 fn bench_augmented(c: &mut Criterion) {
     let (p, m) = (256, 10);
-    let terms = Terms::parse(&["offset", "viscous"]).expect("valid terms");
+    let names = [TermKind::Offset.name(), TermKind::Viscous.name()];
+    let terms = Terms::parse(&names).expect("valid terms");
     let truth = [0.8, 0.2, 1.6, 0.3, 0.05];
     let exc: Vec<Excitation> = (0..m)
         .map(|i| Excitation {
@@ -230,7 +230,7 @@ fn bench_augmented(c: &mut Criterion) {
     let start = [0.7, 0.25, 1.8, 0.25, 0.06];
     let g0: Vec<f64> = gains.iter().map(|g| g * 1.1).collect();
     let ph0: Vec<f64> = phases.iter().map(|v| v + 0.05).collect();
-    let opts = AugOptions::default();
+    let opts = Options::default();
     c.bench_function("augmented_refine_m10_p256_offset_viscous", |b| {
         b.iter(|| augmented_refine(black_box(&exps), &terms, &start, &g0, &ph0, &opts))
     });

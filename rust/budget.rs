@@ -143,6 +143,178 @@ pub fn check_simulation(n_samples: usize, substeps: usize) -> Result<()> {
     )
 }
 
+/// Typical golden-section reductions of a search (`0.618^50 ~ 4e-11` of the bracket), for the
+/// work estimates.
+pub const GOLDEN_ITER_ESTIMATE: u128 = 50;
+/// Typical shooting passes of a steady or path loop, for the work estimates.
+pub const SHOOT_ITER_ESTIMATE: u128 = 4;
+
+/// The long calls of the core and the sizes their work grows with: the one place where a call's
+/// step estimate and its budget check are written down. [`Work::check`] refuses a call over the
+/// `max_steps` budget and returns the estimate, which also decides whether the call runs
+/// interruptibly.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Work {
+    /// An RK4 simulation of `n_samples` output samples, `substeps` steps each (see
+    /// [`check_simulation`]).
+    Simulation {
+        /// Output samples.
+        n_samples: usize,
+        /// RK4 steps per sample interval.
+        substeps: usize,
+    },
+    /// The golden-section mu search (24a) on one period of `samples` samples.
+    MuSearch {
+        /// Samples per period.
+        samples: usize,
+        /// Reductions allowed; the budget is charged for all of them.
+        max_iter: usize,
+    },
+    /// The steady loop of (2b) on `samples` samples per period.
+    SteadyLoop {
+        /// Samples per period.
+        samples: usize,
+        /// RK4 steps per lattice interval.
+        substeps: usize,
+    },
+    /// The loop along the input path (design.md 9.2) on `samples` samples per period.
+    PathLoop {
+        /// Samples per period.
+        samples: usize,
+        /// RK4 steps per segment.
+        substeps: usize,
+    },
+    /// The phase profile of the SLS estimator: a mu search at each of `grid` phases.
+    PhaseProfile {
+        /// Samples per period.
+        samples: usize,
+        /// Phases of the grid.
+        grid: usize,
+    },
+    /// The phase profile at a further frequency (hysteresis known): one pass per phase.
+    PhaseGain {
+        /// Samples per period.
+        samples: usize,
+        /// Phases of the grid.
+        grid: usize,
+    },
+    /// A joint Levenberg-Marquardt of the plain model: every iteration evaluates every loop.
+    Refinement {
+        /// Samples of all experiments together.
+        samples: u128,
+        /// Iteration cap.
+        max_iter: usize,
+        /// RK4 steps per lattice interval.
+        substeps: usize,
+    },
+    /// [`Work::Refinement`] of the augmented model (design.md 9.3).
+    AugmentedRefinement {
+        /// Samples of all experiments together.
+        samples: u128,
+        /// Iteration cap.
+        max_iter: usize,
+        /// RK4 steps per lattice interval / path segment.
+        substeps: usize,
+    },
+    /// `starts` refinements of the multi-start screening. Not charged to the budget (each start
+    /// may be abandoned early, and the caller sizes the screening); estimated only, so that it
+    /// runs interruptibly.
+    Starts {
+        /// Starting points.
+        starts: usize,
+        /// Samples of all experiments together.
+        samples: u128,
+        /// Iteration cap of each start.
+        max_iter: usize,
+        /// RK4 steps per lattice interval.
+        substeps: usize,
+    },
+}
+
+/// `iterations x samples x substeps x` [`SHOOT_ITER_ESTIMATE`]: the steps of loop evaluations.
+fn shooting(iterations: u128, samples: u128, substeps: usize) -> u128 {
+    iterations
+        .saturating_mul(samples)
+        .saturating_mul(substeps as u128)
+        .saturating_mul(SHOOT_ITER_ESTIMATE)
+}
+
+impl Work {
+    /// The estimated elementary steps of the call (RK4 steps, or sample evaluations of the
+    /// searches).
+    pub fn steps(&self) -> u128 {
+        match *self {
+            Work::Simulation {
+                n_samples,
+                substeps,
+            } => n_samples.saturating_sub(1).saturating_mul(substeps) as u128,
+            Work::MuSearch { samples, .. } => (samples as u128) * GOLDEN_ITER_ESTIMATE,
+            Work::SteadyLoop { samples, substeps } | Work::PathLoop { samples, substeps } => {
+                shooting(1, samples as u128, substeps)
+            }
+            Work::PhaseProfile { samples, grid } => (grid as u128)
+                .saturating_mul(samples as u128)
+                .saturating_mul(GOLDEN_ITER_ESTIMATE),
+            Work::PhaseGain { samples, grid } => (grid as u128).saturating_mul(samples as u128),
+            Work::Refinement {
+                samples,
+                max_iter,
+                substeps,
+            }
+            | Work::AugmentedRefinement {
+                samples,
+                max_iter,
+                substeps,
+            } => shooting(max_iter as u128, samples, substeps),
+            Work::Starts {
+                starts,
+                samples,
+                max_iter,
+                substeps,
+            } => shooting(
+                (starts as u128).saturating_mul(max_iter as u128),
+                samples,
+                substeps,
+            ),
+        }
+    }
+
+    /// Checks the call against the budgets and returns [`Work::steps`].
+    ///
+    /// Errors: [`CoreError::BudgetExceeded`], naming the call and the sizes its work grows with.
+    pub fn check(&self) -> Result<u128> {
+        let steps = self.steps();
+        match *self {
+            Work::Simulation {
+                n_samples,
+                substeps,
+            } => check_simulation(n_samples, substeps)?,
+            Work::MuSearch { samples, max_iter } => check_steps(
+                "the mu search",
+                (max_iter as u128).saturating_mul(samples as u128),
+            )?,
+            Work::SteadyLoop { .. } => check_steps("the steady loop", steps)?,
+            Work::PathLoop { .. } => check_steps("the path loop (samples x substeps)", steps)?,
+            Work::PhaseProfile { .. } => check_steps(
+                "the phase profile (grid x samples per period x mu search)",
+                steps,
+            )?,
+            Work::PhaseGain { .. } => {
+                check_steps("the phase profile (grid x samples per period)", steps)?
+            }
+            Work::Refinement { .. } => {
+                check_steps("the refinement (max_iter x samples x substeps)", steps)?
+            }
+            Work::AugmentedRefinement { .. } => check_steps(
+                "the augmented refinement (max_iter x samples x substeps)",
+                steps,
+            )?,
+            Work::Starts { .. } => {}
+        }
+        Ok(steps)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -2,12 +2,13 @@
 //!
 //! The numerics stay free of pyo3: a long loop calls [`checkpoint`] (or, where it cannot return an
 //! error, tests [`requested`] and breaks) at a bounded interval, and the binding decides what
-//! cancels. The binding (`rust/python.rs`, `interruptible`) runs the work on a scoped worker thread
-//! with a fresh [`Token`] installed, and the calling thread polls `Python::check_signals` every
-//! [`POLL_INTERVAL`] while it waits; on Ctrl-C it cancels the token, waits for the worker to reach
-//! its next checkpoint and raises the `KeyboardInterrupt`. This is the usual design of
-//! cooperative cancellation (e.g. .NET's `CancellationToken`, Go's `context.Context`): the worker
-//! is never killed, so nothing is left half-written and every borrow ends normally.
+//! cancels. The binding (`rust/bindings/detach.rs`, `interruptible`) runs the work on a scoped
+//! worker thread with a fresh [`Token`] installed, and the calling thread polls
+//! `Python::check_signals` every [`POLL_INTERVAL`] while it waits; on Ctrl-C it cancels the token,
+//! waits for the worker to reach its next checkpoint and raises the `KeyboardInterrupt`. This is
+//! the usual design of cooperative cancellation (e.g. .NET's `CancellationToken`, Go's
+//! `context.Context`): the worker is never killed, so nothing is left half-written and every
+//! borrow ends normally.
 //!
 //! Adopting it in a new loop is one line:
 //!

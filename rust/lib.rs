@@ -7,8 +7,9 @@
 //! The numerical contract, shared with the NumPy reference `bouc_wen_id.reference`, is
 //! `docs/design.md`; every module follows it step by step so that the two agree to rounding.
 //!
-//! The numerics take `&[f64]` and return [`error::Result`]; the pyo3 bindings (feature `python`)
-//! live in one private module and only borrow, convert and call.
+//! The numerics take `&[f64]` and return [`error::Result`] and know nothing of Python; the pyo3
+//! bindings (feature `python`) live in the private folder `rust/bindings/` and only convert, call
+//! and convert back.
 //!
 //! ## Reference
 //! *Wiener System Identification in Presence of Hysteresis Nonlinearity*, the seed paper whose
@@ -16,6 +17,7 @@
 //! F. Ikhouane and J. Rodellar, *Systems with Hysteresis: Analysis, Identification and Control
 //! using the Bouc-Wen Model*, Wiley, 2007.
 
+pub mod augmented;
 pub mod average;
 pub mod bouc_wen;
 pub mod budget;
@@ -34,4 +36,4 @@ pub mod steady;
 pub mod terms;
 
 #[cfg(feature = "python")]
-mod python;
+mod bindings;

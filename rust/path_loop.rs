@@ -942,15 +942,70 @@ pub fn path_loop_distorted(
     path_loop_with(args, Some(waveform), samples_per_period, substeps, true)
 }
 
+/// The arguments of [`path_loop`]: `(amplitude, beta, gamma, mu, delta, play, phi)`.
+type LoopArgs = (f64, f64, f64, f64, f64, f64, f64);
+
 /// [`path_loop`], with the multiple shooting (`multiple`) or bracketed single shooting alone
 /// (the fallback, exercised by the tests).
 fn path_loop_with(
-    (amplitude, beta, gamma, mu, delta, play, phi): (f64, f64, f64, f64, f64, f64, f64),
+    args: LoopArgs,
     waveform: Option<&Waveform>,
     samples_per_period: usize,
     substeps: usize,
     multiple: bool,
 ) -> Result<PathLoop> {
+    let (amplitude, beta, gamma, mu, delta, play, phi) = args;
+    check_arguments(args, waveform)?;
+    crate::steady::check_grid(samples_per_period, substeps)?;
+    let shape = Shape {
+        beta,
+        gamma,
+        mu,
+        delta,
+    };
+    let p = samples_per_period;
+    let (segs, half_travel) = match waveform {
+        None => (segments(amplitude, phi, play, p), amplitude.abs()),
+        Some(wf) => distorted_segments(amplitude, phi, play, wf, p)?,
+    };
+    let bound = loop_bound(beta + gamma - delta.abs(), mu)?;
+
+    let mut w = vec![0.0; p];
+    let mut jac = vec![[0.0; N_PD]; p];
+    // dw_j / dv of each sample (v the start of its piece).
+    let mut phis = vec![0.0; p];
+    let mut out = Record {
+        w: &mut w,
+        jac: &mut jac,
+        phis: &mut phis,
+    };
+    // |dh/dw| <= L on |w| <= w_b: it sizes the coarse RK4 steps and the advice on substeps.
+    let stiffness = mu * bound.powf(mu - 1.0) * (beta.abs() + gamma.abs() + delta.abs());
+    let pieces = Pieces::<PIECES>::split(segs.len());
+    let start = Start {
+        shape: &shape,
+        segs: &segs,
+        pieces: &pieces,
+        bound,
+        stiffness,
+    };
+    let v = start.values(half_travel - play, multiple);
+    let iterations = start
+        .solve(v, substeps, multiple, &mut out)
+        .map_err(|f| start.not_converged(f, args, substeps))?;
+    if !(w.iter().all(|v| v.is_finite()) && jac.iter().flatten().all(|v| v.is_finite())) {
+        return Err(CoreError::NonFinite(format!(
+            "the path loop or its sensitivities overflowed for A = {amplitude:e}, beta = {beta:e}, \
+             gamma = {gamma:e}, mu = {mu}, delta = {delta:e}, play = {play:e}; rescale the data so \
+             that the parameters are of moderate size"
+        )));
+    }
+    Ok(PathLoop { w, jac, iterations })
+}
+
+/// The checks of [`path_loop`] and [`path_loop_distorted`] on their arguments, in order.
+fn check_arguments(args: LoopArgs, waveform: Option<&Waveform>) -> Result<()> {
+    let (amplitude, beta, gamma, mu, delta, play, phi) = args;
     for (name, v) in [
         ("amplitude", amplitude),
         ("beta", beta),
@@ -1001,19 +1056,14 @@ fn path_loop_with(
             amplitude.abs()
         )));
     }
-    crate::steady::check_grid(samples_per_period, substeps)?;
-    let shape = Shape {
-        beta,
-        gamma,
-        mu,
-        delta,
-    };
-    let p = samples_per_period;
-    let (segs, half_travel) = match waveform {
-        None => (segments(amplitude, phi, play, p), amplitude.abs()),
-        Some(wf) => distorted_segments(amplitude, phi, play, wf, p)?,
-    };
-    // |w| stays below the larger of the two saturation levels (beta + gamma -+ delta)^(-1/mu).
+    Ok(())
+}
+
+/// The bound `w_b = (beta + gamma - |delta|)^(-1/mu)` of the loop: `|w|` stays below the larger
+/// of the two saturation levels `(beta + gamma -+ delta)^(-1/mu)`.
+///
+/// Errors: [`CoreError::InvalidParameter`] when it is not a usable number.
+fn loop_bound(margin: f64, mu: f64) -> Result<f64> {
     let bound = (1.0 / margin).powf(1.0 / mu);
     if !(bound.is_finite() && bound > 0.0) {
         return Err(CoreError::InvalidParameter(format!(
@@ -1022,110 +1072,112 @@ fn path_loop_with(
              that the shape parameters are of moderate size"
         )));
     }
+    Ok(bound)
+}
 
-    let mut w = vec![0.0; p];
-    let mut jac = vec![[0.0; N_PD]; p];
-    // dw_j / dv of each sample (v the start of its piece).
-    let mut phis = vec![0.0; p];
-    let mut out = Record {
-        w: &mut w,
-        jac: &mut jac,
-        phis: &mut phis,
-    };
+/// The shooting problem of one path loop: the fine segments, their pieces, the bound `w_b` and
+/// the stiffness `L >= |dh/dw|` on `|w| <= w_b`.
+struct Start<'a> {
+    shape: &'a Shape,
+    segs: &'a [Segment],
+    pieces: &'a Pieces<PIECES>,
+    bound: f64,
+    stiffness: f64,
+}
 
-    // Start values: single shooting (bracketed) on a coarse cycle, the fine segments merged into
-    // about COARSE_SEGMENTS, then the coarse loop's values at the starts of the pieces.
-    let pieces = Pieces::<PIECES>::split(segs.len());
-    let group = segs.len().div_ceil(COARSE_SEGMENTS).max(1);
-    // |dh/dw| <= L on |w| <= w_b: coarse RK4 steps of at most COARSE_STIFF / L in x keep the
-    // coarse map stable and accurate (RK4 is unstable beyond 2.8 / L) however stiff the loop.
-    let stiffness = mu * bound.powf(mu - 1.0) * (beta.abs() + gamma.abs() + delta.abs());
-    let max_dx = COARSE_SUBSTEPS as f64 * COARSE_STIFF / stiffness;
-    let (coarse, coarse_pieces) = coarse_segments(&segs, &pieces, group, max_dx);
-    // Multiple shooting on it from w = 0 at every piece start (the K chains overlap); should it
-    // stray, bracketed single shooting, which always has a safe step.
-    let v = match multiple {
-        true => coarse_multiple(&shape, &coarse, &coarse_pieces, bound, half_travel - play),
-        false => None,
+impl Start<'_> {
+    /// Start values at the piece starts: shooting on a coarse cycle, the fine segments merged
+    /// into about [`COARSE_SEGMENTS`]; multiple shooting from `w = 0` at every piece start (the K
+    /// chains overlap) when `multiple`, and should it stray, bracketed single shooting, which
+    /// always has a safe step. `xp_top` is the played input at the top of x.
+    fn values(&self, xp_top: f64, multiple: bool) -> [f64; PIECES] {
+        let group = self.segs.len().div_ceil(COARSE_SEGMENTS).max(1);
+        // Coarse RK4 steps of at most COARSE_STIFF / L in x keep the coarse map stable and
+        // accurate (RK4 is unstable beyond 2.8 / L) however stiff the loop.
+        let max_dx = COARSE_SUBSTEPS as f64 * COARSE_STIFF / self.stiffness;
+        let (coarse, coarse_pieces) = coarse_segments(self.segs, self.pieces, group, max_dx);
+        match multiple {
+            true => coarse_multiple(self.shape, &coarse, &coarse_pieces, self.bound, xp_top),
+            false => None,
+        }
+        .unwrap_or_else(|| coarse_single(self.shape, &coarse, &coarse_pieces, self.bound))
     }
-    .unwrap_or_else(|| coarse_single(&shape, &coarse, &coarse_pieces, bound));
-    let w0 = v[0];
 
-    // Multiple shooting from there; should it stray, bracketed single shooting from the coarse
-    // top value, which always has a safe step.
-    let found = if multiple && v.iter().all(|x| x.is_finite() && x.abs() <= bound) {
-        shoot(
-            &shape,
-            &segs,
-            &pieces,
-            v,
-            substeps,
-            bound,
-            MULTI_MAX_ITER,
-            &mut out,
-        )
-    } else {
-        Err(Failure::Unsafe)
-    };
-    let iterations = match found {
-        Ok(n) => n,
-        // Multiple shooting strayed (or was not asked for): bracketed single shooting.
-        Err(_) => {
-            let start = if w0.is_finite() { w0 } else { 0.0 };
-            let whole = Pieces::<1> {
-                start: [0],
-                end: [segs.len()],
-            };
-            let single = shoot(
-                &shape,
-                &segs,
-                &whole,
-                [start],
+    /// Multiple shooting from the start values `v`; should it stray (or not be asked for),
+    /// bracketed single shooting from the first of them, which always has a safe step. Returns
+    /// the number of updates; `out` holds the loop.
+    fn solve(
+        &self,
+        v: [f64; PIECES],
+        substeps: usize,
+        multiple: bool,
+        out: &mut Record<'_>,
+    ) -> std::result::Result<usize, Failure> {
+        let (shape, segs, bound) = (self.shape, self.segs, self.bound);
+        let found = if multiple && v.iter().all(|x| x.is_finite() && x.abs() <= bound) {
+            shoot(
+                shape,
+                segs,
+                self.pieces,
+                v,
                 substeps,
                 bound,
-                SHOOT_MAX_ITER,
-                &mut out,
-            );
-            single.map_err(|f| {
-                let longest = segs.iter().map(|g| g.dx.abs()).fold(0.0, f64::max);
-                let why = match f {
-                    Failure::Diverged(wn) => {
-                        format!("diverged (w reached {wn:e} within one cycle)")
-                    }
-                    Failure::Iterations(g) => format!(
-                        "found no periodic loop in {SHOOT_MAX_ITER} iterations (residual {g:.3e})"
-                    ),
-                    Failure::Unsafe => "left its bracket".to_string(),
-                };
-                let hint = if longest / substeps as f64 * stiffness > RK4_STABLE {
-                    format!(
-                        "its RK4 steps (up to {:.3e} in x) times the loop's stiffness (|dh/dw| up \
-                         to {stiffness:.3e}) exceed RK4's stability limit {RK4_STABLE}: raise \
-                         substeps to at least {}",
-                        longest / substeps as f64,
-                        (longest * stiffness / RK4_STABLE).ceil()
-                    )
-                } else {
-                    "with beta < 0 the unloading branch runs away at large amplitudes: check the \
-                     parameters' signs and scale"
-                        .to_string()
-                };
-                CoreError::NotConverged(format!(
-                    "the path-loop shooting {why}, bound {bound:.3e}, for A = {amplitude}, \
-                     beta = {beta}, gamma = {gamma}, mu = {mu}, delta = {delta}, play = {play}; \
-                     {hint}"
-                ))
-            })?
+                MULTI_MAX_ITER,
+                out,
+            )
+        } else {
+            Err(Failure::Unsafe)
+        };
+        if found.is_ok() {
+            return found;
         }
-    };
-    if !(w.iter().all(|v| v.is_finite()) && jac.iter().flatten().all(|v| v.is_finite())) {
-        return Err(CoreError::NonFinite(format!(
-            "the path loop or its sensitivities overflowed for A = {amplitude:e}, beta = {beta:e}, \
-             gamma = {gamma:e}, mu = {mu}, delta = {delta:e}, play = {play:e}; rescale the data so \
-             that the parameters are of moderate size"
-        )));
+        let start = if v[0].is_finite() { v[0] } else { 0.0 };
+        let whole = Pieces::<1> {
+            start: [0],
+            end: [segs.len()],
+        };
+        shoot(
+            shape,
+            segs,
+            &whole,
+            [start],
+            substeps,
+            bound,
+            SHOOT_MAX_ITER,
+            out,
+        )
     }
-    Ok(PathLoop { w, jac, iterations })
+
+    /// The error of a shooting that found no loop: why, and what to change.
+    fn not_converged(&self, f: Failure, args: LoopArgs, substeps: usize) -> CoreError {
+        let (amplitude, beta, gamma, mu, delta, play, _) = args;
+        let (bound, stiffness) = (self.bound, self.stiffness);
+        let longest = self.segs.iter().map(|g| g.dx.abs()).fold(0.0, f64::max);
+        let why = match f {
+            Failure::Diverged(wn) => format!("diverged (w reached {wn:e} within one cycle)"),
+            Failure::Iterations(g) => {
+                format!("found no periodic loop in {SHOOT_MAX_ITER} iterations (residual {g:.3e})")
+            }
+            Failure::Unsafe => "left its bracket".to_string(),
+        };
+        let hint = if longest / substeps as f64 * stiffness > RK4_STABLE {
+            format!(
+                "its RK4 steps (up to {:.3e} in x) times the loop's stiffness (|dh/dw| up to \
+                 {stiffness:.3e}) exceed RK4's stability limit {RK4_STABLE}: raise substeps to at \
+                 least {}",
+                longest / substeps as f64,
+                (longest * stiffness / RK4_STABLE).ceil()
+            )
+        } else {
+            "with beta < 0 the unloading branch runs away at large amplitudes: check the \
+             parameters' signs and scale"
+                .to_string()
+        };
+        CoreError::NotConverged(format!(
+            "the path-loop shooting {why}, bound {bound:.3e}, for A = {amplitude}, beta = {beta}, \
+             gamma = {gamma}, mu = {mu}, delta = {delta}, play = {play}; {hint}"
+        ))
+    }
 }
 
 #[cfg(test)]

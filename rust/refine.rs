@@ -12,7 +12,7 @@
 //!
 //! The Levenberg-Marquardt itself ([`levenberg_marquardt`]) is generic over a [`JointModel`]
 //! (shared vector of any size, two own parameters per experiment): the plain model here and the
-//! augmented model of design.md 9.3 ([`crate::terms`]) share one damping schedule, stopping rules
+//! augmented model of design.md 9.3 (`rust/augmented.rs`) share one damping schedule, stopping rules
 //! and Schur solve. The experiments are evaluated in parallel and summed in a fixed order.
 //!
 //! ## Reference
@@ -63,12 +63,47 @@ pub struct Params {
     pub phases: Vec<f64>,
 }
 
-/// Stopping rules of [`refine`].
+impl Params {
+    /// The flat vector `[beta, gamma, mu, g_0, phi_0, g_1, phi_1, ...]` (the order of the Fisher
+    /// information).
+    pub fn flat(&self) -> Vec<f64> {
+        let mut v = vec![self.beta, self.gamma, self.mu];
+        for (g, p) in self.gains.iter().zip(&self.phases) {
+            v.push(*g);
+            v.push(*p);
+        }
+        v
+    }
+
+    /// The parameters of `m` experiments from their [`Params::flat`] vector `v`, called `name` in
+    /// the error.
+    ///
+    /// Errors: [`CoreError::InvalidParameter`] unless `v` holds `3 + 2 m` values.
+    pub fn from_flat(name: &str, v: &[f64], m: usize) -> Result<Self> {
+        if v.len() != 3 + 2 * m {
+            return Err(CoreError::InvalidParameter(format!(
+                "{name} has {} values; {m} experiments need 3 + 2 * {m} = {}",
+                v.len(),
+                3 + 2 * m
+            )));
+        }
+        Ok(Self {
+            beta: v[0],
+            gamma: v[1],
+            mu: v[2],
+            gains: v[3..].iter().step_by(2).copied().collect(),
+            phases: v[4..].iter().step_by(2).copied().collect(),
+        })
+    }
+}
+
+/// Options of the joint fits, [`refine`] and the augmented model's (`rust/augmented.rs`): the stopping
+/// rules of [`levenberg_marquardt`], the loop solver's resolution and the mu bracket.
 #[derive(Debug, Clone, Copy)]
 pub struct Options {
     /// Iteration cap.
     pub max_iter: usize,
-    /// RK4 steps per sample interval of the steady-loop solver.
+    /// RK4 steps per sample interval of the steady loop (per path segment of the path loop).
     pub substeps: usize,
     /// Stop when the relative cost decrease of an accepted step is below this.
     pub ftol: f64,
@@ -136,17 +171,6 @@ pub trait JointModel: Sync {
     fn project(&self, shared: &mut [f64], own: &[[f64; 2]]);
     /// Whether a (projected) trial point may be evaluated; an inadmissible one is rejected.
     fn admissible(&self, shared: &[f64], own: &[[f64; 2]]) -> bool;
-}
-
-/// Stopping rules of [`levenberg_marquardt`].
-#[derive(Debug, Clone, Copy)]
-pub struct LmOptions {
-    /// Iteration cap (accepted plus rejected steps).
-    pub max_iter: usize,
-    /// Stop when the relative cost decrease of an accepted step is below this.
-    pub ftol: f64,
-    /// Stop when every step component is below `xtol * (|p| + xtol)`.
-    pub xtol: f64,
 }
 
 /// Outcome of [`levenberg_marquardt`].
@@ -341,7 +365,7 @@ pub fn levenberg_marquardt<M: JointModel>(
     model: &M,
     shared0: &[f64],
     own0: &[[f64; 2]],
-    opts: &LmOptions,
+    opts: &Options,
 ) -> Result<JointFit> {
     let mut shared = shared0.to_vec();
     let mut own = own0.to_vec();
@@ -493,45 +517,71 @@ pub(crate) fn project_hysteresis(shared: &mut [f64], mu_lo: f64, mu_hi: f64) {
     }
 }
 
-fn validate(exps: &[Experiment], p: &Params, opts: &Options) -> Result<()> {
-    if exps.is_empty() {
+/// The checks every joint fit makes before it starts, in order: at least one experiment, one gain
+/// and one phase per experiment, each experiment's data finite, its excitation valid
+/// (`excitation(i)`) and its weight finite and > 0, the gains and phases finite, and
+/// `max_iter`, `substeps >= 1`. The model's own checks (start point, bracket) follow.
+///
+/// Errors: [`CoreError::InsufficientData`], [`CoreError::NonFinite`],
+/// [`CoreError::InvalidParameter`], and those of `excitation`.
+pub(crate) fn check_joint_start(
+    model: &impl JointModel,
+    excitation: impl Fn(usize) -> Result<()>,
+    (gains, phases): (&[f64], &[f64]),
+    opts: &Options,
+) -> Result<()> {
+    let m = model.n_experiments();
+    if m == 0 {
         return Err(CoreError::InsufficientData(
             "the refinement needs at least one experiment".into(),
         ));
     }
-    if p.gains.len() != exps.len() || p.phases.len() != exps.len() {
+    if gains.len() != m || phases.len() != m {
         return Err(CoreError::InvalidParameter(format!(
-            "{} experiments but {} gains and {} phases",
-            exps.len(),
-            p.gains.len(),
-            p.phases.len()
+            "{m} experiments but {} gains and {} phases",
+            gains.len(),
+            phases.len()
         )));
     }
-    for (i, e) in exps.iter().enumerate() {
-        all_finite(&format!("ybar[{i}]"), e.ybar)?;
-        finite("amplitude", e.amplitude)?;
-        finite("weight", e.weight)?;
-        if e.weight <= 0.0 {
+    for i in 0..m {
+        let (ybar, weight) = model.data(i);
+        all_finite(&format!("ybar[{i}]"), ybar)?;
+        excitation(i)?;
+        finite("weight", weight)?;
+        if weight <= 0.0 {
             return Err(CoreError::InvalidParameter(format!(
-                "experiment {i}: weight {} must be > 0 (N / noise variance)",
-                e.weight
+                "experiment {i}: weight {weight} must be > 0 (N / noise variance)"
             )));
         }
     }
-    all_finite("gains", &p.gains)?;
-    all_finite("phases", &p.phases)?;
+    all_finite("gains", gains)?;
+    all_finite("phases", phases)?;
     if opts.max_iter == 0 || opts.substeps == 0 {
         return Err(CoreError::InvalidParameter(
             "max_iter and substeps must be >= 1".into(),
         ));
     }
-    if !hysteresis_admissible(&[p.beta, p.gamma, p.mu], opts.mu_lo, opts.mu_hi) {
+    Ok(())
+}
+
+fn validate(model: &PlainModel, p: &Params, opts: &Options) -> Result<()> {
+    let amplitude = |i: usize| finite("amplitude", model.exps[i].amplitude).map(|_| ());
+    check_joint_start(model, amplitude, (&p.gains, &p.phases), opts)?;
+    check_start_point(&[p.beta, p.gamma, p.mu], opts)
+}
+
+/// Checks that a start `[beta, gamma, mu, ..]` satisfies the Bouc-Wen conditions and the mu
+/// bracket (see [`hysteresis_admissible`]).
+///
+/// Errors: [`CoreError::InvalidParameter`].
+pub(crate) fn check_start_point(shared: &[f64], opts: &Options) -> Result<()> {
+    if !hysteresis_admissible(shared, opts.mu_lo, opts.mu_hi) {
         return Err(CoreError::InvalidParameter(format!(
             "the starting point (beta = {}, gamma = {}, mu = {}) must satisfy beta >= |gamma|, \
              beta + gamma > 0 and {} < mu <= {}",
-            p.beta,
-            p.gamma,
-            p.mu,
+            shared[0],
+            shared[1],
+            shared[2],
             opts.mu_lo.max(1.0),
             opts.mu_hi
         )));
@@ -549,24 +599,15 @@ fn validate(exps: &[Experiment], p: &Params, opts: &Options) -> Result<()> {
 /// Errors: an inadmissible start, the start is not a valid loop (see [`steady_loop`]), inconsistent
 /// lengths, non-finite data, a non-positive weight.
 pub fn refine(exps: &[Experiment], start: &Params, opts: &Options) -> Result<Fit> {
-    validate(exps, start, opts)?;
     let model = PlainModel { exps, opts };
+    validate(&model, start, opts)?;
     let own: Vec<[f64; 2]> = start
         .gains
         .iter()
         .zip(&start.phases)
         .map(|(&g, &p)| [g, p])
         .collect();
-    let fit = levenberg_marquardt(
-        &model,
-        &[start.beta, start.gamma, start.mu],
-        &own,
-        &LmOptions {
-            max_iter: opts.max_iter,
-            ftol: opts.ftol,
-            xtol: opts.xtol,
-        },
-    )?;
+    let fit = levenberg_marquardt(&model, &[start.beta, start.gamma, start.mu], &own, opts)?;
     Ok(Fit {
         params: Params {
             beta: fit.shared[0],

@@ -28,7 +28,7 @@ use crate::linear::{Companion, TransferFunction};
 
 // The augmented model's integrator (design.md §9.4), kept apart so that this plain path is untouched.
 mod with_terms;
-pub use with_terms::{simulate_with_terms, TermSimulation, Terms, COULOMB_SMOOTHING, TERM_NAMES};
+pub use with_terms::{simulate_with_terms, TermSimulation, TermValues};
 
 /// Input signal `u(t)`, `t >= 0` (`u = 0` before).
 #[derive(Debug, Clone, Copy, PartialEq)]

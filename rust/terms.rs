@@ -1,43 +1,30 @@
-//! The augmented model's output terms and their Jacobian (`docs/design.md` 9.1).
+//! The vocabulary of the physical terms (`docs/design.md` 9.1, 9.4): every term the core knows,
+//! its code name, where it acts, and the admissible range of its parameter that does not depend
+//! on the rest of the model.
 //!
-//! Per sine experiment, on the averaged period's grid `theta_j = 2 pi j / P`:
-//! `y_j = y0 + H_tau[w_j + k u_j + c udot_j + m uddot_j + f tanh(udot_j / (eps U omega))]_j`
-//! with the measured input `u_j = U cos(theta_j + psi)` and the hysteresis `w` of the latent
-//! `x_j = A cos(theta_j - phi)`, `A = U g`. The mechanical terms act on u, in parallel with the
-//! Wiener system, as the spring and dashpot of Spencer's phenomenological MR-damper model act on
-//! the piston displacement (Spencer, Dyke, Sain & Carlson, J. Eng. Mech. 123(3), 1997). `H_tau`
-//! is the periodic steady state of the first-order lag `tau ydot + y = F`, applied on the DFT of
-//! the period. The hysteresis is the plain steady loop of 7.2 ([`crate::steady::steady_loop`])
-//! unless asymmetry or play is active, then the loop along the input path of 9.2
-//! ([`crate::path_loop::path_loop`]).
+//! This is the one place in Rust where a term's code name is written: [`TermKind::name`]. The
+//! augmented (steady-loop) model of `rust/augmented.rs` fits the terms of a [`Terms`] list; the
+//! time-domain simulation of `rust/simulate/with_terms.rs` takes a value per term. Adding a term
+//! is a variant here, its arm in [`TermKind::name`] (and [`TermKind::check_value`] if its range is
+//! one-sided), and its behaviour in the model(s) it acts in.
 //!
-//! The Jacobian has the shared columns `[beta, gamma, mu, q_1 .. q_T]` (the active terms'
-//! parameters in the order given) and the experiment's own columns `[g, phi]`; `H_tau` is linear,
-//! so every column but `tau`'s is the filtered derivative of `F`, and `tau`'s is
-//! `dY_k/dtau = -i k omega F_k / (1 + i k omega tau)^2`.
+//! Depends on nothing but [`crate::error`], so that both models can use it without a cycle.
 
-use rustfft::num_complex::Complex;
-use rustfft::FftPlanner;
+use crate::error::{finite, CoreError, Result};
 
-use crate::error::{all_finite, finite, CoreError, Result};
-use crate::path_loop::{
-    path_loop, path_loop_distorted, Waveform, N_PD, PD_AMPLITUDE, PD_BETA, PD_DELTA, PD_DISTORT,
-    PD_GAMMA, PD_MU, PD_PHI, PD_PLAY,
-};
-use crate::refine::{
-    hysteresis_admissible, levenberg_marquardt, project_hysteresis, JointModel, LmOptions,
-    ModelEval,
-};
-use crate::steady::{steady_loop, D_AMPLITUDE, D_BETA, D_GAMMA, D_MU, D_PHI};
+/// Default width `eps` of the smoothed Coulomb sign `tanh(udot / (eps Vmax))`: 1 % of the peak
+/// input velocity `Vmax` (§9.1). The augmented model uses it; the simulation takes it as the
+/// Coulomb term's second parameter ([`COULOMB_SMOOTHING_KEY`]).
+pub const COULOMB_SMOOTHING: f64 = 0.01;
 
-/// Width of the smoothed sign of the Coulomb term, as a fraction of the peak input velocity.
-pub const COULOMB_EPS: f64 = 0.01;
+/// Largest admissible `eps` of the smoothed Coulomb sign: beyond half the peak velocity the
+/// `tanh` no longer resembles a sign.
+pub const COULOMB_SMOOTHING_MAX: f64 = 0.5;
+
 /// Number of shared hysteresis parameters ahead of the terms: `beta, gamma, mu`.
 pub const N_HYSTERESIS: usize = 3;
-/// Own parameters per experiment: `g, phi`.
-pub const N_OWN: usize = 2;
 
-/// One extra physical term of the augmented model, each with exactly one parameter.
+/// One physical term beyond the Wiener-Bouc-Wen model, each with exactly one parameter.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum TermKind {
     /// Output offset `y0` ([y]).
@@ -48,22 +35,25 @@ pub enum TermKind {
     Viscous,
     /// Inertia `m` ([y] s^2/[u]).
     Inertia,
-    /// Dry (Coulomb) friction `f` ([y]), sign smoothed by `tanh` over [`COULOMB_EPS`].
+    /// Dry (Coulomb) friction `f` ([y]), sign smoothed by `tanh` over [`COULOMB_SMOOTHING`].
     Coulomb,
     /// First-order output (sensor) lag `tau` (s), `tau >= 0`.
     SensorLag,
     /// Asymmetry `delta` (1/[w]^mu), `|delta| < beta + gamma`.
     Asymmetry,
-    /// Play (backlash) half-width `b` ([x]) before the hysteresis, `0 <= b < |A|`.
+    /// Play (backlash) half-width `b` ([x]) before the hysteresis, `b >= 0` (and `b < |A|`).
     Play,
     /// Measured input waveform: `lambda` (dimensionless) scales the input's own harmonics in the
-    /// latent x (design.md 9.5); each experiment supplies its waveform.
+    /// latent x (design.md 9.5); each experiment supplies its waveform. Steady-loop model only.
     Distortion,
+    /// Strength degradation `delta_nu` (1/([w] [x])), `>= 0`: Baber-Noori `nu = 1 + delta_nu e`,
+    /// `e = int w dxp` (§9.4). Simulation only: the steady loop has no fixed point with it.
+    Degradation,
 }
 
 impl TermKind {
-    /// Every term, in the order of the table of design.md 9.1.
-    pub const ALL: [TermKind; 9] = [
+    /// Every term, in the order of the table of design.md 9.1 (then the simulation-only one).
+    pub const ALL: [TermKind; 10] = [
         TermKind::Offset,
         TermKind::Stiffness,
         TermKind::Viscous,
@@ -73,9 +63,11 @@ impl TermKind {
         TermKind::Asymmetry,
         TermKind::Play,
         TermKind::Distortion,
+        TermKind::Degradation,
     ];
 
-    /// The code name (design.md 9.1), e.g. `"sensor_lag"`.
+    /// The code name (design.md 9.1), e.g. `"sensor_lag"`: the only place a term's name is
+    /// written in Rust.
     pub fn name(self) -> &'static str {
         match self {
             TermKind::Offset => "offset",
@@ -87,6 +79,7 @@ impl TermKind {
             TermKind::Asymmetry => "asymmetry",
             TermKind::Play => "play",
             TermKind::Distortion => "distortion",
+            TermKind::Degradation => "degradation",
         }
     }
 
@@ -98,27 +91,118 @@ impl TermKind {
             .copied()
             .find(|k| k.name() == name)
             .ok_or_else(|| {
-                let known: Vec<&str> = Self::ALL.iter().map(|k| k.name()).collect();
                 CoreError::InvalidParameter(format!(
                     "unknown term {name:?}; the terms are {}",
-                    known.join(", ")
+                    names(Self::ALL.iter().copied())
                 ))
             })
     }
+
+    /// Whether the augmented (steady-loop) model of design.md 9.1 has this term.
+    pub fn in_steady_loop(self) -> bool {
+        !matches!(self, TermKind::Degradation)
+    }
+
+    /// Whether the time-domain simulation of design.md 9.4 has this term.
+    pub fn in_simulation(self) -> bool {
+        !matches!(self, TermKind::Distortion)
+    }
+
+    /// Whether the term changes the hysteresis' input path (the steady-loop model then solves
+    /// the loop along the path of design.md 9.2).
+    pub fn acts_on_path(self) -> bool {
+        matches!(
+            self,
+            TermKind::Asymmetry | TermKind::Play | TermKind::Distortion
+        )
+    }
+
+    /// Checks the one-sided range of the term's value (`tau >= 0`, `b >= 0`, `delta_nu >= 0`);
+    /// `value` must be finite already. The asymmetry's range depends on the hysteresis: see
+    /// [`check_asymmetry`].
+    ///
+    /// Errors: [`CoreError::InvalidParameter`] naming the term.
+    pub fn check_value(self, value: f64) -> Result<()> {
+        let (symbol, why) = match self {
+            TermKind::SensorLag => ("tau", "s must be >= 0"),
+            TermKind::Play => ("b", "must be >= 0 (the half-width of the backlash)"),
+            TermKind::Degradation => (
+                "delta_nu",
+                "must be >= 0 (the strength falls with dissipated energy)",
+            ),
+            _ => return Ok(()),
+        };
+        if value < 0.0 {
+            return Err(CoreError::InvalidParameter(format!(
+                "{} {symbol} = {value} {why}",
+                self.name()
+            )));
+        }
+        Ok(())
+    }
 }
 
-/// The active terms, in the order their parameters follow `beta, gamma, mu`.
+/// `"a, b, c"` of the terms' code names.
+fn names(kinds: impl Iterator<Item = TermKind>) -> String {
+    kinds.map(TermKind::name).collect::<Vec<_>>().join(", ")
+}
+
+/// Checks the asymmetry against the hysteresis: `|delta| < beta + gamma`, else one side of the
+/// loop is unbounded.
+///
+/// Errors: [`CoreError::InvalidParameter`].
+pub fn check_asymmetry(delta: f64, beta: f64, gamma: f64) -> Result<()> {
+    let bound = beta + gamma;
+    if delta.abs() >= bound {
+        return Err(CoreError::InvalidParameter(format!(
+            "{} |delta| = {} must be < beta + gamma = {bound} for a bounded output on both sides",
+            TermKind::Asymmetry.name(),
+            delta.abs()
+        )));
+    }
+    Ok(())
+}
+
+/// Checks the Coulomb smoothing width `eps` of the simulation: finite, in
+/// `(0, `[`COULOMB_SMOOTHING_MAX`]`]`.
+///
+/// Errors: [`CoreError::NonFinite`], [`CoreError::InvalidParameter`].
+pub fn check_coulomb_smoothing(eps: f64) -> Result<()> {
+    finite(COULOMB_SMOOTHING_KEY, eps)?;
+    if !(eps > 0.0 && eps <= COULOMB_SMOOTHING_MAX) {
+        return Err(CoreError::InvalidParameter(format!(
+            "{COULOMB_SMOOTHING_KEY} eps = {eps} must be in (0, {COULOMB_SMOOTHING_MAX}]"
+        )));
+    }
+    Ok(())
+}
+
+/// The key of the Coulomb term's smoothing width in a simulation's `{name: value}` map: a
+/// setting of the `coulomb` term, not a term of its own.
+pub const COULOMB_SMOOTHING_KEY: &str = "coulomb_smoothing";
+
+/// The active terms of the augmented model, in the order their parameters follow
+/// `beta, gamma, mu` in the shared vector.
 #[derive(Debug, Clone, PartialEq, Eq, Default)]
 pub struct Terms {
     kinds: Vec<TermKind>,
 }
 
 impl Terms {
-    /// Parses code names; unknown or repeated names are [`CoreError::InvalidParameter`].
-    pub fn parse<S: AsRef<str>>(names: &[S]) -> Result<Self> {
-        let mut kinds = Vec::with_capacity(names.len());
-        for n in names {
+    /// Parses code names; unknown or repeated names, and terms the steady-loop model does not
+    /// have, are [`CoreError::InvalidParameter`].
+    pub fn parse<S: AsRef<str>>(names_given: &[S]) -> Result<Self> {
+        let mut kinds = Vec::with_capacity(names_given.len());
+        for n in names_given {
             let k = TermKind::from_name(n.as_ref())?;
+            if !k.in_steady_loop() {
+                return Err(CoreError::InvalidParameter(format!(
+                    "term {:?} has no steady-loop form (simulation only); the terms of the \
+                     augmented model are {}",
+                    k.name(),
+                    names(TermKind::ALL.iter().copied().filter(|k| k.in_steady_loop()))
+                )));
+            }
             if kinds.contains(&k) {
                 return Err(CoreError::InvalidParameter(format!(
                     "term {:?} is given twice; each term has one parameter and may appear once",
@@ -158,14 +242,9 @@ impl Terms {
         N_HYSTERESIS + self.kinds.len()
     }
 
-    /// Whether the hysteresis needs the path loop of 9.2 (asymmetry or play active).
+    /// Whether the hysteresis needs the path loop of 9.2 (a term acting on the path is active).
     pub fn needs_path_loop(&self) -> bool {
-        self.kinds.iter().any(|k| {
-            matches!(
-                k,
-                TermKind::Asymmetry | TermKind::Play | TermKind::Distortion
-            )
-        })
+        self.kinds.iter().any(|k| k.acts_on_path())
     }
 
     /// `kind`'s value in `shared`, 0 when inactive (every term vanishes at 0).
@@ -174,810 +253,43 @@ impl Terms {
     }
 }
 
-/// The sine excitation of one experiment and its averaged period's grid.
-#[derive(Debug, Clone, Copy)]
-pub struct Excitation {
-    /// Samples per period P of the averaged period.
-    pub samples: usize,
-    /// Input amplitude U ([u], non-zero).
-    pub amplitude: f64,
-    /// Angular frequency omega (rad/s, > 0).
-    pub frequency: f64,
-    /// Grid phase psi (rad): `u_j = U cos(2 pi j/P + psi)`.
-    pub grid_phase: f64,
-}
-
-impl Excitation {
-    /// Checks finiteness, `U != 0`, `omega > 0`.
-    pub fn validate(&self) -> Result<()> {
-        finite("amplitude", self.amplitude)?;
-        finite("frequency", self.frequency)?;
-        finite("grid_phase", self.grid_phase)?;
-        if self.amplitude == 0.0 {
-            return Err(CoreError::ZeroAmplitude(
-                "the input amplitude U is 0: nothing excites the plant".into(),
-            ));
-        }
-        if self.frequency <= 0.0 {
-            return Err(CoreError::InvalidParameter(format!(
-                "frequency = {} rad/s must be > 0",
-                self.frequency
-            )));
-        }
-        Ok(())
-    }
-}
-
-/// The model output of one experiment and its Jacobian.
-#[derive(Debug, Clone)]
-pub struct AugOutput {
-    /// `y_j`, j = 0..P ([y]).
-    pub y: Vec<f64>,
-    /// `dy_j / d[beta, gamma, mu, q_1 .. q_T]`, row-major (P, 3 + T).
-    pub jac_shared: Vec<f64>,
-    /// `dy_j / d[g, phi]`, one row per sample.
-    pub jac_own: Vec<[f64; 2]>,
-}
-
-/// Checks the shared vector against the terms and the admissible ranges of 9.1 that do not
-/// depend on the experiment (`tau >= 0`, `b >= 0`, `|delta| < beta + gamma`).
-pub fn check_shared(terms: &Terms, shared: &[f64]) -> Result<()> {
-    if shared.len() != terms.n_shared() {
-        return Err(CoreError::InvalidParameter(format!(
-            "the shared parameters hold {} values but [beta, gamma, mu] and {} terms need {}",
-            shared.len(),
-            terms.len(),
-            terms.n_shared()
-        )));
-    }
-    all_finite("shared parameters", shared)?;
-    let tau = terms.value(shared, TermKind::SensorLag);
-    if tau < 0.0 {
-        return Err(CoreError::InvalidParameter(format!(
-            "sensor_lag tau = {tau} s must be >= 0"
-        )));
-    }
-    let b = terms.value(shared, TermKind::Play);
-    if b < 0.0 {
-        return Err(CoreError::InvalidParameter(format!(
-            "play b = {b} must be >= 0 (the half-width of the backlash)"
-        )));
-    }
-    let delta = terms.value(shared, TermKind::Asymmetry);
-    if terms.column(TermKind::Asymmetry).is_some() && delta.abs() >= shared[0] + shared[1] {
-        return Err(CoreError::InvalidParameter(format!(
-            "asymmetry |delta| = {} must be below beta + gamma = {}",
-            delta.abs(),
-            shared[0] + shared[1]
-        )));
-    }
-    Ok(())
-}
-
-/// The hysteresis `w` and its columns `d/d(beta, gamma, mu, A, phi, delta, b)` (the last two 0
-/// for the plain loop).
-#[allow(clippy::too_many_arguments)]
-fn hysteresis(
-    terms: &Terms,
-    shared: &[f64],
-    amplitude: f64,
-    phi: f64,
-    waveform: &[f64],
-    p: usize,
-    substeps: usize,
-) -> Result<(Vec<f64>, Vec<[f64; N_PD]>)> {
-    let (beta, gamma, mu) = (shared[0], shared[1], shared[2]);
-    if terms.needs_path_loop() {
-        let delta = terms.value(shared, TermKind::Asymmetry);
-        let b = terms.value(shared, TermKind::Play);
-        let l = match terms.column(TermKind::Distortion) {
-            Some(c) => {
-                let wf = Waveform {
-                    lambda: shared[c],
-                    harmonics: waveform,
-                };
-                path_loop_distorted(amplitude, beta, gamma, mu, delta, b, phi, &wf, p, substeps)?
-            }
-            None => path_loop(amplitude, beta, gamma, mu, delta, b, phi, p, substeps)?,
-        };
-        Ok((l.w, l.jac))
-    } else {
-        let l = steady_loop(amplitude, beta, gamma, mu, phi, p, substeps)?;
-        let jac = l
-            .jac
-            .iter()
-            .map(|r| {
-                let mut row = [0.0; N_PD];
-                row[PD_BETA] = r[D_BETA];
-                row[PD_GAMMA] = r[D_GAMMA];
-                row[PD_MU] = r[D_MU];
-                row[PD_AMPLITUDE] = r[D_AMPLITUDE];
-                row[PD_PHI] = r[D_PHI];
-                row
-            })
-            .collect();
-        Ok((l.w, jac))
-    }
-}
-
-/// The lag filter of bin `n` of a P-point DFT at `tau`, and its derivative in `tau`.
-///
-/// Harmonic `k = n` for `n < P/2`, `n - P` above; the Nyquist bin of an even P takes the real
-/// `Re 1/(1 + i (P/2) omega tau)` so that the output stays real.
-fn lag_bin(n: usize, p: usize, omega: f64, tau: f64) -> (Complex<f64>, Complex<f64>) {
-    let one = Complex::new(1.0, 0.0);
-    if 2 * n == p {
-        let a = (p / 2) as f64 * omega;
-        let d = 1.0 + a * a * tau * tau;
-        return (
-            Complex::new(1.0 / d, 0.0),
-            Complex::new(-2.0 * a * a * tau / (d * d), 0.0),
-        );
-    }
-    let k = if 2 * n < p {
-        n as f64
-    } else {
-        n as f64 - p as f64
-    };
-    let iw = Complex::new(0.0, k * omega);
-    let den = one + iw * tau;
-    let h = one / den;
-    (h, -iw * h * h)
-}
-
-/// Applies the lag (`derivative == false`) or its tau-derivative to real columns in place, two
-/// columns per complex FFT (the filter is Hermitian, so it maps the real and imaginary parts
-/// separately).
-fn apply_lag(cols: &mut [&mut [f64]], omega: f64, tau: f64, derivative: bool) {
-    let Some(first) = cols.first() else {
-        return;
-    };
-    let p = first.len();
-    let mut planner = FftPlanner::<f64>::new();
-    let fwd = planner.plan_fft_forward(p);
-    let inv = planner.plan_fft_inverse(p);
-    let filt: Vec<Complex<f64>> = (0..p)
-        .map(|n| {
-            let (h, dh) = lag_bin(n, p, omega, tau);
-            if derivative {
-                dh
-            } else {
-                h
-            }
-        })
-        .collect();
-    let scale = 1.0 / p as f64;
-    let mut buf = vec![Complex::new(0.0, 0.0); p];
-    for pair in cols.chunks_mut(2) {
-        for (j, z) in buf.iter_mut().enumerate() {
-            let im = if pair.len() > 1 { pair[1][j] } else { 0.0 };
-            *z = Complex::new(pair[0][j], im);
-        }
-        fwd.process(&mut buf);
-        for (z, h) in buf.iter_mut().zip(&filt) {
-            *z *= h * scale;
-        }
-        inv.process(&mut buf);
-        for (j, z) in buf.iter().enumerate() {
-            pair[0][j] = z.re;
-            if pair.len() > 1 {
-                pair[1][j] = z.im;
-            }
-        }
-    }
-}
-
-/// The augmented model's output of one experiment (design.md 9.1) and its Jacobian.
-///
-/// `shared = [beta, gamma, mu, q_1 .. q_T]` in the order of `terms`; `gain` is the signed g of
-/// `A = U g` ([x]/[u]), `phase` the phi of `x_j = A cos(theta_j - phi)` (rad, grid frame);
-/// `substeps` RK4 steps per lattice interval (plain loop) or per segment (path loop).
-///
-/// Errors: inconsistent or non-finite parameters, a term outside its admissible range
-/// (see [`check_shared`], and `b < |A|`), and every error of the loop solvers.
-pub fn augmented_output(
-    exc: &Excitation,
-    terms: &Terms,
-    shared: &[f64],
-    gain: f64,
-    phase: f64,
-    substeps: usize,
-) -> Result<AugOutput> {
-    augmented_output_with(exc, &[], terms, shared, gain, phase, substeps)
-}
-
-/// [`augmented_output`] of an experiment whose measured input waveform (design.md 9.5) is
-/// `waveform = [Re c_2, Im c_2, Re c_3, ...]` (relative to the fundamental; empty: a pure sine),
-/// used by the `distortion` term. The mechanical terms still see the fundamental of u.
-pub fn augmented_output_with(
-    exc: &Excitation,
-    waveform: &[f64],
-    terms: &Terms,
-    shared: &[f64],
-    gain: f64,
-    phase: f64,
-    substeps: usize,
-) -> Result<AugOutput> {
-    exc.validate()?;
-    check_shared(terms, shared)?;
-    finite("gain", gain)?;
-    finite("phase", phase)?;
-    let p = exc.samples;
-    let ns = terms.n_shared();
-    let (u_amp, omega) = (exc.amplitude, exc.frequency);
-    let (w, hjac) = hysteresis(terms, shared, u_amp * gain, phase, waveform, p, substeps)?;
-    // Column-major work space: F, then the shared columns, then g and phi.
-    let ncol = 1 + ns + N_OWN;
-    let mut cols = vec![vec![0.0; p]; ncol];
-    let step = 2.0 * std::f64::consts::PI / p as f64;
-    let mut lag_col = None;
-    let mut offset_col = None;
-    for j in 0..p {
-        let th = step * j as f64 + exc.grid_phase;
-        let (s, c) = th.sin_cos();
-        let u = u_amp * c;
-        let udot = -u_amp * omega * s;
-        let uddot = -u_amp * omega * omega * c;
-        // The peak input velocity |U| omega: the smoothed sign follows sgn(udot) for either sign
-        // of U.
-        let fric = (udot / (COULOMB_EPS * u_amp.abs() * omega)).tanh();
-        let h = &hjac[j];
-        let mut f = w[j];
-        cols[1][j] = h[PD_BETA];
-        cols[2][j] = h[PD_GAMMA];
-        cols[3][j] = h[PD_MU];
-        for (t, &kind) in terms.kinds().iter().enumerate() {
-            let q = shared[N_HYSTERESIS + t];
-            let col = &mut cols[1 + N_HYSTERESIS + t];
-            match kind {
-                TermKind::Offset => offset_col = Some(1 + N_HYSTERESIS + t),
-                TermKind::Stiffness => {
-                    f += q * u;
-                    col[j] = u;
-                }
-                TermKind::Viscous => {
-                    f += q * udot;
-                    col[j] = udot;
-                }
-                TermKind::Inertia => {
-                    f += q * uddot;
-                    col[j] = uddot;
-                }
-                TermKind::Coulomb => {
-                    f += q * fric;
-                    col[j] = fric;
-                }
-                TermKind::SensorLag => lag_col = Some(1 + N_HYSTERESIS + t),
-                TermKind::Asymmetry => col[j] = h[PD_DELTA],
-                TermKind::Play => col[j] = h[PD_PLAY],
-                TermKind::Distortion => col[j] = h[PD_DISTORT],
-            }
-        }
-        cols[0][j] = f;
-        cols[1 + ns][j] = u_amp * h[PD_AMPLITUDE];
-        cols[2 + ns][j] = h[PD_PHI];
-    }
-    if let Some(lc) = lag_col {
-        let tau = shared[lc - 1];
-        let mut dtau = cols[0].clone();
-        apply_lag(&mut [&mut dtau[..]], omega, tau, true);
-        let mut filtered: Vec<&mut [f64]> = cols
-            .iter_mut()
-            .enumerate()
-            .filter(|&(c, _)| Some(c) != lag_col && Some(c) != offset_col)
-            .map(|(_, v)| &mut v[..])
-            .collect();
-        apply_lag(&mut filtered, omega, tau, false);
-        cols[lc] = dtau;
-    }
-    if let Some(oc) = offset_col {
-        let y0 = shared[oc - 1];
-        cols[0].iter_mut().for_each(|v| *v += y0);
-        cols[oc].iter_mut().for_each(|v| *v = 1.0);
-    }
-    let mut jac_shared = vec![0.0; p * ns];
-    for (c, col) in cols[1..=ns].iter().enumerate() {
-        for (j, v) in col.iter().enumerate() {
-            jac_shared[j * ns + c] = *v;
-        }
-    }
-    let jac_own = (0..p).map(|j| [cols[1 + ns][j], cols[2 + ns][j]]).collect();
-    let y = std::mem::take(&mut cols[0]);
-    all_finite("model output", &y)?;
-    Ok(AugOutput {
-        y,
-        jac_shared,
-        jac_own,
-    })
-}
-
-/// One experiment of the augmented refinement: its averaged period (with its DC), excitation and
-/// weight.
-#[derive(Debug, Clone, Copy)]
-pub struct AugExperiment<'a> {
-    /// Averaged output over one period, length P, on `t_j = j T / P` ([y], DC kept).
-    pub ybar: &'a [f64],
-    /// Input amplitude U ([u], non-zero).
-    pub amplitude: f64,
-    /// Angular frequency omega (rad/s).
-    pub frequency: f64,
-    /// Grid phase psi (rad) of the input on the averaged period's grid.
-    pub grid_phase: f64,
-    /// Weight of each squared residual, `N / sigma^2`.
-    pub weight: f64,
-    /// The measured input's waveform beyond its fundamental, `[Re c_2, Im c_2, ...]` (design.md
-    /// 9.5; empty for a pure sine), used by the `distortion` term.
-    pub waveform: &'a [f64],
-}
-
-impl AugExperiment<'_> {
-    fn excitation(&self) -> Excitation {
-        Excitation {
-            samples: self.ybar.len(),
-            amplitude: self.amplitude,
-            frequency: self.frequency,
-            grid_phase: self.grid_phase,
-        }
-    }
-}
-
-/// Options of [`augmented_refine`].
-#[derive(Debug, Clone, Copy)]
-pub struct AugOptions {
-    /// Iteration cap.
-    pub max_iter: usize,
-    /// RK4 steps per lattice interval / path segment of the loop solver.
-    pub substeps: usize,
-    /// Relative cost decrease that stops the search.
-    pub ftol: f64,
-    /// Relative step that stops the search.
-    pub xtol: f64,
-    /// Lower end of the admissible mu (exclusive, >= 1).
-    pub mu_lo: f64,
-    /// Upper end of the admissible mu (inclusive, may be infinite).
-    pub mu_hi: f64,
-}
-
-impl Default for AugOptions {
-    fn default() -> Self {
-        Self {
-            max_iter: 200,
-            substeps: 4,
-            ftol: 1e-12,
-            xtol: 1e-10,
-            mu_lo: 1.0,
-            mu_hi: f64::INFINITY,
-        }
-    }
-}
-
-/// Outcome of [`augmented_refine`].
-#[derive(Debug, Clone)]
-pub struct AugFit {
-    /// `[beta, gamma, mu, q_1 .. q_T]` at the minimiser.
-    pub shared: Vec<f64>,
-    /// Signed gains `g_i`.
-    pub gains: Vec<f64>,
-    /// Phases `phi_i` (rad, grid frame).
-    pub phases: Vec<f64>,
-    /// Weighted residual sum of squares.
-    pub cost: f64,
-    /// Accepted plus rejected LM iterations.
-    pub iterations: usize,
-    /// Whether a stopping rule other than the iteration cap ended the search.
-    pub converged: bool,
-    /// `J^T W J`, order `[beta, gamma, mu, q_1 .. q_T, g_0, phi_0, g_1, phi_1, ...]`.
-    pub fisher: nalgebra::DMatrix<f64>,
-    /// Model outputs `y_i` at the minimiser.
-    pub outputs: Vec<Vec<f64>>,
-}
-
-/// Largest play as a fraction of the smallest `|A_i|`: beyond it some experiment's hysteresis
-/// barely moves and its loop is ill-determined.
-pub const PLAY_MAX_FRACTION: f64 = 0.95;
-
-struct AugModel<'a> {
-    exps: &'a [AugExperiment<'a>],
-    terms: &'a Terms,
-    opts: &'a AugOptions,
-}
-
-impl AugModel<'_> {
-    fn play_max(&self, own: &[[f64; 2]]) -> f64 {
-        PLAY_MAX_FRACTION
-            * self
-                .exps
-                .iter()
-                .zip(own)
-                .map(|(e, o)| (e.amplitude * o[0]).abs())
-                .fold(f64::INFINITY, f64::min)
-    }
-}
-
-impl JointModel for AugModel<'_> {
-    fn n_shared(&self) -> usize {
-        self.terms.n_shared()
-    }
-
-    fn n_experiments(&self) -> usize {
-        self.exps.len()
-    }
-
-    fn data(&self, i: usize) -> (&[f64], f64) {
-        (self.exps[i].ybar, self.exps[i].weight)
-    }
-
-    fn evaluate(&self, i: usize, shared: &[f64], own: [f64; 2]) -> Result<ModelEval> {
-        let out = augmented_output_with(
-            &self.exps[i].excitation(),
-            self.exps[i].waveform,
-            self.terms,
-            shared,
-            own[0],
-            own[1],
-            self.opts.substeps,
-        )?;
-        Ok(ModelEval {
-            y: out.y,
-            jac_shared: out.jac_shared,
-            jac_own: out.jac_own,
-        })
-    }
-
-    fn project(&self, shared: &mut [f64], own: &[[f64; 2]]) {
-        project_hysteresis(shared, self.opts.mu_lo, self.opts.mu_hi);
-        if let Some(c) = self.terms.column(TermKind::SensorLag) {
-            shared[c] = shared[c].max(0.0);
-        }
-        if let Some(c) = self.terms.column(TermKind::Play) {
-            shared[c] = shared[c].min(self.play_max(own)).max(0.0);
-        }
-    }
-
-    fn admissible(&self, shared: &[f64], own: &[[f64; 2]]) -> bool {
-        let delta_ok = self
-            .terms
-            .column(TermKind::Asymmetry)
-            .is_none_or(|c| shared[c].abs() < shared[0] + shared[1]);
-        let tau_ok = self
-            .terms
-            .column(TermKind::SensorLag)
-            .is_none_or(|c| shared[c] >= 0.0);
-        let play_ok = self
-            .terms
-            .column(TermKind::Play)
-            .is_none_or(|c| shared[c] >= 0.0 && shared[c] <= self.play_max(own));
-        hysteresis_admissible(shared, self.opts.mu_lo, self.opts.mu_hi)
-            && delta_ok
-            && tau_ok
-            && play_ok
-    }
-}
-
-fn validate_refine(
-    exps: &[AugExperiment],
-    terms: &Terms,
-    shared: &[f64],
-    gains: &[f64],
-    phases: &[f64],
-    opts: &AugOptions,
-) -> Result<()> {
-    if exps.is_empty() {
-        return Err(CoreError::InsufficientData(
-            "the refinement needs at least one experiment".into(),
-        ));
-    }
-    if gains.len() != exps.len() || phases.len() != exps.len() {
-        return Err(CoreError::InvalidParameter(format!(
-            "{} experiments but {} gains and {} phases",
-            exps.len(),
-            gains.len(),
-            phases.len()
-        )));
-    }
-    for (i, e) in exps.iter().enumerate() {
-        all_finite(&format!("ybar[{i}]"), e.ybar)?;
-        e.excitation().validate()?;
-        finite("weight", e.weight)?;
-        if e.weight <= 0.0 {
-            return Err(CoreError::InvalidParameter(format!(
-                "experiment {i}: weight {} must be > 0 (N / noise variance)",
-                e.weight
-            )));
-        }
-    }
-    all_finite("gains", gains)?;
-    all_finite("phases", phases)?;
-    if opts.max_iter == 0 || opts.substeps == 0 {
-        return Err(CoreError::InvalidParameter(
-            "max_iter and substeps must be >= 1".into(),
-        ));
-    }
-    if !opts.mu_lo.is_finite()
-        || opts.mu_lo < 1.0
-        || opts.mu_hi.is_nan()
-        || opts.mu_hi <= opts.mu_lo
-    {
-        return Err(CoreError::InvalidParameter(format!(
-            "the mu bracket ({}, {}] must have a finite lower end >= 1 below its upper end",
-            opts.mu_lo, opts.mu_hi
-        )));
-    }
-    check_shared(terms, shared)?;
-    if !hysteresis_admissible(shared, opts.mu_lo, opts.mu_hi) {
-        return Err(CoreError::InvalidParameter(format!(
-            "the starting point (beta = {}, gamma = {}, mu = {}) must satisfy beta >= |gamma|, \
-             beta + gamma > 0 and {} < mu <= {}",
-            shared[0], shared[1], shared[2], opts.mu_lo, opts.mu_hi
-        )));
-    }
-    let b = terms.value(shared, TermKind::Play);
-    let model = AugModel { exps, terms, opts };
-    let own: Vec<[f64; 2]> = gains.iter().zip(phases).map(|(&g, &p)| [g, p]).collect();
-    if b > model.play_max(&own) {
-        return Err(CoreError::InvalidParameter(format!(
-            "the starting play b = {b} must be below {PLAY_MAX_FRACTION} min |U_i g_i| = {}",
-            model.play_max(&own)
-        )));
-    }
-    Ok(())
-}
-
-/// Joint Levenberg-Marquardt of the augmented model over every experiment (design.md 9.3).
-///
-/// `shared0 = [beta, gamma, mu, q_1 .. q_T]` in the order of `terms`; `gains0`, `phases0` one per
-/// experiment. Same damping schedule, stopping rules and Schur solve as [`crate::refine::refine`]
-/// ([`levenberg_marquardt`]); trial points are projected onto `beta = gamma` and the mu bracket,
-/// `tau` and `b` are clipped at 0 and `b` below [`PLAY_MAX_FRACTION`] `min |A_i|`, and a trial
-/// point with `|delta| >= beta + gamma` is rejected.
-///
-/// Errors: inconsistent lengths, non-finite or inadmissible start, bad mu bracket, non-positive
-/// weight, and every error of [`augmented_output`] at the start.
-pub fn augmented_refine(
-    exps: &[AugExperiment],
-    terms: &Terms,
-    shared0: &[f64],
-    gains0: &[f64],
-    phases0: &[f64],
-    opts: &AugOptions,
-) -> Result<AugFit> {
-    validate_refine(exps, terms, shared0, gains0, phases0, opts)?;
-    let model = AugModel { exps, terms, opts };
-    let own: Vec<[f64; 2]> = gains0.iter().zip(phases0).map(|(&g, &p)| [g, p]).collect();
-    let fit = levenberg_marquardt(
-        &model,
-        shared0,
-        &own,
-        &LmOptions {
-            max_iter: opts.max_iter,
-            ftol: opts.ftol,
-            xtol: opts.xtol,
-        },
-    )?;
-    Ok(AugFit {
-        gains: fit.own.iter().map(|o| o[0]).collect(),
-        phases: fit.own.iter().map(|o| o[1]).collect(),
-        shared: fit.shared,
-        cost: fit.cost,
-        iterations: fit.iterations,
-        converged: fit.converged,
-        fisher: fit.fisher,
-        outputs: fit.outputs,
-    })
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    const EXC: Excitation = Excitation {
-        samples: 64,
-        amplitude: 1.7,
-        frequency: 3.0,
-        grid_phase: 0.4,
-    };
 
     #[test]
     fn names_round_trip_and_bad_names_are_named_errors() {
         for k in TermKind::ALL {
             assert_eq!(TermKind::from_name(k.name()).unwrap(), k);
         }
-        let e = Terms::parse(&["offset", "frobnicate"]).unwrap_err();
+        let (offset, viscous, play) = (
+            TermKind::Offset.name(),
+            TermKind::Viscous.name(),
+            TermKind::Play.name(),
+        );
+        let e = Terms::parse(&[offset, "frobnicate"]).unwrap_err();
         assert!(e.to_string().contains("unknown term \"frobnicate\""), "{e}");
-        let e = Terms::parse(&["viscous", "offset", "viscous"]).unwrap_err();
+        let e = Terms::parse(&[viscous, offset, viscous]).unwrap_err();
         assert!(e.to_string().contains("given twice"), "{e}");
-        let t = Terms::parse(&["play", "offset"]).unwrap();
+        let e = Terms::parse(&[TermKind::Degradation.name()]).unwrap_err();
+        assert!(e.to_string().contains("no steady-loop form"), "{e}");
+        let t = Terms::parse(&[play, offset]).unwrap();
         assert_eq!(t.column(TermKind::Offset), Some(4));
         assert!(t.needs_path_loop());
     }
 
     #[test]
-    fn lag_filter_is_identity_at_zero_and_a_lag_of_the_fundamental() {
-        // A pure fundamental through tau: amplitude 1/sqrt(1 + (omega tau)^2), lag atan(omega tau).
-        let (p, omega, tau) = (32usize, 2.0, 0.3);
-        let x: Vec<f64> = (0..p)
-            .map(|j| (2.0 * std::f64::consts::PI * j as f64 / p as f64).cos())
-            .collect();
-        let mut y0 = x.clone();
-        apply_lag(&mut [&mut y0[..]], omega, 0.0, false);
-        let mut y = x.clone();
-        apply_lag(&mut [&mut y[..]], omega, tau, false);
-        let g = 1.0 / (1.0 + (omega * tau).powi(2)).sqrt();
-        let lag = (omega * tau).atan();
-        for j in 0..p {
-            assert!((y0[j] - x[j]).abs() < 1e-14);
-            let th = 2.0 * std::f64::consts::PI * j as f64 / p as f64;
-            assert!((y[j] - g * (th - lag).cos()).abs() < 1e-14);
+    fn one_sided_ranges_name_the_term() {
+        for kind in [TermKind::SensorLag, TermKind::Play, TermKind::Degradation] {
+            let e = kind.check_value(-0.1).unwrap_err();
+            assert!(e.to_string().contains(kind.name()), "{e}");
+            assert!(kind.check_value(0.0).is_ok());
         }
-    }
-
-    /// Central differences of every shared and own column, with step `h` and relative tolerance.
-    fn check_jacobian(terms: &[&str], shared: &[f64], exc: &Excitation, substeps: usize) {
-        let terms = Terms::parse(terms).unwrap();
-        let (g, phi) = (0.9, 1.1);
-        let out = augmented_output(exc, &terms, shared, g, phi, substeps).unwrap();
-        let ns = shared.len();
-        let h = 1e-6;
-        let f = |s: &[f64], g: f64, phi: f64| {
-            augmented_output(exc, &terms, s, g, phi, substeps)
-                .unwrap()
-                .y
-        };
-        for c in 0..ns + 2 {
-            let (mut sp, mut sm) = (shared.to_vec(), shared.to_vec());
-            let (mut gp, mut gm, mut pp, mut pm) = (g, g, phi, phi);
-            match c {
-                c if c < ns => {
-                    sp[c] += h;
-                    sm[c] -= h;
-                }
-                c if c == ns => {
-                    gp += h;
-                    gm -= h;
-                }
-                _ => {
-                    pp += h;
-                    pm -= h;
-                }
-            }
-            let (yp, ym) = (f(&sp, gp, pp), f(&sm, gm, pm));
-            let col: Vec<f64> = (0..exc.samples)
-                .map(|j| {
-                    if c < ns {
-                        out.jac_shared[j * ns + c]
-                    } else {
-                        out.jac_own[j][c - ns]
-                    }
-                })
-                .collect();
-            let scale = col.iter().fold(0.0f64, |a, v| a.max(v.abs()));
-            let err = (0..exc.samples)
-                .map(|j| ((yp[j] - ym[j]) / (2.0 * h) - col[j]).abs())
-                .fold(0.0, f64::max);
-            // Central differences err by O(h^2) truncation plus O(eps / h) rounding, about 1e-9
-            // relative. The phase column of the plain loop is its continuous rate (7.2), the
-            // derivative of the discrete map only up to the RK4 error near w = 0 where |w|^mu is
-            // not smooth: 1e-5 relative at 4 substeps, 1e-7 at 256 (measured), hence 256 here.
-            assert!(
-                err <= 1e-6 * scale.max(1e-3),
-                "column {c}: {err} vs {scale}"
-            );
-        }
-    }
-
-    #[test]
-    fn jacobian_matches_central_differences() {
-        check_jacobian(
-            &[
-                "offset",
-                "stiffness",
-                "viscous",
-                "inertia",
-                "coulomb",
-                "sensor_lag",
-            ],
-            &[0.8, 0.2, 1.6, 0.3, 0.5, 0.05, 0.002, 0.2, 0.01],
-            &EXC,
-            256,
-        );
-        check_jacobian(
-            &["sensor_lag", "asymmetry", "play", "viscous"],
-            &[0.8, 0.2, 1.6, 0.02, 0.3, 0.2, 0.05],
-            &Excitation { samples: 65, ..EXC },
-            256,
-        );
-    }
-
-    #[test]
-    fn refinement_is_bitwise_identical_across_thread_counts() {
-        let terms = Terms::parse(&["offset", "viscous", "sensor_lag"]).unwrap();
-        let truth = [0.8, 0.2, 1.6, 0.3, 0.05, 0.01];
-        let m = 6;
-        let ys: Vec<Vec<f64>> = (0..m)
-            .map(|i| {
-                let exc = Excitation {
-                    samples: 64,
-                    amplitude: 1.0 + (i % 2) as f64,
-                    frequency: 1.0 + i as f64,
-                    grid_phase: 0.3 * i as f64,
-                };
-                let y = augmented_output(&exc, &terms, &truth, 1.0, 0.5 + 0.1 * i as f64, 4)
-                    .unwrap()
-                    .y;
-                // Deterministic pseudo-noise so that the fit does not end at zero cost.
-                y.iter()
-                    .enumerate()
-                    .map(|(j, v)| v + 1e-3 * ((j * 7 + i * 13) as f64).sin())
-                    .collect()
-            })
-            .collect();
-        let exps: Vec<AugExperiment> = (0..m)
-            .map(|i| AugExperiment {
-                ybar: &ys[i],
-                amplitude: 1.0 + (i % 2) as f64,
-                frequency: 1.0 + i as f64,
-                grid_phase: 0.3 * i as f64,
-                weight: 1e6,
-                waveform: &[],
-            })
-            .collect();
-        let start = [0.7, 0.25, 1.8, 0.2, 0.06, 0.02];
-        let gains = vec![1.1; m];
-        let phases: Vec<f64> = (0..m).map(|i| 0.55 + 0.1 * i as f64).collect();
-        let run = |threads: usize| {
-            rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .unwrap()
-                .install(|| {
-                    augmented_refine(
-                        &exps,
-                        &terms,
-                        &start,
-                        &gains,
-                        &phases,
-                        &AugOptions::default(),
-                    )
-                    .unwrap()
-                })
-        };
-        let (a, b) = (run(1), run(2));
-        assert!(a.converged && a.iterations > 3);
-        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
-        assert_eq!(bits(&a.shared), bits(&b.shared));
-        assert_eq!(bits(&a.gains), bits(&b.gains));
-        assert_eq!(a.cost.to_bits(), b.cost.to_bits());
-        assert_eq!(bits(a.fisher.as_slice()), bits(b.fisher.as_slice()));
-        for (x, y) in a.shared.iter().zip(&truth) {
-            assert!((x - y).abs() < 0.05 * y.abs(), "{:?}", a.shared);
-        }
-    }
-
-    #[test]
-    fn refinement_rejects_bad_input_by_name() {
-        let y = vec![0.0; 16];
-        let terms = Terms::parse(&["sensor_lag"]).unwrap();
-        let exps = [AugExperiment {
-            ybar: &y,
-            amplitude: 1.0,
-            frequency: 1.0,
-            grid_phase: 0.0,
-            weight: 1.0,
-            waveform: &[],
-        }];
-        let go = |shared: &[f64], opts: &AugOptions| {
-            augmented_refine(&exps, &terms, shared, &[1.0], &[0.0], opts).unwrap_err()
-        };
-        let ok = AugOptions::default();
-        assert!(go(&[0.5, 0.1, 1.5], &ok).to_string().contains("need 4"));
-        assert!(go(&[0.5, 0.1, 1.5, -0.1], &ok).to_string().contains(">= 0"));
-        let bad = AugOptions {
-            mu_lo: 2.0,
-            mu_hi: 1.5,
-            ..ok
-        };
-        assert!(go(&[0.5, 0.1, 1.7, 0.1], &bad)
-            .to_string()
-            .contains("mu bracket"));
+        assert!(TermKind::Viscous.check_value(-1.0).is_ok());
+        assert!(check_asymmetry(0.5, 0.3, 0.3).is_ok());
+        assert!(check_asymmetry(-0.6, 0.3, 0.3).is_err());
+        assert!(check_coulomb_smoothing(0.0).is_err());
+        assert!(check_coulomb_smoothing(f64::NAN).is_err());
+        assert!(check_coulomb_smoothing(COULOMB_SMOOTHING_MAX).is_ok());
     }
 }

@@ -1,4 +1,8 @@
-"""Type stubs of the Rust extension module (see rust/python.rs and docs/design.md)."""
+"""Type stubs of the Rust extension module (see rust/bindings/ and docs/design.md).
+
+The block marked "test-only" at the end (``rust/bindings/testing.rs``) exists only so that the tests can
+hold the lab kernels to their references one by one: no module of the package calls it.
+"""
 
 from collections.abc import Mapping, Sequence
 from typing import Callable, overload
@@ -31,18 +35,19 @@ __all__ = [
     "get_budget",
     "set_budget",
     "refine_many",
-    "harmonic_moments",
-    "harmonic_series",
-    "harmonic_gauss_newton",
     "harmonic_rss",
-    "cholesky_upper",
     "harmonic_fit",
     "harmonic_nls",
     "gram_well_conditioned",
     "unscaled_variances",
     "window_fits",
-    "padded_spectrum",
     "spectral_peak",
+    # test-only (rust/bindings/testing.rs): not called by the package
+    "harmonic_moments",
+    "harmonic_series",
+    "harmonic_gauss_newton",
+    "cholesky_upper",
+    "padded_spectrum",
 ]
 
 _F = NDArray[np.float64]
@@ -235,11 +240,7 @@ def refine_many(
     abandon_ratio: float = 10.0,
     threads: int = 0,
 ) -> list[tuple[_F, float, int, bool, bool] | None]: ...
-def harmonic_moments(theta: _F, y: _F, kmax: int) -> tuple[_F, _F, _F, _F]: ...
-def harmonic_series(theta: _F, coef: _F) -> _F: ...
-def cholesky_upper(gram: _F, m: int) -> _F: ...
 def harmonic_rss(theta: _F, y: _F, coef: _F, omega: float | None = None) -> float: ...
-def harmonic_gauss_newton(theta: _F, tau: _F, x: _F, coef: _F) -> tuple[float, float, float, _F]: ...
 def harmonic_fit(
     theta: _F, y: _F, kmax: int, omega: float | None = None
 ) -> tuple[_F, _F, _F, float] | None: ...
@@ -257,7 +258,16 @@ def window_fits(
     k: int,
     omega: float | None = None,
 ) -> tuple[_F, _F]: ...
-def padded_spectrum(x: _F, nfft: int) -> _F: ...
 def spectral_peak(
     x: _F, nfft: int, lo: int, hi: int, band_lo: int, band_hi: int, peak_min: float
 ) -> tuple[int, float, float, float]: ...
+
+# ---- test-only (rust/bindings/testing.rs) -------------------------------------------------------
+# Kernels exported only so that tests/test_fastlab.py can check each one against its NumPy reference; the
+# package calls the fused bindings above instead. Not part of the supported surface: they may change.
+
+def harmonic_moments(theta: _F, y: _F, kmax: int) -> tuple[_F, _F, _F, _F]: ...
+def harmonic_series(theta: _F, coef: _F) -> _F: ...
+def harmonic_gauss_newton(theta: _F, tau: _F, x: _F, coef: _F) -> tuple[float, float, float, _F]: ...
+def cholesky_upper(gram: _F, m: int) -> _F: ...
+def padded_spectrum(x: _F, nfft: int) -> _F: ...

@@ -52,13 +52,9 @@ use super::{check_dt, simulate, try_zeros, Hermite, Input, Simulation, Sine, Sou
 use crate::bouc_wen::{sgn, BoucWen};
 use crate::error::{finite, CoreError, Result};
 use crate::linear::{Companion, TransferFunction};
-
-/// Default `eps` of the smoothed Coulomb sign: 1 % of the peak input velocity (§9.1).
-pub const COULOMB_SMOOTHING: f64 = 0.01;
-
-/// Largest admissible `eps` of the smoothed Coulomb sign: beyond half the peak velocity the
-/// `tanh` no longer resembles a sign.
-pub const COULOMB_SMOOTHING_MAX: f64 = 0.5;
+use crate::terms::{
+    check_asymmetry, check_coulomb_smoothing, TermKind, COULOMB_SMOOTHING, COULOMB_SMOOTHING_KEY,
+};
 
 /// Relative slack of the play's engagement test `|x - xp| >= b`: after a clamp `x - xp` equals `b`
 /// only to the rounding of `x`.
@@ -69,25 +65,10 @@ const PLAY_ENGAGE_RTOL: f64 = 1e-12;
 const PHI_SERIES_BELOW: f64 = 1.0;
 const PHI_TERMS: usize = 20;
 
-/// Names accepted by [`Terms::from_named`], in the order of the §9.1 table (plus the Coulomb
-/// smoothing).
-pub const TERM_NAMES: [&str; 10] = [
-    "offset",
-    "stiffness",
-    "viscous",
-    "inertia",
-    "coulomb",
-    "coulomb_smoothing",
-    "sensor_lag",
-    "asymmetry",
-    "play",
-    "degradation",
-];
-
 /// Parameters of the §9.1 terms; an absent term is 0 (which is also what a zero parameter
 /// means physically: `Play(0)` is the identity, `SensorLag(0)` no lag).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Terms {
+pub struct TermValues {
     /// Output offset `y0` (units of `y`).
     pub offset: f64,
     /// Parallel stiffness `k` (`[y]/[u]`).
@@ -112,7 +93,7 @@ pub struct Terms {
     pub degradation: f64,
 }
 
-impl Default for Terms {
+impl Default for TermValues {
     fn default() -> Self {
         Self {
             offset: 0.0,
@@ -129,89 +110,71 @@ impl Default for Terms {
     }
 }
 
-impl Terms {
-    /// Terms from `(code name, value)` pairs (names of [`TERM_NAMES`]); missing ones are absent.
+impl TermValues {
+    /// Values from `(code name, value)` pairs (the code names of [`TermKind`] that act in a
+    /// simulation, and [`COULOMB_SMOOTHING_KEY`]); missing ones are absent.
     ///
-    /// Errors: [`CoreError::InvalidParameter`] for an unknown name. Values are checked by
-    /// [`Terms::validate`].
+    /// Errors: [`CoreError::InvalidParameter`] for an unknown name or a term without a
+    /// simulation form. Values are checked by [`TermValues::validate`].
     pub fn from_named<'a>(pairs: impl IntoIterator<Item = (&'a str, f64)>) -> Result<Self> {
         let mut t = Self::default();
         for (name, v) in pairs {
-            let slot = match name {
-                "offset" => &mut t.offset,
-                "stiffness" => &mut t.stiffness,
-                "viscous" => &mut t.viscous,
-                "inertia" => &mut t.inertia,
-                "coulomb" => &mut t.coulomb,
-                "coulomb_smoothing" => &mut t.coulomb_smoothing,
-                "sensor_lag" => &mut t.sensor_lag,
-                "asymmetry" => &mut t.asymmetry,
-                "play" => &mut t.play,
-                "degradation" => &mut t.degradation,
-                other => {
-                    return Err(CoreError::InvalidParameter(format!(
-                        "unknown term {other:?}; the terms are {}",
-                        TERM_NAMES.join(", ")
-                    )))
-                }
+            let slot = if name == COULOMB_SMOOTHING_KEY {
+                &mut t.coulomb_smoothing
+            } else {
+                let kind = TermKind::from_name(name)?;
+                t.slot(kind).ok_or_else(|| {
+                    CoreError::InvalidParameter(format!(
+                        "term {name:?} has no time-domain form (steady-loop model only); a \
+                         simulation takes every other term"
+                    ))
+                })?
             };
             *slot = v;
         }
         Ok(t)
     }
 
+    /// The value of `kind`, `None` for a term the simulation does not have.
+    pub fn get(&self, kind: TermKind) -> Option<f64> {
+        let mut t = *self;
+        t.slot(kind).map(|v| *v)
+    }
+
+    /// Where `kind`'s value is kept, `None` for a term the simulation does not have.
+    fn slot(&mut self, kind: TermKind) -> Option<&mut f64> {
+        match kind {
+            TermKind::Offset => Some(&mut self.offset),
+            TermKind::Stiffness => Some(&mut self.stiffness),
+            TermKind::Viscous => Some(&mut self.viscous),
+            TermKind::Inertia => Some(&mut self.inertia),
+            TermKind::Coulomb => Some(&mut self.coulomb),
+            TermKind::SensorLag => Some(&mut self.sensor_lag),
+            TermKind::Asymmetry => Some(&mut self.asymmetry),
+            TermKind::Play => Some(&mut self.play),
+            TermKind::Degradation => Some(&mut self.degradation),
+            TermKind::Distortion => None,
+        }
+    }
+
     /// Checks the §9.1 admissibility against the hysteresis `bw`: all finite, `tau >= 0`,
-    /// `b >= 0`, `0 < eps <= 0.5`, `|delta| < beta + gamma`.
+    /// `b >= 0`, `delta_nu >= 0`, `0 < eps <= 0.5`, `|delta| < beta + gamma`.
     ///
     /// Errors: [`CoreError::NonFinite`], [`CoreError::InvalidParameter`].
     pub fn validate(&self, bw: &BoucWen) -> Result<()> {
-        for (name, v) in [
-            ("offset", self.offset),
-            ("stiffness", self.stiffness),
-            ("viscous", self.viscous),
-            ("inertia", self.inertia),
-            ("coulomb", self.coulomb),
-            ("coulomb_smoothing", self.coulomb_smoothing),
-            ("sensor_lag", self.sensor_lag),
-            ("asymmetry", self.asymmetry),
-            ("play", self.play),
-            ("degradation", self.degradation),
-        ] {
-            finite(name, v)?;
+        let values = || {
+            TermKind::ALL
+                .into_iter()
+                .filter_map(|k| self.get(k).map(|v| (k, v)))
+        };
+        for (kind, v) in values() {
+            finite(kind.name(), v)?;
         }
-        if self.sensor_lag < 0.0 {
-            return Err(CoreError::InvalidParameter(format!(
-                "sensor_lag tau = {} s must be >= 0",
-                self.sensor_lag
-            )));
+        check_coulomb_smoothing(self.coulomb_smoothing)?;
+        for (kind, v) in values() {
+            kind.check_value(v)?;
         }
-        if self.play < 0.0 {
-            return Err(CoreError::InvalidParameter(format!(
-                "play b = {} must be >= 0 (it is a half-width)",
-                self.play
-            )));
-        }
-        if !(self.coulomb_smoothing > 0.0 && self.coulomb_smoothing <= COULOMB_SMOOTHING_MAX) {
-            return Err(CoreError::InvalidParameter(format!(
-                "coulomb_smoothing eps = {} must be in (0, {COULOMB_SMOOTHING_MAX}]",
-                self.coulomb_smoothing
-            )));
-        }
-        if self.degradation < 0.0 {
-            return Err(CoreError::InvalidParameter(format!(
-                "degradation delta_nu = {} must be >= 0 (the strength falls with dissipated energy)",
-                self.degradation
-            )));
-        }
-        let bound = bw.beta() + bw.gamma();
-        if self.asymmetry.abs() >= bound {
-            return Err(CoreError::InvalidParameter(format!(
-                "asymmetry |delta| = {} must be < beta + gamma = {bound} for a bounded output on \
-                 both sides",
-                self.asymmetry.abs()
-            )));
-        }
-        Ok(())
+        check_asymmetry(self.asymmetry, bw.beta(), bw.gamma())
     }
 
     /// `true` when a term needs a state or changes `w` (asymmetry, play, sensor lag,
@@ -238,11 +201,11 @@ pub struct TermSimulation {
 /// Grid, `substeps` and the initial state as in [`simulate`]; `xp(0) = clamp(0, x(0) ± b)`,
 /// `ys(0) = 0`. Returns `x`, `w`, `y`, each of length `n_samples`.
 ///
-/// Errors: those of [`simulate`], then [`Terms::validate`]'s.
+/// Errors: those of [`simulate`], then [`TermValues::validate`]'s.
 pub fn simulate_with_terms(
     tf: &TransferFunction,
     bw: &BoucWen,
-    terms: &Terms,
+    terms: &TermValues,
     input: Input<'_>,
     dt: f64,
     n_samples: usize,
@@ -281,7 +244,7 @@ pub fn simulate_with_terms(
 fn run<S: Derivatives>(
     tf: &TransferFunction,
     bw: &BoucWen,
-    terms: &Terms,
+    terms: &TermValues,
     input: Input<'_>,
     src: &S,
     dt: f64,
@@ -389,7 +352,7 @@ struct Mechanical<'a, S> {
 }
 
 impl<'a, S: Derivatives> Mechanical<'a, S> {
-    fn new(terms: &Terms, src: &'a S) -> Self {
+    fn new(terms: &TermValues, src: &'a S) -> Self {
         Self {
             src,
             stiffness: terms.stiffness,
@@ -535,7 +498,7 @@ impl<S: Derivatives> Augmented<'_, S> {
     fn integrate(
         &self,
         w0: f64,
-        terms: &Terms,
+        terms: &TermValues,
         dt: f64,
         substeps: usize,
         out: &mut TermSimulation,
@@ -674,13 +637,13 @@ mod tests {
     #[test]
     fn without_dynamic_terms_x_and_w_are_the_plain_ones() {
         let (tf, bw) = plant();
-        let terms = Terms {
+        let terms = TermValues {
             offset: 0.3,
             stiffness: 0.5,
             viscous: 0.1,
             inertia: 0.01,
             coulomb: 0.2,
-            ..Terms::default()
+            ..TermValues::default()
         };
         let (u, om, dt) = (1.3, 2.0, 0.02);
         let a = simulate(&tf, &bw, sine(u, om), dt, 400, 3).unwrap();
@@ -699,9 +662,9 @@ mod tests {
     fn zero_dynamic_terms_reproduce_the_plain_path() {
         // delta = 0 and b = 0 on the augmented integrator: only rounding apart from simulate().
         let (tf, bw) = plant();
-        let terms = Terms {
+        let terms = TermValues {
             sensor_lag: 1e-300, // forces the augmented path; h/tau overflows -> ys = F
-            ..Terms::default()
+            ..TermValues::default()
         };
         let a = simulate(&tf, &bw, sine(1.0, 3.0), 0.01, 600, 2).unwrap();
         let b = simulate_with_terms(&tf, &bw, &terms, sine(1.0, 3.0), 0.01, 600, 2).unwrap();
@@ -782,9 +745,9 @@ mod tests {
         // A large slow sine drives w to (beta + gamma +- delta)^(-1/mu) at the top and bottom.
         let tf = TransferFunction::new(&[1.0], &[1.0], 0.0).unwrap();
         let bw = BoucWen::new(1.0, 1.0, 0.5, 2.0, 0.0).unwrap();
-        let terms = Terms {
+        let terms = TermValues {
             asymmetry: 0.6,
-            ..Terms::default()
+            ..TermValues::default()
         };
         let (amp, om) = (30.0, 1.0);
         let n = 2000;
@@ -799,7 +762,7 @@ mod tests {
     #[test]
     fn validation() {
         let (tf, bw) = plant();
-        let bad = |t: Terms, text: &str, nonfinite: bool| {
+        let bad = |t: TermValues, text: &str, nonfinite: bool| {
             let e = simulate_with_terms(&tf, &bw, &t, sine(1.0, 1.0), 0.1, 10, 1).unwrap_err();
             if nonfinite {
                 assert!(matches!(e, CoreError::NonFinite(_)), "{e}");
@@ -808,34 +771,34 @@ mod tests {
             }
             assert!(e.to_string().contains(text), "{e}");
         };
-        let d = Terms::default();
+        let d = TermValues::default();
         bad(
-            Terms {
+            TermValues {
                 sensor_lag: -1.0,
                 ..d
             },
-            "sensor_lag",
+            TermKind::SensorLag.name(),
             false,
         );
-        bad(Terms { play: -0.1, ..d }, "play", false);
+        bad(TermValues { play: -0.1, ..d }, TermKind::Play.name(), false);
         bad(
-            Terms {
+            TermValues {
                 coulomb_smoothing: 0.0,
                 ..d
             },
-            "coulomb_smoothing",
+            COULOMB_SMOOTHING_KEY,
             false,
         );
         bad(
-            Terms {
+            TermValues {
                 coulomb_smoothing: 0.6,
                 ..d
             },
-            "coulomb_smoothing",
+            COULOMB_SMOOTHING_KEY,
             false,
         );
         bad(
-            Terms {
+            TermValues {
                 asymmetry: -1.5,
                 ..d
             },
@@ -843,16 +806,19 @@ mod tests {
             false,
         );
         bad(
-            Terms {
+            TermValues {
                 viscous: f64::NAN,
                 ..d
             },
-            "viscous",
+            TermKind::Viscous.name(),
             true,
         );
-        let e = Terms::from_named([("offset", 1.0), ("spring", 2.0)]).unwrap_err();
+        let (offset, play) = (TermKind::Offset.name(), TermKind::Play.name());
+        let e = TermValues::from_named([(offset, 1.0), ("spring", 2.0)]).unwrap_err();
         assert!(e.to_string().contains("\"spring\""), "{e}");
-        let t = Terms::from_named([("play", 0.2), ("coulomb_smoothing", 0.05)]).unwrap();
+        let e = TermValues::from_named([(TermKind::Distortion.name(), 0.1)]).unwrap_err();
+        assert!(e.to_string().contains("no time-domain form"), "{e}");
+        let t = TermValues::from_named([(play, 0.2), (COULOMB_SMOOTHING_KEY, 0.05)]).unwrap();
         assert_eq!((t.play, t.coulomb_smoothing, t.offset), (0.2, 0.05, 0.0));
     }
 }

@@ -1,0 +1,263 @@
+//! The augmented model (design.md 9): the loop along the input path, the model's output of one
+//! experiment with its Jacobian, and its joint fit (`rust/path_loop.rs`, `rust/terms.rs`).
+
+use numpy::{IntoPyArray, PyReadonlyArray1};
+use pyo3::prelude::*;
+
+use super::convert::{arg, count, matrix, per_experiment, rows, slice, slices, square};
+use super::convert::{Matrix, Vector};
+use super::detach;
+use crate::augmented::{self as model, AugExperiment, Excitation};
+use crate::budget::Work;
+use crate::error::CoreError;
+use crate::path_loop::{self as pathloop, PathLoop, Waveform, N_PD};
+use crate::refine::Options;
+use crate::terms::Terms;
+
+pub(super) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(path_loop, m)?)?;
+    m.add_function(wrap_pyfunction!(path_loop_distorted, m)?)?;
+    m.add_function(wrap_pyfunction!(augmented_output, m)?)?;
+    m.add_function(wrap_pyfunction!(augmented_refine, m)?)?;
+    Ok(())
+}
+
+/// `(w, jac, iterations)` of the path loops.
+type PathLoopOut<'py> = (Vector<'py>, Matrix<'py>, usize);
+
+/// Runs a path loop of `samples` samples per period with `substeps` steps per segment, budgeted
+/// and interruptible; `jac` keeps its first `columns` columns.
+fn run_path_loop<'py, F>(
+    py: Python<'py>,
+    (samples, substeps): (usize, usize),
+    columns: usize,
+    solve: F,
+) -> PyResult<PathLoopOut<'py>>
+where
+    F: FnOnce() -> crate::error::Result<PathLoop> + Send,
+{
+    let steps = Work::PathLoop { samples, substeps }.check()?;
+    let l = detach::interruptible(py, steps, solve)?;
+    let flat: Vec<f64> = l.jac.iter().flat_map(|r| r[..columns].to_vec()).collect();
+    let jac = matrix(py, l.w.len(), columns, flat)?;
+    Ok((l.w.into_pyarray(py), jac, l.iterations))
+}
+
+/// Steady loop of the generalised Bouc-Wen (asymmetry `delta`) behind a play of half-width `play`,
+/// under `x = amplitude cos(omega t - phi)` on P samples per period (design.md 9.2):
+/// `(w, jac, iterations)` with `jac` of shape (P, 7), `d w/d(beta, gamma, mu, A, phi, delta, b)`.
+#[pyfunction]
+#[pyo3(signature = (amplitude, beta, gamma, mu, delta, play, phi, samples_per_period, substeps))]
+#[allow(clippy::too_many_arguments)]
+fn path_loop<'py>(
+    py: Python<'py>,
+    #[pyo3(from_py_with = arg)] amplitude: f64,
+    #[pyo3(from_py_with = arg)] beta: f64,
+    #[pyo3(from_py_with = arg)] gamma: f64,
+    #[pyo3(from_py_with = arg)] mu: f64,
+    #[pyo3(from_py_with = arg)] delta: f64,
+    #[pyo3(from_py_with = arg)] play: f64,
+    #[pyo3(from_py_with = arg)] phi: f64,
+    #[pyo3(from_py_with = arg)] samples_per_period: i64,
+    #[pyo3(from_py_with = arg)] substeps: i64,
+) -> PyResult<PathLoopOut<'py>> {
+    let p = count("samples_per_period", samples_per_period, 0)?;
+    let sub = count("substeps", substeps, 0)?;
+    // The sine path has no distortion column: the first seven.
+    run_path_loop(py, (p, sub), 7, || {
+        pathloop::path_loop(amplitude, beta, gamma, mu, delta, play, phi, p, sub)
+    })
+}
+
+/// [`path_loop`] along a measured waveform `x = A xi(theta - phi)`, `xi = cos + lambda d`,
+/// `d = sum_k Re(c_k e^{i k zeta})` with `harmonics = [Re c_2, Im c_2, Re c_3, ...]`
+/// (design.md 9.5): `(w, jac, iterations)`, `jac` of shape (P, 8), the last column `d w/d lambda`.
+#[pyfunction]
+#[pyo3(signature = (amplitude, beta, gamma, mu, delta, play, phi, lam, harmonics, samples_per_period, substeps))]
+#[allow(clippy::too_many_arguments)]
+fn path_loop_distorted<'py>(
+    py: Python<'py>,
+    #[pyo3(from_py_with = arg)] amplitude: f64,
+    #[pyo3(from_py_with = arg)] beta: f64,
+    #[pyo3(from_py_with = arg)] gamma: f64,
+    #[pyo3(from_py_with = arg)] mu: f64,
+    #[pyo3(from_py_with = arg)] delta: f64,
+    #[pyo3(from_py_with = arg)] play: f64,
+    #[pyo3(from_py_with = arg)] phi: f64,
+    #[pyo3(from_py_with = arg)] lam: f64,
+    #[pyo3(from_py_with = arg)] harmonics: PyReadonlyArray1<'py, f64>,
+    #[pyo3(from_py_with = arg)] samples_per_period: i64,
+    #[pyo3(from_py_with = arg)] substeps: i64,
+) -> PyResult<PathLoopOut<'py>> {
+    let p = count("samples_per_period", samples_per_period, 0)?;
+    let sub = count("substeps", substeps, 0)?;
+    let harmonics = slice("harmonics", &harmonics)?;
+    let wf = Waveform {
+        lambda: lam,
+        harmonics,
+    };
+    run_path_loop(py, (p, sub), N_PD, || {
+        pathloop::path_loop_distorted(amplitude, beta, gamma, mu, delta, play, phi, &wf, p, sub)
+    })
+}
+
+/// `(y, jac_shared, jac_own)` of [`augmented_output`].
+type AugOutputPy<'py> = (Vector<'py>, Matrix<'py>, Matrix<'py>);
+
+/// The augmented model's output of one experiment (design.md 9.1) on `ybar_len` samples per
+/// period: `(y (P,), jac_shared (P, 3 + T), jac_own (P, 2))`, shared columns
+/// `[beta, gamma, mu, q_1 .. q_T]` in the order of `terms`, own columns `[g, phi]`.
+#[pyfunction]
+#[pyo3(signature = (ybar_len, amplitude, frequency, grid_phase, terms, shared, gain, phase, substeps, waveform=None))]
+#[allow(clippy::too_many_arguments)]
+fn augmented_output<'py>(
+    py: Python<'py>,
+    #[pyo3(from_py_with = arg)] ybar_len: i64,
+    #[pyo3(from_py_with = arg)] amplitude: f64,
+    #[pyo3(from_py_with = arg)] frequency: f64,
+    #[pyo3(from_py_with = arg)] grid_phase: f64,
+    #[pyo3(from_py_with = arg)] terms: Vec<String>,
+    #[pyo3(from_py_with = arg)] shared: PyReadonlyArray1<'py, f64>,
+    #[pyo3(from_py_with = arg)] gain: f64,
+    #[pyo3(from_py_with = arg)] phase: f64,
+    #[pyo3(from_py_with = arg)] substeps: i64,
+    #[pyo3(from_py_with = arg)] waveform: Option<PyReadonlyArray1<'py, f64>>,
+) -> PyResult<AugOutputPy<'py>> {
+    let terms = Terms::parse(&terms)?;
+    let shared = slice("shared", &shared)?;
+    let waveform = match &waveform {
+        Some(a) => slice("waveform", a)?,
+        None => &[],
+    };
+    let exc = Excitation {
+        samples: count("ybar_len", ybar_len, 0)?,
+        amplitude,
+        frequency,
+        grid_phase,
+    };
+    let substeps = count("substeps", substeps, 1)?;
+    let out = py.detach(|| {
+        model::augmented_output_with(&exc, waveform, &terms, shared, gain, phase, substeps)
+    })?;
+    let p = out.y.len();
+    Ok((
+        out.y.into_pyarray(py),
+        matrix(py, p, terms.n_shared(), out.jac_shared)?,
+        rows(py, &out.jac_own)?,
+    ))
+}
+
+/// What [`augmented_refine`] returns to Python:
+/// `(shared, gains, phases, cost, iterations, converged, fisher, outputs)`.
+type AugRefineOut<'py> = (
+    Vector<'py>,
+    Vector<'py>,
+    Vector<'py>,
+    f64,
+    usize,
+    bool,
+    Matrix<'py>,
+    Vec<Vector<'py>>,
+);
+
+/// The experiments of the augmented fit: one amplitude, frequency, grid phase and weight per
+/// averaged period, and one waveform each or none.
+fn aug_experiments<'a>(
+    ybars: &[&'a [f64]],
+    (amplitudes, frequencies): (&[f64], &[f64]),
+    (grid_phases, weights): (&[f64], &[f64]),
+    waveforms: &[&'a [f64]],
+) -> PyResult<Vec<AugExperiment<'a>>> {
+    let m = ybars.len();
+    if !(waveforms.is_empty() || waveforms.len() == m) {
+        return Err(CoreError::InvalidParameter(format!(
+            "{m} experiments but {} waveforms (give one per experiment, or none)",
+            waveforms.len()
+        ))
+        .into());
+    }
+    per_experiment(
+        m,
+        &[
+            ("amplitudes", amplitudes.len()),
+            ("frequencies", frequencies.len()),
+            ("grid phases", grid_phases.len()),
+            ("weights", weights.len()),
+        ],
+    )?;
+    Ok((0..m)
+        .map(|i| AugExperiment {
+            ybar: ybars[i],
+            amplitude: amplitudes[i],
+            frequency: frequencies[i],
+            grid_phase: grid_phases[i],
+            weight: weights[i],
+            waveform: waveforms.get(i).copied().unwrap_or(&[]),
+        })
+        .collect())
+}
+
+/// Joint Levenberg-Marquardt of the augmented model (design.md 9.3). `fisher` is `J^T W J`
+/// ordered `[beta, gamma, mu, q_1 .. q_T, g_0, phi_0, g_1, phi_1, ...]`.
+#[pyfunction]
+#[pyo3(signature = (ybars, amplitudes, frequencies, grid_phases, weights, terms, shared0, gains0, phases0, *, max_iter=200, substeps=4, mu_lo=1.0, mu_hi=f64::INFINITY, waveforms=None))]
+#[allow(clippy::too_many_arguments)]
+fn augmented_refine<'py>(
+    py: Python<'py>,
+    #[pyo3(from_py_with = arg)] ybars: Vec<PyReadonlyArray1<'py, f64>>,
+    #[pyo3(from_py_with = arg)] amplitudes: Vec<f64>,
+    #[pyo3(from_py_with = arg)] frequencies: Vec<f64>,
+    #[pyo3(from_py_with = arg)] grid_phases: Vec<f64>,
+    #[pyo3(from_py_with = arg)] weights: Vec<f64>,
+    #[pyo3(from_py_with = arg)] terms: Vec<String>,
+    #[pyo3(from_py_with = arg)] shared0: Vec<f64>,
+    #[pyo3(from_py_with = arg)] gains0: Vec<f64>,
+    #[pyo3(from_py_with = arg)] phases0: Vec<f64>,
+    #[pyo3(from_py_with = arg)] max_iter: i64,
+    #[pyo3(from_py_with = arg)] substeps: i64,
+    #[pyo3(from_py_with = arg)] mu_lo: f64,
+    #[pyo3(from_py_with = arg)] mu_hi: f64,
+    #[pyo3(from_py_with = arg)] waveforms: Option<Vec<PyReadonlyArray1<'py, f64>>>,
+) -> PyResult<AugRefineOut<'py>> {
+    let terms = Terms::parse(&terms)?;
+    let waveforms = waveforms.unwrap_or_default();
+    let waveforms = slices("waveforms", &waveforms)?;
+    let ybars = slices("ybars", &ybars)?;
+    let exps = aug_experiments(
+        &ybars,
+        (&amplitudes, &frequencies),
+        (&grid_phases, &weights),
+        &waveforms,
+    )?;
+    let opts = Options {
+        max_iter: count("max_iter", max_iter, 1)?,
+        substeps: count("substeps", substeps, 1)?,
+        mu_lo,
+        mu_hi,
+        ..Options::default()
+    };
+    let steps = Work::AugmentedRefinement {
+        samples: exps.iter().map(|e| e.ybar.len() as u128).sum(),
+        max_iter: opts.max_iter,
+        substeps: opts.substeps,
+    }
+    .check()?;
+    let fit = detach::interruptible(py, steps, || {
+        model::augmented_refine(&exps, &terms, &shared0, &gains0, &phases0, &opts)
+    })?;
+    let outputs = fit
+        .outputs
+        .into_iter()
+        .map(|y| y.into_pyarray(py))
+        .collect();
+    Ok((
+        fit.shared.into_pyarray(py),
+        fit.gains.into_pyarray(py),
+        fit.phases.into_pyarray(py),
+        fit.cost,
+        fit.iterations,
+        fit.converged,
+        square(py, &fit.fisher),
+        outputs,
+    ))
+}
