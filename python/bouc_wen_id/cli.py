@@ -20,7 +20,6 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ._threads import limit_blas_threads, one_blas_thread
-from .augmented import TERM_NAMES
 from .demo import DEMO_FREQUENCIES, demo_plan, demo_plant, design_amplitudes
 from .errors import BoucWenIdError, FileFormatError, InsufficientDataError, InvalidParameterError
 from .identification import identify
@@ -29,10 +28,11 @@ from .measurement import Measurement
 from .model import SinePlan, WienerPlant
 from .result import IdentificationResult
 from .simulation import simulate
+from .terms import DIAGNOSIS_CANDIDATES
 
 #: diagnose's candidates: the steady-loop terms and degradation (diagnosis.run.ALL_CANDIDATES, kept here
 #: so that the CLI does not import the diagnosis to build its parser).
-_DIAG_CANDIDATES = (*TERM_NAMES, "degradation")
+_DIAG_CANDIDATES = DIAGNOSIS_CANDIDATES
 
 __all__ = ["main"]
 
