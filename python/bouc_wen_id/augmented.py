@@ -294,6 +294,11 @@ def _core_module(backend: str) -> Any:
     raise InvalidParameterError(f"backend must be 'rust' or 'numpy', got {backend!r}")
 
 
+def _rust_kinds(terms: Sequence[str]) -> list[str]:
+    """The kinds the core parses for these code names (the registry's :attr:`Term.rust_kind`)."""
+    return [TERMS[t].rust_kind for t in terms]
+
+
 def _count(name: str, value: int, minimum: int) -> int:
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < minimum:
         raise InvalidParameterError(f"{name} = {value!r} must be an integer >= {minimum}")
@@ -368,7 +373,7 @@ def fit_augmented(
         np.array([e.frequency for e in exps]),
         np.array([e.grid_phase for e in exps]),
         np.array([e.weight for e in exps]),
-        list(start.terms),
+        _rust_kinds(start.terms),
         start.shared,
         np.asarray(start.gains),
         np.asarray(start.phases),
@@ -477,7 +482,7 @@ def augmented_output(
         experiment.amplitude,
         experiment.frequency,
         experiment.grid_phase,
-        list(params.terms),
+        _rust_kinds(params.terms),
         params.shared,
         float(params.gains[i]),
         float(params.phases[i]),
