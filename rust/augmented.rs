@@ -1,6 +1,6 @@
 //! The augmented model (`docs/design.md` 9.1, 9.3): one experiment's output with the physical
 //! terms and its Jacobian, and the joint Levenberg-Marquardt over every experiment. The terms'
-//! vocabulary (names, ranges) is [`crate::terms`]; the NumPy oracle is `reference_augmented.py`.
+//! vocabulary (names, ranges) is [`crate::terms`]; the NumPy oracle is `reference/augmented.py`.
 //!
 //! Per sine experiment, on the averaged period's grid `theta_j = 2 pi j / P`:
 //! `y_j = y0 + H_tau[w_j + k u_j + c udot_j + m uddot_j + f tanh(udot_j / (eps U omega))]_j`

@@ -9,6 +9,7 @@ import os
 import subprocess
 import sys
 from collections.abc import Sequence
+from typing import Any, Literal
 
 import numpy as np
 import pytest
@@ -24,7 +25,7 @@ from bouc_wen_id.augmented import (
     term_unit,
 )
 from bouc_wen_id.errors import InsufficientDataError, InvalidParameterError, NonFiniteError
-from bouc_wen_id.reference import terms as ra
+from bouc_wen_id.reference import augmented as ra
 
 #: A visible value of each term for the test plant (beta, gamma, mu = 0.8, 0.2, 1.6; U ~ 1, omega ~ 1..10,
 #: so w ~ 1 and udot ~ 1..10): each changes y by about 5-30 % of its range.
@@ -241,6 +242,35 @@ def test_augmented_output_wrapper_reproduces_the_fit_outputs() -> None:
     fit = fit_augmented(exps, start, max_iter=3, substeps=4)
     y = augmented_output(exps[0], fit.params, 0, substeps=4)
     np.testing.assert_allclose(y, fit.outputs[0], rtol=0, atol=1e-14)
+
+
+@pytest.mark.parametrize("backend", ["rust", "numpy"])
+def test_typed_output_carries_the_core_jacobians(backend: Literal["rust", "numpy"]) -> None:
+    """``jacobian=True`` hands back the core's own derivatives, keyed on the typed experiment and model."""
+    exps, truth = _make_data(["viscous", "play"], [0.05, 0.04], seed=3, freqs=(1.5,), amps=(1.0,), p=32)
+    e = exps[0]
+    par = AugParams(*HYST, ("viscous", "play"), np.array([0.05, 0.04]), truth.gains, truth.phases)
+    got = augmented_output(e, par, 0, substeps=4, jacobian=True, backend=backend)
+    core: Any = _core if backend == "rust" else ra
+    y, js, jo = core.augmented_output(
+        32, e.amplitude, e.frequency, e.grid_phase, list(par.terms), par.shared, *truth_of(par), 4, e.waveform
+    )
+    np.testing.assert_array_equal(got.y, y)
+    np.testing.assert_array_equal(got.jacobian, js)
+    np.testing.assert_array_equal(got.own_jacobian, jo)
+    assert got.jacobian.shape == (32, 5) and got.own_jacobian.shape == (32, 2)
+    np.testing.assert_array_equal(augmented_output(e, par, 0, substeps=4, backend=backend), y)
+    # A sub-model keeps the chosen terms in the model's own order, with their values.
+    sub = par.only(["play"])
+    assert sub.terms == ("play",) and sub.values.tolist() == [0.04] and par.terms == ("viscous", "play")
+    with pytest.raises(InvalidParameterError, match="unknown term"):
+        par.only(["spring"])
+    with pytest.raises(InvalidParameterError, match="not an AugParams"):
+        augmented_output(e, {"beta": 1.0}, 0)  # type: ignore[call-overload]
+
+
+def truth_of(par: AugParams) -> tuple[float, float]:
+    return float(par.gains[0]), float(par.phases[0])
 
 
 DETERMINISM_SCRIPT = """

@@ -131,7 +131,7 @@ def test_first_order_drift_matches_the_time_domain_simulation() -> None:
     s = scale_of(exps)
     sx = scaled(exps, s)
     sub = substeps_for([e.ybar.size for e in sx])
-    fit = fit_plain(recs, exps, s, sub)
+    fit = fit_plain(exps, sx, s, sub)
     data = D.drift_data(exps, sx, fit, s.y, sub)
     for dd in data:
         assert dd.energy > 0  # the fitted loop dissipates

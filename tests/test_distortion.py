@@ -16,7 +16,7 @@ import pytest
 from bouc_wen_id import _core
 from bouc_wen_id.diagnosis.data import input_waveform
 from bouc_wen_id.errors import InvalidParameterError, ZeroAmplitudeError
-from bouc_wen_id.reference import terms as RA
+from bouc_wen_id.reference import augmented as RA
 from bouc_wen_id.reference.path_loop import path_loop_distorted as ref_path_loop_distorted
 
 # [A, beta, gamma, mu, delta, b, phi, lambda] of mildly distorted loops (one maximum per period).

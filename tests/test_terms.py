@@ -22,17 +22,23 @@ from bouc_wen_id import io as bio
 from bouc_wen_id.errors import InvalidParameterError, NonFiniteError
 from bouc_wen_id.model import BoucWen, SinePlan, TransferFunction, WienerPlant
 from bouc_wen_id.terms import (
+    DIAGNOSIS_CANDIDATES,
+    STEADY_TERM_NAMES,
+    TERM_NAMES,
     TERMS,
     Asymmetry,
     Coulomb,
     Inertia,
     Offset,
+    Place,
     Play,
     SensorLag,
+    StartContext,
     Stiffness,
     Term,
     Viscous,
     core_terms,
+    parse_terms,
     term_from_dict,
 )
 from numpy.testing import assert_allclose, assert_array_equal
@@ -98,14 +104,135 @@ def test_registry_follows_the_design_table() -> None:
     for kind, cls in TERMS.items():
         assert cls.kind == kind
         assert cls.description and cls.signature and cls.symbol
+        assert cls.rust_kind == kind and cls.label and cls.places[0] == cls.acts_on
+        hysteresis = ("asymmetry", "play", "degradation", "distortion")
+        on_u = ("stiffness", "viscous", "inertia", "coulomb")
         assert cls.acts_on == (
-            "hysteresis" if kind in ("asymmetry", "play", "degradation", "distortion") else "output"
+            Place.HYSTERESIS if kind in hysteresis else Place.INPUT if kind in on_u else Place.OUTPUT
         )
+        assert cls.acts_on.label
+    assert TERM_NAMES == tuple(TERMS)
+    assert STEADY_TERM_NAMES == tuple(k for k in TERMS if k != "degradation")
+    assert DIAGNOSIS_CANDIDATES == (*STEADY_TERM_NAMES, "degradation")
+    # The lower bounds of the value types, and the physical ranges the diagnosis will name within.
+    assert {k for k, c in TERMS.items() if c.bounds[0] == 0.0} == {"sensor_lag", "play", "degradation"}
+    assert {k for k, c in TERMS.items() if c.physical[0] == 0.0} == {
+        "viscous",
+        "inertia",
+        "coulomb",
+        "sensor_lag",
+        "play",
+        "degradation",
+    }
+    assert [k for k, c in TERMS.items() if c.linear] == [
+        "offset",
+        "stiffness",
+        "viscous",
+        "inertia",
+        "coulomb",
+    ]
     for t in ONE_OF_EACH:
         assert t.value == getattr(t, t.symbol)
         assert t.with_value(0.07).value == 0.07
         with pytest.raises(FrozenInstanceError):
             setattr(t, t.symbol, 1.0)
+
+
+def test_scale_factors_follow_the_units() -> None:
+    # A parameter in [y]^a [u]^b (asymmetry: [y]^-mu) scales by y^a u^b with the data (design.md 10.1).
+    y, u, mu = 8.0, 0.5, 1.5
+    got = {k: c.scale_factor(y, u, mu) for k, c in TERMS.items()}
+    assert got == {
+        "offset": y,
+        "stiffness": y / u,
+        "viscous": y / u,
+        "inertia": y / u,
+        "coulomb": y,
+        "sensor_lag": 1.0,
+        "asymmetry": y**-mu,
+        "play": y,
+        "degradation": y**-2,
+        "distortion": 1.0,
+    }
+
+
+def test_start_guesses_come_from_the_terms() -> None:
+    calls: list[int] = []
+
+    def projection() -> float:
+        calls.append(1)
+        return 0.25
+
+    ctx = StartContext(
+        latent_amplitudes=(2.0, 0.5), max_frequency=4.0, beta=0.6, gamma=0.2, projection=projection
+    )
+    assert SensorLag.start(ctx) == (0.01 / 4.0, 0.1 / 4.0)
+    assert Play.start(ctx) == (0.005, 0.05, 0.15)
+    assert Asymmetry.start(ctx) == pytest.approx((0.0, 0.24, -0.24))
+    assert TERMS["distortion"].start(ctx) == (1.0, 0.0)
+    assert calls == []  # only the linear terms project the residual
+    assert Viscous.start(ctx) == (0.25, 0.0) and calls == [1]
+
+
+def test_parse_terms_names_the_vocabulary() -> None:
+    assert parse_terms(["play", "offset"]) == ("play", "offset")
+    with pytest.raises(InvalidParameterError, match="unknown term 'spring'"):
+        parse_terms(["spring"])
+    with pytest.raises(InvalidParameterError, match="given twice"):
+        parse_terms(["play", "play"])
+    with pytest.raises(InvalidParameterError, match="not the string"):
+        parse_terms("play")
+    with pytest.raises(InvalidParameterError, match="unknown term 'degradation'"):
+        parse_terms(["degradation"], STEADY_TERM_NAMES)
+
+
+#: Literals that spell a code name in another sense, in files owned elsewhere (see the test below).
+NOT_A_TERM = {
+    ("offset", "result.py"): "the identification's averaged-output DC, a JSON field of IdentificationResult",
+    ("play", "reference/path_loop.py"): "the path loop's argument, named in its finiteness error",
+}
+
+
+def _literal_files(name: str) -> list[str]:
+    """The package's Python files holding the string literal ``name`` (docstrings and f-strings aside)."""
+    import ast
+
+    root = Path(bw.__file__).parent
+    out = []
+    for path in sorted(root.rglob("*.py")):
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        if any(isinstance(n, ast.Constant) and n.value == name for n in ast.walk(tree)):
+            rel = path.relative_to(root).as_posix()
+            if (name, rel) not in NOT_A_TERM:
+                out.append(rel)
+    return out
+
+
+#: The Rust crate (the tests run from the source tree, beside it).
+RUST = Path(__file__).resolve().parents[1] / "rust"
+#: Rust literals that spell a code name in another sense.
+NOT_A_RUST_TERM = {("play", "path_loop.rs"): "the path loop's argument, named in its finiteness error"}
+
+
+def _rust_literal_files(name: str) -> list[str]:
+    """The crate's files holding ``"name"`` outside comments."""
+    out = []
+    for path in sorted(RUST.rglob("*.rs")):
+        code = [line.split("//")[0] for line in path.read_text(encoding="utf-8").splitlines()]
+        rel = path.relative_to(RUST).as_posix()
+        if any(f'"{name}"' in line for line in code) and (name, rel) not in NOT_A_RUST_TERM:
+            out.append(f"rust/{rel}")
+    return out
+
+
+@pytest.mark.parametrize("name", list(TERMS))
+def test_a_code_name_is_spelled_in_at_most_three_files(name: str) -> None:
+    """Issue 17: a term's code name is written as a string in three files only: the registry
+    (``terms.py``), the Rust enum (``rust/terms.rs``, ``TermKind``) and the oracle's vocabulary
+    (``reference/terms.py``); everything else uses the class (``SensorLag.kind``) or the registry."""
+    assert RUST.is_dir(), f"{RUST}: the tests run from the source tree, beside the crate"
+    files = _literal_files(name) + _rust_literal_files(name)
+    assert sorted(files) == ["reference/terms.py", "rust/terms.rs", "terms.py"], files
 
 
 @pytest.mark.parametrize(

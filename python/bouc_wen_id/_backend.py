@@ -5,10 +5,10 @@ This is the only module that imports the compiled extension (``_core``) or the N
 ask :func:`get_backend` for a :class:`Parts`, whose typed parts cover one domain of the bindings each:
 
 ==============  ===========================================  ================================================
-part            Rust (``rust/python.rs``)                    NumPy (``backend="numpy"``)
+part            Rust (``rust/bindings/``)                    NumPy (``backend="numpy"``)
 ==============  ===========================================  ================================================
 ``paper``       simulation, averaging, SLS, loops, refine    :mod:`bouc_wen_id.reference`
-``augmented``   ``augmented_output``, ``augmented_refine``   :mod:`bouc_wen_id.reference.terms`
+``augmented``   ``augmented_output``, ``augmented_refine``   :mod:`bouc_wen_id.reference.augmented`
 ``multistart``  ``refine_many`` (all cores, GIL released)    ``None``: the starts run one by one
 ``lab``         the fused harmonic kernels (``rust/lab``)    no kernel: ``signal/`` runs its NumPy paths
 ==============  ===========================================  ================================================
@@ -56,7 +56,7 @@ class Paper(Protocol):
     accepts at least as much).
 
     Arrays are 1-D float64 (``_F``; the Rust side needs them C-contiguous); polynomial coefficients and
-    per-experiment vectors may also be sequences of floats.  Shapes and units: ``rust/python.rs``.
+    per-experiment vectors may also be sequences of floats.  Shapes and units: ``rust/bindings/``.
     """
 
     @overload
@@ -494,9 +494,9 @@ def _parts(name: Backend) -> Parts:
 
         return Parts("rust", _core, _core, _RustLab(), _core)
     from . import reference
-    from .reference import terms
+    from .reference import augmented
 
-    return Parts("numpy", reference, terms, _NumpyLab(), None)
+    return Parts("numpy", reference, augmented, _NumpyLab(), None)
 
 
 def get_backend(name: object) -> Parts:
@@ -540,12 +540,12 @@ def push_budget(max_samples: int, max_steps: int, max_bytes: int) -> None:
 
 if TYPE_CHECKING:  # pragma: no cover - the static check that both backends implement every part
     from . import _core, reference
-    from .reference import terms as _reference_terms
+    from .reference import augmented as _reference_augmented
 
     _RUST_PAPER: Paper = _core
     _NUMPY_PAPER: Paper = reference
     _RUST_AUGMENTED: Augmented = _core
-    _NUMPY_AUGMENTED: Augmented = _reference_terms
+    _NUMPY_AUGMENTED: Augmented = _reference_augmented
     _RUST_MULTISTART: MultiStart = _core
     _RUST_LAB: Lab = _RustLab()
     _NUMPY_LAB: Lab = _NumpyLab()

@@ -13,16 +13,16 @@ from pathlib import Path
 from typing import Any, NoReturn, Optional, Union
 
 from . import _pool
-from .augmented import TERM_NAMES
 from .demo import DEMO_FREQUENCIES
 from .errors import InvalidParameterError
+from .terms import DIAGNOSIS_CANDIDATES
 from .validation import real_number
 
 __all__ = ["build_parser", "flags_named"]
 
 #: diagnose's candidates: the steady-loop terms and degradation (diagnosis.run.ALL_CANDIDATES, kept here
 #: so that the CLI does not import the diagnosis to build its parser).
-DIAG_CANDIDATES = (*TERM_NAMES, "degradation")
+DIAG_CANDIDATES = DIAGNOSIS_CANDIDATES
 
 
 # --------------------------------------------------------------------------------------------------

@@ -21,17 +21,18 @@ Example
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass, field, replace
 from types import MappingProxyType
-from typing import Literal, Optional
+from typing import Literal, Optional, Union, overload
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import NDArray
 
 from ._backend import get_backend
-from .errors import InsufficientDataError, InvalidParameterError, NonFiniteError, ZeroAmplitudeError
-from .terms import TERM_NAMES, TERMS, parse_terms
+from .errors import InsufficientDataError, InvalidParameterError, ZeroAmplitudeError
+from .terms import STEADY_TERM_NAMES, TERMS, parse_terms
+from .validation import frozen_array, real_number
 
 __all__ = [
     "TERM_NAMES",
@@ -42,11 +43,16 @@ __all__ = [
     "AugExperiment",
     "AugParams",
     "AugFit",
+    "AugOutput",
     "fit_augmented",
     "augmented_output",
 ]
 
 FloatArray = NDArray[np.float64]
+
+#: The terms the augmented model takes (those seen on the averaged steady period; degradation is fitted from
+#: the period-by-period record instead), from the registry :data:`bouc_wen_id.terms.TERMS`.
+TERM_NAMES: tuple[str, ...] = STEADY_TERM_NAMES
 
 #: The shared hysteresis parameters ahead of the terms' parameters.
 HYSTERESIS_NAMES: tuple[str, ...] = ("beta", "gamma", "mu")
@@ -67,33 +73,8 @@ def term_unit(
     In the identified model (alpha = 1) w and x have the output's units, which the templates write as
     ``{y}``; ``x`` and ``w`` are accepted for callers that name them.
     """
-    parse_terms([name])
+    parse_terms([name], TERM_NAMES)
     return TERM_UNITS[name].format(y=y, u=u, x=y if x is None else x, w=y if w is None else w)
-
-
-def _frozen_array(name: str, values: ArrayLike, *, ndim: int = 1) -> FloatArray:
-    """A read-only float64 copy of ``values``; non-finite entries are :class:`NonFiniteError`."""
-    try:
-        arr = np.array(values, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise InvalidParameterError(f"{name} must be an array of real numbers: {exc}") from None
-    if arr.ndim != ndim:
-        raise InvalidParameterError(f"{name} must be {ndim}-D, got shape {arr.shape}")
-    bad = np.flatnonzero(~np.isfinite(arr))
-    if bad.size:
-        raise NonFiniteError(f"{name} holds a non-finite value ({arr.flat[bad[0]]}) at index {bad[0]}")
-    arr.flags.writeable = False
-    return arr
-
-
-def _finite(name: str, value: float) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise InvalidParameterError(f"{name} must be a real number, got {value!r}") from None
-    if not math.isfinite(v):
-        raise NonFiniteError(f"{name} = {v} is not finite")
-    return v
 
 
 @dataclass(frozen=True)
@@ -129,22 +110,22 @@ class AugExperiment:
     waveform: FloatArray = field(default_factory=lambda: np.zeros(0))
 
     def __post_init__(self) -> None:
-        ybar = _frozen_array("ybar", self.ybar)
+        ybar = frozen_array("ybar", self.ybar)
         if ybar.size < 4:
             raise InsufficientDataError(f"ybar has {ybar.size} samples per period; at least 4 are needed")
-        amplitude = _finite("amplitude", self.amplitude)
+        amplitude = real_number("amplitude", self.amplitude)
         if amplitude == 0.0:
             raise ZeroAmplitudeError("the input amplitude U is 0: nothing excites the plant")
-        frequency = _finite("frequency", self.frequency)
+        frequency = real_number("frequency", self.frequency)
         if frequency <= 0.0:
             raise InvalidParameterError(f"frequency = {frequency} rad/s must be > 0")
-        weight = _finite("weight", self.weight)
+        weight = real_number("weight", self.weight)
         if weight <= 0.0:
             raise InvalidParameterError(f"weight = {weight} must be > 0 (N / noise variance)")
         object.__setattr__(self, "ybar", ybar)
         object.__setattr__(self, "amplitude", amplitude)
         object.__setattr__(self, "frequency", frequency)
-        object.__setattr__(self, "grid_phase", _finite("grid_phase", self.grid_phase))
+        object.__setattr__(self, "grid_phase", real_number("grid_phase", self.grid_phase))
         object.__setattr__(self, "weight", weight)
         wave = np.array(self.waveform, dtype=np.float64).ravel()
         if wave.size % 2 or not np.all(np.isfinite(wave)):
@@ -183,13 +164,13 @@ class AugParams:
 
     def __post_init__(self) -> None:
         for name in HYSTERESIS_NAMES:
-            object.__setattr__(self, name, _finite(name, getattr(self, name)))
-        terms = parse_terms(self.terms)
-        values = _frozen_array("values", self.values)
+            object.__setattr__(self, name, real_number(name, getattr(self, name)))
+        terms = parse_terms(self.terms, TERM_NAMES)
+        values = frozen_array("values", self.values)
         if values.size != len(terms):
             raise InvalidParameterError(f"{len(terms)} terms {terms} but {values.size} values")
-        gains = _frozen_array("gains", self.gains)
-        phases = _frozen_array("phases", self.phases)
+        gains = frozen_array("gains", self.gains)
+        phases = frozen_array("phases", self.phases)
         if gains.size != phases.size:
             raise InvalidParameterError(f"{gains.size} gains but {phases.size} phases")
         object.__setattr__(self, "terms", terms)
@@ -211,7 +192,7 @@ class AugParams:
         """The value of a shared parameter (``beta``, ``gamma``, ``mu`` or an active term)."""
         if name in HYSTERESIS_NAMES:
             return float(getattr(self, name))
-        parse_terms([name])
+        parse_terms([name], TERM_NAMES)
         if name not in self.terms:
             raise InvalidParameterError(f"term {name!r} is not active; the active terms are {self.terms}")
         return float(self.values[self.terms.index(name)])
@@ -223,10 +204,16 @@ class AugParams:
             self.gamma,
             self.mu,
             self.terms + (name,),
-            np.append(self.values, _finite(name, value)),
+            np.append(self.values, real_number(name, value)),
             self.gains,
             self.phases,
         )
+
+    def only(self, names: Iterable[str]) -> AugParams:
+        """The same model with only those of its terms that are in ``names`` (in its own order)."""
+        keep = set(parse_terms(tuple(names), TERM_NAMES))
+        cols = [k for k, t in enumerate(self.terms) if t in keep]
+        return replace(self, terms=tuple(self.terms[k] for k in cols), values=self.values[cols])
 
 
 @dataclass(frozen=True)
@@ -265,7 +252,7 @@ class AugFit:
         names = self.params.names
         if name not in names:
             if name not in HYSTERESIS_NAMES:
-                parse_terms([name])
+                parse_terms([name], TERM_NAMES)
             raise InvalidParameterError(f"{name!r} is not a fitted parameter; the fitted ones are {names}")
         i = names.index(name)
         return float(np.sqrt(self.covariance[i, i]))
@@ -294,6 +281,11 @@ def _covariance(fisher: FloatArray) -> FloatArray:
         return nan
     cov = np.linalg.inv(scaled) / np.outer(d, d)
     return np.asarray(0.5 * (cov + cov.T), dtype=np.float64)
+
+
+def _rust_kinds(terms: Sequence[str]) -> list[str]:
+    """The kinds the core parses for these code names (the registry's :attr:`Term.rust_kind`)."""
+    return [TERMS[t].rust_kind for t in terms]
 
 
 def _count(name: str, value: int, minimum: int) -> int:
@@ -370,7 +362,7 @@ def fit_augmented(
         np.array([e.frequency for e in exps]),
         np.array([e.grid_phase for e in exps]),
         np.array([e.weight for e in exps]),
-        list(start.terms),
+        _rust_kinds(start.terms),
         start.shared,
         np.asarray(start.gains),
         np.asarray(start.phases),
@@ -394,32 +386,99 @@ def fit_augmented(
     return AugFit(params, float(cost), int(iterations), bool(converged), fisher, covariance, outs)
 
 
+@dataclass(frozen=True)
+class AugOutput:
+    """The model output on one experiment's grid with its derivatives (:func:`augmented_output`).
+
+    Attributes
+    ----------
+    y : ndarray, shape (P,)
+        The model output (units of the output).
+    jacobian : ndarray, shape (P, 3 + T)
+        ``dy / d[beta, gamma, mu, q_1 .. q_T]`` (the order of :attr:`AugParams.shared`).
+    own_jacobian : ndarray, shape (P, 2)
+        ``dy / d(g_i, phi_i)``, the experiment's own gain and phase.
+    """
+
+    y: FloatArray
+    jacobian: FloatArray
+    own_jacobian: FloatArray
+
+
+@overload
 def augmented_output(
     experiment: AugExperiment,
     params: AugParams,
     i: int,
     *,
     substeps: Optional[int] = None,
+    jacobian: Literal[False] = False,
     backend: Literal["rust", "numpy"] = "rust",
-) -> FloatArray:
+) -> FloatArray: ...
+@overload
+def augmented_output(
+    experiment: AugExperiment,
+    params: AugParams,
+    i: int,
+    *,
+    substeps: Optional[int] = None,
+    jacobian: Literal[True],
+    backend: Literal["rust", "numpy"] = "rust",
+) -> AugOutput: ...
+def augmented_output(
+    experiment: AugExperiment,
+    params: AugParams,
+    i: int,
+    *,
+    substeps: Optional[int] = None,
+    jacobian: bool = False,
+    backend: Literal["rust", "numpy"] = "rust",
+) -> Union[FloatArray, AugOutput]:
     """The model output ``y`` on ``experiment``'s grid with ``params`` and experiment index ``i``'s gain and
-    phase (shape (P,), units of the output)."""
+    phase (shape (P,), units of the output); with ``jacobian=True`` an :class:`AugOutput` holding its
+    derivatives too.
+
+    Parameters
+    ----------
+    experiment : AugExperiment
+        Its grid, amplitude, frequency, grid phase and waveform are used (not its ``ybar``).
+    params : AugParams
+        The model; ``params.gains[i]`` and ``params.phases[i]`` are the experiment's own.
+    i : int
+        Index of the experiment's gain and phase in ``params``.
+    substeps : int, optional
+        RK4 steps per sample; default ``max(2, ceil(2048/P))``.
+    jacobian : bool
+        Return the derivatives too.
+    backend : {"rust", "numpy"}
+        The Rust core or the NumPy reference.
+
+    Raises
+    ------
+    InvalidParameterError
+        A wrong type, an index out of range, a bad count or backend, an inadmissible model.
+    """
     if not isinstance(experiment, AugExperiment):
         raise InvalidParameterError(f"experiment is a {type(experiment).__name__}, not an AugExperiment")
+    if not isinstance(params, AugParams):
+        raise InvalidParameterError(f"params is a {type(params).__name__}, not an AugParams")
     if isinstance(i, bool) or not isinstance(i, (int, np.integer)) or not 0 <= i < params.gains.size:
         raise InvalidParameterError(f"i = {i!r} must index one of the {params.gains.size} gains")
     p = experiment.ybar.size
     steps = _auto_substeps(p) if substeps is None else _count("substeps", substeps, 1)
-    y, _, _ = get_backend(backend).augmented.augmented_output(
+    y, jac, own = get_backend(backend).augmented.augmented_output(
         p,
         experiment.amplitude,
         experiment.frequency,
         experiment.grid_phase,
-        list(params.terms),
+        _rust_kinds(params.terms),
         params.shared,
         float(params.gains[i]),
         float(params.phases[i]),
         steps,
         experiment.waveform,
     )
-    return np.asarray(y, dtype=np.float64)
+    out = np.asarray(y, dtype=np.float64)
+    if not jacobian:
+        return out
+    return AugOutput(out, np.asarray(jac, dtype=np.float64), np.asarray(own, dtype=np.float64))

@@ -265,7 +265,7 @@ def _check_counts(reference: Any, phase_grid: Any, max_iter: Any, harmonics: Any
     return int(reference), count("phase_grid", phase_grid, 3), count("max_iter", max_iter, 1)
 
 
-#: Work estimates of the budget checks, as rust/python.rs: golden reductions of one mu search, shooting
+#: Work estimates of the budget checks, as rust/budget.rs (Work): golden reductions of one mu search, shooting
 #: passes of one steady loop.
 _GOLDEN_ITER_ESTIMATE = 50
 _SHOOT_ITER_ESTIMATE = 4

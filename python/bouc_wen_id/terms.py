@@ -9,6 +9,13 @@ and units, what it means physically and what its absence leaves in the residual 
     wdot = alpha xpdot - beta |xpdot| |w|^(mu-1) w - gamma xpdot |w|^mu - delta xpdot |w|^(mu-1) w
     xp = Play_b[x]
 
+Each term class is the one place its vocabulary lives: code name (:attr:`Term.kind`, also the Rust core's
+``TermKind``), symbol, units, label, description, residual signature, admissible and physical range, the
+diagnosis's start guess (:meth:`Term.start`), how it scales with the data's units, and where it acts
+(:class:`Place`). :data:`TERMS` registers them; the CLI's choices, the diagnosis's candidates and labels, the
+augmented model's names and the JSON all derive from it. A new term is one class here (plus its Rust match
+arm, its oracle and its tests).
+
 The units are templates in ``{y}`` (the output's unit) and ``{u}`` (the input's); fill them with
 :meth:`Term.units`.  ``x`` has the units of ``y`` in the identified (alpha = 1) model, so play is in
 ``{y}`` there.
@@ -17,15 +24,17 @@ The units are templates in ``{y}`` (the output's unit) and ``{u}`` (the input's)
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, fields, replace
+from enum import Enum
 from typing import Any, ClassVar
 
-import numpy as np
-
-from .errors import InvalidParameterError, NonFiniteError
+from .errors import InvalidParameterError
+from .validation import real_number
 
 __all__ = [
+    "Place",
+    "StartContext",
     "Term",
     "Offset",
     "Stiffness",
@@ -38,6 +47,10 @@ __all__ = [
     "Degradation",
     "Distortion",
     "TERMS",
+    "TERM_NAMES",
+    "STEADY_TERM_NAMES",
+    "DIAGNOSIS_CANDIDATES",
+    "parse_terms",
     "COULOMB_SMOOTHING",
     "term_from_dict",
     "core_terms",
@@ -49,18 +62,57 @@ COULOMB_SMOOTHING = 0.01
 #: Largest admissible ``eps``: beyond half the peak velocity the ``tanh`` no longer resembles a sign.
 COULOMB_SMOOTHING_MAX = 0.5
 
+#: The whole real line: the admissible range of a parameter of either sign.
+UNBOUNDED = (-math.inf, math.inf)
+#: Parameters that are >= 0: a lag, a half-width, a rate of loss; a mass, a damping, a friction level.
+NON_NEGATIVE = (0.0, math.inf)
 
-def _real(name: str, value: Any) -> float:
-    """``value`` as a finite float, else a named error."""
-    if isinstance(value, (complex, np.complexfloating, str, bytes)):
-        raise InvalidParameterError(f"{name} = {value!r} must be a real number")
-    try:
-        v = float(value)
-    except (TypeError, ValueError, OverflowError) as exc:
-        raise InvalidParameterError(f"{name} = {value!r} is not a real number: {exc}") from None
-    if not math.isfinite(v):
-        raise NonFiniteError(f"{name} = {v} is not finite")
-    return v
+
+class Place(str, Enum):
+    """Where a term acts in the cascade ``u -> G -> x -> hysteresis -> w -> y``.
+
+    A term's place is a field of its class (:attr:`Term.acts_on`, :attr:`Term.places`), never part of its
+    code name; a new place is one member here and its :attr:`label`. (The mechanical terms' second place,
+    across the hysteretic element on ``x``, is the next one: design.md 9.1.)
+    """
+
+    #: Added to, or filtering, the measured output y (an offset, a sensor lag).
+    OUTPUT = "output"
+    #: Driven by the measured input u, added to the output (a path beside the cascade).
+    INPUT = "u"
+    #: Inside the Bouc-Wen element: its shape, its input's path or its strength.
+    HYSTERESIS = "hysteresis"
+
+    @property
+    def label(self) -> str:
+        """How a verdict says where the term acts."""
+        return _PLACE_LABELS[self]
+
+
+_PLACE_LABELS = {
+    Place.OUTPUT: "on the measured output y",
+    Place.INPUT: "on the measured input u",
+    Place.HYSTERESIS: "inside the hysteretic element",
+}
+
+
+@dataclass(frozen=True)
+class StartContext:
+    """What a term's start guess may look at, in the diagnosis's scaled units (design.md 10.1).
+
+    ``projection`` is called only by the linear terms: the least-squares value of the term's parameter on
+    the current model's residual (its Jacobian column against the residual), which costs one model
+    evaluation per experiment.
+    """
+
+    #: ``|A_i| = |U_i g_i|``, the latent amplitudes of the current model.
+    latent_amplitudes: tuple[float, ...]
+    #: The highest tested frequency (rad/s).
+    max_frequency: float
+    #: The current model's Bouc-Wen parameters.
+    beta: float
+    gamma: float
+    projection: Callable[[], float]
 
 
 @dataclass(frozen=True)
@@ -80,16 +132,62 @@ class Term:
     description: ClassVar[str] = ""
     #: What leaving it out of a plain fit leaves in the residual (one line).
     signature: ClassVar[str] = ""
-    #: ``"output"`` for terms added to y, ``"hysteresis"`` for terms inside the Bouc-Wen path.
-    acts_on: ClassVar[str] = "output"
+    #: The kind the Rust core's ``TermKind`` parses (the code name itself; set by ``__init_subclass__``).
+    rust_kind: ClassVar[str] = ""
+    #: Human name in verdicts and reports.
+    label: ClassVar[str] = ""
+    #: Where the term acts (see :class:`Place`)...
+    acts_on: ClassVar[Place] = Place.OUTPUT
+    #: ... and every place it may act at (the first is :attr:`acts_on`).
+    places: ClassVar[tuple[Place, ...]] = ()
+    #: Admissible range of the parameter: the value type refuses, and the fits stay within, anything outside.
+    bounds: ClassVar[tuple[float, float]] = UNBOUNDED
+    #: Physically meaningful range (within :attr:`bounds`): a value outside it is not named as that physics.
+    physical: ClassVar[tuple[float, float]] = UNBOUNDED
+    #: Why the lower bound holds (appended to the error message).
+    bound_note: ClassVar[str] = ""
+    #: Seen on the averaged steady period (False: only in the period-by-period record, design.md 10.6).
+    steady: ClassVar[bool] = True
+    #: The output is linear in the parameter: its start is the projection of the residual on its column.
+    linear: ClassVar[bool] = False
+    #: Powers ``(a, b, c)`` of the units: the parameter scales as ``[y]^(a + c mu) [u]^b`` (design.md 10.1).
+    scaling: ClassVar[tuple[float, float, float]] = (0.0, 0.0, 0.0)
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        if "rust_kind" not in cls.__dict__:
+            cls.rust_kind = cls.kind
+        if "places" not in cls.__dict__:
+            cls.places = (cls.acts_on,)
 
     def __post_init__(self) -> None:
         for f in fields(self):
-            object.__setattr__(self, f.name, _real(f"{self.kind}.{f.name}", getattr(self, f.name)))
+            object.__setattr__(self, f.name, real_number(f"{self.kind}.{f.name}", getattr(self, f.name)))
+        lo, hi = self.bounds
+        v = self.value
+        if not lo <= v <= hi:
+            unit = "" if "{" in self.unit or not self.unit else f" {self.unit}"
+            rule = f">= {lo:g}" if math.isinf(hi) else f"in [{lo:g}, {hi:g}]"
+            raise InvalidParameterError(
+                f"{self.kind} {self.symbol} = {v}{unit} must be {rule}{self.bound_note}"
+            )
         self._check()
 
     def _check(self) -> None:
-        """Extra admissibility of the parameter (after the finiteness check)."""
+        """Extra admissibility of the parameter (after the finiteness and range checks)."""
+
+    @classmethod
+    def start(cls, context: StartContext) -> tuple[float, ...]:
+        """Start values of the parameter when the diagnosis adds the term to a model (scaled units)."""
+        if cls.linear:
+            return (context.projection(), 0.0)
+        return (0.0,)
+
+    @classmethod
+    def scale_factor(cls, y: float, u: float, mu: float) -> float:
+        """Physical value per unit of scaled value, for data scaled by ``y`` and ``u`` (:attr:`scaling`)."""
+        a, b, c = cls.scaling
+        return float(y ** (a + c * mu) / u ** (-b))
 
     @property
     def value(self) -> float:
@@ -142,6 +240,9 @@ class Offset(Term):
     unit: ClassVar[str] = "{y}"
     description: ClassVar[str] = "constant output offset (sensor zero, static preload)"
     signature: ClassVar[str] = "a constant residual: the loop is shifted up or down as a whole (DC)"
+    label: ClassVar[str] = "output offset"
+    linear: ClassVar[bool] = True
+    scaling: ClassVar[tuple[float, float, float]] = (1.0, 0.0, 0.0)
 
 
 @dataclass(frozen=True)
@@ -157,6 +258,10 @@ class Stiffness(Term):
     signature: ClassVar[str] = (
         "a residual in phase with u at every frequency: the loop is tilted, not saturating at large u"
     )
+    label: ClassVar[str] = "parallel stiffness"
+    acts_on: ClassVar[Place] = Place.INPUT
+    linear: ClassVar[bool] = True
+    scaling: ClassVar[tuple[float, float, float]] = (1.0, -1.0, 0.0)
 
 
 @dataclass(frozen=True)
@@ -170,6 +275,11 @@ class Viscous(Term):
     unit: ClassVar[str] = "{y} s/{u}"
     description: ClassVar[str] = "viscous force proportional to the input velocity (dashpot)"
     signature: ClassVar[str] = "a residual in quadrature with u, growing as omega: loops widen with frequency"
+    label: ClassVar[str] = "viscous damping"
+    acts_on: ClassVar[Place] = Place.INPUT
+    physical: ClassVar[tuple[float, float]] = NON_NEGATIVE
+    linear: ClassVar[bool] = True
+    scaling: ClassVar[tuple[float, float, float]] = (1.0, -1.0, 0.0)
 
 
 @dataclass(frozen=True)
@@ -185,6 +295,11 @@ class Inertia(Term):
     signature: ClassVar[str] = (
         "a residual in antiphase with u growing as omega^2: the loop tilts down at high frequency"
     )
+    label: ClassVar[str] = "inertia"
+    acts_on: ClassVar[Place] = Place.INPUT
+    physical: ClassVar[tuple[float, float]] = NON_NEGATIVE
+    linear: ClassVar[bool] = True
+    scaling: ClassVar[tuple[float, float, float]] = (1.0, -1.0, 0.0)
 
 
 @dataclass(frozen=True)
@@ -205,6 +320,11 @@ class Coulomb(Term):
     signature: ClassVar[str] = (
         "a square wave in phase with udot: steps at each reversal of u, odd harmonics falling as 1/k"
     )
+    label: ClassVar[str] = "dry (Coulomb) friction"
+    acts_on: ClassVar[Place] = Place.INPUT
+    physical: ClassVar[tuple[float, float]] = NON_NEGATIVE
+    linear: ClassVar[bool] = True
+    scaling: ClassVar[tuple[float, float, float]] = (1.0, 0.0, 0.0)
 
     def _check(self) -> None:
         if not 0.0 < self.smoothing <= COULOMB_SMOOTHING_MAX:
@@ -226,10 +346,14 @@ class SensorLag(Term):
     signature: ClassVar[str] = (
         "the whole output delayed by about tau: a residual like -tau ydot, growing with frequency"
     )
+    label: ClassVar[str] = "sensor lag"
+    bounds: ClassVar[tuple[float, float]] = NON_NEGATIVE
+    physical: ClassVar[tuple[float, float]] = NON_NEGATIVE
 
-    def _check(self) -> None:
-        if self.tau < 0.0:
-            raise InvalidParameterError(f"sensor_lag tau = {self.tau} s must be >= 0")
+    @classmethod
+    def start(cls, context: StartContext) -> tuple[float, ...]:
+        # 1 % and 10 % of a radian of lag at the highest frequency.
+        return tuple(f / context.max_frequency for f in (0.01, 0.1))
 
 
 @dataclass(frozen=True)
@@ -249,7 +373,15 @@ class Asymmetry(Term):
     signature: ClassVar[str] = (
         "upper and lower branches saturate at different levels: even harmonics and a DC shift"
     )
-    acts_on: ClassVar[str] = "hysteresis"
+    label: ClassVar[str] = "asymmetry"
+    acts_on: ClassVar[Place] = Place.HYSTERESIS
+    scaling: ClassVar[tuple[float, float, float]] = (0.0, 0.0, -1.0)
+
+    @classmethod
+    def start(cls, context: StartContext) -> tuple[float, ...]:
+        # Symmetric, and 30 % of beta + gamma either way.
+        bg = context.beta + context.gamma
+        return tuple(v * bg for v in (0.0, 0.3, -0.3))
 
     def normalized(self, alpha: float) -> Term:
         return Asymmetry(self.delta / alpha)
@@ -272,11 +404,17 @@ class Play(Term):
     signature: ClassVar[str] = (
         "flat stretches after each reversal: the output dwells for 2b of travel before it follows"
     )
-    acts_on: ClassVar[str] = "hysteresis"
+    label: ClassVar[str] = "play (backlash)"
+    acts_on: ClassVar[Place] = Place.HYSTERESIS
+    bounds: ClassVar[tuple[float, float]] = NON_NEGATIVE
+    physical: ClassVar[tuple[float, float]] = NON_NEGATIVE
+    bound_note: ClassVar[str] = " (it is a half-width)"
+    scaling: ClassVar[tuple[float, float, float]] = (1.0, 0.0, 0.0)
 
-    def _check(self) -> None:
-        if self.b < 0.0:
-            raise InvalidParameterError(f"play b = {self.b} must be >= 0 (it is a half-width)")
+    @classmethod
+    def start(cls, context: StartContext) -> tuple[float, ...]:
+        # 1, 10 and 30 % of the smallest latent amplitude (it must stay below every one).
+        return tuple(f * min(context.latent_amplitudes) for f in (0.01, 0.1, 0.3))
 
     def normalized(self, alpha: float) -> Term:
         return Play(self.b * alpha)
@@ -306,14 +444,13 @@ class Degradation(Term):
         "a loop that drifts from period to period, faster for loops dissipating more energy (larger "
         "amplitudes): the peak of w shrinks; the averaged loop is unchanged to first order"
     )
-    acts_on: ClassVar[str] = "hysteresis"
-
-    def _check(self) -> None:
-        if self.delta_nu < 0.0:
-            raise InvalidParameterError(
-                f"degradation delta_nu = {self.delta_nu} must be >= 0 (the strength falls with dissipated "
-                "energy)"
-            )
+    label: ClassVar[str] = "degradation"
+    acts_on: ClassVar[Place] = Place.HYSTERESIS
+    bounds: ClassVar[tuple[float, float]] = NON_NEGATIVE
+    physical: ClassVar[tuple[float, float]] = NON_NEGATIVE
+    bound_note: ClassVar[str] = " (the strength falls with dissipated energy)"
+    steady: ClassVar[bool] = False
+    scaling: ClassVar[tuple[float, float, float]] = (-2.0, 0.0, 0.0)
 
     def normalized(self, alpha: float) -> Term:
         # e = int w dx grows by alpha under x -> alpha x (G -> alpha G), so delta_nu shrinks by it.
@@ -341,7 +478,14 @@ class Distortion(Term):
         "the input's harmonics reflected in the output: the loop driven by the distortion, at the "
         "harmonics the input carries"
     )
-    acts_on: ClassVar[str] = "hysteresis"
+    label: ClassVar[str] = "measured input waveform"
+    acts_on: ClassVar[Place] = Place.HYSTERESIS
+
+    @classmethod
+    def start(cls, context: StartContext) -> tuple[float, ...]:
+        # lambda = 1: the measured waveform drives the model (the expected value under the quasi-static
+        # assumption of design.md 9.5); 0: the plain model's sine.
+        return (1.0, 0.0)
 
 
 #: Code name -> term class, in the order of the design.md 9.1 table.
@@ -360,6 +504,31 @@ TERMS: dict[str, type[Term]] = {
         Distortion,
     )
 }
+
+#: Every code name, in the order of the design.md 9.1 table.
+TERM_NAMES: tuple[str, ...] = tuple(TERMS)
+#: The terms seen on the averaged steady period: the augmented model's (design.md 9.3).
+STEADY_TERM_NAMES: tuple[str, ...] = tuple(k for k, cls in TERMS.items() if cls.steady)
+#: The diagnosis's candidates: the steady terms, then those fitted from the period record (design.md 10.6).
+DIAGNOSIS_CANDIDATES: tuple[str, ...] = STEADY_TERM_NAMES + tuple(
+    k for k in TERMS if k not in STEADY_TERM_NAMES
+)
+
+
+def parse_terms(names: Sequence[str], allowed: Sequence[str] = TERM_NAMES) -> tuple[str, ...]:
+    """The code names as a tuple; one not in ``allowed``, or repeated, is :class:`InvalidParameterError`."""
+    if isinstance(names, str):
+        raise InvalidParameterError(f"terms must be a sequence of names, not the string {names!r}")
+    out: list[str] = []
+    for name in names:
+        if name not in allowed:
+            raise InvalidParameterError(f"unknown term {name!r}; the terms are {', '.join(allowed)}")
+        if name in out:
+            raise InvalidParameterError(
+                f"term {name!r} is given twice; each term has one parameter and may appear once"
+            )
+        out.append(name)
+    return tuple(out)
 
 
 def term_from_dict(d: Mapping[str, Any]) -> Term:
@@ -382,29 +551,7 @@ def core_terms(terms: Iterable[Term]) -> dict[str, float]:
                 "know: simulate the plain plant with the distorted input itself (simulate_input with its "
                 "samples) instead"
             )
-        out[t.kind] = t.value
+        out[t.rust_kind] = t.value
         if isinstance(t, Coulomb):
             out["coulomb_smoothing"] = t.smoothing
     return out
-
-
-#: Code names of the terms the augmented model fits (design.md 9.1), in the registry's order: every term but
-#: the degradation, which only the simulation carries.
-TERM_NAMES: tuple[str, ...] = tuple(name for name, cls in TERMS.items() if cls is not Degradation)
-
-
-def parse_terms(terms: Iterable[str]) -> tuple[str, ...]:
-    """The augmented model's term names as a tuple; an unknown or repeated name is
-    :class:`InvalidParameterError`."""
-    if isinstance(terms, str):
-        raise InvalidParameterError(f"terms must be a sequence of names, not the string {terms!r}")
-    out: list[str] = []
-    for name in terms:
-        if name not in TERM_NAMES:
-            raise InvalidParameterError(f"unknown term {name!r}; the terms are {', '.join(TERM_NAMES)}")
-        if name in out:
-            raise InvalidParameterError(
-                f"term {name!r} is given twice; each term has one parameter and may appear once"
-            )
-        out.append(name)
-    return tuple(out)

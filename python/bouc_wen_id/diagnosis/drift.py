@@ -25,7 +25,8 @@ from typing import Any, Optional
 import numpy as np
 from numpy.typing import NDArray
 
-from ..augmented import AugExperiment, AugFit
+from ..augmented import AugExperiment, AugFit, AugParams, augmented_output
+from ..terms import TERMS, Asymmetry, Degradation, Play
 from .data import DiagExperiment
 from .select import f_test
 
@@ -34,9 +35,10 @@ ComplexArray = NDArray[np.complex128]
 TWO_PI = 2.0 * math.pi
 
 #: The code name of the term fitted here.
-DEGRADATION = "degradation"
-#: Output terms left out when the hysteresis output w alone is needed (for the loop's energy).
-_HYSTERESIS_TERMS = ("asymmetry", "play")
+DEGRADATION = Degradation.kind
+#: The terms kept when the hysteresis output w alone is needed (for the loop's energy): those shaping the
+#: steady loop of a pure-sine x; the output terms are left out.
+_HYSTERESIS_TERMS = (Asymmetry.kind, Play.kind)
 
 
 @dataclass(frozen=True)
@@ -78,13 +80,13 @@ def harmonics(y: FloatArray, k: int) -> ComplexArray:
     return out
 
 
-def _at_strength(fit: AugFit, nu: float) -> FloatArray:
-    """The shared vector ``[beta, gamma, mu, q..]`` at strength ``nu`` (beta, gamma, delta times nu)."""
+def _at_strength(fit: AugFit, nu: float) -> AugParams:
+    """``fit``'s model at strength ``nu``: beta, gamma (and the asymmetry delta) times nu."""
     par = fit.params
     vals = np.array(par.values, dtype=np.float64)
-    if "asymmetry" in par.terms:
-        vals[par.terms.index("asymmetry")] *= nu
-    return np.concatenate([[par.beta * nu, par.gamma * nu, par.mu], vals]).astype(np.float64)
+    if Asymmetry.kind in par.terms:
+        vals[par.terms.index(Asymmetry.kind)] *= nu
+    return replace(par, beta=par.beta * nu, gamma=par.gamma * nu, values=vals)
 
 
 def regressor(
@@ -97,28 +99,19 @@ def regressor(
     the hysteresis output alone (the fitted asymmetry and play kept, the output terms left out): exact for
     a band-limited loop, second order at the reversals' kinks.
     """
-    from .. import _core
-
     par = fit.params
-    shared = _at_strength(fit, nu)
+    strong = _at_strength(fit, nu)
     p = e.ybar.size
-    g, ph = float(par.gains[i]), float(par.phases[i])
-    _, jac, _ = _core.augmented_output(
-        p, e.amplitude, e.frequency, e.grid_phase, list(par.terms), shared, g, ph, substeps
-    )
-    jac = np.asarray(jac)
+    ph = float(par.phases[i])
+    jac = augmented_output(e, strong, i, substeps=substeps, jacobian=True).jacobian
     j = par.beta * jac[:, 0] + par.gamma * jac[:, 1]
-    if "asymmetry" in par.terms:
-        k = par.terms.index("asymmetry")
+    if Asymmetry.kind in par.terms:
+        k = par.terms.index(Asymmetry.kind)
         j = j + float(par.values[k]) * jac[:, 3 + k]
-    keep = [k for k, t in enumerate(par.terms) if t in _HYSTERESIS_TERMS]
-    hshared = np.concatenate([shared[:3], shared[3:][keep]]).astype(np.float64)
-    w, _, _ = _core.augmented_output(
-        p, e.amplitude, e.frequency, e.grid_phase, [par.terms[k] for k in keep], hshared, g, ph, substeps
-    )
+    w = augmented_output(e, strong.only(_HYSTERESIS_TERMS), i, substeps=substeps)
     theta = TWO_PI * np.arange(p) / p
-    a = e.amplitude * g
-    energy = float(np.dot(np.asarray(w), -a * np.sin(theta - ph))) * TWO_PI / p
+    a = e.amplitude * float(par.gains[i])
+    energy = float(np.dot(w, -a * np.sin(theta - ph))) * TWO_PI / p
     return np.asarray(j, dtype=np.float64), energy
 
 
@@ -203,7 +196,7 @@ class DegradationTest:
     def to_dict(self) -> dict[str, Any]:
         return {
             "term": DEGRADATION,
-            "delta_nu": self.value,
+            Degradation.symbol: self.value,
             "standard_error": self.standard_error,
             "drift_cost_before": self.cost0,
             "drift_cost_after": self.cost1,
@@ -316,11 +309,18 @@ def corrected(
     recorded periods; its difference from the same simulation at ``d = 0`` is taken off the data.
     Experiments of unknown age (no record) are left as they are.
     """
-    from .. import _core
+    from ..model import BoucWen, SinePlan, TransferFunction, WienerPlant
+    from ..simulation import simulate
+    from ..terms import term_from_dict
 
     de, ds = list(exps), list(sx)
     par = fit.params
-    terms = {t: float(v) for t, v in zip(par.terms, par.values) if t in _HYSTERESIS_TERMS}
+    hysteresis = BoucWen(par.beta, par.gamma, par.mu)
+    terms = tuple(
+        term_from_dict({"kind": t, TERMS[t].symbol: float(v)})
+        for t, v in zip(par.terms, par.values)
+        if t in _HYSTERESIS_TERMS
+    )
     for i, (e, a) in enumerate(zip(exps, sx)):
         if e.blocks < 2 or not math.isfinite(e.lead_periods):
             continue
@@ -330,26 +330,23 @@ def corrected(
         om = a.frequency  # rad/s
         phi = float(np.mod(par.phases[i], TWO_PI))
         amp = float(a.amplitude * par.gains[i])
-        dt = TWO_PI / om / p
+        # The fitted latent x = A cos(omega t - phi): a pure gain A and a delay phi / omega on a unit sine.
+        linear = TransferFunction([amp], [1.0], phi / om)
+        plan = SinePlan(
+            [om],
+            [1.0],
+            settle_periods=lead,
+            periods=n,
+            samples_per_period=p,
+            substeps=max(substeps, SIM_SUBSTEPS),
+            noise_sd=0.0,
+        )
         outs = []
         for dv in (max(d, 0.0), 0.0):
-            _, w, _ = _core.simulate_sine(
-                np.array([amp]),
-                np.array([1.0]),
-                phi / om,
-                1.0,
-                float(par.beta),
-                float(par.gamma),
-                float(par.mu),
-                0.0,
-                1.0,
-                om,
-                dt,
-                (lead + n) * p,
-                max(substeps, SIM_SUBSTEPS),
-                terms={**terms, DEGRADATION: dv},
-            )
-            outs.append(np.asarray(w)[lead * p :].reshape(n, p).mean(axis=0))
+            plant = WienerPlant(linear, hysteresis, terms=(*terms, Degradation(dv)))
+            (rec,) = simulate(plant, plan)
+            assert rec.w is not None
+            outs.append(np.asarray(rec.w)[lead * p :].reshape(n, p).mean(axis=0))
         shift = outs[0] - outs[1]
         de[i] = replace(e, ybar=e.ybar - shift * y_scale)
         ds[i] = replace(a, ybar=np.ascontiguousarray(a.ybar - shift))

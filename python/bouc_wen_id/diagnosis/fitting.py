@@ -16,15 +16,16 @@ from typing import Any, Optional
 import numpy as np
 from numpy.typing import NDArray
 
-from ..augmented import AugExperiment, AugFit, AugParams, fit_augmented
+from ..augmented import AugExperiment, AugFit, AugParams, augmented_output, fit_augmented
 from ..errors import BoucWenIdError, SearchAtBoundError
+from ..terms import TERMS, Distortion, StartContext
 from .data import DiagExperiment
 
 FloatArray = NDArray[np.float64]
 TWO_PI = 2.0 * math.pi
 
 #: Output terms whose contribution is linear in the parameter: their start is the residual's projection.
-LINEAR_TERMS = ("offset", "stiffness", "viscous", "inertia", "coulomb")
+LINEAR_TERMS = tuple(k for k, cls in TERMS.items() if cls.linear)
 #: Iterations of the held-out refit of one experiment's (g, phi) with the physics frozen.
 OWN_MAX_ITER = 50
 
@@ -38,13 +39,7 @@ class Scale:
 
     def factor(self, term: str, mu: float) -> float:
         """Physical value of a term's parameter per unit of its scaled value."""
-        if term in ("offset", "coulomb", "play"):
-            return self.y
-        if term in ("stiffness", "viscous", "inertia"):
-            return self.y / self.u
-        if term == "asymmetry":
-            return float(self.y ** (-mu))
-        return 1.0  # sensor_lag (seconds), distortion (dimensionless)
+        return TERMS[term].scale_factor(self.y, self.u, mu)
 
 
 def scale_of(exps: Sequence[DiagExperiment]) -> Scale:
@@ -238,7 +233,7 @@ def carry_through_g(exps: Sequence[AugExperiment], plain: AugFit, substeps: int)
     if not any(e.waveform.size for e in exps):
         return out
     for _ in range(CARRY_REFITS):
-        f = fit_with(out, plain, "distortion", substeps)
+        f = fit_with(out, plain, Distortion.kind, substeps)
         if f is None:
             break
         new = carry_waveforms(exps, f)
@@ -256,22 +251,8 @@ def regressor(term: str, e: AugExperiment, par: AugParams, i: int, substeps: int
     It is the term's Jacobian column in the core's model output (design.md 9.1), through any sensor lag
     the current model already has, so the formulas live in one place.
     """
-    from .. import _core
-
-    trial = par.with_term(term, 0.0)
-    _, jac, _ = _core.augmented_output(
-        e.ybar.size,
-        e.amplitude,
-        e.frequency,
-        e.grid_phase,
-        list(trial.terms),
-        np.concatenate([[trial.beta, trial.gamma, trial.mu], trial.values]).astype(np.float64),
-        float(par.gains[i]),
-        float(par.phases[i]),
-        substeps,
-        e.waveform,
-    )
-    return np.asarray(jac)[:, 3 + len(par.terms)]
+    out = augmented_output(e, par.with_term(term, 0.0), i, substeps=substeps, jacobian=True)
+    return out.jacobian[:, 3 + len(par.terms)]
 
 
 def substeps_for(sizes: Sequence[int]) -> int:
@@ -303,64 +284,76 @@ def best_of(fits: Sequence[Optional[AugFit]]) -> Optional[AugFit]:
     return min(ok, key=lambda f: f.cost) if ok else None
 
 
-def plain_start(items: Any, exps: Sequence[DiagExperiment], s: Scale) -> list[AugParams]:
+#: The separable (profile) start's settings: identify's defaults (mu bracket, tolerance, phase grid).
+PROFILE_MU_BRACKET = (1.0, 10.0)
+PROFILE_TOL = 1e-8
+PROFILE_PHASE_GRID = 48
+
+
+def _prepared(e: DiagExperiment, a: AugExperiment, s: Scale, core: Any) -> Any:
+    """The estimators' view of one experiment, from the diagnosis's own averaged period in its own units
+    (the output's DC taken off: the plain loop has none)."""
+    from ..prepare import Prepared, auto_harmonics
+
+    dc = float(np.mean(a.ybar))
+    ybar = np.ascontiguousarray(a.ybar - dc)
+    noise_var = e.spread_var / s.y**2
+    k = auto_harmonics(ybar, noise_var, e.periods)
+    return Prepared(
+        amplitude=a.amplitude,
+        frequency=a.frequency,
+        phase_shift=0.0,
+        p=ybar.size,
+        s=0,
+        n=e.periods,
+        k=k,
+        ybar=ybar,
+        ydot=np.asarray(core.paper.spectral_derivative(ybar, a.frequency, k)),
+        noise_var=noise_var,
+        noise_dof=e.noise_dof,
+        plant=None,
+        source=e.source,
+        offset=dc * s.y,
+    )
+
+
+def plain_start(exps: Sequence[DiagExperiment], sx: Sequence[AugExperiment], s: Scale) -> list[AugParams]:
     """Starts for the plain model: the separable (profile) estimate, then generic ones (scaled units).
 
-    The profile estimator is the cheap, data-driven start; the joint refinement that follows is the
-    diagnosis's own (with generic restarts when the start is suspicious, :func:`fit_plain`), so the
-    library's refined identification with its restarts is not run twice.
+    The profile estimator runs on the diagnosis's own averaged periods (the experiments the fits use, in
+    their units: one segmentation, one scale); it is the cheap, data-driven start, and the joint refinement
+    that follows is the diagnosis's own (with generic restarts when the start is suspicious,
+    :func:`fit_plain`), so the library's refined identification with its restarts is not run.
     """
-    from ..identification import identify
+    from .._backend import get_backend
+    from ..estimators import fit as estimate
 
     starts: list[AugParams] = []
+    core = get_backend("rust")
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            res = identify(_dc_free(items), method="profile")
-        if len(res.experiments) == len(exps):
-            mu = res.mu
-            starts.append(
-                AugParams(
-                    beta=res.beta * s.y**mu,
-                    gamma=res.gamma * s.y**mu,
-                    mu=mu,
-                    terms=(),
-                    values=np.zeros(0),
-                    gains=np.array([x.gain * s.u / s.y for x in res.experiments]),
-                    phases=np.array([float(np.mod(x.phase - x.grid_phase, TWO_PI)) for x in res.experiments]),
-                )
+            prepared = [_prepared(e, a, s, core) for e, a in zip(exps, sx)]
+            lo, hi = PROFILE_MU_BRACKET
+            # (reference 0; the iteration cap is the refinement's, which the profile estimator does not run)
+            res = estimate(prepared, core, "profile", 0, lo, hi, PROFILE_TOL, PROFILE_PHASE_GRID, 1)
+        # (g, phi) and (-g, phi + pi) draw the same x: start on the branch g > 0.
+        flip = np.where(res.gains < 0, math.pi, 0.0)
+        starts.append(
+            AugParams(
+                beta=res.beta,
+                gamma=res.gamma,
+                mu=res.mu,
+                terms=(),
+                values=np.zeros(0),
+                gains=np.abs(res.gains),
+                phases=np.mod(res.phis + flip, TWO_PI),
             )
+        )
     except (BoucWenIdError, SearchAtBoundError):
         pass
-    starts.extend(_generic_starts(scaled(exps, s)))
+    starts.extend(_generic_starts(sx))
     return starts
-
-
-def _dc_free(items: Any) -> Any:
-    """The items with each recording's output mean removed (the plain identification has no offset)."""
-    from ..model import Recording
-
-    seq = items if isinstance(items, (list, tuple)) else [items]
-    out = []
-    for it in seq:
-        if isinstance(it, Recording):
-            p = it.samples_per_period
-            s = it.settle_periods
-            dc = float(np.mean(it.y[s * p : it.whole_periods * p]))
-            out.append(
-                Recording(
-                    it.t,
-                    it.u,
-                    it.y - dc,
-                    it.amplitude,
-                    it.frequency,
-                    settle_periods=it.settle_periods,
-                    metadata=dict(it.metadata),
-                )
-            )
-        else:
-            out.append(it)
-    return out
 
 
 def _generic_starts(exps: Sequence[AugExperiment]) -> list[AugParams]:
@@ -388,10 +381,10 @@ def _generic_starts(exps: Sequence[AugExperiment]) -> list[AugParams]:
     return out
 
 
-def fit_plain(items: Any, exps: Sequence[DiagExperiment], s: Scale, substeps: int) -> AugFit:
-    """The plain Wiener-Bouc-Wen model on the data with their DC (the null of every test)."""
-    sx = scaled(exps, s)
-    starts = plain_start(items, exps, s)
+def fit_plain(exps: Sequence[DiagExperiment], sx: Sequence[AugExperiment], s: Scale, substeps: int) -> AugFit:
+    """The plain Wiener-Bouc-Wen model on the data with their DC (the null of every test): ``sx`` are
+    ``exps`` scaled by ``s`` (:func:`scaled`)."""
+    starts = plain_start(exps, sx, s)
     first = fit_from(sx, starts[0], substeps) if starts else None
     fits: list[Optional[AugFit]] = [first]
     if first is None or first.params.beta - abs(first.params.gamma) < 1e-6 * first.params.beta:
@@ -409,31 +402,26 @@ def fit_plain(items: Any, exps: Sequence[DiagExperiment], s: Scale, substeps: in
 
 
 def candidate_starts(exps: Sequence[AugExperiment], fit: AugFit, term: str, substeps: int) -> list[AugParams]:
-    """Starts for ``fit``'s model plus ``term``: its parameter at 0 and at an informed guess."""
+    """Starts for ``fit``'s model plus ``term``: the term's own guesses (:meth:`Term.start`)."""
     par = fit.params
-    outs = fit.outputs
-    if term in LINEAR_TERMS:
+
+    def projection() -> float:
+        """The least-squares value of a linear term on the current residual."""
         num = den = 0.0
-        for i, (e, y) in enumerate(zip(exps, outs)):
+        for i, (e, y) in enumerate(zip(exps, fit.outputs)):
             g = regressor(term, e, par, i, substeps)
             num += e.weight * float(np.dot(g, e.ybar - y))
             den += e.weight * float(np.dot(g, g))
-        guess = num / den if den > 0 else 0.0
-        return [par.with_term(term, guess), par.with_term(term, 0.0)]
-    amps = [abs(e.amplitude * g) for e, g in zip(exps, par.gains)]
-    if term == "play":
-        return [par.with_term(term, f * min(amps)) for f in (0.01, 0.1, 0.3)]
-    if term == "sensor_lag":
-        om = max(e.frequency for e in exps)
-        return [par.with_term(term, f / om) for f in (0.01, 0.1)]
-    if term == "asymmetry":
-        bg = par.beta + par.gamma
-        return [par.with_term(term, v * bg) for v in (0.0, 0.3, -0.3)]
-    if term == "distortion":
-        # lambda = 1: the measured waveform drives the model (the expected value under the quasi-static
-        # assumption of design.md 9.5); 0: the plain model's sine.
-        return [par.with_term(term, 1.0), par.with_term(term, 0.0)]
-    return [par.with_term(term, 0.0)]
+        return num / den if den > 0 else 0.0
+
+    context = StartContext(
+        latent_amplitudes=tuple(abs(e.amplitude * g) for e, g in zip(exps, par.gains)),
+        max_frequency=max(e.frequency for e in exps),
+        beta=par.beta,
+        gamma=par.gamma,
+        projection=projection,
+    )
+    return [par.with_term(term, v) for v in TERMS[term].start(context)]
 
 
 #: LM iterations of the screening of several starts (the best is then run to convergence).
@@ -448,7 +436,7 @@ def fit_with(exps: Sequence[AugExperiment], fit: AugFit, term: str, substeps: in
     ``SCREEN_ITER`` iterations and the best is finished.
     """
     starts = candidate_starts(exps, fit, term, substeps)
-    if term in LINEAR_TERMS:
+    if TERMS[term].linear:
         for st in starts:
             f = fit_from(exps, st, substeps)
             if f is not None:
@@ -474,17 +462,12 @@ def fit_own(
     e: AugExperiment, params: AugParams, gain: float, phase: float, substeps: int
 ) -> tuple[float, FloatArray]:
     """Held-out refit: only the experiment's own ``(g, phi)``, the physics frozen; (cost, output)."""
-    from .. import _core
-
-    shared = np.concatenate([[params.beta, params.gamma, params.mu], params.values]).astype(np.float64)
-    terms = list(params.terms)
     p = e.ybar.size
 
     def evaluate(g: float, ph: float) -> tuple[FloatArray, FloatArray]:
-        y, _, jo = _core.augmented_output(
-            p, e.amplitude, e.frequency, e.grid_phase, terms, shared, g, ph, substeps, e.waveform
-        )
-        return np.asarray(y), np.asarray(jo)
+        own = replace(params, gains=np.array([g]), phases=np.array([ph]))
+        out = augmented_output(e, own, 0, substeps=substeps, jacobian=True)
+        return out.y, out.own_jacobian
 
     x = np.array([gain, phase])
     try:
@@ -528,12 +511,13 @@ def physical(fit: AugFit, s: Scale, term: str) -> tuple[float, float]:
     f = s.factor(term, par.mu)
     v = float(par.values[i]) * f
     se = fit.standard_error(term) * abs(f)
-    if term == "asymmetry":
-        # delta = delta~ s^-mu: the delta method through mu as well.
+    c = TERMS[term].scaling[2]
+    if c:
+        # q = q~ s^(c mu) (asymmetry: delta = delta~ s^-mu): the delta method through mu as well.
         cov = fit.covariance
         j = 3 + i
-        ln = math.log(s.y)
-        var = f**2 * (cov[j, j] + (par.values[i] * ln) ** 2 * cov[2, 2] - 2 * par.values[i] * ln * cov[j, 2])
+        ln = c * math.log(s.y)
+        var = f**2 * (cov[j, j] + (par.values[i] * ln) ** 2 * cov[2, 2] + 2 * par.values[i] * ln * cov[j, 2])
         se = math.sqrt(var) if var >= 0 else math.nan
     return v, se
 

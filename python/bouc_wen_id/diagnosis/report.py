@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING, Optional
 
 import numpy as np
 
+from ..terms import Degradation
 from .result import TERM_LABELS, Diagnosis, clean
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -229,7 +230,7 @@ def html_page(d: Diagnosis, images: dict[str, bytes]) -> str:
             + _table(
                 [
                     [
-                        "degradation",
+                        Degradation.kind,
                         _g(deg.statistic, ".4g"),
                         _g(deg.p_adjusted, ".2g"),
                         _g(deg.share, ".2f"),

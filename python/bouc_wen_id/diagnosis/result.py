@@ -10,6 +10,7 @@ from typing import Any, Literal, Optional
 import numpy as np
 from numpy.typing import NDArray
 
+from ..terms import TERMS, Degradation
 from .data import DiagExperiment
 from .locate import Localisation
 from .select import Alternative, HeldOut, Step
@@ -17,25 +18,12 @@ from .select import Alternative, HeldOut, Step
 FloatArray = NDArray[np.float64]
 Status = Literal["adequate", "explained", "partly explained", "unexplained"]
 
-#: Human names of the terms (code name -> phrase), in the order of design.md 9.1.
-TERM_LABELS = {
-    "offset": "output offset",
-    "stiffness": "parallel stiffness",
-    "viscous": "viscous damping",
-    "inertia": "inertia",
-    "coulomb": "dry (Coulomb) friction",
-    "sensor_lag": "sensor lag",
-    "asymmetry": "asymmetry",
-    "play": "play (backlash)",
-    "degradation": "degradation",
-    "distortion": "measured input waveform",
-}
+#: Human names of the terms (code name -> phrase), in the order of design.md 9.1, from the registry.
+TERM_LABELS = {kind: cls.label for kind, cls in TERMS.items()}
 
 
 def term_symbol_unit(term: str, y_unit: str, u_unit: str) -> tuple[str, str]:
     """The parameter's symbol and its units with the output's and the input's units filled in."""
-    from ..terms import TERMS
-
     cls = TERMS[term]
     return cls.symbol, cls.units(y_unit or "[y]", u_unit or "[u]")
 
@@ -222,7 +210,7 @@ class Diagnosis:
             "experiments": [e.to_dict() for e in self.experiments],
             "settings": self.settings,
             "seconds": self.seconds,
-            "degradation": None if self.degradation is None else self.degradation.to_dict(),
+            Degradation.kind: None if self.degradation is None else self.degradation.to_dict(),
             "notes": list(self.notes),
         }
 

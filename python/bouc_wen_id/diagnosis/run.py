@@ -10,8 +10,9 @@ from typing import Any, Optional
 
 import numpy as np
 
-from ..augmented import TERM_NAMES, AugExperiment, AugFit
+from ..augmented import AugExperiment, AugFit
 from ..errors import InvalidParameterError
+from ..terms import DIAGNOSIS_CANDIDATES, Distortion
 from .data import DiagExperiment, prepare
 from .drift import (
     DEGRADATION,
@@ -44,7 +45,7 @@ EXPLAINED_FRACTION = 0.9
 #: structure left is located); below it "unexplained" (the terms are reported as partial, not named).
 PARTLY_EXPLAINED_FRACTION = 0.5
 #: Every candidate: the steady-loop terms, then degradation, tested in drift space (design.md 10.6).
-ALL_CANDIDATES: tuple[str, ...] = (*TERM_NAMES, DEGRADATION)
+ALL_CANDIDATES: tuple[str, ...] = DIAGNOSIS_CANDIDATES
 #: Passes of the virgin-strength correction of the averaged periods once degradation is named.
 CORRECTION_PASSES = 2
 #: Why degradation was not tested when the data hold no period-by-period record.
@@ -285,10 +286,10 @@ def diagnose(
         raise InvalidParameterError(f"alpha = {alpha!r} must lie in (0, 1)")
     exps = prepare(experiments)
     skipped: dict[str, str] = {}
-    if "distortion" in cands and not any(e.distorted for e in exps):
+    if Distortion.kind in cands and not any(e.distorted for e in exps):
         # The term scales the inputs' own harmonics: with pure sines it is the plain model (design.md 9.5).
-        cands = tuple(c for c in cands if c != "distortion")
-        skipped["distortion"] = (
+        cands = tuple(c for c in cands if c != Distortion.kind)
+        skipped[Distortion.kind] = (
             "not tested: every input is a pure sine (no harmonic above its noise floor), so the measured "
             "waveform adds nothing to the model"
         )
@@ -309,9 +310,9 @@ def diagnose(
         p = p_of(fit)
         return bool(math.isfinite(p) and p >= 0.5 * alpha)
 
-    plain = fit_plain(experiments, exps, s, substeps)
+    plain = fit_plain(exps, sx, s, substeps)
     # The distortion term's waveforms through G at their own frequencies, as the plain fit sees G.
-    if "distortion" in cands:
+    if Distortion.kind in cands:
         sx = carry_through_g(sx, plain, substeps)
     before = _localise(exps, sx, plain, s)
     cache: FoldCache = {}

@@ -28,13 +28,14 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, Optional
 
 import numpy as np
 from numpy.typing import NDArray
 
-from ..augmented import AugExperiment, AugFit
+from ..augmented import AugExperiment, AugFit, augmented_output
+from ..terms import TERMS
 from .fitting import best_of, fit_from, fit_own, fit_with, subset
 
 FloatArray = NDArray[np.float64]
@@ -50,7 +51,7 @@ ALTERNATIVE_CORRELATION = 0.95
 #: Held-out folds at most (experiments spread evenly when there are more).
 MAX_FOLDS = 10
 #: Parameters confined to >= 0, whose null value sits on the boundary.
-BOUNDARY_TERMS = ("sensor_lag", "play")
+BOUNDARY_TERMS = tuple(k for k, cls in TERMS.items() if cls.bounds[0] == 0.0)
 
 
 def f_test(c0: float, c1: float, dof1: int, boundary: bool = False) -> tuple[float, float]:
@@ -263,32 +264,17 @@ def _separating(exps: Sequence[AugExperiment], fa: AugFit, fb: AugFit, substeps:
     taken as at the tested one, so the difference there is the terms' own (an approximation for a G that
     changes quickly with frequency, which the message says).
     """
-    from .. import _core
-
     best = (0.0, "")
     for i, e in enumerate(exps):
         for amult, fmult in SEPARATING_DESIGNS:
+            design = replace(e, amplitude=e.amplitude * amult, frequency=e.frequency * fmult)
             ys: list[FloatArray] = []
             for f in (fa, fb):
-                par = f.params
-                shared = np.concatenate([[par.beta, par.gamma, par.mu], par.values]).astype(np.float64)
                 try:
-                    y, _, _ = _core.augmented_output(
-                        e.ybar.size,
-                        e.amplitude * amult,
-                        e.frequency * fmult,
-                        e.grid_phase,
-                        list(par.terms),
-                        shared,
-                        float(par.gains[i]),
-                        float(par.phases[i]),
-                        substeps,
-                        e.waveform,
-                    )
+                    ys.append(augmented_output(design, f.params, i, substeps=substeps))
                 except Exception:  # noqa: BLE001 - a design outside the model's range separates nothing
                     ys = []
                     break
-                ys.append(np.asarray(y))
             if len(ys) == 2:
                 sep = float(np.sqrt(np.mean((ys[0] - ys[1]) ** 2) * e.weight))
                 if sep > best[0]:

@@ -37,6 +37,7 @@ Wiley, 2007.
 
 from __future__ import annotations
 
+from .augmented import augmented_output, augmented_refine
 from .average import periodic_average
 from .estimate import gain_estimate, max_harmonics, phase_from_max, spectral_derivative
 from .linear import realize, routh_hurwitz_stable
@@ -46,7 +47,6 @@ from .refine import levenberg_marquardt, refine
 from .simulate import simulate_sampled, simulate_sine
 from .solve import golden_section, sls_regressor, sls_search, sls_theta, solve_normal
 from .steady import steady_loop
-from .terms import augmented_output, augmented_refine
 
 __all__ = [
     "realize",

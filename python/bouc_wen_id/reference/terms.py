@@ -1,409 +1,68 @@
-"""NumPy reference of ``rust/terms.rs``: the augmented model (``docs/design.md`` 9.1 and 9.3).
+"""NumPy reference of ``rust/terms.rs``: the terms' vocabulary, written once for the whole oracle.
 
-Written line by line from the design text, readable and unoptimised, to hold the Rust core
-(``_core.augmented_output`` and ``_core.augmented_refine``, ``rust/terms.rs``) to account: same signatures,
-same named errors.  The output terms act on the measured input ``u_j = U cos(2 pi j/P + psi)``, the sensor lag
-is applied on the DFT of the period, and the hysteresis is the plain steady loop of :mod:`.steady` (7.2)
-unless asymmetry or play is active, then the loop along the input path (9.2).  The Levenberg-Marquardt follows
-:func:`.refine.refine` (same damping schedule, stopping rules and projections) with a shared block of size
-``3 + T``; like it, it solves the full damped normal equations instead of their Schur complement (the same
-step up to rounding).
+The oracle spells each term's code name here only, independently of the package's registry
+(:mod:`bouc_wen_id.terms`), so that a slip in either shows in the parity tests; :mod:`.augmented` (the
+steady-loop model of ``rust/augmented.rs``) and :mod:`.with_terms` (the simulation of
+``rust/simulate/with_terms.rs``) take the names from here.
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-from typing import NamedTuple, Optional
-
-import numpy as np
-from numpy.typing import ArrayLike, NDArray
-
-from ..errors import InsufficientDataError, InvalidParameterError, ZeroAmplitudeError
-from ..validation import finite_array as _finite_array
-from ..validation import finite_scalar as _finite_scalar
-from .path_loop import path_loop, path_loop_distorted
-from .refine import admissible_bouc_wen, levenberg_marquardt, project_bouc_wen
-from .steady import steady_loop
-
 __all__ = [
-    "TERM_NAMES",
-    "COULOMB_EPS",
-    "PLAY_MAX_FRACTION",
-    "parse_terms",
-    "lag_filter",
-    "augmented_output",
-    "augmented_refine",
+    "OFFSET",
+    "STIFFNESS",
+    "VISCOUS",
+    "INERTIA",
+    "COULOMB",
+    "SENSOR_LAG",
+    "ASYMMETRY",
+    "PLAY",
+    "DEGRADATION",
+    "DISTORTION",
+    "COULOMB_SMOOTHING_KEY",
+    "COULOMB_SMOOTHING",
+    "COULOMB_SMOOTHING_MAX",
+    "STEADY_TERM_NAMES",
+    "SIMULATION_KEYS",
 ]
 
-FloatArray = NDArray[np.float64]
+OFFSET = "offset"
+STIFFNESS = "stiffness"
+VISCOUS = "viscous"
+INERTIA = "inertia"
+COULOMB = "coulomb"
+SENSOR_LAG = "sensor_lag"
+ASYMMETRY = "asymmetry"
+PLAY = "play"
+DEGRADATION = "degradation"
+DISTORTION = "distortion"
+#: The Coulomb term's fixed setting (not a term): the smoothing of its sign, a fraction of the peak velocity.
+COULOMB_SMOOTHING_KEY = "coulomb_smoothing"
+COULOMB_SMOOTHING = 0.01
+COULOMB_SMOOTHING_MAX = 0.5
 
-#: The term code names in the order of the table of design.md 9.1.
-TERM_NAMES: tuple[str, ...] = (
-    "offset",
-    "stiffness",
-    "viscous",
-    "inertia",
-    "coulomb",
-    "sensor_lag",
-    "asymmetry",
-    "play",
-    "distortion",
+#: The steady-loop (augmented) model's terms, in the order of the table of design.md 9.1.
+STEADY_TERM_NAMES: tuple[str, ...] = (
+    OFFSET,
+    STIFFNESS,
+    VISCOUS,
+    INERTIA,
+    COULOMB,
+    SENSOR_LAG,
+    ASYMMETRY,
+    PLAY,
+    DISTORTION,
 )
-#: Width of the Coulomb term's smoothed sign, as a fraction of the peak input velocity |U| omega.
-COULOMB_EPS = 0.01
-#: Largest play as a fraction of the smallest |A_i| during a refinement.
-PLAY_MAX_FRACTION = 0.95
-
-
-def parse_terms(terms: Sequence[str]) -> tuple[str, ...]:
-    """The term names as a tuple; an unknown or repeated name is :class:`InvalidParameterError`."""
-    if isinstance(terms, str):
-        raise InvalidParameterError(f"terms must be a sequence of names, not the string {terms!r}")
-    out: list[str] = []
-    for name in terms:
-        if name not in TERM_NAMES:
-            raise InvalidParameterError(f"unknown term {name!r}; the terms are {', '.join(TERM_NAMES)}")
-        if name in out:
-            raise InvalidParameterError(
-                f"term {name!r} is given twice; each term has one parameter and may appear once"
-            )
-        out.append(name)
-    return tuple(out)
-
-
-def _value(terms: tuple[str, ...], shared: FloatArray, name: str) -> float:
-    return float(shared[3 + terms.index(name)]) if name in terms else 0.0
-
-
-def _check_shared(terms: tuple[str, ...], shared: FloatArray) -> None:
-    if shared.size != 3 + len(terms):
-        raise InvalidParameterError(
-            f"the shared parameters hold {shared.size} values but [beta, gamma, mu] and {len(terms)} terms "
-            f"need {3 + len(terms)}"
-        )
-    _finite_array("shared parameters", shared)
-    tau = _value(terms, shared, "sensor_lag")
-    if tau < 0.0:
-        raise InvalidParameterError(f"sensor_lag tau = {tau} s must be >= 0")
-    b = _value(terms, shared, "play")
-    if b < 0.0:
-        raise InvalidParameterError(f"play b = {b} must be >= 0 (the half-width of the backlash)")
-    delta = _value(terms, shared, "asymmetry")
-    if "asymmetry" in terms and abs(delta) >= shared[0] + shared[1]:
-        raise InvalidParameterError(
-            f"asymmetry |delta| = {abs(delta)} must be below beta + gamma = {shared[0] + shared[1]}"
-        )
-
-
-def _check_excitation(amplitude: float, frequency: float, grid_phase: float) -> None:
-    _finite_scalar("amplitude", amplitude)
-    _finite_scalar("frequency", frequency)
-    _finite_scalar("grid_phase", grid_phase)
-    if amplitude == 0.0:
-        raise ZeroAmplitudeError("the input amplitude U is 0: nothing excites the plant")
-    if frequency <= 0.0:
-        raise InvalidParameterError(f"frequency = {frequency} rad/s must be > 0")
-
-
-def lag_filter(p: int, omega: float, tau: float) -> tuple[NDArray[np.complex128], NDArray[np.complex128]]:
-    """The first-order lag on the bins of a P-point DFT and its tau-derivative.
-
-    ``H_k = 1/(1 + i k omega tau)`` with ``k = n`` below P/2 and ``n - P`` above; the Nyquist bin of an even
-    P takes the real ``Re H``.  ``dH_k/dtau = -i k omega H_k^2``.
-    """
-    n = np.arange(p)
-    k = np.where(2 * n < p, n, n - p).astype(np.float64)
-    iw = 1j * k * omega
-    h: NDArray[np.complex128] = np.asarray(1.0 / (1.0 + iw * tau), dtype=np.complex128)
-    dh: NDArray[np.complex128] = np.asarray(-iw * h * h, dtype=np.complex128)
-    if p % 2 == 0:
-        a = (p // 2) * omega
-        d = 1.0 + a * a * tau * tau
-        h[p // 2] = 1.0 / d
-        dh[p // 2] = -2.0 * a * a * tau / (d * d)
-    return h, dh
-
-
-def _apply(filt: NDArray[np.complex128], cols: FloatArray) -> FloatArray:
-    """The filter applied to every column of ``cols`` (P, n) on the DFT of the period."""
-    return np.real(np.fft.ifft(np.fft.fft(cols, axis=0) * filt[:, None], axis=0))
-
-
-def _hysteresis(
-    terms: tuple[str, ...],
-    shared: FloatArray,
-    amplitude: float,
-    phi: float,
-    p: int,
-    substeps: int,
-    waveform: FloatArray,
-) -> tuple[FloatArray, FloatArray]:
-    """``w`` and its columns ``d/d(beta, gamma, mu, A, phi, delta, b, lambda)`` (0 where inactive)."""
-    beta, gamma, mu = (float(v) for v in shared[:3])
-    if "distortion" in terms:
-        delta, b = _value(terms, shared, "asymmetry"), _value(terms, shared, "play")
-        lam = _value(terms, shared, "distortion")
-        w, jac, _ = path_loop_distorted(amplitude, beta, gamma, mu, delta, b, phi, lam, waveform, p, substeps)
-        return w, jac
-    if "asymmetry" in terms or "play" in terms:
-        delta, b = _value(terms, shared, "asymmetry"), _value(terms, shared, "play")
-        w, jac7, _ = path_loop(amplitude, beta, gamma, mu, delta, b, phi, p, substeps)
-        return w, np.column_stack([jac7, np.zeros(p)])
-    w, jac5, _, _ = steady_loop(amplitude, beta, gamma, mu, phi, p, substeps)
-    jac = np.zeros((p, 8))
-    jac[:, :5] = jac5
-    return w, jac
-
-
-def augmented_output(
-    ybar_len: int,
-    amplitude: float,
-    frequency: float,
-    grid_phase: float,
-    terms: Sequence[str],
-    shared: ArrayLike,
-    gain: float,
-    phase: float,
-    substeps: int,
-    waveform: Optional[ArrayLike] = None,
-) -> tuple[FloatArray, FloatArray, FloatArray]:
-    """The augmented model's output of one experiment (design.md 9.1) and its Jacobian.
-
-    ``waveform``: the measured input's harmonics ``[Re c_2, Im c_2, ...]`` for the ``distortion`` term
-    (design.md 9.5); None or empty for a pure sine.
-
-    Returns ``(y (P,), jac_shared (P, 3 + T), jac_own (P, 2))``: shared columns
-    ``[beta, gamma, mu, q_1 .. q_T]`` in the order of ``terms``, own columns ``[g, phi]``.
-    """
-    names = parse_terms(terms)
-    sh = np.asarray(shared, dtype=np.float64).ravel()
-    if ybar_len < 0:
-        raise InvalidParameterError(f"ybar_len = {ybar_len} must be >= 0")
-    if substeps < 1:
-        raise InvalidParameterError(f"substeps = {substeps} must be >= 1")
-    _check_excitation(amplitude, frequency, grid_phase)
-    _check_shared(names, sh)
-    _finite_scalar("gain", gain)
-    _finite_scalar("phase", phase)
-    p = int(ybar_len)
-    wave = np.zeros(0) if waveform is None else np.asarray(waveform, dtype=np.float64).ravel()
-    w, hj = _hysteresis(names, sh, amplitude * gain, phase, p, substeps, wave)
-    theta = 2.0 * np.pi * np.arange(p) / p + grid_phase
-    u = amplitude * np.cos(theta)
-    udot = -amplitude * frequency * np.sin(theta)
-    uddot = -amplitude * frequency**2 * np.cos(theta)
-    fric = np.tanh(udot / (COULOMB_EPS * abs(amplitude) * frequency))
-    inputs = {"stiffness": u, "viscous": udot, "inertia": uddot, "coulomb": fric}
-    ns = 3 + len(names)
-    f = w.copy()
-    jac_shared = np.zeros((p, ns))
-    jac_shared[:, :3] = hj[:, :3]
-    for t, name in enumerate(names):
-        if name in inputs:
-            f = f + sh[3 + t] * inputs[name]
-            jac_shared[:, 3 + t] = inputs[name]
-        elif name == "asymmetry":
-            jac_shared[:, 3 + t] = hj[:, 5]
-        elif name == "play":
-            jac_shared[:, 3 + t] = hj[:, 6]
-        elif name == "distortion":
-            jac_shared[:, 3 + t] = hj[:, 7]
-    jac_own = np.column_stack([amplitude * hj[:, 3], hj[:, 4]])
-    y = f
-    if "sensor_lag" in names:
-        col = 3 + names.index("sensor_lag")
-        h, dh = lag_filter(p, frequency, sh[col])
-        y = _apply(h, f[:, None])[:, 0]
-        jac_shared = _apply(h, jac_shared)
-        jac_own = _apply(h, jac_own)
-        jac_shared[:, col] = _apply(dh, f[:, None])[:, 0]
-    if "offset" in names:
-        col = 3 + names.index("offset")
-        y = y + sh[col]
-        jac_shared[:, col] = 1.0
-    _finite_array("model output", y)
-    return y, jac_shared, jac_own
-
-
-class _Problem(NamedTuple):
-    """The checked data of :func:`augmented_refine`, and the model's constraints and cost on them."""
-
-    ys: list[FloatArray]
-    amps: FloatArray
-    freqs: FloatArray
-    psis: FloatArray
-    wts: FloatArray
-    names: tuple[str, ...]
-    substeps: int
-    mu_lo: float
-    mu_hi: float
-    waveforms: Optional[Sequence[ArrayLike]]
-
-    @property
-    def ns(self) -> int:
-        """Size of the shared block ``[beta, gamma, mu, q_1 .. q_T]``."""
-        return 3 + len(self.names)
-
-    def col(self, name: str) -> int:
-        return 3 + self.names.index(name)
-
-    def play_max(self, par: FloatArray) -> float:
-        return PLAY_MAX_FRACTION * float(np.min(np.abs(self.amps * par[self.ns :: 2])))
-
-    def admissible(self, par: FloatArray) -> bool:
-        ok = admissible_bouc_wen(par, self.mu_lo, self.mu_hi)
-        if "asymmetry" in self.names:
-            ok = ok and abs(par[self.col("asymmetry")]) < par[0] + par[1]
-        if "sensor_lag" in self.names:
-            ok = ok and par[self.col("sensor_lag")] >= 0.0
-        if "play" in self.names:
-            ok = ok and 0.0 <= par[self.col("play")] <= self.play_max(par)
-        return ok
-
-    def evaluate(self, par: FloatArray) -> tuple[float, tuple[list[FloatArray], FloatArray, FloatArray]]:
-        """``(cost, (outputs, J'WJ, J'Wr))`` at ``par``."""
-        n, ns = par.size, self.ns
-        cost = 0.0
-        outputs = []
-        fisher = np.zeros((n, n))
-        grad = np.zeros(n)
-        for i, yi in enumerate(self.ys):
-            y, js, jo = augmented_output(
-                yi.size,
-                self.amps[i],
-                self.freqs[i],
-                self.psis[i],
-                self.names,
-                par[:ns],
-                par[ns + 2 * i],
-                par[ns + 1 + 2 * i],
-                self.substeps,
-                None if self.waveforms is None else self.waveforms[i],
-            )
-            r = yi - y
-            cost += self.wts[i] * float(np.sum(r * r))
-            full = np.zeros((yi.size, n))
-            full[:, :ns] = js
-            full[:, ns + 2 * i : ns + 2 * i + 2] = jo
-            fisher += self.wts[i] * full.T @ full
-            grad += self.wts[i] * full.T @ r
-            outputs.append(y)
-        return cost, (outputs, fisher, grad)
-
-    def project(self, trial: FloatArray) -> None:
-        """The projections of :func:`.refine.refine`, then tau and b clipped into their ranges."""
-        project_bouc_wen(trial, self.mu_lo, self.mu_hi)
-        if "sensor_lag" in self.names:
-            trial[self.col("sensor_lag")] = max(trial[self.col("sensor_lag")], 0.0)
-        if "play" in self.names:
-            trial[self.col("play")] = max(min(trial[self.col("play")], self.play_max(trial)), 0.0)
-
-
-def _check_refine(
-    ybars: Sequence[ArrayLike],
-    vectors: tuple[ArrayLike, ArrayLike, ArrayLike, ArrayLike],
-    terms: Sequence[str],
-    start: tuple[ArrayLike, ArrayLike, ArrayLike],
-    max_iter: int,
-    substeps: int,
-    mu_lo: float,
-    mu_hi: float,
-    waveforms: Optional[Sequence[ArrayLike]],
-) -> tuple[_Problem, FloatArray, FloatArray, FloatArray]:
-    """The arguments of :func:`augmented_refine` checked in the core's order: the problem and the start
-    ``(shared0, gains0, phases0)``."""
-    names = parse_terms(terms)
-    ys = [np.asarray(y, dtype=np.float64) for y in ybars]
-    m = len(ys)
-    amps, freqs, psis, wts = (np.asarray(v, dtype=np.float64).ravel() for v in vectors)
-    if not (amps.size == freqs.size == psis.size == wts.size == m):
-        raise InvalidParameterError(
-            f"{m} experiments but {amps.size} amplitudes, {freqs.size} frequencies, {psis.size} grid phases "
-            f"and {wts.size} weights"
-        )
-    if max_iter < 1 or substeps < 1:
-        raise InvalidParameterError("max_iter and substeps must be >= 1")
-    sh0, g0, p0 = (np.asarray(v, dtype=np.float64).ravel() for v in start)
-    if m == 0:
-        raise InsufficientDataError("the refinement needs at least one experiment")
-    if g0.size != m or p0.size != m:
-        raise InvalidParameterError(f"{m} experiments but {g0.size} gains and {p0.size} phases")
-    for i in range(m):
-        _finite_array(f"ybar[{i}]", ys[i])
-        _check_excitation(float(amps[i]), float(freqs[i]), float(psis[i]))
-        _finite_scalar("weight", float(wts[i]))
-        if wts[i] <= 0.0:
-            raise InvalidParameterError(f"experiment {i}: weight {wts[i]} must be > 0 (N / noise variance)")
-    _finite_array("gains", g0)
-    _finite_array("phases", p0)
-    if not np.isfinite(mu_lo) or mu_lo < 1.0 or np.isnan(mu_hi) or mu_hi <= mu_lo:
-        raise InvalidParameterError(
-            f"the mu bracket ({mu_lo}, {mu_hi}] must have a finite lower end >= 1 below its upper end"
-        )
-    _check_shared(names, sh0)
-    if waveforms is not None and len(waveforms) != m:
-        raise InvalidParameterError(f"{m} experiments but {len(waveforms)} waveforms")
-    problem = _Problem(ys, amps, freqs, psis, wts, names, substeps, mu_lo, mu_hi, waveforms)
-    return problem, sh0, g0, p0
-
-
-def augmented_refine(
-    ybars: Sequence[ArrayLike],
-    amplitudes: ArrayLike,
-    frequencies: ArrayLike,
-    grid_phases: ArrayLike,
-    weights: ArrayLike,
-    terms: Sequence[str],
-    shared0: ArrayLike,
-    gains0: ArrayLike,
-    phases0: ArrayLike,
-    *,
-    max_iter: int = 200,
-    substeps: int = 4,
-    mu_lo: float = 1.0,
-    mu_hi: float = float("inf"),
-    waveforms: Optional[Sequence[ArrayLike]] = None,
-) -> tuple[FloatArray, FloatArray, FloatArray, float, int, bool, FloatArray, list[FloatArray]]:
-    """Joint Levenberg-Marquardt of the augmented model over every experiment (design.md 9.3).
-
-    Returns ``(shared, gains, phases, cost, iterations, converged, fisher, outputs)`` with ``fisher`` ordered
-    ``[beta, gamma, mu, q_1 .. q_T, g_0, phi_0, g_1, phi_1, ...]``.
-    """
-    ftol, xtol = 1e-12, 1e-10
-    vectors = (amplitudes, frequencies, grid_phases, weights)
-    start = (shared0, gains0, phases0)
-    prob, sh0, g0, p0 = _check_refine(
-        ybars, vectors, terms, start, max_iter, substeps, mu_lo, mu_hi, waveforms
-    )
-    ns = prob.ns
-    params = np.concatenate([sh0, np.column_stack([g0, p0]).ravel()])
-    if not prob.admissible(np.concatenate([params[:3], np.zeros(len(prob.names)), params[ns:]])):
-        raise InvalidParameterError(
-            f"the starting point (beta = {sh0[0]}, gamma = {sh0[1]}, mu = {sh0[2]}) must satisfy "
-            f"beta >= |gamma|, beta + gamma > 0 and {mu_lo} < mu <= {mu_hi}"
-        )
-    if "play" in prob.names and params[prob.col("play")] > prob.play_max(params):
-        raise InvalidParameterError(
-            f"the starting play b = {params[prob.col('play')]} must be below {PLAY_MAX_FRACTION} min "
-            f"|U_i g_i| = {prob.play_max(params)}"
-        )
-    params, cost, it, converged, fisher, (outputs, _, _) = levenberg_marquardt(
-        params,
-        prob.evaluate,
-        lambda state: (state[1], state[2]),
-        prob.project,
-        prob.admissible,
-        max_iter=max_iter,
-        ftol=ftol,
-        xtol=xtol,
-    )
-    return (
-        params[:ns].copy(),
-        params[ns::2].copy(),
-        params[ns + 1 :: 2].copy(),
-        float(cost),
-        it,
-        converged,
-        fisher,
-        outputs,
-    )
+#: Keys of the simulation's ``terms`` mapping: the code names, plus the Coulomb smoothing.
+SIMULATION_KEYS: tuple[str, ...] = (
+    OFFSET,
+    STIFFNESS,
+    VISCOUS,
+    INERTIA,
+    COULOMB,
+    COULOMB_SMOOTHING_KEY,
+    SENSOR_LAG,
+    ASYMMETRY,
+    PLAY,
+    DEGRADATION,
+)

@@ -28,6 +28,21 @@ from numpy.typing import NDArray
 
 from ..errors import InvalidParameterError
 from ..validation import finite_scalar
+from .terms import (
+    ASYMMETRY,
+    COULOMB,
+    COULOMB_SMOOTHING,
+    COULOMB_SMOOTHING_KEY,
+    COULOMB_SMOOTHING_MAX,
+    DEGRADATION,
+    INERTIA,
+    OFFSET,
+    PLAY,
+    SENSOR_LAG,
+    SIMULATION_KEYS,
+    STIFFNESS,
+    VISCOUS,
+)
 
 __all__ = [
     "TERM_NAMES",
@@ -44,21 +59,7 @@ __all__ = [
 
 FloatArray = NDArray[np.float64]
 
-#: Keys of the ``terms`` mapping (the code names, plus the Coulomb smoothing).
-TERM_NAMES = (
-    "offset",
-    "stiffness",
-    "viscous",
-    "inertia",
-    "coulomb",
-    "coulomb_smoothing",
-    "sensor_lag",
-    "asymmetry",
-    "play",
-    "degradation",
-)
-COULOMB_SMOOTHING = 0.01
-COULOMB_SMOOTHING_MAX = 0.5
+TERM_NAMES = SIMULATION_KEYS
 #: Relative slack of the play's engagement test (after a clamp ``x - xp`` is ``b`` only to rounding).
 PLAY_ENGAGE_RTOL = 1e-12
 #: Below this ``r = h/tau`` the phi functions are Taylor series of PHI_TERMS terms.
@@ -69,29 +70,29 @@ PHI_TERMS = 20
 def check_terms(terms: Mapping[str, float], beta: float, gamma: float) -> dict[str, float]:
     """The full set of term parameters (absent ones 0) after the Rust core's checks, in its order."""
     out = {name: 0.0 for name in TERM_NAMES}
-    out["coulomb_smoothing"] = COULOMB_SMOOTHING
+    out[COULOMB_SMOOTHING_KEY] = COULOMB_SMOOTHING
     for name, value in terms.items():
         if name not in out:
             raise InvalidParameterError(f"unknown term {name!r}; the terms are {', '.join(TERM_NAMES)}")
         out[name] = float(value)
     for name in TERM_NAMES:
         finite_scalar(name, out[name])
-    if out["sensor_lag"] < 0.0:
-        raise InvalidParameterError(f"sensor_lag tau = {out['sensor_lag']} s must be >= 0")
-    if out["play"] < 0.0:
-        raise InvalidParameterError(f"play b = {out['play']} must be >= 0 (it is a half-width)")
-    if not 0.0 < out["coulomb_smoothing"] <= COULOMB_SMOOTHING_MAX:
+    if out[SENSOR_LAG] < 0.0:
+        raise InvalidParameterError(f"sensor_lag tau = {out[SENSOR_LAG]} s must be >= 0")
+    if out[PLAY] < 0.0:
+        raise InvalidParameterError(f"play b = {out[PLAY]} must be >= 0 (it is a half-width)")
+    if not 0.0 < out[COULOMB_SMOOTHING_KEY] <= COULOMB_SMOOTHING_MAX:
         raise InvalidParameterError(
-            f"coulomb_smoothing eps = {out['coulomb_smoothing']} must be in (0, {COULOMB_SMOOTHING_MAX}]"
+            f"coulomb_smoothing eps = {out[COULOMB_SMOOTHING_KEY]} must be in (0, {COULOMB_SMOOTHING_MAX}]"
         )
-    if out["degradation"] < 0.0:
+    if out[DEGRADATION] < 0.0:
         raise InvalidParameterError(
-            f"degradation delta_nu = {out['degradation']} must be >= 0 (the strength falls with dissipated "
+            f"degradation delta_nu = {out[DEGRADATION]} must be >= 0 (the strength falls with dissipated "
             "energy)"
         )
-    if abs(out["asymmetry"]) >= beta + gamma:
+    if abs(out[ASYMMETRY]) >= beta + gamma:
         raise InvalidParameterError(
-            f"asymmetry |delta| = {abs(out['asymmetry'])} must be < beta + gamma = {beta + gamma}"
+            f"asymmetry |delta| = {abs(out[ASYMMETRY])} must be < beta + gamma = {beta + gamma}"
         )
     return out
 
@@ -153,13 +154,13 @@ def has_state(model: Model) -> bool:
     """Whether a term changes the states (asymmetry, play, lag, degradation); if not, the plain RK4 of
     :mod:`.simulate` gives ``x, w`` and :func:`outputs` adds the output terms at the samples."""
     p = model.terms
-    return p["asymmetry"] != 0.0 or p["play"] > 0.0 or p["sensor_lag"] > 0.0 or p["degradation"] > 0.0
+    return p[ASYMMETRY] != 0.0 or p[PLAY] > 0.0 or p[SENSOR_LAG] > 0.0 or p[DEGRADATION] > 0.0
 
 
 def _mech(p: Mapping[str, float], inp: Input) -> Callable[[float], float]:
     """``k u + c udot + m uddot + f tanh(udot/(eps Vmax))`` at time t (the undelayed input)."""
-    stiff, visc, iner, coul = p["stiffness"], p["viscous"], p["inertia"], p["coulomb"]
-    scale = p["coulomb_smoothing"] * inp.peak_rate
+    stiff, visc, iner, coul = p[STIFFNESS], p[VISCOUS], p[INERTIA], p[COULOMB]
+    scale = p[COULOMB_SMOOTHING_KEY] * inp.peak_rate
 
     def mech(t: float) -> float:
         u, udot = inp.source(t)
@@ -173,7 +174,7 @@ def _mech(p: Mapping[str, float], inp: Input) -> Callable[[float], float]:
 def outputs(model: Model, w_out: FloatArray, inp: Input, dt: float) -> FloatArray:
     """``y`` at the samples from the plain ``w`` (no state term)."""
     mech = _mech(model.terms, inp)
-    return np.array([model.terms["offset"] + (float(w_out[k]) + mech(k * dt)) for k in range(w_out.size)])
+    return np.array([model.terms[OFFSET] + (float(w_out[k]) + mech(k * dt)) for k in range(w_out.size)])
 
 
 class _Rates(NamedTuple):
@@ -227,8 +228,8 @@ def integrate(
     exponential step (module docstring)."""
     a, c, d, delay, (alpha, beta, gamma, mu, w0), p = model
     mech = _mech(p, inp)
-    b, tau = p["play"], p["sensor_lag"]
-    rates = _Rates(alpha, beta, gamma, mu, p["asymmetry"], p["degradation"])
+    b, tau = p[PLAY], p[SENSOR_LAG]
+    rates = _Rates(alpha, beta, gamma, mu, p[ASYMMETRY], p[DEGRADATION])
     rate = rates.rate
     n = a.size
 
@@ -261,7 +262,7 @@ def integrate(
         t = k * dt
         x_out[k] = float(np.dot(c, xs)) + d * delayed(t)[0]
         w_out[k] = w
-        y_out[k] = p["offset"] + (ys if has_lag else w + mech(t))
+        y_out[k] = p[OFFSET] + (ys if has_lag else w + mech(t))
         if k == n_samples - 1:
             break
         for s in range(substeps):
