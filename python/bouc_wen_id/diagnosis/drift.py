@@ -185,6 +185,11 @@ class DegradationTest:
     rate: tuple[float, ...] = ()
     #: Harmonics 0..K of J_i (scaled), per experiment in ``experiments``.
     jac: tuple[ComplexArray, ...] = ()
+    #: P(chi2(dof0) > cost0): the block deviations against no drift at all (NaN when not computed).
+    drift_p_value: float = math.nan
+    #: Whether the record drifts at all (the gate; False: the test is not a candidate, as a steady term is
+    #: not tried on a plain model at the noise floor).
+    drift_present: bool = True
 
     @property
     def held_out_improves(self) -> bool:
@@ -192,7 +197,7 @@ class DegradationTest:
 
     @property
     def named(self) -> bool:
-        return self.passed and self.held_out_improves
+        return self.passed and self.drift_present and self.held_out_improves
 
     @property
     def held_out_nrmse_ratio(self) -> float:
@@ -218,6 +223,8 @@ class DegradationTest:
             "held_out_nrmse_ratio": self.held_out_nrmse_ratio,
             "experiments": list(self.experiments),
             "passed_in_sample": self.passed,
+            "drift_p_value": None if not math.isfinite(self.drift_p_value) else self.drift_p_value,
+            "drift_present": self.drift_present,
             "named": self.named,
         }
 
@@ -279,6 +286,20 @@ def degradation_test(
         rate=tuple(d * dd.energy for dd in data),
         jac=tuple(dd.jac for dd in data),
     )
+
+
+def with_drift_gate(test: DegradationTest, alpha: float) -> DegradationTest:
+    """``test`` gated on a drift being there at all: the blocks' chi-square against no drift, ``cost0`` on
+    ``dof0``, must reject at ``alpha / 2`` (the other half is the per-experiment drift test's, in locate).
+
+    Without the gate the one-parameter F-test names a degradation in the noise of a record that does not
+    drift (the demo plant, nothing hidden: delta_nu = 1.0e-05 at p adj = 0.023 with the block chi-square
+    at p = 0.06 and the plain model at p = 0.93).
+    """
+    from scipy.special import chdtrc  # type: ignore[import-untyped]
+
+    p = float(chdtrc(test.dof0, test.cost0)) if test.dof0 > 0 and math.isfinite(test.cost0) else math.nan
+    return replace(test, drift_p_value=p, drift_present=bool(math.isfinite(p) and p < 0.5 * alpha))
 
 
 def predicted_deviation(dd: DriftData, d: float) -> ComplexArray:

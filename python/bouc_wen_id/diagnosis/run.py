@@ -4,14 +4,15 @@ from __future__ import annotations
 
 import math
 import time
+import warnings
 from collections.abc import Sequence
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from typing import Any, Optional
 
 import numpy as np
 
 from ..augmented import TERM_NAMES, AugExperiment, AugFit
-from ..errors import InvalidParameterError
+from ..errors import InvalidParameterError, TransientWarning
 from .data import DiagExperiment, prepare
 from .drift import (
     DEGRADATION,
@@ -21,6 +22,7 @@ from .drift import (
     detrended,
     drift_data,
     strengths,
+    with_drift_gate,
 )
 from .fitting import (
     Scale,
@@ -37,11 +39,9 @@ from .locate import Localisation, adequacy_p, locate
 from .result import Diagnosis, ModelSummary, NamedTerm, Status, term_symbol_unit
 from .select import ALPHA, FoldCache, forward_select, held_out
 
-#: The named terms must remove at least this share of the plain model's excess residual for the verdict
-#: "explained" when the final model is still rejected.
-EXPLAINED_FRACTION = 0.9
-#: Between this share and EXPLAINED_FRACTION the verdict is "partly explained" (the terms are named, and the
-#: structure left is located); below it "unexplained" (the terms are reported as partial, not named).
+#: When the final model is still rejected, named terms that remove at least this share of the plain model's
+#: excess give "partly explained" (the terms are named, with the share, and the structure left is located);
+#: below it "unexplained" (the terms are reported as partial, not named).
 PARTLY_EXPLAINED_FRACTION = 0.5
 #: Every candidate: the steady-loop terms, then degradation, tested in drift space (design.md 10.6).
 ALL_CANDIDATES: tuple[str, ...] = (*TERM_NAMES, DEGRADATION)
@@ -90,11 +90,10 @@ def _summary(
     for e, y in zip(sx, fit.outputs):
         spread = float(np.linalg.norm(e.ybar - e.ybar.mean()))
         nr.append(float(np.linalg.norm(e.ybar - y)) / spread if spread > 0 else math.nan)
-    sm = s.y**par.mu
     return ModelSummary(
         terms=tuple(terms),
-        beta=par.beta / sm,
-        gamma=par.gamma / sm,
+        beta=_unscaled(par.beta, s.y, par.mu),
+        gamma=_unscaled(par.gamma, s.y, par.mu),
         mu=par.mu,
         cost=fit.cost,
         dof=dof,
@@ -104,11 +103,23 @@ def _summary(
     )
 
 
+def _unscaled(v: float, s_y: float, mu: float) -> float:
+    """``v / s_y^mu`` in logarithms: an extreme mu (a fit to noise) neither overflows nor divides by 0."""
+    if v == 0.0 or not math.isfinite(v):
+        return v
+    lg = math.log(abs(v)) - mu * math.log(s_y)
+    return math.copysign(math.exp(lg), v) if lg < 709.0 else math.copysign(math.inf, v)
+
+
 def classify(plain_adequate: bool, has_terms: bool, final_adequate: bool, fraction: float) -> Status:
-    """The verdict's status from the plain model's test, the final model's and the excess explained."""
+    """The verdict's status from the plain model's test, the final model's and the excess explained.
+
+    "explained" only when the final model passes its adequacy test: a share of the excess, however large,
+    leaves the rest unexplained (a final chi2/dof of 45 was called "explained" at 90 % of the excess).
+    """
     if plain_adequate:
         return "adequate"
-    if has_terms and (final_adequate or fraction >= EXPLAINED_FRACTION):
+    if has_terms and final_adequate:
         return "explained"
     if has_terms and fraction >= PARTLY_EXPLAINED_FRACTION:
         return "partly explained"
@@ -204,19 +215,25 @@ def _degradation_stage(
     alpha: float,
     family: int,
     held_out_test: bool,
+    drift_seen: bool,
 ) -> Optional[tuple[Optional[DegradationTest], list[DiagExperiment], list[AugExperiment], AugFit]]:
     """The degradation candidate (design.md 10.6): its test, and the data and start the steady selection
     then runs on (the test is None when it cannot be formed); None without a block record.
 
     Tested on the plain model's Jacobian, Bonferroni over all ``family`` candidates of the first step as if
-    it were one of them. When it is named, the averaged periods are brought back to the virgin strength and
-    re-estimated at each loop's own strength, twice (the first pass moves the fit from the plain model's
-    average strength to the virgin one, the second settles it), then d is refined on both costs.
+    it were one of them, and only when the record drifts at all (``drift_seen``: locate's drift test, or
+    else the drift chi-square of the blocks against no drift at ``alpha / 2``, :func:`with_drift_gate`),
+    as a steady term is tried only when the plain model is rejected. When it is named, the averaged periods
+    are brought back to the virgin strength and re-estimated at each loop's own strength, twice (the first
+    pass moves the fit from the plain model's average strength to the virgin one, the second settles it),
+    then d is refined on both costs.
     """
     data = drift_data(exps, sx, plain, s.y, substeps)
     if not data:
         return None
     deg = degradation_test(data, s.y, alpha, family=family)
+    if deg is not None and not drift_seen:
+        deg = with_drift_gate(deg, alpha)
     if deg is None or not (deg.named if held_out_test else deg.passed):
         return deg, list(exps), list(sx), plain
     fit, fexps, fsx = plain, list(exps), list(sx)
@@ -227,7 +244,7 @@ def _degradation_stage(
         retest = degradation_test(data, s.y, alpha, family=family)
         if retest is None:
             break
-        deg = retest
+        deg = retest if drift_seen else with_drift_gate(retest, alpha)
     if not (deg.named if held_out_test else deg.passed):
         # The refined test no longer names it: the steady selection on the data as they are.
         return deg, list(exps), list(sx), plain
@@ -235,6 +252,151 @@ def _degradation_stage(
         deg, fit = _refine_degradation(exps, sx, fit, data, deg, s, substeps)
         fexps, fsx = corrected(exps, sx, fit, deg.d, s.y, substeps)
     return deg, fexps, fsx, fit
+
+
+#: A term whose fitted value must not be negative to be physical (a mass, a damping, a friction, a lag, a
+#: play): a negative one is never named (select.py refuses it; a later step that drives it negative is
+#: reported as "not physical").
+NONNEGATIVE_TERMS: dict[str, str] = {
+    "viscous": "a negative damping (energy supplied, not dissipated)",
+    "inertia": "a negative mass",
+    "coulomb": "a negative friction (energy supplied at every reversal)",
+    "sensor_lag": "a negative lag (an output ahead of its cause)",
+    "play": "a negative play",
+}
+#: What a non-physical value suggests.
+NOT_PHYSICAL_HINT = (
+    "the term stands in for physics the library places elsewhere (e.g. acting on the hysteresis' own input "
+    "x through G, or a G whose phase trades with it); it is not named"
+)
+
+
+@dataclass(frozen=True)
+class _Setup:
+    """What every diagnosis of one set of experiments shares: the tests' settings and the data's scale."""
+
+    cands: tuple[str, ...]
+    alpha: float
+    held_out_test: bool
+    units: tuple[str, str]
+    skipped: dict[str, str]
+
+
+def _settled(experiments: Any) -> tuple[Any, list[str]]:
+    """The recordings with their start-up transient trimmed, as ``identify`` trims it (TransientWarning).
+
+    A recording whose first periods differ from its steady ones beyond the noise (``transient_periods``)
+    is trimmed when the rest is then settled: a transient decays. A drift that goes on through the record
+    (a degrading specimen, a loop still settling slowly) is left for the degradation test and the
+    per-experiment drift test (:func:`_unsettled`), which keep physics from being named from it.
+    """
+    from ..model import Recording
+    from ..prepare import transient_periods
+
+    seq = list(experiments) if isinstance(experiments, (list, tuple)) else [experiments]
+    notes: list[str] = []
+    out: list[Any] = []
+    for i, item in enumerate(seq):
+        if not isinstance(item, Recording):
+            out.append(item)
+            continue
+        p, s = item.samples_per_period, item.settle_periods
+        n = item.whole_periods - s
+        extra = transient_periods(item.y, p, s, n)
+        if extra and transient_periods(item.y, p, s + extra, n - extra) == 0 and n - extra >= 3:
+            source = item.metadata.get("name", f"recording {i}")
+            msg = (
+                f"{source}: the first {extra} of the {n} periods after {s} settling ones are still transient "
+                f"(they differ from the steady periods beyond the noise); they were dropped, settle_periods "
+                f"= {s + extra} is used"
+            )
+            warnings.warn(msg + ". Pass recordings with more settle_periods to choose", TransientWarning, 3)
+            notes.append(msg)
+            item = Recording(
+                item.t,
+                item.u,
+                item.y,
+                item.amplitude,
+                item.frequency,
+                settle_periods=s + extra,
+                x=item.x,
+                w=item.w,
+                plant=item.plant,
+                metadata=item.metadata,
+            )
+        out.append(item)
+    return out, notes
+
+
+def _check_experiments(exps: Sequence[DiagExperiment]) -> None:
+    """Refuse, as ``identify`` does, an output with no response at the excitation (a wrong channel, pure
+    noise: nothing physical can be named from it) and sizes whose squares leave the floating-point range."""
+    from ..errors import ZeroAmplitudeError
+    from ..prepare import SCALE_MAX, SCALE_MIN, _check_response
+
+    for e in exps:
+        peak = float(np.max(np.abs(e.ybar)))
+        for what, size in (("input amplitude", abs(e.amplitude)), ("output", peak)):
+            if not SCALE_MIN <= size <= SCALE_MAX:
+                raise ZeroAmplitudeError(
+                    f"{e.source}: the {what} is of size {size:.3e}, outside [{SCALE_MIN:g}, {SCALE_MAX:g}]: "
+                    "express the data in units that keep it there (e.g. mm instead of km)"
+                )
+        dc = float(np.mean(e.ybar))
+        _check_response(e.ybar - dc, abs(dc), e.noise_var, e.periods, e.source)
+
+
+#: Fewest distinct output levels, relative to the samples, below which the output is read as quantised.
+QUANTISED_LEVELS = 0.25
+
+
+def quantisation_step(y: Any) -> float:
+    """The output's quantisation step (0 when the samples are not on a grid of steps)."""
+    v = np.asarray(y, dtype=np.float64).ravel()
+    levels = np.unique(v[np.isfinite(v)])
+    if levels.size < 2 or levels.size > QUANTISED_LEVELS * v.size:
+        return 0.0
+    q = float(np.min(np.diff(levels)))
+    k = (levels - levels[0]) / q
+    tol = 1e-6 * max(1.0, float(k[-1]))
+    return q if float(np.max(np.abs(k - np.round(k)))) <= tol else 0.0
+
+
+def _quantisation_floor(items: Any, exps: list[DiagExperiment]) -> tuple[list[DiagExperiment], list[str]]:
+    """Every experiment's noise variance at least ``q^2 / 12`` (q the output's quantisation step).
+
+    Quantised outputs can repeat a period exactly: the variance from neighbouring periods is then 0 (or far
+    below a step) and a weight ``N / sigma^2`` absurd (a degradation chi-square of 1.4e26 on the MR damper's
+    1 A files). The floor is the quantisation noise's own variance; the notes say where it applied (the
+    tests there are approximate: quantisation error below one step is not white noise).
+    """
+    seq = list(items) if isinstance(items, (list, tuple)) else [items]
+    q = max((quantisation_step(it.y) for it in seq if hasattr(it, "y")), default=0.0)
+    if q <= 0.0:
+        return exps, []
+    floor = q * q / 12.0
+    out, notes = [], []
+    for e in exps:
+        if e.noise_var < floor:
+            notes.append(
+                f"{e.source}: the period-to-period noise (variance {e.noise_var:.3g}) is below the output's "
+                f"quantisation step q = {q:.3g}; the noise floor is taken as q^2/12 = {floor:.3g}, and the "
+                "tests on this experiment are approximate (quantisation error below one step is not white)"
+            )
+            e = replace(e, noise_var=floor, spread_var=max(e.spread_var, floor))
+        out.append(e)
+    return out, notes
+
+
+def _unsettled(exps: Sequence[DiagExperiment]) -> list[int]:
+    """Indices of the experiments whose loop drifts from period to period (locate's drift test, per
+    experiment, Bonferroni over them at half the level)."""
+    from .locate import LEVEL, _drift
+
+    tested = [i for i, e in enumerate(exps) if e.h1.size >= 4]
+    findings, _ = _drift(exps)
+    level = 0.5 * LEVEL / max(len(findings), 1)
+    return [i for i, f in zip(tested, findings) if f.p_value < level]
 
 
 def diagnose(
@@ -253,7 +415,9 @@ def diagnose(
     experiments : Recording, Measurement, AveragedPeriod or a sequence of them
         The experiments, fitted jointly (shared physics, one |G|, phi per experiment). The output's DC is
         kept, so an offset can be named; the period-by-period record (Recordings, Measurements) feeds the
-        drift test and a noise floor that drift does not inflate.
+        drift test and a noise floor that drift does not inflate. A recording's start-up transient is
+        trimmed as ``identify`` trims it (TransientWarning); an experiment whose loop still drifts is left
+        out of the naming unless degradation explains the drift (``Diagnosis.notes`` says which).
     candidates : sequence of str, optional
         Term names to try (default: the whole library, :data:`ALL_CANDIDATES`: the steady-loop terms of
         :data:`bouc_wen_id.augmented.TERM_NAMES` and ``"degradation"``, which is fitted from the
@@ -276,6 +440,9 @@ def diagnose(
         Unknown candidate names or alpha outside (0, 1).
     InsufficientDataError
         Too few periods for a noise floor.
+    ZeroAmplitudeError
+        An output with no response above the noise (a wrong channel), or data too large or too small for
+        floating point.
     SearchAtBoundError
         When not even the plain model can be fitted.
     """
@@ -283,7 +450,9 @@ def diagnose(
     cands = _check_candidates(candidates)
     if not (0.0 < float(alpha) < 1.0):
         raise InvalidParameterError(f"alpha = {alpha!r} must lie in (0, 1)")
-    exps = prepare(experiments)
+    items, notes = _settled(experiments)
+    exps, qnotes = _quantisation_floor(items, prepare(items))
+    _check_experiments(exps)
     skipped: dict[str, str] = {}
     if "distortion" in cands and not any(e.distorted for e in exps):
         # The term scales the inputs' own harmonics: with pure sines it is the plain model (design.md 9.5).
@@ -292,9 +461,78 @@ def diagnose(
             "not tested: every input is a pure sine (no harmonic above its noise floor), so the measured "
             "waveform adds nothing to the model"
         )
+    setup = _Setup(cands, float(alpha), held_out_test, (y_unit, u_unit), skipped)
+    d = _diagnose_set(items, exps, setup, [*notes, *qnotes])
+    named_deg = any(t.term == DEGRADATION for t in d.named)
+    drifting = [] if named_deg else _unsettled(exps)
+    if drifting:
+        d = _without_unsettled(items, exps, drifting, setup, d, [*notes, *qnotes])
+    return replace(d, seconds=time.perf_counter() - t0)
+
+
+def _without_unsettled(
+    items: Any,
+    exps: list[DiagExperiment],
+    drifting: list[int],
+    setup: _Setup,
+    whole: Diagnosis,
+    notes: list[str],
+) -> Diagnosis:
+    """The diagnosis of the settled experiments only, saying which were left out; when none is settled,
+    the verdict says so and names nothing (a loop that has not settled is not physics)."""
+    names = ", ".join(exps[i].source for i in drifting)
+    why = (
+        f"left out of the diagnosis: {names} (the loop still drifts from period to period: not settled, "
+        "and no degradation explains it); record more settling periods"
+    )
+    keep = [i for i in range(len(exps)) if i not in drifting]
+    if not keep:
+        verdict = (
+            f"not settled: the loop of every experiment ({names}) still drifts from period to period, and "
+            "no degradation explains it; nothing is named from a loop that has not settled (record more "
+            "settling periods, or a longer record)"
+        )
+        return replace(
+            whole,
+            status="unexplained",
+            verdict=verdict,
+            named=(),
+            partial=whole.named + whole.partial,
+            alternatives=(),
+            notes=(*whole.notes, why),
+        )
+    seq = list(items) if isinstance(items, (list, tuple)) else [items]
+    # The plain identification's start needs the items one to one with the experiments (recordings).
+    kept_items: Any = [seq[i] for i in keep] if len(seq) == len(exps) else [exps[i] for i in keep]
+    d = _diagnose_set(kept_items, [exps[i] for i in keep], setup, [*notes, why])
+    return replace(d, verdict=d.verdict + f"; {names} left out (not settled)")
+
+
+def _diagnose_set(items: Any, exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -> Diagnosis:
+    """One diagnosis of checked experiments: the plain fit, degradation, the steady selection, the verdict."""
+    cands, alpha = setup.cands, setup.alpha
     s = scale_of(exps)
     sx = scaled(exps, s)
     substeps = substeps_for([e.ybar.size for e in sx])
+    plain = fit_plain(items, exps, s, substeps)
+    # The distortion term's waveforms through G at their own frequencies, as the plain fit sees G.
+    if "distortion" in cands:
+        sx = carry_through_g(sx, plain, substeps)
+    before = _localise(exps, sx, plain, s)
+    notes = list(notes)
+    # Degradation first, in drift space (design.md 10.6); when it is named, the steady terms are selected on
+    # the averaged periods brought back to one strength.
+    deg: Optional[DegradationTest] = None
+    fexps, fsx, start = exps, sx, plain
+    if DEGRADATION in cands:
+        stage = _degradation_stage(
+            exps, sx, plain, s, substeps, alpha, len(cands), setup.held_out_test, before.drift_detected
+        )
+        if stage is None:
+            notes.append(NO_BLOCKS)
+        else:
+            deg, fexps, fsx, start = stage
+    named_deg = deg is not None and (deg.named if setup.held_out_test else deg.passed)
     noise_dof = sum(e.noise_dof for e in exps)
 
     def p_of(fit: AugFit) -> float:
@@ -305,32 +543,14 @@ def diagnose(
         p = p_of(fit)
         return bool(math.isfinite(p) and p >= alpha)
 
-    def gate(fit: AugFit) -> bool:
-        p = p_of(fit)
-        return bool(math.isfinite(p) and p >= 0.5 * alpha)
-
-    plain = fit_plain(experiments, exps, s, substeps)
-    # The distortion term's waveforms through G at their own frequencies, as the plain fit sees G.
-    if "distortion" in cands:
-        sx = carry_through_g(sx, plain, substeps)
-    before = _localise(exps, sx, plain, s)
-    cache: FoldCache = {}
-    steady = tuple(c for c in cands if c != DEGRADATION)
-    # Degradation first, in drift space (design.md 10.6); when it is named, the steady terms are selected on
-    # the averaged periods brought back to one strength.
-    deg: Optional[DegradationTest] = None
-    notes: list[str] = []
-    fexps, fsx, start = exps, sx, plain
-    if DEGRADATION in cands:
-        stage = _degradation_stage(exps, sx, plain, s, substeps, alpha, len(cands), held_out_test)
-        if stage is None:
-            notes.append(NO_BLOCKS)
-        else:
-            deg, fexps, fsx, start = stage
-    named_deg = deg is not None and (deg.named if held_out_test else deg.passed)
     # The plain model's gate: the global test at alpha / 2, and when it accepts, the targeted step's
     # candidate tests at the other alpha / 2 (select.py's docstring; design.md 10.3).
-    targeted = not named_deg and not before.drift_detected and gate(start)
+    p_start = p_of(start)
+    targeted = (
+        not named_deg and not before.drift_detected and math.isfinite(p_start) and p_start >= 0.5 * alpha
+    )
+    cache: FoldCache = {}
+    steady = tuple(c for c in cands if c != DEGRADATION)
     final, steps = forward_select(
         fsx,
         start,
@@ -338,39 +558,42 @@ def diagnose(
         adequate,
         substeps,
         alpha=alpha,
-        use_held_out=held_out_test,
+        use_held_out=setup.held_out_test,
         cache=cache,
         targeted=targeted,
     )
     after = _localise(detrended(fexps, deg, s.y) if deg is not None and named_deg else fexps, fsx, final, s)
-    units = (y_unit, u_unit)
-    plain_sum = _summary(exps, sx, plain, s, units)
-    final_sum = _summary(fexps, fsx, final, s, units)
+    plain_sum = _summary(exps, sx, plain, s, setup.units)
+    final_sum = _summary(fexps, fsx, final, s, setup.units)
     if deg is not None and named_deg:
-        sym, unit = term_symbol_unit(DEGRADATION, *units)
-        deg_term = NamedTerm(DEGRADATION, sym, deg.value, deg.standard_error, unit)
-        final_sum = replace(final_sum, terms=(*final_sum.terms, deg_term))
-    excess = plain_sum.cost - plain_sum.dof
-    fraction = (plain_sum.cost - final_sum.cost) / excess if excess > 0 else 0.0
-    if deg is not None and named_deg:
-        # Both spaces: the steady excess and the drift excess, and what the model removes of each.
-        total = max(excess, 0.0) + max(deg.cost0 - deg.dof0, 0.0)
-        fraction = (plain_sum.cost - final_sum.cost + deg.cost0 - deg.cost1) / total if total > 0 else 0.0
-    # More than all of the excess is all of it (a model below the noise floor fitted some noise too).
-    fraction = min(fraction, 1.0)
+        sym, unit = term_symbol_unit(DEGRADATION, *setup.units)
+        final_sum = replace(
+            final_sum,
+            terms=(*final_sum.terms, NamedTerm(DEGRADATION, sym, deg.value, deg.standard_error, unit)),
+        )
+    fraction = _explained_fraction(plain_sum, final_sum, deg if named_deg else None)
     status = classify(
-        targeted and not final.params.terms,
-        bool(final.params.terms) or named_deg,
-        adequate(final),
-        fraction,
+        targeted and not final.params.terms, bool(final.params.terms) or named_deg, adequate(final), fraction
     )
-    named = final_sum.terms if status in ("explained", "partly explained") else ()
-    partial = final_sum.terms if status == "unexplained" else ()
+    unphysical = tuple(t for t in final_sum.terms if t.term in NONNEGATIVE_TERMS and t.value < 0)
+    if unphysical:
+        # Never named: the rest of the model is at most a partial explanation.
+        status = "partly explained" if status in ("explained", "partly explained") else status
+    named = (
+        tuple(t for t in final_sum.terms if t not in unphysical)
+        if status in ("explained", "partly explained")
+        else ()
+    )
+    if not named and status != "adequate":
+        status = "unexplained"
+    partial = tuple(t for t in final_sum.terms if t not in named)
     alternatives = tuple(a for st in steps for a in st.alternatives)
     ho = held_out(fsx, start, final, substeps, cache) if final.params.terms else None
+    verdict = _verdict(status, named, tuple(t for t in partial if t not in unphysical), after, fraction)
+    verdict += _unphysical_text(unphysical)
     return Diagnosis(
         status=status,
-        verdict=_verdict(status, named, partial, after, fraction),
+        verdict=verdict,
         named=named,
         partial=partial,
         alternatives=alternatives,
@@ -384,15 +607,34 @@ def diagnose(
         explained_fraction=float(fraction),
         settings={
             "candidates": list(cands),
-            "skipped": skipped,
+            "skipped": setup.skipped,
             "alpha": alpha,
-            "held_out_test": held_out_test,
+            "held_out_test": setup.held_out_test,
             "scale": {"y": s.y, "u": s.u},
             "substeps": substeps,
         },
-        seconds=time.perf_counter() - t0,
+        seconds=0.0,
         plain_fit=plain,
         final_fit=final,
         degradation=deg,
         notes=tuple(notes),
     )
+
+
+def _explained_fraction(plain: ModelSummary, final: ModelSummary, deg: Optional[DegradationTest]) -> float:
+    """The share of the plain model's excess the final model removes (both spaces when degradation is
+    named: the steady excess and the drift excess), capped at 1 (a model below the noise floor fitted some
+    noise too)."""
+    excess = plain.cost - plain.dof
+    fraction = (plain.cost - final.cost) / excess if excess > 0 else 0.0
+    if deg is not None:
+        total = max(excess, 0.0) + max(deg.cost0 - deg.dof0, 0.0)
+        fraction = (plain.cost - final.cost + deg.cost0 - deg.cost1) / total if total > 0 else 0.0
+    return min(fraction, 1.0)
+
+
+def _unphysical_text(terms: Sequence[NamedTerm]) -> str:
+    if not terms:
+        return ""
+    what = "; ".join(f"{t} ({NONNEGATIVE_TERMS[t.term]})" for t in terms)
+    return f"; not physical: {what}: {NOT_PHYSICAL_HINT}"
