@@ -219,7 +219,10 @@ def test_targeted_step_names_a_lag_the_global_test_misses(plain_diagnosis: bw.di
 
 
 def test_terms_one_frequency_cannot_separate_are_alternatives() -> None:
-    """Stiffness k u and inertia m uddot = -m omega^2 u are the same term at one frequency."""
+    """Stiffness k u and inertia m uddot = -m omega^2 u are the same term at one frequency.
+
+    A softening stiffness (k < 0) is a positive mass there: both admissible. (With k > 0 the rival is a
+    negative mass, which is not physical and so not an alternative.)"""
     om = np.full(3, TWO_PI * 1.0)
     lin = bw.TransferFunction([1.0], [0.05, 1.0])
     g, _ = lin.gain_phase(om)
@@ -233,7 +236,7 @@ def test_terms_one_frequency_cannot_separate_are_alternatives() -> None:
         noise_sd=0.005,
         seed=11,
     )
-    d = bw.diagnose(bw.simulate(_plant((T.Stiffness(0.02),)), plan))
+    d = bw.diagnose(bw.simulate(_plant((T.Stiffness(-0.02),)), plan))
     assert d.status == "explained", d.summary()
     assert set(d.named_terms) <= {"stiffness", "inertia"}
     alt = [a for a in d.alternatives if {a.term, a.rival} == {"stiffness", "inertia"}]

@@ -286,7 +286,7 @@ def _settled(experiments: Any) -> tuple[Any, list[str]]:
     """The recordings with their start-up transient trimmed, as ``identify`` trims it (TransientWarning).
 
     A recording whose first periods differ from its steady ones beyond the noise (``transient_periods``)
-    is trimmed when the rest is then settled: a transient decays. A drift that goes on through the record
+    is trimmed when the rest then shows no trend (:func:`_trending`): a transient decays, a drift goes on. A drift that goes on through the record
     (a degrading specimen, a loop still settling slowly) is left for the degradation test and the
     per-experiment drift test (:func:`_unsettled`), which keep physics from being named from it.
     """
@@ -303,7 +303,7 @@ def _settled(experiments: Any) -> tuple[Any, list[str]]:
         p, s = item.samples_per_period, item.settle_periods
         n = item.whole_periods - s
         extra = transient_periods(item.y, p, s, n)
-        if extra and transient_periods(item.y, p, s + extra, n - extra) == 0 and n - extra >= 3:
+        if extra and n - extra >= 4 and not _trending(item.y, p, s + extra, n - extra):
             source = item.metadata.get("name", f"recording {i}")
             msg = (
                 f"{source}: the first {extra} of the {n} periods after {s} settling ones are still transient "
@@ -326,6 +326,25 @@ def _settled(experiments: Any) -> tuple[Any, list[str]]:
             )
         out.append(item)
     return out, notes
+
+
+#: Level of the trend test that keeps a drift (which goes on after the trimmed periods) from being trimmed
+#: as a transient: generous, so that a degradation is not cut away.
+TREND_LEVEL = 0.05
+
+
+def _trending(y: Any, p: int, s: int, n: int) -> bool:
+    """Whether periods ``s .. s + n`` still trend (per-period DC or fundamental amplitude against the
+    period index, locate's t-test, at :data:`TREND_LEVEL`)."""
+    from .data import _period_features
+    from .locate import _t_sf2, _trend
+
+    rows = np.asarray(y[s * p : (s + n) * p], dtype=np.float64).reshape(n, p)
+    dc, h1 = _period_features(rows)
+    amp = np.abs(h1)
+    _, ht, dof = _trend(amp / (float(np.mean(amp)) or 1.0))
+    _, dt, _ = _trend(dc)
+    return min(_t_sf2(ht, dof), _t_sf2(dt, dof)) < 0.5 * TREND_LEVEL
 
 
 def _check_experiments(exps: Sequence[DiagExperiment]) -> None:
