@@ -363,6 +363,30 @@ def _trending(y: Any, p: int, s: int, n: int) -> bool:
     return min(_t_sf2(ht, dof), _t_sf2(dt, dof)) < 0.5 * TREND_LEVEL
 
 
+def _check_sizes(experiments: Any) -> None:
+    """Refuse, before any arithmetic on them, inputs and outputs whose squares leave the floating-point
+    range (U = 1e300 overflowed in the noise floor, the input's waveform and prepare.py)."""
+    from ..errors import ZeroAmplitudeError
+    from ..prepare import SCALE_MAX, SCALE_MIN
+
+    seq = experiments if isinstance(experiments, (list, tuple)) else [experiments]
+    for i, item in enumerate(seq):
+        sizes = []
+        if hasattr(item, "amplitude"):
+            sizes.append(("input amplitude", abs(float(item.amplitude)), SCALE_MIN))
+        for name, what in (("u", "input"), ("y", "output"), ("ybar", "output")):
+            v = getattr(item, name, None)
+            if isinstance(v, np.ndarray) and v.size:
+                peak = float(np.max(np.abs(v)))
+                sizes.append((what, peak, SCALE_MIN if name == "u" else 0.0))
+        for what, size, low in sizes:
+            if not low <= size <= SCALE_MAX:
+                raise ZeroAmplitudeError(
+                    f"item {i}: the {what} is of size {size:.3e}, outside [{low:g}, {SCALE_MAX:g}]: squares "
+                    "of it leave the floating-point range; express the data in units that keep it there"
+                )
+
+
 def _check_experiments(exps: Sequence[DiagExperiment]) -> None:
     """Refuse, as ``identify`` does, an output with no response at the excitation (a wrong channel, pure
     noise: nothing physical can be named from it) and sizes whose squares leave the floating-point range."""
@@ -523,6 +547,7 @@ def diagnose(
     cands = _check_candidates(candidates)
     if not (0.0 < float(alpha) < 1.0):
         raise InvalidParameterError(f"alpha = {alpha!r} must lie in (0, 1)")
+    _check_sizes(experiments)
     items, notes = _settled(experiments)
     exps, qnotes = _noise_floors(items, prepare(items))
     _check_experiments(exps)
@@ -624,17 +649,8 @@ def _diagnose_set(items: Any, exps: list[DiagExperiment], setup: _Setup, notes: 
     )
     cache: FoldCache = {}
     steady = tuple(c for c in cands if c != DEGRADATION)
-    final, steps = forward_select(
-        fsx,
-        start,
-        steady,
-        adequate,
-        substeps,
-        alpha=alpha,
-        use_held_out=setup.held_out_test,
-        cache=cache,
-        targeted=targeted,
-    )
+    kw: dict[str, Any] = {"alpha": alpha, "use_held_out": setup.held_out_test, "cache": cache}
+    final, steps = forward_select(fsx, start, steady, adequate, substeps, targeted=targeted, **kw)
     dexps = detrended(fexps, deg, s.y) if deg is not None and named_deg else fexps
     after = _drift_checked(_localise(dexps, fsx, final, s), dexps)
     plain_sum = _summary(exps, sx, plain, s, setup.units)
@@ -646,27 +662,16 @@ def _diagnose_set(items: Any, exps: list[DiagExperiment], setup: _Setup, notes: 
             terms=(*final_sum.terms, NamedTerm(DEGRADATION, sym, deg.value, deg.standard_error, unit)),
         )
     fraction = _explained_fraction(plain_sum, final_sum, deg if named_deg else None)
-    status = classify(
-        targeted and not final.params.terms, bool(final.params.terms) or named_deg, adequate(final), fraction
+    plain_ok = targeted and not final.params.terms
+    status, named, partial, verdict = _judged(
+        classify(plain_ok, bool(final.params.terms) or named_deg, adequate(final), fraction),
+        final_sum,
+        after,
+        fraction,
+        fexps,
     )
-    unphysical = tuple(t for t in final_sum.terms if t.term in NONNEGATIVE_TERMS and t.value < 0)
-    if unphysical:
-        # Never named: the rest of the model is at most a partial explanation.
-        status = "partly explained" if status in ("explained", "partly explained") else status
-    named = (
-        tuple(t for t in final_sum.terms if t not in unphysical)
-        if status in ("explained", "partly explained")
-        else ()
-    )
-    if not named and status != "adequate":
-        status = "unexplained"
-    partial = tuple(t for t in final_sum.terms if t not in named)
     alternatives = tuple(a for st in steps for a in st.alternatives)
     ho = held_out(fsx, start, final, substeps, cache) if final.params.terms else None
-    verdict = _verdict(status, named, tuple(t for t in partial if t not in unphysical), after, fraction)
-    verdict += _unphysical_text(unphysical)
-    if status != "adequate":
-        verdict += _centre_text(fexps, final_sum.outputs)
     return Diagnosis(
         status=status,
         verdict=verdict,
@@ -681,20 +686,50 @@ def _diagnose_set(items: Any, exps: list[DiagExperiment], setup: _Setup, notes: 
         final=final_sum,
         experiments=tuple(exps),
         explained_fraction=float(fraction),
-        settings={
-            "candidates": list(cands),
-            "skipped": setup.skipped,
-            "alpha": alpha,
-            "held_out_test": setup.held_out_test,
-            "scale": {"y": s.y, "u": s.u},
-            "substeps": substeps,
-        },
+        settings=_settings(setup, s, substeps),
         seconds=0.0,
         plain_fit=plain,
         final_fit=final,
         degradation=deg,
         notes=tuple(notes),
     )
+
+
+def _settings(setup: _Setup, s: Scale, substeps: int) -> dict[str, Any]:
+    return {
+        "candidates": list(setup.cands),
+        "skipped": setup.skipped,
+        "alpha": setup.alpha,
+        "held_out_test": setup.held_out_test,
+        "scale": {"y": s.y, "u": s.u},
+        "substeps": substeps,
+    }
+
+
+def _judged(
+    status: Status,
+    final: ModelSummary,
+    after: Localisation,
+    fraction: float,
+    fexps: Sequence[DiagExperiment],
+) -> tuple[Status, tuple[NamedTerm, ...], tuple[NamedTerm, ...], str]:
+    """``(status, named, partial, verdict)``: a term outside its physical range is never named (the rest is
+    at most a partial explanation), and the verdict says what the non-physical value and a residual DC of
+    both signs suggest."""
+    unphysical = tuple(t for t in final.terms if t.term in NONNEGATIVE_TERMS and t.value < 0)
+    if unphysical and status == "explained":
+        status = "partly explained"
+    named: tuple[NamedTerm, ...] = ()
+    if status in ("explained", "partly explained"):
+        named = tuple(t for t in final.terms if t not in unphysical)
+    if not named and status != "adequate":
+        status = "unexplained"
+    partial = tuple(t for t in final.terms if t not in named)
+    verdict = _verdict(status, named, tuple(t for t in partial if t not in unphysical), after, fraction)
+    verdict += _unphysical_text(unphysical)
+    if status != "adequate":
+        verdict += _centre_text(fexps, final.outputs)
+    return status, named, partial, verdict
 
 
 def _drift_checked(loc: Localisation, exps: Sequence[DiagExperiment]) -> Localisation:
