@@ -458,3 +458,24 @@ def test_an_experiment_still_drifting_is_left_out_and_named() -> None:
     assert d.named == (), d.summary()
     assert "recording 1" in d.verdict and "not settled" in d.verdict
     assert len(d.experiments) == len(recs) - 1
+
+
+def test_a_block_of_part_of_a_period_is_left_out_of_the_drift_test() -> None:
+    """A lab record's first block starting mid-period (166 of 401 samples on the MR damper's 1 A files) has
+    ill-posed harmonics (1e11-1e13 against a loop of 1.9e3): the drift chi-square was 1.4e26."""
+    from dataclasses import replace
+
+    from bouc_wen_id.diagnosis.drift import whole_blocks
+
+    rng = np.random.default_rng(2)
+    coef = rng.normal(0.0, 1.0, (5, 16)) + 1j * rng.normal(0.0, 1.0, (5, 16))
+    coef[0] *= 1e11
+    e = replace(
+        _exp(np.zeros(64)),
+        block_coef=coef.astype(np.complex128),
+        block_samples=np.array([166.0, 401.0, 401.0, 400.0, 401.0]),
+        block_center=np.arange(5.0),
+    )
+    assert whole_blocks(e).tolist() == [1, 2, 3, 4]
+    coef[2, 3] = np.nan
+    assert whole_blocks(replace(e, block_coef=coef)).tolist() == [1, 3, 4]

@@ -51,6 +51,7 @@ class DriftData:
     jac: ComplexArray  # (K + 1,) harmonics of dy/d ln nu
     jac_grid: FloatArray  # dy/d ln nu on the averaged grid
     mean_age: float  # periods from the record's start to the middle of the averaged stretch (NaN: unknown)
+    dropped: int = 0  # blocks left out: partial periods (see :func:`whole_blocks`)
 
     @property
     def dof(self) -> int:
@@ -136,17 +137,38 @@ def drift_data(
     """
     out = []
     for i, (e, a) in enumerate(zip(exps, sx)):
-        if e.blocks < 2:
+        keep = whole_blocks(e)
+        if keep.size < 2:
             continue
         k = e.block_coef.shape[1] - 1
-        wts = e.block_samples / max(e.noise_var, np.finfo(float).tiny) * y_scale**2
-        coef = e.block_coef / y_scale
+        wts = e.block_samples[keep] / max(e.noise_var, np.finfo(float).tiny) * y_scale**2
+        coef = e.block_coef[keep] / y_scale
+        centre = e.block_center[keep]
         mean = (wts[:, None] * coef).sum(axis=0) / wts.sum()
-        t = e.block_center - float(np.dot(wts, e.block_center) / wts.sum())
+        t = centre - float(np.dot(wts, centre) / wts.sum())
         j, energy = regressor(a, fit, i, substeps, 1.0 if strength is None else float(strength[i]))
-        age = e.lead_periods + float(np.dot(wts, e.block_center) / wts.sum()) + 0.5
-        out.append(DriftData(i, coef - mean, t, wts, energy, harmonics(j, k), j, age))
+        age = e.lead_periods + float(np.dot(wts, centre) / wts.sum()) + 0.5
+        dropped = e.blocks - keep.size
+        out.append(DriftData(i, coef - mean, t, wts, energy, harmonics(j, k), j, age, dropped))
     return out
+
+
+#: A block with fewer samples than this fraction of the median block covers part of a period.
+WHOLE_BLOCK_FRACTION = 0.9
+
+
+def whole_blocks(e: DiagExperiment) -> NDArray[np.int64]:
+    """Indices of ``e``'s blocks that hold whole periods with finite harmonics.
+
+    A lab record's first block can start mid-period (166 of 401 samples on the MR damper's 1 A files): its
+    harmonics by least squares over part of the cycle are ill-posed (coefficients of 1e11-1e13 against a
+    loop of 1.9e3) and gave a drift chi-square of 1.4e26. Such a block is no averaged period: left out.
+    """
+    if e.blocks < 2:
+        return np.zeros(0, dtype=np.int64)
+    n = e.block_samples
+    ok = (n >= WHOLE_BLOCK_FRACTION * float(np.median(n))) & np.all(np.isfinite(e.block_coef), axis=1)
+    return np.flatnonzero(ok).astype(np.int64)
 
 
 def _sums(dd: DriftData) -> tuple[float, float, float]:

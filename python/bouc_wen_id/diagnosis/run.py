@@ -216,6 +216,7 @@ def _degradation_stage(
     family: int,
     held_out_test: bool,
     drift_seen: bool,
+    notes: list[str],
 ) -> Optional[tuple[Optional[DegradationTest], list[DiagExperiment], list[AugExperiment], AugFit]]:
     """The degradation candidate (design.md 10.6): its test, and the data and start the steady selection
     then runs on (the test is None when it cannot be formed); None without a block record.
@@ -231,6 +232,13 @@ def _degradation_stage(
     data = drift_data(exps, sx, plain, s.y, substeps)
     if not data:
         return None
+    dropped = [(exps[dd.index].source, dd.dropped) for dd in data if dd.dropped]
+    if dropped:
+        notes.append(
+            "degradation test: blocks that do not hold whole periods left out ("
+            + ", ".join(f"{src}: {k}" for src, k in dropped)
+            + "); their harmonics, fitted over part of a cycle, are ill-posed"
+        )
     deg = degradation_test(data, s.y, alpha, family=family)
     if deg is not None and not drift_seen:
         deg = with_drift_gate(deg, alpha)
@@ -624,7 +632,7 @@ def _diagnose_set(items: Any, exps: list[DiagExperiment], setup: _Setup, notes: 
     fexps, fsx, start = exps, sx, plain
     if DEGRADATION in cands:
         stage = _degradation_stage(
-            exps, sx, plain, s, substeps, alpha, len(cands), setup.held_out_test, before.drift_detected
+            exps, sx, plain, s, substeps, alpha, len(cands), setup.held_out_test, before.drift_detected, notes
         )
         if stage is None:
             notes.append(NO_BLOCKS)
@@ -728,7 +736,7 @@ def _judged(
     verdict = _verdict(status, named, tuple(t for t in partial if t not in unphysical), after, fraction)
     verdict += _unphysical_text(unphysical)
     if status != "adequate":
-        verdict += _centre_text(fexps, final.outputs)
+        verdict += _centre_text(fexps, final.outputs, max(1.0, final.cost / max(final.dof, 1)))
     return status, named, partial, verdict
 
 
@@ -753,15 +761,16 @@ def _explained_fraction(plain: ModelSummary, final: ModelSummary, deg: Optional[
     return min(fraction, 1.0)
 
 
-def _centre_text(exps: Sequence[DiagExperiment], outputs: Sequence[Any]) -> str:
+def _centre_text(exps: Sequence[DiagExperiment], outputs: Sequence[Any], scale: float) -> str:
     """A hint when the residual DC of single experiments is significant with both signs: loop centres that
     differ between experiments are not one output offset (a loop below saturation settles its centre
-    slowly; issue 18's nulls named "output offset + asymmetry" from it)."""
+    slowly; issue 18's nulls named "output offset + asymmetry" from it). Each DC is judged against the noise
+    times ``scale`` (the final model's chi2/dof when above 1: a misfit elsewhere inflates every residual)."""
     from scipy.special import ndtri  # type: ignore[import-untyped]
 
     z = []
     for e, y in zip(exps, outputs):
-        sd = math.sqrt(e.noise_var / (e.periods * e.samples_per_period))
+        sd = math.sqrt(scale * e.noise_var / (e.periods * e.samples_per_period))
         z.append(float(np.mean(e.ybar - np.asarray(y))) / sd if sd > 0 else 0.0)
     crit = float(-ndtri(0.5 * 0.05 / max(len(z), 1)))
     hits = [(e.source, v) for e, v in zip(exps, z) if abs(v) > crit]
