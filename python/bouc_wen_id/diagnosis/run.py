@@ -281,7 +281,7 @@ NOT_PHYSICAL_HINT = (
 
 @dataclass(frozen=True)
 class _Setup:
-    """What every diagnosis of one set of experiments shares: the tests' settings and the data's scale."""
+    """What every diagnosis of one set of experiments shares: the candidates and the tests' settings."""
 
     cands: tuple[str, ...]
     alpha: float
@@ -312,7 +312,7 @@ def _settled(experiments: Any) -> tuple[Any, list[str]]:
         p, s = item.samples_per_period, item.settle_periods
         n = item.whole_periods - s
         extra = transient_periods(item.y, p, s, n)
-        if extra and _beyond_quantisation(item.y, p, s, n, extra):
+        if extra and _within_quantisation(item.y, p, s, n, extra):
             extra = 0  # a difference within the output's quantisation is no transient
         if extra and n - extra >= 4 and not _trending(item.y, p, s + extra, n - extra):
             source = item.metadata.get("name", f"recording {i}")
@@ -344,7 +344,7 @@ def _settled(experiments: Any) -> tuple[Any, list[str]]:
 TREND_LEVEL = 0.05
 
 
-def _beyond_quantisation(y: Any, p: int, s: int, n: int, extra: int) -> bool:
+def _within_quantisation(y: Any, p: int, s: int, n: int, extra: int) -> bool:
     """True when ``y`` is quantised and its first ``extra`` periods differ from the steady ones (the last
     half) by no more than the quantisation noise, ``2 q^2 / 12`` per sample (identify's transient test has
     only the period-to-period spread as its noise, which is 0 for a quantised output that repeats)."""
