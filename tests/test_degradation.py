@@ -176,6 +176,6 @@ def test_averaged_periods_alone_skip_degradation_and_say_why() -> None:
     exps = [replace(e, block_coef=np.zeros((0, 1), np.complex128)) for e in prepare(_recs(1e-3, 0.01))]
     d = bw.diagnose(exps)
     assert d.degradation is None
-    assert d.notes == (NO_BLOCKS,)
+    assert NO_BLOCKS in d.notes  # beside it, the drifting experiments left out (not settled, unexplained)
     assert "degradation" not in d.named_terms
     assert NO_BLOCKS in d.summary()

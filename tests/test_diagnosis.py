@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+import warnings
 from pathlib import Path
 
 import bouc_wen_id as bw
@@ -129,7 +130,9 @@ def test_frequency_exponent_of_a_viscous_like_misfit() -> None:
     [
         (True, False, True, 0.0, "adequate"),
         (False, True, True, 0.4, "explained"),
-        (False, True, False, 0.95, "explained"),
+        # "explained" only when the final model passes: 95 % of the excess leaves the rest unexplained.
+        (False, True, False, 0.95, "partly explained"),
+        (False, True, False, 0.999, "partly explained"),
         (False, True, False, 0.7, "partly explained"),
         (False, True, False, 0.3, "unexplained"),
         (False, False, False, 0.0, "unexplained"),
@@ -217,7 +220,10 @@ def test_targeted_step_names_a_lag_the_global_test_misses(plain_diagnosis: bw.di
 
 
 def test_terms_one_frequency_cannot_separate_are_alternatives() -> None:
-    """Stiffness k u and inertia m uddot = -m omega^2 u are the same term at one frequency."""
+    """Stiffness k u and inertia m uddot = -m omega^2 u are the same term at one frequency.
+
+    A softening stiffness (k < 0) is a positive mass there: both admissible. (With k > 0 the rival is a
+    negative mass, which is not physical and so not an alternative.)"""
     om = np.full(3, TWO_PI * 1.0)
     lin = bw.TransferFunction([1.0], [0.05, 1.0])
     g, _ = lin.gain_phase(om)
@@ -231,7 +237,7 @@ def test_terms_one_frequency_cannot_separate_are_alternatives() -> None:
         noise_sd=0.005,
         seed=11,
     )
-    d = bw.diagnose(bw.simulate(_plant((T.Stiffness(0.02),)), plan))
+    d = bw.diagnose(bw.simulate(_plant((T.Stiffness(-0.02),)), plan))
     assert d.status == "explained", d.summary()
     assert set(d.named_terms) <= {"stiffness", "inertia"}
     alt = [a for a in d.alternatives if {a.term, a.rival} == {"stiffness", "inertia"}]
@@ -290,3 +296,186 @@ def test_cli_diagnose_writes_the_verdict_first_and_refuses_bad_input(
         main(["diagnose", str(data), "--out", str(tmp_path / "x"), "--candidates", "viscous,magic"])
     assert exc.value.code == 2
     assert len(capsys.readouterr().err.strip().splitlines()) == 1
+
+
+# ------------------------------------------------------------------ honest verdicts (issues 18 and 19)
+
+#: A resonant G behind a delay (issue 18's null plants), not the library's demo plant.
+_RESONANT = bw.TransferFunction([36.0], [1.0, 1.8, 36.0], delay=0.08)
+
+
+def _resonant_recs(settle: int, seed: int, noise: float = 0.02) -> list[bw.Recording]:
+    om = np.array([3.0, 6.0, 9.0])
+    g, _ = _RESONANT.gain_phase(om)
+    plan = bw.SinePlan(
+        om,
+        1.5 / g,
+        settle_periods=settle,
+        periods=16,
+        samples_per_period=64,
+        substeps=8,
+        noise_sd=noise,
+        seed=seed,
+    )
+    return bw.simulate(bw.WienerPlant(_RESONANT, bw.BoucWen(1.0, 0.5, 1.5)), plan)
+
+
+@pytest.mark.parametrize(
+    "make",
+    [
+        lambda seed: _transient_first_order(seed),
+        lambda seed: _resonant_recs(0, seed),
+    ],
+    ids=["first-order", "resonant-delay"],
+)
+@pytest.mark.parametrize("seed", [0, 1])
+def test_a_kept_start_up_transient_is_trimmed_with_a_warning_and_names_nothing(
+    make: object, seed: int
+) -> None:
+    """settle_periods = 0: the diagnosis trims the transient as identify does (it named dry friction or a
+    parallel stiffness from it, without a warning, in 8 of 8 seeds)."""
+    recs = make(seed)  # type: ignore[operator]
+    with pytest.warns(bw.errors.TransientWarning):
+        d = bw.diagnose(recs)
+    assert d.named == () and d.status == "adequate", d.summary()
+    assert any("still transient" in n for n in d.notes)
+    assert "drifting" not in d.verdict
+
+
+def _transient_first_order(seed: int) -> list[bw.Recording]:
+    om = TWO_PI * np.array([0.5, 1.5, 4.0])
+    g, _ = bw.TransferFunction([1.0], [0.05, 1.0]).gain_phase(om)
+    plan = bw.SinePlan(
+        om,
+        1.6 / g,
+        settle_periods=0,
+        periods=16,
+        samples_per_period=64,
+        substeps=8,
+        noise_sd=0.005,
+        seed=seed,
+    )
+    return bw.simulate(
+        bw.WienerPlant(bw.TransferFunction([1.0], [0.05, 1.0]), bw.BoucWen(1.0, 0.2, 1.2)), plan
+    )
+
+
+def test_the_demo_plant_from_the_cli_names_no_degradation(tmp_path: Path) -> None:
+    """`bouc-wen-id simulate --frequencies 1 2 4 --seed 1`: nothing hidden, the plain model passes (p = 0.93);
+    the drift-space F-test named "degradation delta_nu = 1.0e-05" from noise (the blocks' chi-square against
+    no drift at all is p = 0.06: there is no drift to explain)."""
+    from bouc_wen_id.cli import main
+
+    assert (
+        main(["simulate", "--out", str(tmp_path / "recs"), "--frequencies", "1", "2", "4", "--seed", "1"])
+        == 0
+    )
+    d = bw.diagnose(bw.load(tmp_path / "recs"))
+    assert d.status == "adequate" and d.named == (), d.summary()
+    assert d.degradation is not None and not d.degradation.named and not d.degradation.drift_present
+
+
+def test_noise_free_data_of_the_exact_model_are_adequate() -> None:
+    """A noise floor of rounding (1e-15) made the simulator's own precision "unexplained structure"."""
+    om = np.array([2.0, 5.0])
+    g, _ = _RESONANT.gain_phase(om)
+    plan = bw.SinePlan(
+        om, 1.5 / g, settle_periods=10, periods=8, samples_per_period=64, substeps=8, noise_sd=0.0
+    )
+    recs = bw.simulate(bw.WienerPlant(_RESONANT, bw.BoucWen(1.0, 0.5, 1.5)), plan)
+    with warnings.catch_warnings():
+        # A transient of 1e-6 of the peak is still there after 10 periods: trimmed, as identify does.
+        warnings.simplefilter("ignore", bw.errors.TransientWarning)
+        d = bw.diagnose(recs)
+    assert d.status == "adequate", d.summary()
+    assert "unexplained" not in d.verdict and "drifting" not in d.verdict
+    assert any("numerical accuracy" in n for n in d.notes)
+
+
+def test_a_negative_mass_is_never_named() -> None:
+    """At one frequency a stiffening k u is a negative mass; offered only inertia, the diagnosis named
+    "inertia m = -0.0005"; a negative mass is outside the physical range and is not a candidate."""
+    om = np.full(3, TWO_PI * 1.0)
+    g, _ = bw.TransferFunction([1.0], [0.05, 1.0]).gain_phase(om)
+    plan = bw.SinePlan(
+        om,
+        np.array([0.6, 1.2, 2.4]) / g,
+        settle_periods=8,
+        periods=12,
+        samples_per_period=64,
+        substeps=8,
+        noise_sd=0.005,
+        seed=11,
+    )
+    d = bw.diagnose(bw.simulate(_plant((T.Stiffness(0.02),)), plan), candidates=["inertia"])
+    assert all(t.value >= 0 for t in d.named), d.summary()
+    assert "inertia" not in d.named_terms
+    assert d.status != "explained"
+
+
+def test_near_tied_rivals_are_alternatives() -> None:
+    from bouc_wen_id.diagnosis.select import Trial, _tied
+
+    fit = object()
+    chosen = Trial("offset", 1000.0, 9000.0, 0.0, 0.0, 0.0, 0.83, True, fit=fit)  # type: ignore[arg-type]
+    close = Trial("asymmetry", 1100.0, 8900.0, 0.0, 0.0, 0.0, 0.81, True)
+    far = Trial("viscous", 9000.0, 1000.0, 0.0, 0.0, 0.0, 0.1, True)
+    assert _tied(chosen, close, dof=500)
+    assert not _tied(chosen, far, dof=500)
+
+
+def test_quantised_output_gets_a_floor_and_a_finite_drift_test() -> None:
+    """Quantised force whose noise is below one step: blocks of zero variance gave the drift test weights
+    of 1/0 (chi2 = 1.4e26 on the MR damper's 1 A files), and the repeated quantisation error was called
+    "unexplained structure"; the averaged period's error is floored at q^2/12, and the notes say so."""
+    recs = _recs(seed=5, noise=0.0005)
+    q = 0.02
+    quant = [
+        bw.Recording(
+            r.t, r.u, q * np.round(r.y / q), r.amplitude, r.frequency, settle_periods=r.settle_periods
+        )
+        for r in recs
+    ]
+    d = bw.diagnose(quant)
+    assert any("quantisation step" in n for n in d.notes), d.notes
+    for e in d.experiments:
+        assert e.noise_var >= e.periods * q * q / 12 * (1 - 1e-12)
+    # The repeated quantisation error is not structure the library lacks.
+    assert d.status == "adequate", d.summary()
+    assert d.degradation is not None and d.degradation.cost0 / d.degradation.dof0 < 10, d.summary()
+
+
+def test_an_experiment_still_drifting_is_left_out_and_named() -> None:
+    """A loop that has not settled is not physics: a slow drift of one experiment's centre (no trimming
+    can remove it) is left out of the naming, and the verdict says which."""
+    recs = _recs(seed=6)
+    r = recs[1]
+    p = r.samples_per_period
+    creep = np.zeros_like(r.y)
+    creep[r.settle_periods * p :] = np.linspace(0.0, 0.08, r.y.size - r.settle_periods * p)
+    recs[1] = bw.Recording(r.t, r.u, r.y + creep, r.amplitude, r.frequency, settle_periods=r.settle_periods)
+    d = bw.diagnose(recs)
+    assert d.named == (), d.summary()
+    assert "recording 1" in d.verdict and "not settled" in d.verdict
+    assert len(d.experiments) == len(recs) - 1
+
+
+def test_a_block_of_part_of_a_period_is_left_out_of_the_drift_test() -> None:
+    """A lab record's first block starting mid-period (166 of 401 samples on the MR damper's 1 A files) has
+    ill-posed harmonics (1e11-1e13 against a loop of 1.9e3): the drift chi-square was 1.4e26."""
+    from dataclasses import replace
+
+    from bouc_wen_id.diagnosis.drift import whole_blocks
+
+    rng = np.random.default_rng(2)
+    coef = rng.normal(0.0, 1.0, (5, 16)) + 1j * rng.normal(0.0, 1.0, (5, 16))
+    coef[0] *= 1e11
+    e = replace(
+        _exp(np.zeros(64)),
+        block_coef=coef.astype(np.complex128),
+        block_samples=np.array([166.0, 401.0, 401.0, 400.0, 401.0]),
+        block_center=np.arange(5.0),
+    )
+    assert whole_blocks(e).tolist() == [1, 2, 3, 4]
+    coef[2, 3] = np.nan
+    assert whole_blocks(replace(e, block_coef=coef)).tolist() == [1, 3, 4]

@@ -658,3 +658,60 @@ def test_planner_keeps_the_labs_sample_rate() -> None:
     # The lab samples at 100 Hz; the planner answered 99.38 Hz.
     plan = _plan_in(20.0, 300.0)
     assert all(e.sample_rate == pytest.approx(100.0, rel=1e-12) for e in plan.experiments)
+
+
+# --------------------------------------------------------------------------------------------------
+# The diagnosis on hostile input (issue 19): no raw exception, no physics named from noise
+# --------------------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("seed", [0, 7])
+def test_diagnose_on_a_pure_noise_output_is_zero_amplitude(noisy: list[bw.Recording], seed: int) -> None:
+    """A wrong channel (pure noise): ZeroDivisionError in diagnosis/run.py on these seeds (3 of 10), and
+    "adequate: the plain model fits at the noise floor" on the others; identify refuses it by name."""
+    rng = np.random.default_rng(seed)
+    recs = [
+        bw.Recording(r.t, r.u, rng.normal(0.0, 1.0, r.y.size), r.amplitude, r.frequency, settle_periods=10)
+        for r in noisy
+    ]
+    with pytest.raises(bw.ZeroAmplitudeError, match="no harmonic above the noise floor"):
+        bw.diagnose(recs)
+
+
+@pytest.mark.parametrize("what", ["input", "output"])
+def test_a_huge_amplitude_is_refused_by_identify_and_diagnose(noisy: list[bw.Recording], what: str) -> None:
+    """U = 1e300 (or y = 1e300): OverflowError squaring the input's projections in prepare.py."""
+    k = 1e300
+    recs = [
+        bw.Recording(r.t, r.u * k, r.y, r.amplitude * k, r.frequency, settle_periods=10)
+        if what == "input"
+        else bw.Recording(r.t, r.u, r.y * k, r.amplitude, r.frequency, settle_periods=10)
+        for r in noisy
+    ]
+    with pytest.raises(bw.ZeroAmplitudeError, match="outside"):
+        _quiet_identify(recs)
+    with pytest.raises(bw.ZeroAmplitudeError, match="outside"):
+        bw.diagnose(recs)
+
+
+def test_an_extrapolated_gain_of_g_cannot_overflow() -> None:
+    """The wire-rope A2 files ended in `internal error: OverflowError` (math.exp of a gain extrapolated from
+    a steep slope between two close frequencies)."""
+    from bouc_wen_id.diagnosis.fitting import EXTRAPOLATED_LOG_GAIN_MAX, _g_of
+
+    freqs = 2.0 * math.pi * np.array([16.0, 18.0])
+    logs = np.array([0.0, 60.0])
+    g = _g_of(freqs, logs, np.array([0.1, 0.2]), 10.0 * freqs[-1])
+    assert math.isfinite(abs(g))
+    assert math.log(abs(g)) <= 60.0 + EXTRAPOLATED_LOG_GAIN_MAX + 1e-9
+    # Within the band nothing changes.
+    assert abs(_g_of(freqs, logs, np.array([0.1, 0.2]), float(freqs[0]))) == pytest.approx(1.0)
+
+
+def test_an_extreme_exponent_does_not_divide_by_zero() -> None:
+    """beta / s_y^mu with mu in the hundreds underflowed to a division by 0 (the pure-noise crash)."""
+    from bouc_wen_id.diagnosis.run import _unscaled
+
+    assert _unscaled(1.0, 0.5, 2000.0) == math.inf
+    assert _unscaled(-2.0, 4.0, 1.0) == pytest.approx(-0.5)
+    assert _unscaled(1.0, 4.0, 2000.0) == 0.0

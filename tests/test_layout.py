@@ -62,19 +62,6 @@ _DOTTED = re.compile(r"bouc_wen_id(\.[A-Za-z_][A-Za-z0-9_]*)+")
 MODULE_LINES_MAX = 1000
 #: Largest function or method, in lines (from ``def`` to its last line, docstring included).
 FUNCTION_LINES_MAX = 100
-#: Functions over FUNCTION_LINES_MAX in files other helpers of this round are splitting (issue 17); the
-#: integrator empties this list after merging them.  Each entry is ``module:qualified name``.
-KNOWN_LONG_FUNCTIONS_PENDING_MERGE = frozenset(
-    {
-        "diagnosis.report:html_page",
-        "diagnosis.run:diagnose",
-    }
-)
-#: Modules over MODULE_LINES_MAX that other helpers are splitting (issue 17); emptied after the merge.
-KNOWN_LONG_MODULES_PENDING_MERGE: frozenset[str] = frozenset()
-#: Modules other helpers of this round are routing through the door (issue 17/18): they still name
-#: ``_core`` today.  Emptied after the merge.
-KNOWN_CORE_USERS_PENDING_MERGE: frozenset[str] = frozenset()
 
 
 def _module_name(path: Path) -> str:
@@ -228,11 +215,7 @@ def test_only_the_door_names_the_extension() -> None:
         for name in _files()
         if name != DOOR and name not in MAY_NAME_CORE and (hits := _names_core(_tree(name)))
     }
-    pending = {n: h for n, h in offenders.items() if n in KNOWN_CORE_USERS_PENDING_MERGE}
-    bad = {n: h for n, h in offenders.items() if n not in KNOWN_CORE_USERS_PENDING_MERGE}
-    assert not bad, f"only {DOOR} may name _core (ask it for a typed part instead): {bad}"
-    stale = KNOWN_CORE_USERS_PENDING_MERGE - set(pending)
-    assert not stale, f"{sorted(stale)} no longer name _core: remove them from KNOWN_CORE_USERS_PENDING_MERGE"
+    assert not offenders, f"only {DOOR} may name _core (ask it for a typed part instead): {offenders}"
     init = [n for n in ast.walk(_tree("")) if isinstance(n, ast.ImportFrom) and n.module == "_core"]
     assert [a.name for n in init for a in n.names] == ["__version__"], "__init__ takes only the version"
 
@@ -279,10 +262,7 @@ def test_import_graph_has_no_cycle() -> None:
 def test_no_module_over_the_size_limit() -> None:
     sizes = {name: len(path.read_text(encoding="utf-8").splitlines()) for name, path in _files().items()}
     long = {n: s for n, s in sizes.items() if s > MODULE_LINES_MAX}
-    bad = {n: s for n, s in long.items() if n not in KNOWN_LONG_MODULES_PENDING_MERGE}
-    assert not bad, f"modules over {MODULE_LINES_MAX} lines (split them by job): {bad}"
-    stale = KNOWN_LONG_MODULES_PENDING_MERGE - set(long)
-    assert not stale, f"{sorted(stale)} are short now: remove them from KNOWN_LONG_MODULES_PENDING_MERGE"
+    assert not long, f"modules over {MODULE_LINES_MAX} lines (split them by job): {long}"
 
 
 def _long_functions(tree: ast.AST, prefix: str = "") -> dict[str, int]:
@@ -310,7 +290,4 @@ def test_no_function_over_the_size_limit() -> None:
     long = {
         f"{name}:{qual}": size for name in _files() for qual, size in _long_functions(_tree(name)).items()
     }
-    bad = {k: v for k, v in long.items() if k not in KNOWN_LONG_FUNCTIONS_PENDING_MERGE}
-    assert not bad, f"functions over {FUNCTION_LINES_MAX} lines (split them into named steps): {bad}"
-    stale = KNOWN_LONG_FUNCTIONS_PENDING_MERGE - set(long)
-    assert not stale, f"{sorted(stale)} are short now: remove them from KNOWN_LONG_FUNCTIONS_PENDING_MERGE"
+    assert not long, f"functions over {FUNCTION_LINES_MAX} lines (split them into named steps): {long}"

@@ -60,6 +60,25 @@ INPUT_PHASE_MAX = 0.02
 SCALE_MIN, SCALE_MAX = 1e-30, 1e30
 
 
+def check_sizes(rec: Recording, start: int, stop: int) -> None:
+    """Refuse a recording whose input amplitude or output lies outside ``[SCALE_MIN, SCALE_MAX]``.
+
+    Every later step squares the data (the input's projections, the noise variance, the chi-square), and
+    a square of 1e300 is no float: such data are refused here, by name, before any arithmetic on them.
+    """
+    y = np.asarray(rec.y[start:stop], dtype=np.float64)
+    peak_y = float(np.max(np.abs(y))) if y.size else 0.0
+    for what, size, low in (
+        ("input amplitude", abs(float(rec.amplitude)), SCALE_MIN),
+        ("output", peak_y, 0.0),
+    ):
+        if not low <= size <= SCALE_MAX:
+            raise ZeroAmplitudeError(
+                f"the {what} is of size {size:.3e}, outside [{low:g}, {SCALE_MAX:g}]: squares of it leave "
+                "the floating-point range; express the data in units that keep it there (e.g. mm, not km)"
+            )
+
+
 def check_input(rec: Recording, start: int, stop: int) -> None:
     """Refuse a recording whose ``u`` is not ``U cos(omega t)`` on its own time axis.
 
@@ -68,6 +87,7 @@ def check_input(rec: Recording, start: int, stop: int) -> None:
     """
     t = rec.t[start:stop]
     u = rec.u[start:stop]
+    check_sizes(rec, start, stop)
     c, s = np.cos(rec.frequency * t), np.sin(rec.frequency * t)
     a_cos = 2.0 * float(np.dot(u, c)) / u.size
     a_sin = 2.0 * float(np.dot(u, s)) / u.size

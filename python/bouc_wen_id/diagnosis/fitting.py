@@ -63,6 +63,10 @@ def scaled(exps: Sequence[DiagExperiment], s: Scale) -> list[AugExperiment]:
     ]
 
 
+#: The gain extrapolated beyond the tested frequencies stays below e^this times the largest tested gain.
+EXTRAPOLATED_LOG_GAIN_MAX = math.log(1e3)
+
+
 def _g_of(freqs: FloatArray, logs: FloatArray, phases: FloatArray, omega: float) -> complex:
     """``G(j omega)`` up to a common scale from ``log|G|`` and the unwrapped phase lag at the sorted, distinct
     ``freqs``: linear in ``log omega`` between them, extended linearly from the two nearest beyond them
@@ -81,6 +85,9 @@ def _g_of(freqs: FloatArray, logs: FloatArray, phases: FloatArray, omega: float)
         lg = float(logs[-1] + slope * (x - lw[-1]))
         dph = (phases[-1] - phases[-2]) / (freqs[-1] - freqs[-2])
         ph = float(phases[-1] + dph * (omega - freqs[-1]))
+    # A steep slope between two close tested frequencies extrapolates to any gain (math.exp overflowed on
+    # the wire-rope files): beyond the band G is not known, so its gain stays within a bound of the tested.
+    lg = min(lg, float(np.max(logs)) + EXTRAPOLATED_LOG_GAIN_MAX)
     return complex(math.exp(lg) * np.exp(-1j * ph))
 
 

@@ -151,22 +151,55 @@ def _g(v: float, fmt: str = ".3g") -> str:
     return format(v, fmt) if isinstance(v, (int, float)) and math.isfinite(v) else "–"
 
 
+_HEAD = (
+    "<!doctype html><html><head><meta charset='utf-8'><title>bouc_wen_id diagnosis</title>"
+    "<style>body{font-family:sans-serif;max-width:980px;margin:2em auto;line-height:1.4}"
+    "table{border-collapse:collapse;margin:0.5em 0}td,th{border:1px solid #ccc;padding:2px 8px;"
+    "text-align:right;font-size:90%}th{background:#eee}.verdict{font-size:130%;padding:0.6em;"
+    "background:#f4f4ff;border-left:6px solid #446}img{max-width:100%}</style></head><body>"
+)
+_FIGURES = (
+    ("residual_cycle", "Residual over the cycle"),
+    ("loops", "Loops"),
+    ("harmonics", "Residual per harmonic"),
+    ("held_out", "Held-out NRMSE"),
+)
+
+
 def html_page(d: Diagnosis, images: dict[str, bytes]) -> str:
     """The report a person reads: verdict first, then evidence; figures inline (no external files)."""
-    parts = [
-        "<!doctype html><html><head><meta charset='utf-8'><title>bouc_wen_id diagnosis</title>",
-        "<style>body{font-family:sans-serif;max-width:980px;margin:2em auto;line-height:1.4}"
-        "table{border-collapse:collapse;margin:0.5em 0}td,th{border:1px solid #ccc;padding:2px 8px;"
-        "text-align:right;font-size:90%}th{background:#eee}.verdict{font-size:130%;padding:0.6em;"
-        "background:#f4f4ff;border-left:6px solid #446}img{max-width:100%}</style></head><body>",
+    verdict, *evidence = _verdict_html(d)  # the verdict is the first text a reader meets
+    parts = [_HEAD, verdict, "<h1>Diagnosis</h1>", *evidence, *_terms_html(d), *_held_out_html(d)]
+    parts.append("<h2>Where the models miss</h2>")
+    parts.append(
+        f"<p>Plain: {html.escape(d.before.describe() or 'nowhere above the noise')}. "
+        f"Final: {html.escape(d.after.describe() or 'nowhere above the noise')}.</p>"
+    )
+    for name, title in _FIGURES:
+        if name in images:
+            b64 = base64.b64encode(images[name]).decode("ascii")
+            parts.append(f"<h3>{title}</h3><img alt='{name}' src='data:image/png;base64,{b64}'>")
+    parts += _selection_html(d)
+    parts += [f"<p>{html.escape(note)}</p>" for note in d.notes]
+    parts += _experiments_html(d)
+    parts.append("</body></html>")
+    return "\n".join(parts)
+
+
+def _verdict_html(d: Diagnosis) -> list[str]:
+    return [
         f"<p class='verdict'><b>{html.escape(d.status)}</b>: {html.escape(d.verdict)}</p>",
-        "<h1>Diagnosis</h1>",
         f"<p>Plain model: χ²/dof = {_g(d.plain.cost / max(d.plain.dof, 1))} "
         f"(p = {_g(d.plain.p_value, '.2g')}); "
         f"final model: χ²/dof = {_g(d.final.cost / max(d.final.dof, 1))} (p = {_g(d.final.p_value, '.2g')}); "
         f"{100 * d.explained_fraction:.1f} % of the plain model's excess explained. "
         f"{len(d.experiments)} experiments, {d.seconds:.1f} s.</p>",
     ]
+
+
+def _terms_html(d: Diagnosis) -> list[str]:
+    """The named terms (or the partial ones), then every alternative with what would separate it."""
+    parts = []
     if d.named or d.partial:
         rows = [
             [t.label, t.symbol, _g(t.value, ".4g"), _g(t.standard_error), t.unit]
@@ -174,36 +207,36 @@ def html_page(d: Diagnosis, images: dict[str, bytes]) -> str:
         ]
         parts.append("<h2>Terms</h2>" + _table(rows, ["term", "symbol", "value", "std. error", "unit"]))
     for a in d.alternatives:
+        why = (
+            f"parameter correlation {a.correlation:+.3f}"
+            if math.isfinite(a.correlation)
+            else "their improvements are within their uncertainty"
+        )
         parts.append(
             f"<p>Alternative: <b>{html.escape(TERM_LABELS.get(a.rival, a.rival))}</b> fits as well as "
-            f"{html.escape(TERM_LABELS.get(a.term, a.term))} (parameter correlation {a.correlation:+.3f}). "
+            f"{html.escape(TERM_LABELS.get(a.term, a.term))} ({why}). "
             f"To separate them: {html.escape(a.separating_experiment)}.</p>"
         )
-    if d.held_out is not None:
-        rows = [
-            [d.experiments[j].source, _g(b, ".4f"), _g(a, ".4f"), _g(a / b if b else math.nan, ".3f")]
-            for j, b, a in zip(d.held_out.folds, d.held_out.nrmse_before, d.held_out.nrmse_after)
-        ]
-        parts.append(
-            "<h2>Held-out proof</h2><p>Each experiment left out in turn: the physics fitted on the "
-            "others, only its own |G| and phase refitted.</p>"
-            + _table(rows, ["held-out experiment", "plain NRMSE", "final NRMSE", "ratio"])
-        )
-    parts.append("<h2>Where the models miss</h2>")
-    parts.append(
-        f"<p>Plain: {html.escape(d.before.describe() or 'nowhere above the noise')}. "
-        f"Final: {html.escape(d.after.describe() or 'nowhere above the noise')}.</p>"
-    )
-    for name, title in (
-        ("residual_cycle", "Residual over the cycle"),
-        ("loops", "Loops"),
-        ("harmonics", "Residual per harmonic"),
-        ("held_out", "Held-out NRMSE"),
-    ):
-        if name in images:
-            b64 = base64.b64encode(images[name]).decode("ascii")
-            parts.append(f"<h3>{title}</h3><img alt='{name}' src='data:image/png;base64,{b64}'>")
-    parts.append("<h2>Selection</h2>")
+    return parts
+
+
+def _held_out_html(d: Diagnosis) -> list[str]:
+    if d.held_out is None:
+        return []
+    rows = [
+        [d.experiments[j].source, _g(b, ".4f"), _g(a, ".4f"), _g(a / b if b else math.nan, ".3f")]
+        for j, b, a in zip(d.held_out.folds, d.held_out.nrmse_before, d.held_out.nrmse_after)
+    ]
+    return [
+        "<h2>Held-out proof</h2><p>Each experiment left out in turn: the physics fitted on the "
+        "others, only its own |G| and phase refitted.</p>"
+        + _table(rows, ["held-out experiment", "plain NRMSE", "final NRMSE", "ratio"])
+    ]
+
+
+def _selection_html(d: Diagnosis) -> list[str]:
+    """Every selection step's candidates with their tests, then degradation's, tested in drift space."""
+    parts = ["<h2>Selection</h2>"]
     for k, st in enumerate(d.steps, 1):
         rows = [
             [
@@ -222,27 +255,25 @@ def html_page(d: Diagnosis, images: dict[str, bytes]) -> str:
             + _table(rows, ["term", "χ²", "F", "p (Bonferroni)", "share of excess", "held-out"])
         )
     deg = d.degradation
-    if deg is not None:  # degradation, tested in drift space (design.md 10.6)
+    if deg is not None:  # design.md 10.6
         ho = "better" if deg.held_out_improves else ("worse" if deg.held_out_after else "")
+        gate = "" if deg.drift_present else " (no drift beyond the noise: not a candidate)"
+        row = [
+            Degradation.kind,
+            _g(deg.statistic, ".4g"),
+            _g(deg.p_adjusted, ".2g"),
+            _g(deg.share, ".2f"),
+            ho,
+        ]
         parts.append(
             "<p>Degradation, from the period-by-period record (block deviations from the mean period): "
-            f"χ² {_g(deg.cost0, '.6g')} → {_g(deg.cost1, '.6g')} (dof {deg.dof0})</p>"
-            + _table(
-                [
-                    [
-                        Degradation.kind,
-                        _g(deg.statistic, ".4g"),
-                        _g(deg.p_adjusted, ".2g"),
-                        _g(deg.share, ".2f"),
-                        ho,
-                    ]
-                ],
-                ["term", "F", "p (Bonferroni)", "share of drift excess", "held-out"],
-            )
+            f"χ² {_g(deg.cost0, '.6g')} → {_g(deg.cost1, '.6g')} (dof {deg.dof0}){gate}</p>"
+            + _table([row], ["term", "F", "p (Bonferroni)", "share of drift excess", "held-out"])
         )
-    for note in d.notes:
-        parts.append(f"<p>{html.escape(note)}</p>")
-    parts.append("<h2>Experiments</h2>")
+    return parts
+
+
+def _experiments_html(d: Diagnosis) -> list[str]:
     rows = [
         [
             e.source,
@@ -254,9 +285,10 @@ def html_page(d: Diagnosis, images: dict[str, bytes]) -> str:
         ]
         for e, p, f in zip(d.experiments, d.plain.nrmse, d.final.nrmse)
     ]
-    parts.append(_table(rows, ["experiment", "f (Hz)", "U", "periods", "plain NRMSE", "final NRMSE"]))
-    parts.append("</body></html>")
-    return "\n".join(parts)
+    return [
+        "<h2>Experiments</h2>",
+        _table(rows, ["experiment", "f (Hz)", "U", "periods", "plain NRMSE", "final NRMSE"]),
+    ]
 
 
 def write_report(d: Diagnosis, out: Path, figures: bool = True) -> list[Path]:

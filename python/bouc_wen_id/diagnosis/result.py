@@ -92,8 +92,10 @@ class Diagnosis:
     ----------
     status : {"adequate", "explained", "partly explained", "unexplained"}
         ``adequate``: the plain model is at the noise floor. ``explained``: the named terms bring it there
-        (or remove at least 90 % of the excess). ``partly explained``: they remove at least half of it and
-        the structure left is located. ``unexplained``: nothing or too little is explained.
+        (the final model passes its adequacy test; nothing less). ``partly explained``: the final model
+        fails but they remove at least half of the excess; the share and the structure left are in the
+        verdict. ``unexplained``: nothing or too little is explained, or no experiment has settled. A term
+        fitted outside its physical range is never named (the verdict says "not physical").
     verdict : str
         One sentence, first in every report.
     named : tuple of NamedTerm

@@ -288,6 +288,35 @@ def _separating(exps: Sequence[AugExperiment], fa: AugFit, fb: AugFit, substeps:
     return best[1] or "none of the designs tried (0.5-4x amplitude, 0.5-2x frequency)"
 
 
+#: Terms whose value must not be negative to be physical (a damping, a mass, a friction, a lag, a play).
+NONNEGATIVE = ("viscous", "inertia", "coulomb", "sensor_lag", "play")
+#: Two candidates' improvements closer than this many standard deviations of their difference are a tie.
+TIE_SD = 2.0
+
+
+def _admissible(fit: AugFit, term: str) -> bool:
+    """Whether ``term``'s fitted value lies in its physical range: a one-parameter term whose best value
+    is negative has its constrained optimum at 0 (the model without it), so it is not a candidate."""
+    if term not in NONNEGATIVE or term not in fit.params.terms:
+        return True
+    return float(fit.params.values[fit.params.terms.index(term)]) >= 0.0
+
+
+def _tied(chosen: Trial, rival: Trial, dof: int) -> bool:
+    """Whether ``rival``'s improvement is within the uncertainty of ``chosen``'s.
+
+    An improvement ``Delta C`` of a term with non-centrality lambda has variance about ``2 + 4 lambda``
+    (1 dof), in units of the residual variance: ``sd ~ 2 sqrt(Delta C s2)`` with ``s2 = C/dof`` of the
+    chosen model when it is above 1 (a misfit inflates the scale). Closer than :data:`TIE_SD` of those, the
+    data do not prefer one (the MR damper's offset over asymmetry at shares 0.83 and 0.81 was one).
+    """
+    if not (math.isfinite(rival.improvement) and rival.improvement > 0 and chosen.fit is not None):
+        return False
+    s2 = max(1.0, chosen.cost / dof) if dof > 0 else 1.0
+    sd = 2.0 * math.sqrt(max(chosen.improvement, 0.0) * s2)
+    return chosen.improvement - rival.improvement <= TIE_SD * sd
+
+
 def forward_select(
     exps: Sequence[AugExperiment],
     plain: AugFit,
@@ -328,7 +357,7 @@ def forward_select(
             # No excess at all (the targeted step): a term that removes cost explains all there is; a term
             # cannot explain more than all of it (capped: the rest of its improvement is noise).
             share = min((c0 - f.cost) / excess, 1.0) if excess > 0 else (1.0 if first else 0.0)
-            ok = bool(math.isfinite(padj) and padj < level and share >= MATERIAL_SHARE)
+            ok = bool(math.isfinite(padj) and padj < level and share >= MATERIAL_SHARE) and _admissible(f, t)
             trials.append(Trial(t, f.cost, c0 - f.cost, stat, p, padj, share, ok, fit=f))
         order = sorted((tr for tr in trials if tr.passed), key=lambda tr: tr.cost)
         chosen: Optional[Trial] = None
@@ -357,11 +386,12 @@ def forward_select(
             for tr in order:
                 if tr.term == chosen.term or tr.fit is None:
                     continue
-                if tr.improvement < ALTERNATIVE_IMPROVEMENT * chosen.improvement:
+                tied = _tied(chosen, tr, dof_of(exps, chosen.fit))
+                if tr.improvement < ALTERNATIVE_IMPROVEMENT * chosen.improvement and not tied:
                     continue
                 both = fit_with(exps, chosen.fit, tr.term, substeps)
                 rho = _correlation(both, chosen.term, tr.term) if both is not None else math.nan
-                if math.isfinite(rho) and abs(rho) >= ALTERNATIVE_CORRELATION:
+                if tied or (math.isfinite(rho) and abs(rho) >= ALTERNATIVE_CORRELATION):
                     alternatives.append(
                         Alternative(
                             chosen.term, tr.term, rho, _separating(exps, chosen.fit, tr.fit, substeps)
