@@ -51,6 +51,7 @@ __all__ = [
     "STEADY_TERM_NAMES",
     "DIAGNOSIS_CANDIDATES",
     "parse_terms",
+    "physical_value",
     "COULOMB_SMOOTHING",
     "term_from_dict",
     "core_terms",
@@ -144,6 +145,8 @@ class Term:
     bounds: ClassVar[tuple[float, float]] = UNBOUNDED
     #: Physically meaningful range (within :attr:`bounds`): a value outside it is not named as that physics.
     physical: ClassVar[tuple[float, float]] = UNBOUNDED
+    #: What a fitted value outside :attr:`physical` would mean (said when the diagnosis declines to name it).
+    unphysical: ClassVar[str] = ""
     #: Why the lower bound holds (appended to the error message).
     bound_note: ClassVar[str] = ""
     #: Seen on the averaged steady period (False: only in the period-by-period record, design.md 10.6).
@@ -278,6 +281,7 @@ class Viscous(Term):
     label: ClassVar[str] = "viscous damping"
     acts_on: ClassVar[Place] = Place.INPUT
     physical: ClassVar[tuple[float, float]] = NON_NEGATIVE
+    unphysical: ClassVar[str] = "a negative damping (energy supplied, not dissipated)"
     linear: ClassVar[bool] = True
     scaling: ClassVar[tuple[float, float, float]] = (1.0, -1.0, 0.0)
 
@@ -298,6 +302,7 @@ class Inertia(Term):
     label: ClassVar[str] = "inertia"
     acts_on: ClassVar[Place] = Place.INPUT
     physical: ClassVar[tuple[float, float]] = NON_NEGATIVE
+    unphysical: ClassVar[str] = "a negative mass"
     linear: ClassVar[bool] = True
     scaling: ClassVar[tuple[float, float, float]] = (1.0, -1.0, 0.0)
 
@@ -323,6 +328,7 @@ class Coulomb(Term):
     label: ClassVar[str] = "dry (Coulomb) friction"
     acts_on: ClassVar[Place] = Place.INPUT
     physical: ClassVar[tuple[float, float]] = NON_NEGATIVE
+    unphysical: ClassVar[str] = "a negative friction (energy supplied at every reversal)"
     linear: ClassVar[bool] = True
     scaling: ClassVar[tuple[float, float, float]] = (1.0, 0.0, 0.0)
 
@@ -349,6 +355,7 @@ class SensorLag(Term):
     label: ClassVar[str] = "sensor lag"
     bounds: ClassVar[tuple[float, float]] = NON_NEGATIVE
     physical: ClassVar[tuple[float, float]] = NON_NEGATIVE
+    unphysical: ClassVar[str] = "a negative lag (an output ahead of its cause)"
 
     @classmethod
     def start(cls, context: StartContext) -> tuple[float, ...]:
@@ -408,6 +415,7 @@ class Play(Term):
     acts_on: ClassVar[Place] = Place.HYSTERESIS
     bounds: ClassVar[tuple[float, float]] = NON_NEGATIVE
     physical: ClassVar[tuple[float, float]] = NON_NEGATIVE
+    unphysical: ClassVar[str] = "a negative play"
     bound_note: ClassVar[str] = " (it is a half-width)"
     scaling: ClassVar[tuple[float, float, float]] = (1.0, 0.0, 0.0)
 
@@ -513,6 +521,12 @@ STEADY_TERM_NAMES: tuple[str, ...] = tuple(k for k, cls in TERMS.items() if cls.
 DIAGNOSIS_CANDIDATES: tuple[str, ...] = STEADY_TERM_NAMES + tuple(
     k for k in TERMS if k not in STEADY_TERM_NAMES
 )
+
+
+def physical_value(name: str, value: float) -> bool:
+    """Whether ``value`` lies in the physical range of the term called ``name`` (:attr:`Term.physical`)."""
+    lo, hi = TERMS[name].physical
+    return lo <= value <= hi
 
 
 def parse_terms(names: Sequence[str], allowed: Sequence[str] = TERM_NAMES) -> tuple[str, ...]:

@@ -13,7 +13,7 @@ import numpy as np
 
 from ..augmented import AugExperiment, AugFit
 from ..errors import InvalidParameterError, TransientWarning
-from ..terms import DIAGNOSIS_CANDIDATES, Distortion
+from ..terms import DIAGNOSIS_CANDIDATES, TERMS, Distortion, physical_value
 from .data import DiagExperiment, prepare
 from .drift import (
     DEGRADATION,
@@ -263,16 +263,6 @@ def _degradation_stage(
     return deg, fexps, fsx, fit
 
 
-#: A term whose fitted value must not be negative to be physical (a mass, a damping, a friction, a lag, a
-#: play): a negative one is never named (select.py refuses it; a later step that drives it negative is
-#: reported as "not physical").
-NONNEGATIVE_TERMS: dict[str, str] = {
-    "viscous": "a negative damping (energy supplied, not dissipated)",
-    "inertia": "a negative mass",
-    "coulomb": "a negative friction (energy supplied at every reversal)",
-    "sensor_lag": "a negative lag (an output ahead of its cause)",
-    "play": "a negative play",
-}
 #: What a non-physical value suggests.
 NOT_PHYSICAL_HINT = (
     "the term stands in for physics the library places elsewhere (e.g. acting on the hysteresis' own input "
@@ -721,7 +711,7 @@ def _judged(
     """``(status, named, partial, verdict)``: a term outside its physical range is never named (the rest is
     at most a partial explanation), and the verdict says what the non-physical value and a residual DC of
     both signs suggest."""
-    unphysical = tuple(t for t in final.terms if t.term in NONNEGATIVE_TERMS and t.value < 0)
+    unphysical = tuple(t for t in final.terms if not physical_value(t.term, t.value))
     if unphysical and status == "explained":
         status = "partly explained"
     named: tuple[NamedTerm, ...] = ()
@@ -783,5 +773,5 @@ def _centre_text(exps: Sequence[DiagExperiment], outputs: Sequence[Any], scale: 
 def _unphysical_text(terms: Sequence[NamedTerm]) -> str:
     if not terms:
         return ""
-    what = "; ".join(f"{t} ({NONNEGATIVE_TERMS[t.term]})" for t in terms)
+    what = "; ".join(f"{t} ({TERMS[t.term].unphysical})" for t in terms)
     return f"; not physical: {what}: {NOT_PHYSICAL_HINT}"

@@ -35,7 +35,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..augmented import AugExperiment, AugFit, augmented_output
-from ..terms import TERMS
+from ..terms import TERMS, physical_value
 from .fitting import best_of, fit_from, fit_own, fit_with, subset
 
 FloatArray = NDArray[np.float64]
@@ -288,18 +288,17 @@ def _separating(exps: Sequence[AugExperiment], fa: AugFit, fb: AugFit, substeps:
     return best[1] or "none of the designs tried (0.5-4x amplitude, 0.5-2x frequency)"
 
 
-#: Terms whose value must not be negative to be physical (a damping, a mass, a friction, a lag, a play).
-NONNEGATIVE = ("viscous", "inertia", "coulomb", "sensor_lag", "play")
 #: Two candidates' improvements closer than this many standard deviations of their difference are a tie.
 TIE_SD = 2.0
 
 
 def _admissible(fit: AugFit, term: str) -> bool:
-    """Whether ``term``'s fitted value lies in its physical range: a one-parameter term whose best value
-    is negative has its constrained optimum at 0 (the model without it), so it is not a candidate."""
-    if term not in NONNEGATIVE or term not in fit.params.terms:
+    """Whether ``term``'s fitted value lies in its physical range (the registry's ``physical``): a
+    one-parameter term whose best value lies outside, e.g. a negative damping, has its constrained optimum on
+    the range's end (the model without it), so it is not a candidate."""
+    if term not in fit.params.terms:
         return True
-    return float(fit.params.values[fit.params.terms.index(term)]) >= 0.0
+    return physical_value(term, float(fit.params.values[fit.params.terms.index(term)]))
 
 
 def _tied(chosen: Trial, rival: Trial, dof: int) -> bool:
