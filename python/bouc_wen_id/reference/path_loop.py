@@ -29,6 +29,7 @@ from ..errors import (
     ZeroAmplitudeError,
 )
 from ..validation import finite_scalar as _finite_scalar
+from .steady import bracketed_newton, next_iteration
 
 FloatArray = NDArray[np.float64]
 
@@ -152,6 +153,23 @@ def _segments(amplitude: float, phi: float, b: float, p: int) -> list[tuple[floa
     return segs
 
 
+def _check_loop(amplitude: float, beta: float, gamma: float, mu: float, delta: float, play: float) -> float:
+    """The checks :func:`path_loop` and :func:`path_loop_distorted` share, in the core's order: ``mu > 1``,
+    ``beta + gamma - |delta| > 0`` (returned), ``A != 0``, ``play >= 0``."""
+    if mu <= 1.0:
+        raise InvalidParameterError(f"mu = {mu} must be > 1 in the identification model")
+    margin = beta + gamma - abs(delta)
+    if margin <= 0.0:
+        raise InvalidParameterError(
+            f"beta + gamma - |delta| = {margin} must be > 0: otherwise one side of the loop is unbounded"
+        )
+    if amplitude == 0.0:
+        raise ZeroAmplitudeError("the amplitude of x is 0: the loop is a point")
+    if play < 0.0:
+        raise InvalidParameterError(f"play = {play} must be >= 0")
+    return margin
+
+
 def path_loop(
     amplitude: float,
     beta: float,
@@ -206,17 +224,7 @@ def path_loop(
         ("phi", phi),
     ):
         _finite_scalar(name, v)
-    if mu <= 1.0:
-        raise InvalidParameterError(f"mu = {mu} must be > 1 in the identification model")
-    margin = beta + gamma - abs(delta)
-    if margin <= 0.0:
-        raise InvalidParameterError(
-            f"beta + gamma - |delta| = {margin} must be > 0: otherwise one side of the loop is unbounded"
-        )
-    if amplitude == 0.0:
-        raise ZeroAmplitudeError("the amplitude of x is 0: the loop is a point")
-    if play < 0.0:
-        raise InvalidParameterError(f"play = {play} must be >= 0")
+    margin = _check_loop(amplitude, beta, gamma, mu, delta, play)
     if play >= abs(amplitude):
         raise ZeroAmplitudeError(
             f"play = {play} >= |amplitude| = {abs(amplitude)}: no motion reaches the hysteresis"
@@ -279,19 +287,10 @@ def _solve(
             raise NotConvergedError(f"the path-loop shooting diverged (w reached {wn} within one cycle)")
         if abs(g) <= PATH_SHOOT_RTOL * bound:
             break
-        iterations += 1
-        if iterations > PATH_SHOOT_MAX_ITER:
-            raise NotConvergedError(
-                f"the path-loop shooting found no periodic loop in {PATH_SHOOT_MAX_ITER} iterations "
-                f"(residual {g:.3e})"
-            )
-        # g = W(w0) - w0 is positive at -w_b and negative at w_b: keep a bracket.
-        if g > 0.0:
-            lo = w0
-        else:
-            hi = w0
-        newton = w0 + g / (1.0 - dw)
-        w0 = newton if lo < newton < hi and np.isfinite(newton) else 0.5 * (lo + hi)
+        failure = f"the path-loop shooting found no periodic loop in {PATH_SHOOT_MAX_ITER}"
+        iterations = next_iteration(iterations, PATH_SHOOT_MAX_ITER, failure, g)
+        # g = W(w0) - w0 is positive at -w_b and negative at w_b: -g increases, with slope 1 - dW/dw0.
+        w0, lo, hi = bracketed_newton(w0, -g, 1.0 - dw, lo, hi)
     # dw_0/dq = (dW/dq) / (1 - dW/dw_0); every sample T_j + Phi_j dw_0/dq.
     jac = t_rows + phis[:, None] * (t_end / (1.0 - dw))[None, :]
     if not (np.all(np.isfinite(w)) and np.all(np.isfinite(jac))):
@@ -369,15 +368,7 @@ def _check_distorted(
         _finite_scalar(name, v)
     if harmonics.size % 2 or not np.all(np.isfinite(harmonics)):
         raise InvalidParameterError("the waveform's harmonics must be finite (re, im) pairs")
-    if mu <= 1.0:
-        raise InvalidParameterError(f"mu = {mu} must be > 1 in the identification model")
-    margin = beta + gamma - abs(delta)
-    if margin <= 0.0:
-        raise InvalidParameterError(f"beta + gamma - |delta| = {margin} must be > 0")
-    if amplitude == 0.0:
-        raise ZeroAmplitudeError("the amplitude of x is 0: the loop is a point")
-    if play < 0.0:
-        raise InvalidParameterError(f"play = {play} must be >= 0")
+    margin = _check_loop(amplitude, beta, gamma, mu, delta, play)
     p = int(samples_per_period)
     if p < 4:
         raise InsufficientDataError(f"samples_per_period = {p}: at least 4 are needed")
