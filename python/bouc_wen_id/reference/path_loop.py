@@ -18,6 +18,9 @@ not bit for bit, and their ``iterations`` counts differ.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from typing import Union
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -57,6 +60,8 @@ PATH_SHOOT_RTOL = 1e-13
 
 # A node: (xp, d xp / d(A, phi, b)).
 _Node = tuple[float, tuple[float, float, float]]
+#: A node of either input: the pure sine's (d/d(A, phi, b)) or the distorted one's (and d/d lambda).
+_AnyNode = Union[_Node, tuple[float, FloatArray]]
 
 
 def _rate(
@@ -126,29 +131,48 @@ def _segments(amplitude: float, phi: float, b: float, p: int) -> list[tuple[floa
     # phi' = phi (+ pi for A < 0, whose top is at theta - phi = pi).
     shift = 0.5 if amplitude < 0.0 else 0.0
     r = (phi / (2.0 * np.pi) + shift) % 1.0
+    top: _Node = (a - b, (sa, 0.0, -1.0))
+    bottom: _Node = (-a + b, (-sa, 0.0, 1.0))
+
+    def node_at(j: int, uj: float, descending: bool) -> _Node:
+        return _play_node(a, sa, b, 2.0 * np.pi * uj, descending)
+
+    return _cycle_segments(r, 0.5, p, top, bottom, node_at, pad=True)
+
+
+def _cycle_segments(
+    r: float,
+    ub: float,
+    p: int,
+    top: _AnyNode,
+    bottom: _AnyNode,
+    node_at: Callable[[int, float, bool], _AnyNode],
+    pad: bool,
+) -> list[tuple[float, FloatArray, float, int]]:
+    """The segments ``(dx, d dx/dq, s, sample or -1)`` of one cycle from the top reversal, whose cycle phase
+    is ``r`` (a fraction of the period on the sample grid), through the samples' nodes ``node_at(j, u_j,
+    descending)`` (``u_j`` the sample's cycle phase; descending up to the bottom reversal at ``ub``) and the
+    bottom one, back to the top; ``pad`` appends the ``lambda`` column a pure sine does not have."""
     u = np.arange(p) / p - r
     u = np.where(u < 0.0, u + 1.0, u)
     j0 = int(np.argmin(u))
-    top: _Node = (a - b, (sa, 0.0, -1.0))
-    bottom: _Node = (-a + b, (-sa, 0.0, 1.0))
-    nodes: list[tuple[_Node, float, int]] = []
+    nodes: list[tuple[_AnyNode, float, int]] = []
     passed_bottom = False
     for m in range(p):
         j = (j0 + m) % p
-        descending = bool(u[j] <= 0.5)
+        descending = bool(u[j] <= ub)
         if not descending and not passed_bottom:
             nodes.append((bottom, -1.0, -1))
             passed_bottom = True
-        nodes.append(
-            (_play_node(a, sa, b, 2.0 * np.pi * float(u[j]), descending), -1.0 if descending else 1.0, j)
-        )
+        nodes.append((node_at(j, float(u[j]), descending), -1.0 if descending else 1.0, j))
     if not passed_bottom:
         nodes.append((bottom, -1.0, -1))
     nodes.append((top, 1.0, -1))
     segs = []
     prev = top
     for node, s, j in nodes:
-        segs.append((node[0] - prev[0], np.append(np.subtract(node[1], prev[1]), 0.0), s, j))
+        d = np.subtract(node[1], prev[1])
+        segs.append((node[0] - prev[0], np.append(d, 0.0) if pad else d, s, j))
         prev = node
     return segs
 
@@ -436,40 +460,23 @@ def path_loop_distorted(
     bottom: tuple[float, FloatArray] = (xb + b, np.array([sa * eb[0], 0.0, 1.0, amplitude * eb[3]]))
     r = ((phi + zt) / (2.0 * np.pi)) % 1.0
     ub = ((zb - zt) / (2.0 * np.pi)) % 1.0
-    u = np.arange(p) / p - r
-    u = np.where(u < 0.0, u + 1.0, u)
-    j0 = int(np.argmin(u))
-    nodes: list[tuple[tuple[float, FloatArray], float, int]] = []
-    passed_bottom = False
-    for m in range(p):
-        j = (j0 + m) % p
-        descending = bool(u[j] <= ub)
-        if not descending and not passed_bottom:
-            nodes.append((bottom, -1.0, -1))
-            passed_bottom = True
+
+    def node_at(j: int, uj: float, descending: bool) -> tuple[float, FloatArray]:
         xi, dxi, _, d = waveform(2.0 * np.pi * j / p - phi, lam, harmonics)
         x = amplitude * xi
         # Descending: xp = min(x_top - b, x + b); ascending: xp = max(x_bot + b, x - b).
         if descending:
-            node = (
+            return (
                 (x + b, np.array([sa * xi, -amplitude * dxi, 1.0, amplitude * d]))
                 if x < xt - 2.0 * b
                 else top
             )
-        else:
-            node = (
-                (x - b, np.array([sa * xi, -amplitude * dxi, -1.0, amplitude * d]))
-                if x > xb + 2.0 * b
-                else bottom
-            )
-        nodes.append((node, -1.0 if descending else 1.0, j))
-    if not passed_bottom:
-        nodes.append((bottom, -1.0, -1))
-    nodes.append((top, 1.0, -1))
-    segs = []
-    prev = top
-    for node, s, j in nodes:
-        segs.append((node[0] - prev[0], node[1] - prev[1], s, j))
-        prev = node
+        return (
+            (x - b, np.array([sa * xi, -amplitude * dxi, -1.0, amplitude * d]))
+            if x > xb + 2.0 * b
+            else bottom
+        )
+
+    segs = _cycle_segments(r, ub, p, top, bottom, node_at, pad=False)
     jac, iterations, w = _solve(segs, beta, gamma, mu, delta, margin, p, substeps)
     return w, jac, iterations
