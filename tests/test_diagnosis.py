@@ -219,15 +219,12 @@ def test_targeted_step_names_a_lag_the_global_test_misses(plain_diagnosis: bw.di
     assert plain_diagnosis.steps[0].targeted and plain_diagnosis.steps[0].chosen is None
 
 
-def test_terms_one_frequency_cannot_separate_are_alternatives() -> None:
-    """Stiffness k u and inertia m uddot = -m omega^2 u are the same term at one frequency.
-
-    A softening stiffness (k < 0) is a positive mass there: both admissible. (With k > 0 the rival is a
-    negative mass, which is not physical and so not an alternative.)"""
+def _one_frequency_plan() -> bw.SinePlan:
+    """Three amplitudes at 1 Hz through G = 1/(0.05 s + 1), outputs of 0.6, 1.2 and 2.4: one frequency, at
+    which a stiffness k u and an inertia -m omega^2 u cannot be told apart."""
     om = np.full(3, TWO_PI * 1.0)
-    lin = bw.TransferFunction([1.0], [0.05, 1.0])
-    g, _ = lin.gain_phase(om)
-    plan = bw.SinePlan(
+    g, _ = bw.TransferFunction([1.0], [0.05, 1.0]).gain_phase(om)
+    return bw.SinePlan(
         om,
         np.array([0.6, 1.2, 2.4]) / g,
         settle_periods=8,
@@ -237,6 +234,14 @@ def test_terms_one_frequency_cannot_separate_are_alternatives() -> None:
         noise_sd=0.005,
         seed=11,
     )
+
+
+def test_terms_one_frequency_cannot_separate_are_alternatives() -> None:
+    """Stiffness k u and inertia m uddot = -m omega^2 u are the same term at one frequency.
+
+    A softening stiffness (k < 0) is a positive mass there: both admissible. (With k > 0 the rival is a
+    negative mass, which is not physical and so not an alternative.)"""
+    plan = _one_frequency_plan()
     d = bw.diagnose(bw.simulate(_plant((T.Stiffness(-0.02),)), plan))
     assert d.status == "explained", d.summary()
     assert set(d.named_terms) <= {"stiffness", "inertia"}
@@ -395,18 +400,7 @@ def test_noise_free_data_of_the_exact_model_are_adequate() -> None:
 def test_a_negative_mass_is_never_named() -> None:
     """At one frequency a stiffening k u is a negative mass; offered only inertia, the diagnosis named
     "inertia m = -0.0005"; a negative mass is outside the physical range and is not a candidate."""
-    om = np.full(3, TWO_PI * 1.0)
-    g, _ = bw.TransferFunction([1.0], [0.05, 1.0]).gain_phase(om)
-    plan = bw.SinePlan(
-        om,
-        np.array([0.6, 1.2, 2.4]) / g,
-        settle_periods=8,
-        periods=12,
-        samples_per_period=64,
-        substeps=8,
-        noise_sd=0.005,
-        seed=11,
-    )
+    plan = _one_frequency_plan()
     d = bw.diagnose(bw.simulate(_plant((T.Stiffness(0.02),)), plan), candidates=["inertia"])
     assert all(t.value >= 0 for t in d.named), d.summary()
     assert "inertia" not in d.named_terms

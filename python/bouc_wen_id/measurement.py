@@ -305,7 +305,7 @@ class Measurement:
         metadata: Optional[Mapping[str, str]] = None,
     ) -> Measurement:
         """A measurement sampled at ``sample_rate`` Hz from t = 0: ``t = k / sample_rate``."""
-        rate = _rate(sample_rate)
+        rate = check_sample_rate(sample_rate)
         uu = _frozen("u", u)
         with np.errstate(over="ignore"):  # a rate so low that t overflows is a NonFiniteError
             t = np.arange(uu.size) / rate
@@ -504,17 +504,20 @@ class Measurement:
         )
 
 
-def _rate(sample_rate: object) -> float:
+def check_sample_rate(sample_rate: object, where: str = "") -> float:
+    """A sampling rate in Hz: a finite number > 0 (``where``, a file, prefixes the messages; the readers
+    of :mod:`bouc_wen_id.io` check a stated rate with it too)."""
+    at = f"{where}: " if where else ""
     if isinstance(sample_rate, bool):
-        raise InvalidParameterError("sample_rate must be a number (Hz), not a bool")
+        raise InvalidParameterError(f"{at}sample_rate must be a number (Hz), not a bool")
     try:
         rate = float(sample_rate)  # type: ignore[arg-type]
     except (TypeError, ValueError, OverflowError) as exc:
-        raise InvalidParameterError(f"sample_rate must be a number (Hz): {exc}") from exc
+        raise InvalidParameterError(f"{at}sample_rate must be a number (Hz): {exc}") from exc
     if not math.isfinite(rate):
-        raise NonFiniteError(f"sample_rate = {rate} is not finite")
+        raise NonFiniteError(f"{at}sample_rate = {rate} is not finite")
     if rate <= 0:
-        raise InvalidParameterError(f"sample_rate = {rate} Hz must be > 0")
+        raise InvalidParameterError(f"{at}sample_rate = {rate} Hz must be > 0")
     return rate
 
 
@@ -550,7 +553,7 @@ def _frame_time_axis(
                 f"sample_rate= is for a frame indexed by row numbers; this one has a "
                 f"{type(df.index).__name__} of times: drop sample_rate or reset the index"
             )
-        return np.arange(len(df)) / _rate(sample_rate)
+        return np.arange(len(df)) / check_sample_rate(sample_rate)
     if isinstance(df.index, pd.MultiIndex):
         raise InvalidParameterError("a MultiIndex is not a time axis: pass time=<column>")
     return _frame_times(pd, df.index.to_series(), "t (the index)")

@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING, Any, Optional
 import numpy as np
 from numpy.typing import NDArray
 
+from ._text import Summarised, with_warnings
 from .errors import InvalidParameterError
 from .model import WienerPlant
 from .validation import z_value
@@ -154,7 +155,7 @@ class Truth:
 
 
 @dataclass(frozen=True, eq=False)
-class IdentificationResult:
+class IdentificationResult(Summarised):
     """The identified model: hysteresis parameters and frequency-response points of G.
 
     The model is alpha-normalised (alpha = 1) and canonical (|G| > 0): of the equivalent models
@@ -320,12 +321,7 @@ class IdentificationResult:
             )
         if self.converged is False:
             lines.append(f"  warning: {NOT_CONVERGED.format(iterations=self.iterations)}")
-        for w in self.warnings:
-            lines.append(f"  warning: {w}")
-        return "\n".join(lines)
-
-    def __str__(self) -> str:
-        return self.summary()
+        return with_warnings(lines, self.warnings)
 
     def __repr__(self) -> str:
         return (

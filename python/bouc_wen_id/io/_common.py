@@ -4,7 +4,6 @@
 from __future__ import annotations
 
 import json
-import math
 import os
 from collections.abc import Mapping, Sequence
 from pathlib import Path
@@ -14,8 +13,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .. import budget as _budget
-from ..errors import FileFormatError, InvalidParameterError, NonFiniteError
-from ..measurement import Measurement
+from ..errors import FileFormatError, InvalidParameterError
+from ..measurement import Measurement, check_sample_rate
 from ..model import Recording
 
 PathLike = Union[str, "os.PathLike[str]"]
@@ -27,19 +26,6 @@ FloatArray = NDArray[np.float64]
 
 #: Signals a file can hold, in column order.
 _ROLES = ("t", "u", "y", "x", "w")
-
-
-def _rate_value(value: Any, where: str = "") -> float:
-    at = f"{where}: " if where else ""
-    try:
-        rate = float(value)
-    except OverflowError as exc:
-        raise InvalidParameterError(f"{at}sample_rate = {value} Hz is out of range") from exc
-    if not math.isfinite(rate):
-        raise NonFiniteError(f"{at}sample_rate = {rate} is not finite")
-    if rate <= 0:
-        raise InvalidParameterError(f"{at}sample_rate = {rate} Hz must be > 0")
-    return rate
 
 
 def _check_columns(columns: Optional[ColumnMap]) -> dict[str, Union[str, int]]:
@@ -60,7 +46,19 @@ def _check_rate(sample_rate: Optional[float]) -> Optional[float]:
         return None
     if isinstance(sample_rate, bool) or not isinstance(sample_rate, (int, float, np.integer, np.floating)):
         raise InvalidParameterError(f"sample_rate must be a number (Hz), got {sample_rate!r}")
-    return _rate_value(sample_rate)
+    return check_sample_rate(sample_rate)
+
+
+def _reader_args(
+    path: PathLike, columns: Optional[ColumnMap], sample_rate: Optional[float], what: str
+) -> tuple[Path, str, dict[str, Union[str, int]], Optional[float]]:
+    """What a container reader checks first, in this order: ``columns=``, ``sample_rate=``, then that
+    ``path`` is a regular ``what`` file within the byte budget; ``(path, where, columns, sample_rate)``."""
+    cols = _check_columns(columns)
+    rate = _check_rate(sample_rate)
+    p = Path(path)
+    _regular_file(p, what)
+    return p, str(p), cols, rate
 
 
 def _pick(
@@ -112,7 +110,7 @@ def _scalar_rate(where: str, key: str, value: Any) -> float:
     arr = _array(where, key, value)
     if arr.size != 1:
         raise FileFormatError(f"{where}: {key!r} must be one number (the sample rate in Hz), got {arr.size}")
-    return _rate_value(arr[0], where)
+    return check_sample_rate(arr[0], where)
 
 
 def _parse_json(text: str, where: str, what: str) -> Any:

@@ -5,7 +5,6 @@ from __future__ import annotations
 import json
 import os
 from collections.abc import Callable, Sequence
-from pathlib import Path
 from typing import Any, Optional
 
 import numpy as np
@@ -13,7 +12,7 @@ import numpy as np
 from .. import _optional
 from ..errors import BoucWenIdError, FileFormatError
 from ..measurement import Measurement
-from ._common import _ROLES, ColumnMap, Item, PathLike, _check_columns, _check_rate, _items, _regular_file
+from ._common import _ROLES, ColumnMap, Item, PathLike, _items, _reader_args
 from ._containers import HEADER_KEY, _Channel, _container_items, _Group
 from ._header import _header
 
@@ -140,11 +139,7 @@ def read_hdf5(
     memory budget applies to all the experiments of the file together.
     """
     h5py = _optional.require("h5py", "reading .h5/.hdf5 files")
-    cols = _check_columns(columns)
-    rate = _check_rate(sample_rate)
-    p = Path(path)
-    where = str(p)
-    _regular_file(p, "HDF5")
+    p, where, cols, rate = _reader_args(path, columns, sample_rate, "HDF5")
     try:
         h5 = h5py.File(p, "r", locking=False)
     except Exception as exc:  # noqa: BLE001 - any decoder failure of an untrusted file is a format error

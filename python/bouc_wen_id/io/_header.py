@@ -12,10 +12,10 @@ from typing import Any, Literal, Optional
 import numpy as np
 
 from ..errors import BoucWenIdError, FileFormatError, InvalidParameterError
-from ..measurement import RESERVED_KEYS, Measurement, check_metadata_key
+from ..measurement import RESERVED_KEYS, Measurement, check_metadata_key, check_sample_rate
 from ..model import Recording, WienerPlant
 from ..validation import check_time_axis
-from ._common import FloatArray, Item, _array, _rate_value, _scalar_rate
+from ._common import FloatArray, Item, _array, _scalar_rate
 
 FORMAT = "bouc_wen_id.recording"
 MEASUREMENT_FORMAT = "bouc_wen_id.measurement"
@@ -156,7 +156,7 @@ def _build(
         raise FileFormatError(f"{where}: the file holds no samples")
     stated = _number(head, "sample_rate", where)
     with _in_file(where):
-        rate = None if stated is None else _rate_value(stated, where)
+        rate = None if stated is None else check_sample_rate(stated, where)
         if sample_rate is not None and rate is not None and abs(sample_rate - rate) > 1e-9 * rate:
             raise FileFormatError(
                 f"{where}: the header's sample_rate {rate:g} Hz disagrees with sample_rate={sample_rate:g}"

@@ -5,7 +5,6 @@ from __future__ import annotations
 import io as _stdio
 import json
 from collections.abc import Mapping, Sequence
-from pathlib import Path
 from typing import Any, Optional, Union
 
 import numpy as np
@@ -16,12 +15,10 @@ from ._common import (
     ColumnMap,
     Item,
     PathLike,
-    _check_columns,
-    _check_rate,
     _items,
     _parse_json,
     _pick,
-    _regular_file,
+    _reader_args,
 )
 from ._header import _header, _read_single
 from ._matv5 import _guard_mat5
@@ -89,13 +86,9 @@ def read_mat(
     array of structs with those fields)."""
     loadmat = _scipy_io().loadmat
 
-    cols = _check_columns(columns)
-    rate = _check_rate(sample_rate)
-    p = Path(path)
-    where = str(p)
+    p, where, cols, rate = _reader_args(path, columns, sample_rate, "MAT")
     wanted = {"t", "u", "y", "x", "w", "fs", "sample_rate", "meta", "experiments"}
     wanted |= {c for c in cols.values() if isinstance(c, str)}
-    _regular_file(p, "MAT")
     try:
         data = p.read_bytes()
     except OSError as exc:

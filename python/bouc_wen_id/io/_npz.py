@@ -6,7 +6,6 @@ import json
 import math
 import re
 from collections.abc import Mapping, Sequence
-from pathlib import Path
 from typing import Any, Optional
 
 import numpy as np
@@ -19,12 +18,10 @@ from ._common import (
     Item,
     PathLike,
     _array,
-    _check_columns,
-    _check_rate,
     _items,
     _parse_json,
     _pick,
-    _regular_file,
+    _reader_args,
 )
 from ._header import _build, _header, _read_single
 
@@ -52,11 +49,7 @@ def read_npz(
 ) -> list[Item]:
     """Read every experiment of an NPZ file: a bundle written by :func:`write_npz`, or a plain archive
     with arrays ``u``, ``y`` and ``t`` (or a scalar ``fs``/``sample_rate``), renamed by ``columns``."""
-    cols = _check_columns(columns)
-    rate = _check_rate(sample_rate)
-    p = Path(path)
-    where = str(p)
-    _regular_file(p, "NPZ")
+    p, where, cols, rate = _reader_args(path, columns, sample_rate, "NPZ")
     try:
         # Our own handle: numpy leaks the one it opens when the archive is corrupt.
         with open(p, "rb") as fh:

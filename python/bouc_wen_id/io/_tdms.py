@@ -5,7 +5,6 @@ from __future__ import annotations
 import json
 from collections.abc import Sequence
 from functools import partial
-from pathlib import Path
 from typing import Any, Optional
 
 import numpy as np
@@ -13,7 +12,7 @@ import numpy as np
 from .. import _optional
 from ..errors import BoucWenIdError, FileFormatError
 from ..measurement import Measurement
-from ._common import _ROLES, ColumnMap, Item, PathLike, _check_columns, _check_rate, _items, _regular_file
+from ._common import _ROLES, ColumnMap, Item, PathLike, _items, _reader_args
 from ._containers import HEADER_KEY, _Channel, _container_items, _Group
 from ._header import _header
 
@@ -57,11 +56,7 @@ def read_tdms(
     written by :func:`write_tdms` carries its header (property ``bouc_wen_id``) and reads back as written.
     """
     nptdms = _optional.require("nptdms", "reading .tdms files")
-    cols = _check_columns(columns)
-    rate = _check_rate(sample_rate)
-    p = Path(path)
-    where = str(p)
-    _regular_file(p, "TDMS")
+    p, where, cols, rate = _reader_args(path, columns, sample_rate, "TDMS")
     with _LogRecords("nptdms") as logged, open(p, "rb") as fh:
         try:
             tdms = nptdms.TdmsFile.open(fh)

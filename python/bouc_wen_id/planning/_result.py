@@ -10,6 +10,7 @@ from typing import Any, Literal, Optional
 import numpy as np
 
 from .._backend import Backend
+from .._text import Summarised
 from ..model import Recording, SinePlan, WienerPlant
 from ..uncertainty import CramerRao
 
@@ -117,7 +118,7 @@ class Design:
 
 
 @dataclass(frozen=True, eq=False)
-class ExperimentPlan:
+class ExperimentPlan(Summarised):
     """The planned design, the naive design of the same budget, and the constraints they obey.
 
     ``design`` is what to run; ``naive`` (None when the budget cannot hold it) is the comparison:
@@ -202,9 +203,6 @@ class ExperimentPlan:
                 f"amplitude, equal periods): the planned one's criterion is {self.improvement:.3g}x smaller."
             )
         return "\n".join(lines)
-
-    def __str__(self) -> str:
-        return self.summary()
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready description (format ``bouc_wen_id.plan``, version 1)."""

@@ -18,6 +18,9 @@ not bit for bit, and their ``iterations`` counts differ.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from typing import Union
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -29,6 +32,7 @@ from ..errors import (
     ZeroAmplitudeError,
 )
 from ..validation import finite_scalar as _finite_scalar
+from .steady import bracketed_newton, next_iteration
 
 FloatArray = NDArray[np.float64]
 
@@ -56,6 +60,8 @@ PATH_SHOOT_RTOL = 1e-13
 
 # A node: (xp, d xp / d(A, phi, b)).
 _Node = tuple[float, tuple[float, float, float]]
+#: A node of either input: the pure sine's (d/d(A, phi, b)) or the distorted one's (and d/d lambda).
+_AnyNode = Union[_Node, tuple[float, FloatArray]]
 
 
 def _rate(
@@ -125,31 +131,67 @@ def _segments(amplitude: float, phi: float, b: float, p: int) -> list[tuple[floa
     # phi' = phi (+ pi for A < 0, whose top is at theta - phi = pi).
     shift = 0.5 if amplitude < 0.0 else 0.0
     r = (phi / (2.0 * np.pi) + shift) % 1.0
+    top: _Node = (a - b, (sa, 0.0, -1.0))
+    bottom: _Node = (-a + b, (-sa, 0.0, 1.0))
+
+    def node_at(j: int, uj: float, descending: bool) -> _Node:
+        return _play_node(a, sa, b, 2.0 * np.pi * uj, descending)
+
+    return _cycle_segments(r, 0.5, p, top, bottom, node_at, pad=True)
+
+
+def _cycle_segments(
+    r: float,
+    ub: float,
+    p: int,
+    top: _AnyNode,
+    bottom: _AnyNode,
+    node_at: Callable[[int, float, bool], _AnyNode],
+    pad: bool,
+) -> list[tuple[float, FloatArray, float, int]]:
+    """The segments ``(dx, d dx/dq, s, sample or -1)`` of one cycle from the top reversal, whose cycle phase
+    is ``r`` (a fraction of the period on the sample grid), through the samples' nodes ``node_at(j, u_j,
+    descending)`` (``u_j`` the sample's cycle phase; descending up to the bottom reversal at ``ub``) and the
+    bottom one, back to the top; ``pad`` appends the ``lambda`` column a pure sine does not have."""
     u = np.arange(p) / p - r
     u = np.where(u < 0.0, u + 1.0, u)
     j0 = int(np.argmin(u))
-    top: _Node = (a - b, (sa, 0.0, -1.0))
-    bottom: _Node = (-a + b, (-sa, 0.0, 1.0))
-    nodes: list[tuple[_Node, float, int]] = []
+    nodes: list[tuple[_AnyNode, float, int]] = []
     passed_bottom = False
     for m in range(p):
         j = (j0 + m) % p
-        descending = bool(u[j] <= 0.5)
+        descending = bool(u[j] <= ub)
         if not descending and not passed_bottom:
             nodes.append((bottom, -1.0, -1))
             passed_bottom = True
-        nodes.append(
-            (_play_node(a, sa, b, 2.0 * np.pi * float(u[j]), descending), -1.0 if descending else 1.0, j)
-        )
+        nodes.append((node_at(j, float(u[j]), descending), -1.0 if descending else 1.0, j))
     if not passed_bottom:
         nodes.append((bottom, -1.0, -1))
     nodes.append((top, 1.0, -1))
     segs = []
     prev = top
     for node, s, j in nodes:
-        segs.append((node[0] - prev[0], np.append(np.subtract(node[1], prev[1]), 0.0), s, j))
+        d = np.subtract(node[1], prev[1])
+        segs.append((node[0] - prev[0], np.append(d, 0.0) if pad else d, s, j))
         prev = node
     return segs
+
+
+def _check_loop(amplitude: float, beta: float, gamma: float, mu: float, delta: float, play: float) -> float:
+    """The checks :func:`path_loop` and :func:`path_loop_distorted` share, in the core's order: ``mu > 1``,
+    ``beta + gamma - |delta| > 0`` (returned), ``A != 0``, ``play >= 0``."""
+    if mu <= 1.0:
+        raise InvalidParameterError(f"mu = {mu} must be > 1 in the identification model")
+    margin = beta + gamma - abs(delta)
+    if margin <= 0.0:
+        raise InvalidParameterError(
+            f"beta + gamma - |delta| = {margin} must be > 0: otherwise one side of the loop is unbounded"
+        )
+    if amplitude == 0.0:
+        raise ZeroAmplitudeError("the amplitude of x is 0: the loop is a point")
+    if play < 0.0:
+        raise InvalidParameterError(f"play = {play} must be >= 0")
+    return margin
 
 
 def path_loop(
@@ -206,17 +248,7 @@ def path_loop(
         ("phi", phi),
     ):
         _finite_scalar(name, v)
-    if mu <= 1.0:
-        raise InvalidParameterError(f"mu = {mu} must be > 1 in the identification model")
-    margin = beta + gamma - abs(delta)
-    if margin <= 0.0:
-        raise InvalidParameterError(
-            f"beta + gamma - |delta| = {margin} must be > 0: otherwise one side of the loop is unbounded"
-        )
-    if amplitude == 0.0:
-        raise ZeroAmplitudeError("the amplitude of x is 0: the loop is a point")
-    if play < 0.0:
-        raise InvalidParameterError(f"play = {play} must be >= 0")
+    margin = _check_loop(amplitude, beta, gamma, mu, delta, play)
     if play >= abs(amplitude):
         raise ZeroAmplitudeError(
             f"play = {play} >= |amplitude| = {abs(amplitude)}: no motion reaches the hysteresis"
@@ -279,19 +311,10 @@ def _solve(
             raise NotConvergedError(f"the path-loop shooting diverged (w reached {wn} within one cycle)")
         if abs(g) <= PATH_SHOOT_RTOL * bound:
             break
-        iterations += 1
-        if iterations > PATH_SHOOT_MAX_ITER:
-            raise NotConvergedError(
-                f"the path-loop shooting found no periodic loop in {PATH_SHOOT_MAX_ITER} iterations "
-                f"(residual {g:.3e})"
-            )
-        # g = W(w0) - w0 is positive at -w_b and negative at w_b: keep a bracket.
-        if g > 0.0:
-            lo = w0
-        else:
-            hi = w0
-        newton = w0 + g / (1.0 - dw)
-        w0 = newton if lo < newton < hi and np.isfinite(newton) else 0.5 * (lo + hi)
+        failure = f"the path-loop shooting found no periodic loop in {PATH_SHOOT_MAX_ITER}"
+        iterations = next_iteration(iterations, PATH_SHOOT_MAX_ITER, failure, g)
+        # g = W(w0) - w0 is positive at -w_b and negative at w_b: -g increases, with slope 1 - dW/dw0.
+        w0, lo, hi = bracketed_newton(w0, -g, 1.0 - dw, lo, hi)
     # dw_0/dq = (dW/dq) / (1 - dW/dw_0); every sample T_j + Phi_j dw_0/dq.
     jac = t_rows + phis[:, None] * (t_end / (1.0 - dw))[None, :]
     if not (np.all(np.isfinite(w)) and np.all(np.isfinite(jac))):
@@ -369,15 +392,7 @@ def _check_distorted(
         _finite_scalar(name, v)
     if harmonics.size % 2 or not np.all(np.isfinite(harmonics)):
         raise InvalidParameterError("the waveform's harmonics must be finite (re, im) pairs")
-    if mu <= 1.0:
-        raise InvalidParameterError(f"mu = {mu} must be > 1 in the identification model")
-    margin = beta + gamma - abs(delta)
-    if margin <= 0.0:
-        raise InvalidParameterError(f"beta + gamma - |delta| = {margin} must be > 0")
-    if amplitude == 0.0:
-        raise ZeroAmplitudeError("the amplitude of x is 0: the loop is a point")
-    if play < 0.0:
-        raise InvalidParameterError(f"play = {play} must be >= 0")
+    margin = _check_loop(amplitude, beta, gamma, mu, delta, play)
     p = int(samples_per_period)
     if p < 4:
         raise InsufficientDataError(f"samples_per_period = {p}: at least 4 are needed")
@@ -445,40 +460,23 @@ def path_loop_distorted(
     bottom: tuple[float, FloatArray] = (xb + b, np.array([sa * eb[0], 0.0, 1.0, amplitude * eb[3]]))
     r = ((phi + zt) / (2.0 * np.pi)) % 1.0
     ub = ((zb - zt) / (2.0 * np.pi)) % 1.0
-    u = np.arange(p) / p - r
-    u = np.where(u < 0.0, u + 1.0, u)
-    j0 = int(np.argmin(u))
-    nodes: list[tuple[tuple[float, FloatArray], float, int]] = []
-    passed_bottom = False
-    for m in range(p):
-        j = (j0 + m) % p
-        descending = bool(u[j] <= ub)
-        if not descending and not passed_bottom:
-            nodes.append((bottom, -1.0, -1))
-            passed_bottom = True
+
+    def node_at(j: int, uj: float, descending: bool) -> tuple[float, FloatArray]:
         xi, dxi, _, d = waveform(2.0 * np.pi * j / p - phi, lam, harmonics)
         x = amplitude * xi
         # Descending: xp = min(x_top - b, x + b); ascending: xp = max(x_bot + b, x - b).
         if descending:
-            node = (
+            return (
                 (x + b, np.array([sa * xi, -amplitude * dxi, 1.0, amplitude * d]))
                 if x < xt - 2.0 * b
                 else top
             )
-        else:
-            node = (
-                (x - b, np.array([sa * xi, -amplitude * dxi, -1.0, amplitude * d]))
-                if x > xb + 2.0 * b
-                else bottom
-            )
-        nodes.append((node, -1.0 if descending else 1.0, j))
-    if not passed_bottom:
-        nodes.append((bottom, -1.0, -1))
-    nodes.append((top, 1.0, -1))
-    segs = []
-    prev = top
-    for node, s, j in nodes:
-        segs.append((node[0] - prev[0], node[1] - prev[1], s, j))
-        prev = node
+        return (
+            (x - b, np.array([sa * xi, -amplitude * dxi, -1.0, amplitude * d]))
+            if x > xb + 2.0 * b
+            else bottom
+        )
+
+    segs = _cycle_segments(r, ub, p, top, bottom, node_at, pad=False)
     jac, iterations, w = _solve(segs, beta, gamma, mu, delta, margin, p, substeps)
     return w, jac, iterations

@@ -80,6 +80,29 @@ def _check_loop(
     return p
 
 
+def next_iteration(iterations: int, max_iter: int, failure: str, resid: float) -> int:
+    """``iterations + 1``, or :class:`NotConvergedError` (``"{failure} iterations (residual ...)"``) past
+    ``max_iter``: the count the shootings keep, as the cores do."""
+    iterations += 1
+    if iterations > max_iter:
+        raise NotConvergedError(f"{failure} iterations (residual {resid:.3e})")
+    return iterations
+
+
+def bracketed_newton(
+    x: float, resid: float, slope: float, lo: float, hi: float
+) -> tuple[float, float, float]:
+    """One safeguarded Newton step on a residual increasing in ``x`` (as the cores' shootings):
+    ``(x_next, lo, hi)``, ``x`` narrowing the bracket on the side its residual's sign says, and the
+    bisection of the bracket where the Newton step ``x - resid / slope`` leaves it or is not finite."""
+    if resid > 0.0:
+        hi = x
+    else:
+        lo = x
+    newton = x - resid / slope
+    return (newton if lo < newton < hi and np.isfinite(newton) else 0.5 * (lo + hi)), lo, hi
+
+
 def steady_loop(
     amplitude: float, beta: float, gamma: float, mu: float, phi: float, samples_per_period: int, substeps: int
 ) -> tuple[FloatArray, FloatArray, float, int]:
@@ -138,12 +161,7 @@ def steady_loop(
                 return None
             if abs(resid) <= COARSE_RTOL * bound:
                 return top
-            if resid > 0.0:
-                c_hi = top
-            else:
-                c_lo = top
-            newton = top - resid / (end[1] + 1.0)
-            top = newton if c_lo < newton < c_hi and np.isfinite(newton) else 0.5 * (c_lo + c_hi)
+            top, c_lo, c_hi = bracketed_newton(top, resid, end[1] + 1.0, c_lo, c_hi)
         return None
 
     bound = (1.0 / (beta + gamma)) ** (1.0 / mu)
@@ -155,18 +173,13 @@ def steady_loop(
         resid = end[0] + w_top
         if abs(resid) <= SHOOT_RTOL * bound:
             break
-        iterations += 1
-        if iterations > SHOOT_MAX_ITER:
-            raise NotConvergedError(
-                f"the steady-loop shooting did not converge in {SHOOT_MAX_ITER} iterations "
-                f"(residual {resid:.3e})"
-            )
-        if resid > 0.0:
-            hi = w_top
-        else:
-            lo = w_top
-        newton = w_top - resid / (end[1] + 1.0)
-        w_top = newton if lo < newton < hi and np.isfinite(newton) else 0.5 * (lo + hi)
+        iterations = next_iteration(
+            iterations,
+            SHOOT_MAX_ITER,
+            f"the steady-loop shooting did not converge in {SHOOT_MAX_ITER}",
+            resid,
+        )
+        w_top, lo, hi = bracketed_newton(w_top, resid, end[1] + 1.0, lo, hi)
     dtop = -end[2:6] / (1.0 + end[1])
     y = rec[lat]
     theta = offset + lat * spacing

@@ -9,6 +9,7 @@ from typing import Any, Optional
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._text import Summarised, with_warnings
 from ..errors import InvalidParameterError
 from ..model import TransferFunction
 from ..validation import frozen_array, z_value
@@ -83,7 +84,7 @@ class FrequencyPrediction:
 
 
 @dataclass(frozen=True, eq=False)
-class TransferFunctionFit:
+class TransferFunctionFit(Summarised):
     """A stable, proper ``G(s)`` fitted to frequency-response points, with its uncertainty.
 
     Attributes
@@ -262,12 +263,7 @@ class TransferFunctionFit:
                 )
         for note in self.notes:
             lines.append(f"  note: {note}")
-        for w in self.warnings:
-            lines.append(f"  warning: {w}")
-        return "\n".join(lines)
-
-    def __str__(self) -> str:
-        return self.summary()
+        return with_warnings(lines, self.warnings)
 
     def __repr__(self) -> str:
         return (
