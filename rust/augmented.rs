@@ -301,6 +301,8 @@ pub fn augmented_output_with(
                 TermKind::Distortion => col[j] = h[PD_DISTORT],
                 // Refused by `Terms::parse`: the steady loop has no form for it.
                 TermKind::Degradation => {}
+                // Refused by `Terms::parse` as well (simulation only for now).
+                TermKind::StiffnessDegradation | TermKind::Pinching => {}
             }
         }
         cols[0][j] = f;

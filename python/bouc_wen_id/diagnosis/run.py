@@ -16,7 +16,9 @@ from ..terms import DIAGNOSIS_CANDIDATES, Distortion
 from .data import DiagExperiment, prepare
 from .drift import (
     DEGRADATION,
+    DRIFT_TERMS,
     DegradationTest,
+    compare,
     corrected,
     degradation_test,
     detrended,
@@ -36,7 +38,7 @@ from .fitting import (
 )
 from .locate import Localisation, adequacy_p, locate
 from .result import Diagnosis, ModelSummary, NamedTerm, Status, term_symbol_unit
-from .select import ALPHA, FoldCache, forward_select, held_out
+from .select import ALPHA, Alternative, FoldCache, forward_select, held_out
 
 #: The named terms must remove at least this share of the plain model's excess residual for the verdict
 #: "explained" when the final model is still rejected.
@@ -169,11 +171,11 @@ def _refine_degradation(
 
     from .drift import _sums
 
-    sums = [_sums(dd) for dd in data]
+    sums = [_sums(dd, deg.term) for dd in data]
     fits: dict[float, AugFit] = {}
 
     def cost(dv: float) -> float:
-        _, fs = corrected(exps, sx, fit, dv, s.y, substeps)
+        _, fs = corrected(exps, sx, fit, dv, s.y, substeps, deg.term)
         f = fit_from(fs, fit.params, substeps, max_iter=50)
         if f is None:
             return math.inf
@@ -205,6 +207,7 @@ def _degradation_stage(
     alpha: float,
     family: int,
     held_out_test: bool,
+    terms: tuple[str, ...] = (DEGRADATION,),
 ) -> Optional[tuple[Optional[DegradationTest], list[DiagExperiment], list[AugExperiment], AugFit]]:
     """The degradation candidate (design.md 10.6): its test, and the data and start the steady selection
     then runs on (the test is None when it cannot be formed); None without a block record.
@@ -217,25 +220,48 @@ def _degradation_stage(
     data = drift_data(exps, sx, plain, s.y, substeps)
     if not data:
         return None
-    deg = degradation_test(data, s.y, alpha, family=family)
+    deg = compare(data, s.y, alpha, family) if len(terms) > 1 else degradation_test(data, s.y, alpha, family, *terms)
     if deg is None or not (deg.named if held_out_test else deg.passed):
         return deg, list(exps), list(sx), plain
     fit, fexps, fsx = plain, list(exps), list(sx)
+    term = deg.term
     for _ in range(CORRECTION_PASSES):
-        fexps, fsx = corrected(exps, sx, fit, deg.d, s.y, substeps)
+        fexps, fsx = corrected(exps, sx, fit, deg.d, s.y, substeps, term)
         fit = best_of([fit_from(fsx, fit.params, substeps)]) or fit
-        data = drift_data(exps, sx, fit, s.y, substeps, strengths(len(exps), data, deg.d))
-        retest = degradation_test(data, s.y, alpha, family=family)
+        # The averaged loops sit at their own mean strength (strength degradation; stiffness: second order).
+        nus = strengths(len(exps), data, deg.d) if term == DEGRADATION else None
+        data = drift_data(exps, sx, fit, s.y, substeps, nus)
+        retest = degradation_test(data, s.y, alpha, family, term)
         if retest is None:
             break
-        deg = retest
+        deg = replace(
+            retest,
+            rival=deg.rival,
+            rival_p_adjusted=deg.rival_p_adjusted,
+            rival_alternative=deg.rival_alternative,
+            correlation=deg.correlation,
+        )
     if not (deg.named if held_out_test else deg.passed):
         # The refined test no longer names it: the steady selection on the data as they are.
         return deg, list(exps), list(sx), plain
     if deg.d > 0:
         deg, fit = _refine_degradation(exps, sx, fit, data, deg, s, substeps)
-        fexps, fsx = corrected(exps, sx, fit, deg.d, s.y, substeps)
+        fexps, fsx = corrected(exps, sx, fit, deg.d, s.y, substeps, term)
     return deg, fexps, fsx, fit
+
+
+#: What separates strength from stiffness degradation (drift.py's docstring).
+SEPARATING_DRIFT = (
+    "an experiment below saturation (x under the loop's saturation level), where stiffness degradation "
+    "changes the loop's amplitude and strength degradation hardly does"
+)
+
+
+def _drift_alternatives(deg: Optional[DegradationTest], named: bool) -> tuple[Alternative, ...]:
+    """The other drift term as an alternative, when the record cannot tell the two apart."""
+    if deg is None or not named or deg.rival is None or not deg.rival_alternative:
+        return ()
+    return (Alternative(deg.term, deg.rival.term, deg.correlation, SEPARATING_DRIFT),)
 
 
 def diagnose(
@@ -316,19 +342,25 @@ def diagnose(
         sx = carry_through_g(sx, plain, substeps)
     before = _localise(exps, sx, plain, s)
     cache: FoldCache = {}
-    steady = tuple(c for c in cands if c != DEGRADATION)
+    steady = tuple(c for c in cands if c not in DRIFT_TERMS)
+    drift_terms = tuple(c for c in DRIFT_TERMS if c in cands)
     # Degradation first, in drift space (design.md 10.6); when it is named, the steady terms are selected on
     # the averaged periods brought back to one strength.
     deg: Optional[DegradationTest] = None
     notes: list[str] = []
     fexps, fsx, start = exps, sx, plain
-    if DEGRADATION in cands:
-        stage = _degradation_stage(exps, sx, plain, s, substeps, alpha, len(cands), held_out_test)
+    if drift_terms:
+        stage = _degradation_stage(exps, sx, plain, s, substeps, alpha, len(cands), held_out_test, drift_terms)
         if stage is None:
             notes.append(NO_BLOCKS)
         else:
             deg, fexps, fsx, start = stage
     named_deg = deg is not None and (deg.named if held_out_test else deg.passed)
+    if deg is not None and named_deg and deg.rival is not None and deg.rival_p_adjusted < alpha:
+        notes.append(
+            f"the period record also needs {deg.rival.term} beside {deg.term} (partial F, adjusted p = "
+            f"{deg.rival_p_adjusted:.2g}): both may act, and only {deg.term} is modelled"
+        )
     # The plain model's gate: the global test at alpha / 2, and when it accepts, the targeted step's
     # candidate tests at the other alpha / 2 (select.py's docstring; design.md 10.3).
     targeted = not named_deg and not before.drift_detected and gate(start)
@@ -348,8 +380,8 @@ def diagnose(
     plain_sum = _summary(exps, sx, plain, s, units)
     final_sum = _summary(fexps, fsx, final, s, units)
     if deg is not None and named_deg:
-        sym, unit = term_symbol_unit(DEGRADATION, *units)
-        deg_term = NamedTerm(DEGRADATION, sym, deg.value, deg.standard_error, unit)
+        sym, unit = term_symbol_unit(deg.term, *units)
+        deg_term = NamedTerm(deg.term, sym, deg.value, deg.standard_error, unit)
         final_sum = replace(final_sum, terms=(*final_sum.terms, deg_term))
     excess = plain_sum.cost - plain_sum.dof
     fraction = (plain_sum.cost - final_sum.cost) / excess if excess > 0 else 0.0
@@ -367,7 +399,7 @@ def diagnose(
     )
     named = final_sum.terms if status in ("explained", "partly explained") else ()
     partial = final_sum.terms if status == "unexplained" else ()
-    alternatives = tuple(a for st in steps for a in st.alternatives)
+    alternatives = tuple(a for st in steps for a in st.alternatives) + _drift_alternatives(deg, named_deg)
     ho = held_out(fsx, start, final, substeps, cache) if final.params.terms else None
     return Diagnosis(
         status=status,
