@@ -128,24 +128,32 @@ def regressor(
 
 
 def regressors(
-    e: AugExperiment, fit: AugFit, i: int, substeps: int, nu: float = 1.0
+    e: AugExperiment, fit: AugFit, i: int, substeps: int, nu: float = 1.0, eta: float = 1.0
 ) -> tuple[FloatArray, FloatArray, float]:
     """``(J_i, K_i, E_i)`` on the grid: :func:`regressor`'s two and the stiffness column
-    ``K_i = dy/d ln eta = -g_i dy/dg_i`` (the loop at the gain ``g_i / eta``)."""
+    ``K_i = dy/d ln eta = -g_i dy/dg_i`` (the loop at the gain ``g_i / eta``).
+
+    At stiffness ``eta`` (relative to ``fit``'s, which is then the virgin one) the loop is at the gain
+    ``g_i / eta`` and ``K_i = -(g_i / eta^2) dy/dg`` there: per unit of ``delta_eta`` itself.
+    """
     par = fit.params
     strong = _at_strength(fit, nu)
+    if eta != 1.0:
+        gains = np.array(par.gains, dtype=np.float64)
+        gains[i] /= eta
+        strong = replace(strong, gains=gains)
     p = e.ybar.size
     ph = float(par.phases[i])
     out = augmented_output(e, strong, i, substeps=substeps, jacobian=True)
     jac = out.jacobian
-    k_eta = -float(par.gains[i]) * out.own_jacobian[:, 0]
+    k_eta = -float(par.gains[i]) / eta**2 * out.own_jacobian[:, 0]
     j = par.beta * jac[:, 0] + par.gamma * jac[:, 1]
     if Asymmetry.kind in par.terms:
         k = par.terms.index(Asymmetry.kind)
         j = j + float(par.values[k]) * jac[:, 3 + k]
     w = augmented_output(e, strong.only(_HYSTERESIS_TERMS), i, substeps=substeps)
     theta = TWO_PI * np.arange(p) / p
-    a = e.amplitude * float(par.gains[i])
+    a = e.amplitude * float(par.gains[i]) / eta
     energy = float(np.dot(w, -a * np.sin(theta - ph))) * TWO_PI / p
     return np.asarray(j, dtype=np.float64), np.asarray(k_eta, dtype=np.float64), energy
 
@@ -157,10 +165,12 @@ def drift_data(
     y_scale: float,
     substeps: int,
     strength: Optional[Sequence[float]] = None,
+    stiffness: Optional[Sequence[float]] = None,
 ) -> list[DriftData]:
     """The experiments with at least two blocks, reduced for the drift fit (scaled by ``y_scale``).
 
-    ``strength`` (per experiment, default 1) is each averaged loop's strength relative to ``fit``'s.
+    ``strength`` (per experiment, default 1) is each averaged loop's strength relative to ``fit``'s,
+    ``stiffness`` its eta (the loop at the gain ``g / eta``).
     """
     out = []
     for i, (e, a) in enumerate(zip(exps, sx)):
@@ -171,7 +181,9 @@ def drift_data(
         coef = e.block_coef / y_scale
         mean = (wts[:, None] * coef).sum(axis=0) / wts.sum()
         t = e.block_center - float(np.dot(wts, e.block_center) / wts.sum())
-        j, k_eta, energy = regressors(a, fit, i, substeps, 1.0 if strength is None else float(strength[i]))
+        nu = 1.0 if strength is None else float(strength[i])
+        eta = 1.0 if stiffness is None else float(stiffness[i])
+        j, k_eta, energy = regressors(a, fit, i, substeps, nu, eta)
         age = e.lead_periods + float(np.dot(wts, e.block_center) / wts.sum()) + 0.5
         out.append(DriftData(i, coef - mean, t, wts, energy, harmonics(j, k), j, age, harmonics(k_eta, k)))
     return out

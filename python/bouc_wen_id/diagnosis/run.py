@@ -228,9 +228,12 @@ def _degradation_stage(
     for _ in range(CORRECTION_PASSES):
         fexps, fsx = corrected(exps, sx, fit, deg.d, s.y, substeps, term)
         fit = best_of([fit_from(fsx, fit.params, substeps)]) or fit
-        # The averaged loops sit at their own mean strength (strength degradation; stiffness: second order).
-        nus = strengths(len(exps), data, deg.d) if term == DEGRADATION else None
-        data = drift_data(exps, sx, fit, s.y, substeps, nus)
+        # The averaged loops sit at their own mean strength (or stiffness), the fit at the virgin one.
+        means = strengths(len(exps), data, deg.d)
+        if term == DEGRADATION:
+            data = drift_data(exps, sx, fit, s.y, substeps, strength=means)
+        else:
+            data = drift_data(exps, sx, fit, s.y, substeps, stiffness=means)
         retest = degradation_test(data, s.y, alpha, family, term)
         if retest is None:
             break
