@@ -59,7 +59,9 @@ def test_terms_units_validation_and_round_trip() -> None:
 
 
 @pytest.mark.parametrize("core", [_core, reference], ids=["rust", "numpy"])
-@pytest.mark.parametrize(("terms", "text"), [({ETA: -0.1}, ETA), ({PINCH: 1.0}, PINCH), ({PINCH: -0.2}, PINCH)])
+@pytest.mark.parametrize(
+    ("terms", "text"), [({ETA: -0.1}, ETA), ({PINCH: 1.0}, PINCH), ({PINCH: -0.2}, PINCH)]
+)
 def test_bad_values_are_named_errors(core: Any, terms: dict[str, float], text: str) -> None:
     args = (np.array([1.0]), np.array([1.0, 1.0]), 0.0, 1.0, 1.0, 0.2, 1.5, 0.0, 1.0, 2.0, 0.05, 50, 1)
     with pytest.raises(InvalidParameterError, match=text):
@@ -179,7 +181,7 @@ class Plant:
             wm = np.abs(w) ** MU
             rate = xdot - (1.0 + nu * e) * (BETA * np.abs(xdot) * np.sign(w) * wm + GAMMA * xdot * wm)
             rate = rate / (1.0 + eta * e)
-            rate = rate * (1.0 - zeta1 * np.exp(-(((w * np.sign(xdot)) - q) / z2) ** 2))
+            rate = rate * (1.0 - zeta1 * np.exp(-((((w * np.sign(xdot)) - q) / z2) ** 2)))
             return np.array([*lin, rate, w * xdot])
 
         n_lin = 1 if self.kind == "first" else 2
@@ -201,7 +203,7 @@ class Plant:
 def _records(
     plant: Plant, noise: float, seed: int, settle: int = 6, periods: int = 16, p: int = 64, **terms: float
 ) -> list[bw.Recording]:
-    """Two frequencies by two amplitudes (x at 0.8 and 2 times saturation), from rest; noise of sd ``noise``."""
+    """Two frequencies by two amplitudes (x at 0.8 and 2 times saturation), from rest; noise sd ``noise``."""
     omegas = np.repeat(TWO_PI * np.array([0.5, 2.0]), 2)
     gains = plant.tf().gain_phase(omegas)[0]
     amps = np.tile([0.8, 2.0], 2) / gains
@@ -273,7 +275,7 @@ def _fit(recs: list[bw.Recording]) -> tuple[Any, ...]:
 
 
 def test_first_order_eta_drift_matches_the_independent_record() -> None:
-    """Block deviations predicted as d E_i t_b K_i, K_i = -g dy/dg, against the independent integrator's record."""
+    """Block deviations predicted as d E_i t_b K_i (K_i = -g dy/dg) against the independent integrator's."""
     rate = 5e-4
     recs = _records(Plant("first", 0.0), 1e-7, seed=1, eta=rate)
     exps, sx, s, sub, fit = _fit(recs)
@@ -309,7 +311,9 @@ def test_stiffness_degradation_is_named(name: str, rate: float, make: Callable[[
 
 
 @pytest.mark.parametrize(("name", "rate", "make"), CASES_DIAG, ids=[c[0] for c in CASES_DIAG])
-def test_strength_degradation_is_told_from_stiffness(name: str, rate: float, make: Callable[[], Plant]) -> None:
+def test_strength_degradation_is_told_from_stiffness(
+    name: str, rate: float, make: Callable[[], Plant]
+) -> None:
     d = bw.diagnose(_records(make(), 0.01, seed=4, nu=rate))
     assert NU in d.named_terms, d.summary()
     assert ETA not in d.named_terms, d.summary()

@@ -465,12 +465,13 @@ class Degradation(Term):
 
 @dataclass(frozen=True)
 class StiffnessDegradation(Term):
-    """Stiffness degradation with dissipated energy (Baber & Noori 1985): the rate over ``eta = 1 + delta_eta e``.
+    """Stiffness degradation with dissipated energy (Baber & Noori 1985): the rate over ``eta``.
 
-    ``e = int w dxp`` as for :class:`Degradation`; ``eta`` divides the whole Bouc-Wen rate (alpha included), so
-    the saturation level ``(alpha / (beta + gamma))^(1/mu)`` stays and is reached over a longer travel: the
-    loop softens. To first order a block at ``eta`` is the steady loop with its gain ``|G|`` divided by
-    ``eta``, so the diagnosis fits it from the period-by-period record beside ``delta_nu`` (design.md 10.6).
+    ``eta = 1 + delta_eta e``, ``e = int w dxp`` as for :class:`Degradation`; ``eta`` divides the whole
+    Bouc-Wen rate (alpha included), so the saturation level ``(alpha / (beta + gamma))^(1/mu)`` stays and
+    is reached over a longer travel: the loop softens. To first order a block at ``eta`` is the steady loop
+    with its gain ``|G|`` divided by ``eta``, so the diagnosis fits it from the period-by-period record beside
+    ``delta_nu`` (design.md 10.6).
     """
 
     delta_eta: float
@@ -507,8 +508,9 @@ PINCHING_WIDTH = 0.2
 
 @dataclass(frozen=True)
 class Pinching(Term):
-    """Pinching (Baber & Noori 1986, Foliente 1995): the rate times ``h = 1 - zeta1 exp(-(w sgn(xdot) - q w_u)^2
-    / (zeta2 w_u)^2)``.
+    """Pinching (Baber & Noori 1986, Foliente 1995): the rate times Foliente's ``h(w, sgn xdot)``.
+
+    ``h = 1 - zeta1 exp(-(w sgn(xdot) - q w_u)^2 / (zeta2 w_u)^2)``.
 
     ``zeta1`` in ``[0, 1)`` is the share of the rate taken out at the band's centre; the shape is fixed at
     ``q = PINCHING_CENTRE``, ``zeta2 = PINCHING_WIDTH`` (fractions of the virgin saturation level ``w_u``).

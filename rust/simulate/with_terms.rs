@@ -828,7 +828,8 @@ mod tests {
         let bw = BoucWen::new(1.0, 1.0, 0.5, 2.0, 0.0).unwrap();
         let (amp, om, n) = (30.0, 1.0, 4000);
         let dt = 4.0 * std::f64::consts::PI / om / n as f64;
-        let run = |t: TermValues| simulate_with_terms(&tf, &bw, &t, sine(amp, om), dt, n, 4).unwrap();
+        let run =
+            |t: TermValues| simulate_with_terms(&tf, &bw, &t, sine(amp, om), dt, n, 4).unwrap();
         let d = TermValues::default();
         let soft = run(TermValues {
             stiffness_degradation: 0.05,
@@ -884,10 +885,7 @@ mod tests {
             false,
         );
         bad(
-            TermValues {
-                pinching: 1.0,
-                ..d
-            },
+            TermValues { pinching: 1.0, ..d },
             TermKind::Pinching.name(),
             false,
         );

@@ -18,7 +18,8 @@ the experiment's own gain column: it shifts the loop's phase and, below saturati
 J_i changes its saturation level. Each column is fitted and tested alone; when both pass, the better is
 named; the other is reported as an alternative when it explains nearly as much and its partial F-test
 given the first fails (the record cannot tell them apart), and in the notes when that partial test passes
-(both act; only the first is modelled) (``compare``). One shared ``d``: a one-parameter weighted linear least squares
+(both act; only the first is modelled) (``compare``). One shared ``d``: a one-parameter weighted linear least
+squares
 on the block deviations' harmonics 0..K, each block weighted by ``samples / sigma^2`` (sigma^2 from
 neighbouring periods, which a slow drift does not inflate). The fit is in *drift space*, apart from the
 steady F-tests of the other terms: the block deviations are orthogonal to the mean period.
@@ -121,8 +122,6 @@ def regressor(
     the hysteresis output alone (the fitted asymmetry and play kept, the output terms left out): exact for
     a band-limited loop, second order at the reversals' kinks.
     """
-    par = fit.params
-    strong = _at_strength(fit, nu)
     j, _, energy = regressors(e, fit, i, substeps, nu)
     return j, energy
 
@@ -228,7 +227,7 @@ class DegradationTest:
     #: The drift term tested: degradation (of strength, nu) or stiffness degradation (eta).
     term: str = DEGRADATION
     #: The other drift term's test, when both were formed (:func:`compare`).
-    rival: Optional["DegradationTest"] = None
+    rival: Optional[DegradationTest] = None
     #: Partial F-test p-value (Bonferroni) of the rival given this term; the rival is named beside it below
     #: alpha, else reported as an alternative when it explains nearly as much (``rival_alternative``).
     rival_p_adjusted: float = math.nan

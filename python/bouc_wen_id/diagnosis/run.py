@@ -220,7 +220,11 @@ def _degradation_stage(
     data = drift_data(exps, sx, plain, s.y, substeps)
     if not data:
         return None
-    deg = compare(data, s.y, alpha, family) if len(terms) > 1 else degradation_test(data, s.y, alpha, family, *terms)
+    deg = (
+        compare(data, s.y, alpha, family)
+        if len(terms) > 1
+        else degradation_test(data, s.y, alpha, family, *terms)
+    )
     if deg is None or not (deg.named if held_out_test else deg.passed):
         return deg, list(exps), list(sx), plain
     fit, fexps, fsx = plain, list(exps), list(sx)
@@ -353,7 +357,9 @@ def diagnose(
     notes: list[str] = []
     fexps, fsx, start = exps, sx, plain
     if drift_terms:
-        stage = _degradation_stage(exps, sx, plain, s, substeps, alpha, len(cands), held_out_test, drift_terms)
+        stage = _degradation_stage(
+            exps, sx, plain, s, substeps, alpha, len(cands), held_out_test, drift_terms
+        )
         if stage is None:
             notes.append(NO_BLOCKS)
         else:

@@ -99,8 +99,8 @@ def check_terms(terms: Mapping[str, float], beta: float, gamma: float) -> dict[s
         )
     if out[STIFFNESS_DEGRADATION] < 0.0:
         raise InvalidParameterError(
-            f"stiffness_degradation delta_eta = {out[STIFFNESS_DEGRADATION]} must be >= 0 (the stiffness falls "
-            "with dissipated energy)"
+            f"stiffness_degradation delta_eta = {out[STIFFNESS_DEGRADATION]} must be >= 0 (the stiffness "
+            "falls with dissipated energy)"
         )
     if not 0.0 <= out[PINCHING] < 1.0:
         raise InvalidParameterError(
