@@ -325,3 +325,57 @@ def test_null_names_neither_drift_term(kind: str) -> None:
     assert ETA not in d.named_terms and NU not in d.named_terms, d.summary()
     assert d.degradation is not None and not d.degradation.passed
     assert d.degradation.rival is not None and not d.degradation.rival.passed
+
+
+@pytest.mark.parametrize("kind", ["first", "resonant"])
+def test_pinching_is_located_not_misnamed(kind: str) -> None:
+    """Pinching is not a diagnosis candidate yet (no steady-loop form): a pinched loop from the independent
+    integrator is located at odd harmonics 3 and 5, and no library term (drift or steady) is named for it."""
+    d = bw.diagnose(_records(Plant(kind, 0.03), 0.01, seed=5, zeta1=0.3))
+    assert PINCH not in d.settings["candidates"]
+    assert not d.named_terms, d.summary()
+    assert d.status == "unexplained", d.summary()
+    assert {3, 5} <= set(d.before.significant_harmonics()), d.summary()
+    assert d.degradation is not None and not d.degradation.passed
+    assert d.degradation.rival is not None and not d.degradation.rival.passed
+
+
+def _synthetic(jac_eta_of: Callable[[np.ndarray], np.ndarray], seed: int) -> list[D.DriftData]:
+    """Block deviations made of strength drift d E t J plus unit-weight noise, with a chosen eta column."""
+    rng = np.random.default_rng(seed)
+    out = []
+    for i in range(4):
+        k, b = 6, 8
+        jac = rng.standard_normal(k) + 1j * rng.standard_normal(k)
+        jac[0] = jac[0].real
+        t = np.arange(b) - (b - 1) / 2.0
+        energy = 1.0 + i
+        # Unit chi-square per real component under the drift space's inner product (DC real, the rest x 1/2).
+        noise = math.sqrt(2.0) * (rng.standard_normal((b, k)) + 1j * rng.standard_normal((b, k)))
+        noise[:, 0] = rng.standard_normal(b)
+        dev = 0.2 * energy * t[:, None] * jac[None, :] + noise
+        dev -= dev.mean(axis=0)
+        grid = np.zeros(8)
+        dev_c = np.asarray(dev, dtype=np.complex128)
+        t_f = np.asarray(t, dtype=np.float64)
+        out.append(D.DriftData(i, dev_c, t_f, np.ones(b), energy, jac, grid, 3.0, jac_eta_of(jac)))
+    return out
+
+
+def test_parallel_drift_columns_are_alternatives() -> None:
+    """Where the record cannot tell stiffness from strength (parallel columns), the rival is an alternative;
+    where the columns are orthogonal, strength is chosen and stiffness does not pass."""
+    same = D.compare(_synthetic(lambda j: 1.001 * j, 0), 1.0, 0.05, family=2)
+    assert same is not None and same.rival is not None
+    assert same.passed and same.rival.passed and same.rival_alternative
+    assert abs(same.correlation) > 0.999
+    other = D.compare(_synthetic(lambda j: 1j * j, 0), 1.0, 0.05, family=2)
+    assert other is not None and other.rival is not None
+    assert other.term == NU and other.passed and not other.rival.passed and not other.rival_alternative
+    assert json.loads(json.dumps(same.to_dict()))["rival_is_alternative"] is True
+    # The diagnosis reports it with the experiment that separates the two.
+    from bouc_wen_id.diagnosis.run import SEPARATING_DRIFT, _drift_alternatives
+
+    (alt,) = _drift_alternatives(same, True)
+    assert {alt.term, alt.rival} == {NU, ETA} and alt.separating_experiment == SEPARATING_DRIFT
+    assert _drift_alternatives(other, True) == () and _drift_alternatives(same, False) == ()
