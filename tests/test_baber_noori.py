@@ -300,7 +300,9 @@ CASES_DIAG: list[tuple[str, float, Callable[[], Plant]]] = [
 
 
 @pytest.mark.parametrize(("name", "rate", "make"), CASES_DIAG, ids=[c[0] for c in CASES_DIAG])
-def test_stiffness_degradation_is_named(name: str, rate: float, make: Callable[[], Plant]) -> None:
+def test_stiffness_degradation_is_named(
+    name: str, rate: float, make: Callable[[], Plant], tmp_path: Any
+) -> None:
     d = bw.diagnose(_records(make(), 0.01, seed=3, eta=rate))
     assert ETA in d.named_terms, d.summary()
     assert NU not in d.named_terms or any({a.term, a.rival} == {ETA, NU} for a in d.alternatives), d.summary()
@@ -308,6 +310,14 @@ def test_stiffness_degradation_is_named(name: str, rate: float, make: Callable[[
     assert abs(got.value - rate) < max(5 * got.standard_error, 0.1 * rate), d.summary()
     assert d.degradation is not None and d.degradation.term == ETA
     assert json.loads(d.to_json())["degradation"]["term"] == ETA
+    assert json.loads(d.to_json())["degradation"]["rival"]["term"] == NU
+    summary = d.summary()
+    assert f"{ETA} (drift space" in summary and f"rival {NU}:" in summary
+    from bouc_wen_id.diagnosis.report import write_report
+
+    write_report(d, tmp_path / "diag")
+    page = (tmp_path / "diag" / "report.html").read_text(encoding="utf-8")
+    assert f"<td>{ETA}</td>" in page and f"<td>{NU}</td>" in page
 
 
 @pytest.mark.parametrize(("name", "rate", "make"), CASES_DIAG, ids=[c[0] for c in CASES_DIAG])
