@@ -55,7 +55,7 @@ pub enum TermKind {
     /// Pinching `zeta1` (dimensionless), `0 <= zeta1 < 1`: the rate times Foliente's
     /// `h = 1 - zeta1 exp(-((w sgn(xpdot) - q w_u) / (z2 w_u))^2)`, shape fixed
     /// ([`PINCHING_CENTRE`], [`PINCHING_WIDTH`]), `w_u = (alpha/(beta + gamma))^(1/mu)` (§9.4).
-    /// Simulation only for now (the steady loop would exist: it is rate independent).
+    /// Rate independent: the steady loop of 9.2 carries it (`rust/path_loop.rs`).
     Pinching,
 }
 
@@ -65,6 +65,9 @@ pub const PINCHING_CENTRE: f64 = 0.1;
 
 /// Width `zeta2` of the pinching band, a fraction of the saturation level `w_u`.
 pub const PINCHING_WIDTH: f64 = 0.2;
+
+/// Largest `zeta1` the steady-loop fit admits (at 1 the loop would stop at the band's centre).
+pub const PINCHING_MAX: f64 = 0.95;
 
 impl TermKind {
     /// Every term, in the order of the table of design.md 9.1 (then the simulation-only one).
@@ -119,10 +122,7 @@ impl TermKind {
 
     /// Whether the augmented (steady-loop) model of design.md 9.1 has this term.
     pub fn in_steady_loop(self) -> bool {
-        !matches!(
-            self,
-            TermKind::Degradation | TermKind::StiffnessDegradation | TermKind::Pinching
-        )
+        !matches!(self, TermKind::Degradation | TermKind::StiffnessDegradation)
     }
 
     /// Whether the time-domain simulation of design.md 9.4 has this term.
@@ -135,7 +135,7 @@ impl TermKind {
     pub fn acts_on_path(self) -> bool {
         matches!(
             self,
-            TermKind::Asymmetry | TermKind::Play | TermKind::Distortion
+            TermKind::Asymmetry | TermKind::Play | TermKind::Distortion | TermKind::Pinching
         )
     }
 
@@ -330,10 +330,11 @@ mod tests {
         assert!(TermKind::Viscous.check_value(-1.0).is_ok());
         assert!(TermKind::Pinching.check_value(1.0).is_err());
         assert!(TermKind::Pinching.check_value(0.99).is_ok());
-        for kind in [TermKind::StiffnessDegradation, TermKind::Pinching] {
-            let e = Terms::parse(&[kind.name()]).unwrap_err();
-            assert!(e.to_string().contains("no steady-loop form"), "{e}");
-        }
+        let e = Terms::parse(&[TermKind::StiffnessDegradation.name()]).unwrap_err();
+        assert!(e.to_string().contains("no steady-loop form"), "{e}");
+        assert!(Terms::parse(&[TermKind::Pinching.name()])
+            .unwrap()
+            .needs_path_loop());
         assert!(check_asymmetry(0.5, 0.3, 0.3).is_ok());
         assert!(check_asymmetry(-0.6, 0.3, 0.3).is_err());
         assert!(check_coulomb_smoothing(0.0).is_err());

@@ -34,9 +34,9 @@ def test_terms_units_validation_and_round_trip() -> None:
     assert eta.symbol == "delta_eta" and pin.symbol == "zeta1"
     assert T.StiffnessDegradation.units(y="N") == "1/N^2" and T.Pinching.units(y="N") == ""
     assert eta.acts_on == pin.acts_on == T.Place.HYSTERESIS
-    assert not T.StiffnessDegradation.steady and not T.Pinching.steady
-    # Stiffness degradation is diagnosed in drift space; pinching has no steady form yet: not a candidate.
-    assert ETA in T.DIAGNOSIS_CANDIDATES and PINCH not in T.DIAGNOSIS_CANDIDATES
+    # Stiffness degradation is diagnosed in drift space, pinching on the steady loop (rate independent).
+    assert not T.StiffnessDegradation.steady and T.Pinching.steady
+    assert ETA in T.DIAGNOSIS_CANDIDATES and PINCH in T.STEADY_TERM_NAMES
     with pytest.raises(InvalidParameterError, match="delta_eta"):
         T.StiffnessDegradation(-1e-3)
     for bad in (-0.1, 1.0):
@@ -338,13 +338,18 @@ def test_null_names_neither_drift_term(kind: str) -> None:
 
 
 @pytest.mark.parametrize("kind", ["first", "resonant"])
-def test_pinching_is_located_not_misnamed(kind: str) -> None:
-    """Pinching is not a diagnosis candidate yet (no steady-loop form): a pinched loop from the independent
-    integrator is located at odd harmonics 3 and 5, and no library term (drift or steady) is named for it."""
-    d = bw.diagnose(_records(Plant(kind, 0.03), 0.01, seed=5, zeta1=0.3))
-    assert PINCH not in d.settings["candidates"]
-    assert not d.named_terms, d.summary()
-    assert d.status == "unexplained", d.summary()
+def test_pinching_is_named_with_its_value(kind: str) -> None:
+    """Pinching on the steady loop (the path loop with Foliente's factor): named on the independent
+    integrator's pinched records, with zeta1 within 5 standard errors and 5 %, and nothing else named."""
+    truth = 0.3
+    d = bw.diagnose(_records(Plant(kind, 0.03), 0.01, seed=5, zeta1=truth))
+    assert PINCH in d.settings["candidates"]
+    assert d.named_terms == (PINCH,), d.summary()
+    assert d.status == "explained", d.summary()
+    got = d.named[0]
+    # Measured 0.297 +- 0.004 (first order and resonant alike).
+    assert abs(got.value - truth) < max(5 * got.standard_error, 0.05 * truth), d.summary()
+    # Its signature before: odd harmonics 3 and 5 above the noise floor.
     assert {3, 5} <= set(d.before.significant_harmonics()), d.summary()
     assert d.degradation is not None and not d.degradation.passed
     assert d.degradation.rival is not None and not d.degradation.rival.passed

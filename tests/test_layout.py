@@ -66,7 +66,6 @@ FUNCTION_LINES_MAX = 100
 #: integrator empties this list after merging them.  Each entry is ``module:qualified name``.
 KNOWN_LONG_FUNCTIONS_PENDING_MERGE = frozenset(
     {
-        "diagnosis.report:html_page",
         "diagnosis.run:diagnose",
     }
 )

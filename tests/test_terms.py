@@ -116,18 +116,23 @@ def test_registry_follows_the_design_table() -> None:
         )
         assert cls.acts_on.label
     assert TERM_NAMES == tuple(TERMS)
-    drift_only = ("degradation", "stiffness_degradation", "pinching")
+    drift_only = ("degradation", "stiffness_degradation")
     assert STEADY_TERM_NAMES == tuple(k for k in TERMS if k not in drift_only)
-    # Pinching has no steady-loop form yet, so the diagnosis cannot fit it: not a candidate.
-    assert DIAGNOSIS_CANDIDATES == (*STEADY_TERM_NAMES, "degradation", "stiffness_degradation")
+    assert DIAGNOSIS_CANDIDATES == (*STEADY_TERM_NAMES, *drift_only)
     # The lower bounds of the value types, and the physical ranges the diagnosis will name within.
-    assert {k for k, c in TERMS.items() if c.bounds[0] == 0.0} == {"sensor_lag", "play", *drift_only}
+    assert {k for k, c in TERMS.items() if c.bounds[0] == 0.0} == {
+        "sensor_lag",
+        "play",
+        "pinching",
+        *drift_only,
+    }
     assert {k for k, c in TERMS.items() if c.physical[0] == 0.0} == {
         "viscous",
         "inertia",
         "coulomb",
         "sensor_lag",
         "play",
+        "pinching",
         *drift_only,
     }
     assert [k for k, c in TERMS.items() if c.linear] == [

@@ -514,8 +514,8 @@ class Pinching(Term):
 
     ``zeta1`` in ``[0, 1)`` is the share of the rate taken out at the band's centre; the shape is fixed at
     ``q = PINCHING_CENTRE``, ``zeta2 = PINCHING_WIDTH`` (fractions of the virgin saturation level ``w_u``).
-    Rate independent: it slows w in a band just past its zero crossing after each reversal (slip). A term
-    of the simulation; the diagnosis cannot fit it yet (no steady-loop form), so it is not a candidate.
+    Rate independent: it slows w in a band just past its zero crossing after each reversal (slip), so its
+    steady loop is the path loop of design.md 9.2 with ``h`` times the factor, fitted like play.
     """
 
     zeta1: float
@@ -533,8 +533,11 @@ class Pinching(Term):
     bounds: ClassVar[tuple[float, float]] = NON_NEGATIVE
     physical: ClassVar[tuple[float, float]] = NON_NEGATIVE
     bound_note: ClassVar[str] = " (the share of the rate taken out)"
-    steady: ClassVar[bool] = False
-    diagnosable: ClassVar[bool] = False
+
+    @classmethod
+    def start(cls, context: StartContext) -> tuple[float, ...]:
+        # None, a light and a marked pinch (the fit stays below PINCHING_MAX = 0.95).
+        return (0.0, 0.2, 0.5)
 
     def _check(self) -> None:
         if self.zeta1 >= 1.0:

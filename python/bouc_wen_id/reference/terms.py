@@ -22,6 +22,7 @@ __all__ = [
     "PINCHING",
     "PINCHING_CENTRE",
     "PINCHING_WIDTH",
+    "PINCHING_MAX",
     "DISTORTION",
     "COULOMB_SMOOTHING_KEY",
     "COULOMB_SMOOTHING",
@@ -44,6 +45,8 @@ PINCHING = "pinching"
 #: Pinching's fixed shape, fractions of the saturation level w_u: the band's centre q and width zeta2.
 PINCHING_CENTRE = 0.1
 PINCHING_WIDTH = 0.2
+#: Largest zeta1 the steady-loop fit admits.
+PINCHING_MAX = 0.95
 DISTORTION = "distortion"
 #: The Coulomb term's fixed setting (not a term): the smoothing of its sign, a fraction of the peak velocity.
 COULOMB_SMOOTHING_KEY = "coulomb_smoothing"
@@ -60,6 +63,7 @@ STEADY_TERM_NAMES: tuple[str, ...] = (
     SENSOR_LAG,
     ASYMMETRY,
     PLAY,
+    PINCHING,
     DISTORTION,
 )
 #: Keys of the simulation's ``terms`` mapping: the code names, plus the Coulomb smoothing.
