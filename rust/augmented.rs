@@ -23,15 +23,17 @@ use rustfft::FftPlanner;
 
 use crate::error::{all_finite, finite, CoreError, Result};
 use crate::path_loop::{
-    path_loop, path_loop_distorted, Waveform, N_PD, PD_AMPLITUDE, PD_BETA, PD_DELTA, PD_DISTORT,
-    PD_GAMMA, PD_MU, PD_PHI, PD_PLAY,
+    path_loop, path_loop_distorted, path_loop_pinched, Waveform, N_PD, PD_AMPLITUDE, PD_BETA,
+    PD_DELTA, PD_DISTORT, PD_GAMMA, PD_MU, PD_PHI, PD_PINCH, PD_PLAY,
 };
 use crate::refine::{
     check_joint_start, check_start_point, hysteresis_admissible, levenberg_marquardt,
     project_hysteresis, JointModel, ModelEval, Options,
 };
 use crate::steady::{steady_loop, D_AMPLITUDE, D_BETA, D_GAMMA, D_MU, D_PHI};
-use crate::terms::{check_asymmetry, TermKind, Terms, COULOMB_SMOOTHING, N_HYSTERESIS};
+use crate::terms::{
+    check_asymmetry, TermKind, Terms, COULOMB_SMOOTHING, N_HYSTERESIS, PINCHING_MAX,
+};
 
 /// Own parameters per experiment: `g, phi`.
 pub const N_OWN: usize = 2;
@@ -118,15 +120,29 @@ fn hysteresis(
     if terms.needs_path_loop() {
         let delta = terms.value(shared, TermKind::Asymmetry);
         let b = terms.value(shared, TermKind::Play);
-        let l = match terms.column(TermKind::Distortion) {
-            Some(c) => {
-                let wf = Waveform {
-                    lambda: shared[c],
-                    harmonics: waveform,
-                };
-                path_loop_distorted(amplitude, beta, gamma, mu, delta, b, phi, &wf, p, substeps)?
+        let wf = terms.column(TermKind::Distortion).map(|c| Waveform {
+            lambda: shared[c],
+            harmonics: waveform,
+        });
+        let l = match (terms.column(TermKind::Pinching), &wf) {
+            // Pinching: Foliente's factor on h(w, s) (rust/path_loop.rs).
+            (Some(c), wf) => path_loop_pinched(
+                amplitude,
+                beta,
+                gamma,
+                mu,
+                delta,
+                b,
+                phi,
+                shared[c],
+                wf.as_ref(),
+                p,
+                substeps,
+            )?,
+            (None, Some(wf)) => {
+                path_loop_distorted(amplitude, beta, gamma, mu, delta, b, phi, wf, p, substeps)?
             }
-            None => path_loop(amplitude, beta, gamma, mu, delta, b, phi, p, substeps)?,
+            (None, None) => path_loop(amplitude, beta, gamma, mu, delta, b, phi, p, substeps)?,
         };
         Ok((l.w, l.jac))
     } else {
@@ -301,6 +317,9 @@ pub fn augmented_output_with(
                 TermKind::Distortion => col[j] = h[PD_DISTORT],
                 // Refused by `Terms::parse`: the steady loop has no form for it.
                 TermKind::Degradation => {}
+                TermKind::Pinching => col[j] = h[PD_PINCH],
+                // Refused by `Terms::parse` as well (no steady loop).
+                TermKind::StiffnessDegradation => {}
             }
         }
         cols[0][j] = f;
@@ -466,6 +485,9 @@ impl JointModel for AugModel<'_> {
         if let Some(c) = self.terms.column(TermKind::Play) {
             shared[c] = shared[c].min(self.play_max(own)).max(0.0);
         }
+        if let Some(c) = self.terms.column(TermKind::Pinching) {
+            shared[c] = shared[c].clamp(0.0, PINCHING_MAX);
+        }
     }
 
     fn admissible(&self, shared: &[f64], own: &[[f64; 2]]) -> bool {
@@ -481,7 +503,12 @@ impl JointModel for AugModel<'_> {
             .terms
             .column(TermKind::Play)
             .is_none_or(|c| shared[c] >= 0.0 && shared[c] <= self.play_max(own));
+        let pinch_ok = self
+            .terms
+            .column(TermKind::Pinching)
+            .is_none_or(|c| (0.0..=PINCHING_MAX).contains(&shared[c]));
         hysteresis_admissible(shared, self.opts.mu_lo, self.opts.mu_hi)
+            && pinch_ok
             && delta_ok
             && tau_ok
             && play_ok
@@ -661,6 +688,12 @@ mod tests {
             &[SensorLag, Asymmetry, Play, Viscous],
             &[0.8, 0.2, 1.6, 0.02, 0.3, 0.2, 0.05],
             &Excitation { samples: 65, ..EXC },
+            256,
+        );
+        check_jacobian(
+            &[Pinching, Play, SensorLag],
+            &[0.8, 0.2, 1.6, 0.4, 0.05, 0.02],
+            &Excitation { samples: 64, ..EXC },
             256,
         );
     }

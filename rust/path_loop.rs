@@ -26,6 +26,7 @@
 
 use crate::bouc_wen::sgn;
 use crate::error::{finite, CoreError, Result};
+use crate::terms::{PINCHING_CENTRE, PINCHING_WIDTH};
 use std::f64::consts::PI;
 
 /// Column of d w / d beta in [`PathLoop::jac`] rows.
@@ -44,8 +45,10 @@ pub const PD_DELTA: usize = 5;
 pub const PD_PLAY: usize = 6;
 /// d w / d lambda (the distortion of a measured input waveform, design.md 9.5).
 pub const PD_DISTORT: usize = 7;
+/// d w / d zeta1 (pinching, [`path_loop_pinched`]).
+pub const PD_PINCH: usize = 8;
 /// Columns of a [`PathLoop::jac`] row.
-pub const N_PD: usize = 8;
+pub const N_PD: usize = 9;
 
 /// Newton (or bisection) updates of `w_0` allowed on the full-resolution cycle map. Bisection
 /// alone halves `[-w_b, w_b]` to the tolerance in about 45 steps.
@@ -98,6 +101,31 @@ struct Shape {
     gamma: f64,
     mu: f64,
     delta: f64,
+    /// Pinching `zeta1`, and whether its factor (and `d/dzeta1`) is computed at all.
+    pinch: f64,
+    pinched: bool,
+    /// `w_u = (beta + gamma)^(-1/mu)`, the virgin saturation level the pinching band scales with.
+    w_u: f64,
+    /// `d w_u / d(beta, gamma, mu)`.
+    dwu: [f64; 3],
+}
+
+impl Shape {
+    fn new(beta: f64, gamma: f64, mu: f64, delta: f64, pinch: Option<f64>) -> Self {
+        let bg = beta + gamma;
+        let w_u = bg.powf(-1.0 / mu);
+        let d_bg = -w_u / (mu * bg);
+        Self {
+            beta,
+            gamma,
+            mu,
+            delta,
+            pinch: pinch.unwrap_or(0.0),
+            pinched: pinch.is_some(),
+            w_u,
+            dwu: [d_bg, d_bg, w_u * bg.ln() / (mu * mu)],
+        }
+    }
 }
 
 /// One segment of the path: from one node to the next.
@@ -131,6 +159,13 @@ struct Rate {
     sw: f64,
     /// `c = gamma + (beta s + delta) sgn(w)`.
     c: f64,
+    /// The pinching factor `P = 1 - zeta1 G` (1 without pinching; `h` above includes it).
+    pf: f64,
+    /// `h / P`, the Bouc-Wen part of `h`.
+    hb: f64,
+    /// `dP/dw_u` and `dP/dzeta1 = -G` (0 without pinching).
+    p_wu: f64,
+    p_z: f64,
 }
 
 #[inline(always)]
@@ -145,14 +180,41 @@ fn rate(p: &Shape, s: f64, w: f64) -> Rate {
         (0.0, 0.0, 0.0)
     };
     let c = p.gamma + (p.beta * s + p.delta) * sw;
+    let hb = 1.0 - wmu * c;
+    // d/dw |w|^mu = mu |w|^(mu-1) sgn(w); d/dw sgn(w)|w|^mu = mu |w|^(mu-1).
+    let hbw = -p.mu * wmu1 * (p.gamma * sw + p.beta * s + p.delta);
+    if !p.pinched {
+        return Rate {
+            h: hb,
+            hw: hbw,
+            wmu,
+            lnw,
+            sw,
+            c,
+            pf: 1.0,
+            hb,
+            p_wu: 0.0,
+            p_z: 0.0,
+        };
+    }
+    // Foliente's P = 1 - zeta1 exp(-z^2), z = (w s / w_u - q) / zeta2.
+    let width = PINCHING_WIDTH * p.w_u;
+    let z = (w * s - PINCHING_CENTRE * p.w_u) / width;
+    let g = (-z * z).exp();
+    let pf = 1.0 - p.pinch * g;
+    // dP/dz = 2 zeta1 G z; dz/dw = s / width; dz/dw_u = -(w s) / (w_u width).
+    let p_dz = 2.0 * p.pinch * g * z;
     Rate {
-        h: 1.0 - wmu * c,
-        // d/dw |w|^mu = mu |w|^(mu-1) sgn(w); d/dw sgn(w)|w|^mu = mu |w|^(mu-1).
-        hw: -p.mu * wmu1 * (p.gamma * sw + p.beta * s + p.delta),
+        h: hb * pf,
+        hw: hbw * pf + hb * p_dz * s / width,
         wmu,
         lnw,
         sw,
         c,
+        pf,
+        hb,
+        p_wu: -p_dz * w * s / (p.w_u * width),
+        p_z: -g,
     }
 }
 
@@ -474,7 +536,7 @@ impl<const K: usize> Pieces<K> {
 }
 
 /// Sensitivities of one RK4 step to `[dx, beta, gamma, mu, delta]` at a fixed step start.
-const NQ: usize = 5;
+const NQ: usize = 6;
 
 /// One RK4 step of length `hs` in sigma of `dw/dsigma = dx h(w, s)` for K chains side by side
 /// (stage by stage, so that the chains' `ln`/`exp` overlap). Returns the new `w`, the step's
@@ -520,13 +582,22 @@ fn rk4_step<const K: usize, const FULL: bool>(
             let mut q = [0.0; NQ];
             for (li, r) in l.iter().zip(rs) {
                 // d k/d dx = h; d k/d(beta, gamma, mu, delta) = -dx |w|^mu (s sgn w, 1,
-                // ln|w| c, sgn w).
-                let e = li * dx * r.wmu;
+                // ln|w| c, sgn w) P, plus (pinching) dx h_b dP/dw_u dw_u/d(beta, gamma, mu);
+                // d k/d zeta1 = dx h_b dP/dzeta1.
+                let e = li * dx * r.wmu * r.pf;
                 q[0] += li * r.h;
                 q[1] -= e * s * r.sw;
                 q[2] -= e;
                 q[3] -= e * r.lnw * r.c;
                 q[4] -= e * r.sw;
+                if p.pinched {
+                    let f = li * dx * r.hb;
+                    let u = f * r.p_wu;
+                    q[1] += u * p.dwu[0];
+                    q[2] += u * p.dwu[1];
+                    q[3] += u * p.dwu[2];
+                    q[5] += f * r.p_z;
+                }
             }
             inc[i] = q;
         }
@@ -597,6 +668,7 @@ fn full_pass<const K: usize>(
                 ti[PD_GAMMA] += q[2];
                 ti[PD_MU] += q[3];
                 ti[PD_DELTA] += q[4];
+                ti[PD_PINCH] += q[5];
                 ph[i] *= rr[i];
             }
         }
@@ -916,7 +988,45 @@ pub fn path_loop(
     substeps: usize,
 ) -> Result<PathLoop> {
     let args = (amplitude, beta, gamma, mu, delta, play, phi);
-    path_loop_with(args, None, samples_per_period, substeps, true)
+    path_loop_with(args, None, None, samples_per_period, substeps, true)
+}
+
+/// [`path_loop`] (or [`path_loop_distorted`], with a `waveform`) with pinching `zeta1` in
+/// `[0, 1)`: `h(w, s)` times Foliente's `1 - zeta1 exp(-((w s - q w_u)/(zeta2 w_u))^2)`, `w_u =
+/// (beta + gamma)^(-1/mu)`, the shape fixed (`crate::terms::PINCHING_CENTRE`, `PINCHING_WIDTH`).
+/// The Jacobian's column [`PD_PINCH`] is `d w / d zeta1`; `zeta1 = 0` is [`path_loop`] to the bit.
+///
+/// Errors: those of [`path_loop`] / [`path_loop_distorted`], and
+/// [`CoreError::InvalidParameter`] for `zeta1` outside `[0, 1)`.
+#[allow(clippy::too_many_arguments)]
+pub fn path_loop_pinched(
+    amplitude: f64,
+    beta: f64,
+    gamma: f64,
+    mu: f64,
+    delta: f64,
+    play: f64,
+    phi: f64,
+    pinch: f64,
+    waveform: Option<&Waveform>,
+    samples_per_period: usize,
+    substeps: usize,
+) -> Result<PathLoop> {
+    finite("zeta1", pinch)?;
+    if !(0.0..1.0).contains(&pinch) {
+        return Err(CoreError::InvalidParameter(format!(
+            "pinching zeta1 = {pinch} must be in [0, 1)"
+        )));
+    }
+    let args = (amplitude, beta, gamma, mu, delta, play, phi);
+    path_loop_with(
+        args,
+        Some(pinch),
+        waveform,
+        samples_per_period,
+        substeps,
+        true,
+    )
 }
 
 /// [`path_loop`] along `x = A xi(theta - phi)`, a measured input waveform scaled by `lambda`
@@ -939,7 +1049,14 @@ pub fn path_loop_distorted(
     substeps: usize,
 ) -> Result<PathLoop> {
     let args = (amplitude, beta, gamma, mu, delta, play, phi);
-    path_loop_with(args, Some(waveform), samples_per_period, substeps, true)
+    path_loop_with(
+        args,
+        None,
+        Some(waveform),
+        samples_per_period,
+        substeps,
+        true,
+    )
 }
 
 /// The arguments of [`path_loop`]: `(amplitude, beta, gamma, mu, delta, play, phi)`.
@@ -949,6 +1066,7 @@ type LoopArgs = (f64, f64, f64, f64, f64, f64, f64);
 /// (the fallback, exercised by the tests).
 fn path_loop_with(
     args: LoopArgs,
+    pinch: Option<f64>,
     waveform: Option<&Waveform>,
     samples_per_period: usize,
     substeps: usize,
@@ -957,12 +1075,7 @@ fn path_loop_with(
     let (amplitude, beta, gamma, mu, delta, play, phi) = args;
     check_arguments(args, waveform)?;
     crate::steady::check_grid(samples_per_period, substeps)?;
-    let shape = Shape {
-        beta,
-        gamma,
-        mu,
-        delta,
-    };
+    let shape = Shape::new(beta, gamma, mu, delta, pinch);
     let p = samples_per_period;
     let (segs, half_travel) = match waveform {
         None => (segments(amplitude, phi, play, p), amplitude.abs()),
@@ -980,7 +1093,13 @@ fn path_loop_with(
         phis: &mut phis,
     };
     // |dh/dw| <= L on |w| <= w_b: it sizes the coarse RK4 steps and the advice on substeps.
-    let stiffness = mu * bound.powf(mu - 1.0) * (beta.abs() + gamma.abs() + delta.abs());
+    let mut stiffness = mu * bound.powf(mu - 1.0) * (beta.abs() + gamma.abs() + delta.abs());
+    if let Some(pinch) = pinch {
+        // |d(h_b P)/dw| <= L + max|h_b| max|dP/dw|, max|dP/dw| = zeta1 sqrt(2/e) / (zeta2 w_u).
+        let hb_max = 1.0 + bound.powf(mu) * (beta.abs() + gamma.abs() + delta.abs());
+        stiffness +=
+            hb_max * pinch * (2.0f64 / std::f64::consts::E).sqrt() / (PINCHING_WIDTH * shape.w_u);
+    }
     let pieces = Pieces::<PIECES>::split(segs.len());
     let start = Start {
         shape: &shape,
@@ -1282,6 +1401,54 @@ mod tests {
     }
 
     #[test]
+    fn pinched_jacobian_matches_central_differences_and_zero_pinch_is_the_plain_loop() {
+        let sets: [[f64; 8]; 3] = [
+            // [beta, gamma, mu, A, phi, delta, b, zeta1]
+            [0.7, 0.25, 1.8, 1.4, 0.9, 0.2, 0.15, 0.5],
+            [0.9, -0.3, 2.5, -1.1, 2.0, -0.35, 0.05, 0.3],
+            [0.5, 0.5, 1.3, 3.0, -1.0, 0.0, 0.5, 0.8],
+        ];
+        let (p, sub) = (40, 6);
+        let run = |q: &[f64; 8]| {
+            path_loop_pinched(q[3], q[0], q[1], q[2], q[5], q[6], q[4], q[7], None, p, sub).unwrap()
+        };
+        for q in sets {
+            let base = run(&q);
+            let plain = pl(q[3], q[0], q[1], q[2], q[5], q[6], q[4], p, sub);
+            let mut zero = q;
+            zero[7] = 0.0;
+            let z = run(&zero);
+            assert_eq!(z.w, plain.w);
+            // At zeta1 = 0 the column is still d w / d zeta1 (the diagnosis starts there).
+            assert!(z.jac.iter().any(|r| r[PD_PINCH].abs() > 1e-3));
+            assert!(base
+                .w
+                .iter()
+                .zip(&plain.w)
+                .any(|(a, b)| (a - b).abs() > 1e-3));
+            for k in 0..8 {
+                let col = if k == 7 { PD_PINCH } else { k };
+                let h = 1e-5 * q[k].abs().max(1.0);
+                let (mut up, mut dn) = (q, q);
+                up[k] += h;
+                dn[k] -= h;
+                let (lu, ld) = (run(&up), run(&dn));
+                for j in 0..p {
+                    let fd = (lu.w[j] - ld.w[j]) / (2.0 * h);
+                    let an = base.jac[j][col];
+                    assert!(
+                        (fd - an).abs() < 1e-6 * (1.0 + fd.abs()),
+                        "set {q:?}, column {k}, sample {j}: fd {fd} vs {an}"
+                    );
+                }
+            }
+        }
+        let e =
+            path_loop_pinched(1.0, 0.7, 0.3, 1.8, 0.0, 0.0, 0.0, 1.0, None, p, sub).unwrap_err();
+        assert!(e.to_string().contains("zeta1"), "{e}");
+    }
+
+    #[test]
     fn asymmetric_saturation_levels() {
         // Far beyond saturation, loading drives w to the root of h = 0 on each side:
         // (beta + gamma + delta)^(-1/mu) ascending with w > 0, -(beta + gamma - delta)^(-1/mu)
@@ -1398,8 +1565,8 @@ mod tests {
             ((-2.5, 0.9, -0.3, 2.5, -0.35, 0.6, 2.0), 37),
             ((0.2, 1.0, 0.2, 1.2, 0.5, 0.0, -1.0), 16),
         ] {
-            let m = path_loop_with(args, None, p, 4, true).unwrap();
-            let s = path_loop_with(args, None, p, 4, false).unwrap();
+            let m = path_loop_with(args, None, None, p, 4, true).unwrap();
+            let s = path_loop_with(args, None, None, p, 4, false).unwrap();
             for j in 0..p {
                 assert!((m.w[j] - s.w[j]).abs() < 1e-12, "{args:?} sample {j}");
                 for k in 0..7 {

@@ -49,11 +49,29 @@ pub enum TermKind {
     /// Strength degradation `delta_nu` (1/([w] [x])), `>= 0`: Baber-Noori `nu = 1 + delta_nu e`,
     /// `e = int w dxp` (§9.4). Simulation only: the steady loop has no fixed point with it.
     Degradation,
+    /// Stiffness degradation `delta_eta` (1/([w] [x])), `>= 0`: Baber-Noori `eta = 1 + delta_eta e`
+    /// divides the whole Bouc-Wen rate (§9.4). Simulation only, as [`TermKind::Degradation`].
+    StiffnessDegradation,
+    /// Pinching `zeta1` (dimensionless), `0 <= zeta1 < 1`: the rate times Foliente's
+    /// `h = 1 - zeta1 exp(-((w sgn(xpdot) - q w_u) / (z2 w_u))^2)`, shape fixed
+    /// ([`PINCHING_CENTRE`], [`PINCHING_WIDTH`]), `w_u = (alpha/(beta + gamma))^(1/mu)` (§9.4).
+    /// Rate independent: the steady loop of 9.2 carries it (`rust/path_loop.rs`).
+    Pinching,
 }
+
+/// Centre `q` of the pinching band, a fraction of the saturation level `w_u`, on the branch of the
+/// motion (`w sgn(xpdot) = q w_u`): the slip sits just past the zero crossing of w after a reversal.
+pub const PINCHING_CENTRE: f64 = 0.1;
+
+/// Width `zeta2` of the pinching band, a fraction of the saturation level `w_u`.
+pub const PINCHING_WIDTH: f64 = 0.2;
+
+/// Largest `zeta1` the steady-loop fit admits (at 1 the loop would stop at the band's centre).
+pub const PINCHING_MAX: f64 = 0.95;
 
 impl TermKind {
     /// Every term, in the order of the table of design.md 9.1 (then the simulation-only one).
-    pub const ALL: [TermKind; 10] = [
+    pub const ALL: [TermKind; 12] = [
         TermKind::Offset,
         TermKind::Stiffness,
         TermKind::Viscous,
@@ -64,6 +82,8 @@ impl TermKind {
         TermKind::Play,
         TermKind::Distortion,
         TermKind::Degradation,
+        TermKind::StiffnessDegradation,
+        TermKind::Pinching,
     ];
 
     /// The code name (design.md 9.1), e.g. `"sensor_lag"`: the only place a term's name is
@@ -80,6 +100,8 @@ impl TermKind {
             TermKind::Play => "play",
             TermKind::Distortion => "distortion",
             TermKind::Degradation => "degradation",
+            TermKind::StiffnessDegradation => "stiffness_degradation",
+            TermKind::Pinching => "pinching",
         }
     }
 
@@ -100,7 +122,7 @@ impl TermKind {
 
     /// Whether the augmented (steady-loop) model of design.md 9.1 has this term.
     pub fn in_steady_loop(self) -> bool {
-        !matches!(self, TermKind::Degradation)
+        !matches!(self, TermKind::Degradation | TermKind::StiffnessDegradation)
     }
 
     /// Whether the time-domain simulation of design.md 9.4 has this term.
@@ -113,7 +135,7 @@ impl TermKind {
     pub fn acts_on_path(self) -> bool {
         matches!(
             self,
-            TermKind::Asymmetry | TermKind::Play | TermKind::Distortion
+            TermKind::Asymmetry | TermKind::Play | TermKind::Distortion | TermKind::Pinching
         )
     }
 
@@ -130,6 +152,20 @@ impl TermKind {
                 "delta_nu",
                 "must be >= 0 (the strength falls with dissipated energy)",
             ),
+            TermKind::StiffnessDegradation => (
+                "delta_eta",
+                "must be >= 0 (the stiffness falls with dissipated energy)",
+            ),
+            TermKind::Pinching => {
+                if !(0.0..1.0).contains(&value) {
+                    return Err(CoreError::InvalidParameter(format!(
+                        "{} zeta1 = {value} must be in [0, 1) (the share of the rate taken out at \
+                         the pinching band's centre)",
+                        self.name()
+                    )));
+                }
+                return Ok(());
+            }
             _ => return Ok(()),
         };
         if value < 0.0 {
@@ -280,12 +316,25 @@ mod tests {
 
     #[test]
     fn one_sided_ranges_name_the_term() {
-        for kind in [TermKind::SensorLag, TermKind::Play, TermKind::Degradation] {
+        for kind in [
+            TermKind::SensorLag,
+            TermKind::Play,
+            TermKind::Degradation,
+            TermKind::StiffnessDegradation,
+            TermKind::Pinching,
+        ] {
             let e = kind.check_value(-0.1).unwrap_err();
             assert!(e.to_string().contains(kind.name()), "{e}");
             assert!(kind.check_value(0.0).is_ok());
         }
         assert!(TermKind::Viscous.check_value(-1.0).is_ok());
+        assert!(TermKind::Pinching.check_value(1.0).is_err());
+        assert!(TermKind::Pinching.check_value(0.99).is_ok());
+        let e = Terms::parse(&[TermKind::StiffnessDegradation.name()]).unwrap_err();
+        assert!(e.to_string().contains("no steady-loop form"), "{e}");
+        assert!(Terms::parse(&[TermKind::Pinching.name()])
+            .unwrap()
+            .needs_path_loop());
         assert!(check_asymmetry(0.5, 0.3, 0.3).is_ok());
         assert!(check_asymmetry(-0.6, 0.3, 0.3).is_err());
         assert!(check_coulomb_smoothing(0.0).is_err());

@@ -38,6 +38,7 @@ TERM_VALUES = {
     "sensor_lag": 0.02,
     "asymmetry": 0.3,
     "play": 0.15,
+    "pinching": 0.4,
 }
 HYST = (0.8, 0.2, 1.6)
 #: The terms that act on a pure sine (the distortion term needs the input's harmonics: test_distortion.py).
@@ -214,6 +215,7 @@ def test_plain_model_through_the_augmented_path_matches_refine() -> None:
     [
         (("offset", "viscous", "sensor_lag"), [0.3, 0.03, 0.02], [0.2, 0.02, 0.01]),
         (("asymmetry", "play"), [0.3, 0.15], [0.1, 0.1]),
+        (("pinching", "play"), [0.4, 0.15], [0.2, 0.1]),
     ],
 )
 def test_full_fit_parity_rust_numpy(
@@ -311,6 +313,7 @@ def test_names_symbols_and_units() -> None:
         "sensor_lag",
         "asymmetry",
         "play",
+        "pinching",
         "distortion",
     )
     assert set(TERM_SYMBOLS) == set(TERM_UNITS) == set(TERM_NAMES)

@@ -86,6 +86,8 @@ def test_registry_follows_the_design_table() -> None:
         "asymmetry",
         "play",
         "degradation",
+        "stiffness_degradation",
+        "pinching",
         "distortion",
     ]
     units = {kind: cls.units(y="N", u="mm") for kind, cls in TERMS.items()}
@@ -99,30 +101,39 @@ def test_registry_follows_the_design_table() -> None:
         "asymmetry": "1/N^mu",
         "play": "N",
         "degradation": "1/N^2",
+        "stiffness_degradation": "1/N^2",
+        "pinching": "",
         "distortion": "",
     }
     for kind, cls in TERMS.items():
         assert cls.kind == kind
         assert cls.description and cls.signature and cls.symbol
         assert cls.rust_kind == kind and cls.label and cls.places[0] == cls.acts_on
-        hysteresis = ("asymmetry", "play", "degradation", "distortion")
+        hysteresis = ("asymmetry", "play", "degradation", "stiffness_degradation", "pinching", "distortion")
         on_u = ("stiffness", "viscous", "inertia", "coulomb")
         assert cls.acts_on == (
             Place.HYSTERESIS if kind in hysteresis else Place.INPUT if kind in on_u else Place.OUTPUT
         )
         assert cls.acts_on.label
     assert TERM_NAMES == tuple(TERMS)
-    assert STEADY_TERM_NAMES == tuple(k for k in TERMS if k != "degradation")
-    assert DIAGNOSIS_CANDIDATES == (*STEADY_TERM_NAMES, "degradation")
+    drift_only = ("degradation", "stiffness_degradation")
+    assert STEADY_TERM_NAMES == tuple(k for k in TERMS if k not in drift_only)
+    assert DIAGNOSIS_CANDIDATES == (*STEADY_TERM_NAMES, *drift_only)
     # The lower bounds of the value types, and the physical ranges the diagnosis will name within.
-    assert {k for k, c in TERMS.items() if c.bounds[0] == 0.0} == {"sensor_lag", "play", "degradation"}
+    assert {k for k, c in TERMS.items() if c.bounds[0] == 0.0} == {
+        "sensor_lag",
+        "play",
+        "pinching",
+        *drift_only,
+    }
     assert {k for k, c in TERMS.items() if c.physical[0] == 0.0} == {
         "viscous",
         "inertia",
         "coulomb",
         "sensor_lag",
         "play",
-        "degradation",
+        "pinching",
+        *drift_only,
     }
     assert [k for k, c in TERMS.items() if c.linear] == [
         "offset",
@@ -152,6 +163,8 @@ def test_scale_factors_follow_the_units() -> None:
         "asymmetry": y**-mu,
         "play": y,
         "degradation": y**-2,
+        "stiffness_degradation": y**-2,
+        "pinching": 1.0,
         "distortion": 1.0,
     }
 

@@ -45,6 +45,10 @@ __all__ = [
     "Asymmetry",
     "Play",
     "Degradation",
+    "StiffnessDegradation",
+    "Pinching",
+    "PINCHING_CENTRE",
+    "PINCHING_WIDTH",
     "Distortion",
     "TERMS",
     "TERM_NAMES",
@@ -151,6 +155,8 @@ class Term:
     bound_note: ClassVar[str] = ""
     #: Seen on the averaged steady period (False: only in the period-by-period record, design.md 10.6).
     steady: ClassVar[bool] = True
+    #: Among the diagnosis's candidates (False: a library term the diagnosis cannot fit yet).
+    diagnosable: ClassVar[bool] = True
     #: The output is linear in the parameter: its start is the projection of the residual on its column.
     linear: ClassVar[bool] = False
     #: Powers ``(a, b, c)`` of the units: the parameter scales as ``[y]^(a + c mu) [u]^b`` (design.md 10.1).
@@ -466,6 +472,89 @@ class Degradation(Term):
 
 
 @dataclass(frozen=True)
+class StiffnessDegradation(Term):
+    """Stiffness degradation with dissipated energy (Baber & Noori 1985): the rate over ``eta``.
+
+    ``eta = 1 + delta_eta e``, ``e = int w dxp`` as for :class:`Degradation`; ``eta`` divides the whole
+    Bouc-Wen rate (alpha included), so the saturation level ``(alpha / (beta + gamma))^(1/mu)`` stays and
+    is reached over a longer travel: the loop softens. To first order a block at ``eta`` is the steady loop
+    with its gain ``|G|`` divided by ``eta``, so the diagnosis fits it from the period-by-period record beside
+    ``delta_nu`` (design.md 10.6).
+    """
+
+    delta_eta: float
+
+    kind: ClassVar[str] = "stiffness_degradation"
+    symbol: ClassVar[str] = "delta_eta"
+    unit: ClassVar[str] = "1/{y}^2"
+    description: ClassVar[str] = (
+        "hysteretic stiffness falling with the energy dissipated (Baber-Noori stiffness degradation)"
+    )
+    signature: ClassVar[str] = (
+        "a loop that drifts from period to period, faster for loops dissipating more energy: the loop "
+        "softens (its phase lags further and, below saturation, its amplitude falls) while the peak of w "
+        "stays"
+    )
+    label: ClassVar[str] = "stiffness degradation"
+    acts_on: ClassVar[Place] = Place.HYSTERESIS
+    bounds: ClassVar[tuple[float, float]] = NON_NEGATIVE
+    physical: ClassVar[tuple[float, float]] = NON_NEGATIVE
+    bound_note: ClassVar[str] = " (the stiffness falls with dissipated energy)"
+    steady: ClassVar[bool] = False
+    scaling: ClassVar[tuple[float, float, float]] = (-2.0, 0.0, 0.0)
+
+    def normalized(self, alpha: float) -> Term:
+        # e grows by alpha under x -> alpha x, as for Degradation.
+        return StiffnessDegradation(self.delta_eta / alpha)
+
+
+#: Pinching's fixed shape (Foliente 1995): the band's centre ``q`` and width ``zeta2``, fractions of the
+#: saturation level ``w_u = (alpha / (beta + gamma))^(1/mu)``.
+PINCHING_CENTRE = 0.1
+PINCHING_WIDTH = 0.2
+
+
+@dataclass(frozen=True)
+class Pinching(Term):
+    """Pinching (Baber & Noori 1986, Foliente 1995): the rate times Foliente's ``h(w, sgn xdot)``.
+
+    ``h = 1 - zeta1 exp(-(w sgn(xdot) - q w_u)^2 / (zeta2 w_u)^2)``.
+
+    ``zeta1`` in ``[0, 1)`` is the share of the rate taken out at the band's centre; the shape is fixed at
+    ``q = PINCHING_CENTRE``, ``zeta2 = PINCHING_WIDTH`` (fractions of the virgin saturation level ``w_u``).
+    Rate independent: it slows w in a band just past its zero crossing after each reversal (slip), so its
+    steady loop is the path loop of design.md 9.2 with ``h`` times the factor, fitted like play.
+    """
+
+    zeta1: float
+
+    kind: ClassVar[str] = "pinching"
+    symbol: ClassVar[str] = "zeta1"
+    unit: ClassVar[str] = ""  # dimensionless
+    description: ClassVar[str] = "slip of the hysteresis near zero force after each reversal (pinched loop)"
+    signature: ClassVar[str] = (
+        "localised to a band of w on each branch just past the zero crossing after a reversal: excess odd "
+        "harmonics 3, 5; a loop-area deficit; only above an amplitude threshold (the band must be crossed)"
+    )
+    label: ClassVar[str] = "pinching"
+    acts_on: ClassVar[Place] = Place.HYSTERESIS
+    bounds: ClassVar[tuple[float, float]] = NON_NEGATIVE
+    physical: ClassVar[tuple[float, float]] = NON_NEGATIVE
+    bound_note: ClassVar[str] = " (the share of the rate taken out)"
+
+    @classmethod
+    def start(cls, context: StartContext) -> tuple[float, ...]:
+        # None, a light and a marked pinch (the fit stays below PINCHING_MAX = 0.95).
+        return (0.0, 0.2, 0.5)
+
+    def _check(self) -> None:
+        if self.zeta1 >= 1.0:
+            raise InvalidParameterError(
+                f"pinching zeta1 = {self.zeta1} must be < 1 (at 1 the loop would stop at the band's centre)"
+            )
+
+
+@dataclass(frozen=True)
 class Distortion(Term):
     """A measured, non-sinusoidal input (design.md 9.5): ``x = A xi(theta - phi)``, ``xi = cos + lam d``.
 
@@ -509,6 +598,8 @@ TERMS: dict[str, type[Term]] = {
         Asymmetry,
         Play,
         Degradation,
+        StiffnessDegradation,
+        Pinching,
         Distortion,
     )
 }
@@ -519,7 +610,7 @@ TERM_NAMES: tuple[str, ...] = tuple(TERMS)
 STEADY_TERM_NAMES: tuple[str, ...] = tuple(k for k, cls in TERMS.items() if cls.steady)
 #: The diagnosis's candidates: the steady terms, then those fitted from the period record (design.md 10.6).
 DIAGNOSIS_CANDIDATES: tuple[str, ...] = STEADY_TERM_NAMES + tuple(
-    k for k in TERMS if k not in STEADY_TERM_NAMES
+    k for k, cls in TERMS.items() if k not in STEADY_TERM_NAMES and cls.diagnosable
 )
 
 

@@ -10,7 +10,7 @@ use super::detach;
 use crate::augmented::{self as model, AugExperiment, Excitation};
 use crate::budget::Work;
 use crate::error::CoreError;
-use crate::path_loop::{self as pathloop, PathLoop, Waveform, N_PD};
+use crate::path_loop::{self as pathloop, PathLoop, Waveform};
 use crate::refine::Options;
 use crate::terms::Terms;
 
@@ -96,7 +96,8 @@ fn path_loop_distorted<'py>(
         lambda: lam,
         harmonics,
     };
-    run_path_loop(py, (p, sub), N_PD, || {
+    // The distortion's column is the last one this binding hands back (not the pinching's).
+    run_path_loop(py, (p, sub), pathloop::PD_DISTORT + 1, || {
         pathloop::path_loop_distorted(amplitude, beta, gamma, mu, delta, play, phi, &wf, p, sub)
     })
 }

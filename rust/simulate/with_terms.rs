@@ -46,6 +46,15 @@
 //!   (`edot = w xpdot`, `e(0) = 0`, moved with `w` along the play's clamped travel) and
 //!   `nu = 1 + delta_nu e` multiplies the beta, gamma and delta terms: the loop's saturation level
 //!   `(alpha/(nu (beta + gamma)))^(1/mu)` falls as energy is dissipated (§10.6).
+//! - **stiffness degradation** (Baber & Noori's `eta`): `eta = 1 + delta_eta e` on the same energy
+//!   state divides the whole rate, `alpha` included: the loop keeps its saturation level
+//!   `(alpha/(beta + gamma))^(1/mu)` but is reached over a longer travel (a softer loop).
+//! - **pinching** (Baber & Noori 1986, in Foliente's form, 1995): the rate times
+//!   `h = 1 - zeta1 exp(-((w sgn(xpdot) - q w_u) / (zeta2 w_u))^2)`, `w_u` the virgin saturation
+//!   level `(alpha/(beta + gamma))^(1/mu)`, the shape fixed at `q = ` [`PINCHING_CENTRE`],
+//!   `zeta2 = ` [`PINCHING_WIDTH`]: a band of w just past the zero crossing after each reversal
+//!   where w slips (moves slowly with x). Rate independent (h depends on the direction only), so the
+//!   play's path map carries it too.
 //! - the **output terms** are evaluated at the sample times (and, inside `F`, at the stage times).
 
 use super::{check_dt, simulate, try_zeros, Hermite, Input, Simulation, Sine, Source};
@@ -54,6 +63,7 @@ use crate::error::{finite, CoreError, Result};
 use crate::linear::{Companion, TransferFunction};
 use crate::terms::{
     check_asymmetry, check_coulomb_smoothing, TermKind, COULOMB_SMOOTHING, COULOMB_SMOOTHING_KEY,
+    PINCHING_CENTRE, PINCHING_WIDTH,
 };
 
 /// Relative slack of the play's engagement test `|x - xp| >= b`: after a clamp `x - xp` equals `b`
@@ -91,6 +101,11 @@ pub struct TermValues {
     /// `nu = 1 + delta_nu e`, `e = int w dxp` (the hysteretic energy dissipated), multiplies the
     /// beta, gamma and delta terms of the rate.
     pub degradation: f64,
+    /// Stiffness degradation `delta_eta` (`1/([w] [x])`), `>= 0`: Baber-Noori
+    /// `eta = 1 + delta_eta e` divides the whole rate (the same energy state as `degradation`).
+    pub stiffness_degradation: f64,
+    /// Pinching `zeta1` in `[0, 1)`: the rate times Foliente's `h(w, sgn xpdot)` (module header).
+    pub pinching: f64,
 }
 
 impl Default for TermValues {
@@ -106,6 +121,8 @@ impl Default for TermValues {
             asymmetry: 0.0,
             play: 0.0,
             degradation: 0.0,
+            stiffness_degradation: 0.0,
+            pinching: 0.0,
         }
     }
 }
@@ -153,6 +170,8 @@ impl TermValues {
             TermKind::Asymmetry => Some(&mut self.asymmetry),
             TermKind::Play => Some(&mut self.play),
             TermKind::Degradation => Some(&mut self.degradation),
+            TermKind::StiffnessDegradation => Some(&mut self.stiffness_degradation),
+            TermKind::Pinching => Some(&mut self.pinching),
             TermKind::Distortion => None,
         }
     }
@@ -178,9 +197,14 @@ impl TermValues {
     }
 
     /// `true` when a term needs a state or changes `w` (asymmetry, play, sensor lag,
-    /// degradation).
+    /// degradation of strength or stiffness, pinching).
     pub fn is_dynamic(&self) -> bool {
-        self.asymmetry != 0.0 || self.play > 0.0 || self.sensor_lag > 0.0 || self.degradation > 0.0
+        self.asymmetry != 0.0
+            || self.play > 0.0
+            || self.sensor_lag > 0.0
+            || self.degradation > 0.0
+            || self.stiffness_degradation > 0.0
+            || self.pinching > 0.0
     }
 }
 
@@ -267,6 +291,8 @@ fn run<S: Derivatives>(
         y: try_zeros(n_samples)?,
     };
     let comp = tf.realize();
+    // Pinching's band in units of w: centre q w_u and width zeta2 w_u, w_u the virgin saturation level.
+    let w_u = (bw.alpha() / (bw.beta() + bw.gamma())).powf(1.0 / bw.mu());
     let sys = Augmented {
         comp: &comp,
         alpha: bw.alpha(),
@@ -275,6 +301,12 @@ fn run<S: Derivatives>(
         mu: bw.mu(),
         delta: terms.asymmetry,
         degradation: terms.degradation,
+        stiffness_degradation: terms.stiffness_degradation,
+        pinch: Pinch {
+            zeta1: terms.pinching,
+            centre: PINCHING_CENTRE * w_u,
+            width: PINCHING_WIDTH * w_u,
+        },
         delay: tf.delay(),
         src,
         mech,
@@ -430,6 +462,24 @@ fn lag_weights(r: f64) -> (f64, f64, f64, f64) {
     )
 }
 
+/// Foliente's pinching factor with its fixed shape in units of w (module header).
+#[derive(Clone, Copy)]
+struct Pinch {
+    zeta1: f64,
+    centre: f64,
+    width: f64,
+}
+
+impl Pinch {
+    /// `h = 1 - zeta1 exp(-((w sgn(xpdot) - centre) / width)^2)`; the rate is 0 where `xpdot = 0`
+    /// whatever h, so the sign of 0 does not matter.
+    #[inline]
+    fn factor(&self, w: f64, xpdot: f64) -> f64 {
+        let z = (w * sgn(xpdot) - self.centre) / self.width;
+        1.0 - self.zeta1 * (-z * z).exp()
+    }
+}
+
 /// The augmented right-hand side: linear part, generalised Bouc-Wen with `delta`, the input.
 struct Augmented<'a, S> {
     comp: &'a Companion,
@@ -440,6 +490,9 @@ struct Augmented<'a, S> {
     delta: f64,
     /// `delta_nu` of `nu = 1 + delta_nu e` (0: no energy state is needed, `nu = 1`).
     degradation: f64,
+    /// `delta_eta` of `eta = 1 + delta_eta e` dividing the whole rate (0: `eta = 1`, not applied).
+    stiffness_degradation: f64,
+    pinch: Pinch,
     delay: f64,
     src: &'a S,
     mech: Mechanical<'a, S>,
@@ -466,10 +519,18 @@ impl<S: Derivatives> Augmented<'_, S> {
         let sw = sgn(w);
         let nu = 1.0 + self.degradation * e;
         // nu multiplies each term (not their sum) so that nu = 1 rounds exactly as before.
-        self.alpha * xpdot
+        let mut r = self.alpha * xpdot
             - nu * (self.beta * xpdot.abs() * sw * wmu)
             - nu * (self.gamma * xpdot * wmu)
-            - nu * (self.delta * xpdot * sw * wmu)
+            - nu * (self.delta * xpdot * sw * wmu);
+        // Applied only when present, so that the other terms' runs round exactly as before.
+        if self.stiffness_degradation != 0.0 {
+            r /= 1.0 + self.stiffness_degradation * e;
+        }
+        if self.pinch.zeta1 != 0.0 {
+            r *= self.pinch.factor(w, xpdot);
+        }
+        r
     }
 
     /// `xsdot` into `dxs` and `xdot`, at state `xs` and delayed input `(v, vdot)`.
@@ -760,6 +821,40 @@ mod tests {
     }
 
     #[test]
+    fn stiffness_degradation_keeps_the_level_and_pinching_slips_past_zero() {
+        // A slow large sine through a static gain: eta leaves the saturation level, and pinching
+        // takes (1 - zeta1) of the slope dw/dx at the band's centre on the loading branch.
+        let tf = TransferFunction::new(&[1.0], &[1.0], 0.0).unwrap();
+        let bw = BoucWen::new(1.0, 1.0, 0.5, 2.0, 0.0).unwrap();
+        let (amp, om, n) = (30.0, 1.0, 4000);
+        let dt = 4.0 * std::f64::consts::PI / om / n as f64;
+        let run =
+            |t: TermValues| simulate_with_terms(&tf, &bw, &t, sine(amp, om), dt, n, 4).unwrap();
+        let d = TermValues::default();
+        let soft = run(TermValues {
+            stiffness_degradation: 0.05,
+            ..d
+        });
+        let top = soft.w.iter().cloned().fold(f64::MIN, f64::max);
+        assert_relative_eq!(top, 1.5f64.powf(-0.5), max_relative = 1e-4);
+        let pinched = run(TermValues { pinching: 0.6, ..d });
+        let plain = run(TermValues {
+            sensor_lag: 1e-300,
+            ..d
+        });
+        // Slope dw/dx where w crosses the band's centre going down (second half of the first period).
+        let slope = |s: &TermSimulation, level: f64| {
+            let k = (n / 2..n - 1)
+                .find(|&k| s.w[k] >= level && s.w[k + 1] < level)
+                .unwrap();
+            (s.w[k + 1] - s.w[k]) / (s.x[k + 1] - s.x[k])
+        };
+        let centre = -PINCHING_CENTRE * 1.5f64.powf(-0.5);
+        let ratio = slope(&pinched, centre) / slope(&plain, centre);
+        assert!((ratio - 0.4).abs() < 0.02, "{ratio}");
+    }
+
+    #[test]
     fn validation() {
         let (tf, bw) = plant();
         let bad = |t: TermValues, text: &str, nonfinite: bool| {
@@ -781,6 +876,19 @@ mod tests {
             false,
         );
         bad(TermValues { play: -0.1, ..d }, TermKind::Play.name(), false);
+        bad(
+            TermValues {
+                stiffness_degradation: -0.1,
+                ..d
+            },
+            TermKind::StiffnessDegradation.name(),
+            false,
+        );
+        bad(
+            TermValues { pinching: 1.0, ..d },
+            TermKind::Pinching.name(),
+            false,
+        );
         bad(
             TermValues {
                 coulomb_smoothing: 0.0,

@@ -9,7 +9,17 @@ the mean period by
 
     D_ib = d E_i t_b J_i,    J_i = dy/d ln nu = beta dy/dbeta + gamma dy/dgamma (+ delta dy/ddelta),
 
-the steady model's own Jacobian columns. One shared ``d``: a one-parameter weighted linear least squares
+the steady model's own Jacobian columns. Stiffness degradation (``eta = 1 + delta_eta e`` dividing the whole
+rate) is the loop at the gain ``|G| / eta`` (the rate over eta is the rate of x / eta), so its column is
+
+    D_ib = d_eta E_i t_b K_i,    K_i = dy/d ln eta = -g_i dy/dg_i,
+
+the experiment's own gain column: it shifts the loop's phase and, below saturation, its amplitude, where
+J_i changes its saturation level. Each column is fitted and tested alone; when both pass, the better is
+named; the other is reported as an alternative when it explains nearly as much and its partial F-test
+given the first fails (the record cannot tell them apart), and in the notes when that partial test passes
+(both act; only the first is modelled) (``compare``). One shared ``d``: a one-parameter weighted linear least
+squares
 on the block deviations' harmonics 0..K, each block weighted by ``samples / sigma^2`` (sigma^2 from
 neighbouring periods, which a slow drift does not inflate). The fit is in *drift space*, apart from the
 steady F-tests of the other terms: the block deviations are orthogonal to the mean period.
@@ -26,7 +36,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..augmented import AugExperiment, AugFit, AugParams, augmented_output
-from ..terms import TERMS, Asymmetry, Degradation, Play
+from ..terms import TERMS, Asymmetry, Degradation, Play, StiffnessDegradation
 from .data import DiagExperiment
 from .select import f_test
 
@@ -36,6 +46,10 @@ TWO_PI = 2.0 * math.pi
 
 #: The code name of the term fitted here.
 DEGRADATION = Degradation.kind
+#: The code name of the stiffness degradation, fitted here beside it.
+STIFFNESS_DEGRADATION = StiffnessDegradation.kind
+#: The terms fitted in drift space.
+DRIFT_TERMS = (DEGRADATION, STIFFNESS_DEGRADATION)
 #: The terms kept when the hysteresis output w alone is needed (for the loop's energy): those shaping the
 #: steady loop of a pure-sine x; the output terms are left out.
 _HYSTERESIS_TERMS = (Asymmetry.kind, Play.kind)
@@ -54,6 +68,15 @@ class DriftData:
     jac_grid: FloatArray  # dy/d ln nu on the averaged grid
     mean_age: float  # periods from the record's start to the middle of the averaged stretch (NaN: unknown)
     dropped: int = 0  # blocks left out: partial periods (see :func:`whole_blocks`)
+    jac_eta: Optional[ComplexArray] = None  # (K + 1,) harmonics of dy/d ln eta = -g dy/dg (None: not formed)
+
+    def column(self, term: str) -> ComplexArray:
+        """The harmonics of the drift regressor of ``term`` (J_i for degradation, K_i for stiffness)."""
+        if term == STIFFNESS_DEGRADATION:
+            if self.jac_eta is None:
+                raise ValueError("the stiffness-degradation column was not formed")
+            return self.jac_eta
+        return self.jac
 
     @property
     def dof(self) -> int:
@@ -100,20 +123,39 @@ def regressor(
     the hysteresis output alone (the fitted asymmetry and play kept, the output terms left out): exact for
     a band-limited loop, second order at the reversals' kinks.
     """
+    j, _, energy = regressors(e, fit, i, substeps, nu)
+    return j, energy
+
+
+def regressors(
+    e: AugExperiment, fit: AugFit, i: int, substeps: int, nu: float = 1.0, eta: float = 1.0
+) -> tuple[FloatArray, FloatArray, float]:
+    """``(J_i, K_i, E_i)`` on the grid: :func:`regressor`'s two and the stiffness column
+    ``K_i = dy/d ln eta = -g_i dy/dg_i`` (the loop at the gain ``g_i / eta``).
+
+    At stiffness ``eta`` (relative to ``fit``'s, which is then the virgin one) the loop is at the gain
+    ``g_i / eta`` and ``K_i = -(g_i / eta^2) dy/dg`` there: per unit of ``delta_eta`` itself.
+    """
     par = fit.params
     strong = _at_strength(fit, nu)
+    if eta != 1.0:
+        gains = np.array(par.gains, dtype=np.float64)
+        gains[i] /= eta
+        strong = replace(strong, gains=gains)
     p = e.ybar.size
     ph = float(par.phases[i])
-    jac = augmented_output(e, strong, i, substeps=substeps, jacobian=True).jacobian
+    out = augmented_output(e, strong, i, substeps=substeps, jacobian=True)
+    jac = out.jacobian
+    k_eta = -float(par.gains[i]) / eta**2 * out.own_jacobian[:, 0]
     j = par.beta * jac[:, 0] + par.gamma * jac[:, 1]
     if Asymmetry.kind in par.terms:
         k = par.terms.index(Asymmetry.kind)
         j = j + float(par.values[k]) * jac[:, 3 + k]
     w = augmented_output(e, strong.only(_HYSTERESIS_TERMS), i, substeps=substeps)
     theta = TWO_PI * np.arange(p) / p
-    a = e.amplitude * float(par.gains[i])
+    a = e.amplitude * float(par.gains[i]) / eta
     energy = float(np.dot(w, -a * np.sin(theta - ph))) * TWO_PI / p
-    return np.asarray(j, dtype=np.float64), energy
+    return np.asarray(j, dtype=np.float64), np.asarray(k_eta, dtype=np.float64), energy
 
 
 def drift_data(
@@ -123,10 +165,12 @@ def drift_data(
     y_scale: float,
     substeps: int,
     strength: Optional[Sequence[float]] = None,
+    stiffness: Optional[Sequence[float]] = None,
 ) -> list[DriftData]:
     """The experiments with at least two blocks, reduced for the drift fit (scaled by ``y_scale``).
 
-    ``strength`` (per experiment, default 1) is each averaged loop's strength relative to ``fit``'s.
+    ``strength`` (per experiment, default 1) is each averaged loop's strength relative to ``fit``'s,
+    ``stiffness`` its eta (the loop at the gain ``g / eta``).
     """
     out = []
     for i, (e, a) in enumerate(zip(exps, sx)):
@@ -139,10 +183,25 @@ def drift_data(
         centre = e.block_center[keep]
         mean = (wts[:, None] * coef).sum(axis=0) / wts.sum()
         t = centre - float(np.dot(wts, centre) / wts.sum())
-        j, energy = regressor(a, fit, i, substeps, 1.0 if strength is None else float(strength[i]))
+        nu = 1.0 if strength is None else float(strength[i])
+        eta = 1.0 if stiffness is None else float(stiffness[i])
+        j, k_eta, energy = regressors(a, fit, i, substeps, nu, eta)
         age = e.lead_periods + float(np.dot(wts, centre) / wts.sum()) + 0.5
         dropped = e.blocks - keep.size
-        out.append(DriftData(i, coef - mean, t, wts, energy, harmonics(j, k), j, age, dropped))
+        out.append(
+            DriftData(
+                i,
+                coef - mean,
+                t,
+                wts,
+                energy,
+                harmonics(j, k),
+                j,
+                age,
+                dropped=dropped,
+                jac_eta=harmonics(k_eta, k),
+            )
+        )
     return out
 
 
@@ -164,9 +223,9 @@ def whole_blocks(e: DiagExperiment) -> NDArray[np.int64]:
     return np.flatnonzero(ok).astype(np.int64)
 
 
-def _sums(dd: DriftData) -> tuple[float, float, float]:
-    """``(C0, num, den)`` of one experiment: ``C(d) = C0 - 2 d num + d^2 den``."""
-    reg = dd.energy * dd.t[:, None] * dd.jac[None, :]
+def _sums(dd: DriftData, term: str = DEGRADATION) -> tuple[float, float, float]:
+    """``(C0, num, den)`` of one experiment: ``C(d) = C0 - 2 d num + d^2 den`` (``term``'s column)."""
+    reg = dd.energy * dd.t[:, None] * dd.column(term)[None, :]
     c0 = float(np.dot(dd.w, _inner(dd.dev, dd.dev)))
     num = float(np.dot(dd.w, _inner(dd.dev, reg)))
     den = float(np.dot(dd.w, _inner(reg, reg)))
@@ -198,13 +257,23 @@ class DegradationTest:
     passed: bool
     #: d E_i per experiment (relative strength change per period), for the predicted drift.
     rate: tuple[float, ...] = ()
-    #: Harmonics 0..K of J_i (scaled), per experiment in ``experiments``.
+    #: Harmonics 0..K of J_i (scaled), per experiment in ``experiments`` (K_i for stiffness degradation).
     jac: tuple[ComplexArray, ...] = ()
     #: P(chi2(dof0) > cost0): the block deviations against no drift at all (NaN when not computed).
     drift_p_value: float = math.nan
     #: Whether the record drifts at all (the gate; False: the test is not a candidate, as a steady term is
     #: not tried on a plain model at the noise floor).
     drift_present: bool = True
+    #: The drift term tested: degradation (of strength, nu) or stiffness degradation (eta).
+    term: str = DEGRADATION
+    #: The other drift term's test, when both were formed (:func:`compare`).
+    rival: Optional[DegradationTest] = None
+    #: Partial F-test p-value (Bonferroni) of the rival given this term; the rival is named beside it below
+    #: alpha, else reported as an alternative when it explains nearly as much (``rival_alternative``).
+    rival_p_adjusted: float = math.nan
+    rival_alternative: bool = False
+    #: Correlation of the two drift columns' estimates (the 2x2 normal matrix).
+    correlation: float = math.nan
 
     @property
     def held_out_improves(self) -> bool:
@@ -221,9 +290,9 @@ class DegradationTest:
         return math.sqrt(sum(self.held_out_after) / b) if b > 0 else math.nan
 
     def to_dict(self) -> dict[str, Any]:
-        return {
-            "term": DEGRADATION,
-            Degradation.symbol: self.value,
+        out = {
+            "term": self.term,
+            TERMS[self.term].symbol: self.value,
             "standard_error": self.standard_error,
             "drift_cost_before": self.cost0,
             "drift_cost_after": self.cost1,
@@ -242,6 +311,14 @@ class DegradationTest:
             "drift_present": self.drift_present,
             "named": self.named,
         }
+        if self.rival is not None:
+            rival = self.rival.to_dict()
+            rival.pop("rival", None)
+            out["rival"] = rival
+            out["rival_partial_p_adjusted"] = self.rival_p_adjusted
+            out["rival_is_alternative"] = self.rival_alternative
+            out["correlation"] = self.correlation
+        return out
 
 
 #: Smallest share of the drift excess ``C0 - dof0`` the term must explain (as MATERIAL_SHARE in select).
@@ -249,7 +326,7 @@ DRIFT_MATERIAL_SHARE = 0.1
 
 
 def degradation_test(
-    data: Sequence[DriftData], y_scale: float, alpha: float, family: int
+    data: Sequence[DriftData], y_scale: float, alpha: float, family: int, term: str = DEGRADATION
 ) -> Optional[DegradationTest]:
     """Fit the shared ``d`` and test it: nested F (1 df, one-sided: ``d >= 0`` is a boundary, halved as for
     tau and b), Bonferroni over ``family`` candidates, the share of the drift excess, and the held-out
@@ -258,7 +335,7 @@ def degradation_test(
     """
     if not data:
         return None
-    sums = [_sums(dd) for dd in data]
+    sums = [_sums(dd, term) for dd in data]
     c0 = sum(s[0] for s in sums)
     num = sum(s[1] for s in sums)
     den = sum(s[2] for s in sums)
@@ -299,7 +376,8 @@ def degradation_test(
         experiments=tuple(dd.index for dd in data),
         passed=passed,
         rate=tuple(d * dd.energy for dd in data),
-        jac=tuple(dd.jac for dd in data),
+        jac=tuple(dd.column(term) for dd in data),
+        term=term,
     )
 
 
@@ -317,9 +395,67 @@ def with_drift_gate(test: DegradationTest, alpha: float) -> DegradationTest:
     return replace(test, drift_p_value=p, drift_present=bool(math.isfinite(p) and p < 0.5 * alpha))
 
 
-def predicted_deviation(dd: DriftData, d: float) -> ComplexArray:
-    """The first-order drift model's block deviations ``d E_i t_b J_i`` (scaled harmonics, (B, K + 1))."""
-    out: ComplexArray = d * dd.energy * dd.t[:, None] * dd.jac[None, :]
+#: The rival explains at least this share of the chosen drift term's improvement to be its alternative.
+RIVAL_SHARE = 0.9
+
+
+def compare(
+    data: Sequence[DriftData], y_scale: float, alpha: float, family: int
+) -> Optional[DegradationTest]:
+    """Both drift terms tested, the one to name first (the other attached as its ``rival``).
+
+    The chosen one is the named (else passed) test with the lower cost, or strength degradation when
+    neither passes. The rival's partial F-test given it (the two-column fit, 1 df, one-sided, Bonferroni
+    over ``family``) says whether the record needs both; when it does not and the rival alone explains at
+    least ``RIVAL_SHARE`` of the chosen one's improvement, the two are alternatives the record cannot tell
+    apart (their columns are nearly parallel: ``correlation``).
+    """
+    if not data:
+        return None
+    tests = [degradation_test(data, y_scale, alpha, family, term) for term in DRIFT_TERMS]
+    nu, eta = tests
+    assert nu is not None and eta is not None
+
+    def rank(t: DegradationTest) -> tuple[int, int, float]:
+        return (0 if t.named else 1, 0 if t.passed else 1, t.cost1)
+
+    best, other = (nu, eta) if rank(nu) <= rank(eta) else (eta, nu)
+    # The two-column fit: the normal matrix of the two regressors over every experiment.
+    a = np.zeros((2, 2))
+    r = np.zeros(2)
+    for dd in data:
+        regs = [dd.energy * dd.t[:, None] * dd.column(t)[None, :] for t in (best.term, other.term)]
+        for m in range(2):
+            r[m] += float(np.dot(dd.w, _inner(dd.dev, regs[m])))
+            for n in range(2):
+                a[m, n] += float(np.dot(dd.w, _inner(regs[m], regs[n])))
+    corr = float(a[0, 1] / math.sqrt(a[0, 0] * a[1, 1])) if a[0, 0] > 0 and a[1, 1] > 0 else math.nan
+    padj = math.nan
+    try:
+        both = np.linalg.solve(a, r)
+    except np.linalg.LinAlgError:
+        both = None
+    if both is not None and both[1] > 0 and both[0] >= 0:
+        c2 = best.cost0 - float(np.dot(both, r))
+        stat, p = f_test(best.cost1, c2, best.dof0 - 2, boundary=True)
+        padj = min(1.0, p * family) if math.isfinite(p) else math.nan
+    elif both is not None:
+        padj = 1.0
+    gain_best = best.cost0 - best.cost1
+    alternative = bool(
+        best.passed
+        and other.passed
+        and not (math.isfinite(padj) and padj < alpha)
+        and gain_best > 0
+        and (other.cost0 - other.cost1) >= RIVAL_SHARE * gain_best
+    )
+    return replace(best, rival=other, rival_p_adjusted=padj, rival_alternative=alternative, correlation=corr)
+
+
+def predicted_deviation(dd: DriftData, d: float, term: str = DEGRADATION) -> ComplexArray:
+    """The first-order drift model's block deviations ``d E_i t_b J_i`` (scaled harmonics, (B, K + 1); K_i
+    for stiffness degradation)."""
+    out: ComplexArray = d * dd.energy * dd.t[:, None] * dd.column(term)[None, :]
     return out
 
 
@@ -339,8 +475,10 @@ def corrected(
     d: float,
     y_scale: float,
     substeps: int,
+    term: str = DEGRADATION,
 ) -> tuple[list[DiagExperiment], list[AugExperiment]]:
-    """The averaged periods brought back to the virgin strength (design.md 10.6).
+    """The averaged periods brought back to the virgin strength (design.md 10.6); ``term`` the drift term
+    simulated (strength degradation, or stiffness degradation: the virgin stiffness).
 
     Each experiment's averaged loop is not the steady loop at one strength: the strength differs between
     experiments (each dissipates at its own rate from the virgin state at the start of its record, so
@@ -386,7 +524,8 @@ def corrected(
         )
         outs = []
         for dv in (max(d, 0.0), 0.0):
-            plant = WienerPlant(linear, hysteresis, terms=(*terms, Degradation(dv)))
+            drift = term_from_dict({"kind": term, TERMS[term].symbol: dv})
+            plant = WienerPlant(linear, hysteresis, terms=(*terms, drift))
             (rec,) = simulate(plant, plan)
             assert rec.w is not None
             outs.append(np.asarray(rec.w)[lead * p :].reshape(n, p).mean(axis=0))
@@ -419,7 +558,11 @@ def detrended(exps: Sequence[DiagExperiment], test: DegradationTest, y_scale: fl
 
 __all__ = [
     "DEGRADATION",
+    "STIFFNESS_DEGRADATION",
+    "DRIFT_TERMS",
     "DegradationTest",
+    "compare",
+    "regressors",
     "DriftData",
     "drift_data",
     "detrended",

@@ -15,7 +15,6 @@ from typing import TYPE_CHECKING, Optional
 
 import numpy as np
 
-from ..terms import Degradation
 from .result import TERM_LABELS, Diagnosis, clean
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -258,17 +257,14 @@ def _selection_html(d: Diagnosis) -> list[str]:
     if deg is not None:  # design.md 10.6
         ho = "better" if deg.held_out_improves else ("worse" if deg.held_out_after else "")
         gate = "" if deg.drift_present else " (no drift beyond the noise: not a candidate)"
-        row = [
-            Degradation.kind,
-            _g(deg.statistic, ".4g"),
-            _g(deg.p_adjusted, ".2g"),
-            _g(deg.share, ".2f"),
-            ho,
-        ]
+        rows = [[deg.term, _g(deg.statistic, ".4g"), _g(deg.p_adjusted, ".2g"), _g(deg.share, ".2f"), ho]]
+        if deg.rival is not None:  # the other drift term (strength or stiffness), tested alone
+            r = deg.rival
+            rows.append([r.term, _g(r.statistic, ".4g"), _g(r.p_adjusted, ".2g"), _g(r.share, ".2f"), ""])
         parts.append(
             "<p>Degradation, from the period-by-period record (block deviations from the mean period): "
             f"χ² {_g(deg.cost0, '.6g')} → {_g(deg.cost1, '.6g')} (dof {deg.dof0}){gate}</p>"
-            + _table([row], ["term", "F", "p (Bonferroni)", "share of drift excess", "held-out"])
+            + _table(rows, ["term", "F", "p (Bonferroni)", "share of drift excess", "held-out"])
         )
     return parts
 

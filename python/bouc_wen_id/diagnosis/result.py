@@ -172,10 +172,17 @@ class Diagnosis:
             lines.append("")
             ho = "better" if deg.held_out_improves else ("worse" if deg.held_out_after else "")
             lines.append(
-                f"degradation (drift space, {len(deg.experiments)} experiments): chi2 {deg.cost0:.6g} -> "
+                f"{deg.term} (drift space, {len(deg.experiments)} experiments): chi2 {deg.cost0:.6g} -> "
                 f"{deg.cost1:.6g} (dof {deg.dof0}), F = {deg.statistic:.4g}, p adj = {deg.p_adjusted:.2g}, "
                 f"share {deg.share:.2f}, held-out {ho} (block NRMSE ratio {deg.held_out_nrmse_ratio:.3f})"
             )
+            rival = deg.rival
+            if rival is not None:  # the other drift term (strength or stiffness), tested alone and given it
+                lines.append(
+                    f"  rival {rival.term}: chi2 -> {rival.cost1:.6g}, p adj = {rival.p_adjusted:.2g}, share "
+                    f"{rival.share:.2f}; given {deg.term}: p adj = {deg.rival_p_adjusted:.2g}; columns' "
+                    f"correlation {deg.correlation:.2f}{' (an alternative)' if deg.rival_alternative else ''}"
+                )
         for note in self.notes:
             lines.append(note)
         if self.held_out is not None:

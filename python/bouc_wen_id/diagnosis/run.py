@@ -17,7 +17,9 @@ from ..terms import DIAGNOSIS_CANDIDATES, TERMS, Distortion, physical_value
 from .data import DiagExperiment, prepare
 from .drift import (
     DEGRADATION,
+    DRIFT_TERMS,
     DegradationTest,
+    compare,
     corrected,
     degradation_test,
     detrended,
@@ -38,7 +40,7 @@ from .fitting import (
 )
 from .locate import Localisation, adequacy_p, locate
 from .result import Diagnosis, ModelSummary, NamedTerm, Status, term_symbol_unit
-from .select import ALPHA, FoldCache, forward_select, held_out
+from .select import ALPHA, Alternative, FoldCache, forward_select, held_out
 
 #: When the final model is still rejected, named terms that remove at least this share of the plain model's
 #: excess give "partly explained" (the terms are named, with the share, and the structure left is located);
@@ -180,11 +182,11 @@ def _refine_degradation(
 
     from .drift import _sums
 
-    sums = [_sums(dd) for dd in data]
+    sums = [_sums(dd, deg.term) for dd in data]
     fits: dict[float, AugFit] = {}
 
     def cost(dv: float) -> float:
-        _, fs = corrected(exps, sx, fit, dv, s.y, substeps)
+        _, fs = corrected(exps, sx, fit, dv, s.y, substeps, deg.term)
         f = fit_from(fs, fit.params, substeps, max_iter=50)
         if f is None:
             return math.inf
@@ -218,6 +220,7 @@ def _degradation_stage(
     held_out_test: bool,
     drift_seen: bool,
     notes: list[str],
+    terms: tuple[str, ...] = (DEGRADATION,),
 ) -> Optional[tuple[Optional[DegradationTest], list[DiagExperiment], list[AugExperiment], AugFit]]:
     """The degradation candidate (design.md 10.6): its test, and the data and start the steady selection
     then runs on (the test is None when it cannot be formed); None without a block record.
@@ -240,27 +243,58 @@ def _degradation_stage(
             + ", ".join(f"{src}: {k}" for src, k in dropped)
             + "); their harmonics, fitted over part of a cycle, are ill-posed"
         )
-    deg = degradation_test(data, s.y, alpha, family=family)
+    deg = (
+        compare(data, s.y, alpha, family)
+        if len(terms) > 1
+        else degradation_test(data, s.y, alpha, family, *terms)
+    )
     if deg is not None and not drift_seen:
         deg = with_drift_gate(deg, alpha)
     if deg is None or not (deg.named if held_out_test else deg.passed):
         return deg, list(exps), list(sx), plain
     fit, fexps, fsx = plain, list(exps), list(sx)
+    term = deg.term
     for _ in range(CORRECTION_PASSES):
-        fexps, fsx = corrected(exps, sx, fit, deg.d, s.y, substeps)
+        fexps, fsx = corrected(exps, sx, fit, deg.d, s.y, substeps, term)
         fit = best_of([fit_from(fsx, fit.params, substeps)]) or fit
-        data = drift_data(exps, sx, fit, s.y, substeps, strengths(len(exps), data, deg.d))
-        retest = degradation_test(data, s.y, alpha, family=family)
+        # The averaged loops sit at their own mean strength (or stiffness), the fit at the virgin one.
+        means = strengths(len(exps), data, deg.d)
+        if term == DEGRADATION:
+            data = drift_data(exps, sx, fit, s.y, substeps, strength=means)
+        else:
+            data = drift_data(exps, sx, fit, s.y, substeps, stiffness=means)
+        retest = degradation_test(data, s.y, alpha, family, term)
         if retest is None:
             break
-        deg = retest if drift_seen else with_drift_gate(retest, alpha)
+        retest = retest if drift_seen else with_drift_gate(retest, alpha)
+        deg = replace(
+            retest,
+            rival=deg.rival,
+            rival_p_adjusted=deg.rival_p_adjusted,
+            rival_alternative=deg.rival_alternative,
+            correlation=deg.correlation,
+        )
     if not (deg.named if held_out_test else deg.passed):
         # The refined test no longer names it: the steady selection on the data as they are.
         return deg, list(exps), list(sx), plain
     if deg.d > 0:
         deg, fit = _refine_degradation(exps, sx, fit, data, deg, s, substeps)
-        fexps, fsx = corrected(exps, sx, fit, deg.d, s.y, substeps)
+        fexps, fsx = corrected(exps, sx, fit, deg.d, s.y, substeps, term)
     return deg, fexps, fsx, fit
+
+
+#: What separates strength from stiffness degradation (drift.py's docstring).
+SEPARATING_DRIFT = (
+    "an experiment below saturation (x under the loop's saturation level), where stiffness degradation "
+    "changes the loop's amplitude and strength degradation hardly does"
+)
+
+
+def _drift_alternatives(deg: Optional[DegradationTest], named: bool) -> tuple[Alternative, ...]:
+    """The other drift term as an alternative, when the record cannot tell the two apart."""
+    if deg is None or not named or deg.rival is None or not deg.rival_alternative:
+        return ()
+    return (Alternative(deg.term, deg.rival.term, deg.correlation, SEPARATING_DRIFT),)
 
 
 #: What a non-physical value suggests.
@@ -560,7 +594,7 @@ def diagnose(
         )
     setup = _Setup(cands, float(alpha), held_out_test, (y_unit, u_unit), skipped)
     d = _diagnose_set(exps, setup, [*notes, *qnotes])
-    named_deg = any(t.term == DEGRADATION for t in d.named)
+    named_deg = any(t.term in DRIFT_TERMS for t in d.named)
     drifting = [] if named_deg else _unsettled(exps)
     if drifting:
         d = _without_unsettled(exps, drifting, setup, d, [*notes, *qnotes])
@@ -617,15 +651,31 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
     # the averaged periods brought back to one strength.
     deg: Optional[DegradationTest] = None
     fexps, fsx, start = exps, sx, plain
-    if DEGRADATION in cands:
+    drift_terms = tuple(c for c in DRIFT_TERMS if c in cands)
+    if drift_terms:
         stage = _degradation_stage(
-            exps, sx, plain, s, substeps, alpha, len(cands), setup.held_out_test, before.drift_detected, notes
+            exps,
+            sx,
+            plain,
+            s,
+            substeps,
+            alpha,
+            len(cands),
+            setup.held_out_test,
+            before.drift_detected,
+            notes,
+            drift_terms,
         )
         if stage is None:
             notes.append(NO_BLOCKS)
         else:
             deg, fexps, fsx, start = stage
     named_deg = deg is not None and (deg.named if setup.held_out_test else deg.passed)
+    if deg is not None and named_deg and deg.rival is not None and deg.rival_p_adjusted < alpha:
+        notes.append(
+            f"the period record also needs {deg.rival.term} beside {deg.term} (partial F, adjusted p = "
+            f"{deg.rival_p_adjusted:.2g}): both may act, and only {deg.term} is modelled"
+        )
     noise_dof = sum(e.noise_dof for e in exps)
 
     def p_of(fit: AugFit) -> float:
@@ -643,7 +693,7 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
         not named_deg and not before.drift_detected and math.isfinite(p_start) and p_start >= 0.5 * alpha
     )
     cache: FoldCache = {}
-    steady = tuple(c for c in cands if c != DEGRADATION)
+    steady = tuple(c for c in cands if c not in DRIFT_TERMS)
     kw: dict[str, Any] = {"alpha": alpha, "use_held_out": setup.held_out_test, "cache": cache}
     final, steps = forward_select(fsx, start, steady, adequate, substeps, targeted=targeted, **kw)
     dexps = detrended(fexps, deg, s.y) if deg is not None and named_deg else fexps
@@ -651,10 +701,10 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
     plain_sum = _summary(exps, sx, plain, s, setup.units)
     final_sum = _summary(fexps, fsx, final, s, setup.units)
     if deg is not None and named_deg:
-        sym, unit = term_symbol_unit(DEGRADATION, *setup.units)
+        sym, unit = term_symbol_unit(deg.term, *setup.units)
         final_sum = replace(
             final_sum,
-            terms=(*final_sum.terms, NamedTerm(DEGRADATION, sym, deg.value, deg.standard_error, unit)),
+            terms=(*final_sum.terms, NamedTerm(deg.term, sym, deg.value, deg.standard_error, unit)),
         )
     fraction = _explained_fraction(plain_sum, final_sum, deg if named_deg else None)
     plain_ok = targeted and not final.params.terms
@@ -665,7 +715,7 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
         fraction,
         fexps,
     )
-    alternatives = tuple(a for st in steps for a in st.alternatives)
+    alternatives = tuple(a for st in steps for a in st.alternatives) + _drift_alternatives(deg, named_deg)
     ho = held_out(fsx, start, final, substeps, cache) if final.params.terms else None
     return Diagnosis(
         status=status,

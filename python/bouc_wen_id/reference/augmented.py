@@ -31,6 +31,8 @@ from .terms import (
     DISTORTION,
     INERTIA,
     OFFSET,
+    PINCHING,
+    PINCHING_MAX,
     PLAY,
     SENSOR_LAG,
     STEADY_TERM_NAMES,
@@ -88,6 +90,9 @@ def _check_shared(terms: tuple[str, ...], shared: FloatArray) -> None:
     b = _value(terms, shared, PLAY)
     if b < 0.0:
         raise InvalidParameterError(f"play b = {b} must be >= 0 (the half-width of the backlash)")
+    zeta1 = _value(terms, shared, PINCHING)
+    if not 0.0 <= zeta1 < 1.0:
+        raise InvalidParameterError(f"pinching zeta1 = {zeta1} must be in [0, 1)")
     delta = _value(terms, shared, ASYMMETRY)
     if ASYMMETRY in terms and abs(delta) >= shared[0] + shared[1]:
         raise InvalidParameterError(
@@ -138,19 +143,33 @@ def _hysteresis(
     substeps: int,
     waveform: FloatArray,
 ) -> tuple[FloatArray, FloatArray]:
-    """``w`` and its columns ``d/d(beta, gamma, mu, A, phi, delta, b, lambda)`` (0 where inactive)."""
+    """``w`` and its columns ``d/d(beta, gamma, mu, A, phi, delta, b, lambda, zeta1)`` (0 where inactive)."""
     beta, gamma, mu = (float(v) for v in shared[:3])
+    if PINCHING in terms:
+        # Pinching: Foliente's factor on the path loop's h(w, s), with its d/dzeta1 column.
+        delta, b = _value(terms, shared, ASYMMETRY), _value(terms, shared, PLAY)
+        zeta1 = _value(terms, shared, PINCHING)
+        if DISTORTION in terms:
+            lam = _value(terms, shared, DISTORTION)
+            w, jac, _ = path_loop_distorted(
+                amplitude, beta, gamma, mu, delta, b, phi, lam, waveform, p, substeps, pinch=zeta1
+            )
+        else:
+            w, jac, _ = path_loop(amplitude, beta, gamma, mu, delta, b, phi, p, substeps, pinch=zeta1)
+        return w, jac
     if DISTORTION in terms:
         delta, b = _value(terms, shared, ASYMMETRY), _value(terms, shared, PLAY)
         lam = _value(terms, shared, DISTORTION)
-        w, jac, _ = path_loop_distorted(amplitude, beta, gamma, mu, delta, b, phi, lam, waveform, p, substeps)
-        return w, jac
+        w, jac8, _ = path_loop_distorted(
+            amplitude, beta, gamma, mu, delta, b, phi, lam, waveform, p, substeps
+        )
+        return w, np.column_stack([jac8, np.zeros(p)])
     if ASYMMETRY in terms or PLAY in terms:
         delta, b = _value(terms, shared, ASYMMETRY), _value(terms, shared, PLAY)
         w, jac7, _ = path_loop(amplitude, beta, gamma, mu, delta, b, phi, p, substeps)
-        return w, np.column_stack([jac7, np.zeros(p)])
+        return w, np.column_stack([jac7, np.zeros((p, 2))])
     w, jac5, _, _ = steady_loop(amplitude, beta, gamma, mu, phi, p, substeps)
-    jac = np.zeros((p, 8))
+    jac = np.zeros((p, 9))
     jac[:, :5] = jac5
     return w, jac
 
@@ -208,6 +227,8 @@ def augmented_output(
             jac_shared[:, 3 + t] = hj[:, 6]
         elif name == DISTORTION:
             jac_shared[:, 3 + t] = hj[:, 7]
+        elif name == PINCHING:
+            jac_shared[:, 3 + t] = hj[:, 8]
     jac_own = np.column_stack([amplitude * hj[:, 3], hj[:, 4]])
     y = f
     if SENSOR_LAG in names:
@@ -258,6 +279,8 @@ class _Problem(NamedTuple):
             ok = ok and par[self.col(SENSOR_LAG)] >= 0.0
         if PLAY in self.names:
             ok = ok and 0.0 <= par[self.col(PLAY)] <= self.play_max(par)
+        if PINCHING in self.names:
+            ok = ok and 0.0 <= par[self.col(PINCHING)] <= PINCHING_MAX
         return ok
 
     def evaluate(self, par: FloatArray) -> tuple[float, tuple[list[FloatArray], FloatArray, FloatArray]]:
@@ -297,6 +320,8 @@ class _Problem(NamedTuple):
             trial[self.col(SENSOR_LAG)] = max(trial[self.col(SENSOR_LAG)], 0.0)
         if PLAY in self.names:
             trial[self.col(PLAY)] = max(min(trial[self.col(PLAY)], self.play_max(trial)), 0.0)
+        if PINCHING in self.names:
+            trial[self.col(PINCHING)] = min(max(trial[self.col(PINCHING)], 0.0), PINCHING_MAX)
 
 
 def _check_refine(

@@ -33,6 +33,7 @@ from ..errors import (
 )
 from ..validation import finite_scalar as _finite_scalar
 from .steady import bracketed_newton, next_iteration
+from .terms import PINCHING_CENTRE, PINCHING_WIDTH
 
 FloatArray = NDArray[np.float64]
 
@@ -47,11 +48,17 @@ __all__ = [
     "PD_DELTA",
     "PD_PLAY",
     "PD_DISTORT",
+    "PD_PINCH",
 ]
 
 #: Columns of the Jacobian returned by :func:`path_loop` (as ``rust/path_loop.rs``);
 #: :func:`path_loop_distorted` adds ``PD_DISTORT``, ``d w / d lambda``.
 PD_BETA, PD_GAMMA, PD_MU, PD_AMPLITUDE, PD_PHI, PD_DELTA, PD_PLAY, PD_DISTORT = range(8)
+#: :func:`path_loop_pinched` adds ``d w / d zeta1``.
+PD_PINCH = 8
+
+#: Pinching of :func:`path_loop_pinched`: ``(zeta1, w_u, d w_u / d(beta, gamma, mu))``, or None.
+_Pinch = tuple[float, float, tuple[float, float, float]]
 
 #: Newton (or bisection) updates of the top value allowed.
 PATH_SHOOT_MAX_ITER = 60
@@ -65,9 +72,20 @@ _AnyNode = Union[_Node, tuple[float, FloatArray]]
 
 
 def _rate(
-    beta: float, gamma: float, mu: float, delta: float, s: float, dx: float, y: FloatArray
+    beta: float,
+    gamma: float,
+    mu: float,
+    delta: float,
+    s: float,
+    dx: float,
+    y: FloatArray,
+    pin: _Pinch | None = None,
 ) -> FloatArray:
-    """Rate in sigma of ``[w, dw/dw_a, dw/d dx, dw/d beta, dw/d gamma, dw/d mu, dw/d delta]``."""
+    """Rate in sigma of ``[w, dw/dw_a, dw/d dx, dw/d beta, dw/d gamma, dw/d mu, dw/d delta, dw/d zeta1]``.
+
+    With pinching, ``h`` is the Bouc-Wen ``h_b`` times Foliente's ``P = 1 - zeta1 exp(-z^2)``,
+    ``z = (w s - q w_u) / (zeta2 w_u)``, differentiated through ``w_u(beta, gamma, mu)`` too.
+    """
     w = float(y[0])
     aw = abs(w)
     sw = float(np.sign(w))
@@ -78,33 +96,57 @@ def _rate(
     else:
         lnw = wmu = wmu1 = 0.0
     c = gamma + (beta * s + delta) * sw
-    h = 1.0 - wmu * c
+    hb = 1.0 - wmu * c
     # d/dw |w|^mu = mu |w|^(mu-1) sgn(w); d/dw sgn(w) |w|^mu = mu |w|^(mu-1).
-    fw = dx * (-mu * wmu1 * (gamma * sw + beta * s + delta))
+    hbw = -mu * wmu1 * (gamma * sw + beta * s + delta)
+    if pin is None:
+        pf, hw, q_extra, q_z = 1.0, hbw, (0.0, 0.0, 0.0), 0.0
+    else:
+        zeta1, w_u, dwu = pin
+        width = PINCHING_WIDTH * w_u
+        z = (w * s - PINCHING_CENTRE * w_u) / width
+        g = float(np.exp(-z * z))
+        pf = 1.0 - zeta1 * g
+        p_dz = 2.0 * zeta1 * g * z
+        hw = hbw * pf + hb * p_dz * s / width
+        p_wu = -p_dz * w * s / (w_u * width)
+        q_extra = (dx * hb * p_wu * dwu[0], dx * hb * p_wu * dwu[1], dx * hb * p_wu * dwu[2])
+        q_z = -dx * hb * g
+    h = hb * pf
+    fw = dx * hw
     return np.array(
         [
             dx * h,
             fw * y[1],
             fw * y[2] + h,
-            fw * y[3] - dx * wmu * s * sw,
-            fw * y[4] - dx * wmu,
-            fw * y[5] - dx * wmu * lnw * c,
-            fw * y[6] - dx * wmu * sw,
+            fw * y[3] - dx * wmu * s * sw * pf + q_extra[0],
+            fw * y[4] - dx * wmu * pf + q_extra[1],
+            fw * y[5] - dx * wmu * lnw * c * pf + q_extra[2],
+            fw * y[6] - dx * wmu * sw * pf,
+            fw * y[7] + q_z,
         ]
     )
 
 
 def _segment(
-    beta: float, gamma: float, mu: float, delta: float, s: float, dx: float, w: float, substeps: int
+    beta: float,
+    gamma: float,
+    mu: float,
+    delta: float,
+    s: float,
+    dx: float,
+    w: float,
+    substeps: int,
+    pin: _Pinch | None = None,
 ) -> FloatArray:
-    """The segment map and its sensitivities: RK4 from ``[w, 1, 0, 0, 0, 0, 0]`` over sigma in [0, 1]."""
-    y = np.array([w, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0])
+    """The segment map and its sensitivities: RK4 from ``[w, 1, 0, 0, 0, 0, 0, 0]`` over sigma in [0, 1]."""
+    y = np.array([w, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])
     hs = 1.0 / substeps
     for _ in range(substeps):
-        k1 = _rate(beta, gamma, mu, delta, s, dx, y)
-        k2 = _rate(beta, gamma, mu, delta, s, dx, y + 0.5 * hs * k1)
-        k3 = _rate(beta, gamma, mu, delta, s, dx, y + 0.5 * hs * k2)
-        k4 = _rate(beta, gamma, mu, delta, s, dx, y + hs * k3)
+        k1 = _rate(beta, gamma, mu, delta, s, dx, y, pin)
+        k2 = _rate(beta, gamma, mu, delta, s, dx, y + 0.5 * hs * k1, pin)
+        k3 = _rate(beta, gamma, mu, delta, s, dx, y + 0.5 * hs * k2, pin)
+        k4 = _rate(beta, gamma, mu, delta, s, dx, y + hs * k3, pin)
         y = y + hs / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
     return y
 
@@ -204,8 +246,13 @@ def path_loop(
     phi: float,
     samples_per_period: int,
     substeps: int,
+    *,
+    pinch: float | None = None,
 ) -> tuple[FloatArray, FloatArray, int]:
     """Steady loop of the generalised Bouc-Wen behind a play, along the path of ``x = A cos(theta - phi)``.
+
+    With ``pinch`` (``zeta1`` in ``[0, 1)``; the core's ``path_loop_pinched``) ``h`` is multiplied by
+    Foliente's factor and ``jac`` has all 9 columns, ``PD_PINCH`` the last.
 
     Parameters
     ----------
@@ -259,10 +306,24 @@ def path_loop(
     if substeps < 1:
         raise InvalidParameterError(f"substeps = {substeps} must be >= 1")
 
+    pin = _pinch(beta, gamma, mu, pinch)
     jac, iterations, w = _solve(
-        _segments(amplitude, phi, play, p), beta, gamma, mu, delta, margin, p, substeps
+        _segments(amplitude, phi, play, p), beta, gamma, mu, delta, margin, p, substeps, pin
     )
-    return w, jac[:, :7], iterations
+    return w, (jac[:, :7] if pin is None else jac), iterations
+
+
+def _pinch(beta: float, gamma: float, mu: float, pinch: float | None) -> _Pinch | None:
+    """``(zeta1, w_u, d w_u / d(beta, gamma, mu))`` for :func:`_rate`, after the core's check of zeta1."""
+    if pinch is None:
+        return None
+    _finite_scalar("zeta1", pinch)
+    if not 0.0 <= pinch < 1.0:
+        raise InvalidParameterError(f"pinching zeta1 = {pinch} must be in [0, 1)")
+    bg = beta + gamma
+    w_u = float(bg ** (-1.0 / mu))
+    d_bg = -w_u / (mu * bg)
+    return float(pinch), w_u, (d_bg, d_bg, w_u * float(np.log(bg)) / (mu * mu))
 
 
 def _solve(
@@ -274,24 +335,25 @@ def _solve(
     margin: float,
     p: int,
     substeps: int,
+    pin: _Pinch | None = None,
 ) -> tuple[FloatArray, int, FloatArray]:
-    """Single shooting on the cycle of segments: ``(jac (P, 8), iterations, w)``."""
+    """Single shooting on the cycle of segments: ``(jac (P, 9), iterations, w)``."""
     with np.errstate(over="ignore", divide="ignore"):
         bound = float(np.float64(1.0) / margin) ** (1.0 / mu)
     if not (np.isfinite(bound) and bound > 0.0):
         raise InvalidParameterError(f"the bound (beta + gamma - |delta|)^(-1/mu) = {bound} is unusable")
     w = np.zeros(p)
-    t_rows = np.zeros((p, 8))
+    t_rows = np.zeros((p, 9))
     phis = np.zeros(p)
 
     def cycle(w0: float) -> tuple[float, float, FloatArray]:
         """One cycle from ``w0``: ``W``, ``dW/dw0``, ``dW/dq`` at fixed ``w0``; records the samples."""
-        wc, ph, t = w0, 1.0, np.zeros(8)
+        wc, ph, t = w0, 1.0, np.zeros(9)
         for dx, ddx, s, j in segs:
-            y = _segment(beta, gamma, mu, delta, s, dx, wc, substeps)
+            y = _segment(beta, gamma, mu, delta, s, dx, wc, substeps, pin)
             # Chain rule through the segment: T <- Psi_w T + Psi_q (+ Psi_dx d dx/dq for A, phi, b).
             t = y[1] * t
-            t[[PD_BETA, PD_GAMMA, PD_MU, PD_DELTA]] += y[3:7]
+            t[[PD_BETA, PD_GAMMA, PD_MU, PD_DELTA, PD_PINCH]] += y[3:8]
             t[[PD_AMPLITUDE, PD_PHI, PD_PLAY, PD_DISTORT]] += y[2] * ddx
             ph *= y[1]
             wc = float(y[0])
@@ -411,6 +473,8 @@ def path_loop_distorted(
     harmonics: FloatArray,
     samples_per_period: int,
     substeps: int,
+    *,
+    pinch: float | None = None,
 ) -> tuple[FloatArray, FloatArray, int]:
     """:func:`path_loop` along ``x = A xi(theta - phi)``, ``xi(zeta) = cos(zeta) + lam d(zeta)``.
 
@@ -420,8 +484,7 @@ def path_loop_distorted(
         ``lambda``, the scale of the measured distortion (1: the measured waveform; 0: the pure sine).
     harmonics : ndarray, shape (2 K,)
         ``[Re c_2, Im c_2, Re c_3, Im c_3, ...]``, ``d(zeta) = sum_k Re(c_k e^{i k zeta})``.
-    others
-        As :func:`path_loop` (``play`` below the half travel of x).
+    others : as :func:`path_loop` (``play`` below the half travel of x; ``pinch`` adds ``PD_PINCH``).
 
     Returns
     -------
@@ -478,5 +541,6 @@ def path_loop_distorted(
         )
 
     segs = _cycle_segments(r, ub, p, top, bottom, node_at, pad=False)
-    jac, iterations, w = _solve(segs, beta, gamma, mu, delta, margin, p, substeps)
-    return w, jac, iterations
+    pin = _pinch(beta, gamma, mu, pinch)
+    jac, iterations, w = _solve(segs, beta, gamma, mu, delta, margin, p, substeps, pin)
+    return w, (jac[:, :8] if pin is None else jac), iterations

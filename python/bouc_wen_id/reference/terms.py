@@ -18,6 +18,11 @@ __all__ = [
     "ASYMMETRY",
     "PLAY",
     "DEGRADATION",
+    "STIFFNESS_DEGRADATION",
+    "PINCHING",
+    "PINCHING_CENTRE",
+    "PINCHING_WIDTH",
+    "PINCHING_MAX",
     "DISTORTION",
     "COULOMB_SMOOTHING_KEY",
     "COULOMB_SMOOTHING",
@@ -35,6 +40,13 @@ SENSOR_LAG = "sensor_lag"
 ASYMMETRY = "asymmetry"
 PLAY = "play"
 DEGRADATION = "degradation"
+STIFFNESS_DEGRADATION = "stiffness_degradation"
+PINCHING = "pinching"
+#: Pinching's fixed shape, fractions of the saturation level w_u: the band's centre q and width zeta2.
+PINCHING_CENTRE = 0.1
+PINCHING_WIDTH = 0.2
+#: Largest zeta1 the steady-loop fit admits.
+PINCHING_MAX = 0.95
 DISTORTION = "distortion"
 #: The Coulomb term's fixed setting (not a term): the smoothing of its sign, a fraction of the peak velocity.
 COULOMB_SMOOTHING_KEY = "coulomb_smoothing"
@@ -51,6 +63,7 @@ STEADY_TERM_NAMES: tuple[str, ...] = (
     SENSOR_LAG,
     ASYMMETRY,
     PLAY,
+    PINCHING,
     DISTORTION,
 )
 #: Keys of the simulation's ``terms`` mapping: the code names, plus the Coulomb smoothing.
@@ -65,4 +78,6 @@ SIMULATION_KEYS: tuple[str, ...] = (
     ASYMMETRY,
     PLAY,
     DEGRADATION,
+    STIFFNESS_DEGRADATION,
+    PINCHING,
 )

@@ -10,6 +10,9 @@ Step by step the same scheme as the Rust core, so that the parity tests hold the
   start, middle (RK4 continuous extension of ``w``) and end;
 - degradation (Baber-Noori): the dissipated energy ``e = int w dxp`` as one more RK4 state, and
   ``nu = 1 + delta_nu e`` multiplying the beta, gamma and delta terms of the rate;
+- stiffness degradation (Baber-Noori ``eta = 1 + delta_eta e``, the same energy state) dividing the whole
+  rate, and pinching (Foliente's ``h = 1 - zeta1 exp(-((w sgn(xpdot) - q w_u)/(zeta2 w_u))^2)``, the shape
+  fixed, ``w_u = (alpha/(beta + gamma))^(1/mu)``) multiplying it, each applied only when present;
 - output terms ``k u + c udot + m uddot + f tanh(udot/(eps Vmax))`` on the undelayed input.
 
 Without asymmetry, play, lag or degradation the plain RK4 of :mod:`.simulate` gives ``x, w`` and the
@@ -37,10 +40,14 @@ from .terms import (
     DEGRADATION,
     INERTIA,
     OFFSET,
+    PINCHING,
+    PINCHING_CENTRE,
+    PINCHING_WIDTH,
     PLAY,
     SENSOR_LAG,
     SIMULATION_KEYS,
     STIFFNESS,
+    STIFFNESS_DEGRADATION,
     VISCOUS,
 )
 
@@ -89,6 +96,16 @@ def check_terms(terms: Mapping[str, float], beta: float, gamma: float) -> dict[s
         raise InvalidParameterError(
             f"degradation delta_nu = {out[DEGRADATION]} must be >= 0 (the strength falls with dissipated "
             "energy)"
+        )
+    if out[STIFFNESS_DEGRADATION] < 0.0:
+        raise InvalidParameterError(
+            f"stiffness_degradation delta_eta = {out[STIFFNESS_DEGRADATION]} must be >= 0 (the stiffness "
+            "falls with dissipated energy)"
+        )
+    if not 0.0 <= out[PINCHING] < 1.0:
+        raise InvalidParameterError(
+            f"pinching zeta1 = {out[PINCHING]} must be in [0, 1) (the share of the rate taken out at the "
+            "pinching band's centre)"
         )
     if abs(out[ASYMMETRY]) >= beta + gamma:
         raise InvalidParameterError(
@@ -154,7 +171,14 @@ def has_state(model: Model) -> bool:
     """Whether a term changes the states (asymmetry, play, lag, degradation); if not, the plain RK4 of
     :mod:`.simulate` gives ``x, w`` and :func:`outputs` adds the output terms at the samples."""
     p = model.terms
-    return p[ASYMMETRY] != 0.0 or p[PLAY] > 0.0 or p[SENSOR_LAG] > 0.0 or p[DEGRADATION] > 0.0
+    return (
+        p[ASYMMETRY] != 0.0
+        or p[PLAY] > 0.0
+        or p[SENSOR_LAG] > 0.0
+        or p[DEGRADATION] > 0.0
+        or p[STIFFNESS_DEGRADATION] > 0.0
+        or p[PINCHING] > 0.0
+    )
 
 
 def _mech(p: Mapping[str, float], inp: Input) -> Callable[[float], float]:
@@ -186,17 +210,27 @@ class _Rates(NamedTuple):
     mu: float
     delta: float
     dnu: float
+    deta: float = 0.0
+    #: Pinching: zeta1, and the band's centre and width in units of w.
+    pinch: tuple[float, float, float] = (0.0, 0.0, 1.0)
 
     def rate(self, xpdot: float, w: float, e: float) -> float:
         wmu = float(abs(w) ** self.mu)
         sw = float(np.sign(w))
         nu = 1.0 + self.dnu * e  # Baber-Noori strength degradation; each term times nu, as the core
-        return (
+        r = (
             self.alpha * xpdot
             - nu * (self.beta * abs(xpdot) * sw * wmu)
             - nu * (self.gamma * xpdot * wmu)
             - nu * (self.delta * xpdot * sw * wmu)
         )
+        if self.deta != 0.0:  # stiffness degradation: the whole rate over eta
+            r /= 1.0 + self.deta * e
+        zeta1, centre, width = self.pinch
+        if zeta1 != 0.0:  # pinching: Foliente's h(w, sgn xpdot)
+            z = (w * float(np.sign(xpdot)) - centre) / width
+            r *= 1.0 - zeta1 * math.exp(-z * z)
+        return r
 
     def path(self, w: float, e: float, dxp: float) -> tuple[float, float]:
         rate = self.rate
@@ -229,7 +263,9 @@ def integrate(
     a, c, d, delay, (alpha, beta, gamma, mu, w0), p = model
     mech = _mech(p, inp)
     b, tau = p[PLAY], p[SENSOR_LAG]
-    rates = _Rates(alpha, beta, gamma, mu, p[ASYMMETRY], p[DEGRADATION])
+    w_u = (alpha / (beta + gamma)) ** (1.0 / mu)  # pinching's band in units of the saturation level
+    pinch = (p[PINCHING], PINCHING_CENTRE * w_u, PINCHING_WIDTH * w_u)
+    rates = _Rates(alpha, beta, gamma, mu, p[ASYMMETRY], p[DEGRADATION], p[STIFFNESS_DEGRADATION], pinch)
     rate = rates.rate
     n = a.size
 
