@@ -190,6 +190,14 @@ class Term:
         if "places" not in cls.__dict__:
             cls.places = (cls.acts_on,)
 
+    @classmethod
+    def place_label(cls) -> str:
+        """The label with the place where the term could be at more than one: what a verdict prints
+        (``"viscous damping on the measured input u"``; a sibling's label names its place already)."""
+        if len(cls.places) < 2 or cls.base_kind != cls.kind:
+            return cls.label
+        return f"{cls.label} {cls.acts_on.label}"
+
     @property
     def place(self) -> Place:
         """Where this term acts (:attr:`acts_on`)."""
