@@ -371,3 +371,12 @@ def test_plain_data_through_a_resonant_g_names_nothing() -> None:
     d = diagnose(_diag_experiments(_resonant(), Viscous.kind, 0.0, noise=0.01, seed=5))
     assert d.named_terms == (), d.summary()
     assert d.status == "adequate", d.summary()
+
+
+def test_large_friction_on_x_is_named_despite_the_phase_staircase() -> None:
+    """A 30x dry friction on x biases the plain fit's phases by 0.2-0.3 rad and its step makes the cost a
+    staircase in them: without the phase screen (fitting.screen_phases) it was left "unexplained"."""
+    kind, value = Coulomb.at(Place.X).kind, 0.087
+    d = diagnose(_diag_experiments(_resonant(), kind, value, noise=0.01, seed=100))
+    assert d.named_terms == (kind,), d.summary()
+    assert abs(d.named[0].value - value) <= 4 * d.named[0].standard_error + 0.02 * value, d.summary()

@@ -166,6 +166,9 @@ class Term:
     steady: ClassVar[bool] = True
     #: The output is linear in the parameter: its start is the projection of the residual on its column.
     linear: ClassVar[bool] = False
+    #: The output jumps with each experiment's phase (a step at the reversals of x, 1 % of a radian wide):
+    #: the fit's cost is a staircase in the phases, so the diagnosis screens them on a grid first.
+    phase_screen: ClassVar[bool] = False
     #: Powers ``(a, b, c)`` of the units: the parameter scales as ``[y]^(a + c mu) [u]^b`` (design.md 10.1).
     scaling: ClassVar[tuple[float, float, float]] = (0.0, 0.0, 0.0)
 
@@ -613,6 +616,7 @@ class CoulombX(Coulomb):
     """Dry friction across the hysteretic element: ``f tanh(xdot / (eps |A| omega))``, ``f`` in [y]."""
 
     acts_on: ClassVar[Place] = Place.X
+    phase_screen: ClassVar[bool] = True
     description: ClassVar[str] = "dry friction of constant level opposing the hysteresis' input velocity"
     signature: ClassVar[str] = "a square wave in phase with xdot: steps at each reversal of x (not of u)"
 
