@@ -380,3 +380,19 @@ def test_large_friction_on_x_is_named_despite_the_phase_staircase() -> None:
     d = diagnose(_diag_experiments(_resonant(), kind, value, noise=0.01, seed=100))
     assert d.named_terms == (kind,), d.summary()
     assert abs(d.named[0].value - value) <= 4 * d.named[0].standard_error + 0.02 * value, d.summary()
+
+
+def test_a_plant_with_a_term_on_x_round_trips_through_json_and_simulate_refuses_it_by_name() -> None:
+    import json
+
+    import bouc_wen_id as bw
+
+    term = _make(Viscous.at(Place.X), 0.02)
+    plant = bw.WienerPlant(
+        bw.TransferFunction([1.0], [0.1, 1.0]), bw.BoucWen(0.5, 0.3, 1.5, alpha=2.0), (term,)
+    )
+    back = bw.WienerPlant.from_dict(json.loads(json.dumps(plant.to_dict())))
+    assert back.terms == (term,) and back.terms[0].place is Place.X
+    plan = bw.SinePlan([1.0], [1.0], settle_periods=2, periods=3, samples_per_period=32)
+    with pytest.raises(InvalidParameterError, match="no terms on x yet"):
+        bw.simulate(plant, plan)
