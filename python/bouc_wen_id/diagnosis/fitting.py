@@ -429,8 +429,9 @@ SCREEN_ITER = 20
 
 
 #: Phase offsets (rad) screened per experiment for a term whose output steps with the phase (friction on
-#: x): 0.01 rad apart, the width of its smoothed sign, over +-0.4 rad.
-PHASE_SCREEN = np.linspace(-0.4, 0.4, 81)
+#: x): 0.025 rad apart over +-0.4 rad, several per sample spacing of a 64-point grid (the Levenberg-Marquardt
+#: steps finish within a stair).
+PHASE_SCREEN = np.linspace(-0.4, 0.4, 33)
 
 
 def screen_phases(exps: Sequence[AugExperiment], par: AugParams, substeps: int) -> tuple[AugParams, float]:
@@ -491,12 +492,12 @@ def _fit_phase_screened(
     """A term whose output steps with the phases (:attr:`Term.phase_screen`): the plain fit's phases are
     biased by the very step it leaves out (0.2-0.3 rad for a 30x friction on x) and its loop has absorbed
     the step's fundamental, so the cost at the held hysteresis does not rank the term's levels. Each start,
-    and each of :data:`SCREEN_LEVELS` of either sign, has its phases screened (:func:`screen_phases`) and is
-    fitted for ``SCREEN_ITER`` iterations; the best is finished."""
+    and each of :data:`SCREEN_LEVELS` (positive: a friction level), has its phases screened
+    (:func:`screen_phases`) and is fitted for ``SCREEN_ITER`` iterations; the best is finished."""
     peak = max(float(np.max(np.abs(e.ybar))) for e in exps)
     base = starts[0]
     levels = [float(v) for st in starts for v in st.values[-1:]]
-    levels += [sign * f * peak for f in SCREEN_LEVELS for sign in (1.0, -1.0)]
+    levels += [f * peak for f in SCREEN_LEVELS]
     fits = []
     for v in levels:
         par, _ = screen_phases(exps, replace(base, values=np.append(base.values[:-1], v)), substeps)
