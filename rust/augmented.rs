@@ -32,7 +32,7 @@ use crate::refine::{
 };
 use crate::steady::{steady_loop, D_AMPLITUDE, D_BETA, D_GAMMA, D_MU, D_PHI};
 use crate::terms::{
-    check_asymmetry, TermKind, Terms, COULOMB_SMOOTHING, N_HYSTERESIS, PINCHING_MAX,
+    check_asymmetry, Place, TermKind, Terms, COULOMB_SMOOTHING, N_HYSTERESIS, PINCHING_MAX,
 };
 
 /// Own parameters per experiment: `g, phi`.
@@ -287,12 +287,23 @@ pub fn augmented_output_with(
         let fric = (udot / (COULOMB_SMOOTHING * u_amp.abs() * omega)).tanh();
         let h = &hjac[j];
         let mut f = w[j];
+        // The on-x terms' share of the own columns d/dg and d/dphi.
+        let (mut dg, mut dphi) = (0.0, 0.0);
         cols[1][j] = h[PD_BETA];
         cols[2][j] = h[PD_GAMMA];
         cols[3][j] = h[PD_MU];
         for (t, &kind) in terms.kinds().iter().enumerate() {
             let q = shared[N_HYSTERESIS + t];
             let col = &mut cols[1 + N_HYSTERESIS + t];
+            if terms.place(t) == Place::X {
+                let (v, dv_da, dv_dphi) =
+                    on_x_regressor(kind, u_amp * gain, omega, step * j as f64 - phase);
+                f += q * v;
+                col[j] = v;
+                dg += q * u_amp * dv_da;
+                dphi += q * dv_dphi;
+                continue;
+            }
             match kind {
                 TermKind::Offset => offset_col = Some(1 + N_HYSTERESIS + t),
                 TermKind::Stiffness => {
@@ -323,8 +334,8 @@ pub fn augmented_output_with(
             }
         }
         cols[0][j] = f;
-        cols[1 + ns][j] = u_amp * h[PD_AMPLITUDE];
-        cols[2 + ns][j] = h[PD_PHI];
+        cols[1 + ns][j] = u_amp * h[PD_AMPLITUDE] + dg;
+        cols[2 + ns][j] = h[PD_PHI] + dphi;
     }
     lag_and_offset(&mut cols, shared, omega, lag_col, offset_col);
     let mut jac_shared = vec![0.0; p * ns];
@@ -341,6 +352,31 @@ pub fn augmented_output_with(
         jac_shared,
         jac_own,
     })
+}
+
+/// The regressor of a mechanical term acting across the hysteretic element, on its input
+/// `x = a cos(z)`, `z = theta_j - phi` (design.md 9.1, place x), with its derivatives in `a` and
+/// `phi`: `k x`, `c xdot`, `m xddot`, `f tanh(xdot / (eps |a| omega))`. The distortion term's
+/// harmonics are not seen here (as the on-u terms see the fundamental of u).
+fn on_x_regressor(kind: TermKind, a: f64, omega: f64, z: f64) -> (f64, f64, f64) {
+    let (s, c) = z.sin_cos();
+    match kind {
+        TermKind::Stiffness => (a * c, c, a * s),
+        TermKind::Viscous => (-a * omega * s, -omega * s, a * omega * c),
+        TermKind::Inertia => (
+            -a * omega * omega * c,
+            -omega * omega * c,
+            -a * omega * omega * s,
+        ),
+        TermKind::Coulomb => {
+            // xdot / (eps |a| omega) = -sgn(a) sin z / eps: independent of |a|.
+            let sg = a.signum();
+            let v = (-sg * s / COULOMB_SMOOTHING).tanh();
+            (v, 0.0, (1.0 - v * v) * sg * c / COULOMB_SMOOTHING)
+        }
+        // Refused by `Terms::parse` (`TermKind::acts_at`).
+        _ => (0.0, 0.0, 0.0),
+    }
 }
 
 /// The output stage of [`augmented_output_with`] on the work space `cols` (F, then the shared
@@ -696,6 +732,56 @@ mod tests {
             &Excitation { samples: 64, ..EXC },
             256,
         );
+    }
+
+    #[test]
+    fn on_x_terms_jacobian_matches_central_differences() {
+        let on_x = |k: TermKind| format!("{}@{}", k.name(), Place::X.tag());
+        let names = [
+            on_x(Stiffness),
+            on_x(Viscous),
+            on_x(Inertia),
+            on_x(Coulomb),
+            Viscous.name().to_string(),
+            SensorLag.name().to_string(),
+        ];
+        let terms = Terms::parse(&names).unwrap();
+        let shared = [0.8, 0.2, 1.6, 0.3, 0.05, 0.002, 0.1, 0.02, 0.01];
+        let (g, phi, h) = (0.9, 1.1, 1e-6);
+        let out = augmented_output(&EXC, &terms, &shared, g, phi, 256).unwrap();
+        let f =
+            |s: &[f64], g: f64, phi: f64| augmented_output(&EXC, &terms, s, g, phi, 256).unwrap().y;
+        let ns = shared.len();
+        for c in 0..ns + 2 {
+            let (mut sp, mut sm) = (shared.to_vec(), shared.to_vec());
+            let (mut gp, mut gm, mut pp, mut pm) = (g, g, phi, phi);
+            if c < ns {
+                sp[c] += h;
+                sm[c] -= h;
+            } else if c == ns {
+                gp += h;
+                gm -= h;
+            } else {
+                pp += h;
+                pm -= h;
+            }
+            let (yp, ym) = (f(&sp, gp, pp), f(&sm, gm, pm));
+            let col = |j: usize| {
+                if c < ns {
+                    out.jac_shared[j * ns + c]
+                } else {
+                    out.jac_own[j][c - ns]
+                }
+            };
+            let scale = (0..EXC.samples).fold(0.0f64, |a, j| a.max(col(j).abs()));
+            let err = (0..EXC.samples)
+                .map(|j| ((yp[j] - ym[j]) / (2.0 * h) - col(j)).abs())
+                .fold(0.0, f64::max);
+            assert!(
+                err <= 1e-6 * scale.max(1e-3),
+                "column {c}: {err} vs {scale}"
+            );
+        }
     }
 
     #[test]

@@ -24,6 +24,31 @@ pub const COULOMB_SMOOTHING_MAX: f64 = 0.5;
 /// Number of shared hysteresis parameters ahead of the terms: `beta, gamma, mu`.
 pub const N_HYSTERESIS: usize = 3;
 
+/// Where a term acts (design.md 9.1). Every term has its usual place; the mechanical terms
+/// (stiffness, viscous, inertia, Coulomb) can also act across the hysteretic element, on its own
+/// input x. A caller names a term at a place other than its usual one as `"<name>@<tag>"`
+/// ([`Place::tag`]); a new place is a variant here, its tag, and its arm in the models.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Place {
+    /// The term's usual place: the mechanical terms on the measured input u (beside the cascade).
+    Usual,
+    /// Across the hysteretic element, on its input `x = G u` (in parallel with it).
+    X,
+}
+
+impl Place {
+    /// Every place other than [`Place::Usual`], which has no tag.
+    pub const OTHERS: [Place; 1] = [Place::X];
+
+    /// The tag after `@` in a placed term's name (`""` for the usual place).
+    pub fn tag(self) -> &'static str {
+        match self {
+            Place::Usual => "",
+            Place::X => "x",
+        }
+    }
+}
+
 /// One physical term beyond the Wiener-Bouc-Wen model, each with exactly one parameter.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum TermKind {
@@ -125,6 +150,18 @@ impl TermKind {
         !matches!(self, TermKind::Degradation | TermKind::StiffnessDegradation)
     }
 
+    /// Whether the term can act at `place` (every term at its usual place; the mechanical terms
+    /// also across the hysteretic element, on x).
+    pub fn acts_at(self, place: Place) -> bool {
+        match place {
+            Place::Usual => true,
+            Place::X => matches!(
+                self,
+                TermKind::Stiffness | TermKind::Viscous | TermKind::Inertia | TermKind::Coulomb
+            ),
+        }
+    }
+
     /// Whether the time-domain simulation of design.md 9.4 has this term.
     pub fn in_simulation(self) -> bool {
         !matches!(self, TermKind::Distortion)
@@ -222,6 +259,35 @@ pub const COULOMB_SMOOTHING_KEY: &str = "coulomb_smoothing";
 #[derive(Debug, Clone, PartialEq, Eq, Default)]
 pub struct Terms {
     kinds: Vec<TermKind>,
+    /// The place of each term, parallel to `kinds`.
+    places: Vec<Place>,
+}
+
+/// Splits a caller's term name `"<code name>[@<place tag>]"` into its kind and place; an unknown
+/// place, or a place the term cannot act at, is [`CoreError::InvalidParameter`].
+pub fn parse_placed(name: &str) -> Result<(TermKind, Place)> {
+    let Some((base, tag)) = name.split_once('@') else {
+        return Ok((TermKind::from_name(name)?, Place::Usual));
+    };
+    let kind = TermKind::from_name(base)?;
+    let place = Place::OTHERS
+        .iter()
+        .copied()
+        .find(|p| p.tag() == tag)
+        .ok_or_else(|| {
+            CoreError::InvalidParameter(format!(
+                "unknown place {tag:?} in term {name:?}; the places are {}",
+                Place::OTHERS.map(Place::tag).join(", ")
+            ))
+        })?;
+    if !kind.acts_at(place) {
+        return Err(CoreError::InvalidParameter(format!(
+            "term {:?} cannot act at place {tag:?}: only the mechanical terms (stiffness, \
+             viscous, inertia, Coulomb) act across the hysteretic element",
+            kind.name()
+        )));
+    }
+    Ok((kind, place))
 }
 
 impl Terms {
@@ -229,8 +295,9 @@ impl Terms {
     /// have, are [`CoreError::InvalidParameter`].
     pub fn parse<S: AsRef<str>>(names_given: &[S]) -> Result<Self> {
         let mut kinds = Vec::with_capacity(names_given.len());
+        let mut places = Vec::with_capacity(names_given.len());
         for n in names_given {
-            let k = TermKind::from_name(n.as_ref())?;
+            let (k, place) = parse_placed(n.as_ref())?;
             if !k.in_steady_loop() {
                 return Err(CoreError::InvalidParameter(format!(
                     "term {:?} has no steady-loop form (simulation only); the terms of the \
@@ -239,15 +306,25 @@ impl Terms {
                     names(TermKind::ALL.iter().copied().filter(|k| k.in_steady_loop()))
                 )));
             }
-            if kinds.contains(&k) {
+            if kinds
+                .iter()
+                .zip(&places)
+                .any(|(&a, &b)| a == k && b == place)
+            {
                 return Err(CoreError::InvalidParameter(format!(
                     "term {:?} is given twice; each term has one parameter and may appear once",
-                    k.name()
+                    n.as_ref()
                 )));
             }
             kinds.push(k);
+            places.push(place);
         }
-        Ok(Self { kinds })
+        Ok(Self { kinds, places })
+    }
+
+    /// The place of the `t`-th active term.
+    pub fn place(&self, t: usize) -> Place {
+        self.places[t]
     }
 
     /// The active terms in order.
@@ -265,11 +342,18 @@ impl Terms {
         self.kinds.is_empty()
     }
 
-    /// Column of `kind`'s parameter in the shared vector `[beta, gamma, mu, q_1 ..]`, if active.
+    /// Column of `kind`'s parameter at its usual place in the shared vector
+    /// `[beta, gamma, mu, q_1 ..]`, if active.
     pub fn column(&self, kind: TermKind) -> Option<usize> {
+        self.column_at(kind, Place::Usual)
+    }
+
+    /// Column of `kind`'s parameter at `place`, if active there.
+    pub fn column_at(&self, kind: TermKind, place: Place) -> Option<usize> {
         self.kinds
             .iter()
-            .position(|&k| k == kind)
+            .zip(&self.places)
+            .position(|(&k, &p)| k == kind && p == place)
             .map(|i| N_HYSTERESIS + i)
     }
 
@@ -312,6 +396,22 @@ mod tests {
         let t = Terms::parse(&[play, offset]).unwrap();
         assert_eq!(t.column(TermKind::Offset), Some(4));
         assert!(t.needs_path_loop());
+    }
+
+    #[test]
+    fn placed_names_parse_and_bad_places_are_named_errors() {
+        let (viscous, offset) = (TermKind::Viscous.name(), TermKind::Offset.name());
+        let on_x = format!("{viscous}@{}", Place::X.tag());
+        let t = Terms::parse(&[viscous, on_x.as_str()]).unwrap();
+        assert_eq!(t.column(TermKind::Viscous), Some(3));
+        assert_eq!(t.column_at(TermKind::Viscous, Place::X), Some(4));
+        assert_eq!(t.place(1), Place::X);
+        let e = Terms::parse(&[on_x.as_str(), on_x.as_str()]).unwrap_err();
+        assert!(e.to_string().contains("given twice"), "{e}");
+        let e = Terms::parse(&[format!("{offset}@x")]).unwrap_err();
+        assert!(e.to_string().contains("cannot act at place"), "{e}");
+        let e = Terms::parse(&[format!("{viscous}@z")]).unwrap_err();
+        assert!(e.to_string().contains("unknown place"), "{e}");
     }
 
     #[test]

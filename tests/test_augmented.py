@@ -39,6 +39,8 @@ TERM_VALUES = {
     "asymmetry": 0.3,
     "play": 0.15,
     "pinching": 0.4,
+    # The mechanical terms across the hysteretic element, on x (|A| ~ 1): tests/test_place.py.
+    **{f"{k}@x": v for k, v in (("stiffness", 0.2), ("viscous", 0.03), ("inertia", 0.003), ("coulomb", 0.1))},
 }
 HYST = (0.8, 0.2, 1.6)
 #: The terms that act on a pure sine (the distortion term needs the input's harmonics: test_distortion.py).
@@ -102,6 +104,9 @@ def _random_case(rng: np.random.Generator, terms: Sequence[str]) -> tuple[object
         [rng.uniform(0.4, 1.0), rng.uniform(-0.3, 0.3), rng.uniform(1.2, 3.0)]
         + [TERM_VALUES[t] * rng.uniform(0.5, 1.5) for t in terms]
     )
+    if "asymmetry" in terms:  # admissible: |delta| < beta + gamma (gamma may be negative)
+        k = 3 + list(terms).index("asymmetry")
+        shared[k] = min(shared[k], 0.9 * (shared[0] + shared[1]))
     return (
         p,
         rng.uniform(0.5, 2.0) * rng.choice([-1, 1]),
@@ -315,6 +320,10 @@ def test_names_symbols_and_units() -> None:
         "play",
         "pinching",
         "distortion",
+        "stiffness@x",
+        "viscous@x",
+        "inertia@x",
+        "coulomb@x",
     )
     assert set(TERM_SYMBOLS) == set(TERM_UNITS) == set(TERM_NAMES)
     assert TERM_SYMBOLS["viscous"] == "c" and TERM_UNITS["viscous"] == "{y} s/{u}"

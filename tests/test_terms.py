@@ -75,8 +75,16 @@ def _plant(terms: tuple[Term, ...] = (), alpha: float = 1.0) -> WienerPlant:
 # --------------------------------------------------------------------------------------------------
 
 
+#: The terms at their usual place (a term at another place is a sibling class, ``"<kind>@<place>"``).
+USUAL = {k: c for k, c in TERMS.items() if c.base_kind == k}
+#: The mechanical terms, which also act across the hysteretic element (on x): tests/test_place.py.
+ON_X = {k: c for k, c in TERMS.items() if c.base_kind != k}
+
+
 def test_registry_follows_the_design_table() -> None:
-    assert list(TERMS) == [
+    assert [c.base_kind for c in ON_X.values()] == ["stiffness", "viscous", "inertia", "coulomb"]
+    assert all(c.acts_on == Place.X and k == f"{c.base_kind}@x" for k, c in ON_X.items())
+    assert list(USUAL) == [
         "offset",
         "stiffness",
         "viscous",
@@ -90,7 +98,7 @@ def test_registry_follows_the_design_table() -> None:
         "pinching",
         "distortion",
     ]
-    units = {kind: cls.units(y="N", u="mm") for kind, cls in TERMS.items()}
+    units = {kind: cls.units(y="N", u="mm") for kind, cls in USUAL.items()}
     assert units == {
         "offset": "N",
         "stiffness": "N/mm",
@@ -105,7 +113,7 @@ def test_registry_follows_the_design_table() -> None:
         "pinching": "",
         "distortion": "",
     }
-    for kind, cls in TERMS.items():
+    for kind, cls in USUAL.items():
         assert cls.kind == kind
         assert cls.description and cls.signature and cls.symbol
         assert cls.rust_kind == kind and cls.label and cls.places[0] == cls.acts_on
@@ -120,13 +128,13 @@ def test_registry_follows_the_design_table() -> None:
     assert STEADY_TERM_NAMES == tuple(k for k in TERMS if k not in drift_only)
     assert DIAGNOSIS_CANDIDATES == (*STEADY_TERM_NAMES, *drift_only)
     # The lower bounds of the value types, and the physical ranges the diagnosis will name within.
-    assert {k for k, c in TERMS.items() if c.bounds[0] == 0.0} == {
+    assert {k for k, c in USUAL.items() if c.bounds[0] == 0.0} == {
         "sensor_lag",
         "play",
         "pinching",
         *drift_only,
     }
-    assert {k for k, c in TERMS.items() if c.physical[0] == 0.0} == {
+    assert {k for k, c in USUAL.items() if c.physical[0] == 0.0} == {
         "viscous",
         "inertia",
         "coulomb",
@@ -135,7 +143,7 @@ def test_registry_follows_the_design_table() -> None:
         "pinching",
         *drift_only,
     }
-    assert [k for k, c in TERMS.items() if c.linear] == [
+    assert [k for k, c in USUAL.items() if c.linear] == [
         "offset",
         "stiffness",
         "viscous",
@@ -152,7 +160,9 @@ def test_registry_follows_the_design_table() -> None:
 def test_scale_factors_follow_the_units() -> None:
     # A parameter in [y]^a [u]^b (asymmetry: [y]^-mu) scales by y^a u^b with the data (design.md 10.1).
     y, u, mu = 8.0, 0.5, 1.5
-    got = {k: c.scale_factor(y, u, mu) for k, c in TERMS.items()}
+    got = {k: c.scale_factor(y, u, mu) for k, c in USUAL.items()}
+    # On x (in units of y): k, c, m are [y]/[y] times s^n, the friction [y].
+    assert [c.scale_factor(y, u, mu) for c in ON_X.values()] == [1.0, 1.0, 1.0, y]
     assert got == {
         "offset": y,
         "stiffness": y / u,
@@ -238,7 +248,7 @@ def _rust_literal_files(name: str) -> list[str]:
     return out
 
 
-@pytest.mark.parametrize("name", list(TERMS))
+@pytest.mark.parametrize("name", list(USUAL))
 def test_a_code_name_is_spelled_in_at_most_three_files(name: str) -> None:
     """Issue 17: a term's code name is written as a string in three files only: the registry
     (``terms.py``), the Rust enum (``rust/terms.rs``, ``TermKind``) and the oracle's vocabulary

@@ -6,7 +6,10 @@ Per sine experiment ``i`` on its averaged period's grid ``theta_j = 2 pi j/P``::
 
 with the measured input ``u_j = U cos(theta_j + psi)``, the hysteresis ``w`` of the latent
 ``x_j = U g_i cos(theta_j - phi_i)`` (asymmetry ``delta`` and play ``b`` act inside it) and ``H_tau`` the
-periodic first-order sensor lag.  Each term has one parameter, shared by every experiment in physical units;
+periodic first-order sensor lag.  The mechanical terms can also act across the hysteretic element, on x
+(``"viscous@x"`` etc., :attr:`bouc_wen_id.terms.Place.X`): ``k x``, ``c xdot``, ``m xddot``,
+``f tanh(xdot / (eps |A| omega))``, their value shared, their phase following each experiment's ``(g, phi)``.
+Each term has one parameter, shared by every experiment in physical units;
 an inactive term is absent (not zero).  :func:`fit_augmented` runs the joint Levenberg-Marquardt of design.md
 9.3 (Rust core, or the NumPy reference with ``backend="numpy"``) and returns the estimates with their Fisher
 information and covariance.

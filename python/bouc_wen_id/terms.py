@@ -50,6 +50,12 @@ __all__ = [
     "PINCHING_CENTRE",
     "PINCHING_WIDTH",
     "Distortion",
+    "StiffnessX",
+    "ViscousX",
+    "InertiaX",
+    "CoulombX",
+    "MECHANICAL_PLACES",
+    "placed_kind",
     "TERMS",
     "TERM_NAMES",
     "STEADY_TERM_NAMES",
@@ -76,9 +82,10 @@ NON_NEGATIVE = (0.0, math.inf)
 class Place(str, Enum):
     """Where a term acts in the cascade ``u -> G -> x -> hysteresis -> w -> y``.
 
-    A term's place is a field of its class (:attr:`Term.acts_on`, :attr:`Term.places`), never part of its
-    code name; a new place is one member here and its :attr:`label`. (The mechanical terms' second place,
-    across the hysteretic element on ``x``, is the next one: design.md 9.1.)
+    A term's place is a field of its class (:attr:`Term.acts_on`, :attr:`Term.places`). A term at a place
+    other than its usual one is a sibling class (:meth:`Term.at`) whose code name is the usual one with
+    ``@`` and the place's value appended (``"viscous@x"``), composed, never spelled; a new place is one
+    member here, its :attr:`label`, one sibling class per term that acts there, and its arm in the models.
     """
 
     #: Added to, or filtering, the measured output y (an offset, a sensor lag).
@@ -87,6 +94,9 @@ class Place(str, Enum):
     INPUT = "u"
     #: Inside the Bouc-Wen element: its shape, its input's path or its strength.
     HYSTERESIS = "hysteresis"
+    #: Across the hysteretic element, on its own input ``x = G u`` (in parallel with it, as Bouc-Wen's own
+    #: elastic term ``alpha k x`` or a damper's dashpot): the term's value is shared, its phase follows G.
+    X = "x"
 
     @property
     def label(self) -> str:
@@ -98,7 +108,13 @@ _PLACE_LABELS = {
     Place.OUTPUT: "on the measured output y",
     Place.INPUT: "on the measured input u",
     Place.HYSTERESIS: "inside the hysteretic element",
+    Place.X: "across the hysteretic element (on x)",
 }
+
+
+def placed_kind(kind: str, place: Place) -> str:
+    """The code name of term ``kind`` acting at ``place`` other than its usual one: ``"<kind>@<place>"``."""
+    return f"{kind}@{place.value}"
 
 
 @dataclass(frozen=True)
@@ -159,15 +175,59 @@ class Term:
     diagnosable: ClassVar[bool] = True
     #: The output is linear in the parameter: its start is the projection of the residual on its column.
     linear: ClassVar[bool] = False
+    #: The output jumps with each experiment's phase (a step at the reversals of x, 1 % of a radian wide):
+    #: the fit's cost is a staircase in the phases, so the diagnosis screens them on a grid first.
+    phase_screen: ClassVar[bool] = False
     #: Powers ``(a, b, c)`` of the units: the parameter scales as ``[y]^(a + c mu) [u]^b`` (design.md 10.1).
     scaling: ClassVar[tuple[float, float, float]] = (0.0, 0.0, 0.0)
 
+    #: The code name of the term at its usual place (the same as :attr:`kind` there).
+    base_kind: ClassVar[str] = ""
+
     def __init_subclass__(cls, **kwargs: Any) -> None:
         super().__init_subclass__(**kwargs)
+        base = cls.__mro__[1]
+        if "acts_on" in cls.__dict__ and issubclass(base, Term) and base.kind and cls.acts_on != base.acts_on:
+            # A sibling at another place: its code name and label are composed from the usual one's.
+            cls.base_kind = base.kind
+            cls.kind = placed_kind(base.kind, cls.acts_on)
+            cls.label = f"{base.label} {cls.acts_on.label}"
+            cls.rust_kind = cls.kind
+            cls.places = (cls.acts_on, *(p for p in base.places if p != cls.acts_on))
+            _SIBLINGS[(base.kind, cls.acts_on)] = cls
+            return
+        cls.base_kind = cls.kind
         if "rust_kind" not in cls.__dict__:
             cls.rust_kind = cls.kind
         if "places" not in cls.__dict__:
             cls.places = (cls.acts_on,)
+
+    @classmethod
+    def place_label(cls) -> str:
+        """The label with the place where the term could be at more than one: what a verdict prints
+        (``"viscous damping on the measured input u"``; a sibling's label names its place already)."""
+        if len(cls.places) < 2 or cls.base_kind != cls.kind:
+            return cls.label
+        return f"{cls.label} {cls.acts_on.label}"
+
+    @property
+    def place(self) -> Place:
+        """Where this term acts (:attr:`acts_on`)."""
+        return self.acts_on
+
+    @classmethod
+    def at(cls, place: Place) -> type[Term]:
+        """The class of this term acting at ``place`` (one of :attr:`places`): ``Viscous.at(Place.X)(c)``."""
+        base = TERMS.get(cls.base_kind, cls)
+        if place == base.acts_on:
+            return base
+        sibling = _SIBLINGS.get((base.kind, place))
+        if sibling is None:
+            raise InvalidParameterError(
+                f"{base.kind} cannot act {Place(place).label}; its places are "
+                f"{', '.join(p.label for p in base.places)}"
+            )
+        return sibling
 
     def __post_init__(self) -> None:
         for f in fields(self):
@@ -238,6 +298,13 @@ class Term:
         return cls(**{k: d[k] for k in names if k in d})
 
 
+#: ``(usual code name, place) -> sibling class`` of every term at a place other than its usual one.
+_SIBLINGS: dict[tuple[str, Place], type[Term]] = {}
+
+#: The places of the mechanical terms: on the measured input u, and across the hysteretic element on x.
+MECHANICAL_PLACES = (Place.INPUT, Place.X)
+
+
 @dataclass(frozen=True)
 class Offset(Term):
     """Output offset ``y0``: a constant added to the measured output (sensor zero, preload)."""
@@ -269,6 +336,7 @@ class Stiffness(Term):
     )
     label: ClassVar[str] = "parallel stiffness"
     acts_on: ClassVar[Place] = Place.INPUT
+    places: ClassVar[tuple[Place, ...]] = MECHANICAL_PLACES
     linear: ClassVar[bool] = True
     scaling: ClassVar[tuple[float, float, float]] = (1.0, -1.0, 0.0)
 
@@ -286,6 +354,7 @@ class Viscous(Term):
     signature: ClassVar[str] = "a residual in quadrature with u, growing as omega: loops widen with frequency"
     label: ClassVar[str] = "viscous damping"
     acts_on: ClassVar[Place] = Place.INPUT
+    places: ClassVar[tuple[Place, ...]] = MECHANICAL_PLACES
     physical: ClassVar[tuple[float, float]] = NON_NEGATIVE
     unphysical: ClassVar[str] = "a negative damping (energy supplied, not dissipated)"
     linear: ClassVar[bool] = True
@@ -307,6 +376,7 @@ class Inertia(Term):
     )
     label: ClassVar[str] = "inertia"
     acts_on: ClassVar[Place] = Place.INPUT
+    places: ClassVar[tuple[Place, ...]] = MECHANICAL_PLACES
     physical: ClassVar[tuple[float, float]] = NON_NEGATIVE
     unphysical: ClassVar[str] = "a negative mass"
     linear: ClassVar[bool] = True
@@ -333,6 +403,7 @@ class Coulomb(Term):
     )
     label: ClassVar[str] = "dry (Coulomb) friction"
     acts_on: ClassVar[Place] = Place.INPUT
+    places: ClassVar[tuple[Place, ...]] = MECHANICAL_PLACES
     physical: ClassVar[tuple[float, float]] = NON_NEGATIVE
     unphysical: ClassVar[str] = "a negative friction (energy supplied at every reversal)"
     linear: ClassVar[bool] = True
@@ -585,7 +656,72 @@ class Distortion(Term):
         return (1.0, 0.0)
 
 
-#: Code name -> term class, in the order of the design.md 9.1 table.
+@dataclass(frozen=True)
+class StiffnessX(Stiffness):
+    """Stiffness across the hysteretic element: ``k x`` (Bouc-Wen's own elastic term ``alpha k x``).
+
+    ``x`` has the units of ``y`` in the identified (alpha = 1) model, so ``k`` is dimensionless
+    (``[y]/[y]``); its phase follows each experiment's G.
+    """
+
+    acts_on: ClassVar[Place] = Place.X
+    unit: ClassVar[str] = ""  # [y]/[x], x in units of y: dimensionless
+    description: ClassVar[str] = "elastic force proportional to the hysteresis' input x, in parallel with it"
+    signature: ClassVar[str] = (
+        "a residual in phase with x (lagging u as G does): the loop tilted along x; below saturation it "
+        "trades with |G|"
+    )
+    scaling: ClassVar[tuple[float, float, float]] = (0.0, 0.0, 0.0)
+
+    def normalized(self, alpha: float) -> Term:
+        # x -> alpha x under G -> alpha G: k x = (k / alpha) (alpha x).
+        return StiffnessX(self.k / alpha)
+
+
+@dataclass(frozen=True)
+class ViscousX(Viscous):
+    """Viscous damping across the hysteretic element: ``c xdot`` (a dashpot beside it), ``c`` in s."""
+
+    acts_on: ClassVar[Place] = Place.X
+    unit: ClassVar[str] = "s"  # [y] s/[x], x in units of y
+    description: ClassVar[str] = "viscous force proportional to the hysteresis' input velocity xdot"
+    signature: ClassVar[str] = (
+        "a residual in quadrature with x (not with u: its phase follows G), growing as omega"
+    )
+    scaling: ClassVar[tuple[float, float, float]] = (0.0, 0.0, 0.0)
+
+    def normalized(self, alpha: float) -> Term:
+        return ViscousX(self.c / alpha)
+
+
+@dataclass(frozen=True)
+class InertiaX(Inertia):
+    """Inertia across the hysteretic element: ``m xddot``, ``m`` in s^2 (x in units of y)."""
+
+    acts_on: ClassVar[Place] = Place.X
+    unit: ClassVar[str] = "s^2"  # [y] s^2/[x], x in units of y
+    description: ClassVar[str] = "inertial force proportional to the hysteresis' input acceleration xddot"
+    signature: ClassVar[str] = "a residual in antiphase with x (its phase follows G), growing as omega^2"
+    scaling: ClassVar[tuple[float, float, float]] = (0.0, 0.0, 0.0)
+
+    def normalized(self, alpha: float) -> Term:
+        return InertiaX(self.m / alpha)
+
+
+@dataclass(frozen=True)
+class CoulombX(Coulomb):
+    """Dry friction across the hysteretic element: ``f tanh(xdot / (eps |A| omega))``, ``f`` in [y]."""
+
+    acts_on: ClassVar[Place] = Place.X
+    phase_screen: ClassVar[bool] = True
+    description: ClassVar[str] = "dry friction of constant level opposing the hysteresis' input velocity"
+    signature: ClassVar[str] = "a square wave in phase with xdot: steps at each reversal of x (not of u)"
+
+    def normalized(self, alpha: float) -> Term:
+        return self
+
+
+#: Code name -> term class, in the order of the design.md 9.1 table (then the terms at their second place).
 TERMS: dict[str, type[Term]] = {
     cls.kind: cls
     for cls in (
@@ -601,6 +737,10 @@ TERMS: dict[str, type[Term]] = {
         StiffnessDegradation,
         Pinching,
         Distortion,
+        StiffnessX,
+        ViscousX,
+        InertiaX,
+        CoulombX,
     )
 }
 
@@ -655,6 +795,11 @@ def core_terms(terms: Iterable[Term]) -> dict[str, float]:
                 "the distortion term stands for the measured input's own harmonics, which simulate does not "
                 "know: simulate the plain plant with the distorted input itself (simulate_input with its "
                 "samples) instead"
+            )
+        if t.place == Place.X:
+            raise InvalidParameterError(
+                f"{t.label}: the time-domain simulation has no terms on x yet (design.md 9.4); the "
+                "augmented (steady-loop) model fits them"
             )
         out[t.rust_kind] = t.value
         if isinstance(t, Coulomb):

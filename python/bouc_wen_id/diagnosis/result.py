@@ -18,8 +18,9 @@ from .select import Alternative, HeldOut, Step
 FloatArray = NDArray[np.float64]
 Status = Literal["adequate", "explained", "partly explained", "unexplained"]
 
-#: Human names of the terms (code name -> phrase), in the order of design.md 9.1, from the registry.
-TERM_LABELS = {kind: cls.label for kind, cls in TERMS.items()}
+#: Human names of the terms (code name -> phrase), in the order of design.md 9.1, from the registry; a term
+#: that can act at more than one place is named with its place (:meth:`Term.place_label`).
+TERM_LABELS = {kind: cls.place_label() for kind, cls in TERMS.items()}
 
 
 def term_symbol_unit(term: str, y_unit: str, u_unit: str) -> tuple[str, str]:

@@ -35,7 +35,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..augmented import AugExperiment, AugFit, augmented_output
-from ..terms import TERMS, physical_value
+from ..terms import TERMS, Stiffness, physical_value
 from .fitting import best_of, fit_from, fit_own, fit_with, subset
 
 FloatArray = NDArray[np.float64]
@@ -316,6 +316,65 @@ def _tied(chosen: Trial, rival: Trial, dof: int) -> bool:
     return chosen.improvement - rival.improvement <= TIE_SD * sd
 
 
+#: Chi-square by which one place of a term must beat its other place to be named alone (two non-nested
+#: fits with the same number of parameters: a cost difference below the 5 % point of chi-square(1) is
+#: within what noise makes, so the data do not tell the places apart).
+PLACE_CHI2 = 3.841
+
+
+def siblings(term: str) -> list[str]:
+    """The code names of ``term`` acting at its other places (the registry's :attr:`Term.places`)."""
+    cls = TERMS[term]
+    return [cls.at(p).kind for p in cls.places if p != cls.acts_on]
+
+
+def _place_separation(exps: Sequence[AugExperiment], fit: AugFit, term: str) -> str:
+    """What would separate ``term`` at its two places: where x lags u differently, or (stiffness) beyond
+    saturation. The lag of x behind u in experiment i is ``phi_i + psi_i`` (design.md 9.1)."""
+    par = fit.params
+    lags = [
+        float(np.angle(np.exp(1j * (ph + e.grid_phase)) * np.sign(g)))
+        for e, g, ph in zip(exps, par.gains, par.phases)
+    ]
+    spread = max(lags) - min(lags)
+    text = (
+        f"a test where x lags u differently from the tested ones (x lags u by {min(lags):.2f} to "
+        f"{max(lags):.2f} rad here, a spread of {spread:.2f} rad: G nearly flat over the band); test near "
+        "G's resonance or corner, where its phase changes"
+    )
+    if issubclass(TERMS[term], Stiffness):
+        text += ", at amplitudes well past saturation (below it k x trades with |G|)"
+    return text
+
+
+def place_alternatives(
+    exps: Sequence[AugExperiment],
+    chosen: Trial,
+    trials: Sequence[Trial],
+    substeps: int,
+) -> list[Alternative]:
+    """The chosen term at its other places, where the data cannot tell the places apart.
+
+    A sibling (the same physics at another place, e.g. viscous damping on u and on x) whose fit is within
+    :data:`PLACE_CHI2` of the chosen one's cost is an alternative, never dropped silently; the separating
+    experiment is where x lags u differently (near G's resonance or corner).
+    """
+    if chosen.fit is None:
+        return []
+    out: list[Alternative] = []
+    by_term = {t.term: t for t in trials}
+    for rival in siblings(chosen.term):
+        tr = by_term.get(rival)
+        if tr is None or tr.fit is None:
+            continue
+        if tr.cost - chosen.cost >= PLACE_CHI2:
+            continue
+        both = fit_with(exps, chosen.fit, rival, substeps)
+        rho = _correlation(both, chosen.term, rival) if both is not None else math.nan
+        out.append(Alternative(chosen.term, rival, rho, _place_separation(exps, chosen.fit, chosen.term)))
+    return out
+
+
 def forward_select(
     exps: Sequence[AugExperiment],
     plain: AugFit,
@@ -382,8 +441,10 @@ def forward_select(
                 break
         alternatives: list[Alternative] = []
         if chosen is not None and chosen.fit is not None:
+            # The chosen physics at its other places first, with the experiment that separates places.
+            alternatives += place_alternatives(exps, chosen, trials, substeps)
             for tr in order:
-                if tr.term == chosen.term or tr.fit is None:
+                if tr.term == chosen.term or tr.fit is None or tr.term in siblings(chosen.term):
                     continue
                 tied = _tied(chosen, tr, dof_of(exps, chosen.fit))
                 if tr.improvement < ALTERNATIVE_IMPROVEMENT * chosen.improvement and not tied:
@@ -413,4 +474,15 @@ def forward_select(
     return current, steps
 
 
-__all__ = ["forward_select", "held_out", "f_test", "Step", "Trial", "HeldOut", "Alternative", "best_of"]
+__all__ = [
+    "forward_select",
+    "held_out",
+    "f_test",
+    "Step",
+    "Trial",
+    "HeldOut",
+    "Alternative",
+    "best_of",
+    "place_alternatives",
+    "siblings",
+]

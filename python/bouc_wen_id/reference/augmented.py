@@ -31,13 +31,16 @@ from .terms import (
     DISTORTION,
     INERTIA,
     OFFSET,
+    ON_X_TERMS,
     PINCHING,
     PINCHING_MAX,
+    PLACE_X,
     PLAY,
     SENSOR_LAG,
     STEADY_TERM_NAMES,
     STIFFNESS,
     VISCOUS,
+    split_place,
 )
 
 __all__ = [
@@ -63,8 +66,15 @@ def parse_terms(terms: Sequence[str]) -> tuple[str, ...]:
         raise InvalidParameterError(f"terms must be a sequence of names, not the string {terms!r}")
     out: list[str] = []
     for name in terms:
-        if name not in TERM_NAMES:
+        base, tag = split_place(name)
+        if base not in TERM_NAMES:
             raise InvalidParameterError(f"unknown term {name!r}; the terms are {', '.join(TERM_NAMES)}")
+        if tag and tag != PLACE_X:
+            raise InvalidParameterError(f"unknown place {tag!r} in term {name!r}; the places are {PLACE_X}")
+        if tag and base not in ON_X_TERMS:
+            raise InvalidParameterError(
+                f"term {base!r} cannot act at place {tag!r}: only the mechanical terms do"
+            )
         if name in out:
             raise InvalidParameterError(
                 f"term {name!r} is given twice; each term has one parameter and may appear once"
@@ -75,6 +85,26 @@ def parse_terms(terms: Sequence[str]) -> tuple[str, ...]:
 
 def _value(terms: tuple[str, ...], shared: FloatArray, name: str) -> float:
     return float(shared[3 + terms.index(name)]) if name in terms else 0.0
+
+
+def _on_x_regressors(a: float, omega: float, z: FloatArray) -> dict[str, tuple[FloatArray, ...]]:
+    """Each mechanical term on ``x = a cos z`` (``z = theta_j - phi``): its regressor and d/da, d/dphi.
+
+    Written from the formulas: ``x``, ``xdot = -a omega sin z``, ``xddot = -a omega^2 cos z`` and
+    ``tanh(xdot / (eps |a| omega))``.
+    """
+    s, c = np.sin(z), np.cos(z)
+    x, xdot, xddot = a * c, -a * omega * s, -a * omega**2 * c
+    arg = xdot / (COULOMB_SMOOTHING * abs(a) * omega)
+    fric = np.tanh(arg)
+    # d arg/dphi: d(-a omega sin(theta - phi))/dphi = a omega cos z.
+    dfric_dphi = (1.0 - fric**2) * (a * omega * c) / (COULOMB_SMOOTHING * abs(a) * omega)
+    return {
+        STIFFNESS: (x, c, a * s),
+        VISCOUS: (xdot, -omega * s, a * omega * c),
+        INERTIA: (xddot, -(omega**2) * c, -a * omega**2 * s),
+        COULOMB: (fric, np.zeros_like(z), dfric_dphi),
+    }
 
 
 def _check_shared(terms: tuple[str, ...], shared: FloatArray) -> None:
@@ -217,8 +247,16 @@ def augmented_output(
     f = w.copy()
     jac_shared = np.zeros((p, ns))
     jac_shared[:, :3] = hj[:, :3]
+    jac_own = np.column_stack([amplitude * hj[:, 3], hj[:, 4]])
+    on_x = _on_x_regressors(amplitude * gain, frequency, 2.0 * np.pi * np.arange(p) / p - phase)
     for t, name in enumerate(names):
-        if name in inputs:
+        base, tag = split_place(name)
+        if tag == PLACE_X:
+            v, dv_da, dv_dphi = on_x[base]
+            f = f + sh[3 + t] * v
+            jac_shared[:, 3 + t] = v
+            jac_own = jac_own + sh[3 + t] * np.column_stack([amplitude * dv_da, dv_dphi])
+        elif name in inputs:
             f = f + sh[3 + t] * inputs[name]
             jac_shared[:, 3 + t] = inputs[name]
         elif name == ASYMMETRY:
@@ -229,7 +267,6 @@ def augmented_output(
             jac_shared[:, 3 + t] = hj[:, 7]
         elif name == PINCHING:
             jac_shared[:, 3 + t] = hj[:, 8]
-    jac_own = np.column_stack([amplitude * hj[:, 3], hj[:, 4]])
     y = f
     if SENSOR_LAG in names:
         col = 3 + names.index(SENSOR_LAG)

@@ -29,6 +29,9 @@ __all__ = [
     "COULOMB_SMOOTHING_MAX",
     "STEADY_TERM_NAMES",
     "SIMULATION_KEYS",
+    "PLACE_X",
+    "ON_X_TERMS",
+    "split_place",
 ]
 
 OFFSET = "offset"
@@ -81,3 +84,15 @@ SIMULATION_KEYS: tuple[str, ...] = (
     STIFFNESS_DEGRADATION,
     PINCHING,
 )
+
+#: The tag of the place across the hysteretic element (on its input x): a term there is named
+#: ``"<code name>@x"`` (``rust/terms.rs``, ``Place::X``).
+PLACE_X = "x"
+#: The terms that can act on x: the mechanical ones.
+ON_X_TERMS: tuple[str, ...] = (STIFFNESS, VISCOUS, INERTIA, COULOMB)
+
+
+def split_place(name: str) -> tuple[str, str]:
+    """``(code name, place tag)`` of a term name ``"<code name>[@<tag>]"`` (tag ``""``: its usual place)."""
+    base, _, tag = name.partition("@")
+    return base, tag
