@@ -373,7 +373,7 @@ def _synthetic(jac_eta_of: Callable[[np.ndarray], np.ndarray], seed: int) -> lis
         grid = np.zeros(8)
         dev_c = np.asarray(dev, dtype=np.complex128)
         t_f = np.asarray(t, dtype=np.float64)
-        out.append(D.DriftData(i, dev_c, t_f, np.ones(b), energy, jac, grid, 3.0, jac_eta_of(jac)))
+        out.append(D.DriftData(i, dev_c, t_f, np.ones(b), energy, jac, grid, 3.0, jac_eta=jac_eta_of(jac)))
     return out
 
 

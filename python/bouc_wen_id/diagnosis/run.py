@@ -40,7 +40,7 @@ from .fitting import (
 )
 from .locate import Localisation, adequacy_p, locate
 from .result import Diagnosis, ModelSummary, NamedTerm, Status, term_symbol_unit
-from .select import ALPHA, Alternative, FoldCache, forward_select, held_out
+from .select import ALPHA, Alternative, FoldCache, Step, forward_select, held_out
 
 #: When the final model is still rejected, named terms that remove at least this share of the plain model's
 #: excess give "partly explained" (the terms are named, with the share, and the structure left is located);
@@ -297,6 +297,12 @@ def _drift_alternatives(deg: Optional[DegradationTest], named: bool) -> tuple[Al
     return (Alternative(deg.term, deg.rival.term, deg.correlation, SEPARATING_DRIFT),)
 
 
+#: Why the targeted step was not run (the plain model passed the global test on a floored noise).
+NO_TARGETED_STEP = (
+    "the targeted candidate tests (effects below the global test's reach) were not run: the noise floor of "
+    "some experiment is not measured noise (quantisation or numerical accuracy), and an effect below the "
+    "global test cannot be told from that error"
+)
 #: What a non-physical value suggests.
 NOT_PHYSICAL_HINT = (
     "the term stands in for physics the library places elsewhere (e.g. acting on the hysteresis' own input "
@@ -313,6 +319,8 @@ class _Setup:
     held_out_test: bool
     units: tuple[str, str]
     skipped: dict[str, str]
+    #: False when some experiment's noise floor is not measured noise (quantisation or numerical accuracy).
+    measured_noise: bool = True
 
 
 def _settled(experiments: Any) -> tuple[Any, list[str]]:
@@ -592,7 +600,7 @@ def diagnose(
             "not tested: every input is a pure sine (no harmonic above its noise floor), so the measured "
             "waveform adds nothing to the model"
         )
-    setup = _Setup(cands, float(alpha), held_out_test, (y_unit, u_unit), skipped)
+    setup = _Setup(cands, float(alpha), held_out_test, (y_unit, u_unit), skipped, measured_noise=not qnotes)
     d = _diagnose_set(exps, setup, [*notes, *qnotes])
     named_deg = any(t.term in DRIFT_TERMS for t in d.named)
     drifting = [] if named_deg else _unsettled(exps)
@@ -635,6 +643,38 @@ def _without_unsettled(
     return replace(d, verdict=d.verdict + f"; {names} left out (not settled)")
 
 
+def _drift_stage(
+    exps: list[DiagExperiment],
+    sx: list[AugExperiment],
+    plain: AugFit,
+    s: Scale,
+    substeps: int,
+    setup: _Setup,
+    drift_seen: bool,
+    notes: list[str],
+) -> tuple[Optional[DegradationTest], list[DiagExperiment], list[AugExperiment], AugFit]:
+    """Degradation first, in drift space (design.md 10.6): its test, and the data and start the steady
+    selection runs on (the averaged periods brought back to one strength when it is named)."""
+    drift_terms = tuple(c for c in DRIFT_TERMS if c in setup.cands)
+    if not drift_terms:
+        return None, exps, sx, plain
+    family = len(setup.cands)
+    stage = _degradation_stage(
+        exps, sx, plain, s, substeps, setup.alpha, family, setup.held_out_test, drift_seen, notes, drift_terms
+    )
+    if stage is None:
+        notes.append(NO_BLOCKS)
+        return None, exps, sx, plain
+    deg, fexps, fsx, start = stage
+    named = deg is not None and (deg.named if setup.held_out_test else deg.passed)
+    if deg is not None and named and deg.rival is not None and deg.rival_p_adjusted < setup.alpha:
+        notes.append(
+            f"the period record also needs {deg.rival.term} beside {deg.term} (partial F, adjusted p = "
+            f"{deg.rival_p_adjusted:.2g}): both may act, and only {deg.term} is modelled"
+        )
+    return deg, fexps, fsx, start
+
+
 def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -> Diagnosis:
     """One diagnosis of checked experiments: the plain fit, degradation, the steady selection, the verdict."""
     cands, alpha = setup.cands, setup.alpha
@@ -647,35 +687,8 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
         sx = carry_through_g(sx, plain, substeps)
     before = _drift_checked(_localise(exps, sx, plain, s), exps)
     notes = list(notes)
-    # Degradation first, in drift space (design.md 10.6); when it is named, the steady terms are selected on
-    # the averaged periods brought back to one strength.
-    deg: Optional[DegradationTest] = None
-    fexps, fsx, start = exps, sx, plain
-    drift_terms = tuple(c for c in DRIFT_TERMS if c in cands)
-    if drift_terms:
-        stage = _degradation_stage(
-            exps,
-            sx,
-            plain,
-            s,
-            substeps,
-            alpha,
-            len(cands),
-            setup.held_out_test,
-            before.drift_detected,
-            notes,
-            drift_terms,
-        )
-        if stage is None:
-            notes.append(NO_BLOCKS)
-        else:
-            deg, fexps, fsx, start = stage
+    deg, fexps, fsx, start = _drift_stage(exps, sx, plain, s, substeps, setup, before.drift_detected, notes)
     named_deg = deg is not None and (deg.named if setup.held_out_test else deg.passed)
-    if deg is not None and named_deg and deg.rival is not None and deg.rival_p_adjusted < alpha:
-        notes.append(
-            f"the period record also needs {deg.rival.term} beside {deg.term} (partial F, adjusted p = "
-            f"{deg.rival_p_adjusted:.2g}): both may act, and only {deg.term} is modelled"
-        )
     noise_dof = sum(e.noise_dof for e in exps)
 
     def p_of(fit: AugFit) -> float:
@@ -689,13 +702,18 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
     # The plain model's gate: the global test at alpha / 2, and when it accepts, the targeted step's
     # candidate tests at the other alpha / 2 (select.py's docstring; design.md 10.3).
     p_start = p_of(start)
-    targeted = (
-        not named_deg and not before.drift_detected and math.isfinite(p_start) and p_start >= 0.5 * alpha
-    )
+    passes = not named_deg and not before.drift_detected and math.isfinite(p_start) and p_start >= 0.5 * alpha
+    # The targeted step hunts effects below the global test's reach; where the error is a repeated
+    # quantisation pattern or the model's own precision, such effects cannot be told from that error.
+    targeted = passes and setup.measured_noise
     cache: FoldCache = {}
     steady = tuple(c for c in cands if c not in DRIFT_TERMS)
     kw: dict[str, Any] = {"alpha": alpha, "use_held_out": setup.held_out_test, "cache": cache}
-    final, steps = forward_select(fsx, start, steady, adequate, substeps, targeted=targeted, **kw)
+    if passes and not targeted:
+        notes.append(NO_TARGETED_STEP)
+        final, steps = start, list[Step]()
+    else:
+        final, steps = forward_select(fsx, start, steady, adequate, substeps, targeted=targeted, **kw)
     dexps = detrended(fexps, deg, s.y) if deg is not None and named_deg else fexps
     after = _drift_checked(_localise(dexps, fsx, final, s), dexps)
     plain_sum = _summary(exps, sx, plain, s, setup.units)
@@ -707,7 +725,7 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
             terms=(*final_sum.terms, NamedTerm(deg.term, sym, deg.value, deg.standard_error, unit)),
         )
     fraction = _explained_fraction(plain_sum, final_sum, deg if named_deg else None)
-    plain_ok = targeted and not final.params.terms
+    plain_ok = passes and not final.params.terms
     status, named, partial, verdict = _judged(
         classify(plain_ok, bool(final.params.terms) or named_deg, adequate(final), fraction),
         final_sum,
