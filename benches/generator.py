@@ -42,7 +42,7 @@ SUBSTEPS = 4  # RK4 steps per sample
 NOISE_SD = 0.01  # 1 % of the saturation level |w| -> 1
 FREQ_FACTORS = (0.5, 0.75, 1.0, 1.4, 2.0)  # around the corner / resonance
 X_LEVELS = (1.2, 3.0)  # latent amplitudes |x| (saturation at |w| = 1, alpha = 1)
-LOW_LEVEL = 0.25  # the null cases' extra experiment, below saturation
+LOW_LEVEL = 0.15  # the null cases' extra experiment, below saturation: its loop centre settles slowly
 SHAPES = ("first", "resonant", "flat")
 
 #: Mechanical terms (each at two places: on the measured input u, on the hysteresis' input x = G u).
@@ -74,7 +74,9 @@ class Plant:
     amplitudes: FloatArray  # U per experiment
     levels: FloatArray  # latent |x| per experiment
     seed: int
-    extra: dict[str, float] = field(default_factory=dict)
+    #: Initial hysteretic state per experiment (None: from rest). A low-amplitude experiment run after a
+    #: saturating one starts from its remanent w, so its loop centre is still settling.
+    w0: Optional[FloatArray] = None
 
     def freqresp(self, om: FloatArray) -> NDArray[np.complex128]:
         s = 1j * np.asarray(om)
@@ -108,12 +110,14 @@ def make_plant(seed: int, shape: Optional[str] = None, low_amplitude: bool = Fal
     beta = 1.0 / (1.0 + ratio)
     om = np.repeat(omegas, len(X_LEVELS))
     levels = np.tile(np.asarray(X_LEVELS), len(omegas))
+    w0 = np.zeros(om.size)
     if low_amplitude:
         om = np.append(om, omegas[len(omegas) // 2])
         levels = np.append(levels, LOW_LEVEL)
+        w0 = np.append(w0, float(rng.choice([-1.0, 1.0])) * float(rng.uniform(0.2, 0.6)))
     plant = Plant(shape, num, den, delay, beta, ratio * beta, mu, om, levels, levels, seed)
     g = np.abs(plant.freqresp(om))
-    return Plant(shape, num, den, delay, beta, ratio * beta, mu, om, levels / g, levels, seed)
+    return Plant(shape, num, den, delay, beta, ratio * beta, mu, om, levels / g, levels, seed, w0)
 
 
 # ------------------------------------------------------------------------------------------------------
@@ -227,10 +231,10 @@ def run(p: Plant, eff: Effect, total: Optional[int] = None) -> FloatArray:
         return pinch * (d - nu * hyst) / (1.0 + deta * e), w * d
 
     nstep = SUBSTEPS * total
-    w = np.zeros((nv, ne))
+    w = np.zeros((nv, ne)) + (0.0 if p.w0 is None else p.w0[None, :])
     e = np.zeros((nv, ne))
     wf = np.empty((nv, ne, nstep + 1))
-    wf[..., 0] = 0.0
+    wf[..., 0] = w
     hh = h[None, :]
     for k in range(nstep):
         d0, dm, d1 = rate[..., 2 * k], rate[..., 2 * k + 1], rate[..., 2 * k + 2]
