@@ -26,6 +26,7 @@ log-log interpolation over a vectorised sweep otherwise (the achieved size is re
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Optional
 
@@ -207,11 +208,14 @@ def run(p: Plant, eff: Effect, total: Optional[int] = None) -> FloatArray:
     h = np.array([g[1] / SUBSTEPS for g in grids])  # RK4 step: two half-grid intervals
     val = eff.values[:, None] * np.ones((1, ne))
     name = eff.name
-    rate = np.broadcast_to(xd[None], (nv,) + xd.shape).copy()
-    gate = np.ones_like(rate)
-    if name in ("play", "slack_gap"):
-        _, on = _play(x, val)
-        rate = rate * on
+    rate = np.broadcast_to(xd[None], (nv,) + xd.shape)
+    gate = np.ones((1, 1, 1))
+    played = name in ("play", "slack_gap")
+    if played:
+        # Rate-independent along the played path: the mean rate of xp over each half interval, constant
+        # there, so RK4 integrates w in xp exactly wherever x does not reverse inside the interval.
+        xp, on = _play(x, val)
+        rate = np.diff(xp, axis=-1) / (0.5 * h)[None, :, None]
         gate = on if name == "slack_gap" else gate
     beta, gamma, mu = p.beta, p.gamma, p.mu
     zero = np.zeros_like(val)
@@ -230,21 +234,8 @@ def run(p: Plant, eff: Effect, total: Optional[int] = None) -> FloatArray:
         pinch = 1.0 - zeta1 * np.exp(-((((w * np.sign(d)) - 0.1) / 0.2) ** 2))
         return pinch * (d - nu * hyst) / (1.0 + deta * e), w * d
 
-    nstep = SUBSTEPS * total
-    w = np.zeros((nv, ne)) + (0.0 if p.w0 is None else p.w0[None, :])
-    e = np.zeros((nv, ne))
-    wf = np.empty((nv, ne, nstep + 1))
-    wf[..., 0] = w
-    hh = h[None, :]
-    for k in range(nstep):
-        d0, dm, d1 = rate[..., 2 * k], rate[..., 2 * k + 1], rate[..., 2 * k + 2]
-        k1 = f(w, e, d0)
-        k2 = f(w + 0.5 * hh * k1[0], e + 0.5 * hh * k1[1], dm)
-        k3 = f(w + 0.5 * hh * k2[0], e + 0.5 * hh * k2[1], dm)
-        k4 = f(w + hh * k3[0], e + hh * k3[1], d1)
-        w = w + hh / 6.0 * (k1[0] + 2.0 * k2[0] + 2.0 * k3[0] + k4[0])
-        e = e + hh / 6.0 * (k1[1] + 2.0 * k2[1] + 2.0 * k3[1] + k4[1])
-        wf[..., k + 1] = w
+    w0 = np.zeros((nv, ne)) + (0.0 if p.w0 is None else p.w0[None, :])
+    wf = _rk4(f, w0, rate, h, SUBSTEPS * total, played)
     v = wf * gate[..., ::2]
     v = v + _parallel(p, eff, val, x[:, ::2], xd[:, ::2], xdd[:, ::2], grids)
     if name == "sensor_lag":
@@ -252,6 +243,38 @@ def run(p: Plant, eff: Effect, total: Optional[int] = None) -> FloatArray:
     if name == "offset":
         v = v + val[..., None]
     return np.ascontiguousarray(v[..., :-1:SUBSTEPS])
+
+
+def _rk4(
+    f: Callable[[FloatArray, FloatArray, FloatArray], tuple[FloatArray, FloatArray]],
+    w: FloatArray,
+    rate: FloatArray,
+    h: FloatArray,
+    nstep: int,
+    played: bool,
+) -> FloatArray:
+    """Classical RK4 of (w, e) over ``nstep`` steps of ``h``, ``w`` at every step (trials x experiments x
+    steps + 1). ``rate``: xdot on the half-step grid, or (``played``) the constant rate of each half step."""
+    e = np.zeros_like(w)
+    wf = np.empty(w.shape + (nstep + 1,))
+    wf[..., 0] = w
+    hh = h[None, :] * (0.5 if played else 1.0)
+    for k in range(2 * nstep if played else nstep):
+        if played:
+            d0 = dm = d1 = rate[..., k]
+        else:
+            d0, dm, d1 = rate[..., 2 * k], rate[..., 2 * k + 1], rate[..., 2 * k + 2]
+        k1 = f(w, e, d0)
+        k2 = f(w + 0.5 * hh * k1[0], e + 0.5 * hh * k1[1], dm)
+        k3 = f(w + 0.5 * hh * k2[0], e + 0.5 * hh * k2[1], dm)
+        k4 = f(w + hh * k3[0], e + hh * k3[1], d1)
+        w = w + hh / 6.0 * (k1[0] + 2.0 * k2[0] + 2.0 * k3[0] + k4[0])
+        e = e + hh / 6.0 * (k1[1] + 2.0 * k2[1] + 2.0 * k3[1] + k4[1])
+        if not played:
+            wf[..., k + 1] = w
+        elif k % 2 == 1:
+            wf[..., (k + 1) // 2] = w
+    return wf
 
 
 def _parallel(
