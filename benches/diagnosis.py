@@ -38,7 +38,7 @@ import json
 import math
 import sys
 import time
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 from typing import Any, Optional
 
@@ -224,7 +224,11 @@ def run_new_case(job: tuple[str, Optional[str], str, float, int]) -> dict[str, A
     kind, name, place, size, seed = job
     row: dict[str, Any] = {"kind": kind, "term": name, "place": place, "size": size, "seed": seed}
     t0 = time.perf_counter()
-    case = gen.make_case(kind, name, place, size, seed)
+    try:
+        case = gen.make_case(kind, name, place, size, seed)
+    except Exception as exc:  # the generator's own failure: reported as such, not as the diagnosis's
+        row["error"] = f"generator: {type(exc).__name__}: {exc}"
+        return row
     row.update(
         shape=case.shape, achieved=case.achieved, value=case.value, gen_seconds=time.perf_counter() - t0
     )
@@ -388,8 +392,7 @@ def main(argv: Optional[list[str]] = None) -> int:
         keep = set(args.only.split(","))
         jobs = [j for j in jobs if (j[1] or "null") in keep]
     t0 = time.perf_counter()
-    with ProcessPoolExecutor(max_workers=args.workers) as pool:
-        rows = list(pool.map(run_new_case, jobs, chunksize=1))
+    rows = _run_all(run_new_case, jobs, args.workers)
     wall = time.perf_counter() - t0
     lines = summarise(rows)
     print_table(lines)
@@ -397,6 +400,22 @@ def main(argv: Optional[list[str]] = None) -> int:
     if args.json:
         args.json.write_text(json.dumps({"rows": rows, "table": lines}, indent=1, default=float))
     return 0
+
+
+def _run_all(fn: Any, jobs: list[Any], workers: int) -> list[dict[str, Any]]:
+    """``fn`` over ``jobs`` on ``workers`` processes, in job order; a progress line per case on stderr."""
+    out: list[Optional[dict[str, Any]]] = [None] * len(jobs)
+    with ProcessPoolExecutor(max_workers=workers) as pool:
+        futs = {pool.submit(fn, j): k for k, j in enumerate(jobs)}
+        for done, fut in enumerate(as_completed(futs), 1):
+            r = fut.result()
+            out[futs[fut]] = r
+            where = "@" + r["place"] if r.get("place") else ""
+            what = f"{r['kind']} {r['term'] or 'plain'}{where} {r['size']:g}x"
+            print(
+                f"[{done}/{len(jobs)}] {what}: {r.get('status', r.get('error'))}", file=sys.stderr, flush=True
+            )
+    return [r for r in out if r is not None]
 
 
 def old_main(args: argparse.Namespace) -> int:
@@ -409,8 +428,7 @@ def old_main(args: argparse.Namespace) -> int:
     for kind in [k for k in args.outside.split(",") if k]:
         jobs += [("outside", kind, 0.0, args.seed + 9000 + s) for s in range(args.cases)]
     t0 = time.perf_counter()
-    with ProcessPoolExecutor(max_workers=args.workers) as pool:
-        rows = list(pool.map(run_old_case, jobs, chunksize=1))
+    rows = _run_all(run_old_case, jobs, args.workers)
     wall = time.perf_counter() - t0
     for r in rows:
         r.setdefault("place", "")

@@ -39,7 +39,7 @@ TWO_PI = 2.0 * math.pi
 P = 128  # samples per period
 PERIODS = 16  # averaged periods
 SETTLE = 10  # settle periods (declared to the diagnosis as a user would)
-SUBSTEPS = 4  # RK4 steps per sample
+SUBSTEPS = 3  # samples are split in SUBSTEPS steps of two RK4 half steps each
 NOISE_SD = 0.01  # 1 % of the saturation level |w| -> 1
 FREQ_FACTORS = (0.5, 0.75, 1.0, 1.4, 2.0)  # around the corner / resonance
 X_LEVELS = (1.2, 3.0)  # latent amplitudes |x| (saturation at |w| = 1, alpha = 1)
@@ -53,11 +53,12 @@ PLACES = ("u", "x")
 LIBRARY_OTHER = ("offset", "asymmetry", "play", "sensor_lag", "degradation")
 #: Baber-Noori terms being added to the library (branch ``bn``): outside rows until they exist.
 BABER_NOORI = ("stiffness_degradation", "pinching")
-#: Physics outside the library: a rate-dependent loop width, a parallel Dahl loop, a force-free slack gap.
+#: Physics outside the library: a rate-dependent loop width, a parallel Dahl loop, a mid-travel slack gap.
 OUTSIDE = ("rate_width", "dahl", "slack_gap")
 #: Effects whose contribution is linear in their parameter (sized in one shot).
 LINEAR = (*MECHANICAL, "offset", "dahl")
 COULOMB_EPS = 0.01  # tanh smoothing as a fraction of the peak velocity
+MAX_INCREMENT = 0.05  # largest path increment of one RK4 step of the hysteresis (x ~ 1)
 
 
 @dataclass(frozen=True)
@@ -182,17 +183,14 @@ def _grid(p: Plant, i: int, total: int) -> tuple[FloatArray, float]:
     return np.arange(2 * SUBSTEPS * total + 1) * (dt / (2 * SUBSTEPS)), dt
 
 
-def _play(x: FloatArray, b: FloatArray) -> tuple[FloatArray, FloatArray]:
-    """Play operator of half-width ``b`` (trials x experiments) along ``x`` (experiments x grid): (xp, on)."""
+def _play(x: FloatArray, b: FloatArray) -> FloatArray:
+    """Play of half-width ``b`` (trials x experiments) along ``x`` (experiments x grid), from rest."""
     xp = np.empty(b.shape + (x.shape[1],))
-    on = np.zeros_like(xp)
     cur = np.clip(np.zeros_like(b), x[None, :, 0] - b, x[None, :, 0] + b)
     for j in range(x.shape[1]):
-        new = np.clip(cur, x[None, :, j] - b, x[None, :, j] + b)
-        on[..., j] = new != cur
-        cur = new
+        cur = np.clip(cur, x[None, :, j] - b, x[None, :, j] + b)
         xp[..., j] = cur
-    return xp, on
+    return xp
 
 
 def run(p: Plant, eff: Effect, total: Optional[int] = None) -> FloatArray:
@@ -208,15 +206,16 @@ def run(p: Plant, eff: Effect, total: Optional[int] = None) -> FloatArray:
     h = np.array([g[1] / SUBSTEPS for g in grids])  # RK4 step: two half-grid intervals
     val = eff.values[:, None] * np.ones((1, ne))
     name = eff.name
-    rate = np.broadcast_to(xd[None], (nv,) + xd.shape)
-    gate = np.ones((1, 1, 1))
-    played = name in ("play", "slack_gap")
-    if played:
-        # Rate-independent along the played path: the mean rate of xp over each half interval, constant
-        # there, so RK4 integrates w in xp exactly wherever x does not reverse inside the interval.
-        xp, on = _play(x, val)
-        rate = np.diff(xp, axis=-1) / (0.5 * h)[None, :, None]
-        gate = on if name == "slack_gap" else gate
+    # Every hysteresis here is driven along its input's path: the mean rate over each half step, constant
+    # there, so RK4 integrates w along x exactly wherever x does not reverse inside the half step (the
+    # rate-dependent width sees that mean rate). Play drives it along the played path, the slack gap along
+    # x with its mid-travel dead zone taken out.
+    path = np.broadcast_to(x[None], (nv,) + x.shape)
+    if name == "play":
+        path = _play(x, val)
+    if name == "slack_gap":  # a dead zone of half-width g at mid-travel: a loose joint's clearance
+        path = x[None] - np.clip(x[None], -val[..., None], val[..., None])
+    rate = np.diff(path, axis=-1) / (0.5 * h)[None, :, None]
     beta, gamma, mu = p.beta, p.gamma, p.mu
     zero = np.zeros_like(val)
     delta = val if name == "asymmetry" else zero
@@ -235,8 +234,8 @@ def run(p: Plant, eff: Effect, total: Optional[int] = None) -> FloatArray:
         return pinch * (d - nu * hyst) / (1.0 + deta * e), w * d
 
     w0 = np.zeros((nv, ne)) + (0.0 if p.w0 is None else p.w0[None, :])
-    wf = _rk4(f, w0, rate, h, SUBSTEPS * total, played)
-    v = wf * gate[..., ::2]
+    wf = _rk4(f, w0, rate, h, SUBSTEPS * total)
+    v = wf
     v = v + _parallel(p, eff, val, x[:, ::2], xd[:, ::2], xdd[:, ::2], grids)
     if name == "sensor_lag":
         v = _lag(v, val, h)
@@ -251,28 +250,27 @@ def _rk4(
     rate: FloatArray,
     h: FloatArray,
     nstep: int,
-    played: bool,
 ) -> FloatArray:
-    """Classical RK4 of (w, e) over ``nstep`` steps of ``h``, ``w`` at every step (trials x experiments x
-    steps + 1). ``rate``: xdot on the half-step grid, or (``played``) the constant rate of each half step."""
+    """Classical RK4 of (w, e) along the path, ``w`` at every step (trials x experiments x steps + 1).
+
+    ``rate`` is the constant rate of each half step; a half step whose increment exceeds ``MAX_INCREMENT``
+    (G's start from rest through a fast pole) is cut into equal parts, so RK4 stays in its stable range."""
     e = np.zeros_like(w)
     wf = np.empty(w.shape + (nstep + 1,))
     wf[..., 0] = w
-    hh = h[None, :] * (0.5 if played else 1.0)
-    for k in range(2 * nstep if played else nstep):
-        if played:
-            d0 = dm = d1 = rate[..., k]
-        else:
-            d0, dm, d1 = rate[..., 2 * k], rate[..., 2 * k + 1], rate[..., 2 * k + 2]
-        k1 = f(w, e, d0)
-        k2 = f(w + 0.5 * hh * k1[0], e + 0.5 * hh * k1[1], dm)
-        k3 = f(w + 0.5 * hh * k2[0], e + 0.5 * hh * k2[1], dm)
-        k4 = f(w + hh * k3[0], e + hh * k3[1], d1)
-        w = w + hh / 6.0 * (k1[0] + 2.0 * k2[0] + 2.0 * k3[0] + k4[0])
-        e = e + hh / 6.0 * (k1[1] + 2.0 * k2[1] + 2.0 * k3[1] + k4[1])
-        if not played:
-            wf[..., k + 1] = w
-        elif k % 2 == 1:
+    half = 0.5 * h[None, :]
+    for k in range(2 * nstep):
+        d = rate[..., k]
+        parts = max(1, math.ceil(float(np.max(np.abs(d * half))) / MAX_INCREMENT))
+        hh = half / parts
+        for _ in range(parts):
+            k1 = f(w, e, d)
+            k2 = f(w + 0.5 * hh * k1[0], e + 0.5 * hh * k1[1], d)
+            k3 = f(w + 0.5 * hh * k2[0], e + 0.5 * hh * k2[1], d)
+            k4 = f(w + hh * k3[0], e + hh * k3[1], d)
+            w = w + hh / 6.0 * (k1[0] + 2.0 * k2[0] + 2.0 * k3[0] + k4[0])
+            e = e + hh / 6.0 * (k1[1] + 2.0 * k2[1] + 2.0 * k3[1] + k4[1])
+        if k % 2 == 1:
             wf[..., (k + 1) // 2] = w
     return wf
 
@@ -308,14 +306,16 @@ def _parallel(
             "coulomb": np.tanh(sig1 / (COULOMB_EPS * vmax)),
         }[name]
         return val[..., None] * sig[None]
-    if name == "dahl":  # F' = sigma x' (1 - F sgn(x') / Fd)^2, level Fd, breakaway over 20 % of |x|min
+    if name == "dahl":  # dF/dxi = sigma (1 - s F)^2 along travel xi in direction s: solved exactly per step
         sigma = 1.0 / (0.2 * float(p.levels.min()))
-        hstep = np.array([g[1] / SUBSTEPS for g in grids])  # the full-step grid spacing
         fd = np.zeros(x.shape[0])
         out = np.zeros(x.shape)
         for j in range(1, x.shape[1]):
-            d = 0.5 * (xd[:, j] + xd[:, j - 1])
-            fd = fd + hstep * sigma * d * (1.0 - fd * np.sign(d)) ** 2
+            dx = x[:, j] - x[:, j - 1]
+            sgn = np.sign(dx)
+            g0 = np.clip(1.0 - sgn * fd, 0.0, 2.0)
+            g1 = g0 / (1.0 + sigma * np.abs(dx) * g0)
+            fd = np.where(sgn != 0.0, sgn * (1.0 - g1), fd)
             out[:, j] = fd
         return val[..., None] * out[None]
     return np.zeros((1, 1, 1))
@@ -373,7 +373,9 @@ def calibrate(p: Plant, name: str, place: str, size: float) -> tuple[float, floa
     hi = upper_value(p, name)
     vals = hi * np.logspace(-3.0, 0.0, 7)
     c = contribution(p, Effect(name, place, vals), plain)
-    ok = c > 0
+    ok = np.isfinite(c) & (c > 0)
+    if not np.any(ok):
+        raise FloatingPointError(f"{name}: no finite contribution over {vals}")
     lv, lc = np.log(vals[ok]), np.log(c[ok])
     order = np.argsort(lc)
     v = float(np.exp(np.interp(math.log(size), lc[order], lv[order])))
