@@ -23,27 +23,36 @@ gen: Any = importlib.import_module("generator")
 #: Integration accuracy asked of the two simulators' steady loops: a tenth of the averaged noise sd the
 #: bench sizes its effects in (the loop saturates at 1; the noise sd is 1 % of that).
 TOL = 0.1 * gen.NOISE_SD / np.sqrt(gen.PERIODS)
+#: Steady periods compared (after the generator's settle periods): enough for a steady loop, short to run.
+KEEP = 3
+TOTAL = (gen.SETTLE + KEEP) * gen.P
+
+
+def _library(p: Any, terms: tuple[Any, ...] = ()) -> Any:
+    plant = bw.WienerPlant(
+        bw.TransferFunction(p.num, p.den, delay=p.delay),
+        bw.BoucWen(beta=p.beta, gamma=p.gamma, mu=p.mu),
+        terms=terms,
+    )
+    plan = bw.SinePlan(
+        p.omegas,
+        p.amplitudes,
+        settle_periods=gen.SETTLE,
+        periods=KEEP,
+        samples_per_period=gen.P,
+        substeps=16,
+        noise_sd=0.0,
+        seed=0,
+    )
+    return bw.simulate(plant, plan)
 
 
 @pytest.mark.parametrize("seed, shape", [(1, "resonant"), (4, "first")])
 def test_generator_and_library_give_the_same_steady_loop(seed: int, shape: str) -> None:
     p = gen.make_plant(seed, shape)
     assert shape == "first" or p.delay > 0.0  # the resonant case carries a delay
-    y = gen.run(p, gen.Effect())[0]
-    plant = bw.WienerPlant(
-        bw.TransferFunction(p.num, p.den, delay=p.delay), bw.BoucWen(beta=p.beta, gamma=p.gamma, mu=p.mu)
-    )
-    plan = bw.SinePlan(
-        p.omegas,
-        p.amplitudes,
-        settle_periods=gen.SETTLE,
-        periods=gen.PERIODS,
-        samples_per_period=gen.P,
-        substeps=16,
-        noise_sd=0.0,
-        seed=0,
-    )
-    recs = bw.simulate(plant, plan)
+    y = gen.run(p, gen.Effect(), total=TOTAL)[0]
+    recs = _library(p)
     steady = slice(gen.SETTLE * gen.P, None)
     y_lib = np.stack([np.asarray(r.y) for r in recs])
     # The same latent x (exact here, the library's RK4 with its delay line there) ...
@@ -56,11 +65,17 @@ def test_generator_and_library_give_the_same_steady_loop(seed: int, shape: str) 
 
 
 def test_a_linear_effect_is_sized_in_averaged_noise_sd() -> None:
+    # A dashpot across the hysteretic element adds c xdot: its size is c RMS(xdot) over the averaged
+    # periods, in averaged noise sd, computed here from the exact latent x instead of two simulations.
     p = gen.make_plant(2, "resonant")
     value, got = gen.calibrate(p, "viscous", "x", 10.0)
-    plain = gen.run(p, gen.Effect())
-    c = gen.contribution(p, gen.Effect("viscous", "x", np.array([value])), plain)
-    assert got == 10.0 and abs(float(c[0]) - 10.0) < 1e-9 and value > 0.0
+    n = (gen.SETTLE + gen.PERIODS) * gen.P
+    xdot = []
+    for i, om in enumerate(p.omegas):
+        t = np.arange(n) * (2 * np.pi / om / gen.P)
+        xdot.append(gen.latent(p, t, i)[1][gen.SETTLE * gen.P :])
+    size = value * np.sqrt(np.mean(np.square(xdot))) / (gen.NOISE_SD / np.sqrt(gen.PERIODS))
+    assert got == 10.0 and value > 0.0 and abs(size - 10.0) < 1e-6
 
 
 @pytest.mark.parametrize(
@@ -78,24 +93,9 @@ def test_generator_and_library_agree_on_the_library_terms(name: str, term: Any) 
     # conventions (sign, smoothing, play from rest, the lag) are the same, the integrators are not.
     p = gen.make_plant(1, "resonant")
     value = float(getattr(term, term.symbol))
-    y = gen.run(p, gen.Effect(name, "u", np.array([value])))[0]
-    plant = bw.WienerPlant(
-        bw.TransferFunction(p.num, p.den, delay=p.delay),
-        bw.BoucWen(beta=p.beta, gamma=p.gamma, mu=p.mu),
-        terms=(term,),
-    )
-    plan = bw.SinePlan(
-        p.omegas,
-        p.amplitudes,
-        settle_periods=gen.SETTLE,
-        periods=gen.PERIODS,
-        samples_per_period=gen.P,
-        substeps=16,
-        noise_sd=0.0,
-        seed=0,
-    )
-    y_lib = np.stack([np.asarray(r.y) for r in bw.simulate(plant, plan)])
-    plain = gen.run(p, gen.Effect())[0]
+    y = gen.run(p, gen.Effect(name, "u", np.array([value])), total=TOTAL)[0]
+    y_lib = np.stack([np.asarray(r.y) for r in _library(p, (term,))])
+    plain = np.stack([np.asarray(r.y) for r in _library(p)])
     steady = slice(gen.SETTLE * gen.P, None)
     effect = np.max(np.abs(y[:, steady] - plain[:, steady]))
     assert effect > 1e-2  # the term is visible ...
