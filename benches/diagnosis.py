@@ -10,8 +10,9 @@ Two generators (``--generator``):
   input u and on the hysteresis' input x = G u; output offset, asymmetry, play, sensor lag, strength
   degradation (nu); the Baber-Noori terms being added (stiffness degradation eta, pinching: scored as
   library rows once the registry has them, as outside rows until then); physics outside the library (a
-  rate-dependent loop width, a parallel Dahl loop, a force-free slack gap, the feedback structure
-  ``m y'' + c y' + k y + z = u``); null cases with a low-amplitude experiment still settling.
+  rate-dependent loop width, a parallel Dahl loop, a slack gap: a dead zone at mid-travel before the
+  hysteresis, the feedback structure ``m y'' + c y' + k y + z = u``); null cases with a low-amplitude
+  experiment (started from a saturating one's remanent w) whose loop centre is still settling.
 - ``old``: ``benches/concealed.py``, the library's own simulator (the earlier tables, for before/after).
 
 Sizes are the RMS of the effect's noise-free contribution over the averaged periods, in units of the
