@@ -255,26 +255,20 @@ def run_new_case(job: tuple[str, Optional[str], str, float, int]) -> dict[str, A
 
 
 def new_jobs(args: argparse.Namespace) -> list[tuple[str, Optional[str], str, float, int]]:
+    """Every row's cases; each row has its own seeds (its own plants, G shapes), offset by ``--seed``."""
     import generator as gen
 
     sizes = (10.0, 30.0) if args.quick else SIZES
-    s0 = args.seed
-    jobs: list[tuple[str, Optional[str], str, float, int]] = []
+    rows: list[tuple[str, Optional[str], str, float, int]] = []
     for n in gen.MECHANICAL:
-        for pl in gen.PLACES:
-            for sz in sizes:
-                jobs += [("library", n, pl, sz, s0 + 1000 + s) for s in range(args.cases)]
-    for n in gen.LIBRARY_OTHER:
-        for sz in sizes:
-            jobs += [("library", n, "", sz, s0 + 2000 + s) for s in range(args.cases)]
-    for n in gen.BABER_NOORI:
-        for sz in sizes:
-            jobs += [("pending", n, "", sz, s0 + 3000 + s) for s in range(args.cases)]
-    for n in gen.OUTSIDE:
-        for sz in (10.0, 30.0):
-            jobs += [("outside", n, "", sz, s0 + 4000 + s) for s in range(args.cases)]
-    jobs += [("outside", "feedback", "", 0.0, s0 + 4500 + s) for s in range(args.cases)]
-    jobs += [("null", None, "", 0.0, s0 + 5000 + s) for s in range(args.null)]
+        rows += [("library", n, pl, sz, args.cases) for pl in gen.PLACES for sz in sizes]
+    rows += [("library", n, "", sz, args.cases) for n in gen.LIBRARY_OTHER for sz in sizes]
+    rows += [("pending", n, "", sz, args.cases) for n in gen.BABER_NOORI for sz in sizes]
+    rows += [("outside", n, "", sz, args.cases) for n in gen.OUTSIDE for sz in (10.0, 30.0)]
+    rows += [("outside", "feedback", "", 0.0, args.cases), ("null", None, "", 0.0, args.null)]
+    jobs = []
+    for k, (kind, name, place, size, count) in enumerate(rows):
+        jobs += [(kind, name, place, size, args.seed + 1000 * (k + 1) + s) for s in range(count)]
     return jobs
 
 
