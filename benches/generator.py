@@ -6,9 +6,12 @@ holds on them does not only hold on the library's own integrator.
 - **G** is integrated exactly: its state-space form (controllable canonical, built here) driven by a delayed
   cosine that starts from rest is solved in closed form, steady sinusoid plus the homogeneous transient
   ``V exp(Lambda t) V^-1`` (eigen-decomposition), so ``x``, ``xdot`` and ``xddot`` are exact on any grid.
-- **The hysteresis** is integrated here by classical RK4 in time along the exact ``xdot`` (its own rate
-  function: Bouc-Wen with asymmetry, Baber-Noori strength and stiffness degradation, pinching, a
-  rate-dependent width), vectorised over experiments and trial parameter values.
+- **The hysteresis** is integrated here by classical RK4 along its input's path: the exact ``x`` on a grid
+  of half steps, the rate constant over each (sub-cycled where G's start from rest makes a large
+  increment), so a rate-independent element is integrated exactly wherever x does not reverse inside a
+  half step. Its own rate function: Bouc-Wen with asymmetry, Baber-Noori strength and stiffness
+  degradation, pinching, a rate-dependent width; play and a mid-travel dead zone on the path; vectorised
+  over experiments and trial parameter values.
 - **The output** is ``y = y0 + Lag_tau[w + terms on u + terms on x + outside parallel elements]``, the lag
   solved exactly for a piecewise-linear input on the fine grid; **noise** is white Gaussian from a seeded
   stream of this module (1 % of the saturation level).
