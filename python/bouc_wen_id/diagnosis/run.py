@@ -35,6 +35,7 @@ from .fitting import (
     substeps_for,
 )
 from .locate import Localisation, adequacy_p, locate
+from .progress import Progress, reporter
 from .result import Diagnosis, ModelSummary, NamedTerm, Status, term_symbol_unit
 from .select import ALPHA, FoldCache, forward_select, held_out
 
@@ -246,6 +247,7 @@ def diagnose(
     held_out_test: bool = True,
     y_unit: str = "",
     u_unit: str = "",
+    progress: Progress = None,
 ) -> Diagnosis:
     """Diagnose what the Wiener-Bouc-Wen model leaves out of sine experiments.
 
@@ -265,6 +267,9 @@ def diagnose(
         Require a held-out improvement before naming a term (leave-one-experiment-out).
     y_unit, u_unit : str
         Units of the output and the input, for the reported term values.
+    progress : bool or callable, optional
+        Report the stages: True on stderr (a bar on a terminal, else a line per stage), a callable
+        ``progress(stage, done, total)`` receives each report; quiet by default.
 
     Returns
     -------
@@ -281,9 +286,11 @@ def diagnose(
         When not even the plain model can be fitted.
     """
     t0 = time.perf_counter()
+    report = reporter(progress)
     cands = _check_candidates(candidates)
     if not (0.0 < float(alpha) < 1.0):
         raise InvalidParameterError(f"alpha = {alpha!r} must lie in (0, 1)")
+    report("preparing the averaged periods", 0, 1)
     exps = prepare(experiments)
     skipped: dict[str, str] = {}
     if Distortion.kind in cands and not any(e.distorted for e in exps):
@@ -310,9 +317,11 @@ def diagnose(
         p = p_of(fit)
         return bool(math.isfinite(p) and p >= 0.5 * alpha)
 
+    report("fitting the plain model", 0, 1)
     plain = fit_plain(exps, sx, s, substeps)
     # The distortion term's waveforms through G at their own frequencies, as the plain fit sees G.
     if Distortion.kind in cands:
+        report("carrying the input's harmonics through G", 0, 1)
         sx = carry_through_g(sx, plain, substeps)
     before = _localise(exps, sx, plain, s)
     cache: FoldCache = {}
@@ -323,6 +332,7 @@ def diagnose(
     notes: list[str] = []
     fexps, fsx, start = exps, sx, plain
     if DEGRADATION in cands:
+        report("testing degradation (period blocks)", 0, 1)
         stage = _degradation_stage(exps, sx, plain, s, substeps, alpha, len(cands), held_out_test)
         if stage is None:
             notes.append(NO_BLOCKS)
@@ -342,6 +352,7 @@ def diagnose(
         use_held_out=held_out_test,
         cache=cache,
         targeted=targeted,
+        on_trial=lambda k, t, i, n: report(f"step {k}: fitting candidate {t}", i, n),
     )
     after = _localise(detrended(fexps, deg, s.y) if deg is not None and named_deg else fexps, fsx, final, s)
     units = (y_unit, u_unit)
@@ -368,7 +379,9 @@ def diagnose(
     named = final_sum.terms if status in ("explained", "partly explained") else ()
     partial = final_sum.terms if status == "unexplained" else ()
     alternatives = tuple(a for st in steps for a in st.alternatives)
+    report("held-out check of the final model", 0, 1)
     ho = held_out(fsx, start, final, substeps, cache) if final.params.terms else None
+    report("done", 1, 1)
     return Diagnosis(
         status=status,
         verdict=_verdict(status, named, partial, after, fraction),
