@@ -1,4 +1,4 @@
-"""Progress of ``diagnose``: quiet by default, stages on stderr with ``progress=True``, a callback's reports."""
+"""Progress of ``diagnose``: quiet by default, stages on stderr with ``progress=True``, or a callback."""
 
 from __future__ import annotations
 
