@@ -20,6 +20,7 @@ import argparse
 import importlib.util
 import json
 import math
+import os
 import sys
 import time
 import warnings
@@ -180,7 +181,7 @@ INTRO = """\
 
 Every number on this page comes from one run of `python studies/diagnose_real.py` on the code as it is:
 the main run took {wall:.0f} s wall on the 2-core machine (the diagnoses {diag:.0f} s, the figures
-{figs:.0f} s; per group in its section), the stability variants another {stab:.0f} s. Each group is
+{figs:.0f} s; per group in its section; load average {load:.1f} at the end), {stab}. Each group is
 diagnosed jointly: one Bouc-Wen element and one set of candidate terms shared by its experiments, one |G|
 and phase per experiment. A term is named only if it passes the nested F-test (Bonferroni over the
 candidates), removes at least 10 % of the excess misfit and lowers the held-out cost (each experiment
@@ -217,8 +218,14 @@ def _stability_lines(rows: list[dict[str, Any]]) -> list[str]:
 
 
 def markdown(rows: list[dict[str, Any]], timing: dict[str, float]) -> str:
+    stab = (
+        f"the stability variants another {timing['stability']:.0f} s"
+        if any(r.get("stability") for r in rows)
+        else "the stability variants not run"
+    )
+    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else math.nan
     intro = INTRO.format(
-        wall=timing["wall"], diag=timing["diagnoses"], figs=timing["figures"], stab=timing["stability"]
+        wall=timing["wall"], diag=timing["diagnoses"], figs=timing["figures"], stab=stab, load=load
     ).splitlines()
     lines = [
         *intro,
