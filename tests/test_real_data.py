@@ -15,6 +15,7 @@ import importlib.util
 import json
 import math
 import sys
+import time
 import warnings
 from pathlib import Path
 from types import ModuleType
@@ -466,3 +467,72 @@ def test_generated_page_matches_results_and_figures_exist() -> None:
         for name in names:
             assert (results.parent / name).is_file(), name
             assert f"real-data/{name}" in regenerated
+
+
+# ------------------------------------------------------------------------------------------------------
+# The diagnosis on real data: no crash, its time printed (a benchmark, not a timed assert)
+
+DIAGNOSIS_STATUSES = {"adequate", "explained", "partly explained", "unexplained"}
+
+
+def _diagnosed(label: str, items: list[Any], units: Any) -> None:
+    """``diagnose`` ends in a Diagnosis with finite costs or a named refusal; the time is printed."""
+    t0 = time.perf_counter()
+    c0 = time.process_time()
+    try:
+        d, _ = _quiet(bw.diagnose, items, y_unit=units.get("y", ""), u_unit=units.get("u", ""))
+    except bw.BoucWenIdError as exc:  # a named refusal is a valid outcome; any other exception fails
+        print(f"\n[benchmark] diagnose {label}: refused ({type(exc).__name__})")
+        return
+    wall, cpu = time.perf_counter() - t0, time.process_time() - c0
+    print(f"\n[benchmark] diagnose {label}: {wall:.1f} s wall, {cpu:.1f} s CPU (target <= 10 s on two cores)")
+    assert d.status in DIAGNOSIS_STATUSES, d.status
+    assert math.isfinite(d.plain.cost) and math.isfinite(d.final.cost), d.summary()
+    assert d.final.cost <= d.plain.cost * (1 + 1e-9), "the final model fits worse than the plain one"
+    assert d.verdict and d.seconds > 0
+
+
+def test_diagnose_wire_rope_a2_raw_files_as_the_cli_reads_them(data_dir: Path) -> None:
+    """The four A2 files read raw (no time column, 10240 Hz; the previous level's first second included):
+    the extrapolated gain of G overflowed ``math.exp`` here (OverflowError, issue 18)."""
+    folder = data_dir / ad.DATASETS["wire-rope"]
+    paths = [folder / f for f in ad.WIRE_ROPE_FILES if "A2" in f]
+    items, _ = _quiet(lambda: list(bw.load(paths, columns={"u": 1, "y": 0}, sample_rate=ad.WIRE_ROPE_RATE)))
+    assert len(items) == 4
+    _diagnosed("wire-rope A2 (raw)", items, {})
+
+
+def test_cli_diagnose_wire_rope_reports_progress_and_no_internal_error(
+    data_dir: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from bouc_wen_id.cli import main
+
+    folder = data_dir / ad.DATASETS["wire-rope"]
+    paths = [str(folder / f) for f in ("16Hz_A2.txt", "22Hz_A2.txt")]
+    argv = ["diagnose", "--columns", "u=1", "y=0", "--sample-rate", "10240", "--no-figures"]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        code = main([*argv, "--candidates", "offset,viscous", "--out", str(tmp_path / "d"), *paths])
+    out, err = capsys.readouterr()
+    assert "internal error" not in err, err
+    assert code == 0, err
+    assert "diagnose:" in err and "fitting the plain model" in err and err.rstrip().endswith("done")
+    assert "diagnose:" not in out, "progress goes to stderr, the verdict to stdout"
+
+
+@pytest.mark.parametrize("dataset", ["wire-rope", "friction-damper", "bh-microwire"])
+def test_diagnose_each_small_data_set_without_crash(dataset: str, data_dir: Path) -> None:
+    folder = data_dir / ad.DATASETS[dataset]
+    if dataset == "wire-rope":
+        items = [ad.load_wire_rope(folder / f) for f in ad.WIRE_ROPE_FILES]
+    elif dataset == "friction-damper":
+        items = [ad.load_friction_damper(folder / f) for f in ad.FRICTION_FILES]
+    else:
+        items = [_quiet(ad.load_bh_loop, folder / f)[0] for f in ad.BH_FILES]
+    _diagnosed(dataset, items, items[0].units)
+
+
+def test_diagnose_one_mr_current_level_without_crash(mr: dict[str, list[bw.Measurement]]) -> None:
+    """One coil current (0.5 A) across the six files, as studies/diagnose_real.py groups them."""
+    items = [mr[f][2] for f in ad.MR_FILES]
+    _diagnosed("mr-damper 0.5 A", items, items[0].units)

@@ -450,6 +450,7 @@ def _cmd_diagnose(args: argparse.Namespace) -> int:
         held_out_test=not args.no_held_out,
         y_unit=str(units.get("y", "")),
         u_unit=str(units.get("u", "")),
+        progress=True,
     )
     print(d.summary())
     with _staged(args) as staged:

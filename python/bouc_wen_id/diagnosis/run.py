@@ -39,6 +39,7 @@ from .fitting import (
     substeps_for,
 )
 from .locate import Localisation, adequacy_p, locate
+from .progress import Progress, ProgressCallback, reporter
 from .result import Diagnosis, ModelSummary, NamedTerm, Status, term_symbol_unit
 from .select import ALPHA, Alternative, FoldCache, Step, forward_select, held_out
 
@@ -321,6 +322,8 @@ class _Setup:
     skipped: dict[str, str]
     #: False when some experiment's noise floor is not measured noise (quantisation or numerical accuracy).
     measured_noise: bool = True
+    #: Where the stages are reported (:mod:`.progress`; quiet by default).
+    report: ProgressCallback = lambda stage, done, total: None
 
 
 def _settled(experiments: Any) -> tuple[Any, list[str]]:
@@ -545,6 +548,7 @@ def diagnose(
     held_out_test: bool = True,
     y_unit: str = "",
     u_unit: str = "",
+    progress: Progress = None,
 ) -> Diagnosis:
     """Diagnose what the Wiener-Bouc-Wen model leaves out of sine experiments.
 
@@ -566,6 +570,9 @@ def diagnose(
         Require a held-out improvement before naming a term (leave-one-experiment-out).
     y_unit, u_unit : str
         Units of the output and the input, for the reported term values.
+    progress : bool or callable, optional
+        Report the stages: True on stderr (a bar on a terminal, else a line per stage), a callable
+        ``progress(stage, done, total)`` receives each report; quiet by default.
 
     Returns
     -------
@@ -585,10 +592,12 @@ def diagnose(
         When not even the plain model can be fitted.
     """
     t0 = time.perf_counter()
+    report = reporter(progress)
     cands = _check_candidates(candidates)
     if not (0.0 < float(alpha) < 1.0):
         raise InvalidParameterError(f"alpha = {alpha!r} must lie in (0, 1)")
     _check_sizes(experiments)
+    report("preparing the averaged periods", 0, 1)
     items, notes = _settled(experiments)
     exps, qnotes = _noise_floors(items, prepare(items))
     _check_experiments(exps)
@@ -600,7 +609,8 @@ def diagnose(
             "not tested: every input is a pure sine (no harmonic above its noise floor), so the measured "
             "waveform adds nothing to the model"
         )
-    setup = _Setup(cands, float(alpha), held_out_test, (y_unit, u_unit), skipped, measured_noise=not qnotes)
+    units = (y_unit, u_unit)
+    setup = _Setup(cands, float(alpha), held_out_test, units, skipped, not qnotes, report)
     d = _diagnose_set(exps, setup, [*notes, *qnotes])
     named_deg = any(t.term in DRIFT_TERMS for t in d.named)
     drifting = [] if named_deg else _unsettled(exps)
@@ -681,12 +691,15 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
     s = scale_of(exps)
     sx = scaled(exps, s)
     substeps = substeps_for([e.ybar.size for e in sx])
+    setup.report("fitting the plain model", 0, 1)
     plain = fit_plain(exps, sx, s, substeps)
     # The distortion term's waveforms through G at their own frequencies, as the plain fit sees G.
     if Distortion.kind in cands:
+        setup.report("carrying the input's harmonics through G", 0, 1)
         sx = carry_through_g(sx, plain, substeps)
     before = _drift_checked(_localise(exps, sx, plain, s), exps)
     notes = list(notes)
+    setup.report("testing degradation (period blocks)", 0, 1)
     deg, fexps, fsx, start = _drift_stage(exps, sx, plain, s, substeps, setup, before.drift_detected, notes)
     named_deg = deg is not None and (deg.named if setup.held_out_test else deg.passed)
     noise_dof = sum(e.noise_dof for e in exps)
@@ -709,6 +722,7 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
     cache: FoldCache = {}
     steady = tuple(c for c in cands if c not in DRIFT_TERMS)
     kw: dict[str, Any] = {"alpha": alpha, "use_held_out": setup.held_out_test, "cache": cache}
+    kw["on_trial"] = lambda k, t, i, n: setup.report(f"step {k}: fitting candidate {t}", i, n)
     if passes and not targeted:
         notes.append(NO_TARGETED_STEP)
         final, steps = start, list[Step]()
@@ -734,7 +748,9 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
         fexps,
     )
     alternatives = tuple(a for st in steps for a in st.alternatives) + _drift_alternatives(deg, named_deg)
+    setup.report("held-out check of the final model", 0, 1)
     ho = held_out(fsx, start, final, substeps, cache) if final.params.terms else None
+    setup.report("done", 1, 1)
     return Diagnosis(
         status=status,
         verdict=verdict,

@@ -385,16 +385,16 @@ def forward_select(
     use_held_out: bool = True,
     cache: Optional[FoldCache] = None,
     targeted: bool = False,
+    on_trial: Optional[Any] = None,
 ) -> tuple[AugFit, list[Step]]:
     """Forward selection from ``plain``; ``adequate(fit) -> bool`` is the stopping test.
 
     ``targeted``: the global test accepted ``plain`` at ``alpha / 2``; the first step is the targeted one
     (module docstring), its candidates tested at ``alpha / 2``, and selection ends there unless it names one.
+    ``on_trial(step, term, index, count)``, when given, is called before each candidate's fit (progress).
     """
     memo: FoldCache = {} if cache is None else cache
-    current = plain
-    steps: list[Step] = []
-    first = targeted
+    current, steps, first = plain, list[Step](), targeted
     while first or not adequate(current):
         level = 0.5 * alpha if first else alpha
         remaining = [t for t in candidates if t not in current.params.terms]
@@ -404,7 +404,9 @@ def forward_select(
         d0 = dof_of(exps, current)
         excess = max(c0 - d0, 0.0)
         trials = []
-        for t in remaining:
+        for k, t in enumerate(remaining):
+            if on_trial is not None:  # progress: on_trial(step, term, index, count)
+                on_trial(len(steps) + 1, t, k, len(remaining))
             f = fit_with(exps, current, t, substeps)
             if f is None:
                 trials.append(Trial(t, math.nan, math.nan, math.nan, math.nan, math.nan, math.nan, False))
