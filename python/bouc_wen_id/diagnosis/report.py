@@ -108,7 +108,11 @@ def plot_held_out(d: Diagnosis, ax: Optional[Axes] = None) -> Axes:
     ax.bar(x - 0.2, ho.nrmse_before, width=0.4, color="tab:red", label="plain")
     ax.bar(x + 0.2, ho.nrmse_after, width=0.4, color="tab:blue", label="final")
     ax.set_xticks(x)
-    ax.set_xticklabels([str(j) for j in ho.folds], fontsize=7)
+    # Each bar named by its experiment (its source: the file or recording), not by its index.
+    names = [d.experiments[j].source or f"experiment {j}" for j in ho.folds]
+    ax.set_xticklabels(
+        names, fontsize=7, rotation=30 if len(names) > 4 else 0, ha="right" if len(names) > 4 else "center"
+    )
     ax.set_xlabel("held-out experiment")
     ax.set_ylabel("held-out NRMSE")
     ax.set_yscale("log")
