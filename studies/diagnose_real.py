@@ -277,13 +277,15 @@ def markdown(rows: list[dict[str, Any]], timing: dict[str, float]) -> str:
         if deg:
             yu = r.get("y_unit") or "[y]"
             du = f"1/({yu})^2" if " " in yu else f"1/{yu}^2"
+            # The drift term tested first: strength (delta_nu) or stiffness (delta_eta) degradation.
+            sym = next(k for k in ("delta_nu", "delta_eta") if k in deg)
             lines.append(
-                f"- degradation (drift space, period blocks): delta_nu = {deg['delta_nu']:.3g} "
+                f"- {deg.get('term', 'degradation')} (drift space, period blocks): {sym} = {deg[sym]:.3g} "
                 f"± {deg['standard_error']:.2g} {du}, p = {deg['p_adjusted']:.2g} (Bonferroni), "
                 f"share of the drift excess {deg['share_of_drift_excess']:.2f}, held-out "
                 f"{'better' if deg['held_out_improves'] else 'worse'}: "
                 f"{'named' if deg['named'] else 'not named'}"
-                + (" (a negative delta_nu is a stiffening, not a degradation)" if deg["delta_nu"] < 0 else "")
+                + (f" (a negative {sym} is a stiffening, not a degradation)" if deg[sym] < 0 else "")
             )
         for why in r.get("notes", []):
             lines.append(f"- note: {why}")
