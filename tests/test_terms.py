@@ -718,3 +718,12 @@ def test_zero_terms_reproduce_the_plain_simulation() -> None:
             assert_allclose(a.x, p.x, rtol=0, atol=1e-13 * _scale(p.x))
             assert_allclose(a.w, p.w, rtol=0, atol=1e-13 * _scale(p.w))
             assert_allclose(a.y[1:], p.y[1:], rtol=0, atol=1e-13 * _scale(p.y))
+
+
+def test_registry_lookups_refuse_unknown_names_and_places_by_name() -> None:
+    # A wrong term name or place is the library's InvalidParameterError, not a KeyError or a bare ValueError.
+    with pytest.raises(InvalidParameterError, match="unknown term 'nope'"):
+        bw.terms.physical_value("nope", 1.0)
+    with pytest.raises(InvalidParameterError, match="not a Place"):
+        bw.terms.Viscous.at("z")  # type: ignore[arg-type]
+    assert bw.terms.physical_value("viscous", 0.1) and not bw.terms.physical_value("viscous", -0.1)

@@ -223,9 +223,9 @@ class Term:
             return base
         sibling = _SIBLINGS.get((base.kind, place))
         if sibling is None:
+            where = Place(place).label if place in tuple(Place) else f"at {place!r} (not a Place)"
             raise InvalidParameterError(
-                f"{base.kind} cannot act {Place(place).label}; its places are "
-                f"{', '.join(p.label for p in base.places)}"
+                f"{base.kind} cannot act {where}; its places are {', '.join(p.label for p in base.places)}"
             )
         return sibling
 
@@ -756,6 +756,8 @@ DIAGNOSIS_CANDIDATES: tuple[str, ...] = STEADY_TERM_NAMES + tuple(
 
 def physical_value(name: str, value: float) -> bool:
     """Whether ``value`` lies in the physical range of the term called ``name`` (:attr:`Term.physical`)."""
+    if name not in TERMS:
+        raise InvalidParameterError(f"unknown term {name!r}; the terms are {', '.join(TERMS)}")
     lo, hi = TERMS[name].physical
     return lo <= value <= hi
 
