@@ -113,3 +113,10 @@ from . import interop  # noqa: E402
 from .tfit import FrequencyPrediction, TransferFunctionFit, fit_transfer_function  # noqa: E402
 
 __all__ += ["interop", "fit_transfer_function", "TransferFunctionFit", "FrequencyPrediction"]
+
+# Feedforward hysteresis compensation (issue 21, item 1): the command that makes a model follow a reference.
+from . import compensation  # noqa: E402
+from .compensation import Compensation, LimitHit, compensate  # noqa: E402
+from .errors import UnreachableReferenceError  # noqa: E402
+
+__all__ += ["compensation", "compensate", "Compensation", "LimitHit", "UnreachableReferenceError"]

@@ -31,6 +31,7 @@ __all__ = [
     "TransientWarning",
     "DistortedInputWarning",
     "PoorFitWarning",
+    "UnreachableReferenceError",
 ]
 
 
@@ -142,3 +143,10 @@ class DistortedInputWarning(UserWarning):
 
 class PoorFitWarning(UserWarning):
     """A fitted model does not describe the data it was fitted to: its own residuals refute it."""
+
+
+# Feedforward compensation (issue 21, item 1).
+class UnreachableReferenceError(InvalidParameterError):
+    """A reference output the model cannot produce: beyond the hysteresis' saturation level ``w_sat`` (the
+    inverse Bouc-Wen operator is defined only for ``-w_sat- < w < w_sat+``), or a linear part that cannot be
+    inverted (a zero on the imaginary axis)."""
