@@ -22,6 +22,7 @@ pub mod average;
 pub mod bouc_wen;
 pub mod budget;
 pub mod cancel;
+pub mod compensate;
 pub mod error;
 pub mod estimate;
 pub mod lab;

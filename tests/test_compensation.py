@@ -236,3 +236,59 @@ def test_terms_accepted_and_reported() -> None:
     assert "asymmetry delta = 0.2" in c.choices["hysteresis"]
     assert "coulomb" in c.choices["terms"] and "offset y0 = 0.1" in c.choices["terms"]
     assert _interior_error(c.y_predicted, ref + 0.1) < 0.03
+
+
+# ------------------------------------------------------------------------------------------------------
+# Parity: the Rust kernels (rust/compensate.rs) against their NumPy oracle (reference/compensate.py)
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_invert_path_parity_on_random_inputs(seed: int) -> None:
+    rng = np.random.default_rng(100 + seed)
+    beta = rng.uniform(0.2, 2.0)
+    gamma = rng.uniform(-0.9 * beta, beta)
+    alpha, mu = rng.uniform(0.5, 2.0), rng.uniform(1.0, 3.0)
+    delta = rng.uniform(-0.8, 0.8) * (beta + gamma)
+    hy = bw.BoucWen(beta, gamma, mu, alpha)
+    down, up = saturation_levels(hy, delta)
+    w = np.clip(np.cumsum(rng.normal(0, 0.05 * up, 500)), -0.97 * down, 0.97 * up)
+    w0 = float(rng.uniform(-0.5 * down, 0.5 * up))
+    x0 = float(rng.normal())
+    args = (alpha, beta, gamma, mu, delta, w0, x0)
+    rust = bw._backend.get_backend("rust").compensate.invert_path(w, *args)
+    ref = bw._backend.get_backend("numpy").compensate.invert_path(w, *args)
+    np.testing.assert_allclose(rust, ref, rtol=1e-12, atol=1e-12 * float(np.max(np.abs(ref))))
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_rate_limit_parity_on_random_inputs(seed: int) -> None:
+    rng = np.random.default_rng(200 + seed)
+    target = np.cumsum(rng.normal(0, 1.0, 400))
+    step, start = float(rng.uniform(0.1, 1.5)), float(rng.normal())
+    rust = bw._backend.get_backend("rust").compensate.rate_limit(target, step, start)
+    ref = bw._backend.get_backend("numpy").compensate.rate_limit(target, step, start)
+    np.testing.assert_allclose(rust, ref, rtol=0, atol=1e-12)
+    assert np.max(np.abs(np.diff(np.concatenate(([start], rust))))) <= step * (1 + 1e-12)
+
+
+@pytest.mark.parametrize("backend", ["rust", "numpy"])
+def test_kernel_errors_are_the_same_named_ones(backend: str) -> None:
+    core = bw._backend.get_backend(backend).compensate
+    with pytest.raises(bw.NonFiniteError):
+        core.invert_path(np.array([0.1, np.nan]), 1.0, 0.7, 0.3, 1.5, 0.0, 0.0, 0.0)
+    with pytest.raises(bw.InvalidParameterError, match="invertible range"):
+        core.invert_path(np.array([0.1, 1.0]), 1.0, 0.7, 0.3, 1.5, 0.0, 0.0, 0.0)
+    with pytest.raises(bw.InvalidParameterError, match="invertible range"):
+        core.invert_path(np.array([0.1]), 1.0, 0.3, 0.7, 1.5, 0.0, 0.0, 0.0)  # beta < gamma
+    with pytest.raises(bw.InvalidParameterError, match="step"):
+        core.rate_limit(np.array([1.0]), 0.0, 0.0)
+
+
+def test_compensate_numpy_backend_agrees_with_rust() -> None:
+    plant = bw.WienerPlant(bw.TransferFunction([1.0], [0.005, 1.0], 0.002), HY)
+    t, ref = _reference(400, 1.0, 2.0, 0.7, seed=9)
+    rust = bw.compensate(plant, ref, t, rate_max=5.0)
+    ref_np = bw.compensate(plant, ref, t, rate_max=5.0, backend="numpy")
+    np.testing.assert_allclose(rust.x_reference, ref_np.x_reference, rtol=1e-11, atol=1e-12)
+    np.testing.assert_allclose(rust.u, ref_np.u, rtol=1e-9, atol=1e-10)
+    assert [h.kind for h in rust.limits] == [h.kind for h in ref_np.limits] == ["rate"]

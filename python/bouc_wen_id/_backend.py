@@ -11,6 +11,7 @@ part            Rust (``rust/bindings/``)                    NumPy (``backend="n
 ``augmented``   ``augmented_output``, ``augmented_refine``   :mod:`bouc_wen_id.reference.augmented`
 ``multistart``  ``refine_many`` (all cores, GIL released)    ``None``: the starts run one by one
 ``lab``         the fused harmonic kernels (``rust/lab``)    no kernel: ``signal/`` runs its NumPy paths
+``compensate``  ``invert_path``, ``rate_limit``              :mod:`bouc_wen_id.reference.compensate`
 ==============  ===========================================  ================================================
 
 mypy checks the Rust stub (``_core.pyi``) and the reference against the Protocols (the block at the end), so
@@ -38,6 +39,7 @@ Backend = Literal["rust", "numpy"]
 __all__ = [
     "Augmented",
     "Backend",
+    "Compensate",
     "Lab",
     "MultiStart",
     "Paper",
@@ -468,6 +470,16 @@ class _NumpyLab:
         return None
 
 
+class Compensate(Protocol):
+    """The feedforward compensation kernels (``rust/compensate.rs``; NumPy: :mod:`.reference.compensate`)."""
+
+    def invert_path(
+        self, w: _F, alpha: float, beta: float, gamma: float, mu: float, delta: float, w0: float, x0: float
+    ) -> _F: ...
+
+    def rate_limit(self, target: _F, step: float, start: float) -> _F: ...
+
+
 @dataclass(frozen=True)
 class Parts:
     """The numerics of one backend, one typed part per domain (module docstring)."""
@@ -477,6 +489,7 @@ class Parts:
     augmented: Augmented
     lab: Lab
     multistart: Optional[MultiStart]
+    compensate: Compensate
 
 
 def _check_name(name: object) -> Backend:
@@ -492,11 +505,12 @@ def _parts(name: Backend) -> Parts:
     if name == "rust":
         from . import _core
 
-        return Parts("rust", _core, _core, _RustLab(), _core)
+        return Parts("rust", _core, _core, _RustLab(), _core, compensate=_core)
     from . import reference
     from .reference import augmented
+    from .reference import compensate as reference_compensate
 
-    return Parts("numpy", reference, augmented, _NumpyLab(), None)
+    return Parts("numpy", reference, augmented, _NumpyLab(), None, compensate=reference_compensate)
 
 
 def get_backend(name: object) -> Parts:
@@ -549,3 +563,7 @@ if TYPE_CHECKING:  # pragma: no cover - the static check that both backends impl
     _RUST_MULTISTART: MultiStart = _core
     _RUST_LAB: Lab = _RustLab()
     _NUMPY_LAB: Lab = _NumpyLab()
+    from .reference import compensate as _reference_compensate
+
+    _RUST_COMPENSATE: Compensate = _core
+    _NUMPY_COMPENSATE: Compensate = _reference_compensate

@@ -48,6 +48,9 @@ __all__ = [
     "harmonic_gauss_newton",
     "cholesky_upper",
     "padded_spectrum",
+    # feedforward compensation (rust/bindings/compensate.rs)
+    "invert_path",
+    "rate_limit",
 ]
 
 _F = NDArray[np.float64]
@@ -271,3 +274,10 @@ def harmonic_series(theta: _F, coef: _F) -> _F: ...
 def harmonic_gauss_newton(theta: _F, tau: _F, x: _F, coef: _F) -> tuple[float, float, float, _F]: ...
 def cholesky_upper(gram: _F, m: int) -> _F: ...
 def padded_spectrum(x: _F, nfft: int) -> _F: ...
+
+# ---- feedforward compensation (rust/bindings/compensate.rs, issue 21) ----------------------------------
+
+def invert_path(
+    w: _F, alpha: float, beta: float, gamma: float, mu: float, delta: float, w0: float, x0: float
+) -> _F: ...
+def rate_limit(target: _F, step: float, start: float) -> _F: ...

@@ -32,6 +32,7 @@ use pyo3::prelude::*;
 
 mod augmented;
 mod budget;
+mod compensate;
 mod convert;
 mod detach;
 mod lab;
@@ -51,5 +52,6 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     budget::register(m)?;
     lab::register(m)?;
     testing::register(m)?;
+    compensate::register(m)?;
     Ok(())
 }

@@ -25,6 +25,7 @@ module             checks                          routines
 ``profile``        ``rust/profile.rs``             ``profile_phase_sls``, ``profile_phase_gain``
 ``refine``         ``rust/refine.rs``              ``levenberg_marquardt``, ``refine``
 ``terms``          ``rust/terms.rs``               ``augmented_output``, ``augmented_refine``
+``compensate``     ``rust/compensate.rs``          ``invert_path``, ``rate_limit`` (feedforward, issue 21)
 =================  ==============================  =====================================================
 
 References
