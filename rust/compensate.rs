@@ -101,7 +101,11 @@ impl Element {
 /// levels, or an inadmissible element ([`CoreError::InvalidParameter`]).
 pub fn invert_path(w: &[f64], element: &Element, x0: f64) -> Result<Vec<f64>> {
     let e = element;
-    if !(e.alpha > 0.0 && e.mu >= 1.0 && e.beta + e.gamma - e.delta.abs() > 0.0 && e.beta >= e.gamma) {
+    if !(e.alpha > 0.0
+        && e.mu >= 1.0
+        && e.beta + e.gamma - e.delta.abs() > 0.0
+        && e.beta >= e.gamma)
+    {
         return Err(CoreError::InvalidParameter(format!(
             "the element (alpha {}, beta {}, gamma {}, mu {}, delta {}) has no invertible range",
             e.alpha, e.beta, e.gamma, e.mu, e.delta

@@ -51,7 +51,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any, Literal, Optional, Union
+from typing import Literal, Optional, Union
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -397,26 +397,6 @@ def _check_terms(terms: tuple[Term, ...]) -> None:
             )
 
 
-def _mech(terms: tuple[Term, ...], u: FloatArray, dt: float) -> FloatArray:
-    """``k u + c udot + m uddot + f tanh(udot/(eps Vmax))`` of the command (finite differences)."""
-    out = np.zeros_like(u)
-    if not any(isinstance(t, (Stiffness, Viscous, Inertia, Coulomb)) for t in terms):
-        return out
-    ud = np.gradient(u, dt, edge_order=2)
-    udd = np.gradient(ud, dt, edge_order=2)
-    peak = float(np.max(np.abs(ud)))
-    for t in terms:
-        if isinstance(t, Stiffness):
-            out += t.k * u
-        elif isinstance(t, Viscous):
-            out += t.c * ud
-        elif isinstance(t, Inertia):
-            out += t.m * udd
-        elif isinstance(t, Coulomb) and peak > 0:
-            out += t.f * np.tanh(ud / (t.smoothing * peak))
-    return np.asarray(out)
-
-
 def _output_target(plant: WienerPlant, y: FloatArray, dt: float) -> tuple[FloatArray, list[str]]:
     """``F`` from the reference: the offset removed, the sensor lag inverted."""
     said = []
@@ -706,16 +686,3 @@ def _choices(
         parts.append(f"the direct inverse refined by {sweeps} model-based iterations")
     out["terms"] = "; ".join(parts) if parts else "none"
     return out
-
-
-def _summary_dict(c: Compensation) -> dict[str, Any]:
-    """JSON-ready summary of a compensation (used by the bench and docs)."""
-    return {
-        "choices": c.choices,
-        "filter_order": c.filter_order,
-        "cutoff": c.cutoff,
-        "preview": c.preview,
-        "saturation_use": c.saturation_use,
-        "tracking_error": c.tracking_error,
-        "limits": [hit.describe() for hit in c.limits],
-    }

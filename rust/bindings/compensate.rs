@@ -53,6 +53,8 @@ fn rate_limit<'py>(
     #[pyo3(from_py_with = arg)] start: f64,
 ) -> PyResult<Vector<'py>> {
     let target = slice("target", &target)?;
-    let out = detach::by_size(py, target.len(), || compensate::rate_limit(target, step, start))?;
+    let out = detach::by_size(py, target.len(), || {
+        compensate::rate_limit(target, step, start)
+    })?;
     Ok(out.into_pyarray(py))
 }
