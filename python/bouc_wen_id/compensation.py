@@ -254,6 +254,11 @@ class _LinearInverse:
     choices: dict[str, str]
 
 
+def _roots_text(z: NDArray[np.complex128]) -> str:
+    """Roots in words: real ones as reals, complex ones as ``a+bj`` (6 significant digits)."""
+    return "[" + ", ".join(f"{r.real:.6g}" if r.imag == 0 else f"{r:.6g}" for r in z) + "]"
+
+
 def _f64(v: ArrayLike) -> FloatArray:
     return np.asarray(v, dtype=np.float64)
 
@@ -280,13 +285,13 @@ def _linear_inverse(lin: TransferFunction, cutoff: float, nmp: str) -> _LinearIn
     if right.size and nmp == "mirror":
         left = np.concatenate((left, -np.conj(right)))
         choices["nonminimum_phase"] = (
-            f"{right.size} right-half-plane zero(s) {np.round(right, 6).tolist()} replaced by their mirror "
+            f"{right.size} right-half-plane zero(s) {_roots_text(right)} replaced by their mirror "
             "images -conj(z): the gain is inverted exactly, the phase is not (a causal approximation)"
         )
         right = right[:0]
     elif right.size:
         choices["nonminimum_phase"] = (
-            f"{right.size} right-half-plane zero(s) {np.round(right, 6).tolist()} inverted exactly by a "
+            f"{right.size} right-half-plane zero(s) {_roots_text(right)} inverted exactly by a "
             "stable anti-causal filter run backward in time over the known reference (stable inversion)"
         )
     else:
