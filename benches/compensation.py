@@ -125,10 +125,10 @@ def plant_output(plant: bw.WienerPlant, t: FloatArray, u: FloatArray) -> FloatAr
             v = v + term.k * spline(tf)
         elif isinstance(term, Viscous):
             v = v + term.c * spline(tf, 1)
-    lag = plant.term("sensor_lag")
+    lag = next((t for t in plant.terms if isinstance(t, SensorLag)), None)
     if isinstance(lag, SensorLag) and lag.tau > 0:
         _, v, _ = lsim(([1.0], [lag.tau, 1.0]), v, tf, X0=[v[0] / 1.0 * lag.tau])
-    off = plant.term("offset")
+    off = next((t for t in plant.terms if isinstance(t, Offset)), None)
     y0 = off.y0 if isinstance(off, Offset) else 0.0
     return np.asarray(v[::FINE] + y0)
 
@@ -207,7 +207,7 @@ def baselines(model: bw.WienerPlant, t: FloatArray, y_ref: FloatArray) -> dict[s
     constant phase lead for the hysteresis, fitted on the model)."""
     from bouc_wen_id.compensation import _invert_linear, _linear_inverse
 
-    off = model.term("offset")
+    off = next((t for t in model.terms if isinstance(t, Offset)), None)
     y0 = off.y0 if isinstance(off, Offset) else 0.0
     target = y_ref - y0
     dt = float(t[1] - t[0])

@@ -393,6 +393,11 @@ def _plant_of(model: Model, linear: Optional[TransferFunction]) -> tuple[WienerP
     )
 
 
+def _term(plant: WienerPlant, cls: type[Term]) -> Optional[Term]:
+    """The plant's term of class ``cls`` (by class, so that no code name is spelled here), or None."""
+    return next((t for t in plant.terms if isinstance(t, cls)), None)
+
+
 def _check_terms(terms: tuple[Term, ...]) -> None:
     for t in terms:
         if t.place == Place.X or not isinstance(t, _SUPPORTED):
@@ -406,11 +411,11 @@ def _output_target(plant: WienerPlant, y: FloatArray, dt: float) -> tuple[FloatA
     """``F`` from the reference: the offset removed, the sensor lag inverted."""
     said = []
     v = y.copy()
-    off = plant.term("offset")
+    off = _term(plant, Offset)
     if isinstance(off, Offset) and off.y0 != 0.0:
         v -= off.y0
         said.append(f"offset y0 = {off.y0:g} subtracted")
-    lag = plant.term("sensor_lag")
+    lag = _term(plant, SensorLag)
     if isinstance(lag, SensorLag) and lag.tau > 0.0:
         v = v + lag.tau * np.gradient(v, dt, edge_order=2)
         said.append(f"sensor lag tau = {lag.tau:g} s inverted: F = v + tau dv/dt (finite differences)")
@@ -524,7 +529,7 @@ def compensate(
     lim_u, lim_rate = _positive("u_max", u_max), _positive("rate_max", rate_max)
     wf = _positive("cutoff", cutoff)
     inv = _linear_inverse(plant.linear, _default_cutoff(y, dt) if wf is None else wf, nmp)
-    asym = plant.term("asymmetry")
+    asym = _term(plant, Asymmetry)
     delta = asym.delta if isinstance(asym, Asymmetry) else 0.0
     target, said_terms = _output_target(plant, y, dt)
     mech_terms = tuple(t for t in plant.terms if isinstance(t, (Stiffness, Viscous, Inertia, Coulomb)))
