@@ -24,6 +24,7 @@ pub mod budget;
 pub mod cancel;
 pub mod error;
 pub mod estimate;
+pub mod feedback;
 pub mod lab;
 pub mod linear;
 pub mod multistart;

@@ -113,3 +113,9 @@ from . import interop  # noqa: E402
 from .tfit import FrequencyPrediction, TransferFunctionFit, fit_transfer_function  # noqa: E402
 
 __all__ += ["interop", "fit_transfer_function", "TransferFunctionFit", "FrequencyPrediction"]
+
+# Issue #20 items 1 and 4: Bouc-Wen in feedback (the Noel-Schoukens benchmark's structure), fitted to records
+# of any waveform.
+from .timedomain import FeedbackFit, FeedbackModel, fit_feedback  # noqa: E402
+
+__all__ += ["fit_feedback", "FeedbackModel", "FeedbackFit"]

@@ -38,11 +38,13 @@ Backend = Literal["rust", "numpy"]
 __all__ = [
     "Augmented",
     "Backend",
+    "Feedback",
     "Lab",
     "MultiStart",
     "Paper",
     "Parts",
     "current_lab",
+    "feedback_part",
     "get_backend",
     "push_budget",
     "selected",
@@ -536,6 +538,45 @@ def push_budget(max_samples: int, max_steps: int, max_bytes: int) -> None:
     except ImportError:  # pragma: no cover - a build without the extension
         return
     _core.set_budget(max_samples, max_steps, max_bytes)
+
+
+# --- Bouc-Wen in feedback (issue #20; rust/feedback.rs, reference/feedback.py) ---------------------------
+
+
+class Feedback(Protocol):
+    """The feedback system ``m ydd + c yd + k y + z = u`` with Bouc-Wen ``z`` (``rust/feedback.rs``): RK4
+    simulation with the forward sensitivities w.r.t. ``[m, c, k, alpha, beta*gamma, beta*delta, nu, x0]``."""
+
+    def feedback_simulate(
+        self,
+        theta: Sequence[float] | _F,
+        x0: Sequence[float] | _F,
+        u: _F,
+        dt: float,
+        upsample: int,
+        substeps: int,
+        sensitivities: bool = True,
+    ) -> tuple[_F, _F, _F]: ...
+
+
+def feedback_part(name: object) -> Feedback:
+    """The feedback kernels of backend ``name`` ("rust" or "numpy"; anything else is
+    :class:`InvalidParameterError`)."""
+    if _check_name(name) == "rust":
+        from . import _core
+
+        return _core
+    from .reference import feedback
+
+    return feedback
+
+
+if TYPE_CHECKING:  # pragma: no cover - both backends implement the feedback part
+    from . import _core as _core_fb
+    from .reference import feedback as _reference_feedback
+
+    _RUST_FEEDBACK: Feedback = _core_fb
+    _NUMPY_FEEDBACK: Feedback = _reference_feedback
 
 
 if TYPE_CHECKING:  # pragma: no cover - the static check that both backends implement every part

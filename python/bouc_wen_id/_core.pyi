@@ -15,6 +15,7 @@ __all__ = [
     "__version__",
     "simulate_sine",
     "simulate_sampled",
+    "feedback_simulate",
     "periodic_average",
     "phase_from_max",
     "spectral_derivative",
@@ -205,6 +206,17 @@ def augmented_output(
     phase: float,
     substeps: int,
     waveform: _F | None = None,
+) -> tuple[_F, _F, _F]: ...
+
+# Bouc-Wen in feedback (rust/bindings/feedback.rs, issue #20)
+def feedback_simulate(
+    theta: Sequence[float] | _F,
+    x0: Sequence[float] | _F,
+    u: _F,
+    dt: float,
+    upsample: int,
+    substeps: int,
+    sensitivities: bool = True,
 ) -> tuple[_F, _F, _F]: ...
 def augmented_refine(
     ybars: Sequence[_F],

@@ -34,6 +34,7 @@ mod augmented;
 mod budget;
 mod convert;
 mod detach;
+mod feedback;
 mod lab;
 mod paper;
 mod refine;
@@ -48,6 +49,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     paper::register(m)?;
     refine::register(m)?;
     augmented::register(m)?;
+    feedback::register(m)?;
     budget::register(m)?;
     lab::register(m)?;
     testing::register(m)?;

@@ -22,3 +22,8 @@ __all__ = [
     "as_time_records",
     "check_memory",
 ]
+
+# Bouc-Wen in feedback (issue #20, the benchmark's structure): model, fit, band-limited input reconstruction.
+from ._feedback import FEEDBACK_PARAMETERS, FeedbackFit, FeedbackModel, fit_feedback, upsample_input  # noqa: E402
+
+__all__ += ["FEEDBACK_PARAMETERS", "FeedbackFit", "FeedbackModel", "fit_feedback", "upsample_input"]
