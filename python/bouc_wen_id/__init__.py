@@ -114,8 +114,8 @@ from .tfit import FrequencyPrediction, TransferFunctionFit, fit_transfer_functio
 
 __all__ += ["interop", "fit_transfer_function", "TransferFunctionFit", "FrequencyPrediction"]
 
-# Issue #20 items 1 and 4: Bouc-Wen in feedback (the Noel-Schoukens benchmark's structure), fitted to records
-# of any waveform.
-from .timedomain import FeedbackFit, FeedbackModel, fit_feedback  # noqa: E402
+# Issue #20 items 1, 2 and 4: Bouc-Wen in feedback (the Noel-Schoukens benchmark's structure), fitted to
+# records of any waveform or to averaged steady sine periods.
+from .timedomain import FeedbackFit, FeedbackModel, fit_feedback, fit_feedback_sines  # noqa: E402
 
-__all__ += ["fit_feedback", "FeedbackModel", "FeedbackFit"]
+__all__ += ["fit_feedback", "fit_feedback_sines", "FeedbackModel", "FeedbackFit"]

@@ -545,7 +545,8 @@ def push_budget(max_samples: int, max_steps: int, max_bytes: int) -> None:
 
 class Feedback(Protocol):
     """The feedback system ``m ydd + c yd + k y + z = u`` with Bouc-Wen ``z`` (``rust/feedback.rs``): RK4
-    simulation with the forward sensitivities w.r.t. ``[m, c, k, alpha, beta*gamma, beta*delta, nu, x0]``."""
+    simulation with the forward sensitivities w.r.t. ``[m, c, k, alpha, beta*gamma, beta*delta, nu, x0]``,
+    and the periodic steady state under a sine (Newton shooting with the monodromy matrix)."""
 
     def feedback_simulate(
         self,
@@ -557,6 +558,18 @@ class Feedback(Protocol):
         substeps: int,
         sensitivities: bool = True,
     ) -> tuple[_F, _F, _F]: ...
+
+    def feedback_periodic(
+        self,
+        theta: Sequence[float] | _F,
+        amplitude: float,
+        omega: float,
+        samples: int,
+        substeps: int,
+        settle_periods: int = 2,
+        max_iter: int = 50,
+        tol: float = 1e-10,
+    ) -> tuple[_F, _F, _F, int]: ...
 
 
 def feedback_part(name: object) -> Feedback:

@@ -16,6 +16,7 @@ __all__ = [
     "simulate_sine",
     "simulate_sampled",
     "feedback_simulate",
+    "feedback_periodic",
     "periodic_average",
     "phase_from_max",
     "spectral_derivative",
@@ -218,6 +219,16 @@ def feedback_simulate(
     substeps: int,
     sensitivities: bool = True,
 ) -> tuple[_F, _F, _F]: ...
+def feedback_periodic(
+    theta: Sequence[float] | _F,
+    amplitude: float,
+    omega: float,
+    samples: int,
+    substeps: int,
+    settle_periods: int = 2,
+    max_iter: int = 50,
+    tol: float = 1e-10,
+) -> tuple[_F, _F, _F, int]: ...
 def augmented_refine(
     ybars: Sequence[_F],
     amplitudes: Sequence[float] | _F,

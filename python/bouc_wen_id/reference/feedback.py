@@ -10,16 +10,16 @@ by Catmull-Rom cubics, as ``reference/simulate.py`` does.  Plain Python loops: s
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..errors import InsufficientDataError, InvalidParameterError, NonFiniteError
+from ..errors import InsufficientDataError, InvalidParameterError, NonFiniteError, NotConvergedError
 from ..validation import finite_array as _finite_array
 from ..validation import finite_scalar as _finite_scalar
 
-__all__ = ["feedback_simulate"]
+__all__ = ["feedback_periodic", "feedback_simulate"]
 
 FloatArray = NDArray[np.float64]
 
@@ -113,22 +113,18 @@ def _sens_rate(d: FloatArray, s: FloatArray) -> FloatArray:
     return out
 
 
-def feedback_simulate(
-    theta: Sequence[float] | FloatArray,
-    x0: Sequence[float] | FloatArray,
-    u: FloatArray,
+def _integrate(
+    th: FloatArray,
+    x0: FloatArray,
+    source: Callable[[float], float],
     dt: float,
-    upsample: int,
+    n: int,
     substeps: int,
-    sensitivities: bool = True,
-) -> tuple[FloatArray, FloatArray, FloatArray]:
-    """``(y, jacobian, state)``: ``y`` on the output grid (``(u.size - 1) // upsample + 1`` samples), the
-    Jacobian ``d y / d [theta, x0]`` (``n x 10``; ``n x 0`` without ``sensitivities``) and the final state."""
-    th, xx, uu, dt_f = _check(theta, x0, u, dt, upsample, substeps)
-    n = (uu.size - 1) // upsample + 1
-    slopes, du = _hermite(uu, dt_f / upsample)
-    h = dt_f / substeps
-    x = xx.copy()
+    sensitivities: bool,
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+    """RK4 over ``n`` output samples: ``(y, jacobian, final state, final state sensitivity 3 x 10)``."""
+    h = dt / substeps
+    x = np.array(x0, dtype=np.float64)
     s = np.zeros((3, N_COLS))
     s[:, N_PARAMS:] = np.eye(3)
     y = np.empty(n)
@@ -140,10 +136,10 @@ def feedback_simulate(
                 jac[kk] = s[0]
             if kk == n - 1:
                 break
-            t = kk * dt_f
+            t = kk * dt
             for step in range(substeps):
                 ts = t + step * h
-                u0, um, u1 = (_interp(uu, slopes, du, tt) for tt in (ts, ts + 0.5 * h, ts + h))
+                u0, um, u1 = (source(tt) for tt in (ts, ts + 0.5 * h, ts + h))
                 f1, d1 = _eval(th, x, u0)
                 f2, d2 = _eval(th, x + 0.5 * h * f1, um)
                 f3, d3 = _eval(th, x + 0.5 * h * f2, um)
@@ -158,8 +154,78 @@ def feedback_simulate(
     if not (np.all(np.isfinite(y)) and np.all(np.isfinite(x))):
         bad = int(np.argmax(~np.isfinite(y))) if not np.all(np.isfinite(y)) else n - 1
         raise NonFiniteError(
-            f"the feedback simulation blew up at sample {bad} (t = {bad * dt_f:.6e} s); the parameters "
+            f"the feedback simulation blew up at sample {bad} (t = {bad * dt:.6e} s); the parameters "
             f"[m, c, k, alpha, beta*gamma, beta*delta, nu] = {th.tolist()} make the state overflow at this "
             "input level; use parameters of moderate size or more substeps"
         )
+    return y, jac, x, s
+
+
+def feedback_simulate(
+    theta: Sequence[float] | FloatArray,
+    x0: Sequence[float] | FloatArray,
+    u: FloatArray,
+    dt: float,
+    upsample: int,
+    substeps: int,
+    sensitivities: bool = True,
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """``(y, jacobian, state)``: ``y`` on the output grid (``(u.size - 1) // upsample + 1`` samples), the
+    Jacobian ``d y / d [theta, x0]`` (``n x 10``; ``n x 0`` without ``sensitivities``) and the final state."""
+    th, xx, uu, dt_f = _check(theta, x0, u, dt, upsample, substeps)
+    n = (uu.size - 1) // upsample + 1
+    slopes, du = _hermite(uu, dt_f / upsample)
+    y, jac, x, _ = _integrate(th, xx, lambda t: _interp(uu, slopes, du, t), dt_f, n, substeps, sensitivities)
     return y, jac, x
+
+
+def feedback_periodic(
+    theta: Sequence[float] | FloatArray,
+    amplitude: float,
+    omega: float,
+    samples: int,
+    substeps: int,
+    settle_periods: int = 2,
+    max_iter: int = 50,
+    tol: float = 1e-10,
+) -> tuple[FloatArray, FloatArray, FloatArray, int]:
+    """One period of the periodic steady state under ``amplitude cos(omega t)`` by Newton shooting with the
+    monodromy matrix: ``(y, d y / d theta (samples x 7), x0*, iterations)``
+    (``rust/feedback/periodic.rs``)."""
+    th, _, _, _ = _check(theta, np.zeros(3), np.zeros(2), 1.0, 1, max(substeps, 1))
+    amp = _finite_scalar("amplitude", amplitude)
+    om = _finite_scalar("omega", omega)
+    tol = _finite_scalar("tol", tol)
+    if om <= 0.0 or samples < 4 or substeps < 1 or tol <= 0.0:
+        raise InvalidParameterError(
+            f"omega = {om} rad/s and tol = {tol} must be > 0, samples = {samples} >= 4, "
+            f"substeps = {substeps} >= 1"
+        )
+
+    def source(t: float) -> float:
+        return amp * math.cos(om * t)
+
+    dt = 2.0 * math.pi / om / samples
+    x0 = np.zeros(3)
+    if settle_periods > 0:
+        x0 = _integrate(th, x0, source, dt, samples * settle_periods + 1, substeps, False)[2]
+    for iteration in range(1, max_iter + 1):
+        y, jac, x_end, s_end = _integrate(th, x0, source, dt, samples + 1, substeps, True)
+        big_y = float(np.max(np.abs(y)))
+        scale = np.array([big_y, om * big_y, abs(amp) + abs(th[3]) * big_y])
+        f = x_end - x0
+        try:
+            inv = np.linalg.inv(s_end[:, N_PARAMS:] - np.eye(3))
+        except np.linalg.LinAlgError:
+            raise NotConvergedError(
+                f"the monodromy matrix minus the identity is singular at iteration {iteration}"
+            ) from None
+        if np.all(np.abs(f) <= tol * np.maximum(scale, np.finfo(float).tiny)):
+            dx0 = -inv @ s_end[:, :N_PARAMS]
+            total = jac[:samples, :N_PARAMS] + jac[:samples, N_PARAMS:] @ dx0
+            return y[:samples], total, x0, iteration
+        x0 = x0 - inv @ f
+    raise NotConvergedError(
+        f"the Newton shooting did not find the periodic state in {max_iter} iterations (amplitude = {amp}, "
+        f"omega = {om} rad/s); settle more periods first or raise max_iter"
+    )

@@ -25,5 +25,7 @@ __all__ = [
 
 # Bouc-Wen in feedback (issue #20, the benchmark's structure): model, fit, band-limited input reconstruction.
 from ._feedback import FEEDBACK_PARAMETERS, FeedbackFit, FeedbackModel, fit_feedback, upsample_input  # noqa: E402
+from ._feedback_sines import SineExperiment, fit_feedback_sines, steady_period  # noqa: E402
 
 __all__ += ["FEEDBACK_PARAMETERS", "FeedbackFit", "FeedbackModel", "fit_feedback", "upsample_input"]
+__all__ += ["SineExperiment", "fit_feedback_sines", "steady_period"]

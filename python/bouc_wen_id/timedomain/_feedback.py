@@ -463,7 +463,8 @@ def fit_feedback(
     problem = _prepare(
         recs, theta_ref, fixed, initial_state == "estimate", lead_in, upsample, periodic, substeps, backend
     )
-    candidates = random_starts(theta_ref, recs, starts, seed)
+    y_rms = float(np.sqrt(np.mean(np.concatenate([r.y for r in recs]) ** 2)))
+    candidates = random_starts(theta_ref, y_rms, starts, seed)
     screen = _truncated(problem, min(screen_samples, len(recs[0]) - problem.skips[0]), max(4, substeps // 2))
     with ThreadPoolExecutor(max(1, threads)) as pool:
         costs, best = [], None

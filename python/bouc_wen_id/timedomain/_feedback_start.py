@@ -61,13 +61,12 @@ def linear_start(recs: list[TimeRecord]) -> FloatArray:
     return np.array([m, 2.0 * zeta * wn * m, 0.5 * stiffness, 0.5 * stiffness, 0.0, 0.0, 1.0])
 
 
-def random_starts(theta_ref: FloatArray, recs: list[TimeRecord], n: int, seed: int) -> list[FloatArray]:
+def random_starts(theta_ref: FloatArray, y_rms: float, n: int, seed: int) -> list[FloatArray]:
     """``theta_ref`` then ``n - 1`` seeded draws: the mass and damping jittered, ``k + alpha`` kept and split
     at random, ``beta*gamma`` log-uniform over ``[0.1, 3] / y_rms`` and ``beta*delta`` a uniform multiple in
-    ``[-1.5, 1.5]`` of it, ``nu`` as in ``theta_ref``."""
+    ``[-1.5, 1.5]`` of it, ``nu`` as in ``theta_ref``; ``y_rms`` is the outputs' RMS."""
     n = count("starts", n, 1)
     rng = np.random.default_rng(seed)
-    y_rms = float(np.sqrt(np.mean(np.concatenate([r.y for r in recs]) ** 2)))
     if not y_rms > 0.0 or not math.isfinite(y_rms):
         raise InvalidParameterError("the outputs are identically zero: nothing to fit")
     out = [np.array(theta_ref, dtype=np.float64)]
