@@ -96,8 +96,8 @@ pub fn periodic_feedback(
             return Ok(finish(&sim, &inv, x0, samples, iteration));
         }
         let step = inv * nalgebra::Vector3::new(f[0], f[1], f[2]);
-        for i in 0..N_STATES {
-            x0[i] -= step[i];
+        for (i, v) in x0.iter_mut().enumerate() {
+            *v -= step[i];
         }
     }
     Err(CoreError::NotConverged(format!(
@@ -140,6 +140,7 @@ fn finish(
 }
 
 #[cfg(test)]
+#[allow(clippy::needless_range_loop)]
 mod tests {
     use super::super::{simulate_feedback, Sampling};
     use super::*;
