@@ -25,6 +25,7 @@ pub mod cancel;
 pub mod compensate;
 pub mod error;
 pub mod estimate;
+pub mod feedback;
 pub mod lab;
 pub mod linear;
 pub mod multistart;

@@ -120,3 +120,8 @@ from .compensation import Compensation, LimitHit, compensate  # noqa: E402
 from .errors import UnreachableReferenceError  # noqa: E402
 
 __all__ += ["compensation", "compensate", "Compensation", "LimitHit", "UnreachableReferenceError"]
+# Issue #20 items 1, 2 and 4: Bouc-Wen in feedback (the Noel-Schoukens benchmark's structure), fitted to
+# records of any waveform or to averaged steady sine periods.
+from .timedomain import FeedbackFit, FeedbackModel, fit_feedback, fit_feedback_sines  # noqa: E402
+
+__all__ += ["fit_feedback", "fit_feedback_sines", "FeedbackModel", "FeedbackFit"]

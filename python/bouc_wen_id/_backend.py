@@ -40,11 +40,13 @@ __all__ = [
     "Augmented",
     "Backend",
     "Compensate",
+    "Feedback",
     "Lab",
     "MultiStart",
     "Paper",
     "Parts",
     "current_lab",
+    "feedback_part",
     "get_backend",
     "push_budget",
     "selected",
@@ -550,6 +552,58 @@ def push_budget(max_samples: int, max_steps: int, max_bytes: int) -> None:
     except ImportError:  # pragma: no cover - a build without the extension
         return
     _core.set_budget(max_samples, max_steps, max_bytes)
+
+
+# --- Bouc-Wen in feedback (issue #20; rust/feedback.rs, reference/feedback.py) ---------------------------
+
+
+class Feedback(Protocol):
+    """The feedback system ``m ydd + c yd + k y + z = u`` with Bouc-Wen ``z`` (``rust/feedback.rs``): RK4
+    simulation with the forward sensitivities w.r.t. ``[m, c, k, alpha, beta*gamma, beta*delta, nu, x0]``,
+    and the periodic steady state under a sine (Newton shooting with the monodromy matrix)."""
+
+    def feedback_simulate(
+        self,
+        theta: Sequence[float] | _F,
+        x0: Sequence[float] | _F,
+        u: _F,
+        dt: float,
+        upsample: int,
+        substeps: int,
+        sensitivities: bool = True,
+    ) -> tuple[_F, _F, _F]: ...
+
+    def feedback_periodic(
+        self,
+        theta: Sequence[float] | _F,
+        amplitude: float,
+        omega: float,
+        samples: int,
+        substeps: int,
+        settle_periods: int = 2,
+        max_iter: int = 50,
+        tol: float = 1e-10,
+    ) -> tuple[_F, _F, _F, int]: ...
+
+
+def feedback_part(name: object) -> Feedback:
+    """The feedback kernels of backend ``name`` ("rust" or "numpy"; anything else is
+    :class:`InvalidParameterError`)."""
+    if _check_name(name) == "rust":
+        from . import _core
+
+        return _core
+    from .reference import feedback
+
+    return feedback
+
+
+if TYPE_CHECKING:  # pragma: no cover - both backends implement the feedback part
+    from . import _core as _core_fb
+    from .reference import feedback as _reference_feedback
+
+    _RUST_FEEDBACK: Feedback = _core_fb
+    _NUMPY_FEEDBACK: Feedback = _reference_feedback
 
 
 if TYPE_CHECKING:  # pragma: no cover - the static check that both backends implement every part

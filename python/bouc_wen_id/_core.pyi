@@ -15,6 +15,8 @@ __all__ = [
     "__version__",
     "simulate_sine",
     "simulate_sampled",
+    "feedback_simulate",
+    "feedback_periodic",
     "periodic_average",
     "phase_from_max",
     "spectral_derivative",
@@ -209,6 +211,27 @@ def augmented_output(
     substeps: int,
     waveform: _F | None = None,
 ) -> tuple[_F, _F, _F]: ...
+
+# Bouc-Wen in feedback (rust/bindings/feedback.rs, issue #20)
+def feedback_simulate(
+    theta: Sequence[float] | _F,
+    x0: Sequence[float] | _F,
+    u: _F,
+    dt: float,
+    upsample: int,
+    substeps: int,
+    sensitivities: bool = True,
+) -> tuple[_F, _F, _F]: ...
+def feedback_periodic(
+    theta: Sequence[float] | _F,
+    amplitude: float,
+    omega: float,
+    samples: int,
+    substeps: int,
+    settle_periods: int = 2,
+    max_iter: int = 50,
+    tol: float = 1e-10,
+) -> tuple[_F, _F, _F, int]: ...
 def augmented_refine(
     ybars: Sequence[_F],
     amplitudes: Sequence[float] | _F,

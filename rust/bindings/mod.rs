@@ -35,6 +35,7 @@ mod budget;
 mod compensate;
 mod convert;
 mod detach;
+mod feedback;
 mod lab;
 mod paper;
 mod refine;
@@ -49,6 +50,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     paper::register(m)?;
     refine::register(m)?;
     augmented::register(m)?;
+    feedback::register(m)?;
     budget::register(m)?;
     lab::register(m)?;
     testing::register(m)?;

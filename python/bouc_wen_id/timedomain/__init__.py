@@ -1,0 +1,31 @@
+"""Time-domain identification (issue #20): records of any waveform, a bounded Levenberg-Marquardt, and the
+model classes fitted to them by output error.
+
+Generic pieces (reused by every model class):
+
+* :class:`TimeRecord`, :func:`as_time_records`, :func:`check_memory` (``_records``): the data and its checks;
+* :func:`levenberg_marquardt`, :class:`LMResult` (``_lm``): the bounded search over stacked residuals with
+  an exact Jacobian.
+"""
+
+from __future__ import annotations
+
+from ._lm import LMResult, StopReason, levenberg_marquardt
+from ._records import MIN_SAMPLES, TimeRecord, as_time_records, check_memory
+
+__all__ = [
+    "LMResult",
+    "StopReason",
+    "levenberg_marquardt",
+    "MIN_SAMPLES",
+    "TimeRecord",
+    "as_time_records",
+    "check_memory",
+]
+
+# Bouc-Wen in feedback (issue #20, the benchmark's structure): model, fit, band-limited input reconstruction.
+from ._feedback import FEEDBACK_PARAMETERS, FeedbackFit, FeedbackModel, fit_feedback, upsample_input  # noqa: E402
+from ._feedback_sines import SineExperiment, fit_feedback_sines, steady_period  # noqa: E402
+
+__all__ += ["FEEDBACK_PARAMETERS", "FeedbackFit", "FeedbackModel", "fit_feedback", "upsample_input"]
+__all__ += ["SineExperiment", "fit_feedback_sines", "steady_period"]
