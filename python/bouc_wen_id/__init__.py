@@ -113,3 +113,10 @@ from . import interop  # noqa: E402
 from .tfit import FrequencyPrediction, TransferFunctionFit, fit_transfer_function  # noqa: E402
 
 __all__ += ["interop", "fit_transfer_function", "TransferFunctionFit", "FrequencyPrediction"]
+
+# Issue #20 items 1 and 3 (time-domain identification): the Wiener cascade fitted to records of any waveform,
+# and any identified model simulated on a record it was not fitted to.
+from . import timedomain  # noqa: E402
+from .timedomain import TimeDomainFit, TimeRecord, ValidationReport, fit_time_domain, validate  # noqa: E402
+
+__all__ += ["timedomain", "fit_time_domain", "TimeDomainFit", "TimeRecord", "validate", "ValidationReport"]

@@ -41,6 +41,7 @@ __all__ = [
     "Lab",
     "MultiStart",
     "Paper",
+    "TimeDomain",
     "Parts",
     "current_lab",
     "get_backend",
@@ -468,6 +469,28 @@ class _NumpyLab:
         return None
 
 
+# --- time-domain identification (issue #20): the Wiener cascade with its exact Jacobian -------------------
+class TimeDomain(Protocol):
+    """``rust/bindings/timedomain.rs`` and :mod:`bouc_wen_id.reference.timedomain`."""
+
+    def timedomain_sensitivities(
+        self, m: int, n: int, theta: Sequence[float] | _F, u: _F, dt: float, substeps: int
+    ) -> tuple[_F, NDArray[np.float64]]:
+        """``(y, J)``: the cascade ``[b_0..b_m, a_1..a_n, tau, beta, gamma, mu, w0]`` on the samples ``u``
+        from rest, and ``dy/dtheta`` exact for the discrete RK4 map (``(len(u), m + n + 6)``)."""
+
+
+@cache
+def _timedomain(name: Backend) -> TimeDomain:
+    if name == "rust":
+        from . import _core
+
+        return _core
+    from .reference import timedomain
+
+    return timedomain
+
+
 @dataclass(frozen=True)
 class Parts:
     """The numerics of one backend, one typed part per domain (module docstring)."""
@@ -477,6 +500,11 @@ class Parts:
     augmented: Augmented
     lab: Lab
     multistart: Optional[MultiStart]
+
+    @property
+    def timedomain(self) -> TimeDomain:
+        """The time-domain kernels (issue #20)."""
+        return _timedomain(self.name)
 
 
 def _check_name(name: object) -> Backend:
@@ -549,3 +577,8 @@ if TYPE_CHECKING:  # pragma: no cover - the static check that both backends impl
     _RUST_MULTISTART: MultiStart = _core
     _RUST_LAB: Lab = _RustLab()
     _NUMPY_LAB: Lab = _NumpyLab()
+    # time-domain identification (issue #20)
+    from .reference import timedomain as _reference_timedomain
+
+    _RUST_TIMEDOMAIN: TimeDomain = _core
+    _NUMPY_TIMEDOMAIN: TimeDomain = _reference_timedomain

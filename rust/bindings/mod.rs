@@ -39,6 +39,7 @@ mod paper;
 mod refine;
 mod simulate;
 mod testing;
+mod timedomain;
 
 /// Rust core of bouc_wen_id (simulation, averaging, estimators); see docs/design.md.
 #[pymodule]
@@ -51,5 +52,6 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     budget::register(m)?;
     lab::register(m)?;
     testing::register(m)?;
+    timedomain::register(m)?;
     Ok(())
 }
