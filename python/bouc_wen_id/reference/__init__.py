@@ -25,6 +25,7 @@ module             checks                          routines
 ``profile``        ``rust/profile.rs``             ``profile_phase_sls``, ``profile_phase_gain``
 ``refine``         ``rust/refine.rs``              ``levenberg_marquardt``, ``refine``
 ``terms``          ``rust/terms.rs``               ``augmented_output``, ``augmented_refine``
+``timedomain``     ``rust/timedomain.rs``          ``timedomain_sensitivities`` (issue #20; via ``_backend``)
 =================  ==============================  =====================================================
 
 References
