@@ -323,3 +323,29 @@ def test_a_record_cut_from_a_longer_run_needs_a_lead_in_and_w0() -> None:
     truth = dict(zip(case.structure().names, case.structure().pack(case.plant())))
     for name in ("beta", "gamma", "mu", "delay"):
         assert abs(handled.value(name) - truth[name]) < 4 * handled.standard_errors[name], name
+
+
+def test_output_terms_are_fitted_and_validated() -> None:
+    """The library's linear output terms (offset, stiffness, viscous on u) beside the cascade: data from
+    solve_ivp plus the terms on the analytic input; the fit finds them, validate simulates them."""
+    from bouc_wen_id.terms import Offset, Stiffness, Viscous
+
+    case = _short(bench.CASES[0])
+    t, u, y, w = bench.independent_record(case, 5)
+    udot = np.gradient(u, t, edge_order=2)  # the analytic rate differs from the interpolant's by O(dt^2)
+    truth = {"y0": 0.1, "k": 0.3, "c": 0.01}
+    y = y + truth["y0"] + truth["k"] * u + truth["c"] * udot
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        fit = bw.fit_time_domain(
+            (t, u, y), start=bench.perturbed_start(case), terms=(Offset, Stiffness.kind, Viscous(0.0))
+        )
+    assert fit.parameter_names[-3:] == ("y0", "k", "c")
+    for name, value in truth.items():
+        assert abs(fit.value(name) - value) < 4 * fit.standard_errors[name], name
+    assert fit.rmse == pytest.approx(case.noise * np.std(w), rel=0.1)
+    assert [type(t) for t in fit.plant.terms] == [Offset, Stiffness, Viscous]
+    rep = bw.validate(fit, t, u, y)
+    assert rep.rmse == pytest.approx(fit.rmse, rel=0.02) and "with terms" not in rep.model
+    with pytest.raises(InvalidParameterError):
+        bw.fit_time_domain((t, u, y), start=bench.perturbed_start(case), terms=("no_such_term",))

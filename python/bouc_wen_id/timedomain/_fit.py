@@ -19,10 +19,11 @@ from .._backend import Backend, get_backend
 from .._text import Summarised, with_warnings
 from ..errors import ConvergenceWarning, IdentifiabilityWarning, InvalidParameterError
 from ..model import BoucWen, Recording, WienerPlant
+from ..terms import Term
 from ..validation import count, nonnegative_number, positive_number, z_value
 from ._lm import LMResult, StopReason, free_covariance, levenberg_marquardt
 from ._records import RecordLike, TimeRecord, as_time_records
-from ._wiener import Problem, Structure, check_records, check_work, lead_ins
+from ._wiener import OUTPUT_TERMS, Problem, Structure, check_records, check_work, lead_ins
 
 FloatArray = NDArray[np.float64]
 
@@ -253,6 +254,7 @@ def fit_time_domain(
     order: Optional[tuple[int, int]] = None,
     delay: Optional[bool] = None,
     estimate_w0: bool = False,
+    terms: Sequence[Union[type[Term], Term, str]] = (),
     lead_in: Optional[float] = None,
     substeps: int = 2,
     max_iter: int = 100,
@@ -277,6 +279,11 @@ def fit_time_domain(
         Fit the delay (default: when the start has one).
     estimate_w0 : bool
         Fit the initial hysteretic state (a record cut from a longer run); G's states start at 0.
+    terms : sequence of term classes, terms or code names
+        The library's output terms to fit beside the cascade (:data:`OUTPUT_TERMS`: offset, parallel
+        stiffness, viscous damping and inertia on the measured input,
+        ``y = y0 + w + k u + c udot + m uddot``); they start at the start plant's values, else 0.  Default:
+        the start plant's terms.
     lead_in : float, optional
         Seconds at each record's start left out of the residuals (G's transient from a state that is not
         rest).  Default 0: the records start from rest.
@@ -309,9 +316,9 @@ def fit_time_domain(
     sd = None if noise_sd is None else positive_number("noise_sd", noise_sd)
     plant, origin = _start_plant(start, raw, order, delay)
     m, n = order if order is not None else _degrees(plant)
-    structure = Structure(
-        m, n, bool(plant.linear.delay > 0.0) if delay is None else bool(delay), bool(estimate_w0)
-    )
+    kinds = _term_classes(terms) if terms else tuple(type(t) for t in plant.terms)
+    fit_delay = bool(plant.linear.delay > 0.0) if delay is None else bool(delay)
+    structure = Structure(m, n, fit_delay, bool(estimate_w0), kinds)
     lead = lead_ins(recs, lead_in_s)
     check_records(recs, lead, plant)
     starts = _alternatives(plant, structure) if multistart else _alternatives(plant, structure)[:1]
@@ -321,6 +328,26 @@ def fit_time_domain(
     max_delay = min(r.duration for r in recs) / 2.0
     best, tried = _search(problem, starts, max_iter, max_delay, should_stop)
     return _result(problem, best, tried, origin, sd, confidence)
+
+
+def _term_classes(terms: Sequence[Union[type[Term], Term, str]]) -> tuple[type[Term], ...]:
+    """Term classes from classes, instances or code names (one of :data:`OUTPUT_TERMS` each)."""
+    if isinstance(terms, (str, Term)) or (isinstance(terms, type) and issubclass(terms, Term)):
+        terms = (terms,)
+    out: list[type[Term]] = []
+    for t in terms:
+        if isinstance(t, Term):
+            out.append(type(t))
+        elif isinstance(t, type) and issubclass(t, Term):
+            out.append(t)
+        else:
+            found = [cls for cls in OUTPUT_TERMS if cls.kind == t]
+            if not found:
+                raise InvalidParameterError(
+                    f"terms: {t!r} is not one of {', '.join(c.kind for c in OUTPUT_TERMS)}"
+                )
+            out.append(found[0])
+    return tuple(out)
 
 
 def _raw_items(records: Any) -> list[Any]:

@@ -26,6 +26,7 @@ from .. import budget as _budget
 from .._backend import Backend, get_backend
 from ..errors import InvalidParameterError, NonFiniteError
 from ..model import BoucWen, TransferFunction, WienerPlant
+from ..terms import Inertia, Offset, Stiffness, Term, Viscous
 from ._lm import LMResult
 from ._records import TimeRecord, check_memory, lead_in_samples
 
@@ -38,6 +39,9 @@ MAX_ORDER = 4
 MU_BOUNDS = (1.0, 10.0)
 #: Time constants of the slowest pole counted as G's memory (with the delay).
 MEMORY_TIME_CONSTANTS = 3.0
+#: The library's terms this class fits: added to the output, linear in their value, on the measured input
+#: (``y = y0 + w + k u + c udot + m uddot``, design.md 9.4 without the sensor lag); the others are refused.
+OUTPUT_TERMS: tuple[type[Term], ...] = (Offset, Stiffness, Viscous, Inertia)
 
 
 @dataclass(frozen=True)
@@ -49,31 +53,45 @@ class Structure:
     n: int
     delay: bool = False
     estimate_w0: bool = False
+    terms: tuple[type[Term], ...] = ()
 
     def __post_init__(self) -> None:
         if not (0 <= self.m <= self.n <= MAX_ORDER):
             raise InvalidParameterError(
                 f"the orders must satisfy 0 <= m <= n <= {MAX_ORDER}, got m = {self.m}, n = {self.n}"
             )
+        for cls in self.terms:
+            if cls not in OUTPUT_TERMS:
+                raise InvalidParameterError(
+                    f"the time-domain Wiener class fits the terms {', '.join(c.kind for c in OUTPUT_TERMS)} "
+                    f"(on the measured input), not {getattr(cls, 'kind', cls)!r}"
+                )
+        if len(set(self.terms)) != len(self.terms):
+            raise InvalidParameterError("each term at most once")
+
+    @property
+    def core_size(self) -> int:
+        """Length of the kernel's parameter vector ``m + n + 6``."""
+        return self.m + self.n + 6
 
     @property
     def size(self) -> int:
-        """Length of the full parameter vector ``m + n + 6``."""
-        return self.m + self.n + 6
+        """Length of the full parameter vector: the kernel's and one value per term."""
+        return self.core_size + len(self.terms)
 
     @property
     def names(self) -> tuple[str, ...]:
         """Names of the full vector's entries."""
         b = tuple(f"b{k}" for k in range(self.m + 1))
         a = tuple(f"a{j + 1}" for j in range(self.n))
-        return (*b, *a, "delay", "beta", "gamma", "mu", "w0")
+        return (*b, *a, "delay", "beta", "gamma", "mu", "w0", *(c.symbol for c in self.terms))
 
     @property
     def free(self) -> BoolArray:
         """Which entries are fitted."""
         out = np.ones(self.size, dtype=bool)
         out[self.m + self.n + 1] = self.delay
-        out[-1] = self.estimate_w0
+        out[self.core_size - 1] = self.estimate_w0
         return out
 
     def pack(self, plant: WienerPlant) -> FloatArray:
@@ -84,9 +102,10 @@ class Structure:
         InvalidParameterError
             A plant with terms, or whose G is not of degrees ``(m, n)`` (after trimming leading zeros).
         """
-        if plant.terms:
+        extra = [t for t in plant.terms if type(t) not in self.terms]
+        if extra:
             raise InvalidParameterError(
-                "the time-domain Wiener class is the plain cascade; a plant with terms cannot start it"
+                f"the start holds terms the structure does not fit: {', '.join(t.kind for t in extra)}"
             )
         p = plant.normalized()
         num = np.trim_zeros(np.asarray(p.linear.num, dtype=float), "f")
@@ -99,15 +118,17 @@ class Structure:
             )
         b = np.concatenate([np.zeros(self.m + 1 - num.size), num])
         h = p.hysteresis
-        return np.concatenate([b, den[1:], [p.linear.delay, h.beta, h.gamma, h.mu, h.w0]])
+        values = [next((t.value for t in p.terms if type(t) is cls), 0.0) for cls in self.terms]
+        return np.concatenate([b, den[1:], [p.linear.delay, h.beta, h.gamma, h.mu, h.w0], values])
 
     def unpack(self, theta: FloatArray) -> WienerPlant:
         """The plant of a full vector (alpha = 1)."""
         m, n = self.m, self.n
         num = np.asarray(theta[: m + 1], dtype=float)
         den = np.concatenate([[1.0], theta[m + 1 : m + 1 + n]])
-        tau, beta, gamma, mu, w0 = (float(v) for v in theta[m + 1 + n :])
-        return WienerPlant(TransferFunction(num, den, tau), BoucWen(beta, gamma, mu, 1.0, w0))
+        tau, beta, gamma, mu, w0 = (float(v) for v in theta[m + 1 + n : self.core_size])
+        terms = tuple(cls(float(v)) for cls, v in zip(self.terms, theta[self.core_size :]))  # type: ignore[call-arg]
+        return WienerPlant(TransferFunction(num, den, tau), BoucWen(beta, gamma, mu, 1.0, w0), terms)
 
     def bounds(self, theta0: FloatArray, max_delay: float) -> tuple[FloatArray, FloatArray]:
         """Box bounds: denominator coefficients > 0 (necessary for stability), ``0 <= tau <= max_delay``,
@@ -120,6 +141,42 @@ class Structure:
         lo[m + n + 2] = 0.0
         lo[m + n + 4], hi[m + n + 4] = MU_BOUNDS
         return lo, hi
+
+
+def term_regressors(rec: TimeRecord, terms: Sequence[type[Term]]) -> FloatArray:
+    """``(N, T)``: each term's regressor at the samples (1, ``u``, ``udot``, ``uddot``), from the Catmull-Rom
+    interpolant at ``t = k dt`` as the simulator with terms evaluates it (the undelayed input)."""
+    u, dt = rec.u, rec.dt
+    slopes = np.empty_like(u)
+    slopes[1:-1] = (u[2:] - u[:-2]) / (2.0 * dt)
+    slopes[0], slopes[-1] = (u[1] - u[0]) / dt, (u[-1] - u[-2]) / dt
+    q = np.arange(u.size) * dt / dt
+    k = np.floor(q).astype(int)
+    s = q - k
+    last = u.size - 1
+    inside = k < last
+    kk = np.minimum(k, last - 1)
+    u0, u1, m0, m1 = u[kk], u[kk + 1], slopes[kk], slopes[kk + 1]
+    s2, s3 = s * s, s * s * s
+    val = (
+        (2 * s3 - 3 * s2 + 1) * u0
+        + (s3 - 2 * s2 + s) * dt * m0
+        + (-2 * s3 + 3 * s2) * u1
+        + (s3 - s2) * dt * m1
+    )
+    der = (
+        ((6 * s2 - 6 * s) * u0 + (-6 * s2 + 6 * s) * u1) / dt
+        + (3 * s2 - 4 * s + 1) * m0
+        + (3 * s2 - 2 * s) * m1
+    )
+    der2 = ((12 * s - 6) * u0 + (6 - 12 * s) * u1) / (dt * dt) + ((6 * s - 4) * m0 + (6 * s - 2) * m1) / dt
+    columns = {
+        Offset: np.ones(u.size),
+        Stiffness: np.where(inside, val, u[last]),
+        Viscous: np.where(inside, der, 0.0),
+        Inertia: np.where(inside, der2, 0.0),
+    }
+    return np.stack([columns[cls] for cls in terms], axis=1)
 
 
 def memory(plant: WienerPlant) -> float:
@@ -150,12 +207,16 @@ class Problem:
         y, jac = core.timedomain_sensitivities(
             s.m,
             s.n,
-            np.ascontiguousarray(theta, dtype=np.float64),
+            np.ascontiguousarray(theta[: s.core_size], dtype=np.float64),
             np.ascontiguousarray(rec.u),
             rec.dt,
             self.substeps,
         )
-        return np.asarray(y, dtype=np.float64), np.asarray(jac, dtype=np.float64)
+        y, jac = np.asarray(y, dtype=np.float64), np.asarray(jac, dtype=np.float64)
+        if not s.terms:
+            return y, jac
+        reg = term_regressors(rec, s.terms)
+        return y + reg @ theta[s.core_size :], np.hstack([jac, reg])
 
     def full(self, free_values: FloatArray, theta0: FloatArray) -> FloatArray:
         theta = np.array(theta0, dtype=np.float64, copy=True)
