@@ -246,13 +246,13 @@ impl Model {
         let mut xdot = self.d.mul(vdot);
         if n > 0 {
             let mut acc = *v;
-            for j in 0..n {
-                acc = acc.sub(&self.a[j].mul(&xs[j]));
+            for (aj, xj) in self.a.iter().zip(xs).take(n) {
+                acc = acc.sub(&aj.mul(xj));
             }
             dxs[0] = acc;
             dxs[1..n].copy_from_slice(&xs[..n - 1]);
-            for j in 0..n {
-                xdot = xdot.add(&self.c[j].mul(&dxs[j]));
+            for (cj, dj) in self.c.iter().zip(&dxs).take(n) {
+                xdot = xdot.add(&cj.mul(dj));
             }
         }
         let wmu = w.pow_abs(&self.mu);
