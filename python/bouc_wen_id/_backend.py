@@ -11,6 +11,7 @@ part            Rust (``rust/bindings/``)                    NumPy (``backend="n
 ``augmented``   ``augmented_output``, ``augmented_refine``   :mod:`bouc_wen_id.reference.augmented`
 ``multistart``  ``refine_many`` (all cores, GIL released)    ``None``: the starts run one by one
 ``lab``         the fused harmonic kernels (``rust/lab``)    no kernel: ``signal/`` runs its NumPy paths
+``timedomain``  ``timedomain_sensitivities`` (issue #20)     :mod:`bouc_wen_id.reference.timedomain`
 ==============  ===========================================  ================================================
 
 mypy checks the Rust stub (``_core.pyi``) and the reference against the Protocols (the block at the end), so
