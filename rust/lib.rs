@@ -36,6 +36,7 @@ pub mod simulate;
 pub mod solve;
 pub mod steady;
 pub mod terms;
+pub mod timedomain;
 
 #[cfg(feature = "python")]
 mod bindings;

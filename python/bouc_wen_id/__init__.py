@@ -125,3 +125,9 @@ __all__ += ["compensation", "compensate", "Compensation", "LimitHit", "Unreachab
 from .timedomain import FeedbackFit, FeedbackModel, fit_feedback, fit_feedback_sines  # noqa: E402
 
 __all__ += ["fit_feedback", "fit_feedback_sines", "FeedbackModel", "FeedbackFit"]
+# Issue #20 items 1 and 3 (time-domain identification): the Wiener cascade fitted to records of any waveform,
+# and any identified model simulated on a record it was not fitted to.
+from . import timedomain  # noqa: E402
+from .timedomain import TimeDomainFit, TimeRecord, ValidationReport, fit_time_domain, validate  # noqa: E402
+
+__all__ += ["timedomain", "fit_time_domain", "TimeDomainFit", "TimeRecord", "validate", "ValidationReport"]

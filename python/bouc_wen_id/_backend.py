@@ -12,6 +12,7 @@ part            Rust (``rust/bindings/``)                    NumPy (``backend="n
 ``multistart``  ``refine_many`` (all cores, GIL released)    ``None``: the starts run one by one
 ``lab``         the fused harmonic kernels (``rust/lab``)    no kernel: ``signal/`` runs its NumPy paths
 ``compensate``  ``invert_path``, ``rate_limit``              :mod:`bouc_wen_id.reference.compensate`
+``timedomain``  ``timedomain_sensitivities`` (issue #20)     :mod:`bouc_wen_id.reference.timedomain`
 ==============  ===========================================  ================================================
 
 mypy checks the Rust stub (``_core.pyi``) and the reference against the Protocols (the block at the end), so
@@ -44,6 +45,7 @@ __all__ = [
     "Lab",
     "MultiStart",
     "Paper",
+    "TimeDomain",
     "Parts",
     "current_lab",
     "feedback_part",
@@ -480,6 +482,26 @@ class Compensate(Protocol):
     ) -> _F: ...
 
     def rate_limit(self, target: _F, step: float, start: float) -> _F: ...
+# --- time-domain identification (issue #20): the Wiener cascade with its exact Jacobian -------------------
+class TimeDomain(Protocol):
+    """``rust/bindings/timedomain.rs`` and :mod:`bouc_wen_id.reference.timedomain`."""
+
+    def timedomain_sensitivities(
+        self, m: int, n: int, theta: Sequence[float] | _F, u: _F, dt: float, substeps: int
+    ) -> tuple[_F, NDArray[np.float64]]:
+        """``(y, J)``: the cascade ``[b_0..b_m, a_1..a_n, tau, beta, gamma, mu, w0]`` on the samples ``u``
+        from rest, and ``dy/dtheta`` exact for the discrete RK4 map (``(len(u), m + n + 6)``)."""
+
+
+@cache
+def _timedomain(name: Backend) -> TimeDomain:
+    if name == "rust":
+        from . import _core
+
+        return _core
+    from .reference import timedomain
+
+    return timedomain
 
 
 @dataclass(frozen=True)
@@ -492,6 +514,11 @@ class Parts:
     lab: Lab
     multistart: Optional[MultiStart]
     compensate: Compensate
+
+    @property
+    def timedomain(self) -> TimeDomain:
+        """The time-domain kernels (issue #20)."""
+        return _timedomain(self.name)
 
 
 def _check_name(name: object) -> Backend:
@@ -621,3 +648,8 @@ if TYPE_CHECKING:  # pragma: no cover - the static check that both backends impl
 
     _RUST_COMPENSATE: Compensate = _core
     _NUMPY_COMPENSATE: Compensate = _reference_compensate
+    # time-domain identification (issue #20)
+    from .reference import timedomain as _reference_timedomain
+
+    _RUST_TIMEDOMAIN: TimeDomain = _core
+    _NUMPY_TIMEDOMAIN: TimeDomain = _reference_timedomain

@@ -44,6 +44,7 @@ __all__ = [
     "unscaled_variances",
     "window_fits",
     "spectral_peak",
+    "timedomain_sensitivities",  # issue #20 (rust/bindings/timedomain.rs)
     # test-only (rust/bindings/testing.rs): not called by the package
     "harmonic_moments",
     "harmonic_series",
@@ -287,6 +288,12 @@ def window_fits(
 def spectral_peak(
     x: _F, nfft: int, lo: int, hi: int, band_lo: int, band_hi: int, peak_min: float
 ) -> tuple[int, float, float, float]: ...
+
+# ---- time-domain identification (rust/bindings/timedomain.rs, issue #20) -----------------------------
+
+def timedomain_sensitivities(
+    m: int, n: int, theta: Sequence[float] | _F, u: _F, dt: float, substeps: int
+) -> tuple[_F, NDArray[np.float64]]: ...
 
 # ---- test-only (rust/bindings/testing.rs) -------------------------------------------------------
 # Kernels exported only so that tests/test_fastlab.py can check each one against its NumPy reference; the

@@ -24,6 +24,7 @@ from numpy.typing import NDArray
 
 from . import _output, _pool
 from ._cli_parser import build_parser, flags_named
+from ._cli_validate import cmd_validate
 from ._threads import one_blas_thread
 from .batch import average_many, identify_many
 from .demo import DEMO_HIDDEN, demo_hidden_plant, demo_plan, demo_plant, design_amplitudes
@@ -538,6 +539,7 @@ _COMMANDS: dict[str, Callable[[argparse.Namespace], int]] = {
     "identify": _cmd_identify,
     "diagnose": _cmd_diagnose,
     "plan": _cmd_plan,
+    "validate": cmd_validate,  # issue #20: bouc_wen_id._cli_validate
 }
 
 

@@ -41,6 +41,7 @@ mod paper;
 mod refine;
 mod simulate;
 mod testing;
+mod timedomain;
 
 /// Rust core of bouc_wen_id (simulation, averaging, estimators); see docs/design.md.
 #[pymodule]
@@ -55,5 +56,6 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     lab::register(m)?;
     testing::register(m)?;
     compensate::register(m)?;
+    timedomain::register(m)?;
     Ok(())
 }

@@ -26,6 +26,7 @@ module             checks                          routines
 ``refine``         ``rust/refine.rs``              ``levenberg_marquardt``, ``refine``
 ``terms``          ``rust/terms.rs``               ``augmented_output``, ``augmented_refine``
 ``compensate``     ``rust/compensate.rs``          ``invert_path``, ``rate_limit`` (feedforward, issue 21)
+``timedomain``     ``rust/timedomain.rs``          ``timedomain_sensitivities`` (issue #20; via ``_backend``)
 =================  ==============================  =====================================================
 
 References

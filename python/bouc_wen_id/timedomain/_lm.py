@@ -34,7 +34,7 @@ from numpy.typing import ArrayLike, NDArray
 from ..errors import InvalidParameterError, NonFiniteError
 from ..validation import count
 
-__all__ = ["LMResult", "StopReason", "levenberg_marquardt"]
+__all__ = ["LMResult", "StopReason", "free_covariance", "levenberg_marquardt"]
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -167,7 +167,7 @@ def _projected_step(
     return np.clip(p + step, lo, hi)
 
 
-def _covariance(jac: FloatArray, free: BoolArray, sigma2: float) -> tuple[FloatArray, bool]:
+def free_covariance(jac: FloatArray, free: BoolArray, sigma2: float) -> tuple[FloatArray, bool]:
     n = jac.shape[1]
     cov = np.full((n, n), np.nan)
     jf = jac[:, free]
@@ -304,7 +304,7 @@ def _finish(
         reason = "converged_at_bound"
     dof = r.size - int(free.sum())
     s2 = float(sigma2) if sigma2 is not None else (2.0 * cost / dof if dof > 0 else math.nan)
-    cov, singular = _covariance(jac, free, s2)
+    cov, singular = free_covariance(jac, free, s2)
     for arr in (p, r, jac, cov):
         arr.setflags(write=False)
     return LMResult(p, cost, r, jac, cov, s2, iterations, evaluations, reason, act_lo, act_hi, singular)

@@ -1,0 +1,118 @@
+"""``bouc-wen-id validate``: an identified model simulated on records it was not fitted to (issue #20).
+
+``bouc-wen-id validate --model MODEL.json RECORD...`` prints, per record, the NRMSE, the RMSE in the units
+of y and the largest error; ``--out DIR`` also writes ``validation.json`` and one residual plot per record.
+``MODEL.json`` is a plant (``WienerPlant.to_dict``: ``{"linear": ..., "hysteresis": ..., "terms": ...}``) or
+any JSON object holding one under ``"plant"`` (``TimeDomainFit.to_dict``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+from typing import Any
+
+from . import _output
+from .errors import BoucWenIdError, FileFormatError, InvalidParameterError
+from .model import WienerPlant
+
+__all__ = ["add_validate_parser", "cmd_validate"]
+
+
+def add_validate_parser(sub: Any) -> None:
+    """The ``validate`` sub-parser."""
+    p = sub.add_parser(
+        "validate",
+        help="simulate an identified model on records it was not fitted to: NRMSE, RMSE, residual plots",
+        description="Simulate the model (a plant JSON, or a fit JSON holding one under 'plant') on each "
+        "record from rest and compare with the measured output.",
+    )
+    p.add_argument("paths", nargs="+", type=Path, help="record files or folders (t, u, y columns)")
+    p.add_argument("--model", type=Path, required=True, help="plant or fit JSON file")
+    p.add_argument(
+        "--columns", nargs="+", default=None, metavar="ROLE=COLUMN", help="which column is t, u, y"
+    )
+    p.add_argument("--sample-rate", type=float, default=None, help="Hz, for files without a time column")
+    p.add_argument("--lead-in", type=float, default=None, help="seconds at each record's start left out")
+    p.add_argument("--substeps", type=int, default=4, help="RK4 steps per sample interval")
+    p.add_argument("--units", default="", help="units of y, for the report")
+    p.add_argument("--out", type=Path, default=None, help="write validation.json and residual plots here")
+    p.add_argument("--overwrite", action="store_true", help="replace a previous report folder at --out")
+
+
+def _load_model(path: Path) -> WienerPlant:
+    """A plant JSON, or an object holding one under ``plant``; every failure a :class:`FileFormatError`."""
+    if not path.is_file():
+        raise FileFormatError(f"--model {path}: no such regular file")
+    if path.stat().st_size > 1 << 20:
+        raise FileFormatError(f"--model {path}: {path.stat().st_size} bytes is no model JSON file")
+    try:
+        spec = json.loads(path.read_text(encoding="utf-8"))
+        if isinstance(spec, dict) and isinstance(spec.get("plant"), dict):
+            spec = spec["plant"]
+        if not isinstance(spec, dict):
+            raise TypeError(f"a JSON {type(spec).__name__}, not an object")
+        return WienerPlant.from_dict(spec)
+    except BoucWenIdError:
+        raise
+    except (OSError, ValueError, TypeError, KeyError, AttributeError) as exc:
+        raise FileFormatError(
+            f"--model {path}: not a plant or fit JSON file ({type(exc).__name__}: {exc})"
+        ) from None
+
+
+def cmd_validate(args: argparse.Namespace) -> int:
+    """Run ``validate``; 0 when every record was simulated."""
+    from .io import load
+    from .timedomain import validate
+
+    if args.substeps < 1:
+        raise InvalidParameterError(f"--substeps = {args.substeps} must be >= 1")
+    target = None
+    if args.out is not None:
+        target = _output.check_out(
+            args.out, overwrite=args.overwrite, inputs=args.paths, what="report folder"
+        )
+        replaces = _output.identity(target) if args.overwrite else None
+    plant = _load_model(args.model)
+    items = load(args.paths, columns=_columns(args.columns), sample_rate=args.sample_rate)
+    reports = []
+    print(f"{'record':<28} {'samples':>8} {'NRMSE':>9} {'RMSE':>11} {'max |e|':>11}")
+    for i, item in enumerate(items):
+        rep = validate(
+            plant, item.t, item.u, item.y, lead_in=args.lead_in, substeps=args.substeps, units=args.units
+        )
+        named = (
+            getattr(item, "name", "")
+            or getattr(item, "source", "")
+            or getattr(item, "metadata", {}).get("name")
+        )
+        name = str(named) if named else f"record {i}"
+        reports.append((name, rep))
+        print(f"{name[:28]:<28} {rep.t.size:>8} {rep.nrmse:>9.4g} {rep.rmse:>11.4g} {rep.max_error:>11.4g}")
+    if target is not None:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        with _output.staged(target, command="validate", replaces=replaces) as staged:
+            staged.mkdir()
+            table = [{"record": n, **r.to_dict()} for n, r in reports]
+            (staged / "validation.json").write_text(json.dumps(table, indent=2) + "\n", encoding="utf-8")
+            for i, (_, rep) in enumerate(reports):
+                rep.plot().savefig(staged / f"residuals_{i:03d}.png", dpi=110)
+        print(f"wrote {args.out}")
+    return 0
+
+
+def _columns(specs: Any) -> Any:
+    """``["u=disp", "y=3"]`` -> ``{"u": "disp", "y": 3}``."""
+    if not specs:
+        return None
+    out: dict[str, Any] = {}
+    for spec in specs:
+        role, sep, col = str(spec).partition("=")
+        if not sep or not col:
+            raise InvalidParameterError(f"--columns {spec!r}: expected ROLE=COLUMN, e.g. u=disp_mm")
+        out[role.strip()] = int(col) if col.strip().isdigit() else col.strip()
+    return out
