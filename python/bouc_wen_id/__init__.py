@@ -113,3 +113,10 @@ from . import interop  # noqa: E402
 from .tfit import FrequencyPrediction, TransferFunctionFit, fit_transfer_function  # noqa: E402
 
 __all__ += ["interop", "fit_transfer_function", "TransferFunctionFit", "FrequencyPrediction"]
+
+# Issue #21 item 2, model export: the whole model as a python-control nlsys (control imported lazily), as
+# self-contained C99 and as versioned JSON (bw.save_model / bw.load_model).
+from . import export  # noqa: E402
+from .export import load_model, model_from_json, model_to_json, save_model, to_c, to_nlsys  # noqa: E402
+
+__all__ += ["export", "load_model", "save_model", "model_to_json", "model_from_json", "to_c", "to_nlsys"]

@@ -56,16 +56,16 @@ def to_c(plant: WienerPlant, name: str = "bouc_wen_model") -> str:
         ``name`` not a C identifier; a term the time-domain simulator does not simulate.
     """
     if not isinstance(name, str) or not _IDENT.fullmatch(name):
-        raise InvalidParameterError(f"name = {name!r} must be a C identifier (letters, digits, _; 63 at most)")
+        raise InvalidParameterError(
+            f"name = {name!r} must be a C identifier (letters, digits, _; 63 at most)"
+        )
     flat = flatten(plant, "to_c")
-    model = " ".join(
-        f"{t.kind} {t.symbol} = {t.value!r};" for t in plant.terms
-    )
+    model = " ".join(f"{t.kind} {t.symbol} = {t.value!r};" for t in plant.terms)
     lin = plant.linear
     h = plant.hysteresis
     desc = (
-        f"G(s) = exp(-{lin.delay!r} s) {lin.num.tolist()} / {lin.den.tolist()}; Bouc-Wen alpha = {h.alpha!r}, "
-        f"beta = {h.beta!r}, gamma = {h.gamma!r}, mu = {h.mu!r}, w0 = {h.w0!r}."
+        f"G(s) = exp(-{lin.delay!r} s) {lin.num.tolist()} / {lin.den.tolist()}; "
+        f"Bouc-Wen alpha = {h.alpha!r}, beta = {h.beta!r}, gamma = {h.gamma!r}, mu = {h.mu!r}, w0 = {h.w0!r}."
         + (f"\n * Terms: {model}" if model else " No terms.")
     )
     return TEMPLATE.substitute(
@@ -226,8 +226,8 @@ static double ${P}_mech(const double *u, long n, double dt, double t, double sca
 static double ${P}_rate(double xpdot, double w, double e, double w_u)
 {
     double wmu = pow(fabs(w), ${P}_mu), sw = ${P}_sgn(w), nu = 1.0 + ${P}_dnu * e;
-    double r = ${P}_alpha * xpdot - nu * (${P}_beta * fabs(xpdot) * sw * wmu) - nu * (${P}_gamma * xpdot * wmu)
-               - nu * (${P}_delta * xpdot * sw * wmu);
+    double r = ${P}_alpha * xpdot - nu * (${P}_beta * fabs(xpdot) * sw * wmu)
+               - nu * (${P}_gamma * xpdot * wmu) - nu * (${P}_delta * xpdot * sw * wmu);
     if (${P}_deta != 0.0) r /= 1.0 + ${P}_deta * e;
     if (${P}_zeta1 != 0.0) {
         double z = (w * ${P}_sgn(xpdot) - ${P}_pinch_centre * w_u) / (${P}_pinch_width * w_u);

@@ -53,7 +53,8 @@ class Flat(NamedTuple):
     ``getattr(flat, term.symbol)``.
     """
 
-    #: Monic denominator ``a_1..a_n`` (companion first row ``-a``), output row ``crow``, feed-through ``dfeed``.
+    #: Monic denominator ``a_1..a_n`` (companion first row ``-a``), output row ``crow``, feed-through
+    #: ``dfeed``.
     a: FloatArray
     crow: FloatArray
     dfeed: float

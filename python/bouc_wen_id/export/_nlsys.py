@@ -21,7 +21,7 @@ Reference: R. M. Murray et al., *python-control*, ``NonlinearIOSystem``.
 from __future__ import annotations
 
 import math
-from typing import Any, Optional
+from typing import Any, Optional, Union
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -53,7 +53,7 @@ def _dot(p: FloatArray, q: Any) -> float:
 def rate(flat: Flat, xpdot: float, w: float, e: float) -> float:
     """The generalised Bouc-Wen rate with degradation and pinching (docs/design.md 9.4), in the simulator's
     operation order."""
-    wmu = abs(w) ** flat.mu
+    wmu = float(abs(w) ** flat.mu)
     sw = _sgn(w)
     nu = 1.0 + flat.delta_nu * e
     r = (
@@ -139,7 +139,9 @@ def _system_functions(flat: Flat, lay: _Layout, vmax_default: float) -> tuple[An
         if lay.xp >= 0:
             out[lay.xp] = p
         if lay.ys >= 0:
-            big_f = w + mechanical(flat, float(inp[0]), float(inp[1]), float(inp[2]), _vmax(params, vmax_default))
+            big_f = w + mechanical(
+                flat, float(inp[0]), float(inp[1]), float(inp[2]), _vmax(params, vmax_default)
+            )
             out[lay.ys] = (big_f - float(z[lay.ys])) / flat.tau
         return out
 
@@ -176,7 +178,8 @@ def to_nlsys(plant: WienerPlant, *, vmax: Optional[float] = None, name: Optional
     control.NonlinearIOSystem
         Inputs ``u, udot, uddot`` (and ``v, vdot``, the input delayed by G's delay, when it has one),
         outputs ``y, x, w``, states ``xs0.., w`` (and ``e``, ``xp``, ``ys``; module docstring); its
-        ``params`` hold ``vmax`` and, for reading only, ``delay``, ``w0`` and ``b`` (the play's half-width). Start it from :func:`initial_state`.
+        ``params`` hold ``vmax`` and, for reading only, ``delay``, ``w0`` and ``b`` (the play's
+        half-width). Start it from :func:`initial_state`.
 
     Raises
     ------
@@ -211,7 +214,7 @@ def to_nlsys(plant: WienerPlant, *, vmax: Optional[float] = None, name: Optional
     )
 
 
-def input_signals(sys: Any, t: ArrayLike, u: ArrayLike, times: ArrayLike) -> FloatArray:
+def input_signals(sys: Any, t: ArrayLike, u: Union[ArrayLike, SampledInput], times: ArrayLike) -> FloatArray:
     """The input vector of ``sys`` (from :func:`to_nlsys`) at ``times``: shape ``(ninputs, len(times))``.
 
     ``u`` sampled on the uniform grid ``t`` is interpolated as the simulator does (Catmull-Rom, held after
