@@ -366,3 +366,35 @@ def test_json_inadmissible_values_keep_their_own_errors(tmp_path: Path) -> None:
         bw.load_model(path)
     with pytest.raises(FileFormatError, match="cannot read"):
         bw.load_model(tmp_path / "missing.json")
+
+
+# ------------------------------------------------------------------------------------------------ CLI
+
+
+def test_cli_export_writes_c_and_json(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    from bouc_wen_id.cli import main
+
+    plant = bw.WienerPlant(
+        bw.TransferFunction([1.0], [0.2, 1.0], 0.01),
+        bw.BoucWen(1.0, 0.5, 1.5),
+        (T.Viscous(0.1), T.Play(0.05)),
+    )
+    spec = tmp_path / "plant.json"
+    spec.write_text(json.dumps(plant.to_dict()), encoding="utf-8")
+    doc = tmp_path / "model.json"
+    assert main(["export", str(spec), "--to", "json", "--out", str(doc)]) == 0
+    assert bw.load_model(doc).to_dict() == plant.to_dict()
+    src = tmp_path / "model.c"
+    assert main(["export", str(doc), "--to", "c", "--name", "damper", "--out", str(src)]) == 0
+    assert src.read_text(encoding="utf-8") == bw.to_c(plant, name="damper")
+    capsys.readouterr()
+    assert main(["export", str(doc), "--to", "c", "--out", str(src)]) == 2
+    assert "exists; pass --overwrite" in capsys.readouterr().err
+    assert main(["export", str(doc), "--to", "c", "--out", str(src), "--overwrite"]) == 0
+    assert "int bouc_wen_model(" in src.read_text(encoding="utf-8")
+    assert main(["export", str(doc), "--to", "c", "--name", "9bad"]) == 2
+    assert "C identifier" in capsys.readouterr().err
+    (tmp_path / "bad.json").write_text('{"format": "bouc_wen_id.model", "version": 3}', encoding="utf-8")
+    assert main(["export", str(tmp_path / "bad.json"), "--to", "json"]) == 2
+    assert "FileFormatError" in capsys.readouterr().err
+    assert main(["export", str(tmp_path / "none.json"), "--to", "json"]) == 2

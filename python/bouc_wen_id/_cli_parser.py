@@ -13,6 +13,7 @@ from pathlib import Path
 from typing import Any, NoReturn, Optional, Union
 
 from . import _pool
+from ._cli_export import add_export_parser
 from .demo import DEMO_FREQUENCIES
 from .errors import InvalidParameterError
 from .terms import DIAGNOSIS_CANDIDATES
@@ -337,6 +338,7 @@ def build_parser() -> argparse.ArgumentParser:
     for add in (_add_demo_parser, _add_simulate_parser, _add_identify_parser, _add_diagnose_parser):
         add(sub)
     _add_plan_parser(sub)
+    add_export_parser(sub)  # issue #21: model export (_cli_export)
     return parser
 
 

@@ -23,6 +23,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from . import _output, _pool
+from ._cli_export import run_export
 from ._cli_parser import build_parser, flags_named
 from ._threads import one_blas_thread
 from .batch import average_many, identify_many
@@ -538,6 +539,7 @@ _COMMANDS: dict[str, Callable[[argparse.Namespace], int]] = {
     "identify": _cmd_identify,
     "diagnose": _cmd_diagnose,
     "plan": _cmd_plan,
+    "export": run_export,  # issue #21: model export (_cli_export)
 }
 
 
