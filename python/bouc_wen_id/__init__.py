@@ -120,3 +120,10 @@ from . import export  # noqa: E402
 from .export import load_model, model_from_json, model_to_json, save_model, to_c, to_nlsys  # noqa: E402
 
 __all__ += ["export", "load_model", "save_model", "model_to_json", "model_from_json", "to_c", "to_nlsys"]
+
+# Issue #21 item 3, parameters that follow an operating variable (current, temperature, pre-load): one joint
+# fit over the levels, each parameter a polynomial in the variable (scipy imported when fitting).
+from . import operating  # noqa: E402
+from .operating import OperatingFit, fit_operating, select_degree  # noqa: E402
+
+__all__ += ["operating", "OperatingFit", "fit_operating", "select_degree"]
