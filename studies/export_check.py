@@ -61,9 +61,8 @@ def main() -> int:
             nl = rk4_response(bw.to_nlsys(plant, vmax=1.0), t, u, substeps=substeps)
             n_err = ", ".join(f"{rel(a, b):.1e}" for a, b in zip(nl, ref))
             kinds = " ".join(t.kind for t in plant.terms) or "(plain)"
-            print(
-                f"| {seed} | {plant.linear.den.size - 1} | {plant.linear.delay:.3g} | {kinds} | {c_err} | {n_err} |"
-            )
+            order, delay = plant.linear.den.size - 1, plant.linear.delay
+            print(f"| {seed} | {order} | {delay:.3g} | {kinds} | {c_err} | {n_err} |")
     return 0
 
 
