@@ -19,7 +19,9 @@ of the squared NRMSEs.
    (``docs/real-data/operating-parameters.png``), the per-level fits' values beside them.
 
 Writes ``docs/real-data-operating.md`` (every number from this run), ``docs/real-data/operating.json`` and
-the figure. Usage: ``python studies/operating_point.py [--data DIR] [--degrees 0,1,2] [--quiet] [--from-json]``.
+the figure.
+
+Usage: ``python studies/operating_point.py [--data DIR] [--degrees 0,1,2] [--quiet] [--from-json]``.
 """
 
 from __future__ import annotations
@@ -309,7 +311,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument(
         "--from-json",
         action="store_true",
-        help="rewrite the page and figure from docs/real-data/operating.json (a previous run), fitting nothing",
+        help="rewrite the page and figure from docs/real-data/operating.json (a run), fitting nothing",
     )
     args = ap.parse_args(argv)
     out = REPO / "docs" / "real-data"
