@@ -30,6 +30,7 @@ import argparse
 import importlib.util
 import json
 import math
+import pickle
 import sys
 import time
 import warnings
@@ -46,6 +47,8 @@ REPO = Path(__file__).resolve().parents[1]
 HERE = Path(__file__).resolve().parent
 #: The model's terms: offset, viscous damping and parallel stiffness on the measured displacement.
 TERMS = (T.Offset.kind, T.Viscous.kind, T.Stiffness.kind)
+#: The gains relative to the yield level (the knee's travel follows it: ``fit_operating(relative_gains=)``).
+RELATIVE_GAINS = True
 #: The coordinates plotted, with their labels (the own gains and phases are left out of the figure).
 PLOTTED = (
     ("w_u", "w_u = yield force (N)"),
@@ -147,22 +150,28 @@ def _own_refit_nrmse(exps: list[AugExperiment], params: AugParams) -> list[float
     return [op.nrmse(e, op.refit_own(e, params, i), i) for i, e in enumerate(exps)]
 
 
-def run(data: Path, degrees: list[int], log: Any) -> dict[str, Any]:
+def run(data: Path, degrees: list[int], log: Any, reuse: bool = False) -> dict[str, Any]:
     t0 = time.time()
     levels, exps, files = experiments(data)
     doc: dict[str, Any] = {"levels_A": levels, "files": files, "terms": list(TERMS), "degrees": degrees}
-    fits = []
-    per_level = []
-    for lv, ex in zip(levels, exps):
-        fit = level_fit(ex)
-        fits.append(fit)
-        ins = [op.nrmse(e, fit, i) for i, e in enumerate(ex)]
-        hof = held_out_files(ex, fit)
-        per_level.append({"in_sample": ins, "held_out_file": hof, "params": _params_dict(fit)})
-        log(
-            f"[{time.time() - t0:.0f} s] per-level fit {lv:g} A: NRMSE {np.round(ins, 3)}, "
-            f"held-out file {np.round(hof, 3)}"
-        )
+    cache = REPO / "docs" / "real-data" / "operating-levels.pkl"
+    if reuse and cache.is_file():
+        fits, per_level = pickle.loads(cache.read_bytes())
+        log(f"per-level fits read from {cache.name} (a previous run of this script)")
+    else:
+        fits, per_level = [], []
+        for lv, ex in zip(levels, exps):
+            fit = level_fit(ex)
+            fits.append(fit)
+            ins = [op.nrmse(e, fit, i) for i, e in enumerate(ex)]
+            hof = held_out_files(ex, fit)
+            per_level.append({"in_sample": ins, "held_out_file": hof, "params": _params_dict(fit)})
+            log(
+                f"[{time.time() - t0:.0f} s] per-level fit {lv:g} A: NRMSE {np.round(ins, 3)}, "
+                f"held-out file {np.round(hof, 3)}"
+            )
+        cache.parent.mkdir(parents=True, exist_ok=True)
+        cache.write_bytes(pickle.dumps((fits, per_level)))
     doc["per_level"] = per_level
     lolo: dict[str, Any] = {}
     for d in degrees:
@@ -171,7 +180,11 @@ def run(data: Path, degrees: list[int], log: Any) -> dict[str, Any]:
             keep = [j for j in range(len(levels)) if j != out]
             try:
                 fit = op.fit_operating(
-                    [levels[j] for j in keep], [exps[j] for j in keep], [fits[j] for j in keep], d
+                    [levels[j] for j in keep],
+                    [exps[j] for j in keep],
+                    [fits[j] for j in keep],
+                    d,
+                    relative_gains=RELATIVE_GAINS,
                 )
                 pred = fit.params_at(levels[out])
                 whole = [op.nrmse(e, pred, i) for i, e in enumerate(exps[out])]
@@ -190,7 +203,7 @@ def run(data: Path, degrees: list[int], log: Any) -> dict[str, Any]:
     best = min(score, key=lambda d: (score[d], d))
     doc["score"] = {str(d): v for d, v in score.items()}
     doc["degree"] = best
-    final = op.fit_operating(levels, exps, fits, best)
+    final = op.fit_operating(levels, exps, fits, best, relative_gains=RELATIVE_GAINS)
     doc["final"] = {
         "cost": final.cost,
         "in_sample": [
@@ -309,6 +322,11 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--degrees", default="0,1,2")
     ap.add_argument("--quiet", action="store_true")
     ap.add_argument(
+        "--reuse-levels",
+        action="store_true",
+        help="take the per-level fits from docs/real-data/operating-levels.pkl (a previous run) if present",
+    )
+    ap.add_argument(
         "--from-json",
         action="store_true",
         help="rewrite the page and figure from docs/real-data/operating.json (a run), fitting nothing",
@@ -324,7 +342,7 @@ def main(argv: list[str] | None = None) -> int:
         raise SystemExit(f"error: {args.data / A.DATASETS['mr-damper']} not found (the shipped real data)")
     log = (lambda s: None) if args.quiet else (lambda s: print(s, file=sys.stderr, flush=True))
     warnings.simplefilter("ignore")
-    doc = run(args.data, [int(d) for d in args.degrees.split(",")], log)
+    doc = run(args.data, [int(d) for d in args.degrees.split(",")], log, args.reuse_levels)
     out.mkdir(parents=True, exist_ok=True)
     (out / "operating.json").write_text(json.dumps(doc, indent=1, default=float) + "\n", encoding="utf-8")
     figure(doc, out / "operating-parameters.png")

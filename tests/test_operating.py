@@ -165,3 +165,68 @@ def test_named_errors(data: tuple) -> None:  # type: ignore[type-arg]
     fit = op.fit_operating(levels[:2], exps[:2], starts[:2], 0)
     with pytest.raises(InvalidParameterError, match="unknown coordinate"):
         fit.coordinate("beta", 0.0)
+
+
+@pytest.mark.parametrize("relative", [False, True])
+def test_the_joint_jacobian_is_the_residuals_derivative(data: tuple, relative: bool) -> None:  # type: ignore[type-arg]
+    """The chain rule through the coordinates, the polynomial basis and (relative gains) w_u, against
+    central differences of the stacked residual."""
+    levels, exps, starts = data
+    lv = np.asarray(levels[:3])
+    signs = np.sign(starts[0].gains)
+    prob = op._Problem(lv, exps[:3], TERMS, signs, 1, 0.75, 0.5, relative)
+    theta = op._start(prob, starts[:3]) * (
+        1 + 0.01 * np.random.default_rng(3).standard_normal(prob.n_coord * 2)
+    )
+    r, jac = prob.evaluate(theta)
+    rng = np.random.default_rng(4)
+    for k in rng.choice(theta.size, 8, replace=False):
+        h = 1e-6 * max(1.0, abs(theta[k]))
+        up, dn = theta.copy(), theta.copy()
+        up[k] += h
+        dn[k] -= h
+        fd = (prob.evaluate(up)[0] - prob.evaluate(dn)[0]) / (2 * h)
+        assert np.allclose(jac[:, k], fd, rtol=1e-4, atol=1e-6 * np.max(np.abs(fd)) + 1e-9), (k, relative)
+
+
+def test_relative_gains_predict_a_level_where_the_gain_follows_the_yield_level() -> None:
+    """When the linear part's gain grows with the saturation level (the knee at a fixed travel), the
+    relative-gain coordinates are constant in the variable (exact at degree 1, w_u being linear) while log g
+    is not: fitted on two levels, they predict the third (an extrapolation) far better."""
+    levels = [0.0, 0.5, 1.0]
+    exps, starts = [], []
+    for v in levels:
+        plant, w_u = truth(v)
+        scaled = bw.WienerPlant(bw.TransferFunction(G.num * w_u, G.den), plant.hysteresis, plant.terms)
+        plan = bw.SinePlan(
+            [w for _, w in TESTS], [u for u, _ in TESTS], settle_periods=30, periods=1, samples_per_period=P
+        )
+        row = [
+            AugExperiment(
+                ybar=np.asarray(r.y[-P:]),
+                amplitude=r.amplitude,
+                frequency=r.frequency,
+                grid_phase=0.0,
+                weight=1.0,
+            )
+            for r in bw.simulate(scaled, plan)
+        ]
+        exps.append(row)
+        resp = [complex(G.freqresp(w)) * w_u for _, w in TESTS]
+        h = plant.hysteresis
+        start = AugParams(
+            h.beta,
+            h.gamma,
+            MU,
+            TERMS,
+            np.array([t.value for t in plant.terms]),
+            np.abs(resp),
+            -np.angle(resp),
+        )
+        starts.append(fit_augmented(row, start).params)
+    rel = op.fit_operating(levels[:2], exps[:2], starts[:2], 1, relative_gains=True)
+    plain = op.fit_operating(levels[:2], exps[:2], starts[:2], 1)
+    score_rel = op.held_out_score(rel, levels[2], exps[2])
+    score_plain = op.held_out_score(plain, levels[2], exps[2])
+    assert score_rel < 1e-5 and score_plain > 10 * score_rel, (score_rel, score_plain)
+    assert rel.relative_gains and not plain.relative_gains

@@ -10,7 +10,8 @@ model of design.md 9.1 is fitted to all levels at once, every parameter a polyno
   ``rho = (beta - gamma) / (beta + gamma) > 0`` (the edge ``beta = gamma`` the fits of a damper often end
   on is approached, never crossed; a start on an edge begins at :data:`EDGE_START` from it);
 * each term by its own parameter (:data:`bouc_wen_id.augmented.TERM_NAMES`, in physical units);
-* each experiment's linear part by ``log |g_i|`` (its sign fixed by the start) and ``phi_i``.
+* each experiment's linear part by ``log |g_i|`` (its sign fixed by the start; or ``log(|g_i| / w_u)``
+  with ``relative_gains``) and ``phi_i``.
 
 The polynomial is in ``z = (v - centre) / half_range`` of the fitted levels.  :func:`fit_operating` runs the
 joint least squares (SciPy's trust-region reflective, the model and its Jacobian from the Rust core's
@@ -65,8 +66,11 @@ def _basis(z: float, degree: int) -> FloatArray:
     return np.array([z**k for k in range(degree + 1)], dtype=np.float64)
 
 
-def coordinates_of(params: AugParams) -> tuple[FloatArray, FloatArray, FloatArray]:
-    """``(shared, log|g|, phi)`` coordinates of one level's :class:`AugParams` (module docstring)."""
+def coordinates_of(
+    params: AugParams, relative_gains: bool = False
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """``(shared, log|g|, phi)`` coordinates of one level's :class:`AugParams` (module docstring); with
+    ``relative_gains`` the middle one is ``log(|g| / w_u)``."""
     s = params.beta + params.gamma
     if not s > 0.0:
         raise InvalidParameterError(f"beta + gamma = {s} must be > 0")
@@ -75,11 +79,17 @@ def coordinates_of(params: AugParams) -> tuple[FloatArray, FloatArray, FloatArra
     shared = np.concatenate(
         [[w_u, math.log(max(params.mu - 1.0, EDGE_START)), math.log(max(rho, EDGE_START))], params.values]
     )
-    return shared, np.log(np.abs(params.gains)), np.asarray(params.phases, dtype=np.float64)
+    log_g = np.log(np.abs(params.gains)) - (math.log(w_u) if relative_gains else 0.0)
+    return shared, log_g, np.asarray(params.phases, dtype=np.float64)
 
 
 def _params_from(
-    shared: FloatArray, log_g: FloatArray, phi: FloatArray, signs: FloatArray, terms: tuple[str, ...]
+    shared: FloatArray,
+    log_g: FloatArray,
+    phi: FloatArray,
+    signs: FloatArray,
+    terms: tuple[str, ...],
+    relative_gains: bool = False,
 ) -> tuple[AugParams, FloatArray]:
     """The :class:`AugParams` of coordinates, and ``d[beta, gamma, mu] / d[its 3 coordinates]``."""
     w_u, lm, lr = (float(v) for v in shared[:3])
@@ -96,7 +106,13 @@ def _params_from(
     jac[1] = 0.5 * (1.0 - rho) * ds - np.array([0.0, 0.0, 0.5 * s * rho])
     jac[2] = [0.0, mu - 1.0, 0.0]
     params = AugParams(
-        beta, gamma, mu, terms, np.asarray(shared[3:], dtype=np.float64), signs * np.exp(log_g), phi
+        beta,
+        gamma,
+        mu,
+        terms,
+        np.asarray(shared[3:], dtype=np.float64),
+        signs * np.exp(log_g) * (w_u if relative_gains else 1.0),
+        phi,
     )
     return params, jac
 
@@ -120,6 +136,8 @@ class OperatingFit:
     cost: float
     residual_variance: float
     iterations: int
+    #: The gains' coordinates are ``log(|g_i| / w_u)`` (:func:`fit_operating`).
+    relative_gains: bool = False
 
     @property
     def experiments(self) -> int:
@@ -161,7 +179,9 @@ class OperatingFit:
         values = self.coef @ _basis(self._z(v), self.degree)
         n_shared = 3 + len(self.terms)
         own = values[n_shared:].reshape(-1, 2)
-        return _params_from(values[:n_shared], own[:, 0], own[:, 1], self.signs, self.terms)
+        return _params_from(
+            values[:n_shared], own[:, 0], own[:, 1], self.signs, self.terms, self.relative_gains
+        )
 
 
 def nrmse(experiment: AugExperiment, params: AugParams, i: int) -> float:
@@ -223,8 +243,10 @@ class _Problem:
         degree: int,
         centre: float,
         half_range: float,
+        relative_gains: bool,
     ) -> None:
         self.levels, self.experiments, self.terms, self.signs = levels, experiments, terms, signs
+        self.relative_gains = relative_gains
         self.degree, self.centre, self.half_range = degree, centre, half_range
         self.n_shared = 3 + len(terms)
         self.n_coord = self.n_shared + 2 * signs.size
@@ -245,6 +267,7 @@ class _Problem:
             cost,
             s2,
             nfev,
+            self.relative_gains,
         )
 
     def evaluate(self, theta: FloatArray) -> tuple[FloatArray, FloatArray]:
@@ -272,6 +295,8 @@ class _Problem:
                 dcoord[:, 3 : self.n_shared] = out.jacobian[:, 3:]
                 k = self.n_shared + 2 * i
                 dcoord[:, k] = out.own_jacobian[:, 0] * params.gains[i]
+                if self.relative_gains:  # g_i = sign w_u exp(log_g_i): through w_u too
+                    dcoord[:, 0] += out.own_jacobian[:, 0] * params.gains[i] / float(fit.coordinate("w_u", v))
                 dcoord[:, k + 1] = out.own_jacobian[:, 1]
                 jacs.append(sw * (dcoord[:, :, None] * basis[None, None, :]).reshape(e.ybar.size, -1))
         return np.concatenate(rows), np.vstack(jacs)
@@ -283,7 +308,7 @@ def _start(problem: _Problem, starts: Sequence[AugParams]) -> FloatArray:
     vander = np.vander(z, problem.degree + 1, increasing=True)
     values = []
     for s in starts:
-        shared, log_g, phi = coordinates_of(s)
+        shared, log_g, phi = coordinates_of(s, problem.relative_gains)
         values.append(np.concatenate([shared, np.column_stack([log_g, phi]).ravel()]))
     coef = np.linalg.lstsq(vander, np.array(values), rcond=None)[0].T
     return np.asarray(coef.ravel(), dtype=np.float64)
@@ -295,6 +320,7 @@ def fit_operating(
     starts: Sequence[AugParams],
     degree: int,
     *,
+    relative_gains: bool = False,
     max_nfev: int = 200,
 ) -> OperatingFit:
     """One joint fit of every level, each parameter a polynomial of ``degree`` in the variable.
@@ -311,6 +337,11 @@ def fit_operating(
         start's.
     degree : int
         0, 1 or 2, at most ``len(levels) - 1``.
+    relative_gains : bool
+        Take each gain relative to the saturation level, ``log(|g_i| / w_u)`` (the inverse of the travel to
+        the loop's knee), instead of ``log |g_i|``: for a device whose yield level follows the variable while
+        the knee stays at a similar travel (an MR damper: its force level follows the current, not the
+        stiffness of its loop's knee relative to it).
 
     Raises
     ------
@@ -335,7 +366,9 @@ def fit_operating(
     lo, hi = float(lv.min()), float(lv.max())
     half = 0.5 * (hi - lo) if hi > lo else 1.0
     signs = np.where(np.asarray(starts[0].gains) < 0.0, -1.0, 1.0)
-    problem = _Problem(lv, experiments, terms, signs, int(degree), 0.5 * (hi + lo), half)
+    problem = _Problem(
+        lv, experiments, terms, signs, int(degree), 0.5 * (hi + lo), half, bool(relative_gains)
+    )
     theta0 = _start(problem, starts)
     r0, j0 = problem.evaluate(theta0)
     problem.refused = (np.full_like(r0, 1e3 * max(float(np.max(np.abs(r0))), 1.0)), np.zeros_like(j0))
@@ -387,6 +420,7 @@ def select_degree(
     starts: Sequence[AugParams],
     degrees: Sequence[int] = (0, 1, 2),
     *,
+    relative_gains: bool = False,
     max_nfev: int = 200,
 ) -> DegreeChoice:
     """The degree whose fits on all levels but one predict the held-out level best (leave-one-level-out).
@@ -414,6 +448,7 @@ def select_degree(
                 [experiments[j] for j in keep],
                 [starts[j] for j in keep],
                 d,
+                relative_gains=relative_gains,
                 max_nfev=max_nfev,
             )
             try:
