@@ -230,3 +230,27 @@ def test_relative_gains_predict_a_level_where_the_gain_follows_the_yield_level()
     score_plain = op.held_out_score(plain, levels[2], exps[2])
     assert score_rel < 1e-5 and score_plain > 10 * score_rel, (score_rel, score_plain)
     assert rel.relative_gains and not plain.relative_gains
+
+
+def test_the_mr_damper_page_is_what_its_run_wrote() -> None:
+    """docs/real-data-operating.md is the study's page of docs/real-data/operating.json (a run of
+    studies/operating_point.py), its figure exists, and the chosen degree is the one with the lowest held-out
+    score of the run."""
+    import importlib.util
+    import json
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    spec = importlib.util.spec_from_file_location(
+        "operating_point_study", root / "studies" / "operating_point.py"
+    )
+    assert spec is not None and spec.loader is not None
+    study = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(study)
+    doc = json.loads((root / "docs" / "real-data" / "operating.json").read_text(encoding="utf-8"))
+    page = (root / "docs" / "real-data-operating.md").read_text(encoding="utf-8")
+    assert study.page(doc) == page, "run: python studies/operating_point.py --from-json"
+    assert (root / "docs" / "real-data" / "operating-parameters.png").stat().st_size > 10_000
+    scores = {int(k): v for k, v in doc["score"].items()}
+    assert doc["degree"] == min(scores, key=lambda d: (scores[d], d))
+    assert len(doc["per_level"]) == len(doc["levels_A"]) == 5

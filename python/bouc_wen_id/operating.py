@@ -56,6 +56,8 @@ FloatArray = NDArray[np.float64]
 HYSTERESIS_COORDINATES = ("w_u", "log_mu_minus_1", "log_rho")
 #: How far from an edge (mu = 1, beta = gamma) a start on it begins: ``mu - 1`` and ``rho`` at least this.
 EDGE_START = 1e-3
+#: The smallest ``mu - 1`` a polynomial gives (below it mu would round to 1, outside the model).
+MU_GAP = 1e-9
 #: Highest polynomial degree.
 MAX_DEGREE = 2
 #: Two-sided normal quantile of a 95 % interval.
@@ -95,16 +97,20 @@ def _params_from(
     w_u, lm, lr = (float(v) for v in shared[:3])
     if not w_u > 0.0:
         raise InvalidParameterError(f"w_u = {w_u} must be > 0 (a saturation level)")
-    mu = 1.0 + math.exp(lm)
+    # mu - 1 floored at MU_GAP (derivative 0 there): a polynomial far out in log(mu - 1) would round mu to 1.
+    gap, dgap = (math.exp(lm), 1.0) if lm > math.log(MU_GAP) else (MU_GAP, 0.0)
+    mu = 1.0 + gap
     rho = math.exp(lr)
     log_w_u = math.log(w_u)
     s = math.exp(-mu * log_w_u)
     beta, gamma = 0.5 * s * (1.0 + rho), 0.5 * s * (1.0 - rho)
-    ds = np.array([-mu * s / w_u, -log_w_u * s * (mu - 1.0), 0.0])  # d s / d(w_u, log(mu - 1), log rho)
+    ds = np.array(
+        [-mu * s / w_u, -log_w_u * s * (mu - 1.0) * dgap, 0.0]
+    )  # d s / d(w_u, log(mu - 1), log rho)
     jac = np.zeros((3, 3))
     jac[0] = 0.5 * (1.0 + rho) * ds + np.array([0.0, 0.0, 0.5 * s * rho])
     jac[1] = 0.5 * (1.0 - rho) * ds - np.array([0.0, 0.0, 0.5 * s * rho])
-    jac[2] = [0.0, mu - 1.0, 0.0]
+    jac[2] = [0.0, (mu - 1.0) * dgap, 0.0]
     params = AugParams(
         beta,
         gamma,
