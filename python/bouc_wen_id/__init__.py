@@ -131,3 +131,16 @@ from . import timedomain  # noqa: E402
 from .timedomain import TimeDomainFit, TimeRecord, ValidationReport, fit_time_domain, validate  # noqa: E402
 
 __all__ += ["timedomain", "fit_time_domain", "TimeDomainFit", "TimeRecord", "validate", "ValidationReport"]
+# Issue #21 item 2, model export: the whole model as a python-control nlsys (control imported lazily), as
+# self-contained C99 and as versioned JSON (bw.save_model / bw.load_model).
+from . import export  # noqa: E402
+from .export import load_model, model_from_json, model_to_json, save_model, to_c, to_nlsys  # noqa: E402
+
+__all__ += ["export", "load_model", "save_model", "model_to_json", "model_from_json", "to_c", "to_nlsys"]
+
+# Issue #21 item 3, parameters that follow an operating variable (current, temperature, pre-load): one joint
+# fit over the levels, each parameter a polynomial in the variable (scipy imported when fitting).
+from . import operating  # noqa: E402
+from .operating import OperatingFit, fit_operating, select_degree  # noqa: E402
+
+__all__ += ["operating", "OperatingFit", "fit_operating", "select_degree"]

@@ -14,6 +14,7 @@ from typing import Any, NoReturn, Optional, Union
 
 from . import _pool
 from ._cli_validate import add_validate_parser
+from ._cli_export import add_export_parser
 from .demo import DEMO_FREQUENCIES
 from .errors import InvalidParameterError
 from .terms import DIAGNOSIS_CANDIDATES
@@ -339,6 +340,7 @@ def build_parser() -> argparse.ArgumentParser:
         add(sub)
     _add_plan_parser(sub)
     add_validate_parser(sub)  # issue #20: bouc_wen_id._cli_validate
+    add_export_parser(sub)  # issue #21: model export (_cli_export)
     return parser
 
 
