@@ -296,6 +296,14 @@ def test_cli_validate(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> Non
     table = json.loads((out / "validation.json").read_text())
     assert table[0]["rmse"] == pytest.approx(case.noise * np.std(w), rel=0.1)
     assert (out / "residuals_000.png").stat().st_size > 1000
+    saved = tmp_path / "model.json"  # the versioned document of bw.save_model reads the same
+    bw.save_model(case.plant(), saved)
+    assert main(["validate", "--model", str(saved), str(rec)]) == 0
+    assert f"{table[0]['rmse']:.4g}"[:4] in capsys.readouterr().out
+    broken = tmp_path / "v99.json"
+    broken.write_text(saved.read_text().replace('"version": 1', '"version": 99'))
+    assert main(["validate", "--model", str(broken), str(rec)]) == 2
+    assert "version" in capsys.readouterr().err
     bad = tmp_path / "bad.json"
     bad.write_text("[1, 2]")
     assert main(["validate", "--model", str(bad), str(rec)]) == 2

@@ -15,6 +15,7 @@ from typing import Any
 
 from . import _output
 from .errors import BoucWenIdError, FileFormatError, InvalidParameterError
+from .export import model_from_json
 from .model import WienerPlant
 
 __all__ = ["add_validate_parser", "cmd_validate"]
@@ -42,13 +43,17 @@ def add_validate_parser(sub: Any) -> None:
 
 
 def _load_model(path: Path) -> WienerPlant:
-    """A plant JSON, or an object holding one under ``plant``; every failure a :class:`FileFormatError`."""
+    """A model document (:func:`bw.save_model`), a plant JSON, or an object holding one under ``plant``;
+    every failure a :class:`FileFormatError`."""
     if not path.is_file():
         raise FileFormatError(f"--model {path}: no such regular file")
     if path.stat().st_size > 1 << 20:
         raise FileFormatError(f"--model {path}: {path.stat().st_size} bytes is no model JSON file")
     try:
-        spec = json.loads(path.read_text(encoding="utf-8"))
+        text = path.read_text(encoding="utf-8")
+        spec = json.loads(text)
+        if isinstance(spec, dict) and "format" in spec:  # a versioned model document (bw.save_model)
+            return model_from_json(text)
         if isinstance(spec, dict) and isinstance(spec.get("plant"), dict):
             spec = spec["plant"]
         if not isinstance(spec, dict):
