@@ -166,6 +166,13 @@ def _add_identify_options(p: argparse.ArgumentParser) -> None:
         action="store_false",
         help="write result.json and print the table only (batch use: no matplotlib)",
     )
+    p.add_argument(
+        "--bode-units",
+        choices=("linear", "dB"),
+        default="linear",
+        help="bode.png: linear (default: |G| on a log axis against omega in rad/s, the units of every "
+        "printed number) or dB (20 log10 |G| against f in Hz); the phase in degrees, unwrapped, in both",
+    )
 
 
 def _add_demo_parser(sub: Any) -> None:
