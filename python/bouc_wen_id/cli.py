@@ -469,6 +469,9 @@ def _cmd_diagnose(args: argparse.Namespace) -> int:
         load(args.paths, columns=_columns(args.columns), sample_rate=args.sample_rate, skiprows=args.skiprows)
     )
     style = _figure_style(args, items)
+    # The plain model as identify fits the same files, and its warnings, for the page (after the verdict).
+    print("identify: fitting the plain model for the report", file=sys.stderr, flush=True)
+    identified, notes = identify_plain(items)
     d = diagnose(
         items,
         candidates=args.candidates,
@@ -479,9 +482,6 @@ def _cmd_diagnose(args: argparse.Namespace) -> int:
         progress=True,
     )
     print(d.summary())
-    # The plain model as identify fits the same files, and its warnings, for the page (after the verdict).
-    print("identifying the plain model for the report ...", file=sys.stderr, flush=True)
-    identified, notes = identify_plain(items)
     with _staged(args) as staged:
         written = write_report(
             d,
@@ -608,8 +608,14 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
 
 def _run(args: argparse.Namespace) -> int:
     try:
-        with one_blas_thread():  # small matrices only: see bouc_wen_id._threads
-            return int(_COMMANDS[args.command](args))
+        # NumPy's floating-point warnings (an overflow on a value of 1e308) are not for a terminal: the
+        # checks that follow name the value in one line.
+        with one_blas_thread(), np.errstate(all="ignore"), warnings.catch_warnings():
+            # (errstate is per thread: the simulation's worker threads warn through the filter instead.)
+            warnings.filterwarnings(
+                "ignore", r"(overflow|invalid value|divide by zero) encountered", RuntimeWarning
+            )
+            return int(_COMMANDS[args.command](args))  # one_blas_thread: see bouc_wen_id._threads
     except BoucWenIdError as exc:
         return _fail(type(exc).__name__, exc, args.command)
     except KeyboardInterrupt:
