@@ -147,7 +147,10 @@ def _classify(argv: list[str], err: io.StringIO, out: io.StringIO) -> tuple[str,
     except BaseException as exc:  # noqa: BLE001 - what escaped main is the finding
         return "raw", f"{type(exc).__name__}: {exc}"[:300]
     text = err.getvalue().strip()
-    lines = [ln for ln in text.splitlines() if not ln.startswith(("diagnose:", "[", "identify:"))]
+    # Progress lines and one-line warnings (cli prints each as "warning: Category: message") aside.
+    lines = [
+        ln for ln in text.splitlines() if not ln.startswith(("diagnose:", "[", "identify:", "warning: "))
+    ]
     if code == 0:
         return "done", ""
     if code == 2 and len(lines) == 1 and ("error:" in lines[0]) and "Traceback" not in text:

@@ -606,11 +606,17 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             signal.signal(signal.SIGTERM, previous)
 
 
+def _show_warning(message: Any, category: type[Warning], *args: Any, **kwargs: Any) -> None:
+    """A warning as one line on stderr (Python's own format adds its file, line and source line)."""
+    print(f"warning: {category.__name__}: {_one_line(str(message))}", file=sys.stderr)
+
+
 def _run(args: argparse.Namespace) -> int:
     try:
         # NumPy's floating-point warnings (an overflow on a value of 1e308) are not for a terminal: the
         # checks that follow name the value in one line.
         with one_blas_thread(), np.errstate(all="ignore"), warnings.catch_warnings():
+            warnings.showwarning = _show_warning
             # (errstate is per thread: the simulation's worker threads warn through the filter instead.)
             warnings.filterwarnings(
                 "ignore", r"(overflow|invalid value|divide by zero) encountered", RuntimeWarning
