@@ -132,35 +132,54 @@ def figure_residuals(outcomes: Sequence[Outcome], ncols: int) -> Figure:
         fontsize=8,
     )
     fig.supxlabel("time from the input's phase zero (s)", fontsize=8)
+    if usable:
+        fig.supylabel(f"residual ybar - model ({usable[0].record['units']['y']})", fontsize=8)
     return fig
+
+
+def _on_branch(ref_f: Sequence[float], ref_deg: Sequence[float], f: float, phase: float) -> float:
+    """``phase`` (rad) in degrees, on the 360-degree branch nearest the group's unwrapped curve at ``f``
+    (in (-180, 180] when the group has no identified point)."""
+    deg = math.degrees(_wrap_pi(phase))
+    if not len(ref_f):
+        return deg
+    order = np.argsort(ref_f)
+    ref = float(np.interp(math.log(f), np.log(np.asarray(ref_f)[order]), np.asarray(ref_deg)[order]))
+    return deg + 360.0 * round((ref - deg) / 360.0)
 
 
 def figure_bode(
     outcomes: Sequence[Outcome], joints: Sequence[Joint], group_of: Callable[[Outcome], str]
 ) -> Figure:
-    """|G| and phi at each experiment's frequency: single fits (95 % CI), joint fits, cross-checks."""
+    """|G| and phi at each experiment's frequency: single fits (95 % CI), joint fits, cross-checks; the
+    phase lag in degrees, unwrapped along frequency within each group."""
+    from bouc_wen_id.plotting import unwrapped_degrees
+
     fig, (ax_g, ax_p) = panel_grid(2, 1, (5.9, 2.75))
+    fig.subplots_adjust(left=1.25 / fig.get_figwidth())  # room for |G|'s long tick labels (B-H: 4.8e-8)
     groups: dict[str, list[Outcome]] = {}
     for o in outcomes:
         if o.averaged is not None:
             groups.setdefault(group_of(o), []).append(o)
+    curves: dict[str, tuple[list[float], list[float]]] = {}
     for k, (name, members) in enumerate(groups.items()):
         color = f"C{k % 10}"
+        fit = [o for o in members if o.record["identification"]["outcome"] == "identified"]
+        fs = [float(o.record["frequency_hz"]) for o in fit]
+        points = [o.record["identification"]["experiments"][0] for o in fit]
+        degs = list(unwrapped_degrees(np.array(fs), np.array([e["phase"]["value"] for e in points])))
+        curves[name] = (fs, degs)
+        for f, e, deg in zip(fs, points, degs):
+            g, ph = e["gain"], e["phase"]
+            g_err = Z95 * g["se"] if g["se"] is not None else 0.0
+            p_err = math.degrees(Z95 * ph["se"]) if ph["se"] is not None else 0.0
+            ax_g.errorbar([f], [g["value"]], yerr=[g_err], fmt="o", color=color, ms=4, capsize=2)
+            ax_p.errorbar([f], [deg], yerr=[p_err], fmt="o", color=color, ms=4, capsize=2)
         for o in members:
-            f = o.record["frequency_hz"]
-            ident = o.record["identification"]
-            if ident["outcome"] == "identified":
-                e = ident["experiments"][0]
-                g, ph = e["gain"], e["phase"]
-                g_err = Z95 * g["se"] if g["se"] is not None else 0.0
-                p_err = Z95 * ph["se"] if ph["se"] is not None else 0.0
-                ax_g.errorbar([f], [g["value"]], yerr=[g_err], fmt="o", color=color, ms=4, capsize=2)
-                ax_p.errorbar(
-                    [f], [_wrap_pi(ph["value"])], yerr=[p_err], fmt="o", color=color, ms=4, capsize=2
-                )
             if o.cross is not None:
+                f = float(o.record["frequency_hz"])
                 ax_g.plot([f], [o.cross.gain], "x", color=color, ms=5)
-                ax_p.plot([f], [_wrap_pi(o.cross.phase)], "x", color=color, ms=5)
+                ax_p.plot([f], [_on_branch(fs, degs, f, o.cross.phase)], "x", color=color, ms=5)
         ax_g.plot([], [], "s", color=color, label=name)
     for j in joints:
         if j.result is None:
@@ -168,9 +187,16 @@ def figure_bode(
         name = group_of(j.members[0])
         k = list(groups).index(name) if name in groups else 0
         fs = [e.frequency / TWO_PI for e in j.result.experiments]
+        ref = curves.get(name, ([], []))
         ax_g.plot(fs, j.result.gains, "s--", mfc="none", color=f"C{k % 10}", ms=6, lw=0.6)
         ax_p.plot(
-            fs, [_wrap_pi(p) for p in j.result.phases], "s--", mfc="none", color=f"C{k % 10}", ms=6, lw=0.6
+            fs,
+            [_on_branch(*ref, f, p) for f, p in zip(fs, j.result.phases)],
+            "s--",
+            mfc="none",
+            color=f"C{k % 10}",
+            ms=6,
+            lw=0.6,
         )
     ax_g.plot([], [], "o", color="0.4", label="single refined fit (95 % CI)")
     ax_g.plot([], [], "s", mfc="none", color="0.4", label="joint refined fit")
@@ -182,8 +208,9 @@ def figure_bode(
     ax_p.set_xscale("log")
     for ax in (ax_g, ax_p):
         ax.xaxis.set_minor_formatter(NullFormatter())
-    ax_g.set_ylabel("|G(j omega)| (alpha-normalised)")
-    ax_p.set_ylabel("phi = -angle G, wrapped to (-pi, pi] (rad)")
+    units = next((o.record["units"] for o in outcomes), {"u": "[u]", "y": "[y]"})
+    ax_g.set_ylabel(f"|G(j omega)| ({units['y']}/{units['u']},\nalpha-normalised)")
+    ax_p.set_ylabel("phase lag phi = -arg G (deg)")
     ax_p.set_xlabel("frequency found (Hz)")
     for ax in (ax_g, ax_p):
         ax.grid(True, which="both", alpha=0.3)
@@ -233,7 +260,8 @@ def write_figures(
     for j in joints:
         if j.result is not None:
             slug = j.record["label"].split(",")[0].replace(" ", "").replace(".", "p")
-            fig = plot_loops(j.result)
+            units = j.members[0].record["units"]
+            fig = plot_loops(j.result, u_unit=units["u"], y_unit=units["y"])
             fig.suptitle(f"Joint fit {j.record['label']}: measured (solid), model (dashed)", fontsize=9)
             figs.append((f"{dataset}-joint-{slug}.png", fig))
     names = []

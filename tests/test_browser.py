@@ -34,7 +34,7 @@ webdriver = pytest.importorskip("selenium.webdriver", reason="selenium is not in
 @pytest.fixture(scope="module")
 def report(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """A diagnosis report of a plant that hides viscous damping, written as the CLI writes it."""
-    from bouc_wen_id.diagnosis.report import write_report
+    from bouc_wen_id.diagnosis.report import identify_plain, write_report
 
     plant = bw.WienerPlant(
         bw.TransferFunction([20.0], [1.0, 20.0]),  # first-order G, corner at 20 rad/s
@@ -50,9 +50,11 @@ def report(tmp_path_factory: pytest.TempPathFactory) -> Path:
         noise_sd=0.003,
         seed=3,
     )
-    d = bw.diagnose(bw.simulate(plant, plan))
+    recs = bw.simulate(plant, plan)
+    d = bw.diagnose(recs, y_unit="N", u_unit="mm")
+    identified, notes = identify_plain(recs)
     out = tmp_path_factory.mktemp("report")
-    write_report(d, out)
+    write_report(d, out, identified=identified, identify_warnings=notes, u_unit="mm", y_unit="N")
     return out / "report.html"
 
 
@@ -94,6 +96,21 @@ def test_report_opens_in_a_browser_with_the_verdict_first_and_every_figure_decod
     assert first, "the first text of the page is not inside the verdict"
     verdict = browser.find_element("css selector", ".verdict").text
     assert "explained" in verdict.lower() or "adequate" in verdict.lower(), verdict
+
+    # The identified model comes right after the verdict's evidence, above the diagnosis's own tables.
+    headings = browser.execute_script(
+        "return Array.from(document.querySelectorAll('h2')).map(h => h.textContent);"
+    )
+    assert headings and headings[0] == "Identified model", headings
+    model = browser.execute_script(
+        "const h = Array.from(document.querySelectorAll('h2'))"
+        ".find(h => h.textContent == 'Identified model');"
+        " let n = h.nextElementSibling, text = '';"
+        " while (n && n.tagName != 'H2') { text += n.innerText + '\\n'; n = n.nextElementSibling; }"
+        " return text;"
+    )
+    for name in ("beta", "gamma", "mu", "95 % interval", "phase lag (deg)"):
+        assert name in model, (name, model)
 
     errors = [e for e in browser.get_log("browser") if e.get("level") == "SEVERE"]
     assert not errors, f"console errors: {errors}"

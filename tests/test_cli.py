@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import shutil
 import signal
 import subprocess
@@ -514,6 +515,19 @@ def test_partial_folders_of_dead_runs_are_cleaned_by_the_next_run(tmp_path: Path
     assert not stale.exists() and alive.is_dir()
 
 
+def _started(proc: subprocess.Popen[str], timeout: float = 120.0) -> None:
+    """Wait until ``cli.main`` has set its SIGTERM handler (Linux: /proc/PID/status), then a little more:
+    a fixed sleep sent the signal while a loaded machine was still importing (Python's default: -15)."""
+    status = Path(f"/proc/{proc.pid}/status")
+    end = time.monotonic() + timeout
+    while status.exists() and time.monotonic() < end and proc.poll() is None:
+        caught = re.search(r"^SigCgt:\s*([0-9a-f]+)", status.read_text(), re.M)
+        if caught is not None and int(caught.group(1), 16) >> (signal.SIGTERM - 1) & 1:
+            break
+        time.sleep(0.05)
+    time.sleep(0.5)
+
+
 def _cli(args: list[str]) -> subprocess.Popen[str]:
     env = dict(os.environ, MPLBACKEND="Agg")
     cmd = [sys.executable, "-m", "bouc_wen_id", *args]
@@ -539,7 +553,7 @@ def test_sigterm_exits_143_and_leaves_nothing(tmp_path: Path) -> None:
     # (which polls for signals as for Ctrl-C).
     args = ["simulate", "--out", str(out), "--frequencies", "1", "--samples-per-period", "10000"]
     proc = _cli([*args, "--substeps", "1000"])
-    time.sleep(2.0)
+    _started(proc)
     proc.send_signal(signal.SIGTERM)
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == 143, err

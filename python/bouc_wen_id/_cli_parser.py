@@ -7,6 +7,7 @@ error's message is put in the command line's words here too (:func:`flags_named`
 from __future__ import annotations
 
 import argparse
+import math
 import re
 from collections.abc import Callable
 from pathlib import Path
@@ -21,6 +22,10 @@ from .terms import DIAGNOSIS_CANDIDATES
 from .validation import real_number
 
 __all__ = ["build_parser", "flags_named"]
+
+#: The highest sampling rate ``plan --sample-rate`` takes (1 THz, beyond any DAQ): 1e308 overflowed the
+#: planner's sample counts.
+MAX_RATE = 1e12
 
 #: diagnose's candidates: the steady-loop terms and degradation (diagnosis.run.ALL_CANDIDATES, kept here
 #: so that the CLI does not import the diagnosis to build its parser).
@@ -39,7 +44,11 @@ class _Parser(argparse.ArgumentParser):
         self.exit(2, f"{self.prog}: error: {message} (usage: {self.prog} --help)\n")
 
 
-def _integer(low: int, high: Optional[int] = None) -> Callable[[str], int]:
+#: The largest integer any count flag takes (a 400-digit --settle-periods overflowed the planner's floats).
+MAX_COUNT = (1 << 31) - 1
+
+
+def _integer(low: int, high: Optional[int] = MAX_COUNT) -> Callable[[str], int]:
     def parse(text: str) -> int:
         try:
             value = int(text)
@@ -54,7 +63,9 @@ def _integer(low: int, high: Optional[int] = None) -> Callable[[str], int]:
     return parse
 
 
-def _real(positive: bool = False, nonnegative: bool = False) -> Callable[[str], float]:
+def _real(
+    positive: bool = False, nonnegative: bool = False, high: float = math.inf
+) -> Callable[[str], float]:
     def parse(text: str) -> float:
         try:
             value = real_number(repr(text), float(text))
@@ -64,6 +75,8 @@ def _real(positive: bool = False, nonnegative: bool = False) -> Callable[[str], 
             raise argparse.ArgumentTypeError(f"{value:g} must be > 0")
         if nonnegative and not value >= 0:
             raise argparse.ArgumentTypeError(f"{value:g} must be >= 0")
+        if not value <= high:
+            raise argparse.ArgumentTypeError(f"{value:g} must be <= {high:g}")
         return value
 
     return parse
@@ -168,6 +181,13 @@ def _add_identify_options(p: argparse.ArgumentParser) -> None:
         action="store_false",
         help="write result.json and print the table only (batch use: no matplotlib)",
     )
+    p.add_argument(
+        "--bode-units",
+        choices=("linear", "dB"),
+        default="linear",
+        help="bode.png: linear (default: |G| on a log axis against omega in rad/s, the units of every "
+        "printed number) or dB (20 log10 |G| against f in Hz); the phase in degrees, unwrapped, in both",
+    )
 
 
 def _add_demo_parser(sub: Any) -> None:
@@ -177,7 +197,7 @@ def _add_demo_parser(sub: Any) -> None:
     p.add_argument(
         "--noise", type=_real(nonnegative=True), default=0.005, help="output noise standard deviation"
     )
-    p.add_argument("--seed", type=_integer(0), default=2024)
+    p.add_argument("--seed", type=_integer(0, (1 << 63) - 1), default=2024)
     p.add_argument(
         "--compare",
         action=argparse.BooleanOptionalAction,
@@ -213,7 +233,7 @@ def _add_simulate_parser(sub: Any) -> None:
     p.add_argument("--samples-per-period", type=_integer(8), default=1024)
     p.add_argument("--substeps", type=_integer(1), default=2)
     p.add_argument("--noise", type=_real(nonnegative=True), default=0.005)
-    p.add_argument("--seed", type=_integer(0), default=2024)
+    p.add_argument("--seed", type=_integer(0, (1 << 63) - 1), default=2024)
     p.add_argument("--backend", choices=("rust", "numpy"), default="rust")
 
 
@@ -311,7 +331,10 @@ def _add_plan_parser(sub: Any) -> None:
         "--noise", type=_real(positive=True), required=True, help="prior output noise sd per sample"
     )
     p.add_argument(
-        "--sample-rate", type=_real(positive=True), required=True, help="highest sampling rate, Hz"
+        "--sample-rate",
+        type=_real(positive=True, high=MAX_RATE),
+        required=True,
+        help="highest sampling rate, Hz",
     )
     p.add_argument("--target", choices=("bouc_wen", "beta", "gamma", "mu", "G"), default="bouc_wen")
     p.add_argument(

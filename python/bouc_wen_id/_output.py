@@ -102,6 +102,7 @@ def check_out(
     folders left beside ``out`` by runs that were killed.  Raises
     :class:`~bouc_wen_id.errors.InvalidParameterError` naming ``flag``.
     """
+    _check_spelling(out, flag)
     target = _target(out)
     try:
         mode: Optional[int] = target.lstat().st_mode
@@ -118,6 +119,31 @@ def check_out(
         raise _refuse(flag, out, f"{parent} is not a writable folder")
     clean_stale(target.parent)
     return target
+
+
+#: Deepest ``--out`` accepted, in folders: creating each missing one recurses (pathlib, os.makedirs), and
+#: no report needs a thousand levels.
+MAX_DEPTH = 256
+
+
+def _check_spelling(out: Path, flag: str) -> None:
+    """Refuse, by name, an ``out`` no file system takes: a NUL byte, longer than the system's path limit,
+    or deeper than :data:`MAX_DEPTH` folders (a raw ValueError and a RecursionError before)."""
+    text = str(out)
+    if "\x00" in text:
+        raise _refuse(flag, Path(text.replace("\x00", "\\0")), "contains a NUL byte, which no path may hold")
+    try:
+        limit = os.pathconf("/", "PC_PATH_MAX")
+    except (OSError, ValueError, AttributeError):  # pragma: no cover - not POSIX
+        limit = 4096
+    if len(os.fsencode(os.path.abspath(text))) >= limit:
+        raise _refuse(
+            flag, Path(text[:60] + "..."), f"is longer than the system's path limit ({limit} bytes)"
+        )
+    if len(out.parts) > MAX_DEPTH:
+        raise _refuse(
+            flag, Path(text[:60] + "..."), f"is {len(out.parts)} folders deep (at most {MAX_DEPTH})"
+        )
 
 
 def _check_existing(

@@ -64,14 +64,16 @@ def _print_written(args: argparse.Namespace, written: Sequence[Path]) -> None:
         print(f"wrote {_output.shown(f, args.out_staged, args.out)}")
 
 
-def _write_report(result: IdentificationResult, out: Path, figures: bool = True) -> list[Path]:
+def _write_report(
+    result: IdentificationResult, out: Path, figures: bool = True, style: Optional[dict[str, str]] = None
+) -> list[Path]:
     """The report folder: result.json, then (unless ``figures`` is False) the loops per experiment, the Bode
-    points, the residuals."""
+    points, the residuals (``style``: the data's units and the Bode units, see ``_figure_style``)."""
     out.mkdir(parents=True, exist_ok=True)
     files = [out / "result.json"]
     files[0].write_text(result.to_json() + "\n", encoding="utf-8")
     if figures:
-        files += _write_figures(result, out)
+        files += _write_figures(result, out, style)
     return files
 
 
@@ -79,20 +81,38 @@ def _write_report(result: IdentificationResult, out: Path, figures: bool = True)
 _FIGURES = ("loops.png", "bode.png", "residuals.png")
 
 
-def _write_figures(result: IdentificationResult, out: Path) -> list[Path]:
+def _figure_style(args: argparse.Namespace, items: Sequence[Any] = ()) -> dict[str, str]:
+    """The figures' labels: the units of the first lab measurement that names them, and ``--bode-units``."""
+    units = next((m.units for m in items if isinstance(m, Measurement)), {})
+    return {
+        "u_unit": str(units.get("u", "")),
+        "y_unit": str(units.get("y", "")),
+        "bode_units": str(getattr(args, "bode_units", "linear")),
+    }
+
+
+def _write_figures(
+    result: IdentificationResult, out: Path, style: Optional[dict[str, str]] = None
+) -> list[Path]:
     """The report's figures (matplotlib is imported here, only when figures are asked for)."""
     files = [out / name for name in _FIGURES]
     for f in files:
-        _render_figure(result, f)
+        _render_figure(result, f, style)
     return files
 
 
-def _render_figure(result: IdentificationResult, path: Path) -> None:
-    """One figure of the report into ``path`` (here or in a worker process)."""
-    from .plotting import plot_loops, plot_residuals
+def _render_figure(result: IdentificationResult, path: Path, style: Optional[dict[str, str]] = None) -> None:
+    """One figure of the report into ``path`` (here or in a worker process), labelled with ``style``."""
+    from .plotting import plot_bode, plot_loops, plot_residuals
 
-    fig = {"loops.png": plot_loops, "residuals.png": plot_residuals}.get(path.name)
-    figure = fig(result) if fig is not None else result.plot_bode()
+    st = style or {}
+    u_unit, y_unit = st.get("u_unit", ""), st.get("y_unit", "")
+    if path.name == "loops.png":
+        figure = plot_loops(result, u_unit=u_unit, y_unit=y_unit)
+    elif path.name == "residuals.png":
+        figure = plot_residuals(result, y_unit=y_unit)
+    else:
+        figure = plot_bode(result, units=st.get("bode_units", "linear"), u_unit=u_unit, y_unit=y_unit)
     # zlib level 1: a third of the PNG encoding time of the default level 6, files ~20 % larger.
     figure.savefig(path, dpi=120, pil_kwargs={"compress_level": 1})
 
@@ -151,11 +171,14 @@ def _cmd_demo(args: argparse.Namespace) -> int:
         print(_compare_methods(recs, args))
     diagnosis = _demo_diagnosis(plan, args) if args.diagnosis else None
     with _staged(args) as staged:
-        written = _write_report(result, staged, figures=args.figures)
+        written = _write_report(result, staged, figures=args.figures, style=_figure_style(args))
         if diagnosis is not None:
             from .diagnosis.report import write_report
 
-            written += write_report(diagnosis, staged / "diagnosis", figures=args.figures)
+            d, plain, notes = diagnosis
+            written += write_report(
+                d, staged / "diagnosis", figures=args.figures, identified=plain, identify_warnings=notes
+            )
     _print_written(args, written)
     return 0
 
@@ -170,17 +193,17 @@ def _demo_diagnosis(plan: SinePlan, args: argparse.Namespace) -> Any:
         f"\n--- diagnosis: the same plant with a hidden {hidden.description} "
         f"({hidden.symbol} = {hidden.value:g}) ---"
     )
+    from .diagnosis.report import identify_plain
+
     recs = simulate(demo_hidden_plant(), plan, backend=args.backend)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        plain = identify(recs, **_identify_options(args))
-    adequacy = plain.adequacy
+    plain, notes = identify_plain(recs, **_identify_options(args))
+    adequacy = None if isinstance(plain, Exception) else plain.adequacy
     if adequacy is not None:
         fails = "fails" if adequacy.rejects() else "passes"
         print(f"identify: the plain model {fails} its adequacy test (p = {adequacy.p_value:.2g})")
     d = diagnose(recs)
     print(d.summary())
-    return d
+    return d, plain, notes
 
 
 def _compare_methods(recs: list, args: argparse.Namespace) -> str:  # type: ignore[type-arg]
@@ -316,6 +339,7 @@ def _prepare(args: argparse.Namespace, workers: int) -> tuple[list[Any], list[di
     items = load(
         args.paths, columns=_columns(args.columns), sample_rate=args.sample_rate, skiprows=args.skiprows
     )
+    args.figure_style = _figure_style(args, items)
     total = sum(isinstance(m, Measurement) for m in items)
 
     def report(i: int, found: Any) -> None:
@@ -400,7 +424,7 @@ def _identify_into(
         (root / "segments.json").write_text(json.dumps(segments, indent=2) + "\n", encoding="utf-8")
         written.append(root / "segments.json")
     if args.figures:
-        written.extend(_figures_of(reported, workers))
+        written.extend(_figures_of(reported, workers, getattr(args, "figure_style", _figure_style(args))))
     failures = len(groups) - len(reported)
     notes = [f"{failures} of {len(groups)} experiment(s) refused (see refused.json in their folders)"]
     return (0 if reported else 2), written, notes if failures else []
@@ -414,15 +438,17 @@ def _write_refusal(label: str, error: BoucWenIdError, out: Path) -> Path:
     return out / "refused.json"
 
 
-def _figures_of(reported: Sequence[tuple[IdentificationResult, Path]], workers: int) -> list[Path]:
+def _figures_of(
+    reported: Sequence[tuple[IdentificationResult, Path]], workers: int, style: dict[str, str]
+) -> list[Path]:
     """Every figure of every result: here, or one task each on the pool of ``workers``."""
     sys.stdout.flush()
     if workers < 2:
-        return [f for result, out in reported for f in _write_figures(result, out)]
-    tasks = [(result, out / name) for result, out in reported for name in _FIGURES]
+        return [f for result, out in reported for f in _write_figures(result, out, style)]
+    tasks = [(result, out / name, style) for result, out in reported for name in _FIGURES]
     for _ in _pool.ordered(_pool.get_pool(workers), _render_figure, tasks, here=False):
         pass
-    return [path for _, path in tasks]
+    return [task[1] for task in tasks]
 
 
 def _label(item: Any) -> str:
@@ -438,25 +464,36 @@ def _label(item: Any) -> str:
 def _cmd_diagnose(args: argparse.Namespace) -> int:
     """Diagnose the files jointly; the verdict first, then diagnosis.json, the figures and report.html."""
     from .diagnosis import diagnose
-    from .diagnosis.report import write_report
+    from .diagnosis.report import identify_plain, write_report
 
     _check_out(args, inputs=args.paths)
     items = list(
         load(args.paths, columns=_columns(args.columns), sample_rate=args.sample_rate, skiprows=args.skiprows)
     )
-    units = next((m.units for m in items if isinstance(m, Measurement)), {})
+    style = _figure_style(args, items)
+    # The plain model as identify fits the same files, and its warnings, for the page (after the verdict).
+    print("identify: fitting the plain model for the report", file=sys.stderr, flush=True)
+    identified, notes = identify_plain(items)
     d = diagnose(
         items,
         candidates=args.candidates,
         alpha=args.alpha,
         held_out_test=not args.no_held_out,
-        y_unit=str(units.get("y", "")),
-        u_unit=str(units.get("u", "")),
+        y_unit=style["y_unit"],
+        u_unit=style["u_unit"],
         progress=True,
     )
     print(d.summary())
     with _staged(args) as staged:
-        written = write_report(d, staged, figures=not args.no_figures)
+        written = write_report(
+            d,
+            staged,
+            figures=not args.no_figures,
+            identified=identified,
+            identify_warnings=notes,
+            u_unit=style["u_unit"],
+            y_unit=style["y_unit"],
+        )
     _print_written(args, written)
     return 0
 
@@ -573,10 +610,22 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             signal.signal(signal.SIGTERM, previous)
 
 
+def _show_warning(message: Any, category: type[Warning], *args: Any, **kwargs: Any) -> None:
+    """A warning as one line on stderr (Python's own format adds its file, line and source line)."""
+    print(f"warning: {category.__name__}: {_one_line(str(message))}", file=sys.stderr)
+
+
 def _run(args: argparse.Namespace) -> int:
     try:
-        with one_blas_thread():  # small matrices only: see bouc_wen_id._threads
-            return int(_COMMANDS[args.command](args))
+        # NumPy's floating-point warnings (an overflow on a value of 1e308) are not for a terminal: the
+        # checks that follow name the value in one line.
+        with one_blas_thread(), np.errstate(all="ignore"), warnings.catch_warnings():
+            warnings.showwarning = _show_warning
+            # (errstate is per thread: the simulation's worker threads warn through the filter instead.)
+            warnings.filterwarnings(
+                "ignore", r"(overflow|invalid value|divide by zero) encountered", RuntimeWarning
+            )
+            return int(_COMMANDS[args.command](args))  # one_blas_thread: see bouc_wen_id._threads
     except BoucWenIdError as exc:
         return _fail(type(exc).__name__, exc, args.command)
     except KeyboardInterrupt:

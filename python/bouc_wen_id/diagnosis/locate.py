@@ -153,7 +153,7 @@ class Localisation:
         if w:
             parts.append(w if w == "spread over the cycle" else f"{w}")
         if math.isfinite(self.frequency_exponent) and abs(self.frequency_exponent) > 0.5:
-            parts.append(f"growing as omega^{self.frequency_exponent:.1f}")
+            parts.append(trend_phrase(self.frequency_exponent))
         if self.drift_detected:
             parts.append("drifting from period to period")
         return ", ".join(parts)
@@ -173,6 +173,14 @@ class Localisation:
             "drift_detected": self.drift_detected,
             "where": self.where(),
         }
+
+
+def trend_phrase(exponent: float) -> str:
+    """How the misfit's size follows the frequency, in words that follow the sign: ``omega^0.7`` grows,
+    ``omega^-0.7`` shrinks (it was once "growing as omega^-0.7")."""
+    if exponent >= 0.0:
+        return f"growing with frequency (as omega^{exponent:.1f})"
+    return f"shrinking with frequency (as omega^{exponent:.1f})"
 
 
 def _num(v: float) -> float | None:

@@ -10,8 +10,10 @@ import base64
 import html
 import io
 import math
+import warnings
+from collections.abc import Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Optional
+from typing import TYPE_CHECKING, Any, Optional, Union
 
 import numpy as np
 
@@ -21,7 +23,27 @@ if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
+    from ..result import IdentificationResult
+
 TWO_PI = 2.0 * math.pi
+
+
+def _label(what: str, unit: str) -> str:
+    """An axis label with its unit: the data's own when known, else said to be the data's."""
+    return f"{what} ({unit})" if unit else f"{what} (units of the data)"
+
+
+def _units(d: Diagnosis, u_unit: str = "", y_unit: str = "") -> tuple[str, str]:
+    """``(u_unit, y_unit)``: the ones given, else the diagnosis's own (``settings["units"]``) when it has
+    them."""
+    own = d.settings.get("units") if isinstance(d.settings, dict) else None
+    own = own if isinstance(own, dict) else {}
+    return u_unit or str(own.get("u", "") or ""), y_unit or str(own.get("y", "") or "")
+
+
+def _legend_outside(ax: Axes) -> None:
+    """The legend right of the axes, never over the data (the saved figure's box grows to hold it)."""
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=7, frameon=False, borderaxespad=0.0)
 
 
 def _axes(ax: Optional[Axes], figsize: tuple[float, float] = (6.0, 3.2)) -> Axes:
@@ -33,8 +55,9 @@ def _axes(ax: Optional[Axes], figsize: tuple[float, float] = (6.0, 3.2)) -> Axes
     return fig.add_subplot(1, 1, 1)
 
 
-def plot_residual_cycle(d: Diagnosis, ax: Optional[Axes] = None) -> Axes:
-    """Residual against the phase of the input over one cycle, plain and final, with the noise band."""
+def plot_residual_cycle(d: Diagnosis, ax: Optional[Axes] = None, *, y_unit: str = "") -> Axes:
+    """Residual against the phase of the input over one cycle, plain and final, with the noise band
+    (``y_unit`` labels the axis)."""
     ax = _axes(ax)
     band = []
     for i, e in enumerate(d.experiments):
@@ -53,14 +76,18 @@ def plot_residual_cycle(d: Diagnosis, ax: Optional[Axes] = None) -> Axes:
     b = float(np.median(band))
     ax.axhspan(-b, b, color="0.85", zorder=0, label="±2 noise sd")
     ax.set_xlabel("phase of the input u (deg)")
-    ax.set_ylabel("residual")
+    ax.set_ylabel(_label("residual y - model", _units(d, y_unit=y_unit)[1]))
     ax.set_xlim(0, 360)
-    ax.legend(loc="upper right", fontsize=7, frameon=False)
+    ax.set_xticks(range(0, 361, 90))
+    _legend_outside(ax)
     return ax
 
 
-def plot_loops(d: Diagnosis, ax: Optional[Axes] = None, max_loops: int = 4) -> Axes:
-    """Measured loops (output against input) with the plain and the final model."""
+def plot_loops(
+    d: Diagnosis, ax: Optional[Axes] = None, max_loops: int = 4, *, u_unit: str = "", y_unit: str = ""
+) -> Axes:
+    """Measured loops (output against the applied input, in the data's units: ``u_unit``, ``y_unit``)
+    with the plain and the final model."""
     ax = _axes(ax)
     n = len(d.experiments)
     pick = sorted({int(round(v)) for v in np.linspace(0, n - 1, min(n, max_loops))})
@@ -70,9 +97,10 @@ def plot_loops(d: Diagnosis, ax: Optional[Axes] = None, max_loops: int = 4) -> A
         ax.plot(u, e.ybar, ".", ms=2, color="0.3", label="data" if k == 0 else None)
         ax.plot(u, d.plain.outputs[i], color="tab:red", lw=0.9, label="plain" if k == 0 else None)
         ax.plot(u, d.final.outputs[i], color="tab:blue", lw=0.9, ls="--", label="final" if k == 0 else None)
-    ax.set_xlabel("input u")
-    ax.set_ylabel("output y")
-    ax.legend(loc="upper left", fontsize=7, frameon=False)
+    uu, yu = _units(d, u_unit, y_unit)
+    ax.set_xlabel(_label("input u - its mean", uu))
+    ax.set_ylabel(_label("averaged output y", yu))
+    _legend_outside(ax)
     return ax
 
 
@@ -88,9 +116,9 @@ def plot_harmonics(d: Diagnosis, ax: Optional[Axes] = None) -> Axes:
     ax.set_yscale("log")
     ax.set_xticks(k)
     ax.set_xticklabels(["DC" if v == 0 else str(v) for v in k], fontsize=7)
-    ax.set_xlabel("harmonic")
-    ax.set_ylabel("residual power / noise")
-    ax.legend(fontsize=7, frameon=False)
+    ax.set_xlabel("harmonic of the input's frequency (DC: the mean)")
+    ax.set_ylabel("residual power / noise power\n(ratio; 1: at the noise)")
+    _legend_outside(ax)
     return ax
 
 
@@ -114,9 +142,9 @@ def plot_held_out(d: Diagnosis, ax: Optional[Axes] = None) -> Axes:
         names, fontsize=7, rotation=30 if len(names) > 4 else 0, ha="right" if len(names) > 4 else "center"
     )
     ax.set_xlabel("held-out experiment")
-    ax.set_ylabel("held-out NRMSE")
+    ax.set_ylabel("held-out NRMSE\n(ratio to the output's spread)")
     ax.set_yscale("log")
-    ax.legend(fontsize=7, frameon=False)
+    _legend_outside(ax)
     return ax
 
 
@@ -128,10 +156,17 @@ FIGURES = {
 }
 
 
-def figure(d: Diagnosis, name: str) -> Figure:
-    ax = FIGURES[name](d)
+def figure(d: Diagnosis, name: str, *, u_unit: str = "", y_unit: str = "") -> Figure:
+    """One figure of the report by name (see ``FIGURES``), its axes labelled in the data's units."""
+    uu, yu = _units(d, u_unit, y_unit)
+    if name == "loops":
+        ax = plot_loops(d, u_unit=uu, y_unit=yu)
+    elif name == "residual_cycle":
+        ax = plot_residual_cycle(d, y_unit=yu)
+    else:
+        ax = FIGURES[name](d)
     fig = ax.figure
-    fig.subplots_adjust(left=0.14, right=0.97, bottom=0.16, top=0.95)
+    fig.subplots_adjust(left=0.16, right=0.78, bottom=0.2, top=0.95)
     return fig  # type: ignore[return-value]
 
 
@@ -140,7 +175,8 @@ def _png(fig: Figure) -> bytes:
 
     FigureCanvasAgg(fig)
     buf = io.BytesIO()
-    fig.savefig(buf, format="png")
+    # The box grows to every label and the legend outside the axes: nothing is clipped.
+    fig.savefig(buf, format="png", bbox_inches="tight", pad_inches=0.08)
     return buf.getvalue()
 
 
@@ -159,7 +195,8 @@ _HEAD = (
     "<style>body{font-family:sans-serif;max-width:980px;margin:2em auto;line-height:1.4}"
     "table{border-collapse:collapse;margin:0.5em 0}td,th{border:1px solid #ccc;padding:2px 8px;"
     "text-align:right;font-size:90%}th{background:#eee}.verdict{font-size:130%;padding:0.6em;"
-    "background:#f4f4ff;border-left:6px solid #446}img{max-width:100%}</style></head><body>"
+    "background:#f4f4ff;border-left:6px solid #446}img{max-width:100%}"
+    ".warnings{padding:0.4em 0.8em;background:#fff6e6;border-left:6px solid #c80}</style></head><body>"
 )
 _FIGURES = (
     ("residual_cycle", "Residual over the cycle"),
@@ -169,10 +206,46 @@ _FIGURES = (
 )
 
 
-def html_page(d: Diagnosis, images: dict[str, bytes]) -> str:
-    """The report a person reads: verdict first, then evidence; figures inline (no external files)."""
+#: What ``identify`` made of the same experiments: its result, or the error it refused them with.
+Identified = Union["IdentificationResult", Exception]
+
+
+def identify_plain(experiments: Any, **options: Any) -> tuple[Identified, tuple[str, ...]]:
+    """:func:`~bouc_wen_id.identify` on the same experiments (the plain model as a user fits it), with every
+    warning it raised as a line ``Category: message`` (each once); a refusal is returned, not raised."""
+    from ..errors import BoucWenIdError
+    from ..identification import identify
+
+    result: Identified
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        try:
+            result = identify(experiments, **options)
+        except BoucWenIdError as exc:
+            result = exc
+    lines: list[str] = []
+    for w in caught:
+        line = f"{w.category.__name__}: {w.message}"
+        if line not in lines:
+            lines.append(line)
+    for note in () if isinstance(result, Exception) else result.warnings:
+        if not any(note in line for line in lines):
+            lines.append(note)
+    return result, tuple(lines)
+
+
+def html_page(
+    d: Diagnosis,
+    images: dict[str, bytes],
+    identified: Optional[Identified] = None,
+    identify_warnings: Sequence[str] = (),
+) -> str:
+    """The report a person reads: verdict first, then evidence, then the plain model ``identify`` fitted to
+    the same data (``identified``) with the warnings it raised; figures inline (no external files)."""
     verdict, *evidence = _verdict_html(d)  # the verdict is the first text a reader meets
-    parts = [_HEAD, verdict, "<h1>Diagnosis</h1>", *evidence, *_terms_html(d), *_held_out_html(d)]
+    parts = [_HEAD, verdict, "<h1>Diagnosis</h1>", *evidence]
+    parts += _identified_html(identified, identify_warnings)
+    parts += [*_terms_html(d), *_held_out_html(d)]
     parts.append("<h2>Where the models miss</h2>")
     parts.append(
         f"<p>Plain: {html.escape(d.before.describe() or 'nowhere above the noise')}. "
@@ -198,6 +271,79 @@ def _verdict_html(d: Diagnosis) -> list[str]:
         f"{100 * d.explained_fraction:.1f} % of the plain model's excess explained. "
         f"{len(d.experiments)} experiments, {d.seconds:.1f} s.</p>",
     ]
+
+
+def _identified_html(identified: Optional[Identified], notes: Sequence[str]) -> list[str]:
+    """The plain model as ``identify`` fits it: its warnings first, then beta, gamma, mu and each
+    experiment's G with their intervals, and its adequacy test."""
+    if identified is None and not notes:
+        return []
+    parts = ["<h2>Identified model</h2>"]
+    if notes:
+        items = "".join(f"<li>{html.escape(n)}</li>" for n in notes)
+        parts.append(f"<div class='warnings'><b>Warnings raised by identify</b><ul>{items}</ul></div>")
+    if isinstance(identified, Exception):
+        parts.append(
+            f"<p class='warnings'>identify refused these data: {html.escape(type(identified).__name__)}: "
+            f"{html.escape(str(identified))}</p>"
+        )
+        return parts
+    if identified is None:
+        return parts
+    r = identified
+    if not notes:
+        parts.append("<p>identify raised no warning.</p>")
+    conf = f"{100 * r.confidence:.0f} %"
+    a = r.adequacy
+    test = (
+        f"; its adequacy test: χ² = {_g(a.statistic, '.4g')} on {a.dof} dof, p = {_g(a.p_value, '.2g')}"
+        if a is not None
+        else ""
+    )
+    parts.append(
+        f"<p>The plain Wiener-Bouc-Wen model as <code>identify</code> fits these data (method "
+        f"{html.escape(r.method)}; alpha-normalised: alpha = 1 and G carries the scale){test}.</p>"
+    )
+    rows = []
+    for name in ("beta", "gamma", "mu"):
+        value = float(getattr(r, name))
+        if r.standard_errors is not None:
+            lo, hi = r.interval(name)
+            rows.append(
+                [name, _g(value, ".5g"), _g(r.standard_errors[name]), f"[{_g(lo, '.4g')}, {_g(hi, '.4g')}]"]
+            )
+        else:
+            rows.append([name, _g(value, ".5g"), "–", "–"])
+    parts.append(_table(rows, ["parameter", "estimate", "std. error", f"{conf} interval"]))
+    parts.append(_g_table(r, conf))
+    return parts
+
+
+def _g_table(r: IdentificationResult, conf: str) -> str:
+    """Each experiment's |G| and phase lag (degrees, unwrapped along frequency) with their intervals."""
+    from ..plotting import unwrapped_degrees
+    from ..validation import z_value
+
+    z = z_value(r.confidence)
+    lags = unwrapped_degrees(r.frequencies, r.phases)
+    rows = []
+    for i, (e, lag) in enumerate(zip(r.experiments, lags)):
+        g_ci = "–" if e.gain_se is None else f"± {_g(z * e.gain_se)}"
+        p_ci = "–" if e.phase_se is None else f"± {_g(math.degrees(z * e.phase_se))}"
+        name = e.source or f"experiment {i}"
+        rows.append(
+            [
+                name,
+                _g(e.frequency / TWO_PI, ".4g"),
+                _g(e.gain, ".5g"),
+                g_ci,
+                _g(lag, ".4g"),
+                p_ci,
+                _g(e.nrmse, ".3g"),
+            ]
+        )
+    head = ["experiment", "f (Hz)", "|G|", f"{conf} interval", "phase lag (deg)", f"{conf} interval", "NRMSE"]
+    return _table(rows, head)
 
 
 def _terms_html(d: Diagnosis) -> list[str]:
@@ -273,38 +419,63 @@ def _selection_html(d: Diagnosis) -> list[str]:
     return parts
 
 
+def whole_periods(e: Any) -> float:
+    """The whole periods an experiment's average comes from: one DC per period in its period-by-period
+    record (a recording's periods after settling, a lab stretch's whole periods); NaN without that record.
+    ``e.periods`` is not it for lab data: that is the samples averaged into each point of ``ybar``."""
+    n = int(np.size(e.dc))
+    return float(n) if n >= 3 else math.nan
+
+
 def _experiments_html(d: Diagnosis) -> list[str]:
     rows = [
         [
             e.source,
             _g(e.frequency / TWO_PI, ".4g"),
             _g(e.amplitude, ".4g"),
+            _g(whole_periods(e), ".4g"),
+            str(e.samples_per_period),
             _g(e.periods, ".4g"),
             _g(p, ".4f"),
             _g(f, ".4f"),
         ]
         for e, p, f in zip(d.experiments, d.plain.nrmse, d.final.nrmse)
     ]
+    head = ["experiment", "f (Hz)", "U", "periods", "points per period", "samples per point"]
     return [
         "<h2>Experiments</h2>",
-        _table(rows, ["experiment", "f (Hz)", "U", "periods", "plain NRMSE", "final NRMSE"]),
+        _table(rows, [*head, "plain NRMSE", "final NRMSE"]),
     ]
 
 
-def write_report(d: Diagnosis, out: Path, figures: bool = True) -> list[Path]:
-    """``diagnosis.json`` first, then the figures (PNG) and ``report.html``, into the folder ``out``."""
+def write_report(
+    d: Diagnosis,
+    out: Path,
+    figures: bool = True,
+    *,
+    identified: Optional[Identified] = None,
+    identify_warnings: Sequence[str] = (),
+    u_unit: str = "",
+    y_unit: str = "",
+) -> list[Path]:
+    """``diagnosis.json`` first, then the figures (PNG) and ``report.html``, into the folder ``out``.
+
+    ``identified``, ``identify_warnings``: the plain model ``identify`` fitted to the same experiments and
+    the warnings it raised (:func:`identify_plain` gives both), shown after the verdict; ``u_unit``,
+    ``y_unit``: the data's units, for the figures' axes.
+    """
     out.mkdir(parents=True, exist_ok=True)
     written = [out / "diagnosis.json"]
     written[0].write_text(d.to_json())
     images: dict[str, bytes] = {}
     if figures:
         for name in FIGURES:
-            images[name] = _png(figure(d, name))
+            images[name] = _png(figure(d, name, u_unit=u_unit, y_unit=y_unit))
             path = out / f"{name}.png"
             path.write_bytes(images[name])
             written.append(path)
     page = out / "report.html"
-    page.write_text(html_page(d, images))
+    page.write_text(html_page(d, images, identified, identify_warnings))
     written.append(page)
     return written
 
@@ -316,5 +487,7 @@ __all__ = [
     "plot_held_out",
     "write_report",
     "html_page",
+    "identify_plain",
+    "whole_periods",
     "clean",
 ]
