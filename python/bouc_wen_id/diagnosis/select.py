@@ -388,7 +388,9 @@ def _tied(chosen: Trial, rival: Trial, dof: int) -> bool:
 
 #: Chi-square by which one place of a term must beat its other place to be named alone (two non-nested
 #: fits with the same number of parameters: a cost difference below the 5 % point of chi-square(1) is
-#: within what noise makes, so the data do not tell the places apart).
+#: within what noise makes, so the data do not tell the places apart). In units of the residual variance:
+#: times the chosen model's chi2/dof when above 1 (a misfit elsewhere inflates every cost difference; the
+#: MR damper's viscous damping moved from x to u between current levels on differences within it).
 PLACE_CHI2 = 3.841
 
 
@@ -426,18 +428,21 @@ def place_alternatives(
     """The chosen term at its other places, where the data cannot tell the places apart.
 
     A sibling (the same physics at another place, e.g. viscous damping on u and on x) whose fit is within
-    :data:`PLACE_CHI2` of the chosen one's cost is an alternative, never dropped silently; the separating
+    :data:`PLACE_CHI2` (times the chosen model's chi2/dof when above 1) of the chosen one's cost is an
+    alternative, never dropped silently; the separating
     experiment is where x lags u differently (near G's resonance or corner).
     """
     if chosen.fit is None:
         return []
     out: list[Alternative] = []
     by_term = {t.term: t for t in trials}
+    dof = dof_of(exps, chosen.fit)
+    s2 = max(1.0, chosen.cost / dof) if dof > 0 else 1.0
     for rival in siblings(chosen.term):
         tr = by_term.get(rival)
         if tr is None or tr.fit is None:
             continue
-        if tr.cost - chosen.cost >= PLACE_CHI2:
+        if tr.cost - chosen.cost >= PLACE_CHI2 * s2:
             continue
         both = fit_with(exps, chosen.fit, rival, substeps)
         rho = _correlation(both, chosen.term, rival) if both is not None else math.nan
