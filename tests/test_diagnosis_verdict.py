@@ -130,8 +130,7 @@ def test_a_library_term_keeps_its_law() -> None:
 def test_law_test_rejects_a_value_that_differs_between_experiments() -> None:
     """The score test itself: an effect c_i du/dt whose c doubles from experiment to experiment is
     rejected; one shared c is not."""
-    from bouc_wen_id.diagnosis.fitting import fit_with, scale_of, scaled, substeps_for
-    from bouc_wen_id.diagnosis.run import fit_plain
+    from bouc_wen_id.diagnosis.fitting import fit_plain, fit_with, scale_of, scaled, substeps_for
     from bouc_wen_id.diagnosis.select import law_test
 
     recs = _records(6, "first")

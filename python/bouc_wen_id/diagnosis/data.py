@@ -253,7 +253,7 @@ def _from_averaged(
     drift test on the per-period record is the guard against a floor a drift inflates.
     """
     ybar = np.asarray(ap.ybar, dtype=np.float64) + float(ap.offset_y)
-    blocks: tuple[ComplexArray, FloatArray, FloatArray] | None = None
+    blocks: tuple[ComplexArray, FloatArray, FloatArray, FloatArray] | None = None
     empty = (np.zeros((0, 1), np.complex128), np.zeros(0), np.zeros(0))
     lead = math.nan
     waveform = np.zeros(0)

@@ -281,7 +281,7 @@ def law_test(exps: Sequence[AugExperiment], fit: AugFit, term: str, substeps: in
     the denominator is the residual variance, so a misfit elsewhere inflates both alike. NaN with fewer
     than two experiments or a column the Jacobian cannot give.
     """
-    from scipy.special import fdtrc  # type: ignore[import-untyped]
+    from scipy.special import fdtrc
 
     par = fit.params
     m = len(exps)
@@ -517,6 +517,8 @@ def forward_select(
             alternatives += place_alternatives(exps, chosen, trials, substeps)
             for tr in order:
                 if tr.term == chosen.term or tr.fit is None or tr.term in siblings(chosen.term):
+                    continue
+                if tr.term in law_failed:  # its value differs between experiments: not a rival reading
                     continue
                 tied = _tied(chosen, tr, dof_of(exps, chosen.fit))
                 if tr.improvement < ALTERNATIVE_IMPROVEMENT * chosen.improvement and not tied:
