@@ -216,3 +216,19 @@ def test_places_within_the_misfit_are_alternatives(monkeypatch: pytest.MonkeyPat
         rivals = [chosen, trial("viscous@x", chi2dof * dof + 50.0)]
         alts = select.place_alternatives(exps, chosen, rivals, 2)  # type: ignore[arg-type]
         assert [a.rival for a in alts] == expect
+
+
+def test_a_term_at_its_null_value_is_not_a_candidate() -> None:
+    """A term fitted at 0 (a sensor lag of 0 +- 0.0013 s beside a 30x stiffness degradation) is the model
+    without it: its "improvement" is the other parameters' refit, so it cannot pass."""
+    from types import SimpleNamespace
+
+    from bouc_wen_id.diagnosis.select import at_null
+
+    def fit(term: str, v: float) -> object:
+        return SimpleNamespace(params=SimpleNamespace(terms=(term,), values=np.array([v])))
+
+    assert at_null(fit("sensor_lag", 0.0), "sensor_lag")  # type: ignore[arg-type]
+    assert not at_null(fit("sensor_lag", 1e-3), "sensor_lag")  # type: ignore[arg-type]
+    assert at_null(fit("offset", 0.0), "offset") and not at_null(fit("offset", -0.2), "offset")  # type: ignore[arg-type]
+    assert not at_null(fit("offset", 0.0), "viscous")  # type: ignore[arg-type]
