@@ -29,7 +29,7 @@ Degradation is a library term fitted in drift space (design.md 10.6): its held-o
 block-resolved deviations from the mean period.
 
 Usage: ``python benches/diagnosis.py [--quick | --full] [--cases N] [--null N] [--workers 2] [--seed S]
-[--generator new|old] [--only a,b] [--json out.json]``.
+[--generator new|old] [--only a,b] [--sizes 10,30] [--json out.json]``.
 """
 
 from __future__ import annotations
@@ -372,6 +372,7 @@ def main(argv: Optional[list[str]] = None) -> int:
     ap.add_argument("--seed", type=int, default=0, help="added to every case's seed")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--only", default="", help="comma-separated effect names to keep (new generator)")
+    ap.add_argument("--sizes", default="", help="comma-separated sizes to keep, e.g. 10,30 (new generator)")
     ap.add_argument(
         "--terms",
         default="offset,stiffness,viscous,inertia,coulomb,sensor_lag,asymmetry,play,degradation,distortion",
@@ -392,6 +393,9 @@ def main(argv: Optional[list[str]] = None) -> int:
     if args.only:
         keep = set(args.only.split(","))
         jobs = [j for j in jobs if (j[1] or "null") in keep]
+    if args.sizes:
+        sizes = {float(v) for v in args.sizes.split(",")}
+        jobs = [j for j in jobs if j[3] in sizes or j[0] in ("null", "outside") and j[3] == 0.0]
     t0 = time.perf_counter()
     rows = _run_all(run_new_case, jobs, args.workers)
     wall = time.perf_counter() - t0

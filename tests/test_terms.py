@@ -135,6 +135,8 @@ def test_registry_follows_the_design_table() -> None:
         *drift_only,
     }
     assert {k for k, c in USUAL.items() if c.physical[0] == 0.0} == {
+        "stiffness",
+        "distortion",
         "viscous",
         "inertia",
         "coulomb",

@@ -319,6 +319,7 @@ class Offset(Term):
     label: ClassVar[str] = "output offset"
     linear: ClassVar[bool] = True
     scaling: ClassVar[tuple[float, float, float]] = (1.0, 0.0, 0.0)
+    # Physical range: any sign (a sensor zero or a static preload either way): UNBOUNDED.
 
 
 @dataclass(frozen=True)
@@ -339,6 +340,20 @@ class Stiffness(Term):
     places: ClassVar[tuple[Place, ...]] = MECHANICAL_PLACES
     linear: ClassVar[bool] = True
     scaling: ClassVar[tuple[float, float, float]] = (1.0, -1.0, 0.0)
+    # Physical range (issue 18): a passive spring stores energy, its force follows its displacement, so
+    # k >= 0 at both places. On u it is measured in the recording's own sign convention (y rising with u at
+    # low frequency, as a force with a displacement; the identified G's gain is then positive); on x the
+    # sign is fixed by the model itself (x = G u in units of y, w rising with x), so k x adds to the element's
+    # own elastic force (Bouc-Wen's alpha k x, alpha in [0, 1], k > 0). A negative k is a softening: the
+    # loop's slope falls with amplitude beyond what the saturating element gives, which is the hysteresis'
+    # own shape (a post-yield slope, a saturation other than Bouc-Wen's), a strength that falls with
+    # amplitude (degradation) or a |G| that trades with it below saturation -- not a spring.
+    physical: ClassVar[tuple[float, float]] = NON_NEGATIVE
+    unphysical: ClassVar[str] = (
+        "a negative stiffness: a softening no passive spring gives (the loop's slope falling with "
+        "amplitude: the hysteresis' own saturation shape, a strength falling with amplitude, or |G| "
+        "trading with it below saturation)"
+    )
 
 
 @dataclass(frozen=True)
@@ -460,6 +475,8 @@ class Asymmetry(Term):
     label: ClassVar[str] = "asymmetry"
     acts_on: ClassVar[Place] = Place.HYSTERESIS
     scaling: ClassVar[tuple[float, float, float]] = (0.0, 0.0, -1.0)
+    # Physical range: either sign (which branch saturates lower); the bound |delta| < beta + gamma that
+    # keeps both branches saturating depends on the fit and is the model's admissibility, checked there.
 
     @classmethod
     def start(cls, context: StartContext) -> tuple[float, ...]:
@@ -648,6 +665,13 @@ class Distortion(Term):
     )
     label: ClassVar[str] = "measured input waveform"
     acts_on: ClassVar[Place] = Place.HYSTERESIS
+    # Physical range: lam >= 0 (the measured harmonics drive the hysteresis, scaled; 1 when G is flat over
+    # them). A negative lam drives it with the harmonics inverted: G's assumption (design.md 9.5) fails.
+    physical: ClassVar[tuple[float, float]] = NON_NEGATIVE
+    unphysical: ClassVar[str] = (
+        "a negative input-waveform scale: the harmonics drive the hysteresis inverted, so G's assumed "
+        "shape over the harmonics (flat gain, linear phase) fails"
+    )
 
     @classmethod
     def start(cls, context: StartContext) -> tuple[float, ...]:

@@ -92,6 +92,10 @@ class DiagExperiment:
     block_samples: FloatArray = field(default_factory=lambda: np.zeros(0), repr=False)
     #: Mean period index of each block (periods from the first averaged one).
     block_center: FloatArray = field(default_factory=lambda: np.zeros(0), repr=False)
+    #: Periods each block spans (empty when unknown): its samples over this are its samples per period,
+    #: which tell a block cut mid-period from one that only holds fewer periods (blocks of 2 and 1 periods
+    #: when the periods do not divide into MAX_BLOCKS equal runs).
+    block_periods: FloatArray = field(default_factory=lambda: np.zeros(0), repr=False)
     #: Periods of excitation recorded before the first averaged one (settling), NaN when unknown: the
     #: energy a degrading specimen has dissipated before the averaged stretch (design.md 10.6).
     lead_periods: float = math.nan
@@ -150,8 +154,9 @@ def _harmonics_of(p: int) -> int:
     return max(0, min(p // 2 - 1, MAX_DRIFT_HARMONIC))
 
 
-def _recording_blocks(rows: FloatArray) -> tuple[ComplexArray, FloatArray, FloatArray]:
-    """Up to MAX_BLOCKS runs of consecutive periods: their averaged period's harmonics, sizes, centres."""
+def _recording_blocks(rows: FloatArray) -> tuple[ComplexArray, FloatArray, FloatArray, FloatArray]:
+    """Up to MAX_BLOCKS runs of consecutive periods: their averaged period's harmonics, sizes, centres and
+    periods."""
     n, p = rows.shape
     k = _harmonics_of(p)
     runs = np.array_split(np.arange(n), min(MAX_BLOCKS, n))
@@ -162,6 +167,7 @@ def _recording_blocks(rows: FloatArray) -> tuple[ComplexArray, FloatArray, Float
         spec.astype(np.complex128),
         np.array([float(r.size * p) for r in runs]),
         np.array([float(r.mean()) for r in runs]),
+        np.array([float(r.size) for r in runs]),
     )
 
 
@@ -180,7 +186,7 @@ def _from_recording(i: int, rec: Any) -> DiagExperiment:
     spread = float(np.mean(np.var(rows, axis=0, ddof=1)))
     diff = float(np.mean(np.diff(rows, axis=0) ** 2)) / 2.0
     dc, h1 = _period_features(rows)
-    coef, samples, center = _recording_blocks(rows)
+    coef, samples, center, nper = _recording_blocks(rows)
     name = rec.metadata.get("name", f"recording {i}") if hasattr(rec, "metadata") else f"recording {i}"
     return DiagExperiment(
         frequency=float(rec.frequency),
@@ -197,6 +203,7 @@ def _from_recording(i: int, rec: Any) -> DiagExperiment:
         block_coef=coef,
         block_samples=samples,
         block_center=center,
+        block_periods=nper,
         lead_periods=float(s),
         waveform=input_waveform(urows),
     )
@@ -246,7 +253,7 @@ def _from_averaged(
     drift test on the per-period record is the guard against a floor a drift inflates.
     """
     ybar = np.asarray(ap.ybar, dtype=np.float64) + float(ap.offset_y)
-    blocks: tuple[ComplexArray, FloatArray, FloatArray] | None = None
+    blocks: tuple[ComplexArray, FloatArray, FloatArray, FloatArray] | None = None
     empty = (np.zeros((0, 1), np.complex128), np.zeros(0), np.zeros(0))
     lead = math.nan
     waveform = np.zeros(0)
@@ -292,13 +299,14 @@ def _from_averaged(
         block_coef=empty[0] if blocks is None else blocks[0],
         block_samples=empty[1] if blocks is None else blocks[1],
         block_center=empty[2] if blocks is None else blocks[2],
+        block_periods=empty[2] if blocks is None else blocks[3],
         waveform=waveform,
     )
 
 
 def _lab_blocks(
     k: NDArray[np.int64], th: FloatArray, y: FloatArray, kept: Sequence[int], p: int
-) -> tuple[ComplexArray, FloatArray, FloatArray] | None:
+) -> tuple[ComplexArray, FloatArray, FloatArray, FloatArray] | None:
     """Block record of a lab stretch: harmonics 0..K by least squares over each run of whole periods.
 
     ``th`` is the input's phase (``u = U cos th``), the frame of the averaged grid (grid phase 0).
@@ -307,7 +315,7 @@ def _lab_blocks(
         return None
     harm = _harmonics_of(p)
     runs = np.array_split(np.asarray(kept), min(MAX_BLOCKS, len(kept)))
-    coefs, samples, centers = [], [], []
+    coefs, samples, centers, nper = [], [], [], []
     for r in runs:
         sel = np.isin(k, r)
         n = int(np.count_nonzero(sel))
@@ -320,7 +328,8 @@ def _lab_blocks(
         coefs.append(c)
         samples.append(float(n))
         centers.append(float(np.mean(r)) - float(kept[0]))
-    return np.stack(coefs), np.array(samples), np.array(centers)
+        nper.append(float(len(r)))
+    return np.stack(coefs), np.array(samples), np.array(centers), np.array(nper)
 
 
 def prepare(items: Any) -> list[DiagExperiment]:

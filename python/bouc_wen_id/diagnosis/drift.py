@@ -205,7 +205,7 @@ def drift_data(
     return out
 
 
-#: A block with fewer samples than this fraction of the median block covers part of a period.
+#: A block with fewer samples per period it spans than this fraction of the median covers part of a period.
 WHOLE_BLOCK_FRACTION = 0.9
 
 
@@ -215,10 +215,15 @@ def whole_blocks(e: DiagExperiment) -> NDArray[np.int64]:
     A lab record's first block can start mid-period (166 of 401 samples on the MR damper's 1 A files): its
     harmonics by least squares over part of the cycle are ill-posed (coefficients of 1e11-1e13 against a
     loop of 1.9e3) and gave a drift chi-square of 1.4e26. Such a block is no averaged period: left out.
+    The test is on samples per period the block spans (``block_periods``, when known): 12 periods cut into
+    8 runs give blocks of 2 and of 1 period, all whole, and comparing raw block sizes with their median
+    left the four single-period blocks out of every experiment.
     """
     if e.blocks < 2:
         return np.zeros(0, dtype=np.int64)
     n = e.block_samples
+    if e.block_periods.size == n.size and np.all(e.block_periods > 0):
+        n = n / e.block_periods
     ok = (n >= WHOLE_BLOCK_FRACTION * float(np.median(n))) & np.all(np.isfinite(e.block_coef), axis=1)
     return np.flatnonzero(ok).astype(np.int64)
 

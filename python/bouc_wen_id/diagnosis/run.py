@@ -739,7 +739,9 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
             terms=(*final_sum.terms, NamedTerm(deg.term, sym, deg.value, deg.standard_error, unit)),
         )
     fraction = _explained_fraction(plain_sum, final_sum, deg if named_deg else None)
-    plain_ok = passes and not final.params.terms
+    # A candidate whose tests passed but whose law failed (select.law_test) is structure the plain model
+    # leaves and no term explains: the plain model is not adequate even when the global test accepted it.
+    plain_ok = passes and not final.params.terms and not any(st.law_failed for st in steps)
     status, named, partial, verdict = _judged(
         classify(plain_ok, bool(final.params.terms) or named_deg, adequate(final), fraction),
         final_sum,
@@ -747,6 +749,7 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
         fraction,
         fexps,
     )
+    verdict += _law_text(steps)
     alternatives = tuple(a for st in steps for a in st.alternatives) + _drift_alternatives(deg, named_deg)
     setup.report("held-out check of the final model", 0, 1)
     ho = held_out(fsx, start, final, substeps, cache) if final.params.terms else None
@@ -859,3 +862,20 @@ def _unphysical_text(terms: Sequence[NamedTerm]) -> str:
         return ""
     what = "; ".join(f"{t} ({TERMS[t.term].unphysical})" for t in terms)
     return f"; not physical: {what}: {NOT_PHYSICAL_HINT}"
+
+
+def _law_text(steps: Sequence[Step]) -> str:
+    """What the verdict says of candidates that fit part of the misfit with a value that differs between
+    experiments (select.law_test): stand-ins for physics outside the library, tested and not named."""
+    failed: dict[str, float] = {}
+    for st in steps:
+        for tr in st.trials:
+            if tr.term in st.law_failed and tr.term not in failed:
+                failed[tr.term] = tr.law_p_value
+    if not failed:
+        return ""
+    what = ", ".join(f"{TERMS[t].place_label()} (p = {p:.2g})" for t, p in failed.items())
+    return (
+        f"; not named: {what}: each fits part of the misfit, but with a value that differs between "
+        "experiments (its law, one value for all, fails): it stands in for physics outside the library"
+    )
