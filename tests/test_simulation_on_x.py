@@ -119,8 +119,9 @@ def test_the_last_period_of_a_long_sine_is_the_steady_loop_with_the_same_terms(o
     )[0]
     last = rec.y[-p:]
     # Two different integrators of one loop (RK4 in time from rest; the path loop's shooting in x): they agree
-    # to their discretisation, far below the terms' share of y (which is checked to matter).
-    assert _scale(last - y_steady) < 2e-4 * _scale(y_steady)
+    # to their discretisation (measured 8.7e-7 and 5.5e-8 of the peak at omega = 2 and 3.2), far below the
+    # terms' share of y (40-50 % of the peak, checked to matter).
+    assert _scale(last - y_steady) < 1e-5 * _scale(y_steady)
     plain = bw.simulate(WienerPlant(g_tf, BoucWen(beta, gamma, mu)), plan)[0].y[-p:]
     assert _scale(last - plain) > 0.1 * _scale(y_steady)
 
