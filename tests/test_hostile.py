@@ -20,6 +20,7 @@ import warnings
 import zipfile
 from collections.abc import Callable, Iterator
 from pathlib import Path
+from typing import Any
 
 import bouc_wen_id as bw
 import numpy as np
@@ -715,3 +716,109 @@ def test_an_extreme_exponent_does_not_divide_by_zero() -> None:
     assert _unscaled(1.0, 0.5, 2000.0) == math.inf
     assert _unscaled(-2.0, 4.0, 1.0) == pytest.approx(-0.5)
     assert _unscaled(1.0, 4.0, 2000.0) == 0.0
+
+
+# --------------------------------------------------------------------------------------------------
+# Issue 19 leftovers in the simulator, the terms and the configuration (onx helper, session 23)
+# --------------------------------------------------------------------------------------------------
+
+
+def _degrading_plant(value: float = 1e300) -> bw.WienerPlant:
+    from bouc_wen_id.terms import Degradation
+
+    return bw.WienerPlant(
+        bw.TransferFunction([1.0], [0.2, 1.0]), bw.BoucWen(1.0, 0.5, 1.5), (Degradation(value),)
+    )
+
+
+@pytest.mark.parametrize("backend", ["rust", "numpy"])
+def test_simulate_input_with_a_huge_degradation_is_a_named_blow_up(backend: Any) -> None:
+    """``simulate_input(..., terms=(Degradation(1e300),))`` returned NaN silently."""
+    t = np.arange(300) * 0.05
+    with pytest.raises(NonFiniteError, match=r"blew up.*degradation = 1(\.0+)?e\+?300"):
+        bw.simulate_input(_degrading_plant(), t, np.cos(2.0 * t), output=True, backend=backend)
+    # A moderate value is a result, finite and degrading (the loop's peak falls).
+    x, w, y = bw.simulate_input(_degrading_plant(0.5), t, np.cos(2.0 * t), output=True, backend=backend)
+    assert np.all(np.isfinite(y))
+
+
+def test_simulate_with_a_huge_degradation_blames_the_parameter_not_y() -> None:
+    plan = bw.SinePlan([2.0], [1.0], settle_periods=1, periods=2, samples_per_period=32)
+    with pytest.raises(NonFiniteError) as info:
+        bw.simulate(_degrading_plant(), plan)
+    message = str(info.value)
+    assert "degradation = 1" in message and "blew up" in message
+    assert not message.startswith("y ") and "y contains" not in message
+
+
+def test_a_small_step_budget_in_diagnose_names_the_budget(recordings: list[bw.Recording]) -> None:
+    """``BOUC_WEN_ID_MAX_STEPS=1000 bouc-wen-id diagnose`` said SearchAtBoundError (every start 'failed')."""
+    with budget.budget(max_steps=1000), pytest.raises(BudgetExceededError, match="max_steps"):
+        bw.diagnose(recordings, held_out_test=False)
+
+
+def test_cli_diagnose_under_a_small_step_budget_names_it_and_the_variable(tmp_path: Path) -> None:
+    recs = tmp_path / "recs"
+    made = _run(
+        ["-m", "bouc_wen_id", "simulate", "--out", str(recs), "--frequencies", "1", "2", "--seed", "1"]
+    )
+    assert made.returncode == 0, made.stderr
+    env = dict(os.environ, MPLBACKEND="Agg", BOUC_WEN_ID_MAX_STEPS="1000")
+    out = subprocess.run(
+        [sys.executable, "-m", "bouc_wen_id", "diagnose", str(recs), "--out", str(tmp_path / "d")],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env=env,
+        check=False,
+    )
+    assert out.returncode == 2, out.stderr
+    assert "BudgetExceededError" in out.stderr and "BOUC_WEN_ID_MAX_STEPS" in out.stderr
+    assert "SearchAtBound" not in out.stderr and "Traceback" not in out.stderr
+
+
+@pytest.mark.parametrize("raw", ["abc", "0", "-5", "1.5e0", "1e999", "99999999999999999999999"])
+def test_a_bad_budget_variable_is_named_at_first_use_not_at_import(raw: str) -> None:
+    code = textwrap.dedent(
+        """
+        import bouc_wen_id as bw
+        print("imported")
+        try:
+            bw.simulate(bw.demo_plant(), bw.SinePlan([1.0], [1.0], samples_per_period=32))
+        except bw.InvalidParameterError as e:
+            print("named:", e)
+        bw.budget.set_budget(max_steps=10**9)  # setting the limits in code clears it
+        print(bw.budget.get_budget().max_steps)
+        """
+    )
+    env = dict(os.environ, BOUC_WEN_ID_MAX_STEPS=raw)
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, check=False)
+    assert out.returncode == 0 and "Traceback" not in out.stderr, out.stderr
+    lines = out.stdout.splitlines()
+    assert lines[0] == "imported" and lines[-1] == str(10**9)
+    assert lines[1].startswith("named:") and "BOUC_WEN_ID_MAX_STEPS" in lines[1] and repr(raw) in lines[1]
+
+
+def test_cli_with_a_bad_budget_variable_is_one_line_exit_2(tmp_path: Path) -> None:
+    env = dict(os.environ, MPLBACKEND="Agg", BOUC_WEN_ID_MAX_SAMPLES="lots")
+    out = subprocess.run(
+        [sys.executable, "-m", "bouc_wen_id", "simulate", "--out", str(tmp_path / "r")],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env=env,
+        check=False,
+    )
+    assert out.returncode == 2 and "Traceback" not in out.stderr, out.stderr
+    assert "BOUC_WEN_ID_MAX_SAMPLES" in out.stderr
+
+
+def test_type_misuse_is_named(recordings: list[bw.Recording]) -> None:
+    plant = bw.demo_plant()
+    with pytest.raises(InvalidParameterError, match="alpha"):
+        bw.diagnose(recordings, alpha="0.05")  # type: ignore[arg-type]
+    with pytest.raises(InvalidParameterError, match="alpha"):
+        bw.diagnose(recordings, alpha="abc")  # type: ignore[arg-type]
+    for bad in (None, 3, "viscous"):
+        with pytest.raises(InvalidParameterError, match="terms must be"):
+            bw.WienerPlant(plant.linear, plant.hysteresis, bad)  # type: ignore[arg-type]
