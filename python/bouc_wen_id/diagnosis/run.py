@@ -63,6 +63,10 @@ NO_BLOCKS = (
 def _check_candidates(candidates: Optional[Sequence[str]]) -> tuple[str, ...]:
     if candidates is None:
         return ALL_CANDIDATES
+    if isinstance(candidates, (str, bytes)) or not hasattr(candidates, "__iter__"):  # issue 19: TypeError
+        raise InvalidParameterError(
+            f"candidates must be a sequence of term names (None: all), got {candidates!r}"
+        )
     out = tuple(candidates)
     bad = [c for c in out if c not in ALL_CANDIDATES]
     if bad or len(set(out)) != len(out):
