@@ -23,6 +23,7 @@ from pathlib import Path
 from typing import Any
 
 import bouc_wen_id as bw
+import hypothesis
 import numpy as np
 import pytest
 from bouc_wen_id import _core, budget, cli, reference
@@ -822,3 +823,144 @@ def test_type_misuse_is_named(recordings: list[bw.Recording]) -> None:
     for bad in (None, 3, "viscous"):
         with pytest.raises(InvalidParameterError, match="terms must be"):
             bw.WienerPlant(plant.linear, plant.hysteresis, bad)  # type: ignore[arg-type]
+
+
+# A bounded version of the property-based sweep of benches/probe_hostile.py (--hypothesis): drawn scalar
+# and array arguments of simulate, simulate_input (any term at any place) and diagnose under a tiny budget
+# end in a named error or a finite result, never a raw exception or a NaN.
+
+_ODD: list[object] = [None, "3", "abc", True, 1 + 1j, [], [1.0, 2.0], np.float32(2.0), np.int64(-5), object()]
+
+
+def _hyp_scalars() -> Any:
+    from hypothesis import strategies as st
+
+    return st.one_of(
+        st.floats(allow_nan=True, allow_infinity=True),
+        st.floats(min_value=-1e3, max_value=1e3),
+        st.integers(min_value=-(2**70), max_value=2**70),
+        st.integers(min_value=-3, max_value=300),
+        st.sampled_from(_ODD),
+    )
+
+
+def _hyp_arrays() -> Any:
+    from hypothesis import strategies as st
+    from hypothesis.extra import numpy as hnp
+
+    floats = st.floats(allow_nan=True, allow_infinity=True)
+    return st.one_of(
+        hnp.arrays(np.float64, st.integers(0, 30), elements=floats),
+        hnp.arrays(np.float64, st.integers(1, 30), elements=st.floats(-1e3, 1e3)),
+        st.lists(_hyp_scalars(), max_size=4),
+        _hyp_scalars(),
+    )
+
+
+def _named_or_finite(call: Callable[[], Any]) -> None:
+    """The outcome the sweep counts as good: a library error, or a result whose arrays are all finite."""
+    try:
+        out = call()
+    except BoucWenIdError:
+        return
+    arrays = out if isinstance(out, (tuple, list)) else (out,)
+    for a in arrays:
+        assert np.all(np.isfinite(np.asarray(a, dtype=float))), f"silent non-finite result {a!r}"
+
+
+def _hyp_settings() -> hypothesis.settings:
+    from hypothesis import HealthCheck, settings
+
+    return settings(max_examples=40, deadline=None, database=None, suppress_health_check=list(HealthCheck))
+
+
+def test_sweep_simulate_input_with_any_term_is_named_or_finite() -> None:
+    from bouc_wen_id.terms import TERMS
+    from hypothesis import given, seed
+    from hypothesis import strategies as st
+
+    plant = bw.demo_plant()
+
+    @seed(19)
+    @_hyp_settings()
+    @given(
+        u=st.one_of(st.just(np.cos(np.arange(50) * 0.1)), _hyp_arrays()),
+        dt=st.one_of(st.just(0.1), _hyp_scalars()),
+        substeps=st.one_of(st.just(2), _hyp_scalars()),
+        term=st.sampled_from(sorted(TERMS)),
+        value=st.one_of(st.just(0.2), _hyp_scalars()),
+    )
+    def check(u: Any, dt: Any, substeps: Any, term: str, value: Any) -> None:
+        def call() -> Any:
+            cls = TERMS[term]
+            p = bw.WienerPlant(plant.linear, plant.hysteresis, (cls.from_dict({cls.symbol: value}),))
+            try:
+                t = np.arange(len(u)) * float(dt)
+            except (TypeError, ValueError, OverflowError):
+                t = u
+            return bw.simulate_input(p, t, u, substeps=substeps, output=True)
+
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)  # the sweep's own arange of a huge dt
+            _named_or_finite(call)
+
+    check()
+
+
+def test_sweep_simulate_and_a_tiny_budget_diagnose_are_named_or_finite(
+    recordings: list[bw.Recording],
+) -> None:
+    from hypothesis import given, seed
+    from hypothesis import strategies as st
+
+    def either(default: Any, hostile: Any) -> Any:
+        return st.one_of(st.just(default), st.just(default), hostile)
+
+    sc, ar = _hyp_scalars(), _hyp_arrays()
+
+    @seed(1919)
+    @_hyp_settings()
+    @given(
+        st.fixed_dictionaries(
+            {
+                "beta": either(1.0, sc),
+                "mu": either(1.5, sc),
+                "den": either([0.3, 1.0], ar),
+                "delay": either(0.02, sc),
+                "frequencies": either([2.0], ar),
+                "amplitudes": either([1.0], ar),
+                "samples_per_period": either(32, sc),
+                "substeps": either(2, sc),
+                "noise_sd": either(0.01, sc),
+                "alpha": either(0.05, sc),
+                "candidates": either(None, st.one_of(st.lists(st.sampled_from(["offset", "viscous@x"])), sc)),
+            }
+        )
+    )
+    def check(kw: dict[str, Any]) -> None:
+        def sim() -> Any:
+            plant = bw.WienerPlant(
+                bw.TransferFunction([1.0], kw["den"], kw["delay"]), bw.BoucWen(kw["beta"], 0.5, kw["mu"])
+            )
+            plan = bw.SinePlan(
+                kw["frequencies"],
+                kw["amplitudes"],
+                settle_periods=1,
+                periods=2,
+                samples_per_period=kw["samples_per_period"],
+                substeps=kw["substeps"],
+                noise_sd=kw["noise_sd"],
+            )
+            return [r.y for r in bw.simulate(plant, plan)]
+
+        def diag() -> Any:
+            with budget.budget(max_steps=1000):
+                d = bw.diagnose(
+                    recordings, alpha=kw["alpha"], candidates=kw["candidates"], held_out_test=False
+                )
+            return [t.value for t in d.named]
+
+        _named_or_finite(sim)
+        _named_or_finite(diag)
+
+    check()
