@@ -356,7 +356,7 @@ fn run<S: Derivatives>(
             });
         }
         for yk in y.iter_mut() {
-            *yk = terms.offset + *yk;
+            *yk += terms.offset; // IEEE addition commutes: the same bits as offset + F
         }
         let out = TermSimulation { x, w, y };
         check_blow_up(tf, bw, terms, dt, &out)?;
