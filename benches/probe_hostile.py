@@ -25,6 +25,11 @@ Target: zero raw, zero silent, zero hang, zero memory. Run::
 
     python benches/probe_hostile.py [--seed 0] [--time-limit 60] [--memory-gb 3] [--verbose]
 
+``--hypothesis N`` runs instead the property-based sweep of issue 19: hypothesis draws (seeded) the scalar
+and array arguments of ``simulate``, ``simulate_input`` (any term at any place), ``identify``, ``diagnose``
+(tiny step budgets), ``plan_experiment``, ``fit_transfer_function`` and ``load`` (a drawn y column), N calls
+each, each in its forked child with a 30 s hang limit; ``--quick`` is ``--hypothesis 15`` (about 20 s).
+
 The default budgets of :mod:`bouc_wen_id.budget` are in force: the probe shows they keep every call
 inside the limits.
 """

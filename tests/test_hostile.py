@@ -964,3 +964,13 @@ def test_sweep_simulate_and_a_tiny_budget_diagnose_are_named_or_finite(
         _named_or_finite(diag)
 
     check()
+
+
+def test_tfit_on_purely_real_points_warns_instead_of_a_linalg_error() -> None:
+    """Found by the sweep: a candidate whose fit ran off to inf reached np.roots (raw LinAlgError)."""
+    with pytest.warns(bw.PoorFitWarning):
+        fit = bw.fit_transfer_function(
+            omega=np.array([1.0, 2.0, 4.0, 8.0]), response=np.array([1.0, 0.8, 0.5, 0.2]) + 0j
+        )
+    assert np.all(np.isfinite(fit.transfer_function.den)) and np.all(np.isfinite(fit.transfer_function.num))
+    assert any(c.error == "non-finite fit" for c in fit.candidates)
