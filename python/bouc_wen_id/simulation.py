@@ -32,8 +32,10 @@ def simulate(
     ``settle_periods + periods`` periods of ``samples_per_period`` samples; the output is
     ``y = w + noise`` with white Gaussian noise of standard deviation ``plan.noise_sd``.  A plant with
     ``terms`` is simulated as the augmented model (docs/design.md 9.4): ``y = F + noise`` with
-    ``F = y0 + Lag[w + k u + c udot + m uddot + f tanh(udot/(eps U omega))]`` and ``w`` the
-    (asymmetric) hysteresis of the played ``x``; a plant without terms takes the plain path, unchanged.
+    ``F = y0 + Lag[w + k u + c udot + m uddot + f tanh(udot/(eps U omega))]`` (plus the mechanical terms on
+    ``x``, ``k_x x + c_x xdot + m_x xddot + f_x tanh(xdot/(eps |U| |G| omega))``, from G's state)
+    and ``w`` the (asymmetric) hysteresis of the played ``x``; a plant without terms takes the plain path,
+    unchanged.  A run that blows up (a huge term or parameter) is :class:`NonFiniteError` naming them.
 
     Parameters
     ----------
@@ -150,14 +152,18 @@ def simulate_input(
 
     With ``output=True`` returns ``(x, w, y)``: ``y`` the noise-free measured output, which differs from
     ``w`` when the plant has terms (docs/design.md 9.4: the mechanical terms use the interpolant's
-    ``u, udot, uddot`` at the samples and ``Vmax = max |udot|`` of the interpolant).  ``w`` honours the
+    ``u, udot, uddot`` at the samples and ``Vmax = max |udot|`` of the interpolant; the terms on x use the
+    linear part's state and, for the friction, the largest ``|xdot|`` at the samples).  ``w`` honours the
     asymmetry and play terms either way.
 
     Raises
     ------
     InvalidParameterError
-        ``t`` and ``u`` of unequal lengths, fewer than 2 samples, or a time axis that is not uniform
-        (:class:`TimeAxisError`, to ``validation.EXACT_GRID_RTOL``).
+        ``t`` and ``u`` of unequal lengths or not real numbers, fewer than 2 samples, a ``substeps`` that is
+        not an integer >= 1, or a time axis that is not uniform (:class:`TimeAxisError`, to
+        ``validation.EXACT_GRID_RTOL``).
+    NonFiniteError
+        Non-finite samples, or a run that blows up (naming the parameters and terms, not the data).
     """
     core = get_backend(backend).paper
     tt = _samples("t", t)
