@@ -25,6 +25,11 @@ Target: zero raw, zero silent, zero hang, zero memory. Run::
 
     python benches/probe_hostile.py [--seed 0] [--time-limit 60] [--memory-gb 3] [--verbose]
 
+``--hypothesis N`` runs instead the property-based sweep of issue 19: hypothesis draws (seeded) the scalar
+and array arguments of ``simulate``, ``simulate_input`` (any term at any place), ``identify``, ``diagnose``
+(tiny step budgets), ``plan_experiment``, ``fit_transfer_function`` and ``load`` (a drawn y column), N calls
+each, each in its forked child with a 30 s hang limit; ``--quick`` is ``--hypothesis 15`` (about 20 s).
+
 The default budgets of :mod:`bouc_wen_id.budget` are in force: the probe shows they keep every call
 inside the limits.
 """
@@ -594,6 +599,285 @@ def cli_probes(rng: np.random.Generator, recs: list[bw.Recording], root: Path) -
 
 
 # --------------------------------------------------------------------------------------------------
+# Property-based sweep (issue 19): hypothesis draws the public entry points' scalar and array arguments
+# --------------------------------------------------------------------------------------------------
+
+
+def _draw(strategy: Any, n: int, seed: int) -> list[Any]:
+    """``n`` values of a hypothesis strategy, reproducibly from ``seed`` (generation only, no shrinking)."""
+    import hypothesis
+    from hypothesis import HealthCheck, Phase, given, settings
+
+    out: list[Any] = []
+
+    @hypothesis.seed(seed)
+    @settings(
+        max_examples=n,
+        database=None,
+        phases=[Phase.generate],
+        suppress_health_check=list(HealthCheck),
+        deadline=None,
+    )
+    @given(strategy)
+    def collect(value: Any) -> None:
+        out.append(value)
+
+    collect()
+    return out[:n]
+
+
+def _either(default: Any, hostile: Any) -> Any:
+    """A field that is its sane default most of the time and a hostile draw otherwise."""
+    from hypothesis import strategies as st
+
+    return st.one_of(st.just(default), st.just(default), st.just(default), hostile)
+
+
+def _scalars() -> Any:
+    from hypothesis import strategies as st
+
+    odd = [None, "3", "abc", True, 1 + 1j, [], [1.0, 2.0], np.float32(2.0), np.int64(-5), object()]
+    return st.one_of(
+        st.floats(allow_nan=True, allow_infinity=True),
+        st.floats(min_value=-1e3, max_value=1e3),
+        st.integers(min_value=-(2**70), max_value=2**70),
+        st.integers(min_value=-3, max_value=600),
+        st.sampled_from(odd),
+    )
+
+
+def _arrays(max_size: int = 40) -> Any:
+    from hypothesis import strategies as st
+    from hypothesis.extra import numpy as hnp
+
+    return st.one_of(
+        hnp.arrays(
+            np.float64, st.integers(0, max_size), elements=st.floats(allow_nan=True, allow_infinity=True)
+        ),
+        hnp.arrays(np.float64, st.integers(1, max_size), elements=st.floats(-1e3, 1e3)),
+        st.lists(_scalars(), max_size=4),
+        _scalars(),
+    )
+
+
+def _pick(kw: dict[str, Any]) -> str:
+    return ", ".join(f"{k}={v!r}"[:40] for k, v in kw.items())
+
+
+def hypothesis_probes(n: int, seed: int, recs: list[bw.Recording], root: Path) -> list[Probe]:
+    """``n`` drawn calls per entry point: simulate, simulate_input, identify, diagnose (tiny budgets),
+    plan_experiment, fit_transfer_function and load. A result must be finite (NaN or inf is silent)."""
+    from bouc_wen_id.terms import TERMS
+    from hypothesis import strategies as st
+
+    out: list[Probe] = []
+    sc, ar = _scalars(), _arrays()
+    # simulate: the plant's and the plan's fields.
+    sim = st.fixed_dictionaries(
+        {
+            "beta": _either(1.0, sc),
+            "gamma": _either(0.5, sc),
+            "mu": _either(1.5, sc),
+            "alpha": _either(1.0, sc),
+            "w0": _either(0.0, sc),
+            "num": _either([1.0], ar),
+            "den": _either([0.3, 1.0], ar),
+            "delay": _either(0.02, sc),
+            "frequencies": _either([2.0], ar),
+            "amplitudes": _either([1.0], ar),
+            "samples_per_period": _either(32, sc),
+            "periods": _either(2, sc),
+            "settle_periods": _either(1, sc),
+            "substeps": _either(2, sc),
+            "noise_sd": _either(0.01, sc),
+            "seed": _either(0, sc),
+        }
+    )
+    for kw in _draw(sim, n, seed):
+
+        def run_sim(kw: dict[str, Any] = kw) -> Any:
+            plant = bw.WienerPlant(
+                bw.TransferFunction(kw["num"], kw["den"], kw["delay"]),
+                bw.BoucWen(kw["beta"], kw["gamma"], kw["mu"], alpha=kw["alpha"], w0=kw["w0"]),
+            )
+            plan_kw = {k: kw[k] for k in ("samples_per_period", "periods", "settle_periods", "substeps")}
+            plan = bw.SinePlan(
+                kw["frequencies"], kw["amplitudes"], noise_sd=kw["noise_sd"], seed=kw["seed"], **plan_kw
+            )
+            return [(r.x, r.w, r.y) for r in bw.simulate(plant, plan)]
+
+        out.append(Probe("h-simulate", _pick(kw), run_sim, finite_deep))
+    # simulate_input: the samples, the step, substeps and one term's value (any term, any place).
+    terms = st.sampled_from(sorted(TERMS))
+    sin = st.fixed_dictionaries(
+        {
+            "u": _either(np.cos(np.arange(60) * 0.1), ar),
+            "dt": _either(0.1, sc),
+            "substeps": _either(2, sc),
+            "term": terms,
+            "value": _either(0.1, sc),
+            "output": st.booleans(),
+        }
+    )
+    for kw in _draw(sin, n, seed + 1):
+
+        def run_sin(kw: dict[str, Any] = kw) -> Any:
+            cls = TERMS[kw["term"]]
+            plant = bw.WienerPlant(
+                bw.demo_plant().linear,
+                bw.demo_plant().hysteresis,
+                (cls.from_dict({cls.symbol: kw["value"]}),),
+            )
+            u = kw["u"]
+            try:  # the time axis of the drawn step; where the draw makes none, the samples themselves
+                t = np.arange(len(u)) * float(kw["dt"])
+            except (TypeError, ValueError, OverflowError):
+                t = u
+            return bw.simulate_input(plant, t, u, substeps=kw["substeps"], output=kw["output"])
+
+        out.append(Probe("h-sim_input", _pick(kw), run_sin, finite_deep))
+    # identify: the data's scale and offset, and every keyword.
+    ident = st.fixed_dictionaries(
+        {
+            "scale": _either(1.0, st.floats(allow_nan=True, allow_infinity=True)),
+            "offset": _either(0.0, st.floats(allow_nan=True, allow_infinity=True)),
+            "settle_periods": _either(None, sc),
+            "periods": _either(None, sc),
+            "harmonics": _either("auto", sc),
+            "mu_bracket": _either((1.0, 10.0), ar),
+            "tol": _either(1e-8, sc),
+            "phase_grid": _either(48, sc),
+            "max_iter": _either(30, sc),
+            "confidence": _either(0.95, sc),
+        }
+    )
+    for kw in _draw(ident, n, seed + 2):
+
+        def run_id(kw: dict[str, Any] = kw) -> Any:
+            data = [
+                bw.Recording(
+                    r.t,
+                    r.u,
+                    r.y * kw["scale"] + kw["offset"],
+                    r.amplitude,
+                    r.frequency,
+                    settle_periods=r.settle_periods,
+                )
+                for r in recs
+            ]
+            opts = {k: v for k, v in kw.items() if k not in ("scale", "offset")}
+            res = bw.identify(data, **opts)
+            return (res.beta, res.gamma, res.mu, res.gains)
+
+        out.append(Probe("h-identify", _pick(kw), run_id, finite_deep))
+    # diagnose under tiny budgets.
+    diag = st.fixed_dictionaries(
+        {
+            "alpha": _either(0.05, sc),
+            "scale": _either(1.0, st.floats(allow_nan=True, allow_infinity=True)),
+            "max_steps": st.sampled_from([10**3, 10**5, 10**7]),
+            "candidates": _either(None, st.one_of(st.lists(terms, max_size=3), sc)),
+            "held_out_test": st.booleans(),
+        }
+    )
+    for kw in _draw(diag, n, seed + 3):
+
+        def run_diag(kw: dict[str, Any] = kw) -> Any:
+            data = [
+                bw.Recording(
+                    r.t, r.u, r.y * kw["scale"], r.amplitude, r.frequency, settle_periods=r.settle_periods
+                )
+                for r in recs
+            ]
+            with bw.budget.budget(max_steps=kw["max_steps"]):
+                d = bw.diagnose(
+                    data, alpha=kw["alpha"], candidates=kw["candidates"], held_out_test=kw["held_out_test"]
+                )
+            return [t.value for t in d.named]
+
+        out.append(Probe("h-diagnose", _pick(kw), run_diag, finite_deep))
+    # plan_experiment: every scalar.
+    plan_kw = st.fixed_dictionaries(
+        {
+            "budget": _either(600.0, sc),
+            "band": _either((1.0, 10.0), ar),
+            "max_amplitude": _either(2.0, sc),
+            "noise_sd": _either(0.01, sc),
+            "sample_rate": _either(200.0, sc),
+            "n_frequencies": _either(4, sc),
+            "n_amplitudes": _either(2, sc),
+            "settle_periods": _either(5, sc),
+            "max_samples_per_period": _either(128, sc),
+            "min_periods": _either(3, sc),
+            "substeps": _either(2, sc),
+        }
+    )
+    for kw in _draw(plan_kw, n, seed + 4):
+
+        def run_plan(kw: dict[str, Any] = kw) -> Any:
+            opts = dict(kw)
+            budget_s = opts.pop("budget")
+            res = bw.plan_experiment(bw.demo_plant(), budget_s, **opts)
+            return (
+                [(e.frequency, e.amplitude) for e in res.experiments] if hasattr(res, "experiments") else res
+            )
+
+        out.append(Probe("h-plan", _pick(kw), run_plan, finite_deep))
+    # fit_transfer_function on user points.
+    tf_kw = st.fixed_dictionaries(
+        {
+            "omega": _either(np.array([1.0, 2.0, 4.0, 8.0]), ar),
+            "re": _either(np.array([1.0, 0.8, 0.5, 0.2]), ar),
+            "im": _either(np.array([-0.2, -0.4, -0.5, -0.4]), ar),
+            "order": _either(None, sc),
+            "delay": _either(None, sc),
+            "max_order": _either(4, sc),
+        }
+    )
+    for kw in _draw(tf_kw, n, seed + 5):
+
+        def run_tf(kw: dict[str, Any] = kw) -> Any:
+            try:
+                response = np.asarray(kw["re"], dtype=float) + 1j * np.asarray(kw["im"], dtype=float)
+            except (TypeError, ValueError):
+                response = kw["re"]
+            fit = bw.fit_transfer_function(
+                omega=kw["omega"],
+                response=response,
+                order=kw["order"],
+                delay=kw["delay"],
+                max_order=kw["max_order"],
+            )
+            g = fit.transfer_function  # candidates may hold an inf AICc (no dof): not a result
+            return (g.num, g.den, g.delay, fit.parameters, fit.chi2)
+
+        out.append(Probe("h-tfit", _pick(kw), run_tf, finite_deep))
+    # load: a recording file whose y column is drawn, with drawn keywords.
+    ld = st.fixed_dictionaries(
+        {"y": _either(None, _arrays(200)), "sample_rate": _either(None, sc), "skiprows": _either(None, sc)}
+    )
+    src = recs[0]
+    for i, kw in enumerate(_draw(ld, n, seed + 6)):
+        path = root / f"h_{i}.csv"
+        y = src.y if kw["y"] is None else kw["y"]
+        try:
+            col = np.resize(np.asarray(y, dtype=float).ravel(), src.t.size) if np.size(y) else np.zeros(0)
+        except (TypeError, ValueError):
+            col = src.y
+        n_rows = min(src.t.size, col.size) if col.size else 0
+        lines = [f"# amplitude: {src.amplitude}", f"# frequency: {src.frequency}", "t,u,y"]
+        lines += [f"{float(src.t[k])!r},{float(src.u[k])!r},{float(col[k])!r}" for k in range(n_rows)]
+        path.write_text("\n".join(lines) + "\n")
+
+        def run_load(kw: dict[str, Any] = kw, path: Path = path) -> Any:
+            items = bw.load(path, sample_rate=kw["sample_rate"], skiprows=kw["skiprows"])
+            return [(getattr(it, "t", None), getattr(it, "u", None), getattr(it, "y", None)) for it in items]
+
+        out.append(Probe("h-load", _pick(kw), run_load, finite_deep))
+    return out
+
+
+# --------------------------------------------------------------------------------------------------
 # Running a probe in a forked child
 # --------------------------------------------------------------------------------------------------
 
@@ -691,7 +975,17 @@ def main() -> int:
     ap.add_argument("--memory-gb", type=float, default=3.0, help="address-space limit per probe")
     ap.add_argument("--only", default=None, help="run only this category")
     ap.add_argument("--verbose", action="store_true", help="print every probe, not only the misses")
+    ap.add_argument(
+        "--hypothesis",
+        type=int,
+        default=0,
+        metavar="N",
+        help="only the property-based sweep: N drawn calls per public entry point (--quick: 15)",
+    )
+    ap.add_argument("--quick", action="store_true", help="the sweep with 15 draws per entry point (< 2 min)")
     args = ap.parse_args()
+    if args.quick and not args.hypothesis:
+        args.hypothesis = 15
     rng = np.random.default_rng(args.seed)
     plan = bw.SinePlan(
         [3.0, 5.0, 7.0],
@@ -708,7 +1002,9 @@ def main() -> int:
         (root / "files").mkdir()
         (root / "cli").mkdir()
         probes = (
-            value_probes(rng)
+            hypothesis_probes(args.hypothesis, args.seed, recs, root / "files")
+            if args.hypothesis
+            else value_probes(rng)
             + work_probes(rng)
             + identify_probes(rng, recs)
             + data_probes(rng, recs)
@@ -716,6 +1012,8 @@ def main() -> int:
             + file_probes(rng, recs, root / "files")
             + cli_probes(rng, recs, root / "cli")
         )
+        if args.hypothesis:
+            args.time_limit = min(args.time_limit, 30.0)  # the sweep's hang limit (issue 19: > 30 s)
         if args.only:
             probes = [p for p in probes if p.category == args.only]
         counts: dict[str, collections.Counter[str]] = collections.defaultdict(collections.Counter)

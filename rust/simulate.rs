@@ -27,7 +27,9 @@ use crate::error::{all_finite, finite, CoreError, Result};
 use crate::linear::{Companion, TransferFunction};
 
 // The augmented model's integrator (design.md §9.4), kept apart so that this plain path is untouched.
+mod on_x;
 mod with_terms;
+pub use on_x::OnXValues;
 pub use with_terms::{simulate_with_terms, TermSimulation, TermValues};
 
 /// Input signal `u(t)`, `t >= 0` (`u = 0` before).

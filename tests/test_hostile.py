@@ -20,8 +20,10 @@ import warnings
 import zipfile
 from collections.abc import Callable, Iterator
 from pathlib import Path
+from typing import Any
 
 import bouc_wen_id as bw
+import hypothesis
 import numpy as np
 import pytest
 from bouc_wen_id import _core, budget, cli, reference
@@ -715,3 +717,260 @@ def test_an_extreme_exponent_does_not_divide_by_zero() -> None:
     assert _unscaled(1.0, 0.5, 2000.0) == math.inf
     assert _unscaled(-2.0, 4.0, 1.0) == pytest.approx(-0.5)
     assert _unscaled(1.0, 4.0, 2000.0) == 0.0
+
+
+# --------------------------------------------------------------------------------------------------
+# Issue 19 leftovers in the simulator, the terms and the configuration (onx helper, session 23)
+# --------------------------------------------------------------------------------------------------
+
+
+def _degrading_plant(value: float = 1e300) -> bw.WienerPlant:
+    from bouc_wen_id.terms import Degradation
+
+    return bw.WienerPlant(
+        bw.TransferFunction([1.0], [0.2, 1.0]), bw.BoucWen(1.0, 0.5, 1.5), (Degradation(value),)
+    )
+
+
+@pytest.mark.parametrize("backend", ["rust", "numpy"])
+def test_simulate_input_with_a_huge_degradation_is_a_named_blow_up(backend: Any) -> None:
+    """``simulate_input(..., terms=(Degradation(1e300),))`` returned NaN silently."""
+    t = np.arange(300) * 0.05
+    with pytest.raises(NonFiniteError, match=r"blew up.*degradation = 1(\.0+)?e\+?300"):
+        bw.simulate_input(_degrading_plant(), t, np.cos(2.0 * t), output=True, backend=backend)
+    # A moderate value is a result, finite and degrading (the loop's peak falls).
+    x, w, y = bw.simulate_input(_degrading_plant(0.5), t, np.cos(2.0 * t), output=True, backend=backend)
+    assert np.all(np.isfinite(y))
+
+
+def test_simulate_with_a_huge_degradation_blames_the_parameter_not_y() -> None:
+    plan = bw.SinePlan([2.0], [1.0], settle_periods=1, periods=2, samples_per_period=32)
+    with pytest.raises(NonFiniteError) as info:
+        bw.simulate(_degrading_plant(), plan)
+    message = str(info.value)
+    assert "degradation = 1" in message and "blew up" in message
+    assert not message.startswith("y ") and "y contains" not in message
+
+
+def test_a_small_step_budget_in_diagnose_names_the_budget(recordings: list[bw.Recording]) -> None:
+    """``BOUC_WEN_ID_MAX_STEPS=1000 bouc-wen-id diagnose`` said SearchAtBoundError (every start 'failed')."""
+    with budget.budget(max_steps=1000), pytest.raises(BudgetExceededError, match="max_steps"):
+        bw.diagnose(recordings, held_out_test=False)
+
+
+def test_cli_diagnose_under_a_small_step_budget_names_it_and_the_variable(tmp_path: Path) -> None:
+    recs = tmp_path / "recs"
+    made = _run(
+        ["-m", "bouc_wen_id", "simulate", "--out", str(recs), "--frequencies", "1", "2", "--seed", "1"]
+    )
+    assert made.returncode == 0, made.stderr
+    env = dict(os.environ, MPLBACKEND="Agg", BOUC_WEN_ID_MAX_STEPS="1000")
+    out = subprocess.run(
+        [sys.executable, "-m", "bouc_wen_id", "diagnose", str(recs), "--out", str(tmp_path / "d")],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env=env,
+        check=False,
+    )
+    assert out.returncode == 2, out.stderr
+    assert "BudgetExceededError" in out.stderr and "BOUC_WEN_ID_MAX_STEPS" in out.stderr
+    assert "SearchAtBound" not in out.stderr and "Traceback" not in out.stderr
+
+
+@pytest.mark.parametrize("raw", ["abc", "0", "-5", "1.5e0", "1e999", "99999999999999999999999"])
+def test_a_bad_budget_variable_is_named_at_first_use_not_at_import(raw: str) -> None:
+    code = textwrap.dedent(
+        """
+        import bouc_wen_id as bw
+        print("imported")
+        try:
+            bw.simulate(bw.demo_plant(), bw.SinePlan([1.0], [1.0], samples_per_period=32))
+        except bw.InvalidParameterError as e:
+            print("named:", e)
+        bw.budget.set_budget(max_steps=10**9)  # setting the limits in code clears it
+        print(bw.budget.get_budget().max_steps)
+        """
+    )
+    env = dict(os.environ, BOUC_WEN_ID_MAX_STEPS=raw)
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, check=False)
+    assert out.returncode == 0 and "Traceback" not in out.stderr, out.stderr
+    lines = out.stdout.splitlines()
+    assert lines[0] == "imported" and lines[-1] == str(10**9)
+    assert lines[1].startswith("named:") and "BOUC_WEN_ID_MAX_STEPS" in lines[1] and repr(raw) in lines[1]
+
+
+def test_cli_with_a_bad_budget_variable_is_one_line_exit_2(tmp_path: Path) -> None:
+    env = dict(os.environ, MPLBACKEND="Agg", BOUC_WEN_ID_MAX_SAMPLES="lots")
+    out = subprocess.run(
+        [sys.executable, "-m", "bouc_wen_id", "simulate", "--out", str(tmp_path / "r")],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env=env,
+        check=False,
+    )
+    assert out.returncode == 2 and "Traceback" not in out.stderr, out.stderr
+    assert "BOUC_WEN_ID_MAX_SAMPLES" in out.stderr
+
+
+def test_type_misuse_is_named(recordings: list[bw.Recording]) -> None:
+    plant = bw.demo_plant()
+    with pytest.raises(InvalidParameterError, match="alpha"):
+        bw.diagnose(recordings, alpha="0.05")  # type: ignore[arg-type]
+    with pytest.raises(InvalidParameterError, match="alpha"):
+        bw.diagnose(recordings, alpha="abc")  # type: ignore[arg-type]
+    for bad in (None, 3, "viscous"):
+        with pytest.raises(InvalidParameterError, match="terms must be"):
+            bw.WienerPlant(plant.linear, plant.hysteresis, bad)  # type: ignore[arg-type]
+
+
+# A bounded version of the property-based sweep of benches/probe_hostile.py (--hypothesis): drawn scalar
+# and array arguments of simulate, simulate_input (any term at any place) and diagnose under a tiny budget
+# end in a named error or a finite result, never a raw exception or a NaN.
+
+_ODD: list[object] = [None, "3", "abc", True, 1 + 1j, [], [1.0, 2.0], np.float32(2.0), np.int64(-5), object()]
+
+
+def _hyp_scalars() -> Any:
+    from hypothesis import strategies as st
+
+    return st.one_of(
+        st.floats(allow_nan=True, allow_infinity=True),
+        st.floats(min_value=-1e3, max_value=1e3),
+        st.integers(min_value=-(2**70), max_value=2**70),
+        st.integers(min_value=-3, max_value=300),
+        st.sampled_from(_ODD),
+    )
+
+
+def _hyp_arrays() -> Any:
+    from hypothesis import strategies as st
+    from hypothesis.extra import numpy as hnp
+
+    floats = st.floats(allow_nan=True, allow_infinity=True)
+    return st.one_of(
+        hnp.arrays(np.float64, st.integers(0, 30), elements=floats),
+        hnp.arrays(np.float64, st.integers(1, 30), elements=st.floats(-1e3, 1e3)),
+        st.lists(_hyp_scalars(), max_size=4),
+        _hyp_scalars(),
+    )
+
+
+def _named_or_finite(call: Callable[[], Any]) -> None:
+    """The outcome the sweep counts as good: a library error, or a result whose arrays are all finite."""
+    try:
+        out = call()
+    except BoucWenIdError:
+        return
+    arrays = out if isinstance(out, (tuple, list)) else (out,)
+    for a in arrays:
+        assert np.all(np.isfinite(np.asarray(a, dtype=float))), f"silent non-finite result {a!r}"
+
+
+def _hyp_settings() -> hypothesis.settings:
+    from hypothesis import HealthCheck, settings
+
+    return settings(max_examples=40, deadline=None, database=None, suppress_health_check=list(HealthCheck))
+
+
+def test_sweep_simulate_input_with_any_term_is_named_or_finite() -> None:
+    from bouc_wen_id.terms import TERMS
+    from hypothesis import given, seed
+    from hypothesis import strategies as st
+
+    plant = bw.demo_plant()
+
+    @seed(19)
+    @_hyp_settings()
+    @given(
+        u=st.one_of(st.just(np.cos(np.arange(50) * 0.1)), _hyp_arrays()),
+        dt=st.one_of(st.just(0.1), _hyp_scalars()),
+        substeps=st.one_of(st.just(2), _hyp_scalars()),
+        term=st.sampled_from(sorted(TERMS)),
+        value=st.one_of(st.just(0.2), _hyp_scalars()),
+    )
+    def check(u: Any, dt: Any, substeps: Any, term: str, value: Any) -> None:
+        def call() -> Any:
+            cls = TERMS[term]
+            p = bw.WienerPlant(plant.linear, plant.hysteresis, (cls.from_dict({cls.symbol: value}),))
+            try:
+                t = np.arange(len(u)) * float(dt)
+            except (TypeError, ValueError, OverflowError):
+                t = u
+            return bw.simulate_input(p, t, u, substeps=substeps, output=True)
+
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)  # the sweep's own arange of a huge dt
+            _named_or_finite(call)
+
+    check()
+
+
+def test_sweep_simulate_and_a_tiny_budget_diagnose_are_named_or_finite(
+    recordings: list[bw.Recording],
+) -> None:
+    from hypothesis import given, seed
+    from hypothesis import strategies as st
+
+    def either(default: Any, hostile: Any) -> Any:
+        return st.one_of(st.just(default), st.just(default), hostile)
+
+    sc, ar = _hyp_scalars(), _hyp_arrays()
+
+    @seed(1919)
+    @_hyp_settings()
+    @given(
+        st.fixed_dictionaries(
+            {
+                "beta": either(1.0, sc),
+                "mu": either(1.5, sc),
+                "den": either([0.3, 1.0], ar),
+                "delay": either(0.02, sc),
+                "frequencies": either([2.0], ar),
+                "amplitudes": either([1.0], ar),
+                "samples_per_period": either(32, sc),
+                "substeps": either(2, sc),
+                "noise_sd": either(0.01, sc),
+                "alpha": either(0.05, sc),
+                "candidates": either(None, st.one_of(st.lists(st.sampled_from(["offset", "viscous@x"])), sc)),
+            }
+        )
+    )
+    def check(kw: dict[str, Any]) -> None:
+        def sim() -> Any:
+            plant = bw.WienerPlant(
+                bw.TransferFunction([1.0], kw["den"], kw["delay"]), bw.BoucWen(kw["beta"], 0.5, kw["mu"])
+            )
+            plan = bw.SinePlan(
+                kw["frequencies"],
+                kw["amplitudes"],
+                settle_periods=1,
+                periods=2,
+                samples_per_period=kw["samples_per_period"],
+                substeps=kw["substeps"],
+                noise_sd=kw["noise_sd"],
+            )
+            return [r.y for r in bw.simulate(plant, plan)]
+
+        def diag() -> Any:
+            with budget.budget(max_steps=1000):
+                d = bw.diagnose(
+                    recordings, alpha=kw["alpha"], candidates=kw["candidates"], held_out_test=False
+                )
+            return [t.value for t in d.named]
+
+        _named_or_finite(sim)
+        _named_or_finite(diag)
+
+    check()
+
+
+def test_tfit_on_purely_real_points_warns_instead_of_a_linalg_error() -> None:
+    """Found by the sweep: a candidate whose fit ran off to inf reached np.roots (raw LinAlgError)."""
+    with pytest.warns(bw.PoorFitWarning):
+        fit = bw.fit_transfer_function(
+            omega=np.array([1.0, 2.0, 4.0, 8.0]), response=np.array([1.0, 0.8, 0.5, 0.2]) + 0j
+        )
+    assert np.all(np.isfinite(fit.transfer_function.den)) and np.all(np.isfinite(fit.transfer_function.num))
+    assert any(c.error == "non-finite fit" for c in fit.candidates)

@@ -38,7 +38,16 @@ from ._backend import push_budget
 from .errors import BudgetExceededError, InvalidParameterError
 from .validation import count
 
-__all__ = ["Budget", "get_budget", "set_budget", "budget", "check_samples", "check_steps", "check_bytes"]
+__all__ = [
+    "Budget",
+    "get_budget",
+    "set_budget",
+    "budget",
+    "check_samples",
+    "check_steps",
+    "check_bytes",
+    "check_environment",
+]
 
 #: Defaults, equal to rust/budget.rs DEFAULT_MAX_*.
 DEFAULT_MAX_SAMPLES = 1 << 24
@@ -71,7 +80,8 @@ def _push(b: Budget) -> None:
 
 
 def get_budget() -> Budget:
-    """The limits in force."""
+    """The limits in force (:class:`InvalidParameterError` while a ``BOUC_WEN_ID_MAX_*`` variable is bad)."""
+    check_environment()
     return _current
 
 
@@ -85,7 +95,7 @@ def set_budget(
     InvalidParameterError
         A limit that is not an integer in ``[1, 2**64 - 1]``.
     """
-    global _current
+    global _current, _environment_error
     old = _current
     new = Budget(
         _positive_int("max_samples", old.max_samples if max_samples is None else max_samples),
@@ -94,6 +104,7 @@ def set_budget(
     )
     _push(new)
     _current = new
+    _environment_error = None
     return old
 
 
@@ -122,24 +133,28 @@ def _refuse(what: str, size: int, unit: str, name: str, limit: int) -> BudgetExc
 
 def check_samples(what: str, n: int) -> None:
     """Refuse ``n`` samples of one signal above ``max_samples`` (:class:`BudgetExceededError`)."""
+    check_environment()
     if n > _current.max_samples:
         raise _refuse(what, n, "samples", "max_samples", _current.max_samples)
 
 
 def check_steps(what: str, steps: int) -> None:
     """Refuse ``steps`` elementary steps above ``max_steps`` (:class:`BudgetExceededError`)."""
+    check_environment()
     if steps > _current.max_steps:
         raise _refuse(what, steps, "steps", "max_steps", _current.max_steps)
 
 
 def check_bytes(what: str, n_bytes: int) -> None:
     """Refuse ``n_bytes`` of memory above ``max_bytes`` (:class:`BudgetExceededError`)."""
+    check_environment()
     if n_bytes > _current.max_bytes:
         raise _refuse(what, n_bytes, "bytes", "max_bytes", _current.max_bytes)
 
 
 def check_simulation(n_samples: int, substeps: int) -> None:
     """The cost of one RK4 simulation of ``n_samples`` samples (as rust/budget.rs check_simulation)."""
+    check_environment()
     if substeps > MAX_SUBSTEPS:
         raise BudgetExceededError(
             f"budget exceeded: substeps = {substeps} is above {MAX_SUBSTEPS} RK4 steps per sample interval, "
@@ -151,19 +166,51 @@ def check_simulation(n_samples: int, substeps: int) -> None:
     check_steps("the simulation", max(n_samples - 1, 0) * max(substeps, 0))
 
 
+#: A bad ``BOUC_WEN_ID_MAX_*`` value found at import: raised by every budget check (and :func:`get_budget`)
+#: until the limits are set with :func:`set_budget`, never at import (issue 19: a raw traceback there).
+_environment_error: Optional[InvalidParameterError] = None
+
+
+def _parse_environment(name: str, raw: str) -> int:
+    """The integer a ``BOUC_WEN_ID_MAX_*`` variable holds (``"1e9"`` allowed), checked as by set_budget."""
+    var = f"BOUC_WEN_ID_{name.upper()}"
+    try:
+        number = float(raw) if "e" in raw.lower() else int(raw)
+    except ValueError:
+        raise InvalidParameterError(f"environment variable {var} = {raw!r} is not an integer") from None
+    if isinstance(number, float) and not (number.is_integer() and 1 <= number <= _LIMIT_CEILING):
+        raise InvalidParameterError(
+            f"environment variable {var} = {raw!r} must be an integer in [1, 2**64 - 1]"
+        )
+    try:
+        return _positive_int(name, int(number))
+    except InvalidParameterError as exc:
+        raise InvalidParameterError(f"environment variable {var} = {raw!r}: {exc}") from None
+
+
 def _from_environment() -> None:
+    global _environment_error
     values: dict[str, int] = {}
-    for name in ("max_samples", "max_steps", "max_bytes"):
-        raw = os.environ.get(f"BOUC_WEN_ID_{name.upper()}")
-        if raw is None or not raw.strip():
-            continue
-        try:
-            values[name] = int(float(raw)) if "e" in raw.lower() else int(raw)
-        except ValueError:
-            raise InvalidParameterError(
-                f"environment variable BOUC_WEN_ID_{name.upper()} = {raw!r} is not an integer"
-            ) from None
-    set_budget(**values)
+    try:
+        for name in ("max_samples", "max_steps", "max_bytes"):
+            raw = os.environ.get(f"BOUC_WEN_ID_{name.upper()}")
+            if raw is None or not raw.strip():
+                continue
+            values[name] = _parse_environment(name, raw.strip())
+        set_budget(**values)
+    except InvalidParameterError as exc:
+        # Not at import: the first call that consults a budget names the variable (the defaults stay in
+        # the core meanwhile; set_budget clears it).
+        _environment_error = exc
+
+
+def check_environment() -> None:
+    """Raise the :class:`InvalidParameterError` of a bad ``BOUC_WEN_ID_MAX_*`` variable, if one was found."""
+    if _environment_error is not None:
+        raise InvalidParameterError(
+            f"{_environment_error}; fix or unset it (the budgets are not in force until then), or set the "
+            "limits with bouc_wen_id.budget.set_budget(...)"
+        )
 
 
 _from_environment()

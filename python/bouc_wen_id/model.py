@@ -188,6 +188,11 @@ class WienerPlant:
     def __post_init__(self) -> None:
         if isinstance(self.terms, Term):
             raise InvalidParameterError("terms must be a sequence of terms: wrap a single one as (term,)")
+        if isinstance(self.terms, (str, bytes)) or not hasattr(self.terms, "__iter__"):
+            # None, a number, a string (issue 19: a raw TypeError before): () is the plant without terms.
+            raise InvalidParameterError(
+                f"terms must be a sequence of bouc_wen_id.terms objects (() for none), got {self.terms!r}"
+            )
         terms = tuple(self.terms)
         seen: set[str] = set()
         for t in terms:

@@ -14,7 +14,7 @@ from ._backend import Backend, get_backend
 from .errors import InvalidParameterError
 from .model import Recording, SinePlan, WienerPlant
 from .terms import core_terms
-from .validation import EXACT_GRID_RTOL, check_time_axis, finite_array
+from .validation import EXACT_GRID_RTOL, check_time_axis, count, finite_array
 
 __all__ = ["simulate", "simulate_input"]
 
@@ -32,8 +32,10 @@ def simulate(
     ``settle_periods + periods`` periods of ``samples_per_period`` samples; the output is
     ``y = w + noise`` with white Gaussian noise of standard deviation ``plan.noise_sd``.  A plant with
     ``terms`` is simulated as the augmented model (docs/design.md 9.4): ``y = F + noise`` with
-    ``F = y0 + Lag[w + k u + c udot + m uddot + f tanh(udot/(eps U omega))]`` and ``w`` the
-    (asymmetric) hysteresis of the played ``x``; a plant without terms takes the plain path, unchanged.
+    ``F = y0 + Lag[w + k u + c udot + m uddot + f tanh(udot/(eps U omega))]`` (plus the mechanical terms on
+    ``x``, ``k_x x + c_x xdot + m_x xddot + f_x tanh(xdot/(eps |U| |G| omega))``, from G's state)
+    and ``w`` the (asymmetric) hysteresis of the played ``x``; a plant without terms takes the plain path,
+    unchanged.  A run that blows up (a huge term or parameter) is :class:`NonFiniteError` naming them.
 
     Parameters
     ----------
@@ -150,18 +152,23 @@ def simulate_input(
 
     With ``output=True`` returns ``(x, w, y)``: ``y`` the noise-free measured output, which differs from
     ``w`` when the plant has terms (docs/design.md 9.4: the mechanical terms use the interpolant's
-    ``u, udot, uddot`` at the samples and ``Vmax = max |udot|`` of the interpolant).  ``w`` honours the
+    ``u, udot, uddot`` at the samples and ``Vmax = max |udot|`` of the interpolant; the terms on x use the
+    linear part's state and, for the friction, the largest ``|xdot|`` at the samples).  ``w`` honours the
     asymmetry and play terms either way.
 
     Raises
     ------
     InvalidParameterError
-        ``t`` and ``u`` of unequal lengths, fewer than 2 samples, or a time axis that is not uniform
-        (:class:`TimeAxisError`, to ``validation.EXACT_GRID_RTOL``).
+        ``t`` and ``u`` of unequal lengths or not real numbers, fewer than 2 samples, a ``substeps`` that is
+        not an integer >= 1, or a time axis that is not uniform (:class:`TimeAxisError`, to
+        ``validation.EXACT_GRID_RTOL``).
+    NonFiniteError
+        Non-finite samples, or a run that blows up (naming the parameters and terms, not the data).
     """
     core = get_backend(backend).paper
-    tt = np.asarray(t, dtype=np.float64)
-    uu = np.ascontiguousarray(u, dtype=np.float64)
+    tt = _samples("t", t)
+    uu = _samples("u", u)
+    steps = count("substeps", substeps, 1)
     if tt.ndim != 1 or uu.ndim != 1 or tt.size != uu.size or tt.size < 2:
         raise InvalidParameterError(
             f"t and u must be 1-D of equal lengths >= 2, got shapes {tt.shape} and {uu.shape}"
@@ -169,7 +176,7 @@ def simulate_input(
     check_time_axis(finite_array("t", tt), rtol=EXACT_GRID_RTOL)
     dt = float(np.mean(np.diff(tt)))
     h, lin = plant.hysteresis, plant.linear
-    args = (lin.num, lin.den, lin.delay, h.alpha, h.beta, h.gamma, h.mu, h.w0, uu, dt, int(substeps))
+    args = (lin.num, lin.den, lin.delay, h.alpha, h.beta, h.gamma, h.mu, h.w0, uu, dt, steps)
     if not plant.terms:
         x, w = core.simulate_sampled(*args)
         y = w
@@ -177,3 +184,15 @@ def simulate_input(
         x, w, y = core.simulate_sampled(*args, terms=core_terms(plant.terms))
     pair = (np.asarray(x, dtype=np.float64), np.asarray(w, dtype=np.float64))
     return (*pair, np.asarray(y, dtype=np.float64)) if output else pair
+
+
+def _samples(name: str, values: ArrayLike) -> NDArray[np.float64]:
+    """User samples as a C-contiguous float64 array; ragged, complex or non-numeric data is
+    :class:`InvalidParameterError` (issue 19: a raw ValueError from NumPy before)."""
+    try:
+        raw = np.asarray(values)
+    except (TypeError, ValueError) as exc:
+        raise InvalidParameterError(f"{name} must be a 1-D array of real numbers: {exc}") from None
+    if raw.dtype.kind not in "biuf":
+        raise InvalidParameterError(f"{name} must hold real numbers, got dtype {raw.dtype}")
+    return np.ascontiguousarray(raw, dtype=np.float64)

@@ -813,7 +813,8 @@ def term_from_dict(d: Mapping[str, Any]) -> Term:
 
 
 def core_terms(terms: Iterable[Term]) -> dict[str, float]:
-    """``{code name: value}`` (plus ``coulomb_smoothing``) as the simulation core takes them."""
+    """``{code name: value}`` (plus each friction's ``<code name>_smoothing``), as the simulation core takes
+    them."""
     out: dict[str, float] = {}
     for t in terms:
         if isinstance(t, Distortion):
@@ -822,12 +823,8 @@ def core_terms(terms: Iterable[Term]) -> dict[str, float]:
                 "know: simulate the plain plant with the distorted input itself (simulate_input with its "
                 "samples) instead"
             )
-        if t.place == Place.X:
-            raise InvalidParameterError(
-                f"{t.label}: the time-domain simulation has no terms on x yet (design.md 9.4); the "
-                "augmented (steady-loop) model fits them"
-            )
         out[t.rust_kind] = t.value
         if isinstance(t, Coulomb):
-            out["coulomb_smoothing"] = t.smoothing
+            # "coulomb_smoothing", "coulomb@x_smoothing": the setting of the term at its place.
+            out[f"{t.rust_kind}_smoothing"] = t.smoothing
     return out

@@ -57,13 +57,14 @@
 //!   play's path map carries it too.
 //! - the **output terms** are evaluated at the sample times (and, inside `F`, at the stage times).
 
+use super::on_x::{linear_pass, smoothing_key, Kinematics, OnX, OnXValues};
 use super::{check_dt, simulate, try_zeros, Hermite, Input, Simulation, Sine, Source};
 use crate::bouc_wen::{sgn, BoucWen};
 use crate::error::{finite, CoreError, Result};
 use crate::linear::{Companion, TransferFunction};
 use crate::terms::{
-    check_asymmetry, check_coulomb_smoothing, TermKind, COULOMB_SMOOTHING, COULOMB_SMOOTHING_KEY,
-    PINCHING_CENTRE, PINCHING_WIDTH,
+    check_asymmetry, check_coulomb_smoothing, parse_placed, Place, TermKind, COULOMB_SMOOTHING,
+    COULOMB_SMOOTHING_KEY, PINCHING_CENTRE, PINCHING_WIDTH,
 };
 
 /// Relative slack of the play's engagement test `|x - xp| >= b`: after a clamp `x - xp` equals `b`
@@ -106,6 +107,8 @@ pub struct TermValues {
     pub stiffness_degradation: f64,
     /// Pinching `zeta1` in `[0, 1)`: the rate times Foliente's `h(w, sgn xpdot)` (module header).
     pub pinching: f64,
+    /// The mechanical terms across the hysteretic element, on x (`rust/simulate/on_x.rs`).
+    pub on_x: OnXValues,
 }
 
 impl Default for TermValues {
@@ -123,24 +126,35 @@ impl Default for TermValues {
             degradation: 0.0,
             stiffness_degradation: 0.0,
             pinching: 0.0,
+            on_x: OnXValues::default(),
         }
     }
 }
 
 impl TermValues {
     /// Values from `(code name, value)` pairs (the code names of [`TermKind`] that act in a
-    /// simulation, and [`COULOMB_SMOOTHING_KEY`]); missing ones are absent.
+    /// simulation, at their usual place or on x as `"<code name>@x"`, and
+    /// [`COULOMB_SMOOTHING_KEY`] and the on-x friction's [`smoothing_key`]); missing ones are
+    /// absent.
     ///
-    /// Errors: [`CoreError::InvalidParameter`] for an unknown name or a term without a
+    /// Errors: [`CoreError::InvalidParameter`] for an unknown name or place, or a term without a
     /// simulation form. Values are checked by [`TermValues::validate`].
     pub fn from_named<'a>(pairs: impl IntoIterator<Item = (&'a str, f64)>) -> Result<Self> {
         let mut t = Self::default();
+        let on_x_smoothing = smoothing_key();
         for (name, v) in pairs {
             let slot = if name == COULOMB_SMOOTHING_KEY {
                 &mut t.coulomb_smoothing
+            } else if name == on_x_smoothing {
+                &mut t.on_x.coulomb_smoothing
             } else {
-                let kind = TermKind::from_name(name)?;
-                t.slot(kind).ok_or_else(|| {
+                let (kind, place) = parse_placed(name)?;
+                let slot = match place {
+                    Place::Usual => t.slot(kind),
+                    // `parse_placed` admits only the mechanical terms on x.
+                    Place::X => t.on_x.slot(kind),
+                };
+                slot.ok_or_else(|| {
                     CoreError::InvalidParameter(format!(
                         "term {name:?} has no time-domain form (steady-loop model only); a \
                          simulation takes every other term"
@@ -193,7 +207,39 @@ impl TermValues {
         for (kind, v) in values() {
             kind.check_value(v)?;
         }
+        self.on_x.validate()?;
         check_asymmetry(self.asymmetry, bw.beta(), bw.gamma())
+    }
+
+    /// `"name = value, ..."` of the present (non-zero) terms, for error messages.
+    pub fn describe(&self) -> String {
+        let usual = TermKind::ALL.into_iter().filter_map(|k| {
+            self.get(k)
+                .filter(|v| *v != 0.0)
+                .map(|v| (k.name().to_string(), v))
+        });
+        let mut on_x = self.on_x;
+        let placed = [
+            TermKind::Stiffness,
+            TermKind::Viscous,
+            TermKind::Inertia,
+            TermKind::Coulomb,
+        ]
+        .into_iter()
+        .filter_map(|k| {
+            let v = *on_x.slot(k)?;
+            (v != 0.0).then(|| (super::on_x::placed_name(k), v))
+        })
+        .collect::<Vec<_>>();
+        let all: Vec<String> = usual
+            .chain(placed)
+            .map(|(name, v)| format!("{name} = {v:e}"))
+            .collect();
+        if all.is_empty() {
+            "none".into()
+        } else {
+            all.join(", ")
+        }
     }
 
     /// `true` when a term needs a state or changes `w` (asymmetry, play, sensor lag,
@@ -276,21 +322,51 @@ fn run<S: Derivatives>(
     substeps: usize,
 ) -> Result<TermSimulation> {
     let mech = Mechanical::new(terms, src);
+    let comp = tf.realize();
+    let delay = tf.delay();
+    let delayed = |t: f64| delayed_with_second(src, delay, t);
+    let mut on_x = if terms.on_x.is_active() {
+        let peak = if terms.on_x.coulomb == 0.0 {
+            0.0 // no friction on x: its scale is not used
+        } else if let Some(steady) = src.steady_x_peak_rate(tf) {
+            steady
+        } else {
+            let mut kin = Kinematics::new(&comp);
+            let mut peak = 0.0f64;
+            linear_pass(&comp, delayed, dt, n_samples, substeps, |_, t, xs| {
+                peak = peak.max(kin.at(xs, delayed(t)).1.abs());
+            });
+            peak
+        };
+        Some(OnX::new(terms.on_x, &comp, peak))
+    } else {
+        None
+    };
     if !terms.is_dynamic() {
-        // Nothing changes x or w: the plain integrator, untouched, and the terms at the samples.
+        // Nothing changes x or w: the plain integrator, untouched, and the terms at the samples (the
+        // terms on x from the linear part's states, stepped alone as the plain integrator steps them).
         let Simulation { x, w } = simulate(tf, bw, input, dt, n_samples, substeps)?;
         let mut y = try_zeros(n_samples)?;
         for (k, (yk, wk)) in y.iter_mut().zip(&w).enumerate() {
-            *yk = terms.offset + (wk + mech.at(k as f64 * dt));
+            *yk = wk + mech.at(k as f64 * dt);
         }
-        return Ok(TermSimulation { x, w, y });
+        if let Some(on_x) = on_x.as_mut() {
+            linear_pass(&comp, delayed, dt, n_samples, substeps, |k, t, xs| {
+                y[k] += on_x.at(xs, delayed(t));
+            });
+        }
+        for yk in y.iter_mut() {
+            *yk += terms.offset; // IEEE addition commutes: the same bits as offset + F
+        }
+        let out = TermSimulation { x, w, y };
+        check_blow_up(tf, bw, terms, dt, &out)?;
+        return Ok(out);
     }
     let mut out = TermSimulation {
         x: try_zeros(n_samples)?,
         w: try_zeros(n_samples)?,
         y: try_zeros(n_samples)?,
     };
-    let comp = tf.realize();
     // Pinching's band in units of w: centre q w_u and width zeta2 w_u, w_u the virgin saturation level.
     let w_u = (bw.alpha() / (bw.beta() + bw.gamma())).powf(1.0 / bw.mu());
     let sys = Augmented {
@@ -307,12 +383,62 @@ fn run<S: Derivatives>(
             centre: PINCHING_CENTRE * w_u,
             width: PINCHING_WIDTH * w_u,
         },
-        delay: tf.delay(),
+        delay,
         src,
         mech,
     };
-    sys.integrate(bw.w0(), terms, dt, substeps, &mut out);
+    sys.integrate(bw.w0(), terms, dt, substeps, &mut on_x, &mut out);
+    crate::cancel::checkpoint()?;
+    check_blow_up(tf, bw, terms, dt, &out)?;
     Ok(out)
+}
+
+/// The delayed input `(v, vdot, vddot)` at time `t` (0 before the delay has elapsed).
+#[inline]
+fn delayed_with_second<S: Derivatives>(src: &S, delay: f64, t: f64) -> (f64, f64, f64) {
+    let tau = t - delay;
+    if tau < 0.0 {
+        (0.0, 0.0, 0.0)
+    } else {
+        let (v, vdot) = src.at(tau);
+        (v, vdot, src.second(tau))
+    }
+}
+
+/// A non-finite `x`, `w` or `y` is the model's blow-up, not the caller's data (the inputs were
+/// checked finite): name the parameters, the terms and where it happened (as
+/// `simulate::check_blow_up` for the plain model).
+///
+/// Errors: [`CoreError::NonFinite`].
+fn check_blow_up(
+    tf: &TransferFunction,
+    bw: &BoucWen,
+    terms: &TermValues,
+    dt: f64,
+    out: &TermSimulation,
+) -> Result<()> {
+    let first = [("x", &out.x), ("w", &out.w), ("y", &out.y)]
+        .into_iter()
+        .filter_map(|(name, v)| v.iter().position(|v| !v.is_finite()).map(|k| (k, name)))
+        .min();
+    let Some((k, signal)) = first else {
+        return Ok(());
+    };
+    Err(CoreError::NonFinite(format!(
+        "the simulation blew up: {signal} is not finite from sample {k} (t = {:.6e} s) on; the \
+         model parameters (alpha = {:e}, beta = {:e}, gamma = {:e}, mu = {}, w0 = {:e}, G = \
+         {:?}/{:?}) with the terms ({}) or the input level make the state overflow; use term \
+         values and parameters of moderate size, a smaller amplitude or a finer step (substeps)",
+        k as f64 * dt,
+        bw.alpha(),
+        bw.beta(),
+        bw.gamma(),
+        bw.mu(),
+        bw.w0(),
+        tf.num(),
+        tf.den(),
+        terms.describe(),
+    )))
 }
 
 /// The input's second derivative and peak rate, beyond the `(u, udot)` of [`Source`].
@@ -321,6 +447,9 @@ trait Derivatives: Source {
     fn second(&self, tau: f64) -> f64;
     /// `Vmax = max |udot|` over `t >= 0` (units of u per s).
     fn peak_rate(&self) -> f64;
+    /// The steady peak of `|xdot|` through `tf` where the input has one (a sine:
+    /// `|U| |G(j omega)| omega`); `None` for samples (`rust/simulate/on_x.rs`).
+    fn steady_x_peak_rate(&self, tf: &TransferFunction) -> Option<f64>;
 }
 
 impl Derivatives for Sine {
@@ -330,6 +459,11 @@ impl Derivatives for Sine {
 
     fn peak_rate(&self) -> f64 {
         self.amplitude.abs() * self.omega
+    }
+
+    fn steady_x_peak_rate(&self, tf: &TransferFunction) -> Option<f64> {
+        let (re, im) = tf.freq_response(self.omega);
+        Some(self.amplitude.abs() * re.hypot(im) * self.omega)
     }
 }
 
@@ -349,6 +483,10 @@ impl Derivatives for Hermite<'_> {
         let dt = self.dt;
         ((12.0 * s - 6.0) * u0 + (6.0 - 12.0 * s) * u1) / (dt * dt)
             + ((6.0 * s - 4.0) * m0 + (6.0 * s - 2.0) * m1) / dt
+    }
+
+    fn steady_x_peak_rate(&self, _tf: &TransferFunction) -> Option<f64> {
+        None
     }
 
     /// Exact: on each interval `udot` is the quadratic `A s^2 + B s + m_k` in `s = (t - t_k)/dt`,
@@ -556,12 +694,24 @@ impl<S: Derivatives> Augmented<'_, S> {
         )
     }
 
+    /// `w + mech(t)`, plus the terms on x at state `xs` when present: the lag's input `F` and,
+    /// without a lag, the output before the offset.
+    #[inline]
+    fn forcing(&self, w: f64, t: f64, xs: &[f64], on_x: &mut Option<OnX<'_>>) -> f64 {
+        let f = w + self.mech.at(t);
+        match on_x {
+            Some(o) => f + o.at(xs, delayed_with_second(self.src, self.delay, t)),
+            None => f,
+        }
+    }
+
     fn integrate(
         &self,
         w0: f64,
         terms: &TermValues,
         dt: f64,
         substeps: usize,
+        on_x: &mut Option<OnX<'_>>,
         out: &mut TermSimulation,
     ) {
         let n = self.comp.order();
@@ -593,12 +743,19 @@ impl<S: Derivatives> Augmented<'_, S> {
             vec![0.0; n],
             vec![0.0; n],
         );
+        // The state at the step's middle for the terms on x in the lag's F (continuous extension).
+        let mut xs_mid = vec![0.0; n];
         let last = out.x.len() - 1;
         for k in 0..out.x.len() {
             let t = k as f64 * dt;
             out.x[k] = self.comp.output_row(&xs) + d * self.delayed(t).0;
             out.w[k] = w;
-            out.y[k] = terms.offset + if has_lag { ys } else { w + self.mech.at(t) };
+            out.y[k] = terms.offset
+                + if has_lag {
+                    ys
+                } else {
+                    self.forcing(w, t, &xs, on_x)
+                };
             if k == last {
                 break;
             }
@@ -645,7 +802,22 @@ impl<S: Derivatives> Augmented<'_, S> {
 
                 // Third-order continuous extension of the RK4 step at its midpoint.
                 let w_mid = w + h * (5.0 * kw1 + 4.0 * (kw2 + kw3) - kw4) / 24.0;
-                let f0 = w + self.mech.at(ts);
+                let f0 = if has_lag {
+                    if on_x.is_some() {
+                        for ((((m, x), a), b2), (c3, d4)) in xs_mid
+                            .iter_mut()
+                            .zip(&xs)
+                            .zip(&k1)
+                            .zip(&k2)
+                            .zip(k3.iter().zip(&k4))
+                        {
+                            *m = x + h * (5.0 * a + 4.0 * (b2 + c3) - d4) / 24.0;
+                        }
+                    }
+                    self.forcing(w, ts, &xs, on_x)
+                } else {
+                    0.0
+                };
                 for ((((x, a), b2), c3), d4) in xs.iter_mut().zip(&k1).zip(&k2).zip(&k3).zip(&k4) {
                     *x += h_sixth * (a + 2.0 * b2 + 2.0 * c3 + d4);
                 }
@@ -662,8 +834,8 @@ impl<S: Derivatives> Augmented<'_, S> {
                     xp = clamped;
                 }
                 if has_lag {
-                    let fm = w_mid + self.mech.at(tm);
-                    let f1 = w + self.mech.at(te);
+                    let fm = self.forcing(w_mid, tm, &xs_mid, on_x);
+                    let f1 = self.forcing(w, te, &xs, on_x);
                     ys = decay * ys + (l0 * f0 + lm * fm + l1 * f1);
                 }
             }
@@ -717,6 +889,94 @@ mod tests {
                 + 0.2 * (-u * om * s / (0.01 * u * om)).tanh();
             assert_relative_eq!(b.y[k], 0.3 + a.w[k] + extra, epsilon = 1e-13);
         }
+    }
+
+    #[test]
+    fn terms_on_x_follow_the_linear_part_and_leave_x_and_w_alone() {
+        // A resonant G with a delay: after the transient, the terms on x are
+        // Re[(k + c j w - m w^2) G(j w) U e^{j w t}] and friction follows sgn(xdot).
+        let tf = TransferFunction::new(&[1.0], &[0.05, 0.1, 1.0], 0.073).unwrap();
+        let bw = BoucWen::new(1.0, 1.0, 0.5, 1.5, 0.0).unwrap();
+        let on_x = OnXValues {
+            stiffness: 0.4,
+            viscous: 0.05,
+            inertia: 0.01,
+            ..OnXValues::default()
+        };
+        let terms = TermValues {
+            on_x,
+            offset: 0.1,
+            ..TermValues::default()
+        };
+        let (u, om, dt, n) = (1.3, 3.0, 0.01, 4000);
+        let a = simulate(&tf, &bw, sine(u, om), dt, n, 3).unwrap();
+        let b = simulate_with_terms(&tf, &bw, &terms, sine(u, om), dt, n, 3).unwrap();
+        assert_eq!((&a.x, &a.w), (&b.x, &b.w));
+        let (re, im) = tf.freq_response(om);
+        let g = nalgebra::Complex::new(re, im);
+        let factor = nalgebra::Complex::new(0.4 - 0.01 * om * om, 0.05 * om);
+        for k in 3000..n {
+            let t = k as f64 * dt;
+            let e = nalgebra::Complex::from_polar(u, om * t);
+            assert_relative_eq!(b.y[k] - 0.1 - b.w[k], (factor * g * e).re, epsilon = 1e-7);
+            // x itself is the plain one: k x is its share.
+        }
+        // The augmented integrator (forced by a vanishing lag: ys = F) computes the same terms
+        // from its own state, to rounding (the delay is off the grid: at t = delay the input
+        // steps from 0 to U and xddot with it, and the two paths' stage times round apart).
+        let lagged = TermValues {
+            sensor_lag: 1e-300,
+            ..terms
+        };
+        let c = simulate_with_terms(&tf, &bw, &lagged, sine(u, om), dt, n, 3).unwrap();
+        for k in 1..n {
+            assert_relative_eq!(c.y[k], b.y[k], epsilon = 1e-12);
+        }
+        // Friction on x: +f where xdot > 0 well beyond eps |A| omega, -f where below.
+        let fric = TermValues {
+            on_x: OnXValues {
+                coulomb: 0.3,
+                coulomb_smoothing: 0.02,
+                ..OnXValues::default()
+            },
+            ..TermValues::default()
+        };
+        let f = simulate_with_terms(&tf, &bw, &fric, sine(u, om), dt, n, 3).unwrap();
+        let peak = u * g.norm() * om;
+        for k in 3000..n {
+            let t = k as f64 * dt;
+            let xdot =
+                (nalgebra::Complex::new(0.0, om) * g * nalgebra::Complex::from_polar(u, om * t)).re;
+            if xdot.abs() > 0.2 * peak {
+                assert_relative_eq!(f.y[k] - f.w[k], 0.3 * xdot.signum(), epsilon = 1e-6);
+            }
+        }
+    }
+
+    #[test]
+    fn a_blow_up_with_terms_names_the_terms_not_the_data() {
+        let (tf, bw) = plant();
+        let terms = TermValues {
+            degradation: 1e300,
+            ..TermValues::default()
+        };
+        let e = simulate_with_terms(&tf, &bw, &terms, sine(1.0, 2.0), 0.05, 400, 2).unwrap_err();
+        assert!(matches!(e, CoreError::NonFinite(_)), "{e}");
+        let msg = e.to_string();
+        assert!(
+            msg.contains("blew up") && msg.contains("degradation = 1e300"),
+            "{msg}"
+        );
+        // A term that overflows y alone (no state): blamed too.
+        let terms = TermValues {
+            on_x: OnXValues {
+                inertia: 1e308,
+                ..OnXValues::default()
+            },
+            ..TermValues::default()
+        };
+        let e = simulate_with_terms(&tf, &bw, &terms, sine(1.0, 30.0), 0.005, 400, 2).unwrap_err();
+        assert!(e.to_string().contains("inertia@x = 1e308"), "{e}");
     }
 
     #[test]

@@ -17,7 +17,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..augmented import AugExperiment, AugFit, AugParams, augmented_output, fit_augmented
-from ..errors import BoucWenIdError, SearchAtBoundError
+from ..errors import BoucWenIdError, BudgetExceededError, SearchAtBoundError
 from ..terms import TERMS, Distortion, StartContext
 from .data import DiagExperiment
 
@@ -304,6 +304,8 @@ def fit_from(
                 fit = new if fit is None or new.cost <= fit.cost else fit
                 if new.converged or stalled:
                     break
+    except BudgetExceededError:  # a limit the user set: never a failed start (issue 19)
+        raise
     except BoucWenIdError:
         return fit
     return fit
@@ -380,6 +382,8 @@ def plain_start(exps: Sequence[DiagExperiment], sx: Sequence[AugExperiment], s: 
                 phases=np.mod(res.phis + flip, TWO_PI),
             )
         )
+    except BudgetExceededError:  # a limit the user set: never a failed start (issue 19)
+        raise
     except (BoucWenIdError, SearchAtBoundError):
         pass
     starts.extend(_generic_starts(sx))
@@ -480,6 +484,8 @@ def screen_phases(exps: Sequence[AugExperiment], par: AugParams, substeps: int) 
             trial[i] += d
             try:
                 y = augmented_output(e, replace(par, phases=trial), i, substeps=substeps)
+            except BudgetExceededError:  # a limit the user set: never a failed start (issue 19)
+                raise
             except BoucWenIdError:
                 continue
             c = e.weight * float(np.sum((e.ybar - y) ** 2))
@@ -562,6 +568,8 @@ def fit_own(
     x = np.array([gain, phase])
     try:
         y, jo = evaluate(*x)
+    except BudgetExceededError:  # a limit the user set: never a failed start (issue 19)
+        raise
     except BoucWenIdError:
         return math.inf, np.full(p, np.nan)
     r = e.ybar - y
@@ -576,6 +584,8 @@ def fit_own(
         trial = x + step
         try:
             y2, jo2 = evaluate(*trial)
+        except BudgetExceededError:  # a limit the user set: never a failed start (issue 19)
+            raise
         except BoucWenIdError:
             lam *= 10.0
             continue

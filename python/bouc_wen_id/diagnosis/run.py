@@ -12,8 +12,10 @@ from typing import Any, Optional
 import numpy as np
 
 from ..augmented import AugExperiment, AugFit
+from ..budget import check_environment
 from ..errors import InvalidParameterError, TransientWarning
 from ..terms import DIAGNOSIS_CANDIDATES, TERMS, Distortion, physical_value
+from ..validation import real_number
 from .data import DiagExperiment, prepare
 from .drift import (
     DEGRADATION,
@@ -61,6 +63,10 @@ NO_BLOCKS = (
 def _check_candidates(candidates: Optional[Sequence[str]]) -> tuple[str, ...]:
     if candidates is None:
         return ALL_CANDIDATES
+    if isinstance(candidates, (str, bytes)) or not hasattr(candidates, "__iter__"):  # issue 19: TypeError
+        raise InvalidParameterError(
+            f"candidates must be a sequence of term names (None: all), got {candidates!r}"
+        )
     out = tuple(candidates)
     bad = [c for c in out if c not in ALL_CANDIDATES]
     if bad or len(set(out)) != len(out):
@@ -594,7 +600,9 @@ def diagnose(
     t0 = time.perf_counter()
     report = reporter(progress)
     cands = _check_candidates(candidates)
-    if not (0.0 < float(alpha) < 1.0):
+    check_environment()  # a bad BOUC_WEN_ID_MAX_* variable is named here, not ignored (issue 19)
+    alpha = real_number("alpha", alpha)
+    if not (0.0 < alpha < 1.0):
         raise InvalidParameterError(f"alpha = {alpha!r} must lie in (0, 1)")
     _check_sizes(experiments)
     report("preparing the averaged periods", 0, 1)

@@ -17,6 +17,7 @@ module             checks                          routines
 ``linear``         ``rust/linear.rs``              ``realize``
 ``simulate``       ``rust/simulate.rs``            ``simulate_sine``, ``simulate_sampled``
 ``with_terms``     ``rust/simulate/with_terms.rs`` the simulation with physical terms (design.md 9.4)
+``on_x``           ``rust/simulate/on_x.rs``       the simulation's mechanical terms on x (design.md 9.4)
 ``average``        ``rust/average.rs``             ``periodic_average``
 ``estimate``       ``rust/estimate.rs``            ``phase_from_max``, ``gain_estimate``, ...
 ``solve``          ``rust/solve.rs``               ``sls_regressor``, ``solve_normal``, ``sls_theta``, ...

@@ -18,7 +18,7 @@ from ..errors import (
 from ..validation import check_bouc_wen as _check_bouc_wen
 from ..validation import finite_array as _finite_array
 from ..validation import finite_scalar as _finite_scalar
-from . import with_terms
+from . import on_x, with_terms
 from .linear import realize
 
 __all__ = ["simulate_sine", "simulate_sampled"]
@@ -133,11 +133,45 @@ def _with_terms(
 ) -> tuple[FloatArray, FloatArray, FloatArray]:
     """``(x, w, y)`` with physical terms: the plain RK4 plus the output terms when no term has a state."""
     (a, c, d, delay_in), dt = _checked(num, den, delay, bw, dt, n_samples, substeps)
-    model = with_terms.Model(a, c, d, delay_in, bw, with_terms.check_terms(terms, bw[1], bw[2]))
+    checked = with_terms.check_terms(terms, bw[1], bw[2])
+    steady = None
+    if inp.sine is not None:  # the sine's steady |xdot| peak |U| |G(j omega)| omega
+        amplitude, omega = inp.sine
+        gain = abs(np.polyval(num, 1j * omega)) / abs(np.polyval(den, 1j * omega))
+        steady = abs(amplitude) * float(gain) * omega
+    onx = on_x.make((a, c, d), checked, with_terms.delayed3(inp, delay_in), steady, (dt, n_samples, substeps))
+    model = with_terms.Model(a, c, d, delay_in, bw, checked, onx)
     if with_terms.has_state(model):
-        return with_terms.integrate(model, inp, dt, n_samples, substeps)
-    x_out, w_out = _simulate(num, den, delay, bw, inp.source, dt, n_samples, substeps)
-    return x_out, w_out, with_terms.outputs(model, w_out, inp, dt)
+        with np.errstate(all="ignore"):  # a blow-up runs on to inf/NaN and is reported just below
+            out = with_terms.integrate(model, inp, dt, n_samples, substeps)
+    else:
+        x_out, w_out = _simulate(num, den, delay, bw, inp.source, dt, n_samples, substeps)
+        out = x_out, w_out, with_terms.outputs(model, w_out, inp, dt, substeps)
+    _check_blow_up_terms(out, bw, checked, dt)
+    return out
+
+
+def _check_blow_up_terms(
+    out: tuple[FloatArray, FloatArray, FloatArray],
+    bw: tuple[float, float, float, float, float],
+    terms: Mapping[str, float],
+    dt: float,
+) -> None:
+    """A non-finite x, w or y is the model's blow-up: name the parameters and the terms (as the core)."""
+    bad = [
+        (int(np.argmax(~np.isfinite(v))), name) for name, v in zip("xwy", out) if not np.all(np.isfinite(v))
+    ]
+    if not bad:
+        return
+    k, name = min(bad)
+    present = ", ".join(f"{n} = {v:e}" for n, v in terms.items() if v != 0.0 and not n.endswith("_smoothing"))
+    alpha, beta, gamma, mu, w0 = bw
+    raise NonFiniteError(
+        f"the simulation blew up: {name} is not finite from sample {k} (t = {k * dt:.6e} s) on; the model "
+        f"parameters (alpha = {alpha:e}, beta = {beta:e}, gamma = {gamma:e}, mu = {mu}, w0 = {w0:e}) with "
+        f"the terms ({present or 'none'}) or the input level make the state overflow; use term values and "
+        "parameters of moderate size, a smaller amplitude or a finer step (substeps)"
+    )
 
 
 def simulate_sine(

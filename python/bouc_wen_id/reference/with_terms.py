@@ -13,7 +13,8 @@ Step by step the same scheme as the Rust core, so that the parity tests hold the
 - stiffness degradation (Baber-Noori ``eta = 1 + delta_eta e``, the same energy state) dividing the whole
   rate, and pinching (Foliente's ``h = 1 - zeta1 exp(-((w sgn(xpdot) - q w_u)/(zeta2 w_u))^2)``, the shape
   fixed, ``w_u = (alpha/(beta + gamma))^(1/mu)``) multiplying it, each applied only when present;
-- output terms ``k u + c udot + m uddot + f tanh(udot/(eps Vmax))`` on the undelayed input.
+- output terms ``k u + c udot + m uddot + f tanh(udot/(eps Vmax))`` on the undelayed input, and the
+  mechanical terms on x from the linear part's state (:mod:`.on_x`), added after them.
 
 Without asymmetry, play, lag or degradation the plain RK4 of :mod:`.simulate` gives ``x, w`` and the
 terms are added at the samples (:func:`outputs`).  Called through ``reference.simulate_sine(..., terms=...)``
@@ -24,13 +25,14 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from typing import Callable, NamedTuple
+from typing import Callable, NamedTuple, Optional
 
 import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import InvalidParameterError
 from ..validation import finite_scalar
+from . import on_x as _on_x
 from .terms import (
     ASYMMETRY,
     COULOMB,
@@ -79,9 +81,10 @@ def check_terms(terms: Mapping[str, float], beta: float, gamma: float) -> dict[s
     out = {name: 0.0 for name in TERM_NAMES}
     out[COULOMB_SMOOTHING_KEY] = COULOMB_SMOOTHING
     for name, value in terms.items():
-        if name not in out:
+        if name not in out and name not in _on_x.ON_X_KEYS:
             raise InvalidParameterError(f"unknown term {name!r}; the terms are {', '.join(TERM_NAMES)}")
-        out[name] = float(value)
+        if name not in _on_x.ON_X_KEYS:
+            out[name] = float(value)
     for name in TERM_NAMES:
         finite_scalar(name, out[name])
     if out[SENSOR_LAG] < 0.0:
@@ -107,6 +110,7 @@ def check_terms(terms: Mapping[str, float], beta: float, gamma: float) -> dict[s
             f"pinching zeta1 = {out[PINCHING]} must be in [0, 1) (the share of the rate taken out at the "
             "pinching band's centre)"
         )
+    out.update(_on_x.check_on_x(terms))
     if abs(out[ASYMMETRY]) >= beta + gamma:
         raise InvalidParameterError(
             f"asymmetry |delta| = {abs(out[ASYMMETRY])} must be < beta + gamma = {beta + gamma}"
@@ -153,6 +157,8 @@ class Input(NamedTuple):
     source: Source
     second: Callable[[float], float]
     peak_rate: float
+    #: ``(U, omega)`` of a sine (its steady ``|xdot|`` peak scales the friction on x); ``None`` for samples.
+    sine: Optional[tuple[float, float]] = None
 
 
 class Model(NamedTuple):
@@ -165,6 +171,8 @@ class Model(NamedTuple):
     delay: float
     bw: tuple[float, float, float, float, float]
     terms: dict[str, float]
+    #: The mechanical terms on x of the run (:func:`.on_x.make`), ``None`` without them.
+    on_x: Optional[_on_x.OnX] = None
 
 
 def has_state(model: Model) -> bool:
@@ -195,10 +203,42 @@ def _mech(p: Mapping[str, float], inp: Input) -> Callable[[float], float]:
     return mech
 
 
-def outputs(model: Model, w_out: FloatArray, inp: Input, dt: float) -> FloatArray:
-    """``y`` at the samples from the plain ``w`` (no state term)."""
+def delayed3(inp: Input, delay: float) -> Callable[[float], tuple[float, float, float]]:
+    """The delayed input ``(v, vdot, vddot)`` at time t (0 before the delay has elapsed)."""
+
+    def at(t: float) -> tuple[float, float, float]:
+        if t - delay < 0.0:
+            return 0.0, 0.0, 0.0
+        v, vdot = inp.source(t - delay)
+        return v, vdot, inp.second(t - delay)
+
+    return at
+
+
+def outputs(model: Model, w_out: FloatArray, inp: Input, dt: float, substeps: int = 1) -> FloatArray:
+    """``y`` at the samples from the plain ``w`` (no state term); the terms on x from the states of a pass
+    of the linear part alone."""
     mech = _mech(model.terms, inp)
-    return np.array([model.terms[OFFSET] + (float(w_out[k]) + mech(k * dt)) for k in range(w_out.size)])
+    f = [float(w_out[k]) + mech(k * dt) for k in range(w_out.size)]
+    if model.on_x is not None:
+        at = delayed3(inp, model.delay)
+        for k, (t, xs) in enumerate(_on_x.linear_pass(model.a, at, dt, w_out.size, substeps)):
+            f[k] += model.on_x.at(xs, at(t))
+    return np.array([model.terms[OFFSET] + fk for fk in f])
+
+
+def _forcing(
+    mech: Callable[[float], float],
+    onx: Optional[_on_x.OnX],
+    at: Callable[[float], tuple[float, float, float]],
+) -> Callable[[float, float, FloatArray], float]:
+    """``F(w, t, xs) = w + mech(t)`` (+ the terms on x at state xs when present): the core's ``forcing``."""
+
+    def forcing(w: float, t: float, xs: FloatArray) -> float:
+        f = w + mech(t)
+        return f + onx.at(xs, at(t)) if onx is not None else f
+
+    return forcing
 
 
 class _Rates(NamedTuple):
@@ -215,7 +255,10 @@ class _Rates(NamedTuple):
     pinch: tuple[float, float, float] = (0.0, 0.0, 1.0)
 
     def rate(self, xpdot: float, w: float, e: float) -> float:
-        wmu = float(abs(w) ** self.mu)
+        try:
+            wmu = float(abs(w) ** self.mu)
+        except OverflowError:  # a blow-up: run on to inf/NaN as the core does; reported after the run
+            wmu = math.inf
         sw = float(np.sign(w))
         nu = 1.0 + self.dnu * e  # Baber-Noori strength degradation; each term times nu, as the core
         r = (
@@ -260,8 +303,8 @@ def integrate(
 ) -> tuple[FloatArray, FloatArray, FloatArray]:
     """``(x, w, y)`` by the RK4 on ``[xs, w, e]`` with the play's mode frozen per step and the lag's
     exponential step (module docstring)."""
-    a, c, d, delay, (alpha, beta, gamma, mu, w0), p = model
-    mech = _mech(p, inp)
+    a, c, d, delay, (alpha, beta, gamma, mu, w0), p, onx = model
+    forcing = _forcing(_mech(p, inp), onx, delayed3(inp, delay))
     b, tau = p[PLAY], p[SENSOR_LAG]
     w_u = (alpha / (beta + gamma)) ** (1.0 / mu)  # pinching's band in units of the saturation level
     pinch = (p[PINCHING], PINCHING_CENTRE * w_u, PINCHING_WIDTH * w_u)
@@ -298,7 +341,7 @@ def integrate(
         t = k * dt
         x_out[k] = float(np.dot(c, xs)) + d * delayed(t)[0]
         w_out[k] = w
-        y_out[k] = p[OFFSET] + (ys if has_lag else w + mech(t))
+        y_out[k] = p[OFFSET] + (ys if has_lag else forcing(w, t, xs))
         if k == n_samples - 1:
             break
         for s in range(substeps):
@@ -333,7 +376,8 @@ def integrate(
             ke4 = w4 * p4
 
             w_mid = w + h * (5.0 * kw1 + 4.0 * (kw2 + kw3) - kw4) / 24.0
-            f0 = w + mech(ts)
+            xs_mid = xs + h * (5.0 * k1 + 4.0 * (k2 + k3) - k4) / 24.0
+            f0 = forcing(w, ts, xs)
             xs = xs + h_sixth * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
             w = w + h_sixth * (kw1 + 2.0 * kw2 + 2.0 * kw3 + kw4)
             en = en + h_sixth * (ke1 + 2.0 * ke2 + 2.0 * ke3 + ke4)
@@ -346,8 +390,8 @@ def integrate(
                     w, en = rates.path(w, en, travel)
                 xp = clamped
             if has_lag:
-                fm = w_mid + mech(tm)
-                f1 = w + mech(te)
+                fm = forcing(w_mid, tm, xs_mid)
+                f1 = forcing(w, te, xs)
                 ys = decay * ys + (l0 * f0 + lm * fm + l1 * f1)
     return x_out, w_out, y_out
 
@@ -363,7 +407,7 @@ def sine_input(amplitude: float, omega: float) -> Input:
     def second(tau: float) -> float:
         return neg_amplitude_omega * omega * math.cos(omega * tau)
 
-    return Input(source, second, abs(amplitude) * omega)
+    return Input(source, second, abs(amplitude) * omega, (amplitude, omega))
 
 
 def hermite_peak_rate(u: FloatArray, m: FloatArray, dt: float) -> float:

@@ -152,8 +152,16 @@ def _fit_candidates(
                 )
                 fits.append(None)
                 continue
+            with np.errstate(over="ignore", invalid="ignore"):  # judged just below
+                den = _Model(m, n, fitted, tau).den_coeffs(f.theta)
+            if not (np.all(np.isfinite(den)) and math.isfinite(f.chi2)):
+                # A fit that ran off to inf/NaN (issue 19 sweep: purely real points) is no candidate.
+                rows.append(
+                    OrderCandidate(m, n, fitted, k, math.nan, math.inf, math.inf, error="non-finite fit")
+                )
+                fits.append(None)
+                continue
             aicc, bic = _criteria(f.chi2, k, eqs, points.weighted)
-            den = _Model(m, n, fitted, tau).den_coeffs(f.theta)
             unpinned = bool(_resonance_warnings(np.real(den), points.omega / w0))
             rows.append(
                 OrderCandidate(m, n, fitted, k, f.chi2, aicc, bic, error=UNPINNED if unpinned else "")
