@@ -449,6 +449,9 @@ fn face_step(
     Some((sol.rows(0, n).into_owned(), nu))
 }
 
+/// A step: the shared part, each experiment's own part, and the working set it was solved on.
+type ConstrainedStep = (DVector<f64>, Vec<Vector2<f64>>, Vec<usize>);
+
 /// A damped step that respects `cons` (the active set, design.md 7.4): the constraints on whose
 /// face `shared` sits start in the working set; one with a negative multiplier is released, the
 /// first one the step would cross is added with the target of landing on its face, and the step is
@@ -459,7 +462,7 @@ fn constrained_step(
     lambda: f64,
     shared: &[f64],
     cons: &[Constraint],
-) -> Option<(DVector<f64>, Vec<Vector2<f64>>, Vec<usize>)> {
+) -> Option<ConstrainedStep> {
     let red = reduce(st, lambda)?;
     let slack: Vec<f64> = cons.iter().map(|c| c.slack(shared)).collect();
     let tol: Vec<f64> = cons.iter().map(|c| c.tol(shared)).collect();
@@ -469,9 +472,7 @@ fn constrained_step(
         let targets: Vec<(usize, f64)> = work.iter().map(|&k| (k, -slack[k])).collect();
         let Some((ds, nu)) = face_step(&red, cons, &targets) else {
             // Dependent faces: keep the last solvable working set (the projection finishes).
-            if work.pop().is_none() {
-                return None;
-            }
+            work.pop()?;
             continue;
         };
         let scale = red.rhs.amax().max(f64::MIN_POSITIVE);
