@@ -913,6 +913,59 @@ mod tests {
     }
 
     #[test]
+    fn a_fit_pulled_beyond_beta_ge_gamma_stops_on_the_face_and_names_it() {
+        // Loops plus a strong spring on the measured input (in phase with u, not with x): the plain
+        // model cannot draw them and its fit runs into beta = gamma. The projected LM crawled along it
+        // to the cap; the active set stops on it by ftol/xtol, with the face named.
+        let amps = [1.8, 1.2, 2.4];
+        let phases = [1.1, 2.5, 0.4];
+        let p = 48;
+        let ys: Vec<Vec<f64>> = (0..3)
+            .map(|i| {
+                let w = data(amps[i], 0.8, 0.2, 1.6, phases[i], p);
+                (0..p)
+                    .map(|j| {
+                        let th = 2.0 * std::f64::consts::PI * j as f64 / p as f64;
+                        // Deterministic pseudo-noise so that the fit does not end at zero cost.
+                        w[j] + 1.5 * th.cos() + 1e-2 * ((j * 7 + i * 13) as f64).sin()
+                    })
+                    .collect()
+            })
+            .collect();
+        let exps: Vec<Experiment> = (0..3)
+            .map(|i| Experiment {
+                ybar: &ys[i],
+                amplitude: amps[i],
+                weight: 1e4,
+            })
+            .collect();
+        let start = Params {
+            beta: 0.7,
+            gamma: 0.3,
+            mu: 1.7,
+            gains: vec![0.9, 1.2, 1.0],
+            phases: vec![1.05, 2.45, 0.4],
+        };
+        let opts = Options {
+            substeps: 3,
+            ..Options::default()
+        };
+        let fit = refine(&exps, &start, &opts).unwrap();
+        assert!(fit.converged, "{:?} after {}", fit.stop, fit.iterations);
+        assert!(matches!(
+            fit.stop,
+            StopReason::CostDecrease | StopReason::SmallStep
+        ));
+        assert!(fit.iterations < 100, "{}", fit.iterations);
+        assert!(
+            fit.active.iter().any(|a| a == "beta=gamma"),
+            "{:?}",
+            fit.active
+        );
+        assert!((fit.params.beta - fit.params.gamma).abs() <= 1e-12 * fit.params.beta.abs());
+    }
+
+    #[test]
     fn rejects_inconsistent_input() {
         let y = vec![0.0; 16];
         let exps = [Experiment {
