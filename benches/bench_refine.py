@@ -6,6 +6,7 @@ Run in an environment where the package is installed (or built with ``maturin de
     python benches/bench_refine.py                  # full run: 2-4 minutes (SciPy capped at 3)
     python benches/bench_refine.py --quick          # smoke run: P = 200, N = 20, SciPy capped at ~20 s
     python benches/bench_refine.py --scipy-budget 0 # no cap: run SciPy to convergence (long)
+    python benches/bench_refine.py --misfit-only    # only the misfit folders (issue 19): < 30 s
 
 The problem
 -----------
@@ -45,6 +46,12 @@ converges to the library's fit. ``--scipy-method trf`` (default) passes ``jac_sp
 touches only its own experiment), so one finite-difference Jacobian costs 5 residual evaluations instead of
 23: the strongest SciPy configuration we know, i.e. the most conservative ratio. ``--scipy-method lm``
 (MINPACK Levenberg-Marquardt, the library's algorithm) differences all 23 columns.
+
+Misfit folders (issue 19, printed last, alone with ``--misfit-only``): ``bw.identify`` on ten
+recordings of the independent generator (``benches/generator.py``) whose plant hides a large mechanical
+term (300x the averaged noise), so that the plain model's fit runs into beta = gamma: wall and CPU seconds
+(target <= 2 s wall), the core refinements identify ran, the LM iterations, and the final run's stopping
+rule and faces.
 
 The SciPy fit can take many minutes.  Unless ``--scipy-budget 0``, it is capped at ``--scipy-budget`` seconds
 (180 by default): by ``max_nfev`` when even the library's iteration count would not fit, and by a wall-clock
@@ -215,8 +222,12 @@ def main(argv: Optional[list[str]] = None) -> int:
     )
     ap.add_argument("--repeats", type=int, default=5, help="repeats of the library timings (best is kept)")
     ap.add_argument("--seed", type=int, default=7)
+    ap.add_argument("--misfit-only", action="store_true", help="only the misfit table (issue 19)")
     args = ap.parse_args(argv)
     t_start = time.perf_counter()
+    if args.misfit_only:
+        misfit_table(args.quick)
+        return 0
     p, n_per = (200, 20) if args.quick else (1000, 200)
     budget = args.scipy_budget if args.scipy_budget is not None else (20.0 if args.quick else 180.0)
 
@@ -464,8 +475,61 @@ def main(argv: Optional[list[str]] = None) -> int:
             r = total / t_lib
             verdict = "PASS" if r >= TARGET else "MISS"
             print(f"  {what}SciPy refinement / library {name} {r:9.0f}x  target >= {TARGET:.0f}x  {verdict}")
+    misfit_table(args.quick)
     print(f"\n(total bench time {time.perf_counter() - t_start:.1f} s)")
     return 0
+
+
+#: Misfit cases of the independent generator (benches/generator.py): a plant hiding a large mechanical term
+#: (300x the averaged noise), ten experiments each; the plain model's fit runs into beta = gamma (issue 19).
+MISFIT_CASES = (("viscous", "u", 1), ("inertia", "x", 1), ("inertia", "x", 2), ("coulomb", "u", 1))
+#: Target wall time of identify on a ten-experiment misfit folder.
+MISFIT_TARGET_S = 2.0
+
+
+def misfit_table(quick: bool) -> None:
+    """identify() on misfit folders: wall and CPU seconds, LM iterations, the stopping rule and the faces."""
+    import warnings
+
+    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+    import generator as gen  # the bench's own generator, beside this script
+    from bouc_wen_id import estimators
+
+    runs: list[Any] = []
+    original = estimators.LMRun.from_core
+
+    def recording(out: tuple[Any, ...]) -> Any:
+        run = original(out)
+        runs.append(run)
+        return run
+
+    print("\nmisfit folders (10 experiments, plain model): identify() until it stops on the boundary")
+    print(f"  {'case':<22}{'wall s':>8}{'cpu s':>8}{'refines':>9}{'iters':>7}  stop / faces of the final run")
+    cases = MISFIT_CASES[:1] if quick else MISFIT_CASES
+    estimators.LMRun.from_core = recording  # type: ignore[method-assign]
+    try:
+        for name, place, seed in cases:
+            recs = gen.make_case("effect", name, place, 300.0, seed).recordings
+            runs.clear()
+            t0, c0 = time.perf_counter(), time.process_time()
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                try:
+                    res = bw.identify(recs)
+                    iters = str(res.iterations)
+                except bw.BoucWenIdError as exc:
+                    iters = type(exc).__name__
+            wall, cpu = time.perf_counter() - t0, time.process_time() - c0
+            last = runs[-1] if runs else None
+            faces = f"{last.stop} / {','.join(last.active) or '-'}" if last is not None else "-"
+            verdict = "PASS" if wall <= MISFIT_TARGET_S else "MISS"
+            label = f"{name} on {place}, seed {seed}"
+            print(
+                f"  {label:<22}{wall:8.2f}{cpu:8.2f}{len(runs):9d}{iters:>7}  {faces}"
+                f"  (<= {MISFIT_TARGET_S} s: {verdict})"
+            )
+    finally:
+        estimators.LMRun.from_core = original  # type: ignore[method-assign]
 
 
 if __name__ == "__main__":

@@ -27,8 +27,9 @@ use crate::path_loop::{
     PD_DELTA, PD_DISTORT, PD_GAMMA, PD_MU, PD_PHI, PD_PINCH, PD_PLAY,
 };
 use crate::refine::{
-    check_joint_start, check_start_point, hysteresis_admissible, levenberg_marquardt,
-    project_hysteresis, JointModel, ModelEval, Options,
+    check_joint_start, check_start_point, hysteresis_admissible, hysteresis_constraints,
+    levenberg_marquardt, project_hysteresis, Constraint, JointModel, ModelEval, Options,
+    StopReason,
 };
 use crate::steady::{steady_loop, D_AMPLITUDE, D_BETA, D_GAMMA, D_MU, D_PHI};
 use crate::terms::{
@@ -455,6 +456,11 @@ pub struct AugFit {
     pub iterations: usize,
     /// Whether a stopping rule other than the iteration cap ended the search.
     pub converged: bool,
+    /// The stopping rule that ended the search.
+    pub stop: StopReason,
+    /// The constraints the minimiser sits on and that hold it there (e.g. `"beta=gamma"`,
+    /// `"mu=lower"`, `"sensor_lag=0"`, `"play=upper"`).
+    pub active: Vec<String>,
     /// `J^T W J`, order `[beta, gamma, mu, q_1 .. q_T, g_0, phi_0, g_1, phi_1, ...]`.
     pub fisher: nalgebra::DMatrix<f64>,
     /// Model outputs `y_i` at the minimiser.
@@ -511,6 +517,31 @@ impl JointModel for AugModel<'_> {
             jac_shared: out.jac_shared,
             jac_own: out.jac_own,
         })
+    }
+
+    fn constraints(&self, own: &[[f64; 2]]) -> Vec<Constraint> {
+        let mut cons = hysteresis_constraints(self.opts.mu_lo, self.opts.mu_hi);
+        // The terms' closed ranges, as `project` clips them: `name=0` and `name=upper`.
+        let mut bound = |kind: TermKind, upper: Option<f64>| {
+            if let Some(c) = self.terms.column(kind) {
+                cons.push(Constraint {
+                    name: format!("{}=0", kind.name()),
+                    normal: vec![(c, 1.0)],
+                    bound: 0.0,
+                });
+                if let Some(hi) = upper {
+                    cons.push(Constraint {
+                        name: format!("{}=upper", kind.name()),
+                        normal: vec![(c, -1.0)],
+                        bound: -hi,
+                    });
+                }
+            }
+        };
+        bound(TermKind::SensorLag, None);
+        bound(TermKind::Play, Some(self.play_max(own)));
+        bound(TermKind::Pinching, Some(PINCHING_MAX));
+        cons
     }
 
     fn project(&self, shared: &mut [f64], own: &[[f64; 2]]) {
@@ -615,6 +646,8 @@ pub fn augmented_refine(
         cost: fit.cost,
         iterations: fit.iterations,
         converged: fit.converged,
+        stop: fit.stop,
+        active: fit.active,
         fisher: fit.fisher,
         outputs: fit.outputs,
     })

@@ -36,6 +36,8 @@ const LAMBDA_UP: f64 = 10.0;
 const LAMBDA_MAX: f64 = 1e12;
 /// Smallest distance kept between mu and its lower limit 1.
 const MU_MARGIN: f64 = 1e-9;
+/// A constraint whose slack is below this fraction of its terms' size holds the point on its face.
+const BOUNDARY_RTOL: f64 = 1e-12;
 
 /// One experiment's averaged period and weight.
 #[derive(Debug, Clone, Copy)]
@@ -139,10 +141,74 @@ pub struct Fit {
     pub iterations: usize,
     /// Whether a stopping rule other than the iteration cap ended the search.
     pub converged: bool,
+    /// The stopping rule that ended the search.
+    pub stop: StopReason,
+    /// The constraints the minimiser sits on and that hold it there ([`Constraint::name`]).
+    pub active: Vec<String>,
     /// `J^T W J` at the minimiser, order `[beta, gamma, mu, g_0, phi_0, g_1, phi_1, ...]`.
     pub fisher: DMatrix<f64>,
     /// Model loops `w_i` at the minimiser.
     pub loops: Vec<Vec<f64>>,
+}
+
+/// Why [`levenberg_marquardt`] stopped.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum StopReason {
+    /// An accepted step decreased the cost by less than `ftol` (relative).
+    CostDecrease,
+    /// Every component of the step was below `xtol (|p| + xtol)`.
+    SmallStep,
+    /// The damping grew beyond [`LAMBDA_MAX`]: no step decreases the cost.
+    NoDecrease,
+    /// The iteration cap `max_iter` (not converged).
+    IterationCap,
+}
+
+impl StopReason {
+    /// The reason's code as Python sees it.
+    pub fn code(self) -> &'static str {
+        match self {
+            StopReason::CostDecrease => "ftol",
+            StopReason::SmallStep => "xtol",
+            StopReason::NoDecrease => "no_decrease",
+            StopReason::IterationCap => "max_iter",
+        }
+    }
+}
+
+/// A closed linear constraint on the shared parameters, `sum_k c_k shared[i_k] >= bound`, on which
+/// a joint fit may end. [`levenberg_marquardt`] keeps an active set of them: a step that would cross
+/// one lands on it, a step from its face stays on it while its multiplier says it holds the fit.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Constraint {
+    /// What holds when it is active, e.g. `"beta=gamma"`, `"mu=lower"`, `"sensor_lag=0"`.
+    pub name: String,
+    /// Its normal, sparse: `(index into shared, coefficient)`.
+    pub normal: Vec<(usize, f64)>,
+    /// Its right-hand side.
+    pub bound: f64,
+}
+
+impl Constraint {
+    /// `c . shared - bound` (>= 0 where admissible).
+    fn slack(&self, shared: &[f64]) -> f64 {
+        self.normal.iter().map(|&(i, c)| c * shared[i]).sum::<f64>() - self.bound
+    }
+
+    /// `c . ds`.
+    fn dot(&self, ds: &DVector<f64>) -> f64 {
+        self.normal.iter().map(|&(i, c)| c * ds[i]).sum()
+    }
+
+    /// Slack below which the point is on the face (rounding of `c . shared`).
+    fn tol(&self, shared: &[f64]) -> f64 {
+        let size = self
+            .normal
+            .iter()
+            .map(|&(i, c)| (c * shared[i]).abs())
+            .sum::<f64>();
+        BOUNDARY_RTOL * (size + self.bound.abs()).max(f64::MIN_POSITIVE)
+    }
 }
 
 /// One experiment's model at one point, as the joint Levenberg-Marquardt needs it.
@@ -167,7 +233,10 @@ pub trait JointModel: Sync {
     fn data(&self, i: usize) -> (&[f64], f64);
     /// Experiment `i`'s model output and Jacobian at `(shared, own)`.
     fn evaluate(&self, i: usize, shared: &[f64], own: [f64; 2]) -> Result<ModelEval>;
-    /// Moves a trial point onto the closed constraints it crossed (in place).
+    /// The closed linear constraints on the shared vector (they may depend on the own parameters).
+    fn constraints(&self, own: &[[f64; 2]]) -> Vec<Constraint>;
+    /// Moves a trial point onto the closed constraints it crossed (in place): the safety net
+    /// behind the active set (rounding, constraints that depend on the own parameters).
     fn project(&self, shared: &mut [f64], own: &[[f64; 2]]);
     /// Whether a (projected) trial point may be evaluated; an inadmissible one is rejected.
     fn admissible(&self, shared: &[f64], own: &[[f64; 2]]) -> bool;
@@ -186,6 +255,10 @@ pub struct JointFit {
     pub iterations: usize,
     /// Whether a stopping rule other than the iteration cap ended the search.
     pub converged: bool,
+    /// The stopping rule that ended the search.
+    pub stop: StopReason,
+    /// The constraints the minimiser sits on and that hold it there ([`Constraint::name`]).
+    pub active: Vec<String>,
     /// `J^T W J` at the minimiser, order `[shared.., own_0 (2), own_1 (2), ...]`.
     pub fisher: DMatrix<f64>,
     /// Model outputs at the minimiser.
@@ -286,8 +359,15 @@ fn evaluate_all<M: JointModel>(model: &M, shared: &[f64], own: &[[f64; 2]]) -> R
     Ok(st)
 }
 
-/// Damped Gauss-Newton step through the Schur complement of the per-experiment 2x2 blocks.
-fn step(st: &State, lambda: f64) -> Option<(DVector<f64>, Vec<Vector2<f64>>)> {
+/// The damped normal equations reduced to the shared block: the Schur complement `s` of the
+/// per-experiment 2x2 blocks, its right-hand side, and the blocks' damped inverses.
+struct Reduced {
+    s: DMatrix<f64>,
+    rhs: DVector<f64>,
+    a_inv: Vec<Matrix2<f64>>,
+}
+
+fn reduce(st: &State, lambda: f64) -> Option<Reduced> {
     let n = st.gs.len();
     let mut s = st.c.clone();
     for k in 0..n {
@@ -319,21 +399,128 @@ fn step(st: &State, lambda: f64) -> Option<(DVector<f64>, Vec<Vector2<f64>>)> {
         }
         a_inv.push(inv);
     }
-    let ds = s.cholesky()?.solve(&rhs);
-    let dl = st
-        .exps
+    Some(Reduced { s, rhs, a_inv })
+}
+
+/// Each experiment's own step given the shared step `ds` (back substitution).
+fn own_steps(st: &State, red: &Reduced, ds: &DVector<f64>) -> Vec<Vector2<f64>> {
+    st.exps
         .iter()
-        .zip(&a_inv)
+        .zip(&red.a_inv)
         .map(|(e, inv)| {
             let mut v = e.gi;
-            for k in 0..n {
-                v[0] -= e.b[k][0] * ds[k];
-                v[1] -= e.b[k][1] * ds[k];
+            for (k, d) in ds.iter().enumerate() {
+                v[0] -= e.b[k][0] * d;
+                v[1] -= e.b[k][1] * d;
             }
             inv * v
         })
+        .collect()
+}
+
+/// The shared step minimising the damped quadratic model `ds' rhs - ds' s ds / 2` subject to
+/// `c_k . ds = target_k` for every `(k, target_k)` of `work`, and the constraints' multipliers
+/// (>= 0: the constraint holds the step; < 0: the model would leave the face inwards).
+fn face_step(
+    red: &Reduced,
+    cons: &[Constraint],
+    work: &[(usize, f64)],
+) -> Option<(DVector<f64>, Vec<f64>)> {
+    if work.is_empty() {
+        return Some((red.s.clone().cholesky()?.solve(&red.rhs), Vec::new()));
+    }
+    let (n, w) = (red.rhs.len(), work.len());
+    let mut kkt = DMatrix::zeros(n + w, n + w);
+    kkt.view_mut((0, 0), (n, n)).copy_from(&red.s);
+    let mut b = DVector::zeros(n + w);
+    b.rows_mut(0, n).copy_from(&red.rhs);
+    for (r, &(k, target)) in work.iter().enumerate() {
+        for &(i, c) in &cons[k].normal {
+            kkt[(n + r, i)] = c;
+            kkt[(i, n + r)] = c;
+        }
+        b[n + r] = target;
+    }
+    let sol = kkt.lu().solve(&b)?;
+    if !sol.iter().all(|v| v.is_finite()) {
+        return None;
+    }
+    let nu = (0..w).map(|r| -sol[n + r]).collect();
+    Some((sol.rows(0, n).into_owned(), nu))
+}
+
+/// A step: the shared part, each experiment's own part, and the working set it was solved on.
+type ConstrainedStep = (DVector<f64>, Vec<Vector2<f64>>, Vec<usize>);
+
+/// A damped step that respects `cons` (the active set, design.md 7.4): the constraints on whose
+/// face `shared` sits start in the working set; one with a negative multiplier is released, the
+/// first one the step would cross is added with the target of landing on its face, and the step is
+/// re-solved on the working set until neither happens (at most `2 len + 2` solves). Returns the
+/// shared and own steps and the working set (indices into `cons`).
+fn constrained_step(
+    st: &State,
+    lambda: f64,
+    shared: &[f64],
+    cons: &[Constraint],
+) -> Option<ConstrainedStep> {
+    let red = reduce(st, lambda)?;
+    let slack: Vec<f64> = cons.iter().map(|c| c.slack(shared)).collect();
+    let tol: Vec<f64> = cons.iter().map(|c| c.tol(shared)).collect();
+    let mut work: Vec<usize> = (0..cons.len()).filter(|&k| slack[k] <= tol[k]).collect();
+    let mut best = None;
+    for _ in 0..2 * cons.len() + 2 {
+        let targets: Vec<(usize, f64)> = work.iter().map(|&k| (k, -slack[k])).collect();
+        let Some((ds, nu)) = face_step(&red, cons, &targets) else {
+            // Dependent faces: keep the last solvable working set (the projection finishes).
+            work.pop()?;
+            continue;
+        };
+        let scale = red.rhs.amax().max(f64::MIN_POSITIVE);
+        let release = nu
+            .iter()
+            .enumerate()
+            .filter(|&(_, &v)| v < -1e-12 * scale)
+            .min_by(|a, b| a.1.total_cmp(b.1))
+            .map(|(r, _)| r);
+        if let Some(r) = release {
+            best = Some((ds, work.clone()));
+            work.remove(r);
+            continue;
+        }
+        // The first face the step crosses (smallest fraction of the step that reaches it).
+        let cross = (0..cons.len())
+            .filter(|k| !work.contains(k))
+            .filter_map(|k| {
+                let d = cons[k].dot(&ds);
+                (slack[k] + d < -tol[k]).then(|| (k, slack[k].max(0.0) / -d))
+            })
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .map(|(k, _)| k);
+        match cross {
+            Some(k) => {
+                best = Some((ds, work.clone()));
+                work.push(k);
+            }
+            None => {
+                best = Some((ds, work));
+                break;
+            }
+        }
+    }
+    let (ds, work) = best?;
+    let dl = own_steps(st, &red, &ds);
+    Some((ds, dl, work))
+}
+
+/// The constraints of `work` the point sits on (the face that holds the fit), by name.
+fn active_names(cons: &[Constraint], work: &[usize], shared: &[f64]) -> Vec<String> {
+    let mut names: Vec<String> = work
+        .iter()
+        .filter(|&&k| cons[k].slack(shared) <= cons[k].tol(shared))
+        .map(|&k| cons[k].name.clone())
         .collect();
-    Some((ds, dl))
+    names.sort();
+    names
 }
 
 fn fisher(st: &State) -> DMatrix<f64> {
@@ -356,9 +543,14 @@ fn fisher(st: &State) -> DMatrix<f64> {
 
 /// Levenberg-Marquardt with Marquardt scaling over every experiment of `model` (design.md 7.4,
 /// 9.3): damping `lambda diag(J'WJ)` from [`LAMBDA_START`], times [`LAMBDA_DOWN`] on success and
-/// [`LAMBDA_UP`] on failure, a minimum once it exceeds [`LAMBDA_MAX`]; trial points projected by
-/// the model and rejected when inadmissible or when the model fails there. The experiments are
-/// evaluated in parallel (rayon) and reduced in a fixed order.
+/// [`LAMBDA_UP`] on failure, a minimum once it exceeds [`LAMBDA_MAX`]. The steps respect the model's
+/// closed constraints through an active set ([`constrained_step`]): a step that would cross a face
+/// lands on it, and a fit on a face moves along it (a Gauss-Newton step in the free subspace) until
+/// the face's multiplier says that the cost decreases inwards. So a fit the data pull beyond the
+/// admissible set stops on its boundary by the usual rules, and says on which face
+/// ([`JointFit::active`]). Trial points are then projected by the model (rounding, faces that move
+/// with the own parameters) and rejected when inadmissible or when the model fails there. The
+/// experiments are evaluated in parallel (rayon) and reduced in a fixed order.
 ///
 /// Errors: only those of the model at the start point (callers validate the start first).
 pub fn levenberg_marquardt<M: JointModel>(
@@ -372,14 +564,15 @@ pub fn levenberg_marquardt<M: JointModel>(
     let mut st = evaluate_all(model, &shared, &own)?;
     let mut lambda = LAMBDA_START;
     let mut iterations = 0;
-    let mut converged = false;
+    let mut stop = StopReason::IterationCap;
     while iterations < opts.max_iter {
         crate::cancel::checkpoint()?;
         iterations += 1;
-        let Some((ds, dl)) = step(&st, lambda) else {
+        let cons = model.constraints(&own);
+        let Some((ds, dl, _)) = constrained_step(&st, lambda, &shared, &cons) else {
             lambda *= LAMBDA_UP;
             if lambda > LAMBDA_MAX {
-                converged = true;
+                stop = StopReason::NoDecrease;
                 break;
             }
             continue;
@@ -410,23 +603,33 @@ pub fn levenberg_marquardt<M: JointModel>(
                 st = tst;
                 lambda = (lambda * LAMBDA_DOWN).max(1e-15);
                 if decrease < opts.ftol || small {
-                    converged = true;
+                    stop = if small {
+                        StopReason::SmallStep
+                    } else {
+                        StopReason::CostDecrease
+                    };
                     break;
                 }
             }
             _ => {
                 if small {
-                    converged = true;
+                    stop = StopReason::SmallStep;
                     break;
                 }
                 lambda *= LAMBDA_UP;
                 if lambda > LAMBDA_MAX {
-                    converged = true;
+                    stop = StopReason::NoDecrease;
                     break;
                 }
             }
         }
     }
+    // The faces that hold the minimiser: the working set of a step from it (the damping only
+    // shortens the step; the multipliers' signs are those of the gradient against the faces).
+    let cons = model.constraints(&own);
+    let active = constrained_step(&st, lambda.min(LAMBDA_MAX), &shared, &cons)
+        .or_else(|| constrained_step(&st, LAMBDA_START, &shared, &cons))
+        .map_or_else(Vec::new, |(_, _, work)| active_names(&cons, &work, &shared));
     Ok(JointFit {
         fisher: fisher(&st),
         cost: st.cost,
@@ -434,7 +637,9 @@ pub fn levenberg_marquardt<M: JointModel>(
         shared,
         own,
         iterations,
-        converged,
+        converged: stop != StopReason::IterationCap,
+        stop,
+        active,
     })
 }
 
@@ -485,6 +690,10 @@ impl JointModel for PlainModel<'_> {
         })
     }
 
+    fn constraints(&self, _own: &[[f64; 2]]) -> Vec<Constraint> {
+        hysteresis_constraints(self.opts.mu_lo, self.opts.mu_hi)
+    }
+
     fn project(&self, shared: &mut [f64], _own: &[[f64; 2]]) {
         project_hysteresis(shared, self.opts.mu_lo, self.opts.mu_hi);
     }
@@ -499,6 +708,33 @@ impl JointModel for PlainModel<'_> {
 pub(crate) fn hysteresis_admissible(shared: &[f64], mu_lo: f64, mu_hi: f64) -> bool {
     let (beta, gamma, mu) = (shared[0], shared[1], shared[2]);
     mu > mu_lo.max(1.0) + MU_MARGIN && mu <= mu_hi && beta + gamma > 0.0 && beta >= gamma
+}
+
+/// The closed constraints of `[beta, gamma, mu, ..]` (the faces of [`project_hysteresis`]): `beta >=
+/// gamma` ("beta=gamma"), `mu >= mu_lo + 2 MU_MARGIN` ("mu=lower"), and `mu <= mu_hi` ("mu=upper") when
+/// finite. `beta + gamma > 0` is open (no loop on its face): trial points beyond it are rejected.
+pub(crate) fn hysteresis_constraints(mu_lo: f64, mu_hi: f64) -> Vec<Constraint> {
+    let mu_min = mu_lo.max(1.0) + 2.0 * MU_MARGIN;
+    let mut cons = vec![
+        Constraint {
+            name: "beta=gamma".into(),
+            normal: vec![(0, 1.0), (1, -1.0)],
+            bound: 0.0,
+        },
+        Constraint {
+            name: "mu=lower".into(),
+            normal: vec![(2, 1.0)],
+            bound: mu_min,
+        },
+    ];
+    if mu_hi.is_finite() {
+        cons.push(Constraint {
+            name: "mu=upper".into(),
+            normal: vec![(2, -1.0)],
+            bound: -mu_hi.max(mu_min),
+        });
+    }
+    cons
 }
 
 /// Projects a trial point onto the closed constraints it crossed, so that the fit can slide along
@@ -619,6 +855,8 @@ pub fn refine(exps: &[Experiment], start: &Params, opts: &Options) -> Result<Fit
         cost: fit.cost,
         iterations: fit.iterations,
         converged: fit.converged,
+        stop: fit.stop,
+        active: fit.active,
         fisher: fit.fisher,
         loops: fit.outputs,
     })
@@ -672,6 +910,59 @@ mod tests {
         assert_eq!(fit.fisher.nrows(), 7);
         // The Fisher matrix is symmetric positive definite at a well-posed fit.
         assert!(fit.fisher.clone().cholesky().is_some());
+    }
+
+    #[test]
+    fn a_fit_pulled_beyond_beta_ge_gamma_stops_on_the_face_and_names_it() {
+        // Loops plus a strong spring on the measured input (in phase with u, not with x): the plain
+        // model cannot draw them and its fit runs into beta = gamma. The projected LM crawled along it
+        // to the cap; the active set stops on it by ftol/xtol, with the face named.
+        let amps = [1.8, 1.2, 2.4];
+        let phases = [1.1, 2.5, 0.4];
+        let p = 48;
+        let ys: Vec<Vec<f64>> = (0..3)
+            .map(|i| {
+                let w = data(amps[i], 0.8, 0.2, 1.6, phases[i], p);
+                (0..p)
+                    .map(|j| {
+                        let th = 2.0 * std::f64::consts::PI * j as f64 / p as f64;
+                        // Deterministic pseudo-noise so that the fit does not end at zero cost.
+                        w[j] + 1.5 * th.cos() + 1e-2 * ((j * 7 + i * 13) as f64).sin()
+                    })
+                    .collect()
+            })
+            .collect();
+        let exps: Vec<Experiment> = (0..3)
+            .map(|i| Experiment {
+                ybar: &ys[i],
+                amplitude: amps[i],
+                weight: 1e4,
+            })
+            .collect();
+        let start = Params {
+            beta: 0.7,
+            gamma: 0.3,
+            mu: 1.7,
+            gains: vec![0.9, 1.2, 1.0],
+            phases: vec![1.05, 2.45, 0.4],
+        };
+        let opts = Options {
+            substeps: 3,
+            ..Options::default()
+        };
+        let fit = refine(&exps, &start, &opts).unwrap();
+        assert!(fit.converged, "{:?} after {}", fit.stop, fit.iterations);
+        assert!(matches!(
+            fit.stop,
+            StopReason::CostDecrease | StopReason::SmallStep
+        ));
+        assert!(fit.iterations < 100, "{}", fit.iterations);
+        assert!(
+            fit.active.iter().any(|a| a == "beta=gamma"),
+            "{:?}",
+            fit.active
+        );
+        assert!((fit.params.beta - fit.params.gamma).abs() <= 1e-12 * fit.params.beta.abs());
     }
 
     #[test]

@@ -257,7 +257,7 @@ class Paper(Protocol):
         xtol: float = 1e-10,
         mu_lo: float = 1.0,
         mu_hi: float = ...,
-    ) -> tuple[_F, float, int, bool, _F, list[_F]]: ...
+    ) -> tuple[_F, float, int, bool, _F, list[_F], str, list[str]]: ...
 
 
 class MultiStart(Protocol):
@@ -315,7 +315,7 @@ class Augmented(Protocol):
         mu_lo: float = 1.0,
         mu_hi: float = ...,
         waveforms: Sequence[_F] | None = None,
-    ) -> tuple[_F, _F, _F, float, int, bool, _F, list[_F]]: ...
+    ) -> tuple[_F, _F, _F, float, int, bool, _F, list[_F], str, list[str]]: ...
 
 
 class Lab(Protocol):

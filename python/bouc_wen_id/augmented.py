@@ -239,6 +239,13 @@ class AugFit:
         Its inverse, NaN-filled when the Fisher matrix is singular.
     outputs : tuple of ndarray
         Model outputs ``y_i`` at the estimates.
+    stop : str
+        The stopping rule that ended the search: ``"ftol"`` (the cost stopped decreasing), ``"xtol"`` (the
+        step became negligible), ``"no_decrease"`` (no step decreases the cost), ``"max_iter"``.
+    active : tuple of str
+        The constraints the estimates sit on and that hold them there, e.g. ``"beta=gamma"`` (the Bouc-Wen
+        condition beta >= gamma), ``"mu=lower"``, ``"sensor_lag=0"``, ``"play=upper"``: the data pull the
+        model beyond its admissible range there.
     """
 
     params: AugParams
@@ -248,6 +255,8 @@ class AugFit:
     fisher: FloatArray
     covariance: FloatArray
     outputs: tuple[FloatArray, ...] = field(default_factory=tuple)
+    stop: str = "ftol"
+    active: tuple[str, ...] = ()
 
     def standard_error(self, name: str) -> float:
         """Standard error of a shared parameter (``beta``, ``gamma``, ``mu`` or an active term); NaN when
@@ -359,7 +368,7 @@ def fit_augmented(
             f"the mu bracket ({mu_lo}, {mu_hi}] must have a finite lower end >= 1 below its upper end"
         )
     core = get_backend(backend).augmented
-    shared, gains, phases, cost, iterations, converged, fisher, outputs = core.augmented_refine(
+    shared, gains, phases, cost, iterations, converged, fisher, outputs, stop, active = core.augmented_refine(
         [e.ybar for e in exps],
         np.array([e.amplitude for e in exps]),
         np.array([e.frequency for e in exps]),
@@ -386,7 +395,17 @@ def fit_augmented(
     outs = tuple(np.asarray(y, dtype=np.float64) for y in outputs)
     for y in outs:
         y.flags.writeable = False
-    return AugFit(params, float(cost), int(iterations), bool(converged), fisher, covariance, outs)
+    return AugFit(
+        params,
+        float(cost),
+        int(iterations),
+        bool(converged),
+        fisher,
+        covariance,
+        outs,
+        str(stop),
+        tuple(str(a) for a in active),
+    )
 
 
 @dataclass(frozen=True)

@@ -106,10 +106,14 @@ class LMRun:
     converged: bool
     fisher: FloatArray
     loops: list[FloatArray]
+    #: The stopping rule that ended the run (``"ftol"``, ``"xtol"``, ``"no_decrease"``, ``"max_iter"``).
+    stop: str = "ftol"
+    #: The constraints the run ended on and that hold it there (``"beta=gamma"``, ``"mu=lower"``, ...).
+    active: tuple[str, ...] = ()
 
     @classmethod
     def from_core(cls, out: tuple[Any, ...]) -> LMRun:
-        params, cost, iterations, converged, fisher, loops = out
+        params, cost, iterations, converged, fisher, loops, stop, active = out
         return cls(
             np.asarray(params),
             float(cost),
@@ -117,6 +121,8 @@ class LMRun:
             bool(converged),
             np.asarray(fisher),
             [np.asarray(w) for w in loops],
+            str(stop),
+            tuple(str(a) for a in active),
         )
 
     def start(self) -> Start:
@@ -140,6 +146,9 @@ class Fit:
     loops: list[Optional[FloatArray]]
     #: Whether the Levenberg-Marquardt run the estimates come from converged (None: no such run).
     converged: Optional[bool] = None
+    #: Its stopping rule (None: no such run) and the constraints it ended on (see :class:`LMRun`).
+    stop: Optional[str] = None
+    active: tuple[str, ...] = ()
 
 
 def steady_substeps(p: int) -> int:
@@ -356,6 +365,40 @@ def _generic_starts(prepared: Sequence[Prepared], lo: float, hi: float) -> list[
     return starts
 
 
+#: What each face of the admissible range means to the user (the names of ``rust/refine.rs`` ``Constraint``).
+_FACES = {
+    "beta=gamma": "beta = gamma (the Bouc-Wen condition beta >= |gamma|)",
+    "mu=lower": "mu = the lower end of its bracket",
+    "mu=upper": "mu = the upper end of its bracket",
+}
+#: What each stopping rule means (``StopReason::code``).
+_STOPS = {
+    "ftol": "the cost stopped decreasing",
+    "xtol": "the step became negligible",
+    "no_decrease": "no admissible step decreases the cost",
+    "max_iter": "the iteration cap",
+}
+
+
+def boundary_note(stop: Optional[str], active: Sequence[str], what: str = "the joint fit") -> Optional[str]:
+    """A plain-language warning when a Levenberg-Marquardt run ended on faces of the admissible range
+    (``active``, as the core names them), or None when it ended inside."""
+    if not active:
+        return None
+    faces = []
+    for a in active:
+        name, _, side = a.partition("=")
+        faces.append(_FACES.get(a, f"{name} at {'0' if side == '0' else 'its upper limit'}"))
+    rule = _STOPS.get(stop or "", stop or "unknown")
+    return (
+        f"{what} stopped on the boundary of the model's admissible range, held there by "
+        f"{' and '.join(faces)} "
+        f"({rule}): the data pull the model beyond what it can draw, so its intervals do not hold there; "
+        "a physical effect the model lacks (bouc_wen_id.diagnose names it), a wrong channel or a transient "
+        "is the usual cause"
+    )
+
+
 def on_constraint(beta: float, gamma: float) -> bool:
     """True when ``(beta, gamma)`` lies on the Bouc-Wen constraint beta = |gamma| (to rounding)."""
     return beta - abs(gamma) <= ON_CONSTRAINT_RTOL * max(abs(beta), abs(gamma), 1e-300)
@@ -531,4 +574,17 @@ def _refined_fit(best: LMRun, m: int, lo: float, hi: float) -> Fit:
     except np.linalg.LinAlgError:
         cov = np.full_like(fisher, np.nan)
     loops: list[Optional[FloatArray]] = list(best.loops)
-    return Fit(beta, gamma, mu, gains, phis, best.cost, best.iterations, cov, loops, best.converged)
+    return Fit(
+        beta,
+        gamma,
+        mu,
+        gains,
+        phis,
+        best.cost,
+        best.iterations,
+        cov,
+        loops,
+        best.converged,
+        best.stop,
+        best.active,
+    )

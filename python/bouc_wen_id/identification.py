@@ -54,7 +54,7 @@ from numpy.typing import NDArray
 from . import budget
 from ._backend import Backend, selected
 from .errors import ConvergenceWarning, IdentifiabilityWarning, InsufficientDataError, InvalidParameterError
-from .estimators import Fit, adequacy, fit, linear_nrmse, on_constraint, steady_substeps
+from .estimators import Fit, adequacy, boundary_note, fit, linear_nrmse, on_constraint, steady_substeps
 from .model import Recording
 from .prepare import Prepared, Scales, auto_harmonics, noise_variance, prepare, scale
 from .result import NOT_CONVERGED, Adequacy, ExperimentEstimate, IdentificationResult, Truth, wrap_phase
@@ -171,7 +171,7 @@ def identify(
     fitted = fit(scaled, parts, method, reference, lo, hi, tol, phase_grid, max_iter)
     est = _unscale(fitted, scales)
     experiments = _experiment_estimates(prepared, fitted, est, scales)
-    notes = _notes(method, est, experiments, confidence)
+    notes = _notes(method, est, experiments, confidence, boundary_note(fitted.stop, fitted.active))
     _warn(notes, fitted)
     settings = {
         "settle_periods": settle_periods,
@@ -366,12 +366,19 @@ def _experiment_estimates(
 
 
 def _notes(
-    method: str, est: _Estimates, experiments: Sequence[ExperimentEstimate], confidence: float
+    method: str,
+    est: _Estimates,
+    experiments: Sequence[ExperimentEstimate],
+    confidence: float,
+    boundary: Optional[str] = None,
 ) -> list[str]:
-    """Plain-language warnings: poor identifiability, the constraint, worse than linear, the conditions."""
+    """Plain-language warnings: poor identifiability, the constraint (``boundary``: the refinement's own
+    word on the faces it stopped on, when it did), worse than linear, the conditions."""
     beta, gamma = est.beta, est.gamma
     notes = _identifiability(beta, gamma, est.mu, experiments, est.cov, est.standard_errors, confidence)
-    if method == "refined" and on_constraint(beta, gamma):
+    if method == "refined" and boundary is not None:
+        notes.append(boundary)
+    elif method == "refined" and on_constraint(beta, gamma):
         face = "beta = gamma" if gamma > 0 else "beta = -gamma"
         notes.append(
             f"the fit ends on the Bouc-Wen constraint {face} (beta = {beta:.4g}, gamma = {gamma:.4g}): the "

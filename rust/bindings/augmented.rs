@@ -149,7 +149,9 @@ fn augmented_output<'py>(
 }
 
 /// What [`augmented_refine`] returns to Python:
-/// `(shared, gains, phases, cost, iterations, converged, fisher, outputs)`.
+/// `(shared, gains, phases, cost, iterations, converged, fisher, outputs, stop, active)`: `stop` the
+/// stopping rule's code (`rust/refine.rs` `StopReason::code`), `active` the constraints the fit
+/// ends on.
 type AugRefineOut<'py> = (
     Vector<'py>,
     Vector<'py>,
@@ -159,6 +161,8 @@ type AugRefineOut<'py> = (
     bool,
     Matrix<'py>,
     Vec<Vector<'py>>,
+    &'static str,
+    Vec<String>,
 );
 
 /// The experiments of the augmented fit: one amplitude, frequency, grid phase and weight per
@@ -199,7 +203,8 @@ fn aug_experiments<'a>(
 }
 
 /// Joint Levenberg-Marquardt of the augmented model (design.md 9.3). `fisher` is `J^T W J`
-/// ordered `[beta, gamma, mu, q_1 .. q_T, g_0, phi_0, g_1, phi_1, ...]`.
+/// ordered `[beta, gamma, mu, q_1 .. q_T, g_0, phi_0, g_1, phi_1, ...]`; `stop` says which rule
+/// ended the search and `active` on which constraints it ended.
 #[pyfunction]
 #[pyo3(signature = (ybars, amplitudes, frequencies, grid_phases, weights, terms, shared0, gains0, phases0, *, max_iter=200, substeps=4, mu_lo=1.0, mu_hi=f64::INFINITY, waveforms=None))]
 #[allow(clippy::too_many_arguments)]
@@ -260,5 +265,7 @@ fn augmented_refine<'py>(
         fit.converged,
         square(py, &fit.fisher),
         outputs,
+        fit.stop.code(),
+        fit.active,
     ))
 }

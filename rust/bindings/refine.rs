@@ -58,8 +58,19 @@ fn total_samples(exps: &[Experiment]) -> u128 {
     exps.iter().map(|e| e.ybar.len() as u128).sum()
 }
 
-/// What [`refine_fit`] returns to Python: `(params, cost, iterations, converged, fisher, loops)`.
-type RefineOut<'py> = (Vector<'py>, f64, usize, bool, Matrix<'py>, Vec<Vector<'py>>);
+/// What [`refine_fit`] returns to Python: `(params, cost, iterations, converged, fisher, loops,
+/// stop, active)`: `stop` the stopping rule's code (`StopReason::code`), `active` the constraints the
+/// fit ends on.
+type RefineOut<'py> = (
+    Vector<'py>,
+    f64,
+    usize,
+    bool,
+    Matrix<'py>,
+    Vec<Vector<'py>>,
+    &'static str,
+    Vec<String>,
+);
 
 /// Joint output-error Levenberg-Marquardt over every experiment. Parameters are ordered
 /// `[beta, gamma, mu, g_0, phi_0, g_1, phi_1, ...]`; `fisher` is `J^T W J` at the minimiser.
@@ -108,6 +119,8 @@ fn refine_fit<'py>(
         fit.converged,
         square(py, &fit.fisher),
         loops,
+        fit.stop.code(),
+        fit.active,
     ))
 }
 

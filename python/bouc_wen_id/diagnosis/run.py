@@ -14,6 +14,7 @@ import numpy as np
 from ..augmented import AugExperiment, AugFit
 from ..budget import check_environment
 from ..errors import InvalidParameterError, TransientWarning
+from ..estimators import boundary_note
 from ..terms import DIAGNOSIS_CANDIDATES, TERMS, Distortion, physical_value
 from ..validation import real_number
 from .data import DiagExperiment, prepare
@@ -736,6 +737,11 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
         final, steps = start, list[Step]()
     else:
         final, steps = forward_select(fsx, start, steady, adequate, substeps, targeted=targeted, **kw)
+    # The fits' own word when they stopped on a face of the admissible range (issue 19, branch lm).
+    fits = (
+        ((plain, "the plain fit"), (final, "the final fit")) if final is not plain else ((plain, "the fit"),)
+    )
+    notes += [n for f, w in fits if (n := boundary_note(f.stop, f.active, w)) is not None]
     dexps = detrended(fexps, deg, s.y) if deg is not None and named_deg else fexps
     after = _drift_checked(_localise(dexps, fsx, final, s), dexps)
     plain_sum = _summary(exps, sx, plain, s, setup.units)

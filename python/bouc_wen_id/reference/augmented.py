@@ -22,7 +22,13 @@ from ..errors import InsufficientDataError, InvalidParameterError, ZeroAmplitude
 from ..validation import finite_array as _finite_array
 from ..validation import finite_scalar as _finite_scalar
 from .path_loop import path_loop, path_loop_distorted
-from .refine import admissible_bouc_wen, levenberg_marquardt, project_bouc_wen
+from .refine import (
+    Constraint,
+    admissible_bouc_wen,
+    bouc_wen_constraints,
+    levenberg_marquardt,
+    project_bouc_wen,
+)
 from .steady import steady_loop
 from .terms import (
     ASYMMETRY,
@@ -350,6 +356,19 @@ class _Problem(NamedTuple):
             outputs.append(y)
         return cost, (outputs, fisher, grad)
 
+    def constraints(self, par: FloatArray) -> list[Constraint]:
+        """The closed constraints of ``rust/augmented.rs``: the Bouc-Wen ones, then ``name=0`` and
+        ``name=upper`` of the sensor lag, the play (up to :meth:`play_max`) and the pinching."""
+        cons = bouc_wen_constraints(par.size, self.mu_lo, self.mu_hi)
+        for name, upper in ((SENSOR_LAG, None), (PLAY, self.play_max(par)), (PINCHING, PINCHING_MAX)):
+            if name in self.names:
+                e = np.zeros(par.size)
+                e[self.col(name)] = 1.0
+                cons.append((f"{name}=0", e, 0.0))
+                if upper is not None:
+                    cons.append((f"{name}=upper", -e, -upper))
+        return cons
+
     def project(self, trial: FloatArray) -> None:
         """The projections of :func:`.refine.refine`, then tau and b clipped into their ranges."""
         project_bouc_wen(trial, self.mu_lo, self.mu_hi)
@@ -425,11 +444,14 @@ def augmented_refine(
     mu_lo: float = 1.0,
     mu_hi: float = float("inf"),
     waveforms: Optional[Sequence[ArrayLike]] = None,
-) -> tuple[FloatArray, FloatArray, FloatArray, float, int, bool, FloatArray, list[FloatArray]]:
+) -> tuple[
+    FloatArray, FloatArray, FloatArray, float, int, bool, FloatArray, list[FloatArray], str, list[str]
+]:
     """Joint Levenberg-Marquardt of the augmented model over every experiment (design.md 9.3).
 
-    Returns ``(shared, gains, phases, cost, iterations, converged, fisher, outputs)`` with ``fisher`` ordered
-    ``[beta, gamma, mu, q_1 .. q_T, g_0, phi_0, g_1, phi_1, ...]``.
+    Returns ``(shared, gains, phases, cost, iterations, converged, fisher, outputs, stop, active)`` with
+    ``fisher`` ordered ``[beta, gamma, mu, q_1 .. q_T, g_0, phi_0, g_1, phi_1, ...]``, ``stop`` the stopping
+    rule and ``active`` the constraints the fit ends on (:func:`.refine.levenberg_marquardt`).
     """
     ftol, xtol = 1e-12, 1e-10
     vectors = (amplitudes, frequencies, grid_phases, weights)
@@ -449,7 +471,7 @@ def augmented_refine(
             f"the starting play b = {params[prob.col(PLAY)]} must be below {PLAY_MAX_FRACTION} min "
             f"|U_i g_i| = {prob.play_max(params)}"
         )
-    params, cost, it, converged, fisher, (outputs, _, _) = levenberg_marquardt(
+    params, cost, it, converged, fisher, (outputs, _, _), stop, active = levenberg_marquardt(
         params,
         prob.evaluate,
         lambda state: (state[1], state[2]),
@@ -458,6 +480,7 @@ def augmented_refine(
         max_iter=max_iter,
         ftol=ftol,
         xtol=xtol,
+        constraints=prob.constraints,
     )
     return (
         params[:ns].copy(),
@@ -468,4 +491,6 @@ def augmented_refine(
         converged,
         fisher,
         outputs,
+        stop,
+        active,
     )
