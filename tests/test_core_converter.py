@@ -53,6 +53,16 @@ _CALLS: dict[str, tuple[tuple[Any, ...], dict[str, Any]]] = {
     "unscaled_variances": ((_A[:9], 3), {}),
     "window_fits": ((_A, _A, _A, [0], [16], 1, 2.0), {}),
     "spectral_peak": ((_A, 32, 1, 10, -1, -1, 0.1), {}),
+    # issue 21: feedforward compensation (rust/bindings/compensate.rs)
+    "invert_path": ((_A, 1.0, 1.0, 0.5, 1.5, 0.0, 0.0, 0.0), {}),
+    "rate_limit": ((_A, 0.1, 0.0), {}),
+    # issue 20: Bouc-Wen in feedback (rust/bindings/feedback.rs) and the Wiener cascade in time (timedomain.rs)
+    "feedback_simulate": (
+        ([2.0, 10.0, 5e4, 5e4, 800.0, -1100.0, 1.0], [0.0, 0.0, 0.0], _A, 1e-3, 1, 1, False),
+        {},
+    ),
+    "feedback_periodic": (([2.0, 10.0, 5e4, 5e4, 800.0, -1100.0, 1.0], 1.0, 2.0, 16, 1, 1, 2, 1e-8), {}),
+    "timedomain_sensitivities": ((0, 1, [1.0, 1.0, 0.0, 1.0, 0.5, 1.5, 0.0], _A, 0.05, 1), {}),
     # test-only (rust/bindings/testing.rs)
     "harmonic_moments": ((_A, _A, 2), {}),
     "harmonic_series": ((_A, _A[:3]), {}),
