@@ -56,7 +56,7 @@ _CALLS: dict[str, tuple[tuple[Any, ...], dict[str, Any]]] = {
     # issue 21: feedforward compensation (rust/bindings/compensate.rs)
     "invert_path": ((_A, 1.0, 1.0, 0.5, 1.5, 0.0, 0.0, 0.0), {}),
     "rate_limit": ((_A, 0.1, 0.0), {}),
-    # issue 20: Bouc-Wen in feedback (rust/bindings/feedback.rs) and the Wiener cascade in time (timedomain.rs)
+    # issue 20: Bouc-Wen in feedback (bindings/feedback.rs) and the Wiener cascade in time (timedomain.rs)
     "feedback_simulate": (
         ([2.0, 10.0, 5e4, 5e4, 800.0, -1100.0, 1.0], [0.0, 0.0, 0.0], _A, 1e-3, 1, 1, False),
         {},

@@ -22,7 +22,7 @@ from numpy.testing import assert_allclose, assert_array_equal
 from scipy.integrate import solve_ivp  # type: ignore[import-untyped]
 
 TWO_PI = 2.0 * math.pi
-MECHANICAL = (Stiffness, Viscous, Inertia, Coulomb)
+MECHANICAL: tuple[type[Term], ...] = (Stiffness, Viscous, Inertia, Coulomb)
 #: The placed code names, from the registry.
 ON_X = tuple(cls.at(Place.X).kind for cls in MECHANICAL)
 

@@ -482,6 +482,8 @@ class Compensate(Protocol):
     ) -> _F: ...
 
     def rate_limit(self, target: _F, step: float, start: float) -> _F: ...
+
+
 # --- time-domain identification (issue #20): the Wiener cascade with its exact Jacobian -------------------
 class TimeDomain(Protocol):
     """``rust/bindings/timedomain.rs`` and :mod:`bouc_wen_id.reference.timedomain`."""

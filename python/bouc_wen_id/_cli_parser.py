@@ -14,8 +14,8 @@ from pathlib import Path
 from typing import Any, NoReturn, Optional, Union
 
 from . import _pool
-from ._cli_validate import add_validate_parser
 from ._cli_export import add_export_parser
+from ._cli_validate import add_validate_parser
 from .demo import DEMO_FREQUENCIES
 from .errors import InvalidParameterError
 from .terms import DIAGNOSIS_CANDIDATES
