@@ -620,6 +620,14 @@ def test_planner_refuses_an_astronomical_budget_at_once() -> None:
     assert plan.total_time <= 1e8 and all(e.periods >= 5 for e in plan.experiments)
 
 
+@pytest.mark.parametrize("rate", [1e308, 1.1e12])
+def test_planner_refuses_a_sample_rate_beyond_any_daq(rate: float) -> None:
+    # sample_rate=1e308 raised OverflowError in planning/_settings.py (the CLI already capped it).
+    with pytest.raises(InvalidParameterError, match="sample_rate"):
+        _plan_in(1.0, 300.0, sample_rate=rate)
+    assert _plan_in(20.0, 300.0, sample_rate=1e6).total_time <= 300.0  # a fast DAQ still plans
+
+
 @pytest.mark.parametrize("noise_sd", [1e-200, 1e300, 1e-101, 1e101])
 def test_planner_refuses_a_noise_level_outside_its_range(noise_sd: float) -> None:
     # 1e-200 raised ZeroDivisionError, 1e300 OverflowError.

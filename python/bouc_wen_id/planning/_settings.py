@@ -34,6 +34,9 @@ MAX_BUDGET = 1e8
 #: Noise levels the planner computes with, in the output's units: the bound scales as noise_sd^2, whose
 #: square must stay a float (1e-200 divided by zero, 1e300 overflowed); rescale the output's units outside.
 NOISE_SD_RANGE = (1e-100, 1e100)
+#: Largest lab sample rate, Hz (the CLI's ``--sample-rate`` cap too): beyond it the samples per period of the
+#: lowest frequency overflow an integer (``sample_rate=1e308`` raised OverflowError).
+MAX_SAMPLE_RATE = 1e12
 
 
 @dataclass(frozen=True)
@@ -163,7 +166,7 @@ def _settings(
         hi=hi,
         max_amplitude=positive_number("max_amplitude", max_amplitude),
         noise_sd=noise,
-        sample_rate=positive_number("sample_rate", sample_rate),
+        sample_rate=_sample_rate(sample_rate),
         max_rate=None if max_rate is None else positive_number("max_rate", max_rate),
         n_freq=n_freq,
         n_amp=n_amp,
@@ -210,6 +213,17 @@ def _too_small(st: _Settings, budget: float, omega: float) -> None:
         f"{cheapest:.4g} s ({st.overhead:g} s overhead + {st.settle} settling + {st.min_n} measured "
         f"periods at {omega:.4g} rad/s)"
     )
+
+
+def _sample_rate(value: object) -> float:
+    """The lab's sample rate, positive and at most :data:`MAX_SAMPLE_RATE`."""
+    rate = positive_number("sample_rate", value)
+    if rate > MAX_SAMPLE_RATE:
+        raise InvalidParameterError(
+            f"sample_rate = {rate:g} Hz is above {MAX_SAMPLE_RATE:g} Hz, beyond any data acquisition; give "
+            "the lab's rate in Hz"
+        )
+    return rate
 
 
 def _check_g_budget(st: _Settings, omegas: FloatArray, budget: float) -> None:
