@@ -258,3 +258,17 @@ def test_bad_input_is_named() -> None:
         fit_feedback((t, np.ones(40), np.ones(40)), theta0=BENCH, initial_state="guess")  # type: ignore[arg-type]
     # Public entry points.
     assert bw.fit_feedback is fit_feedback
+
+
+def test_validate_takes_the_feedback_structure() -> None:
+    # bw.validate simulates "either structure" (issue 20 item 3): the model and the fit, on a fresh record.
+    n = 1024
+    u, y = _multisine_data(21, n, 8)
+    t = np.arange(n) / FS
+    truth = FeedbackModel.from_theta(BENCH, beta=1e3)
+    rep = bw.validate(truth, t, u, y)
+    assert rep.model == "FeedbackModel" and rep.nrmse < 0.02
+    wrong = FeedbackModel.from_theta(BENCH * np.array([1, 1, 1.3, 1, 1, 1, 1]), beta=1e3)  # k 30 % off
+    assert bw.validate(wrong, t, u, y).nrmse > 5 * rep.nrmse
+    with pytest.raises(InvalidParameterError):
+        truth.simulate_record(t[:1], u[:1])

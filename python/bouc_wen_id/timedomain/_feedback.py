@@ -123,6 +123,13 @@ class FeedbackModel:
         )
         return y
 
+    def simulate_record(self, t: ArrayLike, u: ArrayLike) -> FloatArray:
+        """``y`` on a uniformly sampled record from rest: the hook :func:`~bouc_wen_id.validate` calls."""
+        tt = finite_array("t", t)
+        if tt.ndim != 1 or tt.size < 2:
+            raise InvalidParameterError(f"t must be 1-D with at least 2 samples, got shape {tt.shape}")
+        return self.simulate(u, float(np.mean(np.diff(tt))))
+
 
 def upsample_input(u: ArrayLike, factor: int, *, periodic: bool = False) -> FloatArray:
     """``u`` on the grid ``dt / factor`` (``(n - 1) factor + 1`` samples), reconstructed band-limitedly.
@@ -201,6 +208,10 @@ class FeedbackFit:
     elapsed: float
     start_costs: FloatArray = field(repr=False)
     identifiability: str = field(repr=False)
+
+    def simulate_record(self, t: ArrayLike, u: ArrayLike) -> FloatArray:
+        """The fitted model on a fresh record from rest (what :func:`~bouc_wen_id.validate` calls)."""
+        return self.model.simulate_record(t, u)
 
     def interval(self, name: str, level: float = 0.95) -> tuple[float, float]:
         """The symmetric normal-approximation interval of parameter ``name`` at ``level``."""

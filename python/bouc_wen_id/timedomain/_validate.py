@@ -7,7 +7,8 @@ Any model the library identifies is turned into something that simulates a sampl
 * a :class:`~bouc_wen_id.timedomain.TimeDomainFit` (its ``plant``);
 * an :class:`~bouc_wen_id.IdentificationResult` of the sine path: its points carry no parametric G, so
   :meth:`~bouc_wen_id.IdentificationResult.fit_transfer_function` supplies one (order selected by AICc);
-* any object with a ``simulate_record(t, u) -> y`` method (other model classes, e.g. the feedback class),
+* :class:`FeedbackModel` and :class:`FeedbackFit` (Bouc-Wen in feedback), and any object with a
+  ``simulate_record(t, u) -> y`` method (other model classes),
   or a ``plant`` attribute holding a ``WienerPlant``.
 
 The report gives the RMSE in the units of ``y``, the NRMSE ``||y - y_sim|| / ||y - mean(y)||`` (0 a perfect
