@@ -24,6 +24,7 @@
 //! addressing open challenges in nonlinear system identification*, IFAC-PapersOnLine 50(1), 2017.
 
 use crate::error::{all_finite, finite, CoreError, Result};
+use crate::hermite::Hermite;
 
 mod periodic;
 pub use periodic::{periodic_feedback, PeriodicFeedback};
@@ -184,51 +185,6 @@ impl Feedback {
     }
 }
 
-/// Catmull-Rom cubic Hermite value of samples on the grid `k du` (`rust/simulate.rs`'s
-/// interpolant, value only); past the last sample, the last value.
-struct Hermite<'a> {
-    u: &'a [f64],
-    m: Vec<f64>,
-    du: f64,
-}
-
-impl<'a> Hermite<'a> {
-    fn new(u: &'a [f64], du: f64) -> Self {
-        let n = u.len();
-        let mut m = vec![0.0; n];
-        for k in 1..n - 1 {
-            m[k] = (u[k + 1] - u[k - 1]) / (2.0 * du);
-        }
-        m[0] = (u[1] - u[0]) / du;
-        m[n - 1] = (u[n - 1] - u[n - 2]) / du;
-        Self { u, m, du }
-    }
-
-    #[inline(always)]
-    fn at(&self, tau: f64) -> f64 {
-        if tau <= 0.0 {
-            return self.u[0];
-        }
-        let last = self.u.len() - 1;
-        let q = tau / self.du;
-        let kf = q.floor();
-        if kf >= last as f64 {
-            return self.u[last];
-        }
-        let k = kf as usize;
-        let s = q - kf;
-        let (s2, s3) = (s * s, s * s * s);
-        let h00 = 2.0 * s3 - 3.0 * s2 + 1.0;
-        let h10 = s3 - 2.0 * s2 + s;
-        let h01 = -2.0 * s3 + 3.0 * s2;
-        let h11 = s3 - s2;
-        h00 * self.u[k]
-            + h10 * self.du * self.m[k]
-            + h01 * self.u[k + 1]
-            + h11 * self.du * self.m[k + 1]
-    }
-}
-
 /// A simulated record: `y` on the output grid, and with sensitivities `d y_k / d [theta, x0]`
 /// (row-major, `n_samples x N_COLS`), and the state after the last sample.
 #[derive(Debug, Clone, PartialEq)]
@@ -326,7 +282,10 @@ pub(crate) trait Force {
 impl Force for Hermite<'_> {
     #[inline(always)]
     fn at(&self, t: f64) -> f64 {
-        Hermite::at(self, t)
+        if t <= 0.0 {
+            return self.u[0];
+        }
+        self.value(t)
     }
 }
 

@@ -26,6 +26,7 @@ pub mod compensate;
 pub mod error;
 pub mod estimate;
 pub mod feedback;
+mod hermite;
 pub mod lab;
 pub mod linear;
 pub mod multistart;

@@ -24,6 +24,7 @@
 
 use crate::bouc_wen::BoucWen;
 use crate::error::{all_finite, finite, CoreError, Result};
+use crate::hermite::Hermite;
 use crate::linear::{Companion, TransferFunction};
 
 // The augmented model's integrator (design.md §9.4), kept apart so that this plain path is untouched.
@@ -303,57 +304,10 @@ impl Source for Sine {
     }
 }
 
-/// Cubic Hermite interpolant of samples on the grid `k dt`, Catmull-Rom slopes.
-struct Hermite<'a> {
-    u: &'a [f64],
-    /// Slopes `m_k` (units of u per second), same length as `u`.
-    m: Vec<f64>,
-    dt: f64,
-}
-
-impl<'a> Hermite<'a> {
-    /// `u.len() >= 2` (checked by [`Input::validate`]).
-    fn new(u: &'a [f64], dt: f64) -> Self {
-        let n = u.len();
-        let mut m = vec![0.0; n];
-        if n >= 2 {
-            for k in 1..n - 1 {
-                m[k] = (u[k + 1] - u[k - 1]) / (2.0 * dt);
-            }
-            // One-sided at the ends: no sample beyond to centre on.
-            m[0] = (u[1] - u[0]) / dt;
-            m[n - 1] = (u[n - 1] - u[n - 2]) / dt;
-        }
-        Self { u, m, dt }
-    }
-}
-
 impl Source for Hermite<'_> {
     #[inline(always)]
     fn at(&self, tau: f64) -> (f64, f64) {
-        let last = self.u.len() - 1;
-        let q = tau / self.dt;
-        let kf = q.floor();
-        // Compared as floats so that a huge `tau` cannot overflow the index.
-        if kf >= last as f64 {
-            return (self.u[last], 0.0);
-        }
-        let k = kf as usize;
-        let s = q - kf;
-        let (s2, s3) = (s * s, s * s * s);
-        let h00 = 2.0 * s3 - 3.0 * s2 + 1.0;
-        let h10 = s3 - 2.0 * s2 + s;
-        let h01 = -2.0 * s3 + 3.0 * s2;
-        let h11 = s3 - s2;
-        let (u0, u1, m0, m1) = (self.u[k], self.u[k + 1], self.m[k], self.m[k + 1]);
-        let dt = self.dt;
-        let val = h00 * u0 + h10 * dt * m0 + h01 * u1 + h11 * dt * m1;
-        let d00 = 6.0 * s2 - 6.0 * s;
-        let d10 = 3.0 * s2 - 4.0 * s + 1.0;
-        let d01 = -6.0 * s2 + 6.0 * s;
-        let d11 = 3.0 * s2 - 2.0 * s;
-        let der = (d00 * u0 + d01 * u1) / dt + d10 * m0 + d11 * m1;
-        (val, der)
+        self.value_slope(tau)
     }
 }
 

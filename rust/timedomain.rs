@@ -27,6 +27,7 @@
 
 use crate::bouc_wen::sgn;
 use crate::error::{all_finite, CoreError, Result};
+use crate::hermite::Hermite;
 
 /// Largest denominator degree.
 pub const MAX_ORDER: usize = 4;
@@ -125,53 +126,6 @@ impl Dual {
     }
 }
 
-/// The cubic Hermite interpolant of `rust/simulate.rs` (Catmull-Rom slopes, 0 before the start,
-/// the last value held after the end), with its first and second derivatives.
-struct Hermite<'a> {
-    u: &'a [f64],
-    m: Vec<f64>,
-    dt: f64,
-}
-
-impl<'a> Hermite<'a> {
-    fn new(u: &'a [f64], dt: f64) -> Self {
-        let n = u.len();
-        let mut m = vec![0.0; n];
-        for k in 1..n - 1 {
-            m[k] = (u[k + 1] - u[k - 1]) / (2.0 * dt);
-        }
-        m[0] = (u[1] - u[0]) / dt;
-        m[n - 1] = (u[n - 1] - u[n - 2]) / dt;
-        Self { u, m, dt }
-    }
-
-    /// `(u, u', u'')` at `tau` (s; `tau >= 0`).
-    #[inline(always)]
-    fn at(&self, tau: f64) -> (f64, f64, f64) {
-        let last = self.u.len() - 1;
-        let q = tau / self.dt;
-        let kf = q.floor();
-        if kf >= last as f64 {
-            return (self.u[last], 0.0, 0.0);
-        }
-        let k = kf as usize;
-        let s = q - kf;
-        let (s2, s3) = (s * s, s * s * s);
-        let (u0, u1, m0, m1) = (self.u[k], self.u[k + 1], self.m[k], self.m[k + 1]);
-        let dt = self.dt;
-        let val = (2.0 * s3 - 3.0 * s2 + 1.0) * u0
-            + (s3 - 2.0 * s2 + s) * dt * m0
-            + (-2.0 * s3 + 3.0 * s2) * u1
-            + (s3 - s2) * dt * m1;
-        let der = ((6.0 * s2 - 6.0 * s) * u0 + (-6.0 * s2 + 6.0 * s) * u1) / dt
-            + (3.0 * s2 - 4.0 * s + 1.0) * m0
-            + (3.0 * s2 - 2.0 * s) * m1;
-        let der2 = ((12.0 * s - 6.0) * u0 + (-12.0 * s + 6.0) * u1) / (dt * dt)
-            + ((6.0 * s - 4.0) * m0 + (6.0 * s - 2.0) * m1) / dt;
-        (val, der, der2)
-    }
-}
-
 /// The model's parameters as duals, in the canonical form of `TransferFunction::realize`.
 struct Model {
     n: usize,
@@ -225,7 +179,7 @@ impl Model {
         if s < 0.0 {
             return (Dual::constant(0.0), Dual::constant(0.0));
         }
-        let (u, du, ddu) = src.at(s);
+        let (u, du, ddu) = src.value_slope_second(s);
         let mut v = Dual::constant(u);
         let mut vdot = Dual::constant(du);
         v.d[self.i_tau] = -du;

@@ -58,9 +58,10 @@
 //! - the **output terms** are evaluated at the sample times (and, inside `F`, at the stage times).
 
 use super::on_x::{linear_pass, smoothing_key, Kinematics, OnX, OnXValues};
-use super::{check_dt, simulate, try_zeros, Hermite, Input, Simulation, Sine, Source};
+use super::{check_dt, simulate, try_zeros, Input, Simulation, Sine, Source};
 use crate::bouc_wen::{sgn, BoucWen};
 use crate::error::{finite, CoreError, Result};
+use crate::hermite::Hermite;
 use crate::linear::{Companion, TransferFunction};
 use crate::terms::{
     check_asymmetry, check_coulomb_smoothing, parse_placed, Place, TermKind, COULOMB_SMOOTHING,
@@ -471,18 +472,7 @@ impl Derivatives for Hermite<'_> {
     /// The right-hand second derivative of the cubic on `[t_k, t_{k+1})` (it jumps at the knots);
     /// 0 past the last sample.
     fn second(&self, tau: f64) -> f64 {
-        let last = self.u.len() - 1;
-        let q = tau / self.dt;
-        let kf = q.floor();
-        if kf >= last as f64 {
-            return 0.0;
-        }
-        let k = kf as usize;
-        let s = q - kf;
-        let (u0, u1, m0, m1) = (self.u[k], self.u[k + 1], self.m[k], self.m[k + 1]);
-        let dt = self.dt;
-        ((12.0 * s - 6.0) * u0 + (6.0 - 12.0 * s) * u1) / (dt * dt)
-            + ((6.0 * s - 4.0) * m0 + (6.0 * s - 2.0) * m1) / dt
+        Hermite::second(self, tau)
     }
 
     fn steady_x_peak_rate(&self, _tf: &TransferFunction) -> Option<f64> {
