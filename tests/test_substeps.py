@@ -179,3 +179,30 @@ def test_core_rejects_bad_experiment_counts(core: Any, counts: list[int]) -> Non
             truth.phases,
             experiment_substeps=counts,
         )
+
+
+@pytest.mark.parametrize(("gap", "restarts"), [(3.5e-6, True), (0.0, True), (5e-3, False)])
+def test_plain_fit_near_the_open_face_tries_the_generic_starts(
+    monkeypatch: pytest.MonkeyPatch, gap: float, restarts: bool
+) -> None:
+    """A first plain fit that stalls within PLAIN_FACE_GAP of |gamma| = beta (the MR damper at 0 A stalled
+    at a gap of 3.5e-6 towards gamma = -beta) is not taken as the null: the generic starts are tried, and a
+    better one wins; a fit clear of the face is kept as it is."""
+    from types import SimpleNamespace
+
+    from bouc_wen_id.diagnosis import fitting
+
+    calls: list[int] = []
+
+    def fake_fit_from(exps: Any, start: Any, substeps: int, max_iter: int = 200) -> Any:
+        calls.append(max_iter)
+        if len(calls) == 1:  # the first start: stalled near the open face, cost 10
+            return SimpleNamespace(params=SimpleNamespace(beta=1.0, gamma=-(1.0 - gap)), cost=10.0)
+        return SimpleNamespace(params=SimpleNamespace(beta=1.0, gamma=1.0), cost=1.0 + len(calls))
+
+    monkeypatch.setattr(fitting, "fit_from", fake_fit_from)
+    starts = [object()] * 4
+    monkeypatch.setattr(fitting, "plain_start", lambda exps, sx, s: starts)
+    best = fitting.fit_plain([], [], fitting.Scale(1.0, 1.0), 2)
+    assert (len(calls) > 1) is restarts
+    assert best.cost == (3.0 if restarts else 10.0)
