@@ -225,6 +225,7 @@ fn bench_augmented(c: &mut Criterion) {
             grid_phase: exc[i].grid_phase,
             weight: 1e6,
             waveform: &[],
+            substeps: None,
         })
         .collect();
     let start = [0.7, 0.25, 1.8, 0.25, 0.06];

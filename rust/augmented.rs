@@ -428,6 +428,10 @@ pub struct AugExperiment<'a> {
     /// The measured input's waveform beyond its fundamental, `[Re c_2, Im c_2, ...]` (design.md
     /// 9.5; empty for a pure sine), used by the `distortion` term.
     pub waveform: &'a [f64],
+    /// RK4 steps per lattice interval / path segment for this experiment; `None`: the refinement's
+    /// [`Options::substeps`]. A coarse grid needs more steps per sample than a fine one for the
+    /// same step in phase, so one count for all would make every fine grid pay for the coarsest.
+    pub substeps: Option<usize>,
 }
 
 impl AugExperiment<'_> {
@@ -510,7 +514,7 @@ impl JointModel for AugModel<'_> {
             shared,
             own[0],
             own[1],
-            self.opts.substeps,
+            self.exps[i].substeps.unwrap_or(self.opts.substeps),
         )?;
         Ok(ModelEval {
             y: out.y,
@@ -848,6 +852,7 @@ mod tests {
                 grid_phase: 0.3 * i as f64,
                 weight: 1e6,
                 waveform: &[],
+                substeps: None,
             })
             .collect();
         let start = [0.7, 0.25, 1.8, 0.2, 0.06, 0.02];
@@ -876,6 +881,94 @@ mod tests {
     }
 
     #[test]
+    fn each_experiment_is_evaluated_at_its_own_substep_count() {
+        // A coarse grid (16 samples) and a fine one (96): the outputs at the minimiser are the model's
+        // at each experiment's own count, bit for bit, and a count equal to the refinement's is the
+        // refinement's default.
+        let terms = terms_of(&[Offset, Viscous]);
+        let truth = [0.8, 0.2, 1.6, 0.3, 0.05];
+        let sizes = [16usize, 96];
+        let excs: Vec<Excitation> = sizes
+            .iter()
+            .enumerate()
+            .map(|(i, &p)| Excitation {
+                samples: p,
+                amplitude: 1.0 + i as f64,
+                frequency: 1.0 + 2.0 * i as f64,
+                grid_phase: 0.2 + 0.3 * i as f64,
+            })
+            .collect();
+        let ys: Vec<Vec<f64>> = excs
+            .iter()
+            .enumerate()
+            .map(|(i, exc)| {
+                let y = augmented_output(exc, &terms, &truth, 1.1, 0.5, 64)
+                    .unwrap()
+                    .y;
+                y.iter()
+                    .enumerate()
+                    .map(|(j, v)| v + 1e-3 * ((j * 7 + i * 13) as f64).sin())
+                    .collect()
+            })
+            .collect();
+        let exps_with = |counts: [Option<usize>; 2]| -> Vec<AugExperiment> {
+            (0..2)
+                .map(|i| AugExperiment {
+                    ybar: &ys[i],
+                    amplitude: excs[i].amplitude,
+                    frequency: excs[i].frequency,
+                    grid_phase: excs[i].grid_phase,
+                    weight: 1e6,
+                    waveform: &[],
+                    substeps: counts[i],
+                })
+                .collect()
+        };
+        let start = [0.7, 0.25, 1.8, 0.2, 0.06];
+        let opts = Options::default();
+        let fit = |counts| {
+            augmented_refine(
+                &exps_with(counts),
+                &terms,
+                &start,
+                &[1.0; 2],
+                &[0.45; 2],
+                &opts,
+            )
+            .unwrap()
+        };
+        let own = fit([Some(8), Some(2)]);
+        for (i, count) in [8, 2].into_iter().enumerate() {
+            let y = augmented_output(
+                &excs[i],
+                &terms,
+                &own.shared,
+                own.gains[i],
+                own.phases[i],
+                count,
+            )
+            .unwrap()
+            .y;
+            assert_eq!(y, own.outputs[i], "experiment {i} at {count} substeps");
+        }
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        let same = fit([Some(opts.substeps), None]);
+        let default = fit([None, None]);
+        assert_eq!(bits(&same.shared), bits(&default.shared));
+        assert_eq!(same.cost.to_bits(), default.cost.to_bits());
+        // Other counts move the minimiser, by the integration error only.
+        assert_ne!(bits(&own.shared), bits(&default.shared));
+        for (a, b) in own.shared.iter().zip(&default.shared) {
+            assert!(
+                (a - b).abs() < 1e-3 * b.abs().max(1e-2),
+                "{:?} {:?}",
+                own.shared,
+                default.shared
+            );
+        }
+    }
+
+    #[test]
     fn refinement_rejects_bad_input_by_name() {
         let y = vec![0.0; 16];
         let terms = terms_of(&[SensorLag]);
@@ -886,6 +979,7 @@ mod tests {
             grid_phase: 0.0,
             weight: 1.0,
             waveform: &[],
+            substeps: None,
         }];
         let go = |shared: &[f64], opts: &Options| {
             augmented_refine(&exps, &terms, shared, &[1.0], &[0.0], opts).unwrap_err()

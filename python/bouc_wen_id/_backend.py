@@ -315,6 +315,7 @@ class Augmented(Protocol):
         mu_lo: float = 1.0,
         mu_hi: float = ...,
         waveforms: Sequence[_F] | None = None,
+        experiment_substeps: Sequence[int] | None = None,
     ) -> tuple[_F, _F, _F, float, int, bool, _F, list[_F], str, list[str]]: ...
 
 

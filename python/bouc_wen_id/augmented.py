@@ -102,6 +102,11 @@ class AugExperiment:
         The measured input's harmonics beyond the fundamental, ``[Re c_2, Im c_2, Re c_3, ...]`` with
         ``u = U Re[e^{i z} + sum_k c_k e^{i k z}]``, ``z = 2 pi j/P + psi`` (design.md 9.5): what the
         ``distortion`` term scales. Empty (the default) for a pure sine.
+    substeps : int, optional
+        This experiment's own RK4 steps per sample of the loop solvers (>= 1). When set it is used in
+        place of the ``substeps`` a fit or an output call is given, so a coarse grid can take more steps
+        per sample than the fine grids fitted with it (the diagnosis sets one per experiment). None (the
+        default): the call's count.
     """
 
     ybar: FloatArray
@@ -111,6 +116,7 @@ class AugExperiment:
     weight: float
     source: str = ""
     waveform: FloatArray = field(default_factory=lambda: np.zeros(0))
+    substeps: Optional[int] = None
 
     def __post_init__(self) -> None:
         ybar = frozen_array("ybar", self.ybar)
@@ -137,6 +143,8 @@ class AugExperiment:
             )
         wave.flags.writeable = False
         object.__setattr__(self, "waveform", wave)
+        if self.substeps is not None:
+            object.__setattr__(self, "substeps", _count("substeps", self.substeps, 1))
 
 
 @dataclass(frozen=True)
@@ -279,6 +287,13 @@ def _auto_substeps(p: int) -> int:
 COVARIANCE_RCOND_MIN = 1e-12
 
 
+def _fit_substeps(exps: Sequence[AugExperiment], substeps: Optional[int]) -> int:
+    """The count of a fit's experiments without their own: the largest need (auto), or the one given."""
+    if substeps is None:
+        return max(_auto_substeps(e.ybar.size) for e in exps)
+    return _count("substeps", substeps, 1)
+
+
 def _covariance(fisher: FloatArray) -> FloatArray:
     """``fisher^-1``, NaN-filled when the Jacobi-scaled matrix is not positive definite or its reciprocal
     condition number is below :data:`COVARIANCE_RCOND_MIN` (a direction the data do not fix)."""
@@ -328,6 +343,7 @@ def fit_augmented(
         Iteration cap (accepted plus rejected steps).
     substeps : int, optional
         RK4 steps per sample of the loop solvers; default ``max(2, ceil(2048/P))`` for the largest need.
+        An experiment with its own :attr:`AugExperiment.substeps` is evaluated at that count instead.
     mu_lo, mu_hi : float
         The admissible mu bracket ``(mu_lo, mu_hi]``, ``mu_lo >= 1``.
     backend : {"rust", "numpy"}
@@ -357,11 +373,7 @@ def fit_augmented(
             f"{len(exps)} experiments but the start has {start.gains.size} gains and phases"
         )
     max_iter = _count("max_iter", max_iter, 1)
-    steps = (
-        max(_auto_substeps(e.ybar.size) for e in exps)
-        if substeps is None
-        else _count("substeps", substeps, 1)
-    )
+    steps = _fit_substeps(exps, substeps)
     mu_lo, mu_hi = float(mu_lo), float(mu_hi)
     if not math.isfinite(mu_lo) or mu_lo < 1.0 or math.isnan(mu_hi) or mu_hi <= mu_lo:
         raise InvalidParameterError(
@@ -383,6 +395,7 @@ def fit_augmented(
         mu_lo=mu_lo,
         mu_hi=mu_hi,
         waveforms=[e.waveform for e in exps],
+        experiment_substeps=[steps if e.substeps is None else e.substeps for e in exps],
     )
     shared = np.asarray(shared, dtype=np.float64)
     params = AugParams(
@@ -469,7 +482,8 @@ def augmented_output(
     i : int
         Index of the experiment's gain and phase in ``params``.
     substeps : int, optional
-        RK4 steps per sample; default ``max(2, ceil(2048/P))``.
+        RK4 steps per sample; default ``max(2, ceil(2048/P))``; the experiment's own
+        :attr:`AugExperiment.substeps` when it has one.
     jacobian : bool
         Return the derivatives too.
     backend : {"rust", "numpy"}
@@ -488,6 +502,8 @@ def augmented_output(
         raise InvalidParameterError(f"i = {i!r} must index one of the {params.gains.size} gains")
     p = experiment.ybar.size
     steps = _auto_substeps(p) if substeps is None else _count("substeps", substeps, 1)
+    if experiment.substeps is not None:
+        steps = experiment.substeps
     y, jac, own = get_backend(backend).augmented.augmented_output(
         p,
         experiment.amplitude,

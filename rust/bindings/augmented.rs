@@ -172,8 +172,16 @@ fn aug_experiments<'a>(
     (amplitudes, frequencies): (&[f64], &[f64]),
     (grid_phases, weights): (&[f64], &[f64]),
     waveforms: &[&'a [f64]],
+    substeps: &[Option<usize>],
 ) -> PyResult<Vec<AugExperiment<'a>>> {
     let m = ybars.len();
+    if !(substeps.is_empty() || substeps.len() == m) {
+        return Err(CoreError::InvalidParameter(format!(
+            "{m} experiments but {} substep counts (give one per experiment, or none)",
+            substeps.len()
+        ))
+        .into());
+    }
     if !(waveforms.is_empty() || waveforms.len() == m) {
         return Err(CoreError::InvalidParameter(format!(
             "{m} experiments but {} waveforms (give one per experiment, or none)",
@@ -198,15 +206,17 @@ fn aug_experiments<'a>(
             grid_phase: grid_phases[i],
             weight: weights[i],
             waveform: waveforms.get(i).copied().unwrap_or(&[]),
+            substeps: substeps.get(i).copied().flatten(),
         })
         .collect())
 }
 
 /// Joint Levenberg-Marquardt of the augmented model (design.md 9.3). `fisher` is `J^T W J`
 /// ordered `[beta, gamma, mu, q_1 .. q_T, g_0, phi_0, g_1, phi_1, ...]`; `stop` says which rule
-/// ended the search and `active` on which constraints it ended.
+/// ended the search and `active` on which constraints it ended. `experiment_substeps`, one count
+/// per experiment, overrides `substeps` for each (the budget charges the largest).
 #[pyfunction]
-#[pyo3(signature = (ybars, amplitudes, frequencies, grid_phases, weights, terms, shared0, gains0, phases0, *, max_iter=200, substeps=4, mu_lo=1.0, mu_hi=f64::INFINITY, waveforms=None))]
+#[pyo3(signature = (ybars, amplitudes, frequencies, grid_phases, weights, terms, shared0, gains0, phases0, *, max_iter=200, substeps=4, mu_lo=1.0, mu_hi=f64::INFINITY, waveforms=None, experiment_substeps=None))]
 #[allow(clippy::too_many_arguments)]
 fn augmented_refine<'py>(
     py: Python<'py>,
@@ -224,6 +234,7 @@ fn augmented_refine<'py>(
     #[pyo3(from_py_with = arg)] mu_lo: f64,
     #[pyo3(from_py_with = arg)] mu_hi: f64,
     #[pyo3(from_py_with = arg)] waveforms: Option<Vec<PyReadonlyArray1<'py, f64>>>,
+    #[pyo3(from_py_with = arg)] experiment_substeps: Option<Vec<i64>>,
 ) -> PyResult<AugRefineOut<'py>> {
     let terms = Terms::parse(&terms)?;
     let waveforms = waveforms.unwrap_or_default();
@@ -234,6 +245,11 @@ fn augmented_refine<'py>(
         (&amplitudes, &frequencies),
         (&grid_phases, &weights),
         &waveforms,
+        &experiment_substeps
+            .unwrap_or_default()
+            .into_iter()
+            .map(|v| count("experiment_substeps", v, 1).map(Some))
+            .collect::<PyResult<Vec<_>>>()?,
     )?;
     let opts = Options {
         max_iter: count("max_iter", max_iter, 1)?,
@@ -245,7 +261,11 @@ fn augmented_refine<'py>(
     let steps = Work::AugmentedRefinement {
         samples: exps.iter().map(|e| e.ybar.len() as u128).sum(),
         max_iter: opts.max_iter,
-        substeps: opts.substeps,
+        substeps: exps
+            .iter()
+            .map(|e| e.substeps.unwrap_or(opts.substeps))
+            .max()
+            .unwrap_or(opts.substeps),
     }
     .check()?;
     let fit = detach::interruptible(py, steps, || {

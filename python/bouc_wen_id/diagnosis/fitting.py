@@ -49,6 +49,8 @@ def scale_of(exps: Sequence[DiagExperiment]) -> Scale:
 
 
 def scaled(exps: Sequence[DiagExperiment], s: Scale) -> list[AugExperiment]:
+    """The experiments in scaled units, each with its own RK4 substep count (:func:`experiment_substeps`)."""
+    sizes = [e.ybar.size for e in exps]
     return [
         AugExperiment(
             ybar=np.ascontiguousarray(e.ybar / s.y),
@@ -58,6 +60,7 @@ def scaled(exps: Sequence[DiagExperiment], s: Scale) -> list[AugExperiment]:
             weight=e.weight * s.y**2,
             source=e.source,
             waveform=e.waveform,
+            substeps=experiment_substeps(e.ybar.size, sizes),
         )
         for e in exps
     ]
@@ -263,15 +266,26 @@ def regressor(term: str, e: AugExperiment, par: AugParams, i: int, substeps: int
 
 
 def substeps_for(sizes: Sequence[int]) -> int:
-    """RK4 steps per sample of the diagnosis's loops, one count for all experiments (the core takes one).
+    """RK4 steps per sample that serve every experiment's grid: the largest :func:`experiment_substeps`.
 
-    A step of at most 2 pi/512 rad on the finest grid, and at least 128 steps per period on the coarsest.
-    Coarser than identify's 2 pi/2048: every reversal is a node of the loop solvers (design.md 9.2), so the
-    steps stay fourth order and the discretisation error (below 1e-6 of the loop at 128 steps per period)
-    sits far below any noise floor, at a fraction of the cost over the hundred fits of a diagnosis; and
-    experiments with very different grids (lab records) do not all pay for the coarsest one.
+    The fits and outputs use each experiment's own count (:attr:`AugExperiment.substeps`, set by
+    :func:`scaled`); this one is for what has no experiment of its own (the drift test's simulations).
     """
-    return max(2, math.ceil(512 / max(sizes)), math.ceil(128 / min(sizes)))
+    return max(experiment_substeps(p, sizes) for p in sizes)
+
+
+def experiment_substeps(p: int, sizes: Sequence[int]) -> int:
+    """RK4 steps per sample of one experiment of ``p`` samples per period among grids of ``sizes``.
+
+    At least 128 steps per period on this grid, and a step of at most 2 pi/512 rad on the finest grid of
+    the set (so equal grids get exactly the count they had when one count served all). Coarser than
+    identify's 2 pi/2048: every reversal is a node of the loop solvers (design.md 9.2), so the steps stay
+    fourth order, and at these counts the error of the MR damper's loops is at most 5.4e-3 of the averaged
+    noise's standard deviation at every current (docs/diagnosis-speed.md). One count for all would make
+    every fine grid pay for the coarsest (the MR damper's six files: P = 401 ... 37, 4 steps per sample
+    for all instead of 2 for five and 4 for one: 3670 RK4 steps per evaluation instead of 7192).
+    """
+    return max(2, math.ceil(512 / max(sizes)), math.ceil(128 / p))
 
 
 #: The diagnosis's fits run in chunks of this many LM iterations...
@@ -415,13 +429,21 @@ def _generic_starts(exps: Sequence[AugExperiment]) -> list[AugParams]:
     return out
 
 
+#: A plain fit that ends within this relative gap of ``|gamma| = beta`` is suspicious and the generic starts
+#: are tried too. On the closed face ``gamma = beta`` the fit sits exactly (gap 0); towards the open face
+#: ``gamma = -beta`` (``beta + gamma -> 0``, not a constraint the active set holds) it crawls and stalls short
+#: of it: the MR damper at 0 A stalled at a gap of 3.5e-6 with a cost 6.8 times that of the plain fit a
+#: generic start reaches (beta = gamma, mu = 1.18), so 1e-6 let a local minimum be the null of every test.
+PLAIN_FACE_GAP = 1e-3
+
+
 def fit_plain(exps: Sequence[DiagExperiment], sx: Sequence[AugExperiment], s: Scale, substeps: int) -> AugFit:
     """The plain Wiener-Bouc-Wen model on the data with their DC (the null of every test): ``sx`` are
     ``exps`` scaled by ``s`` (:func:`scaled`)."""
     starts = plain_start(exps, sx, s)
     first = fit_from(sx, starts[0], substeps) if starts else None
     fits: list[Optional[AugFit]] = [first]
-    if first is None or first.params.beta - abs(first.params.gamma) < 1e-6 * first.params.beta:
+    if first is None or first.params.beta - abs(first.params.gamma) < PLAIN_FACE_GAP * first.params.beta:
         fits += [fit_from(sx, st, substeps, max_iter=25) for st in starts[1:]]
         screened = best_of(fits)
         if screened is not None and screened is not first:

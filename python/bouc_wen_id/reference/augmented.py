@@ -298,7 +298,7 @@ class _Problem(NamedTuple):
     psis: FloatArray
     wts: FloatArray
     names: tuple[str, ...]
-    substeps: int
+    substeps: tuple[int, ...]
     mu_lo: float
     mu_hi: float
     waveforms: Optional[Sequence[ArrayLike]]
@@ -343,7 +343,7 @@ class _Problem(NamedTuple):
                 par[:ns],
                 par[ns + 2 * i],
                 par[ns + 1 + 2 * i],
-                self.substeps,
+                self.substeps[i],
                 None if self.waveforms is None else self.waveforms[i],
             )
             r = yi - y
@@ -390,6 +390,7 @@ def _check_refine(
     mu_lo: float,
     mu_hi: float,
     waveforms: Optional[Sequence[ArrayLike]],
+    experiment_substeps: Optional[Sequence[int]] = None,
 ) -> tuple[_Problem, FloatArray, FloatArray, FloatArray]:
     """The arguments of :func:`augmented_refine` checked in the core's order: the problem and the start
     ``(shared0, gains0, phases0)``."""
@@ -424,7 +425,12 @@ def _check_refine(
     _check_shared(names, sh0)
     if waveforms is not None and len(waveforms) != m:
         raise InvalidParameterError(f"{m} experiments but {len(waveforms)} waveforms")
-    problem = _Problem(ys, amps, freqs, psis, wts, names, substeps, mu_lo, mu_hi, waveforms)
+    own = [substeps] * m if experiment_substeps is None else [int(k) for k in experiment_substeps]
+    if len(own) != m:
+        raise InvalidParameterError(f"{m} experiments but {len(own)} substep counts")
+    if any(k < 1 for k in own):
+        raise InvalidParameterError(f"experiment_substeps = {own} must all be >= 1")
+    problem = _Problem(ys, amps, freqs, psis, wts, names, tuple(own), mu_lo, mu_hi, waveforms)
     return problem, sh0, g0, p0
 
 
@@ -444,6 +450,7 @@ def augmented_refine(
     mu_lo: float = 1.0,
     mu_hi: float = float("inf"),
     waveforms: Optional[Sequence[ArrayLike]] = None,
+    experiment_substeps: Optional[Sequence[int]] = None,
 ) -> tuple[
     FloatArray, FloatArray, FloatArray, float, int, bool, FloatArray, list[FloatArray], str, list[str]
 ]:
@@ -452,12 +459,13 @@ def augmented_refine(
     Returns ``(shared, gains, phases, cost, iterations, converged, fisher, outputs, stop, active)`` with
     ``fisher`` ordered ``[beta, gamma, mu, q_1 .. q_T, g_0, phi_0, g_1, phi_1, ...]``, ``stop`` the stopping
     rule and ``active`` the constraints the fit ends on (:func:`.refine.levenberg_marquardt`).
+    ``experiment_substeps``, one count per experiment, overrides ``substeps`` for each.
     """
     ftol, xtol = 1e-12, 1e-10
     vectors = (amplitudes, frequencies, grid_phases, weights)
     start = (shared0, gains0, phases0)
     prob, sh0, g0, p0 = _check_refine(
-        ybars, vectors, terms, start, max_iter, substeps, mu_lo, mu_hi, waveforms
+        ybars, vectors, terms, start, max_iter, substeps, mu_lo, mu_hi, waveforms, experiment_substeps
     )
     ns = prob.ns
     params = np.concatenate([sh0, np.column_stack([g0, p0]).ravel()])
