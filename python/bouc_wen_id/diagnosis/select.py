@@ -471,12 +471,14 @@ def place_alternatives(
     chosen: Trial,
     trials: Sequence[Trial],
     substeps: int,
+    law_failed: Sequence[str] = (),
 ) -> list[Alternative]:
     """The chosen term at its other places, where the data cannot tell the places apart.
 
     A sibling (the same physics at another place, e.g. viscous damping on u and on x) whose fit is within
     :data:`PLACE_CHI2` (times the chosen model's chi2/dof when above 1) of the chosen one's cost is an
-    alternative, never dropped silently; the separating
+    alternative, never dropped silently, unless its law fails (:func:`law_test`, run here for a sibling the
+    selection did not reach): then it is no rival reading. The separating
     experiment is where x lags u differently (near G's resonance or corner).
     """
     if chosen.fit is None:
@@ -487,9 +489,12 @@ def place_alternatives(
     s2 = max(1.0, chosen.cost / dof) if dof > 0 else 1.0
     for rival in siblings(chosen.term):
         tr = by_term.get(rival)
-        if tr is None or tr.fit is None:
+        if tr is None or tr.fit is None or rival in law_failed:  # its law failed: not a rival reading
             continue
         if tr.cost - chosen.cost >= PLACE_CHI2 * s2:
+            continue
+        law_p = tr.law_p_value if math.isfinite(tr.law_p_value) else law_test(exps, tr.fit, rival, substeps)
+        if math.isfinite(law_p) and law_p < LAW_ALPHA:  # a value that differs between experiments
             continue
         both = fit_with(exps, chosen.fit, rival, substeps)
         rho = _correlation(both, chosen.term, rival) if both is not None else math.nan
@@ -562,7 +567,7 @@ def forward_select(
         alternatives: list[Alternative] = []
         if chosen is not None and chosen.fit is not None:
             # The chosen physics at its other places first, with the experiment that separates places.
-            alternatives += place_alternatives(exps, chosen, trials, substeps)
+            alternatives += place_alternatives(exps, chosen, trials, substeps, law_failed)
             for tr in order:
                 if tr.term == chosen.term or tr.fit is None or tr.term in siblings(chosen.term):
                     continue
