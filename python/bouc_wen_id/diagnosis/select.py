@@ -11,7 +11,8 @@ A term is **named** at a step only if
 3. it improves the **held-out** fit: leave-one-experiment-out, physics fitted on the others, only the
    held-out experiment's own (|G|, phi) refitted, summed held-out cost lower than M's;
 4. its **law** holds (:func:`law_test`): the library's claim for every term is one value shared by all
-   experiments in physical units, so the value fitted per experiment must agree across them. A term that
+   experiments in physical units, so the value fitted per experiment must agree across them, within what
+   each experiment's own residual spectrum lets a misfit elsewhere move it. A term that
    stands in for physics outside the library (viscous damping for a loop width that grows with rate, a
    stiffness for a parallel loop of another hysteresis family) absorbs part of the misfit with values that
    differ from experiment to experiment; it is not named, and the structure it touched stays unexplained.
