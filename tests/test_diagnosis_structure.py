@@ -16,9 +16,9 @@ from pathlib import Path
 from typing import Any
 
 import bouc_wen_id as bw
+import bouc_wen_id.diagnosis.structure as S
 import numpy as np
 import pytest
-from bouc_wen_id.diagnosis import structure as S
 from bouc_wen_id.diagnosis.data import DiagExperiment
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benches"))
