@@ -216,6 +216,9 @@ def _score(d: Any, kind: str, truth: Optional[str], place: str) -> dict[str, Any
         "bad_explained": d.status == "explained" and not (d.final.p_value >= alpha),
         "final_p": float(d.final.p_value),
         "verdict": d.verdict,
+        # The structural candidate (diagnosis/structure.py): why it was (not) tried, and its seconds.
+        "structure": None if d.structure is None else d.structure.reason,
+        "structure_seconds": 0.0 if d.structure is None else float(d.structure.seconds),
     }
 
 

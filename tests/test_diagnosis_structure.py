@@ -129,3 +129,12 @@ def test_amplitude_groups_and_gain_test() -> None:
     # A misfit inflates the covariance: the same gap is no longer significant at chi2/dof = 1e4.
     assert S.gain_test([[0, 1]], np.array([2.0, 2.2, 1.0, 1.0]), cov, 1e4)[0] > 0.05
     assert math.isnan(S.gain_test([], np.ones(4), cov, 1.0)[0])
+
+
+def test_report_of_a_named_structure_is_written(feedback_diagnosis: Any, tmp_path: Path) -> None:
+    from bouc_wen_id.diagnosis.report import write_report
+
+    write_report(feedback_diagnosis, tmp_path / "diag")
+    js = json.loads((tmp_path / "diag" / "diagnosis.json").read_text())
+    assert js["status"] == "explained" and js["structure"]["named"]
+    assert "acts back on the dynamics" in (tmp_path / "diag" / "report.html").read_text()
