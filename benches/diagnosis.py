@@ -11,8 +11,10 @@ Two generators (``--generator``):
   degradation (nu); the Baber-Noori terms being added (stiffness degradation eta, pinching: scored as
   library rows once the registry has them, as outside rows until then); physics outside the library (a
   rate-dependent loop width, a parallel Dahl loop, a slack gap: a dead zone at mid-travel before the
-  hysteresis, the feedback structure ``m y'' + c y' + k y + z = u``); null cases with a low-amplitude
-  experiment (started from a saturating one's remanent w) whose loop centre is still settling.
+  hysteresis); a structure the diagnosis names as a rival of the cascade (group ``structure``: the
+  feedback structure ``m y'' + c y' + k y + z = u``, sized by its noise, to be named ``feedback``); null
+  cases with a low-amplitude experiment (started from a saturating one's remanent w) whose loop centre is
+  still settling.
 - ``old``: ``benches/concealed.py``, the library's own simulator (the earlier tables, for before/after).
 
 Sizes are the RMS of the effect's noise-free contribution over the averaged periods, in units of the
@@ -186,10 +188,12 @@ def _score(d: Any, kind: str, truth: Optional[str], place: str) -> dict[str, Any
     """Detection, right name, right place, wrong name, unexplained and a bad "explained" of one diagnosis."""
     js = d.to_dict()
     named = [(_base_name(str(e["term"])), _place_of(e)) for e in js["named"]]
+    if js.get("structure") and js["structure"]["named"]:  # a named structure (diagnosis/structure.py)
+        named.append((str(js["structure"]["structure"]), ""))
     alts: set[str] = set()
     for a in js["alternatives"]:
         alts |= {_base_name(str(a.get("term", ""))), _base_name(str(a.get("rival", "")))}
-    ok = _accepted(truth if kind == "library" else None)
+    ok = _accepted(truth if kind in ("library", "structure") else None)
     names = [n for n, _ in named]
     hit = [n in ok for n in names]
     via_alt = any(o in alts for o in ok) and any(n in alts for n in names)
@@ -212,6 +216,9 @@ def _score(d: Any, kind: str, truth: Optional[str], place: str) -> dict[str, Any
         "bad_explained": d.status == "explained" and not (d.final.p_value >= alpha),
         "final_p": float(d.final.p_value),
         "verdict": d.verdict,
+        # The structural candidate (diagnosis/structure.py): why it was (not) tried, and its seconds.
+        "structure": None if d.structure is None else d.structure.reason,
+        "structure_seconds": 0.0 if d.structure is None else float(d.structure.seconds),
     }
 
 
@@ -244,9 +251,14 @@ def run_new_case(job: tuple[str, Optional[str], str, float, int]) -> dict[str, A
             row["error"] = f"{type(exc).__name__}: {exc}"
             return row
     row["seconds"] = time.perf_counter() - t0
-    truth = name if skind == "library" else None
+    truth = name if skind in ("library", "structure") else None
     row.update(_score(d, skind, truth, place if name in gen.MECHANICAL else ""))
-    fittable = skind != "outside" and (name is None or (name not in gen.MECHANICAL or place == "u"))
+    if skind == "structure":  # the achieved size: the cascade's RMS misfit in averaged-noise sd
+        n = sum(e.ybar.size for e in d.experiments)
+        row["achieved"] = math.sqrt(max(d.plain.cost - d.plain.dof, 0.0) / n)
+    fittable = skind not in ("outside", "structure") and (
+        name is None or (name not in gen.MECHANICAL or place == "u")
+    )
     try:
         row["ratio"] = _held_out_ratio(d, truth) if fittable and kind != "pending" else math.nan
     except Exception:
@@ -265,7 +277,8 @@ def new_jobs(args: argparse.Namespace) -> list[tuple[str, Optional[str], str, fl
     rows += [("library", n, "", sz, args.cases) for n in gen.LIBRARY_OTHER for sz in sizes]
     rows += [("pending", n, "", sz, args.cases) for n in gen.BABER_NOORI for sz in sizes]
     rows += [("outside", n, "", sz, args.cases) for n in gen.OUTSIDE for sz in (10.0, 30.0)]
-    rows += [("outside", "feedback", "", 0.0, args.cases), ("null", None, "", 0.0, args.null)]
+    rows += [("null", None, "", 0.0, args.null)]
+    rows += [("structure", "feedback", "", sz, args.cases) for sz in (10.0, 30.0)]
     jobs = []
     for k, (kind, name, place, size, count) in enumerate(rows):
         jobs += [(kind, name, place, size, args.seed + 1000 * (k + 1) + s) for s in range(count)]
@@ -281,6 +294,12 @@ def _target(kind: str, size: float) -> tuple[str, dict[str, tuple[str, float]]]:
                 "bad": ("<=", 0.0),
             }
         return "(reported)", {"bad": ("<=", 0.0)}
+    if kind == "structure":
+        return "named >= .95, wrong <= .05, bad 0", {
+            "right": (">=", 0.95),
+            "wrong": ("<=", 0.05),
+            "bad": ("<=", 0.0),
+        }
     if kind == "null":
         return "named <= .05, unexpl <= .05", {"wrong": ("<=", 0.05), "unexplained": ("<=", 0.05)}
     return "unexpl >= .90, wrong <= .10", {

@@ -5,7 +5,8 @@ names a term only when it passes a nested test at a controlled false-alarm rate,
 of the misfit and improves the fit on held-out experiments, and says "unexplained" (and where) otherwise.
 Modules, one job each: ``data`` (experiments with their DC and period record), ``locate`` (where),
 ``fitting`` (the augmented fits in scaled units), ``select`` (forward selection, held-out), ``result``
-(the Diagnosis value), ``run`` (the orchestration), ``report`` (figures and the HTML page).
+(the Diagnosis value), ``run`` (the orchestration), ``report`` (figures and the HTML page), ``structure``
+(Bouc-Wen in feedback, a structural rival of the cascade).
 """
 
 from __future__ import annotations

@@ -137,6 +137,10 @@ class Diagnosis:
     degradation: Any = field(default=None, repr=False)
     #: Remarks on the selection, e.g. why a candidate was not tested.
     notes: tuple[str, ...] = ()
+    #: The structural candidate's test (Bouc-Wen in feedback, not a cascade: diagnosis/structure.py); None
+    #: when the cascade's final model is adequate or explained. When named, ``final``, ``final_fit`` and
+    #: ``held_out`` are the feedback model's and ``named`` is empty (a structure, not a term).
+    structure: Any = field(default=None, repr=False)
 
     @property
     def named_terms(self) -> tuple[str, ...]:
@@ -186,6 +190,11 @@ class Diagnosis:
                 )
         for note in self.notes:
             lines.append(note)
+        if self.structure is not None and self.structure.named:  # the feedback structure (structure.py)
+            lines.append(
+                "feedback structure: "
+                + ", ".join(f"{k} = {v:.4g} ± {se:.2g}" for k, v, se in self.structure.parameters)
+            )
         if self.held_out is not None:
             lines.append("")
             lines.append("held-out NRMSE (one experiment left out, physics fitted on the others):")
@@ -222,6 +231,7 @@ class Diagnosis:
             "seconds": self.seconds,
             Degradation.kind: None if self.degradation is None else self.degradation.to_dict(),
             "notes": list(self.notes),
+            "structure": None if self.structure is None else self.structure.to_dict(),
         }
 
     def to_json(self, indent: int = 2) -> str:

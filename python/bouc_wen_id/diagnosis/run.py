@@ -45,6 +45,7 @@ from .locate import Localisation, adequacy_p, locate
 from .progress import Progress, ProgressCallback, reporter
 from .result import Diagnosis, ModelSummary, NamedTerm, Status, term_symbol_unit
 from .select import ALPHA, Alternative, FoldCache, Step, forward_select, held_out
+from .structure import with_structure
 
 #: When the final model is still rejected, named terms that remove at least this share of the plain model's
 #: excess give "partly explained" (the terms are named, with the share, and the structure left is located);
@@ -768,7 +769,7 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
     setup.report("held-out check of the final model", 0, 1)
     ho = held_out(fsx, start, final, substeps, cache) if final.params.terms else None
     setup.report("done", 1, 1)
-    return Diagnosis(
+    d = Diagnosis(
         status=status,
         verdict=verdict,
         named=named,
@@ -789,6 +790,9 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
         degradation=deg,
         notes=tuple(notes),
     )
+    # The structural candidate (feedback, not a cascade), tried only when the cascade fails (structure.py).
+    setup.report("testing the feedback structure", 0, 1)
+    return with_structure(d, setup.alpha, setup.held_out_test)
 
 
 def _settings(setup: _Setup, s: Scale, substeps: int) -> dict[str, Any]:

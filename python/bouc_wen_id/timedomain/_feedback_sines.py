@@ -38,19 +38,30 @@ SineExperiment = tuple[float, float, ArrayLike]
 MAX_STEP = 1.0 / 15000.0
 
 
-def _substeps(frequency: float, samples: int) -> int:
-    return max(1, math.ceil(1.0 / (frequency * samples) / MAX_STEP))
+def _substeps(frequency: float, samples: int, max_step: float = MAX_STEP) -> int:
+    return max(1, math.ceil(1.0 / (frequency * samples) / max_step))
 
 
 def steady_period(
-    model: FeedbackModel, amplitude: float, frequency: float, samples: int, *, backend: str = "rust"
+    model: FeedbackModel,
+    amplitude: float,
+    frequency: float,
+    samples: int,
+    *,
+    backend: str = "rust",
+    max_step: float = MAX_STEP,
 ) -> FloatArray:
     """One period (``samples`` points from ``t = 0``) of the periodic displacement of ``model`` under
-    ``amplitude cos(2 pi frequency t)``, RK4 steps at most 1/15000 s."""
+    ``amplitude cos(2 pi frequency t)``, RK4 steps at most ``max_step`` (default 1/15000 s)."""
     frequency = positive_number("frequency", frequency)
     samples = count("samples", samples, 4)
+    max_step = positive_number("max_step", max_step)
     y, _, _, _ = feedback_part(backend).feedback_periodic(
-        model.theta, float(amplitude), 2 * math.pi * frequency, samples, _substeps(frequency, samples)
+        model.theta,
+        float(amplitude),
+        2 * math.pi * frequency,
+        samples,
+        _substeps(frequency, samples, max_step),
     )
     return y
 
@@ -104,6 +115,7 @@ def _residuals(
     scale: FloatArray,
     backend: str,
     pool: ThreadPoolExecutor,
+    max_step: float = MAX_STEP,
 ) -> Callable[[FloatArray], tuple[FloatArray, FloatArray]]:
     part = feedback_part(backend)
 
@@ -114,7 +126,7 @@ def _residuals(
         def one(e: tuple[float, float, FloatArray]) -> tuple[FloatArray, FloatArray]:
             amp, freq, yb = e
             y, jac, _, _ = part.feedback_periodic(
-                theta, amp, 2 * math.pi * freq, yb.size, _substeps(freq, yb.size)
+                theta, amp, 2 * math.pi * freq, yb.size, _substeps(freq, yb.size, max_step)
             )
             return y - yb, jac[:, free] * scale
 
@@ -140,12 +152,15 @@ def fit_feedback_sines(
     noise_variance: Optional[float] = None,
     threads: int = 2,
     backend: str = "rust",
+    max_step: float = MAX_STEP,
 ) -> FeedbackFit:
     """Fit Bouc-Wen in feedback to averaged steady sine periods (module docstring).
 
     The same parameters, normalisation (``beta`` fixed: only ``beta*gamma`` and ``beta*delta`` are
     identifiable) and multi-start as :func:`~._feedback.fit_feedback`; the start comes from the first
     harmonics when ``theta0`` is not given.  The result's ``x0`` is empty and ``rmse`` is per experiment.
+    ``max_step`` (s) is the largest RK4 step (default 1/15000 s, the benchmark's; the diagnosis passes a
+    fraction of the shortest period, which keeps the cost independent of the time unit).
 
     Raises
     ------
@@ -155,6 +170,7 @@ def fit_feedback_sines(
     t_start = time.perf_counter()
     exps = _checked(experiments)
     beta = positive_number("beta", beta)
+    max_step = positive_number("max_step", max_step)
     starts = count("starts", starts, 1)
     unknown = [f for f in fixed if f not in FEEDBACK_PARAMETERS]
     if unknown:
@@ -174,7 +190,7 @@ def fit_feedback_sines(
     costs: list[float] = []
     best: Optional[LMResult] = None
     with ThreadPoolExecutor(max(1, threads)) as pool:
-        fun = _residuals(exps, theta_ref, free, scale, backend, pool)
+        fun = _residuals(exps, theta_ref, free, scale, backend, pool, max_step)
         for cand in random_starts(theta_ref, y_rms, starts, seed):
             try:
                 res = levenberg_marquardt(
