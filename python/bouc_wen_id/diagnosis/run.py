@@ -768,7 +768,6 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
     alternatives = tuple(a for st in steps for a in st.alternatives) + _drift_alternatives(deg, named_deg)
     setup.report("held-out check of the final model", 0, 1)
     ho = held_out(fsx, start, final, substeps, cache) if final.params.terms else None
-    setup.report("done", 1, 1)
     d = Diagnosis(
         status=status,
         verdict=verdict,
@@ -792,7 +791,9 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
     )
     # The structural candidate (feedback, not a cascade), tried only when the cascade fails (structure.py).
     setup.report("testing the feedback structure", 0, 1)
-    return with_structure(d, setup.alpha, setup.held_out_test)
+    d = with_structure(d, setup.alpha, setup.held_out_test)
+    setup.report("done", 1, 1)  # the last stage, after the structural candidate (progress tests hold it)
+    return d
 
 
 def _settings(setup: _Setup, s: Scale, substeps: int) -> dict[str, Any]:
