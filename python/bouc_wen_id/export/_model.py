@@ -21,19 +21,11 @@ from ..terms import (
     COULOMB_SMOOTHING,
     PINCHING_CENTRE,
     PINCHING_WIDTH,
-    Asymmetry,
+    TERMS,
     Coulomb,
-    Degradation,
-    Inertia,
-    Offset,
-    Pinching,
+    Distortion,
     Place,
-    Play,
-    SensorLag,
-    Stiffness,
-    StiffnessDegradation,
     Term,
-    Viscous,
     core_terms,
 )
 from ..validation import check_transfer_function
@@ -101,19 +93,10 @@ class Flat(NamedTuple):
         return float((self.alpha / (self.beta + self.gamma)) ** (1.0 / self.mu))
 
 
-#: The term classes the exporters write (exactly these: a term on x is a subclass, and not here).
-EXPORTED: tuple[type[Term], ...] = (
-    Offset,
-    Stiffness,
-    Viscous,
-    Inertia,
-    Coulomb,
-    SensorLag,
-    Asymmetry,
-    Play,
-    Degradation,
-    StiffnessDegradation,
-    Pinching,
+#: The term classes the exporters write: the registry's terms at their usual place, less the input distortion
+#: (a term on x is a subclass of its usual class, with ``acts_on`` = x, and not here).
+EXPORTED: tuple[type[Term], ...] = tuple(
+    cls for cls in TERMS.values() if cls is not Distortion and cls.acts_on != Place.X
 )
 
 
