@@ -8,6 +8,7 @@ from the library's simulator.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import replace
 
 import bouc_wen_id as bw
@@ -289,3 +290,35 @@ def test_a_term_at_its_null_value_is_not_a_candidate() -> None:
     assert not at_null(fit("sensor_lag", 1e-3), "sensor_lag")  # type: ignore[arg-type]
     assert at_null(fit("offset", 0.0), "offset") and not at_null(fit("offset", -0.2), "offset")  # type: ignore[arg-type]
     assert not at_null(fit("offset", 0.0), "viscous")  # type: ignore[arg-type]
+
+
+def test_a_budget_error_inside_the_law_test_or_the_separating_design_is_raised(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """A budget the user set is theirs: the law test and the separating-design search used to swallow every
+    exception (reading a budget stop as "the law is not tested" / "separates nothing"). Other failures of
+    the core there still mean exactly that."""
+    from types import SimpleNamespace
+
+    from bouc_wen_id.diagnosis import select
+    from bouc_wen_id.errors import BudgetExceededError, NonFiniteError
+
+    exps = [SimpleNamespace(ybar=np.zeros(10), amplitude=1.0, frequency=1.0, weight=1.0, source="e")] * 2
+    par = SimpleNamespace(terms=("viscous",))
+    fit = SimpleNamespace(params=par)
+
+    def raiser(exc: Exception) -> Callable[..., None]:
+        def f(*a: object, **k: object) -> None:
+            raise exc
+
+        return f
+
+    monkeypatch.setattr(select, "replace", lambda e, **k: e)
+    monkeypatch.setattr(select, "augmented_output", raiser(NonFiniteError("x")))
+    assert math.isnan(select.law_test(exps, fit, "viscous", 2))  # type: ignore[arg-type]
+    assert select._separating(exps, fit, fit, 2).startswith("none of the designs")  # type: ignore[arg-type]
+    monkeypatch.setattr(select, "augmented_output", raiser(BudgetExceededError("BOUC_WEN_ID_MAX_STEPS")))
+    with pytest.raises(BudgetExceededError):
+        select.law_test(exps, fit, "viscous", 2)  # type: ignore[arg-type]
+    with pytest.raises(BudgetExceededError):
+        select._separating(exps, fit, fit, 2)  # type: ignore[arg-type]

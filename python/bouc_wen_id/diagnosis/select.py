@@ -41,6 +41,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..augmented import AugExperiment, AugFit, augmented_output
+from ..errors import BudgetExceededError
 from ..terms import TERMS, Stiffness, physical_value
 from .fitting import best_of, fit_from, fit_own, fit_with, subset
 
@@ -322,6 +323,8 @@ def law_test(exps: Sequence[AugExperiment], fit: AugFit, term: str, substeps: in
             sw = math.sqrt(e.weight)
             xs.append(sw * x)
             res.append(sw * (e.ybar - out.y))
+    except BudgetExceededError:
+        raise  # the user's budget is theirs: never turned into "the law is not tested"
     except Exception:  # noqa: BLE001 - a model the core cannot differentiate: the law is not tested
         return math.nan
     xa, r = np.vstack(xs), np.concatenate(res)
@@ -378,6 +381,8 @@ def _separating(exps: Sequence[AugExperiment], fa: AugFit, fb: AugFit, substeps:
             for f in (fa, fb):
                 try:
                     ys.append(augmented_output(design, f.params, i, substeps=substeps))
+                except BudgetExceededError:
+                    raise  # a budget the user set is reported, not read as "separates nothing"
                 except Exception:  # noqa: BLE001 - a design outside the model's range separates nothing
                     ys = []
                     break
