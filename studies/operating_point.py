@@ -79,10 +79,12 @@ held-out-file NRMSE (physics from the other five files, the file's (g, phi) refi
 
 #: The page's note under the figure (Markdown; ``{d}`` the chosen form).
 FIGURE_PROSE = """\
-The figure: the {d} fit on all five currents (line), its 95 % interval (band: the delta method
+The figure: the {d} fit on all five currents (line), and the monotone spline's when another form is chosen
+(dashed), each with its 95 % interval (band: the delta method
 on the Gauss-Newton covariance scaled by the residual variance, i.e. the misfit taken as white noise,
 which it is not: the bands are narrower than the model error warrants), and the per-level fits (dots).
-0 A and 1 A held out are extrapolations. `log(mu - 1)` and `log rho`: the joint fit runs to the edges
+0 A and 1 A held out are extrapolations (the monotone spline holds the nearest fitted current's values
+there). `log(mu - 1)` and `log rho`: the joint fit runs to the edges
 mu -> 1 (a sharp knee) and beta = gamma (rho -> 0), where the loop no longer depends on them (their bands
 are the Gauss-Newton's, near zero because the gradient vanishes, not a measured precision); the
 per-level fits end on beta = gamma too (their dots sit at the start's floor, log 1e-3). A form whose
@@ -221,21 +223,28 @@ def run(data: Path, degrees: list[op.Form], log: Any, reuse: bool = False) -> di
     best = min(score, key=lambda d: (score[d], op.n_basis(d), d == op.MONOTONE))
     doc["score"] = {str(d): v for d, v in score.items()}
     doc["degree"] = best
-    final = op.fit_operating(levels, exps, fits, best, relative_gains=RELATIVE_GAINS)
-    doc["final"] = {
+    doc["final"] = _final(levels, exps, fits, best)
+    if op.MONOTONE in degrees and best != op.MONOTONE:
+        # The spline fitted on all five currents too, drawn beside the chosen form (its own intervals).
+        doc["final_monotone"] = _final(levels, exps, fits, op.MONOTONE)
+    doc["seconds"] = time.time() - t0
+    log(f"[{doc['seconds']:.0f} s] {form_label(best)} chosen (mean held-out NRMSE^2 {score})")
+    return doc
+
+
+def _final(levels: list[float], exps: list[list[AugExperiment]], fits: list[AugParams], form: op.Form) -> Any:
+    """``form`` fitted on every current: its cost, in-sample NRMSEs and each plotted coordinate's curve
+    ``(value, low, high)`` (95 %) on a grid of the current."""
+    final = op.fit_operating(levels, exps, fits, form, relative_gains=RELATIVE_GAINS)
+    grid = np.linspace(levels[0], levels[-1], 41)
+    return {
         "cost": final.cost,
         "in_sample": [
             [op.nrmse(e, final.params_at(lv), i) for i, e in enumerate(ex)] for lv, ex in zip(levels, exps)
         ],
-        "curves": {
-            name: [list(final.interval(name, float(v))) for v in np.linspace(levels[0], levels[-1], 41)]
-            for name, _ in PLOTTED
-        },
-        "grid_A": np.linspace(levels[0], levels[-1], 41).tolist(),
+        "curves": {name: [list(final.interval(name, float(v))) for v in grid] for name, _ in PLOTTED},
+        "grid_A": grid.tolist(),
     }
-    doc["seconds"] = time.time() - t0
-    log(f"[{doc['seconds']:.0f} s] {form_label(best)} chosen (mean held-out NRMSE^2 {score})")
-    return doc
 
 
 def _params_dict(p: AugParams) -> dict[str, Any]:
@@ -263,6 +272,15 @@ def figure(doc: dict[str, Any], path: Path) -> None:
         curve = np.array(doc["final"]["curves"][name])
         ax.plot(grid, curve[:, 0], color="C0", label=f"{form_label(doc['degree'])} in the current, joint fit")
         ax.fill_between(grid, curve[:, 1], curve[:, 2], color="C0", alpha=0.25, label="95 % interval")
+        if "final_monotone" in doc:
+            lo, hi = ax.get_ylim()  # the chosen form's scale: a coordinate at an edge may lie far off it
+            mono = np.array(doc["final_monotone"]["curves"][name])
+            ax.plot(grid, mono[:, 0], "--", color="C2", label="monotone spline, joint fit (not chosen)")
+            ax.fill_between(grid, mono[:, 1], mono[:, 2], color="C2", alpha=0.12, label="its 95 % interval")
+            off = mono[:, 0].max() < lo - (hi - lo) or mono[:, 0].min() > hi + (hi - lo)
+            if off:
+                ax.text(0.03, 0.05, f"spline off scale: {np.median(mono[:, 0]):.3g}", transform=ax.transAxes)
+                ax.set_ylim(lo, hi)
         pts = [lv["params"]["coordinates"][name] for lv in doc["per_level"]]
         ax.plot(doc["levels_A"], pts, "o", color="C1", label="per-level fit")
         ax.set_xlabel("coil current (A)")
