@@ -3,8 +3,11 @@
 For each row: a seeded random plant (G of order 0-4, with or without delay and feed-through; a random
 subset of the simulated terms), a random sampled input, the Rust simulator against the compiled C function
 (``bw.to_c``, ``cc -std=c99 -Wall -Wextra -Werror -pedantic -O2``) and against the python-control system
-(``bw.to_nlsys`` under ``bouc_wen_id.export.rk4_response``, the simulator's RK4 step). Prints a Markdown
-table of the largest difference relative to the signal's largest magnitude (x, w, y).
+(continuous: ``bw.to_nlsys`` under ``bouc_wen_id.export.rk4_response``, the simulator's RK4 step;
+discrete: ``bw.to_nlsys(plant, dt=...)`` run by python-control's ``input_output_response`` through
+``bouc_wen_id.export.discrete_response``). Every term of the registry the simulator has may be drawn, on u,
+inside the hysteresis, on x and on the output. Prints a Markdown table of the largest difference relative to
+the signal's largest magnitude (x, w, y).
 
 Usage: ``python studies/export_check.py [--plants 12]``.
 """
@@ -21,7 +24,7 @@ from pathlib import Path
 
 import bouc_wen_id as bw
 import numpy as np
-from bouc_wen_id.export import rk4_response
+from bouc_wen_id.export import discrete_response, peak_speeds, rk4_response
 
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO / "tests"))
@@ -44,8 +47,11 @@ def main() -> int:
     ap.add_argument("--plants", type=int, default=12)
     args = ap.parse_args()
     p = ctypes.POINTER(ctypes.c_double)
-    print("| seed | order | delay | terms | C: x, w, y | nlsys (RK4): x, w, y |")
-    print("|---|---|---|---|---|---|")
+    print(
+        "| seed | order | delay | terms | C: x, w, y | nlsys discrete: x, w, y "
+        "| nlsys continuous (RK4): x, w, y |"
+    )
+    print("|---|---|---|---|---|---|---|")
     with tempfile.TemporaryDirectory() as tmp:
         for seed in range(args.plants):
             rng = np.random.default_rng(seed)
@@ -58,11 +64,15 @@ def main() -> int:
             outs = [np.zeros(u.size) for _ in range(3)]
             rc = fn(u.ctypes.data_as(p), u.size, step(t), substeps, *(o.ctypes.data_as(p) for o in outs))
             c_err = ", ".join(f"{rel(a, b):.1e}" for a, b in zip(outs, ref)) if rc == 0 else f"rc {rc}"
-            nl = rk4_response(bw.to_nlsys(plant, vmax=1.0), t, u, substeps=substeps)
+            vmax, vx = peak_speeds(plant, t, u, substeps)
+            nl = rk4_response(bw.to_nlsys(plant, vmax=vmax, vx=vx), t, u, substeps=substeps, plant=plant)
             n_err = ", ".join(f"{rel(a, b):.1e}" for a, b in zip(nl, ref))
+            sysd = bw.to_nlsys(plant, vmax=vmax, vx=vx, dt=step(t), substeps=substeps)
+            dn = discrete_response(sysd, t, u, plant=plant)
+            d_err = ", ".join(f"{rel(a, b):.1e}" for a, b in zip(dn, ref))
             kinds = " ".join(t.kind for t in plant.terms) or "(plain)"
             order, delay = plant.linear.den.size - 1, plant.linear.delay
-            print(f"| {seed} | {order} | {delay:.3g} | {kinds} | {c_err} | {n_err} |")
+            print(f"| {seed} | {order} | {delay:.3g} | {kinds} | {c_err} | {d_err} | {n_err} |")
     return 0
 
 

@@ -11,17 +11,19 @@ of the squared NRMSEs.
    file, and the **held-out-file** NRMSE (design.md 10.4: the physics fitted on the other five files, the
    held-out file's own gain and phase refitted with it frozen).
 2. **Operating-point fits** (:mod:`bouc_wen_id.operating`): every parameter a polynomial of degree 0, 1 or 2
-   in the current, one joint fit over the levels. Leave one current out: fit on the other four, predict the
-   held-out current **whole** (every parameter from its polynomial) and **with its own (g, phi) refitted**
-   (the physics predicted, as the held-out-file protocol). The degree is the one with the lowest mean
-   held-out score (the same folds choose it: one choice among three).
-3. The chosen degree fitted on all five currents: each parameter against current with 95 % intervals
+   in the current, or a monotone spline (``"monotone"``: quadratic between the extreme currents, held
+   beyond, its slope of one sign), one joint fit over the levels. Leave one current out: fit on the other
+   four, predict the held-out current **whole** (every parameter from its polynomial) and **with its own (g,
+   phi) refitted** (the physics predicted, as the held-out-file protocol). The form is the one with the lowest
+   mean held-out score (the same folds choose it: one choice among four).
+3. The chosen form fitted on all five currents: each parameter against current with 95 % intervals
    (``docs/real-data/operating-parameters.png``), the per-level fits' values beside them.
 
 Writes ``docs/real-data-operating.md`` (every number from this run), ``docs/real-data/operating.json`` and
 the figure.
 
-Usage: ``python studies/operating_point.py [--data DIR] [--degrees 0,1,2] [--quiet] [--from-json]``.
+Usage: ``python studies/operating_point.py [--data DIR] [--degrees 0,1,2,monotone] [--quiet] [--from-json]
+[--reuse-levels]``.
 """
 
 from __future__ import annotations
@@ -65,23 +67,27 @@ MODEL_PROSE = """\
 **Model.** The augmented Wiener-Bouc-Wen model (design.md 9.1) with an output offset, a viscous damping
 and a parallel stiffness on the measured displacement, one gain and phase per file; each experiment
 weighted `1/(P var(ybar))` (the cost is the sum of squared NRMSEs). **Operating fit:** every parameter
-(the saturation level `w_u = (beta + gamma)^(-1/mu)`, `log(mu - 1)`, `log rho` with
-`rho = (beta - gamma)/(beta + gamma)`, the three terms, and each file's `log g` and `phi`) a polynomial
-in the current, one joint fit over the currents. **Held-out level:** fit on four currents, predict the
-fifth *whole* (every parameter from its polynomial) or with each file's own (g, phi) refitted to it and
-the physics predicted (*own refit*, the held-out protocol of design.md 10.4). **Per level:** the fit of
-that current alone (*in-sample*) and its held-out-file NRMSE (physics from the other five files, the
-file's (g, phi) refitted)."""
+(the saturation level `w_u = (beta + gamma)^(-1/mu)`, `log(mu - 1)`, `log rho` with `rho = (beta -
+gamma)/(beta + gamma)`, the three terms, and each file's `log g` and `phi`) a polynomial in the current
+(degree 0, 1 or 2) or a monotone spline (*monotone*: Ramsay's quadratic I-splines of knots at the extreme
+fitted currents, held at its end values beyond them (no extrapolation); its two slope coefficients held
+to the sign of the joint degree-1 fit's slope, which also starts it), one joint fit over the currents.
+**Held-out level:** fit on four currents, predict the fifth *whole* (every parameter from its polynomial)
+or with each file's own (g, phi) refitted to it and the physics predicted (*own refit*, the held-out
+protocol of design.md 10.4). **Per level:** the fit of that current alone (*in-sample*) and its
+held-out-file NRMSE (physics from the other five files, the file's (g, phi) refitted)."""
 
-#: The page's note under the figure (Markdown; ``{d}`` the degree).
+#: The page's note under the figure (Markdown; ``{d}`` the chosen form).
 FIGURE_PROSE = """\
-The figure: the degree-{d} fit on all five currents (line), its 95 % interval (band: the delta method
+The figure: the {d} fit on all five currents (line), and the monotone spline's when another form is chosen
+(dashed), each with its 95 % interval (band: the delta method
 on the Gauss-Newton covariance scaled by the residual variance, i.e. the misfit taken as white noise,
 which it is not: the bands are narrower than the model error warrants), and the per-level fits (dots).
-0 A and 1 A held out are extrapolations. `log(mu - 1)` and `log rho`: the joint fit runs to the edges
+0 A and 1 A held out are extrapolations (the monotone spline holds the nearest fitted current's values
+there). `log(mu - 1)` and `log rho`: the joint fit runs to the edges
 mu -> 1 (a sharp knee) and beta = gamma (rho -> 0), where the loop no longer depends on them (their bands
 are the Gauss-Newton's, near zero because the gradient vanishes, not a measured precision); the
-per-level fits end on beta = gamma too (their dots sit at the start's floor, log 1e-3). A degree whose
+per-level fits end on beta = gamma too (their dots sit at the start's floor, log 1e-3). A form whose
 fit fails to predict a held-out current (the model refuses the extrapolated parameters: *fails*) scores
 infinity."""
 
@@ -155,7 +161,16 @@ def _own_refit_nrmse(exps: list[AugExperiment], params: AugParams) -> list[float
     return [op.nrmse(e, op.refit_own(e, params, i), i) for i, e in enumerate(exps)]
 
 
-def run(data: Path, degrees: list[int], log: Any, reuse: bool = False) -> dict[str, Any]:
+def form_label(d: Any) -> str:
+    """How the page names a form: ``degree-2 polynomial``, ``monotone spline``."""
+    return "monotone spline" if str(d) == op.MONOTONE else f"degree-{d} polynomial"
+
+
+def parse_forms(text: str) -> list[op.Form]:
+    return [f if f == op.MONOTONE else int(f) for f in (t.strip() for t in text.split(","))]
+
+
+def run(data: Path, degrees: list[op.Form], log: Any, reuse: bool = False) -> dict[str, Any]:
     t0 = time.time()
     levels, exps, files = experiments(data)
     doc: dict[str, Any] = {"levels_A": levels, "files": files, "terms": list(TERMS), "degrees": degrees}
@@ -205,24 +220,31 @@ def run(data: Path, degrees: list[int], log: Any, reuse: bool = False) -> dict[s
         lolo[str(d)] = rows
     doc["held_out_level"] = lolo
     score = {d: float(np.mean([np.mean(np.square(r["whole"])) for r in lolo[str(d)]])) for d in degrees}
-    best = min(score, key=lambda d: (score[d], d))
+    best = min(score, key=lambda d: (score[d], op.n_basis(d), d == op.MONOTONE))
     doc["score"] = {str(d): v for d, v in score.items()}
     doc["degree"] = best
-    final = op.fit_operating(levels, exps, fits, best, relative_gains=RELATIVE_GAINS)
-    doc["final"] = {
+    doc["final"] = _final(levels, exps, fits, best)
+    if op.MONOTONE in degrees and best != op.MONOTONE:
+        # The spline fitted on all five currents too, drawn beside the chosen form (its own intervals).
+        doc["final_monotone"] = _final(levels, exps, fits, op.MONOTONE)
+    doc["seconds"] = time.time() - t0
+    log(f"[{doc['seconds']:.0f} s] {form_label(best)} chosen (mean held-out NRMSE^2 {score})")
+    return doc
+
+
+def _final(levels: list[float], exps: list[list[AugExperiment]], fits: list[AugParams], form: op.Form) -> Any:
+    """``form`` fitted on every current: its cost, in-sample NRMSEs and each plotted coordinate's curve
+    ``(value, low, high)`` (95 %) on a grid of the current."""
+    final = op.fit_operating(levels, exps, fits, form, relative_gains=RELATIVE_GAINS)
+    grid = np.linspace(levels[0], levels[-1], 41)
+    return {
         "cost": final.cost,
         "in_sample": [
             [op.nrmse(e, final.params_at(lv), i) for i, e in enumerate(ex)] for lv, ex in zip(levels, exps)
         ],
-        "curves": {
-            name: [list(final.interval(name, float(v))) for v in np.linspace(levels[0], levels[-1], 41)]
-            for name, _ in PLOTTED
-        },
-        "grid_A": np.linspace(levels[0], levels[-1], 41).tolist(),
+        "curves": {name: [list(final.interval(name, float(v))) for v in grid] for name, _ in PLOTTED},
+        "grid_A": grid.tolist(),
     }
-    doc["seconds"] = time.time() - t0
-    log(f"[{doc['seconds']:.0f} s] degree {best} chosen (mean held-out NRMSE^2 {score})")
-    return doc
 
 
 def _params_dict(p: AugParams) -> dict[str, Any]:
@@ -248,8 +270,17 @@ def figure(doc: dict[str, Any], path: Path) -> None:
     grid = np.array(doc["grid_A"] if "grid_A" in doc else doc["final"]["grid_A"])
     for ax, (name, label) in zip(axes.ravel(), PLOTTED):
         curve = np.array(doc["final"]["curves"][name])
-        ax.plot(grid, curve[:, 0], color="C0", label=f"degree {doc['degree']} in the current, joint fit")
+        ax.plot(grid, curve[:, 0], color="C0", label=f"{form_label(doc['degree'])} in the current, joint fit")
         ax.fill_between(grid, curve[:, 1], curve[:, 2], color="C0", alpha=0.25, label="95 % interval")
+        if "final_monotone" in doc:
+            lo, hi = ax.get_ylim()  # the chosen form's scale: a coordinate at an edge may lie far off it
+            mono = np.array(doc["final_monotone"]["curves"][name])
+            ax.plot(grid, mono[:, 0], "--", color="C2", label="monotone spline, joint fit (not chosen)")
+            ax.fill_between(grid, mono[:, 1], mono[:, 2], color="C2", alpha=0.12, label="its 95 % interval")
+            off = mono[:, 0].max() < lo - (hi - lo) or mono[:, 0].min() > hi + (hi - lo)
+            if off:
+                ax.text(0.03, 0.05, f"spline off scale: {np.median(mono[:, 0]):.3g}", transform=ax.transAxes)
+                ax.set_ylim(lo, hi)
         pts = [lv["params"]["coordinates"][name] for lv in doc["per_level"]]
         ax.plot(doc["levels_A"], pts, "o", color="C1", label="per-level fit")
         ax.set_xlabel("coil current (A)")
@@ -277,12 +308,12 @@ def page(doc: dict[str, Any]) -> str:
         "",
         *MODEL_PROSE.splitlines(),
         "",
-        f"**Degree chosen by held-out level: {d}** (mean squared held-out NRMSE per degree: "
-        + ", ".join(f"{k}: {v:.4g}" for k, v in doc["score"].items())
-        + "; the same folds choose it, one choice among the degrees tried).",
+        f"**Form chosen by held-out level: {form_label(d)}** (mean squared held-out NRMSE per form: "
+        + ", ".join(f"{form_label(k)}: {v:.4g}" for k, v in doc["score"].items())
+        + "; the same folds choose it, one choice among the forms tried).",
         "",
         "| current | file | per-level in-sample | per-level held-out file | "
-        + " | ".join(f"held-out level, degree {k} (whole / own refit)" for k in doc["score"])
+        + " | ".join(f"held-out level, {form_label(k)} (whole / own refit)" for k in doc["score"])
         + " |",
         "|---|---|---|---|" + "---|" * len(doc["score"]),
     ]
@@ -305,7 +336,7 @@ def page(doc: dict[str, Any]) -> str:
     lines += [
         "",
         "Median over the six files, per current (in-sample / held-out file / held-out level whole at the "
-        "chosen degree): "
+        "chosen form): "
         + "; ".join(
             f"{lv:g} A: {np.median(doc['per_level'][k]['in_sample']):.3f} / "
             f"{np.nanmedian(doc['per_level'][k]['held_out_file']):.3f} / {med[str(d)][k]:.3f}"
@@ -315,7 +346,7 @@ def page(doc: dict[str, Any]) -> str:
         "",
         "![parameters against current](real-data/operating-parameters.png)",
         "",
-        *FIGURE_PROSE.format(d=d).splitlines(),
+        *FIGURE_PROSE.format(d=form_label(d)).splitlines(),
         "",
     ]
     return "\n".join(lines)
@@ -325,7 +356,7 @@ def main(argv: list[str] | None = None) -> int:
     A = _adapters()
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--data", type=Path, default=A.default_data_dir())
-    ap.add_argument("--degrees", default="0,1,2")
+    ap.add_argument("--degrees", default="0,1,2,monotone", help="polynomial degrees and/or 'monotone'")
     ap.add_argument("--quiet", action="store_true")
     ap.add_argument(
         "--reuse-levels",
@@ -348,7 +379,7 @@ def main(argv: list[str] | None = None) -> int:
         raise SystemExit(f"error: {args.data / A.DATASETS['mr-damper']} not found (the shipped real data)")
     log = (lambda s: None) if args.quiet else (lambda s: print(s, file=sys.stderr, flush=True))
     warnings.simplefilter("ignore")
-    doc = run(args.data, [int(d) for d in args.degrees.split(",")], log, args.reuse_levels)
+    doc = run(args.data, parse_forms(args.degrees), log, args.reuse_levels)
     out.mkdir(parents=True, exist_ok=True)
     (out / "operating.json").write_text(json.dumps(doc, indent=1, default=float) + "\n", encoding="utf-8")
     figure(doc, out / "operating-parameters.png")

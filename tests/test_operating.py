@@ -251,6 +251,115 @@ def test_the_mr_damper_page_is_what_its_run_wrote() -> None:
     page = (root / "docs" / "real-data-operating.md").read_text(encoding="utf-8")
     assert study.page(doc) == page, "run: python studies/operating_point.py --from-json"
     assert (root / "docs" / "real-data" / "operating-parameters.png").stat().st_size > 10_000
-    scores = {int(k): v for k, v in doc["score"].items()}
-    assert doc["degree"] == min(scores, key=lambda d: (scores[d], d))
+    scores = {(k if k == op.MONOTONE else int(k)): v for k, v in doc["score"].items()}
+    assert op.MONOTONE in scores and {0, 1, 2} <= set(scores)
+    assert doc["degree"] == min(scores, key=lambda d: (scores[d], op.n_basis(d), d == op.MONOTONE))
     assert len(doc["per_level"]) == len(doc["levels_A"]) == 5
+
+
+# ------------------------------------------------------------------------------ the monotone spline form
+
+
+def test_the_i_splines_are_monotone_continuous_flat_beyond_and_span_a_line() -> None:
+    """Each basis function rises from 0 at z = -1 to 1 at z = 1, never falls, is continuous with a
+    continuous slope inside, holds its end value beyond, and c = (-a, a, a) is the line a z over [-1, 1]."""
+    z = np.linspace(-2.0, 2.0, 4001)
+    basis = np.array([op._ispline(float(v)) for v in z])
+    assert np.allclose(op._ispline(-1.0), 0.0) and np.allclose(op._ispline(1.0), 1.0)
+    assert np.all(np.diff(basis, axis=0) >= -1e-15)
+    assert np.max(np.abs(np.diff(basis, axis=0))) < 2e-3  # continuous
+    inside = np.abs(z) <= 1.0
+    slope = np.diff(basis[inside], axis=0) / np.diff(z[inside])[:, None]
+    assert np.max(np.abs(np.diff(slope, axis=0))) < 5e-3
+    assert np.allclose(basis[z < -1.0], 0.0) and np.allclose(basis[z > 1.0], 1.0)
+    line = basis[inside] @ np.array([1.0, 1.0]) - 1.0
+    assert np.allclose(line, z[inside], atol=1e-12)
+    assert op.n_basis(op.MONOTONE) == 3 and op.n_basis(2) == 3
+
+
+def test_the_monotone_spline_predicts_a_held_out_level_and_stays_monotone(data: tuple) -> None:  # type: ignore[type-arg]
+    """Fitted on the outer three levels it predicts the inner fourth as the true degree 1 does (the truth is
+    linear, which the spline spans between the levels); beyond the levels it holds the end values; every
+    coordinate is monotone in the variable, in the direction of the joint line (w_u rising, the stiffness
+    falling)."""
+    levels, exps, starts = data
+    keep = [0, 1, 3]
+    fit = op.fit_operating(
+        [levels[k] for k in keep], [exps[k] for k in keep], [starts[k] for k in keep], op.MONOTONE
+    )
+    assert fit.degree == op.MONOTONE and fit.coef.shape[1] == 3
+    held = max(op.nrmse(e, fit.params_at(levels[2]), i) for i, e in enumerate(exps[2]))
+    assert held < 5e-3, held
+    assert fit.coordinate("w_u", levels[2]) == pytest.approx(truth(levels[2])[1], rel=5e-3)
+    assert fit.coordinate("w_u", 3.0) == fit.coordinate("w_u", levels[3])
+    assert fit.coordinate("w_u", -1.0) == fit.coordinate("w_u", levels[0])
+    grid = np.linspace(-0.5, 2.0, 101)
+    for k, name in enumerate(fit.names):
+        values = np.array([fit.coordinate(name, v) for v in grid])
+        assert np.all(fit.directions[k] * np.diff(values) >= -1e-12), name
+    names = list(fit.names)
+    assert fit.directions[names.index("w_u")] == 1.0
+    assert fit.directions[names.index(T.Stiffness.kind)] == -1.0
+    assert np.all(fit.directions[:, None] * fit.coef[:, 1:] >= 0.0)
+
+
+def test_the_monotone_spline_holds_a_non_monotone_trend_to_its_direction() -> None:
+    """Per-level values that rise then fall: a quadratic follows them, the spline cannot (its coefficients
+    sit on their bounds): the constraint is real."""
+    levels = [0.0, 0.5, 1.0, 1.5]
+    exps = [level(v) for v in levels]
+    starts = [level_start(v, e) for v, e in zip(levels, exps)]
+    bump = [0.0, 0.3, 0.3, 0.0]  # offset added to the data and the starts: up, flat, down
+    exps = [
+        [AugExperiment(e.ybar + b, e.amplitude, e.frequency, e.grid_phase, e.weight) for e in row]
+        for row, b in zip(exps, bump)
+    ]
+    starts = [
+        AugParams(s.beta, s.gamma, s.mu, s.terms, s.values + np.array([b, 0.0, 0.0]), s.gains, s.phases)
+        for s, b in zip(starts, bump)
+    ]
+    quad = op.fit_operating(levels, exps, starts, 2)
+    mono = op.fit_operating(levels, exps, starts, op.MONOTONE)
+    offs = [mono.coordinate(T.Offset.kind, v) for v in np.linspace(0.0, 1.5, 31)]
+    k = list(mono.names).index(T.Offset.kind)
+    assert np.all(mono.directions[k] * np.diff(offs) >= -1e-12)
+    assert quad.cost < 0.5 * mono.cost, (quad.cost, mono.cost)
+
+
+def test_monotone_intervals_cover_the_truth_under_noise() -> None:
+    """The spline's 95 % band of w_u holds the truth at every level, about as wide as the quadratic's (the
+    same number of coefficients), and it narrows with the noise."""
+    levels = [0.0, 0.5, 1.0, 1.5]
+    widths = []
+    for noise in (0.02, 0.005):
+        exps = [level(v, noise, seed=10 + k) for k, v in enumerate(levels)]
+        starts = [level_start(v, e) for v, e in zip(levels, exps)]
+        fit = op.fit_operating(levels, exps, starts, op.MONOTONE)
+        quad = op.fit_operating(levels, exps, starts, 2)
+        for v in levels:
+            _, lo, hi = fit.interval("w_u", v)
+            _, qlo, qhi = quad.interval("w_u", v)
+            assert lo <= truth(v)[1] <= hi and hi - lo < 2.0 * (qhi - qlo), (noise, v, lo, hi, qlo, qhi)
+        widths.append(hi - lo)
+    assert widths[1] < 0.5 * widths[0], widths
+
+
+def test_select_degree_tries_the_spline_and_names_its_errors(data: tuple) -> None:  # type: ignore[type-arg]
+    levels, exps, starts = data
+    choice = op.select_degree(levels, exps, starts, degrees=(0, op.MONOTONE))
+    assert set(choice.scores) == {0, op.MONOTONE}
+    # Interior levels predicted to the integration error, the end ones held at the nearest level (no
+    # extrapolation): still 3x better than constant parameters.
+    assert choice.degree == op.MONOTONE and choice.total(0) > 3 * choice.total(op.MONOTONE), choice.scores
+    assert max(choice.scores[op.MONOTONE][1:3]) < 1e-8 < min(choice.scores[0])
+    assert op.MONOTONE in op.FORMS
+    with pytest.raises(InsufficientDataError, match="monotone spline needs 3 levels"):
+        op.fit_operating(levels[:2], exps[:2], starts[:2], op.MONOTONE)
+    with pytest.raises(InvalidParameterError, match="monotone"):
+        op.fit_operating(levels, exps, starts, "spline")
+    far = op.fit_operating(levels, exps, starts, 1)
+    with pytest.raises(InvalidParameterError):  # extrapolated out of the model: named, never an OverflowError
+        far.params_at(1e12)
+    assert (
+        op.fit_operating(levels, exps, starts, op.MONOTONE).params_at(1e12).mu > 1.0
+    )  # held, not extrapolated

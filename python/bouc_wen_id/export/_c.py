@@ -34,7 +34,8 @@ def _array(values: list[float]) -> str:
 
 
 def to_c(plant: WienerPlant, name: str = "bouc_wen_model") -> str:
-    """The C99 source of ``plant`` (plain or with the terms ``simulate_input`` simulates).
+    """The C99 source of ``plant`` (plain or with any terms ``simulate_input`` simulates, on u, inside the
+    hysteresis, on x or on the output).
 
     Parameters
     ----------
@@ -53,7 +54,9 @@ def to_c(plant: WienerPlant, name: str = "bouc_wen_model") -> str:
     Raises
     ------
     InvalidParameterError
-        ``name`` not a C identifier; a term the time-domain simulator does not simulate.
+        ``name`` not a C identifier.
+    UnsupportedTermError
+        The measured-input distortion, or a term with no exporter (an ``InvalidParameterError``).
     """
     if not isinstance(name, str) or not _IDENT.fullmatch(name):
         raise InvalidParameterError(
@@ -93,6 +96,11 @@ def to_c(plant: WienerPlant, name: str = "bouc_wen_model") -> str:
         DNU=_num(flat.delta_nu),
         DETA=_num(flat.delta_eta),
         ZETA1=_num(flat.zeta1),
+        KX=_num(flat.k_x),
+        CX=_num(flat.c_x),
+        MX=_num(flat.m_x),
+        FX=_num(flat.f_x),
+        EPSX=_num(flat.smoothing_x),
         PCENTRE=_num(PINCHING_CENTRE),
         PWIDTH=_num(PINCHING_WIDTH),
     )
@@ -110,7 +118,9 @@ TEMPLATE = Template(
  *   sections 1 and 9.4): fixed-step classical RK4 with h = dt / substeps, the input interpolated between
  *   samples by cubic Hermite polynomials with Catmull-Rom slopes (held after the last sample, 0 before
  *   the first), the play's mode frozen per step and xp clamped after it, the sensor lag stepped
- *   exponentially. Writes x[k], w[k] and y[k] (any of them may be NULL); allocates nothing.
+ *   exponentially, the terms on x from x's derivatives of the linear part's state (their friction scaled
+ *   by the peak |xdot| at the samples, from one pass of the linear part alone). Writes x[k], w[k] and
+ *   y[k] (any of them may be NULL); allocates nothing.
  *   Returns 0; -1 for bad arguments (n < 2, dt <= 0 or not finite, substeps < 1, u NULL); -2 for a
  *   non-finite input sample; 1 when the simulation blew up (a non-finite state: parameters or input level
  *   too large for the step).
@@ -141,6 +151,11 @@ static const double ${P}_b = $B;
 static const double ${P}_dnu = $DNU;
 static const double ${P}_deta = $DETA;
 static const double ${P}_zeta1 = $ZETA1;
+static const double ${P}_kx = $KX;
+static const double ${P}_cx = $CX;
+static const double ${P}_mx = $MX;
+static const double ${P}_fx = $FX;
+static const double ${P}_epsx = $EPSX;
 static const double ${P}_pinch_centre = ${PCENTRE};
 static const double ${P}_pinch_width = ${PWIDTH};
 
@@ -193,6 +208,19 @@ static void ${P}_delayed(const double *u, long n, double dt, double t, double ou
     ${P}_input(u, n, dt, tau, in);
     out[0] = in[0];
     out[1] = in[1];
+}
+
+/* The delayed input with its second derivative: (v, vdot, vddot), 0 before the delay has elapsed. */
+static void ${P}_delayed3(const double *u, long n, double dt, double t, double out[3])
+{
+    double tau = t - ${P}_delay;
+    if (tau < 0.0) {
+        out[0] = 0.0;
+        out[1] = 0.0;
+        out[2] = 0.0;
+        return;
+    }
+    ${P}_input(u, n, dt, tau, out);
 }
 
 /* Exact peak |udot| of the interpolant: knot slopes and the vertices of each interval's slope. */
@@ -254,6 +282,70 @@ static double ${P}_output(const double *xs, double v)
     int i;
     for (i = 0; i < ${P}_N; ++i) acc += ${P}_c[i] * xs[i];
     return acc + ${P}_d * v;
+}
+
+/* (x, xdot, xddot) of the linear part at state xs and delayed input vin = (v, vdot, vddot):
+ * xsdot = A xs + B v, xsddot = A xsdot + B vdot, x's derivatives their output rows plus D vdot, D vddot. */
+static void ${P}_kinematics(const double *xs, const double vin[3], double out[3])
+{
+    double d1[${P}_N + 1] = {0.0}, d2[${P}_N + 1] = {0.0}, v1[2], v2[2];
+    v1[0] = vin[0];
+    v1[1] = vin[1];
+    v2[0] = vin[1];
+    v2[1] = vin[2];
+    out[0] = ${P}_output(xs, vin[0]);
+    out[1] = ${P}_linear(xs, v1, d1);
+    out[2] = ${P}_linear(d1, v2, d2);
+}
+
+/* The terms on x at state xs and time t: k_x x + c_x xdot + m_x xddot + f_x tanh(xdot / (eps_x Vx)). */
+static double ${P}_onx(const double *u, long n, double dt, double t, const double *xs, double scale_x)
+{
+    double vin[3], kin[3], friction;
+    ${P}_delayed3(u, n, dt, t, vin);
+    ${P}_kinematics(xs, vin, kin);
+    friction = scale_x > 0.0 ? ${P}_fx * tanh(kin[1] / scale_x) : 0.0;
+    return ${P}_kx * kin[0] + ${P}_cx * kin[1] + ${P}_mx * kin[2] + friction;
+}
+
+/* Vx, the peak |xdot| at the samples: the linear part stepped alone from rest with the run's RK4. */
+static double ${P}_peak_xrate(const double *u, long n, double dt, int substeps)
+{
+    double xs[${P}_N + 1] = {0.0}, k1[${P}_N + 1] = {0.0}, k2[${P}_N + 1] = {0.0}, k3[${P}_N + 1] = {0.0};
+    double k4[${P}_N + 1] = {0.0}, tmp[${P}_N + 1] = {0.0}, peak = 0.0, h = dt / (double)substeps;
+    double half_h = 0.5 * h, h_sixth = h / 6.0;
+    long k;
+    int s, i;
+    for (k = 0; k < n; ++k) {
+        double t = (double)k * dt, vin[3], kin[3];
+        ${P}_delayed3(u, n, dt, t, vin);
+        ${P}_kinematics(xs, vin, kin);
+        peak = fmax(peak, fabs(kin[1]));
+        if (k == n - 1) break;
+        for (s = 0; s < substeps; ++s) {
+            double ts = t + (double)s * h, in1[2], inm[2], in4[2];
+            ${P}_delayed(u, n, dt, ts, in1);
+            ${P}_delayed(u, n, dt, ts + half_h, inm);
+            ${P}_delayed(u, n, dt, ts + h, in4);
+            ${P}_linear(xs, in1, k1);
+            for (i = 0; i < ${P}_N; ++i) tmp[i] = xs[i] + half_h * k1[i];
+            ${P}_linear(tmp, inm, k2);
+            for (i = 0; i < ${P}_N; ++i) tmp[i] = xs[i] + half_h * k2[i];
+            ${P}_linear(tmp, inm, k3);
+            for (i = 0; i < ${P}_N; ++i) tmp[i] = xs[i] + h * k3[i];
+            ${P}_linear(tmp, in4, k4);
+            for (i = 0; i < ${P}_N; ++i) xs[i] += h_sixth * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
+        }
+    }
+    return peak;
+}
+
+/* The lag's input F (and, without a lag, the output before the offset): w + the terms on u and on x. */
+static double ${P}_forcing(const double *u, long n, double dt, double t, double wv, const double *xs,
+                           double scale, double scale_x, int has_onx)
+{
+    double f = wv + ${P}_mech(u, n, dt, t, scale);
+    return has_onx ? f + ${P}_onx(u, n, dt, t, xs, scale_x) : f;
 }
 
 /* (w, e) moved along the hysteresis path by the play's clamped travel dxp (one RK4 step in xp). */
@@ -319,10 +411,12 @@ static double ${P}_played(int has_play, int mode, double xdot)
 int ${P}(const double *u, long n, double dt, int substeps, double *x, double *w, double *y)
 {
     double xs[${P}_N + 1] = {0.0}, k1[${P}_N + 1] = {0.0}, k2[${P}_N + 1] = {0.0}, k3[${P}_N + 1] = {0.0};
-    double k4[${P}_N + 1] = {0.0}, tmp[${P}_N + 1] = {0.0};
-    double h, half_h, h_sixth, wv = ${P}_w0, en = 0.0, xp, ys = 0.0, lw[4] = {0.0, 0.0, 0.0, 0.0};
+    double k4[${P}_N + 1] = {0.0}, tmp[${P}_N + 1] = {0.0}, xs_mid[${P}_N + 1] = {0.0};
+    double scale_x = 0.0, h, half_h, h_sixth, wv = ${P}_w0, en = 0.0, xp, ys = 0.0;
+    double lw[4] = {0.0, 0.0, 0.0, 0.0};
     double scale, w_u = pow(${P}_alpha / (${P}_beta + ${P}_gamma), 1.0 / ${P}_mu), v0[2];
     int has_play = ${P}_b > 0.0, has_lag = ${P}_tau > 0.0, s, i, blown = 0;
+    int has_onx = ${P}_kx != 0.0 || ${P}_cx != 0.0 || ${P}_mx != 0.0 || ${P}_fx != 0.0;
     long k;
     if (u == NULL || n < 2 || !(dt > 0.0) || !isfinite(dt) || substeps < 1) return -1;
     for (k = 0; k < n; ++k)
@@ -332,6 +426,7 @@ int ${P}(const double *u, long n, double dt, int substeps, double *x, double *w,
     h_sixth = h / 6.0;
     scale = ${P}_eps * ${P}_peak_rate(u, n, dt);
     if (has_lag) ${P}_lag_weights(h / ${P}_tau, lw);
+    if (${P}_fx != 0.0) scale_x = ${P}_epsx * ${P}_peak_xrate(u, n, dt, substeps);
     ${P}_delayed(u, n, dt, 0.0, v0);
     {
         double x0 = ${P}_output(xs, v0[0]);
@@ -342,7 +437,7 @@ int ${P}(const double *u, long n, double dt, int substeps, double *x, double *w,
         ${P}_delayed(u, n, dt, t, vk);
         if (x != NULL) x[k] = ${P}_output(xs, vk[0]);
         if (w != NULL) w[k] = wv;
-        yk = ${P}_y0 + (has_lag ? ys : wv + ${P}_mech(u, n, dt, t, scale));
+        yk = ${P}_y0 + (has_lag ? ys : ${P}_forcing(u, n, dt, t, wv, xs, scale, scale_x, has_onx));
         if (y != NULL) y[k] = yk;
         if (!isfinite(wv) || !isfinite(yk)) blown = 1;
         if (k == n - 1) break;
@@ -382,7 +477,10 @@ int ${P}(const double *u, long n, double dt, int substeps, double *x, double *w,
             kw4 = ${P}_rate(p4, w4, e4, w_u);
             ke4 = w4 * p4;
             w_mid = wv + h * (5.0 * kw1 + 4.0 * (kw2 + kw3) - kw4) / 24.0;
-            f0 = has_lag ? wv + ${P}_mech(u, n, dt, ts, scale) : 0.0;
+            if (has_lag && has_onx)
+                for (i = 0; i < ${P}_N; ++i)
+                    xs_mid[i] = xs[i] + h * (5.0 * k1[i] + 4.0 * (k2[i] + k3[i]) - k4[i]) / 24.0;
+            f0 = has_lag ? ${P}_forcing(u, n, dt, ts, wv, xs, scale, scale_x, has_onx) : 0.0;
             for (i = 0; i < ${P}_N; ++i) xs[i] += h_sixth * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
             wv += h_sixth * (kw1 + 2.0 * kw2 + 2.0 * kw3 + kw4);
             en += h_sixth * (ke1 + 2.0 * ke2 + 2.0 * ke3 + ke4);
@@ -396,7 +494,8 @@ int ${P}(const double *u, long n, double dt, int substeps, double *x, double *w,
                 xp = clamped;
             }
             if (has_lag) {
-                double fm = w_mid + ${P}_mech(u, n, dt, tm, scale), f1 = wv + ${P}_mech(u, n, dt, te, scale);
+                double fm = ${P}_forcing(u, n, dt, tm, w_mid, xs_mid, scale, scale_x, has_onx);
+                double f1 = ${P}_forcing(u, n, dt, te, wv, xs, scale, scale_x, has_onx);
                 ys = lw[0] * ys + (lw[1] * f0 + lw[2] * fm + lw[3] * f1);
             }
         }

@@ -3,9 +3,13 @@
 The exporters (:mod:`._nlsys`, :mod:`._c`) reproduce the library's time-domain simulator
 (:func:`bouc_wen_id.simulate_input`, docs/design.md sections 1 and 9.4): the controllable canonical form
 ``xsdot = A xs + B v``, ``x = C xs + D v`` of G with ``v(t) = u(t - delay)``, the generalised Bouc-Wen rate
-with the terms that change it, and the output terms.  :func:`flatten` checks once what they can export: the
-terms ``simulate_input`` simulates, and nothing else (a measured-input distortion or a term acting on x is
-refused by name, as the simulator refuses it).
+with the terms that change it, and the output terms (on u and, across the hysteretic element, on x:
+``rust/simulate/on_x.rs``).  :func:`flatten` checks once what they can export: every term of the registry
+:data:`~bouc_wen_id.terms.TERMS` at every place whose parameter has a field of :class:`Flat` (named by the
+term's symbol, with ``_<place>`` appended off its usual place), which is every term ``simulate_input``
+simulates.  The measured-input distortion is refused by name, as the simulator refuses it (it stands for
+the harmonics of one measured sine experiment, not a map of an arbitrary input); a term the exporters do
+not know (a registry term added without an exporter) is :class:`UnsupportedTermError`.
 """
 
 from __future__ import annotations
@@ -24,13 +28,22 @@ from ..terms import (
     TERMS,
     Coulomb,
     Distortion,
-    Place,
     Term,
     core_terms,
 )
 from ..validation import check_transfer_function
 
-__all__ = ["Flat", "EXPORTED", "flatten", "realize", "PLAY_ENGAGE_RTOL", "PINCHING_CENTRE", "PINCHING_WIDTH"]
+__all__ = [
+    "Flat",
+    "EXPORTED",
+    "UnsupportedTermError",
+    "field_of",
+    "flatten",
+    "realize",
+    "PLAY_ENGAGE_RTOL",
+    "PINCHING_CENTRE",
+    "PINCHING_WIDTH",
+]
 
 FloatArray = NDArray[np.float64]
 
@@ -69,6 +82,12 @@ class Flat(NamedTuple):
     delta_nu: float = 0.0
     delta_eta: float = 0.0
     zeta1: float = 0.0
+    #: The mechanical terms across the hysteretic element, on x (``rust/simulate/on_x.rs``).
+    k_x: float = 0.0
+    c_x: float = 0.0
+    m_x: float = 0.0
+    f_x: float = 0.0
+    smoothing_x: float = COULOMB_SMOOTHING
 
     @property
     def order(self) -> int:
@@ -88,16 +107,43 @@ class Flat(NamedTuple):
         return self.tau > 0.0
 
     @property
+    def has_on_x(self) -> bool:
+        """A term acts on x (then its value needs x's derivatives from the state, on_x.rs)."""
+        return self.k_x != 0.0 or self.c_x != 0.0 or self.m_x != 0.0 or self.f_x != 0.0
+
+    @property
     def w_u(self) -> float:
         """The virgin saturation level ``(alpha / (beta + gamma))^(1/mu)`` (pinching's band scale)."""
         return float((self.alpha / (self.beta + self.gamma)) ** (1.0 / self.mu))
 
 
-#: The term classes the exporters write: the registry's terms at their usual place, less the input distortion
-#: (a term on x is a subclass of its usual class, with ``acts_on`` = x, and not here).
-EXPORTED: tuple[type[Term], ...] = tuple(
-    cls for cls in TERMS.values() if cls is not Distortion and cls.acts_on != Place.X
-)
+class UnsupportedTermError(InvalidParameterError):
+    """A term the exporters cannot write: the input distortion, or a term with no exporter (named)."""
+
+
+def field_of(cls: type[Term]) -> str:
+    """The :class:`Flat` field of term class ``cls``: its symbol at its usual place, ``<symbol>_<place>``
+    at another (``ViscousX`` -> ``c_x``)."""
+    base = TERMS.get(cls.base_kind, cls)
+    return cls.symbol if cls.acts_on == base.acts_on else f"{cls.symbol}_{cls.acts_on.value}"
+
+
+def _exported() -> tuple[type[Term], ...]:
+    fields = set(Flat._fields) - {"a", "crow", "dfeed", "delay", "alpha", "beta", "gamma", "mu", "w0"}
+    out = []
+    taken: dict[str, type[Term]] = {}
+    for cls in TERMS.values():
+        f = field_of(cls)
+        if cls is Distortion or f not in fields or f in taken:
+            continue  # no field, or a second class on one field: not written (refused by name)
+        taken[f] = cls
+        out.append(cls)
+    return tuple(out)
+
+
+#: The term classes the exporters write, derived from the registry: every class whose parameter has its own
+#: field of :class:`Flat` (the distortion excepted): every term at every place the simulator simulates.
+EXPORTED: tuple[type[Term], ...] = _exported()
 
 
 def realize(num: FloatArray, den: FloatArray) -> tuple[FloatArray, FloatArray, float]:
@@ -115,25 +161,28 @@ def flatten(plant: WienerPlant, what: str) -> Flat:
     Raises
     ------
     InvalidParameterError
-        Not a :class:`WienerPlant`; a term the time-domain simulator does not simulate (the measured-input
-        distortion, a term on x): the exporters write the model ``simulate_input`` simulates, no other.
+        Not a :class:`WienerPlant`.
+    UnsupportedTermError
+        The measured-input distortion (the simulator's own refusal, word for word), or a term with no
+        exporter (a registry term added without one, a class outside the registry).
     """
     if not isinstance(plant, WienerPlant):
         raise InvalidParameterError(f"{what} needs a WienerPlant, got {type(plant).__name__}")
     try:
         core_terms(plant.terms)  # the simulator's own refusals, word for word
     except InvalidParameterError as exc:
-        raise InvalidParameterError(f"{what}: {exc}") from None
+        raise UnsupportedTermError(f"{what}: {exc}") from None
     values: dict[str, float] = {}
     for t in plant.terms:
-        if type(t) not in EXPORTED or t.place == Place.X:
-            raise InvalidParameterError(
-                f"{what}: the term {t.kind!r} ({t.label}) has no exporter; the exporters write the terms "
-                f"the time-domain simulator has ({', '.join(c.kind for c in EXPORTED)})"
+        if type(t) not in EXPORTED:
+            raise UnsupportedTermError(
+                f"{what}: the term {t.kind!r} ({t.label}) has no exporter; the exporters write "
+                f"{', '.join(c.kind for c in EXPORTED)}"
             )
-        values[t.symbol] = t.value
+        f = field_of(type(t))
+        values[f] = t.value
         if isinstance(t, Coulomb):
-            values["smoothing"] = t.smoothing
+            values["smoothing" + f[1:]] = t.smoothing
     num, den, delay = check_transfer_function(plant.linear.num, plant.linear.den, plant.linear.delay)
     a, c, d = realize(num, den)
     h = plant.hysteresis

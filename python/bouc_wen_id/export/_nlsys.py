@@ -1,81 +1,43 @@
-"""The whole model as a python-control nonlinear I/O system (``control.nlsys``), in physical units.
+"""The whole model as a continuous-time python-control system (``control.nlsys``), in physical units.
 
 State ``[xs_0 .. xs_{n-1}, w]`` (the controllable canonical form of G and the Bouc-Wen output, docs/design.md
 section 1), then, when the plant's terms need them (section 9.4), ``e`` (the dissipated energy of a
 degradation), ``xp`` (the play's output) and ``ys`` (the sensor's lagged output).  Inputs ``u, udot, uddot``:
-the measured input and its first two derivatives (the viscous and inertia terms and a biproper G need them);
-with a delay also ``v, vdot``, the input delayed by it (a nonlinear I/O system cannot hold a delay:
-:func:`input_signals` makes both from samples).  Outputs ``y, x, w``.  Parameter ``vmax``: the peak input
-velocity that scales the Coulomb friction's smoothed sign (the simulator takes it from the whole input).
+the measured input and its first two derivatives (the terms on u, the terms on x and a biproper G need them);
+with a delay also ``v, vdot, vddot``, the input delayed by it (a nonlinear I/O system cannot hold a delay:
+:func:`input_signals` makes them from samples).  Outputs ``y, x, w``.  Parameters ``vmax`` and ``vx``: the
+peak input velocity and the peak ``|xdot|`` that scale the Coulomb frictions' smoothed signs on u and on x
+(the simulator takes them from the whole input: :func:`._rhs.peak_speeds`).
 
-The right-hand side is the simulator's, operation for operation, so that classical RK4 on it with the
-simulator's step and stage times (:func:`rk4_response`) reproduces :func:`bouc_wen_id.simulate_input`
-to rounding, for every term but two whose simulator scheme is not an RK4 step of an ODE: the play (the
-simulator freezes its mode per step and clamps ``xp`` after it) and the sensor lag (integrated
-exponentially); there the system is the exact ODE and agrees to the integration error of either scheme.
-``control.input_output_response`` integrates the same system with SciPy's adaptive solvers.
+The right-hand side is the simulator's (:mod:`._rhs`), so that classical RK4 on it with the simulator's step
+and stage times (:func:`rk4_response`) reproduces :func:`bouc_wen_id.simulate_input` to rounding, for every
+term but two whose simulator scheme is not an RK4 step of an ODE: the play (the simulator freezes its mode
+per step and clamps ``xp`` after it) and the sensor lag (integrated exponentially); there the system is the
+exact ODE and agrees to the integration error of either scheme. ``to_nlsys(plant, dt=...)`` gives instead
+the discrete-time system whose update is the simulator's own step (:mod:`._discrete`), exact for every term.
+``control.input_output_response`` integrates the continuous system with SciPy's adaptive solvers.
 
 Reference: R. M. Murray et al., *python-control*, ``NonlinearIOSystem``.
 """
 
 from __future__ import annotations
 
-import math
 from typing import Any, Optional, Union
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .. import _optional
-from ..errors import InvalidParameterError
 from ..model import WienerPlant
-from ..validation import count, real_number
+from ..validation import count
+from ._discrete import to_discrete
 from ._input import SampledInput
-from ._model import PINCHING_CENTRE, PINCHING_WIDTH, PLAY_ENGAGE_RTOL, Flat, flatten
+from ._model import PLAY_ENGAGE_RTOL, Flat, flatten
+from ._rhs import check_speed, dot, initial_state, linear, mechanical, on_x, peak_speeds, rate
 
-__all__ = ["to_nlsys", "input_signals", "initial_state", "rk4_response"]
+__all__ = ["to_nlsys", "input_signals", "rk4_response"]
 
 FloatArray = NDArray[np.float64]
-
-
-def _sgn(v: float) -> float:
-    return 1.0 if v > 0.0 else -1.0 if v < 0.0 else 0.0
-
-
-def _dot(p: FloatArray, q: Any) -> float:
-    """``sum p_i q_i`` from the first term on (the simulator's order)."""
-    acc = 0.0
-    for pi, qi in zip(p, q):
-        acc += float(pi) * float(qi)
-    return acc
-
-
-def rate(flat: Flat, xpdot: float, w: float, e: float) -> float:
-    """The generalised Bouc-Wen rate with degradation and pinching (docs/design.md 9.4), in the simulator's
-    operation order."""
-    wmu = float(abs(w) ** flat.mu)
-    sw = _sgn(w)
-    nu = 1.0 + flat.delta_nu * e
-    r = (
-        flat.alpha * xpdot
-        - nu * (flat.beta * abs(xpdot) * sw * wmu)
-        - nu * (flat.gamma * xpdot * wmu)
-        - nu * (flat.delta * xpdot * sw * wmu)
-    )
-    if flat.delta_eta != 0.0:
-        r /= 1.0 + flat.delta_eta * e
-    if flat.zeta1 != 0.0:
-        w_u = flat.w_u
-        z = (w * _sgn(xpdot) - PINCHING_CENTRE * w_u) / (PINCHING_WIDTH * w_u)
-        r *= 1.0 - flat.zeta1 * math.exp(-z * z)
-    return r
-
-
-def mechanical(flat: Flat, u: float, udot: float, uddot: float, vmax: float) -> float:
-    """``k u + c udot + m uddot + f tanh(udot / (eps Vmax))`` (0 friction when ``Vmax = 0``)."""
-    scale = flat.smoothing * vmax
-    friction = flat.f * math.tanh(udot / scale) if scale > 0.0 else 0.0
-    return flat.k * u + flat.c * udot + flat.m * uddot + friction
 
 
 class _Layout:
@@ -90,26 +52,30 @@ class _Layout:
             if flag:
                 setattr(self, name, len(self.states))
                 self.states.append(name)
-        self.inputs = ["u", "udot", "uddot"] + (["v", "vdot"] if flat.delay > 0.0 else [])
-        #: (v, vdot) columns of the input vector: the delayed pair, or u, udot themselves without a delay.
-        self.v = (3, 4) if flat.delay > 0.0 else (0, 1)
+        self.inputs = ["u", "udot", "uddot"] + (["v", "vdot", "vddot"] if flat.delay > 0.0 else [])
+        #: (v, vdot, vddot) columns of the input vector: the delayed ones, or u's own without a delay.
+        self.v = (3, 4, 5) if flat.delay > 0.0 else (0, 1, 2)
 
 
-def _vmax(params: Optional[dict[str, Any]], default: float) -> float:
-    if params and "vmax" in params:
-        return float(params["vmax"])
+def _param(params: Optional[dict[str, Any]], name: str, default: float) -> float:
+    if params and name in params:
+        return float(params[name])
     return default
 
 
-def _system_functions(flat: Flat, lay: _Layout, vmax_default: float) -> tuple[Any, Any]:
+def _system_functions(flat: Flat, lay: _Layout, vmax_default: float, vx_default: float) -> tuple[Any, Any]:
     n = flat.order
 
-    def linear(xs: Any, v: float, vdot: float) -> tuple[list[float], float]:
-        dxs = [0.0] * n
-        if n:
-            dxs[0] = -_dot(flat.a, xs) + v
-            dxs[1:] = [float(q) for q in xs[: n - 1]]
-        return dxs, _dot(flat.crow, dxs) + flat.dfeed * vdot
+    def forcing(z: Any, w: float, inp: Any, params: Optional[dict[str, Any]]) -> float:
+        """``w`` + the terms on u + the terms on x: the lag's input, the output before the offset."""
+        mech = mechanical(
+            flat, float(inp[0]), float(inp[1]), float(inp[2]), _param(params, "vmax", vmax_default)
+        )
+        f = w + mech
+        if flat.has_on_x:
+            v3 = (float(inp[lay.v[0]]), float(inp[lay.v[1]]), float(inp[lay.v[2]]))
+            f += on_x(flat, z[:n], *v3, _param(params, "vx", vx_default))
+        return f
 
     def played(z: Any, x: float, xdot: float) -> float:
         if not flat.has_play:
@@ -127,8 +93,8 @@ def _system_functions(flat: Flat, lay: _Layout, vmax_default: float) -> tuple[An
         xs = z[:n]
         w = float(z[lay.w])
         v, vdot = float(inp[lay.v[0]]), float(inp[lay.v[1]])
-        dxs, xdot = linear(xs, v, vdot)
-        x = _dot(flat.crow, xs) + flat.dfeed * v
+        dxs, xdot = linear(flat, xs, v, vdot)
+        x = dot(flat.crow, xs) + flat.dfeed * v
         p = played(z, x, xdot)
         e = float(z[lay.e]) if lay.e >= 0 else 0.0
         out = np.empty(len(lay.states))
@@ -139,27 +105,42 @@ def _system_functions(flat: Flat, lay: _Layout, vmax_default: float) -> tuple[An
         if lay.xp >= 0:
             out[lay.xp] = p
         if lay.ys >= 0:
-            big_f = w + mechanical(
-                flat, float(inp[0]), float(inp[1]), float(inp[2]), _vmax(params, vmax_default)
-            )
-            out[lay.ys] = (big_f - float(z[lay.ys])) / flat.tau
+            out[lay.ys] = (forcing(z, w, inp, params) - float(z[lay.ys])) / flat.tau
         return out
 
     def output(t: float, z: Any, inp: Any, params: Optional[dict[str, Any]] = None) -> FloatArray:
         w = float(z[lay.w])
-        x = _dot(flat.crow, z[:n]) + flat.dfeed * float(inp[lay.v[0]])
+        x = dot(flat.crow, z[:n]) + flat.dfeed * float(inp[lay.v[0]])
         if lay.ys >= 0:
             y = flat.y0 + float(z[lay.ys])
         else:
-            mech = mechanical(flat, float(inp[0]), float(inp[1]), float(inp[2]), _vmax(params, vmax_default))
-            y = flat.y0 + (w + mech)
+            y = flat.y0 + forcing(z, w, inp, params)
         return np.array([y, x, w])
 
     return dynamics, output
 
 
-def to_nlsys(plant: WienerPlant, *, vmax: Optional[float] = None, name: Optional[str] = None) -> Any:
-    """``plant`` (plain or with terms) as a continuous-time ``control.NonlinearIOSystem``.
+def to_nlsys(
+    plant: WienerPlant,
+    *,
+    vmax: Optional[float] = None,
+    vx: Optional[float] = None,
+    name: Optional[str] = None,
+    dt: Optional[float] = None,
+    substeps: int = 4,
+) -> Any:
+    """``plant`` (plain or with any terms at any place) as a ``control.NonlinearIOSystem``.
+
+    Two forms (docs/export.md says when to use which):
+
+    * ``dt=None`` (default): the continuous-time system, the model's ODE (the play as its exact
+      rate, the sensor lag as its ODE). Under RK4 with the simulator's step (:func:`rk4_response`) it
+      reproduces :func:`bouc_wen_id.simulate_input` to rounding for every term but play and sensor lag,
+      whose simulator schemes are not RK4 steps of an ODE (there: to the integration error).
+    * ``dt`` = the sample step: the discrete-time system (``sys.dt = dt / substeps``, one RK4 step of the
+      simulator's own scheme per update, the play's frozen mode and clamp and the lag's exponential step
+      included; :mod:`._discrete`): driven by :func:`stage_inputs`, it reproduces ``simulate_input`` to
+      rounding for every term. This is the form to use when the exact discrete map matters.
 
     Parameters
     ----------
@@ -167,49 +148,50 @@ def to_nlsys(plant: WienerPlant, *, vmax: Optional[float] = None, name: Optional
         In physical units, as identified or built (alpha need not be 1).
     vmax : float, optional
         Peak input velocity ``Vmax`` (units of u per s) of the Coulomb friction's smoothing
-        ``tanh(udot / (eps Vmax))``; needed when the plant has Coulomb friction (for a sampled input,
-        ``SampledInput(t, u).peak_rate()``, which :func:`rk4_response` passes itself). It is the system's
-        parameter ``vmax`` (``params={"vmax": ...}`` overrides it in a simulation).
+        ``tanh(udot / (eps Vmax))`` on u; needed when the plant has it (:func:`peak_speeds`, which
+        :func:`rk4_response` and :func:`discrete_response` call themselves). The system's parameter
+        ``vmax`` (``params={"vmax": ...}`` overrides it).
+    vx : float, optional
+        Peak ``|xdot|`` at the samples for the Coulomb friction on x (``tanh(xdot / (eps_x Vx))``); needed
+        when the plant has it. The system's parameter ``vx``.
     name : str, optional
         The system's name.
+    dt, substeps : float, int
+        The discrete form's sample step and RK4 steps per sample (above).
 
     Returns
     -------
     control.NonlinearIOSystem
-        Inputs ``u, udot, uddot`` (and ``v, vdot``, the input delayed by G's delay, when it has one),
-        outputs ``y, x, w``, states ``xs0.., w`` (and ``e``, ``xp``, ``ys``; module docstring); its
-        ``params`` hold ``vmax`` and, for reading only, ``delay``, ``w0`` and ``b`` (the play's
-        half-width). Start it from :func:`initial_state`.
+        Continuous: inputs ``u, udot, uddot`` (and ``v, vdot, vddot``, the input delayed by G's delay, when
+        it has one), outputs ``y, x, w``, states ``xs0.., w`` (and ``e``, ``xp``, ``ys``; module
+        docstring); ``params`` hold ``vmax``, ``vx`` and, for reading only, ``delay``, ``w0`` and ``b``.
+        Start it from :func:`initial_state`. Discrete: :func:`._discrete.to_discrete`'s.
 
     Raises
     ------
     InvalidParameterError
-        A term the time-domain simulator does not simulate (a term on x, the distortion), a Coulomb
-        friction without ``vmax``, a negative or non-finite ``vmax``.
+        A Coulomb friction without its peak speed, a negative or non-finite speed, a bad ``dt`` or
+        ``substeps``.
+    UnsupportedTermError
+        The measured-input distortion (``simulate_input`` refuses it too), a term with no exporter.
     ImportError
         python-control is not installed (``pip install 'bouc_wen_id[control]'``).
     """
     control = _optional.require("control", "exporting the model to python-control")
     flat = flatten(plant, "to_nlsys")
-    if vmax is None:
-        if flat.f != 0.0:
-            raise InvalidParameterError(
-                "the plant has Coulomb friction, whose smoothed sign tanh(udot / (eps Vmax)) needs the peak "
-                "input velocity: pass vmax= (SampledInput(t, u).peak_rate() for a sampled input)"
-            )
-        vmax = 0.0
-    vmax = real_number("vmax", vmax)
-    if vmax < 0.0:
-        raise InvalidParameterError(f"vmax = {vmax} must be >= 0 (a peak speed)")
+    vmax = check_speed("vmax", vmax, flat.f != 0.0, "on u")
+    vx = check_speed("vx", vx, flat.f_x != 0.0, "on x")
+    if dt is not None:
+        return to_discrete(control, flat, vmax, vx, name, dt, substeps)
     lay = _Layout(flat)
-    dynamics, output = _system_functions(flat, lay, vmax)
+    dynamics, output = _system_functions(flat, lay, vmax, vx)
     return control.nlsys(
         dynamics,
         output,
         inputs=lay.inputs,
         outputs=["y", "x", "w"],
         states=lay.states,
-        params={"vmax": vmax, "delay": flat.delay, "w0": flat.w0, "b": flat.b},
+        params={"vmax": vmax, "vx": vx, "delay": flat.delay, "w0": flat.w0, "b": flat.b},
         name=name,
     )
 
@@ -218,8 +200,8 @@ def input_signals(sys: Any, t: ArrayLike, u: Union[ArrayLike, SampledInput], tim
     """The input vector of ``sys`` (from :func:`to_nlsys`) at ``times``: shape ``(ninputs, len(times))``.
 
     ``u`` sampled on the uniform grid ``t`` is interpolated as the simulator does (Catmull-Rom, held after
-    the last sample, 0 before ``t[0]``); times count from ``t[0]``. With a delay the rows ``v, vdot`` are the
-    same interpolant at ``times - delay``.
+    the last sample, 0 before ``t[0]``); times count from ``t[0]``. With a delay the rows ``v, vdot, vddot``
+    are the same interpolant at ``times - delay``.
     """
     src = u if isinstance(u, SampledInput) else SampledInput(t, u)
     tt = np.atleast_1d(np.asarray(times, dtype=np.float64))
@@ -227,39 +209,29 @@ def input_signals(sys: Any, t: ArrayLike, u: Union[ArrayLike, SampledInput], tim
     rows = np.empty((sys.ninputs, tt.size))
     for j, tj in enumerate(tt):
         rows[:3, j] = src.at(float(tj))
-        if sys.ninputs == 5:
+        if sys.ninputs == 6:
             tau = float(tj) - delay
-            rows[3:, j] = src.at(tau)[:2] if tau >= 0.0 else (0.0, 0.0)
+            rows[3:, j] = src.at(tau) if tau >= 0.0 else (0.0, 0.0, 0.0)
     return rows
 
 
-def initial_state(sys: Any, first_input: ArrayLike) -> FloatArray:
-    """The simulator's state at rest: ``xs = 0``, ``w = w0``, ``e = 0``, ``ys = 0``,
-    ``xp = clamp(0, x(0) - b, x(0) + b)``; ``first_input`` is the input vector at ``t = 0``."""
-    lay_states = list(sys.state_labels)
-    w0 = float(sys.params.get("w0", 0.0))
-    z = np.zeros(len(lay_states))
-    z[lay_states.index("w")] = w0
-    if "xp" in lay_states:
-        x0 = float(sys.output(0.0, z, np.asarray(first_input, dtype=np.float64))[1])
-        b = float(sys.params["b"])
-        z[lay_states.index("xp")] = min(max(0.0, x0 - b), x0 + b)
-    return z
-
-
 def rk4_response(
-    sys: Any, t: ArrayLike, u: ArrayLike, *, substeps: int = 4
+    sys: Any, t: ArrayLike, u: ArrayLike, *, substeps: int = 4, plant: Optional[WienerPlant] = None
 ) -> tuple[FloatArray, FloatArray, FloatArray]:
-    """``(x, w, y)`` of ``sys`` driven by samples ``u(t)``: classical RK4 on its right-hand side with the
-    simulator's step ``h = dt / substeps`` and stage times ``t + s h, + h/2, + h`` (design.md section 1).
+    """``(x, w, y)`` of the continuous ``sys`` driven by samples ``u(t)``: classical RK4 on its right-hand
+    side with the simulator's step ``h = dt / substeps`` and stage times ``t + s h, + h/2, + h`` (design.md
+    section 1).
 
-    The input is :func:`input_signals`'s interpolant; ``vmax`` is the interpolant's peak slope. For a plant
-    without play or sensor lag this is :func:`bouc_wen_id.simulate_input` to rounding.
+    The input is :func:`input_signals`'s interpolant; ``vmax`` is the interpolant's peak slope and ``vx``
+    (friction on x: pass the ``plant``) :func:`peak_speeds`'s. For a plant without play or sensor lag this
+    is :func:`bouc_wen_id.simulate_input` to rounding.
     """
     src = SampledInput(t, u)
     steps = count("substeps", substeps, 1, 2**20)
     params = dict(sys.params)
     params["vmax"] = src.peak_rate()
+    if plant is not None:
+        params["vx"] = peak_speeds(plant, t, u, steps)[1]
     n = src.u.size
     dt = src.dt
     h = dt / steps
