@@ -184,6 +184,8 @@ def test_terms_are_recovered_from_a_random_input(kind: str) -> None:
     lo, hi = fit.interval(TERMS[kind].symbol)
     assert lo < value < hi
     assert fit.rmse == pytest.approx(sd, rel=0.1)
+    # validate simulates the fitted model with its term (its own substeps): the same residuals to 1e-3.
+    assert bw.validate(fit, t, u, yn).rmse == pytest.approx(fit.rmse, rel=1e-3)
 
 
 def test_bad_records_with_terms_are_named() -> None:
