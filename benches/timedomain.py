@@ -28,6 +28,27 @@ from dataclasses import dataclass
 
 import bouc_wen_id as bw
 import numpy as np
+from bouc_wen_id.terms import (
+    COULOMB_SMOOTHING,
+    PINCHING_CENTRE,
+    PINCHING_WIDTH,
+    Asymmetry,
+    Coulomb,
+    CoulombX,
+    Degradation,
+    Inertia,
+    InertiaX,
+    Offset,
+    Pinching,
+    Play,
+    SensorLag,
+    Stiffness,
+    StiffnessDegradation,
+    StiffnessX,
+    Term,
+    Viscous,
+    ViscousX,
+)
 from bouc_wen_id.timedomain import Structure, cramer_rao_bound
 
 
@@ -175,34 +196,35 @@ def _analytic_input(case: Case, phase_seed: int) -> Callable[[float], tuple[floa
 
 
 #: The terms' values of the bench's term rows (alpha = 1 units of the cases: y ~ 1, u ~ 1).
-TERM_VALUES: dict[str, float] = {
-    "offset": 0.1,
-    "stiffness": 0.3,
-    "viscous": 0.01,
-    "inertia": 2e-4,
-    "coulomb": 0.05,
-    "sensor_lag": 0.01,
-    "asymmetry": 0.3,
-    "play": 0.05,
-    "degradation": 0.05,
-    "stiffness_degradation": 0.1,
-    "pinching": 0.3,
-    "stiffness@x": 0.3,
-    "viscous@x": 0.02,
-    "inertia@x": 2e-4,
-    "coulomb@x": 0.05,
+TERM_VALUES: dict[type[Term], float] = {
+    Offset: 0.1,
+    Stiffness: 0.3,
+    Viscous: 0.01,
+    Inertia: 2e-4,
+    Coulomb: 0.05,
+    SensorLag: 0.01,
+    Asymmetry: 0.3,
+    Play: 0.05,
+    Degradation: 0.05,
+    StiffnessDegradation: 0.1,
+    Pinching: 0.3,
+    StiffnessX: 0.3,
+    ViscousX: 0.02,
+    InertiaX: 2e-4,
+    CoulombX: 0.05,
 }
 
 
 @functools.lru_cache(maxsize=64)
-def clean_with_term(case: Case, kind: str, value: float, phase_seed: int = 0) -> tuple[np.ndarray, ...]:
+def clean_with_term(
+    case: Case, kind: type[Term], value: float, phase_seed: int = 0
+) -> tuple[np.ndarray, ...]:
     """``(t, u, y)``: the noise-free output of the case's plant with one term, by an integrator independent of
     the library's: solve_ivp (DOP853) on ``tf2ss`` of G with the terms' states (the energy of degradation,
     the sensor lag's output) and the analytic input; play by the exact play operator on a fine grid (64
     points per sample) of solve_ivp's x with Bouc-Wen integrated along the played path (RK4 in ``xp``: the
     element is rate independent). Conventions as docs/design.md 9.4 (``Vmax`` the largest ``|udot|``
     (``|xdot|`` for the friction on x) over the samples)."""
-    from bouc_wen_id.terms import COULOMB_SMOOTHING, PINCHING_CENTRE, PINCHING_WIDTH
     from scipy.integrate import solve_ivp
     from scipy.signal import tf2ss
 
@@ -213,9 +235,11 @@ def clean_with_term(case: Case, kind: str, value: float, phase_seed: int = 0) ->
     nx = a.shape[0]
     n = int(round(case.duration * case.fs))
     t = np.arange(n) / case.fs
+    if kind not in TERM_VALUES:
+        raise ValueError(f"the independent generator does not simulate the term {kind.kind!r}")
     p = dict.fromkeys(TERM_VALUES, 0.0)
     p[kind] = value
-    beta, gamma, mu, delta = case.beta, case.gamma, case.mu, p["asymmetry"]
+    beta, gamma, mu, delta = case.beta, case.gamma, case.mu, p[Asymmetry]
     w_u = (1.0 / (beta + gamma)) ** (1.0 / mu)
 
     def kin(tt: float, xs: np.ndarray) -> tuple[float, float, float, np.ndarray]:
@@ -228,11 +252,11 @@ def clean_with_term(case: Case, kind: str, value: float, phase_seed: int = 0) ->
 
     def rate(xpd: float, w: float, e: float) -> float:
         aw = abs(w) ** mu
-        nu = 1.0 + p["degradation"] * e
+        nu = 1.0 + p[Degradation] * e
         r = xpd - nu * (beta * abs(xpd) * np.sign(w) * aw + gamma * xpd * aw + delta * xpd * np.sign(w) * aw)
-        r /= 1.0 + p["stiffness_degradation"] * e
+        r /= 1.0 + p[StiffnessDegradation] * e
         z = (w * np.sign(xpd) - PINCHING_CENTRE * w_u) / (PINCHING_WIDTH * w_u)
-        return float(r * (1.0 - p["pinching"] * np.exp(-z * z)))
+        return float(r * (1.0 - p[Pinching] * np.exp(-z * z)))
 
     vmax = max(abs(u_of(tk)[1]) for tk in t)
     eps = COULOMB_SMOOTHING
@@ -241,12 +265,12 @@ def clean_with_term(case: Case, kind: str, value: float, phase_seed: int = 0) ->
     def forcing(tt: float, xs: np.ndarray, w: float) -> float:
         uu, ud, udd = u_of(tt)
         x, xd, xdd, _ = kin(tt, xs)
-        f = w + p["stiffness"] * uu + p["viscous"] * ud + p["inertia"] * udd
-        f += p["coulomb"] * np.tanh(ud / (eps * vmax))
-        f += p["stiffness@x"] * x + p["viscous@x"] * xd + p["inertia@x"] * xdd
-        return float(f + p["coulomb@x"] * np.tanh(xd / (eps * xmax)))
+        f = w + p[Stiffness] * uu + p[Viscous] * ud + p[Inertia] * udd
+        f += p[Coulomb] * np.tanh(ud / (eps * vmax))
+        f += p[StiffnessX] * x + p[ViscousX] * xd + p[InertiaX] * xdd
+        return float(f + p[CoulombX] * np.tanh(xd / (eps * xmax)))
 
-    if kind == "coulomb@x":  # the friction's scale: the largest |xdot| at the samples (a linear pass)
+    if kind is CoulombX:  # the friction's scale: the largest |xdot| at the samples (a linear pass)
         lin = solve_ivp(
             lambda tt, z: kin(tt, z)[3],
             (0.0, t[-1]),
@@ -257,9 +281,9 @@ def clean_with_term(case: Case, kind: str, value: float, phase_seed: int = 0) ->
             atol=1e-12,
         )
         xmax = max(abs(kin(tk, lin.y[:, k])[1]) for k, tk in enumerate(t))
-    if kind == "play":
+    if kind is Play:
         return _played(case, t, u_of, kin, value, rate, nx)
-    tau = p["sensor_lag"]
+    tau = p[SensorLag]
 
     def rhs(tt: float, z: np.ndarray) -> np.ndarray:
         xs, w, e, ys = z[:nx], z[nx], z[nx + 1], z[nx + 2]
@@ -273,7 +297,7 @@ def clean_with_term(case: Case, kind: str, value: float, phase_seed: int = 0) ->
         y = sol.y[nx + 2].copy()
     else:
         y = np.array([forcing(tk, sol.y[:nx, k], sol.y[nx, k]) for k, tk in enumerate(t)])
-    y += p["offset"]
+    y += p[Offset]
     u = np.array([u_of(tk)[0] for tk in t])
     return t, u, y
 
@@ -364,41 +388,37 @@ def monte_carlo(case: Case, seeds: int, *, substeps: int = 2) -> dict[str, objec
 
 #: The term rows: (case index, term) -- the terms on x on the resonant plant, the others on the first-order
 #: plant with a delay (the terms on u with an exact regressor are tested in tests/test_timedomain.py).
-TERM_ROWS: tuple[tuple[int, str], ...] = (
-    (1, "coulomb"),
-    (1, "sensor_lag"),
-    (1, "asymmetry"),
-    (1, "play"),
-    (1, "degradation"),
-    (1, "stiffness_degradation"),
-    (1, "pinching"),
-    (0, "stiffness@x"),
-    (0, "viscous@x"),
-    (0, "inertia@x"),
-    (0, "coulomb@x"),
+TERM_ROWS: tuple[tuple[int, type[Term]], ...] = (
+    (1, Coulomb),
+    (1, SensorLag),
+    (1, Asymmetry),
+    (1, Play),
+    (1, Degradation),
+    (1, StiffnessDegradation),
+    (1, Pinching),
+    (0, StiffnessX),
+    (0, ViscousX),
+    (0, InertiaX),
+    (0, CoulombX),
 )
 
 
-def term_plant(case: Case, kind: str, value: float) -> bw.WienerPlant:
-    from bouc_wen_id.terms import TERMS
-
+def term_plant(case: Case, kind: type[Term], value: float) -> bw.WienerPlant:
     p = case.plant()
-    return bw.WienerPlant(p.linear, p.hysteresis, (TERMS[kind](value),))
+    return bw.WienerPlant(p.linear, p.hysteresis, (kind(value),))  # type: ignore[call-arg]
 
 
-def term_monte_carlo(case: Case, kind: str, seeds: int, *, substeps: int = 2) -> dict[str, object]:
+def term_monte_carlo(case: Case, kind: type[Term], seeds: int, *, substeps: int = 2) -> dict[str, object]:
     """Fits of the plant with one term over ``seeds`` noise draws on data from :func:`clean_with_term`; the
     start is the truth perturbed by 10 % and the term at half its value."""
-    from bouc_wen_id.terms import TERMS
-
     value = TERM_VALUES[kind]
     truth = term_plant(case, kind, value)
-    s = Structure(len(case.num) - 1, len(case.den) - 1, delay=case.delay > 0, terms=(TERMS[kind],))
+    s = Structure(len(case.num) - 1, len(case.den) - 1, delay=case.delay > 0, terms=(kind,))
     t, u, y = clean_with_term(case, kind, value)
     sd = case.noise * float(np.std(y))
     names, crb = cramer_rao_bound(truth, (t, u, y), sd, structure=s, substeps=substeps)
     p0 = perturbed_start(case)
-    start = bw.WienerPlant(p0.linear, p0.hysteresis, (TERMS[kind](0.5 * value),))
+    start = bw.WienerPlant(p0.linear, p0.hysteresis, (kind(0.5 * value),))  # type: ignore[call-arg]
     est, inside, seconds = [], [], []
     for seed in range(seeds):
         rng = np.random.default_rng(20_000 + seed)
@@ -411,7 +431,7 @@ def term_monte_carlo(case: Case, kind: str, seeds: int, *, substeps: int = 2) ->
             )
         seconds.append(time.perf_counter() - t0)
         est.append(fit.parameters)
-        lo, hi = fit.interval(TERMS[kind].symbol)
+        lo, hi = fit.interval(kind.symbol)
         inside.append(lo <= value <= hi)
     e = np.array(est)
     return {
@@ -423,7 +443,7 @@ def term_monte_carlo(case: Case, kind: str, seeds: int, *, substeps: int = 2) ->
         "seconds": float(np.mean(seconds)),
         "estimates": e,
         "inside": float(np.mean(inside)),
-        "symbol": TERMS[kind].symbol,
+        "symbol": kind.symbol,
     }
 
 
@@ -448,7 +468,8 @@ def term_table(seeds: int) -> float:
         worst = max(worst, sd / crb)
         others = float(np.max(np.delete(ratio, i)))
         print(
-            f"{kind:>22} {'res.' if ci == 0 else '1st+d':>6} {tr:>9.4g} {mean:>9.4g} {sd:>9.3g} {crb:>9.3g} "
+            f"{kind.kind:>22} {'res.' if ci == 0 else '1st+d':>6} {tr:>9.4g} {mean:>9.4g} {sd:>9.3g} "
+            f"{crb:>9.3g} "
             f"{sd / crb:>6.2f} {(mean - tr) / crb:>8.2f} {float(r['inside']):>6.0%} {others:>11.2f} "  # type: ignore[arg-type]
             f"{float(r['seconds']):>6.2f}"  # type: ignore[arg-type]
         )

@@ -20,7 +20,22 @@ import bouc_wen_id as bw
 import numpy as np
 import pytest
 from bouc_wen_id.errors import InsufficientDataError, InvalidParameterError, NonFiniteError, TimeAxisError
-from bouc_wen_id.terms import TERMS, Distortion, Offset, Stiffness, Term, Viscous, core_terms
+from bouc_wen_id.terms import (
+    TERMS,
+    Asymmetry,
+    Coulomb,
+    Degradation,
+    Distortion,
+    Inertia,
+    Offset,
+    Place,
+    Play,
+    SensorLag,
+    Stiffness,
+    Term,
+    Viscous,
+    core_terms,
+)
 from bouc_wen_id.timedomain import Structure
 from bouc_wen_id.timedomain._records import as_time_records
 from bouc_wen_id.timedomain._terms import FD_STEP, REGRESSOR_TERMS, term_bounds, time_domain_terms
@@ -32,8 +47,8 @@ bench: Any = importlib.import_module("timedomain")
 DIFFERENCED = tuple(cls for cls in time_domain_terms() if cls not in REGRESSOR_TERMS)
 
 
-def _make(kind: str, value: float) -> Term:
-    return TERMS[kind](value)  # type: ignore[call-arg]
+def _make(kind: type[Term], value: float) -> Term:
+    return kind(value)  # type: ignore[call-arg]
 
 
 def _short(ci: int, duration: float = 3.0, **kw: Any) -> Any:
@@ -54,11 +69,12 @@ def test_every_registry_term_with_a_simulation_form_is_fittable_and_distortion_i
             pass
     assert time_domain_terms() == tuple(expected) and Distortion not in expected
     # Both places of the mechanical terms.
-    assert {c.kind for c in time_domain_terms()} >= {"viscous", "viscous@x", "coulomb", "coulomb@x"}
+    for cls in (Viscous, Coulomb, Stiffness, Inertia):
+        assert cls in time_domain_terms() and cls.at(Place.X) in time_domain_terms()
     case = _short(0, 2.0)
-    t, u, y = bench.clean_with_term(case, "offset", 0.0)
-    with pytest.raises(InvalidParameterError, match="distortion"):
-        bw.fit_time_domain((t, u, y), start=case.plant(), terms=("distortion",))
+    t, u, y = bench.clean_with_term(case, Offset, 0.0)
+    with pytest.raises(InvalidParameterError, match=Distortion.kind):
+        bw.fit_time_domain((t, u, y), start=case.plant(), terms=(Distortion.kind,))
     with pytest.raises(InvalidParameterError, match="no_such_term"):
         bw.fit_time_domain((t, u, y), start=case.plant(), terms=("no_such_term",))
 
@@ -79,7 +95,7 @@ def test_differenced_jacobian_matches_the_exact_dual_number_one() -> None:
     """Where both exist (the cascade with the regressor terms), the central differences of the simulator with
     terms equal the dual-number kernel's exact Jacobian."""
     case = _short(1, 2.0)
-    t, u, y = bench.clean_with_term(case, "offset", 0.0)
+    t, u, y = bench.clean_with_term(case, Offset, 0.0)
     s = _structure(case, Offset, Stiffness, Viscous)
     plant = bw.WienerPlant(
         case.plant().linear, case.plant().hysteresis, (Offset(0.1), Stiffness(0.3), Viscous(0.01))
@@ -101,14 +117,17 @@ def test_each_terms_jacobian_against_differences_at_another_step(cls: type[Term]
     """Per term: the search's Jacobian (steps FD_STEP x scale) against central differences 30x wider. Smooth
     terms agree everywhere; play's map is non-smooth (the mode switches), so it is held to the same bound
     away from them: at 99 % of the samples."""
-    case = _short(0 if cls.acts_on.value == "x" else 1, 2.0)
-    t, u, _ = bench.clean_with_term(case, "offset", 0.0)
+    case = _short(0 if cls.acts_on is Place.X else 1, 2.0)
+    t, u, _ = bench.clean_with_term(case, Offset, 0.0)
     s = _structure(case, cls)
-    theta = s.pack(bench.term_plant(case, cls.kind, bench.TERM_VALUES[cls.kind]))
+    value = bench.TERM_VALUES.get(
+        cls, 0.05 * cls.scale_factor(1.0, 1.0, case.mu)
+    )  # a new term: a small value
+    theta = s.pack(bench.term_plant(case, cls, value))
     p = Problem(s, as_time_records((t, u, u)), [0], 2, "rust", scale=1.0)
     _, jac = p.simulate(theta, 0)
     scales = s.scales(theta, 1.0, float(np.std(u)), t[1] - t[0])
-    share = 0.99 if cls.kind == "play" else 1.0
+    share = 0.99 if cls is Play else 1.0
     for i in np.flatnonzero(s.free):
         h = 30 * FD_STEP * max(abs(theta[i]), scales[i])
         hi, lo = theta.copy(), theta.copy()
@@ -127,8 +146,8 @@ def test_the_differenced_path_runs_alike_on_rust_and_on_the_numpy_oracle() -> No
     t = np.arange(n) / 200.0
     u = np.convolve(rng.standard_normal(n + 8), np.ones(8) / 8, "valid")[:n]
     case = _short(0)
-    kinds = ("sensor_lag", "asymmetry", "play", "degradation", "viscous@x", "coulomb")
-    s = _structure(case, *(TERMS[k] for k in kinds))
+    kinds = (SensorLag, Asymmetry, Play, Degradation, Viscous.at(Place.X), Coulomb)
+    s = _structure(case, *kinds)
     plant = bw.WienerPlant(
         case.plant().linear, case.plant().hysteresis, tuple(_make(k, rng.uniform(0.005, 0.05)) for k in kinds)
     )
@@ -140,15 +159,15 @@ def test_the_differenced_path_runs_alike_on_rust_and_on_the_numpy_oracle() -> No
     np.testing.assert_allclose(j2, j1, atol=1e-5 * np.max(np.abs(j1)))
 
 
-@pytest.mark.parametrize("row", bench.TERM_ROWS, ids=lambda r: r[1])
-def test_terms_are_recovered_on_independent_data(row: tuple[int, str]) -> None:
+@pytest.mark.parametrize("row", bench.TERM_ROWS, ids=lambda r: r[1].kind)
+def test_terms_are_recovered_on_independent_data(row: tuple[int, type[Term]]) -> None:
     """Two noise seeds per term: the term's estimate and every other parameter within 3.5 SE of the truth,
     the residual RMS at the noise (10 %), the whiteness test passing at 1 %."""
     ci, kind = row
     case = _short(ci)
     value = bench.TERM_VALUES[kind]
     t, u, y = bench.clean_with_term(case, kind, value)
-    s = _structure(case, TERMS[kind])
+    s = _structure(case, kind)
     truth = s.pack(bench.term_plant(case, kind, value))[s.free]
     p0 = bench.perturbed_start(case)
     start = bw.WienerPlant(p0.linear, p0.hysteresis, (_make(kind, 0.5 * value),))
@@ -165,12 +184,12 @@ def test_terms_are_recovered_on_independent_data(row: tuple[int, str]) -> None:
         )
         assert fit.rmse == pytest.approx(sd, rel=0.1)
         assert not fit.adequacy.rejects(0.01)
-        assert [type(x) for x in fit.plant.terms] == [TERMS[kind]]
+        assert [type(x) for x in fit.plant.terms] == [kind]
 
 
-@pytest.mark.parametrize("kind", ["sensor_lag", "play", "viscous@x"])
-def test_terms_are_recovered_from_a_random_input(kind: str) -> None:
-    ci = 0 if kind.endswith("@x") else 1
+@pytest.mark.parametrize("kind", [SensorLag, Play, Viscous.at(Place.X)], ids=lambda c: c.kind)
+def test_terms_are_recovered_from_a_random_input(kind: type[Term]) -> None:
+    ci = 0 if kind.acts_on is Place.X else 1
     case = _short(ci, random=True)
     value = bench.TERM_VALUES[kind]
     t, u, y = bench.clean_with_term(case, kind, value, 3)
@@ -181,7 +200,7 @@ def test_terms_are_recovered_from_a_random_input(kind: str) -> None:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         fit = bw.fit_time_domain((t, u, yn), start=start, delay=case.delay > 0, multistart=False)
-    lo, hi = fit.interval(TERMS[kind].symbol)
+    lo, hi = fit.interval(kind.symbol)
     assert lo < value < hi
     assert fit.rmse == pytest.approx(sd, rel=0.1)
     # validate simulates the fitted model with its term (its own substeps): the same residuals to 1e-3.
@@ -190,13 +209,13 @@ def test_terms_are_recovered_from_a_random_input(kind: str) -> None:
 
 def test_bad_records_with_terms_are_named() -> None:
     case = _short(1, 2.0)
-    t, u, y = bench.clean_with_term(case, "sensor_lag", 0.01)
-    lagged = bw.WienerPlant(case.plant().linear, case.plant().hysteresis, (_make("sensor_lag", 0.2),))
+    t, u, y = bench.clean_with_term(case, SensorLag, 0.01)
+    lagged = bw.WienerPlant(case.plant().linear, case.plant().hysteresis, (_make(SensorLag, 0.2),))
     # A record shorter than the model's memory: 3 time constants of G (0.15 s) + the delay + 3 of the lag.
     n = int(0.5 * case.fs)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        bw.fit_time_domain((t[:n], u[:n], y[:n]), start=case.plant(), terms=("sensor_lag",), max_iter=1)
+        bw.fit_time_domain((t[:n], u[:n], y[:n]), start=case.plant(), terms=(SensorLag.kind,), max_iter=1)
     with pytest.raises(InsufficientDataError, match="memory"):
         bw.fit_time_domain((t[:n], u[:n], y[:n]), start=lagged, max_iter=1)
     bad = y.copy()
