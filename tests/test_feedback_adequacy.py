@@ -16,7 +16,7 @@ from bouc_wen_id.timedomain._feedback_adequacy import FeedbackAdequacy
 BENCH = np.array([2.0, 10.0, 5e4, 5e4, 800.0, -1100.0, 1.0])
 FS = 750.0
 NOISE = 8e-6
-#: The unmodelled cubic spring of the misspecified data (N/m^3): 2-15 % of k y over the design's amplitudes.
+#: The unmodelled cubic spring of the misspecified data (N/m^3): k3 y^2 / k = 2-80 % at the sines' peaks.
 CUBIC = 2e10
 
 

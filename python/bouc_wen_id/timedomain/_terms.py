@@ -42,25 +42,35 @@ REGRESSOR_TERMS: tuple[type[Term], ...] = (Offset, Stiffness, Viscous, Inertia)
 FD_STEP = 1e-6
 
 
+def _sample(cls: type[Term]) -> Term:
+    """An admissible instance of ``cls`` (0 where 0 is admissible, else the lower bound, else 1)."""
+    lo = cls.bounds[0]
+    last: Exception = InvalidParameterError(f"{cls.kind}: no admissible value found")
+    for v in (0.0, lo if math.isfinite(lo) else 0.0, 1.0):
+        try:
+            return cls(v)  # type: ignore[call-arg]
+        except (InvalidParameterError, TypeError) as exc:
+            last = exc
+    raise last
+
+
+def _why_not(cls: type[Term]) -> Optional[str]:
+    """None when the simulator's term list takes ``cls``, else the reason."""
+    try:
+        core_terms([_sample(cls)])
+    except (InvalidParameterError, TypeError) as exc:
+        return str(exc)
+    return None
+
+
 def time_domain_terms() -> tuple[type[Term], ...]:
     """The registry's terms that have a time-domain form, in the registry's order."""
-    out = []
-    for cls in TERMS.values():
-        try:
-            core_terms([cls(0.0)])  # type: ignore[call-arg]
-        except (InvalidParameterError, TypeError):
-            continue
-        out.append(cls)
-    return tuple(out)
+    return tuple(cls for cls in TERMS.values() if _why_not(cls) is None)
 
 
 def refuse(cls: type[Term]) -> InvalidParameterError:
     """The named refusal of a term without a time-domain form."""
-    try:
-        core_terms([cls(0.0)])  # type: ignore[call-arg]
-        why = "it has no time-domain form here"
-    except (InvalidParameterError, TypeError) as exc:
-        why = str(exc)
+    why = _why_not(cls) or "it has no time-domain form here"
     return InvalidParameterError(
         f"the term {cls.kind!r} cannot be fitted in the time domain: {why}. The time-domain terms are "
         f"{', '.join(c.kind for c in time_domain_terms())}"
