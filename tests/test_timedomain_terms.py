@@ -207,6 +207,29 @@ def test_terms_are_recovered_from_a_random_input(kind: type[Term]) -> None:
     assert bw.validate(fit, t, u, yn).rmse == pytest.approx(fit.rmse, rel=1e-3)
 
 
+@pytest.mark.parametrize("kind", [Degradation, Inertia.at(Place.X)], ids=lambda c: c.kind)
+def test_terms_on_a_resonant_plant_with_a_delay(kind: type[Term]) -> None:
+    """The resonant G with a delay of 17 ms (fitted), a state term and a term on x."""
+    case = replace(_short(0), delay=0.017)
+    value = bench.TERM_VALUES[kind]
+    t, u, y = bench.clean_with_term(case, kind, value)
+    sd = case.noise * float(np.std(y))
+    yn = y + sd * np.random.default_rng(32).standard_normal(y.size)
+    p0 = bench.perturbed_start(case)
+    start = bw.WienerPlant(p0.linear, p0.hysteresis, (_make(kind, 0.5 * value),))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        fit = bw.fit_time_domain((t, u, yn), start=start, delay=True, multistart=False)
+    s = _structure(case, kind)
+    truth = s.pack(bench.term_plant(case, kind, value))[s.free]
+    se = np.array([fit.standard_errors[n] for n in fit.parameter_names])
+    assert "delay" in fit.parameter_names
+    assert np.all(np.abs(fit.parameters - truth) < 3.5 * se), dict(
+        zip(fit.parameter_names, (fit.parameters - truth) / se)
+    )
+    assert fit.rmse == pytest.approx(sd, rel=0.1)
+
+
 def test_bad_records_with_terms_are_named() -> None:
     case = _short(1, 2.0)
     t, u, y = bench.clean_with_term(case, SensorLag, 0.01)
