@@ -185,6 +185,7 @@ def test_terms_are_recovered_on_independent_data(row: tuple[int, type[Term]]) ->
         assert fit.rmse == pytest.approx(sd, rel=0.1)
         assert not fit.adequacy.rejects(0.01)
         assert [type(x) for x in fit.plant.terms] == [kind]
+        assert kind.kind in fit.summary() and "central differences" in fit.summary()
 
 
 @pytest.mark.parametrize("kind", [SensorLag, Play, Viscous.at(Place.X)], ids=lambda c: c.kind)

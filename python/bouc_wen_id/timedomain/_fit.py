@@ -138,9 +138,13 @@ class TimeDomainFit(Summarised):
         return v - z * se, v + z * se
 
     def summary(self) -> str:
+        kinds = ", ".join(c.kind for c in self.structure.terms)
         lines = [
             f"TimeDomainFit: Wiener cascade, G of degrees ({self.structure.m}, {self.structure.n})"
-            f"{' with a fitted delay' if self.structure.delay else ''}, {self.samples} samples",
+            f"{' with a fitted delay' if self.structure.delay else ''}"
+            f"{', terms ' + kinds if kinds else ''}, "
+            f"{self.samples} samples; Jacobian "
+            f"{'exact (dual numbers)' if self.structure.exact else 'by central differences'}",
             f"  {self.reason} after {self.iterations} iterations; RMSE = {self.rmse:.4g}, "
             f"NRMSE = {', '.join(f'{v:.3g}' for v in self.nrmse)}",
         ]
