@@ -215,16 +215,23 @@ TERM_VALUES: dict[type[Term], float] = {
 }
 
 
-@functools.lru_cache(maxsize=64)
 def clean_with_term(
     case: Case, kind: type[Term], value: float, phase_seed: int = 0
 ) -> tuple[np.ndarray, ...]:
-    """``(t, u, y)``: the noise-free output of the case's plant with one term, by an integrator independent of
+    """:func:`clean_with_terms` with one term."""
+    return clean_with_terms(case, ((kind, value),), phase_seed)
+
+
+@functools.lru_cache(maxsize=64)
+def clean_with_terms(
+    case: Case, terms: tuple[tuple[type[Term], float], ...], phase_seed: int = 0
+) -> tuple[np.ndarray, ...]:
+    """``(t, u, y)``: the noise-free output of the case's plant with terms, by an integrator independent of
     the library's: solve_ivp (DOP853) on ``tf2ss`` of G with the terms' states (the energy of degradation,
     the sensor lag's output) and the analytic input; play by the exact play operator on a fine grid (64
     points per sample) of solve_ivp's x with Bouc-Wen integrated along the played path (RK4 in ``xp``: the
-    element is rate independent). Conventions as docs/design.md 9.4 (``Vmax`` the largest ``|udot|``
-    (``|xdot|`` for the friction on x) over the samples)."""
+    element is rate independent; play only alone). Conventions as docs/design.md 9.4 (``Vmax`` the largest
+    ``|udot|`` (``|xdot|`` for the friction on x) over the samples)."""
     from scipy.integrate import solve_ivp
     from scipy.signal import tf2ss
 
@@ -235,10 +242,13 @@ def clean_with_term(
     nx = a.shape[0]
     n = int(round(case.duration * case.fs))
     t = np.arange(n) / case.fs
-    if kind not in TERM_VALUES:
-        raise ValueError(f"the independent generator does not simulate the term {kind.kind!r}")
     p = dict.fromkeys(TERM_VALUES, 0.0)
-    p[kind] = value
+    for kind, value in terms:
+        if kind not in TERM_VALUES:
+            raise ValueError(f"the independent generator does not simulate the term {kind.kind!r}")
+        p[kind] = value
+    if p[Play] and len(terms) > 1:
+        raise ValueError("the independent generator simulates play alone")
     beta, gamma, mu, delta = case.beta, case.gamma, case.mu, p[Asymmetry]
     w_u = (1.0 / (beta + gamma)) ** (1.0 / mu)
 
@@ -270,7 +280,7 @@ def clean_with_term(
         f += p[StiffnessX] * x + p[ViscousX] * xd + p[InertiaX] * xdd
         return float(f + p[CoulombX] * np.tanh(xd / (eps * xmax)))
 
-    if kind is CoulombX:  # the friction's scale: the largest |xdot| at the samples (a linear pass)
+    if p[CoulombX]:  # the friction's scale: the largest |xdot| at the samples (a linear pass)
         lin = solve_ivp(
             lambda tt, z: kin(tt, z)[3],
             (0.0, t[-1]),
@@ -281,8 +291,8 @@ def clean_with_term(
             atol=1e-12,
         )
         xmax = max(abs(kin(tk, lin.y[:, k])[1]) for k, tk in enumerate(t))
-    if kind is Play:
-        return _played(case, t, u_of, kin, value, rate, nx)
+    if p[Play]:
+        return _played(case, t, u_of, kin, p[Play], rate, nx)
     tau = p[SensorLag]
 
     def rhs(tt: float, z: np.ndarray) -> np.ndarray:

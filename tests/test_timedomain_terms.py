@@ -231,6 +231,32 @@ def test_terms_on_a_resonant_plant_with_a_delay(kind: type[Term]) -> None:
     assert fit.rmse == pytest.approx(sd, rel=0.1)
 
 
+def test_several_terms_at_once_on_independent_data() -> None:
+    """A sensor lag, asymmetry, strength degradation and viscous damping on x together on the resonant G."""
+    case = _short(0, 4.0)
+    kinds = (SensorLag, Asymmetry, Degradation, Viscous.at(Place.X))
+    pairs = tuple((k, bench.TERM_VALUES[k]) for k in kinds)
+    t, u, y = bench.clean_with_terms(case, pairs)
+    sd = case.noise * float(np.std(y))
+    yn = y + sd * np.random.default_rng(33).standard_normal(y.size)
+    p0 = bench.perturbed_start(case)
+    start = bw.WienerPlant(p0.linear, p0.hysteresis, tuple(_make(k, 0.5 * v) for k, v in pairs))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        fit = bw.fit_time_domain((t, u, yn), start=start, multistart=False)
+    s = _structure(case, *kinds)
+    truth_plant = bw.WienerPlant(
+        case.plant().linear, case.plant().hysteresis, tuple(_make(k, v) for k, v in pairs)
+    )
+    truth = s.pack(truth_plant)[s.free]
+    se = np.array([fit.standard_errors[n] for n in fit.parameter_names])
+    assert fit.converged and fit.parameter_names[-4:] == tuple(k.symbol for k in kinds)
+    assert np.all(np.abs(fit.parameters - truth) < 3.5 * se), dict(
+        zip(fit.parameter_names, (fit.parameters - truth) / se)
+    )
+    assert fit.rmse == pytest.approx(sd, rel=0.1) and not fit.adequacy.rejects(0.01)
+
+
 def test_bad_records_with_terms_are_named() -> None:
     case = _short(1, 2.0)
     t, u, y = bench.clean_with_term(case, SensorLag, 0.01)
