@@ -158,6 +158,8 @@ def main() -> int:
         f"{fit.condition:.3g}"
     )
     print(f"identifiability: {fit.identifiability}")
+    if fit.adequacy is not None:
+        print(fit.adequacy.describe())
     rmse_ms = float(
         np.sqrt(np.mean((fit.model.simulate(u_ms, 1 / FS, upsample=10, periodic=True) - y_ms) ** 2))
     )

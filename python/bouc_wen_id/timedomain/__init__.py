@@ -51,3 +51,8 @@ from ._feedback_sines import SineExperiment, fit_feedback_sines, steady_period  
 
 __all__ += ["FEEDBACK_PARAMETERS", "FeedbackFit", "FeedbackModel", "fit_feedback", "upsample_input"]
 __all__ += ["SineExperiment", "fit_feedback_sines", "steady_period"]
+
+# The feedback fits' adequacy test (issue #20).
+from ._feedback_adequacy import FeedbackAdequacy  # noqa: E402
+
+__all__ += ["FeedbackAdequacy"]

@@ -32,8 +32,10 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._backend import feedback_part
+from .._text import Summarised
 from ..errors import InsufficientDataError, InvalidParameterError, NonFiniteError
 from ..validation import count, finite_array, positive_number, z_value
+from ._feedback_adequacy import FeedbackAdequacy, record_adequacy
 from ._feedback_start import linear_start, random_starts
 from ._lm import LMResult, levenberg_marquardt
 from ._records import RecordLike, TimeRecord, as_time_records, lead_in_samples
@@ -162,7 +164,7 @@ def upsample_input(u: ArrayLike, factor: int, *, periodic: bool = False) -> Floa
 
 
 @dataclass(frozen=True, eq=False)
-class FeedbackFit:
+class FeedbackFit(Summarised):
     """What :func:`fit_feedback` returns.
 
     Attributes
@@ -191,6 +193,9 @@ class FeedbackFit:
         The screening cost of every start (NaN where the start could not be simulated).
     identifiability : str
         Which combination is fixed and why.
+    adequacy : FeedbackAdequacy or None
+        The adequacy test (:mod:`._feedback_adequacy`): residual whiteness for records, residual power
+        against the averaged noise for sine periods (None when no noise level was given for those).
     """
 
     model: FeedbackModel
@@ -208,6 +213,22 @@ class FeedbackFit:
     elapsed: float
     start_costs: FloatArray = field(repr=False)
     identifiability: str = field(repr=False)
+    adequacy: Optional[FeedbackAdequacy] = None
+
+    def summary(self) -> str:
+        lines = [
+            f"FeedbackFit: Bouc-Wen in feedback, {self.reason} after {self.iterations} iterations "
+            f"({self.starts} start(s), {self.elapsed:.1f} s); "
+            f"RMSE {', '.join(f'{v:.4g}' for v in self.rmse)}",
+        ]
+        for name, est, se in zip(self.names, self.estimates, self.standard_errors):
+            lines.append(f"  {name:>10} = {float(est): .6g} +- {float(se):.3g}")
+        if self.adequacy is None:
+            lines.append("  adequacy: not run (give the averaged periods' noise: noise= or noise_variance=)")
+        else:
+            lines.append(f"  {self.adequacy.describe()}")
+        lines.append(f"  {self.identifiability}")
+        return "\n".join(lines)
 
     def simulate_record(self, t: ArrayLike, u: ArrayLike) -> FloatArray:
         """The fitted model on a fresh record from rest (what :func:`~bouc_wen_id.validate` calls)."""
@@ -509,10 +530,11 @@ def _result(
     jn = lm.jacobian / np.maximum(np.linalg.norm(lm.jacobian, axis=0), 1e-300)
     sv = np.linalg.svd(jn, compute_uv=False)
     r = lm.residuals
-    rmse, at = [], 0
+    rmse, at, segments = [], 0, []
     for o, s in zip(problem.outputs, problem.skips):
         seg = r[at : at + o.size - s]
         rmse.append(float(np.sqrt(np.mean(seg**2))))
+        segments.append(seg)
         at += o.size - s
     note = (
         f"beta is fixed at {beta:g}: it only multiplies gamma and delta, so (beta, gamma, delta) and "
@@ -535,4 +557,5 @@ def _result(
         elapsed=elapsed,
         start_costs=np.array(costs, dtype=np.float64),
         identifiability=note,
+        adequacy=record_adequacy(segments),
     )

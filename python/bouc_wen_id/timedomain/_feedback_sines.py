@@ -17,6 +17,7 @@ import math
 import time
 from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
+from dataclasses import replace
 from typing import Optional
 
 import numpy as np
@@ -26,6 +27,7 @@ from .._backend import feedback_part
 from ..errors import InsufficientDataError, InvalidParameterError, NonFiniteError, NotConvergedError
 from ..validation import count, finite_array, positive_number
 from ._feedback import FEEDBACK_PARAMETERS, FeedbackFit, FeedbackModel
+from ._feedback_adequacy import check_noise, sine_adequacy
 from ._feedback_start import random_starts
 from ._lm import LMResult, levenberg_marquardt
 
@@ -153,6 +155,7 @@ def fit_feedback_sines(
     threads: int = 2,
     backend: str = "rust",
     max_step: float = MAX_STEP,
+    noise: Optional[Sequence[tuple[float, int]]] = None,
 ) -> FeedbackFit:
     """Fit Bouc-Wen in feedback to averaged steady sine periods (module docstring).
 
@@ -162,6 +165,11 @@ def fit_feedback_sines(
     ``max_step`` (s) is the largest RK4 step (default 1/15000 s, the benchmark's; the diagnosis passes a
     fraction of the shortest period, which keeps the cost independent of the time unit).
 
+    ``noise`` (one ``(variance, dof)`` pair per experiment: the noise variance of the averaged period's
+    samples, e.g. the period-to-period variance over the number of periods, and its degrees of freedom) or
+    ``noise_variance`` (known, the same for every sample) runs the adequacy test: the residual power against
+    that noise (``fit.adequacy``, an F or chi-square test, :mod:`._feedback_adequacy`).
+
     Raises
     ------
     InvalidParameterError, InsufficientDataError, NonFiniteError
@@ -170,6 +178,9 @@ def fit_feedback_sines(
     t_start = time.perf_counter()
     exps = _checked(experiments)
     beta = positive_number("beta", beta)
+    noise_pairs = None if noise is None else check_noise(noise, len(exps))
+    if noise_variance is not None:
+        noise_variance = positive_number("noise_variance", noise_variance)
     max_step = positive_number("max_step", max_step)
     starts = count("starts", starts, 1)
     unknown = [f for f in fixed if f not in FEEDBACK_PARAMETERS]
@@ -206,7 +217,10 @@ def fit_feedback_sines(
             raise NonFiniteError("no start could be simulated; give theta0 near the system's parameters")
         if starts > 1:
             best = levenberg_marquardt(fun, best.p, lo, hi, max_iter=max_iter, sigma2=noise_variance)
-    return _result(best, exps, theta_ref, free, scale, beta, costs, time.perf_counter() - t_start)
+    fit = _result(best, exps, theta_ref, free, scale, beta, costs, time.perf_counter() - t_start)
+    bounds = np.cumsum([0] + [yb.size for _, _, yb in exps])
+    segments = [best.residuals[a:b] for a, b in zip(bounds[:-1], bounds[1:])]
+    return replace(fit, adequacy=sine_adequacy(segments, len(free), noise_pairs, noise_variance))
 
 
 def _result(

@@ -23,7 +23,8 @@ from ..terms import Term
 from ..validation import count, nonnegative_number, positive_number, z_value
 from ._lm import LMResult, StopReason, free_covariance, levenberg_marquardt
 from ._records import RecordLike, TimeRecord, as_time_records
-from ._wiener import OUTPUT_TERMS, Problem, Structure, check_records, check_work, lead_ins
+from ._terms import term_class
+from ._wiener import Problem, Structure, check_records, check_work, lead_ins
 
 FloatArray = NDArray[np.float64]
 
@@ -137,9 +138,13 @@ class TimeDomainFit(Summarised):
         return v - z * se, v + z * se
 
     def summary(self) -> str:
+        kinds = ", ".join(c.kind for c in self.structure.terms)
         lines = [
             f"TimeDomainFit: Wiener cascade, G of degrees ({self.structure.m}, {self.structure.n})"
-            f"{' with a fitted delay' if self.structure.delay else ''}, {self.samples} samples",
+            f"{' with a fitted delay' if self.structure.delay else ''}"
+            f"{', terms ' + kinds if kinds else ''}, "
+            f"{self.samples} samples; Jacobian "
+            f"{'exact (dual numbers)' if self.structure.exact else 'by central differences'}",
             f"  {self.reason} after {self.iterations} iterations; RMSE = {self.rmse:.4g}, "
             f"NRMSE = {', '.join(f'{v:.3g}' for v in self.nrmse)}",
         ]
@@ -280,10 +285,13 @@ def fit_time_domain(
     estimate_w0 : bool
         Fit the initial hysteretic state (a record cut from a longer run); G's states start at 0.
     terms : sequence of term classes, terms or code names
-        The library's output terms to fit beside the cascade (:data:`OUTPUT_TERMS`: offset, parallel
-        stiffness, viscous damping and inertia on the measured input,
-        ``y = y0 + w + k u + c udot + m uddot``); they start at the start plant's values, else 0.  Default:
-        the start plant's terms.
+        The library's terms to fit beside the cascade: any term of the registry with a time-domain form, at
+        any of its places (``"viscous@x"``, ``Viscous.at(Place.X)``); the input distortion has none and is
+        refused by name.  They start at the start plant's values (keeping its fixed settings, e.g. a
+        friction's smoothing), else 0, within their admissible and physical ranges (the search's bounds).
+        The output terms on u (offset, stiffness, viscous damping, inertia) have exact Jacobian columns;
+        with any other term the Jacobian is a central difference of the simulator with terms (module
+        ``timedomain._terms``).  Default: the start plant's terms.
     lead_in : float, optional
         Seconds at each record's start left out of the residuals (G's transient from a state that is not
         rest).  Default 0: the records start from rest.
@@ -318,36 +326,26 @@ def fit_time_domain(
     m, n = order if order is not None else _degrees(plant)
     kinds = _term_classes(terms) if terms else tuple(type(t) for t in plant.terms)
     fit_delay = bool(plant.linear.delay > 0.0) if delay is None else bool(delay)
-    structure = Structure(m, n, fit_delay, bool(estimate_w0), kinds)
+    structure = Structure(m, n, fit_delay, bool(estimate_w0), kinds, plant.terms)
     lead = lead_ins(recs, lead_in_s)
-    check_records(recs, lead, plant)
+    check_records(recs, lead, structure.unpack(structure.pack(plant)))
     starts = _alternatives(plant, structure) if multistart else _alternatives(plant, structure)[:1]
     check_work(recs, substeps, (len(starts) * (2 * SCREEN_ITER + 1) + 2 * max_iter + 1) * 16)
     scale = float(np.std(np.concatenate([r.y for r in recs]))) or 1.0
     problem = Problem(structure, recs, lead, substeps, backend, scale)
+    # The start simulated once outside the search: a term the simulator refuses is named here, not
+    # taken for a step the search rejects.
+    problem.simulate(starts[0][1], 0)
     max_delay = min(r.duration for r in recs) / 2.0
     best, tried = _search(problem, starts, max_iter, max_delay, should_stop)
     return _result(problem, best, tried, origin, sd, confidence)
 
 
 def _term_classes(terms: Sequence[Union[type[Term], Term, str]]) -> tuple[type[Term], ...]:
-    """Term classes from classes, instances or code names (one of :data:`OUTPUT_TERMS` each)."""
+    """Term classes from classes, instances or code names of the registry (any place, ``"viscous@x"``)."""
     if isinstance(terms, (str, Term)) or (isinstance(terms, type) and issubclass(terms, Term)):
         terms = (terms,)
-    out: list[type[Term]] = []
-    for t in terms:
-        if isinstance(t, Term):
-            out.append(type(t))
-        elif isinstance(t, type) and issubclass(t, Term):
-            out.append(t)
-        else:
-            found = [cls for cls in OUTPUT_TERMS if cls.kind == t]
-            if not found:
-                raise InvalidParameterError(
-                    f"terms: {t!r} is not one of {', '.join(c.kind for c in OUTPUT_TERMS)}"
-                )
-            out.append(found[0])
-    return tuple(out)
+    return tuple(term_class(t) for t in terms)
 
 
 def _raw_items(records: Any) -> list[Any]:

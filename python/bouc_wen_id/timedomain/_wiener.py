@@ -26,9 +26,10 @@ from .. import budget as _budget
 from .._backend import Backend, get_backend
 from ..errors import InvalidParameterError, NonFiniteError
 from ..model import BoucWen, TransferFunction, WienerPlant
-from ..terms import Inertia, Offset, Stiffness, Term, Viscous
+from ..terms import Inertia, Offset, Stiffness, Term, Viscous, core_terms
 from ._lm import LMResult
 from ._records import TimeRecord, check_memory, lead_in_samples
+from ._terms import REGRESSOR_TERMS, difference_jacobian, refuse, term_bounds, term_memory, time_domain_terms
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -39,9 +40,10 @@ MAX_ORDER = 4
 MU_BOUNDS = (1.0, 10.0)
 #: Time constants of the slowest pole counted as G's memory (with the delay).
 MEMORY_TIME_CONSTANTS = 3.0
-#: The library's terms this class fits: added to the output, linear in their value, on the measured input
-#: (``y = y0 + w + k u + c udot + m uddot``, design.md 9.4 without the sensor lag); the others are refused.
-OUTPUT_TERMS: tuple[type[Term], ...] = (Offset, Stiffness, Viscous, Inertia)
+#: The output terms on u fitted with exact regressor columns (``y = y0 + w + k u + c udot + m uddot``); every
+#: other time-domain term of the registry is fitted too, by differences of the simulator with terms
+#: (``_terms``).
+OUTPUT_TERMS: tuple[type[Term], ...] = REGRESSOR_TERMS
 
 
 @dataclass(frozen=True)
@@ -54,20 +56,27 @@ class Structure:
     delay: bool = False
     estimate_w0: bool = False
     terms: tuple[type[Term], ...] = ()
+    #: Terms whose fixed settings (a friction's smoothing) the fitted ones keep; by class, optional.
+    templates: tuple[Term, ...] = ()
 
     def __post_init__(self) -> None:
         if not (0 <= self.m <= self.n <= MAX_ORDER):
             raise InvalidParameterError(
                 f"the orders must satisfy 0 <= m <= n <= {MAX_ORDER}, got m = {self.m}, n = {self.n}"
             )
+        allowed = time_domain_terms()
         for cls in self.terms:
-            if cls not in OUTPUT_TERMS:
-                raise InvalidParameterError(
-                    f"the time-domain Wiener class fits the terms {', '.join(c.kind for c in OUTPUT_TERMS)} "
-                    f"(on the measured input), not {getattr(cls, 'kind', cls)!r}"
-                )
+            if not (isinstance(cls, type) and issubclass(cls, Term)):
+                raise InvalidParameterError(f"terms must be term classes, got {cls!r}")
+            if cls not in allowed:
+                raise refuse(cls)
         if len(set(self.terms)) != len(self.terms):
             raise InvalidParameterError("each term at most once")
+
+    @property
+    def exact(self) -> bool:
+        """Whether the Jacobian is the dual-number kernel's (every term a regressor term) or differences."""
+        return all(cls in REGRESSOR_TERMS for cls in self.terms)
 
     @property
     def core_size(self) -> int:
@@ -127,8 +136,15 @@ class Structure:
         num = np.asarray(theta[: m + 1], dtype=float)
         den = np.concatenate([[1.0], theta[m + 1 : m + 1 + n]])
         tau, beta, gamma, mu, w0 = (float(v) for v in theta[m + 1 + n : self.core_size])
-        terms = tuple(cls(float(v)) for cls, v in zip(self.terms, theta[self.core_size :]))  # type: ignore[call-arg]
+        terms = tuple(self.make_term(cls, float(v)) for cls, v in zip(self.terms, theta[self.core_size :]))
         return WienerPlant(TransferFunction(num, den, tau), BoucWen(beta, gamma, mu, 1.0, w0), terms)
+
+    def make_term(self, cls: type[Term], value: float) -> Term:
+        """The term ``cls`` at ``value``, with the fixed settings of its template (validated)."""
+        for t in self.templates:
+            if type(t) is cls:
+                return t.with_value(value)
+        return cls(value)  # type: ignore[call-arg]
 
     def bounds(self, theta0: FloatArray, max_delay: float) -> tuple[FloatArray, FloatArray]:
         """Box bounds: denominator coefficients > 0 (necessary for stability), ``0 <= tau <= max_delay``,
@@ -140,7 +156,29 @@ class Structure:
         lo[m + 1 + n], hi[m + 1 + n] = 0.0, max(max_delay, float(theta0[m + 1 + n]) + 1e-12)
         lo[m + n + 2] = 0.0
         lo[m + n + 4], hi[m + n + 4] = MU_BOUNDS
+        for j, cls in enumerate(self.terms):
+            lo[self.core_size + j], hi[self.core_size + j] = term_bounds(cls)
         return lo, hi
+
+    def scales(self, theta: FloatArray, y_scale: float, u_scale: float, dt: float) -> FloatArray:
+        """Natural magnitude of each entry (the finite-difference steps' floor): G's coefficients their
+        block's size, the delay one sample, beta and gamma their sum's size, ``w0`` the output RMS, each
+        term its own units at the data's output and input RMS (:meth:`Term.scale_factor`)."""
+        m, n = self.m, self.n
+        out: FloatArray = np.abs(np.asarray(theta, dtype=np.float64)).copy()
+        b, a = out[: m + 1], out[m + 1 : m + 1 + n]
+        out[: m + 1] = max(float(b.max()), 1e-12)
+        if n:
+            out[m + 1 : m + 1 + n] = np.maximum(a, max(float(a.max()), 1e-12) * 1e-3)
+        out[m + 1 + n] = dt
+        bg = max(abs(float(theta[m + n + 2])) + abs(float(theta[m + n + 3])), 1e-12)
+        out[m + n + 2 : m + n + 4] = bg
+        out[m + n + 4] = 1.0
+        out[m + n + 5] = y_scale
+        mu = float(theta[m + n + 4])
+        for j, cls in enumerate(self.terms):
+            out[self.core_size + j] = cls.scale_factor(y_scale, u_scale, mu)
+        return out
 
 
 def term_regressors(rec: TimeRecord, terms: Sequence[type[Term]]) -> FloatArray:
@@ -180,12 +218,14 @@ def term_regressors(rec: TimeRecord, terms: Sequence[type[Term]]) -> FloatArray:
 
 
 def memory(plant: WienerPlant) -> float:
-    """G's memory (s): its delay plus :data:`MEMORY_TIME_CONSTANTS` time constants of its slowest pole."""
+    """The model's memory (s): G's delay plus :data:`MEMORY_TIME_CONSTANTS` time constants of its slowest
+    pole, plus as many of a sensor lag's."""
     den = np.asarray(plant.linear.den, dtype=float)
+    lag = term_memory(plant.terms)
     if den.size < 2:
-        return float(plant.linear.delay)
+        return float(plant.linear.delay) + lag
     slowest = float(np.min(np.abs(np.real(np.roots(den)))))
-    return float(plant.linear.delay) + (MEMORY_TIME_CONSTANTS / slowest if slowest > 0 else math.inf)
+    return float(plant.linear.delay) + lag + (MEMORY_TIME_CONSTANTS / slowest if slowest > 0 else math.inf)
 
 
 @dataclass
@@ -199,11 +239,18 @@ class Problem:
     backend: Backend
     scale: float = 1.0
 
+    #: ``"auto"``: exact when the structure allows (:attr:`Structure.exact`), else differences;
+    #: ``"difference"`` forces the differences (to test them against the exact Jacobian).
+    jacobian: str = "auto"
+
     def simulate(self, theta: FloatArray, i: int) -> tuple[FloatArray, FloatArray]:
-        """``(y_sim, J)`` of record ``i`` at the full vector ``theta`` (every column)."""
+        """``(y_sim, J)`` of record ``i`` at the full vector ``theta`` (every free column; held ones 0 when
+        differenced)."""
+        s = self.structure
+        if self.jacobian == "difference" or not s.exact:
+            return self._difference(theta, i)
         core = get_backend(self.backend).timedomain
         rec = self.records[i]
-        s = self.structure
         y, jac = core.timedomain_sensitivities(
             s.m,
             s.n,
@@ -217,6 +264,23 @@ class Problem:
             return y, jac
         reg = term_regressors(rec, s.terms)
         return y + reg @ theta[s.core_size :], np.hstack([jac, reg])
+
+    def output(self, theta: FloatArray, i: int) -> FloatArray:
+        """``y`` of record ``i`` by the library's simulator with terms (the map ``simulate_input`` runs)."""
+        s, rec = self.structure, self.records[i]
+        plant = s.unpack(theta)
+        h, lin = plant.hysteresis, plant.linear
+        core = get_backend(self.backend).paper
+        args = (lin.num, lin.den, lin.delay, 1.0, h.beta, h.gamma, h.mu, h.w0, np.ascontiguousarray(rec.u))
+        _, _, y = core.simulate_sampled(*args, rec.dt, self.substeps, terms=core_terms(plant.terms))
+        return np.asarray(y, dtype=np.float64)
+
+    def _difference(self, theta: FloatArray, i: int) -> tuple[FloatArray, FloatArray]:
+        s, rec = self.structure, self.records[i]
+        lo, hi = s.bounds(theta, math.inf)
+        u_scale = float(np.std(np.concatenate([r.u for r in self.records]))) or 1.0
+        scales = s.scales(theta, self.scale, u_scale, rec.dt)
+        return difference_jacobian(lambda th: self.output(th, i), theta, s.free, scales, lo, hi)
 
     def full(self, free_values: FloatArray, theta0: FloatArray) -> FloatArray:
         theta = np.array(theta0, dtype=np.float64, copy=True)
@@ -238,7 +302,7 @@ class Problem:
         def f(free_values: FloatArray) -> tuple[FloatArray, FloatArray]:
             try:
                 return self.residuals(self.full(free_values, theta0))
-            except NonFiniteError:
+            except (NonFiniteError, InvalidParameterError):  # a trial the model cannot take: rejected
                 n = sum(len(r) - k for r, k in zip(self.records, self.lead))
                 return np.full(n, np.inf), np.zeros((n, int(self.structure.free.sum())))
 
