@@ -57,8 +57,15 @@ ALTERNATIVE_IMPROVEMENT = 0.9
 ALTERNATIVE_CORRELATION = 0.95
 #: Held-out folds at most (experiments spread evenly when there are more).
 MAX_FOLDS = 10
-#: Level of the law test of a candidate (its value the same in every experiment), per candidate.
-LAW_ALPHA = ALPHA
+#: Level of the law test of a candidate (its value the same in every experiment), per candidate. The test
+#: is calibrated (its null is "the library's term is the truth"), so at ``ALPHA`` it refused the true term in
+#: 5 % of cases by construction: 9 of 160 mechanical cases of the 20-case bench (law p 0.003-0.044), each
+#: then "unexplained". At ``ALPHA / 5`` the true term is lost in 1 %. The price: outside physics whose law p
+#: falls between the two levels is named as the term it resembles. On the bench's quick seeds the rate-
+#: dependent width's stand-ins fail at p <= 2e-10 either way, but a parallel Dahl loop's (stiffness on x at
+#: 10x, pinching at 30x) at p = 0.035 and 0.037: a small Dahl loop IS nearly a spring on x, and the law test
+#: could not tell them apart on other seeds at any level (p = 0.11, 0.13). The closing table reports it.
+LAW_ALPHA = ALPHA / 5
 #: Parameters confined to >= 0, whose null value sits on the boundary.
 BOUNDARY_TERMS = tuple(k for k, cls in TERMS.items() if cls.bounds[0] == 0.0)
 
