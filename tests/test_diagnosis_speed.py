@@ -7,6 +7,7 @@ another way than the library's simulator).
 from __future__ import annotations
 
 import importlib
+import math
 import sys
 from dataclasses import replace
 from pathlib import Path
@@ -36,9 +37,7 @@ def test_screening_all_levels_from_one_loop_per_offset_matches_one_screen_per_le
     plain = fitting.plain_start(exps, sx, s)[0]
     rng = np.random.default_rng(seed)
     # Phases off by up to 0.3 rad (the bias a plain fit has beside a 30x friction on x), several levels.
-    base = replace(
-        plain.with_term("coulomb@x", 0.0), phases=plain.phases + rng.uniform(-0.3, 0.3, len(sx))
-    )
+    base = replace(plain.with_term("coulomb@x", 0.0), phases=plain.phases + rng.uniform(-0.3, 0.3, len(sx)))
     peak = max(float(np.max(np.abs(e.ybar))) for e in sx)
     levels = [0.0, *(peak * rng.uniform(0.01, 0.4, 3))]
     pars = [replace(base, values=np.append(base.values[:-1], v)) for v in levels]
@@ -50,6 +49,31 @@ def test_screening_all_levels_from_one_loop_per_offset_matches_one_screen_per_le
         assert cb == pytest.approx(ca, rel=1e-10)
     # The screen moved some phase (else the comparison would say nothing).
     assert any(not np.array_equal(pa.phases, base.phases) for pa, _ in one)
+
+
+def test_a_level_the_core_refuses_keeps_its_phases_at_cost_inf(monkeypatch: pytest.MonkeyPatch) -> None:
+    from bouc_wen_id.errors import InvalidParameterError
+
+    exps, sx = _scaled_case(4)
+    plain = fitting.plain_start(exps, sx, fitting.scale_of(exps))[0]
+    base = plain.with_term("coulomb@x", 0.0)
+    refused = 0.123
+    from bouc_wen_id.augmented import augmented_output as real
+
+    def output(e: Any, par: Any, i: int, **kw: Any) -> Any:
+        if float(par.values[-1]) == refused:  # as the core refuses a value outside a term's range
+            raise InvalidParameterError("refused level")
+        return real(e, par, i, **kw)
+
+    monkeypatch.setattr(fitting, "augmented_output", output)
+    pars = [replace(base, values=np.append(base.values[:-1], v)) for v in (0.0, refused, 0.05)]
+    substeps = fitting.substeps_for([e.ybar.size for e in sx])
+    one = [fitting.screen_phases(sx, p, substeps) for p in pars]
+    once = fitting.screen_phases_linear(sx, pars, substeps)
+    assert once[1][1] == math.inf and np.array_equal(once[1][0].phases, base.phases)
+    for (pa, ca), (pb, cb) in zip(one, once):
+        assert np.array_equal(pa.phases, pb.phases)
+        assert cb == pytest.approx(ca, rel=1e-10)
 
 
 def test_diagnosis_is_the_same_with_the_speed_switches_off(monkeypatch: pytest.MonkeyPatch) -> None:

@@ -527,22 +527,14 @@ def screen_phases_linear(
 
     The output at each experiment's phase offset is then ``y(v) = y(v0) + (v - v0) r`` with ``r`` the
     term's column: each offset's loop is solved once (at ``pars[0]``) instead of once per level (five
-    levels: the screening's loops fall five-fold; docs/diagnosis-speed.md). A level the core refuses
-    (:meth:`AugParams` checked by the core: every output raises) keeps its phases at cost inf, as
+    levels: five times fewer loops; docs/diagnosis-speed.md). A level the core refuses (its value outside
+    the term's range: an error wherever the loop itself is fine) keeps its phases at cost inf, as
     :func:`screen_phases` leaves it.
     """
     base = pars[0]
     v0 = float(base.values[-1])
     col = 3 + len(base.terms) - 1
-    valid = []
-    for par in pars:
-        try:
-            augmented_output(exps[0], par, 0, substeps=substeps)
-            valid.append(True)
-        except BudgetExceededError:  # a limit the user set: never a failed start (issue 19)
-            raise
-        except BoucWenIdError:
-            valid.append(False)
+    valid: list[Optional[bool]] = [None] * len(pars)
     phases = [np.array(p.phases, dtype=np.float64) for p in pars]
     totals = [0.0] * len(pars)
     for i, e in enumerate(exps):
@@ -552,11 +544,13 @@ def screen_phases_linear(
             trial[i] += d
             try:
                 out = augmented_output(e, replace(base, phases=trial), i, substeps=substeps, jacobian=True)
-            except BudgetExceededError:
+            except BudgetExceededError:  # a limit the user set: never a failed start (issue 19)
                 raise
             except BoucWenIdError:
                 continue
             for k, par in enumerate(pars):
+                if valid[k] is None:  # where the loop is fine, only the level itself can be refused
+                    valid[k] = _accepted(e, replace(par, phases=trial), i, substeps)
                 if not valid[k]:
                     continue
                 dv = float(par.values[-1]) - v0
@@ -568,6 +562,16 @@ def screen_phases_linear(
             phases[k][i] = best[k][1]
             totals[k] += best[k][0]
     return [(replace(par, phases=ph), t) for par, ph, t in zip(pars, phases, totals)]
+
+
+def _accepted(e: AugExperiment, par: AugParams, i: int, substeps: int) -> bool:
+    try:
+        augmented_output(e, par, i, substeps=substeps)
+    except BudgetExceededError:
+        raise
+    except BoucWenIdError:
+        return False
+    return True
 
 
 #: Levels of a phase-screened term tried beside its own starts, as fractions of the data's peak |ybar|.
