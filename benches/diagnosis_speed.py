@@ -28,6 +28,7 @@ import os
 import sys
 import time
 import warnings
+from functools import partial
 from pathlib import Path
 from typing import Any, Callable, Optional
 
@@ -63,22 +64,26 @@ def _data_dir(given: Optional[Path], adapters: Any) -> Path:
 
 def mr_cases(data: Path, adapters: Any, levels: list[float]) -> list[tuple[str, Callable[[], Any]]]:
     blocks = [adapters.load_mr_damper(data / adapters.DATASETS["mr-damper"] / f) for f in adapters.MR_FILES]
-    out = []
+    out: list[tuple[str, Callable[[], Any]]] = []
     for k, current in enumerate(adapters.MR_CURRENTS):
         if current in levels:
             ms = [b[k] for b in blocks]
-            out.append((f"MR damper {current:g} A", lambda ms=ms: ms))
+            out.append((f"MR damper {current:g} A", partial(list, ms)))
     return out
 
 
-def simulated_cases(count: int) -> list[tuple[str, Callable[[], Any]]]:
+def _recordings(*case: Any) -> Any:
     import generator as gen
 
-    out = []
+    return gen.make_case(*case).recordings
+
+
+def simulated_cases(count: int) -> list[tuple[str, Callable[[], Any]]]:
+    out: list[tuple[str, Callable[[], Any]]] = []
     for kind, name, place, size, seed in SIMULATED[:count]:
         where = f"@{place}" if place else ""
         label = f"simulated {name or 'null'}{where} {size:g}x (seed {seed})"
-        out.append((label, lambda a=(kind, name, place, size, seed): gen.make_case(*a).recordings))
+        out.append((label, partial(_recordings, kind, name, place, size, seed)))
     return out
 
 
@@ -91,7 +96,9 @@ def timed(items: Any, fast: bool) -> tuple[float, float, dict[str, Any]]:
     import bouc_wen_id as bw
     from bouc_wen_id.diagnosis import speed
 
-    speed.ONE_BLAS_THREAD = fast
+    switches = [k for k in vars(speed) if k.isupper()]  # every switch of diagnosis/speed.py
+    for k in switches:
+        setattr(speed, k, fast)
     try:
         t0, c0 = time.perf_counter(), time.process_time()
         with warnings.catch_warnings():
@@ -99,7 +106,8 @@ def timed(items: Any, fast: bool) -> tuple[float, float, dict[str, Any]]:
             d = bw.diagnose(items)
         return time.perf_counter() - t0, time.process_time() - c0, _verdict(d)
     finally:
-        speed.ONE_BLAS_THREAD = True
+        for k in switches:
+            setattr(speed, k, True)
 
 
 def main(argv: Optional[list[str]] = None) -> int:
@@ -115,7 +123,7 @@ def main(argv: Optional[list[str]] = None) -> int:
     levels = [0.0] if args.quick else list(A.MR_CURRENTS)
     cases = simulated_cases(1 if args.quick else 3) + mr_cases(_data_dir(args.data, A), A, levels)
     load0 = os.getloadavg()[0]
-    rows = []
+    rows: list[dict[str, Any]] = []
     for label, make in cases:
         items = make()
         if not rows:
