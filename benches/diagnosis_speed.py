@@ -138,13 +138,13 @@ def main(argv: Optional[list[str]] = None) -> int:
         )  # fmt: skip
         print(f"{label}: {wb:.1f} s -> {wa:.1f} s, same verdict: {vb == va}", file=sys.stderr, flush=True)
     load1 = os.getloadavg()[0]
-    print("| case | before: wall / CPU s | after: wall / CPU s | wall ratio after/before | same verdict |")
+    print("| case | before: wall / CPU s | after: wall / CPU s | after/before: wall / CPU | same verdict |")
     print("|---|---|---|---|---|")
     for r in rows:
         print(
             f"| {r['case']} | {r['before_wall']:.1f} / {r['before_cpu']:.1f} | {r['after_wall']:.1f} / "
-            f"{r['after_cpu']:.1f} | {r['after_wall'] / r['before_wall']:.2f} | "
-            f"{'yes' if r['same_verdict'] else 'NO'} |"
+            f"{r['after_cpu']:.1f} | {r['after_wall'] / r['before_wall']:.2f} / "
+            f"{r['after_cpu'] / max(r['before_cpu'], 1e-9):.2f} | {'yes' if r['same_verdict'] else 'NO'} |"
         )
     print(f"\nload average {load0:.1f} at the start, {load1:.1f} at the end; {os.cpu_count()} CPUs")
     for r in rows:
