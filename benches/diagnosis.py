@@ -24,8 +24,9 @@ Per row: detection (the plain model rejected), right name, right name AND place 
 defensively from the named term's JSON: a ``place`` key, else the registry's ``acts_on``), wrong name (a
 named term that is not the hidden one, nor its listed alternative), "unexplained", bad: "explained" while
 the final model fails its adequacy test, the held-out NRMSE of the chosen model over the true structure's
-(median; where the truth is a fittable library term), seconds per diagnosis, and the achieved size. Targets
-beside each row; "meets" says whether the row's measurable targets hold.
+(median; where the truth is a fittable library term, at its place: ``viscous`` on x is ``viscous@x``),
+seconds per diagnosis, and the achieved size. Targets beside each row; "meets" says whether the row's
+measurable targets hold.
 
 Degradation is a library term fitted in drift space (design.md 10.6): its held-out ratio is that of the
 block-resolved deviations from the mean period.
@@ -53,10 +54,29 @@ SIZES = (3.0, 10.0, 30.0)
 OLD_OUTSIDE = ("pinching", "feedback")
 
 
-def _held_out_ratio(d: Any, term: Optional[str]) -> float:
-    """Held-out NRMSE of the chosen model over the true structure's, on the same data."""
+def true_kind(term: Optional[str], place: str = "") -> Optional[str]:
+    """The registry's code name of the hidden term at its place: ``viscous`` on x is ``viscous@x``; a term
+    at its usual place (or with no place) keeps its name."""
+    from bouc_wen_id.terms import TERMS, Place, placed_kind
+
+    if term is None or not place:
+        return term
+    cls = TERMS.get(term)
+    if cls is not None and getattr(cls.acts_on, "value", cls.acts_on) == place:
+        return term
+    placed = placed_kind(term, Place(place))
+    if placed not in TERMS:
+        raise KeyError(f"the registry has no {term} at place {place!r}")
+    return placed
+
+
+def _held_out_ratio(d: Any, term: Optional[str], place: str = "") -> float:
+    """Held-out NRMSE of the chosen model over the true structure's (the hidden term at its place), on
+    the same data."""
     from bouc_wen_id.diagnosis.fitting import Scale, carry_through_g, fit_with, scaled
     from bouc_wen_id.diagnosis.select import held_out
+
+    term = true_kind(term, place)
 
     if term == "degradation":
         deg = d.degradation
@@ -256,11 +276,10 @@ def run_new_case(job: tuple[str, Optional[str], str, float, int]) -> dict[str, A
     if skind == "structure":  # the achieved size: the cascade's RMS misfit in averaged-noise sd
         n = sum(e.ybar.size for e in d.experiments)
         row["achieved"] = math.sqrt(max(d.plain.cost - d.plain.dof, 0.0) / n)
-    fittable = skind not in ("outside", "structure") and (
-        name is None or (name not in gen.MECHANICAL or place == "u")
-    )
+    fittable = skind not in ("outside", "structure")
     try:
-        row["ratio"] = _held_out_ratio(d, truth) if fittable and kind != "pending" else math.nan
+        where = place if name in gen.MECHANICAL else ""
+        row["ratio"] = _held_out_ratio(d, truth, where) if fittable and kind != "pending" else math.nan
     except Exception:
         row["ratio"] = math.nan
     return row

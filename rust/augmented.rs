@@ -20,6 +20,7 @@
 
 use rustfft::num_complex::Complex;
 use rustfft::FftPlanner;
+use std::cell::RefCell;
 
 use crate::error::{all_finite, finite, CoreError, Result};
 use crate::path_loop::{
@@ -190,6 +191,13 @@ fn lag_bin(n: usize, p: usize, omega: f64, tau: f64) -> (Complex<f64>, Complex<f
     (h, -iw * h * h)
 }
 
+thread_local! {
+    /// The lag filter's FFT plans, kept per thread by size (issue 18 item 4): planned afresh on
+    /// every call, a prime size (the MR damper's P = 401, 37: Bluestein) cost more than the
+    /// transforms. A size always gets the same algorithm, so the outputs are the same bit for bit.
+    static LAG_PLANNER: RefCell<FftPlanner<f64>> = RefCell::new(FftPlanner::new());
+}
+
 /// Applies the lag (`derivative == false`) or its tau-derivative to real columns in place, two
 /// columns per complex FFT (the filter is Hermitian, so it maps the real and imaginary parts
 /// separately).
@@ -198,9 +206,10 @@ fn apply_lag(cols: &mut [&mut [f64]], omega: f64, tau: f64, derivative: bool) {
         return;
     };
     let p = first.len();
-    let mut planner = FftPlanner::<f64>::new();
-    let fwd = planner.plan_fft_forward(p);
-    let inv = planner.plan_fft_inverse(p);
+    let (fwd, inv) = LAG_PLANNER.with(|planner| {
+        let mut planner = planner.borrow_mut();
+        (planner.plan_fft_forward(p), planner.plan_fft_inverse(p))
+    });
     let filt: Vec<Complex<f64>> = (0..p)
         .map(|n| {
             let (h, dh) = lag_bin(n, p, omega, tau);

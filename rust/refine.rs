@@ -334,8 +334,11 @@ fn exp_blocks<M: JointModel>(
 /// Every experiment evaluated in parallel, the sums formed in experiment order, so the result is
 /// bit-identical whatever the number of threads. The first failing experiment's error wins.
 fn evaluate_all<M: JointModel>(model: &M, shared: &[f64], own: &[[f64; 2]]) -> Result<State> {
+    // One experiment per task (issue 18 item 4): rayon's default halves would leave one thread the
+    // three largest grids of the MR damper (P = 401, 391, 401 of 401 ... 37) while the other idles.
     let per: Vec<Result<ExpBlocks>> = (0..model.n_experiments())
         .into_par_iter()
+        .with_max_len(1)
         .map(|i| exp_blocks(model, i, shared, own[i]))
         .collect();
     let n = model.n_shared();

@@ -6,7 +6,8 @@ of the misfit and improves the fit on held-out experiments, and says "unexplaine
 Modules, one job each: ``data`` (experiments with their DC and period record), ``locate`` (where),
 ``fitting`` (the augmented fits in scaled units), ``select`` (forward selection, held-out), ``result``
 (the Diagnosis value), ``run`` (the orchestration), ``report`` (figures and the HTML page), ``structure``
-(Bouc-Wen in feedback, a structural rival of the cascade).
+(Bouc-Wen in feedback, a structural rival of the cascade), ``speed`` (switches of the speed-ups, for the
+speed bench's before/after).
 """
 
 from __future__ import annotations

@@ -19,6 +19,7 @@ from numpy.typing import NDArray
 from ..augmented import AugExperiment, AugFit, AugParams, augmented_output, fit_augmented
 from ..errors import BoucWenIdError, BudgetExceededError, SearchAtBoundError
 from ..terms import TERMS, Distortion, StartContext
+from . import speed
 from .data import DiagExperiment
 
 FloatArray = NDArray[np.float64]
@@ -518,6 +519,61 @@ def screen_phases(exps: Sequence[AugExperiment], par: AugParams, substeps: int) 
     return replace(par, phases=phases), total
 
 
+def screen_phases_linear(
+    exps: Sequence[AugExperiment], pars: Sequence[AugParams], substeps: int
+) -> list[tuple[AugParams, float]]:
+    """:func:`screen_phases` of each of ``pars``, which differ only in the value of their last term, a term
+    whose output is linear in its value (:attr:`Term.linear`; the phase-screened dry friction on x).
+
+    The output at each experiment's phase offset is then ``y(v) = y(v0) + (v - v0) r`` with ``r`` the
+    term's column: each offset's loop is solved once (at ``pars[0]``) instead of once per level (five
+    levels: five times fewer loops; docs/diagnosis-speed.md). A level the core refuses (its value outside
+    the term's range: an error wherever the loop itself is fine) keeps its phases at cost inf, as
+    :func:`screen_phases` leaves it.
+    """
+    base = pars[0]
+    v0 = float(base.values[-1])
+    col = 3 + len(base.terms) - 1
+    valid: list[Optional[bool]] = [None] * len(pars)
+    phases = [np.array(p.phases, dtype=np.float64) for p in pars]
+    totals = [0.0] * len(pars)
+    for i, e in enumerate(exps):
+        best = [(math.inf, float(ph[i])) for ph in phases]
+        for d in PHASE_SCREEN:
+            trial = np.array(base.phases, dtype=np.float64)
+            trial[i] += d
+            try:
+                out = augmented_output(e, replace(base, phases=trial), i, substeps=substeps, jacobian=True)
+            except BudgetExceededError:  # a limit the user set: never a failed start (issue 19)
+                raise
+            except BoucWenIdError:
+                continue
+            for k, par in enumerate(pars):
+                if valid[k] is None:  # where the loop is fine, only the level itself can be refused
+                    valid[k] = _accepted(e, replace(par, phases=trial), i, substeps)
+                if not valid[k]:
+                    continue
+                dv = float(par.values[-1]) - v0
+                y = out.y if dv == 0.0 else out.y + dv * out.jacobian[:, col]
+                c = e.weight * float(np.sum((e.ybar - y) ** 2))
+                if c < best[k][0]:
+                    best[k] = (c, float(trial[i]))
+        for k in range(len(pars)):
+            phases[k][i] = best[k][1]
+            totals[k] += best[k][0]
+    return [(replace(par, phases=ph), t) for par, ph, t in zip(pars, phases, totals)]
+
+
+def _accepted(e: AugExperiment, par: AugParams, i: int, substeps: int) -> bool:
+    try:
+        augmented_output(e, par, i, substeps=substeps)
+    except BudgetExceededError:
+        raise
+    except BoucWenIdError:
+        return False
+    return True
+
+
 #: Levels of a phase-screened term tried beside its own starts, as fractions of the data's peak |ybar|.
 SCREEN_LEVELS = (0.03, 0.1, 0.3)
 
@@ -556,10 +612,12 @@ def _fit_phase_screened(
     base = starts[0]
     levels = [float(v) for st in starts for v in st.values[-1:]]
     levels += [f * peak for f in SCREEN_LEVELS]
-    fits = []
-    for v in levels:
-        par, _ = screen_phases(exps, replace(base, values=np.append(base.values[:-1], v)), substeps)
-        fits.append(fit_from(exps, par, substeps, max_iter=SCREEN_ITER))
+    at = [replace(base, values=np.append(base.values[:-1], v)) for v in levels]
+    if speed.SCREEN_ONCE and TERMS[base.terms[-1]].linear:
+        screened_starts = [par for par, _ in screen_phases_linear(exps, at, substeps)]
+    else:
+        screened_starts = [screen_phases(exps, par, substeps)[0] for par in at]
+    fits = [fit_from(exps, par, substeps, max_iter=SCREEN_ITER) for par in screened_starts]
     screened = best_of(fits)
     if screened is None:
         return None

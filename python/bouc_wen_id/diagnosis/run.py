@@ -560,6 +560,10 @@ def diagnose(
 ) -> Diagnosis:
     """Diagnose what the Wiener-Bouc-Wen model leaves out of sine experiments.
 
+    The diagnosis runs its own linear algebra on one BLAS thread (the core's fits already use every core;
+    :mod:`bouc_wen_id._threads`), unless the user set a BLAS thread count; the caller's setting is restored
+    after.
+
     Parameters
     ----------
     experiments : Recording, Measurement, AveragedPeriod or a sequence of them
@@ -599,6 +603,24 @@ def diagnose(
     SearchAtBoundError
         When not even the plain model can be fitted.
     """
+    from .. import _threads
+    from . import speed
+
+    if not speed.ONE_BLAS_THREAD:
+        return _diagnose(experiments, candidates, alpha, held_out_test, (y_unit, u_unit), progress)
+    with _threads.one_blas_thread():  # issue 18 item 4: BLAS threads compete with the core's (speed.py)
+        return _diagnose(experiments, candidates, alpha, held_out_test, (y_unit, u_unit), progress)
+
+
+def _diagnose(
+    experiments: Any,
+    candidates: Optional[Sequence[str]],
+    alpha: float,
+    held_out_test: bool,
+    units: tuple[str, str],
+    progress: Progress,
+) -> Diagnosis:
+    """:func:`diagnose` itself (its arguments as given)."""
     t0 = time.perf_counter()
     report = reporter(progress)
     cands = _check_candidates(candidates)
@@ -619,7 +641,6 @@ def diagnose(
             "not tested: every input is a pure sine (no harmonic above its noise floor), so the measured "
             "waveform adds nothing to the model"
         )
-    units = (y_unit, u_unit)
     setup = _Setup(cands, float(alpha), held_out_test, units, skipped, not qnotes, report)
     d = _diagnose_set(exps, setup, [*notes, *qnotes])
     named_deg = any(t.term in DRIFT_TERMS for t in d.named)

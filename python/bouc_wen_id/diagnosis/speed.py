@@ -1,0 +1,19 @@
+"""The diagnosis's speed switches (issue 18 item 4; docs/diagnosis-speed.md).
+
+Each switch changes how fast ``diagnose`` runs, never what it finds (the verdicts, named terms and values
+are those of the code without it: benches/diagnosis_speed.py runs both in one process and checks them).
+They exist so that the speed bench can measure "before" and "after" at the same moment on the same
+machine; a user has no reason to turn them off.
+"""
+
+from __future__ import annotations
+
+#: Run the diagnosis with one BLAS thread (:func:`bouc_wen_id._threads.one_blas_thread`; the caller's
+#: setting is restored after). With NumPy's default (one thread per core), the law test's SVD of a
+#: 1800 x 40 matrix took 0.2-0.85 s instead of 8 ms on the 2-core machine under load: the BLAS threads
+#: compete with the core's rayon threads for the same cores, and spin-wait after each call.
+ONE_BLAS_THREAD = True
+
+#: Screen the phases of a linear phase-screened term (dry friction on x) at every level from one loop per
+#: phase offset (:func:`bouc_wen_id.diagnosis.fitting.screen_phases_linear`) instead of one per level.
+SCREEN_ONCE = True
