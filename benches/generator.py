@@ -196,19 +196,75 @@ def _play(x: FloatArray, b: FloatArray) -> FloatArray:
     return xp
 
 
-def run(p: Plant, eff: Effect, total: Optional[int] = None) -> FloatArray:
-    """Noise-free outputs (trials x experiments x samples) of the plant with ``eff`` at every trial value."""
+#: Effects that change the hysteresis' own integration; the others add to its output or filter it, so their
+#: runs reuse the plain hysteresis of the same plant (the same arrays, bit for bit).
+IN_HYSTERESIS = (
+    "play",
+    "slack_gap",
+    "asymmetry",
+    "degradation",
+    "stiffness_degradation",
+    "pinching",
+    "rate_width",
+)
+
+
+@dataclass
+class Base:
+    """What every run of one plant shares: the half-step grids, the exact latent path, the RK4 steps, and
+    (once computed) the plain hysteresis ``w`` (1 x experiments x steps + 1)."""
+
+    total: int
+    grids: list[tuple[FloatArray, float]]
+    x: FloatArray
+    xd: FloatArray
+    xdd: FloatArray
+    h: FloatArray
+    wf: Optional[FloatArray] = None
+
+
+def base(p: Plant, total: Optional[int] = None) -> Base:
+    """The grids and exact latent ``x, xdot, xddot`` of every experiment of ``p`` (shared by its runs)."""
     total = total or (SETTLE + PERIODS) * P
-    nv = eff.values.size
-    ne = p.omegas.size
-    grids = [_grid(p, i, total) for i in range(ne)]
+    grids = [_grid(p, i, total) for i in range(p.omegas.size)]
     lat = [latent(p, g, i) for i, (g, _) in enumerate(grids)]
     x = np.stack([v[0] for v in lat])
     xd = np.stack([v[1] for v in lat])
     xdd = np.stack([v[2] for v in lat])
     h = np.array([g[1] / SUBSTEPS for g in grids])  # RK4 step: two half-grid intervals
+    return Base(total, grids, x, xd, xdd, h)
+
+
+def run(p: Plant, eff: Effect, total: Optional[int] = None, shared: Optional[Base] = None) -> FloatArray:
+    """Noise-free outputs (trials x experiments x samples) of the plant with ``eff`` at every trial value.
+
+    ``shared``: the plant's :func:`base` (same ``total``), reused across runs instead of recomputed."""
+    b = shared if shared is not None else base(p, total)
+    if total is not None and total != b.total:
+        raise ValueError(f"run: total {total} differs from the shared base's {b.total}")
+    nv = eff.values.size
+    ne = p.omegas.size
     val = eff.values[:, None] * np.ones((1, ne))
     name = eff.name
+    if name in IN_HYSTERESIS or b.wf is None:
+        wf = _hysteresis(p, name, val, b)
+        if name not in IN_HYSTERESIS:
+            b.wf = wf[:1]
+    else:
+        wf = np.broadcast_to(b.wf, (nv,) + b.wf.shape[1:])
+    v = wf
+    v = v + _parallel(p, eff, val, b.x[:, ::2], b.xd[:, ::2], b.xdd[:, ::2], b.grids)
+    if name == "sensor_lag":
+        v = _lag(v, val, b.h)
+    if name == "offset":
+        v = v + val[..., None]
+    return np.ascontiguousarray(v[..., :-1:SUBSTEPS])
+
+
+def _hysteresis(p: Plant, name: Optional[str], val: FloatArray, b: Base) -> FloatArray:
+    """``w`` (trials x experiments x steps + 1) of the hysteresis with effect ``name`` at values ``val``."""
+    nv, ne = val.shape
+    x, h = b.x, b.h
     # Every hysteresis here is driven along its input's path: the mean rate over each half step, constant
     # there, so RK4 integrates w along x exactly wherever x does not reverse inside the half step (the
     # rate-dependent width sees that mean rate). Play drives it along the played path, the slack gap along
@@ -227,6 +283,7 @@ def run(p: Plant, eff: Effect, total: Optional[int] = None) -> FloatArray:
     zeta1 = val if name == "pinching" else zero
     rwidth = val if name == "rate_width" else zero
     vref = np.median(p.levels * p.omegas)
+    w0 = np.zeros((nv, ne)) + (0.0 if p.w0 is None else p.w0[None, :])
 
     def f(w: FloatArray, e: FloatArray, d: FloatArray) -> tuple[FloatArray, FloatArray]:
         aw = np.abs(w) ** (mu - 1.0)
@@ -236,15 +293,7 @@ def run(p: Plant, eff: Effect, total: Optional[int] = None) -> FloatArray:
         pinch = 1.0 - zeta1 * np.exp(-((((w * np.sign(d)) - 0.1) / 0.2) ** 2))
         return pinch * (d - nu * hyst) / (1.0 + deta * e), w * d
 
-    w0 = np.zeros((nv, ne)) + (0.0 if p.w0 is None else p.w0[None, :])
-    wf = _rk4(f, w0, rate, h, SUBSTEPS * total)
-    v = wf
-    v = v + _parallel(p, eff, val, x[:, ::2], xd[:, ::2], xdd[:, ::2], grids)
-    if name == "sensor_lag":
-        v = _lag(v, val, h)
-    if name == "offset":
-        v = v + val[..., None]
-    return np.ascontiguousarray(v[..., :-1:SUBSTEPS])
+    return _rk4(f, w0, rate, h, SUBSTEPS * b.total)
 
 
 def _rk4(
@@ -347,10 +396,18 @@ def _steady(y: FloatArray) -> FloatArray:
     return y[..., SETTLE * P :]
 
 
-def contribution(p: Plant, eff: Effect, plain: FloatArray) -> FloatArray:
+def contribution(p: Plant, eff: Effect, plain: FloatArray, shared: Optional[Base] = None) -> FloatArray:
     """RMS of each trial value's contribution over the averaged periods, in averaged-noise-sd units."""
-    y = run(p, eff)
-    return np.sqrt(np.mean((_steady(y) - _steady(plain)) ** 2, axis=(1, 2))) / (NOISE_SD / math.sqrt(PERIODS))
+    return _contribution(p, eff, plain, shared)[0]
+
+
+def _contribution(
+    p: Plant, eff: Effect, plain: FloatArray, shared: Optional[Base]
+) -> tuple[FloatArray, FloatArray]:
+    """:func:`contribution` and the run it measured (trials x experiments x samples)."""
+    y = run(p, eff, shared=shared)
+    size = np.sqrt(np.mean((_steady(y) - _steady(plain)) ** 2, axis=(1, 2))) / (NOISE_SD / math.sqrt(PERIODS))
+    return size, y
 
 
 def upper_value(p: Plant, name: str) -> float:
@@ -369,25 +426,34 @@ def upper_value(p: Plant, name: str) -> float:
 
 def calibrate(p: Plant, name: str, place: str, size: float) -> tuple[float, float]:
     """(value, achieved size) of effect ``name`` at ``place`` whose contribution is ``size`` noise sd."""
-    plain = run(p, Effect())
+    value, got, _ = _calibrate(p, name, place, size, base(p))
+    return value, got
+
+
+def _calibrate(p: Plant, name: str, place: str, size: float, b: Base) -> tuple[float, float, FloatArray]:
+    """:func:`calibrate` and the noise-free run at the value found (experiments x samples)."""
+    plain = run(p, Effect(), shared=b)
     if name in LINEAR:
-        unit = float(contribution(p, Effect(name, place, np.ones(1)), plain)[0])
-        return size / unit, size
+        unit = float(contribution(p, Effect(name, place, np.ones(1)), plain, b)[0])
+        value = size / unit
+        return value, size, run(p, Effect(name, place, np.array([value])), shared=b)[0]
     hi = upper_value(p, name)
     vals = hi * np.logspace(-3.0, 0.0, 7)
-    c = contribution(p, Effect(name, place, vals), plain)
+    c = contribution(p, Effect(name, place, vals), plain, b)
     ok = np.isfinite(c) & (c > 0)
     if not np.any(ok):
         raise FloatingPointError(f"{name}: no finite contribution over {vals}")
     lv, lc = np.log(vals[ok]), np.log(c[ok])
     order = np.argsort(lc)
     v = float(np.exp(np.interp(math.log(size), lc[order], lv[order])))
-    got = float(contribution(p, Effect(name, place, np.array([v])), plain)[0])
+    cv, y = _contribution(p, Effect(name, place, np.array([v])), plain, b)
+    got = float(cv[0])
     if got > 0:  # one secant correction in log-log
         slope = np.polyfit(lv, lc, 1)[0] if lv.size > 1 else 1.0
         v = min(hi, v * math.exp((math.log(size) - math.log(got)) / max(slope, 0.2)))
-        got = float(contribution(p, Effect(name, place, np.array([v])), plain)[0])
-    return v, got
+        cv, y = _contribution(p, Effect(name, place, np.array([v])), plain, b)
+        got = float(cv[0])
+    return v, got, y[0]  # the last run was at v: reused, not re-run
 
 
 def recordings(
@@ -488,6 +554,5 @@ def make_case(kind: str, name: Optional[str], place: str, size: float, seed: int
         )
     if name is None:
         return Case(kind, None, "", 0.0, 0.0, 0.0, seed, p.shape, recordings(p, run(p, Effect())[0], seed))
-    value, got = calibrate(p, name, place, size)
-    y = run(p, Effect(name, place, np.array([value])))[0]
+    value, got, y = _calibrate(p, name, place, size, base(p))
     return Case(kind, name, place, size, got, value, seed, p.shape, recordings(p, y, seed))
