@@ -29,9 +29,10 @@ log-log interpolation over a vectorised sweep otherwise (the achieved size is re
 from __future__ import annotations
 
 import math
+import os
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Optional
+from typing import Any, Optional
 
 import numpy as np
 from numpy.typing import NDArray
@@ -188,6 +189,8 @@ def _grid(p: Plant, i: int, total: int) -> tuple[FloatArray, float]:
 
 def _play(x: FloatArray, b: FloatArray) -> FloatArray:
     """Play of half-width ``b`` (trials x experiments) along ``x`` (experiments x grid), from rest."""
+    if _jit is not None:
+        return _jit.play(np.ascontiguousarray(x), np.ascontiguousarray(b))
     xp = np.empty(b.shape + (x.shape[1],))
     cur = np.clip(np.zeros_like(b), x[None, :, 0] - b, x[None, :, 0] + b)
     for j in range(x.shape[1]):
@@ -284,6 +287,9 @@ def _hysteresis(p: Plant, name: Optional[str], val: FloatArray, b: Base) -> Floa
     rwidth = val if name == "rate_width" else zero
     vref = np.median(p.levels * p.omegas)
     w0 = np.zeros((nv, ne)) + (0.0 if p.w0 is None else p.w0[None, :])
+    if _jit is not None:
+        sw = np.stack([rwidth, dnu, delta, zeta1, deta])
+        return _jit.rk4(w0, np.ascontiguousarray(rate), h, SUBSTEPS * b.total, mu, beta, gamma, vref, sw)
 
     def f(w: FloatArray, e: FloatArray, d: FloatArray) -> tuple[FloatArray, FloatArray]:
         aw = np.abs(w) ** (mu - 1.0)
@@ -360,6 +366,8 @@ def _parallel(
         return val[..., None] * sig[None]
     if name == "dahl":  # dF/dxi = sigma (1 - s F)^2 along travel xi in direction s: solved exactly per step
         sigma = 1.0 / (0.2 * float(p.levels.min()))
+        if _jit is not None:
+            return val[..., None] * _jit.dahl(np.ascontiguousarray(x), sigma)[None]
         fd = np.zeros(x.shape[0])
         out = np.zeros(x.shape)
         for j in range(1, x.shape[1]):
@@ -375,6 +383,8 @@ def _parallel(
 
 def _lag(v: FloatArray, tau: FloatArray, h: FloatArray) -> FloatArray:
     """``v`` seen through ``1/(tau s + 1)`` from rest, exact for a piecewise-linear ``v`` on the grid."""
+    if _jit is not None:
+        return _jit.lag(np.ascontiguousarray(v), np.ascontiguousarray(tau), h)
     hh = h[None, :]  # the full-step grid spacing
     tt = np.maximum(tau, 1e-300)
     a = np.exp(-hh / tt)
@@ -505,6 +515,9 @@ def feedback_outputs(p: Plant, total: Optional[int] = None) -> tuple[FloatArray,
     amp = p.levels * np.abs(-m * om**2 + 1j * c * om + kk + 1.0)
     h = TWO_PI / om / P / SUBSTEPS
     st = np.zeros((3, om.size))  # y, y', z
+    if _jit is not None:
+        pw = np.array([p.mu, p.beta, p.gamma])
+        return _jit.feedback(amp, om, h, total, m, c, kk, pw), amp
     out = np.zeros((om.size, total))
 
     def f(s: FloatArray, t: FloatArray) -> FloatArray:
@@ -556,3 +569,179 @@ def make_case(kind: str, name: Optional[str], place: str, size: float, seed: int
         return Case(kind, None, "", 0.0, 0.0, 0.0, seed, p.shape, recordings(p, run(p, Effect())[0], seed))
     value, got, y = _calibrate(p, name, place, size, base(p))
     return Case(kind, name, place, size, got, value, seed, p.shape, recordings(p, y, seed))
+
+
+# ------------------------------------------------------------------------------------------------------
+# The same loops compiled (numba, the ``bench`` extra), used when numba imports: one element at a time, the
+# same arithmetic in the same order as the NumPy loops above (which stay the definition). Set the
+# environment variable ``BENCH_GENERATOR_NUMBA=0`` (or ``use_numba(False)``) to run the NumPy loops.
+
+
+def _f_scalar(
+    w: float, e: float, d: float, mu: float, beta: float, gamma: float, vref: float, sw: FloatArray
+) -> tuple[float, float]:
+    """The rate function of ``_hysteresis`` for one element; ``sw`` = (rwidth, dnu, delta, zeta1, deta)."""
+    aw = abs(w) ** (mu - 1.0)
+    b_eff = beta * math.exp(sw[0] * math.tanh(abs(d) / vref - 1.0))
+    nu = 1.0 + sw[1] * e
+    hyst = b_eff * abs(d) * aw * w + gamma * d * aw * abs(w) + sw[2] * d * aw * w
+    sd = 1.0 if d > 0.0 else (-1.0 if d < 0.0 else 0.0)
+    q = ((w * sd) - 0.1) / 0.2
+    pinch = 1.0 - sw[3] * math.exp(-(q * q))
+    return pinch * (d - nu * hyst) / (1.0 + sw[4] * e), w * d
+
+
+def _rk4_loop(
+    w0: FloatArray,
+    rate: FloatArray,
+    h: FloatArray,
+    nstep: int,
+    mu: float,
+    beta: float,
+    gamma: float,
+    vref: float,
+    sw: FloatArray,
+) -> FloatArray:
+    """``_rk4`` of ``_hysteresis``'s rate function, element by element (``sw``: 5 x trials x experiments)."""
+    nv, ne = w0.shape
+    wf = np.empty((nv, ne, nstep + 1))
+    w = w0.copy()
+    e = np.zeros_like(w0)
+    wf[:, :, 0] = w
+    half = 0.5 * h
+    for k in range(2 * nstep):
+        big = 0.0
+        for i in range(nv):
+            for j in range(ne):
+                big = max(big, abs(rate[i, j, k] * half[j]))
+        parts = max(1, math.ceil(big / MAX_INCREMENT))
+        for i in range(nv):
+            for j in range(ne):
+                d = rate[i, j, k]
+                hh = half[j] / parts
+                s = sw[:, i, j]
+                wi, ei = w[i, j], e[i, j]
+                for _ in range(parts):
+                    k1w, k1e = _f_scalar(wi, ei, d, mu, beta, gamma, vref, s)
+                    k2w, k2e = _f_scalar(
+                        wi + 0.5 * hh * k1w, ei + 0.5 * hh * k1e, d, mu, beta, gamma, vref, s
+                    )
+                    k3w, k3e = _f_scalar(
+                        wi + 0.5 * hh * k2w, ei + 0.5 * hh * k2e, d, mu, beta, gamma, vref, s
+                    )
+                    k4w, k4e = _f_scalar(wi + hh * k3w, ei + hh * k3e, d, mu, beta, gamma, vref, s)
+                    wi = wi + hh / 6.0 * (k1w + 2.0 * k2w + 2.0 * k3w + k4w)
+                    ei = ei + hh / 6.0 * (k1e + 2.0 * k2e + 2.0 * k3e + k4e)
+                w[i, j], e[i, j] = wi, ei
+                if k % 2 == 1:
+                    wf[i, j, (k + 1) // 2] = wi
+    return wf
+
+
+def _play_loop(x: FloatArray, b: FloatArray) -> FloatArray:
+    """``_play`` element by element."""
+    nv, ne = b.shape
+    xp = np.empty((nv, ne, x.shape[1]))
+    for i in range(nv):
+        for j in range(ne):
+            cur = min(max(0.0, x[j, 0] - b[i, j]), x[j, 0] + b[i, j])
+            for m in range(x.shape[1]):
+                cur = min(max(cur, x[j, m] - b[i, j]), x[j, m] + b[i, j])
+                xp[i, j, m] = cur
+    return xp
+
+
+def _lag_loop(v: FloatArray, tau: FloatArray, h: FloatArray) -> FloatArray:
+    """``_lag`` element by element."""
+    nv, ne, n = v.shape
+    out = np.empty((nv, ne, n))
+    for i in range(nv):
+        for j in range(ne):
+            hh = h[j]
+            tt = max(tau[i, j], 1e-300)
+            a = math.exp(-hh / tt)
+            y = 0.0
+            out[i, j, 0] = y
+            for m in range(1, n):
+                s = (v[i, j, m] - v[i, j, m - 1]) / hh
+                y = v[i, j, m] - tt * s + a * (y - v[i, j, m - 1] + tt * s)
+                out[i, j, m] = y
+    return out
+
+
+def _dahl_loop(x: FloatArray, sigma: float) -> FloatArray:
+    """The Dahl loop of ``_parallel`` element by element (experiments x grid)."""
+    out = np.zeros(x.shape)
+    for i in range(x.shape[0]):
+        fd = 0.0
+        for j in range(1, x.shape[1]):
+            dx = x[i, j] - x[i, j - 1]
+            sgn = 1.0 if dx > 0.0 else (-1.0 if dx < 0.0 else 0.0)
+            g0 = min(max(1.0 - sgn * fd, 0.0), 2.0)
+            g1 = g0 / (1.0 + sigma * abs(dx) * g0)
+            if sgn != 0.0:
+                fd = sgn * (1.0 - g1)
+            out[i, j] = fd
+    return out
+
+
+def _feedback_loop(
+    amp: FloatArray, om: FloatArray, h: FloatArray, total: int, m: float, c: float, kk: float, pw: FloatArray
+) -> FloatArray:
+    """``feedback_outputs``' RK4 element by element; ``pw`` = (mu, beta, gamma)."""
+    ne = om.size
+    out = np.zeros((ne, total))
+    for j in range(ne):
+        st = np.zeros(3)
+        ks = np.zeros((4, 3))
+        for k in range(SUBSTEPS * total):
+            t = k * h[j]
+            if k % SUBSTEPS == 0:
+                out[j, k // SUBSTEPS] = st[0]
+            for q in range(4):
+                frac = (0.0, 0.5, 0.5, 1.0)[q]
+                tq = t if q == 0 else (t + 0.5 * h[j] if q < 3 else t + h[j])
+                y = st[0] + frac * h[j] * ks[q - 1, 0] if q > 0 else st[0]
+                yd = st[1] + frac * h[j] * ks[q - 1, 1] if q > 0 else st[1]
+                z = st[2] + frac * h[j] * ks[q - 1, 2] if q > 0 else st[2]
+                u = amp[j] * math.cos(om[j] * tq)
+                aw = abs(z) ** (pw[0] - 1.0)
+                ks[q, 0] = yd
+                ks[q, 1] = (u - c * yd - kk * y - z) / m
+                ks[q, 2] = yd - pw[1] * abs(yd) * aw * z - pw[2] * yd * aw * abs(z)
+            for r in range(3):
+                st[r] = st[r] + h[j] / 6.0 * (ks[0, r] + 2 * ks[1, r] + 2 * ks[2, r] + ks[3, r])
+    return out
+
+
+class _Jit:
+    """The compiled loops (numba.njit of the ``_*_loop`` functions above), built once per process."""
+
+    def __init__(self, numba: Any) -> None:
+        global _f_scalar
+        njit = numba.njit(cache=True)
+        _f_scalar = njit(_f_scalar)  # the loops call it by its global name: compiled calls compiled
+        self.rk4 = njit(_rk4_loop)
+        self.play = njit(_play_loop)
+        self.lag = njit(_lag_loop)
+        self.dahl = njit(_dahl_loop)
+        self.feedback = njit(_feedback_loop)
+
+
+def use_numba(on: bool) -> bool:
+    """Run the compiled loops (``on`` and numba imports) or the NumPy ones; returns whether compiled."""
+    global _jit, _compiled
+    _jit = None
+    if on:
+        try:
+            import numba
+        except ImportError:
+            return False
+        _compiled = _compiled or _Jit(numba)
+        _jit = _compiled
+    return _jit is not None
+
+
+_compiled: Optional[_Jit] = None
+_jit: Optional[_Jit] = None
+use_numba(os.environ.get("BENCH_GENERATOR_NUMBA", "1") != "0")
