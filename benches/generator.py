@@ -28,10 +28,13 @@ log-log interpolation over a vectorised sweep otherwise (the achieved size is re
 
 from __future__ import annotations
 
+import hashlib
+import json
 import math
 import os
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any, Optional
 
 import numpy as np
@@ -745,3 +748,67 @@ def use_numba(on: bool) -> bool:
 _compiled: Optional[_Jit] = None
 _jit: Optional[_Jit] = None
 use_numba(os.environ.get("BENCH_GENERATOR_NUMBA", "1") != "0")
+
+
+# ------------------------------------------------------------------------------------------------------
+# A cache of generated cases (benches/diagnosis.py --cache DIR): an npz of the recordings' arrays and a json
+# of the case's metadata, keyed by (kind, name, place, size, seed, generator version).
+
+
+def version() -> str:
+    """This generator's version: a hash of this file's text, and which loops run (compiled or NumPy)."""
+    text = Path(__file__).read_bytes()
+    return hashlib.sha256(text).hexdigest()[:16] + ("-numba" if _jit is not None else "-numpy")
+
+
+def cached_case(kind: str, name: Optional[str], place: str, size: float, seed: int, cache: Path) -> Case:
+    """:func:`make_case`, read from ``cache`` when this generator version already made it, else made and
+    stored there (a damaged or foreign entry is made again and overwritten)."""
+    key = json.dumps([kind, name, place, float(size), int(seed), version()])
+    stem = cache / hashlib.sha256(key.encode()).hexdigest()[:24]
+    npz, meta = stem.with_suffix(".npz"), stem.with_suffix(".json")
+    if npz.exists() and meta.exists():
+        try:
+            return _load_case(npz, meta, key)
+        except (OSError, ValueError, KeyError, TypeError):
+            pass
+    case = make_case(kind, name, place, size, seed)
+    cache.mkdir(parents=True, exist_ok=True)
+    recs: list[Any] = case.recordings
+    arrays = {f"{a}{i}": np.asarray(getattr(r, a)) for i, r in enumerate(recs) for a in ("t", "u", "y")}
+    info = {
+        "key": key,
+        "case": [
+            case.kind,
+            case.name,
+            case.place,
+            case.size,
+            case.achieved,
+            case.value,
+            case.seed,
+            case.shape,
+        ],
+        "recordings": [[r.amplitude, r.frequency, r.settle_periods, dict(r.metadata)] for r in recs],
+    }
+    # Written under temporary names, then renamed: a reader never sees half a file.
+    with open(f"{npz}.tmp", "wb") as fh:
+        np.savez(fh, **arrays)
+    Path(f"{meta}.tmp").write_text(json.dumps(info))
+    os.replace(f"{npz}.tmp", npz)
+    os.replace(f"{meta}.tmp", meta)
+    return case
+
+
+def _load_case(npz: Path, meta: Path, key: str) -> Case:
+    import bouc_wen_id as bw
+
+    info = json.loads(meta.read_text())
+    if info["key"] != key:
+        raise KeyError(f"{meta}: stored for {info['key']}, not {key}")
+    with np.load(npz) as z:
+        recs: list[object] = [
+            bw.Recording(z[f"t{i}"], z[f"u{i}"], z[f"y{i}"], amp, freq, settle_periods=settle, metadata=md)
+            for i, (amp, freq, settle, md) in enumerate(info["recordings"])
+        ]
+    kind, name, place, size, achieved, value, seed, shape = info["case"]
+    return Case(kind, name, place, size, achieved, value, seed, shape, recs)

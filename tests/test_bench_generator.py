@@ -8,6 +8,7 @@ loop to integration accuracy, through G shapes that differ (a resonant G with a 
 from __future__ import annotations
 
 import importlib
+import json
 import sys
 from pathlib import Path
 from typing import Any
@@ -181,3 +182,33 @@ def test_compiled_feedback_agrees_with_the_numpy_feedback() -> None:
         assert np.max(np.abs(fast - ref)) <= 1e-12 * np.max(np.abs(ref))
     finally:
         gen.use_numba(was)
+
+
+def test_a_cached_case_is_the_case_made(tmp_path: Path) -> None:
+    # benches/diagnosis.py --cache DIR: the first call makes and stores the case, the second reads it back
+    # (the same arrays, values and metadata); a damaged entry is made again; a new version is a new key.
+    made = gen.cached_case("null", None, "", 0.0, 116, tmp_path)
+    assert len(list(tmp_path.glob("*.npz"))) == 1 and len(list(tmp_path.glob("*.json"))) == 1
+    read = gen.cached_case("null", None, "", 0.0, 116, tmp_path)
+    assert (read.kind, read.name, read.seed, read.shape, read.value) == (
+        made.kind,
+        made.name,
+        made.seed,
+        made.shape,
+        made.value,
+    )
+    for a, b in zip(made.recordings, read.recordings):
+        assert all(np.array_equal(getattr(a, k), getattr(b, k)) for k in ("t", "u", "y"))
+        assert (a.amplitude, a.frequency, a.settle_periods, dict(a.metadata)) == (
+            b.amplitude,
+            b.frequency,
+            b.settle_periods,
+            dict(b.metadata),
+        )
+    (meta,) = tmp_path.glob("*.json")
+    meta.write_text("{not json")
+    again = gen.cached_case("null", None, "", 0.0, 116, tmp_path)
+    assert np.array_equal(again.recordings[0].y, made.recordings[0].y)
+    assert json.loads(meta.read_text())["key"].endswith(gen.version() + '"]')
+    gen.cached_case("null", None, "", 0.0, 117, tmp_path)
+    assert len(list(tmp_path.glob("*.npz"))) == 2
