@@ -32,12 +32,15 @@ Degradation is a library term fitted in drift space (design.md 10.6): its held-o
 block-resolved deviations from the mean period.
 
 Usage: ``python benches/diagnosis.py [--quick | --full] [--cases N] [--null N] [--workers 2] [--seed S]
-[--generator new|old] [--only a,b] [--sizes 10,30] [--json out.json]``.
+[--generator new|old] [--only a,b] [--sizes 10,30] [--json out.json] [--cache DIR]``; ``--cache DIR`` stores
+each generated case (npz + json, keyed by kind, name, place, size, seed and the generator's version) and
+reuses it, so a re-run on the same cases costs only the diagnosis.
 """
 
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 import math
 import sys
@@ -242,8 +245,11 @@ def _score(d: Any, kind: str, truth: Optional[str], place: str) -> dict[str, Any
     }
 
 
-def run_new_case(job: tuple[str, Optional[str], str, float, int]) -> dict[str, Any]:
-    """Generate one case with ``benches/generator.py`` and diagnose it as a user would."""
+def run_new_case(
+    job: tuple[str, Optional[str], str, float, int], cache: Optional[Path] = None
+) -> dict[str, Any]:
+    """Generate one case with ``benches/generator.py`` (or read it from ``cache``, ``--cache DIR``, when this
+    generator version made it before) and diagnose it as a user would."""
     import warnings
 
     import bouc_wen_id as bw
@@ -253,7 +259,11 @@ def run_new_case(job: tuple[str, Optional[str], str, float, int]) -> dict[str, A
     row: dict[str, Any] = {"kind": kind, "term": name, "place": place, "size": size, "seed": seed}
     t0 = time.perf_counter()
     try:
-        case = gen.make_case(kind, name, place, size, seed)
+        case = (
+            gen.make_case(kind, name, place, size, seed)
+            if cache is None
+            else gen.cached_case(kind, name, place, size, seed, cache)
+        )
     except Exception as exc:  # the generator's own failure: reported as such, not as the diagnosis's
         row["error"] = f"generator: {type(exc).__name__}: {exc}"
         return row
@@ -418,6 +428,12 @@ def main(argv: Optional[list[str]] = None) -> int:
     )
     ap.add_argument("--outside", default=",".join(OLD_OUTSIDE), help="old generator's outside rows")
     ap.add_argument("--json", type=Path, default=None)
+    ap.add_argument(
+        "--cache",
+        type=Path,
+        default=None,
+        help="store each generated case in DIR (npz + json, keyed by case and generator version), reuse it",
+    )
     ap.add_argument("--table", type=Path, default=None, help="re-print the table of a saved --json run")
     args = ap.parse_args(argv)
     if args.table:
@@ -435,7 +451,7 @@ def main(argv: Optional[list[str]] = None) -> int:
         sizes = {float(v) for v in args.sizes.split(",")}
         jobs = [j for j in jobs if j[3] in sizes or j[0] in ("null", "outside") and j[3] == 0.0]
     t0 = time.perf_counter()
-    rows = _run_all(run_new_case, jobs, args.workers)
+    rows = _run_all(functools.partial(run_new_case, cache=args.cache), jobs, args.workers)
     wall = time.perf_counter() - t0
     lines = summarise(rows)
     print_table(lines)

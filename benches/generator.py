@@ -28,10 +28,14 @@ log-log interpolation over a vectorised sweep otherwise (the achieved size is re
 
 from __future__ import annotations
 
+import hashlib
+import json
 import math
+import os
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Optional
+from pathlib import Path
+from typing import Any, Optional
 
 import numpy as np
 from numpy.typing import NDArray
@@ -188,6 +192,8 @@ def _grid(p: Plant, i: int, total: int) -> tuple[FloatArray, float]:
 
 def _play(x: FloatArray, b: FloatArray) -> FloatArray:
     """Play of half-width ``b`` (trials x experiments) along ``x`` (experiments x grid), from rest."""
+    if _jit is not None:
+        return _jit.play(np.ascontiguousarray(x), np.ascontiguousarray(b))
     xp = np.empty(b.shape + (x.shape[1],))
     cur = np.clip(np.zeros_like(b), x[None, :, 0] - b, x[None, :, 0] + b)
     for j in range(x.shape[1]):
@@ -196,19 +202,75 @@ def _play(x: FloatArray, b: FloatArray) -> FloatArray:
     return xp
 
 
-def run(p: Plant, eff: Effect, total: Optional[int] = None) -> FloatArray:
-    """Noise-free outputs (trials x experiments x samples) of the plant with ``eff`` at every trial value."""
+#: Effects that change the hysteresis' own integration; the others add to its output or filter it, so their
+#: runs reuse the plain hysteresis of the same plant (the same arrays, bit for bit).
+IN_HYSTERESIS = (
+    "play",
+    "slack_gap",
+    "asymmetry",
+    "degradation",
+    "stiffness_degradation",
+    "pinching",
+    "rate_width",
+)
+
+
+@dataclass
+class Base:
+    """What every run of one plant shares: the half-step grids, the exact latent path, the RK4 steps, and
+    (once computed) the plain hysteresis ``w`` (1 x experiments x steps + 1)."""
+
+    total: int
+    grids: list[tuple[FloatArray, float]]
+    x: FloatArray
+    xd: FloatArray
+    xdd: FloatArray
+    h: FloatArray
+    wf: Optional[FloatArray] = None
+
+
+def base(p: Plant, total: Optional[int] = None) -> Base:
+    """The grids and exact latent ``x, xdot, xddot`` of every experiment of ``p`` (shared by its runs)."""
     total = total or (SETTLE + PERIODS) * P
-    nv = eff.values.size
-    ne = p.omegas.size
-    grids = [_grid(p, i, total) for i in range(ne)]
+    grids = [_grid(p, i, total) for i in range(p.omegas.size)]
     lat = [latent(p, g, i) for i, (g, _) in enumerate(grids)]
     x = np.stack([v[0] for v in lat])
     xd = np.stack([v[1] for v in lat])
     xdd = np.stack([v[2] for v in lat])
     h = np.array([g[1] / SUBSTEPS for g in grids])  # RK4 step: two half-grid intervals
+    return Base(total, grids, x, xd, xdd, h)
+
+
+def run(p: Plant, eff: Effect, total: Optional[int] = None, shared: Optional[Base] = None) -> FloatArray:
+    """Noise-free outputs (trials x experiments x samples) of the plant with ``eff`` at every trial value.
+
+    ``shared``: the plant's :func:`base` (same ``total``), reused across runs instead of recomputed."""
+    b = shared if shared is not None else base(p, total)
+    if total is not None and total != b.total:
+        raise ValueError(f"run: total {total} differs from the shared base's {b.total}")
+    nv = eff.values.size
+    ne = p.omegas.size
     val = eff.values[:, None] * np.ones((1, ne))
     name = eff.name
+    if name in IN_HYSTERESIS or b.wf is None:
+        wf = _hysteresis(p, name, val, b)
+        if name not in IN_HYSTERESIS:
+            b.wf = wf[:1]
+    else:
+        wf = np.broadcast_to(b.wf, (nv,) + b.wf.shape[1:])
+    v = wf
+    v = v + _parallel(p, eff, val, b.x[:, ::2], b.xd[:, ::2], b.xdd[:, ::2], b.grids)
+    if name == "sensor_lag":
+        v = _lag(v, val, b.h)
+    if name == "offset":
+        v = v + val[..., None]
+    return np.ascontiguousarray(v[..., :-1:SUBSTEPS])
+
+
+def _hysteresis(p: Plant, name: Optional[str], val: FloatArray, b: Base) -> FloatArray:
+    """``w`` (trials x experiments x steps + 1) of the hysteresis with effect ``name`` at values ``val``."""
+    nv, ne = val.shape
+    x, h = b.x, b.h
     # Every hysteresis here is driven along its input's path: the mean rate over each half step, constant
     # there, so RK4 integrates w along x exactly wherever x does not reverse inside the half step (the
     # rate-dependent width sees that mean rate). Play drives it along the played path, the slack gap along
@@ -227,6 +289,10 @@ def run(p: Plant, eff: Effect, total: Optional[int] = None) -> FloatArray:
     zeta1 = val if name == "pinching" else zero
     rwidth = val if name == "rate_width" else zero
     vref = np.median(p.levels * p.omegas)
+    w0 = np.zeros((nv, ne)) + (0.0 if p.w0 is None else p.w0[None, :])
+    if _jit is not None:
+        sw = np.stack([rwidth, dnu, delta, zeta1, deta])
+        return _jit.rk4(w0, np.ascontiguousarray(rate), h, SUBSTEPS * b.total, mu, beta, gamma, vref, sw)
 
     def f(w: FloatArray, e: FloatArray, d: FloatArray) -> tuple[FloatArray, FloatArray]:
         aw = np.abs(w) ** (mu - 1.0)
@@ -236,15 +302,7 @@ def run(p: Plant, eff: Effect, total: Optional[int] = None) -> FloatArray:
         pinch = 1.0 - zeta1 * np.exp(-((((w * np.sign(d)) - 0.1) / 0.2) ** 2))
         return pinch * (d - nu * hyst) / (1.0 + deta * e), w * d
 
-    w0 = np.zeros((nv, ne)) + (0.0 if p.w0 is None else p.w0[None, :])
-    wf = _rk4(f, w0, rate, h, SUBSTEPS * total)
-    v = wf
-    v = v + _parallel(p, eff, val, x[:, ::2], xd[:, ::2], xdd[:, ::2], grids)
-    if name == "sensor_lag":
-        v = _lag(v, val, h)
-    if name == "offset":
-        v = v + val[..., None]
-    return np.ascontiguousarray(v[..., :-1:SUBSTEPS])
+    return _rk4(f, w0, rate, h, SUBSTEPS * b.total)
 
 
 def _rk4(
@@ -311,6 +369,8 @@ def _parallel(
         return val[..., None] * sig[None]
     if name == "dahl":  # dF/dxi = sigma (1 - s F)^2 along travel xi in direction s: solved exactly per step
         sigma = 1.0 / (0.2 * float(p.levels.min()))
+        if _jit is not None:
+            return val[..., None] * _jit.dahl(np.ascontiguousarray(x), sigma)[None]
         fd = np.zeros(x.shape[0])
         out = np.zeros(x.shape)
         for j in range(1, x.shape[1]):
@@ -326,6 +386,8 @@ def _parallel(
 
 def _lag(v: FloatArray, tau: FloatArray, h: FloatArray) -> FloatArray:
     """``v`` seen through ``1/(tau s + 1)`` from rest, exact for a piecewise-linear ``v`` on the grid."""
+    if _jit is not None:
+        return _jit.lag(np.ascontiguousarray(v), np.ascontiguousarray(tau), h)
     hh = h[None, :]  # the full-step grid spacing
     tt = np.maximum(tau, 1e-300)
     a = np.exp(-hh / tt)
@@ -347,10 +409,18 @@ def _steady(y: FloatArray) -> FloatArray:
     return y[..., SETTLE * P :]
 
 
-def contribution(p: Plant, eff: Effect, plain: FloatArray) -> FloatArray:
+def contribution(p: Plant, eff: Effect, plain: FloatArray, shared: Optional[Base] = None) -> FloatArray:
     """RMS of each trial value's contribution over the averaged periods, in averaged-noise-sd units."""
-    y = run(p, eff)
-    return np.sqrt(np.mean((_steady(y) - _steady(plain)) ** 2, axis=(1, 2))) / (NOISE_SD / math.sqrt(PERIODS))
+    return _contribution(p, eff, plain, shared)[0]
+
+
+def _contribution(
+    p: Plant, eff: Effect, plain: FloatArray, shared: Optional[Base]
+) -> tuple[FloatArray, FloatArray]:
+    """:func:`contribution` and the run it measured (trials x experiments x samples)."""
+    y = run(p, eff, shared=shared)
+    size = np.sqrt(np.mean((_steady(y) - _steady(plain)) ** 2, axis=(1, 2))) / (NOISE_SD / math.sqrt(PERIODS))
+    return size, y
 
 
 def upper_value(p: Plant, name: str) -> float:
@@ -369,25 +439,34 @@ def upper_value(p: Plant, name: str) -> float:
 
 def calibrate(p: Plant, name: str, place: str, size: float) -> tuple[float, float]:
     """(value, achieved size) of effect ``name`` at ``place`` whose contribution is ``size`` noise sd."""
-    plain = run(p, Effect())
+    value, got, _ = _calibrate(p, name, place, size, base(p))
+    return value, got
+
+
+def _calibrate(p: Plant, name: str, place: str, size: float, b: Base) -> tuple[float, float, FloatArray]:
+    """:func:`calibrate` and the noise-free run at the value found (experiments x samples)."""
+    plain = run(p, Effect(), shared=b)
     if name in LINEAR:
-        unit = float(contribution(p, Effect(name, place, np.ones(1)), plain)[0])
-        return size / unit, size
+        unit = float(contribution(p, Effect(name, place, np.ones(1)), plain, b)[0])
+        value = size / unit
+        return value, size, run(p, Effect(name, place, np.array([value])), shared=b)[0]
     hi = upper_value(p, name)
     vals = hi * np.logspace(-3.0, 0.0, 7)
-    c = contribution(p, Effect(name, place, vals), plain)
+    c = contribution(p, Effect(name, place, vals), plain, b)
     ok = np.isfinite(c) & (c > 0)
     if not np.any(ok):
         raise FloatingPointError(f"{name}: no finite contribution over {vals}")
     lv, lc = np.log(vals[ok]), np.log(c[ok])
     order = np.argsort(lc)
     v = float(np.exp(np.interp(math.log(size), lc[order], lv[order])))
-    got = float(contribution(p, Effect(name, place, np.array([v])), plain)[0])
+    cv, y = _contribution(p, Effect(name, place, np.array([v])), plain, b)
+    got = float(cv[0])
     if got > 0:  # one secant correction in log-log
         slope = np.polyfit(lv, lc, 1)[0] if lv.size > 1 else 1.0
         v = min(hi, v * math.exp((math.log(size) - math.log(got)) / max(slope, 0.2)))
-        got = float(contribution(p, Effect(name, place, np.array([v])), plain)[0])
-    return v, got
+        cv, y = _contribution(p, Effect(name, place, np.array([v])), plain, b)
+        got = float(cv[0])
+    return v, got, y[0]  # the last run was at v: reused, not re-run
 
 
 def recordings(
@@ -439,6 +518,9 @@ def feedback_outputs(p: Plant, total: Optional[int] = None) -> tuple[FloatArray,
     amp = p.levels * np.abs(-m * om**2 + 1j * c * om + kk + 1.0)
     h = TWO_PI / om / P / SUBSTEPS
     st = np.zeros((3, om.size))  # y, y', z
+    if _jit is not None:
+        pw = np.array([p.mu, p.beta, p.gamma])
+        return _jit.feedback(amp, om, h, total, m, c, kk, pw), amp
     out = np.zeros((om.size, total))
 
     def f(s: FloatArray, t: FloatArray) -> FloatArray:
@@ -488,6 +570,245 @@ def make_case(kind: str, name: Optional[str], place: str, size: float, seed: int
         )
     if name is None:
         return Case(kind, None, "", 0.0, 0.0, 0.0, seed, p.shape, recordings(p, run(p, Effect())[0], seed))
-    value, got = calibrate(p, name, place, size)
-    y = run(p, Effect(name, place, np.array([value])))[0]
+    value, got, y = _calibrate(p, name, place, size, base(p))
     return Case(kind, name, place, size, got, value, seed, p.shape, recordings(p, y, seed))
+
+
+# ------------------------------------------------------------------------------------------------------
+# The same loops compiled (numba, the ``bench`` extra), used when numba imports: one element at a time, the
+# same arithmetic in the same order as the NumPy loops above (which stay the definition). Set the
+# environment variable ``BENCH_GENERATOR_NUMBA=0`` (or ``use_numba(False)``) to run the NumPy loops.
+
+
+def _f_scalar(
+    w: float, e: float, d: float, mu: float, beta: float, gamma: float, vref: float, sw: FloatArray
+) -> tuple[float, float]:
+    """The rate function of ``_hysteresis`` for one element; ``sw`` = (rwidth, dnu, delta, zeta1, deta)."""
+    aw = abs(w) ** (mu - 1.0)
+    b_eff = beta * math.exp(sw[0] * math.tanh(abs(d) / vref - 1.0))
+    nu = 1.0 + sw[1] * e
+    hyst = b_eff * abs(d) * aw * w + gamma * d * aw * abs(w) + sw[2] * d * aw * w
+    sd = 1.0 if d > 0.0 else (-1.0 if d < 0.0 else 0.0)
+    q = ((w * sd) - 0.1) / 0.2
+    pinch = 1.0 - sw[3] * math.exp(-(q * q))
+    return pinch * (d - nu * hyst) / (1.0 + sw[4] * e), w * d
+
+
+def _rk4_loop(
+    w0: FloatArray,
+    rate: FloatArray,
+    h: FloatArray,
+    nstep: int,
+    mu: float,
+    beta: float,
+    gamma: float,
+    vref: float,
+    sw: FloatArray,
+) -> FloatArray:
+    """``_rk4`` of ``_hysteresis``'s rate function, element by element (``sw``: 5 x trials x experiments)."""
+    nv, ne = w0.shape
+    wf = np.empty((nv, ne, nstep + 1))
+    w = w0.copy()
+    e = np.zeros_like(w0)
+    wf[:, :, 0] = w
+    half = 0.5 * h
+    for k in range(2 * nstep):
+        big = 0.0
+        for i in range(nv):
+            for j in range(ne):
+                big = max(big, abs(rate[i, j, k] * half[j]))
+        parts = max(1, math.ceil(big / MAX_INCREMENT))
+        for i in range(nv):
+            for j in range(ne):
+                d = rate[i, j, k]
+                hh = half[j] / parts
+                s = sw[:, i, j]
+                wi, ei = w[i, j], e[i, j]
+                for _ in range(parts):
+                    k1w, k1e = _f_scalar(wi, ei, d, mu, beta, gamma, vref, s)
+                    k2w, k2e = _f_scalar(
+                        wi + 0.5 * hh * k1w, ei + 0.5 * hh * k1e, d, mu, beta, gamma, vref, s
+                    )
+                    k3w, k3e = _f_scalar(
+                        wi + 0.5 * hh * k2w, ei + 0.5 * hh * k2e, d, mu, beta, gamma, vref, s
+                    )
+                    k4w, k4e = _f_scalar(wi + hh * k3w, ei + hh * k3e, d, mu, beta, gamma, vref, s)
+                    wi = wi + hh / 6.0 * (k1w + 2.0 * k2w + 2.0 * k3w + k4w)
+                    ei = ei + hh / 6.0 * (k1e + 2.0 * k2e + 2.0 * k3e + k4e)
+                w[i, j], e[i, j] = wi, ei
+                if k % 2 == 1:
+                    wf[i, j, (k + 1) // 2] = wi
+    return wf
+
+
+def _play_loop(x: FloatArray, b: FloatArray) -> FloatArray:
+    """``_play`` element by element."""
+    nv, ne = b.shape
+    xp = np.empty((nv, ne, x.shape[1]))
+    for i in range(nv):
+        for j in range(ne):
+            cur = min(max(0.0, x[j, 0] - b[i, j]), x[j, 0] + b[i, j])
+            for m in range(x.shape[1]):
+                cur = min(max(cur, x[j, m] - b[i, j]), x[j, m] + b[i, j])
+                xp[i, j, m] = cur
+    return xp
+
+
+def _lag_loop(v: FloatArray, tau: FloatArray, h: FloatArray) -> FloatArray:
+    """``_lag`` element by element."""
+    nv, ne, n = v.shape
+    out = np.empty((nv, ne, n))
+    for i in range(nv):
+        for j in range(ne):
+            hh = h[j]
+            tt = max(tau[i, j], 1e-300)
+            a = math.exp(-hh / tt)
+            y = 0.0
+            out[i, j, 0] = y
+            for m in range(1, n):
+                s = (v[i, j, m] - v[i, j, m - 1]) / hh
+                y = v[i, j, m] - tt * s + a * (y - v[i, j, m - 1] + tt * s)
+                out[i, j, m] = y
+    return out
+
+
+def _dahl_loop(x: FloatArray, sigma: float) -> FloatArray:
+    """The Dahl loop of ``_parallel`` element by element (experiments x grid)."""
+    out = np.zeros(x.shape)
+    for i in range(x.shape[0]):
+        fd = 0.0
+        for j in range(1, x.shape[1]):
+            dx = x[i, j] - x[i, j - 1]
+            sgn = 1.0 if dx > 0.0 else (-1.0 if dx < 0.0 else 0.0)
+            g0 = min(max(1.0 - sgn * fd, 0.0), 2.0)
+            g1 = g0 / (1.0 + sigma * abs(dx) * g0)
+            if sgn != 0.0:
+                fd = sgn * (1.0 - g1)
+            out[i, j] = fd
+    return out
+
+
+def _feedback_loop(
+    amp: FloatArray, om: FloatArray, h: FloatArray, total: int, m: float, c: float, kk: float, pw: FloatArray
+) -> FloatArray:
+    """``feedback_outputs``' RK4 element by element; ``pw`` = (mu, beta, gamma)."""
+    ne = om.size
+    out = np.zeros((ne, total))
+    for j in range(ne):
+        st = np.zeros(3)
+        ks = np.zeros((4, 3))
+        for k in range(SUBSTEPS * total):
+            t = k * h[j]
+            if k % SUBSTEPS == 0:
+                out[j, k // SUBSTEPS] = st[0]
+            for q in range(4):
+                frac = (0.0, 0.5, 0.5, 1.0)[q]
+                tq = t if q == 0 else (t + 0.5 * h[j] if q < 3 else t + h[j])
+                y = st[0] + frac * h[j] * ks[q - 1, 0] if q > 0 else st[0]
+                yd = st[1] + frac * h[j] * ks[q - 1, 1] if q > 0 else st[1]
+                z = st[2] + frac * h[j] * ks[q - 1, 2] if q > 0 else st[2]
+                u = amp[j] * math.cos(om[j] * tq)
+                aw = abs(z) ** (pw[0] - 1.0)
+                ks[q, 0] = yd
+                ks[q, 1] = (u - c * yd - kk * y - z) / m
+                ks[q, 2] = yd - pw[1] * abs(yd) * aw * z - pw[2] * yd * aw * abs(z)
+            for r in range(3):
+                st[r] = st[r] + h[j] / 6.0 * (ks[0, r] + 2 * ks[1, r] + 2 * ks[2, r] + ks[3, r])
+    return out
+
+
+class _Jit:
+    """The compiled loops (numba.njit of the ``_*_loop`` functions above), built once per process."""
+
+    def __init__(self, numba: Any) -> None:
+        global _f_scalar
+        njit = numba.njit(cache=True)
+        _f_scalar = njit(_f_scalar)  # the loops call it by its global name: compiled calls compiled
+        self.rk4 = njit(_rk4_loop)
+        self.play = njit(_play_loop)
+        self.lag = njit(_lag_loop)
+        self.dahl = njit(_dahl_loop)
+        self.feedback = njit(_feedback_loop)
+
+
+def use_numba(on: bool) -> bool:
+    """Run the compiled loops (``on`` and numba imports) or the NumPy ones; returns whether compiled."""
+    global _jit, _compiled
+    _jit = None
+    if on:
+        try:
+            import numba
+        except ImportError:
+            return False
+        _compiled = _compiled or _Jit(numba)
+        _jit = _compiled
+    return _jit is not None
+
+
+_compiled: Optional[_Jit] = None
+_jit: Optional[_Jit] = None
+use_numba(os.environ.get("BENCH_GENERATOR_NUMBA", "1") != "0")
+
+
+# ------------------------------------------------------------------------------------------------------
+# A cache of generated cases (benches/diagnosis.py --cache DIR): an npz of the recordings' arrays and a json
+# of the case's metadata, keyed by (kind, name, place, size, seed, generator version).
+
+
+def version() -> str:
+    """This generator's version: a hash of this file's text, and which loops run (compiled or NumPy)."""
+    text = Path(__file__).read_bytes()
+    return hashlib.sha256(text).hexdigest()[:16] + ("-numba" if _jit is not None else "-numpy")
+
+
+def cached_case(kind: str, name: Optional[str], place: str, size: float, seed: int, cache: Path) -> Case:
+    """:func:`make_case`, read from ``cache`` when this generator version already made it, else made and
+    stored there (a damaged or foreign entry is made again and overwritten)."""
+    key = json.dumps([kind, name, place, float(size), int(seed), version()])
+    stem = cache / hashlib.sha256(key.encode()).hexdigest()[:24]
+    npz, meta = stem.with_suffix(".npz"), stem.with_suffix(".json")
+    if npz.exists() and meta.exists():
+        try:
+            return _load_case(npz, meta, key)
+        except (OSError, ValueError, KeyError, TypeError):
+            pass
+    case = make_case(kind, name, place, size, seed)
+    cache.mkdir(parents=True, exist_ok=True)
+    recs: list[Any] = case.recordings
+    arrays = {f"{a}{i}": np.asarray(getattr(r, a)) for i, r in enumerate(recs) for a in ("t", "u", "y")}
+    info = {
+        "key": key,
+        "case": [
+            case.kind,
+            case.name,
+            case.place,
+            case.size,
+            case.achieved,
+            case.value,
+            case.seed,
+            case.shape,
+        ],
+        "recordings": [[r.amplitude, r.frequency, r.settle_periods, dict(r.metadata)] for r in recs],
+    }
+    # Written under temporary names, then renamed: a reader never sees half a file.
+    with open(f"{npz}.tmp", "wb") as fh:
+        np.savez(fh, **arrays)
+    Path(f"{meta}.tmp").write_text(json.dumps(info))
+    os.replace(f"{npz}.tmp", npz)
+    os.replace(f"{meta}.tmp", meta)
+    return case
+
+
+def _load_case(npz: Path, meta: Path, key: str) -> Case:
+    import bouc_wen_id as bw
+
+    info = json.loads(meta.read_text())
+    if info["key"] != key:
+        raise KeyError(f"{meta}: stored for {info['key']}, not {key}")
+    with np.load(npz) as z:
+        recs: list[object] = [
+            bw.Recording(z[f"t{i}"], z[f"u{i}"], z[f"y{i}"], amp, freq, settle_periods=settle, metadata=md)
+            for i, (amp, freq, settle, md) in enumerate(info["recordings"])
+        ]
+    kind, name, place, size, achieved, value, seed, shape = info["case"]
+    return Case(kind, name, place, size, achieved, value, seed, shape, recs)

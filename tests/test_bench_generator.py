@@ -8,6 +8,7 @@ loop to integration accuracy, through G shapes that differ (a resonant G with a 
 from __future__ import annotations
 
 import importlib
+import json
 import sys
 from pathlib import Path
 from typing import Any
@@ -100,3 +101,114 @@ def test_generator_and_library_agree_on_the_library_terms(name: str, term: Any) 
     effect = np.max(np.abs(y[:, steady] - plain[:, steady]))
     assert effect > 1e-2  # the term is visible ...
     assert np.max(np.abs(y[:, steady] - y_lib[:, steady])) < TOL  # ... and the same in both
+
+
+#: Every effect the generator hides (the feedback structure has its own integrator, tested apart).
+EFFECTS = [
+    *[(name, place) for name in gen.MECHANICAL for place in gen.PLACES],
+    *[(name, "") for name in (*gen.LIBRARY_OTHER, *gen.BABER_NOORI, *gen.OUTSIDE)],
+]
+SHORT = (2 + 1) * gen.P  # a short record: the loops' arithmetic, not the steady loop, is compared here
+
+
+@pytest.fixture
+def numpy_loops() -> Any:
+    """The generator's NumPy loops (the definition), whatever the environment; restored afterwards."""
+    was = gen._jit is not None
+    gen.use_numba(False)
+    yield gen
+    gen.use_numba(was)
+
+
+def test_runs_of_one_plant_share_its_plain_hysteresis_bit_for_bit(numpy_loops: Any) -> None:
+    # make_case reuses calibrate's plain hysteresis for the effects outside it (added to, or filtering, w):
+    # the same bits as a run from scratch, for every effect, on the NumPy loops.
+    p = gen.make_plant(3, "resonant", low_amplitude=True)
+    shared = gen.base(p, SHORT)
+    plain = gen.run(p, gen.Effect(), shared=shared)
+    assert shared.wf is not None and np.array_equal(plain, gen.run(p, gen.Effect(), total=SHORT))
+    for name, place in EFFECTS:
+        eff = gen.Effect(name, place, np.array([0.02, 0.05]))
+        y = gen.run(p, eff, shared=shared)
+        assert np.array_equal(y, gen.run(p, eff, total=SHORT)), name
+        assert np.max(np.abs(y - plain)) > 1e-4, name  # the effect is there
+
+
+def test_make_case_returns_the_calibrated_run() -> None:
+    # The recordings' noise-free part is the run at the calibrated value (reused from calibrate's last
+    # contribution, not re-run): noisy y minus it is the seeded noise, with the noise sd asked.
+    case = gen.make_case("library", "asymmetry", "", 10.0, 106)
+    p = gen.make_plant(106)
+    y = gen.run(p, gen.Effect("asymmetry", "", np.array([case.value])))[0]
+    noise = np.stack([np.asarray(r.y) for r in case.recordings]) - y
+    rng = np.random.default_rng([106, 7])
+    expected = np.stack([rng.normal(0.0, gen.NOISE_SD, y.shape[1]) for _ in range(y.shape[0])])
+    assert np.allclose(noise, expected, rtol=0.0, atol=1e-12)
+    assert abs(case.achieved - 10.0) < 0.1
+
+
+def _compiled() -> Any:
+    if not gen.use_numba(True):
+        pytest.skip("numba is not installed (the bench extra): the compiled loops cannot be compared")
+    return gen
+
+
+@pytest.mark.parametrize("name, place", EFFECTS)
+def test_compiled_loops_agree_with_the_numpy_loops(name: str, place: str) -> None:
+    # The compiled loops are the NumPy loops element by element, the same arithmetic in the same order:
+    # equal to 1e-12 relative (only the libm's pow/exp/tanh may differ by an ulp).
+    was = gen._jit is not None
+    try:
+        g = _compiled()
+        p = gen.make_plant(5, "first" if name in ("play", "dahl") else "resonant", low_amplitude=True)
+        eff = gen.Effect(name, place, np.array([0.01, 0.04]) * (10.0 if name == "pinching" else 1.0))
+        fast = g.run(p, eff, total=SHORT)
+        g.use_numba(False)
+        ref = g.run(p, eff, total=SHORT)
+        assert np.max(np.abs(fast - ref)) <= 1e-12 * np.max(np.abs(ref))
+    finally:
+        gen.use_numba(was)
+
+
+def test_compiled_feedback_agrees_with_the_numpy_feedback() -> None:
+    was = gen._jit is not None
+    try:
+        g = _compiled()
+        p = gen.make_plant(6, "resonant")
+        fast, amp = g.feedback_outputs(p, total=SHORT)
+        g.use_numba(False)
+        ref, amp_ref = g.feedback_outputs(p, total=SHORT)
+        assert np.array_equal(amp, amp_ref) and np.max(np.abs(ref)) > 0.5
+        assert np.max(np.abs(fast - ref)) <= 1e-12 * np.max(np.abs(ref))
+    finally:
+        gen.use_numba(was)
+
+
+def test_a_cached_case_is_the_case_made(tmp_path: Path) -> None:
+    # benches/diagnosis.py --cache DIR: the first call makes and stores the case, the second reads it back
+    # (the same arrays, values and metadata); a damaged entry is made again; a new version is a new key.
+    made = gen.cached_case("null", None, "", 0.0, 116, tmp_path)
+    assert len(list(tmp_path.glob("*.npz"))) == 1 and len(list(tmp_path.glob("*.json"))) == 1
+    read = gen.cached_case("null", None, "", 0.0, 116, tmp_path)
+    assert (read.kind, read.name, read.seed, read.shape, read.value) == (
+        made.kind,
+        made.name,
+        made.seed,
+        made.shape,
+        made.value,
+    )
+    for a, b in zip(made.recordings, read.recordings):
+        assert all(np.array_equal(getattr(a, k), getattr(b, k)) for k in ("t", "u", "y"))
+        assert (a.amplitude, a.frequency, a.settle_periods, dict(a.metadata)) == (
+            b.amplitude,
+            b.frequency,
+            b.settle_periods,
+            dict(b.metadata),
+        )
+    (meta,) = tmp_path.glob("*.json")
+    meta.write_text("{not json")
+    again = gen.cached_case("null", None, "", 0.0, 116, tmp_path)
+    assert np.array_equal(again.recordings[0].y, made.recordings[0].y)
+    assert json.loads(meta.read_text())["key"].endswith(gen.version() + '"]')
+    gen.cached_case("null", None, "", 0.0, 117, tmp_path)
+    assert len(list(tmp_path.glob("*.npz"))) == 2
