@@ -247,3 +247,17 @@ def test_simulate_input_matches_spencers_equations_by_solve_ivp(kind: str) -> No
     plain = bw.WienerPlant(plant.linear, plant.hysteresis, terms=plant.terms[1:])
     _, _, y_plain = bw.simulate_input(plain, t, u, substeps=8, output=True)
     assert float(np.max(np.abs(np.asarray(y_plain) - ours))) > 20 * err
+
+
+def test_exporters_and_compensation_refuse_the_term_by_name() -> None:
+    from bouc_wen_id.compensation import compensate
+    from bouc_wen_id.export._model import flatten
+
+    plant = bw.WienerPlant(
+        bw.TransferFunction([1.0], [0.1, 1.0]), bw.BoucWen(0.5, 0.5, 2.0), (T.SeriesDashpot(1.0),)
+    )
+    with pytest.raises(InvalidParameterError, match=SD):
+        flatten(plant, "export")
+    t = np.arange(200) * 0.01
+    with pytest.raises(InvalidParameterError, match=SD):
+        compensate(plant, 0.1 * np.sin(TWO_PI * t), t)

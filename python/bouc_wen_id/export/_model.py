@@ -25,6 +25,7 @@ from ..terms import (
     Coulomb,
     Distortion,
     Place,
+    SeriesDashpot,
     Term,
     core_terms,
 )
@@ -96,7 +97,7 @@ class Flat(NamedTuple):
 #: The term classes the exporters write: the registry's terms at their usual place, less the input distortion
 #: (a term on x is a subclass of its usual class, with ``acts_on`` = x, and not here).
 EXPORTED: tuple[type[Term], ...] = tuple(
-    cls for cls in TERMS.values() if cls is not Distortion and cls.acts_on != Place.X
+    cls for cls in TERMS.values() if cls not in (Distortion, SeriesDashpot) and cls.acts_on != Place.X
 )
 
 
