@@ -723,8 +723,9 @@ class SeriesDashpot(Term):
 
     @classmethod
     def start(cls, context: StartContext) -> tuple[float, ...]:
-        # The dashpot's time constant 1/rho at 30 and 3 periods of the highest frequency (in scaled time).
-        return tuple(f * context.max_frequency for f in (0.005, 0.05))
+        # The creep rate rho (times w_u ~ 1 in the scaled units) at 0.1 and 1 times the highest frequency:
+        # the force rolls off below the velocity rho w_u, about |A| omega where the term is seen.
+        return tuple(f * context.max_frequency for f in (0.1, 1.0))
 
     def normalized(self, alpha: float) -> Term:
         # qdot = rho w is in units of x: under x -> alpha x (G -> alpha G) rho grows by alpha.
