@@ -52,6 +52,9 @@ pub const N_SD: usize = 7;
 const MAX_ITER: usize = 80;
 /// Relative tolerance of `|W(w_0) - w_0| <= tol w_b`.
 const RTOL: f64 = 1e-12;
+/// Most RK4 steps per sample interval: beyond, the loop is too stiff for this explicit solver (a
+/// named error, which a fit's trial step takes as a rejected step) rather than minutes per call.
+pub const MAX_STEPS_PER_SAMPLE: usize = 256;
 
 /// The steady loop on the sample grid and its Jacobian.
 #[derive(Debug, Clone)]
@@ -181,8 +184,10 @@ fn steps_per_sample(p: &Params, bound: f64, n: usize, substeps: usize) -> usize 
     let vmax = p.a.abs() + p.r * bound;
     let stiff = vmax * p.mu * bg * bound.powf(p.mu - 1.0) + p.r * (1.0 + bg * bound.powf(p.mu));
     let need = (stiff * 2.0 * PI / n as f64).ceil();
-    if need.is_finite() && need > substeps as f64 {
-        need.min(1e6) as usize
+    if !need.is_finite() || need > MAX_STEPS_PER_SAMPLE as f64 {
+        MAX_STEPS_PER_SAMPLE + 1
+    } else if need > substeps as f64 {
+        need as usize
     } else {
         substeps
     }
@@ -268,6 +273,14 @@ pub fn series_loop(
         r,
     };
     let m = steps_per_sample(&prm, bound, p, substeps);
+    if m > MAX_STEPS_PER_SAMPLE.max(substeps) {
+        return Err(CoreError::NotConverged(format!(
+            "the series-dashpot loop is too stiff for its explicit RK4 (more than \
+             {MAX_STEPS_PER_SAMPLE} steps per sample) at A = {amplitude}, beta = {beta}, \
+             gamma = {gamma}, mu = {mu}, delta = {delta}, r = rho/omega = {r}: w's bound \
+             (beta + gamma - |delta|)^(-1/mu) = {bound:e} or r is too large"
+        )));
+    }
     let (w0, out, iterations) = shoot(&prm, bound, p, m)?;
     let mut samples = Vec::with_capacity(p);
     let _ = pass(&prm, w0, p, m, Some(&mut samples));
@@ -373,6 +386,12 @@ mod tests {
                 );
             }
         }
+    }
+
+    #[test]
+    fn too_stiff_a_loop_is_a_named_error_not_a_hang() {
+        let r = series_loop(1.0, 0.5, 0.5, 2.0, 0.0, 0.0, 1e5, 32, 2);
+        assert!(matches!(r, Err(CoreError::NotConverged(_))), "{r:?}");
     }
 
     #[test]

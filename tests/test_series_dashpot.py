@@ -261,3 +261,12 @@ def test_exporters_and_compensation_refuse_the_term_by_name() -> None:
     t = np.arange(200) * 0.01
     with pytest.raises(InvalidParameterError, match=SD):
         compensate(plant, 0.1 * np.sin(TWO_PI * t), t)
+
+
+@pytest.mark.parametrize("core", [_core, ra], ids=["rust", "numpy"])
+def test_too_stiff_a_loop_is_a_named_error_not_a_hang(core: Any) -> None:
+    # rho/omega = 5e4: the explicit RK4 would need more than MAX_STEPS_PER_SAMPLE steps per sample.
+    from bouc_wen_id.errors import NotConvergedError
+
+    with pytest.raises(NotConvergedError, match="too stiff"):
+        core.augmented_output(32, 1.0, 2.0, 0.0, [SD], np.array([0.6, 0.3, 1.7, 1e5]), 1.0, 0.0, 2)

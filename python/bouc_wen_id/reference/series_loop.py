@@ -32,6 +32,8 @@ N_SD = 7
 _ND = 8
 _MAX_ITER = 80
 _RTOL = 1e-12
+#: Most RK4 steps per sample interval (beyond: too stiff, a named error).
+MAX_STEPS_PER_SAMPLE = 256
 
 
 def _sign(v: float) -> float:
@@ -85,8 +87,10 @@ def _steps_per_sample(prm: tuple[float, ...], bound: float, n: int, substeps: in
     bg = abs(beta) + abs(gamma) + abs(delta)
     vmax = abs(a) + r * bound
     stiff = vmax * mu * bg * bound ** (mu - 1.0) + r * (1.0 + bg * bound**mu)
-    need = math.ceil(stiff * 2.0 * math.pi / n)
-    return int(min(need, 1e6)) if math.isfinite(need) and need > substeps else substeps
+    need = stiff * 2.0 * math.pi / n
+    if not math.isfinite(need) or need > MAX_STEPS_PER_SAMPLE:
+        return MAX_STEPS_PER_SAMPLE + 1
+    return int(math.ceil(need)) if need > substeps else substeps
 
 
 def series_loop(
@@ -131,6 +135,11 @@ def series_loop(
     bound = (1.0 / margin) ** (1.0 / mu)
     prm = (float(amplitude), float(beta), float(gamma), float(mu), float(delta), float(phi), float(r))
     m = _steps_per_sample(prm, bound, p, substeps)
+    if m > max(MAX_STEPS_PER_SAMPLE, substeps):
+        raise NotConvergedError(
+            f"the series-dashpot loop is too stiff for its explicit RK4 (more than {MAX_STEPS_PER_SAMPLE} "
+            f"steps per sample) at r = rho/omega = {r}"
+        )
     lo, hi, w0, passes = -bound, bound, 0.0, 0
     while True:
         if passes == _MAX_ITER:
