@@ -14,7 +14,8 @@ Two generators (``--generator``):
   hysteresis); a structure the diagnosis names as a rival of the cascade (group ``structure``: the
   feedback structure ``m y'' + c y' + k y + z = u``, sized by its noise, to be named ``feedback``); null
   cases with a low-amplitude experiment (started from a saturating one's remanent w) whose loop centre is
-  still settling.
+  still settling; Spencer's series dashpot (the element driven by its own travel ``ddot = xdot - rho w``, a
+  library row since the term exists).
 - ``old``: ``benches/concealed.py``, the library's own simulator (the earlier tables, for before/after).
 
 Sizes are the RMS of the effect's noise-free contribution over the averaged periods, in units of the
@@ -308,6 +309,8 @@ def new_jobs(args: argparse.Namespace) -> list[tuple[str, Optional[str], str, fl
     rows += [("outside", n, "", sz, args.cases) for n in gen.OUTSIDE for sz in (10.0, 30.0)]
     rows += [("null", None, "", 0.0, args.null)]
     rows += [("structure", "feedback", "", sz, args.cases) for sz in (10.0, 30.0)]
+    # Appended last so that the rows above keep their seeds: Spencer's series dashpot (a library term).
+    rows += [("library", n, "", sz, args.cases) for n in gen.SPENCER for sz in sizes]
     jobs = []
     for k, (kind, name, place, size, count) in enumerate(rows):
         jobs += [(kind, name, place, size, args.seed + 1000 * (k + 1) + s) for s in range(count)]

@@ -60,6 +60,10 @@ PLACES = ("u", "x")
 LIBRARY_OTHER = ("offset", "asymmetry", "play", "sensor_lag", "degradation")
 #: Baber-Noori terms being added to the library (branch ``bn``): outside rows until they exist.
 BABER_NOORI = ("stiffness_degradation", "pinching")
+#: Spencer's MR-damper series dashpot: the element driven by its own travel, ``ddot = xdot - rho w`` (the
+#: dashpot in series creeps at ``qdot = rho w`` under the element's force), integrated here in time with x's
+#: mean rate over each half step (not the library's scheme).
+SPENCER = ("series_dashpot",)
 #: Physics outside the library: a rate-dependent loop width, a parallel Dahl loop, a mid-travel slack gap.
 OUTSIDE = ("rate_width", "dahl", "slack_gap")
 #: Effects whose contribution is linear in their parameter (sized in one shot).
@@ -288,6 +292,7 @@ def _hysteresis(p: Plant, name: Optional[str], val: FloatArray, b: Base) -> Floa
     deta = val if name == "stiffness_degradation" else zero
     zeta1 = val if name == "pinching" else zero
     rwidth = val if name == "rate_width" else zero
+    rho = val if name == "series_dashpot" else zero
     vref = np.median(p.levels * p.omegas)
     w0 = np.zeros((nv, ne)) + (0.0 if p.w0 is None else p.w0[None, :])
     if _jit is not None:
@@ -295,6 +300,7 @@ def _hysteresis(p: Plant, name: Optional[str], val: FloatArray, b: Base) -> Floa
         return _jit.rk4(w0, np.ascontiguousarray(rate), h, SUBSTEPS * b.total, mu, beta, gamma, vref, sw)
 
     def f(w: FloatArray, e: FloatArray, d: FloatArray) -> tuple[FloatArray, FloatArray]:
+        d = d - rho * w  # the element's own travel rate behind a series dashpot (0 without one)
         aw = np.abs(w) ** (mu - 1.0)
         b_eff = beta * np.exp(rwidth * np.tanh(np.abs(d) / vref - 1.0))
         nu = 1.0 + dnu * e
@@ -434,6 +440,9 @@ def upper_value(p: Plant, name: str) -> float:
         "stiffness_degradation": 0.05,
         "pinching": 0.9,
         "rate_width": 0.5,
+        # The creep rate: the force rolls off below the velocity rho w_u = rho (saturation at 1), about
+        # |x| omega at the top of the band.
+        "series_dashpot": 3.0 * float(np.max(p.levels * p.omegas)),
     }[name]
 
 

@@ -32,6 +32,9 @@ use crate::refine::{
     levenberg_marquardt, project_hysteresis, Constraint, JointModel, ModelEval, Options,
     StopReason,
 };
+use crate::series_loop::{
+    series_loop, SD_AMPLITUDE, SD_BETA, SD_DELTA, SD_GAMMA, SD_MU, SD_PHI, SD_R,
+};
 use crate::steady::{steady_loop, D_AMPLITUDE, D_BETA, D_GAMMA, D_MU, D_PHI};
 use crate::terms::{
     check_asymmetry, Place, TermKind, Terms, COULOMB_SMOOTHING, N_HYSTERESIS, PINCHING_MAX,
@@ -166,6 +169,64 @@ fn hysteresis(
     }
 }
 
+/// `w`, its rows of columns `PD_*`, and `d w / d rho` per sample.
+type SeriesHysteresis = (Vec<f64>, Vec<[f64; N_PD]>, Vec<f64>);
+
+/// The hysteresis behind Spencer's series dashpot (`rust/series_loop.rs`) with its columns
+/// `d/d(beta, gamma, mu, A, phi, delta)` as [`hysteresis`]'s rows and `d/drho` per sample
+/// (`r = rho / omega`). Asymmetry rides along; play, pinching and a distorted waveform do not
+/// (a named error).
+#[allow(clippy::too_many_arguments)]
+fn series_hysteresis(
+    terms: &Terms,
+    shared: &[f64],
+    amplitude: f64,
+    phi: f64,
+    omega: f64,
+    rho: f64,
+    p: usize,
+    substeps: usize,
+) -> Result<SeriesHysteresis> {
+    for other in [TermKind::Play, TermKind::Pinching, TermKind::Distortion] {
+        if terms.column(other).is_some() {
+            return Err(CoreError::InvalidParameter(format!(
+                "term {:?} with {:?}: the series dashpot's steady loop carries the asymmetry only",
+                TermKind::SeriesDashpot.name(),
+                other.name()
+            )));
+        }
+    }
+    let delta = terms.value(shared, TermKind::Asymmetry);
+    let (beta, gamma, mu) = (shared[0], shared[1], shared[2]);
+    let l = series_loop(
+        amplitude,
+        beta,
+        gamma,
+        mu,
+        delta,
+        phi,
+        rho / omega,
+        p,
+        substeps,
+    )?;
+    let jac = l
+        .jac
+        .iter()
+        .map(|r| {
+            let mut row = [0.0; N_PD];
+            row[PD_BETA] = r[SD_BETA];
+            row[PD_GAMMA] = r[SD_GAMMA];
+            row[PD_MU] = r[SD_MU];
+            row[PD_AMPLITUDE] = r[SD_AMPLITUDE];
+            row[PD_PHI] = r[SD_PHI];
+            row[PD_DELTA] = r[SD_DELTA];
+            row
+        })
+        .collect();
+    let d_rho = l.jac.iter().map(|r| r[SD_R] / omega).collect();
+    Ok((l.w, jac, d_rho))
+}
+
 /// The lag filter of bin `n` of a P-point DFT at `tau`, and its derivative in `tau`.
 ///
 /// Harmonic `k = n` for `n < P/2`, `n - P` above; the Nyquist bin of an even P takes the real
@@ -279,7 +340,22 @@ pub fn augmented_output_with(
     let p = exc.samples;
     let ns = terms.n_shared();
     let (u_amp, omega) = (exc.amplitude, exc.frequency);
-    let (w, hjac) = hysteresis(terms, shared, u_amp * gain, phase, waveform, p, substeps)?;
+    let (w, hjac, d_series) = match terms.column(TermKind::SeriesDashpot) {
+        Some(c) => series_hysteresis(
+            terms,
+            shared,
+            u_amp * gain,
+            phase,
+            omega,
+            shared[c],
+            p,
+            substeps,
+        )?,
+        None => {
+            let (w, hjac) = hysteresis(terms, shared, u_amp * gain, phase, waveform, p, substeps)?;
+            (w, hjac, Vec::new())
+        }
+    };
     // Column-major work space: F, then the shared columns, then g and phi.
     let ncol = 1 + ns + N_OWN;
     let mut cols = vec![vec![0.0; p]; ncol];
@@ -341,6 +417,7 @@ pub fn augmented_output_with(
                 TermKind::Pinching => col[j] = h[PD_PINCH],
                 // Refused by `Terms::parse` as well (no steady loop).
                 TermKind::StiffnessDegradation => {}
+                TermKind::SeriesDashpot => col[j] = d_series[j],
             }
         }
         cols[0][j] = f;
@@ -554,6 +631,7 @@ impl JointModel for AugModel<'_> {
         bound(TermKind::SensorLag, None);
         bound(TermKind::Play, Some(self.play_max(own)));
         bound(TermKind::Pinching, Some(PINCHING_MAX));
+        bound(TermKind::SeriesDashpot, None);
         cons
     }
 
@@ -567,6 +645,9 @@ impl JointModel for AugModel<'_> {
         }
         if let Some(c) = self.terms.column(TermKind::Pinching) {
             shared[c] = shared[c].clamp(0.0, PINCHING_MAX);
+        }
+        if let Some(c) = self.terms.column(TermKind::SeriesDashpot) {
+            shared[c] = shared[c].max(0.0);
         }
     }
 
@@ -587,7 +668,12 @@ impl JointModel for AugModel<'_> {
             .terms
             .column(TermKind::Pinching)
             .is_none_or(|c| (0.0..=PINCHING_MAX).contains(&shared[c]));
+        let series_ok = self
+            .terms
+            .column(TermKind::SeriesDashpot)
+            .is_none_or(|c| shared[c] >= 0.0);
         hysteresis_admissible(shared, self.opts.mu_lo, self.opts.mu_hi)
+            && series_ok
             && pinch_ok
             && delta_ok
             && tau_ok
@@ -778,6 +864,21 @@ mod tests {
             &Excitation { samples: 64, ..EXC },
             256,
         );
+    }
+
+    #[test]
+    fn series_dashpot_jacobian_matches_central_differences() {
+        // Spencer's series dashpot (rust/series_loop.rs) with the asymmetry it carries and the
+        // output terms around it; the series loop's columns are those of its discrete map.
+        check_jacobian(
+            &[SeriesDashpot, Asymmetry, SensorLag, Offset],
+            &[0.8, 0.2, 1.6, 0.7, -0.1, 0.05, 0.3],
+            &Excitation { samples: 48, ..EXC },
+            8,
+        );
+        let both = terms_of(&[SeriesDashpot, Play]);
+        let e = augmented_output(&EXC, &both, &[0.8, 0.2, 1.6, 0.5, 0.1], 0.9, 1.1, 4).unwrap_err();
+        assert!(e.to_string().contains("asymmetry only"), "{e}");
     }
 
     #[test]

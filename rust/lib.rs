@@ -33,6 +33,7 @@ pub mod multistart;
 pub mod path_loop;
 pub mod profile;
 pub mod refine;
+pub mod series_loop;
 pub mod simulate;
 pub mod solve;
 pub mod steady;

@@ -82,6 +82,12 @@ pub enum TermKind {
     /// ([`PINCHING_CENTRE`], [`PINCHING_WIDTH`]), `w_u = (alpha/(beta + gamma))^(1/mu)` (§9.4).
     /// Rate independent: the steady loop of 9.2 carries it (`rust/path_loop.rs`).
     Pinching,
+    /// Series dashpot `rho` (1/s in the identified model; `[x]/([w] s)` in general), `>= 0`:
+    /// Spencer's MR-damper dashpot in series with the hysteretic element. The element is driven
+    /// by its own travel `d = x - q`, `ddot = xdot - rho w` (the dashpot creeps at `qdot = rho w`
+    /// under the element's force), so `wdot = ddot h(w, sgn ddot)` (design.md 9.1, diagnosis.md).
+    /// Rate dependent: its steady loop is solved in time (`rust/series_loop.rs`).
+    SeriesDashpot,
 }
 
 /// Centre `q` of the pinching band, a fraction of the saturation level `w_u`, on the branch of the
@@ -96,7 +102,7 @@ pub const PINCHING_MAX: f64 = 0.95;
 
 impl TermKind {
     /// Every term, in the order of the table of design.md 9.1 (then the simulation-only one).
-    pub const ALL: [TermKind; 12] = [
+    pub const ALL: [TermKind; 13] = [
         TermKind::Offset,
         TermKind::Stiffness,
         TermKind::Viscous,
@@ -109,6 +115,7 @@ impl TermKind {
         TermKind::Degradation,
         TermKind::StiffnessDegradation,
         TermKind::Pinching,
+        TermKind::SeriesDashpot,
     ];
 
     /// The code name (design.md 9.1), e.g. `"sensor_lag"`: the only place a term's name is
@@ -127,6 +134,7 @@ impl TermKind {
             TermKind::Degradation => "degradation",
             TermKind::StiffnessDegradation => "stiffness_degradation",
             TermKind::Pinching => "pinching",
+            TermKind::SeriesDashpot => "series_dashpot",
         }
     }
 
@@ -192,6 +200,10 @@ impl TermKind {
             TermKind::StiffnessDegradation => (
                 "delta_eta",
                 "must be >= 0 (the stiffness falls with dissipated energy)",
+            ),
+            TermKind::SeriesDashpot => (
+                "rho",
+                "must be >= 0 (the inverse of the series dashpot's coefficient; 0: no dashpot)",
             ),
             TermKind::Pinching => {
                 if !(0.0..1.0).contains(&value) {
@@ -422,6 +434,7 @@ mod tests {
             TermKind::Degradation,
             TermKind::StiffnessDegradation,
             TermKind::Pinching,
+            TermKind::SeriesDashpot,
         ] {
             let e = kind.check_value(-0.1).unwrap_err();
             assert!(e.to_string().contains(kind.name()), "{e}");

@@ -87,6 +87,7 @@ def test_a_linear_effect_is_sized_in_averaged_noise_sd() -> None:
         ("asymmetry", bw.terms.Asymmetry(0.3)),
         ("play", bw.terms.Play(0.1)),
         ("sensor_lag", bw.terms.SensorLag(0.003)),
+        ("series_dashpot", bw.terms.SeriesDashpot(3.0)),
     ],
 )
 def test_generator_and_library_agree_on_the_library_terms(name: str, term: Any) -> None:

@@ -97,6 +97,7 @@ def test_registry_follows_the_design_table() -> None:
         "stiffness_degradation",
         "pinching",
         "distortion",
+        "series_dashpot",
     ]
     units = {kind: cls.units(y="N", u="mm") for kind, cls in USUAL.items()}
     assert units == {
@@ -112,12 +113,21 @@ def test_registry_follows_the_design_table() -> None:
         "stiffness_degradation": "1/N^2",
         "pinching": "",
         "distortion": "",
+        "series_dashpot": "1/s",
     }
     for kind, cls in USUAL.items():
         assert cls.kind == kind
         assert cls.description and cls.signature and cls.symbol
         assert cls.rust_kind == kind and cls.label and cls.places[0] == cls.acts_on
-        hysteresis = ("asymmetry", "play", "degradation", "stiffness_degradation", "pinching", "distortion")
+        hysteresis = (
+            "asymmetry",
+            "play",
+            "degradation",
+            "stiffness_degradation",
+            "pinching",
+            "distortion",
+            "series_dashpot",
+        )
         on_u = ("stiffness", "viscous", "inertia", "coulomb")
         assert cls.acts_on == (
             Place.HYSTERESIS if kind in hysteresis else Place.INPUT if kind in on_u else Place.OUTPUT
@@ -132,6 +142,7 @@ def test_registry_follows_the_design_table() -> None:
         "sensor_lag",
         "play",
         "pinching",
+        "series_dashpot",
         *drift_only,
     }
     assert {k for k, c in USUAL.items() if c.physical[0] == 0.0} == {
@@ -143,6 +154,7 @@ def test_registry_follows_the_design_table() -> None:
         "sensor_lag",
         "play",
         "pinching",
+        "series_dashpot",
         *drift_only,
     }
     assert [k for k, c in USUAL.items() if c.linear] == [
@@ -178,6 +190,7 @@ def test_scale_factors_follow_the_units() -> None:
         "stiffness_degradation": y**-2,
         "pinching": 1.0,
         "distortion": 1.0,
+        "series_dashpot": 1.0,
     }
 
 

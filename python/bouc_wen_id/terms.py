@@ -50,6 +50,7 @@ __all__ = [
     "PINCHING_CENTRE",
     "PINCHING_WIDTH",
     "Distortion",
+    "SeriesDashpot",
     "StiffnessX",
     "ViscousX",
     "InertiaX",
@@ -681,6 +682,57 @@ class Distortion(Term):
 
 
 @dataclass(frozen=True)
+class SeriesDashpot(Term):
+    """Spencer's series dashpot (Spencer, Dyke, Sain & Carlson, J. Eng. Mech. 123(3), 1997): the
+    hysteretic element behind a dashpot in series, driven by its own travel ``d = x - q``.
+
+    The dashpot carries the element's force, ``c1 qdot = w``, so with ``rho = 1/c1``::
+
+        ddot = xdot - rho w,    wdot = ddot [1 - |w|^mu (beta sgn(ddot w) + gamma + delta sgn(w))]
+
+    and the output is ``w`` (plus the other terms): in the elastic range ``w`` is ``x`` seen through the
+    high-pass ``s/(s + rho)`` (a time constant ``1/rho``), in saturation the dashpot creeps at
+    ``rho w_u``, so the force rolls off below the velocity ``rho w_u`` (Spencer's low-velocity roll-off).
+    ``rho`` is in ``1/s`` in the identified (alpha = 1) model (x in units of y); 0 is no dashpot.
+    Spencer's other parameters are the library's: ``alpha``, ``A`` go into ``|G|`` and the alpha = 1
+    normalisation, ``k1`` is ``stiffness@x``, ``-k1 x0`` the offset, ``c0`` (with ``c0 << c1``)
+    ``viscous@x``; ``k0`` is left out (docs/diagnosis.md, "Series dashpot").
+    """
+
+    rho: float
+
+    kind: ClassVar[str] = "series_dashpot"
+    symbol: ClassVar[str] = "rho"
+    unit: ClassVar[str] = "1/s"  # [x]/([y] s), x in units of y in the identified model
+    description: ClassVar[str] = (
+        "a dashpot in series with the hysteretic element (Spencer's MR-damper model): the element is "
+        "driven by its own travel, which creeps under its force"
+    )
+    signature: ClassVar[str] = (
+        "a rate-dependent loop: the force rolls off at low velocity (rounded corners after each reversal, "
+        "a saturation that leans back with the creep), a lag of w behind x that shrinks as 1/omega; "
+        "harmonics 1, 3, 5 falling with frequency"
+    )
+    label: ClassVar[str] = "series dashpot"
+    acts_on: ClassVar[Place] = Place.HYSTERESIS
+    bounds: ClassVar[tuple[float, float]] = NON_NEGATIVE
+    physical: ClassVar[tuple[float, float]] = NON_NEGATIVE
+    unphysical: ClassVar[str] = "a negative series dashpot (a creep that supplies energy)"
+    bound_note: ClassVar[str] = " (the inverse of the series dashpot's coefficient; 0: no dashpot)"
+    scaling: ClassVar[tuple[float, float, float]] = (0.0, 0.0, 0.0)
+
+    @classmethod
+    def start(cls, context: StartContext) -> tuple[float, ...]:
+        # The creep rate rho (times w_u ~ 1 in the scaled units) at 0.1 and 1 times the highest frequency:
+        # the force rolls off below the velocity rho w_u, about |A| omega where the term is seen.
+        return tuple(f * context.max_frequency for f in (0.1, 1.0))
+
+    def normalized(self, alpha: float) -> Term:
+        # qdot = rho w is in units of x: under x -> alpha x (G -> alpha G) rho grows by alpha.
+        return SeriesDashpot(self.rho * alpha)
+
+
+@dataclass(frozen=True)
 class StiffnessX(Stiffness):
     """Stiffness across the hysteretic element: ``k x`` (Bouc-Wen's own elastic term ``alpha k x``).
 
@@ -765,6 +817,7 @@ TERMS: dict[str, type[Term]] = {
         ViscousX,
         InertiaX,
         CoulombX,
+        SeriesDashpot,
     )
 }
 

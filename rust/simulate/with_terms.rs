@@ -55,6 +55,11 @@
 //!   `zeta2 = ` [`PINCHING_WIDTH`]: a band of w just past the zero crossing after each reversal
 //!   where w slips (moves slowly with x). Rate independent (h depends on the direction only), so the
 //!   play's path map carries it too.
+//! - **series dashpot** (Spencer, Dyke, Sain & Carlson, J. Eng. Mech. 123(3), 1997, with their
+//!   `c0 = k0 = 0`): the element sits behind a dashpot in series and is driven by its own travel
+//!   `d = xp - q`; the dashpot carries the element's force, `c1 qdot = w`, so with `rho = 1/c1`
+//!   `ddot = xpdot - rho w` at every stage (no new state: `q` is not needed). The element's energy is
+//!   `e = int w dd`. A play's clamped travel is instantaneous, so the dashpot does not move in it.
 //! - the **output terms** are evaluated at the sample times (and, inside `F`, at the stage times).
 
 use super::on_x::{linear_pass, smoothing_key, Kinematics, OnX, OnXValues};
@@ -108,6 +113,9 @@ pub struct TermValues {
     pub stiffness_degradation: f64,
     /// Pinching `zeta1` in `[0, 1)`: the rate times Foliente's `h(w, sgn xpdot)` (module header).
     pub pinching: f64,
+    /// Series dashpot `rho` (`[x]/([w] s)`), `>= 0`: the element is driven by its own travel,
+    /// `ddot = xpdot - rho w` (module header).
+    pub series_dashpot: f64,
     /// The mechanical terms across the hysteretic element, on x (`rust/simulate/on_x.rs`).
     pub on_x: OnXValues,
 }
@@ -127,6 +135,7 @@ impl Default for TermValues {
             degradation: 0.0,
             stiffness_degradation: 0.0,
             pinching: 0.0,
+            series_dashpot: 0.0,
             on_x: OnXValues::default(),
         }
     }
@@ -187,6 +196,7 @@ impl TermValues {
             TermKind::Degradation => Some(&mut self.degradation),
             TermKind::StiffnessDegradation => Some(&mut self.stiffness_degradation),
             TermKind::Pinching => Some(&mut self.pinching),
+            TermKind::SeriesDashpot => Some(&mut self.series_dashpot),
             TermKind::Distortion => None,
         }
     }
@@ -252,6 +262,7 @@ impl TermValues {
             || self.degradation > 0.0
             || self.stiffness_degradation > 0.0
             || self.pinching > 0.0
+            || self.series_dashpot > 0.0
     }
 }
 
@@ -713,6 +724,7 @@ impl<S: Derivatives> Augmented<'_, S> {
         let has_play = b > 0.0;
         let tau = terms.sensor_lag;
         let has_lag = tau > 0.0;
+        let rho = terms.series_dashpot;
         let (decay, l0, lm, l1) = if has_lag {
             lag_weights(h / tau)
         } else {
@@ -771,24 +783,30 @@ impl<S: Derivatives> Augmented<'_, S> {
                 };
                 let played = |xdot: f64| if has_play { mode.rate(xdot) } else { xdot };
 
+                // The element's travel rate behind the series dashpot (`rho = 0`: `p - 0 = p`).
+                let element = |p: f64, w: f64| p - rho * w;
                 let p1 = played(xdot1);
-                let kw1 = self.rate(p1, w, en);
-                let ke1 = w * p1;
+                let d1 = element(p1, w);
+                let kw1 = self.rate(d1, w, en);
+                let ke1 = w * d1;
                 let (w2, e2) = (w + half_h * kw1, en + half_h * ke1);
                 axpy(&mut tmp, &xs, half_h, &k1);
                 let p2 = played(self.linear(&tmp, inm, &mut k2));
-                let kw2 = self.rate(p2, w2, e2);
-                let ke2 = w2 * p2;
+                let d2 = element(p2, w2);
+                let kw2 = self.rate(d2, w2, e2);
+                let ke2 = w2 * d2;
                 let (w3, e3) = (w + half_h * kw2, en + half_h * ke2);
                 axpy(&mut tmp, &xs, half_h, &k2);
                 let p3 = played(self.linear(&tmp, inm, &mut k3));
-                let kw3 = self.rate(p3, w3, e3);
-                let ke3 = w3 * p3;
+                let d3 = element(p3, w3);
+                let kw3 = self.rate(d3, w3, e3);
+                let ke3 = w3 * d3;
                 let (w4, e4) = (w + h * kw3, en + h * ke3);
                 axpy(&mut tmp, &xs, h, &k3);
                 let p4 = played(self.linear(&tmp, in4, &mut k4));
-                let kw4 = self.rate(p4, w4, e4);
-                let ke4 = w4 * p4;
+                let d4 = element(p4, w4);
+                let kw4 = self.rate(d4, w4, e4);
+                let ke4 = w4 * d4;
 
                 // Third-order continuous extension of the RK4 step at its midpoint.
                 let w_mid = w + h * (5.0 * kw1 + 4.0 * (kw2 + kw3) - kw4) / 24.0;

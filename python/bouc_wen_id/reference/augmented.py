@@ -29,6 +29,7 @@ from .refine import (
     levenberg_marquardt,
     project_bouc_wen,
 )
+from .series_loop import series_loop
 from .steady import steady_loop
 from .terms import (
     ASYMMETRY,
@@ -43,6 +44,7 @@ from .terms import (
     PLACE_X,
     PLAY,
     SENSOR_LAG,
+    SERIES_DASHPOT,
     STEADY_TERM_NAMES,
     STIFFNESS,
     VISCOUS,
@@ -129,6 +131,9 @@ def _check_shared(terms: tuple[str, ...], shared: FloatArray) -> None:
     zeta1 = _value(terms, shared, PINCHING)
     if not 0.0 <= zeta1 < 1.0:
         raise InvalidParameterError(f"pinching zeta1 = {zeta1} must be in [0, 1)")
+    rho = _value(terms, shared, SERIES_DASHPOT)
+    if rho < 0.0:
+        raise InvalidParameterError(f"series_dashpot rho = {rho} must be >= 0")
     delta = _value(terms, shared, ASYMMETRY)
     if ASYMMETRY in terms and abs(delta) >= shared[0] + shared[1]:
         raise InvalidParameterError(
@@ -210,6 +215,31 @@ def _hysteresis(
     return w, jac
 
 
+def _series_hysteresis(
+    terms: tuple[str, ...],
+    shared: FloatArray,
+    amplitude: float,
+    phi: float,
+    omega: float,
+    p: int,
+    substeps: int,
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """The loop behind the series dashpot (:mod:`.series_loop`): ``w``, its columns as :func:`_hysteresis`'s
+    (``d/d(beta, gamma, mu, A, phi, delta)``, the rest 0) and ``d w / d rho``; asymmetry only rides along."""
+    for other in (PLAY, PINCHING, DISTORTION):
+        if other in terms:
+            raise InvalidParameterError(
+                f"term {SERIES_DASHPOT!r} with {other!r}: the series dashpot's steady loop carries the "
+                "asymmetry only"
+            )
+    beta, gamma, mu = (float(v) for v in shared[:3])
+    delta, rho = _value(terms, shared, ASYMMETRY), _value(terms, shared, SERIES_DASHPOT)
+    w, jac7, _ = series_loop(amplitude, beta, gamma, mu, delta, phi, rho / omega, p, substeps)
+    jac = np.zeros((p, 9))
+    jac[:, :6] = jac7[:, :6]
+    return w, jac, jac7[:, 6] / omega
+
+
 def augmented_output(
     ybar_len: int,
     amplitude: float,
@@ -242,7 +272,10 @@ def augmented_output(
     _finite_scalar("phase", phase)
     p = int(ybar_len)
     wave = np.zeros(0) if waveform is None else np.asarray(waveform, dtype=np.float64).ravel()
-    w, hj = _hysteresis(names, sh, amplitude * gain, phase, p, substeps, wave)
+    if SERIES_DASHPOT in names:
+        w, hj, d_rho = _series_hysteresis(names, sh, amplitude * gain, phase, frequency, p, substeps)
+    else:
+        w, hj = _hysteresis(names, sh, amplitude * gain, phase, p, substeps, wave)
     theta = 2.0 * np.pi * np.arange(p) / p + grid_phase
     u = amplitude * np.cos(theta)
     udot = -amplitude * frequency * np.sin(theta)
@@ -273,6 +306,8 @@ def augmented_output(
             jac_shared[:, 3 + t] = hj[:, 7]
         elif name == PINCHING:
             jac_shared[:, 3 + t] = hj[:, 8]
+        elif name == SERIES_DASHPOT:
+            jac_shared[:, 3 + t] = d_rho
     y = f
     if SENSOR_LAG in names:
         col = 3 + names.index(SENSOR_LAG)
@@ -324,6 +359,8 @@ class _Problem(NamedTuple):
             ok = ok and 0.0 <= par[self.col(PLAY)] <= self.play_max(par)
         if PINCHING in self.names:
             ok = ok and 0.0 <= par[self.col(PINCHING)] <= PINCHING_MAX
+        if SERIES_DASHPOT in self.names:
+            ok = ok and par[self.col(SERIES_DASHPOT)] >= 0.0
         return ok
 
     def evaluate(self, par: FloatArray) -> tuple[float, tuple[list[FloatArray], FloatArray, FloatArray]]:
@@ -360,7 +397,13 @@ class _Problem(NamedTuple):
         """The closed constraints of ``rust/augmented.rs``: the Bouc-Wen ones, then ``name=0`` and
         ``name=upper`` of the sensor lag, the play (up to :meth:`play_max`) and the pinching."""
         cons = bouc_wen_constraints(par.size, self.mu_lo, self.mu_hi)
-        for name, upper in ((SENSOR_LAG, None), (PLAY, self.play_max(par)), (PINCHING, PINCHING_MAX)):
+        play = self.play_max(par)
+        for name, upper in (
+            (SENSOR_LAG, None),
+            (PLAY, play),
+            (PINCHING, PINCHING_MAX),
+            (SERIES_DASHPOT, None),
+        ):
             if name in self.names:
                 e = np.zeros(par.size)
                 e[self.col(name)] = 1.0
@@ -378,6 +421,8 @@ class _Problem(NamedTuple):
             trial[self.col(PLAY)] = max(min(trial[self.col(PLAY)], self.play_max(trial)), 0.0)
         if PINCHING in self.names:
             trial[self.col(PINCHING)] = min(max(trial[self.col(PINCHING)], 0.0), PINCHING_MAX)
+        if SERIES_DASHPOT in self.names:
+            trial[self.col(SERIES_DASHPOT)] = max(trial[self.col(SERIES_DASHPOT)], 0.0)
 
 
 def _check_refine(

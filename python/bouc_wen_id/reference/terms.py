@@ -20,6 +20,7 @@ __all__ = [
     "DEGRADATION",
     "STIFFNESS_DEGRADATION",
     "PINCHING",
+    "SERIES_DASHPOT",
     "PINCHING_CENTRE",
     "PINCHING_WIDTH",
     "PINCHING_MAX",
@@ -45,6 +46,8 @@ PLAY = "play"
 DEGRADATION = "degradation"
 STIFFNESS_DEGRADATION = "stiffness_degradation"
 PINCHING = "pinching"
+#: Spencer's series dashpot: the element driven by its own travel, ``ddot = xdot - rho w``.
+SERIES_DASHPOT = "series_dashpot"
 #: Pinching's fixed shape, fractions of the saturation level w_u: the band's centre q and width zeta2.
 PINCHING_CENTRE = 0.1
 PINCHING_WIDTH = 0.2
@@ -68,6 +71,7 @@ STEADY_TERM_NAMES: tuple[str, ...] = (
     PLAY,
     PINCHING,
     DISTORTION,
+    SERIES_DASHPOT,
 )
 #: Keys of the simulation's ``terms`` mapping: the code names, plus the Coulomb smoothing.
 SIMULATION_KEYS: tuple[str, ...] = (
@@ -83,6 +87,7 @@ SIMULATION_KEYS: tuple[str, ...] = (
     DEGRADATION,
     STIFFNESS_DEGRADATION,
     PINCHING,
+    SERIES_DASHPOT,
 )
 
 #: The tag of the place across the hysteretic element (on its input x): a term there is named

@@ -14,7 +14,9 @@ Step by step the same scheme as the Rust core, so that the parity tests hold the
   rate, and pinching (Foliente's ``h = 1 - zeta1 exp(-((w sgn(xpdot) - q w_u)/(zeta2 w_u))^2)``, the shape
   fixed, ``w_u = (alpha/(beta + gamma))^(1/mu)``) multiplying it, each applied only when present;
 - output terms ``k u + c udot + m uddot + f tanh(udot/(eps Vmax))`` on the undelayed input, and the
-  mechanical terms on x from the linear part's state (:mod:`.on_x`), added after them.
+  mechanical terms on x from the linear part's state (:mod:`.on_x`), added after them;
+- the series dashpot (Spencer's MR-damper model with ``c0 = k0 = 0``): the element driven by its own
+  travel, ``ddot = xpdot - rho w`` at every stage, its energy ``e = int w dd``.
 
 Without asymmetry, play, lag or degradation the plain RK4 of :mod:`.simulate` gives ``x, w`` and the
 terms are added at the samples (:func:`outputs`).  Called through ``reference.simulate_sine(..., terms=...)``
@@ -47,6 +49,7 @@ from .terms import (
     PINCHING_WIDTH,
     PLAY,
     SENSOR_LAG,
+    SERIES_DASHPOT,
     SIMULATION_KEYS,
     STIFFNESS,
     STIFFNESS_DEGRADATION,
@@ -109,6 +112,11 @@ def check_terms(terms: Mapping[str, float], beta: float, gamma: float) -> dict[s
         raise InvalidParameterError(
             f"pinching zeta1 = {out[PINCHING]} must be in [0, 1) (the share of the rate taken out at the "
             "pinching band's centre)"
+        )
+    if out[SERIES_DASHPOT] < 0.0:
+        raise InvalidParameterError(
+            f"series_dashpot rho = {out[SERIES_DASHPOT]} must be >= 0 (the inverse of the series dashpot's "
+            "coefficient; 0: no dashpot)"
         )
     out.update(_on_x.check_on_x(terms))
     if abs(out[ASYMMETRY]) >= beta + gamma:
@@ -186,6 +194,7 @@ def has_state(model: Model) -> bool:
         or p[DEGRADATION] > 0.0
         or p[STIFFNESS_DEGRADATION] > 0.0
         or p[PINCHING] > 0.0
+        or p[SERIES_DASHPOT] > 0.0
     )
 
 
@@ -327,7 +336,7 @@ def integrate(
 
     h = dt / substeps
     half_h, h_sixth = 0.5 * h, h / 6.0
-    has_play, has_lag = b > 0.0, tau > 0.0
+    has_play, has_lag, rho = b > 0.0, tau > 0.0, p[SERIES_DASHPOT]  # the element's travel: xpdot - rho w
     decay, l0, lm, l1 = lag_weights(h / tau) if has_lag else (0.0, 0.0, 0.0, 0.0)
 
     xs = np.zeros(n)
@@ -357,23 +366,27 @@ def integrate(
                 return max(xdot, 0.0) if mode == 1 else min(xdot, 0.0) if mode == -1 else 0.0
 
             p1 = played(xdot1)
-            kw1 = rate(p1, w, en)
-            ke1 = w * p1
+            d1 = p1 - rho * w
+            kw1 = rate(d1, w, en)
+            ke1 = w * d1
             w2, e2 = w + half_h * kw1, en + half_h * ke1
             k2, xdot2 = linear(xs + half_h * k1, inm)
             p2 = played(xdot2)
-            kw2 = rate(p2, w2, e2)
-            ke2 = w2 * p2
+            d2 = p2 - rho * w2
+            kw2 = rate(d2, w2, e2)
+            ke2 = w2 * d2
             w3, e3 = w + half_h * kw2, en + half_h * ke2
             k3, xdot3 = linear(xs + half_h * k2, inm)
             p3 = played(xdot3)
-            kw3 = rate(p3, w3, e3)
-            ke3 = w3 * p3
+            d3 = p3 - rho * w3
+            kw3 = rate(d3, w3, e3)
+            ke3 = w3 * d3
             w4, e4 = w + h * kw3, en + h * ke3
             k4, xdot4 = linear(xs + h * k3, in4)
             p4 = played(xdot4)
-            kw4 = rate(p4, w4, e4)
-            ke4 = w4 * p4
+            d4 = p4 - rho * w4
+            kw4 = rate(d4, w4, e4)
+            ke4 = w4 * d4
 
             w_mid = w + h * (5.0 * kw1 + 4.0 * (kw2 + kw3) - kw4) / 24.0
             xs_mid = xs + h * (5.0 * k1 + 4.0 * (k2 + k3) - k4) / 24.0
