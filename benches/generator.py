@@ -216,6 +216,7 @@ IN_HYSTERESIS = (
     "stiffness_degradation",
     "pinching",
     "rate_width",
+    "series_dashpot",
 )
 
 
@@ -296,7 +297,7 @@ def _hysteresis(p: Plant, name: Optional[str], val: FloatArray, b: Base) -> Floa
     vref = np.median(p.levels * p.omegas)
     w0 = np.zeros((nv, ne)) + (0.0 if p.w0 is None else p.w0[None, :])
     if _jit is not None:
-        sw = np.stack([rwidth, dnu, delta, zeta1, deta])
+        sw = np.stack([rwidth, dnu, delta, zeta1, deta, rho])
         return _jit.rk4(w0, np.ascontiguousarray(rate), h, SUBSTEPS * b.total, mu, beta, gamma, vref, sw)
 
     def f(w: FloatArray, e: FloatArray, d: FloatArray) -> tuple[FloatArray, FloatArray]:
@@ -592,7 +593,9 @@ def make_case(kind: str, name: Optional[str], place: str, size: float, seed: int
 def _f_scalar(
     w: float, e: float, d: float, mu: float, beta: float, gamma: float, vref: float, sw: FloatArray
 ) -> tuple[float, float]:
-    """The rate function of ``_hysteresis`` for one element; ``sw`` = (rwidth, dnu, delta, zeta1, deta)."""
+    """The rate function of ``_hysteresis`` for one element; ``sw`` = (rwidth, dnu, delta, zeta1, deta,
+    rho)."""
+    d = d - sw[5] * w  # the element's own travel rate behind a series dashpot (0 without one)
     aw = abs(w) ** (mu - 1.0)
     b_eff = beta * math.exp(sw[0] * math.tanh(abs(d) / vref - 1.0))
     nu = 1.0 + sw[1] * e
@@ -614,7 +617,7 @@ def _rk4_loop(
     vref: float,
     sw: FloatArray,
 ) -> FloatArray:
-    """``_rk4`` of ``_hysteresis``'s rate function, element by element (``sw``: 5 x trials x experiments)."""
+    """``_rk4`` of ``_hysteresis``'s rate function, element by element (``sw``: 6 x trials x experiments)."""
     nv, ne = w0.shape
     wf = np.empty((nv, ne, nstep + 1))
     w = w0.copy()

@@ -441,7 +441,7 @@ def plant_with(cls: type[T.Term], rng: np.random.Generator, extra: int) -> bw.Wi
     ``extra`` other random simulated terms."""
     beta = rng.uniform(0.4, 1.5)
     h = bw.BoucWen(beta, rng.uniform(-0.3, 1.0) * beta, rng.uniform(1.2, 2.5), alpha=rng.uniform(0.5, 2))
-    others = [c for c in REGISTRY_SIMULATED if c is not cls]
+    others = [c for c in REGISTRY_SIMULATED if c is not cls and c in EXPORTED]  # extras the exporters write
     chosen = [cls] + [others[i] for i in rng.permutation(len(others))[:extra]]
     terms = tuple(make(c, value_for(c, rng), rng) for c in chosen)
     return bw.WienerPlant(random_linear(rng), h, terms)

@@ -982,3 +982,17 @@ def test_tfit_on_purely_real_points_warns_instead_of_a_linalg_error() -> None:
         )
     assert np.all(np.isfinite(fit.transfer_function.den)) and np.all(np.isfinite(fit.transfer_function.num))
     assert any(c.error == "non-finite fit" for c in fit.candidates)
+
+
+def test_a_ragged_plan_and_a_denormal_leading_coefficient_are_named() -> None:
+    """Found by the hypothesis sweep when run after other test files: SinePlan on a ragged list raised
+    NumPy's bare ValueError, and a den whose leading coefficient is denormal (2.2e-313) overflowed to inf
+    inside the stability test (a RuntimeWarning, then a silent 'unstable')."""
+    from bouc_wen_id.errors import ImproperTransferFunctionError
+
+    with pytest.raises(InvalidParameterError, match="frequencies"):
+        bw.SinePlan([0.0, []], [1.0])  # type: ignore[list-item]
+    with pytest.raises(InvalidParameterError, match="amplitudes"):
+        bw.SinePlan([2.0], [0.0, []])  # type: ignore[list-item]
+    with pytest.raises(ImproperTransferFunctionError, match="leading coefficient"):
+        bw.TransferFunction([1.0], np.array([2.22507386e-313, 1.0]), 0.02)

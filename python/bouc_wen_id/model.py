@@ -242,6 +242,17 @@ class WienerPlant:
         return cls(TransferFunction.from_dict(d["linear"]), BoucWen.from_dict(d["hysteresis"]), terms)
 
 
+def _at_least_1d(name: str, values: ArrayLike) -> NDArray[Any]:
+    """``values`` as an array of at least one dimension; a ragged list is a named error (NumPy's own
+    ValueError said nothing of which argument)."""
+    try:
+        return np.atleast_1d(np.asarray(values))
+    except ValueError as exc:
+        raise InvalidParameterError(
+            f"{name}: expected a number or a flat list of numbers, got {values!r} ({exc})"
+        ) from None
+
+
 @dataclass(frozen=True, eq=False, init=False)
 class SinePlan:
     """A set of sine experiments ``u = U_i cos(omega_i t)``, one per frequency.
@@ -296,12 +307,12 @@ class SinePlan:
         object.__setattr__(self, "substeps", substeps)
         object.__setattr__(self, "noise_sd", noise_sd)
         object.__setattr__(self, "seed", seed)
-        freqs = _frozen_array("frequencies", np.atleast_1d(np.asarray(frequencies)))
+        freqs = _frozen_array("frequencies", _at_least_1d("frequencies", frequencies))
         if freqs.size == 0:
             raise InvalidParameterError("the plan needs at least one frequency")
         if np.any(freqs <= 0):
             raise InvalidParameterError(f"frequencies must be > 0 rad/s, got {freqs.tolist()}")
-        amps_raw = _frozen_array("amplitudes", np.atleast_1d(np.asarray(amplitudes)))
+        amps_raw = _frozen_array("amplitudes", _at_least_1d("amplitudes", amplitudes))
         if amps_raw.size not in (1, freqs.size):
             raise InvalidParameterError(
                 f"amplitudes: {amps_raw.size} values for {freqs.size} frequencies; give one amplitude per "

@@ -213,6 +213,13 @@ def check_transfer_function(
         raise ImproperTransferFunctionError(
             "den must start with a non-zero coefficient (highest power of s first)"
         )
+    with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
+        monic = a / a[0]
+    if not np.all(np.isfinite(monic)):
+        raise ImproperTransferFunctionError(
+            f"den = {a.tolist()}: its leading coefficient {a[0]:g} is so small against the others that "
+            "the monic denominator overflows (a pole beyond 1e308 rad/s); drop it or rescale den"
+        )
     nz = np.flatnonzero(b)
     b = b[nz[0] :] if nz.size else np.zeros(1)
     if b.size > a.size:
