@@ -59,7 +59,7 @@ ALTERNATIVE_CORRELATION = 0.95
 MAX_FOLDS = 10
 #: Level of the law test of a candidate (its value the same in every experiment), per candidate. The test
 #: is calibrated (its null is "the library's term is the truth"), so at ``ALPHA`` it refused the true term in
-#: 5 % of cases by construction: 9 of 160 mechanical cases of the 20-case bench (law p 0.003-0.044), each
+#: 5 % of cases by construction: 9 of 160 stiffness/viscous cases of the 20-case bench (p 0.003-0.044), each
 #: then "unexplained". At ``ALPHA / 5`` the true term is lost in 1 %. The price: outside physics whose law p
 #: falls between the two levels is named as the term it resembles. On the bench's quick seeds the rate-
 #: dependent width's stand-ins fail at p <= 2e-10 either way, but a parallel Dahl loop's (stiffness on x at
