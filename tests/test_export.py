@@ -48,6 +48,8 @@ SIMULATED = {
     T.ViscousX: lambda r: r.uniform(0, 0.3),
     T.InertiaX: lambda r: r.uniform(0, 0.02),
     T.CoulombX: lambda r: r.uniform(0, 0.5),
+    # rho (1/s) against the input's 2-20 rad/s: the element creeps at rho w_u, a visible share of x's rate.
+    T.SeriesDashpot: lambda r: r.uniform(0.5, 5.0),
 }
 
 
@@ -426,6 +428,8 @@ REGISTRY_SIMULATED = [cls for cls in T.TERMS.values() if cls is not T.Distortion
 def value_for(cls: type[T.Term], rng: np.random.Generator) -> float:
     """An admissible, clearly non-zero value for any plant of :func:`plant_with`."""
     lo, _ = cls.bounds
+    if cls is T.SeriesDashpot:  # in 1/s: 0.02-0.1 would be lost against the input's 2-20 rad/s
+        return float(rng.uniform(0.5, 5.0))
     v = float(rng.uniform(0.02, 0.1))
     return v if lo >= 0.0 else v * float(rng.choice([-1.0, 1.0]))
 
@@ -450,7 +454,7 @@ def plant_with(cls: type[T.Term], rng: np.random.Generator, extra: int) -> bw.Wi
 #: The terms the simulator had when the exporters were written (issue 21): each must stay exported.
 KNOWN = (
     "offset stiffness viscous inertia coulomb sensor_lag asymmetry play degradation stiffness_degradation "
-    "pinching stiffness@x viscous@x inertia@x coulomb@x"
+    "pinching stiffness@x viscous@x inertia@x coulomb@x series_dashpot"
 ).split()
 
 
@@ -507,6 +511,30 @@ def test_the_comparison_has_power_for_the_terms_on_x() -> None:
     assert rel(discrete_response(sysd, t, u)[2], yr) > 1e-4  # vx = 1 instead of the run's peak |xdot|
     bare = bw.WienerPlant(g, plant.hysteresis, (T.CoulombX(0.2),))
     assert rel(bw.simulate_input(bare, t, u, substeps=2, output=True)[2], yr) > 1e-3
+
+
+def test_the_comparison_has_power_for_the_series_dashpot(tmp_path: Path) -> None:
+    """The series dashpot at value_for's values changes w far above the tolerance, and the C and both nlsys
+    forms follow it (with play, whose xp integrates the played rate, not the element's)."""
+    rng = np.random.default_rng(21)
+    g = bw.TransferFunction([2.0, 5.0], [1.0, 1.2, 9.0], 0.013)
+    h = bw.BoucWen(1.0, 0.4, 1.6, alpha=1.3)
+    t, u = random_input(rng, 300)
+    rho = value_for(T.SeriesDashpot, rng)
+    for extra in ((), (T.Play(0.05), T.Degradation(0.05))):
+        plant = bw.WienerPlant(g, h, (T.SeriesDashpot(rho), *extra))
+        bare = bw.WienerPlant(g, h, extra)
+        ref = bw.simulate_input(plant, t, u, substeps=2, output=True)
+        assert rel(bw.simulate_input(bare, t, u, substeps=2, output=True)[1], ref[1]) > 1e-2
+        name = f"sd{len(extra)}"
+        rc, *c_out = run_c(compile_c(bw.to_c(plant, name=name), name, tmp_path), u, step(t), 2)
+        d_out = discrete_response(bw.to_nlsys(plant, dt=step(t), substeps=2), t, u)
+        assert rc == 0
+        for got in (c_out, d_out):
+            assert all(rel(np.asarray(a), b) <= 1e-9 for a, b in zip(got, ref))
+        if not extra:  # no play: the continuous system is the simulator's ODE
+            c_rk4 = rk4_response(bw.to_nlsys(plant), t, u, substeps=2)
+            assert all(rel(a, b) <= 1e-9 for a, b in zip(c_rk4, ref))
 
 
 @pytest.mark.parametrize("seed", range(4))

@@ -96,6 +96,7 @@ def to_c(plant: WienerPlant, name: str = "bouc_wen_model") -> str:
         DNU=_num(flat.delta_nu),
         DETA=_num(flat.delta_eta),
         ZETA1=_num(flat.zeta1),
+        RHO=_num(flat.rho),
         KX=_num(flat.k_x),
         CX=_num(flat.c_x),
         MX=_num(flat.m_x),
@@ -117,10 +118,11 @@ TEMPLATE = Template(
  *   bouc_wen_id.simulate_input(plant, t, u, substeps=substeps, output=True) does (docs/design.md
  *   sections 1 and 9.4): fixed-step classical RK4 with h = dt / substeps, the input interpolated between
  *   samples by cubic Hermite polynomials with Catmull-Rom slopes (held after the last sample, 0 before
- *   the first), the play's mode frozen per step and xp clamped after it, the sensor lag stepped
- *   exponentially, the terms on x from x's derivatives of the linear part's state (their friction scaled
- *   by the peak |xdot| at the samples, from one pass of the linear part alone). Writes x[k], w[k] and
- *   y[k] (any of them may be NULL); allocates nothing.
+ *   the first), the play's mode frozen per step and xp clamped after it, the series dashpot's element
+ *   driven by xpdot - rho w at every stage, the sensor lag stepped exponentially, the terms on x from x's
+ *   derivatives of the linear part's state (their friction scaled by the peak |xdot| at the samples, from
+ *   one pass of the linear part alone). Writes x[k], w[k] and y[k] (any of them may be NULL); allocates
+ *   nothing.
  *   Returns 0; -1 for bad arguments (n < 2, dt <= 0 or not finite, substeps < 1, u NULL); -2 for a
  *   non-finite input sample; 1 when the simulation blew up (a non-finite state: parameters or input level
  *   too large for the step).
@@ -151,6 +153,7 @@ static const double ${P}_b = $B;
 static const double ${P}_dnu = $DNU;
 static const double ${P}_deta = $DETA;
 static const double ${P}_zeta1 = $ZETA1;
+static const double ${P}_rho = $RHO;
 static const double ${P}_kx = $KX;
 static const double ${P}_cx = $CX;
 static const double ${P}_mx = $MX;
@@ -348,6 +351,10 @@ static double ${P}_forcing(const double *u, long n, double dt, double t, double 
     return has_onx ? f + ${P}_onx(u, n, dt, t, xs, scale_x) : f;
 }
 
+/* The element's travel rate behind the series dashpot: p - rho w for the (played) x-rate p (rho = 0: p);
+ * the play's xp still integrates p. */
+static double ${P}_element(double p, double wv) { return p - ${P}_rho * wv; }
+
 /* (w, e) moved along the hysteresis path by the play's clamped travel dxp (one RK4 step in xp). */
 static void ${P}_path(double *w, double *e, double dxp, double w_u)
 {
@@ -444,6 +451,7 @@ int ${P}(const double *u, long n, double dt, int substeps, double *x, double *w,
         for (s = 0; s < substeps; ++s) {
             double ts = t + (double)s * h, tm = ts + half_h, te = ts + h;
             double in1[2], inm[2], in4[2], p1, p2, p3, p4, kw1, kw2, kw3, kw4, ke1, ke2, ke3, ke4;
+            double d1, d2, d3, d4;
             double w2, w3, w4, e2, e3, e4, w_mid, f0;
             int mode = 0;
             ${P}_delayed(u, n, dt, ts, in1);
@@ -456,26 +464,30 @@ int ${P}(const double *u, long n, double dt, int substeps, double *x, double *w,
                 else if (p1 < 0.0 && e <= -${P}_b + slack) mode = -1;
             }
             p1 = ${P}_played(has_play, mode, p1);
-            kw1 = ${P}_rate(p1, wv, en, w_u);
-            ke1 = wv * p1;
+            d1 = ${P}_element(p1, wv);
+            kw1 = ${P}_rate(d1, wv, en, w_u);
+            ke1 = wv * d1;
             w2 = wv + half_h * kw1;
             e2 = en + half_h * ke1;
             for (i = 0; i < ${P}_N; ++i) tmp[i] = xs[i] + half_h * k1[i];
             p2 = ${P}_played(has_play, mode, ${P}_linear(tmp, inm, k2));
-            kw2 = ${P}_rate(p2, w2, e2, w_u);
-            ke2 = w2 * p2;
+            d2 = ${P}_element(p2, w2);
+            kw2 = ${P}_rate(d2, w2, e2, w_u);
+            ke2 = w2 * d2;
             w3 = wv + half_h * kw2;
             e3 = en + half_h * ke2;
             for (i = 0; i < ${P}_N; ++i) tmp[i] = xs[i] + half_h * k2[i];
             p3 = ${P}_played(has_play, mode, ${P}_linear(tmp, inm, k3));
-            kw3 = ${P}_rate(p3, w3, e3, w_u);
-            ke3 = w3 * p3;
+            d3 = ${P}_element(p3, w3);
+            kw3 = ${P}_rate(d3, w3, e3, w_u);
+            ke3 = w3 * d3;
             w4 = wv + h * kw3;
             e4 = en + h * ke3;
             for (i = 0; i < ${P}_N; ++i) tmp[i] = xs[i] + h * k3[i];
             p4 = ${P}_played(has_play, mode, ${P}_linear(tmp, in4, k4));
-            kw4 = ${P}_rate(p4, w4, e4, w_u);
-            ke4 = w4 * p4;
+            d4 = ${P}_element(p4, w4);
+            kw4 = ${P}_rate(d4, w4, e4, w_u);
+            ke4 = w4 * d4;
             w_mid = wv + h * (5.0 * kw1 + 4.0 * (kw2 + kw3) - kw4) / 24.0;
             if (has_lag && has_onx)
                 for (i = 0; i < ${P}_N; ++i)

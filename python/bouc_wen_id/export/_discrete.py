@@ -31,6 +31,7 @@ from ._model import Flat
 from ._rhs import (
     delayed,
     dot,
+    element,
     engage_mode,
     initial_state,
     lag_weights,
@@ -100,19 +101,23 @@ def _functions(flat: Flat, lay: _Layout, h: float, defaults: tuple[float, float]
             engage_mode(flat, dot(flat.crow, xs) + flat.dfeed * s0[1][0], xp, xdot1) if flat.has_play else 1
         )
         p1 = played(flat, mode, xdot1)
-        kw1, ke1 = rate(flat, p1, w, en), w * p1
+        d1 = element(flat, p1, w)
+        kw1, ke1 = rate(flat, d1, w, en), w * d1
         w2, e2 = w + half_h * kw1, en + half_h * ke1
         k2, xdot2 = linear(flat, xs + half_h * np.asarray(k1), *sm[1][:2])
         p2 = played(flat, mode, xdot2)
-        kw2, ke2 = rate(flat, p2, w2, e2), w2 * p2
+        d2 = element(flat, p2, w2)
+        kw2, ke2 = rate(flat, d2, w2, e2), w2 * d2
         w3, e3 = w + half_h * kw2, en + half_h * ke2
         k3, xdot3 = linear(flat, xs + half_h * np.asarray(k2), *sm[1][:2])
         p3 = played(flat, mode, xdot3)
-        kw3, ke3 = rate(flat, p3, w3, e3), w3 * p3
+        d3 = element(flat, p3, w3)
+        kw3, ke3 = rate(flat, d3, w3, e3), w3 * d3
         w4, e4 = w + h * kw3, en + h * ke3
         k4, xdot4 = linear(flat, xs + h * np.asarray(k3), *s1[1][:2])
         p4 = played(flat, mode, xdot4)
-        kw4, ke4 = rate(flat, p4, w4, e4), w4 * p4
+        d4 = element(flat, p4, w4)
+        kw4, ke4 = rate(flat, d4, w4, e4), w4 * d4
         ka, kb, kc, kd = (np.asarray(k) for k in (k1, k2, k3, k4))
         w_mid = w + h * (5.0 * kw1 + 4.0 * (kw2 + kw3) - kw4) / 24.0
         xs_mid = xs + h * (5.0 * ka + 4.0 * (kb + kc) - kd) / 24.0

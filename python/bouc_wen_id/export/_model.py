@@ -82,6 +82,9 @@ class Flat(NamedTuple):
     delta_nu: float = 0.0
     delta_eta: float = 0.0
     zeta1: float = 0.0
+    #: The series dashpot's ``rho``: the element is driven by ``xpdot - rho w`` at every RK4 stage (0: none,
+    #: ``p - 0 w = p`` exactly, so a plant without it rounds as before).
+    rho: float = 0.0
     #: The mechanical terms across the hysteretic element, on x (``rust/simulate/on_x.rs``).
     k_x: float = 0.0
     c_x: float = 0.0

@@ -33,7 +33,7 @@ from ..validation import count
 from ._discrete import to_discrete
 from ._input import SampledInput
 from ._model import PLAY_ENGAGE_RTOL, Flat, flatten
-from ._rhs import check_speed, dot, initial_state, linear, mechanical, on_x, peak_speeds, rate
+from ._rhs import check_speed, dot, element, initial_state, linear, mechanical, on_x, peak_speeds, rate
 
 __all__ = ["to_nlsys", "input_signals", "rk4_response"]
 
@@ -97,11 +97,12 @@ def _system_functions(flat: Flat, lay: _Layout, vmax_default: float, vx_default:
         x = dot(flat.crow, xs) + flat.dfeed * v
         p = played(z, x, xdot)
         e = float(z[lay.e]) if lay.e >= 0 else 0.0
+        d = element(flat, p, w)  # behind the series dashpot; xp still moves at p
         out = np.empty(len(lay.states))
         out[:n] = dxs
-        out[lay.w] = rate(flat, p, w, e)
+        out[lay.w] = rate(flat, d, w, e)
         if lay.e >= 0:
-            out[lay.e] = w * p
+            out[lay.e] = w * d
         if lay.xp >= 0:
             out[lay.xp] = p
         if lay.ys >= 0:

@@ -2,8 +2,9 @@
 shared by the continuous (:mod:`._nlsys`) and the discrete-time (:mod:`._discrete`) python-control systems.
 
 The transcription follows ``rust/simulate/with_terms.rs`` (the rate, the terms on u, the play's frozen mode,
-its path map, the lag's exponential weights) and ``rust/simulate/on_x.rs`` (x's derivatives from the linear
-part's state, the terms on x, the peak ``|xdot|`` from one pass of the linear part alone).
+its path map, the series dashpot's element travel, the lag's exponential weights) and
+``rust/simulate/on_x.rs`` (x's derivatives from the linear part's state, the terms on x, the peak ``|xdot|``
+from one pass of the linear part alone).
 """
 
 from __future__ import annotations
@@ -30,6 +31,7 @@ __all__ = [
     "on_x",
     "engage_mode",
     "played",
+    "element",
     "path",
     "lag_weights",
     "delayed",
@@ -135,6 +137,13 @@ def played(flat: Flat, mode: int, xdot: float) -> float:
     if mode == -1:
         return min(xdot, 0.0)
     return 0.0
+
+
+def element(flat: Flat, p: float, w: float) -> float:
+    """The hysteretic element's travel rate behind the series dashpot: ``p - rho w`` for the (played)
+    x-rate ``p`` (with_terms.rs, at every RK4 stage; ``rho = 0``: ``p``). The play's ``xp`` still
+    integrates ``p``, and its path map after the clamp uses the travel without the dashpot."""
+    return p - flat.rho * w
 
 
 def path(flat: Flat, w: float, e: float, dxp: float) -> tuple[float, float]:
