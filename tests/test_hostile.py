@@ -991,8 +991,8 @@ def test_a_ragged_plan_and_a_denormal_leading_coefficient_are_named() -> None:
     from bouc_wen_id.errors import ImproperTransferFunctionError
 
     with pytest.raises(InvalidParameterError, match="frequencies"):
-        bw.SinePlan([0.0, []], [1.0])  # type: ignore[list-item]
+        bw.SinePlan([0.0, []], [1.0])  # type: ignore[arg-type]
     with pytest.raises(InvalidParameterError, match="amplitudes"):
-        bw.SinePlan([2.0], [0.0, []])  # type: ignore[list-item]
+        bw.SinePlan([2.0], [0.0, []])  # type: ignore[arg-type]
     with pytest.raises(ImproperTransferFunctionError, match="leading coefficient"):
         bw.TransferFunction([1.0], np.array([2.22507386e-313, 1.0]), 0.02)
