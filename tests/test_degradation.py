@@ -179,3 +179,33 @@ def test_averaged_periods_alone_skip_degradation_and_say_why() -> None:
     assert NO_BLOCKS in d.notes  # beside it, the drifting experiments left out (not settled, unexplained)
     assert "degradation" not in d.named_terms
     assert NO_BLOCKS in d.summary()
+
+
+def test_a_drift_correction_that_adds_misfit_is_not_used(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Once stiffness degradation is named, the averaged periods are corrected to the virgin stiffness and
+    the steady selection starts from the plain model re-converged on them. A correction that makes the
+    periods fit worse than as recorded is not used: the selection runs on the recorded periods and a note
+    says why (here the correction is spoiled on purpose); the drift term stays named."""
+    import sys
+    from dataclasses import replace as dc_replace
+    from pathlib import Path
+
+    from bouc_wen_id.diagnosis import run
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benches"))
+    import generator as gen
+
+    case = gen.make_case("library", "stiffness_degradation", "", 30.0, 42001)
+    real = run.corrected
+
+    def spoiled(*args: Any, **kwargs: Any) -> Any:
+        de, ds = real(*args, **kwargs)
+        bump = [
+            dc_replace(a, ybar=a.ybar + 0.05 * np.cos(3 * np.linspace(0, 2 * np.pi, a.ybar.size))) for a in ds
+        ]
+        return de, bump
+
+    monkeypatch.setattr(run, "corrected", spoiled)
+    d = bw.diagnose(case.recordings)
+    assert any("used as recorded" in n for n in d.notes), d.notes
+    assert "stiffness_degradation" in d.named_terms, d.summary()

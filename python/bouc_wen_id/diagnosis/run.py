@@ -298,11 +298,11 @@ def _degradation_stage(
     # match the record's beyond first order, and the selection runs on the periods as recorded.
     final = best_of([fit_from(fsx, fit.params, substeps)]) or fit
     if final.cost > plain.cost:
+        virgin = "virgin strength" if term == DEGRADATION else "virgin stiffness"
         notes.append(
-            f"the averaged periods are used as recorded, not brought back to the virgin "
-            f"{'strength' if term == DEGRADATION else 'stiffness'}: the steady model fits the corrected "
-            f"periods worse (chi2 {final.cost:.6g} against {plain.cost:.6g}), so the simulated drift does "
-            f"not match the record's beyond first order"
+            f"the averaged periods are used as recorded, not brought back to the {virgin}: the steady "
+            f"model fits the corrected periods worse (chi2 {final.cost:.6g} against {plain.cost:.6g}), so "
+            "the simulated drift does not match the record's beyond first order"
         )
         return deg, list(exps), list(sx), plain
     return deg, fexps, fsx, final
