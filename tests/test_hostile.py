@@ -994,5 +994,7 @@ def test_a_ragged_plan_and_a_denormal_leading_coefficient_are_named() -> None:
         bw.SinePlan([0.0, []], [1.0])  # type: ignore[arg-type]
     with pytest.raises(InvalidParameterError, match="amplitudes"):
         bw.SinePlan([2.0], [0.0, []])  # type: ignore[arg-type]
+    with pytest.raises(InvalidParameterError, match="num"):  # every frozen_array input, not only the plan's
+        bw.TransferFunction([1.0, [2.0]], [1.0, 1.0])  # type: ignore[arg-type]
     with pytest.raises(ImproperTransferFunctionError, match="leading coefficient"):
         bw.TransferFunction([1.0], np.array([2.22507386e-313, 1.0]), 0.02)

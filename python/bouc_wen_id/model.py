@@ -242,17 +242,6 @@ class WienerPlant:
         return cls(TransferFunction.from_dict(d["linear"]), BoucWen.from_dict(d["hysteresis"]), terms)
 
 
-def _at_least_1d(name: str, values: ArrayLike) -> NDArray[Any]:
-    """``values`` as an array of at least one dimension; a ragged list is a named error (NumPy's own
-    ValueError said nothing of which argument)."""
-    try:
-        return np.atleast_1d(np.asarray(values))
-    except ValueError as exc:
-        raise InvalidParameterError(
-            f"{name}: expected a number or a flat list of numbers, got {values!r} ({exc})"
-        ) from None
-
-
 @dataclass(frozen=True, eq=False, init=False)
 class SinePlan:
     """A set of sine experiments ``u = U_i cos(omega_i t)``, one per frequency.
@@ -307,12 +296,12 @@ class SinePlan:
         object.__setattr__(self, "substeps", substeps)
         object.__setattr__(self, "noise_sd", noise_sd)
         object.__setattr__(self, "seed", seed)
-        freqs = _frozen_array("frequencies", _at_least_1d("frequencies", frequencies))
+        freqs = _frozen_array("frequencies", frequencies, at_least_1d=True)
         if freqs.size == 0:
             raise InvalidParameterError("the plan needs at least one frequency")
         if np.any(freqs <= 0):
             raise InvalidParameterError(f"frequencies must be > 0 rad/s, got {freqs.tolist()}")
-        amps_raw = _frozen_array("amplitudes", _at_least_1d("amplitudes", amplitudes))
+        amps_raw = _frozen_array("amplitudes", amplitudes, at_least_1d=True)
         if amps_raw.size not in (1, freqs.size):
             raise InvalidParameterError(
                 f"amplitudes: {amps_raw.size} values for {freqs.size} frequencies; give one amplitude per "

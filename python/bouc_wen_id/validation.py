@@ -139,9 +139,17 @@ def count(name: str, value: object, low: int, high: Optional[int] = None) -> int
     return n
 
 
-def frozen_array(name: str, values: ArrayLike, ndim: int = 1) -> FloatArray:
-    """A read-only float64 copy of user data: real, ``ndim``-D and finite (the user's array is not kept)."""
-    raw = np.asarray(values)
+def frozen_array(name: str, values: ArrayLike, ndim: int = 1, at_least_1d: bool = False) -> FloatArray:
+    """A read-only float64 copy of user data: real, ``ndim``-D and finite (the user's array is not kept).
+
+    ``at_least_1d``: a scalar is taken as one value. A ragged list is a named error (NumPy's own
+    ValueError said nothing of which argument)."""
+    try:
+        raw = np.atleast_1d(np.asarray(values)) if at_least_1d else np.asarray(values)
+    except ValueError as exc:
+        raise InvalidParameterError(
+            f"{name}: expected numbers in a regular (not ragged) array, got {values!r} ({exc})"
+        ) from None
     if raw.dtype.kind not in "biuf":
         raise InvalidParameterError(
             f"{name} must hold real numbers, got dtype {raw.dtype}; take the real part or convert it first"
