@@ -29,6 +29,7 @@ pub mod feedback;
 mod hermite;
 pub mod lab;
 pub mod linear;
+mod loop_kernel;
 pub mod multistart;
 pub mod path_loop;
 pub mod profile;

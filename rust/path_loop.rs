@@ -31,6 +31,7 @@
 //! `coarse.rs` (the start values) and `tests.rs`.
 
 use crate::error::{finite, CoreError, Result};
+use crate::loop_kernel::{check_amplitude, check_mu};
 use crate::terms::PINCHING_WIDTH;
 
 mod coarse;
@@ -48,20 +49,13 @@ use rk4::{Pieces, Record};
 use shooting::{Start, PIECES};
 pub use waveform::Waveform;
 
-/// Column of d w / d beta in [`PathLoop::jac`] rows.
-pub const PD_BETA: usize = 0;
-/// d w / d gamma.
-pub const PD_GAMMA: usize = 1;
-/// d w / d mu.
-pub const PD_MU: usize = 2;
-/// d w / d A (A signed: the amplitude of x).
-pub const PD_AMPLITUDE: usize = 3;
-/// d w / d phi.
-pub const PD_PHI: usize = 4;
-/// d w / d delta (asymmetry).
-pub const PD_DELTA: usize = 5;
+// Columns of a [`PathLoop::jac`] row: the shared ones first, then the path loop's own.
+pub use crate::loop_kernel::{
+    COL_AMPLITUDE as PD_AMPLITUDE, COL_BETA as PD_BETA, COL_DELTA as PD_DELTA,
+    COL_GAMMA as PD_GAMMA, COL_MU as PD_MU, COL_PHI as PD_PHI,
+};
 /// d w / d b (play half-width).
-pub const PD_PLAY: usize = 6;
+pub const PD_PLAY: usize = crate::loop_kernel::N_SHARED_COLS;
 /// d w / d lambda (the distortion of a measured input waveform, design.md 9.5).
 pub const PD_DISTORT: usize = 7;
 /// d w / d zeta1 (pinching, [`path_loop_pinched`]).
@@ -258,11 +252,7 @@ fn check_arguments(args: LoopArgs, waveform: Option<&Waveform>) -> Result<()> {
     ] {
         finite(name, v)?;
     }
-    if mu <= 1.0 {
-        return Err(CoreError::InvalidParameter(format!(
-            "mu = {mu} must be > 1 in the identification model"
-        )));
-    }
+    check_mu(mu)?;
     let margin = beta + gamma - delta.abs();
     if margin <= 0.0 {
         return Err(CoreError::InvalidParameter(format!(
@@ -271,11 +261,7 @@ fn check_arguments(args: LoopArgs, waveform: Option<&Waveform>) -> Result<()> {
              beta + gamma"
         )));
     }
-    if amplitude == 0.0 {
-        return Err(CoreError::ZeroAmplitude(
-            "the amplitude of x is 0: the loop is a point".into(),
-        ));
-    }
+    check_amplitude(amplitude)?;
     if play < 0.0 {
         return Err(CoreError::InvalidParameter(format!(
             "play = {play} must be >= 0 (it is the half-width of the backlash, in units of x)"

@@ -24,27 +24,25 @@
 //! `L >= |dF/dw|` on `|w| <= w_b` stays below 1 (RK4 is stable up to 2.79). The NumPy oracle is
 //! `reference/series_loop.py`.
 
+use crate::bouc_wen::sgn;
 use crate::error::{finite, CoreError, Result};
+use crate::loop_kernel::{
+    check_amplitude, check_mu, fold_row, rk4_dual_step, Bracket, Dual as DualN,
+};
 use std::f64::consts::PI;
 
 /// Derivatives carried: `w_0, beta, gamma, mu, A, phi, delta, r`.
 const ND: usize = 8;
 /// Column of `d/dw_0` in the carried derivatives.
 const DW0: usize = 0;
-/// Columns of a [`SeriesLoop::jac`] row: `d w / d(beta, gamma, mu, A, phi, delta, r)`.
-pub const SD_BETA: usize = 0;
-/// d w / d gamma.
-pub const SD_GAMMA: usize = 1;
-/// d w / d mu.
-pub const SD_MU: usize = 2;
-/// d w / d A (signed amplitude of x).
-pub const SD_AMPLITUDE: usize = 3;
-/// d w / d phi.
-pub const SD_PHI: usize = 4;
-/// d w / d delta (asymmetry).
-pub const SD_DELTA: usize = 5;
+// Columns of a [`SeriesLoop::jac`] row: `d w / d(beta, gamma, mu, A, phi, delta, r)`, the shared
+// ones first.
+pub use crate::loop_kernel::{
+    COL_AMPLITUDE as SD_AMPLITUDE, COL_BETA as SD_BETA, COL_DELTA as SD_DELTA,
+    COL_GAMMA as SD_GAMMA, COL_MU as SD_MU, COL_PHI as SD_PHI,
+};
 /// d w / d r (`r = rho / omega`, per radian).
-pub const SD_R: usize = 6;
+pub const SD_R: usize = crate::loop_kernel::N_SHARED_COLS;
 /// Columns of a [`SeriesLoop::jac`] row.
 pub const N_SD: usize = 7;
 
@@ -68,24 +66,7 @@ pub struct SeriesLoop {
 }
 
 /// A value with its derivatives in the [`ND`] carried directions.
-#[derive(Clone, Copy)]
-struct Dual {
-    v: f64,
-    d: [f64; ND],
-}
-
-impl Dual {
-    fn axpy(&self, h: f64, k: &Dual) -> Dual {
-        let mut d = self.d;
-        for (a, b) in d.iter_mut().zip(&k.d) {
-            *a += h * b;
-        }
-        Dual {
-            v: self.v + h * k.v,
-            d,
-        }
-    }
-}
+type Dual = DualN<ND>;
 
 /// The model's parameters.
 #[derive(Clone, Copy)]
@@ -97,18 +78,6 @@ struct Params {
     delta: f64,
     phi: f64,
     r: f64,
-}
-
-/// `sgn` with `sgn(0) = 0`.
-#[inline]
-fn sign(v: f64) -> f64 {
-    if v > 0.0 {
-        1.0
-    } else if v < 0.0 {
-        -1.0
-    } else {
-        0.0
-    }
 }
 
 /// `F(theta, w)` and its derivatives (through `w`'s and the parameters' own directions).
@@ -123,7 +92,7 @@ fn rhs(p: &Params, theta: f64, w: &Dual) -> Dual {
     dv[4] += -s;
     dv[5] += p.a * c;
     dv[7] += -w.v;
-    let (sw, svw) = (sign(w.v), sign(v * w.v));
+    let (sw, svw) = (sgn(w.v), sgn(v * w.v));
     let aw = w.v.abs();
     let m = aw.powf(p.mu);
     // d|w|^mu/dw = mu |w|^(mu-1) sgn(w) (mu > 1: 0 at w = 0); d/dmu = |w|^mu ln|w| (0 at w = 0).
@@ -162,16 +131,7 @@ fn pass(p: &Params, w0: f64, n: usize, m: usize, record: Option<&mut Vec<Dual>>)
         }
         for s in 0..m {
             let t = h * (j * m + s) as f64;
-            let k1 = rhs(p, t, &w);
-            let k2 = rhs(p, t + 0.5 * h, &w.axpy(0.5 * h, &k1));
-            let k3 = rhs(p, t + 0.5 * h, &w.axpy(0.5 * h, &k2));
-            let k4 = rhs(p, t + h, &w.axpy(h, &k3));
-            let mut next = w;
-            next.v += h / 6.0 * (k1.v + 2.0 * k2.v + 2.0 * k3.v + k4.v);
-            for (i, o) in next.d.iter_mut().enumerate() {
-                *o += h / 6.0 * (k1.d[i] + 2.0 * k2.d[i] + 2.0 * k3.d[i] + k4.d[i]);
-            }
-            w = next;
+            w = rk4_dual_step(|t, w| rhs(p, t, w), t, h, &w);
         }
     }
     w
@@ -225,11 +185,7 @@ pub fn series_loop(
     ] {
         finite(name, v)?;
     }
-    if mu <= 1.0 {
-        return Err(CoreError::InvalidParameter(format!(
-            "mu = {mu} must be > 1 in the identification model"
-        )));
-    }
+    check_mu(mu)?;
     let margin = beta + gamma - delta.abs();
     if margin <= 0.0 {
         return Err(CoreError::InvalidParameter(format!(
@@ -242,11 +198,7 @@ pub fn series_loop(
             "series_dashpot r = rho/omega = {r} must be >= 0"
         )));
     }
-    if amplitude == 0.0 {
-        return Err(CoreError::ZeroAmplitude(
-            "the amplitude of x is 0: the loop is a point".into(),
-        ));
-    }
+    check_amplitude(amplitude)?;
     if p < 4 {
         return Err(CoreError::InsufficientData(format!(
             "P = {p} samples per period; the steady loop needs at least 4"
@@ -291,9 +243,8 @@ pub fn series_loop(
         .iter()
         .map(|s| {
             let mut row = [0.0; N_SD];
-            for (i, o) in row.iter_mut().enumerate() {
-                *o = s.d[i + 1] + s.d[DW0] * dw0[i];
-            }
+            row.copy_from_slice(&s.d[DW0 + 1..]);
+            fold_row(&mut row, s.d[DW0], &dw0);
             row
         })
         .collect();
@@ -303,7 +254,7 @@ pub fn series_loop(
 /// Safeguarded Newton on `g(w_0) = W(w_0) - w_0` over `[-w_b, w_b]`: the fixed point, the last
 /// pass's `W` (with its derivatives) and the passes taken.
 fn shoot(p: &Params, bound: f64, n: usize, m: usize) -> Result<(f64, Dual, usize)> {
-    let (mut lo, mut hi) = (-bound, bound);
+    let mut bracket = Bracket::new(bound);
     let mut w0 = 0.0;
     for it in 1..=MAX_ITER {
         let out = pass(p, w0, n, m, None);
@@ -318,18 +269,14 @@ fn shoot(p: &Params, bound: f64, n: usize, m: usize) -> Result<(f64, Dual, usize
         if g.abs() <= RTOL * bound {
             return Ok((w0, out, it));
         }
-        if g > 0.0 {
-            lo = w0;
-        } else {
-            hi = w0;
-        }
+        // Newton only where W - w_0 decreases (else a NaN step: bisection).
         let slope = out.d[DW0] - 1.0;
-        let newton = w0 - g / slope;
-        w0 = if slope < 0.0 && newton > lo && newton < hi {
-            newton
+        let newton = if slope < 0.0 {
+            w0 - g / slope
         } else {
-            0.5 * (lo + hi)
+            f64::NAN
         };
+        w0 = bracket.next(w0, g, newton);
     }
     Err(CoreError::NotConverged(format!(
         "the series-dashpot loop found no periodic solution in {MAX_ITER} passes for A = {}, \

@@ -5,6 +5,7 @@ use super::nodes::{Segment, REVERSAL};
 use super::rate::Shape;
 use super::rk4::{shoot_pass, Pieces};
 use super::shooting::{newton_steps, Start, PIECES, SHOOT_MAX_ITER, SHOOT_RTOL};
+use crate::loop_kernel::Bracket;
 
 /// Segments (merged runs of the fine ones) of the coarse cycle whose fixed point gives the start
 /// values (more where the loop is stiff, see [`COARSE_STIFF`]): close enough to the fine fixed
@@ -123,7 +124,7 @@ pub(super) fn coarse_single(
         start: [0],
         end: [coarse.len()],
     };
-    let mut lo_hi = (-bound, bound);
+    let mut bracket = Bracket::new(bound);
     let mut w0 = 0.0;
     for _ in 0..SHOOT_MAX_ITER {
         let (e, m) = shoot_pass(p, coarse, &whole, &[w0], COARSE_SUBSTEPS);
@@ -131,17 +132,7 @@ pub(super) fn coarse_single(
         if g.abs() <= SHOOT_RTOL * bound || g.is_nan() {
             break;
         }
-        if g > 0.0 {
-            lo_hi.0 = w0;
-        } else {
-            lo_hi.1 = w0;
-        }
-        let newton = w0 + g / (1.0 - m[0]);
-        let next = if newton > lo_hi.0 && newton < lo_hi.1 {
-            newton
-        } else {
-            0.5 * (lo_hi.0 + lo_hi.1)
-        };
+        let next = bracket.next(w0, g, w0 + g / (1.0 - m[0]));
         let step = next - w0;
         w0 = next;
         // Quadratic convergence: the error after this step is about step^2 / w_b, far below

@@ -6,6 +6,7 @@ use super::nodes::{Segment, REVERSAL};
 use super::rate::{rate, Rate, Shape};
 use super::{N_PD, PD_AMPLITUDE, PD_BETA, PD_DELTA, PD_DISTORT, PD_GAMMA, PD_MU, PD_PHI};
 use super::{PD_PINCH, PD_PLAY};
+use crate::loop_kernel::{rk4_combine, rk4_reverse_weights};
 
 /// Pieces of the cycle integrated side by side: piece i is `segs[start[i]..end[i]]`. With
 /// `K > 1` the K chains are independent until the pieces are joined, so their `ln`/`exp`
@@ -60,9 +61,8 @@ pub(super) const NQ: usize = 6;
 /// mu, delta]`.
 ///
 /// The derivatives are those of the augmented RK4 (forward sensitivities riding along), summed
-/// in reverse: with `k_i = dx h(w_i)`, `a_i = dx dh/dw(w_i)` and `b_i = d k_i/dq` at fixed
-/// `w_i`, the weights `l_4 = hs/6`, `l_3 = hs/3 + l_4 a_4 hs`, `l_2 = hs/3 + l_3 a_3 hs/2`,
-/// `l_1 = hs/6 + l_2 a_2 hs/2` give `R = 1 + sum l_i a_i` and `dw_new/dq = sum l_i b_i`: the
+/// in reverse ([`rk4_reverse_weights`]): with `k_i = dx h(w_i)`, `a_i = dx dh/dw(w_i)` and
+/// `b_i = d k_i/dq` at fixed `w_i`, `R = 1 + sum l_i a_i` and `dw_new/dq = sum l_i b_i`: the
 /// same numbers with five multiplications per parameter instead of a 7-component RK4 state.
 #[inline(always)]
 pub(super) fn rk4_step<const K: usize, const FULL: bool>(
@@ -84,15 +84,11 @@ pub(super) fn rk4_step<const K: usize, const FULL: bool>(
     for i in 0..K {
         let dx = row[i].dx;
         let k4 = dx * r4[i].h;
-        wn[i] = w[i] + hs / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4);
+        wn[i] = rk4_combine(w[i], hs, [k1[i], k2[i], k3[i], k4]);
         let rs = [&r1[i], &r2[i], &r3[i], &r4[i]];
         let a = rs.map(|r| dx * r.hw);
-        let l4 = hs / 6.0;
-        let l3 = hs / 3.0 + l4 * a[3] * hs;
-        let l2 = hs / 3.0 + l3 * a[2] * 0.5 * hs;
-        let l1 = hs / 6.0 + l2 * a[1] * 0.5 * hs;
-        let l = [l1, l2, l3, l4];
-        rr[i] = 1.0 + l1 * a[0] + l2 * a[1] + l3 * a[2] + l4 * a[3];
+        let l;
+        (l, rr[i]) = rk4_reverse_weights(hs, a);
         if FULL {
             let s = row[i].s;
             let mut q = [0.0; NQ];

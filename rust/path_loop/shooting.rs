@@ -7,6 +7,7 @@ use super::rate::Shape;
 use super::rk4::{full_pass, shoot_pass, Pieces, Record};
 use super::{LoopArgs, N_PD};
 use crate::error::CoreError;
+use crate::loop_kernel::{fold_row, Bracket};
 
 /// Newton (or bisection) updates of `w_0` allowed on the full-resolution cycle map. Bisection
 /// alone halves `[-w_b, w_b]` to the tolerance in about 45 steps.
@@ -78,7 +79,7 @@ pub(super) fn shoot<const K: usize>(
 ) -> Result<usize, Failure> {
     let tol = SHOOT_RTOL * bound;
     let bracketed = K == 1;
-    let (mut lo, mut hi) = (-bound, bound);
+    let mut bracket = Bracket::new(bound);
     let mut iterations = 0;
     let mut full = false;
     loop {
@@ -120,10 +121,7 @@ pub(super) fn shoot<const K: usize>(
             for i in 0..K {
                 for seg in &segs[pc.start[i]..pc.end[i]] {
                     if seg.end != REVERSAL {
-                        let ph = out.phis[seg.end];
-                        for (x, d) in out.jac[seg.end].iter_mut().zip(dv[i]) {
-                            *x += ph * d;
-                        }
+                        fold_row(&mut out.jac[seg.end], out.phis[seg.end], &dv[i]);
                     }
                 }
             }
@@ -139,17 +137,8 @@ pub(super) fn shoot<const K: usize>(
         }
         let d = newton_steps(&r, &m);
         let step = if bracketed {
-            if r[0] > 0.0 {
-                lo = v[0];
-            } else {
-                hi = v[0];
-            }
-            let newton = v[0] + d[0];
-            let next = if newton > lo && newton < hi && newton.is_finite() {
-                newton
-            } else {
-                0.5 * (lo + hi)
-            };
+            // The bracket's ends are finite, so a non-finite Newton iterate is refused too.
+            let next = bracket.next(v[0], r[0], v[0] + d[0]);
             let step = next - v[0];
             v[0] = next;
             step.abs()
