@@ -51,6 +51,30 @@ pub(super) fn segments(amplitude: f64, phi: f64, b: f64, p: usize) -> Vec<Segmen
     // phi' = phi (+ pi when A < 0, whose top is at theta - phi = pi).
     let shift = if amplitude < 0.0 { 0.5 } else { 0.0 };
     let r = (phi / (2.0 * PI) + shift).rem_euclid(1.0);
+    // No lambda here: its derivative is 0 at every node.
+    let top = (a - b, [sa, 0.0, -1.0, 0.0]);
+    let bottom = (-a + b, [-sa, 0.0, 1.0, 0.0]);
+    walk(p, r, 0.5, top, bottom, |_, u, descending| {
+        let (xp, d) = play_node(a, sa, b, 2.0 * PI * u, descending);
+        (xp, [d[0], d[1], d[2], 0.0])
+    })
+}
+
+/// A node of the cycle: the play output there and its derivatives `d/d(A, phi, b, lambda)`.
+type Node = (f64, [f64; 4]);
+
+/// The P + 2 segments of one cycle, from the top around to the top: the samples in cycle order
+/// from the one closest after the top (sample j at the cycle phase `u_j = frac(j/P - r)`, a
+/// fraction of the period, descending while `u_j <= ub`), with the bottom between the last
+/// descending and the first ascending sample; `node(j, u_j, descending)` is sample j's node.
+fn walk(
+    p: usize,
+    r: f64,
+    ub: f64,
+    top: Node,
+    bottom: Node,
+    node: impl Fn(usize, f64, bool) -> Node,
+) -> Vec<Segment> {
     let frac = |j: usize| {
         let u = j as f64 / p as f64 - r;
         if u < 0.0 {
@@ -64,18 +88,11 @@ pub(super) fn segments(amplitude: f64, phi: f64, b: f64, p: usize) -> Vec<Segmen
         .min_by(|&i, &k| frac(i).total_cmp(&frac(k)))
         .unwrap_or(0);
     let mut segs = Vec::with_capacity(p + 2);
-    let top = (a - b, [sa, 0.0, -1.0]);
-    let bottom = (-a + b, [-sa, 0.0, 1.0]);
     let mut prev = top;
-    let mut push = |prev: &mut (f64, [f64; 3]), node: (f64, [f64; 3]), s: f64, end: usize| {
+    let mut push = |prev: &mut Node, node: Node, s: f64, end: usize| {
         segs.push(Segment {
             dx: node.0 - prev.0,
-            ddx: [
-                node.1[0] - prev.1[0],
-                node.1[1] - prev.1[1],
-                node.1[2] - prev.1[2],
-                0.0,
-            ],
+            ddx: std::array::from_fn(|q| node.1[q] - prev.1[q]),
             s,
             end,
         });
@@ -85,13 +102,17 @@ pub(super) fn segments(amplitude: f64, phi: f64, b: f64, p: usize) -> Vec<Segmen
     for m in 0..p {
         let j = (j0 + m) % p;
         let u = frac(j);
-        let descending = u <= 0.5;
+        let descending = u <= ub;
         if !descending && !passed_bottom {
             push(&mut prev, bottom, -1.0, REVERSAL);
             passed_bottom = true;
         }
-        let node = play_node(a, sa, b, 2.0 * PI * u, descending);
-        push(&mut prev, node, if descending { -1.0 } else { 1.0 }, j);
+        push(
+            &mut prev,
+            node(j, u, descending),
+            if descending { -1.0 } else { 1.0 },
+            j,
+        );
     }
     if !passed_bottom {
         push(&mut prev, bottom, -1.0, REVERSAL);
@@ -156,41 +177,12 @@ pub(super) fn distorted_segments(
     let bottom = (xb + b, [sa * eb[0], 0.0, 1.0, amplitude * eb[3]]);
     let r = ((phi + zt) / (2.0 * PI)).rem_euclid(1.0);
     let ub = ((zb - zt) / (2.0 * PI)).rem_euclid(1.0);
-    let frac = |j: usize| {
-        let u = j as f64 / p as f64 - r;
-        if u < 0.0 {
-            u + 1.0
-        } else {
-            u
-        }
-    };
-    let j0 = (0..p)
-        .min_by(|&i, &k| frac(i).total_cmp(&frac(k)))
-        .unwrap_or(0);
-    let mut segs = Vec::with_capacity(p + 2);
-    let mut prev = top;
-    let mut push = |prev: &mut (f64, [f64; 4]), node: (f64, [f64; 4]), s: f64, end: usize| {
-        segs.push(Segment {
-            dx: node.0 - prev.0,
-            ddx: std::array::from_fn(|q| node.1[q] - prev.1[q]),
-            s,
-            end,
-        });
-        *prev = node;
-    };
-    let mut passed_bottom = false;
-    for m in 0..p {
-        let j = (j0 + m) % p;
-        let descending = frac(j) <= ub;
-        if !descending && !passed_bottom {
-            push(&mut prev, bottom, -1.0, REVERSAL);
-            passed_bottom = true;
-        }
+    let segs = walk(p, r, ub, top, bottom, |j, _, descending| {
         let zeta = 2.0 * PI * j as f64 / p as f64 - phi;
         let ev = wf.eval(zeta);
         let x = amplitude * ev[0];
         let dx = [sa * ev[0], -amplitude * ev[1], amplitude * ev[3]];
-        let node = if descending {
+        if descending {
             if x < xt - 2.0 * b {
                 (x + b, [dx[0], dx[1], 1.0, dx[2]])
             } else {
@@ -200,12 +192,7 @@ pub(super) fn distorted_segments(
             (x - b, [dx[0], dx[1], -1.0, dx[2]])
         } else {
             bottom
-        };
-        push(&mut prev, node, if descending { -1.0 } else { 1.0 }, j);
-    }
-    if !passed_bottom {
-        push(&mut prev, bottom, -1.0, REVERSAL);
-    }
-    push(&mut prev, top, 1.0, REVERSAL);
+        }
+    });
     Ok((segs, half))
 }
