@@ -246,9 +246,11 @@ def _degradation_stage(
     it were one of them, and only when the record drifts at all (``drift_seen``: locate's drift test, or
     else the drift chi-square of the blocks against no drift at ``alpha / 2``, :func:`with_drift_gate`),
     as a steady term is tried only when the plain model is rejected. When it is named, the averaged periods
-    are brought back to the virgin strength and re-estimated at each loop's own strength, twice (the first
-    pass moves the fit from the plain model's average strength to the virgin one, the second settles it),
-    then d is refined on both costs.
+    are brought back to the virgin strength and re-estimated at each loop's own strength, pass after pass
+    until d and the virgin fit settle (the first pass moves the fit from the plain model's average strength
+    to the virgin one; :data:`CORRECTION_PASSES`), then d is refined on both costs. Stiffness degradation
+    keeps the plain fit's estimate (each experiment's gain holds its own mean stiffness): its passes only
+    bring the periods back to the virgin stiffness.
     """
     data = drift_data(exps, sx, plain, s.y, substeps)
     if not data:
