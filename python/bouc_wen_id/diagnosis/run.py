@@ -17,7 +17,7 @@ from ..errors import InvalidParameterError, TransientWarning
 from ..estimators import boundary_note
 from ..terms import DIAGNOSIS_CANDIDATES, TERMS, Distortion, physical_value
 from ..validation import real_number
-from .data import DiagExperiment, prepare
+from .data import DiagExperiment, colour_notes, prepare
 from .drift import (
     DEGRADATION,
     DRIFT_TERMS,
@@ -648,6 +648,7 @@ def _diagnose(
     report("preparing the averaged periods", 0, 1)
     items, notes = _settled(experiments)
     exps, qnotes = _noise_floors(items, prepare(items))
+    notes = [*notes, *colour_notes(exps)]  # a coloured noise: its low-harmonic level is the floor (data.py)
     _check_experiments(exps)
     skipped: dict[str, str] = {}
     if Distortion.kind in cands and not any(e.distorted for e in exps):
