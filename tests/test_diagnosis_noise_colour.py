@@ -125,3 +125,20 @@ def test_ar1_viscous_on_x_is_named() -> None:
 def test_white_noise_gets_no_colour_note() -> None:
     d = _diagnose(_case("base", None, "", 0.0, 100000))
     assert not any("coloured" in n for n in d.notes), d.notes
+
+
+def test_the_verdict_says_when_the_design_cannot_tell_the_places_apart() -> None:
+    """Three frequencies at one amplitude through a nearly flat G (x lags u by 0.01-0.05 rad): a 10x spring on
+    x fits as well on u, and the summary listed the other place as an alternative, but the one-line verdict
+    named the chosen place alone. It now names both."""
+    from bouc_wen_id.terms import TERMS
+
+    d = _diagnose(_case("3f x 1A", "stiffness", "x", 10.0, 410001))
+    assert d.status == "explained", d.summary()
+    (chosen,) = d.named_terms
+    rivals = [a.rival for a in d.alternatives if a.term == chosen]
+    assert rivals, d.summary()
+    assert {chosen, *rivals} >= {"stiffness", "stiffness@x"}, d.summary()
+    for kind in (chosen, *rivals):
+        assert TERMS[kind].place_label() in d.verdict, d.verdict
+    assert "cannot tell apart" in d.verdict
