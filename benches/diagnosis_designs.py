@@ -10,7 +10,8 @@ file's:
 - designs (white noise): ``base`` (the bench's own: 5 f x 2 A, 16 periods), ``3f x 1A``, ``2f x 4A``,
   ``8f x 1A``, ``below-sat`` (3 f x {0.4, 2.0}: one amplitude per frequency below saturation, from rest),
   ``4 periods`` and ``64 periods`` (the base plan);
-- noise (base plan): ``ar1`` (AR(1) output noise, phi = 0.8, the same marginal sd), ``t3`` (Student t with 3
+- noise (base plan): ``ar1`` (AR(1) output noise, phi = 0.8, the same marginal sd), ``ar1 slow`` (phi = 0.99:
+  correlated over about a period, so neighbouring periods are correlated too), ``t3`` (Student t with 3
   degrees of freedom scaled to the same sd), ``quant`` (white noise, then the output rounded to ADC steps of
   0.5 noise sd), ``u-noise`` (white noise on the measured input too, 1 % of its amplitude).
 
@@ -66,6 +67,7 @@ class Design:
     periods: int = gen.PERIODS
     settle: int = gen.SETTLE
     noise: str = "white"  # white, ar1, t3, quant, u-noise
+    phi: float = 0.8  # the AR(1) coefficient (noise "ar1")
 
 
 DESIGNS = {
@@ -79,12 +81,12 @@ DESIGNS = {
         Design("4 periods", periods=4),
         Design("64 periods", periods=64),
         Design("ar1", noise="ar1"),
+        Design("ar1 slow", noise="ar1", phi=0.99),
         Design("t3", noise="t3"),
         Design("quant", noise="quant"),
         Design("u-noise", noise="u-noise"),
     )
 }
-AR_PHI = 0.8
 T_DOF = 3
 QUANT_STEP = 0.5  # ADC step in noise sd
 U_NOISE = 0.01  # input noise sd, relative to the input amplitude
@@ -144,11 +146,12 @@ def outputs(p: gen.Plant, design: Design, name: Optional[str], place: str, size:
 def noise(design: Design, rng: np.random.Generator, n: int) -> FloatArray:
     """Output noise of marginal sd ``NOISE_SD`` of the design's kind (before any quantisation)."""
     if design.noise == "ar1":
-        z = rng.normal(0.0, NOISE_SD * math.sqrt(1.0 - AR_PHI**2), n)
+        phi = design.phi
+        z = rng.normal(0.0, NOISE_SD * math.sqrt(1.0 - phi**2), n)
         e = np.empty(n)
         e[0] = rng.normal(0.0, NOISE_SD)  # stationary start
         for k in range(1, n):
-            e[k] = AR_PHI * e[k - 1] + z[k]
+            e[k] = phi * e[k - 1] + z[k]
         return e
     if design.noise == "t3":
         return np.asarray(rng.standard_t(T_DOF, n) * NOISE_SD / math.sqrt(T_DOF / (T_DOF - 2.0)))
@@ -256,7 +259,8 @@ def jobs(args: argparse.Namespace) -> list[tuple[str, Optional[str], str, float,
     sizes = [float(s) for s in args.sizes.split(",")]
     for d in designs:
         cells: list[tuple[Optional[str], str, float, int, int]] = [(None, "", 0.0, args.null, 0)]
-        for k, (n, pl) in enumerate(effects):
+        for n, pl in effects:  # seeds by the effect's index in EFFECTS: the same whatever is filtered
+            k = EFFECTS.index((n, pl))
             cells += [(n, pl, sz, args.cases, 100 * (k + 1) + int(sz)) for sz in sizes]
         for name, place, size, count, off in cells:
             for s in range(count):
@@ -329,6 +333,35 @@ def print_table(lines: list[dict[str, Any]]) -> None:
     )
 
 
+def print_compact(rows: list[dict[str, Any]]) -> None:
+    """One line per design/noise: nulls (named, unexplained) and the effect rows pooled (right name at its
+    place, right name at the other place with that place listed as its alternative, wrong, unexplained)."""
+    print(
+        f"\n{'design/noise':<11} {'nulls':>5} {'named':>5} {'unexpl':>6} | {'cases':>5} {'+place':>6} "
+        f"{'alt':>4} {'wrong':>5} {'unexpl':>6} {'bad':>4} {'crash':>5} {'s/diag':>6}"
+    )
+    for design in dict.fromkeys(r["design"] for r in rows):
+        rs = [r for r in rows if r["design"] == design]
+        ok = [r for r in rs if "status" in r]
+        nul = [r for r in ok if r["term"] is None]
+        eff = [r for r in ok if r["term"] is not None]
+        alt = [
+            r
+            for r in eff
+            if r["right"] and not r["right_place"] and r["term"] in {a for a in r["alternatives"]}
+        ]
+
+        def n(rr: list[dict[str, Any]], key: str) -> int:
+            return sum(bool(r.get(key)) for r in rr)
+
+        secs = float(np.median([r["seconds"] for r in ok])) if ok else math.nan
+        print(
+            f"{design:<11} {len(nul):>5} {n(nul, 'wrong'):>5} {n(nul, 'unexplained'):>6} | {len(eff):>5} "
+            f"{n(eff, 'right_place'):>6} {len(alt):>4} {n(eff, 'wrong'):>5} {n(eff, 'unexplained'):>6} "
+            f"{n(ok, 'bad_explained'):>4} {len(rs) - len(ok):>5} {secs:6.2f}"
+        )
+
+
 def main(argv: Optional[list[str]] = None) -> int:
     ap = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
     ap.add_argument("--quick", action="store_true")
@@ -344,7 +377,9 @@ def main(argv: Optional[list[str]] = None) -> int:
     ap.add_argument("--table", type=Path, default=None, help="re-print the table of a saved --json run")
     args = ap.parse_args(argv)
     if args.table:
-        print_table(summarise(json.loads(args.table.read_text())["rows"]))
+        saved = json.loads(args.table.read_text())["rows"]
+        print_table(summarise(saved))
+        print_compact(saved)
         return 0
     if args.quick:
         args.only = args.only or "base,3f x 1A,ar1,quant"
@@ -364,6 +399,7 @@ def main(argv: Optional[list[str]] = None) -> int:
             print(f"[{done}/{len(todo)}] {what} seed {r['seed']}: {status}", file=sys.stderr, flush=True)
     got = [r for r in rows if r is not None]
     print_table(summarise(got))
+    print_compact(got)
     print(f"\n{len(got)} diagnoses in {time.perf_counter() - t0:.0f} s wall on {args.workers} workers")
     if args.json:
         args.json.write_text(json.dumps({"rows": got, "table": summarise(got)}, indent=1, default=float))

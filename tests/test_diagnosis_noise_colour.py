@@ -111,7 +111,7 @@ def test_ar1_null_names_nothing_and_says_the_noise_is_coloured() -> None:
     d = _diagnose(_case("ar1", None, "", 0.0, 100001))
     assert d.named_terms == (), d.summary()
     assert d.status == "adequate", d.summary()
-    assert any("coloured" in n for n in d.notes), d.notes
+    assert any("coloured noise" in n for n in d.notes), d.notes
 
 
 def test_ar1_viscous_on_x_is_named() -> None:
@@ -124,7 +124,7 @@ def test_ar1_viscous_on_x_is_named() -> None:
 
 def test_white_noise_gets_no_colour_note() -> None:
     d = _diagnose(_case("base", None, "", 0.0, 100000))
-    assert not any("coloured" in n for n in d.notes), d.notes
+    assert not any("coloured noise" in n for n in d.notes), d.notes
 
 
 def test_the_verdict_says_when_the_design_cannot_tell_the_places_apart() -> None:

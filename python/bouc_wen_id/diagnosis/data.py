@@ -441,10 +441,11 @@ def prepare(items: Any) -> list[DiagExperiment]:
 def colour_notes(exps: Sequence[DiagExperiment]) -> list[str]:
     """What the diagnosis says of experiments whose noise is coloured (:func:`noise_colour`)."""
     return [
-        f"{e.source}: the output noise is coloured, not white: at harmonics {e.colour_band[0]}-"
-        f"{e.colour_band[1]} its spread from period to period is {e.colour:.3g} times the per-sample "
-        "variance (1 for white noise); the tests on this experiment take that larger level as its noise "
-        "(valid where the model and its terms act, conservative at the other harmonics)"
+        f"{e.source}: the output is not white noise about its mean period: at harmonics {e.colour_band[0]}-"
+        f"{e.colour_band[1]} its spread from period to period (about a quadratic trend) is {e.colour:.3g} "
+        "times the per-sample variance (1 for white noise): a coloured noise, or a loop that changes faster "
+        "than a quadratic trend; the tests on this experiment take that larger level as its noise (valid "
+        "where the model and its terms act, conservative at the other harmonics)"
         for e in exps
         if e.colour > 1.0
     ]
