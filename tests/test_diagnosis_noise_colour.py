@@ -142,3 +142,18 @@ def test_the_verdict_says_when_the_design_cannot_tell_the_places_apart() -> None
     for kind in (chosen, *rivals):
         assert TERMS[kind].place_label() in d.verdict, d.verdict
     assert "cannot tell apart" in d.verdict
+
+
+def test_a_design_below_saturation_says_a_spring_on_x_could_not_show() -> None:
+    """Three frequencies, every latent amplitude at 0.3 of saturation: a 30x spring on x trades with |G| and
+    the diagnosis says "adequate" (true of the plain model); the notes now say the design could not show a
+    spring on x. A saturating design gets no such note."""
+    dd = _designs()
+    low = dd.Design("low", factors=(0.5, 1.0, 2.0), levels=(0.3,))
+    p = dd.plant_for(low, 430000)
+    y, _, _ = dd.outputs(p, low, "stiffness", "x", 30.0)
+    d = _diagnose(dd.recordings(p, low, y, 430000))
+    assert "stiffness@x" not in d.named_terms, d.summary()
+    assert any("below the hysteresis' saturation" in n for n in d.notes), d.notes
+    base = _diagnose(_case("3f x 1A", None, "", 0.0, 100000))
+    assert not any("saturation" in n for n in base.notes), base.notes

@@ -17,6 +17,7 @@ from ..errors import InvalidParameterError, TransientWarning
 from ..estimators import boundary_note
 from ..terms import DIAGNOSIS_CANDIDATES, TERMS, Distortion, physical_value
 from ..validation import real_number
+from .caveats import alternatives_text, below_saturation
 from .data import DiagExperiment, colour_notes, prepare
 from .drift import (
     DEGRADATION,
@@ -746,7 +747,7 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
         setup.report("carrying the input's harmonics through G", 0, 1)
         sx = carry_through_g(sx, plain, substeps)
     before = _drift_checked(_localise(exps, sx, plain, s), exps)
-    notes = list(notes)
+    notes = [*notes, *below_saturation(sx, plain)]
     setup.report("testing degradation (period blocks)", 0, 1)
     deg, fexps, fsx, start = _drift_stage(exps, sx, plain, s, substeps, setup, before.drift_detected, notes)
     named_deg = deg is not None and (deg.named if setup.held_out_test else deg.passed)
@@ -804,7 +805,7 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
     )
     verdict += _law_text(steps)
     alternatives = tuple(a for st in steps for a in st.alternatives) + _drift_alternatives(deg, named_deg)
-    verdict += _alternatives_text(alternatives, named)
+    verdict += alternatives_text(alternatives, named)
     setup.report("held-out check of the final model", 0, 1)
     ho = held_out(fsx, start, final, substeps, cache) if final.params.terms else None
     d = Diagnosis(
@@ -920,28 +921,6 @@ def _unphysical_text(terms: Sequence[NamedTerm]) -> str:
         return ""
     what = "; ".join(f"{t} ({TERMS[t.term].unphysical})" for t in terms)
     return f"; not physical: {what}: {NOT_PHYSICAL_HINT}"
-
-
-def _alternatives_text(alternatives: Sequence[Alternative], named: Sequence[NamedTerm]) -> str:
-    """The verdict's word on a named term the data cannot tell from a rival (issue 18: "never one of them
-    silently"): a design with one amplitude per frequency, or G nearly flat over the band, cannot separate a
-    spring on x from one on u, and the one-line verdict named one place only."""
-    kinds = {t.term for t in named}
-    rivals: dict[str, list[str]] = {}
-    for a in alternatives:
-        if a.term in kinds and a.rival not in rivals.setdefault(a.term, []):
-            rivals[a.term].append(a.rival)
-    if not rivals:
-        return ""
-
-    def label(kind: str) -> str:
-        return TERMS[kind].place_label() if kind in TERMS else kind
-
-    what = "; ".join(" or ".join(label(k) for k in (t, *rs)) for t, rs in rivals.items())
-    return (
-        f"; the experiments cannot tell apart: {what} (alternatives, each with the experiment that would "
-        "separate them)"
-    )
 
 
 def _law_text(steps: Sequence[Step]) -> str:
