@@ -17,6 +17,15 @@ is reduced to
   count and mean period index, for the degradation fit. Empty for an averaged period alone.
 - ``waveform``: the averaged input's harmonics beyond the fundamental, relative to it (design.md 9.5), those
   measurably above the input's own noise; empty for a pure sine (and when the input is not at hand).
+- ``colour``: how much larger the noise is at the low harmonics than per sample (1: white, or not measurably
+  coloured). Every test here weighs samples with one variance per experiment, which is valid for white noise
+  only; a coloured noise (an AR(1) with phi = 0.8 carries 8.6 times its per-sample variance at the
+  fundamental of a 128-sample period) made the F-tests of terms acting there anticonservative. So for a
+  recording the spread of each harmonic 0..``MAX_DRIFT_HARMONIC`` of the single periods about a quadratic
+  trend in the period index (drift taken out) is compared with the per-sample variance; when a band of
+  ``COLOUR_BAND`` harmonics is larger beyond chance (:data:`COLOUR_ALPHA`, Bonferroni over the bands), the
+  largest band's level is the experiment's noise variance, with its own degrees of freedom (conservative
+  at the other harmonics), and the diagnosis says so in its notes.
 """
 
 from __future__ import annotations
@@ -42,6 +51,11 @@ MAX_BLOCKS = 8
 #: Highest harmonic kept per block: the localisation's range (a degrading loop's change is in the low
 #: harmonics), and a least-squares fit of a lab block stays well posed with few samples per period.
 MAX_DRIFT_HARMONIC = 15
+#: Harmonics per band of the colour check (centred: +-2), as the law test smooths its periodogram.
+COLOUR_BAND = 5
+#: False-alarm level of the colour check per experiment (Bonferroni over its bands): white noise keeps the
+#: per-sample variance (and its degrees of freedom) in all but about 1e-3 of experiments.
+COLOUR_ALPHA = 1e-3
 #: Highest harmonic of the input kept in its waveform (design.md 9.5).
 WAVEFORM_MAX_HARMONIC = 10
 #: A harmonic of the averaged input is kept when its amplitude exceeds this many standard deviations of its
@@ -106,6 +120,11 @@ class DiagExperiment:
         return int(self.block_coef.shape[0])
 
     waveform: FloatArray = field(default_factory=lambda: np.zeros(0), repr=False)
+    #: The noise's level at the low harmonics over its per-sample level when the noise is measurably
+    #: coloured (then ``noise_var`` is that low-harmonic level), else 1.0 (see the module docstring).
+    colour: float = 1.0
+    #: The harmonics (first, last) of the band where the coloured noise is largest ((0, 0) when white).
+    colour_band: tuple[int, int] = (0, 0)
 
     @property
     def samples_per_period(self) -> int:
@@ -171,6 +190,47 @@ def _recording_blocks(rows: FloatArray) -> tuple[ComplexArray, FloatArray, Float
     )
 
 
+def noise_colour(rows: FloatArray, white_var: float, white_dof: int) -> tuple[float, int, tuple[int, int]]:
+    """The noise's level at the low harmonics of periods ``rows`` (N, P), when measurably above
+    ``white_var`` (the per-sample variance, ``white_dof`` degrees of freedom): ``(variance, dof, band)``;
+    ``(white_var, white_dof, (0, 0))`` when not (or when N < 4 leaves no spread about a quadratic trend).
+
+    Each period's harmonic ``c_k = sum_j y_j e^{-2 pi i jk/P} / P`` (``c_0`` the DC) has variance ``s2/P``
+    (DC) or ``s2/(2P)`` per real and imaginary part for white noise of variance ``s2``; about a quadratic
+    trend in the period index (a drift or a settling loop taken out) their spread gives ``s2`` at each
+    harmonic with ``N - 3`` (DC) or ``2 (N - 3)`` degrees of freedom, pooled over bands of
+    :data:`COLOUR_BAND` harmonics.
+    """
+    from scipy.special import fdtrc  # type: ignore[import-untyped]
+
+    n, p = rows.shape
+    k = _harmonics_of(p)
+    if n < 4 or k < 1 or not (white_var > 0 and math.isfinite(white_var)):
+        return white_var, white_dof, (0, 0)
+    c = np.fft.rfft(rows, axis=1)[:, : k + 1] / p
+    idx = np.arange(n, dtype=np.float64)
+    trend = np.vander(idx - idx.mean(), 3)
+    c = c - trend @ np.linalg.lstsq(trend, c, rcond=None)[0]
+    ss = np.empty(k + 1)
+    ss[0] = p * float(np.sum(c[:, 0].real ** 2))
+    ss[1:] = 2.0 * p * np.sum(np.abs(c[:, 1:]) ** 2, axis=0)  # c_k = rfft/P: E|c_k|^2 = s2/P per period
+    dof = np.full(k + 1, 2.0 * (n - 3))
+    dof[0] = n - 3
+    half = COLOUR_BAND // 2
+    best = (white_var, white_dof, (0, 0), 1.0)
+    bands = 0
+    for lo in range(0, k + 1):
+        a, b = max(0, lo - half), min(k, lo + half)
+        bands += 1
+        d = float(np.sum(dof[a : b + 1]))
+        v = float(np.sum(ss[a : b + 1])) / d
+        if v > best[0]:
+            best = (v, int(d), (a, b), float(fdtrc(d, max(white_dof, 1), v / white_var)))
+    if best[2] == (0, 0) or min(1.0, bands * best[3]) >= COLOUR_ALPHA:
+        return white_var, white_dof, (0, 0)
+    return best[0], best[1], best[2]
+
+
 def _from_recording(i: int, rec: Any) -> DiagExperiment:
     p = int(rec.samples_per_period)
     s = int(rec.settle_periods)
@@ -187,6 +247,8 @@ def _from_recording(i: int, rec: Any) -> DiagExperiment:
     diff = float(np.mean(np.diff(rows, axis=0) ** 2)) / 2.0
     dc, h1 = _period_features(rows)
     coef, samples, center, nper = _recording_blocks(rows)
+    dof = p * (n - 1)
+    var, cdof, band = noise_colour(rows, diff, dof)
     name = rec.metadata.get("name", f"recording {i}") if hasattr(rec, "metadata") else f"recording {i}"
     return DiagExperiment(
         frequency=float(rec.frequency),
@@ -194,9 +256,9 @@ def _from_recording(i: int, rec: Any) -> DiagExperiment:
         grid_phase=float(np.mod(rec.frequency * float(rec.t[0]), TWO_PI)),
         ybar=ybar,
         periods=float(n),
-        noise_var=diff,
-        spread_var=spread,
-        noise_dof=p * (n - 1),
+        noise_var=var,
+        spread_var=max(spread, var),
+        noise_dof=cdof,
         dc=dc,
         h1=h1,
         source=str(name),
@@ -206,6 +268,8 @@ def _from_recording(i: int, rec: Any) -> DiagExperiment:
         block_periods=nper,
         lead_periods=float(s),
         waveform=input_waveform(urows),
+        colour=var / diff if diff > 0 else 1.0,
+        colour_band=band,
     )
 
 
@@ -372,3 +436,16 @@ def prepare(items: Any) -> list[DiagExperiment]:
                 "claim against the period-to-period noise and needs noisy, repeated periods"
             )
     return out
+
+
+def colour_notes(exps: Sequence[DiagExperiment]) -> list[str]:
+    """What the diagnosis says of experiments whose noise is coloured (:func:`noise_colour`)."""
+    return [
+        f"{e.source}: the output is not white noise about its mean period: at harmonics {e.colour_band[0]}-"
+        f"{e.colour_band[1]} its spread from period to period (about a quadratic trend) is {e.colour:.3g} "
+        "times the per-sample variance (1 for white noise): a coloured noise, or a loop that changes faster "
+        "than a quadratic trend; the tests on this experiment take that larger level as its noise (valid "
+        "where the model and its terms act, conservative at the other harmonics)"
+        for e in exps
+        if e.colour > 1.0
+    ]

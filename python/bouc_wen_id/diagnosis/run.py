@@ -17,7 +17,8 @@ from ..errors import InvalidParameterError, TransientWarning
 from ..estimators import boundary_note
 from ..terms import DIAGNOSIS_CANDIDATES, TERMS, Distortion, physical_value
 from ..validation import real_number
-from .data import DiagExperiment, prepare
+from .caveats import alternatives_text, below_saturation
+from .data import DiagExperiment, colour_notes, prepare
 from .drift import (
     DEGRADATION,
     DRIFT_TERMS,
@@ -668,6 +669,7 @@ def _diagnose(
     report("preparing the averaged periods", 0, 1)
     items, notes = _settled(experiments)
     exps, qnotes = _noise_floors(items, prepare(items))
+    notes = [*notes, *colour_notes(exps)]  # a coloured noise: its low-harmonic level is the floor (data.py)
     _check_experiments(exps)
     skipped: dict[str, str] = {}
     if Distortion.kind in cands and not any(e.distorted for e in exps):
@@ -765,7 +767,7 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
         setup.report("carrying the input's harmonics through G", 0, 1)
         sx = carry_through_g(sx, plain, substeps)
     before = _drift_checked(_localise(exps, sx, plain, s), exps)
-    notes = list(notes)
+    notes = [*notes, *below_saturation(sx, plain)]
     setup.report("testing degradation (period blocks)", 0, 1)
     deg, fexps, fsx, start = _drift_stage(exps, sx, plain, s, substeps, setup, before.drift_detected, notes)
     named_deg = deg is not None and (deg.named if setup.held_out_test else deg.passed)
@@ -823,6 +825,7 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
     )
     verdict += _law_text(steps)
     alternatives = tuple(a for st in steps for a in st.alternatives) + _drift_alternatives(deg, named_deg)
+    verdict += alternatives_text(alternatives, named)
     setup.report("held-out check of the final model", 0, 1)
     ho = held_out(fsx, start, final, substeps, cache) if final.params.terms else None
     d = Diagnosis(

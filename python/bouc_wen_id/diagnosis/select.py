@@ -76,7 +76,10 @@ def f_test(c0: float, c1: float, dof1: int, boundary: bool = False) -> tuple[flo
 
     if dof1 < 1 or not (math.isfinite(c0) and math.isfinite(c1)) or c1 <= 0:
         return math.nan, math.nan
-    f = max(c0 - c1, 0.0) / (c1 / dof1)
+    # The residual variance per dof, never below the noise floor (1 in these units): below it the residual
+    # is the floor's overestimate at other harmonics (a coloured noise whose low-harmonic level is the floor,
+    # data.noise_colour), not a smaller noise at the harmonics the term fills.
+    f = max(c0 - c1, 0.0) / max(c1 / dof1, 1.0)
     p = float(fdtrc(1, dof1, f)) if f > 0 else 1.0
     return f, (0.5 * p if boundary and f > 0 else p)
 

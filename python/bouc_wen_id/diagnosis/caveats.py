@@ -1,0 +1,60 @@
+"""What a verdict must say about the design behind it (issue 18: "verdicts that depend on the design say so").
+
+- :func:`alternatives_text`: a named term the experiments cannot tell from a rival (one amplitude per
+  frequency, or G nearly flat over the band, cannot separate a spring on x from one on u) is reported with
+  its rival in the one-line verdict, not only in the summary's alternatives.
+- :func:`below_saturation`: when every experiment stays below the hysteresis' saturation, a spring on x
+  trades with |G| and could not show; the notes say so (benches/diagnosis_designs.py measured a 30x spring
+  on x "adequate" on such a design).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+from ..augmented import AugExperiment, AugFit
+from ..terms import TERMS
+from .result import NamedTerm
+from .select import Alternative
+
+
+def below_saturation(sx: Sequence[AugExperiment], fit: AugFit) -> list[str]:
+    """A note when every experiment stays below the hysteresis' saturation (the plain fit's latent
+    amplitudes ``|x_i| = |g_i| U_i`` under ``w_u = (beta + gamma)^(-1/mu)``, alpha = 1): there the loop is
+    nearly linear and a spring on x trades with |G|, so the design could not show one (a 30x spring on x
+    over three frequencies at 0.3 of saturation gave "adequate")."""
+    par = fit.params
+    if not par.beta + par.gamma > 0:
+        return []
+    w_u = float((par.beta + par.gamma) ** (-1.0 / par.mu))
+    levels = [abs(float(g)) * e.amplitude / w_u for e, g in zip(sx, par.gains)]
+    if not levels or max(levels) >= 1.0:
+        return []
+    return [
+        "every experiment stays below the hysteresis' saturation (latent amplitude, as the plain fit sees "
+        f"it, {min(levels):.2g}-{max(levels):.2g} of its saturation level): the loop is nearly linear there, "
+        "and a spring across the hysteretic element (on x) trades with |G|, so it could neither show nor be "
+        "told from |G|; an experiment past saturation (1.5-3 times that level) would separate them"
+    ]
+
+
+def alternatives_text(alternatives: Sequence[Alternative], named: Sequence[NamedTerm]) -> str:
+    """The verdict's word on a named term the data cannot tell from a rival (issue 18: "never one of them
+    silently"): a design with one amplitude per frequency, or G nearly flat over the band, cannot separate a
+    spring on x from one on u, and the one-line verdict named one place only."""
+    kinds = {t.term for t in named}
+    rivals: dict[str, list[str]] = {}
+    for a in alternatives:
+        if a.term in kinds and a.rival not in rivals.setdefault(a.term, []):
+            rivals[a.term].append(a.rival)
+    if not rivals:
+        return ""
+
+    def label(kind: str) -> str:
+        return TERMS[kind].place_label() if kind in TERMS else kind
+
+    what = "; ".join(" or ".join(label(k) for k in (t, *rs)) for t, rs in rivals.items())
+    return (
+        f"; the experiments cannot tell apart: {what} (alternatives, each with the experiment that would "
+        "separate them)"
+    )
