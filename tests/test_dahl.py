@@ -221,3 +221,22 @@ def test_simulation_refuses_dahl_friction_by_name() -> None:
     plant = bw.WienerPlant(bw.TransferFunction([1.0], [0.1, 1.0]), bw.BoucWen(0.5, 0.3, 1.5), (T.DahlX(0.1),))
     with pytest.raises(InvalidParameterError, match="no time-domain form"):
         bw.simulate(plant, bw.SinePlan([2.0], 1.0, settle_periods=1, periods=1, samples_per_period=32))
+
+
+@pytest.mark.parametrize("term", [T.Dahl(0.1), T.DahlX(0.1), T.DahlSigmaX(1.0)], ids=lambda t: t.kind)
+def test_exporters_and_compensation_refuse_it_by_name(term: T.Term) -> None:
+    """No time-domain form yet: the exporters (the simulator's own refusal, word for word) and compensation
+    name the term."""
+    import bouc_wen_id as bw
+    from bouc_wen_id.compensation import compensate
+    from bouc_wen_id.export import EXPORTED
+    from bouc_wen_id.export._model import UnsupportedTermError, flatten
+
+    assert type(term) not in EXPORTED
+    plant = bw.WienerPlant(bw.TransferFunction([1.0], [0.1, 1.0]), bw.BoucWen(0.5, 0.5, 2.0), (term,))
+    for what in ("C export", "nlsys export", "JSON export"):
+        with pytest.raises(UnsupportedTermError, match=f"{what}: term '{term.kind}'"):
+            flatten(plant, what)
+    t = np.arange(200) * 0.01
+    with pytest.raises(InvalidParameterError, match=term.kind):
+        compensate(plant, 0.1 * np.sin(TWO_PI * t), t)

@@ -805,7 +805,7 @@ class Dahl(Term):
     limits: ClassVar[tuple[str, ...]] = (Stiffness.kind, Coulomb.kind)  # Fc -> inf, sigma -> inf: simpler
 
     #: Start shapes ``sigma A / Fc`` (A: the median travel amplitude): spring-like, turning, sliding.
-    START_SHAPES: ClassVar[tuple[float, ...]] = (0.3, 1.0, 3.0)
+    START_SHAPES: ClassVar[tuple[float, ...]] = (0.3, 3.0, 30.0)
 
     @classmethod
     def start_pairs(cls, context: StartContext) -> tuple[tuple[float, float], ...]:
