@@ -86,6 +86,9 @@ def test_simpler_first_puts_a_limit_ahead_unless_the_element_beats_it() -> None:
     # A clear gain: the element stays first; a best term without limits is left alone.
     gain = [trial(DAHL_X, 50.0), trial(spring, 80.0)]
     assert [t.term for t in S.simpler_first(exps, gain, 0.05)] == [DAHL_X, spring]
+    # A limit at the other place counts too (where G is flat a spring on u is one on x).
+    on_u = [trial(DAHL_X, 50.0), trial(T.Stiffness.kind, 50.0 * (1 + 1.0 / dof))]
+    assert [t.term for t in S.simpler_first(exps, on_u, 0.05)] == [T.Stiffness.kind, DAHL_X]
     other = [trial("play", 40.0), trial(DAHL_X, 50.0)]
     assert S.simpler_first(exps, other, 0.05) == other
 

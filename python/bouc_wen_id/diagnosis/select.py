@@ -521,13 +521,15 @@ def simpler_first(exps: Sequence[AugExperiment], order: list[Trial], alpha: floa
 
     A term with :attr:`limits` (Dahl friction: a spring as ``Fc -> inf``, dry friction as ``sigma -> inf``)
     nests each of them up to one extra parameter, so on data of a limit it ties it or fits the noise a
-    little better. Unless it beats the best of its limits that also passed by the F test of that parameter
-    at ``alpha``, the limit goes first (the element may then stand as its alternative).
+    little better. Unless it beats the best of its limits (at either place) that also passed by the F test
+    of that parameter at ``alpha``, the limit goes first (the element may then stand as its alternative).
     """
     best_fit = order[0].fit if order else None
     if best_fit is None:
         return order
     best, limits = order[0], getattr(TERMS[order[0].term], "limits", ())
+    # At either place: where G is nearly flat a spring on x is one on u (a 10x spring on u went to Dahl on x).
+    limits = {s for k in limits for s in (k, *siblings(k))}
     simpler = [tr for tr in order if tr.term in limits]
     if not simpler:
         return order
