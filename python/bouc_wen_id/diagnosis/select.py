@@ -522,7 +522,8 @@ def simpler_first(exps: Sequence[AugExperiment], order: list[Trial], alpha: floa
     A term with :attr:`limits` (Dahl friction: a spring as ``Fc -> inf``, dry friction as ``sigma -> inf``)
     nests each of them up to one extra parameter, so on data of a limit it ties it or fits the noise a
     little better. Unless it beats the best of its limits (at either place) that also passed by the F test
-    of that parameter at ``alpha``, the limit goes first (the element may then stand as its alternative).
+    of that parameter at ``alpha`` (the caller's Bonferroni level over the candidates, as their own tests),
+    the limit goes first (the element may then stand as its alternative).
     """
     best_fit = order[0].fit if order else None
     if best_fit is None:
@@ -584,7 +585,8 @@ def forward_select(
             ok = bool(math.isfinite(padj) and padj < level and share >= MATERIAL_SHARE) and _admissible(f, t)
             ok = ok and not at_null(f, t)
             trials.append(Trial(t, f.cost, c0 - f.cost, stat, p, padj, share, ok, fit=f))
-        order = simpler_first(exps, sorted((tr for tr in trials if tr.passed), key=lambda tr: tr.cost), level)
+        passed = sorted((tr for tr in trials if tr.passed), key=lambda tr: tr.cost)
+        order = simpler_first(exps, passed, level / len(remaining))  # Bonferroni, as the candidates' tests
         chosen: Optional[Trial] = None
         final_trials = {tr.term: tr for tr in trials}
         law_failed: list[str] = []
