@@ -189,10 +189,24 @@ def _base_name(name: str) -> str:
     return name
 
 
+def library_effects() -> dict[str, Any]:
+    """Generator effects made another way than the library's own term, scored as that registry term (keyed by
+    its class): the exponent-2 Dahl loop on x (``generator.py``) as Dahl friction on x (exponent 1)."""
+    from bouc_wen_id.terms import DahlX
+
+    return {"dahl": DahlX}
+
+
 def _accepted(truth: Optional[str]) -> tuple[str, ...]:
-    """Code names that count as the hidden effect's (the Baber-Noori terms' names are not fixed yet)."""
+    """Code names that count as the hidden effect's (the Baber-Noori terms' names are not fixed yet; a
+    two-term element's second term, Dahl friction's pre-sliding stiffness, is part of it)."""
+    from bouc_wen_id.terms import TERMS
+
     if truth is None:
         return ()
+    cls = TERMS.get(truth)
+    if cls is not None and cls.companion:
+        return (truth, TERMS[cls.companion].base_kind)
     return {
         "stiffness_degradation": ("stiffness_degradation", "degradation_eta", "eta", "stiffness_loss"),
         "pinching": ("pinching", "pinch"),
@@ -282,14 +296,16 @@ def run_new_case(
             row["error"] = f"{type(exc).__name__}: {exc}"
             return row
     row["seconds"] = time.perf_counter() - t0
-    truth = name if skind in ("library", "structure") else None
-    row.update(_score(d, skind, truth, place if name in gen.MECHANICAL else ""))
+    lib = library_effects()
+    truth = (lib[name].base_kind if name in lib else name) if skind in ("library", "structure") else None
+    placed = name in gen.MECHANICAL or name in lib
+    row.update(_score(d, skind, truth, place if placed else ""))
     if skind == "structure":  # the achieved size: the cascade's RMS misfit in averaged-noise sd
         n = sum(e.ybar.size for e in d.experiments)
         row["achieved"] = math.sqrt(max(d.plain.cost - d.plain.dof, 0.0) / n)
     fittable = skind not in ("outside", "structure")
     try:
-        where = place if name in gen.MECHANICAL else ""
+        where = place if placed else ""
         row["ratio"] = _held_out_ratio(d, truth, where) if fittable and kind != "pending" else math.nan
     except Exception:
         row["ratio"] = math.nan
@@ -306,11 +322,19 @@ def new_jobs(args: argparse.Namespace) -> list[tuple[str, Optional[str], str, fl
         rows += [("library", n, pl, sz, args.cases) for pl in gen.PLACES for sz in sizes]
     rows += [("library", n, "", sz, args.cases) for n in gen.LIBRARY_OTHER for sz in sizes]
     rows += [("pending", n, "", sz, args.cases) for n in gen.BABER_NOORI for sz in sizes]
-    rows += [("outside", n, "", sz, args.cases) for n in gen.OUTSIDE for sz in (10.0, 30.0)]
+    lib = library_effects()  # an outside effect the library now has: scored as its term, at its place
+    rows += [
+        ("library", n, lib[n].acts_on.value, sz, n_) if n in lib else ("outside", n, "", sz, n_)
+        for n_ in (args.cases,)
+        for n in gen.OUTSIDE
+        for sz in (10.0, 30.0)
+    ]
     rows += [("null", None, "", 0.0, args.null)]
     rows += [("structure", "feedback", "", sz, args.cases) for sz in (10.0, 30.0)]
     # Appended last so that the rows above keep their seeds: Spencer's series dashpot (a library term).
     rows += [("library", n, "", sz, args.cases) for n in gen.SPENCER for sz in sizes]
+    # Appended last as well: a parallel Iwan (Prandtl-Ishlinskii) loop on x, outside the library.
+    rows += [("outside", n, "", sz, args.cases) for n in gen.IWAN for sz in (10.0, 30.0)]
     jobs = []
     for k, (kind, name, place, size, count) in enumerate(rows):
         jobs += [(kind, name, place, size, args.seed + 1000 * (k + 1) + s) for s in range(count)]

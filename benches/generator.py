@@ -66,8 +66,15 @@ BABER_NOORI = ("stiffness_degradation", "pinching")
 SPENCER = ("series_dashpot",)
 #: Physics outside the library: a rate-dependent loop width, a parallel Dahl loop, a mid-travel slack gap.
 OUTSIDE = ("rate_width", "dahl", "slack_gap")
+#: Outside physics appended after the others (their rows keep the earlier rows' seeds): a parallel Iwan
+#: (Prandtl-Ishlinskii) loop on x, a weighted sum of elastic-perfectly-plastic elements with spread yield
+#: travels: a piecewise-linear, kinked loop of another hysteresis family.
+IWAN = ("iwan",)
+#: The Iwan loop's yield travels (fractions of the plant's smallest latent level) and weights (sum 1).
+IWAN_YIELDS = (0.08, 0.16, 0.3, 0.5, 0.8)
+IWAN_WEIGHTS = (0.3, 0.25, 0.2, 0.15, 0.1)
 #: Effects whose contribution is linear in their parameter (sized in one shot).
-LINEAR = (*MECHANICAL, "offset", "dahl")
+LINEAR = (*MECHANICAL, "offset", "dahl", "iwan")
 COULOMB_EPS = 0.01  # tanh smoothing as a fraction of the peak velocity
 MAX_INCREMENT = 0.05  # largest path increment of one RK4 step of the hysteresis (x ~ 1)
 
@@ -388,7 +395,24 @@ def _parallel(
             fd = np.where(sgn != 0.0, sgn * (1.0 - g1), fd)
             out[:, j] = fd
         return val[..., None] * out[None]
+    if name == "iwan":  # stops z_k = clip(z_k + dx / r_k, -1, 1): exact along each monotone sample step
+        yields = np.asarray(IWAN_YIELDS) * float(p.levels.min())
+        weights = np.asarray(IWAN_WEIGHTS)
+        if _jit is not None:
+            return val[..., None] * _jit.iwan(np.ascontiguousarray(x), yields, weights)[None]
+        return val[..., None] * _iwan_loop_numpy(x, yields, weights)[None]
     return np.zeros((1, 1, 1))
+
+
+def _iwan_loop_numpy(x: FloatArray, yields: FloatArray, weights: FloatArray) -> FloatArray:
+    """The Iwan loop of ``_parallel`` on every experiment at once (experiments x grid), from rest."""
+    z = np.zeros((x.shape[0], yields.size))
+    out = np.zeros(x.shape)
+    for j in range(1, x.shape[1]):
+        dx = x[:, j] - x[:, j - 1]
+        z = np.clip(z + dx[:, None] / yields[None, :], -1.0, 1.0)
+        out[:, j] = z @ weights
+    return out
 
 
 def _lag(v: FloatArray, tau: FloatArray, h: FloatArray) -> FloatArray:
@@ -684,6 +708,22 @@ def _lag_loop(v: FloatArray, tau: FloatArray, h: FloatArray) -> FloatArray:
     return out
 
 
+def _iwan_loop(x: FloatArray, yields: FloatArray, weights: FloatArray) -> FloatArray:
+    """The Iwan loop of ``_parallel`` element by element (experiments x grid)."""
+    out = np.zeros(x.shape)
+    z = np.zeros(yields.size)
+    for i in range(x.shape[0]):
+        z[:] = 0.0
+        for j in range(1, x.shape[1]):
+            dx = x[i, j] - x[i, j - 1]
+            acc = 0.0
+            for k in range(yields.size):
+                z[k] = min(max(z[k] + dx / yields[k], -1.0), 1.0)
+                acc += z[k] * weights[k]
+            out[i, j] = acc
+    return out
+
+
 def _dahl_loop(x: FloatArray, sigma: float) -> FloatArray:
     """The Dahl loop of ``_parallel`` element by element (experiments x grid)."""
     out = np.zeros(x.shape)
@@ -740,6 +780,7 @@ class _Jit:
         self.play = njit(_play_loop)
         self.lag = njit(_lag_loop)
         self.dahl = njit(_dahl_loop)
+        self.iwan = njit(_iwan_loop)
         self.feedback = njit(_feedback_loop)
 
 

@@ -22,6 +22,7 @@ use rustfft::num_complex::Complex;
 use rustfft::FftPlanner;
 use std::cell::RefCell;
 
+use crate::dahl::{dahl_loop, DahlLoop};
 use crate::error::{all_finite, finite, CoreError, Result};
 use crate::path_loop::{
     path_loop, path_loop_distorted, path_loop_pinched, Waveform, N_PD, PD_AMPLITUDE, PD_BETA,
@@ -362,6 +363,7 @@ pub fn augmented_output_with(
     let step = 2.0 * std::f64::consts::PI / p as f64;
     let mut lag_col = None;
     let mut offset_col = None;
+    let dahl = dahl_loops(terms, shared, exc, gain, phase)?;
     for j in 0..p {
         let th = step * j as f64 + exc.grid_phase;
         let (s, c) = th.sin_cos();
@@ -381,6 +383,21 @@ pub fn augmented_output_with(
         for (t, &kind) in terms.kinds().iter().enumerate() {
             let q = shared[N_HYSTERESIS + t];
             let col = &mut cols[1 + N_HYSTERESIS + t];
+            if let Some((l, on_x)) = dahl_of(&dahl, kind, terms.place(t)) {
+                // Dahl friction (rust/dahl.rs): the level's column carries F itself; the
+                // on-x loop's phase follows (g, phi).
+                if kind == TermKind::Dahl {
+                    f += l.f[j];
+                    col[j] = l.d_fc[j];
+                    if on_x {
+                        dg += u_amp * l.d_amplitude[j];
+                        dphi -= l.d_phase[j];
+                    }
+                } else {
+                    col[j] = l.d_sigma[j];
+                }
+                continue;
+            }
             if terms.place(t) == Place::X {
                 let (v, dv_da, dv_dphi) =
                     on_x_regressor(kind, u_amp * gain, omega, step * j as f64 - phase);
@@ -418,6 +435,8 @@ pub fn augmented_output_with(
                 // Refused by `Terms::parse` as well (no steady loop).
                 TermKind::StiffnessDegradation => {}
                 TermKind::SeriesDashpot => col[j] = d_series[j],
+                // Handled above (`dahl_of`).
+                TermKind::Dahl | TermKind::DahlSigma => {}
             }
         }
         cols[0][j] = f;
@@ -439,6 +458,50 @@ pub fn augmented_output_with(
         jac_shared,
         jac_own,
     })
+}
+
+/// The steady Dahl loops of the active Dahl friction, `(on u, on x)` (rust/dahl.rs): on u driven
+/// by `u_j = U cos(theta_j + psi)`, on x by `x_j = U g cos(theta_j - phi)`.
+fn dahl_loops(
+    terms: &Terms,
+    shared: &[f64],
+    exc: &Excitation,
+    gain: f64,
+    phase: f64,
+) -> Result<[Option<DahlLoop>; 2]> {
+    let at = |place: Place, a: f64, psi0: f64| -> Result<Option<DahlLoop>> {
+        match (
+            terms.column_at(TermKind::Dahl, place),
+            terms.column_at(TermKind::DahlSigma, place),
+        ) {
+            (Some(cf), Some(cs)) => Ok(Some(dahl_loop(
+                a,
+                psi0,
+                shared[cf],
+                shared[cs],
+                exc.samples,
+            )?)),
+            _ => Ok(None),
+        }
+    };
+    Ok([
+        at(Place::Usual, exc.amplitude, exc.grid_phase)?,
+        at(Place::X, exc.amplitude * gain, -phase)?,
+    ])
+}
+
+/// The Dahl loop of a Dahl parameter's term at `place`, and whether it acts on x; `None` for
+/// the other terms.
+fn dahl_of(
+    dahl: &[Option<DahlLoop>; 2],
+    kind: TermKind,
+    place: Place,
+) -> Option<(&DahlLoop, bool)> {
+    if !matches!(kind, TermKind::Dahl | TermKind::DahlSigma) {
+        return None;
+    }
+    let on_x = place == Place::X;
+    dahl[usize::from(on_x)].as_ref().map(|l| (l, on_x))
 }
 
 /// The regressor of a mechanical term acting across the hysteretic element, on its input
@@ -568,6 +631,24 @@ struct AugModel<'a> {
 }
 
 impl AugModel<'_> {
+    /// The columns of Dahl friction's two parameters (>= 0) at every place, with their names.
+    fn dahl_columns(&self) -> Vec<(usize, String)> {
+        let mut out = Vec::new();
+        for place in [Place::Usual, Place::X] {
+            for kind in [TermKind::Dahl, TermKind::DahlSigma] {
+                if let Some(c) = self.terms.column_at(kind, place) {
+                    let name = if place == Place::Usual {
+                        kind.name().to_string()
+                    } else {
+                        format!("{}@{}", kind.name(), place.tag())
+                    };
+                    out.push((c, name));
+                }
+            }
+        }
+        out
+    }
+
     fn play_max(&self, own: &[[f64; 2]]) -> f64 {
         PLAY_MAX_FRACTION
             * self
@@ -632,6 +713,13 @@ impl JointModel for AugModel<'_> {
         bound(TermKind::Play, Some(self.play_max(own)));
         bound(TermKind::Pinching, Some(PINCHING_MAX));
         bound(TermKind::SeriesDashpot, None);
+        for (c, name) in self.dahl_columns() {
+            cons.push(Constraint {
+                name: format!("{name}=0"),
+                normal: vec![(c, 1.0)],
+                bound: 0.0,
+            });
+        }
         cons
     }
 
@@ -647,6 +735,9 @@ impl JointModel for AugModel<'_> {
             shared[c] = shared[c].clamp(0.0, PINCHING_MAX);
         }
         if let Some(c) = self.terms.column(TermKind::SeriesDashpot) {
+            shared[c] = shared[c].max(0.0);
+        }
+        for (c, _) in self.dahl_columns() {
             shared[c] = shared[c].max(0.0);
         }
     }
@@ -672,7 +763,9 @@ impl JointModel for AugModel<'_> {
             .terms
             .column(TermKind::SeriesDashpot)
             .is_none_or(|c| shared[c] >= 0.0);
+        let dahl_ok = self.dahl_columns().iter().all(|&(c, _)| shared[c] >= 0.0);
         hysteresis_admissible(shared, self.opts.mu_lo, self.opts.mu_hi)
+            && dahl_ok
             && series_ok
             && pinch_ok
             && delta_ok
@@ -879,6 +972,57 @@ mod tests {
         let both = terms_of(&[SeriesDashpot, Play]);
         let e = augmented_output(&EXC, &both, &[0.8, 0.2, 1.6, 0.5, 0.1], 0.9, 1.1, 4).unwrap_err();
         assert!(e.to_string().contains("asymmetry only"), "{e}");
+    }
+
+    #[test]
+    fn dahl_jacobian_matches_central_differences() {
+        // Dahl friction on u and on x (rust/dahl.rs) beside the lag and a spring on x.
+        let on_x = |k: TermKind| format!("{}@{}", k.name(), Place::X.tag());
+        let names = [
+            on_x(Dahl),
+            Dahl.name().to_string(),
+            on_x(DahlSigma),
+            SensorLag.name().to_string(),
+            DahlSigma.name().to_string(),
+            on_x(Stiffness),
+        ];
+        let terms = Terms::parse(&names).unwrap();
+        let shared = [0.8, 0.2, 1.6, 0.1, 0.05, 0.3, 0.02, 0.4, 0.2];
+        let (g, phi, h) = (-0.9, 1.1, 1e-6);
+        let out = augmented_output(&EXC, &terms, &shared, g, phi, 256).unwrap();
+        let f =
+            |s: &[f64], g: f64, phi: f64| augmented_output(&EXC, &terms, s, g, phi, 256).unwrap().y;
+        let ns = shared.len();
+        for c in 0..ns + 2 {
+            let (mut sp, mut sm) = (shared.to_vec(), shared.to_vec());
+            let (mut gp, mut gm, mut pp, mut pm) = (g, g, phi, phi);
+            if c < ns {
+                sp[c] += h;
+                sm[c] -= h;
+            } else if c == ns {
+                gp += h;
+                gm -= h;
+            } else {
+                pp += h;
+                pm -= h;
+            }
+            let (yp, ym) = (f(&sp, gp, pp), f(&sm, gm, pm));
+            let col = |j: usize| {
+                if c < ns {
+                    out.jac_shared[j * ns + c]
+                } else {
+                    out.jac_own[j][c - ns]
+                }
+            };
+            let scale = (0..EXC.samples).fold(0.0f64, |a, j| a.max(col(j).abs()));
+            let err = (0..EXC.samples)
+                .map(|j| ((yp[j] - ym[j]) / (2.0 * h) - col(j)).abs())
+                .fold(0.0, f64::max);
+            assert!(
+                err <= 1e-6 * scale.max(1e-3),
+                "column {c}: {err} vs {scale}"
+            );
+        }
     }
 
     #[test]

@@ -23,6 +23,7 @@ pub mod bouc_wen;
 pub mod budget;
 pub mod cancel;
 pub mod compensate;
+pub mod dahl;
 pub mod error;
 pub mod estimate;
 pub mod feedback;

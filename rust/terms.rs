@@ -88,6 +88,14 @@ pub enum TermKind {
     /// under the element's force), so `wdot = ddot h(w, sgn ddot)` (design.md 9.1, diagnosis.md).
     /// Rate dependent: its steady loop is solved in time (`rust/series_loop.rs`).
     SeriesDashpot,
+    /// Dahl friction's level `Fc` ([y]), `>= 0`: `F' = sigma v' (1 - sgn(v') F / Fc)` along the
+    /// travel v of its place (u, or x across the hysteretic element), added to the output. It
+    /// comes with its pre-sliding stiffness [`TermKind::DahlSigma`] at the same place (the two
+    /// parameters of one element). Its steady loop is closed form (`rust/dahl.rs`).
+    Dahl,
+    /// Dahl friction's pre-sliding stiffness `sigma` ([y]/[u] on u, dimensionless on x), `>= 0`:
+    /// the second parameter of [`TermKind::Dahl`], given with it at the same place.
+    DahlSigma,
 }
 
 /// Centre `q` of the pinching band, a fraction of the saturation level `w_u`, on the branch of the
@@ -102,7 +110,7 @@ pub const PINCHING_MAX: f64 = 0.95;
 
 impl TermKind {
     /// Every term, in the order of the table of design.md 9.1 (then the simulation-only one).
-    pub const ALL: [TermKind; 13] = [
+    pub const ALL: [TermKind; 15] = [
         TermKind::Offset,
         TermKind::Stiffness,
         TermKind::Viscous,
@@ -116,6 +124,8 @@ impl TermKind {
         TermKind::StiffnessDegradation,
         TermKind::Pinching,
         TermKind::SeriesDashpot,
+        TermKind::Dahl,
+        TermKind::DahlSigma,
     ];
 
     /// The code name (design.md 9.1), e.g. `"sensor_lag"`: the only place a term's name is
@@ -135,6 +145,8 @@ impl TermKind {
             TermKind::StiffnessDegradation => "stiffness_degradation",
             TermKind::Pinching => "pinching",
             TermKind::SeriesDashpot => "series_dashpot",
+            TermKind::Dahl => "dahl",
+            TermKind::DahlSigma => "dahl_sigma",
         }
     }
 
@@ -165,14 +177,22 @@ impl TermKind {
             Place::Usual => true,
             Place::X => matches!(
                 self,
-                TermKind::Stiffness | TermKind::Viscous | TermKind::Inertia | TermKind::Coulomb
+                TermKind::Stiffness
+                    | TermKind::Viscous
+                    | TermKind::Inertia
+                    | TermKind::Coulomb
+                    | TermKind::Dahl
+                    | TermKind::DahlSigma
             ),
         }
     }
 
     /// Whether the time-domain simulation of design.md 9.4 has this term.
     pub fn in_simulation(self) -> bool {
-        !matches!(self, TermKind::Distortion)
+        !matches!(
+            self,
+            TermKind::Distortion | TermKind::Dahl | TermKind::DahlSigma
+        )
     }
 
     /// Whether the term changes the hysteresis' input path (the steady-loop model then solves
@@ -204,6 +224,11 @@ impl TermKind {
             TermKind::SeriesDashpot => (
                 "rho",
                 "must be >= 0 (the inverse of the series dashpot's coefficient; 0: no dashpot)",
+            ),
+            TermKind::Dahl => ("Fc", "must be >= 0 (the friction level; 0: no friction)"),
+            TermKind::DahlSigma => (
+                "sigma",
+                "must be >= 0 (the pre-sliding stiffness of the Dahl friction)",
             ),
             TermKind::Pinching => {
                 if !(0.0..1.0).contains(&value) {
@@ -295,7 +320,7 @@ pub fn parse_placed(name: &str) -> Result<(TermKind, Place)> {
     if !kind.acts_at(place) {
         return Err(CoreError::InvalidParameter(format!(
             "term {:?} cannot act at place {tag:?}: only the mechanical terms (stiffness, \
-             viscous, inertia, Coulomb) act across the hysteretic element",
+             viscous, inertia, Coulomb, Dahl) act across the hysteretic element",
             kind.name()
         )));
     }
@@ -331,7 +356,35 @@ impl Terms {
             kinds.push(k);
             places.push(place);
         }
-        Ok(Self { kinds, places })
+        let t = Self { kinds, places };
+        t.check_pairs()?;
+        Ok(t)
+    }
+
+    /// Checks that Dahl friction's two parameters come together: [`TermKind::Dahl`] and
+    /// [`TermKind::DahlSigma`] at the same place, or neither.
+    fn check_pairs(&self) -> Result<()> {
+        for (&k, &place) in self.kinds.iter().zip(&self.places) {
+            let other = match k {
+                TermKind::Dahl => TermKind::DahlSigma,
+                TermKind::DahlSigma => TermKind::Dahl,
+                _ => continue,
+            };
+            if self.column_at(other, place).is_none() {
+                let tag = if place == Place::Usual {
+                    String::new()
+                } else {
+                    format!("@{}", place.tag())
+                };
+                return Err(CoreError::InvalidParameter(format!(
+                    "term \"{}{tag}\" needs \"{}{tag}\": Dahl friction's level and pre-sliding \
+                     stiffness are given together",
+                    k.name(),
+                    other.name()
+                )));
+            }
+        }
+        Ok(())
     }
 
     /// The place of the `t`-th active term.
@@ -427,6 +480,22 @@ mod tests {
     }
 
     #[test]
+    fn dahl_friction_takes_its_two_parameters_together() {
+        let (dahl, sigma) = (TermKind::Dahl.name(), TermKind::DahlSigma.name());
+        let on_x = |n: &str| format!("{n}@{}", Place::X.tag());
+        let t = Terms::parse(&[on_x(dahl), on_x(sigma), dahl.into(), sigma.into()]).unwrap();
+        assert_eq!(t.column_at(TermKind::DahlSigma, Place::X), Some(4));
+        assert_eq!(t.column(TermKind::Dahl), Some(5));
+        let e = Terms::parse(&[dahl]).unwrap_err();
+        assert!(e.to_string().contains("given together"), "{e}");
+        let e = Terms::parse(&[on_x(sigma), sigma.into()]).unwrap_err();
+        assert!(e.to_string().contains("given together"), "{e}");
+        let e = Terms::parse(&[on_x(dahl), sigma.into()]).unwrap_err();
+        assert!(e.to_string().contains("given together"), "{e}");
+        assert!(!TermKind::Dahl.in_simulation());
+    }
+
+    #[test]
     fn one_sided_ranges_name_the_term() {
         for kind in [
             TermKind::SensorLag,
@@ -435,6 +504,8 @@ mod tests {
             TermKind::StiffnessDegradation,
             TermKind::Pinching,
             TermKind::SeriesDashpot,
+            TermKind::Dahl,
+            TermKind::DahlSigma,
         ] {
             let e = kind.check_value(-0.1).unwrap_err();
             assert!(e.to_string().contains(kind.name()), "{e}");

@@ -26,6 +26,7 @@ from bouc_wen_id.augmented import (
 )
 from bouc_wen_id.errors import InsufficientDataError, InvalidParameterError, NonFiniteError
 from bouc_wen_id.reference import augmented as ra
+from bouc_wen_id.terms import TERMS
 
 #: A visible value of each term for the test plant (beta, gamma, mu = 0.8, 0.2, 1.6; U ~ 1, omega ~ 1..10,
 #: so w ~ 1 and udot ~ 1..10): each changes y by about 5-30 % of its range.
@@ -44,8 +45,13 @@ TERM_VALUES = {
 }
 HYST = (0.8, 0.2, 1.6)
 #: The terms that act on a pure sine (the distortion term needs the input's harmonics: test_distortion.py;
-#: the series dashpot's loop carries the asymmetry only, not play or pinching: test_series_dashpot.py).
-SINE_TERMS = tuple(t for t in TERM_NAMES if t not in ("distortion", "series_dashpot"))
+#: the series dashpot's loop carries the asymmetry only, not play or pinching: test_series_dashpot.py; a
+#: two-term element, Dahl friction, is given as its pair: test_dahl.py).
+SINE_TERMS = tuple(
+    t
+    for t in TERM_NAMES
+    if t not in ("distortion", "series_dashpot") and not (TERMS[t].companion or TERMS[t].part_of)
+)
 
 
 def _fd_columns(
@@ -326,6 +332,10 @@ def test_names_symbols_and_units() -> None:
         "inertia@x",
         "coulomb@x",
         "series_dashpot",
+        "dahl",
+        "dahl_sigma",
+        "dahl@x",
+        "dahl_sigma@x",
     )
     assert set(TERM_SYMBOLS) == set(TERM_UNITS) == set(TERM_NAMES)
     assert TERM_SYMBOLS["viscous"] == "c" and TERM_UNITS["viscous"] == "{y} s/{u}"

@@ -107,7 +107,7 @@ def test_generator_and_library_agree_on_the_library_terms(name: str, term: Any) 
 #: Every effect the generator hides (the feedback structure has its own integrator, tested apart).
 EFFECTS = [
     *[(name, place) for name in gen.MECHANICAL for place in gen.PLACES],
-    *[(name, "") for name in (*gen.LIBRARY_OTHER, *gen.BABER_NOORI, *gen.OUTSIDE)],
+    *[(name, "") for name in (*gen.LIBRARY_OTHER, *gen.BABER_NOORI, *gen.OUTSIDE, *gen.IWAN)],
 ]
 SHORT = (2 + 1) * gen.P  # a short record: the loops' arithmetic, not the steady loop, is compared here
 

@@ -82,7 +82,14 @@ ON_X = {k: c for k, c in TERMS.items() if c.base_kind != k}
 
 
 def test_registry_follows_the_design_table() -> None:
-    assert [c.base_kind for c in ON_X.values()] == ["stiffness", "viscous", "inertia", "coulomb"]
+    assert [c.base_kind for c in ON_X.values()] == [
+        "stiffness",
+        "viscous",
+        "inertia",
+        "coulomb",
+        "dahl",
+        "dahl_sigma",
+    ]
     assert all(c.acts_on == Place.X and k == f"{c.base_kind}@x" for k, c in ON_X.items())
     assert list(USUAL) == [
         "offset",
@@ -98,6 +105,8 @@ def test_registry_follows_the_design_table() -> None:
         "pinching",
         "distortion",
         "series_dashpot",
+        "dahl",
+        "dahl_sigma",
     ]
     units = {kind: cls.units(y="N", u="mm") for kind, cls in USUAL.items()}
     assert units == {
@@ -114,6 +123,8 @@ def test_registry_follows_the_design_table() -> None:
         "pinching": "",
         "distortion": "",
         "series_dashpot": "1/s",
+        "dahl": "N",
+        "dahl_sigma": "N/mm",
     }
     for kind, cls in USUAL.items():
         assert cls.kind == kind
@@ -128,7 +139,7 @@ def test_registry_follows_the_design_table() -> None:
             "distortion",
             "series_dashpot",
         )
-        on_u = ("stiffness", "viscous", "inertia", "coulomb")
+        on_u = ("stiffness", "viscous", "inertia", "coulomb", "dahl", "dahl_sigma")
         assert cls.acts_on == (
             Place.HYSTERESIS if kind in hysteresis else Place.INPUT if kind in on_u else Place.OUTPUT
         )
@@ -136,13 +147,17 @@ def test_registry_follows_the_design_table() -> None:
     assert TERM_NAMES == tuple(TERMS)
     drift_only = ("degradation", "stiffness_degradation")
     assert STEADY_TERM_NAMES == tuple(k for k in TERMS if k not in drift_only)
-    assert DIAGNOSIS_CANDIDATES == (*STEADY_TERM_NAMES, *drift_only)
+    # A two-term element's second term (Dahl friction's sigma) is added with its first, not on its own.
+    seconds = ("dahl_sigma", "dahl_sigma@x")
+    assert DIAGNOSIS_CANDIDATES == (*(k for k in STEADY_TERM_NAMES if k not in seconds), *drift_only)
     # The lower bounds of the value types, and the physical ranges the diagnosis will name within.
     assert {k for k, c in USUAL.items() if c.bounds[0] == 0.0} == {
         "sensor_lag",
         "play",
         "pinching",
         "series_dashpot",
+        "dahl",
+        "dahl_sigma",
         *drift_only,
     }
     assert {k for k, c in USUAL.items() if c.physical[0] == 0.0} == {
@@ -155,6 +170,8 @@ def test_registry_follows_the_design_table() -> None:
         "play",
         "pinching",
         "series_dashpot",
+        "dahl",
+        "dahl_sigma",
         *drift_only,
     }
     assert [k for k, c in USUAL.items() if c.linear] == [
@@ -175,8 +192,8 @@ def test_scale_factors_follow_the_units() -> None:
     # A parameter in [y]^a [u]^b (asymmetry: [y]^-mu) scales by y^a u^b with the data (design.md 10.1).
     y, u, mu = 8.0, 0.5, 1.5
     got = {k: c.scale_factor(y, u, mu) for k, c in USUAL.items()}
-    # On x (in units of y): k, c, m are [y]/[y] times s^n, the friction [y].
-    assert [c.scale_factor(y, u, mu) for c in ON_X.values()] == [1.0, 1.0, 1.0, y]
+    # On x (in units of y): k, c, m are [y]/[y] times s^n, the friction [y] (Dahl's: Fc [y], sigma [y]/[y]).
+    assert [c.scale_factor(y, u, mu) for c in ON_X.values()] == [1.0, 1.0, 1.0, y, y, 1.0]
     assert got == {
         "offset": y,
         "stiffness": y / u,
@@ -191,6 +208,8 @@ def test_scale_factors_follow_the_units() -> None:
         "pinching": 1.0,
         "distortion": 1.0,
         "series_dashpot": 1.0,
+        "dahl": y,
+        "dahl_sigma": y / u,
     }
 
 

@@ -51,6 +51,10 @@ __all__ = [
     "PINCHING_WIDTH",
     "Distortion",
     "SeriesDashpot",
+    "Dahl",
+    "DahlSigma",
+    "DahlX",
+    "DahlSigmaX",
     "StiffnessX",
     "ViscousX",
     "InertiaX",
@@ -135,6 +139,10 @@ class StartContext:
     beta: float
     gamma: float
     projection: Callable[[], float]
+    #: RMS of the current model's residual over every experiment (a two-parameter element's level).
+    residual_rms: float = math.nan
+    #: ``|U_i|``, the measured input amplitudes (a term on u scales with them; empty: not given).
+    input_amplitudes: tuple[float, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -184,6 +192,15 @@ class Term:
 
     #: The code name of the term at its usual place (the same as :attr:`kind` there).
     base_kind: ClassVar[str] = ""
+    #: A two-parameter element (Dahl friction) is two terms given together at one place: the first names the
+    #: second (:attr:`companion`), the second the first (:attr:`part_of`); the diagnosis adds them as one.
+    companion: ClassVar[str] = ""
+    part_of: ClassVar[str] = ""
+
+    @classmethod
+    def start_pairs(cls, context: StartContext) -> tuple[tuple[float, float], ...]:
+        """Starts ``(own value, companion's value)`` of a term with a :attr:`companion`."""
+        return ()
 
     def __init_subclass__(cls, **kwargs: Any) -> None:
         super().__init_subclass__(**kwargs)
@@ -733,6 +750,74 @@ class SeriesDashpot(Term):
 
 
 @dataclass(frozen=True)
+class DahlSigma(Term):
+    """Dahl friction's pre-sliding stiffness ``sigma`` (dF/dv after a reversal), given with :class:`Dahl`."""
+
+    sigma: float
+
+    kind: ClassVar[str] = "dahl_sigma"
+    symbol: ClassVar[str] = "sigma"
+    unit: ClassVar[str] = "{y}/{u}"
+    description: ClassVar[str] = "pre-sliding stiffness of the Dahl friction (its slope after each reversal)"
+    signature: ClassVar[str] = "with the Dahl friction's level: how sharply the friction turns at a reversal"
+    label: ClassVar[str] = "Dahl pre-sliding stiffness"
+    acts_on: ClassVar[Place] = Place.INPUT
+    places: ClassVar[tuple[Place, ...]] = MECHANICAL_PLACES
+    bounds: ClassVar[tuple[float, float]] = NON_NEGATIVE
+    physical: ClassVar[tuple[float, float]] = NON_NEGATIVE
+    unphysical: ClassVar[str] = "a negative pre-sliding stiffness"
+    bound_note: ClassVar[str] = " (the friction's stiffness after a reversal)"
+    scaling: ClassVar[tuple[float, float, float]] = (1.0, -1.0, 0.0)
+    part_of: ClassVar[str] = "dahl"
+
+
+@dataclass(frozen=True)
+class Dahl(Term):
+    """Dahl friction (Dahl 1968; LuGre's pre-sliding limit): ``F' = sigma v' (1 - sgn(v') F / Fc)``.
+
+    ``v`` is the travel at its place (the measured input u, or x across the hysteretic element); ``F`` is
+    added to the output. Two parameters, two terms given together: this one's level ``fc`` (a force, in
+    [y]) and :class:`DahlSigma`'s pre-sliding stiffness ``sigma``. ``sigma -> inf`` is dry (Coulomb)
+    friction of level ``Fc``, ``Fc -> inf`` a spring of stiffness ``sigma``; ``Fc = 0`` is no friction.
+    Under a sine its steady loop is closed form (``rust/dahl.rs``): from a reversal at ``v = A`` the force
+    falls as ``-Fc + (F_top + Fc) exp(-sigma (A - v) / Fc)``, ``F_top = Fc tanh(sigma A / Fc)``.
+    """
+
+    fc: float
+
+    kind: ClassVar[str] = "dahl"
+    symbol: ClassVar[str] = "fc"
+    unit: ClassVar[str] = "{y}"
+    description: ClassVar[str] = "pre-sliding (Dahl) friction: turns over a short travel, saturates at Fc"
+    signature: ClassVar[str] = (
+        "a small parallel loop: a spring's slope after each reversal, a level Fc once sliding; spring-like "
+        "at small amplitude, dry-friction-like at large"
+    )
+    label: ClassVar[str] = "Dahl friction"
+    acts_on: ClassVar[Place] = Place.INPUT
+    places: ClassVar[tuple[Place, ...]] = MECHANICAL_PLACES
+    bounds: ClassVar[tuple[float, float]] = NON_NEGATIVE
+    physical: ClassVar[tuple[float, float]] = NON_NEGATIVE
+    unphysical: ClassVar[str] = "a negative friction level"
+    bound_note: ClassVar[str] = " (the friction level; 0: no friction)"
+    scaling: ClassVar[tuple[float, float, float]] = (1.0, 0.0, 0.0)
+    companion: ClassVar[str] = DahlSigma.kind
+    limits: ClassVar[tuple[str, ...]] = (Stiffness.kind, Coulomb.kind)  # Fc -> inf, sigma -> inf: simpler
+
+    #: Start shapes ``sigma A / Fc`` (A: the median travel amplitude): spring-like, turning, sliding.
+    START_SHAPES: ClassVar[tuple[float, ...]] = (0.3, 3.0, 30.0)
+
+    @classmethod
+    def start_pairs(cls, context: StartContext) -> tuple[tuple[float, float], ...]:
+        # The loop's top F_top = Fc tanh(r) at twice the residual's RMS, at r = sigma A / Fc in START_SHAPES.
+        amps = context.latent_amplitudes if cls.acts_on == Place.X else context.input_amplitudes
+        amp = float(sorted(amps)[len(amps) // 2]) if amps else 1.0
+        rms = context.residual_rms if context.residual_rms > 0 else 0.1  # nan: not given
+        fcs = [2.0 * rms / math.tanh(r) for r in cls.START_SHAPES]
+        return tuple((fc, r * fc / max(amp, 1e-300)) for fc, r in zip(fcs, cls.START_SHAPES))
+
+
+@dataclass(frozen=True)
 class StiffnessX(Stiffness):
     """Stiffness across the hysteretic element: ``k x`` (Bouc-Wen's own elastic term ``alpha k x``).
 
@@ -797,6 +882,29 @@ class CoulombX(Coulomb):
         return self
 
 
+@dataclass(frozen=True)
+class DahlSigmaX(DahlSigma):
+    """Dahl friction's pre-sliding stiffness across the hysteretic element (x in units of y: no unit)."""
+
+    acts_on: ClassVar[Place] = Place.X
+    unit: ClassVar[str] = ""  # [y]/[x], x in units of y
+    scaling: ClassVar[tuple[float, float, float]] = (0.0, 0.0, 0.0)
+    part_of: ClassVar[str] = placed_kind(Dahl.kind, Place.X)
+
+    def normalized(self, alpha: float) -> Term:  # sigma x = (sigma / alpha) (alpha x)
+        return DahlSigmaX(self.sigma / alpha)
+
+
+@dataclass(frozen=True)
+class DahlX(Dahl):
+    """Dahl friction across the hysteretic element, on x: ``F' = sigma xdot (1 - sgn(xdot) F / Fc)``."""
+
+    acts_on: ClassVar[Place] = Place.X
+    signature: ClassVar[str] = "as on u, its reversals following x: near a spring on x, or dry friction on x"
+    companion: ClassVar[str] = DahlSigmaX.kind
+    limits: ClassVar[tuple[str, ...]] = (StiffnessX.kind, CoulombX.kind)
+
+
 #: Code name -> term class, in the order of the design.md 9.1 table (then the terms at their second place).
 TERMS: dict[str, type[Term]] = {
     cls.kind: cls
@@ -818,6 +926,10 @@ TERMS: dict[str, type[Term]] = {
         InertiaX,
         CoulombX,
         SeriesDashpot,
+        Dahl,
+        DahlSigma,
+        DahlX,
+        DahlSigmaX,
     )
 }
 
@@ -825,8 +937,9 @@ TERMS: dict[str, type[Term]] = {
 TERM_NAMES: tuple[str, ...] = tuple(TERMS)
 #: The terms seen on the averaged steady period: the augmented model's (design.md 9.3).
 STEADY_TERM_NAMES: tuple[str, ...] = tuple(k for k, cls in TERMS.items() if cls.steady)
-#: The diagnosis's candidates: the steady terms, then those fitted from the period record (design.md 10.6).
-DIAGNOSIS_CANDIDATES: tuple[str, ...] = STEADY_TERM_NAMES + tuple(
+#: The diagnosis's candidates: the steady terms, then those fitted from the period record (design.md 10.6). A
+#: two-parameter element's second term (:attr:`Term.part_of`) is added with its first, not on its own.
+DIAGNOSIS_CANDIDATES: tuple[str, ...] = tuple(k for k in STEADY_TERM_NAMES if not TERMS[k].part_of) + tuple(
     k for k, cls in TERMS.items() if k not in STEADY_TERM_NAMES and cls.diagnosable
 )
 
@@ -875,6 +988,10 @@ def core_terms(terms: Iterable[Term]) -> dict[str, float]:
                 "the distortion term stands for the measured input's own harmonics, which simulate does not "
                 "know: simulate the plain plant with the distorted input itself (simulate_input with its "
                 "samples) instead"
+            )
+        if t.companion or t.part_of:  # Dahl friction: its steady loop only, so far
+            raise InvalidParameterError(
+                f"term {t.kind!r} has no time-domain form yet (steady-loop model only)"
             )
         out[t.rust_kind] = t.value
         if isinstance(t, Coulomb):

@@ -197,7 +197,8 @@ impl TermValues {
             TermKind::StiffnessDegradation => Some(&mut self.stiffness_degradation),
             TermKind::Pinching => Some(&mut self.pinching),
             TermKind::SeriesDashpot => Some(&mut self.series_dashpot),
-            TermKind::Distortion => None,
+            // Steady-loop model only (no time-domain form yet).
+            TermKind::Distortion | TermKind::Dahl | TermKind::DahlSigma => None,
         }
     }
 

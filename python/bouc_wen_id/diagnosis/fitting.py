@@ -18,7 +18,7 @@ from numpy.typing import NDArray
 
 from ..augmented import AugExperiment, AugFit, AugParams, augmented_output, fit_augmented
 from ..errors import BoucWenIdError, BudgetExceededError, SearchAtBoundError
-from ..terms import TERMS, Distortion, StartContext
+from ..terms import TERMS, Distortion, Place, StartContext
 from . import speed
 from .data import DiagExperiment
 
@@ -477,8 +477,16 @@ def candidate_starts(exps: Sequence[AugExperiment], fit: AugFit, term: str, subs
         beta=par.beta,
         gamma=par.gamma,
         projection=projection,
+        residual_rms=math.sqrt(
+            sum(float(np.sum((e.ybar - y) ** 2)) for e, y in zip(exps, fit.outputs))
+            / max(sum(e.ybar.size for e in exps), 1)
+        ),
+        input_amplitudes=tuple(abs(e.amplitude) for e in exps),
     )
-    return [par.with_term(term, v) for v in TERMS[term].start(context)]
+    cls = TERMS[term]
+    if cls.companion:  # a two-term element (Dahl friction): both parameters are added, from paired starts
+        return [par.with_term(term, a).with_term(cls.companion, b) for a, b in cls.start_pairs(context)]
+    return [par.with_term(term, v) for v in cls.start(context)]
 
 
 #: LM iterations of the screening of several starts (the best is then run to convergence).
@@ -597,7 +605,27 @@ def fit_with(exps: Sequence[AugExperiment], fit: AugFit, term: str, substeps: in
     screened = best_of([fit_from(exps, st, substeps, max_iter=SCREEN_ITER) for st in starts])
     if screened is None:
         return None
-    return best_of([screened, fit_from(exps, screened.params, substeps)])
+    best = best_of([screened, fit_from(exps, screened.params, substeps)])
+    return None if best is not None and at_a_limit(exps, best, term) else best
+
+
+#: A two-term element (Dahl friction) whose fitted shape ``sigma A / Fc`` lies below the first bound at every
+#: experiment is its spring limit, above the second its dry-friction limit: the simpler term, not the element.
+LIMIT_SHAPES = (0.05, 200.0)
+
+
+def at_a_limit(exps: Sequence[AugExperiment], fit: AugFit, term: str) -> bool:
+    """Whether ``fit``'s two-term element ``term`` sits at one of its limits (:data:`LIMIT_SHAPES`)."""
+    cls, par = TERMS[term], fit.params
+    if not cls.companion or term not in par.terms or cls.companion not in par.terms:
+        return False
+    fc = float(par.values[par.terms.index(term)])
+    sigma = float(par.values[par.terms.index(cls.companion)])
+    if fc <= 0.0:
+        return False  # no friction: the null, not a limit
+    on_x = cls.acts_on == Place.X
+    shapes = [sigma * abs(e.amplitude * (g if on_x else 1.0)) / fc for e, g in zip(exps, par.gains)]
+    return max(shapes) < LIMIT_SHAPES[0] or min(shapes) > LIMIT_SHAPES[1]
 
 
 def _fit_phase_screened(

@@ -270,7 +270,8 @@ def _correlation(fit: AugFit, a: str, b: str) -> float:
     f = np.asarray(fit.fisher, dtype=np.float64)
     pair = [3 + fit.params.terms.index(a), 3 + fit.params.terms.index(b)]
     rest = [k for k in range(f.shape[0]) if k not in pair]
-    d = np.sqrt(np.abs(np.diag(f))) + 1e-300  # Jacobi scaling keeps the pseudo-inverse well posed
+    d = np.sqrt(np.abs(np.diag(f)))  # Jacobi scaling keeps the pseudo-inverse well posed ...
+    d[d == 0.0] = 1.0  # ... and a zero column (Dahl's sigma at Fc = 0) stays zero, not 0/0
     fs = f / np.outer(d, d)
     info = (
         fs[np.ix_(pair, pair)]
@@ -518,6 +519,30 @@ def place_alternatives(
     return out
 
 
+def simpler_first(exps: Sequence[AugExperiment], order: list[Trial], alpha: float) -> list[Trial]:
+    """``order`` with a simpler limit of its best term first when the best does not beat it.
+
+    A term with :attr:`limits` (Dahl friction: a spring as ``Fc -> inf``, dry friction as ``sigma -> inf``)
+    nests each of them up to one extra parameter, so on data of a limit it ties it or fits the noise a
+    little better. Unless it beats the best of its limits (at either place) that also passed by the F test
+    of that parameter at ``alpha`` (the caller's Bonferroni level over the candidates, as their own tests),
+    the limit goes first (the element may then stand as its alternative).
+    """
+    best_fit = order[0].fit if order else None
+    if best_fit is None:
+        return order
+    best, limits = order[0], getattr(TERMS[order[0].term], "limits", ())
+    # At either place: where G is nearly flat a spring on x is one on u (a 10x spring on u went to Dahl on x).
+    limits = {s for k in limits for s in (k, *siblings(k))}
+    simpler = [tr for tr in order if tr.term in limits]
+    if not simpler:
+        return order
+    _, p = f_test(simpler[0].cost, best.cost, dof_of(exps, best_fit))
+    if math.isfinite(p) and p < alpha:
+        return order
+    return [simpler[0], *(tr for tr in order if tr is not simpler[0])]
+
+
 def forward_select(
     exps: Sequence[AugExperiment],
     plain: AugFit,
@@ -563,7 +588,8 @@ def forward_select(
             ok = bool(math.isfinite(padj) and padj < level and share >= MATERIAL_SHARE) and _admissible(f, t)
             ok = ok and not at_null(f, t)
             trials.append(Trial(t, f.cost, c0 - f.cost, stat, p, padj, share, ok, fit=f))
-        order = sorted((tr for tr in trials if tr.passed), key=lambda tr: tr.cost)
+        passed = sorted((tr for tr in trials if tr.passed), key=lambda tr: tr.cost)
+        order = simpler_first(exps, passed, level / len(remaining))  # Bonferroni, as the candidates' tests
         chosen: Optional[Trial] = None
         final_trials = {tr.term: tr for tr in trials}
         law_failed: list[str] = []
@@ -630,4 +656,5 @@ __all__ = [
     "place_alternatives",
     "siblings",
     "law_test",
+    "simpler_first",
 ]

@@ -21,6 +21,7 @@ from numpy.typing import ArrayLike, NDArray
 from ..errors import InsufficientDataError, InvalidParameterError, ZeroAmplitudeError
 from ..validation import finite_array as _finite_array
 from ..validation import finite_scalar as _finite_scalar
+from .dahl import dahl_loop
 from .path_loop import path_loop, path_loop_distorted
 from .refine import (
     Constraint,
@@ -35,6 +36,8 @@ from .terms import (
     ASYMMETRY,
     COULOMB,
     COULOMB_SMOOTHING,
+    DAHL,
+    DAHL_SIGMA,
     DISTORTION,
     INERTIA,
     OFFSET,
@@ -88,7 +91,28 @@ def parse_terms(terms: Sequence[str]) -> tuple[str, ...]:
                 f"term {name!r} is given twice; each term has one parameter and may appear once"
             )
         out.append(name)
+    _check_pairs(tuple(out))
     return tuple(out)
+
+
+def _placed(name: str, tag: str) -> str:
+    return f"{name}@{tag}" if tag else name
+
+
+def _check_pairs(names: tuple[str, ...]) -> None:
+    """Dahl friction's level and pre-sliding stiffness come together, at the same place."""
+    pair = {DAHL: DAHL_SIGMA, DAHL_SIGMA: DAHL}
+    for name in names:
+        base, tag = split_place(name)
+        if base in pair and _placed(pair[base], tag) not in names:
+            raise InvalidParameterError(
+                f"term {name!r} needs {_placed(pair[base], tag)!r}: Dahl friction's level and pre-sliding "
+                "stiffness are given together"
+            )
+
+
+#: Dahl friction's parameters at each place, in the order of the core's constraints.
+_DAHL_NAMES = (DAHL, DAHL_SIGMA, _placed(DAHL, PLACE_X), _placed(DAHL_SIGMA, PLACE_X))
 
 
 def _value(terms: tuple[str, ...], shared: FloatArray, name: str) -> float:
@@ -134,6 +158,9 @@ def _check_shared(terms: tuple[str, ...], shared: FloatArray) -> None:
     rho = _value(terms, shared, SERIES_DASHPOT)
     if rho < 0.0:
         raise InvalidParameterError(f"series_dashpot rho = {rho} must be >= 0")
+    for name in _DAHL_NAMES:
+        if _value(terms, shared, name) < 0.0:
+            raise InvalidParameterError(f"{name} = {_value(terms, shared, name)} must be >= 0")
     delta = _value(terms, shared, ASYMMETRY)
     if ASYMMETRY in terms and abs(delta) >= shared[0] + shared[1]:
         raise InvalidParameterError(
@@ -288,9 +315,24 @@ def augmented_output(
     jac_shared[:, :3] = hj[:, :3]
     jac_own = np.column_stack([amplitude * hj[:, 3], hj[:, 4]])
     on_x = _on_x_regressors(amplitude * gain, frequency, 2.0 * np.pi * np.arange(p) / p - phase)
+    dahl = {
+        tag: dahl_loop(
+            a, psi0, _value(names, sh, _placed(DAHL, tag)), _value(names, sh, _placed(DAHL_SIGMA, tag)), p
+        )
+        for tag, a, psi0 in (("", amplitude, grid_phase), (PLACE_X, amplitude * gain, -phase))
+        if _placed(DAHL, tag) in names
+    }
     for t, name in enumerate(names):
         base, tag = split_place(name)
-        if tag == PLACE_X:
+        if base == DAHL:
+            fd, d_fc, _, d_a, d_psi = dahl[tag]
+            f = f + fd
+            jac_shared[:, 3 + t] = d_fc
+            if tag == PLACE_X:
+                jac_own = jac_own + np.column_stack([amplitude * d_a, -d_psi])
+        elif base == DAHL_SIGMA:
+            jac_shared[:, 3 + t] = dahl[tag][2]
+        elif tag == PLACE_X:
             v, dv_da, dv_dphi = on_x[base]
             f = f + sh[3 + t] * v
             jac_shared[:, 3 + t] = v
@@ -361,7 +403,7 @@ class _Problem(NamedTuple):
             ok = ok and 0.0 <= par[self.col(PINCHING)] <= PINCHING_MAX
         if SERIES_DASHPOT in self.names:
             ok = ok and par[self.col(SERIES_DASHPOT)] >= 0.0
-        return ok
+        return ok and all(par[self.col(n)] >= 0.0 for n in _DAHL_NAMES if n in self.names)
 
     def evaluate(self, par: FloatArray) -> tuple[float, tuple[list[FloatArray], FloatArray, FloatArray]]:
         """``(cost, (outputs, J'WJ, J'Wr))`` at ``par``."""
@@ -410,6 +452,11 @@ class _Problem(NamedTuple):
                 cons.append((f"{name}=0", e, 0.0))
                 if upper is not None:
                     cons.append((f"{name}=upper", -e, -upper))
+        for name in _DAHL_NAMES:
+            if name in self.names:
+                e = np.zeros(par.size)
+                e[self.col(name)] = 1.0
+                cons.append((f"{name}=0", e, 0.0))
         return cons
 
     def project(self, trial: FloatArray) -> None:
@@ -423,6 +470,9 @@ class _Problem(NamedTuple):
             trial[self.col(PINCHING)] = min(max(trial[self.col(PINCHING)], 0.0), PINCHING_MAX)
         if SERIES_DASHPOT in self.names:
             trial[self.col(SERIES_DASHPOT)] = max(trial[self.col(SERIES_DASHPOT)], 0.0)
+        for name in _DAHL_NAMES:
+            if name in self.names:
+                trial[self.col(name)] = max(trial[self.col(name)], 0.0)
 
 
 def _check_refine(

@@ -21,6 +21,8 @@ __all__ = [
     "STIFFNESS_DEGRADATION",
     "PINCHING",
     "SERIES_DASHPOT",
+    "DAHL",
+    "DAHL_SIGMA",
     "PINCHING_CENTRE",
     "PINCHING_WIDTH",
     "PINCHING_MAX",
@@ -48,6 +50,9 @@ STIFFNESS_DEGRADATION = "stiffness_degradation"
 PINCHING = "pinching"
 #: Spencer's series dashpot: the element driven by its own travel, ``ddot = xdot - rho w``.
 SERIES_DASHPOT = "series_dashpot"
+#: Dahl friction (``rust/dahl.rs``): its level Fc and its pre-sliding stiffness sigma, given together.
+DAHL = "dahl"
+DAHL_SIGMA = "dahl_sigma"
 #: Pinching's fixed shape, fractions of the saturation level w_u: the band's centre q and width zeta2.
 PINCHING_CENTRE = 0.1
 PINCHING_WIDTH = 0.2
@@ -72,6 +77,8 @@ STEADY_TERM_NAMES: tuple[str, ...] = (
     PINCHING,
     DISTORTION,
     SERIES_DASHPOT,
+    DAHL,
+    DAHL_SIGMA,
 )
 #: Keys of the simulation's ``terms`` mapping: the code names, plus the Coulomb smoothing.
 SIMULATION_KEYS: tuple[str, ...] = (
@@ -94,7 +101,7 @@ SIMULATION_KEYS: tuple[str, ...] = (
 #: ``"<code name>@x"`` (``rust/terms.rs``, ``Place::X``).
 PLACE_X = "x"
 #: The terms that can act on x: the mechanical ones.
-ON_X_TERMS: tuple[str, ...] = (STIFFNESS, VISCOUS, INERTIA, COULOMB)
+ON_X_TERMS: tuple[str, ...] = (STIFFNESS, VISCOUS, INERTIA, COULOMB, DAHL, DAHL_SIGMA)
 
 
 def split_place(name: str) -> tuple[str, str]:
