@@ -23,14 +23,14 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any, Optional
 
 import numpy as np
 
 from ..augmented import AugExperiment, AugFit, augmented_output
 from ..errors import BoucWenIdError, BudgetExceededError
-from .fitting import Scale, physical
+from .fitting import Scale, fit_from, physical
 from .result import TERM_LABELS, term_symbol_unit
 from .select import BOUNDARY_TERMS, MATERIAL_SHARE, Step, dof_of
 
@@ -131,6 +131,16 @@ class _Profile:
         c = self.q.T @ r
         return max(raw - float(c @ c), 0.0), raw
 
+    def exact(self, term: str, v: float) -> float:
+        """The unabsorbed size without linearising: the plain model refitted (from the base) to the noise-free
+        output of the base plus the term at ``v``; NaN when the fit fails."""
+        par = self.base.params.with_term(term, v)
+        ys = [
+            np.asarray(augmented_output(e, par, i, substeps=self.substeps)) for i, e in enumerate(self.exps)
+        ]
+        f = fit_from([replace(e, ybar=y) for e, y in zip(self.exps, ys)], self.base.params, self.substeps)
+        return f.cost if f is not None else math.nan
+
 
 #: Doublings of the search for the value whose unabsorbed trace reaches the target, and the log-log
 #: interpolations that refine it within its factor-2 bracket (a few per cent).
@@ -186,6 +196,33 @@ def _solve(profile: _Profile, term: str, guess: float, targets: Sequence[float])
     return out, absorbed
 
 
+def _refined(profile: _Profile, term: str, v1: float, targets: Sequence[float]) -> tuple[float, float]:
+    """The linearised limit corrected by two refits (:meth:`_Profile.exact`): the plain model absorbs more
+    than its Jacobian says where its parameters move far (a sensor lag through a steep phase of G). The
+    unabsorbed size is taken as a power of the value between the two refits (its exponent from the
+    linearised profile at first); both limits are read from it."""
+    t50, t90 = targets
+    if not math.isfinite(v1):
+        return math.inf, math.inf
+    try:
+        k = math.log(profile(term, 2.0 * v1)[0] / profile(term, v1)[0]) / math.log(2.0)
+        l1 = profile.exact(term, v1)
+        if not (math.isfinite(k) and k > 0 and math.isfinite(l1) and l1 > 0):
+            raise ValueError(term)
+        v2 = v1 * (t50 / l1) ** (1.0 / k)
+        l2 = profile.exact(term, v2)
+        if math.isfinite(l2) and l2 > 0 and abs(math.log(v2 / v1)) > 1e-3:
+            k = max(math.log(l2 / l1) / math.log(v2 / v1), 0.25)
+        else:
+            v2, l2 = v1, l1
+    except BudgetExceededError:
+        raise
+    except (BoucWenIdError, ValueError, FloatingPointError, ZeroDivisionError):
+        return v1, v1 * (t90 / t50) ** 0.5  # the linearised limit, 90 % from a linear trace
+    v50 = v2 * (t50 / l2) ** (1.0 / k)
+    return v50, v50 * (t90 / t50) ** (1.0 / k)
+
+
 def detection_limits(
     exps: Sequence[AugExperiment],
     base: AugFit,
@@ -221,6 +258,7 @@ def detection_limits(
         se_scaled = fit.standard_error(tr.term) if fit is not None else math.nan
         guess = z_c * se_scaled if math.isfinite(se_scaled) and se_scaled > 0 else 1e-3
         (lim, lim90), absorbed = _solve(profile, tr.term, guess, targets)
+        lim, lim90 = _refined(profile, tr.term, lim, targets)
         factor = abs(s.factor(tr.term, base.params.mu))
         note = "" if math.isfinite(lim) else "not detectable within the term's admissible range"
         out.append(

@@ -849,9 +849,8 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
     )
     # The structural candidate (feedback, not a cascade), tried only when the cascade fails (structure.py).
     setup.report("testing the feedback structure", 0, 1)
-    d = with_structure(
-        _with_limits(d, fsx, start, steps, s, substeps, setup), setup.alpha, setup.held_out_test
-    )
+    d = _with_limits(d, fsx, start, steps, s, substeps, setup)  # detection limits (limits.py)
+    d = with_structure(d, setup.alpha, setup.held_out_test)
     setup.report("done", 1, 1)  # the last stage, after the structural candidate (progress tests hold it)
     return d
 
