@@ -36,6 +36,8 @@ from .select import BOUNDARY_TERMS, MATERIAL_SHARE, Step, dof_of
 
 #: Normal quantile of the power of :attr:`DetectionLimit.limit_90`.
 Z_90 = 1.2815515655446004
+#: Share of a term's raw trace absorbed by the plain model above which its limit says so.
+ABSORBED_SAID = 0.95
 #: Detection limits named in the verdict (the rest are in the JSON and the detailed report).
 VERDICT_LIMITS = 4
 
@@ -69,7 +71,11 @@ class DetectionLimit:
     def __str__(self) -> str:
         if not math.isfinite(self.limit):
             return f"{self.label}: no detection limit ({self.note})"
-        ab = f" ({100 * self.absorbed:.0f} % absorbed by the plain model)" if self.absorbed >= 0.5 else ""
+        ab = (
+            f" ({100 * self.absorbed:.3g} % absorbed by the plain model)"
+            if self.absorbed >= ABSORBED_SAID
+            else ""
+        )
         return f"{self.label} |{self.symbol}| < {self.limit:.2g} {self.unit}".rstrip() + ab
 
     def to_dict(self) -> dict[str, Any]:
