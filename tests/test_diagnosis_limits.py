@@ -18,6 +18,7 @@ import bouc_wen_id as bw
 import numpy as np
 import pytest
 from bouc_wen_id.diagnosis.limits import most_relevant
+from bouc_wen_id.diagnosis.report import html_page
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benches"))
 #: The bench's generator, a script beside the package (not an installed module).
@@ -67,6 +68,8 @@ def test_to_dict_and_json_carry_the_limits(null: Any) -> None:
         assert got[lim.term]["limit_90"] == pytest.approx(lim.limit_90)
         assert got[lim.term]["unit"] == lim.unit
     assert "detection limits" in null.summary()
+    page = html_page(null, {})
+    assert "Detection limits" in page and all(lim.label in page for lim in null.limits)
 
 
 def test_an_adequate_verdict_names_what_it_could_not_have_seen(null: Any) -> None:
