@@ -71,11 +71,8 @@ class DetectionLimit:
     def __str__(self) -> str:
         if not math.isfinite(self.limit):
             return f"{self.label}: no detection limit ({self.note})"
-        ab = (
-            f" ({100 * self.absorbed:.3g} % absorbed by the plain model)"
-            if self.absorbed >= ABSORBED_SAID
-            else ""
-        )
+        pct = "> 99.9" if self.absorbed >= 0.999 else f"{100 * self.absorbed:.3g}"
+        ab = f" ({pct} % absorbed by the plain model)" if self.absorbed >= ABSORBED_SAID else ""
         return f"{self.label} |{self.symbol}| < {self.limit:.2g} {self.unit}".rstrip() + ab
 
     def to_dict(self) -> dict[str, Any]:
