@@ -26,8 +26,9 @@ defensively from the named term's JSON: a ``place`` key, else the registry's ``a
 named term that is not the hidden one, nor its listed alternative), "unexplained", bad: "explained" while
 the final model fails its adequacy test, the held-out NRMSE of the chosen model over the true structure's
 (median; where the truth is a fittable library term, at its place: ``viscous`` on x is ``viscous@x``),
-seconds per diagnosis, and the achieved size. Targets beside each row; "meets" says whether the row's
-measurable targets hold.
+seconds per diagnosis, the achieved size, and "<lim": the share of cases whose true value is below the
+diagnosis's own detection limit for the true term at its place (docs/diagnosis.md, "Detection limits").
+Targets beside each row; "meets" says whether the row's measurable targets hold.
 
 Degradation is a library term fitted in drift space (design.md 10.6): its held-out ratio is that of the
 block-resolved deviations from the mean period.
@@ -260,6 +261,17 @@ def _score(d: Any, kind: str, truth: Optional[str], place: str) -> dict[str, Any
     }
 
 
+def _below_limit(d: Any, truth: Optional[str], place: str, value: float) -> Optional[bool]:
+    """Whether the true value lies below the diagnosis's own detection limit (50 % power) for the true term
+    at its place (diagnosis/limits.py; in the generator's units, which are the library's for a sensor lag
+    and viscous damping: benches/detection_limits.py prints the ratio); None when not reported."""
+    kind = true_kind(truth, place) if truth else None
+    lim = next((x.limit for x in getattr(d, "limits", ()) if x.term == kind), None)
+    if lim is None or not math.isfinite(value):
+        return None
+    return bool(abs(value) < lim)
+
+
 def run_new_case(
     job: tuple[str, Optional[str], str, float, int], cache: Optional[Path] = None
 ) -> dict[str, Any]:
@@ -300,6 +312,7 @@ def run_new_case(
     truth = (lib[name].base_kind if name in lib else name) if skind in ("library", "structure") else None
     placed = name in gen.MECHANICAL or name in lib
     row.update(_score(d, skind, truth, place if placed else ""))
+    row["below_limit"] = _below_limit(d, truth, place if placed else "", case.value)
     if skind == "structure":  # the achieved size: the cascade's RMS misfit in averaged-noise sd
         n = sum(e.ybar.size for e in d.experiments)
         row["achieved"] = math.sqrt(max(d.plain.cost - d.plain.dof, 0.0) / n)
@@ -401,6 +414,8 @@ def summarise(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
             "ho_ratio": med("ratio"),
             "seconds": med("seconds"),
             "achieved": med("achieved"),
+            # Share of the cases whose true value is below the diagnosis's own detection limit.
+            "below_lim": _mean([r["below_limit"] for r in ok if r.get("below_limit") is not None]),
         }
         text, checks = _target(kind, size)
         if kind == "library" and size >= 10 and math.isfinite(line["ho_ratio"]):
@@ -417,10 +432,14 @@ def summarise(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
     return out
 
 
+def _mean(v: list[Any]) -> float:
+    return float(np.mean(v)) if v else math.nan
+
+
 def print_table(lines: list[dict[str, Any]], null_label: str = "null (plain, low-amp settling)") -> None:
     head = (
         f"{'case':<34} {'n':>3} {'detect':>6} {'name':>5} {'+place':>6} {'wrong':>5} {'unexpl':>6} "
-        f"{'bad':>4} {'HO':>6} {'s/diag':>6} {'size':>5} {'err':>3} {'meets':>5}  target"
+        f"{'bad':>4} {'HO':>6} {'s/diag':>6} {'size':>5} {'<lim':>5} {'err':>3} {'meets':>5}  target"
     )
     print(head)
     print("-" * len(head))
@@ -434,7 +453,8 @@ def print_table(lines: list[dict[str, Any]], null_label: str = "null (plain, low
         print(
             f"{label:<34} {ln['n']:>3} {ln['detect']:6.2f} {ln['right']:5.2f} {ln['right_place']:6.2f} "
             f"{ln['wrong']:5.2f} {ln['unexplained']:6.2f} {ln['bad']:4.2f} {ln['ho_ratio']:6.3f} "
-            f"{ln['seconds']:6.2f} {ln['achieved']:5.1f} {ln['errors']:>3} "
+            f"{ln['seconds']:6.2f} {ln['achieved']:5.1f} {ln.get('below_lim', math.nan):5.2f} "
+            f"{ln['errors']:>3} "
             f"{'yes' if ln['meets'] else 'NO':>5}  "
             f"{ln['target']}"
         )

@@ -256,6 +256,7 @@ def html_page(
             b64 = base64.b64encode(images[name]).decode("ascii")
             parts.append(f"<h3>{title}</h3><img alt='{name}' src='data:image/png;base64,{b64}'>")
     parts += _selection_html(d)
+    parts += _limits_html(d)  # detection limits (diagnosis/limits.py)
     parts += [f"<p>{html.escape(note)}</p>" for note in d.notes]
     parts += _experiments_html(d)
     parts.append("</body></html>")
@@ -367,6 +368,37 @@ def _terms_html(d: Diagnosis) -> list[str]:
             f"To separate them: {html.escape(a.separating_experiment)}.</p>"
         )
     return parts
+
+
+def _limits_html(d: Diagnosis) -> list[str]:
+    """Every first-step candidate's detection limit: what the design could not have seen."""
+    if not d.limits:
+        return []
+    rows = [
+        [
+            lim.label,
+            lim.symbol,
+            _g(lim.limit),
+            _g(lim.limit_90),
+            lim.unit,
+            _g(100 * lim.absorbed, ".3g"),
+            lim.note,
+        ]
+        for lim in d.limits
+    ]
+    head = [
+        "term",
+        "symbol",
+        "limit (50 % power)",
+        "90 % power",
+        "unit",
+        "absorbed by the plain model (%)",
+        "",
+    ]
+    return [
+        "<h2>Detection limits</h2><p>The value of each candidate the experiments detect with 50 % and 90 % "
+        "power at its test's level; below it, a term is not excluded.</p>" + _table(rows, head)
+    ]
 
 
 def _held_out_html(d: Diagnosis) -> list[str]:

@@ -141,6 +141,9 @@ class Diagnosis:
     #: when the cascade's final model is adequate or explained. When named, ``final``, ``final_fit`` and
     #: ``held_out`` are the feedback model's and ``named`` is empty (a structure, not a term).
     structure: Any = field(default=None, repr=False)
+    #: Detection limits (diagnosis/limits.py): per candidate term and place of the first selection step,
+    #: the smallest value the design detects (50 % power at the step's level); () when no step ran.
+    limits: tuple[Any, ...] = ()
 
     @property
     def named_terms(self) -> tuple[str, ...]:
@@ -195,6 +198,10 @@ class Diagnosis:
                 "feedback structure: "
                 + ", ".join(f"{k} = {v:.4g} ± {se:.2g}" for k, v, se in self.structure.parameters)
             )
+        if self.limits:  # detection limits (diagnosis/limits.py)
+            lines.append("")
+            lines.append("detection limits (first step: the value detected with 50 % / 90 % power):")
+            lines += [f"  {lim}; 90 %: {lim.limit_90:.2g}" for lim in self.limits]
         if self.held_out is not None:
             lines.append("")
             lines.append("held-out NRMSE (one experiment left out, physics fitted on the others):")
@@ -232,6 +239,7 @@ class Diagnosis:
             Degradation.kind: None if self.degradation is None else self.degradation.to_dict(),
             "notes": list(self.notes),
             "structure": None if self.structure is None else self.structure.to_dict(),
+            "detection_limits": [lim.to_dict() for lim in self.limits],
         }
 
     def to_json(self, indent: int = 2) -> str:

@@ -42,6 +42,7 @@ from .fitting import (
     scaled,
     substeps_for,
 )
+from .limits import detection_limits, verdict_text
 from .locate import Localisation, adequacy_p, locate
 from .progress import Progress, ProgressCallback, reporter
 from .result import Diagnosis, ModelSummary, NamedTerm, Status, term_symbol_unit
@@ -851,9 +852,26 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
     )
     # The structural candidate (feedback, not a cascade), tried only when the cascade fails (structure.py).
     setup.report("testing the feedback structure", 0, 1)
+    d = _with_limits(d, fsx, start, steps, s, substeps, setup)  # detection limits (limits.py)
     d = with_structure(d, setup.alpha, setup.held_out_test)
     setup.report("done", 1, 1)  # the last stage, after the structural candidate (progress tests hold it)
     return d
+
+
+def _with_limits(
+    d: Diagnosis,
+    sx: Sequence[AugExperiment],
+    base: AugFit,
+    steps: Sequence[Step],
+    s: Scale,
+    substeps: int,
+    setup: _Setup,
+) -> Diagnosis:
+    """``d`` with each first-step candidate's detection limit (diagnosis/limits.py); an "adequate" verdict
+    names the few closest to detection ("not excluded below: ...")."""
+    lims = detection_limits(sx, base, steps, s, setup.units, setup.alpha, substeps)
+    tail = verdict_text(lims) if d.status == "adequate" else ""
+    return replace(d, limits=lims, verdict=d.verdict + tail)
 
 
 def _settings(setup: _Setup, s: Scale, substeps: int) -> dict[str, Any]:

@@ -1,0 +1,293 @@
+"""What the experiments could not have seen: a detection limit per candidate term and place.
+
+When the diagnosis names nothing for a term, the user needs the size below which the design would not have
+named it. Each candidate of the first selection step (fitted from the plain model's start) has a standard
+error ``se`` of its parameter, with every Bouc-Wen parameter and each experiment's own (|G|, phi) profiled
+out (the Fisher matrix's inverse). Its F-test at that step (select.py) rejects when the improvement
+``Delta C ~ (v / se)^2`` exceeds ``z_c^2 s2``: ``s2 = C_{M+t} / dof`` the test's own residual scale, and
+``z_c`` the normal quantile of the level the step really runs at (``alpha`` or ``alpha / 2`` on the
+targeted step, Bonferroni over its candidates, one-sided for a term confined to ``>= 0`` whose p is halved,
+two-sided otherwise). The step also requires the term to explain :data:`~.select.MATERIAL_SHARE` of the
+excess, so the threshold on ``Delta C`` is the larger of the two. The value detected with probability P is
+
+    ``limit_P = se sqrt(s2) (sqrt(threshold / s2) + z_P)``
+
+(``z_0.5 = 0``: :attr:`DetectionLimit.limit` at 50 % power, :attr:`DetectionLimit.limit_90` at 90 %). It is
+the F-test's limit: naming also needs the held-out and the law tests, which a true term passes in most
+cases (docs/diagnosis.md, "Detection limits", has the calibration by simulation). ``absorbed`` is the share
+of the term's trace the plain model's own parameters take up (``1 - 1 / (F_tt cov_tt)``): a sensor lag is a
+delay in G, which each experiment's free phase absorbs.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
+from typing import Any, Optional
+
+import numpy as np
+
+from ..augmented import AugExperiment, AugFit, augmented_output
+from ..errors import BoucWenIdError, BudgetExceededError
+from .fitting import Scale, fit_from, physical
+from .result import TERM_LABELS, term_symbol_unit
+from .select import BOUNDARY_TERMS, MATERIAL_SHARE, Step, dof_of
+
+#: Normal quantile of the power of :attr:`DetectionLimit.limit_90`.
+Z_90 = 1.2815515655446004
+#: Share of a term's raw trace absorbed by the plain model above which its limit says so.
+ABSORBED_SAID = 0.95
+#: Detection limits named in the verdict (the rest are in the JSON and the detailed report).
+VERDICT_LIMITS = 4
+
+
+@dataclass(frozen=True)
+class DetectionLimit:
+    """The smallest value of one candidate term (at its place) the design detects at the test's level."""
+
+    term: str
+    symbol: str
+    unit: str
+    #: Value at 50 % power (physical units; the sign of the term's physical range; inf: not detectable).
+    limit: float
+    #: Value at 90 % power.
+    limit_90: float
+    #: The candidate's fitted value and standard error at the first step (physical units).
+    value: float
+    standard_error: float
+    #: The level of the term's own F-test (the step's level over its candidates), and one- or two-sided.
+    level: float
+    one_sided: bool
+    #: Share of the term's trace absorbed by the plain model's parameters (0-1; NaN when unknown).
+    absorbed: float
+    #: Why the limit is infinite or undefined ("" when finite).
+    note: str = ""
+
+    @property
+    def label(self) -> str:
+        return TERM_LABELS.get(self.term, self.term)
+
+    def __str__(self) -> str:
+        if not math.isfinite(self.limit):
+            return f"{self.label}: no detection limit ({self.note})"
+        pct = "> 99.9" if self.absorbed >= 0.999 else f"{100 * self.absorbed:.3g}"
+        ab = f" ({pct} % absorbed by the plain model)" if self.absorbed >= ABSORBED_SAID else ""
+        return f"{self.label} |{self.symbol}| < {self.limit:.2g} {self.unit}".rstrip() + ab
+
+    def to_dict(self) -> dict[str, Any]:
+        def n(v: float) -> Optional[float]:
+            return v if math.isfinite(v) else None
+
+        return {
+            "term": self.term,
+            "label": self.label,
+            "symbol": self.symbol,
+            "unit": self.unit,
+            "limit": n(self.limit),
+            "limit_90": n(self.limit_90),
+            "power": 0.5,
+            "value": n(self.value),
+            "standard_error": n(self.standard_error),
+            "level": self.level,
+            "one_sided": self.one_sided,
+            "absorbed": n(self.absorbed),
+            "note": self.note,
+        }
+
+
+class _Profile:
+    """The part of a term's trace the plain model cannot absorb, linearised at the plain fit: ``lam(v)`` is
+    the weighted squared residual of (the plain model plus the term at ``v``) minus the plain model, after
+    projecting out the plain model's own Jacobian (Bouc-Wen parameters and each experiment's |G|, phi).
+    Exact to first order in the plain parameters' moves; the term's own nonlinearity is kept (a sensor lag
+    is a delay in G to first order, absorbed by the phase: what remains grows as tau^2)."""
+
+    def __init__(self, exps: Sequence[AugExperiment], base: AugFit, substeps: int) -> None:
+        m = len(exps)
+        self.exps, self.base, self.substeps = exps, base, substeps
+        blocks, self.y0, self.sw = [], [], []
+        for i, e in enumerate(exps):
+            out = augmented_output(e, base.params, i, substeps=substeps, jacobian=True)
+            x = np.zeros((e.ybar.size, out.jacobian.shape[1] + 2 * m))
+            x[:, : out.jacobian.shape[1]] = out.jacobian
+            x[:, out.jacobian.shape[1] + 2 * i : out.jacobian.shape[1] + 2 * i + 2] = out.own_jacobian
+            sw = math.sqrt(e.weight)
+            blocks.append(sw * x)
+            self.y0.append(np.asarray(out.y))
+            self.sw.append(sw)
+        xa = np.vstack(blocks)
+        xa = xa / (np.linalg.norm(xa, axis=0) + 1e-300)
+        u, sv, _ = np.linalg.svd(xa, full_matrices=False)
+        self.q = u[:, sv > 1e-10 * sv[0]]
+
+    def __call__(self, term: str, v: float) -> tuple[float, float]:
+        """``(lam, raw)``: the unabsorbed and the raw squared size of the term at scaled value ``v``."""
+        par = self.base.params.with_term(term, v)
+        r = np.concatenate(
+            [
+                sw * (np.asarray(augmented_output(e, par, i, substeps=self.substeps)) - y0)
+                for i, (e, y0, sw) in enumerate(zip(self.exps, self.y0, self.sw))
+            ]
+        )
+        raw = float(r @ r)
+        c = self.q.T @ r
+        return max(raw - float(c @ c), 0.0), raw
+
+    def exact(self, term: str, v: float) -> float:
+        """The unabsorbed size without linearising: the plain model refitted (from the base) to the noise-free
+        output of the base plus the term at ``v``; NaN when the fit fails."""
+        par = self.base.params.with_term(term, v)
+        ys = [
+            np.asarray(augmented_output(e, par, i, substeps=self.substeps)) for i, e in enumerate(self.exps)
+        ]
+        f = fit_from([replace(e, ybar=y) for e, y in zip(self.exps, ys)], self.base.params, self.substeps)
+        return f.cost if f is not None else math.nan
+
+
+#: Doublings of the search for the value whose unabsorbed trace reaches the target, and the log-log
+#: interpolations that refine it within its factor-2 bracket (a few per cent).
+EXPAND_MAX = 60
+REFINE = 3
+
+
+def _solve(profile: _Profile, term: str, guess: float, targets: Sequence[float]) -> tuple[list[float], float]:
+    """Scaled values where ``lam`` reaches each target (inf: not within the term's admissible range), and
+    the share of the raw trace absorbed at the first."""
+    seen: dict[float, float] = {}
+
+    def lam(v: float) -> float:
+        if v not in seen:
+            try:
+                seen[v] = profile(term, v)[0]
+            except BudgetExceededError:
+                raise
+            except (BoucWenIdError, ValueError, FloatingPointError):
+                seen[v] = math.nan
+        return seen[v]
+
+    v = guess
+    for _ in range(EXPAND_MAX):  # down until below the smaller target, then up until above the larger
+        if not (lam(v) >= min(targets)):
+            break
+        v /= 2.0
+    for _ in range(EXPAND_MAX):
+        if not math.isfinite(lam(v)) or lam(v) >= max(targets):
+            break
+        v *= 2.0
+    out: list[float] = []
+    for t in targets:
+        above = [x for x, y in seen.items() if math.isfinite(y) and y >= t]
+        below = [x for x, y in seen.items() if math.isfinite(y) and 0 < y < t]
+        if not above or not below:
+            out.append(math.inf)
+            continue
+        a, b = max(x for x in below if x < min(above)), min(above)
+        for _ in range(REFINE):
+            la, lb = math.log(lam(a)), math.log(lam(b))
+            w = (math.log(t) - la) / (lb - la) if lb > la else 0.5
+            mid = math.exp(math.log(a) + min(max(w, 0.05), 0.95) * (math.log(b) - math.log(a)))
+            if lam(mid) < t:
+                a = mid
+            else:
+                b = mid
+        out.append(b if abs(lam(b) - t) < abs(lam(a) - t) else a)
+    absorbed = math.nan
+    if math.isfinite(out[0]):
+        lam0, raw = profile(term, out[0])
+        absorbed = 1.0 - lam0 / raw if raw > 0 else math.nan
+    return out, absorbed
+
+
+def _refined(profile: _Profile, term: str, v1: float, targets: Sequence[float]) -> tuple[float, float]:
+    """The linearised limit corrected by two refits (:meth:`_Profile.exact`): the plain model absorbs more
+    than its Jacobian says where its parameters move far (a sensor lag through a steep phase of G). The
+    unabsorbed size is taken as a power of the value between the two refits (its exponent from the
+    linearised profile at first); both limits are read from it."""
+    t50, t90 = targets
+    if not math.isfinite(v1):
+        return math.inf, math.inf
+    try:
+        k = math.log(profile(term, 2.0 * v1)[0] / profile(term, v1)[0]) / math.log(2.0)
+        l1 = profile.exact(term, v1)
+        if not (math.isfinite(k) and k > 0 and math.isfinite(l1) and l1 > 0):
+            raise ValueError(term)
+        v2 = v1 * (t50 / l1) ** (1.0 / k)
+        l2 = profile.exact(term, v2)
+        if math.isfinite(l2) and l2 > 0 and abs(math.log(v2 / v1)) > 1e-3:
+            k = max(math.log(l2 / l1) / math.log(v2 / v1), 0.25)
+        else:
+            v2, l2 = v1, l1
+    except BudgetExceededError:
+        raise
+    except (BoucWenIdError, ValueError, FloatingPointError, ZeroDivisionError):
+        return v1, v1 * (t90 / t50) ** 0.5  # the linearised limit, 90 % from a linear trace
+    v50 = v2 * (t50 / l2) ** (1.0 / k)
+    return v50, v50 * (t90 / t50) ** (1.0 / k)
+
+
+def detection_limits(
+    exps: Sequence[AugExperiment],
+    base: AugFit,
+    steps: Sequence[Step],
+    s: Scale,
+    units: tuple[str, str],
+    alpha: float,
+    substeps: int,
+) -> tuple[DetectionLimit, ...]:
+    """Every candidate of the first selection step with its detection limit (module docstring); empty when
+    no step ran (the plain model accepted with no targeted step). ``base``: the step's starting model."""
+    from scipy.special import ndtri  # type: ignore[import-untyped]
+
+    if not steps:
+        return ()
+    st = steps[0]
+    level = 0.5 * alpha if st.targeted else alpha
+    n = max(len(st.trials), 1)
+    excess = max(st.before_cost - st.before_dof, 0.0)
+    profile = _Profile(exps, base, substeps)
+    out = []
+    for tr in st.trials:
+        one = tr.term in BOUNDARY_TERMS
+        z_c = float(ndtri(1.0 - (level / n if one else level / (2 * n))))
+        sym, unit = term_symbol_unit(tr.term, *units)
+        fit = tr.fit
+        v, se = physical(fit, s, tr.term) if fit is not None else (math.nan, math.nan)
+        dof = dof_of(exps, fit) if fit is not None else st.before_dof - 1
+        s2 = max(fit.cost / dof, 1e-300) if fit is not None and dof > 0 else 1.0
+        share_gate = 0.0 if (st.targeted and excess <= 0) else MATERIAL_SHARE * excess
+        thr = max(z_c * z_c * s2, share_gate)
+        targets = [thr, (math.sqrt(thr) + Z_90 * math.sqrt(s2)) ** 2]
+        se_scaled = fit.standard_error(tr.term) if fit is not None else math.nan
+        guess = z_c * se_scaled if math.isfinite(se_scaled) and se_scaled > 0 else 1e-3
+        (lim, lim90), absorbed = _solve(profile, tr.term, guess, targets)
+        lim, lim90 = _refined(profile, tr.term, lim, targets)
+        factor = abs(s.factor(tr.term, base.params.mu))
+        note = "" if math.isfinite(lim) else "not detectable within the term's admissible range"
+        out.append(
+            DetectionLimit(
+                tr.term, sym, unit, lim * factor, lim90 * factor, v, se, level / n, one, absorbed, note
+            )
+        )
+    return tuple(out)
+
+
+def verdict_text(limits: Sequence[DetectionLimit], count: int = VERDICT_LIMITS) -> str:
+    """``"; not excluded below: ..."``: the ``count`` candidates closest to detection (largest F first)."""
+    if not limits:
+        return ""
+    return "; not excluded below: " + ", ".join(str(lim) for lim in most_relevant(limits, count))
+
+
+def most_relevant(limits: Sequence[DetectionLimit], count: int = VERDICT_LIMITS) -> list[DetectionLimit]:
+    """The candidates whose fitted value is largest against its own limit (closest to being detected),
+    finite limits first."""
+
+    def key(lim: DetectionLimit) -> tuple[int, float]:
+        r = abs(lim.value) / lim.limit if math.isfinite(lim.limit) and lim.limit > 0 else -1.0
+        return (0 if math.isfinite(lim.limit) else 1, -(r if math.isfinite(r) else -1.0))
+
+    return sorted(limits, key=key)[:count]
+
+
+__all__ = ["DetectionLimit", "detection_limits", "verdict_text", "most_relevant"]
