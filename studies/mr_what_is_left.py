@@ -222,8 +222,29 @@ class Level:
     substeps: int
 
 
-def prepare_level(label: str, ms: list[bw.Measurement]) -> Level:
-    d = _quiet(bw.diagnose, ms, y_unit="N", u_unit="mm")
+@dataclass
+class PlainOnly:
+    """The part of a Diagnosis the forced fits need, without running the selection (``--dahl-only``)."""
+
+    experiments: list[Any]
+    plain_fit: AugFit
+    settings: dict[str, Any]
+
+
+def prepare_level(label: str, ms: list[bw.Measurement], diagnose: bool = True) -> Level:
+    """The level's diagnosis (or only its plain fit) and its experiments as the diagnosis scaled them."""
+    d: Any
+    if diagnose:
+        d = _quiet(bw.diagnose, ms, y_unit="N", u_unit="mm")
+    else:
+        from bouc_wen_id.diagnosis.data import prepare
+        from bouc_wen_id.diagnosis.fitting import fit_plain, scale_of
+
+        exps = _quiet(prepare, ms)
+        sc = scale_of(exps)
+        sx0 = scaled(exps, sc)
+        plain = _quiet(fit_plain, exps, sx0, sc, substeps_for([e.ybar.size for e in sx0]))
+        d = PlainOnly(exps, plain, {"scale": {"y": sc.y, "u": sc.u}})
     s = Scale(**d.settings["scale"])
     sx = scaled(list(d.experiments), s)
     return Level(label, ms, d, s, sx, substeps_for([e.ybar.size for e in sx]))
@@ -585,9 +606,12 @@ def each_alone(lv: Level, fit: AugFit) -> list[float]:
 
 def run_level(lv: Level, args: argparse.Namespace) -> dict[str, Any]:
     d = lv.diagnosis
-    out: dict[str, Any] = {"verdict": d.verdict, "today": tuple(d.held_out.nrmse_after) if d.held_out else ()}
-    out["localisation"] = [localise(e, y) for e, y in zip(lv.sx, d.final_fit.outputs)]
-    out["yield"], out["yield_exps"], out["yield_slopes"] = _yield(lv)
+    out: dict[str, Any] = {}
+    if not args.dahl_only:
+        out["verdict"] = d.verdict
+        out["today"] = tuple(d.held_out.nrmse_after) if d.held_out else ()
+        out["localisation"] = [localise(e, y) for e, y in zip(lv.sx, d.final_fit.outputs)]
+        out["yield"], out["yield_exps"], out["yield_slopes"] = _yield(lv)
     sets: dict[str, Any] = {}
     fits: dict[str, AugFit] = {}
     for terms in () if args.dahl_only else SETS:
@@ -649,17 +673,19 @@ def main(argv: Optional[list[str]] = None) -> int:
     print(f"bouc_wen_id from {Path(bw.__file__).parent}; Dahl term in this build: {'dahl@x' in TERMS}")
     for lab, ms in loaded:
         tl = time.perf_counter()
-        lv = prepare_level(lab, ms)
+        lv = prepare_level(lab, ms, diagnose=not args.dahl_only)
         results[lab] = run_level(lv, args)
         results[lab]["diagnosis"] = lv.diagnosis
         print(f"{lab}: done in {time.perf_counter() - tl:.0f} s", file=sys.stderr, flush=True)
-    print_floor(floors, {k: v["today"] for k, v in results.items()}, proxy)
-    print(
-        "\n## 2. Where the final model's misfit sits (residual energy shares; zone concentration, 1 = even)"
-    )
-    for lab, r in results.items():
-        print_localisation(lab, r.pop("diagnosis"), r["localisation"])
+    diagnoses = {lab: r.pop("diagnosis") for lab, r in results.items()}
     if not args.dahl_only:
+        print_floor(floors, {k: v["today"] for k, v in results.items()}, proxy)
+        print(
+            "\n## 2. Where the final model's misfit sits (residual energy shares; zone concentration, 1 = "
+            "even)"
+        )
+        for lab, r in results.items():
+            print_localisation(lab, diagnoses[lab], r["localisation"])
         print_sets(results, SETS)
         print_common(results, COMMON)
         print_yield(results)
