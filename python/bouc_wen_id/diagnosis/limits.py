@@ -1,22 +1,22 @@
 """What the experiments could not have seen: a detection limit per candidate term and place.
 
 When the diagnosis names nothing for a term, the user needs the size below which the design would not have
-named it. Each candidate of the first selection step (fitted from the plain model's start) has a standard
-error ``se`` of its parameter, with every Bouc-Wen parameter and each experiment's own (|G|, phi) profiled
-out (the Fisher matrix's inverse). Its F-test at that step (select.py) rejects when the improvement
-``Delta C ~ (v / se)^2`` exceeds ``z_c^2 s2``: ``s2 = C_{M+t} / dof`` the test's own residual scale, and
-``z_c`` the normal quantile of the level the step really runs at (``alpha`` or ``alpha / 2`` on the
-targeted step, Bonferroni over its candidates, one-sided for a term confined to ``>= 0`` whose p is halved,
-two-sided otherwise). The step also requires the term to explain :data:`~.select.MATERIAL_SHARE` of the
-excess, so the threshold on ``Delta C`` is the larger of the two. The value detected with probability P is
-
-    ``limit_P = se sqrt(s2) (sqrt(threshold / s2) + z_P)``
-
-(``z_0.5 = 0``: :attr:`DetectionLimit.limit` at 50 % power, :attr:`DetectionLimit.limit_90` at 90 %). It is
-the F-test's limit: naming also needs the held-out and the law tests, which a true term passes in most
-cases (docs/diagnosis.md, "Detection limits", has the calibration by simulation). ``absorbed`` is the share
-of the term's trace the plain model's own parameters take up (``1 - 1 / (F_tt cov_tt)``): a sensor lag is a
-delay in G, which each experiment's free phase absorbs.
+named it. Each candidate of the first selection step is tested by an F-test (select.py) that rejects when
+its cost drop exceeds ``z_c^2 s2``: ``s2`` the test's own residual scale per dof, ``z_c`` the normal
+quantile of the level the step really runs at (``alpha`` or ``alpha / 2`` on the targeted step, Bonferroni
+over its candidates, one-sided for a term confined to ``>= 0`` whose p is halved, two-sided otherwise); the
+step also requires the term to explain :data:`~.select.MATERIAL_SHARE` of the excess, so the threshold is
+the larger of the two. The cost drop a true value ``v`` produces on noise-free data is the part of the
+term's trace the plain model cannot absorb: the trace (plain model plus the term at ``v``, minus the plain
+model), weighted, with its projection on the plain model's Jacobian (Bouc-Wen parameters, each
+experiment's |G| and phi) removed (:class:`_Profile`). :attr:`DetectionLimit.limit` is the value whose
+unabsorbed size reaches the threshold (detected with 50 % power), :attr:`DetectionLimit.limit_90` the
+one that reaches it with 90 % power. Where the plain model's parameters move far (a sensor lag, a delay in
+G that each experiment's phase absorbs beyond first order), the projection is corrected by two refits of
+the plain model (:func:`_refined`); the diagnosis asks for that only when it named nothing (the limits are
+then the finding). It is the F-test's limit: naming also needs the held-out and the law tests
+(docs/diagnosis.md, "Detection limits", has the calibration by simulation). ``absorbed`` is the share of
+the term's raw trace the plain model takes up.
 """
 
 from __future__ import annotations
@@ -63,6 +63,9 @@ class DetectionLimit:
     absorbed: float
     #: Why the limit is infinite or undefined ("" when finite).
     note: str = ""
+    #: Corrected by refits of the plain model (True), or the first-order projection alone (False: the verdict
+    #: named physics, so the limits are context, not the finding; they can read low where most is absorbed).
+    refined: bool = True
 
     @property
     def label(self) -> str:
@@ -93,6 +96,7 @@ class DetectionLimit:
             "one_sided": self.one_sided,
             "absorbed": n(self.absorbed),
             "note": self.note,
+            "refined": self.refined,
         }
 
 
@@ -234,6 +238,7 @@ def detection_limits(
     units: tuple[str, str],
     alpha: float,
     substeps: int,
+    refine: bool = True,
 ) -> tuple[DetectionLimit, ...]:
     """Every candidate of the first selection step with its detection limit (module docstring); empty when
     no step ran (the plain model accepted with no targeted step). ``base``: the step's starting model."""
@@ -261,12 +266,24 @@ def detection_limits(
         se_scaled = fit.standard_error(tr.term) if fit is not None else math.nan
         guess = z_c * se_scaled if math.isfinite(se_scaled) and se_scaled > 0 else 1e-3
         (lim, lim90), absorbed = _solve(profile, tr.term, guess, targets)
-        lim, lim90 = _refined(profile, tr.term, lim, targets)
+        if refine:
+            lim, lim90 = _refined(profile, tr.term, lim, targets)
         factor = abs(s.factor(tr.term, base.params.mu))
         note = "" if math.isfinite(lim) else "not detectable within the term's admissible range"
         out.append(
             DetectionLimit(
-                tr.term, sym, unit, lim * factor, lim90 * factor, v, se, level / n, one, absorbed, note
+                tr.term,
+                sym,
+                unit,
+                lim * factor,
+                lim90 * factor,
+                v,
+                se,
+                level / n,
+                one,
+                absorbed,
+                note,
+                refine,
             )
         )
     return tuple(out)

@@ -850,9 +850,13 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
         degradation=deg,
         notes=tuple(notes),
     )
-    # The structural candidate (feedback, not a cascade), tried only when the cascade fails (structure.py).
-    setup.report("testing the feedback structure", 0, 1)
     d = _with_limits(d, fsx, start, steps, s, substeps, setup)  # detection limits (limits.py)
+    return _with_feedback(d, setup)
+
+
+def _with_feedback(d: Diagnosis, setup: _Setup) -> Diagnosis:
+    """The structural candidate (feedback, not a cascade), tried when the cascade fails (structure.py)."""
+    setup.report("testing the feedback structure", 0, 1)
     d = with_structure(d, setup.alpha, setup.held_out_test)
     setup.report("done", 1, 1)  # the last stage, after the structural candidate (progress tests hold it)
     return d
@@ -868,8 +872,11 @@ def _with_limits(
     setup: _Setup,
 ) -> Diagnosis:
     """``d`` with each first-step candidate's detection limit (diagnosis/limits.py); an "adequate" verdict
-    names the few closest to detection ("not excluded below: ...")."""
-    lims = detection_limits(sx, base, steps, s, setup.units, setup.alpha, substeps)
+    names the few closest to detection ("not excluded below: ..."). Refined by refits of the plain model only
+    when nothing was named (adequate, unexplained): there they are the finding; beside named physics they are
+    context, and the first-order projection saves two plain fits per candidate."""
+    refine = d.status in ("adequate", "unexplained")
+    lims = detection_limits(sx, base, steps, s, setup.units, setup.alpha, substeps, refine=refine)
     tail = verdict_text(lims) if d.status == "adequate" else ""
     return replace(d, limits=lims, verdict=d.verdict + tail)
 
