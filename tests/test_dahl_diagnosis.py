@@ -114,3 +114,30 @@ def test_nested_limits_keep_their_own_names(name: str, place: str) -> None:
     d = _diagnose(name, place, 30.0, 47001)
     named = set(d.named_terms)
     assert f"{name}@{place}" in named and DAHL_X not in named, d.verdict
+
+
+def _varied(sigmas: tuple[float, ...], seed: int) -> list[AugExperiment]:
+    """Records of a Dahl element on x whose level is shared but whose pre-sliding stiffness differs by
+    experiment (no one element draws them all)."""
+    rng = np.random.default_rng(seed)
+    exps = []
+    for k, ((u, om), sg) in enumerate(zip([(1.2, 2.0), (3.0, 2.0), (1.2, 5.0), (3.0, 5.0)], sigmas)):
+        truth = AugParams(
+            0.8, 0.2, 1.6, (DAHL_X, SIGMA_X), np.array([0.05, sg]), np.array([1.0]), np.array([0.3 + 0.2 * k])
+        )
+        e0 = AugExperiment(np.zeros(64), u, om, 0.1 * k, 1.0)
+        y = augmented_output(e0, truth, 0, substeps=4)
+        exps.append(AugExperiment(y + 1e-3 * rng.standard_normal(64), u, om, 0.1 * k, 1.0 / 1e-6))
+    return exps
+
+
+def test_the_law_frees_both_parameters_of_the_element() -> None:
+    """The element claims one level AND one pre-sliding stiffness for all experiments: its law test frees
+    both per experiment, so a stiffness that moves between experiments fails it while one shared passes."""
+    _, start = _data((DAHL_X, SIGMA_X), (0.05, 0.2), seed=6)
+    same = _varied((0.2, 0.2, 0.2, 0.2), seed=6)
+    moved = _varied((0.2, 0.3, 0.2, 0.3), seed=6)  # the level's column alone: p ~ 1e-3, both: ~ 1e-34
+    p_same = S.law_test(same, fit_augmented(same, start, substeps=4), DAHL_X, 4)
+    p_moved = S.law_test(moved, fit_augmented(moved, start, substeps=4), DAHL_X, 4)
+    assert p_same > 0.01
+    assert p_moved < 1e-8

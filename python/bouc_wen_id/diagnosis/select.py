@@ -321,16 +321,21 @@ def law_test(exps: Sequence[AugExperiment], fit: AugFit, term: str, substeps: in
     m = len(exps)
     if m < 2 or term not in par.terms:
         return math.nan
-    k = 3 + par.terms.index(term)
-    nsh = 3 + len(par.terms) - 1
+    # A two-parameter element (Dahl friction: its level and its pre-sliding stiffness) claims both values
+    # for all experiments: both columns are freed per experiment, 2 (m - 1) contrasts.
+    comp = TERMS[term].companion if term in TERMS else ""
+    ks = [3 + par.terms.index(t) for t in (term, comp) if t and t in par.terms]
+    nk = len(ks)
+    nsh = 3 + len(par.terms) - nk
     xs, res = [], []
     try:
         for i, e in enumerate(exps):
             out = augmented_output(e, par, i, substeps=substeps, jacobian=True)
-            x = np.zeros((e.ybar.size, nsh + 3 * m))
-            x[:, :nsh] = np.delete(out.jacobian, k, axis=1)
+            x = np.zeros((e.ybar.size, nsh + (2 + nk) * m))
+            x[:, :nsh] = np.delete(out.jacobian, ks, axis=1)
             x[:, nsh + 2 * i : nsh + 2 * i + 2] = out.own_jacobian
-            x[:, nsh + 2 * m + i] = out.jacobian[:, k]
+            for j, k in enumerate(ks):
+                x[:, nsh + 2 * m + j * m + i] = out.jacobian[:, k]
             sw = math.sqrt(e.weight)
             xs.append(sw * x)
             res.append(sw * (e.ybar - out.y))
@@ -358,11 +363,12 @@ def law_test(exps: Sequence[AugExperiment], fit: AugFit, term: str, substeps: in
         start += n_i
     cov = bread @ meat @ bread
     # Contrasts of the m per-experiment values (each against the last), in the scaled coordinates.
-    contrast = np.zeros((m - 1, xa.shape[1]))
-    cols = nsh + 2 * m + np.arange(m)
-    for j in range(m - 1):
-        contrast[j, cols[j]] = 1.0 / scale[cols[j]]
-        contrast[j, cols[-1]] = -1.0 / scale[cols[-1]]
+    contrast = np.zeros((nk * (m - 1), xa.shape[1]))
+    for q in range(nk):
+        cols = nsh + 2 * m + q * m + np.arange(m)
+        for j in range(m - 1):
+            contrast[q * (m - 1) + j, cols[j]] = 1.0 / scale[cols[j]]
+            contrast[q * (m - 1) + j, cols[-1]] = -1.0 / scale[cols[-1]]
     d = contrast @ beta
     v = contrast @ cov @ contrast.T
     vinv = np.linalg.pinv(v, rcond=1e-12, hermitian=True)
