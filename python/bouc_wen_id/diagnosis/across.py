@@ -1,0 +1,635 @@
+"""The diagnosis across conditions: one named structure, its values free per condition (issue 18).
+
+A user who characterises a damper at several conditions (coil currents, temperatures, preloads) wants one
+model structure whose parameters move with the condition, not a separate story per condition.
+:func:`diagnose_across` takes groups of experiments, one per condition, and runs a forward selection in which
+a candidate term is added to EVERY condition at once, its value free per condition (docs/diagnosis.md,
+"Across conditions"):
+
+- each condition keeps its own plain Wiener-Bouc-Wen fit (its own beta, gamma, mu, |G|, phi) as in
+  :func:`~bouc_wen_id.diagnosis.diagnose`, and a candidate is fitted on each by the same machinery
+  (:func:`.fitting.fit_with`);
+- the candidate's combined F statistic is the sum of the per-condition numerators ``C0_k - C1_k`` over the
+  pooled denominator ``sum C1_k / sum dof_k`` (floored at the noise, as :func:`.select.f_test`), against
+  ``F(q K, sum dof_k)`` for K conditions and q added parameters, Bonferroni over the step's candidates;
+  it must explain a material share of the summed excess, keep a physical value wherever it is present,
+  hold its law (one value for a condition's experiments, :func:`.select.law_test`, Bonferroni over the
+  conditions where it is present) and lower the held-out cost summed over the conditions;
+- selection stops when no candidate passes.
+
+Per condition the result reports each term's value with its standard error (inflated by the final fit's
+``sqrt(chi2/dof)`` when above 1: a misfit elsewhere makes the noise-based one too small), whether the term
+is present there on its own evidence (its per-condition F test at ``alpha / K``; a term present only at
+some conditions is reported so, never forced everywhere), the smoothness of the values in the condition
+(the lowest polynomial degree, at most :data:`MAX_DEGREE`, that fits them within their se by a chi-square
+test; degree 0 passing: the term is shared), the final chi2/dof and the held-out NRMSE; and, when the
+per-condition diagnoses are given, their named terms and held-out NRMSE beside the joint structure's.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+import warnings
+from collections.abc import Sequence
+from dataclasses import dataclass, field, replace
+from typing import Any, Optional
+
+import numpy as np
+
+from ..augmented import AugExperiment, AugFit
+from ..errors import InvalidParameterError
+from ..terms import TERMS, Distortion
+from ..validation import real_number
+from .fitting import Scale, carry_through_g, fit_plain, fit_with, physical, scale_of, scaled, substeps_for
+from .locate import adequacy_p
+from .progress import Progress, ProgressCallback, reporter
+from .result import Diagnosis, term_symbol_unit
+from .select import ALPHA, LAW_ALPHA, MATERIAL_SHARE, FoldCache, _admissible, dof_of, held_out, law_test
+
+#: Highest polynomial degree in the condition tried by the smoothness check ("low order").
+MAX_DEGREE = 2
+
+
+@dataclass
+class _Group:
+    """One condition: its prepared experiments, scale, plain fit and current model (mutable: the model)."""
+
+    label: str
+    condition: float
+    sx: list[AugExperiment]
+    scale: Scale
+    substeps: int
+    noise_dof: int
+    plain: AugFit
+    current: AugFit
+    cache: FoldCache = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class JointTrial:
+    """One candidate added at every condition at once, with its combined tests."""
+
+    term: str
+    statistic: float
+    p_value: float
+    p_adjusted: float
+    share: float
+    #: Per condition: ``C0_k - C1_k`` and the term's own F-test p-value there (presence).
+    improvements: tuple[float, ...]
+    p_each: tuple[float, ...]
+    passed: bool
+    law_p_value: float = math.nan
+    held_out_before: float = math.nan
+    held_out_after: float = math.nan
+    fits: tuple[Optional[AugFit], ...] = field(default=(), repr=False, compare=False)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "term": self.term,
+            "F": _n(self.statistic),
+            "p_value": _n(self.p_value),
+            "p_adjusted": _n(self.p_adjusted),
+            "share_of_excess": _n(self.share),
+            "improvement_per_condition": [_n(v) for v in self.improvements],
+            "p_per_condition": [_n(v) for v in self.p_each],
+            "passed_in_sample": self.passed,
+            "law_p_value": _n(self.law_p_value),
+            "held_out_cost_before": _n(self.held_out_before),
+            "held_out_cost_after": _n(self.held_out_after),
+        }
+
+
+@dataclass(frozen=True)
+class JointStep:
+    """One step of the joint selection: every candidate's trial and the chosen term (None: stop)."""
+
+    trials: tuple[JointTrial, ...]
+    chosen: Optional[str]
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"trials": [t.to_dict() for t in self.trials], "chosen": self.chosen}
+
+
+@dataclass(frozen=True)
+class TermAcross:
+    """A named term across the conditions: its value per condition and how it moves with the condition."""
+
+    term: str
+    label: str
+    symbol: str
+    unit: str
+    values: tuple[float, ...]
+    standard_errors: tuple[float, ...]
+    #: Whether the term is needed at each condition on that condition's own evidence (F at alpha / K).
+    present: tuple[bool, ...]
+    p_present: tuple[float, ...]
+    #: chi-square p of a polynomial of degree 0, 1, ... in the condition through the values (within se).
+    smooth_p: tuple[float, ...]
+    #: The lowest degree whose p passes (None: none up to :data:`MAX_DEGREE`).
+    smooth_degree: Optional[int]
+
+    @property
+    def shared(self) -> bool:
+        """One value fits every condition within the se (degree 0 passes)."""
+        return self.smooth_degree == 0
+
+    @property
+    def everywhere(self) -> bool:
+        return all(self.present)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "term": self.term,
+            "label": self.label,
+            "symbol": self.symbol,
+            "unit": self.unit,
+            "values": [_n(v) for v in self.values],
+            "standard_errors": [_n(v) for v in self.standard_errors],
+            "present": list(self.present),
+            "p_present": [_n(v) for v in self.p_present],
+            "smooth_p": [_n(v) for v in self.smooth_p],
+            "smooth_degree": self.smooth_degree,
+            "shared": self.shared,
+        }
+
+
+@dataclass(frozen=True)
+class ConditionResult:
+    """The joint structure at one condition, beside its own diagnosis when that was given."""
+
+    label: str
+    condition: float
+    experiments: int
+    plain_chi2_dof: float
+    final_chi2_dof: float
+    final_p_value: float
+    #: Median over the held-out folds: the plain model's NRMSE and the joint structure's.
+    held_out_plain: float
+    held_out_joint: float
+    #: The per-condition diagnosis (when given): its named terms and its held-out NRMSE (median).
+    per_level_terms: Optional[tuple[str, ...]] = None
+    held_out_per_level: float = math.nan
+
+    def to_dict(self) -> dict[str, Any]:
+        out = {k: _n(v) if isinstance(v, float) else v for k, v in self.__dict__.items()}
+        out["per_level_terms"] = None if self.per_level_terms is None else list(self.per_level_terms)
+        return out
+
+
+@dataclass(frozen=True)
+class AcrossDiagnosis:
+    """The result of :func:`diagnose_across`: the verdict first, then per term and per condition."""
+
+    verdict: str
+    terms: tuple[TermAcross, ...]
+    conditions: tuple[ConditionResult, ...]
+    steps: tuple[JointStep, ...]
+    settings: dict[str, Any]
+    seconds: float
+    final_fits: tuple[AugFit, ...] = field(default=(), repr=False, compare=False)
+
+    @property
+    def named(self) -> tuple[str, ...]:
+        return tuple(t.term for t in self.terms)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "format": "bouc_wen_id.diagnosis_across",
+            "verdict": self.verdict,
+            "terms": [t.to_dict() for t in self.terms],
+            "conditions": [c.to_dict() for c in self.conditions],
+            "steps": [s.to_dict() for s in self.steps],
+            "settings": self.settings,
+            "seconds": self.seconds,
+        }
+
+    def summary(self) -> str:
+        """The verdict, a table of each term per condition and one of the conditions' fits."""
+        lines = [self.verdict, ""]
+        for t in self.terms:
+            smooth = (
+                f"degree {t.smooth_degree} in the condition" if t.smooth_degree is not None else "not smooth"
+            )
+            lines.append(f"{t.label} ({t.symbol}, {t.unit}): {smooth}; p per degree " + _ps(t.smooth_p))
+            for c, v, se, pr in zip(self.conditions, t.values, t.standard_errors, t.present):
+                lines.append(f"  {c.label}: {v:.4g} +- {se:.2g}{'' if pr else '  (not needed here)'}")
+        lines += ["", "condition | chi2/dof plain -> final | held-out NRMSE plain, joint, per-level (terms)"]
+        for c in self.conditions:
+            own = (
+                "-"
+                if c.per_level_terms is None
+                else f"{c.held_out_per_level:.3f} ({', '.join(c.per_level_terms)})"
+            )
+            lines.append(
+                f"{c.label} | {c.plain_chi2_dof:.3g} -> {c.final_chi2_dof:.3g} | {c.held_out_plain:.3f}, "
+                f"{c.held_out_joint:.3f}, {own}"
+            )
+        return "\n".join(lines)
+
+
+def _n(v: float) -> Optional[float]:
+    return v if math.isfinite(v) else None
+
+
+def _ps(ps: Sequence[float]) -> str:
+    return ", ".join(f"{d}: {p:.2g}" for d, p in enumerate(ps)) or "none (too few conditions)"
+
+
+def _median(v: Sequence[float]) -> float:
+    f = [x for x in v if math.isfinite(x)]
+    return float(np.median(f)) if f else math.nan
+
+
+# ------------------------------------------------------------------------------------------------------
+# Preparing each condition: the single-group diagnosis's own steps
+
+
+def _group(
+    items: Any, label: str, condition: float, cands: Sequence[str], own: Optional[Diagnosis]
+) -> _Group:
+    """One condition's experiments prepared, checked and plain-fitted as :func:`diagnose` does; from its own
+    diagnosis (``own``) when given (its experiments and plain fit, so nothing is fitted twice)."""
+    from .data import prepare
+    from .run import _check_experiments, _noise_floors, _settled
+
+    if (
+        own is not None
+        and own.plain_fit is not None
+        and len(own.plain_fit.params.gains) == len(own.experiments)
+    ):
+        exps = list(own.experiments)
+        s = scale_of(exps)
+        sx = scaled(exps, s)
+        substeps = substeps_for([e.ybar.size for e in sx])
+        plain: AugFit = own.plain_fit
+    else:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # the transient trim's warning is diagnose's to give
+            settled, _ = _settled(items)
+        exps, _ = _noise_floors(settled, prepare(settled))
+        _check_experiments(exps)
+        s = scale_of(exps)
+        sx = scaled(exps, s)
+        substeps = substeps_for([e.ybar.size for e in sx])
+        plain = fit_plain(exps, sx, s, substeps)
+    if Distortion.kind in cands and any(e.distorted for e in exps):
+        sx = carry_through_g(sx, plain, substeps)
+    noise_dof = sum(e.noise_dof for e in exps)
+    return _Group(label, condition, sx, s, substeps, noise_dof, plain, plain)
+
+
+# ------------------------------------------------------------------------------------------------------
+# The joint selection
+
+
+def _trial(groups: Sequence[_Group], term: str, n_cands: int, alpha: float) -> JointTrial:
+    """``term`` fitted at every condition on top of its current model, with the combined in-sample tests."""
+    from scipy.special import fdtrc  # type: ignore[import-untyped]
+
+    k = len(groups)
+    fits = [fit_with(g.sx, g.current, term, g.substeps) for g in groups]
+    if any(f is None for f in fits):  # the term cannot stand at some condition: not at every one
+        nan = (math.nan,) * k
+        return JointTrial(term, math.nan, math.nan, math.nan, math.nan, nan, nan, False, fits=tuple(fits))
+    done = [f for f in fits if f is not None]
+    q = len(done[0].params.terms) - len(groups[0].current.params.terms)  # 2 for a two-term element
+    c0 = [g.current.cost for g in groups]
+    c1 = [f.cost for f in done]
+    d1 = [dof_of(g.sx, f) for g, f in zip(groups, done)]
+    imp = [a - b for a, b in zip(c0, c1)]
+    den = max(sum(c1) / max(sum(d1), 1), 1.0)  # the pooled residual variance, never below the noise
+    stat = max(sum(imp), 0.0) / (q * k) / den
+    p = float(fdtrc(q * k, max(sum(d1), 1), stat)) if stat > 0 else 1.0
+    padj = min(1.0, p * n_cands)
+    excess = sum(max(g.current.cost - dof_of(g.sx, g.current), 0.0) for g in groups)
+    share = min(sum(imp) / excess, 1.0) if excess > 0 else 1.0
+    # Each condition's own evidence, its own denominator: is the term needed there?
+    p_each = []
+    for a, c, d in zip(imp, c1, d1):
+        f_k = max(a, 0.0) / q / max(c / max(d, 1), 1.0)
+        p_each.append(float(fdtrc(q, max(d, 1), f_k)) if f_k > 0 else 1.0)
+    present = [pk < alpha / k for pk in p_each]
+    physical = all(_admissible(f, term) for f, pr in zip(done, present) if pr)
+    ok = padj < alpha and share >= MATERIAL_SHARE and physical and any(present)
+    return JointTrial(term, stat, p, padj, share, tuple(imp), tuple(p_each), ok, fits=tuple(fits))
+
+
+def _confirmed(groups: Sequence[_Group], tr: JointTrial, alpha: float, use_held_out: bool) -> JointTrial:
+    """``tr`` with its law test (Bonferroni over the conditions where it is present) and its held-out costs
+    summed over the conditions."""
+    k = len(groups)
+    present = [pk < alpha / k for pk in tr.p_each]
+    laws = [
+        law_test(g.sx, f, tr.term, g.substeps)
+        for g, f, pr in zip(groups, tr.fits, present)
+        if pr and f is not None
+    ]
+    laws = [v for v in laws if math.isfinite(v)]
+    law_p = min(1.0, min(laws) * len(laws)) if laws else math.nan
+    out = replace(tr, law_p_value=law_p)
+    if not use_held_out or (math.isfinite(law_p) and law_p < LAW_ALPHA):
+        return out
+    before = after = 0.0
+    for g, f in zip(groups, tr.fits):
+        assert f is not None
+        ho = held_out(g.sx, g.current, f, g.substeps, g.cache)
+        if ho is not None:
+            before += sum(ho.cost_before)
+            after += sum(ho.cost_after)
+    return replace(out, held_out_before=before, held_out_after=after)
+
+
+def _accepts(tr: JointTrial, use_held_out: bool) -> bool:
+    if math.isfinite(tr.law_p_value) and tr.law_p_value < LAW_ALPHA:
+        return False
+    if not use_held_out or not math.isfinite(tr.held_out_before) or tr.held_out_before == 0.0:
+        return True
+    return tr.held_out_after < tr.held_out_before
+
+
+def _select(
+    groups: Sequence[_Group],
+    cands: Sequence[str],
+    alpha: float,
+    use_held_out: bool,
+    report: ProgressCallback,
+) -> list[JointStep]:
+    """The joint forward selection (module docstring); the groups' current models end at the final ones."""
+    steps: list[JointStep] = []
+    while True:
+        remaining = [t for t in cands if t not in groups[0].current.params.terms]
+        if not remaining:
+            break
+        trials: list[JointTrial] = []
+        for i, t in enumerate(remaining):
+            report(
+                f"across step {len(steps) + 1}: fitting candidate {t} at every condition", i, len(remaining)
+            )
+            trials.append(_trial(groups, t, len(remaining), alpha))
+        passed = sorted((tr for tr in trials if tr.passed), key=lambda tr: -sum(tr.improvements))
+        chosen: Optional[JointTrial] = None
+        final = {tr.term: tr for tr in trials}
+        for tr in passed:
+            tr2 = _confirmed(groups, tr, alpha, use_held_out)
+            final[tr.term] = tr2
+            if _accepts(tr2, use_held_out):
+                chosen = tr2
+                break
+        steps.append(JointStep(tuple(final[t.term] for t in trials), None if chosen is None else chosen.term))
+        if chosen is None:
+            break
+        for g, f in zip(groups, chosen.fits):
+            assert f is not None
+            g.current = f
+    return steps
+
+
+# ------------------------------------------------------------------------------------------------------
+# What the final structure says per term and per condition
+
+
+def smoothness(
+    conditions: Sequence[float], values: Sequence[float], ses: Sequence[float], max_degree: int = MAX_DEGREE
+) -> tuple[float, ...]:
+    """chi-square p-values of the weighted least-squares polynomials of degree 0 .. ``max_degree`` in the
+    condition through ``values`` (weights ``1 / se^2``): a degree with dof ``K - degree - 1 >= 1`` only.
+    A p above the level says the values move as that polynomial within their se."""
+    from scipy.special import chdtrc
+
+    c = np.asarray(conditions, dtype=np.float64)
+    v = np.asarray(values, dtype=np.float64)
+    s = np.asarray(ses, dtype=np.float64)
+    if not (np.all(np.isfinite(v)) and np.all(np.isfinite(s)) and np.all(s > 0)):
+        return ()
+    span = float(np.ptp(c)) or 1.0
+    z = (c - float(np.mean(c))) / span
+    out = []
+    for d in range(min(max_degree, c.size - 2) + 1):
+        a = np.vander(z, d + 1) / s[:, None]
+        coef, *_ = np.linalg.lstsq(a, v / s, rcond=None)
+        chi2 = float(np.sum((a @ coef - v / s) ** 2))
+        out.append(float(chdtrc(c.size - d - 1, chi2)))
+    return tuple(out)
+
+
+def _terms(
+    groups: Sequence[_Group], steps: Sequence[JointStep], units: tuple[str, str], alpha: float
+) -> tuple[TermAcross, ...]:
+    k = len(groups)
+    conds = [g.condition for g in groups]
+    out = []
+    for st in steps:
+        if st.chosen is None:
+            continue
+        tr = next(t for t in st.trials if t.term == st.chosen)
+        for term in groups[0].current.params.terms:
+            # The chosen term, and a two-term element's companion beside it.
+            if term != st.chosen and TERMS[st.chosen].companion != term:
+                continue
+            vals, ses = [], []
+            for g in groups:
+                v, se = physical(g.current, g.scale, term)
+                inflate = math.sqrt(max(1.0, g.current.cost / max(dof_of(g.sx, g.current), 1)))
+                vals.append(v)
+                ses.append(se * inflate)
+            ps = smoothness(conds, vals, ses)
+            degree = next((d for d, p in enumerate(ps) if p >= alpha), None)
+            sym, unit = term_symbol_unit(term, *units)
+            out.append(
+                TermAcross(
+                    term,
+                    TERMS[term].place_label(),
+                    sym,
+                    unit,
+                    tuple(vals),
+                    tuple(ses),
+                    tuple(p < alpha / k for p in tr.p_each),
+                    tr.p_each,
+                    ps,
+                    degree,
+                )
+            )
+    return tuple(out)
+
+
+def _conditions(
+    groups: Sequence[_Group], own: Sequence[Optional[Diagnosis]], use_held_out: bool
+) -> tuple[ConditionResult, ...]:
+    out = []
+    for g, d in zip(groups, own):
+        fin, pl = g.current, g.plain
+        dof0, dof1 = dof_of(g.sx, pl), dof_of(g.sx, fin)
+        ho = held_out(g.sx, pl, fin, g.substeps, g.cache) if use_held_out and fin is not pl else None
+        if ho is None and use_held_out:
+            ho = held_out(g.sx, pl, pl, g.substeps, g.cache)
+        hp = math.nan if ho is None else _median(ho.nrmse_before)
+        hj = math.nan if ho is None else _median(ho.nrmse_after)
+        terms: Optional[tuple[str, ...]] = None
+        own_ho = math.nan
+        if d is not None:
+            terms = tuple(t.term for t in d.named)
+            own_ho = _median(d.held_out.nrmse_after) if d.held_out is not None else hp
+        out.append(
+            ConditionResult(
+                g.label,
+                g.condition,
+                len(g.sx),
+                pl.cost / max(dof0, 1),
+                fin.cost / max(dof1, 1),
+                adequacy_p(fin.cost, dof1, g.noise_dof),
+                hp,
+                hj,
+                terms,
+                own_ho,
+            )
+        )
+    return tuple(out)
+
+
+def _verdict(terms: Sequence[TermAcross], conds: Sequence[ConditionResult]) -> str:
+    n = len(conds)
+    if not terms:
+        return f"across {n} conditions: nothing named (no candidate passes at every condition jointly)"
+    parts = []
+    for t in terms:
+        where = (
+            "at every condition"
+            if t.everywhere
+            else "needed only at " + ", ".join(c.label for c, p in zip(conds, t.present) if p)
+        )
+        if t.smooth_degree is None:
+            how = "its values not smooth in the condition (no polynomial up to degree "
+            how += f"{MAX_DEGREE} fits them within their se)"
+        elif t.shared:
+            how = "one value shared by the conditions"
+        else:
+            how = f"its values move with the condition as a degree-{t.smooth_degree} polynomial"
+        parts.append(f"{t.label} ({where}; {how})")
+    adequate = sum(1 for c in conds if math.isfinite(c.final_p_value) and c.final_p_value >= 0.05)
+    tail = f"; the joint structure passes its adequacy test at {adequate} of {n} conditions"
+    return f"across {n} conditions, one structure: " + "; ".join(parts) + tail
+
+
+# ------------------------------------------------------------------------------------------------------
+# The public entry point
+
+
+def _check(
+    groups: Any, condition: Any, labels: Any, per_condition: Any
+) -> tuple[list[Any], list[float], list[str]]:
+    if isinstance(groups, (str, bytes)) or not hasattr(groups, "__len__"):
+        raise InvalidParameterError("groups must be a sequence of experiment sets, one per condition")
+    gs = [g if isinstance(g, (list, tuple)) else [g] for g in groups]
+    if len(gs) < 2:
+        raise InvalidParameterError(f"diagnose_across needs at least 2 conditions, got {len(gs)}")
+    if condition is None:
+        conds = [float(i) for i in range(len(gs))]
+    else:
+        conds = [real_number("condition", c) for c in condition]
+    if len(conds) != len(gs):
+        raise InvalidParameterError(f"condition has {len(conds)} values for {len(gs)} groups")
+    if len(set(conds)) != len(conds):
+        raise InvalidParameterError(f"the condition values must be distinct, got {conds}")
+    names = [f"{c:g}" for c in conds] if labels is None else [str(x) for x in labels]
+    if len(names) != len(gs):
+        raise InvalidParameterError(f"labels has {len(names)} entries for {len(gs)} groups")
+    if per_condition is not None and len(per_condition) != len(gs):
+        raise InvalidParameterError(f"per_condition has {len(per_condition)} diagnoses for {len(gs)} groups")
+    return gs, conds, names
+
+
+def diagnose_across(
+    groups: Sequence[Any],
+    condition: Optional[Sequence[float]] = None,
+    *,
+    labels: Optional[Sequence[str]] = None,
+    candidates: Optional[Sequence[str]] = None,
+    alpha: float = ALPHA,
+    held_out_test: bool = True,
+    per_condition: Optional[Sequence[Optional[Diagnosis]]] = None,
+    y_unit: str = "",
+    u_unit: str = "",
+    progress: Progress = None,
+) -> AcrossDiagnosis:
+    """One named structure for experiments at several conditions, its values free per condition.
+
+    Parameters
+    ----------
+    groups : sequence of experiment sets
+        One set per condition (Recordings, Measurements or AveragedPeriods, as :func:`diagnose` takes).
+    condition : sequence of float, optional
+        The condition variable of each group (a coil current, a temperature); default 0, 1, 2, ...
+    labels : sequence of str, optional
+        How each condition is named in the result (default: its value).
+    candidates : sequence of str, optional
+        The steady-loop terms to try (default: every one of the single-group diagnosis's; the drift terms,
+        tested on period blocks, are not candidates here).
+    alpha : float
+        Family-wise false-alarm level of each step (Bonferroni over the candidates).
+    held_out_test : bool
+        Require the held-out cost, summed over the conditions, to improve before naming a term.
+    per_condition : sequence of Diagnosis, optional
+        Each group's own :func:`diagnose` result: compared with the joint structure, and its experiments
+        and plain fit reused (nothing fitted twice).
+    y_unit, u_unit : str
+        Units of the output and the input, for the reported values.
+    progress : bool or callable, optional
+        As :func:`diagnose`'s.
+
+    Raises
+    ------
+    InvalidParameterError
+        Fewer than two groups, conditions that do not match the groups or repeat, unknown candidates.
+    """
+    from .. import _threads
+    from .drift import DRIFT_TERMS
+    from .run import ALL_CANDIDATES, _check_candidates
+
+    t0 = time.perf_counter()
+    report = reporter(progress)
+    gs, conds, names = _check(groups, condition, labels, per_condition)
+    cands = tuple(c for c in _check_candidates(candidates) if c not in DRIFT_TERMS)
+    alpha = real_number("alpha", alpha)
+    if not 0.0 < alpha < 1.0:
+        raise InvalidParameterError(f"alpha = {alpha!r} must lie in (0, 1)")
+    own = list(per_condition) if per_condition is not None else [None] * len(gs)
+    with _threads.one_blas_thread():
+        prepared = []
+        for i, (items, c, name) in enumerate(zip(gs, conds, names)):
+            report(f"preparing condition {name}", i, len(gs))
+            prepared.append(_group(items, name, c, cands, own[i]))
+        if Distortion.kind in cands and not any(e.waveform.size for g in prepared for e in g.sx):
+            cands = tuple(c for c in cands if c != Distortion.kind)
+        steps = _select(prepared, cands, alpha, held_out_test, report)
+        report("held-out check of the joint structure", 0, 1)
+        terms = _terms(prepared, steps, (y_unit, u_unit), alpha)
+        conditions = _conditions(prepared, own, held_out_test)
+    report("done", 1, 1)
+    settings = {
+        "candidates": list(cands),
+        "all_candidates": list(ALL_CANDIDATES),
+        "alpha": alpha,
+        "held_out_test": held_out_test,
+        "condition": conds,
+    }
+    return AcrossDiagnosis(
+        _verdict(terms, conditions),
+        terms,
+        conditions,
+        tuple(steps),
+        settings,
+        time.perf_counter() - t0,
+        tuple(g.current for g in prepared),
+    )
+
+
+__all__ = [
+    "diagnose_across",
+    "AcrossDiagnosis",
+    "TermAcross",
+    "ConditionResult",
+    "JointStep",
+    "JointTrial",
+    "smoothness",
+]
