@@ -300,6 +300,104 @@ def markdown(rows: list[dict[str, Any]], timing: dict[str, float]) -> str:
     return "\n".join(lines) + "\n"
 
 
+def across_candidates(ds: list[bw.Diagnosis]) -> list[str]:
+    """The across-levels candidates: every steady term some level named (or tried as partial), at both of
+    its places. The joint selection costs about what the per-level selections cost together; the study's
+    budget (at most ~20 s beside the main run) allows the terms the levels themselves point at, not all."""
+    from bouc_wen_id.diagnosis.drift import DRIFT_TERMS
+    from bouc_wen_id.diagnosis.select import siblings
+    from bouc_wen_id.terms import DIAGNOSIS_CANDIDATES, TERMS
+
+    out: list[str] = []
+    for d in ds:
+        for t in (*d.named, *d.partial):
+            for k in (t.term, *siblings(t.term)) if t.term in TERMS else ():
+                if k not in out and k not in DRIFT_TERMS and k in DIAGNOSIS_CANDIDATES:
+                    out.append(k)
+    return out
+
+
+def across_levels(
+    loaded: list[tuple[str, str, list[bw.Measurement]]], rows: list[dict[str, Any]], quiet: bool
+) -> tuple[Any, float]:
+    """The MR damper's current levels diagnosed across (bw.diagnose_across), reusing each level's own
+    diagnosis (its prepared experiments and plain fit); (result or None, seconds)."""
+    A = _adapters()
+    mr = [(lab, ms, r) for (ds, lab, ms), r in zip(loaded, rows) if ds == "mr-damper" and "runs" in r]
+    if len(mr) < 2:
+        return None, 0.0
+    if not quiet:
+        print("-- mr-damper across current levels", file=sys.stderr)
+    own = [r["runs"]["as recorded"] for _, _, r in mr]
+    currents = [float(A.MR_CURRENTS[[f"{c:g} A" for c in A.MR_CURRENTS].index(lab)]) for lab, _, _ in mr]
+    units = mr[0][1][0].units
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        a = bw.diagnose_across(
+            [ms for _, ms, _ in mr],
+            currents,
+            labels=[lab for lab, _, _ in mr],
+            candidates=across_candidates(own),
+            per_condition=own,
+            y_unit=units.get("y", ""),
+            u_unit=units.get("u", ""),
+            progress=not quiet,
+        )
+    print(f"mr-damper across levels: {a.verdict} ({a.seconds:.1f} s)")
+    return a, a.seconds
+
+
+def across_markdown(a: Any, seconds: float) -> str:
+    """The section "Across current levels" of the page (docs/diagnosis.md, "Across conditions")."""
+    lines = [
+        "",
+        "## Across current levels",
+        "",
+        "The MR damper's five current levels diagnosed with one structure (`bw.diagnose_across`, "
+        f"{seconds:.0f} s, each level's own experiments and plain fit reused): a candidate is added at every "
+        "level at once, its value free per level, chosen by the combined F test (Bonferroni over the "
+        "candidates), the summed share and the held-out cost summed over the levels. Candidates: "
+        + ", ".join(a.settings["candidates"])
+        + " (every steady term some level's own diagnosis named or tried, at both places).",
+        "",
+        f"**{a.verdict}**",
+        "",
+    ]
+    if a.terms:
+        head = (
+            "| term | "
+            + " | ".join(c.label for c in a.conditions)
+            + " | smooth in the current (p per degree) |"
+        )
+        lines += [head, "|---" * (len(a.conditions) + 2) + "|"]
+        for t in a.terms:
+            cells = [
+                f"{v:.3g} ± {se:.2g}" + ("" if pr else " (not needed)")
+                for v, se, pr in zip(t.values, t.standard_errors, t.present)
+            ]
+            ps = ", ".join(f"{d}: {p:.2g}" for d, p in enumerate(t.smooth_p))
+            deg = "none" if t.smooth_degree is None else f"degree {t.smooth_degree}"
+            lines.append(f"| {t.label} ({t.symbol}, {t.unit}) | " + " | ".join(cells) + f" | {deg} ({ps}) |")
+        lines.append("")
+    lines += [
+        "| level | chi2/dof plain -> joint | held-out NRMSE plain | joint structure | per-level structure "
+        "(its terms) |",
+        "|---|---|---|---|---|",
+    ]
+    for c in a.conditions:
+        own = ", ".join(c.per_level_terms or ()) or "none"
+        lines.append(
+            f"| {c.label} | {c.plain_chi2_dof:.3g} -> {c.final_chi2_dof:.3g} | {c.held_out_plain:.3f} "
+            f"| {c.held_out_joint:.3f} | {c.held_out_per_level:.3f} ({own}) |"
+        )
+    lines.append(
+        "\nHeld-out NRMSE: the median over the left-out experiments (physics fitted on the others, only the "
+        "left-out one's |G| and phase refitted). Standard errors are inflated by sqrt(chi2/dof) of each "
+        "level's fit; 'not needed' marks a level whose own F test (alpha / 5) does not ask for the term."
+    )
+    return "\n".join(lines) + "\n"
+
+
 def _diagnose(items: list[Any], units: Any, progress: bool) -> bw.Diagnosis:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -342,6 +440,7 @@ def main(argv: list[str] | None = None) -> int:
         t_figs += time.perf_counter() - tf
         rows.append(_row(dataset, label, d, units.get("y", "")))
         rows[-1]["runs"] = {"as recorded": d}
+    across, t_across = across_levels(loaded, rows, quiet=args.quiet)
     wall = time.perf_counter() - t0
     t1 = time.perf_counter()
     if not args.no_stability:
@@ -367,10 +466,21 @@ def main(argv: list[str] | None = None) -> int:
     for r in rows:
         r.pop("runs", None)
     wall_stab = time.perf_counter() - t1
-    timing = {"wall": wall, "diagnoses": t_main, "figures": t_figs, "stability": wall_stab}
+    timing = {
+        "wall": wall,
+        "diagnoses": t_main,
+        "figures": t_figs,
+        "stability": wall_stab,
+        "across": t_across,
+    }
     ok = [r for r in rows if "error" not in r]
     (figs / "diagnosis.json").write_text(json.dumps(clean(rows), indent=1, allow_nan=False))
     page = markdown(ok, timing)
+    if across is not None:
+        page += across_markdown(across, t_across)
+        (figs / "diagnosis-across.json").write_text(
+            json.dumps(clean(across.to_dict()), indent=1, allow_nan=False)
+        )
     refused = [r for r in rows if "error" in r]
     if refused:
         page += (

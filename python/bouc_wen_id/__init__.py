@@ -144,3 +144,8 @@ from . import operating  # noqa: E402
 from .operating import OperatingFit, fit_operating, select_degree  # noqa: E402
 
 __all__ += ["operating", "OperatingFit", "fit_operating", "select_degree"]
+# Issue 18, the diagnosis across conditions: one named structure for experiments at several conditions (coil
+# currents, temperatures), its values free per condition, with how they move with the condition.
+from .diagnosis.across import AcrossDiagnosis, diagnose_across  # noqa: E402
+
+__all__ += ["diagnose_across", "AcrossDiagnosis"]

@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import Any, NoReturn, Optional, Union
 
 from . import _pool
+from ._cli_across import add_across_parser
 from ._cli_export import add_export_parser
 from ._cli_validate import add_validate_parser
 from .demo import DEMO_FREQUENCIES
@@ -364,6 +365,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_plan_parser(sub)
     add_validate_parser(sub)  # issue #20: bouc_wen_id._cli_validate
     add_export_parser(sub)  # issue #21: model export (_cli_export)
+    add_across_parser(sub)  # issue 18: the diagnosis across conditions (_cli_across)
     return parser
 
 

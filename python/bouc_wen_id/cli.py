@@ -23,6 +23,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from . import _output, _pool
+from ._cli_across import cmd_across
 from ._cli_export import run_export
 from ._cli_parser import build_parser, flags_named
 from ._cli_validate import cmd_validate
@@ -579,6 +580,7 @@ _COMMANDS: dict[str, Callable[[argparse.Namespace], int]] = {
     "plan": _cmd_plan,
     "validate": cmd_validate,  # issue #20: bouc_wen_id._cli_validate
     "export": run_export,  # issue #21: model export (_cli_export)
+    "diagnose-across": cmd_across,  # issue 18: the diagnosis across conditions (_cli_across)
 }
 
 

@@ -36,6 +36,7 @@ from dataclasses import dataclass, field, replace
 from typing import Any, Optional
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..augmented import AugExperiment, AugFit
 from ..errors import InvalidParameterError
@@ -45,8 +46,21 @@ from .fitting import Scale, carry_through_g, fit_plain, fit_with, physical, scal
 from .locate import adequacy_p
 from .progress import Progress, ProgressCallback, reporter
 from .result import Diagnosis, term_symbol_unit
-from .select import ALPHA, LAW_ALPHA, MATERIAL_SHARE, FoldCache, _admissible, dof_of, held_out, law_test
+from .select import (
+    ALPHA,
+    ALTERNATIVE_IMPROVEMENT,
+    LAW_ALPHA,
+    MATERIAL_SHARE,
+    FoldCache,
+    _admissible,
+    dof_of,
+    held_out,
+    law_test,
+)
 
+#: A passed candidate whose summed improvement is at least this fraction of the chosen one's is a near-tied
+#: rival (select.ALTERNATIVE_IMPROVEMENT's threshold, on the summed improvements).
+RIVAL_IMPROVEMENT = ALTERNATIVE_IMPROVEMENT
 #: Highest polynomial degree in the condition tried by the smoothness check ("low order").
 MAX_DEGREE = 2
 
@@ -106,9 +120,16 @@ class JointStep:
 
     trials: tuple[JointTrial, ...]
     chosen: Optional[str]
+    #: Candidates that passed in sample with a summed improvement of at least :data:`RIVAL_IMPROVEMENT` of
+    #: the chosen one's: near-tied readings of the same misfit (not named; the verdict lists them).
+    rivals: tuple[str, ...] = ()
 
     def to_dict(self) -> dict[str, Any]:
-        return {"trials": [t.to_dict() for t in self.trials], "chosen": self.chosen}
+        return {
+            "trials": [t.to_dict() for t in self.trials],
+            "chosen": self.chosen,
+            "rivals": list(self.rivals),
+        }
 
 
 @dataclass(frozen=True)
@@ -376,9 +397,14 @@ def _select(
             if _accepts(tr2, use_held_out):
                 chosen = tr2
                 break
-        steps.append(JointStep(tuple(final[t.term] for t in trials), None if chosen is None else chosen.term))
         if chosen is None:
+            steps.append(JointStep(tuple(final[t.term] for t in trials), None))
             break
+        best = sum(chosen.improvements)
+        rivals = tuple(
+            tr.term for tr in passed if tr is not chosen and sum(tr.improvements) >= RIVAL_IMPROVEMENT * best
+        )
+        steps.append(JointStep(tuple(final[t.term] for t in trials), chosen.term, rivals))
         for g, f in zip(groups, chosen.fits):
             assert f is not None
             g.current = f
@@ -390,7 +416,7 @@ def _select(
 
 
 def smoothness(
-    conditions: Sequence[float], values: Sequence[float], ses: Sequence[float], max_degree: int = MAX_DEGREE
+    conditions: ArrayLike, values: ArrayLike, ses: ArrayLike, max_degree: int = MAX_DEGREE
 ) -> tuple[float, ...]:
     """chi-square p-values of the weighted least-squares polynomials of degree 0 .. ``max_degree`` in the
     condition through ``values`` (weights ``1 / se^2``): a degree with dof ``K - degree - 1 >= 1`` only.
@@ -487,7 +513,9 @@ def _conditions(
     return tuple(out)
 
 
-def _verdict(terms: Sequence[TermAcross], conds: Sequence[ConditionResult]) -> str:
+def _verdict(
+    terms: Sequence[TermAcross], conds: Sequence[ConditionResult], steps: Sequence[JointStep]
+) -> str:
     n = len(conds)
     if not terms:
         return f"across {n} conditions: nothing named (no candidate passes at every condition jointly)"
@@ -508,6 +536,14 @@ def _verdict(terms: Sequence[TermAcross], conds: Sequence[ConditionResult]) -> s
         parts.append(f"{t.label} ({where}; {how})")
     adequate = sum(1 for c in conds if math.isfinite(c.final_p_value) and c.final_p_value >= 0.05)
     tail = f"; the joint structure passes its adequacy test at {adequate} of {n} conditions"
+    ties = [
+        f"{TERMS[st.chosen].place_label()} or {TERMS[r].place_label()}"
+        for st in steps
+        if st.chosen is not None
+        for r in st.rivals
+    ]
+    if ties:
+        tail += "; near-tied readings (summed improvement within 10 %): " + "; ".join(ties)
     return f"across {n} conditions, one structure: " + "; ".join(parts) + tail
 
 
@@ -614,7 +650,7 @@ def diagnose_across(
         "condition": conds,
     }
     return AcrossDiagnosis(
-        _verdict(terms, conditions),
+        _verdict(terms, conditions, steps),
         terms,
         conditions,
         tuple(steps),
