@@ -402,7 +402,9 @@ def _select(
             break
         best = sum(chosen.improvements)
         rivals = tuple(
-            tr.term for tr in passed if tr is not chosen and sum(tr.improvements) >= RIVAL_IMPROVEMENT * best
+            tr.term
+            for tr in passed
+            if tr.term != chosen.term and sum(tr.improvements) >= RIVAL_IMPROVEMENT * best
         )
         steps.append(JointStep(tuple(final[t.term] for t in trials), chosen.term, rivals))
         for g, f in zip(groups, chosen.fits):
