@@ -393,7 +393,8 @@ def across_markdown(a: Any, seconds: float) -> str:
     lines.append(
         "\nHeld-out NRMSE: the median over the left-out experiments (physics fitted on the others, only the "
         "left-out one's |G| and phase refitted). Standard errors are inflated by sqrt(chi2/dof) of each "
-        "level's fit; 'not needed' marks a level whose own F test (alpha / 5) does not ask for the term."
+        f"level's fit; 'not needed' marks a level whose own F test (alpha / {len(a.conditions)}) does not "
+        "ask for the term."
     )
     return "\n".join(lines) + "\n"
 
