@@ -6,6 +6,10 @@ its six files. Writes ``docs/real-data/diagnosis-*.png`` (loops and residual ove
 final), ``docs/real-data/diagnosis.json`` and ``docs/real-data-diagnosis.md`` (the findings, generated:
 every number in it comes from this run).
 
+Across current levels: the MR damper's levels are also diagnosed with ONE structure (``bw.diagnose_across``:
+each candidate added at every level at once, its value free per level; the levels' own diagnoses reused),
+written as the page's section "Across current levels" and ``docs/real-data/diagnosis-across.json``.
+
 Stability: every group is diagnosed again under preprocessing variants (:data:`VARIANTS`: the steady stretch
 without its last or first third, half the harmonics kept in the averaged period); a term named in every
 variant is a finding, one that comes and goes is listed as an alternative (``--no-stability`` skips them).
