@@ -73,8 +73,19 @@ IWAN = ("iwan",)
 #: The Iwan loop's yield travels (fractions of the plant's smallest latent level) and weights (sum 1).
 IWAN_YIELDS = (0.08, 0.16, 0.3, 0.5, 0.8)
 IWAN_WEIGHTS = (0.3, 0.25, 0.2, 0.15, 0.1)
+#: Outside physics of the Dahl element's family, appended after the Iwan rows (issue 18: do not tune to one
+#: generator): Dahl's own loop with his brittle exponent 2 on x (the library's element is exponent 1), and a
+#: Prandtl-Ishlinskii operator on u with a continuous, uniform density of yield travels (PI_STOPS stops by
+#: the midpoint rule, all updated at once in NumPy), a loop of spread stops made another way than the Iwan's.
+FAMILY = ("dahl_n2", "pi_u")
+#: The PI operator's yield travels: a uniform density over these fractions of the smallest input amplitude.
+PI_RANGE = (0.05, 0.9)
+PI_STOPS = 64
+#: Dahl's exponent per generator effect: the library row's is the library's law (exponent 1), solved
+#: exactly along each sample step (not the library's closed-form steady loop).
+DAHL_EXPONENT = {"dahl": 1.0, "dahl_n2": 2.0}
 #: Effects whose contribution is linear in their parameter (sized in one shot).
-LINEAR = (*MECHANICAL, "offset", "dahl", "iwan")
+LINEAR = (*MECHANICAL, "offset", "dahl", "iwan", *FAMILY)
 COULOMB_EPS = 0.01  # tanh smoothing as a fraction of the peak velocity
 MAX_INCREMENT = 0.05  # largest path increment of one RK4 step of the hysteresis (x ~ 1)
 
@@ -381,19 +392,31 @@ def _parallel(
             "coulomb": np.tanh(sig1 / (COULOMB_EPS * vmax)),
         }[name]
         return val[..., None] * sig[None]
-    if name == "dahl":  # dF/dxi = sigma (1 - s F)^2 along travel xi in direction s: solved exactly per step
+    if name in DAHL_EXPONENT:  # dF/dxi = sigma (1 - s F)^n along travel xi in direction s: exact per step
         sigma = 1.0 / (0.2 * float(p.levels.min()))
+        n = DAHL_EXPONENT[name]
         if _jit is not None:
-            return val[..., None] * _jit.dahl(np.ascontiguousarray(x), sigma)[None]
+            return val[..., None] * _jit.dahl(np.ascontiguousarray(x), sigma, n)[None]
         fd = np.zeros(x.shape[0])
         out = np.zeros(x.shape)
         for j in range(1, x.shape[1]):
             dx = x[:, j] - x[:, j - 1]
             sgn = np.sign(dx)
             g0 = np.clip(1.0 - sgn * fd, 0.0, 2.0)
-            g1 = g0 / (1.0 + sigma * np.abs(dx) * g0)
+            g1 = g0 * np.exp(-sigma * np.abs(dx)) if n == 1.0 else g0 / (1.0 + sigma * np.abs(dx) * g0)
             fd = np.where(sgn != 0.0, sgn * (1.0 - g1), fd)
             out[:, j] = fd
+        return val[..., None] * out[None]
+    if name == "pi_u":  # a Prandtl-Ishlinskii operator on u: every stop clipped at once, exact per step
+        t = np.stack([g[0][::2] for g in grids])
+        u = p.amplitudes[:, None] * np.cos(p.omegas[:, None] * t)
+        lo, hi = PI_RANGE
+        yields = (lo + (hi - lo) * (np.arange(PI_STOPS) + 0.5) / PI_STOPS) * float(p.amplitudes.min())
+        z = np.zeros((u.shape[0], PI_STOPS))
+        out = np.zeros(u.shape)
+        for j in range(1, u.shape[1]):
+            z = np.clip(z + (u[:, j] - u[:, j - 1])[:, None] / yields[None, :], -1.0, 1.0)
+            out[:, j] = z.mean(axis=1)
         return val[..., None] * out[None]
     if name == "iwan":  # stops z_k = clip(z_k + dx / r_k, -1, 1): exact along each monotone sample step
         yields = np.asarray(IWAN_YIELDS) * float(p.levels.min())
@@ -724,8 +747,8 @@ def _iwan_loop(x: FloatArray, yields: FloatArray, weights: FloatArray) -> FloatA
     return out
 
 
-def _dahl_loop(x: FloatArray, sigma: float) -> FloatArray:
-    """The Dahl loop of ``_parallel`` element by element (experiments x grid)."""
+def _dahl_loop(x: FloatArray, sigma: float, n: float) -> FloatArray:
+    """The Dahl loop of ``_parallel`` element by element (experiments x grid), exponent ``n`` (1 or 2)."""
     out = np.zeros(x.shape)
     for i in range(x.shape[0]):
         fd = 0.0
@@ -733,7 +756,7 @@ def _dahl_loop(x: FloatArray, sigma: float) -> FloatArray:
             dx = x[i, j] - x[i, j - 1]
             sgn = 1.0 if dx > 0.0 else (-1.0 if dx < 0.0 else 0.0)
             g0 = min(max(1.0 - sgn * fd, 0.0), 2.0)
-            g1 = g0 / (1.0 + sigma * abs(dx) * g0)
+            g1 = g0 * math.exp(-sigma * abs(dx)) if n == 1.0 else g0 / (1.0 + sigma * abs(dx) * g0)
             if sgn != 0.0:
                 fd = sgn * (1.0 - g1)
             out[i, j] = fd

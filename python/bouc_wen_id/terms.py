@@ -809,11 +809,11 @@ class Dahl(Term):
 
     @classmethod
     def start_pairs(cls, context: StartContext) -> tuple[tuple[float, float], ...]:
-        # The loop's top F_top = Fc tanh(r) at twice the residual's RMS, at r = sigma A / Fc in START_SHAPES.
+        # Top Fc tanh(r) at 2 (1 + r/2) residual RMS (r in START_SHAPES): plain Bouc-Wen absorbs a sharp loop.
         amps = context.latent_amplitudes if cls.acts_on == Place.X else context.input_amplitudes
         amp = float(sorted(amps)[len(amps) // 2]) if amps else 1.0
         rms = context.residual_rms if context.residual_rms > 0 else 0.1  # nan: not given
-        fcs = [2.0 * rms / math.tanh(r) for r in cls.START_SHAPES]
+        fcs = [2.0 * rms * (1.0 + 0.5 * r) / math.tanh(r) for r in cls.START_SHAPES]
         return tuple((fc, r * fc / max(amp, 1e-300)) for fc, r in zip(fcs, cls.START_SHAPES))
 
 

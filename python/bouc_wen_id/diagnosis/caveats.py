@@ -58,3 +58,24 @@ def alternatives_text(alternatives: Sequence[Alternative], named: Sequence[Named
         f"; the experiments cannot tell apart: {what} (alternatives, each with the experiment that would "
         "separate them)"
     )
+
+
+#: The words that mark the family caveat in a verdict (the bench reads them: benches/diagnosis.py).
+FAMILY_MARK = "a Dahl-like friction loop"
+
+
+def family_text(named: Sequence[NamedTerm]) -> str:
+    """The verdict's word when Dahl friction is named: what it stands for and what the data could not
+    exclude (issue 18: a name users can trust blind). Empty when no Dahl element is named."""
+    dahl = [t for t in named if t.term in TERMS and TERMS[t.term].companion]
+    if not dahl:
+        return ""
+    where = " or ".join(TERMS[t.term].place_label() for t in dahl)
+    return (
+        f"; {where} names {FAMILY_MARK} (a smooth parallel loop that turns after each reversal and "
+        "saturates): its branch shape passed its test, but a distribution of stops (Iwan, "
+        "Prandtl-Ishlinskii, Masing) or another Dahl exponent fits such loops too; what separates them is "
+        "the branch over a wider range of travel: experiments at several amplitudes from well below the "
+        "turning travel to 3x it (Dahl approaches its level exponentially, stops reach theirs at a finite "
+        "travel)"
+    )

@@ -17,7 +17,7 @@ from ..errors import InvalidParameterError, TransientWarning
 from ..estimators import boundary_note
 from ..terms import DIAGNOSIS_CANDIDATES, TERMS, Distortion, physical_value
 from ..validation import real_number
-from .caveats import alternatives_text, below_saturation
+from .caveats import alternatives_text, below_saturation, family_text
 from .data import DiagExperiment, colour_notes, prepare
 from .drift import (
     DEGRADATION,
@@ -826,7 +826,7 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
     )
     verdict += _law_text(steps)
     alternatives = tuple(a for st in steps for a in st.alternatives) + _drift_alternatives(deg, named_deg)
-    verdict += alternatives_text(alternatives, named)
+    verdict += alternatives_text(alternatives, named) + family_text(named)
     setup.report("held-out check of the final model", 0, 1)
     ho = held_out(fsx, start, final, substeps, cache) if final.params.terms else None
     d = Diagnosis(
@@ -981,5 +981,6 @@ def _law_text(steps: Sequence[Step]) -> str:
     what = ", ".join(f"{TERMS[t].place_label()} (p = {p:.2g})" for t, p in failed.items())
     return (
         f"; not named: {what}: each fits part of the misfit, but with a value that differs between "
-        "experiments (its law, one value for all, fails): it stands in for physics outside the library"
+        "experiments (its law, one value for all, fails; for Dahl friction, or a branch shape not its "
+        "own): it stands in for physics outside the library"
     )
