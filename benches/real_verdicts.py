@@ -1,4 +1,4 @@
-"""Dump the real-data diagnosis of every group of ``studies/diagnose_real.py`` (main run, as recorded) to JSON:
+"""Dump the real-data diagnosis of every group of ``studies/diagnose_real.py`` (main run) to JSON:
 the full ``Diagnosis.to_dict()`` of each group plus its seconds, so that a speed change can be checked
 verdict-neutral (``--compare before.json``: statuses, named terms and places, alternatives exact; values to a
 relative tolerance). Same inputs as the study (its ``groups`` and ``_diagnose``, imported, not copied).
@@ -29,22 +29,6 @@ def _study() -> Any:
     sys.modules["diagnose_real"] = mod
     spec.loader.exec_module(mod)
     return mod
-
-
-def _digest(d: dict[str, Any]) -> dict[str, Any]:
-    """What must match exactly: status, named/partial terms with places, alternatives, limits' terms."""
-
-    def terms(key: str) -> list[Any]:
-        return [(t.get("term"), t.get("place")) for t in d.get(key, [])]
-
-    return {
-        "status": d.get("status"),
-        "named": terms("named"),
-        "partial": terms("partial"),
-        "alternatives": json.dumps(d.get("alternatives"), sort_keys=True, default=str)
-        if False
-        else [sorted(a.keys()) for a in d.get("alternatives", [])],
-    }
 
 
 def _numbers(v: Any, path: str = "") -> dict[str, float]:

@@ -38,6 +38,7 @@ from numpy.typing import NDArray
 
 from ..augmented import AugExperiment, AugFit, AugParams, augmented_output
 from ..terms import TERMS, Asymmetry, Degradation, Play, StiffnessDegradation
+from . import speed
 from .data import DiagExperiment
 from .select import f_test
 
@@ -513,7 +514,8 @@ def corrected(
         phi = float(np.mod(par.phases[i], TWO_PI))
         amp = float(a.amplitude * par.gains[i])
         plan = (om, lead, n, p, max(substeps, SIM_SUBSTEPS))
-        outs = [_mean_period(hysteresis, terms, amp, phi, plan, term, dv) for dv in (max(d, 0.0), 0.0)]
+        sim = _mean_period if speed.CACHE_DRIFT_LOOPS else _mean_period.__wrapped__
+        outs = [sim(hysteresis, terms, amp, phi, plan, term, dv) for dv in (max(d, 0.0), 0.0)]
         shift = outs[0] - outs[1]
         de[i] = replace(e, ybar=e.ybar - shift * y_scale)
         ds[i] = replace(a, ybar=np.ascontiguousarray(a.ybar - shift))

@@ -43,6 +43,7 @@ from numpy.typing import NDArray
 from ..augmented import AugExperiment, AugFit, augmented_output
 from ..errors import BudgetExceededError
 from ..terms import TERMS, Stiffness, physical_value
+from . import speed
 from .fitting import best_of, fit_from, fit_own, fit_with, subset
 
 FloatArray = NDArray[np.float64]
@@ -557,6 +558,8 @@ def memo_fit_with(exps: Sequence[AugExperiment], substeps: int) -> Callable[[Aug
     fitted: dict[tuple[int, str], tuple[AugFit, Optional[AugFit]]] = {}
 
     def fit_term(base: AugFit, t: str) -> Optional[AugFit]:
+        if not speed.MEMO_FITS:
+            return fit_with(exps, base, t, substeps)
         if (id(base), t) not in fitted:
             fitted[(id(base), t)] = (base, fit_with(exps, base, t, substeps))
         return fitted[(id(base), t)][1]
