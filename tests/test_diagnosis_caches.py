@@ -88,3 +88,18 @@ def test_memo_of_fit_with_equals_fit_with_and_keys_by_model() -> None:
     assert c is not None and d is not None and c is not a
     assert c.cost == d.cost and np.array_equal(c.params.values, d.params.values)
     assert memo(plain, "offset") is not a
+
+
+def test_limits_profile_evaluates_each_value_once_and_returns_the_fresh_sizes() -> None:
+    from bouc_wen_id.diagnosis.limits import _Profile
+
+    _, sx, plain, substeps = _case(58)
+    profile = _Profile(sx, plain, substeps)
+    rng = np.random.default_rng(58)
+    vs = [float(v) for v in rng.uniform(0.01, 0.3, 3)]
+    first = [profile("viscous", v) for v in vs]
+    assert len(profile.seen) == len(vs)
+    assert [profile("viscous", v) for v in vs] == first and len(profile.seen) == len(vs)
+    assert first == [profile._sizes("viscous", v) for v in vs]  # what an uncached evaluation gives
+    assert len({f[1] for f in first}) == len(vs)  # each value its own size
+    assert profile("stiffness", vs[0]) == profile._sizes("stiffness", vs[0]) != first[0]  # keyed by term too
