@@ -1,5 +1,6 @@
 """The diagnosis's speed (issue 18 item 4): seconds per MR damper current level and per 10-experiment
-simulated diagnosis, before and after the speed switches of ``bouc_wen_id.diagnosis.speed``, in one run.
+simulated diagnosis (and the wire rope's, full mode), before and after the speed switches of
+``bouc_wen_id.diagnosis.speed``, in one run.
 
 Each case is diagnosed twice in the same process, alternating: "before" with every switch of
 :mod:`bouc_wen_id.diagnosis.speed` off (the code as it was), "after" with them on; wall seconds
@@ -15,8 +16,8 @@ effect). Run it WITHOUT ``OPENBLAS_NUM_THREADS`` / ``OMP_NUM_THREADS`` set (as a
 with them set, the BLAS switch has nothing to change.
 
 Usage: ``python benches/diagnosis_speed.py [--quick] [--data DIR] [--json out.json]``; ``--quick`` (the
-0 A level and one simulated case, about a minute on 2 idle cores) or the full set (five levels, three
-simulated cases). Progress on stderr.
+0 A level and one simulated case, about a minute on 2 idle cores) or the full set (five levels, the wire
+rope, three simulated cases). Progress on stderr.
 """
 
 from __future__ import annotations
@@ -72,6 +73,15 @@ def mr_cases(data: Path, adapters: Any, levels: list[float]) -> list[tuple[str, 
     return out
 
 
+def wire_rope_case(data: Path, adapters: Any) -> list[tuple[str, Callable[[], Any]]]:
+    """The wire-rope isolator's files, as ``studies/diagnose_real.py`` loads them (its slowest group)."""
+    folder = data / adapters.DATASETS["wire-rope"]
+    if not folder.is_dir():
+        return []
+    ms = [adapters.load_wire_rope(folder / f) for f in adapters.WIRE_ROPE_FILES]
+    return [("wire rope, all files", partial(list, ms))]
+
+
 def _recordings(*case: Any) -> Any:
     import generator as gen
 
@@ -95,10 +105,12 @@ def timed(items: Any, fast: bool) -> tuple[float, float, dict[str, Any]]:
     """(wall s, CPU s, verdict) of one diagnosis, the speed switches on (``fast``) or off."""
     import bouc_wen_id as bw
     from bouc_wen_id.diagnosis import speed
+    from bouc_wen_id.diagnosis.drift import _mean_period
 
     switches = [k for k in vars(speed) if k.isupper()]  # every switch of diagnosis/speed.py
     for k in switches:
         setattr(speed, k, fast)
+    _mean_period.cache_clear()  # no hits from an earlier diagnosis of the same case (the warm-up)
     try:
         t0, c0 = time.perf_counter(), time.process_time()
         with warnings.catch_warnings():
@@ -121,7 +133,9 @@ def main(argv: Optional[list[str]] = None) -> int:
         print(f"note: {', '.join(chosen)} set: the BLAS switch has nothing to change", file=sys.stderr)
     A = _adapters()
     levels = [0.0] if args.quick else list(A.MR_CURRENTS)
-    cases = simulated_cases(1 if args.quick else 3) + mr_cases(_data_dir(args.data, A), A, levels)
+    data = _data_dir(args.data, A)
+    cases = simulated_cases(1 if args.quick else 3) + mr_cases(data, A, levels)
+    cases += [] if args.quick else wire_rope_case(data, A)
     load0 = os.getloadavg()[0]
     rows: list[dict[str, Any]] = []
     for label, make in cases:

@@ -30,6 +30,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
+from functools import lru_cache
 from typing import Any, Optional
 
 import numpy as np
@@ -37,6 +38,7 @@ from numpy.typing import NDArray
 
 from ..augmented import AugExperiment, AugFit, AugParams, augmented_output
 from ..terms import TERMS, Asymmetry, Degradation, Play, StiffnessDegradation
+from . import speed
 from .data import DiagExperiment
 from .select import f_test
 
@@ -498,18 +500,10 @@ def corrected(
     recorded periods; its difference from the same simulation at ``d = 0`` is taken off the data.
     Experiments of unknown age (no record) are left as they are.
     """
-    from ..model import BoucWen, SinePlan, TransferFunction, WienerPlant
-    from ..simulation import simulate
-    from ..terms import term_from_dict
-
     de, ds = list(exps), list(sx)
     par = fit.params
-    hysteresis = BoucWen(par.beta, par.gamma, par.mu)
-    terms = tuple(
-        term_from_dict({"kind": t, TERMS[t].symbol: float(v)})
-        for t, v in zip(par.terms, par.values)
-        if t in _HYSTERESIS_TERMS
-    )
+    hysteresis = (float(par.beta), float(par.gamma), float(par.mu))
+    terms = tuple((t, float(v)) for t, v in zip(par.terms, par.values) if t in _HYSTERESIS_TERMS)
     for i, (e, a) in enumerate(zip(exps, sx)):
         if e.blocks < 2 or not math.isfinite(e.lead_periods):
             continue
@@ -519,24 +513,9 @@ def corrected(
         om = a.frequency  # rad/s
         phi = float(np.mod(par.phases[i], TWO_PI))
         amp = float(a.amplitude * par.gains[i])
-        # The fitted latent x = A cos(omega t - phi): a pure gain A and a delay phi / omega on a unit sine.
-        linear = TransferFunction([amp], [1.0], phi / om)
-        plan = SinePlan(
-            [om],
-            [1.0],
-            settle_periods=lead,
-            periods=n,
-            samples_per_period=p,
-            substeps=max(substeps, SIM_SUBSTEPS),
-            noise_sd=0.0,
-        )
-        outs = []
-        for dv in (max(d, 0.0), 0.0):
-            drift = term_from_dict({"kind": term, TERMS[term].symbol: dv})
-            plant = WienerPlant(linear, hysteresis, terms=(*terms, drift))
-            (rec,) = simulate(plant, plan)
-            assert rec.w is not None
-            outs.append(np.asarray(rec.w)[lead * p :].reshape(n, p).mean(axis=0))
+        plan = (om, lead, n, p, max(substeps, SIM_SUBSTEPS))
+        sim = _mean_period if speed.CACHE_DRIFT_LOOPS else _mean_period.__wrapped__
+        outs = [sim(hysteresis, terms, amp, phi, plan, term, dv) for dv in (max(d, 0.0), 0.0)]
         shift = outs[0] - outs[1]
         de[i] = replace(e, ybar=e.ybar - shift * y_scale)
         ds[i] = replace(a, ybar=np.ascontiguousarray(a.ybar - shift))
@@ -545,6 +524,40 @@ def corrected(
 
 #: RK4 steps per sample, at least, of the record's simulation in :func:`corrected`.
 SIM_SUBSTEPS = 4
+
+
+@lru_cache(maxsize=64)
+def _mean_period(
+    hysteresis: tuple[float, float, float],
+    terms: tuple[tuple[str, float], ...],
+    amp: float,
+    phi: float,
+    plan: tuple[float, int, int, int, int],
+    term: str,
+    dv: float,
+) -> FloatArray:
+    """The recorded periods' mean of the fitted hysteresis (``(beta, gamma, mu)`` and ``terms``) at drift
+    ``term = dv``, driven by ``x = amp cos(omega t - phi)`` from rest; ``plan`` is ``(omega, settle periods,
+    periods, samples per period, substeps)``. Cached on these values (every input of the simulation, so a
+    hit is the same simulation): :func:`corrected`'s d = 0 loop is the same at every d the refinement
+    tries (docs/diagnosis-speed.md). Read-only."""
+    from ..model import BoucWen, SinePlan, TransferFunction, WienerPlant
+    from ..simulation import simulate
+    from ..terms import term_from_dict
+
+    om, lead, n, p, sub = plan
+    # The fitted latent x = A cos(omega t - phi): a pure gain A and a delay phi / omega on a unit sine.
+    linear = TransferFunction([amp], [1.0], phi / om)
+    sine = SinePlan(
+        [om], [1.0], settle_periods=lead, periods=n, samples_per_period=p, substeps=sub, noise_sd=0.0
+    )
+    own = tuple(term_from_dict({"kind": t, TERMS[t].symbol: v}) for t, v in terms)
+    drift = term_from_dict({"kind": term, TERMS[term].symbol: dv})
+    (rec,) = simulate(WienerPlant(linear, BoucWen(*hysteresis), terms=(*own, drift)), sine)
+    assert rec.w is not None
+    out: FloatArray = np.asarray(rec.w, dtype=np.float64)[lead * p :].reshape(n, p).mean(axis=0)
+    out.setflags(write=False)
+    return out
 
 
 def detrended(exps: Sequence[DiagExperiment], test: DegradationTest, y_scale: float) -> list[DiagExperiment]:

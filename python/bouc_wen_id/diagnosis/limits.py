@@ -110,6 +110,7 @@ class _Profile:
     def __init__(self, exps: Sequence[AugExperiment], base: AugFit, substeps: int) -> None:
         m = len(exps)
         self.exps, self.base, self.substeps = exps, base, substeps
+        self.seen: dict[tuple[str, float], tuple[float, float]] = {}
         blocks, self.y0, self.sw = [], [], []
         for i, e in enumerate(exps):
             out = augmented_output(e, base.params, i, substeps=substeps, jacobian=True)
@@ -126,7 +127,13 @@ class _Profile:
         self.q = u[:, sv > 1e-10 * sv[0]]
 
     def __call__(self, term: str, v: float) -> tuple[float, float]:
-        """``(lam, raw)``: the unabsorbed and the raw squared size of the term at scaled value ``v``."""
+        """``(lam, raw)``: the unabsorbed and the raw squared size of the term at scaled value ``v``; each
+        (term, v) evaluated once (the search, its refinement and the absorbed share ask for the same)."""
+        if (term, v) not in self.seen:
+            self.seen[(term, v)] = self._sizes(term, v)
+        return self.seen[(term, v)]
+
+    def _sizes(self, term: str, v: float) -> tuple[float, float]:
         par = self.base.params.with_term(term, v)
         r = np.concatenate(
             [

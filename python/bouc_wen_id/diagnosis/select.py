@@ -33,7 +33,7 @@ with the held-out test as usual. Nothing named there: the plain model is adequat
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 from typing import Any, Optional
 
@@ -43,6 +43,7 @@ from numpy.typing import NDArray
 from ..augmented import AugExperiment, AugFit, augmented_output
 from ..errors import BudgetExceededError
 from ..terms import TERMS, Stiffness, physical_value
+from . import speed
 from .fitting import best_of, fit_from, fit_own, fit_with, subset
 from .shape import LAW_WINDOW, shape_test, spectral_meat
 
@@ -492,6 +493,7 @@ def place_alternatives(
     trials: Sequence[Trial],
     substeps: int,
     law_failed: Sequence[str] = (),
+    fit_term: Optional[Callable[[AugFit, str], Optional[AugFit]]] = None,
 ) -> list[Alternative]:
     """The chosen term at its other places, where the data cannot tell the places apart.
 
@@ -520,7 +522,7 @@ def place_alternatives(
         )
         if math.isfinite(law_p) and law_p < LAW_ALPHA:  # a value that differs between experiments
             continue
-        both = fit_with(exps, chosen.fit, rival, substeps)
+        both = fit_term(chosen.fit, rival) if fit_term else fit_with(exps, chosen.fit, rival, substeps)
         rho = _correlation(both, chosen.term, rival) if both is not None else math.nan
         out.append(Alternative(chosen.term, rival, rho, _place_separation(exps, chosen.fit, chosen.term)))
     return out
@@ -550,6 +552,22 @@ def simpler_first(exps: Sequence[AugExperiment], order: list[Trial], alpha: floa
     return [simpler[0], *(tr for tr in order if tr is not simpler[0])]
 
 
+def memo_fit_with(exps: Sequence[AugExperiment], substeps: int) -> Callable[[AugFit, str], Optional[AugFit]]:
+    """``fit_with(exps, base, term, substeps)`` computed once per (model, term): within one selection an
+    alternative's two-term fit is the next step's trial of that term from the chosen model (the same
+    inputs, so the same fit). Keyed by the model object, which the memo keeps alive."""
+    fitted: dict[tuple[int, str], tuple[AugFit, Optional[AugFit]]] = {}
+
+    def fit_term(base: AugFit, t: str) -> Optional[AugFit]:
+        if not speed.MEMO_FITS:
+            return fit_with(exps, base, t, substeps)
+        if (id(base), t) not in fitted:
+            fitted[(id(base), t)] = (base, fit_with(exps, base, t, substeps))
+        return fitted[(id(base), t)][1]
+
+    return fit_term
+
+
 def forward_select(
     exps: Sequence[AugExperiment],
     plain: AugFit,
@@ -569,6 +587,7 @@ def forward_select(
     ``on_trial(step, term, index, count)``, when given, is called before each candidate's fit (progress).
     """
     memo: FoldCache = {} if cache is None else cache
+    fit_term = memo_fit_with(exps, substeps)
     current, steps, first = plain, list[Step](), targeted
     while first or not adequate(current):
         level = 0.5 * alpha if first else alpha
@@ -582,7 +601,7 @@ def forward_select(
         for k, t in enumerate(remaining):
             if on_trial is not None:  # progress: on_trial(step, term, index, count)
                 on_trial(len(steps) + 1, t, k, len(remaining))
-            f = fit_with(exps, current, t, substeps)
+            f = fit_term(current, t)
             if f is None:
                 trials.append(Trial(t, math.nan, math.nan, math.nan, math.nan, math.nan, math.nan, False))
                 continue
@@ -616,7 +635,7 @@ def forward_select(
         alternatives: list[Alternative] = []
         if chosen is not None and chosen.fit is not None:
             # The chosen physics at its other places first, with the experiment that separates places.
-            alternatives += place_alternatives(exps, chosen, trials, substeps, law_failed)
+            alternatives += place_alternatives(exps, chosen, trials, substeps, law_failed, fit_term)
             for tr in order:
                 if tr.term == chosen.term or tr.fit is None or tr.term in siblings(chosen.term):
                     continue
@@ -625,7 +644,7 @@ def forward_select(
                 tied = _tied(chosen, tr, dof_of(exps, chosen.fit))
                 if tr.improvement < ALTERNATIVE_IMPROVEMENT * chosen.improvement and not tied:
                     continue
-                both = fit_with(exps, chosen.fit, tr.term, substeps)
+                both = fit_term(chosen.fit, tr.term)
                 rho = _correlation(both, chosen.term, tr.term) if both is not None else math.nan
                 if tied or (math.isfinite(rho) and abs(rho) >= ALTERNATIVE_CORRELATION):
                     alternatives.append(

@@ -17,3 +17,11 @@ ONE_BLAS_THREAD = True
 #: Screen the phases of a linear phase-screened term (dry friction on x) at every level from one loop per
 #: phase offset (:func:`bouc_wen_id.diagnosis.fitting.screen_phases_linear`) instead of one per level.
 SCREEN_ONCE = True
+
+#: Cache the drift correction's simulated mean periods on their inputs (:func:`bouc_wen_id.diagnosis.drift.
+#: _mean_period`): the degradation refinement re-simulated the d = 0 loop, the same at every d it tries.
+CACHE_DRIFT_LOOPS = True
+
+#: Fit each (model, candidate term) once per forward selection (:func:`bouc_wen_id.diagnosis.select.
+#: memo_fit_with`): an alternative's two-term fit is the next step's trial of that term.
+MEMO_FITS = True
