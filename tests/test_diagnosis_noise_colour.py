@@ -238,3 +238,37 @@ def test_noise_correlated_across_periods_is_no_unexplained_structure(seed: int) 
     assert d.status == "adequate", d.summary()
     assert d.named_terms == ()
     assert any("correlated across periods" in n for n in d.notes), d.notes
+
+
+def _block_chi2(phi: float, seed: int, per_harmonic: bool) -> float:
+    """The drift test's chi-square of the block deviations over its degrees of freedom (drift.drift_data's
+    weights), for a loop with AR(1) output noise and no drift."""
+    from bouc_wen_id.diagnosis.data import prepare
+    from bouc_wen_id.diagnosis.drift import _inner, harmonic_weights, whole_blocks
+
+    rng = np.random.default_rng([seed, 9])
+    n = 20 * P
+    t = np.arange(n) * 2 * math.pi / P
+    y = np.tanh(2.0 * np.cos(t - 0.3)) + 0.05 * _ar1(rng, n, phi)
+    (e,) = prepare(bw.Recording(t, np.cos(t), y, 1.0, 1.0, settle_periods=4))
+    keep = whole_blocks(e)
+    k = e.block_coef.shape[1] - 1
+    w = e.block_samples[keep] / e.noise_var
+    c = e.block_coef[keep]
+    dev = c - (w[:, None] * c).sum(axis=0) / w.sum()
+    hw = harmonic_weights(e, k) if per_harmonic else None
+    return float(np.dot(w, _inner(dev, dev, hw))) / ((keep.size - 1) * (2 * k + 1))
+
+
+@pytest.mark.parametrize("phi", [0.8, 0.99])
+def test_the_drift_test_weighs_each_harmonic_by_its_own_noise(phi: float) -> None:
+    """Weighed with one level (the largest, at the DC) the blocks of a record that does not drift sat at
+    0.31 (phi = 0.8) and 0.026 (phi = 0.99) of their degrees of freedom: a degradation acting at the
+    fundamental was judged against the DC's noise (not named in any of 5 'ar1' cases at 10x). Each
+    harmonic weighed by its own level they sit near 1 (0.96 and 0.76: the harmonics of neighbouring periods
+    are slightly anticorrelated, conservative), and never above it by much."""
+    new = [_block_chi2(phi, s, True) for s in range(12)]
+    old = [_block_chi2(phi, s, False) for s in range(12)]
+    assert 0.6 < float(np.median(new)) < 1.3, new
+    assert max(new) < 2.0, new
+    assert float(np.median(old)) < 0.4, old

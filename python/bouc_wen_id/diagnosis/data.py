@@ -134,6 +134,10 @@ class DiagExperiment:
     #: How much more the mean of the period DCs varies than their spread says (:func:`cross_period_inflation`;
     #: 1.0: independent periods, or not measured).
     cross_period: float = 1.0
+    #: Each harmonic 0..K's own noise level (per-sample units, as ``noise_var``) when the noise is coloured:
+    #: the level of :func:`harmonic_levels`, for the drift test's weights; empty when white (``noise_var``
+    #: at every harmonic).
+    harmonic_var: FloatArray = field(default_factory=lambda: np.zeros(0), repr=False)
 
     @property
     def samples_per_period(self) -> int:
@@ -248,6 +252,35 @@ def noise_colour(rows: FloatArray, white_var: float, white_dof: int) -> tuple[fl
     return best[0], int(best[1]), best[2]
 
 
+#: Smallest harmonic level :func:`harmonic_levels` returns, relative to the per-sample variance.
+HARMONIC_FLOOR = 0.01
+
+
+def harmonic_levels(rows: FloatArray, white_var: float) -> FloatArray:
+    """Each harmonic 0..K's noise level of periods ``rows`` (N, P), in per-sample units: the spread about
+    a quadratic trend (as :func:`noise_colour`) pooled over the :data:`COLOUR_BAND` harmonics around it
+    (the DC alone, inflated for the correlation of the period DCs, :func:`cross_period_inflation`), never
+    below :data:`HARMONIC_FLOOR` times ``white_var`` (a red noise is below its per-sample level at the
+    higher harmonics). Empty when N < 4.
+    """
+    n, p = rows.shape
+    k = _harmonics_of(p)
+    if n < 4 or k < 1:
+        return np.zeros(0)
+    raw = np.fft.rfft(rows, axis=1)[:, : k + 1] / p
+    idx = np.arange(n, dtype=np.float64)
+    trend = np.vander(idx - idx.mean(), 3)
+    c = raw - trend @ np.linalg.lstsq(trend, raw, rcond=None)[0]
+    ss = 2.0 * p * np.sum(np.abs(c) ** 2, axis=0)
+    half = COLOUR_BAND // 2
+    out = np.empty(k + 1)
+    out[0] = p * float(np.sum(c[:, 0].real ** 2)) / (n - 3) * cross_period_inflation(raw[:, 0].real)
+    for j in range(1, k + 1):
+        a, b = max(1, j - half), min(k, j + half)
+        out[j] = float(np.sum(ss[a : b + 1])) / (2.0 * (n - 3) * (b - a + 1))
+    return np.maximum(out, HARMONIC_FLOOR * white_var)
+
+
 #: Largest cross-period lag-1 correlation :func:`cross_period_inflation` allows (an inflation of 9).
 MAX_CROSS_PERIOD_CORRELATION = 0.8
 
@@ -313,6 +346,7 @@ def _from_recording(i: int, rec: Any) -> DiagExperiment:
         colour=var / diff if diff > 0 else 1.0,
         colour_band=band,
         cross_period=cross_period_inflation(dc) if var > diff else 1.0,
+        harmonic_var=harmonic_levels(rows, diff) if var > diff else np.zeros(0),
     )
 
 
