@@ -131,9 +131,9 @@ class DiagExperiment:
     colour: float = 1.0
     #: The harmonics (first, last) of the band where the coloured noise is largest ((0, 0) when white).
     colour_band: tuple[int, int] = (0, 0)
-    #: How much more the mean of the period DCs varies than their spread says (:func:`cross_period_inflation`;
-    #: 1.0: independent periods, or not measured).
-    cross_period: float = 1.0
+    #: The period DCs' lag-1 correlation, bias-corrected, unclipped (:func:`cross_period_correlation`; 0.0
+    #: when the noise is white or it is not measured).
+    cross_period: float = 0.0
     #: Each harmonic 0..K's own noise level (per-sample units, as ``noise_var``) when the noise is coloured:
     #: the level of :func:`harmonic_levels`, for the drift test's weights; empty when white (``noise_var``
     #: at every harmonic).
@@ -285,24 +285,28 @@ def harmonic_levels(rows: FloatArray, white_var: float) -> FloatArray:
 MAX_CROSS_PERIOD_CORRELATION = 0.8
 
 
-def cross_period_inflation(series: FloatArray) -> float:
-    """``(1 + r) / (1 - r)``: how much more the mean of ``series`` (one value per period) varies than its
-    spread says, for an AR(1) across periods with lag-1 correlation ``r``.
-
-    ``r`` is the lag-1 autocorrelation of the mean-removed series with the first-order bias of a short
-    series taken off (``E r_hat = r - (1 + 3 r) / N``, Marriott and Pope 1954), clipped to
-    ``[0, MAX_CROSS_PERIOD_CORRELATION]``: 1 for independent periods.
-    """
+def cross_period_correlation(series: FloatArray) -> float:
+    """The lag-1 autocorrelation of ``series`` (one value per period, mean removed) with the first-order bias
+    of a short series taken off (``E r_hat = r - (1 + 3 r) / N``, Marriott and Pope 1954); 0.0 when N < 4
+    or the series is constant. Unclipped: about 0 with sd ``1 / sqrt(N)`` for independent periods."""
     n = series.size
     if n < 4:
-        return 1.0
+        return 0.0
     x = series - series.mean()
     den = float(np.dot(x, x))
     if not den > 0:
-        return 1.0
+        return 0.0
     r_hat = float(np.dot(x[1:], x[:-1])) / den
-    r = r_hat + (1.0 + 3.0 * r_hat) / n
-    r = min(max(r, 0.0), MAX_CROSS_PERIOD_CORRELATION)
+    return r_hat + (1.0 + 3.0 * r_hat) / n
+
+
+def cross_period_inflation(series: FloatArray) -> float:
+    """``(1 + r) / (1 - r)``: how much more the mean of ``series`` (one value per period) varies than its
+    spread says, for an AR(1) across periods with lag-1 correlation ``r``
+    (:func:`cross_period_correlation` clipped to ``[0, MAX_CROSS_PERIOD_CORRELATION]``): 1 for independent
+    periods.
+    """
+    r = min(max(cross_period_correlation(series), 0.0), MAX_CROSS_PERIOD_CORRELATION)
     return (1.0 + r) / (1.0 - r)
 
 
@@ -345,7 +349,7 @@ def _from_recording(i: int, rec: Any) -> DiagExperiment:
         waveform=input_waveform(urows),
         colour=var / diff if diff > 0 else 1.0,
         colour_band=band,
-        cross_period=cross_period_inflation(dc) if var > diff else 1.0,
+        cross_period=cross_period_correlation(dc) if var > diff else 0.0,
         harmonic_var=harmonic_levels(rows, diff) if var > diff else np.zeros(0),
     )
 
@@ -515,9 +519,10 @@ def prepare(items: Any) -> list[DiagExperiment]:
     return out
 
 
-#: The median cross-period inflation from which the notes say the periods are correlated (r = 0.2; phi = 0.99
-#: at 128 samples per period gives about 2.6, phi = 0.8 about 1.0-1.3).
-CROSS_PERIOD_NOTE = 1.5
+#: One-sided normal quantile (0.1 %) of the pooled cross-period correlation from which the notes say the
+#: periods are correlated (phi = 0.99 at 128 samples per period: r about 0.45, z about 5 over 10
+#: experiments of 16 periods; phi = 0.8: r about 0).
+CROSS_PERIOD_Z = 3.09
 
 
 def colour_notes(exps: Sequence[DiagExperiment]) -> list[str]:
@@ -539,13 +544,18 @@ def colour_notes(exps: Sequence[DiagExperiment]) -> list[str]:
             "where the model and its terms act, conservative at the other harmonics)"
         )
         out.append(text)
-    # Pooled over the experiments (one noise process; 16 periods alone hardly tell r = 0.2 from 0).
-    dcs = [e.cross_period for e in exps if e.colour > 1.0 and e.colour_band == (0, 0)]
-    if dcs and float(np.median(dcs)) >= CROSS_PERIOD_NOTE:
-        out.append(
-            "the noise is correlated across periods: the mean of the period DCs varies "
-            f"{float(np.median(dcs)):.2g} times more than their spread says (median over {len(dcs)} "
-            "experiments), so a slow wander of the loop's centre and a drift of it cannot be told apart in "
-            "these records; the centres are judged against that wander (longer records would separate them)"
-        )
+    # Pooled over the experiments (one noise process; 16 periods alone hardly tell r = 0.3 from 0): the
+    # mean correlation against its sd for independent periods, 1 / sqrt(sum of periods).
+    dcs = [e for e in exps if e.colour > 1.0 and e.colour_band == (0, 0) and e.periods >= 4]
+    if dcs:
+        r = float(np.mean([e.cross_period for e in dcs]))
+        z = r * math.sqrt(sum(e.periods for e in dcs))
+        if z >= CROSS_PERIOD_Z:
+            out.append(
+                f"the noise is correlated across periods: the period DCs' lag-1 correlation is {r:.2g} "
+                f"(mean over {len(dcs)} experiments, z = {z:.2g}), so their mean varies about "
+                f"{(1 + r) / (1 - r) if r < 1 else math.inf:.2g} times more than their spread says; a slow "
+                "wander of the loop's centre and a drift of it cannot be told apart in these records, and "
+                "the centres are judged against that wander (longer records would separate them)"
+            )
     return out
