@@ -13,7 +13,9 @@ file's:
 - noise (base plan): ``ar1`` (AR(1) output noise, phi = 0.8, the same marginal sd), ``ar1 slow`` (phi = 0.99:
   correlated over about a period, so neighbouring periods are correlated too), ``t3`` (Student t with 3
   degrees of freedom scaled to the same sd), ``quant`` (white noise, then the output rounded to ADC steps of
-  0.5 noise sd), ``u-noise`` (white noise on the measured input too, 1 % of its amplitude).
+  0.5 noise sd), ``u-noise`` (white noise on the measured input too, 1 % of its amplitude), ``pink`` (1/f
+  noise shaped in the frequency domain, the same sd), ``walk`` (white noise plus a random-walk baseline,
+  steps of 0.05 noise sd per sample: 2.5 noise sd of wander over the record).
 
 Effects: nulls (nothing hidden), viscous damping on x, stiffness on u, stiffness on x, output offset, play,
 strength degradation, each sized as in the bench (RMS of its noise-free contribution over the averaged
@@ -66,7 +68,7 @@ class Design:
     levels: tuple[float, ...] = gen.X_LEVELS
     periods: int = gen.PERIODS
     settle: int = gen.SETTLE
-    noise: str = "white"  # white, ar1, t3, quant, u-noise
+    noise: str = "white"  # white, ar1, t3, quant, u-noise, pink, walk
     phi: float = 0.8  # the AR(1) coefficient (noise "ar1")
 
 
@@ -85,11 +87,14 @@ DESIGNS = {
         Design("t3", noise="t3"),
         Design("quant", noise="quant"),
         Design("u-noise", noise="u-noise"),
+        Design("pink", noise="pink"),
+        Design("walk", noise="walk"),
     )
 }
 T_DOF = 3
 QUANT_STEP = 0.5  # ADC step in noise sd
 U_NOISE = 0.01  # input noise sd, relative to the input amplitude
+WALK_STEP = 0.05  # the random walk's step sd per sample, in noise sd (2.5 noise sd after 2560 samples)
 
 #: (name, place) of the effects; place "" for effects that have one place.
 EFFECTS = (
@@ -153,6 +158,15 @@ def noise(design: Design, rng: np.random.Generator, n: int) -> FloatArray:
         for k in range(1, n):
             e[k] = phi * e[k - 1] + z[k]
         return e
+    if design.noise == "pink":  # 1/f noise shaped in the frequency domain, no AR recursion
+        f = np.fft.rfftfreq(n)
+        amp = np.zeros(f.size)
+        amp[1:] = 1.0 / np.sqrt(f[1:])
+        x = np.fft.irfft(amp * (rng.normal(size=f.size) + 1j * rng.normal(size=f.size)), n)
+        return np.asarray(x * NOISE_SD / x.std())
+    if design.noise == "walk":  # a random-walk baseline wander plus white noise
+        walk = np.cumsum(rng.normal(0.0, WALK_STEP * NOISE_SD, n))
+        return np.asarray(walk + rng.normal(0.0, NOISE_SD, n))
     if design.noise == "t3":
         return np.asarray(rng.standard_t(T_DOF, n) * NOISE_SD / math.sqrt(T_DOF / (T_DOF - 2.0)))
     return np.asarray(rng.normal(0.0, NOISE_SD, n))

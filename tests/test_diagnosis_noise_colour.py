@@ -21,7 +21,7 @@ from typing import Any
 import bouc_wen_id as bw
 import numpy as np
 import pytest
-from bouc_wen_id.diagnosis.data import COLOUR_BAND, noise_colour
+from bouc_wen_id.diagnosis.data import COLOUR_BAND, cross_period_inflation, noise_colour
 from bouc_wen_id.diagnosis.select import f_test
 
 P = 128
@@ -61,16 +61,81 @@ def test_ar1_noise_is_found_at_the_low_harmonics() -> None:
 
 
 def test_a_drift_is_no_colour() -> None:
-    """A loop drifting by 20 noise sd over the record (a degradation, a settling centre) is taken out by the
-    quadratic trend: white noise stays white."""
+    """A loop drifting by 20 noise sd over the record (a degradation, a drifting centre) is taken out by the
+    quadratic trend: white noise stays white. A centre that settles faster (an exponential over 4 periods)
+    is not a quadratic: it is measured at the DC, as a wander the record cannot tell from noise correlated
+    across periods (the DC alone is a band since the phi = 0.99 nulls), and only there (the fundamental's
+    drift still is no colour)."""
     rng = np.random.default_rng(11)
     n = 16
     th = 2 * math.pi * np.arange(P) / P
     k = np.arange(n)[:, None]
-    drift = 0.2 * (k / n) * np.cos(th)[None, :] + 0.1 * (k / n) ** 2 + 0.05 * np.exp(-k / 4.0)
+    drift = 0.2 * (k / n) * np.cos(th)[None, :] + 0.1 * (k / n) ** 2
     rows = drift + rng.normal(0.0, 0.01, (n, P))
     v = _white_var(rows)
-    assert noise_colour(rows, v, P * (n - 1))[2] == (0, 0)
+    assert noise_colour(rows, v, P * (n - 1)) == (v, P * (n - 1), (0, 0))
+    settling = rows + 0.05 * np.exp(-k / 4.0)
+    var, _, band = noise_colour(settling, _white_var(settling), P * (n - 1))
+    assert band == (0, 0) and var > 10 * _white_var(settling)
+
+
+def _pink(rng: np.random.Generator, n: int) -> Any:
+    """1/f noise of unit sd, shaped in the frequency domain (another way than an AR recursion)."""
+    f = np.fft.rfftfreq(n)
+    amp = np.zeros(f.size)
+    amp[1:] = 1.0 / np.sqrt(f[1:])
+    x = np.fft.irfft(amp * (rng.normal(size=f.size) + 1j * rng.normal(size=f.size)), n)
+    return x / x.std()
+
+
+NOISES: dict[str, Any] = {
+    "white": lambda rng, n: rng.normal(size=n),
+    "ar1 0.99": lambda rng, n: _ar1(rng, n, 0.99),
+    "ar1 0.8": lambda rng, n: _ar1(rng, n, 0.8),
+    "pink": _pink,
+    # an ADC of 0.5 noise sd (the MR damper's force is quantised)
+    "quantised": lambda rng, n: np.round(rng.normal(size=n) / 0.5) * 0.5,
+}
+
+
+@pytest.mark.parametrize("kind", list(NOISES))
+def test_the_mean_periods_dc_is_judged_against_its_own_variance(kind: str) -> None:
+    """The DC of the averaged period (the loop's centre, where an offset acts) against the noise level the
+    diagnosis takes: ``mean / sqrt(var / (N P))`` beyond 2.576 in about 1 % of noise-only records. With an
+    AR(1) of phi = 0.99 (correlated across the 128-sample periods) the old level, the harmonics 0-2 pooled
+    about a quadratic trend, was 10 times too small at the DC: 41 % of 200 records (now 4 %), and the nulls
+    of benches/diagnosis_designs.py's "ar1 slow" were "unexplained" (an output offset whose law failed,
+    loops "not settled")."""
+    n = 16
+    z = []
+    for s in range(120):
+        rng = np.random.default_rng([s, 5])
+        y = NOISES[kind](rng, n * P)
+        rows = y.reshape(n, P)
+        v = _white_var(rows)
+        var = noise_colour(rows, v, P * (n - 1))[0]
+        z.append(float(np.mean(y)) / math.sqrt(var / (n * P)))
+    assert np.mean(np.abs(z) > 2.576) <= 0.06, np.mean(np.abs(z) > 2.576)
+
+
+def test_quantised_white_noise_stays_white() -> None:
+    rng = np.random.default_rng(21)
+    fired = 0
+    for _ in range(60):
+        rows = np.round(rng.normal(size=(16, P)) / 0.5) * 0.5
+        v = _white_var(rows)
+        fired += noise_colour(rows, v, P * 15)[0] != v
+    assert fired <= 1
+
+
+def test_cross_period_inflation_follows_the_lag_one_correlation() -> None:
+    """Independent periods: about 1; an AR(1) across periods with r = 0.5: about (1 + r) / (1 - r) = 3."""
+    rng = np.random.default_rng(4)
+    ind = [cross_period_inflation(rng.normal(size=16)) for _ in range(400)]
+    assert 1.0 <= float(np.median(ind)) < 1.4
+    cor = [cross_period_inflation(_ar1(rng, 16, 0.5)) for _ in range(400)]
+    assert 2.0 < float(np.median(cor)) < 4.5
+    assert cross_period_inflation(np.ones(16)) == 1.0
 
 
 def test_f_test_does_not_scale_by_a_residual_below_the_floor() -> None:
@@ -112,6 +177,8 @@ def test_ar1_null_names_nothing_and_says_the_noise_is_coloured() -> None:
     assert d.named_terms == (), d.summary()
     assert d.status == "adequate", d.summary()
     assert any("coloured noise" in n for n in d.notes), d.notes
+    # phi = 0.8 is not correlated from one 128-sample period to the next (0.8^128 ~ 4e-13).
+    assert not any("correlated across periods" in n for n in d.notes), d.notes
 
 
 def test_ar1_viscous_on_x_is_named() -> None:
@@ -157,3 +224,51 @@ def test_a_design_below_saturation_says_a_spring_on_x_could_not_show() -> None:
     assert any("below the hysteresis' saturation" in n for n in d.notes), d.notes
     base = _diagnose(_case("3f x 1A", None, "", 0.0, 100000))
     assert not any("saturation" in n for n in base.notes), base.notes
+
+
+@pytest.mark.parametrize("seed", [100002, 100005])
+def test_noise_correlated_across_periods_is_no_unexplained_structure(seed: int) -> None:
+    """AR(1) output noise with phi = 0.99 (the bench's "ar1 slow"), nothing hidden: the loop centres wander
+    from experiment to experiment by more than the spread of their period DCs says. Seed 100002 left three
+    experiments out as "not settled" and called the rest "unexplained" (centres of both signs); 100005 tested
+    an output offset at p = 3.4e-11 whose law failed ("unexplained structure remains"). Judged against the
+    DC's own level (correlated across periods) both are adequate, and the notes say the record cannot tell
+    that wander from a drift."""
+    d = _diagnose(_case("ar1 slow", None, "", 0.0, seed))
+    assert d.status == "adequate", d.summary()
+    assert d.named_terms == ()
+    assert any("correlated across periods" in n for n in d.notes), d.notes
+
+
+def _block_chi2(phi: float, seed: int, per_harmonic: bool) -> float:
+    """The drift test's chi-square of the block deviations over its degrees of freedom (drift.drift_data's
+    weights), for a loop with AR(1) output noise and no drift."""
+    from bouc_wen_id.diagnosis.data import prepare
+    from bouc_wen_id.diagnosis.drift import _inner, harmonic_weights, whole_blocks
+
+    rng = np.random.default_rng([seed, 9])
+    n = 20 * P
+    t = np.arange(n) * 2 * math.pi / P
+    y = np.tanh(2.0 * np.cos(t - 0.3)) + 0.05 * _ar1(rng, n, phi)
+    (e,) = prepare(bw.Recording(t, np.cos(t), y, 1.0, 1.0, settle_periods=4))
+    keep = whole_blocks(e)
+    k = e.block_coef.shape[1] - 1
+    w = e.block_samples[keep] / e.noise_var
+    c = e.block_coef[keep]
+    dev = c - (w[:, None] * c).sum(axis=0) / w.sum()
+    hw = harmonic_weights(e, k) if per_harmonic else None
+    return float(np.dot(w, _inner(dev, dev, hw))) / ((keep.size - 1) * (2 * k + 1))
+
+
+@pytest.mark.parametrize("phi", [0.8, 0.99])
+def test_the_drift_test_weighs_each_harmonic_by_its_own_noise(phi: float) -> None:
+    """Weighed with one level (the largest, at the DC) the blocks of a record that does not drift sat at
+    0.31 (phi = 0.8) and 0.026 (phi = 0.99) of their degrees of freedom: a degradation acting at the
+    fundamental was judged against the DC's noise (not named in any of 5 'ar1' cases at 10x). Each
+    harmonic weighed by its own level they sit near 1 (0.96 and 0.76: the harmonics of neighbouring periods
+    are slightly anticorrelated, conservative), and never above it by much."""
+    new = [_block_chi2(phi, s, True) for s in range(12)]
+    old = [_block_chi2(phi, s, False) for s in range(12)]
+    assert 0.6 < float(np.median(new)) < 1.3, new
+    assert max(new) < 2.0, new
+    assert float(np.median(old)) < 0.4, old

@@ -71,6 +71,7 @@ class DriftData:
     mean_age: float  # periods from the record's start to the middle of the averaged stretch (NaN: unknown)
     dropped: int = 0  # blocks left out: partial periods (see :func:`whole_blocks`)
     jac_eta: Optional[ComplexArray] = None  # (K + 1,) harmonics of dy/d ln eta = -g dy/dg (None: not formed)
+    hw: Optional[FloatArray] = None  # (K + 1,) per-harmonic weight relative to w (None: white noise)
 
     def column(self, term: str) -> ComplexArray:
         """The harmonics of the drift regressor of ``term`` (J_i for degradation, K_i for stiffness)."""
@@ -86,14 +87,34 @@ class DriftData:
         return int((self.dev.shape[0] - 1) * (2 * self.dev.shape[1] - 1))
 
 
-def _inner(a: ComplexArray, b: ComplexArray) -> FloatArray:
-    """Per-row weighted inner product of harmonic rows: ``Re a_0 b_0* + 1/2 sum_k Re a_k b_k*``.
+def _inner(a: ComplexArray, b: ComplexArray, hw: Optional[FloatArray] = None) -> FloatArray:
+    """Per-row weighted inner product of harmonic rows: ``Re a_0 b_0* + 1/2 sum_k Re a_k b_k*``, each
+    harmonic k times ``hw[k]`` when given (its noise level relative to the block weight's).
 
     By Parseval it is ``||y_a . y_b|| / P`` on the grid, so with ``samples / sigma^2`` in front it is the
-    chi-square of the block average.
+    chi-square of the block average (white noise; ``hw`` makes it one for a coloured noise too).
     """
     prod = (a * np.conj(b)).real
+    if hw is not None:
+        prod = prod * hw
     out: FloatArray = prod[..., 0] + 0.5 * prod[..., 1:].sum(axis=-1)
+    return out
+
+
+def harmonic_weights(e: DiagExperiment, k: int) -> Optional[FloatArray]:
+    """``noise_var / sigma_k^2`` for harmonics 0..k of ``e`` (None when its noise is white: one level).
+
+    A coloured noise is weighed at each harmonic by its own level (``DiagExperiment.harmonic_var``), not
+    by the largest one: with an AR(1) of phi = 0.99 the DC's level (about 250 times the per-sample variance)
+    weighed the fundamental, where degradation acts (8 times), and the block chi-square of a null record sat
+    at 0.2 of its degrees of freedom.
+    """
+    hv = e.harmonic_var
+    if hv.size < k + 1 or not (e.noise_var > 0 and np.all(hv[: k + 1] > 0)):
+        return None
+    if e.noise_var > 2.0 * float(np.max(hv)):  # a floor raised it above every measured level (run.py)
+        return None
+    out: FloatArray = e.noise_var / hv[: k + 1]
     return out
 
 
@@ -205,6 +226,7 @@ def drift_data(
                 age,
                 dropped=dropped,
                 jac_eta=harmonics(k_eta, k),
+                hw=harmonic_weights(e, k),
             )
         )
     return out
@@ -236,9 +258,9 @@ def whole_blocks(e: DiagExperiment) -> NDArray[np.int64]:
 def _sums(dd: DriftData, term: str = DEGRADATION) -> tuple[float, float, float]:
     """``(C0, num, den)`` of one experiment: ``C(d) = C0 - 2 d num + d^2 den`` (``term``'s column)."""
     reg = dd.energy * dd.t[:, None] * dd.column(term)[None, :]
-    c0 = float(np.dot(dd.w, _inner(dd.dev, dd.dev)))
-    num = float(np.dot(dd.w, _inner(dd.dev, reg)))
-    den = float(np.dot(dd.w, _inner(reg, reg)))
+    c0 = float(np.dot(dd.w, _inner(dd.dev, dd.dev, dd.hw)))
+    num = float(np.dot(dd.w, _inner(dd.dev, reg, dd.hw)))
+    den = float(np.dot(dd.w, _inner(reg, reg, dd.hw)))
     return c0, num, den
 
 
@@ -436,9 +458,9 @@ def compare(
     for dd in data:
         regs = [dd.energy * dd.t[:, None] * dd.column(t)[None, :] for t in (best.term, other.term)]
         for m in range(2):
-            r[m] += float(np.dot(dd.w, _inner(dd.dev, regs[m])))
+            r[m] += float(np.dot(dd.w, _inner(dd.dev, regs[m], dd.hw)))
             for n in range(2):
-                a[m, n] += float(np.dot(dd.w, _inner(regs[m], regs[n])))
+                a[m, n] += float(np.dot(dd.w, _inner(regs[m], regs[n], dd.hw)))
     corr = float(a[0, 1] / math.sqrt(a[0, 0] * a[1, 1])) if a[0, 0] > 0 and a[1, 1] > 0 else math.nan
     padj = math.nan
     try:
