@@ -257,7 +257,7 @@ def _block_chi2(phi: float, seed: int, per_harmonic: bool) -> float:
     c = e.block_coef[keep]
     dev = c - (w[:, None] * c).sum(axis=0) / w.sum()
     hw = harmonic_weights(e, k) if per_harmonic else None
-    return float(np.dot(w, _inner(dev, dev, hw))) / ((keep.size - 1) * (2 * k + 1))
+    return float(np.dot(w, _inner(dev, dev, hw)) / ((keep.size - 1) * (2 * k + 1)))
 
 
 @pytest.mark.parametrize("phi", [0.8, 0.99])
