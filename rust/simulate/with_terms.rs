@@ -76,6 +76,7 @@ use crate::hermite::Hermite;
 use crate::linear::TransferFunction;
 use crate::terms::{PINCHING_CENTRE, PINCHING_WIDTH};
 
+mod dahl;
 mod derivatives;
 mod integrate;
 mod lag;

@@ -2,6 +2,7 @@
 //! `with_terms.rs`).
 
 use super::super::on_x::OnX;
+use super::dahl::Dahl;
 use super::derivatives::Derivatives;
 use super::lag::lag_weights;
 use super::rhs::{Augmented, Mode};
@@ -44,6 +45,19 @@ impl<S: Derivatives> Augmented<'_, S> {
         let x0 = self.comp.output_row(&xs) + d * self.delayed(0.0).0;
         let mut xp = 0.0f64.max(x0 - b).min(x0 + b);
         let mut ys = 0.0;
+        // Dahl friction's forces on u and on x (with_terms/dahl.rs); added only when active, so
+        // that the other terms' runs round exactly as before.
+        let dahl_u = Dahl {
+            fc: terms.dahl,
+            sigma: terms.dahl_sigma,
+        };
+        let dahl_x = Dahl {
+            fc: terms.dahl_x,
+            sigma: terms.dahl_sigma_x,
+        };
+        let has_dahl = terms.dahl_active();
+        let (mut fu, mut fx) = (0.0f64, 0.0f64);
+        let with_dahl = |f: f64, fu: f64, fx: f64| if has_dahl { f + (fu + fx) } else { f };
         let (mut k1, mut k2, mut k3, mut k4, mut tmp) = (
             vec![0.0; n],
             vec![0.0; n],
@@ -62,7 +76,7 @@ impl<S: Derivatives> Augmented<'_, S> {
                 + if has_lag {
                     ys
                 } else {
-                    self.forcing(w, t, &xs, on_x)
+                    with_dahl(self.forcing(w, t, &xs, on_x), fu, fx)
                 };
             if k == last {
                 break;
@@ -97,19 +111,22 @@ impl<S: Derivatives> Augmented<'_, S> {
                 let ke1 = w * d1;
                 let (w2, e2) = (w + half_h * kw1, en + half_h * ke1);
                 axpy(&mut tmp, &xs, half_h, &k1);
-                let p2 = played(self.linear(&tmp, inm, &mut k2));
+                let xdot2 = self.linear(&tmp, inm, &mut k2);
+                let p2 = played(xdot2);
                 let d2 = element(p2, w2);
                 let kw2 = self.rate(d2, w2, e2);
                 let ke2 = w2 * d2;
                 let (w3, e3) = (w + half_h * kw2, en + half_h * ke2);
                 axpy(&mut tmp, &xs, half_h, &k2);
-                let p3 = played(self.linear(&tmp, inm, &mut k3));
+                let xdot3 = self.linear(&tmp, inm, &mut k3);
+                let p3 = played(xdot3);
                 let d3 = element(p3, w3);
                 let kw3 = self.rate(d3, w3, e3);
                 let ke3 = w3 * d3;
                 let (w4, e4) = (w + h * kw3, en + h * ke3);
                 axpy(&mut tmp, &xs, h, &k3);
-                let p4 = played(self.linear(&tmp, in4, &mut k4));
+                let xdot4 = self.linear(&tmp, in4, &mut k4);
+                let p4 = played(xdot4);
                 let d4 = element(p4, w4);
                 let kw4 = self.rate(d4, w4, e4);
                 let ke4 = w4 * d4;
@@ -128,7 +145,7 @@ impl<S: Derivatives> Augmented<'_, S> {
                             *m = x + h * (5.0 * a + 4.0 * (b2 + c3) - d4) / 24.0;
                         }
                     }
-                    self.forcing(w, ts, &xs, on_x)
+                    with_dahl(self.forcing(w, ts, &xs, on_x), fu, fx)
                 } else {
                     0.0
                 };
@@ -136,6 +153,14 @@ impl<S: Derivatives> Augmented<'_, S> {
                     *x += h_sixth * (a + 2.0 * b2 + 2.0 * c3 + d4);
                 }
                 w += h_sixth * (kw1 + 2.0 * kw2 + 2.0 * kw3 + kw4);
+                let (mut fu_mid, mut fx_mid) = (fu, fx);
+                if has_dahl {
+                    // The undelayed input's rate on u (as the output terms'), x's on x.
+                    let udot = |t: f64| self.src.at(t).1;
+                    let um = udot(tm);
+                    (fu, fu_mid) = dahl_u.step(fu, h, [udot(ts), um, um, udot(te)]);
+                    (fx, fx_mid) = dahl_x.step(fx, h, [xdot1, xdot2, xdot3, xdot4]);
+                }
                 en += h_sixth * (ke1 + 2.0 * ke2 + 2.0 * ke3 + ke4);
                 if has_play {
                     xp += h_sixth * (p1 + 2.0 * p2 + 2.0 * p3 + p4);
@@ -148,8 +173,8 @@ impl<S: Derivatives> Augmented<'_, S> {
                     xp = clamped;
                 }
                 if has_lag {
-                    let fm = self.forcing(w_mid, tm, &xs_mid, on_x);
-                    let f1 = self.forcing(w, te, &xs, on_x);
+                    let fm = with_dahl(self.forcing(w_mid, tm, &xs_mid, on_x), fu_mid, fx_mid);
+                    let f1 = with_dahl(self.forcing(w, te, &xs, on_x), fu, fx);
                     ys = decay * ys + (l0 * f0 + lm * fm + l1 * f1);
                 }
             }

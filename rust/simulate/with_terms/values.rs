@@ -44,6 +44,14 @@ pub struct TermValues {
     pub series_dashpot: f64,
     /// The mechanical terms across the hysteretic element, on x (`rust/simulate/on_x.rs`).
     pub on_x: OnXValues,
+    /// Dahl friction on u: level `Fc` ([y]), `>= 0` (`with_terms/dahl.rs`).
+    pub dahl: f64,
+    /// Dahl friction on u: pre-sliding stiffness `sigma` ([y]/[u]), `>= 0`.
+    pub dahl_sigma: f64,
+    /// Dahl friction on x: level `Fc` ([y]), `>= 0`.
+    pub dahl_x: f64,
+    /// Dahl friction on x: pre-sliding stiffness `sigma` ([y]/[x]), `>= 0`.
+    pub dahl_sigma_x: f64,
 }
 
 impl Default for TermValues {
@@ -63,6 +71,10 @@ impl Default for TermValues {
             pinching: 0.0,
             series_dashpot: 0.0,
             on_x: OnXValues::default(),
+            dahl: 0.0,
+            dahl_sigma: 0.0,
+            dahl_x: 0.0,
+            dahl_sigma_x: 0.0,
         }
     }
 }
@@ -88,7 +100,7 @@ impl TermValues {
                 let slot = match place {
                     Place::Usual => t.slot(kind),
                     // `parse_placed` admits only the mechanical terms on x.
-                    Place::X => t.on_x.slot(kind),
+                    Place::X => t.slot_on_x(kind),
                 };
                 slot.ok_or_else(|| {
                     CoreError::InvalidParameter(format!(
@@ -123,9 +135,29 @@ impl TermValues {
             TermKind::StiffnessDegradation => Some(&mut self.stiffness_degradation),
             TermKind::Pinching => Some(&mut self.pinching),
             TermKind::SeriesDashpot => Some(&mut self.series_dashpot),
-            // Steady-loop model only (no time-domain form yet).
-            TermKind::Distortion | TermKind::Dahl | TermKind::DahlSigma => None,
+            TermKind::Dahl => Some(&mut self.dahl),
+            TermKind::DahlSigma => Some(&mut self.dahl_sigma),
+            // The measured input's own harmonics: simulate takes that input itself.
+            TermKind::Distortion => None,
         }
+    }
+
+    /// Where `kind`'s value on x is kept: Dahl friction here, the mechanical terms in
+    /// [`OnXValues`].
+    fn slot_on_x(&mut self, kind: TermKind) -> Option<&mut f64> {
+        match kind {
+            TermKind::Dahl => Some(&mut self.dahl_x),
+            TermKind::DahlSigma => Some(&mut self.dahl_sigma_x),
+            _ => self.on_x.slot(kind),
+        }
+    }
+
+    /// Dahl friction's values on x, `(kind, value)`.
+    fn dahl_on_x(&self) -> [(TermKind, f64); 2] {
+        [
+            (TermKind::Dahl, self.dahl_x),
+            (TermKind::DahlSigma, self.dahl_sigma_x),
+        ]
     }
 
     /// Checks the §9.1 admissibility against the hysteresis `bw`: all finite, `tau >= 0`,
@@ -143,6 +175,10 @@ impl TermValues {
         }
         check_coulomb_smoothing(self.coulomb_smoothing)?;
         for (kind, v) in values() {
+            kind.check_value(v)?;
+        }
+        for (kind, v) in self.dahl_on_x() {
+            finite(&super::super::on_x::placed_name(kind), v)?;
             kind.check_value(v)?;
         }
         self.on_x.validate()?;
@@ -169,8 +205,14 @@ impl TermValues {
             (v != 0.0).then(|| (super::super::on_x::placed_name(k), v))
         })
         .collect::<Vec<_>>();
+        let dahl_x = self
+            .dahl_on_x()
+            .into_iter()
+            .filter(|&(_, v)| v != 0.0)
+            .map(|(k, v)| (super::super::on_x::placed_name(k), v));
         let all: Vec<String> = usual
             .chain(placed)
+            .chain(dahl_x)
             .map(|(name, v)| format!("{name} = {v:e}"))
             .collect();
         if all.is_empty() {
@@ -190,5 +232,11 @@ impl TermValues {
             || self.stiffness_degradation > 0.0
             || self.pinching > 0.0
             || self.series_dashpot > 0.0
+            || self.dahl_active()
+    }
+
+    /// `true` when Dahl friction moves at either place (level and stiffness both > 0).
+    pub fn dahl_active(&self) -> bool {
+        (self.dahl > 0.0 && self.dahl_sigma > 0.0) || (self.dahl_x > 0.0 && self.dahl_sigma_x > 0.0)
     }
 }
