@@ -115,9 +115,11 @@ def test_the_friction_force_matches_solve_ivp_of_the_ode(shape: str) -> None:
     )
     want = sol.y[-2] + sol.y[-1]
     got = rec.y - w  # the same plain w: the friction adds to y and does not feed back
-    # RK4 at h = T/800 against the tight adaptive solver: measured 2e-6 of the peak over the last two periods.
+    # RK4 at h = T/800 against the tight adaptive solver, over the last two periods: measured 1.8e-5 of the
+    # peak (resonant, delay: x's reversals fall inside steps, where sgn(xdot) switches) and 7.9e-7 (first
+    # order); over the whole record 2.5e-4 and 1.3e-5 (the delayed input steps at t = delay inside a step).
     last = rec.t > rec.t[-1] - 2 * TWO_PI / omega
-    assert _scale((got - want)[last]) < 2e-5 * _scale(want)
+    assert _scale((got - want)[last]) < 5e-5 * _scale(want)
     assert _scale(got - want) < 1e-3 * _scale(want)
 
 
@@ -144,8 +146,8 @@ def test_the_steady_state_is_the_closed_form_loop(place: Place) -> None:
         a, psi0 = amp * abs(gj), theta0 + float(np.angle(gj))
     ref: Any = reference
     want = ref.dahl.dahl_loop(a, psi0, fc, sigma, p)[0]
-    # RK4 at T/1024 of the fast relaxation after each reversal (r = sigma a / Fc = 18 on x): measured
-    # 1.4e-5 Fc on x, less on u (r = 8).
+    # Measured 2.0e-9 Fc on u (u's reversals fall on step boundaries) and 1.4e-5 Fc on x (x's fall inside RK4
+    # steps, where sgn(xdot) switches: O(h^2) locally; r = sigma a / Fc = 18 there).
     assert _scale(f - want) < 3e-5 * fc
 
 
