@@ -9,13 +9,16 @@ and the things that still refuse it, by name.
 
 from __future__ import annotations
 
+import json
 import math
+from pathlib import Path
 from typing import Any
 
 import bouc_wen_id as bw
 import numpy as np
 import pytest
 from bouc_wen_id import _core, reference
+from bouc_wen_id.cli import main
 from bouc_wen_id.errors import InvalidParameterError
 from bouc_wen_id.export import UnsupportedTermError
 from bouc_wen_id.model import BoucWen, SinePlan, TransferFunction, WienerPlant
@@ -168,3 +171,28 @@ def test_what_still_refuses_dahl_friction_says_why() -> None:
         bw.simulate(
             WienerPlant(plant.linear, plant.hysteresis, _dahl(0.2, 2.0)[:1] + (DahlSigma(-1.0),)), plan
         )
+
+
+def test_the_cli_simulates_a_plant_with_dahl_friction(tmp_path: Path) -> None:
+    """``bouc-wen-id simulate --plant`` with Dahl friction on u and on x: it runs, and the friction shows."""
+    with_dahl = WienerPlant(
+        TransferFunction([1.0], [0.1, 1.0]),
+        BoucWen(1.0, 0.5, 1.5),
+        _dahl(0.2, 2.0) + _dahl(0.1, 1.0, Place.X),
+    )
+    ys = []
+    for name, plant in (("dahl", with_dahl), ("bare", WienerPlant(with_dahl.linear, with_dahl.hysteresis))):
+        (tmp_path / f"{name}.json").write_text(json.dumps(plant.to_dict()))
+        argv = [
+            "simulate",
+            "--plant",
+            str(tmp_path / f"{name}.json"),
+            "--frequencies",
+            "1",
+            "--amplitude",
+            "0.8",
+        ]
+        assert main([*argv, "--noise", "0", "--out", str(tmp_path / name)]) == 0
+        (rec,) = bw.load_recordings(tmp_path / name)
+        ys.append(rec.y)
+    assert np.all(np.isfinite(ys[0])) and _scale(ys[0] - ys[1]) > 0.1
