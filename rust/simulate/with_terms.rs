@@ -61,12 +61,15 @@
 //!   `ddot = xpdot - rho w` at every stage (no new state: `q` is not needed). The element's energy is
 //!   `e = int w dd`. A play's clamped travel is instantaneous, so the dashpot does not move in it.
 //! - the **output terms** are evaluated at the sample times (and, inside `F`, at the stage times).
+//! - **Dahl friction** (on u or on x): its force is one more RK4 state per place, stepped with the
+//!   stage rates of u or x, added to the output, not fed back (`with_terms/dahl.rs`).
 //!
 //! Layout: this file holds the entry point, its checks and the choice of integrator; `with_terms/`
 //! holds one job per file: `values.rs` (the terms' values by name), `derivatives.rs` (the input's
 //! second derivative and peak rate, and the output terms on u), `lag.rs` (the exponential lag
-//! step's weights), `rhs.rs` (the right-hand side: play mode, pinching, the rate and the path
-//! map), `integrate.rs` (the RK4 loop) and `tests.rs`.
+//! step's weights), `dahl.rs` (Dahl friction's force state, with its tests), `rhs.rs` (the
+//! right-hand side: play mode, pinching, the rate and the path map), `integrate.rs` (the RK4 loop)
+//! and `tests.rs`.
 
 use super::on_x::{linear_pass, Kinematics, OnX};
 use super::{check_dt, simulate, try_zeros, Input, Simulation, Sine};
