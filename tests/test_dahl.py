@@ -214,21 +214,15 @@ def test_limits_are_dry_friction_and_a_spring() -> None:
     assert_allclose(f_spring, 0.7 * a * np.cos(theta), atol=1e-5)
 
 
-def test_simulation_refuses_dahl_friction_by_name() -> None:
-    import bouc_wen_id as bw
-
+def test_simulation_takes_dahl_friction() -> None:
+    """Its time-domain form is in the simulator (tests/test_simulation_dahl.py): the core gets its values."""
     for term in (T.Dahl(0.1), T.DahlSigmaX(1.0)):
-        with pytest.raises(InvalidParameterError, match=f"'{term.kind}' has no time-domain form"):
-            T.core_terms([term])
-    plant = bw.WienerPlant(bw.TransferFunction([1.0], [0.1, 1.0]), bw.BoucWen(0.5, 0.3, 1.5), (T.DahlX(0.1),))
-    with pytest.raises(InvalidParameterError, match="no time-domain form"):
-        bw.simulate(plant, bw.SinePlan([2.0], 1.0, settle_periods=1, periods=1, samples_per_period=32))
+        assert T.core_terms([term]) == {term.rust_kind: term.value}
 
 
 @pytest.mark.parametrize("term", [T.Dahl(0.1), T.DahlX(0.1), T.DahlSigmaX(1.0)], ids=lambda t: t.kind)
 def test_exporters_and_compensation_refuse_it_by_name(term: T.Term) -> None:
-    """No time-domain form yet: the exporters (the simulator's own refusal, word for word) and compensation
-    name the term."""
+    """The exporters have no Dahl state (no exporter, named) and compensation refuses it with its reason."""
     import bouc_wen_id as bw
     from bouc_wen_id.compensation import compensate
     from bouc_wen_id.export import EXPORTED
@@ -237,7 +231,7 @@ def test_exporters_and_compensation_refuse_it_by_name(term: T.Term) -> None:
     assert type(term) not in EXPORTED
     plant = bw.WienerPlant(bw.TransferFunction([1.0], [0.1, 1.0]), bw.BoucWen(0.5, 0.5, 2.0), (term,))
     for what in ("C export", "nlsys export", "JSON export"):
-        with pytest.raises(UnsupportedTermError, match=f"{what}: term '{term.kind}'"):
+        with pytest.raises(UnsupportedTermError, match=f"{what}: the term '{term.kind}'.* has no exporter"):
             flatten(plant, what)
     t = np.arange(200) * 0.01
     with pytest.raises(InvalidParameterError, match=term.kind):

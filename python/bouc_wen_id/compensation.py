@@ -400,6 +400,15 @@ def _term(plant: WienerPlant, cls: type[Term]) -> Optional[Term]:
 
 def _check_terms(terms: tuple[Term, ...]) -> None:
     for t in terms:
+        if t.companion or t.part_of:  # Dahl friction
+            raise InvalidParameterError(
+                f"{t.label} ({t.kind}): the feedforward inverse does not handle Dahl friction: its "
+                "force has a memory of the travel's own path (a state), so the input that gives y_ref cannot "
+                "be read off y stage by stage as for the memoryless terms; it would need the friction solved "
+                "inside the inverse. Compensate the plant without it (WienerPlant(linear, hysteresis, "
+                "other terms)) and treat the friction as a disturbance, or simulate the plant with it to "
+                "check the residual"
+            )
         if t.place == Place.X or not isinstance(t, _SUPPORTED):
             raise InvalidParameterError(
                 f"{t.label} ({t.kind}): the feedforward inverse does not handle this term yet; it handles "

@@ -989,10 +989,6 @@ def core_terms(terms: Iterable[Term]) -> dict[str, float]:
                 "know: simulate the plain plant with the distorted input itself (simulate_input with its "
                 "samples) instead"
             )
-        if t.companion or t.part_of:  # Dahl friction: its steady loop only, so far
-            raise InvalidParameterError(
-                f"term {t.kind!r} has no time-domain form yet (steady-loop model only)"
-            )
         out[t.rust_kind] = t.value
         if isinstance(t, Coulomb):
             # "coulomb_smoothing", "coulomb@x_smoothing": the setting of the term at its place.

@@ -16,7 +16,10 @@ Step by step the same scheme as the Rust core, so that the parity tests hold the
 - output terms ``k u + c udot + m uddot + f tanh(udot/(eps Vmax))`` on the undelayed input, and the
   mechanical terms on x from the linear part's state (:mod:`.on_x`), added after them;
 - the series dashpot (Spencer's MR-damper model with ``c0 = k0 = 0``): the element driven by its own
-  travel, ``ddot = xpdot - rho w`` at every stage, its energy ``e = int w dd``.
+  travel, ``ddot = xpdot - rho w`` at every stage, its energy ``e = int w dd``;
+- Dahl friction on u and on x (``rust/simulate/with_terms/dahl.rs``): its force ``F`` one more RK4 state each,
+  ``F' = sigma v' (1 - sgn(v') F / Fc)``, ``F(0) = 0``, with the stage rates of u (undelayed) or x; added to
+  the output only when active.
 
 Without asymmetry, play, lag or degradation the plain RK4 of :mod:`.simulate` gives ``x, w`` and the
 terms are added at the samples (:func:`outputs`).  Called through ``reference.simulate_sine(..., terms=...)``
@@ -41,12 +44,15 @@ from .terms import (
     COULOMB_SMOOTHING,
     COULOMB_SMOOTHING_KEY,
     COULOMB_SMOOTHING_MAX,
+    DAHL,
+    DAHL_SIGMA,
     DEGRADATION,
     INERTIA,
     OFFSET,
     PINCHING,
     PINCHING_CENTRE,
     PINCHING_WIDTH,
+    PLACE_X,
     PLAY,
     SENSOR_LAG,
     SERIES_DASHPOT,
@@ -72,6 +78,8 @@ __all__ = [
 FloatArray = NDArray[np.float64]
 
 TERM_NAMES = SIMULATION_KEYS
+#: Dahl friction's keys, on u and on x: ``(Fc, sigma)`` at each place.
+DAHL_KEYS: tuple[str, ...] = (DAHL, DAHL_SIGMA, f"{DAHL}@{PLACE_X}", f"{DAHL_SIGMA}@{PLACE_X}")
 #: Relative slack of the play's engagement test (after a clamp ``x - xp`` is ``b`` only to rounding).
 PLAY_ENGAGE_RTOL = 1e-12
 #: Below this ``r = h/tau`` the phi functions are Taylor series of PHI_TERMS terms.
@@ -83,13 +91,17 @@ def check_terms(terms: Mapping[str, float], beta: float, gamma: float) -> dict[s
     """The full set of term parameters (absent ones 0) after the Rust core's checks, in its order."""
     out = {name: 0.0 for name in TERM_NAMES}
     out[COULOMB_SMOOTHING_KEY] = COULOMB_SMOOTHING
+    out.update({name: 0.0 for name in DAHL_KEYS})
     for name, value in terms.items():
         if name not in out and name not in _on_x.ON_X_KEYS:
             raise InvalidParameterError(f"unknown term {name!r}; the terms are {', '.join(TERM_NAMES)}")
         if name not in _on_x.ON_X_KEYS:
             out[name] = float(value)
-    for name in TERM_NAMES:
+    for name in (*TERM_NAMES, *DAHL_KEYS):
         finite_scalar(name, out[name])
+    for name in DAHL_KEYS:
+        if out[name] < 0.0:
+            raise InvalidParameterError(f"Dahl friction's {name} = {out[name]} must be >= 0")
     if out[SENSOR_LAG] < 0.0:
         raise InvalidParameterError(f"sensor_lag tau = {out[SENSOR_LAG]} s must be >= 0")
     if out[PLAY] < 0.0:
@@ -195,7 +207,60 @@ def has_state(model: Model) -> bool:
         or p[STIFFNESS_DEGRADATION] > 0.0
         or p[PINCHING] > 0.0
         or p[SERIES_DASHPOT] > 0.0
+        or _dahl_on(_dahl(p))
     )
+
+
+def _dahl_on(dahl: tuple[tuple[float, float], ...]) -> bool:
+    """Whether Dahl friction moves at some place (level and stiffness both > 0)."""
+    return any(fc > 0.0 and sigma > 0.0 for fc, sigma in dahl)
+
+
+def _with_dahl(on: bool, f: float, fu: float, fx: float) -> float:
+    """``F`` plus the two Dahl forces when active (only then, so that other runs round as before)."""
+    return f + (fu + fx) if on else f
+
+
+def _dahl_steps(
+    dahl: tuple[tuple[float, float], ...],
+    fs: tuple[float, float],
+    h: float,
+    inp: Input,
+    ts: float,
+    xdots: tuple[float, ...],
+) -> tuple[float, float, float, float]:
+    """``(fu, fu_mid, fx, fx_mid)`` after one RK4 step from ``ts``: on u with the undelayed input's rates, on
+    x with the stage rates ``xdots`` (unchanged when no friction is ``on``)."""
+    if not _dahl_on(dahl):
+        return fs[0], fs[0], fs[1], fs[1]
+    um = inp.source(ts + 0.5 * h)[1]
+    fu, fu_mid = _dahl_step(*dahl[0], fs[0], h, (inp.source(ts)[1], um, um, inp.source(ts + h)[1]))
+    fx, fx_mid = _dahl_step(*dahl[1], fs[1], h, xdots)
+    return fu, fu_mid, fx, fx_mid
+
+
+def _dahl(p: Mapping[str, float]) -> tuple[tuple[float, float], tuple[float, float]]:
+    """Dahl friction's ``(Fc, sigma)`` on u and on x."""
+    k = DAHL_KEYS
+    return (p[k[0]], p[k[1]]), (p[k[2]], p[k[3]])
+
+
+def _dahl_step(fc: float, sigma: float, f: float, h: float, vdot: tuple[float, ...]) -> tuple[float, float]:
+    """One RK4 step of Dahl's ``F`` with the stage rates ``vdot``: the new ``F`` and its continuous extension
+    at the step's middle (as the core's ``Dahl::step``)."""
+    if not (fc > 0.0 and sigma > 0.0):
+        return f, f
+
+    def rate(v: float, f: float) -> float:
+        s = 1.0 if v > 0.0 else -1.0 if v < 0.0 else 0.0
+        return sigma * v * (1.0 - s * f / fc)
+
+    half_h = 0.5 * h
+    k1 = rate(vdot[0], f)
+    k2 = rate(vdot[1], f + half_h * k1)
+    k3 = rate(vdot[2], f + half_h * k2)
+    k4 = rate(vdot[3], f + h * k3)
+    return f + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4), f + h * (5.0 * k1 + 4.0 * (k2 + k3) - k4) / 24.0
 
 
 def _mech(p: Mapping[str, float], inp: Input) -> Callable[[float], float]:
@@ -296,6 +361,17 @@ class _Rates(NamedTuple):
         return w + (k1 + 2.0 * k2 + 2.0 * k3 + k4) / 6.0, e + (w + 2.0 * w2 + 2.0 * w3 + w4) * dxp / 6.0
 
 
+def _delayed(inp: Input, delay: float) -> Source:
+    """The delayed input ``(v, vdot)`` at time t (0 before the delay has elapsed)."""
+
+    def at(t: float) -> tuple[float, float]:
+        if t - delay < 0.0:
+            return 0.0, 0.0
+        return inp.source(t - delay)
+
+    return at
+
+
 def _play_mode(x: float, xp: float, b: float, xdot: float) -> int:
     """+1 when the play is engaged going up, -1 going down, 0 in its dwell."""
     e = x - xp
@@ -321,10 +397,7 @@ def integrate(
     rate = rates.rate
     n = a.size
 
-    def delayed(t: float) -> tuple[float, float]:
-        if t - delay < 0.0:
-            return 0.0, 0.0
-        return inp.source(t - delay)
+    delayed = _delayed(inp, delay)
 
     def linear(xs: FloatArray, vin: tuple[float, float]) -> tuple[FloatArray, float]:
         v, vdot = vin
@@ -345,12 +418,14 @@ def integrate(
     x0 = float(np.dot(c, xs)) + d * delayed(0.0)[0]
     xp = min(max(0.0, x0 - b), x0 + b)
     ys = 0.0
+    dahl, fu, fx = _dahl(p), 0.0, 0.0  # Dahl friction's forces on u and on x
+    has_dahl = _dahl_on(dahl)
     x_out, w_out, y_out = np.empty(n_samples), np.empty(n_samples), np.empty(n_samples)
     for k in range(n_samples):
         t = k * dt
         x_out[k] = float(np.dot(c, xs)) + d * delayed(t)[0]
         w_out[k] = w
-        y_out[k] = p[OFFSET] + (ys if has_lag else forcing(w, t, xs))
+        y_out[k] = p[OFFSET] + (ys if has_lag else _with_dahl(has_dahl, forcing(w, t, xs), fu, fx))
         if k == n_samples - 1:
             break
         for s in range(substeps):
@@ -390,10 +465,11 @@ def integrate(
 
             w_mid = w + h * (5.0 * kw1 + 4.0 * (kw2 + kw3) - kw4) / 24.0
             xs_mid = xs + h * (5.0 * k1 + 4.0 * (k2 + k3) - k4) / 24.0
-            f0 = forcing(w, ts, xs)
+            f0 = _with_dahl(has_dahl, forcing(w, ts, xs), fu, fx)
             xs = xs + h_sixth * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
             w = w + h_sixth * (kw1 + 2.0 * kw2 + 2.0 * kw3 + kw4)
             en = en + h_sixth * (ke1 + 2.0 * ke2 + 2.0 * ke3 + ke4)
+            fu, fu_mid, fx, fx_mid = _dahl_steps(dahl, (fu, fx), h, inp, ts, (xdot1, xdot2, xdot3, xdot4))
             if has_play:
                 xp = xp + h_sixth * (p1 + 2.0 * p2 + 2.0 * p3 + p4)
                 x_end = float(np.dot(c, xs)) + d * in4[0]
@@ -403,8 +479,8 @@ def integrate(
                     w, en = rates.path(w, en, travel)
                 xp = clamped
             if has_lag:
-                fm = forcing(w_mid, tm, xs_mid)
-                f1 = forcing(w, te, xs)
+                fm = _with_dahl(has_dahl, forcing(w_mid, tm, xs_mid), fu_mid, fx_mid)
+                f1 = _with_dahl(has_dahl, forcing(w, te, xs), fu, fx)
                 ys = decay * ys + (l0 * f0 + lm * fm + l1 * f1)
     return x_out, w_out, y_out
 

@@ -55,7 +55,14 @@ def _sample(cls: type[Term]) -> Term:
 
 
 def _why_not(cls: type[Term]) -> Optional[str]:
-    """None when the simulator's term list takes ``cls``, else the reason."""
+    """None when the simulator's term list takes ``cls`` and the fit can free it alone, else the reason."""
+    if cls.companion or cls.part_of:  # Dahl friction: simulated, but its two parameters are one element
+        return (
+            f"{cls.label!r} is one parameter of a two-parameter element (with "
+            f"{cls.companion or cls.part_of!r}), which the simulator integrates but this fit frees term by "
+            "term (alone, one parameter has no effect while the other is 0); fit it on averaged periods "
+            "(identify_augmented, diagnose)"
+        )
     try:
         core_terms([_sample(cls)])
     except (InvalidParameterError, TypeError) as exc:
