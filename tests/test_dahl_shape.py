@@ -128,3 +128,23 @@ def test_the_bench_scores_the_caveat_only_on_the_family_rows() -> None:
     assert not bench._family(caveated, ["dahl", "dahl_sigma"], "slack_gap")  # not of the family
     assert not bench._family(caveated, ["dahl", "dahl_sigma", "pinching"], "iwan")  # another name beside
     assert not bench._family(_D("explained by Dahl friction"), ["dahl", "dahl_sigma"], "pi_u")  # no caveat
+
+
+def test_the_law_text_names_the_branch_shape_only_when_the_element_failed() -> None:
+    """The verdict's "not named" clause mentions a branch shape only when an element whose shape is tested
+    with its law (a term with a companion: Dahl friction) is among the refused; a spring's refusal is its
+    law alone."""
+    from types import SimpleNamespace
+    from typing import cast
+
+    from bouc_wen_id.diagnosis import run as R
+
+    def steps(term: str) -> Any:
+        trial = SimpleNamespace(term=term, law_p_value=1e-5)
+        return cast(Any, [SimpleNamespace(trials=[trial], law_failed={term})])
+
+    spring = R._law_text(steps(T.Stiffness.kind))
+    element = R._law_text(steps(T.Dahl.kind))
+    assert "not named" in spring and "not named" in element
+    assert "branch shape" not in spring
+    assert "branch shape" in element

@@ -979,8 +979,14 @@ def _law_text(steps: Sequence[Step]) -> str:
     if not failed:
         return ""
     what = ", ".join(f"{TERMS[t].place_label()} (p = {p:.2g})" for t, p in failed.items())
+    # a two-parameter element (Dahl friction) has its branch shape tested with its law (diagnosis/shape.py)
+    shape = (
+        "; for Dahl friction, or a branch shape not its own"
+        if any(TERMS[t].companion for t in failed)
+        else ""
+    )
     return (
         f"; not named: {what}: each fits part of the misfit, but with a value that differs between "
-        "experiments (its law, one value for all, fails; for Dahl friction, or a branch shape not its "
-        "own): it stands in for physics outside the library"
+        f"experiments (its law, one value for all, fails{shape}): it stands in for physics outside the "
+        "library"
     )
