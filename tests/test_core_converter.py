@@ -115,3 +115,15 @@ def test_a_wrong_argument_is_invalid_parameter_error(name: str, param: str, bad:
 def test_a_non_callable_objective_is_named() -> None:
     with pytest.raises(InvalidParameterError, match="callable"):
         _core.golden_section(3.0, 0.0, 1.0, 1e-6)  # type: ignore[arg-type]
+
+
+def test_a_simulation_with_two_unknown_terms_names_the_same_one_every_time() -> None:
+    """The terms reach the core as a map; its order is the names' (sorted), not a hash's, so the error for
+    two unknown names is the same on every call (it named either one, call by call)."""
+    messages = set()
+    for _ in range(40):
+        with pytest.raises(InvalidParameterError, match="unknown term") as err:
+            _core.simulate_sine(*_PLANT, 1.0, 2.0, 0.05, 50, 1, terms={"zz_nope": 1.0, "aa_nope": 1.0})
+        messages.add(str(err.value))
+    assert len(messages) == 1
+    assert "aa_nope" in messages.pop()

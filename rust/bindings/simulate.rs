@@ -1,7 +1,7 @@
 //! Simulation of the Wiener-Bouc-Wen plant (1a-c, 2a), with the §9.4 terms
 //! (`rust/simulate.rs`, `rust/simulate/with_terms.rs`).
 
-use std::collections::HashMap;
+use std::collections::BTreeMap;
 
 use numpy::{IntoPyArray, PyReadonlyArray1};
 use pyo3::prelude::*;
@@ -29,13 +29,14 @@ struct Plant {
     bouc_wen: [f64; 5],
 }
 
-/// Runs one simulation: `(x, w)`, or `(x, w, y)` with the §9.4 `terms` ({code name: value}; the
+/// Runs one simulation: `(x, w)`, or `(x, w, y)` with the §9.4 `terms` ({code name: value}, read in
+/// the names' sorted order so that an error names the same term on every call; the
 /// plain path untouched without them). Checks in the reference's order: G, the hysteresis, dt,
 /// substeps, n_samples, then the terms (the input itself was checked by the caller).
 fn run<'py>(
     py: Python<'py>,
     plant: Plant,
-    terms: Option<HashMap<String, f64>>,
+    terms: Option<BTreeMap<String, f64>>,
     input: Input<'_>,
     dt: f64,
     n_samples: i64,
@@ -93,7 +94,7 @@ fn simulate_sine<'py>(
     #[pyo3(from_py_with = arg)] dt: f64,
     #[pyo3(from_py_with = arg)] n_samples: i64,
     #[pyo3(from_py_with = arg)] substeps: i64,
-    #[pyo3(from_py_with = arg)] terms: Option<HashMap<String, f64>>,
+    #[pyo3(from_py_with = arg)] terms: Option<BTreeMap<String, f64>>,
 ) -> PyResult<Bound<'py, PyTuple>> {
     let input = Input::Sine { amplitude, omega };
     input.validate()?;
@@ -124,7 +125,7 @@ fn simulate_sampled<'py>(
     #[pyo3(from_py_with = arg)] u: PyReadonlyArray1<'py, f64>,
     #[pyo3(from_py_with = arg)] dt: f64,
     #[pyo3(from_py_with = arg)] substeps: i64,
-    #[pyo3(from_py_with = arg)] terms: Option<HashMap<String, f64>>,
+    #[pyo3(from_py_with = arg)] terms: Option<BTreeMap<String, f64>>,
 ) -> PyResult<Bound<'py, PyTuple>> {
     let u = slice("u", &u)?;
     let input = Input::Sampled { u };
