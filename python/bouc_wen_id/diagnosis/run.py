@@ -47,6 +47,7 @@ from .locate import Localisation, adequacy_p, locate
 from .progress import Progress, ProgressCallback, reporter
 from .result import Diagnosis, ModelSummary, NamedTerm, Status, term_symbol_unit
 from .select import ALPHA, Alternative, FoldCache, Step, dof_of, forward_select, held_out
+from .shape import has_branch
 from .structure import with_structure
 
 #: When the final model is still rejected, named terms that remove at least this share of the plain model's
@@ -979,12 +980,7 @@ def _law_text(steps: Sequence[Step]) -> str:
     if not failed:
         return ""
     what = ", ".join(f"{TERMS[t].place_label()} (p = {p:.2g})" for t, p in failed.items())
-    # a two-parameter element (Dahl friction) has its branch shape tested with its law (diagnosis/shape.py)
-    shape = (
-        "; for Dahl friction, or a branch shape not its own"
-        if any(TERMS[t].companion for t in failed)
-        else ""
-    )
+    shape = "; for Dahl friction, or a branch shape not its own" if any(map(has_branch, failed)) else ""
     return (
         f"; not named: {what}: each fits part of the misfit, but with a value that differs between "
         f"experiments (its law, one value for all, fails{shape}): it stands in for physics outside the "

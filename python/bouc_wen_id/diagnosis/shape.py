@@ -87,6 +87,13 @@ def exponent_column(a: float, psi0: float, fc: float, sigma: float, p: int) -> F
     return np.asarray(-s * fc * dg, dtype=np.float64)
 
 
+def has_branch(term: str) -> bool:
+    """Whether ``term`` is a two-parameter element (Dahl friction) whose branch shape :func:`shape_test`
+    tests beside its law."""
+    cls = TERMS.get(term)
+    return cls is not None and bool(cls.companion)
+
+
 def shape_test(exps: Sequence[AugExperiment], fit: AugFit, term: str, substeps: int) -> float:
     """p-value of Dahl friction's branch shape (exponent 1) at ``fit`` (module docstring); NaN for a term
     without a branch (not a two-parameter element), an absent element, or a model the core cannot
@@ -94,8 +101,10 @@ def shape_test(exps: Sequence[AugExperiment], fit: AugFit, term: str, substeps: 
     from scipy.special import chdtrc  # type: ignore[import-untyped]
 
     par = fit.params
-    cls = TERMS.get(term)
-    if cls is None or not cls.companion or term not in par.terms or cls.companion not in par.terms:
+    if not has_branch(term):
+        return math.nan
+    cls = TERMS[term]
+    if term not in par.terms or cls.companion not in par.terms:
         return math.nan
     fc = float(par.values[par.terms.index(term)])
     sigma = float(par.values[par.terms.index(cls.companion)])
