@@ -147,3 +147,19 @@ def test_the_command_line_reads_groups_and_writes_the_json(tmp_path: Path, capsy
     assert main(["diagnose-across", "--group", "0", dirs[0]]) == 2
     assert "at least 2 conditions" in capsys.readouterr().err
     assert main(["diagnose-across", "--group", "x", dirs[0], "--group", "1", dirs[1]]) == 2
+
+
+def test_the_json_never_replaces_a_users_file_unasked(tmp_path: Path, capsys: Any) -> None:
+    """``--json`` onto an existing file (a recording, say) or a folder is refused before any diagnosis, the
+    file left as it was; ``--overwrite`` replaces a file (and never a folder)."""
+    from bouc_wen_id.cli import main
+
+    mine = tmp_path / "mine.csv"
+    mine.write_text("t,u,y\n0,1,2\n")
+    argv = ["diagnose-across", "--group", "0", "nowhere_a", "--group", "1", "nowhere_b"]
+    assert main([*argv, "--json", str(mine)]) == 2
+    err = capsys.readouterr().err
+    assert f"--json {mine} exists; pass --overwrite" in err
+    assert mine.read_text() == "t,u,y\n0,1,2\n"
+    assert main([*argv, "--json", str(tmp_path), "--overwrite"]) == 2
+    assert "is not a regular file" in capsys.readouterr().err

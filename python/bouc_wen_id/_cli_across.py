@@ -17,6 +17,7 @@ import warnings
 from pathlib import Path
 from typing import Any, Optional
 
+from . import _output
 from .errors import InvalidParameterError
 
 __all__ = ["add_across_parser", "cmd_across"]
@@ -49,7 +50,8 @@ def add_across_parser(sub: Any) -> None:
     p.add_argument("--alpha", type=float, default=0.05, help="false-alarm level per step (default 0.05)")
     p.add_argument("--no-held-out", action="store_true", help="skip the held-out check (faster, weaker)")
     p.add_argument("--compare", action="store_true", help="also diagnose each condition on its own, beside")
-    p.add_argument("--json", type=Path, default=None, help="write the result as JSON to this file")
+    p.add_argument("--json", type=Path, default=None, help="write the result as JSON to this (new) file")
+    p.add_argument("--overwrite", action="store_true", help="replace an existing --json file")
 
 
 def _groups(specs: list[list[str]]) -> tuple[list[float], list[list[Path]]]:
@@ -86,6 +88,8 @@ def cmd_across(args: argparse.Namespace) -> int:
     from .io import load
 
     conds, paths = _groups(args.group)
+    if args.json is not None:  # refused before the run, never after it
+        _output.check_file(args.json, overwrite=args.overwrite, flag="--json")
     cols = _columns(args.columns)
     groups = [list(load(ps, columns=cols, sample_rate=args.sample_rate)) for ps in paths]
     cands = None if args.candidates is None else [c.strip() for c in args.candidates.split(",") if c.strip()]
@@ -110,6 +114,7 @@ def cmd_across(args: argparse.Namespace) -> int:
     if args.json is not None:
         from .diagnosis.result import clean
 
-        args.json.write_text(json.dumps(clean(a.to_dict()), indent=1, allow_nan=False), encoding="utf-8")
+        text = json.dumps(clean(a.to_dict()), indent=1, allow_nan=False)
+        _output.write_file(args.json, text, overwrite=args.overwrite, flag="--json")
         print(f"wrote {args.json}", file=sys.stderr)
     return 0

@@ -9,13 +9,12 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import sys
-import tempfile
 from pathlib import Path
 from typing import Any
 
-from .errors import FileFormatError, InvalidParameterError
+from . import _output
+from .errors import FileFormatError
 from .model import WienerPlant
 
 __all__ = ["add_export_parser", "run_export"]
@@ -69,20 +68,6 @@ def _read(path: Path) -> WienerPlant:
         raise FileFormatError(f"{path}: not a plant JSON file ({type(exc).__name__}: {exc})") from None
 
 
-def _write(out: Path, text: str, overwrite: bool) -> None:
-    if out.exists() and not (overwrite and out.is_file()):
-        why = "is not a regular file" if out.exists() and not out.is_file() else "exists; pass --overwrite"
-        raise InvalidParameterError(f"--out {out} {why}")
-    fd, tmp = tempfile.mkstemp(dir=out.parent if str(out.parent) else ".", prefix=f".{out.name}.")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(text)
-        os.replace(tmp, out)
-    except BaseException:
-        os.unlink(tmp)
-        raise
-
-
 def run_export(args: argparse.Namespace) -> int:
     """Run ``export``: read, convert, write; errors are the library's named ones."""
     from .export import model_to_json, to_c
@@ -92,6 +77,6 @@ def run_export(args: argparse.Namespace) -> int:
     if args.out is None:
         sys.stdout.write(text)
         return 0
-    _write(args.out, text, args.overwrite)
+    _output.write_file(args.out, text, overwrite=args.overwrite)
     print(f"wrote {args.out}")
     return 0

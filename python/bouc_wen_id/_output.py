@@ -121,6 +121,29 @@ def check_out(
     return target
 
 
+def check_file(out: Path, *, overwrite: bool, flag: str = "--out") -> None:
+    """Refuse, by name, a one-file output (``export --out``, ``diagnose-across --json``) that is not ours
+    to write: anything but a regular file, or an existing file without ``overwrite``.  Called before the
+    work, so a long run never ends in a refusal."""
+    if out.exists() and not (overwrite and out.is_file()):
+        why = "is not a regular file" if not out.is_file() else "exists; pass --overwrite"
+        raise InvalidParameterError(f"{flag} {out} {why}")
+
+
+def write_file(out: Path, text: str, *, overwrite: bool, flag: str = "--out") -> None:
+    """Write ``text`` to ``out`` whole or not at all (a temporary file beside it, renamed), after
+    :func:`check_file`."""
+    check_file(out, overwrite=overwrite, flag=flag)
+    fd, tmp = tempfile.mkstemp(dir=out.parent if str(out.parent) else ".", prefix=f".{out.name}.")
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as fh:
+            fh.write(text)
+        os.replace(tmp, out)
+    except BaseException:
+        os.unlink(tmp)
+        raise
+
+
 #: Deepest ``--out`` accepted, in folders: creating each missing one recurses (pathlib, os.makedirs), and
 #: no report needs a thousand levels.
 MAX_DEPTH = 256
