@@ -44,6 +44,7 @@ from .fitting import (
 )
 from .limits import detection_limits, verdict_text
 from .locate import Localisation, adequacy_p, locate
+from .pinch_shape import is_pinching
 from .progress import Progress, ProgressCallback, reporter
 from .result import Diagnosis, ModelSummary, NamedTerm, Status, term_symbol_unit
 from .select import ALPHA, Alternative, FoldCache, Step, dof_of, forward_select, held_out
@@ -981,6 +982,7 @@ def _law_text(steps: Sequence[Step]) -> str:
         return ""
     what = ", ".join(f"{TERMS[t].place_label()} (p = {p:.2g})" for t, p in failed.items())
     shape = "; for Dahl friction, or a branch shape not its own" if any(map(has_branch, failed)) else ""
+    shape += "; for pinching, or a band not its own" if any(map(is_pinching, failed)) else ""
     return (
         f"; not named: {what}: each fits part of the misfit, but with a value that differs between "
         f"experiments (its law, one value for all, fails{shape}): it stands in for physics outside the "

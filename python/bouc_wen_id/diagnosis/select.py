@@ -45,6 +45,7 @@ from ..errors import BudgetExceededError
 from ..terms import TERMS, Stiffness, physical_value
 from . import speed
 from .fitting import best_of, fit_from, fit_own, fit_with, subset
+from .pinch_shape import band_test, is_pinching
 from .shape import LAW_WINDOW, shape_test, spectral_meat
 
 FloatArray = NDArray[np.float64]
@@ -371,6 +372,9 @@ def element_law_test(exps: Sequence[AugExperiment], fit: AugFit, term: str, subs
     Bonferroni over the two. The bench's Iwan loop (a sum of stops on x) was named Dahl friction "in part"
     in 9 of 20 cases at 30x with its values shared: its branch is not Dahl's."""
     p = law_test(exps, fit, term, substeps)
+    if is_pinching(term):  # pinching claims its band too (pinch_shape.band_test: centre and width)
+        ps = [v for v in (p, band_test(exps, fit, term, substeps)) if math.isfinite(v)]
+        return min(1.0, len(ps) * min(ps)) if ps else math.nan
     if not (term in TERMS and TERMS[term].companion):
         return p
     ps = [v for v in (p, shape_test(exps, fit, term, substeps)) if math.isfinite(v)]

@@ -98,8 +98,6 @@ def shape_test(exps: Sequence[AugExperiment], fit: AugFit, term: str, substeps: 
     """p-value of Dahl friction's branch shape (exponent 1) at ``fit`` (module docstring); NaN for a term
     without a branch (not a two-parameter element), an absent element, or a model the core cannot
     differentiate."""
-    from scipy.special import chdtrc  # type: ignore[import-untyped]
-
     par = fit.params
     if not has_branch(term):
         return math.nan
@@ -108,35 +106,66 @@ def shape_test(exps: Sequence[AugExperiment], fit: AugFit, term: str, substeps: 
         return math.nan
     fc = float(par.values[par.terms.index(term)])
     sigma = float(par.values[par.terms.index(cls.companion)])
+    cols = []
+    for i, e in enumerate(exps):
+        if cls.acts_on == Place.X:
+            a, psi0 = e.amplitude * float(par.gains[i]), -float(par.phases[i])
+        else:
+            a, psi0 = e.amplitude, e.grid_phase
+        cols.append(exponent_column(a, psi0, fc, sigma, e.ybar.size)[:, None])
+    return extra_wald(exps, fit, substeps, cols)
+
+
+def extra_wald(
+    exps: Sequence[AugExperiment], fit: AugFit, substeps: int, extra: Sequence[FloatArray]
+) -> float:
+    """p-value of the Wald test that the k columns ``extra[i]`` (per experiment, shape (P_i, k)) add
+    nothing at ``fit``: added beside every parameter of the fit (the shared ones, each experiment's own
+    |G| and phase), one Gauss-Newton step, their k coefficients against their sandwich covariance whose
+    meat is each experiment's residual spectrum (:func:`spectral_meat`), chi-square(k). NaN for a model
+    the core cannot differentiate or columns that are all zero."""
+    k = int(extra[0].shape[1]) if extra else 0
+    got = sandwich_step(exps, fit, substeps, extra)
+    if got is None or k < 1:
+        return math.nan
+    step, cov = got
+    return wald_p(step[-k:], cov[-k:, -k:])
+
+
+def sandwich_step(
+    exps: Sequence[AugExperiment], fit: AugFit, substeps: int, extra: Sequence[FloatArray]
+) -> tuple[FloatArray, FloatArray] | None:
+    """One Gauss-Newton step at ``fit`` of its parameters (shared ``[beta, gamma, mu, terms]``, then each
+    experiment's |G| and phase) and the extra columns ``extra[i]`` (per experiment, (P_i, k)), with the
+    step's sandwich covariance (meat: each experiment's residual spectrum, :func:`spectral_meat`), in the
+    parameters' own units; None for a model the core cannot differentiate or extra columns all zero."""
+    par = fit.params
     m, ns = len(exps), 3 + len(par.terms)
+    k = int(extra[0].shape[1]) if extra else 0
     xs, res = [], []
     try:
         for i, e in enumerate(exps):
             out = augmented_output(e, par, i, substeps=substeps, jacobian=True)
-            if cls.acts_on == Place.X:
-                a, psi0 = e.amplitude * float(par.gains[i]), -float(par.phases[i])
-            else:
-                a, psi0 = e.amplitude, e.grid_phase
-            x = np.zeros((e.ybar.size, ns + 2 * m + 1))
+            x = np.zeros((e.ybar.size, ns + 2 * m + k))
             x[:, :ns] = out.jacobian
             x[:, ns + 2 * i : ns + 2 * i + 2] = out.own_jacobian
-            x[:, -1] = exponent_column(a, psi0, fc, sigma, e.ybar.size)
+            x[:, ns + 2 * m :] = extra[i]
             sw = math.sqrt(e.weight)
             xs.append(sw * x)
             res.append(sw * (e.ybar - out.y))
     except BudgetExceededError:
         raise  # the user's budget is theirs
     except Exception:  # noqa: BLE001 - a model the core cannot differentiate: the shape is not tested
-        return math.nan
+        return None
     xa, r = np.vstack(xs), np.concatenate(res)
-    if not (np.all(np.isfinite(xa)) and np.all(np.isfinite(r))) or not np.any(xa[:, -1]):
-        return math.nan
+    if k < 1 or not (np.all(np.isfinite(xa)) and np.all(np.isfinite(r))) or not np.any(xa[:, -k:]):
+        return None
     scale = np.linalg.norm(xa, axis=0) + 1e-300
     xa = xa / scale
     sv = np.linalg.svd(xa, compute_uv=False)
     rank = int(np.sum(sv > 1e-10 * sv[0]))
     if r.size - rank < 1:
-        return math.nan
+        return None
     beta = np.linalg.lstsq(xa, r, rcond=1e-10)[0]
     bread = np.linalg.pinv(xa.T @ xa, rcond=1e-12)
     meat = np.zeros_like(bread)
@@ -145,10 +174,24 @@ def shape_test(exps: Sequence[AugExperiment], fit: AugFit, term: str, substeps: 
         sl = slice(start, start + x.shape[0])
         meat += spectral_meat(xa[sl], r[sl] - xa[sl] @ beta, r.size / (r.size - rank))
         start += x.shape[0]
-    var = float((bread @ meat @ bread)[-1, -1])
-    if not (var > 0 and math.isfinite(var)):
+    cov = bread @ meat @ bread
+    return beta / scale, cov / np.outer(scale, scale)
+
+
+def wald_p(b: FloatArray, cov: FloatArray) -> float:
+    """Wald p-value of ``b = 0`` with covariance ``cov``, chi-square(rank)."""
+    from scipy.special import chdtrc  # type: ignore[import-untyped]
+
+    if not (np.all(np.isfinite(cov)) and np.all(np.diag(cov) > 0)):
         return math.nan
-    return float(chdtrc(1, beta[-1] ** 2 / var))
+    # Scaled to unit diagonal before the pseudo-inverse (the columns' units differ by orders).
+    d = np.sqrt(np.diag(cov))
+    c = cov / np.outer(d, d)
+    stat = float((b / d) @ np.linalg.pinv(c, rcond=1e-12, hermitian=True) @ (b / d))
+    df = int(np.linalg.matrix_rank(c, hermitian=True))
+    if df < 1 or not math.isfinite(stat):
+        return math.nan
+    return float(chdtrc(df, max(stat, 0.0)))
 
 
-__all__ = ["exponent_column", "shape_test", "spectral_meat"]
+__all__ = ["exponent_column", "extra_wald", "sandwich_step", "shape_test", "spectral_meat"]
