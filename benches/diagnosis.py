@@ -31,6 +31,14 @@ diagnosis's own detection limit for the true term at its place (docs/diagnosis.m
 the effects whose generator units are the library's (``SAME_UNITS``).
 Targets beside each row; "meets" says whether the row's measurable targets hold.
 
+Outside rows also report what the plain model CANNOT absorb (:func:`unabsorbed`: the plain model, G free
+per experiment, refitted to the case's noise-free record, weighted with the noisy data's noise floors):
+"unabs", its RMS in averaged-noise sd (median; the units of "size"); "<det", the share of cases where even
+one candidate taking up all of it would reach the targeted step's test (alpha/2, Bonferroni over the
+candidates) with less than 50 % power, so nothing could see it; "<glob", the share below the global
+adequacy test's 50 % power point; "hon|d", the honest rate (unexpl + fam) over the cases not "<det". The
+rates before them keep every case: no case leaves a denominator.
+
 What counts as right on an outside row of the Dahl element's family (``DAHL_FAMILY``: the Iwan loop, Dahl's
 exponent 2, the Prandtl-Ishlinskii operator on u): "unexplained", or a verdict that names ONLY the Dahl
 element with the family caveat (``diagnosis/caveats.py``: "a Dahl-like friction loop ... a distribution of
@@ -310,6 +318,57 @@ def _below_limit(d: Any, truth: Optional[str], place: str, value: float) -> Opti
     return bool(abs(value) < lim)
 
 
+def unabsorbed(d: Any, recordings: list[Any]) -> tuple[float, float, float]:
+    """What of an effect the plain model CANNOT absorb, and the sizes the diagnosis could detect, as RMS in
+    averaged-noise sd (the units of the "size" column): ``(unabsorbed, limit, global limit)``.
+
+    ``recordings`` are the case's noise-free recordings (the effect included). The plain model (G free per
+    experiment) is refitted to their averaged periods from the diagnosis's plain fit, weighted with the
+    noisy data's own noise floors: its cost ``lam`` is the non-centrality the effect gives any test of the
+    plain model, ``sqrt(lam / n)`` the unabsorbed RMS over the ``n`` samples. ``limit``: even a candidate
+    that took up ALL of ``lam`` with its one parameter reaches 50 % power of the targeted step's test
+    (alpha / 2, Bonferroni over the candidates: run.py's gate) only at ``lam = chi2_1 critical value``;
+    below it no test of the diagnosis sees the effect half the time. ``global limit``: the global adequacy
+    test's 50 % power point (F at alpha / 2 against the noise floor), ``lam = dof (F_crit - 1)``. NaNs
+    when the noise-free data do not line up with the diagnosis's experiments."""
+    from dataclasses import replace
+
+    from bouc_wen_id.diagnosis.data import prepare
+    from bouc_wen_id.diagnosis.fitting import Scale, fit_from, scaled
+    from scipy.stats import chi2  # type: ignore[import-untyped]
+    from scipy.stats import f as f_dist
+
+    nan3 = (math.nan, math.nan, math.nan)
+    exps = list(d.experiments)
+    clean = {e.source: e for e in prepare(recordings)}
+    if d.plain_fit is None or any(
+        e.source not in clean or clean[e.source].ybar.size != e.ybar.size for e in exps
+    ):
+        return nan3
+    s = Scale(d.settings["scale"]["y"], d.settings["scale"]["u"])
+    sx = [replace(e, ybar=clean[x.source].ybar / s.y) for e, x in zip(scaled(exps, s), exps)]
+    fit = fit_from(sx, d.plain_fit.params, d.settings["substeps"])
+    if fit is None:
+        return nan3
+    n = sum(e.ybar.size for e in sx)
+    dof = n - (3 + 2 * len(sx))
+    noise_dof = max(sum(int(e.noise_dof) for e in exps), 1)
+    half = 0.5 * float(d.settings["alpha"])
+    lam_one = float(chi2.isf(half / max(len(d.settings["candidates"]), 1), 1))
+    lam_global = dof * (float(f_dist.isf(half, dof, noise_dof)) - 1.0)
+    return math.sqrt(max(fit.cost, 0.0) / n), math.sqrt(lam_one / n), math.sqrt(max(lam_global, 0.0) / n)
+
+
+def _clean_recordings(kind: str, name: str, place: str, size: float, seed: int) -> list[Any]:
+    """The case's recordings without noise (benches/generator.py's plant and effect at the calibrated
+    value, the same sampling), for :func:`unabsorbed`."""
+    import generator as gen
+
+    p = gen.make_plant(seed, low_amplitude=kind == "null")
+    _, _, y = gen._calibrate(p, name, place, size, gen.base(p))
+    return gen.recordings(p, y, seed, noise_sd=0.0)
+
+
 def run_new_case(
     job: tuple[str, Optional[str], str, float, int], cache: Optional[Path] = None
 ) -> dict[str, Any]:
@@ -354,6 +413,15 @@ def run_new_case(
     if skind == "structure":  # the achieved size: the cascade's RMS misfit in averaged-noise sd
         n = sum(e.ybar.size for e in d.experiments)
         row["achieved"] = math.sqrt(max(d.plain.cost - d.plain.dof, 0.0) / n)
+    if skind == "outside" and name is not None:  # what the plain model cannot absorb (unabsorbed())
+        try:
+            got = unabsorbed(d, _clean_recordings(kind, name, place, size, seed))
+            row["unabsorbed"], row["det_limit"], row["global_limit"] = got
+        except Exception as exc:  # reported, never fatal
+            row["unabsorbed_error"] = f"{type(exc).__name__}: {exc}"
+        if math.isfinite(row.get("unabsorbed", math.nan)):
+            row["below_det"] = bool(row["unabsorbed"] < row["det_limit"])
+            row["below_global"] = bool(row["unabsorbed"] < row["global_limit"])
     fittable = skind not in ("outside", "structure")
     try:
         where = place if placed else ""
@@ -462,6 +530,15 @@ def summarise(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
                 [r["below_limit"] for r in ok if r.get("below_limit") is not None and r["term"] in SAME_UNITS]
             ),
         }
+        # Outside rows: the unabsorbed part (unabsorbed()) and the share below the global test's 50 % power
+        # point, and the honest rate over the other cases; the rates above keep every case.
+        det = [r for r in ok if r.get("below_det") is not None]
+        line["unabsorbed"] = med("unabsorbed")
+        line["below_det"] = _mean([bool(r["below_det"]) for r in det])
+        line["below_global"] = _mean([bool(r["unabsorbed"] < r["global_limit"]) for r in det])
+        line["honest_det"] = _mean(
+            [bool(r.get("unexplained")) or bool(r.get("family")) for r in det if not r["below_det"]]
+        )
         text, checks = _target(kind, size)
         if kind == "library" and size >= 10 and math.isfinite(line["ho_ratio"]):
             checks["ho_ratio"] = ("<=", 1.10)
@@ -484,7 +561,8 @@ def _mean(v: list[Any]) -> float:
 def print_table(lines: list[dict[str, Any]], null_label: str = "null (plain, low-amp settling)") -> None:
     head = (
         f"{'case':<34} {'n':>3} {'detect':>6} {'name':>5} {'+place':>6} {'wrong':>5} {'unexpl':>6} "
-        f"{'fam':>4} {'bad':>4} {'HO':>6} {'s/diag':>6} {'size':>5} {'<lim':>5} {'err':>3} {'meets':>5}  "
+        f"{'fam':>4} {'bad':>4} {'HO':>6} {'s/diag':>6} {'size':>5} {'<lim':>5} {'unabs':>5} {'<det':>4} "
+        f"{'<glob':>5} {'hon|d':>5} {'err':>3} {'meets':>5}  "
         "target"
     )
     print(head)
@@ -501,6 +579,8 @@ def print_table(lines: list[dict[str, Any]], null_label: str = "null (plain, low
             f"{ln['wrong']:5.2f} {ln['unexplained']:6.2f} {ln.get('family', 0.0):4.2f} {ln['bad']:4.2f} "
             f"{ln['ho_ratio']:6.3f} "
             f"{ln['seconds']:6.2f} {ln['achieved']:5.1f} {ln.get('below_lim', math.nan):5.2f} "
+            f"{ln.get('unabsorbed', math.nan):5.2f} {ln.get('below_det', math.nan):4.2f} "
+            f"{ln.get('below_global', math.nan):5.2f} {ln.get('honest_det', math.nan):5.2f} "
             f"{ln['errors']:>3} "
             f"{'yes' if ln['meets'] else 'NO':>5}  "
             f"{ln['target']}"
