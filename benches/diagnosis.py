@@ -31,13 +31,13 @@ diagnosis's own detection limit for the true term at its place (docs/diagnosis.m
 the effects whose generator units are the library's (``SAME_UNITS``).
 Targets beside each row; "meets" says whether the row's measurable targets hold.
 
-Outside rows also report what the plain model CANNOT absorb (:func:`unabsorbed`: the plain model, G free
-per experiment, refitted to the case's noise-free record, weighted with the noisy data's noise floors):
-"unabs", its RMS in averaged-noise sd (median; the units of "size"); "<det", the share of cases where even
-one candidate taking up all of it would reach the targeted step's test (alpha/2, Bonferroni over the
-candidates) with less than 50 % power, so nothing could see it; "<glob", the share below the global
-adequacy test's 50 % power point; "hon|d", the honest rate (unexpl + fam) over the cases not "<det". The
-rates before them keep every case: no case leaves a denominator.
+Outside and library rows also report what the plain model CANNOT absorb (:func:`unabsorbed`: the plain
+model, G free per experiment, refitted to the case's noise-free record, weighted with the noisy data's
+noise floors): "unabs", its RMS in averaged-noise sd (median; the units of "size"); "<det", the share of
+cases where even one candidate taking up all of it would reach the targeted step's test (alpha/2,
+Bonferroni over the candidates) with less than 50 % power, so nothing could see it; "<glob", the share
+below the global adequacy test's 50 % power point; "hon|d" (outside rows), the honest rate (unexpl + fam)
+over the cases not "<det". The rates before them keep every case: no case leaves a denominator.
 
 What counts as right on an outside row of the Dahl element's family (``DAHL_FAMILY``: the Iwan loop, Dahl's
 exponent 2, the Prandtl-Ishlinskii operator on u): "unexplained", or a verdict that names ONLY the Dahl
@@ -413,7 +413,7 @@ def run_new_case(
     if skind == "structure":  # the achieved size: the cascade's RMS misfit in averaged-noise sd
         n = sum(e.ybar.size for e in d.experiments)
         row["achieved"] = math.sqrt(max(d.plain.cost - d.plain.dof, 0.0) / n)
-    if skind == "outside" and name is not None:  # what the plain model cannot absorb (unabsorbed())
+    if skind in ("outside", "library") and name is not None:  # what the plain model cannot absorb
         try:
             got = unabsorbed(d, _clean_recordings(kind, name, place, size, seed))
             row["unabsorbed"], row["det_limit"], row["global_limit"] = got
@@ -536,8 +536,10 @@ def summarise(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
         line["unabsorbed"] = med("unabsorbed")
         line["below_det"] = _mean([bool(r["below_det"]) for r in det])
         line["below_global"] = _mean([bool(r["unabsorbed"] < r["global_limit"]) for r in det])
-        line["honest_det"] = _mean(
-            [bool(r.get("unexplained")) or bool(r.get("family")) for r in det if not r["below_det"]]
+        line["honest_det"] = (
+            _mean([bool(r.get("unexplained")) or bool(r.get("family")) for r in det if not r["below_det"]])
+            if kind == "outside"
+            else math.nan
         )
         text, checks = _target(kind, size)
         if kind == "library" and size >= 10 and math.isfinite(line["ho_ratio"]):
