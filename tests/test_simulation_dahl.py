@@ -4,7 +4,7 @@ more RK4 state, ``F' = sigma v' (1 - sgn(v') F / Fc)``, on the measured input u 
 Rust against the NumPy oracle on seeded random plants and inputs; the record against scipy's ``solve_ivp``
 of the ODE (a state-space G written here, resonant with a delay, and first order); the last period of a long
 sine against the closed-form steady loop of ``rust/dahl.rs`` (its oracle ``reference.dahl``, no time loop);
-and the things that still refuse it, by name.
+and the things that still refuse it, by name (the exporters take it: tests/test_export_dahl.py).
 """
 
 from __future__ import annotations
@@ -20,7 +20,6 @@ import pytest
 from bouc_wen_id import _core, reference
 from bouc_wen_id.cli import main
 from bouc_wen_id.errors import InvalidParameterError
-from bouc_wen_id.export import UnsupportedTermError
 from bouc_wen_id.model import BoucWen, SinePlan, TransferFunction, WienerPlant
 from bouc_wen_id.terms import Dahl, DahlSigma, Place, SensorLag, Term, Viscous
 from numpy.testing import assert_allclose
@@ -156,9 +155,8 @@ def test_the_steady_state_is_the_closed_form_loop(place: Place) -> None:
 
 def test_what_still_refuses_dahl_friction_says_why() -> None:
     plant = WienerPlant(TransferFunction([1.0], [0.1, 1.0]), BoucWen(1.0, 0.5, 1.5), _dahl(0.2, 2.0))
-    # Export: the formats transcribe the simulator term by term, with no Dahl state yet.
-    with pytest.raises(UnsupportedTermError, match="'dahl'.* has no exporter"):
-        bw.to_c(plant)
+    # Export takes it (tests/test_export_dahl.py): the force is one more state of the exported model.
+    assert "static const double bouc_wen_model_sigma = 2.0;" in bw.to_c(plant)
     # Compensation: the inverse reads u off y stage by stage; the friction's state is in the way.
     t = np.arange(200) * 0.01
     with pytest.raises(InvalidParameterError, match="does not handle Dahl friction: its force has a memory"):
