@@ -334,6 +334,15 @@ impl System<'_> {
     }
 }
 
+/// The mask on the sample index of the integrators' Ctrl-C check, about every
+/// `CHECK_EVERY_STEPS` RK4 steps: a power of two minus one, so the test is a mask, not a division.
+fn cancel_mask(substeps: usize) -> usize {
+    (crate::cancel::CHECK_EVERY_STEPS / substeps)
+        .max(1)
+        .next_power_of_two()
+        - 1
+}
+
 /// Largest order run on fixed-size arrays by [`integrate_fixed`].
 const FIXED_MAX_ORDER: usize = 4;
 
@@ -440,17 +449,11 @@ fn integrate_fixed<const N: usize, I: Stages>(
 ) {
     let sys = Fixed::<N>::new(comp, bw);
     let dt = grid.dt;
-    let h = dt / grid.substeps as f64;
-    let half_h = 0.5 * h;
-    let h_sixth = h / 6.0;
+    let rk4::Steps { h, half_h, h_sixth } = rk4::Steps::new(dt, grid.substeps);
     let mut xs = [0.0; N];
     let mut w = bw.w0();
     let last = grid.n_samples - 1;
-    // As in `integrate`: a Ctrl-C check every ~CHECK_EVERY_STEPS steps, a mask on the sample index.
-    let check_mask = (crate::cancel::CHECK_EVERY_STEPS / grid.substeps)
-        .max(1)
-        .next_power_of_two()
-        - 1;
+    let check_mask = cancel_mask(grid.substeps);
     for (k, (xo, wo)) in out.x.iter_mut().zip(out.w.iter_mut()).enumerate() {
         let t = k as f64 * dt;
         *xo = sys.output(&xs, src.sample(t));
@@ -495,11 +498,7 @@ fn integrate<I: Stages>(
     let mut w = bw.w0();
     let mut sc = rk4::Scratch::new(n);
     let last = grid.n_samples - 1;
-    // A power of two, so the test is a mask rather than a division.
-    let check_mask = (crate::cancel::CHECK_EVERY_STEPS / grid.substeps)
-        .max(1)
-        .next_power_of_two()
-        - 1;
+    let check_mask = cancel_mask(grid.substeps);
     for (k, (xo, wo)) in out.x.iter_mut().zip(out.w.iter_mut()).enumerate() {
         let t = k as f64 * dt;
         *xo = sys.output(&xs, src.sample(t));
