@@ -481,7 +481,8 @@ int ${P}(const double *u, long n, double dt, int substeps, double *x, double *w,
         if (x != NULL) x[k] = ${P}_output(xs, vk[0]);
         if (w != NULL) w[k] = wv;
         yk = has_lag ? ys : ${P}_forcing(u, n, dt, t, wv, xs, scale, scale_x, has_onx);
-        yk = ${P}_y0 + (has_lag ? ys : ${P}_with_dahl(has_dahl, yk, fu, fx));
+        if (!has_lag) yk = ${P}_with_dahl(has_dahl, yk, fu, fx);
+        yk = ${P}_y0 + yk;
         if (y != NULL) y[k] = yk;
         if (!isfinite(wv) || !isfinite(yk)) blown = 1;
         if (k == n - 1) break;
@@ -533,7 +534,7 @@ int ${P}(const double *u, long n, double dt, int substeps, double *x, double *w,
                 for (i = 0; i < ${P}_N; ++i)
                     xs_mid[i] = xs[i] + h * (5.0 * k1[i] + 4.0 * (k2[i] + k3[i]) - k4[i]) / 24.0;
             f0 = has_lag ? ${P}_forcing(u, n, dt, ts, wv, xs, scale, scale_x, has_onx) : 0.0;
-            f0 = has_lag ? ${P}_with_dahl(has_dahl, f0, fu, fx) : 0.0;
+            if (has_lag) f0 = ${P}_with_dahl(has_dahl, f0, fu, fx);
             for (i = 0; i < ${P}_N; ++i) xs[i] += h_sixth * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
             wv += h_sixth * (kw1 + 2.0 * kw2 + 2.0 * kw3 + kw4);
             if (has_dahl) {
