@@ -23,7 +23,6 @@ rope, three simulated cases). Progress on stderr.
 from __future__ import annotations
 
 import argparse
-import importlib.util
 import json
 import os
 import sys
@@ -36,6 +35,7 @@ from typing import Any, Callable, Optional
 HERE = Path(__file__).resolve().parent
 REPO = HERE.parent
 sys.path.insert(0, str(HERE))
+sys.path.insert(0, str(REPO / "studies"))  # the data sets' adapters, imported by name
 
 #: The simulated cases: (kind, effect, place, size in averaged-noise sd, seed) of benches/generator.py.
 SIMULATED = (
@@ -46,13 +46,9 @@ SIMULATED = (
 
 
 def _adapters() -> Any:
-    path = REPO / "studies" / "_adapters.py"
-    spec = importlib.util.spec_from_file_location("_adapters", path)
-    assert spec is not None and spec.loader is not None
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules["_adapters"] = mod
-    spec.loader.exec_module(mod)
-    return mod
+    import _adapters
+
+    return _adapters
 
 
 def _data_dir(given: Optional[Path], adapters: Any) -> Path:

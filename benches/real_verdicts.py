@@ -10,7 +10,6 @@ Usage: ``python benches/real_verdicts.py [--data DIR] [--groups 'mr-damper 0 A,w
 from __future__ import annotations
 
 import argparse
-import importlib.util
 import json
 import os
 import sys
@@ -19,16 +18,13 @@ from pathlib import Path
 from typing import Any
 
 REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO / "studies"))  # the study and its adapters, imported by name
 
 
 def _study() -> Any:
-    path = REPO / "studies" / "diagnose_real.py"
-    spec = importlib.util.spec_from_file_location("diagnose_real", path)
-    assert spec is not None and spec.loader is not None
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules["diagnose_real"] = mod
-    spec.loader.exec_module(mod)
-    return mod
+    import diagnose_real
+
+    return diagnose_real
 
 
 def _numbers(v: Any, path: str = "") -> dict[str, float]:

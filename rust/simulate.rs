@@ -29,6 +29,7 @@ use crate::linear::{Companion, TransferFunction};
 
 // The augmented model's integrator (design.md §9.4), kept apart so that this plain path is untouched.
 mod on_x;
+mod rk4;
 mod with_terms;
 pub use on_x::OnXValues;
 pub use with_terms::{simulate_with_terms, TermSimulation, TermValues};
@@ -333,12 +334,13 @@ impl System<'_> {
     }
 }
 
-/// `xs + k * hk`, elementwise into `out` (all of the same length).
-#[inline(always)]
-fn axpy(out: &mut [f64], xs: &[f64], hk: f64, k: &[f64]) {
-    for ((o, x), ki) in out.iter_mut().zip(xs).zip(k) {
-        *o = x + hk * ki;
-    }
+/// The mask on the sample index of the integrators' Ctrl-C check, about every
+/// `CHECK_EVERY_STEPS` RK4 steps: a power of two minus one, so the test is a mask, not a division.
+fn cancel_mask(substeps: usize) -> usize {
+    (crate::cancel::CHECK_EVERY_STEPS / substeps)
+        .max(1)
+        .next_power_of_two()
+        - 1
 }
 
 /// Largest order run on fixed-size arrays by [`integrate_fixed`].
@@ -447,17 +449,11 @@ fn integrate_fixed<const N: usize, I: Stages>(
 ) {
     let sys = Fixed::<N>::new(comp, bw);
     let dt = grid.dt;
-    let h = dt / grid.substeps as f64;
-    let half_h = 0.5 * h;
-    let h_sixth = h / 6.0;
+    let rk4::Steps { h, half_h, h_sixth } = rk4::Steps::new(dt, grid.substeps);
     let mut xs = [0.0; N];
     let mut w = bw.w0();
     let last = grid.n_samples - 1;
-    // As in `integrate`: a Ctrl-C check every ~CHECK_EVERY_STEPS steps, a mask on the sample index.
-    let check_mask = (crate::cancel::CHECK_EVERY_STEPS / grid.substeps)
-        .max(1)
-        .next_power_of_two()
-        - 1;
+    let check_mask = cancel_mask(grid.substeps);
     for (k, (xo, wo)) in out.x.iter_mut().zip(out.w.iter_mut()).enumerate() {
         let t = k as f64 * dt;
         *xo = sys.output(&xs, src.sample(t));
@@ -496,25 +492,13 @@ fn integrate<I: Stages>(
     let n = comp.order();
     let sys = System { comp, bw };
     let dt = grid.dt;
-    let h = dt / grid.substeps as f64;
-    let half_h = 0.5 * h;
-    let h_sixth = h / 6.0;
+    let rk4::Steps { h, half_h, h_sixth } = rk4::Steps::new(dt, grid.substeps);
 
     let mut xs = vec![0.0; n];
     let mut w = bw.w0();
-    let (mut k1, mut k2, mut k3, mut k4, mut tmp) = (
-        vec![0.0; n],
-        vec![0.0; n],
-        vec![0.0; n],
-        vec![0.0; n],
-        vec![0.0; n],
-    );
+    let mut sc = rk4::Scratch::new(n);
     let last = grid.n_samples - 1;
-    // A power of two, so the test is a mask rather than a division.
-    let check_mask = (crate::cancel::CHECK_EVERY_STEPS / grid.substeps)
-        .max(1)
-        .next_power_of_two()
-        - 1;
+    let check_mask = cancel_mask(grid.substeps);
     for (k, (xo, wo)) in out.x.iter_mut().zip(out.w.iter_mut()).enumerate() {
         let t = k as f64 * dt;
         *xo = sys.output(&xs, src.sample(t));
@@ -524,18 +508,17 @@ fn integrate<I: Stages>(
         }
         for s in 0..grid.substeps {
             let ts = t + s as f64 * h;
-            let kw1 = sys.rhs(&xs, w, src.stage(2 * s, ts), &mut k1);
+            let kw1 = sys.rhs(&xs, w, src.stage(2 * s, ts), &mut sc.k1);
             // Stages 2 and 3 share the time t + h/2: evaluate the input once.
             let mid = src.stage(2 * s + 1, ts + half_h);
-            axpy(&mut tmp, &xs, half_h, &k1);
-            let kw2 = sys.rhs(&tmp, w + half_h * kw1, mid, &mut k2);
-            axpy(&mut tmp, &xs, half_h, &k2);
-            let kw3 = sys.rhs(&tmp, w + half_h * kw2, mid, &mut k3);
-            axpy(&mut tmp, &xs, h, &k3);
-            let kw4 = sys.rhs(&tmp, w + h * kw3, src.stage(2 * s + 2, ts + h), &mut k4);
-            for ((((x, a), b), c), d) in xs.iter_mut().zip(&k1).zip(&k2).zip(&k3).zip(&k4) {
-                *x += h_sixth * (a + 2.0 * b + 2.0 * c + d);
-            }
+            rk4::axpy(&mut sc.tmp, &xs, half_h, &sc.k1);
+            let kw2 = sys.rhs(&sc.tmp, w + half_h * kw1, mid, &mut sc.k2);
+            rk4::axpy(&mut sc.tmp, &xs, half_h, &sc.k2);
+            let kw3 = sys.rhs(&sc.tmp, w + half_h * kw2, mid, &mut sc.k3);
+            rk4::axpy(&mut sc.tmp, &xs, h, &sc.k3);
+            let end = src.stage(2 * s + 2, ts + h);
+            let kw4 = sys.rhs(&sc.tmp, w + h * kw3, end, &mut sc.k4);
+            sc.advance(&mut xs, h_sixth);
             w += h_sixth * (kw1 + 2.0 * kw2 + 2.0 * kw3 + kw4);
         }
     }

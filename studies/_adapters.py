@@ -9,7 +9,8 @@ offsets and noise are left to :mod:`bouc_wen_id.signal`.
 The data files are read in place; none of them is copied into the project (only the MR damper files are
 MIT-licensed; the friction damper is CC BY-SA 4.0; the other two state no license).
 
-``examples/`` is not a package: scripts and tests load this file by path (``importlib``).
+``studies/`` is not a package: the studies and benches import this file by name with ``studies/`` on
+``sys.path`` (a study puts its own folder there); tests load it by path (``importlib``) under the same name.
 """
 
 from __future__ import annotations

@@ -2,7 +2,9 @@
 model and the simulation with terms (`augmented_output`, `augmented_refine`, `simulate_sine` and
 `simulate_sampled` with `terms=`): random inputs from a fixed seed, bad values among them so that
 the error messages are compared too. Written for the split of `rust/augmented.rs` and
-`rust/simulate/with_terms.rs` into folders (a refactor that must not move a bit).
+`rust/simulate/with_terms.rs` into folders (a refactor that must not move a bit); `orders 0-7` (G of
+order 0-7 with and without terms: every integrator's RK4 scratch, rust/simulate/rk4.rs) was added for
+the RK4 scratch's move into one helper.
 
 Each build runs in its own process (one `_core` per interpreter):
 
@@ -20,7 +22,7 @@ import sys
 import numpy as np
 
 SEED = 20261126
-N_AUG, N_SIM, N_REF = 420, 360, 30
+N_AUG, N_SIM, N_REF, N_ORDER = 420, 360, 30, 160
 
 USUAL = [
     "offset",
@@ -150,6 +152,38 @@ def sim_cases(core, rng):
     return res
 
 
+def order_cases(core, rng):
+    """G of order 0-7 (above 4 the plain path steps vectors, below it fixed arrays; the path with terms
+    always vectors), without terms (the plain integrator) and with them (Dahl friction among them, the
+    linear part's own pass for a friction on x with samples): the RK4 scratch of every integrator."""
+    res = []
+    for i in range(N_ORDER):
+        order = i % 8
+        poles = -rng.uniform(0.5, 8.0, order)
+        den = np.real(np.poly(poles)) * rng.uniform(0.5, 2.0) if order else np.array([rng.uniform(0.5, 2)])
+        num = rng.uniform(0.5, 2.0, int(rng.integers(0, order + 1)) + 1)
+        num *= rng.uniform(0.5, 2.0) * den[-1] / num.sum() / max(1.0, float(np.max(num / den[0])))
+        delay = rng.uniform(0, 0.1) if rng.uniform() < 0.5 else 0.0
+        beta, gamma, mu = rng.uniform(0.3, 1.0), rng.uniform(-0.2, 0.3), rng.uniform(1.0, 2.5)
+        bw = (1.0, beta, gamma, mu, rng.normal(0, 0.1))
+        dt, sub = rng.uniform(0.005, 0.03), int(rng.integers(1, 4))
+        kwargs = {}
+        if (i // 8) % 2:
+            names = list(rng.choice(USUAL[:-3] + ON_X, size=rng.integers(1, 5), replace=False))
+            names = [n for n in names if n != "distortion"]
+            if rng.uniform() < 0.5:
+                names += ["dahl", "dahl_sigma", "dahl@x", "dahl_sigma@x"]
+            kwargs["terms"] = {n: abs(value(rng, n, beta, gamma)) for n in names}
+        if rng.uniform() < 0.5:
+            args = (num, den, delay, *bw, rng.uniform(0.3, 2), rng.uniform(0.5, 6), dt, 300, sub)
+            res.append(capture(core.simulate_sine, *args, **kwargs))
+        else:
+            u = np.cumsum(rng.normal(0, 0.1, 300))
+            args = (num, den, delay, *bw, u, dt, sub)
+            res.append(capture(core.simulate_sampled, *args, **kwargs))
+    return res
+
+
 def refine_cases(core, rng):
     res = []
     for _ in range(N_REF):
@@ -197,6 +231,7 @@ def run(so, out):
         "augmented_output": aug_cases(core, rng),
         "simulate": sim_cases(core, rng),
         "augmented_refine": refine_cases(core, rng),
+        "orders 0-7": order_cases(core, np.random.default_rng(SEED + 1)),
     }
     with open(out, "wb") as fh:
         pickle.dump(data, fh)

@@ -21,7 +21,6 @@ Usage: ``python studies/diagnose_real.py [--data DIR] [--datasets mr-damper,fric
 from __future__ import annotations
 
 import argparse
-import importlib.util
 import json
 import math
 import os
@@ -37,20 +36,15 @@ from bouc_wen_id.diagnosis.result import clean
 
 REPO = Path(__file__).resolve().parents[1]
 HERE = Path(__file__).resolve().parent
+if str(HERE) not in sys.path:  # the sibling modules import by name (studies/ is not a package)
+    sys.path.insert(0, str(HERE))
 
 
 def _adapters() -> Any:
-    """The data sets' adapters (a sibling file; not a package)."""
-    for folder in (HERE, REPO / "examples"):
-        path = folder / "_adapters.py"
-        if path.exists():
-            spec = importlib.util.spec_from_file_location("_adapters", path)
-            assert spec is not None and spec.loader is not None
-            mod = importlib.util.module_from_spec(spec)
-            sys.modules["_adapters"] = mod
-            spec.loader.exec_module(mod)
-            return mod
-    raise FileNotFoundError("_adapters.py not found beside this study")
+    """The data sets' adapters (the sibling ``_adapters.py``)."""
+    import _adapters
+
+    return _adapters
 
 
 def groups(data: Path, datasets: list[str]) -> list[tuple[str, str, list[bw.Measurement]]]:

@@ -34,7 +34,6 @@ the same code prints the same tables. Usage: ``python studies/mr_what_is_left.py
 from __future__ import annotations
 
 import argparse
-import importlib.util
 import json
 import math
 import sys
@@ -65,6 +64,8 @@ from bouc_wen_id.terms import TERMS
 from scipy.optimize import least_squares
 
 HERE = Path(__file__).resolve().parent
+if str(HERE) not in sys.path:  # the sibling modules import by name (studies/ is not a package)
+    sys.path.insert(0, str(HERE))
 TARGET = 0.03
 #: Phase zones of the cycle, degrees after the last reversal of the input (u = U cos z reverses at z = 0, pi).
 ZONES = ((0, 15), (15, 45), (45, 135), (135, 165), (165, 180))
@@ -89,13 +90,10 @@ DAHL_SETS: tuple[tuple[str, ...], ...] = (SETS[1] + ("dahl@x",), SETS[3] + ("dah
 
 
 def _adapters() -> Any:
-    path = HERE / "_adapters.py"
-    spec = importlib.util.spec_from_file_location("_adapters", path)
-    assert spec is not None and spec.loader is not None
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules["_adapters"] = mod
-    spec.loader.exec_module(mod)
-    return mod
+    """The data sets' adapters (the sibling ``_adapters.py``)."""
+    import _adapters
+
+    return _adapters
 
 
 def load_levels(data: Path, levels: Optional[Sequence[float]]) -> list[tuple[str, list[bw.Measurement]]]:

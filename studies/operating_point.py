@@ -29,7 +29,6 @@ Usage: ``python studies/operating_point.py [--data DIR] [--degrees 0,1,2,monoton
 from __future__ import annotations
 
 import argparse
-import importlib.util
 import json
 import math
 import pickle
@@ -47,6 +46,8 @@ from bouc_wen_id.augmented import AugExperiment, AugParams, fit_augmented
 
 REPO = Path(__file__).resolve().parents[1]
 HERE = Path(__file__).resolve().parent
+if str(HERE) not in sys.path:  # the sibling modules import by name (studies/ is not a package)
+    sys.path.insert(0, str(HERE))
 #: The model's terms: offset, viscous damping and parallel stiffness on the measured displacement.
 TERMS = (T.Offset.kind, T.Viscous.kind, T.Stiffness.kind)
 #: The gains relative to the yield level (the knee's travel follows it: ``fit_operating(relative_gains=)``).
@@ -93,13 +94,10 @@ infinity."""
 
 
 def _adapters() -> Any:
-    path = HERE / "_adapters.py"
-    spec = importlib.util.spec_from_file_location("_adapters", path)
-    assert spec is not None and spec.loader is not None
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules["_adapters"] = mod
-    spec.loader.exec_module(mod)
-    return mod
+    """The data sets' adapters (the sibling ``_adapters.py``)."""
+    import _adapters
+
+    return _adapters
 
 
 def experiments(data: Path) -> tuple[list[float], list[list[AugExperiment]], list[str]]:

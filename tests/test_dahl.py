@@ -221,18 +221,17 @@ def test_simulation_takes_dahl_friction() -> None:
 
 
 @pytest.mark.parametrize("term", [T.Dahl(0.1), T.DahlX(0.1), T.DahlSigmaX(1.0)], ids=lambda t: t.kind)
-def test_exporters_and_compensation_refuse_it_by_name(term: T.Term) -> None:
-    """The exporters have no Dahl state (no exporter, named) and compensation refuses it with its reason."""
+def test_exporters_take_it_and_compensation_refuses_it_by_name(term: T.Term) -> None:
+    """The exporters write its force as a state (tests/test_export_dahl.py); compensation refuses it with its
+    reason."""
     import bouc_wen_id as bw
     from bouc_wen_id.compensation import compensate
     from bouc_wen_id.export import EXPORTED
-    from bouc_wen_id.export._model import UnsupportedTermError, flatten
+    from bouc_wen_id.export._model import field_of, flatten
 
-    assert type(term) not in EXPORTED
+    assert type(term) in EXPORTED
     plant = bw.WienerPlant(bw.TransferFunction([1.0], [0.1, 1.0]), bw.BoucWen(0.5, 0.5, 2.0), (term,))
-    for what in ("C export", "nlsys export", "JSON export"):
-        with pytest.raises(UnsupportedTermError, match=f"{what}: the term '{term.kind}'.* has no exporter"):
-            flatten(plant, what)
+    assert getattr(flatten(plant, "C export"), field_of(type(term))) == term.value
     t = np.arange(200) * 0.01
     with pytest.raises(InvalidParameterError, match=term.kind):
         compensate(plant, 0.1 * np.sin(TWO_PI * t), t)

@@ -4,7 +4,7 @@ more RK4 state, ``F' = sigma v' (1 - sgn(v') F / Fc)``, on the measured input u 
 Rust against the NumPy oracle on seeded random plants and inputs; the record against scipy's ``solve_ivp``
 of the ODE (a state-space G written here, resonant with a delay, and first order); the last period of a long
 sine against the closed-form steady loop of ``rust/dahl.rs`` (its oracle ``reference.dahl``, no time loop);
-and the things that still refuse it, by name.
+and the things that still refuse it, by name (the exporters take it: tests/test_export_dahl.py).
 """
 
 from __future__ import annotations
@@ -20,10 +20,8 @@ import pytest
 from bouc_wen_id import _core, reference
 from bouc_wen_id.cli import main
 from bouc_wen_id.errors import InvalidParameterError
-from bouc_wen_id.export import UnsupportedTermError
 from bouc_wen_id.model import BoucWen, SinePlan, TransferFunction, WienerPlant
 from bouc_wen_id.terms import Dahl, DahlSigma, Place, SensorLag, Term, Viscous
-from numpy.testing import assert_allclose
 from scipy.integrate import solve_ivp  # type: ignore[import-untyped]
 
 TWO_PI = 2.0 * math.pi
@@ -47,33 +45,14 @@ def test_rust_matches_the_oracle_with_dahl_friction(
     helpers: Any, order: int, extra: dict[str, float], seed: int
 ) -> None:
     rng = np.random.default_rng([2026, order, seed])
-    num, den, delay = helpers.random_tf(rng, order)
-    if order and "play" in extra:  # a biproper G steps x at the delay's end: keep the play's travel short
-        num = num[-order:]
-    plant = helpers.random_bouc_wen(rng)
-    omega = float(rng.uniform(0.5, 6.0))
-    dt = TWO_PI / omega / int(rng.integers(24, 64))
-    amp = float(rng.uniform(0.5, 2.5) * rng.choice([-1.0, 1.0]))
-    terms = {ON_U[0]: float(rng.uniform(0.05, 0.5)), ON_U[1]: float(rng.uniform(0.2, 3.0))}
-    terms |= {ON_X[0]: float(rng.uniform(0.05, 0.5)), ON_X[1]: float(rng.uniform(0.2, 3.0))}
-    terms.update(extra)
-    if "play" in terms:
-        gain = abs(np.polyval(num, 1j * omega) / np.polyval(den, 1j * omega))
-        terms["play"] *= abs(amp) * float(gain)
-    args = (num, den, delay, *plant)
-    n, sub = 150, 2
+
+    def draw(rng: np.random.Generator) -> dict[str, float]:
+        terms = {ON_U[0]: float(rng.uniform(0.05, 0.5)), ON_U[1]: float(rng.uniform(0.2, 3.0))}
+        return terms | {ON_X[0]: float(rng.uniform(0.05, 0.5)), ON_X[1]: float(rng.uniform(0.2, 3.0))}
+
+    run = helpers.rust_against_oracle(rng, order, draw, extra)
+    args, u, dt, sub, terms, rust = run.args, run.u, run.dt, run.sub, run.terms, run.rust
     core: Any = _core
-    ref: Any = reference
-    rust = core.simulate_sine(*args, amp, omega, dt, n, sub, terms=terms)
-    oracle = ref.simulate_sine(*args, amp, omega, dt, n, sub, terms=terms)
-    # Same stages in the same order: only the rounding of short dot products and libm differs.
-    for r, p in zip(rust, oracle):
-        assert_allclose(r, p, rtol=1e-11, atol=1e-11 * _scale(p))
-    u = amp * np.cos(omega * np.arange(n) * dt) + 0.05 * rng.standard_normal(n)
-    rust = core.simulate_sampled(*args, u, dt, sub, terms=terms)
-    oracle = ref.simulate_sampled(*args, u, dt, sub, terms=terms)
-    for r, p in zip(rust, oracle):
-        assert_allclose(r, p, rtol=1e-11, atol=1e-11 * _scale(p))
     # The friction changes y: the run without it differs.
     bare = {k: v for k, v in terms.items() if k not in ON_U + ON_X}
     assert _scale(rust[2] - core.simulate_sampled(*args, u, dt, sub, terms=bare)[2]) > 1e-3
@@ -156,9 +135,8 @@ def test_the_steady_state_is_the_closed_form_loop(place: Place) -> None:
 
 def test_what_still_refuses_dahl_friction_says_why() -> None:
     plant = WienerPlant(TransferFunction([1.0], [0.1, 1.0]), BoucWen(1.0, 0.5, 1.5), _dahl(0.2, 2.0))
-    # Export: the formats transcribe the simulator term by term, with no Dahl state yet.
-    with pytest.raises(UnsupportedTermError, match="'dahl'.* has no exporter"):
-        bw.to_c(plant)
+    # Export takes it (tests/test_export_dahl.py): the force is one more state of the exported model.
+    assert "static const double bouc_wen_model_sigma = 2.0;" in bw.to_c(plant)
     # Compensation: the inverse reads u off y stage by stage; the friction's state is in the way.
     t = np.arange(200) * 0.01
     with pytest.raises(InvalidParameterError, match="does not handle Dahl friction: its force has a memory"):

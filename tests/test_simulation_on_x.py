@@ -54,35 +54,16 @@ def test_rust_matches_the_oracle_with_terms_on_x(
     helpers: Any, order: int, extra: dict[str, float], seed: int
 ) -> None:
     rng = np.random.default_rng([1918, order, seed])
-    num, den, delay = helpers.random_tf(rng, order)
-    if order and "play" in extra:  # a biproper G steps x at the delay's end: keep the play's travel short
-        num = num[-order:]
-    plant = helpers.random_bouc_wen(rng)
-    omega = float(rng.uniform(0.5, 6.0))
-    dt = TWO_PI / omega / int(rng.integers(24, 64))
-    amp = float(rng.uniform(0.5, 2.5) * rng.choice([-1.0, 1.0]))
-    terms = {name: float(rng.uniform(-0.5, 0.5)) * scale for name, scale in zip(ON_X, (1.0, 0.1, 0.01, 1.0))}
-    terms[f"{ON_X[3]}_smoothing"] = float(rng.uniform(0.005, 0.3))
-    terms.update(extra)
-    if "play" in terms:
-        gain = abs(np.polyval(num, 1j * omega) / np.polyval(den, 1j * omega))
-        terms["play"] *= abs(amp) * float(gain)
-    args = (num, den, delay, *plant)
-    n, sub = 150, 2
+
+    def draw(rng: np.random.Generator) -> dict[str, float]:
+        scales = (1.0, 0.1, 0.01, 1.0)
+        terms = {name: float(rng.uniform(-0.5, 0.5)) * scale for name, scale in zip(ON_X, scales)}
+        terms[f"{ON_X[3]}_smoothing"] = float(rng.uniform(0.005, 0.3))
+        return terms
+
+    run = helpers.rust_against_oracle(rng, order, draw, extra, hold_tail=10)
+    args, u, dt, sub, terms, rust = run.args, run.u, run.dt, run.sub, run.terms, run.rust
     core: Any = _core
-    ref: Any = reference
-    rust = core.simulate_sine(*args, amp, omega, dt, n, sub, terms=terms)
-    oracle = ref.simulate_sine(*args, amp, omega, dt, n, sub, terms=terms)
-    # Same stages in the same order; only the rounding of short dot products and libm differs (measured
-    # <= 2e-15 of the peak): 1e-11 still catches any difference of method.
-    for r, p in zip(rust, oracle):
-        assert_allclose(r, p, rtol=1e-11, atol=1e-11 * _scale(p))
-    u = amp * np.cos(omega * np.arange(n) * dt) + 0.05 * rng.standard_normal(n)
-    u[-10:] = u[-11]
-    rust = core.simulate_sampled(*args, u, dt, sub, terms=terms)
-    oracle = ref.simulate_sampled(*args, u, dt, sub, terms=terms)
-    for r, p in zip(rust, oracle):
-        assert_allclose(r, p, rtol=1e-11, atol=1e-11 * _scale(p))
     # The terms on x change y only: x and w are those of the run without them, bit for bit where no term
     # has a state (the plain integrator and the linear part's own pass step the same states).
     bare = {k: v for k, v in terms.items() if k not in ON_X}

@@ -27,6 +27,7 @@
 //! the periodic model's); for samples the largest `|xdot|` at the output samples of the run
 //! (one pass of the linear part alone before the run). `Vx = 0` makes the friction term 0.
 
+use super::rk4::{axpy, Scratch, Steps};
 use crate::error::{finite, CoreError, Result};
 use crate::linear::Companion;
 use crate::terms::{Place, TermKind, COULOMB_SMOOTHING, COULOMB_SMOOTHING_MAX};
@@ -185,24 +186,10 @@ pub(super) fn linear_pass(
     substeps: usize,
     mut visit: impl FnMut(usize, f64, &[f64]),
 ) {
-    let n = comp.order();
-    let h = dt / substeps as f64;
-    let half_h = 0.5 * h;
-    let h_sixth = h / 6.0;
-    let mut xs = vec![0.0; n];
-    let (mut k1, mut k2, mut k3, mut k4, mut tmp) = (
-        vec![0.0; n],
-        vec![0.0; n],
-        vec![0.0; n],
-        vec![0.0; n],
-        vec![0.0; n],
-    );
+    let Steps { h, half_h, h_sixth } = Steps::new(dt, substeps);
+    let mut xs = vec![0.0; comp.order()];
+    let mut sc = Scratch::new(comp.order());
     let stage = |xs: &[f64], t: f64, out: &mut [f64]| comp.state_derivative(xs, input(t).0, out);
-    let axpy = |out: &mut [f64], xs: &[f64], hk: f64, k: &[f64]| {
-        for ((o, x), ki) in out.iter_mut().zip(xs).zip(k) {
-            *o = x + hk * ki;
-        }
-    };
     for k in 0..n_samples {
         let t = k as f64 * dt;
         visit(k, t, &xs);
@@ -211,16 +198,14 @@ pub(super) fn linear_pass(
         }
         for s in 0..substeps {
             let ts = t + s as f64 * h;
-            stage(&xs, ts, &mut k1);
-            axpy(&mut tmp, &xs, half_h, &k1);
-            stage(&tmp, ts + half_h, &mut k2);
-            axpy(&mut tmp, &xs, half_h, &k2);
-            stage(&tmp, ts + half_h, &mut k3);
-            axpy(&mut tmp, &xs, h, &k3);
-            stage(&tmp, ts + h, &mut k4);
-            for ((((x, a), b), c), d) in xs.iter_mut().zip(&k1).zip(&k2).zip(&k3).zip(&k4) {
-                *x += h_sixth * (a + 2.0 * b + 2.0 * c + d);
-            }
+            stage(&xs, ts, &mut sc.k1);
+            axpy(&mut sc.tmp, &xs, half_h, &sc.k1);
+            stage(&sc.tmp, ts + half_h, &mut sc.k2);
+            axpy(&mut sc.tmp, &xs, half_h, &sc.k2);
+            stage(&sc.tmp, ts + half_h, &mut sc.k3);
+            axpy(&mut sc.tmp, &xs, h, &sc.k3);
+            stage(&sc.tmp, ts + h, &mut sc.k4);
+            sc.advance(&mut xs, h_sixth);
         }
     }
 }

@@ -1,8 +1,8 @@
 """The whole model as a self-contained C99 source: one function, fixed-step RK4, no allocation.
 
 :func:`to_c` writes the plant's numbers into :data:`TEMPLATE`, a transcription of the library's time-domain
-simulator (``rust/simulate.rs`` and ``rust/simulate/with_terms.rs``, docs/design.md sections 1 and 9.4) in
-its operation order: the generated function driven by samples ``u`` returns what
+simulator (``rust/simulate.rs``, ``rust/simulate/with_terms.rs`` and its ``dahl.rs``, docs/design.md
+sections 1 and 9.4) in its operation order: the generated function driven by samples ``u`` returns what
 :func:`bouc_wen_id.simulate_input` returns for them, to rounding. Every coefficient is written with
 ``repr`` (the shortest decimal that reads back to the same double), so the compiled constants are the
 plant's own. Only the entry point has external linkage; the helpers are ``static``. It needs ``math.h``
@@ -102,6 +102,10 @@ def to_c(plant: WienerPlant, name: str = "bouc_wen_model") -> str:
         MX=_num(flat.m_x),
         FX=_num(flat.f_x),
         EPSX=_num(flat.smoothing_x),
+        FC=_num(flat.fc),
+        SIGMA=_num(flat.sigma),
+        FCX=_num(flat.fc_x),
+        SIGMAX=_num(flat.sigma_x),
         PCENTRE=_num(PINCHING_CENTRE),
         PWIDTH=_num(PINCHING_WIDTH),
     )
@@ -121,8 +125,9 @@ TEMPLATE = Template(
  *   the first), the play's mode frozen per step and xp clamped after it, the series dashpot's element
  *   driven by xpdot - rho w at every stage, the sensor lag stepped exponentially, the terms on x from x's
  *   derivatives of the linear part's state (their friction scaled by the peak |xdot| at the samples, from
- *   one pass of the linear part alone). Writes x[k], w[k] and y[k] (any of them may be NULL); allocates
- *   nothing.
+ *   one pass of the linear part alone), Dahl friction's forces F' = sigma v' (1 - sgn(v') F / Fc) on u and
+ *   on x as two more states stepped with the rates of the RK4 stages. Writes x[k], w[k] and y[k] (any
+ *   of them may be NULL); allocates nothing.
  *   Returns 0; -1 for bad arguments (n < 2, dt <= 0 or not finite, substeps < 1, u NULL); -2 for a
  *   non-finite input sample; 1 when the simulation blew up (a non-finite state: parameters or input level
  *   too large for the step).
@@ -159,6 +164,10 @@ static const double ${P}_cx = $CX;
 static const double ${P}_mx = $MX;
 static const double ${P}_fx = $FX;
 static const double ${P}_epsx = $EPSX;
+static const double ${P}_fc = $FC;
+static const double ${P}_sigma = $SIGMA;
+static const double ${P}_fcx = $FCX;
+static const double ${P}_sigmax = $SIGMAX;
 static const double ${P}_pinch_centre = ${PCENTRE};
 static const double ${P}_pinch_width = ${PWIDTH};
 
@@ -406,6 +415,32 @@ static void ${P}_lag_weights(double r, double out[4])
     out[3] = r * (4.0 * p3 - p2);
 }
 
+/* Dahl friction's F' = sigma vdot (1 - sgn(vdot) F / Fc); 0 unless Fc > 0 and sigma > 0. */
+static double ${P}_dahl_rate(double fc, double sigma, double vdot, double f)
+{
+    if (!(fc > 0.0 && sigma > 0.0)) return 0.0;
+    return sigma * vdot * (1.0 - ${P}_sgn(vdot) * f / fc);
+}
+
+/* One RK4 step of the Dahl force f over h with the stage rates v[0..3]: returns the new force, writes
+ * its third-order continuous extension at the step's middle into *mid. */
+static double ${P}_dahl_step(double fc, double sigma, double f, double h, const double v[4], double *mid)
+{
+    double half_h = 0.5 * h;
+    double k1 = ${P}_dahl_rate(fc, sigma, v[0], f);
+    double k2 = ${P}_dahl_rate(fc, sigma, v[1], f + half_h * k1);
+    double k3 = ${P}_dahl_rate(fc, sigma, v[2], f + half_h * k2);
+    double k4 = ${P}_dahl_rate(fc, sigma, v[3], f + h * k3);
+    *mid = f + h * (5.0 * k1 + 4.0 * (k2 + k3) - k4) / 24.0;
+    return f + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
+}
+
+/* f + (F_u + F_x) when Dahl friction moves at either place, f itself otherwise. */
+static double ${P}_with_dahl(int has_dahl, double f, double fu, double fx)
+{
+    return has_dahl ? f + (fu + fx) : f;
+}
+
 /* The play's rate for the mode frozen over the step: +1 up, -1 down, 0 dwell. */
 static double ${P}_played(int has_play, int mode, double xdot)
 {
@@ -419,11 +454,12 @@ int ${P}(const double *u, long n, double dt, int substeps, double *x, double *w,
 {
     double xs[${P}_N + 1] = {0.0}, k1[${P}_N + 1] = {0.0}, k2[${P}_N + 1] = {0.0}, k3[${P}_N + 1] = {0.0};
     double k4[${P}_N + 1] = {0.0}, tmp[${P}_N + 1] = {0.0}, xs_mid[${P}_N + 1] = {0.0};
-    double scale_x = 0.0, h, half_h, h_sixth, wv = ${P}_w0, en = 0.0, xp, ys = 0.0;
+    double scale_x = 0.0, h, half_h, h_sixth, wv = ${P}_w0, en = 0.0, xp, ys = 0.0, fu = 0.0, fx = 0.0;
     double lw[4] = {0.0, 0.0, 0.0, 0.0};
     double scale, w_u = pow(${P}_alpha / (${P}_beta + ${P}_gamma), 1.0 / ${P}_mu), v0[2];
     int has_play = ${P}_b > 0.0, has_lag = ${P}_tau > 0.0, s, i, blown = 0;
     int has_onx = ${P}_kx != 0.0 || ${P}_cx != 0.0 || ${P}_mx != 0.0 || ${P}_fx != 0.0;
+    int has_dahl = (${P}_fc > 0.0 && ${P}_sigma > 0.0) || (${P}_fcx > 0.0 && ${P}_sigmax > 0.0);
     long k;
     if (u == NULL || n < 2 || !(dt > 0.0) || !isfinite(dt) || substeps < 1) return -1;
     for (k = 0; k < n; ++k)
@@ -444,47 +480,52 @@ int ${P}(const double *u, long n, double dt, int substeps, double *x, double *w,
         ${P}_delayed(u, n, dt, t, vk);
         if (x != NULL) x[k] = ${P}_output(xs, vk[0]);
         if (w != NULL) w[k] = wv;
-        yk = ${P}_y0 + (has_lag ? ys : ${P}_forcing(u, n, dt, t, wv, xs, scale, scale_x, has_onx));
+        yk = has_lag ? ys : ${P}_forcing(u, n, dt, t, wv, xs, scale, scale_x, has_onx);
+        if (!has_lag) yk = ${P}_with_dahl(has_dahl, yk, fu, fx);
+        yk = ${P}_y0 + yk;
         if (y != NULL) y[k] = yk;
         if (!isfinite(wv) || !isfinite(yk)) blown = 1;
         if (k == n - 1) break;
         for (s = 0; s < substeps; ++s) {
             double ts = t + (double)s * h, tm = ts + half_h, te = ts + h;
             double in1[2], inm[2], in4[2], p1, p2, p3, p4, kw1, kw2, kw3, kw4, ke1, ke2, ke3, ke4;
-            double d1, d2, d3, d4;
+            double d1, d2, d3, d4, xd1, xd2, xd3, xd4, fu_mid = fu, fx_mid = fx;
             double w2, w3, w4, e2, e3, e4, w_mid, f0;
             int mode = 0;
             ${P}_delayed(u, n, dt, ts, in1);
             ${P}_delayed(u, n, dt, tm, inm);
             ${P}_delayed(u, n, dt, te, in4);
-            p1 = ${P}_linear(xs, in1, k1);
+            xd1 = ${P}_linear(xs, in1, k1);
             if (has_play) {
                 double xx = ${P}_output(xs, in1[0]), e = xx - xp, slack = 1e-12 * (${P}_b + fabs(xx));
-                if (p1 > 0.0 && e >= ${P}_b - slack) mode = 1;
-                else if (p1 < 0.0 && e <= -${P}_b + slack) mode = -1;
+                if (xd1 > 0.0 && e >= ${P}_b - slack) mode = 1;
+                else if (xd1 < 0.0 && e <= -${P}_b + slack) mode = -1;
             }
-            p1 = ${P}_played(has_play, mode, p1);
+            p1 = ${P}_played(has_play, mode, xd1);
             d1 = ${P}_element(p1, wv);
             kw1 = ${P}_rate(d1, wv, en, w_u);
             ke1 = wv * d1;
             w2 = wv + half_h * kw1;
             e2 = en + half_h * ke1;
             for (i = 0; i < ${P}_N; ++i) tmp[i] = xs[i] + half_h * k1[i];
-            p2 = ${P}_played(has_play, mode, ${P}_linear(tmp, inm, k2));
+            xd2 = ${P}_linear(tmp, inm, k2);
+            p2 = ${P}_played(has_play, mode, xd2);
             d2 = ${P}_element(p2, w2);
             kw2 = ${P}_rate(d2, w2, e2, w_u);
             ke2 = w2 * d2;
             w3 = wv + half_h * kw2;
             e3 = en + half_h * ke2;
             for (i = 0; i < ${P}_N; ++i) tmp[i] = xs[i] + half_h * k2[i];
-            p3 = ${P}_played(has_play, mode, ${P}_linear(tmp, inm, k3));
+            xd3 = ${P}_linear(tmp, inm, k3);
+            p3 = ${P}_played(has_play, mode, xd3);
             d3 = ${P}_element(p3, w3);
             kw3 = ${P}_rate(d3, w3, e3, w_u);
             ke3 = w3 * d3;
             w4 = wv + h * kw3;
             e4 = en + h * ke3;
             for (i = 0; i < ${P}_N; ++i) tmp[i] = xs[i] + h * k3[i];
-            p4 = ${P}_played(has_play, mode, ${P}_linear(tmp, in4, k4));
+            xd4 = ${P}_linear(tmp, in4, k4);
+            p4 = ${P}_played(has_play, mode, xd4);
             d4 = ${P}_element(p4, w4);
             kw4 = ${P}_rate(d4, w4, e4, w_u);
             ke4 = w4 * d4;
@@ -493,8 +534,26 @@ int ${P}(const double *u, long n, double dt, int substeps, double *x, double *w,
                 for (i = 0; i < ${P}_N; ++i)
                     xs_mid[i] = xs[i] + h * (5.0 * k1[i] + 4.0 * (k2[i] + k3[i]) - k4[i]) / 24.0;
             f0 = has_lag ? ${P}_forcing(u, n, dt, ts, wv, xs, scale, scale_x, has_onx) : 0.0;
+            if (has_lag) f0 = ${P}_with_dahl(has_dahl, f0, fu, fx);
             for (i = 0; i < ${P}_N; ++i) xs[i] += h_sixth * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
             wv += h_sixth * (kw1 + 2.0 * kw2 + 2.0 * kw3 + kw4);
+            if (has_dahl) {
+                /* Dahl friction: on u with the undelayed input's rate at the stage times, on x with x's. */
+                double iu[3], vu[4], vx4[4];
+                ${P}_input(u, n, dt, ts, iu);
+                vu[0] = iu[1];
+                ${P}_input(u, n, dt, tm, iu);
+                vu[1] = iu[1];
+                vu[2] = iu[1];
+                ${P}_input(u, n, dt, te, iu);
+                vu[3] = iu[1];
+                vx4[0] = xd1;
+                vx4[1] = xd2;
+                vx4[2] = xd3;
+                vx4[3] = xd4;
+                fu = ${P}_dahl_step(${P}_fc, ${P}_sigma, fu, h, vu, &fu_mid);
+                fx = ${P}_dahl_step(${P}_fcx, ${P}_sigmax, fx, h, vx4, &fx_mid);
+            }
             en += h_sixth * (ke1 + 2.0 * ke2 + 2.0 * ke3 + ke4);
             if (has_play) {
                 double x_end, clamped, travel;
@@ -508,6 +567,8 @@ int ${P}(const double *u, long n, double dt, int substeps, double *x, double *w,
             if (has_lag) {
                 double fm = ${P}_forcing(u, n, dt, tm, w_mid, xs_mid, scale, scale_x, has_onx);
                 double f1 = ${P}_forcing(u, n, dt, te, wv, xs, scale, scale_x, has_onx);
+                fm = ${P}_with_dahl(has_dahl, fm, fu_mid, fx_mid);
+                f1 = ${P}_with_dahl(has_dahl, f1, fu, fx);
                 ys = lw[0] * ys + (lw[1] * f0 + lw[2] * fm + lw[3] * f1);
             }
         }

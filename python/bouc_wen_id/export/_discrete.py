@@ -5,14 +5,16 @@ the play (the simulator freezes its mode over each step and clamps ``xp`` after 
 fed through the path map) and the sensor lag (stepped exponentially, exact for the decay and stable at any
 ``h / tau``). A control engineer who wants the model that was identified and validated, not a nearby ODE,
 gets it here: ``control.nlsys(update, output, dt=h)`` with ``h = dt / substeps`` whose update is exactly one
-RK4 step of ``rust/simulate/with_terms.rs`` (+ ``on_x.rs``), every term included, operation for operation.
+RK4 step of ``rust/simulate/with_terms.rs`` (+ ``on_x.rs``, ``with_terms/dahl.rs``), every term included,
+operation for operation.
 
 Inputs: the input's values at the step's three stage times ``t, t + h/2, t + h`` (the simulator's stage
 times; RK4 needs the input between samples), each ``u, udot, uddot`` of the Catmull-Rom interpolant and,
 with a delay, ``v, vdot, vddot`` of the delayed one: labels ``u_0, udot_0, .., u_m, .., vddot_1``.
 :func:`stage_inputs` builds them from samples; :func:`discrete_response` runs
 ``control.input_output_response`` on them and returns the samples. States and outputs as the continuous
-system's (``xs0.., w, e, xp, ys``; ``y, x, w``); ``e``, ``xp`` and ``ys`` only when a term needs them.
+system's (``xs0.., w, e, xp, ys, fu, fx``; ``y, x, w``); ``e``, ``xp``, ``ys`` and the Dahl forces ``fu``,
+``fx`` only when a term needs them.
 """
 
 from __future__ import annotations
@@ -29,6 +31,7 @@ from ..validation import count, real_number
 from ._input import SampledInput
 from ._model import Flat
 from ._rhs import (
+    dahl_step,
     delayed,
     dot,
     element,
@@ -38,10 +41,12 @@ from ._rhs import (
     linear,
     mechanical,
     on_x,
+    optional_states,
     path,
     peak_speeds,
     played,
     rate,
+    with_dahl,
 )
 
 __all__ = ["to_discrete", "stage_inputs", "discrete_response", "STAGES"]
@@ -57,11 +62,10 @@ class _Layout:
         n = flat.order
         self.n = n
         self.states = [f"xs{i}" for i in range(n)] + ["w"]
-        self.e = self.xp = self.ys = -1
-        for flag, name in ((flat.has_energy, "e"), (flat.has_play, "xp"), (flat.has_lag, "ys")):
-            if flag:
-                setattr(self, name, len(self.states))
-                self.states.append(name)
+        self.e = self.xp = self.ys = self.fu = self.fx = -1
+        for name in optional_states(flat):
+            setattr(self, name, len(self.states))
+            self.states.append(name)
         per = ["u", "udot", "uddot"] + (["v", "vdot", "vddot"] if flat.delay > 0.0 else [])
         self.width = len(per)
         self.inputs = [f"{q}_{s}" for s in STAGES for q in per]
@@ -84,10 +88,13 @@ def _functions(flat: Flat, lay: _Layout, h: float, defaults: tuple[float, float]
         p = params or {}
         return float(p.get("vmax", defaults[0])), float(p.get("vx", defaults[1]))
 
-    def forcing(w: float, st: Any, xs: Any, vmax: float, vx: float) -> float:
+    def forcing(w: float, st: Any, xs: Any, vmax: float, vx: float, fu: float, fx: float) -> float:
+        """``w`` + the terms on u and on x (+ the Dahl forces): the lag's input, the output before the
+        offset."""
         (u, udot, uddot), (v, vdot, vddot) = st
         f = w + mechanical(flat, u, udot, uddot, vmax)
-        return f + on_x(flat, xs, v, vdot, vddot, vx) if flat.has_on_x else f
+        f = f + on_x(flat, xs, v, vdot, vddot, vx) if flat.has_on_x else f
+        return with_dahl(flat, f, fu, fx)
 
     def update(t: float, z: Any, inp: Any, params: Optional[dict[str, Any]] = None) -> FloatArray:
         vmax, vx = speeds(params)
@@ -95,6 +102,8 @@ def _functions(flat: Flat, lay: _Layout, h: float, defaults: tuple[float, float]
         xs, w = z[: lay.n], float(z[lay.n])
         en = float(z[lay.e]) if lay.e >= 0 else 0.0
         xp = float(z[lay.xp]) if lay.xp >= 0 else 0.0
+        fu = float(z[lay.fu]) if lay.fu >= 0 else 0.0
+        fx = float(z[lay.fx]) if lay.fx >= 0 else 0.0
         s0, sm, s1 = (lay.stage(inp, j) for j in range(3))
         k1, xdot1 = linear(flat, xs, *s0[1][:2])
         mode = (
@@ -121,11 +130,20 @@ def _functions(flat: Flat, lay: _Layout, h: float, defaults: tuple[float, float]
         ka, kb, kc, kd = (np.asarray(k) for k in (k1, k2, k3, k4))
         w_mid = w + h * (5.0 * kw1 + 4.0 * (kw2 + kw3) - kw4) / 24.0
         xs_mid = xs + h * (5.0 * ka + 4.0 * (kb + kc) - kd) / 24.0
-        f0 = forcing(w, s0, xs, vmax, vx) if flat.has_lag else 0.0
+        f0 = forcing(w, s0, xs, vmax, vx, fu, fx) if flat.has_lag else 0.0
         xs_new = xs + h_sixth * (ka + 2.0 * kb + 2.0 * kc + kd)
         w = w + h_sixth * (kw1 + 2.0 * kw2 + 2.0 * kw3 + kw4)
-        en = en + h_sixth * (ke1 + 2.0 * ke2 + 2.0 * ke3 + ke4)
         out = np.empty(len(lay.states))
+        # Dahl friction (dahl.rs): on u with the undelayed input's rate at the stage times, on x with x's.
+        fu_mid, fx_mid = fu, fx
+        if flat.has_dahl_u:
+            um = sm[0][1]
+            fu, fu_mid = dahl_step(flat.fc, flat.sigma, fu, h, (s0[0][1], um, um, s1[0][1]))
+            out[lay.fu] = fu
+        if flat.has_dahl_x:
+            fx, fx_mid = dahl_step(flat.fc_x, flat.sigma_x, fx, h, (xdot1, xdot2, xdot3, xdot4))
+            out[lay.fx] = fx
+        en = en + h_sixth * (ke1 + 2.0 * ke2 + 2.0 * ke3 + ke4)
         if flat.has_play:
             xp += h_sixth * (p1 + 2.0 * p2 + 2.0 * p3 + p4)
             x_end = dot(flat.crow, xs_new) + flat.dfeed * s1[1][0]
@@ -134,8 +152,8 @@ def _functions(flat: Flat, lay: _Layout, h: float, defaults: tuple[float, float]
                 w, en = path(flat, w, en, clamped - xp)
             out[lay.xp] = clamped
         if flat.has_lag:
-            fm = forcing(w_mid, sm, xs_mid, vmax, vx)
-            f1 = forcing(w, s1, xs_new, vmax, vx)
+            fm = forcing(w_mid, sm, xs_mid, vmax, vx, fu_mid, fx_mid)
+            f1 = forcing(w, s1, xs_new, vmax, vx, fu, fx)
             out[lay.ys] = decay * float(z[lay.ys]) + (l0 * f0 + lm * fm + l1 * f1)
         out[: lay.n] = xs_new
         out[lay.n] = w
@@ -148,7 +166,9 @@ def _functions(flat: Flat, lay: _Layout, h: float, defaults: tuple[float, float]
         s0 = lay.stage(inp, 0)
         xs, w = z[: lay.n], float(z[lay.n])
         x = dot(flat.crow, xs) + flat.dfeed * s0[1][0]
-        y = flat.y0 + (float(z[lay.ys]) if flat.has_lag else forcing(w, s0, xs, vmax, vx))
+        fu = float(z[lay.fu]) if lay.fu >= 0 else 0.0
+        fx = float(z[lay.fx]) if lay.fx >= 0 else 0.0
+        y = flat.y0 + (float(z[lay.ys]) if flat.has_lag else forcing(w, s0, xs, vmax, vx, fu, fx))
         return np.array([y, x, w])
 
     return update, output

@@ -4,12 +4,13 @@ The exporters (:mod:`._nlsys`, :mod:`._c`) reproduce the library's time-domain s
 (:func:`bouc_wen_id.simulate_input`, docs/design.md sections 1 and 9.4): the controllable canonical form
 ``xsdot = A xs + B v``, ``x = C xs + D v`` of G with ``v(t) = u(t - delay)``, the generalised Bouc-Wen rate
 with the terms that change it, and the output terms (on u and, across the hysteretic element, on x:
-``rust/simulate/on_x.rs``).  :func:`flatten` checks once what they can export: every term of the registry
-:data:`~bouc_wen_id.terms.TERMS` at every place whose parameter has a field of :class:`Flat` (named by the
-term's symbol, with ``_<place>`` appended off its usual place), which is every term ``simulate_input``
-simulates.  The measured-input distortion is refused by name, as the simulator refuses it (it stands for
-the harmonics of one measured sine experiment, not a map of an arbitrary input); a term the exporters do
-not know (a registry term added without an exporter) is :class:`UnsupportedTermError`.
+``rust/simulate/on_x.rs``), with Dahl friction's forces as states on u and on x
+(``rust/simulate/with_terms/dahl.rs``). :func:`flatten` checks once what they can export: every term of the
+registry :data:`~bouc_wen_id.terms.TERMS` at every place whose parameter has a field of :class:`Flat` (named
+by the term's symbol, with ``_<place>`` appended off its usual place), which is every term ``simulate_input``
+simulates. The measured-input distortion is refused by name, as the simulator refuses it (it stands for the
+harmonics of one measured sine experiment, not a map of an arbitrary input); a term the exporters do not know
+(a registry term added without an exporter) is :class:`UnsupportedTermError`.
 """
 
 from __future__ import annotations
@@ -91,6 +92,12 @@ class Flat(NamedTuple):
     m_x: float = 0.0
     f_x: float = 0.0
     smoothing_x: float = COULOMB_SMOOTHING
+    #: Dahl friction on u (level ``fc``, pre-sliding stiffness ``sigma``) and on x (``fc_x``, ``sigma_x``):
+    #: its force is one more state at each place (``rust/simulate/with_terms/dahl.rs``); 0: none.
+    fc: float = 0.0
+    sigma: float = 0.0
+    fc_x: float = 0.0
+    sigma_x: float = 0.0
 
     @property
     def order(self) -> int:
@@ -113,6 +120,22 @@ class Flat(NamedTuple):
     def has_on_x(self) -> bool:
         """A term acts on x (then its value needs x's derivatives from the state, on_x.rs)."""
         return self.k_x != 0.0 or self.c_x != 0.0 or self.m_x != 0.0 or self.f_x != 0.0
+
+    @property
+    def has_dahl_u(self) -> bool:
+        """Dahl friction moves on u (``Fc > 0`` and ``sigma > 0``; either 0 is no friction, dahl.rs)."""
+        return self.fc > 0.0 and self.sigma > 0.0
+
+    @property
+    def has_dahl_x(self) -> bool:
+        """Dahl friction moves on x."""
+        return self.fc_x > 0.0 and self.sigma_x > 0.0
+
+    @property
+    def has_dahl(self) -> bool:
+        """Dahl friction moves at either place: then the output adds ``F_u + F_x`` (the simulator's
+        ``dahl_active``; without it the output rounds as before)."""
+        return self.has_dahl_u or self.has_dahl_x
 
     @property
     def w_u(self) -> float:

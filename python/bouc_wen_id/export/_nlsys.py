@@ -2,12 +2,13 @@
 
 State ``[xs_0 .. xs_{n-1}, w]`` (the controllable canonical form of G and the Bouc-Wen output, docs/design.md
 section 1), then, when the plant's terms need them (section 9.4), ``e`` (the dissipated energy of a
-degradation), ``xp`` (the play's output) and ``ys`` (the sensor's lagged output).  Inputs ``u, udot, uddot``:
-the measured input and its first two derivatives (the terms on u, the terms on x and a biproper G need them);
-with a delay also ``v, vdot, vddot``, the input delayed by it (a nonlinear I/O system cannot hold a delay:
-:func:`input_signals` makes them from samples).  Outputs ``y, x, w``.  Parameters ``vmax`` and ``vx``: the
-peak input velocity and the peak ``|xdot|`` that scale the Coulomb frictions' smoothed signs on u and on x
-(the simulator takes them from the whole input: :func:`._rhs.peak_speeds`).
+degradation), ``xp`` (the play's output), ``ys`` (the sensor's lagged output), ``fu`` and ``fx`` (Dahl
+friction's forces on u and on x, ``F' = sigma v' (1 - sgn(v') F / Fc)``, docs/dahl-time-domain.md). Inputs
+``u, udot, uddot``: the measured input and its first two derivatives (the terms on u, the terms on x and a
+biproper G need them); with a delay also ``v, vdot, vddot``, the input delayed by it (a nonlinear I/O system
+cannot hold a delay: :func:`input_signals` makes them from samples). Outputs ``y, x, w``. Parameters ``vmax``
+and ``vx``: the peak input velocity and the peak ``|xdot|`` that scale the Coulomb frictions' smoothed signs
+on u and on x (the simulator takes them from the whole input: :func:`._rhs.peak_speeds`).
 
 The right-hand side is the simulator's (:mod:`._rhs`), so that classical RK4 on it with the simulator's step
 and stage times (:func:`rk4_response`) reproduces :func:`bouc_wen_id.simulate_input` to rounding, for every
@@ -33,7 +34,20 @@ from ..validation import count
 from ._discrete import to_discrete
 from ._input import SampledInput
 from ._model import PLAY_ENGAGE_RTOL, Flat, flatten
-from ._rhs import check_speed, dot, element, initial_state, linear, mechanical, on_x, peak_speeds, rate
+from ._rhs import (
+    check_speed,
+    dahl_rate,
+    dot,
+    element,
+    initial_state,
+    linear,
+    mechanical,
+    on_x,
+    optional_states,
+    peak_speeds,
+    rate,
+    with_dahl,
+)
 
 __all__ = ["to_nlsys", "input_signals", "rk4_response"]
 
@@ -47,11 +61,10 @@ class _Layout:
         n = flat.order
         self.states = [f"xs{i}" for i in range(n)] + ["w"]
         self.w = n
-        self.e = self.xp = self.ys = -1
-        for flag, name in ((flat.has_energy, "e"), (flat.has_play, "xp"), (flat.has_lag, "ys")):
-            if flag:
-                setattr(self, name, len(self.states))
-                self.states.append(name)
+        self.e = self.xp = self.ys = self.fu = self.fx = -1
+        for name in optional_states(flat):
+            setattr(self, name, len(self.states))
+            self.states.append(name)
         self.inputs = ["u", "udot", "uddot"] + (["v", "vdot", "vddot"] if flat.delay > 0.0 else [])
         #: (v, vdot, vddot) columns of the input vector: the delayed ones, or u's own without a delay.
         self.v = (3, 4, 5) if flat.delay > 0.0 else (0, 1, 2)
@@ -67,7 +80,8 @@ def _system_functions(flat: Flat, lay: _Layout, vmax_default: float, vx_default:
     n = flat.order
 
     def forcing(z: Any, w: float, inp: Any, params: Optional[dict[str, Any]]) -> float:
-        """``w`` + the terms on u + the terms on x: the lag's input, the output before the offset."""
+        """``w`` + the terms on u + the terms on x (+ the Dahl forces): the lag's input, the output before
+        the offset."""
         mech = mechanical(
             flat, float(inp[0]), float(inp[1]), float(inp[2]), _param(params, "vmax", vmax_default)
         )
@@ -75,7 +89,9 @@ def _system_functions(flat: Flat, lay: _Layout, vmax_default: float, vx_default:
         if flat.has_on_x:
             v3 = (float(inp[lay.v[0]]), float(inp[lay.v[1]]), float(inp[lay.v[2]]))
             f += on_x(flat, z[:n], *v3, _param(params, "vx", vx_default))
-        return f
+        fu = float(z[lay.fu]) if lay.fu >= 0 else 0.0
+        fx = float(z[lay.fx]) if lay.fx >= 0 else 0.0
+        return with_dahl(flat, f, fu, fx)
 
     def played(z: Any, x: float, xdot: float) -> float:
         if not flat.has_play:
@@ -107,6 +123,10 @@ def _system_functions(flat: Flat, lay: _Layout, vmax_default: float, vx_default:
             out[lay.xp] = p
         if lay.ys >= 0:
             out[lay.ys] = (forcing(z, w, inp, params) - float(z[lay.ys])) / flat.tau
+        if lay.fu >= 0:  # Dahl friction on u moves with the undelayed input's rate, on x with x's
+            out[lay.fu] = dahl_rate(flat.fc, flat.sigma, float(inp[1]), float(z[lay.fu]))
+        if lay.fx >= 0:
+            out[lay.fx] = dahl_rate(flat.fc_x, flat.sigma_x, xdot, float(z[lay.fx]))
         return out
 
     def output(t: float, z: Any, inp: Any, params: Optional[dict[str, Any]] = None) -> FloatArray:
@@ -164,8 +184,9 @@ def to_nlsys(
     -------
     control.NonlinearIOSystem
         Continuous: inputs ``u, udot, uddot`` (and ``v, vdot, vddot``, the input delayed by G's delay, when
-        it has one), outputs ``y, x, w``, states ``xs0.., w`` (and ``e``, ``xp``, ``ys``; module
-        docstring); ``params`` hold ``vmax``, ``vx`` and, for reading only, ``delay``, ``w0`` and ``b``.
+        it has one), outputs ``y, x, w``, states ``xs0.., w`` (and ``e``, ``xp``, ``ys``, ``fu``, ``fx``;
+        module docstring); ``params`` hold ``vmax``, ``vx`` and, for reading only, ``delay``, ``w0``,
+        ``b``.
         Start it from :func:`initial_state`. Discrete: :func:`._discrete.to_discrete`'s.
 
     Raises

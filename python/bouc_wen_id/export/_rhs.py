@@ -4,7 +4,8 @@ shared by the continuous (:mod:`._nlsys`) and the discrete-time (:mod:`._discret
 The transcription follows ``rust/simulate/with_terms.rs`` (the rate, the terms on u, the play's frozen mode,
 its path map, the series dashpot's element travel, the lag's exponential weights) and
 ``rust/simulate/on_x.rs`` (x's derivatives from the linear part's state, the terms on x, the peak ``|xdot|``
-from one pass of the linear part alone).
+from one pass of the linear part alone) and ``rust/simulate/with_terms/dahl.rs`` (Dahl friction's force, one
+more state per place, stepped with the rates of the four RK4 stages).
 """
 
 from __future__ import annotations
@@ -34,6 +35,10 @@ __all__ = [
     "element",
     "path",
     "lag_weights",
+    "dahl_rate",
+    "dahl_step",
+    "with_dahl",
+    "optional_states",
     "delayed",
     "peak_xrate",
     "peak_speeds",
@@ -157,6 +162,48 @@ def path(flat: Flat, w: float, e: float, dxp: float) -> tuple[float, float]:
     w4, e4 = w + k3, e + w3 * dxp
     k4 = rate(flat, dxp, w4, e4)
     return w + (k1 + 2.0 * k2 + 2.0 * k3 + k4) / 6.0, e + (w + 2.0 * w2 + 2.0 * w3 + w4) * dxp / 6.0
+
+
+def dahl_rate(fc: float, sigma: float, vdot: float, f: float) -> float:
+    """Dahl friction's ``F' = sigma vdot (1 - sgn(vdot) F / Fc)``; 0 unless ``Fc > 0`` and ``sigma > 0``
+    (dahl.rs ``rate``, same operation order)."""
+    if not (fc > 0.0 and sigma > 0.0):
+        return 0.0
+    return sigma * vdot * (1.0 - sgn(vdot) * f / fc)
+
+
+def dahl_step(fc: float, sigma: float, f: float, h: float, vdots: tuple[float, ...]) -> tuple[float, float]:
+    """One RK4 step of the Dahl force ``f`` over ``h`` with the stage rates ``vdots = (v1, v2, v3, v4)``:
+    the new force and its third-order continuous extension at the step's middle (dahl.rs ``step``)."""
+    half_h = 0.5 * h
+    k1 = dahl_rate(fc, sigma, vdots[0], f)
+    k2 = dahl_rate(fc, sigma, vdots[1], f + half_h * k1)
+    k3 = dahl_rate(fc, sigma, vdots[2], f + half_h * k2)
+    k4 = dahl_rate(fc, sigma, vdots[3], f + h * k3)
+    return (
+        f + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4),
+        f + h * (5.0 * k1 + 4.0 * (k2 + k3) - k4) / 24.0,
+    )
+
+
+def with_dahl(flat: Flat, f: float, fu: float, fx: float) -> float:
+    """``f + (F_u + F_x)`` when Dahl friction moves at either place, ``f`` itself otherwise (the simulator's
+    order: a plant without it rounds as before)."""
+    return f + (fu + fx) if flat.has_dahl else f
+
+
+def optional_states(flat: Flat) -> tuple[str, ...]:
+    """The states a plant's terms add after ``xs0.., w``, in order: ``e`` (a degradation's dissipated
+    energy), ``xp`` (the play's output), ``ys`` (the lagged sensor output), ``fu`` and ``fx`` (Dahl
+    friction's forces on u and on x)."""
+    flags = (
+        (flat.has_energy, "e"),
+        (flat.has_play, "xp"),
+        (flat.has_lag, "ys"),
+        (flat.has_dahl_u, "fu"),
+        (flat.has_dahl_x, "fx"),
+    )
+    return tuple(name for flag, name in flags if flag)
 
 
 def lag_weights(r: float) -> tuple[float, float, float, float]:

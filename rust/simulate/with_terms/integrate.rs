@@ -2,6 +2,7 @@
 //! `with_terms.rs`).
 
 use super::super::on_x::OnX;
+use super::super::rk4::{axpy, Scratch, Steps};
 use super::dahl::Dahl;
 use super::derivatives::Derivatives;
 use super::lag::lag_weights;
@@ -24,9 +25,7 @@ impl<S: Derivatives> Augmented<'_, S> {
     ) {
         let n = self.comp.order();
         let d = self.comp.d;
-        let h = dt / substeps as f64;
-        let half_h = 0.5 * h;
-        let h_sixth = h / 6.0;
+        let Steps { h, half_h, h_sixth } = Steps::new(dt, substeps);
         let b = terms.play;
         let has_play = b > 0.0;
         let tau = terms.sensor_lag;
@@ -58,13 +57,7 @@ impl<S: Derivatives> Augmented<'_, S> {
         let has_dahl = terms.dahl_active();
         let (mut fu, mut fx) = (0.0f64, 0.0f64);
         let with_dahl = |f: f64, fu: f64, fx: f64| if has_dahl { f + (fu + fx) } else { f };
-        let (mut k1, mut k2, mut k3, mut k4, mut tmp) = (
-            vec![0.0; n],
-            vec![0.0; n],
-            vec![0.0; n],
-            vec![0.0; n],
-            vec![0.0; n],
-        );
+        let mut sc = Scratch::new(n);
         // The state at the step's middle for the terms on x in the lag's F (continuous extension).
         let mut xs_mid = vec![0.0; n];
         let last = out.x.len() - 1;
@@ -86,7 +79,7 @@ impl<S: Derivatives> Augmented<'_, S> {
                 let (tm, te) = (ts + half_h, ts + h);
                 let (in1, inm, in4) = (self.delayed(ts), self.delayed(tm), self.delayed(te));
 
-                let xdot1 = self.linear(&xs, in1, &mut k1);
+                let xdot1 = self.linear(&xs, in1, &mut sc.k1);
                 let mode = if has_play {
                     let x = self.comp.output_row(&xs) + d * in1.0;
                     let e = x - xp;
@@ -110,22 +103,22 @@ impl<S: Derivatives> Augmented<'_, S> {
                 let kw1 = self.rate(d1, w, en);
                 let ke1 = w * d1;
                 let (w2, e2) = (w + half_h * kw1, en + half_h * ke1);
-                axpy(&mut tmp, &xs, half_h, &k1);
-                let xdot2 = self.linear(&tmp, inm, &mut k2);
+                axpy(&mut sc.tmp, &xs, half_h, &sc.k1);
+                let xdot2 = self.linear(&sc.tmp, inm, &mut sc.k2);
                 let p2 = played(xdot2);
                 let d2 = element(p2, w2);
                 let kw2 = self.rate(d2, w2, e2);
                 let ke2 = w2 * d2;
                 let (w3, e3) = (w + half_h * kw2, en + half_h * ke2);
-                axpy(&mut tmp, &xs, half_h, &k2);
-                let xdot3 = self.linear(&tmp, inm, &mut k3);
+                axpy(&mut sc.tmp, &xs, half_h, &sc.k2);
+                let xdot3 = self.linear(&sc.tmp, inm, &mut sc.k3);
                 let p3 = played(xdot3);
                 let d3 = element(p3, w3);
                 let kw3 = self.rate(d3, w3, e3);
                 let ke3 = w3 * d3;
                 let (w4, e4) = (w + h * kw3, en + h * ke3);
-                axpy(&mut tmp, &xs, h, &k3);
-                let xdot4 = self.linear(&tmp, in4, &mut k4);
+                axpy(&mut sc.tmp, &xs, h, &sc.k3);
+                let xdot4 = self.linear(&sc.tmp, in4, &mut sc.k4);
                 let p4 = played(xdot4);
                 let d4 = element(p4, w4);
                 let kw4 = self.rate(d4, w4, e4);
@@ -135,23 +128,13 @@ impl<S: Derivatives> Augmented<'_, S> {
                 let w_mid = w + h * (5.0 * kw1 + 4.0 * (kw2 + kw3) - kw4) / 24.0;
                 let f0 = if has_lag {
                     if on_x.is_some() {
-                        for ((((m, x), a), b2), (c3, d4)) in xs_mid
-                            .iter_mut()
-                            .zip(&xs)
-                            .zip(&k1)
-                            .zip(&k2)
-                            .zip(k3.iter().zip(&k4))
-                        {
-                            *m = x + h * (5.0 * a + 4.0 * (b2 + c3) - d4) / 24.0;
-                        }
+                        sc.middle(&xs, h, &mut xs_mid);
                     }
                     with_dahl(self.forcing(w, ts, &xs, on_x), fu, fx)
                 } else {
                     0.0
                 };
-                for ((((x, a), b2), c3), d4) in xs.iter_mut().zip(&k1).zip(&k2).zip(&k3).zip(&k4) {
-                    *x += h_sixth * (a + 2.0 * b2 + 2.0 * c3 + d4);
-                }
+                sc.advance(&mut xs, h_sixth);
                 w += h_sixth * (kw1 + 2.0 * kw2 + 2.0 * kw3 + kw4);
                 let (mut fu_mid, mut fx_mid) = (fu, fx);
                 if has_dahl {
@@ -179,13 +162,5 @@ impl<S: Derivatives> Augmented<'_, S> {
                 }
             }
         }
-    }
-}
-
-/// `xs + k * hk`, elementwise into `out` (all of the same length).
-#[inline]
-fn axpy(out: &mut [f64], xs: &[f64], hk: f64, k: &[f64]) {
-    for ((o, x), ki) in out.iter_mut().zip(xs).zip(k) {
-        *o = x + hk * ki;
     }
 }
