@@ -31,10 +31,10 @@ from ..errors import BoucWenIdError, BudgetExceededError
 from ..terms import TERMS
 from .fitting import Scale
 
-#: LM iterations of the joint fit (it starts next to the per-condition optima: a few are enough).
-MAX_ITER = 40
-#: Stop when an accepted step lowers the joint cost by less than this fraction of a unit of chi-square
-#: per dof of the numerator (far below what moves the F test).
+#: LM iterations of the joint fit at most.
+MAX_ITER = 60
+#: Stop when an accepted step lowers the joint cost by less than this many units of the F test's
+#: denominator (the pooled residual variance): far below what moves the test.
 COST_TOL = 1e-3
 
 
@@ -53,6 +53,7 @@ class SharedTest:
     p_value: float
     #: p >= alpha: one value fits as well as one per condition.
     shared: bool
+    #: LM iterations of the kept joint fit.
     iterations: int
 
     def to_dict(self) -> dict[str, Any]:
@@ -126,46 +127,93 @@ def _evaluate(
     grad, hess = np.zeros(n), np.zeros((n, n))
     cost = 0.0
     at = 1
-    try:
-        pars = _unpack(term, conds, x)
-        for c, par in zip(conds, pars):
-            i = par.terms.index(term)
-            nt, m = len(par.terms), par.gains.size
-            k = 3 + nt - 1 + 2 * m
-            f, dlnf = _factor(term, c.scale, par.mu)
-            for j, e in enumerate(c.sx):
-                if not jacobian:
-                    y = augmented_output(e, par, j, substeps=c.substeps)
-                    cost += e.weight * float(np.sum((e.ybar - y) ** 2))
-                    continue
-                o = augmented_output(e, par, j, substeps=c.substeps, jacobian=True)
-                r = e.ybar - o.y
-                cost += e.weight * float(np.sum(r**2))
-                jq = o.jacobian[:, 3 + i]
-                jac = np.zeros((r.size, 1 + k))
-                jac[:, 0] = jq / f  # d y / d v through q~ = v / f(mu)
-                jac[:, 1:4] = o.jacobian[:, :3]
-                jac[:, 3] -= jq * float(par.values[i]) * dlnf  # q~ moves with mu at fixed v
-                jac[:, 4 : 4 + nt - 1] = np.delete(o.jacobian[:, 3:], i, axis=1)
-                jac[:, 4 + nt - 1 + 2 * j : 6 + nt - 1 + 2 * j] = o.own_jacobian
-                cols = np.concatenate([[0], np.arange(at, at + k)])
-                grad[cols] += e.weight * (jac.T @ r)
-                hess[np.ix_(cols, cols)] += e.weight * (jac.T @ jac)
-            at += k
-    except BudgetExceededError:  # a limit the user set: never an inadmissible step
-        raise
-    except BoucWenIdError:
-        return None
-    if not math.isfinite(cost):
-        return None
+    with np.errstate(over="ignore", invalid="ignore"):  # a degenerate loop: refused below
+        try:
+            pars = _unpack(term, conds, x)
+            for c, par in zip(conds, pars):
+                i = par.terms.index(term)
+                nt, m = len(par.terms), par.gains.size
+                k = 3 + nt - 1 + 2 * m
+                f, dlnf = _factor(term, c.scale, par.mu)
+                for j, e in enumerate(c.sx):
+                    if not jacobian:
+                        y = augmented_output(e, par, j, substeps=c.substeps)
+                        cost += e.weight * float(np.sum((e.ybar - y) ** 2))
+                        continue
+                    o = augmented_output(e, par, j, substeps=c.substeps, jacobian=True)
+                    r = e.ybar - o.y
+                    cost += e.weight * float(np.sum(r**2))
+                    jq = o.jacobian[:, 3 + i]
+                    jac = np.zeros((r.size, 1 + k))
+                    jac[:, 0] = jq / f  # d y / d v through q~ = v / f(mu)
+                    jac[:, 1:4] = o.jacobian[:, :3]
+                    jac[:, 3] -= jq * float(par.values[i]) * dlnf  # q~ moves with mu at fixed v
+                    jac[:, 4 : 4 + nt - 1] = np.delete(o.jacobian[:, 3:], i, axis=1)
+                    jac[:, 4 + nt - 1 + 2 * j : 6 + nt - 1 + 2 * j] = o.own_jacobian
+                    cols = np.concatenate([[0], np.arange(at, at + k)])
+                    grad[cols] += e.weight * (jac.T @ r)
+                    hess[np.ix_(cols, cols)] += e.weight * (jac.T @ jac)
+                at += k
+        except BudgetExceededError:  # a limit the user set: never an inadmissible step
+            raise
+        except BoucWenIdError:
+            return None
+    if not (math.isfinite(cost) and np.all(np.isfinite(grad)) and np.all(np.isfinite(hess))):
+        return None  # a degenerate loop (derivatives overflowing): no step goes there
     return cost, grad, hess
 
 
+#: mu's lower end in the core's fits (rust/refine.rs: ``mu_lo + 2 MU_MARGIN`` with ``mu_lo = 1``).
+MU_MIN = 1.0 + 2e-9
+
+
+def _blocks(conds: Sequence[_Cond]) -> list[int]:
+    """Where each condition's own parameters start in the joint vector."""
+    out, at = [], 1
+    for c in conds:
+        out.append(at)
+        at += 3 + len(c.fit.params.terms) - 1 + 2 * c.fit.params.gains.size
+    return out
+
+
+def _project(conds: Sequence[_Cond], x: np.ndarray) -> np.ndarray:
+    """The core's projection of the Bouc-Wen conditions (rust/refine.rs ``project_hysteresis``): beta < gamma
+    onto beta = gamma at the same sum, mu into its bracket; a step may slide along them."""
+    y: np.ndarray = np.array(x, dtype=np.float64)
+    for at in _blocks(conds):
+        if y[at] < y[at + 1]:
+            y[at] = y[at + 1] = 0.5 * (y[at] + y[at + 1])
+        y[at + 2] = max(y[at + 2], MU_MIN)
+    return y
+
+
+def _faces(conds: Sequence[_Cond], x: np.ndarray) -> np.ndarray:
+    """The steps' basis: every parameter free, but a condition ON beta = gamma moves beta and gamma together
+    and one at mu's lower end holds mu (the faces its own fit sits on: a step off them is projected back)."""
+    cols = []
+    n = x.size
+    starts = _blocks(conds)
+    on_bg = {at for at in starts if x[at] - x[at + 1] <= 1e-12 * max(abs(x[at]), 1.0)}
+    on_mu = {at + 2 for at in starts if x[at + 2] <= MU_MIN * (1.0 + 1e-12)}
+    for j in range(n):
+        if j in on_mu or (j - 1) in on_bg:
+            continue  # held mu, or gamma (moved with beta)
+        col = np.zeros(n)
+        col[j] = 1.0
+        if j in on_bg:
+            col[j + 1] = 1.0
+        cols.append(col)
+    out: np.ndarray = np.array(cols).T
+    return out
+
+
 def _joint_fit(
-    term: str, conds: Sequence[_Cond], v0: float
+    term: str, conds: Sequence[_Cond], v0: float, tol: float
 ) -> Optional[tuple[np.ndarray, float, np.ndarray, int]]:
-    """Levenberg-Marquardt of the joint vector from the shared value ``v0``: (x, cost, J^T W J, iterations);
-    None when ``v0`` is inadmissible somewhere."""
+    """Levenberg-Marquardt of the joint vector from the shared value ``v0``, on the faces the conditions' fits
+    sit on (:func:`_faces`), trial points projected (:func:`_project`); stops once an accepted step gains less
+    than ``tol``: (x, cost, the shared value's J^T W J block's inverse variance, iterations); None when
+    ``v0`` is inadmissible somewhere."""
     x = _pack(term, conds, v0)
     ev = _evaluate(term, conds, x, True)
     if ev is None:
@@ -174,14 +222,16 @@ def _joint_fit(
     lam, it = 1e-3, 0
     while it < MAX_ITER:
         it += 1
-        d = np.diag(hess).copy()
+        t = _faces(conds, x)
+        h, g = t.T @ hess @ t, t.T @ grad
+        d = np.diag(h).copy()
         d[d <= 0] = 1.0
         try:
-            step = np.linalg.solve(hess + lam * np.diag(d), grad)
+            step = t @ np.linalg.solve(h + lam * np.diag(d), g)
         except np.linalg.LinAlgError:
             lam *= 10.0
             continue
-        trial = x + step
+        trial = _project(conds, x + step)
         new = _evaluate(term, conds, trial, False)
         if new is None or new[0] >= cost:
             lam *= 10.0
@@ -190,13 +240,24 @@ def _joint_fit(
             continue
         gain = cost - new[0]
         ev = _evaluate(term, conds, trial, True)
-        if ev is None:
-            break
+        if ev is None:  # a lower cost in a degenerate loop: refused as an inadmissible step
+            lam *= 10.0
+            if lam > 1e10:
+                break
+            continue
         x, (cost, grad, hess) = trial, ev
         lam = max(lam / 10.0, 1e-9)
-        if gain < COST_TOL:
+        if gain < tol:
             break
-    return x, cost, hess, it
+    t = _faces(conds, x)
+    return x, cost, t.T @ hess @ t, it
+
+
+def _own(term: str, c: _Cond) -> float:
+    """A condition's own physical value of ``term``."""
+    from .fitting import physical
+
+    return physical(c.fit, c.scale, term)[0]
 
 
 def _start(term: str, conds: Sequence[_Cond]) -> float:
@@ -234,15 +295,17 @@ def shared_test(
     if k < 2 or any(term not in f.params.terms for f in fits):
         return None
     conds = [_Cond(a, s, n, f, d) for a, s, n, f, d in zip(sx, scales, substeps, fits, dofs)]
-    v0 = _start(term, conds)
-    done = _joint_fit(term, conds, v0)
-    if done is None:
-        return None
-    x, cost, hess, it = done
     c_free = float(sum(f.cost for f in fits))
     dof_free = int(sum(dofs))
     dof_shared = max(dof_free + k - 1, 1)
     den = max(c_free / max(dof_free, 1), 1.0)
+    # The joint fit is a local search (a shared value far from some condition's own pulls that condition's
+    # other parameters a long way): the better of two starts, the values' inverse-variance mean and median.
+    starts = dict.fromkeys([_start(term, conds), float(np.median([_own(term, c) for c in conds]))])
+    fits_ = [f for f in (_joint_fit(term, conds, v0, COST_TOL * den) for v0 in starts) if f is not None]
+    if not fits_:
+        return None
+    x, cost, hess, it = min(fits_, key=lambda f: f[1])
     stat = max(cost - c_free, 0.0) / (k - 1) / den
     p = float(fdtrc(k - 1, max(dof_free, 1), stat)) if stat > 0 else 1.0
     try:
