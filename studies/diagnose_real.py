@@ -386,7 +386,7 @@ def across_markdown(a: Any, seconds: float) -> str:
                 "-"
                 if sf is None
                 else f"{'shared' if sf.shared else 'varies'}: {sf.value:.3g} ± {sf.standard_error:.2g}, "
-                f"p = {sf.p_value:.2g}"
+                f"p {f'= {sf.p_value:.2g}' if sf.p_value > 0 else '< 1e-300'}"
             )
             lines.append(
                 f"| {t.label} ({t.symbol}, {t.unit}) | " + " | ".join(cells) + f" | {deg} ({ps}) | {one} |"

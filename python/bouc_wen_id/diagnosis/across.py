@@ -245,7 +245,7 @@ class AcrossDiagnosis:
                 sf = t.shared_fit
                 lines.append(
                     f"  one shared value refitted: {sf.value:.4g} +- {sf.standard_error:.2g}, F = "
-                    f"{sf.statistic:.3g}, p = {sf.p_value:.2g} ({'shared' if sf.shared else 'varies'})"
+                    f"{sf.statistic:.3g}, p {_p(sf.p_value)} ({'shared' if sf.shared else 'varies'})"
                 )
             for c, v, se, pr in zip(self.conditions, t.values, t.standard_errors, t.present):
                 lines.append(f"  {c.label}: {v:.4g} +- {se:.2g}{'' if pr else '  (not needed here)'}")
@@ -265,6 +265,11 @@ class AcrossDiagnosis:
 
 def _n(v: float) -> Optional[float]:
     return v if math.isfinite(v) else None
+
+
+def _p(p: float) -> str:
+    """``= 0.03``, or ``< 1e-300`` where the F distribution's tail underflows."""
+    return f"= {p:.2g}" if p > 0.0 else "< 1e-300"
 
 
 def _ps(ps: Sequence[float]) -> str:
@@ -545,7 +550,7 @@ def _how(t: TermAcross) -> str:
     if sf is not None and sf.shared:
         return (
             f"shared: {t.symbol} = {sf.value:.4g} +- {sf.standard_error:.2g} {t.unit} (one value refitted "
-            f"at every condition fits as well as one per condition, p = {sf.p_value:.2g})"
+            f"at every condition fits as well as one per condition, p {_p(sf.p_value)})"
         ).replace(" )", ")")
     if t.smooth_degree is None:
         how = "its values not smooth in the condition (no polynomial up to degree "
@@ -555,7 +560,7 @@ def _how(t: TermAcross) -> str:
     else:
         how = f"its values move with the condition as a degree-{t.smooth_degree} polynomial"
     if sf is not None:
-        how = f"varies with the condition (one shared value refused, p = {sf.p_value:.2g}); {how}"
+        how = f"varies with the condition (one shared value refused, p {_p(sf.p_value)}); {how}"
     return how
 
 
