@@ -22,8 +22,10 @@ Per condition the result reports each term's value with its standard error (infl
 is present there on its own evidence (its per-condition F test at ``alpha / K``; a term present only at
 some conditions is reported so, never forced everywhere), the smoothness of the values in the condition
 (the lowest polynomial degree, at most :data:`MAX_DEGREE`, that fits them within their se by a chi-square
-test; degree 0 passing: the term is shared), the final chi2/dof and the held-out NRMSE; and, when the
-per-condition diagnoses are given, their named terms and held-out NRMSE beside the joint structure's.
+test), whether ONE value refitted at every condition fits as well as one per condition (the nested fit's F
+test, :mod:`.shared`: "shared: c = ... +- ..." or "varies with the condition (p = ...)"), the final
+chi2/dof and the held-out NRMSE; and, when the per-condition diagnoses are given, their named terms and
+held-out NRMSE beside the joint structure's.
 """
 
 from __future__ import annotations
