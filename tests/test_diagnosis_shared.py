@@ -55,6 +55,7 @@ def test_a_constant_term_is_shared_and_its_value_is_the_truth() -> None:
     # One value is tighter than any condition's own.
     assert sf.standard_error < min(t.standard_errors)
     assert "shared: c = " in a.verdict
+    assert "one shared value refitted: " in a.summary() and "(shared)" in a.summary()
     assert a.to_dict()["terms"][0]["shared_fit"]["shared"] is True
 
 
