@@ -8,12 +8,16 @@ with the condition (sized in averaged-noise sd of its RMS contribution, so the v
   first: its own diagnosis rarely names it there);
 - ``trend x``: the same on x;
 - ``some``: viscous damping on u at 0, 0, 1, 2 sd (present at the last two conditions only);
-- ``null``: nothing.
+- ``null``: nothing;
+- ``const u``: viscous damping on u at 0.3 sd at every condition (one value: the shared-value test's
+  null, ``diagnosis/shared.py``).
 
 Each case is diagnosed per condition (``bw.diagnose``) and across (``bw.diagnose_across`` with the
 per-condition diagnoses). Per row: the joint selection names the true term (alone), a wrong term, its value
 within 3 se of the truth at every condition, the presence flags right (``some``: absent at 0 and 1, present
 at 2 and 3), the smoothness degree found (the truth is degree 1 for the trends, 0 for nulls: nothing), how
+often one value refitted at every condition is accepted (``diagnosis/shared.py``'s F test; the truth: only
+``const u``) and, there, whether the shared value is the truth within 3 se, how
 often the per-condition diagnoses tell ONE story (the same named set at every condition, the truth), the
 median held-out NRMSE of the joint structure over the per-condition one's, seconds per joint diagnosis.
 Candidates: :data:`CANDS` (the true terms' rivals; the study on the MR damper picks its own the same way).
@@ -44,6 +48,8 @@ ROWS: dict[str, tuple[str, str, Any, tuple[float, ...]]] = {
     "trend_x": ("viscous", "x", "viscous@x", (0.05, 0.15, 0.25, 0.35)),
     "some": ("viscous", "u", "viscous", (0.0, 0.0, 1.0, 2.0)),
     "null": ("viscous", "u", None, (0.0, 0.0, 0.0, 0.0)),
+    # Appended: one value at every condition (the shared-value test must not call it varying).
+    "const_u": ("viscous", "u", "viscous", (0.3, 0.3, 0.3, 0.3)),
 }
 
 
@@ -84,6 +90,8 @@ def case(row: str, seed: int) -> dict[str, Any]:
         "named": list(a.named),
         "own": [[t.term for t in d.named] for d in own],
         "ratio": float(np.median([c.held_out_joint / c.held_out_per_level for c in a.conditions])),
+        "shared": None,
+        "shared_within_3se": None,
     }
     if right:
         (t,) = a.terms
@@ -92,6 +100,11 @@ def case(row: str, seed: int) -> dict[str, Any]:
         out["within_3se"] = bool(np.all(np.abs(z) < 3.0)) if place == "u" else None
         out["degree"] = t.smooth_degree
         out["presence"] = t.present == tuple(s > 0.5 for s in sizes) if row == "some" else None
+        sf = t.shared_fit  # one value refitted at every condition, F test against one per condition
+        if sf is not None:
+            out["shared"] = sf.shared
+            if place == "u" and len(set(sizes)) == 1:
+                out["shared_within_3se"] = bool(abs(sf.value - truth[0]) < 3.0 * sf.standard_error)
     return out
 
 
@@ -105,9 +118,9 @@ def table(results: dict[str, list[dict[str, Any]]]) -> str:
     lines = [
         "| row | cases | right term alone | right physics, other place (true one listed as near-tied) "
         "| wrong physics | values within 3 se | presence right "
-        "| smooth degree (count) | per-condition: one story | held-out joint / per-level (median) "
-        "| s per joint |",
-        "|---|---|---|---|---|---|---|---|---|---|---|",
+        "| smooth degree (count) | one shared value (F test; its value within 3 se) "
+        "| per-condition: one story | held-out joint / per-level (median) | s per joint |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for row, rs in results.items():
         n = len(rs)
@@ -123,6 +136,7 @@ def table(results: dict[str, list[dict[str, Any]]]) -> str:
             f"| {sum(r['wrong'] for r in rs)} "
             f"| {_count(rs, 'within_3se')} | {_count(rs, 'presence')} "
             f"| {', '.join(f'{k}: {v}' for k, v in sorted(degs.items())) or '-'} "
+            f"| {_count(rs, 'shared')} ({_count(rs, 'shared_within_3se')}) "
             f"| {sum(r['one_story'] for r in rs)} | {ratio:.3f} "
             f"| {np.median([r['seconds'] for r in rs]):.1f} |"
         )

@@ -365,9 +365,9 @@ def across_markdown(a: Any, seconds: float) -> str:
         head = (
             "| term | "
             + " | ".join(c.label for c in a.conditions)
-            + " | smooth in the current (p per degree) |"
+            + " | smooth in the current (p per degree) | one shared value (refitted; F test) |"
         )
-        lines += [head, "|---" * (len(a.conditions) + 2) + "|"]
+        lines += [head, "|---" * (len(a.conditions) + 3) + "|"]
         for t in a.terms:
             cells = [
                 f"{v:.3g} ± {se:.2g}" + ("" if pr else " (not needed)")
@@ -375,7 +375,16 @@ def across_markdown(a: Any, seconds: float) -> str:
             ]
             ps = ", ".join(f"{d}: {p:.2g}" for d, p in enumerate(t.smooth_p))
             deg = "none" if t.smooth_degree is None else f"degree {t.smooth_degree}"
-            lines.append(f"| {t.label} ({t.symbol}, {t.unit}) | " + " | ".join(cells) + f" | {deg} ({ps}) |")
+            sf = t.shared_fit
+            one = (
+                "-"
+                if sf is None
+                else f"{'shared' if sf.shared else 'varies'}: {sf.value:.3g} ± {sf.standard_error:.2g}, "
+                f"p {f'= {sf.p_value:.2g}' if sf.p_value > 0 else '< 1e-300'}"
+            )
+            lines.append(
+                f"| {t.label} ({t.symbol}, {t.unit}) | " + " | ".join(cells) + f" | {deg} ({ps}) | {one} |"
+            )
         lines.append("")
     lines += [
         "| level | chi2/dof plain -> joint | held-out NRMSE plain | joint structure | per-level structure "

@@ -22,8 +22,10 @@ Per condition the result reports each term's value with its standard error (infl
 is present there on its own evidence (its per-condition F test at ``alpha / K``; a term present only at
 some conditions is reported so, never forced everywhere), the smoothness of the values in the condition
 (the lowest polynomial degree, at most :data:`MAX_DEGREE`, that fits them within their se by a chi-square
-test; degree 0 passing: the term is shared), the final chi2/dof and the held-out NRMSE; and, when the
-per-condition diagnoses are given, their named terms and held-out NRMSE beside the joint structure's.
+test), whether ONE value refitted at every condition fits as well as one per condition (the nested fit's F
+test, :mod:`.shared`: "shared: c = ... +- ..." or "varies with the condition (p = ...)"), the final
+chi2/dof and the held-out NRMSE; and, when the per-condition diagnoses are given, their named terms and
+held-out NRMSE beside the joint structure's.
 """
 
 from __future__ import annotations
@@ -57,6 +59,7 @@ from .select import (
     held_out,
     law_test,
 )
+from .shared import SharedTest, shared_test
 
 #: A passed candidate whose summed improvement is at least this fraction of the chosen one's is a near-tied
 #: rival (select.ALTERNATIVE_IMPROVEMENT's threshold, on the summed improvements).
@@ -149,10 +152,16 @@ class TermAcross:
     smooth_p: tuple[float, ...]
     #: The lowest degree whose p passes (None: none up to :data:`MAX_DEGREE`).
     smooth_degree: Optional[int]
+    #: The nested fit with ONE value at every condition, refitted jointly, and its F test
+    #: (diagnosis/shared.py; None: not computed, e.g. the joint fit found no admissible start).
+    shared_fit: Optional[SharedTest] = None
 
     @property
     def shared(self) -> bool:
-        """One value fits every condition within the se (degree 0 passes)."""
+        """One value fits every condition: the nested fit's F test passes (:attr:`shared_fit`); without it,
+        the values' degree-0 polynomial fits them within their se."""
+        if self.shared_fit is not None:
+            return self.shared_fit.shared
         return self.smooth_degree == 0
 
     @property
@@ -172,6 +181,7 @@ class TermAcross:
             "smooth_p": [_n(v) for v in self.smooth_p],
             "smooth_degree": self.smooth_degree,
             "shared": self.shared,
+            "shared_fit": None if self.shared_fit is None else self.shared_fit.to_dict(),
         }
 
 
@@ -233,6 +243,12 @@ class AcrossDiagnosis:
                 f"degree {t.smooth_degree} in the condition" if t.smooth_degree is not None else "not smooth"
             )
             lines.append(f"{t.label} ({t.symbol}, {t.unit}): {smooth}; p per degree " + _ps(t.smooth_p))
+            if t.shared_fit is not None:
+                sf = t.shared_fit
+                lines.append(
+                    f"  one shared value refitted: {sf.value:.4g} +- {sf.standard_error:.2g}, F = "
+                    f"{sf.statistic:.3g}, p {_p(sf.p_value)} ({'shared' if sf.shared else 'varies'})"
+                )
             for c, v, se, pr in zip(self.conditions, t.values, t.standard_errors, t.present):
                 lines.append(f"  {c.label}: {v:.4g} +- {se:.2g}{'' if pr else '  (not needed here)'}")
         lines += ["", "condition | chi2/dof plain -> final | held-out NRMSE plain, joint, per-level (terms)"]
@@ -251,6 +267,11 @@ class AcrossDiagnosis:
 
 def _n(v: float) -> Optional[float]:
     return v if math.isfinite(v) else None
+
+
+def _p(p: float) -> str:
+    """``= 0.03``, or ``< 1e-300`` where the F distribution's tail underflows."""
+    return f"= {p:.2g}" if p > 0.0 else "< 1e-300"
 
 
 def _ps(ps: Sequence[float]) -> str:
@@ -463,6 +484,15 @@ def _terms(
                 ses.append(se * inflate)
             ps = smoothness(conds, vals, ses)
             degree = next((d for d, p in enumerate(ps) if p >= alpha), None)
+            one = shared_test(
+                term,
+                [g.sx for g in groups],
+                [g.scale for g in groups],
+                [g.substeps for g in groups],
+                [g.current for g in groups],
+                [dof_of(g.sx, g.current) for g in groups],
+                alpha,
+            )
             sym, unit = term_symbol_unit(term, *units)
             out.append(
                 TermAcross(
@@ -476,6 +506,7 @@ def _terms(
                     tr.p_each,
                     ps,
                     degree,
+                    one,
                 )
             )
     return tuple(out)
@@ -515,6 +546,26 @@ def _conditions(
     return tuple(out)
 
 
+def _how(t: TermAcross) -> str:
+    """How a term's value moves with the condition: the shared-value test first, then the smoothness."""
+    sf = t.shared_fit
+    if sf is not None and sf.shared:
+        return (
+            f"shared: {t.symbol} = {sf.value:.4g} +- {sf.standard_error:.2g} {t.unit} (one value refitted "
+            f"at every condition fits as well as one per condition, p {_p(sf.p_value)})"
+        ).replace(" )", ")")
+    if t.smooth_degree is None:
+        how = "its values not smooth in the condition (no polynomial up to degree "
+        how += f"{MAX_DEGREE} fits them within their se)"
+    elif t.shared:
+        how = "one value shared by the conditions"
+    else:
+        how = f"its values move with the condition as a degree-{t.smooth_degree} polynomial"
+    if sf is not None:
+        how = f"varies with the condition (one shared value refused, p {_p(sf.p_value)}); {how}"
+    return how
+
+
 def _verdict(
     terms: Sequence[TermAcross], conds: Sequence[ConditionResult], steps: Sequence[JointStep]
 ) -> str:
@@ -528,14 +579,7 @@ def _verdict(
             if t.everywhere
             else "needed only at " + ", ".join(c.label for c, p in zip(conds, t.present) if p)
         )
-        if t.smooth_degree is None:
-            how = "its values not smooth in the condition (no polynomial up to degree "
-            how += f"{MAX_DEGREE} fits them within their se)"
-        elif t.shared:
-            how = "one value shared by the conditions"
-        else:
-            how = f"its values move with the condition as a degree-{t.smooth_degree} polynomial"
-        parts.append(f"{t.label} ({where}; {how})")
+        parts.append(f"{t.label} ({where}; {_how(t)})")
     adequate = sum(1 for c in conds if math.isfinite(c.final_p_value) and c.final_p_value >= 0.05)
     tail = f"; the joint structure passes its adequacy test at {adequate} of {n} conditions"
     ties = [
