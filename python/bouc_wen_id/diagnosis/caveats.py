@@ -10,12 +10,13 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 from ..augmented import AugExperiment, AugFit
 from ..terms import TERMS
 from .result import NamedTerm
-from .select import Alternative
+from .select import LAW_ALPHA, Alternative
 
 
 def below_saturation(sx: Sequence[AugExperiment], fit: AugFit) -> list[str]:
@@ -44,14 +45,23 @@ def alternatives_text(alternatives: Sequence[Alternative], named: Sequence[Named
     spring on x from one on u, and the one-line verdict named one place only."""
     kinds = {t.term for t in named}
     rivals: dict[str, list[str]] = {}
+    law_p: dict[str, float] = {}  # a rival passed over for its law only, though it fits as well (select.py)
     for a in alternatives:
         if a.term in kinds and a.rival not in rivals.setdefault(a.term, []):
             rivals[a.term].append(a.rival)
+        if math.isfinite(a.law_p_value):
+            law_p[a.rival] = a.law_p_value
     if not rivals:
         return ""
 
     def label(kind: str) -> str:
-        return TERMS[kind].place_label() if kind in TERMS else kind
+        text = TERMS[kind].place_label() if kind in TERMS else kind
+        if kind in law_p:
+            text += (
+                f" (it fits at least as well; its value differs between experiments at law p = "
+                f"{law_p[kind]:.2g}, a test that refuses a true term in {100 * LAW_ALPHA:g} % of cases)"
+            )
+        return text
 
     what = "; ".join(" or ".join(label(k) for k in (t, *rs)) for t, rs in rivals.items())
     return (
