@@ -28,7 +28,11 @@ the final model fails its adequacy test, the held-out NRMSE of the chosen model 
 (median; where the truth is a fittable library term, at its place: ``viscous`` on x is ``viscous@x``),
 seconds per diagnosis, the achieved size, and "<lim": the share of cases whose true value is below the
 diagnosis's own detection limit for the true term at its place (docs/diagnosis.md, "Detection limits"), for
-the effects whose generator units are the library's (``SAME_UNITS``).
+the effects whose generator units are the library's (``SAME_UNITS``); "<l90" the same against the 90 %-power
+limit (the design's power there is below 90 %, so a miss is the design's: the plain model absorbs all but
+about 0.01 % of a 10x sensor lag's raw chi2, docs/diagnosis.md "Misses at 10x"). A named term whose listed
+alternative is the truth AT ITS PLACE (e.g. Dahl on x beside a Dahl on u named where G is nearly flat)
+counts as right at its place: issue 18's "confounded pair as alternatives".
 Targets beside each row; "meets" says whether the row's measurable targets hold.
 
 What counts as right on an outside row of the Dahl element's family (``DAHL_FAMILY``: the Iwan loop, Dahl's
