@@ -134,3 +134,16 @@ def test_the_bench_credits_the_truth_at_its_place_listed_as_the_alternative() ->
     assert fr["right_place"] and not fr["wrong"]
     fr_u = bench._score(_Diag(["coulomb@x"], [("coulomb@x", "dahl")]), "library", "dahl", "x")
     assert fr_u["right"] and not fr_u["right_place"]
+
+
+def test_a_law_failed_rival_listed_as_an_alternative_is_not_also_called_a_stand_in() -> None:
+    """The verdict says a passed-over candidate once: as the alternative with its law p, not also under
+    "not named: ... stands in for physics outside the library"; one not listed keeps that clause."""
+    from bouc_wen_id.diagnosis import run
+
+    trial = SimpleNamespace(term="sensor_lag", law_p_value=0.004)
+    listed = select.Alternative("coulomb@x", "sensor_lag", 0.3, "a separating design", 0.004)
+    step = SimpleNamespace(trials=[trial], law_failed=("sensor_lag",), alternatives=(listed,))
+    assert run._law_text(cast(Any, [step])) == ""
+    bare = SimpleNamespace(trials=[trial], law_failed=("sensor_lag",), alternatives=())
+    assert "not named: sensor lag" in run._law_text(cast(Any, [bare]))
