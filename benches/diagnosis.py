@@ -30,7 +30,8 @@ seconds per diagnosis, the achieved size, and "<lim": the share of cases whose t
 diagnosis's own detection limit for the true term at its place (docs/diagnosis.md, "Detection limits"), for
 the effects whose generator units are the library's (``SAME_UNITS``); "<l90" the same against the 90 %-power
 limit (the design's power there is below 90 %, so a miss is the design's: the plain model absorbs all but
-about 0.01 % of a 10x sensor lag's raw chi2, docs/diagnosis.md "Misses at 10x"). A named term whose listed
+about 0.01 % of a 10x sensor lag's raw chi2, docs/diagnosis.md "Misses at 10x"), and "ok>90" the share right
+at its place among the other cases. A named term whose listed
 alternative is the truth AT ITS PLACE (e.g. Dahl on x beside a Dahl on u named where G is nearly flat)
 counts as right at its place: issue 18's "confounded pair as alternatives".
 Targets beside each row; "meets" says whether the row's measurable targets hold.
@@ -489,6 +490,14 @@ def summarise(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
             "below_lim": _mean(
                 [r["below_limit"] for r in ok if r.get("below_limit") is not None and r["term"] in SAME_UNITS]
             ),
+            # Right at its place among the cases at or above the 90 %-power limit (the design could see them).
+            "right_above_l90": _mean(
+                [
+                    bool(r.get("right_place"))
+                    for r in ok
+                    if r.get("below_limit_90") is False and r["term"] in SAME_UNITS
+                ]
+            ),
             "below_lim90": _mean(
                 [
                     r["below_limit_90"]
@@ -519,8 +528,8 @@ def _mean(v: list[Any]) -> float:
 def print_table(lines: list[dict[str, Any]], null_label: str = "null (plain, low-amp settling)") -> None:
     head = (
         f"{'case':<34} {'n':>3} {'detect':>6} {'name':>5} {'+place':>6} {'wrong':>5} {'unexpl':>6} "
-        f"{'fam':>4} {'bad':>4} {'HO':>6} {'s/diag':>6} {'size':>5} {'<lim':>5} {'<l90':>5} {'err':>3} "
-        f"{'meets':>5}  "
+        f"{'fam':>4} {'bad':>4} {'HO':>6} {'s/diag':>6} {'size':>5} {'<lim':>5} {'<l90':>5} {'ok>90':>5} "
+        f"{'err':>3} {'meets':>5}  "
         "target"
     )
     print(head)
@@ -537,7 +546,7 @@ def print_table(lines: list[dict[str, Any]], null_label: str = "null (plain, low
             f"{ln['wrong']:5.2f} {ln['unexplained']:6.2f} {ln.get('family', 0.0):4.2f} {ln['bad']:4.2f} "
             f"{ln['ho_ratio']:6.3f} "
             f"{ln['seconds']:6.2f} {ln['achieved']:5.1f} {ln.get('below_lim', math.nan):5.2f} "
-            f"{ln.get('below_lim90', math.nan):5.2f} "
+            f"{ln.get('below_lim90', math.nan):5.2f} {ln.get('right_above_l90', math.nan):5.2f} "
             f"{ln['errors']:>3} "
             f"{'yes' if ln['meets'] else 'NO':>5}  "
             f"{ln['target']}"
