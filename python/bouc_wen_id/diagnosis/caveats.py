@@ -10,12 +10,13 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 from ..augmented import AugExperiment, AugFit
 from ..terms import TERMS
 from .result import NamedTerm
-from .select import Alternative
+from .select import LAW_ALPHA, Alternative
 
 
 def below_saturation(sx: Sequence[AugExperiment], fit: AugFit) -> list[str]:
@@ -44,20 +45,35 @@ def alternatives_text(alternatives: Sequence[Alternative], named: Sequence[Named
     spring on x from one on u, and the one-line verdict named one place only."""
     kinds = {t.term for t in named}
     rivals: dict[str, list[str]] = {}
+    # A rival passed over for its law only, though it fits at least as well (select.preferred_by_fit): the
+    # law, not the fit, told them apart, so it gets its own clause with the law's p.
+    by_law: list[Alternative] = []
     for a in alternatives:
-        if a.term in kinds and a.rival not in rivals.setdefault(a.term, []):
+        if a.term not in kinds:
+            continue
+        if math.isfinite(a.law_p_value):
+            by_law.append(a)
+        elif a.rival not in rivals.setdefault(a.term, []):
             rivals[a.term].append(a.rival)
-    if not rivals:
-        return ""
+    rivals = {t: rs for t, rs in rivals.items() if rs}
 
     def label(kind: str) -> str:
         return TERMS[kind].place_label() if kind in TERMS else kind
 
-    what = "; ".join(" or ".join(label(k) for k in (t, *rs)) for t, rs in rivals.items())
-    return (
-        f"; the experiments cannot tell apart: {what} (alternatives, each with the experiment that would "
-        "separate them)"
-    )
+    text = ""
+    if rivals:
+        what = "; ".join(" or ".join(label(k) for k in (t, *rs)) for t, rs in rivals.items())
+        text += (
+            f"; the experiments cannot tell apart: {what} (alternatives, each with the experiment that would "
+            "separate them)"
+        )
+    for a in by_law:
+        text += (
+            f"; {label(a.term)} is named over {label(a.rival)}, which fits at least as well but whose value "
+            f"differs between experiments (law p = {a.law_p_value:.2g}; the law test refuses a true term in "
+            f"{100 * LAW_ALPHA:g} % of cases): an alternative, with the experiment that would separate them"
+        )
+    return text
 
 
 #: The words that mark the family caveat in a verdict (the bench reads them: benches/diagnosis.py).

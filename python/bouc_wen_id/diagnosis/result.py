@@ -159,9 +159,14 @@ class Diagnosis:
             lines.append(f"{TERM_LABELS.get(term, term)}: {why}")
         for a in self.alternatives:
             rival, term = TERM_LABELS.get(a.rival, a.rival), TERM_LABELS.get(a.term, a.term)
+            law = (
+                ""
+                if not math.isfinite(a.law_p_value)
+                else f", though its law fails (p = {a.law_p_value:.2g})"
+            )
             lines.append(
-                f"alternative: {rival} fits as well as {term} (parameter correlation {a.correlation:+.3f}); "
-                f"to separate them: {a.separating_experiment}"
+                f"alternative: {rival} fits as well as {term}{law} (parameter correlation "
+                f"{a.correlation:+.3f}); to separate them: {a.separating_experiment}"
             )
         for k, st in enumerate(self.steps, 1):
             lines.append("")

@@ -975,8 +975,11 @@ def _law_text(steps: Sequence[Step]) -> str:
     experiments (select.law_test): stand-ins for physics outside the library, tested and not named."""
     failed: dict[str, float] = {}
     for st in steps:
+        # A law-failed candidate listed as the named term's alternative (it fits at least as well,
+        # select.preferred_by_fit) is said there, with its law p: not also as a stand-in here.
+        listed = {a.rival for a in getattr(st, "alternatives", ()) if math.isfinite(a.law_p_value)}
         for tr in st.trials:
-            if tr.term in st.law_failed and tr.term not in failed:
+            if tr.term in st.law_failed and tr.term not in failed and tr.term not in listed:
                 failed[tr.term] = tr.law_p_value
     if not failed:
         return ""

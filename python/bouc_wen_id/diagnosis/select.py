@@ -162,6 +162,9 @@ class Alternative:
     rival: str
     correlation: float
     separating_experiment: str
+    #: The rival's law-test p (:func:`law_test`) when its law failed yet it fits the data at least as well
+    #: as the chosen term (:func:`preferred_by_fit`); NaN for a rival whose law holds or was not tested.
+    law_p_value: float = math.nan
 
     def to_dict(self) -> dict[str, Any]:
         return dict(self.__dict__)
@@ -491,6 +494,25 @@ def _place_separation(exps: Sequence[AugExperiment], fit: AugFit, term: str) -> 
     return text
 
 
+def preferred_by_fit(chosen: Trial, trials: Sequence[Trial], law_failed: Sequence[str]) -> dict[str, float]:
+    """The candidates the selection passed over ONLY for their law although they fit the data at least as
+    well as ``chosen`` (cost not above its cost), with their law p: {term: law p}.
+
+    The law test refuses the library's true term in ``LAW_ALPHA`` of cases by construction (its null is
+    "this term is the truth"). When it does, the selection names the next term that passes, which fits
+    worse or at best equally: a rival reading, or the same physics at the other place where G is nearly
+    flat (a Dahl loop on x named on u; a sensor lag named as dry friction on x). Such a candidate is not
+    dropped silently: it is an alternative with its law's p, and the separating experiment. A candidate
+    whose law failed and which fits worse than the chosen term is no rival reading (as before)."""
+    if chosen.fit is None:
+        return {}
+    out: dict[str, float] = {}
+    for tr in trials:
+        if tr.term in law_failed and tr.fit is not None and tr.cost <= chosen.cost:
+            out[tr.term] = tr.law_p_value
+    return out
+
+
 def place_alternatives(
     exps: Sequence[AugExperiment],
     chosen: Trial,
@@ -498,24 +520,35 @@ def place_alternatives(
     substeps: int,
     law_failed: Sequence[str] = (),
     fit_term: Optional[Callable[[AugFit, str], Optional[AugFit]]] = None,
+    preferred: Optional[dict[str, float]] = None,
 ) -> list[Alternative]:
     """The chosen term at its other places, where the data cannot tell the places apart.
 
     A sibling (the same physics at another place, e.g. viscous damping on u and on x) whose fit is within
     :data:`PLACE_CHI2` (times the chosen model's chi2/dof when above 1) of the chosen one's cost is an
     alternative, never dropped silently, unless its law fails (:func:`law_test`, run here for a sibling the
-    selection did not reach): then it is no rival reading. The separating
-    experiment is where x lags u differently (near G's resonance or corner).
+    selection did not reach): then it is no rival reading, except where it fits at least as well as the
+    chosen place (``preferred``: :func:`preferred_by_fit`, with the law's p), where it is an alternative
+    with that p. The separating experiment is where x lags u differently (near G's resonance or corner).
     """
     if chosen.fit is None:
         return []
+    preferred = preferred or {}
     out: list[Alternative] = []
     by_term = {t.term: t for t in trials}
     dof = dof_of(exps, chosen.fit)
     s2 = max(1.0, chosen.cost / dof) if dof > 0 else 1.0
     for rival in siblings(chosen.term):
         tr = by_term.get(rival)
-        if tr is None or tr.fit is None or rival in law_failed:  # its law failed: not a rival reading
+        if tr is None or tr.fit is None:
+            continue
+        if rival in preferred:  # skipped for its law only, while it fits at least as well
+            both = fit_term(chosen.fit, rival) if fit_term else fit_with(exps, chosen.fit, rival, substeps)
+            rho = _correlation(both, chosen.term, rival) if both is not None else math.nan
+            sep = _place_separation(exps, chosen.fit, chosen.term)
+            out.append(Alternative(chosen.term, rival, rho, sep, preferred[rival]))
+            continue
+        if rival in law_failed:  # its law failed and it fits worse: not a rival reading
             continue
         if tr.cost - chosen.cost >= PLACE_CHI2 * s2:
             continue
@@ -570,6 +603,43 @@ def memo_fit_with(exps: Sequence[AugExperiment], substeps: int) -> Callable[[Aug
         return fitted[(id(base), t)][1]
 
     return fit_term
+
+
+def step_alternatives(
+    exps: Sequence[AugExperiment],
+    chosen: Optional[Trial],
+    trials: Sequence[Trial],
+    order: Sequence[Trial],
+    tested: Sequence[Trial],
+    law_failed: Sequence[str],
+    fit_term: Callable[[AugFit, str], Optional[AugFit]],
+    substeps: int,
+) -> list[Alternative]:
+    """The alternatives of one selection step's chosen term: its other places (:func:`place_alternatives`),
+    then the rivals among ``order`` (the candidates that passed, best first) that tie with it or whose
+    value is confounded with its (``|rho| >= ALTERNATIVE_CORRELATION``), each with the experiment that would
+    separate them. A rival whose law failed is no rival reading unless the selection passed it over for its
+    law only while it fits at least as well (:func:`preferred_by_fit`): then it is one, with its law's p.
+    ``tested``: the step's trials with their law p."""
+    if chosen is None or chosen.fit is None:
+        return []
+    preferred = preferred_by_fit(chosen, tested, law_failed)
+    # The chosen physics at its other places first, with the experiment that separates places.
+    out = place_alternatives(exps, chosen, trials, substeps, law_failed, fit_term, preferred)
+    for tr in order:
+        if tr.term == chosen.term or tr.fit is None or tr.term in siblings(chosen.term):
+            continue
+        if tr.term in law_failed and tr.term not in preferred:  # its value differs: not a rival reading
+            continue
+        tied = tr.term in preferred or _tied(chosen, tr, dof_of(exps, chosen.fit))
+        if tr.improvement < ALTERNATIVE_IMPROVEMENT * chosen.improvement and not tied:
+            continue
+        both = fit_term(chosen.fit, tr.term)
+        rho = _correlation(both, chosen.term, tr.term) if both is not None else math.nan
+        if tied or (math.isfinite(rho) and abs(rho) >= ALTERNATIVE_CORRELATION):
+            sep = _separating(exps, chosen.fit, tr.fit, substeps)
+            out.append(Alternative(chosen.term, tr.term, rho, sep, preferred.get(tr.term, math.nan)))
+    return out
 
 
 def forward_select(
@@ -636,26 +706,9 @@ def forward_select(
             if ho is None or ho.improves:
                 chosen = tr2
                 break
-        alternatives: list[Alternative] = []
-        if chosen is not None and chosen.fit is not None:
-            # The chosen physics at its other places first, with the experiment that separates places.
-            alternatives += place_alternatives(exps, chosen, trials, substeps, law_failed, fit_term)
-            for tr in order:
-                if tr.term == chosen.term or tr.fit is None or tr.term in siblings(chosen.term):
-                    continue
-                if tr.term in law_failed:  # its value differs between experiments: not a rival reading
-                    continue
-                tied = _tied(chosen, tr, dof_of(exps, chosen.fit))
-                if tr.improvement < ALTERNATIVE_IMPROVEMENT * chosen.improvement and not tied:
-                    continue
-                both = fit_term(chosen.fit, tr.term)
-                rho = _correlation(both, chosen.term, tr.term) if both is not None else math.nan
-                if tied or (math.isfinite(rho) and abs(rho) >= ALTERNATIVE_CORRELATION):
-                    alternatives.append(
-                        Alternative(
-                            chosen.term, tr.term, rho, _separating(exps, chosen.fit, tr.fit, substeps)
-                        )
-                    )
+        alternatives = step_alternatives(
+            exps, chosen, trials, order, list(final_trials.values()), law_failed, fit_term, substeps
+        )
         steps.append(
             Step(
                 c0,
@@ -684,6 +737,7 @@ __all__ = [
     "Alternative",
     "best_of",
     "place_alternatives",
+    "preferred_by_fit",
     "siblings",
     "law_test",
     "element_law_test",
