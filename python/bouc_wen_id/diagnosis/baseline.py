@@ -1,0 +1,192 @@
+"""A baseline that wanders: taken out of the recordings before averaging (issue 18, honest verdicts).
+
+A load cell's zero that drifts with temperature, or any random walk added to the output, moves the loop's
+centre from period to period without changing its shape. It is not hysteresis, and it is not stationary:
+no noise level makes its trend chance, and in 16 periods it cannot be told from a centre that drifts. Left
+in, the trend test of the period DCs called the loops "not settled", their centres differed between
+experiments, and an output offset fitted part of it with a value that differed between experiments:
+"unexplained" on 16 of 20 noise-only sets of the designs bench's ``walk`` rows.
+
+So the set is tested first (:func:`detect`, on the periods after settling): the period DCs' spread about a
+quadratic trend in the period index against the white noise (the periods' own spread with each period's
+mean taken out), pooled over the recordings (chi-square, :data:`WANDER_ALPHA`), and their lag-1 correlation,
+pooled (at least :data:`WANDER_CORRELATION`: beyond what the stationary correction of ``data.py`` covers).
+A rough wander passes both; white noise fails the first, a smooth settling of the centre (a transient) the
+first too (the quadratic takes it), a stationary noise correlated over a period (AR(1), phi = 0.99 at 128
+samples per period: r about 0.45) the second.
+
+When it wanders, each period's mean is the baseline (:func:`removed`): it is taken out of every whole period
+of every recording, and the set's common centre put back in its place when it stands out of the spread of
+the recordings' centres (a t-test with m - 1 degrees of freedom at the level of one candidate: an output
+offset is then still named, with that spread as its standard error), else 0. The harmonics 1.. of every
+period are untouched, so the loop, its degradation (the fundamental's trend) and its noise level there are
+measured as before; the DC of each period is spent (its degrees of freedom are taken off the noise floor's,
+``data.py``, and the DC is left out of the drift test, ``drift.harmonic_weights``). What the records cannot
+tell (an output offset within the wander, a loop whose centre drifts, an asymmetry's DC) the verdict says.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
+from typing import Any, Optional
+
+import numpy as np
+
+from .data import BASELINE_MARK, cross_period_correlation
+
+#: Level of the pooled chi-square of the period DCs about a quadratic trend (as the colour check's).
+WANDER_ALPHA = 1e-3
+#: Smallest pooled lag-1 correlation of the period DCs read as a wander (data.MAX_CROSS_PERIOD_CORRELATION:
+#: the stationary inflation stops there).
+WANDER_CORRELATION = 0.8
+#: The metadata key that marks a recording whose period means were taken out (read by ``data.py``).
+MARK = BASELINE_MARK
+
+
+@dataclass(frozen=True)
+class Wander:
+    """The set's wander test and what was kept of its centres."""
+
+    correlation: float  # pooled lag-1 correlation of the period DCs
+    chi2: float  # pooled chi-square of the period DCs about their quadratic trends (white-noise units)
+    dof: int
+    p_value: float
+    centre: float  # the common centre kept (0.0 when not kept)
+    centre_se: float  # its standard error: the spread of the recordings' centres over sqrt(m)
+    centre_p: float  # the t-test of the common centre (NaN: fewer than 2 recordings)
+    kept: bool
+
+    def note(self) -> str:
+        return (
+            "the baseline wanders: the period means trend beyond a quadratic (chi-square "
+            f"{self.chi2:.3g} on {self.dof} dof, p = {self.p_value:.2g}) with a lag-1 correlation of "
+            f"{self.correlation:.2g}, as a random walk (a drifting sensor zero); each period's mean was "
+            "taken as baseline and removed before averaging (one degree of freedom per period, from the "
+            "noise floor), the harmonics of every period kept as measured"
+        )
+
+    def clause(self) -> str:
+        head = "; the baseline wanders (removed period by period): "
+        if self.kept:
+            return (
+                f"{head}the common centre {self.centre:.4g} ± {self.centre_se:.3g} (the recordings' "
+                f"centres' spread, t-test p = {self.centre_p:.2g}) was kept; a drift of the loop's centre "
+                "cannot be told from the wander"
+            )
+        tail = f" (the centres' common part: p = {self.centre_p:.2g})" if math.isfinite(self.centre_p) else ""
+        return f"{head}an output offset or a drift of the loop's centre cannot be told from it{tail}"
+
+
+def _rows(rec: Any) -> tuple[np.ndarray, int]:
+    p, s = int(rec.samples_per_period), int(rec.settle_periods)
+    n = int(rec.whole_periods) - s
+    return np.asarray(rec.y[s * p : (s + n) * p], dtype=np.float64).reshape(n, p), p
+
+
+def detect(items: Any, level: float) -> Optional[Wander]:
+    """The set's wander test (module docstring) on its Recordings; None when it does not wander, or with
+    fewer than 4 periods after settling in every recording. ``level`` is the common centre's t-test level."""
+    from scipy.special import chdtrc, stdtr  # type: ignore[import-untyped]
+
+    from ..model import Recording
+
+    seq = list(items) if isinstance(items, (list, tuple)) else [items]
+    recs = [r for r in seq if isinstance(r, Recording)]
+    chi2, dof, rs, weights, centres = 0.0, 0, [], [], []
+    for rec in recs:
+        try:
+            rows, p = _rows(rec)
+        except Exception:  # no whole-period grid: prepare() names the problem
+            return None
+        n = rows.shape[0]
+        if n < 4 or p < 2:
+            continue
+        dc = rows.mean(axis=1)
+        white = float(np.mean(np.diff(rows - dc[:, None], axis=0) ** 2)) / 2.0 * p / (p - 1)
+        if not (white > 0 and math.isfinite(white)):
+            continue
+        idx = np.arange(n, dtype=np.float64)
+        trend = np.vander(idx - idx.mean(), 3)
+        res = dc - trend @ np.linalg.lstsq(trend, dc, rcond=None)[0]
+        chi2 += float(res @ res) * p / white
+        dof += n - 3
+        rs.append(cross_period_correlation(dc))
+        weights.append(float(n))
+        centres.append(float(dc.mean()))
+    if dof == 0:
+        return None
+    pval = float(chdtrc(dof, chi2))
+    r = float(np.average(rs, weights=weights))
+    if not (pval < WANDER_ALPHA and r >= WANDER_CORRELATION):
+        return None
+    m = len(centres)
+    c, se, cp = float(np.mean(centres)), math.nan, math.nan
+    if m >= 2:
+        se = float(np.std(centres, ddof=1)) / math.sqrt(m)
+        cp = float(2.0 * stdtr(m - 1, -abs(c) / se)) if se > 0 else (0.0 if c else 1.0)
+    kept = bool(math.isfinite(cp) and cp < level)
+    return Wander(r, chi2, dof, pval, c if kept else 0.0, se, cp, kept)
+
+
+def removed(items: Any, wander: Optional[Wander]) -> Any:
+    """``items`` with each Recording's period means replaced by the kept centre (every whole period, the
+    settling ones too, and the tail after the last whole period by the last one's), marked for ``data.py``;
+    ``items`` as they are when the set does not wander."""
+    from ..model import Recording
+
+    if wander is None:
+        return items
+    seq = list(items) if isinstance(items, (list, tuple)) else [items]
+    out = []
+    for rec in seq:
+        if not isinstance(rec, Recording):
+            out.append(rec)
+            continue
+        p, n = int(rec.samples_per_period), int(rec.whole_periods)
+        y = np.array(rec.y, dtype=np.float64)
+        dc = y[: n * p].reshape(n, p).mean(axis=1)
+        shift = np.concatenate([np.repeat(dc, p), np.full(y.size - n * p, dc[-1] if n else 0.0)])
+        meta = {**dict(rec.metadata), MARK: True}
+        new = y - shift + wander.centre
+        out.append(
+            Recording(
+                rec.t,
+                rec.u,
+                new,
+                rec.amplitude,
+                rec.frequency,
+                settle_periods=rec.settle_periods,
+                x=rec.x,
+                w=rec.w,
+                plant=rec.plant,
+                metadata=meta,
+            )
+        )
+    return out
+
+
+def marked(rec: Any) -> bool:
+    """Whether ``rec``'s period means were taken out here (:func:`removed`)."""
+    return bool(getattr(rec, "metadata", {}).get(MARK, False))
+
+
+def adjusted(d: Any, wander: Optional[Wander], offset_kind: str) -> Any:
+    """The diagnosis ``d`` with the wander's clause, and a named output offset's standard error the spread of
+    the recordings' centres (the fit's own, from the white noise, does not see the wander)."""
+    if wander is None:
+        return d
+
+    def fix(terms: Sequence[Any]) -> tuple[Any, ...]:
+        return tuple(
+            replace(t, standard_error=wander.centre_se)
+            if t.term == offset_kind and wander.kept and math.isfinite(wander.centre_se)
+            else t
+            for t in terms
+        )
+
+    return replace(d, verdict=d.verdict + wander.clause(), named=fix(d.named), partial=fix(d.partial))
+
+
+__all__ = ["Wander", "detect", "removed", "marked", "adjusted", "WANDER_ALPHA", "WANDER_CORRELATION"]
