@@ -10,10 +10,12 @@ experiments, and an output offset fitted part of it with a value that differed b
 So the set is tested first (:func:`detect`, on the periods after settling): the period DCs' spread about a
 quadratic trend in the period index against the white noise (the periods' own spread with each period's
 mean taken out), pooled over the recordings (chi-square, :data:`WANDER_ALPHA`), and their lag-1 correlation,
-pooled (at least :data:`WANDER_CORRELATION`: beyond what the stationary correction of ``data.py`` covers).
-A rough wander passes both; white noise fails the first, a smooth settling of the centre (a transient) the
-first too (the quadratic takes it), a stationary noise correlated over a period (AR(1), phi = 0.99 at 128
-samples per period: r about 0.45) the second.
+pooled (at least :data:`WANDER_CORRELATION`: more than the stationary correction of ``data.py`` is for),
+and the first test again over the last half of the periods (records of 8 periods or more: a transient has
+died out there, a wander goes on). A rough wander passes all three; white noise fails the first, a smooth
+settling of the centre (a transient) the first (the quadratic takes it) or, faster, the third, a stationary
+noise correlated over a period (AR(1), phi = 0.99 at 128 samples per
+period: r about 0.45) the second.
 
 When it wanders, each period's mean is the baseline (:func:`removed`): it is taken out of every whole period
 of every recording, and the set's common centre put back in its place when it stands out of the spread of
@@ -38,9 +40,10 @@ from .data import BASELINE_MARK, cross_period_correlation
 
 #: Level of the pooled chi-square of the period DCs about a quadratic trend (as the colour check's).
 WANDER_ALPHA = 1e-3
-#: Smallest pooled lag-1 correlation of the period DCs read as a wander (data.MAX_CROSS_PERIOD_CORRELATION:
-#: the stationary inflation stops there).
-WANDER_CORRELATION = 0.8
+#: Smallest pooled lag-1 correlation of the period DCs read as a wander: a random walk's, bias-corrected, is
+#: 0.68-0.96 over 10 recordings of 16 periods (a short series' estimate falls short of 1); AR(1) noise with
+#: phi = 0.99 at 128 samples per period gives about 0.45, which data.py's stationary correction covers.
+WANDER_CORRELATION = 0.6
 #: The metadata key that marks a recording whose period means were taken out (read by ``data.py``).
 MARK = BASELINE_MARK
 
@@ -50,6 +53,7 @@ class Wander:
     """The set's wander test and what was kept of its centres."""
 
     correlation: float  # pooled lag-1 correlation of the period DCs
+    late_p_value: float  # the chi-square's p-value over the last half of the periods alone
     chi2: float  # pooled chi-square of the period DCs about their quadratic trends (white-noise units)
     dof: int
     p_value: float
@@ -62,7 +66,8 @@ class Wander:
         return (
             "the baseline wanders: the period means trend beyond a quadratic (chi-square "
             f"{self.chi2:.3g} on {self.dof} dof, p = {self.p_value:.2g}) with a lag-1 correlation of "
-            f"{self.correlation:.2g}, as a random walk (a drifting sensor zero); each period's mean was "
+            f"{self.correlation:.2g}, and on over the last half of the periods (p = "
+            f"{self.late_p_value:.2g}), as a random walk (a drifting sensor zero); each period's mean was "
             "taken as baseline and removed before averaging (one degree of freedom per period, from the "
             "noise floor), the harmonics of every period kept as measured"
         )
@@ -94,7 +99,7 @@ def detect(items: Any, level: float) -> Optional[Wander]:
 
     seq = list(items) if isinstance(items, (list, tuple)) else [items]
     recs = [r for r in seq if isinstance(r, Recording)]
-    chi2, dof, rs, weights, centres = 0.0, 0, [], [], []
+    chi2, dof, late, late_dof, rs, weights, centres = 0.0, 0, 0.0, 0, [], [], []
     for rec in recs:
         try:
             rows, p = _rows(rec)
@@ -107,11 +112,11 @@ def detect(items: Any, level: float) -> Optional[Wander]:
         white = float(np.mean(np.diff(rows - dc[:, None], axis=0) ** 2)) / 2.0 * p / (p - 1)
         if not (white > 0 and math.isfinite(white)):
             continue
-        idx = np.arange(n, dtype=np.float64)
-        trend = np.vander(idx - idx.mean(), 3)
-        res = dc - trend @ np.linalg.lstsq(trend, dc, rcond=None)[0]
-        chi2 += float(res @ res) * p / white
-        dof += n - 3
+        x2, d2 = _rough(dc, p / white)
+        chi2, dof = chi2 + x2, dof + d2
+        if n >= 8:  # the last half alone: a transient has died out there, a wander goes on
+            x2, d2 = _rough(dc[n // 2 :], p / white)
+            late, late_dof = late + x2, late_dof + d2
         rs.append(cross_period_correlation(dc))
         weights.append(float(n))
         centres.append(float(dc.mean()))
@@ -119,7 +124,8 @@ def detect(items: Any, level: float) -> Optional[Wander]:
         return None
     pval = float(chdtrc(dof, chi2))
     r = float(np.average(rs, weights=weights))
-    if not (pval < WANDER_ALPHA and r >= WANDER_CORRELATION):
+    pl = float(chdtrc(late_dof, late)) if late_dof else math.nan
+    if not (pval < WANDER_ALPHA and r >= WANDER_CORRELATION and pl < WANDER_ALPHA):
         return None
     m = len(centres)
     c, se, cp = float(np.mean(centres)), math.nan, math.nan
@@ -127,7 +133,15 @@ def detect(items: Any, level: float) -> Optional[Wander]:
         se = float(np.std(centres, ddof=1)) / math.sqrt(m)
         cp = float(2.0 * stdtr(m - 1, -abs(c) / se)) if se > 0 else (0.0 if c else 1.0)
     kept = bool(math.isfinite(cp) and cp < level)
-    return Wander(r, chi2, dof, pval, c if kept else 0.0, se, cp, kept)
+    return Wander(r, pl, chi2, dof, pval, c if kept else 0.0, se, cp, kept)
+
+
+def _rough(dc: np.ndarray, weight: float) -> tuple[float, int]:
+    """The period DCs' chi-square about a quadratic trend in the period index (``weight`` = P / sigma^2)."""
+    idx = np.arange(dc.size, dtype=np.float64)
+    trend = np.vander(idx - idx.mean(), 3)
+    res = dc - trend @ np.linalg.lstsq(trend, dc, rcond=None)[0]
+    return float(res @ res) * weight, dc.size - 3
 
 
 def removed(items: Any, wander: Optional[Wander]) -> Any:
@@ -148,7 +162,7 @@ def removed(items: Any, wander: Optional[Wander]) -> Any:
         y = np.array(rec.y, dtype=np.float64)
         dc = y[: n * p].reshape(n, p).mean(axis=1)
         shift = np.concatenate([np.repeat(dc, p), np.full(y.size - n * p, dc[-1] if n else 0.0)])
-        meta = {**dict(rec.metadata), MARK: True}
+        meta = {**dict(rec.metadata), MARK: step_variance(rec)}
         new = y - shift + wander.centre
         out.append(
             Recording(
@@ -165,6 +179,21 @@ def removed(items: Any, wander: Optional[Wander]) -> Any:
             )
         )
     return out
+
+
+def step_variance(rec: Any) -> float:
+    """The walk's step variance per sample ``s^2`` of a recording, from its period DCs after settling: the
+    means of neighbouring periods of a random walk differ by ``s^2 (2 P^2 + 1) / (3 P)`` in variance, white
+    noise adds ``2 sigma^2 / P`` (sigma^2 from the periods less their means). 0.0 with fewer than 3
+    periods. Its leak into the harmonics is ``data.walk_levels``."""
+    rows, p = _rows(rec)
+    n = rows.shape[0]
+    if n < 3 or p < 2:
+        return 0.0
+    dc = rows.mean(axis=1)
+    white = float(np.mean(np.diff(rows - dc[:, None], axis=0) ** 2)) / 2.0 * p / (p - 1)
+    step = float(np.mean(np.diff(dc) ** 2))
+    return max(step - 2.0 * white / p, 0.0) * 3.0 * p / (2.0 * p * p + 1.0)
 
 
 def marked(rec: Any) -> bool:
@@ -189,4 +218,12 @@ def adjusted(d: Any, wander: Optional[Wander], offset_kind: str) -> Any:
     return replace(d, verdict=d.verdict + wander.clause(), named=fix(d.named), partial=fix(d.partial))
 
 
-__all__ = ["Wander", "detect", "removed", "marked", "adjusted", "WANDER_ALPHA", "WANDER_CORRELATION"]
+__all__ = [
+    "Wander",
+    "detect",
+    "removed",
+    "marked",
+    "adjusted",
+    "WANDER_ALPHA",
+    "WANDER_CORRELATION",
+]

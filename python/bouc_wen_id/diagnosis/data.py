@@ -250,7 +250,11 @@ def noise_colour(
     dof[0] = n - 3 if dc else 0.0
     half = COLOUR_BAND // 2
     first = 0 if dc else 1
-    bands = [(0, 0)] * dc + [(max(first, lo - half), min(k, lo + half)) for lo in range(first, k + 1)]
+    # Without the DC (period means taken out: a random walk's leak falls as 1/k^2 from the fundamental, and
+    # the band 1-3 put the fundamental's level at 0.6 of its own) the fundamental is a band of its own.
+    bands = [(0, 0) if dc else (1, 1)] + [
+        (max(first, lo - half), min(k, lo + half)) for lo in range(first, k + 1)
+    ]
     levels = []
     for a, b in bands:
         d = float(np.sum(dof[a : b + 1]))
@@ -296,6 +300,8 @@ def harmonic_levels(rows: FloatArray, white_var: float, dc: bool = True) -> Floa
     for j in range(1, k + 1):
         a, b = max(1, j - half), min(k, j + half)
         out[j] = float(np.sum(ss[a : b + 1])) / (2.0 * (n - 3) * (b - a + 1))
+    if not dc:  # the fundamental alone, as noise_colour's band of its own
+        out[1] = float(ss[1]) / (2.0 * (n - 3))
     out = np.maximum(out, HARMONIC_FLOOR * white_var)
     if not dc:
         out[0] = np.inf
@@ -348,10 +354,16 @@ def _from_recording(i: int, rec: Any) -> DiagExperiment:
     dc, h1 = _period_features(rows)
     coef, samples, center, nper = _recording_blocks(rows)
     dof = p * (n - 1)
-    flat = bool(getattr(rec, "metadata", {}).get(BASELINE_MARK, False))
+    walk = getattr(rec, "metadata", {}).get(BASELINE_MARK, None)
+    flat = walk is not None
     if flat:  # the period means were spent on the baseline: the differences hold P - 1 components each
         diff, dof = diff * p / max(p - 1, 1), (p - 1) * (n - 1)
     var, cdof, band = noise_colour(rows, diff, dof, dc=not flat)
+    hvar = _levels(rows, diff, var, flat)
+    if flat and hvar.size > 1:  # the walk's own leak into each harmonic, never below its steps' (baseline.py)
+        hvar = np.maximum(hvar, diff + walk_levels(float(walk), p, hvar.size - 1))
+        if float(hvar[1]) > var:
+            var, cdof, band = float(hvar[1]), n - 1, (1, 1)  # the level of the walk's n - 1 steps
     name = rec.metadata.get("name", f"recording {i}") if hasattr(rec, "metadata") else f"recording {i}"
     return DiagExperiment(
         frequency=float(rec.frequency),
@@ -374,8 +386,20 @@ def _from_recording(i: int, rec: Any) -> DiagExperiment:
         colour=var / diff if diff > 0 else 1.0,
         colour_band=band,
         cross_period=cross_period_correlation(dc) if var > diff and not flat else 0.0,
-        harmonic_var=_levels(rows, diff, var, flat),
+        harmonic_var=hvar,
     )
+
+
+def walk_levels(s2: float, p: int, k: int) -> np.ndarray:
+    """A random walk's variance at harmonics 0..k of single periods whose means were taken out, in
+    per-sample units (as the white noise's ``sigma^2``): ``s^2 / (2 sin^2(pi j / P))`` at harmonic j (a
+    period's walk is its steps summed: ``E|c_j|^2 = 2 s^2 / (P 4 sin^2(pi j / P))``, white noise's
+    ``sigma^2 / P``); infinite at the DC. At 0.05 noise sd per step and 128 samples per period: 2.1 times
+    the white noise's variance at the fundamental, 0.52 at the second harmonic, 0.23 at the third."""
+    j = np.arange(k + 1, dtype=np.float64)
+    out = np.full(k + 1, np.inf)
+    out[1:] = s2 / (2.0 * np.sin(np.pi * j[1:] / p) ** 2)
+    return out
 
 
 def _levels(rows: FloatArray, white: float, var: float, flat: bool) -> FloatArray:
