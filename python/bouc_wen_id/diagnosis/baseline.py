@@ -37,6 +37,7 @@ from typing import Any, Optional
 import numpy as np
 
 from .data import BASELINE_MARK, cross_period_correlation
+from .result import Diagnosis, NamedTerm
 
 #: Level of the pooled chi-square of the period DCs about a quadratic trend (as the colour check's).
 WANDER_ALPHA = 1e-3
@@ -162,7 +163,7 @@ def removed(items: Any, wander: Optional[Wander]) -> Any:
         y = np.array(rec.y, dtype=np.float64)
         dc = y[: n * p].reshape(n, p).mean(axis=1)
         shift = np.concatenate([np.repeat(dc, p), np.full(y.size - n * p, dc[-1] if n else 0.0)])
-        meta = {**dict(rec.metadata), MARK: step_variance(rec)}
+        meta = {**dict(rec.metadata), MARK: repr(step_variance(rec))}  # metadata holds strings
         new = y - shift + wander.centre
         out.append(
             Recording(
@@ -201,13 +202,13 @@ def marked(rec: Any) -> bool:
     return bool(getattr(rec, "metadata", {}).get(MARK, False))
 
 
-def adjusted(d: Any, wander: Optional[Wander], offset_kind: str) -> Any:
+def adjusted(d: Diagnosis, wander: Optional[Wander], offset_kind: str) -> Diagnosis:
     """The diagnosis ``d`` with the wander's clause, and a named output offset's standard error the spread of
     the recordings' centres (the fit's own, from the white noise, does not see the wander)."""
     if wander is None:
         return d
 
-    def fix(terms: Sequence[Any]) -> tuple[Any, ...]:
+    def fix(terms: Sequence[NamedTerm]) -> tuple[NamedTerm, ...]:
         return tuple(
             replace(t, standard_error=wander.centre_se)
             if t.term == offset_kind and wander.kept and math.isfinite(wander.centre_se)

@@ -361,7 +361,7 @@ def _from_recording(i: int, rec: Any) -> DiagExperiment:
     var, cdof, band = noise_colour(rows, diff, dof, dc=not flat)
     hvar = _levels(rows, diff, var, flat)
     if flat and hvar.size > 1:  # the walk's own leak into each harmonic, never below its steps' (baseline.py)
-        hvar = np.maximum(hvar, diff + walk_levels(float(walk), p, hvar.size - 1))
+        hvar = np.maximum(hvar, diff + walk_levels(float(str(walk)), p, hvar.size - 1))
         if float(hvar[1]) > var:
             var, cdof, band = float(hvar[1]), n - 1, (1, 1)  # the level of the walk's n - 1 steps
     name = rec.metadata.get("name", f"recording {i}") if hasattr(rec, "metadata") else f"recording {i}"
