@@ -156,3 +156,39 @@ def test_a_degradation_under_a_wandering_baseline_is_still_named() -> None:
     d = _diagnose(_case("degradation", "", 10.0, 710000))
     assert "the baseline wanders" in d.verdict, d.summary()
     assert "degradation" in [t.term for t in d.named], d.summary()
+
+
+def test_an_offset_under_a_wandering_baseline_is_judged_against_the_wander() -> None:
+    """A 10x output offset under the walk: kept (and named) only when the set's common centre stands out of
+    the spread of the recordings' centres; then its standard error is that spread's, in the verdict and the
+    final model alike (the fit's own, from the white noise, is 45 times smaller); else the verdict says the
+    offset cannot be told from the wander, with the t-test's p-value."""
+    from bouc_wen_id.terms import DIAGNOSIS_CANDIDATES, Offset
+
+    for seed in (510000, 510004):
+        recs = _case("offset", "", 10.0, seed)
+        w = baseline.detect(recs, 0.05 / len(DIAGNOSIS_CANDIDATES))
+        assert w is not None
+        d = _diagnose(recs)
+        assert "the baseline wanders" in d.verdict, d.summary()
+        off = [t for t in d.named if t.term == Offset.kind]
+        if w.kept:
+            assert "was kept" in d.verdict and len(off) == 1, d.summary()
+            assert off[0].standard_error == w.centre_se and str(off[0]) in d.verdict
+            assert [t for t in d.final.terms if t.term == Offset.kind] == off
+        else:
+            assert off == [] and "cannot be told" in d.verdict, d.summary()
+            assert f"p = {w.centre_p:.2g}" in d.verdict
+    assert seed == 510004 and w.kept  # the last seed's offset stands out of the wander (t-test p = 5e-4)
+
+
+def test_white_noise_sets_keep_their_baseline() -> None:
+    """The designs bench's white-noise null (the same plant and seed as a walk null): no wander, no clause."""
+    dd = _designs()
+    des = dd.DESIGNS["base"]
+    p = dd.plant_for(des, 100001)
+    y, _, _ = dd.outputs(p, des, None, "", 0.0)
+    recs = dd.recordings(p, des, y, 100001)
+    assert baseline.detect(recs, 0.05 / 20) is None
+    d = _diagnose(recs)
+    assert "baseline wanders" not in d.verdict and not any("baseline wanders" in n for n in d.notes)

@@ -62,6 +62,7 @@ class Wander:
     centre_se: float  # its standard error: the spread of the recordings' centres over sqrt(m)
     centre_p: float  # the t-test of the common centre (NaN: fewer than 2 recordings)
     kept: bool
+    level: float = math.nan  # the t-test's level (alpha over the candidates: one candidate's share)
 
     def note(self) -> str:
         return (
@@ -81,7 +82,12 @@ class Wander:
                 f"centres' spread, t-test p = {self.centre_p:.2g}) was kept; a drift of the loop's centre "
                 "cannot be told from the wander"
             )
-        tail = f" (the centres' common part: p = {self.centre_p:.2g})" if math.isfinite(self.centre_p) else ""
+        tail = (
+            " (the centres' common part, against the spread of the recordings' centres: p = "
+            f"{self.centre_p:.2g}, not below {self.level:.2g}, one candidate's level)"
+            if math.isfinite(self.centre_p)
+            else ""
+        )
         return f"{head}an output offset or a drift of the loop's centre cannot be told from it{tail}"
 
 
@@ -134,7 +140,7 @@ def detect(items: Any, level: float) -> Optional[Wander]:
         se = float(np.std(centres, ddof=1)) / math.sqrt(m)
         cp = float(2.0 * stdtr(m - 1, -abs(c) / se)) if se > 0 else (0.0 if c else 1.0)
     kept = bool(math.isfinite(cp) and cp < level)
-    return Wander(r, pl, chi2, dof, pval, c if kept else 0.0, se, cp, kept)
+    return Wander(r, pl, chi2, dof, pval, c if kept else 0.0, se, cp, kept, level)
 
 
 def _rough(dc: np.ndarray, weight: float) -> tuple[float, int]:
@@ -208,15 +214,21 @@ def adjusted(d: Diagnosis, wander: Optional[Wander], offset_kind: str) -> Diagno
     if wander is None:
         return d
 
-    def fix(terms: Sequence[NamedTerm]) -> tuple[NamedTerm, ...]:
-        return tuple(
-            replace(t, standard_error=wander.centre_se)
-            if t.term == offset_kind and wander.kept and math.isfinite(wander.centre_se)
-            else t
-            for t in terms
-        )
+    verdict = d.verdict
 
-    return replace(d, verdict=d.verdict + wander.clause(), named=fix(d.named), partial=fix(d.partial))
+    def fix(terms: Sequence[NamedTerm]) -> tuple[NamedTerm, ...]:
+        nonlocal verdict
+        out = []
+        for t in terms:
+            if t.term == offset_kind and wander.kept and math.isfinite(wander.centre_se):
+                new = replace(t, standard_error=wander.centre_se)
+                verdict = verdict.replace(str(t), str(new))  # the verdict names it with that error too
+                t = new
+            out.append(t)
+        return tuple(out)
+
+    named, partial, final = fix(d.named), fix(d.partial), replace(d.final, terms=fix(d.final.terms))
+    return replace(d, verdict=verdict + wander.clause(), named=named, partial=partial, final=final)
 
 
 __all__ = [
