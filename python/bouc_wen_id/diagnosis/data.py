@@ -62,6 +62,9 @@ COLOUR_BAND = 5
 #: False-alarm level of the colour check per experiment (Bonferroni over its bands): white noise keeps the
 #: per-sample variance (and its degrees of freedom) in all but about 1e-3 of experiments.
 COLOUR_ALPHA = 1e-3
+#: The metadata key of a recording whose period means were taken out as a wandering baseline
+#: (``baseline.removed``): its DC carries no noise, and its noise floor is that of harmonics 1.. alone.
+BASELINE_MARK = "baseline_removed"
 #: Highest harmonic of the input kept in its waveform (design.md 9.5).
 WAVEFORM_MAX_HARMONIC = 10
 #: A harmonic of the averaged input is kept when its amplitude exceeds this many standard deviations of its
@@ -140,6 +143,12 @@ class DiagExperiment:
     harmonic_var: FloatArray = field(default_factory=lambda: np.zeros(0), repr=False)
 
     @property
+    def baseline_removed(self) -> bool:
+        """Whether the period means were taken out as a wandering baseline (``baseline.py``): the DC of
+        ``ybar`` is then set, not measured (no weight in the drift test, one degree of freedom less)."""
+        return bool(self.harmonic_var.size) and math.isinf(float(self.harmonic_var[0]))
+
+    @property
     def samples_per_period(self) -> int:
         return int(self.ybar.size)
 
@@ -203,7 +212,9 @@ def _recording_blocks(rows: FloatArray) -> tuple[ComplexArray, FloatArray, Float
     )
 
 
-def noise_colour(rows: FloatArray, white_var: float, white_dof: int) -> tuple[float, int, tuple[int, int]]:
+def noise_colour(
+    rows: FloatArray, white_var: float, white_dof: int, dc: bool = True
+) -> tuple[float, int, tuple[int, int]]:
     """The noise's level at the low harmonics of periods ``rows`` (N, P), when measurably above
     ``white_var`` (the per-sample variance, ``white_dof`` degrees of freedom): ``(variance, dof, band)``;
     ``(white_var, white_dof, (0, 0))`` when not (or when N < 4 leaves no spread about a quadratic trend).
@@ -218,6 +229,9 @@ def noise_colour(rows: FloatArray, white_var: float, white_dof: int) -> tuple[fl
     periods' DCs across periods (:func:`cross_period_inflation`): a noise correlated over a period or more
     (an AR(1) with phi = 0.99 at 128 samples per period) wanders slowly, and the spread of the period DCs
     then underestimates the variance of their mean (2.6 times on average, about the quadratic trend).
+
+    ``dc=False``: the period means were taken out (a wandering baseline, ``baseline.py``): the DC is no band
+    and counts in none (its spread is 0 by construction, not a quiet noise).
     """
     from scipy.special import fdtrc  # type: ignore[import-untyped]
 
@@ -233,9 +247,14 @@ def noise_colour(rows: FloatArray, white_var: float, white_dof: int) -> tuple[fl
     ss[0] = p * float(np.sum(c[:, 0].real ** 2))
     ss[1:] = 2.0 * p * np.sum(np.abs(c[:, 1:]) ** 2, axis=0)  # c_k = rfft/P: E|c_k|^2 = s2/P per period
     dof = np.full(k + 1, 2.0 * (n - 3))
-    dof[0] = n - 3
+    dof[0] = n - 3 if dc else 0.0
     half = COLOUR_BAND // 2
-    bands = [(0, 0)] + [(max(0, lo - half), min(k, lo + half)) for lo in range(0, k + 1)]
+    first = 0 if dc else 1
+    # Without the DC (period means taken out: a random walk's leak falls as 1/k^2 from the fundamental, and
+    # the band 1-3 put the fundamental's level at 0.6 of its own) the fundamental is a band of its own.
+    bands = [(0, 0) if dc else (1, 1)] + [
+        (max(first, lo - half), min(k, lo + half)) for lo in range(first, k + 1)
+    ]
     levels = []
     for a, b in bands:
         d = float(np.sum(dof[a : b + 1]))
@@ -244,6 +263,8 @@ def noise_colour(rows: FloatArray, white_var: float, white_dof: int) -> tuple[fl
     top = max(levels, key=lambda t: t[0])
     if top[0] <= white_var or min(1.0, len(bands) * min(t[3] for t in levels)) >= COLOUR_ALPHA:
         return white_var, white_dof, (0, 0)
+    if not dc:
+        return top[0], int(top[1]), top[2]
     # Coloured: the DC's level for its mean over the periods, the largest level the noise variance.
     infl = cross_period_inflation(raw[:, 0].real)
     v0, d0, _, _ = levels[0]
@@ -256,12 +277,13 @@ def noise_colour(rows: FloatArray, white_var: float, white_dof: int) -> tuple[fl
 HARMONIC_FLOOR = 0.01
 
 
-def harmonic_levels(rows: FloatArray, white_var: float) -> FloatArray:
+def harmonic_levels(rows: FloatArray, white_var: float, dc: bool = True) -> FloatArray:
     """Each harmonic 0..K's noise level of periods ``rows`` (N, P), in per-sample units: the spread about
     a quadratic trend (as :func:`noise_colour`) pooled over the :data:`COLOUR_BAND` harmonics around it
     (the DC alone, inflated for the correlation of the period DCs, :func:`cross_period_inflation`), never
     below :data:`HARMONIC_FLOOR` times ``white_var`` (a red noise is below its per-sample level at the
-    higher harmonics). Empty when N < 4.
+    higher harmonics). Empty when N < 4. ``dc=False`` (the period means taken out, ``baseline.py``): the DC's
+    level is infinite (no weight in the drift test) and no band counts it.
     """
     n, p = rows.shape
     k = _harmonics_of(p)
@@ -278,7 +300,12 @@ def harmonic_levels(rows: FloatArray, white_var: float) -> FloatArray:
     for j in range(1, k + 1):
         a, b = max(1, j - half), min(k, j + half)
         out[j] = float(np.sum(ss[a : b + 1])) / (2.0 * (n - 3) * (b - a + 1))
-    return np.maximum(out, HARMONIC_FLOOR * white_var)
+    if not dc:  # the fundamental alone, as noise_colour's band of its own
+        out[1] = float(ss[1]) / (2.0 * (n - 3))
+    out = np.maximum(out, HARMONIC_FLOOR * white_var)
+    if not dc:
+        out[0] = np.inf
+    return out
 
 
 #: Largest cross-period lag-1 correlation :func:`cross_period_inflation` allows (an inflation of 9).
@@ -327,7 +354,16 @@ def _from_recording(i: int, rec: Any) -> DiagExperiment:
     dc, h1 = _period_features(rows)
     coef, samples, center, nper = _recording_blocks(rows)
     dof = p * (n - 1)
-    var, cdof, band = noise_colour(rows, diff, dof)
+    walk = getattr(rec, "metadata", {}).get(BASELINE_MARK, None)
+    flat = walk is not None
+    if flat:  # the period means were spent on the baseline: the differences hold P - 1 components each
+        diff, dof = diff * p / max(p - 1, 1), (p - 1) * (n - 1)
+    var, cdof, band = noise_colour(rows, diff, dof, dc=not flat)
+    hvar = _levels(rows, diff, var, flat)
+    if flat and hvar.size > 1:  # the walk's own leak into each harmonic, never below its steps' (baseline.py)
+        hvar = np.maximum(hvar, diff + walk_levels(float(str(walk)), p, hvar.size - 1))
+        if float(hvar[1]) > var:
+            var, cdof, band = float(hvar[1]), n - 1, (1, 1)  # the level of the walk's n - 1 steps
     name = rec.metadata.get("name", f"recording {i}") if hasattr(rec, "metadata") else f"recording {i}"
     return DiagExperiment(
         frequency=float(rec.frequency),
@@ -349,9 +385,33 @@ def _from_recording(i: int, rec: Any) -> DiagExperiment:
         waveform=input_waveform(urows),
         colour=var / diff if diff > 0 else 1.0,
         colour_band=band,
-        cross_period=cross_period_correlation(dc) if var > diff else 0.0,
-        harmonic_var=harmonic_levels(rows, diff) if var > diff else np.zeros(0),
+        cross_period=cross_period_correlation(dc) if var > diff and not flat else 0.0,
+        harmonic_var=hvar,
     )
+
+
+def walk_levels(s2: float, p: int, k: int) -> np.ndarray:
+    """A random walk's variance at harmonics 0..k of single periods whose means were taken out, in
+    per-sample units (as the white noise's ``sigma^2``): ``s^2 / (2 sin^2(pi j / P))`` at harmonic j (a
+    period's walk is its steps summed: ``E|c_j|^2 = 2 s^2 / (P 4 sin^2(pi j / P))``, white noise's
+    ``sigma^2 / P``); infinite at the DC. At 0.05 noise sd per step and 128 samples per period: 2.1 times
+    the white noise's variance at the fundamental, 0.52 at the second harmonic, 0.23 at the third."""
+    j = np.arange(k + 1, dtype=np.float64)
+    out = np.full(k + 1, np.inf)
+    out[1:] = s2 / (2.0 * np.sin(np.pi * j[1:] / p) ** 2)
+    return out
+
+
+def _levels(rows: FloatArray, white: float, var: float, flat: bool) -> FloatArray:
+    """``DiagExperiment.harmonic_var`` of a recording: :func:`harmonic_levels` when the noise is coloured,
+    empty when white, and with an infinite DC level when the period means were taken out."""
+    if var > white:
+        return harmonic_levels(rows, white, dc=not flat)
+    if not flat:
+        return np.zeros(0)
+    out = np.full(_harmonics_of(rows.shape[1]) + 1, white)
+    out[0] = np.inf
+    return out
 
 
 def _normalised(c: ComplexArray, floor: float) -> FloatArray:

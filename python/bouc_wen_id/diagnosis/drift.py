@@ -83,8 +83,10 @@ class DriftData:
 
     @property
     def dof(self) -> int:
-        """Independent real components of the deviations: (B - 1) blocks of (2K + 1) each."""
-        return int((self.dev.shape[0] - 1) * (2 * self.dev.shape[1] - 1))
+        """Independent real components of the deviations: (B - 1) blocks of (2K + 1) each (2K when the DC
+        has no weight: the period means were taken out as a wandering baseline, baseline.py)."""
+        spent = self.hw is not None and self.hw[0] == 0.0
+        return int((self.dev.shape[0] - 1) * (2 * self.dev.shape[1] - 1 - spent))
 
 
 def _inner(a: ComplexArray, b: ComplexArray, hw: Optional[FloatArray] = None) -> FloatArray:
@@ -112,7 +114,8 @@ def harmonic_weights(e: DiagExperiment, k: int) -> Optional[FloatArray]:
     hv = e.harmonic_var
     if hv.size < k + 1 or not (e.noise_var > 0 and np.all(hv[: k + 1] > 0)):
         return None
-    if e.noise_var > 2.0 * float(np.max(hv)):  # a floor raised it above every measured level (run.py)
+    finite = hv[np.isfinite(hv)]  # the DC is infinite when the period means were taken out (baseline.py)
+    if finite.size and e.noise_var > 2.0 * float(np.max(finite)):  # a floor raised it above every level
         return None
     out: FloatArray = e.noise_var / hv[: k + 1]
     return out

@@ -15,8 +15,9 @@ from ..augmented import AugExperiment, AugFit
 from ..budget import check_environment
 from ..errors import InvalidParameterError, TransientWarning
 from ..estimators import boundary_note
-from ..terms import DIAGNOSIS_CANDIDATES, TERMS, Distortion, physical_value
+from ..terms import DIAGNOSIS_CANDIDATES, TERMS, Distortion, Offset, physical_value
 from ..validation import real_number
+from . import baseline
 from .caveats import alternatives_text, below_saturation, family_text
 from .data import DiagExperiment, colour_notes, prepare
 from .drift import (
@@ -670,9 +671,10 @@ def _diagnose(
         raise InvalidParameterError(f"alpha = {alpha!r} must lie in (0, 1)")
     _check_sizes(experiments)
     report("preparing the averaged periods", 0, 1)
-    items, notes = _settled(experiments)
+    wander = baseline.detect(experiments, alpha / max(len(cands), 1))  # a wandering zero (baseline.py)
+    items, notes = _settled(baseline.removed(experiments, wander))
     exps, qnotes = _noise_floors(items, prepare(items))
-    notes = [*notes, *colour_notes(exps)]  # a coloured noise: its low-harmonic level is the floor (data.py)
+    notes = [*notes, *colour_notes(exps), *([wander.note()] if wander else [])]  # coloured noise: data.py
     _check_experiments(exps)
     skipped: dict[str, str] = {}
     if Distortion.kind in cands and not any(e.distorted for e in exps):
@@ -688,7 +690,7 @@ def _diagnose(
     drifting = [] if named_deg else _unsettled(exps)
     if drifting:
         d = _without_unsettled(exps, drifting, setup, d, [*notes, *qnotes])
-    return replace(d, seconds=time.perf_counter() - t0)
+    return replace(baseline.adjusted(d, wander, Offset.kind), seconds=time.perf_counter() - t0)
 
 
 def _without_unsettled(
@@ -777,7 +779,9 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
     noise_dof = sum(e.noise_dof for e in exps)
 
     def p_of(fit: AugFit) -> float:
-        dof = sum(e.ybar.size for e in sx) - (3 + len(fit.params.terms) + 2 * len(sx))
+        dof = sum(a.ybar.size - e.baseline_removed for a, e in zip(sx, exps)) - (
+            3 + len(fit.params.terms) + 2 * len(sx)
+        )
         return adequacy_p(fit.cost, dof, noise_dof)
 
     def adequate(fit: AugFit) -> bool:
