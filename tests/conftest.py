@@ -219,6 +219,37 @@ def rust_against_oracle(
     return SimpleNamespace(args=args, u=u, dt=dt, sub=sub, terms=terms, rust=rust)
 
 
+def designs_bench() -> ModuleType:
+    """``benches/diagnosis_designs.py``, the designs bench's driver (a script beside the package)."""
+    import importlib
+    import sys
+
+    benches = str(Path(__file__).resolve().parents[1] / "benches")
+    if benches not in sys.path:
+        sys.path.insert(0, benches)
+    return importlib.import_module("diagnosis_designs")
+
+
+def designs_case(design: str, name: Any, place: str, size: float, seed: int) -> list[Any]:
+    """One case of the designs bench: its plant for ``seed`` (exact G, its own RK4), ``design``'s plan and
+    noise, the effect ``name`` at ``place`` sized ``size`` (None: nothing hidden)."""
+    dd = designs_bench()
+    des = dd.DESIGNS[design]
+    p = dd.plant_for(des, seed)
+    y, _, _ = dd.outputs(p, des, name, place, size)
+    recs: list[Any] = dd.recordings(p, des, y, seed)
+    return recs
+
+
+def diagnose_quietly(recs: list[Any]) -> Any:
+    """``bw.diagnose`` with its warnings silenced (the tests read the verdict, not the warnings)."""
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return bw.diagnose(recs)
+
+
 @pytest.fixture(scope="session")
 def helpers() -> SimpleNamespace:
     """The helper functions of this module, as one namespace."""
@@ -230,6 +261,9 @@ def helpers() -> SimpleNamespace:
         averaged_loop=averaged_loop,
         loop_problem=loop_problem,
         rust_against_oracle=rust_against_oracle,
+        designs_bench=designs_bench,
+        designs_case=designs_case,
+        diagnose_quietly=diagnose_quietly,
     )
 
 

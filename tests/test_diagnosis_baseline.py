@@ -11,11 +11,8 @@ out before averaging; the harmonics of the periods are untouched, so a degradati
 
 from __future__ import annotations
 
-import importlib
 import math
-import sys
-import warnings
-from pathlib import Path
+from types import SimpleNamespace
 from typing import Any
 
 import bouc_wen_id as bw
@@ -117,32 +114,12 @@ def test_a_common_centre_is_kept_only_when_it_stands_out_of_the_wander() -> None
     assert w0.centre_p > w1.centre_p
 
 
-def _designs() -> Any:
-    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benches"))
-    return importlib.import_module("diagnosis_designs")  # the bench's driver, a script beside the package
-
-
-def _case(name: Any, place: str, size: float, seed: int) -> list[Any]:
-    dd = _designs()
-    des = dd.DESIGNS["walk"]
-    p = dd.plant_for(des, seed)
-    y, _, _ = dd.outputs(p, des, name, place, size)
-    recs: list[Any] = dd.recordings(p, des, y, seed)
-    return recs
-
-
-def _diagnose(recs: list[Any]) -> Any:
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        return bw.diagnose(recs)
-
-
-def test_a_wandering_baseline_is_no_unexplained_structure() -> None:
+def test_a_wandering_baseline_is_no_unexplained_structure(helpers: SimpleNamespace) -> None:
     """The bench generator's plant (exact G, its own RK4), white noise plus a random-walk baseline, nothing
     hidden: "unexplained" before (centres of both signs, an output offset whose law failed at p = 4e-169,
     seven recordings trimmed as transient); now the plain model passes and the verdict says the baseline
     wanders."""
-    d = _diagnose(_case(None, "", 0.0, 100001))
+    d = helpers.diagnose_quietly(helpers.designs_case("walk", None, "", 0.0, 100001))
     assert d.status == "adequate", d.summary()
     assert d.named == ()
     assert "the baseline wanders" in d.verdict and "cannot be told" in d.verdict
@@ -150,15 +127,15 @@ def test_a_wandering_baseline_is_no_unexplained_structure() -> None:
     assert not any("still transient" in n for n in d.notes), d.notes
 
 
-def test_a_degradation_under_a_wandering_baseline_is_still_named() -> None:
+def test_a_degradation_under_a_wandering_baseline_is_still_named(helpers: SimpleNamespace) -> None:
     """The period means are baseline; the harmonics are not: a 10x strength degradation (the fundamental
     shrinking period by period) is named under the same walk."""
-    d = _diagnose(_case("degradation", "", 10.0, 710000))
+    d = helpers.diagnose_quietly(helpers.designs_case("walk", "degradation", "", 10.0, 710000))
     assert "the baseline wanders" in d.verdict, d.summary()
     assert "degradation" in [t.term for t in d.named], d.summary()
 
 
-def test_an_offset_under_a_wandering_baseline_is_judged_against_the_wander() -> None:
+def test_an_offset_under_a_wandering_baseline_is_judged_against_the_wander(helpers: SimpleNamespace) -> None:
     """A 10x output offset under the walk: kept (and named) only when the set's common centre stands out of
     the spread of the recordings' centres; then its standard error is that spread's, in the verdict and the
     final model alike (the fit's own, from the white noise, is 45 times smaller); else the verdict says the
@@ -166,10 +143,10 @@ def test_an_offset_under_a_wandering_baseline_is_judged_against_the_wander() -> 
     from bouc_wen_id.terms import DIAGNOSIS_CANDIDATES, Offset
 
     for seed in (510000, 510004):
-        recs = _case("offset", "", 10.0, seed)
+        recs = helpers.designs_case("walk", "offset", "", 10.0, seed)
         w = baseline.detect(recs, 0.05 / len(DIAGNOSIS_CANDIDATES))
         assert w is not None
-        d = _diagnose(recs)
+        d = helpers.diagnose_quietly(recs)
         assert "the baseline wanders" in d.verdict, d.summary()
         off = [t for t in d.named if t.term == Offset.kind]
         if w.kept:
@@ -183,13 +160,13 @@ def test_an_offset_under_a_wandering_baseline_is_judged_against_the_wander() -> 
     assert seed == 510004 and w is not None and w.kept
 
 
-def test_white_noise_sets_keep_their_baseline() -> None:
+def test_white_noise_sets_keep_their_baseline(helpers: SimpleNamespace) -> None:
     """The designs bench's white-noise null (the same plant and seed as a walk null): no wander, no clause."""
-    dd = _designs()
+    dd = helpers.designs_bench()
     des = dd.DESIGNS["base"]
     p = dd.plant_for(des, 100001)
     y, _, _ = dd.outputs(p, des, None, "", 0.0)
     recs = dd.recordings(p, des, y, 100001)
     assert baseline.detect(recs, 0.05 / 20) is None
-    d = _diagnose(recs)
+    d = helpers.diagnose_quietly(recs)
     assert "baseline wanders" not in d.verdict and not any("baseline wanders" in n for n in d.notes)

@@ -11,11 +11,8 @@ residual variance below the noise floor.
 
 from __future__ import annotations
 
-import importlib
 import math
-import sys
-import warnings
-from pathlib import Path
+from types import SimpleNamespace
 from typing import Any
 
 import bouc_wen_id as bw
@@ -149,31 +146,11 @@ def test_f_test_does_not_scale_by_a_residual_below_the_floor() -> None:
     assert f2 == pytest.approx(10.0 / 2.0)
 
 
-def _designs() -> Any:
-    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benches"))
-    return importlib.import_module("diagnosis_designs")  # the bench's driver, a script beside the package
-
-
-def _case(design: str, name: Any, place: str, size: float, seed: int) -> list[Any]:
-    dd = _designs()
-    des = dd.DESIGNS[design]
-    p = dd.plant_for(des, seed)
-    y, _, _ = dd.outputs(p, des, name, place, size)
-    recs: list[Any] = dd.recordings(p, des, y, seed)
-    return recs
-
-
-def _diagnose(recs: list[Any]) -> Any:
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        return bw.diagnose(recs)
-
-
-def test_ar1_null_names_nothing_and_says_the_noise_is_coloured() -> None:
+def test_ar1_null_names_nothing_and_says_the_noise_is_coloured(helpers: SimpleNamespace) -> None:
     """On the bench generator's plant (exact G, its own RK4 of the hysteresis) with AR(1) noise and nothing
     hidden, the targeted step named a parallel stiffness (F = 28.5, p = 1.6e-6: a cost drop of 4 scaled by
     chi2/dof 0.14); now nothing is named and the notes say the noise is coloured."""
-    d = _diagnose(_case("ar1", None, "", 0.0, 100001))
+    d = helpers.diagnose_quietly(helpers.designs_case("ar1", None, "", 0.0, 100001))
     assert d.named_terms == (), d.summary()
     assert d.status == "adequate", d.summary()
     assert any("coloured noise" in n for n in d.notes), d.notes
@@ -181,26 +158,26 @@ def test_ar1_null_names_nothing_and_says_the_noise_is_coloured() -> None:
     assert not any("correlated across periods" in n for n in d.notes), d.notes
 
 
-def test_ar1_viscous_on_x_is_named() -> None:
+def test_ar1_viscous_on_x_is_named(helpers: SimpleNamespace) -> None:
     """A 10x viscous damping on x under the same AR(1) noise is still named, at its place (its law test used
     to fail at p = 0.003 against the white floor: "unexplained")."""
-    d = _diagnose(_case("ar1", "viscous", "x", 10.0, 210001))
+    d = helpers.diagnose_quietly(helpers.designs_case("ar1", "viscous", "x", 10.0, 210001))
     assert d.status == "explained", d.summary()
     assert [t.term for t in d.named] == ["viscous@x"], d.summary()
 
 
-def test_white_noise_gets_no_colour_note() -> None:
-    d = _diagnose(_case("base", None, "", 0.0, 100000))
+def test_white_noise_gets_no_colour_note(helpers: SimpleNamespace) -> None:
+    d = helpers.diagnose_quietly(helpers.designs_case("base", None, "", 0.0, 100000))
     assert not any("coloured noise" in n for n in d.notes), d.notes
 
 
-def test_the_verdict_says_when_the_design_cannot_tell_the_places_apart() -> None:
+def test_the_verdict_says_when_the_design_cannot_tell_the_places_apart(helpers: SimpleNamespace) -> None:
     """Three frequencies at one amplitude through a nearly flat G (x lags u by 0.01-0.05 rad): a 10x spring on
     x fits as well on u, and the summary listed the other place as an alternative, but the one-line verdict
     named the chosen place alone. It now names both."""
     from bouc_wen_id.terms import TERMS
 
-    d = _diagnose(_case("3f x 1A", "stiffness", "x", 10.0, 410001))
+    d = helpers.diagnose_quietly(helpers.designs_case("3f x 1A", "stiffness", "x", 10.0, 410001))
     assert d.status == "explained", d.summary()
     (chosen,) = d.named_terms
     rivals = [a.rival for a in d.alternatives if a.term == chosen]
@@ -211,30 +188,32 @@ def test_the_verdict_says_when_the_design_cannot_tell_the_places_apart() -> None
     assert "cannot tell apart" in d.verdict
 
 
-def test_a_design_below_saturation_says_a_spring_on_x_could_not_show() -> None:
+def test_a_design_below_saturation_says_a_spring_on_x_could_not_show(helpers: SimpleNamespace) -> None:
     """Three frequencies, every latent amplitude at 0.3 of saturation: a 30x spring on x trades with |G| and
     the diagnosis says "adequate" (true of the plain model); the notes now say the design could not show a
     spring on x. A saturating design gets no such note."""
-    dd = _designs()
+    dd = helpers.designs_bench()
     low = dd.Design("low", factors=(0.5, 1.0, 2.0), levels=(0.3,))
     p = dd.plant_for(low, 430000)
     y, _, _ = dd.outputs(p, low, "stiffness", "x", 30.0)
-    d = _diagnose(dd.recordings(p, low, y, 430000))
+    d = helpers.diagnose_quietly(dd.recordings(p, low, y, 430000))
     assert "stiffness@x" not in d.named_terms, d.summary()
     assert any("below the hysteresis' saturation" in n for n in d.notes), d.notes
-    base = _diagnose(_case("3f x 1A", None, "", 0.0, 100000))
+    base = helpers.diagnose_quietly(helpers.designs_case("3f x 1A", None, "", 0.0, 100000))
     assert not any("saturation" in n for n in base.notes), base.notes
 
 
 @pytest.mark.parametrize("seed", [100002, 100005])
-def test_noise_correlated_across_periods_is_no_unexplained_structure(seed: int) -> None:
+def test_noise_correlated_across_periods_is_no_unexplained_structure(
+    seed: int, helpers: SimpleNamespace
+) -> None:
     """AR(1) output noise with phi = 0.99 (the bench's "ar1 slow"), nothing hidden: the loop centres wander
     from experiment to experiment by more than the spread of their period DCs says. Seed 100002 left three
     experiments out as "not settled" and called the rest "unexplained" (centres of both signs); 100005 tested
     an output offset at p = 3.4e-11 whose law failed ("unexplained structure remains"). Judged against the
     DC's own level (correlated across periods) both are adequate, and the notes say the record cannot tell
     that wander from a drift."""
-    d = _diagnose(_case("ar1 slow", None, "", 0.0, seed))
+    d = helpers.diagnose_quietly(helpers.designs_case("ar1 slow", None, "", 0.0, seed))
     assert d.status == "adequate", d.summary()
     assert d.named_terms == ()
     assert any("correlated across periods" in n for n in d.notes), d.notes
