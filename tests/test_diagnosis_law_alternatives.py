@@ -147,3 +147,10 @@ def test_a_law_failed_rival_listed_as_an_alternative_is_not_also_called_a_stand_
     assert run._law_text(cast(Any, [step])) == ""
     bare = SimpleNamespace(trials=[trial], law_failed=("sensor_lag",), alternatives=())
     assert "not named: sensor lag" in run._law_text(cast(Any, [bare]))
+    # Listed at the step that named its rival, tried again (and failed its law again) at the next step: the
+    # MR damper at 0.5 A said both (viscous damping on x the alternative, then a stand-in at step 2).
+    again = SimpleNamespace(
+        trials=[SimpleNamespace(term="sensor_lag", law_p_value=1e-9)], law_failed=("sensor_lag",)
+    )
+    assert run._law_text(cast(Any, [step, again])) == ""
+    assert "not named: sensor lag" in run._law_text(cast(Any, [bare, again]))

@@ -978,10 +978,11 @@ def _law_text(steps: Sequence[Step]) -> str:
     """What the verdict says of candidates that fit part of the misfit with a value that differs between
     experiments (select.law_test): stand-ins for physics outside the library, tested and not named."""
     failed: dict[str, float] = {}
+    # A named term's law-failed alternative (select.preferred_by_fit) is said there: at no step a stand-in.
+    listed = {
+        a.rival for st in steps for a in getattr(st, "alternatives", ()) if math.isfinite(a.law_p_value)
+    }
     for st in steps:
-        # A law-failed candidate listed as the named term's alternative (it fits at least as well,
-        # select.preferred_by_fit) is said there, with its law p: not also as a stand-in here.
-        listed = {a.rival for a in getattr(st, "alternatives", ()) if math.isfinite(a.law_p_value)}
         for tr in st.trials:
             if tr.term in st.law_failed and tr.term not in failed and tr.term not in listed:
                 failed[tr.term] = tr.law_p_value
