@@ -170,3 +170,16 @@ def test_white_noise_sets_keep_their_baseline(helpers: SimpleNamespace) -> None:
     assert baseline.detect(recs, 0.05 / 20) is None
     d = helpers.diagnose_quietly(recs)
     assert "baseline wanders" not in d.verdict and not any("baseline wanders" in n for n in d.notes)
+
+
+def test_a_users_own_metadata_key_is_no_mark() -> None:
+    """Metadata is the user's, free-form: a key "baseline_removed" of their own (here "no") neither crashes the
+    preparation (it was parsed as the walk's step variance: ValueError) nor marks the recording."""
+    from dataclasses import replace as _replace
+
+    from bouc_wen_id.diagnosis import data
+
+    recs = [_replace(r, metadata={"baseline_removed": "no"}) for r in _recs("white", 3)]
+    exps = data.prepare(recs)
+    assert not any(e.baseline_removed for e in exps)
+    assert all(r.metadata == {"baseline_removed": "no"} for r in recs)

@@ -83,6 +83,10 @@ def test_a_place_refused_by_its_law_that_fits_better_is_a_place_alternative(
     better = select.Trial("viscous@x", 431.0, 69.0, 1.0, 0.0, 0.0, 0.6, True, fit=_fit(("viscous@x",), 431.0))
     better = replace(better, law_p_value=0.002)
     assert select.preferred_by_fit(chosen, [chosen, better], ["viscous@x"]) == {"viscous@x": 0.002}
+    # A law p far below any the truth gives (the calibration's smallest of 1798: 5.9e-4) is a refusal that
+    # stands, however well the term fits (the MR damper at 0.5 A: viscous damping on x at law p 1.1e-5).
+    refused = replace(better, law_p_value=1.1e-5)
+    assert select.preferred_by_fit(chosen, [chosen, refused], ["viscous@x"]) == {}
 
 
 def test_a_law_that_holds_gives_no_law_p_and_nothing_changes(monkeypatch: pytest.MonkeyPatch) -> None:

@@ -121,3 +121,32 @@ def test_the_joint_gradient_is_the_costs_derivative() -> None:
             assert cu is not None and cd is not None
             fd = (cu[0] - cd[0]) / (2 * h)
             assert abs(fd + 2 * grad[i]) <= 1e-3 * abs(fd) + 1e-5 * np.abs(grad).max(), (term, i, fd, grad[i])
+
+
+def test_a_joint_fit_cut_at_its_iteration_limit_is_not_converged(monkeypatch: Any) -> None:
+    # From a shared value far from the conditions' own, one LM iteration cannot reach a stationary point: the
+    # fit says so (its cost only bounds the best shared fit's from above), where the full fit does not.
+    gs, fits = _groups_and_fits(8, "viscous")
+    assert all(f is not None for f in fits)
+    conds = [shared._Cond(g.sx, g.scale, g.substeps, f, dof_of(g.sx, f)) for g, f in zip(gs, fits)]
+    v0 = 3.0 * shared._start("viscous", conds)
+    full = shared._joint_fit("viscous", conds, v0, 1e-6)
+    monkeypatch.setattr(shared, "MAX_ITER", 1)
+    cut = shared._joint_fit("viscous", conds, v0, 1e-6)
+    assert full is not None and cut is not None
+    assert full[4] and not cut[4] and cut[3] == 1 and cut[1] > full[1]
+
+
+def test_the_text_never_calls_an_undetermined_or_linearised_value_a_refusal_or_a_degree_0_trend() -> None:
+    def term(sf: shared.SharedTest, degree: Any) -> across.TermAcross:
+        return across.TermAcross(
+            "viscous", "viscous damping", "c", "s", (1.0, 1.1), (0.1, 0.1), (True, True), (0.0, 0.0),
+            (0.5,), degree, sf,
+        )  # fmt: skip
+
+    refused = shared.SharedTest("viscous", 1.05, 0.01, 10.0, 30.0, 8, 9.0, 1e-3, False, 5, True)
+    text = across._how(term(refused, 0))
+    assert "one shared value refused" in text and "degree-0" not in text and "linearised" in text
+    cut = shared.SharedTest("viscous", 1.05, 0.01, 10.0, 30.0, 8, 9.0, 1e-3, False, 60, False)
+    text = across._how(term(cut, 1))
+    assert "not determined" in text and "refused" not in text

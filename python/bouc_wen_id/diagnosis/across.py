@@ -559,9 +559,16 @@ def _how(t: TermAcross) -> str:
         how += f"{MAX_DEGREE} fits them within their se)"
     elif t.shared:
         how = "one value shared by the conditions"
+    elif t.smooth_degree == 0 and sf is not None:  # linearised, one value fits; refitted, it does not
+        how = "its values within their se of one value when linearised at each condition"
     else:
         how = f"its values move with the condition as a degree-{t.smooth_degree} polynomial"
-    if sf is not None:
+    if sf is not None and not sf.converged:  # its cost only bounds the shared fit's: a refusal not shown
+        how = (
+            f"one shared value not determined (its joint refit stopped after {sf.iterations} iterations); "
+            f"{how}"
+        )
+    elif sf is not None:
         how = f"varies with the condition (one shared value refused, p {_p(sf.p_value)}); {how}"
     return how
 

@@ -69,7 +69,8 @@ class Wander:
             "the baseline wanders: the period means trend beyond a quadratic (chi-square "
             f"{self.chi2:.3g} on {self.dof} dof, p = {self.p_value:.2g}) with a lag-1 correlation of "
             f"{self.correlation:.2g}, and on over the last half of the periods (p = "
-            f"{self.late_p_value:.2g}), as a random walk (a drifting sensor zero); each period's mean was "
+            f"{self.late_p_value:.2g}): a baseline that moves from period to period (a drifting sensor zero, "
+            "for example); each period's mean was "
             "taken as baseline and removed before averaging (one degree of freedom per period, from the "
             "noise floor), the harmonics of every period kept as measured"
         )
@@ -80,7 +81,7 @@ class Wander:
             return (
                 f"{head}the common centre {self.centre:.4g} ± {self.centre_se:.3g} (the recordings' "
                 f"centres' spread, t-test p = {self.centre_p:.2g}) was kept; a drift of the loop's centre "
-                "cannot be told from the wander"
+                "cannot be told from the wander, nor can each experiment's own DC (an asymmetry's)"
             )
         tail = (
             " (the centres' common part, against the spread of the recordings' centres: p = "
@@ -88,7 +89,10 @@ class Wander:
             if math.isfinite(self.centre_p)
             else ""
         )
-        return f"{head}an output offset or a drift of the loop's centre cannot be told from it{tail}"
+        return (
+            f"{head}an output offset, a drift of the loop's centre or each experiment's own DC (an "
+            f"asymmetry's) cannot be told from it{tail}"
+        )
 
 
 def _rows(rec: Any) -> tuple[np.ndarray, int]:

@@ -64,7 +64,8 @@ COLOUR_BAND = 5
 COLOUR_ALPHA = 1e-3
 #: The metadata key of a recording whose period means were taken out as a wandering baseline
 #: (``baseline.removed``): its DC carries no noise, and its noise floor is that of harmonics 1.. alone.
-BASELINE_MARK = "baseline_removed"
+#: A private key (the package's own prefix): a user's metadata is free-form and may hold "baseline_removed".
+BASELINE_MARK = "_bouc_wen_id.baseline_removed"
 #: Highest harmonic of the input kept in its waveform (design.md 9.5).
 WAVEFORM_MAX_HARMONIC = 10
 #: A harmonic of the averaged input is kept when its amplitude exceeds this many standard deviations of its

@@ -494,6 +494,12 @@ def _place_separation(exps: Sequence[AugExperiment], fit: AugFit, term: str) -> 
     return text
 
 
+#: The smallest law p of a law-failed candidate that may still be the better-fitting reading
+#: (:func:`preferred_by_fit`): under the truth the law's p falls below it in 0.1 % of cases (the calibration,
+#: ``studies/law_calibration.py``: none of 1798 true terms below 5.9e-4); below it the law's refusal stands.
+PREFERRED_LAW_FLOOR = LAW_ALPHA / 10
+
+
 def preferred_by_fit(chosen: Trial, trials: Sequence[Trial], law_failed: Sequence[str]) -> dict[str, float]:
     """The candidates the selection passed over ONLY for their law although they fit the data at least as
     well as ``chosen`` (cost not above its cost), with their law p: {term: law p}.
@@ -503,11 +509,14 @@ def preferred_by_fit(chosen: Trial, trials: Sequence[Trial], law_failed: Sequenc
     worse or at best equally: a rival reading, or the same physics at the other place where G is nearly
     flat (a Dahl loop on x named on u; a sensor lag named as dry friction on x). Such a candidate is not
     dropped silently: it is an alternative with its law's p, and the separating experiment. A candidate
-    whose law failed and which fits worse than the chosen term is no rival reading (as before)."""
+    whose law failed and which fits worse than the chosen term is no rival reading (as before), nor is one
+    whose law p is below :data:`PREFERRED_LAW_FLOOR`, far below what the truth gives."""
     if chosen.fit is None:
         return {}
     out: dict[str, float] = {}
     for tr in trials:
+        if tr.law_p_value < PREFERRED_LAW_FLOOR:
+            continue
         if tr.term in law_failed and tr.fit is not None and tr.cost <= chosen.cost:
             out[tr.term] = tr.law_p_value
     return out

@@ -188,7 +188,8 @@ def wald_p(b: FloatArray, cov: FloatArray) -> float:
     d = np.sqrt(np.diag(cov))
     c = cov / np.outer(d, d)
     stat = float((b / d) @ np.linalg.pinv(c, rcond=1e-12, hermitian=True) @ (b / d))
-    df = int(np.linalg.matrix_rank(c, hermitian=True))
+    ev = np.abs(np.linalg.eigvalsh(c))  # the rank at the pseudo-inverse's own cutoff: the directions it keeps
+    df = int(np.sum(ev > 1e-12 * ev.max())) if ev.size else 0
     if df < 1 or not math.isfinite(stat):
         return math.nan
     return float(chdtrc(df, max(stat, 0.0)))

@@ -55,6 +55,10 @@ class SharedTest:
     shared: bool
     #: LM iterations of the kept joint fit.
     iterations: int
+    #: Whether that fit stopped at a stationary point (a step gaining less than the tolerance, or no step
+    #: lowering the cost); False: it reached :data:`MAX_ITER`, so its cost only bounds the best shared fit's
+    #: from above and a refusal is not determined.
+    converged: bool = True
 
     def to_dict(self) -> dict[str, Any]:
         def n(v: float) -> Optional[float]:
@@ -71,6 +75,7 @@ class SharedTest:
             "p_value": n(self.p_value),
             "shared": self.shared,
             "iterations": self.iterations,
+            "converged": self.converged,
         }
 
 
@@ -209,17 +214,17 @@ def _faces(conds: Sequence[_Cond], x: np.ndarray) -> np.ndarray:
 
 def _joint_fit(
     term: str, conds: Sequence[_Cond], v0: float, tol: float
-) -> Optional[tuple[np.ndarray, float, np.ndarray, int]]:
+) -> Optional[tuple[np.ndarray, float, np.ndarray, int, bool]]:
     """Levenberg-Marquardt of the joint vector from the shared value ``v0``, on the faces the conditions' fits
     sit on (:func:`_faces`), trial points projected (:func:`_project`); stops once an accepted step gains less
-    than ``tol``: (x, cost, the shared value's J^T W J block's inverse variance, iterations); None when
-    ``v0`` is inadmissible somewhere."""
+    than ``tol``: (x, cost, the shared value's J^T W J block's inverse variance, iterations, whether it
+    stopped before :data:`MAX_ITER`); None when ``v0`` is inadmissible somewhere."""
     x = _pack(term, conds, v0)
     ev = _evaluate(term, conds, x, True)
     if ev is None:
         return None
     cost, grad, hess = ev
-    lam, it = 1e-3, 0
+    lam, it, stopped = 1e-3, 0, False
     while it < MAX_ITER:
         it += 1
         t = _faces(conds, x)
@@ -236,6 +241,7 @@ def _joint_fit(
         if new is None or new[0] >= cost:
             lam *= 10.0
             if lam > 1e10:
+                stopped = True  # no step lowers the cost: a stationary point
                 break
             continue
         gain = cost - new[0]
@@ -248,9 +254,10 @@ def _joint_fit(
         x, (cost, grad, hess) = trial, ev
         lam = max(lam / 10.0, 1e-9)
         if gain < tol:
+            stopped = True
             break
     t = _faces(conds, x)
-    return x, cost, t.T @ hess @ t, it
+    return x, cost, t.T @ hess @ t, it, stopped
 
 
 def _own(term: str, c: _Cond) -> float:
@@ -305,7 +312,7 @@ def shared_test(
     fits_ = [f for f in (_joint_fit(term, conds, v0, COST_TOL * den) for v0 in starts) if f is not None]
     if not fits_:
         return None
-    x, cost, hess, it = min(fits_, key=lambda f: f[1])
+    x, cost, hess, it, converged = min(fits_, key=lambda f: f[1])
     stat = max(cost - c_free, 0.0) / (k - 1) / den
     p = float(fdtrc(k - 1, max(dof_free, 1), stat)) if stat > 0 else 1.0
     try:
@@ -314,4 +321,6 @@ def shared_test(
         var = math.nan
     inflate = math.sqrt(max(1.0, cost / dof_shared))
     se = math.sqrt(var) * inflate if var >= 0 else math.nan
-    return SharedTest(term, float(x[0]), se, c_free, float(cost), dof_free, stat, p, p >= alpha, it)
+    return SharedTest(
+        term, float(x[0]), se, c_free, float(cost), dof_free, stat, p, p >= alpha, it, converged
+    )
