@@ -173,8 +173,8 @@ def test_white_noise_sets_keep_their_baseline(helpers: SimpleNamespace) -> None:
 
 
 def test_a_users_own_metadata_key_is_no_mark() -> None:
-    """Metadata is the user's, free-form: a key "baseline_removed" of their own (here "no") neither crashes the
-    preparation (it was parsed as the walk's step variance: ValueError) nor marks the recording."""
+    """Metadata is the user's, free-form: a key "baseline_removed" of their own (here "no") neither crashes
+    the preparation (it was parsed as the walk's step variance: ValueError) nor marks the recording."""
     from dataclasses import replace as _replace
 
     from bouc_wen_id.diagnosis import data
