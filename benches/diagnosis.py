@@ -408,11 +408,7 @@ def run_new_case(
     row: dict[str, Any] = {"kind": kind, "term": name, "place": place, "size": size, "seed": seed}
     t0 = time.perf_counter()
     try:
-        case = (
-            gen.make_case(kind, name, place, size, seed)
-            if cache is None
-            else gen.cached_case(kind, name, place, size, seed, cache)
-        )
+        case = gen.cached_case(kind, name, place, size, seed, cache)
     except Exception as exc:  # the generator's own failure: reported as such, not as the diagnosis's
         row["error"] = f"generator: {type(exc).__name__}: {exc}"
         return row

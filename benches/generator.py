@@ -837,9 +837,13 @@ def version() -> str:
     return hashlib.sha256(text).hexdigest()[:16] + ("-numba" if _jit is not None else "-numpy")
 
 
-def cached_case(kind: str, name: Optional[str], place: str, size: float, seed: int, cache: Path) -> Case:
+def cached_case(
+    kind: str, name: Optional[str], place: str, size: float, seed: int, cache: Optional[Path]
+) -> Case:
     """:func:`make_case`, read from ``cache`` when this generator version already made it, else made and
-    stored there (a damaged or foreign entry is made again and overwritten)."""
+    stored there (a damaged or foreign entry is made again and overwritten); no cache (None): made."""
+    if cache is None:
+        return make_case(kind, name, place, size, seed)
     key = json.dumps([kind, name, place, float(size), int(seed), version()])
     stem = cache / hashlib.sha256(key.encode()).hexdigest()[:24]
     npz, meta = stem.with_suffix(".npz"), stem.with_suffix(".json")

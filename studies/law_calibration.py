@@ -92,11 +92,7 @@ def run_case(job: tuple[str, str, str, float, int], cache: Optional[Path]) -> di
     row: dict[str, Any] = {"term": name, "place": place, "size": size, "seed": seed}
     t0 = time.perf_counter()
     try:
-        case = (
-            gen.make_case(kind, name, place, size, seed)
-            if cache is None
-            else gen.cached_case(kind, name, place, size, seed, cache)
-        )
+        case = gen.cached_case(kind, name, place, size, seed, cache)
         lib = bench.library_effects()
         truth = lib[name].kind if name in lib else bench.true_kind(name, place)
         row["truth"] = truth

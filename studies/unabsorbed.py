@@ -45,11 +45,7 @@ def measure(row: str, place: str, size: float, seed: int, cache: Any) -> str:
 
     lib = bench.library_effects()
     truth = bench.true_kind(lib[row].base_kind if row in lib else row, place)
-    case = (
-        gen.make_case("library", row, place, size, seed)
-        if cache is None
-        else gen.cached_case("library", row, place, size, seed, cache)
-    )
+    case = gen.cached_case("library", row, place, size, seed, cache)
     p = gen.make_plant(seed)
     b = gen.base(p)
     value, _, y = gen._calibrate(p, row, place, size, b)
