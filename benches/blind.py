@@ -661,6 +661,24 @@ def table(recs: list[dict[str, Any]]) -> str:
     return "\n".join(lines)
 
 
+def breakdown(recs: list[dict[str, Any]], key: str) -> str:
+    """Good verdicts per group (library effects, nulls, outside) and per value of `key` (noise, design...)."""
+    values = sorted({str(r.get(key)) for r in recs})
+    lines = [
+        f"| {key} | " + " | ".join(f"{g} good/n" for g in GOOD) + " | not settled |",
+        "|---|---|---|---|---|",
+    ]
+    for v in values:
+        rs = [r for r in recs if str(r.get(key)) == v]
+        cells = []
+        for gname in GOOD:
+            sub = [r for r in rs if group(r) == gname]
+            cells.append(f"{sum(r['category'] in GOOD[gname] for r in sub)}/{len(sub)}")
+        stuck = sum("not settled" in str(r.get("verdict", "")) for r in rs)
+        lines.append(f"| {v} | " + " | ".join(cells) + f" | {stuck} |")
+    return "\n".join(lines)
+
+
 def failures(recs: list[dict[str, Any]]) -> str:
     out = []
     for r in recs:
@@ -683,10 +701,15 @@ def main(argv: Optional[list[str]] = None) -> int:
     ap.add_argument("--only", default=None, help="comma list of effects (and/or 'null')")
     ap.add_argument("--workers", type=int, default=1)
     ap.add_argument("--json", default=None, help="write every case's record here")
+    ap.add_argument("--report", default=None, help="print the tables and failures of a --json file again")
     ap.add_argument(
         "--replay", default=None, help="EFFECT:SIZE:INDEX with the same --seed: one case, summary"
     )
     args = ap.parse_args(argv)
+    if args.report:
+        doc = json.loads(Path(args.report).read_text())
+        _print(doc["cases"], doc["wall"], doc.get("probe_non_integer", ""))
+        return 0
     if args.replay:
         eff, size, k = args.replay.split(":")
         tag = (LIBRARY + OUTSIDE + ("null",)).index(eff)
@@ -709,14 +732,20 @@ def main(argv: Optional[list[str]] = None) -> int:
             recs.append(run_case(c))
             _progress(recs[-1], len(recs), len(todo))
     wall = time.perf_counter() - t0
-    print(table(recs))
-    print(f"\n{len(recs)} diagnoses, wall {wall:.0f} s\n\nFailures:\n" + failures(recs))
     probe = probe_non_integer(args.seed)
-    print("\nA fixed-rate record (no whole number of samples per period) as a Recording: " + probe)
+    _print(recs, wall, probe)
     if args.json:
         doc = {"seed": args.seed, "version": GENERATOR_VERSION, "wall": wall, "probe_non_integer": probe}
         Path(args.json).write_text(json.dumps({**doc, "cases": recs}, indent=1, default=str))
     return 0
+
+
+def _print(recs: list[dict[str, Any]], wall: float, probe: str) -> None:
+    print(table(recs))
+    for key in ("noise", "design", "plant"):
+        print("\n" + breakdown(recs, key))
+    print(f"\n{len(recs)} diagnoses, wall {wall:.0f} s\n\nFailures:\n" + failures(recs))
+    print("\nA fixed-rate record (no whole number of samples per period) as a Recording: " + probe)
 
 
 def _progress(r: dict[str, Any], i: int, n: int) -> None:
