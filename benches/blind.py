@@ -417,6 +417,8 @@ class Case:
     size: float  # x the averaged noise sd (0 for a null)
     index: int
     seed: int
+    noise: Optional[str] = None  # this noise kind (--noise), else drawn from the seed
+    drift: float = DRIFT  # the drift of the output zero over the record, in noise sd (noise "drift")
 
     @property
     def key(self) -> str:
@@ -449,7 +451,9 @@ def size_effect(sig: list[Signals], hy: Hysteresis, effect: str, target: float, 
     return p, y
 
 
-def add_noise(y: list[Array], kind: str, pct: float, rng: np.random.Generator) -> tuple[list[Array], float]:
+def add_noise(
+    y: list[Array], kind: str, pct: float, rng: np.random.Generator, drift: float = DRIFT
+) -> tuple[list[Array], float]:
     """Measured outputs and the averaged noise sd (the noise sd of a mean over the recorded periods)."""
     sigma = pct * rms(y)
     out = []
@@ -461,7 +465,7 @@ def add_noise(y: list[Array], kind: str, pct: float, rng: np.random.Generator) -
         else:
             v = v + rng.normal(0.0, sigma, v.size)
         if kind == "drift":
-            v = v + float(rng.choice([-1, 1])) * DRIFT * sigma * np.linspace(0.0, 1.0, v.size)
+            v = v + float(rng.choice([-1, 1])) * drift * sigma * np.linspace(0.0, 1.0, v.size)
         if kind == "adc":
             v = sigma * np.round(v / sigma)  # an ADC whose step is one noise sd
         out.append(v)
@@ -479,6 +483,7 @@ def make_case(case: Case) -> dict[str, Any]:
     dkind = str(rng.choice(DESIGNS))
     exps = design(dkind, g, hy, rng)
     nkind = str(rng.choice(NOISES))
+    nkind = case.noise or nkind  # the draw is made either way: the plant and design stay the case's
     pct = float(rng.uniform(0.005, 0.02))
     sig = [signals(g, e) for e in exps]
     X_MIN = min(float(np.abs(s.x[s.e.settle * SUB :]).max()) for s in sig)
@@ -491,7 +496,7 @@ def make_case(case: Case) -> dict[str, Any]:
     if case.effect != "null":
         value, y = size_effect(sig, hy, case.effect, case.size * avg_sd, y0, plain)
     got = rms([a - b for a, b in zip(y, y0)]) / avg_sd
-    ym, _ = add_noise(y, nkind, pct, rng)
+    ym, _ = add_noise(y, nkind, pct, rng, case.drift)
     u = [s.u[(s.e.settle * SUB) :: SUB] for s in sig]
     if dkind == "fixed_rate":  # a lab's input channel: its own small noise
         u = [v + rng.normal(0.0, 5e-4 * e.amplitude, v.size) for v, e in zip(u, exps)]
@@ -601,7 +606,7 @@ def cases(args: argparse.Namespace) -> list[Case]:
     def add(effect: str, size: float, k: int) -> None:
         tag = (LIBRARY + OUTSIDE + ("null",)).index(effect)
         seed = int(np.random.SeedSequence([args.seed, tag, int(size), k]).generate_state(1)[0])
-        out.append(Case(effect, size, k, seed))
+        out.append(Case(effect, size, k, seed, args.noise, args.drift))
 
     sizes = [float(s) for s in args.sizes.split(",")]
     effects = LIBRARY if args.only is None else tuple(e for e in args.only.split(",") if e in LIBRARY)
@@ -619,14 +624,14 @@ def cases(args: argparse.Namespace) -> list[Case]:
     return out
 
 
-def quick_cases(seed: int) -> list[Case]:
+def quick_cases(args: argparse.Namespace) -> list[Case]:
     pick = [("viscous@x", 30), ("inertia", 30), ("coulomb@x", 10), ("offset", 10), ("play", 30),
             ("sensor_lag", 30), ("stiffness@x", 10), ("null", 0), ("null", 0), ("stribeck", 30)]  # fmt: skip
     out = []
     for k, (eff, s) in enumerate(pick):
         tag = (LIBRARY + OUTSIDE + ("null",)).index(eff)
-        sd = int(np.random.SeedSequence([seed, tag, s, k]).generate_state(1)[0])
-        out.append(Case(eff, float(s), k, sd))
+        sd = int(np.random.SeedSequence([args.seed, tag, s, k]).generate_state(1)[0])
+        out.append(Case(eff, float(s), k, sd, args.noise, args.drift))
     return out
 
 
@@ -701,6 +706,10 @@ def main(argv: Optional[list[str]] = None) -> int:
     ap.add_argument("--only", default=None, help="comma list of effects (and/or 'null')")
     ap.add_argument("--workers", type=int, default=1)
     ap.add_argument("--json", default=None, help="write every case's record here")
+    ap.add_argument("--noise", choices=NOISES, default=None, help="this noise for every case (else drawn)")
+    ap.add_argument(
+        "--drift", type=float, default=DRIFT, help="drift of the output zero over the record (sd)"
+    )
     ap.add_argument("--report", default=None, help="print the tables and failures of a --json file again")
     ap.add_argument(
         "--replay", default=None, help="EFFECT:SIZE:INDEX with the same --seed: one case, summary"
@@ -714,10 +723,10 @@ def main(argv: Optional[list[str]] = None) -> int:
         eff, size, k = args.replay.split(":")
         tag = (LIBRARY + OUTSIDE + ("null",)).index(eff)
         sd = int(np.random.SeedSequence([args.seed, tag, int(float(size)), int(k)]).generate_state(1)[0])
-        rec = run_case(Case(eff, float(size), int(k), sd))
+        rec = run_case(Case(eff, float(size), int(k), sd, args.noise, args.drift))
         print(json.dumps({k2: v for k2, v in rec.items() if k2 != "trace"}, indent=1, default=str))
         return 0
-    todo = quick_cases(args.seed) if args.quick else cases(args)
+    todo = quick_cases(args) if args.quick else cases(args)
     print(f"{len(todo)} cases, {args.workers} worker(s), generator v{GENERATOR_VERSION}", file=sys.stderr)
     t0 = time.perf_counter()
     recs: list[dict[str, Any]] = []
