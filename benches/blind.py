@@ -670,7 +670,7 @@ def breakdown(recs: list[dict[str, Any]], key: str) -> str:
     """Good verdicts per group (library effects, nulls, outside) and per value of `key` (noise, design...)."""
     values = sorted({str(r.get(key)) for r in recs})
     lines = [
-        f"| {key} | " + " | ".join(f"{g} good/n" for g in GOOD) + " | not settled |",
+        f"| {key} | " + " | ".join(f"{g} good/n" for g in GOOD) + ' | says "not settled" |',
         "|---|---|---|---|---|",
     ]
     for v in values:
