@@ -1,0 +1,168 @@
+"""The blind bench's own generator (benches/blind.py), checked against what can be known without it.
+
+Its G is checked against the frequency response written from each plant's PHYSICAL parameters (masses and
+springs, tau and delay, wn and zeta), not from the realisation it integrates; its Bouc-Wen element against
+the saturation levels (2a) implies and against SciPy's adaptive integrator in time (the bench integrates
+along the path); its noise-free nulls must be periodic once settled; its sizing must hit the asked size.
+"""
+
+from __future__ import annotations
+
+import importlib
+import math
+import sys
+from pathlib import Path
+from types import SimpleNamespace
+from typing import Any
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp  # type: ignore[import-untyped]
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benches"))
+#: The blind bench, a script beside the package (not an installed module).
+blind: Any = importlib.import_module("blind")
+
+
+def _physical_response(g: Any, omega: float) -> complex:
+    """G(j omega) from the plant's physical parameters (not from its state-space realisation)."""
+    s = 1j * omega
+    info = g.info
+    if g.kind == "resonance":
+        wn, zeta = info["wn"], info["zeta"]
+        h = wn**2 / (s**2 + 2 * zeta * wn * s + wn**2)
+    elif g.kind == "lag_delay":
+        h = 1 / (1 + s * info["tau"])
+    else:
+        mm = np.diag([1.0, info["m2"]])
+        kk = np.array([[info["k1"] + info["k2"], -info["k2"]], [-info["k2"], info["k2"]]])
+        cc = info["a0"] * mm + info["a1"] * kk
+        disp = np.linalg.solve(kk + s * cc + s**2 * mm, np.array([0.0, 1.0]))
+        h = disp[0] / info["dc"]
+    return complex(h * np.exp(-s * g.delay))
+
+
+@pytest.mark.parametrize("kind", ["two_dof", "lag_delay", "resonance"])
+def test_g_steady_response_is_the_physical_frequency_response(kind: str) -> None:
+    rng = np.random.default_rng(11)
+    g = blind.LINEAR[kind](rng)
+    hy = blind.draw_hysteresis(rng)
+    exps = blind.design("six_plus_one", g, hy, rng)
+    for e in (exps[0], exps[3], exps[5]):  # the bottom, the middle and the top of the band
+        sig = blind.signals(g, e)
+        keep = slice(-2 * blind.SUB * int(round(2 * math.pi / e.omega / e.dt)), None)
+        t = sig.t[keep]
+        phasor = _physical_response(g, e.omega) * e.amplitude * np.exp(1j * e.omega * t)
+        scale = abs(phasor[0])
+        # the first-order hold of a sine is exact to (omega h)^2 / 12 (h the grid step): below 1e-4 here
+        for got, factor in ((sig.x, 1.0), (sig.xd, 1j * e.omega), (sig.xdd, -(e.omega**2))):
+            want = (factor * phasor).real
+            assert np.abs(got[keep] - want).max() < 1e-4 * abs(factor) * scale
+
+
+def test_delay_buffer_holds_x_at_zero_until_the_delay_has_passed() -> None:
+    rng = np.random.default_rng(3)
+    g = blind.lag_delay(rng)
+    e = blind.design("grid3x3", g, blind.draw_hysteresis(rng), rng)[0]
+    sig = blind.signals(g, e)
+    before = sig.t < g.delay
+    assert before.sum() > 2
+    assert np.all(sig.x[before] == 0.0) and np.abs(sig.x[~before]).max() > 0
+
+
+def _bw_time(x_amp: float, hy: Any, periods: int, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """w(t) of (2a) under x = X cos t by SciPy's adaptive Runge-Kutta in TIME (the bench's is in the path)."""
+
+    def rhs(t: float, w: np.ndarray) -> np.ndarray:
+        xd = -x_amp * math.sin(t)
+        aw = abs(w[0])
+        return np.array(
+            [hy.alpha * xd - hy.beta * abs(xd) * aw ** (hy.mu - 1) * w[0] - hy.gamma * xd * aw**hy.mu]
+        )
+
+    t = np.arange(periods * n + 1) * (2 * math.pi / n)
+    sol = solve_ivp(rhs, (0.0, t[-1]), [0.0], t_eval=t, rtol=1e-11, atol=1e-13, method="DOP853")
+    return t, sol.y[0]
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_path_integrator_agrees_with_an_adaptive_integrator_in_time(seed: int) -> None:
+    hy = blind.draw_hysteresis(np.random.default_rng(seed))
+    x_amp = 2.0 * hy.saturation / hy.alpha
+    n = 400
+    t, w_ref = _bw_time(x_amp, hy, 3, n)
+    w = blind.hysteresis((x_amp * np.cos(t))[None, :], hy)[0]
+    assert np.abs(w - w_ref)[-n:].max() < 2e-5 * hy.saturation
+
+
+@pytest.mark.parametrize("seed", [4, 5])
+def test_bouc_wen_saturates_at_the_levels_2a_implies(seed: int) -> None:
+    hy = blind.draw_hysteresis(np.random.default_rng(seed))
+    n = 2000
+    path = 8 * hy.saturation / hy.alpha * np.cos(np.arange(4 * n) * 2 * math.pi / n)
+    w = blind.hysteresis(path[None, :], hy)[0][-n:]
+    assert abs(w.max() - hy.saturation) < 1e-6 * hy.saturation
+    assert np.abs(w[: n // 2] + w[n // 2 :]).max() < 1e-6 * hy.saturation  # odd: w(theta + pi) = -w(theta)
+    delta = 0.3 * (hy.beta + hy.gamma)
+    wa = blind.hysteresis(path[None, :], hy, asym=delta)[0][-n:]
+    top = (hy.alpha / (hy.beta + hy.gamma + delta)) ** (1 / hy.mu)
+    bottom = (hy.alpha / (hy.beta + hy.gamma - delta)) ** (1 / hy.mu)
+    assert abs(wa.max() - top) < 1e-6 * top and abs(wa.min() + bottom) < 1e-6 * bottom
+
+
+def test_play_holds_w_after_each_reversal_for_two_half_widths_of_travel() -> None:
+    hy = blind.draw_hysteresis(np.random.default_rng(6))
+    n, b = 1000, 0.2 * hy.saturation / hy.alpha
+    path = 3 * hy.saturation / hy.alpha * np.cos(np.arange(3 * n + 1) * 2 * math.pi / n)
+    w = blind.hysteresis(path[None, :], hy, play=b)[0]
+    top = 2 * n  # a maximum of x: w stays put while x falls by 2 b, then moves
+    drop = path[top] - path[top : top + n // 2]
+    held = w[top : top + n // 2][drop < 2 * b * 0.999]
+    moved = w[top : top + n // 2][drop > 2 * b * 1.01]
+    assert np.ptp(held) < 1e-12 and abs(moved[0] - held[0]) > 0
+
+
+@pytest.mark.parametrize("kind", ["two_dof", "lag_delay", "resonance"])
+def test_noise_free_null_is_periodic_after_settling(kind: str) -> None:
+    rng = np.random.default_rng(21)
+    g = blind.LINEAR[kind](rng)
+    hy = blind.draw_hysteresis(rng)
+    exps = blind.design("grid3x3", g, hy, rng)[::4]  # three of the nine: low, middle, high
+    sig = [blind.signals(g, e) for e in exps]
+    ys = blind.output(sig, hy, "null", 0.0)
+    # a fiftieth of the smallest averaged noise sd the bench draws (0.5 % of the output RMS over 30 periods)
+    tol = 0.02 * 0.005 * blind.rms(ys) / math.sqrt(blind.RECORD_PERIODS)
+    for e, y in zip(exps, ys):
+        p = int(round(2 * math.pi / e.omega / e.dt))
+        assert abs(p * e.dt * e.omega - 2 * math.pi) < 1e-12
+        assert np.abs(y[p:] - y[:-p]).max() < tol
+
+
+@pytest.mark.parametrize(("effect", "seed"), [("viscous@x", 31), ("play", 32), ("sensor_lag", 33)])
+def test_sizing_hits_the_asked_multiple_of_the_averaged_noise(effect: str, seed: int) -> None:
+    made = blind.make_case(blind.Case(effect, 10.0, 0, seed))
+    assert abs(made["info"]["size_got"] - 10.0) < 0.3
+    again = blind.make_case(blind.Case(effect, 10.0, 0, seed))
+    assert all(np.array_equal(a, b) for a, b in zip(made["y"], again["y"]))  # the seed decides everything
+
+
+def _diag(status: str, named: list[str], alts: list[tuple[str, str]]) -> Any:
+    return SimpleNamespace(
+        status=status,
+        named=[SimpleNamespace(term=t) for t in named],
+        alternatives=[SimpleNamespace(term=a, rival=r) for a, r in alts],
+    )
+
+
+def test_score_reads_name_place_and_alternatives() -> None:
+    case = blind.Case("viscous@x", 10.0, 0, 1)
+    assert blind.score(case, _diag("explained", ["viscous@x"], []))[0] == "right"
+    assert blind.score(case, _diag("explained", ["viscous"], [("viscous", "viscous@x")]))[0] == "right"
+    assert blind.score(case, _diag("explained", ["viscous"], []))[0] == "place"
+    assert blind.score(case, _diag("partly explained", ["inertia"], []))[0] == "wrong"
+    assert blind.score(case, _diag("unexplained", [], []))[0] == "unexplained"
+    null = blind.Case("null", 0.0, 0, 1)
+    assert blind.score(null, _diag("adequate", [], []))[0] == "adequate"
+    assert blind.score(null, _diag("explained", ["offset"], []))[0] == "named"
+    outside = blind.Case("stribeck", 10.0, 0, 1)
+    assert blind.score(outside, _diag("partly explained", ["coulomb"], []))[0] == "partly"
