@@ -293,7 +293,7 @@ def _group(
     """One condition's experiments prepared, checked and plain-fitted as :func:`diagnose` does; from its own
     diagnosis (``own``) when given (its experiments and plain fit, so nothing is fitted twice)."""
     from .data import prepare
-    from .run import _check_experiments, _noise_floors, _settled
+    from .settling import _check_experiments, _noise_floors, _settled
 
     if (
         own is not None
