@@ -16,7 +16,7 @@ from ..errors import InvalidParameterError
 from ..estimators import boundary_note
 from ..terms import DIAGNOSIS_CANDIDATES, TERMS, Distortion, Offset, physical_value
 from ..validation import real_number
-from . import baseline
+from . import baseline, free_dc
 from .caveats import alternatives_text, below_saturation, family_text
 from .data import DiagExperiment, colour_notes, prepare
 from .drift import (
@@ -116,7 +116,7 @@ def _summary(
         v, se = physical(fit, s, t)
         sym, unit = term_symbol_unit(t, *units)
         terms.append(NamedTerm(t, sym, v, se, unit))
-    dof = sum(e.ybar.size for e in sx) - (3 + len(par.terms) + 2 * len(sx))
+    dof = sum(a.ybar.size - e.baseline_removed for a, e in zip(sx, exps)) - (3 + len(par.terms) + 2 * len(sx))
     noise_dof = sum(e.noise_dof for e in exps)
     nr = []
     for e, y in zip(sx, fit.outputs):
@@ -378,6 +378,9 @@ class _Setup:
     skipped: dict[str, str]
     #: False when some experiment's noise floor is not measured noise (quantisation or numerical accuracy).
     measured_noise: bool = True
+    #: The wandering baseline's free DCs (free_dc.py): None without a wander, else whether the common
+    #: centre was kept (then only the experiments' DCs about their common one are free).
+    common_dc: Optional[bool] = None
     #: Where the stages are reported (:mod:`.progress`; quiet by default).
     report: ProgressCallback = lambda stage, done, total: None
 
@@ -477,7 +480,10 @@ def _diagnose(
             "not tested: every input is a pure sine (no harmonic above its noise floor), so the measured "
             "waveform adds nothing to the model"
         )
-    setup = _Setup(cands, float(alpha), held_out_test, units, skipped, not qnotes, report)
+    common = None if wander is None else wander.kept
+    setup = _Setup(
+        cands, float(alpha), held_out_test, units, skipped, not qnotes, report=report, common_dc=common
+    )
     d = _diagnose_set(exps, setup, [*notes, *qnotes])
     named_deg = any(t.term in DRIFT_TERMS for t in d.named)
     drifting = [] if named_deg else _unsettled(exps)
@@ -552,11 +558,20 @@ def _drift_stage(
     return deg, fexps, fsx, start
 
 
+def _scaled(exps: list[DiagExperiment], s: Scale, setup: _Setup) -> list[AugExperiment]:
+    """The experiments in the fits' units; under a wandering baseline each marked experiment's DC free
+    (free_dc.py: the averaged period's DC was set, not measured)."""
+    sx = scaled(exps, s)
+    if setup.common_dc is None:
+        return sx
+    return free_dc.marked(sx, [e.baseline_removed for e in exps], setup.common_dc)
+
+
 def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -> Diagnosis:
     """One diagnosis of checked experiments: the plain fit, degradation, the steady selection, the verdict."""
     cands, alpha = setup.cands, setup.alpha
     s = scale_of(exps)
-    sx = scaled(exps, s)
+    sx = _scaled(exps, s, setup)
     substeps = substeps_for([e.ybar.size for e in sx])
     setup.report("fitting the plain model", 0, 1)
     plain = fit_plain(exps, sx, s, substeps)
