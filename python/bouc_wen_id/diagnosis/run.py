@@ -470,7 +470,9 @@ def _diagnose(
     wander = baseline.detect(experiments, alpha / max(len(cands), 1))  # a wandering zero (baseline.py)
     items, notes = _settled(baseline.removed(experiments, wander))
     exps, qnotes = _noise_floors(items, prepare(items))
-    notes = [*notes, *colour_notes(exps), *([wander.note()] if wander else [])]  # coloured noise: data.py
+    # Coloured noise (data.py) and the wander's note, or why a short record's wander was not tested.
+    short = None if wander else baseline.short_note(experiments)
+    notes = [*notes, *colour_notes(exps), *([wander.note()] if wander else [short] if short else [])]
     _check_experiments(exps)
     skipped: dict[str, str] = {}
     if Distortion.kind in cands and not any(e.distorted for e in exps):
