@@ -156,3 +156,18 @@ def test_a_wander_in_records_too_short_to_test_is_said() -> None:
         warnings.simplefilter("ignore")  # the transient trim's warning, if any: the notes are read here
         d = bw.diagnose(recs, candidates=["offset"])
     assert any("may wander" in n and "8 periods" in n for n in d.notes), d.notes
+
+
+def test_diagnose_across_removes_a_wandering_baseline(helpers: SimpleNamespace) -> None:
+    """``diagnose_across`` on two conditions of the designs bench's ``walk`` (its plants, a NumPy walk):
+    with a 10x asymmetry at both, "nothing named" before (the wander was left in the averaged periods), now
+    asymmetry at every condition, and the verdict says the baseline wanders; noise alone names nothing."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        asym = [helpers.designs_case("walk", "asymmetry", "", 10.0, s) for s in (520000, 520001)]
+        a = bw.diagnose_across(asym, condition=[0.0, 1.0])
+        null = [helpers.designs_case("walk", None, "", 0.0, s) for s in (100001, 100002)]
+        n = bw.diagnose_across(null, condition=[0.0, 1.0])
+    assert [t.term for t in a.terms] == ["asymmetry"], a.verdict
+    assert "the baseline wanders at 0, 1" in a.verdict
+    assert n.terms == () and "nothing named" in n.verdict and "the baseline wanders" in n.verdict, n.verdict

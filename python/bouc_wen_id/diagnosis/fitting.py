@@ -688,8 +688,10 @@ def fit_own(
         raise
     except BoucWenIdError:
         return math.inf, np.full(p, np.nan)
-    r = free_dc.centred(e, e.ybar - y)  # a free DC (free_dc.py): the residual's mean has no weight
-    jo = free_dc.centred(e, jo)
+    r = free_dc.centred(
+        e, e.ybar - y, held_out=True
+    )  # a free DC (free_dc.py): the residual's mean has no weight
+    jo = free_dc.centred(e, jo, held_out=True)
     cost = e.weight * float(r @ r)
     lam = 1e-3
     for _ in range(OWN_MAX_ITER):
@@ -706,8 +708,8 @@ def fit_own(
         except BoucWenIdError:
             lam *= 10.0
             continue
-        r2 = free_dc.centred(e, e.ybar - y2)
-        jo2 = free_dc.centred(e, jo2)
+        r2 = free_dc.centred(e, e.ybar - y2, held_out=True)
+        jo2 = free_dc.centred(e, jo2, held_out=True)
         c2 = e.weight * float(r2 @ r2)
         if c2 < cost:
             done = (cost - c2) <= 1e-10 * cost
@@ -719,7 +721,7 @@ def fit_own(
             lam *= 10.0
             if lam > 1e12:
                 break
-    return cost, (e.ybar - r if free_dc.count([e]) else y)  # a free DC: the data's own
+    return cost, (e.ybar - r if free_dc.count([e], held_out=True) else y)  # a free DC: the data's own
 
 
 def physical(fit: AugFit, s: Scale, term: str) -> tuple[float, float]:

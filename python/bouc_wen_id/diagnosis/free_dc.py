@@ -74,17 +74,18 @@ def spent(exps: Sequence[AugExperiment]) -> int:
     return len(free) - (1 if free and _common(exps, free) else 0)
 
 
-def count(exps: Sequence[AugExperiment]) -> int:
+def count(exps: Sequence[AugExperiment], held_out: bool = False) -> int:
     """How many of ``exps`` :func:`centred` centres."""
-    return sum(isinstance(e, FreeDC) and not e.common for e in exps)
+    return sum(isinstance(e, FreeDC) and not (held_out and e.common) for e in exps)
 
 
-def centred(e: AugExperiment, a: FloatArray) -> FloatArray:
+def centred(e: AugExperiment, a: FloatArray, held_out: bool = False) -> FloatArray:
     """``a`` (a residual or a Jacobian of ``e``, samples along axis 0) less its mean when ``e``'s DC is
-    free (the law test and the held-out cost); ``a`` itself otherwise, and when ``common``: the held-out
-    experiment's DC is then judged against the model's, as without a wander (the kept common centre is
-    the output offset's evidence, which a held-out DC left free would not see)."""
-    if not isinstance(e, FreeDC) or e.common:
+    free (the law test: each experiment's own DC free, so a term's law is judged on the rest of the loop);
+    ``a`` itself otherwise, and for the held-out refit (``held_out``) when ``common``: the held-out
+    experiment's DC is then judged against the model's, as without a wander (the kept common centre is the
+    output offset's evidence, which a held-out DC left free would not see)."""
+    if not isinstance(e, FreeDC) or (held_out and e.common):
         return a
     return np.asarray(a - np.mean(a, axis=0), dtype=np.float64)
 
