@@ -81,6 +81,8 @@ class _Group:
     plain: AugFit
     current: AugFit
     cache: FoldCache = field(default_factory=dict)
+    #: The condition's baseline wanders (baseline.py): removed period by period, each experiment's DC free.
+    wander: bool = False
 
 
 @dataclass(frozen=True)
@@ -288,13 +290,20 @@ def _median(v: Sequence[float]) -> float:
 
 
 def _group(
-    items: Any, label: str, condition: float, cands: Sequence[str], own: Optional[Diagnosis]
+    items: Any,
+    label: str,
+    condition: float,
+    cands: Sequence[str],
+    own: Optional[Diagnosis],
+    alpha: float = ALPHA,
 ) -> _Group:
     """One condition's experiments prepared, checked and plain-fitted as :func:`diagnose` does; from its own
     diagnosis (``own``) when given (its experiments and plain fit, so nothing is fitted twice)."""
+    from . import baseline, free_dc
     from .data import prepare
-    from .run import _check_experiments, _noise_floors, _settled
+    from .settling import _check_experiments, _noise_floors, _settled
 
+    wander = baseline.detect(items, alpha / max(len(cands), 1))  # a wandering zero, as diagnose (baseline.py)
     if (
         own is not None
         and own.plain_fit is not None
@@ -308,17 +317,21 @@ def _group(
     else:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # the transient trim's warning is diagnose's to give
-            settled, _ = _settled(items)
+            settled, _ = _settled(baseline.removed(items, wander))
         exps, _ = _noise_floors(settled, prepare(settled))
         _check_experiments(exps)
         s = scale_of(exps)
         sx = scaled(exps, s)
+        if wander is not None:
+            sx = free_dc.marked(sx, [e.baseline_removed for e in exps], wander.kept)
         substeps = substeps_for([e.ybar.size for e in sx])
         plain = fit_plain(exps, sx, s, substeps)
+    if wander is not None:  # each marked experiment's DC free, as diagnose fits it (free_dc.py)
+        sx = free_dc.marked(sx, [e.baseline_removed for e in exps], wander.kept)
     if Distortion.kind in cands and any(e.distorted for e in exps):
         sx = carry_through_g(sx, plain, substeps)
     noise_dof = sum(e.noise_dof for e in exps)
-    return _Group(label, condition, sx, s, substeps, noise_dof, plain, plain)
+    return _Group(label, condition, sx, s, substeps, noise_dof, plain, plain, wander=wander is not None)
 
 
 # ------------------------------------------------------------------------------------------------------
@@ -687,7 +700,7 @@ def diagnose_across(
         prepared = []
         for i, (items, c, name) in enumerate(zip(gs, conds, names)):
             report(f"preparing condition {name}", i, len(gs))
-            prepared.append(_group(items, name, c, cands, own[i]))
+            prepared.append(_group(items, name, c, cands, own[i], alpha))
         if Distortion.kind in cands and not any(e.waveform.size for g in prepared for e in g.sx):
             cands = tuple(c for c in cands if c != Distortion.kind)
         steps = _select(prepared, cands, alpha, held_out_test, report)
@@ -702,8 +715,15 @@ def diagnose_across(
         "held_out_test": held_out_test,
         "condition": conds,
     }
+    wandering = ", ".join(str(g.label) for g in prepared if g.wander)
+    clause = (
+        f"; the baseline wanders at {wandering} (removed period by period, each experiment's DC free: an "
+        "offset or each experiment's own DC there cannot be told from it)"
+        if wandering
+        else ""
+    )
     return AcrossDiagnosis(
-        _verdict(terms, conditions, steps),
+        _verdict(terms, conditions, steps) + clause,
         terms,
         conditions,
         tuple(steps),

@@ -104,7 +104,27 @@ def _rows(rec: Any) -> tuple[np.ndarray, int]:
 def detect(items: Any, level: float) -> Optional[Wander]:
     """The set's wander test (module docstring) on its Recordings; None when it does not wander, or with
     fewer than 4 periods after settling in every recording. ``level`` is the common centre's t-test level."""
-    from scipy.special import chdtrc, stdtr  # type: ignore[import-untyped]
+    from scipy.special import stdtr  # type: ignore[import-untyped]
+
+    st = _statistics(items)
+    if st is None:
+        return None
+    chi2, dof, pval, r, pl, centres = st
+    if not (pval < WANDER_ALPHA and r >= WANDER_CORRELATION and pl < WANDER_ALPHA):
+        return None
+    m = len(centres)
+    c, se, cp = float(np.mean(centres)), math.nan, math.nan
+    if m >= 2:
+        se = float(np.std(centres, ddof=1)) / math.sqrt(m)
+        cp = float(2.0 * stdtr(m - 1, -abs(c) / se)) if se > 0 else (0.0 if c else 1.0)
+    kept = bool(math.isfinite(cp) and cp < level)
+    return Wander(r, pl, chi2, dof, pval, c if kept else 0.0, se, cp, kept, level)
+
+
+def _statistics(items: Any) -> Optional[tuple[float, int, float, float, float, list[float]]]:
+    """The wander test's numbers (chi-square, dof, p, pooled lag-1 correlation, the last half's p (NaN: no
+    recording of 8 periods or more), the recordings' centres); None when nothing can be tested."""
+    from scipy.special import chdtrc
 
     from ..model import Recording
 
@@ -136,15 +156,26 @@ def detect(items: Any, level: float) -> Optional[Wander]:
     pval = float(chdtrc(dof, chi2))
     r = float(np.average(rs, weights=weights))
     pl = float(chdtrc(late_dof, late)) if late_dof else math.nan
-    if not (pval < WANDER_ALPHA and r >= WANDER_CORRELATION and pl < WANDER_ALPHA):
+    return chi2, dof, pval, r, pl, centres
+
+
+def short_note(items: Any) -> Optional[str]:
+    """A note when the period DCs look like a wander (rough beyond a quadratic, correlated from period to
+    period) but no recording has the 8 periods after settling that tell a wander from a transient (the
+    last half's test): the baseline is then not removed, and the verdict's tests of the centre may read it
+    as a drift or a transient. None otherwise."""
+    st = _statistics(items)
+    if st is None:
         return None
-    m = len(centres)
-    c, se, cp = float(np.mean(centres)), math.nan, math.nan
-    if m >= 2:
-        se = float(np.std(centres, ddof=1)) / math.sqrt(m)
-        cp = float(2.0 * stdtr(m - 1, -abs(c) / se)) if se > 0 else (0.0 if c else 1.0)
-    kept = bool(math.isfinite(cp) and cp < level)
-    return Wander(r, pl, chi2, dof, pval, c if kept else 0.0, se, cp, kept, level)
+    chi2, dof, pval, r, pl, _ = st
+    if not (pval < WANDER_ALPHA and r >= WANDER_CORRELATION) or math.isfinite(pl):
+        return None
+    return (
+        f"the period means may wander (chi-square {chi2:.3g} on {dof} dof about a quadratic trend, p = "
+        f"{pval:.2g}, lag-1 correlation {r:.2g}), but no recording has the 8 periods after settling that "
+        "tell a wandering baseline from a settling transient: the baseline was not removed, and a drift or a "
+        "transient of the loop's centre may be that wander; record more periods"
+    )
 
 
 def _rough(dc: np.ndarray, weight: float) -> tuple[float, int]:
@@ -241,6 +272,7 @@ __all__ = [
     "removed",
     "marked",
     "adjusted",
+    "short_note",
     "WANDER_ALPHA",
     "WANDER_CORRELATION",
 ]

@@ -19,7 +19,7 @@ from numpy.typing import NDArray
 from ..augmented import AugExperiment, AugFit, AugParams, augmented_output, fit_augmented
 from ..errors import BoucWenIdError, BudgetExceededError, SearchAtBoundError
 from ..terms import TERMS, Distortion, Place, StartContext
-from . import speed
+from . import free_dc, speed
 from .data import DiagExperiment
 
 FloatArray = NDArray[np.float64]
@@ -304,7 +304,15 @@ def fit_from(
     exps: Sequence[AugExperiment], start: AugParams, substeps: int, max_iter: int = 200
 ) -> Optional[AugFit]:
     """One augmented fit of at most ``max_iter`` iterations, ended early once it stalls (:data:`STALL_CHI2`);
-    None when the start leads nowhere (no steady loop, a rejected constraint)."""
+    None when the start leads nowhere (no steady loop, a rejected constraint). An experiment whose period
+    means were taken out (a :class:`.free_dc.FreeDC`) has its DC free (``free_dc.py``)."""
+    return free_dc.fit(exps, start, substeps, max_iter, _fit_from)
+
+
+def _fit_from(
+    exps: Sequence[AugExperiment], start: AugParams, substeps: int, max_iter: int
+) -> Optional[AugFit]:
+    """:func:`fit_from` without free DCs."""
     dof = max(sum(e.ybar.size for e in exps) - (3 + len(start.terms) + 2 * len(exps)), 1)
     fit: Optional[AugFit] = None
     done = 0
@@ -680,7 +688,10 @@ def fit_own(
         raise
     except BoucWenIdError:
         return math.inf, np.full(p, np.nan)
-    r = e.ybar - y
+    r = free_dc.centred(
+        e, e.ybar - y, held_out=True
+    )  # a free DC (free_dc.py): the residual's mean has no weight
+    jo = free_dc.centred(e, jo, held_out=True)
     cost = e.weight * float(r @ r)
     lam = 1e-3
     for _ in range(OWN_MAX_ITER):
@@ -697,7 +708,8 @@ def fit_own(
         except BoucWenIdError:
             lam *= 10.0
             continue
-        r2 = e.ybar - y2
+        r2 = free_dc.centred(e, e.ybar - y2, held_out=True)
+        jo2 = free_dc.centred(e, jo2, held_out=True)
         c2 = e.weight * float(r2 @ r2)
         if c2 < cost:
             done = (cost - c2) <= 1e-10 * cost
@@ -709,7 +721,7 @@ def fit_own(
             lam *= 10.0
             if lam > 1e12:
                 break
-    return cost, y
+    return cost, (e.ybar - r if free_dc.count([e], held_out=True) else y)  # a free DC: the data's own
 
 
 def physical(fit: AugFit, s: Scale, term: str) -> tuple[float, float]:

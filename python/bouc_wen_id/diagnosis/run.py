@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import math
 import time
-import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from typing import Any, Optional
@@ -13,11 +12,11 @@ import numpy as np
 
 from ..augmented import AugExperiment, AugFit
 from ..budget import check_environment
-from ..errors import InvalidParameterError, TransientWarning
+from ..errors import InvalidParameterError
 from ..estimators import boundary_note
 from ..terms import DIAGNOSIS_CANDIDATES, TERMS, Distortion, Offset, physical_value
 from ..validation import real_number
-from . import baseline
+from . import baseline, free_dc
 from .caveats import alternatives_text, below_saturation, family_text
 from .data import DiagExperiment, colour_notes, prepare
 from .drift import (
@@ -49,6 +48,14 @@ from .pinch_shape import is_pinching
 from .progress import Progress, ProgressCallback, reporter
 from .result import Diagnosis, ModelSummary, NamedTerm, Status, term_symbol_unit
 from .select import ALPHA, Alternative, FoldCache, Step, dof_of, forward_select, held_out
+from .settling import (  # noqa: F401 (quantisation_step: importable here as before)
+    _check_experiments,
+    _check_sizes,
+    _noise_floors,
+    _settled,
+    _unsettled,
+    quantisation_step,
+)
 from .shape import has_branch
 from .structure import with_structure
 
@@ -109,7 +116,7 @@ def _summary(
         v, se = physical(fit, s, t)
         sym, unit = term_symbol_unit(t, *units)
         terms.append(NamedTerm(t, sym, v, se, unit))
-    dof = sum(e.ybar.size for e in sx) - (3 + len(par.terms) + 2 * len(sx))
+    dof = sum(a.ybar.size - e.baseline_removed for a, e in zip(sx, exps)) - (3 + len(par.terms) + 2 * len(sx))
     noise_dof = sum(e.noise_dof for e in exps)
     nr = []
     for e, y in zip(sx, fit.outputs):
@@ -371,222 +378,11 @@ class _Setup:
     skipped: dict[str, str]
     #: False when some experiment's noise floor is not measured noise (quantisation or numerical accuracy).
     measured_noise: bool = True
+    #: The wandering baseline's free DCs (free_dc.py): None without a wander, else whether the common
+    #: centre was kept (then only the experiments' DCs about their common one are free).
+    common_dc: Optional[bool] = None
     #: Where the stages are reported (:mod:`.progress`; quiet by default).
     report: ProgressCallback = lambda stage, done, total: None
-
-
-def _settled(experiments: Any) -> tuple[Any, list[str]]:
-    """The recordings with their start-up transient trimmed, as ``identify`` trims it (TransientWarning).
-
-    A recording whose first periods differ from its steady ones beyond the noise (``transient_periods``)
-    is trimmed when the rest then shows no trend (:func:`_trending`): a transient decays, a drift goes on.
-    A drift that goes on through the record
-    (a degrading specimen, a loop still settling slowly) is left for the degradation test and the
-    per-experiment drift test (:func:`_unsettled`), which keep physics from being named from it.
-    """
-    from ..model import Recording
-    from ..prepare import transient_periods
-
-    seq = list(experiments) if isinstance(experiments, (list, tuple)) else [experiments]
-    notes: list[str] = []
-    out: list[Any] = []
-    for i, item in enumerate(seq):
-        if not isinstance(item, Recording):
-            out.append(item)
-            continue
-        p, s = item.samples_per_period, item.settle_periods
-        n = item.whole_periods - s
-        extra = transient_periods(item.y, p, s, n)
-        if extra and _within_quantisation(item.y, p, s, n, extra):
-            extra = 0  # a difference within the output's quantisation is no transient
-        if extra and n - extra >= 4 and not _trending(item.y, p, s + extra, n - extra):
-            source = item.metadata.get("name", f"recording {i}")
-            msg = (
-                f"{source}: the first {extra} of the {n} periods after {s} settling ones are still transient "
-                f"(they differ from the steady periods beyond the noise); they were dropped, settle_periods "
-                f"= {s + extra} is used"
-            )
-            warnings.warn(msg + ". Pass recordings with more settle_periods to choose", TransientWarning, 3)
-            notes.append(msg)
-            item = Recording(
-                item.t,
-                item.u,
-                item.y,
-                item.amplitude,
-                item.frequency,
-                settle_periods=s + extra,
-                x=item.x,
-                w=item.w,
-                plant=item.plant,
-                metadata=item.metadata,
-            )
-        out.append(item)
-    return out, notes
-
-
-#: Level of the trend test that keeps a drift (which goes on after the trimmed periods) from being trimmed
-#: as a transient: generous, so that a degradation is not cut away.
-TREND_LEVEL = 0.05
-
-
-def _within_quantisation(y: Any, p: int, s: int, n: int, extra: int) -> bool:
-    """True when ``y`` is quantised and its first ``extra`` periods differ from the steady ones (the last
-    half) by no more than the quantisation noise, ``2 q^2 / 12`` per sample (identify's transient test has
-    only the period-to-period spread as its noise, which is 0 for a quantised output that repeats)."""
-    q = quantisation_step(y)
-    if q <= 0.0:
-        return False
-    seg = np.asarray(y[s * p : (s + n) * p], dtype=np.float64).reshape(n, p)
-    ref = seg[n // 2 :].mean(axis=0)
-    dev = np.mean((seg[:extra] - ref) ** 2, axis=1)
-    return bool(np.all(dev <= 2.0 * q * q / 12.0))
-
-
-def _trending(y: Any, p: int, s: int, n: int) -> bool:
-    """Whether periods ``s .. s + n`` still trend (per-period DC or fundamental amplitude against the
-    period index, locate's t-test, at :data:`TREND_LEVEL`)."""
-    from .data import _period_features
-    from .locate import _t_sf2, _trend
-
-    rows = np.asarray(y[s * p : (s + n) * p], dtype=np.float64).reshape(n, p)
-    dc, h1 = _period_features(rows)
-    amp = np.abs(h1)
-    _, ht, dof = _trend(amp / (float(np.mean(amp)) or 1.0))
-    _, dt, _ = _trend(dc)
-    return min(_t_sf2(ht, dof), _t_sf2(dt, dof)) < 0.5 * TREND_LEVEL
-
-
-def _check_sizes(experiments: Any) -> None:
-    """Refuse, before any arithmetic on them, inputs and outputs whose squares leave the floating-point
-    range (U = 1e300 overflowed in the noise floor, the input's waveform and prepare.py)."""
-    from ..errors import ZeroAmplitudeError
-    from ..prepare import SCALE_MAX, SCALE_MIN
-
-    seq = experiments if isinstance(experiments, (list, tuple)) else [experiments]
-    for i, item in enumerate(seq):
-        sizes = []
-        if hasattr(item, "amplitude"):
-            sizes.append(("input amplitude", abs(float(item.amplitude)), SCALE_MIN))
-        for name, what in (("u", "input"), ("y", "output"), ("ybar", "output")):
-            v = getattr(item, name, None)
-            if isinstance(v, np.ndarray) and v.size:
-                peak = float(np.max(np.abs(v)))
-                sizes.append((what, peak, SCALE_MIN if name == "u" else 0.0))
-        for what, size, low in sizes:
-            if not low <= size <= SCALE_MAX:
-                raise ZeroAmplitudeError(
-                    f"item {i}: the {what} is of size {size:.3e}, outside [{low:g}, {SCALE_MAX:g}]: squares "
-                    "of it leave the floating-point range; express the data in units that keep it there"
-                )
-
-
-def _check_experiments(exps: Sequence[DiagExperiment]) -> None:
-    """Refuse, as ``identify`` does, an output with no response at the excitation (a wrong channel, pure
-    noise: nothing physical can be named from it) and sizes whose squares leave the floating-point range."""
-    from ..errors import ZeroAmplitudeError
-    from ..prepare import SCALE_MAX, SCALE_MIN, _check_response
-
-    for e in exps:
-        peak = float(np.max(np.abs(e.ybar)))
-        for what, size in (("input amplitude", abs(e.amplitude)), ("output", peak)):
-            if not SCALE_MIN <= size <= SCALE_MAX:
-                raise ZeroAmplitudeError(
-                    f"{e.source}: the {what} is of size {size:.3e}, outside [{SCALE_MIN:g}, {SCALE_MAX:g}]: "
-                    "express the data in units that keep it there (e.g. mm instead of km)"
-                )
-        dc = float(np.mean(e.ybar))
-        _check_response(e.ybar - dc, abs(dc), e.noise_var, e.periods, e.source)
-
-
-#: Fewest distinct output levels, relative to the samples, below which the output is read as quantised.
-QUANTISED_LEVELS = 0.25
-
-
-def quantisation_step(y: Any) -> float:
-    """The output's quantisation step (0 when the samples are not on a grid of steps)."""
-    v = np.asarray(y, dtype=np.float64).ravel()
-    levels = np.unique(v[np.isfinite(v)])
-    if levels.size < 2 or levels.size > QUANTISED_LEVELS * v.size:
-        return 0.0
-    q = float(np.min(np.diff(levels)))
-    k = (levels - levels[0]) / q
-    tol = 1e-6 * max(1.0, float(k[-1]))
-    return q if float(np.max(np.abs(k - np.round(k)))) <= tol else 0.0
-
-
-#: The numerical accuracy of a simulated loop relative to the output's peak: below it a noise floor is
-#: rounding, not noise. Noise-free data carry their generator's discretisation error (measured: 4e-8 of the
-#: peak for the demo plant at 1024 samples per period, 2e-6 for a resonant G with a delay at 64 samples and
-#: 8 substeps), which a floor of rounding (1e-15) turned into "unexplained structure remains". 1e-5 of the
-#: peak is below a 16-bit converter's own quantisation noise (4e-6 of its full range).
-NUMERICAL_RTOL = 1e-5
-
-
-def _noise_floors(items: Any, exps: list[DiagExperiment]) -> tuple[list[DiagExperiment], list[str]]:
-    """Every experiment's noise variance at least the model's numerical accuracy,
-    ``(NUMERICAL_RTOL max |ybar|)^2``, and, when it is below the output's quantisation step q, at least
-    ``N q^2 / 12`` (the averaged period's error is then the repeated quantisation error, q^2/12).
-
-    Quantised outputs can repeat a period exactly: the variance from neighbouring periods is then 0 (or far
-    below a step) and a weight ``N / sigma^2`` absurd (a degradation chi-square of 1.4e26 on the MR damper's
-    1 A files); noise-free data have a floor of rounding, far below what any model reproduces. The notes
-    say where a floor applied (the tests there are conservative, and a numerical floor is no measured
-    noise).
-    """
-    seq = list(items) if isinstance(items, (list, tuple)) else [items]
-    q = max((quantisation_step(it.y) for it in seq if hasattr(it, "y")), default=0.0)
-    out, notes = [], []
-    for e in exps:
-        numerical = (NUMERICAL_RTOL * float(np.max(np.abs(e.ybar)))) ** 2
-        floor = numerical
-        if e.noise_var < q * q / 12.0:
-            # Without noise to dither it, the quantisation error repeats every period: the averaged period
-            # keeps all of it (variance q^2/12), so its weight is at most 12 / q^2.
-            floor = max(floor, e.periods * q * q / 12.0)
-        if e.noise_var < floor:
-            what = (
-                f"below the output's quantisation step q = {q:.3g}: the quantisation error repeats every "
-                "period and does not average out, so the averaged period's error is taken as q^2/12 (noise "
-                f"variance {floor:.3g}); the tests on this experiment are conservative"
-                if floor > numerical
-                else f"below the model's numerical accuracy ({NUMERICAL_RTOL:g} of the output's peak); the "
-                f"noise floor is taken as that accuracy, variance {floor:.3g} (noise-free data: the tests "
-                "compare the model with its own precision, not with a measured noise)"
-            )
-            notes.append(f"{e.source}: the period-to-period noise (variance {e.noise_var:.3g}) is {what}")
-            e = replace(e, noise_var=floor, spread_var=max(e.spread_var, floor))
-        out.append(e)
-    return out, notes
-
-
-def _unsettled(exps: Sequence[DiagExperiment]) -> list[int]:
-    """Indices of the experiments whose loop drifts from period to period: locate's trend test of the
-    per-period DC and fundamental amplitude, per experiment, Bonferroni over them at half the level, with
-    each slope's standard error at least what the noise floor gives (rounding in noise-free data trends
-    "significantly" against its own scatter)."""
-    from .locate import LEVEL, _t_sf2, _trend
-
-    tested = [i for i, e in enumerate(exps) if e.h1.size >= 4]
-    level = 0.5 * LEVEL / max(len(tested), 1)
-    out = []
-    for i in tested:
-        e = exps[i]
-        n, p = e.h1.size, e.samples_per_period
-        k2 = float(n * (n * n - 1) / 12.0)  # sum of the centred period indices squared
-        amp = np.abs(e.h1)
-        ref = float(np.mean(amp)) or 1.0
-        pvals = []
-        for values, sd in (
-            (amp / ref, math.sqrt(2.0 * e.noise_var / p) / ref),
-            (e.dc, math.sqrt(e.noise_var / p)),
-        ):
-            slope, t, dof = _trend(np.asarray(values, dtype=np.float64))
-            se = abs(slope / t) if t and math.isfinite(t) else 0.0
-            se = max(se, sd / math.sqrt(k2))
-            pvals.append(_t_sf2(slope / se, dof) if se > 0 else 1.0)
-        if min(1.0, 2.0 * min(pvals)) < level:
-            out.append(i)
-    return out
 
 
 def diagnose(
@@ -674,7 +470,9 @@ def _diagnose(
     wander = baseline.detect(experiments, alpha / max(len(cands), 1))  # a wandering zero (baseline.py)
     items, notes = _settled(baseline.removed(experiments, wander))
     exps, qnotes = _noise_floors(items, prepare(items))
-    notes = [*notes, *colour_notes(exps), *([wander.note()] if wander else [])]  # coloured noise: data.py
+    # Coloured noise (data.py) and the wander's note, or why a short record's wander was not tested.
+    short = None if wander else baseline.short_note(experiments)
+    notes = [*notes, *colour_notes(exps), *([wander.note()] if wander else [short] if short else [])]
     _check_experiments(exps)
     skipped: dict[str, str] = {}
     if Distortion.kind in cands and not any(e.distorted for e in exps):
@@ -684,7 +482,10 @@ def _diagnose(
             "not tested: every input is a pure sine (no harmonic above its noise floor), so the measured "
             "waveform adds nothing to the model"
         )
-    setup = _Setup(cands, float(alpha), held_out_test, units, skipped, not qnotes, report)
+    common = None if wander is None else wander.kept
+    setup = _Setup(
+        cands, float(alpha), held_out_test, units, skipped, not qnotes, report=report, common_dc=common
+    )
     d = _diagnose_set(exps, setup, [*notes, *qnotes])
     named_deg = any(t.term in DRIFT_TERMS for t in d.named)
     drifting = [] if named_deg else _unsettled(exps)
@@ -759,11 +560,20 @@ def _drift_stage(
     return deg, fexps, fsx, start
 
 
+def _scaled(exps: list[DiagExperiment], s: Scale, setup: _Setup) -> list[AugExperiment]:
+    """The experiments in the fits' units; under a wandering baseline each marked experiment's DC free
+    (free_dc.py: the averaged period's DC was set, not measured)."""
+    sx = scaled(exps, s)
+    if setup.common_dc is None:
+        return sx
+    return free_dc.marked(sx, [e.baseline_removed for e in exps], setup.common_dc)
+
+
 def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -> Diagnosis:
     """One diagnosis of checked experiments: the plain fit, degradation, the steady selection, the verdict."""
     cands, alpha = setup.cands, setup.alpha
     s = scale_of(exps)
-    sx = scaled(exps, s)
+    sx = _scaled(exps, s, setup)
     substeps = substeps_for([e.ybar.size for e in sx])
     setup.report("fitting the plain model", 0, 1)
     plain = fit_plain(exps, sx, s, substeps)

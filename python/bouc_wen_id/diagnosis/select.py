@@ -43,7 +43,7 @@ from numpy.typing import NDArray
 from ..augmented import AugExperiment, AugFit, augmented_output
 from ..errors import BudgetExceededError
 from ..terms import TERMS, Stiffness, physical_value
-from . import speed
+from . import free_dc, speed
 from .fitting import best_of, fit_from, fit_own, fit_with, subset
 from .pinch_shape import band_test, is_pinching
 from .shape import LAW_WINDOW, shape_test, spectral_meat
@@ -205,7 +205,7 @@ def n_params(fit: AugFit) -> int:
 
 
 def dof_of(exps: Sequence[AugExperiment], fit: AugFit) -> int:
-    return sum(e.ybar.size for e in exps) - n_params(fit)
+    return sum(e.ybar.size for e in exps) - n_params(fit) - free_dc.spent(exps)
 
 
 def folds(m: int) -> list[int]:
@@ -327,8 +327,8 @@ def law_test(exps: Sequence[AugExperiment], fit: AugFit, term: str, substeps: in
             for j, k in enumerate(ks):
                 x[:, nsh + 2 * m + j * m + i] = out.jacobian[:, k]
             sw = math.sqrt(e.weight)
-            xs.append(sw * x)
-            res.append(sw * (e.ybar - out.y))
+            xs.append(sw * free_dc.centred(e, x))  # a free DC (free_dc.py): no weight on the mean
+            res.append(sw * free_dc.centred(e, e.ybar - out.y))
     except BudgetExceededError:
         raise  # the user's budget is theirs: never turned into "the law is not tested"
     except Exception:  # noqa: BLE001 - a model the core cannot differentiate: the law is not tested
@@ -339,7 +339,7 @@ def law_test(exps: Sequence[AugExperiment], fit: AugFit, term: str, substeps: in
     scale = np.linalg.norm(xa, axis=0) + 1e-300
     xa = xa / scale
     sv = np.linalg.svd(xa, compute_uv=False)
-    rank = int(np.sum(sv > 1e-10 * sv[0]))
+    rank = int(np.sum(sv > 1e-10 * sv[0])) + free_dc.count(exps)  # + the centred DCs' dof
     beta = np.linalg.lstsq(xa, r, rcond=1e-10)[0]
     if r.size - rank < 1:
         return math.nan

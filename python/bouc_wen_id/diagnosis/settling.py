@@ -1,0 +1,233 @@
+"""Which periods and experiments are fit to diagnose: the settling trimmed, sizes and responses checked, the
+noise floors bounded below (quantisation, numerical accuracy), and the experiments whose loop still drifts.
+
+Moved out of ``run.py`` (layout headroom, issue 18); ``run`` imports these names, so they stay importable
+from there too.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from collections.abc import Sequence
+from dataclasses import replace
+from typing import Any
+
+import numpy as np
+
+from ..errors import TransientWarning
+from .data import DiagExperiment
+
+
+def _settled(experiments: Any) -> tuple[Any, list[str]]:
+    """The recordings with their start-up transient trimmed, as ``identify`` trims it (TransientWarning).
+
+    A recording whose first periods differ from its steady ones beyond the noise (``transient_periods``)
+    is trimmed when the rest then shows no trend (:func:`_trending`): a transient decays, a drift goes on.
+    A drift that goes on through the record
+    (a degrading specimen, a loop still settling slowly) is left for the degradation test and the
+    per-experiment drift test (:func:`_unsettled`), which keep physics from being named from it.
+    """
+    from ..model import Recording
+    from ..prepare import transient_periods
+
+    seq = list(experiments) if isinstance(experiments, (list, tuple)) else [experiments]
+    notes: list[str] = []
+    out: list[Any] = []
+    for i, item in enumerate(seq):
+        if not isinstance(item, Recording):
+            out.append(item)
+            continue
+        p, s = item.samples_per_period, item.settle_periods
+        n = item.whole_periods - s
+        extra = transient_periods(item.y, p, s, n)
+        if extra and _within_quantisation(item.y, p, s, n, extra):
+            extra = 0  # a difference within the output's quantisation is no transient
+        if extra and n - extra >= 4 and not _trending(item.y, p, s + extra, n - extra):
+            source = item.metadata.get("name", f"recording {i}")
+            msg = (
+                f"{source}: the first {extra} of the {n} periods after {s} settling ones are still transient "
+                f"(they differ from the steady periods beyond the noise); they were dropped, settle_periods "
+                f"= {s + extra} is used"
+            )
+            warnings.warn(msg + ". Pass recordings with more settle_periods to choose", TransientWarning, 3)
+            notes.append(msg)
+            item = Recording(
+                item.t,
+                item.u,
+                item.y,
+                item.amplitude,
+                item.frequency,
+                settle_periods=s + extra,
+                x=item.x,
+                w=item.w,
+                plant=item.plant,
+                metadata=item.metadata,
+            )
+        out.append(item)
+    return out, notes
+
+
+#: Level of the trend test that keeps a drift (which goes on after the trimmed periods) from being trimmed
+#: as a transient: generous, so that a degradation is not cut away.
+TREND_LEVEL = 0.05
+
+
+def _within_quantisation(y: Any, p: int, s: int, n: int, extra: int) -> bool:
+    """True when ``y`` is quantised and its first ``extra`` periods differ from the steady ones (the last
+    half) by no more than the quantisation noise, ``2 q^2 / 12`` per sample (identify's transient test has
+    only the period-to-period spread as its noise, which is 0 for a quantised output that repeats)."""
+    q = quantisation_step(y)
+    if q <= 0.0:
+        return False
+    seg = np.asarray(y[s * p : (s + n) * p], dtype=np.float64).reshape(n, p)
+    ref = seg[n // 2 :].mean(axis=0)
+    dev = np.mean((seg[:extra] - ref) ** 2, axis=1)
+    return bool(np.all(dev <= 2.0 * q * q / 12.0))
+
+
+def _trending(y: Any, p: int, s: int, n: int) -> bool:
+    """Whether periods ``s .. s + n`` still trend (per-period DC or fundamental amplitude against the
+    period index, locate's t-test, at :data:`TREND_LEVEL`)."""
+    from .data import _period_features
+    from .locate import _t_sf2, _trend
+
+    rows = np.asarray(y[s * p : (s + n) * p], dtype=np.float64).reshape(n, p)
+    dc, h1 = _period_features(rows)
+    amp = np.abs(h1)
+    _, ht, dof = _trend(amp / (float(np.mean(amp)) or 1.0))
+    _, dt, _ = _trend(dc)
+    return min(_t_sf2(ht, dof), _t_sf2(dt, dof)) < 0.5 * TREND_LEVEL
+
+
+def _check_sizes(experiments: Any) -> None:
+    """Refuse, before any arithmetic on them, inputs and outputs whose squares leave the floating-point
+    range (U = 1e300 overflowed in the noise floor, the input's waveform and prepare.py)."""
+    from ..errors import ZeroAmplitudeError
+    from ..prepare import SCALE_MAX, SCALE_MIN
+
+    seq = experiments if isinstance(experiments, (list, tuple)) else [experiments]
+    for i, item in enumerate(seq):
+        sizes = []
+        if hasattr(item, "amplitude"):
+            sizes.append(("input amplitude", abs(float(item.amplitude)), SCALE_MIN))
+        for name, what in (("u", "input"), ("y", "output"), ("ybar", "output")):
+            v = getattr(item, name, None)
+            if isinstance(v, np.ndarray) and v.size:
+                peak = float(np.max(np.abs(v)))
+                sizes.append((what, peak, SCALE_MIN if name == "u" else 0.0))
+        for what, size, low in sizes:
+            if not low <= size <= SCALE_MAX:
+                raise ZeroAmplitudeError(
+                    f"item {i}: the {what} is of size {size:.3e}, outside [{low:g}, {SCALE_MAX:g}]: squares "
+                    "of it leave the floating-point range; express the data in units that keep it there"
+                )
+
+
+def _check_experiments(exps: Sequence[DiagExperiment]) -> None:
+    """Refuse, as ``identify`` does, an output with no response at the excitation (a wrong channel, pure
+    noise: nothing physical can be named from it) and sizes whose squares leave the floating-point range."""
+    from ..errors import ZeroAmplitudeError
+    from ..prepare import SCALE_MAX, SCALE_MIN, _check_response
+
+    for e in exps:
+        peak = float(np.max(np.abs(e.ybar)))
+        for what, size in (("input amplitude", abs(e.amplitude)), ("output", peak)):
+            if not SCALE_MIN <= size <= SCALE_MAX:
+                raise ZeroAmplitudeError(
+                    f"{e.source}: the {what} is of size {size:.3e}, outside [{SCALE_MIN:g}, {SCALE_MAX:g}]: "
+                    "express the data in units that keep it there (e.g. mm instead of km)"
+                )
+        dc = float(np.mean(e.ybar))
+        _check_response(e.ybar - dc, abs(dc), e.noise_var, e.periods, e.source)
+
+
+#: Fewest distinct output levels, relative to the samples, below which the output is read as quantised.
+QUANTISED_LEVELS = 0.25
+
+
+def quantisation_step(y: Any) -> float:
+    """The output's quantisation step (0 when the samples are not on a grid of steps)."""
+    v = np.asarray(y, dtype=np.float64).ravel()
+    levels = np.unique(v[np.isfinite(v)])
+    if levels.size < 2 or levels.size > QUANTISED_LEVELS * v.size:
+        return 0.0
+    q = float(np.min(np.diff(levels)))
+    k = (levels - levels[0]) / q
+    tol = 1e-6 * max(1.0, float(k[-1]))
+    return q if float(np.max(np.abs(k - np.round(k)))) <= tol else 0.0
+
+
+#: The numerical accuracy of a simulated loop relative to the output's peak: below it a noise floor is
+#: rounding, not noise. Noise-free data carry their generator's discretisation error (measured: 4e-8 of the
+#: peak for the demo plant at 1024 samples per period, 2e-6 for a resonant G with a delay at 64 samples and
+#: 8 substeps), which a floor of rounding (1e-15) turned into "unexplained structure remains". 1e-5 of the
+#: peak is below a 16-bit converter's own quantisation noise (4e-6 of its full range).
+NUMERICAL_RTOL = 1e-5
+
+
+def _noise_floors(items: Any, exps: list[DiagExperiment]) -> tuple[list[DiagExperiment], list[str]]:
+    """Every experiment's noise variance at least the model's numerical accuracy,
+    ``(NUMERICAL_RTOL max |ybar|)^2``, and, when it is below the output's quantisation step q, at least
+    ``N q^2 / 12`` (the averaged period's error is then the repeated quantisation error, q^2/12).
+
+    Quantised outputs can repeat a period exactly: the variance from neighbouring periods is then 0 (or far
+    below a step) and a weight ``N / sigma^2`` absurd (a degradation chi-square of 1.4e26 on the MR damper's
+    1 A files); noise-free data have a floor of rounding, far below what any model reproduces. The notes
+    say where a floor applied (the tests there are conservative, and a numerical floor is no measured
+    noise).
+    """
+    seq = list(items) if isinstance(items, (list, tuple)) else [items]
+    q = max((quantisation_step(it.y) for it in seq if hasattr(it, "y")), default=0.0)
+    out, notes = [], []
+    for e in exps:
+        numerical = (NUMERICAL_RTOL * float(np.max(np.abs(e.ybar)))) ** 2
+        floor = numerical
+        if e.noise_var < q * q / 12.0:
+            # Without noise to dither it, the quantisation error repeats every period: the averaged period
+            # keeps all of it (variance q^2/12), so its weight is at most 12 / q^2.
+            floor = max(floor, e.periods * q * q / 12.0)
+        if e.noise_var < floor:
+            what = (
+                f"below the output's quantisation step q = {q:.3g}: the quantisation error repeats every "
+                "period and does not average out, so the averaged period's error is taken as q^2/12 (noise "
+                f"variance {floor:.3g}); the tests on this experiment are conservative"
+                if floor > numerical
+                else f"below the model's numerical accuracy ({NUMERICAL_RTOL:g} of the output's peak); the "
+                f"noise floor is taken as that accuracy, variance {floor:.3g} (noise-free data: the tests "
+                "compare the model with its own precision, not with a measured noise)"
+            )
+            notes.append(f"{e.source}: the period-to-period noise (variance {e.noise_var:.3g}) is {what}")
+            e = replace(e, noise_var=floor, spread_var=max(e.spread_var, floor))
+        out.append(e)
+    return out, notes
+
+
+def _unsettled(exps: Sequence[DiagExperiment]) -> list[int]:
+    """Indices of the experiments whose loop drifts from period to period: locate's trend test of the
+    per-period DC and fundamental amplitude, per experiment, Bonferroni over them at half the level, with
+    each slope's standard error at least what the noise floor gives (rounding in noise-free data trends
+    "significantly" against its own scatter)."""
+    from .locate import LEVEL, _t_sf2, _trend
+
+    tested = [i for i, e in enumerate(exps) if e.h1.size >= 4]
+    level = 0.5 * LEVEL / max(len(tested), 1)
+    out = []
+    for i in tested:
+        e = exps[i]
+        n, p = e.h1.size, e.samples_per_period
+        k2 = float(n * (n * n - 1) / 12.0)  # sum of the centred period indices squared
+        amp = np.abs(e.h1)
+        ref = float(np.mean(amp)) or 1.0
+        pvals = []
+        for values, sd in (
+            (amp / ref, math.sqrt(2.0 * e.noise_var / p) / ref),
+            (e.dc, math.sqrt(e.noise_var / p)),
+        ):
+            slope, t, dof = _trend(np.asarray(values, dtype=np.float64))
+            se = abs(slope / t) if t and math.isfinite(t) else 0.0
+            se = max(se, sd / math.sqrt(k2))
+            pvals.append(_t_sf2(slope / se, dof) if se > 0 else 1.0)
+        if min(1.0, 2.0 * min(pvals)) < level:
+            out.append(i)
+    return out

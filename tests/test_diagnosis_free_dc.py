@@ -1,0 +1,173 @@
+"""A free DC per experiment whose period means were taken out as a wandering baseline (issue 18, honest
+verdicts; ``diagnosis/free_dc.py``).
+
+Under a wandering baseline every period's mean is set to one common centre, so the averaged period's DC of
+such an experiment carries no information; an asymmetry (its own DC per experiment) fitted against it was
+"unexplained" (the designs bench's ``walk`` design, seeds 520000-520002). The fits now leave each marked
+experiment's DC free: the estimates cannot depend on it.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from dataclasses import replace
+from types import SimpleNamespace
+from typing import Any
+
+import bouc_wen_id as bw
+import numpy as np
+import pytest
+from bouc_wen_id.augmented import augmented_output
+from bouc_wen_id.diagnosis import free_dc
+from bouc_wen_id.diagnosis.data import prepare
+from bouc_wen_id.diagnosis.fitting import fit_from, fit_plain, scale_of, scaled, substeps_for
+from bouc_wen_id.diagnosis.select import dof_of
+
+TWO_PI = 2.0 * math.pi
+P = 64
+
+
+def _set(seed: int, m: int = 4) -> tuple[Any, Any, Any, int]:
+    """A NumPy-made saturating loop (no simulator: ``tanh`` of a lagging cosine, with a second harmonic, so
+    it is no Bouc-Wen loop) at ``m`` amplitudes and frequencies with white noise; its plain fit with an
+    asymmetry (at 0) added, as the start."""
+    rng = np.random.default_rng([seed, 44])
+    recs = []
+    for i in range(m):
+        om, amp = TWO_PI * (0.5 + 0.3 * i), 1.0 + 0.3 * i
+        t = np.arange(12 * P) * (TWO_PI / om / P)
+        y = np.tanh(2.0 * amp * np.cos(om * t - 0.3)) + 0.05 * np.cos(2.0 * om * t)
+        y = y + rng.normal(0, 0.01, t.size)
+        recs.append(bw.Recording(t, amp * np.cos(om * t), y, amp, om, settle_periods=2))
+    exps = prepare(recs)
+    s = scale_of(exps)
+    sx = scaled(exps, s)
+    substeps = substeps_for([e.ybar.size for e in sx])
+    plain = fit_plain(exps, sx, s, substeps)
+    start = replace(plain, params=plain.params.with_term("asymmetry", 0.0))  # a term with a DC of its own
+    return exps, sx, start, substeps
+
+
+@pytest.mark.parametrize("common", [False, True])
+def test_a_free_dc_fit_does_not_depend_on_the_experiments_dcs(common: bool) -> None:
+    """Shifting each marked experiment's DC by its own amount leaves the estimates, the cost and the
+    residuals as they were (each DC free; with ``common`` the DCs about their weighted mean, so the shifts
+    have weighted mean 0 there); the plain
+    fit's estimates do move. Each free residual's mean is 0 (its weight is 0), or one common value."""
+    _, sx, plain, substeps = _set(3)
+    free = free_dc.marked(sx, [True] * len(sx), common)
+    shifts = np.random.default_rng(7).normal(0.0, 0.2, len(sx))
+    if common:  # the DCs about their common one are free: shifts of weighted mean 0
+        wts = np.array([e.weight * e.ybar.size for e in sx])
+        shifts -= float(wts @ shifts / wts.sum())
+    moved = [replace(e, ybar=e.ybar + c) for e, c in zip(free, shifts)]
+    a = fit_from(free, plain.params, substeps)
+    b = fit_from(moved, plain.params, substeps)
+    assert a is not None and b is not None
+    np.testing.assert_allclose(b.params.shared, a.params.shared, rtol=1e-3, atol=1e-6)
+    assert b.cost == pytest.approx(a.cost, rel=1e-3)
+    means = [float(np.mean(e.ybar - y)) for e, y in zip(moved, b.outputs)]
+    if common:
+        assert np.ptp(means) < 1e-12 and abs(means[0]) > 1e-6  # the common DC is fitted, not free
+    else:
+        np.testing.assert_allclose(means, 0.0, atol=1e-12)
+    unmarked = [replace(e, ybar=e.ybar + c) for e, c in zip(sx, shifts)]
+    c = fit_from(unmarked, plain.params, substeps)
+    assert c is not None and not np.allclose(c.params.shared, a.params.shared, rtol=1e-3)
+    assert dof_of(free, a) == dof_of(sx, a) - len(sx) + common
+
+
+def test_a_free_dc_fit_solves_the_projected_problem_and_its_fisher_is_that_problems() -> None:
+    """At the profiled fit the gradient of the projected cost, ``J^T W P r``, vanishes (relative to the
+    size of the unprojected one), and its Fisher matrix is ``(P J)^T W (P J)`` formed here from the
+    Jacobian."""
+    _, sx, plain, substeps = _set(5)
+    shifts = np.random.default_rng(8).normal(0.0, 0.2, len(sx))
+    free = [replace(e, ybar=e.ybar + c) for e, c in zip(free_dc.marked(sx, [True] * len(sx), False), shifts)]
+    f = fit_from(free, plain.params, substeps)
+    assert f is not None
+    nsh, m = 3 + len(f.params.terms), len(free)
+    grad_p, grad, fisher = np.zeros(nsh + 2 * m), np.zeros(nsh + 2 * m), np.zeros((nsh + 2 * m,) * 2)
+    for i, e in enumerate(free):
+        out = augmented_output(e, f.params, i, substeps=substeps, jacobian=True)
+        j = np.zeros((e.ybar.size, nsh + 2 * m))
+        j[:, :nsh], j[:, nsh + 2 * i : nsh + 2 * i + 2] = out.jacobian, out.own_jacobian
+        r = e.ybar - out.y
+        jp, rp = j - j.mean(axis=0), r - r.mean()
+        grad_p += e.weight * (jp.T @ rp)
+        grad += e.weight * (j.T @ r)
+        fisher += e.weight * (jp.T @ jp)
+    assert np.max(np.abs(grad_p)) < 1e-2 * np.max(np.abs(grad))
+    np.testing.assert_allclose(f.fisher, fisher, rtol=1e-6, atol=1e-9 * np.max(np.abs(fisher)))
+
+
+def test_unmarked_experiments_are_fitted_as_before() -> None:
+    """No wander, no free DC: the fit is the core's own, bit for bit."""
+    from bouc_wen_id.diagnosis.fitting import _fit_from
+
+    _, sx, plain, substeps = _set(4)
+    a, b = fit_from(sx, plain.params, substeps), _fit_from(sx, plain.params, substeps, 200)
+    assert a is not None and b is not None
+    assert a.cost == b.cost and np.array_equal(a.params.shared, b.params.shared)
+    assert all(np.array_equal(x, y) for x, y in zip(a.outputs, b.outputs))
+    assert free_dc.spent(sx) == 0 and all(free_dc.centred(e, e.ybar) is e.ybar for e in sx)
+
+
+@pytest.mark.parametrize("seed", [520000, 520001, 520002])
+def test_an_asymmetry_under_a_wandering_baseline_is_named(helpers: SimpleNamespace, seed: int) -> None:
+    """The bench generator's plants (exact G, its own RK4; a NumPy random walk plus white noise, the designs
+    bench's ``walk``), a 10x asymmetry: "unexplained" before ("tested terms asymmetry remove 17 % of the
+    excess but leave structure the library does not model"), now named at its place."""
+    d = helpers.diagnose_quietly(helpers.designs_case("walk", "asymmetry", "", 10.0, seed))
+    assert "the baseline wanders" in d.verdict, d.summary()
+    assert d.status in ("explained", "partly explained"), d.summary()
+    assert "asymmetry" in [t.term for t in d.named], d.summary()
+
+
+def _short(kind: str, seed: int) -> list[Any]:
+    """7 periods after settling of test_diagnosis_baseline's NumPy-made loop (a ``tanh`` loop, no simulator)
+    with white noise and: a random walk of 0.1 noise sd per sample, AR(1) noise, a settling centre."""
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).with_name("test_diagnosis_baseline.py")
+    spec = importlib.util.spec_from_file_location("_tb", path)
+    assert spec is not None and spec.loader is not None
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    recs: list[Any] = mod._recs(kind, seed, periods=7, step=0.1)
+    return recs
+
+
+def test_a_wander_in_records_too_short_to_test_is_said() -> None:
+    """Fewer than 8 periods after settling: the wander test needs the last half of the periods to tell a
+    wander from a transient, so the baseline is not removed; the notes now say the period means may wander
+    (before: nothing). White and AR(1) noise and a settling centre give no such note."""
+    from bouc_wen_id.diagnosis import baseline
+
+    said = [seed for seed in range(8) if baseline.short_note(_short("walk", seed)) is not None]
+    assert len(said) >= 3, said
+    for kind in ("white", "ar1", "settling"):
+        assert all(baseline.short_note(_short(kind, seed)) is None for seed in range(8)), kind
+    recs = _short("walk", said[0])
+    assert baseline.detect(recs, 0.05 / 20) is None
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the transient trim's warning, if any: the notes are read here
+        d = bw.diagnose(recs, candidates=["offset"])
+    assert any("may wander" in n and "8 periods" in n for n in d.notes), d.notes
+
+
+def test_diagnose_across_removes_a_wandering_baseline(helpers: SimpleNamespace) -> None:
+    """``diagnose_across`` on two conditions of the designs bench's ``walk`` (its plants, a NumPy walk):
+    with a 10x asymmetry at both, "nothing named" before (the wander was left in the averaged periods), now
+    asymmetry at every condition, and the verdict says the baseline wanders; noise alone names nothing."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        asym = [helpers.designs_case("walk", "asymmetry", "", 10.0, s) for s in (520000, 520001)]
+        a = bw.diagnose_across(asym, condition=[0.0, 1.0])
+        null = [helpers.designs_case("walk", None, "", 0.0, s) for s in (100001, 100002)]
+        n = bw.diagnose_across(null, condition=[0.0, 1.0])
+    assert [t.term for t in a.terms] == ["asymmetry"], a.verdict
+    assert "the baseline wanders at 0, 1" in a.verdict
+    assert n.terms == () and "nothing named" in n.verdict and "the baseline wanders" in n.verdict, n.verdict
