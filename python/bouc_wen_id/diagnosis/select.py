@@ -44,6 +44,7 @@ from ..augmented import AugExperiment, AugFit, augmented_output
 from ..errors import BudgetExceededError
 from ..terms import TERMS, Stiffness, physical_value
 from . import free_dc, speed
+from .beside import only_beside
 from .fitting import best_of, fit_from, fit_own, fit_with, subset
 from .pinch_shape import band_test, is_pinching
 from .shape import LAW_WINDOW, shape_test, spectral_meat
@@ -702,8 +703,11 @@ def forward_select(
         chosen: Optional[Trial] = None
         final_trials = {tr.term: tr for tr in trials}
         law_failed: list[str] = []
+        alone = {t.term: t.p_value for t in steps[0].trials} if steps else {}
         for tr in order:
             assert tr.fit is not None
+            if only_beside(current, tr.term, alone.get(tr.term, math.nan), alpha):
+                continue  # needed only beside a Dahl element: its branch's family, not a term (beside.py)
             law_p = element_law_test(exps, tr.fit, tr.term, substeps)
             if math.isfinite(law_p) and law_p < LAW_ALPHA:
                 final_trials[tr.term] = replace(tr, law_p_value=law_p)
