@@ -298,6 +298,37 @@ def test_the_code_name_scan_reads_every_registry_module() -> None:
     assert set(REGISTRY_MODULES) <= seen and not seen & {"terms/__init__.py", "terms/_base.py"}
 
 
+#: Where each registry module's terms act (docs/design.md 9.1: a new term is a class in its place's module).
+MODULE_PLACES = {
+    "terms/_on_output.py": {Place.OUTPUT},
+    "terms/_mechanical.py": {Place.INPUT, Place.X},
+    "terms/_hysteretic.py": {Place.HYSTERESIS},
+}
+
+
+def test_each_term_class_is_defined_once_in_the_module_of_its_place() -> None:
+    import ast
+
+    root = Path(bw.__file__).parent
+    assert set(MODULE_PLACES) == set(REGISTRY_MODULES)
+    defined: dict[str, list[str]] = {}
+    for rel in (p.relative_to(root).as_posix() for p in (root / "terms").glob("*.py")):
+        tree = ast.parse((root / rel).read_text(encoding="utf-8"))
+        for node in tree.body:
+            if isinstance(node, ast.ClassDef):
+                defined.setdefault(node.name, []).append(rel)
+    for cls in TERMS.values():
+        homes = defined.get(cls.__name__, [])
+        assert len(homes) == 1 and homes[0] in MODULE_PLACES, (cls.__name__, homes)
+        assert cls.acts_on in MODULE_PLACES[homes[0]], (cls.__name__, homes[0], cls.acts_on)
+    # The protocol module holds the protocol only: no term class.
+    assert {name for name, homes in defined.items() if "terms/_base.py" in homes} == {
+        "Place",
+        "StartContext",
+        "Term",
+    }
+
+
 @pytest.mark.parametrize("name", list(USUAL))
 def test_a_code_name_is_spelled_in_at_most_three_files(name: str) -> None:
     """Issue 17: a term's code name is written as a string in three files only: its class's module in the
