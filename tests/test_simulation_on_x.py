@@ -200,7 +200,7 @@ def test_a_sampled_sine_gives_the_sine_terms_on_x() -> None:
 
 
 def test_on_x_terms_follow_the_alpha_normalisation() -> None:
-    # G -> alpha G with k, c, m on x divided by alpha (terms.py normalized) leaves y unchanged.
+    # G -> alpha G with k, c, m on x divided by alpha (Term.normalized) leaves y unchanged.
     alpha = 2.5
     plant = WienerPlant(
         _resonant(), BoucWen(0.8 * alpha, 0.2 * alpha, 1.6, alpha=alpha), _on_x(0.25, 0.03, 0.004, 0.08)

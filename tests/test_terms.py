@@ -10,6 +10,7 @@ from __future__ import annotations
 import hashlib
 import json
 import math
+import pickle
 from dataclasses import FrozenInstanceError
 from pathlib import Path
 from typing import Any
@@ -37,6 +38,7 @@ from bouc_wen_id.terms import (
     Stiffness,
     Term,
     Viscous,
+    ViscousX,
     core_terms,
     parse_terms,
     term_from_dict,
@@ -282,14 +284,64 @@ def _rust_literal_files(name: str) -> list[str]:
     return out
 
 
+#: The registry's modules that hold term classes (``terms/__init__.py`` is the registry's list: classes only).
+REGISTRY_MODULES = ("terms/_on_output.py", "terms/_mechanical.py", "terms/_hysteretic.py")
+
+
+def test_the_code_name_scan_reads_every_registry_module() -> None:
+    # The rule below is only as good as its scan: every module of the registry package is read, and each
+    # module that holds terms spells some code name (a new module of terms is scanned without a change here).
+    root = Path(bw.__file__).parent
+    modules = sorted(p.relative_to(root).as_posix() for p in (root / "terms").glob("*.py"))
+    assert modules == sorted(("terms/__init__.py", "terms/_base.py", *REGISTRY_MODULES))
+    seen = {f for name in USUAL for f in _literal_files(name)}
+    assert set(REGISTRY_MODULES) <= seen and not seen & {"terms/__init__.py", "terms/_base.py"}
+
+
+#: Where each registry module's terms act (docs/design.md 9.1: a new term is a class in its place's module).
+MODULE_PLACES = {
+    "terms/_on_output.py": {Place.OUTPUT},
+    "terms/_mechanical.py": {Place.INPUT, Place.X},
+    "terms/_hysteretic.py": {Place.HYSTERESIS},
+}
+
+
+def test_each_term_class_is_defined_once_in_the_module_of_its_place() -> None:
+    import ast
+
+    root = Path(bw.__file__).parent
+    assert set(MODULE_PLACES) == set(REGISTRY_MODULES)
+    defined: dict[str, list[str]] = {}
+    for rel in (p.relative_to(root).as_posix() for p in (root / "terms").glob("*.py")):
+        tree = ast.parse((root / rel).read_text(encoding="utf-8"))
+        for node in tree.body:
+            if isinstance(node, ast.ClassDef):
+                defined.setdefault(node.name, []).append(rel)
+    for cls in TERMS.values():
+        homes = defined.get(cls.__name__, [])
+        assert len(homes) == 1 and homes[0] in MODULE_PLACES, (cls.__name__, homes)
+        assert cls.acts_on in MODULE_PLACES[homes[0]], (cls.__name__, homes[0], cls.acts_on)
+    # The protocol module holds the protocol only: no term class.
+    assert {name for name, homes in defined.items() if "terms/_base.py" in homes} == {
+        "Place",
+        "StartContext",
+        "Term",
+    }
+
+
 @pytest.mark.parametrize("name", list(USUAL))
 def test_a_code_name_is_spelled_in_at_most_three_files(name: str) -> None:
-    """Issue 17: a term's code name is written as a string in three files only: the registry
-    (``terms.py``), the Rust enum (``rust/terms.rs``, ``TermKind``) and the oracle's vocabulary
-    (``reference/terms.py``); everything else uses the class (``SensorLag.kind``) or the registry."""
+    """Issue 17: a term's code name is written as a string in three files only: its class's module in the
+    registry (``terms/_mechanical.py`` for ``viscous``), the Rust enum (``rust/terms.rs``, ``TermKind``) and
+    the oracle's vocabulary (``reference/terms.py``); everything else, the registry's list
+    (``terms/__init__.py``) included, uses the class (``SensorLag.kind``) or the registry."""
     assert RUST.is_dir(), f"{RUST}: the tests run from the source tree, beside the crate"
     files = _literal_files(name) + _rust_literal_files(name)
-    assert sorted(files) == ["reference/terms.py", "rust/terms.rs", "terms.py"], files
+    registry = [f for f in files if f.startswith("terms/")]
+    assert len(registry) == 1 and registry[0] in REGISTRY_MODULES, files
+    source = (Path(bw.__file__).parent / registry[0]).read_text(encoding="utf-8")
+    assert f"class {USUAL[name].__name__}(" in source, f"{name} is spelled away from its class"
+    assert sorted(set(files) - set(registry)) == ["reference/terms.py", "rust/terms.rs"], files
 
 
 @pytest.mark.parametrize(
@@ -345,6 +397,28 @@ def test_term_dicts_round_trip() -> None:
         "asymmetry": 0.3,
         "play": 0.1,
     }
+
+
+#: A ``ViscousX(1.0)`` pickled (protocol 0) by the single-file registry of main a301eb6, before the split.
+OLD_PICKLE = (
+    b"ccopy_reg\n_reconstructor\np0\n(cbouc_wen_id.terms\nViscousX\np1\nc__builtin__\nobject\np2\nNtp3\n"
+    b"Rp4\n(dp5\nVc\np6\nF1.0\nsb."
+)
+
+
+def test_pickles_name_the_one_public_module() -> None:
+    # The classes live in the registry's private modules but are published as bouc_wen_id.terms.<Name>: a
+    # pickle written before the split loads, and one written now names the same path (old code loads it).
+    assert pickle.loads(OLD_PICKLE) == ViscousX(1.0)
+    assert pickle.dumps(ViscousX(1.0), protocol=0) == OLD_PICKLE
+    for cls in (*TERMS.values(), Place, Term, StartContext):
+        assert cls.__module__ == "bouc_wen_id.terms", cls
+    for cls in TERMS.values():  # every term, at every place
+        t = cls(**{cls.symbol: 0.25})
+        back = pickle.loads(pickle.dumps(t))
+        assert back == t and type(back) is cls
+        assert b"cbouc_wen_id.terms\n" + cls.__name__.encode() + b"\n" in pickle.dumps(t, protocol=0)
+    assert pickle.loads(pickle.dumps(Place.X)) is Place.X
 
 
 def test_plant_validates_its_terms() -> None:
