@@ -31,6 +31,20 @@ const SHOOT_RTOL: f64 = 1e-13;
 
 /// Number of state components integrated: `w`, `Phi`, `S_beta`, `S_gamma`, `S_mu`, `S_A`.
 const NS: usize = 6;
+/// The shootings' first bracket is `|w(0)| < BRACKET_SLACK w_bound`, not `< w_bound`: a saturated
+/// loop (`|A|` many times the loop's width, `Phi(pi)` ~ 1e-160) has its `w(0)` at the bound itself,
+/// and its first Newton step lands exactly there; with the open bracket `(-w_bound, w_bound)` every
+/// such step was refused and the shooting bisected, halving the residual per pass (20 coarse and
+/// 45 fine passes instead of 2 and 1: most of the MR damper's fit time at 0 A). The slack only
+/// admits the Newton step; the converged loop meets the same tolerance.
+const BRACKET_SLACK: f64 = 1.0 + 1e-9;
+/// Components of a reduced shooting pass: `w` and `Phi` (the residual and its slope).
+const NR: usize = 2;
+/// A fine shooting pass integrates the sensitivities and records the loop only when the previous
+/// pass's residual is within this many `w_bound`s (Newton then converges on the next pass); the
+/// other passes carry `w` and `Phi` alone. A reduced pass that converges is followed by one full
+/// pass from the same `w(0)`, so the loop returned is the same bit for bit either way.
+const FULL_PASS_RESIDUAL: f64 = 1e-6;
 
 /// Index of each sensitivity in [`SteadyLoop::jac`] rows.
 pub const D_BETA: usize = 0;
@@ -67,12 +81,16 @@ struct Params {
 /// Rate of the augmented state at `theta`.
 #[inline(always)]
 fn rhs(p: &Params, theta: f64, y: &[f64; NS]) -> [f64; NS] {
-    rhs_sin(p, theta.sin(), y)
+    rhs_sin::<NS>(p, theta.sin(), y)
 }
 
 /// [`rhs`] with `sin(theta)` given (the half cycle takes it from tables, see [`SinTable`]).
+///
+/// `N` is the number of state components integrated: [`NS`] (the loop and every sensitivity) or
+/// [`NR`] (`w` and `Phi` only, what a shooting pass needs to take its Newton step). Each component
+/// is formed by the same operations whatever `N`, so `w` and `Phi` are equal bit for bit.
 #[inline(always)]
-fn rhs_sin(p: &Params, sin_t: f64, y: &[f64; NS]) -> [f64; NS] {
+fn rhs_sin<const N: usize>(p: &Params, sin_t: f64, y: &[f64; N]) -> [f64; N] {
     let xt = -p.a * sin_t;
     let w = y[0];
     let aw = w.abs();
@@ -89,24 +107,26 @@ fn rhs_sin(p: &Params, sin_t: f64, y: &[f64; NS]) -> [f64; NS] {
     let f = xt * bracket;
     // d/dw of sgn(w)|w|^mu is mu |w|^(mu-1); of |w|^mu it is mu |w|^(mu-1) sgn(w).
     let fw = xt * (-p.beta * sx * p.mu * wmu1 - p.gamma * p.mu * wmu1 * sw);
-    let fbeta = -xt * sx * sw * wmu;
-    let fgamma = -xt * wmu;
-    let fmu = xt * (-p.beta * sx * sw - p.gamma) * wmu * lnw;
-    let fa = -sin_t * bracket;
-    [
-        f,
-        fw * y[1],
-        fw * y[2] + fbeta,
-        fw * y[3] + fgamma,
-        fw * y[4] + fmu,
-        fw * y[5] + fa,
-    ]
+    let mut out = [0.0; N];
+    out[0] = f;
+    out[1] = fw * y[1];
+    if N == NS {
+        let fbeta = -xt * sx * sw * wmu;
+        let fgamma = -xt * wmu;
+        let fmu = xt * (-p.beta * sx * sw - p.gamma) * wmu * lnw;
+        let fa = -sin_t * bracket;
+        out[2] = fw * y[2] + fbeta;
+        out[3] = fw * y[3] + fgamma;
+        out[4] = fw * y[4] + fmu;
+        out[5] = fw * y[5] + fa;
+    }
+    out
 }
 
 #[inline(always)]
-fn axpy(y: &[f64; NS], h: f64, k: &[f64; NS]) -> [f64; NS] {
+fn axpy<const N: usize>(y: &[f64; N], h: f64, k: &[f64; N]) -> [f64; N] {
     let mut out = *y;
-    for i in 0..NS {
+    for i in 0..N {
         out[i] += h * k[i];
     }
     out
@@ -114,19 +134,19 @@ fn axpy(y: &[f64; NS], h: f64, k: &[f64; NS]) -> [f64; NS] {
 
 /// One classical RK4 step of length `h` from `theta`.
 #[inline(always)]
-fn rk4(p: &Params, theta: f64, y: &mut [f64; NS], h: f64) {
+fn rk4<const N: usize>(p: &Params, theta: f64, y: &mut [f64; N], h: f64) {
     let sines = (theta.sin(), (theta + 0.5 * h).sin(), (theta + h).sin());
     rk4_sin(p, sines, y, h);
 }
 
 /// One classical RK4 step of length `h` with `sin(theta)` at its start, middle and end given.
 #[inline(always)]
-fn rk4_sin(p: &Params, (s1, sm, s4): (f64, f64, f64), y: &mut [f64; NS], h: f64) {
+fn rk4_sin<const N: usize>(p: &Params, (s1, sm, s4): (f64, f64, f64), y: &mut [f64; N], h: f64) {
     let k1 = rhs_sin(p, s1, y);
     let k2 = rhs_sin(p, sm, &axpy(y, 0.5 * h, &k1));
     let k3 = rhs_sin(p, sm, &axpy(y, 0.5 * h, &k2));
     let k4 = rhs_sin(p, s4, &axpy(y, h, &k3));
-    for i in 0..NS {
+    for i in 0..N {
         y[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
     }
 }
@@ -211,17 +231,19 @@ impl Lattice {
     }
 }
 
-/// Integrates the half cycle from `w(0) = w_top`, recording the state at every lattice point.
-/// Returns the state at `theta = pi`.
-fn half_cycle(
+/// Integrates the half cycle from `w(0) = w_top`, recording the state at every lattice point when
+/// `rec` is given. Returns the state at `theta = pi`.
+fn half_cycle<const N: usize>(
     p: &Params,
     lat: &Lattice,
     table: &SinTable,
     w_top: f64,
     substeps: usize,
-    rec: &mut [[f64; NS]],
-) -> [f64; NS] {
-    let mut y = [w_top, 1.0, 0.0, 0.0, 0.0, 0.0];
+    mut rec: Option<&mut [[f64; N]]>,
+) -> [f64; N] {
+    let mut y = [0.0; N];
+    y[0] = w_top;
+    y[1] = 1.0;
     let mut theta = 0.0;
     let sub = substeps as f64;
     if lat.offset > 0.0 {
@@ -236,12 +258,14 @@ fn half_cycle(
         .max(1)
         .next_power_of_two()
         - 1;
-    for (k, slot) in rec.iter_mut().enumerate() {
+    for k in 0..lat.len {
         // A cancelled half cycle stops early; the caller's checkpoint turns it into the error.
         if k & check_mask == 0 && crate::cancel::requested() {
             return y;
         }
-        *slot = y;
+        if let Some(rec) = rec.as_deref_mut() {
+            rec[k] = y;
+        }
         let start = lat.offset + k as f64 * lat.spacing;
         // The last lattice interval ends at pi, not at the next lattice point.
         let (len, base) = if k + 1 == lat.len {
@@ -283,17 +307,17 @@ const COARSE_MAX_ITER: usize = 20;
 
 /// `w(0)` of the periodic half cycle with one RK4 step per lattice interval, or `None` when that
 /// shooting does not converge (the fine one then starts from 0, as it always did).
-fn coarse_top(
+fn coarse_top<const N: usize>(
     p: &Params,
     lat: &Lattice,
     table: &SinTable,
     bound: f64,
-    rec: &mut [[f64; NS]],
 ) -> Option<f64> {
-    let (mut lo, mut hi) = (-bound, bound);
+    let (mut lo, mut hi) = (-bound * BRACKET_SLACK, bound * BRACKET_SLACK);
     let mut w_top = 0.0;
     for _ in 0..COARSE_MAX_ITER {
-        let end = half_cycle(p, lat, table, w_top, 1, rec);
+        // Only the residual and its slope are used: `w` and `Phi` alone (equal bit for bit).
+        let end = half_cycle::<N>(p, lat, table, w_top, 1, None);
         let h = end[0] + w_top;
         if !h.is_finite() {
             return None;
@@ -360,6 +384,19 @@ pub fn steady_loop(
     samples_per_period: usize,
     substeps: usize,
 ) -> Result<SteadyLoop> {
+    let args = (amplitude, beta, gamma, mu, phi);
+    steady_loop_passes(args, samples_per_period, substeps, true)
+}
+
+/// [`steady_loop`] with every shooting pass reduced to `w` and `Phi` but the converged one
+/// (`reduced`), or with every pass full (the solver as it was before; the tests hold the two equal
+/// bit for bit).
+fn steady_loop_passes(
+    (amplitude, beta, gamma, mu, phi): (f64, f64, f64, f64, f64),
+    samples_per_period: usize,
+    substeps: usize,
+    reduced: bool,
+) -> Result<SteadyLoop> {
     for (name, v) in [
         ("amplitude", amplitude),
         ("beta", beta),
@@ -396,7 +433,7 @@ pub fn steady_loop(
     let mut rec = vec![[0.0; NS]; lat.len];
     // |w| never exceeds the bound of Proposition 1 in steady state.
     let bound = (1.0 / (beta + gamma)).powf(1.0 / mu);
-    let (mut lo, mut hi) = (-bound, bound);
+    let (mut lo, mut hi) = (-bound * BRACKET_SLACK, bound * BRACKET_SLACK);
     let table = SinTable::new(&lat, substeps);
     // Coarse to fine: the shooting first converges with one RK4 step per lattice interval (a
     // quarter or less of a pass's work), whose w(0) differs from the fine one by the small
@@ -404,17 +441,39 @@ pub fn steady_loop(
     // instead of three to five (issue #8). The fine iteration below decides, as before.
     let mut w_top = if substeps > 1 {
         let coarse = SinTable::new(&lat, 1);
-        coarse_top(&p, &lat, &coarse, bound, &mut rec).unwrap_or(0.0)
+        if reduced {
+            coarse_top::<NR>(&p, &lat, &coarse, bound)
+        } else {
+            coarse_top::<NS>(&p, &lat, &coarse, bound)
+        }
+        .unwrap_or(0.0)
     } else {
         0.0
     };
     let mut iterations = 0;
+    // The fine passes: reduced (`w`, `Phi`) while the shooting is still far, full (sensitivities,
+    // the loop recorded) once the last residual says Newton converges on this pass.
+    let mut full = !reduced;
     let end = loop {
-        let end = half_cycle(&p, &lat, &table, w_top, substeps, &mut rec);
+        let (w_end, phi_end, end) = if full {
+            let end = half_cycle::<NS>(&p, &lat, &table, w_top, substeps, Some(&mut rec));
+            (end[0], end[1], Some(end))
+        } else {
+            let end = half_cycle::<NR>(&p, &lat, &table, w_top, substeps, None);
+            (end[0], end[1], None)
+        };
         crate::cancel::checkpoint()?;
-        let h = end[0] + w_top;
+        let h = w_end + w_top;
         if h.abs() <= SHOOT_RTOL * bound {
-            break end;
+            match end {
+                Some(end) => break end,
+                // Converged on a reduced pass: the same pass again with the sensitivities.
+                None => {
+                    let end = half_cycle::<NS>(&p, &lat, &table, w_top, substeps, Some(&mut rec));
+                    crate::cancel::checkpoint()?;
+                    break end;
+                }
+            }
         }
         iterations += 1;
         if iterations > SHOOT_MAX_ITER {
@@ -430,12 +489,13 @@ pub fn steady_loop(
         } else {
             lo = w_top;
         }
-        let newton = w_top - h / (end[1] + 1.0);
+        let newton = w_top - h / (phi_end + 1.0);
         w_top = if newton > lo && newton < hi && newton.is_finite() {
             newton
         } else {
             0.5 * (lo + hi)
         };
+        full = !reduced || h.abs() <= FULL_PASS_RESIDUAL * bound;
     };
     let denom = 1.0 + end[1];
     let dtop = [
@@ -480,6 +540,84 @@ mod tests {
 
     fn loop_at(a: f64, beta: f64, gamma: f64, mu: f64, phi: f64, p: usize) -> SteadyLoop {
         steady_loop(a, beta, gamma, mu, phi, p, 8).unwrap()
+    }
+
+    /// Uniform draws in [0, 1) from a seeded SplitMix64 (no crate needed).
+    struct Draws(u64);
+
+    impl Draws {
+        fn next(&mut self) -> f64 {
+            self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+            let mut z = self.0;
+            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+            ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+        }
+    }
+
+    #[test]
+    fn reduced_passes_give_the_full_solver_bit_for_bit() {
+        // The shooting's passes with `w` and `Phi` alone must leave every output as the solver
+        // with every pass full gave it: loop, Jacobian, w(0) and the Newton count, on random
+        // loops (thin to fat, gamma of either sign, odd and even grids, 1-4 substeps).
+        let mut r = Draws(20261127);
+        let mut fine_passes = 0;
+        for case in 0..300 {
+            let a = (0.2 + 3.0 * r.next()) * if r.next() < 0.2 { -1.0 } else { 1.0 };
+            let beta = 0.05 + 2.0 * r.next();
+            let gamma = beta * (2.0 * r.next() - 0.9);
+            let mu = 1.0 + 1e-3 + 3.0 * r.next();
+            let phi = 8.0 * r.next() - 1.0;
+            let p = [4, 5, 37, 64, 243, 325, 401][case % 7];
+            let substeps = 1 + case % 4;
+            let args = (a, beta, gamma, mu, phi);
+            let full = steady_loop_passes(args, p, substeps, false);
+            let fast = steady_loop(a, beta, gamma, mu, phi, p, substeps);
+            match (full, fast) {
+                (Ok(x), Ok(y)) => {
+                    let bits = |v: &[f64]| v.iter().map(|z| z.to_bits()).collect::<Vec<_>>();
+                    assert_eq!(bits(&x.w), bits(&y.w), "case {case}: {args:?} P {p}");
+                    assert_eq!(
+                        bits(x.jac.as_flattened()),
+                        bits(y.jac.as_flattened()),
+                        "case {case}"
+                    );
+                    assert_eq!(x.w_top.to_bits(), y.w_top.to_bits(), "case {case}");
+                    assert_eq!(x.iterations, y.iterations, "case {case}");
+                    fine_passes += x.iterations + 1;
+                }
+                (Err(x), Err(y)) => assert_eq!(x.to_string(), y.to_string(), "case {case}"),
+                (x, y) => panic!("case {case}: {:?} vs {:?}", x.is_ok(), y.is_ok()),
+            }
+        }
+        // Enough Newton steps that both kinds of pass (and the repeated converged one) ran.
+        assert!(fine_passes > 600, "{fine_passes}");
+    }
+
+    #[test]
+    fn a_saturated_loop_converges_by_newton() {
+        // |A| = 48 against a loop of width 1 (a fit of the MR damper at 0 A): w(0) sits at the
+        // bound and Phi(pi) underflows; the first Newton step lands on the bound and must be taken.
+        let (beta, gamma, mu) = (1.9, 1.9, 1.94);
+        let bound = (1.0_f64 / (beta + gamma)).powf(1.0 / mu);
+        for (a, p, substeps) in [
+            (48.4, 401, 2),
+            (-37.9, 391, 2),
+            (10.0, 37, 4),
+            (30.0, 243, 1),
+        ] {
+            let l = steady_loop(a, beta, gamma, mu, 0.7, p, substeps).unwrap();
+            assert!(
+                l.iterations <= 2,
+                "{a} {p}: {} Newton iterations",
+                l.iterations
+            );
+            assert_relative_eq!(l.w_top.abs(), bound, max_relative = 1e-9);
+            let half = if p % 2 == 0 { p / 2 } else { 0 };
+            if half > 0 {
+                assert_relative_eq!(l.w[0], -l.w[half], epsilon = 1e-12);
+            }
+        }
     }
 
     #[test]

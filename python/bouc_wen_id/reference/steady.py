@@ -30,6 +30,9 @@ SHOOT_RTOL = 1e-13
 #: Relative tolerance and iteration cap of the coarse shooting that starts the fine one (rust/steady.rs).
 COARSE_RTOL = 1e-9
 COARSE_MAX_ITER = 20
+#: The shootings' first bracket is |w(0)| < BRACKET_SLACK w_bound: a saturated loop's w(0) is the bound
+#: itself, where the first Newton step lands (rust/steady.rs).
+BRACKET_SLACK = 1.0 + 1e-9
 
 
 def _loop_rhs(a: float, beta: float, gamma: float, mu: float, theta: float, y: FloatArray) -> FloatArray:
@@ -153,7 +156,7 @@ def steady_loop(
     def coarse_top() -> Optional[float]:
         # Coarse to fine (as rust/steady.rs): the shooting with one RK4 step per lattice interval
         # proposes the fine shooting's start.
-        c_lo, c_hi, top = -bound, bound, 0.0
+        c_lo, c_hi, top = -bound * BRACKET_SLACK, bound * BRACKET_SLACK, 0.0
         for _ in range(COARSE_MAX_ITER):
             end = half_cycle(top, 1)
             resid = float(end[0] + top)
@@ -165,7 +168,7 @@ def steady_loop(
         return None
 
     bound = (1.0 / (beta + gamma)) ** (1.0 / mu)
-    lo, hi = -bound, bound
+    lo, hi = -bound * BRACKET_SLACK, bound * BRACKET_SLACK
     w_top = (coarse_top() or 0.0) if substeps > 1 else 0.0
     iterations = 0
     while True:
