@@ -186,25 +186,29 @@ def _rough(dc: np.ndarray, weight: float) -> tuple[float, int]:
     return float(res @ res) * weight, dc.size - 3
 
 
-def removed(items: Any, wander: Optional[Wander]) -> Any:
+def removed(items: Any, wander: Any) -> Any:
     """``items`` with each Recording's period means replaced by the kept centre (every whole period, the
     settling ones too, and the tail after the last whole period by the last one's), marked for ``data.py``;
-    ``items`` as they are when the set does not wander."""
+    ``items`` as they are when the set does not wander. ``wander`` is a :class:`Wander` or a
+    ``zero_drift.Drift`` (each recording's straight line is then taken out first, and no walk is left)."""
     from ..model import Recording
+    from .zero_drift import detrended
 
     if wander is None:
         return items
     seq = list(items) if isinstance(items, (list, tuple)) else [items]
+    slopes = getattr(wander, "slopes", None)  # a zero drifting in a straight line (zero_drift.py)
     out = []
-    for rec in seq:
+    for j, rec in enumerate(seq):
         if not isinstance(rec, Recording):
             out.append(rec)
             continue
         p, n = int(rec.samples_per_period), int(rec.whole_periods)
-        y = np.array(rec.y, dtype=np.float64)
+        y = np.array(rec.y, dtype=np.float64) if slopes is None else detrended(rec, slopes[j])
         dc = y[: n * p].reshape(n, p).mean(axis=1)
         shift = np.concatenate([np.repeat(dc, p), np.full(y.size - n * p, dc[-1] if n else 0.0)])
-        meta = {**dict(rec.metadata), MARK: repr(step_variance(rec))}  # metadata holds strings
+        walk = step_variance(rec) if slopes is None else 0.0  # a straight line is no walk
+        meta = {**dict(rec.metadata), MARK: repr(walk)}  # metadata holds strings
         new = y - shift + wander.centre
         out.append(
             Recording(
@@ -243,7 +247,7 @@ def marked(rec: Any) -> bool:
     return bool(getattr(rec, "metadata", {}).get(MARK, False))
 
 
-def adjusted(d: Diagnosis, wander: Optional[Wander], offset_kind: str) -> Diagnosis:
+def adjusted(d: Diagnosis, wander: Any, offset_kind: str) -> Diagnosis:
     """The diagnosis ``d`` with the wander's clause, and a named output offset's standard error the spread of
     the recordings' centres (the fit's own, from the white noise, does not see the wander)."""
     if wander is None:

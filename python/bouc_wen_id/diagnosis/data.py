@@ -46,6 +46,7 @@ from numpy.typing import NDArray
 
 from ..errors import InsufficientDataError, InvalidParameterError
 from ..signal._harmonic_ls import harmonic_basis
+from . import lab_colour
 
 FloatArray = NDArray[np.float64]
 ComplexArray = NDArray[np.complex128]
@@ -465,6 +466,7 @@ def _from_averaged(
     waveform = np.zeros(0)
     dc = np.array([float(np.mean(ybar))])
     h1 = np.array([complex(2.0 * np.fft.rfft(ybar)[1] / ybar.size)])
+    var, dof, band = float(ap.noise_var), int(ap.noise_dof), (0, 0)
     if t is not None and y is not None:
         omega = float(ap.frequency)
         seg_t = t[ap.start : ap.stop] - float(ap.time_origin)
@@ -485,6 +487,10 @@ def _from_averaged(
         if len(dcs) >= 3:
             dc, h1 = np.array(dcs), np.array(h1s, dtype=np.complex128)
         blocks = _lab_blocks(k, th, seg_y, kept, ybar.size)
+        rules = (COLOUR_BAND, COLOUR_ALPHA, cross_period_inflation)  # as noise_colour on recordings
+        coloured = lab_colour.levels(k, th, seg_y, kept, var, dof, ybar, rules)
+        if coloured is not None:
+            var, dof, band = coloured
         if kept:  # periods from the record's first sample to the first whole period used
             lead = float((float(ap.time_origin) - float(t[0])) * omega / TWO_PI) + float(kept[0])
         if u is not None:
@@ -495,9 +501,9 @@ def _from_averaged(
         grid_phase=0.0,
         ybar=ybar,
         periods=float(ap.periods),
-        noise_var=float(ap.noise_var),
-        spread_var=float(ap.noise_var),
-        noise_dof=int(ap.noise_dof),
+        noise_var=var,
+        spread_var=var,
+        noise_dof=dof,
         dc=dc,
         h1=h1,
         source=str(ap.source),
@@ -507,6 +513,8 @@ def _from_averaged(
         block_center=empty[2] if blocks is None else blocks[2],
         block_periods=empty[2] if blocks is None else blocks[3],
         waveform=waveform,
+        colour=var / float(ap.noise_var) if band != (0, 0) or var > float(ap.noise_var) else 1.0,
+        colour_band=band,
     )
 
 

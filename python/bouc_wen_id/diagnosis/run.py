@@ -16,7 +16,7 @@ from ..errors import InvalidParameterError
 from ..estimators import boundary_note
 from ..terms import DIAGNOSIS_CANDIDATES, TERMS, Distortion, Offset, physical_value
 from ..validation import real_number
-from . import baseline, free_dc
+from . import baseline, free_dc, zero_drift
 from .caveats import alternatives_text, below_saturation, family_text
 from .data import DiagExperiment, colour_notes, prepare
 from .drift import (
@@ -467,7 +467,8 @@ def _diagnose(
         raise InvalidParameterError(f"alpha = {alpha!r} must lie in (0, 1)")
     _check_sizes(experiments)
     report("preparing the averaged periods", 0, 1)
-    wander = baseline.detect(experiments, alpha / max(len(cands), 1))  # a wandering zero (baseline.py)
+    level = alpha / max(len(cands), 1)  # a wandering zero (baseline.py), or one drifting (zero_drift.py)
+    wander = baseline.detect(experiments, level) or zero_drift.detect(experiments, level)
     items, notes = _settled(baseline.removed(experiments, wander))
     exps, qnotes = _noise_floors(items, prepare(items))
     # Coloured noise (data.py) and the wander's note, or why a short record's wander was not tested.

@@ -1,0 +1,97 @@
+"""Coloured noise on the lab-measurement path (any sampling rate, ``bouc_wen_id.measurement``; issue 18).
+
+On recordings ``data.noise_colour`` compares the spread of each period's low harmonics (about a quadratic
+trend in the period index) with the per-sample variance, and when the noise is measurably coloured takes the
+largest band's level as the noise floor. Lab measurements had no such check: their floor stayed the
+averaging's per-sample residual variance, so an AR(1) noise (phi 0.5-0.85: 3-12 times that level at the
+low harmonics) left every fixed-rate null of the blind bench "unexplained structure at harmonics DC, 1-6"
+(7 of 7), while the same noise on recordings was adequate.
+
+:func:`levels` is that check on a lab stretch: each whole period's harmonics 0..K by least squares on the
+input's phase (as the per-period DC and fundamental are fitted), scaled by the square root of its samples
+(a white noise of per-sample variance ``s2`` then gives ``s2`` at the DC and ``s2 / 2`` per part at each
+harmonic), their spread about a quadratic trend pooled in the bands of ``noise_colour``, the DC's inflated
+for its correlation across periods, each tested against the averaging's variance (F, ``COLOUR_ALPHA``).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from typing import Optional
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..signal._harmonic_ls import harmonic_basis
+
+#: Most harmonics fitted per period (and never more than a quarter of its samples allow).
+MAX_HARMONIC = 7
+
+
+def levels(
+    k: NDArray[np.int64],
+    th: NDArray[np.float64],
+    y: NDArray[np.float64],
+    kept: Sequence[int],
+    white_var: float,
+    white_dof: int,
+    ybar: NDArray[np.float64],
+    rules: tuple[int, float, Callable[[NDArray[np.float64]], float]],
+) -> Optional[tuple[float, int, tuple[int, int]]]:
+    """``(variance, dof, band)`` of the noise's largest low-harmonic level when measurably above
+    ``white_var`` (per-sample, ``white_dof`` dof), else None (white, or fewer than 4 whole periods).
+
+    The averaged period ``ybar`` (on its grid, phase 0 at ``th = 0``) is taken out first, evaluated at each
+    sample's phase as its trigonometric polynomial: the loop's harmonics above K would otherwise leak into
+    the fitted ones differently in every period (the phases of a fixed rate move from period to period).
+    ``rules`` are ``data.py``'s band width, level and cross-period inflation."""
+    from scipy.special import fdtrc  # type: ignore[import-untyped]
+
+    colour_band, colour_alpha, cross_period_inflation = rules  # data.py's (no import cycle)
+    counts = {j: int(np.count_nonzero(k == j)) for j in kept}
+    full = max(counts.values(), default=0)
+    kept = [j for j in kept if counts[j] >= full - 1]  # whole periods only (the first may be cut)
+    if len(kept) < 4 or not (white_var > 0 and math.isfinite(white_var)):
+        return None
+    sizes = [counts[j] for j in kept]
+    harm = min(MAX_HARMONIC, min(sizes) // 4 - 1)
+    if harm < 1:
+        return None
+    c = np.fft.rfft(ybar) / ybar.size
+    c[1:] *= 2.0
+    if ybar.size % 2 == 0:
+        c[-1] /= 2.0
+    coef = np.empty((len(kept), 2 * harm + 1))
+    for row, j in enumerate(kept):
+        sel = k == j
+        ph = th[sel]
+        model = (np.exp(1j * np.outer(ph, np.arange(c.size))) @ c).real
+        coef[row] = np.linalg.lstsq(harmonic_basis(ph, harm), y[sel] - model, rcond=None)[0]
+    n = coef.shape[0]
+    idx = np.arange(n, dtype=np.float64)
+    trend = np.vander(idx - idx.mean(), 3)
+    res = (coef - trend @ np.linalg.lstsq(trend, coef, rcond=None)[0]) * np.sqrt(np.asarray(sizes))[:, None]
+    ss = np.empty(harm + 1)
+    ss[0] = float(np.sum(res[:, 0] ** 2))
+    ss[1:] = 0.5 * np.sum(res[:, 1::2] ** 2 + res[:, 2::2] ** 2, axis=0)  # each part: variance 2 s2
+    dof = np.full(harm + 1, 2.0 * (n - 3))
+    dof[0] = n - 3
+    half = colour_band // 2
+    bands = [(0, 0)] + [(max(0, lo - half), min(harm, lo + half)) for lo in range(0, harm + 1)]
+    out = []
+    for a, b in bands:
+        d = float(np.sum(dof[a : b + 1]))
+        v = float(np.sum(ss[a : b + 1])) / d
+        out.append((v, d, (a, b), float(fdtrc(d, max(white_dof, 1), v / white_var))))
+    top = max(out, key=lambda t: t[0])
+    if top[0] <= white_var or min(1.0, len(bands) * min(t[3] for t in out)) >= colour_alpha:
+        return None
+    v0, d0, _, _ = out[0]
+    infl = cross_period_inflation(coef[:, 0] - trend @ np.linalg.lstsq(trend, coef[:, 0], rcond=None)[0])
+    out[0] = (v0 * infl, max(1.0, d0 / infl), (0, 0), 0.0)
+    best = max(out, key=lambda t: t[0])
+    return best[0], int(best[1]), best[2]
+
+
+__all__ = ["levels", "MAX_HARMONIC"]

@@ -1,0 +1,201 @@
+"""A zero that drifts in a straight line: taken out of the recordings as a wandering baseline is (issue 18).
+
+A sensor's zero that creeps with temperature over the minutes of a record moves every period's mean by a
+little more than the last, linearly, without changing the loop. The wander test (``baseline.py``) does not
+see it (a straight line is no roughness beyond a quadratic), and left in it did three kinds of harm: the
+averaged period's DC is off by half the drift in each experiment (its sign per experiment), which a DC
+known to ``sigma / sqrt(N P)`` reads as structure at the DC even at a tenth of a noise sd of drift; the
+within-period ramp repeats in every period; and the settling test read the trend as a loop that has not
+settled ("record more settling periods": the wrong advice, the loop is periodic). A blind test
+(benches/blind.py, noise ``drift``: 1 noise sd from the first sample to the last) failed 38 of 40 library
+cases and 4 of 4 nulls.
+
+:func:`detect` (on the periods after settling, recordings of 8 periods or more) calls the zero drifting when
+
+* the period means trend, pooled over the recordings (each recording's slope t-test, its standard error
+  the larger of the residual scatter's and the white noise's, turned to a chi-square of one degree of
+  freedom, summed: p below :data:`DRIFT_ALPHA`);
+* the trend goes on: in no recording whose own slope is significant is the first half's slope steeper than
+  the last half's (one-sided, :data:`DECAY_LEVEL` over those recordings): a settling transient decays, a
+  drift does not;
+* the loop itself does not trend (the fundamental's amplitude, pooled the same way, p at least
+  :data:`DRIFT_ALPHA`): a degradation, or a loop still settling, moves its harmonics too.
+
+Then each recording's straight line (its slope per sample, from the period means) and each period's mean are
+taken out (:func:`baseline.removed`), the recordings marked and the fits given each experiment's DC free, as
+for a wander; the verdict says "the output's zero drifts by ... over the record; its DC is not used".
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, Optional
+
+import numpy as np
+
+from .data import cross_period_inflation
+
+#: Level of the pooled trend test of the period means (as the wander's).
+DRIFT_ALPHA = 1e-3
+#: Level (over the recordings that trend) of the one-sided test that the first half's slope is steeper than
+#: the last half's: generous, so that a settling transient is not taken for a drift.
+DECAY_LEVEL = 0.05
+#: The trend test of each recording's own slope that admits it to the decay test.
+OWN_LEVEL = 0.05
+#: Fewest periods after settling for a recording to be tested (two halves of 4).
+MIN_PERIODS = 8
+
+
+@dataclass(frozen=True)
+class Drift:
+    """The set's zero-drift test and what was kept of its centres (read as a ``baseline.Wander`` is)."""
+
+    slopes: tuple[float, ...]  # per item: the zero's slope per sample (0.0 for items not tested)
+    chi2: float  # pooled chi-square of the period means' slopes
+    dof: int
+    p_value: float
+    loop_p: float  # the pooled trend test of the fundamental's amplitude
+    decay_p: float  # the smallest one-sided p of "the first half steeper" (NaN: no recording trends)
+    largest: float  # the largest drift over a record, output units
+    sigma: float  # the noise sd of a sample (the periods' white spread), for the note
+    centre: float
+    centre_se: float
+    centre_p: float
+    kept: bool
+    level: float = math.nan
+
+    def note(self) -> str:
+        size = self.largest / self.sigma if self.sigma > 0 else math.nan
+        return (
+            f"the output's zero drifts by up to {self.largest:.3g} (about {size:.2g} noise sd) over the "
+            f"record: the period means follow a straight line (pooled chi-square {self.chi2:.3g} on "
+            f"{self.dof} dof, p = {self.p_value:.2g}) that goes on to the end of the record (no recording's "
+            f"first half steeper than its last, smallest p = {self.decay_p:.2g}) while the loop itself does "
+            f"not trend (fundamental amplitude p = {self.loop_p:.2g}); each recording's line and each "
+            "period's mean were taken out before averaging, so the loop's shape is measured as before; its "
+            "DC is not used"
+        )
+
+    def clause(self) -> str:
+        head = "; the output's zero drifts over the record (taken out, its DC not used): "
+        if self.kept:
+            return (
+                f"{head}the common centre {self.centre:.4g} ± {self.centre_se:.3g} (the recordings' centres' "
+                f"spread, t-test p = {self.centre_p:.2g}) was kept; each experiment's own DC (an "
+                "asymmetry's) cannot be told from the drift"
+            )
+        return f"{head}an output offset or each experiment's own DC (an asymmetry's) cannot be told from it"
+
+
+def _rows(rec: Any) -> Optional[tuple[np.ndarray, int, int]]:
+    p, s = int(rec.samples_per_period), int(rec.settle_periods)
+    n = int(rec.whole_periods) - s
+    if n < MIN_PERIODS or p < 4:
+        return None
+    return np.asarray(rec.y[s * p : (s + n) * p], dtype=np.float64).reshape(n, p), p, s
+
+
+def _slope(values: np.ndarray, floor_var: float) -> tuple[float, float, int]:
+    """Least-squares slope per period, its standard error (at least the white noise's, times the residuals'
+    cross-period inflation: noise correlated over a period, AR(1) with phi = 0.99 at 128 samples per period,
+    has period means correlated about 0.45, and their slope varies 2-3 times more than white) and dof."""
+    n = values.size
+    k = np.arange(n, dtype=np.float64) - (n - 1) / 2.0
+    kk = float(k @ k)
+    b = float(k @ (values - values.mean())) / kk
+    res = values - values.mean() - b * k
+    s2 = float(res @ res) / (n - 2)
+    return b, math.sqrt(max(s2, floor_var) * cross_period_inflation(res) / kk), n - 2
+
+
+def _chi2_1(t: float, dof: int) -> float:
+    """A t statistic on ``dof`` degrees of freedom as the chi-square (1 dof) of the same p-value."""
+    from scipy.special import chdtri, stdtr  # type: ignore[import-untyped]
+
+    p = float(2.0 * stdtr(dof, -abs(t)))
+    return float(chdtri(1, p)) if p > 0 else math.inf
+
+
+def _recording(rows: np.ndarray, p: int) -> tuple[float, float, float, float, float]:
+    """One recording's numbers: slope t as chi-square, its p, the decay test's one-sided p, the loop's
+    chi-square, the slope per period and the white noise variance of a sample."""
+    from scipy.special import ndtr
+
+    n = rows.shape[0]
+    spec = np.fft.rfft(rows, axis=1) / p
+    dc, amp = spec[:, 0].real, 2.0 * np.abs(spec[:, 1])
+    white = float(np.mean(np.diff(rows - dc[:, None], axis=0) ** 2)) / 2.0 * p / (p - 1)
+    b, se, dof = _slope(dc, white / p)
+    h = n // 2
+    b1, se1, _ = _slope(dc[:h], white / p)
+    b2, se2, _ = _slope(dc[n - h :], white / p)
+    decay = float(ndtr(-(b1 - b2) * math.copysign(1.0, b) / math.hypot(se1, se2)))
+    la, lse, ldof = _slope(amp, 2.0 * white / p)
+    return _chi2_1(b / se, dof), decay, _chi2_1(la / lse, ldof), b, white
+
+
+def detect(items: Any, level: float) -> Optional[Drift]:
+    """The set's zero-drift test (module docstring) on its Recordings; None when the zero does not drift or
+    no recording has :data:`MIN_PERIODS` periods after settling. ``level`` is the common centre's t-test's."""
+    from scipy.special import chdtrc, stdtr
+
+    from ..model import Recording
+
+    seq = list(items) if isinstance(items, (list, tuple)) else [items]
+    chi2, loop, dof, decays, slopes, centres, largest, sig = 0.0, 0.0, 0, [], [], [], 0.0, []
+    for rec in seq:
+        got = _rows(rec) if isinstance(rec, Recording) else None
+        if got is None:
+            slopes.append(0.0)
+            continue
+        rows, p, _ = got
+        x2, decay, l2, b, white = _recording(rows, p)
+        chi2, loop, dof = chi2 + x2, loop + l2, dof + 1
+        if float(chdtrc(1, x2)) < OWN_LEVEL:
+            decays.append(decay)
+        slopes.append(b / p)
+        centres.append(float(rows.mean()))
+        largest = max(largest, abs(b) / p * np.asarray(rec.y).size)
+        sig.append(white)
+    if dof == 0:
+        return None
+    pval, loop_p = float(chdtrc(dof, chi2)), float(chdtrc(dof, loop))
+    decay_p = min(decays) if decays else math.nan
+    if not (pval < DRIFT_ALPHA and loop_p >= DRIFT_ALPHA and decays and decay_p >= DECAY_LEVEL / len(decays)):
+        return None
+    m = len(centres)
+    c, se, cp = float(np.mean(centres)), math.nan, math.nan
+    if m >= 2:
+        se = float(np.std(centres, ddof=1)) / math.sqrt(m)
+        cp = float(2.0 * stdtr(m - 1, -abs(c) / se)) if se > 0 else (0.0 if c else 1.0)
+    kept = bool(math.isfinite(cp) and cp < level)
+    sigma = math.sqrt(float(np.mean(sig)))
+    return Drift(
+        tuple(slopes),
+        chi2,
+        dof,
+        pval,
+        loop_p,
+        decay_p,
+        largest,
+        sigma,
+        c if kept else 0.0,
+        se,
+        cp,
+        kept,
+        level,
+    )
+
+
+def detrended(rec: Any, slope: float) -> np.ndarray:
+    """``rec.y`` less the straight line of ``slope`` per sample, centred on the periods after settling (so
+    that their mean is unchanged)."""
+    y = np.array(rec.y, dtype=np.float64)
+    p, s = int(rec.samples_per_period), int(rec.settle_periods)
+    n = int(rec.whole_periods) - s
+    mid = s * p + (n * p - 1) / 2.0
+    return y - slope * (np.arange(y.size, dtype=np.float64) - mid)
+
+
+__all__ = ["Drift", "detect", "detrended", "DRIFT_ALPHA", "DECAY_LEVEL"]
