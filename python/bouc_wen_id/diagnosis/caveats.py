@@ -14,7 +14,7 @@ import math
 from collections.abc import Sequence
 
 from ..augmented import AugExperiment, AugFit
-from ..terms import TERMS
+from ..terms import TERMS, Play
 from .result import NamedTerm
 from .select import LAW_ALPHA, Alternative
 
@@ -85,13 +85,37 @@ def family_text(named: Sequence[NamedTerm]) -> str:
     exclude (issue 18: a name users can trust blind). Empty when no Dahl element is named."""
     dahl = [t for t in named if t.term in TERMS and TERMS[t.term].companion]
     if not dahl:
-        return ""
+        return play_text(named)
     where = " or ".join(TERMS[t.term].place_label() for t in dahl)
-    return (
+    return play_text(named) + (
         f"; {where} names {FAMILY_MARK} (a smooth parallel loop that turns after each reversal and "
         "saturates): its branch shape passed its test, but a distribution of stops (Iwan, "
         "Prandtl-Ishlinskii, Masing) or another Dahl exponent fits such loops too; what separates them is "
         "the branch over a wider range of travel: experiments at several amplitudes from well below the "
         "turning travel to 3x it (Dahl approaches its level exponentially, stops reach theirs at a finite "
         "travel)"
+    )
+
+
+#: The words that mark play's equivalence caveat in a verdict.
+PLAY_MARK = "a dwell after each reversal"
+
+
+def play_text(named: Sequence[NamedTerm]) -> str:
+    """The verdict's word when play is named: a backlash on the measured output draws the same loop.
+
+    After a reversal from saturation the element's branch leaves with one slope at every experiment, so a
+    backlash of half-width c on the output dwells exactly as a play of half-width c / slope on x: at
+    saturating amplitudes no test of the dwell's shape tells them apart (session 28: a flat, sharply
+    resolved dwell at x's turn, dwell slope -0.0017 +- 0.0036, on the blind bench's output backlash). Only
+    reversals from different levels of w (amplitudes around and below saturation) separate them, where
+    the equivalent play would change with the amplitude and its law test would refuse it."""
+    if not any(t.term == Play.kind for t in named):
+        return ""
+    label = Play.place_label()
+    return (
+        f"; {label} names {PLAY_MARK}: a backlash on the measured output (a dead band in the sensor or "
+        "its linkage) dwells alike when every reversal starts from saturation; what separates them is "
+        "experiments at amplitudes around and below saturation (a play keeps its width in x, an output "
+        "backlash in y)"
     )
