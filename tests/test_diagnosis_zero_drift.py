@@ -203,3 +203,22 @@ def test_a_drifting_lab_zero_is_no_unsettled_loop(monkeypatch: pytest.MonkeyPatc
     monkeypatch.setattr(zero_drift, "detect", lambda items, level: None)  # the code before
     old = bw.diagnose(meas)
     assert "not settled" in old.verdict, old.verdict
+
+
+def test_diagnose_across_takes_a_drifting_zero_out(
+    helpers: SimpleNamespace, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``diagnose_across`` on two conditions of the designs bench's null (its own plant and RK4), each with a
+    1 sd drift: its verdict says the zero drifts there and names nothing; before (the wander test alone) the
+    drift was left in."""
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        sets = [_drifting(helpers, s, 1.0)[1] for s in (100002, 100003)]
+        a = bw.diagnose_across(sets, condition=[0.0, 1.0])
+        monkeypatch.setattr(zero_drift, "detect", lambda items, level: None)  # the code before
+        old = bw.diagnose_across(sets, condition=[0.0, 1.0])
+    assert "the output's zero drifts at 0, 1" in a.verdict, a.verdict
+    assert a.terms == () and "nothing named" in a.verdict, a.verdict
+    assert "zero drifts" not in old.verdict, old.verdict
