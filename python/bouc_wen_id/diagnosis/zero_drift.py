@@ -24,6 +24,11 @@ cases and 4 of 4 nulls.
 Then each recording's straight line (its slope per sample, from the period means) and each period's mean are
 taken out (:func:`baseline.removed`), the recordings marked and the fits given each experiment's DC free, as
 for a wander; the verdict says "the output's zero drifts by ... over the record; its DC is not used".
+
+Lab Measurements (a fixed sampling rate, no whole number of samples per period; :func:`_lab`) are tested the
+same way on each whole period of their one averaged stretch (DC and fundamental by least squares on the
+input's phase, the averaged period taken out first); a drifting one has its line (per second) and its
+stretch's mean taken out and is marked (:func:`lab_detrended`, ``data.py`` then leaves its DC free).
 """
 
 from __future__ import annotations
