@@ -83,6 +83,8 @@ class _Group:
     cache: FoldCache = field(default_factory=dict)
     #: The condition's baseline wanders (baseline.py): removed period by period, each experiment's DC free.
     wander: bool = False
+    #: ... or its zero drifts in a straight line (zero_drift.py), taken out the same way.
+    drifts: bool = False
 
 
 @dataclass(frozen=True)
@@ -299,11 +301,12 @@ def _group(
 ) -> _Group:
     """One condition's experiments prepared, checked and plain-fitted as :func:`diagnose` does; from its own
     diagnosis (``own``) when given (its experiments and plain fit, so nothing is fitted twice)."""
-    from . import baseline, free_dc
+    from . import baseline, free_dc, zero_drift
     from .data import prepare
     from .settling import _check_experiments, _noise_floors, _settled
 
-    wander = baseline.detect(items, alpha / max(len(cands), 1))  # a wandering zero, as diagnose (baseline.py)
+    level = alpha / max(len(cands), 1)  # a wandering zero (baseline.py) or a drifting one, as diagnose
+    wander = baseline.detect(items, level) or zero_drift.detect(items, level)
     if (
         own is not None
         and own.plain_fit is not None
@@ -331,7 +334,18 @@ def _group(
     if Distortion.kind in cands and any(e.distorted for e in exps):
         sx = carry_through_g(sx, plain, substeps)
     noise_dof = sum(e.noise_dof for e in exps)
-    return _Group(label, condition, sx, s, substeps, noise_dof, plain, plain, wander=wander is not None)
+    return _Group(
+        label,
+        condition,
+        sx,
+        s,
+        substeps,
+        noise_dof,
+        plain,
+        plain,
+        wander=isinstance(wander, baseline.Wander),
+        drifts=isinstance(wander, zero_drift.Drift),
+    )
 
 
 # ------------------------------------------------------------------------------------------------------
@@ -722,6 +736,12 @@ def diagnose_across(
         if wandering
         else ""
     )
+    drifting = ", ".join(str(g.label) for g in prepared if g.drifts)
+    if drifting:  # a zero drifting in a straight line (zero_drift.py)
+        clause += (
+            f"; the output's zero drifts at {drifting} (its straight line taken out, each experiment's DC "
+            "free: an offset or each experiment's own DC there cannot be told from it)"
+        )
     return AcrossDiagnosis(
         _verdict(terms, conditions, steps) + clause,
         terms,

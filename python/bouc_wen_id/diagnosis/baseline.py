@@ -192,14 +192,18 @@ def removed(items: Any, wander: Any) -> Any:
     ``items`` as they are when the set does not wander. ``wander`` is a :class:`Wander` or a
     ``zero_drift.Drift`` (each recording's straight line is then taken out first, and no walk is left)."""
     from ..model import Recording
-    from .zero_drift import detrended
+    from .zero_drift import detrended, lab_detrended
 
     if wander is None:
         return items
     seq = list(items) if isinstance(items, (list, tuple)) else [items]
     slopes = getattr(wander, "slopes", None)  # a zero drifting in a straight line (zero_drift.py)
     out = []
+    lab = getattr(wander, "lab", ())
     for j, rec in enumerate(seq):
+        if j < len(lab) and lab[j] is not None:  # a lab Measurement's line (zero_drift.py)
+            out.append(lab_detrended(rec, float(np.asarray(slopes)[j]), lab[j], wander.centre))
+            continue
         if not isinstance(rec, Recording):
             out.append(rec)
             continue

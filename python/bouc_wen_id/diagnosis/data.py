@@ -38,7 +38,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -546,6 +546,14 @@ def _lab_blocks(
     return np.stack(coefs), np.array(samples), np.array(centers), np.array(nper)
 
 
+def _lab_marked(e: DiagExperiment) -> DiagExperiment:
+    """A lab experiment whose drifting zero was taken out (``zero_drift.lab_detrended``): its DC set, not
+    measured (an infinite level at the DC), the noise's level at every harmonic."""
+    hv = np.full(e.samples_per_period // 2 + 1, e.noise_var)
+    hv[0] = math.inf
+    return replace(e, harmonic_var=hv)
+
+
 def prepare(items: Any) -> list[DiagExperiment]:
     """Reduce Recordings, Measurements or AveragedPeriods (or a mix) to :class:`DiagExperiment`.
 
@@ -567,7 +575,8 @@ def prepare(items: Any) -> list[DiagExperiment]:
             out.append(_from_recording(i, item))
         elif isinstance(item, Measurement):
             for ap in average_measurement(item):
-                out.append(_from_averaged(ap, np.asarray(item.t), np.asarray(item.y), np.asarray(item.u)))
+                e = _from_averaged(ap, np.asarray(item.t), np.asarray(item.y), np.asarray(item.u))
+                out.append(_lab_marked(e) if BASELINE_MARK in item.metadata else e)
         elif isinstance(item, AveragedPeriod):
             out.append(_from_averaged(item, None, None))
         elif isinstance(item, DiagExperiment):

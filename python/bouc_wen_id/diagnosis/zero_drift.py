@@ -24,6 +24,11 @@ cases and 4 of 4 nulls.
 Then each recording's straight line (its slope per sample, from the period means) and each period's mean are
 taken out (:func:`baseline.removed`), the recordings marked and the fits given each experiment's DC free, as
 for a wander; the verdict says "the output's zero drifts by ... over the record; its DC is not used".
+
+Lab Measurements (a fixed sampling rate, no whole number of samples per period; :func:`_lab`) are tested the
+same way on each whole period of their one averaged stretch (DC and fundamental by least squares on the
+input's phase, the averaged period taken out first); a drifting one has its line (per second) and its
+stretch's mean taken out and is marked (:func:`lab_detrended`, ``data.py`` then leaves its DC free).
 """
 
 from __future__ import annotations
@@ -64,6 +69,9 @@ class Drift:
     centre_p: float
     kept: bool
     level: float = math.nan
+    #: per item: a lab Measurement's (time of the line's zero, its averaged stretch's mean), else None; its
+    #: slope is then per second (a fixed rate has no whole number of samples per period)
+    lab: tuple[Optional[tuple[float, float]], ...] = ()
 
     def note(self) -> str:
         size = self.largest / self.sigma if self.sigma > 0 else math.nan
@@ -135,28 +143,103 @@ def _recording(rows: np.ndarray, p: int) -> tuple[float, float, float, float, fl
     return _chi2_1(b / se, dof), decay, _chi2_1(la / lse, ldof), b, white
 
 
+_Numbers = tuple[float, float, float, float, float, float, float, Any]
+
+
+def _numbers(rec: Any) -> Optional[_Numbers]:
+    """An item's test numbers (:func:`_recording`'s), its slope (per sample, per second on the lab path),
+    centre, span (samples or seconds) and, on the lab path, where its line is zero; None when not tested."""
+    from ..measurement import Measurement
+    from ..model import Recording
+
+    if isinstance(rec, Recording):
+        got = _rows(rec)
+        if got is None:
+            return None
+        rows, p, _ = got
+        x2, decay, l2, b, white = _recording(rows, p)
+        return x2, decay, l2, b / p, white, float(rows.mean()), float(np.asarray(rec.y).size), None
+    if isinstance(rec, Measurement):
+        return _lab(rec)
+    return None
+
+
+def _lab(meas: Any) -> Optional[_Numbers]:
+    """The lab path (a fixed sampling rate): each whole period's DC and fundamental by least squares on the
+    input's phase after the averaged period is taken out (as ``lab_colour.levels`` fits them), tested as
+    :func:`_recording` tests a recording's period means. One averaged stretch per measurement, else None."""
+    from scipy.special import ndtr
+
+    from ..signal import average_measurement
+    from .data import TWO_PI
+
+    try:
+        aps = average_measurement(meas)
+    except Exception:  # noqa: BLE001 - a record the averaging refuses is not tested here; prepare says why
+        return None
+    if len(aps) != 1:
+        return None
+    ap = aps[0]
+    omega = float(ap.frequency)
+    seg_t = np.asarray(meas.t, dtype=np.float64)[ap.start : ap.stop] - float(ap.time_origin)
+    seg_y = np.asarray(meas.y, dtype=np.float64)[ap.start : ap.stop]
+    th = omega * seg_t
+    k = np.floor(th / TWO_PI).astype(np.int64)
+    ybar = np.asarray(ap.ybar, dtype=np.float64) + float(ap.offset_y)
+    c = np.fft.rfft(ybar) / ybar.size
+    c[1:] *= 2.0
+    if ybar.size % 2 == 0:
+        c[-1] /= 2.0
+    resid = seg_y - (np.exp(1j * np.outer(th, np.arange(c.size))) @ c).real
+    counts = np.bincount(k - k.min()) if k.size else np.zeros(0, np.int64)
+    full = int(counts.max(initial=0))
+    kept = [j + int(k.min()) for j in range(counts.size) if counts[j] >= max(full - 1, 8)]
+    white = float(ap.noise_var)
+    if len(kept) < MIN_PERIODS or not (white > 0 and math.isfinite(white)):
+        return None
+    dc, amp = np.empty(len(kept)), np.empty(len(kept))
+    for row, j in enumerate(kept):
+        sel = k == j
+        basis = np.column_stack([np.ones(int(np.count_nonzero(sel))), np.cos(th[sel]), np.sin(th[sel])])
+        a = np.linalg.lstsq(basis, resid[sel], rcond=None)[0]
+        dc[row], amp[row] = a[0], abs(c[1] + complex(a[1], -a[2]))
+    m = float(np.mean(counts[counts > 0]))
+    b, se, dof = _slope(dc, white / m)
+    n, h = dc.size, dc.size // 2
+    b1, se1, _ = _slope(dc[:h], white / m)
+    b2, se2, _ = _slope(dc[n - h :], white / m)
+    decay = float(ndtr(-(b1 - b2) * math.copysign(1.0, b) / math.hypot(se1, se2)))
+    la, lse, ldof = _slope(amp, 2.0 * white / m)
+    per_second = b * omega / TWO_PI
+    t = np.asarray(meas.t, dtype=np.float64)
+    mid = float(np.mean(seg_t)) + float(ap.time_origin)
+    where = (mid, float(np.mean(seg_y)))
+    x2, l2 = _chi2_1(b / se, dof), _chi2_1(la / lse, ldof)
+    return x2, decay, l2, per_second, white, float(np.mean(seg_y)), float(t[-1] - t[0]), where
+
+
 def detect(items: Any, level: float) -> Optional[Drift]:
     """The set's zero-drift test (module docstring) on its Recordings; None when the zero does not drift or
     no recording has :data:`MIN_PERIODS` periods after settling. ``level`` is the common centre's t-test's."""
     from scipy.special import chdtrc, stdtr
 
-    from ..model import Recording
-
     seq = list(items) if isinstance(items, (list, tuple)) else [items]
     chi2, loop, dof, decays, slopes, centres, largest, sig = 0.0, 0.0, 0, [], [], [], 0.0, []
+    lab: list[Optional[tuple[float, float]]] = []
     for rec in seq:
-        got = _rows(rec) if isinstance(rec, Recording) else None
+        got = _numbers(rec)
         if got is None:
             slopes.append(0.0)
+            lab.append(None)
             continue
-        rows, p, _ = got
-        x2, decay, l2, b, white = _recording(rows, p)
+        x2, decay, l2, slope, white, centre, span, where = got
         chi2, loop, dof = chi2 + x2, loop + l2, dof + 1
         if float(chdtrc(1, x2)) < OWN_LEVEL:
             decays.append(decay)
-        slopes.append(b / p)
-        centres.append(float(rows.mean()))
-        largest = max(largest, abs(b) / p * np.asarray(rec.y).size)
+        slopes.append(slope)
+        lab.append(where)
+        centres.append(centre)
+        largest = max(largest, abs(slope) * span)
         sig.append(white)
     if dof == 0:
         return None
@@ -185,6 +268,7 @@ def detect(items: Any, level: float) -> Optional[Drift]:
         cp,
         kept,
         level,
+        tuple(lab),
     )
 
 
@@ -198,4 +282,26 @@ def detrended(rec: Any, slope: float) -> np.ndarray:
     return y - slope * (np.arange(y.size, dtype=np.float64) - mid)
 
 
-__all__ = ["Drift", "detect", "detrended", "DRIFT_ALPHA", "DECAY_LEVEL"]
+def lab_detrended(meas: Any, slope: float, where: tuple[float, float], centre: float) -> Any:
+    """A lab Measurement with its straight line (``slope`` per second, zero at ``where[0]``) and its
+    averaged stretch's mean ``where[1]`` taken out, ``centre`` put in, marked as ``baseline.removed`` marks
+    a recording (``data.py`` then gives its DC no weight)."""
+    from ..measurement import Measurement
+    from .data import BASELINE_MARK
+
+    t = np.asarray(meas.t, dtype=np.float64)
+    y = np.asarray(meas.y, dtype=np.float64) - slope * (t - where[0]) - where[1] + centre
+    meta = {**dict(meas.metadata), BASELINE_MARK: repr(0.0)}
+    return Measurement(
+        meas.t,
+        meas.u,
+        y,
+        nominal_frequency=meas.nominal_frequency,
+        units=meas.units,
+        channels=meas.channels,
+        name=meas.name,
+        metadata=meta,
+    )
+
+
+__all__ = ["Drift", "detect", "detrended", "lab_detrended", "DRIFT_ALPHA", "DECAY_LEVEL"]
