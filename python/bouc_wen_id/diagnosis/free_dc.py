@@ -90,6 +90,31 @@ def centred(e: AugExperiment, a: FloatArray, held_out: bool = False) -> FloatArr
     return np.asarray(a - np.mean(a, axis=0), dtype=np.float64)
 
 
+def project(
+    exps: Sequence[AugExperiment],
+    residuals: Sequence[FloatArray],
+    jacobians: Optional[Sequence[FloatArray]] = None,
+) -> tuple[list[FloatArray], Optional[list[FloatArray]]]:
+    """The residuals (and Jacobians, samples along axis 0, one column layout for all of ``exps``) of the
+    projected problem :func:`fit` solves: each marked experiment's less its mean, plus, when ``common``, the
+    ``a``-weighted mean over the marked experiments (``a = weight * N``) added back, as :func:`_projected`
+    forms the outputs and the Fisher matrix. Experiments that are not marked are returned as given."""
+    free = _free(exps)
+    rs = [np.asarray(r, dtype=np.float64) for r in residuals]
+    js = None if jacobians is None else [np.asarray(j, dtype=np.float64) for j in jacobians]
+    if not free:
+        return rs, js
+    a = np.array([exps[i].weight * exps[i].ybar.size for i in free])
+    keep = _common(exps, free)
+    parts: list[list[FloatArray]] = [rs] if js is None else [rs, js]
+    for arrs in parts:
+        means = [np.mean(arrs[i], axis=0) for i in free]
+        back = sum(w * m for w, m in zip(a, means)) / a.sum() if keep else 0.0
+        for i, m in zip(free, means):
+            arrs[i] = arrs[i] - m + back
+    return rs, js
+
+
 def _residual_dcs(
     exps: Sequence[AugExperiment], outs: Sequence[FloatArray], free: Sequence[int]
 ) -> FloatArray:
@@ -262,4 +287,4 @@ def _projected(exps: Sequence[AugExperiment], f: AugFit, substeps: int, free: Se
     return replace(f, cost=cost, fisher=fisher, covariance=cov, outputs=tuple(outs))
 
 
-__all__ = ["FreeDC", "marked", "spent", "count", "centred", "fit", "DC_TOL", "MAX_PASSES"]
+__all__ = ["FreeDC", "marked", "spent", "count", "centred", "project", "fit", "DC_TOL", "MAX_PASSES"]
