@@ -216,3 +216,20 @@ def test_the_same_walk_recordings_twice_share_their_value(helpers: SimpleNamespa
     sh = a.terms[0].shared_fit
     assert sh is not None and sh.shared, sh
     assert sh.cost_shared == pytest.approx(sh.cost_free, rel=1e-6)
+
+
+@pytest.mark.parametrize("common", [False, True])
+def test_the_reported_dof_spends_what_the_free_dcs_spend(common: bool) -> None:
+    """The summary's dof (and the adequacy p from it) is the selection's ``dof_of``: one dof per marked
+    experiment, one fewer when the common DC is kept (it is fitted, not free). Before, the summary spent
+    one per removed experiment either way."""
+    from bouc_wen_id.diagnosis import run
+
+    exps, sx, plain, substeps = _set(3)
+    free = free_dc.marked(sx, [True] * len(sx), common)
+    removed = [replace(e, harmonic_var=np.array([np.inf, 1.0])) for e in exps]  # data.py's mark
+    assert all(e.baseline_removed for e in removed)
+    f = fit_from(free, plain.params, substeps)
+    assert f is not None
+    summary = run._summary(removed, free, f, scale_of(exps), ("m", "N"))
+    assert summary.dof == dof_of(free, f) == dof_of(sx, f) - len(sx) + common
