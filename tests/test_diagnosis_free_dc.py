@@ -233,3 +233,18 @@ def test_the_reported_dof_spends_what_the_free_dcs_spend(common: bool) -> None:
     assert f is not None
     summary = run._summary(removed, free, f, scale_of(exps), ("m", "N"))
     assert summary.dof == dof_of(free, f) == dof_of(sx, f) - len(sx) + common
+
+
+def test_a_free_dc_fit_cut_before_its_fixed_point_says_so(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Cut to one pass (the DCs not yet at their fixed point), the fit is returned flagged: not converged,
+    stop ``dc_not_converged``, and the diagnosis's note says so; with the default passes it reaches it."""
+    _, sx, plain, substeps = _set(5)
+    shifts = np.random.default_rng(8).normal(0.0, 0.2, len(sx))
+    free = [replace(e, ybar=e.ybar + c) for e, c in zip(free_dc.marked(sx, [True] * len(sx), False), shifts)]
+    done = fit_from(free, plain.params, substeps)
+    assert done is not None and done.stop != free_dc.NOT_CONVERGED
+    assert free_dc.note(done, "the fit") is None
+    monkeypatch.setattr(free_dc, "MAX_PASSES", 1)
+    cut = fit_from(free, plain.params, substeps)
+    assert cut is not None and not cut.converged and cut.stop == free_dc.NOT_CONVERGED
+    assert "did not converge" in (free_dc.note(cut, "the fit") or "")

@@ -37,8 +37,12 @@ FloatArray = NDArray[np.float64]
 #: The fixed point's tolerance: the largest change of an experiment's DC, in averaged-noise sd
 #: (``sqrt(weight P)`` units: a change of the cost of at most DC_TOL^2 per experiment).
 DC_TOL = 1e-3
-#: Most passes of the core's fit (the DCs converge geometrically; a pass starts from the last estimates).
-MAX_PASSES = 12
+#: Most passes of the core's fit (the DCs converge geometrically; a pass starts from the last estimates, so
+#: a pass near the fixed point is short).
+MAX_PASSES = 20
+#: The stop reason of a fit whose DCs did not reach the fixed point (:data:`DC_TOL`) within
+#: :data:`MAX_PASSES` or whose backtracking stalled: its estimates are not the projected problem's solution.
+NOT_CONVERGED = "dc_not_converged"
 
 
 @dataclass(frozen=True)
@@ -142,6 +146,7 @@ def fit(
     c = _start_dcs(exps, start, free, substeps)
     best: Optional[AugFit] = None
     best_cost, base, step = math.inf, c, np.zeros(len(free))
+    met = False  # whether the fixed point's criterion was met (else the last accepted fit, flagged)
     for _ in range(MAX_PASSES):
         work = _with_dcs(exps, free, c)
         new = inner(work, start if best is None else best.params, substeps, max_iter)
@@ -160,10 +165,25 @@ def fit(
             - c
         )
         if float(np.max(np.abs(g) * np.sqrt(a))) <= DC_TOL:
+            met = True
             break
         step = _newton(work, new, free, substeps, a, g)
         c = c + step
-    return None if best is None else _projected(exps, best, substeps, free)
+    if best is None:
+        return None
+    out = _projected(exps, best, substeps, free)
+    return out if met else replace(out, converged=False, stop=NOT_CONVERGED)
+
+
+def note(f: AugFit, what: str) -> Optional[str]:
+    """The diagnosis's note when ``f``'s free DCs did not reach their fixed point (:data:`NOT_CONVERGED`)."""
+    if f.stop != NOT_CONVERGED:
+        return None
+    return (
+        f"{what} did not converge: the free DCs of the wandering baseline's experiments did not settle "
+        f"(within {DC_TOL:g} of the averaged noise sd in {MAX_PASSES} passes), so its estimates and cost are "
+        "those of the last pass, not the solution"
+    )
 
 
 def _with_dcs(exps: Sequence[AugExperiment], free: Sequence[int], c: FloatArray) -> list[AugExperiment]:
@@ -287,4 +307,16 @@ def _projected(exps: Sequence[AugExperiment], f: AugFit, substeps: int, free: Se
     return replace(f, cost=cost, fisher=fisher, covariance=cov, outputs=tuple(outs))
 
 
-__all__ = ["FreeDC", "marked", "spent", "count", "centred", "project", "fit", "DC_TOL", "MAX_PASSES"]
+__all__ = [
+    "FreeDC",
+    "marked",
+    "spent",
+    "count",
+    "centred",
+    "project",
+    "fit",
+    "note",
+    "DC_TOL",
+    "MAX_PASSES",
+    "NOT_CONVERGED",
+]

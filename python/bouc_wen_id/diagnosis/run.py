@@ -617,7 +617,7 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
     fits = (
         ((plain, "the plain fit"), (final, "the final fit")) if final is not plain else ((plain, "the fit"),)
     )
-    notes += [n for f, w in fits if (n := boundary_note(f.stop, f.active, w)) is not None]
+    notes += [n for f, w in fits for n in (boundary_note(f.stop, f.active, w), free_dc.note(f, w)) if n]
     dexps = detrended(fexps, deg, s.y) if deg is not None and named_deg else fexps
     after = _drift_checked(_localise(dexps, fsx, final, s), dexps)
     plain_sum = _summary(exps, sx, plain, s, setup.units)
