@@ -248,3 +248,49 @@ def test_a_free_dc_fit_cut_before_its_fixed_point_says_so(monkeypatch: pytest.Mo
     cut = fit_from(free, plain.params, substeps)
     assert cut is not None and not cut.converged and cut.stop == free_dc.NOT_CONVERGED
     assert "did not converge" in (free_dc.note(cut, "the fit") or "")
+
+
+def test_the_shape_tests_step_does_not_depend_on_the_free_dcs() -> None:
+    """``shape.sandwich_step`` (the Dahl exponent's Wald test) on marked experiments: shifting each one's DC
+    by its own amount leaves its step and covariance as they were (each residual and column centred, as the
+    law test); on unmarked experiments the same shifts move the step."""
+    from bouc_wen_id.diagnosis.shape import sandwich_step
+
+    _, sx, plain, substeps = _set(7)
+    free = free_dc.marked(sx, [True] * len(sx), False)
+    f = fit_from(free, plain.params, substeps)
+    assert f is not None
+    rng = np.random.default_rng(11)
+    extra = [rng.normal(0.0, 1.0, (e.ybar.size, 1)) + 0.3 for e in sx]  # a column with a DC part
+    shifts = rng.normal(0.0, 0.2, len(sx))
+
+    def step(exps: list[Any]) -> Any:
+        got = sandwich_step(exps, f, substeps, extra)
+        assert got is not None
+        return got
+
+    a = step(free)
+    b = step([replace(e, ybar=e.ybar + c) for e, c in zip(free, shifts)])
+    np.testing.assert_allclose(b[0], a[0], rtol=1e-8, atol=1e-10 * np.max(np.abs(a[0])))
+    np.testing.assert_allclose(b[1], a[1], rtol=1e-6, atol=1e-10 * np.max(np.abs(a[1])))
+    c = step([replace(e, ybar=e.ybar + d) for e, d in zip(sx, shifts)])
+    assert not np.allclose(c[0], step(list(sx))[0], rtol=1e-3)
+
+
+@pytest.mark.parametrize("common", [False, True])
+def test_an_offsets_limit_under_free_dcs_is_not_detectable_unless_the_common_dc_is_kept(common: bool) -> None:
+    """The detection limits' profile projects the traces as the fits do: an offset's trace is each
+    experiment's DC, all free without the common DC (nothing of it is seen: its limit is inf, "not
+    detectable", where it was a finite, absurd size before); with the common DC kept it is still seen."""
+    from bouc_wen_id.diagnosis.limits import _Profile
+
+    _, sx, plain, substeps = _set(8)
+    free = free_dc.marked(sx, [True] * len(sx), common)
+    f = fit_from(free, plain.params, substeps)
+    assert f is not None
+    lam, raw = _Profile(free, f, substeps)("offset", 0.1)
+    assert raw > 0.0
+    if common:
+        assert lam > 1e-3 * raw  # the asymmetry of ``_set``'s start takes up most of it, not all
+    else:
+        assert lam <= 1e-10 * raw
