@@ -14,8 +14,12 @@ The core's fit has no free DC, so :func:`fit` profiles it: the core fits data wh
 (plus the common residual DC when ``common``), the DCs are updated from the fit, and so on until they move
 by less than :data:`DC_TOL` of the averaged DC's noise sd. At that fixed point the core's normal equations
 are those of the projected problem (``J^T W (P r) = 0``), so the estimates are its exact solution; the
-cost, the outputs (with the data's DC: every residual formed downstream is the projected one) and the
-Fisher matrix (``J^T W J`` less each experiment's DC direction) are then those of the projected problem.
+cost, the outputs (with the data's DC: a residual formed from them is the projected one) and the Fisher
+matrix (``J^T W J`` less each experiment's DC direction) are then those of the projected problem. Residuals
+and Jacobians formed elsewhere go through :func:`project` (the across test's shared fit, the detection limits)
+or :func:`centred` (the law and shape tests, the held-out refit); the feedback structure's held-out check and
+the separating-design search are not projected (docs/diagnosis.md). A fit whose DCs do not settle is flagged
+(:data:`NOT_CONVERGED`).
 Experiments that are not marked are untouched (a set without a wander is fitted as before, bit for bit).
 """
 
