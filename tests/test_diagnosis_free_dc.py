@@ -294,3 +294,14 @@ def test_an_offsets_limit_under_free_dcs_is_not_detectable_unless_the_common_dc_
         assert lam > 1e-3 * raw  # the asymmetry of ``_set``'s start takes up most of it, not all
     else:
         assert lam <= 1e-10 * raw
+
+
+def test_an_offsets_limit_under_a_wander_is_not_detectable(helpers: SimpleNamespace) -> None:
+    """The designs bench's ``walk`` (a NumPy walk plus white noise, nothing else; its common centre not kept):
+    the offset's trace is all free DC, so its detection limit is inf and says "not detectable". Before, the
+    limit came out at an absurd finite size (1e15 [y] on this seed: rounding grown with the value)."""
+    d = helpers.diagnose_quietly(helpers.designs_case("walk", None, "", 0.0, 100001))
+    assert "the baseline wanders" in d.verdict, d.summary()
+    off = [lim for lim in d.limits if lim.term == "offset"]
+    assert off and all(math.isinf(lim.limit) and "not detectable" in lim.note for lim in off), off
+    assert any(math.isfinite(lim.limit) for lim in d.limits)  # the other terms' limits are still found
