@@ -835,3 +835,17 @@ def test_registry_lookups_refuse_unknown_names_and_places_by_name() -> None:
     with pytest.raises(InvalidParameterError, match="not a Place"):
         bw.terms.Viscous.at("z")  # type: ignore[arg-type]
     assert bw.terms.physical_value("viscous", 0.1) and not bw.terms.physical_value("viscous", -0.1)
+
+
+def test_every_terms_annotations_resolve_from_its_published_module() -> None:
+    """Each class is published as ``bouc_wen_id.terms.<Name>`` (its ``__module__``), so ``get_type_hints``
+    resolves its string annotations there: every name they use (ClassVar, Callable, ...) must be found
+    (a NameError before ClassVar and Callable were importable from the package)."""
+    import typing
+
+    from bouc_wen_id import terms as T
+
+    for cls in [*T.TERMS.values(), T.Term, T.StartContext]:
+        assert cls.__module__ == "bouc_wen_id.terms", cls
+        hints = typing.get_type_hints(cls)
+        assert hints, cls  # each has annotated attributes: the resolution ran

@@ -14,8 +14,12 @@ The core's fit has no free DC, so :func:`fit` profiles it: the core fits data wh
 (plus the common residual DC when ``common``), the DCs are updated from the fit, and so on until they move
 by less than :data:`DC_TOL` of the averaged DC's noise sd. At that fixed point the core's normal equations
 are those of the projected problem (``J^T W (P r) = 0``), so the estimates are its exact solution; the
-cost, the outputs (with the data's DC: every residual formed downstream is the projected one) and the
-Fisher matrix (``J^T W J`` less each experiment's DC direction) are then those of the projected problem.
+cost, the outputs (with the data's DC: a residual formed from them is the projected one) and the Fisher
+matrix (``J^T W J`` less each experiment's DC direction) are then those of the projected problem. Residuals
+and Jacobians formed elsewhere go through :func:`project` (the across test's shared fit, the detection limits)
+or :func:`centred` (the law and shape tests, the held-out refit); the feedback structure's held-out check and
+the separating-design search are not projected (docs/diagnosis.md). A fit whose DCs do not settle is flagged
+(:data:`NOT_CONVERGED`).
 Experiments that are not marked are untouched (a set without a wander is fitted as before, bit for bit).
 """
 
@@ -37,8 +41,12 @@ FloatArray = NDArray[np.float64]
 #: The fixed point's tolerance: the largest change of an experiment's DC, in averaged-noise sd
 #: (``sqrt(weight P)`` units: a change of the cost of at most DC_TOL^2 per experiment).
 DC_TOL = 1e-3
-#: Most passes of the core's fit (the DCs converge geometrically; a pass starts from the last estimates).
-MAX_PASSES = 12
+#: Most passes of the core's fit (the DCs converge geometrically; a pass starts from the last estimates, so
+#: a pass near the fixed point is short).
+MAX_PASSES = 20
+#: The stop reason of a fit whose DCs did not reach the fixed point (:data:`DC_TOL`) within
+#: :data:`MAX_PASSES` or whose backtracking stalled: its estimates are not the projected problem's solution.
+NOT_CONVERGED = "dc_not_converged"
 
 
 @dataclass(frozen=True)
@@ -90,6 +98,31 @@ def centred(e: AugExperiment, a: FloatArray, held_out: bool = False) -> FloatArr
     return np.asarray(a - np.mean(a, axis=0), dtype=np.float64)
 
 
+def project(
+    exps: Sequence[AugExperiment],
+    residuals: Sequence[FloatArray],
+    jacobians: Optional[Sequence[FloatArray]] = None,
+) -> tuple[list[FloatArray], Optional[list[FloatArray]]]:
+    """The residuals (and Jacobians, samples along axis 0, one column layout for all of ``exps``) of the
+    projected problem :func:`fit` solves: each marked experiment's less its mean, plus, when ``common``, the
+    ``a``-weighted mean over the marked experiments (``a = weight * N``) added back, as :func:`_projected`
+    forms the outputs and the Fisher matrix. Experiments that are not marked are returned as given."""
+    free = _free(exps)
+    rs = [np.asarray(r, dtype=np.float64) for r in residuals]
+    js = None if jacobians is None else [np.asarray(j, dtype=np.float64) for j in jacobians]
+    if not free:
+        return rs, js
+    a = np.array([exps[i].weight * exps[i].ybar.size for i in free])
+    keep = _common(exps, free)
+    parts: list[list[FloatArray]] = [rs] if js is None else [rs, js]
+    for arrs in parts:
+        means = [np.mean(arrs[i], axis=0) for i in free]
+        back = sum(w * m for w, m in zip(a, means)) / a.sum() if keep else 0.0
+        for i, m in zip(free, means):
+            arrs[i] = arrs[i] - m + back
+    return rs, js
+
+
 def _residual_dcs(
     exps: Sequence[AugExperiment], outs: Sequence[FloatArray], free: Sequence[int]
 ) -> FloatArray:
@@ -117,6 +150,7 @@ def fit(
     c = _start_dcs(exps, start, free, substeps)
     best: Optional[AugFit] = None
     best_cost, base, step = math.inf, c, np.zeros(len(free))
+    met = False  # whether the fixed point's criterion was met (else the last accepted fit, flagged)
     for _ in range(MAX_PASSES):
         work = _with_dcs(exps, free, c)
         new = inner(work, start if best is None else best.params, substeps, max_iter)
@@ -135,10 +169,25 @@ def fit(
             - c
         )
         if float(np.max(np.abs(g) * np.sqrt(a))) <= DC_TOL:
+            met = True
             break
         step = _newton(work, new, free, substeps, a, g)
         c = c + step
-    return None if best is None else _projected(exps, best, substeps, free)
+    if best is None:
+        return None
+    out = _projected(exps, best, substeps, free)
+    return out if met else replace(out, converged=False, stop=NOT_CONVERGED)
+
+
+def note(f: AugFit, what: str) -> Optional[str]:
+    """The diagnosis's note when ``f``'s free DCs did not reach their fixed point (:data:`NOT_CONVERGED`)."""
+    if f.stop != NOT_CONVERGED:
+        return None
+    return (
+        f"{what} did not converge: the free DCs of the wandering baseline's experiments did not settle "
+        f"(within {DC_TOL:g} of the averaged noise sd in {MAX_PASSES} passes), so its estimates and cost are "
+        "those of the last pass, not the solution"
+    )
 
 
 def _with_dcs(exps: Sequence[AugExperiment], free: Sequence[int], c: FloatArray) -> list[AugExperiment]:
@@ -262,4 +311,16 @@ def _projected(exps: Sequence[AugExperiment], f: AugFit, substeps: int, free: Se
     return replace(f, cost=cost, fisher=fisher, covariance=cov, outputs=tuple(outs))
 
 
-__all__ = ["FreeDC", "marked", "spent", "count", "centred", "fit", "DC_TOL", "MAX_PASSES"]
+__all__ = [
+    "FreeDC",
+    "marked",
+    "spent",
+    "count",
+    "centred",
+    "project",
+    "fit",
+    "note",
+    "DC_TOL",
+    "MAX_PASSES",
+    "NOT_CONVERGED",
+]

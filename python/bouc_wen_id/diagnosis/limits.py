@@ -30,6 +30,7 @@ import numpy as np
 
 from ..augmented import AugExperiment, AugFit, augmented_output
 from ..errors import BoucWenIdError, BudgetExceededError
+from . import free_dc
 from .fitting import Scale, fit_from, physical
 from .result import TERM_LABELS, term_symbol_unit
 from .select import BOUNDARY_TERMS, MATERIAL_SHARE, Step, dof_of
@@ -38,6 +39,8 @@ from .select import BOUNDARY_TERMS, MATERIAL_SHARE, Step, dof_of
 Z_90 = 1.2815515655446004
 #: Share of a term's raw trace absorbed by the plain model above which its limit says so.
 ABSORBED_SAID = 0.95
+#: Under free DCs (free_dc.py), an unabsorbed size below this share of the raw one is rounding: nothing seen.
+ABSORBED_ROUNDING = 1e-9
 #: Detection limits named in the verdict (the rest are in the JSON and the detailed report).
 VERDICT_LIMITS = 4
 
@@ -117,11 +120,13 @@ class _Profile:
             x = np.zeros((e.ybar.size, out.jacobian.shape[1] + 2 * m))
             x[:, : out.jacobian.shape[1]] = out.jacobian
             x[:, out.jacobian.shape[1] + 2 * i : out.jacobian.shape[1] + 2 * i + 2] = out.own_jacobian
-            sw = math.sqrt(e.weight)
-            blocks.append(sw * x)
+            blocks.append(x)
             self.y0.append(np.asarray(out.y))
-            self.sw.append(sw)
-        xa = np.vstack(blocks)
+            self.sw.append(math.sqrt(e.weight))
+        # A wandering baseline's free DCs (free_dc.py): the traces and the Jacobian projected as the fits
+        # project them, so a term whose trace is only those DCs (an offset) is not detectable there.
+        _, projected = free_dc.project(exps, self.y0, blocks)
+        xa = np.vstack([sw * x for sw, x in zip(self.sw, projected or blocks)])
         xa = xa / (np.linalg.norm(xa, axis=0) + 1e-300)
         u, sv, _ = np.linalg.svd(xa, full_matrices=False)
         self.q = u[:, sv > 1e-10 * sv[0]]
@@ -135,15 +140,18 @@ class _Profile:
 
     def _sizes(self, term: str, v: float) -> tuple[float, float]:
         par = self.base.params.with_term(term, v)
-        r = np.concatenate(
-            [
-                sw * (np.asarray(augmented_output(e, par, i, substeps=self.substeps)) - y0)
-                for i, (e, y0, sw) in enumerate(zip(self.exps, self.y0, self.sw))
-            ]
-        )
-        raw = float(r @ r)
+        diffs = [
+            np.asarray(augmented_output(e, par, i, substeps=self.substeps)) - y0
+            for i, (e, y0) in enumerate(zip(self.exps, self.y0))
+        ]
+        r = np.concatenate([sw * d for sw, d in zip(self.sw, diffs)])
+        raw = float(r @ r)  # as drawn: what the free DCs take (free_dc.py) counts as absorbed
+        r = np.concatenate([sw * d for sw, d in zip(self.sw, free_dc.project(self.exps, diffs)[0])])
         c = self.q.T @ r
-        return max(raw - float(c @ c), 0.0), raw
+        lam = max(float(r @ r) - float(c @ c), 0.0)
+        if free_dc.count(self.exps) and lam <= ABSORBED_ROUNDING * raw:
+            lam = 0.0  # the free DCs took it all (an offset's trace): rounding, which would grow with v
+        return lam, raw
 
     def exact(self, term: str, v: float) -> float:
         """The unabsorbed size without linearising: the plain model refitted (from the base) to the noise-free
@@ -193,11 +201,17 @@ def _solve(profile: _Profile, term: str, guess: float, targets: Sequence[float])
         if not above or not below:
             out.append(math.inf)
             continue
-        a, b = max(x for x in below if x < min(above)), min(above)
+        lower = [x for x in below if x < min(above)]
+        if not lower:  # no bracket (lam not monotone there): not located
+            out.append(math.inf)
+            continue
+        a, b = max(lower), min(above)
         for _ in range(REFINE):
             la, lb = math.log(lam(a)), math.log(lam(b))
             w = (math.log(t) - la) / (lb - la) if lb > la else 0.5
             mid = math.exp(math.log(a) + min(max(w, 0.05), 0.95) * (math.log(b) - math.log(a)))
+            if not lam(mid) > 0.0:  # nothing left unabsorbed there (free DCs, free_dc.py) or no model
+                break
             if lam(mid) < t:
                 a = mid
             else:

@@ -116,7 +116,7 @@ def _summary(
         v, se = physical(fit, s, t)
         sym, unit = term_symbol_unit(t, *units)
         terms.append(NamedTerm(t, sym, v, se, unit))
-    dof = sum(a.ybar.size - e.baseline_removed for a, e in zip(sx, exps)) - (3 + len(par.terms) + 2 * len(sx))
+    dof = sum(a.ybar.size for a in sx) - free_dc.spent(sx) - (3 + len(par.terms) + 2 * len(sx))
     noise_dof = sum(e.noise_dof for e in exps)
     nr = []
     for e, y in zip(sx, fit.outputs):
@@ -590,9 +590,7 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
     noise_dof = sum(e.noise_dof for e in exps)
 
     def p_of(fit: AugFit) -> float:
-        dof = sum(a.ybar.size - e.baseline_removed for a, e in zip(sx, exps)) - (
-            3 + len(fit.params.terms) + 2 * len(sx)
-        )
+        dof = sum(a.ybar.size for a in sx) - free_dc.spent(sx) - (3 + len(fit.params.terms) + 2 * len(sx))
         return adequacy_p(fit.cost, dof, noise_dof)
 
     def adequate(fit: AugFit) -> bool:
@@ -619,7 +617,7 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
     fits = (
         ((plain, "the plain fit"), (final, "the final fit")) if final is not plain else ((plain, "the fit"),)
     )
-    notes += [n for f, w in fits if (n := boundary_note(f.stop, f.active, w)) is not None]
+    notes += [n for f, w in fits for n in (boundary_note(f.stop, f.active, w), free_dc.note(f, w)) if n]
     dexps = detrended(fexps, deg, s.y) if deg is not None and named_deg else fexps
     after = _drift_checked(_localise(dexps, fsx, final, s), dexps)
     plain_sum = _summary(exps, sx, plain, s, setup.units)

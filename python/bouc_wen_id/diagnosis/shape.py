@@ -27,6 +27,7 @@ from numpy.typing import NDArray
 from ..augmented import AugExperiment, AugFit, augmented_output
 from ..errors import BudgetExceededError
 from ..terms import TERMS, Place
+from . import free_dc
 
 FloatArray = NDArray[np.float64]
 
@@ -151,8 +152,8 @@ def sandwich_step(
             x[:, ns + 2 * i : ns + 2 * i + 2] = out.own_jacobian
             x[:, ns + 2 * m :] = extra[i]
             sw = math.sqrt(e.weight)
-            xs.append(sw * x)
-            res.append(sw * (e.ybar - out.y))
+            xs.append(sw * free_dc.centred(e, x))  # a free DC (free_dc.py), as select.law_test
+            res.append(sw * free_dc.centred(e, e.ybar - out.y))
     except BudgetExceededError:
         raise  # the user's budget is theirs
     except Exception:  # noqa: BLE001 - a model the core cannot differentiate: the shape is not tested
@@ -163,7 +164,7 @@ def sandwich_step(
     scale = np.linalg.norm(xa, axis=0) + 1e-300
     xa = xa / scale
     sv = np.linalg.svd(xa, compute_uv=False)
-    rank = int(np.sum(sv > 1e-10 * sv[0]))
+    rank = int(np.sum(sv > 1e-10 * sv[0])) + free_dc.count(exps)  # + the centred DCs' dof
     if r.size - rank < 1:
         return None
     beta = np.linalg.lstsq(xa, r, rcond=1e-10)[0]

@@ -29,6 +29,7 @@ import numpy as np
 from ..augmented import AugExperiment, AugFit, AugParams, augmented_output
 from ..errors import BoucWenIdError, BudgetExceededError
 from ..terms import TERMS
+from . import free_dc
 from .fitting import Scale
 
 #: LM iterations of the joint fit at most.
@@ -140,24 +141,30 @@ def _evaluate(
                 nt, m = len(par.terms), par.gains.size
                 k = 3 + nt - 1 + 2 * m
                 f, dlnf = _factor(term, c.scale, par.mu)
+                rs, jacs = [], []
                 for j, e in enumerate(c.sx):
                     if not jacobian:
-                        y = augmented_output(e, par, j, substeps=c.substeps)
-                        cost += e.weight * float(np.sum((e.ybar - y) ** 2))
+                        rs.append(e.ybar - augmented_output(e, par, j, substeps=c.substeps))
                         continue
                     o = augmented_output(e, par, j, substeps=c.substeps, jacobian=True)
-                    r = e.ybar - o.y
-                    cost += e.weight * float(np.sum(r**2))
+                    rs.append(e.ybar - o.y)
                     jq = o.jacobian[:, 3 + i]
-                    jac = np.zeros((r.size, 1 + k))
+                    jac = np.zeros((e.ybar.size, 1 + k))
                     jac[:, 0] = jq / f  # d y / d v through q~ = v / f(mu)
                     jac[:, 1:4] = o.jacobian[:, :3]
                     jac[:, 3] -= jq * float(par.values[i]) * dlnf  # q~ moves with mu at fixed v
                     jac[:, 4 : 4 + nt - 1] = np.delete(o.jacobian[:, 3:], i, axis=1)
                     jac[:, 4 + nt - 1 + 2 * j : 6 + nt - 1 + 2 * j] = o.own_jacobian
-                    cols = np.concatenate([[0], np.arange(at, at + k)])
-                    grad[cols] += e.weight * (jac.T @ r)
-                    hess[np.ix_(cols, cols)] += e.weight * (jac.T @ jac)
+                    jacs.append(jac)
+                # A wandering baseline's marked experiments: the projected residuals the condition's own
+                # fit minimised (free_dc.py), so C_shared and C_free are costs of one problem.
+                prs, pjs = free_dc.project(c.sx, rs, jacs if jacobian else None)
+                cols = np.concatenate([[0], np.arange(at, at + k)])
+                for j, (e, r) in enumerate(zip(c.sx, prs)):
+                    cost += e.weight * float(np.sum(r**2))
+                    if pjs is not None:
+                        grad[cols] += e.weight * (pjs[j].T @ r)
+                        hess[np.ix_(cols, cols)] += e.weight * (pjs[j].T @ pjs[j])
                 at += k
         except BudgetExceededError:  # a limit the user set: never an inadmissible step
             raise

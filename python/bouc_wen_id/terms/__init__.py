@@ -30,8 +30,12 @@ The units are templates in ``{y}`` (the output's unit) and ``{u}`` (the input's)
 
 from __future__ import annotations
 
+# Callable, ClassVar: the classes published here (__module__ this package) have string annotations naming
+# them, which typing.get_type_hints resolves in this namespace (noqa F401: used only that way).
+from collections.abc import Callable as Callable  # noqa: F401
 from collections.abc import Iterable, Mapping, Sequence
 from typing import Any
+from typing import ClassVar as ClassVar  # noqa: F401
 
 from ..errors import InvalidParameterError
 from ._base import NON_NEGATIVE as NON_NEGATIVE  # the ranges and the smoothing's limit, attributes before the
