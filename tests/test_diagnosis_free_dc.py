@@ -305,3 +305,13 @@ def test_an_offsets_limit_under_a_wander_is_not_detectable(helpers: SimpleNamesp
     off = [lim for lim in d.limits if lim.term == "offset"]
     assert off and all(math.isinf(lim.limit) and "not detectable" in lim.note for lim in off), off
     assert any(math.isfinite(lim.limit) for lim in d.limits)  # the other terms' limits are still found
+
+
+def test_a_boundary_note_reads_the_dc_stop_in_plain_words() -> None:
+    """A fit flagged dc_not_converged that also ended on a face: the boundary note says why in words (the
+    session-28 review: it printed the code '(dc_not_converged)')."""
+    from bouc_wen_id.diagnosis import free_dc
+    from bouc_wen_id.estimators import boundary_note
+
+    text = boundary_note(free_dc.NOT_CONVERGED, ["beta=gamma"]) or ""
+    assert "free DCs" in text and free_dc.NOT_CONVERGED not in text

@@ -30,6 +30,11 @@ def test_the_caveat_comes_with_play_and_only_with_play() -> None:
     both = C.family_text([dahl, play])
     assert C.PLAY_MARK in both and C.FAMILY_MARK in both
     assert C.PLAY_MARK not in C.family_text([dahl])
+    # Said only when every experiment reverses from saturation: with one below it (latent level 0.6),
+    # the separating experiment has been run and the law test judged the play.
+    assert C.PLAY_MARK in C.family_text([play], [1.2, 2.5])
+    assert C.PLAY_MARK not in C.family_text([play], [0.6, 2.5])
+    assert C.PLAY_MARK not in C.family_text([play], [])  # no saturation level at all
 
 
 def test_a_named_play_carries_the_caveat_in_the_verdict() -> None:

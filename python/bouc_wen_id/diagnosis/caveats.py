@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from typing import Optional
 
 from ..augmented import AugExperiment, AugFit
 from ..terms import TERMS, Play
@@ -24,11 +25,7 @@ def below_saturation(sx: Sequence[AugExperiment], fit: AugFit) -> list[str]:
     amplitudes ``|x_i| = |g_i| U_i`` under ``w_u = (beta + gamma)^(-1/mu)``, alpha = 1): there the loop is
     nearly linear and a spring on x trades with |G|, so the design could not show one (a 30x spring on x
     over three frequencies at 0.3 of saturation gave "adequate")."""
-    par = fit.params
-    if not par.beta + par.gamma > 0:
-        return []
-    w_u = float((par.beta + par.gamma) ** (-1.0 / par.mu))
-    levels = [abs(float(g)) * e.amplitude / w_u for e, g in zip(sx, par.gains)]
+    levels = latent_levels(sx, fit)
     if not levels or max(levels) >= 1.0:
         return []
     return [
@@ -37,6 +34,16 @@ def below_saturation(sx: Sequence[AugExperiment], fit: AugFit) -> list[str]:
         "and a spring across the hysteretic element (on x) trades with |G|, so it could neither show nor be "
         "told from |G|; an experiment past saturation (1.5-3 times that level) would separate them"
     ]
+
+
+def latent_levels(sx: Sequence[AugExperiment], fit: AugFit) -> list[float]:
+    """Each experiment's latent amplitude ``|g_i| U_i`` over the saturation level ``w_u = (beta +
+    gamma)^(-1/mu)`` (alpha = 1), as ``fit`` sees it; empty when the element has no saturation level."""
+    par = fit.params
+    if not par.beta + par.gamma > 0:
+        return []
+    w_u = float((par.beta + par.gamma) ** (-1.0 / par.mu))
+    return [abs(float(g)) * e.amplitude / w_u for e, g in zip(sx, par.gains)]
 
 
 def alternatives_text(alternatives: Sequence[Alternative], named: Sequence[NamedTerm]) -> str:
@@ -80,14 +87,17 @@ def alternatives_text(alternatives: Sequence[Alternative], named: Sequence[Named
 FAMILY_MARK = "a Dahl-like friction loop"
 
 
-def family_text(named: Sequence[NamedTerm]) -> str:
+def family_text(named: Sequence[NamedTerm], levels: Optional[Sequence[float]] = None) -> str:
     """The verdict's word when Dahl friction is named: what it stands for and what the data could not
-    exclude (issue 18: a name users can trust blind). Empty when no Dahl element is named."""
+    exclude (issue 18: a name users can trust blind), and play's equivalence (:func:`play_text`, when
+    every experiment reverses from saturation: each of ``levels``, :func:`latent_levels`, at least 1;
+    None: not known, said). Empty when neither is named."""
+    saturated = levels is None or (len(levels) > 0 and min(levels) >= 1.0)
     dahl = [t for t in named if t.term in TERMS and TERMS[t.term].companion]
     if not dahl:
-        return play_text(named)
+        return play_text(named, saturated)
     where = " or ".join(TERMS[t.term].place_label() for t in dahl)
-    return play_text(named) + (
+    return play_text(named, saturated) + (
         f"; {where} names {FAMILY_MARK} (a smooth parallel loop that turns after each reversal and "
         "saturates): its branch shape passed its test, but a distribution of stops (Iwan, "
         "Prandtl-Ishlinskii, Masing) or another Dahl exponent fits such loops too; what separates them is "
@@ -101,7 +111,7 @@ def family_text(named: Sequence[NamedTerm]) -> str:
 PLAY_MARK = "a dwell after each reversal"
 
 
-def play_text(named: Sequence[NamedTerm]) -> str:
+def play_text(named: Sequence[NamedTerm], saturated: bool = True) -> str:
     """The verdict's word when play is named: a backlash on the measured output draws the same loop.
 
     After a reversal from saturation the element's branch leaves with one slope at every experiment, so a
@@ -109,8 +119,10 @@ def play_text(named: Sequence[NamedTerm]) -> str:
     saturating amplitudes no test of the dwell's shape tells them apart (session 28: a flat, sharply
     resolved dwell at x's turn, dwell slope -0.0017 +- 0.0036, on the blind bench's output backlash). Only
     reversals from different levels of w (amplitudes around and below saturation) separate them, where
-    the equivalent play would change with the amplitude and its law test would refuse it."""
-    if not any(t.term == Play.kind for t in named):
+    the equivalent play would change with the amplitude and its law test would refuse it. So the clause
+    is said only when ``saturated`` (every experiment's latent amplitude at or past the saturation level,
+    :func:`latent_levels`): with an experiment below it, the separating experiment has been run."""
+    if not saturated or not any(t.term == Play.kind for t in named):
         return ""
     label = Play.place_label()
     return (

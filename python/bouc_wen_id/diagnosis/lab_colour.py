@@ -68,9 +68,46 @@ def levels(
         ph = th[sel]
         model = (np.exp(1j * np.outer(ph, np.arange(c.size))) @ c).real
         coef[row] = np.linalg.lstsq(harmonic_basis(ph, harm), y[sel] - model, rcond=None)[0]
-    n = coef.shape[0]
+    out = _bands(coef, sizes, harm, white_var, white_dof, colour_band, fdtrc)
+    top = max(out, key=lambda t: t[0])
+    if top[0] <= white_var or min(1.0, len(out) * min(t[3] for t in out)) >= colour_alpha:
+        return None
+    # A colour must hold over the last half of the periods too: a transient that is still settling when
+    # the stretch starts (a decaying DC is no quadratic) raises the first periods' spread only, and taken
+    # as the floor it would hide the loop's "not settled" (the review's 10 sd transient, tau 3 periods:
+    # floor 1.5-97 times the noise). Stationary coloured noise raises both halves.
+    late = len(kept) // 2
+    if len(kept) - late < 4:
+        return None
+    tail = _bands(coef[late:], sizes[late:], harm, white_var, white_dof, colour_band, fdtrc)
+    if min(1.0, len(tail) * min(t[3] for t in tail)) >= colour_alpha:
+        return None
+    v0, d0, _, _ = out[0]
+    trend = _trend(coef.shape[0])
+    infl = cross_period_inflation(coef[:, 0] - trend @ np.linalg.lstsq(trend, coef[:, 0], rcond=None)[0])
+    out[0] = (v0 * infl, max(1.0, d0 / infl), (0, 0), 0.0)
+    best = max(out, key=lambda t: t[0])
+    return best[0], int(best[1]), best[2]
+
+
+def _trend(n: int) -> NDArray[np.float64]:
     idx = np.arange(n, dtype=np.float64)
-    trend = np.vander(idx - idx.mean(), 3)
+    return np.vander(idx - idx.mean(), 3)
+
+
+def _bands(
+    coef: NDArray[np.float64],
+    sizes: Sequence[int],
+    harm: int,
+    white_var: float,
+    white_dof: int,
+    colour_band: int,
+    fdtrc: Callable[..., float],
+) -> list[tuple[float, float, tuple[int, int], float]]:
+    """Each band's level, dof and F-test p against ``white_var``: the periods' harmonics about a quadratic
+    trend in the period index, scaled by the square root of each period's samples."""
+    n = coef.shape[0]
+    trend = _trend(n)
     res = (coef - trend @ np.linalg.lstsq(trend, coef, rcond=None)[0]) * np.sqrt(np.asarray(sizes))[:, None]
     ss = np.empty(harm + 1)
     ss[0] = float(np.sum(res[:, 0] ** 2))
@@ -84,14 +121,7 @@ def levels(
         d = float(np.sum(dof[a : b + 1]))
         v = float(np.sum(ss[a : b + 1])) / d
         out.append((v, d, (a, b), float(fdtrc(d, max(white_dof, 1), v / white_var))))
-    top = max(out, key=lambda t: t[0])
-    if top[0] <= white_var or min(1.0, len(bands) * min(t[3] for t in out)) >= colour_alpha:
-        return None
-    v0, d0, _, _ = out[0]
-    infl = cross_period_inflation(coef[:, 0] - trend @ np.linalg.lstsq(trend, coef[:, 0], rcond=None)[0])
-    out[0] = (v0 * infl, max(1.0, d0 / infl), (0, 0), 0.0)
-    best = max(out, key=lambda t: t[0])
-    return best[0], int(best[1]), best[2]
+    return out
 
 
 __all__ = ["levels", "MAX_HARMONIC"]

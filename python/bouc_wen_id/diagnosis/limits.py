@@ -39,8 +39,10 @@ from .select import BOUNDARY_TERMS, MATERIAL_SHARE, Step, dof_of
 Z_90 = 1.2815515655446004
 #: Share of a term's raw trace absorbed by the plain model above which its limit says so.
 ABSORBED_SAID = 0.95
-#: Under free DCs (free_dc.py), an unabsorbed size below this share of the raw one is rounding: nothing seen.
-ABSORBED_ROUNDING = 1e-9
+#: Under free DCs (free_dc.py), a trace whose projection keeps less than this share of its raw energy was
+#: taken whole by the DCs (an offset's: 1e-32-1e-28 measured); what is left is rounding, nothing seen. The
+#: smallest real leftover measured (a sensor lag at 1e-3) keeps 9e-5.
+ABSORBED_ROUNDING = 1e-20
 #: Detection limits named in the verdict (the rest are in the JSON and the detailed report).
 VERDICT_LIMITS = 4
 
@@ -148,8 +150,9 @@ class _Profile:
         raw = float(r @ r)  # as drawn: what the free DCs take (free_dc.py) counts as absorbed
         r = np.concatenate([sw * d for sw, d in zip(self.sw, free_dc.project(self.exps, diffs)[0])])
         c = self.q.T @ r
-        lam = max(float(r @ r) - float(c @ c), 0.0)
-        if free_dc.count(self.exps) and lam <= ABSORBED_ROUNDING * raw:
+        kept = float(r @ r)
+        lam = max(kept - float(c @ c), 0.0)
+        if free_dc.count(self.exps) and kept <= ABSORBED_ROUNDING * raw:
             lam = 0.0  # the free DCs took it all (an offset's trace): rounding, which would grow with v
         return lam, raw
 

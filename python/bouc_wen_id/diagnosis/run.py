@@ -17,7 +17,7 @@ from ..estimators import boundary_note
 from ..terms import DIAGNOSIS_CANDIDATES, TERMS, Distortion, Offset, physical_value
 from ..validation import real_number
 from . import baseline, free_dc, zero_drift
-from .caveats import alternatives_text, below_saturation, family_text
+from .caveats import alternatives_text, below_saturation, family_text, latent_levels
 from .data import DiagExperiment, colour_notes, prepare
 from .drift import (
     DEGRADATION,
@@ -641,7 +641,7 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
     )
     verdict += _law_text(steps)
     alternatives = tuple(a for st in steps for a in st.alternatives) + _drift_alternatives(deg, named_deg)
-    verdict += alternatives_text(alternatives, named) + family_text(named)
+    verdict += alternatives_text(alternatives, named) + family_text(named, latent_levels(sx, plain))
     setup.report("held-out check of the final model", 0, 1)
     ho = held_out(fsx, start, final, substeps, cache) if final.params.terms else None
     d = Diagnosis(
