@@ -36,7 +36,7 @@ from typing import Any, Optional
 
 import numpy as np
 
-from .data import BASELINE_MARK, cross_period_correlation
+from .data import BASELINE_MARK, common_centre, cross_period_correlation
 from .result import Diagnosis, NamedTerm
 
 #: Level of the pooled chi-square of the period DCs about a quadratic trend (as the colour check's).
@@ -104,27 +104,20 @@ def _rows(rec: Any) -> tuple[np.ndarray, int]:
 def detect(items: Any, level: float) -> Optional[Wander]:
     """The set's wander test (module docstring) on its Recordings; None when it does not wander, or with
     fewer than 4 periods after settling in every recording. ``level`` is the common centre's t-test level."""
-    from scipy.special import stdtr  # type: ignore[import-untyped]
-
     st = _statistics(items)
     if st is None:
         return None
     chi2, dof, pval, r, pl, centres = st
     if not (pval < WANDER_ALPHA and r >= WANDER_CORRELATION and pl < WANDER_ALPHA):
         return None
-    m = len(centres)
-    c, se, cp = float(np.mean(centres)), math.nan, math.nan
-    if m >= 2:
-        se = float(np.std(centres, ddof=1)) / math.sqrt(m)
-        cp = float(2.0 * stdtr(m - 1, -abs(c) / se)) if se > 0 else (0.0 if c else 1.0)
-    kept = bool(math.isfinite(cp) and cp < level)
+    c, se, cp, kept = common_centre(centres, level)
     return Wander(r, pl, chi2, dof, pval, c if kept else 0.0, se, cp, kept, level)
 
 
 def _statistics(items: Any) -> Optional[tuple[float, int, float, float, float, list[float]]]:
     """The wander test's numbers (chi-square, dof, p, pooled lag-1 correlation, the last half's p (NaN: no
     recording of 8 periods or more), the recordings' centres); None when nothing can be tested."""
-    from scipy.special import chdtrc
+    from scipy.special import chdtrc  # type: ignore[import-untyped]
 
     from ..model import Recording
 

@@ -314,6 +314,20 @@ def harmonic_levels(rows: FloatArray, white_var: float, dc: bool = True) -> Floa
 MAX_CROSS_PERIOD_CORRELATION = 0.8
 
 
+def common_centre(centres: Sequence[float], level: float) -> tuple[float, float, float, bool]:
+    """``(mean, se, p, kept)`` of the recordings' centres after a wander or a drift is taken out: the
+    two-sided t-test of their mean against 0 (NaN se and p with fewer than 2), kept when ``p < level`` (an
+    output offset that stands out of their spread; baseline.py, zero_drift.py)."""
+    from scipy.special import stdtr
+
+    m = len(centres)
+    c, se, cp = float(np.mean(centres)), math.nan, math.nan
+    if m >= 2:
+        se = float(np.std(centres, ddof=1)) / math.sqrt(m)
+        cp = float(2.0 * stdtr(m - 1, -abs(c) / se)) if se > 0 else (0.0 if c else 1.0)
+    return c, se, cp, bool(math.isfinite(cp) and cp < level)
+
+
 def cross_period_correlation(series: FloatArray) -> float:
     """The lag-1 autocorrelation of ``series`` (one value per period, mean removed) with the first-order bias
     of a short series taken off (``E r_hat = r - (1 + 3 r) / N``, Marriott and Pope 1954); 0.0 when N < 4

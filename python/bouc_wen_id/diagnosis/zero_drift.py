@@ -39,7 +39,7 @@ from typing import Any, Optional
 
 import numpy as np
 
-from .data import cross_period_inflation
+from .data import common_centre, cross_period_inflation
 
 #: Level of the pooled trend test of the period means (as the wander's).
 DRIFT_ALPHA = 1e-3
@@ -221,7 +221,7 @@ def _lab(meas: Any) -> Optional[_Numbers]:
 def detect(items: Any, level: float) -> Optional[Drift]:
     """The set's zero-drift test (module docstring) on its Recordings; None when the zero does not drift or
     no recording has :data:`MIN_PERIODS` periods after settling. ``level`` is the common centre's t-test's."""
-    from scipy.special import chdtrc, stdtr
+    from scipy.special import chdtrc
 
     seq = list(items) if isinstance(items, (list, tuple)) else [items]
     chi2, loop, dof, decays, slopes, centres, largest, sig = 0.0, 0.0, 0, [], [], [], 0.0, []
@@ -247,12 +247,7 @@ def detect(items: Any, level: float) -> Optional[Drift]:
     decay_p = min(decays) if decays else math.nan
     if not (pval < DRIFT_ALPHA and loop_p >= DRIFT_ALPHA and decays and decay_p >= DECAY_LEVEL / len(decays)):
         return None
-    m = len(centres)
-    c, se, cp = float(np.mean(centres)), math.nan, math.nan
-    if m >= 2:
-        se = float(np.std(centres, ddof=1)) / math.sqrt(m)
-        cp = float(2.0 * stdtr(m - 1, -abs(c) / se)) if se > 0 else (0.0 if c else 1.0)
-    kept = bool(math.isfinite(cp) and cp < level)
+    c, se, cp, kept = common_centre(centres, level)
     sigma = math.sqrt(float(np.mean(sig)))
     return Drift(
         tuple(slopes),
