@@ -16,6 +16,7 @@ from typing import Optional
 
 from ..augmented import AugExperiment, AugFit
 from ..terms import TERMS, Play
+from .masing import masing_text
 from .result import NamedTerm
 from .select import LAW_ALPHA, Alternative
 
@@ -94,10 +95,12 @@ def family_text(named: Sequence[NamedTerm], levels: Optional[Sequence[float]] = 
     None: not known, said). Empty when neither is named."""
     saturated = levels is None or (len(levels) > 0 and min(levels) >= 1.0)
     dahl = [t for t in named if t.term in TERMS and TERMS[t.term].companion]
+    # A spring on x from saturating loops may be a Prandtl-Ishlinskii loop's elastic part (masing.py).
+    before = play_text(named, saturated) + masing_text(named, saturated and levels is not None)
     if not dahl:
-        return play_text(named, saturated)
+        return before
     where = " or ".join(TERMS[t.term].place_label() for t in dahl)
-    return play_text(named, saturated) + (
+    return before + (
         f"; {where} names {FAMILY_MARK} (a smooth parallel loop that turns after each reversal and "
         "saturates): its branch shape passed its test, but a distribution of stops (Iwan, "
         "Prandtl-Ishlinskii, Masing) or another Dahl exponent fits such loops too; what separates them is "

@@ -1,0 +1,130 @@
+"""The Masing caveat (diagnosis/masing.py): a spring on x named from saturating loops may be the elastic
+part of a Prandtl-Ishlinskii loop on x, and the verdict says so - only when every experiment saturates.
+
+The records here are made without the library's simulator: a first-order G with a delay in closed form
+(steady state), Bouc-Wen integrated by RK4 along the analytic x(t), and a Prandtl-Ishlinskii operator
+written in NumPy (plays of several widths, one of width zero: mostly elastic, as a real PI spring is).
+"""
+
+from __future__ import annotations
+
+import math
+
+import bouc_wen_id as bw
+import numpy as np
+import pytest
+from bouc_wen_id.diagnosis.caveats import family_text
+from bouc_wen_id.diagnosis.masing import MASING_MARK, masing_text
+from bouc_wen_id.diagnosis.result import NamedTerm
+from bouc_wen_id.terms import Stiffness, StiffnessX
+
+P = 200  # samples per period
+ALPHA, BETA, GAMMA, MU = 1.0, 0.7, 0.3, 1.5  # saturation w_u = ((beta + gamma) / alpha)^(-1/mu) = 1
+TAU, DELAY = 0.15, 0.05  # G = exp(-s DELAY) / (1 + s TAU)
+
+
+def _named(kind: str) -> list[NamedTerm]:
+    return [NamedTerm(kind, "k", 0.1, 0.01, "")]
+
+
+def test_the_clause_needs_a_spring_on_x_and_saturating_loops() -> None:
+    assert MASING_MARK in masing_text(_named(StiffnessX.kind), True)
+    assert masing_text(_named(StiffnessX.kind), False) == ""
+    assert masing_text(_named(Stiffness.kind), True) == ""
+    # through the verdict's caveats: levels known and all past saturation; one below, or unknown, quiet
+    assert MASING_MARK in family_text(_named(StiffnessX.kind), [1.2, 3.0])
+    assert MASING_MARK not in family_text(_named(StiffnessX.kind), [0.5, 3.0])
+    assert MASING_MARK not in family_text(_named(StiffnessX.kind), None)
+
+
+def _plays(x: np.ndarray, radii: np.ndarray) -> np.ndarray:
+    """Play operators of half-widths ``radii`` (rows) along the sampled path x, started at x[0]."""
+    out = np.empty((radii.size, x.size))
+    p = np.full(radii.size, x[0])
+    for k in range(x.size):
+        p = np.clip(p, x[k] - radii, x[k] + radii)
+        out[:, k] = p
+    return out
+
+
+def _bouc_wen(x: np.ndarray, xd: np.ndarray, h: float) -> np.ndarray:
+    """w along x(t) by RK4 (x, dx/dt sampled at half steps: the arrays hold 2n+1 points, step h)."""
+
+    def rate(w: float, v: float) -> float:
+        return float(v * (ALPHA - (BETA * np.sign(v * w) + GAMMA) * abs(w) ** MU))
+
+    n = (x.size - 1) // 2
+    w = np.zeros(n + 1)
+    for j in range(n):
+        v0, vm, v1 = xd[2 * j], xd[2 * j + 1], xd[2 * j + 2]
+        k1 = rate(w[j], v0)
+        k2 = rate(w[j] + h / 2 * k1, vm)
+        k3 = rate(w[j] + h / 2 * k2, vm)
+        k4 = rate(w[j] + h * k3, v1)
+        w[j + 1] = w[j] + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+    return w
+
+
+def _records(
+    seed: int,
+    levels: tuple[float, ...],
+    extra: str,
+    size: float,
+    periods: int = 10,
+    settle: int = 4,
+    reach: float = 0.0,
+) -> list[bw.Recording]:
+    """Three frequencies x ``levels`` (x's stroke over the saturation level); ``extra``: "pi" (a
+    Prandtl-Ishlinskii operator on x) or "spring" (k x); sized to ``size`` times the averaged noise sd.
+    The plays' widths scale with ``reach`` (x's stroke; 0: the smallest experiment's)."""
+    rng = np.random.default_rng(seed)
+    sd = 0.01
+    avg = sd / math.sqrt(periods)
+    radii = np.array([0.0, 0.1, 0.2, 0.3, 0.45]) * (reach or min(levels))
+    weights = np.array([3.0, 1.0, 0.8, 0.6, 0.4])
+    runs = []
+    for om in (2.0, 6.0, 15.0):
+        g = np.exp(-1j * om * DELAY) / (1 + 1j * om * TAU)
+        for lv in levels:
+            amp = lv / abs(g)
+            n = (settle + periods) * P
+            dt = 2 * math.pi / om / P
+            tt = np.arange(2 * n + 1) * (dt / 2)
+            x = lv * np.cos(om * tt + np.angle(g))
+            xd = -lv * om * np.sin(om * tt + np.angle(g))
+            w = _bouc_wen(x, xd, dt)[:n]
+            xs = x[: 2 * n : 2]
+            add = weights @ _plays(xs, radii) if extra == "pi" else xs
+            runs.append((om, amp, n, dt, w, add))
+    rms = math.sqrt(np.mean(np.concatenate([r[5][settle * P :] for r in runs]) ** 2))
+    scale = size * avg / rms
+    out = []
+    for om, amp, n, dt, w, add in runs:
+        t = np.arange(n) * dt
+        y = w + scale * add + rng.normal(0.0, sd, n)
+        out.append(bw.Recording(t, amp * np.cos(om * t), y, amp, om, settle_periods=settle))
+    return out
+
+
+def test_a_numpy_prandtl_ishlinskii_loop_named_as_a_spring_on_x_carries_the_caveat() -> None:
+    """Saturating amplitudes only: the PI loop's elastic part is named as a spring on x (its stops fit
+    inside Bouc-Wen's branch at this size), and the verdict says a loop of another family fits alike."""
+    d = bw.diagnose(_records(3, (1.4, 3.0), "pi", 20.0))
+    assert d.status != "adequate"
+    named = {t.term for t in d.named}
+    assert StiffnessX.kind in named
+    assert MASING_MARK in d.verdict
+
+
+def test_a_spring_on_x_with_an_experiment_below_saturation_gets_no_caveat() -> None:
+    """The library's own spring on x, with one amplitude below saturation (the separating experiment
+    run): named, and no Masing clause."""
+    d = bw.diagnose(_records(4, (0.6, 3.0), "spring", 20.0))
+    assert StiffnessX.kind in {t.term for t in d.named}
+    assert MASING_MARK not in d.verdict
+
+
+@pytest.mark.parametrize("seed", [5])
+def test_a_plain_plant_gets_no_caveat(seed: int) -> None:
+    d = bw.diagnose(_records(seed, (1.4, 3.0), "spring", 0.0))
+    assert MASING_MARK not in d.verdict
