@@ -25,7 +25,10 @@ as a new user would, and it differs from them on purpose:
   output with minus without the effect), the library's terms and three of our own outside it: a Stribeck
   friction curve on u, a backlash (play) on the measured output, a Prandtl-Ishlinskii loop on x.
 
-Scored by the public result only (status, named terms, alternatives). Run:
+Scored by the public result only (status, named terms, alternatives, and for two outside effects the
+verdict's words: a verdict naming only the term whose caveat names the truth as an equivalent that the
+design cannot separate, with that caveat, is "family", as benches/diagnosis.py scores the Dahl element's
+family caveat; see FAMILY). Run:
 
     python benches/blind.py --quick                        # <= 2 min
     python benches/blind.py --cases 6 --null 20 --outside 6 --workers 2 --json blind.json

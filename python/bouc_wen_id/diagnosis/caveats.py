@@ -92,7 +92,8 @@ def family_text(named: Sequence[NamedTerm], levels: Optional[Sequence[float]] = 
     """The verdict's word when Dahl friction is named: what it stands for and what the data could not
     exclude (issue 18: a name users can trust blind), and play's equivalence (:func:`play_text`, when
     every experiment reverses from saturation: each of ``levels``, :func:`latent_levels`, at least 1;
-    None: not known, said). Empty when neither is named."""
+    None: not known, said), and a spring on x's Masing caveat (:func:`masing.masing_text`, under the same
+    condition; None: not said). Empty when none of them is named."""
     saturated = levels is None or (len(levels) > 0 and min(levels) >= 1.0)
     dahl = [t for t in named if t.term in TERMS and TERMS[t.term].companion]
     # A spring on x from saturating loops may be a Prandtl-Ishlinskii loop's elastic part (masing.py).
