@@ -12,8 +12,8 @@ Measured (benches/blind.py's six Prandtl-Ishlinskii cases, the same plants, desi
 effect re-sized, its RMS over the averaged noise sd): at 10x and 30x all six "explained by: parallel
 stiffness on x" with a final model that passes; at 100x three still named it with a passing final model
 (p 0.06-1), two "explained in part", one "unexplained"; at 300x all six "unexplained". A PI loop written
-here in NumPy through a first-order G with a delay (tests/test_diagnosis_masing.py) is named the same way
-at 20x (final p 0.91). So at such sizes no shape test of the residual can separate them, and the
+here in NumPy through a first-order or a resonant G with a delay (tests/test_diagnosis_masing.py) is
+named the same way at 20x (final p 0.91, 0.89). So at such sizes no shape test of the residual can separate them, and the
 verdict says so instead (:func:`masing_text`) - only when every experiment saturates, as
 :func:`caveats.play_text` does for play and an output backlash: with an experiment below saturation, a
 Masing branch from a lower reversal is its initial curve scaled by 2 while Bouc-Wen's is not, so the
@@ -44,5 +44,7 @@ def masing_text(named: Sequence[NamedTerm], saturated: bool) -> str:
         "in parallel with a distribution of stops, a Masing-type loop) draws the same steady loops when "
         "every reversal starts from saturation, as here; what separates them is experiments at amplitudes "
         "from well below saturation to past it, and minor loops (a Masing branch is the initial loading "
-        "curve scaled by 2 and returns to the reversal it left; Bouc-Wen's is not, in general)"
+        "curve scaled by 2 and returns to the reversal it left; Bouc-Wen's is not, in general), with the "
+        "loop well above the noise (measured: such a loop at 10-30x the averaged noise sd fits as this "
+        "spring; one below-saturation amplitude added, the spring's law refused it at 100x)"
     )
