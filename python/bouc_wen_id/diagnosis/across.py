@@ -635,7 +635,10 @@ def _verdict(
 ) -> str:
     n = len(conds)
     if not terms:
-        return f"across {n} conditions: nothing named (no candidate passes all its tests jointly at every condition)"
+        return (
+            f"across {n} conditions: nothing named (no candidate passes all its tests jointly at every "
+            "condition)"
+        )
     parts = []
     for t in terms:
         where = (
