@@ -40,7 +40,7 @@ def _twice(effect: str, size: float, seed: int, cands: list[str]) -> Any:
 
 def test_a_term_needed_only_beside_dahl_is_not_named_across_and_the_verdict_says_why() -> None:
     """Dahl's exponent 2 at 30x (seed 61010, the case of tests/test_beside_dahl.py): before, the joint
-    selection named Dahl friction and then pinching (share 0.98 of what was left, law and held-out passing),
+    selection named Dahl friction and then pinching (its F test, law and held-out passing beside Dahl),
     though pinching's combined F test on the plain models gave p = 0.98. Now it is refused through
     beside.only_beside, recorded in the step and said in the verdict, as diagnose does on the same records."""
     pinch = T.Pinching.kind
