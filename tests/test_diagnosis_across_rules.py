@@ -126,3 +126,24 @@ def test_a_non_physical_value_where_the_term_is_present_is_not_named() -> None:
         visc.term, visc.label, "c", "", (0.5, -0.2), (0.1, 0.1), (True, False), (0.0, 1.0), (), None
     )
     assert V.unphysical([absent]) == []
+
+
+def _joint(term: str, imp: tuple[float, float], cost: float) -> Any:
+    fits = tuple(_fit(cost, (term,)) for _ in imp)
+    return SimpleNamespace(term=term, improvements=imp, fits=fits, passed=True)
+
+
+def test_a_rival_within_the_uncertainty_of_the_chosen_improvement_is_near_tied() -> None:
+    """select._tied's rule on the sums: a rival 17 % short of the chosen term's summed improvement (outside
+    the 10 % rule) is a near-tied reading when the difference is within 2 sd of the improvement, ``sd = 2
+    sqrt(Delta C s2)``, s2 the chosen structure's pooled chi2/dof: at s2 = 4 it is (277 >= 200), at the
+    noise floor it is not (139 < 200)."""
+    g = _groups(5000.0, 5000.0, (T.Viscous.kind,))
+    dof = 2 * 256 - (3 + 1 + 4)
+    for s2, tie in ((4.0, True), (1.0, False)):
+        chosen = _joint(T.Viscous.kind, (600.0, 600.0), s2 * dof)
+        rival = _joint(T.Offset.kind, (500.0, 500.0), s2 * dof + 100.0)
+        assert V.tied(g, chosen, rival) is tie
+    # A rival whose fit failed at some condition is never a reading of the same misfit.
+    broken = SimpleNamespace(term="offset", improvements=(600.0, 600.0), fits=(None, None), passed=False)
+    assert not V.tied(g, _joint(T.Viscous.kind, (600.0, 600.0), 4.0 * dof), broken)

@@ -131,7 +131,8 @@ class JointStep:
     trials: tuple[JointTrial, ...]
     chosen: Optional[str]
     #: Candidates that passed in sample with a summed improvement of at least :data:`RIVAL_IMPROVEMENT` of
-    #: the chosen one's: near-tied readings of the same misfit (not named; the verdict lists them).
+    #: the chosen one's, or within its uncertainty (:func:`.across_verdict.tied`): near-tied readings of
+    #: the same misfit (not named; the verdict lists them).
     rivals: tuple[str, ...] = ()
     #: Candidates that passed in sample but whose law failed (element_law_test; said in the verdict).
     law_failed: tuple[str, ...] = ()
@@ -481,7 +482,7 @@ def _select(
             tr.term
             for tr in passed
             if tr.term != chosen.term
-            and sum(tr.improvements) >= RIVAL_IMPROVEMENT * best
+            and (sum(tr.improvements) >= RIVAL_IMPROVEMENT * best or across_verdict.tied(groups, chosen, tr))
             and tr.term not in refused + list(law_failed)
         )
         steps.append(JointStep(done, chosen.term, rivals, law_failed, tuple(refused)))
@@ -656,7 +657,10 @@ def _verdict(
         for r in st.rivals
     ]
     if ties:
-        tail += "; near-tied readings (summed improvement within 10 %): " + "; ".join(ties)
+        tail += (
+            "; near-tied readings (summed improvement within 10 % or within its uncertainty): "
+            + "; ".join(ties)
+        )
     return f"across {n} conditions, one structure: " + "; ".join(parts) + tail
 
 

@@ -13,7 +13,9 @@ through the same functions (no copies):
 - **law-failed candidates are said** (:func:`.run._law_text`): a candidate that fits part of the misfit
   with values that differ between a condition's experiments is a stand-in, named in the verdict as such;
 - **a term refused beside Dahl's element is said** (:func:`.beside.text`);
-- **Dahl's and play's caveats** (:func:`.caveats.family_text`, with every condition's latent levels).
+- **Dahl's and play's caveats** (:func:`.caveats.family_text`, with every condition's latent levels);
+- **a rival within the uncertainty of the chosen term's improvement is a near-tied reading**
+  (:func:`tied`, through :func:`.select._tied` on the improvements and costs summed over the conditions).
 
 The selection's own rules (the element's law with its branch shape and pinching's band,
 :func:`.select.element_law_test`; a term at its null value is no candidate, :func:`.select.at_null`; only
@@ -31,7 +33,7 @@ from . import beside
 from .caveats import family_text, latent_levels
 from .locate import adequacy_p
 from .result import NamedTerm, Status
-from .select import dof_of
+from .select import Trial, _tied, dof_of
 
 
 def explained_fraction(groups: Sequence[Any]) -> float:
@@ -84,6 +86,23 @@ def judged(groups: Sequence[Any], terms: Sequence[Any], alpha: float) -> tuple[S
     return status, named, [t for t in terms if t not in named]
 
 
+def _summed(groups: Sequence[Any], tr: Any) -> Trial:
+    """A joint trial as the single-group :class:`.select.Trial` :func:`.select._tied` reads: its cost and
+    improvement summed over the conditions (the first condition's fit stands for "fitted")."""
+    cost = sum(f.cost for f in tr.fits) if all(f is not None for f in tr.fits) else math.nan
+    nan = math.nan
+    return Trial(tr.term, cost, sum(tr.improvements), nan, nan, nan, nan, tr.passed, fit=tr.fits[0])
+
+
+def tied(groups: Sequence[Any], chosen: Any, rival: Any) -> bool:
+    """Whether ``rival``'s summed improvement is within the uncertainty of ``chosen``'s (:func:`.select._tied`
+    on the sums: ``2 sqrt(Delta C s2)``, ``s2`` the chosen structure's pooled chi2/dof when above 1)."""
+    if any(f is None for f in (*chosen.fits, *rival.fits)):
+        return False
+    dof = sum(dof_of(g.sx, f) for g, f in zip(groups, chosen.fits))
+    return _tied(_summed(groups, chosen), _summed(groups, rival), dof)
+
+
 def head(status: Status, partial: Sequence[Any], n: int, fraction: float) -> str:
     """The verdict's opening when the joint structure is "unexplained" with tested terms (none named)."""
     what = ", ".join(t.label for t in partial)
@@ -110,4 +129,4 @@ def clauses(
     return text + family_text(as_named, levels)
 
 
-__all__ = ["explained_fraction", "judged", "head", "clauses", "unphysical"]
+__all__ = ["explained_fraction", "judged", "head", "clauses", "unphysical", "tied"]
