@@ -4,7 +4,11 @@ verdict-neutral (``--compare before.json``: statuses, named terms and places, al
 relative tolerance). Same inputs as the study (its ``groups`` and ``_diagnose``, imported, not copied).
 
 Usage: ``python benches/real_verdicts.py [--data DIR] [--groups 'mr-damper 0 A,wire-rope all files']
-[--json out.json] [--compare before.json] [--rtol 1e-3] [--profile out.prof]``.
+[--json out.json] [--compare before.json] [--rtol 1e-3] [--profile out.prof] [--across]``.
+
+``--across``: also the MR damper's current levels diagnosed with one structure (``bw.diagnose_across``, as
+the study's ``across_levels``: each level's own diagnosis reused, the study's candidates), stored under
+``"across"`` and compared by its verdict, named terms and their values per level.
 """
 
 from __future__ import annotations
@@ -78,6 +82,49 @@ def compare(before: dict[str, Any], after: dict[str, Any], rtol: float) -> list[
     return bad
 
 
+def _across(S: Any, mr: list[tuple[str, Any, Any]]) -> dict[str, Any]:
+    """The MR damper's levels across (the study's ``across_levels``, its inputs as there): ``to_dict()``."""
+    import warnings
+
+    import bouc_wen_id as bw
+
+    A = S._adapters()
+    labels = [f"{c:g} A" for c in A.MR_CURRENTS]
+    currents = [float(A.MR_CURRENTS[labels.index(lab)]) for lab, _, _ in mr]
+    own = [d for _, _, d in mr]
+    units = mr[0][1][0].units
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        a = bw.diagnose_across(
+            [ms for _, ms, _ in mr],
+            currents,
+            labels=[lab for lab, _, _ in mr],
+            candidates=S.across_candidates(own),
+            per_condition=own,
+            y_unit=units.get("y", ""),
+            u_unit=units.get("u", ""),
+        )
+    print(f"mr-damper across levels: {a.verdict} ({a.seconds:.1f} s)", file=sys.stderr)
+    return {"seconds": a.seconds, "diagnosis": S.clean(a.to_dict())}
+
+
+def compare_across(before: dict[str, Any], after: dict[str, Any], rtol: float) -> list[str]:
+    """Differences of the across run: its verdict and named terms exact, their values to ``rtol``."""
+    db, da = before.get("diagnosis", {}), after.get("diagnosis", {})
+    bad = [f"across: verdict differs:\n   before {db.get('verdict')}\n   after  {da.get('verdict')}"]
+    if db.get("verdict") == da.get("verdict"):
+        bad = []
+    tb = {t["term"]: t for t in db.get("terms", [])}
+    ta = {t["term"]: t for t in da.get("terms", [])}
+    if list(tb) != list(ta):
+        bad.append(f"across: named {list(tb)} -> {list(ta)}")
+    for k in set(tb) & set(ta):
+        for i, (x, y) in enumerate(zip(tb[k]["values"], ta[k]["values"])):
+            if x is None or y is None or abs(x - y) > rtol * max(abs(x), abs(y), 1e-300):
+                bad.append(f"across: {k} value [{i}]: {x!r} -> {y!r}")
+    return bad
+
+
 def identical(before: dict[str, Any], after: dict[str, Any], group: str) -> bool:
     """Whether a group's whole diagnosis (every number, bit for bit) is the same, its seconds aside."""
 
@@ -112,6 +159,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--compare", type=Path)
     ap.add_argument("--rtol", type=float, default=1e-3)
     ap.add_argument("--profile", type=Path)
+    ap.add_argument("--across", action="store_true", help="also the MR damper's levels across (see above)")
     args = ap.parse_args(argv)
     S = _study()
     datasets = "mr-damper,friction-damper,wire-rope,bh-microwire".split(",")
@@ -123,6 +171,7 @@ def main(argv: list[str] | None = None) -> int:
 
         prof = cProfile.Profile()
     t0 = time.perf_counter()
+    mr: list[tuple[str, Any, Any]] = []  # (label, measurements, own diagnosis) of the MR damper's levels
     for dataset, label, ms in S.groups(args.data, datasets):
         name = f"{dataset} {label}"
         if want and name not in want:
@@ -139,8 +188,12 @@ def main(argv: list[str] | None = None) -> int:
             if prof is not None:
                 prof.disable()
         wall = time.perf_counter() - t
+        if dataset == "mr-damper":
+            mr.append((label, ms, d))
         out["groups"][name] = {"seconds": d.seconds, "wall": wall, "diagnosis": S.clean(d.to_dict())}
         print(f"{name}: {d.status} {[t.term for t in d.named]} {d.seconds:.1f} s", file=sys.stderr)
+    if args.across and len(mr) >= 2:
+        out["across"] = _across(S, mr)
     out["total"] = time.perf_counter() - t0
     out["load_end"] = os.getloadavg()[0]
     if prof is not None:
@@ -150,6 +203,8 @@ def main(argv: list[str] | None = None) -> int:
     if args.compare:
         before = json.loads(args.compare.read_text())
         bad = compare(before, out, args.rtol)
+        if "across" in before or "across" in out:
+            bad += compare_across(before.get("across", {}), out.get("across", {}), args.rtol)
         print("\n".join(bad) if bad else "verdict-neutral: no differences", file=sys.stderr)
         same = [g for g in before["groups"] if identical(before, out, g)]
         print(

@@ -67,3 +67,7 @@ def test_pinching_that_only_bends_a_dahl_branch_is_not_named() -> None:
     later = {tr.term: tr for tr in d.steps[1].trials}
     assert later[pinch].passed  # beside the element it passed its F test: the rule refused it
     assert d.steps[1].chosen is None
+    # Refused, not dropped silently: the step records it and the verdict names it with its plain-model p.
+    assert d.steps[1].beside == (pinch,)
+    assert f"not named: {T.Pinching.place_label()} beside {DAHL_X.place_label()}" in d.verdict
+    assert f"(on the plain model p = {first[pinch].p_value:.2g})" in d.verdict

@@ -44,10 +44,12 @@ from ..augmented import AugExperiment, AugFit
 from ..errors import InvalidParameterError
 from ..terms import TERMS, Distortion
 from ..validation import real_number
+from . import across_verdict
+from .beside import only_beside
 from .fitting import Scale, carry_through_g, fit_plain, fit_with, physical, scale_of, scaled, substeps_for
 from .locate import adequacy_p
 from .progress import Progress, ProgressCallback, reporter
-from .result import Diagnosis, term_symbol_unit
+from .result import Diagnosis, Status, term_symbol_unit
 from .select import (
     ALPHA,
     ALTERNATIVE_IMPROVEMENT,
@@ -55,9 +57,10 @@ from .select import (
     MATERIAL_SHARE,
     FoldCache,
     _admissible,
+    at_null,
     dof_of,
+    element_law_test,
     held_out,
-    law_test,
 )
 from .shared import SharedTest, shared_test
 
@@ -128,15 +131,22 @@ class JointStep:
     trials: tuple[JointTrial, ...]
     chosen: Optional[str]
     #: Candidates that passed in sample with a summed improvement of at least :data:`RIVAL_IMPROVEMENT` of
-    #: the chosen one's: near-tied readings of the same misfit (not named; the verdict lists them).
+    #: the chosen one's, or within its uncertainty (:func:`.across_verdict.tied`): near-tied readings of
+    #: the same misfit (not named; the verdict lists them).
     rivals: tuple[str, ...] = ()
+    #: Candidates that passed in sample but whose law failed (element_law_test; said in the verdict).
+    law_failed: tuple[str, ...] = ()
+    #: Candidates refused beside a Dahl element with no effect of their own on the plain models (beside.py).
+    beside: tuple[str, ...] = ()
 
     def to_dict(self) -> dict[str, Any]:
-        return {
+        out: dict[str, Any] = {
             "trials": [t.to_dict() for t in self.trials],
             "chosen": self.chosen,
             "rivals": list(self.rivals),
         }
+        out.update({k: list(getattr(self, k)) for k in ("law_failed", "beside") if getattr(self, k)})
+        return out
 
 
 @dataclass(frozen=True)
@@ -223,6 +233,12 @@ class AcrossDiagnosis:
     settings: dict[str, Any]
     seconds: float
     final_fits: tuple[AugFit, ...] = field(default=(), repr=False, compare=False)
+    #: As :class:`Diagnosis`'s (across_verdict.py): "explained" only when the joint structure passes its
+    #: adequacy test at every condition.
+    status: Status = "unexplained"
+    #: Terms of the joint structure tested but not named (a non-physical value where present, or a structure
+    #: that leaves most of the summed excess), with their values per condition as :attr:`terms`.
+    partial: tuple[TermAcross, ...] = ()
 
     @property
     def named(self) -> tuple[str, ...]:
@@ -231,8 +247,10 @@ class AcrossDiagnosis:
     def to_dict(self) -> dict[str, Any]:
         return {
             "format": "bouc_wen_id.diagnosis_across",
+            "status": self.status,
             "verdict": self.verdict,
             "terms": [t.to_dict() for t in self.terms],
+            "partial": [t.to_dict() for t in self.partial],
             "conditions": [c.to_dict() for c in self.conditions],
             "steps": [s.to_dict() for s in self.steps],
             "settings": self.settings,
@@ -242,7 +260,7 @@ class AcrossDiagnosis:
     def summary(self) -> str:
         """The verdict, a table of each term per condition and one of the conditions' fits."""
         lines = [self.verdict, ""]
-        for t in self.terms:
+        for t in (*self.terms, *self.partial):
             smooth = (
                 f"degree {t.smooth_degree} in the condition" if t.smooth_degree is not None else "not smooth"
             )
@@ -379,7 +397,9 @@ def _trial(groups: Sequence[_Group], term: str, n_cands: int, alpha: float) -> J
         f_k = max(a, 0.0) / q / max(c / max(d, 1), 1.0)
         p_each.append(float(fdtrc(q, max(d, 1), f_k)) if f_k > 0 else 1.0)
     present = [pk < alpha / k for pk in p_each]
-    physical = all(_admissible(f, term) for f, pr in zip(done, present) if pr)
+    # As the single-group selection: a physical value, and not the null value (the model without it: what
+    # it "removed" is a refit from another start, select.at_null), wherever it is present.
+    physical = all(_admissible(f, term) and not at_null(f, term) for f, pr in zip(done, present) if pr)
     ok = padj < alpha and share >= MATERIAL_SHARE and physical and any(present)
     return JointTrial(term, stat, p, padj, share, tuple(imp), tuple(p_each), ok, fits=tuple(fits))
 
@@ -389,8 +409,8 @@ def _confirmed(groups: Sequence[_Group], tr: JointTrial, alpha: float, use_held_
     summed over the conditions."""
     k = len(groups)
     present = [pk < alpha / k for pk in tr.p_each]
-    laws = [
-        law_test(g.sx, f, tr.term, g.substeps)
+    laws = [  # everything the term claims, as the single-group selection tests it (its shape, its band)
+        element_law_test(g.sx, f, tr.term, g.substeps)
         for g, f, pr in zip(groups, tr.fits, present)
         if pr and f is not None
     ]
@@ -439,22 +459,33 @@ def _select(
         passed = sorted((tr for tr in trials if tr.passed), key=lambda tr: -sum(tr.improvements))
         chosen: Optional[JointTrial] = None
         final = {tr.term: tr for tr in trials}
+        alone = {t.term: t.p_value for t in steps[0].trials} if steps else {}
+        refused: list[str] = []
         for tr in passed:
+            if only_beside(groups[0].current, tr.term, alone.get(tr.term, math.nan), alpha):
+                refused.append(tr.term)  # needed only beside a Dahl element (beside.py), as diagnose
+                continue
             tr2 = _confirmed(groups, tr, alpha, use_held_out)
             final[tr.term] = tr2
             if _accepts(tr2, use_held_out):
                 chosen = tr2
                 break
+        law_failed = tuple(
+            t.term for t in final.values() if math.isfinite(t.law_p_value) and t.law_p_value < LAW_ALPHA
+        )
+        done = tuple(final[t.term] for t in trials)
         if chosen is None:
-            steps.append(JointStep(tuple(final[t.term] for t in trials), None))
+            steps.append(JointStep(done, None, (), law_failed, tuple(refused)))
             break
         best = sum(chosen.improvements)
         rivals = tuple(
             tr.term
             for tr in passed
-            if tr.term != chosen.term and sum(tr.improvements) >= RIVAL_IMPROVEMENT * best
+            if tr.term != chosen.term
+            and (sum(tr.improvements) >= RIVAL_IMPROVEMENT * best or across_verdict.tied(groups, chosen, tr))
+            and tr.term not in refused + list(law_failed)
         )
-        steps.append(JointStep(tuple(final[t.term] for t in trials), chosen.term, rivals))
+        steps.append(JointStep(done, chosen.term, rivals, law_failed, tuple(refused)))
         for g, f in zip(groups, chosen.fits):
             assert f is not None
             g.current = f
@@ -605,7 +636,10 @@ def _verdict(
 ) -> str:
     n = len(conds)
     if not terms:
-        return f"across {n} conditions: nothing named (no candidate passes at every condition jointly)"
+        return (
+            f"across {n} conditions: nothing named (no candidate passes all its tests jointly at every "
+            "condition)"
+        )
     parts = []
     for t in terms:
         where = (
@@ -623,7 +657,10 @@ def _verdict(
         for r in st.rivals
     ]
     if ties:
-        tail += "; near-tied readings (summed improvement within 10 %): " + "; ".join(ties)
+        tail += (
+            "; near-tied readings (summed improvement within 10 % or within its uncertainty): "
+            + "; ".join(ties)
+        )
     return f"across {n} conditions, one structure: " + "; ".join(parts) + tail
 
 
@@ -729,6 +766,20 @@ def diagnose_across(
         "held_out_test": held_out_test,
         "condition": conds,
     }
+    return _finished(prepared, terms, conditions, steps, settings, alpha, time.perf_counter() - t0)
+
+
+def _finished(
+    prepared: Sequence[_Group],
+    terms: tuple[TermAcross, ...],
+    conditions: tuple[ConditionResult, ...],
+    steps: Sequence[JointStep],
+    settings: dict[str, Any],
+    alpha: float,
+    seconds: float,
+) -> AcrossDiagnosis:
+    """The result: the verdict by the single-group diagnosis's rules (across_verdict.py) and the wander's
+    or the drift's clause."""
     wandering = ", ".join(str(g.label) for g in prepared if g.wander)
     clause = (
         f"; the baseline wanders at {wandering} (removed period by period, each experiment's DC free: an "
@@ -742,14 +793,23 @@ def diagnose_across(
             f"; the output's zero drifts at {drifting} (its straight line taken out, each experiment's DC "
             "free: an offset or each experiment's own DC there cannot be told from it)"
         )
+    status, named, partial = across_verdict.judged(prepared, terms, alpha)
+    verdict = (
+        across_verdict.head(status, partial, len(prepared), across_verdict.explained_fraction(prepared))
+        if partial and not named
+        else _verdict(named, conditions, steps)
+    )
+    verdict += across_verdict.clauses(status, named, partial, steps, prepared)
     return AcrossDiagnosis(
-        _verdict(terms, conditions, steps) + clause,
-        terms,
+        verdict + clause,
+        tuple(named),
         conditions,
         tuple(steps),
         settings,
-        time.perf_counter() - t0,
+        seconds,
         tuple(g.current for g in prepared),
+        status,
+        tuple(partial),
     )
 
 

@@ -15,11 +15,20 @@ real second effect beside Dahl's loop shows there too (its own columns reduce th
 the other effect's misfit only widening the F test's denominator); a term that fits nothing until the
 element is in explains the element's branch, and what it filled is the element's family's, which its
 caveat names. The structure stays unexplained rather than named after the wrong physics.
+
+The rule is conservative on purpose: a real second effect whose own trace on the plain model is below
+``alpha`` (swamped there by the element's misfit) is refused too. So it is never silent: the step records
+the refused term (``Step.beside``, ``JointStep.beside`` across conditions) and the verdict names it with
+its plain-model p and why (:func:`text`), for the user to test it on its own (a design where the element's
+loop is small, or the term's effect large). Both diagnoses apply it through :func:`only_beside`
+(:func:`.select.forward_select`, :func:`.across.diagnose_across`).
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
+from typing import Any
 
 from ..augmented import AugFit
 from ..terms import TERMS
@@ -43,4 +52,36 @@ def only_beside(current: AugFit, term: str, p_alone: float, alpha: float) -> boo
     return not (math.isfinite(p_alone) and p_alone < alpha)
 
 
-__all__ = ["elements_beside", "only_beside"]
+def text(steps: Sequence[Any]) -> str:
+    """The verdict's clause for the terms :func:`only_beside` refused (each step's ``beside``; the steps of
+    :func:`.select.forward_select` or of the joint selection across conditions): each with its first-step
+    p on the plain model and the element it sat beside. Empty when the rule never fired."""
+    first = {tr.term: tr.p_value for tr in steps[0].trials} if steps else {}
+    elements: list[str] = []
+    refused: dict[str, str] = {}
+    for st in steps:
+        for t in getattr(st, "beside", ()):
+            if t not in refused and elements:
+                refused[t] = elements[-1]
+        if st.chosen is not None and has_branch(st.chosen):
+            elements.append(st.chosen)
+    if not refused:
+        return ""
+
+    def p_text(t: str) -> str:
+        p = first.get(t, math.nan)
+        return f"p = {p:.2g}" if math.isfinite(p) else "its fit failed"
+
+    what = "; ".join(
+        f"{TERMS[t].place_label()} beside {TERMS[e].place_label()} (on the plain model {p_text(t)})"
+        for t, e in refused.items()
+    )
+    return (
+        f"; not named: {what}: it passes its F test only with the element in, so it bends the element's "
+        "branch (another Dahl exponent or a distribution of stops fits such loops) rather than showing an "
+        "effect of its own; to name it, it must show on the plain model (conservative: a real effect "
+        "swamped by the element's misfit is refused too)"
+    )
+
+
+__all__ = ["elements_beside", "only_beside", "text"]

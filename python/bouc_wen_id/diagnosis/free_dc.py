@@ -17,8 +17,11 @@ are those of the projected problem (``J^T W (P r) = 0``), so the estimates are i
 cost, the outputs (with the data's DC: a residual formed from them is the projected one) and the Fisher
 matrix (``J^T W J`` less each experiment's DC direction) are then those of the projected problem. Residuals
 and Jacobians formed elsewhere go through :func:`project` (the across test's shared fit, the detection limits)
-or :func:`centred` (the law and shape tests, the held-out refit); the feedback structure's held-out check and
-the separating-design search are not projected (docs/diagnosis.md). A fit whose DCs do not settle is flagged
+or :func:`centred` (the law and shape tests, the held-out refit, the separating-design search); the feedback
+structure's held-out check marks the experiments (:func:`marked`, from ``Diagnosis.settings["common_dc"]``),
+fits the feedback's folds on data projected by :func:`project` and centres its left-out residual
+(:func:`centred`). The feedback's own full fit is not projected (docs/diagnosis.md). A fit whose DCs do not
+settle is flagged
 (:data:`NOT_CONVERGED`).
 Experiments that are not marked are untouched (a set without a wander is fitted as before, bit for bit).
 """

@@ -16,7 +16,7 @@ from ..errors import InvalidParameterError
 from ..estimators import boundary_note
 from ..terms import DIAGNOSIS_CANDIDATES, TERMS, Distortion, Offset, physical_value
 from ..validation import real_number
-from . import baseline, free_dc, zero_drift
+from . import baseline, beside, free_dc, zero_drift
 from .caveats import alternatives_text, below_saturation, family_text, latent_levels
 from .data import DiagExperiment, colour_notes, prepare
 from .drift import (
@@ -639,7 +639,7 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
         fraction,
         fexps,
     )
-    verdict += _law_text(steps)
+    verdict += _law_text(steps) + beside.text(steps)  # refused beside a Dahl element: said (beside.py)
     alternatives = tuple(a for st in steps for a in st.alternatives) + _drift_alternatives(deg, named_deg)
     verdict += alternatives_text(alternatives, named) + family_text(named, latent_levels(sx, plain))
     setup.report("held-out check of the final model", 0, 1)
@@ -704,6 +704,7 @@ def _settings(setup: _Setup, s: Scale, substeps: int) -> dict[str, Any]:
         "held_out_test": setup.held_out_test,
         "scale": {"y": s.y, "u": s.u},
         "substeps": substeps,
+        **({} if setup.common_dc is None else {"common_dc": setup.common_dc}),  # free DCs (free_dc.py)
     }
 
 

@@ -184,9 +184,12 @@ class Step:
     targeted: bool = False
     #: Candidates that passed their tests but whose value differs between experiments (not named).
     law_failed: tuple[str, ...] = ()
+    #: Candidates that passed in sample beside a Dahl element with no effect of their own on the plain
+    #: model (beside.py): refused, and said in the verdict (:func:`.beside.text`).
+    beside: tuple[str, ...] = ()
 
     def to_dict(self) -> dict[str, Any]:
-        return {
+        out = {
             "before_cost": self.before_cost,
             "before_dof": self.before_dof,
             "trials": [t.to_dict() for t in self.trials],
@@ -195,6 +198,9 @@ class Step:
             "targeted": self.targeted,
             "law_failed": list(self.law_failed),
         }
+        if self.beside:  # only where the rule fired (a record without it reads as before)
+            out["beside"] = list(self.beside)
+        return out
 
 
 def _n(v: float) -> Optional[float]:
@@ -394,7 +400,8 @@ def _separating(exps: Sequence[AugExperiment], fa: AugFit, fb: AugFit, substeps:
 
     Each fitted model is evaluated with its own |G| and phase of that experiment; at another frequency G is
     taken as at the tested one, so the difference there is the terms' own (an approximation for a G that
-    changes quickly with frequency, which the message says).
+    changes quickly with frequency, which the message says). Under a wandering baseline the difference's
+    DC at a marked experiment is projected out as the held-out refit projects it (:func:`.free_dc.centred`).
     """
     best = (0.0, "")
     for i, e in enumerate(exps):
@@ -410,7 +417,10 @@ def _separating(exps: Sequence[AugExperiment], fa: AugFit, fb: AugFit, substeps:
                     ys = []
                     break
             if len(ys) == 2:
-                sep = float(np.sqrt(np.mean((ys[0] - ys[1]) ** 2) * e.weight))
+                # A marked experiment's DC is free (free_dc.py): a new one recorded so would not see the two
+                # models' DCs differ, as the held-out refit does not (kept only with the common centre).
+                diff = free_dc.centred(design, ys[0] - ys[1], held_out=True)
+                sep = float(np.sqrt(np.mean(diff**2) * e.weight))
                 if sep > best[0]:
                     what = f"{amult:g}x its amplitude" if fmult == 1.0 else f"{fmult:g}x its frequency"
                     note = "" if fmult == 1.0 else ", G taken as at the tested frequency"
@@ -703,11 +713,13 @@ def forward_select(
         chosen: Optional[Trial] = None
         final_trials = {tr.term: tr for tr in trials}
         law_failed: list[str] = []
+        refused: list[str] = []  # needed only beside a Dahl element: its branch's family (beside.py)
         alone = {t.term: t.p_value for t in steps[0].trials} if steps else {}
         for tr in order:
             assert tr.fit is not None
             if only_beside(current, tr.term, alone.get(tr.term, math.nan), alpha):
-                continue  # needed only beside a Dahl element: its branch's family, not a term (beside.py)
+                refused.append(tr.term)
+                continue
             law_p = element_law_test(exps, tr.fit, tr.term, substeps)
             if math.isfinite(law_p) and law_p < LAW_ALPHA:
                 final_trials[tr.term] = replace(tr, law_p_value=law_p)
@@ -731,6 +743,7 @@ def forward_select(
                 tuple(alternatives),
                 first,
                 tuple(law_failed),
+                tuple(refused),
             )
         )
         first = False

@@ -211,16 +211,27 @@ FIT_ERRORS = (InvalidParameterError, InsufficientDataError, NonFiniteError, NotC
 
 def _held_out(d: Diagnosis, fit: FeedbackFit, cache: FoldCache) -> Optional[HeldOut]:
     """Leave-one-experiment-out: the cascade's final model (own gain and phase on the left-out experiment)
-    against the feedback refitted on the others (nothing refitted on the left-out one)."""
-    from .fitting import scaled
+    against the feedback refitted on the others (nothing refitted on the left-out one).
+
+    Under a wandering baseline (``d.settings["common_dc"]``, free_dc.py) both sides see the data as the
+    diagnosis's fits do: the cascade's folds on the marked experiments (:func:`.select._fold`, each marked
+    DC free), the feedback refitted on the others' data projected as :func:`.free_dc.project` projects a
+    residual (its steady output has no DC of its own, so the projection of the data is that of its
+    residual), and the left-out experiment's residual centred as the held-out refit centres it
+    (:func:`.free_dc.centred`): a constant added to a marked experiment's output moves neither side."""
+    from . import free_dc
+    from .fitting import Scale, scaled
 
     exps = list(d.experiments)
     s = d.settings["scale"]
-    from .fitting import Scale
-
     sx = scaled(exps, Scale(float(s["y"]), float(s["u"])))
+    common = d.settings.get("common_dc")
+    if common is not None:
+        sx = free_dc.marked(sx, [e.baseline_removed for e in exps], bool(common))
     substeps = int(d.settings["substeps"])
     sines = _sines(exps)
+    data, _ = free_dc.project(sx, [yb for _, _, yb in sines])
+    sines = [(a, fr, yb) for (a, fr, _), yb in zip(sines, data)]
     h = max_step(exps)
     used, cb, ca, nb, na = [], [], [], [], []
     for j in folds(len(exps)):
@@ -230,20 +241,21 @@ def _held_out(d: Diagnosis, fit: FeedbackFit, cache: FoldCache) -> Optional[Held
             f = fit_feedback_sines(
                 [sines[i] for i in keep], theta0=fit.model.theta, starts=1, max_iter=FOLD_ITER, max_step=h
             )
-            a, fr, yb = sines[j]
-            y1 = steady_period(f.model, a, fr, yb.size, max_step=h)
+            a, fr, _ = sines[j]
+            y1 = steady_period(f.model, a, fr, exps[j].ybar.size, max_step=h)
         except FIT_ERRORS:
             continue
         if o0 is None:
             continue
         e = exps[j]
         c0, y0 = o0
+        r1 = free_dc.centred(sx[j], aligned(e) - y1, held_out=True)
         spread = float(np.linalg.norm(e.ybar - e.ybar.mean())) or 1.0
         used.append(j)
         cb.append(float(c0))
-        ca.append(e.weight * float(np.sum((yb - y1) ** 2)))
+        ca.append(e.weight * float(np.sum(r1**2)))
         nb.append(float(np.linalg.norm(sx[j].ybar - y0)) / (spread / float(s["y"])))
-        na.append(float(np.linalg.norm(yb - y1)) / spread)
+        na.append(float(np.linalg.norm(r1)) / spread)
     if not used:
         return None
     return HeldOut(tuple(used), tuple(cb), tuple(ca), tuple(nb), tuple(na))

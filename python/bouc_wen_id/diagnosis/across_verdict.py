@@ -1,0 +1,132 @@
+"""The single-group diagnosis's verdict rules, applied to the diagnosis across conditions (issue 18).
+
+The house must say the same thing whichever path the user takes. :func:`.run.diagnose`'s verdict follows
+rules that :func:`.across.diagnose_across` did not apply; here they are applied to the joint structure
+through the same functions (no copies):
+
+- **honest status** (:func:`.run.classify`): "explained" only when the final structure passes its adequacy
+  test (here: at every condition); named terms that remove less than ``PARTLY_EXPLAINED_FRACTION`` of the
+  plain model's excess (summed over the conditions) while the structure still fails leave the structure
+  "unexplained" and are reported as tested, not named (``AcrossDiagnosis.partial``);
+- **non-physical values are not named** (:func:`.run._unphysical_text`): a term whose value lies outside its
+  physical range at a condition where it is present stands in for physics the library places elsewhere;
+- **law-failed candidates are said** (:func:`.run._law_text`): a candidate that fits part of the misfit
+  with values that differ between a condition's experiments is a stand-in, named in the verdict as such;
+- **a term refused beside Dahl's element is said** (:func:`.beside.text`);
+- **Dahl's and play's caveats** (:func:`.caveats.family_text`, with every condition's latent levels);
+- **a rival within the uncertainty of the chosen term's improvement is a near-tied reading**
+  (:func:`tied`, through :func:`.select._tied` on the improvements and costs summed over the conditions).
+
+The selection's own rules (the element's law with its branch shape and pinching's band,
+:func:`.select.element_law_test`; a term at its null value is no candidate, :func:`.select.at_null`; only
+beside Dahl with an effect of its own, :func:`.beside.only_beside`) are applied in :mod:`.across`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from typing import Any
+
+from ..terms import TERMS, physical_value
+from . import beside
+from .caveats import family_text, latent_levels
+from .locate import adequacy_p
+from .result import NamedTerm, Status
+from .select import Trial, _tied, dof_of
+
+
+def explained_fraction(groups: Sequence[Any]) -> float:
+    """The share of the plain models' excess (``C - dof``, summed over the conditions) the joint structure
+    removes, capped at 1 (as :func:`.run._explained_fraction` for one group)."""
+    excess = sum(max(g.plain.cost - dof_of(g.sx, g.plain), 0.0) for g in groups)
+    gain = sum(g.plain.cost - g.current.cost for g in groups)
+    return min(gain / excess, 1.0) if excess > 0 else 0.0
+
+
+def _adequate(groups: Sequence[Any], plain: bool, alpha: float) -> bool:
+    """Whether the plain (or the final) model passes its adequacy test at every condition."""
+    for g in groups:
+        fit = g.plain if plain else g.current
+        p = adequacy_p(fit.cost, dof_of(g.sx, fit), g.noise_dof)
+        if not (math.isfinite(p) and p >= alpha):
+            return False
+    return True
+
+
+def unphysical(terms: Sequence[Any]) -> list[NamedTerm]:
+    """Each term (a :class:`.across.TermAcross`) with a value outside its physical range where it is
+    present, as the :class:`NamedTerm` of its first such condition (for :func:`.run._unphysical_text`)."""
+    out = []
+    for t in terms:
+        for v, se, pr in zip(t.values, t.standard_errors, t.present):
+            if pr and math.isfinite(v) and not physical_value(t.term, v):
+                out.append(NamedTerm(t.term, t.symbol, v, se, t.unit))
+                break
+    return out
+
+
+def judged(groups: Sequence[Any], terms: Sequence[Any], alpha: float) -> tuple[Status, list[Any], list[Any]]:
+    """``(status, named, partial)`` of the joint structure by :func:`.run.classify` and
+    :func:`.run._judged`'s rule on non-physical values (module docstring)."""
+    from .run import classify
+
+    bad = {t.term for t in unphysical(terms)}
+    status = classify(
+        not terms and _adequate(groups, True, alpha),
+        bool(terms),
+        _adequate(groups, False, alpha),
+        explained_fraction(groups),
+    )
+    if bad and status == "explained":
+        status = "partly explained"
+    named = [t for t in terms if t.term not in bad] if status in ("explained", "partly explained") else []
+    if not named and status != "adequate":
+        status = "unexplained"
+    return status, named, [t for t in terms if t not in named]
+
+
+def _summed(groups: Sequence[Any], tr: Any) -> Trial:
+    """A joint trial as the single-group :class:`.select.Trial` :func:`.select._tied` reads: its cost and
+    improvement summed over the conditions (the first condition's fit stands for "fitted")."""
+    cost = sum(f.cost for f in tr.fits) if all(f is not None for f in tr.fits) else math.nan
+    nan = math.nan
+    return Trial(tr.term, cost, sum(tr.improvements), nan, nan, nan, nan, tr.passed, fit=tr.fits[0])
+
+
+def tied(groups: Sequence[Any], chosen: Any, rival: Any) -> bool:
+    """Whether ``rival``'s summed improvement is within the uncertainty of ``chosen``'s (:func:`.select._tied`
+    on the sums: ``2 sqrt(Delta C s2)``, ``s2`` the chosen structure's pooled chi2/dof when above 1)."""
+    if any(f is None for f in (*chosen.fits, *rival.fits)):
+        return False
+    dof = sum(dof_of(g.sx, f) for g, f in zip(groups, chosen.fits))
+    return _tied(_summed(groups, chosen), _summed(groups, rival), dof)
+
+
+def head(status: Status, partial: Sequence[Any], n: int, fraction: float) -> str:
+    """The verdict's opening when the joint structure is "unexplained" with tested terms (none named)."""
+    what = ", ".join(t.label for t in partial)
+    return (
+        f"across {n} conditions: unexplained structure remains (tested terms {what} remove "
+        f"{100 * fraction:.0f} % of the summed excess but leave structure the library does not model; "
+        "not named)"
+    )
+
+
+def clauses(
+    status: Status, named: Sequence[Any], partial: Sequence[Any], steps: Sequence[Any], groups: Sequence[Any]
+) -> str:
+    """What the single-group verdict says beside its terms, said of the joint structure (module docstring)."""
+    from .run import _law_text, _unphysical_text
+
+    text = ""
+    if status == "partly explained":
+        text += f"; explained in part ({100 * explained_fraction(groups):.0f} % of the summed excess)"
+    text += _unphysical_text(unphysical(partial))
+    text += _law_text(steps) + beside.text(steps)
+    levels = [v for g in groups for v in latent_levels(g.sx, g.plain)]
+    as_named = [NamedTerm(t.term, t.symbol, math.nan, math.nan, t.unit) for t in named if t.term in TERMS]
+    return text + family_text(as_named, levels)
+
+
+__all__ = ["explained_fraction", "judged", "head", "clauses", "unphysical", "tied"]
