@@ -14,6 +14,11 @@ it into the best detection any test of the diagnosis could reach:
 - ``lam95``: the non-centrality the targeted test needs for 95 % power, and the size (in the row's units)
   at which the row's median case would reach it (lam grows with the size squared).
 
+Then every missed case ("adequate"): whether what it left unseen lies below what its verdict now quotes
+(diagnosis/resolution.py): the true value below the true term's 90 %-power limit (the bench's
+``below_limit_90``, library terms in the library's units), and the unabsorbed RMS below the adequacy test's
+90 %-power resolution (the bench's 50 % ``global_limit`` scaled by sqrt(lam_90 / lam_50)).
+
 Usage::
 
     python studies/power_limits.py /work/fb10/sensor_lag.json /work/fb10/iwan.json ... [--candidates K]
@@ -103,6 +108,33 @@ def main() -> None:
             f"{r['row']:34s} {r['n']:3d} {r['detect']:6.2f} {r['meets']:5.2f} {r['lam_min']:7.1f} "
             f"{r['lam_med']:7.1f} {r['p_one']:6.2f} {r['p_glob']:6.2f} {r['bound']:6.2f} {r['size95']:6.1f}x"
         )
+    misses(args.runs)
+
+
+def misses(paths: list[Path]) -> None:
+    """One line per missed case: the true value against the quoted 90 % limit, the unabsorbed RMS against
+    the quoted resolution."""
+    from bouc_wen_id.diagnosis.resolution import unseen_lambda
+
+    print(
+        "missed cases (adequate): unabsorbed RMS vs the adequacy test's 90 % resolution (averaged-noise sd)"
+    )
+    for p in paths:
+        for r in json.loads(p.read_text())["rows"]:
+            if r.get("detected", True) or not math.isfinite(r.get("unabsorbed") or math.nan):
+                continue
+            n = float(chi2.isf(0.5 * ALPHA / _candidates(), 1)) / r["det_limit"] ** 2
+            dof = max(int(round(n)) - PLAIN_PARAMS, 1)
+            nd = 20 * dof  # the bench's noise dof (19200 for 10 experiments) hardly moves F's tail here
+            res = r["global_limit"] * math.sqrt(
+                unseen_lambda(dof, nd, 0.025) / unseen_lambda(dof, nd, 0.025, 0.5)
+            )
+            below = r.get("below_limit_90")
+            print(
+                f"  {r['kind'][:3]} {r['term']} {r['size']:g}x seed {r['seed']}: "
+                f"unabsorbed {r['unabsorbed']:.3f} < {res:.3f}: {r['unabsorbed'] < res}; "
+                f"true value below its 90 % limit: {below}"
+            )
 
 
 if __name__ == "__main__":
