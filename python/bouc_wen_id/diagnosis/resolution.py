@@ -55,11 +55,14 @@ def unseen_lambda(dof: int, noise_dof: int, level: float, power: float = POWER) 
     if _power(0.0, dof, nd, crit) >= power:
         return 0.0
     hi = max(1.0, float(dof))
-    while _power(hi, dof, nd, crit) < power:
+    while not _power(hi, dof, nd, crit) >= power:  # a NaN power doubles on to the cap: inf
         hi *= 2.0
         if hi > 1e12:
             return math.inf
-    return float(brentq(lambda lam: _power(lam, dof, nd, crit) - power, 0.0, hi, xtol=1e-6 * hi))
+    try:
+        return float(brentq(lambda lam: _power(lam, dof, nd, crit) - power, 0.0, hi, xtol=1e-6 * hi))
+    except (ValueError, RuntimeError):  # no sign change on a NaN: nothing to quote
+        return math.nan
 
 
 def unseen_rms(
