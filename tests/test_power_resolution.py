@@ -47,7 +47,8 @@ def _outputs(tau: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     def wdot(theta: float, w: np.ndarray) -> np.ndarray:
         xd = -xl * np.sin(theta + phase)  # dx/dtheta
         aw = np.abs(w)
-        return xd - BETA * np.abs(xd) * aw ** (MU - 1) * w - GAMMA * xd * aw**MU
+        out: np.ndarray = xd - BETA * np.abs(xd) * aw ** (MU - 1) * w - GAMMA * xd * aw**MU
+        return out
 
     w = np.zeros(om.size)
     fine = np.empty((n + 1, om.size))
