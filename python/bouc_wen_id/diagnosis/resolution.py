@@ -60,7 +60,7 @@ def unseen_lambda(dof: int, noise_dof: int, level: float, power: float = POWER) 
         if hi > 1e12:
             return math.inf
     try:
-        return float(brentq(lambda lam: _power(lam, dof, nd, crit) - power, 0.0, hi, xtol=1e-6 * hi))
+        return float(brentq(lambda lam: _power(lam, dof, nd, crit) - power, 0.0, hi, xtol=1e-4 * hi))
     except (ValueError, RuntimeError):  # no sign change on a NaN: nothing to quote
         return math.nan
 
