@@ -121,6 +121,9 @@ def test_bad_settings_give_nan_not_a_number_that_looks_real() -> None:
     assert math.isnan(unseen_lambda(10, 100, 1.5))
     assert math.isnan(unseen_lambda(10, 100, 0.025, power=1.0))
     assert math.isnan(unseen_rms([0.0], [10], 10, 100, 0.025))
+    # One noise dof (a floor barely measured): a finite non-centrality or none, never an exception.
+    lam = unseen_lambda(50, 1, 0.025)
+    assert lam > 0 and not math.isnan(lam)
 
 
 def test_the_adequate_verdict_states_the_global_tests_resolution_in_noise_units(null: Any) -> None:
