@@ -16,7 +16,7 @@ from ..errors import InvalidParameterError
 from ..estimators import boundary_note
 from ..terms import DIAGNOSIS_CANDIDATES, TERMS, Distortion, Offset, physical_value
 from ..validation import real_number
-from . import baseline, beside, free_dc, zero_drift
+from . import baseline, beside, free_dc, resolution, zero_drift
 from .caveats import alternatives_text, below_saturation, family_text, latent_levels
 from .data import DiagExperiment, colour_notes, prepare
 from .drift import (
@@ -42,7 +42,7 @@ from .fitting import (
     scaled,
     substeps_for,
 )
-from .limits import detection_limits, verdict_text
+from .limits import detection_limits
 from .locate import Localisation, adequacy_p, locate
 from .pinch_shape import is_pinching
 from .progress import Progress, ProgressCallback, reporter
@@ -692,7 +692,7 @@ def _with_limits(
     context, and the first-order projection saves two plain fits per candidate."""
     refine = d.status in ("adequate", "unexplained")
     lims = detection_limits(sx, base, steps, s, setup.units, setup.alpha, substeps, refine=refine)
-    tail = verdict_text(lims) if d.status == "adequate" else ""
+    tail = resolution.adequate_tail(lims, d, setup.alpha, setup.units[0]) if d.status == "adequate" else ""
     return replace(d, limits=lims, verdict=d.verdict + tail)
 
 
