@@ -313,13 +313,6 @@ def detection_limits(
     return tuple(out)
 
 
-def verdict_text(limits: Sequence[DetectionLimit], count: int = VERDICT_LIMITS) -> str:
-    """``"; not excluded below: ..."``: the ``count`` candidates closest to detection (largest F first)."""
-    if not limits:
-        return ""
-    return "; not excluded below: " + ", ".join(str(lim) for lim in most_relevant(limits, count))
-
-
 def most_relevant(limits: Sequence[DetectionLimit], count: int = VERDICT_LIMITS) -> list[DetectionLimit]:
     """The candidates whose fitted value is largest against its own limit (closest to being detected),
     finite limits first."""
@@ -331,4 +324,4 @@ def most_relevant(limits: Sequence[DetectionLimit], count: int = VERDICT_LIMITS)
     return sorted(limits, key=key)[:count]
 
 
-__all__ = ["DetectionLimit", "detection_limits", "verdict_text", "most_relevant"]
+__all__ = ["DetectionLimit", "detection_limits", "most_relevant"]
