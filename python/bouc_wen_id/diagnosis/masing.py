@@ -15,8 +15,8 @@ stiffness on x" with a final model that passes; at 100x three still named it wit
 here in NumPy through a first-order or a resonant G with a delay (tests/test_diagnosis_masing.py) is
 named the same way at 20x (final p 0.91, 0.89). So at such sizes no shape test of the residual can
 separate them, and the verdict says so instead (:func:`masing_text`) - only when every experiment
-saturates, as
-:func:`caveats.play_text` does for play and an output backlash: with an experiment below saturation, a
+saturates, as :func:`caveats.play_text` does for play and an output backlash: with an experiment
+below saturation, a
 Masing branch from a lower reversal is its initial curve scaled by 2 while Bouc-Wen's is not, so the
 separating experiment has been run and the law and adequacy tests speak for themselves. Their power
 there is limited: the NumPy PI loop with an experiment at 0.3 of saturation added was still named a
