@@ -43,9 +43,11 @@ from .data import common_centre, cross_period_inflation
 
 #: Level of the pooled trend test of the period means (as the wander's).
 DRIFT_ALPHA = 1e-3
-#: Level (over the recordings that trend) of the one-sided test that the first half's slope is steeper than
-#: the last half's: generous, so that a settling transient is not taken for a drift.
-DECAY_LEVEL = 0.05
+#: Level of the one-sided test that the first half's slope is steeper than the last half's, pooled over the
+#: recordings that trend (Stouffer): a settling transient decays, a drift does not.
+DECAY_LEVEL = 0.01
+#: The same test per recording (Bonferroni over those that trend): the drift must stand without these.
+SLOWING_LEVEL = 0.05
 #: The trend test of each recording's own slope that admits it to the decay test.
 OWN_LEVEL = 0.05
 #: Fewest periods after settling for a recording to be tested (two halves of 4).
@@ -61,7 +63,7 @@ class Drift:
     dof: int
     p_value: float
     loop_p: float  # the pooled trend test of the fundamental's amplitude
-    decay_p: float  # the smallest one-sided p of "the first half steeper" (NaN: no recording trends)
+    decay_p: float  # Stouffer's pooled one-sided p of "the first half steeper" over the recordings that trend
     largest: float  # the largest drift over a record, output units
     sigma: float  # the noise sd of a sample (the periods' white spread), for the note
     centre: float
@@ -72,18 +74,35 @@ class Drift:
     #: per item: a lab Measurement's (time of the line's zero, its averaged stretch's mean), else None; its
     #: slope is then per second (a fixed rate has no whole number of samples per period)
     lab: tuple[Optional[tuple[float, float]], ...] = ()
+    #: the items whose own trend slows (:data:`SLOWING_LEVEL`): a transient there as well, or a line's halves
+    #: apart by chance; their lines are taken out too, what remains is the settling test's
+    decaying: tuple[str, ...] = ()
+    #: lab Measurements the test cannot read (more than one averaged stretch, or too few whole periods):
+    #: used as recorded
+    untested: tuple[str, ...] = ()
 
     def note(self) -> str:
         size = self.largest / self.sigma if self.sigma > 0 else math.nan
-        return (
+        text = (
             f"the output's zero drifts by up to {self.largest:.3g} (about {size:.2g} noise sd) over the "
             f"record: the period means follow a straight line (pooled chi-square {self.chi2:.3g} on "
-            f"{self.dof} dof, p = {self.p_value:.2g}) that goes on to the end of the record (no recording's "
-            f"first half steeper than its last, smallest p = {self.decay_p:.2g}) while the loop itself does "
-            f"not trend (fundamental amplitude p = {self.loop_p:.2g}); each recording's line and each "
-            "period's mean were taken out before averaging, so the loop's shape is measured as before; its "
-            "DC is not used"
+            f"{self.dof} dof, p = {self.p_value:.2g}) that goes on to the end of the record (the "
+            f"recordings' first halves no steeper than their last, pooled p = {self.decay_p:.2g}) while the loop itself does not trend (fundamental amplitude p = "
+            f"{self.loop_p:.2g}); each recording's line and each period's mean were taken out before "
+            "averaging, so the loop's shape is measured as before; its DC is not used"
         )
+        if self.decaying:
+            text += (
+                f"; in {', '.join(self.decaying)} the trend slows over the record (a transient there as "
+                "well, or the halves of a line apart by chance): its line was taken out too, what remains is "
+                "left to the settling test"
+            )
+        if self.untested:
+            text += (
+                f"; {', '.join(self.untested)} could not be tested (more than one averaged stretch, or too "
+                "few whole periods): used as recorded, a drift there left in"
+            )
+        return text
 
     def clause(self) -> str:
         head = "; the output's zero drifts over the record (taken out, its DC not used): "
@@ -219,52 +238,73 @@ def _lab(meas: Any) -> Optional[_Numbers]:
 
 
 def detect(items: Any, level: float) -> Optional[Drift]:
-    """The set's zero-drift test (module docstring) on its Recordings; None when the zero does not drift or
-    no recording has :data:`MIN_PERIODS` periods after settling. ``level`` is the common centre's t-test's."""
+    """The set's zero-drift test (module docstring) on its Recordings and lab Measurements; None when the
+    zero does not drift or no item has :data:`MIN_PERIODS` periods after settling. ``level`` is the common
+    centre's t-test's."""
     from scipy.special import chdtrc
 
     seq = list(items) if isinstance(items, (list, tuple)) else [items]
-    chi2, loop, dof, decays, slopes, centres, largest, sig = 0.0, 0.0, 0, [], [], [], 0.0, []
-    lab: list[Optional[tuple[float, float]]] = []
-    for rec in seq:
-        got = _numbers(rec)
-        if got is None:
-            slopes.append(0.0)
-            lab.append(None)
-            continue
-        x2, decay, l2, slope, white, centre, span, where = got
-        chi2, loop, dof = chi2 + x2, loop + l2, dof + 1
-        if float(chdtrc(1, x2)) < OWN_LEVEL:
-            decays.append(decay)
-        slopes.append(slope)
-        lab.append(where)
-        centres.append(centre)
-        largest = max(largest, abs(slope) * span)
-        sig.append(white)
-    if dof == 0:
+    got: list[Optional[_Numbers]] = [_numbers(rec) for rec in seq]
+    tested = [j for j, g in enumerate(got) if g is not None]
+    if not tested:
         return None
-    pval, loop_p = float(chdtrc(dof, chi2)), float(chdtrc(dof, loop))
-    decay_p = min(decays) if decays else math.nan
-    if not (pval < DRIFT_ALPHA and loop_p >= DRIFT_ALPHA and decays and decay_p >= DECAY_LEVEL / len(decays)):
+    num = {j: g for j, g in enumerate(got) if g is not None}
+    chi2, loop = sum(num[j][0] for j in tested), sum(num[j][2] for j in tested)
+    pval, loop_p = float(chdtrc(len(tested), chi2)), float(chdtrc(len(tested), loop))
+    decays = {j: num[j][1] for j in tested if float(chdtrc(1, num[j][0])) < OWN_LEVEL}
+    slowing = [j for j, d in decays.items() if d < SLOWING_LEVEL / len(decays)]
+    rest = [j for j in tested if j not in slowing]  # the drift must stand without the slowing ones
+    rest_p = float(chdtrc(len(rest), sum(num[j][0] for j in rest))) if rest else 1.0
+    decay_p = _pooled(list(decays.values()))
+    if not (pval < DRIFT_ALPHA and loop_p >= DRIFT_ALPHA and decays and decay_p >= DECAY_LEVEL):
         return None
-    c, se, cp, kept = common_centre(centres, level)
-    sigma = math.sqrt(float(np.mean(sig)))
+    if rest_p >= DRIFT_ALPHA:
+        return None
+    c, se, cp, kept = common_centre([num[j][5] for j in tested], level)
+    untested = tuple(_label(seq[j], j) for j, g in enumerate(got) if g is None and _measured(seq[j]))
     return Drift(
-        tuple(slopes),
+        tuple(num[j][3] if j in num else 0.0 for j in range(len(seq))),
         chi2,
-        dof,
+        len(tested),
         pval,
         loop_p,
         decay_p,
-        largest,
-        sigma,
+        max(abs(num[j][3]) * num[j][6] for j in tested),
+        math.sqrt(float(np.mean([num[j][4] for j in tested]))),
         c if kept else 0.0,
         se,
         cp,
         kept,
         level,
-        tuple(lab),
+        tuple(num[j][7] if j in num else None for j in range(len(seq))),
+        tuple(_label(seq[j], j) for j in slowing),
+        untested,
     )
+
+
+def _pooled(decays: list[float]) -> float:
+    """Stouffer's pooled one-sided p of "the first half steeper" over the recordings that trend (NaN when
+    none does): a transient in every recording adds up here, where one recording's halves apart by chance
+    do not sink the set (the smallest p, Bonferroni'd, rejected 1 set of true drifts in 20)."""
+    from scipy.special import ndtr, ndtri
+
+    if not decays:
+        return math.nan
+    z = ndtri(1.0 - np.clip(np.asarray(decays, dtype=np.float64), 1e-300, 1.0 - 1e-16))
+    return float(ndtr(-float(np.sum(z)) / math.sqrt(len(decays))))
+
+
+def _measured(item: Any) -> bool:
+    """Whether an item is a lab Measurement (``baseline.removed`` leaves an untested one as recorded;
+    an untested Recording still has its period means replaced)."""
+    from ..measurement import Measurement
+
+    return isinstance(item, Measurement)
+
+
+def _label(item: Any, j: int) -> str:
+    name = str(getattr(item, "name", "") or "")
+    return name if name else f"item {j}"
 
 
 def detrended(rec: Any, slope: float) -> np.ndarray:
