@@ -50,7 +50,7 @@ DRIFT_ALPHA = 1e-3
 #: recordings that trend (Stouffer): a settling transient decays, a drift does not.
 DECAY_LEVEL = 0.01
 #: The same test per recording (Bonferroni over those that trend): the drift must stand without these.
-SLOWING_LEVEL = 0.01
+SLOWING_LEVEL = 0.05
 #: The trend test of each recording's own slope that admits it to the decay test.
 OWN_LEVEL = 0.05
 #: Fewest periods after settling for a recording to be tested (two halves of 4).
