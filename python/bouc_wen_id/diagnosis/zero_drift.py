@@ -15,9 +15,10 @@ cases and 4 of 4 nulls.
 * the period means trend, pooled over the recordings (each recording's slope t-test, its standard error
   the larger of the residual scatter's and the white noise's, turned to a chi-square of one degree of
   freedom, summed: p below :data:`DRIFT_ALPHA`);
-* the trend goes on: in no recording whose own slope is significant is the first half's slope steeper than
-  the last half's (one-sided, :data:`DECAY_LEVEL` over those recordings): a settling transient decays, a
-  drift does not;
+* the trend goes on: over the recordings whose own slope is significant, the first half's slope is not
+  steeper than the last half's (one-sided, pooled by Stouffer's sum at :data:`DECAY_LEVEL`; before, any
+  one recording at 0.05 Bonferroni'd sank the set), and the drift stands without the recordings that slow
+  one by one (:data:`SLOWING_LEVEL`): a settling transient decays, a drift does not;
 * the loop itself does not trend (the fundamental's amplitude, pooled the same way, p at least
   :data:`DRIFT_ALPHA`): a degradation, or a loop still settling, moves its harmonics too.
 
@@ -26,9 +27,11 @@ taken out (:func:`baseline.removed`), the recordings marked and the fits given e
 for a wander; the verdict says "the output's zero drifts by ... over the record; its DC is not used".
 
 Lab Measurements (a fixed sampling rate, no whole number of samples per period; :func:`_lab`) are tested the
-same way on each whole period of their one averaged stretch (DC and fundamental by least squares on the
-input's phase, the averaged period taken out first); a drifting one has its line (per second) and its
-stretch's mean taken out and is marked (:func:`lab_detrended`, ``data.py`` then leaves its DC free).
+same way on each whole period of each averaged stretch (DC and fundamental by least squares on the
+input's phase, the averaged period taken out first; several stretches of one measurement share one line
+over its time, each its own level); a drifting one has its line (per second) and its mean taken out and is
+marked (:func:`lab_detrended`, ``data.py`` then leaves the DC of each stretch free). One the test cannot
+read is named in the note as used with its drift left in.
 """
 
 from __future__ import annotations
@@ -43,9 +46,11 @@ from .data import common_centre, cross_period_inflation
 
 #: Level of the pooled trend test of the period means (as the wander's).
 DRIFT_ALPHA = 1e-3
-#: Level (over the recordings that trend) of the one-sided test that the first half's slope is steeper than
-#: the last half's: generous, so that a settling transient is not taken for a drift.
-DECAY_LEVEL = 0.05
+#: Level of the one-sided test that the first half's slope is steeper than the last half's, pooled over the
+#: recordings that trend (Stouffer): a settling transient decays, a drift does not.
+DECAY_LEVEL = 0.01
+#: The same test per recording (Bonferroni over those that trend): the drift must stand without these.
+SLOWING_LEVEL = 0.05
 #: The trend test of each recording's own slope that admits it to the decay test.
 OWN_LEVEL = 0.05
 #: Fewest periods after settling for a recording to be tested (two halves of 4).
@@ -61,7 +66,7 @@ class Drift:
     dof: int
     p_value: float
     loop_p: float  # the pooled trend test of the fundamental's amplitude
-    decay_p: float  # the smallest one-sided p of "the first half steeper" (NaN: no recording trends)
+    decay_p: float  # Stouffer's pooled one-sided p of "the first half steeper" over the recordings that trend
     largest: float  # the largest drift over a record, output units
     sigma: float  # the noise sd of a sample (the periods' white spread), for the note
     centre: float
@@ -72,18 +77,36 @@ class Drift:
     #: per item: a lab Measurement's (time of the line's zero, its averaged stretch's mean), else None; its
     #: slope is then per second (a fixed rate has no whole number of samples per period)
     lab: tuple[Optional[tuple[float, float]], ...] = ()
+    #: the items whose own trend slows (:data:`SLOWING_LEVEL`): a transient there as well, or a line's halves
+    #: apart by chance; their lines are taken out too, what remains is the settling test's
+    decaying: tuple[str, ...] = ()
+    #: lab Measurements the test cannot read (more than one averaged stretch, or too few whole periods):
+    #: used as recorded
+    untested: tuple[str, ...] = ()
 
     def note(self) -> str:
         size = self.largest / self.sigma if self.sigma > 0 else math.nan
-        return (
+        text = (
             f"the output's zero drifts by up to {self.largest:.3g} (about {size:.2g} noise sd) over the "
             f"record: the period means follow a straight line (pooled chi-square {self.chi2:.3g} on "
-            f"{self.dof} dof, p = {self.p_value:.2g}) that goes on to the end of the record (no recording's "
-            f"first half steeper than its last, smallest p = {self.decay_p:.2g}) while the loop itself does "
-            f"not trend (fundamental amplitude p = {self.loop_p:.2g}); each recording's line and each "
-            "period's mean were taken out before averaging, so the loop's shape is measured as before; its "
-            "DC is not used"
+            f"{self.dof} dof, p = {self.p_value:.2g}) that goes on to the end of the record (the "
+            f"recordings' first halves no steeper than their last, pooled p = {self.decay_p:.2g}) while "
+            f"the loop itself does not trend (fundamental amplitude p = {self.loop_p:.2g}); each "
+            "recording's line and each period's mean were taken out before "
+            "averaging, so the loop's shape is measured as before; its DC is not used"
         )
+        if self.decaying:
+            text += (
+                f"; in {', '.join(self.decaying)} the trend slows over the record (a transient there as "
+                "well, or the halves of a line apart by chance): its line was taken out too, what remains is "
+                "left to the settling test"
+            )
+        if self.untested:
+            text += (
+                f"; {', '.join(self.untested)} could not be tested (more than one averaged stretch, or too "
+                "few whole periods): used as recorded, a drift there left in"
+            )
+        return text
 
     def clause(self) -> str:
         head = "; the output's zero drifts over the record (taken out, its DC not used): "
@@ -167,19 +190,49 @@ def _numbers(rec: Any) -> Optional[_Numbers]:
 def _lab(meas: Any) -> Optional[_Numbers]:
     """The lab path (a fixed sampling rate): each whole period's DC and fundamental by least squares on the
     input's phase after the averaged period is taken out (as ``lab_colour.levels`` fits them), tested as
-    :func:`_recording` tests a recording's period means. One averaged stretch per measurement, else None."""
-    from scipy.special import ndtr
+    :func:`_recording` tests a recording's period means. A measurement of several averaged stretches (one
+    experiment each, one sensor and one clock) has one line over its time, each stretch its own level: the
+    stretches' slopes per second pooled by their weights, their trend, decay and loop tests pooled; None
+    when no stretch has :data:`MIN_PERIODS` whole periods."""
+    from scipy.special import chdtrc, chdtri, ndtr, ndtri
 
     from ..signal import average_measurement
-    from .data import TWO_PI
 
     try:
         aps = average_measurement(meas)
     except Exception:  # noqa: BLE001 - a record the averaging refuses is not tested here; prepare says why
         return None
-    if len(aps) != 1:
+    parts = [got for got in (_stretch(meas, ap) for ap in aps) if got is not None]
+    if not parts:
         return None
-    ap = aps[0]
+    t = np.asarray(meas.t, dtype=np.float64)
+    weights = np.array([1.0 / q[1] ** 2 for q in parts])
+    slope = float(np.sum(weights * np.array([q[0] for q in parts]))) / float(np.sum(weights))
+    se, dof = 1.0 / math.sqrt(float(np.sum(weights))), sum(q[2] for q in parts)
+    x2 = _chi2_1(slope / se, dof)
+    loop = float(chdtrc(len(parts), sum(q[4] for q in parts)))
+    l2 = float(chdtri(1, loop)) if loop > 0 else math.inf
+    # each stretch's decay p is one-sided about its own slope's sign: turned to the pooled slope's, Stouffer
+    own = np.array([q[3] if (q[0] >= 0) == (slope >= 0) else 1.0 - q[3] for q in parts])
+    z = ndtri(1.0 - np.clip(own, 1e-300, 1.0 - 1e-16))
+    decay = float(ndtr(-float(np.sum(z)) / math.sqrt(len(parts))))
+    sizes = np.array([q[7] for q in parts], dtype=np.float64)
+    mid = float(np.sum(sizes * np.array([q[5] for q in parts]))) / float(np.sum(sizes))
+    mean = float(np.sum(sizes * np.array([q[6] for q in parts]))) / float(np.sum(sizes))
+    white = float(np.mean([q[8] for q in parts]))
+    return x2, decay, l2, slope, white, mean, float(t[-1] - t[0]), (mid, mean)
+
+
+def _stretch(
+    meas: Any, ap: Any
+) -> Optional[tuple[float, float, int, float, float, float, float, int, float]]:
+    """One averaged stretch of a lab measurement: its zero's slope per second, its standard error and dof,
+    the decay test's one-sided p, the loop's chi-square, the stretch's mid time, mean, samples and white
+    noise variance; None with fewer than :data:`MIN_PERIODS` whole periods."""
+    from scipy.special import ndtr
+
+    from .data import TWO_PI
+
     omega = float(ap.frequency)
     seg_t = np.asarray(meas.t, dtype=np.float64)[ap.start : ap.stop] - float(ap.time_origin)
     seg_y = np.asarray(meas.y, dtype=np.float64)[ap.start : ap.stop]
@@ -210,61 +263,80 @@ def _lab(meas: Any) -> Optional[_Numbers]:
     b2, se2, _ = _slope(dc[n - h :], white / m)
     decay = float(ndtr(-(b1 - b2) * math.copysign(1.0, b) / math.hypot(se1, se2)))
     la, lse, ldof = _slope(amp, 2.0 * white / m)
-    per_second = b * omega / TWO_PI
-    t = np.asarray(meas.t, dtype=np.float64)
+    per = omega / TWO_PI  # per period -> per second
     mid = float(np.mean(seg_t)) + float(ap.time_origin)
-    where = (mid, float(np.mean(seg_y)))
-    x2, l2 = _chi2_1(b / se, dof), _chi2_1(la / lse, ldof)
-    return x2, decay, l2, per_second, white, float(np.mean(seg_y)), float(t[-1] - t[0]), where
+    l2 = _chi2_1(la / lse, ldof)
+    return b * per, se * per, dof, decay, l2, mid, float(np.mean(seg_y)), int(seg_y.size), white
 
 
 def detect(items: Any, level: float) -> Optional[Drift]:
-    """The set's zero-drift test (module docstring) on its Recordings; None when the zero does not drift or
-    no recording has :data:`MIN_PERIODS` periods after settling. ``level`` is the common centre's t-test's."""
+    """The set's zero-drift test (module docstring) on its Recordings and lab Measurements; None when the
+    zero does not drift or no item has :data:`MIN_PERIODS` periods after settling. ``level`` is the common
+    centre's t-test's."""
     from scipy.special import chdtrc
 
     seq = list(items) if isinstance(items, (list, tuple)) else [items]
-    chi2, loop, dof, decays, slopes, centres, largest, sig = 0.0, 0.0, 0, [], [], [], 0.0, []
-    lab: list[Optional[tuple[float, float]]] = []
-    for rec in seq:
-        got = _numbers(rec)
-        if got is None:
-            slopes.append(0.0)
-            lab.append(None)
-            continue
-        x2, decay, l2, slope, white, centre, span, where = got
-        chi2, loop, dof = chi2 + x2, loop + l2, dof + 1
-        if float(chdtrc(1, x2)) < OWN_LEVEL:
-            decays.append(decay)
-        slopes.append(slope)
-        lab.append(where)
-        centres.append(centre)
-        largest = max(largest, abs(slope) * span)
-        sig.append(white)
-    if dof == 0:
+    got: list[Optional[_Numbers]] = [_numbers(rec) for rec in seq]
+    tested = [j for j, g in enumerate(got) if g is not None]
+    if not tested:
         return None
-    pval, loop_p = float(chdtrc(dof, chi2)), float(chdtrc(dof, loop))
-    decay_p = min(decays) if decays else math.nan
-    if not (pval < DRIFT_ALPHA and loop_p >= DRIFT_ALPHA and decays and decay_p >= DECAY_LEVEL / len(decays)):
+    num = {j: g for j, g in enumerate(got) if g is not None}
+    chi2, loop = sum(num[j][0] for j in tested), sum(num[j][2] for j in tested)
+    pval, loop_p = float(chdtrc(len(tested), chi2)), float(chdtrc(len(tested), loop))
+    decays = {j: num[j][1] for j in tested if float(chdtrc(1, num[j][0])) < OWN_LEVEL}
+    slowing = [j for j, d in decays.items() if d < SLOWING_LEVEL / len(decays)]
+    rest = [j for j in tested if j not in slowing]  # the drift must stand without the slowing ones
+    rest_p = float(chdtrc(len(rest), sum(num[j][0] for j in rest))) if rest else 1.0
+    decay_p = _pooled(list(decays.values()))
+    if not (pval < DRIFT_ALPHA and loop_p >= DRIFT_ALPHA and decays and decay_p >= DECAY_LEVEL):
         return None
-    c, se, cp, kept = common_centre(centres, level)
-    sigma = math.sqrt(float(np.mean(sig)))
+    if rest_p >= DRIFT_ALPHA:
+        return None
+    c, se, cp, kept = common_centre([num[j][5] for j in tested], level)
+    untested = tuple(_label(seq[j], j) for j, g in enumerate(got) if g is None and _measured(seq[j]))
     return Drift(
-        tuple(slopes),
+        tuple(num[j][3] if j in num else 0.0 for j in range(len(seq))),
         chi2,
-        dof,
+        len(tested),
         pval,
         loop_p,
         decay_p,
-        largest,
-        sigma,
+        max(abs(num[j][3]) * num[j][6] for j in tested),
+        math.sqrt(float(np.mean([num[j][4] for j in tested]))),
         c if kept else 0.0,
         se,
         cp,
         kept,
         level,
-        tuple(lab),
+        tuple(num[j][7] if j in num else None for j in range(len(seq))),
+        tuple(_label(seq[j], j) for j in slowing),
+        untested,
     )
+
+
+def _pooled(decays: list[float]) -> float:
+    """Stouffer's pooled one-sided p of "the first half steeper" over the recordings that trend (NaN when
+    none does): a transient in every recording adds up here, where one recording's halves apart by chance
+    do not sink the set (before, the smallest p, Bonferroni'd, did: blind play:30:5)."""
+    from scipy.special import ndtr, ndtri
+
+    if not decays:
+        return math.nan
+    z = ndtri(1.0 - np.clip(np.asarray(decays, dtype=np.float64), 1e-300, 1.0 - 1e-16))
+    return float(ndtr(-float(np.sum(z)) / math.sqrt(len(decays))))
+
+
+def _measured(item: Any) -> bool:
+    """Whether an item is a lab Measurement (``baseline.removed`` leaves an untested one as recorded;
+    an untested Recording still has its period means replaced)."""
+    from ..measurement import Measurement
+
+    return isinstance(item, Measurement)
+
+
+def _label(item: Any, j: int) -> str:
+    name = str(getattr(item, "name", "") or "")
+    return name if name else f"item {j}"
 
 
 def detrended(rec: Any, slope: float) -> np.ndarray:
