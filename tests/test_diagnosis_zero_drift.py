@@ -71,14 +71,22 @@ def test_a_straight_line_drift_is_found_and_measured() -> None:
         assert 0.7 < d.sigma / SD < 1.3
 
 
-@pytest.mark.parametrize("kind", ["white", "ar1", "ar1 slow", "settling", "fading"])
+@pytest.mark.parametrize("kind", ["white", "ar1", "ar1 slow", "settling"])
 def test_noise_a_settling_centre_and_a_trending_loop_are_no_drift(kind: str) -> None:
     """White or AR(1) noise has no trend (noise correlated over a period, phi = 0.99, has its period means
     correlated, and their slope's error is inflated as much); a centre that settles has its first half
-    steeper than its last (a transient decays); a loop whose fundamental trends (a degradation) is left to
-    the degradation test even when its zero drifts too."""
+    steeper than its last (a transient decays)."""
     for seed in range(5):
         assert zero_drift.detect(_recs(kind, seed), 0.05 / 20) is None, (kind, seed)
+
+
+def test_a_zero_drifting_beside_a_trending_loop_is_flagged() -> None:
+    """Session 29 (zero_drift.BESIDE_LOOP_TREND): a loop whose fundamental trends (a degradation) while its
+    zero drifts has the zero's line taken out too, flagged, and the loop's trend left to the degradation
+    and settling tests (tests/test_degradation_beside_drift.py); before, the drift was left in."""
+    for seed in range(5):
+        d = zero_drift.detect(_recs("fading", seed), 0.05 / 20)
+        assert d is not None and d.loop_trends and d.loop_p < zero_drift.DRIFT_ALPHA, seed
 
 
 def test_removal_takes_out_the_line_and_the_period_means() -> None:
@@ -187,10 +195,13 @@ def test_a_drift_on_the_lab_path_is_found_and_taken_out() -> None:
             assert float(np.ptp(resid)) < 0.2 * SD, float(np.ptp(resid)) / SD
 
 
-@pytest.mark.parametrize("kind", ["white", "ar1", "settling", "fading"])
+@pytest.mark.parametrize("kind", ["white", "ar1", "settling"])
 def test_lab_noise_a_settling_centre_and_a_trending_loop_are_no_drift(kind: str) -> None:
     for seed in range(3):
         assert zero_drift.detect(_lab(kind, seed), 0.05 / 20) is None, (kind, seed)
+    for seed in range(3):  # a trending loop's drifting zero: found, flagged (session 29)
+        d = zero_drift.detect(_lab("fading", seed), 0.05 / 20)
+        assert d is not None and d.loop_trends, seed
 
 
 def test_a_drifting_lab_zero_is_no_unsettled_loop(monkeypatch: pytest.MonkeyPatch) -> None:
