@@ -13,7 +13,8 @@ import math
 import bouc_wen_id as bw
 import numpy as np
 import pytest
-from bouc_wen_id.diagnosis.caveats import family_text
+from bouc_wen_id.diagnosis.caveats import family_text, latent_levels
+from bouc_wen_id.diagnosis.fitting import Scale, scaled
 from bouc_wen_id.diagnosis.masing import MASING_MARK, masing_text
 from bouc_wen_id.diagnosis.result import NamedTerm
 from bouc_wen_id.terms import Stiffness, StiffnessX
@@ -137,3 +138,17 @@ def test_a_spring_on_x_with_an_experiment_below_saturation_gets_no_caveat() -> N
 def test_a_plain_plant_gets_no_caveat(seed: int) -> None:
     d = bw.diagnose(_records(seed, (1.4, 3.0), "spring", 0.0))
     assert MASING_MARK not in d.verdict
+
+
+def test_a_strong_spring_on_x_is_judged_on_the_levels_the_named_structure_sees() -> None:
+    """A 100x spring on x lowers the plain fit's latent levels below saturation (the plain fit's |G|
+    absorbs the spring's share: 0.7 of saturation for a true 1.1): the caveat and the below-saturation
+    note must read the final fit's levels, which hold the spring, or the verdict names a spring on x from
+    saturating loops without the caveat and says in its notes that no spring could show."""
+    d = bw.diagnose(_records(6, (1.1,), "spring", 100.0))
+    assert StiffnessX.kind in {t.term for t in d.named}
+    s = d.settings["scale"]
+    sx = scaled(list(d.experiments), Scale(s["y"], s["u"]))
+    assert min(latent_levels(sx, d.plain_fit)) < 1.0 <= min(latent_levels(sx, d.final_fit))
+    assert MASING_MARK in d.verdict
+    assert not any("stays below the hysteresis' saturation" in n for n in d.notes)

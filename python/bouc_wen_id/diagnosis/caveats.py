@@ -22,15 +22,16 @@ from .select import LAW_ALPHA, Alternative
 
 
 def below_saturation(sx: Sequence[AugExperiment], fit: AugFit) -> list[str]:
-    """A note when every experiment stays below the hysteresis' saturation (the plain fit's latent
-    amplitudes ``|x_i| = |g_i| U_i`` under ``w_u = (beta + gamma)^(-1/mu)``, alpha = 1): there the loop is
-    nearly linear and a spring on x trades with |G|, so the design could not show one (a 30x spring on x
-    over three frequencies at 0.3 of saturation gave "adequate")."""
+    """A note when every experiment stays below the hysteresis' saturation (``fit``'s latent amplitudes
+    ``|x_i| = |g_i| U_i`` under ``w_u = (beta + gamma)^(-1/mu)``, alpha = 1; the final fit's, so that a spring
+    on x, which lifts them, is seen): there the loop is nearly linear and a spring on x trades with |G|, so
+    the design could not show one (a 30x spring on x over three frequencies at 0.3 of saturation gave
+    "adequate")."""
     levels = latent_levels(sx, fit)
     if not levels or max(levels) >= 1.0:
         return []
     return [
-        "every experiment stays below the hysteresis' saturation (latent amplitude, as the plain fit sees "
+        "every experiment stays below the hysteresis' saturation (latent amplitude, as the fitted model sees "
         f"it, {min(levels):.2g}-{max(levels):.2g} of its saturation level): the loop is nearly linear there, "
         "and a spring across the hysteretic element (on x) trades with |G|, so it could neither show nor be "
         "told from |G|; an experiment past saturation (1.5-3 times that level) would separate them"

@@ -39,6 +39,10 @@ POWER = 0.9
 def _power(lam: float, dof: int, noise_dof: int, crit: float) -> float:
     from scipy.stats import ncf  # type: ignore[import-untyped]
 
+    if lam <= 0.0:  # SciPy's ncf.sf at a zero non-centrality returns -cdf (1.17): the central F's tail
+        from scipy.stats import f as f_dist
+
+        return float(f_dist.sf(crit, dof, noise_dof))
     return float(ncf.sf(crit, dof, noise_dof, lam))
 
 
@@ -110,8 +114,9 @@ def resolution_text(d: Any, alpha: float, y_unit: str) -> str:
         return ""
     share = f" ({100 * rms / out:.2g} % of the output's RMS)" if out > 0 else ""
     return (
-        f"; what the plain model cannot absorb, of any shape, goes unseen below an RMS of {rms:.2g} {y_unit}"
-        f"{share} over the averaged periods (the adequacy test's {100 * POWER:.0f} % power)"
+        "; what the plain model cannot absorb, of any shape, may go unseen below an RMS of "
+        f"{rms:.2g} {y_unit}{share} over the averaged periods "
+        f"(below it the adequacy test has less than {100 * POWER:.0f} % power)"
     )
 
 

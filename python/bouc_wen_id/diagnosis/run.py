@@ -583,7 +583,7 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
         setup.report("carrying the input's harmonics through G", 0, 1)
         sx = carry_through_g(sx, plain, substeps)
     before = _drift_checked(_localise(exps, sx, plain, s), exps)
-    notes = [*notes, *below_saturation(sx, plain)]
+    notes = list(notes)  # a copy: the stages below append to it
     setup.report("testing degradation (period blocks)", 0, 1)
     deg, fexps, fsx, start = _drift_stage(exps, sx, plain, s, substeps, setup, before.drift_detected, notes)
     named_deg = deg is not None and (deg.named if setup.held_out_test else deg.passed)
@@ -641,7 +641,7 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
     )
     verdict += _law_text(steps) + beside.text(steps)  # refused beside a Dahl element: said (beside.py)
     alternatives = tuple(a for st in steps for a in st.alternatives) + _drift_alternatives(deg, named_deg)
-    verdict += alternatives_text(alternatives, named) + family_text(named, latent_levels(sx, plain))
+    verdict += alternatives_text(alternatives, named) + family_text(named, latent_levels(fsx, final))
     setup.report("held-out check of the final model", 0, 1)
     ho = held_out(fsx, start, final, substeps, cache) if final.params.terms else None
     d = Diagnosis(
@@ -663,7 +663,7 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
         plain_fit=plain,
         final_fit=final,
         degradation=deg,
-        notes=tuple(notes),
+        notes=(*notes, *below_saturation(fsx, final)),  # the levels as the named structure sees them
     )
     d = _with_limits(d, fsx, start, steps, s, substeps, setup)  # detection limits (limits.py)
     return _with_feedback(d, setup)
