@@ -21,6 +21,7 @@ import bouc_wen_id as bw
 import numpy as np
 from bouc_wen_id import terms as T
 from bouc_wen_id.diagnosis import across_verdict as V
+from bouc_wen_id.diagnosis import gate
 from bouc_wen_id.diagnosis.across import TermAcross
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benches"))
@@ -147,3 +148,78 @@ def test_a_rival_within_the_uncertainty_of_the_chosen_improvement_is_near_tied()
     # A rival whose fit failed at some condition is never a reading of the same misfit.
     broken = SimpleNamespace(term="offset", improvements=(600.0, 600.0), fits=(None, None), passed=False)
     assert not V.tied(g, _joint(T.Viscous.kind, (600.0, 600.0), 4.0 * dof), broken)
+
+
+def _plain_at(p: float, noise_dof: int = 10**6) -> float:
+    """The plain model's cost whose adequacy p-value is ``p`` (two conditions of 256 points, no term)."""
+    from bouc_wen_id.diagnosis.locate import adequacy_p
+    from scipy.optimize import brentq  # type: ignore[import-untyped]
+
+    dof = 2 * 256 - (3 + 0 + 4)
+    return float(brentq(lambda c: adequacy_p(c, dof, noise_dof) - p, 0.5 * dof, 3.0 * dof, xtol=1e-9))
+
+
+def test_the_plain_model_is_judged_across_by_diagnose_s_gate_at_half_alpha() -> None:
+    """diagnose accepts the plain model at alpha / 2 (the other half is the targeted step's); the joint path
+    tested it at alpha and called "unexplained" a plain model diagnose calls "adequate" (p in [alpha/2,
+    alpha)). Both paths now call gate.plain_passes; below alpha / 2 both refuse it."""
+    for p, want in ((0.035, "adequate"), (0.02, "unexplained"), (0.3, "adequate")):
+        cost = _plain_at(p)
+        g = _groups(cost, cost, ())
+        assert V.judged(g, [], 0.05, ())[0] == want, p
+        assert gate.plain_passes(p, 0.05) is (want == "adequate")
+
+
+def test_a_law_failed_candidate_keeps_the_plain_model_from_adequate_across() -> None:
+    """run._diagnose_set's rule (gate.plain_adequate): a candidate whose tests passed but whose law failed
+    is structure the plain model leaves and no term explains, even when the global test accepts the plain
+    model."""
+    cost = _plain_at(0.3)
+    g = _groups(cost, cost, ())
+    failed = SimpleNamespace(trials=(), chosen=None, law_failed=(DAHL_X.kind,), beside=())
+    clean = SimpleNamespace(trials=(), chosen=None, law_failed=(), beside=())
+    assert V.judged(g, [], 0.05, [clean])[0] == "adequate"
+    assert V.judged(g, [], 0.05, [clean, failed])[0] == "unexplained"
+
+
+def test_a_plain_p_between_half_alpha_and_alpha_gives_one_status_on_both_paths() -> None:
+    """The reviewer's case (tests/test_power_resolution.py's own NumPy integrator of a delayed two-pole G,
+    noise seed 7): the plain model's p lies in [alpha/2, alpha); diagnose says "adequate", and so does
+    diagnose_across on the same records twice, with diagnose's adequate head."""
+    tests = str(Path(__file__).resolve().parent)
+    sys.path.insert(0, tests)
+    pr: Any = importlib.import_module("test_power_resolution")
+    y, a, om = pr._outputs(0.0)
+    recs = pr._records(y, a, om, 7)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        d = bw.diagnose(recs, candidates=[T.Offset.kind])
+        x = bw.diagnose_across([recs, recs], [0.0, 1.0], candidates=[T.Offset.kind])
+    assert 0.025 <= d.plain.p_value < 0.05, d.plain.p_value
+    assert d.status == x.status == "adequate", (d.verdict, x.verdict)
+    assert gate.ADEQUATE in d.verdict and gate.ADEQUATE in x.verdict
+
+
+def test_an_unexplained_head_lists_only_the_physical_tested_terms() -> None:
+    """run._judged leaves a non-physical term out of "tested terms ... leave structure the library does not
+    model" (it is said in its own "not physical" clause): a negative damping whose structure passes is not a
+    term that leaves structure; the physical one that removes little still is."""
+    visc = _term(T.Viscous.kind, (-0.5, -0.7))
+    dof = 2 * 256 - (3 + 1 + 4)
+    g = _groups(5000.0, float(dof), (visc.term,))
+    status, named, partial = V.judged(g, [visc], 0.05)
+    assert (status, named, partial) == ("unexplained", [], [visc])
+    head = V.head(status, partial, 2, V.explained_fraction(g))
+    assert "unexplained structure remains" in head and "tested terms" not in head, head
+    assert [t.term for t in V.unphysical(partial)] == [visc.term]  # said by clauses' "not physical"
+    off = _term(T.Offset.kind, (0.1, 0.2))
+    head = V.head("unexplained", [visc, off], 2, 0.2)
+    assert f"tested terms {off.label} remove 20 %" in head and visc.label not in head, head
+
+
+def test_no_candidates_says_nothing_was_tested() -> None:
+    """candidates=[] on a structure the plain model misses (the Iwan loop at 30x, seed 59003): nothing was
+    tested, and the verdict says so rather than "no candidate passes"."""
+    a, d = _twice("iwan", 30.0, 59003, [])
+    assert a.status == d.status == "unexplained", (a.verdict, d.verdict)
+    assert "no candidate tested" in a.verdict and "no candidate passes" not in a.verdict, a.verdict

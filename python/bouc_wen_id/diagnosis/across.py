@@ -636,10 +636,9 @@ def _verdict(
 ) -> str:
     n = len(conds)
     if not terms:
-        return (
-            f"across {n} conditions: nothing named (no candidate passes all its tests jointly at every "
-            "condition)"
-        )
+        why = "no candidate passes all its tests jointly at every condition"
+        why = why if any(st.trials for st in steps) else "no candidate tested"
+        return f"across {n} conditions: nothing named ({why})"
     parts = []
     for t in terms:
         where = (
@@ -793,10 +792,10 @@ def _finished(
             f"; the output's zero drifts at {drifting} (its straight line taken out, each experiment's DC "
             "free: an offset or each experiment's own DC there cannot be told from it)"
         )
-    status, named, partial = across_verdict.judged(prepared, terms, alpha)
+    status, named, partial = across_verdict.judged(prepared, terms, alpha, steps)
     verdict = (
         across_verdict.head(status, partial, len(prepared), across_verdict.explained_fraction(prepared))
-        if partial and not named
+        if status == "adequate" or (partial and not named)
         else _verdict(named, conditions, steps)
     )
     verdict += across_verdict.clauses(status, named, partial, steps, prepared)

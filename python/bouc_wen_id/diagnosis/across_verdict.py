@@ -29,7 +29,7 @@ from collections.abc import Sequence
 from typing import Any
 
 from ..terms import TERMS, physical_value
-from . import beside
+from . import beside, gate
 from .caveats import family_text, latent_levels
 from .locate import adequacy_p
 from .result import NamedTerm, Status
@@ -38,20 +38,25 @@ from .select import Trial, _tied, dof_of
 
 def explained_fraction(groups: Sequence[Any]) -> float:
     """The share of the plain models' excess (``C - dof``, summed over the conditions) the joint structure
-    removes, capped at 1 (as :func:`.run._explained_fraction` for one group)."""
-    excess = sum(max(g.plain.cost - dof_of(g.sx, g.plain), 0.0) for g in groups)
-    gain = sum(g.plain.cost - g.current.cost for g in groups)
-    return min(gain / excess, 1.0) if excess > 0 else 0.0
+    removes, capped at 1: :func:`.gate.explained_fraction`, as :func:`.run._explained_fraction` for one
+    group."""
+    return gate.explained_fraction((g.plain.cost, dof_of(g.sx, g.plain), g.current.cost) for g in groups)
 
 
-def _adequate(groups: Sequence[Any], plain: bool, alpha: float) -> bool:
-    """Whether the plain (or the final) model passes its adequacy test at every condition."""
-    for g in groups:
-        fit = g.plain if plain else g.current
-        p = adequacy_p(fit.cost, dof_of(g.sx, fit), g.noise_dof)
-        if not (math.isfinite(p) and p >= alpha):
-            return False
-    return True
+def _p(g: Any, fit: Any) -> float:
+    return adequacy_p(fit.cost, dof_of(g.sx, fit), g.noise_dof)
+
+
+def plain_adequate(groups: Sequence[Any], terms: Sequence[Any], steps: Sequence[Any], alpha: float) -> bool:
+    """:func:`.run.diagnose`'s gate at every condition (:func:`.gate.plain_passes`, at ``alpha / 2``) and its
+    rule on what was added or refused (:func:`.gate.plain_adequate`: no term, no law-failed candidate)."""
+    passes = all(gate.plain_passes(_p(g, g.plain), alpha) for g in groups)
+    return gate.plain_adequate(passes, bool(terms), steps)
+
+
+def _final_adequate(groups: Sequence[Any], alpha: float) -> bool:
+    """Whether the final model passes its adequacy test (at ``alpha``, as diagnose's) at every condition."""
+    return all(math.isfinite(p) and p >= alpha for p in (_p(g, g.current) for g in groups))
 
 
 def unphysical(terms: Sequence[Any]) -> list[NamedTerm]:
@@ -66,16 +71,19 @@ def unphysical(terms: Sequence[Any]) -> list[NamedTerm]:
     return out
 
 
-def judged(groups: Sequence[Any], terms: Sequence[Any], alpha: float) -> tuple[Status, list[Any], list[Any]]:
-    """``(status, named, partial)`` of the joint structure by :func:`.run.classify` and
-    :func:`.run._judged`'s rule on non-physical values (module docstring)."""
+def judged(
+    groups: Sequence[Any], terms: Sequence[Any], alpha: float, steps: Sequence[Any] = ()
+) -> tuple[Status, list[Any], list[Any]]:
+    """``(status, named, partial)`` of the joint structure by :func:`.run.classify` on
+    :func:`plain_adequate` (``steps``: the joint selection's, whose law-failed candidates refuse "adequate")
+    and :func:`.run._judged`'s rule on non-physical values (module docstring)."""
     from .run import classify
 
     bad = {t.term for t in unphysical(terms)}
     status = classify(
-        not terms and _adequate(groups, True, alpha),
+        plain_adequate(groups, terms, steps, alpha),
         bool(terms),
-        _adequate(groups, False, alpha),
+        _final_adequate(groups, alpha),
         explained_fraction(groups),
     )
     if bad and status == "explained":
@@ -104,13 +112,20 @@ def tied(groups: Sequence[Any], chosen: Any, rival: Any) -> bool:
 
 
 def head(status: Status, partial: Sequence[Any], n: int, fraction: float) -> str:
-    """The verdict's opening when the joint structure is "unexplained" with tested terms (none named)."""
-    what = ", ".join(t.label for t in partial)
-    return (
-        f"across {n} conditions: unexplained structure remains (tested terms {what} remove "
-        f"{100 * fraction:.0f} % of the summed excess but leave structure the library does not model; "
-        "not named)"
+    """The verdict's opening when nothing is named: "adequate" as :func:`.run._verdict` says it, or the
+    structure "unexplained" with the tested terms that lie in their physical range (as :func:`.run._judged`:
+    a non-physical one is said by its own clause, :func:`clauses`, not among the tested terms)."""
+    if status == "adequate":
+        return f"across {n} conditions: {gate.ADEQUATE} at every condition"
+    bad = {t.term for t in unphysical(partial)}
+    what = ", ".join(t.label for t in partial if t.term not in bad)
+    tail = (
+        f" (tested terms {what} remove {100 * fraction:.0f} % of the summed excess but leave structure the "
+        "library does not model; not named)"
+        if what
+        else ""
     )
+    return f"across {n} conditions: unexplained structure remains{tail}"
 
 
 def clauses(
@@ -129,4 +144,4 @@ def clauses(
     return text + family_text(as_named, levels)
 
 
-__all__ = ["explained_fraction", "judged", "head", "clauses", "unphysical", "tied"]
+__all__ = ["explained_fraction", "plain_adequate", "judged", "head", "clauses", "unphysical", "tied"]

@@ -16,7 +16,7 @@ from ..errors import InvalidParameterError
 from ..estimators import boundary_note
 from ..terms import DIAGNOSIS_CANDIDATES, TERMS, Distortion, Offset, physical_value
 from ..validation import real_number
-from . import baseline, beside, free_dc, resolution, zero_drift
+from . import baseline, beside, free_dc, gate, resolution, zero_drift
 from .caveats import alternatives_text, below_saturation, family_text, latent_levels
 from .data import DiagExperiment, colour_notes, prepare
 from .drift import (
@@ -166,7 +166,7 @@ def _verdict(
     fraction: float,
 ) -> str:
     if status == "adequate":
-        return "adequate: the plain Wiener-Bouc-Wen model fits at the noise floor"
+        return gate.ADEQUATE
     where = after.describe() or "spread over the cycle"
     if status == "explained":
         drift = "; the loop drifts from period to period (not modelled)" if after.drift_detected else ""
@@ -599,8 +599,7 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
 
     # The plain model's gate: the global test at alpha / 2, and when it accepts, the targeted step's
     # candidate tests at the other alpha / 2 (select.py's docstring; design.md 10.3).
-    p_start = p_of(start)
-    passes = not named_deg and not before.drift_detected and math.isfinite(p_start) and p_start >= 0.5 * alpha
+    passes = gate.plain_passes(p_of(start), alpha, named_deg or before.drift_detected)
     # The targeted step hunts effects below the global test's reach; where the error is a repeated
     # quantisation pattern or the model's own precision, such effects cannot be told from that error.
     targeted = passes and setup.measured_noise
@@ -631,7 +630,7 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
     fraction = _explained_fraction(plain_sum, final_sum, deg if named_deg else None)
     # A candidate whose tests passed but whose law failed (select.law_test) is structure the plain model
     # leaves and no term explains: the plain model is not adequate even when the global test accepted it.
-    plain_ok = passes and not final.params.terms and not any(st.law_failed for st in steps)
+    plain_ok = gate.plain_adequate(passes, bool(final.params.terms), steps)
     status, named, partial, verdict = _judged(
         classify(plain_ok, bool(final.params.terms) or named_deg, adequate(final), fraction),
         final_sum,
@@ -747,12 +746,8 @@ def _explained_fraction(plain: ModelSummary, final: ModelSummary, deg: Optional[
     """The share of the plain model's excess the final model removes (both spaces when degradation is
     named: the steady excess and the drift excess), capped at 1 (a model below the noise floor fitted some
     noise too)."""
-    excess = plain.cost - plain.dof
-    fraction = (plain.cost - final.cost) / excess if excess > 0 else 0.0
-    if deg is not None:
-        total = max(excess, 0.0) + max(deg.cost0 - deg.dof0, 0.0)
-        fraction = (plain.cost - final.cost + deg.cost0 - deg.cost1) / total if total > 0 else 0.0
-    return min(fraction, 1.0)
+    drift = [] if deg is None else [(deg.cost0, deg.dof0, deg.cost1)]
+    return gate.explained_fraction([(plain.cost, plain.dof, final.cost), *drift])
 
 
 def _centre_text(exps: Sequence[DiagExperiment], outputs: Sequence[Any], scale: float) -> str:

@@ -1,0 +1,45 @@
+"""The plain model's gate and the explained fraction: one code for :func:`.run.diagnose` and
+:func:`.across.diagnose_across` (issue 18: the house says the same thing whichever path the user takes).
+
+Copies of these rules in the joint path drifted from the single-group one (the joint path tested the plain
+model at ``alpha`` where diagnose tests it at ``alpha / 2``, and ignored the law-failed candidates that keep
+diagnose from "adequate"); both paths now call these functions.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Sequence
+from typing import Any
+
+#: The "adequate" verdict's words, both paths'.
+ADEQUATE = "adequate: the plain Wiener-Bouc-Wen model fits at the noise floor"
+
+
+def plain_passes(p_value: float, alpha: float, moved: bool = False) -> bool:
+    """The plain model's global test at ``alpha / 2`` (the other ``alpha / 2`` is the targeted step's:
+    select.py's docstring, design.md 10.3); ``moved``: the loop drifts or degradation is named, and the
+    plain (steady) model cannot be the answer."""
+    return not moved and math.isfinite(p_value) and p_value >= 0.5 * alpha
+
+
+def plain_adequate(passes: bool, has_terms: bool, steps: Sequence[Any]) -> bool:
+    """The plain model is "adequate": its gate passed (:func:`plain_passes`), nothing was added, and no
+    candidate's tests passed with a law that failed (select.law_test: structure the plain model leaves and no
+    term explains, even when the global test accepted it)."""
+    return passes and not has_terms and not any(st.law_failed for st in steps)
+
+
+def explained_fraction(parts: Iterable[tuple[float, float, float]]) -> float:
+    """The share of the excess the final model removes, over ``parts`` of ``(cost before, its dof, cost
+    after)``: the plain model's and the final's (one per condition across conditions; the drift space's too
+    when degradation is named). The excess is each part's ``C - dof`` when positive; capped at 1 (a model
+    below the noise floor fitted some noise too); 0 without excess."""
+    excess = gain = 0.0
+    for before, dof, after in parts:
+        excess += max(before - dof, 0.0)
+        gain += before - after
+    return min(gain / excess, 1.0) if excess > 0 else 0.0
+
+
+__all__ = ["ADEQUATE", "plain_passes", "plain_adequate", "explained_fraction"]
