@@ -13,7 +13,8 @@ through the same functions (no copies):
 - **law-failed candidates are said** (:func:`.run._law_text`): a candidate that fits part of the misfit
   with values that differ between a condition's experiments is a stand-in, named in the verdict as such;
 - **a term refused beside Dahl's element is said** (:func:`.beside.text`);
-- **Dahl's and play's caveats** (:func:`.caveats.family_text`, with every condition's latent levels);
+- **Dahl's and play's caveats** (:func:`.caveats.family_text`, with every condition's latent levels as its
+  final model sees them, as diagnose reads its final fit's);
 - **a rival within the uncertainty of the chosen term's improvement is a near-tied reading**
   (:func:`tied`, through :func:`.select._tied` on the improvements and costs summed over the conditions).
 
@@ -139,7 +140,7 @@ def clauses(
         text += f"; explained in part ({100 * explained_fraction(groups):.0f} % of the summed excess)"
     text += _unphysical_text(unphysical(partial))
     text += _law_text(steps) + beside.text(steps)
-    levels = [v for g in groups for v in latent_levels(g.sx, g.plain)]
+    levels = [v for g in groups for v in latent_levels(g.sx, g.current)]
     as_named = [NamedTerm(t.term, t.symbol, math.nan, math.nan, t.unit) for t in named if t.term in TERMS]
     return text + family_text(as_named, levels)
 
