@@ -81,10 +81,10 @@ def test_noise_a_settling_centre_and_a_trending_loop_are_no_drift(kind: str) -> 
 
 
 def test_a_zero_drifting_beside_a_trending_loop_is_flagged(monkeypatch: pytest.MonkeyPatch) -> None:
-    """Session 29 (zero_drift.BESIDE_LOOP_TREND, off by default since the review: a degrading asymmetric
-    loop's centre moves in a line too): on, a loop whose fundamental trends (a degradation) while its zero
-    drifts has the line taken out too, flagged, and the loop's trend left to the degradation and settling
-    tests (tests/test_degradation_beside_drift.py); off, the drift is left in."""
+    """Session 29 (zero_drift.BESIDE_LOOP_TREND): on, a loop whose fundamental trends (a degradation) while
+    its zero drifts has the line taken out too, flagged (no centre kept), and the loop's trend left to the
+    degradation and settling tests (tests/test_degradation_beside_drift.py); off, the drift is left in."""
+    monkeypatch.setattr(zero_drift, "BESIDE_LOOP_TREND", False)
     for seed in range(2):
         assert zero_drift.detect(_recs("fading", seed), 0.05 / 20) is None, seed
     monkeypatch.setattr(zero_drift, "BESIDE_LOOP_TREND", True)
@@ -205,7 +205,8 @@ def test_lab_noise_a_settling_centre_and_a_trending_loop_are_no_drift(
 ) -> None:
     for seed in range(3):
         assert zero_drift.detect(_lab(kind, seed), 0.05 / 20) is None, (kind, seed)
-    assert zero_drift.detect(_lab("fading", 0), 0.05 / 20) is None  # the default stands aside
+    monkeypatch.setattr(zero_drift, "BESIDE_LOOP_TREND", False)
+    assert zero_drift.detect(_lab("fading", 0), 0.05 / 20) is None  # the old rule stands aside
     monkeypatch.setattr(zero_drift, "BESIDE_LOOP_TREND", True)
     for seed in range(3):  # a trending loop's drifting zero: found, flagged (session 29, the flag on)
         d = zero_drift.detect(_lab("fading", seed), 0.05 / 20)
