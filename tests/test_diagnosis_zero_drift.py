@@ -80,10 +80,14 @@ def test_noise_a_settling_centre_and_a_trending_loop_are_no_drift(kind: str) -> 
         assert zero_drift.detect(_recs(kind, seed), 0.05 / 20) is None, (kind, seed)
 
 
-def test_a_zero_drifting_beside_a_trending_loop_is_flagged() -> None:
-    """Session 29 (zero_drift.BESIDE_LOOP_TREND): a loop whose fundamental trends (a degradation) while its
-    zero drifts has the zero's line taken out too, flagged, and the loop's trend left to the degradation
-    and settling tests (tests/test_degradation_beside_drift.py); before, the drift was left in."""
+def test_a_zero_drifting_beside_a_trending_loop_is_flagged(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Session 29 (zero_drift.BESIDE_LOOP_TREND): on, a loop whose fundamental trends (a degradation) while
+    its zero drifts has the line taken out too, flagged (no centre kept), and the loop's trend left to the
+    degradation and settling tests (tests/test_degradation_beside_drift.py); off, the drift is left in."""
+    monkeypatch.setattr(zero_drift, "BESIDE_LOOP_TREND", False)
+    for seed in range(2):
+        assert zero_drift.detect(_recs("fading", seed), 0.05 / 20) is None, seed
+    monkeypatch.setattr(zero_drift, "BESIDE_LOOP_TREND", True)
     for seed in range(5):
         d = zero_drift.detect(_recs("fading", seed), 0.05 / 20)
         assert d is not None and d.loop_trends and d.loop_p < zero_drift.DRIFT_ALPHA, seed
@@ -196,10 +200,15 @@ def test_a_drift_on_the_lab_path_is_found_and_taken_out() -> None:
 
 
 @pytest.mark.parametrize("kind", ["white", "ar1", "settling"])
-def test_lab_noise_a_settling_centre_and_a_trending_loop_are_no_drift(kind: str) -> None:
+def test_lab_noise_a_settling_centre_and_a_trending_loop_are_no_drift(
+    kind: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
     for seed in range(3):
         assert zero_drift.detect(_lab(kind, seed), 0.05 / 20) is None, (kind, seed)
-    for seed in range(3):  # a trending loop's drifting zero: found, flagged (session 29)
+    monkeypatch.setattr(zero_drift, "BESIDE_LOOP_TREND", False)
+    assert zero_drift.detect(_lab("fading", 0), 0.05 / 20) is None  # the old rule stands aside
+    monkeypatch.setattr(zero_drift, "BESIDE_LOOP_TREND", True)
+    for seed in range(3):  # a trending loop's drifting zero: found, flagged (session 29, the flag on)
         d = zero_drift.detect(_lab("fading", seed), 0.05 / 20)
         assert d is not None and d.loop_trends, seed
 
@@ -277,10 +286,32 @@ def test_one_slowing_measurement_does_not_sink_a_drift() -> None:
                 assert float(np.ptp(np.asarray(o.y) - np.asarray(c.y))) < 0.3 * SD, (seed, j)
 
 
+def test_one_strong_transient_does_not_sink_a_drift() -> None:
+    """As above with a 3 sd transient in the first measurement (its decay p 5e-8 to 8e-7): before the review,
+    Stouffer's sum took its z whole (5-6) and the pooled p fell to 0.004-0.0008 (seeds 0, 1, 4; measured),
+    the drift lost; now each z is capped at the slowing bound (that measurement is a slowing one, which the
+    drift must stand without anyway)."""
+    for seed in (0, 1, 4):
+        d = zero_drift.detect(_lab97(seed, slowing=3.0), 0.05 / 20)
+        assert d is not None and "m0" in d.decaying, seed
+
+
+def test_a_short_recording_is_named_untested() -> None:
+    """A recording of fewer than 8 periods after settling beside tested ones: its line is not tested (slope
+    0, only its period means replaced) and the note says so rather than "each recording's line"."""
+    short = _recs("drift", 1, m=1, periods=6)
+    d = zero_drift.detect([*_recs("drift", 0), *short], 0.05 / 20)
+    assert d is not None and d.slopes[-1] == 0.0
+    label = zero_drift._label(short[0], 6)
+    assert d.short == (label,) and f"{label} has fewer than" in d.note(), d.note()
+
+
 def test_transients_in_every_measurement_are_no_drift() -> None:
     """The other side: the same transient in every measurement (and no line) adds up in the pooled test."""
     for seed in range(3):
         assert zero_drift.detect(_lab97(seed, slowing=1.5, drift=0.0, every=True), 0.05 / 20) is None, seed
+    for seed in range(2):  # and a strong one, each z capped at the slowing bound, still adds up
+        assert zero_drift.detect(_lab97(seed, slowing=3.0, drift=0.0, every=True), 0.05 / 20) is None, seed
 
 
 def _stretches(seed: int, drift: float = 1.0) -> Any:
