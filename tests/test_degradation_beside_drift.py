@@ -203,3 +203,14 @@ def test_a_lab_degradation_under_a_drifting_zero_is_named(seed: int) -> None:
     assert T.Offset.kind not in d.named_terms, d.summary()  # the drift's DC is no output offset
     got = next(t for t in d.named if t.term == NU)
     assert abs(got.value - RATE) < max(5.0 * got.standard_error, 0.15 * RATE), d.summary()
+
+
+def test_across_a_trending_loop_is_not_said_a_drifting_zero() -> None:
+    """diagnose_across says what diagnose says: under a trending loop the straight line of the period means
+    is a drifting zero or a degrading loop's centre, not 'the output's zero drifts' (the review's
+    asymmetric degrading loop, no drift)."""
+    recs = _records(1, RATE, 0.0, asym=0.4)
+    d = bw.diagnose_across([recs, recs], [0.0, 1.0], candidates=[T.Offset.kind])
+    assert "zero drifts" not in d.verdict, d.verdict
+    assert "a drifting zero or a degrading loop's centre" in d.verdict, d.verdict
+    assert T.Offset.kind not in {t.term for t in d.named}, d.verdict

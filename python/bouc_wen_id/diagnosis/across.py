@@ -88,6 +88,8 @@ class _Group:
     wander: bool = False
     #: ... or its zero drifts in a straight line (zero_drift.py), taken out the same way.
     drifts: bool = False
+    #: ... while the loop trends too: a drifting zero or a degrading loop's centre, not told apart
+    loop_trends: bool = False
 
 
 @dataclass(frozen=True)
@@ -363,6 +365,7 @@ def _group(
         plain,
         wander=isinstance(wander, baseline.Wander),
         drifts=isinstance(wander, zero_drift.Drift),
+        loop_trends=isinstance(wander, zero_drift.Drift) and wander.loop_trends,
     )
 
 
@@ -786,7 +789,15 @@ def _finished(
         if wandering
         else ""
     )
-    drifting = ", ".join(str(g.label) for g in prepared if g.drifts)
+    drifting = ", ".join(str(g.label) for g in prepared if g.drifts and not g.loop_trends)
+    trending = ", ".join(str(g.label) for g in prepared if g.loop_trends)
+    if trending:  # the period means trend while the loop trends (zero_drift.py): the DC cannot tell which
+        clause += (
+            f"; the period means trend in a straight line at {trending} while the loop trends (taken out, "
+            "each experiment's DC free): a drifting zero or a degrading loop's centre (an asymmetry's), "
+            "which the DC cannot tell apart; an offset or each experiment's own DC there cannot be told "
+            "from it"
+        )
     if drifting:  # a zero drifting in a straight line (zero_drift.py)
         clause += (
             f"; the output's zero drifts at {drifting} (its straight line taken out, each experiment's DC "
