@@ -163,7 +163,7 @@ def test_the_power_at_no_effect_is_the_level() -> None:
     """At a zero non-centrality the power is the test's size (SciPy's non-central F returns -cdf there),
     so a power asked at or below the level needs no effect at all."""
     from bouc_wen_id.diagnosis.resolution import _power, unseen_lambda
-    from scipy.stats import f as f_dist
+    from scipy.stats import f as f_dist  # type: ignore[import-untyped]
 
     crit = float(f_dist.isf(0.025, 12, 900))
     assert abs(_power(0.0, 12, 900, crit) - 0.025) < 1e-9
