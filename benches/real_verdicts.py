@@ -83,27 +83,8 @@ def compare(before: dict[str, Any], after: dict[str, Any], rtol: float) -> list[
 
 
 def _across(S: Any, mr: list[tuple[str, Any, Any]]) -> dict[str, Any]:
-    """The MR damper's levels across (the study's ``across_levels``, its inputs as there): ``to_dict()``."""
-    import warnings
-
-    import bouc_wen_id as bw
-
-    A = S._adapters()
-    labels = [f"{c:g} A" for c in A.MR_CURRENTS]
-    currents = [float(A.MR_CURRENTS[labels.index(lab)]) for lab, _, _ in mr]
-    own = [d for _, _, d in mr]
-    units = mr[0][1][0].units
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        a = bw.diagnose_across(
-            [ms for _, ms, _ in mr],
-            currents,
-            labels=[lab for lab, _, _ in mr],
-            candidates=S.across_candidates(own),
-            per_condition=own,
-            y_unit=units.get("y", ""),
-            u_unit=units.get("u", ""),
-        )
+    """The MR damper's levels across (the study's ``mr_across``, its inputs as there): ``to_dict()``."""
+    a = S.mr_across(mr, progress=False)
     print(f"mr-damper across levels: {a.verdict} ({a.seconds:.1f} s)", file=sys.stderr)
     return {"seconds": a.seconds, "diagnosis": S.clean(a.to_dict())}
 

@@ -315,23 +315,17 @@ def across_candidates(ds: list[bw.Diagnosis]) -> list[str]:
     return out
 
 
-def across_levels(
-    loaded: list[tuple[str, str, list[bw.Measurement]]], rows: list[dict[str, Any]], quiet: bool
-) -> tuple[Any, float]:
-    """The MR damper's current levels diagnosed across (bw.diagnose_across), reusing each level's own
-    diagnosis (its prepared experiments and plain fit); (result or None, seconds)."""
+def mr_across(mr: list[tuple[str, list[bw.Measurement], Any]], progress: bool) -> Any:
+    """``bw.diagnose_across`` on the MR damper's levels, each given as (label, its measurements, its own
+    diagnosis): the candidates are the steady terms the levels' own diagnoses named or tried
+    (:func:`across_candidates`). Called by :func:`across_levels` and by ``benches/real_verdicts.py``."""
     A = _adapters()
-    mr = [(lab, ms, r) for (ds, lab, ms), r in zip(loaded, rows) if ds == "mr-damper" and "runs" in r]
-    if len(mr) < 2:
-        return None, 0.0
-    if not quiet:
-        print("-- mr-damper across current levels", file=sys.stderr)
-    own = [r["runs"]["as recorded"] for _, _, r in mr]
+    own = [d for _, _, d in mr]
     currents = [float(A.MR_CURRENTS[[f"{c:g} A" for c in A.MR_CURRENTS].index(lab)]) for lab, _, _ in mr]
     units = mr[0][1][0].units
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        a = bw.diagnose_across(
+        return bw.diagnose_across(
             [ms for _, ms, _ in mr],
             currents,
             labels=[lab for lab, _, _ in mr],
@@ -339,8 +333,21 @@ def across_levels(
             per_condition=own,
             y_unit=units.get("y", ""),
             u_unit=units.get("u", ""),
-            progress=not quiet,
+            progress=progress,
         )
+
+
+def across_levels(
+    loaded: list[tuple[str, str, list[bw.Measurement]]], rows: list[dict[str, Any]], quiet: bool
+) -> tuple[Any, float]:
+    """The MR damper's current levels diagnosed across (bw.diagnose_across), reusing each level's own
+    diagnosis (its prepared experiments and plain fit); (result or None, seconds)."""
+    mr = [(lab, ms, r) for (ds, lab, ms), r in zip(loaded, rows) if ds == "mr-damper" and "runs" in r]
+    if len(mr) < 2:
+        return None, 0.0
+    if not quiet:
+        print("-- mr-damper across current levels", file=sys.stderr)
+    a = mr_across([(lab, ms, r["runs"]["as recorded"]) for lab, ms, r in mr], progress=not quiet)
     print(f"mr-damper across levels: {a.verdict} ({a.seconds:.1f} s)")
     return a, a.seconds
 
