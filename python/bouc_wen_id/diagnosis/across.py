@@ -33,7 +33,7 @@ from __future__ import annotations
 import math
 import time
 import warnings
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 from typing import Any, Optional
 
@@ -44,23 +44,26 @@ from ..augmented import AugExperiment, AugFit
 from ..errors import InvalidParameterError
 from ..terms import TERMS, Distortion
 from ..validation import real_number
-from . import across_verdict
+from . import across_rules, across_verdict, fit_notes, gate
 from .beside import only_beside
-from .fitting import Scale, carry_through_g, fit_plain, fit_with, physical, scale_of, scaled, substeps_for
+from .caveats import alternatives_text
+from .data import DiagExperiment
+from .fitting import Scale, carry_through_g, fit_plain, physical, scale_of, scaled, substeps_for
 from .locate import adequacy_p
 from .progress import Progress, ProgressCallback, reporter
-from .result import Diagnosis, Status, term_symbol_unit
+from .result import Diagnosis, NamedTerm, Status, term_symbol_unit
 from .select import (
     ALPHA,
     ALTERNATIVE_IMPROVEMENT,
     LAW_ALPHA,
     MATERIAL_SHARE,
+    Alternative,
     FoldCache,
     _admissible,
     at_null,
     dof_of,
-    element_law_test,
     held_out,
+    memo_fit_with,
 )
 from .shared import SharedTest, shared_test
 
@@ -84,12 +87,20 @@ class _Group:
     plain: AugFit
     current: AugFit
     cache: FoldCache = field(default_factory=dict)
+    #: The condition's prepared experiments (the notes and the loop centres read them).
+    exps: list[DiagExperiment] = field(default_factory=list)
     #: The condition's baseline wanders (baseline.py): removed period by period, each experiment's DC free.
     wander: bool = False
     #: ... or its zero drifts in a straight line (zero_drift.py), taken out the same way.
     drifts: bool = False
     #: ... while the loop trends too: a drifting zero or a degrading loop's centre, not told apart
     loop_trends: bool = False
+    #: ``fit_with`` on this condition, once per (model, term) (select.memo_fit_with): an alternative's
+    #: two-term fit is the next step's trial of that term.
+    fit_term: Callable[[AugFit, str], Optional[AugFit]] = field(init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        self.fit_term = memo_fit_with(self.sx, self.substeps)
 
 
 @dataclass(frozen=True)
@@ -109,6 +120,8 @@ class JointTrial:
     held_out_before: float = math.nan
     held_out_after: float = math.nan
     fits: tuple[Optional[AugFit], ...] = field(default=(), repr=False, compare=False)
+    #: Per condition: whether the term is needed there on its own evidence (``p_each`` below alpha / K).
+    present: tuple[bool, ...] = ()
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -140,12 +153,16 @@ class JointStep:
     law_failed: tuple[str, ...] = ()
     #: Candidates refused beside a Dahl element with no effect of their own on the plain models (beside.py).
     beside: tuple[str, ...] = ()
+    #: The readings the conditions cannot tell from the chosen term, by diagnose's rules (across_rules.py):
+    #: its other place, a tied rival, a confounded value, one passed over for its law only.
+    alternatives: tuple[Alternative, ...] = ()
 
     def to_dict(self) -> dict[str, Any]:
         out: dict[str, Any] = {
             "trials": [t.to_dict() for t in self.trials],
             "chosen": self.chosen,
             "rivals": list(self.rivals),
+            "alternatives": [a.to_dict() for a in self.alternatives],
         }
         out.update({k: list(getattr(self, k)) for k in ("law_failed", "beside") if getattr(self, k)})
         return out
@@ -241,10 +258,17 @@ class AcrossDiagnosis:
     #: Terms of the joint structure tested but not named (a non-physical value where present, or a structure
     #: that leaves most of the summed excess), with their values per condition as :attr:`terms`.
     partial: tuple[TermAcross, ...] = ()
+    #: What diagnose notes of its fits, per condition (across_notes.py): a fit stopped at a bound, every
+    #: experiment below saturation.
+    notes: tuple[str, ...] = ()
 
     @property
     def named(self) -> tuple[str, ...]:
         return tuple(t.term for t in self.terms)
+
+    @property
+    def alternatives(self) -> tuple[Alternative, ...]:
+        return tuple(a for st in self.steps for a in st.alternatives)
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -255,6 +279,7 @@ class AcrossDiagnosis:
             "partial": [t.to_dict() for t in self.partial],
             "conditions": [c.to_dict() for c in self.conditions],
             "steps": [s.to_dict() for s in self.steps],
+            "notes": list(self.notes),
             "settings": self.settings,
             "seconds": self.seconds,
         }
@@ -363,6 +388,7 @@ def _group(
         noise_dof,
         plain,
         plain,
+        exps=list(exps),
         wander=isinstance(wander, baseline.Wander),
         drifts=isinstance(wander, zero_drift.Drift),
         loop_trends=isinstance(wander, zero_drift.Drift) and wander.loop_trends,
@@ -373,12 +399,13 @@ def _group(
 # The joint selection
 
 
-def _trial(groups: Sequence[_Group], term: str, n_cands: int, alpha: float) -> JointTrial:
-    """``term`` fitted at every condition on top of its current model, with the combined in-sample tests."""
+def _trial(groups: Sequence[_Group], term: str, n_cands: int, alpha: float, level: float) -> JointTrial:
+    """``term`` fitted at every condition on top of its current model, with the combined in-sample tests
+    (the combined F at ``level``, Bonferroni over the ``n_cands`` candidates; presence at ``alpha / K``)."""
     from scipy.special import fdtrc  # type: ignore[import-untyped]
 
     k = len(groups)
-    fits = [fit_with(g.sx, g.current, term, g.substeps) for g in groups]
+    fits = [g.fit_term(g.current, term) for g in groups]
     if any(f is None for f in fits):  # the term cannot stand at some condition: not at every one
         nan = (math.nan,) * k
         return JointTrial(term, math.nan, math.nan, math.nan, math.nan, nan, nan, False, fits=tuple(fits))
@@ -388,9 +415,7 @@ def _trial(groups: Sequence[_Group], term: str, n_cands: int, alpha: float) -> J
     c1 = [f.cost for f in done]
     d1 = [dof_of(g.sx, f) for g, f in zip(groups, done)]
     imp = [a - b for a, b in zip(c0, c1)]
-    den = max(sum(c1) / max(sum(d1), 1), 1.0)  # the pooled residual variance, never below the noise
-    stat = max(sum(imp), 0.0) / (q * k) / den
-    p = float(fdtrc(q * k, max(sum(d1), 1), stat)) if stat > 0 else 1.0
+    stat, p = across_rules.pooled_f(imp, c1, d1, q)  # over the pooled residual variance (>= the noise)
     padj = min(1.0, p * n_cands)
     excess = sum(max(g.current.cost - dof_of(g.sx, g.current), 0.0) for g in groups)
     share = min(sum(imp) / excess, 1.0) if excess > 0 else 1.0
@@ -399,26 +424,19 @@ def _trial(groups: Sequence[_Group], term: str, n_cands: int, alpha: float) -> J
     for a, c, d in zip(imp, c1, d1):
         f_k = max(a, 0.0) / q / max(c / max(d, 1), 1.0)
         p_each.append(float(fdtrc(q, max(d, 1), f_k)) if f_k > 0 else 1.0)
-    present = [pk < alpha / k for pk in p_each]
+    present = tuple(pk < alpha / k for pk in p_each)
     # As the single-group selection: a physical value, and not the null value (the model without it: what
     # it "removed" is a refit from another start, select.at_null), wherever it is present.
     physical = all(_admissible(f, term) and not at_null(f, term) for f, pr in zip(done, present) if pr)
-    ok = padj < alpha and share >= MATERIAL_SHARE and physical and any(present)
-    return JointTrial(term, stat, p, padj, share, tuple(imp), tuple(p_each), ok, fits=tuple(fits))
+    ok = padj < level and share >= MATERIAL_SHARE and physical and any(present)
+    imps, ps = tuple(imp), tuple(p_each)
+    return JointTrial(term, stat, p, padj, share, imps, ps, ok, fits=tuple(fits), present=present)
 
 
-def _confirmed(groups: Sequence[_Group], tr: JointTrial, alpha: float, use_held_out: bool) -> JointTrial:
-    """``tr`` with its law test (Bonferroni over the conditions where it is present) and its held-out costs
-    summed over the conditions."""
-    k = len(groups)
-    present = [pk < alpha / k for pk in tr.p_each]
-    laws = [  # everything the term claims, as the single-group selection tests it (its shape, its band)
-        element_law_test(g.sx, f, tr.term, g.substeps)
-        for g, f, pr in zip(groups, tr.fits, present)
-        if pr and f is not None
-    ]
-    laws = [v for v in laws if math.isfinite(v)]
-    law_p = min(1.0, min(laws) * len(laws)) if laws else math.nan
+def _confirmed(groups: Sequence[_Group], tr: JointTrial, use_held_out: bool) -> JointTrial:
+    """``tr`` with its law test (Bonferroni over the conditions where it is present, across_rules.law_p)
+    and its held-out costs summed over the conditions."""
+    law_p = across_rules.law_p(groups, tr, tr.present)
     out = replace(tr, law_p_value=law_p)
     if not use_held_out or (math.isfinite(law_p) and law_p < LAW_ALPHA):
         return out
@@ -440,6 +458,61 @@ def _accepts(tr: JointTrial, use_held_out: bool) -> bool:
     return tr.held_out_after < tr.held_out_before
 
 
+def _go_on(groups: Sequence[_Group], steps: Sequence[JointStep], alpha: float) -> tuple[bool, float]:
+    """Whether the joint selection takes another step, and its level: as diagnose's selection, it stops
+    once the structure passes its adequacy test at every condition (at ``alpha``); the first step runs
+    always, at ``alpha / 2`` (the targeted step, select.py) when every condition's plain model passes
+    diagnose's gate (gate.plain_passes)."""
+    if not steps:
+        targeted = all(gate.plain_passes(across_verdict.p_of(g, g.plain), alpha) for g in groups)
+        return True, 0.5 * alpha if targeted else alpha
+    if steps[-1].chosen is None or across_verdict.final_adequate(groups, alpha):
+        return False, alpha
+    return True, alpha
+
+
+def _step(
+    groups: Sequence[_Group],
+    trials: list[JointTrial],
+    level: float,
+    alpha: float,
+    use_held_out: bool,
+    alone: dict[str, float],
+) -> JointStep:
+    """One joint step's choice from its ``trials`` (module docstring): the simpler limit first
+    (across_rules.simpler_first), the beside-Dahl rule, the law and held-out tests, the alternatives."""
+    passed = sorted((tr for tr in trials if tr.passed), key=lambda tr: -sum(tr.improvements))
+    order = across_rules.simpler_first(groups, passed, level / len(trials))
+    chosen: Optional[JointTrial] = None
+    final = {tr.term: tr for tr in trials}
+    refused: list[str] = []
+    for tr in order:
+        if only_beside(groups[0].current, tr.term, alone.get(tr.term, math.nan), alpha):
+            refused.append(tr.term)  # needed only beside a Dahl element (beside.py), as diagnose
+            continue
+        tr2 = _confirmed(groups, tr, use_held_out)
+        final[tr.term] = tr2
+        if _accepts(tr2, use_held_out):
+            chosen = tr2
+            break
+    law_failed = tuple(
+        t.term for t in final.values() if math.isfinite(t.law_p_value) and t.law_p_value < LAW_ALPHA
+    )
+    done = tuple(final[t.term] for t in trials)
+    if chosen is None:
+        return JointStep(done, None, (), law_failed, tuple(refused))
+    best = sum(chosen.improvements)
+    rivals = tuple(
+        tr.term
+        for tr in passed
+        if tr.term != chosen.term
+        and (sum(tr.improvements) >= RIVAL_IMPROVEMENT * best or across_verdict.tied(groups, chosen, tr))
+        and tr.term not in refused + list(law_failed)
+    )
+    alts = across_rules.alternatives(groups, chosen, done, order, law_failed)
+    return JointStep(done, chosen.term, rivals, law_failed, tuple(refused), alts)
+
+
 def _select(
     groups: Sequence[_Group],
     cands: Sequence[str],
@@ -450,45 +523,21 @@ def _select(
     """The joint forward selection (module docstring); the groups' current models end at the final ones."""
     steps: list[JointStep] = []
     while True:
+        go, level = _go_on(groups, steps, alpha)
         remaining = [t for t in cands if t not in groups[0].current.params.terms]
-        if not remaining:
+        if not (go and remaining):
             break
         trials: list[JointTrial] = []
         for i, t in enumerate(remaining):
             report(
                 f"across step {len(steps) + 1}: fitting candidate {t} at every condition", i, len(remaining)
             )
-            trials.append(_trial(groups, t, len(remaining), alpha))
-        passed = sorted((tr for tr in trials if tr.passed), key=lambda tr: -sum(tr.improvements))
-        chosen: Optional[JointTrial] = None
-        final = {tr.term: tr for tr in trials}
+            trials.append(_trial(groups, t, len(remaining), alpha, level))
         alone = {t.term: t.p_value for t in steps[0].trials} if steps else {}
-        refused: list[str] = []
-        for tr in passed:
-            if only_beside(groups[0].current, tr.term, alone.get(tr.term, math.nan), alpha):
-                refused.append(tr.term)  # needed only beside a Dahl element (beside.py), as diagnose
-                continue
-            tr2 = _confirmed(groups, tr, alpha, use_held_out)
-            final[tr.term] = tr2
-            if _accepts(tr2, use_held_out):
-                chosen = tr2
-                break
-        law_failed = tuple(
-            t.term for t in final.values() if math.isfinite(t.law_p_value) and t.law_p_value < LAW_ALPHA
-        )
-        done = tuple(final[t.term] for t in trials)
+        steps.append(_step(groups, trials, level, alpha, use_held_out, alone))
+        chosen = next((t for t in steps[-1].trials if t.term == steps[-1].chosen), None)
         if chosen is None:
-            steps.append(JointStep(done, None, (), law_failed, tuple(refused)))
             break
-        best = sum(chosen.improvements)
-        rivals = tuple(
-            tr.term
-            for tr in passed
-            if tr.term != chosen.term
-            and (sum(tr.improvements) >= RIVAL_IMPROVEMENT * best or across_verdict.tied(groups, chosen, tr))
-            and tr.term not in refused + list(law_failed)
-        )
-        steps.append(JointStep(done, chosen.term, rivals, law_failed, tuple(refused)))
         for g, f in zip(groups, chosen.fits):
             assert f is not None
             g.current = f
@@ -652,17 +701,8 @@ def _verdict(
         parts.append(f"{t.label} ({where}; {_how(t)})")
     adequate = sum(1 for c in conds if math.isfinite(c.final_p_value) and c.final_p_value >= 0.05)
     tail = f"; the joint structure passes its adequacy test at {adequate} of {n} conditions"
-    ties = [
-        f"{TERMS[st.chosen].place_label()} or {TERMS[r].place_label()}"
-        for st in steps
-        if st.chosen is not None
-        for r in st.rivals
-    ]
-    if ties:
-        tail += (
-            "; near-tied readings (summed improvement within 10 % or within its uncertainty): "
-            + "; ".join(ties)
-        )
+    named = [NamedTerm(t.term, t.symbol, math.nan, math.nan, t.unit) for t in terms]
+    tail += alternatives_text([a for st in steps for a in st.alternatives], named)  # as diagnose says them
     return f"across {n} conditions, one structure: " + "; ".join(parts) + tail
 
 
@@ -810,6 +850,8 @@ def _finished(
         else _verdict(named, conditions, steps)
     )
     verdict += across_verdict.clauses(status, named, partial, steps, prepared)
+    if status != "adequate":  # loop centres that differ in sign (run._centre_text), as diagnose says
+        verdict += fit_notes.centre_text(prepared)
     return AcrossDiagnosis(
         verdict + clause,
         tuple(named),
@@ -820,6 +862,7 @@ def _finished(
         tuple(g.current for g in prepared),
         status,
         tuple(partial),
+        fit_notes.condition_notes(prepared),
     )
 
 

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from dataclasses import replace
 from typing import Any
 
 from ..terms import TERMS, physical_value
@@ -44,20 +45,21 @@ def explained_fraction(groups: Sequence[Any]) -> float:
     return gate.explained_fraction((g.plain.cost, dof_of(g.sx, g.plain), g.current.cost) for g in groups)
 
 
-def _p(g: Any, fit: Any) -> float:
+def p_of(g: Any, fit: Any) -> float:
+    """The adequacy p of ``fit`` at condition ``g`` (its dof and noise dof)."""
     return adequacy_p(fit.cost, dof_of(g.sx, fit), g.noise_dof)
 
 
 def plain_adequate(groups: Sequence[Any], terms: Sequence[Any], steps: Sequence[Any], alpha: float) -> bool:
     """:func:`.run.diagnose`'s gate at every condition (:func:`.gate.plain_passes`, at ``alpha / 2``) and its
     rule on what was added or refused (:func:`.gate.plain_adequate`: no term, no law-failed candidate)."""
-    passes = all(gate.plain_passes(_p(g, g.plain), alpha) for g in groups)
+    passes = all(gate.plain_passes(p_of(g, g.plain), alpha) for g in groups)
     return gate.plain_adequate(passes, bool(terms), steps)
 
 
-def _final_adequate(groups: Sequence[Any], alpha: float) -> bool:
+def final_adequate(groups: Sequence[Any], alpha: float) -> bool:
     """Whether the final model passes its adequacy test (at ``alpha``, as diagnose's) at every condition."""
-    return all(math.isfinite(p) and p >= alpha for p in (_p(g, g.current) for g in groups))
+    return all(math.isfinite(p) and p >= alpha for p in (p_of(g, g.current) for g in groups))
 
 
 def unphysical(terms: Sequence[Any]) -> list[NamedTerm]:
@@ -84,7 +86,7 @@ def judged(
     status = classify(
         plain_adequate(groups, terms, steps, alpha),
         bool(terms),
-        _final_adequate(groups, alpha),
+        final_adequate(groups, alpha),
         explained_fraction(groups),
     )
     if bad and status == "explained":
@@ -95,12 +97,14 @@ def judged(
     return status, named, [t for t in terms if t not in named]
 
 
-def _summed(groups: Sequence[Any], tr: Any) -> Trial:
-    """A joint trial as the single-group :class:`.select.Trial` :func:`.select._tied` reads: its cost and
-    improvement summed over the conditions (the first condition's fit stands for "fitted")."""
+def summed(tr: Any) -> Trial:
+    """A joint trial as the single-group :class:`.select.Trial` :func:`.select._tied` and
+    :func:`.select.preferred_by_fit` read: its cost and improvement summed over the conditions, its law p
+    (the first condition's fit stands for "fitted")."""
     cost = sum(f.cost for f in tr.fits) if all(f is not None for f in tr.fits) else math.nan
     nan = math.nan
-    return Trial(tr.term, cost, sum(tr.improvements), nan, nan, nan, nan, tr.passed, fit=tr.fits[0])
+    t = Trial(tr.term, cost, sum(tr.improvements), nan, nan, nan, nan, tr.passed, fit=tr.fits[0])
+    return replace(t, law_p_value=getattr(tr, "law_p_value", nan))
 
 
 def tied(groups: Sequence[Any], chosen: Any, rival: Any) -> bool:
@@ -109,7 +113,7 @@ def tied(groups: Sequence[Any], chosen: Any, rival: Any) -> bool:
     if any(f is None for f in (*chosen.fits, *rival.fits)):
         return False
     dof = sum(dof_of(g.sx, f) for g, f in zip(groups, chosen.fits))
-    return _tied(_summed(groups, chosen), _summed(groups, rival), dof)
+    return _tied(summed(chosen), summed(rival), dof)
 
 
 def head(status: Status, partial: Sequence[Any], n: int, fraction: float) -> str:
@@ -145,4 +149,15 @@ def clauses(
     return text + family_text(as_named, levels)
 
 
-__all__ = ["explained_fraction", "plain_adequate", "judged", "head", "clauses", "unphysical", "tied"]
+__all__ = [
+    "p_of",
+    "final_adequate",
+    "summed",
+    "explained_fraction",
+    "plain_adequate",
+    "judged",
+    "head",
+    "clauses",
+    "unphysical",
+    "tied",
+]

@@ -13,7 +13,6 @@ import numpy as np
 from ..augmented import AugExperiment, AugFit
 from ..budget import check_environment
 from ..errors import InvalidParameterError
-from ..estimators import boundary_note
 from ..terms import DIAGNOSIS_CANDIDATES, TERMS, Distortion, Offset, physical_value
 from ..validation import real_number
 from . import baseline, beside, free_dc, gate, resolution, zero_drift
@@ -31,6 +30,7 @@ from .drift import (
     strengths,
     with_drift_gate,
 )
+from .fit_notes import fit_notes
 from .fitting import (
     Scale,
     best_of,
@@ -612,11 +612,7 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
         final, steps = start, list[Step]()
     else:
         final, steps = forward_select(fsx, start, steady, adequate, substeps, targeted=targeted, **kw)
-    # The fits' own word when they stopped on a face of the admissible range (issue 19, branch lm).
-    fits = (
-        ((plain, "the plain fit"), (final, "the final fit")) if final is not plain else ((plain, "the fit"),)
-    )
-    notes += [n for f, w in fits for n in (boundary_note(f.stop, f.active, w), free_dc.note(f, w)) if n]
+    notes += fit_notes(plain, final)  # a fit stopped on a face of its admissible range (issue 19, branch lm)
     dexps = detrended(fexps, deg, s.y) if deg is not None and named_deg else fexps
     after = _drift_checked(_localise(dexps, fsx, final, s), dexps)
     plain_sum = _summary(exps, sx, plain, s, setup.units)

@@ -35,7 +35,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
-from typing import Any, Optional
+from typing import Any, Optional, Protocol, TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -50,6 +50,14 @@ from .pinch_shape import band_test, is_pinching
 from .shape import LAW_WINDOW, shape_test, spectral_meat
 
 FloatArray = NDArray[np.float64]
+
+
+class _Termed(Protocol):
+    @property
+    def term(self) -> str: ...
+
+
+T = TypeVar("T", bound=_Termed)
 
 #: Family-wise false-alarm level of one selection step.
 ALPHA = 0.05
@@ -597,16 +605,27 @@ def simpler_first(exps: Sequence[AugExperiment], order: list[Trial], alpha: floa
     best_fit = order[0].fit if order else None
     if best_fit is None:
         return order
-    best, limits = order[0], getattr(TERMS[order[0].term], "limits", ())
+
+    def beats(simpler: Trial, best: Trial) -> bool:
+        _, p = f_test(simpler.cost, best.cost, dof_of(exps, best_fit))
+        return math.isfinite(p) and p < alpha
+
+    return limit_first(order, beats)
+
+
+def limit_first(order: list[T], beats: Callable[[T, T], bool]) -> list[T]:
+    """``order`` (trials with a ``term``, best first) with the first simpler limit of its best term (at
+    either place) moved first unless ``beats(limit, best)``: the rule of :func:`simpler_first`, whatever the
+    trial's kind (one set of experiments, or several conditions at once: :mod:`.across`)."""
+    if not order:
+        return order
+    limits = getattr(TERMS[order[0].term], "limits", ())
     # At either place: where G is nearly flat a spring on x is one on u (a 10x spring on u went to Dahl on x).
     limits = {s for k in limits for s in (k, *siblings(k))}
-    simpler = [tr for tr in order if tr.term in limits]
-    if not simpler:
+    simpler = next((tr for tr in order if tr.term in limits), None)
+    if simpler is None or beats(simpler, order[0]):
         return order
-    _, p = f_test(simpler[0].cost, best.cost, dof_of(exps, best_fit))
-    if math.isfinite(p) and p < alpha:
-        return order
-    return [simpler[0], *(tr for tr in order if tr is not simpler[0])]
+    return [simpler, *(tr for tr in order if tr is not simpler)]
 
 
 def memo_fit_with(exps: Sequence[AugExperiment], substeps: int) -> Callable[[AugFit, str], Optional[AugFit]]:
@@ -769,4 +788,5 @@ __all__ = [
     "element_law_test",
     "LAW_WINDOW",
     "simpler_first",
+    "limit_first",
 ]

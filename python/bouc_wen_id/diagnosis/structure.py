@@ -196,14 +196,38 @@ def max_step(exps: Sequence[DiagExperiment]) -> float:
     return 2.0 * math.pi / (STEPS_PER_PERIOD * max(e.frequency for e in exps))
 
 
-def _chi2(exps: Sequence[DiagExperiment], model: FeedbackModel) -> tuple[float, list[FloatArray]]:
-    cost, outs = 0.0, []
+def _chi2(
+    exps: Sequence[DiagExperiment], model: FeedbackModel, sx: Optional[Sequence[Any]] = None
+) -> tuple[float, list[FloatArray]]:
+    """The feedback model's chi-square and steady periods; with ``sx`` (:func:`_seen`), its residuals seen
+    as the cascade's fit sees them (each marked experiment's DC free, :func:`.free_dc.project`)."""
+    from . import free_dc
+
     h = max_step(exps)
-    for e, (a, f, yb) in zip(exps, _sines(exps)):
-        y = steady_period(model, a, f, yb.size, max_step=h)
-        cost += e.weight * float(np.sum((yb - y) ** 2))
-        outs.append(y)
-    return cost, outs
+    outs = [steady_period(model, a, f, yb.size, max_step=h) for a, f, yb in _sines(exps)]
+    res = [yb - y for (_, _, yb), y in zip(_sines(exps), outs)]
+    if sx is not None:
+        res, _ = free_dc.project(sx, res)
+    return sum(e.weight * float(np.sum(r**2)) for e, r in zip(exps, res)), outs
+
+
+def _seen(d: Diagnosis) -> tuple[list[Any], list[tuple[float, float, FloatArray]]]:
+    """The experiments as the diagnosis's fits see them (scaled; under a wandering baseline,
+    ``d.settings["common_dc"]``, each marked experiment's DC free: free_dc.py) and the sines the feedback
+    is fitted to, their data projected as :func:`.free_dc.project` projects a residual (the feedback's steady
+    output has no DC of its own, so the projection of the data is that of its residual)."""
+    from . import free_dc
+    from .fitting import Scale, scaled
+
+    exps = list(d.experiments)
+    s = d.settings["scale"]
+    sx = scaled(exps, Scale(float(s["y"]), float(s["u"])))
+    common = d.settings.get("common_dc")
+    if common is not None:
+        sx = free_dc.marked(sx, [e.baseline_removed for e in exps], bool(common))
+    sines = _sines(exps)
+    data, _ = free_dc.project(sx, [yb for _, _, yb in sines])
+    return sx, [(a, fr, yb) for (a, fr, _), yb in zip(sines, data)]
 
 
 FIT_ERRORS = (InvalidParameterError, InsufficientDataError, NonFiniteError, NotConvergedError)
@@ -220,18 +244,11 @@ def _held_out(d: Diagnosis, fit: FeedbackFit, cache: FoldCache) -> Optional[Held
     residual), and the left-out experiment's residual centred as the held-out refit centres it
     (:func:`.free_dc.centred`): a constant added to a marked experiment's output moves neither side."""
     from . import free_dc
-    from .fitting import Scale, scaled
 
     exps = list(d.experiments)
     s = d.settings["scale"]
-    sx = scaled(exps, Scale(float(s["y"]), float(s["u"])))
-    common = d.settings.get("common_dc")
-    if common is not None:
-        sx = free_dc.marked(sx, [e.baseline_removed for e in exps], bool(common))
+    sx, sines = _seen(d)
     substeps = int(d.settings["substeps"])
-    sines = _sines(exps)
-    data, _ = free_dc.project(sx, [yb for _, _, yb in sines])
-    sines = [(a, fr, yb) for (a, fr, _), yb in zip(sines, data)]
     h = max_step(exps)
     used, cb, ca, nb, na = [], [], [], [], []
     for j in folds(len(exps)):
@@ -298,14 +315,20 @@ def feedback_test(
     base = StructureTest(
         FEEDBACK, True, False, "", gain_p, ratio, d.final.cost, k_rival, aic_rival=d.final.cost + 2 * k_rival
     )
+    # Its fit, cost and dof see the data as the cascade's do (a wandering baseline's DCs free, as its
+    # held-out test sees them): with the DCs set, the AIC compared a cascade with free DCs to a feedback
+    # charged for them.
+    sx, sines = _seen(d)
     try:
-        fit = fit_feedback_sines(_sines(exps), starts=STARTS, seed=0, max_step=max_step(exps))
-        cost, _ = _chi2(exps, fit.model)
+        fit = fit_feedback_sines(sines, starts=STARTS, seed=0, max_step=max_step(exps))
+        cost, _ = _chi2(exps, fit.model, sx)
     except FIT_ERRORS as exc:
         why = f"tested, not named: the feedback model could not be fitted ({type(exc).__name__}: {exc})"
         return replace(base, reason=why, seconds=time.perf_counter() - t0), None
+    from . import free_dc
+
     n = sum(e.ybar.size for e in exps)
-    dof = n - FEEDBACK_PARAMS
+    dof = n - FEEDBACK_PARAMS - free_dc.spent(sx)
     p = adequacy_p(cost, dof, sum(e.noise_dof for e in exps))
     pars = tuple(
         (nm, float(v), float(se)) for nm, v, se in zip(fit.names, fit.estimates, fit.standard_errors)
