@@ -198,8 +198,8 @@ def test_a_dahl_element_that_does_not_beat_its_spring_gives_way_to_it() -> None:
 
 
 def test_loop_centres_that_differ_in_sign_are_said_at_their_condition() -> None:
-    """run._centre_text's clause, said of each condition where the residual DCs of its experiments differ
-    in sign beyond the noise (here the second condition), nowhere else."""
+    """diagnose's loop-centre clause (fit_notes.centre_clause), said of each condition where the residual
+    DCs of its experiments differ in sign beyond the noise (here the second condition), nowhere else."""
 
     def group(label: str, dcs: tuple[float, float]) -> Any:
         exps = [

@@ -15,7 +15,11 @@ a candidate term is added to EVERY condition at once, its value free per conditi
   it must explain a material share of the summed excess, keep a physical value wherever it is present,
   hold its law (one value for a condition's experiments, :func:`.select.law_test`, Bonferroni over the
   conditions where it is present) and lower the held-out cost summed over the conditions;
-- selection stops when no candidate passes.
+- as in :func:`~bouc_wen_id.diagnosis.diagnose` (across_rules.py): a two-term element's simpler limit goes
+  first unless the element beats it; the chosen term's other place, a rival within its uncertainty and one
+  whose value trades with its are reported as alternatives with the separating experiment; selection stops
+  when no candidate passes or once the structure passes its adequacy test at every condition (the first
+  step at ``alpha / 2`` when every condition's plain model passes the gate, the targeted step).
 
 Per condition the result reports each term's value with its standard error (inflated by the final fit's
 ``sqrt(chi2/dof)`` when above 1: a misfit elsewhere makes the noise-based one too small), whether the term
@@ -146,8 +150,8 @@ class JointStep:
     trials: tuple[JointTrial, ...]
     chosen: Optional[str]
     #: Candidates that passed in sample with a summed improvement of at least :data:`RIVAL_IMPROVEMENT` of
-    #: the chosen one's, or within its uncertainty (:func:`.across_verdict.tied`): near-tied readings of
-    #: the same misfit (not named; the verdict lists them).
+    #: the chosen one's, or within its uncertainty (:func:`.across_verdict.tied`): the candidates checked
+    #: as alternatives (the verdict says those of :attr:`alternatives`, as diagnose says its own).
     rivals: tuple[str, ...] = ()
     #: Candidates that passed in sample but whose law failed (element_law_test; said in the verdict).
     law_failed: tuple[str, ...] = ()
@@ -850,7 +854,7 @@ def _finished(
         else _verdict(named, conditions, steps)
     )
     verdict += across_verdict.clauses(status, named, partial, steps, prepared)
-    if status != "adequate":  # loop centres that differ in sign (run._centre_text), as diagnose says
+    if status != "adequate":  # loop centres that differ in sign (fit_notes.centre_clause), as diagnose says
         verdict += fit_notes.centre_text(prepared)
     return AcrossDiagnosis(
         verdict + clause,

@@ -30,6 +30,7 @@ from .drift import (
     strengths,
     with_drift_gate,
 )
+from .fit_notes import centre_clause as _centre_text
 from .fit_notes import fit_notes
 from .fitting import (
     Scale,
@@ -744,28 +745,6 @@ def _explained_fraction(plain: ModelSummary, final: ModelSummary, deg: Optional[
     noise too)."""
     drift = [] if deg is None else [(deg.cost0, deg.dof0, deg.cost1)]
     return gate.explained_fraction([(plain.cost, plain.dof, final.cost), *drift])
-
-
-def _centre_text(exps: Sequence[DiagExperiment], outputs: Sequence[Any], scale: float) -> str:
-    """A hint when the residual DC of single experiments is significant with both signs: loop centres that
-    differ between experiments are not one output offset (a loop below saturation settles its centre
-    slowly; issue 18's nulls named "output offset + asymmetry" from it). Each DC is judged against the noise
-    times ``scale`` (the final model's chi2/dof when above 1: a misfit elsewhere inflates every residual)."""
-    from scipy.special import ndtri  # type: ignore[import-untyped]
-
-    z = []
-    for e, y in zip(exps, outputs):
-        sd = math.sqrt(scale * e.noise_var / (e.periods * e.samples_per_period))
-        z.append(float(np.mean(e.ybar - np.asarray(y))) / sd if sd > 0 else 0.0)
-    crit = float(-ndtri(0.5 * 0.05 / max(len(z), 1)))
-    hits = [(e.source, v) for e, v in zip(exps, z) if abs(v) > crit]
-    if not (any(v > 0 for _, v in hits) and any(v < 0 for _, v in hits)):
-        return ""
-    where = ", ".join(f"{src} {'+' if v > 0 else '-'}" for src, v in hits)
-    return (
-        f"; the loop centre differs in sign between experiments ({where}): loops whose centre has not "
-        "settled (more settling periods) or an offset that changes between experiments, not one output offset"
-    )
 
 
 def _unphysical_text(terms: Sequence[NamedTerm]) -> str:
