@@ -16,8 +16,12 @@ effect at 10x the averaged noise on the default design (the bench's sizing), the
 Per row: predicted power, the F-test's empirical rate with its 95 % binomial (Wilson) interval, named and
 detected rates, seconds per diagnosis.
 
+``--cases sensor_lag:35014,...`` takes the plants of exactly those seeds (the diagnosis bench's missed
+cases). ``--hint SEED,...`` checks the adequate verdict's design hint instead (:func:`hint_rows`).
+
 Usage: ``python benches/detection_design.py [--draws 12] [--terms sensor_lag,series_dashpot]
-[--shapes resonant,first] [--size 10] [--seed 11] [--workers 1] [--json out.json]``
+[--shapes resonant,first] [--cases TERM:SEED,...] [--hint SEED,...] [--size 10] [--seed 11] [--workers 1]
+[--json out.json]``
 """
 
 from __future__ import annotations
@@ -136,11 +140,12 @@ def wilson(k: int, n: int, z: float = 1.96) -> tuple[float, float]:
 
 
 def row(shape: str, name: str, size: float, seed: int, draws: int, workers: int) -> list[dict[str, Any]]:
-    """The default and the planned design of one shape and term: predictions and Monte-Carlo counts."""
+    """The default and the planned design of one shape and term: predictions and Monte-Carlo counts
+    (``shape`` "seed": the plant of exactly ``seed``, whatever its shape)."""
     import bouc_wen_id as bw
     from bouc_wen_id.planning import detection_power
 
-    p = _plant(seed, shape)
+    p = gen.make_plant(seed) if shape == "seed" else _plant(seed, shape)
     value, got = gen.calibrate(p, name, "", size)
     prior, default = _prior(p), _default(p)
     budget = float(sum(e.duration for e in default))
@@ -180,7 +185,7 @@ def row(shape: str, name: str, size: float, seed: int, draws: int, workers: int)
         lo, hi = wilson(k, draws)
         out.append(
             {
-                "shape": shape,
+                "shape": p.shape,
                 "term": name,
                 "size": got,
                 "value": value,
@@ -206,6 +211,69 @@ def row(shape: str, name: str, size: float, seed: int, draws: int, workers: int)
     return out
 
 
+def hint_rows(seed: int, draws: int, workers: int) -> list[dict[str, Any]]:
+    """The adequate verdict's design hint, checked: a null recording of plant ``seed`` on the default design
+    is diagnosed; its sensor lag's 50 % limit L50 and hint (every experiment's periods times f; one
+    experiment's times s_j) are read; sensor lags of L50 are then drawn on the default design (the limit
+    promises 50 %) and on the two hinted designs (90 % promised)."""
+    import bouc_wen_id as bw
+    from bouc_wen_id.planning import PlannedExperiment
+
+    p = gen.make_plant(seed)
+    default = _default(p)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        d = bw.diagnose(_records(default, _noise_free(p, default, "sensor_lag", 0.0), 10**6 + seed))
+    lim = next((x for x in d.limits if x.term == "sensor_lag"), None)
+    if d.status != "adequate" or lim is None or lim.hint is None:
+        print(f"seed {seed}: {d.status}, no sensor-lag hint to check")
+        return []
+    h = lim.hint
+    print(f"seed {seed} ({p.shape}): {d.verdict}")
+    every = [replace(e, periods=math.ceil(h.periods_factor * e.periods)) for e in default]
+    designs: list[tuple[str, list[PlannedExperiment], float]] = [
+        ("default", default, 0.5),
+        ("every", every, 0.9),
+    ]
+    if h.experiment >= 0:
+        one = list(default)
+        e = one[h.experiment]
+        one[h.experiment] = replace(e, periods=math.ceil(h.experiment_factor * e.periods))
+        designs.append((f"exp {h.experiment}", one, 0.9))
+    out = []
+    for label, design, promised in designs:
+        y = _noise_free(p, design, "sensor_lag", lim.limit)
+        jobs = [(design, y, "sensor_lag", 10**7 * (seed + 1) + k) for k in range(draws)]
+        if workers > 1:
+            with ProcessPoolExecutor(workers) as ex:
+                res = list(ex.map(_draw, jobs))
+        else:
+            res = [_draw(j) for j in jobs]
+        k = sum(r["f"] for r in res)
+        lo, hi = wilson(k, draws)
+        out.append(
+            {
+                "seed": seed,
+                "shape": p.shape,
+                "design": label,
+                "tau": lim.limit,
+                "time": float(sum(e.duration for e in design)),
+                "promised": promised,
+                "f_rate": k / draws,
+                "f_interval": [lo, hi],
+                "within": lo <= promised <= hi,
+                "detected": sum(r["detected"] for r in res) / draws,
+            }
+        )
+        r = out[-1]
+        print(
+            f"  {label:<8} tau {lim.limit:.3g} s  time {r['time']:7.1f} s  promised {promised:.2f}  "
+            f"F rate {r['f_rate']:.2f} ({lo:.2f}-{hi:.2f})  detected {r['detected']:.2f}",
+            flush=True,
+        )
+    return out
+
+
 def main(argv: Optional[list[str]] = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--draws", type=int, default=12)
@@ -213,17 +281,32 @@ def main(argv: Optional[list[str]] = None) -> int:
     ap.add_argument("--shapes", default="resonant,first")
     ap.add_argument("--size", type=float, default=10.0)
     ap.add_argument("--seed", type=int, default=11)
+    ap.add_argument(
+        "--cases",
+        default="",
+        help="TERM:SEED,... plants of exactly these seeds (e.g. the bench's missed cases sensor_lag:35014) "
+        "instead of --shapes x --terms",
+    )
     ap.add_argument("--workers", type=int, default=1)
     ap.add_argument("--json", type=Path, default=None)
+    ap.add_argument("--hint", default="", help="SEED,...: check the adequate verdict's design hint instead")
     a = ap.parse_args(argv)
+    if a.hint:
+        hints = [r for sd in a.hint.split(",") for r in hint_rows(int(sd), a.draws, a.workers)]
+        if a.json is not None:
+            a.json.write_text(json.dumps(hints, indent=1), encoding="utf-8")
+        return 0
     rows: list[dict[str, Any]] = []
     print(
         f"{'shape':<9} {'term':<15} {'design':<14} {'time s':>7} {'lam1':>7} {'lam':>7} {'power':>6} "
         f"{'F rate':>6} {'95 % interval':>14} {'named':>6} {'detect':>6} {'s/diag':>6}"
     )
-    for shape in a.shapes.split(","):
-        for name in a.terms.split(","):
-            for r in row(shape, name, a.size, a.seed, a.draws, a.workers):
+    jobs = [(shape, name, a.seed) for shape in a.shapes.split(",") for name in a.terms.split(",")]
+    if a.cases:
+        jobs = [("seed", c.split(":")[0], int(c.split(":")[1])) for c in a.cases.split(",")]
+    for shape, name, seed in jobs:
+        if True:
+            for r in row(shape, name, a.size, seed, a.draws, a.workers):
                 rows.append(r)
                 lo, hi = r["f_interval"]
                 print(
