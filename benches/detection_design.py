@@ -173,7 +173,7 @@ def row(shape: str, name: str, size: float, seed: int, draws: int, workers: int)
     out = []
     for label, design, pred in designs:
         t1 = time.perf_counter()
-        y = _noise_free(p, design, name, value)
+        y = _noise_free(p, design, name, value) if draws else None  # --draws 0: the predictions alone
         gen_s = time.perf_counter() - t1
         jobs = [(design, y, name, 10**6 * (seed + 1) + k) for k in range(draws)]
         if workers > 1:
@@ -183,6 +183,7 @@ def row(shape: str, name: str, size: float, seed: int, draws: int, workers: int)
             res = [_draw(j) for j in jobs]
         k = sum(r["f"] for r in res)
         lo, hi = wilson(k, draws)
+        n = max(draws, 1)
         out.append(
             {
                 "shape": p.shape,
@@ -196,13 +197,13 @@ def row(shape: str, name: str, size: float, seed: int, draws: int, workers: int)
                 "lam_linear": pred.lam_linear,
                 "lam": pred.lam,
                 "power": pred.power,
-                "f_rate": k / draws,
+                "f_rate": k / n if draws else math.nan,
                 "f_interval": [lo, hi],
                 "within": lo <= pred.power <= hi,
-                "named": sum(r["named"] for r in res) / draws,
-                "detected": sum(r["detected"] for r in res) / draws,
+                "named": sum(r["named"] for r in res) / n if draws else math.nan,
+                "detected": sum(r["detected"] for r in res) / n if draws else math.nan,
                 "trials": sorted({r["trials"] for r in res}),
-                "seconds": float(np.mean([r["seconds"] for r in res])),
+                "seconds": float(np.mean([r["seconds"] for r in res])) if draws else math.nan,
                 "plan_seconds": plan_s,
                 "generator_seconds": gen_s,
                 "budget_for_90": plan.budget_for(0.9),
