@@ -139,7 +139,9 @@ def wilson(k: int, n: int, z: float = 1.96) -> tuple[float, float]:
     return max(c - h, 0.0), min(c + h, 1.0)
 
 
-def row(shape: str, name: str, size: float, seed: int, draws: int, workers: int) -> list[dict[str, Any]]:
+def row(
+    shape: str, name: str, size: float, seed: int, draws: int, workers: int, least: int = 1
+) -> list[dict[str, Any]]:
     """The default and the planned design of one shape and term: predictions and Monte-Carlo counts
     (``shape`` "seed": the plant of exactly ``seed``, whatever its shape)."""
     import bouc_wen_id as bw
@@ -158,6 +160,7 @@ def row(shape: str, name: str, size: float, seed: int, draws: int, workers: int)
         "max_samples_per_period": gen.P,
         "settle_periods": gen.SETTLE,
         "baseline": default,
+        "min_experiments": least,
     }
     t0 = time.perf_counter()
     plan = bw.plan_detection(prior, budget, {name: value}, **kw)
@@ -290,6 +293,7 @@ def main(argv: Optional[list[str]] = None) -> int:
     )
     ap.add_argument("--workers", type=int, default=1)
     ap.add_argument("--json", type=Path, default=None)
+    ap.add_argument("--min-experiments", type=int, default=1, help="plan_detection's min_experiments")
     ap.add_argument("--hint", default="", help="SEED,...: check the adequate verdict's design hint instead")
     a = ap.parse_args(argv)
     if a.hint:
@@ -307,7 +311,7 @@ def main(argv: Optional[list[str]] = None) -> int:
         jobs = [("seed", c.split(":")[0], int(c.split(":")[1])) for c in a.cases.split(",")]
     for shape, name, seed in jobs:
         if True:
-            for r in row(shape, name, a.size, seed, a.draws, a.workers):
+            for r in row(shape, name, a.size, seed, a.draws, a.workers, a.min_experiments):
                 rows.append(r)
                 lo, hi = r["f_interval"]
                 print(

@@ -153,3 +153,11 @@ def test_cli_plan_detect(capsys: pytest.CaptureFixture[str]) -> None:
     assert "sensor_lag" in capsys.readouterr().err
     assert cli.main([*argv, "--detect", "sensor_lag"]) == 2
     assert "TERM=SIZE" in capsys.readouterr().err
+
+
+def test_min_experiments_is_obeyed(plan: bw.DetectionPlan) -> None:
+    more = bw.plan_detection(
+        PRIOR, 200.0, {"viscous@x": 0.01}, min_experiments=len(plan.experiments) + 1, **LAB
+    )
+    assert len(more.experiments) > len(plan.experiments)
+    assert more.predicted.lam <= plan.predicted.lam * (1 + 1e-9)  # a constraint costs, never gains

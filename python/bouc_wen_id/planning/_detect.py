@@ -169,7 +169,14 @@ EXPERIMENT_COUNTS = (2, 3, 4, 6)
 
 
 def _best_design(
-    prior: WienerPlant, st: _Settings, grid: _Grid, budget: float, term: str, size: float, kw: dict[str, Any]
+    prior: WienerPlant,
+    st: _Settings,
+    grid: _Grid,
+    budget: float,
+    term: str,
+    size: float,
+    kw: dict[str, Any],
+    least: int = 1,
 ) -> tuple[tuple[PlannedExperiment, ...], DetectionPower]:
     """The searched designs with at most 2, 3, 4, 6 and ``max_experiments`` experiments, each checked by a
     refit of the plain model; the one with the largest refitted non-centrality. The first-order projection
@@ -182,14 +189,19 @@ def _best_design(
     for m in sorted({c for c in EXPERIMENT_COUNTS if c < st.max_exp} | {st.max_exp}):
         sub = replace(st, max_exp=m)
         exps = _experiments(sub, grid, _search_design(search, sub, grid, budget))
-        if not exps or exps in seen:
+        if len(exps) < least or exps in seen:
             continue
         seen.add(exps)
         pw = detection_power(prior, exps, term, size, **kw)
         if best is None or pw.lam_used > best[1].lam_used:
             best = (exps, pw)
-    if best is None:
-        raise InvalidParameterError(f"within budget = {budget:g} s no design was found")
+    if best is None:  # no searched design has ``least`` experiments: the naive one with that many
+        naive = tuple(_naive_experiments(st, budget, least, grid) or ())
+        if len(naive) < least:
+            raise InvalidParameterError(
+                f"within budget = {budget:g} s no design of min_experiments = {least} experiments fits"
+            )
+        best = (naive, detection_power(prior, naive, term, size, **kw))
     return best
 
 
@@ -212,6 +224,7 @@ def plan_detection(
     max_samples_per_period: int = 512,
     min_periods: int = 5,
     max_experiments: Optional[int] = None,
+    min_experiments: int = 1,
     substeps: int = 8,
     baseline: Optional[Sequence[PlannedExperiment]] = None,
     backend: Backend = "rust",
@@ -223,7 +236,9 @@ def plan_detection(
     physical units of the alpha-normalised model (a sensor lag in s). ``alpha`` and ``candidates`` are the
     diagnosis's family-wise level and the number of candidate terms sharing its targeted step (``alpha / 2``
     Bonferroni). ``baseline`` (optional): the user's own design within the budget, a candidate too (the plan
-    is never below it). Every other keyword is :func:`~bouc_wen_id.plan_experiment`'s (the lab limits and the
+    is never below it). ``min_experiments``: fewest experiments of a searched design (the diagnosis's
+    held-out test refits without each experiment in turn; the term's F-test alone does not need more than
+    one or two). Every other keyword is :func:`~bouc_wen_id.plan_experiment`'s (the lab limits and the
     candidate grid). The search maximises the first-order non-centrality (``_power``); the planned and the
     naive design's are then checked by refitting the plain model, and their powers reported from it.
 
@@ -253,7 +268,8 @@ def plan_detection(
         "candidates": n_cand,
         "substeps": st.substeps,
     }
-    experiments, planned = _best_design(prior_plant, st, grid, budget, term, size, kw)
+    least = count("min_experiments", min_experiments, 1)
+    experiments, planned = _best_design(prior_plant, st, grid, budget, term, size, kw, least)
     if baseline is not None:
         base = tuple(baseline)
         if not base or not all(isinstance(e, PlannedExperiment) for e in base):
@@ -267,7 +283,9 @@ def plan_detection(
             experiments, planned = base, own
     naive_exps = tuple(_naive_experiments(st, budget, len(experiments), grid) or ())
     naive = detection_power(prior_plant, naive_exps, term, size, **kw) if naive_exps else None
-    if naive is not None and naive.lam_used > planned.lam_used:  # the search is local: never worse than naive
+    if (
+        naive is not None and len(naive_exps) >= least and naive.lam_used > planned.lam_used
+    ):  # the search is local: never worse than naive
         experiments, planned = naive_exps, naive
     if not planned.lam_used > 0.0:
         raise InvalidParameterError(
