@@ -169,3 +169,21 @@ def test_the_power_at_no_effect_is_the_level() -> None:
     assert abs(_power(0.0, 12, 900, crit) - 0.025) < 1e-9
     assert unseen_lambda(12, 900, 0.025, power=0.02) == 0.0
     assert unseen_lambda(12, 900, 0.025, power=0.5) > 0.0
+
+
+def test_the_adequate_verdict_says_what_would_see_the_sensor_lag(null: Any) -> None:
+    # The sensor lag (> 99.9 % absorbed) gets the periods that see its 50 % value at 90 % power: the
+    # 90 %- over the 50 %-power threshold of its own one-sided test at its level.
+    from scipy.special import ndtri  # type: ignore[import-untyped]
+
+    lim = next(x for x in null.limits if x.term == "sensor_lag")
+    assert lim.hint is not None
+    z = float(ndtri(1 - lim.level))
+    factor = ((z + float(ndtri(0.9))) / z) ** 2
+    assert lim.hint.periods_factor == pytest.approx(factor, rel=1e-6)
+    periods = math.ceil(factor * PERIODS)
+    assert (
+        f"[to see sensor lag |tau| = {lim.limit:.2g} s at 90 % power: record {periods} periods"
+        in null.verdict
+    )
+    assert "rad/s" in null.verdict.split("[to see")[1].split("]")[0]

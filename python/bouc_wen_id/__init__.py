@@ -103,9 +103,9 @@ __all__ = [
 __all__ += ["budget", "BudgetExceededError"]
 
 # Experiment planning (issue #11 part 3): the design that minimises a Cramer-Rao criterion within a budget.
-from .planning import ExperimentPlan, PlannedExperiment, plan_experiment  # noqa: E402
+from .planning import DetectionPlan, ExperimentPlan, PlannedExperiment, plan_detection, plan_experiment  # noqa: E402
 
-__all__ += ["plan_experiment", "ExperimentPlan", "PlannedExperiment"]
+__all__ += ["plan_experiment", "ExperimentPlan", "PlannedExperiment", "plan_detection", "DetectionPlan"]
 
 # Issue #11 parts 1-2: G(s) from the points (scipy.optimize imported only when fitting); python-control
 # interop lives in bouc_wen_id.interop and imports control lazily.

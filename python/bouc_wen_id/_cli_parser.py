@@ -349,6 +349,16 @@ def _add_plan_parser(sub: Any) -> None:
     p.add_argument("--max-samples-per-period", type=_integer(16), default=512)
     p.add_argument("--min-periods", type=_integer(2), default=5)
     p.add_argument("--max-experiments", type=_integer(2), default=None)
+    p.add_argument(
+        "--detect",
+        default=None,
+        metavar="TERM=SIZE",
+        help="plan to detect one term of this size instead (e.g. sensor_lag=1e-3: the design that maximises "
+        "the power of the diagnosis's test of it; --target is then not used)",
+    )
+    p.add_argument(
+        "--diagnosis-alpha", type=_level, default=0.05, help="with --detect: the diagnosis's alpha (0.05)"
+    )
     p.add_argument("--out", type=Path, default=None, help="write the plan as JSON to this file")
     _add_overwrite(p)
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import signal
 import sys
 import time
@@ -540,20 +541,31 @@ def _prior_from_args(args: argparse.Namespace) -> WienerPlant:
     return _load_plant(args.plant)
 
 
+def _detect_arg(text: str) -> dict[str, float]:
+    """``--detect TERM=SIZE`` as ``{term: size}`` (the term and the size are checked by the planner)."""
+    term, sep, size = text.partition("=")
+    try:
+        value = float(size)
+    except ValueError:
+        value = math.nan
+    if not sep or not term.strip() or not math.isfinite(value):
+        raise InvalidParameterError(
+            f"--detect {text!r} must be TERM=SIZE with a finite size, e.g. sensor_lag=1e-3"
+        )
+    return {term.strip(): value}
+
+
 def _cmd_plan(args: argparse.Namespace) -> int:
     from .planning import plan_experiment
 
     if args.out is not None:
         _check_out(args, inputs=[args.plant] if args.plant else [], what="--out file")
     prior = _prior_from_args(args)
-    plan = plan_experiment(
-        prior,
-        args.budget,
+    lab: dict[str, Any] = dict(
         band=(args.band[0], args.band[1]),
         max_amplitude=args.max_amplitude,
         noise_sd=args.noise,
         sample_rate=args.sample_rate,
-        target=args.target,
         max_rate=args.max_rate,
         n_frequencies=args.frequencies,
         n_amplitudes=args.amplitudes,
@@ -563,6 +575,13 @@ def _cmd_plan(args: argparse.Namespace) -> int:
         min_periods=args.min_periods,
         max_experiments=args.max_experiments,
     )
+    plan: Any
+    if args.detect is not None:
+        from .planning import plan_detection
+
+        plan = plan_detection(prior, args.budget, _detect_arg(args.detect), alpha=args.diagnosis_alpha, **lab)
+    else:
+        plan = plan_experiment(prior, args.budget, target=args.target, **lab)
     print(plan.summary())
     if args.out is not None:
         with _staged(args) as staged:

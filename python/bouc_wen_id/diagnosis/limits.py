@@ -31,6 +31,7 @@ import numpy as np
 from ..augmented import AugExperiment, AugFit, augmented_output
 from ..errors import BoucWenIdError, BudgetExceededError
 from . import free_dc
+from .design_hint import DesignHint, design_hint
 from .fitting import Scale, fit_from, physical
 from .result import TERM_LABELS, term_symbol_unit
 from .select import BOUNDARY_TERMS, MATERIAL_SHARE, Step, dof_of
@@ -71,6 +72,9 @@ class DetectionLimit:
     #: Corrected by refits of the plain model (True), or the first-order projection alone (False: the verdict
     #: named physics, so the limits are context, not the finding; they can read low where most is absorbed).
     refined: bool = True
+    #: What would see the 50 % limit with 90 % power (more periods; design_hint.py), for a term the plain
+    #: model absorbs at least :data:`ABSORBED_SAID` of; None otherwise.
+    hint: Optional[DesignHint] = None
 
     @property
     def label(self) -> str:
@@ -102,6 +106,7 @@ class DetectionLimit:
             "absorbed": n(self.absorbed),
             "note": self.note,
             "refined": self.refined,
+            "design_hint": None if self.hint is None else self.hint.to_dict(),
         }
 
 
@@ -125,6 +130,7 @@ class _Profile:
             blocks.append(x)
             self.y0.append(np.asarray(out.y))
             self.sw.append(math.sqrt(e.weight))
+        self.blocks = blocks  # each experiment's Jacobian (design_hint.py)
         # A wandering baseline's free DCs (free_dc.py): the traces and the Jacobian projected as the fits
         # project them, so a term whose trace is only those DCs (an offset) is not detectable there.
         _, projected = free_dc.project(exps, self.y0, blocks)
@@ -263,9 +269,11 @@ def detection_limits(
     alpha: float,
     substeps: int,
     refine: bool = True,
+    seconds: Optional[list[float]] = None,
 ) -> tuple[DetectionLimit, ...]:
     """Every candidate of the first selection step with its detection limit (module docstring); empty when
-    no step ran (the plain model accepted with no targeted step). ``base``: the step's starting model."""
+    no step ran (the plain model accepted with no targeted step). ``base``: the step's starting model;
+    ``seconds``: each experiment's measured time (the design hint's cheapest single experiment)."""
     from scipy.special import ndtri  # type: ignore[import-untyped]
 
     if not steps:
@@ -290,6 +298,7 @@ def detection_limits(
         se_scaled = fit.standard_error(tr.term) if fit is not None else math.nan
         guess = z_c * se_scaled if math.isfinite(se_scaled) and se_scaled > 0 else 1e-3
         (lim, lim90), absorbed = _solve(profile, tr.term, guess, targets)
+        hint = _hint(profile, tr.term, lim, absorbed, targets, seconds)
         if refine:
             lim, lim90 = _refined(profile, tr.term, lim, targets)
         factor = abs(s.factor(tr.term, base.params.mu))
@@ -308,9 +317,24 @@ def detection_limits(
                 absorbed,
                 note,
                 refine,
+                hint,
             )
         )
     return tuple(out)
+
+
+def _hint(
+    profile: _Profile, term: str, lim: float, absorbed: float, targets: Sequence[float], seconds: Any
+) -> Optional[DesignHint]:
+    """design_hint.py's factors where the plain model absorbs most of the term (None elsewhere)."""
+    if not (math.isfinite(lim) and absorbed >= ABSORBED_SAID):
+        return None
+    try:
+        return design_hint(profile, term, lim, targets[0], targets[1], seconds)
+    except BudgetExceededError:
+        raise
+    except (BoucWenIdError, ValueError, FloatingPointError, np.linalg.LinAlgError):
+        return None
 
 
 def most_relevant(limits: Sequence[DetectionLimit], count: int = VERDICT_LIMITS) -> list[DetectionLimit]:

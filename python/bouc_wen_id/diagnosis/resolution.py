@@ -96,6 +96,33 @@ def limit_text(lim: DetectionLimit) -> str:
     return f"{head} (50 % power at {lim.limit:.2g}{ab})"
 
 
+def hint_text(lim: DetectionLimit, exps: Sequence[Any]) -> str:
+    """What would see ``lim``'s 50 % value with 90 % power (design_hint.py), in periods and test time of the
+    experiments ``exps`` (each with ``periods`` and ``frequency``); ``""`` without a hint."""
+    h = lim.hint
+    if h is None or not (math.isfinite(lim.limit) and math.isfinite(h.periods_factor)) or not exps:
+        return ""
+    periods = [float(e.periods) for e in exps]
+    secs = [n * 2.0 * math.pi / float(e.frequency) for n, e in zip(periods, exps)]
+    f = h.periods_factor
+    more = (f - 1.0) * sum(secs)
+    if len(set(periods)) == 1:
+        every = f"record {math.ceil(f * periods[0])} periods per experiment ({f:.2g}x, +{more:.3g} s)"
+    else:
+        every = f"record {f:.2g}x the periods of every experiment (+{more:.3g} s)"
+    one = ""
+    j = h.experiment
+    if 0 <= j < len(exps) and math.isfinite(h.experiment_factor):
+        extra = math.ceil((h.experiment_factor - 1.0) * periods[j])
+        w = float(exps[j].frequency)
+        one = (
+            f", or {extra} more periods at {w:.3g} rad/s (U = {float(exps[j].amplitude):.3g}; "
+            f"+{extra * 2.0 * math.pi / w:.3g} s, first order)"
+        )
+    sym = f"|{lim.symbol}| = {lim.limit:.2g} {lim.unit}".rstrip()
+    return f" [to see {lim.label} {sym} at {100 * POWER:.0f} % power: {every}{one}]"
+
+
 def resolution_text(d: Any, alpha: float, y_unit: str) -> str:
     """The global test's 90 %-power resolution for ``d`` (a Diagnosis with its experiments and plain fit),
     ``""`` when it cannot be computed."""
@@ -121,14 +148,26 @@ def resolution_text(d: Any, alpha: float, y_unit: str) -> str:
 
 
 def adequate_tail(lims: Sequence[DetectionLimit], d: Any, alpha: float, y_unit: str = "[y]") -> str:
-    """The "adequate" verdict's tail: the few candidates closest to detection at 90 % power, then the global
-    test's resolution (module docstring)."""
+    """The "adequate" verdict's tail: the few candidates closest to detection at 90 % power (the first of them
+    the plain model mostly absorbs with what would see it: :func:`hint_text`), then the global test's
+    resolution (module docstring)."""
     head = ""
     if lims:
+        shown = most_relevant(lims, VERDICT_LIMITS)
+        hinted = next((k for k, lim in enumerate(shown) if hint_text(lim, list(d.experiments))), -1)
         head = "; not excluded below (90 % power): " + ", ".join(
-            limit_text(lim) for lim in most_relevant(lims, VERDICT_LIMITS)
+            limit_text(lim) + (hint_text(lim, list(d.experiments)) if k == hinted else "")
+            for k, lim in enumerate(shown)
         )
     return head + resolution_text(d, alpha, y_unit or "[y]")
 
 
-__all__ = ["POWER", "adequate_tail", "limit_text", "resolution_text", "unseen_lambda", "unseen_rms"]
+__all__ = [
+    "POWER",
+    "adequate_tail",
+    "hint_text",
+    "limit_text",
+    "resolution_text",
+    "unseen_lambda",
+    "unseen_rms",
+]

@@ -687,7 +687,8 @@ def _with_limits(
     when nothing was named (adequate, unexplained): there they are the finding; beside named physics they are
     context, and the first-order projection saves two plain fits per candidate."""
     refine = d.status in ("adequate", "unexplained")
-    lims = detection_limits(sx, base, steps, s, setup.units, setup.alpha, substeps, refine=refine)
+    secs = [float(e.periods) * 2.0 * math.pi / float(e.frequency) for e in d.experiments]
+    lims = detection_limits(sx, base, steps, s, setup.units, setup.alpha, substeps, refine, secs)
     tail = resolution.adequate_tail(lims, d, setup.alpha, setup.units[0]) if d.status == "adequate" else ""
     return replace(d, limits=lims, verdict=d.verdict + tail)
 

@@ -61,7 +61,9 @@ the naive design), ``_result`` (the result types).
 
 from __future__ import annotations
 
+from ._detect import DetectionPlan, plan_detection
 from ._plan import plan_experiment
+from ._power import DETECTABLE, DetectionPower, detection_power
 from ._result import TARGETS, Design, ExperimentPlan, PlannedExperiment, Target
 from ._search import criterion_value
 from ._settings import (
@@ -79,6 +81,11 @@ __all__ = [
     "Design",
     "ExperimentPlan",
     "plan_experiment",
+    "plan_detection",
+    "DetectionPlan",
+    "DetectionPower",
+    "detection_power",
+    "DETECTABLE",
     "TARGETS",
     "criterion_value",
     "MAX_AMPLITUDES",

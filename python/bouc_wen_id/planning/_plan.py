@@ -150,6 +150,14 @@ def _design(st: _Settings, prior: WienerPlant, experiments: Sequence[PlannedExpe
 
 
 def _naive(st: _Settings, prior: WienerPlant, budget: float, count: int, grid: _Grid) -> Optional[Design]:
+    """The naive design's bound (:func:`_naive_experiments`; None when the budget cannot hold it)."""
+    experiments = _naive_experiments(st, budget, count, grid)
+    return None if experiments is None else _design(st, prior, experiments)
+
+
+def _naive_experiments(
+    st: _Settings, budget: float, count: int, grid: _Grid
+) -> Optional[list[PlannedExperiment]]:
     """Evenly log-spaced frequencies of the usable band at the largest amplitude, equal N, fewer if the
     budget is short (for "G": the tested grid)."""
     fixed = st.target == "G"
@@ -166,9 +174,8 @@ def _naive(st: _Settings, prior: WienerPlant, budget: float, count: int, grid: _
                 return None
             continue
         amps = np.minimum(st.max_amplitude, st.rate / omegas)
-        experiments = [
+        return [
             PlannedExperiment(float(w), float(u), n, int(p), st.settle, st.overhead)
             for w, u, p in zip(omegas, amps, samples)
         ]
-        return _design(st, prior, experiments)
     return None

@@ -1,0 +1,300 @@
+"""``plan_detection``: sine experiments that make a named term of a given size visible to the diagnosis.
+
+An "adequate" verdict quotes, per candidate term, the size below which the design may have missed it (90 %
+power, diagnosis/resolution.py). This answers the user's next question, *what should I record to see it?*
+It is a separate entry point rather than a sixth ``target`` of :func:`~._plan.plan_experiment`: the criterion
+is a hypothesis test's power, not a variance, it needs the term and its size, the diagnosis's level and
+candidate count, and its result is a power, not standard errors; the candidate grid, the lab limits and the
+greedy and exchange search are shared (``_settings``, ``_search``). The non-centrality of a design, its
+refit check and the power are ``_power``'s.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field, replace
+from typing import Any, Optional
+
+import numpy as np
+
+from .._backend import Backend
+from .._text import Summarised
+from ..errors import InvalidParameterError
+from ..model import WienerPlant
+from ..validation import count, real_number
+from ._plan import _experiments, _naive_experiments
+from ._power import (
+    DEFAULT_CANDIDATES,
+    DetectionPower,
+    check_detect,
+    detection_power,
+    experiment_block,
+    lam_of,
+)
+from ._result import PlannedExperiment
+from ._search import _scales, _Search, _search_design
+from ._settings import _budget, _Grid, _grid, _Settings, _settings
+
+
+class _DetectSearch(_Search):
+    """The search's scoring for detection: ``-log lam`` of the design (``_power.lam_of``), to minimise."""
+
+    def __init__(self, prior: WienerPlant, grid: _Grid, st: _Settings, term: str, size: float) -> None:
+        self.target = "detect"
+        self.omegas, self.amps, self.samples = grid.omegas, grid.amps, grid.samples
+        self.period = 2.0 * np.pi / grid.omegas
+        self.settle, self.overhead = st.settle, st.overhead
+        h = prior.normalized().hysteresis
+        self.theta_scale = _scales(np.array([h.beta, h.gamma, h.mu]))
+        k, n_amp = grid.amps.shape
+        self.blocks = np.zeros((k, n_amp, 4, 4))
+        for i in range(k):
+            for a in range(n_amp):
+                self.blocks[i, a] = experiment_block(
+                    prior,
+                    float(grid.omegas[i]),
+                    float(grid.amps[i, a]),
+                    int(grid.samples[i]),
+                    term,
+                    size,
+                    st.substeps,
+                )
+
+    def score(self, design: dict[int, tuple[int, int]]) -> float:
+        if not design:
+            return 700.0  # -log of a non-centrality of about 1e-304: any experiment improves on none
+        cells = np.array([(k, a, n) for k, (a, n) in design.items()], dtype=np.int64)
+        lam = lam_of(
+            self.blocks[cells[:, 0], cells[:, 1]], cells[:, 2].astype(np.float64), self.theta_scale, 1.0
+        )
+        return -math.log(lam) if lam > 1e-300 else 700.0
+
+
+@dataclass(frozen=True, eq=False)
+class DetectionPlan(Summarised):
+    """The design that maximises the non-centrality of one term's test, its predicted power, and the naive
+    design's (evenly log-spaced frequencies at the largest amplitude, equal periods, the same budget)."""
+
+    term: str
+    size: float
+    prior: WienerPlant
+    budget: float
+    noise_sd: float
+    experiments: tuple[PlannedExperiment, ...]
+    predicted: DetectionPower
+    naive_experiments: tuple[PlannedExperiment, ...]
+    naive: Optional[DetectionPower]
+    settings: dict[str, Any] = field(repr=False)
+
+    @property
+    def total_time(self) -> float:
+        return self.predicted.total_time
+
+    def scaled(self, power: float = 0.9) -> tuple[PlannedExperiment, ...]:
+        """The planned design with every experiment's periods raised to reach ``power`` (the non-centrality
+        grows as the periods; settling and overhead are paid once); empty when it cannot."""
+        f = self.predicted.periods_factor(power)
+        if not math.isfinite(f):
+            return ()
+        return tuple(replace(e, periods=max(e.periods, math.ceil(f * e.periods))) for e in self.experiments)
+
+    def budget_for(self, power: float = 0.9) -> float:
+        """Test time of :meth:`scaled` (inf when no scaling reaches ``power``)."""
+        exps = self.scaled(power)
+        return float(sum(e.duration for e in exps)) if exps else math.inf
+
+    def plans(self, seed: Optional[int] = 0, substeps: int = 4) -> list[Any]:
+        """The planned experiments as :class:`~bouc_wen_id.SinePlan` s (seeds as :meth:`Design.plans`)."""
+        children = np.random.SeedSequence(seed).spawn(len(self.experiments)) if seed is not None else None
+        return [
+            e.plan(
+                self.noise_sd, None if children is None else int(children[i].generate_state(1)[0]), substeps
+            )
+            for i, e in enumerate(self.experiments)
+        ]
+
+    def summary(self) -> str:
+        p = self.predicted
+        lines = [
+            f"Detection plan: {self.term} = {self.size:g}, budget {self.budget:g} s "
+            f"(used {self.total_time:.1f}"
+            f" s), noise sd {self.noise_sd:g}; the term's test at level {p.level:.2g}"
+            f" ({'one' if p.one_sided else 'two'}-sided, alpha / 2 over the candidates)",
+            f"  {'#':>2} {'omega rad/s':>11} {'f Hz':>8} {'U':>9} {'P':>5} {'settle':>6} {'N':>6} "
+            f"{'time s':>8}",
+        ]
+        for i, e in enumerate(self.experiments):
+            lines.append(
+                f"  {i:>2} {e.frequency:>11.4g} {e.frequency / (2 * math.pi):>8.4g} {e.amplitude:>9.4g} "
+                f"{e.samples_per_period:>5d} {e.settle_periods:>6d} {e.periods:>6d} {e.duration:>8.2f}"
+            )
+        lines.append(f"  {'':<8} {'lam (1st order)':>16} {'lam (refit)':>12} {'power':>7}")
+        for name, d in (("planned", p), ("naive", self.naive)):
+            if d is not None:
+                lines.append(f"  {name:<8} {d.lam_linear:>16.3g} {d.lam:>12.3g} {d.power:>7.3f}")
+        need = self.budget_for(0.9)
+        if p.power < 0.9 and math.isfinite(need):
+            f = p.periods_factor(0.9)
+            lines.append(
+                f"90 % power needs {f:.2g}x the periods in every experiment of this design: "
+                f"about {need:.0f} s."
+            )
+        return "\n".join(lines)
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready description (format ``bouc_wen_id.detection_plan``, version 1)."""
+        return {
+            "format": "bouc_wen_id.detection_plan",
+            "version": 1,
+            "term": self.term,
+            "size": self.size,
+            "budget": self.budget,
+            "prior": self.prior.to_dict(),
+            "settings": self.settings,
+            "experiments": [e.to_dict() for e in self.experiments],
+            "predicted": self.predicted.to_dict(),
+            "naive_experiments": [e.to_dict() for e in self.naive_experiments],
+            "naive": None if self.naive is None else self.naive.to_dict(),
+            "budget_for_90": self.budget_for(0.9) if math.isfinite(self.budget_for(0.9)) else None,
+        }
+
+    def to_json(self, indent: int = 2) -> str:
+        return json.dumps(self.to_dict(), indent=indent)
+
+
+#: Most experiments of the searched designs whose non-centrality is checked by a refit (and the lab's cap).
+EXPERIMENT_COUNTS = (2, 3, 4, 6)
+
+
+def _best_design(
+    prior: WienerPlant,
+    st: _Settings,
+    grid: _Grid,
+    budget: float,
+    term: str,
+    size: float,
+    kw: dict[str, Any],
+    least: int = 1,
+) -> tuple[tuple[PlannedExperiment, ...], DetectionPower]:
+    """The searched designs with at most 2, 3, 4, 6 and ``max_experiments`` experiments, each checked by a
+    refit of the plain model; the one with the largest refitted non-centrality. The first-order projection
+    the search maximises overstates what the refit leaves where the plain parameters move far (a sensor
+    lag: 4x on the bench's default design), and the more so the fewer experiments pin them (a series dashpot
+    on one experiment: 9x), so the count of experiments is chosen on the refit."""
+    search = _DetectSearch(prior, grid, st, term, size)
+    best: Optional[tuple[tuple[PlannedExperiment, ...], DetectionPower]] = None
+    seen: set[tuple[PlannedExperiment, ...]] = set()
+    for m in sorted({c for c in EXPERIMENT_COUNTS if c < st.max_exp} | {st.max_exp}):
+        sub = replace(st, max_exp=m)
+        exps = _experiments(sub, grid, _search_design(search, sub, grid, budget))
+        if len(exps) < least or exps in seen:
+            continue
+        seen.add(exps)
+        pw = detection_power(prior, exps, term, size, **kw)
+        if best is None or pw.lam_used > best[1].lam_used:
+            best = (exps, pw)
+    if best is None:  # no searched design has ``least`` experiments: the naive one with that many
+        naive = tuple(_naive_experiments(st, budget, least, grid) or ())
+        if len(naive) < least:
+            raise InvalidParameterError(
+                f"within budget = {budget:g} s no design of min_experiments = {least} experiments fits"
+            )
+        best = (naive, detection_power(prior, naive, term, size, **kw))
+    return best
+
+
+def plan_detection(
+    prior_plant: WienerPlant,
+    budget: float,
+    detect: dict[str, float],
+    *,
+    band: tuple[float, float],
+    max_amplitude: float,
+    noise_sd: float,
+    sample_rate: float,
+    alpha: float = 0.05,
+    candidates: int = DEFAULT_CANDIDATES,
+    max_rate: Optional[float] = None,
+    n_frequencies: int = 12,
+    n_amplitudes: int = 4,
+    settle_periods: int = 20,
+    overhead: float = 0.0,
+    max_samples_per_period: int = 512,
+    min_periods: int = 5,
+    max_experiments: Optional[int] = None,
+    min_experiments: int = 1,
+    substeps: int = 8,
+    baseline: Optional[Sequence[PlannedExperiment]] = None,
+    backend: Backend = "rust",
+) -> DetectionPlan:
+    """Plan sine experiments that maximise the power of the diagnosis's test of one term of a given size.
+
+    ``detect`` is ``{term: size}``: one candidate term's code name (``"sensor_lag"``,
+    ``"series_dashpot"``, ``"viscous@x"``, ...; :data:`~._power.DETECTABLE`) and its value in the term's
+    physical units of the alpha-normalised model (a sensor lag in s). ``alpha`` and ``candidates`` are the
+    diagnosis's family-wise level and the number of candidate terms sharing its targeted step (``alpha / 2``
+    Bonferroni). ``baseline`` (optional): the user's own design within the budget, a candidate too (the plan
+    is never below it). ``min_experiments``: fewest experiments of a searched design (the diagnosis's
+    held-out test refits without each experiment in turn; the term's F-test alone does not need more than
+    one or two). Every other keyword is :func:`~bouc_wen_id.plan_experiment`'s (the lab limits and the
+    candidate grid). The search maximises the first-order non-centrality (``_power``); the planned and the
+    naive design's are then checked by refitting the plain model, and their powers reported from it.
+
+    Raises
+    ------
+    InvalidParameterError
+        An unknown or undetectable term, a zero or out-of-range size, a bad budget (zero, negative, too
+        small for one experiment) or any of :func:`~bouc_wen_id.plan_experiment`'s input errors; a design
+        on which the term leaves nothing the plain model cannot absorb.
+    """
+    if not isinstance(prior_plant, WienerPlant) or prior_plant.terms:
+        raise InvalidParameterError("prior_plant must be a plain WienerPlant (no terms)")
+    term, size = check_detect(detect)
+    budget = _budget(budget)
+    lvl = real_number("alpha", alpha)
+    if not 0.0 < lvl < 1.0:
+        raise InvalidParameterError(f"alpha = {lvl:g} must be within (0, 1)")
+    n_cand = count("candidates", candidates, 1)
+    st = _settings(
+        "detect", band, max_amplitude, noise_sd, sample_rate, max_rate, n_frequencies, n_amplitudes,
+        settle_periods, overhead, max_samples_per_period, min_periods, max_experiments, substeps, backend,
+    )  # fmt: skip
+    grid = _grid(st, budget)
+    kw: dict[str, Any] = {
+        "noise_sd": st.noise_sd,
+        "alpha": lvl,
+        "candidates": n_cand,
+        "substeps": st.substeps,
+    }
+    least = count("min_experiments", min_experiments, 1)
+    experiments, planned = _best_design(prior_plant, st, grid, budget, term, size, kw, least)
+    if baseline is not None:
+        base = tuple(baseline)
+        if not base or not all(isinstance(e, PlannedExperiment) for e in base):
+            raise InvalidParameterError("baseline must be a non-empty sequence of PlannedExperiment")
+        if sum(e.duration for e in base) > budget * (1 + 1e-9):
+            raise InvalidParameterError(
+                f"baseline takes {sum(e.duration for e in base):.4g} s, more than budget = {budget:g} s"
+            )
+        own = detection_power(prior_plant, base, term, size, **kw)
+        if own.lam_used > planned.lam_used:  # the user's design is a candidate too
+            experiments, planned = base, own
+    naive_exps = tuple(_naive_experiments(st, budget, len(experiments), grid) or ())
+    naive = detection_power(prior_plant, naive_exps, term, size, **kw) if naive_exps else None
+    if (
+        naive is not None and len(naive_exps) >= least and naive.lam_used > planned.lam_used
+    ):  # the search is local: never worse than naive
+        experiments, planned = naive_exps, naive
+    if not planned.lam_used > 0.0:
+        raise InvalidParameterError(
+            f"{term} = {size:g}: the plain model absorbs all of it on every design searched; nothing to plan"
+        )
+    return DetectionPlan(
+        term, size, prior_plant, budget, st.noise_sd, experiments, planned, naive_exps, naive,
+        {**st.to_dict(grid.omegas), "alpha": lvl, "candidates": n_cand},
+    )  # fmt: skip
+
+
+__all__ = ["DetectionPlan", "plan_detection"]

@@ -1,0 +1,247 @@
+"""The non-centrality a term of a given size gives the diagnosis's test of the plain model, per design.
+
+The diagnosis names a term when its one-parameter F-test against the plain model passes (diagnosis/select.py);
+the cost drop a true value ``v`` produces on noise-free data is the part of the term's trace the plain model
+cannot absorb (diagnosis/limits.py, ``_Profile``): the weighted trace ``r`` (the plain model plus the term at
+``v``, minus the plain model) after projecting out the plain model's Jacobian ``J`` (beta, gamma, mu shared;
+each experiment's own |G| and phi). With weights ``N_i / sigma^2`` the projection is a sum over experiments:
+eliminating experiment i's own (|G_i|, phi_i) leaves the 4 x 4 block ``M_i = [B_i' r_i']^T [B_i' r_i']``
+(``B`` the Bouc-Wen columns, primes after removing the own columns), and
+
+    lam = (S_rr - S_rb S_bb^-1 S_br) / sigma^2,   S = sum_i N_i M_i,
+
+the same Schur-complement form as the Cramer-Rao planner's (``_search``): each candidate experiment's block is
+computed once, and a design is scored with a 3 x 3 solve. It is linear in the plain model's moves and keeps
+the term's own nonlinearity (a sensor lag is a delay in G to first order: what is left grows as tau^2). The
+reported non-centrality of a design is then checked by refitting the plain model to the noise-free records
+of the plain model plus the term (as ``_Profile.exact``), which the search's first-order projection can
+overstate where the plain parameters move far.
+
+The power is that of the term's own test at the targeted step's level (``alpha / 2`` Bonferroni over the
+candidates, one-sided for a term confined to ``>= 0``), as diagnosis/limits.py quotes its 50 % and 90 %
+limits: ``Phi(sqrt(lam) - z_c)`` (plus ``Phi(-sqrt(lam) - z_c)`` two-sided).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
+from typing import Any, Optional
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..augmented import AugExperiment, AugParams, augmented_output
+from ..errors import BoucWenIdError, InvalidParameterError
+from ..model import WienerPlant
+from ..terms import DIAGNOSIS_CANDIDATES, STEADY_TERM_NAMES, TERMS
+from ..validation import real_number
+
+FloatArray = NDArray[np.float64]
+
+#: Terms the diagnosis tests on the averaged period by a one-parameter F-test, and so can be designed for
+#: (``distortion`` scales the measured input's harmonics, which a planned pure sine does not have).
+DETECTABLE = tuple(t for t in STEADY_TERM_NAMES if t != "distortion")
+#: The candidates sharing the targeted step's level by default: the library's steady candidates less the
+#: distortion (the diagnosis drops it on pure sines, diagnosis/run.py): 16, as the bench's first steps count.
+DEFAULT_CANDIDATES = sum(1 for t in DIAGNOSIS_CANDIDATES if t in DETECTABLE)
+#: Relative precision of the vague prior on beta, gamma, mu (as ``_search.VAGUE_PRIOR``): keeps a
+#: one-experiment design's projection finite.
+VAGUE_PRIOR = 1e-8
+
+
+def check_detect(detect: object) -> tuple[str, float]:
+    """``detect``: a mapping of one term code name to its size (the term's parameter, physical units of the
+    alpha-normalised model), each checked by name."""
+    if not isinstance(detect, dict) or len(detect) != 1:
+        raise InvalidParameterError(
+            f"detect must be a mapping of one term to its size, e.g. {{'sensor_lag': 1e-3}}; got {detect!r}"
+        )
+    ((term, size),) = detect.items()
+    if term not in DETECTABLE:
+        raise InvalidParameterError(
+            f"detect: unknown or undetectable term {term!r}; the terms a sine design can be planned to "
+            "detect "
+            f"are {', '.join(DETECTABLE)}"
+        )
+    value = real_number(f"detect[{term!r}]", size)
+    lo, hi = TERMS[term].bounds
+    if value == 0.0:
+        raise InvalidParameterError(f"detect[{term!r}] = 0: a term of size 0 has nothing to detect")
+    if not lo <= value <= hi:
+        raise InvalidParameterError(
+            f"detect[{term!r}] = {value:g} is outside the term's range [{lo:g}, {hi:g}] (a negative size of "
+            "a "
+            "term confined to >= 0)"
+        )
+    return term, value
+
+
+def critical(term: str, alpha: float, candidates: int) -> tuple[float, float, bool]:
+    """``(z_c, level, one_sided)`` of the term's test at the targeted step (module docstring)."""
+    from scipy.special import ndtri  # type: ignore[import-untyped]
+
+    one = TERMS[term].bounds[0] == 0.0
+    level = 0.5 * alpha / candidates
+    return float(ndtri(1.0 - (level if one else 0.5 * level))), level, one
+
+
+def power_at(lam: float, z_c: float, one_sided: bool) -> float:
+    """Power of the term's test at non-centrality ``lam`` (normal approximation of the F-test)."""
+    from scipy.special import ndtr
+
+    if not math.isfinite(lam):
+        return math.nan
+    d = math.sqrt(max(lam, 0.0))
+    return float(ndtr(d - z_c)) + (0.0 if one_sided else float(ndtr(-d - z_c)))
+
+
+def lam_needed(power: float, z_c: float) -> float:
+    """The non-centrality at which the (one-sided) test reaches ``power``."""
+    from scipy.special import ndtri
+
+    return float((z_c + ndtri(power)) ** 2)
+
+
+def aug_params(prior: WienerPlant, omegas: Sequence[float]) -> AugParams:
+    """The prior as the augmented model's parameters at ``omegas`` (grid phase 0: ``phi_i`` is G's lag)."""
+    norm = prior.normalized()
+    h = norm.hysteresis
+    gains, phases = norm.linear.gain_phase(list(omegas))
+    return AugParams(h.beta, h.gamma, h.mu, (), np.zeros(0), np.asarray(gains), np.asarray(phases))
+
+
+def experiment_block(
+    prior: WienerPlant, omega: float, amplitude: float, samples: int, term: str, size: float, substeps: int
+) -> FloatArray:
+    """``M`` (4 x 4, at unit weight: one averaged period, noise sd 1) of one sine experiment."""
+    e = AugExperiment(np.zeros(samples), amplitude, omega, 0.0, 1.0)
+    par = aug_params(prior, [omega])
+    out = augmented_output(e, par, 0, substeps=substeps, jacobian=True)
+    r = np.asarray(augmented_output(e, par.with_term(term, size), 0, substeps=substeps)) - np.asarray(out.y)
+    own = np.asarray(out.own_jacobian)
+    u, sv, _ = np.linalg.svd(own, full_matrices=False)
+    q = u[:, sv > 1e-10 * max(float(sv[0]), 1e-300)]
+    cols = np.column_stack([np.asarray(out.jacobian)[:, :3], r])
+    cols = cols - q @ (q.T @ cols)
+    block: FloatArray = cols.T @ cols
+    return block
+
+
+def lam_of(blocks: FloatArray, periods: FloatArray, scale: FloatArray, noise_sd: float) -> float:
+    """The linearised non-centrality of experiments with 4 x 4 ``blocks`` (k, 4, 4) and ``periods`` N."""
+    s = np.einsum("i,ijk->jk", periods, blocks)
+    sbb = s[:3, :3] + VAGUE_PRIOR * np.diag(1.0 / scale**2)
+    try:
+        absorbed = float(s[3, :3] @ np.linalg.solve(sbb, s[:3, 3]))
+    except np.linalg.LinAlgError:
+        return math.nan
+    return max(float(s[3, 3]) - absorbed, 0.0) / noise_sd**2
+
+
+def refitted_lam(
+    prior: WienerPlant,
+    design: Sequence[Any],
+    term: str,
+    size: float,
+    noise_sd: float,
+    substeps: int,
+) -> float:
+    """The non-centrality after refitting the plain model to the noise-free records of the prior plus the term
+    (``design``: :class:`~._result.PlannedExperiment` s); NaN when the fit fails."""
+    from ..diagnosis.fitting import fit_from
+
+    par = aug_params(prior, [e.frequency for e in design])
+    exps = [
+        AugExperiment(np.zeros(e.samples_per_period), e.amplitude, e.frequency, 0.0, e.periods / noise_sd**2)
+        for e in design
+    ]
+    truth = par.with_term(term, size)
+    try:
+        ys = [np.asarray(augmented_output(e, truth, i, substeps=substeps)) for i, e in enumerate(exps)]
+        fit = fit_from([replace(e, ybar=y) for e, y in zip(exps, ys)], par, substeps)
+    except (BoucWenIdError, FloatingPointError):
+        return math.nan
+    return float(fit.cost) if fit is not None else math.nan
+
+
+@dataclass(frozen=True)
+class DetectionPower:
+    """What a design predicts for the diagnosis's test of one term at one size."""
+
+    term: str
+    size: float
+    #: The first-order non-centrality (the search's), and the one after refitting the plain model (NaN: the
+    #: refit failed; the power then uses the first-order value).
+    lam_linear: float
+    lam: float
+    #: The test's level (per candidate), whether one-sided, and its normal critical value.
+    level: float
+    one_sided: bool
+    z_c: float
+    power: float
+    total_time: float
+
+    @property
+    def lam_used(self) -> float:
+        return self.lam if math.isfinite(self.lam) else self.lam_linear
+
+    def periods_factor(self, power: float = 0.9) -> float:
+        """Factor on every experiment's periods that brings the power to ``power`` (lam grows as N)."""
+        lam = self.lam_used
+        return lam_needed(power, self.z_c) / lam if lam > 0 else math.inf
+
+    def to_dict(self) -> dict[str, Any]:
+        def n(v: float) -> Optional[float]:
+            return v if math.isfinite(v) else None
+
+        return {
+            "term": self.term,
+            "size": self.size,
+            "lam_linear": n(self.lam_linear),
+            "lam": n(self.lam),
+            "level": self.level,
+            "one_sided": self.one_sided,
+            "power": n(self.power),
+            "total_time": self.total_time,
+            "periods_factor_90": n(self.periods_factor(0.9)),
+        }
+
+
+def detection_power(
+    prior: WienerPlant,
+    design: Sequence[Any],
+    term: str,
+    size: float,
+    *,
+    noise_sd: float,
+    alpha: float = 0.05,
+    candidates: int = DEFAULT_CANDIDATES,
+    substeps: int = 8,
+    refit: bool = True,
+) -> DetectionPower:
+    """The predicted power of the diagnosis's test of ``term`` at ``size`` on ``design`` (experiments with
+    ``frequency, amplitude, periods, samples_per_period`` and ``duration``, e.g. ``PlannedExperiment`` s)
+    for a plant ``prior`` with white output noise ``noise_sd`` per sample (module docstring)."""
+    term, size = check_detect({term: size})
+    if not design:
+        raise InvalidParameterError("design has no experiments")
+    h = prior.normalized().hysteresis
+    scale = np.where(np.array([h.beta, h.gamma, h.mu]) != 0, np.abs([h.beta, h.gamma, h.mu]), 1.0)
+    blocks = np.array(
+        [
+            experiment_block(prior, e.frequency, e.amplitude, e.samples_per_period, term, size, substeps)
+            for e in design
+        ]
+    )
+    periods = np.array([float(e.periods) for e in design])
+    lam1 = lam_of(blocks, periods, scale, noise_sd)
+    lam = refitted_lam(prior, design, term, size, noise_sd, substeps) if refit else math.nan
+    z_c, level, one = critical(term, alpha, candidates)
+    used = lam if math.isfinite(lam) else lam1
+    total = float(sum(e.duration for e in design))
+    return DetectionPower(term, size, lam1, lam, level, one, z_c, power_at(used, z_c, one), total)
+
+
+__all__ = ["DETECTABLE", "DEFAULT_CANDIDATES", "DetectionPower", "detection_power", "check_detect"]
