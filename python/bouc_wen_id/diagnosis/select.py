@@ -310,7 +310,8 @@ def law_test(exps: Sequence[AugExperiment], fit: AugFit, term: str, substeps: in
     column, not the residual variance per sample: with thousands of samples the per-sample F test called
     every leak "significant" (the MR damper at chi2/dof 84-556: p = 1e-58). Where the model fits (white
     residual at the noise floor) the meat is the classical one and the test the classical score/Wald
-    test. NaN with fewer than two experiments or a column the Jacobian cannot give.
+    test. Only the experiments the term acts on (a non-zero column) are compared. NaN with fewer than two
+    of them or a column the Jacobian cannot give.
     """
     from scipy.special import chdtrc
 
@@ -359,13 +360,20 @@ def law_test(exps: Sequence[AugExperiment], fit: AugFit, term: str, substeps: in
         meat += spectral_meat(xa[sl], r[sl] - xa[sl] @ beta, r.size / (r.size - rank))
         start += n_i
     cov = bread @ meat @ bread
-    # Contrasts of the m per-experiment values (each against the last), in the scaled coordinates.
-    contrast = np.zeros((nk * (m - 1), xa.shape[1]))
+    # Contrasts of the per-experiment values (each against the last), in the scaled coordinates, among the
+    # experiments whose column is not zero: an experiment the term does not act on (the input-waveform term
+    # on a clean sine) has no value of its own to compare (its 1/scale would overflow the covariance).
+    rows = []
     for q in range(nk):
         cols = nsh + 2 * m + q * m + np.arange(m)
-        for j in range(m - 1):
-            contrast[q * (m - 1) + j, cols[j]] = 1.0 / scale[cols[j]]
-            contrast[q * (m - 1) + j, cols[-1]] = -1.0 / scale[cols[-1]]
+        seen = cols[scale[cols] > 1e-12 * scale[cols].max()]
+        for c in seen[:-1]:
+            row = np.zeros(xa.shape[1])
+            row[c], row[seen[-1]] = 1.0 / scale[c], -1.0 / scale[seen[-1]]
+            rows.append(row)
+    if not rows:
+        return math.nan
+    contrast = np.array(rows)
     d = contrast @ beta
     v = contrast @ cov @ contrast.T
     vinv = np.linalg.pinv(v, rcond=1e-12, hermitian=True)
