@@ -623,17 +623,20 @@ def score(case: Case, d: Any) -> tuple[str, str]:
     """(category, what was named): right, place, wrong, unexplained, adequate; nulls: adequate, named,
     unexplained; outside: unexplained, family (the caveated equivalent, FAMILY), named, partly, adequate."""
     named = [t.term for t in d.named]
+    status = str(d.status)
     if case.design == "clipped":  # the input's own waveform is not device physics: the input IS distorted
         named = [n for n in named if n != "distortion"]
+        if not named and status == "explained":  # the measured input alone explains it: the final model fits
+            status = "adequate"
     alts = [(a.term, a.rival) for a in d.alternatives]
     text = ",".join(named) + ("" if not alts else " | alt " + ",".join(f"{a}~{r}" for a, r in alts))
     if case.effect == "null" or case.effect in OUTSIDE:
-        if d.status == "adequate":
+        if status == "adequate":
             return "adequate", text
         if named and _family(case.effect, named, str(getattr(d, "verdict", ""))):
             return "family", text
         if named:
-            return ("named" if d.status == "explained" else "partly"), text
+            return ("named" if status == "explained" else "partly"), text
         return "unexplained", text
     truth = case.effect
     if truth in named or any(r == truth and a in named for a, r in alts):
@@ -643,7 +646,7 @@ def score(case: Case, d: Any) -> tuple[str, str]:
         return "place", text
     if named:
         return "wrong", text
-    return ("adequate" if d.status == "adequate" else "unexplained"), text
+    return ("adequate" if status == "adequate" else "unexplained"), text
 
 
 def run_case(case: Case) -> dict[str, Any]:

@@ -253,3 +253,15 @@ def test_clipped_design_drives_g_with_the_flat_topped_input_it_writes() -> None:
             xv += h / m * (uj - xv) / tau
         x[k] = xv
     assert np.abs(x[rec] - sig.x[rec]).max() < 1e-3 * np.abs(sig.x[rec]).max()
+
+
+def test_score_reads_the_input_waveform_as_the_input_in_the_clipped_design() -> None:
+    """Where the actuator clips, the measured input's waveform (`distortion`) is the input, not device
+    physics: named alone with a passing model, a null is adequate; beside the truth, the truth is right."""
+    null = blind.Case("null", 0.0, 0, 1, None, 1.0, "clipped")
+    assert blind.score(null, _diag("explained", ["distortion"], []))[0] == "adequate"
+    assert blind.score(null, _diag("explained", ["distortion", "offset"], []))[0] == "named"
+    vis = blind.Case("viscous", 10.0, 0, 1, None, 1.0, "clipped")
+    assert blind.score(vis, _diag("explained", ["viscous", "distortion"], []))[0] == "right"
+    other = blind.Case("null", 0.0, 0, 1, None, 1.0, "grid3x3")
+    assert blind.score(other, _diag("explained", ["distortion"], []))[0] == "named"
