@@ -494,6 +494,23 @@ def siblings(term: str) -> list[str]:
     return [cls.at(p).kind for p in cls.places if p != cls.acts_on]
 
 
+#: A spread of x's lag behind u (rad) below which G is called "nearly flat over the band" (30 degrees:
+#: a first-order G tested below omega tau = 0.6). Wider spreads that still leave the places tied are said
+#: as such, not blamed on a flat G.
+FLAT_SPREAD = math.pi / 6
+
+
+def lag_arc(lags: Sequence[float]) -> tuple[float, float]:
+    """The shortest arc holding every lag (angles, rad): its start in (-pi, pi] and its length. Lags are
+    angles: a two-mass structure's x lags u by 3.28 rad at the top of its band, which ``np.angle`` gives
+    as -3.00; their plain max - min read a spread of 0.3-3.28 rad as 4.16 rad."""
+    a = np.sort(np.mod(np.asarray(lags, dtype=np.float64) + math.pi, 2 * math.pi) - math.pi)
+    gaps = np.diff(np.concatenate([a, a[:1] + 2 * math.pi]))
+    j = int(np.argmax(gaps))
+    start = float(a[(j + 1) % a.size])
+    return start, float(2 * math.pi - gaps[j])
+
+
 def _place_separation(exps: Sequence[AugExperiment], fit: AugFit, term: str) -> str:
     """What would separate ``term`` at its two places: where x lags u differently, or (stiffness) beyond
     saturation. The lag of x behind u in experiment i is ``phi_i + psi_i`` (design.md 9.1)."""
@@ -502,10 +519,11 @@ def _place_separation(exps: Sequence[AugExperiment], fit: AugFit, term: str) -> 
         float(np.angle(np.exp(1j * (ph + e.grid_phase)) * np.sign(g)))
         for e, g, ph in zip(exps, par.gains, par.phases)
     ]
-    spread = max(lags) - min(lags)
+    start, spread = lag_arc(lags)
+    why = "G nearly flat over the band" if spread < FLAT_SPREAD else "not enough to separate them here"
     text = (
-        f"a test where x lags u differently from the tested ones (x lags u by {min(lags):.2f} to "
-        f"{max(lags):.2f} rad here, a spread of {spread:.2f} rad: G nearly flat over the band); test near "
+        f"a test where x lags u differently from the tested ones (x lags u by {start:.2f} to "
+        f"{start + spread:.2f} rad here, a spread of {spread:.2f} rad: {why}); test near "
         "G's resonance or corner, where its phase changes"
     )
     if issubclass(TERMS[term], Stiffness):
