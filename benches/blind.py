@@ -19,6 +19,9 @@ as a new user would, and it differs from them on purpose:
   again at a second (recordings); 4 frequencies x 2 levels at ONE fixed sample rate, so that no period
   holds a whole number of samples (measurements: the public API refuses such a record as a `Recording`,
   which is reported). Each lab writes CSV files in the README's format and reads them with `bw.load`.
+  `--design` runs every case on other designs instead (NEW_DESIGNS: one frequency at 5 amplitudes, two far
+  frequencies, 4-6 periods after a short settle, unequal periods with one experiment below saturation, a
+  first-order G without resonance, an actuator that clips the highest amplitude), written from the docs too.
 * **Noise**: white at 0.5-2 % of the output RMS, AR(1), a coarse ADC (steps of one noise sd), or a slow
   linear drift of the output zero (1 noise sd over the record).
 * **Effects** sized at 10x and 30x the averaged noise sd (RMS over the recorded periods of the noise-free
@@ -33,6 +36,7 @@ family caveat; see FAMILY). Run:
     python benches/blind.py --quick                        # <= 2 min
     python benches/blind.py --cases 6 --null 20 --outside 6 --workers 2 --json blind.json
     python benches/blind.py --replay viscous@x:10:3        # one case again, with its summary
+    python benches/blind.py --design amp_sweep,clipped --cases 1 --null 6 --outside 2 --workers 2
 """
 
 from __future__ import annotations
