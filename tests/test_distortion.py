@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 import warnings
+from typing import Any
 
 import bouc_wen_id as bw
 import numpy as np
@@ -227,3 +228,21 @@ def test_a_waveform_distorted_in_some_experiments_only_keeps_its_law_test() -> N
     assert d.named_terms == ("distortion",), d.summary()
     trial = next(tr for st in d.steps for tr in st.trials if tr.term == "distortion")
     assert math.isfinite(trial.law_p_value) and trial.law_p_value >= 0.01
+
+
+def test_a_failed_waveform_law_names_g_at_the_harmonics_as_a_reading() -> None:
+    """The input-waveform term's law fails where G at the input's harmonics is not the G carried from the
+    tested band (the blind bench's clipping actuator through a resonance: lam 1.5-2.4): the verdict says
+    so, not only "physics outside the library"; other terms' words are unchanged."""
+    from types import SimpleNamespace
+
+    from bouc_wen_id.diagnosis.run import _law_text
+    from bouc_wen_id.terms import Distortion, Viscous
+
+    def steps(term: str) -> list[Any]:
+        trial = SimpleNamespace(term=term, law_p_value=1e-20)
+        return [SimpleNamespace(trials=[trial], law_failed=(term,), alternatives=())]
+
+    text = _law_text(steps(Distortion.kind))
+    assert "G at the input's harmonics" in text and "p = 1e-20" in text
+    assert "G at the input's harmonics" not in _law_text(steps(Viscous.kind))
