@@ -19,6 +19,9 @@ as a new user would, and it differs from them on purpose:
   again at a second (recordings); 4 frequencies x 2 levels at ONE fixed sample rate, so that no period
   holds a whole number of samples (measurements: the public API refuses such a record as a `Recording`,
   which is reported). Each lab writes CSV files in the README's format and reads them with `bw.load`.
+  `--design` runs every case on other designs instead (NEW_DESIGNS: one frequency at 5 amplitudes, two far
+  frequencies, 4-6 periods after a short settle, unequal periods with one experiment below saturation, a
+  first-order G without resonance, an actuator that clips the highest amplitude), written from the docs too.
 * **Noise**: white at 0.5-2 % of the output RMS, AR(1), a coarse ADC (steps of one noise sd), or a slow
   linear drift of the output zero (1 noise sd over the record).
 * **Effects** sized at 10x and 30x the averaged noise sd (RMS over the recorded periods of the noise-free
@@ -33,6 +36,7 @@ family caveat; see FAMILY). Run:
     python benches/blind.py --quick                        # <= 2 min
     python benches/blind.py --cases 6 --null 20 --outside 6 --workers 2 --json blind.json
     python benches/blind.py --replay viscous@x:10:3        # one case again, with its summary
+    python benches/blind.py --design amp_sweep,clipped --cases 1 --null 6 --outside 2 --workers 2
 """
 
 from __future__ import annotations
@@ -67,6 +71,18 @@ LIBRARY = (
 OUTSIDE = ("stribeck", "output_backlash", "prandtl_ishlinskii")
 PLANTS = ("two_dof", "lag_delay", "resonance")
 DESIGNS = ("grid3x3", "six_plus_one", "fixed_rate")
+#: Other experiment designs a user records (--design; never drawn, so the default run is unchanged):
+#: amp_sweep     5 amplitudes at ONE frequency (a term on u and on x cannot be told apart there);
+#: two_far       two frequencies far apart (the ends of G's band), two levels each;
+#: few_periods   the 3 x 3 grid with 4-6 recorded periods after a short settle (4 periods, the ramp's 3
+#:               included): the slowest mode of G may not have decayed;
+#: unequal       3 frequencies x 2 levels with 8-50 periods each, plus one experiment below saturation;
+#: first_order   the 3 x 3 grid on a first-order G with no delay and omega tau <= 0.3 (x within 17 degrees
+#:               of u, no resonance), whatever plant the seed drew;
+#: clipped       the 3 x 3 grid written as lab measurements (u with its own small noise), the highest
+#:               level's actuator clipping a little (flat tops at 95-98 % of its amplitude): the
+#:               measured u is what drives G.
+NEW_DESIGNS = ("amp_sweep", "two_far", "few_periods", "unequal", "first_order", "clipped")
 NOISES = ("white", "ar1", "adc", "drift")
 RECORD_PERIODS = 30
 #: Settling before the record: the slowest mode of G decays by e^-SETTLE_DECAY (20 periods at least).
@@ -139,7 +155,15 @@ def resonance(rng: np.random.Generator) -> Linear:
     return Linear("resonance", a, b, c, delay, (0.4 * wn, 1.6 * wn), zeta * wn, {"wn": wn, "zeta": zeta})
 
 
-LINEAR = {"two_dof": two_dof, "lag_delay": lag_delay, "resonance": resonance}
+def first_order(rng: np.random.Generator) -> Linear:
+    """1/(tau s + 1) with no delay, tested well below its corner (omega tau in 0.03-0.3): x nearly in phase
+    with u, |G| flat to 4 %: no resonance, nothing that tells a term on x from one on u but the small lag."""
+    tau = float(rng.uniform(0.05, 0.3))
+    a, b, c = np.array([[-1 / tau]]), np.array([1 / tau]), np.array([1.0])
+    return Linear("first_order", a, b, c, 0.0, (0.03 / tau, 0.3 / tau), 1 / tau, {"tau": tau})
+
+
+LINEAR = {"two_dof": two_dof, "lag_delay": lag_delay, "resonance": resonance, "first_order": first_order}
 
 
 # ------------------------------------------------------------------------------------- plant and design
@@ -173,6 +197,8 @@ class Experiment:
     settle: int  # samples simulated before the record
     n: int  # samples recorded
     recording: bool  # a whole number of samples per period (Recording) or a lab measurement
+    periods: int = RECORD_PERIODS  # periods recorded (after the settle)
+    clip: float = 0.0  # the actuator's limit as a fraction of the amplitude (0: no clipping)
 
 
 def design(kind: str, g: Linear, hy: Hysteresis, rng: np.random.Generator) -> list[Experiment]:
@@ -181,7 +207,27 @@ def design(kind: str, g: Linear, hy: Hysteresis, rng: np.random.Generator) -> li
     lo, hi = g.band
     jit = rng.uniform(0.97, 1.03, 8)
     xy = hy.saturation / hy.alpha
-    if kind == "grid3x3":
+    periods = [RECORD_PERIODS] * 12
+    clip: dict[int, float] = {}
+    short_settle = False
+    if kind in ("first_order", "clipped", "few_periods"):
+        pairs = [(f, lv) for f in np.geomspace(lo, hi, 3) * jit[:3] for lv in (1.3, 2.2, 4.0)]
+        if kind == "few_periods":
+            periods = [int(rng.integers(4, 7))] * 9
+            short_settle = True
+        if kind == "clipped":
+            level = float(rng.uniform(0.95, 0.98))
+            clip = {i: level for i in (2, 5, 8)}  # every frequency's highest level
+    elif kind == "amp_sweep":
+        f0 = math.sqrt(lo * hi) * float(jit[0])
+        pairs = [(f0, lv) for lv in (1.3, 1.8, 2.5, 3.5, 5.0)]
+    elif kind == "two_far":
+        pairs = [(f, lv) for f in (lo * jit[0], hi * jit[1]) for lv in (1.5, 3.5)]
+    elif kind == "unequal":
+        fr = np.geomspace(lo, hi, 3) * jit[:3]
+        pairs = [(f, lv) for f in fr for lv in (1.5, 3.5)] + [(fr[1], 0.6)]  # 0.6: below saturation
+        periods = [int(p) for p in rng.choice([8, 12, 20, 30, 50], len(pairs))]
+    elif kind == "grid3x3":
         pairs = [(f, lv) for f in np.geomspace(lo, hi, 3) * jit[:3] for lv in (1.3, 2.2, 4.0)]
     elif kind == "six_plus_one":
         fr = np.geomspace(lo, hi, 6) * jit[:6]
@@ -193,9 +239,11 @@ def design(kind: str, g: Linear, hy: Hysteresis, rng: np.random.Generator) -> li
     p_rec = int(rng.choice([160, 200, 240]))
     fs = float(rng.uniform(96.0, 104.0)) * hi * 1.03 / (2 * math.pi)  # ~100 samples at the top frequency
     out = []
-    for omega, level in pairs:
+    for i, (omega, level) in enumerate(pairs):
         period = 2 * math.pi / float(omega)
         settle_t = max(20 * period, SETTLE_DECAY / g.slowest) + g.delay
+        if short_settle:
+            settle_t = 4 * period + g.delay
         amp = float(level * xy / abs(g.response(float(omega))))
         if kind == "fixed_rate":
             dt = 1.0 / fs
@@ -207,7 +255,12 @@ def design(kind: str, g: Linear, hy: Hysteresis, rng: np.random.Generator) -> li
         else:
             dt = period / p_rec
             k = math.ceil(settle_t / period)
-            out.append(Experiment(float(omega), amp, dt, k * p_rec, RECORD_PERIODS * p_rec, True))
+            np_ = periods[i]
+            out.append(
+                Experiment(
+                    float(omega), amp, dt, k * p_rec, np_ * p_rec, kind != "clipped", np_, clip.get(i, 0.0)
+                )
+            )
     return out
 
 
@@ -225,7 +278,13 @@ def drive(e: Experiment, t: Array) -> tuple[Array, Array, Array]:
     d2 = np.where(on, 0.5 * (math.pi / tr) ** 2 * np.cos(math.pi * q), 0.0)
     c, s = np.cos(e.omega * t), np.sin(e.omega * t)
     w, a = e.omega, e.amplitude
-    return a * env * c, a * (d1 * c - env * w * s), a * (d2 * c - 2 * d1 * w * s - env * w * w * c)
+    u, ud = a * env * c, a * (d1 * c - env * w * s)
+    udd = a * (d2 * c - 2 * d1 * w * s - env * w * w * c)
+    if e.clip > 0:  # the actuator's limit: flat tops, the velocity zero on them (its jump is not carried)
+        lim = e.clip * a
+        on_top = np.abs(u) >= lim
+        u, ud, udd = np.clip(u, -lim, lim), np.where(on_top, 0.0, ud), np.where(on_top, 0.0, udd)
+    return u, ud, udd
 
 
 def linear_signals(g: Linear, e: Experiment, t: Array) -> tuple[Array, Array, Array]:
@@ -250,6 +309,8 @@ def linear_signals(g: Linear, e: Experiment, t: Array) -> tuple[Array, Array, Ar
         for acc, v in zip(outs, drives):
             acc += ci * lfilter([g1 / h, g0 - g1 / h], [1.0, -a], bi * v)
     x, xd, xdd = (o.real.copy() for o in outs)
+    if e.clip > 0:  # the clipped drive's acceleration has impulses where the velocity jumps: differentiate
+        xdd = np.gradient(xd, h)
     return x, xd, xdd
 
 
@@ -423,10 +484,11 @@ class Case:
     seed: int
     noise: Optional[str] = None  # this noise kind (--noise), else drawn from the seed
     drift: float = DRIFT  # the drift of the output zero over the record, in noise sd (noise "drift")
+    design: Optional[str] = None  # this experiment design (--design), else drawn from the seed
 
     @property
     def key(self) -> str:
-        return f"{self.effect}:{self.size:g}:{self.index}"
+        return f"{self.effect}:{self.size:g}:{self.index}" + (f":{self.design}" if self.design else "")
 
 
 def rms(parts: list[Array]) -> float:
@@ -456,9 +518,16 @@ def size_effect(sig: list[Signals], hy: Hysteresis, effect: str, target: float, 
 
 
 def add_noise(
-    y: list[Array], kind: str, pct: float, rng: np.random.Generator, drift: float = DRIFT
+    y: list[Array],
+    kind: str,
+    pct: float,
+    rng: np.random.Generator,
+    drift: float = DRIFT,
+    periods: Optional[list[int]] = None,
 ) -> tuple[list[Array], float]:
-    """Measured outputs and the averaged noise sd (the noise sd of a mean over the recorded periods)."""
+    """Measured outputs and the averaged noise sd (the noise sd of a mean over the recorded periods; RMS
+    over the experiments when they record unequal numbers of periods)."""
+    periods = periods or [RECORD_PERIODS]
     sigma = pct * rms(y)
     out = []
     for v in y:
@@ -474,7 +543,7 @@ def add_noise(
             v = sigma * np.round(v / sigma)  # an ADC whose step is one noise sd
         out.append(v)
     spread = sigma * (math.sqrt(1 + 1 / 12) if kind == "adc" else 1.0)
-    return out, spread / math.sqrt(RECORD_PERIODS)
+    return out, spread * math.sqrt(float(np.mean([1.0 / p for p in periods])))
 
 
 def make_case(case: Case) -> dict[str, Any]:
@@ -482,9 +551,11 @@ def make_case(case: Case) -> dict[str, Any]:
     global STRIBECK_VS, X_MIN
     rng = np.random.default_rng(case.seed)
     plant = str(rng.choice(PLANTS))
-    g = LINEAR[plant](rng)
+    g = LINEAR["first_order" if case.design == "first_order" else plant](rng)
+    plant = g.kind
     hy = draw_hysteresis(rng)
     dkind = str(rng.choice(DESIGNS))
+    dkind = case.design or dkind  # drawn either way: the rest of the case stays the seed's
     exps = design(dkind, g, hy, rng)
     nkind = str(rng.choice(NOISES))
     nkind = case.noise or nkind  # the draw is made either way: the plant and design stay the case's
@@ -494,19 +565,21 @@ def make_case(case: Case) -> dict[str, Any]:
     STRIBECK_VS = 0.15 * float(np.median([e.amplitude * e.omega for e in exps]))
     plain = element(sig, hy)
     y0 = output(sig, hy, "null", 0.0, plain)
-    _, avg_sd = add_noise(y0, nkind, pct, np.random.default_rng(0))
+    npers = [e.periods for e in exps]
+    _, avg_sd = add_noise(y0, nkind, pct, np.random.default_rng(0), periods=npers)
     value = 0.0
     y = y0
     if case.effect != "null":
         value, y = size_effect(sig, hy, case.effect, case.size * avg_sd, y0, plain)
     got = rms([a - b for a, b in zip(y, y0)]) / avg_sd
-    ym, _ = add_noise(y, nkind, pct, rng, case.drift)
+    ym, _ = add_noise(y, nkind, pct, rng, case.drift, npers)
     u = [s.u[(s.e.settle * SUB) :: SUB] for s in sig]
-    if dkind == "fixed_rate":  # a lab's input channel: its own small noise
+    if dkind in ("fixed_rate", "clipped"):  # a lab's input channel: its own small noise
         u = [v + rng.normal(0.0, 5e-4 * e.amplitude, v.size) for v, e in zip(u, exps)]
     info = {"plant": plant, "g": g.info, "delay": g.delay, "alpha": hy.alpha, "beta": hy.beta,
             "gamma": hy.gamma, "mu": hy.mu, "design": dkind, "noise": nkind, "noise_pct": 100 * pct,
-            "value": value, "size_got": got, "avg_sd": avg_sd,
+            "value": value, "size_got": got, "avg_sd": avg_sd, "periods": npers,
+            "clip": [e.clip for e in exps],
             "phase_max_deg": max(-math.degrees(np.angle(g.response(e.omega))) % 360 for e in exps),
             }  # fmt: skip
     return {"info": info, "exps": exps, "u": u, "y": ym}
@@ -554,15 +627,20 @@ def score(case: Case, d: Any) -> tuple[str, str]:
     """(category, what was named): right, place, wrong, unexplained, adequate; nulls: adequate, named,
     unexplained; outside: unexplained, family (the caveated equivalent, FAMILY), named, partly, adequate."""
     named = [t.term for t in d.named]
+    status = str(d.status)
+    if case.design == "clipped":  # the input's own waveform is not device physics: the input IS distorted
+        named = [n for n in named if n != "distortion"]
+        if not named and status == "explained":  # the measured input alone explains it: the final model fits
+            status = "adequate"
     alts = [(a.term, a.rival) for a in d.alternatives]
     text = ",".join(named) + ("" if not alts else " | alt " + ",".join(f"{a}~{r}" for a, r in alts))
     if case.effect == "null" or case.effect in OUTSIDE:
-        if d.status == "adequate":
+        if status == "adequate":
             return "adequate", text
         if named and _family(case.effect, named, str(getattr(d, "verdict", ""))):
             return "family", text
         if named:
-            return ("named" if d.status == "explained" else "partly"), text
+            return ("named" if status == "explained" else "partly"), text
         return "unexplained", text
     truth = case.effect
     if truth in named or any(r == truth and a in named for a, r in alts):
@@ -572,7 +650,7 @@ def score(case: Case, d: Any) -> tuple[str, str]:
         return "place", text
     if named:
         return "wrong", text
-    return ("adequate" if d.status == "adequate" else "unexplained"), text
+    return ("adequate" if status == "adequate" else "unexplained"), text
 
 
 def run_case(case: Case) -> dict[str, Any]:
@@ -597,8 +675,12 @@ def run_case(case: Case) -> dict[str, Any]:
         rec.update(status=d.status, verdict=d.verdict, final_p=float(d.final.p_value),
                    plain_p=float(d.plain.p_value))  # fmt: skip
         rec["bad_explained"] = d.status == "explained" and float(d.final.p_value) < 0.05
-    except Exception as exc:  # a crash is a finding, with its text
-        rec["category"] = "error"
+        rec["input_named"] = any(t.term == "distortion" for t in d.named)
+        rec["place_alts"] = [f"{a.term}~{a.rival}" for a in d.alternatives if _other_place(a.term, a.rival)]
+    except Exception as exc:  # a crash is a finding, with its text; a named error of the library is apart
+        import bouc_wen_id.errors as bwe
+
+        rec["category"] = "refused" if isinstance(exc, bwe.BoucWenIdError) else "error"
         rec["verdict"] = f"{type(exc).__name__}: {exc}"
         rec["trace"] = traceback.format_exc()[-1500:]
     rec["seconds"] = time.perf_counter() - t0
@@ -612,8 +694,10 @@ def cases(args: argparse.Namespace) -> list[Case]:
     def add(effect: str, size: float, k: int) -> None:
         tag = (LIBRARY + OUTSIDE + ("null",)).index(effect)
         seed = int(np.random.SeedSequence([args.seed, tag, int(size), k]).generate_state(1)[0])
-        out.append(Case(effect, size, k, seed, args.noise, args.drift))
+        for dz in designs:
+            out.append(Case(effect, size, k, seed, args.noise, args.drift, dz))
 
+    designs: list[Optional[str]] = [None] if args.design is None else list(args.design.split(","))
     sizes = [float(s) for s in args.sizes.split(",")]
     effects = LIBRARY if args.only is None else tuple(e for e in args.only.split(",") if e in LIBRARY)
     for eff in effects:
@@ -642,7 +726,9 @@ def quick_cases(args: argparse.Namespace) -> list[Case]:
 
 
 GOOD = {"lib": ("right",), "null": ("adequate",), "outside": ("unexplained", "family")}
-COLUMNS = ("right", "place", "wrong", "unexplained", "family", "adequate", "named", "partly", "error")
+COLUMNS = (
+    "right", "place", "wrong", "unexplained", "family", "adequate", "named", "partly", "refused", "error"
+)  # fmt: skip
 
 #: An outside effect, the term a library caveat ties to it, and the module and mark of that caveat: a
 #: verdict naming only that term, with the caveat that names the truth as the equivalent, is "family" (as
@@ -652,6 +738,11 @@ FAMILY = {
     "output_backlash": ("play", "caveats", "PLAY_MARK"),
     "prandtl_ishlinskii": ("stiffness@x", "masing", "MASING_MARK"),
 }
+
+
+def _other_place(a: str, b: str) -> bool:
+    """Are two code names one term at two places (viscous and viscous@x)?"""
+    return a != b and a.split("@")[0] == b.split("@")[0]
 
 
 def _family(effect: str, named: list[str], verdict: str) -> bool:
@@ -736,20 +827,29 @@ def main(argv: Optional[list[str]] = None) -> int:
     ap.add_argument(
         "--drift", type=float, default=DRIFT, help="drift of the output zero over the record (sd)"
     )
+    ap.add_argument(
+        "--design",
+        default=None,
+        help=f"comma list of designs for every case (else drawn): {', '.join(DESIGNS + NEW_DESIGNS)}",
+    )
     ap.add_argument("--report", default=None, help="print the tables and failures of a --json file again")
     ap.add_argument(
         "--replay", default=None, help="EFFECT:SIZE:INDEX with the same --seed: one case, summary"
     )
     args = ap.parse_args(argv)
+    if args.design is not None:
+        unknown = set(args.design.split(",")) - set(DESIGNS + NEW_DESIGNS)
+        if unknown:
+            ap.error(f"unknown design(s) {sorted(unknown)}")
     if args.report:
         doc = json.loads(Path(args.report).read_text())
         _print(doc["cases"], doc["wall"], doc.get("probe_non_integer", ""))
         return 0
     if args.replay:
-        eff, size, k = args.replay.split(":")
+        eff, size, k, *dz = args.replay.split(":")
         tag = (LIBRARY + OUTSIDE + ("null",)).index(eff)
         sd = int(np.random.SeedSequence([args.seed, tag, int(float(size)), int(k)]).generate_state(1)[0])
-        rec = run_case(Case(eff, float(size), int(k), sd, args.noise, args.drift))
+        rec = run_case(Case(eff, float(size), int(k), sd, args.noise, args.drift, dz[0] if dz else None))
         print(json.dumps({k2: v for k2, v in rec.items() if k2 != "trace"}, indent=1, default=str))
         return 0
     todo = quick_cases(args) if args.quick else cases(args)
@@ -775,7 +875,45 @@ def main(argv: Optional[list[str]] = None) -> int:
     return 0
 
 
+def design_table(recs: list[dict[str, Any]]) -> str:
+    """One row per experiment design: the library cases' outcomes, the nulls, the outside effects, the
+    verdicts that say "not settled", and the place alternatives reported (term~rival at the other place)."""
+    head = (
+        "| design | lib n | right (as alt) | place | wrong | unexpl | adequate | refused | error | "
+        "not settled"
+        " | place alts (lib) | nulls adequate | outside good | bad expl | s/diag |"
+    )
+    lines = [head, "|" + "---|" * (head.count("|") - 1)]
+    for dz in sorted({str(r.get("design")) for r in recs}):
+        rs = [r for r in recs if str(r.get("design")) == dz]
+        lib = [r for r in rs if group(r) == "lib"]
+        nul = [r for r in rs if group(r) == "null"]
+        out = [r for r in rs if group(r) == "outside"]
+
+        def n(cat: str, sub: list[dict[str, Any]] = lib) -> int:
+            return sum(r["category"] == cat for r in sub)
+
+        def named_first(r: dict[str, Any]) -> list[str]:
+            return str(r.get("named", "")).split(" | ")[0].split(",")
+
+        as_alt = sum(r["category"] == "right" and r["effect"] not in named_first(r) for r in lib)
+        stuck = sum("not settled" in str(r.get("verdict", "")) for r in rs)
+        alts = sum(bool(r.get("place_alts")) for r in lib)
+        good_o = sum(r["category"] in GOOD["outside"] for r in out)
+        bad = sum(bool(r.get("bad_explained")) for r in rs)
+        sec = float(np.median([r.get("t_diag", math.nan) for r in rs]))
+        lines.append(
+            f"| {dz} | {len(lib)} | {n('right')} ({as_alt}) | {n('place')} | {n('wrong')} | "
+            f"{n('unexplained')} | {n('adequate')} | {n('refused', rs)} | {n('error', rs)} | "
+            f"{stuck} | {alts} | "
+            f"{n('adequate', nul)}/{len(nul)} | {good_o}/{len(out)} | {bad} | {sec:.1f} |"
+        )
+    return "\n".join(lines)
+
+
 def _print(recs: list[dict[str, Any]], wall: float, probe: str) -> None:
+    if len({str(r.get("design")) for r in recs}) > 1 or any(r.get("key", "").count(":") == 3 for r in recs):
+        print(design_table(recs) + "\n")
     print(table(recs))
     for key in ("noise", "design", "plant"):
         print("\n" + breakdown(recs, key))

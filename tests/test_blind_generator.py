@@ -188,3 +188,80 @@ def test_score_counts_a_caveated_equivalent_as_family() -> None:
     stribeck = blind.Case("stribeck", 10.0, 0, 1)
     assert blind.score(stribeck, d(["stiffness@x"], MASING_MARK))[0] == "named"
     assert "family" in blind.GOOD["outside"]
+
+
+def _made(design: str, seed: int = 41, effect: str = "null") -> Any:
+    return blind.make_case(blind.Case(effect, 10.0 if effect != "null" else 0.0, 0, seed, None, 1.0, design))
+
+
+def test_first_order_design_keeps_x_nearly_in_phase_with_u() -> None:
+    """The first-order design's G is 1/(tau s + 1) with no delay, tested at omega tau <= 0.3: x lags u by at
+    most atan(0.3) = 16.7 degrees (written from the plant's tau, not the realisation)."""
+    made = _made("first_order")
+    info = made["info"]
+    assert info["plant"] == "first_order" and info["delay"] == 0.0
+    tau = info["g"]["tau"]
+    assert max(e.omega for e in made["exps"]) * tau <= 0.3 * 1.03 + 1e-12
+    assert info["phase_max_deg"] <= math.degrees(math.atan(0.3 * 1.03)) + 1e-9
+
+
+def test_amplitude_sweep_is_one_frequency_at_five_levels() -> None:
+    exps = _made("amp_sweep")["exps"]
+    assert len(exps) == 5 and len({e.omega for e in exps}) == 1
+    assert all(a.amplitude < b.amplitude for a, b in zip(exps, exps[1:]))
+
+
+def test_unequal_design_records_unequal_periods_and_sizes_on_their_averaged_noise() -> None:
+    made = _made("unequal", effect="viscous@x")
+    periods = made["info"]["periods"]
+    assert len(set(periods)) > 1
+    for e, y in zip(made["exps"], made["y"]):
+        assert y.size == e.n == e.periods * int(round(2 * math.pi / e.omega / e.dt))
+    assert abs(made["info"]["size_got"] - 10.0) < 0.3
+
+
+def test_few_periods_design_records_four_to_six_periods_after_a_short_settle() -> None:
+    for e in _made("few_periods")["exps"]:
+        period = int(round(2 * math.pi / e.omega / e.dt))
+        assert 4 <= e.periods <= 6 and e.n == e.periods * period and e.settle <= 5 * period
+
+
+def test_clipped_design_drives_g_with_the_flat_topped_input_it_writes() -> None:
+    """The clipped experiments' u has flat tops at the actuator's limit (the rest are sines), they are
+    written as measurements, and x is G applied to that clipped u: the steady x of a first-order G is
+    checked against the exact lag of the clipped samples (a recursion of its own, not the bench's modes)."""
+    rng = np.random.default_rng(5)
+    g = blind.first_order(rng)
+    hy = blind.draw_hysteresis(rng)
+    exps = blind.design("clipped", g, hy, rng)
+    clipped = [e for e in exps if e.clip > 0]
+    assert len(clipped) == 3 and all(0.95 <= e.clip <= 0.98 for e in clipped)
+    assert not any(e.recording for e in exps)
+    e = clipped[0]
+    sig = blind.signals(g, e)
+    rec = slice(e.settle * blind.SUB, None)
+    assert abs(np.abs(sig.u[rec]).max() - e.clip * e.amplitude) < 1e-12 * e.amplitude
+    assert np.mean(np.abs(sig.u[rec]) >= e.clip * e.amplitude * (1 - 1e-12)) > 0.05  # flat tops
+    # x' = (u - x) / tau, by a fine explicit Euler sub-stepping of the sampled u (linear between points)
+    tau, h = g.info["tau"], e.dt / blind.SUB
+    x = np.zeros(sig.u.size)
+    m = 200
+    for k in range(1, sig.u.size):
+        xv = x[k - 1]
+        for j in range(m):
+            uj = sig.u[k - 1] + (sig.u[k] - sig.u[k - 1]) * (j + 0.5) / m
+            xv += h / m * (uj - xv) / tau
+        x[k] = xv
+    assert np.abs(x[rec] - sig.x[rec]).max() < 1e-3 * np.abs(sig.x[rec]).max()
+
+
+def test_score_reads_the_input_waveform_as_the_input_in_the_clipped_design() -> None:
+    """Where the actuator clips, the measured input's waveform (`distortion`) is the input, not device
+    physics: named alone with a passing model, a null is adequate; beside the truth, the truth is right."""
+    null = blind.Case("null", 0.0, 0, 1, None, 1.0, "clipped")
+    assert blind.score(null, _diag("explained", ["distortion"], []))[0] == "adequate"
+    assert blind.score(null, _diag("explained", ["distortion", "offset"], []))[0] == "named"
+    vis = blind.Case("viscous", 10.0, 0, 1, None, 1.0, "clipped")
+    assert blind.score(vis, _diag("explained", ["viscous", "distortion"], []))[0] == "right"
+    other = blind.Case("null", 0.0, 0, 1, None, 1.0, "grid3x3")
+    assert blind.score(other, _diag("explained", ["distortion"], []))[0] == "named"

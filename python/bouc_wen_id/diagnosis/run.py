@@ -772,6 +772,11 @@ def _law_text(steps: Sequence[Step]) -> str:
     what = ", ".join(f"{TERMS[t].place_label()} (p = {p:.2g})" for t, p in failed.items())
     shape = "; for Dahl friction, or a branch shape not its own" if any(map(has_branch, failed)) else ""
     shape += "; for pinching, or a band not its own" if any(map(is_pinching, failed)) else ""
+    if Distortion.kind in failed:  # its law fails when G at the input's harmonics is not the G carried there
+        shape += (
+            "; for the measured input waveform, or G at the input's harmonics not the one carried from the "
+            "tested band (lam far from 1)"
+        )
     return (
         f"; not named: {what}: each fits part of the misfit, but with a value that differs between "
         f"experiments (its law, one value for all, fails{shape}): it stands in for physics outside the "

@@ -318,7 +318,8 @@ def law_test(exps: Sequence[AugExperiment], fit: AugFit, term: str, substeps: in
     column, not the residual variance per sample: with thousands of samples the per-sample F test called
     every leak "significant" (the MR damper at chi2/dof 84-556: p = 1e-58). Where the model fits (white
     residual at the noise floor) the meat is the classical one and the test the classical score/Wald
-    test. NaN with fewer than two experiments or a column the Jacobian cannot give.
+    test. Only the experiments the term acts on (a non-zero column) are compared. NaN with fewer than two
+    of them or a column the Jacobian cannot give.
     """
     from scipy.special import chdtrc
 
@@ -367,13 +368,20 @@ def law_test(exps: Sequence[AugExperiment], fit: AugFit, term: str, substeps: in
         meat += spectral_meat(xa[sl], r[sl] - xa[sl] @ beta, r.size / (r.size - rank))
         start += n_i
     cov = bread @ meat @ bread
-    # Contrasts of the m per-experiment values (each against the last), in the scaled coordinates.
-    contrast = np.zeros((nk * (m - 1), xa.shape[1]))
+    # Contrasts of the per-experiment values (each against the last), in the scaled coordinates, among the
+    # experiments whose column is not zero: an experiment the term does not act on (the input-waveform term
+    # on a clean sine) has no value of its own to compare (its 1/scale would overflow the covariance).
+    rows = []
     for q in range(nk):
         cols = nsh + 2 * m + q * m + np.arange(m)
-        for j in range(m - 1):
-            contrast[q * (m - 1) + j, cols[j]] = 1.0 / scale[cols[j]]
-            contrast[q * (m - 1) + j, cols[-1]] = -1.0 / scale[cols[-1]]
+        seen = cols[scale[cols] > 1e-12 * scale[cols].max()]
+        for c in seen[:-1]:
+            row = np.zeros(xa.shape[1])
+            row[c], row[seen[-1]] = 1.0 / scale[c], -1.0 / scale[seen[-1]]
+            rows.append(row)
+    if not rows:
+        return math.nan
+    contrast = np.array(rows)
     d = contrast @ beta
     v = contrast @ cov @ contrast.T
     vinv = np.linalg.pinv(v, rcond=1e-12, hermitian=True)
@@ -494,6 +502,23 @@ def siblings(term: str) -> list[str]:
     return [cls.at(p).kind for p in cls.places if p != cls.acts_on]
 
 
+#: A spread of x's lag behind u (rad) below which G is called "nearly flat over the band" (30 degrees:
+#: a first-order G tested below omega tau = 0.6). Wider spreads that still leave the places tied are said
+#: as such, not blamed on a flat G.
+FLAT_SPREAD = math.pi / 6
+
+
+def lag_arc(lags: Sequence[float]) -> tuple[float, float]:
+    """The shortest arc holding every lag (angles, rad): its start in (-pi, pi] and its length. Lags are
+    angles: a two-mass structure's x lags u by 3.28 rad at the top of its band, which ``np.angle`` gives
+    as -3.00; their plain max - min read a spread of 0.3-3.28 rad as 4.16 rad."""
+    a = np.sort(np.mod(np.asarray(lags, dtype=np.float64) + math.pi, 2 * math.pi) - math.pi)
+    gaps = np.diff(np.concatenate([a, a[:1] + 2 * math.pi]))
+    j = int(np.argmax(gaps))
+    start = float(a[(j + 1) % a.size])
+    return start, float(2 * math.pi - gaps[j])
+
+
 def _place_separation(exps: Sequence[AugExperiment], fit: AugFit, term: str) -> str:
     """What would separate ``term`` at its two places: where x lags u differently, or (stiffness) beyond
     saturation. The lag of x behind u in experiment i is ``phi_i + psi_i`` (design.md 9.1)."""
@@ -502,10 +527,11 @@ def _place_separation(exps: Sequence[AugExperiment], fit: AugFit, term: str) -> 
         float(np.angle(np.exp(1j * (ph + e.grid_phase)) * np.sign(g)))
         for e, g, ph in zip(exps, par.gains, par.phases)
     ]
-    spread = max(lags) - min(lags)
+    start, spread = lag_arc(lags)
+    why = "G nearly flat over the band" if spread < FLAT_SPREAD else "not enough to separate them here"
     text = (
-        f"a test where x lags u differently from the tested ones (x lags u by {min(lags):.2f} to "
-        f"{max(lags):.2f} rad here, a spread of {spread:.2f} rad: G nearly flat over the band); test near "
+        f"a test where x lags u differently from the tested ones (x lags u by {start:.2f} to "
+        f"{start + spread:.2f} rad here, a spread of {spread:.2f} rad: {why}); test near "
         "G's resonance or corner, where its phase changes"
     )
     if issubclass(TERMS[term], Stiffness):
