@@ -668,8 +668,13 @@ def main(argv: Optional[list[str]] = None) -> int:
     ap.add_argument("--steps", type=int, default=720, help="RK4 steps per period")
     ap.add_argument("--max-nfev", type=int, default=60)
     ap.add_argument("--fold-nfev", type=int, default=30)
+    ap.add_argument("--n-min", type=float, default=BOUNDS["n"][0], help="lower bound of the exponent n")
     ap.add_argument("--json", type=Path, default=None)
     args = ap.parse_args(argv)
+    if not 0.0 < args.n_min < BOUNDS["n"][1]:
+        print(f"error: --n-min must be in (0, {BOUNDS['n'][1]})", file=sys.stderr)
+        return 2
+    BOUNDS["n"] = (args.n_min, BOUNDS["n"][1])
     data = args.data if args.data is not None else left._adapters().default_data_dir()
     t0 = time.perf_counter()
     lv = None if args.levels is None else [float(v) for v in args.levels.split(",")]
