@@ -25,7 +25,9 @@ cases and 4 of 4 nulls.
   taken out too (``Drift.loop_trends``), the period means with it, and the loop's own trend is left to the
   degradation test on harmonics 1.. (the DC, where the two cannot be told apart, spent) and to the
   settling test (a loop still settling is still left out). No common centre is kept then, and the verdict
-  does not call the line the zero's: a degrading asymmetric loop moves its own centre in a line too.
+  does not call the line the zero's: a degrading asymmetric loop moves its own centre in a line too. The
+  diagnosis then predicts that centre from its fitted model and tests the drift on what is left
+  (``loop_centre.py``, session 30).
 
 Then each recording's straight line (its slope per sample, from the period means) and each period's mean are
 taken out (:func:`baseline.removed`), the recordings marked and the fits given each experiment's DC free, as
