@@ -15,7 +15,7 @@ from ..budget import check_environment
 from ..errors import InvalidParameterError
 from ..terms import DIAGNOSIS_CANDIDATES, TERMS, Distortion, Offset, physical_value
 from ..validation import real_number
-from . import baseline, beside, free_dc, gate, resolution, zero_drift
+from . import baseline, beside, free_dc, gate, loop_centre, resolution, zero_drift
 from .caveats import alternatives_text, below_saturation, family_text, latent_levels
 from .data import DiagExperiment, colour_notes, prepare
 from .drift import (
@@ -470,6 +470,30 @@ def _diagnose(
     report("preparing the averaged periods", 0, 1)
     level = alpha / max(len(cands), 1)  # a wandering zero (baseline.py), or one drifting (zero_drift.py)
     wander = baseline.detect(experiments, level) or zero_drift.detect(experiments, level)
+    args = (cands, float(alpha), held_out_test, units, report)
+    d = _with_wander(experiments, *args, wander)
+    if isinstance(wander, zero_drift.Drift) and wander.loop_trends:
+        # A degrading asymmetric loop moves its own centre: predicted, taken off, tested (loop_centre.py).
+        d = loop_centre.resolved(
+            _as_list(experiments), level, wander, d, lambda xs: _with_wander(list(xs), *args, None)
+        )
+    return replace(d, seconds=time.perf_counter() - t0)
+
+
+def _as_list(experiments: Any) -> list[Any]:
+    return list(experiments) if isinstance(experiments, (list, tuple)) else [experiments]
+
+
+def _with_wander(
+    experiments: Any,
+    cands: tuple[str, ...],
+    alpha: float,
+    held_out_test: bool,
+    units: tuple[str, str],
+    report: ProgressCallback,
+    wander: Any,
+) -> Diagnosis:
+    """The diagnosis with ``wander`` (a wandering or drifting zero, or None) taken out of the records."""
     items, notes = _settled(baseline.removed(experiments, wander))
     exps, qnotes = _noise_floors(items, prepare(items))
     # Coloured noise (data.py) and the wander's note, or why a short record's wander was not tested.
@@ -485,15 +509,13 @@ def _diagnose(
             "waveform adds nothing to the model"
         )
     common = None if wander is None else wander.kept
-    setup = _Setup(
-        cands, float(alpha), held_out_test, units, skipped, not qnotes, report=report, common_dc=common
-    )
+    setup = _Setup(cands, alpha, held_out_test, units, skipped, not qnotes, report=report, common_dc=common)
     d = _diagnose_set(exps, setup, [*notes, *qnotes])
     named_deg = any(t.term in DRIFT_TERMS for t in d.named)
     drifting = [] if named_deg else _unsettled(exps)
     if drifting:
         d = _without_unsettled(exps, drifting, setup, d, [*notes, *qnotes])
-    return replace(baseline.adjusted(d, wander, Offset.kind), seconds=time.perf_counter() - t0)
+    return baseline.adjusted(d, wander, Offset.kind)
 
 
 def _without_unsettled(

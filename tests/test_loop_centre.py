@@ -1,0 +1,45 @@
+"""The loop-centre check's pieces (diagnosis/loop_centre.py, session 30) without a diagnosis run: the line
+taken off a record (the user's records unmodified) and no prediction without a named drift term."""
+
+from __future__ import annotations
+
+import math
+from types import SimpleNamespace
+from typing import Any, cast
+
+import bouc_wen_id as bw
+import numpy as np
+from bouc_wen_id.diagnosis import loop_centre, zero_drift
+
+TWO_PI = 2.0 * math.pi
+
+
+def _recs(slope: float) -> list[Any]:
+    out = []
+    rng = np.random.default_rng(30)
+    for i in range(3):
+        om, p, n = TWO_PI * (0.5 + 0.5 * i), 64, 12
+        t = np.arange(n * p) * (TWO_PI / om / p)
+        y = np.tanh(2.0 * np.cos(om * t - 0.4)) + slope * np.arange(t.size) + rng.normal(0.0, 1e-3, t.size)
+        out.append(bw.Recording(t, np.cos(om * t), y, 1.0, om, settle_periods=2))
+    return out
+
+
+def test_the_predicted_line_is_taken_off_and_the_records_kept() -> None:
+    recs = _recs(2e-5)
+    before = [np.array(r.y) for r in recs]
+    out = loop_centre.less_trend(recs, [2e-5] * len(recs))
+    for r, o, b in zip(recs, out, before):
+        np.testing.assert_array_equal(np.asarray(r.y), b)  # the user's record untouched
+        rows = np.asarray(o.y)[2 * 64 :].reshape(-1, 64).mean(axis=1)
+        assert abs(np.polyfit(np.arange(rows.size), rows, 1)[0]) < 0.05 * 2e-5 * 64  # 5 % of the line left
+        # the mean over the periods after settling is kept
+        assert abs(float(np.mean(np.asarray(o.y)[2 * 64 :]) - np.mean(b[2 * 64 :]))) < 1e-12
+    assert zero_drift.detect(out, 0.05 / 20) is None  # the line was all the drift there was
+    assert zero_drift.detect(recs, 0.05 / 20) is not None
+
+
+def test_nothing_is_predicted_without_a_named_drift_term() -> None:
+    d = SimpleNamespace(degradation=None, named=(), final_fit=None, experiments=())
+    assert loop_centre.predicted_slopes(_recs(0.0), cast(Any, d)) is None
+    assert loop_centre.check(_recs(0.0), cast(Any, d), 0.05 / 20) is None
