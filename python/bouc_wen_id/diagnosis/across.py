@@ -160,6 +160,9 @@ class JointStep:
     #: The readings the conditions cannot tell from the chosen term, by diagnose's rules (across_rules.py):
     #: its other place, a tied rival, a confounded value, one passed over for its law only.
     alternatives: tuple[Alternative, ...] = ()
+    #: The chosen term's other places that fit about as well only with a non-physical value where it is
+    #: present (across_rules._places): no alternative, said in the verdict as not physical.
+    unphysical_places: tuple[str, ...] = ()
 
     def to_dict(self) -> dict[str, Any]:
         out: dict[str, Any] = {
@@ -168,7 +171,13 @@ class JointStep:
             "rivals": list(self.rivals),
             "alternatives": [a.to_dict() for a in self.alternatives],
         }
-        out.update({k: list(getattr(self, k)) for k in ("law_failed", "beside") if getattr(self, k)})
+        out.update(
+            {
+                k: list(getattr(self, k))
+                for k in ("law_failed", "beside", "unphysical_places")
+                if getattr(self, k)
+            }
+        )
         return out
 
 
@@ -513,8 +522,9 @@ def _step(
         and (sum(tr.improvements) >= RIVAL_IMPROVEMENT * best or across_verdict.tied(groups, chosen, tr))
         and tr.term not in refused + list(law_failed)
     )
-    alts = across_rules.alternatives(groups, chosen, done, order, law_failed)
-    return JointStep(done, chosen.term, rivals, law_failed, tuple(refused), alts)
+    unphysical: list[str] = []  # the chosen term's other places that fit as well, non-physical
+    alts = across_rules.alternatives(groups, chosen, done, order, law_failed, unphysical)
+    return JointStep(done, chosen.term, rivals, law_failed, tuple(refused), alts, tuple(unphysical))
 
 
 def _select(

@@ -32,7 +32,7 @@ from typing import Any
 
 from ..terms import TERMS, physical_value
 from . import beside, gate
-from .caveats import family_text, latent_levels
+from .caveats import family_text, latent_levels, unphysical_places_text
 from .locate import adequacy_p
 from .result import NamedTerm, Status
 from .select import Trial, _tied, dof_of
@@ -144,6 +144,8 @@ def clauses(
         text += f"; explained in part ({100 * explained_fraction(groups):.0f} % of the summed excess)"
     text += _unphysical_text(unphysical(partial))
     text += _law_text(steps) + beside.text(steps)
+    as_said = [NamedTerm(t.term, t.symbol, math.nan, math.nan, t.unit) for t in named if t.term in TERMS]
+    text += unphysical_places_text(steps, as_said)  # another place that fits only non-physically
     levels = [v for g in groups for v in latent_levels(g.sx, g.current)]
     as_named = [NamedTerm(t.term, t.symbol, math.nan, math.nan, t.unit) for t in named if t.term in TERMS]
     return text + family_text(as_named, levels)

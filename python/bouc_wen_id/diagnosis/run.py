@@ -16,7 +16,7 @@ from ..errors import InvalidParameterError
 from ..terms import DIAGNOSIS_CANDIDATES, TERMS, Distortion, Offset, physical_value
 from ..validation import real_number
 from . import baseline, beside, free_dc, gate, resolution, zero_drift
-from .caveats import alternatives_text, below_saturation, family_text, latent_levels
+from .caveats import alternatives_text, below_saturation, family_text, latent_levels, unphysical_places_text
 from .data import DiagExperiment, colour_notes, prepare
 from .drift import (
     DEGRADATION,
@@ -635,7 +635,7 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
         fraction,
         fexps,
     )
-    verdict += _law_text(steps) + beside.text(steps)  # refused beside a Dahl element: said (beside.py)
+    verdict += _law_text(steps) + beside.text(steps) + unphysical_places_text(steps, named)  # said, not named
     alternatives = tuple(a for st in steps for a in st.alternatives) + _drift_alternatives(deg, named_deg)
     verdict += alternatives_text(alternatives, named) + family_text(named, latent_levels(fsx, final))
     setup.report("held-out check of the final model", 0, 1)
