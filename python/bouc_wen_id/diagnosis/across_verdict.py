@@ -50,11 +50,22 @@ def p_of(g: Any, fit: Any) -> float:
     return adequacy_p(fit.cost, dof_of(g.sx, fit), g.noise_dof)
 
 
+def plain_gate(groups: Sequence[Any], alpha: float) -> tuple[bool, bool]:
+    """``(passes, targeted)``: :func:`.run.diagnose`'s gate at every condition (:func:`.gate.plain_gate`:
+    :func:`.gate.plain_passes` at ``alpha / 2`` with the condition's ``moved``, the loop drifting on its
+    plain model) and whether the targeted step runs (every condition's noise floor measured noise)."""
+    return gate.plain_gate(
+        [p_of(g, g.plain) for g in groups],
+        alpha,
+        [getattr(g, "moved", False) for g in groups],
+        [getattr(g, "measured_noise", True) for g in groups],
+    )
+
+
 def plain_adequate(groups: Sequence[Any], terms: Sequence[Any], steps: Sequence[Any], alpha: float) -> bool:
-    """:func:`.run.diagnose`'s gate at every condition (:func:`.gate.plain_passes`, at ``alpha / 2``) and its
-    rule on what was added or refused (:func:`.gate.plain_adequate`: no term, no law-failed candidate)."""
-    passes = all(gate.plain_passes(p_of(g, g.plain), alpha) for g in groups)
-    return gate.plain_adequate(passes, bool(terms), steps)
+    """:func:`.run.diagnose`'s gate at every condition (:func:`plain_gate`) and its rule on what was added or
+    refused (:func:`.gate.plain_adequate`: no term, no law-failed candidate)."""
+    return gate.plain_adequate(plain_gate(groups, alpha)[0], bool(terms), steps)
 
 
 def final_adequate(groups: Sequence[Any], alpha: float) -> bool:
@@ -157,6 +168,7 @@ __all__ = [
     "summed",
     "explained_fraction",
     "plain_adequate",
+    "plain_gate",
     "judged",
     "head",
     "clauses",
