@@ -63,14 +63,15 @@ def test_a_negative_damping_at_the_other_place_is_no_alternative() -> None:
         warnings.simplefilter("ignore")
         a = bw.diagnose_across(groups, [0.0, 1.0], candidates=cands)
         d = bw.diagnose(groups[0], candidates=cands)
-    for what, named, steps, verdict in (
+    runs: list[tuple[str, Any, Any, str]] = [
         ("across", a.named, a.steps, a.verdict),
         ("diagnose", d.named_terms, d.steps, d.verdict),
-    ):
+    ]
+    for what, named, steps, verdict in runs:
         assert named == (T.Viscous.kind,), (what, verdict)
         first = steps[0]
         # The sibling on x fits about as well, with a negative value: the case the rule is about.
-        on_x = next(t for t in first.trials if t.term == X)
+        on_x: Any = next(t for t in first.trials if t.term == X)
         fits = on_x.fits if what == "across" else (on_x.fit,)
         assert all(_value(f, X) < 0 for f in fits), what
         assert not any(alt.rival == X for st in steps for alt in st.alternatives), (what, verdict)

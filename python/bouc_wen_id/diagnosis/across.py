@@ -19,7 +19,8 @@ a candidate term is added to EVERY condition at once, its value free per conditi
   first unless the element beats it; the chosen term's other place, a rival within its uncertainty and one
   whose value trades with its are reported as alternatives with the separating experiment; selection stops
   when no candidate passes or once the structure passes its adequacy test at every condition (the first
-  step at ``alpha / 2`` when every condition's plain model passes the gate, the targeted step).
+  step at ``alpha / 2`` when every condition's plain model passes the gate, the targeted step, and none
+  where the gate passes on a noise floor that is not measured noise: :func:`.gate.plain_gate`, diagnose's).
 
 Per condition the result reports each term's value with its standard error (inflated by the final fit's
 ``sqrt(chi2/dof)`` when above 1: a misfit elsewhere makes the noise-based one too small), whether the term

@@ -780,19 +780,10 @@ def forward_select(
             if ho is None or ho.improves:
                 chosen = tr2
                 break
-        unphysical: list[
-            str
-        ] = []  # the chosen term's other places that fit as well with a non-physical value
+        bad: list[str] = []  # the chosen term's other places that fit as well only non-physically
+        tested = list(final_trials.values())
         alternatives = step_alternatives(
-            exps,
-            chosen,
-            trials,
-            order,
-            list(final_trials.values()),
-            law_failed,
-            fit_term,
-            substeps,
-            unphysical,
+            exps, chosen, trials, order, tested, law_failed, fit_term, substeps, bad
         )
         steps.append(
             Step(
@@ -804,7 +795,7 @@ def forward_select(
                 first,
                 tuple(law_failed),
                 tuple(refused),
-                tuple(unphysical),
+                tuple(bad),
             )
         )
         first = False
