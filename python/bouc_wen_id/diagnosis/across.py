@@ -19,7 +19,8 @@ a candidate term is added to EVERY condition at once, its value free per conditi
   first unless the element beats it; the chosen term's other place, a rival within its uncertainty and one
   whose value trades with its are reported as alternatives with the separating experiment; selection stops
   when no candidate passes or once the structure passes its adequacy test at every condition (the first
-  step at ``alpha / 2`` when every condition's plain model passes the gate, the targeted step).
+  step at ``alpha / 2`` when every condition's plain model passes the gate, the targeted step, and none
+  where the gate passes on a noise floor that is not measured noise: :func:`.gate.plain_gate`, diagnose's).
 
 Per condition the result reports each term's value with its standard error (inflated by the final fit's
 ``sqrt(chi2/dof)`` when above 1: a misfit elsewhere makes the noise-based one too small), whether the term
@@ -99,6 +100,12 @@ class _Group:
     drifts: bool = False
     #: ... while the loop trends too: a drifting zero or a degrading loop's centre, not told apart
     loop_trends: bool = False
+    #: False when some experiment's noise floor is not measured noise (quantisation or numerical accuracy):
+    #: no targeted step (gate.plain_gate), as diagnose
+    measured_noise: bool = True
+    #: The loop drifts on the plain model (diagnose's ``before.drift_detected``): the plain model cannot pass
+    #: its gate (gate.plain_passes' ``moved``)
+    moved: bool = False
     #: ``fit_with`` on this condition, once per (model, term) (select.memo_fit_with): an alternative's
     #: two-term fit is the next step's trial of that term.
     fit_term: Callable[[AugFit, str], Optional[AugFit]] = field(init=False, repr=False)
@@ -140,6 +147,7 @@ class JointTrial:
             "law_p_value": _n(self.law_p_value),
             "held_out_cost_before": _n(self.held_out_before),
             "held_out_cost_after": _n(self.held_out_after),
+            "present": list(self.present),
         }
 
 
@@ -160,15 +168,30 @@ class JointStep:
     #: The readings the conditions cannot tell from the chosen term, by diagnose's rules (across_rules.py):
     #: its other place, a tied rival, a confounded value, one passed over for its law only.
     alternatives: tuple[Alternative, ...] = ()
+    #: The chosen term's other places that fit about as well only with a non-physical value where it is
+    #: present (across_rules._places): no alternative, said in the verdict as not physical.
+    unphysical_places: tuple[str, ...] = ()
+    #: The level its candidates were tested at (their combined F, Bonferroni over them: ``level / n``) and
+    #: whether it was the targeted first step (at ``alpha / 2``: every plain model passed its gate, _go_on).
+    level: float = math.nan
+    targeted: bool = False
 
     def to_dict(self) -> dict[str, Any]:
         out: dict[str, Any] = {
             "trials": [t.to_dict() for t in self.trials],
             "chosen": self.chosen,
+            "level": _n(self.level),
+            "targeted": self.targeted,
             "rivals": list(self.rivals),
             "alternatives": [a.to_dict() for a in self.alternatives],
         }
-        out.update({k: list(getattr(self, k)) for k in ("law_failed", "beside") if getattr(self, k)})
+        out.update(
+            {
+                k: list(getattr(self, k))
+                for k in ("law_failed", "beside", "unphysical_places")
+                if getattr(self, k)
+            }
+        )
         return out
 
 
@@ -262,8 +285,8 @@ class AcrossDiagnosis:
     #: Terms of the joint structure tested but not named (a non-physical value where present, or a structure
     #: that leaves most of the summed excess), with their values per condition as :attr:`terms`.
     partial: tuple[TermAcross, ...] = ()
-    #: What diagnose notes of its fits, per condition (across_notes.py): a fit stopped at a bound, every
-    #: experiment below saturation.
+    #: What diagnose notes of its fits, per condition (fit_notes.condition_notes): a fit stopped at a
+    #: bound, every experiment below saturation; and why the targeted step was not run (gate.py).
     notes: tuple[str, ...] = ()
 
     @property
@@ -315,6 +338,8 @@ class AcrossDiagnosis:
                 f"{c.label} | {c.plain_chi2_dof:.3g} -> {c.final_chi2_dof:.3g} | {c.held_out_plain:.3f}, "
                 f"{c.held_out_joint:.3f}, {own}"
             )
+        if self.notes:  # as Diagnosis.summary prints its notes
+            lines += ["", "notes:", *(f"  - {n}" for n in self.notes)]
         return "\n".join(lines)
 
 
@@ -352,6 +377,8 @@ def _group(
     diagnosis (``own``) when given (its experiments and plain fit, so nothing is fitted twice)."""
     from . import baseline, free_dc, zero_drift
     from .data import prepare
+    from .drift import DRIFT_TERMS
+    from .run import _drift_checked, _localise
     from .settling import _check_experiments, _noise_floors, _settled
 
     level = alpha / max(len(cands), 1)  # a wandering zero (baseline.py) or a drifting one, as diagnose
@@ -366,11 +393,16 @@ def _group(
         sx = scaled(exps, s)
         substeps = substeps_for([e.ybar.size for e in sx])
         plain: AugFit = own.plain_fit
+        measured = own.settings.get("measured_noise")
+        if measured is None:  # a diagnosis that did not record it: its floors, from the items again
+            measured = _measured_noise(items, wander)
+        moved = own.before.drift_detected or any(t.term in DRIFT_TERMS for t in own.named)
     else:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # the transient trim's warning is diagnose's to give
             settled, _ = _settled(baseline.removed(items, wander))
-        exps, _ = _noise_floors(settled, prepare(settled))
+        exps, qnotes = _noise_floors(settled, prepare(settled))
+        measured = not qnotes
         _check_experiments(exps)
         s = scale_of(exps)
         sx = scaled(exps, s)
@@ -378,6 +410,7 @@ def _group(
             sx = free_dc.marked(sx, [e.baseline_removed for e in exps], wander.kept)
         substeps = substeps_for([e.ybar.size for e in sx])
         plain = fit_plain(exps, sx, s, substeps)
+        moved = _drift_checked(_localise(exps, sx, plain, s), exps).drift_detected  # as diagnose's gate
     if wander is not None:  # each marked experiment's DC free, as diagnose fits it (free_dc.py)
         sx = free_dc.marked(sx, [e.baseline_removed for e in exps], wander.kept)
     if Distortion.kind in cands and any(e.distorted for e in exps):
@@ -396,7 +429,21 @@ def _group(
         wander=isinstance(wander, baseline.Wander),
         drifts=isinstance(wander, zero_drift.Drift),
         loop_trends=isinstance(wander, zero_drift.Drift) and wander.loop_trends,
+        measured_noise=bool(measured),
+        moved=bool(moved),
     )
+
+
+def _measured_noise(items: Any, wander: Any) -> bool:
+    """Whether every experiment's noise floor is measured noise (settling._noise_floors set none)."""
+    from . import baseline
+    from .data import prepare
+    from .settling import _noise_floors, _settled
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        settled, _ = _settled(baseline.removed(items, wander))
+    return not _noise_floors(settled, prepare(settled))[1]
 
 
 # ------------------------------------------------------------------------------------------------------
@@ -462,17 +509,19 @@ def _accepts(tr: JointTrial, use_held_out: bool) -> bool:
     return tr.held_out_after < tr.held_out_before
 
 
-def _go_on(groups: Sequence[_Group], steps: Sequence[JointStep], alpha: float) -> tuple[bool, float]:
-    """Whether the joint selection takes another step, and its level: as diagnose's selection, it stops
-    once the structure passes its adequacy test at every condition (at ``alpha``); the first step runs
-    always, at ``alpha / 2`` (the targeted step, select.py) when every condition's plain model passes
-    diagnose's gate (gate.plain_passes)."""
+def _go_on(groups: Sequence[_Group], steps: Sequence[JointStep], alpha: float) -> tuple[bool, float, bool]:
+    """Whether the joint selection takes another step, its level and whether it is the targeted step: as
+    diagnose's selection, it stops once the structure passes its adequacy test at every condition (at
+    ``alpha``); the first step is the targeted one, at ``alpha / 2`` (select.py), when every condition's
+    plain model passes diagnose's gate (gate.plain_gate: at ``alpha / 2``, its loop not drifting) and every
+    noise floor is measured noise; when the gate passes on a floor set by quantisation or numerical
+    accuracy, no step runs (gate.NO_TARGETED_STEP, a note); else the first step runs at ``alpha``."""
     if not steps:
-        targeted = all(gate.plain_passes(across_verdict.p_of(g, g.plain), alpha) for g in groups)
-        return True, 0.5 * alpha if targeted else alpha
+        passes, targeted = across_verdict.plain_gate(groups, alpha)
+        return not passes or targeted, 0.5 * alpha if targeted else alpha, targeted
     if steps[-1].chosen is None or across_verdict.final_adequate(groups, alpha):
-        return False, alpha
-    return True, alpha
+        return False, alpha, False
+    return True, alpha, False
 
 
 def _step(
@@ -504,7 +553,7 @@ def _step(
     )
     done = tuple(final[t.term] for t in trials)
     if chosen is None:
-        return JointStep(done, None, (), law_failed, tuple(refused))
+        return JointStep(done, None, (), law_failed, tuple(refused), level=level)
     best = sum(chosen.improvements)
     rivals = tuple(
         tr.term
@@ -513,8 +562,9 @@ def _step(
         and (sum(tr.improvements) >= RIVAL_IMPROVEMENT * best or across_verdict.tied(groups, chosen, tr))
         and tr.term not in refused + list(law_failed)
     )
-    alts = across_rules.alternatives(groups, chosen, done, order, law_failed)
-    return JointStep(done, chosen.term, rivals, law_failed, tuple(refused), alts)
+    unphysical: list[str] = []  # the chosen term's other places that fit as well, non-physical
+    alts = across_rules.alternatives(groups, chosen, done, order, law_failed, unphysical)
+    return JointStep(done, chosen.term, rivals, law_failed, tuple(refused), alts, tuple(unphysical), level)
 
 
 def _select(
@@ -527,7 +577,7 @@ def _select(
     """The joint forward selection (module docstring); the groups' current models end at the final ones."""
     steps: list[JointStep] = []
     while True:
-        go, level = _go_on(groups, steps, alpha)
+        go, level, targeted = _go_on(groups, steps, alpha)
         remaining = [t for t in cands if t not in groups[0].current.params.terms]
         if not (go and remaining):
             break
@@ -538,7 +588,7 @@ def _select(
             )
             trials.append(_trial(groups, t, len(remaining), alpha, level))
         alone = {t.term: t.p_value for t in steps[0].trials} if steps else {}
-        steps.append(_step(groups, trials, level, alpha, use_held_out, alone))
+        steps.append(replace(_step(groups, trials, level, alpha, use_held_out, alone), targeted=targeted))
         chosen = next((t for t in steps[-1].trials if t.term == steps[-1].chosen), None)
         if chosen is None:
             break
@@ -688,8 +738,13 @@ def _how(t: TermAcross) -> str:
 
 
 def _verdict(
-    terms: Sequence[TermAcross], conds: Sequence[ConditionResult], steps: Sequence[JointStep]
+    terms: Sequence[TermAcross],
+    conds: Sequence[ConditionResult],
+    steps: Sequence[JointStep],
+    alpha: float = ALPHA,
 ) -> str:
+    """The verdict naming the joint structure; "passes its adequacy test" at ``alpha``, the caller's level,
+    as the stop rule (:func:`_go_on`) and the status (across_verdict.py) judge it."""
     n = len(conds)
     if not terms:
         why = "no candidate passes all its tests jointly at every condition"
@@ -703,7 +758,7 @@ def _verdict(
             else "needed only at " + ", ".join(c.label for c, p in zip(conds, t.present) if p)
         )
         parts.append(f"{t.label} ({where}; {_how(t)})")
-    adequate = sum(1 for c in conds if math.isfinite(c.final_p_value) and c.final_p_value >= 0.05)
+    adequate = sum(1 for c in conds if math.isfinite(c.final_p_value) and c.final_p_value >= alpha)
     tail = f"; the joint structure passes its adequacy test at {adequate} of {n} conditions"
     named = [NamedTerm(t.term, t.symbol, math.nan, math.nan, t.unit) for t in terms]
     tail += alternatives_text([a for st in steps for a in st.alternatives], named)  # as diagnose says them
@@ -851,7 +906,7 @@ def _finished(
     verdict = (
         across_verdict.head(status, partial, len(prepared), across_verdict.explained_fraction(prepared))
         if status == "adequate" or (partial and not named)
-        else _verdict(named, conditions, steps)
+        else _verdict(named, conditions, steps, alpha)
     )
     verdict += across_verdict.clauses(status, named, partial, steps, prepared)
     if status != "adequate":  # loop centres that differ in sign (fit_notes.centre_clause), as diagnose says
@@ -866,8 +921,18 @@ def _finished(
         tuple(g.current for g in prepared),
         status,
         tuple(partial),
-        fit_notes.condition_notes(prepared),
+        (*fit_notes.condition_notes(prepared), *_gate_notes(prepared, alpha)),
     )
+
+
+def _gate_notes(prepared: Sequence[_Group], alpha: float) -> tuple[str, ...]:
+    """Why the targeted step was not run (gate.NO_TARGETED_STEP, as diagnose notes it), naming the
+    conditions whose noise floor is not measured noise."""
+    passes, targeted = across_verdict.plain_gate(prepared, alpha)
+    if not passes or targeted:
+        return ()
+    where = ", ".join(str(g.label) for g in prepared if not g.measured_noise)
+    return (f"{where}: {gate.NO_TARGETED_STEP}",)
 
 
 __all__ = [

@@ -14,7 +14,9 @@ joint step (a candidate added at every condition at once) through the same funct
   condition where it is present, Bonferroni over those conditions;
 - **alternatives** (:func:`alternatives`): the chosen term at its other place when the summed costs of the
   two places differ by less than the 5 % point of chi-square(K) (:data:`.select.PLACE_CHI2` for one
-  condition), times the pooled chi2/dof when above 1, with the experiment that separates places
+  condition), times the pooled chi2/dof when above 1, with a physical value that is not its null wherever
+  the chosen term is present (:func:`.select.place_admissible`; else no alternative, said as not physical),
+  its own law holding where it is present, with the experiment that separates places
   (:func:`.select._place_separation`); a rival whose summed improvement is within the chosen one's
   uncertainty (:func:`.across_verdict.tied`), or within 10 % of it with its value confounded with the
   chosen one's (``|rho| >= ALTERNATIVE_CORRELATION`` from the two-term fit) at a condition where the
@@ -28,7 +30,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from typing import Any
+from typing import Any, Optional
 
 from .across_verdict import summed, tied
 from .select import (
@@ -39,9 +41,11 @@ from .select import (
     _correlation,
     _place_separation,
     _separating,
+    at_null,
     dof_of,
     element_law_test,
     limit_first,
+    place_admissible,
     preferred_by_fit,
     siblings,
 )
@@ -120,9 +124,17 @@ def _first_present(groups: Sequence[Any], present: Sequence[bool]) -> int:
 
 
 def _places(
-    groups: Sequence[Any], chosen: Any, by_term: dict[str, Any], law_failed: Sequence[str], preferred: Any
+    groups: Sequence[Any],
+    chosen: Any,
+    by_term: dict[str, Any],
+    law_failed: Sequence[str],
+    preferred: Any,
+    unphysical: Optional[list[str]] = None,
 ) -> list[Alternative]:
-    """The chosen term at its other places that the conditions cannot tell from it (module docstring)."""
+    """The chosen term at its other places that the conditions cannot tell from it (module docstring): a
+    sibling with a physical value, not its null, at every condition where the chosen term is present
+    (:func:`.select.place_admissible`); one that would be an alternative but for a non-physical value is
+    appended to ``unphysical`` (said in the verdict)."""
     from scipy.special import chdtri
 
     present = chosen.present
@@ -138,13 +150,19 @@ def _places(
         tr = by_term.get(rival)
         if tr is None or not _fitted(tr):
             continue
+        where = [f for f, pr in zip(tr.fits, present) if pr]
+        if not place_admissible(where, rival):  # a negative damping is no reading of the data
+            close = sum(f.cost for f in tr.fits) - sum(f.cost for f in chosen.fits) < crit
+            if unphysical is not None and close and not any(at_null(f, rival) for f in where):
+                unphysical.append(rival)
+            continue
         if rival in preferred:  # passed over for its law only, while it fits at least as well
             rho = _rho(groups, chosen, rival, present)
             out.append(Alternative(chosen.term, rival, rho, sep(), preferred[rival]))
             continue
         if rival in law_failed or sum(f.cost for f in tr.fits) - sum(f.cost for f in chosen.fits) >= crit:
             continue
-        lp = tr.law_p_value if math.isfinite(tr.law_p_value) else law_p(groups, tr, present)
+        lp = tr.law_p_value if math.isfinite(tr.law_p_value) else law_p(groups, tr, tr.present or present)
         if math.isfinite(lp) and lp < LAW_ALPHA:  # a value that differs between a condition's experiments
             continue
         out.append(Alternative(chosen.term, rival, _rho(groups, chosen, rival, present), sep()))
@@ -152,16 +170,22 @@ def _places(
 
 
 def alternatives(
-    groups: Sequence[Any], chosen: Any, trials: Sequence[Any], order: Sequence[Any], law_failed: Sequence[str]
+    groups: Sequence[Any],
+    chosen: Any,
+    trials: Sequence[Any],
+    order: Sequence[Any],
+    law_failed: Sequence[str],
+    unphysical: Optional[list[str]] = None,
 ) -> tuple[Alternative, ...]:
     """The alternatives of a joint step's chosen trial (module docstring; :func:`.select.step_alternatives`'s
     rules on the conditions' sums). ``trials``: the step's trials with their law p; ``order``: the passed
-    ones, best first."""
+    ones, best first; ``unphysical`` collects the other places that fit as well only with a non-physical
+    value (:func:`_places`)."""
     if chosen is None or not _fitted(chosen):
         return ()
     preferred = preferred_by_fit(summed(chosen), [summed(t) for t in trials if _fitted(t)], law_failed)
     by_term = {t.term: t for t in trials}
-    out = _places(groups, chosen, by_term, law_failed, preferred)
+    out = _places(groups, chosen, by_term, law_failed, preferred, unphysical)
     best = sum(chosen.improvements)
     for tr in order:
         if tr.term == chosen.term or not _fitted(tr) or tr.term in siblings(chosen.term):

@@ -32,7 +32,7 @@ from typing import Any
 
 from ..terms import TERMS, physical_value
 from . import beside, gate
-from .caveats import family_text, latent_levels
+from .caveats import family_text, latent_levels, unphysical_places_text
 from .locate import adequacy_p
 from .result import NamedTerm, Status
 from .select import Trial, _tied, dof_of
@@ -50,11 +50,22 @@ def p_of(g: Any, fit: Any) -> float:
     return adequacy_p(fit.cost, dof_of(g.sx, fit), g.noise_dof)
 
 
+def plain_gate(groups: Sequence[Any], alpha: float) -> tuple[bool, bool]:
+    """``(passes, targeted)``: :func:`.run.diagnose`'s gate at every condition (:func:`.gate.plain_gate`:
+    :func:`.gate.plain_passes` at ``alpha / 2`` with the condition's ``moved``, the loop drifting on its
+    plain model) and whether the targeted step runs (every condition's noise floor measured noise)."""
+    return gate.plain_gate(
+        [p_of(g, g.plain) for g in groups],
+        alpha,
+        [getattr(g, "moved", False) for g in groups],
+        [getattr(g, "measured_noise", True) for g in groups],
+    )
+
+
 def plain_adequate(groups: Sequence[Any], terms: Sequence[Any], steps: Sequence[Any], alpha: float) -> bool:
-    """:func:`.run.diagnose`'s gate at every condition (:func:`.gate.plain_passes`, at ``alpha / 2``) and its
-    rule on what was added or refused (:func:`.gate.plain_adequate`: no term, no law-failed candidate)."""
-    passes = all(gate.plain_passes(p_of(g, g.plain), alpha) for g in groups)
-    return gate.plain_adequate(passes, bool(terms), steps)
+    """:func:`.run.diagnose`'s gate at every condition (:func:`plain_gate`) and its rule on what was added or
+    refused (:func:`.gate.plain_adequate`: no term, no law-failed candidate)."""
+    return gate.plain_adequate(plain_gate(groups, alpha)[0], bool(terms), steps)
 
 
 def final_adequate(groups: Sequence[Any], alpha: float) -> bool:
@@ -144,6 +155,8 @@ def clauses(
         text += f"; explained in part ({100 * explained_fraction(groups):.0f} % of the summed excess)"
     text += _unphysical_text(unphysical(partial))
     text += _law_text(steps) + beside.text(steps)
+    as_said = [NamedTerm(t.term, t.symbol, math.nan, math.nan, t.unit) for t in named if t.term in TERMS]
+    text += unphysical_places_text(steps, as_said)  # another place that fits only non-physically
     levels = [v for g in groups for v in latent_levels(g.sx, g.current)]
     as_named = [NamedTerm(t.term, t.symbol, math.nan, math.nan, t.unit) for t in named if t.term in TERMS]
     return text + family_text(as_named, levels)
@@ -155,6 +168,7 @@ __all__ = [
     "summed",
     "explained_fraction",
     "plain_adequate",
+    "plain_gate",
     "judged",
     "head",
     "clauses",

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from typing import Optional
+from typing import Any, Optional
 
 from ..augmented import AugExperiment, AugFit
 from ..terms import TERMS, Play
@@ -83,6 +83,24 @@ def alternatives_text(alternatives: Sequence[Alternative], named: Sequence[Named
             f"{100 * LAW_ALPHA:g} % of cases): an alternative, with the experiment that would separate them"
         )
     return text
+
+
+def unphysical_places_text(steps: Sequence[Any], named: Sequence[NamedTerm]) -> str:
+    """The verdict's word on a named term's other place that fits about as well only with a value outside
+    its physical range (a step's ``unphysical_places``, :func:`.select.place_alternatives`): not an
+    alternative, and said so (where x lags u by about pi, viscous damping on x fits as well as on u with
+    a negative damping). Empty when there is none."""
+    kinds = {t.term for t in named}
+    said: list[tuple[str, str]] = []
+    for st in steps:
+        for rival in getattr(st, "unphysical_places", ()):
+            if st.chosen in kinds and (st.chosen, rival) not in said:
+                said.append((st.chosen, rival))
+    return "".join(
+        f"; {TERMS[r].place_label()} fits about as well as {TERMS[t].place_label()} only with "
+        f"{TERMS[r].unphysical or 'a value outside its physical range'}: not physical, so no alternative"
+        for t, r in said
+    )
 
 
 #: The words that mark the family caveat in a verdict (the bench reads them: benches/diagnosis.py).

@@ -23,6 +23,27 @@ def plain_passes(p_value: float, alpha: float, moved: bool = False) -> bool:
     return not moved and math.isfinite(p_value) and p_value >= 0.5 * alpha
 
 
+#: Why the targeted step was not run (the plain model passed the global test on a floored noise).
+NO_TARGETED_STEP = (
+    "the targeted candidate tests (effects below the global test's reach) were not run: the noise floor of "
+    "some experiment is not measured noise (quantisation or numerical accuracy), and an effect below the "
+    "global test cannot be told from that error"
+)
+
+
+def plain_gate(
+    p_values: Sequence[float], alpha: float, moved: Sequence[bool], measured_noise: Sequence[bool]
+) -> tuple[bool, bool]:
+    """``(passes, targeted)`` over one or several sets of experiments (one per condition): the plain model
+    passes its gate at every set (:func:`plain_passes`, with that set's ``moved``), and the targeted step
+    runs only when it passes and every set's noise floor is measured noise. The targeted step hunts effects
+    below the global test's reach; where the error is a repeated quantisation pattern or the model's own
+    precision (``measured_noise`` False: settling._noise_floors set the floor), such effects cannot be told
+    from that error, and the step is not run (:data:`NO_TARGETED_STEP` says so)."""
+    passes = all(plain_passes(p, alpha, m) for p, m in zip(p_values, moved, strict=True))
+    return passes, passes and all(measured_noise)
+
+
 def plain_adequate(passes: bool, has_terms: bool, steps: Sequence[Any]) -> bool:
     """The plain model is "adequate": its gate passed (:func:`plain_passes`), nothing was added, and no
     candidate's tests passed with a law that failed (select.law_test: structure the plain model leaves and no
@@ -42,4 +63,11 @@ def explained_fraction(parts: Iterable[tuple[float, float, float]]) -> float:
     return min(gain / excess, 1.0) if excess > 0 else 0.0
 
 
-__all__ = ["ADEQUATE", "plain_passes", "plain_adequate", "explained_fraction"]
+__all__ = [
+    "ADEQUATE",
+    "NO_TARGETED_STEP",
+    "plain_gate",
+    "plain_passes",
+    "plain_adequate",
+    "explained_fraction",
+]

@@ -16,7 +16,7 @@ from ..errors import InvalidParameterError
 from ..terms import DIAGNOSIS_CANDIDATES, TERMS, Distortion, Offset, physical_value
 from ..validation import real_number
 from . import baseline, beside, free_dc, gate, loop_centre, resolution, zero_drift
-from .caveats import alternatives_text, below_saturation, family_text, latent_levels
+from .caveats import alternatives_text, below_saturation, family_text, latent_levels, unphysical_places_text
 from .data import DiagExperiment, colour_notes, prepare
 from .drift import (
     DEGRADATION,
@@ -355,12 +355,8 @@ def _drift_alternatives(deg: Optional[DegradationTest], named: bool) -> tuple[Al
     return (Alternative(deg.term, deg.rival.term, deg.correlation, SEPARATING_DRIFT),)
 
 
-#: Why the targeted step was not run (the plain model passed the global test on a floored noise).
-NO_TARGETED_STEP = (
-    "the targeted candidate tests (effects below the global test's reach) were not run: the noise floor of "
-    "some experiment is not measured noise (quantisation or numerical accuracy), and an effect below the "
-    "global test cannot be told from that error"
-)
+#: Why the targeted step was not run (gate.py, shared with diagnose_across).
+NO_TARGETED_STEP = gate.NO_TARGETED_STEP
 #: What a non-physical value suggests.
 NOT_PHYSICAL_HINT = (
     "the term stands in for physics the library places elsewhere (e.g. acting on the hysteresis' own input "
@@ -622,10 +618,9 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
 
     # The plain model's gate: the global test at alpha / 2, and when it accepts, the targeted step's
     # candidate tests at the other alpha / 2 (select.py's docstring; design.md 10.3).
-    passes = gate.plain_passes(p_of(start), alpha, named_deg or before.drift_detected)
-    # The targeted step hunts effects below the global test's reach; where the error is a repeated
-    # quantisation pattern or the model's own precision, such effects cannot be told from that error.
-    targeted = passes and setup.measured_noise
+    # The targeted step only on measured noise (gate.plain_gate: one rule for diagnose_across too).
+    moved = named_deg or before.drift_detected
+    passes, targeted = gate.plain_gate([p_of(start)], alpha, [moved], [setup.measured_noise])
     cache: FoldCache = {}
     steady = tuple(c for c in cands if c not in DRIFT_TERMS)
     kw: dict[str, Any] = {"alpha": alpha, "use_held_out": setup.held_out_test, "cache": cache}
@@ -657,7 +652,7 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
         fraction,
         fexps,
     )
-    verdict += _law_text(steps) + beside.text(steps)  # refused beside a Dahl element: said (beside.py)
+    verdict += _law_text(steps) + beside.text(steps) + unphysical_places_text(steps, named)  # said, not named
     alternatives = tuple(a for st in steps for a in st.alternatives) + _drift_alternatives(deg, named_deg)
     verdict += alternatives_text(alternatives, named) + family_text(named, latent_levels(fsx, final))
     setup.report("held-out check of the final model", 0, 1)
@@ -724,6 +719,7 @@ def _settings(setup: _Setup, s: Scale, substeps: int) -> dict[str, Any]:
         "scale": {"y": s.y, "u": s.u},
         "substeps": substeps,
         **({} if setup.common_dc is None else {"common_dc": setup.common_dc}),  # free DCs (free_dc.py)
+        "measured_noise": setup.measured_noise,  # False: a floor set (gate.plain_gate reads it across)
     }
 
 

@@ -195,6 +195,10 @@ class Step:
     #: Candidates that passed in sample beside a Dahl element with no effect of their own on the plain
     #: model (beside.py): refused, and said in the verdict (:func:`.beside.text`).
     beside: tuple[str, ...] = ()
+    #: The chosen term's other places that fit about as well only with a value outside their physical
+    #: range (:func:`place_alternatives`): no alternative, said in the verdict
+    #: (:func:`.caveats.unphysical_places_text`).
+    unphysical_places: tuple[str, ...] = ()
 
     def to_dict(self) -> dict[str, Any]:
         out = {
@@ -208,6 +212,8 @@ class Step:
         }
         if self.beside:  # only where the rule fired (a record without it reads as before)
             out["beside"] = list(self.beside)
+        if self.unphysical_places:  # likewise
+            out["unphysical_places"] = list(self.unphysical_places)
         return out
 
 
@@ -496,6 +502,14 @@ def _tied(chosen: Trial, rival: Trial, dof: int) -> bool:
 PLACE_CHI2 = 3.841
 
 
+def place_admissible(fits: Sequence[Optional[AugFit]], term: str) -> bool:
+    """Whether ``term`` (a sibling of the chosen term, at another place) has a physical value
+    (:func:`_admissible`) that is not its null value (:func:`at_null`) in every one of ``fits`` (one per
+    set of experiments where the chosen term is present; None: not fitted there): the rule by which a
+    candidate may pass (:func:`forward_select`), applied to a place alternative."""
+    return all(f is not None and _admissible(f, term) and not at_null(f, term) for f in fits)
+
+
 def siblings(term: str) -> list[str]:
     """The code names of ``term`` acting at its other places (the registry's :attr:`Term.places`)."""
     cls = TERMS[term]
@@ -575,6 +589,7 @@ def place_alternatives(
     law_failed: Sequence[str] = (),
     fit_term: Optional[Callable[[AugFit, str], Optional[AugFit]]] = None,
     preferred: Optional[dict[str, float]] = None,
+    unphysical: Optional[list[str]] = None,
 ) -> list[Alternative]:
     """The chosen term at its other places, where the data cannot tell the places apart.
 
@@ -584,6 +599,11 @@ def place_alternatives(
     selection did not reach): then it is no rival reading, except where it fits at least as well as the
     chosen place (``preferred``: :func:`preferred_by_fit`, with the law's p), where it is an alternative
     with that p. The separating experiment is where x lags u differently (near G's resonance or corner).
+
+    A sibling whose value lies outside its physical range, or at its null value (:func:`place_admissible`),
+    is no alternative: where x lags u by about pi, viscous damping on x fits as well as on u with the
+    opposite sign, a negative damping. A non-physical one that would otherwise be an alternative is
+    appended to ``unphysical`` (the verdict says it: :func:`.caveats.unphysical_places_text`).
     """
     if chosen.fit is None:
         return []
@@ -595,6 +615,14 @@ def place_alternatives(
     for rival in siblings(chosen.term):
         tr = by_term.get(rival)
         if tr is None or tr.fit is None:
+            continue
+        if not place_admissible([tr.fit], rival):  # a negative damping is no reading of the data
+            if (
+                unphysical is not None
+                and tr.cost - chosen.cost < PLACE_CHI2 * s2
+                and not at_null(tr.fit, rival)
+            ):
+                unphysical.append(rival)
             continue
         if rival in preferred:  # skipped for its law only, while it fits at least as well
             both = fit_term(chosen.fit, rival) if fit_term else fit_with(exps, chosen.fit, rival, substeps)
@@ -679,18 +707,20 @@ def step_alternatives(
     law_failed: Sequence[str],
     fit_term: Callable[[AugFit, str], Optional[AugFit]],
     substeps: int,
+    unphysical: Optional[list[str]] = None,
 ) -> list[Alternative]:
     """The alternatives of one selection step's chosen term: its other places (:func:`place_alternatives`),
     then the rivals among ``order`` (the candidates that passed, best first) that tie with it or whose
     value is confounded with its (``|rho| >= ALTERNATIVE_CORRELATION``), each with the experiment that would
     separate them. A rival whose law failed is no rival reading unless the selection passed it over for its
     law only while it fits at least as well (:func:`preferred_by_fit`): then it is one, with its law's p.
-    ``tested``: the step's trials with their law p."""
+    ``tested``: the step's trials with their law p; ``unphysical`` collects the other places that fit as
+    well only with a non-physical value (:func:`place_alternatives`)."""
     if chosen is None or chosen.fit is None:
         return []
     preferred = preferred_by_fit(chosen, tested, law_failed)
     # The chosen physics at its other places first, with the experiment that separates places.
-    out = place_alternatives(exps, chosen, trials, substeps, law_failed, fit_term, preferred)
+    out = place_alternatives(exps, chosen, trials, substeps, law_failed, fit_term, preferred, unphysical)
     for tr in order:
         if tr.term == chosen.term or tr.fit is None or tr.term in siblings(chosen.term):
             continue
@@ -776,8 +806,10 @@ def forward_select(
             if ho is None or ho.improves:
                 chosen = tr2
                 break
+        bad: list[str] = []  # the chosen term's other places that fit as well only non-physically
+        tested = list(final_trials.values())
         alternatives = step_alternatives(
-            exps, chosen, trials, order, list(final_trials.values()), law_failed, fit_term, substeps
+            exps, chosen, trials, order, tested, law_failed, fit_term, substeps, bad
         )
         steps.append(
             Step(
@@ -789,6 +821,7 @@ def forward_select(
                 first,
                 tuple(law_failed),
                 tuple(refused),
+                tuple(bad),
             )
         )
         first = False
@@ -808,6 +841,7 @@ __all__ = [
     "Alternative",
     "best_of",
     "place_alternatives",
+    "place_admissible",
     "preferred_by_fit",
     "siblings",
     "law_test",

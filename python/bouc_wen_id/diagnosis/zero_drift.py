@@ -104,6 +104,9 @@ class Drift:
     #: Recordings of fewer than :data:`MIN_PERIODS` periods after settling: their period means replaced
     #: (``baseline.removed``), their line not tested (slope 0)
     short: tuple[str, ...] = ()
+    #: Recordings whose periods repeat exactly (:data:`NOISELESS`): their trend test void, their line not
+    #: tested (slope 0), their period means replaced
+    noiseless: tuple[str, ...] = ()
 
     def note(self) -> str:
         size = self.largest / self.sigma if self.sigma > 0 else math.nan
@@ -143,6 +146,10 @@ class Drift:
             text += (
                 f"; {', '.join(self.short)} has fewer than {MIN_PERIODS} periods after settling: its period "
                 "means replaced, its line not tested (left in within its periods)"
+            )
+        if self.noiseless:
+            text += (
+                f"; {', '.join(self.noiseless)}: {NOISELESS}: its line not tested, its period means replaced"
             )
         return text
 
@@ -192,15 +199,23 @@ def _chi2_1(t: float, dof: int) -> float:
     return float(chdtri(1, p)) if p > 0 else math.inf
 
 
-def _recording(rows: np.ndarray, p: int) -> tuple[float, float, float, float, float]:
+#: Why a recording's trend test is void: its periods repeat exactly (noise-free or quantised output with
+#: nothing to dither it), so every standard error is 0 and a slope has no noise to be tested against.
+NOISELESS = "its periods repeat exactly (no period-to-period noise to test a trend against)"
+
+
+def _recording(rows: np.ndarray, p: int) -> tuple[float, float, float, float, float] | str:
     """One recording's numbers: slope t as chi-square, its p, the decay test's one-sided p, the loop's
-    chi-square, the slope per period and the white noise variance of a sample."""
+    chi-square, the slope per period and the white noise variance of a sample; :data:`NOISELESS` (why the
+    test is void) when the periods repeat exactly: every standard error would be 0."""
     from scipy.special import ndtr
 
     n = rows.shape[0]
     spec = np.fft.rfft(rows, axis=1) / p
     dc, amp = spec[:, 0].real, 2.0 * np.abs(spec[:, 1])
     white = float(np.mean(np.diff(rows - dc[:, None], axis=0) ** 2)) / 2.0 * p / (p - 1)
+    if not (white > 0 and math.isfinite(white)):
+        return NOISELESS
     b, se, dof = _slope(dc, white / p)
     h = n // 2
     b1, se1, _ = _slope(dc[:h], white / p)
@@ -213,9 +228,10 @@ def _recording(rows: np.ndarray, p: int) -> tuple[float, float, float, float, fl
 _Numbers = tuple[float, float, float, float, float, float, float, Any]
 
 
-def _numbers(rec: Any) -> Optional[_Numbers]:
+def _numbers(rec: Any) -> Optional[_Numbers | str]:
     """An item's test numbers (:func:`_recording`'s), its slope (per sample, per second on the lab path),
-    centre, span (samples or seconds) and, on the lab path, where its line is zero; None when not tested."""
+    centre, span (samples or seconds) and, on the lab path, where its line is zero; None when not tested,
+    or why its test is void (:data:`NOISELESS`)."""
     from ..measurement import Measurement
     from ..model import Recording
 
@@ -224,7 +240,10 @@ def _numbers(rec: Any) -> Optional[_Numbers]:
         if got is None:
             return None
         rows, p, _ = got
-        x2, decay, l2, b, white = _recording(rows, p)
+        numbers = _recording(rows, p)
+        if isinstance(numbers, str):
+            return numbers
+        x2, decay, l2, b, white = numbers
         return x2, decay, l2, b / p, white, float(rows.mean()), float(np.asarray(rec.y).size), None
     if isinstance(rec, Measurement):
         return _lab(rec)
@@ -320,7 +339,9 @@ def detect(items: Any, level: float) -> Optional[Drift]:
     from scipy.special import chdtrc
 
     seq = list(items) if isinstance(items, (list, tuple)) else [items]
-    got: list[Optional[_Numbers]] = [_numbers(rec) for rec in seq]
+    read = [_numbers(rec) for rec in seq]
+    void = tuple(_label(seq[j], j) for j, g in enumerate(read) if isinstance(g, str))
+    got: list[Optional[_Numbers]] = [None if isinstance(g, str) else g for g in read]
     tested = [j for j, g in enumerate(got) if g is not None]
     if not tested:
         return None
@@ -359,7 +380,12 @@ def detect(items: Any, level: float) -> Optional[Drift]:
         tuple(_label(seq[j], j) for j in slowing),
         untested,
         trends,
-        tuple(_label(seq[j], j) for j, g in enumerate(got) if g is None and _recorded(seq[j])),
+        tuple(
+            _label(seq[j], j)
+            for j, g in enumerate(got)
+            if g is None and _recorded(seq[j]) and not isinstance(read[j], str)
+        ),
+        void,
     )
 
 
@@ -440,4 +466,4 @@ def lab_detrended(meas: Any, slope: float, where: tuple[float, float], centre: f
     )
 
 
-__all__ = ["Drift", "detect", "detrended", "lab_detrended", "DRIFT_ALPHA", "DECAY_LEVEL"]
+__all__ = ["Drift", "NOISELESS", "detect", "detrended", "lab_detrended", "DRIFT_ALPHA", "DECAY_LEVEL"]
