@@ -371,7 +371,7 @@ def _add_plan_parser(sub: Any) -> None:
         type=_integer(1),
         default=None,
         help="with --detect: candidate terms sharing the diagnosis's targeted step (default: the diagnosis's "
-        "own count on pure sines)",
+        "own count on pure sines; one more where the inputs carry harmonics, the distortion term)",
     )
     p.add_argument("--out", type=Path, default=None, help="write the plan as JSON to this file")
     _add_overwrite(p)
