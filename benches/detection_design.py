@@ -140,7 +140,7 @@ def wilson(k: int, n: int, z: float = 1.96) -> tuple[float, float]:
 
 
 def row(
-    shape: str, name: str, size: float, seed: int, draws: int, workers: int, least: int = 1
+    shape: str, name: str, size: float, seed: int, draws: int, workers: int, least: int = 3
 ) -> list[dict[str, Any]]:
     """The default and the planned design of one shape and term: predictions and Monte-Carlo counts
     (``shape`` "seed": the plant of exactly ``seed``, whatever its shape)."""
@@ -293,7 +293,9 @@ def main(argv: Optional[list[str]] = None) -> int:
     )
     ap.add_argument("--workers", type=int, default=1)
     ap.add_argument("--json", type=Path, default=None)
-    ap.add_argument("--min-experiments", type=int, default=1, help="plan_detection's min_experiments")
+    ap.add_argument(
+        "--min-experiments", type=int, default=3, help="plan_detection's min_experiments (3, its default)"
+    )
     ap.add_argument("--hint", default="", help="SEED,...: check the adequate verdict's design hint instead")
     a = ap.parse_args(argv)
     if a.hint:

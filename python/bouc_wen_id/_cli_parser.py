@@ -359,6 +359,20 @@ def _add_plan_parser(sub: Any) -> None:
     p.add_argument(
         "--diagnosis-alpha", type=_level, default=0.05, help="with --detect: the diagnosis's alpha (0.05)"
     )
+    p.add_argument(
+        "--min-experiments",
+        type=_integer(1),
+        default=3,
+        help="with --detect: fewest experiments of the plan (3: the diagnosis names a term only if it also "
+        "passes the held-out test across experiments, which 2 pass rarely and 1 cannot run)",
+    )
+    p.add_argument(
+        "--candidates",
+        type=_integer(1),
+        default=None,
+        help="with --detect: candidate terms sharing the diagnosis's targeted step (default: the diagnosis's "
+        "own count on pure sines; one more where the inputs carry harmonics, the distortion term)",
+    )
     p.add_argument("--out", type=Path, default=None, help="write the plan as JSON to this file")
     _add_overwrite(p)
 

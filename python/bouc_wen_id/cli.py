@@ -579,7 +579,12 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     if args.detect is not None:
         from .planning import plan_detection
 
-        plan = plan_detection(prior, args.budget, _detect_arg(args.detect), alpha=args.diagnosis_alpha, **lab)
+        more: dict[str, Any] = {"min_experiments": args.min_experiments}
+        if args.candidates is not None:
+            more["candidates"] = args.candidates
+        plan = plan_detection(
+            prior, args.budget, _detect_arg(args.detect), alpha=args.diagnosis_alpha, **more, **lab
+        )
     else:
         plan = plan_experiment(prior, args.budget, target=args.target, **lab)
     print(plan.summary())

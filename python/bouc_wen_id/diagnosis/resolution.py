@@ -107,9 +107,12 @@ def hint_text(lim: DetectionLimit, exps: Sequence[Any]) -> str:
     f = h.periods_factor
     more = (f - 1.0) * sum(secs)
     if len(set(periods)) == 1:
-        every = f"record {math.ceil(f * periods[0])} periods per experiment ({f:.2g}x, +{more:.3g} s)"
+        every = (
+            f"record {math.ceil(f * periods[0])} periods after the settling ones per experiment "
+            f"({f:.2g}x, +{more:.3g} s)"
+        )
     else:
-        every = f"record {f:.2g}x the periods of every experiment (+{more:.3g} s)"
+        every = f"record {f:.2g}x the periods after the settling ones of every experiment (+{more:.3g} s)"
     one = ""
     j = h.experiment
     if 0 <= j < len(exps) and math.isfinite(h.experiment_factor):

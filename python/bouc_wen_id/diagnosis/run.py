@@ -16,6 +16,7 @@ from ..errors import InvalidParameterError
 from ..terms import DIAGNOSIS_CANDIDATES, TERMS, Distortion, Offset, physical_value
 from ..validation import real_number
 from . import baseline, beside, free_dc, gate, loop_centre, resolution, zero_drift
+from .candidates import step_candidates
 from .caveats import alternatives_text, below_saturation, family_text, latent_levels, unphysical_places_text
 from .data import DiagExperiment, colour_notes, prepare
 from .drift import (
@@ -499,7 +500,7 @@ def _with_wander(
     skipped: dict[str, str] = {}
     if Distortion.kind in cands and not any(e.distorted for e in exps):
         # The term scales the inputs' own harmonics: with pure sines it is the plain model (design.md 9.5).
-        cands = tuple(c for c in cands if c != Distortion.kind)
+        cands = tuple(c for c in cands if c in step_candidates(cands, pure_sines=True) or c in DRIFT_TERMS)
         skipped[Distortion.kind] = (
             "not tested: every input is a pure sine (no harmonic above its noise floor), so the measured "
             "waveform adds nothing to the model"
@@ -622,7 +623,7 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
     moved = named_deg or before.drift_detected
     passes, targeted = gate.plain_gate([p_of(start)], alpha, [moved], [setup.measured_noise])
     cache: FoldCache = {}
-    steady = tuple(c for c in cands if c not in DRIFT_TERMS)
+    steady = step_candidates(cands, pure_sines=False)  # the planner's family too (candidates.py)
     kw: dict[str, Any] = {"alpha": alpha, "use_held_out": setup.held_out_test, "cache": cache}
     kw["on_trial"] = lambda k, t, i, n: setup.report(f"step {k}: fitting candidate {t}", i, n)
     if passes and not targeted:

@@ -61,9 +61,9 @@ the naive design), ``_result`` (the result types).
 
 from __future__ import annotations
 
-from ._detect import DetectionPlan, plan_detection
+from ._detect import MIN_EXPERIMENTS, DetectionPlan, plan_detection
 from ._plan import plan_experiment
-from ._power import DETECTABLE, DetectionPower, detection_power
+from ._power import DETECTABLE, DetectionPower, UnphysicalSizeError, detection_power
 from ._result import TARGETS, Design, ExperimentPlan, PlannedExperiment, Target
 from ._search import criterion_value
 from ._settings import (
@@ -86,6 +86,8 @@ __all__ = [
     "DetectionPower",
     "detection_power",
     "DETECTABLE",
+    "MIN_EXPERIMENTS",
+    "UnphysicalSizeError",
     "TARGETS",
     "criterion_value",
     "MAX_AMPLITUDES",

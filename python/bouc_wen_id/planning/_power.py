@@ -33,19 +33,24 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..augmented import AugExperiment, AugParams, augmented_output
+from ..diagnosis.candidates import step_candidates
 from ..errors import BoucWenIdError, InvalidParameterError
 from ..model import WienerPlant
-from ..terms import DIAGNOSIS_CANDIDATES, STEADY_TERM_NAMES, TERMS
+from ..terms import STEADY_TERM_NAMES, TERMS, Distortion
 from ..validation import real_number
 
 FloatArray = NDArray[np.float64]
 
-#: Terms the diagnosis tests on the averaged period by a one-parameter F-test, and so can be designed for
-#: (``distortion`` scales the measured input's harmonics, which a planned pure sine does not have).
-DETECTABLE = tuple(t for t in STEADY_TERM_NAMES if t != "distortion")
-#: The candidates sharing the targeted step's level by default: the library's steady candidates less the
-#: distortion (the diagnosis drops it on pure sines, diagnosis/run.py): 16, as the bench's first steps count.
-DEFAULT_CANDIDATES = sum(1 for t in DIAGNOSIS_CANDIDATES if t in DETECTABLE)
+#: Terms the diagnosis tests on the averaged period by a one-parameter F-test, and so can be designed for:
+#: the distortion term scales the measured input's harmonics, which a planned pure sine does not have; a
+#: two-parameter element (Dahl friction: its level and its pre-sliding stiffness, :attr:`Term.companion`,
+#: :attr:`Term.part_of`) is fitted as one with two parameters, which a one-size plan does not describe.
+DETECTABLE = tuple(
+    t for t in STEADY_TERM_NAMES if t != Distortion.kind and not TERMS[t].part_of and not TERMS[t].companion
+)
+#: The candidates sharing the targeted step's level by default: the diagnosis's own list of what a step
+#: tests on pure sines (diagnosis/candidates.py), the one :func:`~bouc_wen_id.diagnose` uses.
+DEFAULT_CANDIDATES = len(step_candidates(pure_sines=True))
 #: Relative precision of the vague prior on beta, gamma, mu (as ``_search.VAGUE_PRIOR``): keeps a
 #: one-experiment design's projection finite.
 VAGUE_PRIOR = 1e-8
@@ -59,6 +64,12 @@ def check_detect(detect: object) -> tuple[str, float]:
             f"detect must be a mapping of one term to its size, e.g. {{'sensor_lag': 1e-3}}; got {detect!r}"
         )
     ((term, size),) = detect.items()
+    if term in TERMS and (TERMS[term].companion or TERMS[term].part_of):
+        raise InvalidParameterError(
+            f"detect: {term!r} is one of a two-parameter element's parameters (fitted together with "
+            f"{TERMS[term].companion or TERMS[term].part_of!r}); a plan for one size cannot describe it. The "
+            f"terms a sine design can be planned to detect are {', '.join(DETECTABLE)}"
+        )
     if term not in DETECTABLE:
         raise InvalidParameterError(
             f"detect: unknown or undetectable term {term!r}; the terms a sine design can be planned to "
@@ -69,17 +80,30 @@ def check_detect(detect: object) -> tuple[str, float]:
     lo, hi = TERMS[term].bounds
     if value == 0.0:
         raise InvalidParameterError(f"detect[{term!r}] = 0: a term of size 0 has nothing to detect")
-    if not lo <= value <= hi:
-        raise InvalidParameterError(
-            f"detect[{term!r}] = {value:g} is outside the term's range [{lo:g}, {hi:g}] (a negative size of "
-            "a "
-            "term confined to >= 0)"
+    plo, phi = TERMS[term].physical
+    if not max(lo, plo) <= value <= min(hi, phi):
+        what = TERMS[term].unphysical or "a value outside the term's physical range"
+        raise UnphysicalSizeError(
+            f"detect[{term!r}] = {value:g} is outside the term's physical range [{max(lo, plo):g}, "
+            f"{min(hi, phi):g}] ({what}): the diagnosis never names such a value, so no design detects it"
         )
     return term, value
 
 
+class UnphysicalSizeError(InvalidParameterError):
+    """A size outside the term's physical range (:attr:`Term.physical`), which the diagnosis never names."""
+
+
+def physical_side(term: str) -> bool:
+    """Whether the term's physical range is one-sided (``>= 0``): only values of that sign are named (the
+    diagnosis refuses the others, diagnosis/select.py ``_admissible``), so the power counts one tail."""
+    lo, hi = TERMS[term].physical
+    return math.isfinite(lo) != math.isfinite(hi)
+
+
 def critical(term: str, alpha: float, candidates: int) -> tuple[float, float, bool]:
-    """``(z_c, level, one_sided)`` of the term's test at the targeted step (module docstring)."""
+    """``(z_c, level, one_sided)`` of the term's test at the targeted step (module docstring): one-sided
+    (its p halved) for a term whose fitted range is confined to ``>= 0``, two-sided otherwise."""
     from scipy.special import ndtri  # type: ignore[import-untyped]
 
     one = TERMS[term].bounds[0] == 0.0
@@ -241,7 +265,15 @@ def detection_power(
     z_c, level, one = critical(term, alpha, candidates)
     used = lam if math.isfinite(lam) else lam1
     total = float(sum(e.duration for e in design))
-    return DetectionPower(term, size, lam1, lam, level, one, z_c, power_at(used, z_c, one), total)
+    tails_one = one or physical_side(term)  # a negative damping is never named: its tail is no detection
+    return DetectionPower(term, size, lam1, lam, level, one, z_c, power_at(used, z_c, tails_one), total)
 
 
-__all__ = ["DETECTABLE", "DEFAULT_CANDIDATES", "DetectionPower", "detection_power", "check_detect"]
+__all__ = [
+    "DETECTABLE",
+    "DEFAULT_CANDIDATES",
+    "DetectionPower",
+    "UnphysicalSizeError",
+    "detection_power",
+    "check_detect",
+]
