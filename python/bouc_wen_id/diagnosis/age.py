@@ -1,0 +1,190 @@
+"""The unrecorded age of a degrading specimen: how far each experiment had degraded before its record.
+
+A strength degradation (``nu = 1 + delta_nu e``, ``e`` the dissipated energy) is corrected on the averaged
+periods by simulating each experiment from the virgin state through its declared settling
+(``DiagExperiment.lead_periods``) and its recorded periods (``drift.corrected``). A lab that drove the
+specimen before recording (a settling it does not declare, earlier runs on the same specimen) hands over
+records that start already aged, each by its own energy ``e0_i``: the averaged loops then sit at strengths
+``1 + delta_nu (e0_i + ...)`` that differ between experiments by more than the drift over a record, which
+shared beta and gamma cannot follow, and the steady fit is left with "unexplained structure".
+
+Which ages the record can tell (the parameterisation):
+
+* A **common** age (the same ``e0`` for every experiment) is exactly a different virgin state: with
+  ``nu = (1 + delta_nu e0)(1 + delta_nu' (e - e0))``, ``delta_nu' = delta_nu / (1 + delta_nu e0)``, beta and
+  gamma absorb the first factor. It is not identifiable, so the youngest experiment is taken as the virgin
+  state and the values (beta, gamma, delta_nu) are those at its first recorded period.
+* The **differences** are: each experiment's loop shows its own strength through its saturation level,
+  which its own gain and phase (G free per experiment) do not absorb. So the model carries one age per
+  experiment beyond the youngest, ``m - 1`` parameters, each ``>= 0`` relative to the youngest, kept only
+  when their F-test on the steady fit passes (else the records start as declared, as before).
+* One shared count of unrecorded periods (``e0_i = N E_i``) or ages accumulated over experiments run in
+  a known order on one specimen are special cases of these free ages, tied to a history the files do not
+  say (a lab's settling is often a time, not a number of periods; the recording order is rarely given).
+  The free ages are the honest general case; their values say which history fits.
+
+Stiffness degradation has no such parameter: its first-order effect on an averaged loop is the loop at the
+gain ``|G_i| / eta_i``, which each experiment's own free gain already absorbs.
+
+The ages are fitted by the same simulation as the correction: an age of ``a_i`` periods is ``a_i`` more
+periods of the experiment's own drive simulated before its record (fractional ages between the two whole
+counts), so the energy follows the degrading loop exactly as the term does. Each pass projects the steady
+fit's residual onto the per-experiment strength columns ``J_i = dy/d ln nu`` beside the shared and own
+columns (Gauss-Newton; the common direction is the null space above) and converts the strength differences
+to periods through the energy per period, ``a_i = Delta ln nu_i / (d E_i)``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import replace
+from typing import Optional
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..augmented import AugExperiment, AugFit, augmented_output
+from ..terms import Asymmetry
+from . import free_dc
+from .data import DiagExperiment
+from .drift import DEGRADATION, DegradationTest, corrected, regressors
+from .fitting import best_of, fit_from
+from .result import Diagnosis
+from .select import dof_of
+
+FloatArray = NDArray[np.float64]
+
+#: Gauss-Newton passes of the ages (each: correct, refit, project), and the change in periods that ends them.
+AGE_PASSES = 5
+AGE_TOL = 0.25
+#: Kill switch (tests compare with and without).
+ENABLED = True
+
+
+def _eligible(e: DiagExperiment) -> bool:
+    """Experiments ``drift.corrected`` simulates (a block record and a known lead)."""
+    return e.blocks >= 2 and math.isfinite(e.lead_periods)
+
+
+def _strength_steps(
+    fsx: Sequence[AugExperiment], fit: AugFit, keep: Sequence[int], substeps: int
+) -> tuple[FloatArray, FloatArray]:
+    """``(Delta ln nu_i, E_i)`` for the experiments ``keep``: the residual's per-experiment strength
+    coefficients (least squares beside the shared and own columns; relative to their minimum, the common
+    part being the virgin strength's) and each loop's energy per period (scaled units)."""
+    par = fit.params
+    m = len(keep)
+    n_shared = 3 + len(par.terms)
+    cols_n = n_shared + 2 * m + m
+    rows_a, rows_b, energies = [], [], []
+    for k, i in enumerate(keep):
+        a = fsx[i]
+        out = augmented_output(a, par, i, substeps=substeps, jacobian=True)
+        jac = out.jacobian
+        strength = par.beta * jac[:, 0] + par.gamma * jac[:, 1]
+        if Asymmetry.kind in par.terms:
+            t = par.terms.index(Asymmetry.kind)
+            strength = strength + float(par.values[t]) * jac[:, 3 + t]
+        block = np.zeros((a.ybar.size, cols_n))
+        block[:, :n_shared] = jac
+        block[:, n_shared + 2 * k : n_shared + 2 * k + 2] = out.own_jacobian
+        block[:, n_shared + 2 * m + k] = strength
+        root = math.sqrt(a.weight)
+        rows_a.append(root * free_dc.centred(a, block))
+        rows_b.append(root * free_dc.centred(a, a.ybar - out.y))
+        energies.append(regressors(a, fit, i, substeps)[2])
+    mat = np.vstack(rows_a)
+    scale = np.linalg.norm(mat, axis=0)
+    scale[scale == 0] = 1.0
+    sol = np.linalg.lstsq(mat / scale, np.concatenate(rows_b), rcond=1e-10)[0] / scale
+    c = sol[n_shared + 2 * m :]
+    return c - float(np.min(c)), np.asarray(energies, dtype=np.float64)
+
+
+def estimate(
+    exps: Sequence[DiagExperiment],
+    sx: Sequence[AugExperiment],
+    fit: AugFit,
+    deg: DegradationTest,
+    y_scale: float,
+    substeps: int,
+    alpha: float,
+) -> Optional[tuple[list[DiagExperiment], AugFit, DegradationTest]]:
+    """The experiments with their unrecorded ages (``age_periods``), the fit of their corrected periods and
+    ``deg`` carrying the ages, when the ages' F-test passes; else None (the ages tried are in ``deg`` only
+    through :func:`tried`).
+
+    ``fit`` is the virgin-strength fit of the periods corrected as declared (ages 0), ``deg`` the named
+    strength degradation (its scaled ``d``).
+    """
+    keep = [i for i, e in enumerate(exps) if _eligible(e)]
+    if not ENABLED or deg.term != DEGRADATION or len(keep) < 2 or not deg.d > 0:
+        return None
+    ages = np.zeros(len(exps))
+    best, cost0 = fit, fit.cost
+    aged = list(exps)
+    for _ in range(AGE_PASSES):
+        aged = [replace(e, age_periods=float(a)) for e, a in zip(exps, ages)]
+        _, fsx = corrected(aged, sx, best, deg.d, y_scale, substeps, deg.term)
+        refit = best_of([fit_from(fsx, best.params, substeps)])
+        if refit is None:
+            return None
+        best = refit
+        dln, energy = _strength_steps(fsx, best, keep, substeps)
+        step = np.zeros(len(exps))
+        ok = energy > 0
+        step[np.asarray(keep)[ok]] = dln[ok] / (deg.d * energy[ok])
+        ages = ages + step
+        ages = np.maximum(ages - float(np.min(ages[keep])), 0.0)
+        if float(np.max(np.abs(step - np.min(step[keep])))) < AGE_TOL:
+            break
+    aged = [replace(e, age_periods=float(a)) for e, a in zip(exps, ages)]
+    _, fsx = corrected(aged, sx, best, deg.d, y_scale, substeps, deg.term)
+    final = best_of([fit_from(fsx, best.params, substeps)])
+    if final is None:
+        return None
+    p = _f_p(cost0, final.cost, len(keep) - 1, dof_of(fsx, final) - (len(keep) - 1))
+    if not (math.isfinite(p) and p < alpha and final.cost < cost0):
+        return list(exps), fit, replace(deg, age_p_value=p)
+    # The energy of those periods, at the virgin loop's energy per period (first order).
+    per = [regressors(fsx[i], final, i, substeps)[2] if ages[i] > 0 else 0.0 for i in range(len(exps))]
+    energy_phys = tuple(float(a) * float(e) * y_scale**2 for a, e in zip(ages, per))
+    said = clause(exps, ages, energy_phys, p)
+    ages_t = tuple(float(a) for a in ages)
+    got = replace(deg, age_periods=ages_t, age_energy=energy_phys, age_p_value=p, age_clause=said)
+    return aged, final, got
+
+
+def _f_p(c0: float, c1: float, k: int, dof1: int) -> float:
+    """P-value of the nested F-test of ``k`` added parameters (the residual variance per dof never below the
+    noise floor, 1 in these units, as ``select.f_test``)."""
+    from scipy.special import fdtrc  # type: ignore[import-untyped]
+
+    if k < 1 or dof1 < 1 or not (math.isfinite(c0) and math.isfinite(c1)) or c1 <= 0 or c0 <= c1:
+        return 1.0 if math.isfinite(c0) and math.isfinite(c1) else math.nan
+    f = (c0 - c1) / k / max(c1 / dof1, 1.0)
+    return float(fdtrc(k, dof1, f))
+
+
+def clause(exps: Sequence[DiagExperiment], ages: FloatArray, energy: Sequence[float], p: float) -> str:
+    """The verdict's clause of adopted ages: what the fit assumed of the specimen's history."""
+    young = min((i for i, e in enumerate(exps) if _eligible(e)), key=lambda i: float(ages[i]))
+    parts = [f"{e.source} by {a:.3g} (e = {en:.3g} [y]^2)" for e, a, en in zip(exps, ages, energy) if a > 0]
+    return (
+        "; the specimen had aged before the first recorded period (an unrecorded age fitted per experiment, "
+        f"F-test p = {p:.2g}), in periods of each experiment's own drive beyond {exps[young].source}'s: "
+        f"{', '.join(parts)}; {exps[young].source} is taken as the virgin state (a common age cannot be "
+        "told from the virgin strength): the values are those at its first recorded period"
+    )
+
+
+def with_clause(d: Diagnosis) -> Diagnosis:
+    """``d`` with the ages' clause after its verdict when it names the strength degradation with ages."""
+    deg = d.degradation
+    if deg is None or not getattr(deg, "age_clause", "") or all(t.term != DEGRADATION for t in d.named):
+        return d
+    return replace(d, verdict=d.verdict + deg.age_clause)
+
+
+__all__ = ["estimate", "clause", "with_clause", "AGE_PASSES", "AGE_TOL", "ENABLED"]
