@@ -58,6 +58,9 @@ FloatArray = NDArray[np.float64]
 #: Gauss-Newton passes of the ages (each: correct, refit, project), and the change in periods that ends them.
 AGE_PASSES = 5
 AGE_TOL = 0.25
+#: Largest standard error (periods) of an age that determines the youngest record (below saturation a loop
+#: hardly shows its strength: its age is not determined and is not said).
+AGE_SE_MAX = 2.0
 #: Kill switch (tests compare with and without).
 ENABLED = True
 
@@ -99,7 +102,18 @@ def _strength_steps(
     scale[scale == 0] = 1.0
     sol = np.linalg.lstsq(mat / scale, np.concatenate(rows_b), rcond=1e-10)[0] / scale
     c = sol[n_shared + 2 * m :]
-    return c - float(np.min(c)), np.asarray(energies, dtype=np.float64)
+    # Each strength's standard error against its own experiment's gain and phase (the noise at 1 in these
+    # units): below saturation the loop hardly shows its strength, and its age is not determined.
+    se = np.empty(m)
+    start = 0
+    for k, rows in enumerate(rows_a):
+        own = rows[:, [n_shared + 2 * k, n_shared + 2 * k + 1]]
+        col = rows[:, n_shared + 2 * m + k]
+        resid = col - own @ np.linalg.lstsq(own, col, rcond=None)[0]
+        norm = float(np.linalg.norm(resid))
+        se[k] = 1.0 / norm if norm > 0 else math.inf
+        start += rows.shape[0]
+    return c, np.asarray(energies, dtype=np.float64), se
 
 
 def estimate(
@@ -122,6 +136,7 @@ def estimate(
     if not ENABLED or deg.term != DEGRADATION or len(keep) < 2 or not deg.d > 0:
         return None
     ages = np.zeros(len(exps))
+    sd = np.full(len(exps), math.inf)
     best, cost0 = fit, fit.cost
     aged = list(exps)
     for _ in range(AGE_PASSES):
@@ -131,13 +146,27 @@ def estimate(
         if refit is None:
             return None
         best = refit
-        dln, energy = _strength_steps(fsx, best, keep, substeps)
-        step = np.zeros(len(exps))
+        dln, energy, se = _strength_steps(fsx, best, keep, substeps)
         ok = energy > 0
-        step[np.asarray(keep)[ok]] = dln[ok] / (deg.d * energy[ok])
-        ages = ages + step
-        ages = np.maximum(ages - float(np.min(ages[keep])), 0.0)
-        if float(np.max(np.abs(step - np.min(step[keep])))) < AGE_TOL:
+        idx = np.asarray(keep)[ok]
+        step = np.zeros(len(exps))
+        step[idx] = dln[ok] / (deg.d * energy[ok])
+        sd = np.full(len(exps), math.inf)
+        inflate = math.sqrt(max(1.0, best.cost / max(dof_of(fsx, best), 1)))
+        sd[idx] = inflate * se[ok] / (deg.d * energy[ok])
+        sure = [i for i in keep if sd[i] <= AGE_SE_MAX]
+        if not sure:
+            return None
+        # Anchored in energy, not in periods: the null direction is one common energy (a common number of
+        # periods is not, the energy per period differs between experiments).
+        per = np.zeros(len(exps))
+        per[idx] = energy[ok]
+        e0 = (ages + step) * per
+        e0 = np.maximum(e0 - float(np.min(e0[sure])), 0.0)
+        moved = np.zeros(len(exps))
+        moved[idx] = e0[idx] / per[idx] - ages[idx]
+        ages[idx] = e0[idx] / per[idx]
+        if float(np.max(np.abs(moved[sure]))) < AGE_TOL:
             break
     aged = [replace(e, age_periods=float(a)) for e, a in zip(exps, ages)]
     _, fsx = corrected(aged, sx, best, deg.d, y_scale, substeps, deg.term)
@@ -150,7 +179,7 @@ def estimate(
     # The energy of those periods, at the virgin loop's energy per period (first order).
     per = [regressors(fsx[i], final, i, substeps)[2] if ages[i] > 0 else 0.0 for i in range(len(exps))]
     energy_phys = tuple(float(a) * float(e) * y_scale**2 for a, e in zip(ages, per))
-    said = clause(exps, ages, energy_phys, p)
+    said = clause(exps, ages, energy_phys, p, sd <= AGE_SE_MAX)
     ages_t = tuple(float(a) for a in ages)
     got = replace(deg, age_periods=ages_t, age_energy=energy_phys, age_p_value=p, age_clause=said)
     return aged, final, got
@@ -167,15 +196,33 @@ def _f_p(c0: float, c1: float, k: int, dof1: int) -> float:
     return float(fdtrc(k, dof1, f))
 
 
-def clause(exps: Sequence[DiagExperiment], ages: FloatArray, energy: Sequence[float], p: float) -> str:
-    """The verdict's clause of adopted ages: what the fit assumed of the specimen's history."""
-    young = min((i for i, e in enumerate(exps) if _eligible(e)), key=lambda i: float(ages[i]))
-    parts = [f"{e.source} by {a:.3g} (e = {en:.3g} [y]^2)" for e, a, en in zip(exps, ages, energy) if a > 0]
+def clause(
+    exps: Sequence[DiagExperiment],
+    ages: FloatArray,
+    energy: Sequence[float],
+    p: float,
+    sure: NDArray[np.bool_],
+) -> str:
+    """The verdict's clause of adopted ages: what the fit assumed of the specimen's history (the ages not
+    determined, of loops that hardly show their strength, named apart)."""
+    young = min((i for i, e in enumerate(exps) if sure[i]), key=lambda i: float(ages[i]))
+    parts = [
+        f"{e.source} by {a:.3g} (e = {en:.3g} [y]^2)"
+        for e, a, en, ok in zip(exps, ages, energy, sure)
+        if ok and a > 0
+    ]
+    loose = [e.source for e, ok in zip(exps, sure) if not ok and _eligible(e)]
+    vague = (
+        f"; the age of {', '.join(loose)} is not determined (a loop below saturation hardly shows its "
+        "strength)"
+        if loose
+        else ""
+    )
     return (
         "; the specimen had aged before the first recorded period (an unrecorded age fitted per experiment, "
         f"F-test p = {p:.2g}), in periods of each experiment's own drive beyond {exps[young].source}'s: "
-        f"{', '.join(parts)}; {exps[young].source} is taken as the virgin state (a common age cannot be "
-        "told from the virgin strength): the values are those at its first recorded period"
+        f"{', '.join(parts) or 'none'}{vague}; {exps[young].source} is taken as the virgin state (a common "
+        "age cannot be told from the virgin strength): the values are those at its first recorded period"
     )
 
 
