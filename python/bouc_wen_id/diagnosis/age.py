@@ -72,10 +72,11 @@ def _eligible(e: DiagExperiment) -> bool:
 
 def _strength_steps(
     fsx: Sequence[AugExperiment], fit: AugFit, keep: Sequence[int], substeps: int
-) -> tuple[FloatArray, FloatArray]:
-    """``(Delta ln nu_i, E_i)`` for the experiments ``keep``: the residual's per-experiment strength
-    coefficients (least squares beside the shared and own columns; relative to their minimum, the common
-    part being the virgin strength's) and each loop's energy per period (scaled units)."""
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """``(Delta ln nu_i, E_i, se_i)`` for the experiments ``keep``: the residual's per-experiment strength
+    coefficients (least squares beside the shared and own columns; their common part is arbitrary, the
+    virgin strength's), each loop's energy per period (scaled units) and each coefficient's standard
+    error against its own experiment's gain and phase."""
     par = fit.params
     m = len(keep)
     n_shared = 3 + len(par.terms)
@@ -105,14 +106,12 @@ def _strength_steps(
     # Each strength's standard error against its own experiment's gain and phase (the noise at 1 in these
     # units): below saturation the loop hardly shows its strength, and its age is not determined.
     se = np.empty(m)
-    start = 0
     for k, rows in enumerate(rows_a):
         own = rows[:, [n_shared + 2 * k, n_shared + 2 * k + 1]]
         col = rows[:, n_shared + 2 * m + k]
         resid = col - own @ np.linalg.lstsq(own, col, rcond=None)[0]
         norm = float(np.linalg.norm(resid))
         se[k] = 1.0 / norm if norm > 0 else math.inf
-        start += rows.shape[0]
     return c, np.asarray(energies, dtype=np.float64), se
 
 
@@ -177,11 +176,14 @@ def estimate(
     if not (math.isfinite(p) and p < alpha and final.cost < cost0):
         return list(exps), fit, replace(deg, age_p_value=p)
     # The energy of those periods, at the virgin loop's energy per period (first order).
-    per = [regressors(fsx[i], final, i, substeps)[2] if ages[i] > 0 else 0.0 for i in range(len(exps))]
-    energy_phys = tuple(float(a) * float(e) * y_scale**2 for a, e in zip(ages, per))
+    unit = [regressors(fsx[i], final, i, substeps)[2] if ages[i] > 0 else 0.0 for i in range(len(exps))]
+    energy_phys = tuple(float(a) * float(e) * y_scale**2 for a, e in zip(ages, unit))
     said = clause(exps, ages, energy_phys, p, sd <= AGE_SE_MAX)
     ages_t = tuple(float(a) for a in ages)
-    got = replace(deg, age_periods=ages_t, age_energy=energy_phys, age_p_value=p, age_clause=said)
+    sure_t = tuple(bool(v <= AGE_SE_MAX) for v in sd)
+    got = replace(
+        deg, age_periods=ages_t, age_energy=energy_phys, age_determined=sure_t, age_p_value=p, age_clause=said
+    )
     return aged, final, got
 
 

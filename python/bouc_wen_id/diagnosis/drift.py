@@ -314,6 +314,8 @@ class DegradationTest:
     #: [y]^2); empty when the records are taken to start as declared.
     age_periods: tuple[float, ...] = ()
     age_energy: tuple[float, ...] = ()
+    #: Per experiment, whether its age is determined (its standard error within ``age.AGE_SE_MAX``).
+    age_determined: tuple[bool, ...] = ()
     #: P-value of the ages' F-test on the steady fit (m - 1 parameters; NaN when not tried).
     age_p_value: float = math.nan
     #: The verdict's clause of the adopted ages ('' when none; age.py).
@@ -359,6 +361,7 @@ class DegradationTest:
             out["unrecorded_age_p_value"] = self.age_p_value
             out["unrecorded_age_periods"] = list(self.age_periods)
             out["unrecorded_age_energy"] = list(self.age_energy)
+            out["unrecorded_age_determined"] = list(self.age_determined)
         if self.rival is not None:
             rival = self.rival.to_dict()
             rival.pop("rival", None)

@@ -296,8 +296,9 @@ def _aged(
     substeps: int,
     alpha: float,
 ) -> tuple[list[DiagExperiment], AugFit, DegradationTest, Sequence[Any]]:
-    """The experiments with their unrecorded ages when age.py's F-test keeps them (the drift data re-formed
-    at each loop's mean strength, now older), else as they are."""
+    """The experiments with their unrecorded ages when age.py's F-test keeps them at ``alpha`` (Bonferroni
+    over the candidates, as the drift term's own test; the drift data re-formed at each loop's mean
+    strength, now older), else as they are."""
     got = age.estimate(exps, sx, fit, deg, s.y, substeps, alpha)
     if got is None:
         return list(exps), fit, deg, data
@@ -358,7 +359,7 @@ def _degradation_stage(
         # The refined test no longer names it: the steady selection on the data as they are.
         return deg, list(exps), list(sx), plain
     # The unrecorded age of each record (age.py): kept when its F-test passes, else the ages are 0.
-    exps, fit, deg, data = _aged(exps, sx, fit, data, deg, s, substeps, alpha)
+    exps, fit, deg, data = _aged(exps, sx, fit, data, deg, s, substeps, alpha / family)
     if deg.d > 0:
         deg, fit = _refine_degradation(exps, sx, fit, data, deg, s, substeps)
     fexps, fsx = corrected(exps, sx, fit, deg.d, s.y, substeps, term)
