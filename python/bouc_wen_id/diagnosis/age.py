@@ -60,8 +60,8 @@ AGE_PASSES = 5
 AGE_TOL = 0.25
 #: Largest standard error of an age (in energy, in periods of the most dissipative experiment's drive) that
 #: is said and may anchor the youngest record: below saturation a loop hardly shows its strength (measured:
-#: 3 such periods at x = 0.8 of saturation, 0.4 at 0.8 of our bench's stroke, tests/test_unrecorded_age.py,
-#: studies/unrecorded_age.py).
+#: 48-62 of its own periods at x = 0.8 of saturation in tests/test_unrecorded_age.py; 0.4 periods of the
+#: most dissipative drive for our bench's low stroke, studies/unrecorded_age.py, which is determined).
 AGE_SE_MAX = 1.0
 #: Smallest age span kept, in periods of the most dissipative experiment's drive (see :func:`estimate`).
 AGE_MIN_SPAN = 1.5
