@@ -124,6 +124,10 @@ class DiagExperiment:
     #: Periods of excitation recorded before the first averaged one (settling), NaN when unknown: the
     #: energy a degrading specimen has dissipated before the averaged stretch (design.md 10.6).
     lead_periods: float = math.nan
+    #: Unrecorded age: periods of this experiment's own drive the specimen had degraded by before
+    #: ``lead_periods``, beyond the youngest experiment's (estimated by ``age.py`` when a strength
+    #: degradation is named; 0 when the record starts as declared).
+    age_periods: float = 0.0
 
     @property
     def blocks(self) -> int:

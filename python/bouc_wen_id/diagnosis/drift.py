@@ -215,7 +215,7 @@ def drift_data(
         nu = 1.0 if strength is None else float(strength[i])
         eta = 1.0 if stiffness is None else float(stiffness[i])
         j, k_eta, energy = regressors(a, fit, i, substeps, nu, eta)
-        age = e.lead_periods + float(np.dot(wts, centre) / wts.sum()) + 0.5
+        age = e.lead_periods + e.age_periods + float(np.dot(wts, centre) / wts.sum()) + 0.5
         dropped = e.blocks - keep.size
         out.append(
             DriftData(
@@ -309,6 +309,17 @@ class DegradationTest:
     rival_alternative: bool = False
     #: Correlation of the two drift columns' estimates (the 2x2 normal matrix).
     correlation: float = math.nan
+    #: The unrecorded age (age.py) when adopted: per experiment, periods of its own drive before its
+    #: record beyond the youngest one's, and the energy e dissipated in them (1/[y]^2 units' inverse:
+    #: [y]^2); empty when the records are taken to start as declared.
+    age_periods: tuple[float, ...] = ()
+    age_energy: tuple[float, ...] = ()
+    #: Per experiment, whether its age is determined (its standard error within ``age.AGE_SE_MAX``).
+    age_determined: tuple[bool, ...] = ()
+    #: P-value of the ages' F-test on the steady fit (m - 1 parameters; NaN when not tried).
+    age_p_value: float = math.nan
+    #: The verdict's clause of the adopted ages ('' when none; age.py).
+    age_clause: str = ""
 
     @property
     def held_out_improves(self) -> bool:
@@ -346,6 +357,11 @@ class DegradationTest:
             "drift_present": self.drift_present,
             "named": self.named,
         }
+        if math.isfinite(self.age_p_value):
+            out["unrecorded_age_p_value"] = self.age_p_value
+            out["unrecorded_age_periods"] = list(self.age_periods)
+            out["unrecorded_age_energy"] = list(self.age_energy)
+            out["unrecorded_age_determined"] = list(self.age_determined)
         if self.rival is not None:
             rival = self.rival.to_dict()
             rival.pop("rival", None)
@@ -533,18 +549,32 @@ def corrected(
         if e.blocks < 2 or not math.isfinite(e.lead_periods):
             continue
         p = a.ybar.size
-        lead = max(int(round(e.lead_periods)), 0)
         n = recorded_periods(e)
         om = a.frequency  # rad/s
         phi = float(np.mod(par.phases[i], TWO_PI))
         amp = float(a.amplitude * par.gains[i])
-        plan = (om, lead, n, p, max(substeps, SIM_SUBSTEPS))
         sim = _mean_period if speed.CACHE_DRIFT_LOOPS else _mean_period.__wrapped__
-        outs = [sim(hysteresis, terms, amp, phi, plan, term, dv) for dv in (max(d, 0.0), 0.0)]
-        shift = outs[0] - outs[1]
+        shift = np.zeros(p)
+        for lead, share in _leads(e):
+            plan = (om, lead, n, p, max(substeps, SIM_SUBSTEPS))
+            outs = [sim(hysteresis, terms, amp, phi, plan, term, dv) for dv in (max(d, 0.0), 0.0)]
+            shift = shift + share * (outs[0] - outs[1])
         de[i] = replace(e, ybar=e.ybar - shift * y_scale)
         ds[i] = replace(a, ybar=np.ascontiguousarray(a.ybar - shift))
     return de, ds
+
+
+def _leads(e: DiagExperiment) -> list[tuple[int, float]]:
+    """Whole periods simulated before the record, with their shares: the declared settling
+    (``lead_periods``, rounded) plus the unrecorded age (``age_periods``, fractional: the two whole
+    counts around it, weighted linearly)."""
+    base = max(int(round(e.lead_periods)), 0)
+    age = max(float(e.age_periods), 0.0)
+    whole = int(math.floor(age))
+    frac = age - whole
+    if frac < 1e-6:
+        return [(base + whole, 1.0)]
+    return [(base + whole, 1.0 - frac), (base + whole + 1, frac)]
 
 
 def recorded_periods(e: DiagExperiment) -> int:
@@ -567,7 +597,7 @@ def recorded_periods(e: DiagExperiment) -> int:
 SIM_SUBSTEPS = 4
 
 
-@lru_cache(maxsize=64)
+@lru_cache(maxsize=128)
 def _mean_period(
     hysteresis: tuple[float, float, float],
     terms: tuple[tuple[str, float], ...],

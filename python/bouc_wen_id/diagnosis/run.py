@@ -15,7 +15,7 @@ from ..budget import check_environment
 from ..errors import InvalidParameterError
 from ..terms import DIAGNOSIS_CANDIDATES, TERMS, Distortion, Offset, physical_value
 from ..validation import real_number
-from . import baseline, beside, free_dc, gate, loop_centre, resolution, zero_drift
+from . import age, baseline, beside, free_dc, gate, loop_centre, resolution, zero_drift
 from .candidates import step_candidates
 from .caveats import alternatives_text, below_saturation, family_text, latent_levels, unphysical_places_text
 from .data import DiagExperiment, colour_notes, prepare
@@ -240,56 +240,24 @@ def _refine_degradation(
     return replace(deg, d=dv, value=dv / s.y**2, standard_error=se / s.y**2), fits[dv]
 
 
-def _degradation_stage(
+def _correction_passes(
     exps: Sequence[DiagExperiment],
     sx: Sequence[AugExperiment],
     plain: AugFit,
+    data: Sequence[Any],
+    deg: DegradationTest,
     s: Scale,
     substeps: int,
-    alpha: float,
-    family: int,
-    held_out_test: bool,
-    drift_seen: bool,
-    notes: list[str],
-    terms: tuple[str, ...] = (DEGRADATION,),
-) -> Optional[tuple[Optional[DegradationTest], list[DiagExperiment], list[AugExperiment], AugFit]]:
-    """The degradation candidate (design.md 10.6): its test, and the data and start the steady selection
-    then runs on (the test is None when it cannot be formed); None without a block record.
-
-    Tested on the plain model's Jacobian, Bonferroni over all ``family`` candidates of the first step as if
-    it were one of them, and only when the record drifts at all (``drift_seen``: locate's drift test, or
-    else the drift chi-square of the blocks against no drift at ``alpha / 2``, :func:`with_drift_gate`),
-    as a steady term is tried only when the plain model is rejected. When it is named, the averaged periods
-    are brought back to the virgin strength and re-estimated at each loop's own strength, pass after pass
-    until d and the virgin fit settle (the first pass moves the fit from the plain model's average strength
-    to the virgin one; :data:`CORRECTION_PASSES`), then d is refined on both costs. Stiffness degradation
-    keeps the plain fit's estimate (each experiment's gain holds its own mean stiffness): its passes only
-    bring the periods back to the virgin stiffness.
-    """
-    data = drift_data(exps, sx, plain, s.y, substeps)
-    if not data:
-        return None
-    dropped = [(exps[dd.index].source, dd.dropped) for dd in data if dd.dropped]
-    if dropped:
-        notes.append(
-            "degradation test: blocks that do not hold whole periods left out ("
-            + ", ".join(f"{src}: {k}" for src, k in dropped)
-            + "); their harmonics, fitted over part of a cycle, are ill-posed"
-        )
-    deg = (
-        compare(data, s.y, alpha, family)
-        if len(terms) > 1
-        else degradation_test(data, s.y, alpha, family, *terms)
-    )
-    if deg is not None and not drift_seen:
-        deg = with_drift_gate(deg, alpha)
-    if deg is None or not (deg.named if held_out_test else deg.passed):
-        return deg, list(exps), list(sx), plain
-    fit, fexps, fsx = plain, list(exps), list(sx)
+    tests: tuple[float, int, bool],
+) -> tuple[DegradationTest, AugFit, Sequence[Any]]:
+    """The averaged periods brought back to the virgin value and the virgin fit re-estimated, pass after pass
+    (:func:`_degradation_stage`); ``tests`` is ``(alpha, family, drift_seen)`` of the retests."""
+    fit, fsx = plain, list(sx)
+    alpha, family, drift_seen = tests
     term = deg.term
     for k in range(MAX_CORRECTION_PASSES):
         last, last_cost = deg.d, fit.cost
-        fexps, fsx = corrected(exps, sx, fit, deg.d, s.y, substeps, term)
+        _, fsx = corrected(exps, sx, fit, deg.d, s.y, substeps, term)
         fit = best_of([fit_from(fsx, fit.params, substeps)]) or fit
         if term != DEGRADATION:
             # Each experiment's own gain holds its loop's mean stiffness (the loop at g / eta), so the
@@ -317,12 +285,86 @@ def _degradation_stage(
         settled = last_cost - fit.cost <= CORRECTION_CHI2 * max(1.0, fit.cost / max(dof_of(fsx, fit), 1))
         if k + 1 >= CORRECTION_PASSES and settled and abs(deg.d - last) <= CORRECTION_RTOL * abs(last):
             break
+    return deg, fit, data
+
+
+def _aged(
+    exps: Sequence[DiagExperiment],
+    sx: Sequence[AugExperiment],
+    fit: AugFit,
+    data: Sequence[Any],
+    deg: DegradationTest,
+    s: Scale,
+    substeps: int,
+    alpha: float,
+) -> tuple[list[DiagExperiment], AugFit, DegradationTest, Sequence[Any]]:
+    """The experiments with their unrecorded ages when age.py's F-test keeps them at ``alpha`` (Bonferroni
+    over the candidates, as the drift term's own test; the drift data re-formed at each loop's mean
+    strength, now older), else as they are."""
+    got = age.estimate(exps, sx, fit, deg, s.y, substeps, alpha)
+    if got is None:
+        return list(exps), fit, deg, data
+    aged, fit, deg = got
+    if deg.age_periods:
+        data = drift_data(aged, sx, fit, s.y, substeps, strength=strengths(len(aged), data, deg.d))
+    return aged, fit, deg, data
+
+
+def _degradation_stage(
+    exps: Sequence[DiagExperiment],
+    sx: Sequence[AugExperiment],
+    plain: AugFit,
+    s: Scale,
+    substeps: int,
+    alpha: float,
+    family: int,
+    held_out_test: bool,
+    drift_seen: bool,
+    notes: list[str],
+    terms: tuple[str, ...] = (DEGRADATION,),
+) -> Optional[tuple[Optional[DegradationTest], list[DiagExperiment], list[AugExperiment], AugFit]]:
+    """The degradation candidate (design.md 10.6): its test, and the data and start the steady selection
+    then runs on (the test is None when it cannot be formed); None without a block record.
+
+    Tested on the plain model's Jacobian, Bonferroni over all ``family`` candidates of the first step as if
+    it were one of them, and only when the record drifts at all (``drift_seen``: locate's drift test, or
+    else the drift chi-square of the blocks against no drift at ``alpha / 2``, :func:`with_drift_gate`),
+    as a steady term is tried only when the plain model is rejected. When it is named, the averaged periods
+    are brought back to the virgin strength and re-estimated at each loop's own strength, pass after pass
+    until d and the virgin fit settle (the first pass moves the fit from the plain model's average strength
+    to the virgin one; :data:`CORRECTION_PASSES`), then d is refined on both costs. Stiffness degradation
+    keeps the plain fit's estimate (each experiment's gain holds its own mean stiffness): its passes only
+    bring the periods back to the virgin stiffness.
+    """
+    data: Sequence[Any] = drift_data(exps, sx, plain, s.y, substeps)
+    if not data:
+        return None
+    dropped = [(exps[dd.index].source, dd.dropped) for dd in data if dd.dropped]
+    if dropped:
+        notes.append(
+            "degradation test: blocks that do not hold whole periods left out ("
+            + ", ".join(f"{src}: {k}" for src, k in dropped)
+            + "); their harmonics, fitted over part of a cycle, are ill-posed"
+        )
+    deg = (
+        compare(data, s.y, alpha, family)
+        if len(terms) > 1
+        else degradation_test(data, s.y, alpha, family, *terms)
+    )
+    if deg is not None and not drift_seen:
+        deg = with_drift_gate(deg, alpha)
+    if deg is None or not (deg.named if held_out_test else deg.passed):
+        return deg, list(exps), list(sx), plain
+    deg, fit, data = _correction_passes(exps, sx, plain, data, deg, s, substeps, (alpha, family, drift_seen))
+    term = deg.term
     if not (deg.named if held_out_test else deg.passed):
         # The refined test no longer names it: the steady selection on the data as they are.
         return deg, list(exps), list(sx), plain
+    # The unrecorded age of each record (age.py): kept when its F-test passes, else the ages are 0.
+    exps, fit, deg, data = _aged(exps, sx, fit, data, deg, s, substeps, alpha / family)
     if deg.d > 0:
         deg, fit = _refine_degradation(exps, sx, fit, data, deg, s, substeps)
-        fexps, fsx = corrected(exps, sx, fit, deg.d, s.y, substeps, term)
+    fexps, fsx = corrected(exps, sx, fit, deg.d, s.y, substeps, term)
     # The steady selection starts from the plain model converged on the periods it runs on: the refinement's
     # fit is not (it was fitted before the last correction at the refined d), and a start left short of its
     # optimum hands the first candidate the re-convergence as its own improvement (a spring named beside
@@ -512,6 +554,7 @@ def _with_wander(
     drifting = [] if named_deg else _unsettled(exps)
     if drifting:
         d = _without_unsettled(exps, drifting, setup, d, [*notes, *qnotes])
+    d = age.with_clause(d)  # what the fit assumed of the specimen's history, when it fitted its age
     return baseline.adjusted(d, wander, Offset.kind)
 
 
