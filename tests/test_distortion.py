@@ -126,10 +126,11 @@ def test_input_waveform_recovers_harmonics_and_ignores_a_pure_sine() -> None:
     assert input_waveform(pure).size == 0
 
 
-def _recordings(distortion: float, seed: int, low_clean: bool = False) -> list[bw.Recording]:
+def _recordings(distortion: float, seed: int, low_clean: bool = False, only: int = -1) -> list[bw.Recording]:
     """A first-order G and a saturating Bouc-Wen at three frequencies and two amplitudes, driven by an input
     with harmonics 2 and 3 of relative size ``distortion`` (simulated in the time domain, sampled input);
-    ``low_clean``: the low amplitude's inputs are pure sines (an actuator that distorts only at its top)."""
+    ``low_clean``: the low amplitude's inputs are pure sines (an actuator that distorts only at its top);
+    ``only`` (0..5): that recording's input alone is distorted."""
     lin = bw.TransferFunction([1.0], [0.05, 1.0])
     plant = bw.WienerPlant(lin, bw.BoucWen(beta=0.7, gamma=0.3, mu=1.8))
     rng = np.random.default_rng(seed)
@@ -140,7 +141,7 @@ def _recordings(distortion: float, seed: int, low_clean: bool = False) -> list[b
         for amp in (0.8, 2.0):
             t = np.arange((settle + periods) * p) * (2 * np.pi / om / p)
             th = om * t
-            dist = 0.0 if (low_clean and amp < 1.0) else distortion
+            dist = 0.0 if (low_clean and amp < 1.0) or only not in (-1, len(recs)) else distortion
             u = amp * (np.cos(th) + dist * (0.5 * np.cos(2 * th + 0.3) + np.cos(3 * th - 1.0)))
             _, w = bw.simulate_input(plant, t, u, substeps=8)
             y = w + rng.normal(0.0, 0.01, t.size)
@@ -246,3 +247,45 @@ def test_a_failed_waveform_law_names_g_at_the_harmonics_as_a_reading() -> None:
     text = _law_text(steps(Distortion.kind))
     assert "G at the input's harmonics" in text and "p = 1e-20" in text
     assert "G at the input's harmonics" not in _law_text(steps(Viscous.kind))
+
+
+def test_a_small_column_does_not_hide_a_law_failure() -> None:
+    """The law test's contrasts (select.contrast_statistic) on a known covariance: four experiments, the
+    term's value 1.0, 1.5 and 0.6 (se 0.05) in three, the fourth's column 1e-6..1e-9 of the largest (a
+    nearly clean input: its value undetermined). Each against the last scaled every row by the small
+    column's 1/scale: the informative contrasts fell below the pseudo-inverse's cut while matrix_rank
+    counted them (statistic ~0 on 3 dof, p = 1: the failure hidden). Normalised rows against the largest
+    column keep them; a zero column is left out (2 dof), and one experiment alone is no test."""
+    from bouc_wen_id.diagnosis.select import LAW_ALPHA, contrast_statistic
+    from scipy.special import chdtrc  # type: ignore[import-untyped]
+
+    values, se = np.array([1.0, 1.5, 0.6, 0.0]), 0.05
+    cols = [np.arange(4)]
+    for rel in (1e-6, 1e-7, 1e-9):
+        scale = np.array([1.0, 1.0, 1.0, rel])
+        got = contrast_statistic(values * scale / se, np.eye(4), scale, cols)
+        assert got is not None, rel
+        stat, df = got
+        assert df == 3 and float(chdtrc(df, stat)) < LAW_ALPHA, (rel, stat, df)
+    zero = np.array([1.0, 1.0, 1.0, 1e-300])
+    got = contrast_statistic(values * zero / se, np.eye(4), zero, cols)
+    assert got is not None and got[1] == 2 and float(chdtrc(2, got[0])) < LAW_ALPHA
+    alone = np.array([1.0, 1e-300, 1e-300, 1e-300])
+    assert contrast_statistic(values * alone / se, np.eye(4), alone, cols) is None
+    same = np.array([1.0, 1.0, 1.0, 1e-7])  # one value for all: no failure
+    got = contrast_statistic(np.full(4, 0.8) * same / se, np.eye(4), same, cols)
+    assert got is not None and float(chdtrc(got[1], got[0])) > 0.5
+
+
+def test_a_waveform_carried_by_one_experiment_says_its_law_untested() -> None:
+    """The input waveform distorted in one experiment of six (the others pure sines): its column is zero in
+    five, the law test has nothing to compare (NaN), and before the verdict named the term as if its law,
+    one value for all, had passed. Now it says the law is untested; distorted in every experiment, it does
+    not."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        one = bw.diagnose(_recordings(0.2, 1, only=5), candidates=["offset", "distortion"])
+        every = bw.diagnose(_recordings(0.2, 1), candidates=["offset", "distortion"])
+    assert one.named_terms == ("distortion",), one.summary()
+    assert "law untested (carried by only 1 of the 6 experiments" in one.verdict, one.verdict
+    assert every.named_terms == ("distortion",) and "law untested" not in every.verdict, every.verdict

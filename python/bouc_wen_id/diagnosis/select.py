@@ -310,6 +310,12 @@ def _correlation(fit: AugFit, a: str, b: str) -> float:
     return float(np.clip(-info[0, 1] / denom, -1.0, 1.0))
 
 
+#: Relative threshold of the law test: a column of the term below it (of its largest) is taken as zero (the
+#: term does not act there), and the contrasts' covariance is inverted, and its degrees of freedom counted,
+#: over the eigenvalues above it (of the largest).
+LAW_RCOND = 1e-10
+
+
 def law_test(exps: Sequence[AugExperiment], fit: AugFit, term: str, substeps: int) -> float:
     """p-value of the term's law: one value shared by every experiment (the library's claim for a term).
 
@@ -374,28 +380,47 @@ def law_test(exps: Sequence[AugExperiment], fit: AugFit, term: str, substeps: in
         meat += spectral_meat(xa[sl], r[sl] - xa[sl] @ beta, r.size / (r.size - rank))
         start += n_i
     cov = bread @ meat @ bread
-    # Contrasts of the per-experiment values (each against the last), in the scaled coordinates, among the
-    # experiments whose column is not zero: an experiment the term does not act on (the input-waveform term
-    # on a clean sine) has no value of its own to compare (its 1/scale would overflow the covariance).
-    rows = []
-    for q in range(nk):
-        cols = nsh + 2 * m + q * m + np.arange(m)
-        seen = cols[scale[cols] > 1e-12 * scale[cols].max()]
-        for c in seen[:-1]:
-            row = np.zeros(xa.shape[1])
-            row[c], row[seen[-1]] = 1.0 / scale[c], -1.0 / scale[seen[-1]]
-            rows.append(row)
-    if not rows:
+    got = contrast_statistic(beta, cov, scale, [nsh + 2 * m + q * m + np.arange(m) for q in range(nk)])
+    if got is None:
         return math.nan
+    stat, df = got
+    return float(chdtrc(df, max(stat, 0.0)))
+
+
+def contrast_statistic(
+    beta: np.ndarray, cov: np.ndarray, scale: np.ndarray, groups: Sequence[np.ndarray]
+) -> Optional[tuple[float, int]]:
+    """The law test's Wald statistic and its degrees of freedom: ``beta`` and ``cov`` in scaled coordinates
+    (column ``c``'s value is ``beta[c] / scale[c]``), each group the columns of one claimed value freed per
+    experiment; None when no group has two experiments the term acts on, or nothing is left to test.
+
+    Contrasts of the per-experiment values, each against the experiment of the largest column, among those
+    whose column is not zero (below :data:`LAW_RCOND` of the largest): an experiment the term does not act
+    on (the input-waveform term on a clean sine) has no value of its own to compare. Each row is normalised,
+    so a small column (1e-6..1e-9 of the largest: a nearly clean input) does not scale every row by its
+    1/scale and push the informative contrasts below the pseudo-inverse's cut (review of session 30: with
+    each against the last, the statistic collapsed to ~0, p = 1, a real law failure hidden); the inverse
+    and the degrees of freedom are taken over the same eigenvalues (above :data:`LAW_RCOND` of the
+    largest)."""
+    rows = []
+    for cols in groups:
+        seen = cols[scale[cols] > LAW_RCOND * scale[cols].max()]
+        if seen.size < 2:
+            continue
+        ref = seen[int(np.argmax(scale[seen]))]
+        for c in seen[seen != ref]:
+            row = np.zeros(beta.size)
+            row[c], row[ref] = 1.0 / scale[c], -1.0 / scale[ref]
+            rows.append(row / np.linalg.norm(row))
+    if not rows:
+        return None
     contrast = np.array(rows)
     d = contrast @ beta
-    v = contrast @ cov @ contrast.T
-    vinv = np.linalg.pinv(v, rcond=1e-12, hermitian=True)
-    df = int(np.linalg.matrix_rank(v, hermitian=True))
-    stat = float(d @ vinv @ d)
-    if df < 1 or not math.isfinite(stat):
-        return math.nan
-    return float(chdtrc(df, max(stat, 0.0)))
+    w, vec = np.linalg.eigh(contrast @ cov @ contrast.T)
+    keep = w > LAW_RCOND * float(w.max())
+    stat = float(np.sum((vec[:, keep].T @ d) ** 2 / w[keep]))
+    df = int(np.count_nonzero(keep))
+    return (stat, df) if df > 0 and math.isfinite(stat) else None
 
 
 def element_law_test(exps: Sequence[AugExperiment], fit: AugFit, term: str, substeps: int) -> float:
