@@ -43,3 +43,21 @@ def test_nothing_is_predicted_without_a_named_drift_term() -> None:
     d = SimpleNamespace(degradation=None, named=(), final_fit=None, experiments=())
     assert loop_centre.predicted_slopes(_recs(0.0), cast(Any, d)) is None
     assert loop_centre.check(_recs(0.0), cast(Any, d), 0.05 / 20) is None
+
+
+def test_a_fixed_zero_is_qualified_when_the_predicting_model_fits_in_part(monkeypatch: Any) -> None:
+    """Review of session 30: "the output's zero is taken as fixed" was said even when the model that
+    predicted the loop's centre failed its adequacy test (a diagnosis "partly explained"); then it is said
+    with that qualification, and without it when the model fits ("explained")."""
+    recs = _recs(0.0)
+    monkeypatch.setattr(loop_centre, "predicted_slopes", lambda items, d: ([0.0] * len(items), 0.01))
+    texts = {}
+    for status in ("partly explained", "explained"):
+        got = loop_centre.check(recs, cast(Any, SimpleNamespace(status=status)), 0.05 / 20)
+        assert got is not None and got.remaining is None
+        texts[status] = got.text()
+    assert (
+        "taken as fixed" in texts["partly explained"]
+        and "fits the records only in part" in texts["partly explained"]
+    ), texts
+    assert "taken as fixed" in texts["explained"] and "only in part" not in texts["explained"], texts

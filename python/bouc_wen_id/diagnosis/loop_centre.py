@@ -41,14 +41,19 @@ class CentreCheck:
     slopes: tuple[float, ...]
     change: float  # the predicted centre's largest change over a record (units of y)
     remaining: Optional[zero_drift.Drift]
+    #: the model that predicted the centre passed its adequacy test (the diagnosis "explained"); else it
+    #: fits only in part, and the zero is said fixed with that qualification (review of session 30)
+    fits: bool = True
 
     def text(self) -> str:
         """The clause for the verdict."""
         if self.remaining is None:
+            but = "" if self.fits else ", though the model that predicted it fits the records only in part"
             return (
                 "; the period means trend in a straight line as the degrading loop's own centre does (the "
                 f"fitted model simulated: up to {self.change:.3g} over a record; what is left does not "
-                "drift): the output's zero is taken as fixed"
+                "drift): the output's zero is taken as fixed: the degrading loop's predicted centre accounts "
+                f"for the period means' trend{but}"
             )
         r = self.remaining
         return (
@@ -165,7 +170,8 @@ def check(items: Sequence[Any], d: Diagnosis, level: float) -> Optional[CentreCh
     if got is None:
         return None
     slopes, change = got
-    return CentreCheck(tuple(slopes), change, zero_drift.detect(less_trend(items, slopes), level))
+    remaining = zero_drift.detect(less_trend(items, slopes), level)
+    return CentreCheck(tuple(slopes), change, remaining, d.status == "explained")
 
 
 def resolved(
