@@ -298,26 +298,39 @@ def test_one_strong_transient_does_not_sink_a_drift() -> None:
         assert d is not None and "m0" in d.decaying, seed
 
 
-def test_two_slowing_measurements_do_not_sink_a_drift() -> None:
-    """Session 30: two of the eight with a 3 sd transient beside the drift in all. Kept in the pool at the
-    cap (z 2.50 each), their 5.0 over a sum whose null sd over the other six is 2.45 sank the drift on seeds
-    0, 1 and 4 (measured on main: pooled p below 0.01); a minority of slowing measurements is left out of
-    the pool (the drift must stand without them anyway) and the drift is found, both slowing ones named."""
-    for seed in (0, 1, 4):
-        d = zero_drift.detect(_lab97(seed, slowing=3.0, first=2), 0.05 / 20)
-        assert d is not None, seed
-        assert {"m0", "m1"} <= set(d.decaying), (seed, d.decaying)
+def _settling(seed: int, size: float, tau: float) -> list[Any]:
+    """Eight recordings with NO zero drift, each settling (review of session 30): two fast (3 noise sd,
+    decaying over a quarter of the record), six slowly (``size`` sd over ``tau`` records); a saturating loop
+    at eight frequencies, white noise (sd 0.01)."""
+    rng = np.random.default_rng([seed, 77])
+    p, n, out = 64, 28 * 64, []
+    for i in range(8):
+        om = TWO_PI * (0.5 + 0.25 * i)
+        t = np.arange(n) * (TWO_PI / om / p)
+        e = rng.normal(0.0, SD, n)
+        big, decay = (3.0, n / 4.0) if i < 2 else (size, n * tau)
+        e -= big * SD * np.exp(-np.arange(n) / decay)
+        y = np.tanh(2.0 * np.cos(om * t - 0.4)) + e
+        out.append(bw.Recording(t, np.cos(om * t), y, 1.0, om, settle_periods=4))
+    return out
 
 
-def test_the_pooled_decay_test_leaves_out_only_a_minority() -> None:
-    """The pool (zero_drift._pooled) without its slowing minority: two of eight at p = 1e-9 and six at 0.3
-    (z 0.52 each) are no decay (p 0.10 over the six); pooled over all eight, capped, they were (p 0.002).
-    Four of eight slowing (not a minority) are pooled, capped, as before: a decay."""
-    ps, slow = [1e-9, 1e-9, *[0.3] * 6], [True, True, *[False] * 6]
-    assert zero_drift._pooled(ps, slow) > 0.05
-    assert zero_drift._pooled(ps) < zero_drift.DECAY_LEVEL  # unmarked: the capped pool over all eight
-    half = [1e-9] * 4 + [0.5] * 4
-    assert zero_drift._pooled(half, [True] * 4 + [False] * 4) < zero_drift.DECAY_LEVEL
+def test_a_settling_set_is_no_drift() -> None:
+    """The review of session 30: leaving the slowing minority (the two fast transients) out of the pooled
+    decay test called such a set a drift (the six slow ones alone show too little decay): on seeds 1, 2 and
+    4 of these five, and in 103 and 61 of 150 draws where the capped pool over all called 6 and 1
+    (docs/degradation-beside-drift.md; seed 5 is one of the capped pool's few). All are pooled, capped."""
+    for seed in range(5):
+        for size, tau in ((5.0, 2.0), (4.0, 1.5)):
+            assert zero_drift.detect(_settling(seed, size, tau), 0.05 / 20) is None, (seed, size, tau)
+
+
+def test_the_pooled_decay_test_caps_each_recording() -> None:
+    """The pool (zero_drift._pooled) over all that trend, each z capped at the slowing bound: two of eight
+    at p = 1e-9 and six at 0.3 are a decay (p 0.002); without the cap the two alone would be (z 6 each)
+    whatever the six showed, with it six at 0.7 (z -0.52 each) are not."""
+    assert zero_drift._pooled([1e-9, 1e-9, *[0.3] * 6]) < zero_drift.DECAY_LEVEL
+    assert zero_drift._pooled([1e-9, 1e-9, *[0.7] * 6]) >= zero_drift.DECAY_LEVEL
 
 
 def test_a_short_recording_is_named_untested() -> None:

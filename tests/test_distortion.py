@@ -135,7 +135,7 @@ def _recordings(distortion: float, seed: int, low_clean: bool = False, only: int
     plant = bw.WienerPlant(lin, bw.BoucWen(beta=0.7, gamma=0.3, mu=1.8))
     rng = np.random.default_rng(seed)
     p, settle, periods = 64, 6, 12
-    recs = []
+    recs: list[bw.Recording] = []
     for f in (0.5, 1.0, 2.0):
         om = 2 * np.pi * f
         for amp in (0.8, 2.0):
