@@ -510,7 +510,7 @@ def away_from_null(fit: AugFit, term: str, level: float, s2: float = 1.0) -> boo
     the pair's improvement passing the F test while neither value stood out from zero). ``level`` is the
     step's family level, not split over the candidates: the F test carries the split. True when the
     covariance cannot be read (:func:`null_z` NaN): the F test stands alone there, as before."""
-    from scipy.special import ndtri  # type: ignore[import-untyped]
+    from scipy.special import ndtri
 
     z = null_z(fit, term, s2)
     if not math.isfinite(z):
