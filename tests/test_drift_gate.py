@@ -88,3 +88,17 @@ def test_experiments_degradation_explains_are_not_left_out_when_the_verdict_is_u
     assert d.degradation is not None and d.degradation.named
     assert "left out (not settled)" not in d.verdict, d.verdict
     assert not any("left out of the diagnosis" in n for n in d.notes)
+
+
+def test_a_drift_degradation_explains_counts_for_its_own_space_in_the_partial_verdict() -> None:
+    """The share that decides "explained in part" is at least the drift space's share when degradation's own
+    test names it (the blind lab case: 27 % of the pooled excess, all of the drift space's): a steady misfit
+    elsewhere no longer turns a degradation its test names into "unexplained"."""
+    from bouc_wen_id.diagnosis import run
+
+    deg = _test(5706.0, 1953, 1e-30)
+    deg = DegradationTest(**{**deg.__dict__, "cost1": 1600.0})
+    assert run._naming_share(0.27, deg, True) == pytest.approx(1.0)
+    assert run._naming_share(0.27, deg, False) == pytest.approx(0.27)
+    assert run._naming_share(0.27, None, True) == pytest.approx(0.27)
+    assert run.classify(False, True, False, run._naming_share(0.27, deg, True)) == "partly explained"
