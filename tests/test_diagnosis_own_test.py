@@ -148,3 +148,20 @@ def test_null_z_reads_no_distance_without_a_covariance() -> None:
     f.covariance = np.full_like(f.covariance, math.nan)
     assert math.isnan(select.null_z(f, STIFF))
     assert select.away_from_null(f, STIFF, 0.05)
+
+
+def test_the_targeted_step_still_names_the_same_physics_at_its_other_place(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The exception: the refused best is Dahl on x (law p 0.0031, the bench's seed 48001), the runner-up
+    the same element on u, which fits nearly as well and whose law holds: it is named, with x as its
+    alternative (where G is nearly flat the places are one; the law refuses the true place in 1 %)."""
+    dahl_u, sigma_u = T.Dahl.kind, T.DahlSigma.kind
+    fits = {
+        DAHL: lambda base: _fit((*base, DAHL, SIGMA), 359.5),
+        dahl_u: lambda base: _fit((*base, dahl_u, sigma_u), 360.8),
+        COULOMB: lambda base: _fit((*base, COULOMB), 380.0),
+    }
+    _, steps = _select(monkeypatch, fits, {DAHL: 0.0031}, targeted=True, plain_cost=400.0)
+    assert steps[0].chosen == dahl_u
+    assert DAHL in {a.rival for a in steps[0].alternatives}
