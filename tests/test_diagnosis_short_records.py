@@ -105,3 +105,22 @@ def test_nothing_is_named_from_the_one_experiment_left_when_the_rest_are_unsettl
     assert d.status == "unexplained"
     assert "would rest on exp0 alone" in d.verdict
     assert T.Offset.kind in {t.term for t in d.partial}
+
+
+def test_the_short_trend_floor_follows_the_noise_level_near_the_dc() -> None:
+    """A period mean's variance is the noise's spectrum near zero over P: for AR(1) noise (phi = 0.8) the
+    residual's harmonics 1-3 sit several times above the white level, and the floor follows them; for
+    white noise it stays at 1."""
+    from scipy.signal import lfilter  # type: ignore[import-untyped]
+
+    rng = np.random.default_rng(4)
+    n, p, phi = 6, 128, 0.8
+    white = rng.normal(0.0, 1.0, n * p).reshape(n, p)
+    ar = np.asarray(lfilter([1.0], [1.0, -phi], rng.normal(0.0, np.sqrt(1 - phi**2), n * p))).reshape(n, p)
+
+    def level(rows: np.ndarray) -> float:
+        dc = rows.mean(axis=1)
+        return float(np.mean(np.diff(rows - dc[:, None], axis=0) ** 2)) / 2.0 * p / (p - 1)
+
+    assert zero_drift._low_colour(white, level(white)) < 1.6
+    assert 3.0 < zero_drift._low_colour(ar, level(ar)) < (1 + phi) / (1 - phi) * 1.5
