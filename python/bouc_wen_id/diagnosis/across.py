@@ -66,6 +66,7 @@ from .select import (
     FoldCache,
     _admissible,
     at_null,
+    away_from_null,
     dof_of,
     held_out,
     memo_fit_with,
@@ -478,7 +479,12 @@ def _trial(groups: Sequence[_Group], term: str, n_cands: int, alpha: float, leve
     present = tuple(pk < alpha / k for pk in p_each)
     # As the single-group selection: a physical value, and not the null value (the model without it: what
     # it "removed" is a refit from another start, select.at_null), wherever it is present.
-    physical = all(_admissible(f, term) and not at_null(f, term) for f, pr in zip(done, present) if pr)
+    # And its value away from the null there (select.away_from_null: the Wald test beside the F test).
+    physical = all(
+        _admissible(f, term) and not at_null(f, term) and away_from_null(f, term, level, f.cost / max(d, 1))
+        for f, d, pr in zip(done, d1, present)
+        if pr
+    )
     ok = padj < level and share >= MATERIAL_SHARE and physical and any(present)
     imps, ps = tuple(imp), tuple(p_each)
     return JointTrial(term, stat, p, padj, share, imps, ps, ok, fits=tuple(fits), present=present)
