@@ -114,5 +114,6 @@ def main() -> None:
             f"chi2/dof median {q[1]:.3f} (5-95 %: {q[0]:.3f}-{q[2]:.3f})"
         )
 
+
 if __name__ == "__main__":
     main()
