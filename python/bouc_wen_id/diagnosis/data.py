@@ -485,6 +485,7 @@ def _from_averaged(
     dc = np.array([float(np.mean(ybar))])
     h1 = np.array([complex(2.0 * np.fft.rfft(ybar)[1] / ybar.size)])
     var, dof, band = float(ap.noise_var), int(ap.noise_dof), (0, 0)
+    hvar = np.zeros(0)
     if t is not None and y is not None:
         omega = float(ap.frequency)
         seg_t = t[ap.start : ap.stop] - float(ap.time_origin)
@@ -509,6 +510,11 @@ def _from_averaged(
         coloured = lab_colour.levels(k, th, seg_y, kept, var, dof, ybar, rules)
         if coloured is not None:
             var, dof, band = coloured
+        # Each harmonic's own level for the drift test's blocks, coloured or not: a colour too weak for the
+        # check above (AR(1), phi = 0.3: 1.6-1.9 times the per-sample level at every block harmonic) put
+        # that experiment's block chi-square at 1.8 of its dof, and the gate called 45 % of nulls drifting.
+        hrules = (_harmonics_of(ybar.size), COLOUR_BAND, HARMONIC_FLOOR, cross_period_inflation)
+        hvar = lab_colour.harmonic_levels(k, th, seg_y, kept, float(ap.noise_var), ybar, hrules)
         if kept:  # periods from the record's first sample to the first whole period used
             lead = float((float(ap.time_origin) - float(t[0])) * omega / TWO_PI) + float(kept[0])
         if u is not None:
@@ -533,6 +539,7 @@ def _from_averaged(
         waveform=waveform,
         colour=var / float(ap.noise_var) if band != (0, 0) or var > float(ap.noise_var) else 1.0,
         colour_band=band,
+        harmonic_var=hvar,
     )
 
 

@@ -90,6 +90,62 @@ def levels(
     return best[0], int(best[1]), best[2]
 
 
+def harmonic_levels(
+    k: NDArray[np.int64],
+    th: NDArray[np.float64],
+    y: NDArray[np.float64],
+    kept: Sequence[int],
+    white_var: float,
+    ybar: NDArray[np.float64],
+    rules: tuple[int, int, float, Callable[[NDArray[np.float64]], float]],
+) -> NDArray[np.float64]:
+    """Each harmonic 0..K's noise level on a lab stretch (per-sample units, as ``white_var``), for the drift
+    test's block weights (``DiagExperiment.harmonic_var``); empty with fewer than 4 whole periods.
+
+    :func:`levels` gives one number, the largest band's, which became the noise floor of every harmonic:
+    under AR(1) noise the blocks' harmonics 2..15 were weighed by the fundamental's (or the DC's) level, 2-40
+    times their own, and the block chi-square of a degrading record sat below its dof (blind
+    ``degradation:10:0``: 982 on 1302). As :func:`data.harmonic_levels` on recordings: each whole period's
+    harmonics 0..K by least squares on the input's phase (the averaged period taken out), their spread about
+    a quadratic trend (a drift does not count) pooled over the ``COLOUR_BAND`` harmonics around each, the
+    DC alone and inflated for the period DCs' correlation, never below ``floor`` times ``white_var``.
+    Harmonics above those a period's samples resolve get the highest one's level. ``rules`` is
+    ``(K, COLOUR_BAND, HARMONIC_FLOOR, cross_period_inflation)``.
+    """
+    kmax, colour_band, floor, cross_period_inflation = rules
+    counts = {j: int(np.count_nonzero(k == j)) for j in kept}
+    full = max(counts.values(), default=0)
+    kept = [j for j in kept if counts[j] >= full - 1]
+    harm = min(kmax, min((counts[j] for j in kept), default=0) // 4 - 1)
+    if len(kept) < 4 or harm < 1 or not (white_var > 0 and math.isfinite(white_var)):
+        return np.zeros(0)
+    c = np.fft.rfft(ybar) / ybar.size
+    c[1:] *= 2.0
+    if ybar.size % 2 == 0:
+        c[-1] /= 2.0
+    coef = np.empty((len(kept), 2 * harm + 1))
+    sizes = np.empty(len(kept))
+    for row, j in enumerate(kept):
+        sel = k == j
+        ph = th[sel]
+        model = (np.exp(1j * np.outer(ph, np.arange(c.size))) @ c).real
+        coef[row] = np.linalg.lstsq(harmonic_basis(ph, harm), y[sel] - model, rcond=None)[0]
+        sizes[row] = ph.size
+    n = len(kept)
+    trend = _trend(n)
+    res = (coef - trend @ np.linalg.lstsq(trend, coef, rcond=None)[0]) * np.sqrt(sizes)[:, None]
+    ss = 0.5 * (res[:, 1::2] ** 2 + res[:, 2::2] ** 2).sum(axis=0)  # each part: variance 2 s2 (scaled)
+    out = np.empty(kmax + 1)
+    out[0] = float(np.sum(res[:, 0] ** 2)) / (n - 3) * cross_period_inflation(res[:, 0] / np.sqrt(sizes))
+    half = colour_band // 2
+    for j in range(1, harm + 1):
+        a, b = max(1, j - half), min(harm, j + half)
+        out[j] = float(np.sum(ss[a - 1 : b])) / (2.0 * (n - 3) * (b - a + 1))
+    out[harm + 1 :] = out[harm]
+    lev: NDArray[np.float64] = np.maximum(out, floor * white_var)
+    return lev
+
+
 def _trend(n: int) -> NDArray[np.float64]:
     idx = np.arange(n, dtype=np.float64)
     return np.vander(idx - idx.mean(), 3)
@@ -124,4 +180,4 @@ def _bands(
     return out
 
 
-__all__ = ["levels", "MAX_HARMONIC"]
+__all__ = ["levels", "harmonic_levels", "MAX_HARMONIC"]
