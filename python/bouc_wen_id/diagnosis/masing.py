@@ -14,13 +14,30 @@ stiffness on x" with a final model that passes; at 100x three still named it wit
 (p 0.06-1), two "explained in part", one "unexplained"; at 300x all six "unexplained". A PI loop written
 here in NumPy through a first-order or a resonant G with a delay (tests/test_diagnosis_masing.py) is
 named the same way at 20x (final p 0.91, 0.89). So at such sizes no shape test of the residual can
-separate them, and the verdict says so instead (:func:`masing_text`) - only when every experiment
-saturates, as :func:`caveats.play_text` does for play and an output backlash: with an experiment
-below saturation, a
-Masing branch from a lower reversal is its initial curve scaled by 2 while Bouc-Wen's is not, so the
-separating experiment has been run and the law and adequacy tests speak for themselves. Their power
-there is limited: the NumPy PI loop with an experiment at 0.3 of saturation added was still named a
-spring on x at 30x (final p 0.09, no clause), and refused by the spring's law only at 100x.
+separate them, and the verdict says so instead (:func:`masing_text`) whenever every experiment saturates.
+
+The test (:func:`separation`), when the design holds an experiment below saturation. Such an experiment
+can separate them (a Masing branch from a lower reversal is its initial curve scaled by 2, Bouc-Wen's is
+not), but one is not enough by being there: the NumPy PI loop with an experiment at 0.3 of saturation was
+still named a spring on x at 30x, and refused by the spring's law only at 100x; benches/blind.py's
+``unequal`` design (one experiment at 0.6 of the yield displacement) named its PI loops a spring on x in 2
+of 2 cases. So the caveat is kept unless the design has the power to see such a loop and the data do not
+show it. The reference loops: the fitted spring ``k x`` made a Prandtl-Ishlinskii operator of the same
+elastic stiffness whose stops carry :data:`SHARE` of it, ``k (x - SHARE mean_j stop_rj(x))``, half-widths
+uniform over (0, reach], for each reach in :data:`REACHES` (of the saturation level in x), x the spring's
+own trace. Each reference loop's trace is projected off the final model's Jacobian (Bouc-Wen parameters,
+its terms, each experiment's |G| and phi, the free DCs), as limits.py does for a detection limit: what is
+left is what no move of the fitted structure absorbs (linear in the trace: measured, the refitted cost is
+4.0 times as large at SHARE 1 as at 0.5 on every case tried). Its squared size over the final fit's
+residual variance per dof is the noncentrality ``lam`` of the one-sided test of that direction on the
+final residual, ``z = <t, r> / sqrt(<t, t> s2)`` (stops have positive weights), at level alpha Bonferroni
+over the reaches. The design separates them when the weakest reference loop's ``lam`` reaches
+``(z_c + z_90)^2`` (90 % power); then the caveat is left out if no reach's z exceeds ``z_c``, and said with
+"the data point to one" if one does. When the design is too weak, the clause names the separating
+experiment: one added at :data:`PROBE_LEVELS` of saturation at the tested middle frequency (its ``lam``
+computed with the added experiment's own |G| and phi in the Jacobian), with the periods that bring the
+weakest loop's ``lam`` to the threshold (its part grows with its weight). Across conditions
+(across_verdict.py) the old rule stays: the clause only when every experiment saturates.
 """
 
 from __future__ import annotations
