@@ -1,5 +1,6 @@
 """The Masing caveat (diagnosis/masing.py): a spring on x named from saturating loops may be the elastic
-part of a Prandtl-Ishlinskii loop on x, and the verdict says so - only when every experiment saturates.
+part of a Prandtl-Ishlinskii loop on x, and the verdict says so when every experiment saturates, or when
+the experiments below saturation are too weak to separate them (masing.separation), or the data point to one.
 
 The records here are made without the library's simulator: a first-order G with a delay in closed form
 (steady state), Bouc-Wen integrated by RK4 along the analytic x(t), and a Prandtl-Ishlinskii operator
