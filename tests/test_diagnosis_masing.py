@@ -1,5 +1,6 @@
 """The Masing caveat (diagnosis/masing.py): a spring on x named from saturating loops may be the elastic
-part of a Prandtl-Ishlinskii loop on x, and the verdict says so - only when every experiment saturates.
+part of a Prandtl-Ishlinskii loop on x, and the verdict says so when every experiment saturates, or when
+the experiments below saturation are too weak to separate them (masing.separation), or the data point to one.
 
 The records here are made without the library's simulator: a first-order G with a delay in closed form
 (steady state), Bouc-Wen integrated by RK4 along the analytic x(t), and a Prandtl-Ishlinskii operator
@@ -126,12 +127,50 @@ def test_a_numpy_prandtl_ishlinskii_loop_named_as_a_spring_on_x_carries_the_cave
     assert MASING_MARK in d.verdict
 
 
-def test_a_spring_on_x_with_an_experiment_below_saturation_gets_no_caveat() -> None:
-    """The library's own spring on x, with one amplitude below saturation (the separating experiment
-    run): named, and no Masing clause."""
-    d = bw.diagnose(_records(4, (0.6, 3.0), "spring", 20.0))
+def test_a_spring_on_x_on_a_design_that_separates_it_gets_no_caveat() -> None:
+    """The library's own spring on x on a design strong enough to tell it from a Prandtl-Ishlinskii loop
+    (latent levels 0.3 and 0.6 below saturation, 1.4 and 3.0 past it, 100 periods each, 30x): named, the
+    reference loop's test has its power and is quiet, and no Masing clause."""
+    d = bw.diagnose(_records(8, (0.3, 0.6, 1.4, 3.0), "spring", 30.0, periods=100))
     assert StiffnessX.kind in {t.term for t in d.named}
     assert MASING_MARK not in d.verdict
+
+
+@pytest.mark.parametrize("shape", ["first", "resonant"])
+def test_a_pi_loop_with_one_weak_below_saturation_experiment_keeps_the_caveat(shape: str) -> None:
+    """A PI loop on x (stops reaching 1.4 of saturation, half the stiffness elastic) at 20x, with one
+    below-saturation level (0.5) beside two saturating ones, 10 periods each: the below-saturation
+    experiments are there but too weak to separate a spring from the loop; the spring on x it is named
+    keeps the caveat, with the separating experiment (main dropped the caveat: "some experiment is below
+    saturation")."""
+    d = bw.diagnose(_records(3, (0.5, 1.4, 3.0), "pi", 20.0, reach=1.4, shape=shape))
+    assert StiffnessX.kind in {t.term for t in d.named}
+    assert MASING_MARK in d.verdict
+    assert "too weak to separate" in d.verdict and "the separating experiment" in d.verdict
+
+
+def test_a_pi_loop_on_a_strong_design_is_not_named_a_spring_silently() -> None:
+    """The same PI loop at 60x with 60 periods per experiment: the design has the power; either the
+    spring on x is not named, or the verdict says the data point to a loop of another family (main: named
+    "explained by: parallel stiffness on x" with no clause)."""
+    d = bw.diagnose(_records(3, (0.5, 1.4, 3.0), "pi", 60.0, periods=60, reach=1.4))
+    if StiffnessX.kind in {t.term for t in d.named}:
+        assert MASING_MARK in d.verdict and "the data point to one" in d.verdict
+
+
+def test_the_clause_follows_the_designs_power_and_the_test() -> None:
+    """masing_text with a measured separation: a design with the power and a quiet test, no clause; too
+    weak, the clause with its separating experiment; the test rejecting, the clause saying so."""
+    from bouc_wen_id.diagnosis.masing import Separation
+
+    spring = _named(StiffnessX.kind)
+    assert masing_text(spring, False, Separation(20.0, 12.0, 1.0, 2.2, 0.5)) == ""
+    weak = masing_text(spring, False, Separation(3.0, 12.0, 1.0, 2.2, 0.5, "; the separating experiment: X"))
+    assert MASING_MARK in weak and "the separating experiment: X" in weak
+    assert "the data point to one" in masing_text(spring, False, Separation(20.0, 12.0, 5.0, 2.2, 0.5))
+    assert masing_text(_named(Stiffness.kind), False, Separation(3.0, 12.0, 1.0, 2.2, 0.5)) == ""
+    # saturating loops: the clause whatever the measure (no design of such loops separates them)
+    assert MASING_MARK in masing_text(spring, True, Separation(20.0, 12.0, 1.0, 2.2, 0.5))
 
 
 @pytest.mark.parametrize("seed", [5])

@@ -15,8 +15,8 @@ from collections.abc import Sequence
 from typing import Any, Optional
 
 from ..augmented import AugExperiment, AugFit
-from ..terms import TERMS, Play
-from .masing import masing_text
+from ..terms import TERMS, Play, StiffnessX
+from .masing import Separation, masing_text, separation
 from .result import NamedTerm
 from .select import LAW_ALPHA, Alternative
 
@@ -107,16 +107,33 @@ def unphysical_places_text(steps: Sequence[Any], named: Sequence[NamedTerm]) -> 
 FAMILY_MARK = "a Dahl-like friction loop"
 
 
-def family_text(named: Sequence[NamedTerm], levels: Optional[Sequence[float]] = None) -> str:
+def caveats_of(
+    named: Sequence[NamedTerm], sx: Sequence[AugExperiment], fit: AugFit, exps: Sequence[Any], alpha: float,
+    substeps: int,
+) -> str:  # fmt: skip
+    """:func:`family_text` for one group: its latent levels, and when a spring on x is named from a design
+    with an experiment below saturation, whether that design separates it from a Prandtl-Ishlinskii loop
+    (:func:`.masing.separation`; ``exps``' periods name the separating experiment)."""
+    levels = latent_levels(sx, fit)
+    sep = None
+    if any(t.term == StiffnessX.kind for t in named) and levels and min(levels) < 1.0:
+        sep = separation(sx, fit, [float(getattr(e, "periods", math.nan)) for e in exps], alpha, substeps)
+    return family_text(named, levels, sep)
+
+
+def family_text(
+    named: Sequence[NamedTerm], levels: Optional[Sequence[float]] = None, sep: Optional[Separation] = None
+) -> str:
     """The verdict's word when Dahl friction is named: what it stands for and what the data could not
     exclude (issue 18: a name users can trust blind), and play's equivalence (:func:`play_text`, when
     every experiment reverses from saturation: each of ``levels``, :func:`latent_levels`, at least 1;
     None: not known, said), and a spring on x's Masing caveat (:func:`masing.masing_text`, under the same
-    condition; None: not said). Empty when none of them is named."""
+    condition; None: not said; or, with an experiment below saturation, when ``sep`` finds the design too
+    weak to separate them). Empty when none of them is named."""
     saturated = levels is None or (len(levels) > 0 and min(levels) >= 1.0)
     dahl = [t for t in named if t.term in TERMS and TERMS[t.term].companion]
     # A spring on x from saturating loops may be a Prandtl-Ishlinskii loop's elastic part (masing.py).
-    before = play_text(named, saturated) + masing_text(named, saturated and levels is not None)
+    before = play_text(named, saturated) + masing_text(named, saturated and levels is not None, sep)
     if not dahl:
         return before
     where = " or ".join(TERMS[t.term].place_label() for t in dahl)

@@ -17,7 +17,7 @@ from ..terms import DIAGNOSIS_CANDIDATES, TERMS, Distortion, Offset, physical_va
 from ..validation import real_number
 from . import age, baseline, beside, free_dc, gate, law_untested, loop_centre, resolution, zero_drift
 from .candidates import step_candidates
-from .caveats import alternatives_text, below_saturation, family_text, latent_levels, unphysical_places_text
+from .caveats import alternatives_text, below_saturation, caveats_of, unphysical_places_text
 from .data import DiagExperiment, colour_notes, prepare
 from .drift import (
     DEGRADATION,
@@ -726,7 +726,7 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
     verdict += _law_text(steps) + beside.text(steps) + unphysical_places_text(steps, named)  # said, not named
     verdict += law_untested.text(named, fexps)  # a named term acting on fewer than two experiments
     alternatives = tuple(a for st in steps for a in st.alternatives) + _drift_alternatives(deg, named_deg)
-    verdict += alternatives_text(alternatives, named) + family_text(named, latent_levels(fsx, final))
+    verdict += alternatives_text(alternatives, named) + caveats_of(named, fsx, final, fexps, alpha, substeps)
     setup.report("held-out check of the final model", 0, 1)
     ho = held_out(fsx, start, final, substeps, cache) if final.params.terms else None
     d = Diagnosis(
