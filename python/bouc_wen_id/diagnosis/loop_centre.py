@@ -184,19 +184,19 @@ def resolved(
     """The diagnosis to report when the zero-drift test fired beside a trending loop (``wander``, taken out
     with each period's mean for ``beside``); ``run(records)`` diagnoses records with nothing taken out.
 
-    * ``beside`` names a drift term and a drift remains after its model's centre trend: ``beside``, saying
-      the zero drifts;
-    * else the records as they are (``run(items)``): when its model's centre trend leaves no drift, it is
+    * the records as they are (``run(items)``): when its model's centre trend leaves no drift, it is
       reported (the zero fixed, the DC used: an asymmetry and an offset can be named);
-    * else, when ``beside``'s model explains the line: ``beside``, saying so;
+    * else, when ``beside`` names a drift term: ``beside``, saying whether its model's centre trend
+      explains the line or the zero drifts beyond it;
     * else, when the records' own model leaves a drift: that remaining line alone is taken out of the
       records (each period's mean kept, so the loop's own centre and its trend stay in the DC) and they are
       diagnosed again; reported when a drift term is named there, else ``beside`` saying the zero drifts;
     * else ``beside`` as it was (the two not told apart).
     """
     first = check(items, beside, level)
-    if first is not None and first.remaining is not None:
-        return _said(beside, wander, first)
+    # The records as they are come first even when ``beside``'s model leaves a drift: with the DC not
+    # used, its asymmetry is read from the loop's shape alone and may predict too small a centre trend
+    # (an asymmetric degrading loop with a fixed zero was then said to drift).
     other = run(items)
     second = check(items, other, level)
     if second is not None and second.remaining is None:
