@@ -604,8 +604,7 @@ def recorded_periods(e: DiagExperiment) -> int:
 SIM_SUBSTEPS = 4
 
 
-@lru_cache(maxsize=128)
-def _mean_period(
+def simulated_periods(
     hysteresis: tuple[float, float, float],
     terms: tuple[tuple[str, float], ...],
     amp: float,
@@ -614,11 +613,9 @@ def _mean_period(
     term: str,
     dv: float,
 ) -> FloatArray:
-    """The recorded periods' mean of the fitted hysteresis (``(beta, gamma, mu)`` and ``terms``) at drift
-    ``term = dv``, driven by ``x = amp cos(omega t - phi)`` from rest; ``plan`` is ``(omega, settle periods,
-    periods, samples per period, substeps)``. Cached on these values (every input of the simulation, so a
-    hit is the same simulation): :func:`corrected`'s d = 0 loop is the same at every d the refinement
-    tries (docs/diagnosis-speed.md). Read-only."""
+    """The recorded periods, one row each (``(periods, samples per period)``), of the fitted hysteresis
+    (``(beta, gamma, mu)`` and ``terms``) at drift ``term = dv``, driven by ``x = amp cos(omega t - phi)``
+    from rest; ``plan`` is ``(omega, settle periods, periods, samples per period, substeps)``."""
     from ..model import BoucWen, SinePlan, TransferFunction, WienerPlant
     from ..simulation import simulate
     from ..terms import term_from_dict
@@ -633,7 +630,24 @@ def _mean_period(
     drift = term_from_dict({"kind": term, TERMS[term].symbol: dv})
     (rec,) = simulate(WienerPlant(linear, BoucWen(*hysteresis), terms=(*own, drift)), sine)
     assert rec.w is not None
-    out: FloatArray = np.asarray(rec.w, dtype=np.float64)[lead * p :].reshape(n, p).mean(axis=0)
+    out: FloatArray = np.asarray(rec.w, dtype=np.float64)[lead * p :].reshape(n, p)
+    return out
+
+
+@lru_cache(maxsize=128)
+def _mean_period(
+    hysteresis: tuple[float, float, float],
+    terms: tuple[tuple[str, float], ...],
+    amp: float,
+    phi: float,
+    plan: tuple[float, int, int, int, int],
+    term: str,
+    dv: float,
+) -> FloatArray:
+    """The recorded periods' mean of :func:`simulated_periods`. Cached on these values (every input of the
+    simulation, so a hit is the same simulation): :func:`corrected`'s d = 0 loop is the same at every d the
+    refinement tries (docs/diagnosis-speed.md). Read-only."""
+    out: FloatArray = simulated_periods(hysteresis, terms, amp, phi, plan, term, dv).mean(axis=0)
     out.setflags(write=False)
     return out
 
@@ -667,6 +681,7 @@ __all__ = [
     "detrended",
     "corrected",
     "recorded_periods",
+    "simulated_periods",
     "strengths",
     "harmonics",
     "predicted_deviation",

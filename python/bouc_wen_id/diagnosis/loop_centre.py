@@ -27,7 +27,7 @@ from typing import Any, Optional
 import numpy as np
 
 from . import zero_drift
-from .drift import _HYSTERESIS_TERMS, DRIFT_TERMS, SIM_SUBSTEPS, recorded_periods
+from .drift import _HYSTERESIS_TERMS, DRIFT_TERMS, SIM_SUBSTEPS, recorded_periods, simulated_periods
 from .result import Diagnosis
 
 TWO_PI = 2.0 * math.pi
@@ -117,21 +117,8 @@ def _period_means(
     term: str,
     dv: float,
 ) -> Any:
-    """Each recorded period's mean of w (scaled units), the simulation :func:`drift._mean_period` runs."""
-    from ..model import BoucWen, SinePlan, TransferFunction, WienerPlant
-    from ..simulation import simulate
-    from ..terms import TERMS, term_from_dict
-
-    om, lead, n, p, sub = plan
-    linear = TransferFunction([amp], [1.0], phi / om)
-    sine = SinePlan(
-        [om], [1.0], settle_periods=lead, periods=n, samples_per_period=p, substeps=sub, noise_sd=0.0
-    )
-    own = tuple(term_from_dict({"kind": t, TERMS[t].symbol: v}) for t, v in terms)
-    drift = term_from_dict({"kind": term, TERMS[term].symbol: dv})
-    (rec,) = simulate(WienerPlant(linear, BoucWen(*hysteresis), terms=(*own, drift)), sine)
-    assert rec.w is not None
-    return np.asarray(rec.w, dtype=np.float64)[lead * p :].reshape(n, p).mean(axis=1)
+    """Each recorded period's mean of w (scaled units), from the simulation drift.py's correction runs."""
+    return simulated_periods(hysteresis, terms, amp, phi, plan, term, dv).mean(axis=1)
 
 
 def less_trend(items: Sequence[Any], slopes: Sequence[float]) -> list[Any]:
