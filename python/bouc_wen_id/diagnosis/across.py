@@ -49,7 +49,7 @@ from ..augmented import AugExperiment, AugFit
 from ..errors import InvalidParameterError
 from ..terms import TERMS, Distortion
 from ..validation import real_number
-from . import across_rules, across_verdict, fit_notes, gate
+from . import across_rules, across_settling, across_verdict, fit_notes, gate
 from .beside import only_beside
 from .caveats import alternatives_text
 from .data import DiagExperiment
@@ -107,6 +107,8 @@ class _Group:
     #: The loop drifts on the plain model (diagnose's ``before.drift_detected``): the plain model cannot pass
     #: its gate (gate.plain_passes' ``moved``)
     moved: bool = False
+    #: The experiments left out as not settled (across_settling.py), as diagnose leaves them out
+    left_out: tuple[str, ...] = ()
     #: ``fit_with`` on this condition, once per (model, term) (select.memo_fit_with): an alternative's
     #: two-term fit is the next step's trial of that term.
     fit_term: Callable[[AugFit, str], Optional[AugFit]] = field(init=False, repr=False)
@@ -384,6 +386,7 @@ def _group(
 
     level = alpha / max(len(cands), 1)  # a wandering zero (baseline.py) or a drifting one, as diagnose
     wander = baseline.detect(items, level) or zero_drift.detect(items, level)
+    left = across_settling.from_own(own, label) if own is not None else ()  # its unsettled stay out
     if (
         own is not None
         and own.plain_fit is not None
@@ -405,6 +408,7 @@ def _group(
         exps, qnotes = _noise_floors(settled, prepare(settled))
         measured = not qnotes
         _check_experiments(exps)
+        exps, left = across_settling.drop(exps, label)  # loops that have not settled, as diagnose
         s = scale_of(exps)
         sx = scaled(exps, s)
         if wander is not None:
@@ -432,6 +436,7 @@ def _group(
         loop_trends=isinstance(wander, zero_drift.Drift) and wander.loop_trends,
         measured_noise=bool(measured),
         moved=bool(moved),
+        left_out=left,
     )
 
 
@@ -855,25 +860,38 @@ def diagnose_across(
         raise InvalidParameterError(f"alpha = {alpha!r} must lie in (0, 1)")
     own = list(per_condition) if per_condition is not None else [None] * len(gs)
     with _threads.one_blas_thread():
-        prepared = []
+        prepared, kept, unsettled = [], [], []
         for i, (items, c, name) in enumerate(zip(gs, conds, names)):
             report(f"preparing condition {name}", i, len(gs))
-            prepared.append(_group(items, name, c, cands, own[i], alpha))
+            try:
+                prepared.append(_group(items, name, c, cands, own[i], alpha))
+                kept.append(own[i])
+            except across_settling.NotSettled as e:  # no experiment settled there (across_settling.py)
+                unsettled.append(e)
+        settings: dict[str, Any] = {"not_settled": {u.label: list(u.names) for u in unsettled}}
+        few = across_settling.too_few(prepared, unsettled, settings, time.perf_counter() - t0)
+        if few is not None:
+            return few
         if Distortion.kind in cands and not any(e.waveform.size for g in prepared for e in g.sx):
             cands = tuple(c for c in cands if c != Distortion.kind)
         steps = _select(prepared, cands, alpha, held_out_test, report)
         report("held-out check of the joint structure", 0, 1)
         terms = _terms(prepared, steps, (y_unit, u_unit), alpha)
-        conditions = _conditions(prepared, own, held_out_test)
+        conditions = _conditions(prepared, kept, held_out_test)
     report("done", 1, 1)
-    settings = {
+    settings |= {
         "candidates": list(cands),
         "all_candidates": list(ALL_CANDIDATES),
         "alpha": alpha,
         "held_out_test": held_out_test,
-        "condition": conds,
+        "condition": [g.condition for g in prepared],
     }
-    return _finished(prepared, terms, conditions, steps, settings, alpha, time.perf_counter() - t0)
+    out = _finished(prepared, terms, conditions, steps, settings, alpha, time.perf_counter() - t0)
+    return replace(  # what was left out as not settled (across_settling.py), as diagnose says it
+        out,
+        verdict=out.verdict + across_settling.clause(prepared, unsettled),
+        notes=(*out.notes, *across_settling.notes(prepared, unsettled)),
+    )
 
 
 def _finished(
@@ -914,7 +932,7 @@ def _finished(
         if status == "adequate" or (partial and not named)
         else _verdict(named, conditions, steps, alpha)
     )
-    verdict += across_verdict.clauses(status, named, partial, steps, prepared)
+    verdict += across_verdict.clauses(status, named, partial, steps, prepared, alpha)
     if status != "adequate":  # loop centres that differ in sign (fit_notes.centre_clause), as diagnose says
         verdict += fit_notes.centre_text(prepared)
     return AcrossDiagnosis(

@@ -14,7 +14,11 @@ through the same functions (no copies):
   with values that differ between a condition's experiments is a stand-in, named in the verdict as such;
 - **a term refused beside Dahl's element is said** (:func:`.beside.text`);
 - **Dahl's and play's caveats** (:func:`.caveats.family_text`, with every condition's latent levels as its
-  final model sees them, as diagnose reads its final fit's);
+  final model sees them, as diagnose reads its final fit's), and a spring on x's **Masing caveat** with an
+  experiment below saturation measured as diagnose measures it (:func:`.caveats.masing_separation` at each
+  condition where the spring is present, :func:`.caveats.joint_separation` over them);
+- **"law untested"** (:func:`.law_untested.across_text`): a named term carried by fewer than two of a
+  condition's experiments where it is present;
 - **a rival within the uncertainty of the chosen term's improvement is a near-tied reading**
   (:func:`tied`, through :func:`.select._tied` on the improvements and costs summed over the conditions).
 
@@ -30,12 +34,12 @@ from collections.abc import Sequence
 from dataclasses import replace
 from typing import Any
 
-from ..terms import TERMS, physical_value
-from . import beside, gate
-from .caveats import family_text, latent_levels, unphysical_places_text
+from ..terms import TERMS, StiffnessX, physical_value
+from . import beside, gate, law_untested
+from .caveats import family_text, joint_separation, latent_levels, masing_separation, unphysical_places_text
 from .locate import adequacy_p
 from .result import NamedTerm, Status
-from .select import Trial, _tied, dof_of
+from .select import ALPHA, Trial, _tied, dof_of
 
 
 def explained_fraction(groups: Sequence[Any]) -> float:
@@ -145,7 +149,12 @@ def head(status: Status, partial: Sequence[Any], n: int, fraction: float) -> str
 
 
 def clauses(
-    status: Status, named: Sequence[Any], partial: Sequence[Any], steps: Sequence[Any], groups: Sequence[Any]
+    status: Status,
+    named: Sequence[Any],
+    partial: Sequence[Any],
+    steps: Sequence[Any],
+    groups: Sequence[Any],
+    alpha: float = ALPHA,
 ) -> str:
     """What the single-group verdict says beside its terms, said of the joint structure (module docstring)."""
     from .run import _law_text, _unphysical_text
@@ -157,9 +166,27 @@ def clauses(
     text += _law_text(steps) + beside.text(steps)
     as_said = [NamedTerm(t.term, t.symbol, math.nan, math.nan, t.unit) for t in named if t.term in TERMS]
     text += unphysical_places_text(steps, as_said)  # another place that fits only non-physically
+    text += law_untested.across_text(named, [(str(g.label), g.exps) for g in groups])
     levels = [v for g in groups for v in latent_levels(g.sx, g.current)]
     as_named = [NamedTerm(t.term, t.symbol, math.nan, math.nan, t.unit) for t in named if t.term in TERMS]
-    return text + family_text(as_named, levels)
+    return text + family_text(as_named, levels, *_masing(named, groups, alpha))
+
+
+def _masing(named: Sequence[Any], groups: Sequence[Any], alpha: float) -> tuple[Any, str]:
+    """``(sep, where)`` for the Masing caveat (:func:`.caveats.joint_separation` over the conditions where
+    a named spring on x is present, each by :func:`.caveats.masing_separation` on its final model, as
+    diagnose measures its one design)."""
+    spring = next((t for t in named if t.term == StiffnessX.kind), None)
+    if spring is None:
+        return None, ""
+    as_named = [NamedTerm(spring.term, spring.symbol, math.nan, math.nan, spring.unit)]
+    seps = [
+        (str(g.label), masing_separation(as_named, g.sx, g.current, g.exps, alpha, g.substeps))
+        for g, pr in zip(groups, spring.present)
+        if pr
+    ]
+    where, sep = joint_separation(seps)
+    return sep, where
 
 
 __all__ = [

@@ -114,26 +114,61 @@ def caveats_of(
     """:func:`family_text` for one group: its latent levels, and when a spring on x is named from a design
     with an experiment below saturation, whether that design separates it from a Prandtl-Ishlinskii loop
     (:func:`.masing.separation`; ``exps``' periods name the separating experiment)."""
+    return family_text(
+        named, latent_levels(sx, fit), masing_separation(named, sx, fit, exps, alpha, substeps)
+    )
+
+
+def masing_separation(
+    named: Sequence[Any], sx: Sequence[AugExperiment], fit: AugFit, exps: Sequence[Any], alpha: float,
+    substeps: int,
+) -> Optional[Separation]:  # fmt: skip
+    """:func:`.masing.separation` of one group's final ``fit`` when a spring on x is among ``named`` and some
+    experiment lies below saturation (its latent level, :func:`latent_levels`); None otherwise (every
+    experiment saturating: no design of such loops separates them, said without a measure)."""
     levels = latent_levels(sx, fit)
-    sep = None
-    if any(t.term == StiffnessX.kind for t in named) and levels and min(levels) < 1.0:
-        sep = separation(sx, fit, [float(getattr(e, "periods", math.nan)) for e in exps], alpha, substeps)
-    return family_text(named, levels, sep)
+    if not (any(t.term == StiffnessX.kind for t in named) and levels and min(levels) < 1.0):
+        return None
+    return separation(sx, fit, [float(getattr(e, "periods", math.nan)) for e in exps], alpha, substeps)
+
+
+def joint_separation(seps: Sequence[tuple[str, Optional[Separation]]]) -> tuple[str, Optional[Separation]]:
+    """The one separation that decides the Masing caveat of a structure named at several conditions (each
+    ``(label, sep)``, :func:`masing_separation` of its design): a condition whose data point to a loop of
+    another family (its test rejecting, the largest z) first; else one whose design separates them with a
+    quiet test (the structure is one across the conditions, and there it was told from such a loop: no
+    caveat); else the strongest too-weak design (the largest noncentrality), with its separating experiment.
+    ``("", None)`` when no condition has an experiment below saturation."""
+    have = [(w, s) for w, s in seps if s is not None]
+    refused = [(w, s) for w, s in have if s.refused]
+    if refused:
+        return max(refused, key=lambda ws: ws[1].z)
+    quiet = [(w, s) for w, s in have if s.separable]
+    if quiet:
+        return quiet[0]
+    finite = [(w, s) for w, s in have if math.isfinite(s.lam)]
+    if finite:
+        return max(finite, key=lambda ws: ws[1].lam)
+    return have[0] if have else ("", None)
 
 
 def family_text(
-    named: Sequence[NamedTerm], levels: Optional[Sequence[float]] = None, sep: Optional[Separation] = None
+    named: Sequence[NamedTerm],
+    levels: Optional[Sequence[float]] = None,
+    sep: Optional[Separation] = None,
+    where: str = "",
 ) -> str:
     """The verdict's word when Dahl friction is named: what it stands for and what the data could not
     exclude (issue 18: a name users can trust blind), and play's equivalence (:func:`play_text`, when
     every experiment reverses from saturation: each of ``levels``, :func:`latent_levels`, at least 1;
     None: not known, said), and a spring on x's Masing caveat (:func:`masing.masing_text`, under the same
     condition; None: not said; or, with an experiment below saturation, when ``sep`` finds the design too
-    weak to separate them). Empty when none of them is named."""
+    weak to separate them; ``where``: the condition whose design ``sep`` measured, across conditions). Empty
+    when none of them is named."""
     saturated = levels is None or (len(levels) > 0 and min(levels) >= 1.0)
     dahl = [t for t in named if t.term in TERMS and TERMS[t.term].companion]
     # A spring on x from saturating loops may be a Prandtl-Ishlinskii loop's elastic part (masing.py).
-    before = play_text(named, saturated) + masing_text(named, saturated and levels is not None, sep)
+    before = play_text(named, saturated) + masing_text(named, saturated and levels is not None, sep, where)
     if not dahl:
         return before
     where = " or ".join(TERMS[t.term].place_label() for t in dahl)

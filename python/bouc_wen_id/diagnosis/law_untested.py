@@ -3,7 +3,8 @@
 The law test compares the term's value between the experiments it acts on (a column not zero). The
 input-waveform term acts only on experiments whose input carries harmonics: with fewer than two of them
 there is nothing to compare, the test gives NaN, and a NaN law counted as passed said nothing of it (review
-of session 30). The verdict says "law untested" beside such a named term instead.
+of session 30). The verdict says "law untested" beside such a named term instead; across conditions
+(:func:`across_text`) at each condition where the term is present and its law could not be tested there.
 """
 
 from __future__ import annotations
@@ -22,6 +23,11 @@ def carriers(exps: Sequence[Any], term: str) -> int:
     return len(exps)
 
 
+def untested(term: str, exps: Sequence[Any]) -> bool:
+    """Whether ``term``'s law cannot be compared between ``exps``: it acts on fewer than two of them."""
+    return carriers(exps, term) < 2
+
+
 def text(named: Sequence[Any], exps: Sequence[Any]) -> str:
     """The verdict's clause for each named term carried by fewer than two of two or more experiments."""
     m = len(exps)
@@ -29,10 +35,32 @@ def text(named: Sequence[Any], exps: Sequence[Any]) -> str:
         return ""
     out = []
     for t in named:
-        k = carriers(exps, t.term)
-        if k < 2:
+        if untested(t.term, exps):
+            k = carriers(exps, t.term)
             out.append(
                 f"; {t.label}: law untested (carried by only {k} of the {m} experiments: its one value "
                 "for all cannot be compared between them)"
             )
+    return "".join(out)
+
+
+def across_text(named: Sequence[Any], groups: Sequence[tuple[str, Sequence[Any]]]) -> str:
+    """The clause of :func:`text` for a structure named across conditions (``diagnose_across``): its law is
+    one value for a condition's experiments, tested at each condition where the term is present (each
+    ``named`` term's ``present``, one flag per ``(label, experiments)`` of ``groups``). Said for each named
+    term at the conditions where it is present and carried by fewer than two of their experiments (one
+    experiment alone included: there is nothing to compare either), and whether that is every such
+    condition (then its law was tested nowhere)."""
+    out = []
+    for t in named:
+        here = [(w, exps) for (w, exps), pr in zip(groups, t.present) if pr]
+        bad = [(w, exps) for w, exps in here if untested(t.term, exps)]
+        if not bad:
+            continue
+        where = ", ".join(f"{w} ({carriers(exps, t.term)} of {len(exps)})" for w, exps in bad)
+        scope = "at every condition where it is present" if len(bad) == len(here) else "at some conditions"
+        out.append(
+            f"; {t.label}: law untested {scope} (carried by fewer than two of the condition's experiments at "
+            f"{where}: its one value for a condition's experiments cannot be compared between them there)"
+        )
     return "".join(out)

@@ -37,7 +37,9 @@ over the reaches. The design separates them when the weakest reference loop's ``
 experiment: one added at :data:`PROBE_LEVELS` of saturation at the tested middle frequency (its ``lam``
 computed with the added experiment's own |G| and phi in the Jacobian), with the periods that bring the
 weakest loop's ``lam`` to the threshold (its part grows with its weight). Across conditions
-(across_verdict.py) the old rule stays: the clause only when every experiment saturates.
+(across_verdict.py) the same test at each condition with an experiment below saturation
+(:func:`.caveats.joint_separation` picks the one that decides: data pointing to such a loop anywhere first,
+else a condition whose design separates them, else the strongest too-weak design, named in the clause).
 """
 
 from __future__ import annotations
@@ -248,17 +250,21 @@ def _probe(
     )
 
 
-def masing_text(named: Sequence[NamedTerm], saturated: bool, sep: Optional[Separation] = None) -> str:
+def masing_text(
+    named: Sequence[NamedTerm], saturated: bool, sep: Optional[Separation] = None, where: str = ""
+) -> str:
     """The clause after a verdict naming a spring on x unless the design separates it from a
     Prandtl-Ishlinskii loop on x and the test of that loop's direction is quiet: said when ``saturated``
     (every experiment's latent amplitude at or past the saturation level, :func:`caveats.latent_levels`: no
     design of saturating loops separates them), or when ``sep`` (:func:`separation`) finds the design too
-    weak or the data pointing to such a loop; empty otherwise (and when ``sep`` is None below saturation)."""
+    weak or the data pointing to such a loop; empty otherwise (and when ``sep`` is None below saturation).
+    ``where``: the condition whose design ``sep`` measured (across conditions; "here" when empty)."""
     if not any(t.term == StiffnessX.kind for t in named):
         return ""
     if not saturated and (sep is None or (sep.separable and not sep.refused)):
         return ""
     label = StiffnessX.place_label()
+    here = f"at {where}" if where else "here"
     if saturated or sep is None:
         why = "as here"
     else:
@@ -268,9 +274,9 @@ def masing_text(named: Sequence[NamedTerm], saturated: bool, sep: Optional[Separ
         )
         why = (
             f"and the data point to one: the test of {ref} rejects the spring (z = {sep.z:.3g} over "
-            f"{sep.z_c:.3g})"
+            f"{sep.z_c:.3g}{', ' + here if where else ''})"
             if sep.refused
-            else f"and the experiments below saturation here are too weak to separate them ({ref} leaves a "
+            else f"and the experiments below saturation {here} are too weak to separate them ({ref} leaves a "
             f"noncentrality of {sep.lam:.3g} once the fitted model absorbs what it can, below the "
             f"{sep.threshold:.3g} its test detects with 90 % power){sep.hint}"
         )

@@ -51,12 +51,15 @@ from .progress import Progress, ProgressCallback, reporter
 from .result import Diagnosis, ModelSummary, NamedTerm, Status, term_symbol_unit
 from .select import ALPHA, Alternative, FoldCache, Step, dof_of, forward_select, held_out
 from .settling import (  # noqa: F401 (quantisation_step: importable here as before)
+    LEFT_OUT,
     _check_experiments,
     _check_sizes,
     _noise_floors,
     _settled,
     _unsettled,
+    left_out_note,
     quantisation_step,
+    settled_only,
 )
 from .shape import has_branch
 from .structure import with_structure
@@ -557,7 +560,7 @@ def _with_wander(
     named_deg = any(t.term in DRIFT_TERMS for t in d.named) or (
         deg is not None and (deg.named if setup.held_out_test else deg.passed)
     )
-    drifting = [] if named_deg else _unsettled(exps)
+    drifting = settled_only(exps, named_deg)[1]
     if drifting:
         d = _without_unsettled(exps, drifting, setup, d, [*notes, *qnotes])
     d = age.with_clause(d)  # what the fit assumed of the specimen's history, when it fitted its age
@@ -574,11 +577,9 @@ def _without_unsettled(
     """The diagnosis of the settled experiments only, saying which were left out; when none is settled,
     the verdict says so and names nothing (a loop that has not settled is not physics)."""
     names = ", ".join(exps[i].source for i in drifting)
-    why = (
-        f"left out of the diagnosis: {names} (the loop still drifts from period to period: not settled, "
-        "and no degradation explains it); record more settling periods"
-    )
+    why = left_out_note(names)
     keep = [i for i in range(len(exps)) if i not in drifting]
+    whole = replace(whole, settings={**whole.settings, LEFT_OUT: [exps[i].source for i in drifting]})
     if not keep:
         verdict = (
             f"not settled: the loop of every experiment ({names}) still drifts from period to period, and "
@@ -595,6 +596,7 @@ def _without_unsettled(
             notes=(*whole.notes, why),
         )
     d = _diagnose_set([exps[i] for i in keep], setup, [*notes, why])
+    d = replace(d, settings={**d.settings, LEFT_OUT: whole.settings[LEFT_OUT]})
     if len(keep) == 1 and d.named:
         return _from_one(d, exps[keep[0]].source, names)
     return replace(d, verdict=d.verdict + f"; {names} left out (not settled)")

@@ -231,3 +231,25 @@ def _unsettled(exps: Sequence[DiagExperiment]) -> list[int]:
         if min(1.0, 2.0 * min(pvals)) < level:
             out.append(i)
     return out
+
+
+#: Where :func:`.run.diagnose` records the experiments it left out as not settled (its ``settings``), so that
+#: ``diagnose_across`` given that diagnosis leaves out the same ones.
+LEFT_OUT = "left_out"
+
+
+def left_out_note(names: str) -> str:
+    """The note on experiments left out of a diagnosis as not settled (:func:`_unsettled`), one wording for
+    :func:`.run.diagnose` and ``diagnose_across``."""
+    return (
+        f"left out of the diagnosis: {names} (the loop still drifts from period to period: not settled, "
+        "and no degradation explains it); record more settling periods"
+    )
+
+
+def settled_only(exps: Sequence[DiagExperiment], degradation_named: bool) -> tuple[list[int], list[int]]:
+    """``(kept, drifting)`` indices of ``exps``: every one kept when degradation is named (the drift is
+    its), else those whose loop still drifts (:func:`_unsettled`) left out; diagnose's rule, read by both
+    paths."""
+    drifting = [] if degradation_named else _unsettled(exps)
+    return [i for i in range(len(exps)) if i not in drifting], drifting
