@@ -114,7 +114,7 @@ def test_a_still_settling_experiment_is_left_out_across_and_the_null_is_adequate
 
 def test_a_condition_with_no_settled_experiment_is_left_out_and_two_are_needed() -> None:
     """from_own on a diagnosis that left out every experiment raises NotSettled; too_few with one condition
-    left names nothing and says why."""
+    left gives the verdict that names nothing and says why."""
     exps = [SimpleNamespace(source="e1"), SimpleNamespace(source="e2")]
     own = SimpleNamespace(settings={LEFT_OUT: ["e1", "e2"]}, experiments=exps)
     with pytest.raises(across_settling.NotSettled) as err:
@@ -123,7 +123,7 @@ def test_a_condition_with_no_settled_experiment_is_left_out_and_two_are_needed()
     some = SimpleNamespace(settings={LEFT_OUT: ["e1"]}, experiments=exps[1:])
     assert across_settling.from_own(some, "1 A") == ("e1",)
     g = SimpleNamespace(label="1 A", left_out=("e1",))
-    d = across_settling.too_few([g], [err.value], {}, 0.0)
-    assert d is not None and d.status == "unexplained" and not d.named
-    assert "not settled" in d.verdict and "condition 2 A left out" in d.verdict and "e1 at 1 A" in d.verdict
-    assert across_settling.too_few([g, g], [], {}, 0.0) is None
+    verdict = across_settling.too_few([g], [err.value])
+    assert verdict is not None and "not settled" in verdict, verdict
+    assert "condition 2 A left out" in verdict and "e1 at 1 A" in verdict, verdict
+    assert across_settling.too_few([g, g], []) is None

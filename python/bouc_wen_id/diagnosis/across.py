@@ -869,9 +869,10 @@ def diagnose_across(
             except across_settling.NotSettled as e:  # no experiment settled there (across_settling.py)
                 unsettled.append(e)
         settings: dict[str, Any] = {"not_settled": {u.label: list(u.names) for u in unsettled}}
-        few = across_settling.too_few(prepared, unsettled, settings, time.perf_counter() - t0)
+        few = across_settling.too_few(prepared, unsettled)  # one structure needs two settled conditions
         if few is not None:
-            return few
+            left = across_settling.notes(prepared, unsettled)
+            return AcrossDiagnosis(few, (), (), (), settings, time.perf_counter() - t0, notes=left)
         if Distortion.kind in cands and not any(e.waveform.size for g in prepared for e in g.sx):
             cands = tuple(c for c in cands if c != Distortion.kind)
         steps = _select(prepared, cands, alpha, held_out_test, report)

@@ -12,7 +12,7 @@ structure. Here the same rule per condition:
 - without it, :func:`.settling.settled_only` on the condition's prepared experiments (no degradation test
   runs across conditions: a drift there is not degradation's);
 - a condition with no settled experiment is left out of the joint structure (:class:`NotSettled`), and
-  with fewer than two conditions left nothing is named (:func:`too_few`).
+  with fewer than two conditions left nothing is named (:func:`too_few`'s verdict).
 
 The verdict says which experiments and conditions were left out (:func:`clause`), and the notes why
 (:func:`.settling.left_out_note`, prefixed by the condition).
@@ -21,13 +21,10 @@ The verdict says which experiments and conditions were left out (:func:`clause`)
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Any, Optional
+from typing import Any, Optional
 
 from .data import DiagExperiment
 from .settling import LEFT_OUT, left_out_note, settled_only
-
-if TYPE_CHECKING:
-    from .across import AcrossDiagnosis
 
 
 class NotSettled(Exception):
@@ -81,23 +78,16 @@ def notes(groups: Sequence[Any], unsettled: Sequence[NotSettled]) -> tuple[str, 
     return tuple(out)
 
 
-def too_few(
-    groups: Sequence[Any], unsettled: Sequence[NotSettled], settings: dict[str, Any], seconds: float
-) -> Optional[AcrossDiagnosis]:
-    """The result when fewer than two conditions have a settled experiment: nothing named, the verdict
-    saying why (None when two or more are left: the joint selection runs)."""
-    from .across import AcrossDiagnosis
-
+def too_few(groups: Sequence[Any], unsettled: Sequence[NotSettled]) -> Optional[str]:
+    """The verdict when fewer than two conditions have a settled experiment: nothing is named (None when
+    two or more are left: the joint selection runs)."""
     if len(groups) >= 2:
         return None
     n = len(groups) + len(unsettled)
-    verdict = (
+    return (
         f"across {n} conditions: not settled: only {len(groups)} condition(s) with a settled experiment, "
         "and one structure across conditions needs two; nothing is named from a loop that has not settled "
         "(record more settling periods, or a longer record)" + clause(groups, unsettled)
-    )
-    return AcrossDiagnosis(
-        verdict, (), (), (), settings, seconds, status="unexplained", notes=notes(groups, unsettled)
     )
 
 
