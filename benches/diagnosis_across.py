@@ -12,6 +12,18 @@ with the condition (sized in averaged-noise sd of its RMS contribution, so the v
 - ``const u``: viscous damping on u at 0.3 sd at every condition (one value: the shared-value test's
   null, ``diagnosis/shared.py``).
 
+Rows for three of diagnose's verdict rules, each with the design that needs it (``DESIGNS``):
+
+- ``null_low``: nothing, each condition with the null cases' low-amplitude experiment (0.15 of saturation,
+  started from a saturating one's remanent w) whose loop centre is still settling: the truth is "adequate"
+  with that experiment left out as not settled (diagnosis/across_settling.py), never "unexplained";
+- ``spring_x_low``: a spring on x (stiffness at x) at 10 sd at every condition, each with one experiment
+  at 0.15 of saturation started from rest (a below-saturation design too weak to tell a spring from a
+  Prandtl-Ishlinskii loop): the truth is the spring named with the Masing caveat (diagnosis/masing.py);
+- ``one_u``: viscous damping on u at 3 sd, ONE experiment per condition (the middle frequency's high
+  amplitude): a term's law (one value for a condition's experiments) cannot be tested, and the truth is
+  the term named with "law untested" (diagnosis/law_untested.py).
+
 Each case is diagnosed per condition (``bw.diagnose``) and across (``bw.diagnose_across`` with the
 per-condition diagnoses). Per row: the joint selection names the true term (alone), a wrong term, its value
 within 3 se of the truth at every condition, the presence flags right (``some``: absent at 0 and 1, present
@@ -29,6 +41,7 @@ Usage: ``python benches/diagnosis_across.py [--quick] [--seeds N] [--seed S] [--
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import math
 import sys
 import time
@@ -50,6 +63,19 @@ ROWS: dict[str, tuple[str, str, Any, tuple[float, ...]]] = {
     "null": ("viscous", "u", None, (0.0, 0.0, 0.0, 0.0)),
     # Appended: one value at every condition (the shared-value test must not call it varying).
     "const_u": ("viscous", "u", "viscous", (0.3, 0.3, 0.3, 0.3)),
+    # Appended: the designs that need diagnose's not-settled, Masing and law-untested rules (DESIGNS).
+    "null_low": ("viscous", "u", None, (0.0, 0.0, 0.0, 0.0)),
+    "spring_x_low": ("stiffness", "x", "stiffness@x", (10.0, 10.0, 10.0, 10.0)),
+    "one_u": ("viscous", "u", "viscous", (3.0, 3.0, 3.0, 3.0)),
+}
+#: row -> design: "low" (the null cases' still-settling low-amplitude experiment added), "low_rest" (the same
+#: experiment started from rest: below saturation, settled), "one" (one experiment per condition).
+DESIGNS = {"null_low": "low", "spring_x_low": "low_rest", "one_u": "one"}
+#: What the verdict says for each rule (the library's own wording).
+SAID = {
+    "masing": "a loop of another family",
+    "untested": "law untested",
+    "left_out": "left out as not settled",
 }
 
 
@@ -58,7 +84,15 @@ def case(row: str, seed: int) -> dict[str, Any]:
     import generator as G
 
     name, place, code, sizes = ROWS[row]
-    p = G.make_plant(seed)
+    design = DESIGNS.get(row, "")
+    p = G.make_plant(seed, low_amplitude=design in ("low", "low_rest"))
+    if design == "low_rest":
+        p = dataclasses.replace(p, w0=np.zeros(p.omegas.size))
+    elif design == "one":  # the middle frequency's high amplitude only
+        k = 2 * (len(G.FREQ_FACTORS) // 2) + 1
+        p = dataclasses.replace(
+            p, omegas=p.omegas[k : k + 1], amplitudes=p.amplitudes[k : k + 1], levels=p.levels[k : k + 1]
+        )
     b = G.base(p)
     plain = G.run(p, G.Effect(), shared=b)
     unit = float(G.contribution(p, G.Effect(name, place, np.ones(1)), plain, b)[0])
@@ -92,6 +126,8 @@ def case(row: str, seed: int) -> dict[str, Any]:
         "ratio": float(np.median([c.held_out_joint / c.held_out_per_level for c in a.conditions])),
         "shared": None,
         "shared_within_3se": None,
+        "status": a.status,
+        **{k: v in a.verdict for k, v in SAID.items()},
     }
     if right:
         (t,) = a.terms
@@ -108,6 +144,9 @@ def case(row: str, seed: int) -> dict[str, Any]:
     return out
 
 
+STATUSES = ("adequate", "explained", "partly explained", "unexplained")
+
+
 def _count(rs: list[dict[str, Any]], key: str) -> str:
     """How many cases hold ``key``; '-' where no case could be scored (None)."""
     scored = [r[key] for r in rs if r[key] is not None]
@@ -119,8 +158,9 @@ def table(results: dict[str, list[dict[str, Any]]]) -> str:
         "| row | cases | right term alone | right physics, other place (true one listed as near-tied) "
         "| wrong physics | values within 3 se | presence right "
         "| smooth degree (count) | one shared value (F test; its value within 3 se) "
-        "| per-condition: one story | held-out joint / per-level (median) | s per joint |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|",
+        "| per-condition: one story | held-out joint / per-level (median) | s per joint "
+        "| status a/e/p/u | Masing caveat | law untested | left out (not settled) |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for row, rs in results.items():
         n = len(rs)
@@ -138,7 +178,9 @@ def table(results: dict[str, list[dict[str, Any]]]) -> str:
             f"| {', '.join(f'{k}: {v}' for k, v in sorted(degs.items())) or '-'} "
             f"| {_count(rs, 'shared')} ({_count(rs, 'shared_within_3se')}) "
             f"| {sum(r['one_story'] for r in rs)} | {ratio:.3f} "
-            f"| {np.median([r['seconds'] for r in rs]):.1f} |"
+            f"| {np.median([r['seconds'] for r in rs]):.1f} "
+            f"| {'/'.join(str(sum(r['status'] == s for r in rs)) for s in STATUSES)} "
+            f"| {' | '.join(str(sum(r[k] for r in rs)) for k in SAID)} |"
         )
     return "\n".join(lines)
 
