@@ -25,7 +25,7 @@ import bouc_wen_id as bw
 import numpy as np
 import pytest
 from bouc_wen_id import terms as T
-from bouc_wen_id.diagnosis import run, zero_drift
+from bouc_wen_id.diagnosis import run, settling, zero_drift
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benches"))
 gen: Any = importlib.import_module("generator")
@@ -99,7 +99,12 @@ def test_nothing_is_named_from_the_one_experiment_left_when_the_rest_are_unsettl
     (its law untested, its DC not to be told from the unsettled centres), and the verdict says the one
     experiment it would rest on. Before, "explained by: output offset" from that one experiment."""
     recs = _recs(2, "offset", 0.05, drift_sd=0.0)
-    monkeypatch.setattr(run, "_unsettled", lambda exps: list(range(1, len(exps))))
+
+    def rest(exps: Any) -> list[int]:
+        return list(range(1, len(exps)))
+
+    monkeypatch.setattr(run, "_unsettled", rest)
+    monkeypatch.setattr(settling, "_unsettled", rest)  # the rule both paths read (settling.settled_only)
     d = _diagnose(recs)
     assert not d.named, d.verdict
     assert d.status == "unexplained"
