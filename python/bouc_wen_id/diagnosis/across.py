@@ -20,7 +20,9 @@ a candidate term is added to EVERY condition at once, its value free per conditi
   whose value trades with its are reported as alternatives with the separating experiment; selection stops
   when no candidate passes or once the structure passes its adequacy test at every condition (the first
   step at ``alpha / 2`` when every condition's plain model passes the gate, the targeted step, and none
-  where the gate passes on a noise floor that is not measured noise: :func:`.gate.plain_gate`, diagnose's).
+  where the gate passes on a noise floor that is not measured noise: :func:`.gate.plain_gate`, diagnose's);
+  experiments whose loop has not settled are left out per condition, as diagnose leaves them out
+  (across_settling.py), and the verdict's clauses are diagnose's (across_verdict.py).
 
 Per condition the result reports each term's value with its standard error (inflated by the final fit's
 ``sqrt(chi2/dof)`` when above 1: a misfit elsewhere makes the noise-based one too small), whether the term
