@@ -123,9 +123,11 @@ def main(argv: Optional[list[str]] = None) -> int:
         f"{a.plant}, {a.term} = {a.size:g}, min_experiments={a.min_experiments}: "
         f"{[(round(e.frequency, 2), e.periods) for e in exps]} time {pred.total_time:.0f} s, "
         f"power to detect {pred.power:.3f} (lam refit {pred.lam:.1f}), predicted chance to name "
-        f"{name.chance:.3f} (weakest fold lam {name.weakest_fold:.2f})"
+        f"{name.chance:.3f} (weakest fold lam {name.weakest_fold:.2f}; a linear rival chosen instead "
+        f"{name.rival_named:.3f})"
     )
-    truth = bw.WienerPlant(prior.linear, prior.hysteresis, (TERMS[a.term](a.size),))
+    norm = prior.normalized()  # the planned size is in the alpha-normalised model's units (viscous@x: c / alpha)
+    truth = bw.WienerPlant(norm.linear, norm.hysteresis, (TERMS[a.term](a.size),))
     f_k, n_k, wrong = _draws(truth, exps, a.term, noise, a.draws)
     fl, fh = interval(f_k, a.draws)
     nl, nh = interval(n_k, a.draws)

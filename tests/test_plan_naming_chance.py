@@ -53,11 +53,15 @@ def _exp(omega: float, periods: int) -> PlannedExperiment:
 def test_on_one_experiment_the_chance_to_name_is_the_power() -> None:
     design = [_exp(8.16, 3000)]
     p = detection_power(PRIOR, design, "sensor_lag", 0.01, noise_sd=0.05)
-    c = naming_chance(PRIOR, design, "sensor_lag", 0.01, noise_sd=0.05, power=p, draws=4000, seed=3)
+    c = naming_chance(PRIOR, design, "sensor_lag", 0.01, noise_sd=0.05, power=p, rivals=(), seed=3)
     assert 0.2 < p.power < 0.95  # a power the draws can check
     se = math.sqrt(p.power * (1.0 - p.power) / c.draws)
     assert abs(c.chance - p.power) < 4.0 * se
-    assert c.held_out_given_f == 1.0 and c.fold_lams == ()
+    assert c.named_given_f == 1.0 and c.fold_lams == () and c.rival_named == 0.0
+    # the diagnosis's linear candidates beside it: a rival with a larger cost drop is named instead at times
+    r = naming_chance(PRIOR, design, "sensor_lag", 0.01, noise_sd=0.05, power=p, seed=3)
+    assert "coulomb@x" in r.rivals and "sensor_lag" not in r.rivals
+    assert r.chance == pytest.approx(c.chance - r.rival_named, abs=4.0 * se) and r.rival_named > 0.0
 
 
 def test_a_fold_that_barely_sees_the_term_lowers_the_chance_to_name() -> None:
@@ -67,7 +71,7 @@ def test_a_fold_that_barely_sees_the_term_lowers_the_chance_to_name() -> None:
     p = detection_power(PRIOR, lopsided, "sensor_lag", 0.01, noise_sd=0.05)
     c = naming_chance(PRIOR, lopsided, "sensor_lag", 0.01, noise_sd=0.05, power=p)
     assert c.chance < p.power - 0.15
-    assert c.held_out_given_f < 0.85
+    assert c.named_given_f < 0.85
     assert c.weakest_fold < p.lam / 4.0
     balanced = [_exp(5.32, 52), _exp(8.16, 611), _exp(9.97, 1028)]  # the balanced plan at about the same F
     pb = detection_power(PRIOR, balanced, "sensor_lag", 0.01, noise_sd=0.05)

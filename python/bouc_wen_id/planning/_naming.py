@@ -32,6 +32,7 @@ from typing import Any, Optional
 import numpy as np
 from numpy.typing import NDArray
 
+from ..diagnosis.candidates import step_candidates
 from ..diagnosis.select import LAW_ALPHA
 from ..errors import InvalidParameterError
 from ..model import WienerPlant
@@ -61,10 +62,14 @@ class NamingChance:
     term: str
     size: float
     #: The chance to name, and its parts: the F-test passing (the linear model's, at the refitted
-    #: non-centrality), and the held-out test improving given that it passed.
+    #: non-centrality), and the term being the step's choice (its held-out test improving, no rival with a
+    #: larger cost drop passing its own) given that it passed.
     chance: float
     f_pass: float
-    held_out_given_f: float
+    named_given_f: float
+    #: The chance that a rival (a linear candidate, ``rivals``) is the step's choice instead.
+    rival_named: float
+    rivals: tuple[str, ...]
     #: The law test's refusal rate of a true law (the chance carries ``1 - law_refusal``).
     law_refusal: float
     #: Each fold's non-centrality (the design less one experiment, linear, scaled as the whole design's),
@@ -83,7 +88,9 @@ class NamingChance:
             "size": self.size,
             "chance": self.chance,
             "f_pass": self.f_pass,
-            "held_out_given_f": self.held_out_given_f,
+            "named_given_f": self.named_given_f,
+            "rival_named": self.rival_named,
+            "rivals": list(self.rivals),
             "law_refusal": self.law_refusal,
             "fold_lams": list(self.fold_lams),
             "weakest_fold": self.weakest_fold if self.fold_lams else None,
@@ -94,12 +101,15 @@ class NamingChance:
 
 @dataclass(frozen=True)
 class _Linear:
-    """A design in the linearised model: each experiment's ``A_i`` (k, 4, 4) at weight ``N_i / sigma^2``."""
+    """A design in the linearised model: each experiment's ``A_i`` (k, 4 + R, 4 + R) at weight ``N_i /
+    sigma^2``; columns the Bouc-Wen parameters, the term, then its ``R`` linear rivals. ``one_sided`` per
+    candidate (the term, then the rivals): only positive values are named; ``bounded``: the term's fitted
+    range is ``>= 0``."""
 
     a: FloatArray
     ridge: FloatArray
     z_c: float
-    one_sided: bool
+    one_sided: tuple[bool, ...]
     bounded: bool
 
 
@@ -110,44 +120,66 @@ def _roots(blocks: FloatArray) -> FloatArray:
     return out
 
 
-def _fit(s: FloatArray, g: FloatArray, ridge: FloatArray, with_term: bool) -> FloatArray:
-    """Least squares from the normal equations (``g``: draws x 4); the plain model's has the term at 0."""
-    sr = s + np.diag(np.append(ridge, 0.0))
+def _fit(s: FloatArray, g: FloatArray, ridge: FloatArray, col: int) -> FloatArray:
+    """Least squares from the normal equations (``g``: draws x p) on the Bouc-Wen columns and ``col`` (none
+    when negative: the plain model); the other coefficients 0."""
+    idx = [0, 1, 2] + ([col] if col >= 0 else [])
+    sr = s[np.ix_(idx, idx)] + np.diag(np.append(ridge, [0.0] * (len(idx) - 3)))
     theta = np.zeros_like(g)
-    if with_term:
-        theta[:] = np.linalg.solve(sr, g.T).T
-    else:
-        theta[:, :3] = np.linalg.solve(sr[:3, :3], g[:, :3].T).T
+    theta[:, idx] = np.linalg.solve(sr, g[:, idx].T).T
     return theta
 
 
-def _named(lin: _Linear, e: FloatArray, factor: float) -> tuple[BoolArray, BoolArray]:
-    """Per draw: whether the F-test passes on the whole design and whether the held-out cost falls, with
-    every experiment's periods times ``factor`` (``e``: draws x k x 4 standard normal)."""
-    a = math.sqrt(factor) * lin.a
-    z = a[None, :, :, 3] + e  # theta = (0, 0, 0, 1): z_i = A_i[:, 3] + e_i
-    s = np.einsum("kij,kil->jl", a, a)
-    g = np.einsum("kij,dki->dj", a, z)
-    sbb = s[:3, :3] + np.diag(lin.ridge)
-    w = np.linalg.solve(sbb, s[:3, 3])
-    info = float(s[3, 3] - s[3, :3] @ w)
-    d = (g[:, 3] - g[:, :3] @ w) / math.sqrt(max(info, 1e-300))
-    f_ok: BoolArray = np.asarray(d > lin.z_c if lin.one_sided else np.abs(d) > lin.z_c, dtype=np.bool_)
-    k = a.shape[0]
-    if k < 2:
-        return f_ok, np.ones(f_ok.shape, dtype=np.bool_)
-    c0 = np.zeros(e.shape[0])
-    c1 = np.zeros(e.shape[0])
-    for j in range(k):
-        gj = np.einsum("ij,di->dj", a[j], z[:, j])
-        sj, rest = a[j].T @ a[j], g - gj
-        t0 = _fit(s - sj, rest, lin.ridge, False)
-        t1 = _fit(s - sj, rest, lin.ridge, True)
-        if lin.bounded:  # the term's fitted range is >= 0: clipped there, the fold's fit is the plain one
+def _statistic(s: FloatArray, g: FloatArray, ridge: FloatArray, col: int) -> FloatArray:
+    """Per draw, the signed root of the cost drop of adding column ``col`` to the plain model."""
+    sbb = s[:3, :3] + np.diag(ridge)
+    w = np.linalg.solve(sbb, s[:3, col])
+    info = float(s[col, col] - s[col, :3] @ w)
+    out: FloatArray = (g[:, col] - g[:, :3] @ w) / math.sqrt(max(info, 1e-300))
+    return out
+
+
+def _held_out(
+    lin: _Linear, a: FloatArray, z: FloatArray, s: FloatArray, g: FloatArray, col: int
+) -> BoolArray:
+    """Per draw, whether adding column ``col`` lowers the summed held-out cost (leave one experiment out, the
+    physics fitted on the others; each experiment's own columns are already projected out)."""
+    c0 = np.zeros(z.shape[0])
+    c1 = np.zeros(z.shape[0])
+    for j in range(a.shape[0]):
+        sj, rest = a[j].T @ a[j], g - np.einsum("ij,di->dj", a[j], z[:, j])
+        t0 = _fit(s - sj, rest, lin.ridge, -1)
+        t1 = _fit(s - sj, rest, lin.ridge, col)
+        if col == 3 and lin.bounded:  # fitted range >= 0: clipped there, the fold's fit is the plain one
             t1 = np.where((t1[:, 3] < 0.0)[:, None], t0, t1)
         c0 += np.sum((z[:, j] - t0 @ a[j].T) ** 2, axis=1)
         c1 += np.sum((z[:, j] - t1 @ a[j].T) ** 2, axis=1)
-    return f_ok, np.asarray(c1 < c0, dtype=np.bool_)
+    return np.asarray(c1 < c0, dtype=np.bool_)
+
+
+def _named(lin: _Linear, e: FloatArray, factor: float) -> tuple[BoolArray, BoolArray, BoolArray]:
+    """Per draw (``e``: draws x k x (4 + R) standard normal), with every experiment's periods times
+    ``factor``: whether the term's F-test passes, whether the term is the step's choice (the candidate that
+    passes its F-test and the held-out test with the largest cost drop, as diagnosis/select.py orders them),
+    and whether a rival is chosen instead."""
+    a = math.sqrt(factor) * lin.a
+    z = a[None, :, :, 3] + e  # theta = (0, 0, 0, 1, 0 ...): z_i = A_i[:, 3] + e_i
+    s = np.einsum("kij,kil->jl", a, a)
+    g = np.einsum("kij,dki->dj", a, z)
+    cols = range(3, a.shape[2])
+    score = np.full((z.shape[0], len(cols)), -np.inf)
+    f_ok = np.zeros(z.shape[0], dtype=np.bool_)
+    for n, col in enumerate(cols):
+        d = _statistic(s, g, lin.ridge, col)
+        ok = d > lin.z_c if lin.one_sided[n] else np.abs(d) > lin.z_c
+        if col == 3:
+            f_ok = np.array(ok, dtype=np.bool_)  # a copy: ``ok`` is narrowed below
+        if a.shape[0] > 1 and np.any(ok):
+            ok &= _held_out(lin, a, z, s, g, col)
+        score[:, n] = np.where(ok, d**2, -np.inf)
+    chosen = np.argmax(score, axis=1)
+    any_ok = np.isfinite(score.max(axis=1))
+    return f_ok, any_ok & (chosen == 0), any_ok & (chosen != 0)
 
 
 def _linear(
@@ -158,10 +190,13 @@ def _linear(
     power: DetectionPower,
     noise_sd: float,
     substeps: int,
+    rivals: Sequence[str],
 ) -> _Linear:
     blocks = np.array(
         [
-            experiment_block(prior, e.frequency, e.amplitude, e.samples_per_period, term, size, substeps)
+            experiment_block(
+                prior, e.frequency, e.amplitude, e.samples_per_period, term, size, substeps, rivals
+            )
             * (float(e.periods) / noise_sd**2)
             for e in design
         ]
@@ -173,8 +208,14 @@ def _linear(
     h = prior.normalized().hysteresis
     par = np.array([h.beta, h.gamma, h.mu])
     scale = np.where(par != 0, np.abs(par), 1.0)
-    one = power.one_sided or physical_side(term)
-    return _Linear(_roots(blocks), VAGUE_PRIOR / scale**2, power.z_c, one, TERMS[term].bounds[0] == 0.0)
+    sided = (power.one_sided or physical_side(term), *(physical_side(t) for t in rivals))
+    return _Linear(_roots(blocks), VAGUE_PRIOR / scale**2, power.z_c, sided, TERMS[term].bounds[0] == 0.0)
+
+
+def linear_rivals(term: str, candidates: Sequence[str]) -> tuple[str, ...]:
+    """The candidates the step tests beside ``term`` whose trace is linear in their value (modelled exactly
+    in the linearised model); the others (a series dashpot, pinching, Dahl friction, ...) are not."""
+    return tuple(t for t in candidates if t != term and getattr(TERMS[t], "linear", False))
 
 
 def _fold_lams(lin: _Linear) -> tuple[float, ...]:
@@ -185,6 +226,27 @@ def _fold_lams(lin: _Linear) -> tuple[float, ...]:
         sbb = s[:3, :3] + np.diag(lin.ridge)
         out.append(max(float(s[3, 3] - s[3, :3] @ np.linalg.solve(sbb, s[:3, 3])), 0.0))
     return tuple(out)
+
+
+def _setup(
+    prior: WienerPlant,
+    design: Sequence[Any],
+    term: str,
+    size: float,
+    power: DetectionPower,
+    noise_sd: float,
+    substeps: int,
+    rivals: Optional[Sequence[str]],
+    draws: int,
+    seed: int,
+) -> tuple[_Linear, FloatArray, tuple[str, ...]]:
+    """The linearised design and its seeded standard normal draws."""
+    if not design:
+        raise InvalidParameterError("design has no experiments")
+    rv = linear_rivals(term, step_candidates(pure_sines=True) if rivals is None else rivals)
+    lin = _linear(prior, design, term, size, power, noise_sd, substeps, rv)
+    n = count("draws", draws, 100)
+    return lin, np.random.default_rng(seed).standard_normal((n, *lin.a.shape[:2])), rv
 
 
 def naming_chance(
@@ -198,32 +260,26 @@ def naming_chance(
     candidates: int = DEFAULT_CANDIDATES,
     substeps: int = 8,
     power: Optional[DetectionPower] = None,
+    rivals: Optional[Sequence[str]] = None,
     draws: int = NAMING_DRAWS,
     seed: int = 0,
 ) -> NamingChance:
     """The predicted chance that :func:`~bouc_wen_id.diagnose` names ``term`` at ``size`` on ``design``
-    (module docstring); ``power``: the design's :func:`~._power.detection_power`, computed when not given."""
+    (module docstring); ``power``: the design's :func:`~._power.detection_power`, computed when not given;
+    ``rivals``: the candidates tested beside it (default the diagnosis's on pure sines; only those linear in
+    their value are modelled, :func:`linear_rivals`; ``()``: none)."""
     pw = power or detection_power(
         prior, design, term, size, noise_sd=noise_sd, alpha=alpha, candidates=candidates, substeps=substeps
     )
-    n = count("draws", draws, 100)
-    lin = _linear(prior, design, term, size, pw, noise_sd, substeps)
-    e = np.random.default_rng(seed).standard_normal((n, lin.a.shape[0], 4))
-    f_ok, ho = _named(lin, e, 1.0)
+    lin, e, rv = _setup(prior, design, pw.term, pw.size, pw, noise_sd, substeps, rivals, draws, seed)
+    f_ok, named, rival = _named(lin, e, 1.0)
     law = LAW_ALPHA if len(design) > 1 else 0.0
-    both = float(np.mean(f_ok & ho))
     f = float(np.mean(f_ok))
+    chosen = float(np.mean(named))
     return NamingChance(
-        pw.term,
-        pw.size,
-        both * (1.0 - law),
-        f,
-        both / f if f > 0 else math.nan,
-        law,
-        _fold_lams(lin),
-        n,
-        seed,
-    )
+        pw.term, pw.size, chosen * (1.0 - law), f, float(np.mean(named & f_ok)) / f if f > 0 else math.nan,
+        float(np.mean(rival)), rv, law, _fold_lams(lin), e.shape[0], seed,
+    )  # fmt: skip
 
 
 def naming_factor(
@@ -236,6 +292,7 @@ def naming_factor(
     noise_sd: float,
     power: DetectionPower,
     substeps: int = 8,
+    rivals: Optional[Sequence[str]] = None,
     draws: int = NAMING_DRAWS,
     seed: int = 0,
 ) -> float:
@@ -243,13 +300,11 @@ def naming_factor(
     (bisection in log on the same seeded draws); inf when a thousandfold does not."""
     if not 0.0 < target < 1.0:
         raise InvalidParameterError(f"target = {target:g} must be within (0, 1)")
-    lin = _linear(prior, design, term, size, power, noise_sd, substeps)
-    e = np.random.default_rng(seed).standard_normal((draws, lin.a.shape[0], 4))
+    lin, e, _ = _setup(prior, design, term, size, power, noise_sd, substeps, rivals, draws, seed)
     keep = 1.0 - (LAW_ALPHA if len(design) > 1 else 0.0)
 
     def chance(f: float) -> float:
-        ok, ho = _named(lin, e, f)
-        return float(np.mean(ok & ho)) * keep
+        return float(np.mean(_named(lin, e, f)[1])) * keep
 
     lo, hi = 1e-3, 1e3
     if chance(hi) < target:
@@ -264,4 +319,4 @@ def naming_factor(
     return hi
 
 
-__all__ = ["NAMING_DRAWS", "NamingChance", "naming_chance", "naming_factor"]
+__all__ = ["NAMING_DRAWS", "NamingChance", "linear_rivals", "naming_chance", "naming_factor"]

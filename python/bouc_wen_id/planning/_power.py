@@ -204,25 +204,44 @@ def aug_params(prior: WienerPlant, omegas: Sequence[float]) -> AugParams:
 
 
 def experiment_block(
-    prior: WienerPlant, omega: float, amplitude: float, samples: int, term: str, size: float, substeps: int
+    prior: WienerPlant,
+    omega: float,
+    amplitude: float,
+    samples: int,
+    term: str,
+    size: float,
+    substeps: int,
+    rivals: Sequence[str] = (),
 ) -> FloatArray:
-    """``M`` (4 x 4, at unit weight: one averaged period, noise sd 1) of one sine experiment."""
+    """``M`` (4 x 4, at unit weight: one averaged period, noise sd 1) of one sine experiment; with
+    ``rivals`` (terms linear in their value, :attr:`Term.linear`) one more row and column each: the rival's
+    trace per unit value."""
     e = AugExperiment(np.zeros(samples), amplitude, omega, 0.0, 1.0)
     par = aug_params(prior, [omega])
     out = augmented_output(e, par, 0, substeps=substeps, jacobian=True)
-    r = np.asarray(augmented_output(e, par.with_term(term, size), 0, substeps=substeps)) - np.asarray(out.y)
+    y0 = np.asarray(out.y)
+    r = np.asarray(augmented_output(e, par.with_term(term, size), 0, substeps=substeps)) - y0
+    more = [
+        (np.asarray(augmented_output(e, par.with_term(t, RIVAL_STEP), 0, substeps=substeps)) - y0)
+        / RIVAL_STEP
+        for t in rivals
+    ]
     own = np.asarray(out.own_jacobian)
     u, sv, _ = np.linalg.svd(own, full_matrices=False)
     q = u[:, sv > 1e-10 * max(float(sv[0]), 1e-300)]
-    cols = np.column_stack([np.asarray(out.jacobian)[:, :3], r])
+    cols = np.column_stack([np.asarray(out.jacobian)[:, :3], r, *more])
     cols = cols - q @ (q.T @ cols)
     block: FloatArray = cols.T @ cols
     return block
 
 
+#: The value at which a rival's trace is taken (it is linear in its value: the trace per unit value).
+RIVAL_STEP = 1e-3
+
+
 def lam_of(blocks: FloatArray, periods: FloatArray, scale: FloatArray, noise_sd: float) -> float:
     """The linearised non-centrality of experiments with 4 x 4 ``blocks`` (k, 4, 4) and ``periods`` N."""
-    s = np.einsum("i,ijk->jk", periods, blocks)
+    s = np.einsum("i,ijk->jk", periods, blocks[:, :4, :4])
     sbb = s[:3, :3] + VAGUE_PRIOR * np.diag(1.0 / scale**2)
     try:
         absorbed = float(s[3, :3] @ np.linalg.solve(sbb, s[:3, 3]))
