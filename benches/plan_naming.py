@@ -126,7 +126,7 @@ def main(argv: Optional[list[str]] = None) -> int:
         f"{name.chance:.3f} (weakest fold lam {name.weakest_fold:.2f}; a linear rival chosen instead "
         f"{name.rival_named:.3f})"
     )
-    norm = prior.normalized()  # the planned size is in the alpha-normalised model's units (viscous@x: c / alpha)
+    norm = prior.normalized()  # the planned size is in the alpha-normalised model's units
     truth = bw.WienerPlant(norm.linear, norm.hysteresis, (TERMS[a.term](a.size),))
     f_k, n_k, wrong = _draws(truth, exps, a.term, noise, a.draws)
     fl, fh = interval(f_k, a.draws)

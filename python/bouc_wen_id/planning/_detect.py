@@ -89,8 +89,9 @@ class _DetectSearch(_Search):
 
 @dataclass(frozen=True, eq=False)
 class DetectionPlan(Summarised):
-    """The design that maximises the non-centrality of one term's test, its predicted power, and the naive
-    design's (evenly log-spaced frequencies at the largest amplitude, equal periods, the same budget)."""
+    """The design with the best predicted chance that the diagnosis names one term, its power to detect (the
+    term's test) and chance to name, and the naive design's (evenly log-spaced frequencies at the largest
+    amplitude, equal periods, the same budget)."""
 
     term: str
     size: float
@@ -236,8 +237,9 @@ class DetectionPlan(Summarised):
 POWER_LABEL = "power of the term's test (naming also needs the held-out test across experiments)"
 #: What the predicted chance to name is.
 NAMING_LABEL = (
-    "predicted chance to name: the share of seeded draws of the linearised model in which the F-test passes "
-    "and the held-out test improves, times the law test's acceptance; a rival named instead is not counted"
+    "predicted chance to name: the share of seeded draws of the linearised model in which the term is the "
+    "diagnosis's choice (its F-test and held-out test pass, no linear rival passes with a larger cost drop), "
+    "times the law test's acceptance; nonlinear rivals are not modelled"
 )
 #: Most experiments of the searched designs whose non-centrality is checked by a refit (and the lab's cap).
 EXPERIMENT_COUNTS = (2, 3, 4, 6)
@@ -426,7 +428,9 @@ def plan_detection(
     is never below it; one with fewer than ``min_experiments`` experiments is not taken). ``min_experiments``
     (default :data:`MIN_EXPERIMENTS` = 3): fewest experiments of the plan. The diagnosis names a term only if
     its F-test passes *and* it improves the held-out fit (leave-one-experiment-out), which two experiments
-    pass too rarely and one cannot run; the reported power is the F-test's (:data:`POWER_LABEL`). Designs
+    pass too rarely and one cannot run; the reported power is the F-test's (:data:`POWER_LABEL`), reported
+    beside the predicted chance to name (:data:`NAMING_LABEL`, ``_naming``), by which designs are compared
+    and :meth:`DetectionPlan.scaled` scales. Designs
     the search finds with fewer are grown to it (:func:`_grown`) before any fallback to the naive design.
     Every other keyword is :func:`~bouc_wen_id.plan_experiment`'s (the lab limits and the
     candidate grid). The search maximises the first-order non-centrality (``_power``); the planned and the
@@ -435,7 +439,9 @@ def plan_detection(
     Raises
     ------
     InvalidParameterError
-        An unknown or undetectable term, a zero or out-of-range size, a bad budget (zero, negative, too
+        An unknown or undetectable term (:class:`~._power.TwoParameterTermError` for Dahl friction), a zero,
+        NaN or out-of-range size, a size whose force dwarfs the plant's
+        (:class:`~._power.OversizedTermError`), a bad budget (zero, negative, too
         small for one experiment) or any of :func:`~bouc_wen_id.plan_experiment`'s input errors; a design
         on which the term leaves nothing the plain model cannot absorb.
     """
