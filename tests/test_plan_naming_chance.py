@@ -148,3 +148,9 @@ def test_cli_says_the_term_is_oversized(capsys: pytest.CaptureFixture[str]) -> N
     assert cli.main(argv) != 0
     err = capsys.readouterr().err
     assert "OversizedTermError" in err and "NonFiniteError" not in err and "clean or drop" not in err
+
+
+@pytest.mark.parametrize("term", ["offset", "sensor_lag", "series_dashpot", "stiffness@x"])
+def test_any_term_beyond_floating_point_gets_the_named_error(term: str) -> None:
+    with pytest.raises(OversizedTermError, match=term):
+        bw.plan_detection(PRIOR, 100.0, {term: 1e308}, **LAB)

@@ -117,9 +117,10 @@ class OversizedTermError(InvalidParameterError):
     """A size whose term would dwarf the plant's own hysteretic output (:func:`check_scale`)."""
 
 
-#: Largest ratio of a planned term's force to the plain model's output (peak to peak, at the largest
-#: amplitude, across the band) taken as a term missing from an identified model: beyond it the prior is not
-#: the plant (the term would be the plant), and its output overflows at sizes such as 1e308.
+#: Largest ratio of a planned term's change of the output (its largest magnitude) to the plain model's
+#: output (peak to peak), at the largest amplitude, across the band, taken as a term missing from an
+#: identified model: beyond it the prior is not the plant (the term would be the plant), and its output
+#: overflows at sizes such as 1e308.
 MAX_TERM_RATIO = 100.0
 
 
@@ -134,8 +135,9 @@ def _output(e: AugExperiment, par: AugParams) -> Optional[FloatArray]:
 
 
 def check_scale(prior: WienerPlant, term: str, size: float, band: Sequence[float], amplitude: float) -> float:
-    """The ratio of the term's force to the plain model's output at ``amplitude`` and the band's edges
-    (peak to peak, the larger); :class:`OversizedTermError` above :data:`MAX_TERM_RATIO` or non-finite."""
+    """The ratio of the term's change of the output (its largest magnitude: an offset counts) to the plain
+    model's output (peak to peak) at ``amplitude`` and the band's edges, the larger;
+    :class:`OversizedTermError` above :data:`MAX_TERM_RATIO` or non-finite."""
     ratio = 0.0
     for omega in (float(band[0]), float(band[-1])):
         e = AugExperiment(np.zeros(64), amplitude, omega, 0.0, 1.0)
@@ -144,12 +146,13 @@ def check_scale(prior: WienerPlant, term: str, size: float, band: Sequence[float
         if y0 is None or y1 is None or not np.all(np.isfinite(y1)):
             ratio = math.inf
             break
-        ratio = max(ratio, float(np.ptp(y1 - y0)) / max(float(np.ptp(y0)), 1e-300))
+        ratio = max(ratio, float(np.max(np.abs(y1 - y0))) / max(float(np.ptp(y0)), 1e-300))
     if not ratio <= MAX_TERM_RATIO:
         times = "beyond floating point (the model output overflows) against" if math.isinf(ratio) else ""
         raise OversizedTermError(
-            f"detect[{term!r}] = {size:g}: the term's force would be {times or f'{ratio:.3g}x'}"
-            f" the plant's hysteretic output at the largest amplitude {amplitude:g} across the band "
+            f"detect[{term!r}] = {size:g}: the term's change of the output would be "
+            f"{times or f'{ratio:.3g}x'} the plant's hysteretic output (peak to peak) at the largest "
+            f"amplitude {amplitude:g} across the band "
             f"({float(band[0]):g}-{float(band[-1]):g} rad/s); a plan is for a term missing from a model that "
             f"otherwise fits, at most {MAX_TERM_RATIO:g}x. Check the size's units ({TERMS[term].unit or '-'}"
             " in the alpha-normalised model) or the prior plant"
