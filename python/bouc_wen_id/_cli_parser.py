@@ -353,8 +353,10 @@ def _add_plan_parser(sub: Any) -> None:
         "--detect",
         default=None,
         metavar="TERM=SIZE",
-        help="plan to detect one term of this size instead (e.g. sensor_lag=1e-3: the design that maximises "
-        "the power of the diagnosis's test of it; --target is then not used)",
+        help="plan to detect one term of this size instead (e.g. sensor_lag=1e-3, in the alpha-normalised "
+        "model's units: the design with the best predicted chance that the diagnosis names it, reported with "
+        "the power of its test; Dahl friction is not plannable: plan its coulomb or stiffness limit; "
+        "--target is then not used)",
     )
     p.add_argument(
         "--diagnosis-alpha", type=_level, default=0.05, help="with --detect: the diagnosis's alpha (0.05)"

@@ -62,8 +62,16 @@ the naive design), ``_result`` (the result types).
 from __future__ import annotations
 
 from ._detect import MIN_EXPERIMENTS, DetectionPlan, plan_detection
+from ._naming import NamingChance, naming_chance, naming_factor
 from ._plan import plan_experiment
-from ._power import DETECTABLE, DetectionPower, UnphysicalSizeError, detection_power
+from ._power import (
+    DETECTABLE,
+    DetectionPower,
+    OversizedTermError,
+    TwoParameterTermError,
+    UnphysicalSizeError,
+    detection_power,
+)
 from ._result import TARGETS, Design, ExperimentPlan, PlannedExperiment, Target
 from ._search import criterion_value
 from ._settings import (
@@ -76,6 +84,11 @@ from ._settings import (
 )
 
 __all__ = [
+    "NamingChance",
+    "naming_chance",
+    "naming_factor",
+    "OversizedTermError",
+    "TwoParameterTermError",
     "Target",
     "PlannedExperiment",
     "Design",

@@ -24,11 +24,13 @@ from .._text import Summarised
 from ..errors import InvalidParameterError
 from ..model import WienerPlant
 from ..validation import count, real_number
+from ._naming import NamingChance, naming_chance, naming_factor
 from ._plan import _experiments, _naive_experiments
 from ._power import (
     DEFAULT_CANDIDATES,
     DetectionPower,
     check_detect,
+    check_scale,
     detection_power,
     experiment_block,
     lam_of,
@@ -87,8 +89,9 @@ class _DetectSearch(_Search):
 
 @dataclass(frozen=True, eq=False)
 class DetectionPlan(Summarised):
-    """The design that maximises the non-centrality of one term's test, its predicted power, and the naive
-    design's (evenly log-spaced frequencies at the largest amplitude, equal periods, the same budget)."""
+    """The design with the best predicted chance that the diagnosis names one term, its power to detect (the
+    term's test) and chance to name, and the naive design's (evenly log-spaced frequencies at the largest
+    amplitude, equal periods, the same budget)."""
 
     term: str
     size: float
@@ -100,15 +103,34 @@ class DetectionPlan(Summarised):
     naive_experiments: tuple[PlannedExperiment, ...]
     naive: Optional[DetectionPower]
     settings: dict[str, Any] = field(repr=False)
+    #: The predicted chance that the diagnosis names the term on the plan and the naive design (``_naming``).
+    naming: Optional[NamingChance] = None
+    naive_naming: Optional[NamingChance] = None
+    _factors: dict[float, float] = field(default_factory=dict, repr=False, compare=False)
 
     @property
     def total_time(self) -> float:
         return self.predicted.total_time
 
+    def periods_factor(self, power: float = 0.9) -> float:
+        """Factor on every experiment's periods that brings both the power to detect and the predicted chance
+        to name to ``power`` (the naming's, :func:`~._naming.naming_factor`, when the plan has it)."""
+        if power not in self._factors:
+            f = self.predicted.periods_factor(power)
+            if self.naming is not None and math.isfinite(f):
+                more = naming_factor(
+                    self.prior, self.experiments, self.term, self.size, power, noise_sd=self.noise_sd,
+                    power=self.predicted, substeps=int(self.settings.get("substeps", 8)),
+                )  # fmt: skip
+                f = max(f, more)
+            self._factors[power] = f
+        return self._factors[power]
+
     def scaled(self, power: float = 0.9) -> tuple[PlannedExperiment, ...]:
-        """The planned design with every experiment's periods raised to reach ``power`` (the non-centrality
-        grows as the periods; settling and overhead are paid once); empty when it cannot."""
-        f = self.predicted.periods_factor(power)
+        """The planned design with every experiment's periods raised so that the chance to name (and the power
+        to detect) reaches ``power`` (both grow with the periods; settling and overhead are paid once);
+        empty when it cannot."""
+        f = self.periods_factor(power)
         if not math.isfinite(f):
             return ()
         return tuple(replace(e, periods=max(e.periods, math.ceil(f * e.periods))) for e in self.experiments)
@@ -144,18 +166,27 @@ class DetectionPlan(Summarised):
                 f"  {i:>2} {e.frequency:>11.4g} {e.frequency / (2 * math.pi):>8.4g} {e.amplitude:>9.4g} "
                 f"{e.samples_per_period:>5d} {e.settle_periods:>6d} {e.periods:>6d} {e.duration:>8.2f}"
             )
-        lines.append(f"  {'':<8} {'lam (1st order)':>16} {'lam (refit)':>12} {'power*':>7}")
-        for name, d in (("planned", p), ("naive", self.naive)):
+        lines.append(
+            f"  {'':<8} {'lam (1st order)':>16} {'lam (refit)':>12} {'weakest fold':>12} {'detect*':>7} "
+            f"{'name**':>6}"
+        )
+        for name, d, c in (("planned", p, self.naming), ("naive", self.naive, self.naive_naming)):
             if d is not None:
-                lines.append(f"  {name:<8} {d.lam_linear:>16.3g} {d.lam:>12.3g} {d.power:>7.3f}")
+                fold = f"{c.weakest_fold:>12.3g}" if c is not None and c.fold_lams else f"{'-':>12}"
+                named = f"{c.chance:>6.3f}" if c is not None else f"{'-':>6}"
+                lines.append(
+                    f"  {name:<8} {d.lam_linear:>16.3g} {d.lam:>12.3g} {fold} {d.power:>7.3f} {named}"
+                )
         lines.append(f"  * {POWER_LABEL}")
+        lines.append(f"  ** {NAMING_LABEL}")
         lines.append(self._naming_note())
         need = self.budget_for(0.9)
-        if p.power < 0.9 and math.isfinite(need):
-            f = p.periods_factor(0.9)
+        chance = self.naming.chance if self.naming is not None else p.power
+        if min(p.power, chance) < 0.9 and math.isfinite(need):
             lines.append(
-                f"90 % power needs {f:.2g}x the periods in every experiment of this design: "
-                f"about {need:.0f} s."
+                f"a 90 % {'chance to name' if self.naming is not None else 'power'} needs "
+                f"{self.periods_factor(0.9):.2g}x the periods in every experiment of this design: about "
+                f"{need:.0f} s."
             )
         return "\n".join(lines)
 
@@ -191,7 +222,10 @@ class DetectionPlan(Summarised):
             "predicted": self.predicted.to_dict(),
             "naive_experiments": [e.to_dict() for e in self.naive_experiments],
             "naive": None if self.naive is None else self.naive.to_dict(),
+            "naming": None if self.naming is None else self.naming.to_dict(),
+            "naive_naming": None if self.naive_naming is None else self.naive_naming.to_dict(),
             "power_is": POWER_LABEL,
+            "naming_is": NAMING_LABEL,
             "budget_for_90": self.budget_for(0.9) if math.isfinite(self.budget_for(0.9)) else None,
         }
 
@@ -201,6 +235,12 @@ class DetectionPlan(Summarised):
 
 #: What the reported power is: the term's F-test's, not the naming's.
 POWER_LABEL = "power of the term's test (naming also needs the held-out test across experiments)"
+#: What the predicted chance to name is.
+NAMING_LABEL = (
+    "predicted chance to name: the share of seeded draws of the linearised model in which the term is the "
+    "diagnosis's choice (its F-test and held-out test pass, no linear rival passes with a larger cost drop), "
+    "times the law test's acceptance; nonlinear rivals are not modelled"
+)
 #: Most experiments of the searched designs whose non-centrality is checked by a refit (and the lab's cap).
 EXPERIMENT_COUNTS = (2, 3, 4, 6)
 #: Fewest experiments of a plan by default: the diagnosis names a term only if it also improves the
@@ -277,15 +317,16 @@ def _best_design(
     size: float,
     kw: dict[str, Any],
     least: int = MIN_EXPERIMENTS,
-) -> tuple[tuple[PlannedExperiment, ...], DetectionPower]:
+) -> tuple[tuple[PlannedExperiment, ...], tuple[DetectionPower, NamingChance]]:
     """The searched designs with at most 2, 3, 4, 6 and ``max_experiments`` experiments, each grown to
     ``least`` experiments where it has fewer (:func:`_grown`) and checked by a refit of the plain model; the
-    one with the largest refitted non-centrality. The first-order projection the search maximises overstates
+    one with the largest predicted chance to name (``_naming``), then the largest refitted non-centrality.
+    The first-order projection the search maximises overstates
     what the refit leaves where the plain parameters move far (a sensor lag: 4x on the bench's default
     design), and the more so the fewer experiments pin them (a series dashpot on one experiment: 9x), so the
     count of experiments is chosen on the refit."""
     search = _DetectSearch(prior, grid, st, term, size)
-    best: Optional[tuple[tuple[PlannedExperiment, ...], DetectionPower]] = None
+    best: Optional[tuple[tuple[PlannedExperiment, ...], tuple[DetectionPower, NamingChance]]] = None
     seen: set[tuple[PlannedExperiment, ...]] = set()
     for m in sorted({c for c in EXPERIMENT_COUNTS if least <= c < st.max_exp} | {st.max_exp}):
         sub = replace(st, max_exp=m)
@@ -298,8 +339,8 @@ def _best_design(
         if exps in seen:
             continue
         seen.add(exps)
-        pw = detection_power(prior, exps, term, size, **kw)
-        if best is None or pw.lam_used > best[1].lam_used:
+        pw = _rated(prior, exps, term, size, kw)
+        if best is None or _better(pw, best[1]):
             best = (exps, pw)
     if best is None:  # no searched design has ``least`` experiments: the naive one with that many
         naive = tuple(_naive_experiments(st, budget, least, grid) or ())
@@ -307,8 +348,50 @@ def _best_design(
             raise InvalidParameterError(
                 f"within budget = {budget:g} s no design of min_experiments = {least} experiments fits"
             )
-        best = (naive, detection_power(prior, naive, term, size, **kw))
+        best = (naive, _rated(prior, naive, term, size, kw))
     return best
+
+
+def _with_baseline(
+    prior: WienerPlant,
+    baseline: Sequence[PlannedExperiment],
+    budget: float,
+    least: int,
+    experiments: tuple[PlannedExperiment, ...],
+    planned: tuple[DetectionPower, NamingChance],
+    kw: dict[str, Any],
+) -> tuple[tuple[PlannedExperiment, ...], tuple[DetectionPower, NamingChance]]:
+    """The user's own design in place of the plan where it is the better one (:func:`_better`) and has
+    ``least`` experiments."""
+    base = tuple(baseline)
+    if not base or not all(isinstance(e, PlannedExperiment) for e in base):
+        raise InvalidParameterError("baseline must be a non-empty sequence of PlannedExperiment")
+    if sum(e.duration for e in base) > budget * (1 + 1e-9):
+        raise InvalidParameterError(
+            f"baseline takes {sum(e.duration for e in base):.4g} s, more than budget = {budget:g} s"
+        )
+    term, size = planned[0].term, planned[0].size
+    own = _rated(prior, base, term, size, kw)
+    if len(base) >= least and _better(own, planned):  # the user's design is a candidate too
+        return base, own
+    return experiments, planned
+
+
+def _rated(
+    prior: WienerPlant, exps: Sequence[PlannedExperiment], term: str, size: float, kw: dict[str, Any]
+) -> tuple[DetectionPower, NamingChance]:
+    """A design's power to detect and its predicted chance to name."""
+    pw = detection_power(prior, exps, term, size, **kw)
+    return pw, naming_chance(prior, exps, term, size, power=pw, **kw)
+
+
+def _better(a: tuple[DetectionPower, NamingChance], b: tuple[DetectionPower, NamingChance]) -> bool:
+    """Whether design ``a`` is the better plan: the larger chance to name (beyond its Monte Carlo error),
+    then the larger non-centrality."""
+    da, db = a[1].chance, b[1].chance
+    if abs(da - db) > 2.0 * math.sqrt(0.25 / min(a[1].draws, b[1].draws)):
+        return da > db
+    return a[0].lam_used > b[0].lam_used
 
 
 def plan_detection(
@@ -345,7 +428,9 @@ def plan_detection(
     is never below it; one with fewer than ``min_experiments`` experiments is not taken). ``min_experiments``
     (default :data:`MIN_EXPERIMENTS` = 3): fewest experiments of the plan. The diagnosis names a term only if
     its F-test passes *and* it improves the held-out fit (leave-one-experiment-out), which two experiments
-    pass too rarely and one cannot run; the reported power is the F-test's (:data:`POWER_LABEL`). Designs
+    pass too rarely and one cannot run; the reported power is the F-test's (:data:`POWER_LABEL`), reported
+    beside the predicted chance to name (:data:`NAMING_LABEL`, ``_naming``), by which designs are compared
+    and :meth:`DetectionPlan.scaled` scales. Designs
     the search finds with fewer are grown to it (:func:`_grown`) before any fallback to the naive design.
     Every other keyword is :func:`~bouc_wen_id.plan_experiment`'s (the lab limits and the
     candidate grid). The search maximises the first-order non-centrality (``_power``); the planned and the
@@ -354,7 +439,9 @@ def plan_detection(
     Raises
     ------
     InvalidParameterError
-        An unknown or undetectable term, a zero or out-of-range size, a bad budget (zero, negative, too
+        An unknown or undetectable term (:class:`~._power.TwoParameterTermError` for Dahl friction), a zero,
+        NaN or out-of-range size, a size whose force dwarfs the plant's
+        (:class:`~._power.OversizedTermError`), a bad budget (zero, negative, too
         small for one experiment) or any of :func:`~bouc_wen_id.plan_experiment`'s input errors; a design
         on which the term leaves nothing the plain model cannot absorb.
     """
@@ -370,6 +457,7 @@ def plan_detection(
         "detect", band, max_amplitude, noise_sd, sample_rate, max_rate, n_frequencies, n_amplitudes,
         settle_periods, overhead, max_samples_per_period, min_periods, max_experiments, substeps, backend,
     )  # fmt: skip
+    check_scale(prior_plant, term, size, (st.lo, st.hi), st.max_amplitude)  # before the first simulation
     grid = _grid(st, budget)
     kw: dict[str, Any] = {
         "noise_sd": st.noise_sd,
@@ -385,29 +473,22 @@ def plan_detection(
         )
     experiments, planned = _best_design(prior_plant, st, grid, budget, term, size, kw, least)
     if baseline is not None:
-        base = tuple(baseline)
-        if not base or not all(isinstance(e, PlannedExperiment) for e in base):
-            raise InvalidParameterError("baseline must be a non-empty sequence of PlannedExperiment")
-        if sum(e.duration for e in base) > budget * (1 + 1e-9):
-            raise InvalidParameterError(
-                f"baseline takes {sum(e.duration for e in base):.4g} s, more than budget = {budget:g} s"
-            )
-        own = detection_power(prior_plant, base, term, size, **kw)
-        if len(base) >= least and own.lam_used > planned.lam_used:  # the user's design is a candidate too
-            experiments, planned = base, own
+        experiments, planned = _with_baseline(prior_plant, baseline, budget, least, experiments, planned, kw)
     naive_exps = tuple(_naive_experiments(st, budget, len(experiments), grid) or ())
-    naive = detection_power(prior_plant, naive_exps, term, size, **kw) if naive_exps else None
+    naive = _rated(prior_plant, naive_exps, term, size, kw) if naive_exps else None
     if (
-        naive is not None and len(naive_exps) >= least and naive.lam_used > planned.lam_used
+        naive is not None and len(naive_exps) >= least and _better(naive, planned)
     ):  # the search is local: never worse than naive
         experiments, planned = naive_exps, naive
-    if not planned.lam_used > 0.0:
+    if not planned[0].lam_used > 0.0:
         raise InvalidParameterError(
             f"{term} = {size:g}: the plain model absorbs all of it on every design searched; nothing to plan"
         )
     return DetectionPlan(
-        term, size, prior_plant, budget, st.noise_sd, experiments, planned, naive_exps, naive,
+        term, size, prior_plant, budget, st.noise_sd, experiments, planned[0], naive_exps,
+        None if naive is None else naive[0],
         {**st.to_dict(grid.omegas), "alpha": lvl, "candidates": n_cand, "min_experiments": least},
+        planned[1], None if naive is None else naive[1],
     )  # fmt: skip
 
 

@@ -64,19 +64,20 @@ def check_detect(detect: object) -> tuple[str, float]:
             f"detect must be a mapping of one term to its size, e.g. {{'sensor_lag': 1e-3}}; got {detect!r}"
         )
     ((term, size),) = detect.items()
-    if term in TERMS and (TERMS[term].companion or TERMS[term].part_of):
-        raise InvalidParameterError(
-            f"detect: {term!r} is one of a two-parameter element's parameters (fitted together with "
-            f"{TERMS[term].companion or TERMS[term].part_of!r}); a plan for one size cannot describe it. The "
-            f"terms a sine design can be planned to detect are {', '.join(DETECTABLE)}"
-        )
+    if isinstance(term, str) and term in TERMS and (TERMS[term].companion or TERMS[term].part_of):
+        raise TwoParameterTermError(two_parameter_text(term))
     if term not in DETECTABLE:
         raise InvalidParameterError(
             f"detect: unknown or undetectable term {term!r}; the terms a sine design can be planned to "
             "detect "
             f"are {', '.join(DETECTABLE)}"
         )
-    value = real_number(f"detect[{term!r}]", size)
+    try:
+        value = real_number(f"detect[{term!r}]", size)
+    except BoucWenIdError as err:  # NaN, infinity, not a number: the user's size, said as such
+        raise InvalidParameterError(
+            f"detect[{term!r}] = {size!r}: a term's size must be a finite number in the term's units"
+        ) from err
     lo, hi = TERMS[term].bounds
     if value == 0.0:
         raise InvalidParameterError(f"detect[{term!r}] = 0: a term of size 0 has nothing to detect")
@@ -88,6 +89,75 @@ def check_detect(detect: object) -> tuple[str, float]:
             f"{min(hi, phi):g}] ({what}): the diagnosis never names such a value, so no design detects it"
         )
     return term, value
+
+
+def two_parameter_text(term: str) -> str:
+    """Why a two-parameter element (Dahl friction) cannot be planned for one size; what to plan instead."""
+    element = TERMS[term].part_of or term
+    # the same place's limits (a Dahl element on x: its limits on x), ``Term.limits``: spring, then sliding
+    spring, sliding = (*getattr(TERMS[element], "limits", ()), "its spring limit", "its sliding limit")[:2]
+    cls, sym = TERMS[element], TERMS[element].symbol
+    return (
+        f"detect: {term!r} is a parameter of {element!r} ({cls.label}), a two-parameter element (its level "
+        f"{sym} and {cls.companion!r}) that the diagnosis fits and tests together (an F-test of 2 degrees of "
+        f"freedom). One size cannot describe it: its trace, and so the power, depend on the ratio sigma A / "
+        f"{sym} (A the travel amplitude) as much as on the level, and at the null (level 0) the companion's "
+        "Jacobian column is zero, so the planner's first-order projection of a one-parameter term does not "
+        f"exist. Plan for the limit you expect instead: {sliding!r} = the level (sliding: sigma A / Fc >> "
+        f"1) or {spring!r} = sigma (a spring: sigma A / Fc << 1); the diagnosis tests those too. "
+        f"Plannable terms: {', '.join(DETECTABLE)}"
+    )
+
+
+class TwoParameterTermError(InvalidParameterError):
+    """A parameter of a two-parameter element (Dahl friction) given to a one-size plan (``check_detect``)."""
+
+
+class OversizedTermError(InvalidParameterError):
+    """A size whose term would dwarf the plant's own hysteretic output (:func:`check_scale`)."""
+
+
+#: Largest ratio of a planned term's change of the output (its largest magnitude) to the plain model's
+#: output (peak to peak), at the largest amplitude, across the band, taken as a term missing from an
+#: identified model: beyond it the prior is not the plant (the term would be the plant), and its output
+#: overflows at sizes such as 1e308.
+MAX_TERM_RATIO = 100.0
+
+
+def _output(e: AugExperiment, par: AugParams) -> Optional[FloatArray]:
+    """One steady period of the model's output; None where it overflows (a term beyond floating point)."""
+    try:
+        with np.errstate(over="ignore", invalid="ignore"):
+            y = np.asarray(augmented_output(e, par, 0, substeps=4), dtype=np.float64)
+    except (BoucWenIdError, FloatingPointError, OverflowError):
+        return None
+    return y if np.all(np.isfinite(y)) else None
+
+
+def check_scale(prior: WienerPlant, term: str, size: float, band: Sequence[float], amplitude: float) -> float:
+    """The ratio of the term's change of the output (its largest magnitude: an offset counts) to the plain
+    model's output (peak to peak) at ``amplitude`` and the band's edges, the larger;
+    :class:`OversizedTermError` above :data:`MAX_TERM_RATIO` or non-finite."""
+    ratio = 0.0
+    for omega in (float(band[0]), float(band[-1])):
+        e = AugExperiment(np.zeros(64), amplitude, omega, 0.0, 1.0)
+        par = aug_params(prior, [omega])
+        y0, y1 = _output(e, par), _output(e, par.with_term(term, size))
+        if y0 is None or y1 is None or not np.all(np.isfinite(y1)):
+            ratio = math.inf
+            break
+        ratio = max(ratio, float(np.max(np.abs(y1 - y0))) / max(float(np.ptp(y0)), 1e-300))
+    if not ratio <= MAX_TERM_RATIO:
+        times = "beyond floating point (the model output overflows) against" if math.isinf(ratio) else ""
+        raise OversizedTermError(
+            f"detect[{term!r}] = {size:g}: the term's change of the output would be "
+            f"{times or f'{ratio:.3g}x'} the plant's hysteretic output (peak to peak) at the largest "
+            f"amplitude {amplitude:g} across the band "
+            f"({float(band[0]):g}-{float(band[-1]):g} rad/s); a plan is for a term missing from a model that "
+            f"otherwise fits, at most {MAX_TERM_RATIO:g}x. Check the size's units ({TERMS[term].unit or '-'}"
+            " in the alpha-normalised model) or the prior plant"
+        )
+    return ratio
 
 
 class UnphysicalSizeError(InvalidParameterError):
@@ -137,25 +207,44 @@ def aug_params(prior: WienerPlant, omegas: Sequence[float]) -> AugParams:
 
 
 def experiment_block(
-    prior: WienerPlant, omega: float, amplitude: float, samples: int, term: str, size: float, substeps: int
+    prior: WienerPlant,
+    omega: float,
+    amplitude: float,
+    samples: int,
+    term: str,
+    size: float,
+    substeps: int,
+    rivals: Sequence[str] = (),
 ) -> FloatArray:
-    """``M`` (4 x 4, at unit weight: one averaged period, noise sd 1) of one sine experiment."""
+    """``M`` (4 x 4, at unit weight: one averaged period, noise sd 1) of one sine experiment; with
+    ``rivals`` (terms linear in their value, :attr:`Term.linear`) one more row and column each: the rival's
+    trace per unit value."""
     e = AugExperiment(np.zeros(samples), amplitude, omega, 0.0, 1.0)
     par = aug_params(prior, [omega])
     out = augmented_output(e, par, 0, substeps=substeps, jacobian=True)
-    r = np.asarray(augmented_output(e, par.with_term(term, size), 0, substeps=substeps)) - np.asarray(out.y)
+    y0 = np.asarray(out.y)
+    r = np.asarray(augmented_output(e, par.with_term(term, size), 0, substeps=substeps)) - y0
+    more = [
+        (np.asarray(augmented_output(e, par.with_term(t, RIVAL_STEP), 0, substeps=substeps)) - y0)
+        / RIVAL_STEP
+        for t in rivals
+    ]
     own = np.asarray(out.own_jacobian)
     u, sv, _ = np.linalg.svd(own, full_matrices=False)
     q = u[:, sv > 1e-10 * max(float(sv[0]), 1e-300)]
-    cols = np.column_stack([np.asarray(out.jacobian)[:, :3], r])
+    cols = np.column_stack([np.asarray(out.jacobian)[:, :3], r, *more])
     cols = cols - q @ (q.T @ cols)
     block: FloatArray = cols.T @ cols
     return block
 
 
+#: The value at which a rival's trace is taken (it is linear in its value: the trace per unit value).
+RIVAL_STEP = 1e-3
+
+
 def lam_of(blocks: FloatArray, periods: FloatArray, scale: FloatArray, noise_sd: float) -> float:
     """The linearised non-centrality of experiments with 4 x 4 ``blocks`` (k, 4, 4) and ``periods`` N."""
-    s = np.einsum("i,ijk->jk", periods, blocks)
+    s = np.einsum("i,ijk->jk", periods, blocks[:, :4, :4])
     sbb = s[:3, :3] + VAGUE_PRIOR * np.diag(1.0 / scale**2)
     try:
         absorbed = float(s[3, :3] @ np.linalg.solve(sbb, s[:3, 3]))
@@ -274,6 +363,10 @@ __all__ = [
     "DEFAULT_CANDIDATES",
     "DetectionPower",
     "UnphysicalSizeError",
+    "TwoParameterTermError",
+    "OversizedTermError",
+    "MAX_TERM_RATIO",
+    "check_scale",
     "detection_power",
     "check_detect",
 ]
