@@ -15,7 +15,18 @@ from ..budget import check_environment
 from ..errors import InvalidParameterError
 from ..terms import DIAGNOSIS_CANDIDATES, TERMS, Distortion, Offset, physical_value
 from ..validation import real_number
-from . import age, baseline, beside, free_dc, gate, law_untested, loop_centre, resolution, zero_drift
+from . import (
+    age,
+    baseline,
+    beside,
+    free_dc,
+    gate,
+    input_note,
+    law_untested,
+    loop_centre,
+    resolution,
+    zero_drift,
+)
 from .candidates import step_candidates
 from .caveats import alternatives_text, below_saturation, caveats_of, unphysical_places_text
 from .centre_only import clause as _centres_only
@@ -725,7 +736,7 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
         fexps,
     )
     verdict += (centre or _law_text(steps)) + beside.text(steps) + unphysical_places_text(steps, named)
-    verdict += law_untested.text(named, fexps)  # a named term acting on fewer than two experiments
+    verdict += law_untested.text(named, fexps) + input_note.text(status, (*named, *partial), fexps)
     alternatives = tuple(a for st in steps for a in st.alternatives) + _drift_alternatives(deg, named_deg)
     verdict += alternatives_text(alternatives, named) + caveats_of(named, fsx, final, fexps, alpha, substeps)
     setup.report("held-out check of the final model", 0, 1)
