@@ -26,6 +26,8 @@ import numpy as np
 from ..terms import Distortion
 from .data import DiagExperiment
 
+#: The clause's opening words (a bench scores a verdict by them: ``benches/blind.py``).
+MARK = "; the measured input is not a sine"
 #: An input harmonic is said when it would move the output's harmonic beyond this many standard errors
 #: (chi-square of that harmonic of one experiment, 2 dof, at this size squared): the harmonic times the
 #: output's amplitude, the loop's gain at the fundamental standing in for its gain there.
@@ -72,13 +74,16 @@ def text(status: str, named: Sequence[Any], exps: Sequence[DiagExperiment]) -> s
         return ""
     src, k, mag = big
     out = (
-        f"; the measured input is not a sine ({src}: harmonic {k} at {100 * mag:.2g} % of the fundamental; "
+        f"{MARK} ({src}: harmonic {k} at {100 * mag:.2g} % of the fundamental; "
         f"{sum(bool(e.waveform.size) for e in exps)} of {len(exps)} inputs carry harmonics): a clipped or "
-        "distorted drive, not device physics. Its harmonics reach the output through G at frequencies "
-        "above the tested band, which these experiments do not measure, so a residual at the input's "
-        "harmonics can be the input's; a clean sine at those levels, or G measured up to "
-        f"{k} times the highest frequency, would tell"
+        "distorted drive, not device physics"
     )
+    if status != "explained":  # a residual is left: where it may come from
+        out += (
+            ". Its harmonics reach the output through G at frequencies above the tested band, which these "
+            "experiments do not measure, so a residual at the input's harmonics can be the input's; a clean "
+            f"sine at those levels, or G measured up to {k} times the highest frequency, would tell"
+        )
     if lam is not None and _far(float(lam.value), float(lam.standard_error)):
         out += (
             f"; {lam.symbol} = {lam.value:.3g} is far from 1 (the measured waveform through the G carried "
@@ -94,4 +99,4 @@ def _far(value: float, se: float) -> bool:
     )
 
 
-__all__ = ["VISIBLE_SE", "LAM_FAR", "largest", "visible", "text"]
+__all__ = ["MARK", "VISIBLE_SE", "LAM_FAR", "largest", "visible", "text"]
