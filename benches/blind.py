@@ -625,7 +625,8 @@ def probe_non_integer(seed: int) -> str:
 
 def score(case: Case, d: Any) -> tuple[str, str]:
     """(category, what was named): right, place, wrong, unexplained, adequate; nulls: adequate, named,
-    unexplained; outside: unexplained, family (the caveated equivalent, FAMILY), named, partly, adequate."""
+    unexplained, input (:func:`_input_said`); outside: unexplained, family (the caveated equivalent,
+    FAMILY), named, partly, adequate."""
     named = [t.term for t in d.named]
     status = str(d.status)
     if case.design == "clipped":  # the input's own waveform is not device physics: the input IS distorted
@@ -637,6 +638,8 @@ def score(case: Case, d: Any) -> tuple[str, str]:
     if case.effect == "null" or case.effect in OUTSIDE:
         if status == "adequate":
             return "adequate", text
+        if case.effect == "null" and not named and _input_said(str(getattr(d, "verdict", ""))):
+            return "input", text  # a misfit the verdict puts on the measured input's own harmonics
         if named and _family(case.effect, named, str(getattr(d, "verdict", ""))):
             return "family", text
         if named:
@@ -727,7 +730,8 @@ def quick_cases(args: argparse.Namespace) -> list[Case]:
 
 GOOD = {"lib": ("right",), "null": ("adequate",), "outside": ("unexplained", "family")}
 COLUMNS = (
-    "right", "place", "wrong", "unexplained", "family", "adequate", "named", "partly", "refused", "error"
+    "right", "place", "wrong", "unexplained", "family", "adequate", "input", "named", "partly", "refused",
+    "error",
 )  # fmt: skip
 
 #: An outside effect, the term a library caveat ties to it, and the module and mark of that caveat: a
@@ -743,6 +747,18 @@ FAMILY = {
 def _other_place(a: str, b: str) -> bool:
     """Are two code names one term at two places (viscous and viscous@x)?"""
     return a != b and a.split("@")[0] == b.split("@")[0]
+
+
+def _input_said(verdict: str) -> bool:
+    """Does the verdict say the measured input is not a sine (diagnosis.input_note's mark)? A null with a
+    distorted input whose misfit the verdict leaves "unexplained" with that clause and no term named is
+    scored "input": the input's harmonics through G above the band are the truth here, and the verdict
+    names them; it is counted apart from "adequate" (the model does not fit)."""
+    try:
+        mark = getattr(importlib.import_module("bouc_wen_id.diagnosis.input_note"), "MARK", None)
+    except ImportError:
+        mark = None
+    return bool(mark) and str(mark).lstrip("; ") in verdict
 
 
 def _family(effect: str, named: list[str], verdict: str) -> bool:

@@ -265,3 +265,21 @@ def test_score_reads_the_input_waveform_as_the_input_in_the_clipped_design() -> 
     assert blind.score(vis, _diag("explained", ["viscous", "distortion"], []))[0] == "right"
     other = blind.Case("null", 0.0, 0, 1, None, 1.0, "grid3x3")
     assert blind.score(other, _diag("explained", ["distortion"], []))[0] == "named"
+
+
+def test_score_counts_a_null_whose_verdict_names_the_distorted_input_apart() -> None:
+    """A null left "unexplained" with the input clause of diagnosis.input_note and nothing named is "input"
+    (counted apart from adequate); without the clause, or with a device term named, it is not."""
+    from bouc_wen_id.diagnosis.input_note import MARK
+
+    null = blind.Case("null", 0.0, 0, 1, None, 1.0, "clipped")
+
+    def d(status: str, named: list[str], verdict: str) -> Any:
+        out = _diag(status, named, [])
+        out.verdict = verdict
+        return out
+
+    said = "unexplained structure remains at harmonics 3, 5" + MARK + " (recording 2: harmonic 3 at 4 %)"
+    assert blind.score(null, d("unexplained", [], said))[0] == "input"
+    assert blind.score(null, d("unexplained", [], "unexplained structure remains"))[0] == "unexplained"
+    assert blind.score(null, d("partly explained", ["coulomb"], said))[0] == "partly"

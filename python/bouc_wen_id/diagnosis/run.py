@@ -15,9 +15,21 @@ from ..budget import check_environment
 from ..errors import InvalidParameterError
 from ..terms import DIAGNOSIS_CANDIDATES, TERMS, Distortion, Offset, physical_value
 from ..validation import real_number
-from . import age, baseline, beside, free_dc, gate, law_untested, loop_centre, resolution, zero_drift
+from . import (
+    age,
+    baseline,
+    beside,
+    free_dc,
+    gate,
+    input_note,
+    law_untested,
+    loop_centre,
+    resolution,
+    zero_drift,
+)
 from .candidates import step_candidates
 from .caveats import alternatives_text, below_saturation, caveats_of, unphysical_places_text
+from .centre_only import clause as _centres_only
 from .data import DiagExperiment, colour_notes, prepare
 from .drift import (
     DEGRADATION,
@@ -710,9 +722,9 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
             terms=(*final_sum.terms, NamedTerm(deg.term, sym, deg.value, deg.standard_error, unit)),
         )
     fraction = _explained_fraction(plain_sum, final_sum, deg if named_deg else None)
-    # A candidate whose tests passed but whose law failed (select.law_test) is structure the plain model
-    # leaves and no term explains: the plain model is not adequate even when the global test accepted it.
-    plain_ok = gate.plain_adequate(passes, bool(final.params.terms), steps)
+    # A candidate whose law failed (select.law_test) is structure no term explains, unless only centres.
+    centre = _centres_only(passes, bool(final.params.terms), steps, fexps, final_sum.outputs)
+    plain_ok = gate.plain_adequate(passes, bool(final.params.terms), steps) or bool(centre)
     status, named, partial, verdict = _judged(
         classify(
             plain_ok,
@@ -725,8 +737,8 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
         fraction,
         fexps,
     )
-    verdict += _law_text(steps) + beside.text(steps) + unphysical_places_text(steps, named)  # said, not named
-    verdict += law_untested.text(named, fexps)  # a named term acting on fewer than two experiments
+    verdict += (centre or _law_text(steps)) + beside.text(steps) + unphysical_places_text(steps, named)
+    verdict += law_untested.text(named, fexps) + input_note.text(status, (*named, *partial), fexps)
     alternatives = tuple(a for st in steps for a in st.alternatives) + _drift_alternatives(deg, named_deg)
     verdict += alternatives_text(alternatives, named) + caveats_of(named, fsx, final, fexps, alpha, substeps)
     setup.report("held-out check of the final model", 0, 1)
