@@ -162,7 +162,7 @@ def _revised(
     main: Diagnosis, terms: tuple[TermStability, ...], completed: tuple[str, ...], failed: Mapping[str, str]
 ) -> tuple[Status, str]:
     """The main run's status and verdict with its unstable terms said as alternatives (see Stability)."""
-    fails = "; ".join(f"{k} ({why})" for k, why in failed.items())
+    fails = ", ".join(f"{k} ({why})" for k, why in failed.items())
     if len(completed) < 2:
         if not failed:
             return main.status, main.verdict
@@ -192,7 +192,7 @@ def _revised(
         if t.main is not None
     ]
     clauses += [f"{t.label} {_count(t, completed)}: an alternative, not a finding" for t in others]
-    tail = f" ({', '.join(failed)} failed: {fails})" if failed else ""
+    tail = f" (variants that failed, not counted: {fails})" if failed else ""
     return status, f"{verdict}; {'; '.join(clauses)}{tail}"
 
 
