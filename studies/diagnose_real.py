@@ -404,7 +404,8 @@ def _diagnose(items: list[Any], units: Any, progress: bool) -> bw.Diagnosis:
 
 
 def _commit() -> str:
-    """The checked-out commit (with "+ changes" when the tree differs from it), or "unknown"."""
+    """The checked-out commit (with "+ uncommitted changes" when the code, not the docs this study writes,
+    differs from it), or "unknown"."""
     import subprocess
 
     try:
@@ -412,7 +413,10 @@ def _commit() -> str:
             ["git", "rev-parse", "--short", "HEAD"], cwd=REPO, capture_output=True, text=True, check=True
         ).stdout.strip()
         dirty = subprocess.run(
-            ["git", "status", "--porcelain", "--untracked-files=no"], cwd=REPO, capture_output=True, text=True
+            ["git", "status", "--porcelain", "--untracked-files=no", "--", "python", "rust", "studies"],
+            cwd=REPO,
+            capture_output=True,
+            text=True,
         ).stdout.strip()
     except (OSError, subprocess.CalledProcessError):
         return "unknown"
