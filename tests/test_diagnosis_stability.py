@@ -116,6 +116,7 @@ def test_no_stable_term_left_is_unexplained_and_explained_becomes_partly() -> No
     full = _diag((VISCOUS, DEG), status="explained")
     st = stab.stability(full, {"early": _diag((VISCOUS,), status="explained")})
     assert st.status == "partly explained" and str(DEG) not in st.verdict.split(";")[0]
+    assert st.verdict.startswith(f"explained in part by: {VISCOUS};") and "(the fit counts it)" in st.verdict
 
 
 def test_no_completed_variant_leaves_the_verdict_and_says_stability_was_not_checked() -> None:

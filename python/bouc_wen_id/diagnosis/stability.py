@@ -31,6 +31,9 @@ VARIANTS: tuple[tuple[str, str], ...] = (
     ("half harmonics", "half the harmonics in the averaged period (at least 8)"),
 )
 
+#: The head of an "explained" verdict (run._verdict).
+EXPLAINED_BY = "explained by: "
+
 #: A variant's outcome: its diagnosis, or why it did not complete (a message or the exception).
 Outcome = Union[Diagnosis, str, BaseException]
 
@@ -185,9 +188,15 @@ def _revised(
             status = "unexplained"
         if kept and status == "explained":
             status = "partly explained"
+            if verdict.startswith(EXPLAINED_BY):  # the findings alone are not shown to reach the noise floor
+                verdict = "explained in part by: " + verdict[len(EXPLAINED_BY) :]
+    counted = {
+        "partly explained": " (the share of the excess above counts it)",
+        "explained": " (the fit counts it)",
+    }
     clauses = [
         f"{t.main} {_count(t, completed)}: an alternative, not a finding"
-        + (" (the share of the excess above counts it)" if kept and main.status == "partly explained" else "")
+        + (counted.get(main.status, "") if kept else "")
         for t in unstable
         if t.main is not None
     ]
