@@ -122,6 +122,13 @@ def _row(dataset: str, label: str, d: bw.Diagnosis, y_unit: str = "") -> dict[st
     }
 
 
+def _count_of(r: dict[str, Any], term: str) -> str:
+    """ "k of n": how many of the completed runs named ``term`` (the row's stability record)."""
+    st = r.get("stability") or {}
+    k = next((len(t["named_in"]) for t in st.get("terms", ()) if t["term"] == term), 0)
+    return f"{k} of {len(st.get('completed', ()))}"
+
+
 def _median(v: list[float]) -> float:
     s = sorted(x for x in v if math.isfinite(x))
     if not s:
@@ -266,7 +273,12 @@ def markdown(
                 f"± {deg['standard_error']:.2g} {du}, p = {deg['p_adjusted']:.2g} (Bonferroni), "
                 f"share of the drift excess {deg['share_of_drift_excess']:.2f}, held-out "
                 f"{'better' if deg['held_out_improves'] else 'worse'}: "
-                f"{'named' if deg['named'] else 'not named'}"
+                f"{'named in the main run' if deg['named'] else 'not named'}"
+                + (
+                    f", an alternative under preprocessing ({_count_of(r, deg.get('term', ''))}: the verdict)"
+                    if deg["named"] and deg.get("term") in (r.get("stability") or {}).get("alternatives", ())
+                    else ""
+                )
                 + (f" (a negative {sym} is a stiffening, not a degradation)" if deg[sym] < 0 else "")
             )
         for why in r.get("notes", []):
