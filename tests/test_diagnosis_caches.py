@@ -103,3 +103,29 @@ def test_limits_profile_evaluates_each_value_once_and_returns_the_fresh_sizes() 
     assert first == [profile._sizes("viscous", v) for v in vs]  # what an uncached evaluation gives
     assert len({f[1] for f in first}) == len(vs)  # each value its own size
     assert profile("stiffness", vs[0]) == profile._sizes("stiffness", vs[0]) != first[0]  # keyed by term too
+
+
+@pytest.mark.parametrize("ages", [(0.0, 2.5, 7.25), (1.0, 0.0, 3.75)])
+def test_corrected_with_shared_leads_and_threads_equals_one_simulation_per_lead(
+    ages: tuple[float, ...],
+) -> None:
+    """A fractional unrecorded age's two whole lead counts from one record (the shorter lead's record is the
+    longer one's prefix), the simulations on threads: the corrected periods are bit for bit those of one
+    simulation per lead in turn (speed.SHARE_AGE_LEADS, speed.THREAD_DRIFT_SIMS)."""
+    from bouc_wen_id.diagnosis import speed
+
+    exps, sx, plain, substeps = _case(23)
+    aged = [replace(e, age_periods=a) for e, a in zip(exps, ages * len(exps))]
+    out = {}
+    for fast in (True, False):
+        speed.SHARE_AGE_LEADS = speed.THREAD_DRIFT_SIMS = fast
+        drift._mean_period.cache_clear()
+        try:
+            out[fast] = drift.corrected(aged, sx, plain, 0.04, 1.0, substeps)[1]
+        finally:
+            speed.SHARE_AGE_LEADS = speed.THREAD_DRIFT_SIMS = True
+    assert any(e.blocks >= 2 and a % 1 for e, a in zip(aged, ages * len(exps)))  # a fractional age is used
+    for a, b in zip(out[True], out[False]):
+        assert np.array_equal(a.ybar, b.ybar)
+    young = drift.corrected(exps, sx, plain, 0.04, 1.0, substeps)[1]
+    assert not all(np.array_equal(a.ybar, b.ybar) for a, b in zip(young, out[True]))  # the ages matter

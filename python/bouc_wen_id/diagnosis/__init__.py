@@ -6,8 +6,9 @@ of the misfit and improves the fit on held-out experiments, and says "unexplaine
 Modules, one job each: ``data`` (experiments with their DC and period record), ``locate`` (where),
 ``fitting`` (the augmented fits in scaled units), ``select`` (forward selection, held-out), ``result``
 (the Diagnosis value), ``run`` (the orchestration), ``report`` (figures and the HTML page), ``structure``
-(Bouc-Wen in feedback, a structural rival of the cascade), ``speed`` (switches of the speed-ups, for the
-speed bench's before/after).
+(Bouc-Wen in feedback, a structural rival of the cascade), ``stability`` (a term that comes and goes
+under preprocessing variants is an alternative, not a finding: ``diagnose_stable``), ``speed`` (switches
+of the speed-ups, for the speed bench's before/after).
 """
 
 from __future__ import annotations
@@ -16,5 +17,16 @@ from .data import DiagExperiment, prepare
 from .locate import Localisation, locate
 from .result import Diagnosis, NamedTerm
 from .run import diagnose
+from .stability import Stability, diagnose_stable
 
-__all__ = ["diagnose", "Diagnosis", "NamedTerm", "Localisation", "DiagExperiment", "locate", "prepare"]
+__all__ = [
+    "diagnose",
+    "diagnose_stable",
+    "Stability",
+    "Diagnosis",
+    "NamedTerm",
+    "Localisation",
+    "DiagExperiment",
+    "locate",
+    "prepare",
+]

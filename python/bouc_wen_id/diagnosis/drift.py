@@ -28,7 +28,9 @@ steady F-tests of the other terms: the block deviations are orthogonal to the me
 from __future__ import annotations
 
 import math
+import os
 from collections.abc import Sequence
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, replace
 from functools import lru_cache
 from typing import Any, Optional
@@ -552,23 +554,56 @@ def corrected(
     par = fit.params
     hysteresis = (float(par.beta), float(par.gamma), float(par.mu))
     terms = tuple((t, float(v)) for t, v in zip(par.terms, par.values) if t in _HYSTERESIS_TERMS)
+    sim = _mean_period if speed.CACHE_DRIFT_LOOPS else _mean_period.__wrapped__
+    jobs: dict[int, list[tuple[Any, ...]]] = {}
     for i, (e, a) in enumerate(zip(exps, sx)):
         if e.blocks < 2 or not math.isfinite(e.lead_periods):
             continue
-        p = a.ybar.size
-        n = recorded_periods(e)
         om = a.frequency  # rad/s
         phi = float(np.mod(par.phases[i], TWO_PI))
         amp = float(a.amplitude * par.gains[i])
-        sim = _mean_period if speed.CACHE_DRIFT_LOOPS else _mean_period.__wrapped__
-        shift = np.zeros(p)
-        for lead, share in _leads(e):
-            plan = (om, lead, n, p, max(substeps, SIM_SUBSTEPS))
-            outs = [sim(hysteresis, terms, amp, phi, plan, term, dv) for dv in (max(d, 0.0), 0.0)]
-            shift = shift + share * (outs[0] - outs[1])
+        plans = _plans(e, (om, 0, recorded_periods(e), a.ybar.size, max(substeps, SIM_SUBSTEPS)))
+        jobs[i] = [
+            (hysteresis, terms, amp, phi, plan, term, dv) for plan, _ in plans for dv in (max(d, 0.0), 0.0)
+        ]
+    means = _run_all(sim, [job for js in jobs.values() for job in js])
+    for i, js in jobs.items():
+        e, a = exps[i], sx[i]
+        shift = np.zeros(a.ybar.size)
+        for k, (_, shares) in enumerate(_plans(e, js[0][4])):
+            with_d, without = means[js[2 * k]], means[js[2 * k + 1]]
+            for row, share in enumerate(shares):
+                shift = shift + share * (with_d[row] - without[row])
         de[i] = replace(e, ybar=e.ybar - shift * y_scale)
         ds[i] = replace(a, ybar=np.ascontiguousarray(a.ybar - shift))
     return de, ds
+
+
+def _plans(
+    e: DiagExperiment, plan: tuple[float, int, int, int, int]
+) -> list[tuple[tuple[float, int, int, int, int, int], tuple[float, ...]]]:
+    """The simulations :func:`corrected` runs for ``e`` (``plan`` with its lead set; only its lead is
+    replaced), each with the shares of its consecutive leads: a fractional age's two whole counts differ by
+    one period, and the record simulated from rest through the longer lead holds the shorter one's record
+    as its prefix (the same drive on the same time grid), so one simulation with one extra period gives
+    both (:data:`speed.SHARE_AGE_LEADS`; off, one simulation per lead)."""
+    om, _, n, p, sub = plan[:5]
+    leads = _leads(e)
+    if speed.SHARE_AGE_LEADS and len(leads) == 2 and leads[1][0] == leads[0][0] + 1:
+        return [((om, leads[0][0], n, p, sub, 1), (leads[0][1], leads[1][1]))]
+    return [((om, lead, n, p, sub, 0), (share,)) for lead, share in leads]
+
+
+def _run_all(sim: Any, jobs: list[tuple[Any, ...]]) -> dict[tuple[Any, ...], FloatArray]:
+    """``sim(*job)`` for every distinct job, on up to one thread per core (each simulation runs in the Rust
+    core with the interpreter's lock released; the results do not depend on the scheduling) when
+    :data:`speed.THREAD_DRIFT_SIMS`."""
+    todo = list(dict.fromkeys(jobs))
+    workers = min(len(todo), os.cpu_count() or 1) if speed.THREAD_DRIFT_SIMS else 1
+    if workers <= 1:
+        return {job: sim(*job) for job in todo}
+    with ThreadPoolExecutor(max_workers=workers) as pool:
+        return dict(zip(todo, pool.map(lambda job: sim(*job), todo)))
 
 
 def _leads(e: DiagExperiment) -> list[tuple[int, float]]:
@@ -640,14 +675,22 @@ def _mean_period(
     terms: tuple[tuple[str, float], ...],
     amp: float,
     phi: float,
-    plan: tuple[float, int, int, int, int],
+    plan: tuple[float, int, int, int, int] | tuple[float, int, int, int, int, int],
     term: str,
     dv: float,
 ) -> FloatArray:
-    """The recorded periods' mean of :func:`simulated_periods`. Cached on these values (every input of the
-    simulation, so a hit is the same simulation): :func:`corrected`'s d = 0 loop is the same at every d the
-    refinement tries (docs/diagnosis-speed.md). Read-only."""
-    out: FloatArray = simulated_periods(hysteresis, terms, amp, phi, plan, term, dv).mean(axis=0)
+    """The recorded periods' mean of :func:`simulated_periods`; with a sixth entry ``extra`` in ``plan``,
+    one row per lead ``lead, ..., lead + extra`` (shape ``(extra + 1, samples per period)``: the mean of the
+    ``periods`` periods after each, from one simulation of ``extra`` more periods). Cached on these values
+    (every input of the simulation, so a hit is the same simulation): :func:`corrected`'s d = 0 loop is
+    the same at every d the refinement tries (docs/diagnosis-speed.md). Read-only."""
+    om, lead, n, p, sub = plan[:5]
+    if len(plan) == 5:
+        out: FloatArray = simulated_periods(hysteresis, terms, amp, phi, plan[:5], term, dv).mean(axis=0)
+    else:
+        extra = int(plan[5])
+        rows = simulated_periods(hysteresis, terms, amp, phi, (om, lead, n + extra, p, sub), term, dv)
+        out = np.stack([rows[k : k + n].mean(axis=0) for k in range(extra + 1)])
     out.setflags(write=False)
     return out
 

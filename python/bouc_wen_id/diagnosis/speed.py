@@ -25,3 +25,12 @@ CACHE_DRIFT_LOOPS = True
 #: Fit each (model, candidate term) once per forward selection (:func:`bouc_wen_id.diagnosis.select.
 #: memo_fit_with`): an alternative's two-term fit is the next step's trial of that term.
 MEMO_FITS = True
+
+#: Simulate a fractional unrecorded age's two whole lead counts as one record (:func:`bouc_wen_id.diagnosis.
+#: drift._plans`): the shorter lead's record is the prefix of the longer one's (same drive, same time grid).
+SHARE_AGE_LEADS = True
+
+#: Run the drift correction's simulations (one per experiment, lead and d) on up to one thread per core
+#: (:func:`bouc_wen_id.diagnosis.drift._run_all`): each is independent, in the Rust core without the
+#: interpreter's lock. The unrecorded-age estimate of MR 0.75 A spent 13 of its 30 s in them.
+THREAD_DRIFT_SIMS = True
