@@ -15,7 +15,7 @@ from ..budget import check_environment
 from ..errors import InvalidParameterError
 from ..terms import DIAGNOSIS_CANDIDATES, TERMS, Distortion, Offset, physical_value
 from ..validation import real_number
-from . import age, baseline, beside, free_dc, gate, law_untested, loop_centre, resolution, zero_drift
+from . import age, baseline, beside, free_dc, gate, inputs, law_untested, loop_centre, resolution, zero_drift
 from .candidates import step_candidates
 from .caveats import alternatives_text, below_saturation, caveats_of, unphysical_places_text
 from .data import DiagExperiment, colour_notes, prepare
@@ -506,6 +506,7 @@ def _diagnose(
     if not (0.0 < alpha < 1.0):
         raise InvalidParameterError(f"alpha = {alpha!r} must lie in (0, 1)")
     _check_sizes(experiments)
+    inputs.check_items(experiments)  # the stated input as identify checks it, no repeats (inputs.py)
     report("preparing the averaged periods", 0, 1)
     level = alpha / max(len(cands), 1)  # a wandering zero (baseline.py), or one drifting (zero_drift.py)
     wander = baseline.detect(experiments, level) or zero_drift.detect(experiments, level)
