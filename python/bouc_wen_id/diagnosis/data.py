@@ -613,8 +613,13 @@ def prepare(items: Any) -> list[DiagExperiment]:
             )
     if not out:
         raise InsufficientDataError("nothing to diagnose: no item gave an averaged period")
+    # A quantised output without noise repeats its periods exactly (variance 0): settling._noise_floors
+    # gives it the quantisation floor N q^2 / 12, as the docs promise, rather than refusing it.
+    from .settling import quantisation_step
+
+    quantised = any(quantisation_step(it.y) > 0 for it in seq if hasattr(it, "y"))
     for e in out:
-        if not (math.isfinite(e.noise_var) and e.noise_var > 0):
+        if not (math.isfinite(e.noise_var) and (e.noise_var > 0 or (quantised and e.noise_var == 0))):
             raise InsufficientDataError(
                 f"{e.source}: no noise floor (noise-free or single-period data); the diagnosis tests every "
                 "claim against the period-to-period noise and needs noisy, repeated periods"
