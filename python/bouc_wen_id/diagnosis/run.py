@@ -818,7 +818,8 @@ def _judged(
     verdict = _verdict(status, named, tuple(t for t in partial if t not in unphysical), after, fraction)
     verdict += _unphysical_text(unphysical)
     if status != "adequate":
-        verdict += _centre_text(fexps, final.outputs, max(1.0, final.cost / max(final.dof, 1)))
+        offset = any(t.term == Offset.kind for t in final.terms)  # said about it, not against it
+        verdict += _centre_text(fexps, final.outputs, max(1.0, final.cost / max(final.dof, 1)), offset)
     return status, named, partial, verdict
 
 
