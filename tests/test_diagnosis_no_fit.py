@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from dataclasses import replace
 
 import bouc_wen_id as bw
@@ -19,7 +20,8 @@ def test_a_failed_fit_is_a_row_with_its_reason_not_nan() -> None:
     d = bw.diagnose(bw.simulate(plant, plan), candidates=[Viscous.kind])
     failed = [Trial(k, NAN, NAN, NAN, NAN, NAN, NAN, False) for k in (Dahl.kind, Viscous.kind)]
     d = replace(d, steps=(Step(10.0, 100, tuple(failed), None),))
-    rows = [line for line in d.summary().splitlines() if line.split()[:1] in ([Dahl.kind], [Viscous.kind])]
+    table = re.compile(rf"  ({Dahl.kind}|{Viscous.kind})\s\s")  # a row: the name padded to 12 characters
+    rows = [line for line in d.summary().splitlines() if table.match(line)]
     assert len(rows) == 2 and all("no fit:" in r and "nan" not in r for r in rows)
     assert "shape" in rows[0] and "shape" not in rows[1]  # the two-term element's own reason
     record = json.loads(d.to_json())["steps"][0]["trials"]
