@@ -6,14 +6,15 @@ from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
-
 from bouc_wen_id.diagnosis.fit_notes import centre_clause
 
 
 def _exps(dcs: list[float]) -> tuple[list[Any], list[np.ndarray]]:
     th = np.linspace(0.0, 2 * np.pi, 64, endpoint=False)
     exps = [
-        SimpleNamespace(ybar=np.sin(th) + dc, noise_var=1e-4, periods=10.0, samples_per_period=64, source=f"e{i}")
+        SimpleNamespace(
+            ybar=np.sin(th) + dc, noise_var=1e-4, periods=10.0, samples_per_period=64, source=f"e{i}"
+        )
         for i, dc in enumerate(dcs)
     ]
     return exps, [np.sin(th) for _ in dcs]

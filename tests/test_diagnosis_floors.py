@@ -3,10 +3,9 @@
 
 from __future__ import annotations
 
+import bouc_wen_id as bw
 import numpy as np
 import pytest
-
-import bouc_wen_id as bw
 from bouc_wen_id.diagnosis.data import prepare
 from bouc_wen_id.diagnosis.settling import _noise_floors
 

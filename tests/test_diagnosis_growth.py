@@ -1,4 +1,4 @@
-"""A frequency trend of the misfit is claimed only over a real span and when significant (review 31a item 5)."""
+"""A frequency trend of the misfit is claimed only over a span and when significant (review 31a item 5)."""
 
 from __future__ import annotations
 
@@ -7,7 +7,6 @@ from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
-
 from bouc_wen_id.diagnosis.locate import _growth
 
 
@@ -27,7 +26,9 @@ def test_blocks_at_one_frequency_claim_no_trend() -> None:
 
 def test_a_real_power_law_is_found_and_scatter_is_not() -> None:
     freqs = [1.0, 2.0, 3.0, 4.5, 6.0, 8.0]
-    _, fexp, _ = _growth(*_case(freqs, [0.01 * f**1.5 * (1.0 + 0.05 * (-1) ** i) for i, f in enumerate(freqs)]))
+    _, fexp, _ = _growth(
+        *_case(freqs, [0.01 * f**1.5 * (1.0 + 0.05 * (-1) ** i) for i, f in enumerate(freqs)])
+    )
     assert abs(fexp - 1.5) < 0.1
     _, flat, _ = _growth(*_case(freqs, [1.0, 2.0, 1.0, 2.0, 1.0, 2.0]))
     assert math.isnan(flat)

@@ -2,10 +2,9 @@
 
 from __future__ import annotations
 
+import bouc_wen_id as bw
 import numpy as np
 import pytest
-
-import bouc_wen_id as bw
 from bouc_wen_id.errors import FrequencyMismatchError, InsufficientDataError, InvalidParameterError
 
 
@@ -20,17 +19,16 @@ def _recs(seed: int = 0) -> list[bw.Recording]:
     return list(bw.simulate(plant, plan))
 
 
-def _restated(recs: list[bw.Recording], **kw: float) -> list[bw.Recording]:
-    out = []
-    for r in recs:
-        args = {"amplitude": r.amplitude, "frequency": r.frequency, "settle_periods": r.settle_periods, **kw}
-        if "frequency" in kw:
-            args["frequency"] = kw["frequency"] * r.frequency
-            args["settle_periods"] = 2 * r.settle_periods
-        if "amplitude" in kw:
-            args["amplitude"] = kw["amplitude"] * r.amplitude
-        out.append(bw.Recording(r.t, r.u, r.y, **args))
-    return out
+def _restated(recs: list[bw.Recording], amplitude: float = 1.0, frequency: float = 1.0) -> list[bw.Recording]:
+    """The recordings with their amplitude and frequency stated ``amplitude`` and ``frequency`` times too
+    large (the settling periods scaled with the frequency, so the grid stays whole)."""
+    return [
+        bw.Recording(
+            r.t, r.u, r.y, amplitude=amplitude * r.amplitude, frequency=frequency * r.frequency,
+            settle_periods=int(round(frequency * r.settle_periods)),
+        )
+        for r in recs
+    ]  # fmt: skip
 
 
 def _same_refusal(bad: list[bw.Recording], kind: type[Exception]) -> str:

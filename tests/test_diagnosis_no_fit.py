@@ -16,7 +16,9 @@ NAN = math.nan
 
 def test_a_failed_fit_is_a_row_with_its_reason_not_nan() -> None:
     plant = bw.WienerPlant(bw.TransferFunction([1.5], [0.2, 1.0]), bw.BoucWen(1.0, 0.3, 1.5, 1.0))
-    plan = bw.SinePlan(frequencies=[2.0, 5.0], amplitudes=1.0, settle_periods=5, periods=6, samples_per_period=64)
+    plan = bw.SinePlan(
+        frequencies=[2.0, 5.0], amplitudes=1.0, settle_periods=5, periods=6, samples_per_period=64
+    )
     d = bw.diagnose(bw.simulate(plant, plan), candidates=[Viscous.kind])
     failed = [Trial(k, NAN, NAN, NAN, NAN, NAN, NAN, False) for k in (Dahl.kind, Viscous.kind)]
     d = replace(d, steps=(Step(10.0, 100, tuple(failed), None),))

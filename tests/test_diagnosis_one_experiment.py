@@ -1,4 +1,4 @@
-"""With one experiment there is no held-out test: the verdict says so when it names a term (review 31a item 7)."""
+"""One experiment allows no held-out test: the verdict says so when it names a term (review 31a item 7)."""
 
 from __future__ import annotations
 

@@ -284,9 +284,9 @@ def _growth(exps: Sequence[DiagExperiment], resid: Sequence[FloatArray]) -> tupl
     if ok.sum() >= 3:
         cols = [np.ones(int(ok.sum()))]
         which = []
-        for name, v in (("f", om), ("a", am)):
-            if np.ptp(v[ok]) >= math.log(TREND_SPAN):
-                cols.append(v[ok])
+        for name, logs in (("f", om), ("a", am)):
+            if np.ptp(logs[ok]) >= math.log(TREND_SPAN):
+                cols.append(logs[ok])
                 which.append(name)
         dof = int(ok.sum()) - len(cols)
         if len(cols) > 1 and dof > 0:
