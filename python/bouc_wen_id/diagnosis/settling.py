@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import TransientWarning
-from .data import DiagExperiment
+from .data import QUANTISED_LEVELS, DiagExperiment, quantisation_step  # noqa: F401 (moved to data.py)
 
 
 def _settled(experiments: Any) -> tuple[Any, list[str]]:
@@ -140,22 +140,6 @@ def _check_experiments(exps: Sequence[DiagExperiment]) -> None:
                 )
         dc = float(np.mean(e.ybar))
         _check_response(e.ybar - dc, abs(dc), e.noise_var, e.periods, e.source)
-
-
-#: Fewest distinct output levels, relative to the samples, below which the output is read as quantised.
-QUANTISED_LEVELS = 0.25
-
-
-def quantisation_step(y: Any) -> float:
-    """The output's quantisation step (0 when the samples are not on a grid of steps)."""
-    v = np.asarray(y, dtype=np.float64).ravel()
-    levels = np.unique(v[np.isfinite(v)])
-    if levels.size < 2 or levels.size > QUANTISED_LEVELS * v.size:
-        return 0.0
-    q = float(np.min(np.diff(levels)))
-    k = (levels - levels[0]) / q
-    tol = 1e-6 * max(1.0, float(k[-1]))
-    return q if float(np.max(np.abs(k - np.round(k)))) <= tol else 0.0
 
 
 #: The numerical accuracy of a simulated loop relative to the output's peak: below it a noise floor is
