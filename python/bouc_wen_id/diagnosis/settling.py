@@ -16,7 +16,9 @@ from typing import Any
 import numpy as np
 
 from ..errors import TransientWarning
-from .data import QUANTISED_LEVELS as QUANTISED_LEVELS  # moved to data.py (data.prepare needs them); kept here
+from .data import (
+    QUANTISED_LEVELS as QUANTISED_LEVELS,  # moved to data.py (data.prepare needs them); kept here
+)
 from .data import DiagExperiment
 from .data import quantisation_step as quantisation_step
 
