@@ -45,7 +45,31 @@ def test_a_wrong_stated_amplitude_is_refused_as_identify_refuses_it() -> None:
 
 
 def test_a_wrong_stated_frequency_is_a_frequency_mismatch() -> None:
-    _same_refusal(_restated(_recs(), frequency=2.0), FrequencyMismatchError)
+    bad = _restated(_recs(), frequency=2.0)
+    with pytest.raises(FrequencyMismatchError):
+        bw.identify(bad)
+    with pytest.raises(FrequencyMismatchError, match="does not repeat at omega"):
+        bw.diagnose(bad)
+
+
+def test_an_input_with_harmonics_passes_and_its_fundamental_is_still_checked() -> None:
+    # The diagnosis takes a distorted input (its measured-waveform term); identify asks for a pure sine.
+    distorted = []
+    for r in _recs():
+        th = r.frequency * r.t
+        u = r.u + 0.2 * r.amplitude * np.cos(3 * th - 1.0)  # a 20 % third harmonic
+        distorted.append(
+            bw.Recording(
+                r.t, u, r.y, amplitude=r.amplitude, frequency=r.frequency, settle_periods=r.settle_periods
+            )
+        )
+    from bouc_wen_id.diagnosis.inputs import check_items
+
+    check_items(distorted)  # no error
+    with pytest.raises(FrequencyMismatchError):
+        bw.identify(distorted)
+    with pytest.raises(InvalidParameterError, match="stated amplitude"):
+        check_items(_restated(distorted, amplitude=2.0))
 
 
 def test_an_input_that_is_not_a_cosine_at_t0_is_refused() -> None:
