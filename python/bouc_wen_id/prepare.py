@@ -45,6 +45,8 @@ __all__ = [
     "prepare",
     "scale",
     "check_input",
+    "check_fundamental",
+    "input_fundamental",
     "noise_variance",
     "auto_harmonics",
 ]
@@ -79,27 +81,21 @@ def check_sizes(rec: Recording, start: int, stop: int) -> None:
             )
 
 
-def check_input(rec: Recording, start: int, stop: int) -> None:
-    """Refuse a recording whose ``u`` is not ``U cos(omega t)`` on its own time axis.
+def input_fundamental(rec: Recording, start: int, stop: int) -> tuple[float, float]:
+    """``(a_cos, a_sin)``: the recorded input's fundamental at the stated omega over ``start:stop`` (whole
+    periods), as the least-squares coefficients of ``cos(omega t)`` and ``sin(omega t)``.
 
-    Over whole periods, cos, sin and the constant are orthogonal on the sample grid, so their
-    least-squares coefficients are plain projections (no linear solve needed).
-    """
+    Over whole periods, cos, sin, the constant and the harmonics are orthogonal on the sample grid, so the
+    least-squares coefficients are plain projections (no linear solve needed)."""
     t = rec.t[start:stop]
     u = rec.u[start:stop]
-    check_sizes(rec, start, stop)
     c, s = np.cos(rec.frequency * t), np.sin(rec.frequency * t)
-    a_cos = 2.0 * float(np.dot(u, c)) / u.size
-    a_sin = 2.0 * float(np.dot(u, s)) / u.size
-    centred = u - u.mean()
-    spread = float(np.dot(centred, centred))
-    fitted = 0.5 * u.size * (a_cos**2 + a_sin**2)
-    misfit = math.sqrt(max(spread - fitted, 0.0) / spread) if spread > 0 else math.inf
-    if misfit > INPUT_MISFIT_MAX:
-        raise FrequencyMismatchError(
-            f"the recorded input is not a sine at omega = {rec.frequency:.6g} rad/s "
-            f"(relative misfit {misfit:.2g} > {INPUT_MISFIT_MAX}); check the stated frequency and its units"
-        )
+    return 2.0 * float(np.dot(u, c)) / u.size, 2.0 * float(np.dot(u, s)) / u.size
+
+
+def check_fundamental(rec: Recording, a_cos: float, a_sin: float) -> None:
+    """Refuse a stated amplitude the input's fundamental does not have, or a fundamental that does not peak
+    at ``t = 0`` (identify's checks; ``diagnose`` makes them too, on an input that may carry harmonics)."""
     amp = math.hypot(a_cos, a_sin)
     if abs(amp - abs(rec.amplitude)) > INPUT_MISFIT_MAX * abs(rec.amplitude):
         raise InvalidParameterError(
@@ -111,6 +107,23 @@ def check_input(rec: Recording, start: int, stop: int) -> None:
             f"the recorded input is U cos(omega t - {phase:.3g}) rather than U cos(omega t) on its time "
             "axis; shift the time column so that the input peaks at t = 0"
         )
+
+
+def check_input(rec: Recording, start: int, stop: int) -> None:
+    """Refuse a recording whose ``u`` is not ``U cos(omega t)`` on its own time axis."""
+    u = rec.u[start:stop]
+    check_sizes(rec, start, stop)
+    a_cos, a_sin = input_fundamental(rec, start, stop)
+    centred = u - u.mean()
+    spread = float(np.dot(centred, centred))
+    fitted = 0.5 * u.size * (a_cos**2 + a_sin**2)
+    misfit = math.sqrt(max(spread - fitted, 0.0) / spread) if spread > 0 else math.inf
+    if misfit > INPUT_MISFIT_MAX:
+        raise FrequencyMismatchError(
+            f"the recorded input is not a sine at omega = {rec.frequency:.6g} rad/s "
+            f"(relative misfit {misfit:.2g} > {INPUT_MISFIT_MAX}); check the stated frequency and its units"
+        )
+    check_fundamental(rec, a_cos, a_sin)
 
 
 def noise_variance(y: FloatArray, samples_per_period: int, settle_periods: int, periods: int) -> float:

@@ -51,7 +51,7 @@ from ..augmented import AugExperiment, AugFit
 from ..errors import InvalidParameterError
 from ..terms import TERMS, Distortion
 from ..validation import real_number
-from . import across_rules, across_settling, across_verdict, fit_notes, gate
+from . import across_rules, across_settling, across_verdict, fit_notes, gate, inputs
 from .beside import only_beside
 from .caveats import alternatives_text
 from .data import DiagExperiment
@@ -865,6 +865,7 @@ def diagnose_across(
         prepared, kept, unsettled = [], [], []
         for i, (items, c, name) in enumerate(zip(gs, conds, names)):
             report(f"preparing condition {name}", i, len(gs))
+            inputs.check_items(items, f"condition {name}")  # as diagnose checks them (inputs.py)
             try:
                 prepared.append(_group(items, name, c, cands, own[i], alpha))
                 kept.append(own[i])

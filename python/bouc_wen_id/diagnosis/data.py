@@ -579,6 +579,22 @@ def _lab_marked(e: DiagExperiment) -> DiagExperiment:
     return replace(e, harmonic_var=hv)
 
 
+#: Fewest distinct output levels, relative to the samples, below which the output is read as quantised.
+QUANTISED_LEVELS = 0.25
+
+
+def quantisation_step(y: Any) -> float:
+    """The output's quantisation step (0 when the samples are not on a grid of steps)."""
+    v = np.asarray(y, dtype=np.float64).ravel()
+    levels = np.unique(v[np.isfinite(v)])
+    if levels.size < 2 or levels.size > QUANTISED_LEVELS * v.size:
+        return 0.0
+    q = float(np.min(np.diff(levels)))
+    k = (levels - levels[0]) / q
+    tol = 1e-6 * max(1.0, float(k[-1]))
+    return q if float(np.max(np.abs(k - np.round(k)))) <= tol else 0.0
+
+
 def prepare(items: Any) -> list[DiagExperiment]:
     """Reduce Recordings, Measurements or AveragedPeriods (or a mix) to :class:`DiagExperiment`.
 
@@ -613,8 +629,11 @@ def prepare(items: Any) -> list[DiagExperiment]:
             )
     if not out:
         raise InsufficientDataError("nothing to diagnose: no item gave an averaged period")
+    # A quantised output without noise repeats its periods exactly (variance 0): settling._noise_floors
+    # gives it the quantisation floor N q^2 / 12, as the docs promise, rather than refusing it.
+    quantised = any(quantisation_step(it.y) > 0 for it in seq if hasattr(it, "y"))
     for e in out:
-        if not (math.isfinite(e.noise_var) and e.noise_var > 0):
+        if not (math.isfinite(e.noise_var) and (e.noise_var > 0 or (quantised and e.noise_var == 0))):
             raise InsufficientDataError(
                 f"{e.source}: no noise floor (noise-free or single-period data); the diagnosis tests every "
                 "claim against the period-to-period noise and needs noisy, repeated periods"

@@ -5,6 +5,9 @@ input-waveform term acts only on experiments whose input carries harmonics: with
 there is nothing to compare, the test gives NaN, and a NaN law counted as passed said nothing of it (review
 of session 30). The verdict says "law untested" beside such a named term instead; across conditions
 (:func:`across_text`) at each condition where the term is present and its law could not be tested there.
+
+With one experiment there is no held-out test either (leave-one-experiment-out needs two): a term was
+named on the in-sample F test alone and nothing said so (review 31a item 7). The verdict says so.
 """
 
 from __future__ import annotations
@@ -29,10 +32,17 @@ def untested(term: str, exps: Sequence[Any]) -> bool:
 
 
 def text(named: Sequence[Any], exps: Sequence[Any]) -> str:
-    """The verdict's clause for each named term carried by fewer than two of two or more experiments."""
+    """The verdict's clause for each named term carried by fewer than two of two or more experiments, or,
+    with one experiment, that the named terms passed neither the held-out test nor the law test."""
     m = len(exps)
     if m < 2:
-        return ""
+        return (
+            "; named without the held-out test: not possible with one experiment (a term is otherwise named "
+            "only if it lowers the cost of experiments left out of its fit), and its one value for all "
+            "experiments is untested; record a second experiment to test both"
+            if named and m == 1
+            else ""
+        )
     out = []
     for t in named:
         if untested(t.term, exps):

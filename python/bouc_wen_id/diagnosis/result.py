@@ -13,6 +13,7 @@ from numpy.typing import NDArray
 from ..terms import TERMS, Degradation
 from .data import DiagExperiment
 from .locate import Localisation
+from .no_fit import no_fit_reason
 from .select import Alternative, HeldOut, Step
 
 FloatArray = NDArray[np.float64]
@@ -179,7 +180,9 @@ class Diagnosis:
             for t in st.trials:
                 ho = "" if t.held_out is None else ("better" if t.held_out.improves else "worse")
                 row = f"  {t.term:<12} {t.cost:12.6g} {t.statistic:10.4g} {t.p_adjusted:9.2g} {t.share:7.2f}"
-                lines.append(f"{row} {ho:>10}")
+                lines.append(
+                    f"{row} {ho:>10}" if math.isfinite(t.cost) else f"  {t.term:<12} {no_fit_reason(t.term)}"
+                )
         deg = self.degradation
         if deg is not None:
             lines.append("")

@@ -22,6 +22,7 @@ from . import (
     free_dc,
     gate,
     input_note,
+    inputs,
     law_untested,
     loop_centre,
     resolution,
@@ -521,6 +522,7 @@ def _diagnose(
     if not (0.0 < alpha < 1.0):
         raise InvalidParameterError(f"alpha = {alpha!r} must lie in (0, 1)")
     _check_sizes(experiments)
+    inputs.check_items(experiments)  # the stated input as identify checks it, no repeats (inputs.py)
     report("preparing the averaged periods", 0, 1)
     level = alpha / max(len(cands), 1)  # a wandering zero (baseline.py), or one drifting (zero_drift.py)
     wander = baseline.detect(experiments, level) or zero_drift.detect(experiments, level)
@@ -831,7 +833,8 @@ def _judged(
     verdict = _verdict(status, named, tuple(t for t in partial if t not in unphysical), after, fraction)
     verdict += _unphysical_text(unphysical)
     if status != "adequate":
-        verdict += _centre_text(fexps, final.outputs, max(1.0, final.cost / max(final.dof, 1)))
+        offset = any(t.term == Offset.kind for t in final.terms)  # said about it, not against it
+        verdict += _centre_text(fexps, final.outputs, max(1.0, final.cost / max(final.dof, 1)), offset)
     return status, named, partial, verdict
 
 

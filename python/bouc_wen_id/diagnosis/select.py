@@ -162,8 +162,11 @@ class Trial:
         return not (math.isfinite(self.law_p_value) and self.law_p_value < LAW_ALPHA)
 
     def to_dict(self) -> dict[str, Any]:
+        from .no_fit import no_fit_reason
+
         return {
             "term": self.term,
+            **({"failure": no_fit_reason(self.term)} if not math.isfinite(self.cost) else {}),
             "law_p_value": _n(self.law_p_value),
             "cost": _n(self.cost),
             "improvement": _n(self.improvement),

@@ -439,6 +439,8 @@ def short_trend(seq: Sequence[Any], level: float) -> Optional[Drift]:
         spec = np.fft.rfft(rows, axis=1) / p
         dc, amp = spec[:, 0].real, 2.0 * np.abs(spec[:, 1])
         white = float(np.mean(np.diff(rows - dc[:, None], axis=0) ** 2)) / 2.0 * p / (p - 1)
+        if not white > 0:  # the periods repeat exactly (a quantised noise-free output): no noise to test on
+            continue
         b, se, dof = _slope(dc, white / p * _low_colour(rows, white))
         la, lse, ldof = _slope(amp, 2.0 * white / p)
         nums[j] = (_chi2_1(b / se, dof), _chi2_1(la / lse, ldof), b / p, white, float(np.asarray(rec.y).size))
