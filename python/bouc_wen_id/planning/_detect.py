@@ -457,8 +457,12 @@ def plan_detection(
         "detect", band, max_amplitude, noise_sd, sample_rate, max_rate, n_frequencies, n_amplitudes,
         settle_periods, overhead, max_samples_per_period, min_periods, max_experiments, substeps, backend,
     )  # fmt: skip
-    check_scale(prior_plant, term, size, (st.lo, st.hi), st.max_amplitude)  # before the first simulation
     grid = _grid(st, budget)
+    # before the search's first simulation, on the planner's own grid and resolution
+    check_scale(
+        prior_plant, term, size, (st.lo, st.hi), grid.amps[:, -1], omegas=grid.omegas, samples=grid.samples,
+        substeps=st.substeps,
+    )  # fmt: skip
     kw: dict[str, Any] = {
         "noise_sd": st.noise_sd,
         "alpha": lvl,
