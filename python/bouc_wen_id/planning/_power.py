@@ -217,11 +217,17 @@ def physical_side(term: str) -> bool:
 def critical(term: str, alpha: float, candidates: int) -> tuple[float, float, bool]:
     """``(z_c, level, one_sided)`` of the term's test at the targeted step (module docstring): one-sided
     (its p halved) for a term whose fitted range is confined to ``>= 0``, two-sided otherwise."""
+    level = 0.5 * alpha / candidates
+    return z_critical(term, level), level, TERMS[term].bounds[0] == 0.0
+
+
+def z_critical(term: str, level: float) -> float:
+    """The normal critical value of ``term``'s own test at ``level`` (per candidate): one-sided for a term
+    whose fitted range is ``>= 0`` (diagnosis/select.py ``BOUNDARY_TERMS``), two-sided otherwise."""
     from scipy.special import ndtri  # type: ignore[import-untyped]
 
     one = TERMS[term].bounds[0] == 0.0
-    level = 0.5 * alpha / candidates
-    return float(ndtri(1.0 - (level if one else 0.5 * level))), level, one
+    return float(ndtri(1.0 - (level if one else 0.5 * level)))
 
 
 def power_at(lam: float, z_c: float, one_sided: bool) -> float:
