@@ -1,5 +1,5 @@
-"""The rivals a detection plan models are the diagnosis's own: the candidates it will be given, each at its own
-critical value; and the chance's draws come from a seed the user sets.
+"""The rivals a detection plan models are the diagnosis's own: the candidates it will be given, each at its
+own critical value; and the chance's draws come from a seed the user sets.
 
 - ``candidates=1`` (``diagnose(candidates=[term])``) changed the critical value but nine linear rivals were
   still modelled; now the rivals follow the candidate list (a count, or the names the diagnosis is given).
@@ -20,8 +20,7 @@ import pytest
 from bouc_wen_id import cli
 from bouc_wen_id.diagnosis.candidates import step_candidates
 from bouc_wen_id.errors import InvalidParameterError
-from bouc_wen_id.planning import PlannedExperiment, detection_power, naming_chance
-from bouc_wen_id.planning import _naming, _power
+from bouc_wen_id.planning import PlannedExperiment, _naming, _power, detection_power, naming_chance
 from bouc_wen_id.planning._naming import linear_rivals
 from bouc_wen_id.terms import TERMS
 
@@ -51,7 +50,7 @@ def test_one_candidate_models_no_rival() -> None:
     named = naming_chance(PRIOR, design, "sensor_lag", 0.01, noise_sd=0.05, candidates=["sensor_lag"])
     assert named.rivals == () and named.chance == alone.chance
     full = naming_chance(PRIOR, design, "sensor_lag", 0.01, noise_sd=0.05)
-    assert len(full.rivals) > 0 and full.rivals == linear_rivals("sensor_lag", step_candidates(pure_sines=True))
+    assert full.rivals and full.rivals == linear_rivals("sensor_lag", step_candidates(pure_sines=True))
 
 
 def test_the_rivals_follow_the_names_given() -> None:

@@ -433,9 +433,9 @@ def plan_detection(
     diagnosis's family-wise level and the candidate terms sharing its targeted step (``alpha / 2``
     Bonferroni): a count, or the names the diagnosis will be given (``diagnose(candidates=...)``); the
     rivals the chance to name models follow them (``_naming.family``: a count of 1 is the term alone).
-    ``seed``: of the chance to name's draws (the same seed, the same plan). ``baseline`` (optional): the user's own design within the budget, a candidate too (the plan
-    is never below it; one with fewer than ``min_experiments`` experiments is not taken). ``min_experiments``
-    (default :data:`MIN_EXPERIMENTS` = 3): fewest experiments of the plan. The diagnosis names a term only if
+    ``seed``: of the chance to name's draws (the same seed, the same plan). ``baseline`` (optional): the
+    user's own design within the budget, a candidate too (the plan is never below it; one with fewer than
+    ``min_experiments`` experiments is not taken). ``min_experiments`` (default :data:`MIN_EXPERIMENTS` = 3): fewest experiments of the plan. The diagnosis names a term only if
     its F-test passes *and* it improves the held-out fit (leave-one-experiment-out), which two experiments
     pass too rarely and one cannot run; the reported power is the F-test's (:data:`POWER_LABEL`), reported
     beside the predicted chance to name (:data:`NAMING_LABEL`, ``_naming``), by which designs are compared

@@ -18,13 +18,13 @@ its range is one-sided, as the fit is). The projection is first order; where the
 leaves less than it (``DetectionPower.lam`` below ``lam_linear``) the term's column is scaled by
 ``sqrt(lam / lam_linear)`` so the whole design's non-centrality is the refitted one. The law test, a test of
 a true hypothesis here, refuses at its own level (``LAW_ALPHA``); the Wald test is the F-test's twin in the
-linear model. The rivals are the candidates of the step the diagnosis would run (:func:`family`) whose trace is
-linear in their value (:func:`linear_rivals`): each is tested at its own critical value (one-sided for a term
-whose fitted range is ``>= 0``, two-sided otherwise, as diagnosis/select.py) and the step's choice is the
-candidate passing its tests with the largest cost drop, so a linear rival named instead (wrong physics) is
-modelled. Not modelled: nonlinear rivals (a series dashpot, pinching, Dahl friction, inertia on x, ...) being
-named instead, and nonlinearity beyond the refit's scaling; where such a rival resembles the term the chance
-over-predicts (docs/power.md).
+linear model. The rivals are the candidates of the step the diagnosis would run (:func:`family`) whose trace
+is linear in their value (:func:`linear_rivals`): each is tested at its own critical value (one-sided for a
+term whose fitted range is ``>= 0``, two-sided otherwise, as diagnosis/select.py) and the step's choice is
+the candidate passing its tests with the largest cost drop, so a linear rival named instead (wrong physics)
+is modelled. Not modelled: nonlinear rivals (a series dashpot, pinching, Dahl friction, inertia on x, ...)
+being named instead, and nonlinearity beyond the refit's scaling; where such a rival resembles the term the
+chance over-predicts (docs/power.md).
 """
 
 from __future__ import annotations
@@ -311,7 +311,9 @@ def naming_chance(
     pw = power or detection_power(
         prior, design, term, size, noise_sd=noise_sd, alpha=alpha, candidates=n_cand, substeps=substeps
     )
-    lin, e, rv = _setup(prior, design, pw.term, pw.size, pw, noise_sd, substeps, rivals, candidates, draws, seed)
+    lin, e, rv = _setup(
+        prior, design, pw.term, pw.size, pw, noise_sd, substeps, rivals, candidates, draws, seed
+    )
     f_ok, named, rival = _named(lin, e, 1.0)
     law = LAW_ALPHA if len(design) > 1 else 0.0
     f = float(np.mean(f_ok))

@@ -27,10 +27,10 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
-from typing import Any, Optional, Union
+from typing import Any, Optional
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from ..augmented import AugExperiment, AugParams, augmented_output
 from ..diagnosis.candidates import step_candidates
@@ -147,10 +147,10 @@ def check_scale(
     term: str,
     size: float,
     band: Sequence[float],
-    amplitude: Union[float, Sequence[float]],
+    amplitude: ArrayLike,
     *,
-    omegas: Optional[Sequence[float]] = None,
-    samples: Union[int, Sequence[int]] = 512,
+    omegas: Optional[ArrayLike] = None,
+    samples: ArrayLike = 512,
     substeps: int = 8,
 ) -> float:
     """The smallest ratio, over the band, of the term's change of the output (its largest magnitude: an
@@ -187,7 +187,7 @@ def _refuse(term: str, size: float, band: tuple[float, float], amplitude: float,
     """:class:`OversizedTermError`: ``what`` is the ratio, ``overflow`` or a failed solve of the model with
     the term."""
     if what.startswith("overflow"):
-        said = f"overflow the model's output (beyond floating point{what[len('overflow'):]})"
+        said = f"overflow the model's output (beyond floating point{what[len('overflow') :]})"
     elif "x at best" in what:
         said = (
             f"change the output by more than {MAX_TERM_RATIO:g}x the plain model's own output swing (peak to "
