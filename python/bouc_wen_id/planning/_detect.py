@@ -400,6 +400,15 @@ def _better(a: tuple[DetectionPower, NamingChance], b: tuple[DetectionPower, Nam
     return a[0].lam_used > b[0].lam_used
 
 
+def _check_scale_on(prior: WienerPlant, term: str, size: float, st: _Settings, grid: _Grid) -> None:
+    """:func:`~._power.check_scale` on the planner's own grid (each frequency at its largest amplitude) and
+    resolution."""
+    amps, lo_hi = grid.amps[:, -1], (st.lo, st.hi)
+    check_scale(
+        prior, term, size, lo_hi, amps, omegas=grid.omegas, samples=grid.samples, substeps=st.substeps
+    )
+
+
 def plan_detection(
     prior_plant: WienerPlant,
     budget: float,
@@ -427,32 +436,32 @@ def plan_detection(
 ) -> DetectionPlan:
     """Plan sine experiments that maximise the power of the diagnosis's test of one term of a given size.
 
-    ``detect`` is ``{term: size}``: one candidate term's code name (``"sensor_lag"``,
-    ``"series_dashpot"``, ``"viscous@x"``, ...; :data:`~._power.DETECTABLE`) and its value in the term's
-    physical units of the alpha-normalised model (a sensor lag in s). ``alpha`` and ``candidates`` are the
-    diagnosis's family-wise level and the candidate terms sharing its targeted step (``alpha / 2``
-    Bonferroni): a count, or the names the diagnosis will be given (``diagnose(candidates=...)``); the
-    rivals the chance to name models follow them (``_naming.family``: a count of 1 is the term alone).
-    ``seed``: of the chance to name's draws (the same seed, the same plan). ``baseline`` (optional): the
-    user's own design within the budget, a candidate too (the plan is never below it; one with fewer than
-    ``min_experiments`` experiments is not taken). ``min_experiments`` (default :data:`MIN_EXPERIMENTS` = 3): fewest experiments of the plan. The diagnosis names a term only if
-    its F-test passes *and* it improves the held-out fit (leave-one-experiment-out), which two experiments
-    pass too rarely and one cannot run; the reported power is the F-test's (:data:`POWER_LABEL`), reported
-    beside the predicted chance to name (:data:`NAMING_LABEL`, ``_naming``), by which designs are compared
-    and :meth:`DetectionPlan.scaled` scales. Designs
-    the search finds with fewer are grown to it (:func:`_grown`) before any fallback to the naive design.
-    Every other keyword is :func:`~bouc_wen_id.plan_experiment`'s (the lab limits and the
-    candidate grid). The search maximises the first-order non-centrality (``_power``); the planned and the
-    naive design's are then checked by refitting the plain model, and their powers reported from it.
+    ``detect`` is ``{term: size}``: one candidate term's code name (``"sensor_lag"``, ``"series_dashpot"``,
+    ``"viscous@x"``, ...; :data:`~._power.DETECTABLE`) and its value in the term's physical units of the
+    alpha-normalised model (a sensor lag in s). ``alpha`` and ``candidates`` are the diagnosis's family-wise
+    level and the candidate terms sharing its targeted step (``alpha / 2`` Bonferroni): a count, or the names
+    the diagnosis will be given (``diagnose(candidates=...)``); the rivals the chance to name models follow
+    them (``_naming.family``: a count of 1 is the term alone). ``seed``: of the chance to name's draws.
+    ``baseline`` (optional): the user's own design within the budget, a candidate too (the plan is never below
+    it; one with fewer than ``min_experiments`` experiments is not taken). ``min_experiments`` (default
+    :data:`MIN_EXPERIMENTS` = 3): fewest experiments of the plan. The diagnosis names a term only if its
+    F-test passes *and* it improves the held-out fit (leave-one-experiment-out), which two experiments pass
+    too rarely and one cannot run; the reported power is the F-test's (:data:`POWER_LABEL`), reported beside
+    the predicted chance to name (:data:`NAMING_LABEL`, ``_naming``), by which designs are compared and
+    :meth:`DetectionPlan.scaled` scales. Designs the search finds with fewer are grown to it (:func:`_grown`)
+    before any fallback to the naive design. Every other keyword is :func:`~bouc_wen_id.plan_experiment`'s
+    (the lab limits and the candidate grid). The search maximises the first-order non-centrality
+    (``_power``); the planned and the naive design's are then checked by refitting the plain model, and their
+    powers reported from it.
 
     Raises
     ------
     InvalidParameterError
         An unknown or undetectable term (:class:`~._power.TwoParameterTermError` for Dahl friction), a zero,
-        NaN or out-of-range size, a size whose force dwarfs the plant's
-        (:class:`~._power.OversizedTermError`), a bad budget (zero, negative, too
-        small for one experiment) or any of :func:`~bouc_wen_id.plan_experiment`'s input errors; a design
-        on which the term leaves nothing the plain model cannot absorb.
+        NaN or out-of-range size, a size that dwarfs the plant at every frequency of the band or overflows
+        the model (:class:`~._power.OversizedTermError`), a bad budget (zero, negative, too small for one
+        experiment) or any of :func:`~bouc_wen_id.plan_experiment`'s input errors; a design on which the
+        term leaves nothing the plain model cannot absorb.
     """
     if not isinstance(prior_plant, WienerPlant) or prior_plant.terms:
         raise InvalidParameterError("prior_plant must be a plain WienerPlant (no terms)")
@@ -468,19 +477,9 @@ def plan_detection(
         settle_periods, overhead, max_samples_per_period, min_periods, max_experiments, substeps, backend,
     )  # fmt: skip
     grid = _grid(st, budget)
-    # before the search's first simulation, on the planner's own grid and resolution
-    check_scale(
-        prior_plant, term, size, (st.lo, st.hi), grid.amps[:, -1], omegas=grid.omegas, samples=grid.samples,
-        substeps=st.substeps,
-    )  # fmt: skip
-    kw: dict[str, Any] = {
-        "noise_sd": st.noise_sd,
-        "alpha": lvl,
-        "candidates": n_cand,
-        "substeps": st.substeps,
-        "rivals": rivals,
-        "seed": draw_seed,
-    }
+    _check_scale_on(prior_plant, term, size, st, grid)  # before the search's first simulation
+    kw: dict[str, Any] = dict(noise_sd=st.noise_sd, alpha=lvl, candidates=n_cand, substeps=st.substeps)
+    kw.update(rivals=rivals, seed=draw_seed)  # the naming's (NAMING_ONLY)
     least = count("min_experiments", min_experiments, 1)
     if least > st.max_exp:
         raise InvalidParameterError(
