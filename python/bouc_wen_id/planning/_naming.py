@@ -22,7 +22,7 @@ linear model. The rivals are the candidates of the step the diagnosis would run 
 is linear in their value (:func:`linear_rivals`): each is tested at its own critical value (one-sided for a
 term whose fitted range is ``>= 0``, two-sided otherwise, as diagnosis/select.py) and the step's choice is
 the candidate passing its tests with the largest cost drop, so a linear rival named instead (wrong physics)
-is modelled. Not modelled: nonlinear rivals (a series dashpot, pinching, Dahl friction, inertia on x, ...)
+is modelled. Not modelled: nonlinear rivals (a series dashpot, pinching, play, Dahl friction, ...)
 being named instead, and nonlinearity beyond the refit's scaling; where such a rival resembles the term the
 chance over-predicts (docs/power.md).
 """
