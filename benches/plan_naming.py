@@ -41,7 +41,8 @@ TERM, SIZE, BUDGET = "sensor_lag", 0.01, 300.0
 
 
 def plant(name: str) -> Any:
-    """The bench's plants: the demo (resonant with a delay), another resonance with a delay, a first order."""
+    """The bench's plants: the demo (resonant with a delay), another resonance with a delay, a first order,
+    a first order with a delay."""
     import bouc_wen_id as bw
 
     if name == "demo":
@@ -51,7 +52,10 @@ def plant(name: str) -> Any:
         return bw.WienerPlant(bw.TransferFunction([49.0], [1.0, 1.4, 49.0], delay=0.03), h)
     if name == "first_order":
         return bw.WienerPlant(bw.TransferFunction([1.0], [0.15, 1.0]), h)
-    raise SystemExit(f"unknown --plant {name!r}: demo, resonant or first_order")
+    if name == "first_order_delay":  # the reviewer's plant (session 31): other G, other hysteresis
+        other = bw.BoucWen(beta=0.9, gamma=0.3, mu=2.5, alpha=1.5)
+        return bw.WienerPlant(bw.TransferFunction([2.0], [0.3, 1.0], delay=0.02), other)
+    raise SystemExit(f"unknown --plant {name!r}: demo, resonant, first_order or first_order_delay")
 
 
 def _at_time(exps: list[Any], target: float) -> list[Any]:

@@ -123,7 +123,7 @@ def test_dahl_gets_a_named_error_that_says_why_and_what_to_plan(term: str, limit
     assert issubclass(TwoParameterTermError, InvalidParameterError)
 
 
-@pytest.mark.parametrize("size, what", [(1e308, "overflows"), (1e3, "x the plant's hysteretic output")])
+@pytest.mark.parametrize("size, what", [(1e308, "overflow"), (1e3, "output swing .* at every frequency")])
 def test_an_oversized_term_gets_a_named_error(size: float, what: str) -> None:
     with pytest.raises(OversizedTermError, match=what):
         bw.plan_detection(PRIOR, 100.0, {"viscous": size}, **LAB)

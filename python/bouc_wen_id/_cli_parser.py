@@ -375,6 +375,12 @@ def _add_plan_parser(sub: Any) -> None:
         help="with --detect: candidate terms sharing the diagnosis's targeted step (default: the diagnosis's "
         "own count on pure sines; one more where the inputs carry harmonics, the distortion term)",
     )
+    p.add_argument(
+        "--seed",
+        type=_integer(0, (1 << 63) - 1),
+        default=0,
+        help="with --detect: seed of the predicted chance to name's draws (0; the same seed, the same plan)",
+    )
     p.add_argument("--out", type=Path, default=None, help="write the plan as JSON to this file")
     _add_overwrite(p)
 

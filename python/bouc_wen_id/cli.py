@@ -579,7 +579,7 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     if args.detect is not None:
         from .planning import plan_detection
 
-        more: dict[str, Any] = {"min_experiments": args.min_experiments}
+        more: dict[str, Any] = {"min_experiments": args.min_experiments, "seed": args.seed}
         if args.candidates is not None:
             more["candidates"] = args.candidates
         plan = plan_detection(

@@ -15,7 +15,7 @@ import json
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
-from typing import Any, Optional
+from typing import Any, Optional, Union
 
 import numpy as np
 
@@ -24,7 +24,7 @@ from .._text import Summarised
 from ..errors import InvalidParameterError
 from ..model import WienerPlant
 from ..validation import count, real_number
-from ._naming import NamingChance, naming_chance, naming_factor
+from ._naming import NamingChance, family, naming_chance, naming_factor
 from ._plan import _experiments, _naive_experiments
 from ._power import (
     DEFAULT_CANDIDATES,
@@ -121,6 +121,7 @@ class DetectionPlan(Summarised):
                 more = naming_factor(
                     self.prior, self.experiments, self.term, self.size, power, noise_sd=self.noise_sd,
                     power=self.predicted, substeps=int(self.settings.get("substeps", 8)),
+                    rivals=tuple(self.naming.rivals), seed=self.naming.seed,
                 )  # fmt: skip
                 f = max(f, more)
             self._factors[power] = f
@@ -380,9 +381,14 @@ def _with_baseline(
 def _rated(
     prior: WienerPlant, exps: Sequence[PlannedExperiment], term: str, size: float, kw: dict[str, Any]
 ) -> tuple[DetectionPower, NamingChance]:
-    """A design's power to detect and its predicted chance to name."""
-    pw = detection_power(prior, exps, term, size, **kw)
+    """A design's power to detect and its predicted chance to name (``kw``'s ``rivals`` and ``seed`` are the
+    naming's)."""
+    pw = detection_power(prior, exps, term, size, **{k: v for k, v in kw.items() if k not in NAMING_ONLY})
     return pw, naming_chance(prior, exps, term, size, power=pw, **kw)
+
+
+#: The keywords of ``_rated`` that only the chance to name takes.
+NAMING_ONLY = ("rivals", "seed")
 
 
 def _better(a: tuple[DetectionPower, NamingChance], b: tuple[DetectionPower, NamingChance]) -> bool:
@@ -392,6 +398,15 @@ def _better(a: tuple[DetectionPower, NamingChance], b: tuple[DetectionPower, Nam
     if abs(da - db) > 2.0 * math.sqrt(0.25 / min(a[1].draws, b[1].draws)):
         return da > db
     return a[0].lam_used > b[0].lam_used
+
+
+def _check_scale_on(prior: WienerPlant, term: str, size: float, st: _Settings, grid: _Grid) -> None:
+    """:func:`~._power.check_scale` on the planner's own grid (each frequency at its largest amplitude) and
+    resolution."""
+    amps, lo_hi = grid.amps[:, -1], (st.lo, st.hi)
+    check_scale(
+        prior, term, size, lo_hi, amps, omegas=grid.omegas, samples=grid.samples, substeps=st.substeps
+    )
 
 
 def plan_detection(
@@ -404,7 +419,7 @@ def plan_detection(
     noise_sd: float,
     sample_rate: float,
     alpha: float = 0.05,
-    candidates: int = DEFAULT_CANDIDATES,
+    candidates: Union[int, Sequence[str]] = DEFAULT_CANDIDATES,
     max_rate: Optional[float] = None,
     n_frequencies: int = 12,
     n_amplitudes: int = 4,
@@ -417,33 +432,36 @@ def plan_detection(
     substeps: int = 8,
     baseline: Optional[Sequence[PlannedExperiment]] = None,
     backend: Backend = "rust",
+    seed: int = 0,
 ) -> DetectionPlan:
     """Plan sine experiments that maximise the power of the diagnosis's test of one term of a given size.
 
-    ``detect`` is ``{term: size}``: one candidate term's code name (``"sensor_lag"``,
-    ``"series_dashpot"``, ``"viscous@x"``, ...; :data:`~._power.DETECTABLE`) and its value in the term's
-    physical units of the alpha-normalised model (a sensor lag in s). ``alpha`` and ``candidates`` are the
-    diagnosis's family-wise level and the number of candidate terms sharing its targeted step (``alpha / 2``
-    Bonferroni). ``baseline`` (optional): the user's own design within the budget, a candidate too (the plan
-    is never below it; one with fewer than ``min_experiments`` experiments is not taken). ``min_experiments``
-    (default :data:`MIN_EXPERIMENTS` = 3): fewest experiments of the plan. The diagnosis names a term only if
-    its F-test passes *and* it improves the held-out fit (leave-one-experiment-out), which two experiments
-    pass too rarely and one cannot run; the reported power is the F-test's (:data:`POWER_LABEL`), reported
-    beside the predicted chance to name (:data:`NAMING_LABEL`, ``_naming``), by which designs are compared
-    and :meth:`DetectionPlan.scaled` scales. Designs
-    the search finds with fewer are grown to it (:func:`_grown`) before any fallback to the naive design.
-    Every other keyword is :func:`~bouc_wen_id.plan_experiment`'s (the lab limits and the
-    candidate grid). The search maximises the first-order non-centrality (``_power``); the planned and the
-    naive design's are then checked by refitting the plain model, and their powers reported from it.
+    ``detect`` is ``{term: size}``: one candidate term's code name (``"sensor_lag"``, ``"series_dashpot"``,
+    ``"viscous@x"``, ...; :data:`~._power.DETECTABLE`) and its value in the term's physical units of the
+    alpha-normalised model (a sensor lag in s). ``alpha`` and ``candidates`` are the diagnosis's family-wise
+    level and the candidate terms sharing its targeted step (``alpha / 2`` Bonferroni): a count, or the names
+    the diagnosis will be given (``diagnose(candidates=...)``); the rivals the chance to name models follow
+    them (``_naming.family``: a count of 1 is the term alone). ``seed``: of the chance to name's draws.
+    ``baseline`` (optional): the user's own design within the budget, a candidate too (the plan is never below
+    it; one with fewer than ``min_experiments`` experiments is not taken). ``min_experiments`` (default
+    :data:`MIN_EXPERIMENTS` = 3): fewest experiments of the plan. The diagnosis names a term only if its
+    F-test passes *and* it improves the held-out fit (leave-one-experiment-out), which two experiments pass
+    too rarely and one cannot run; the reported power is the F-test's (:data:`POWER_LABEL`), reported beside
+    the predicted chance to name (:data:`NAMING_LABEL`, ``_naming``), by which designs are compared and
+    :meth:`DetectionPlan.scaled` scales. Designs the search finds with fewer are grown to it (:func:`_grown`)
+    before any fallback to the naive design. Every other keyword is :func:`~bouc_wen_id.plan_experiment`'s
+    (the lab limits and the candidate grid). The search maximises the first-order non-centrality
+    (``_power``); the planned and the naive design's are then checked by refitting the plain model, and their
+    powers reported from it.
 
     Raises
     ------
     InvalidParameterError
         An unknown or undetectable term (:class:`~._power.TwoParameterTermError` for Dahl friction), a zero,
-        NaN or out-of-range size, a size whose force dwarfs the plant's
-        (:class:`~._power.OversizedTermError`), a bad budget (zero, negative, too
-        small for one experiment) or any of :func:`~bouc_wen_id.plan_experiment`'s input errors; a design
-        on which the term leaves nothing the plain model cannot absorb.
+        NaN or out-of-range size, a size that dwarfs the plant at every frequency of the band or overflows
+        the model (:class:`~._power.OversizedTermError`), a bad budget (zero, negative, too small for one
+        experiment) or any of :func:`~bouc_wen_id.plan_experiment`'s input errors; a design on which the
+        term leaves nothing the plain model cannot absorb.
     """
     if not isinstance(prior_plant, WienerPlant) or prior_plant.terms:
         raise InvalidParameterError("prior_plant must be a plain WienerPlant (no terms)")
@@ -452,19 +470,16 @@ def plan_detection(
     lvl = real_number("alpha", alpha)
     if not 0.0 < lvl < 1.0:
         raise InvalidParameterError(f"alpha = {lvl:g} must be within (0, 1)")
-    n_cand = count("candidates", candidates, 1)
+    n_cand, rivals = family(term, candidates)
+    draw_seed = count("seed", seed, 0)
     st = _settings(
         "detect", band, max_amplitude, noise_sd, sample_rate, max_rate, n_frequencies, n_amplitudes,
         settle_periods, overhead, max_samples_per_period, min_periods, max_experiments, substeps, backend,
     )  # fmt: skip
-    check_scale(prior_plant, term, size, (st.lo, st.hi), st.max_amplitude)  # before the first simulation
     grid = _grid(st, budget)
-    kw: dict[str, Any] = {
-        "noise_sd": st.noise_sd,
-        "alpha": lvl,
-        "candidates": n_cand,
-        "substeps": st.substeps,
-    }
+    _check_scale_on(prior_plant, term, size, st, grid)  # before the search's first simulation
+    kw: dict[str, Any] = dict(noise_sd=st.noise_sd, alpha=lvl, candidates=n_cand, substeps=st.substeps)
+    kw.update(rivals=rivals, seed=draw_seed)  # the naming's (NAMING_ONLY)
     least = count("min_experiments", min_experiments, 1)
     if least > st.max_exp:
         raise InvalidParameterError(
@@ -487,7 +502,8 @@ def plan_detection(
     return DetectionPlan(
         term, size, prior_plant, budget, st.noise_sd, experiments, planned[0], naive_exps,
         None if naive is None else naive[0],
-        {**st.to_dict(grid.omegas), "alpha": lvl, "candidates": n_cand, "min_experiments": least},
+        {**st.to_dict(grid.omegas), "alpha": lvl, "candidates": n_cand, "min_experiments": least,
+         "seed": draw_seed},
         planned[1], None if naive is None else naive[1],
     )  # fmt: skip
 

@@ -18,8 +18,13 @@ its range is one-sided, as the fit is). The projection is first order; where the
 leaves less than it (``DetectionPower.lam`` below ``lam_linear``) the term's column is scaled by
 ``sqrt(lam / lam_linear)`` so the whole design's non-centrality is the refitted one. The law test, a test of
 a true hypothesis here, refuses at its own level (``LAW_ALPHA``); the Wald test is the F-test's twin in the
-linear model. Not modelled: a rival candidate fitting better and being named instead (wrong physics), and
-nonlinearity beyond the refit's scaling.
+linear model. The rivals are the candidates of the step the diagnosis would run (:func:`family`) whose trace
+is linear in their value (:func:`linear_rivals`): each is tested at its own critical value (one-sided for a
+term whose fitted range is ``>= 0``, two-sided otherwise, as diagnosis/select.py) and the step's choice is
+the candidate passing its tests with the largest cost drop, so a linear rival named instead (wrong physics)
+is modelled. Not modelled: nonlinear rivals (a series dashpot, pinching, play, Dahl friction, ...)
+being named instead, and nonlinearity beyond the refit's scaling; where such a rival resembles the term the
+chance over-predicts (docs/power.md).
 """
 
 from __future__ import annotations
@@ -27,7 +32,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any, Optional
+from typing import Any, Optional, Union
 
 import numpy as np
 from numpy.typing import NDArray
@@ -45,6 +50,7 @@ from ._power import (
     detection_power,
     experiment_block,
     physical_side,
+    z_critical,
 )
 
 FloatArray = NDArray[np.float64]
@@ -108,7 +114,8 @@ class _Linear:
 
     a: FloatArray
     ridge: FloatArray
-    z_c: float
+    #: Each candidate's critical value (the term, then the rivals): its own test's at the step's level.
+    z_c: tuple[float, ...]
     one_sided: tuple[bool, ...]
     bounded: bool
 
@@ -171,7 +178,7 @@ def _named(lin: _Linear, e: FloatArray, factor: float) -> tuple[BoolArray, BoolA
     f_ok = np.zeros(z.shape[0], dtype=np.bool_)
     for n, col in enumerate(cols):
         d = _statistic(s, g, lin.ridge, col)
-        ok = d > lin.z_c if lin.one_sided[n] else np.abs(d) > lin.z_c
+        ok = d > lin.z_c[n] if lin.one_sided[n] else np.abs(d) > lin.z_c[n]
         if col == 3:
             f_ok = np.array(ok, dtype=np.bool_)  # a copy: ``ok`` is narrowed below
         if a.shape[0] > 1 and np.any(ok):
@@ -208,14 +215,43 @@ def _linear(
     h = prior.normalized().hysteresis
     par = np.array([h.beta, h.gamma, h.mu])
     scale = np.where(par != 0, np.abs(par), 1.0)
-    sided = (power.one_sided or physical_side(term), *(physical_side(t) for t in rivals))
-    return _Linear(_roots(blocks), VAGUE_PRIOR / scale**2, power.z_c, sided, TERMS[term].bounds[0] == 0.0)
+    sided = (power.one_sided or physical_side(term), *(_one_sided(t) for t in rivals))
+    z_c = (power.z_c, *(z_critical(t, power.level) for t in rivals))
+    return _Linear(_roots(blocks), VAGUE_PRIOR / scale**2, z_c, sided, TERMS[term].bounds[0] == 0.0)
+
+
+def _one_sided(term: str) -> bool:
+    """Whether only one sign of the term is named: its fitted range is ``>= 0`` or its physical one is."""
+    return TERMS[term].bounds[0] == 0.0 or physical_side(term)
 
 
 def linear_rivals(term: str, candidates: Sequence[str]) -> tuple[str, ...]:
     """The candidates the step tests beside ``term`` whose trace is linear in their value (modelled exactly
     in the linearised model); the others (a series dashpot, pinching, Dahl friction, ...) are not."""
     return tuple(t for t in candidates if t != term and getattr(TERMS[t], "linear", False))
+
+
+def family(term: str, candidates: Union[int, Sequence[str]]) -> tuple[int, tuple[str, ...]]:
+    """The step's candidate count (its Bonferroni family) and the term's linear rivals for the diagnosis run
+    with ``candidates``: a sequence of term names (as :func:`~bouc_wen_id.diagnose` takes them; the term
+    must be among them), or a count. A count of 1 is the term alone (no rival); any other count is taken as
+    the diagnosis's own list on pure sines (its linear rivals modelled; where the user's list is shorter this
+    counts rivals it does not have, and the chance is on the low side: give the names instead)."""
+    if isinstance(candidates, (int, np.integer)) and not isinstance(candidates, bool):
+        n = count("candidates", int(candidates), 1)
+        return n, () if n == 1 else linear_rivals(term, step_candidates(pure_sines=True))
+    from ..diagnosis.run import _check_candidates
+
+    if candidates is None or isinstance(candidates, (str, bytes, float, bool)):
+        raise InvalidParameterError(
+            f"candidates must be a count or a sequence of term names, got {candidates!r}"
+        )
+    step = step_candidates(_check_candidates(candidates), pure_sines=True)
+    if term not in step:
+        raise InvalidParameterError(
+            f"candidates {list(candidates)!r} do not include {term!r}: the diagnosis would never name it"
+        )
+    return len(step), linear_rivals(term, step)
 
 
 def _fold_lams(lin: _Linear) -> tuple[float, ...]:
@@ -237,13 +273,15 @@ def _setup(
     noise_sd: float,
     substeps: int,
     rivals: Optional[Sequence[str]],
+    candidates: Union[int, Sequence[str]],
     draws: int,
     seed: int,
 ) -> tuple[_Linear, FloatArray, tuple[str, ...]]:
-    """The linearised design and its seeded standard normal draws."""
+    """The linearised design and its seeded standard normal draws; the rivals ``rivals`` (those linear in
+    their value), or when None those of the step the diagnosis runs with ``candidates`` (:func:`family`)."""
     if not design:
         raise InvalidParameterError("design has no experiments")
-    rv = linear_rivals(term, step_candidates(pure_sines=True) if rivals is None else rivals)
+    rv = family(term, candidates)[1] if rivals is None else linear_rivals(term, rivals)
     lin = _linear(prior, design, term, size, power, noise_sd, substeps, rv)
     n = count("draws", draws, 100)
     return lin, np.random.default_rng(seed).standard_normal((n, *lin.a.shape[:2])), rv
@@ -257,7 +295,7 @@ def naming_chance(
     *,
     noise_sd: float,
     alpha: float = 0.05,
-    candidates: int = DEFAULT_CANDIDATES,
+    candidates: Union[int, Sequence[str]] = DEFAULT_CANDIDATES,
     substeps: int = 8,
     power: Optional[DetectionPower] = None,
     rivals: Optional[Sequence[str]] = None,
@@ -266,12 +304,16 @@ def naming_chance(
 ) -> NamingChance:
     """The predicted chance that :func:`~bouc_wen_id.diagnose` names ``term`` at ``size`` on ``design``
     (module docstring); ``power``: the design's :func:`~._power.detection_power`, computed when not given;
-    ``rivals``: the candidates tested beside it (default the diagnosis's on pure sines; only those linear in
-    their value are modelled, :func:`linear_rivals`; ``()``: none)."""
+    ``candidates``: the diagnosis's candidates, a count or their names (:func:`family`: the rivals modelled
+    follow them); ``rivals``: the candidates tested beside it, overriding those (only those linear in
+    their value are modelled, :func:`linear_rivals`; ``()``: none); ``seed``: of the draws."""
+    n_cand = family(term, candidates)[0]
     pw = power or detection_power(
-        prior, design, term, size, noise_sd=noise_sd, alpha=alpha, candidates=candidates, substeps=substeps
+        prior, design, term, size, noise_sd=noise_sd, alpha=alpha, candidates=n_cand, substeps=substeps
     )
-    lin, e, rv = _setup(prior, design, pw.term, pw.size, pw, noise_sd, substeps, rivals, draws, seed)
+    lin, e, rv = _setup(
+        prior, design, pw.term, pw.size, pw, noise_sd, substeps, rivals, candidates, draws, seed
+    )
     f_ok, named, rival = _named(lin, e, 1.0)
     law = LAW_ALPHA if len(design) > 1 else 0.0
     f = float(np.mean(f_ok))
@@ -293,14 +335,16 @@ def naming_factor(
     power: DetectionPower,
     substeps: int = 8,
     rivals: Optional[Sequence[str]] = None,
+    candidates: Union[int, Sequence[str]] = DEFAULT_CANDIDATES,
     draws: int = NAMING_DRAWS,
     seed: int = 0,
 ) -> float:
     """The factor on every experiment's periods that brings the predicted chance to name to ``target``
-    (bisection in log on the same seeded draws); inf when a thousandfold does not."""
+    (bisection in log on the same seeded draws); inf when a thousandfold does not. ``rivals``,
+    ``candidates``: as :func:`naming_chance`'s."""
     if not 0.0 < target < 1.0:
         raise InvalidParameterError(f"target = {target:g} must be within (0, 1)")
-    lin, e, _ = _setup(prior, design, term, size, power, noise_sd, substeps, rivals, draws, seed)
+    lin, e, _ = _setup(prior, design, term, size, power, noise_sd, substeps, rivals, candidates, draws, seed)
     keep = 1.0 - (LAW_ALPHA if len(design) > 1 else 0.0)
 
     def chance(f: float) -> float:
@@ -319,4 +363,4 @@ def naming_factor(
     return hi
 
 
-__all__ = ["NAMING_DRAWS", "NamingChance", "linear_rivals", "naming_chance", "naming_factor"]
+__all__ = ["NAMING_DRAWS", "NamingChance", "family", "linear_rivals", "naming_chance", "naming_factor"]

@@ -30,11 +30,11 @@ from dataclasses import dataclass, replace
 from typing import Any, Optional
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from ..augmented import AugExperiment, AugParams, augmented_output
 from ..diagnosis.candidates import step_candidates
-from ..errors import BoucWenIdError, InvalidParameterError
+from ..errors import BoucWenIdError, InvalidParameterError, NonFiniteError
 from ..model import WienerPlant
 from ..terms import STEADY_TERM_NAMES, TERMS, Distortion
 from ..validation import real_number
@@ -114,50 +114,93 @@ class TwoParameterTermError(InvalidParameterError):
 
 
 class OversizedTermError(InvalidParameterError):
-    """A size whose term would dwarf the plant's own hysteretic output (:func:`check_scale`)."""
+    """A size whose term would dwarf the plant's own output at every frequency of the band, overflow the
+    model's output or make it unsolvable (:func:`check_scale`)."""
 
 
-#: Largest ratio of a planned term's change of the output (its largest magnitude) to the plain model's
-#: output (peak to peak), at the largest amplitude, across the band, taken as a term missing from an
-#: identified model: beyond it the prior is not the plant (the term would be the plant), and its output
-#: overflows at sizes such as 1e308.
+#: Largest ratio of a planned term's change of the output (its largest magnitude) to the plain model's own
+#: output swing (peak to peak), at the largest amplitude the plan may use, that a plan accepts at *some*
+#: frequency of the band (the term is refused only where it exceeds this at every frequency): beyond it the
+#: prior is not the plant (the term would be the plant), and its output overflows at sizes such as 1e308.
 MAX_TERM_RATIO = 100.0
+#: Frequencies, log-spaced over the band, at which :func:`check_scale` compares the term with the plant when
+#: not given the planner's own grid.
+SCALE_POINTS = 12
 
 
-def _output(e: AugExperiment, par: AugParams) -> Optional[FloatArray]:
-    """One steady period of the model's output; None where it overflows (a term beyond floating point)."""
+def _term_output(e: AugExperiment, par: AugParams, substeps: int) -> tuple[Optional[FloatArray], str]:
+    """One steady period of the model with the term: ``(y, "")``, or ``(None, why)`` where its output is not
+    finite (``"overflow"``) or its solve fails (the error's text)."""
     try:
         with np.errstate(over="ignore", invalid="ignore"):
-            y = np.asarray(augmented_output(e, par, 0, substeps=4), dtype=np.float64)
-    except (BoucWenIdError, FloatingPointError, OverflowError):
-        return None
-    return y if np.all(np.isfinite(y)) else None
+            y = np.asarray(augmented_output(e, par, 0, substeps=substeps), dtype=np.float64)
+    except (NonFiniteError, FloatingPointError, OverflowError):
+        return None, "overflow"
+    except BoucWenIdError as err:
+        text = str(err)
+        return None, f"{type(err).__name__}: {text if len(text) <= 160 else text[:157] + '...'}"
+    return (y, "") if np.all(np.isfinite(y)) else (None, "overflow")
 
 
-def check_scale(prior: WienerPlant, term: str, size: float, band: Sequence[float], amplitude: float) -> float:
-    """The ratio of the term's change of the output (its largest magnitude: an offset counts) to the plain
-    model's output (peak to peak) at ``amplitude`` and the band's edges, the larger;
-    :class:`OversizedTermError` above :data:`MAX_TERM_RATIO` or non-finite."""
-    ratio = 0.0
-    for omega in (float(band[0]), float(band[-1])):
-        e = AugExperiment(np.zeros(64), amplitude, omega, 0.0, 1.0)
-        par = aug_params(prior, [omega])
-        y0, y1 = _output(e, par), _output(e, par.with_term(term, size))
-        if y0 is None or y1 is None or not np.all(np.isfinite(y1)):
-            ratio = math.inf
-            break
-        ratio = max(ratio, float(np.max(np.abs(y1 - y0))) / max(float(np.ptp(y0)), 1e-300))
-    if not ratio <= MAX_TERM_RATIO:
-        times = "beyond floating point (the model output overflows) against" if math.isinf(ratio) else ""
-        raise OversizedTermError(
-            f"detect[{term!r}] = {size:g}: the term's change of the output would be "
-            f"{times or f'{ratio:.3g}x'} the plant's hysteretic output (peak to peak) at the largest "
-            f"amplitude {amplitude:g} across the band "
-            f"({float(band[0]):g}-{float(band[-1]):g} rad/s); a plan is for a term missing from a model that "
-            f"otherwise fits, at most {MAX_TERM_RATIO:g}x. Check the size's units ({TERMS[term].unit or '-'}"
-            " in the alpha-normalised model) or the prior plant"
+def check_scale(
+    prior: WienerPlant,
+    term: str,
+    size: float,
+    band: Sequence[float],
+    amplitude: ArrayLike,
+    *,
+    omegas: Optional[ArrayLike] = None,
+    samples: ArrayLike = 512,
+    substeps: int = 8,
+) -> float:
+    """The smallest ratio, over the band, of the term's change of the output (its largest magnitude: an
+    offset counts) to the plain model's own output swing (peak to peak), at ``amplitude`` (one, or one per
+    frequency: the largest the plan may use there); at ``omegas`` (default :data:`SCALE_POINTS` log-spaced
+    over ``band``) with ``samples`` per period and ``substeps``, the planner's resolution.
+
+    The term is judged against the plant where it would be measured: it is refused
+    (:class:`OversizedTermError`) only where it exceeds :data:`MAX_TERM_RATIO` times the plant's swing at
+    every frequency, or where the model with it overflows (a non-finite output) or cannot be solved. The
+    prior's own errors (an invalid parameter, a solve that fails without the term) are raised as they are."""
+    lo, hi = float(band[0]), float(band[-1])
+    om = np.geomspace(lo, hi, SCALE_POINTS) if omegas is None else np.asarray(omegas, dtype=np.float64)
+    amps = np.broadcast_to(np.asarray(amplitude, dtype=np.float64), om.shape)
+    sam = np.broadcast_to(np.asarray(samples, dtype=np.int64), om.shape)
+    ratios = []
+    for omega, amp, n in zip(om, amps, sam):
+        e = AugExperiment(np.zeros(int(n)), float(amp), float(omega), 0.0, 1.0)
+        par = aug_params(prior, [float(omega)])
+        y0 = np.asarray(augmented_output(e, par, 0, substeps=substeps), dtype=np.float64)  # the prior's own
+        y1, why = _term_output(e, par.with_term(term, size), substeps)
+        if y1 is None:
+            _refuse(term, size, (lo, hi), float(amp), f"{why} at {omega:.4g} rad/s")
+        assert y1 is not None
+        ratios.append(float(np.max(np.abs(y1 - y0))) / max(float(np.ptp(y0)), 1e-300))
+    least = min(ratios)
+    if not least <= MAX_TERM_RATIO:
+        where = float(om[int(np.argmin(ratios))])
+        _refuse(term, size, (lo, hi), float(np.max(amps)), f"{least:.3g}x at best ({where:.4g} rad/s)")
+    return least
+
+
+def _refuse(term: str, size: float, band: tuple[float, float], amplitude: float, what: str) -> None:
+    """:class:`OversizedTermError`: ``what`` is the ratio, ``overflow`` or a failed solve of the model with
+    the term."""
+    if what.startswith("overflow"):
+        said = f"overflow the model's output (beyond floating point{what[len('overflow') :]})"
+    elif "x at best" in what:
+        said = (
+            f"change the output by more than {MAX_TERM_RATIO:g}x the plain model's own output swing (peak to "
+            f"peak) at every frequency of the band: {what}"
         )
-    return ratio
+    else:
+        said = f"make the model unsolvable ({what})"
+    raise OversizedTermError(
+        f"detect[{term!r}] = {size:g}: at amplitudes up to {amplitude:g} across the band ({band[0]:g}-"
+        f"{band[1]:g} rad/s) the term would {said}; a plan is for a term missing from a model that "
+        f"otherwise fits. Check the size's units ({TERMS[term].unit or '-'} in the alpha-normalised model) "
+        "or the prior plant"
+    )
 
 
 class UnphysicalSizeError(InvalidParameterError):
@@ -174,11 +217,17 @@ def physical_side(term: str) -> bool:
 def critical(term: str, alpha: float, candidates: int) -> tuple[float, float, bool]:
     """``(z_c, level, one_sided)`` of the term's test at the targeted step (module docstring): one-sided
     (its p halved) for a term whose fitted range is confined to ``>= 0``, two-sided otherwise."""
+    level = 0.5 * alpha / candidates
+    return z_critical(term, level), level, TERMS[term].bounds[0] == 0.0
+
+
+def z_critical(term: str, level: float) -> float:
+    """The normal critical value of ``term``'s own test at ``level`` (per candidate): one-sided for a term
+    whose fitted range is ``>= 0`` (diagnosis/select.py ``BOUNDARY_TERMS``), two-sided otherwise."""
     from scipy.special import ndtri  # type: ignore[import-untyped]
 
     one = TERMS[term].bounds[0] == 0.0
-    level = 0.5 * alpha / candidates
-    return float(ndtri(1.0 - (level if one else 0.5 * level))), level, one
+    return float(ndtri(1.0 - (level if one else 0.5 * level)))
 
 
 def power_at(lam: float, z_c: float, one_sided: bool) -> float:
