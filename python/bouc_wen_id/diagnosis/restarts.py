@@ -15,9 +15,10 @@ escape (a series dashpot named at "100 % of the excess").
   a generic loop saturating at the rest of the output's peak (the base's gains and phases kept);
 - :func:`rebase`: forward selection's consistency check. When two or more unrelated candidates lower the
   cost by about the same amount (:data:`SIMILAR`), the improvement may be the refit's, not the terms': the
-  base model is refitted from those candidates' fits with their term removed; if that alone recovers most
-  of the improvement (:data:`RECOVERED`), the base was not converged, and the step restarts from the refit
-  instead of crediting a term.
+  base model is refitted from those candidates' fits with their term removed (when the best improvement is
+  an F of at least :data:`REBASE_MIN_F`); if that alone recovers most of the improvement
+  (:data:`RECOVERED`), the base was not converged, and the step restarts from the refit instead of
+  crediting a term.
 """
 
 from __future__ import annotations
@@ -48,6 +49,9 @@ SIMILAR = 0.2
 #: The base refitted without any term must recover at least this share of the best candidate's improvement
 #: for the base to count as not converged (:func:`rebase`).
 RECOVERED = 0.5
+#: ... and that improvement must be an F of at least this over the base's reduced chi-square (at least 1):
+#: no refit for the small, alike improvements of a model at the noise floor (a null's targeted step).
+REBASE_MIN_F = 10.0
 #: At most this many candidate fits (those with the largest improvements) seed the base's refit.
 REBASE_SEEDS = 2
 
@@ -142,6 +146,8 @@ def rebase(
     if not gains or gains[0][0] <= 0.0:
         return None
     best = gains[0][0]
+    if best < REBASE_MIN_F * max(reduced_chi2(exps, current), 1.0):
+        return None
     alike: list[tuple[float, str, AugFit]] = []
     for g in gains:
         if g[0] < (1.0 - SIMILAR) * best:
