@@ -58,6 +58,7 @@ from .data import DiagExperiment
 from .fitting import Scale, carry_through_g, fit_plain, physical, scale_of, scaled, substeps_for
 from .locate import adequacy_p
 from .progress import Progress, ProgressCallback, reporter
+from .restarts import rebase_groups
 from .result import Diagnosis, NamedTerm, Status, term_symbol_unit
 from .select import (
     ALPHA,
@@ -72,6 +73,7 @@ from .select import (
     dof_of,
     held_out,
     memo_fit_with,
+    siblings,
 )
 from .shared import SharedTest, shared_test
 
@@ -180,6 +182,8 @@ class JointStep:
     #: whether it was the targeted first step (at ``alpha / 2``: every plain model passed its gate, _go_on).
     level: float = math.nan
     targeted: bool = False
+    #: The conditions whose model the step refitted before its trials (restarts.rebase: not converged).
+    refitted: tuple[str, ...] = ()
 
     def to_dict(self) -> dict[str, Any]:
         out: dict[str, Any] = {
@@ -193,7 +197,7 @@ class JointStep:
         out.update(
             {
                 k: list(getattr(self, k))
-                for k in ("law_failed", "beside", "unphysical_places")
+                for k in ("law_failed", "beside", "unphysical_places", "refitted")
                 if getattr(self, k)
             }
         )
@@ -589,6 +593,7 @@ def _select(
 ) -> list[JointStep]:
     """The joint forward selection (module docstring); the groups' current models end at the final ones."""
     steps: list[JointStep] = []
+    refitted: tuple[str, ...] = ()
     while True:
         go, level, targeted = _go_on(groups, steps, alpha)
         remaining = [t for t in cands if t not in groups[0].current.params.terms]
@@ -600,8 +605,14 @@ def _select(
                 f"across step {len(steps) + 1}: fitting candidate {t} at every condition", i, len(remaining)
             )
             trials.append(_trial(groups, t, len(remaining), alpha, level))
+        if not refitted:  # a condition's model not converged (restarts.py): refitted, the step redone
+            refitted = rebase_groups(groups, trials, [(t, u) for t in remaining for u in siblings(t)])
+            if refitted:
+                continue
         alone = {t.term: t.p_value for t in steps[0].trials} if steps else {}
-        steps.append(replace(_step(groups, trials, level, alpha, use_held_out, alone), targeted=targeted))
+        step = _step(groups, trials, level, alpha, use_held_out, alone)
+        steps.append(replace(step, targeted=targeted, refitted=refitted))
+        refitted = ()
         chosen = next((t for t in steps[-1].trials if t.term == steps[-1].chosen), None)
         if chosen is None:
             break

@@ -26,7 +26,12 @@ def below_saturation(sx: Sequence[AugExperiment], fit: AugFit) -> list[str]:
     ``|x_i| = |g_i| U_i`` under ``w_u = (beta + gamma)^(-1/mu)``, alpha = 1; the final fit's, so that a spring
     on x, which lifts them, is seen): there the loop is nearly linear and a spring on x trades with |G|, so
     the design could not show one (a 30x spring on x over three frequencies at 0.3 of saturation gave
-    "adequate")."""
+    "adequate"). Not from a fit stopped on a face of its admissible range (``fit.active``: mu at its lower
+    bound, ``|gamma| = beta``): there ``beta + gamma`` is whatever the stall left (a spring on x absorbed as a
+    nearly linear loop, ``beta + gamma`` near 0, put experiments at 1-8 times saturation at 0.12-0.35 of it,
+    review 31a), so the level it reads is no level of the data."""
+    if fit.active:
+        return []
     levels = latent_levels(sx, fit)
     if not levels or max(levels) >= 1.0:
         return []

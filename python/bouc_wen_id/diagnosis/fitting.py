@@ -452,7 +452,14 @@ def fit_plain(exps: Sequence[DiagExperiment], sx: Sequence[AugExperiment], s: Sc
     starts = plain_start(exps, sx, s)
     first = fit_from(sx, starts[0], substeps) if starts else None
     fits: list[Optional[AugFit]] = [first]
-    if first is None or first.params.beta - abs(first.params.gamma) < PLAIN_FACE_GAP * first.params.beta:
+    if (
+        first is None
+        or first.params.beta - abs(first.params.gamma) < PLAIN_FACE_GAP * first.params.beta
+        or (
+            first.active
+            or first.params.mu > PROFILE_MU_BRACKET[1]  # on a face, or a two-line loop (restarts.py)
+        )
+    ):
         fits += [fit_from(sx, st, substeps, max_iter=25) for st in starts[1:]]
         screened = best_of(fits)
         if screened is not None and screened is not first:

@@ -176,6 +176,11 @@ class Diagnosis:
                 f"step {k}{' (targeted: the global test accepted the plain model)' if st.targeted else ''}: "
                 f"from chi2 = {st.before_cost:.6g} (dof {st.before_dof}); chosen: {chosen}"
             )
+            if math.isfinite(st.refitted_from):  # restarts.rebase: the step's base had not converged
+                lines.append(
+                    f"  (its base refitted from chi2 = {st.refitted_from:.6g}: unrelated candidates lowered "
+                    "that by about the same amount, and the model without any of them reached it too)"
+                )
             lines.append(f"  {'term':<12} {'chi2':>12} {'F':>10} {'p adj':>9} {'share':>7} {'held-out':>10}")
             for t in st.trials:
                 ho = "" if t.held_out is None else ("better" if t.held_out.improves else "worse")

@@ -61,6 +61,7 @@ from .limits import detection_limits
 from .locate import Localisation, adequacy_p, locate
 from .pinch_shape import is_pinching
 from .progress import Progress, ProgressCallback, reporter
+from .restarts import rebased_plain
 from .result import Diagnosis, ModelSummary, NamedTerm, Status, term_symbol_unit
 from .select import ALPHA, Alternative, FoldCache, Step, dof_of, forward_select, held_out
 from .settling import (  # noqa: F401 (quantisation_step: importable here as before)
@@ -712,6 +713,7 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
         final, steps = start, list[Step]()
     else:
         final, steps = forward_select(fsx, start, steady, adequate, substeps, targeted=targeted, **kw)
+        plain, start = rebased_plain(plain, start, steps)  # a first step that refitted an unconverged start
     notes += fit_notes(plain, final)  # a fit stopped on a face of its admissible range (issue 19, branch lm)
     dexps = detrended(fexps, deg, s.y) if deg is not None and named_deg else fexps
     after = _drift_checked(_localise(dexps, fsx, final, s), dexps)

@@ -57,6 +57,7 @@ from . import free_dc, speed
 from .beside import only_beside
 from .fitting import best_of, fit_from, fit_own, fit_with, subset
 from .pinch_shape import band_test, is_pinching
+from .restarts import rebase, wide_fit
 from .shape import LAW_WINDOW, shape_test, spectral_meat
 
 FloatArray = NDArray[np.float64]
@@ -215,6 +216,10 @@ class Step:
     #: range (:func:`place_alternatives`): no alternative, said in the verdict
     #: (:func:`.caveats.unphysical_places_text`).
     unphysical_places: tuple[str, ...] = ()
+    #: The cost the step's base had before :func:`.restarts.rebase` found it not converged and refitted it
+    #: (NaN: not refitted); ``base`` is that refit (the model ``before_cost`` is of).
+    refitted_from: float = math.nan
+    base: Optional[AugFit] = field(default=None, repr=False, compare=False)
 
     def to_dict(self) -> dict[str, Any]:
         out = {
@@ -230,6 +235,8 @@ class Step:
             out["beside"] = list(self.beside)
         if self.unphysical_places:  # likewise
             out["unphysical_places"] = list(self.unphysical_places)
+        if math.isfinite(self.refitted_from):  # likewise
+            out["refitted_from"] = self.refitted_from
         return out
 
 
@@ -768,9 +775,12 @@ def memo_fit_with(exps: Sequence[AugExperiment], substeps: int) -> Callable[[Aug
 
     def fit_term(base: AugFit, t: str) -> Optional[AugFit]:
         if not speed.MEMO_FITS:
-            return fit_with(exps, base, t, substeps)
-        if (id(base), t) not in fitted:
-            fitted[(id(base), t)] = (base, fit_with(exps, base, t, substeps))
+            return wide_fit(exps, base, t, substeps, fit_with(exps, base, t, substeps))
+        if (id(base), t) not in fitted:  # wide starts when the term's own fit is suspicious (restarts.py)
+            fitted[(id(base), t)] = (
+                base,
+                wide_fit(exps, base, t, substeps, fit_with(exps, base, t, substeps)),
+            )
         return fitted[(id(base), t)][1]
 
     return fit_term
@@ -815,6 +825,11 @@ def step_alternatives(
     return out
 
 
+def _pairs(terms: Sequence[str]) -> list[tuple[str, str]]:
+    """The pairs among ``terms`` that are one physics at two places (:func:`siblings`)."""
+    return [(t, u) for t in terms for u in siblings(t) if u in terms]
+
+
 def forward_select(
     exps: Sequence[AugExperiment],
     plain: AugFit,
@@ -827,16 +842,14 @@ def forward_select(
     targeted: bool = False,
     on_trial: Optional[Any] = None,
 ) -> tuple[AugFit, list[Step]]:
-    """Forward selection from ``plain``; ``adequate(fit) -> bool`` is the stopping test.
-
-    ``targeted``: the global test accepted ``plain`` at ``alpha / 2``; the first step is the targeted one
-    (module docstring), its candidates tested at ``alpha / 2``, and selection ends there unless it names one.
-    ``on_trial(step, term, index, count)``, when given, is called before each candidate's fit (progress).
-    """
+    """Forward selection from ``plain``; ``adequate(fit) -> bool`` is the stopping test. ``targeted``: the
+    global test accepted ``plain`` at ``alpha / 2``; the first step is the targeted one (module docstring),
+    its candidates tested at ``alpha / 2``, and selection ends there unless it names one. ``on_trial(step,
+    term, index, count)``, when given, is called before each candidate's fit (progress)."""
     memo: FoldCache = {} if cache is None else cache
     fit_term = memo_fit_with(exps, substeps)
-    current, steps, first = plain, list[Step](), targeted
-    while first or not adequate(current):
+    current, steps, first, refitted_from = plain, list[Step](), targeted, math.nan
+    while first or math.isfinite(refitted_from) or not adequate(current):  # (a refitted base: its step)
         level = 0.5 * alpha if first else alpha
         remaining = [t for t in candidates if t not in current.params.terms]
         if not remaining:
@@ -862,6 +875,10 @@ def forward_select(
             ok = bool(math.isfinite(padj) and padj < level and share >= MATERIAL_SHARE) and _admissible(f, t)
             ok = ok and not at_null(f, t) and away_from_null(f, t, level, f.cost / max(d1, 1))
             trials.append(Trial(t, f.cost, c0 - f.cost, stat, p, padj, share, ok, fit=f))
+        better = rebase(exps, current, [(tr.term, tr.fit) for tr in trials], substeps, _pairs(remaining))
+        if better is not None and not math.isfinite(refitted_from):  # base not converged (restarts.py):
+            current, refitted_from = better, c0  # refitted, once per step, and the step redone
+            continue
         passed = sorted((tr for tr in trials if tr.passed), key=lambda tr: tr.cost)
         order = simpler_first(exps, passed, level / len(remaining))  # Bonferroni, as the candidates' tests
         chosen: Optional[Trial] = None
@@ -903,9 +920,11 @@ def forward_select(
                 tuple(law_failed),
                 tuple(refused),
                 tuple(bad),
+                refitted_from,
+                None if math.isnan(refitted_from) else current,
             )
         )
-        first = False
+        first, refitted_from = False, math.nan
         if chosen is None or chosen.fit is None:
             break
         current = chosen.fit
