@@ -16,8 +16,10 @@ from pathlib import Path
 from typing import Any
 
 import bouc_wen_id as bw
+from bouc_wen_id.diagnosis.drift import DRIFT_TERMS
 from bouc_wen_id.diagnosis.masing import MASING_MARK
-from bouc_wen_id.terms import Stiffness, StiffnessX, Viscous
+from bouc_wen_id.diagnosis.run import ALL_CANDIDATES
+from bouc_wen_id.terms import Degradation, Stiffness, StiffnessX, Viscous
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
@@ -40,3 +42,51 @@ def test_the_masing_caveat_is_judged_where_the_spring_on_x_is_present() -> None:
     assert spring.present == (False, True)
     assert MASING_MARK in a.verdict
     assert "starts from saturation, as at 1;" in a.verdict  # the condition whose loops all saturate
+
+
+degradation_records: Any = importlib.import_module("test_degradation")._recs
+
+
+def _degrading(**kw: Any) -> tuple[Any, Any]:
+    """A degrading specimen (rate 1e-3) at condition 1, the same plant without it at 0; diagnose of the
+    degrading condition alone, and diagnose_across."""
+    plain, degr = degradation_records(0.0, 0.01, seed=5), degradation_records(1e-3, 0.01, seed=4)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        alone = bw.diagnose(degr)
+        if kw.pop("own", False):
+            kw["per_condition"] = [bw.diagnose(plain), alone]
+        return alone, bw.diagnose_across([plain, degr], [0.0, 1.0], **kw)
+
+
+def test_a_degrading_condition_is_said_across_not_called_unsettled() -> None:
+    """diagnose names degradation at the degrading condition; across, which does not model it, leaves its
+    drifting experiments out *because the loop degrades* (its own judgement, run as diagnose runs it),
+    never "not settled, and no degradation explains it" (said before without any test)."""
+    alone, a = _degrading()
+    assert Degradation.kind in alone.named_terms
+    text = " ".join((a.verdict, *a.notes))
+    assert "no degradation explains it" not in text
+    assert "left out at 1:" in a.verdict and "diagnose of that condition alone names degradation" in a.verdict
+    assert any(n.startswith("1: left out") and "the loop degrades" in n for n in a.notes)
+
+
+def test_a_degrading_condition_given_its_own_diagnosis_names_no_steady_term_from_the_drift() -> None:
+    """Given the conditions' own diagnoses, the degrading one's experiments were reused whole and the joint
+    selection read its drift as Dahl friction on x; now its drifting experiments are left out as without
+    them, and both paths say the same."""
+    _, a = _degrading(own=True)
+    _, b = _degrading()
+    assert a.named == b.named
+    assert not any(k.startswith("dahl") for k in a.named)
+    assert "diagnose of that condition alone names degradation" in a.verdict
+
+
+def test_a_drift_not_tested_for_degradation_is_said_untested() -> None:
+    """Without a drift term among the candidates the drift is not judged: the note says degradation was not
+    tested instead of claiming none explains it."""
+    steady = [c for c in ALL_CANDIDATES if c not in DRIFT_TERMS]
+    _, a = _degrading(candidates=steady)
+    text = " ".join((a.verdict, *a.notes))
+    assert "no degradation explains it" not in text
+    assert "degradation was not tested" in a.verdict
