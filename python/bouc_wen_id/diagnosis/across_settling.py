@@ -34,7 +34,6 @@ from typing import Any, Optional
 from .data import DiagExperiment
 from .settling import LEFT_OUT, left_out_note, settled_only
 
-
 #: Why experiments were left out (``_Group.left_why``, :class:`NotSettled`): degradation explains their
 #: drift at the condition, or it was not tested (no drift term among the candidates).
 DEGRADES, UNTESTED = "degrades", "untested"
