@@ -394,7 +394,8 @@ def _group(
     level = alpha / max(len(cands), 1)  # a wandering zero (baseline.py) or a drifting one, as diagnose
     wander = baseline.detect(items, level) or zero_drift.detect(items, level)
     left = across_settling.from_own(own, label) if own is not None else ()  # its unsettled stay out
-    degraded, why = own is not None and across_settling.names_degradation(own), ""  # not modelled across
+    degraded = own is not None and across_settling.names_degradation(own)  # not modelled across
+    why = across_settling.why_own(own) if left else ""
     if (
         own is not None
         and not degraded

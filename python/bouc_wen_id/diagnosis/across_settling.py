@@ -49,6 +49,15 @@ class NotSettled(Exception):
         self.left_why = why
 
 
+def why_own(own: Any) -> str:
+    """Why the condition's own diagnosis left its experiments out: :data:`UNTESTED` when it had no drift term
+    among its candidates (degradation not tested), else "" (tested, and none named)."""
+    from .drift import DRIFT_TERMS
+
+    cands = (own.settings or {}).get("candidates", DRIFT_TERMS)
+    return "" if any(c in DRIFT_TERMS for c in cands) else UNTESTED
+
+
 def names_degradation(d: Any) -> bool:
     """Whether the diagnosis ``d`` names degradation (diagnose's own rule: a drift term named, or its
     degradation test named, or passed when ``d`` ran without the held-out test)."""
@@ -112,7 +121,7 @@ def _reason(why: str) -> str:
     if why == UNTESTED:
         return (
             "the loop still drifts from period to period: not settled; degradation was not tested (no drift "
-            "term among the candidates)"
+            "term among the candidates); record more settling periods"
         )
     return "the loop still drifts from period to period"
 
@@ -129,27 +138,36 @@ def clause(groups: Sequence[Any], unsettled: Sequence[NotSettled]) -> str:
     """The verdict's word on what was left out as not settled: experiments per condition, whole
     conditions."""
     text = ""
-    parts = [f"{', '.join(g.left_out)} at {g.label}" for g in groups if g.left_out and not g.left_why]
+    untested = " (degradation not tested: no drift term among the candidates)"
+    parts = [
+        f"{', '.join(g.left_out)} at {g.label}" + (untested if _why(g) == UNTESTED else "")
+        for g in groups
+        if g.left_out and _why(g) != DEGRADES
+    ]
     if parts:
         text += f"; left out as not settled (the loop still drifts from period to period): {'; '.join(parts)}"
     for g in groups:
-        if g.left_out and g.left_why:
-            text += f"; left out at {g.label}: {', '.join(g.left_out)} ({_reason(g.left_why)})"
-    plain = [u.label for u in unsettled if not u.left_why]
+        if g.left_out and _why(g) == DEGRADES:
+            text += f"; left out at {g.label}: {', '.join(g.left_out)} ({_reason(DEGRADES)})"
+    plain = [u.label for u in unsettled if u.left_why != DEGRADES]
     if plain:
         text += (
             f"; condition {', '.join(plain)} left out: no experiment there has settled (every loop still "
             "drifts from period to period); nothing is named from a loop that has not settled"
         )
     for u in unsettled:
-        if u.left_why:
-            text += f"; condition {u.label} left out ({_reason(u.left_why)})"
+        if u.left_why == DEGRADES:
+            text += f"; condition {u.label} left out ({_reason(DEGRADES)})"
     return text
+
+
+def _why(g: Any) -> str:
+    return str(getattr(g, "left_why", ""))
 
 
 def notes(groups: Sequence[Any], unsettled: Sequence[NotSettled]) -> tuple[str, ...]:
     """Each condition's left-out note, as diagnose words it (:func:`.settling.left_out_note`)."""
-    out = [_note(g.label, g.left_out, g.left_why) for g in groups if g.left_out]
+    out = [_note(g.label, g.left_out, _why(g)) for g in groups if g.left_out]
     out += [_note(u.label, u.names, u.left_why) for u in unsettled]
     return tuple(out)
 
@@ -167,4 +185,14 @@ def too_few(groups: Sequence[Any], unsettled: Sequence[NotSettled]) -> Optional[
     )
 
 
-__all__ = ["NotSettled", "from_own", "drop", "degrades", "names_degradation", "clause", "notes", "too_few"]
+__all__ = [
+    "NotSettled",
+    "from_own",
+    "why_own",
+    "drop",
+    "degrades",
+    "names_degradation",
+    "clause",
+    "notes",
+    "too_few",
+]
