@@ -4,7 +4,7 @@ degrading specimen's drift, which is not a loop "not settled".
 
 The records are other tests' own: tests/test_diagnosis_masing.py (a Prandtl-Ishlinskii loop written in
 NumPy, and a Bouc-Wen loop below saturation) and tests/test_degradation.py (the library's simulator with a
-degrading element, and the same plant without it).
+degrading element, and the same plant without it), and a resonant G with stiffness degradation here.
 """
 
 from __future__ import annotations
@@ -16,10 +16,11 @@ from pathlib import Path
 from typing import Any
 
 import bouc_wen_id as bw
+import numpy as np
 from bouc_wen_id.diagnosis.drift import DRIFT_TERMS
 from bouc_wen_id.diagnosis.masing import MASING_MARK
 from bouc_wen_id.diagnosis.run import ALL_CANDIDATES
-from bouc_wen_id.terms import Degradation, Stiffness, StiffnessX, Viscous
+from bouc_wen_id.terms import Degradation, Stiffness, StiffnessDegradation, StiffnessX, Viscous
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
@@ -90,3 +91,34 @@ def test_a_drift_not_tested_for_degradation_is_said_untested() -> None:
     text = " ".join((a.verdict, *a.notes))
     assert "no degradation explains it" not in text
     assert "degradation not tested" in a.verdict and "degradation was not tested" in " ".join(a.notes)
+
+
+def _resonant(rate: float, seed: int) -> list[bw.Recording]:
+    """Another plant and design than test_degradation's: a resonant G, stiffness degradation, three
+    frequencies at 0.6 and 1.8 of |G|'s scale, noise 0.02."""
+    lin = bw.TransferFunction([1.0], [1.0 / 400.0, 0.3 / 20.0, 1.0])
+    om = np.repeat(2 * np.pi * np.array([0.7, 1.5, 3.0]), 2)
+    amps = np.tile([0.6, 1.8], 3) / lin.gain_phase(om)[0]
+    terms = (StiffnessDegradation(rate),) if rate > 0 else ()
+    plant = bw.WienerPlant(lin, bw.BoucWen(0.6, 0.4, 1.5), terms=terms)
+    plan = bw.SinePlan(
+        om, amps, settle_periods=6, periods=16, samples_per_period=64, substeps=8, noise_sd=0.02, seed=seed
+    )
+    return bw.simulate(plant, plan)
+
+
+def test_stiffness_degradation_through_a_resonant_g_is_said_alike_on_both_paths() -> None:
+    """Stiffness degradation through a resonant G at one condition: diagnose names it there; across says
+    the loop degrades, with and without the conditions' own diagnoses (main: "no degradation explains it"
+    without them, "nothing named", unexplained, with them)."""
+    plain, degr = _resonant(0.0, 21), _resonant(1e-3, 22)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        alone = bw.diagnose(degr)
+        a = bw.diagnose_across([plain, degr], [0.0, 1.0])
+        b = bw.diagnose_across([plain, degr], [0.0, 1.0], per_condition=[bw.diagnose(plain), alone])
+    assert StiffnessDegradation.kind in alone.named_terms
+    for d in (a, b):
+        assert "no degradation explains it" not in " ".join((d.verdict, *d.notes))
+        assert "diagnose of that condition alone names degradation" in d.verdict, d.verdict
+    assert (a.status, a.named) == (b.status, b.named)
