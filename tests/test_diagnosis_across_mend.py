@@ -17,6 +17,7 @@ from typing import Any
 
 import bouc_wen_id as bw
 import numpy as np
+import pytest
 from bouc_wen_id.diagnosis.drift import DRIFT_TERMS
 from bouc_wen_id.diagnosis.masing import MASING_MARK
 from bouc_wen_id.diagnosis.run import ALL_CANDIDATES
@@ -27,12 +28,19 @@ sys.path.insert(0, str(HERE))
 masing_records: Any = importlib.import_module("test_diagnosis_masing")._records
 
 
-def test_the_masing_caveat_is_judged_where_the_spring_on_x_is_present() -> None:
-    """A spring on x needed only at a condition whose experiments all saturate (a PI loop at 1.4 and 3 times
-    saturation) keeps the caveat diagnose gives there, though the other condition (no spring) lies below
-    saturation: its levels say nothing of the spring (they made the joint design read as unsaturated)."""
-    below = masing_records(5, (0.3, 0.6), "spring", 0.0001)
-    pi = masing_records(3, (1.4, 3.0), "pi", 20.0, reach=1.4)
+@pytest.mark.parametrize(
+    "case",
+    [(5, 3, (0.3, 0.6), (1.4, 3.0), 20.0, "first"), (7, 8, (0.25, 0.5), (1.5, 2.5), 30.0, "resonant")],
+    ids=["first", "resonant"],
+)
+def test_the_masing_caveat_is_judged_where_the_spring_on_x_is_present(case: tuple[Any, ...]) -> None:
+    """A spring on x needed only at a condition whose experiments all saturate (a PI loop past saturation,
+    through a first-order G or a resonant one with a delay) keeps the caveat diagnose gives there, though the
+    other condition (no spring) lies below saturation: its levels say nothing of the spring (they made the
+    joint design read as unsaturated)."""
+    seed_a, seed_b, low, high, size, shape = case
+    below = masing_records(seed_a, low, "spring", 0.0001, shape=shape)
+    pi = masing_records(seed_b, high, "pi", size, reach=high[0], shape=shape)
     cands = [StiffnessX.kind, Stiffness.kind, Viscous.kind]
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
