@@ -113,6 +113,8 @@ class _Group:
     moved: bool = False
     #: The experiments left out as not settled (across_settling.py), as diagnose leaves them out
     left_out: tuple[str, ...] = ()
+    #: ... or why else (across_settling.DEGRADES: degradation explains their drift; UNTESTED: not tested)
+    left_why: str = ""
     #: ``fit_with`` on this condition, once per (model, term) (select.memo_fit_with): an alternative's
     #: two-term fit is the next step's trial of that term.
     fit_term: Callable[[AugFit, str], Optional[AugFit]] = field(init=False, repr=False)
@@ -381,9 +383,12 @@ def _group(
     cands: Sequence[str],
     own: Optional[Diagnosis],
     alpha: float = ALPHA,
+    judged: tuple[Sequence[str], bool] = ((), True),
 ) -> _Group:
     """One condition's experiments prepared, checked and plain-fitted as :func:`diagnose` does; from its own
-    diagnosis (``own``) when given (its experiments and plain fit, so nothing is fitted twice)."""
+    diagnosis (``own``) when given (its experiments and plain fit, so nothing is fitted twice) unless it
+    names degradation; ``judged``: the candidates and held-out rule of the condition's own judgement of a
+    drift (across_settling.degrades)."""
     from . import baseline, free_dc, zero_drift
     from .data import prepare
     from .drift import DRIFT_TERMS
@@ -393,8 +398,11 @@ def _group(
     level = alpha / max(len(cands), 1)  # a wandering zero (baseline.py) or a drifting one, as diagnose
     wander = baseline.detect(items, level) or zero_drift.detect(items, level)
     left = across_settling.from_own(own, label) if own is not None else ()  # its unsettled stay out
+    degraded = own is not None and across_settling.names_degradation(own)  # not modelled across
+    why = across_settling.why_own(own) if left else ""
     if (
         own is not None
+        and not degraded
         and own.plain_fit is not None
         and len(own.plain_fit.params.gains) == len(own.experiments)
     ):
@@ -414,7 +422,8 @@ def _group(
         exps, qnotes = _noise_floors(settled, prepare(settled))
         measured = not qnotes
         _check_experiments(exps)
-        exps, left = across_settling.drop(exps, label)  # loops that have not settled, as diagnose
+        judge = lambda: True if degraded else across_settling.degrades(items, judged[0], alpha, judged[1])  # noqa: E731
+        exps, left, why = across_settling.drop(exps, label, judge)  # loops that have not settled, as diagnose
         s = scale_of(exps)
         sx = scaled(exps, s)
         if wander is not None:
@@ -443,6 +452,7 @@ def _group(
         measured_noise=bool(measured),
         moved=bool(moved),
         left_out=left,
+        left_why=why,
     )
 
 
@@ -878,7 +888,8 @@ def diagnose_across(
             report(f"preparing condition {name}", i, len(gs))
             inputs.check_items(items, f"condition {name}")  # as diagnose checks them (inputs.py)
             try:
-                prepared.append(_group(items, name, c, cands, own[i], alpha))
+                judged = (_check_candidates(candidates), held_out_test)  # the drift's own judgement
+                prepared.append(_group(items, name, c, cands, own[i], alpha, judged))
                 kept.append(own[i])
             except across_settling.NotSettled as e:  # no experiment settled there (across_settling.py)
                 unsettled.append(e)

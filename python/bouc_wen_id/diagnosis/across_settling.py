@@ -9,8 +9,15 @@ structure. Here the same rule per condition:
 
 - given the condition's own diagnosis, the experiments it left out (recorded in its ``settings`` under
   :data:`.settling.LEFT_OUT`) stay out (its experiments and plain fit are the settled ones);
-- without it, :func:`.settling.settled_only` on the condition's prepared experiments (no degradation test
-  runs across conditions: a drift there is not degradation's);
+- without it, :func:`.settling.settled_only` on the condition's prepared experiments; when some drift,
+  the condition's own judgement of the drift, as diagnose makes it (:func:`degrades`: ``diagnose`` of that
+  condition with the candidates' drift terms). Degradation is not modelled across conditions (its test
+  runs on period blocks), so a drift it explains is said, not hidden: the drifting experiments are left
+  out *because the loop degrades* ("diagnose the condition alone"), never "not settled, and no
+  degradation explains it", which was said without a test (session 31 review: a degrading specimen at
+  one condition, named by diagnose, read "adequate ... at every condition");
+- a condition whose own diagnosis names degradation is treated the same way (its experiments and plain
+  fit are not reused: the joint selection on its degrading loops named Dahl friction on x);
 - a condition with no settled experiment is left out of the joint structure (:class:`NotSettled`), and
   with fewer than two conditions left nothing is named (:func:`too_few`'s verdict).
 
@@ -20,20 +27,61 @@ The verdict says which experiments and conditions were left out (:func:`clause`)
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+import warnings
+from collections.abc import Callable, Sequence
 from typing import Any, Optional
 
 from .data import DiagExperiment
 from .settling import LEFT_OUT, left_out_note, settled_only
 
+#: Why experiments were left out (``_Group.left_why``, :class:`NotSettled`): degradation explains their
+#: drift at the condition, or it was not tested (no drift term among the candidates).
+DEGRADES, UNTESTED = "degrades", "untested"
+
 
 class NotSettled(Exception):
     """No experiment of a condition has settled: the condition is left out of the joint structure."""
 
-    def __init__(self, label: str, names: Sequence[str]) -> None:
+    def __init__(self, label: str, names: Sequence[str], why: str = "") -> None:
         super().__init__(f"{label}: not settled ({', '.join(names)})")
         self.label = label
         self.names = tuple(names)
+        self.left_why = why
+
+
+def why_own(own: Any) -> str:
+    """Why the condition's own diagnosis left its experiments out: :data:`UNTESTED` when it had no drift term
+    among its candidates (degradation not tested), else "" (tested, and none named)."""
+    from .drift import DRIFT_TERMS
+
+    cands = (own.settings or {}).get("candidates", DRIFT_TERMS)
+    return "" if any(c in DRIFT_TERMS for c in cands) else UNTESTED
+
+
+def names_degradation(d: Any) -> bool:
+    """Whether the diagnosis ``d`` names degradation (diagnose's own rule: a drift term named, or its
+    degradation test named, or passed when ``d`` ran without the held-out test)."""
+    from .drift import DRIFT_TERMS
+
+    deg = getattr(d, "degradation", None)
+    held_out = (d.settings or {}).get("held_out_test", True)
+    named = deg is not None and bool(deg.named if held_out else deg.passed)
+    return named or any(t.term in DRIFT_TERMS for t in d.named)
+
+
+def degrades(items: Any, cands: Sequence[str], alpha: float, held_out_test: bool) -> Optional[bool]:
+    """The condition's own judgement of a drift: ``diagnose`` of its ``items`` with ``cands`` (the user's,
+    drift terms included), whether it names degradation; None when no drift term is a candidate (not
+    tested)."""
+    from .drift import DRIFT_TERMS
+    from .run import diagnose
+
+    if not any(c in DRIFT_TERMS for c in cands):
+        return None
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the condition's warnings are diagnose's to give
+        d = diagnose(items, candidates=list(cands), alpha=alpha, held_out_test=held_out_test)
+    return names_degradation(d)
 
 
 def from_own(own: Any, label: str) -> tuple[str, ...]:
@@ -45,36 +93,82 @@ def from_own(own: Any, label: str) -> tuple[str, ...]:
     return left
 
 
-def drop(exps: Sequence[DiagExperiment], label: str) -> tuple[list[DiagExperiment], tuple[str, ...]]:
-    """``exps`` without those whose loop still drifts (:func:`.settling.settled_only`, no degradation
-    named), and their names; raises :class:`NotSettled` when none is left."""
+def drop(
+    exps: Sequence[DiagExperiment], label: str, judge: Callable[[], Optional[bool]]
+) -> tuple[list[DiagExperiment], tuple[str, ...], str]:
+    """``exps`` without those whose loop still drifts (:func:`.settling.settled_only`), their names and why
+    (:data:`DEGRADES` when ``judge``, the condition's own judgement run only when some drift, names
+    degradation; :data:`UNTESTED` when it did not test it; else ""); raises :class:`NotSettled` when none
+    is left."""
     keep, drifting = settled_only(exps, False)
     names = tuple(exps[i].source for i in drifting)
+    why = ""
+    if drifting:
+        verdict = judge()
+        why = UNTESTED if verdict is None else DEGRADES if verdict else ""
     if not keep:
-        raise NotSettled(label, names)
-    return [exps[i] for i in keep], names
+        raise NotSettled(label, names, why)
+    return [exps[i] for i in keep], names, why
+
+
+def _reason(why: str) -> str:
+    """The words on why experiments were left out, after their names."""
+    if why == DEGRADES:
+        return (
+            "the loop degrades: diagnose of that condition alone names degradation, which the structure "
+            "across conditions does not model (its test runs on period blocks); diagnose the condition alone"
+        )
+    if why == UNTESTED:
+        return (
+            "the loop still drifts from period to period: not settled; degradation was not tested (no drift "
+            "term among the candidates); record more settling periods"
+        )
+    return "the loop still drifts from period to period"
+
+
+def _note(label: str, names: Sequence[str], why: str) -> str:
+    """A condition's note on what was left out: diagnose's wording (:func:`.settling.left_out_note`) when
+    the drift was tested and is no degradation's, else :func:`_reason`'s."""
+    if not why:
+        return f"{label}: {left_out_note(', '.join(names))}"
+    return f"{label}: left out of the diagnosis: {', '.join(names)} ({_reason(why)})"
 
 
 def clause(groups: Sequence[Any], unsettled: Sequence[NotSettled]) -> str:
     """The verdict's word on what was left out as not settled: experiments per condition, whole
     conditions."""
     text = ""
-    parts = [f"{', '.join(g.left_out)} at {g.label}" for g in groups if g.left_out]
+    untested = " (degradation not tested: no drift term among the candidates)"
+    parts = [
+        f"{', '.join(g.left_out)} at {g.label}" + (untested if _why(g) == UNTESTED else "")
+        for g in groups
+        if g.left_out and _why(g) != DEGRADES
+    ]
     if parts:
         text += f"; left out as not settled (the loop still drifts from period to period): {'; '.join(parts)}"
-    if unsettled:
-        which = ", ".join(u.label for u in unsettled)
+    for g in groups:
+        if g.left_out and _why(g) == DEGRADES:
+            text += f"; left out at {g.label}: {', '.join(g.left_out)} ({_reason(DEGRADES)})"
+    plain = [u.label for u in unsettled if u.left_why != DEGRADES]
+    if plain:
         text += (
-            f"; condition {which} left out: no experiment there has settled (every loop still drifts from "
-            "period to period); nothing is named from a loop that has not settled"
+            f"; condition {', '.join(plain)} left out: no experiment there has settled (every loop still "
+            "drifts from period to period); nothing is named from a loop that has not settled"
         )
+    for u in unsettled:
+        if u.left_why == DEGRADES:
+            text += f"; condition {u.label} left out ({_reason(DEGRADES)})"
     return text
+
+
+def _why(g: Any) -> str:
+    return str(getattr(g, "left_why", ""))
 
 
 def notes(groups: Sequence[Any], unsettled: Sequence[NotSettled]) -> tuple[str, ...]:
     """Each condition's left-out note, as diagnose words it (:func:`.settling.left_out_note`)."""
-    out = [f"{g.label}: {left_out_note(', '.join(g.left_out))}" for g in groups if g.left_out]
-    out += [f"{u.label}: {left_out_note(', '.join(u.names))}" for u in unsettled]
+    out = [_note(g.label, g.left_out, _why(g)) for g in groups if g.left_out]
+    out += [_note(u.label, u.names, u.left_why) for u in unsettled]
     return tuple(out)
 
 
@@ -91,4 +185,14 @@ def too_few(groups: Sequence[Any], unsettled: Sequence[NotSettled]) -> Optional[
     )
 
 
-__all__ = ["NotSettled", "from_own", "drop", "clause", "notes", "too_few"]
+__all__ = [
+    "NotSettled",
+    "from_own",
+    "why_own",
+    "drop",
+    "degrades",
+    "names_degradation",
+    "clause",
+    "notes",
+    "too_few",
+]

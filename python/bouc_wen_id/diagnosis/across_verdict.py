@@ -34,7 +34,7 @@ from collections.abc import Sequence
 from dataclasses import replace
 from typing import Any
 
-from ..terms import TERMS, StiffnessX, physical_value
+from ..terms import TERMS, Play, StiffnessX, physical_value
 from . import beside, gate, law_untested
 from .caveats import family_text, joint_separation, latent_levels, masing_separation, unphysical_places_text
 from .locate import adequacy_p
@@ -167,9 +167,24 @@ def clauses(
     as_said = [NamedTerm(t.term, t.symbol, math.nan, math.nan, t.unit) for t in named if t.term in TERMS]
     text += unphysical_places_text(steps, as_said)  # another place that fits only non-physically
     text += law_untested.across_text(named, [(str(g.label), g.exps) for g in groups])
-    levels = [v for g in groups for v in latent_levels(g.sx, g.current)]
-    as_named = [NamedTerm(t.term, t.symbol, math.nan, math.nan, t.unit) for t in named if t.term in TERMS]
-    return text + family_text(as_named, levels, *_masing(named, groups, alpha))
+    # Play's and the spring on x's caveats hang on whether every experiment saturates where the term acts:
+    # a condition where it is absent says nothing of it (a spring on x present only at a saturating
+    # condition lost its Masing caveat to the other condition's levels below saturation).
+    own = {Play.kind, StiffnessX.kind}
+    for t in named:
+        if t.term in own:
+            one = [NamedTerm(t.term, t.symbol, math.nan, math.nan, t.unit)]
+            masing = _masing(named, groups, alpha) if t.term == StiffnessX.kind else (None, "")
+            text += family_text(one, _levels(groups, t.present or [True] * len(groups)), *masing)
+    rest = [NamedTerm(t.term, t.symbol, math.nan, math.nan, t.unit) for t in named if t.term in TERMS]
+    rest = [t for t in rest if t.term not in own]
+    return text + family_text(rest, _levels(groups, [True] * len(groups)))
+
+
+def _levels(groups: Sequence[Any], present: Sequence[bool]) -> list[float]:
+    """The latent levels (:func:`.caveats.latent_levels`, final models) of the experiments at the conditions
+    where ``present`` holds."""
+    return [v for g, pr in zip(groups, present) if pr for v in latent_levels(g.sx, g.current)]
 
 
 def _masing(named: Sequence[Any], groups: Sequence[Any], alpha: float) -> tuple[Any, str]:
@@ -186,7 +201,8 @@ def _masing(named: Sequence[Any], groups: Sequence[Any], alpha: float) -> tuple[
         if pr
     ]
     where, sep = joint_separation(seps)
-    return sep, where
+    # Every condition where the spring is present saturating: no measure, and the caveat names them.
+    return sep, where if sep is not None else ", ".join(w for w, _ in seps)
 
 
 __all__ = [

@@ -266,7 +266,7 @@ def masing_text(
     label = StiffnessX.place_label()
     here = f"at {where}" if where else "here"
     if saturated or sep is None:
-        why = "as here"
+        why = f"as {here}"
     else:
         ref = (
             f"a reference such loop (stops carrying {SHARE:g} of this stiffness, half-widths up to "
