@@ -33,8 +33,8 @@ MAIN = "as recorded"
 #: The preprocessing variants (key, description); the first is the main run.
 VARIANTS: tuple[tuple[str, str], ...] = (
     (MAIN, "the whole steady stretch, the averaging's own harmonic count"),
-    ("early", "the steady stretch without its last third"),
-    ("late", "the steady stretch without its first third"),
+    ("early", "each steady stretch without its last third"),
+    ("late", "each steady stretch without its first third (the third kept in its lead)"),
     ("half harmonics", "half the harmonics in the averaged period (at least 8)"),
 )
 
