@@ -11,8 +11,11 @@ import pytest
 from bouc_wen_id import Measurement, average_measurement
 from bouc_wen_id.diagnosis import run as diag_run
 from bouc_wen_id.diagnosis import stability as stab
+from bouc_wen_id.diagnosis.data import prepare
+from bouc_wen_id.diagnosis.limits import DetectionLimit
 from bouc_wen_id.diagnosis.result import Diagnosis, NamedTerm
 from bouc_wen_id.errors import InsufficientDataError
+from bouc_wen_id.signal import average_segments
 
 VISCOUS = NamedTerm("viscous", "c", 3.3, 0.01, "N s/mm")
 ASYM = NamedTerm("asymmetry", "delta", -6e-5, 1e-6, "1/N^mu")
@@ -20,20 +23,30 @@ DEG = NamedTerm("degradation", "delta_nu", 1.5e-11, 2e-12, "1/N^2")
 OFFSET = NamedTerm("offset", "y0", 4.0, 0.1, "N")
 
 
-def _diag(named: tuple[NamedTerm, ...], status: str = "partly explained") -> Diagnosis:
-    """A diagnosis naming ``named``, its verdict built as run._verdict builds it."""
+def _diag(
+    named: tuple[NamedTerm, ...],
+    status: str = "partly explained",
+    limits: tuple[DetectionLimit, ...] = (),
+    partial: tuple[NamedTerm, ...] = (),
+) -> Diagnosis:
+    """A diagnosis naming ``named`` (found ``partial`` beside structure left), its verdict built as
+    run._verdict builds it, with the detection limits ``limits``."""
     none = cast(Any, None)
     verdict = (
         "explained in part by: " + ", ".join(str(t) for t in named) + " (82 % of the excess); unexplained "
         "structure remains at harmonics 1, 2"
         if status == "partly explained"
         else "explained by: " + ", ".join(str(t) for t in named)
+        if status == "explained"
+        else f"{status}: the plain Wiener-Bouc-Wen model fits at the noise floor"
+        if status == "adequate"
+        else "unexplained structure remains at harmonic 2"
     )
     return Diagnosis(
         status=cast(Any, status),
         verdict=verdict,
         named=named,
-        partial=(),
+        partial=partial,
         alternatives=(),
         before=none,
         after=none,
@@ -45,6 +58,7 @@ def _diag(named: tuple[NamedTerm, ...], status: str = "partly explained") -> Dia
         explained_fraction=0.82,
         settings={},
         seconds=0.0,
+        limits=limits,
     )
 
 
@@ -149,10 +163,9 @@ def test_variant_items_cut_without_touching_the_measurements_and_refuse_others()
     early, late = stab.variant_items(ms, "early"), stab.variant_items(ms, "late")
     for m, e, la, y in zip(ms, early, late, before):
         assert np.array_equal(m.y, y)
-        assert e.t.size < m.t.size and la.t.size < m.t.size
         ap = average_measurement(m)[0]
-        assert np.array_equal(e.y, m.y[ap.start : ap.start + e.y.size])  # the first two thirds
-        assert np.array_equal(la.y, m.y[ap.stop - la.y.size : ap.stop])  # the last two thirds
+        assert e.periods < ap.periods and la.periods < ap.periods  # two thirds of the steady stretch
+        assert e.source.endswith("(early)") and la.source.endswith("(late)")
     assert stab.variant_items(ms, "as recorded") == ms
     with pytest.raises(ValueError, match="unknown preprocessing variant"):
         stab.variant_items(ms, "reversed")
@@ -169,7 +182,7 @@ def test_diagnose_stable_runs_each_variant_and_counts_a_refused_one_as_failed(
 
     def fake(items: Any, **kw: Any) -> Diagnosis:
         seen.append(len(items))
-        if any("(late)" in getattr(m, "name", "") for m in items):
+        if any("(late)" in getattr(m, "source", "") for m in items):
             raise InsufficientDataError("too short")
         return _diag((VISCOUS, DEG) if len(seen) == 1 else (VISCOUS,))
 
@@ -184,3 +197,77 @@ def test_diagnose_stable_runs_each_variant_and_counts_a_refused_one_as_failed(
     assert st.alternatives == ("degradation",) and main.verdict == said  # the main diagnosis untouched
     with pytest.raises(ValueError, match="unknown preprocessing variants"):
         stab.diagnose_stable([_measurement(3)], variants=("as recorded",))
+
+
+def _limit(term: NamedTerm, limit_90: float) -> DetectionLimit:
+    """A variant's detection limit for ``term`` (90 % power at ``limit_90``)."""
+    return DetectionLimit(
+        term.term, term.symbol, term.unit, 0.7 * limit_90, limit_90, 0.0, 0.2, 0.01, False, 0.0
+    )
+
+
+def test_a_variant_too_small_to_see_a_term_is_not_counted_against_it() -> None:
+    """Review 31c (stable_power.py 6 5): a shorter variant with the term below its detection limit is not
+    evidence against it; one that could have seen it (limit below the main run's value) is."""
+    main = _diag((OFFSET,), status="explained")
+    blind = _diag((), status="adequate", limits=(_limit(OFFSET, 2.5 * OFFSET.value),))
+    st = stab.stability(main, {"early": blind, "late": main, "half harmonics": main})
+    off = st.terms[0]
+    assert off.unseen == ("early",) and off.finding and st.findings == ("offset",)
+    assert st.status == "explained" and st.verdict.startswith(main.verdict)
+    assert "not named in early, which could not have seen it" in st.verdict
+    assert st.to_dict()["terms"][0]["unseen"] == ["early"]
+    sharp = _diag((), status="adequate", limits=(_limit(OFFSET, 0.4 * OFFSET.value),))
+    st = stab.stability(main, {"early": sharp, "late": main, "half harmonics": main})
+    assert st.terms[0].unseen == () and st.alternatives == ("offset",)
+    assert "named in 3 of 4 preprocessing variants" in st.verdict
+
+
+def test_nothing_stable_named_but_no_run_left_structure_is_not_unexplained() -> None:
+    """Review 31c (stab_text.py): every run fit at its noise floor (adequate, or explained by the term), so
+    nothing is shown to remain: partly explained by alternatives, not "unexplained"."""
+    main = _diag((OFFSET,), status="explained")
+    st = stab.stability(main, {"early": _diag((), status="adequate"), "late": main})
+    assert st.alternatives == ("offset",) and st.findings == ()
+    assert st.status == "partly explained"
+    assert st.verdict.startswith("explained only by alternatives, not findings")
+    assert "named in 2 of 3 preprocessing variants" in st.verdict
+    # A run that left structure keeps it "unexplained".
+    st = stab.stability(main, {"early": _diag((), status="unexplained"), "late": main})
+    assert st.status == "unexplained"
+
+
+def test_a_variant_that_found_the_term_beside_structure_counts_as_naming_it() -> None:
+    main = _diag((OFFSET,), status="explained")
+    found = _diag((), status="unexplained", partial=(OFFSET,))
+    st = stab.stability(main, {"early": found, "late": main})
+    assert st.findings == ("offset",) and st.terms[0].named_in == ("as recorded", "early", "late")
+    assert st.status == "explained" and st.verdict == main.verdict
+
+
+def _two_segments() -> Measurement:
+    """One Measurement, two steady segments (two amplitudes), each after a settling stretch."""
+    f, fs = 2.0, 200.0
+    t = np.arange(0, 60, 1 / fs)
+    u = np.where(t < 30, 1.0, 2.0) * np.sin(2 * np.pi * f * t)
+    y = np.tanh(2 * u) + 0.01 * np.random.default_rng(0).normal(size=t.size)
+    return Measurement(t, u, y, nominal_frequency=f, name="two")
+
+
+def test_early_and_late_cut_every_segment_and_keep_its_lead() -> None:
+    """Review 31c (multiseg.py, lead_cut.py): the cuts keep every steady segment, and the periods recorded
+    before each stretch (the drift's age) stay its lead: the late cut's lead grows by the third it drops."""
+    m = _two_segments()
+    main = prepare([m])
+    assert len(main) == 2 and main[1].lead_periods > 50  # the second segment follows 30 s at 2 Hz
+    for variant in ("early", "late", "half harmonics"):
+        cut = stab.variant_items([m], variant)
+        assert len(cut) == len(main)
+        for e, full, k in zip(cut, main, average_segments(m).report.kept):
+            assert e.lead_periods >= full.lead_periods  # never younger than the main run's stretch
+            if variant == "late":
+                dropped = (k.stop - k.start) // 3 * (m.t[1] - m.t[0]) * 2.0  # the third dropped, in periods
+                assert e.lead_periods - full.lead_periods == pytest.approx(dropped, abs=1.0)
+                assert e.lead_periods > full.lead_periods
+            else:
+                assert e.lead_periods == full.lead_periods

@@ -9,11 +9,18 @@ the count and said. :func:`diagnose_stable` runs the main diagnosis and the :dat
 Measurements and returns the comparison.
 
 The rule is not the F-test's: each run's terms are already tested at its own level. It asks whether the
-naming survives choices the data do not dictate, as a reader of the verdict assumes it does.
+naming survives choices the data do not dictate, as a reader of the verdict assumes it does. A variant
+holds less data than the main run (early, late: two thirds of each steady stretch), so its silence is
+evidence against a term only when it had the power to see it: a variant that did not name a term the main
+run named, and whose own detection limit for it at 90 % power (``Diagnosis.limits``, limits.py) is above
+the main run's value, is *unseen* there, said and not counted against the term. A variant that found the
+term but left structure beside it (``Diagnosis.partial``) counts as naming it. A variant that reports no
+detection limit for the term counts against it (its power is unknown).
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Union
@@ -26,8 +33,8 @@ MAIN = "as recorded"
 #: The preprocessing variants (key, description); the first is the main run.
 VARIANTS: tuple[tuple[str, str], ...] = (
     (MAIN, "the whole steady stretch, the averaging's own harmonic count"),
-    ("early", "the steady stretch without its last third"),
-    ("late", "the steady stretch without its first third"),
+    ("early", "each steady stretch without its last third"),
+    ("late", "each steady stretch without its first third (the third kept in its lead)"),
     ("half harmonics", "half the harmonics in the averaged period (at least 8)"),
 )
 
@@ -47,6 +54,9 @@ class TermStability:
     completed: int
     #: The main run's estimate when it named the term, else None.
     main: NamedTerm | None = None
+    #: Completed variants that did not name the main run's term but could not have seen it: their detection
+    #: limit at 90 % power is above the main run's value (not counted against the term).
+    unseen: tuple[str, ...] = ()
 
     @property
     def label(self) -> str:
@@ -54,8 +64,13 @@ class TermStability:
 
     @property
     def finding(self) -> bool:
-        """Named in the main run and in every completed variant (at least one variant completed)."""
-        return self.main is not None and self.completed > 1 and len(self.named_in) == self.completed
+        """Named in the main run and in every completed variant that could have seen it (at least one variant
+        completed)."""
+        return (
+            self.main is not None
+            and self.completed > 1
+            and len(self.named_in) + len(self.unseen) == self.completed
+        )
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -63,6 +78,7 @@ class TermStability:
             "label": self.label,
             "named_in": list(self.named_in),
             "completed": self.completed,
+            "unseen": list(self.unseen),
             "finding": self.finding,
             "main": None if self.main is None else self.main.to_dict(),
         }
@@ -73,11 +89,15 @@ class Stability:
     """The main diagnosis read against its preprocessing variants.
 
     ``status`` and ``verdict`` are the main run's, revised: a term named there but not in every completed
-    variant is moved out of the named terms into an "alternative, not a finding" clause (with its count);
-    a term only some variants named is mentioned likewise; failed variants are said. With no named term
-    left the status is ``unexplained``; an ``explained`` whose named terms are not all findings becomes
-    ``partly explained`` (the findings alone are not shown to reach the noise floor). When no variant
-    completed, nothing is revised (stability not checked) and the verdict says so.
+    variant that could have seen it is moved out of the named terms into an "alternative, not a finding"
+    clause (with its count); a term only some variants named is mentioned likewise; variants too small to
+    see a term and failed variants are said. With no named term left the status is ``unexplained`` when
+    some completed run left structure (status ``partly explained`` or ``unexplained``); when every completed
+    run reached its noise floor (``adequate`` or ``explained``) nothing is shown to remain, so it is
+    ``partly explained``: the data are accounted for, but only by alternatives, none of them a finding. An
+    ``explained`` whose named terms are not all findings becomes ``partly explained`` (the findings alone are
+    not shown to reach the noise floor). When no variant completed, nothing is revised (stability not
+    checked) and the verdict says so.
     """
 
     status: Status
@@ -141,31 +161,68 @@ def stability(main: Diagnosis, variants: Mapping[str, Outcome], main_key: str = 
         else:
             raise TypeError(f"variant {k!r}: a Diagnosis, a message or an exception, not {type(v).__name__}")
     n = len(done)
+    own = {t.term: t for t in main.named}
     order: dict[str, list[str]] = {}
     for k, d in done.items():
-        for t in d.named:
+        # A variant that found the main run's term beside structure it left (partial) found it too.
+        seen = [*d.named, *(t for t in d.partial if k != main_key and t.term in own)]
+        for t in seen:
             order.setdefault(t.term, [])
             if k not in order[t.term]:
                 order[t.term].append(k)
-    own = {t.term: t for t in main.named}
-    terms = tuple(TermStability(t, tuple(ks), n, own.get(t)) for t, ks in order.items())
-    status, verdict = _revised(main, terms, tuple(done), failed)
+    terms = tuple(
+        TermStability(t, tuple(ks), n, own.get(t), _unseen(own.get(t), ks, done)) for t, ks in order.items()
+    )
+    status, verdict = _revised(main, terms, done, failed)
     return Stability(status, verdict, terms, tuple(done), failed, main, dict(variants))
 
 
+def _limit_90(d: Diagnosis, term: str) -> float:
+    """The smallest |value| of ``term`` that ``d``'s design detects with 90 % power (inf: none reported)."""
+    lims = [abs(float(lim.limit_90)) for lim in d.limits if getattr(lim, "term", None) == term]
+    return min((v for v in lims if math.isfinite(v)), default=math.inf)
+
+
+def _unseen(
+    main: NamedTerm | None, named_in: Sequence[str], done: Mapping[str, Diagnosis]
+) -> tuple[str, ...]:
+    """The completed runs that did not name the main run's term ``main`` and could not have seen it: their
+    own detection limit at 90 % power is above its value (a variant reporting no limit could have)."""
+    if main is None or not math.isfinite(main.value):
+        return ()
+    return tuple(
+        k
+        for k, d in done.items()
+        if k not in named_in and abs(main.value) < _limit_90(d, main.term) < math.inf
+    )
+
+
 def _count(t: TermStability, completed: Sequence[str]) -> str:
-    missing = [k for k in completed if k not in t.named_in]
+    missing = [k for k in completed if k not in t.named_in and k not in t.unseen]
     return (
-        f"named in {len(t.named_in)} of {t.completed} preprocessing variants "
-        f"({', '.join(t.named_in)}; not {', '.join(missing)})"
+        f"named in {len(t.named_in)} of {len(t.named_in) + len(missing)} preprocessing variants "
+        f"({', '.join(t.named_in)}; not {', '.join(missing)})" + _unseen_clause(t, "; ")
+    )
+
+
+def _unseen_clause(t: TermStability, head: str) -> str:
+    if not t.unseen:
+        return ""
+    return (
+        f"{head}not named in {', '.join(t.unseen)}, which could not have seen it (the value is below the "
+        "detection limit at 90 % power there): not counted against it"
     )
 
 
 def _revised(
-    main: Diagnosis, terms: tuple[TermStability, ...], completed: tuple[str, ...], failed: Mapping[str, str]
+    main: Diagnosis,
+    terms: tuple[TermStability, ...],
+    done: Mapping[str, Diagnosis],
+    failed: Mapping[str, str],
 ) -> tuple[Status, str]:
     """The main run's status and verdict with its unstable terms said as alternatives (see Stability)."""
     fails = ", ".join(f"{k} ({why})" for k, why in failed.items())
+    completed = tuple(done)
     if len(completed) < 2:
         if not failed:
             return main.status, main.verdict
@@ -175,17 +232,27 @@ def _revised(
         )
     unstable = [t for t in terms if t.main is not None and not t.finding]
     others = [t for t in terms if t.main is None]
+    unseen = [t for t in terms if t.main is not None and t.finding and t.unseen]
     if not unstable and not others:
-        return main.status, main.verdict
+        if not unseen:
+            return main.status, main.verdict
+        said = "; ".join(f"{t.main}: a finding{_unseen_clause(t, ', ')}" for t in unseen)
+        return main.status, f"{main.verdict}; {said}"
     verdict, status = main.verdict, main.status
     kept = [t for t in main.named if t.term not in {u.term for u in unstable}]
     if unstable:
         listed = ", ".join(str(t) for t in main.named)
         if kept and listed in verdict:
             verdict = verdict.replace(listed, ", ".join(str(t) for t in kept), 1)
-        elif not kept:
+        elif not kept and any(d.status in ("partly explained", "unexplained") for d in done.values()):
             verdict = "no term named in every preprocessing variant; the main run said: " + verdict
             status = "unexplained"
+        elif not kept:  # every run reached its noise floor: nothing is shown to remain, but no term is stable
+            verdict = (
+                "explained only by alternatives, not findings (every preprocessing variant fits at its noise "
+                "floor, with or without them); the main run said: " + verdict
+            )
+            status = "partly explained"
         if kept and status == "explained":
             status = "partly explained"
             if verdict.startswith(EXPLAINED_BY):  # the findings alone are not shown to reach the noise floor
@@ -201,16 +268,16 @@ def _revised(
         if t.main is not None
     ]
     clauses += [f"{t.label} {_count(t, completed)}: an alternative, not a finding" for t in others]
+    clauses += [f"{t.main}: a finding{_unseen_clause(t, ', ')}" for t in unseen]
     tail = f" (variants that failed, not counted: {fails})" if failed else ""
     return status, f"{verdict}; {'; '.join(clauses)}{tail}"
 
 
 def variant_items(measurements: Sequence[Any], variant: str) -> list[Any]:
     """The experiments of one preprocessing variant of :data:`VARIANTS`, from Measurements (the main run's
-    items are the measurements themselves; the others are derived, the measurements left as they are)."""
-    from .. import signal
+    items are the measurements themselves; the others are derived, one experiment per steady segment as in
+    the main run, the measurements left as they are)."""
     from ..measurement import Measurement
-    from .data import _from_averaged
 
     keys = [k for k, _ in VARIANTS]
     if variant not in keys:
@@ -223,32 +290,34 @@ def variant_items(measurements: Sequence[Any], variant: str) -> list[Any]:
         )
     if variant == MAIN:
         return ms
-    if variant in ("early", "late"):
-        return [_cut(m, variant) for m in ms]
-    out = []
-    for m in ms:
-        for ap in signal.average_measurement(m):
-            half = signal.average_measurement(m, harmonics=max(8, ap.harmonics // 2))
-            out += [_from_averaged(h, m.t, m.y, m.u) for h in half if h.start == ap.start]
-    return out
+    return [e for m in ms for e in _segments(m, variant)]
 
 
-def _cut(m: Any, variant: str) -> Any:
-    """``m`` restricted to part of its first steady stretch: the early or the late two thirds."""
+def _segments(m: Any, variant: str) -> list[Any]:
+    """Every steady segment of ``m`` as the variant preprocesses it: ``early`` without the segment's last
+    third, ``late`` without its first, ``half harmonics`` whole with half the harmonics (at least 8). Each is
+    averaged on the main run's own input fit and on ``m``'s whole time axis, so what precedes the stretch
+    (the settling, the dropped third) stays its lead (``DiagExperiment.lead_periods``, the drift's age)."""
     from .. import signal
-    from ..measurement import Measurement
+    from .data import BASELINE_MARK, _from_averaged, _lab_marked
 
-    ap = signal.average_measurement(m)[0]
-    third = (ap.stop - ap.start) // 3
-    a, b = (ap.start, ap.stop - third) if variant == "early" else (ap.start + third, ap.stop)
-    return Measurement(
-        m.t[a:b] - m.t[a],
-        m.u[a:b],
-        m.y[a:b],
-        nominal_frequency=m.nominal_frequency,
-        units={k: v for k, v in m.units.items() if k in ("u", "y")},
-        name=f"{m.name} ({variant})",
-    )
+    seg = signal.average_segments(m)
+    out = []
+    for ap, kept, fit in zip(seg.periods, seg.report.kept, seg.report.fits):
+        a, b, harmonics = kept.start, kept.stop, None
+        third = (b - a) // 3
+        if variant == "early":
+            b -= third
+        elif variant == "late":
+            a += third
+        else:
+            harmonics = max(8, ap.harmonics // 2)
+        cut = signal.synchronous_average(
+            m.t, m.y, fit, start=a, stop=b, harmonics=harmonics, source=f"{ap.source} ({variant})"
+        )
+        e = _from_averaged(cut, m.t, m.y, m.u)
+        out.append(_lab_marked(e) if BASELINE_MARK in m.metadata else e)
+    return out
 
 
 def diagnose_stable(
