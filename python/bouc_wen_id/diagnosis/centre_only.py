@@ -21,7 +21,9 @@ experiments) keeps the rule off (:func:`clause` gives ""); and the sign test alo
 "not device physics": a physical DC of one sign (an asymmetric element) plus zeros moved either way shows
 both signs too. The common part of the DCs (their noise-weighted mean) is tested: when it stands beyond the
 noise (:data:`COMMON_Z`), the clause says the centres differ *and* a common part remains, which these
-experiments cannot tell from device physics, and the verdict is not "adequate".
+experiments cannot tell from device physics, and the verdict is not "adequate". The blind nulls above
+(``null:0:2``, ``null:0:4`` at seed 2026) had dry friction and sensor lag pass their tests beside the DC's
+terms: with (a) they are "unexplained" again (benches/README.md, "Review 31c").
 """
 
 from __future__ import annotations
