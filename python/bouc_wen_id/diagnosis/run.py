@@ -728,7 +728,7 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
     fraction = _explained_fraction(plain_sum, final_sum, deg if named_deg else None)
     # A candidate whose law failed (select.law_test) is structure no term explains, unless only centres.
     centre = _centres_only(passes, bool(final.params.terms), steps, fexps, final_sum.outputs)
-    plain_ok = gate.plain_adequate(passes, bool(final.params.terms), steps) or bool(centre)
+    plain_ok = gate.plain_adequate(passes, bool(final.params.terms), steps) or centre.adequate
     status, named, partial, verdict = _judged(
         classify(
             plain_ok,
@@ -741,8 +741,10 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
         fraction,
         fexps,
     )
-    verdict += (centre or _law_text(steps)) + beside.text(steps) + unphysical_places_text(steps, named)
-    verdict += law_untested.text(named, fexps) + input_note.text(status, (*named, *partial), fexps)
+    verdict += (centre.text or _law_text(steps)) + beside.text(steps) + unphysical_places_text(steps, named)
+    verdict += law_untested.text(named, fexps) + input_note.text(
+        status, (*named, *partial), fexps, final_sum.outputs
+    )
     alternatives = tuple(a for st in steps for a in st.alternatives) + _drift_alternatives(deg, named_deg)
     verdict += alternatives_text(alternatives, named) + caveats_of(named, fsx, final, fexps, alpha, substeps)
     setup.report("held-out check of the final model", 0, 1)
