@@ -54,6 +54,9 @@ def _select(
     monkeypatch.setattr(select, "element_law_test", lambda exps, fit, t, sub: law.get(t, 0.5))
     monkeypatch.setattr(select, "_correlation", lambda fit, a, b: 0.3)
     monkeypatch.setattr(select, "_separating", lambda exps, fa, fb, sub: "a separating design")
+    # the stub fits cannot be refitted: restarts.py's base check and wide starts are not under test here
+    monkeypatch.setattr(select, "rebase", lambda *a, **k: None)
+    monkeypatch.setattr(select, "wide_fit", lambda exps, base, t, sub, first: first)
     exps = [SimpleNamespace(ybar=np.zeros(N), grid_phase=0.0, source=f"e{i}") for i in range(M)]
     return select.forward_select(
         cast(Any, exps),
