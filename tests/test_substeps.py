@@ -197,8 +197,12 @@ def test_plain_fit_near_the_open_face_tries_the_generic_starts(
     def fake_fit_from(exps: Any, start: Any, substeps: int, max_iter: int = 200) -> Any:
         calls.append(max_iter)
         if len(calls) == 1:  # the first start: stalled near the open face, cost 10
-            return SimpleNamespace(params=SimpleNamespace(beta=1.0, gamma=-(1.0 - gap)), cost=10.0)
-        return SimpleNamespace(params=SimpleNamespace(beta=1.0, gamma=1.0), cost=1.0 + len(calls))
+            return SimpleNamespace(
+                params=SimpleNamespace(beta=1.0, gamma=-(1.0 - gap), mu=1.5), cost=10.0, active=False
+            )
+        return SimpleNamespace(
+            params=SimpleNamespace(beta=1.0, gamma=1.0, mu=1.5), cost=1.0 + len(calls), active=False
+        )
 
     monkeypatch.setattr(fitting, "fit_from", fake_fit_from)
     starts = [object()] * 4

@@ -63,7 +63,7 @@ def names_degradation(d: Any) -> bool:
     degradation test named, or passed when ``d`` ran without the held-out test)."""
     from .drift import DRIFT_TERMS
 
-    deg = getattr(d, "degradation", None)
+    deg = d.degradation  # a Diagnosis always has the field (None when the test was not formed)
     held_out = (d.settings or {}).get("held_out_test", True)
     named = deg is not None and bool(deg.named if held_out else deg.passed)
     return named or any(t.term in DRIFT_TERMS for t in d.named)
