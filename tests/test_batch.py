@@ -153,6 +153,28 @@ def test_a_pool_whose_worker_died_is_rebuilt_for_the_next_call(recordings: list[
     assert [r.to_json() for r in again] == [r.to_json() for r in first]  # type: ignore[union-attr]
 
 
+def test_a_pool_found_broken_while_submitting_gets_the_same_named_error() -> None:
+    """A worker can die before the last job is submitted: submit() then sees the broken pool first, and
+    must raise the named error (not CPython's 'A child process terminated abruptly') and drop the pool."""
+    from concurrent.futures import Executor, Future
+    from concurrent.futures.process import BrokenProcessPool
+
+    from bouc_wen_id import _pool
+
+    class _Broken(Executor):
+        def submit(self, fn: object, /, *args: object, **kwargs: object) -> Future[object]:  # type: ignore[override]
+            raise BrokenProcessPool("A child process terminated abruptly, the process pool is not usable")
+
+    broken = _Broken()
+    _pool._POOLS[-7] = broken  # type: ignore[assignment]
+    try:
+        with pytest.raises(BrokenProcessPool, match="worker process died.*next call starts new workers"):
+            list(_pool.ordered(broken, max, [(1, 2)], here=False))
+        assert -7 not in _pool._POOLS
+    finally:
+        _pool._POOLS.pop(-7, None)
+
+
 def test_the_callers_budget_applies_in_the_workers(recordings: list[bw.Recording]) -> None:
     jobs = _jobs(recordings)
     # identify's phase profile needs ~3e5 steps: refused under max_steps = 1000, serial or pooled.

@@ -198,9 +198,19 @@ def submit(pool: Executor, fn: Callable[..., Any], *args: Any) -> Future[Any]:
     :class:`BrokenProcessPool` is raised: the caller asks :func:`get_pool` for a new one)."""
     try:
         return pool.submit(call_within, _budget.get_budget(), fn, args)
-    except BrokenProcessPool:
-        discard(pool)
-        raise
+    except BrokenProcessPool as exc:
+        # A worker that died while earlier jobs were being submitted breaks the pool here, before any
+        # result is read: the same named error as :func:`result`'s, whichever of the two sees it first.
+        raise _died(pool, "the batch") from exc
+
+
+def _died(pool: Executor, what: str) -> BrokenProcessPool:
+    """Discard the broken ``pool``; the error to raise, which says what happened and what comes next."""
+    discard(pool)
+    return BrokenProcessPool(
+        f"a worker process died (killed, out of memory, or a crash) while running {what}; its pool is "
+        "discarded, and the next call starts new workers"
+    )
 
 
 def result(pool: Executor, future: Future[Any], what: str) -> Any:
@@ -208,11 +218,7 @@ def result(pool: Executor, future: Future[Any], what: str) -> Any:
     try:
         return future.result()
     except BrokenProcessPool as exc:
-        discard(pool)
-        raise BrokenProcessPool(
-            f"a worker process died (killed, out of memory, or a crash) while running {what}; its pool is "
-            "discarded, and the next call starts new workers"
-        ) from exc
+        raise _died(pool, what) from exc
 
 
 def ordered(
