@@ -498,12 +498,15 @@ def diagnose(
         When not even the plain model can be fitted.
     """
     from .. import _threads
-    from . import speed
+    from . import fit_share, speed
 
-    if not speed.ONE_BLAS_THREAD:
-        return _diagnose(experiments, candidates, alpha, held_out_test, (y_unit, u_unit), progress)
-    with _threads.one_blas_thread():  # issue 18 item 4: BLAS threads compete with the core's (speed.py)
-        return _diagnose(experiments, candidates, alpha, held_out_test, (y_unit, u_unit), progress)
+    with fit_share.scope() as fits:  # its candidate fits, kept for diagnose_across (fit_share.py)
+        if not speed.ONE_BLAS_THREAD:
+            d = _diagnose(experiments, candidates, alpha, held_out_test, (y_unit, u_unit), progress)
+        else:
+            with _threads.one_blas_thread():  # issue 18 item 4: BLAS threads compete with the core's
+                d = _diagnose(experiments, candidates, alpha, held_out_test, (y_unit, u_unit), progress)
+    return replace(d, fits=fits)
 
 
 def _diagnose(

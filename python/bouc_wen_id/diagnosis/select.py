@@ -53,7 +53,7 @@ from numpy.typing import NDArray
 from ..augmented import AugExperiment, AugFit, augmented_output
 from ..errors import BudgetExceededError
 from ..terms import TERMS, Stiffness, physical_value
-from . import free_dc, speed
+from . import fit_share, fitting, free_dc, speed
 from .beside import only_beside
 from .fitting import best_of, fit_from, fit_own, fit_with, subset
 from .pinch_shape import band_test, is_pinching
@@ -778,8 +778,15 @@ def memo_fit_with(exps: Sequence[AugExperiment], substeps: int) -> Callable[[Aug
             return wide_fit(exps, base, t, substeps, fit_with(exps, base, t, substeps))
         if (id(base), t) not in fitted:  # wide starts when the term's own fit is suspicious (restarts.py)
             fitted[(id(base), t)] = (
-                base,
-                wide_fit(exps, base, t, substeps, fit_with(exps, base, t, substeps)),
+                base,  # the same inputs fitted by another diagnosis: its fit (fit_share.py)
+                fit_share.shared(
+                    exps,
+                    base,
+                    t,
+                    substeps,
+                    lambda: wide_fit(exps, base, t, substeps, fit_with(exps, base, t, substeps)),
+                    (wide_fit, fit_with, fitting.fit_from, getattr(fitting, "augmented_output", None)),
+                ),
             )
         return fitted[(id(base), t)][1]
 

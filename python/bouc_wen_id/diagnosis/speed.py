@@ -34,3 +34,8 @@ SHARE_AGE_LEADS = True
 #: (:func:`bouc_wen_id.diagnosis.drift._run_all`): each is independent, in the Rust core without the
 #: interpreter's lock. The unrecorded-age estimate of MR 0.75 A spent 13 of its 30 s in them.
 THREAD_DRIFT_SIMS = True
+
+#: Share a candidate's fit between diagnoses of the same data (:mod:`bouc_wen_id.diagnosis.fit_share`): the
+#: joint selection of ``diagnose_across`` refitted, at each condition, the candidates that condition's own
+#: diagnosis had fitted from the same model on the same periods.
+SHARE_FITS = True

@@ -1,0 +1,159 @@
+"""diagnose_across reuses its conditions' own candidate fits (diagnosis/fit_share.py), reads their stability
+checks (diagnosis/across_stable.py), and Ctrl-C during the drift correction's threaded simulations reaches
+the caller without waiting for them (drift._run_all).
+
+The conditions are made by the bench's independent generator (benches/generator.py), as in
+test_diagnosis_shared.py.
+"""
+
+from __future__ import annotations
+
+import importlib
+import os
+import pickle
+import signal
+import sys
+import threading
+import warnings
+from dataclasses import replace
+from pathlib import Path
+from typing import Any
+
+import bouc_wen_id as bw
+import numpy as np
+import pytest
+from bouc_wen_id.diagnosis import drift, select, speed, stability
+from bouc_wen_id.errors import InvalidParameterError
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benches"))
+G: Any = importlib.import_module("generator")
+
+CANDS = ["offset", "stiffness", "viscous", "viscous@x", "asymmetry"]
+
+
+def _groups(seed: int, sizes: tuple[float, ...]) -> list[list[Any]]:
+    """Recordings of one plant with viscous damping on u sized ``sizes`` averaged-noise sd per condition."""
+    p = G.make_plant(seed)
+    b = G.base(p)
+    plain = G.run(p, G.Effect(), shared=b)
+    one = float(G.contribution(p, G.Effect("viscous", "u", np.ones(1)), plain, b)[0])
+    y = G.run(p, G.Effect("viscous", "u", np.asarray(sizes) / one), shared=b)
+    return [G.recordings(p, y[k], 100 * seed + 50 + k, noise_sd=G.NOISE_SD) for k in range(len(sizes))]
+
+
+@pytest.fixture(scope="module")
+def levels() -> tuple[list[list[Any]], list[bw.Diagnosis]]:
+    groups = _groups(5, (0.5, 0.8))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        own = [bw.diagnose(g, candidates=CANDS) for g in groups]
+    return groups, own
+
+
+def _across(groups: list[list[Any]], per_condition: Any) -> bw.AcrossDiagnosis:
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return bw.diagnose_across(groups, [0.0, 1.0], candidates=CANDS, per_condition=per_condition)
+
+
+def _result(a: bw.AcrossDiagnosis) -> dict[str, Any]:
+    out = a.to_dict()
+    out.pop("seconds")
+    return out
+
+
+def test_across_reuses_the_conditions_own_candidate_fits_and_finds_the_same(
+    levels: tuple[list[list[Any]], list[bw.Diagnosis]], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    groups, _ = levels
+    calls = {"n": 0}
+    real = select.fit_with
+
+    def counted(*args: Any, **kw: Any) -> Any:
+        calls["n"] += 1
+        return real(*args, **kw)
+
+    monkeypatch.setattr(select, "fit_with", counted)  # before the conditions' own diagnoses: one key
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        own = [bw.diagnose(g, candidates=CANDS) for g in groups]
+    assert all(d.fits for d in own)  # each diagnosis kept its candidate fits
+    calls["n"] = 0
+    shared = _across(groups, own)
+    with_sharing = calls["n"]
+    monkeypatch.setattr(speed, "SHARE_FITS", False)
+    calls["n"] = 0
+    fresh = _across(groups, own)
+    assert calls["n"] > 0 and with_sharing < calls["n"], (with_sharing, calls["n"])
+    assert _result(shared) == _result(fresh)  # the stored fits are the ones a refit gives, bit for bit
+    assert shared.named == ("viscous",), shared.verdict
+
+
+def test_a_diagnosis_pickles_without_its_fits(levels: tuple[list[list[Any]], list[bw.Diagnosis]]) -> None:
+    d = levels[1][0]
+    assert d.fits
+    back = pickle.loads(pickle.dumps(d))
+    assert not back.fits and back.verdict == d.verdict
+
+
+def _unstable(d: bw.Diagnosis) -> stability.Stability:
+    """``d`` checked against a variant that named nothing and could have seen every term (limit 0)."""
+    silent = replace(d, named=(), partial=(), limits=())
+    return stability.stability(d, {"early": silent})
+
+
+def test_a_conditions_alternative_is_not_listed_as_its_term(
+    levels: tuple[list[list[Any]], list[bw.Diagnosis]],
+) -> None:
+    from bouc_wen_id.diagnosis import across_stable
+
+    groups, own = levels
+    assert [t.term for t in own[0].named] == ["viscous"], own[0].verdict
+    check = _unstable(own[0])
+    assert check.alternatives == ("viscous",)
+    a = _across(groups, [check, own[1]])
+    c0, c1 = a.conditions
+    assert c0.per_level_terms == () and c0.per_level_alternatives == ("viscous",)
+    assert "viscous: alternatives, not findings" in c0.per_level_text
+    assert c1.per_level_terms == tuple(t.term for t in own[1].named) and c1.per_level_alternatives == ()
+    assert a.to_dict()["conditions"][0]["per_level_alternatives"] == ["viscous"]
+    # Read afterwards (no refit), the same conditions.
+    plain = _across(groups, own)
+    assert plain.conditions[0].per_level_terms == ("viscous",)
+    assert across_stable.checked(plain, [check, None]).conditions == a.conditions
+    # A check of another diagnosis is refused, by name.
+    other = _unstable(replace(own[0], named=own[0].named * 2))
+    with pytest.raises(InvalidParameterError, match="condition 0"):
+        across_stable.checked(plain, [other, None])
+    with pytest.raises(InvalidParameterError, match="per_condition"):
+        _across(groups, ["not a diagnosis", own[1]])
+
+
+def test_ctrl_c_does_not_wait_for_the_running_drift_simulations(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The simulations run on worker threads, where a signal does not reach the core: Ctrl-C must reach the
+    caller at once, not after they end (here they end only when released, after the interrupt is seen)."""
+    monkeypatch.setattr(speed, "THREAD_DRIFT_SIMS", True)
+    monkeypatch.setattr(os, "cpu_count", lambda: 2)
+    started, release = threading.Barrier(3), threading.Event()
+
+    def sim(*job: Any) -> np.ndarray:
+        started.wait(timeout=30)
+        release.wait(timeout=30)
+        return np.zeros(1)
+
+    def interrupt() -> None:
+        started.wait(timeout=30)  # both simulations are running
+        os.kill(os.getpid(), signal.SIGINT)
+
+    threading.Thread(target=interrupt, daemon=True).start()
+    safety = threading.Timer(5.0, release.set)  # without the fix the call returns only once they end
+    safety.start()
+    released_at_interrupt = None
+    try:
+        drift._run_all(sim, [(0,), (1,)])
+    except KeyboardInterrupt:
+        released_at_interrupt = release.is_set()
+    finally:
+        release.set()  # the running simulations end now
+        safety.cancel()
+    assert released_at_interrupt is False, "Ctrl-C waited for the running simulations"
