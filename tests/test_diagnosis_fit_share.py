@@ -157,3 +157,38 @@ def test_ctrl_c_does_not_wait_for_the_running_drift_simulations(monkeypatch: pyt
         release.set()  # the running simulations end now
         safety.cancel()
     assert released_at_interrupt is False, "Ctrl-C waited for the running simulations"
+
+
+def test_the_settled_experiments_alone_are_diagnosed_without_the_whole_set_first(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Three of six records from a degrading loop, degradation not a candidate: those three still drift and
+    are left out. The whole set's selection used to run first and be thrown away; the verdict is the same
+    without it (speed.LEAVE_OUT_EARLY), and one selection runs instead of two."""
+    from bouc_wen_id.diagnosis import run
+
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    B: Any = importlib.import_module("test_degradation_beside_drift")
+    steady, degrading = B._records(1, 0.0, 0.0), B._records(1, 3 * B.RATE, 0.0)
+    recs = [*steady[:3], *degrading[3:]]
+    calls = {"n": 0}
+    real = run.forward_select
+
+    def counted(*args: Any, **kw: Any) -> Any:
+        calls["n"] += 1
+        return real(*args, **kw)
+
+    monkeypatch.setattr(run, "forward_select", counted)
+    got = {}
+    for early in (True, False):
+        monkeypatch.setattr(speed, "LEAVE_OUT_EARLY", early)
+        calls["n"] = 0
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            d = bw.diagnose(recs, candidates=["offset", "viscous", "stiffness"])
+        out = d.to_dict()
+        out.pop("seconds")
+        got[early] = (out, calls["n"])
+    assert "left out (not settled)" in got[True][0]["verdict"], got[True][0]["verdict"]
+    assert got[True][0] == got[False][0]
+    assert got[True][1] < got[False][1], (got[True][1], got[False][1])

@@ -268,11 +268,16 @@ def _fold(
     """Fit ``model``'s physics without experiment j, then only j's own (g, phi): (cost, output) on j."""
     key = (id(model), j)
     if key not in cache:
-        keep = [i for i in range(len(exps)) if i != j]
-        sub, start = subset(exps, model.params, keep)
-        f = fit_from(sub, start, substeps)
-        g, ph = float(model.params.gains[j]), float(model.params.phases[j])
-        cache[key] = None if f is None else fit_own(exps[j], f.params, g, ph, substeps)
+
+        def fitted() -> Optional[tuple[float, FloatArray]]:
+            keep = [i for i in range(len(exps)) if i != j]
+            sub, start = subset(exps, model.params, keep)
+            f = fit_from(sub, start, substeps)
+            g, ph = float(model.params.gains[j]), float(model.params.phases[j])
+            return None if f is None else fit_own(exps[j], f.params, g, ph, substeps)
+
+        # Another diagnosis of the same data (diagnose_across's condition) may hold it (fit_share.py).
+        cache[key] = fit_share.shared(exps, model, f"fold {j}", substeps, fitted, (fit_from, fit_own, subset))
     return cache[key]
 
 
