@@ -192,3 +192,35 @@ def test_the_settled_experiments_alone_are_diagnosed_without_the_whole_set_first
     assert "left out (not settled)" in got[True][0]["verdict"], got[True][0]["verdict"]
     assert got[True][0] == got[False][0]
     assert got[True][1] < got[False][1], (got[True][1], got[False][1])
+
+
+def test_the_lab_noise_levels_share_each_periods_averaged_values_exactly() -> None:
+    """lab_colour.levels and harmonic_levels take the averaged period out of the same periods of a stretch:
+    computed once (``models``), both return what each returns alone, bit for bit. AR(1) noise, so that the
+    colour check gets past its early returns."""
+    from bouc_wen_id.diagnosis import data, lab_colour
+
+    rng = np.random.default_rng(7)
+    p = 100.37  # samples a period, not whole (a fixed sampling rate)
+    n = int(24 * p)
+    th = 2.0 * np.pi * np.arange(n) / p
+    k = np.floor(th / (2.0 * np.pi)).astype(np.int64)
+    e = np.zeros(n)
+    for i in range(1, n):
+        e[i] = 0.8 * e[i - 1] + 0.05 * rng.standard_normal()
+    y = np.cos(th) + 0.3 * np.abs(np.cos(th)) ** 3 + e
+    grid = 2.0 * np.pi * np.arange(64) / 64
+    ybar = np.cos(grid) + 0.3 * np.abs(np.cos(grid)) ** 3
+    kept = list(range(int(k.max())))
+    white = float(np.var(np.diff(e))) / 2.0
+    rules = (data.COLOUR_BAND, data.COLOUR_ALPHA, data.cross_period_inflation)
+    inflation = data.cross_period_inflation
+    hrules = (data._harmonics_of(ybar.size), data.COLOUR_BAND, data.HARMONIC_FLOOR, inflation)
+    alone = lab_colour.levels(k, th, y, kept, white, n, ybar, rules)
+    alone_h = lab_colour.harmonic_levels(k, th, y, kept, white, ybar, hrules)
+    models: dict[int, Any] = {}
+    shared = lab_colour.levels(k, th, y, kept, white, n, ybar, rules, models)
+    assert len(models) >= len(kept) - 1  # every whole period's values kept for the other
+    shared_h = lab_colour.harmonic_levels(k, th, y, kept, white, ybar, hrules, models)
+    assert alone is not None and shared == alone
+    assert alone_h.size and np.array_equal(shared_h, alone_h)
