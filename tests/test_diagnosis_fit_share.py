@@ -22,7 +22,7 @@ from typing import Any
 import bouc_wen_id as bw
 import numpy as np
 import pytest
-from bouc_wen_id.diagnosis import drift, select, speed, stability
+from bouc_wen_id.diagnosis import drift, fitting, select, speed, stability
 from bouc_wen_id.errors import InvalidParameterError
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benches"))
@@ -67,7 +67,7 @@ def test_across_reuses_the_conditions_own_candidate_fits_and_finds_the_same(
 ) -> None:
     groups, _ = levels
     calls = {"n": 0}
-    real = select.fit_with
+    real = fitting.fit_with  # the function select calls
 
     def counted(*args: Any, **kw: Any) -> Any:
         calls["n"] += 1
@@ -172,7 +172,7 @@ def test_the_settled_experiments_alone_are_diagnosed_without_the_whole_set_first
     steady, degrading = B._records(1, 0.0, 0.0), B._records(1, 3 * B.RATE, 0.0)
     recs = [*steady[:3], *degrading[3:]]
     calls = {"n": 0}
-    real = run.forward_select
+    real = select.forward_select  # the function run calls
 
     def counted(*args: Any, **kw: Any) -> Any:
         calls["n"] += 1
@@ -203,7 +203,7 @@ def test_the_lab_noise_levels_share_each_periods_averaged_values_exactly() -> No
     rng = np.random.default_rng(7)
     p = 100.37  # samples a period, not whole (a fixed sampling rate)
     n = int(24 * p)
-    th = 2.0 * np.pi * np.arange(n) / p
+    th = np.asarray(2.0 * np.pi * np.arange(n) / p, dtype=np.float64)
     k = np.floor(th / (2.0 * np.pi)).astype(np.int64)
     e = np.zeros(n)
     for i in range(1, n):
