@@ -8,7 +8,9 @@ every number in it comes from this run).
 
 Across current levels: the MR damper's levels are also diagnosed with ONE structure (``bw.diagnose_across``:
 each candidate added at every level at once, its value free per level; the levels' own diagnoses reused),
-written as the page's section "Across current levels" and ``docs/real-data/diagnosis-across.json``.
+written as the page's section "Across current levels" and ``docs/real-data/diagnosis-across.json``. Each
+level's own terms there are read against its stability check (``across_stable.checked``): a term only some
+preprocessing variants name is listed as that level's alternative, not its finding, as its verdict says.
 
 Stability: every group is diagnosed again under preprocessing variants (:data:`VARIANTS`: the steady stretch
 without its last or first third, half the harmonics kept in the averaged period); a term named in every
