@@ -57,9 +57,21 @@ def scope(seeds: Iterable[Optional[Store]] = ()) -> Iterator[Store]:
 def _key(exps: Sequence[Any], base: Any, term: str, substeps: int, tag: Sequence[Any]) -> Optional[bytes]:
     """The digest of a fit's inputs (``tag``: the fitting functions in use, by name and identity, so a
     replaced one is another key), or None when they cannot be pickled (then nothing is shared)."""
+    from dataclasses import replace
+
+    import numpy as np
+
     from .. import budget
+    from ..terms import Distortion
 
     switches = tuple(sorted((k, v) for k, v in vars(speed).items() if k.isupper()))
+    if Distortion.kind not in (*getattr(getattr(base, "params", None), "terms", ()), term):
+        # The input's waveform enters a fit only through the distortion term (rust/augmented/hysteresis.rs:
+        # its column scales the waveform; fitting.py reads it only to carry it through G): without the term
+        # two experiments that differ only there give the same fit. diagnose carries the waveforms through
+        # G (carry_through_g) and diagnose_across, without the distortion candidate, does not.
+        plain = np.zeros(0)
+        exps = [replace(e, waveform=plain) if getattr(e, "waveform", None) is not None else e for e in exps]
     names = tuple((getattr(f, "__module__", ""), getattr(f, "__qualname__", ""), id(f)) for f in tag)
     try:
         raw = pickle.dumps(
