@@ -115,7 +115,7 @@ def test_a_conditions_alternative_is_not_listed_as_its_term(
     a = _across(groups, [check, own[1]])
     c0, c1 = a.conditions
     assert c0.per_level_terms == () and c0.per_level_alternatives == ("viscous",)
-    assert "viscous: alternatives, not findings" in c0.per_level_text
+    assert c0.per_level_text == "none; viscous: an alternative, not a finding", c0.per_level_text
     assert c1.per_level_terms == tuple(t.term for t in own[1].named) and c1.per_level_alternatives == ()
     assert a.to_dict()["conditions"][0]["per_level_alternatives"] == ["viscous"]
     # Read afterwards (no refit), the same conditions.

@@ -59,7 +59,9 @@ class ConditionResult:
             return "-"
         own = ", ".join(self.per_level_terms) or "none"
         if self.per_level_alternatives:
-            own += "; " + ", ".join(self.per_level_alternatives) + ": alternatives, not findings"
+            alts = self.per_level_alternatives
+            said = "an alternative, not a finding" if len(alts) == 1 else "alternatives, not findings"
+            own += f"; {', '.join(alts)}: {said}"
         return own
 
 
