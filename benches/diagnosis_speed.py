@@ -17,7 +17,10 @@ with them set, the BLAS switch has nothing to change.
 
 Usage: ``python benches/diagnosis_speed.py [--quick] [--data DIR] [--json out.json]``; ``--quick`` (the
 0 A level and one simulated case, about a minute on 2 idle cores) or the full set (five levels, the wire
-rope, three simulated cases). Progress on stderr.
+rope, three simulated cases). Progress on stderr. Then the MR damper's levels diagnosed across
+(``diagnose_across`` given each level's own diagnosis, as the study runs it; 0 A and 0.25 A with ``--quick``):
+"same verdict" there is the whole result (``to_dict()``, every value) the same; ``--no-across`` skips it,
+``--across-only`` runs it alone.
 """
 
 from __future__ import annotations
@@ -118,11 +121,48 @@ def timed(items: Any, fast: bool) -> tuple[float, float, dict[str, Any]]:
             setattr(speed, k, True)
 
 
+def across_row(data: Path, adapters: Any, levels: list[float]) -> dict[str, Any]:
+    """The MR damper's levels across (``studies/diagnose_real.py``'s ``mr_across``: each level's own
+    diagnosis given, the study's candidates), timed with the switches off and on as :func:`timed` does; the
+    levels' own diagnoses run once, switches on, untimed (the study's main run has them already). Off, the
+    stored fits are keyed by other switches, so none is reused (fit_share.py)."""
+    import diagnose_real as study
+    from bouc_wen_id.diagnosis import speed
+
+    blocks = [adapters.load_mr_damper(data / adapters.DATASETS["mr-damper"] / f) for f in adapters.MR_FILES]
+    mr = []
+    for k, current in enumerate(adapters.MR_CURRENTS):
+        if current in levels:
+            ms = [b[k] for b in blocks]
+            mr.append((f"{current:g} A", ms, study._diagnose(ms, ms[0].units, False)))
+    switches = [k for k in vars(speed) if k.isupper()]
+    got = {}
+    for fast in (False, True):
+        for k in switches:
+            setattr(speed, k, fast)
+        try:
+            when = "after" if fast else "before"
+            print(f"across {len(mr)} levels: {when} ...", file=sys.stderr, flush=True)
+            t0, c0 = time.perf_counter(), time.process_time()
+            a = study.mr_across(mr, progress=False)
+            got[fast] = (time.perf_counter() - t0, time.process_time() - c0, a.to_dict())
+        finally:
+            for k in switches:
+                setattr(speed, k, True)
+    (wb, cb, vb), (wa, ca, va) = got[False], got[True]
+    vb.pop("seconds"), va.pop("seconds")
+    return {"case": f"MR damper across {len(mr)} levels", "before_wall": wb, "before_cpu": cb,
+            "after_wall": wa, "after_cpu": ca, "same_verdict": vb == va, "before": vb["verdict"],
+            "after": va["verdict"]}  # fmt: skip
+
+
 def main(argv: Optional[list[str]] = None) -> int:
     ap = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="0 A and one simulated case")
     ap.add_argument("--data", type=Path, default=None, help="the real data folder (shared/data/real)")
     ap.add_argument("--json", type=Path, default=None)
+    ap.add_argument("--no-across", action="store_true", help="skip the MR levels' diagnose_across case")
+    ap.add_argument("--across-only", action="store_true", help="only the MR levels' diagnose_across case")
     args = ap.parse_args(argv)
     chosen = [v for v in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS") if os.environ.get(v)]
     if chosen:
@@ -132,6 +172,7 @@ def main(argv: Optional[list[str]] = None) -> int:
     data = _data_dir(args.data, A)
     cases = simulated_cases(1 if args.quick else 3) + mr_cases(data, A, levels)
     cases += [] if args.quick else wire_rope_case(data, A)
+    cases = [] if args.across_only else cases
     load0 = os.getloadavg()[0]
     rows: list[dict[str, Any]] = []
     for label, make in cases:
@@ -147,6 +188,11 @@ def main(argv: Optional[list[str]] = None) -> int:
              "same_verdict": vb == va, "before": vb, "after": va}
         )  # fmt: skip
         print(f"{label}: {wb:.1f} s -> {wa:.1f} s, same verdict: {vb == va}", file=sys.stderr, flush=True)
+    if not args.no_across:  # the joint selection over the levels (the whole result compared, not the verdict)
+        rows.append(across_row(data, A, [0.0, 0.25] if args.quick else list(A.MR_CURRENTS)))
+        r = rows[-1]
+        took = f"{r['before_wall']:.1f} s -> {r['after_wall']:.1f} s"
+        print(f"{r['case']}: {took}", file=sys.stderr, flush=True)
     load1 = os.getloadavg()[0]
     print("| case | before: wall / CPU s | after: wall / CPU s | after/before: wall / CPU | same verdict |")
     print("|---|---|---|---|---|")

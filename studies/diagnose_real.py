@@ -8,7 +8,9 @@ every number in it comes from this run).
 
 Across current levels: the MR damper's levels are also diagnosed with ONE structure (``bw.diagnose_across``:
 each candidate added at every level at once, its value free per level; the levels' own diagnoses reused),
-written as the page's section "Across current levels" and ``docs/real-data/diagnosis-across.json``.
+written as the page's section "Across current levels" and ``docs/real-data/diagnosis-across.json``. Each
+level's own terms there are read against its stability check (``across_stable.checked``): a term only some
+preprocessing variants name is listed as that level's alternative, not its finding, as its verdict says.
 
 Stability: every group is diagnosed again under preprocessing variants (:data:`VARIANTS`: the steady stretch
 without its last or first third, half the harmonics kept in the averaged period); a term named in every
@@ -348,7 +350,29 @@ def across_levels(
     return a, a.seconds
 
 
-def across_markdown(a: Any, seconds: float) -> str:
+def across_checked(
+    a: Any, loaded: list[tuple[str, str, list[bw.Measurement]]], rows: list[dict[str, Any]]
+) -> Any:
+    """``a`` with each level's own terms read against its stability check (``across_stable.checked``: a term
+    only some preprocessing variants name is that level's alternative, not its finding, as its verdict
+    says); ``a`` as it is when the variants were not run."""
+    from bouc_wen_id.diagnosis import across_stable
+
+    checks = {lab: r.get("check") for (ds, lab, _), r in zip(loaded, rows) if ds == "mr-damper"}
+    if a is None or not any(checks.values()):
+        return a
+    return across_stable.checked(a, [checks.get(c.label) for c in a.conditions])
+
+
+def _per_level(c: Any, by_label: dict[str, dict[str, Any]]) -> str:
+    """A level's own structure: its findings, then its alternatives with their counts (k of n variants)."""
+    own = ", ".join(c.per_level_terms or ()) or "none"
+    r = by_label.get(c.label, {})
+    alts = [f"{t} ({_count_of(r, t)}): an alternative, not a finding" for t in c.per_level_alternatives]
+    return "; ".join([own, *alts])
+
+
+def across_markdown(a: Any, seconds: float, rows: list[dict[str, Any]] | None = None) -> str:
     """The section "Across current levels" of the page (docs/diagnosis.md, "Across conditions")."""
     lines = [
         "",
@@ -394,8 +418,9 @@ def across_markdown(a: Any, seconds: float) -> str:
         "(its terms) |",
         "|---|---|---|---|---|",
     ]
+    by_label = {r["group"]: r for r in rows or () if r.get("dataset") == "mr-damper"}
     for c in a.conditions:
-        own = ", ".join(c.per_level_terms or ()) or "none"
+        own = _per_level(c, by_label)
         lines.append(
             f"| {c.label} | {c.plain_chi2_dof:.3g} -> {c.final_chi2_dof:.3g} | {c.held_out_plain:.3f} "
             f"| {c.held_out_joint:.3f} | {c.held_out_per_level:.3f} ({own}) |"
@@ -405,6 +430,13 @@ def across_markdown(a: Any, seconds: float) -> str:
         "left-out one's |G| and phase refitted). Standard errors are inflated by sqrt(chi2/dof) of each "
         f"level's fit; 'not needed' marks a level whose own F test (alpha / {len(a.conditions)}) does not "
         "ask for the term."
+        + (
+            " The per-level structure lists a level's findings; a term its own diagnosis named but only some "
+            "preprocessing variants name is said as an alternative (named in k of n variants), as its "
+            "verdict says it."
+            if any(c.per_level_alternatives for c in a.conditions)
+            else ""
+        )
     )
     return "\n".join(lines) + "\n"
 
@@ -492,15 +524,17 @@ def main(argv: list[str] | None = None) -> int:
             main_d = r["runs"].pop(stab.MAIN)
             st = stab.stability(main_d, r["runs"])
             r["runs"][stab.MAIN] = main_d
-            r.update(status=st.status, verdict=st.verdict, stability=st.to_dict())
+            r.update(status=st.status, verdict=st.verdict, stability=st.to_dict(), check=st)
             r["named"] = [t for t in r["named_main_run"] if t["term"] not in st.alternatives]
             print(
                 f"{dataset} {label}: named in how many of {len(st.completed)} completed variants: "
                 + stab.describe(st)
                 + (f"; verdict revised: {st.verdict}" if st.verdict != main_d.verdict else "")
             )
+    across = across_checked(across, loaded, rows)  # a level's alternatives said as such (across_stable.py)
     for r in rows:
         r.pop("runs", None)
+        r.pop("check", None)
     wall_stab = time.perf_counter() - t1
     timing = {
         "wall": wall,
@@ -515,7 +549,7 @@ def main(argv: list[str] | None = None) -> int:
     command = "python studies/diagnose_real.py " + " ".join(argv if argv is not None else sys.argv[1:])
     page = markdown(ok, timing, command.strip(), _commit())
     if across is not None:
-        page += across_markdown(across, t_across)
+        page += across_markdown(across, t_across, ok)
         (figs / "diagnosis-across.json").write_text(
             json.dumps(clean(across.to_dict()), indent=1, allow_nan=False)
         )

@@ -51,7 +51,8 @@ from ..augmented import AugExperiment, AugFit
 from ..errors import InvalidParameterError
 from ..terms import TERMS, Distortion
 from ..validation import real_number
-from . import across_rules, across_settling, across_verdict, fit_notes, gate, inputs
+from . import across_rules, across_settling, across_stable, across_verdict, fit_notes, gate, inputs
+from .across_stable import ConditionResult
 from .beside import only_beside
 from .caveats import alternatives_text
 from .data import DiagExperiment
@@ -257,29 +258,6 @@ class TermAcross:
 
 
 @dataclass(frozen=True)
-class ConditionResult:
-    """The joint structure at one condition, beside its own diagnosis when that was given."""
-
-    label: str
-    condition: float
-    experiments: int
-    plain_chi2_dof: float
-    final_chi2_dof: float
-    final_p_value: float
-    #: Median over the held-out folds: the plain model's NRMSE and the joint structure's.
-    held_out_plain: float
-    held_out_joint: float
-    #: The per-condition diagnosis (when given): its named terms and its held-out NRMSE (median).
-    per_level_terms: Optional[tuple[str, ...]] = None
-    held_out_per_level: float = math.nan
-
-    def to_dict(self) -> dict[str, Any]:
-        out = {k: _n(v) if isinstance(v, float) else v for k, v in self.__dict__.items()}
-        out["per_level_terms"] = None if self.per_level_terms is None else list(self.per_level_terms)
-        return out
-
-
-@dataclass(frozen=True)
 class AcrossDiagnosis:
     """The result of :func:`diagnose_across`: the verdict first, then per term and per condition."""
 
@@ -340,11 +318,7 @@ class AcrossDiagnosis:
                 lines.append(f"  {c.label}: {v:.4g} +- {se:.2g}{'' if pr else '  (not needed here)'}")
         lines += ["", "condition | chi2/dof plain -> final | held-out NRMSE plain, joint, per-level (terms)"]
         for c in self.conditions:
-            own = (
-                "-"
-                if c.per_level_terms is None
-                else f"{c.held_out_per_level:.3f} ({', '.join(c.per_level_terms)})"
-            )
+            own = "-" if c.per_level_terms is None else f"{c.held_out_per_level:.3f} ({c.per_level_text})"
             lines.append(
                 f"{c.label} | {c.plain_chi2_dof:.3g} -> {c.final_chi2_dof:.3g} | {c.held_out_plain:.3f}, "
                 f"{c.held_out_joint:.3f}, {own}"
@@ -711,10 +685,15 @@ def _terms(
 
 
 def _conditions(
-    groups: Sequence[_Group], own: Sequence[Optional[Diagnosis]], use_held_out: bool
+    groups: Sequence[_Group],
+    own: Sequence[Optional[Diagnosis]],
+    use_held_out: bool,
+    checks: Sequence[Any] = (),
 ) -> tuple[ConditionResult, ...]:
+    """Each condition's joint fit beside its own diagnosis; ``checks``: each one's stability check (or None),
+    whose alternatives are said as such, not as the condition's terms (across_stable.py)."""
     out = []
-    for g, d in zip(groups, own):
+    for g, d, st in zip(groups, own, [*checks, *[None] * (len(own) - len(checks))]):
         fin, pl = g.current, g.plain
         dof0, dof1 = dof_of(g.sx, pl), dof_of(g.sx, fin)
         ho = held_out(g.sx, pl, fin, g.substeps, g.cache) if use_held_out and fin is not pl else None
@@ -724,8 +703,9 @@ def _conditions(
         hj = math.nan if ho is None else _median(ho.nrmse_after)
         terms: Optional[tuple[str, ...]] = None
         own_ho = math.nan
+        alts: tuple[str, ...] = ()
         if d is not None:
-            terms = tuple(t.term for t in d.named)
+            terms, alts = across_stable.split(d, st)
             own_ho = _median(d.held_out.nrmse_after) if d.held_out is not None else hp
         out.append(
             ConditionResult(
@@ -739,6 +719,7 @@ def _conditions(
                 hj,
                 terms,
                 own_ho,
+                alts,
             )
         )
     return tuple(out)
@@ -857,9 +838,11 @@ def diagnose_across(
         Family-wise false-alarm level of each step (Bonferroni over the candidates).
     held_out_test : bool
         Require the held-out cost, summed over the conditions, to improve before naming a term.
-    per_condition : sequence of Diagnosis, optional
-        Each group's own :func:`diagnose` result: compared with the joint structure, and its experiments
-        and plain fit reused (nothing fitted twice).
+    per_condition : sequence of Diagnosis or Stability, optional
+        Each group's own :func:`diagnose` result: compared with the joint structure, and its experiments,
+        plain fit and candidate fits reused (nothing fitted twice). Given as its stability check
+        (:func:`bouc_wen_id.diagnosis.stability.stability`), a term its main run named that is only an
+        alternative there is not listed among the condition's terms but as an alternative.
     y_unit, u_unit : str
         Units of the output and the input, for the reported values.
     progress : bool or callable, optional
@@ -871,6 +854,7 @@ def diagnose_across(
         Fewer than two groups, conditions that do not match the groups or repeat, unknown candidates.
     """
     from .. import _threads
+    from . import fit_share
     from .drift import DRIFT_TERMS
     from .run import ALL_CANDIDATES, _check_candidates
 
@@ -881,9 +865,10 @@ def diagnose_across(
     alpha = real_number("alpha", alpha)
     if not 0.0 < alpha < 1.0:
         raise InvalidParameterError(f"alpha = {alpha!r} must lie in (0, 1)")
-    own = list(per_condition) if per_condition is not None else [None] * len(gs)
-    with _threads.one_blas_thread():
-        prepared, kept, unsettled = [], [], []
+    own, checks = across_stable.unpacked(per_condition, len(gs))
+    seeds = [getattr(d, "fits", None) for d in own]  # their candidate fits, reused (fit_share.py)
+    with _threads.one_blas_thread(), fit_share.scope(seeds):
+        prepared, kept, kept_checks, unsettled = [], [], [], []
         for i, (items, c, name) in enumerate(zip(gs, conds, names)):
             report(f"preparing condition {name}", i, len(gs))
             inputs.check_items(items, f"condition {name}")  # as diagnose checks them (inputs.py)
@@ -891,6 +876,7 @@ def diagnose_across(
                 judged = (_check_candidates(candidates), held_out_test)  # the drift's own judgement
                 prepared.append(_group(items, name, c, cands, own[i], alpha, judged))
                 kept.append(own[i])
+                kept_checks.append(checks[i])
             except across_settling.NotSettled as e:  # no experiment settled there (across_settling.py)
                 unsettled.append(e)
         settings: dict[str, Any] = {"not_settled": {u.label: list(u.names) for u in unsettled}}
@@ -903,7 +889,7 @@ def diagnose_across(
         steps = _select(prepared, cands, alpha, held_out_test, report)
         report("held-out check of the joint structure", 0, 1)
         terms = _terms(prepared, steps, (y_unit, u_unit), alpha)
-        conditions = _conditions(prepared, kept, held_out_test)
+        conditions = _conditions(prepared, kept, held_out_test, kept_checks)
     report("done", 1, 1)
     settings |= {
         "candidates": list(cands),

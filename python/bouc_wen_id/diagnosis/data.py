@@ -507,14 +507,15 @@ def _from_averaged(
             dc, h1 = np.array(dcs), np.array(h1s, dtype=np.complex128)
         blocks = _lab_blocks(k, th, seg_y, kept, ybar.size)
         rules = (COLOUR_BAND, COLOUR_ALPHA, cross_period_inflation)  # as noise_colour on recordings
-        coloured = lab_colour.levels(k, th, seg_y, kept, var, dof, ybar, rules)
+        models: dict[int, FloatArray] = {}  # each period's averaged-period values, computed once for both
+        coloured = lab_colour.levels(k, th, seg_y, kept, var, dof, ybar, rules, models)
         if coloured is not None:
             var, dof, band = coloured
         # Each harmonic's own level for the drift test's blocks, coloured or not: a colour too weak for the
         # check above (AR(1), phi = 0.3: 1.6-1.9 times the per-sample level at every block harmonic) put
         # that experiment's block chi-square at 1.8 of its dof, and the gate called 45 % of nulls drifting.
         hrules = (_harmonics_of(ybar.size), COLOUR_BAND, HARMONIC_FLOOR, cross_period_inflation)
-        hvar = lab_colour.harmonic_levels(k, th, seg_y, kept, float(ap.noise_var), ybar, hrules)
+        hvar = lab_colour.harmonic_levels(k, th, seg_y, kept, float(ap.noise_var), ybar, hrules, models)
         if kept:  # periods from the record's first sample to the first whole period used
             lead = float((float(ap.time_origin) - float(t[0])) * omega / TWO_PI) + float(kept[0])
         if u is not None:

@@ -29,6 +29,22 @@ from ..signal._harmonic_ls import harmonic_basis
 MAX_HARMONIC = 7
 
 
+def _model(
+    models: Optional[dict[int, NDArray[np.float64]]],
+    j: int,
+    ph: NDArray[np.float64],
+    c: NDArray[np.complex128],
+) -> NDArray[np.float64]:
+    """The averaged period (its harmonics ``c``) at period ``j``'s phases ``ph``; kept in ``models`` (when
+    given) for the other function on the same stretch, which computes the same values (exact)."""
+    if models is not None and j in models:
+        return models[j]
+    model: NDArray[np.float64] = (np.exp(1j * np.outer(ph, np.arange(c.size))) @ c).real
+    if models is not None:
+        models[j] = model
+    return model
+
+
 def levels(
     k: NDArray[np.int64],
     th: NDArray[np.float64],
@@ -38,6 +54,7 @@ def levels(
     white_dof: int,
     ybar: NDArray[np.float64],
     rules: tuple[int, float, Callable[[NDArray[np.float64]], float]],
+    models: Optional[dict[int, NDArray[np.float64]]] = None,
 ) -> Optional[tuple[float, int, tuple[int, int]]]:
     """``(variance, dof, band)`` of the noise's largest low-harmonic level when measurably above
     ``white_var`` (per-sample, ``white_dof`` dof), else None (white, or fewer than 4 whole periods).
@@ -45,7 +62,9 @@ def levels(
     The averaged period ``ybar`` (on its grid, phase 0 at ``th = 0``) is taken out first, evaluated at each
     sample's phase as its trigonometric polynomial: the loop's harmonics above K would otherwise leak into
     the fitted ones differently in every period (the phases of a fixed rate move from period to period).
-    ``rules`` are ``data.py``'s band width, level and cross-period inflation."""
+    ``rules`` are ``data.py``'s band width, level and cross-period inflation; ``models``: each period's
+    averaged-period values at its samples, by period (:func:`_model`), filled and shared with
+    :func:`harmonic_levels` on the same stretch."""
     from scipy.special import fdtrc  # type: ignore[import-untyped]
 
     colour_band, colour_alpha, cross_period_inflation = rules  # data.py's (no import cycle)
@@ -66,7 +85,7 @@ def levels(
     for row, j in enumerate(kept):
         sel = k == j
         ph = th[sel]
-        model = (np.exp(1j * np.outer(ph, np.arange(c.size))) @ c).real
+        model = _model(models, j, ph, c)
         coef[row] = np.linalg.lstsq(harmonic_basis(ph, harm), y[sel] - model, rcond=None)[0]
     out = _bands(coef, sizes, harm, white_var, white_dof, colour_band, fdtrc)
     top = max(out, key=lambda t: t[0])
@@ -98,6 +117,7 @@ def harmonic_levels(
     white_var: float,
     ybar: NDArray[np.float64],
     rules: tuple[int, int, float, Callable[[NDArray[np.float64]], float]],
+    models: Optional[dict[int, NDArray[np.float64]]] = None,
 ) -> NDArray[np.float64]:
     """Each harmonic 0..K's noise level on a lab stretch (per-sample units, as ``white_var``), for the drift
     test's block weights (``DiagExperiment.harmonic_var``); empty with fewer than 4 whole periods.
@@ -128,7 +148,7 @@ def harmonic_levels(
     for row, j in enumerate(kept):
         sel = k == j
         ph = th[sel]
-        model = (np.exp(1j * np.outer(ph, np.arange(c.size))) @ c).real
+        model = _model(models, j, ph, c)
         coef[row] = np.linalg.lstsq(harmonic_basis(ph, harm), y[sel] - model, rcond=None)[0]
         sizes[row] = ph.size
     n = len(kept)

@@ -145,6 +145,9 @@ class Diagnosis:
     #: Detection limits (diagnosis/limits.py): per candidate term and place of the first selection step,
     #: the smallest value the design detects (50 % power at the step's level); () when no step ran.
     limits: tuple[Any, ...] = ()
+    #: The candidate fits of its selections by the digest of their inputs (diagnosis/fit_share.py), for
+    #: ``diagnose_across`` to reuse; not serialised, pickled empty.
+    fits: Any = field(default=None, repr=False)
 
     @property
     def named_terms(self) -> tuple[str, ...]:

@@ -26,6 +26,7 @@ from . import (
     law_untested,
     loop_centre,
     resolution,
+    speed,
     zero_drift,
 )
 from .candidates import step_candidates
@@ -440,6 +441,19 @@ class _Setup:
     common_dc: Optional[bool] = None
     #: Where the stages are reported (:mod:`.progress`; quiet by default).
     report: ProgressCallback = lambda stage, done, total: None
+    #: Stop after the degradation stage when some (not every) experiment's loop still drifts and no
+    #: degradation explains it (:class:`_LeaveOut`): the diagnosis of the settled ones replaces this one,
+    #: whose selection would only be thrown away (the wire rope's whole set was diagnosed for nothing).
+    leave_out_early: bool = False
+
+
+class _LeaveOut(Exception):
+    """Raised by :func:`_drift_stage` under ``_Setup.leave_out_early``: these experiments' loops still drift
+    (``drifting``, indices), the others settled; caught by :func:`_with_wander`."""
+
+    def __init__(self, drifting: list[int]) -> None:
+        super().__init__(drifting)
+        self.drifting = drifting
 
 
 def diagnose(
@@ -498,12 +512,15 @@ def diagnose(
         When not even the plain model can be fitted.
     """
     from .. import _threads
-    from . import speed
+    from . import fit_share, speed
 
-    if not speed.ONE_BLAS_THREAD:
-        return _diagnose(experiments, candidates, alpha, held_out_test, (y_unit, u_unit), progress)
-    with _threads.one_blas_thread():  # issue 18 item 4: BLAS threads compete with the core's (speed.py)
-        return _diagnose(experiments, candidates, alpha, held_out_test, (y_unit, u_unit), progress)
+    with fit_share.scope() as fits:  # its candidate fits, kept for diagnose_across (fit_share.py)
+        if not speed.ONE_BLAS_THREAD:
+            d = _diagnose(experiments, candidates, alpha, held_out_test, (y_unit, u_unit), progress)
+        else:
+            with _threads.one_blas_thread():  # issue 18 item 4: BLAS threads compete with the core's
+                d = _diagnose(experiments, candidates, alpha, held_out_test, (y_unit, u_unit), progress)
+    return replace(d, fits=fits)
 
 
 def _diagnose(
@@ -567,7 +584,14 @@ def _with_wander(
         )
     common = None if wander is None else wander.kept
     setup = _Setup(cands, alpha, held_out_test, units, skipped, not qnotes, report=report, common_dc=common)
-    d = _diagnose_set(exps, setup, [*notes, *qnotes])
+    try:
+        d = _diagnose_set(exps, replace(setup, leave_out_early=speed.LEAVE_OUT_EARLY), [*notes, *qnotes])
+    except _LeaveOut as e:  # some loops still drift, no degradation explains it: the settled ones alone
+        return baseline.adjusted(
+            age.with_clause(_without_unsettled(exps, e.drifting, setup, None, [*notes, *qnotes])),
+            wander,
+            Offset.kind,
+        )
     # The drift is degradation's when its own test names it, whatever the steady verdict (a steady misfit
     # left "unexplained" moved it to the partial terms, the degrading experiments were then left out as not
     # settled, and on the three left inertia on x was named: blind degradation:30:0:clipped).
@@ -586,16 +610,19 @@ def _without_unsettled(
     exps: list[DiagExperiment],
     drifting: list[int],
     setup: _Setup,
-    whole: Diagnosis,
+    whole: Optional[Diagnosis],
     notes: list[str],
 ) -> Diagnosis:
     """The diagnosis of the settled experiments only, saying which were left out; when none is settled,
-    the verdict says so and names nothing (a loop that has not settled is not physics)."""
+    the verdict says so and names nothing (a loop that has not settled is not physics). ``whole`` (the
+    diagnosis of them all) is read only then: None when some settled (:class:`_LeaveOut`)."""
     names = ", ".join(exps[i].source for i in drifting)
     why = left_out_note(names)
     keep = [i for i in range(len(exps)) if i not in drifting]
-    whole = replace(whole, settings={**whole.settings, LEFT_OUT: [exps[i].source for i in drifting]})
+    left_out = [exps[i].source for i in drifting]
     if not keep:
+        assert whole is not None  # _drift_stage leaves out early only when some experiment settled
+        whole = replace(whole, settings={**whole.settings, LEFT_OUT: left_out})
         verdict = (
             f"not settled: the loop of every experiment ({names}) still drifts from period to period, and "
             "no degradation explains it; nothing is named from a loop that has not settled (record more "
@@ -611,7 +638,7 @@ def _without_unsettled(
             notes=(*whole.notes, why),
         )
     d = _diagnose_set([exps[i] for i in keep], setup, [*notes, why])
-    d = replace(d, settings={**d.settings, LEFT_OUT: whole.settings[LEFT_OUT]})
+    d = replace(d, settings={**d.settings, LEFT_OUT: left_out})
     if len(keep) == 1 and d.named:
         return _from_one(d, exps[keep[0]].source, names)
     return replace(d, verdict=d.verdict + f"; {names} left out (not settled)")
@@ -642,7 +669,29 @@ def _drift_stage(
     notes: list[str],
 ) -> tuple[Optional[DegradationTest], list[DiagExperiment], list[AugExperiment], AugFit]:
     """Degradation first, in drift space (design.md 10.6): its test, and the data and start the steady
-    selection runs on (the averaged periods brought back to one strength when it is named)."""
+    selection runs on (the averaged periods brought back to one strength when it is named). Under
+    ``setup.leave_out_early``, :class:`_LeaveOut` when some experiments' loops still drift, not all, and
+    degradation is not named (:func:`settled_only`: diagnose's rule, read here as _with_wander read it)."""
+    out = _degradation_first(exps, sx, plain, s, substeps, setup, drift_seen, notes)
+    deg = out[0]
+    named = deg is not None and (deg.named if setup.held_out_test else deg.passed)
+    drifting = settled_only(exps, named)[1] if setup.leave_out_early else []
+    if drifting and len(drifting) < len(exps):  # _with_wander diagnoses the settled ones instead
+        raise _LeaveOut(drifting)
+    return out
+
+
+def _degradation_first(
+    exps: list[DiagExperiment],
+    sx: list[AugExperiment],
+    plain: AugFit,
+    s: Scale,
+    substeps: int,
+    setup: _Setup,
+    drift_seen: bool,
+    notes: list[str],
+) -> tuple[Optional[DegradationTest], list[DiagExperiment], list[AugExperiment], AugFit]:
+    """:func:`_drift_stage` itself."""
     drift_terms = tuple(c for c in DRIFT_TERMS if c in setup.cands)
     if not drift_terms:
         return None, exps, sx, plain

@@ -53,7 +53,7 @@ from numpy.typing import NDArray
 from ..augmented import AugExperiment, AugFit, augmented_output
 from ..errors import BudgetExceededError
 from ..terms import TERMS, Stiffness, physical_value
-from . import free_dc, speed
+from . import fit_share, fitting, free_dc, speed
 from .beside import only_beside
 from .fitting import best_of, fit_from, fit_own, fit_with, subset
 from .pinch_shape import band_test, is_pinching
@@ -268,11 +268,16 @@ def _fold(
     """Fit ``model``'s physics without experiment j, then only j's own (g, phi): (cost, output) on j."""
     key = (id(model), j)
     if key not in cache:
-        keep = [i for i in range(len(exps)) if i != j]
-        sub, start = subset(exps, model.params, keep)
-        f = fit_from(sub, start, substeps)
-        g, ph = float(model.params.gains[j]), float(model.params.phases[j])
-        cache[key] = None if f is None else fit_own(exps[j], f.params, g, ph, substeps)
+
+        def fitted() -> Optional[tuple[float, FloatArray]]:
+            keep = [i for i in range(len(exps)) if i != j]
+            sub, start = subset(exps, model.params, keep)
+            f = fit_from(sub, start, substeps)
+            g, ph = float(model.params.gains[j]), float(model.params.phases[j])
+            return None if f is None else fit_own(exps[j], f.params, g, ph, substeps)
+
+        # Another diagnosis of the same data (diagnose_across's condition) may hold it (fit_share.py).
+        cache[key] = fit_share.shared(exps, model, f"fold {j}", substeps, fitted, (fit_from, fit_own, subset))
     return cache[key]
 
 
@@ -778,8 +783,15 @@ def memo_fit_with(exps: Sequence[AugExperiment], substeps: int) -> Callable[[Aug
             return wide_fit(exps, base, t, substeps, fit_with(exps, base, t, substeps))
         if (id(base), t) not in fitted:  # wide starts when the term's own fit is suspicious (restarts.py)
             fitted[(id(base), t)] = (
-                base,
-                wide_fit(exps, base, t, substeps, fit_with(exps, base, t, substeps)),
+                base,  # the same inputs fitted by another diagnosis: its fit (fit_share.py)
+                fit_share.shared(
+                    exps,
+                    base,
+                    t,
+                    substeps,
+                    lambda: wide_fit(exps, base, t, substeps, fit_with(exps, base, t, substeps)),
+                    (wide_fit, fit_with, fitting.fit_from, getattr(fitting, "augmented_output", None)),
+                ),
             )
         return fitted[(id(base), t)][1]
 

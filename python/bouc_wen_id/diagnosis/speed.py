@@ -34,3 +34,13 @@ SHARE_AGE_LEADS = True
 #: (:func:`bouc_wen_id.diagnosis.drift._run_all`): each is independent, in the Rust core without the
 #: interpreter's lock. The unrecorded-age estimate of MR 0.75 A spent 13 of its 30 s in them.
 THREAD_DRIFT_SIMS = True
+
+#: Share a candidate's fit between diagnoses of the same data (:mod:`bouc_wen_id.diagnosis.fit_share`): the
+#: joint selection of ``diagnose_across`` refitted, at each condition, the candidates that condition's own
+#: diagnosis had fitted from the same model on the same periods.
+SHARE_FITS = True
+
+#: Diagnose only the settled experiments when some loops still drift and no degradation explains it,
+#: deciding after the degradation stage (:class:`bouc_wen_id.diagnosis.run._LeaveOut`), instead of
+#: diagnosing the whole set first and throwing that diagnosis away (the wire rope's 13 s, half of it).
+LEAVE_OUT_EARLY = True
