@@ -30,7 +30,7 @@ from __future__ import annotations
 import math
 import os
 from collections.abc import Sequence
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import ThreadPoolExecutor, wait
 from dataclasses import dataclass, replace
 from functools import lru_cache
 from typing import Any, Optional
@@ -604,7 +604,12 @@ def _run_all(sim: Any, jobs: list[tuple[Any, ...]]) -> dict[tuple[Any, ...], Flo
         return {job: sim(*job) for job in todo}
     pool = ThreadPoolExecutor(max_workers=workers)
     try:
-        out = dict(zip(todo, pool.map(lambda job: sim(*job), todo)))
+        futures = [pool.submit(sim, *job) for job in todo]
+        # Wait in short slices: the kernel may hand Ctrl-C to a worker thread, and then a main thread
+        # blocked without a timeout would not run Python's handler until every simulation ended.
+        while not all(f.done() for f in futures):
+            wait(futures, timeout=0.05)
+        out = {job: f.result() for job, f in zip(todo, futures)}
     except BaseException:
         # Ctrl-C (or an error) reaches the caller now: the queued simulations are dropped, and the ones
         # running (a signal does not reach a worker thread's core call) finish in the background, not
