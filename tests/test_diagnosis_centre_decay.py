@@ -121,14 +121,3 @@ def test_constant_period_levels_keep_the_offset() -> None:
         ):
             got = centre_decay.check(_with_levels(d, lv), 0.05)
             assert [t.term for t in got.named] == [T.Offset.kind], got.verdict
-
-
-def test_an_unexplained_blind_null_says_its_centre_has_not_settled() -> None:
-    """Blind ``null:0:2:few_periods`` at seed 2026: the offset fitted the settling centres only with a value
-    that differs between experiments, and Coulomb friction passed beside it. The selection without the
-    centre's terms names Coulomb friction from the transient's loop shape, so "unexplained" stays (nothing
-    is named); the verdict now says the centre has not settled and how many periods would settle it."""
-    rec = _blind(2026, "null:0:2:few_periods")
-    assert rec["category"] == "unexplained" and not rec["named"], rec["verdict"]
-    assert "the loop centre has not settled" in rec["verdict"]
-    assert "no common offset beside the transients" in rec["verdict"]

@@ -580,11 +580,8 @@ def _with_wander(
     if drifting:
         d = _without_unsettled(exps, drifting, setup, d, [*notes, *qnotes])
     d = age.with_clause(d)  # what the fit assumed of the specimen's history, when it fitted its age
-    if wander is None:  # short records whose loop centre still settles (centre_decay.py)
-        again = (
-            None if drifting else lambda c: _diagnose_set(exps, replace(setup, cands=c), [*notes, *qnotes])
-        )
-        d = centre_decay.check(d, alpha, again)
+    if wander is None:  # short records: an offset that is a settling centre's transient (centre_decay.py)
+        d = centre_decay.check(d, alpha)
     return baseline.adjusted(d, wander, Offset.kind)
 
 
