@@ -47,5 +47,5 @@ def test_a_blind_clipped_library_term_is_named(key: str) -> None:
     sd = int(np.random.SeedSequence([2026, tag, int(size), int(k)]).generate_state(1)[0])
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        rec = blind.run_case(blind.Case(eff, float(size), int(k), sd, None, 0.0, dz))
+        rec = blind.run_case(blind.Case(eff, float(size), int(k), sd, None, blind.DRIFT, dz))
     assert rec["category"] == "right", rec["verdict"]

@@ -27,12 +27,14 @@ offset came from the targeted step on the DC): the case the blind bench showed. 
 by its two halves.
 
 Not done (measured): the blind nulls ``null:0:2`` and ``null:0:4`` of ``few_periods`` at seed 2026 stay
-"unexplained". Their offset fitted the settling centres only with a value that differs between experiments
-(law p = 0.0027, 6e-9) and the decay test finds the transient with no common offset beside it (p = 0.15,
-0.17); but the selection run again without the centre's terms named Coulomb friction on ``null:0:2`` (f =
-0.0028 +- 0.0007, its law passed: the transient's loop shape) and left ``null:0:4`` "unexplained"
-(asymmetry's law failing), and taking such a rerun when "adequate" turned an asymmetric element and a
-common DC beside zero resets (tests/test_diagnosis_clipped_input.py) "adequate": the guard of review 31c.
+"unexplained". On ``null:0:2`` (white noise) the offset fitted the settling centres only with a value that
+differs between experiments (law p = 0.0027) and the decay test finds the transient with no common offset
+beside it (p = 0.15); but the selection run again without the centre's terms named Coulomb friction (f =
+0.0028 +- 0.0007, its law passed: the transient's loop shape), and taking such a rerun when "adequate"
+turned an asymmetric element and a common DC beside zero resets (tests/test_diagnosis_clipped_input.py)
+"adequate": the guard of review 31c. ``null:0:4`` is another case: its output zero drifts (noise kind
+``drift``, 4 periods: too short for the zero-drift test), the asymmetry's law fails (p = 1.9e-8), and the
+decay test finds a common offset beside the transients (p = 7e-9).
 """
 
 from __future__ import annotations
