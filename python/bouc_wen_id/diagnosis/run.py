@@ -19,6 +19,7 @@ from . import (
     age,
     baseline,
     beside,
+    centre_decay,
     free_dc,
     gate,
     input_note,
@@ -603,6 +604,8 @@ def _with_wander(
     if drifting:
         d = _without_unsettled(exps, drifting, setup, d, [*notes, *qnotes])
     d = age.with_clause(d)  # what the fit assumed of the specimen's history, when it fitted its age
+    if wander is None:  # short records: an offset that is a settling centre's transient (centre_decay.py)
+        d = centre_decay.check(d, alpha)
     return baseline.adjusted(d, wander, Offset.kind)
 
 
