@@ -12,7 +12,7 @@ import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, fields, replace
 from enum import Enum
-from typing import Any, ClassVar, cast
+from typing import Any, ClassVar, Optional, cast, overload
 
 from ..errors import InvalidParameterError
 from ..validation import real_number
@@ -172,20 +172,15 @@ class Term:
         """Where this term acts (:attr:`acts_on`)."""
         return self.acts_on
 
-    @classmethod
-    def at(cls, place: Place) -> type[Term]:
-        """The class of this term acting at ``place`` (one of :attr:`places`): ``Viscous.at(Place.X)(c)``."""
-        # A sibling's usual class is its parent: ``__init_subclass__`` composed the sibling's names from it.
-        base = cls if cls.base_kind == cls.kind else cast("type[Term]", cls.__mro__[1])
-        if place == base.acts_on:
-            return base
-        sibling = _SIBLINGS.get((base.kind, place))
-        if sibling is None:
-            where = Place(place).label if place in tuple(Place) else f"at {place!r} (not a Place)"
-            raise InvalidParameterError(
-                f"{base.kind} cannot act {where}; its places are {', '.join(p.label for p in base.places)}"
-            )
-        return sibling
+    #: On the class, the class of this term acting at ``place`` (one of :attr:`places`):
+    #: ``Viscous.at(Place.X)(c)``; on an instance, the same term with its value(s) at ``place``:
+    #: ``Viscous(0.03).at(Place.X)`` is ``Viscous.at(Place.X)(0.03)`` (:class:`_At`).
+    at: ClassVar[_At]
+
+    def _placed(self, place: Place) -> Term:
+        """This term's value(s) at ``place`` (the instance's :attr:`at`)."""
+        cls = _class_at(type(self), place)
+        return cls(**{f.name: getattr(self, f.name) for f in fields(cls)})
 
     def __post_init__(self) -> None:
         for f in fields(self):
@@ -258,3 +253,40 @@ class Term:
 
 #: ``(usual code name, place) -> sibling class`` of every term at a place other than its usual one.
 _SIBLINGS: dict[tuple[str, Place], type[Term]] = {}
+
+
+def _class_at(cls: type[Term], place: Place) -> type[Term]:
+    """The class of term ``cls`` acting at ``place``; a named error where it cannot act there."""
+    # A sibling's usual class is its parent: ``__init_subclass__`` composed the sibling's names from it.
+    base = cls if cls.base_kind == cls.kind else cast("type[Term]", cls.__mro__[1])
+    if place == base.acts_on:
+        return base
+    sibling = _SIBLINGS.get((base.kind, place))
+    if sibling is None:
+        where = Place(place).label if place in tuple(Place) else f"at {place!r} (not a Place)"
+        raise InvalidParameterError(
+            f"{base.kind} cannot act {where}; its places are {', '.join(p.label for p in base.places)}"
+        )
+    return sibling
+
+
+class _At:
+    """:attr:`Term.at`: called on a term's class, the class at a place; on an instance, the instance at that
+    place with its value(s). Before, ``at`` was a classmethod, and ``Viscous(0.03).at(Place.X)`` returned
+    the class and dropped 0.03 without a word (review 32)."""
+
+    @overload
+    def __get__(self, obj: None, owner: type[Term]) -> Callable[[Place], type[Term]]: ...
+
+    @overload
+    def __get__(self, obj: Term, owner: type[Term]) -> Callable[[Place], Term]: ...
+
+    def __get__(
+        self, obj: Optional[Term], owner: type[Term]
+    ) -> Callable[[Place], type[Term]] | Callable[[Place], Term]:
+        if obj is None:
+            return lambda place: _class_at(owner, place)
+        return obj._placed
+
+
+Term.at = _At()
