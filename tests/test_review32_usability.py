@@ -4,15 +4,17 @@ channel, and the joint verdict's "explained in part" clause."""
 from __future__ import annotations
 
 import math
+from pathlib import Path
 from types import SimpleNamespace
 from typing import Any
 
 import bouc_wen_id as bw
+import bouc_wen_id.io
 import numpy as np
 import pytest
 from bouc_wen_id import terms as T
 from bouc_wen_id.diagnosis import across_verdict
-from bouc_wen_id.errors import InvalidParameterError, ZeroAmplitudeError
+from bouc_wen_id.errors import FileFormatError, InvalidParameterError, ZeroAmplitudeError
 
 TWO_PI = 2.0 * math.pi
 
@@ -98,3 +100,27 @@ def test_explained_in_part_across_says_what_the_share_is_and_what_remains(
     g: Any = groups[1]
     g.current = 0.2
     assert "fails" not in across_verdict.partly_text(groups, 0.05)
+
+
+def test_a_unit_written_as_the_names_last_part_is_read(tmp_path: Path) -> None:
+    # Before: "force_N", "disp_mm" were names only (no unit, no role: "which column is the input u?").
+    k = np.arange(64)
+    rows = "".join(f"{i * 0.002!r},{math.cos(i / 5)!r},{math.sin(i / 5)!r}\n" for i in k.tolist())
+    path = tmp_path / "lab.csv"
+    path.write_text("time_s,disp_mm,force_kN\n" + rows, encoding="utf-8")
+    (m,) = bw.io.load(path)
+    assert isinstance(m, bw.Measurement)
+    assert dict(m.units) == {"t": "s", "u": "mm", "y": "kN"}
+    assert dict(m.channels) == {"t": "time_s", "u": "disp_mm", "y": "force_kN"}
+    # A last part that is no unit symbol stays part of the name (no unit, no role read from it).
+    path.write_text("time_s,disp_raw,force_2\n" + rows, encoding="utf-8")
+    with pytest.raises(FileFormatError, match="which column is the input u"):
+        bw.io.load(path)
+    (m,) = bw.io.load(path, columns={"u": "disp_raw", "y": "force_2"})
+    assert isinstance(m, bw.Measurement)
+    assert "u" not in m.units and "y" not in m.units
+    # A time column in ms is refused by name, as "Time (ms)" is.
+    ms = "".join(f"{2 * i},{math.cos(i / 5)!r},{math.sin(i / 5)!r}\n" for i in k.tolist())
+    path.write_text("time_ms,disp_mm,force_N\n" + ms, encoding="utf-8")
+    with pytest.raises(InvalidParameterError, match="units\\['t'\\] = 'ms'"):
+        bw.io.load(path)

@@ -43,6 +43,21 @@ _ROLE_WORDS = {
 #: Names of a text column whose cells mark the acquisition's pauses (one experiment per block).
 _EVENT_COLUMNS = ("events", "event", "markers", "marker")
 _UNIT = re.compile(r"^(.*?)\s*[\(\[]([^\)\]]+)[\)\]]\s*$")
+#: A unit written as the name's last ``_``-part (``force_N``, ``disp_mm``, ``time_s``): read only when that
+#: part is a unit symbol, an SI prefix and a unit (case as written: ``mN`` is not ``MN``) or an imperial one,
+#: so that ``u_raw`` or ``force_2`` stay names (review 32: lab names like ``force_N`` carried no unit).
+_SUFFIX = re.compile(r"^(.+?)_([A-Za-zµ]+)$")
+_SI_UNITS = ("s", "m", "g", "N", "Pa", "V", "A", "W", "J", "Hz", "rad", "K")
+_SI_PREFIXES = ("", "p", "n", "u", "µ", "m", "c", "k", "M", "G")
+_SUFFIX_UNITS = frozenset(p + u for u in _SI_UNITS for p in _SI_PREFIXES) | {
+    "deg",
+    "in",
+    "ft",
+    "lb",
+    "lbf",
+    "kip",
+    "psi",
+}
 
 
 def check_skiprows(skiprows: Optional[int]) -> Optional[int]:
@@ -214,9 +229,15 @@ def read_preamble(lines: Sequence[tuple[int, str]], where: str) -> Preamble:
 
 
 def _role_of(name: str) -> tuple[str, Optional[str]]:
-    """A column name without its unit suffix (``Force (N)``, ``disp [mm]``), and that unit."""
+    """A column name without its unit suffix (``Force (N)``, ``disp [mm]``, ``force_N``: :data:`_SUFFIX`),
+    and that unit."""
     m = _UNIT.match(name)
-    return (m.group(1).strip().lower(), m.group(2).strip()) if m else (name.strip().lower(), None)
+    if m:
+        return m.group(1).strip().lower(), m.group(2).strip()
+    m = _SUFFIX.match(name.strip())
+    if m and m.group(2) in _SUFFIX_UNITS:
+        return m.group(1).strip().lower(), m.group(2)
+    return name.strip().lower(), None
 
 
 def infer_roles(
@@ -224,7 +245,8 @@ def infer_roles(
 ) -> tuple[dict[str, Union[str, int]], dict[str, str]]:
     """``columns`` completed with the signals a column's name states, and the units the names carry.
 
-    ``Displacement (mm)`` is ``u`` (the whole name but its unit is one of the words; ``disp_mm`` is not).
+    ``Displacement (mm)`` and ``disp_mm`` are ``u`` (the whole name but its unit is one of the words;
+    ``disp_1`` is not).
     A signal is inferred only when no column bears its own name, ``columns`` does not map it, and exactly
     one column's name says it; two candidates are an error naming both.
     """
