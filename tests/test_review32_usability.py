@@ -95,7 +95,7 @@ def test_explained_in_part_across_says_what_the_share_is_and_what_remains(
     monkeypatch.setattr(across_verdict, "explained_fraction", lambda gs: 1.0)
     text = across_verdict.partly_text(groups, 0.05)
     assert "100 % of the plain models' excess over the noise floor, summed over the conditions" in text
-    assert "fails the adequacy test at condition 1.0 (p = 1e-06)" in text
+    assert "fails the adequacy test at condition 1.0 (p = 1e-06)" in text and "offset what remains" in text
     assert "condition 0.0" not in text and "condition 2.0" not in text
     g: Any = groups[1]
     g.current = 0.2

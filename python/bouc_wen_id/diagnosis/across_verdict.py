@@ -57,8 +57,11 @@ def partly_text(groups: Sequence[Any], alpha: float) -> str:
     fails = [(g, p) for g in groups if not ((p := p_of(g, g.current)) >= alpha)]
     rest = ", ".join(f"condition {g.label} (p = {p:.2g})" for g, p in fails)
     left = f"; what remains fails the adequacy test at {rest}" if rest else ""
+    share = explained_fraction(groups)
+    if rest and share >= 1.0:  # the sum's gain reached its excess while a condition still fails
+        left += " (the share is of the sum: fits below their noise floor elsewhere offset what remains there)"
     return (
-        f"; explained in part: the joint structure removes {100 * explained_fraction(groups):.0f} % of the "
+        f"; explained in part: the joint structure removes {100 * share:.0f} % of the "
         f"plain models' excess over the noise floor, summed over the conditions{left}"
     )
 
