@@ -103,24 +103,24 @@ def test_explained_in_part_across_says_what_the_share_is_and_what_remains(
 
 
 def test_a_unit_written_as_the_names_last_part_is_read(tmp_path: Path) -> None:
-    # Before: "force_N", "disp_mm" were names only (no unit, no role: "which column is the input u?").
+    # Before: "force_N", "disp_mm" mapped with columns= carried no unit (the reports said [y], [u]).
     k = np.arange(64)
     rows = "".join(f"{i * 0.002!r},{math.cos(i / 5)!r},{math.sin(i / 5)!r}\n" for i in k.tolist())
     path = tmp_path / "lab.csv"
     path.write_text("time_s,disp_mm,force_kN\n" + rows, encoding="utf-8")
-    (m,) = bw.io.load(path)
+    (m,) = bw.io.load(path, columns={"t": "time_s", "u": "disp_mm", "y": "force_kN"})
     assert isinstance(m, bw.Measurement)
     assert dict(m.units) == {"t": "s", "u": "mm", "y": "kN"}
-    assert dict(m.channels) == {"t": "time_s", "u": "disp_mm", "y": "force_kN"}
-    # A last part that is no unit symbol stays part of the name (no unit, no role read from it).
-    path.write_text("time_s,disp_raw,force_2\n" + rows, encoding="utf-8")
+    # It labels a chosen column only: the roles are not read from such names (as before).
     with pytest.raises(FileFormatError, match="which column is the input u"):
         bw.io.load(path)
-    (m,) = bw.io.load(path, columns={"u": "disp_raw", "y": "force_2"})
+    # A last part that is no unit symbol stays part of the name: no unit.
+    path.write_text("time_s,disp_raw,force_2\n" + rows, encoding="utf-8")
+    (m,) = bw.io.load(path, columns={"t": "time_s", "u": "disp_raw", "y": "force_2"})
     assert isinstance(m, bw.Measurement)
     assert "u" not in m.units and "y" not in m.units
     # A time column in ms is refused by name, as "Time (ms)" is.
     ms = "".join(f"{2 * i},{math.cos(i / 5)!r},{math.sin(i / 5)!r}\n" for i in k.tolist())
     path.write_text("time_ms,disp_mm,force_N\n" + ms, encoding="utf-8")
     with pytest.raises(InvalidParameterError, match="units\\['t'\\] = 'ms'"):
-        bw.io.load(path)
+        bw.io.load(path, columns={"t": "time_ms", "u": "disp_mm", "y": "force_N"})

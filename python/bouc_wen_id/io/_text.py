@@ -229,15 +229,19 @@ def read_preamble(lines: Sequence[tuple[int, str]], where: str) -> Preamble:
 
 
 def _role_of(name: str) -> tuple[str, Optional[str]]:
-    """A column name without its unit suffix (``Force (N)``, ``disp [mm]``, ``force_N``: :data:`_SUFFIX`),
-    and that unit."""
+    """A column name without its unit suffix (``Force (N)``, ``disp [mm]``), and that unit."""
     m = _UNIT.match(name)
-    if m:
-        return m.group(1).strip().lower(), m.group(2).strip()
+    return (m.group(1).strip().lower(), m.group(2).strip()) if m else (name.strip().lower(), None)
+
+
+def _unit_of(name: str) -> Optional[str]:
+    """The unit a column's name carries: in brackets (:func:`_role_of`), or as its last ``_`` part when that
+    is a unit symbol (:data:`_SUFFIX`: ``force_N``). The second only labels a column already chosen (by its
+    name or ``columns=``); it does not make ``force_N`` the output by itself (a ``time_s`` column beside a
+    stated sampling rate would then be checked against it, where such files were read)."""
+    unit = _role_of(name)[1]
     m = _SUFFIX.match(name.strip())
-    if m and m.group(2) in _SUFFIX_UNITS:
-        return m.group(1).strip().lower(), m.group(2)
-    return name.strip().lower(), None
+    return unit if unit or not (m and m.group(2) in _SUFFIX_UNITS) else m.group(2)
 
 
 def infer_roles(
@@ -245,8 +249,8 @@ def infer_roles(
 ) -> tuple[dict[str, Union[str, int]], dict[str, str]]:
     """``columns`` completed with the signals a column's name states, and the units the names carry.
 
-    ``Displacement (mm)`` and ``disp_mm`` are ``u`` (the whole name but its unit is one of the words;
-    ``disp_1`` is not).
+    ``Displacement (mm)`` is ``u`` (the whole name but its unit is one of the words; ``disp_mm`` is not, but
+    mapped to ``u`` it carries its unit ``mm``: :func:`_unit_of`).
     A signal is inferred only when no column bears its own name, ``columns`` does not map it, and exactly
     one column's name says it; two candidates are an error naming both.
     """
@@ -267,7 +271,7 @@ def infer_roles(
             taken.add(found[0])
     for role, col in out.items():
         name = names[col] if isinstance(col, int) and col < len(names) else col
-        unit = _role_of(str(name))[1]
+        unit = _unit_of(str(name))
         if unit and role in ("t", "u", "y"):
             units[role] = unit
     return out, units
