@@ -12,8 +12,9 @@ import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, fields, replace
 from enum import Enum
-from typing import Any, ClassVar, Optional, cast, overload
+from typing import Any, ClassVar, cast
 
+from .._term_at import PlaceAt
 from ..errors import InvalidParameterError
 from ..validation import real_number
 
@@ -174,12 +175,28 @@ class Term:
 
     #: On the class, the class of this term acting at ``place`` (one of :attr:`places`):
     #: ``Viscous.at(Place.X)(c)``; on an instance, the same term with its value(s) at ``place``:
-    #: ``Viscous(0.03).at(Place.X)`` is ``Viscous.at(Place.X)(0.03)`` (:class:`_At`).
-    at: ClassVar[_At]
+    #: ``Viscous(0.03).at(Place.X)`` is ``Viscous.at(Place.X)(0.03)`` (:class:`.._term_at.PlaceAt`).
+    at: ClassVar[PlaceAt] = PlaceAt()
 
-    def _placed(self, place: Place) -> Term:
-        """This term's value(s) at ``place`` (the instance's :attr:`at`)."""
-        cls = _class_at(type(self), place)
+    @classmethod
+    def class_at(cls, place: Place) -> type[Term]:
+        """The class of this term acting at ``place`` (the class's :attr:`at`); a named error where the term
+        cannot act there."""
+        # A sibling's usual class is its parent: ``__init_subclass__`` composed the sibling's names from it.
+        base = cls if cls.base_kind == cls.kind else cast("type[Term]", cls.__mro__[1])
+        if place == base.acts_on:
+            return base
+        sibling = _SIBLINGS.get((base.kind, place))
+        if sibling is None:
+            where = Place(place).label if place in tuple(Place) else f"at {place!r} (not a Place)"
+            raise InvalidParameterError(
+                f"{base.kind} cannot act {where}; its places are {', '.join(p.label for p in base.places)}"
+            )
+        return sibling
+
+    def placed(self, place: Place) -> Term:
+        """This term with its value(s) at ``place`` (the instance's :attr:`at`)."""
+        cls = self.class_at(place)
         return cls(**{f.name: getattr(self, f.name) for f in fields(cls)})
 
     def __post_init__(self) -> None:
@@ -253,40 +270,3 @@ class Term:
 
 #: ``(usual code name, place) -> sibling class`` of every term at a place other than its usual one.
 _SIBLINGS: dict[tuple[str, Place], type[Term]] = {}
-
-
-def _class_at(cls: type[Term], place: Place) -> type[Term]:
-    """The class of term ``cls`` acting at ``place``; a named error where it cannot act there."""
-    # A sibling's usual class is its parent: ``__init_subclass__`` composed the sibling's names from it.
-    base = cls if cls.base_kind == cls.kind else cast("type[Term]", cls.__mro__[1])
-    if place == base.acts_on:
-        return base
-    sibling = _SIBLINGS.get((base.kind, place))
-    if sibling is None:
-        where = Place(place).label if place in tuple(Place) else f"at {place!r} (not a Place)"
-        raise InvalidParameterError(
-            f"{base.kind} cannot act {where}; its places are {', '.join(p.label for p in base.places)}"
-        )
-    return sibling
-
-
-class _At:
-    """:attr:`Term.at`: called on a term's class, the class at a place; on an instance, the instance at that
-    place with its value(s). Before, ``at`` was a classmethod, and ``Viscous(0.03).at(Place.X)`` returned
-    the class and dropped 0.03 without a word (review 32)."""
-
-    @overload
-    def __get__(self, obj: None, owner: type[Term]) -> Callable[[Place], type[Term]]: ...
-
-    @overload
-    def __get__(self, obj: Term, owner: type[Term]) -> Callable[[Place], Term]: ...
-
-    def __get__(
-        self, obj: Optional[Term], owner: type[Term]
-    ) -> Callable[[Place], type[Term]] | Callable[[Place], Term]:
-        if obj is None:
-            return lambda place: _class_at(owner, place)
-        return obj._placed
-
-
-Term.at = _At()
