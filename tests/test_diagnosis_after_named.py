@@ -90,7 +90,7 @@ def test_the_drift_clause_says_what_drifts_beyond_a_named_degradation() -> None:
     text = run._verdict("explained", [deg], (), after, 1.0, drift_clause.clause(after, before, [deg]))
     assert "(not modelled)" not in text
     assert "beyond the named degradation" in text and "recording 1's fundamental by +0.062 %" in text
-    assert "-0.39 % before" in text and "recording 2" not in text  # only the experiment whose test fires
+    assert "(-0.39 % before)" in text and "recording 2" not in text  # only the experiment whose test fires
     # No drift left: no clause; no drift term named: the drift itself is not modelled.
     assert drift_clause.clause(_loc(after.drift, False), before, [deg]) == ""
     lag = NamedTerm(T.SensorLag.kind, "tau", 0.01, 0.001, "s")

@@ -29,9 +29,9 @@ def _moves(d: DriftFinding, before: dict[str, DriftFinding]) -> str:
     whichever trend test is the stronger, beside the same trend before the named drift was taken out."""
     b = before.get(d.source)
     if abs(d.h1_t) >= abs(d.dc_t):
-        was = f", {100 * b.h1_slope:+.2g} % before" if b is not None else ""
+        was = f" ({100 * b.h1_slope:+.2g} % before)" if b is not None else ""
         return f"{d.source}'s fundamental by {100 * d.h1_slope:+.2g} % per period{was}, t = {d.h1_t:.1f}"
-    was = f", {b.dc_slope:+.2g} before" if b is not None else ""
+    was = f" ({b.dc_slope:+.2g} before)" if b is not None else ""
     return f"{d.source}'s DC by {d.dc_slope:+.2g}  per period (output units){was}, t = {d.dc_t:.1f}"
 
 
@@ -46,8 +46,8 @@ def clause(after: Localisation, before: Localisation, named: Sequence[NamedTerm]
     was = {d.source: d for d in before.drift}
     where = "; ".join(_moves(d, was) for d in _fired(after.drift)) or "below each experiment's own test"
     return (
-        f"; beyond the named {' and '.join(drift_named)}, the loop still drifts from period to period "
-        f"({where}; after the named drift is taken out; not explained by the named terms)"
+        f"; beyond the named {' and '.join(drift_named)}, the loop still drifts from period to period once "
+        f"its drift is taken out ({where}; not explained by the named terms)"
     )
 
 
