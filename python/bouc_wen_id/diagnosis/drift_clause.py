@@ -32,7 +32,7 @@ def _moves(d: DriftFinding, before: dict[str, DriftFinding]) -> str:
         was = f" ({100 * b.h1_slope:+.2g} % before)" if b is not None else ""
         return f"{d.source}'s fundamental by {100 * d.h1_slope:+.2g} % per period{was}, t = {d.h1_t:.1f}"
     was = f" ({b.dc_slope:+.2g} before)" if b is not None else ""
-    return f"{d.source}'s DC by {d.dc_slope:+.2g}  per period (output units){was}, t = {d.dc_t:.1f}"
+    return f"{d.source}'s DC by {d.dc_slope:+.2g} per period (output units){was}, t = {d.dc_t:.1f}"
 
 
 def clause(after: Localisation, before: Localisation, named: Sequence[NamedTerm]) -> str:
