@@ -15,6 +15,11 @@ one. A correct model is thus refused a false extra term at most at ``alpha / 2 +
 model is. A null that names nothing at its first step never reaches this step, so the nulls' rate of any
 name is the first step's.
 
+Each later call of :func:`.select.forward_select` starts its own step list, so its beside-a-Dahl rule
+(:func:`.beside.only_beside`) has no first-step p of a candidate on the plain model and refuses every
+candidate beside a Dahl element there (the conservative side; the verdict's clause still quotes the first
+step's p).
+
 Only where the first step's gate allowed the targeted step (``again``: measured noise, the loop not
 drifting, no degradation named); else the selection is the old one (stopping at ``adequate``).
 """
