@@ -90,15 +90,20 @@ def test_explained_in_part_across_says_what_the_share_is_and_what_remains(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
     # Before: "explained in part (100 % of the summed excess)", with a condition still failing its test.
-    groups = [SimpleNamespace(label=str(c), current=p) for c, p in ((0.0, 0.4), (1.0, 1e-6), (2.0, 0.3))]
-    monkeypatch.setattr(across_verdict, "p_of", lambda g, fit: fit)
+    fits = ((0.0, 0.4, 90.0), (1.0, 1e-6, 130.0), (2.0, 0.3, 101.0))  # condition, p, cost (dof 100)
+    groups = [
+        SimpleNamespace(label=str(c), sx=None, current=SimpleNamespace(p=p, cost=k)) for c, p, k in fits
+    ]
+    monkeypatch.setattr(across_verdict, "p_of", lambda g, fit: fit.p)
+    monkeypatch.setattr(across_verdict, "dof_of", lambda sx, fit: 100)
     monkeypatch.setattr(across_verdict, "explained_fraction", lambda gs: 1.0)
     text = across_verdict.partly_text(groups, 0.05)
     assert "100 % of the plain models' excess over the noise floor, summed over the conditions" in text
-    assert "fails the adequacy test at condition 1.0 (p = 1e-06)" in text and "offset what remains" in text
-    assert "condition 0.0" not in text and "condition 2.0" not in text
+    assert "fails the adequacy test at condition 1.0 (p = 1e-06)" in text
+    assert "below their noise floor at condition 0.0, the fits there offset what remains" in text
+    assert "condition 2.0" not in text
     g: Any = groups[1]
-    g.current = 0.2
+    g.current.p = 0.2
     assert "fails" not in across_verdict.partly_text(groups, 0.05)
 
 

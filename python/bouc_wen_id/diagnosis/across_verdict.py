@@ -58,8 +58,12 @@ def partly_text(groups: Sequence[Any], alpha: float) -> str:
     rest = ", ".join(f"condition {g.label} (p = {p:.2g})" for g, p in fails)
     left = f"; what remains fails the adequacy test at {rest}" if rest else ""
     share = explained_fraction(groups)
-    if rest and share >= 1.0:  # the sum's gain reached its excess while a condition still fails
-        left += " (the share is of the sum: fits below their noise floor elsewhere offset what remains there)"
+    below = [str(g.label) for g in groups if g.current.cost < dof_of(g.sx, g.current)]
+    if rest and below and round(100 * share) >= 100:  # the sum hides what remains: say why
+        left += (
+            f" (the share is of the sum: below their noise floor at condition {', '.join(below)}, the fits "
+            "there offset what remains)"
+        )
     return (
         f"; explained in part: the joint structure removes {100 * share:.0f} % of the "
         f"plain models' excess over the noise floor, summed over the conditions{left}"
