@@ -61,7 +61,8 @@ def partly_text(groups: Sequence[Any], alpha: float) -> str:
     below = [str(g.label) for g in groups if g.current.cost < dof_of(g.sx, g.current)]
     if rest and below and round(100 * share) >= 100:  # the sum hides what remains: say why
         left += (
-            f" (the share is of the sum: below their noise floor at condition {', '.join(below)}, the fits "
+            f" (the share is of the sum: below their noise floor at condition{'s' * (len(below) > 1)} "
+            f"{', '.join(below)}, the fits "
             "there offset what remains)"
         )
     return (
