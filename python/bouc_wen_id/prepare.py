@@ -93,19 +93,58 @@ def input_fundamental(rec: Recording, start: int, stop: int) -> tuple[float, flo
     return 2.0 * float(np.dot(u, c)) / u.size, 2.0 * float(np.dot(u, s)) / u.size
 
 
-def check_fundamental(rec: Recording, a_cos: float, a_sin: float) -> None:
+def _sine_misfit(v: FloatArray, a_cos: float, a_sin: float) -> float:
+    """Relative RMS of ``v`` (whole periods, centred) outside its fundamental ``(a_cos, a_sin)``."""
+    centred = v - v.mean()
+    spread = float(np.dot(centred, centred))
+    fitted = 0.5 * v.size * (a_cos**2 + a_sin**2)
+    return math.sqrt(max(spread - fitted, 0.0) / spread) if spread > 0 else math.inf
+
+
+def swapped_hint(rec: Recording, window: Optional[tuple[int, int]]) -> str:
+    """A clause for an input refused as no ``U cos(omega t)``: when the *output* over ``window`` (whole
+    periods) is the sine the input should be (its fundamental of amplitude ``|U|`` peaking at ``t = 0``,
+    nothing else beyond the input's tolerance), the columns look swapped (review 32: u and y exchanged
+    gave only "shift the time column"). '' otherwise."""
+    if window is None:
+        return ""
+    y = np.asarray(rec.y[window[0] : window[1]], dtype=np.float64)
+    if y.size == 0 or not np.all(np.isfinite(y)):
+        return ""
+    t = rec.t[window[0] : window[1]]
+    b_cos = 2.0 * float(np.dot(y, np.cos(rec.frequency * t))) / y.size
+    b_sin = 2.0 * float(np.dot(y, np.sin(rec.frequency * t))) / y.size
+    phase = math.atan2(b_sin, b_cos * np.sign(rec.amplitude))
+    close = abs(math.hypot(b_cos, b_sin) - abs(rec.amplitude)) <= INPUT_MISFIT_MAX * abs(rec.amplitude)
+    if close and abs(phase) <= INPUT_PHASE_MAX and _sine_misfit(y, b_cos, b_sin) <= INPUT_MISFIT_MAX:
+        return (
+            f"; the recorded output y is the sine the input should be (amplitude "
+            f"{math.hypot(b_cos, b_sin):.4g}, "
+            "peaking at t = 0): check the channels, the input and output columns look swapped"
+        )
+    return ""
+
+
+def check_fundamental(
+    rec: Recording, a_cos: float, a_sin: float, window: Optional[tuple[int, int]] = None
+) -> None:
     """Refuse a stated amplitude the input's fundamental does not have, or a fundamental that does not peak
-    at ``t = 0`` (identify's checks; ``diagnose`` makes them too, on an input that may carry harmonics)."""
+    at ``t = 0`` (identify's checks; ``diagnose`` makes them too, on an input that may carry harmonics).
+    ``window``: the samples the fundamental was taken over, for :func:`swapped_hint`."""
     amp = math.hypot(a_cos, a_sin)
     if abs(amp - abs(rec.amplitude)) > INPUT_MISFIT_MAX * abs(rec.amplitude):
         raise InvalidParameterError(
             f"the stated amplitude U = {rec.amplitude:.6g} does not match the recorded input's {amp:.6g}"
+            + swapped_hint(rec, window)
         )
     phase = math.atan2(a_sin, a_cos * np.sign(rec.amplitude))
     if abs(phase) > INPUT_PHASE_MAX:
+        sign = "-" if phase >= 0 else "+"
+        swapped = swapped_hint(rec, window)
+        advice = swapped or "; shift the time column so that the input peaks at t = 0"
         raise InvalidParameterError(
-            f"the recorded input is U cos(omega t - {phase:.3g}) rather than U cos(omega t) on its time "
-            "axis; shift the time column so that the input peaks at t = 0"
+            f"the recorded input is U cos(omega t {sign} {abs(phase):.3g}) rather than U cos(omega t) on its "
+            f"time axis{advice}"
         )
 
 
@@ -114,16 +153,14 @@ def check_input(rec: Recording, start: int, stop: int) -> None:
     u = rec.u[start:stop]
     check_sizes(rec, start, stop)
     a_cos, a_sin = input_fundamental(rec, start, stop)
-    centred = u - u.mean()
-    spread = float(np.dot(centred, centred))
-    fitted = 0.5 * u.size * (a_cos**2 + a_sin**2)
-    misfit = math.sqrt(max(spread - fitted, 0.0) / spread) if spread > 0 else math.inf
+    misfit = _sine_misfit(u, a_cos, a_sin)
     if misfit > INPUT_MISFIT_MAX:
         raise FrequencyMismatchError(
             f"the recorded input is not a sine at omega = {rec.frequency:.6g} rad/s "
             f"(relative misfit {misfit:.2g} > {INPUT_MISFIT_MAX}); check the stated frequency and its units"
+            + swapped_hint(rec, (start, stop))
         )
-    check_fundamental(rec, a_cos, a_sin)
+    check_fundamental(rec, a_cos, a_sin, (start, stop))
 
 
 def noise_variance(y: FloatArray, samples_per_period: int, settle_periods: int, periods: int) -> float:

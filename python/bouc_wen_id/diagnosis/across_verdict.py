@@ -49,6 +49,28 @@ def explained_fraction(groups: Sequence[Any]) -> float:
     return gate.explained_fraction((g.plain.cost, dof_of(g.sx, g.plain), g.current.cost) for g in groups)
 
 
+def partly_text(groups: Sequence[Any], alpha: float) -> str:
+    """The "explained in part" clause: what the share is of (the plain models' excess over the noise floor,
+    summed over the conditions: :func:`explained_fraction`) and what remains (the conditions where the
+    joint structure fails its adequacy test). Before, "explained in part (100 % of the summed excess)" read
+    as a contradiction (review 32): the summed share is capped at 100 % while a condition still fails."""
+    fails = [(g, p) for g in groups if not ((p := p_of(g, g.current)) >= alpha)]
+    rest = ", ".join(f"condition {g.label} (p = {p:.2g})" for g, p in fails)
+    left = f"; what remains fails the adequacy test at {rest}" if rest else ""
+    share = explained_fraction(groups)
+    below = [str(g.label) for g in groups if g.current.cost < dof_of(g.sx, g.current)]
+    if rest and below and round(100 * share) >= 100:  # the sum hides what remains: say why
+        left += (
+            f" (the share is of the sum: below their noise floor at condition{'s' * (len(below) > 1)} "
+            f"{', '.join(below)}, the fits "
+            "there offset what remains)"
+        )
+    return (
+        f"; explained in part: the joint structure removes {100 * share:.0f} % of the "
+        f"plain models' excess over the noise floor, summed over the conditions{left}"
+    )
+
+
 def p_of(g: Any, fit: Any) -> float:
     """The adequacy p of ``fit`` at condition ``g`` (its dof and noise dof)."""
     return adequacy_p(fit.cost, dof_of(g.sx, fit), g.noise_dof)
@@ -161,7 +183,7 @@ def clauses(
 
     text = ""
     if status == "partly explained":
-        text += f"; explained in part ({100 * explained_fraction(groups):.0f} % of the summed excess)"
+        text += partly_text(groups, alpha)
     text += _unphysical_text(unphysical(partial))
     text += _law_text(steps) + beside.text(steps)
     as_said = [NamedTerm(t.term, t.symbol, math.nan, math.nan, t.unit) for t in named if t.term in TERMS]
@@ -210,6 +232,7 @@ __all__ = [
     "final_adequate",
     "summed",
     "explained_fraction",
+    "partly_text",
     "plain_adequate",
     "plain_gate",
     "judged",

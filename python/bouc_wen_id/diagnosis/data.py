@@ -44,7 +44,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ..errors import InsufficientDataError, InvalidParameterError
+from ..errors import InsufficientDataError, InvalidParameterError, ZeroAmplitudeError
 from ..signal._harmonic_ls import harmonic_basis
 from . import lab_colour
 
@@ -635,6 +635,11 @@ def prepare(items: Any) -> list[DiagExperiment]:
     quantised = any(quantisation_step(it.y) > 0 for it in seq if hasattr(it, "y"))
     for e in out:
         if not (math.isfinite(e.noise_var) and (e.noise_var > 0 or (quantised and e.noise_var == 0))):
+            if e.ybar.size and float(np.ptp(e.ybar)) == 0.0:  # a dead channel: identify's error, the README's
+                raise ZeroAmplitudeError(
+                    f"{e.source}: the output's averaged period is constant ({float(e.ybar[0]):.6g} at every "
+                    "sample): a dead or wrong channel, with no response to the excitation to diagnose"
+                )
             raise InsufficientDataError(
                 f"{e.source}: no noise floor (noise-free or single-period data); the diagnosis tests every "
                 "claim against the period-to-period noise and needs noisy, repeated periods"

@@ -41,7 +41,7 @@ def _check_recording(i: int, rec: Any, at: str) -> None:
     try:
         check_sizes(rec, s * p, (s + n) * p)
         _check_periodic(rec, s * p, n, p)
-        check_fundamental(rec, *input_fundamental(rec, s * p, (s + n) * p))
+        check_fundamental(rec, *input_fundamental(rec, s * p, (s + n) * p), (s * p, (s + n) * p))
     except BoucWenIdError as err:
         raise type(err)(f"{at}{_source(i, rec)}: {err}") from err
 
@@ -49,7 +49,7 @@ def _check_recording(i: int, rec: Any, at: str) -> None:
 def _check_periodic(rec: Any, start: int, n: int, p: int) -> None:
     """Refuse an input that does not repeat at the stated omega: its periods differ from their mean by more
     than ``INPUT_MISFIT_MAX`` of its spread (identify's bound on the misfit of its sine)."""
-    from ..prepare import INPUT_MISFIT_MAX
+    from ..prepare import INPUT_MISFIT_MAX, swapped_hint
 
     if n < 2:
         return
@@ -60,7 +60,7 @@ def _check_periodic(rec: Any, start: int, n: int, p: int) -> None:
         raise FrequencyMismatchError(
             f"the recorded input does not repeat at omega = {rec.frequency:.6g} rad/s (its periods differ "
             f"from their mean by a relative {misfit:.2g} > {INPUT_MISFIT_MAX}); check the stated frequency "
-            "and its units"
+            "and its units" + swapped_hint(rec, (start, start + n * p))
         )
 
 

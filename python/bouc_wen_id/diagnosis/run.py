@@ -16,10 +16,12 @@ from ..errors import InvalidParameterError
 from ..terms import DIAGNOSIS_CANDIDATES, TERMS, Distortion, Offset, physical_value
 from ..validation import real_number
 from . import (
+    after_named,
     age,
     baseline,
     beside,
     centre_decay,
+    drift_clause,
     free_dc,
     gate,
     input_note,
@@ -65,7 +67,7 @@ from .pinch_shape import is_pinching
 from .progress import Progress, ProgressCallback, reporter
 from .restarts import rebased_plain
 from .result import Diagnosis, ModelSummary, NamedTerm, Status, term_symbol_unit
-from .select import ALPHA, Alternative, FoldCache, Step, dof_of, forward_select, held_out
+from .select import ALPHA, Alternative, FoldCache, Step, dof_of, held_out
 from .settling import (  # noqa: F401 (quantisation_step: importable here as before)
     LEFT_OUT,
     _check_experiments,
@@ -185,12 +187,13 @@ def _verdict(
     partial: Sequence[NamedTerm],
     after: Localisation,
     fraction: float,
+    drift: str = "",
 ) -> str:
+    """The verdict's words; ``drift``: the clause on a loop still drifting (:func:`.drift_clause.clause`)."""
     if status == "adequate":
         return gate.ADEQUATE
     where = after.describe() or "spread over the cycle"
     if status == "explained":
-        drift = "; the loop drifts from period to period (not modelled)" if after.drift_detected else ""
         return "explained by: " + ", ".join(str(t) for t in named) + drift
     if status == "partly explained":
         return (
@@ -751,9 +754,8 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
         p = p_of(fit)
         return bool(math.isfinite(p) and p >= alpha)
 
-    # The plain model's gate: the global test at alpha / 2, and when it accepts, the targeted step's
-    # candidate tests at the other alpha / 2 (select.py's docstring; design.md 10.3).
-    # The targeted step only on measured noise (gate.plain_gate: one rule for diagnose_across too).
+    # The plain model's gate: the global test at alpha / 2, and when it accepts, the targeted step at the
+    # other alpha / 2 (select.py; design.md 10.3), only on measured noise (gate.plain_gate, across's too).
     moved = named_deg or before.drift_detected
     passes, targeted = gate.plain_gate([p_of(start)], alpha, [moved], [setup.measured_noise])
     cache: FoldCache = {}
@@ -764,7 +766,8 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
         notes.append(NO_TARGETED_STEP)
         final, steps = start, list[Step]()
     else:
-        final, steps = forward_select(fsx, start, steady, adequate, substeps, targeted=targeted, **kw)
+        again = not moved and setup.measured_noise  # the targeted step after a named one (after_named.py)
+        final, steps = after_named.select(fsx, start, steady, adequate, p_of, substeps, targeted, again, **kw)
         plain, start = rebased_plain(plain, start, steps)  # a first step that refitted an unconverged start
     notes += fit_notes(plain, final)  # a fit stopped on a face of its admissible range (issue 19, branch lm)
     dexps = detrended(fexps, deg, s.y) if deg is not None and named_deg else fexps
@@ -781,18 +784,13 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
     # A candidate whose law failed (select.law_test) is structure no term explains, unless only centres.
     centre = _centres_only(passes, bool(final.params.terms), steps, fexps, final_sum.outputs)
     plain_ok = gate.plain_adequate(passes, bool(final.params.terms), steps) or centre.adequate
-    status, named, partial, verdict = _judged(
-        classify(
-            plain_ok,
-            bool(final.params.terms) or named_deg,
-            adequate(final),
-            _naming_share(fraction, deg, named_deg),
-        ),
-        final_sum,
-        after,
-        fraction,
-        fexps,
+    judged = classify(
+        plain_ok,
+        bool(final.params.terms) or named_deg,
+        adequate(final),
+        _naming_share(fraction, deg, named_deg),
     )
+    status, named, partial, verdict = _judged(judged, final_sum, (before, after), fraction, fexps)
     verdict += (centre.text or _law_text(steps)) + beside.text(steps) + unphysical_places_text(steps, named)
     verdict += law_untested.text(named, fexps) + input_note.text(
         status, (*named, *partial), fexps, final_sum.outputs
@@ -870,13 +868,14 @@ def _settings(setup: _Setup, s: Scale, substeps: int) -> dict[str, Any]:
 def _judged(
     status: Status,
     final: ModelSummary,
-    after: Localisation,
+    located: tuple[Localisation, Localisation],
     fraction: float,
     fexps: Sequence[DiagExperiment],
 ) -> tuple[Status, tuple[NamedTerm, ...], tuple[NamedTerm, ...], str]:
     """``(status, named, partial, verdict)``: a term outside its physical range is never named (the rest is
     at most a partial explanation), and the verdict says what the non-physical value and a residual DC of
-    both signs suggest."""
+    both signs suggest. ``located``: the plain model's localisation and the final's."""
+    before, after = located
     unphysical = tuple(t for t in final.terms if not physical_value(t.term, t.value))
     if unphysical and status == "explained":
         status = "partly explained"
@@ -886,7 +885,10 @@ def _judged(
     if not named and status != "adequate":
         status = "unexplained"
     partial = tuple(t for t in final.terms if t not in named)
-    verdict = _verdict(status, named, tuple(t for t in partial if t not in unphysical), after, fraction)
+    drift = drift_clause.clause(after, before, named)  # beyond a named drift term (drift_clause.py)
+    verdict = _verdict(
+        status, named, tuple(t for t in partial if t not in unphysical), after, fraction, drift
+    )
     verdict += _unphysical_text(unphysical)
     if status != "adequate":
         offset = any(t.term == Offset.kind for t in final.terms)  # said about it, not against it

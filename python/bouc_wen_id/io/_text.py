@@ -43,6 +43,21 @@ _ROLE_WORDS = {
 #: Names of a text column whose cells mark the acquisition's pauses (one experiment per block).
 _EVENT_COLUMNS = ("events", "event", "markers", "marker")
 _UNIT = re.compile(r"^(.*?)\s*[\(\[]([^\)\]]+)[\)\]]\s*$")
+#: A unit written as the name's last ``_``-part (``force_N``, ``disp_mm``, ``time_s``): read only when that
+#: part is a unit symbol, an SI prefix and a unit (case as written: ``mN`` is not ``MN``) or an imperial one,
+#: so that ``u_raw`` or ``force_2`` stay names (review 32: lab names like ``force_N`` carried no unit).
+_SUFFIX = re.compile(r"^(.+?)_([A-Za-zµ]+)$")
+_SI_UNITS = ("s", "m", "g", "N", "Pa", "V", "A", "W", "J", "Hz", "rad", "K")
+_SI_PREFIXES = ("", "p", "n", "u", "µ", "m", "c", "k", "M", "G")
+_SUFFIX_UNITS = frozenset(p + u for u in _SI_UNITS for p in _SI_PREFIXES) | {
+    "deg",
+    "in",
+    "ft",
+    "lb",
+    "lbf",
+    "kip",
+    "psi",
+}
 
 
 def check_skiprows(skiprows: Optional[int]) -> Optional[int]:
@@ -219,12 +234,23 @@ def _role_of(name: str) -> tuple[str, Optional[str]]:
     return (m.group(1).strip().lower(), m.group(2).strip()) if m else (name.strip().lower(), None)
 
 
+def _unit_of(name: str) -> Optional[str]:
+    """The unit a column's name carries: in brackets (:func:`_role_of`), or as its last ``_`` part when that
+    is a unit symbol (:data:`_SUFFIX`: ``force_N``). The second only labels a column already chosen (by its
+    name or ``columns=``); it does not make ``force_N`` the output by itself (a ``time_s`` column beside a
+    stated sampling rate would then be checked against it, where such files were read)."""
+    unit = _role_of(name)[1]
+    m = _SUFFIX.match(name.strip())
+    return unit if unit or not (m and m.group(2) in _SUFFIX_UNITS) else m.group(2)
+
+
 def infer_roles(
     names: Sequence[str], columns: dict[str, Union[str, int]], where: str
 ) -> tuple[dict[str, Union[str, int]], dict[str, str]]:
     """``columns`` completed with the signals a column's name states, and the units the names carry.
 
-    ``Displacement (mm)`` is ``u`` (the whole name but its unit is one of the words; ``disp_mm`` is not).
+    ``Displacement (mm)`` is ``u`` (the whole name but its unit is one of the words; ``disp_mm`` is not, but
+    mapped to ``u`` it carries its unit ``mm``: :func:`_unit_of`).
     A signal is inferred only when no column bears its own name, ``columns`` does not map it, and exactly
     one column's name says it; two candidates are an error naming both.
     """
@@ -245,7 +271,7 @@ def infer_roles(
             taken.add(found[0])
     for role, col in out.items():
         name = names[col] if isinstance(col, int) and col < len(names) else col
-        unit = _role_of(str(name))[1]
+        unit = _unit_of(str(name))
         if unit and role in ("t", "u", "y"):
             units[role] = unit
     return out, units

@@ -37,6 +37,7 @@ from collections.abc import Iterable, Mapping, Sequence
 from typing import Any
 from typing import ClassVar as ClassVar  # noqa: F401
 
+from .._term_at import PlaceAt as PlaceAt  # noqa: F401 (Term.at's annotation resolves here)
 from ..errors import InvalidParameterError
 from ._base import NON_NEGATIVE as NON_NEGATIVE  # the ranges and the smoothing's limit, attributes before the
 from ._base import UNBOUNDED as UNBOUNDED  # split, stay reachable here (not in __all__)

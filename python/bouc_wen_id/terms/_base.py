@@ -14,6 +14,7 @@ from dataclasses import dataclass, fields, replace
 from enum import Enum
 from typing import Any, ClassVar, cast
 
+from .._term_at import PlaceAt
 from ..errors import InvalidParameterError
 from ..validation import real_number
 
@@ -172,9 +173,15 @@ class Term:
         """Where this term acts (:attr:`acts_on`)."""
         return self.acts_on
 
+    #: On the class, the class of this term acting at ``place`` (one of :attr:`places`):
+    #: ``Viscous.at(Place.X)(c)``; on an instance, the same term with its value(s) at ``place``:
+    #: ``Viscous(0.03).at(Place.X)`` is ``Viscous.at(Place.X)(0.03)`` (:class:`.._term_at.PlaceAt`).
+    at: ClassVar[PlaceAt] = PlaceAt()
+
     @classmethod
-    def at(cls, place: Place) -> type[Term]:
-        """The class of this term acting at ``place`` (one of :attr:`places`): ``Viscous.at(Place.X)(c)``."""
+    def class_at(cls, place: Place) -> type[Term]:
+        """The class of this term acting at ``place`` (the class's :attr:`at`); a named error where the term
+        cannot act there."""
         # A sibling's usual class is its parent: ``__init_subclass__`` composed the sibling's names from it.
         base = cls if cls.base_kind == cls.kind else cast("type[Term]", cls.__mro__[1])
         if place == base.acts_on:
@@ -186,6 +193,11 @@ class Term:
                 f"{base.kind} cannot act {where}; its places are {', '.join(p.label for p in base.places)}"
             )
         return sibling
+
+    def placed(self, place: Place) -> Term:
+        """This term with its value(s) at ``place`` (the instance's :attr:`at`)."""
+        cls = self.class_at(place)
+        return cls(**{f.name: getattr(self, f.name) for f in fields(cls)})
 
     def __post_init__(self) -> None:
         for f in fields(self):
