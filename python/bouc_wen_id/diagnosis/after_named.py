@@ -21,7 +21,10 @@ candidate beside a Dahl element there (the conservative side; the verdict's clau
 step's p).
 
 Only where the first step's gate allowed the targeted step (``again``: measured noise, the loop not
-drifting, no degradation named); else the selection is the old one (stopping at ``adequate``).
+drifting, no degradation named) and every record has the periods that tell a settling transient from a
+term (:data:`.zero_drift.MIN_PERIODS`: on blind few_periods seed 11's null the step named an asymmetry
+beside the offset that a settling centre's transient had drawn, which centre_decay.py then could not
+weigh); else the selection is the old one (stopping at ``adequate``).
 """
 
 from __future__ import annotations

@@ -766,7 +766,9 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
         notes.append(NO_TARGETED_STEP)
         final, steps = start, list[Step]()
     else:
-        again = not moved and setup.measured_noise  # the targeted step after a named one (after_named.py)
+        # The targeted step after a named one (after_named.py); not on short records, where a settling
+        # centre's transient is still in the loops (centre_decay.py) and a second term would take it up.
+        again = not moved and setup.measured_noise and all(e.dc.size >= zero_drift.MIN_PERIODS for e in exps)
         final, steps = after_named.select(fsx, start, steady, adequate, p_of, substeps, targeted, again, **kw)
         plain, start = rebased_plain(plain, start, steps)  # a first step that refitted an unconverged start
     notes += fit_notes(plain, final)  # a fit stopped on a face of its admissible range (issue 19, branch lm)
