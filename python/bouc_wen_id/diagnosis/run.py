@@ -25,6 +25,7 @@ from . import (
     inputs,
     law_untested,
     loop_centre,
+    pairs,
     resolution,
     zero_drift,
 )
@@ -699,14 +700,14 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
         p = p_of(fit)
         return bool(math.isfinite(p) and p >= alpha)
 
-    # The plain model's gate: the global test at alpha / 2, and when it accepts, the targeted step's
-    # candidate tests at the other alpha / 2 (select.py's docstring; design.md 10.3).
-    # The targeted step only on measured noise (gate.plain_gate: one rule for diagnose_across too).
+    # The plain model's gate: the global test at alpha / 2, and when it accepts, the targeted step's tests at
+    # the other alpha / 2, only on measured noise (select.py's docstring; design.md 10.3; gate.plain_gate).
     moved = named_deg or before.drift_detected
     passes, targeted = gate.plain_gate([p_of(start)], alpha, [moved], [setup.measured_noise])
     cache: FoldCache = {}
     steady = step_candidates(cands, pure_sines=False)  # the planner's family too (candidates.py)
     kw: dict[str, Any] = {"alpha": alpha, "use_held_out": setup.held_out_test, "cache": cache}
+    kw["pair_step"] = pairs.pair_step if pairs.ENABLED else None  # two large terms at once (pairs.py)
     kw["on_trial"] = lambda k, t, i, n: setup.report(f"step {k}: fitting candidate {t}", i, n)
     if passes and not targeted:
         notes.append(NO_TARGETED_STEP)
@@ -891,7 +892,7 @@ def _law_text(steps: Sequence[Step]) -> str:
             if tr.term in st.law_failed and tr.term not in failed and tr.term not in listed:
                 failed[tr.term] = tr.law_p_value
     if not failed:
-        return ""
+        return pairs.text(steps)  # a pair named where each member's law failed alone (pairs.py)
     what = ", ".join(f"{TERMS[t].place_label()} (p = {p:.2g})" for t, p in failed.items())
     shape = "; for Dahl friction, or a branch shape not its own" if any(map(has_branch, failed)) else ""
     shape += "; for pinching, or a band not its own" if any(map(is_pinching, failed)) else ""
@@ -900,7 +901,7 @@ def _law_text(steps: Sequence[Step]) -> str:
             "; for the measured input waveform, or G at the input's harmonics not the one carried from the "
             "tested band (lam far from 1)"
         )
-    return (
+    return pairs.text(steps) + (
         f"; not named: {what}: each fits part of the misfit, but with a value that differs between "
         f"experiments (its law, one value for all, fails{shape}): it stands in for physics outside the "
         "library"

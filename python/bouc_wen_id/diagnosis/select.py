@@ -220,6 +220,10 @@ class Step:
     #: (NaN: not refitted); ``base`` is that refit (the model ``before_cost`` is of).
     refitted_from: float = math.nan
     base: Optional[AugFit] = field(default=None, repr=False, compare=False)
+    #: Both terms when the step named a pair (:mod:`.pairs`: every candidate's law failed alone); ``chosen``
+    #: is then the first. ``pairs``: the pairs that step tried (:class:`.pairs.PairTrial`), with their tests.
+    pair: tuple[str, ...] = ()
+    pairs: tuple[Any, ...] = ()
 
     def to_dict(self) -> dict[str, Any]:
         out = {
@@ -237,6 +241,9 @@ class Step:
             out["unphysical_places"] = list(self.unphysical_places)
         if math.isfinite(self.refitted_from):  # likewise
             out["refitted_from"] = self.refitted_from
+        if self.pairs:  # likewise: the pair step ran (pairs.py)
+            out["pair"] = list(self.pair)
+            out["pairs"] = [p.to_dict() for p in self.pairs]
         return out
 
 
@@ -830,6 +837,50 @@ def _pairs(terms: Sequence[str]) -> list[tuple[str, str]]:
     return [(t, u) for t in terms for u in siblings(t) if u in terms]
 
 
+#: The context of one selection step the step's helpers read: (substeps, the step's level, the number of
+#: candidates, the held-out test on, the held-out cache).
+StepContext = tuple[int, float, int, bool, FoldCache]
+
+
+def _choose(
+    exps: Sequence[AugExperiment],
+    current: AugFit,
+    trials: Sequence[Trial],
+    order: Sequence[Trial],
+    first: bool,
+    alone: dict[str, float],
+    alpha: float,
+    ctx: StepContext,
+) -> tuple[Optional[Trial], dict[str, Trial], list[str], list[str]]:
+    """One step's choice among ``order`` (the candidates that passed, best first): the first whose law holds
+    and whose held-out cost is lower; (chosen or None, the step's trials by term with their law p and
+    held-out, the law-failed candidates, those refused beside a Dahl element: beside.py)."""
+    substeps, _, _, use_held_out, memo = ctx
+    chosen: Optional[Trial] = None
+    final_trials = {tr.term: tr for tr in trials}
+    law_failed: list[str] = []
+    refused: list[str] = []  # needed only beside a Dahl element: its branch's family (beside.py)
+    for tr in order:
+        assert tr.fit is not None
+        if first and law_failed and not any(tr.term in siblings(t) for t in law_failed):
+            break  # the targeted step ends on a refused law, but for the same physics elsewhere
+        if only_beside(current, tr.term, alone.get(tr.term, math.nan), alpha):
+            refused.append(tr.term)
+            continue
+        law_p = element_law_test(exps, tr.fit, tr.term, substeps)
+        if math.isfinite(law_p) and law_p < LAW_ALPHA:
+            final_trials[tr.term] = replace(tr, law_p_value=law_p)
+            law_failed.append(tr.term)
+            continue
+        ho = held_out(exps, current, tr.fit, substeps, memo) if use_held_out else None
+        tr2 = replace(tr, held_out=ho, law_p_value=law_p)
+        final_trials[tr.term] = tr2
+        if ho is None or ho.improves:
+            chosen = tr2
+            break
+    return chosen, final_trials, law_failed, refused
+
+
 def forward_select(
     exps: Sequence[AugExperiment],
     plain: AugFit,
@@ -841,11 +892,14 @@ def forward_select(
     cache: Optional[FoldCache] = None,
     targeted: bool = False,
     on_trial: Optional[Any] = None,
+    pair_step: Optional[Callable[..., tuple[Any, tuple[Any, ...]]]] = None,
 ) -> tuple[AugFit, list[Step]]:
     """Forward selection from ``plain``; ``adequate(fit) -> bool`` is the stopping test. ``targeted``: the
     global test accepted ``plain`` at ``alpha / 2``; the first step is the targeted one (module docstring),
     its candidates tested at ``alpha / 2``, and selection ends there unless it names one. ``on_trial(step,
-    term, index, count)``, when given, is called before each candidate's fit (progress)."""
+    term, index, count)``, when given, is called before each candidate's fit (progress). ``pair_step``
+    (:func:`.pairs.pair_step`), when given, runs where a step named nothing while some candidate's law failed
+    (never the targeted first step): a pair it names joins the model at that step."""
     memo: FoldCache = {} if cache is None else cache
     fit_term = memo_fit_with(exps, substeps)
     current, steps, first, refitted_from = plain, list[Step](), targeted, math.nan
@@ -881,34 +935,23 @@ def forward_select(
             continue
         passed = sorted((tr for tr in trials if tr.passed), key=lambda tr: tr.cost)
         order = simpler_first(exps, passed, level / len(remaining))  # Bonferroni, as the candidates' tests
-        chosen: Optional[Trial] = None
-        final_trials = {tr.term: tr for tr in trials}
-        law_failed: list[str] = []
-        refused: list[str] = []  # needed only beside a Dahl element: its branch's family (beside.py)
         alone = {t.term: t.p_value for t in steps[0].trials} if steps else {}
-        for tr in order:
-            assert tr.fit is not None
-            if first and law_failed and not any(tr.term in siblings(t) for t in law_failed):
-                break  # the targeted step ends on a refused law, but for the same physics elsewhere
-            if only_beside(current, tr.term, alone.get(tr.term, math.nan), alpha):
-                refused.append(tr.term)
-                continue
-            law_p = element_law_test(exps, tr.fit, tr.term, substeps)
-            if math.isfinite(law_p) and law_p < LAW_ALPHA:
-                final_trials[tr.term] = replace(tr, law_p_value=law_p)
-                law_failed.append(tr.term)
-                continue
-            ho = held_out(exps, current, tr.fit, substeps, memo) if use_held_out else None
-            tr2 = replace(tr, held_out=ho, law_p_value=law_p)
-            final_trials[tr.term] = tr2
-            if ho is None or ho.improves:
-                chosen = tr2
-                break
+        ctx = (substeps, level, len(remaining), use_held_out, memo)
+        chosen, final_trials, law_failed, refused = _choose(
+            exps, current, trials, order, first, alone, alpha, ctx
+        )
         bad: list[str] = []  # the chosen term's other places that fit as well only non-physically
         tested = list(final_trials.values())
         alternatives = step_alternatives(
             exps, chosen, trials, order, tested, law_failed, fit_term, substeps, bad
         )
+        pair, tried = (
+            (None, ())
+            if pair_step is None or chosen is not None or first or not law_failed
+            else (pair_step(exps, current, order, tested, refused, fit_term, *ctx))
+        )
+        if pair is not None:  # every candidate's law failed alone; two of them hold jointly (pairs.py)
+            chosen, alternatives, law_failed = pair.trial, list(pair.alternatives), pair.unnamed(law_failed)
         steps.append(
             Step(
                 c0,
@@ -922,6 +965,8 @@ def forward_select(
                 tuple(bad),
                 refitted_from,
                 None if math.isnan(refitted_from) else current,
+                () if pair is None else pair.terms,
+                tried,
             )
         )
         first, refitted_from = False, math.nan

@@ -1,0 +1,329 @@
+"""Two large terms at once: the pair step of the forward selection (issue 18).
+
+The forward selection (:func:`.select.forward_select`) adds one candidate per step. When two library terms
+are missing at once, each one alone absorbs part of the other's misfit with a value that differs between
+experiments, so each fails its law (:func:`.select.law_test`) and the step ends without a name: the
+README's three-term plant (viscous damping, play and a sensor lag) was "unexplained". Only then (a step
+that named nothing while some candidate's law failed; never the targeted first step, never a step that
+named a term) the best :data:`POOL` candidates that passed their own tests are fitted in pairs, and the
+best of them with each candidate that did not pass alone (the README plant's play and sensor lag remove
+nothing alone while viscous damping, 96 % of the excess, is missing), the second term added to the first's
+fit by the same machinery that fits one term (``fit_term``: the memoised :func:`.fitting.fit_with` with its
+wide restarts), and a pair is named only when
+
+1. the pair improves on the step's model by its joint F test (Bonferroni over every pair of the step's
+   candidates) and **each member is significant given the other**: its own nested F test against the model
+   of the other member alone, at the step's level after Bonferroni over the candidates (the single-term
+   test), a material share of the excess the other leaves, a physical value away from its null (the
+   Wald test at the step's level, :func:`.select.away_from_null`). A rival single term that matches the
+   pair's gain leaves one member with no gain of its own, so this test is also the rule against a
+   single-term rival;
+2. **each member's law holds** in the pair's fit (:func:`.select.element_law_test`, at
+   :data:`.select.LAW_ALPHA`): one value for every experiment, the claim a single term must meet;
+3. the pair improves the held-out fit (leave-one-experiment-out, as a single term must).
+
+The pairs that pass 1 are taken by cost; the first that passes 2 and 3 is named. A rival pair (or a single
+term whose law held) whose improvement is within the chosen pair's uncertainty (:func:`.select._tied`) and
+whose laws hold, or one that fits at least as well and was passed over for its law only (p above
+:data:`.select.PREFERRED_LAW_FLOOR`), is reported as alternatives of the members it replaces, with the
+experiment that would separate them. Physics outside the library stays "unexplained" when no pair of
+library terms fits it with one value each (the law of a stand-in still fails beside another stand-in).
+
+``ENABLED`` switches the path off (then a step whose candidates all fail their laws ends as before).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any, Optional
+
+from ..augmented import AugExperiment, AugFit
+from ..terms import TERMS
+from .select import (
+    BOUNDARY_TERMS,
+    LAW_ALPHA,
+    MATERIAL_SHARE,
+    PREFERRED_LAW_FLOOR,
+    Alternative,
+    FoldCache,
+    HeldOut,
+    Trial,
+    _admissible,
+    _separating,
+    _tied,
+    at_null,
+    away_from_null,
+    dof_of,
+    element_law_test,
+    f_test,
+    held_out,
+    siblings,
+)
+
+#: Whether a step whose candidates all failed their laws tries pairs of them (module docstring).
+ENABLED = True
+#: The best this many candidates (by cost) that passed their own tests are paired with each other (3 pair
+#: fits); the best of them is also paired with every candidate that did not pass alone.
+POOL = 3
+
+
+@dataclass(frozen=True)
+class PairTrial:
+    """One pair of candidates fitted jointly on top of the step's model, with its tests."""
+
+    terms: tuple[str, str]
+    cost: float
+    improvement: float
+    #: Each member's F-test p given the other, Bonferroni-adjusted over the step's candidates.
+    member_p: tuple[float, float]
+    #: Each member's law p in the pair's fit (NaN: not run).
+    law_p: tuple[float, float] = (math.nan, math.nan)
+    held_out: Optional[HeldOut] = None
+    #: Why it was not named ("" for the named pair; "not reached" when a better pair was named first).
+    refused: str = ""
+    fit: Optional[AugFit] = field(default=None, repr=False, compare=False)
+
+    def to_dict(self) -> dict[str, Any]:
+        def n(v: float) -> Optional[float]:
+            return v if math.isfinite(v) else None
+
+        return {
+            "terms": list(self.terms),
+            "cost": n(self.cost),
+            "improvement": n(self.improvement),
+            "member_p_adjusted": [n(p) for p in self.member_p],
+            "law_p_value": [n(p) for p in self.law_p],
+            "held_out": None if self.held_out is None else self.held_out.to_dict(),
+            "refused": self.refused,
+        }
+
+
+@dataclass(frozen=True)
+class PairChoice:
+    """The pair named at a step: ``trial`` is the step's chosen trial (its term the first member, its fit the
+    pair's), ``terms`` both members, ``alternatives`` the rivals the data cannot tell from it."""
+
+    trial: Trial
+    terms: tuple[str, str]
+    alternatives: tuple[Alternative, ...]
+
+    def unnamed(self, law_failed: Sequence[str]) -> list[str]:
+        """The step's law-failed candidates less the pair's members (named: no stand-ins)."""
+        return [t for t in law_failed if t not in self.terms]
+
+
+def _as_trial(p: PairTrial) -> Trial:
+    return Trial(p.terms[0], p.cost, p.improvement, math.nan, math.nan, math.nan, math.nan, True, fit=p.fit)
+
+
+def _member_tests(
+    exps: Sequence[AugExperiment],
+    fit: AugFit,
+    alone: dict[str, Trial],
+    pair: tuple[str, str],
+    level: float,
+    n_cands: int,
+) -> tuple[tuple[float, float], str]:
+    """Each member's test given the other (rule 1 of the module docstring): (adjusted p's, why refused)."""
+    d1 = dof_of(exps, fit)
+    s2 = fit.cost / max(d1, 1)
+    ps: list[float] = []
+    why = ""
+    for k, m in enumerate(pair):
+        other = alone[pair[1 - k]]
+        assert other.fit is not None
+        q = max(len(fit.params.terms) - len(other.fit.params.terms), 1)
+        _, p = f_test(other.cost, fit.cost, d1, boundary=m in BOUNDARY_TERMS, q=q)
+        padj = min(1.0, p * n_cands) if math.isfinite(p) else math.nan
+        ps.append(padj)
+        # Its share of the excess the other member leaves (what the next single step would ask of it).
+        left = max(other.cost - dof_of(exps, other.fit), 0.0)
+        share = min((other.cost - fit.cost) / left, 1.0) if left > 0 else 0.0
+        if why:
+            continue
+        if not (_admissible(fit, m) and not at_null(fit, m)):
+            why = f"{m}: not physical or at its null"
+        elif not (math.isfinite(padj) and padj < level):
+            why = f"{m}: not significant given {pair[1 - k]} (p = {padj:.2g})"
+        elif share < MATERIAL_SHARE:
+            why = f"{m}: share {share:.2g} of the excess given {pair[1 - k]}"
+        elif not away_from_null(fit, m, level, s2):
+            why = f"{m}: value not away from its null given {pair[1 - k]}"
+    return (ps[0], ps[1]), why
+
+
+def fit_pairs(
+    exps: Sequence[AugExperiment],
+    current: AugFit,
+    order: Sequence[Trial],
+    others: Sequence[Trial],
+    refused: Sequence[str],
+    fit_term: Callable[[AugFit, str], Optional[AugFit]],
+    level: float,
+    n_cands: int,
+) -> list[PairTrial]:
+    """The pool's pairs fitted and given rule 1 (module docstring), in the pool's order."""
+    passed = [tr for tr in order if tr.fit is not None and tr.term not in refused]
+    pool = passed[:POOL]
+    alone = {tr.term: tr for tr in (*pool, *others)}
+    # The pool's pairs, then the best with every other candidate fitted alone (a second term too small to
+    # pass alone while the first absorbs part of it: the README plant's play beside its viscous damping).
+    pairs = [(a, b) for i, a in enumerate(pool) for b in pool[i + 1 :]]
+    pairs += [(pool[0], b) for b in others] if pool else []
+    c0 = current.cost
+    n_pairs = max(n_cands * (n_cands - 1) // 2, 1)
+    out: list[PairTrial] = []
+    for a, b in pairs:
+        assert a.fit is not None and b.fit is not None
+        if b.term in siblings(a.term) or b.term in a.fit.params.terms or a.term in b.fit.params.terms:
+            continue  # one physics at two places, or one element's own parts
+        f = fit_term(a.fit, b.term)  # the second added to the better one's fit, by the one-term fit
+        pair = (a.term, b.term)
+        if f is None or not math.isfinite(f.cost):
+            out.append(PairTrial(pair, math.nan, math.nan, (math.nan, math.nan), refused="no fit"))
+            continue
+        q = max(len(f.params.terms) - len(current.params.terms), 1)
+        _, p = f_test(c0, f.cost, dof_of(exps, f), q=q)
+        ps, why = _member_tests(exps, f, alone, pair, level, n_cands)
+        if not why and not (math.isfinite(p) and min(1.0, p * n_pairs) < level):
+            why = f"joint F test p = {p:.2g}"
+        out.append(PairTrial(pair, f.cost, c0 - f.cost, ps, refused=why, fit=f))
+    return out
+
+
+def _law(exps: Sequence[AugExperiment], p: PairTrial, substeps: int) -> PairTrial:
+    assert p.fit is not None
+    laws = (
+        element_law_test(exps, p.fit, p.terms[0], substeps),
+        element_law_test(exps, p.fit, p.terms[1], substeps),
+    )
+    bad = [f"{t} (law p = {v:.2g})" for t, v in zip(p.terms, laws) if math.isfinite(v) and v < LAW_ALPHA]
+    return PairTrial(
+        p.terms,
+        p.cost,
+        p.improvement,
+        p.member_p,
+        laws,
+        refused="law fails: " + ", ".join(bad) if bad else "",
+        fit=p.fit,
+    )
+
+
+def law_holds(p: PairTrial) -> bool:
+    return not any(math.isfinite(v) and v < LAW_ALPHA for v in p.law_p)
+
+
+def _rivals(
+    exps: Sequence[AugExperiment],
+    chosen: PairTrial,
+    tested: Sequence[PairTrial],
+    singles: Sequence[Trial],
+    substeps: int,
+) -> list[Alternative]:
+    """Rule of the alternatives (module docstring): each rival pair's differing members, and single terms
+    whose law held, tied with the chosen pair, each against the member it would replace."""
+    assert chosen.fit is not None
+    ct = _as_trial(chosen)
+    dof = dof_of(exps, chosen.fit)
+    out: list[Alternative] = []
+    for r in tested:
+        if r is chosen or r.fit is None or not math.isfinite(r.cost):
+            continue
+        by_law = (
+            not law_holds(r) and r.cost <= chosen.cost and min(r.law_p) >= PREFERRED_LAW_FLOOR
+        )  # passed over for its law only, while it fits at least as well (select.preferred_by_fit)
+        if not (
+            by_law or (law_holds(r) and not r.refused.startswith("law") and _tied(ct, _as_trial(r), dof))
+        ):
+            continue
+        sep = _separating(exps, chosen.fit, r.fit, substeps)
+        new = [t for t in r.terms if t not in chosen.terms]
+        old = [t for t in chosen.terms if t not in r.terms]
+        for t, rival in zip(old, new):
+            out.append(Alternative(t, rival, math.nan, sep, min(r.law_p) if by_law else math.nan))
+    for s in singles:
+        if s.fit is None or s.term in chosen.terms or not s.law_holds or not math.isfinite(s.law_p_value):
+            continue
+        if _tied(ct, s, dof):
+            sep = _separating(exps, chosen.fit, s.fit, substeps)
+            out.append(Alternative(chosen.terms[0], s.term, math.nan, sep))
+    return out
+
+
+def pair_step(
+    exps: Sequence[AugExperiment],
+    current: AugFit,
+    order: Sequence[Trial],
+    tested: Sequence[Trial],
+    refused: Sequence[str],
+    fit_term: Callable[[AugFit, str], Optional[AugFit]],
+    substeps: int,
+    level: float,
+    n_cands: int,
+    held_out_test: bool = True,
+    cache: Optional[FoldCache] = None,
+) -> tuple[Optional[PairChoice], tuple[PairTrial, ...]]:
+    """The pair named at a step whose candidates (``order``: those that passed their own tests, best first)
+    all failed their laws, or None; with every pair tried (module docstring)."""
+    passed = {tr.term for tr in order}
+    others = [tr for tr in tested if tr.term not in passed and tr.fit is not None and math.isfinite(tr.cost)]
+    tried = fit_pairs(exps, current, order, others, refused, fit_term, level, n_cands)
+    ranked = sorted((p for p in tried if not p.refused), key=lambda p: p.cost)
+    done: dict[tuple[str, str], PairTrial] = {p.terms: p for p in tried}
+    chosen: Optional[PairTrial] = None
+    for p in ranked:
+        p = _law(exps, p, substeps)
+        done[p.terms] = p
+        if not law_holds(p):
+            continue
+        assert p.fit is not None
+        ho = held_out(exps, current, p.fit, substeps, cache) if held_out_test else None
+        if ho is not None and not ho.improves:
+            done[p.terms] = PairTrial(
+                p.terms, p.cost, p.improvement, p.member_p, p.law_p, ho, "held-out cost not lower", p.fit
+            )
+            continue
+        chosen = PairTrial(p.terms, p.cost, p.improvement, p.member_p, p.law_p, ho, "", p.fit)
+        done[p.terms] = chosen
+        break
+    if chosen is None:
+        return None, tuple(done.values())
+    # Rivals among the pairs that passed rule 1: their laws (run for those a tie could make alternatives).
+    for p in ranked:
+        if p.terms != chosen.terms and not math.isfinite(p.law_p[0]):
+            if _tied(_as_trial(chosen), _as_trial(p), dof_of(exps, chosen.fit or current)):
+                done[p.terms] = _law(exps, p, substeps)
+    rivals = [done[p.terms] for p in ranked]
+    alts = _rivals(exps, chosen, [r for r in rivals if math.isfinite(r.law_p[0])], tested, substeps)
+    trial = Trial(
+        chosen.terms[0],
+        chosen.cost,
+        chosen.improvement,
+        math.nan,
+        min(chosen.member_p),
+        min(chosen.member_p),
+        math.nan,
+        True,
+        chosen.held_out,
+        chosen.fit,
+        min(chosen.law_p),
+    )
+    return PairChoice(trial, chosen.terms, tuple(alts)), tuple(done.values())
+
+
+def text(steps: Sequence[Any]) -> str:
+    """The verdict's clause for a step that named a pair: both were named together because neither fits
+    alone with one value for every experiment."""
+    named = [st.pair for st in steps if getattr(st, "pair", ())]
+    if not named:
+        return ""
+    what = "; ".join(" with ".join(TERMS[t].place_label() for t in p) for p in named)
+    return (
+        f"; named together: {what} (neither alone fits with one value for every experiment; jointly each "
+        "does, and each is significant given the other)"
+    )
+
+
+__all__ = ["ENABLED", "POOL", "PairTrial", "PairChoice", "pair_step", "fit_pairs", "law_holds", "text"]
