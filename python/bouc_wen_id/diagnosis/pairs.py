@@ -36,7 +36,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, Optional
 
 from ..augmented import AugExperiment, AugFit
@@ -67,19 +67,21 @@ ENABLED = True
 #: The best this many candidates (by cost) that passed their own tests are paired with each other (3 pair
 #: fits); the best of them is also paired with every candidate that did not pass alone.
 POOL = 3
+#: Whether a step whose pairs all fail their laws tries the best pair with a third term (module docstring).
+TRIPLES = True
 
 
 @dataclass(frozen=True)
 class PairTrial:
     """One pair of candidates fitted jointly on top of the step's model, with its tests."""
 
-    terms: tuple[str, str]
+    terms: tuple[str, ...]
     cost: float
     improvement: float
-    #: Each member's F-test p given the other, Bonferroni-adjusted over the step's candidates.
-    member_p: tuple[float, float]
-    #: Each member's law p in the pair's fit (NaN: not run).
-    law_p: tuple[float, float] = (math.nan, math.nan)
+    #: Each member's F-test p given the others, Bonferroni-adjusted over the step's candidates.
+    member_p: tuple[float, ...]
+    #: Each member's law p in the set's fit (empty: not run).
+    law_p: tuple[float, ...] = ()
     held_out: Optional[HeldOut] = None
     #: Why it was not named ("" for the named pair; "not reached" when a better pair was named first).
     refused: str = ""
@@ -106,7 +108,7 @@ class PairChoice:
     pair's), ``terms`` both members, ``alternatives`` the rivals the data cannot tell from it."""
 
     trial: Trial
-    terms: tuple[str, str]
+    terms: tuple[str, ...]
     alternatives: tuple[Alternative, ...]
 
     def unnamed(self, law_failed: Sequence[str]) -> list[str]:
@@ -118,97 +120,151 @@ def _as_trial(p: PairTrial) -> Trial:
     return Trial(p.terms[0], p.cost, p.improvement, math.nan, math.nan, math.nan, math.nan, True, fit=p.fit)
 
 
+#: A model without one member: (its cost, its fit).
+Without = dict[str, tuple[float, AugFit]]
+
+
 def _member_tests(
     exps: Sequence[AugExperiment],
     fit: AugFit,
-    alone: dict[str, Trial],
-    pair: tuple[str, str],
+    without: Without,
     level: float,
     n_cands: int,
-) -> tuple[tuple[float, float], str]:
-    """Each member's test given the other (rule 1 of the module docstring): (adjusted p's, why refused)."""
+) -> tuple[tuple[float, ...], str]:
+    """Each member's test given the others (rule 1 of the module docstring), ``without[m]`` the model of the
+    others: (adjusted p's, why refused)."""
     d1 = dof_of(exps, fit)
     s2 = fit.cost / max(d1, 1)
     ps: list[float] = []
     why = ""
-    for k, m in enumerate(pair):
-        other = alone[pair[1 - k]]
-        assert other.fit is not None
-        q = max(len(fit.params.terms) - len(other.fit.params.terms), 1)
-        _, p = f_test(other.cost, fit.cost, d1, boundary=m in BOUNDARY_TERMS, q=q)
+    for m, (c_other, f_other) in without.items():
+        q = max(len(fit.params.terms) - len(f_other.params.terms), 1)
+        _, p = f_test(c_other, fit.cost, d1, boundary=m in BOUNDARY_TERMS, q=q)
         padj = min(1.0, p * n_cands) if math.isfinite(p) else math.nan
         ps.append(padj)
-        # Its share of the excess the other member leaves (what the next single step would ask of it).
-        left = max(other.cost - dof_of(exps, other.fit), 0.0)
-        share = min((other.cost - fit.cost) / left, 1.0) if left > 0 else 0.0
+        # Its share of the excess the others leave (what the next single step would ask of it).
+        left = max(c_other - dof_of(exps, f_other), 0.0)
+        share = min((c_other - fit.cost) / left, 1.0) if left > 0 else 0.0
+        given = "+".join(t for t in without if t != m)
         if why:
             continue
         if not (_admissible(fit, m) and not at_null(fit, m)):
             why = f"{m}: not physical or at its null"
         elif not (math.isfinite(padj) and padj < level):
-            why = f"{m}: not significant given {pair[1 - k]} (p = {padj:.2g})"
+            why = f"{m}: not significant given {given} (p = {padj:.2g})"
         elif share < MATERIAL_SHARE:
-            why = f"{m}: share {share:.2g} of the excess given {pair[1 - k]}"
+            why = f"{m}: share {share:.2g} of the excess given {given}"
         elif not away_from_null(fit, m, level, s2):
-            why = f"{m}: value not away from its null given {pair[1 - k]}"
-    return (ps[0], ps[1]), why
+            why = f"{m}: value not away from its null given {given}"
+    return tuple(ps), why
+
+
+def _joint(
+    exps: Sequence[AugExperiment], current: AugFit, f: AugFit, k: int, n_cands: int, level: float
+) -> str:
+    """The set's joint F test against the step's model, Bonferroni over every set of ``k`` candidates."""
+    q = max(len(f.params.terms) - len(current.params.terms), 1)
+    _, p = f_test(current.cost, f.cost, dof_of(exps, f), q=q)
+    return (
+        ""
+        if math.isfinite(p) and min(1.0, p * max(math.comb(n_cands, k), 1)) < level
+        else f"joint p = {p:.2g}"
+    )
+
+
+def _no_fit(terms: tuple[str, ...]) -> PairTrial:
+    return PairTrial(terms, math.nan, math.nan, tuple(math.nan for _ in terms), refused="no fit")
+
+
+def _clash(t: str, terms: Sequence[str], fits: Sequence[AugFit]) -> bool:
+    """One physics at two places, or one element's own parts."""
+    return any(t in siblings(u) for u in terms) or any(t in f.params.terms for f in fits)
 
 
 def fit_pairs(
     exps: Sequence[AugExperiment],
     current: AugFit,
-    order: Sequence[Trial],
+    pool: Sequence[Trial],
     others: Sequence[Trial],
-    refused: Sequence[str],
     fit_term: Callable[[AugFit, str], Optional[AugFit]],
     level: float,
     n_cands: int,
 ) -> list[PairTrial]:
-    """The pool's pairs fitted and given rule 1 (module docstring), in the pool's order."""
-    passed = [tr for tr in order if tr.fit is not None and tr.term not in refused]
-    pool = passed[:POOL]
-    alone = {tr.term: tr for tr in (*pool, *others)}
-    # The pool's pairs, then the best with every other candidate fitted alone (a second term too small to
-    # pass alone while the first absorbs part of it: the README plant's play beside its viscous damping).
+    """The pool's pairs, then the best with every other candidate (a second term too small to pass alone
+    while the first absorbs part of it: the README plant's play beside its viscous damping), fitted and given
+    rule 1 (module docstring)."""
     pairs = [(a, b) for i, a in enumerate(pool) for b in pool[i + 1 :]]
     pairs += [(pool[0], b) for b in others] if pool else []
-    c0 = current.cost
-    n_pairs = max(n_cands * (n_cands - 1) // 2, 1)
     out: list[PairTrial] = []
     for a, b in pairs:
         assert a.fit is not None and b.fit is not None
-        if b.term in siblings(a.term) or b.term in a.fit.params.terms or a.term in b.fit.params.terms:
-            continue  # one physics at two places, or one element's own parts
-        f = fit_term(a.fit, b.term)  # the second added to the better one's fit, by the one-term fit
-        pair = (a.term, b.term)
-        if f is None or not math.isfinite(f.cost):
-            out.append(PairTrial(pair, math.nan, math.nan, (math.nan, math.nan), refused="no fit"))
+        if _clash(b.term, [a.term], [a.fit]) or a.term in b.fit.params.terms:
             continue
-        q = max(len(f.params.terms) - len(current.params.terms), 1)
-        _, p = f_test(c0, f.cost, dof_of(exps, f), q=q)
-        ps, why = _member_tests(exps, f, alone, pair, level, n_cands)
-        if not why and not (math.isfinite(p) and min(1.0, p * n_pairs) < level):
-            why = f"joint F test p = {p:.2g}"
-        out.append(PairTrial(pair, f.cost, c0 - f.cost, ps, refused=why, fit=f))
+        f = fit_term(a.fit, b.term)  # the second added to the better one's fit, by the one-term fit
+        if f is None or not math.isfinite(f.cost):
+            out.append(_no_fit((a.term, b.term)))
+            continue
+        without = {a.term: (b.cost, b.fit), b.term: (a.cost, a.fit)}
+        ps, why = _member_tests(exps, f, without, level, n_cands)
+        why = why or _joint(exps, current, f, 2, n_cands, level)
+        out.append(PairTrial((a.term, b.term), f.cost, current.cost - f.cost, ps, refused=why, fit=f))
+    return out
+
+
+def fit_triples(
+    exps: Sequence[AugExperiment],
+    current: AugFit,
+    base: PairTrial,
+    cands: Sequence[Trial],
+    pair_fits: dict[frozenset[str], PairTrial],
+    fit_term: Callable[[AugFit, str], Optional[AugFit]],
+    level: float,
+    n_cands: int,
+) -> list[PairTrial]:
+    """``base`` (the best pair that passed rule 1 but whose law failed) with each other candidate: a third
+    large term beside it (the README's sensor lag beside viscous damping and play). The third's own test
+    given the pair runs first; the other two members' models are then fitted as pairs where not yet."""
+    assert base.fit is not None
+    alone = {tr.term: tr for tr in cands}
+    out: list[PairTrial] = []
+    for c in cands:
+        assert c.fit is not None
+        if c.term in base.terms or _clash(c.term, base.terms, [base.fit]):
+            continue
+        terms = (*base.terms, c.term)
+        f = fit_term(base.fit, c.term)
+        if f is None or not math.isfinite(f.cost):
+            out.append(_no_fit(terms))
+            continue
+        _, why = _member_tests(exps, f, {c.term: (base.cost, base.fit)}, level, n_cands)
+        without: Without = {}
+        for m in base.terms if not why else ():
+            rest = [t for t in base.terms if t != m][0]
+            got = pair_fits.get(frozenset({rest, c.term}))
+            first = alone[rest].fit if rest in alone else None
+            sub = got.fit if got is not None else None if first is None else fit_term(first, c.term)
+            if sub is None or not math.isfinite(sub.cost):
+                why = f"{m}: no fit without it"
+                break
+            without[m] = (sub.cost, sub)
+        ps: tuple[float, ...] = tuple(math.nan for _ in terms)
+        if not why:
+            without[c.term] = (base.cost, base.fit)
+            ps, why = _member_tests(exps, f, without, level, n_cands)
+            why = why or _joint(exps, current, f, 3, n_cands, level)
+        out.append(PairTrial(terms, f.cost, current.cost - f.cost, ps, refused=why, fit=f))
     return out
 
 
 def _law(exps: Sequence[AugExperiment], p: PairTrial, substeps: int) -> PairTrial:
     assert p.fit is not None
-    laws = (
-        element_law_test(exps, p.fit, p.terms[0], substeps),
-        element_law_test(exps, p.fit, p.terms[1], substeps),
-    )
+    laws = tuple(element_law_test(exps, p.fit, t, substeps) for t in p.terms)
     bad = [f"{t} (law p = {v:.2g})" for t, v in zip(p.terms, laws) if math.isfinite(v) and v < LAW_ALPHA]
-    return PairTrial(
-        p.terms,
-        p.cost,
-        p.improvement,
-        p.member_p,
-        laws,
-        refused="law fails: " + ", ".join(bad) if bad else "",
-        fit=p.fit,
-    )
+    return replace(p, law_p=laws, refused="law fails: " + ", ".join(bad) if bad else "")
+
+
+def _least(values: Sequence[float]) -> float:
+    return min((v for v in values if math.isfinite(v)), default=math.nan)
 
 
 def law_holds(p: PairTrial) -> bool:
@@ -232,7 +288,7 @@ def _rivals(
         if r is chosen or r.fit is None or not math.isfinite(r.cost):
             continue
         by_law = (
-            not law_holds(r) and r.cost <= chosen.cost and min(r.law_p) >= PREFERRED_LAW_FLOOR
+            not law_holds(r) and r.cost <= chosen.cost and _least(r.law_p) >= PREFERRED_LAW_FLOOR
         )  # passed over for its law only, while it fits at least as well (select.preferred_by_fit)
         if not (
             by_law or (law_holds(r) and not r.refused.startswith("law") and _tied(ct, _as_trial(r), dof))
@@ -242,7 +298,7 @@ def _rivals(
         new = [t for t in r.terms if t not in chosen.terms]
         old = [t for t in chosen.terms if t not in r.terms]
         for t, rival in zip(old, new):
-            out.append(Alternative(t, rival, math.nan, sep, min(r.law_p) if by_law else math.nan))
+            out.append(Alternative(t, rival, math.nan, sep, _least(r.law_p) if by_law else math.nan))
     for s in singles:
         if s.fit is None or s.term in chosen.terms or not s.law_holds or not math.isfinite(s.law_p_value):
             continue
@@ -250,6 +306,32 @@ def _rivals(
             sep = _separating(exps, chosen.fit, s.fit, substeps)
             out.append(Alternative(chosen.terms[0], s.term, math.nan, sep))
     return out
+
+
+def _pick(
+    exps: Sequence[AugExperiment],
+    current: AugFit,
+    ranked: Sequence[PairTrial],
+    done: dict[tuple[str, ...], PairTrial],
+    substeps: int,
+    held_out_test: bool,
+    cache: Optional[FoldCache],
+) -> Optional[PairTrial]:
+    """The first of ``ranked`` (those that passed rule 1, by cost) whose laws hold and whose held-out cost is
+    lower (rules 2 and 3); ``done`` records every one's tests."""
+    for p in ranked:
+        p = _law(exps, p, substeps)
+        done[p.terms] = p
+        if not law_holds(p):
+            continue
+        assert p.fit is not None
+        ho = held_out(exps, current, p.fit, substeps, cache) if held_out_test else None
+        done[p.terms] = replace(p, held_out=ho)
+        if ho is not None and not ho.improves:
+            done[p.terms] = replace(p, held_out=ho, refused="held-out cost not lower")
+            continue
+        return done[p.terms]
+    return None
 
 
 def pair_step(
@@ -265,51 +347,33 @@ def pair_step(
     held_out_test: bool = True,
     cache: Optional[FoldCache] = None,
 ) -> tuple[Optional[PairChoice], tuple[PairTrial, ...]]:
-    """The pair named at a step whose candidates (``order``: those that passed their own tests, best first)
-    all failed their laws, or None; with every pair tried (module docstring)."""
+    """The pair (or triple) named at a step whose candidates (``order``: those that passed their own tests,
+    best first) all failed their laws, or None; with every set tried (module docstring)."""
+    pool = [tr for tr in order if tr.fit is not None and tr.term not in refused][:POOL]
     passed = {tr.term for tr in order}
     others = [tr for tr in tested if tr.term not in passed and tr.fit is not None and math.isfinite(tr.cost)]
-    tried = fit_pairs(exps, current, order, others, refused, fit_term, level, n_cands)
+    tried = fit_pairs(exps, current, pool, others, fit_term, level, n_cands)
     ranked = sorted((p for p in tried if not p.refused), key=lambda p: p.cost)
-    done: dict[tuple[str, str], PairTrial] = {p.terms: p for p in tried}
-    chosen: Optional[PairTrial] = None
-    for p in ranked:
-        p = _law(exps, p, substeps)
-        done[p.terms] = p
-        if not law_holds(p):
-            continue
-        assert p.fit is not None
-        ho = held_out(exps, current, p.fit, substeps, cache) if held_out_test else None
-        if ho is not None and not ho.improves:
-            done[p.terms] = PairTrial(
-                p.terms, p.cost, p.improvement, p.member_p, p.law_p, ho, "held-out cost not lower", p.fit
-            )
-            continue
-        chosen = PairTrial(p.terms, p.cost, p.improvement, p.member_p, p.law_p, ho, "", p.fit)
-        done[p.terms] = chosen
-        break
-    if chosen is None:
+    done: dict[tuple[str, ...], PairTrial] = {p.terms: p for p in tried}
+    chosen = _pick(exps, current, ranked, done, substeps, held_out_test, cache)
+    if chosen is None and TRIPLES and ranked:  # the best pair's laws failed: a third large term beside it
+        fits = {frozenset(p.terms): p for p in tried if p.fit is not None}
+        tri = fit_triples(exps, current, ranked[0], [*pool, *others], fits, fit_term, level, n_cands)
+        done.update({p.terms: p for p in tri})
+        ranked = sorted((p for p in tri if not p.refused), key=lambda p: p.cost)
+        chosen = _pick(exps, current, ranked, done, substeps, held_out_test, cache)
+    if chosen is None or chosen.fit is None:
         return None, tuple(done.values())
-    # Rivals among the pairs that passed rule 1: their laws (run for those a tie could make alternatives).
+    # Rivals among the sets that passed rule 1: their laws (run for those a tie could make alternatives).
+    dof = dof_of(exps, chosen.fit)
     for p in ranked:
-        if p.terms != chosen.terms and not math.isfinite(p.law_p[0]):
-            if _tied(_as_trial(chosen), _as_trial(p), dof_of(exps, chosen.fit or current)):
-                done[p.terms] = _law(exps, p, substeps)
-    rivals = [done[p.terms] for p in ranked]
-    alts = _rivals(exps, chosen, [r for r in rivals if math.isfinite(r.law_p[0])], tested, substeps)
-    trial = Trial(
-        chosen.terms[0],
-        chosen.cost,
-        chosen.improvement,
-        math.nan,
-        min(chosen.member_p),
-        min(chosen.member_p),
-        math.nan,
-        True,
-        chosen.held_out,
-        chosen.fit,
-        min(chosen.law_p),
-    )
+        if p.terms != chosen.terms and not p.law_p and _tied(_as_trial(chosen), _as_trial(p), dof):
+            done[p.terms] = _law(exps, p, substeps)
+    rivals = [done[p.terms] for p in ranked if done[p.terms].law_p]
+    alts = _rivals(exps, chosen, rivals, tested, substeps)
+    pmin, lmin = _least(chosen.member_p), _least(chosen.law_p)
+    trial = Trial(chosen.terms[0], chosen.cost, chosen.improvement, math.nan, pmin, pmin, math.nan, True,
+                  chosen.held_out, chosen.fit, lmin)  # fmt: skip
     return PairChoice(trial, chosen.terms, tuple(alts)), tuple(done.values())
 
 
@@ -326,4 +390,15 @@ def text(steps: Sequence[Any]) -> str:
     )
 
 
-__all__ = ["ENABLED", "POOL", "PairTrial", "PairChoice", "pair_step", "fit_pairs", "law_holds", "text"]
+__all__ = [
+    "ENABLED",
+    "POOL",
+    "TRIPLES",
+    "fit_triples",
+    "PairTrial",
+    "PairChoice",
+    "pair_step",
+    "fit_pairs",
+    "law_holds",
+    "text",
+]
