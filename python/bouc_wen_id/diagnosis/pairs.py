@@ -130,6 +130,7 @@ def _member_tests(
     without: Without,
     level: float,
     n_cands: int,
+    members: Sequence[str] = (),
 ) -> tuple[tuple[float, ...], str]:
     """Each member's test given the others (rule 1 of the module docstring), ``without[m]`` the model of the
     others: (adjusted p's, why refused)."""
@@ -145,7 +146,7 @@ def _member_tests(
         # Its share of the excess the others leave (what the next single step would ask of it).
         left = max(c_other - dof_of(exps, f_other), 0.0)
         share = min((c_other - fit.cost) / left, 1.0) if left > 0 else 0.0
-        given = "+".join(t for t in without if t != m)
+        given = " + ".join(t for t in (members or without) if t != m)
         if why:
             continue
         if not (_admissible(fit, m) and not at_null(fit, m)):
@@ -236,7 +237,7 @@ def fit_triples(
         if f is None or not math.isfinite(f.cost):
             out.append(_no_fit(terms))
             continue
-        _, why = _member_tests(exps, f, {c.term: (base.cost, base.fit)}, level, n_cands)
+        _, why = _member_tests(exps, f, {c.term: (base.cost, base.fit)}, level, n_cands, terms)
         without: Without = {}
         for m in base.terms if not why else ():
             rest = [t for t in base.terms if t != m][0]
@@ -385,8 +386,8 @@ def text(steps: Sequence[Any]) -> str:
         return ""
     what = "; ".join(" with ".join(TERMS[t].place_label() for t in p) for p in named)
     return (
-        f"; named together: {what} (neither alone fits with one value for every experiment; jointly each "
-        "does, and each is significant given the other)"
+        f"; named together: {what} (none alone fits with one value for every experiment; jointly each does, "
+        "and each is significant given the others)"
     )
 
 
