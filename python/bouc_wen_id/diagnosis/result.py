@@ -171,7 +171,7 @@ class Diagnosis:
             )
         for k, st in enumerate(self.steps, 1):
             lines.append("")
-            chosen = st.chosen or "none"
+            chosen = " + ".join(st.pair) + " (together)" if getattr(st, "pair", ()) else (st.chosen or "none")
             lines.append(
                 f"step {k}{' (targeted: the global test accepted the plain model)' if st.targeted else ''}: "
                 f"from chi2 = {st.before_cost:.6g} (dof {st.before_dof}); chosen: {chosen}"
