@@ -391,7 +391,37 @@ def text(steps: Sequence[Any]) -> str:
     )
 
 
+def refusal_text(steps: Sequence[Any]) -> str:
+    """What the pair step did at the steps where candidates' laws failed: the set it named there, or how
+    many sets it fitted and why the best was refused, or that it did not run (a step that names a single
+    term never reaches it)."""
+    if not ENABLED:
+        return "the pair step is switched off"
+    out = []
+    for k, st in enumerate(steps, 1):
+        tried = [p for p in getattr(st, "pairs", ()) if isinstance(p, PairTrial)]
+        if not st.law_failed:
+            continue
+        if getattr(st, "pair", ()):
+            who = " with ".join(TERMS[t].place_label() for t in st.pair)
+            out.append(f"at step {k} the pair step named {who}, these not among them")
+        elif tried:
+            fitted = sorted((p for p in tried if math.isfinite(p.cost)), key=lambda p: p.cost)
+            best = fitted[0] if fitted else tried[0]
+            who = " with ".join(TERMS[t].place_label() for t in best.terms)
+            out.append(
+                f"at step {k} the pair step fitted {len(fitted)} sets and named none; the best, {who}: "
+                f"{best.refused or 'not reached'}"
+            )
+        else:
+            out.append(
+                f"at step {k} the pair step did not run: it runs only where a step names no single term"
+            )
+    return "; ".join(out)
+
+
 __all__ = [
+    "refusal_text",
     "ENABLED",
     "POOL",
     "TRIPLES",

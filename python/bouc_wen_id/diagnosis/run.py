@@ -27,6 +27,7 @@ from . import (
     loop_centre,
     pairs,
     resolution,
+    revisit,
     zero_drift,
 )
 from .candidates import step_candidates
@@ -64,7 +65,7 @@ from .pinch_shape import is_pinching
 from .progress import Progress, ProgressCallback, reporter
 from .restarts import rebased_plain
 from .result import Diagnosis, ModelSummary, NamedTerm, Status, term_symbol_unit
-from .select import ALPHA, Alternative, FoldCache, Step, dof_of, forward_select, held_out
+from .select import ALPHA, Alternative, FoldCache, Step, dof_of, held_out
 from .settling import (  # noqa: F401 (quantisation_step: importable here as before)
     LEFT_OUT,
     _check_experiments,
@@ -713,7 +714,7 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
         notes.append(NO_TARGETED_STEP)
         final, steps = start, list[Step]()
     else:
-        final, steps = forward_select(fsx, start, steady, adequate, substeps, targeted=targeted, **kw)
+        final, steps = revisit.select(fsx, start, steady, adequate, substeps, targeted=targeted, **kw)
         plain, start = rebased_plain(plain, start, steps)  # a first step that refitted an unconverged start
     notes += fit_notes(plain, final)  # a fit stopped on a face of its admissible range (issue 19, branch lm)
     dexps = detrended(fexps, deg, s.y) if deg is not None and named_deg else fexps
@@ -881,7 +882,9 @@ def _unphysical_text(terms: Sequence[NamedTerm]) -> str:
 
 def _law_text(steps: Sequence[Step]) -> str:
     """What the verdict says of candidates that fit part of the misfit with a value that differs between
-    experiments (select.law_test): stand-ins for physics outside the library, tested and not named."""
+    experiments (select.law_test): stand-ins for physics outside the library or for several library terms
+    at once that the pair step (pairs.py) could not name, tested and not named; with why the pair step did
+    not name them."""
     failed: dict[str, float] = {}
     # A named term's law-failed alternative (select.preferred_by_fit) is said there: at no step a stand-in.
     listed = {
@@ -891,8 +894,9 @@ def _law_text(steps: Sequence[Step]) -> str:
         for tr in st.trials:
             if tr.term in st.law_failed and tr.term not in failed and tr.term not in listed:
                 failed[tr.term] = tr.law_p_value
+    named = pairs.text(steps) + revisit.text(steps)  # sets named or kept as alternatives (pairs, revisit)
     if not failed:
-        return pairs.text(steps)  # a pair named where each member's law failed alone (pairs.py)
+        return named  # a pair named where each member's law failed alone (pairs.py)
     what = ", ".join(f"{TERMS[t].place_label()} (p = {p:.2g})" for t, p in failed.items())
     shape = "; for Dahl friction, or a branch shape not its own" if any(map(has_branch, failed)) else ""
     shape += "; for pinching, or a band not its own" if any(map(is_pinching, failed)) else ""
@@ -901,8 +905,9 @@ def _law_text(steps: Sequence[Step]) -> str:
             "; for the measured input waveform, or G at the input's harmonics not the one carried from the "
             "tested band (lam far from 1)"
         )
-    return pairs.text(steps) + (
+    return named + (
         f"; not named: {what}: each fits part of the misfit, but with a value that differs between "
         f"experiments (its law, one value for all, fails{shape}): it stands in for physics outside the "
-        "library"
+        f"library, or for several library terms at once beyond what the pair step could name ("
+        f"{pairs.refusal_text(steps)})"
     )

@@ -192,8 +192,8 @@ class Alternative:
     #: as the chosen term (:func:`preferred_by_fit`); NaN for a rival whose law holds or was not tested.
     law_p_value: float = math.nan
 
-    def to_dict(self) -> dict[str, Any]:
-        return dict(self.__dict__)
+    def to_dict(self) -> dict[str, Any]:  # NaN (no correlation: a set's rival; no law p) is None
+        return {k: _n(v) if isinstance(v, float) else v for k, v in vars(self).items()}
 
 
 @dataclass(frozen=True)
