@@ -5,6 +5,7 @@ noise levels, diagnosed as a user would; prints the verdict and every set the pa
 
     PYTHONPATH=python python studies/several_terms.py readme3 1
     PYTHONPATH=python python studies/several_terms.py res_pl 3   # also readme_vp, res_vl, first_vp, outside
+    PYTHONPATH=python python studies/several_terms.py kc_u_2p 3  # the revisit (revisit.py)
 """
 
 from __future__ import annotations
@@ -14,7 +15,7 @@ import time
 from typing import Any
 
 import bouc_wen_id as bw
-from bouc_wen_id.terms import Play, SensorLag, Term, Viscous
+from bouc_wen_id.terms import Play, SensorLag, Stiffness, Term, Viscous
 
 README_G = bw.TransferFunction([25.0], [1.0, 2.0, 25.0], delay=0.05)
 README_F = [1, 2, 3, 4, 5, 6.5, 8]
@@ -38,6 +39,14 @@ PLANTS: dict[str, tuple[Any, tuple[Term, ...], list[float], float]] = {
         bw.TransferFunction([36.0], [1.0, 3.0, 36.0], delay=0.03),
         (Play(0.1), SensorLag(0.015)),
         [0.5, 1, 2, 3, 4, 5],
+        0.01,
+    ),
+    # Two terms on u through a two-pole G without delay (poles 1.2 and 7 rad/s): 1/G is a polynomial, so
+    # viscous damping on x passes its law at step 1 and the pair is found only by the revisit (revisit.py).
+    "kc_u_2p": (
+        bw.TransferFunction([12.6], [1.0, 8.2, 8.4]),
+        (Stiffness(0.1), Viscous(0.02)),
+        [0.6, 1, 1.5, 3, 4.5, 6],
         0.01,
     ),
 }
@@ -71,7 +80,9 @@ def main() -> None:
     for st in d.steps:
         print("   step", st.chosen, getattr(st, "pair", ()), "law failed:", st.law_failed)
         for p in getattr(st, "pairs", ()):
-            if p.refused != "no fit":
+            if not hasattr(p, "refused"):  # the revisit's record (revisit.py)
+                print("     revisit of", p.replaced, "pool", p.pool, "->", p.terms, p.outcome[:90])
+            elif p.refused != "no fit":
                 print("     set", p.terms, f"{p.cost:.4g}", [f"{v:.2g}" for v in p.law_p], p.refused[:90])
 
 

@@ -104,12 +104,12 @@ def _base(steps: Sequence[Step], j: int, plain: AugFit) -> Optional[AugFit]:
     return next((tr.fit for tr in prev.trials if tr.term == prev.chosen), None)
 
 
-def _lead(last: Step) -> Optional[Trial]:
-    """The last step's best candidate when it removes most of the excess left and failed its law."""
+def _leads(last: Step) -> list[Trial]:
+    """The last step's candidates that removed at least :data:`SHARE` of the excess left and failed their
+    laws, best first; empty unless the step's best candidate is one of them."""
     passed = sorted((tr for tr in last.trials if tr.passed and math.isfinite(tr.cost)), key=lambda t: t.cost)
-    if not passed or passed[0].term not in last.law_failed or passed[0].fit is None:
-        return None
-    return passed[0] if passed[0].share >= SHARE else None
+    out = [tr for tr in passed if tr.term in last.law_failed and tr.fit is not None and tr.share >= SHARE]
+    return out if out and passed[0] is out[0] else []
 
 
 def revisit(
@@ -130,8 +130,8 @@ def revisit(
     last = steps[-1]
     # The last named single term; the steps between it and the last may only have named sets (pairs.py).
     j = max((k for k, s in enumerate(steps) if s.chosen is not None and not s.pair), default=-1)
-    lead = _lead(last)
-    if j < 0 or lead is None or adequate(final):
+    leads = _leads(last)
+    if j < 0 or not leads or adequate(final):
         return final, steps
     st = steps[j]
     named = str(st.chosen)
@@ -141,14 +141,14 @@ def revisit(
     by = {tr.term: tr for tr in st.trials if tr.fit is not None and math.isfinite(tr.cost)}
     single = by.get(named)
     later = [t for s in steps[j + 1 :] for t in s.pair]  # members of the sets named after it
-    first = [t for t in dict.fromkeys((lead.term, *later)) if t in by and t != named]
-    others = sorted((by[t] for t in st.law_failed if t in by and t not in first), key=lambda t: t.cost)
-    if single is None or single.fit is None or lead.term not in by:
+    # What could replace the named term: the later steps' leads and named members, step j's law-failed
+    # candidates; by their cost at step j, the best POOL paired with each other, the best with the rest.
+    terms = dict.fromkeys((*(tr.term for tr in leads), *later, *st.law_failed))
+    cands = sorted((by[t] for t in terms if t in by and t != named), key=lambda t: t.cost)
+    if single is None or single.fit is None:
         return final, steps
-    order = sorted([by[t] for t in first], key=lambda t: t.cost)[: pairs.POOL]
-    order = sorted([*order, *others[: max(pairs.POOL - len(order), 0)]], key=lambda t: t.cost)
-    rest = [t for t in others if t not in order]
-    pool = tuple(t.term for t in (*order, *rest))
+    order, rest = cands[: pairs.POOL], cands[pairs.POOL :]
+    pool = tuple(t.term for t in cands)
     if len(pool) < 2:
         return final, steps
     level = 0.5 * alpha if st.targeted else alpha
