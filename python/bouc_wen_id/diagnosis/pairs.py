@@ -29,6 +29,12 @@ whose laws hold, or one that fits at least as well and was passed over for its l
 experiment that would separate them. Physics outside the library stays "unexplained" when no pair of
 library terms fits it with one value each (the law of a stand-in still fails beside another stand-in).
 
+The same rules run once more, from an earlier model, in :mod:`.revisit`: where a single term was named and
+a later step's best candidate, removing most of what is left, fails its law (stiffness and viscous damping
+on u through a G without delay were named viscous damping on x), sets that could replace the named term
+are fitted from the model before it. Where a step's law-failed candidates stay unnamed, the verdict says
+what this step did there (:func:`refusal_text`).
+
 ``ENABLED`` switches the path off (then a step whose candidates all fail their laws ends as before).
 """
 
@@ -347,10 +353,12 @@ def pair_step(
     n_cands: int,
     held_out_test: bool = True,
     cache: Optional[FoldCache] = None,
+    pool_size: int = POOL,
 ) -> tuple[Optional[PairChoice], tuple[PairTrial, ...]]:
     """The pair (or triple) named at a step whose candidates (``order``: those that passed their own tests,
-    best first) all failed their laws, or None; with every set tried (module docstring)."""
-    pool = [tr for tr in order if tr.fit is not None and tr.term not in refused][:POOL]
+    best first) all failed their laws, or None; with every set tried (module docstring). The best
+    ``pool_size`` of ``order`` are paired with each other (the revisit pairs more: revisit.py)."""
+    pool = [tr for tr in order if tr.fit is not None and tr.term not in refused][:pool_size]
     passed = {tr.term for tr in order}
     others = [tr for tr in tested if tr.term not in passed and tr.fit is not None and math.isfinite(tr.cost)]
     tried = fit_pairs(exps, current, pool, others, fit_term, level, n_cands)

@@ -49,6 +49,9 @@ from .select import (
 
 #: Whether the revisit runs (module docstring).
 ENABLED = True
+#: The best this many candidates (by cost at the revisited step) are paired with each other (at most 10
+#: pair fits, only where the revisit runs); the best of them with the rest.
+POOL = 5
 #: The last step's best candidate must remove at least this share of the excess left ("most of it").
 SHARE = 0.5
 
@@ -70,6 +73,11 @@ class Revisit:
     tried: tuple[Any, ...] = field(default=(), compare=False)
     #: The members of the sets the selection named after ``replaced`` (replaced with it when named).
     later: tuple[str, ...] = ()
+
+    @property
+    def refused(self) -> str:
+        """As a :class:`.pairs.PairTrial`'s (both sit in ``Step.pairs``): "" when the set was named."""
+        return "" if self.outcome == "named" else self.outcome
 
     def to_dict(self) -> dict[str, Any]:
         def n(v: float) -> Optional[float]:
@@ -147,14 +155,25 @@ def revisit(
     cands = sorted((by[t] for t in terms if t in by and t != named), key=lambda t: t.cost)
     if single is None or single.fit is None:
         return final, steps
-    order, rest = cands[: pairs.POOL], cands[pairs.POOL :]
+    order, rest = cands[:POOL], cands[POOL:]
     pool = tuple(t.term for t in cands)
     if len(pool) < 2:
         return final, steps
     level = 0.5 * alpha if st.targeted else alpha
     fit_term = memo_fit_with(exps, substeps)
     choice, tried = pairs.pair_step(
-        exps, base, order, rest, [], fit_term, substeps, level, len(st.trials), use_held_out, cache
+        exps,
+        base,
+        order,
+        rest,
+        [],
+        fit_term,
+        substeps,
+        level,
+        len(st.trials),
+        use_held_out,
+        cache,
+        len(order),
     )
     if choice is None or choice.trial.fit is None:
         why = next((p.refused for p in sorted(tried, key=_cost) if p.refused), "no set fitted")
@@ -240,4 +259,4 @@ def text(steps: Sequence[Any]) -> str:
     return out
 
 
-__all__ = ["ENABLED", "SHARE", "Revisit", "records", "revisit", "select", "text"]
+__all__ = ["ENABLED", "POOL", "SHARE", "Revisit", "records", "revisit", "select", "text"]
