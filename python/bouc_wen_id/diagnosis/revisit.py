@@ -232,12 +232,15 @@ def records(steps: Sequence[Any]) -> list[Revisit]:
 
 
 def text(steps: Sequence[Any]) -> str:
-    """The verdict's clause on a revisit that named a set or found one the data cannot refuse."""
+    """The verdict's clause on a revisit: the set it named, one the data cannot refuse, or why none."""
     out = ""
     for r in records(steps):
-        if not r.terms:
-            continue
         one = " then ".join(TERMS[t].place_label() for t in (r.replaced, *r.later))
+        if not r.terms:  # the revisit ran and named nothing: said, with why (the pair rules' refusal)
+            n = sum(1 for p in r.tried if math.isfinite(_cost(p)))
+            out += f"; {one} revisited from the model before it ({n} sets of {len(r.pool)} candidates): "
+            out += r.outcome
+            continue
         both = " with ".join(TERMS[t].place_label() for t in r.terms)
         ho = (
             f"held-out cost {r.held_out_set:.1f} vs {r.held_out_single:.1f}"
