@@ -80,7 +80,7 @@ def main() -> None:
     for st in d.steps:
         print("   step", st.chosen, getattr(st, "pair", ()), "law failed:", st.law_failed)
         for p in getattr(st, "pairs", ()):
-X
+            if hasattr(p, "replaced"):  # the revisit's record (revisit.py)
                 print("     revisit of", p.replaced, "pool", p.pool, "->", p.terms, p.outcome[:90])
             elif p.refused != "no fit":
                 print("     set", p.terms, f"{p.cost:.4g}", [f"{v:.2g}" for v in p.law_p], p.refused[:90])
