@@ -8,11 +8,13 @@ left but fails its law beside the wrong term, and the verdict is "explained in p
 
 The revisit runs only there: the final model fails adequacy, the last step named nothing, and that step's
 best candidate (lowest cost of those that passed their own tests) removes at least :data:`SHARE` of the
-excess left but failed its law. The model before the last named single term (step ``j``) is taken again and
-the pair/triple step (:func:`.pairs.pair_step`, the same rules: each member significant given the others,
-every law holding jointly, held-out cost lower than that model's) is run on the candidates that could
-replace the named term: step ``j``'s law-failed candidates and the last step's best one, never the named
-term itself. A set found so is
+excess left but failed its law. The model before the last named single term (step ``j``; later steps may
+only have named sets) is taken again and the pair/triple step (:func:`.pairs.pair_step`, the same rules:
+each member significant given the others, every law holding jointly, held-out cost lower than that
+model's) is run on the candidates that could replace the named term: the law-failed candidates of step
+``j`` and of the last step, the members of sets named after ``j``, never the named term itself; the best
+:data:`POOL` by their cost at step ``j`` in pairs with each other, the best with the rest. A set found so
+is
 
 - **named in the named term's place** when it also passes adequacy (the model after it is tenable where the
   named term's is not) and its held-out cost is lower than the named term's; the named term is then said as
@@ -49,9 +51,9 @@ from .select import (
 
 #: Whether the revisit runs (module docstring).
 ENABLED = True
-#: The best this many candidates (by cost at the revisited step) are paired with each other (at most 10
+#: The best this many candidates (by cost at the revisited step) are paired with each other (at most 15
 #: pair fits, only where the revisit runs); the best of them with the rest.
-POOL = 5
+POOL = 6
 #: The last step's best candidate must remove at least this share of the excess left ("most of it").
 SHARE = 0.5
 
@@ -61,7 +63,7 @@ class Revisit:
     """The revisit of a named single term: the set tried in its place and what came of it."""
 
     replaced: str
-    #: The candidates the pair step was run on (step ``j``'s law-failed ones and the later step's best).
+    #: The candidates the pair step was run on (module docstring).
     pool: tuple[str, ...]
     #: The set that passed the pair rules (empty: none did).
     terms: tuple[str, ...]
@@ -149,9 +151,10 @@ def revisit(
     by = {tr.term: tr for tr in st.trials if tr.fit is not None and math.isfinite(tr.cost)}
     single = by.get(named)
     later = [t for s in steps[j + 1 :] for t in s.pair]  # members of the sets named after it
-    # What could replace the named term: the later steps' leads and named members, step j's law-failed
-    # candidates; by their cost at step j, the best POOL paired with each other, the best with the rest.
-    terms = dict.fromkeys((*(tr.term for tr in leads), *later, *st.law_failed))
+    # What could replace the named term: the later steps' leads and named members, step j's and the last
+    # step's law-failed candidates; by cost at step j, the best POOL paired with each other, the best with
+    # the rest.
+    terms = dict.fromkeys((*(tr.term for tr in leads), *later, *st.law_failed, *last.law_failed))
     cands = sorted((by[t] for t in terms if t in by and t != named), key=lambda t: t.cost)
     if single is None or single.fit is None:
         return final, steps
