@@ -11,8 +11,9 @@ best candidate (lowest cost of those that passed their own tests) removes at lea
 excess left but failed its law. The model before the last named single term (step ``j``; later steps may
 only have named sets) is taken again and the pair/triple step (:func:`.pairs.pair_step`, the same rules:
 each member significant given the others, every law holding jointly, held-out cost lower than that
-model's) is run on the candidates that could replace the named term: the law-failed candidates of step
-``j`` and of the last step, the members of sets named after ``j``, never the named term itself; the best
+model's) is run on the candidates that could replace the named term: its alternatives, the law-failed
+candidates of step ``j`` and of the last step, the members of sets named after ``j``, never the named term
+itself; the best
 :data:`POOL` by their cost at step ``j`` in pairs with each other, the best with the rest. A set found so
 is
 
@@ -151,10 +152,11 @@ def revisit(
     by = {tr.term: tr for tr in st.trials if tr.fit is not None and math.isfinite(tr.cost)}
     single = by.get(named)
     later = [t for s in steps[j + 1 :] for t in s.pair]  # members of the sets named after it
-    # What could replace the named term: the later steps' leads and named members, step j's and the last
-    # step's law-failed candidates; by cost at step j, the best POOL paired with each other, the best with
-    # the rest.
-    terms = dict.fromkeys((*(tr.term for tr in leads), *later, *st.law_failed, *last.law_failed))
+    # What could replace the named term: the later steps' leads and named members, its alternatives, step
+    # j's and the last step's law-failed candidates; by cost at step j, the best POOL paired with each
+    # other, the best with the rest.
+    rivals = [a.rival for a in st.alternatives]  # the named term's own alternatives (a tie, a place)
+    terms = dict.fromkeys((*(tr.term for tr in leads), *later, *rivals, *st.law_failed, *last.law_failed))
     cands = sorted((by[t] for t in terms if t in by and t != named), key=lambda t: t.cost)
     if single is None or single.fit is None:
         return final, steps
