@@ -6,16 +6,17 @@ viscous term on x, the per-experiment free |G| and phase absorbing the rest) mak
 its law at step 1 while each true term fails alone; at step 2 viscous damping on u removes most of what is
 left but fails its law beside the wrong term, and the verdict is "explained in part" by the wrong name.
 
-The revisit runs only there: the final model fails adequacy, the last step named nothing, and that step's
-best candidate (lowest cost of those that passed their own tests) removes at least :data:`SHARE` of the
-excess left but failed its law. The model before the last named single term (step ``j``; later steps may
-only have named sets) is taken again and the pair/triple step (:func:`.pairs.pair_step`, the same rules:
-each member significant given the others, every law holding jointly, held-out cost lower than that
+The revisit runs only there: the final model fails adequacy, the last step named nothing, and a step after the
+last named single term had as its best candidate (lowest cost of those that passed their own tests) one that
+removes at least :data:`SHARE` of the excess left but failed its law alone (that step may then have named a
+set with it: seed 1 of the same plant named viscous on x, then viscous on u with stiffness and inertia on x,
+99 % of the excess and still not adequate). The model before the last named single term (step ``j``; later
+steps may only have named sets) is taken again and the pair/triple step (:func:`.pairs.pair_step`, the same
+rules: each member significant given the others, every law holding jointly, held-out cost lower than that
 model's) is run on the candidates that could replace the named term: its alternatives, the law-failed
 candidates of step ``j`` and of the last step, the members of sets named after ``j``, never the named term
-itself; the best
-:data:`POOL` by their cost at step ``j`` in pairs with each other, the best with the rest. A set found so
-is
+itself; the best :data:`POOL` by their cost at step ``j`` in pairs with each other, the best with the rest. A
+set found so is
 
 - **named in the named term's place** when it also passes adequacy (the model after it is tenable where the
   named term's is not) and its held-out cost is lower than the named term's; the named term is then said as
@@ -115,11 +116,12 @@ def _base(steps: Sequence[Step], j: int, plain: AugFit) -> Optional[AugFit]:
     return next((tr.fit for tr in prev.trials if tr.term == prev.chosen), None)
 
 
-def _leads(last: Step) -> list[Trial]:
-    """The last step's candidates that removed at least :data:`SHARE` of the excess left and failed their
-    laws, best first; empty unless the step's best candidate is one of them."""
-    passed = sorted((tr for tr in last.trials if tr.passed and math.isfinite(tr.cost)), key=lambda t: t.cost)
-    out = [tr for tr in passed if tr.term in last.law_failed and tr.fit is not None and tr.share >= SHARE]
+def _leads(step: Step) -> list[Trial]:
+    """A step's candidates that removed at least :data:`SHARE` of the excess left and failed their laws
+    alone (also where the step then named a set of them: pairs.py), best first; empty unless the step's
+    best candidate is one of them."""
+    passed = sorted((tr for tr in step.trials if tr.passed and math.isfinite(tr.cost)), key=lambda t: t.cost)
+    out = [tr for tr in passed if not tr.law_holds and tr.fit is not None and tr.share >= SHARE]
     return out if out and passed[0] is out[0] else []
 
 
@@ -141,8 +143,8 @@ def revisit(
     last = steps[-1]
     # The last named single term; the steps between it and the last may only have named sets (pairs.py).
     j = max((k for k, s in enumerate(steps) if s.chosen is not None and not s.pair), default=-1)
-    leads = _leads(last)
-    if j < 0 or not leads or adequate(final):
+    leads = [tr for s in steps[j + 1 :] for tr in _leads(s)] if j >= 0 else []
+    if not leads or adequate(final):
         return final, steps
     st = steps[j]
     named = str(st.chosen)
