@@ -679,6 +679,9 @@ def run_case(case: Case) -> dict[str, Any]:
                    plain_p=float(d.plain.p_value))  # fmt: skip
         rec["bad_explained"] = d.status == "explained" and float(d.final.p_value) < 0.05
         rec["input_named"] = any(t.term == "distortion" for t in d.named)
+        rec["pair_step"] = [
+            list(getattr(st, "pair", ())) or "tried" for st in d.steps if getattr(st, "pairs", ())
+        ]
         rec["place_alts"] = [f"{a.term}~{a.rival}" for a in d.alternatives if _other_place(a.term, a.rival)]
     except Exception as exc:  # a crash is a finding, with its text; a named error of the library is apart
         import bouc_wen_id.errors as bwe

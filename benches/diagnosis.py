@@ -426,6 +426,10 @@ def run_new_case(
             row["error"] = f"{type(exc).__name__}: {exc}"
             return row
     row["seconds"] = time.perf_counter() - t0
+    # The pair step (diagnosis/pairs.py): the set named where every single law failed, or "tried".
+    row["pair_step"] = [
+        list(getattr(st, "pair", ())) or "tried" for st in d.steps if getattr(st, "pairs", ())
+    ]
     lib = library_effects()
     truth = (lib[name].base_kind if name in lib else name) if skind in ("library", "structure") else None
     placed = name in gen.MECHANICAL or name in lib

@@ -430,9 +430,10 @@ def _selection_html(d: Diagnosis) -> list[str]:
             ]
             for t in st.trials
         ]
+        chosen = " + ".join(st.pair) if getattr(st, "pair", ()) else (st.chosen or "none")  # pairs.py
         parts.append(
             f"<p>Step {k}: from χ² = {_g(st.before_cost, '.6g')} (dof {st.before_dof}); chosen: "
-            f"<b>{html.escape(st.chosen or 'none')}</b></p>"
+            f"<b>{html.escape(chosen)}</b></p>"
             + _table(rows, ["term", "χ²", "F", "p (Bonferroni)", "share of excess", "held-out"])
         )
     deg = d.degradation

@@ -168,13 +168,18 @@ class Diagnosis:
                 if not math.isfinite(a.law_p_value)
                 else f", though its law fails (p = {a.law_p_value:.2g})"
             )
+            why = (
+                f"parameter correlation {a.correlation:+.3f}"
+                if math.isfinite(a.correlation)  # a set's rival (pairs.py): no one parameter pair
+                else "improvements within their uncertainty"
+            )
             lines.append(
-                f"alternative: {rival} fits as well as {term}{law} (parameter correlation "
-                f"{a.correlation:+.3f}); to separate them: {a.separating_experiment}"
+                f"alternative: {rival} fits as well as {term}{law} ({why}); to separate them: "
+                f"{a.separating_experiment}"
             )
         for k, st in enumerate(self.steps, 1):
             lines.append("")
-            chosen = st.chosen or "none"
+            chosen = " + ".join(st.pair) + " (together)" if getattr(st, "pair", ()) else (st.chosen or "none")
             lines.append(
                 f"step {k}{' (targeted: the global test accepted the plain model)' if st.targeted else ''}: "
                 f"from chi2 = {st.before_cost:.6g} (dof {st.before_dof}); chosen: {chosen}"

@@ -28,7 +28,9 @@ from . import (
     inputs,
     law_untested,
     loop_centre,
+    pairs,
     resolution,
+    revisit,
     speed,
     zero_drift,
 )
@@ -754,22 +756,24 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
         p = p_of(fit)
         return bool(math.isfinite(p) and p >= alpha)
 
-    # The plain model's gate: the global test at alpha / 2, and when it accepts, the targeted step at the
-    # other alpha / 2 (select.py; design.md 10.3), only on measured noise (gate.plain_gate, across's too).
+    # The plain model's gate: the global test at alpha / 2, and when it accepts, the targeted step's tests at
+    # the other alpha / 2, only on measured noise (select.py's docstring; design.md 10.3; gate.plain_gate).
     moved = named_deg or before.drift_detected
     passes, targeted = gate.plain_gate([p_of(start)], alpha, [moved], [setup.measured_noise])
     cache: FoldCache = {}
     steady = step_candidates(cands, pure_sines=False)  # the planner's family too (candidates.py)
     kw: dict[str, Any] = {"alpha": alpha, "use_held_out": setup.held_out_test, "cache": cache}
+    kw["pair_step"] = pairs.pair_step if pairs.ENABLED else None  # two large terms at once (pairs.py)
     kw["on_trial"] = lambda k, t, i, n: setup.report(f"step {k}: fitting candidate {t}", i, n)
     if passes and not targeted:
         notes.append(NO_TARGETED_STEP)
         final, steps = start, list[Step]()
     else:
-        # The targeted step after a named one (after_named.py); not on short records, where a settling
-        # centre's transient is still in the loops (centre_decay.py) and a second term would take it up.
+        # The targeted step after a named one (after_named.py), not on short records (centre_decay.py);
         again = not moved and setup.measured_noise and all(e.dc.size >= zero_drift.MIN_PERIODS for e in exps)
         final, steps = after_named.select(fsx, start, steady, adequate, p_of, substeps, targeted, again, **kw)
+        # then a named single term whose later lead failed its law is revisited (revisit.py).
+        final, steps = revisit.after(fsx, start, final, steps, adequate, substeps, **kw)
         plain, start = rebased_plain(plain, start, steps)  # a first step that refitted an unconverged start
     notes += fit_notes(plain, final)  # a fit stopped on a face of its admissible range (issue 19, branch lm)
     dexps = detrended(fexps, deg, s.y) if deg is not None and named_deg else fexps
@@ -936,7 +940,9 @@ def _unphysical_text(terms: Sequence[NamedTerm]) -> str:
 
 def _law_text(steps: Sequence[Step]) -> str:
     """What the verdict says of candidates that fit part of the misfit with a value that differs between
-    experiments (select.law_test): stand-ins for physics outside the library, tested and not named."""
+    experiments (select.law_test): stand-ins for physics outside the library or for several library terms
+    at once that the pair step (pairs.py) could not name, tested and not named; with why the pair step did
+    not name them."""
     failed: dict[str, float] = {}
     # A named term's law-failed alternative (select.preferred_by_fit) is said there: at no step a stand-in.
     listed = {
@@ -946,8 +952,9 @@ def _law_text(steps: Sequence[Step]) -> str:
         for tr in st.trials:
             if tr.term in st.law_failed and tr.term not in failed and tr.term not in listed:
                 failed[tr.term] = tr.law_p_value
+    named = pairs.text(steps) + revisit.text(steps)  # sets named or kept as alternatives (pairs, revisit)
     if not failed:
-        return ""
+        return named  # a pair named where each member's law failed alone (pairs.py)
     what = ", ".join(f"{TERMS[t].place_label()} (p = {p:.2g})" for t, p in failed.items())
     shape = "; for Dahl friction, or a branch shape not its own" if any(map(has_branch, failed)) else ""
     shape += "; for pinching, or a band not its own" if any(map(is_pinching, failed)) else ""
@@ -956,8 +963,9 @@ def _law_text(steps: Sequence[Step]) -> str:
             "; for the measured input waveform, or G at the input's harmonics not the one carried from the "
             "tested band (lam far from 1)"
         )
-    return (
+    return named + (
         f"; not named: {what}: each fits part of the misfit, but with a value that differs between "
         f"experiments (its law, one value for all, fails{shape}): it stands in for physics outside the "
-        "library"
+        f"library, or for several library terms at once beyond what the pair step could name ("
+        f"{pairs.refusal_text(steps)})"
     )

@@ -52,13 +52,13 @@ from numpy.typing import NDArray
 
 from ..augmented import AugExperiment, AugFit, augmented_output
 from ..errors import BudgetExceededError
-from ..terms import TERMS, Distortion, Stiffness, physical_value
+from ..terms import TERMS, Stiffness, physical_value
 from . import fit_share, fitting, free_dc, speed
 from .beside import only_beside
 from .fitting import best_of, fit_from, fit_own, fit_with, subset
-from .pinch_shape import band_test, is_pinching
+from .law import LAW_RCOND, contrast_statistic, element_law_test, law_rows, law_test
 from .restarts import rebase, wide_fit
-from .shape import LAW_WINDOW, shape_test, spectral_meat
+from .shape import LAW_WINDOW
 
 FloatArray = NDArray[np.float64]
 
@@ -192,8 +192,8 @@ class Alternative:
     #: as the chosen term (:func:`preferred_by_fit`); NaN for a rival whose law holds or was not tested.
     law_p_value: float = math.nan
 
-    def to_dict(self) -> dict[str, Any]:
-        return dict(self.__dict__)
+    def to_dict(self) -> dict[str, Any]:  # NaN (no correlation: a set's rival; no law p) is None
+        return {k: _n(v) if isinstance(v, float) else v for k, v in vars(self).items()}
 
 
 @dataclass(frozen=True)
@@ -220,6 +220,10 @@ class Step:
     #: (NaN: not refitted); ``base`` is that refit (the model ``before_cost`` is of).
     refitted_from: float = math.nan
     base: Optional[AugFit] = field(default=None, repr=False, compare=False)
+    #: Both terms when the step named a pair (:mod:`.pairs`: every candidate's law failed alone); ``chosen``
+    #: is then the first. ``pairs``: the pairs that step tried (:class:`.pairs.PairTrial`), with their tests.
+    pair: tuple[str, ...] = ()
+    pairs: tuple[Any, ...] = ()
 
     def to_dict(self) -> dict[str, Any]:
         out = {
@@ -237,6 +241,9 @@ class Step:
             out["unphysical_places"] = list(self.unphysical_places)
         if math.isfinite(self.refitted_from):  # likewise
             out["refitted_from"] = self.refitted_from
+        if self.pairs:  # likewise: the pair step ran (pairs.py)
+            out["pair"] = list(self.pair)
+            out["pairs"] = [p.to_dict() for p in self.pairs]
         return out
 
 
@@ -336,149 +343,6 @@ def _correlation(fit: AugFit, a: str, b: str) -> float:
     if not (denom > 0 and math.isfinite(denom)):
         return math.nan
     return float(np.clip(-info[0, 1] / denom, -1.0, 1.0))
-
-
-#: Relative threshold of the law test: a column of the term below it (of its largest) is taken as zero (the
-#: term does not act there), and the contrasts' covariance is inverted, and its degrees of freedom counted,
-#: over the eigenvalues above it (of the largest).
-LAW_RCOND = 1e-10
-
-
-def law_test(exps: Sequence[AugExperiment], fit: AugFit, term: str, substeps: int) -> float:
-    """p-value of the term's law: one value shared by every experiment (the library's claim for a term).
-
-    A Wald test, valid under misfit, of the term's parameter freed per experiment: at ``fit``, one
-    Gauss-Newton step of the model whose shared column of the term is split by experiment (``D``), beside
-    the shared Bouc-Wen parameters, every other term and each experiment's own (|G|, phi) (``J``); the
-    m - 1 contrasts of the m per-experiment values against chi-square(m - 1). Their covariance is a
-    sandwich, ``B M B`` with ``B = ([J D]^T [J D])^+``: the meat ``M`` takes each experiment's residual
-    (after the step) as a stationary periodic process with its own spectrum (the smoothed periodogram,
-    :func:`shape.spectral_meat`), not white noise. A misfit sits in a few low harmonics, the same ones the
-    term's column fills, so its leak into each experiment's value is that harmonic power projected on the
-    column, not the residual variance per sample: with thousands of samples the per-sample F test called
-    every leak "significant" (the MR damper at chi2/dof 84-556: p = 1e-58). Where the model fits (white
-    residual at the noise floor) the meat is the classical one and the test the classical score/Wald
-    test. Only the experiments the term acts on (a non-zero column) are compared. NaN with fewer than two
-    of them or a column the Jacobian cannot give.
-    """
-    from scipy.special import chdtrc
-
-    par = fit.params
-    m = len(exps)
-    if m < 2 or term not in par.terms:
-        return math.nan
-    # A two-parameter element (Dahl friction: its level and its pre-sliding stiffness) claims both values
-    # for all experiments: both columns are freed per experiment, 2 (m - 1) contrasts.
-    comp = TERMS[term].companion if term in TERMS else ""
-    ks = [3 + par.terms.index(t) for t in (term, comp) if t and t in par.terms]
-    nk = len(ks)
-    nsh = 3 + len(par.terms) - nk
-    xs, res = [], []
-    try:
-        for i, e in enumerate(exps):
-            out = augmented_output(e, par, i, substeps=substeps, jacobian=True)
-            x = np.zeros((e.ybar.size, nsh + (2 + nk) * m))
-            x[:, :nsh] = np.delete(out.jacobian, ks, axis=1)
-            x[:, nsh + 2 * i : nsh + 2 * i + 2] = out.own_jacobian
-            for j, k in enumerate(ks):
-                x[:, nsh + 2 * m + j * m + i] = out.jacobian[:, k]
-            sw = math.sqrt(e.weight)
-            xs.append(sw * free_dc.centred(e, x))  # a free DC (free_dc.py): no weight on the mean
-            res.append(sw * free_dc.centred(e, e.ybar - out.y))
-    except BudgetExceededError:
-        raise  # the user's budget is theirs: never turned into "the law is not tested"
-    except Exception:  # noqa: BLE001 - a model the core cannot differentiate: the law is not tested
-        return math.nan
-    xa, r = np.vstack(xs), np.concatenate(res)
-    if not (np.all(np.isfinite(xa)) and np.all(np.isfinite(r))):
-        return math.nan
-    scale = np.linalg.norm(xa, axis=0) + 1e-300
-    xa = xa / scale
-    sv = np.linalg.svd(xa, compute_uv=False)
-    rank = int(np.sum(sv > 1e-10 * sv[0])) + free_dc.count(exps)  # + the centred DCs' dof
-    beta = np.linalg.lstsq(xa, r, rcond=1e-10)[0]
-    if r.size - rank < 1:
-        return math.nan
-    bread = np.linalg.pinv(xa.T @ xa, rcond=1e-12)
-    meat = np.zeros_like(bread)
-    start = 0
-    for x in xs:
-        n_i = x.shape[0]
-        sl = slice(start, start + n_i)
-        meat += spectral_meat(xa[sl], r[sl] - xa[sl] @ beta, r.size / (r.size - rank))
-        start += n_i
-    cov = bread @ meat @ bread
-    got = contrast_statistic(
-        beta, cov, scale, [nsh + 2 * m + q * m + law_rows(exps, term) for q in range(nk)]
-    )
-    if got is None:
-        return math.nan
-    stat, df = got
-    return float(chdtrc(df, max(stat, 0.0)))
-
-
-def law_rows(exps: Sequence[AugExperiment], term: str) -> np.ndarray:
-    """The experiments whose values the law compares: those with a pure-sine input when at least two have
-    one and some input is not a sine (its ``waveform``: an actuator that clips). The model's latent ``x`` is
-    a sine there, the true one carries the input's harmonics through G, and the term's value fitted on such
-    an experiment takes them up (blind ``viscous@x:30:0:clipped``: its law failed at p = 0.009 with the
-    clipped experiments in, the term was named from the six clean ones alone). Every experiment otherwise,
-    and for the input's own term (``distortion``, which acts only where the input is not a sine)."""
-    clean = [i for i, e in enumerate(exps) if not e.waveform.size]
-    if term == Distortion.kind or len(clean) < 2 or len(clean) == len(exps):
-        return np.arange(len(exps))
-    return np.array(clean)
-
-
-def contrast_statistic(
-    beta: np.ndarray, cov: np.ndarray, scale: np.ndarray, groups: Sequence[np.ndarray]
-) -> Optional[tuple[float, int]]:
-    """The law test's Wald statistic and its degrees of freedom: ``beta`` and ``cov`` in scaled coordinates
-    (column ``c``'s value is ``beta[c] / scale[c]``), each group the columns of one claimed value freed per
-    experiment; None when no group has two experiments the term acts on, or nothing is left to test.
-
-    Contrasts of the per-experiment values, each against the experiment of the largest column, among those
-    whose column is not zero (below :data:`LAW_RCOND` of the largest): an experiment the term does not act
-    on (the input-waveform term on a clean sine) has no value of its own to compare. Each row is normalised,
-    so a small column (1e-6..1e-9 of the largest: a nearly clean input) does not scale every row by its
-    1/scale and push the informative contrasts below the pseudo-inverse's cut (review of session 30: with
-    each against the last, the statistic collapsed to ~0, p = 1, a real law failure hidden); the inverse
-    and the degrees of freedom are taken over the same eigenvalues (above :data:`LAW_RCOND` of the
-    largest)."""
-    rows = []
-    for cols in groups:
-        seen = cols[scale[cols] > LAW_RCOND * scale[cols].max()]
-        if seen.size < 2:
-            continue
-        ref = seen[int(np.argmax(scale[seen]))]
-        for c in seen[seen != ref]:
-            row = np.zeros(beta.size)
-            row[c], row[ref] = 1.0 / scale[c], -1.0 / scale[ref]
-            rows.append(row / np.linalg.norm(row))
-    if not rows:
-        return None
-    contrast = np.array(rows)
-    d = contrast @ beta
-    w, vec = np.linalg.eigh(contrast @ cov @ contrast.T)
-    keep = w > LAW_RCOND * float(w.max())
-    stat = float(np.sum((vec[:, keep].T @ d) ** 2 / w[keep]))
-    df = int(np.count_nonzero(keep))
-    return (stat, df) if df > 0 and math.isfinite(stat) else None
-
-
-def element_law_test(exps: Sequence[AugExperiment], fit: AugFit, term: str, substeps: int) -> float:
-    """p-value of everything a term claims: :func:`law_test` (one value for all experiments) and, for a
-    two-parameter element (Dahl friction), its branch shape too (:func:`shape.shape_test`, exponent 1),
-    Bonferroni over the two. The bench's Iwan loop (a sum of stops on x) was named Dahl friction "in part"
-    in 9 of 20 cases at 30x with its values shared: its branch is not Dahl's."""
-    p = law_test(exps, fit, term, substeps)
-    if is_pinching(term):  # pinching claims its band too (pinch_shape.band_test: centre and width)
-        ps = [v for v in (p, band_test(exps, fit, term, substeps)) if math.isfinite(v)]
-        return min(1.0, len(ps) * min(ps)) if ps else math.nan
-    if not (term in TERMS and TERMS[term].companion):
-        return p
-    ps = [v for v in (p, shape_test(exps, fit, term, substeps)) if math.isfinite(v)]
-    return min(1.0, len(ps) * min(ps)) if ps else math.nan
 
 
 #: Candidate designs for separating two alternatives: (amplitude multiple, frequency multiple).
@@ -857,6 +721,50 @@ def _pairs(terms: Sequence[str]) -> list[tuple[str, str]]:
     return [(t, u) for t in terms for u in siblings(t) if u in terms]
 
 
+#: The context of one selection step the step's helpers read: (substeps, the step's level, the number of
+#: candidates, the held-out test on, the held-out cache).
+StepContext = tuple[int, float, int, bool, FoldCache]
+
+
+def _choose(
+    exps: Sequence[AugExperiment],
+    current: AugFit,
+    trials: Sequence[Trial],
+    order: Sequence[Trial],
+    first: bool,
+    alone: dict[str, float],
+    alpha: float,
+    ctx: StepContext,
+) -> tuple[Optional[Trial], dict[str, Trial], list[str], list[str]]:
+    """One step's choice among ``order`` (the candidates that passed, best first): the first whose law holds
+    and whose held-out cost is lower; (chosen or None, the step's trials by term with their law p and
+    held-out, the law-failed candidates, those refused beside a Dahl element: beside.py)."""
+    substeps, _, _, use_held_out, memo = ctx
+    chosen: Optional[Trial] = None
+    final_trials = {tr.term: tr for tr in trials}
+    law_failed: list[str] = []
+    refused: list[str] = []  # needed only beside a Dahl element: its branch's family (beside.py)
+    for tr in order:
+        assert tr.fit is not None
+        if first and law_failed and not any(tr.term in siblings(t) for t in law_failed):
+            break  # the targeted step ends on a refused law, but for the same physics elsewhere
+        if only_beside(current, tr.term, alone.get(tr.term, math.nan), alpha):
+            refused.append(tr.term)
+            continue
+        law_p = element_law_test(exps, tr.fit, tr.term, substeps)
+        if math.isfinite(law_p) and law_p < LAW_ALPHA:
+            final_trials[tr.term] = replace(tr, law_p_value=law_p)
+            law_failed.append(tr.term)
+            continue
+        ho = held_out(exps, current, tr.fit, substeps, memo) if use_held_out else None
+        tr2 = replace(tr, held_out=ho, law_p_value=law_p)
+        final_trials[tr.term] = tr2
+        if ho is None or ho.improves:
+            chosen = tr2
+            break
+    return chosen, final_trials, law_failed, refused
+
+
 def forward_select(
     exps: Sequence[AugExperiment],
     plain: AugFit,
@@ -868,11 +776,14 @@ def forward_select(
     cache: Optional[FoldCache] = None,
     targeted: bool = False,
     on_trial: Optional[Any] = None,
+    pair_step: Optional[Callable[..., tuple[Any, tuple[Any, ...]]]] = None,
 ) -> tuple[AugFit, list[Step]]:
     """Forward selection from ``plain``; ``adequate(fit) -> bool`` is the stopping test. ``targeted``: the
     global test accepted ``plain`` at ``alpha / 2``; the first step is the targeted one (module docstring),
     its candidates tested at ``alpha / 2``, and selection ends there unless it names one. ``on_trial(step,
-    term, index, count)``, when given, is called before each candidate's fit (progress)."""
+    term, index, count)``, when given, is called before each candidate's fit (progress). ``pair_step``
+    (:func:`.pairs.pair_step`), when given, runs where a step named nothing while some candidate's law failed
+    (never the targeted first step): a pair it names joins the model at that step."""
     memo: FoldCache = {} if cache is None else cache
     fit_term = memo_fit_with(exps, substeps)
     current, steps, first, refitted_from = plain, list[Step](), targeted, math.nan
@@ -908,34 +819,23 @@ def forward_select(
             continue
         passed = sorted((tr for tr in trials if tr.passed), key=lambda tr: tr.cost)
         order = simpler_first(exps, passed, level / len(remaining))  # Bonferroni, as the candidates' tests
-        chosen: Optional[Trial] = None
-        final_trials = {tr.term: tr for tr in trials}
-        law_failed: list[str] = []
-        refused: list[str] = []  # needed only beside a Dahl element: its branch's family (beside.py)
         alone = {t.term: t.p_value for t in steps[0].trials} if steps else {}
-        for tr in order:
-            assert tr.fit is not None
-            if first and law_failed and not any(tr.term in siblings(t) for t in law_failed):
-                break  # the targeted step ends on a refused law, but for the same physics elsewhere
-            if only_beside(current, tr.term, alone.get(tr.term, math.nan), alpha):
-                refused.append(tr.term)
-                continue
-            law_p = element_law_test(exps, tr.fit, tr.term, substeps)
-            if math.isfinite(law_p) and law_p < LAW_ALPHA:
-                final_trials[tr.term] = replace(tr, law_p_value=law_p)
-                law_failed.append(tr.term)
-                continue
-            ho = held_out(exps, current, tr.fit, substeps, memo) if use_held_out else None
-            tr2 = replace(tr, held_out=ho, law_p_value=law_p)
-            final_trials[tr.term] = tr2
-            if ho is None or ho.improves:
-                chosen = tr2
-                break
+        ctx = (substeps, level, len(remaining), use_held_out, memo)
+        chosen, final_trials, law_failed, refused = _choose(
+            exps, current, trials, order, first, alone, alpha, ctx
+        )
         bad: list[str] = []  # the chosen term's other places that fit as well only non-physically
         tested = list(final_trials.values())
         alternatives = step_alternatives(
             exps, chosen, trials, order, tested, law_failed, fit_term, substeps, bad
         )
+        pair, tried = (
+            (None, ())
+            if pair_step is None or chosen is not None or first or not law_failed
+            else (pair_step(exps, current, order, tested, refused, fit_term, *ctx))
+        )
+        if pair is not None:  # every candidate's law failed alone; two of them hold jointly (pairs.py)
+            chosen, alternatives, law_failed = pair.trial, list(pair.alternatives), pair.unnamed(law_failed)
         steps.append(
             Step(
                 c0,
@@ -949,6 +849,8 @@ def forward_select(
                 tuple(bad),
                 refitted_from,
                 None if math.isnan(refitted_from) else current,
+                () if pair is None else pair.terms,
+                tried,
             )
         )
         first, refitted_from = False, math.nan
@@ -960,6 +862,9 @@ def forward_select(
 
 __all__ = [
     "forward_select",
+    "LAW_RCOND",
+    "contrast_statistic",
+    "law_rows",
     "held_out",
     "f_test",
     "Step",

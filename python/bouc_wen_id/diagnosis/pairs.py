@@ -1,0 +1,443 @@
+"""Two large terms at once: the pair step of the forward selection (issue 18).
+
+The forward selection (:func:`.select.forward_select`) adds one candidate per step. When two library terms
+are missing at once, each one alone absorbs part of the other's misfit with a value that differs between
+experiments, so each fails its law (:func:`.select.law_test`) and the step ends without a name: the
+README's three-term plant (viscous damping, play and a sensor lag) was "unexplained". Only then (a step
+that named nothing while some candidate's law failed; never the targeted first step, never a step that
+named a term) the best :data:`POOL` candidates that passed their own tests are fitted in pairs, and the
+best of them with each candidate that did not pass alone (the README plant's play and sensor lag remove
+nothing alone while viscous damping, 96 % of the excess, is missing), the second term added to the first's
+fit by the same machinery that fits one term (``fit_term``: the memoised :func:`.fitting.fit_with` with its
+wide restarts), and a pair is named only when
+
+1. the pair improves on the step's model by its joint F test (Bonferroni over every pair of the step's
+   candidates) and **each member is significant given the other**: its own nested F test against the model
+   of the other member alone, at the step's level after Bonferroni over the candidates (the single-term
+   test), a material share of the excess the other leaves, a physical value away from its null (the
+   Wald test at the step's level, :func:`.select.away_from_null`). A rival single term that matches the
+   pair's gain leaves one member with no gain of its own, so this test is also the rule against a
+   single-term rival;
+2. **each member's law holds** in the pair's fit (:func:`.select.element_law_test`, at
+   :data:`.select.LAW_ALPHA`): one value for every experiment, the claim a single term must meet;
+3. the pair improves the held-out fit (leave-one-experiment-out, as a single term must).
+
+The pairs that pass 1 are taken by cost; the first that passes 2 and 3 is named. A rival pair (or a single
+term whose law held) whose improvement is within the chosen pair's uncertainty (:func:`.select._tied`) and
+whose laws hold, or one that fits at least as well and was passed over for its law only (p above
+:data:`.select.PREFERRED_LAW_FLOOR`), is reported as alternatives of the members it replaces, with the
+experiment that would separate them. Physics outside the library stays "unexplained" when no pair of
+library terms fits it with one value each (the law of a stand-in still fails beside another stand-in).
+
+The same rules run once more, from an earlier model, in :mod:`.revisit`: where a single term was named and
+a later step's best candidate, removing most of what is left, fails its law (stiffness and viscous damping
+on u through a G without delay were named viscous damping on x), sets that could replace the named term
+are fitted from the model before it. Where a step's law-failed candidates stay unnamed, the verdict says
+what this step did there (:func:`refusal_text`).
+
+``ENABLED`` switches the path off (then a step whose candidates all fail their laws ends as before).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field, replace
+from typing import Any, Optional
+
+from ..augmented import AugExperiment, AugFit
+from ..terms import TERMS
+from .select import (
+    BOUNDARY_TERMS,
+    LAW_ALPHA,
+    MATERIAL_SHARE,
+    PREFERRED_LAW_FLOOR,
+    Alternative,
+    FoldCache,
+    HeldOut,
+    Trial,
+    _admissible,
+    _separating,
+    _tied,
+    at_null,
+    away_from_null,
+    dof_of,
+    element_law_test,
+    f_test,
+    held_out,
+    siblings,
+)
+
+#: Whether a step whose candidates all failed their laws tries pairs of them (module docstring).
+ENABLED = True
+#: The best this many candidates (by cost) that passed their own tests are paired with each other (3 pair
+#: fits); the best of them is also paired with every candidate that did not pass alone.
+POOL = 3
+#: Whether a step whose pairs all fail their laws tries the best pair with a third term (module docstring).
+TRIPLES = True
+
+
+@dataclass(frozen=True)
+class PairTrial:
+    """One pair of candidates fitted jointly on top of the step's model, with its tests."""
+
+    terms: tuple[str, ...]
+    cost: float
+    improvement: float
+    #: Each member's F-test p given the others, Bonferroni-adjusted over the step's candidates.
+    member_p: tuple[float, ...]
+    #: Each member's law p in the set's fit (empty: not run).
+    law_p: tuple[float, ...] = ()
+    held_out: Optional[HeldOut] = None
+    #: Why it was not named ("" for the named pair; "not reached" when a better pair was named first).
+    refused: str = ""
+    fit: Optional[AugFit] = field(default=None, repr=False, compare=False)
+
+    def to_dict(self) -> dict[str, Any]:
+        def n(v: float) -> Optional[float]:
+            return v if math.isfinite(v) else None
+
+        return {
+            "terms": list(self.terms),
+            "cost": n(self.cost),
+            "improvement": n(self.improvement),
+            "member_p_adjusted": [n(p) for p in self.member_p],
+            "law_p_value": [n(p) for p in self.law_p],
+            "held_out": None if self.held_out is None else self.held_out.to_dict(),
+            "refused": self.refused,
+        }
+
+
+@dataclass(frozen=True)
+class PairChoice:
+    """The pair named at a step: ``trial`` is the step's chosen trial (its term the first member, its fit the
+    pair's), ``terms`` both members, ``alternatives`` the rivals the data cannot tell from it."""
+
+    trial: Trial
+    terms: tuple[str, ...]
+    alternatives: tuple[Alternative, ...]
+
+    def unnamed(self, law_failed: Sequence[str]) -> list[str]:
+        """The step's law-failed candidates less the pair's members (named: no stand-ins)."""
+        return [t for t in law_failed if t not in self.terms]
+
+
+def _as_trial(p: PairTrial) -> Trial:
+    return Trial(p.terms[0], p.cost, p.improvement, math.nan, math.nan, math.nan, math.nan, True, fit=p.fit)
+
+
+#: A model without one member: (its cost, its fit).
+Without = dict[str, tuple[float, AugFit]]
+
+
+def _member_tests(
+    exps: Sequence[AugExperiment],
+    fit: AugFit,
+    without: Without,
+    level: float,
+    n_cands: int,
+    members: Sequence[str] = (),
+) -> tuple[tuple[float, ...], str]:
+    """Each member's test given the others (rule 1 of the module docstring), ``without[m]`` the model of the
+    others: (adjusted p's, why refused)."""
+    d1 = dof_of(exps, fit)
+    s2 = fit.cost / max(d1, 1)
+    ps: list[float] = []
+    why = ""
+    for m, (c_other, f_other) in without.items():
+        q = max(len(fit.params.terms) - len(f_other.params.terms), 1)
+        _, p = f_test(c_other, fit.cost, d1, boundary=m in BOUNDARY_TERMS, q=q)
+        padj = min(1.0, p * n_cands) if math.isfinite(p) else math.nan
+        ps.append(padj)
+        # Its share of the excess the others leave (what the next single step would ask of it).
+        left = max(c_other - dof_of(exps, f_other), 0.0)
+        share = min((c_other - fit.cost) / left, 1.0) if left > 0 else 0.0
+        given = " + ".join(t for t in (members or without) if t != m)
+        if why:
+            continue
+        if not (_admissible(fit, m) and not at_null(fit, m)):
+            why = f"{m}: not physical or at its null"
+        elif not (math.isfinite(padj) and padj < level):
+            why = f"{m}: not significant given {given} (p = {padj:.2g})"
+        elif share < MATERIAL_SHARE:
+            why = f"{m}: share {share:.2g} of the excess given {given}"
+        elif not away_from_null(fit, m, level, s2):
+            why = f"{m}: value not away from its null given {given}"
+    return tuple(ps), why
+
+
+def _joint(
+    exps: Sequence[AugExperiment], current: AugFit, f: AugFit, k: int, n_cands: int, level: float
+) -> str:
+    """The set's joint F test against the step's model, Bonferroni over every set of ``k`` candidates."""
+    q = max(len(f.params.terms) - len(current.params.terms), 1)
+    _, p = f_test(current.cost, f.cost, dof_of(exps, f), q=q)
+    return (
+        ""
+        if math.isfinite(p) and min(1.0, p * max(math.comb(n_cands, k), 1)) < level
+        else f"joint p = {p:.2g}"
+    )
+
+
+def _no_fit(terms: tuple[str, ...]) -> PairTrial:
+    return PairTrial(terms, math.nan, math.nan, tuple(math.nan for _ in terms), refused="no fit")
+
+
+def _clash(t: str, terms: Sequence[str], fits: Sequence[AugFit]) -> bool:
+    """One physics at two places, or one element's own parts."""
+    return any(t in siblings(u) for u in terms) or any(t in f.params.terms for f in fits)
+
+
+def fit_pairs(
+    exps: Sequence[AugExperiment],
+    current: AugFit,
+    pool: Sequence[Trial],
+    others: Sequence[Trial],
+    fit_term: Callable[[AugFit, str], Optional[AugFit]],
+    level: float,
+    n_cands: int,
+) -> list[PairTrial]:
+    """The pool's pairs, then the best with every other candidate (a second term too small to pass alone
+    while the first absorbs part of it: the README plant's play beside its viscous damping), fitted and given
+    rule 1 (module docstring)."""
+    pairs = [(a, b) for i, a in enumerate(pool) for b in pool[i + 1 :]]
+    pairs += [(pool[0], b) for b in others] if pool else []
+    out: list[PairTrial] = []
+    for a, b in pairs:
+        assert a.fit is not None and b.fit is not None
+        if _clash(b.term, [a.term], [a.fit]) or a.term in b.fit.params.terms:
+            continue
+        f = fit_term(a.fit, b.term)  # the second added to the better one's fit, by the one-term fit
+        if f is None or not math.isfinite(f.cost):
+            out.append(_no_fit((a.term, b.term)))
+            continue
+        without = {a.term: (b.cost, b.fit), b.term: (a.cost, a.fit)}
+        ps, why = _member_tests(exps, f, without, level, n_cands)
+        why = why or _joint(exps, current, f, 2, n_cands, level)
+        out.append(PairTrial((a.term, b.term), f.cost, current.cost - f.cost, ps, refused=why, fit=f))
+    return out
+
+
+def fit_triples(
+    exps: Sequence[AugExperiment],
+    current: AugFit,
+    base: PairTrial,
+    cands: Sequence[Trial],
+    pair_fits: dict[frozenset[str], PairTrial],
+    fit_term: Callable[[AugFit, str], Optional[AugFit]],
+    level: float,
+    n_cands: int,
+) -> list[PairTrial]:
+    """``base`` (the best pair that passed rule 1 but whose law failed) with each other candidate: a third
+    large term beside it (the README's sensor lag beside viscous damping and play). The third's own test
+    given the pair runs first; the other two members' models are then fitted as pairs where not yet."""
+    assert base.fit is not None
+    alone = {tr.term: tr for tr in cands}
+    out: list[PairTrial] = []
+    for c in cands:
+        assert c.fit is not None
+        if c.term in base.terms or _clash(c.term, base.terms, [base.fit]):
+            continue
+        terms = (*base.terms, c.term)
+        f = fit_term(base.fit, c.term)
+        if f is None or not math.isfinite(f.cost):
+            out.append(_no_fit(terms))
+            continue
+        _, why = _member_tests(exps, f, {c.term: (base.cost, base.fit)}, level, n_cands, terms)
+        without: Without = {}
+        for m in base.terms if not why else ():
+            rest = [t for t in base.terms if t != m][0]
+            got = pair_fits.get(frozenset({rest, c.term}))
+            first = alone[rest].fit if rest in alone else None
+            sub = got.fit if got is not None else None if first is None else fit_term(first, c.term)
+            if sub is None or not math.isfinite(sub.cost):
+                why = f"{m}: no fit without it"
+                break
+            without[m] = (sub.cost, sub)
+        ps: tuple[float, ...] = tuple(math.nan for _ in terms)
+        if not why:
+            without[c.term] = (base.cost, base.fit)
+            ps, why = _member_tests(exps, f, without, level, n_cands)
+            why = why or _joint(exps, current, f, 3, n_cands, level)
+        out.append(PairTrial(terms, f.cost, current.cost - f.cost, ps, refused=why, fit=f))
+    return out
+
+
+def _law(exps: Sequence[AugExperiment], p: PairTrial, substeps: int) -> PairTrial:
+    assert p.fit is not None
+    laws = tuple(element_law_test(exps, p.fit, t, substeps) for t in p.terms)
+    bad = [f"{t} (law p = {v:.2g})" for t, v in zip(p.terms, laws) if math.isfinite(v) and v < LAW_ALPHA]
+    return replace(p, law_p=laws, refused="law fails: " + ", ".join(bad) if bad else "")
+
+
+def _least(values: Sequence[float]) -> float:
+    return min((v for v in values if math.isfinite(v)), default=math.nan)
+
+
+def law_holds(p: PairTrial) -> bool:
+    return not any(math.isfinite(v) and v < LAW_ALPHA for v in p.law_p)
+
+
+def _rivals(
+    exps: Sequence[AugExperiment],
+    chosen: PairTrial,
+    tested: Sequence[PairTrial],
+    singles: Sequence[Trial],
+    substeps: int,
+) -> list[Alternative]:
+    """Rule of the alternatives (module docstring): each rival pair's differing members, and single terms
+    whose law held, tied with the chosen pair, each against the member it would replace."""
+    assert chosen.fit is not None
+    ct = _as_trial(chosen)
+    dof = dof_of(exps, chosen.fit)
+    out: list[Alternative] = []
+    for r in tested:
+        if r is chosen or r.fit is None or not math.isfinite(r.cost):
+            continue
+        by_law = (
+            not law_holds(r) and r.cost <= chosen.cost and _least(r.law_p) >= PREFERRED_LAW_FLOOR
+        )  # passed over for its law only, while it fits at least as well (select.preferred_by_fit)
+        if not (
+            by_law or (law_holds(r) and not r.refused.startswith("law") and _tied(ct, _as_trial(r), dof))
+        ):
+            continue
+        sep = _separating(exps, chosen.fit, r.fit, substeps)
+        new = [t for t in r.terms if t not in chosen.terms]
+        old = [t for t in chosen.terms if t not in r.terms]
+        for t, rival in zip(old, new):
+            out.append(Alternative(t, rival, math.nan, sep, _least(r.law_p) if by_law else math.nan))
+    for s in singles:
+        if s.fit is None or s.term in chosen.terms or not s.law_holds or not math.isfinite(s.law_p_value):
+            continue
+        if _tied(ct, s, dof):
+            sep = _separating(exps, chosen.fit, s.fit, substeps)
+            out.append(Alternative(chosen.terms[0], s.term, math.nan, sep))
+    return out
+
+
+def _pick(
+    exps: Sequence[AugExperiment],
+    current: AugFit,
+    ranked: Sequence[PairTrial],
+    done: dict[tuple[str, ...], PairTrial],
+    substeps: int,
+    held_out_test: bool,
+    cache: Optional[FoldCache],
+) -> Optional[PairTrial]:
+    """The first of ``ranked`` (those that passed rule 1, by cost) whose laws hold and whose held-out cost is
+    lower (rules 2 and 3); ``done`` records every one's tests."""
+    for p in ranked:
+        p = _law(exps, p, substeps)
+        done[p.terms] = p
+        if not law_holds(p):
+            continue
+        assert p.fit is not None
+        ho = held_out(exps, current, p.fit, substeps, cache) if held_out_test else None
+        done[p.terms] = replace(p, held_out=ho)
+        if ho is not None and not ho.improves:
+            done[p.terms] = replace(p, held_out=ho, refused="held-out cost not lower")
+            continue
+        return done[p.terms]
+    return None
+
+
+def pair_step(
+    exps: Sequence[AugExperiment],
+    current: AugFit,
+    order: Sequence[Trial],
+    tested: Sequence[Trial],
+    refused: Sequence[str],
+    fit_term: Callable[[AugFit, str], Optional[AugFit]],
+    substeps: int,
+    level: float,
+    n_cands: int,
+    held_out_test: bool = True,
+    cache: Optional[FoldCache] = None,
+    pool_size: int = POOL,
+) -> tuple[Optional[PairChoice], tuple[PairTrial, ...]]:
+    """The pair (or triple) named at a step whose candidates (``order``: those that passed their own tests,
+    best first) all failed their laws, or None; with every set tried (module docstring). The best
+    ``pool_size`` of ``order`` are paired with each other (the revisit pairs more: revisit.py)."""
+    pool = [tr for tr in order if tr.fit is not None and tr.term not in refused][:pool_size]
+    passed = {tr.term for tr in order}
+    others = [tr for tr in tested if tr.term not in passed and tr.fit is not None and math.isfinite(tr.cost)]
+    tried = fit_pairs(exps, current, pool, others, fit_term, level, n_cands)
+    ranked = sorted((p for p in tried if not p.refused), key=lambda p: p.cost)
+    done: dict[tuple[str, ...], PairTrial] = {p.terms: p for p in tried}
+    chosen = _pick(exps, current, ranked, done, substeps, held_out_test, cache)
+    if chosen is None and TRIPLES and ranked:  # the best pair's laws failed: a third large term beside it
+        fits = {frozenset(p.terms): p for p in tried if p.fit is not None}
+        tri = fit_triples(exps, current, ranked[0], [*pool, *others], fits, fit_term, level, n_cands)
+        done.update({p.terms: p for p in tri})
+        ranked = sorted((p for p in tri if not p.refused), key=lambda p: p.cost)
+        chosen = _pick(exps, current, ranked, done, substeps, held_out_test, cache)
+    if chosen is None or chosen.fit is None:
+        return None, tuple(done.values())
+    # Rivals among the sets that passed rule 1: their laws (run for those a tie could make alternatives).
+    dof = dof_of(exps, chosen.fit)
+    for p in ranked:
+        if p.terms != chosen.terms and not p.law_p and _tied(_as_trial(chosen), _as_trial(p), dof):
+            done[p.terms] = _law(exps, p, substeps)
+    rivals = [done[p.terms] for p in ranked if done[p.terms].law_p]
+    alts = _rivals(exps, chosen, rivals, tested, substeps)
+    pmin, lmin = _least(chosen.member_p), _least(chosen.law_p)
+    trial = Trial(chosen.terms[0], chosen.cost, chosen.improvement, math.nan, pmin, pmin, math.nan, True,
+                  chosen.held_out, chosen.fit, lmin)  # fmt: skip
+    return PairChoice(trial, chosen.terms, tuple(alts)), tuple(done.values())
+
+
+def text(steps: Sequence[Any]) -> str:
+    """The verdict's clause for a step that named a pair: both were named together because neither fits
+    alone with one value for every experiment."""
+    named = [st.pair for st in steps if getattr(st, "pair", ())]
+    if not named:
+        return ""
+    what = "; ".join(" with ".join(TERMS[t].place_label() for t in p) for p in named)
+    return (
+        f"; named together: {what} (none alone fits with one value for every experiment; jointly each does, "
+        "and each is significant given the others)"
+    )
+
+
+def refusal_text(steps: Sequence[Any]) -> str:
+    """What the pair step did at the steps where candidates' laws failed: the set it named there, or how
+    many sets it fitted and why the best was refused, or that it did not run (a step that names a single
+    term never reaches it)."""
+    if not ENABLED:
+        return "the pair step is switched off"
+    out = []
+    for k, st in enumerate(steps, 1):
+        tried = [p for p in getattr(st, "pairs", ()) if isinstance(p, PairTrial)]
+        if not st.law_failed:
+            continue
+        if getattr(st, "pair", ()):
+            who = " with ".join(TERMS[t].place_label() for t in st.pair)
+            out.append(f"at step {k} the pair step named {who}, these not among them")
+        elif tried:
+            fitted = sorted((p for p in tried if math.isfinite(p.cost)), key=lambda p: p.cost)
+            best = fitted[0] if fitted else tried[0]
+            who = " with ".join(TERMS[t].place_label() for t in best.terms)
+            out.append(
+                f"at step {k} the pair step fitted {len(fitted)} sets and named none; the best, {who}: "
+                f"{best.refused or 'not reached'}"
+            )
+        else:
+            out.append(
+                f"at step {k} the pair step did not run: it runs only where a step names no single term"
+            )
+    return "; ".join(out)
+
+
+__all__ = [
+    "refusal_text",
+    "ENABLED",
+    "POOL",
+    "TRIPLES",
+    "fit_triples",
+    "PairTrial",
+    "PairChoice",
+    "pair_step",
+    "fit_pairs",
+    "law_holds",
+    "text",
+]
