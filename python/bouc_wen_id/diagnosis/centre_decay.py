@@ -244,7 +244,7 @@ def _named(d: Diagnosis) -> Diagnosis:
         return d
     steady = got.steady
     if steady * term.value > 0 and got.steady_p < STEADY_P:
-        return d  # the steady levels confirm it, whatever the profile's edge (liberal: 2 of 20 true values out)
+        return d  # the steady levels confirm it, whatever the profile edge (2 of 20 true values fell out)
     sign = "" if steady * term.value > 0 else " (of the other sign)"
     left = tuple(str(s) for s in (d.settings or {}).get(LEFT_OUT, ()))
     clause = (
