@@ -11,6 +11,7 @@ and by the test on hand-built levels.
 from __future__ import annotations
 
 import importlib
+import re
 import sys
 import warnings
 from dataclasses import replace
@@ -21,7 +22,8 @@ import bouc_wen_id as bw
 import numpy as np
 import pytest
 from bouc_wen_id import terms as T
-from bouc_wen_id.diagnosis import centre_decay
+from bouc_wen_id.diagnosis import centre_decay, speed
+from bouc_wen_id.diagnosis.settling import LEFT_OUT
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benches"))
 blind: Any = importlib.import_module("blind")
@@ -121,3 +123,82 @@ def test_constant_period_levels_keep_the_offset() -> None:
         ):
             got = centre_decay.check(_with_levels(d, lv), 0.05)
             assert [t.term for t in got.named] == [T.Offset.kind], got.verdict
+
+
+def _short_records(
+    seed: int, off: float, amp: float, tau: float, settle: int = 2, extra: bool = False
+) -> Any:
+    """Review 32's short records, made apart from the blind bench: the demo plant, sines at 2/4/8 rad/s
+    (and 3 rad/s whose zero ramps by 0.05 over its record when ``extra``: not settled), 5 periods after
+    ``settle``, white noise 0.005, plus ``off`` and a loop-centre transient ``amp exp(-t / (tau T))``."""
+    freqs = [2.0, 4.0, 8.0, 3.0] if extra else [2.0, 4.0, 8.0]
+    plan = bw.SinePlan(
+        freqs, [0.6] * len(freqs), settle_periods=settle, periods=5, samples_per_period=64, noise_sd=0.005,
+        seed=seed,
+    )  # fmt: skip
+    out = []
+    for i, r in enumerate(bw.simulate(bw.demo_plant(), plan)):
+        period = 2 * np.pi / r.frequency
+        y = r.y + off + amp * np.exp(-(r.t - r.t[0]) / (tau * period))
+        if i == 3:
+            y = y + 0.05 * ((r.t - r.t[0] - settle * period) / (5 * period) - 0.5)
+        out.append(bw.Recording(r.t, r.u, y, r.amplitude, r.frequency, settle_periods=r.settle_periods))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return bw.diagnose(out)
+
+
+@pytest.mark.parametrize("seed", [8, 5])
+def test_a_real_offset_beside_a_small_transient_stays_named(seed: int) -> None:
+    """Review 32: an offset of 0.0015 (6-7 standard errors) beside a transient of 0.003 exp(-t / 1.5 T) was
+    dropped as "that transient's mean" because the steady levels did not confirm it at 5 %; the steady
+    levels do not contradict it, and it is named."""
+    d = _short_records(seed, 0.0015, 0.003, 1.5)
+    assert [t.term for t in d.named] == [T.Offset.kind], d.verdict
+
+
+def test_the_settling_periods_it_asks_for_are_enough() -> None:
+    """Review 32: a null with a transient 0.01 exp(-t / 3 T) (ratio 0.72 per period) was told "record about 3
+    more settling periods" from a ratio at the grid's floor, and with 3 more an offset was named. The number,
+    when given, comes from the upper end of the ratio's interval, and recording that many more names
+    nothing; without a number the verdict says the rate is not determined."""
+    for seed in (8, 1):
+        d = _short_records(seed, 0.0, 0.01, 3.0)
+        assert not d.named, d.verdict
+        got = re.search(r"record about (\d+) more settling periods", d.verdict)
+        if got is None:
+            assert "the decay rate is not determined by these records" in d.verdict
+            continue
+        again = _short_records(seed, 0.0, 0.01, 3.0, settle=2 + int(got.group(1)))
+        assert not again.named, again.verdict
+
+
+def test_leaving_out_early_gives_the_same_verdict() -> None:
+    """Review 32: with speed.LEAVE_OUT_EARLY the early return skipped the decay test; both paths now give
+    the same verdict, which says the unsettled experiment was left out."""
+    got = []
+    for early in (True, False):
+        with pytest.MonkeyPatch.context() as mp:
+            mp.setattr(speed, "LEAVE_OUT_EARLY", early)
+            d = _short_records(8, 0.001, 0.003, 1.5, extra=True)
+        got.append((d.status, [(t.term, t.value) for t in d.named], d.verdict))
+    assert got[0] == got[1]
+    assert "recording 3 left out (not settled)" in got[0][2]
+
+
+def test_the_decay_verdict_keeps_the_left_out_clause() -> None:
+    """Review 32: the decay test rewrote the verdict from "adequate" and dropped "... left out (not
+    settled)"; the clause stays."""
+    d = _offset_diagnosis()
+    d = replace(d, settings={**d.settings, LEFT_OUT: ["run_x"]})
+    sd = [float(np.sqrt(e.noise_var / e.samples_per_period)) for e in d.experiments]
+    dropped = 0
+    for s in range(4):
+        rng = np.random.default_rng(s)
+        got = centre_decay.check(
+            _with_levels(d, lambda i, k, g=rng: -20 * sd[i] * 0.5**k + g.normal(0.0, sd[i], k.size)), 0.05
+        )
+        if not got.named:
+            dropped += 1
+            assert got.verdict.endswith("; run_x left out (not settled)"), got.verdict
+    assert dropped

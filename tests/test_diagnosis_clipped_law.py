@@ -33,8 +33,10 @@ def _exp(waveform: Any) -> AugExperiment:
 
 def test_law_rows_leave_out_the_inputs_that_are_not_sines() -> None:
     clean, clipped = _exp([]), _exp([0.0, 0.0, 0.01, 0.0])
-    assert list(select.law_rows([clean, clipped, clean, clipped], "coulomb")) == [0, 2]
-    # every experiment when all inputs are sines, when fewer than two are, and for the input's own term
+    assert list(select.law_rows([clean, clipped, clean, clipped, clean], "coulomb")) == [0, 2, 4]
+    # every experiment when all inputs are sines, when fewer than three are (review 32: two clean ones
+    # passed a false series dashpot and a play on outside physics), and for the input's own term
+    assert list(select.law_rows([clean, clipped, clean, clipped], "coulomb")) == [0, 1, 2, 3]
     assert list(select.law_rows([clean, clean], "coulomb")) == [0, 1]
     assert list(select.law_rows([clean, clipped, clipped], "coulomb")) == [0, 1, 2]
     assert list(select.law_rows([clean, clipped, clean], "distortion")) == [0, 1, 2]

@@ -593,11 +593,17 @@ def _with_wander(
     try:
         d = _diagnose_set(exps, replace(setup, leave_out_early=speed.LEAVE_OUT_EARLY), [*notes, *qnotes])
     except _LeaveOut as e:  # some loops still drift, no degradation explains it: the settled ones alone
-        return baseline.adjusted(
-            age.with_clause(_without_unsettled(exps, e.drifting, setup, None, [*notes, *qnotes])),
-            wander,
-            Offset.kind,
-        )
+        d = _without_unsettled(exps, e.drifting, setup, None, [*notes, *qnotes])
+    else:
+        d = _unless_unsettled(exps, d, setup, [*notes, *qnotes])
+    d = age.with_clause(d)  # what the fit assumed of the specimen's history, when it fitted its age
+    if wander is None:  # short records: an offset that is a settling centre's transient (centre_decay.py)
+        d = centre_decay.check(d, alpha)  # on both paths: LEAVE_OUT_EARLY gives the same verdict (review 32)
+    return baseline.adjusted(d, wander, Offset.kind)
+
+
+def _unless_unsettled(exps: list[DiagExperiment], d: Diagnosis, setup: _Setup, notes: list[str]) -> Diagnosis:
+    """``d``, or the diagnosis of the settled experiments when some loops still drift."""
     # The drift is degradation's when its own test names it, whatever the steady verdict (a steady misfit
     # left "unexplained" moved it to the partial terms, the degrading experiments were then left out as not
     # settled, and on the three left inertia on x was named: blind degradation:30:0:clipped).
@@ -606,12 +612,7 @@ def _with_wander(
         deg is not None and (deg.named if setup.held_out_test else deg.passed)
     )
     drifting = settled_only(exps, named_deg)[1]
-    if drifting:
-        d = _without_unsettled(exps, drifting, setup, d, [*notes, *qnotes])
-    d = age.with_clause(d)  # what the fit assumed of the specimen's history, when it fitted its age
-    if wander is None:  # short records: an offset that is a settling centre's transient (centre_decay.py)
-        d = centre_decay.check(d, alpha)
-    return baseline.adjusted(d, wander, Offset.kind)
+    return _without_unsettled(exps, drifting, setup, d, notes) if drifting else d
 
 
 def _without_unsettled(
