@@ -166,20 +166,20 @@ def test_the_settled_experiments_alone_are_diagnosed_without_the_whole_set_first
     """Three of six records from a degrading loop, degradation not a candidate: those three still drift and
     are left out. The whole set's selection used to run first and be thrown away; the verdict is the same
     without it (speed.LEAVE_OUT_EARLY), and one selection runs instead of two."""
-    from bouc_wen_id.diagnosis import run
+    from bouc_wen_id.diagnosis import after_named
 
     sys.path.insert(0, str(Path(__file__).resolve().parent))
     B: Any = importlib.import_module("test_degradation_beside_drift")
     steady, degrading = B._records(1, 0.0, 0.0), B._records(1, 3 * B.RATE, 0.0)
     recs = [*steady[:3], *degrading[3:]]
     calls = {"n": 0}
-    real = select.forward_select  # the function run calls
+    real = select.forward_select  # the function run calls (through after_named.select)
 
     def counted(*args: Any, **kw: Any) -> Any:
         calls["n"] += 1
         return real(*args, **kw)
 
-    monkeypatch.setattr(run, "forward_select", counted)
+    monkeypatch.setattr(after_named, "forward_select", counted)
     got = {}
     for early in (True, False):
         monkeypatch.setattr(speed, "LEAVE_OUT_EARLY", early)
