@@ -135,6 +135,8 @@ def test_ctrl_c_does_not_wait_for_the_running_drift_simulations(monkeypatch: pyt
     caller at once, not after they end (here they end only when released, after the interrupt is seen)."""
     monkeypatch.setattr(speed, "THREAD_DRIFT_SIMS", True)
     monkeypatch.setattr(os, "cpu_count", lambda: 2)
+    # Python's own Ctrl-C handler, whatever an earlier test (the CLI's, run in this process) left installed.
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
     started, release = threading.Barrier(3), threading.Event()
 
     def sim(*job: Any) -> np.ndarray:
@@ -147,7 +149,7 @@ def test_ctrl_c_does_not_wait_for_the_running_drift_simulations(monkeypatch: pyt
         os.kill(os.getpid(), signal.SIGINT)
 
     threading.Thread(target=interrupt, daemon=True).start()
-    safety = threading.Timer(5.0, release.set)  # without the fix the call returns only once they end
+    safety = threading.Timer(30.0, release.set)  # without the fix the call returns only once they end
     safety.start()
     released_at_interrupt = None
     try:
@@ -157,6 +159,7 @@ def test_ctrl_c_does_not_wait_for_the_running_drift_simulations(monkeypatch: pyt
     finally:
         release.set()  # the running simulations end now
         safety.cancel()
+        signal.signal(signal.SIGINT, previous)
     assert released_at_interrupt is False, "Ctrl-C waited for the running simulations"
 
 
