@@ -72,7 +72,10 @@ def test_the_joint_selection_stops_once_the_structure_passes_as_diagnose_does() 
     assert a.named == (T.Viscous.kind,), a.verdict
     assert all(c.final_p_value >= 0.05 for c in a.conditions)  # the premise: it passes everywhere
     assert a.status == "explained" and len(a.steps) == 1
-    assert [d.named_terms for d in own] == [(T.Viscous.kind,)] * 3  # what diagnose says at each
+    # What diagnose says at each: viscous damping first; since its targeted step after a named term
+    # (after_named.py) it may also name the offset, which is in the data, at a condition (nothing else).
+    assert all(d.named_terms[:1] == (T.Viscous.kind,) for d in own), [d.named_terms for d in own]
+    assert all(set(d.named_terms) <= {T.Viscous.kind, T.Offset.kind} for d in own)
 
 
 def test_the_place_alternative_is_reported_with_the_separating_experiment() -> None:
