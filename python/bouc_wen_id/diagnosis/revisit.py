@@ -223,10 +223,7 @@ def select(
 ) -> tuple[AugFit, list[Step]]:
     """:func:`.select.forward_select` (same arguments), then :func:`revisit` of its result."""
     final, steps = forward_select(exps, plain, candidates, adequate, substeps, **kw)
-    return revisit(
-        exps, plain, final, steps, adequate, substeps, kw.get("alpha", ALPHA), kw.get("use_held_out", True),
-        kw.get("cache"),
-    )  # fmt: skip
+    return after(exps, plain, final, steps, adequate, substeps, **kw)
 
 
 def after(

@@ -608,9 +608,7 @@ def _unless_unsettled(exps: list[DiagExperiment], d: Diagnosis, setup: _Setup, n
     # left "unexplained" moved it to the partial terms, the degrading experiments were then left out as not
     # settled, and on the three left inertia on x was named: blind degradation:30:0:clipped).
     deg = d.degradation
-    named_deg = any(t.term in DRIFT_TERMS for t in d.named) or (
-        deg is not None and (deg.named if setup.held_out_test else deg.passed)
-    )
+    named_deg = any(t.term in DRIFT_TERMS for t in d.named) or _deg_named(deg, setup.held_out_test)
     drifting = settled_only(exps, named_deg)[1]
     return _without_unsettled(exps, drifting, setup, d, notes) if drifting else d
 
@@ -667,6 +665,11 @@ def _from_one(d: Diagnosis, source: str, names: str) -> Diagnosis:
     return replace(d, status="unexplained", verdict=verdict, named=(), partial=d.named + d.partial)
 
 
+def _deg_named(deg: Optional[DegradationTest], held_out_test: bool) -> bool:
+    """Degradation is named: by its held-out test when that runs, else by its own test."""
+    return deg is not None and bool(deg.named if held_out_test else deg.passed)
+
+
 def _drift_stage(
     exps: list[DiagExperiment],
     sx: list[AugExperiment],
@@ -683,7 +686,7 @@ def _drift_stage(
     degradation is not named (:func:`settled_only`: diagnose's rule, read here as _with_wander read it)."""
     out = _degradation_first(exps, sx, plain, s, substeps, setup, drift_seen, notes)
     deg = out[0]
-    named = deg is not None and (deg.named if setup.held_out_test else deg.passed)
+    named = _deg_named(deg, setup.held_out_test)
     drifting = settled_only(exps, named)[1] if setup.leave_out_early else []
     if drifting and len(drifting) < len(exps):  # _with_wander diagnoses the settled ones instead
         raise _LeaveOut(drifting)
@@ -712,7 +715,7 @@ def _degradation_first(
         notes.append(NO_BLOCKS)
         return None, exps, sx, plain
     deg, fexps, fsx, start = stage
-    named = deg is not None and (deg.named if setup.held_out_test else deg.passed)
+    named = _deg_named(deg, setup.held_out_test)
     if deg is not None and named and deg.rival is not None and deg.rival_p_adjusted < setup.alpha:
         notes.append(
             f"the period record also needs {deg.rival.term} beside {deg.term} (partial F, adjusted p = "
@@ -746,7 +749,7 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
     notes = list(notes)  # a copy: the stages below append to it
     setup.report("testing degradation (period blocks)", 0, 1)
     deg, fexps, fsx, start = _drift_stage(exps, sx, plain, s, substeps, setup, before.drift_detected, notes)
-    named_deg = deg is not None and (deg.named if setup.held_out_test else deg.passed)
+    named_deg = _deg_named(deg, setup.held_out_test)
     noise_dof = sum(e.noise_dof for e in exps)
 
     def p_of(fit: AugFit) -> float:
