@@ -36,6 +36,7 @@ import bouc_wen_id as bw
 from bouc_wen_id.diagnosis import stability as stab
 from bouc_wen_id.diagnosis.report import plot_harmonics, plot_loops, plot_residual_cycle
 from bouc_wen_id.diagnosis.result import clean
+from bouc_wen_id.diagnosis.verdict_text import details, headline
 
 REPO = Path(__file__).resolve().parents[1]
 HERE = Path(__file__).resolve().parent
@@ -129,6 +130,12 @@ def _count_of(r: dict[str, Any], term: str) -> str:
     st = r.get("stability") or {}
     k = next((len(t["named_in"]) for t in st.get("terms", ()) if t["term"] == term), 0)
     return f"{k} of {len(st.get('completed', ()))}"
+
+
+def _table_verdict(verdict: str) -> str:
+    """The table's cell: the verdict's headline, and a pointer to its further clauses in the section."""
+    more = len(details(verdict))
+    return headline(verdict) + (f" (+{more} further clause{'s' if more > 1 else ''} below)" if more else "")
 
 
 def _median(v: list[float]) -> float:
@@ -226,7 +233,7 @@ def markdown(
         if ho:
             hot = f"{_median(ho['nrmse_before']):.3f} -> {_median(ho['nrmse_after']):.3f}"
         lines.append(
-            f"| {r['dataset']} | {r['group']} | {r['experiments']} | {r['verdict']} "
+            f"| {r['dataset']} | {r['group']} | {r['experiments']} | {_table_verdict(r['verdict'])} "
             f"| {r['plain_chi2_dof']:.3g} | {r['final_chi2_dof']:.3g} "
             f"| {100 * r['explained_fraction']:.0f} % | {hot} |"
         )
@@ -235,8 +242,10 @@ def markdown(
     for r in rows:
         lines.append(f"### {r['dataset']}, {r['group']}")
         lines.append("")
-        lines.append(f"**{r['status']}**: {r['verdict']}")
+        lines.append(f"**{r['status']}**: {headline(r['verdict'])}")
         lines.append("")
+        lines += [f"- {c}" for c in details(r["verdict"])]
+        lines += [""] if details(r["verdict"]) else []
         lines.append(f"- diagnosed in {r['seconds']:.1f} s")
         st = r.get("stability")
         if st:
@@ -385,8 +394,10 @@ def across_markdown(a: Any, seconds: float, rows: list[dict[str, Any]] | None = 
         + ", ".join(a.settings["candidates"])
         + " (every steady term some level's own diagnosis named or tried, at both places).",
         "",
-        f"**{a.verdict}**",
+        f"**{headline(a.verdict)}**",
         "",
+        *(f"- {c}" for c in details(a.verdict)),
+        *([""] if details(a.verdict) else []),
     ]
     if a.terms:
         head = (

@@ -77,6 +77,7 @@ from .select import (
     siblings,
 )
 from .shared import SharedTest, shared_test
+from .verdict_text import details, headline
 
 #: A passed candidate whose summed improvement is at least this fraction of the chosen one's is a near-tied
 #: rival (select.ALTERNATIVE_IMPROVEMENT's threshold, on the summed improvements).
@@ -302,7 +303,7 @@ class AcrossDiagnosis:
 
     def summary(self) -> str:
         """The verdict, a table of each term per condition and one of the conditions' fits."""
-        lines = [self.verdict, ""]
+        lines = [headline(self.verdict), *(f"  - {c}" for c in details(self.verdict)), ""]
         for t in (*self.terms, *self.partial):
             smooth = (
                 f"degree {t.smooth_degree} in the condition" if t.smooth_degree is not None else "not smooth"

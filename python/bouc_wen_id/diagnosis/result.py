@@ -15,6 +15,7 @@ from .data import DiagExperiment
 from .locate import Localisation
 from .no_fit import no_fit_reason
 from .select import Alternative, HeldOut, Step
+from .verdict_text import details, headline
 
 FloatArray = NDArray[np.float64]
 Status = Literal["adequate", "explained", "partly explained", "unexplained"]
@@ -153,9 +154,20 @@ class Diagnosis:
     def named_terms(self) -> tuple[str, ...]:
         return tuple(t.term for t in self.named)
 
+    @property
+    def headline(self) -> str:
+        """The verdict's first clause: the named terms with their values and share, or what is left."""
+        return headline(self.verdict)
+
+    @property
+    def details(self) -> tuple[str, ...]:
+        """The verdict's further clauses, in order: alternatives, terms not named and why, data notes."""
+        return tuple(details(self.verdict))
+
     def summary(self) -> str:
-        """A plain-text report: verdict, named terms, selection table, held-out comparison, location."""
-        lines = [f"Diagnosis: {self.verdict}", ""]
+        """A plain-text report: the verdict (headline, then its further clauses one per line), the selection
+        table, the held-out comparison and where the models miss."""
+        lines = [f"Diagnosis: {self.headline}", *(f"  - {c}" for c in self.details), ""]
         for label, m in (("plain", self.plain), ("final", self.final)):
             lines.append(f"{label} model: chi2/dof = {m.cost / max(m.dof, 1):.3g} (p = {m.p_value:.2g})")
         lines.append(f"share of the plain model's excess explained: {100 * self.explained_fraction:.1f} %")
