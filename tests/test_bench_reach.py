@@ -91,3 +91,19 @@ def test_the_progress_line_says_how_far_a_case_is_from_the_global_test() -> None
     assert line.startswith("adequate (seed 58003)")
     assert "unabsorbed 0.170 sd" in line and f"power {r['global_power']:.2f}" in line
     assert bench._progress({"error": "boom", "seed": 1}) == "boom (seed 1)"
+
+
+def test_a_diagnosis_own_test_is_read_from_its_experiments_and_alpha() -> None:
+    """``unabsorbed_power`` reads the samples, dof, noise dof and level (alpha / 2) of the diagnosis: at the
+    RMS of its own global limit (``unabsorbed``'s formula) the power is about one half."""
+    from types import SimpleNamespace
+
+    import numpy as np
+
+    exps = [SimpleNamespace(ybar=np.zeros(128), noise_dof=1200) for _ in range(10)]
+    d = SimpleNamespace(experiments=exps, settings={"alpha": 0.05})
+    n, dof, noise_dof = 1280, 1280 - (3 + 20), 12000
+    glob = math.sqrt(dof * (float(f_dist.isf(0.025, dof, noise_dof)) - 1.0) / n)
+    assert bench.unabsorbed_power(d, glob) == bench.global_power(n * glob**2, dof, noise_dof, 0.025)
+    assert abs(bench.unabsorbed_power(d, glob) - 0.5) < 0.05
+    assert bench.unabsorbed_power(d, 0.5 * glob) < 0.5 < bench.unabsorbed_power(d, 1.5 * glob)
