@@ -157,6 +157,45 @@ def test_no_pair_step_where_a_single_term_is_named_or_in_the_targeted_step(
     assert steps[0].targeted and steps[0].pairs == () and final.params.terms == ()
 
 
+def _hidden(lead: float) -> dict[frozenset[str], float]:
+    """A leads alone (``lead``), B passes alone, C does not (495: 4 % of the excess); A and C jointly bring
+    the model to the noise floor: C is a second term hidden behind A."""
+    return {
+        frozenset({A}): lead,
+        frozenset({B}): 470.0,
+        frozenset({C}): 495.0,
+        frozenset({A, B}): 460.0,
+        frozenset({A, C}): 395.0,
+        frozenset({B, C}): 465.0,
+    }
+
+
+def test_a_term_hidden_behind_a_lead_that_removes_most_of_the_excess_is_still_named(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """A removes 54 % of the excess (500 -> 440 over 389 dof): C, too small to pass alone, is paired with it
+    and the pair whose laws hold jointly is named (the README plant's play behind its viscous damping)."""
+    final, steps = _select(monkeypatch, _hidden(440.0), _law_pair(frozenset({A, C})))
+    assert steps[0].trials[0].share >= pairs.OTHERS_SHARE
+    assert set(final.params.terms) == {A, C} and steps[0].pair == (A, C)
+
+
+def test_a_lead_that_removes_less_than_half_the_excess_is_not_paired_with_the_failed_candidates(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """A removes 45 % of the excess (500 -> 450): the candidates that did not pass alone (C) are not fitted
+    beside it (main fitted A with C and named the pair); the passed candidates are still paired."""
+    final, steps = _select(monkeypatch, _hidden(450.0), _law_pair(frozenset({A, C})))
+    assert steps[0].trials[0].share < pairs.OTHERS_SHARE and A in steps[0].law_failed
+    assert final.params.terms == () and steps[0].pair == ()
+    tried = {p.terms for p in steps[0].pairs}
+    assert (A, B) in tried and not any(C in t for t in tried), tried
+    # the same data with the old rule (every failed candidate beside the lead): the pair is found
+    monkeypatch.setattr(pairs, "OTHERS_SHARE", 0.0)
+    final, steps = _select(monkeypatch, _hidden(450.0), _law_pair(frozenset({A, C})))
+    assert steps[0].pair == (A, C)
+
+
 def _play_lag_recordings(
     viscous_of: Optional[Callable[[float], float]] = None,
     freqs: tuple[float, ...] = (0.5, 1, 2, 3, 4, 5),
