@@ -190,10 +190,25 @@ def test_a_lead_that_removes_less_than_half_the_excess_is_not_paired_with_the_fa
     assert final.params.terms == () and steps[0].pair == ()
     tried = {p.terms for p in steps[0].pairs}
     assert (A, B) in tried and not any(C in t for t in tried), tried
+    assert "the pair step fitted 1 sets and named none" in pairs.refusal_text(steps)
     # the same data with the old rule (every failed candidate beside the lead): the pair is found
     monkeypatch.setattr(pairs, "OTHERS_SHARE", 0.0)
     final, steps = _select(monkeypatch, _hidden(450.0), _law_pair(frozenset({A, C})))
     assert steps[0].pair == (A, C)
+
+
+def test_a_step_whose_lead_is_small_and_alone_says_the_pair_step_fitted_no_set(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Only A passes alone (B and C remove 4 % of the excess each) and it removes 45 %: the pair step has no
+    set to fit, and the clause says so with the lead's share (main fitted A with B and with C, and a step
+    with no set tried was said "did not run", which is false here)."""
+    costs = {**_hidden(450.0), frozenset({B}): 495.0}
+    final, steps = _select(monkeypatch, costs, _law_pair(frozenset({A, C})))
+    assert final.params.terms == () and steps[0].pairs == () and steps[0].law_failed == (A,)
+    text = pairs.refusal_text(steps)
+    assert "at step 1 the pair step fitted no set" in text and "removes 45 % of the excess" in text, text
+    assert "did not run" not in text
 
 
 def _play_lag_recordings(

@@ -443,11 +443,29 @@ def refusal_text(steps: Sequence[Any]) -> str:
                 f"at step {k} the pair step fitted {len(fitted)} sets and named none; the best, {who}: "
                 f"{best.refused or 'not reached'}"
             )
+        elif st.chosen is None and not st.targeted:  # it ran and had no set to fit (OTHERS_SHARE)
+            out.append(f"at step {k} the pair step fitted no set: {_none_to_fit(st)}")
         else:
             out.append(
                 f"at step {k} the pair step did not run: it runs only where a step names no single term"
             )
     return "; ".join(out)
+
+
+def _none_to_fit(st: Any) -> str:
+    """Why a step that named nothing had no set to fit: the candidates that passed alone give no pair (one
+    only, or one physics at two places), and the lead removes under :data:`OTHERS_SHARE` of the excess (the
+    others are not fitted beside it)."""
+    passed = sorted((t for t in st.trials if t.passed and math.isfinite(t.cost)), key=lambda t: t.cost)
+    if not passed:
+        return "no candidate passed its own tests"
+    lead = passed[0]
+    return (
+        f"the candidates that passed alone ({', '.join(t.term for t in passed)}) give no pair, and the lead, "
+        f"{TERMS[lead.term].place_label()}, removes {100 * lead.share:.0f} % of the excess, under the "
+        f"{100 * OTHERS_SHARE:.0f} % beside which the candidates that failed alone are fitted (a term its "
+        "misfit could hide)"
+    )
 
 
 __all__ = [
