@@ -460,12 +460,12 @@ def _none_to_fit(st: Any) -> str:
     passed = sorted((t for t in st.trials if t.passed and math.isfinite(t.cost)), key=lambda t: t.cost)
     if not passed:
         return "no candidate passed its own tests"
-    lead = passed[0]
+    label = TERMS[passed[0].term].place_label()
+    many = "the candidates that passed alone give no pair (one physics at two places), and the lead,"
+    who = f"only {label} passed alone, and it" if len(passed) == 1 else f"{many} {label},"
     return (
-        f"the candidates that passed alone ({', '.join(t.term for t in passed)}) give no pair, and the lead, "
-        f"{TERMS[lead.term].place_label()}, removes {100 * lead.share:.0f} % of the excess, under the "
-        f"{100 * OTHERS_SHARE:.0f} % beside which the candidates that failed alone are fitted (a term its "
-        "misfit could hide)"
+        f"{who} removes {100 * passed[0].share:.0f} % of the excess, under the {100 * OTHERS_SHARE:.0f} % "
+        "beside which the candidates that failed alone are fitted (a term its misfit could hide)"
     )
 
 
