@@ -444,7 +444,8 @@ def refusal_text(steps: Sequence[Any]) -> str:
                 f"at step {k} the pair step fitted {len(fitted)} sets and named none; the best, {who}: "
                 f"{best.refused or 'not reached'}"
             )
-        elif st.chosen is None and not st.targeted:  # it ran and had no set to fit (OTHERS_SHARE)
+        elif hasattr(st, "chosen") and st.chosen is None and not getattr(st, "targeted", False):
+            # it ran and had no set to fit (OTHERS_SHARE)
             out.append(f"at step {k} the pair step fitted no set: {_none_to_fit(st)}")
         else:
             out.append(
@@ -457,7 +458,8 @@ def _none_to_fit(st: Any) -> str:
     """Why a step that named nothing had no set to fit: the candidates that passed alone give no pair (one
     only, or one physics at two places), and the lead removes under :data:`OTHERS_SHARE` of the excess (the
     others are not fitted beside it)."""
-    passed = sorted((t for t in st.trials if t.passed and math.isfinite(t.cost)), key=lambda t: t.cost)
+    trials = [t for t in getattr(st, "trials", ()) if getattr(t, "passed", False) and math.isfinite(t.cost)]
+    passed = sorted(trials, key=lambda t: t.cost)
     if not passed:
         return "no candidate passed its own tests"
     label = TERMS[passed[0].term].place_label()
