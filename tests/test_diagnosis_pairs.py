@@ -157,6 +157,60 @@ def test_no_pair_step_where_a_single_term_is_named_or_in_the_targeted_step(
     assert steps[0].targeted and steps[0].pairs == () and final.params.terms == ()
 
 
+def _hidden(lead: float) -> dict[frozenset[str], float]:
+    """A leads alone (``lead``), B passes alone, C does not (495: 4 % of the excess); A and C jointly bring
+    the model to the noise floor: C is a second term hidden behind A."""
+    return {
+        frozenset({A}): lead,
+        frozenset({B}): 470.0,
+        frozenset({C}): 495.0,
+        frozenset({A, B}): 460.0,
+        frozenset({A, C}): 395.0,
+        frozenset({B, C}): 465.0,
+    }
+
+
+def test_a_term_hidden_behind_a_lead_that_removes_most_of_the_excess_is_still_named(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """A removes 54 % of the excess (500 -> 440 over 389 dof): C, too small to pass alone, is paired with it
+    and the pair whose laws hold jointly is named (the README plant's play behind its viscous damping)."""
+    final, steps = _select(monkeypatch, _hidden(440.0), _law_pair(frozenset({A, C})))
+    assert steps[0].trials[0].share >= pairs.OTHERS_SHARE
+    assert set(final.params.terms) == {A, C} and steps[0].pair == (A, C)
+
+
+def test_a_lead_that_removes_less_than_half_the_excess_is_not_paired_with_the_failed_candidates(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """A removes 45 % of the excess (500 -> 450): the candidates that did not pass alone (C) are not fitted
+    beside it (main fitted A with C and named the pair); the passed candidates are still paired."""
+    final, steps = _select(monkeypatch, _hidden(450.0), _law_pair(frozenset({A, C})))
+    assert steps[0].trials[0].share < pairs.OTHERS_SHARE and A in steps[0].law_failed
+    assert final.params.terms == () and steps[0].pair == ()
+    tried = {p.terms for p in steps[0].pairs}
+    assert (A, B) in tried and not any(C in t for t in tried), tried
+    assert "the pair step fitted 1 sets and named none" in pairs.refusal_text(steps)
+    # the same data with the old rule (every failed candidate beside the lead): the pair is found
+    monkeypatch.setattr(pairs, "OTHERS_SHARE", 0.0)
+    final, steps = _select(monkeypatch, _hidden(450.0), _law_pair(frozenset({A, C})))
+    assert steps[0].pair == (A, C)
+
+
+def test_a_step_whose_lead_is_small_and_alone_says_the_pair_step_fitted_no_set(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Only A passes alone (B and C remove 4 % of the excess each) and it removes 45 %: the pair step has no
+    set to fit, and the clause says so with the lead's share (main fitted A with B and with C, and a step
+    with no set tried was said "did not run", which is false here)."""
+    costs = {**_hidden(450.0), frozenset({B}): 495.0}
+    final, steps = _select(monkeypatch, costs, _law_pair(frozenset({A, C})))
+    assert final.params.terms == () and steps[0].pairs == () and steps[0].law_failed == (A,)
+    text = pairs.refusal_text(steps)
+    assert "at step 1 the pair step fitted no set" in text and "removes 45 % of the excess" in text, text
+    assert "did not run" not in text
+
+
 def _play_lag_recordings(
     viscous_of: Optional[Callable[[float], float]] = None,
     freqs: tuple[float, ...] = (0.5, 1, 2, 3, 4, 5),

@@ -181,6 +181,7 @@ def revisit(
         use_held_out,
         cache,
         len(order),
+        0.0,  # every candidate with the best: the revisit's own gate already asks a lead of SHARE
     )
     if choice is None or choice.trial.fit is None:
         why = next((p.refused for p in sorted(tried, key=_cost) if p.refused), "no set fitted")
