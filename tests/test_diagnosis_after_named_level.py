@@ -3,9 +3,10 @@
 
 At ``alpha / 2`` our bench's play case 32015 was named "play + inertia on u" (inertia's p adj 0.0068) and its
 pinching case 44014 "pinching + stiffness on x" (p adj 0.025): their laws held and their held-out gains were
-as large as their in-sample ones, so only the level tells them from a true second term. The rule is tested on built selection inputs (a fit of set cost per
-candidate, as tests/test_diagnosis_own_test.py does), so that the level, not a noise draw, decides; then on
-the two bench cases themselves (benches/generator.py, a generator other than the tests' own simulate).
+as large as their in-sample ones, so only the level tells them from a true second term. The rule is tested on
+built selection inputs (a fit of set cost per candidate, as tests/test_diagnosis_own_test.py does), so that
+the level, not a noise draw, decides; then on the two bench cases themselves (benches/generator.py, a
+generator other than the tests' own simulate).
 """
 
 from __future__ import annotations
