@@ -41,7 +41,8 @@ def test_a_lag_behind_a_named_offset_is_found_by_the_targeted_step_after_it() ->
     assert set(d.named_terms) == {"offset", "sensor_lag"}, d.summary()
     first, second = d.steps[0], d.steps[1]
     assert not first.targeted and first.chosen == "offset"
-    assert second.targeted and second.chosen == "sensor_lag"  # the targeted step, at alpha / 2
+    assert second.targeted and second.chosen == "sensor_lag"  # the targeted step after a named one
+    assert second.after_named and not first.after_named  # its candidates at alpha / 10 (gate.targeted_level)
     lag = next(n for n in d.named if n.term == "sensor_lag")
     assert abs(lag.value - 0.004) < 4 * lag.standard_error, d.summary()
     # Selection ends on a targeted step that names nothing: the gate's other half is spent.

@@ -23,6 +23,18 @@ def plain_passes(p_value: float, alpha: float, moved: bool = False) -> bool:
     return not moved and math.isfinite(p_value) and p_value >= 0.5 * alpha
 
 
+#: The share of ``alpha`` the targeted step after a named term gives its candidates' F-tests (Bonferroni
+#: over them, as the plain model's targeted step shares ``alpha / 2``); after_named.py's docstring says why.
+AFTER_NAMED_SHARE = 0.1
+
+
+def targeted_level(alpha: float, after_named: bool = False) -> float:
+    """The level of a targeted step's candidates (before Bonferroni over them): ``alpha / 2`` on the plain
+    model (the other half is its global test's), ``AFTER_NAMED_SHARE * alpha`` on a model with named terms
+    (after_named.py)."""
+    return (AFTER_NAMED_SHARE if after_named else 0.5) * alpha
+
+
 #: Why the targeted step was not run (the plain model passed the global test on a floored noise).
 NO_TARGETED_STEP = (
     "the targeted candidate tests (effects below the global test's reach) were not run: the noise floor of "
@@ -65,6 +77,8 @@ def explained_fraction(parts: Iterable[tuple[float, float, float]]) -> float:
 
 __all__ = [
     "ADEQUATE",
+    "AFTER_NAMED_SHARE",
+    "targeted_level",
     "NO_TARGETED_STEP",
     "plain_gate",
     "plain_passes",

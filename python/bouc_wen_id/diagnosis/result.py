@@ -12,6 +12,7 @@ from numpy.typing import NDArray
 
 from ..terms import TERMS, Degradation
 from .data import DiagExperiment
+from .gate import AFTER_NAMED_SHARE
 from .locate import Localisation
 from .no_fit import no_fit_reason
 from .select import Alternative, HeldOut, Step
@@ -193,8 +194,8 @@ class Diagnosis:
             lines.append("")
             chosen = " + ".join(st.pair) + " (together)" if getattr(st, "pair", ()) else (st.chosen or "none")
             lines.append(
-                f"step {k}{' (targeted: the global test accepted the plain model)' if st.targeted else ''}: "
-                f"from chi2 = {st.before_cost:.6g} (dof {st.before_dof}); chosen: {chosen}"
+                f"step {k}{_targeted(st)}: from chi2 = {st.before_cost:.6g} (dof {st.before_dof}); "
+                f"chosen: {chosen}"
             )
             if math.isfinite(st.refitted_from):  # restarts.rebase: the step's base had not converged
                 lines.append(
@@ -278,6 +279,19 @@ class Diagnosis:
     def to_json(self, indent: int = 2) -> str:
         """Strict JSON (NaN and infinities become null)."""
         return json.dumps(clean(self.to_dict()), indent=indent, allow_nan=False)
+
+
+def _targeted(st: Step) -> str:
+    """A step's label in the summary: which model the global test accepted before a targeted step, and the
+    level its candidates shared (gate.targeted_level)."""
+    if not st.targeted:
+        return ""
+    if getattr(st, "after_named", False):
+        return (
+            " (targeted: the global test accepted the model with the terms named before; its candidates at "
+            f"{AFTER_NAMED_SHARE:g} alpha)"
+        )
+    return " (targeted: the global test accepted the plain model)"
 
 
 def clean(v: Any) -> Any:

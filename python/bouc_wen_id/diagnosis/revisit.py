@@ -39,6 +39,7 @@ from typing import Any, Optional
 from ..augmented import AugExperiment, AugFit
 from ..terms import TERMS
 from . import pairs
+from .gate import targeted_level
 from .select import (
     ALPHA,
     FoldCache,
@@ -166,7 +167,7 @@ def revisit(
     pool = tuple(t.term for t in cands)
     if len(pool) < 2:
         return final, steps
-    level = 0.5 * alpha if st.targeted else alpha
+    level = targeted_level(alpha, st.after_named) if st.targeted else alpha
     fit_term = memo_fit_with(exps, substeps)
     choice, tried = pairs.pair_step(
         exps,

@@ -56,6 +56,7 @@ from ..terms import TERMS, Stiffness, physical_value
 from . import fit_share, fitting, free_dc, speed
 from .beside import only_beside
 from .fitting import best_of, fit_from, fit_own, fit_with, subset
+from .gate import targeted_level
 from .law import LAW_RCOND, contrast_statistic, element_law_test, law_rows, law_test
 from .restarts import rebase, wide_fit
 from .shape import LAW_WINDOW
@@ -224,6 +225,8 @@ class Step:
     #: is then the first. ``pairs``: the pairs that step tried (:class:`.pairs.PairTrial`), with their tests.
     pair: tuple[str, ...] = ()
     pairs: tuple[Any, ...] = ()
+    #: The targeted step after a named one (after_named.py): its candidates at ``gate.targeted_level``.
+    after_named: bool = False
 
     def to_dict(self) -> dict[str, Any]:
         out = {
@@ -241,6 +244,8 @@ class Step:
             out["unphysical_places"] = list(self.unphysical_places)
         if math.isfinite(self.refitted_from):  # likewise
             out["refitted_from"] = self.refitted_from
+        if self.after_named:  # likewise: the targeted step after a named one (after_named.py)
+            out["after_named"] = True
         if self.pairs:  # likewise: the pair step ran (pairs.py)
             out["pair"] = list(self.pair)
             out["pairs"] = [p.to_dict() for p in self.pairs]
@@ -777,18 +782,20 @@ def forward_select(
     targeted: bool = False,
     on_trial: Optional[Any] = None,
     pair_step: Optional[Callable[..., tuple[Any, tuple[Any, ...]]]] = None,
+    after_named: bool = False,
 ) -> tuple[AugFit, list[Step]]:
     """Forward selection from ``plain``; ``adequate(fit) -> bool`` is the stopping test. ``targeted``: the
     global test accepted ``plain`` at ``alpha / 2``; the first step is the targeted one (module docstring),
     its candidates tested at ``alpha / 2``, and selection ends there unless it names one. ``on_trial(step,
     term, index, count)``, when given, is called before each candidate's fit (progress). ``pair_step``
     (:func:`.pairs.pair_step`), when given, runs where a step named nothing while some candidate's law failed
-    (never the targeted first step): a pair it names joins the model at that step."""
+    (never the targeted first step): a pair it names joins the model at that step. ``after_named``: that
+    targeted first step follows a named term (after_named.py), its level ``gate.targeted_level``'s."""
     memo: FoldCache = {} if cache is None else cache
     fit_term = memo_fit_with(exps, substeps)
     current, steps, first, refitted_from = plain, list[Step](), targeted, math.nan
     while first or math.isfinite(refitted_from) or not adequate(current):  # (a refitted base: its step)
-        level = 0.5 * alpha if first else alpha
+        level = targeted_level(alpha, after_named) if first else alpha
         remaining = [t for t in candidates if t not in current.params.terms]
         if not remaining:
             break
@@ -851,6 +858,7 @@ def forward_select(
                 None if math.isnan(refitted_from) else current,
                 () if pair is None else pair.terms,
                 tried,
+                first and after_named,
             )
         )
         first, refitted_from = False, math.nan
