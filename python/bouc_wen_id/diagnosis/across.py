@@ -51,7 +51,16 @@ from ..augmented import AugExperiment, AugFit
 from ..errors import InvalidParameterError
 from ..terms import TERMS, Distortion
 from ..validation import real_number
-from . import across_rules, across_settling, across_stable, across_verdict, fit_notes, gate, inputs
+from . import (
+    across_rules,
+    across_settling,
+    after_named,
+    across_stable,
+    across_verdict,
+    fit_notes,
+    gate,
+    inputs,
+)
 from .across_stable import ConditionResult
 from .beside import only_beside
 from .caveats import alternatives_text
@@ -512,17 +521,19 @@ def _accepts(tr: JointTrial, use_held_out: bool) -> bool:
 
 def _go_on(groups: Sequence[_Group], steps: Sequence[JointStep], alpha: float) -> tuple[bool, float, bool]:
     """Whether the joint selection takes another step, its level and whether it is the targeted step: as
-    diagnose's selection, it stops once the structure passes its adequacy test at every condition (at
-    ``alpha``); the first step is the targeted one, at ``alpha / 2`` (select.py), when every condition's
+    diagnose's selection, after a named step by its gate (after_named.joint_next: the targeted step at
+    ``alpha / 2`` when the structure passes the global test at ``alpha / 2`` everywhere; without measured
+    noise or settled periods, stop once it passes at ``alpha``); the first step is the targeted one, at ``alpha / 2`` (select.py), when every condition's
     plain model passes diagnose's gate (gate.plain_gate: at ``alpha / 2``, its loop not drifting) and every
     noise floor is measured noise; when the gate passes on a floor set by quantisation or numerical
     accuracy, no step runs (gate.NO_TARGETED_STEP, a note); else the first step runs at ``alpha``."""
     if not steps:
         passes, targeted = across_verdict.plain_gate(groups, alpha)
         return not passes or targeted, 0.5 * alpha if targeted else alpha, targeted
-    if steps[-1].chosen is None or across_verdict.final_adequate(groups, alpha):
+    if steps[-1].chosen is None:  # after a named step: diagnose's gate (after_named.py)
         return False, alpha, False
-    return True, alpha, False
+    again = [after_named.again(g.moved, g.measured_noise, g.exps) for g in groups]
+    return after_named.joint_next([across_verdict.p_of(g, g.current) for g in groups], alpha, again)
 
 
 def _step(
