@@ -22,14 +22,20 @@ from bouc_wen_id.terms import Offset, Play, SensorLag, Stiffness, Viscous, Visco
 CANDS = [Play.kind, SensorLag.kind, Viscous.kind, ViscousX.kind, Offset.kind, Stiffness.kind]
 
 
-def _recordings(play: float, lag: float, seed: int) -> list[Any]:
+def _recordings(play: float, lag: float, seed: int, rate_damping: float = 0.0) -> list[Any]:
+    """Play and a sensor lag (``rate_damping`` > 0: play and a damping ``rate_damping * f`` that grows with
+    the frequency f instead, one plant per experiment: physics outside the library, 20 periods of 256)."""
     g = bw.TransferFunction([36.0], [1.0, 3.0, 36.0], delay=0.03)
     hyst = bw.BoucWen(beta=1.6, gamma=0.4, mu=1.6, alpha=2.0)
     out: list[Any] = []
+    periods, samples = (20, 256) if rate_damping else (40, 512)
     for k, f in enumerate((0.5, 1, 2, 3, 4, 5)):
-        plan = bw.SinePlan(frequencies=[f], amplitudes=1.0, settle_periods=30, periods=40,
-                           samples_per_period=512, noise_sd=0.01, seed=seed + k)  # fmt: skip
-        out += bw.simulate(bw.WienerPlant(g, hyst, terms=(Play(play), SensorLag(lag))), plan)
+        terms: tuple[Any, ...] = (Play(play), SensorLag(lag))
+        if rate_damping:
+            terms = (Viscous(rate_damping * f), Play(play))
+        plan = bw.SinePlan(frequencies=[f], amplitudes=1.0, settle_periods=30, periods=periods,
+                           samples_per_period=samples, noise_sd=0.01, seed=seed + k)  # fmt: skip
+        out += bw.simulate(bw.WienerPlant(g, hyst, terms=terms), plan)
     return out
 
 
@@ -59,6 +65,27 @@ def test_across_names_the_pair_each_level_names() -> None:
         assert np.all(np.abs(z) < 3.0), (t.term, z)
     step = next(st for st in a.steps if st.pair)
     assert step.to_dict()["pair"] == list(step.pair) and step.to_dict()["pairs"]
+
+
+def test_outside_physics_reaches_the_joint_pair_step_and_no_set_is_named() -> None:
+    """A damping that grows with the rate beside play (0.02 f and 0.025 f at two conditions): the joint pair
+    step is reached (a step whose candidates' laws all fail) and every set it fits is refused (each
+    stand-in's law still fails beside the others): no set named, and the verdict says what the step did
+    (on main the clause said it "did not run")."""
+    groups = [_recordings(0.1, 0.0, 3, 0.02), _recordings(0.1, 0.0, 60, 0.025)]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        a = bw.diagnose_across(groups, [0.0, 1.0])
+    tried = [st for st in a.steps if st.pairs]
+    assert tried, a.verdict
+    assert not any(st.pair for st in a.steps) and "named together" not in a.verdict
+    assert all(p.refused for st in tried for p in st.pairs)
+    assert a.status != "explained"
+    k = a.steps.index(tried[0]) + 1
+    assert (
+        f"at step {k} the pair step fitted {sum(math.isfinite(p.cost) for p in tried[0].pairs)} sets"
+        in a.verdict
+    )
 
 
 class _Group:
