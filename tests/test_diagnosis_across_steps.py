@@ -24,6 +24,7 @@ import numpy as np
 import pytest
 from bouc_wen_id import terms as T
 from bouc_wen_id.diagnosis import across_rules, fit_notes
+from bouc_wen_id.diagnosis.gate import targeted_level
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benches"))
 G: Any = importlib.import_module("generator")
@@ -53,12 +54,13 @@ def _quiet(f: Any, *a: Any, **kw: Any) -> Any:
         return f(*a, **kw)
 
 
-def test_the_joint_selection_stops_once_the_structure_passes_as_diagnose_does() -> None:
+def test_the_joint_selection_takes_diagnoses_targeted_step_after_a_named_term() -> None:
     """Viscous damping on u at 8, 12, 16 averaged-noise sd through a first-order G, and an output offset of
     0.1 sd at every condition (uniform noise). After viscous damping the structure passes its adequacy test
-    at every condition, and diagnose stops there at each condition; the joint selection, which pools the
-    offset's tiny evidence over three conditions, named it too (viscous damping + output offset, "explained")
-    before. Now it stops where diagnose stops."""
+    at every condition; diagnose then takes its targeted step after a named term (after_named.py) and names
+    the offset, which is in the data, beside viscous damping. The joint selection stopped after viscous
+    damping (the user saw "viscous damping" across and "viscous damping + output offset" per level); it now
+    takes the same step by the same gate (after_named.joint_next) and says what the levels say."""
     p = G.make_plant(4101, shape="first")
     b = G.base(p)
     off = 0.1 * G.NOISE_SD / math.sqrt(G.PERIODS)
@@ -69,13 +71,18 @@ def test_the_joint_selection_stops_once_the_structure_passes_as_diagnose_does() 
     cands = [T.Viscous.kind, T.Offset.kind, T.Stiffness.kind]
     a = _quiet(bw.diagnose_across, groups, [0.0, 1.0, 2.0], candidates=cands)
     own = [_quiet(bw.diagnose, g, candidates=cands) for g in groups]
-    assert a.named == (T.Viscous.kind,), a.verdict
-    assert all(c.final_p_value >= 0.05 for c in a.conditions)  # the premise: it passes everywhere
-    assert a.status == "explained" and len(a.steps) == 1
-    # What diagnose says at each: viscous damping first; since its targeted step after a named term
-    # (after_named.py) it may also name the offset, which is in the data, at a condition (nothing else).
     assert all(d.named_terms[:1] == (T.Viscous.kind,) for d in own), [d.named_terms for d in own]
-    assert all(set(d.named_terms) <= {T.Viscous.kind, T.Offset.kind} for d in own)
+    assert a.named[:1] == (T.Viscous.kind,) and a.status == "explained", a.verdict
+    # The step after viscous damping was the targeted one (every condition passed at alpha / 2 there), at
+    # diagnose's level for a step after a named term (gate.targeted_level: alpha / 10) ...
+    level = targeted_level(a.settings["alpha"], after_named=True)
+    assert len(a.steps) >= 2 and a.steps[1].targeted and a.steps[1].level == level
+    # ... and every term a level names is named across (no contradiction left unexplained).
+    named_own = {t for d in own for t in d.named_terms}
+    assert named_own == {T.Viscous.kind, T.Offset.kind}
+    assert set(a.named) == named_own, a.verdict
+    (offset,) = [t for t in a.terms if t.term == T.Offset.kind]
+    assert all(v > 0 for v in offset.values)  # the true offset's sign at every condition
 
 
 def test_the_place_alternative_is_reported_with_the_separating_experiment() -> None:

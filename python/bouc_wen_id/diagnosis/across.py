@@ -51,7 +51,16 @@ from ..augmented import AugExperiment, AugFit
 from ..errors import InvalidParameterError
 from ..terms import TERMS, Distortion
 from ..validation import real_number
-from . import across_rules, across_settling, across_stable, across_verdict, fit_notes, gate, inputs
+from . import (
+    across_pairs,
+    across_rules,
+    across_settling,
+    across_stable,
+    across_verdict,
+    after_named,
+    fit_notes,
+    inputs,
+)
 from .across_stable import ConditionResult
 from .beside import only_beside
 from .caveats import alternatives_text
@@ -188,6 +197,11 @@ class JointStep:
     targeted: bool = False
     #: The conditions whose model the step refitted before its trials (restarts.rebase: not converged).
     refitted: tuple[str, ...] = ()
+    #: The set named where every candidate's law failed alone (across_pairs.py: diagnose's pair step), each
+    #: member's joint trial (its fits the set's), and the sets the pair step tried (pairs.PairTrial).
+    pair: tuple[str, ...] = ()
+    members: tuple[JointTrial, ...] = ()
+    pairs: tuple[Any, ...] = ()
 
     def to_dict(self) -> dict[str, Any]:
         out: dict[str, Any] = {
@@ -201,10 +215,12 @@ class JointStep:
         out.update(
             {
                 k: list(getattr(self, k))
-                for k in ("law_failed", "beside", "unphysical_places", "refitted")
+                for k in ("law_failed", "beside", "unphysical_places", "refitted", "pair")
                 if getattr(self, k)
             }
         )
+        if self.pairs:
+            out["pairs"] = [p.to_dict() for p in self.pairs]
         return out
 
 
@@ -388,7 +404,7 @@ def _group(
         plain: AugFit = own.plain_fit
         measured = own.settings.get("measured_noise")
         if measured is None:  # a diagnosis that did not record it: its floors, from the items again
-            measured = _measured_noise(items, wander)
+            measured = across_settling.measured_noise(items, wander)
         moved = own.before.drift_detected or any(t.term in DRIFT_TERMS for t in own.named)
     else:
         with warnings.catch_warnings():
@@ -429,18 +445,6 @@ def _group(
         left_out=left,
         left_why=why,
     )
-
-
-def _measured_noise(items: Any, wander: Any) -> bool:
-    """Whether every experiment's noise floor is measured noise (settling._noise_floors set none)."""
-    from . import baseline
-    from .data import prepare
-    from .settling import _noise_floors, _settled
-
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        settled, _ = _settled(baseline.removed(items, wander))
-    return not _noise_floors(settled, prepare(settled))[1]
 
 
 # ------------------------------------------------------------------------------------------------------
@@ -513,17 +517,20 @@ def _accepts(tr: JointTrial, use_held_out: bool) -> bool:
 
 def _go_on(groups: Sequence[_Group], steps: Sequence[JointStep], alpha: float) -> tuple[bool, float, bool]:
     """Whether the joint selection takes another step, its level and whether it is the targeted step: as
-    diagnose's selection, it stops once the structure passes its adequacy test at every condition (at
-    ``alpha``); the first step is the targeted one, at ``alpha / 2`` (select.py), when every condition's
-    plain model passes diagnose's gate (gate.plain_gate: at ``alpha / 2``, its loop not drifting) and every
-    noise floor is measured noise; when the gate passes on a floor set by quantisation or numerical
-    accuracy, no step runs (gate.NO_TARGETED_STEP, a note); else the first step runs at ``alpha``."""
+    diagnose's selection, after a named step by its gate (after_named.joint_next: the targeted step at ``alpha
+    / 10`` when the structure passes the global test at ``alpha / 2`` everywhere; without measured noise or
+    settled periods, stop once it passes at ``alpha``); the first step is the targeted one, at ``alpha / 2``
+    (select.py), when every condition's plain model passes diagnose's gate (gate.plain_gate: at ``alpha / 2``,
+    its loop not drifting) and every noise floor is measured noise; when the gate passes on a floor set by
+    quantisation or numerical accuracy, no step runs (gate.NO_TARGETED_STEP, a note); else the first step runs
+    at ``alpha``."""
     if not steps:
         passes, targeted = across_verdict.plain_gate(groups, alpha)
         return not passes or targeted, 0.5 * alpha if targeted else alpha, targeted
-    if steps[-1].chosen is None or across_verdict.final_adequate(groups, alpha):
+    if steps[-1].chosen is None:  # after a named step: diagnose's gate (after_named.py)
         return False, alpha, False
-    return True, alpha, False
+    again = [after_named.again(g.moved, g.measured_noise, g.exps) for g in groups]
+    return after_named.joint_next([across_verdict.p_of(g, g.current) for g in groups], alpha, again)
 
 
 def _step(
@@ -573,7 +580,7 @@ def _select(
     groups: Sequence[_Group],
     cands: Sequence[str],
     alpha: float,
-    use_held_out: bool,
+    held: bool,
     report: ProgressCallback,
 ) -> list[JointStep]:
     """The joint forward selection (module docstring); the groups' current models end at the final ones."""
@@ -595,10 +602,13 @@ def _select(
             if refitted:
                 continue
         alone = {t.term: t.p_value for t in steps[0].trials} if steps else {}
-        step = _step(groups, trials, level, alpha, use_held_out, alone)
-        steps.append(replace(step, targeted=targeted, refitted=refitted))
+        step = replace(_step(groups, trials, level, alpha, held, alone), targeted=targeted, refitted=refitted)
+        # Every candidate's law failed alone: two or three at once, as diagnose's pair step (across_pairs.py).
+        steps.append(across_pairs.step(groups, step, len(trials), alpha, held, JointTrial))
         refitted = ()
-        chosen = next((t for t in steps[-1].trials if t.term == steps[-1].chosen), None)
+        chosen = next(
+            (t for t in (*steps[-1].members, *steps[-1].trials) if t.term == steps[-1].chosen), None
+        )
         if chosen is None:
             break
         for g, f in zip(groups, chosen.fits):
@@ -644,11 +654,13 @@ def _terms(
     for st in steps:
         if st.chosen is None:
             continue
-        tr = next(t for t in st.trials if t.term == st.chosen)
         for term in groups[0].current.params.terms:
-            # The chosen term, and a two-term element's companion beside it.
-            if term != st.chosen and TERMS[st.chosen].companion != term:
+            # The chosen term (or set: across_pairs.py), and a two-term element's companion beside it.
+            if term not in (st.chosen, *st.pair) and TERMS[st.chosen].companion != term:
                 continue
+            tr = next((m for m in st.members if m.term == term), None) or next(
+                t for t in (*st.members, *st.trials) if t.term == st.chosen
+            )
             vals, ses = [], []
             for g in groups:
                 v, se = physical(g.current, g.scale, term)
@@ -948,6 +960,7 @@ def _finished(
     verdict += across_verdict.clauses(status, named, partial, steps, prepared, alpha)
     if status != "adequate":  # loop centres that differ in sign (fit_notes.centre_clause), as diagnose says
         verdict += fit_notes.centre_text(prepared)
+    verdict += across_pairs.revisit_clause(prepared, steps, across_verdict.final_adequate(prepared, alpha))
     return AcrossDiagnosis(
         verdict + clause,
         tuple(named),
@@ -958,18 +971,8 @@ def _finished(
         tuple(g.current for g in prepared),
         status,
         tuple(partial),
-        (*fit_notes.condition_notes(prepared), *_gate_notes(prepared, alpha)),
+        (*fit_notes.condition_notes(prepared), *across_verdict.gate_notes(prepared, alpha)),
     )
-
-
-def _gate_notes(prepared: Sequence[_Group], alpha: float) -> tuple[str, ...]:
-    """Why the targeted step was not run (gate.NO_TARGETED_STEP, as diagnose notes it), naming the
-    conditions whose noise floor is not measured noise."""
-    passes, targeted = across_verdict.plain_gate(prepared, alpha)
-    if not passes or targeted:
-        return ()
-    where = ", ".join(str(g.label) for g in prepared if not g.measured_noise)
-    return (f"{where}: {gate.NO_TARGETED_STEP}",)
 
 
 __all__ = [

@@ -185,7 +185,21 @@ def too_few(groups: Sequence[Any], unsettled: Sequence[NotSettled]) -> Optional[
     )
 
 
+def measured_noise(items: Any, wander: Any) -> bool:
+    """Whether every experiment's noise floor is measured noise (settling._noise_floors set none), of a
+    condition's ``items`` and ``wander`` as across._group reads them."""
+    from . import baseline
+    from .data import prepare
+    from .settling import _noise_floors, _settled
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        settled, _ = _settled(baseline.removed(items, wander))
+    return not _noise_floors(settled, prepare(settled))[1]
+
+
 __all__ = [
+    "measured_noise",
     "NotSettled",
     "from_own",
     "why_own",

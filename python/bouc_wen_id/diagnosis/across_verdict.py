@@ -227,7 +227,18 @@ def _masing(named: Sequence[Any], groups: Sequence[Any], alpha: float) -> tuple[
     return sep, where if sep is not None else ", ".join(w for w, _ in seps)
 
 
+def gate_notes(prepared: Sequence[Any], alpha: float) -> tuple[str, ...]:
+    """Why the targeted step was not run (gate.NO_TARGETED_STEP, as diagnose notes it), naming the
+    conditions whose noise floor is not measured noise."""
+    passes, targeted = plain_gate(prepared, alpha)
+    if not passes or targeted:
+        return ()
+    where = ", ".join(str(g.label) for g in prepared if not g.measured_noise)
+    return (f"{where}: {gate.NO_TARGETED_STEP}",)
+
+
 __all__ = [
+    "gate_notes",
     "p_of",
     "final_adequate",
     "summed",

@@ -35,16 +35,46 @@ drifting, no degradation named) and every record has the periods that tell a set
 term (:data:`.zero_drift.MIN_PERIODS`: on blind few_periods seed 11's null the step named an asymmetry
 beside the offset that a settling centre's transient had drawn, which centre_decay.py then could not
 weigh); else the selection is the old one (stopping at ``adequate``).
+
+:func:`.across.diagnose_across` takes the same step by the same gate (:func:`joint_next`: after a named
+joint step, the targeted step at ``alpha / 10`` when every condition's model passes the global test at
+``alpha / 2`` and :func:`again` holds at every condition; review 33: diagnose named a 0.1-sd offset beside
+viscous damping at one condition while the joint selection stopped after viscous damping).
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Sequence
 from typing import Any
 
 from ..augmented import AugExperiment, AugFit
-from .gate import plain_passes
+from .gate import plain_passes, targeted_level
 from .select import ALPHA, Step, forward_select
+from .zero_drift import MIN_PERIODS
+
+
+def again(moved: bool, measured_noise: bool, exps: Sequence[Any]) -> bool:
+    """Whether the targeted step after a named one may run on a set of experiments (module docstring): the
+    loop not drifting and no degradation named (``moved`` False), measured noise, and every experiment with
+    the :data:`.zero_drift.MIN_PERIODS` periods that tell a settling transient from a term."""
+    return not moved and measured_noise and all(e.dc.size >= MIN_PERIODS for e in exps)
+
+
+def joint_next(
+    p_values: Sequence[float], alpha: float, again_each: Sequence[bool]
+) -> tuple[bool, float, bool]:
+    """After a joint step that named a term (across.py; ``p_values``: each condition's global p of the model
+    with it): ``(go on, level, targeted)`` by :func:`select`'s gate. Where :func:`again` holds at every
+    condition: when every model passes the global test at ``alpha / 2`` (:func:`.gate.plain_passes`), one
+    targeted step at :func:`.gate.targeted_level`'s ``alpha / 10``, else a step at ``alpha``; elsewhere the old rule (stop once every model
+    passes its adequacy test at ``alpha``)."""
+    if again_each and all(again_each):
+        if all(plain_passes(p, alpha) for p in p_values):
+            return True, targeted_level(alpha, after_named=True), True
+        return True, alpha, False
+    adequate = all(math.isfinite(p) and p >= alpha for p in p_values)
+    return not adequate, alpha, False
 
 
 def select(
@@ -99,4 +129,4 @@ def select(
     return final, steps
 
 
-__all__ = ["select"]
+__all__ = ["select", "again", "joint_next"]

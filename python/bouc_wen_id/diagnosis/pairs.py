@@ -49,6 +49,11 @@ on u through a G without delay were named viscous damping on x), sets that could
 are fitted from the model before it. Where a step's law-failed candidates stay unnamed, the verdict says
 what this step did there (:func:`refusal_text`).
 
+The rules read the experiments only through :class:`Rules` (the degrees of freedom, the nested F test, a
+member's physical range, its law, the held-out cost, the separating experiment): :func:`pair_step` takes
+either a set of experiments (one set: :func:`.run.diagnose`) or a :class:`Rules` of its own, as
+:mod:`.across_pairs` gives one for several conditions at once (:func:`.across.diagnose_across`).
+
 ``ENABLED`` switches the path off (then a step whose candidates all fail their laws ends as before).
 """
 
@@ -92,6 +97,42 @@ TRIPLES = True
 #: The candidates that did not pass alone are paired with the lead (and tried as a third term) only where
 #: the lead alone removes at least this share of the excess (module docstring, "Where it runs").
 OTHERS_SHARE = 0.5
+
+
+class Rules:
+    """What the pair rules ask of the experiments a set is tested on: here one set of experiments and
+    :mod:`.select`'s functions (module docstring; :class:`.across_pairs.JointRules` for several conditions).
+    ``per_set``: how many parameter sets one added term brings (1 here; the number of conditions across)."""
+
+    per_set = 1
+
+    def __init__(
+        self, exps: Sequence[AugExperiment], substeps: int = 1, cache: Optional[FoldCache] = None
+    ) -> None:
+        self.exps, self.substeps, self.cache = exps, substeps, cache
+
+    def dof(self, fit: Any) -> int:
+        return dof_of(self.exps, fit)
+
+    def physical(self, fit: Any, term: str) -> bool:
+        """In its physical range and not at its null value (the model without it)."""
+        return _admissible(fit, term) and not at_null(fit, term)
+
+    def away(self, fit: Any, term: str, level: float, s2: float) -> bool:
+        return away_from_null(fit, term, level, s2)
+
+    def law(self, fit: Any, term: str) -> float:
+        return element_law_test(self.exps, fit, term, self.substeps)
+
+    def held_out(self, before: Any, after: Any) -> Optional[HeldOut]:
+        return held_out(self.exps, before, after, self.substeps, self.cache)
+
+    def separating(self, a: Any, b: Any) -> str:
+        return _separating(self.exps, a, b, self.substeps)
+
+
+def _rules(exps: Any, substeps: int = 1, cache: Optional[FoldCache] = None) -> Rules:
+    return exps if isinstance(exps, Rules) else Rules(exps, substeps, cache)
 
 
 @dataclass(frozen=True)
@@ -148,7 +189,7 @@ Without = dict[str, tuple[float, AugFit]]
 
 
 def _member_tests(
-    exps: Sequence[AugExperiment],
+    exps: Any,
     fit: AugFit,
     without: Without,
     level: float,
@@ -157,38 +198,38 @@ def _member_tests(
 ) -> tuple[tuple[float, ...], str]:
     """Each member's test given the others (rule 1 of the module docstring), ``without[m]`` the model of the
     others: (adjusted p's, why refused)."""
-    d1 = dof_of(exps, fit)
+    r = _rules(exps)
+    d1 = r.dof(fit)
     s2 = fit.cost / max(d1, 1)
     ps: list[float] = []
     why = ""
     for m, (c_other, f_other) in without.items():
-        q = max(len(fit.params.terms) - len(f_other.params.terms), 1)
+        q = max(len(fit.params.terms) - len(f_other.params.terms), 1) * r.per_set
         _, p = f_test(c_other, fit.cost, d1, boundary=m in BOUNDARY_TERMS, q=q)
         padj = min(1.0, p * n_cands) if math.isfinite(p) else math.nan
         ps.append(padj)
         # Its share of the excess the others leave (what the next single step would ask of it).
-        left = max(c_other - dof_of(exps, f_other), 0.0)
+        left = max(c_other - r.dof(f_other), 0.0)
         share = min((c_other - fit.cost) / left, 1.0) if left > 0 else 0.0
         given = " + ".join(t for t in (members or without) if t != m)
         if why:
             continue
-        if not (_admissible(fit, m) and not at_null(fit, m)):
+        if not r.physical(fit, m):
             why = f"{m}: not physical or at its null"
         elif not (math.isfinite(padj) and padj < level):
             why = f"{m}: not significant given {given} (p = {padj:.2g})"
         elif share < MATERIAL_SHARE:
             why = f"{m}: share {share:.2g} of the excess given {given}"
-        elif not away_from_null(fit, m, level, s2):
+        elif not r.away(fit, m, level, s2):
             why = f"{m}: value not away from its null given {given}"
     return tuple(ps), why
 
 
-def _joint(
-    exps: Sequence[AugExperiment], current: AugFit, f: AugFit, k: int, n_cands: int, level: float
-) -> str:
+def _joint(exps: Any, current: AugFit, f: AugFit, k: int, n_cands: int, level: float) -> str:
     """The set's joint F test against the step's model, Bonferroni over every set of ``k`` candidates."""
-    q = max(len(f.params.terms) - len(current.params.terms), 1)
-    _, p = f_test(current.cost, f.cost, dof_of(exps, f), q=q)
+    r = _rules(exps)
+    q = max(len(f.params.terms) - len(current.params.terms), 1) * r.per_set
+    _, p = f_test(current.cost, f.cost, r.dof(f), q=q)
     return (
         ""
         if math.isfinite(p) and min(1.0, p * max(math.comb(n_cands, k), 1)) < level
@@ -206,7 +247,7 @@ def _clash(t: str, terms: Sequence[str], fits: Sequence[AugFit]) -> bool:
 
 
 def fit_pairs(
-    exps: Sequence[AugExperiment],
+    exps: Any,
     current: AugFit,
     pool: Sequence[Trial],
     others: Sequence[Trial],
@@ -236,7 +277,7 @@ def fit_pairs(
 
 
 def fit_triples(
-    exps: Sequence[AugExperiment],
+    exps: Any,
     current: AugFit,
     base: PairTrial,
     cands: Sequence[Trial],
@@ -280,9 +321,10 @@ def fit_triples(
     return out
 
 
-def _law(exps: Sequence[AugExperiment], p: PairTrial, substeps: int) -> PairTrial:
+def _law(exps: Any, p: PairTrial, substeps: int) -> PairTrial:
     assert p.fit is not None
-    laws = tuple(element_law_test(exps, p.fit, t, substeps) for t in p.terms)
+    r = _rules(exps, substeps)
+    laws = tuple(r.law(p.fit, t) for t in p.terms)
     bad = [f"{t} (law p = {v:.2g})" for t, v in zip(p.terms, laws) if math.isfinite(v) and v < LAW_ALPHA]
     return replace(p, law_p=laws, refused="law fails: " + ", ".join(bad) if bad else "")
 
@@ -296,7 +338,7 @@ def law_holds(p: PairTrial) -> bool:
 
 
 def _rivals(
-    exps: Sequence[AugExperiment],
+    exps: Any,
     chosen: PairTrial,
     tested: Sequence[PairTrial],
     singles: Sequence[Trial],
@@ -305,8 +347,9 @@ def _rivals(
     """Rule of the alternatives (module docstring): each rival pair's differing members, and single terms
     whose law held, tied with the chosen pair, each against the member it would replace."""
     assert chosen.fit is not None
+    r0 = _rules(exps, substeps)
     ct = _as_trial(chosen)
-    dof = dof_of(exps, chosen.fit)
+    dof = r0.dof(chosen.fit)
     out: list[Alternative] = []
     for r in tested:
         if r is chosen or r.fit is None or not math.isfinite(r.cost):
@@ -318,7 +361,7 @@ def _rivals(
             by_law or (law_holds(r) and not r.refused.startswith("law") and _tied(ct, _as_trial(r), dof))
         ):
             continue
-        sep = _separating(exps, chosen.fit, r.fit, substeps)
+        sep = r0.separating(chosen.fit, r.fit)
         new = [t for t in r.terms if t not in chosen.terms]
         old = [t for t in chosen.terms if t not in r.terms]
         for t, rival in zip(old, new):
@@ -327,13 +370,13 @@ def _rivals(
         if s.fit is None or s.term in chosen.terms or not s.law_holds or not math.isfinite(s.law_p_value):
             continue
         if _tied(ct, s, dof):
-            sep = _separating(exps, chosen.fit, s.fit, substeps)
+            sep = r0.separating(chosen.fit, s.fit)
             out.append(Alternative(chosen.terms[0], s.term, math.nan, sep))
     return out
 
 
 def _pick(
-    exps: Sequence[AugExperiment],
+    exps: Any,
     current: AugFit,
     ranked: Sequence[PairTrial],
     done: dict[tuple[str, ...], PairTrial],
@@ -343,13 +386,14 @@ def _pick(
 ) -> Optional[PairTrial]:
     """The first of ``ranked`` (those that passed rule 1, by cost) whose laws hold and whose held-out cost is
     lower (rules 2 and 3); ``done`` records every one's tests."""
+    r = _rules(exps, substeps, cache)
     for p in ranked:
-        p = _law(exps, p, substeps)
+        p = _law(r, p, substeps)
         done[p.terms] = p
         if not law_holds(p):
             continue
         assert p.fit is not None
-        ho = held_out(exps, current, p.fit, substeps, cache) if held_out_test else None
+        ho = r.held_out(current, p.fit) if held_out_test else None
         done[p.terms] = replace(p, held_out=ho)
         if ho is not None and not ho.improves:
             done[p.terms] = replace(p, held_out=ho, refused="held-out cost not lower")
@@ -359,12 +403,12 @@ def _pick(
 
 
 def pair_step(
-    exps: Sequence[AugExperiment],
-    current: AugFit,
+    exps: Any,
+    current: Any,
     order: Sequence[Trial],
     tested: Sequence[Trial],
     refused: Sequence[str],
-    fit_term: Callable[[AugFit, str], Optional[AugFit]],
+    fit_term: Callable[[Any, str], Optional[Any]],
     substeps: int,
     level: float,
     n_cands: int,
@@ -377,7 +421,9 @@ def pair_step(
     best first) all failed their laws, or None; with every set tried (module docstring). The best
     ``pool_size`` of ``order`` are paired with each other (the revisit pairs more: revisit.py); the
     candidates of ``tested`` that did not pass alone only where the lead's share is ``others_share``
-    (:data:`OTHERS_SHARE` when None) or more."""
+    (:data:`OTHERS_SHARE` when None) or more. ``exps``: the experiments, or the :class:`Rules` the sets
+    are tested by (across_pairs.py)."""
+    exps = _rules(exps, substeps, cache)
     pool = [tr for tr in order if tr.fit is not None and tr.term not in refused][:pool_size]
     passed = {tr.term for tr in order}
     others = [tr for tr in tested if tr.term not in passed and tr.fit is not None and math.isfinite(tr.cost)]
@@ -397,7 +443,7 @@ def pair_step(
     if chosen is None or chosen.fit is None:
         return None, tuple(done.values())
     # Rivals among the sets that passed rule 1: their laws (run for those a tie could make alternatives).
-    dof = dof_of(exps, chosen.fit)
+    dof = exps.dof(chosen.fit)
     for p in ranked:
         if p.terms != chosen.terms and not p.law_p and _tied(_as_trial(chosen), _as_trial(p), dof):
             done[p.terms] = _law(exps, p, substeps)
@@ -472,6 +518,7 @@ def _none_to_fit(st: Any) -> str:
 
 
 __all__ = [
+    "Rules",
     "refusal_text",
     "ENABLED",
     "POOL",

@@ -117,13 +117,23 @@ def _base(steps: Sequence[Step], j: int, plain: AugFit) -> Optional[AugFit]:
     return next((tr.fit for tr in prev.trials if tr.term == prev.chosen), None)
 
 
-def _leads(step: Step) -> list[Trial]:
+def _leads(step: Any) -> list[Trial]:
     """A step's candidates that removed at least :data:`SHARE` of the excess left and failed their laws
     alone (also where the step then named a set of them: pairs.py), best first; empty unless the step's
     best candidate is one of them."""
     passed = sorted((tr for tr in step.trials if tr.passed and math.isfinite(tr.cost)), key=lambda t: t.cost)
     out = [tr for tr in passed if not tr.law_holds and tr.fit is not None and tr.share >= SHARE]
     return out if out and passed[0] is out[0] else []
+
+
+def trigger(steps: Sequence[Any]) -> tuple[int, list[Trial]]:
+    """``(j, leads)``: the step ``j`` of the last named single term (the steps between it and the last may
+    only have named sets: pairs.py) and the later steps' leads (:func:`_leads`); no leads where the revisit
+    does not run (module docstring; the final model's adequacy is the caller's to test)."""
+    if not (ENABLED and pairs.ENABLED) or len(steps) < 2 or steps[-1].chosen is not None:
+        return -1, []
+    j = max((k for k, s in enumerate(steps) if s.chosen is not None and not s.pair), default=-1)
+    return j, [tr for s in steps[j + 1 :] for tr in _leads(s)] if j >= 0 else []
 
 
 def revisit(
@@ -139,14 +149,10 @@ def revisit(
 ) -> tuple[AugFit, list[Step]]:
     """``(final, steps)`` after the revisit of the last named single term (module docstring); unchanged
     where it does not run or finds no set."""
-    if not (ENABLED and pairs.ENABLED) or len(steps) < 2 or steps[-1].chosen is not None:
-        return final, steps
-    last = steps[-1]
-    # The last named single term; the steps between it and the last may only have named sets (pairs.py).
-    j = max((k for k, s in enumerate(steps) if s.chosen is not None and not s.pair), default=-1)
-    leads = [tr for s in steps[j + 1 :] for tr in _leads(s)] if j >= 0 else []
+    j, leads = trigger(steps)
     if not leads or adequate(final):
         return final, steps
+    last = steps[-1]
     st = steps[j]
     named = str(st.chosen)
     base = _base(steps, j, plain)
@@ -285,4 +291,4 @@ def text(steps: Sequence[Any]) -> str:
     return out
 
 
-__all__ = ["ENABLED", "POOL", "SHARE", "Revisit", "records", "revisit", "select", "text"]
+__all__ = ["ENABLED", "POOL", "SHARE", "Revisit", "records", "revisit", "select", "text", "trigger"]

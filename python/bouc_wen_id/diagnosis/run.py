@@ -774,7 +774,7 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
         final, steps = start, list[Step]()
     else:
         # The targeted step after a named one (after_named.py), not on short records (centre_decay.py);
-        again = not moved and setup.measured_noise and all(e.dc.size >= zero_drift.MIN_PERIODS for e in exps)
+        again = after_named.again(moved, setup.measured_noise, exps)
         final, steps = after_named.select(fsx, start, steady, adequate, p_of, substeps, targeted, again, **kw)
         # then a named single term whose later lead failed its law is revisited (revisit.py).
         final, steps = revisit.after(fsx, start, final, steps, adequate, substeps, **kw)
