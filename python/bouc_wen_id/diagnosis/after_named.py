@@ -67,8 +67,8 @@ def joint_next(
     """After a joint step that named a term (across.py; ``p_values``: each condition's global p of the model
     with it): ``(go on, level, targeted)`` by :func:`select`'s gate. Where :func:`again` holds at every
     condition: when every model passes the global test at ``alpha / 2`` (:func:`.gate.plain_passes`), one
-    targeted step at :func:`.gate.targeted_level`'s ``alpha / 10``, else a step at ``alpha``; elsewhere the old rule (stop once every model
-    passes its adequacy test at ``alpha``)."""
+    targeted step at :func:`.gate.targeted_level`'s ``alpha / 10``, else a step at ``alpha``; elsewhere the
+    old rule (stop once every model passes its adequacy test at ``alpha``)."""
     if again_each and all(again_each):
         if all(plain_passes(p, alpha) for p in p_values):
             return True, targeted_level(alpha, after_named=True), True
