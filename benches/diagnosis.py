@@ -403,6 +403,7 @@ def run_new_case(
 
     import bouc_wen_id as bw
     import generator as gen
+    import oracle
 
     kind, name, place, size, seed = job
     row: dict[str, Any] = {"kind": kind, "term": name, "place": place, "size": size, "seed": seed}
@@ -451,6 +452,12 @@ def run_new_case(
         if math.isfinite(row.get("unabsorbed", math.nan)):
             row["below_det"] = bool(row["unabsorbed"] < row["det_limit"])
             row["below_global"] = bool(row["unabsorbed"] < row["global_limit"])
+    if skind == "library":  # the true model's own LR test: detectable at all? why missed? (oracle.py)
+        try:
+            row.update(oracle.truth_lr(d, true_kind(truth, place if placed else "")))
+            row["cause"] = oracle.cause(row, float(d.settings.get("alpha", 0.05)))
+        except Exception as exc:  # reported, never fatal
+            row["oracle_error"] = f"{type(exc).__name__}: {exc}"
     fittable = skind not in ("outside", "structure")
     try:
         where = place if placed else ""
@@ -520,6 +527,8 @@ def _target(kind: str, size: float) -> tuple[str, dict[str, tuple[str, float]]]:
 
 def summarise(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
     """One line per (kind, term, place, size): the rates, medians and whether the targets hold."""
+    import oracle
+
     groups: dict[tuple[str, str, str, float], list[dict[str, Any]]] = {}
     for r in rows:
         key = (r.get("scored_as", r["kind"]), r["term"] or "plain", r.get("place", ""), r["size"])
@@ -574,6 +583,7 @@ def summarise(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
                 ]
             ),
         }
+        line.update(oracle.columns(ok))  # lr_det, right_lr, causes (library rows; oracle.py)
         # Outside rows: the unabsorbed part (unabsorbed()) and the share below the global test's 50 % power
         # point, and the honest rate over the other cases; the rates above keep every case.
         det = [r for r in ok if r.get("below_det") is not None]
@@ -608,7 +618,8 @@ def print_table(lines: list[dict[str, Any]], null_label: str = "null (plain, low
     head = (
         f"{'case':<34} {'n':>3} {'detect':>6} {'name':>5} {'+place':>6} {'wrong':>5} {'unexpl':>6} "
         f"{'fam':>4} {'bad':>4} {'HO':>6} {'s/diag':>6} {'size':>5} {'<lim':>5} {'<l90':>5} {'ok>90':>5} "
-        f"{'unabs':>5} {'<det':>4} {'<glob':>5} {'hon|d':>5} {'err':>3} {'meets':>5}  "
+        f"{'unabs':>5} {'<det':>4} {'<glob':>5} {'hon|d':>5} {'lrdet':>5} {'ok|lr':>5} {'err':>3} "
+        f"{'meets':>5}  "
         "target"
     )
     print(head)
@@ -628,10 +639,13 @@ def print_table(lines: list[dict[str, Any]], null_label: str = "null (plain, low
             f"{ln.get('below_lim90', math.nan):5.2f} {ln.get('right_above_l90', math.nan):5.2f} "
             f"{ln.get('unabsorbed', math.nan):5.2f} {ln.get('below_det', math.nan):4.2f} "
             f"{ln.get('below_global', math.nan):5.2f} {ln.get('honest_det', math.nan):5.2f} "
+            f"{ln.get('lr_det', math.nan):5.2f} {ln.get('right_lr', math.nan):5.2f} "
             f"{ln['errors']:>3} "
             f"{'yes' if ln['meets'] else 'NO':>5}  "
             f"{ln['target']}"
         )
+        if ln.get("causes"):  # each miss's cause (oracle.py): undetectable, law refused, ...
+            print(f"{'':<34} misses: " + ", ".join(f"{k} {v}" for k, v in sorted(ln["causes"].items())))
 
 
 def main(argv: Optional[list[str]] = None) -> int:
