@@ -44,6 +44,15 @@ Bonferroni over the candidates) with less than 50 % power, so nothing could see 
 below the global adequacy test's 50 % power point; "hon|d" (outside rows), the honest rate (unexpl + fam)
 over the cases not "<det". The rates before them keep every case: no case leaves a denominator.
 
+Library rows also run the true model's own likelihood-ratio test (``benches/oracle.py``: plain + the hidden term
+at its place fitted to the NOISY data, its chi2 gain put to the diagnosis's own first-step F test at the
+step's level): "lrdet", the share of cases that test detects (below it even an oracle that knew the term
+would keep the plain model, so "adequate" is the honest verdict), and "ok|lr", right at its place among
+those. The old "+place" keeps every case. A line "misses:" under the row counts each miss's cause:
+undetectable, law refused (the truth's own law p below ``LAW_ALPHA``), truth rejected (the true model fails
+its adequacy test: a high noise draw), local minimum (the step's fit of the truth above the oracle's), or
+search (none of these: the diagnosis had what it needed).
+
 What counts as right on an outside row of the Dahl element's family (``DAHL_FAMILY``: the Iwan loop, Dahl's
 exponent 2, the Prandtl-Ishlinskii operator on u): "unexplained", or a verdict that names ONLY the Dahl
 element with the family caveat (``diagnosis/caveats.py``: "a Dahl-like friction loop ... a distribution of
