@@ -44,8 +44,8 @@ Bonferroni over the candidates) with less than 50 % power, so nothing could see 
 below the global adequacy test's 50 % power point; "hon|d" (outside rows), the honest rate (unexpl + fam)
 over the cases not "<det". The rates before them keep every case: no case leaves a denominator.
 
-Library rows also run the true model's own likelihood-ratio test (``benches/oracle.py``: plain + the hidden term
-at its place fitted to the NOISY data, its chi2 gain put to the diagnosis's own first-step F test at the
+Library rows also run the true model's own likelihood-ratio test (``benches/oracle.py``: plain + the hidden
+term at its place fitted to the NOISY data, its chi2 gain put to the diagnosis's own first-step F test at the
 step's level): "lrdet", the share of cases that test detects (below it even an oracle that knew the term
 would keep the plain model, so "adequate" is the honest verdict), and "ok|lr", right at its place among
 those. The old "+place" keeps every case. A line "misses:" under the row counts each miss's cause:
