@@ -683,6 +683,11 @@ def run_case(case: Case) -> dict[str, Any]:
             list(getattr(st, "pair", ())) or "tried" for st in d.steps if getattr(st, "pairs", ())
         ]
         rec["place_alts"] = [f"{a.term}~{a.rival}" for a in d.alternatives if _other_place(a.term, a.rival)]
+        if case.effect in LIBRARY:  # the true model's own LR test, and why a miss missed (oracle.py)
+            import oracle
+
+            rec.update(oracle.truth_lr(d, case.effect), right_place=rec["category"] == "right")
+            rec["cause"] = oracle.cause(rec)
     except Exception as exc:  # a crash is a finding, with its text; a named error of the library is apart
         import bouc_wen_id.errors as bwe
 

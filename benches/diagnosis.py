@@ -49,6 +49,15 @@ cases said "adequate" while below that test's 50 % point (the plain model is wit
 diagnosis's shape-free test, and the verdict quotes the RMS it could miss); "hon+a", the honest rate
 counting those too. The target ("honest") is unchanged: "hon+a" is reported beside it, never in its place.
 
+Library rows also run the true model's own likelihood-ratio test (``benches/oracle.py``: plain + the hidden
+term at its place fitted to the NOISY data, its chi2 gain put to the diagnosis's own first-step F test at the
+step's level): "lrdet", the share of cases that test detects (below it even an oracle that knew the term
+would keep the plain model, so "adequate" is the honest verdict), and "ok|lr", right at its place among
+those. The old "+place" keeps every case. A line "misses:" under the row counts each miss's cause:
+undetectable, law refused (the truth's own law p below ``LAW_ALPHA``), truth rejected (the true model fails
+its adequacy test: a high noise draw), local minimum (the step's fit of the truth above the oracle's), or
+search (none of these: the diagnosis had what it needed).
+
 What counts as right on an outside row of the Dahl element's family (``DAHL_FAMILY``: the Iwan loop, Dahl's
 exponent 2, the Prandtl-Ishlinskii operator on u): "unexplained", or a verdict that names ONLY the Dahl
 element with the family caveat (``diagnosis/caveats.py``: "a Dahl-like friction loop ... a distribution of
@@ -432,6 +441,7 @@ def run_new_case(
 
     import bouc_wen_id as bw
     import generator as gen
+    import oracle
 
     kind, name, place, size, seed = job
     row: dict[str, Any] = {"kind": kind, "term": name, "place": place, "size": size, "seed": seed}
@@ -481,6 +491,12 @@ def run_new_case(
             row["below_det"] = bool(row["unabsorbed"] < row["det_limit"])
             row["below_global"] = bool(row["unabsorbed"] < row["global_limit"])
             row["global_power"] = unabsorbed_power(d, row["unabsorbed"])
+    if skind == "library":  # the true model's own LR test: detectable at all? why missed? (oracle.py)
+        try:
+            row.update(oracle.truth_lr(d, true_kind(truth, place if placed else "")))
+            row["cause"] = oracle.cause(row, float(d.settings.get("alpha", 0.05)))
+        except Exception as exc:  # reported, never fatal
+            row["oracle_error"] = f"{type(exc).__name__}: {exc}"
     fittable = skind not in ("outside", "structure")
     try:
         where = place if placed else ""
@@ -550,6 +566,8 @@ def _target(kind: str, size: float) -> tuple[str, dict[str, tuple[str, float]]]:
 
 def summarise(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
     """One line per (kind, term, place, size): the rates, medians and whether the targets hold."""
+    import oracle
+
     groups: dict[tuple[str, str, str, float], list[dict[str, Any]]] = {}
     for r in rows:
         key = (r.get("scored_as", r["kind"]), r["term"] or "plain", r.get("place", ""), r["size"])
@@ -604,6 +622,7 @@ def summarise(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
                 ]
             ),
         }
+        line.update(oracle.columns(ok))  # lr_det, right_lr, causes (library rows; oracle.py)
         # Outside rows: the unabsorbed part (unabsorbed()) and the share below the global test's 50 % power
         # point, and the honest rate over the other cases; the rates above keep every case.
         det = [r for r in ok if r.get("below_det") is not None]
@@ -667,7 +686,7 @@ def print_table(lines: list[dict[str, Any]], null_label: str = "null (plain, low
         f"{'case':<34} {'n':>3} {'detect':>6} {'name':>5} {'+place':>6} {'wrong':>5} {'unexpl':>6} "
         f"{'fam':>4} {'bad':>4} {'HO':>6} {'s/diag':>6} {'size':>5} {'<lim':>5} {'<l90':>5} {'ok>90':>5} "
         f"{'unabs':>5} {'<det':>4} {'<glob':>5} {'hon|d':>5} {'pwG':>4} {'ad<g':>4} {'hon+a':>5} "
-        f"{'err':>3} {'meets':>5}  "
+        f"{'lrdet':>5} {'ok|lr':>5} {'err':>3} {'meets':>5}  "
         "target"
     )
     print(head)
@@ -689,10 +708,13 @@ def print_table(lines: list[dict[str, Any]], null_label: str = "null (plain, low
             f"{ln.get('below_global', math.nan):5.2f} {ln.get('honest_det', math.nan):5.2f} "
             f"{ln.get('global_power', math.nan):4.2f} {ln.get('adequate_absorbed', math.nan):4.2f} "
             f"{ln.get('honest_absorbed', math.nan):5.2f} "
+            f"{ln.get('lr_det', math.nan):5.2f} {ln.get('right_lr', math.nan):5.2f} "
             f"{ln['errors']:>3} "
             f"{'yes' if ln['meets'] else 'NO':>5}  "
             f"{ln['target']}"
         )
+        if ln.get("causes"):  # each miss's cause (oracle.py): undetectable, law refused, ...
+            print(f"{'':<34} misses: " + ", ".join(f"{k} {v}" for k, v in sorted(ln["causes"].items())))
 
 
 def main(argv: Optional[list[str]] = None) -> int:

@@ -26,6 +26,7 @@ from . import (
     gate,
     input_note,
     inputs,
+    law_chance,
     law_untested,
     loop_centre,
     pairs,
@@ -971,5 +972,5 @@ def _law_text(steps: Sequence[Step]) -> str:
         f"; not named: {what}: each fits part of the misfit, but with a value that differs between "
         f"experiments (its law, one value for all, fails{shape}): it stands in for physics outside the "
         f"library, or for several library terms at once beyond what the pair step could name ("
-        f"{pairs.refusal_text(steps)})"
+        f"{pairs.refusal_text(steps)}){law_chance.text(steps)}"
     )
