@@ -169,17 +169,21 @@ def _member_tests(
         # Its share of the excess the others leave (what the next single step would ask of it).
         left = max(c_other - dof_of(exps, f_other), 0.0)
         share = min((c_other - fit.cost) / left, 1.0) if left > 0 else 0.0
-        given = " + ".join(t for t in (members or without) if t != m)
+        given = " and ".join(_label(t) for t in (members or without) if t != m)
         if why:
             continue
+        who = _label(m)
         if not (_admissible(fit, m) and not at_null(fit, m)):
-            why = f"{m}: not physical or at its null"
+            why = f"{who} came out at its null or outside its physical range"
         elif not (math.isfinite(padj) and padj < level):
-            why = f"{m}: not significant given {given} (p = {padj:.2g})"
+            why = f"{who} does not improve the fit significantly beside {given} (adjusted p = {padj:.2g})"
         elif share < MATERIAL_SHARE:
-            why = f"{m}: share {share:.2g} of the excess given {given}"
+            why = (
+                f"{who} removes only {100 * share:.2g} % of the misfit that {given} leaves (a named "
+                f"term must remove at least {100 * MATERIAL_SHARE:g} %)"
+            )
         elif not away_from_null(fit, m, level, s2):
-            why = f"{m}: value not away from its null given {given}"
+            why = f"{who}'s value is not told from its null beside {given}"
     return tuple(ps), why
 
 
@@ -192,7 +196,7 @@ def _joint(
     return (
         ""
         if math.isfinite(p) and min(1.0, p * max(math.comb(n_cands, k), 1)) < level
-        else f"joint p = {p:.2g}"
+        else f"the set together does not improve the fit significantly (joint p = {p:.2g})"
     )
 
 
@@ -283,8 +287,17 @@ def fit_triples(
 def _law(exps: Sequence[AugExperiment], p: PairTrial, substeps: int) -> PairTrial:
     assert p.fit is not None
     laws = tuple(element_law_test(exps, p.fit, t, substeps) for t in p.terms)
-    bad = [f"{t} (law p = {v:.2g})" for t, v in zip(p.terms, laws) if math.isfinite(v) and v < LAW_ALPHA]
-    return replace(p, law_p=laws, refused="law fails: " + ", ".join(bad) if bad else "")
+    bad = [f"{_label(t)} (p = {v:.2g})" for t, v in zip(p.terms, laws) if math.isfinite(v) and v < LAW_ALPHA]
+    return replace(
+        p,
+        law_p=laws,
+        refused="law fails (its value differs between experiments): " + ", ".join(bad) if bad else "",
+    )
+
+
+def _label(term: str) -> str:
+    """A term as the user reads it (its registry label and place)."""
+    return TERMS[term].place_label() if term in TERMS else term
 
 
 def _least(values: Sequence[float]) -> float:
@@ -352,7 +365,7 @@ def _pick(
         ho = held_out(exps, current, p.fit, substeps, cache) if held_out_test else None
         done[p.terms] = replace(p, held_out=ho)
         if ho is not None and not ho.improves:
-            done[p.terms] = replace(p, held_out=ho, refused="held-out cost not lower")
+            done[p.terms] = replace(p, held_out=ho, refused="it predicts held-out experiments no better")
             continue
         return done[p.terms]
     return None
