@@ -16,6 +16,7 @@ import pytest
 from bouc_wen_id import terms as T
 from bouc_wen_id.diagnosis import rate_rival
 from bouc_wen_id.diagnosis.result import NamedTerm
+from bouc_wen_id.diagnosis.select import LAW_ALPHA
 
 OM = np.array([1.5, 3.0, 6.0, 1.5, 3.0, 6.0])
 AMP = np.array([1.0, 1.0, 1.0, 0.5, 0.5, 0.5])
@@ -44,7 +45,7 @@ def test_values_falling_as_one_over_frequency_within_their_errors_get_the_caveat
     vals = 0.006 / OM
     exps, fit = _case(monkeypatch, term, vals, 0.3 * vals)
     p = rate_rival.rival_p_values(exps, fit, term, 3)
-    assert p is not None and max(p) >= rate_rival.LAW_ALPHA
+    assert p is not None and max(p) >= LAW_ALPHA
     said = _said(exps, fit, term, float(np.mean(vals)))
     assert rate_rival.RATE_MARK in said and T.TERMS[term].place_label() in said and "1.5-6 rad/s" in said
 
@@ -58,7 +59,7 @@ def test_one_value_at_every_frequency_refuses_the_rival_and_says_nothing(
     vals = np.full(OM.size, 0.006)
     exps, fit = _case(monkeypatch, term, vals, 0.1 * vals)
     p = rate_rival.rival_p_values(exps, fit, term, 3)
-    assert p is not None and max(p) < rate_rival.LAW_ALPHA
+    assert p is not None and max(p) < LAW_ALPHA
     assert _said(exps, fit, term, 0.006) == ""
 
 
