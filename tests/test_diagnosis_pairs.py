@@ -17,6 +17,7 @@ from typing import Any, Optional, cast
 import numpy as np
 import pytest
 from bouc_wen_id.diagnosis import pairs, select, speed
+from bouc_wen_id.terms import TERMS
 
 M, N = 4, 100  # experiments, samples per averaged period
 A, B, C = "viscous", "play", "sensor_lag"
@@ -125,7 +126,10 @@ def test_a_member_with_no_gain_of_its_own_given_the_other_is_not_named(
     final, steps = _select(monkeypatch, _costs(ab=439.5), _law_pair(frozenset({A, B})))
     assert final.params.terms == () and steps[0].pair == ()
     ab = next(p for p in steps[0].pairs if p.terms == (A, B))
-    assert ab.refused.startswith(f"{B}: ")
+    assert ab.refused.startswith(TERMS[B].place_label())
+    # in words a user reads (review 33: "coulomb: share 0.048 of the excess given distortion"): the other
+    # member by its label, and what the refusal means
+    assert f"beside {TERMS[A].place_label()}" in ab.refused
 
 
 def test_a_rival_pair_within_the_uncertainty_is_an_alternative(monkeypatch: pytest.MonkeyPatch) -> None:

@@ -115,6 +115,21 @@ def test_outside_physics_keeps_the_single_and_says_why(monkeypatch: pytest.Monke
     assert "revisited from the model before it" in revisit.text(steps) and rec.outcome in revisit.text(steps)
 
 
+def test_the_revisits_refusal_names_the_set_and_its_terms_in_words(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Review 33 (clip_cu): "best refused for coulomb: share 0.048 of the excess given distortion" named no
+    set and spoke in code names. The refusal names the best-fitting set by its terms' labels, says it was
+    refused, and the law's failure in words (which value differs between experiments)."""
+    final, steps = _select(monkeypatch, _costs(), _law(()))
+    (rec,) = revisit.records(steps)
+    said = revisit.text(steps)
+    assert "best refused for" not in said and "was refused: law fails (its value differs" in said
+    assert f"the best-fitting, {T.Stiffness.place_label()} with {T.Viscous.place_label()}" in said or (
+        f"the best-fitting, {T.Viscous.place_label()} with {T.Stiffness.place_label()}" in said
+    )
+    labels = (T.Stiffness.place_label(), T.Viscous.place_label())
+    assert any(f"{lab} (p = " in rec.outcome for lab in labels)
+
+
 def test_a_set_whose_model_fails_adequacy_is_an_alternative_only(monkeypatch: pytest.MonkeyPatch) -> None:
     """The set's laws hold but its model is not adequate (the limit below its cost): S stays named; the set
     is said as an alternative with the separating experiment."""

@@ -119,9 +119,11 @@ def caveats_of(
     """:func:`family_text` for one group: its latent levels, and when a spring on x is named from a design
     with an experiment below saturation, whether that design separates it from a Prandtl-Ishlinskii loop
     (:func:`.masing.separation`; ``exps``' periods name the separating experiment)."""
+    from .rate_rival import rate_text
+
     return family_text(
         named, latent_levels(sx, fit), masing_separation(named, sx, fit, exps, alpha, substeps)
-    )
+    ) + rate_text(named, sx, fit, substeps)
 
 
 def masing_separation(

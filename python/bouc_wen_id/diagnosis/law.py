@@ -45,10 +45,28 @@ def law_test(exps: Sequence[AugExperiment], fit: AugFit, term: str, substeps: in
     """
     from scipy.special import chdtrc  # type: ignore[import-untyped]
 
+    step = freed_step(exps, fit, term, substeps)
+    if step is None:
+        return math.nan
+    beta, cov, scale, cols = step
+    got = contrast_statistic(beta, cov, scale, [c[law_rows(exps, term)] for c in cols])
+    if got is None:
+        return math.nan
+    stat, df = got
+    return float(chdtrc(df, max(stat, 0.0)))
+
+
+def freed_step(
+    exps: Sequence[AugExperiment], fit: AugFit, term: str, substeps: int
+) -> Optional[tuple[np.ndarray, np.ndarray, np.ndarray, list[np.ndarray]]]:
+    """:func:`law_test`'s step: ``(beta, cov, scale, cols)``, the Gauss-Newton step in scaled coordinates
+    with its sandwich covariance, the column scales, and per claimed value (the term's, its companion's)
+    the columns of that value freed per experiment (experiment ``i`` at ``cols[q][i]``; its value is
+    ``fit``'s plus ``beta[c] / scale[c]``). None where :func:`law_test` is NaN before its contrasts."""
     par = fit.params
     m = len(exps)
     if m < 2 or term not in par.terms:
-        return math.nan
+        return None
     # A two-parameter element (Dahl friction: its level and its pre-sliding stiffness) claims both values
     # for all experiments: both columns are freed per experiment, 2 (m - 1) contrasts.
     comp = TERMS[term].companion if term in TERMS else ""
@@ -70,17 +88,17 @@ def law_test(exps: Sequence[AugExperiment], fit: AugFit, term: str, substeps: in
     except BudgetExceededError:
         raise  # the user's budget is theirs: never turned into "the law is not tested"
     except Exception:  # noqa: BLE001 - a model the core cannot differentiate: the law is not tested
-        return math.nan
+        return None
     xa, r = np.vstack(xs), np.concatenate(res)
     if not (np.all(np.isfinite(xa)) and np.all(np.isfinite(r))):
-        return math.nan
+        return None
     scale = np.linalg.norm(xa, axis=0) + 1e-300
     xa = xa / scale
     sv = np.linalg.svd(xa, compute_uv=False)
     rank = int(np.sum(sv > 1e-10 * sv[0])) + free_dc.count(exps)  # + the centred DCs' dof
     beta = np.linalg.lstsq(xa, r, rcond=1e-10)[0]
     if r.size - rank < 1:
-        return math.nan
+        return None
     bread = np.linalg.pinv(xa.T @ xa, rcond=1e-12)
     meat = np.zeros_like(bread)
     start = 0
@@ -90,13 +108,7 @@ def law_test(exps: Sequence[AugExperiment], fit: AugFit, term: str, substeps: in
         meat += spectral_meat(xa[sl], r[sl] - xa[sl] @ beta, r.size / (r.size - rank))
         start += n_i
     cov = bread @ meat @ bread
-    got = contrast_statistic(
-        beta, cov, scale, [nsh + 2 * m + q * m + law_rows(exps, term) for q in range(nk)]
-    )
-    if got is None:
-        return math.nan
-    stat, df = got
-    return float(chdtrc(df, max(stat, 0.0)))
+    return beta, cov, scale, [nsh + 2 * m + q * m + np.arange(m) for q in range(nk)]
 
 
 #: Clean-input experiments the law test needs before it compares them alone (:func:`law_rows`).
@@ -170,4 +182,12 @@ def element_law_test(exps: Sequence[AugExperiment], fit: AugFit, term: str, subs
     return min(1.0, len(ps) * min(ps)) if ps else math.nan
 
 
-__all__ = ["LAW_RCOND", "MIN_CLEAN", "contrast_statistic", "element_law_test", "law_rows", "law_test"]
+__all__ = [
+    "LAW_RCOND",
+    "MIN_CLEAN",
+    "contrast_statistic",
+    "element_law_test",
+    "freed_step",
+    "law_rows",
+    "law_test",
+]

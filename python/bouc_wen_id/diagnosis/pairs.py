@@ -211,17 +211,21 @@ def _member_tests(
         # Its share of the excess the others leave (what the next single step would ask of it).
         left = max(c_other - r.dof(f_other), 0.0)
         share = min((c_other - fit.cost) / left, 1.0) if left > 0 else 0.0
-        given = " + ".join(t for t in (members or without) if t != m)
+        given = " and ".join(_label(t) for t in (members or without) if t != m)
         if why:
             continue
+        who = _label(m)
         if not r.physical(fit, m):
-            why = f"{m}: not physical or at its null"
+            why = f"{who} came out at its null or outside its physical range"
         elif not (math.isfinite(padj) and padj < level):
-            why = f"{m}: not significant given {given} (p = {padj:.2g})"
+            why = f"{who} does not improve the fit significantly beside {given} (adjusted p = {padj:.2g})"
         elif share < MATERIAL_SHARE:
-            why = f"{m}: share {share:.2g} of the excess given {given}"
+            why = (
+                f"{who} removes only {100 * share:.2g} % of the misfit that {given} leaves (a named "
+                f"term must remove at least {100 * MATERIAL_SHARE:g} %)"
+            )
         elif not r.away(fit, m, level, s2):
-            why = f"{m}: value not away from its null given {given}"
+            why = f"{who}'s value is not told from its null beside {given}"
     return tuple(ps), why
 
 
@@ -233,7 +237,7 @@ def _joint(exps: Any, current: AugFit, f: AugFit, k: int, n_cands: int, level: f
     return (
         ""
         if math.isfinite(p) and min(1.0, p * max(math.comb(n_cands, k), 1)) < level
-        else f"joint p = {p:.2g}"
+        else f"the set together does not improve the fit significantly (joint p = {p:.2g})"
     )
 
 
@@ -325,8 +329,17 @@ def _law(exps: Any, p: PairTrial, substeps: int) -> PairTrial:
     assert p.fit is not None
     r = _rules(exps, substeps)
     laws = tuple(r.law(p.fit, t) for t in p.terms)
-    bad = [f"{t} (law p = {v:.2g})" for t, v in zip(p.terms, laws) if math.isfinite(v) and v < LAW_ALPHA]
-    return replace(p, law_p=laws, refused="law fails: " + ", ".join(bad) if bad else "")
+    bad = [f"{_label(t)} (p = {v:.2g})" for t, v in zip(p.terms, laws) if math.isfinite(v) and v < LAW_ALPHA]
+    return replace(
+        p,
+        law_p=laws,
+        refused="law fails (its value differs between experiments): " + ", ".join(bad) if bad else "",
+    )
+
+
+def _label(term: str) -> str:
+    """A term as the user reads it (its registry label and place)."""
+    return TERMS[term].place_label() if term in TERMS else term
 
 
 def _least(values: Sequence[float]) -> float:
@@ -396,7 +409,7 @@ def _pick(
         ho = r.held_out(current, p.fit) if held_out_test else None
         done[p.terms] = replace(p, held_out=ho)
         if ho is not None and not ho.improves:
-            done[p.terms] = replace(p, held_out=ho, refused="held-out cost not lower")
+            done[p.terms] = replace(p, held_out=ho, refused="it predicts held-out experiments no better")
             continue
         return done[p.terms]
     return None
@@ -504,8 +517,9 @@ def _none_to_fit(st: Any) -> str:
     """Why a step that named nothing had no set to fit: the candidates that passed alone give no pair (one
     only, or one physics at two places), and the lead removes under :data:`OTHERS_SHARE` of the excess (the
     others are not fitted beside it)."""
-    trials = [t for t in getattr(st, "trials", ()) if getattr(t, "passed", False) and math.isfinite(t.cost)]
-    passed = sorted(trials, key=lambda t: t.cost)
+    # By share, not cost: the joint steps' trials (across.py's JointTrial) carry no one cost.
+    trials = [t for t in getattr(st, "trials", ()) if getattr(t, "passed", False) and math.isfinite(t.share)]
+    passed = sorted(trials, key=lambda t: -t.share)
     if not passed:
         return "no candidate passed its own tests"
     label = TERMS[passed[0].term].place_label()

@@ -191,8 +191,14 @@ def revisit(
         0.0,  # every candidate with the best: the revisit's own gate already asks a lead of SHARE
     )
     if choice is None or choice.trial.fit is None:
-        why = next((p.refused for p in sorted(tried, key=_cost) if p.refused), "no set fitted")
-        rec = Revisit(named, pool, (), f"no set named: best refused for {why}", tried=tried)
+        best = next((p for p in sorted(tried, key=_cost) if p.refused), None)
+        why = (
+            "no set could be fitted"
+            if best is None
+            else f"the best-fitting, {' with '.join(TERMS[t].place_label() for t in best.terms)}, "
+            f"was refused: {best.refused}"
+        )
+        rec = Revisit(named, pool, (), f"no set named: {why}", tried=tried)
         return final, [*steps[:j], replace(st, pairs=(*st.pairs, rec)), *steps[j + 1 :]]
     fit = choice.trial.fit
     # The named path's model from the same base: the single, or the single and the sets after it.

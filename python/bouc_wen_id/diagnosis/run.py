@@ -21,6 +21,7 @@ from . import (
     baseline,
     beside,
     centre_decay,
+    clean_share,
     drift_clause,
     free_dc,
     gate,
@@ -795,14 +796,12 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
     # A candidate whose law failed (select.law_test) is structure no term explains, unless only centres.
     centre = _centres_only(passes, bool(final.params.terms), steps, fexps, final_sum.outputs)
     plain_ok = gate.plain_adequate(passes, bool(final.params.terms), steps) or centre.adequate
-    judged = classify(
-        plain_ok,
-        bool(final.params.terms) or named_deg,
-        adequate(final),
-        _naming_share(fraction, deg, named_deg),
-    )
+    cshare = clean_share.share(sx, plain, fsx, final)  # on the clean inputs alone (clean_share.py)
+    share = clean_share.naming_share(_naming_share(fraction, deg, named_deg), cshare)
+    judged = classify(plain_ok, bool(final.params.terms) or named_deg, adequate(final), share)
     status, named, partial, verdict = _judged(judged, final_sum, (before, after), fraction, fexps)
     verdict += (centre.text or _law_text(steps)) + beside.text(steps) + unphysical_places_text(steps, named)
+    verdict += clean_share.text(status, named, fraction, cshare, fsx)
     verdict += law_untested.text(named, fexps) + input_note.text(
         status, (*named, *partial), fexps, final_sum.outputs
     )
