@@ -952,6 +952,8 @@ def _law_text(steps: Sequence[Step]) -> str:
     listed = {
         a.rival for st in steps for a in getattr(st, "alternatives", ()) if math.isfinite(a.law_p_value)
     }
+    # A term named at any step (alone or in a set) is no stand-in: its law failed only before it was named.
+    listed |= {t for st in steps for t in (getattr(st, "chosen", None), *getattr(st, "pair", ())) if t}
     for st in steps:
         for tr in st.trials:
             if tr.term in st.law_failed and tr.term not in failed and tr.term not in listed:
