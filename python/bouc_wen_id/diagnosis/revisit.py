@@ -38,7 +38,7 @@ from typing import Any, Optional
 
 from ..augmented import AugExperiment, AugFit
 from ..terms import TERMS
-from . import pairs, rival_revisit
+from . import pairs
 from .gate import targeted_level
 from .select import (
     ALPHA,
@@ -248,9 +248,10 @@ def after(
 ) -> tuple[AugFit, list[Step]]:
     """:func:`revisit` of a selection already run (by :func:`.after_named.select`), with the selection's
     keywords ``kw`` (``alpha``, ``use_held_out``, ``cache``; the others unused)."""
-    args = (adequate, substeps, kw.get("alpha", ALPHA), kw.get("use_held_out", True), kw.get("cache"))
-    final, steps = revisit(exps, plain, final, steps, *args)
-    return rival_revisit.revisit(exps, plain, final, steps, *args)  # a law-failed rival (rival_revisit.py)
+    return revisit(
+        exps, plain, final, steps, adequate, substeps, kw.get("alpha", ALPHA), kw.get("use_held_out", True),
+        kw.get("cache"),
+    )  # fmt: skip
 
 
 def _cost(p: Any) -> float:

@@ -31,12 +31,14 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import replace
-from typing import Optional
+from typing import Any, Optional
 
 from ..augmented import AugExperiment, AugFit
 from . import pairs
 from .gate import targeted_level
-from .select import FoldCache, HeldOut, Step, _separating, held_out, memo_fit_with
+from .revisit import Revisit, _base
+from .revisit import after as lead_after
+from .select import ALPHA, FoldCache, HeldOut, Step, _separating, forward_select, held_out, memo_fit_with
 
 #: Whether this revisit runs (module docstring).
 ENABLED = True
@@ -74,8 +76,6 @@ def revisit(
 ) -> tuple[AugFit, list[Step]]:
     """``(final, steps)`` after the revisit of a named single term with a law-failed rival that fits at
     least as well (module docstring); unchanged where it does not run."""
-    from .revisit import Revisit, _base  # the lead revisit's record and base (revisit.py imports this)
-
     j, rivals = trigger(steps)
     if j < 0:
         return final, steps
@@ -126,4 +126,33 @@ def revisit(
     return fit, [*steps[:j], new]
 
 
-__all__ = ["ENABLED", "revisit", "trigger"]
+def after(
+    exps: Sequence[AugExperiment],
+    plain: AugFit,
+    final: AugFit,
+    steps: list[Step],
+    adequate: Callable[[AugFit], bool],
+    substeps: int,
+    **kw: Any,
+) -> tuple[AugFit, list[Step]]:
+    """:func:`.revisit.after` (a later lead that failed its law), then :func:`revisit` (a law-failed rival)
+    of a selection already run, with the selection's keywords ``kw``."""
+    final, steps = lead_after(exps, plain, final, steps, adequate, substeps, **kw)
+    args = (adequate, substeps, kw.get("alpha", ALPHA), kw.get("use_held_out", True), kw.get("cache"))
+    return revisit(exps, plain, final, steps, *args)
+
+
+def select(
+    exps: Sequence[AugExperiment],
+    plain: AugFit,
+    candidates: Sequence[str],
+    adequate: Callable[[AugFit], bool],
+    substeps: int,
+    **kw: Any,
+) -> tuple[AugFit, list[Step]]:
+    """:func:`.select.forward_select` (same arguments), then :func:`after`."""
+    final, steps = forward_select(exps, plain, candidates, adequate, substeps, **kw)
+    return after(exps, plain, final, steps, adequate, substeps, **kw)
+
+
+__all__ = ["ENABLED", "after", "revisit", "select", "trigger"]
