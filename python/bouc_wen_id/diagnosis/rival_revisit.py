@@ -24,6 +24,14 @@ first, each paired with every other candidate of step ``j`` (never the named ter
   them: the verdict then says the named term is not the only tenable reading.
 
 Where no set holds its laws the named term stays, with its rival said as before.
+
+Measured (review 33's simulator, ``/tmp/sm33/dbg.py``-style runs of ``/work/review33/run_case.py``'s cases):
+mx_lag_30 now names inertia on x m = 0.01093 +- 0.00068 (true 0.01137) with the lag tau = 0.0609 +- 0.0069
+(true 0.0559), held-out cost 713 against viscous damping on u's 777; play_ku names stiffness on u
+k = 0.0328 +- 0.0011 (true 0.0327) with play b = 0.0162 (true 0.0160), held-out 930 against 1080. The
+bench rows of main (session 32's /work/m32, ~600 rows) had one case where the trigger holds (Dahl seed
+48001, Dahl on u named over Dahl on x at law p 0.0031): no set passed the pair rules there, and its verdict
+is unchanged.
 """
 
 from __future__ import annotations
