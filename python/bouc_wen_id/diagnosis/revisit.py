@@ -305,9 +305,10 @@ def _rival_text(r: Revisit, one: str, both: str, ho: str) -> str:
             f"alone; {both}, jointly, hold their laws, pass adequacy and predict better ({ho}): named in its "
             f"place. {one} is the rival; the experiment that would separate them: {r.separating_experiment}"
         )
+    costs = f"; {ho}" if ho.startswith("held-out") else ""  # the two models' held-out costs, when run
     return (
         f"; not the only reading: {both}, jointly, hold their laws in place of {one} (not named: "
-        f"{r.outcome[13:-1]}); the experiment that would separate them: {r.separating_experiment}"
+        f"{r.outcome[13:-1]}{costs}); the experiment that would separate them: {r.separating_experiment}"
     )
 
 
