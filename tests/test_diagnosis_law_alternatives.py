@@ -161,3 +161,24 @@ def test_a_law_failed_rival_listed_as_an_alternative_is_not_also_called_a_stand_
     )
     assert run._law_text(cast(Any, [step, again])) == ""
     assert "not named: sensor lag" in run._law_text(cast(Any, [bare, again]))
+
+
+def test_a_term_named_at_a_later_step_is_not_also_called_a_stand_in() -> None:
+    """A candidate whose law failed at step 1 and that a later step named (alone, or in a set) is named, not
+    "not named ... stands in for physics outside the library" (review 33: cu_mx_30 named viscous damping on
+    u at step 2 and listed it as not named from step 1; play_ku likewise with play)."""
+    from bouc_wen_id.diagnosis import run
+
+    first = SimpleNamespace(
+        trials=[SimpleNamespace(term="viscous", law_p_value=3.6e-4)],
+        law_failed=("viscous",),
+        alternatives=(),
+        chosen="inertia@x",
+    )
+    later = SimpleNamespace(trials=[], law_failed=(), alternatives=(), chosen="viscous")
+    assert "not named: viscous" in run._law_text(cast(Any, [first]))
+    assert "not named" not in run._law_text(cast(Any, [first, later]))
+    in_set = SimpleNamespace(
+        trials=[], law_failed=(), alternatives=(), chosen="play", pair=("play", "viscous")
+    )
+    assert "not named" not in run._law_text(cast(Any, [first, in_set]))

@@ -471,7 +471,7 @@ def pair_step(
 def text(steps: Sequence[Any]) -> str:
     """The verdict's clause for a step that named a pair: both were named together because neither fits
     alone with one value for every experiment."""
-    named = [st.pair for st in steps if getattr(st, "pair", ())]
+    named = [st.pair for st in steps if getattr(st, "pair", ()) and not _by_rival(st)]
     if not named:
         return ""
     what = "; ".join(" with ".join(TERMS[t].place_label() for t in p) for p in named)
@@ -479,6 +479,11 @@ def text(steps: Sequence[Any]) -> str:
         f"; named together: {what} (none alone fits with one value for every experiment; jointly each does, "
         "and each is significant given the others)"
     )
+
+
+def _by_rival(st: Any) -> bool:
+    """A set named in place of a single term whose law held (rival_revisit.py: said there, not here)."""
+    return any(getattr(p, "by_rival", False) and p.refused == "" for p in getattr(st, "pairs", ()))
 
 
 def refusal_text(steps: Sequence[Any]) -> str:

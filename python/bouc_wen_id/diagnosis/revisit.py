@@ -78,6 +78,8 @@ class Revisit:
     tried: tuple[Any, ...] = field(default=(), compare=False)
     #: The members of the sets the selection named after ``replaced`` (replaced with it when named).
     later: tuple[str, ...] = ()
+    #: Run for a rival that fit at least as well but failed its law alone (rival_revisit.py), not a lead.
+    by_rival: bool = False
 
     @property
     def refused(self) -> str:
@@ -98,6 +100,7 @@ class Revisit:
             "separating_experiment": self.separating_experiment,
             "tried": [p.to_dict() for p in self.tried],
             "later": list(self.later),
+            **({"by_rival": True} if self.by_rival else {}),
         }
 
 
@@ -282,7 +285,9 @@ def text(steps: Sequence[Any]) -> str:
             if math.isfinite(r.held_out_set + r.held_out_single)
             else "in-sample cost lower"
         )
-        if r.outcome == "named":
+        if r.by_rival:
+            out += _rival_text(r, one, both, ho)
+        elif r.outcome == "named":
             out += (
                 f"; revisited: {one} (named first, its law held) left misfit that a later candidate removed "
                 f"only with a value differing between experiments; {both}, jointly, hold their laws, pass "
@@ -295,6 +300,22 @@ def text(steps: Sequence[Any]) -> str:
                 f"the experiment that would separate them: {r.separating_experiment}"
             )
     return out
+
+
+def _rival_text(r: Revisit, one: str, both: str, ho: str) -> str:
+    """The clause on a revisit run for a law-failed rival (rival_revisit.py)."""
+    rival, first = TERMS[r.terms[0]].place_label(), TERMS[r.replaced].place_label()
+    if r.outcome == "named":
+        return (
+            f"; revisited: {first} was named over {rival}, which fit at least as well but whose law failed "
+            f"alone; {both}, jointly, hold their laws, pass adequacy and predict better ({ho}): named in its "
+            f"place. {one} is the rival; the experiment that would separate them: {r.separating_experiment}"
+        )
+    costs = f"; {ho}" if ho.startswith("held-out") else ""  # the two models' held-out costs, when run
+    return (
+        f"; not the only reading: {both}, jointly, hold their laws in place of {one} (not named: "
+        f"{r.outcome[13:-1]}{costs}); the experiment that would separate them: {r.separating_experiment}"
+    )
 
 
 __all__ = ["ENABLED", "POOL", "SHARE", "Revisit", "records", "revisit", "select", "text", "trigger"]

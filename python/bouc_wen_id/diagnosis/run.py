@@ -33,6 +33,7 @@ from . import (
     pairs,
     resolution,
     revisit,
+    rival_revisit,
     speed,
     zero_drift,
 )
@@ -778,8 +779,8 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
         # The targeted step after a named one (after_named.py), not on short records (centre_decay.py);
         again = after_named.again(moved, setup.measured_noise, exps)
         final, steps = after_named.select(fsx, start, steady, adequate, p_of, substeps, targeted, again, **kw)
-        # then a named single term whose later lead failed its law is revisited (revisit.py).
-        final, steps = revisit.after(fsx, start, final, steps, adequate, substeps, **kw)
+        # then a named single term whose later lead (revisit.py) or rival (rival_revisit.py) failed its law.
+        final, steps = rival_revisit.after(fsx, start, final, steps, adequate, substeps, **kw)
         plain, start = rebased_plain(plain, start, steps)  # a first step that refitted an unconverged start
     notes += fit_notes(plain, final)  # a fit stopped on a face of its admissible range (issue 19, branch lm)
     dexps = detrended(fexps, deg, s.y) if deg is not None and named_deg else fexps
@@ -952,6 +953,8 @@ def _law_text(steps: Sequence[Step]) -> str:
     listed = {
         a.rival for st in steps for a in getattr(st, "alternatives", ()) if math.isfinite(a.law_p_value)
     }
+    # A term named at any step (alone or in a set) is no stand-in: its law failed only before it was named.
+    listed |= {t for st in steps for t in (getattr(st, "chosen", None), *getattr(st, "pair", ())) if t}
     for st in steps:
         for tr in st.trials:
             if tr.term in st.law_failed and tr.term not in failed and tr.term not in listed:
