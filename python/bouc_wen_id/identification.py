@@ -58,6 +58,7 @@ from .estimators import Fit, adequacy, boundary_note, fit, linear_nrmse, on_cons
 from .model import Recording
 from .prepare import Prepared, Scales, auto_harmonics, noise_variance, prepare, scale
 from .result import NOT_CONVERGED, Adequacy, ExperimentEstimate, IdentificationResult, Truth, wrap_phase
+from .units import harmonise
 from .validation import count, z_value
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
@@ -157,12 +158,18 @@ def identify(
         the Bouc-Wen conditions.
     DistortedInputWarning
         When a Measurement's input is far from a pure sine.
+    UnitWarning
+        When the experiments state different units of one quantity (converted to the first's: new arrays,
+        said in ``result.warnings`` too) or some state none (:mod:`bouc_wen_id.units`); two units no known
+        scale relates raise :class:`~bouc_wen_id.errors.UnitMismatchError`.
     ConvergenceWarning
         When the Levenberg-Marquardt refinement stops at ``max_iter`` before converging
         (``result.converged`` is False).
     """
     items, (lo, hi) = _check_arguments(recordings, method, confidence, mu_bracket)
     reference, phase_grid, max_iter = _check_counts(reference, phase_grid, max_iter, harmonics)
+    joined = harmonise(items)  # one unit per quantity: later items converted to the first's (units.py)
+    items = joined.items
     with selected(backend) as parts:  # the lab preprocessing of Measurements runs on the same backend
         prepared = prepare(items, parts.paper, settle_periods, periods, harmonics)
     _check_work(prepared, method, phase_grid, max_iter)
@@ -173,6 +180,7 @@ def identify(
     experiments = _experiment_estimates(prepared, fitted, est, scales)
     notes = _notes(method, est, experiments, confidence, boundary_note(fitted.stop, fitted.active))
     _warn(notes, fitted)
+    notes = [*joined.notes, *notes]
     settings = {
         "settle_periods": settle_periods,
         "periods": periods,

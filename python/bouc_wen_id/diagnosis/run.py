@@ -14,6 +14,7 @@ from ..augmented import AugExperiment, AugFit
 from ..budget import check_environment
 from ..errors import InvalidParameterError
 from ..terms import DIAGNOSIS_CANDIDATES, TERMS, Distortion, Offset, physical_value
+from ..units import harmonise
 from ..validation import real_number
 from . import (
     after_named,
@@ -516,6 +517,8 @@ def diagnose(
         floating point.
     SearchAtBoundError
         When not even the plain model can be fitted.
+    UnitMismatchError
+        Experiments whose units of one quantity no known scale relates (others converted: UnitWarning).
     """
     from .. import _threads
     from . import fit_share, speed
@@ -545,6 +548,8 @@ def _diagnose(
     alpha = real_number("alpha", alpha)
     if not (0.0 < alpha < 1.0):
         raise InvalidParameterError(f"alpha = {alpha!r} must lie in (0, 1)")
+    joined = harmonise(_as_list(experiments))  # one unit per quantity, the first's (bouc_wen_id/units.py)
+    experiments = joined.items if isinstance(experiments, (list, tuple)) else experiments
     _check_sizes(experiments)
     inputs.check_items(experiments)  # the stated input as identify checks it, no repeats (inputs.py)
     report("preparing the averaged periods", 0, 1)
@@ -557,7 +562,7 @@ def _diagnose(
         d = loop_centre.resolved(
             _as_list(experiments), level, wander, d, lambda xs: _with_wander(list(xs), *args, None)
         )
-    return replace(d, seconds=time.perf_counter() - t0)
+    return replace(d, seconds=time.perf_counter() - t0, notes=(*joined.notes, *d.notes))
 
 
 def _as_list(experiments: Any) -> list[Any]:
