@@ -209,11 +209,14 @@ class Joined:
     units: dict[str, str]
 
 
-def harmonise(items: Sequence[Any], labels: Optional[Sequence[str]] = None, *, warn: bool = True) -> Joined:
+def harmonise(
+    items: Sequence[Any], labels: Optional[Sequence[str]] = None, *, warn: bool = True, stacklevel: int = 3
+) -> Joined:
     """The experiments in the units of the first that states each quantity's unit (module docstring).
 
-    ``labels`` name the experiments in messages (default: :func:`label_of`).  Warns (``UnitWarning``) once
-    for every conversion or assumption made here (not for those the metadata records as made before).
+    ``labels`` name the experiments in messages (default: :func:`label_of`).  Warns (``UnitWarning``, at
+    ``stacklevel``) once for every conversion or assumption made here (not for those the metadata records
+    as made before).
 
     Raises
     ------
@@ -260,14 +263,14 @@ def harmonise(items: Sequence[Any], labels: Optional[Sequence[str]] = None, *, w
             f"{refs[q]})"
         )
         if warn and (q, src, dst) in fresh:
-            warnings.warn(notes[-1], UnitWarning, stacklevel=3)
+            warnings.warn(notes[-1], UnitWarning, stacklevel=stacklevel)
     for (q, unit, src), who in assumed.items():
         notes.append(
             f"{', '.join(who)} state{'s' if len(who) == 1 else ''} no unit for {QUANTITIES[q]}: taken to be "
             f"{unit} as in {src}"
         )
         if warn:
-            warnings.warn(notes[-1], UnitWarning, stacklevel=3)
+            warnings.warn(notes[-1], UnitWarning, stacklevel=stacklevel)
     return Joined(out, tuple(notes), units)
 
 

@@ -548,7 +548,8 @@ def _diagnose(
     alpha = real_number("alpha", alpha)
     if not (0.0 < alpha < 1.0):
         raise InvalidParameterError(f"alpha = {alpha!r} must lie in (0, 1)")
-    joined = harmonise(_as_list(experiments))  # one unit per quantity, the first's (bouc_wen_id/units.py)
+    # One unit per quantity: the first experiment's, the others converted or refused (bouc_wen_id/units.py).
+    joined = harmonise(_as_list(experiments), stacklevel=4)
     experiments = joined.items if isinstance(experiments, (list, tuple)) else experiments
     _check_sizes(experiments)
     inputs.check_items(experiments)  # the stated input as identify checks it, no repeats (inputs.py)
