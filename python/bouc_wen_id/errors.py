@@ -120,7 +120,7 @@ class UnitMismatchError(FileFormatError):
 
 class UnitWarning(UserWarning):
     """Experiments joined into one data set stated different units of one quantity and were converted to the
-    first one's (``m`` to ``mm``), or some stated none and were taken to be in the others' unit."""
+    first one's (``m`` to ``mm``): new arrays, the result's notes repeat it."""
 
 
 class TimeAxisError(InvalidParameterError):

@@ -14,8 +14,9 @@ take a wrong value or a wrong name.  :func:`harmonise` therefore
   repeat it ("converted the input u from m to mm (x 1000) in exp3.csv, exp4.csv");
 * **refuses** two units no known scale relates (``mm`` beside ``N``; two different unit strings it does
   not know) with :class:`~bouc_wen_id.errors.UnitMismatchError`, naming both experiments and units;
-* **assumes** an experiment that states no unit for a quantity is in the unit the others state (a
-  :class:`~bouc_wen_id.errors.UnitWarning` and a note say so: it cannot be checked).
+* **assumes** an experiment that states no unit for a quantity is in the unit the others state: the
+  result's notes say so (it cannot be checked), without a warning (simulated recordings and arrays built
+  in Python carry no units and often sit beside lab files in the right ones).
 
 A converted Measurement carries the conversion in its metadata (``units_converted``: ``"u: m -> mm"``), so
 that ``diagnose`` of experiments ``load`` already converted names the conversion in its notes without
@@ -215,8 +216,8 @@ def harmonise(
     """The experiments in the units of the first that states each quantity's unit (module docstring).
 
     ``labels`` name the experiments in messages (default: :func:`label_of`).  Warns (``UnitWarning``, at
-    ``stacklevel``) once for every conversion or assumption made here (not for those the metadata records
-    as made before).
+    ``stacklevel``) once for every conversion made here (not for those the metadata records as made
+    before); an experiment without units is only noted.
 
     Raises
     ------
@@ -269,8 +270,6 @@ def harmonise(
             f"{', '.join(who)} state{'s' if len(who) == 1 else ''} no unit for {QUANTITIES[q]}: taken to be "
             f"{unit} as in {src}"
         )
-        if warn:
-            warnings.warn(notes[-1], UnitWarning, stacklevel=stacklevel)
     return Joined(out, tuple(notes), units)
 
 

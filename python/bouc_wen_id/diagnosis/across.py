@@ -903,7 +903,9 @@ def diagnose_across(
             cands = tuple(c for c in cands if c != Distortion.kind)
         steps = _select(prepared, cands, alpha, held_out_test, report)
         report("held-out check of the joint structure", 0, 1)
-        terms = _terms(prepared, steps, (y_unit, u_unit), alpha)
+        terms = _terms(
+            prepared, steps, (y_unit or joined.units.get("y", ""), u_unit or joined.units.get("u", "")), alpha
+        )
         conditions = _conditions(prepared, kept, held_out_test, kept_checks)
     report("done", 1, 1)
     settings |= {

@@ -496,7 +496,8 @@ def diagnose(
     held_out_test : bool
         Require a held-out improvement before naming a term (leave-one-experiment-out).
     y_unit, u_unit : str
-        Units of the output and the input, for the reported term values.
+        Units of the output and the input, for the reported term values (default: the first experiment's
+        stated units; experiments in other units of the same quantity are converted to them).
     progress : bool or callable, optional
         Report the stages: True on stderr (a bar on a terminal, else a line per stage), a callable
         ``progress(stage, done, total)`` receives each report; quiet by default.
@@ -551,6 +552,7 @@ def _diagnose(
     # One unit per quantity: the first experiment's, the others converted or refused (bouc_wen_id/units.py).
     joined = harmonise(_as_list(experiments), stacklevel=4)
     experiments = joined.items if isinstance(experiments, (list, tuple)) else experiments
+    units = (units[0] or joined.units.get("y", ""), units[1] or joined.units.get("u", ""))  # the first file's
     _check_sizes(experiments)
     inputs.check_items(experiments)  # the stated input as identify checks it, no repeats (inputs.py)
     report("preparing the averaged periods", 0, 1)

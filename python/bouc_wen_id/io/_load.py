@@ -95,7 +95,7 @@ def load(
     column names state another unit of the same quantity than the first file's (``disp_m`` beside
     ``disp_mm``, ``Force (kN)`` beside ``Force (N)``) is converted to the first file's unit, with a
     :class:`~bouc_wen_id.errors.UnitWarning` (new arrays; the conversion is recorded in the experiment's
-    ``metadata["units_converted"]``); a file stating no unit is taken to be in the others' (a warning).
+    ``metadata["units_converted"]``); a file stating no unit is taken to be in the others'.
 
     Raises
     ------
