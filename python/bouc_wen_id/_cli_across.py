@@ -86,12 +86,14 @@ def cmd_across(args: argparse.Namespace) -> int:
     from .diagnosis import diagnose
     from .diagnosis.across import diagnose_across
     from .io import load
+    from .units import harmonise_groups
 
     conds, paths = _groups(args.group)
     if args.json is not None:  # refused before the run, never after it
         _output.check_file(args.json, overwrite=args.overwrite, flag="--json")
     cols = _columns(args.columns)
     groups = [list(load(ps, columns=cols, sample_rate=args.sample_rate)) for ps in paths]
+    groups = harmonise_groups(groups)[0]  # one unit across the conditions, before any group is fitted
     cands = None if args.candidates is None else [c.strip() for c in args.candidates.split(",") if c.strip()]
     own = None
     if args.compare:

@@ -22,6 +22,8 @@ __all__ = [
     "NotConvergedError",
     "BudgetExceededError",
     "FileFormatError",
+    "UnitMismatchError",
+    "UnitWarning",
     "TimeAxisError",
     "ClippingError",
     "UndersampledError",
@@ -107,6 +109,18 @@ class TransientWarning(UserWarning):
 
 class FileFormatError(BoucWenIdError):
     """A recording or result file cannot be read: a missing column, a bad header, an unknown version."""
+
+
+class UnitMismatchError(FileFormatError):
+    """Experiments joined into one data set state units of one quantity that no known scale relates (``mm``
+    in one file, ``N`` in another; an unknown unit beside another): the message names both experiments and
+    units, and how to fix it (:mod:`bouc_wen_id.units`).  A :class:`FileFormatError`: it is most often a
+    wrong column name or a file of another rig."""
+
+
+class UnitWarning(UserWarning):
+    """Experiments joined into one data set stated different units of one quantity and were converted to the
+    first one's (``m`` to ``mm``): new arrays, the result's notes repeat it."""
 
 
 class TimeAxisError(InvalidParameterError):

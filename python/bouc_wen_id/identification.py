@@ -58,6 +58,7 @@ from .estimators import Fit, adequacy, boundary_note, fit, linear_nrmse, on_cons
 from .model import Recording
 from .prepare import Prepared, Scales, auto_harmonics, noise_variance, prepare, scale
 from .result import NOT_CONVERGED, Adequacy, ExperimentEstimate, IdentificationResult, Truth, wrap_phase
+from .units import harmonise
 from .validation import count, z_value
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
@@ -145,7 +146,7 @@ def identify(
     Raises
     ------
     FrequencyMismatchError, InsufficientDataError, ZeroAmplitudeError, SingularNormalMatrixError,
-    SearchAtBoundError, InvalidParameterError, NonFiniteError, NotConvergedError
+    SearchAtBoundError, InvalidParameterError, NonFiniteError, NotConvergedError, UnitMismatchError
         And, for Measurements, the errors of :func:`bouc_wen_id.signal.find_steady_segments`
         (TimeAxisError, UndersampledError, NotPeriodicError, ...).
 
@@ -155,13 +156,14 @@ def identify(
         When the parameters are poorly determined by the data, the fit ends on the constraint
         beta = |gamma|, the loops explain less than a linear model, or the separable estimates violate
         the Bouc-Wen conditions.
-    DistortedInputWarning
-        When a Measurement's input is far from a pure sine.
+    DistortedInputWarning, UnitWarning
+        When a Measurement's input is far from a pure sine; when experiments state other units of one
+        quantity than the first's, converted to them (:mod:`bouc_wen_id.units`).
     ConvergenceWarning
         When the Levenberg-Marquardt refinement stops at ``max_iter`` before converging
         (``result.converged`` is False).
     """
-    items, (lo, hi) = _check_arguments(recordings, method, confidence, mu_bracket)
+    items, (lo, hi), unit_notes = _check_arguments(recordings, method, confidence, mu_bracket)
     reference, phase_grid, max_iter = _check_counts(reference, phase_grid, max_iter, harmonics)
     with selected(backend) as parts:  # the lab preprocessing of Measurements runs on the same backend
         prepared = prepare(items, parts.paper, settle_periods, periods, harmonics)
@@ -172,7 +174,7 @@ def identify(
     est = _unscale(fitted, scales)
     experiments = _experiment_estimates(prepared, fitted, est, scales)
     notes = _notes(method, est, experiments, confidence, boundary_note(fitted.stop, fitted.active))
-    _warn(notes, fitted)
+    notes = _warn(notes, fitted, unit_notes)
     settings = {
         "settle_periods": settle_periods,
         "periods": periods,
@@ -188,13 +190,14 @@ def identify(
     )
 
 
-def _warn(notes: Sequence[str], fitted: Fit) -> None:
+def _warn(notes: Sequence[str], fitted: Fit, unit_notes: Sequence[str]) -> list[str]:
     """The notes as IdentifiabilityWarning, a refinement stopped at max_iter as ConvergenceWarning (both
-    pointing at identify's caller)."""
+    pointing at identify's caller); the result's notes: the units' (warned already, if at all), then these."""
     for note in notes:
         warnings.warn(note, IdentifiabilityWarning, stacklevel=3)
     if fitted.converged is False:
         warnings.warn(NOT_CONVERGED.format(iterations=fitted.iterations), ConvergenceWarning, stacklevel=3)
+    return [*unit_notes, *notes]
 
 
 def _result(
@@ -233,8 +236,9 @@ def _result(
 
 def _check_arguments(
     recordings: Any, method: str, confidence: float, mu_bracket: tuple[float, float]
-) -> tuple[list[Any], tuple[float, float]]:
-    """The experiments as a list, and the mu bracket; refuses a bad method, confidence or bracket."""
+) -> tuple[list[Any], tuple[float, float], tuple[str, ...]]:
+    """The experiments as a list in one unit per quantity (:mod:`bouc_wen_id.units`: later ones converted
+    to the first's, with their notes), and the mu bracket; refuses a bad method, confidence or bracket."""
     if method not in ("paper", "profile", "refined"):
         raise InvalidParameterError(f"method must be 'refined', 'profile' or 'paper', got {method!r}")
     if isinstance(confidence, bool) or not isinstance(confidence, (int, float, np.integer, np.floating)):
@@ -250,7 +254,8 @@ def _check_arguments(
         raise InvalidParameterError(f"mu_bracket = {mu_bracket!r} must be two numbers: {exc}") from None
     if not 1.0 <= lo < hi:
         raise InvalidParameterError(f"mu_bracket = {mu_bracket} must satisfy 1 <= lo < hi (mu > 1)")
-    return items, (lo, hi)
+    joined = harmonise(items, stacklevel=4)  # warns at identify's caller
+    return joined.items, (lo, hi), joined.notes
 
 
 def _check_counts(reference: Any, phase_grid: Any, max_iter: Any, harmonics: Any) -> tuple[int, int, int]:

@@ -50,6 +50,7 @@ from numpy.typing import ArrayLike
 from ..augmented import AugExperiment, AugFit
 from ..errors import InvalidParameterError
 from ..terms import TERMS, Distortion
+from ..units import harmonise_groups
 from ..validation import real_number
 from . import (
     across_pairs,
@@ -874,6 +875,7 @@ def diagnose_across(
     t0 = time.perf_counter()
     report = reporter(progress)
     gs, conds, names = _check(groups, condition, labels, per_condition)
+    gs, joined = harmonise_groups(gs, fixed=per_condition is not None)  # one unit per quantity (units.py)
     cands = tuple(c for c in _check_candidates(candidates) if c not in DRIFT_TERMS)
     alpha = real_number("alpha", alpha)
     if not 0.0 < alpha < 1.0:
@@ -901,7 +903,9 @@ def diagnose_across(
             cands = tuple(c for c in cands if c != Distortion.kind)
         steps = _select(prepared, cands, alpha, held_out_test, report)
         report("held-out check of the joint structure", 0, 1)
-        terms = _terms(prepared, steps, (y_unit, u_unit), alpha)
+        terms = _terms(
+            prepared, steps, (y_unit or joined.units.get("y", ""), u_unit or joined.units.get("u", "")), alpha
+        )
         conditions = _conditions(prepared, kept, held_out_test, kept_checks)
     report("done", 1, 1)
     settings |= {
@@ -915,7 +919,7 @@ def diagnose_across(
     return replace(  # what was left out as not settled (across_settling.py), as diagnose says it
         out,
         verdict=out.verdict + across_settling.clause(prepared, unsettled),
-        notes=(*out.notes, *across_settling.notes(prepared, unsettled)),
+        notes=(*joined.notes, *out.notes, *across_settling.notes(prepared, unsettled)),
     )
 
 

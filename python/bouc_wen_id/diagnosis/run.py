@@ -14,6 +14,7 @@ from ..augmented import AugExperiment, AugFit
 from ..budget import check_environment
 from ..errors import InvalidParameterError
 from ..terms import DIAGNOSIS_CANDIDATES, TERMS, Distortion, Offset, physical_value
+from ..units import harmonise
 from ..validation import real_number
 from . import (
     after_named,
@@ -498,7 +499,8 @@ def diagnose(
     held_out_test : bool
         Require a held-out improvement before naming a term (leave-one-experiment-out).
     y_unit, u_unit : str
-        Units of the output and the input, for the reported term values.
+        Units of the output and the input, for the reported term values (default: the first experiment's
+        stated units; experiments in other units of the same quantity are converted to them).
     progress : bool or callable, optional
         Report the stages: True on stderr (a bar on a terminal, else a line per stage), a callable
         ``progress(stage, done, total)`` receives each report; quiet by default.
@@ -519,6 +521,8 @@ def diagnose(
         floating point.
     SearchAtBoundError
         When not even the plain model can be fitted.
+    UnitMismatchError
+        Experiments whose units of one quantity no known scale relates (others converted: UnitWarning).
     """
     from .. import _threads
     from . import fit_share, speed
@@ -548,6 +552,10 @@ def _diagnose(
     alpha = real_number("alpha", alpha)
     if not (0.0 < alpha < 1.0):
         raise InvalidParameterError(f"alpha = {alpha!r} must lie in (0, 1)")
+    # One unit per quantity: the first experiment's, the others converted or refused (bouc_wen_id/units.py).
+    joined = harmonise(_as_list(experiments), stacklevel=4)
+    experiments = joined.items if isinstance(experiments, (list, tuple)) else experiments
+    units = (units[0] or joined.units.get("y", ""), units[1] or joined.units.get("u", ""))  # the first file's
     _check_sizes(experiments)
     inputs.check_items(experiments)  # the stated input as identify checks it, no repeats (inputs.py)
     report("preparing the averaged periods", 0, 1)
@@ -560,7 +568,7 @@ def _diagnose(
         d = loop_centre.resolved(
             _as_list(experiments), level, wander, d, lambda xs: _with_wander(list(xs), *args, None)
         )
-    return replace(d, seconds=time.perf_counter() - t0)
+    return replace(d, seconds=time.perf_counter() - t0, notes=(*joined.notes, *d.notes))
 
 
 def _as_list(experiments: Any) -> list[Any]:

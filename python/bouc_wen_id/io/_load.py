@@ -10,6 +10,7 @@ from typing import Literal, Optional
 from ..errors import FileFormatError, InvalidParameterError
 from ..measurement import Measurement
 from ..model import Recording
+from ..units import harmonise
 from ._common import ColumnMap, Item, PathLike, _check_columns, _check_rate, _items
 from ._csv import read_text, write_csv
 from ._hdf5 import read_hdf5, write_hdf5
@@ -90,18 +91,30 @@ def load(
     Text files may start with a DAQ's ``Key: value`` lines (found by themselves, or skipped with
     ``skiprows``) and hold one experiment per acquisition block: see :func:`read_text`.
 
+    The experiments are one data set: their units must agree (:mod:`bouc_wen_id.units`).  A file whose
+    column names state another unit of the same quantity than the first file's (``disp_m`` beside
+    ``disp_mm``, ``Force (kN)`` beside ``Force (N)``) is converted to the first file's unit, with a
+    :class:`~bouc_wen_id.errors.UnitWarning` (new arrays; the conversion is recorded in the experiment's
+    ``metadata["units_converted"]``); a file stating no unit is taken to be in the others'.
+
     Raises
     ------
     FileFormatError
         A missing file, an unknown suffix, or a malformed file (named, with what is wrong).
+    UnitMismatchError
+        Two files state units of one quantity that no known scale relates (``mm`` and ``N``).
     """
     cols = _check_columns(columns)
     rate = _check_rate(sample_rate)
     skip = check_skiprows(skiprows)
     out: list[Item] = []
+    names: list[str] = []
     for f in _files(paths):
-        out.extend(_read_file(f, cols, rate, skip))
-    return out
+        read = _read_file(f, cols, rate, skip)
+        out.extend(read)
+        names.extend(f.name if len(read) == 1 else f"{f.name}[{b}]" for b in range(len(read)))
+    # One data set: one unit per quantity (later files converted to the first's, or a UnitMismatchError).
+    return harmonise(out, names).items if len(out) > 1 else out
 
 
 def load_recordings(
@@ -122,7 +135,7 @@ def load_recordings(
                     "recording; read lab data with bouc_wen_id.io.load"
                 )
             out.append(item)
-    return out
+    return harmonise(out).items if len(out) > 1 else out
 
 
 def save(
