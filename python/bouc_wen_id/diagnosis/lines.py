@@ -41,8 +41,13 @@ GUARD_BINS = 1.5
 MIRROR_SHARE = 0.1
 #: Most lines searched per recording.
 MAX_LINES = 3
+#: Fewest steady periods searched for a line (the quadratic drift takes three per sample of the period);
+#: a line found elsewhere is fitted in any recording of 3 or more.
+MIN_PERIODS = 5
 #: Zero padding of the search periodogram.
 PAD = 4
+#: What the padded periodogram's maximum exceeds that of its independent bins by (in units of the level).
+PAD_EXCESS = 1.0
 #: Largest coherence of a line with the periodic mean (its average over the periods, relative to itself)
 #: at which it is still fitted: above, the line and the loop cannot be told apart in the record.
 MAX_COHERENCE = 0.95
@@ -57,19 +62,24 @@ def _steady(rec: Any) -> tuple[FloatArray, int, int, int, float]:
     return y, p, n, s, dt
 
 
-def _orth(sig: FloatArray, n: int, p: int) -> FloatArray:
-    """``sig`` (n whole periods) minus its mean period repeated: its part the periodic mean cannot take."""
+def _orth(sig: FloatArray, n: int, p: int, drift: bool = True) -> FloatArray:
+    """``sig`` (n whole periods) less what the periodic mean and a quadratic drift of it in the period
+    index can take (each sample of the period a series over the periods, as the colour check's trend): a
+    loop that drifts or settles is taken up there and leaves no line. ``drift=False``: the mean alone (the
+    fit of a line already found, whose frequency is known: one near a harmonic is taken up by a drift)."""
     rows = sig.reshape(n, p)
-    out: FloatArray = (rows - rows.mean(axis=0)).ravel()
+    idx = np.arange(n, dtype=np.float64)
+    trend = np.vander(idx - idx.mean(), min(3, n - 1) if drift else 1)
+    out: FloatArray = (rows - trend @ np.linalg.lstsq(trend, rows, rcond=None)[0]).ravel()
     return out
 
 
-def _fit(r: FloatArray, f: float, n: int, p: int) -> tuple[complex, float, float]:
+def _fit(r: FloatArray, f: float, n: int, p: int, drift: bool = True) -> tuple[complex, float, float]:
     """``(amplitude, explained power, coherence)`` of a line at ``f`` cycles per sample fitted to the
     residual ``r`` (periodic mean taken out), jointly with the periodic mean."""
     j = np.arange(r.size, dtype=np.float64)
     c, s = np.cos(2 * math.pi * f * j), np.sin(2 * math.pi * f * j)
-    x = np.column_stack([_orth(c, n, p), _orth(s, n, p)])
+    x = np.column_stack([_orth(c, n, p, drift), _orth(s, n, p, drift)])
     norm = float(np.sum(c * c + s * s))
     coh = math.sqrt(max(0.0, 1.0 - float(np.sum(x * x)) / norm)) if norm > 0 else 1.0
     beta = np.linalg.lstsq(x, r, rcond=None)[0]
@@ -92,8 +102,10 @@ def _candidate(r: FloatArray, n: int, p: int) -> Optional[float]:
     half = max(8, m // 16) * PAD  # the local level: median over +-m/16 record bins (a coloured noise)
     k = int(np.argmax(np.where(far, per, 0.0)))
     lo, hi = max(0, k - half), min(per.size, k + half + 1)
-    level = float(np.median(per[lo:hi])) / math.log(2.0)
-    if not level > 0 or per[k] / level < math.log(m / 2 / LINE_ALPHA):
+    near = per[lo:hi][far[lo:hi]]  # the bins the search sees (the drift's projection dips at harmonics)
+    level = float(np.median(near)) / math.log(2.0) if near.size else 0.0
+    bins = max(2.0, float(np.count_nonzero(far)) / PAD)  # independent bins searched
+    if not level > 0 or per[k] / level < math.log(bins / LINE_ALPHA) + PAD_EXCESS:
         return None
     mirror = int(round((2 * harm[k] - freq[k]) * size))
     if 0 <= mirror < per.size and per[mirror] > MIRROR_SHARE * per[k]:
@@ -116,7 +128,7 @@ def _candidate(r: FloatArray, n: int, p: int) -> Optional[float]:
 def _lines(rec: Any) -> list[float]:
     """Lines found in one recording, in cycles per sample (each its alias in [0, 1/2])."""
     y, p, n, _s, dt = _steady(rec)
-    if n < 3 or not (dt > 0):
+    if n < MIN_PERIODS or not (dt > 0):
         return []
     r = _orth(y, n, p)
     found: list[float] = []
@@ -129,10 +141,12 @@ def _lines(rec: Any) -> list[float]:
     return found
 
 
-def _line(r: FloatArray, f: float, n: int, p: int) -> FloatArray:
+def _line(r: FloatArray, f: float, n: int, p: int, drift: bool = True) -> FloatArray:
     """The least-squares line at ``f`` in ``r`` (its part the periodic mean cannot take)."""
     j = np.arange(r.size, dtype=np.float64)
-    x = np.column_stack([_orth(np.cos(2 * math.pi * f * j), n, p), _orth(np.sin(2 * math.pi * f * j), n, p)])
+    x = np.column_stack(
+        [_orth(np.cos(2 * math.pi * f * j), n, p, drift), _orth(np.sin(2 * math.pi * f * j), n, p, drift)]
+    )
     out: FloatArray = x @ np.linalg.lstsq(x, r, rcond=None)[0]
     return out
 
@@ -146,6 +160,11 @@ def _alias(hz: float, dt: float) -> float:
 MAX_FOLD = 64
 
 
+def _hits(found: Sequence[tuple[float, float, int]], hz: float) -> list[int]:
+    """Which lines ``found`` (as in :func:`_resolved`) are aliases of ``hz``, within a record bin."""
+    return [i for i, (f, dt, m) in enumerate(found) if abs(_alias(hz, dt) - f) * m <= 1.0]
+
+
 def _resolved(found: Sequence[tuple[float, float, int]]) -> list[tuple[float, bool]]:
     """Frequencies (cycles per unit of t) of the lines ``found`` as ``(cycles per sample, dt, samples)`` in
     single recordings, with whether the samples leave it ambiguous. Each is sampled at its recording's
@@ -157,15 +176,11 @@ def _resolved(found: Sequence[tuple[float, float, int]]) -> list[tuple[float, bo
         cands = sorted(
             {abs(k + sgn * f) / dt for f, dt, _m in left for k in range(MAX_FOLD + 1) for sgn in (-1.0, 1.0)}
         )
-
-        def hits(hz: float) -> list[int]:
-            return [i for i, (f, dt, m) in enumerate(left) if abs(_alias(hz, dt) - f) * m <= 1.0]
-
-        scored = [(len(hits(hz)), hz) for hz in cands if hz > 0]
+        scored = [(len(_hits(left, hz)), hz) for hz in cands if hz > 0]
         top = max(c for c, _ in scored)
         best = [hz for c, hz in scored if c == top]
         out.append((best[0], len(_merged(best)) > 1))
-        gone = set(hits(best[0]))
+        gone = set(_hits(left, best[0]))
         left = [d for i, d in enumerate(left) if i not in gone]
     return out
 
@@ -202,12 +217,12 @@ def removed(items: Any) -> tuple[Any, list[str]]:
         ys, p, n, s, dt = _steady(rec)
         if n < 3 or not (dt > 0):
             continue
-        r = _orth(ys, n, p)
+        r = _orth(ys, n, p, drift=False)
         changed = False
         for hz in freqs:
             f = hz * dt
-            amp, power, coh = _fit(r, f, n, p)
-            dof = r.size - p - 2  # the residual's dof: n p samples less p means and the line's 2
+            amp, power, coh = _fit(r, f, n, p, drift=False)
+            dof = r.size - p - 2  # n p samples less the periodic mean and the line's 2
             rest = float(r @ r) - power
             if coh > MAX_COHERENCE or dof <= 0 or not rest > 0:
                 continue
@@ -215,7 +230,7 @@ def removed(items: Any) -> tuple[Any, list[str]]:
                 continue
             j0 = np.arange(y_all.size, dtype=np.float64) - s * p  # the steady stretch's sample 0
             y_all = y_all - (amp * np.exp(2j * math.pi * f * j0)).real
-            r = r - _line(r, f, n, p)
+            r = r - _line(r, f, n, p, drift=False)
             where[hz].append((i, abs(amp)))
             changed = True
         if changed:
