@@ -33,10 +33,10 @@ from numpy.typing import NDArray
 FloatArray = NDArray[np.float64]
 
 #: False-alarm level of the line search per recording (Bonferroni over its periodogram's bins).
-LINE_ALPHA = 1e-3
+LINE_ALPHA = 1e-4
 #: Least distance of a searched line from every harmonic of the input, in bins of the whole record (a
 #: drifting loop's sidebands sit within a bin or two of its harmonics; the mirror test handles the rest).
-GUARD_BINS = 1.5
+GUARD_BINS = 2.5
 #: Largest share of the line's periodogram power its mirror about the nearest harmonic may hold.
 MIRROR_SHARE = 0.1
 #: Most lines searched per recording.
