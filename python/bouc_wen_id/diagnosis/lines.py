@@ -44,6 +44,10 @@ MAX_LINES = 3
 #: Fewest steady periods searched for a line (the quadratic drift takes three per sample of the period);
 #: a line found elsewhere is fitted in any recording of 3 or more.
 MIN_PERIODS = 5
+#: Lowest frequency searched or fitted, in harmonics of the input.
+MIN_HARMONIC = 2.0
+#: Half-width of the band whose median is a line's local noise level, in harmonics of the input.
+LEVEL_HARMONICS = 2
 #: Zero padding of the search periodogram.
 PAD = 4
 #: What the padded periodogram's maximum exceeds that of its independent bins by (in units of the level).
@@ -87,23 +91,39 @@ def _fit(r: FloatArray, f: float, n: int, p: int, drift: bool = True) -> tuple[c
     return complex(beta[0], -beta[1]), float(fitted @ fitted), coh
 
 
+def _spectrum(r: FloatArray, n: int, p: int) -> tuple[FloatArray, FloatArray, FloatArray, NDArray[np.bool_]]:
+    """The padded periodogram of ``r`` (white noise of variance s2: mean s2), its frequencies (cycles per
+    sample), each one's nearest harmonic of the input, and the bins searched: :data:`GUARD_BINS` from every
+    harmonic and above :data:`MIN_HARMONIC` (a red noise and a loop's slow wander live below)."""
+    m = r.size
+    size = PAD * m
+    per: FloatArray = np.abs(np.fft.rfft(r, size)) ** 2 / m
+    freq: FloatArray = np.arange(per.size) / size
+    harm: FloatArray = np.round(freq * p) / p
+    far = (np.abs(freq - harm) * m >= GUARD_BINS) & (freq * p >= MIN_HARMONIC)
+    return per, freq, harm, far
+
+
+def _level(per: FloatArray, far: NDArray[np.bool_], k: int, n: int) -> float:
+    """The noise's periodogram level about bin ``k``: the median of the searched bins within
+    :data:`LEVEL_HARMONICS` harmonics (a coloured noise's level changes over the band), over ln 2."""
+    half = max(16, LEVEL_HARMONICS * n) * PAD
+    lo, hi = max(0, k - half), min(per.size, k + half + 1)
+    near = per[lo:hi][far[lo:hi]]  # the bins the search sees (the drift's projection dips at harmonics)
+    return float(np.median(near)) / math.log(2.0) if near.size else 0.0
+
+
 def _candidate(r: FloatArray, n: int, p: int) -> Optional[float]:
     """The strongest line of ``r`` that passes the search's tests, in cycles per sample, or None."""
     from scipy.optimize import minimize_scalar  # type: ignore[import-untyped]
 
     m = r.size
-    size = PAD * m
-    per = np.abs(np.fft.rfft(r, size)) ** 2 / m
-    freq = np.arange(per.size) / size
-    harm = np.round(freq * p) / p
-    far = np.abs(freq - harm) * m >= GUARD_BINS
+    per, freq, harm, far = _spectrum(r, n, p)
     if not far.any():
         return None
-    half = max(8, m // 16) * PAD  # the local level: median over +-m/16 record bins (a coloured noise)
+    size = PAD * m
     k = int(np.argmax(np.where(far, per, 0.0)))
-    lo, hi = max(0, k - half), min(per.size, k + half + 1)
-    near = per[lo:hi][far[lo:hi]]  # the bins the search sees (the drift's projection dips at harmonics)
-    level = float(np.median(near)) / math.log(2.0) if near.size else 0.0
+    level = _level(per, far, k, n)
     bins = max(2.0, float(np.count_nonzero(far)) / PAD)  # independent bins searched
     if not level > 0 or per[k] / level < math.log(bins / LINE_ALPHA) + PAD_EXCESS:
         return None
@@ -197,8 +217,6 @@ def removed(items: Any) -> tuple[Any, list[str]]:
     """``(items, notes)``: copies of the Recordings in ``items`` with the lines found taken out of their
     outputs, and one note per line (what, where, how large); ``items`` as given when none is found.
     Measurements and averaged periods are passed on unchanged."""
-    from scipy.special import fdtrc  # type: ignore[import-untyped]
-
     from ..model import Recording
 
     seq = list(items) if isinstance(items, (list, tuple)) else [items]
@@ -222,11 +240,14 @@ def removed(items: Any) -> tuple[Any, list[str]]:
         for hz in freqs:
             f = hz * dt
             amp, power, coh = _fit(r, f, n, p, drift=False)
-            dof = r.size - p - 2  # n p samples less the periodic mean and the line's 2
-            rest = float(r @ r) - power
-            if coh > MAX_COHERENCE or dof <= 0 or not rest > 0:
+            per, freq, _h, far = _spectrum(r, n, p)
+            a = _alias(hz, dt)
+            k = int(round(a * PAD * r.size))
+            if coh > MAX_COHERENCE or a * p < MIN_HARMONIC or k >= per.size:
                 continue
-            if float(fdtrc(2, dof, (power / 2) / (rest / dof))) >= level:
+            lev = _level(per, far, k, n)  # the line against the noise's own level at its frequency
+            top = float(np.max(per[max(0, k - PAD) : k + PAD + 1]))
+            if not lev > 0 or top / lev < math.log(1.0 / level) + PAD_EXCESS:
                 continue
             j0 = np.arange(y_all.size, dtype=np.float64) - s * p  # the steady stretch's sample 0
             y_all = y_all - (amp * np.exp(2j * math.pi * f * j0)).real
