@@ -100,6 +100,36 @@ def test_white_noise_alone_gives_no_line(clean: tuple[Any, Any]) -> None:
         assert notes == [] and out is recs
 
 
+def test_red_noise_gives_no_line(clean: tuple[Any, Any]) -> None:
+    """AR(1) noise with phi = 0.99 (correlated over about a period): its periodogram falls steeply above the
+    DC, and a level taken as white made "lines" of it."""
+    from bouc_wen_id.diagnosis import lines
+
+    p, y = clean
+    rng = np.random.default_rng(5)
+    recs = []
+    for rec in _records(p, y, hum=0.0):
+        n = np.asarray(rec.y).size
+        e = rng.normal(0.0, gen.NOISE_SD * math.sqrt(1 - 0.99**2), n)
+        ar = np.empty(n)
+        acc = 0.0
+        for k in range(n):
+            acc = 0.99 * acc + e[k]
+            ar[k] = acc
+        recs.append(
+            bw.Recording(
+                rec.t,
+                rec.u,
+                np.asarray(rec.y) + ar,
+                rec.amplitude,
+                rec.frequency,
+                settle_periods=rec.settle_periods,
+            )
+        )
+    out, notes = lines.removed(recs)
+    assert notes == [] and out is recs
+
+
 def test_a_hum_null_is_adequate_and_the_verdict_names_the_disturbance(clean: tuple[Any, Any]) -> None:
     d = _diagnose(_records(*clean, hum=HUM_SD))
     assert d.status == "adequate", d.verdict
