@@ -152,8 +152,9 @@ def resolution_text(d: Any, alpha: float, y_unit: str) -> str:
 
 def adequate_tail(lims: Sequence[DetectionLimit], d: Any, alpha: float, y_unit: str = "[y]") -> str:
     """The "adequate" verdict's tail: the few candidates closest to detection at 90 % power (the first of them
-    the plain model mostly absorbs with what would see it: :func:`hint_text`), then the global test's
-    resolution (module docstring)."""
+    the plain model mostly absorbs with what would see it: :func:`hint_text`), which of the others have their
+    limits in ``Diagnosis.summary()`` (a user who knows a term is present looks for its own), then the global
+    test's resolution (module docstring)."""
     head = ""
     if lims:
         shown = most_relevant(lims, VERDICT_LIMITS)
@@ -162,6 +163,13 @@ def adequate_tail(lims: Sequence[DetectionLimit], d: Any, alpha: float, y_unit: 
             limit_text(lim) + (hint_text(lim, list(d.experiments)) if k == hinted else "")
             for k, lim in enumerate(shown)
         )
+        rest = [lim for lim in lims if lim not in shown]
+        if rest:  # a user who knows a term is there must find its limit too (review 33)
+            head += (
+                f"; the other {len(rest)} candidates' limits ("
+                + ", ".join(lim.label for lim in rest)
+                + ") are in the summary's 'detection limits'"
+            )
     return head + resolution_text(d, alpha, y_unit or "[y]")
 
 

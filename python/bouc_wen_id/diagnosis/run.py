@@ -30,6 +30,7 @@ from . import (
     inputs,
     law_chance,
     law_untested,
+    lines,
     loop_centre,
     pairs,
     resolution,
@@ -558,11 +559,14 @@ def _diagnose(
     units = (units[0] or joined.units.get("y", ""), units[1] or joined.units.get("u", ""))  # the first file's
     _check_sizes(experiments)
     inputs.check_items(experiments)  # the stated input as identify checks it, no repeats (inputs.py)
+    experiments, line_notes = lines.removed(experiments)  # a steady sinusoid not locked to the input
     report("preparing the averaged periods", 0, 1)
     level = alpha / max(len(cands), 1)  # a wandering zero (baseline.py), or one drifting (zero_drift.py)
     wander = baseline.detect(experiments, level) or zero_drift.detect(experiments, level)
     args = (cands, float(alpha), held_out_test, units, report)
     d = _with_wander(experiments, *args, wander)
+    if line_notes:
+        d = replace(d, verdict=d.verdict + lines.clause(line_notes), notes=(*line_notes, *d.notes))
     if isinstance(wander, zero_drift.Drift) and wander.loop_trends:
         # A degrading asymmetric loop moves its own centre: predicted, taken off, tested (loop_centre.py).
         d = loop_centre.resolved(

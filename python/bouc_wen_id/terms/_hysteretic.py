@@ -91,6 +91,14 @@ class Degradation(Term):
     identified (alpha = 1) model, where x has the units of y. The steady averaged period cannot see it
     (to first order the mean loop is the loop at the mean strength); the diagnosis fits it from the
     period-by-period record (design.md 10.6).
+
+    The energy's origin (``e = 0``, ``nu = 1``): each experiment starts virgin at the first of its
+    declared settling periods (a Recording's first sample when those periods are in it; ``settle_periods``
+    whole periods before its steady stretch), each experiment a specimen of its own; when the diagnosis
+    fits unrecorded ages (diagnosis/age.py) the origin is the youngest experiment's first recorded
+    period. A model whose energy counts from ``e0`` earlier (an unrecorded settling, earlier runs) has
+    ``nu = (1 + d e0)(1 + d/(1 + d e0) e)``: the first factor goes into beta and gamma, and its
+    ``d = delta_nu / (1 - delta_nu e0)``.
     """
 
     delta_nu: float
