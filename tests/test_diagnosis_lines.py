@@ -138,3 +138,27 @@ def test_a_hum_null_is_adequate_and_the_verdict_names_the_disturbance(clean: tup
     white = _diagnose(_records(*clean, hum=0.0))
     assert white.status == "adequate", white.verdict
     assert "not locked to the input" not in white.verdict
+
+
+def test_a_tone_in_the_measured_input_is_the_plants_response_not_a_disturbance() -> None:
+    """A 3 % tone at 1.7 Hz in the input u itself (review 33): the output's lines (the tone's response and
+    its products with the input's harmonics) are not a disturbance; nothing is taken out of y. On the code
+    before, the 7 rad/s recording lost a 'hum' at 3.93 Hz = 1.7 Hz + 2 x 1.11 Hz (a product)."""
+    from bouc_wen_id.diagnosis import lines
+    from bouc_wen_id.model import Recording
+
+    plant = bw.demo_plant()
+    recs = []
+    for i, om in enumerate((2.0, 4.0, 7.0)):
+        p, n, st = 128, 30, 10
+        t = np.arange((n + st) * p) * (2 * np.pi / om) / p
+        a = float(bw.demo.design_amplitudes(plant, [om])[0])
+        u = a * np.cos(om * t) + 0.03 * a * np.cos(2 * np.pi * 1.7 * t + 0.3)
+        y = bw.simulate_input(plant, t, u)[1] + np.random.default_rng(70 + i).normal(0, 0.005, t.size)
+        recs.append(Recording(t, u, y, a, om, settle_periods=st))
+    assert all(lines.input_carries_a_line(r) for r in recs)
+    out, notes = lines.removed(recs)
+    assert notes == [] and out is recs
+    clean = [Recording(r.t, a * np.cos(r.frequency * r.t), r.y, a, r.frequency, settle_periods=10)
+             for r, a in zip(recs, [r.amplitude for r in recs])]  # fmt: skip
+    assert not any(lines.input_carries_a_line(r) for r in clean)  # an exact sine's rounding is no line

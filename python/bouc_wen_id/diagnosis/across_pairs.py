@@ -36,6 +36,7 @@ from typing import Any, Optional
 from ..augmented import AugFit
 from ..terms import TERMS
 from . import across_rules, pairs
+from .fitting import at_a_limit
 from .select import (
     HeldOut,
     Trial,
@@ -77,6 +78,10 @@ class JointRules(pairs.Rules):
 
     def physical(self, fit: Any, term: str) -> bool:
         return all(_admissible(f, term) for f in fit.fits) and not all(at_null(f, term) for f in fit.fits)
+
+    def at_limit(self, fit: Any, term: str) -> bool:
+        """At its spring or dry-friction limit at some condition (:meth:`.pairs.Rules.at_limit`)."""
+        return any(at_a_limit(g.sx, f, term) for g, f in zip(self.groups, fit.fits))
 
     def away(self, fit: Any, term: str, level: float, s2: float) -> bool:
         return any(

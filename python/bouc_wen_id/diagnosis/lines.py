@@ -18,7 +18,9 @@ is the same in both halves of the record (a free oscillation decays). Its freque
 squares, is then fitted in every recording (jointly with the periodic mean: the line's own average over the
 periods is not separable from the loop and stays in the regressors' complement) and taken out of the
 whole record when significant there (a line too close to a harmonic to be found alone in one experiment is
-found in another). The recordings handed to the diagnosis are copies; the user's are not modified.
+found in another). A recording whose measured input holds a line of its own is neither searched nor
+cleaned: its output's lines are the response to that input. The recordings handed to the diagnosis are
+copies; the user's are not modified.
 """
 
 from __future__ import annotations
@@ -91,7 +93,9 @@ def _fit(r: FloatArray, f: float, n: int, p: int, drift: bool = True) -> tuple[c
     return complex(beta[0], -beta[1]), float(fitted @ fitted), coh
 
 
-def _spectrum(r: FloatArray, n: int, p: int) -> tuple[FloatArray, FloatArray, FloatArray, NDArray[np.bool_]]:
+def _spectrum(
+    r: FloatArray, n: int, p: int, low: float = MIN_HARMONIC
+) -> tuple[FloatArray, FloatArray, FloatArray, NDArray[np.bool_]]:
     """The padded periodogram of ``r`` (white noise of variance s2: mean s2), its frequencies (cycles per
     sample), each one's nearest harmonic of the input, and the bins searched: :data:`GUARD_BINS` from every
     harmonic and above :data:`MIN_HARMONIC` (a red noise and a loop's slow wander live below)."""
@@ -100,7 +104,7 @@ def _spectrum(r: FloatArray, n: int, p: int) -> tuple[FloatArray, FloatArray, Fl
     per: FloatArray = np.abs(np.fft.rfft(r, size)) ** 2 / m
     freq: FloatArray = np.arange(per.size) / size
     harm: FloatArray = np.round(freq * p) / p
-    far = (np.abs(freq - harm) * m >= GUARD_BINS) & (freq * p >= MIN_HARMONIC)
+    far = (np.abs(freq - harm) * m >= GUARD_BINS) & (freq * p >= low)
     return per, freq, harm, far
 
 
@@ -113,12 +117,13 @@ def _level(per: FloatArray, far: NDArray[np.bool_], k: int, n: int) -> float:
     return float(np.median(near)) / math.log(2.0) if near.size else 0.0
 
 
-def _candidate(r: FloatArray, n: int, p: int) -> Optional[float]:
-    """The strongest line of ``r`` that passes the search's tests, in cycles per sample, or None."""
+def _candidate(r: FloatArray, n: int, p: int, low: float = MIN_HARMONIC) -> Optional[float]:
+    """The strongest line of ``r`` that passes the search's tests, in cycles per sample, or None; searched
+    from ``low`` harmonics of the input up."""
     from scipy.optimize import minimize_scalar  # type: ignore[import-untyped]
 
     m = r.size
-    per, freq, harm, far = _spectrum(r, n, p)
+    per, freq, harm, far = _spectrum(r, n, p, low)
     if not far.any():
         return None
     size = PAD * m
@@ -145,10 +150,35 @@ def _candidate(r: FloatArray, n: int, p: int) -> Optional[float]:
     return f0
 
 
+#: The input is searched from this many harmonics up (the output from :data:`MIN_HARMONIC`): a tone in u
+#: below the output's band still mixes with the input's harmonics into lines inside it.
+INPUT_LOW = 0.25
+#: ... and a line there counts above this share of the input's peak (a float32 record rounds at 6e-8).
+INPUT_SHARE = 1e-5
+
+
+def input_carries_a_line(rec: Any) -> bool:
+    """Whether the recording's measured input holds a line of its own (the search's tests on its steady
+    periods): then the output's lines are the plant's response to it (and, through the loop, its products
+    with the input's harmonics), not a disturbance; nothing is taken out of that recording (review 33: a
+    3 % tone at 1.7 Hz in u was removed from y as "mains hum", y then no longer the response to u)."""
+    _y, p, n, s, _dt = _steady(rec)
+    u = np.asarray(rec.u, dtype=np.float64)[s * p : (s + n) * p]
+    if n < 3 or u.size != n * p:
+        return False
+    ru = _orth(u, n, p)
+    f = _candidate(ru, n, p, INPUT_LOW)
+    if f is None:
+        return False
+    # A material line, not the rounding of an exact sine (whose residual, 1e-16 of it, has structure too).
+    return abs(_fit(ru, f, n, p)[0]) > INPUT_SHARE * float(np.max(np.abs(u)))
+
+
 def _lines(rec: Any) -> list[float]:
-    """Lines found in one recording, in cycles per sample (each its alias in [0, 1/2])."""
+    """Lines found in one recording, in cycles per sample (each its alias in [0, 1/2]); none where its input
+    carries a line (:func:`input_carries_a_line`)."""
     y, p, n, _s, dt = _steady(rec)
-    if n < MIN_PERIODS or not (dt > 0):
+    if n < MIN_PERIODS or not (dt > 0) or input_carries_a_line(rec):
         return []
     r = _orth(y, n, p)
     found: list[float] = []
@@ -233,7 +263,7 @@ def removed(items: Any) -> tuple[Any, list[str]]:
         rec = seq[i]
         y_all = np.array(rec.y, dtype=np.float64)
         ys, p, n, s, dt = _steady(rec)
-        if n < 3 or not (dt > 0):
+        if n < 3 or not (dt > 0) or input_carries_a_line(rec):
             continue
         r = _orth(ys, n, p, drift=False)
         changed = False

@@ -66,6 +66,7 @@ from typing import Any, Optional
 
 from ..augmented import AugExperiment, AugFit
 from ..terms import TERMS
+from .fitting import at_a_limit
 from .select import (
     BOUNDARY_TERMS,
     LAW_ALPHA,
@@ -117,6 +118,13 @@ class Rules:
     def physical(self, fit: Any, term: str) -> bool:
         """In its physical range and not at its null value (the model without it)."""
         return _admissible(fit, term) and not at_null(fit, term)
+
+    def at_limit(self, fit: Any, term: str) -> bool:
+        """A two-term element (Dahl friction) at its spring or dry-friction limit at every experiment
+        (:func:`.fitting.at_a_limit`): the simpler term says it with fewer parameters. A single Dahl fit there
+        is refused (tried as that term); beside another member the joint refit can still drive it there
+        (review 33: Dahl with fc 1.6 +- 0.55, its sigma the true spring, named with Coulomb friction)."""
+        return at_a_limit(self.exps, fit, term)
 
     def away(self, fit: Any, term: str, level: float, s2: float) -> bool:
         return away_from_null(fit, term, level, s2)
@@ -217,6 +225,8 @@ def _member_tests(
         who = _label(m)
         if not r.physical(fit, m):
             why = f"{who} came out at its null or outside its physical range"
+        elif r.at_limit(fit, m):
+            why = f"{who} sits at its spring or dry-friction limit, which the simpler term states"
         elif not (math.isfinite(padj) and padj < level):
             why = f"{who} does not improve the fit significantly beside {given} (adjusted p = {padj:.2g})"
         elif share < MATERIAL_SHARE:
