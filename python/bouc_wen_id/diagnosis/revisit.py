@@ -203,6 +203,33 @@ def revisit(
         )
         rec = Revisit(named, pool, (), f"no set named: {why}", tried=tried)
         return final, [*steps[:j], replace(st, pairs=(*st.pairs, rec)), *steps[j + 1 :]]
+    rec = Revisit(named, pool, choice.terms, "", later=tuple(later))
+    return settle(
+        exps, base, final, steps, j, single, choice, tried, rec, adequate, substeps, use_held_out, cache
+    )
+
+
+def settle(
+    exps: Sequence[AugExperiment],
+    base: AugFit,
+    final: AugFit,
+    steps: list[Step],
+    j: int,
+    single: Any,
+    choice: Any,
+    tried: Sequence[Any],
+    rec: Revisit,
+    adequate: Callable[[AugFit], bool],
+    substeps: int,
+    use_held_out: bool,
+    cache: Optional[FoldCache],
+) -> tuple[AugFit, list[Step]]:
+    """A revisit's set ``choice`` (from ``base``, the model before step ``j``) against the named path
+    (``single``, the step's own trial of the named term, and ``final``): named in the step's place when its
+    model passes adequacy and predicts better held out, else recorded on the step as an alternative
+    (``rec``: the revisit's record, its held-out costs and separating experiment filled in here). Shared by
+    :func:`revisit` and :func:`.rival_revisit.revisit`."""
+    st = steps[j]
     fit = choice.trial.fit
     # The named path's model from the same base: the single, or the single and the sets after it.
     h_one = _ho(
@@ -214,7 +241,9 @@ def revisit(
     better = h_set < h_one if use_held_out and math.isfinite(h_set + h_one) else fit.cost < final.cost
     sep = _separating(exps, fit, final, substeps)
     tenable = adequate(fit)
-    rec = Revisit(named, pool, choice.terms, "", h_set, h_one, sep, tried, tuple(later))
+    rec = replace(
+        rec, held_out_set=h_set, held_out_single=h_one, separating_experiment=sep, tried=tuple(tried)
+    )
     if not (tenable and better):
         why = "its model fails adequacy" if not tenable else "its held-out cost is not lower"
         rec = replace(rec, outcome=f"alternative ({why})")

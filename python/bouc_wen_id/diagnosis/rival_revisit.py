@@ -38,15 +38,14 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import replace
 from typing import Any, Optional
 
 from ..augmented import AugExperiment, AugFit
 from . import pairs
 from .gate import targeted_level
-from .revisit import Revisit, _base
+from .revisit import Revisit, _base, settle
 from .revisit import after as lead_after
-from .select import ALPHA, FoldCache, HeldOut, Step, _separating, forward_select, held_out, memo_fit_with
+from .select import ALPHA, FoldCache, Step, forward_select, memo_fit_with
 
 #: Whether this revisit runs (module docstring).
 ENABLED = True
@@ -65,10 +64,6 @@ def trigger(steps: Sequence[Step]) -> tuple[int, tuple[str, ...]]:
         if rivals:
             return j, rivals
     return -1, ()
-
-
-def _ho(h: Optional[HeldOut]) -> float:
-    return math.nan if h is None else float(sum(h.cost_after))
 
 
 def revisit(
@@ -108,30 +103,10 @@ def revisit(
     pool = tuple(t.term for t in (*order, *rest))
     if choice is None or choice.trial.fit is None:
         return final, steps  # no set holds its laws: the rival stays said as before
-    fit = choice.trial.fit
-    h_one = _ho(
-        single.held_out
-        if final is single.fit or not use_held_out
-        else held_out(exps, base, final, substeps, cache)
+    rec = Revisit(named, pool, choice.terms, "", later=later, by_rival=True)
+    return settle(
+        exps, base, final, steps, j, single, choice, tried, rec, adequate, substeps, use_held_out, cache
     )
-    h_set = _ho(choice.trial.held_out)
-    better = h_set < h_one if use_held_out and math.isfinite(h_set + h_one) else fit.cost < final.cost
-    sep = _separating(exps, fit, final, substeps)
-    rec = Revisit(named, pool, choice.terms, "", h_set, h_one, sep, tried, later, by_rival=True)
-    tenable = adequate(fit)
-    if not (tenable and better):
-        why = "its model fails adequacy" if not tenable else "its held-out cost is not lower"
-        rec = replace(rec, outcome=f"alternative ({why})")
-        return final, [*steps[:j], replace(st, pairs=(*st.pairs, rec)), *steps[j + 1 :]]
-    new = replace(
-        st,
-        chosen=choice.trial.term,
-        alternatives=tuple(choice.alternatives),
-        law_failed=tuple(choice.unnamed(st.law_failed)),
-        pair=choice.terms,
-        pairs=(*tried, replace(rec, outcome="named")),
-    )
-    return fit, [*steps[:j], new]
 
 
 def after(
