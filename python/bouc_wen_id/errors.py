@@ -23,6 +23,7 @@ __all__ = [
     "BudgetExceededError",
     "FileFormatError",
     "UnitMismatchError",
+    "TimeUnitError",
     "UnitWarning",
     "TimeAxisError",
     "ClippingError",
@@ -116,6 +117,12 @@ class UnitMismatchError(FileFormatError):
     in one file, ``N`` in another; an unknown unit beside another): the message names both experiments and
     units, and how to fix it (:mod:`bouc_wen_id.units`).  A :class:`FileFormatError`: it is most often a
     wrong column name or a file of another rig."""
+
+
+class TimeUnitError(UnitMismatchError, FrequencyMismatchError):
+    """A time column that is not in seconds although nothing says so: its step is 1000 (or 10^6) times what
+    a stated sample rate or frequency needs, so it "looks like ms" (or us) (:mod:`bouc_wen_id.timeunits`).
+    Both a :class:`UnitMismatchError` and the :class:`FrequencyMismatchError` such data raised before."""
 
 
 class UnitWarning(UserWarning):

@@ -453,11 +453,18 @@ class Recording:
         p = self.period / self.dt
         pr = round(p)
         if pr < 1 or abs(p - pr) > GRID_RTOL * p:
-            raise FrequencyMismatchError(
-                f"omega = {self.frequency:.9g} rad/s gives {p:.6f} samples per period "
-                f"at dt = {self.dt:.9g} s; "
-                "the paper's averaging (4a-b) needs a whole number. Check the frequency (rad/s, not Hz?) "
-                "or the time column"
+            from .timeunits import hint
+
+            raise hint(
+                FrequencyMismatchError(
+                    f"omega = {self.frequency:.9g} rad/s gives {p:.6f} samples per period "
+                    f"at dt = {self.dt:.9g} s; "
+                    "the paper's averaging (4a-b) needs a whole number. Check the frequency (rad/s, not Hz?) "
+                    "or the time column"
+                ),
+                self.t,
+                self.u,
+                self.frequency,
             )
         return int(pr)
 

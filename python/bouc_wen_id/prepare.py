@@ -34,6 +34,7 @@ from .errors import (
     ZeroAmplitudeError,
 )
 from .model import Recording, WienerPlant
+from .timeunits import hint
 from .validation import HARMONIC_SNR
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
@@ -155,10 +156,15 @@ def check_input(rec: Recording, start: int, stop: int) -> None:
     a_cos, a_sin = input_fundamental(rec, start, stop)
     misfit = _sine_misfit(u, a_cos, a_sin)
     if misfit > INPUT_MISFIT_MAX:
-        raise FrequencyMismatchError(
-            f"the recorded input is not a sine at omega = {rec.frequency:.6g} rad/s "
-            f"(relative misfit {misfit:.2g} > {INPUT_MISFIT_MAX}); check the stated frequency and its units"
-            + swapped_hint(rec, (start, stop))
+        raise hint(
+            FrequencyMismatchError(
+                f"the recorded input is not a sine at omega = {rec.frequency:.6g} rad/s "
+                f"(relative misfit {misfit:.2g} > {INPUT_MISFIT_MAX}); check the stated frequency and its "
+                "units" + swapped_hint(rec, (start, stop))
+            ),
+            rec.t[start:stop],
+            u,
+            rec.frequency,
         )
     check_fundamental(rec, a_cos, a_sin, (start, stop))
 

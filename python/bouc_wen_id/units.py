@@ -20,7 +20,9 @@ take a wrong value or a wrong name.  :func:`harmonise` therefore
 
 A converted Measurement carries the conversion in its metadata (``units_converted``: ``"u: m -> mm"``), so
 that ``diagnose`` of experiments ``load`` already converted names the conversion in its notes without
-warning twice.  Time is always in seconds (a Measurement refuses another unit for ``t``).
+warning twice.  Time is always in seconds (a Measurement refuses another unit for ``t``); a file's time column
+in another unit was converted on reading (:mod:`bouc_wen_id.timeunits`), and the notes say so.  A fitted
+model carries the units it was fitted in (:func:`against_model`: new recordings are converted to them).
 """
 
 from __future__ import annotations
@@ -265,6 +267,9 @@ def harmonise(
         )
         if warn and (q, src, dst) in fresh:
             warnings.warn(notes[-1], UnitWarning, stacklevel=stacklevel)
+    from .timeunits import note_of
+
+    notes += [n for n in (note_of(x, labs[i]) for i, x in enumerate(items)) if n]
     for (q, unit, src), who in assumed.items():
         notes.append(
             f"{', '.join(who)} state{'s' if len(who) == 1 else ''} no unit for {QUANTITIES[q]}: taken to be "

@@ -57,10 +57,17 @@ def _check_periodic(rec: Any, start: int, n: int, p: int) -> None:
     spread = float(np.sum((rows - rows.mean()) ** 2))
     misfit = math.sqrt(float(np.sum((rows - rows.mean(axis=0)) ** 2)) / spread) if spread > 0 else math.inf
     if misfit > INPUT_MISFIT_MAX:
-        raise FrequencyMismatchError(
-            f"the recorded input does not repeat at omega = {rec.frequency:.6g} rad/s (its periods differ "
-            f"from their mean by a relative {misfit:.2g} > {INPUT_MISFIT_MAX}); check the stated frequency "
-            "and its units" + swapped_hint(rec, (start, start + n * p))
+        from ..timeunits import hint
+
+        raise hint(
+            FrequencyMismatchError(
+                f"the recorded input does not repeat at omega = {rec.frequency:.6g} rad/s (its periods "
+                f"differ from their mean by a relative {misfit:.2g} > {INPUT_MISFIT_MAX}); check the stated "
+                "frequency and its units" + swapped_hint(rec, (start, start + n * p))
+            ),
+            rec.t,
+            rec.u,
+            rec.frequency,
         )
 
 

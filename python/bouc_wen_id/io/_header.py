@@ -11,6 +11,7 @@ from typing import Any, Literal, Optional
 
 import numpy as np
 
+from .. import timeunits
 from ..errors import BoucWenIdError, FileFormatError, InvalidParameterError
 from ..measurement import RESERVED_KEYS, Measurement, check_metadata_key, check_sample_rate
 from ..model import Recording, WienerPlant
@@ -163,10 +164,11 @@ def _build(
             )
         rate = sample_rate if rate is None else rate
         if "t" in arrays:
-            t = arrays["t"]
+            t, head = timeunits.declared(head, arrays["t"], where)
             if rate is not None and n >= 2:
                 dt = check_time_axis(t)
                 if abs(1.0 / dt - rate) > _RATE_RTOL * rate:
+                    timeunits.check_rate(where, rate, dt)
                     raise FileFormatError(
                         f"{where}: the t column is sampled at {1.0 / dt:.6g} Hz, not at the stated sample "
                         f"rate {rate:.6g} Hz"

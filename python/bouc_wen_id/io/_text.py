@@ -20,6 +20,7 @@ from typing import Optional, Union
 
 from ..errors import FileFormatError, InvalidParameterError
 from ..measurement import RESERVED_KEYS, check_metadata_key
+from ..timeunits import time_scale
 from ._header import _RESERVED
 
 #: Preamble keys (lower case, single spaces) stating the sampling rate in Hz ...
@@ -244,6 +245,18 @@ def _unit_of(name: str) -> Optional[str]:
     return unit if unit or not (m and m.group(2) in _SUFFIX_UNITS) else m.group(2)
 
 
+def _timed(name: str, role: str) -> bool:
+    """``t [ms]``, ``time_ms``, ``t_us``: a time column by its name and a unit of time (then converted to
+    seconds, :mod:`bouc_wen_id.timeunits`; ``time_N`` stays a name)."""
+    if role != "t":
+        return False
+    base, unit = _role_of(name)
+    if unit is None:
+        m = _SUFFIX.match(name.strip())
+        base, unit = (m.group(1).strip().lower(), m.group(2)) if m else (base, None)
+    return base in ("t", "time") and unit is not None and time_scale(unit) is not None
+
+
 def infer_roles(
     names: Sequence[str], columns: dict[str, Union[str, int]], where: str
 ) -> tuple[dict[str, Union[str, int]], dict[str, str]]:
@@ -260,7 +273,7 @@ def infer_roles(
     for role, words in _ROLE_WORDS.items():
         if role in out or role in names:
             continue
-        found = [n for n in names if n not in taken and _role_of(n)[0] in words]
+        found = [n for n in names if n not in taken and (_role_of(n)[0] in words or _timed(n, role))]
         if len(found) > 1:
             raise FileFormatError(
                 f"{where}: columns {', '.join(map(repr, found))} could each be {role!r}; choose with "

@@ -299,6 +299,11 @@ def average_segments(
         min_periods=min_periods,
     )
     label = name or measurement.name or "measurement"
+    if measurement.nominal_frequency is not None and report.fits:
+        from ..timeunits import check_frequency
+
+        found = float(np.median([f.frequency for f in report.fits]))
+        check_frequency(label, measurement.nominal_frequency, found, "the nominal frequency")
     periods = tuple(
         synchronous_average(
             measurement.t,
