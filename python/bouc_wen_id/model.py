@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, Optional
 
 import numpy as np
@@ -179,11 +179,16 @@ class WienerPlant:
     ``y = y0 + Lag[w + k u + c udot + m uddot + f tanh(udot/(eps Vmax))]`` with ``w`` the asymmetric
     Bouc-Wen output of the played ``xp = Play_b[x]``; each kind at most once, and an asymmetry needs
     ``beta + gamma > |delta|``.  Any sequence of terms is stored as a tuple, in the order given.
+
+    ``units`` (``{"u": "mm", "y": "N"}``) are those the plant was fitted in (a fit sets them from its
+    records; empty: not known): its parameters hold only in them, and ``validate`` converts or refuses
+    records in others (:func:`bouc_wen_id.units.against_model`).  They do not take part in ``==``.
     """
 
     linear: TransferFunction
     hysteresis: BoucWen
     terms: tuple[Term, ...] = ()
+    units: Mapping[str, str] = field(default_factory=dict, compare=False)
 
     def __post_init__(self) -> None:
         if isinstance(self.terms, Term):
@@ -211,6 +216,7 @@ class WienerPlant:
                         "for a bounded output on both sides"
                     )
         object.__setattr__(self, "terms", terms)
+        object.__setattr__(self, "units", _plant_units(self.units))
 
     def term(self, kind: str) -> Optional[Term]:
         """The plant's term of code name ``kind`` (e.g. ``"play"``), or None."""
@@ -228,18 +234,41 @@ class WienerPlant:
             self.linear.scaled(h.alpha),
             BoucWen(h.beta / h.alpha, h.gamma / h.alpha, h.mu, 1.0, h.w0),
             tuple(t.normalized(h.alpha) for t in self.terms),
+            self.units,
         )
+
+    def with_units(self, units: Mapping[str, str]) -> WienerPlant:
+        """The same plant, stating that it holds in ``units`` (``{"u": "mm", "y": "N"}``)."""
+        return WienerPlant(self.linear, self.hysteresis, self.terms, units)
 
     def to_dict(self) -> dict[str, Any]:
         out: dict[str, Any] = {"linear": self.linear.to_dict(), "hysteresis": self.hysteresis.to_dict()}
         if self.terms:  # a plain plant's dict stays as it was
             out["terms"] = [t.to_dict() for t in self.terms]
+        if self.units:
+            out["units"] = dict(self.units)
         return out
 
     @classmethod
     def from_dict(cls, d: Mapping[str, Any]) -> WienerPlant:
         terms = tuple(term_from_dict(t) for t in d.get("terms", ()))
-        return cls(TransferFunction.from_dict(d["linear"]), BoucWen.from_dict(d["hysteresis"]), terms)
+        lin, hys = TransferFunction.from_dict(d["linear"]), BoucWen.from_dict(d["hysteresis"])
+        return cls(lin, hys, terms, d.get("units") or {})
+
+
+def _plant_units(units: Any) -> dict[str, str]:
+    """A plant's units checked: a mapping of ``"u"``/``"y"`` to unit strings (``"t"`` only as ``"s"``)."""
+    if not isinstance(units, Mapping):
+        raise InvalidParameterError(f"units must be a mapping like {{'u': 'mm', 'y': 'N'}}, got {units!r}")
+    out = {}
+    for k, v in units.items():
+        if k not in ("t", "u", "y") or not isinstance(v, str):
+            raise InvalidParameterError(f"units must map 'u' and 'y' to unit strings; got {k!r}: {v!r}")
+        if k == "t" and v.strip() != "s":
+            raise InvalidParameterError(f"a plant's time is in seconds; units['t'] = {v!r}")
+        if k != "t" and v.strip():
+            out[k] = v.strip()
+    return out
 
 
 @dataclass(frozen=True, eq=False, init=False)

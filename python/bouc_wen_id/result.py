@@ -186,6 +186,9 @@ class IdentificationResult(Summarised):
     converged : bool or None
         ``refined``: whether the Levenberg-Marquardt run the estimates come from converged before
         ``max_iter`` (``False`` is also issued as :class:`ConvergenceWarning`); None for the other methods.
+    units : dict
+        The units of ``u`` and ``y`` the recordings stated (``{"u": "mm", "y": "N"}``; empty: none): the
+        model holds in them (``validate`` converts or refuses records in others).
     """
 
     method: str
@@ -205,6 +208,7 @@ class IdentificationResult(Summarised):
     warnings: tuple[str, ...] = ()
     confidence: float = 0.95
     converged: Optional[bool] = None
+    units: dict[str, str] = field(default_factory=dict)
 
     def interval(self, name: str) -> tuple[float, float]:
         """Confidence interval (at ``self.confidence``) of ``beta``, ``gamma`` or ``mu``.
@@ -353,6 +357,7 @@ class IdentificationResult(Summarised):
             "adequacy": None if self.adequacy is None else self.adequacy.to_dict(),
             "warnings": list(self.warnings),
             "converged": self.converged,
+            "units": dict(self.units),
         }
         if self.truth is not None:
             err = self.errors()

@@ -36,7 +36,16 @@ from typing import Any, Optional
 
 from .errors import UnitMismatchError, UnitWarning
 
-__all__ = ["Joined", "harmonise", "harmonise_groups", "scale_between", "units_of"]
+__all__ = [
+    "Against",
+    "Joined",
+    "against_model",
+    "harmonise",
+    "harmonise_groups",
+    "model_units",
+    "scale_between",
+    "units_of",
+]
 
 #: The quantities whose units must agree (``t`` is always seconds).
 QUANTITIES = {"u": "the input u", "y": "the output y"}
@@ -147,18 +156,22 @@ def _marks(item: Any) -> list[tuple[str, str, str]]:
     return out
 
 
-def _mismatch(q: str, ref: tuple[str, str], other: tuple[str, str]) -> UnitMismatchError:
-    (rl, ru), (ol, ou) = ref, other
+def _why(ru: str, ou: str) -> str:
+    """Why no known scale relates the units ``ru`` and ``ou``."""
     known = [parse(ru), parse(ou)]
     if all(known) and known[0] is not None and known[1] is not None:
-        why = f"{ru!r} is {_BASES[known[0][0]]}, {ou!r} {_BASES[known[1][0]]}"
-    else:
-        unknown = " and ".join(repr(u) for u, k in ((ru, known[0]), (ou, known[1])) if k is None)
-        verb = "is not a unit" if " and " not in unknown else "are not units"
-        why = (
-            f"{unknown} {verb} this library converts "
-            "(SI prefixes of m, N, s, g, Pa, V, A, W, J, Hz, rad, K; in, ft, lbf, kip, psi, deg)"
-        )
+        return f"{ru!r} is {_BASES[known[0][0]]}, {ou!r} {_BASES[known[1][0]]}"
+    unknown = " and ".join(repr(u) for u, k in ((ru, known[0]), (ou, known[1])) if k is None)
+    verb = "is not a unit" if " and " not in unknown else "are not units"
+    return (
+        f"{unknown} {verb} this library converts "
+        "(SI prefixes of m, N, s, g, Pa, V, A, W, J, Hz, rad, K; in, ft, lbf, kip, psi, deg)"
+    )
+
+
+def _mismatch(q: str, ref: tuple[str, str], other: tuple[str, str]) -> UnitMismatchError:
+    (rl, ru), (ol, ou) = ref, other
+    why = _why(ru, ou)
     return UnitMismatchError(
         f"{QUANTITIES[q]} is in {ru!r} in {rl} but in {ou!r} in {ol}, and no known scale relates them "
         f"({why}): one data set needs one unit per quantity. Correct the unit in the column name or "
@@ -298,3 +311,85 @@ def harmonise_groups(
         out.append(joined.items[at : at + len(g)])
         at += len(g)
     return out, joined
+
+
+@dataclass(frozen=True)
+class Against:
+    """A record set beside the model it meets: the factors that put its ``u`` and ``y`` in the model's
+    units (absent: 1), what was done or assumed (notes), and the units the comparison is in."""
+
+    factors: dict[str, float]
+    notes: tuple[str, ...]
+    units: dict[str, str]
+
+
+def model_units(model: Any) -> dict[str, str]:
+    """The units a fitted model states: a plant's ``units``, a fit's (``TimeDomainFit.plant``,
+    ``IdentificationResult.units``); empty when it states none (a model saved before models carried
+    units, or built in Python without them)."""
+    for holder in (model, getattr(model, "plant", None)):
+        units = getattr(holder, "units", None)
+        if isinstance(units, dict) and units:
+            return {q: str(v).strip() for q, v in units.items() if q in QUANTITIES and str(v).strip()}
+    return {}
+
+
+def against_model(model: Any, data: Any, label: str, *, warn: bool = True, stacklevel: int = 3) -> Against:
+    """A record (``data``: its units, or anything :func:`units_of` reads) checked against the units the
+    ``model`` was fitted in (:func:`model_units`, or a units mapping).
+
+    * the same unit, or the record states none for a quantity (noted: it cannot be checked): nothing done;
+    * another unit of the same quantity (``m`` for the model's ``mm``): factors to the model's unit, with a
+      :class:`~bouc_wen_id.errors.UnitWarning` naming the record and both units;
+    * the model states no units (an older saved model): the record is taken to be in the model's units,
+      noted as unchecked.
+
+    Raises
+    ------
+    UnitMismatchError
+        A unit no known scale relates to the model's (``N`` for the model's ``mm``), naming the record and
+        both units.
+    """
+    have = (
+        model_units(model)
+        if not isinstance(model, dict)
+        else {q: str(v).strip() for q, v in model.items() if q in QUANTITIES and str(v).strip()}
+    )
+    given = (
+        units_of(data)
+        if not isinstance(data, dict)
+        else {q: str(v).strip() for q, v in data.items() if q in QUANTITIES and str(v).strip()}
+    )
+    shown = ", ".join(f"{q} in {v}" for q, v in given.items())
+    if not have:
+        notes = (
+            (
+                f"the model states no units (saved before models carried them, or built without them): "
+                f"{label} ({shown}) is taken to be in the model's units, which cannot be checked",
+            )
+            if given
+            else ()
+        )
+        return Against({}, notes, dict(given))
+    factors: dict[str, float] = {}
+    notes_l: list[str] = []
+    for q, unit in have.items():
+        if q not in given:
+            notes_l.append(f"{label} states no unit for {QUANTITIES[q]}: taken to be the model's {unit}")
+            continue
+        f = scale_between(given[q], unit)
+        if f is None:
+            raise UnitMismatchError(
+                f"{label}: {QUANTITIES[q]} is in {given[q]!r} but the model was fitted in {unit!r}, and no "
+                f"known scale relates them ({_why(unit, given[q])}): its parameters hold only in "
+                f"{unit!r}. Correct the unit in the record's column name or header, convert the record to "
+                f"{unit!r}, or use a model fitted in {given[q]!r}"
+            )
+        if given[q] != unit:
+            factors[q] = f
+            notes_l.append(
+                f"converted {QUANTITIES[q]} of {label} from {given[q]} to the model's {unit} (x {f:.6g})"
+            )
+            if warn:
+                warnings.warn(notes_l[-1], UnitWarning, stacklevel=stacklevel)
+    return Against(factors, tuple(notes_l), {**given, **have})

@@ -6,7 +6,13 @@ Document (schema version 1)::
      "plant": {"linear": {"num": [...], "den": [...], "delay": s},
                "hysteresis": {"alpha": .., "beta": .., "gamma": .., "mu": .., "w0": ..},
                "terms": [{"kind": code name, <symbol>: value, ...}, ...]},
+     "units": {"u": "mm", "y": "N"},
      "metadata": {free-form strings}}
+
+``units`` (optional) are those the model was fitted in (``WienerPlant.units``): written when the plant
+states them, read back onto the plant, so that ``validate`` converts or refuses records in other units.  A
+document without them (written before models carried units) still loads, as a plant without units; validating
+it notes that the records' units cannot be checked.
 
 Numbers are written by Python's ``json`` (``repr``: the shortest decimal that reads back to the same
 double), so a model read back is the model written, bit for bit. Every term of the registry may be written,
@@ -39,10 +45,13 @@ _LINEAR = {"num", "den", "delay"}
 _HYSTERESIS = {"alpha", "beta", "gamma", "mu", "w0"}
 
 
-def model_to_json(
-    plant: WienerPlant, *, metadata: Optional[Mapping[str, str]] = None, indent: int = 2
-) -> str:
-    """``plant`` as a JSON document (module docstring); ``metadata`` free-form strings (units, provenance)."""
+def model_to_json(plant: Any, *, metadata: Optional[Mapping[str, str]] = None, indent: int = 2) -> str:
+    """``plant`` as a JSON document (module docstring); ``metadata`` free-form strings (provenance).
+
+    ``plant``: a WienerPlant, or a fit holding one (``TimeDomainFit``: its ``plant``, with the units it
+    was fitted in)."""
+    if not isinstance(plant, WienerPlant) and isinstance(getattr(plant, "plant", None), WienerPlant):
+        plant = plant.plant
     if not isinstance(plant, WienerPlant):
         raise InvalidParameterError(f"model_to_json needs a WienerPlant, got {type(plant).__name__}")
     meta = dict(metadata or {})
@@ -59,6 +68,8 @@ def model_to_json(
         },
         "metadata": meta,
     }
+    if plant.units:
+        doc["units"] = dict(plant.units)
     return json.dumps(doc, indent=indent, allow_nan=False)
 
 
@@ -136,17 +147,26 @@ def model_from_json(text: Union[str, bytes]) -> WienerPlant:
             f"model schema version {version!r} is not known to this library (it reads version "
             f"{MODEL_VERSION}); upgrade bouc_wen_id or write the model with the version it knows"
         )
-    top = _fields("the document", doc, {"format", "version", "plant"}, frozenset({"metadata"}))
+    top = _fields("the document", doc, {"format", "version", "plant"}, frozenset({"metadata", "units"}))
     meta = top.get("metadata", {})
     if not isinstance(meta, Mapping) or not all(isinstance(v, str) for v in meta.values()):
         raise FileFormatError("metadata must be a JSON object of strings")
-    return _plant(top["plant"])
+    units = top.get("units", {})
+    if (
+        not isinstance(units, Mapping)
+        or not set(units) <= {"u", "y"}
+        or not all(isinstance(v, str) for v in units.values())
+    ):
+        raise FileFormatError('units must be a JSON object of strings keyed "u" and "y", e.g. {"u": "mm"}')
+    plant = _plant(top["plant"])
+    return plant.with_units(units) if units else plant
 
 
 def save_model(
-    plant: WienerPlant, path: Union[str, os.PathLike[str]], *, metadata: Optional[Mapping[str, str]] = None
+    plant: Any, path: Union[str, os.PathLike[str]], *, metadata: Optional[Mapping[str, str]] = None
 ) -> None:
-    """Write ``plant`` to ``path`` as a model document (UTF-8 JSON)."""
+    """Write ``plant`` (a WienerPlant, or a fit holding one) to ``path`` as a model document (UTF-8 JSON),
+    with the units it was fitted in."""
     text = model_to_json(plant, metadata=metadata)
     with open(path, "w", encoding="utf-8") as fh:
         fh.write(text + "\n")

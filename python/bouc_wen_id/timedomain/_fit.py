@@ -9,7 +9,7 @@ from __future__ import annotations
 import math
 import warnings
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, Optional, Union
 
 import numpy as np
@@ -20,6 +20,7 @@ from .._text import Summarised, with_warnings
 from ..errors import ConvergenceWarning, IdentifiabilityWarning, InvalidParameterError
 from ..model import BoucWen, Recording, WienerPlant
 from ..terms import Term
+from ..units import harmonise
 from ..validation import count, nonnegative_number, positive_number, z_value
 from ._lm import LMResult, StopReason, free_covariance, levenberg_marquardt
 from ._records import RecordLike, TimeRecord, as_time_records
@@ -314,8 +315,13 @@ def fit_time_domain(
         Bad records (see :class:`TimeRecord`), a record shorter than the start model's memory, no start,
         bad options, or a fit above the step budget.
     """
+    # One unit per quantity (later records converted to the first's; unrelated units refused), and the
+    # fitted plant states them (validate converts or refuses records in others).
     recs = as_time_records(records)
-    raw = _raw_items(records)
+    joined = harmonise(_raw_items(records), stacklevel=3)
+    raw = joined.items
+    if any(a is not b for a, b in zip(raw, _raw_items(records))):
+        recs = as_time_records(raw)
     substeps = count("substeps", substeps, 1)
     max_iter = count("max_iter", max_iter, 1)
     confidence = positive_number("confidence", confidence)
@@ -338,7 +344,10 @@ def fit_time_domain(
     problem.simulate(starts[0][1], 0)
     max_delay = min(r.duration for r in recs) / 2.0
     best, tried = _search(problem, starts, max_iter, max_delay, should_stop)
-    return _result(problem, best, tried, origin, sd, confidence)
+    fit = _result(problem, best, tried, origin, sd, confidence)
+    if not joined.units:
+        return fit
+    return replace(fit, plant=fit.plant.with_units(joined.units), warnings=(*joined.notes, *fit.warnings))
 
 
 def _term_classes(terms: Sequence[Union[type[Term], Term, str]]) -> tuple[type[Term], ...]:

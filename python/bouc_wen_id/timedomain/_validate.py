@@ -13,11 +13,18 @@ Any model the library identifies is turned into something that simulates a sampl
 
 The report gives the RMSE in the units of ``y``, the NRMSE ``||y - y_sim|| / ||y - mean(y)||`` (0 a perfect
 simulation, 1 no better than the mean), the largest error, and a residual plot.
+
+A model holds only in the units it was fitted in (``WienerPlant.units``, set by the fits and kept by
+``save_model``/``load_model``).  A record in other units of the same quantities (``m``/``kN`` for a model in
+``mm``/``N``) is converted to the model's with a :class:`~bouc_wen_id.errors.UnitWarning`; one in units no
+scale relates to the model's is a :class:`~bouc_wen_id.errors.UnitMismatchError`
+(:func:`bouc_wen_id.units.against_model`); the report's notes say what was done or could not be checked.
 """
 
 from __future__ import annotations
 
 import warnings
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Optional
 
@@ -28,6 +35,7 @@ from .._backend import Backend
 from .._text import Summarised
 from ..errors import IdentifiabilityWarning, InvalidParameterError
 from ..model import BoucWen, WienerPlant
+from ..units import against_model, label_of, units_of
 from ..validation import count, nonnegative_number
 from ._records import TimeRecord, lead_in_samples
 
@@ -58,6 +66,10 @@ class ValidationReport(Summarised):
         Samples left out at the start.
     model : str
         What was simulated.
+    units : str
+        The unit of ``y`` (the model's, when it states one).
+    notes : tuple of str
+        Units converted to the model's, or that could not be checked against it.
     """
 
     t: FloatArray = field(repr=False)
@@ -70,13 +82,14 @@ class ValidationReport(Summarised):
     lead_in: int
     model: str
     units: str = ""
+    notes: tuple[str, ...] = ()
 
     def summary(self) -> str:
         u = f" {self.units}" if self.units else ""
         return (
             f"ValidationReport: {self.model} on {self.t.size} samples (lead-in {self.lead_in})\n"
             f"  RMSE = {self.rmse:.4g}{u}, NRMSE = {self.nrmse:.4g}, max |error| = {self.max_error:.4g}{u}"
-        )
+        ) + "".join(f"\n  note: {n}" for n in self.notes)
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -87,6 +100,7 @@ class ValidationReport(Summarised):
             "nrmse": self.nrmse,
             "max_error": self.max_error,
             "units": self.units,
+            "notes": list(self.notes),
         }
 
     def plot(self, axes: Optional[tuple[Axes, Axes]] = None) -> Figure:
@@ -131,7 +145,10 @@ def simulator_plant(model: object) -> tuple[WienerPlant, str]:
             warnings.simplefilter("ignore", IdentifiabilityWarning)
             tf = model.fit_transfer_function()
         label = f"identify result with G fitted by fit_transfer_function (m={tf.m}, n={tf.n})"
-        return WienerPlant(tf.transfer_function, BoucWen(model.beta, model.gamma, model.mu)), label
+        plant = WienerPlant(
+            tf.transfer_function, BoucWen(model.beta, model.gamma, model.mu), units=model.units
+        )
+        return plant, label
     raise InvalidParameterError(
         f"cannot simulate a {type(model).__name__}: give a WienerPlant, a TimeDomainFit, an "
         "IdentificationResult or an object with a simulate_record(t, u) method"
@@ -140,13 +157,15 @@ def simulator_plant(model: object) -> tuple[WienerPlant, str]:
 
 def validate(
     model: object,
-    t: ArrayLike,
-    u: ArrayLike,
-    y: ArrayLike,
+    t: Any,
+    u: Optional[ArrayLike] = None,
+    y: Optional[ArrayLike] = None,
     *,
     lead_in: Optional[float] = None,
     substeps: int = 4,
     units: str = "",
+    data_units: Optional[Mapping[str, str]] = None,
+    name: str = "",
     backend: Backend = "rust",
 ) -> ValidationReport:
     """Simulate ``model`` on the record ``(t, u, y)`` from rest at ``t[0]`` and compare with ``y``.
@@ -156,20 +175,44 @@ def validate(
     model : WienerPlant, TimeDomainFit, IdentificationResult, ...
         See the module docstring.
     t, u, y : array_like
-        A record the model was not fitted to (checked as :class:`TimeRecord`).
+        A record the model was not fitted to (checked as :class:`TimeRecord`); or ``t`` a
+        :class:`~bouc_wen_id.Measurement` or :class:`~bouc_wen_id.Recording` (``u``, ``y`` left out), whose
+        units and name are then used.
     lead_in : float, optional
         Seconds at the start left out of the figures (the record does not start from rest).
     substeps : int
         RK4 steps per sample interval.
     units : str
-        Units of ``y`` for the report.
+        Units of ``y`` of the record: the report's label, and checked against the model's y unit (when
+        ``data_units`` does not state it).
+    data_units : mapping, optional
+        Units of the record's ``u`` and ``y`` (``{"u": "m", "y": "kN"}``): converted to the model's with a
+        :class:`~bouc_wen_id.errors.UnitWarning`, refused when no scale relates them (module docstring).
+    name : str
+        The record's name in messages (default: the item's name, or "the record").
 
     Raises
     ------
+    UnitMismatchError
+        The record's units and the model's measure different things (``N`` for the model's ``mm``).
     InvalidParameterError, NonFiniteError, TimeAxisError, InsufficientDataError
         A model that cannot be simulated, or a bad record.
     """
+    if u is None and y is None and all(hasattr(t, k) for k in ("t", "u", "y")):
+        item = t
+        t, u, y = item.t, item.u, item.y
+        data_units = units_of(item) if data_units is None else data_units
+        name = name or label_of(item, 0)
+    if u is None or y is None:
+        raise InvalidParameterError("validate needs t, u and y (or a Measurement or Recording as t)")
+    given = dict(data_units or {})
+    if units and "y" not in given:
+        given["y"] = str(units)
+    against = against_model(model, given, name or "the record", stacklevel=3)
     rec = TimeRecord(t, u, y)
+    if against.factors:
+        rec = TimeRecord(rec.t, rec.u * against.factors.get("u", 1.0), rec.y * against.factors.get("y", 1.0))
+    units = against.units.get("y", str(units))
     substeps = count("substeps", substeps, 1)
     lead_s = None if lead_in is None else nonnegative_number("lead_in", lead_in)
     k = lead_in_samples(rec, lead_s)
@@ -204,4 +247,5 @@ def validate(
         lead_in=k,
         model=label,
         units=str(units),
+        notes=against.notes,
     )
