@@ -25,6 +25,8 @@ from bouc_wen_id.errors import (
     InvalidParameterError,
     NonFiniteError,
     TimeAxisError,
+    UnitMismatchError,
+    UnitWarning,
 )
 from bouc_wen_id.io import read_csv, write_csv
 from bouc_wen_id.measurement import Measurement, clipping_check
@@ -610,8 +612,13 @@ def test_data_errors_keep_their_names_and_name_the_file(tmp_path: Path) -> None:
     path.write_text("t,u,y\n" + ROWS + "0.1,1,1\n")
     with pytest.raises(TimeAxisError, match=f"{path}: t is not strictly increasing"):
         io.load(path)
+    # A time column declared in ms is converted to seconds (it was refused before: bouc_wen_id.timeunits).
     path.write_text('# units: {"t": "ms"}\nt,u,y\n' + ROWS)
-    with pytest.raises(InvalidParameterError, match="seconds"):
+    with pytest.warns(UnitWarning, match=f"{path}: read the time column in ms as seconds"):
+        (m,) = io.load(path)
+    assert m.units["t"] == "s"
+    path.write_text('# units: {"t": "mm"}\nt,u,y\n' + ROWS)
+    with pytest.raises(UnitMismatchError, match=f"{path}: the time column is in 'mm'"):
         io.load(path)
     path.write_text("# sample_rate: 0\nu,y\n1,2\n3,4\n")
     with pytest.raises(InvalidParameterError, match="sample_rate"):

@@ -1,9 +1,10 @@
 """A fitted model meets new recordings in the units it was fitted in (bouc_wen_id/units.py ``against_model``).
 
-Before, ``validate`` took the records' arrays as they were: a model fitted in mm/N simulated on a record in
-m/kN gave a confident NRMSE of a simulation 1000x off.  Now the model carries its units (``WienerPlant.units``,
-``IdentificationResult.units``, the model document's ``units``), records in other units of the same
-quantities are converted (UnitWarning, notes) and unrelated units are refused (UnitMismatchError).
+Before, ``validate`` took the records' arrays as they were: a model fitted in mm/N simulated on a record
+in m/kN gave a confident NRMSE of a simulation 1000x off.  Now the model carries its units
+(``WienerPlant.units``, ``IdentificationResult.units``, the model document's ``units``), records in other
+units of the same quantities are converted (UnitWarning, notes) and unrelated units are refused
+(UnitMismatchError).
 """
 
 from __future__ import annotations

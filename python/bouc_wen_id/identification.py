@@ -42,10 +42,9 @@ Wiley, 2007.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import warnings
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Literal, Optional
 
@@ -59,7 +58,7 @@ from .estimators import Fit, adequacy, boundary_note, fit, linear_nrmse, on_cons
 from .model import Recording
 from .prepare import Prepared, Scales, auto_harmonics, noise_variance, prepare, scale
 from .result import NOT_CONVERGED, Adequacy, ExperimentEstimate, IdentificationResult, Truth, wrap_phase
-from .units import Joined, harmonise
+from .units import harmonise
 from .validation import count, z_value
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
@@ -164,7 +163,7 @@ def identify(
         When the Levenberg-Marquardt refinement stops at ``max_iter`` before converging
         (``result.converged`` is False).
     """
-    items, (lo, hi), joined = _check_arguments(recordings, method, confidence, mu_bracket)
+    items, (lo, hi), (unit_notes, units) = _check_arguments(recordings, method, confidence, mu_bracket)
     reference, phase_grid, max_iter = _check_counts(reference, phase_grid, max_iter, harmonics)
     with selected(backend) as parts:  # the lab preprocessing of Measurements runs on the same backend
         prepared = prepare(items, parts.paper, settle_periods, periods, harmonics)
@@ -175,7 +174,7 @@ def identify(
     est = _unscale(fitted, scales)
     experiments = _experiment_estimates(prepared, fitted, est, scales)
     notes = _notes(method, est, experiments, confidence, boundary_note(fitted.stop, fitted.active))
-    notes = _warn(notes, fitted, joined.notes)
+    notes = _warn(notes, fitted, unit_notes)
     settings = {
         "settle_periods": settle_periods,
         "periods": periods,
@@ -186,10 +185,9 @@ def identify(
         "max_iter": max_iter,
         "scales": {"y": scales.y, "u": scales.u},
     }
-    result = _result(
-        method, backend, reference, prepared, fitted, est, experiments, settings, notes, confidence
+    return _result(
+        method, backend, reference, prepared, fitted, est, experiments, settings, notes, confidence, units
     )
-    return dataclasses.replace(result, units=dict(joined.units)) if joined.units else result
 
 
 def _warn(notes: Sequence[str], fitted: Fit, unit_notes: Sequence[str]) -> list[str]:
@@ -213,6 +211,7 @@ def _result(
     settings: dict[str, Any],
     notes: Sequence[str],
     confidence: float,
+    units: Mapping[str, str],
 ) -> IdentificationResult:
     """The result object of :func:`identify` from its pieces."""
     return IdentificationResult(
@@ -233,12 +232,13 @@ def _result(
         warnings=tuple(notes),
         confidence=confidence,
         converged=fitted.converged,
+        units=dict(units),
     )
 
 
 def _check_arguments(
     recordings: Any, method: str, confidence: float, mu_bracket: tuple[float, float]
-) -> tuple[list[Any], tuple[float, float], Joined]:
+) -> tuple[list[Any], tuple[float, float], tuple[tuple[str, ...], dict[str, str]]]:
     """The experiments as a list in one unit per quantity (:mod:`bouc_wen_id.units`: later ones converted
     to the first's, with their notes), and the mu bracket; refuses a bad method, confidence or bracket."""
     if method not in ("paper", "profile", "refined"):
@@ -257,7 +257,7 @@ def _check_arguments(
     if not 1.0 <= lo < hi:
         raise InvalidParameterError(f"mu_bracket = {mu_bracket} must satisfy 1 <= lo < hi (mu > 1)")
     joined = harmonise(items, stacklevel=4)  # warns at identify's caller
-    return joined.items, (lo, hi), joined
+    return joined.items, (lo, hi), (joined.notes, joined.units)
 
 
 def _check_counts(reference: Any, phase_grid: Any, max_iter: Any, harmonics: Any) -> tuple[int, int, int]:

@@ -482,7 +482,7 @@ class Recording:
         p = self.period / self.dt
         pr = round(p)
         if pr < 1 or abs(p - pr) > GRID_RTOL * p:
-            from .timeunits import hint
+            from ._timehint import hint
 
             raise hint(
                 FrequencyMismatchError(

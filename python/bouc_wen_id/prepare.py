@@ -26,6 +26,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ._backend import Paper
+from ._timehint import hint
 from .errors import (
     FrequencyMismatchError,
     InsufficientDataError,
@@ -34,7 +35,6 @@ from .errors import (
     ZeroAmplitudeError,
 )
 from .model import Recording, WienerPlant
-from .timeunits import hint
 from .validation import HARMONIC_SNR
 
 if TYPE_CHECKING:  # pragma: no cover - typing only

@@ -20,63 +20,25 @@ a plant 1000x slower is then as plausible as the data, and the file is read as s
 
 from __future__ import annotations
 
-import math
 import warnings
 from collections.abc import Mapping
-from typing import Any, Optional
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from .errors import TimeUnitError, UnitMismatchError, UnitWarning
-from .units import MARK, parse
+from ._timehint import hint, suspect, time_error
+from .errors import UnitMismatchError, UnitWarning
+from .units import MARK, time_scale
 
-__all__ = ["SUSPECTS", "TIME_RTOL", "check_frequency", "check_rate", "declared", "suspect", "time_scale"]
-
-#: Relative tolerance on the factor between what a time axis says and what is stated beside it.
-TIME_RTOL = 0.03
-#: The units an undeclared time column is suspected of, with their factor to seconds.
-SUSPECTS = (("ms", 1e-3), ("us", 1e-6))
-
-
-def time_scale(unit: str) -> Optional[float]:
-    """Seconds per ``unit`` (``"ms"`` -> 1e-3, ``"min"`` -> 60); None when ``unit`` is not a time."""
-    text = unit.strip()
-    if text in ("min", "minute", "minutes"):
-        return 60.0
-    if text in ("h", "hour", "hours"):
-        return 3600.0
-    if text in ("seconds", "second", "secs"):
-        return 1.0
-    found = parse(text)
-    return found[1] if found is not None and found[0] == "s" else None
-
-
-def suspect(ratio: float) -> Optional[tuple[str, float]]:
-    """``("ms", 1e-3)`` when ``ratio`` (what is stated / what a time axis read as seconds gives) is 1000 to
-    :data:`TIME_RTOL` (``("us", 1e-6)`` for 10^6); None otherwise."""
-    if not (math.isfinite(ratio) and ratio > 0.0):
-        return None
-    for unit, factor in SUSPECTS:
-        if abs(ratio * factor - 1.0) <= TIME_RTOL:
-            return unit, factor
-    return None
-
-
-def _error(where: str, unit: str, factor: float, what: str) -> TimeUnitError:
-    at = f"{where}: " if where else ""
-    return TimeUnitError(
-        f"{at}the time looks like {unit}, not seconds: {what}, {1.0 / factor:.0f}x apart. The library reads "
-        f"time in seconds: divide the time column by {1.0 / factor:.0f}, or name its unit in the column name "
-        f"('t [{unit}]', 'time_{unit}') and it is converted"
-    )
+__all__ = ["check_frequency", "check_rate", "declared", "hint", "time_scale"]
 
 
 def check_rate(where: str, rate: float, dt: float) -> None:
     """Raise :class:`TimeUnitError` when a t column's step ``dt`` is 1000x (10^6x) the stated rate's."""
     found = suspect(rate * dt)
     if found is not None:
-        raise _error(
+        raise time_error(
             where,
             *found,
             f"the t column steps by {dt:.6g} per sample, the stated sample rate {rate:.6g} Hz needs "
@@ -89,33 +51,12 @@ def check_frequency(where: str, stated: float, found: float, what: str = "the st
     data on its time axis read as seconds."""
     hit = suspect(stated / found) if found > 0.0 else None
     if hit is not None:
-        raise _error(
+        raise time_error(
             where,
             *hit,
             f"{what} is {stated:.6g} rad/s, the input repeats at {found:.6g} rad/s on the t column read "
             "as seconds",
         )
-
-
-def data_frequency(t: NDArray[np.float64], u: NDArray[np.float64]) -> float:
-    """The frequency (rad/s) of the input's largest spectral peak on the time axis ``t`` (NaN when none)."""
-    from .signal._sine import dft_peak
-
-    try:
-        return dft_peak(np.asarray(u, dtype=np.float64), float((t[-1] - t[0]) / (t.size - 1)), None)
-    except (ValueError, ZeroDivisionError, IndexError):
-        return math.nan
-
-
-def hint(err: BaseException, t: Any, u: Any, stated: float) -> BaseException:
-    """``err`` (a mismatch of a stated omega and the data) as a :class:`TimeUnitError` when the input
-    repeats 1000x (10^6x) slower than ``stated`` on ``t``; ``err`` itself otherwise."""
-    try:
-        tt, uu = np.asarray(t, dtype=np.float64), np.asarray(u, dtype=np.float64)
-        check_frequency("", float(stated), data_frequency(tt, uu))
-    except TimeUnitError as better:
-        return TimeUnitError(f"{better} (before: {err})")
-    return err
 
 
 def declared(
@@ -149,16 +90,3 @@ def declared(
         stacklevel=2,
     )
     return np.asarray(t, dtype=np.float64) * factor, out
-
-
-def note_of(item: Any, label: str) -> Optional[str]:
-    """The note of a time axis converted on reading (``"t: ms -> s"`` in the metadata), or None."""
-    meta = getattr(item, "metadata", {})
-    text = meta.get(MARK, "") if isinstance(meta, Mapping) else ""
-    for part in str(text).split(";"):
-        q, _, rest = part.partition(":")
-        src, _, dst = rest.partition("->")
-        if q.strip() == "t" and src.strip():
-            scale = time_scale(src.strip())
-            return f"read the time column of {label} in {src.strip()} as seconds (x {scale:g})"
-    return None

@@ -30,7 +30,7 @@ from __future__ import annotations
 import json
 import math
 import warnings
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, Optional
 
@@ -105,6 +105,19 @@ def parse(unit: str) -> Optional[tuple[str, float]]:
         if text.endswith(base) and text[: len(text) - len(base)] in _PREFIXES:
             return base, _PREFIXES[text[: len(text) - len(base)]]
     return None
+
+
+def time_scale(unit: str) -> Optional[float]:
+    """Seconds per ``unit`` (``"ms"`` -> 1e-3, ``"min"`` -> 60); None when ``unit`` is not a time."""
+    text = unit.strip()
+    if text in ("min", "minute", "minutes"):
+        return 60.0
+    if text in ("h", "hour", "hours"):
+        return 3600.0
+    if text in ("seconds", "second", "secs"):
+        return 1.0
+    found = parse(text)
+    return found[1] if found is not None and found[0] == "s" else None
 
 
 def scale_between(src: str, dst: str) -> Optional[float]:
@@ -280,8 +293,6 @@ def harmonise(
         )
         if warn and (q, src, dst) in fresh:
             warnings.warn(notes[-1], UnitWarning, stacklevel=stacklevel)
-    from .timeunits import note_of
-
     notes += [n for n in (note_of(x, labs[i]) for i, x in enumerate(items)) if n]
     for (q, unit, src), who in assumed.items():
         notes.append(
@@ -393,3 +404,16 @@ def against_model(model: Any, data: Any, label: str, *, warn: bool = True, stack
             if warn:
                 warnings.warn(notes_l[-1], UnitWarning, stacklevel=stacklevel)
     return Against(factors, tuple(notes_l), {**given, **have})
+
+
+def note_of(item: Any, label: str) -> Optional[str]:
+    """The note of a time axis converted on reading (``"t: ms -> s"`` in the metadata), or None."""
+    meta = getattr(item, "metadata", {})
+    text = meta.get(MARK, "") if isinstance(meta, Mapping) else ""
+    for part in str(text).split(";"):
+        q, _, rest = part.partition(":")
+        src, _, dst = rest.partition("->")
+        if q.strip() == "t" and src.strip():
+            scale = time_scale(src.strip())
+            return f"read the time column of {label} in {src.strip()} as seconds (x {scale:g})"
+    return None

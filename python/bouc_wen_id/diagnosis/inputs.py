@@ -57,7 +57,7 @@ def _check_periodic(rec: Any, start: int, n: int, p: int) -> None:
     spread = float(np.sum((rows - rows.mean()) ** 2))
     misfit = math.sqrt(float(np.sum((rows - rows.mean(axis=0)) ** 2)) / spread) if spread > 0 else math.inf
     if misfit > INPUT_MISFIT_MAX:
-        from ..timeunits import hint
+        from .._timehint import hint
 
         raise hint(
             FrequencyMismatchError(
