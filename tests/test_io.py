@@ -616,7 +616,7 @@ def test_data_errors_keep_their_names_and_name_the_file(tmp_path: Path) -> None:
     path.write_text('# units: {"t": "ms"}\nt,u,y\n' + ROWS)
     with pytest.warns(UnitWarning, match=f"{path}: read the time column in ms as seconds"):
         (m,) = io.load(path)
-    assert m.units["t"] == "s"
+    assert isinstance(m, Measurement) and m.units["t"] == "s"
     path.write_text('# units: {"t": "mm"}\nt,u,y\n' + ROWS)
     with pytest.raises(UnitMismatchError, match=f"{path}: the time column is in 'mm'"):
         io.load(path)

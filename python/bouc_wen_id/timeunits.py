@@ -71,7 +71,9 @@ def declared(
         The t column's unit is not a time (``t [mm]``).
     """
     units = head.get("units")
-    unit = units.get("t") if isinstance(units, Mapping) else None
+    if not isinstance(units, Mapping):
+        return t, dict(head)
+    unit = units.get("t")
     if not isinstance(unit, str) or unit.strip() in ("", "s"):
         return t, dict(head)
     factor = time_scale(unit)
@@ -81,6 +83,8 @@ def declared(
             "min, h): rename the column's unit or choose another time column with columns={'t': ...}"
         )
     new_units = {**units, "t": "s"}
+    if factor == 1.0:  # "sec", "seconds": seconds by another name
+        return t, {**head, "units": new_units}
     mark = f"t: {unit.strip()} -> s"
     old = head.get(MARK)
     out = {**head, "units": new_units, MARK: f"{old}; {mark}" if isinstance(old, str) and old else mark}
