@@ -170,3 +170,11 @@ def test_cli_validate_converts_refuses_and_notes(tmp_path: Path, capsys: pytest.
     old.write_text(json.dumps(doc))
     assert main(["validate", "--model", str(old), str(same)]) == 0
     assert "note: the model states no units" in capsys.readouterr().out
+
+
+def test_the_exported_c_names_the_units_and_cannot_be_broken_by_them() -> None:
+    code = bw.to_c(_PLANT)
+    assert "Units: u in mm, y in N" in code
+    odd = _PLANT.with_units({"u": "mm */ int x; /*", "y": "N"})
+    code = bw.to_c(odd)
+    assert "Units: y in N" in code and "int x;" not in code

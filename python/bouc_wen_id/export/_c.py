@@ -33,6 +33,13 @@ def _array(values: list[float]) -> str:
     return ", ".join(_num(v) for v in [*values, 0.0])
 
 
+def _units_line(plant: WienerPlant) -> str:
+    """The units the model holds in, for the header comment (a unit that could end the comment is left out:
+    units come from file headers)."""
+    units = [f"{q} in {v}" for q, v in plant.units.items() if re.fullmatch(r"[\w\u00b5 ./^-]{1,20}", v)]
+    return f"\n * Units: {', '.join(units)} (the model holds only in them)." if units else ""
+
+
 def to_c(plant: WienerPlant, name: str = "bouc_wen_model") -> str:
     """The C99 source of ``plant`` (plain or with any terms ``simulate_input`` simulates, on u, inside the
     hysteresis, on x or on the output).
@@ -70,6 +77,7 @@ def to_c(plant: WienerPlant, name: str = "bouc_wen_model") -> str:
         f"G(s) = exp(-{lin.delay!r} s) {lin.num.tolist()} / {lin.den.tolist()}; "
         f"Bouc-Wen alpha = {h.alpha!r}, beta = {h.beta!r}, gamma = {h.gamma!r}, mu = {h.mu!r}, w0 = {h.w0!r}."
         + (f"\n * Terms: {model}" if model else " No terms.")
+        + _units_line(plant)
     )
     return TEMPLATE.substitute(
         P=name,
