@@ -146,7 +146,9 @@ def simulator_plant(model: object) -> tuple[WienerPlant, str]:
             tf = model.fit_transfer_function()
         label = f"identify result with G fitted by fit_transfer_function (m={tf.m}, n={tf.n})"
         plant = WienerPlant(
-            tf.transfer_function, BoucWen(model.beta, model.gamma, model.mu), units=model.units
+            tf.transfer_function,
+            BoucWen(model.beta, model.gamma, model.mu),
+            units=getattr(model, "units", {}),
         )
         return plant, label
     raise InvalidParameterError(
