@@ -130,3 +130,16 @@ def test_cli_identify_names_a_time_column_in_ms(tmp_path: Path, capsys: pytest.C
         code = main(["identify", str(declared), "--out", str(tmp_path / "out2")])
     assert code == 0, capsys.readouterr().err
     assert "read the time column in ms as seconds" in capsys.readouterr().err
+
+
+def test_a_frame_s_time_column_declared_in_ms_is_converted() -> None:
+    pd = pytest.importorskip("pandas")
+    r = _recordings(9)[0]
+    frame = pd.DataFrame({"time_ms": r.t * 1e3, "disp": r.u, "force": r.y})
+    with pytest.warns(UnitWarning, match="'time_ms' in ms as seconds"):
+        m = bw.Measurement.from_dataframe(frame, input="disp", output="force", time="time_ms")
+    np.testing.assert_allclose(m.t, r.t, rtol=1e-12, atol=1e-15)
+    indexed = frame.set_index("time_ms").rename_axis("t [ms]")
+    with pytest.warns(UnitWarning):
+        m2 = bw.Measurement.from_dataframe(indexed, input="disp", output="force")
+    np.testing.assert_allclose(m2.t, r.t, rtol=1e-12, atol=1e-15)

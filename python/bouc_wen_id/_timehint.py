@@ -6,6 +6,7 @@ the error (numpy and :mod:`.errors` only)."""
 from __future__ import annotations
 
 import math
+import re
 from typing import Any, Optional
 
 import numpy as np
@@ -20,6 +21,45 @@ TIME_RTOL = 0.03
 SUSPECTS = (("ms", 1e-3), ("us", 1e-6))
 #: Largest relative misfit of the input and itself one stated period later for "it repeats there".
 REPEAT_MAX = 0.1
+
+
+#: Units of time (as written) and seconds per unit.
+TIME_UNITS = {
+    "s": 1.0,
+    "sec": 1.0,
+    "secs": 1.0,
+    "second": 1.0,
+    "seconds": 1.0,
+    "ms": 1e-3,
+    "msec": 1e-3,
+    "us": 1e-6,
+    "\u00b5s": 1e-6,
+    "\u03bcs": 1e-6,
+    "ns": 1e-9,
+    "ks": 1e3,
+    "min": 60.0,
+    "minute": 60.0,
+    "minutes": 60.0,
+    "h": 3600.0,
+    "hour": 3600.0,
+    "hours": 3600.0,
+}
+_LABEL = re.compile(
+    r"^\s*(t|time)\s*(?:[\(\[]\s*([^\)\]]+?)\s*[\)\]]|_([A-Za-z\u00b5\u03bc]+))\s*$", re.IGNORECASE
+)
+
+
+def time_scale(unit: str) -> Optional[float]:
+    """Seconds per ``unit`` (``"ms"`` -> 1e-3, ``"min"`` -> 60); None when ``unit`` is not a time."""
+    return TIME_UNITS.get(unit.strip())
+
+
+def label_unit(label: object) -> Optional[str]:
+    """The unit of time a column label declares (``"t [ms]"``, ``"Time (us)"``, ``"time_ms"`` -> ``"ms"``),
+    or None."""
+    m = _LABEL.match(label) if isinstance(label, str) else None
+    unit = (m.group(2) or m.group(3)) if m else None
+    return unit if unit is not None and time_scale(unit) is not None else None
 
 
 def suspect(ratio: float) -> Optional[tuple[str, float]]:

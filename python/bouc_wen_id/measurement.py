@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import json
 import math
+import warnings
 from collections.abc import Hashable, Mapping
 from dataclasses import dataclass
 from typing import Any, Optional
@@ -27,6 +28,7 @@ from .errors import (
     ClippingError,
     InvalidParameterError,
     NonFiniteError,
+    UnitWarning,
 )
 from .model import Recording, _refreeze
 from .validation import check_time_axis
@@ -540,7 +542,7 @@ def _frame_time_axis(
         t = _frame_times(pd, _frame_series(df, time, "t"), f"t (column {time!r})")
         if sample_rate is not None:
             raise InvalidParameterError("give time= or sample_rate=, not both")
-        return t
+        return _declared_seconds(t, time)
     if _row_numbers(pd, df.index) or sample_rate is not None:
         if sample_rate is None:
             raise InvalidParameterError(
@@ -556,7 +558,22 @@ def _frame_time_axis(
         return np.arange(len(df)) / check_sample_rate(sample_rate)
     if isinstance(df.index, pd.MultiIndex):
         raise InvalidParameterError("a MultiIndex is not a time axis: pass time=<column>")
-    return _frame_times(pd, df.index.to_series(), "t (the index)")
+    return _declared_seconds(_frame_times(pd, df.index.to_series(), "t (the index)"), df.index.name)
+
+
+def _declared_seconds(t: FloatArray, label: object) -> FloatArray:
+    """``t`` in seconds when its column's label declares another unit of time (``"t [ms]"``, ``"time_ms"``),
+    with a :class:`UnitWarning`; as it is otherwise."""
+    from ._timehint import label_unit, time_scale
+
+    unit = label_unit(label)
+    factor = time_scale(unit) if unit is not None else None
+    if unit is None or factor is None or factor == 1.0:
+        return t
+    warnings.warn(
+        f"read the time column {label!r} in {unit} as seconds (x {factor:g})", UnitWarning, stacklevel=4
+    )
+    return t * factor
 
 
 def _frame_units(df: Any, input: Hashable, output: Hashable) -> dict[str, str]:

@@ -27,9 +27,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ._timehint import hint, suspect, time_error
+from ._timehint import hint, suspect, time_error, time_scale
 from .errors import UnitMismatchError, UnitWarning
-from .units import MARK, time_scale
+from .units import MARK
 
 __all__ = ["check_frequency", "check_rate", "declared", "hint", "time_scale"]
 

@@ -34,6 +34,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, Optional
 
+from ._timehint import time_scale
 from .errors import UnitMismatchError, UnitWarning
 
 __all__ = [
@@ -105,19 +106,6 @@ def parse(unit: str) -> Optional[tuple[str, float]]:
         if text.endswith(base) and text[: len(text) - len(base)] in _PREFIXES:
             return base, _PREFIXES[text[: len(text) - len(base)]]
     return None
-
-
-def time_scale(unit: str) -> Optional[float]:
-    """Seconds per ``unit`` (``"ms"`` -> 1e-3, ``"min"`` -> 60); None when ``unit`` is not a time."""
-    text = unit.strip()
-    if text in ("min", "minute", "minutes"):
-        return 60.0
-    if text in ("h", "hour", "hours"):
-        return 3600.0
-    if text in ("seconds", "second", "secs"):
-        return 1.0
-    found = parse(text)
-    return found[1] if found is not None and found[0] == "s" else None
 
 
 def scale_between(src: str, dst: str) -> Optional[float]:

@@ -18,9 +18,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Optional, Union
 
+from .._timehint import time_scale
 from ..errors import FileFormatError, InvalidParameterError
 from ..measurement import RESERVED_KEYS, check_metadata_key
-from ..units import time_scale
 from ._header import _RESERVED
 
 #: Preamble keys (lower case, single spaces) stating the sampling rate in Hz ...
