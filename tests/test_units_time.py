@@ -96,6 +96,8 @@ def test_a_recording_in_ms_is_named_not_a_generic_mismatch() -> None:
     with pytest.raises(TimeUnitError, match="looks like ms") as err:
         bw.identify([bad])
     assert isinstance(err.value, FrequencyMismatchError)  # what callers caught before still catches it
+    with pytest.raises(TimeUnitError, match="looks like ms"):
+        bw.diagnose([bad])
     hz = bw.Recording(r.t, r.u, r.y, r.amplitude, r.frequency / TWO_PI, r.settle_periods)
     with pytest.raises(FrequencyMismatchError) as other:  # omega in Hz: not a time unit
         bw.identify([hz])
