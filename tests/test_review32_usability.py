@@ -124,8 +124,10 @@ def test_a_unit_written_as_the_names_last_part_is_read(tmp_path: Path) -> None:
     (m,) = bw.io.load(path, columns={"t": "time_s", "u": "disp_raw", "y": "force_2"})
     assert isinstance(m, bw.Measurement)
     assert "u" not in m.units and "y" not in m.units
-    # A time column in ms is refused by name, as "Time (ms)" is.
+    # A time column in ms is read as ms, as "Time (ms)" is: converted to seconds, with a UnitWarning (it was
+    # refused before session 34; bouc_wen_id.timeunits).
     ms = "".join(f"{2 * i},{math.cos(i / 5)!r},{math.sin(i / 5)!r}\n" for i in k.tolist())
     path.write_text("time_ms,disp_mm,force_N\n" + ms, encoding="utf-8")
-    with pytest.raises(InvalidParameterError, match="units\\['t'\\] = 'ms'"):
-        bw.io.load(path, columns={"t": "time_ms", "u": "disp_mm", "y": "force_N"})
+    with pytest.warns(bw.errors.UnitWarning, match="time column in ms as seconds"):
+        (m,) = bw.io.load(path, columns={"t": "time_ms", "u": "disp_mm", "y": "force_N"})
+    assert isinstance(m, bw.Measurement) and np.allclose(m.t, 0.002 * k) and m.units["t"] == "s"
