@@ -4,10 +4,10 @@ Every time axis of the library is in seconds.  A lab file's time column is often
 seconds, every frequency comes out 1000x too low and the fit is confidently wrong.  So
 
 * a time column whose name **declares** its unit (``t [ms]``, ``Time (us)``, ``time_ms``: :mod:`.io`) is
-  converted to seconds when the unit is a time (``ms``, ``us``, ``ns``, ``min``... any SI prefix of ``s``),
+  converted to seconds when the unit is a time (``ms``, ``us``, ``ns``, ``min``, ``h``: ``TIME_UNITS``),
   with a :class:`~bouc_wen_id.errors.UnitWarning`; the experiment's metadata records it
-  (``units_converted: "t: ms -> s"``) and the notes of ``identify``/``diagnose`` repeat it.  A unit that is
-  not a time (``t [mm]``) is a :class:`~bouc_wen_id.errors.UnitMismatchError`;
+  (``units_converted: "t: ms -> s"``) and the notes of ``identify``/``diagnose`` repeat it.  A time column
+  in a unit that is not a time (``Time (mm)``) is a :class:`~bouc_wen_id.errors.UnitMismatchError`;
 * an **undeclared** time column whose step disagrees with what the file or the user states by a factor of
   1000 (or 10^6) is a :class:`~bouc_wen_id.errors.TimeUnitError` saying "the time looks like ms (us)", not
   a generic mismatch and never a fit: a stated sample rate (``# sample_rate:``, a DAQ's ``Sampling Rate``)
