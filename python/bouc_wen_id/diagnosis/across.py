@@ -54,6 +54,7 @@ from ..units import harmonise_groups
 from ..validation import real_number
 from . import (
     across_pairs,
+    across_revisit,
     across_rules,
     across_settling,
     across_stable,
@@ -203,6 +204,8 @@ class JointStep:
     pair: tuple[str, ...] = ()
     members: tuple[JointTrial, ...] = ()
     pairs: tuple[Any, ...] = ()
+    #: The model the step started from at every condition (an across_pairs.JointFit: the revisits' base).
+    base: Any = field(default=None, repr=False, compare=False)
 
     def to_dict(self) -> dict[str, Any]:
         out: dict[str, Any] = {
@@ -615,7 +618,7 @@ def _select(
         for g, f in zip(groups, chosen.fits):
             assert f is not None
             g.current = f
-    return steps
+    return across_revisit.after(groups, steps, alpha, held, JointTrial)  # diagnose's revisits, across
 
 
 # ------------------------------------------------------------------------------------------------------
@@ -964,7 +967,6 @@ def _finished(
     verdict += across_verdict.clauses(status, named, partial, steps, prepared, alpha)
     if status != "adequate":  # loop centres that differ in sign (fit_notes.centre_clause), as diagnose says
         verdict += fit_notes.centre_text(prepared)
-    verdict += across_pairs.revisit_clause(prepared, steps, across_verdict.final_adequate(prepared, alpha))
     return AcrossDiagnosis(
         verdict + clause,
         tuple(named),

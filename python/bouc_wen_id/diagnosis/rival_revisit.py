@@ -45,7 +45,7 @@ from . import pairs
 from .gate import targeted_level
 from .revisit import Revisit, _base, settle
 from .revisit import after as lead_after
-from .select import ALPHA, FoldCache, Step, forward_select, memo_fit_with
+from .select import ALPHA, FoldCache, Step, forward_select
 
 #: Whether this revisit runs (module docstring).
 ENABLED = True
@@ -96,8 +96,9 @@ def revisit(
     later = tuple(str(s.chosen) for s in steps[j + 1 :] if s.chosen is not None and not s.pair)
     later += tuple(t for s in steps[j + 1 :] for t in s.pair)
     level = targeted_level(alpha, st.after_named) if st.targeted else alpha
+    rules = pairs._rules(exps, substeps, cache)  # one set of experiments, or several (across_revisit.py)
     choice, tried = pairs.pair_step(
-        exps, base, order, [*order, *rest], [], memo_fit_with(exps, substeps), substeps, level,
+        rules, base, order, [*order, *rest], [], rules.fitter(), substeps, level,
         len(st.trials), use_held_out, cache, len(order), 0.0,
     )  # fmt: skip
     pool = tuple(t.term for t in (*order, *rest))
