@@ -22,7 +22,8 @@ a candidate term is added to EVERY condition at once, its value free per conditi
   step at ``alpha / 2`` when every condition's plain model passes the gate, the targeted step, and none
   where the gate passes on a noise floor that is not measured noise: :func:`.gate.plain_gate`, diagnose's);
   experiments whose loop has not settled are left out per condition, as diagnose leaves them out
-  (across_settling.py), and the verdict's clauses are diagnose's (across_verdict.py).
+  (across_settling.py), and the verdict's clauses are diagnose's (across_verdict.py); its pair step and its
+  two revisits of a named single term run on the joint steps (across_pairs.py, across_revisit.py).
 
 Per condition the result reports each term's value with its standard error (inflated by the final fit's
 ``sqrt(chi2/dof)`` when above 1: a misfit elsewhere makes the noise-based one too small), whether the term

@@ -158,7 +158,8 @@ def step(groups: Sequence[Any], st: Any, n_cands: int, alpha: float, use_held_ou
     """The joint step ``st`` (across.JointStep) with the pair step's set where ``st`` named nothing while
     some candidate's law failed and it was not the targeted first step (module docstring): the set named
     (``pair``, its members' joint trials in ``members``, its rivals as alternatives), or the sets tried and
-    why they were refused (``pairs``); ``like``: the joint trial's class."""
+    why they were refused (``pairs``); ``like``: the joint trial's class. The step keeps the model it started
+    from (``base``: the revisits', across_revisit.py)."""
     st = replace(st, base=JointFit(tuple(g.current for g in groups)))  # the step's model (the revisits')
     if not pairs.ENABLED or st.chosen is not None or not st.law_failed or st.targeted:
         return st
