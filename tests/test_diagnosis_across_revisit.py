@@ -138,8 +138,8 @@ def test_a_single_whose_later_lead_fails_its_law_is_revisited_across(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
     """diagnose's revisit (revisit.py) on the joint steps: S named at step 1 (its model not adequate), B
-    beside it removes most of what is left but fails its law at step 2; A with B hold their laws jointly and pass
-    adequacy: named in S's place (on main: S named, "explained in part", B law-failed)."""
+    beside it removes most of what is left but fails its law at step 2; A with B hold their laws jointly and
+    pass adequacy: named in S's place (on main: S named, "explained in part", B law-failed)."""
     groups, steps = _select(monkeypatch, (frozenset({A, B}),), LEAD, 420.0, 1e-6)
     assert len(steps) == 1 and set(steps[0].pair) == {A, B}, [(s.chosen, s.law_failed) for s in steps]
     assert all(set(g.current.params.terms) == {A, B} for g in groups)
