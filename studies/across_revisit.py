@@ -7,7 +7,8 @@ level's forward selection and fixed there by the rival revisit), at two or three
 - ``--generator SEEDS``: benches/generator.py's plants (its exact G, its RK4 hysteresis; the two effects
   composed from its own pieces: the plain loop plus its inertia on x, seen through its exact lag), each
   effect sized ``--size`` averaged-noise sd alone; one plant per seed, its conditions ``--noise`` draws of
-  the noise (the same plant recorded again);
+  the noise (the same plant recorded again); ``--shape two_pole``: review 33's G and band (20 / (s^2 + 12 s
+  + 20), no delay, 1-7 rad/s) with the generator's loop and levels;
 - ``--review DIR --case CASE``: review 33's simulator (``DIR``: a copy of /work/review33's sim.py and
   run_case.py), the case at ``--noise`` draws.
 
@@ -26,6 +27,7 @@ import json
 import sys
 import time
 import warnings
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -42,7 +44,16 @@ def generator_groups(
     sys.path.insert(0, str(REPO / "benches"))
     import generator as G
 
-    p = G.make_plant(seed, shape=shape or None)
+    if shape == "two_pole":  # review 33's G (poles at 2 and 10 rad/s, no delay) and band, the seed's loop
+        q = G.make_plant(seed, shape="first")
+        num, den = np.array([20.0]), np.array([1.0, 12.0, 20.0])
+        om = np.repeat(np.array([1.0, 2.0, 3.5, 5.0, 7.0]), len(G.X_LEVELS))
+        lev = np.tile(np.asarray(G.X_LEVELS), 5)
+        g = np.abs(np.polyval(num, 1j * om) / np.polyval(den, 1j * om))
+        p = replace(q, shape=shape, num=num, den=den, delay=0.0, omegas=om, amplitudes=lev / g, levels=lev)
+        p = replace(p, w0=np.zeros(om.size))
+    else:
+        p = G.make_plant(seed, shape=shape or None)
     b = G.base(p)
     m, got_m = G.calibrate(p, "inertia", "x", size)
     tau, got_t = G.calibrate(p, "sensor_lag", "", size)
@@ -115,7 +126,7 @@ def nulls(seeds: list[int], noise: list[int]) -> None:
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--generator", default="", help="plant seeds of benches/generator.py")
-    ap.add_argument("--shape", default="", help="G's shape (first, resonant, flat; default: the seed's)")
+    ap.add_argument("--shape", default="", help="G: first, resonant, flat (default: the seed's), two_pole")
     ap.add_argument("--size", type=float, default=30.0)
     ap.add_argument("--review", type=Path, default=None, help="a copy of review 33's sim.py, run_case.py")
     ap.add_argument("--case", default="mx_lag_30")

@@ -27,6 +27,10 @@ set found so is
 Physics outside the library is left alone by construction: the revisit needs a named term (an
 "unexplained" verdict has none) and a set whose laws all hold and whose model passes adequacy before it
 changes a name.
+
+The experiments are read through :class:`.pairs.Rules` (held-out costs, separating experiment, the one-term
+fit): :func:`.across.diagnose_across` runs the same functions on its joint steps with the conditions' rules
+(:mod:`.across_revisit`).
 """
 
 from __future__ import annotations

@@ -23,7 +23,8 @@ first, each paired with every other candidate of step ``j`` (never the named ter
 - otherwise **reported as an alternative** (:func:`.revisit.text`), with the experiment that would separate
   them: the verdict then says the named term is not the only tenable reading.
 
-Where no set holds its laws the named term stays, with its rival said as before.
+Where no set holds its laws the named term stays, with its rival said as before. The joint selection across
+conditions runs it too, on its joint steps (:mod:`.across_revisit`).
 
 Measured (review 33's simulator, ``/tmp/sm33/dbg.py``-style runs of ``/work/review33/run_case.py``'s cases):
 mx_lag_30 now names inertia on x m = 0.01093 +- 0.00068 (true 0.01137) with the lag tau = 0.0609 +- 0.0069
