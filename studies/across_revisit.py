@@ -8,7 +8,7 @@ level's forward selection and fixed there by the rival revisit), at two or three
   composed from its own pieces: the plain loop plus its inertia on x, seen through its exact lag), each
   effect sized ``--size`` averaged-noise sd alone; one plant per seed, its conditions ``--noise`` draws of
   the noise (the same plant recorded again); ``--shape two_pole``: review 33's G and band (20 / (s^2 + 12 s
-  + 20), no delay, 1-7 rad/s) with the generator's loop and levels;
+  + 20), no delay, 1-7 rad/s) with the generator's loop and levels (``--one-level``: its higher one only);
 - ``--review DIR --case CASE``: review 33's simulator (``DIR``: a copy of /work/review33's sim.py and
   run_case.py), the case at ``--noise`` draws.
 
@@ -37,7 +37,7 @@ REPO = Path(__file__).resolve().parents[1]
 
 
 def generator_groups(
-    seed: int, noise: list[int], size: float, shape: str
+    seed: int, noise: list[int], size: float, shape: str, one_level: bool = False
 ) -> tuple[list[Any], dict[str, Any]]:
     """One generator plant with inertia on x and a sensor lag, each ``size`` averaged-noise sd alone, recorded
     at each noise seed of ``noise``."""
@@ -47,8 +47,9 @@ def generator_groups(
     if shape == "two_pole":  # review 33's G (poles at 2 and 10 rad/s, no delay) and band, the seed's loop
         q = G.make_plant(seed, shape="first")
         num, den = np.array([20.0]), np.array([1.0, 12.0, 20.0])
-        om = np.repeat(np.array([1.0, 2.0, 3.5, 5.0, 7.0]), len(G.X_LEVELS))
-        lev = np.tile(np.asarray(G.X_LEVELS), 5)
+        levels = G.X_LEVELS if not one_level else G.X_LEVELS[-1:]  # one: review 33's single amplitude
+        om = np.repeat(np.array([1.0, 2.0, 3.5, 5.0, 7.0]), len(levels))
+        lev = np.tile(np.asarray(levels), 5)
         g = np.abs(np.polyval(num, 1j * om) / np.polyval(den, 1j * om))
         p = replace(q, shape=shape, num=num, den=den, delay=0.0, omegas=om, amplitudes=lev / g, levels=lev)
         p = replace(p, w0=np.zeros(om.size))
@@ -128,6 +129,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--generator", default="", help="plant seeds of benches/generator.py")
     ap.add_argument("--shape", default="", help="G: first, resonant, flat (default: the seed's), two_pole")
     ap.add_argument("--size", type=float, default=30.0)
+    ap.add_argument("--one-level", action="store_true", help="two_pole: one latent level, as review 33's")
     ap.add_argument("--review", type=Path, default=None, help="a copy of review 33's sim.py, run_case.py")
     ap.add_argument("--case", default="mx_lag_30")
     ap.add_argument("--noise", default="1,2", help="noise seeds: one condition each")
@@ -141,7 +143,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.review is not None:
         runs.append((f"review {args.case}", *review_groups(args.review, args.case, noise)))
     for s in [int(v) for v in args.generator.split(",") if v]:
-        runs.append((f"generator {s}", *generator_groups(s, noise, args.size, args.shape)))
+        runs.append((f"generator {s}", *generator_groups(s, noise, args.size, args.shape, args.one_level)))
     for name, groups, truth in runs:
         row = {"run": name, "noise": noise, "truth": truth, **compare(groups)}
         print(json.dumps(row), flush=True)
