@@ -69,7 +69,6 @@ def _select(
     for mod in (select, pairs):
         monkeypatch.setattr(mod, "element_law_test", law_test)
         monkeypatch.setattr(mod, "_separating", lambda exps, fa, fb, sub: "a separating design")
-    monkeypatch.setattr(revisit, "_separating", lambda exps, fa, fb, sub: "a separating design")
     monkeypatch.setattr(select, "_correlation", lambda fit, a, b: 0.3)
     monkeypatch.setattr(select, "rebase", lambda *a, **k: None)
     monkeypatch.setattr(select, "wide_fit", lambda exps, base, t, sub, first: first)

@@ -22,7 +22,8 @@ a candidate term is added to EVERY condition at once, its value free per conditi
   step at ``alpha / 2`` when every condition's plain model passes the gate, the targeted step, and none
   where the gate passes on a noise floor that is not measured noise: :func:`.gate.plain_gate`, diagnose's);
   experiments whose loop has not settled are left out per condition, as diagnose leaves them out
-  (across_settling.py), and the verdict's clauses are diagnose's (across_verdict.py).
+  (across_settling.py), and the verdict's clauses are diagnose's (across_verdict.py); its pair step and its
+  two revisits of a named single term run on the joint steps (across_pairs.py, across_revisit.py).
 
 Per condition the result reports each term's value with its standard error (inflated by the final fit's
 ``sqrt(chi2/dof)`` when above 1: a misfit elsewhere makes the noise-based one too small), whether the term
@@ -54,6 +55,7 @@ from ..units import harmonise_groups
 from ..validation import real_number
 from . import (
     across_pairs,
+    across_revisit,
     across_rules,
     across_settling,
     across_stable,
@@ -203,6 +205,8 @@ class JointStep:
     pair: tuple[str, ...] = ()
     members: tuple[JointTrial, ...] = ()
     pairs: tuple[Any, ...] = ()
+    #: The model the step started from at every condition (an across_pairs.JointFit: the revisits' base).
+    base: Any = field(default=None, repr=False, compare=False)
 
     def to_dict(self) -> dict[str, Any]:
         out: dict[str, Any] = {
@@ -615,7 +619,7 @@ def _select(
         for g, f in zip(groups, chosen.fits):
             assert f is not None
             g.current = f
-    return steps
+    return across_revisit.after(groups, steps, alpha, held, JointTrial)  # diagnose's revisits, across
 
 
 # ------------------------------------------------------------------------------------------------------
@@ -964,7 +968,6 @@ def _finished(
     verdict += across_verdict.clauses(status, named, partial, steps, prepared, alpha)
     if status != "adequate":  # loop centres that differ in sign (fit_notes.centre_clause), as diagnose says
         verdict += fit_notes.centre_text(prepared)
-    verdict += across_pairs.revisit_clause(prepared, steps, across_verdict.final_adequate(prepared, alpha))
     return AcrossDiagnosis(
         verdict + clause,
         tuple(named),

@@ -34,7 +34,6 @@ from types import SimpleNamespace
 from typing import Any, Optional
 
 from ..augmented import AugFit
-from ..terms import TERMS
 from . import across_rules, pairs
 from .fitting import at_a_limit
 from .select import (
@@ -109,6 +108,10 @@ class JointRules(pairs.Rules):
                 return f"at {g.label}: {sep}"
         return ""
 
+    def fitter(self) -> Any:
+        """The one-term fit across: :meth:`fit_term` (each condition's memo of the selection)."""
+        return self.fit_term
+
     def fit_term(self, fit: Any, term: str) -> Optional[JointFit]:
         """``term`` added at every condition (each condition's memoised one-term fit), or None where it
         cannot stand at some condition."""
@@ -155,7 +158,9 @@ def step(groups: Sequence[Any], st: Any, n_cands: int, alpha: float, use_held_ou
     """The joint step ``st`` (across.JointStep) with the pair step's set where ``st`` named nothing while
     some candidate's law failed and it was not the targeted first step (module docstring): the set named
     (``pair``, its members' joint trials in ``members``, its rivals as alternatives), or the sets tried and
-    why they were refused (``pairs``); ``like``: the joint trial's class."""
+    why they were refused (``pairs``); ``like``: the joint trial's class. The step keeps the model it started
+    from (``base``: the revisits', across_revisit.py)."""
+    st = replace(st, base=JointFit(tuple(g.current for g in groups)))  # the step's model (the revisits')
     if not pairs.ENABLED or st.chosen is not None or not st.law_failed or st.targeted:
         return st
     rules = JointRules(groups)
@@ -181,26 +186,4 @@ def step(groups: Sequence[Any], st: Any, n_cands: int, alpha: float, use_held_ou
     )
 
 
-def revisit_clause(groups: Sequence[Any], steps: Sequence[Any], adequate: bool) -> str:
-    """The verdict's clause where diagnose's revisit would run on the joint steps and is not run across
-    (module docstring); "" elsewhere."""
-    from . import revisit
-
-    if adequate:
-        return ""
-    seen = [
-        SimpleNamespace(chosen=st.chosen, pair=st.pair, trials=[_as_trial(t) for t in st.trials])
-        for st in steps
-    ]
-    j, leads = revisit.trigger(seen)
-    if not leads:
-        return ""
-    named, lead = TERMS[str(steps[j].chosen)].place_label(), TERMS[leads[0].term].place_label()
-    return (
-        f"; not run across conditions: diagnose's revisit of {named} (a later candidate, {lead}, removes "
-        "most of what is left with a value that differs between experiments; a level's own diagnosis may "
-        "name a set in its place)"
-    )
-
-
-__all__ = ["JointFit", "JointRules", "step", "revisit_clause"]
+__all__ = ["JointFit", "JointRules", "step"]

@@ -85,6 +85,7 @@ from .select import (
     element_law_test,
     f_test,
     held_out,
+    memo_fit_with,
     siblings,
 )
 
@@ -137,6 +138,10 @@ class Rules:
 
     def separating(self, a: Any, b: Any) -> str:
         return _separating(self.exps, a, b, self.substeps)
+
+    def fitter(self) -> Callable[[Any, str], Optional[Any]]:
+        """The one-term fit a set's members are added by (a new memo of :func:`.select.memo_fit_with`)."""
+        return memo_fit_with(self.exps, self.substeps)
 
 
 def _rules(exps: Any, substeps: int = 1, cache: Optional[FoldCache] = None) -> Rules:

@@ -27,6 +27,10 @@ set found so is
 Physics outside the library is left alone by construction: the revisit needs a named term (an
 "unexplained" verdict has none) and a set whose laws all hold and whose model passes adequacy before it
 changes a name.
+
+The experiments are read through :class:`.pairs.Rules` (held-out costs, separating experiment, the one-term
+fit): :func:`.across.diagnose_across` runs the same functions on its joint steps with the conditions' rules
+(:mod:`.across_revisit`).
 """
 
 from __future__ import annotations
@@ -46,10 +50,7 @@ from .select import (
     HeldOut,
     Step,
     Trial,
-    _separating,
     forward_select,
-    held_out,
-    memo_fit_with,
 )
 
 #: Whether the revisit runs (module docstring).
@@ -177,14 +178,14 @@ def revisit(
     if len(pool) < 2:
         return final, steps
     level = targeted_level(alpha, st.after_named) if st.targeted else alpha
-    fit_term = memo_fit_with(exps, substeps)
+    rules = pairs._rules(exps, substeps, cache)  # one set of experiments, or several (across_revisit.py)
     choice, tried = pairs.pair_step(
-        exps,
+        rules,
         base,
         order,
         rest,
         [],
-        fit_term,
+        rules.fitter(),
         substeps,
         level,
         len(st.trials),
@@ -228,18 +229,16 @@ def settle(
     (``single``, the step's own trial of the named term, and ``final``): named in the step's place when its
     model passes adequacy and predicts better held out, else recorded on the step as an alternative
     (``rec``: the revisit's record, its held-out costs and separating experiment filled in here). Shared by
-    :func:`revisit` and :func:`.rival_revisit.revisit`."""
+    :func:`revisit` and :func:`.rival_revisit.revisit`; ``exps`` as :func:`.pairs.pair_step` takes them (the
+    experiments, or the :class:`.pairs.Rules` they are read through: across_revisit.py)."""
     st = steps[j]
     fit = choice.trial.fit
+    rules = pairs._rules(exps, substeps, cache)
     # The named path's model from the same base: the single, or the single and the sets after it.
-    h_one = _ho(
-        single.held_out
-        if final is single.fit or not use_held_out
-        else held_out(exps, base, final, substeps, cache)
-    )
+    h_one = _ho(single.held_out if final is single.fit or not use_held_out else rules.held_out(base, final))
     h_set = _ho(choice.trial.held_out)
     better = h_set < h_one if use_held_out and math.isfinite(h_set + h_one) else fit.cost < final.cost
-    sep = _separating(exps, fit, final, substeps)
+    sep = rules.separating(fit, final)
     tenable = adequate(fit)
     rec = replace(
         rec, held_out_set=h_set, held_out_single=h_one, separating_experiment=sep, tried=tuple(tried)

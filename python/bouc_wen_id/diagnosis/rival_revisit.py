@@ -23,7 +23,8 @@ first, each paired with every other candidate of step ``j`` (never the named ter
 - otherwise **reported as an alternative** (:func:`.revisit.text`), with the experiment that would separate
   them: the verdict then says the named term is not the only tenable reading.
 
-Where no set holds its laws the named term stays, with its rival said as before.
+Where no set holds its laws the named term stays, with its rival said as before. The joint selection across
+conditions runs it too, on its joint steps (:mod:`.across_revisit`).
 
 Measured (review 33's simulator, ``/tmp/sm33/dbg.py``-style runs of ``/work/review33/run_case.py``'s cases):
 mx_lag_30 now names inertia on x m = 0.01093 +- 0.00068 (true 0.01137) with the lag tau = 0.0609 +- 0.0069
@@ -45,7 +46,7 @@ from . import pairs
 from .gate import targeted_level
 from .revisit import Revisit, _base, settle
 from .revisit import after as lead_after
-from .select import ALPHA, FoldCache, Step, forward_select, memo_fit_with
+from .select import ALPHA, FoldCache, Step, forward_select
 
 #: Whether this revisit runs (module docstring).
 ENABLED = True
@@ -96,8 +97,9 @@ def revisit(
     later = tuple(str(s.chosen) for s in steps[j + 1 :] if s.chosen is not None and not s.pair)
     later += tuple(t for s in steps[j + 1 :] for t in s.pair)
     level = targeted_level(alpha, st.after_named) if st.targeted else alpha
+    rules = pairs._rules(exps, substeps, cache)  # one set of experiments, or several (across_revisit.py)
     choice, tried = pairs.pair_step(
-        exps, base, order, [*order, *rest], [], memo_fit_with(exps, substeps), substeps, level,
+        rules, base, order, [*order, *rest], [], rules.fitter(), substeps, level,
         len(st.trials), use_held_out, cache, len(order), 0.0,
     )  # fmt: skip
     pool = tuple(t.term for t in (*order, *rest))
