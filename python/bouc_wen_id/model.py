@@ -453,11 +453,14 @@ class Recording:
         p = self.period / self.dt
         pr = round(p)
         if pr < 1 or abs(p - pr) > GRID_RTOL * p:
+            name = self.metadata.get("name")
             raise FrequencyMismatchError(
-                f"omega = {self.frequency:.9g} rad/s gives {p:.6f} samples per period "
-                f"at dt = {self.dt:.9g} s; "
-                "the paper's averaging (4a-b) needs a whole number. Check the frequency (rad/s, not Hz?) "
-                "or the time column"
+                f"{f'{name}: ' if name else ''}omega = {self.frequency:.9g} rad/s gives {p:.6f} samples per "
+                f"period at dt = {self.dt:.9g} s; the paper's averaging (4a-b) needs a whole number. "
+                "Check the frequency (rad/s, not Hz?) or the time column; if both are right and the "
+                "sampling rate is simply not a multiple of the frequency, give the record as a Measurement "
+                "(bw.Measurement(t, u, y), or a file without the amplitude and frequency header keys): the "
+                "lab path estimates the frequency itself and needs no whole number of samples per period"
             )
         return int(pr)
 
