@@ -193,7 +193,7 @@ def test_the_settled_experiments_alone_are_diagnosed_without_the_whole_set_first
         out = d.to_dict()
         out.pop("seconds")
         got[early] = (out, calls["n"])
-    assert "left out (not settled)" in got[True][0]["verdict"], got[True][0]["verdict"]
+    assert "left out (not settled, or a drifting sensor)" in got[True][0]["verdict"], got[True][0]["verdict"]
     assert got[True][0] == got[False][0]
     assert got[True][1] < got[False][1], (got[True][1], got[False][1])
 

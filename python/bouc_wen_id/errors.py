@@ -16,6 +16,7 @@ __all__ = [
     "ImproperTransferFunctionError",
     "InsufficientDataError",
     "FrequencyMismatchError",
+    "NoisyInputError",
     "ZeroAmplitudeError",
     "SingularNormalMatrixError",
     "SearchAtBoundError",
@@ -64,6 +65,11 @@ class InsufficientDataError(BoucWenIdError):
 
 class FrequencyMismatchError(BoucWenIdError):
     """The stated frequency does not give a whole number of samples per period on the recording's grid."""
+
+
+class NoisyInputError(FrequencyMismatchError):
+    """The measured input repeats at the stated frequency but carries more noise than the averaging takes (a
+    ``FrequencyMismatchError`` as well: the same check refuses it, so code catching that still catches it)."""
 
 
 class ZeroAmplitudeError(BoucWenIdError):

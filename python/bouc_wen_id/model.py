@@ -484,12 +484,16 @@ class Recording:
         if pr < 1 or abs(p - pr) > GRID_RTOL * p:
             from ._timehint import hint
 
+            name = self.metadata.get("name")
             raise hint(
                 FrequencyMismatchError(
-                    f"omega = {self.frequency:.9g} rad/s gives {p:.6f} samples per period "
-                    f"at dt = {self.dt:.9g} s; "
-                    "the paper's averaging (4a-b) needs a whole number. Check the frequency (rad/s, not Hz?) "
-                    "or the time column"
+                    f"{f'{name}: ' if name else ''}omega = {self.frequency:.9g} rad/s gives {p:.6f} samples "
+                    f"per period at dt = {self.dt:.9g} s; the paper's averaging (4a-b) needs a whole number. "
+                    "Check the frequency (rad/s, not Hz?) or the time column; if both are right and the "
+                    "sampling rate is simply not a multiple of the frequency, give the record as a "
+                    "Measurement (bw.Measurement(t, u, y), or a file without the amplitude and frequency "
+                    "header keys): the lab path estimates the frequency itself and needs no whole number of "
+                    "samples per period"
                 ),
                 self.t,
                 self.u,

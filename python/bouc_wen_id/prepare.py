@@ -26,11 +26,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ._backend import Paper
+from ._text import item_label
 from ._timehint import hint
 from .errors import (
     FrequencyMismatchError,
     InsufficientDataError,
     InvalidParameterError,
+    NoisyInputError,
     TransientWarning,
     ZeroAmplitudeError,
 )
@@ -56,6 +58,8 @@ FloatArray = NDArray[np.float64]
 
 #: Largest relative misfit of ``u`` to ``U cos(omega t)`` before the stated frequency is called wrong.
 INPUT_MISFIT_MAX = 0.05
+#: An input's deviation whose neighbouring samples correlate below this is noise, not a wrong frequency.
+NOISE_LAG1_MAX = 0.5
 #: Largest phase (rad) of the recorded input relative to ``cos(omega t)`` on the given time axis.
 INPUT_PHASE_MAX = 0.02
 #: Range of output and input scales identify accepts: beyond it, squares of the data leave the
@@ -100,6 +104,27 @@ def _sine_misfit(v: FloatArray, a_cos: float, a_sin: float) -> float:
     spread = float(np.dot(centred, centred))
     fitted = 0.5 * v.size * (a_cos**2 + a_sin**2)
     return math.sqrt(max(spread - fitted, 0.0) / spread) if spread > 0 else math.inf
+
+
+def noisy_input(dev: FloatArray, misfit: float, omega: float, what: str) -> Optional[NoisyInputError]:
+    """The error for an input refused by its ``misfit`` when its deviation ``dev`` (from ``what``) is noise
+    rather than a wrong frequency: neighbouring samples of noise hardly correlate, while a misaligned period
+    (or a distortion) leaves a smooth deviation whose lag-1 correlation is near ``cos(omega dt)`` ~ 1
+    (review 34: 8 % input noise was refused with "check the stated frequency").  ``None`` otherwise."""
+    d = np.asarray(dev, dtype=np.float64).ravel()
+    ss = float(np.dot(d, d))
+    if d.size < 3 or not ss > 0.0:
+        return None
+    r1 = float(np.dot(d[:-1], d[1:])) / ss
+    if r1 >= NOISE_LAG1_MAX:
+        return None
+    return NoisyInputError(
+        f"the recorded input repeats at omega = {omega:.6g} rad/s but carries noise: it differs from {what} "
+        f"by a relative {misfit:.2g} > {INPUT_MISFIT_MAX}, and the difference is noise (neighbouring "
+        f"samples correlate {r1:.2f}; a wrong frequency or a distortion leaves a smooth difference). The "
+        f"input must repeat to within {INPUT_MISFIT_MAX:g} of its RMS: filter the input channel with a "
+        "zero-phase low-pass well above omega (the output is not affected), or measure it with less noise"
+    )
 
 
 def swapped_hint(rec: Recording, window: Optional[tuple[int, int]]) -> str:
@@ -156,6 +181,11 @@ def check_input(rec: Recording, start: int, stop: int) -> None:
     a_cos, a_sin = input_fundamental(rec, start, stop)
     misfit = _sine_misfit(u, a_cos, a_sin)
     if misfit > INPUT_MISFIT_MAX:
+        t = rec.t[start:stop]
+        sine = u.mean() + a_cos * np.cos(rec.frequency * t) + a_sin * np.sin(rec.frequency * t)
+        noisy = noisy_input(u - sine, misfit, rec.frequency, "its sine")
+        if noisy is not None:
+            raise noisy
         raise hint(
             FrequencyMismatchError(
                 f"the recorded input is not a sine at omega = {rec.frequency:.6g} rad/s "
@@ -298,8 +328,8 @@ def _prepare_recording(
     n = rec.whole_periods - s if periods is None else int(periods)
     if n < 1 or s + n > rec.whole_periods:
         raise InsufficientDataError(
-            f"recording {i} holds {rec.whole_periods} whole periods; {s} settling + {max(n, 1)} averaged "
-            "periods do not fit. Record longer or lower settle_periods/periods"
+            f"{item_label(i, rec, 'recording')} holds {rec.whole_periods} whole periods; {s} settling + "
+            f"{max(n, 1)} averaged periods do not fit. Record longer or lower settle_periods/periods"
         )
     source = rec.metadata.get("name", f"recording {i}")
     # The input first: a wrong frequency misaligns the periods, which is no transient.

@@ -64,6 +64,9 @@ TIME_JITTER_RTOL = 0.01
 EXACT_GRID_RTOL = 1e-5
 #: Rounding allowance of a time step, relative to the largest time: differences of large times lose digits.
 TIME_ROUNDING_RTOL = 1e-12
+#: A time column printed with few digits is taken as uniform when its rounding unit is at most this share of
+#: the step (coarser printing leaves the step itself uncertain) and explains the uneven steps.
+PRINTED_QUANTUM_SHARE = 1e-3
 
 
 def z_value(confidence: float) -> float:
@@ -243,6 +246,23 @@ def check_transfer_function(
     return b, a, delay
 
 
+def printed_quantum(t: FloatArray) -> float:
+    """The rounding unit of the largest time when every time holds few significant digits (a time column
+    printed with ``%.9g``: a uniform grid then steps unevenly by up to one unit of its last digit); ``inf``
+    when the times hold all of a double's digits (nothing to forgive)."""
+    x = np.abs(np.asarray(t, dtype=np.float64))
+    x = x[x > 0]
+    if not x.size:
+        return math.inf
+    expo = np.floor(np.log10(x))
+    for digits in range(1, 16):
+        scale = 10.0 ** (digits - 1 - expo)
+        back = np.round(x * scale) / scale
+        if np.all(np.abs(back - x) <= 4.0 * np.spacing(x)):
+            return float(10.0 ** (float(np.max(expo)) - digits + 1))
+    return math.inf
+
+
 def check_time_axis(
     t: FloatArray, name: str = "t", *, rtol: float = TIME_JITTER_RTOL, gap_factor: Optional[float] = None
 ) -> float:
@@ -278,7 +298,11 @@ def check_time_axis(
     if gap_factor is not None:
         dev[steps > gap_factor * dt] = 0.0
     worst = int(np.argmax(dev))
-    if dev[worst] > rtol * dt + TIME_ROUNDING_RTOL * max(abs(float(t[0])), abs(float(t[-1]))):
+    top = max(abs(float(t[0])), abs(float(t[-1])))
+    if dev[worst] > rtol * dt + TIME_ROUNDING_RTOL * top:
+        quantum = printed_quantum(t)
+        if quantum <= PRINTED_QUANTUM_SHARE * dt and dev[worst] <= rtol * dt + quantum:
+            return dt  # a uniform grid whose times were printed with few digits (review 34: 9 digits)
         gaps = "" if gap_factor is None else f"; steps over {gap_factor}x the median count as gaps"
         raise TimeAxisError(
             f"{name} is not uniformly sampled: step {worst} is {steps[worst]:.9g} s against a median step of "

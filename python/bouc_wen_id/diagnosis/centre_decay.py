@@ -62,7 +62,7 @@ from ..terms import Offset
 from .data import DiagExperiment
 from .gate import ADEQUATE
 from .result import Diagnosis
-from .settling import LEFT_OUT
+from .settling import LEFT_OUT, LEFT_OUT_TAIL
 from .zero_drift import MIN_PERIODS, MIN_SHORT_PERIODS
 
 #: Level of the F-test "a decaying transient explains the period DCs better than constant levels".
@@ -254,7 +254,7 @@ def _named(d: Diagnosis) -> Diagnosis:
         f"steady levels y0 = {steady:.2g}{sign}, whose 95 % interval excludes it (p = {got.named_p:.2g}), "
         f"not named; {_settle(got)}"
     )
-    tail = f"; {', '.join(left)} left out (not settled)" if left else ""
+    tail = f"; {', '.join(left)} {LEFT_OUT_TAIL}" if left else ""
     return replace(
         d,
         status="adequate",

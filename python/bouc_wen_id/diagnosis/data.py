@@ -44,6 +44,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from .._text import item_label
 from ..errors import InsufficientDataError, InvalidParameterError, ZeroAmplitudeError
 from ..signal._harmonic_ls import harmonic_basis
 from . import lab_colour
@@ -363,8 +364,9 @@ def _from_recording(i: int, rec: Any) -> DiagExperiment:
     n = int(rec.whole_periods) - s
     if n < 3:
         raise InsufficientDataError(
-            f"recording {i} leaves {n} periods after {s} settling ones; the diagnosis needs at least 3 "
-            "(the noise floor and the drift test come from differences of neighbouring periods)"
+            f"{item_label(i, rec, 'recording')} leaves {n} periods after {s} settling ones; the diagnosis "
+            "needs at least 3 (the noise floor and the drift test come from differences of neighbouring "
+            "periods)"
         )
     rows = np.asarray(rec.y[s * p : (s + n) * p], dtype=np.float64).reshape(n, p)
     urows = np.asarray(rec.u[s * p : (s + n) * p], dtype=np.float64).reshape(n, p)

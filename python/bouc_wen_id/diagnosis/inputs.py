@@ -18,13 +18,12 @@ from typing import Any
 
 import numpy as np
 
+from .._text import item_label
 from ..errors import BoucWenIdError, FrequencyMismatchError, InsufficientDataError, InvalidParameterError
 
 
 def _source(i: int, item: Any) -> str:
-    meta = getattr(item, "metadata", None)
-    name = meta.get("name") if isinstance(meta, dict) else getattr(item, "name", None)
-    return f"item {i} ({name})" if name else f"item {i}"
+    return item_label(i, item)
 
 
 def _check_recording(i: int, rec: Any, at: str) -> None:
@@ -49,7 +48,7 @@ def _check_recording(i: int, rec: Any, at: str) -> None:
 def _check_periodic(rec: Any, start: int, n: int, p: int) -> None:
     """Refuse an input that does not repeat at the stated omega: its periods differ from their mean by more
     than ``INPUT_MISFIT_MAX`` of its spread (identify's bound on the misfit of its sine)."""
-    from ..prepare import INPUT_MISFIT_MAX, swapped_hint
+    from ..prepare import INPUT_MISFIT_MAX, noisy_input, swapped_hint
 
     if n < 2:
         return
@@ -57,6 +56,9 @@ def _check_periodic(rec: Any, start: int, n: int, p: int) -> None:
     spread = float(np.sum((rows - rows.mean()) ** 2))
     misfit = math.sqrt(float(np.sum((rows - rows.mean(axis=0)) ** 2)) / spread) if spread > 0 else math.inf
     if misfit > INPUT_MISFIT_MAX:
+        noisy = noisy_input(rows - rows.mean(axis=0), misfit, rec.frequency, "its mean period")
+        if noisy is not None:
+            raise noisy
         from .._timehint import hint
 
         raise hint(

@@ -77,6 +77,7 @@ from .result import Diagnosis, ModelSummary, NamedTerm, Status, term_symbol_unit
 from .select import ALPHA, Alternative, FoldCache, Step, dof_of, held_out
 from .settling import (  # noqa: F401 (quantisation_step: importable here as before)
     LEFT_OUT,
+    LEFT_OUT_TAIL,
     _check_experiments,
     _check_sizes,
     _noise_floors,
@@ -663,7 +664,7 @@ def _without_unsettled(
     d = replace(d, settings={**d.settings, LEFT_OUT: left_out})
     if len(keep) == 1 and d.named:
         return _from_one(d, exps[keep[0]].source, names)
-    return replace(d, verdict=d.verdict + f"; {names} left out (not settled)")
+    return replace(d, verdict=d.verdict + f"; {names} {LEFT_OUT_TAIL}")
 
 
 def _from_one(d: Diagnosis, source: str, names: str) -> Diagnosis:

@@ -107,6 +107,7 @@ def _trending(y: Any, p: int, s: int, n: int) -> bool:
 def _check_sizes(experiments: Any) -> None:
     """Refuse, before any arithmetic on them, inputs and outputs whose squares leave the floating-point
     range (U = 1e300 overflowed in the noise floor, the input's waveform and prepare.py)."""
+    from .._text import item_label
     from ..errors import ZeroAmplitudeError
     from ..prepare import SCALE_MAX, SCALE_MIN
 
@@ -123,8 +124,9 @@ def _check_sizes(experiments: Any) -> None:
         for what, size, low in sizes:
             if not low <= size <= SCALE_MAX:
                 raise ZeroAmplitudeError(
-                    f"item {i}: the {what} is of size {size:.3e}, outside [{low:g}, {SCALE_MAX:g}]: squares "
-                    "of it leave the floating-point range; express the data in units that keep it there"
+                    f"{item_label(i, item)}: the {what} is of size {size:.3e}, outside [{low:g}, "
+                    f"{SCALE_MAX:g}]: squares of it leave the floating-point range; express the data in "
+                    "units that keep it there"
                 )
 
 
@@ -241,12 +243,18 @@ def _unsettled(exps: Sequence[DiagExperiment]) -> list[int]:
 LEFT_OUT = "left_out"
 
 
+#: How a verdict ends when experiments were left out as still drifting (:func:`left_out_note` says more).
+LEFT_OUT_TAIL = "left out (not settled, or a drifting sensor)"
+
+
 def left_out_note(names: str) -> str:
     """The note on experiments left out of a diagnosis as not settled (:func:`_unsettled`), one wording for
-    :func:`.run.diagnose` and ``diagnose_across``."""
+    :func:`.run.diagnose` and ``diagnose_across``.  A sensor whose gain or zero drifts over the record looks
+    the same to the drift test (review 34: a 2 % gain drift), so both readings are said."""
     return (
-        f"left out of the diagnosis: {names} (the loop still drifts from period to period: not settled, "
-        "and no degradation explains it); record more settling periods"
+        f"left out of the diagnosis: {names} (the loop still drifts from period to period and no "
+        "degradation explains it: a transient not yet settled, or a sensor whose gain or zero drifts over "
+        "the record); record more settling periods, or check the sensor's calibration over the record"
     )
 
 

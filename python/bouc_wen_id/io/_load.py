@@ -111,10 +111,31 @@ def load(
     names: list[str] = []
     for f in _files(paths):
         read = _read_file(f, cols, rate, skip)
-        out.extend(read)
-        names.extend(f.name if len(read) == 1 else f"{f.name}[{b}]" for b in range(len(read)))
+        here = [f.name if len(read) == 1 else f"{f.name}[{b}]" for b in range(len(read))]
+        out.extend(_named(item, name) for item, name in zip(read, here))
+        names.extend(here)
     # One data set: one unit per quantity (later files converted to the first's, or a UnitMismatchError).
     return harmonise(out, names).items if len(out) > 1 else out
+
+
+def _named(item: Item, name: str) -> Item:
+    """A recording whose header names no experiment, named after its file (``metadata["name"]``, as a
+    measurement's ``name`` is): messages then say "item 3 (exp3.csv)", not "item 3".  A new object with the
+    same samples; nothing read from the file is changed."""
+    if not isinstance(item, Recording) or item.metadata.get("name"):
+        return item
+    return Recording(
+        item.t,
+        item.u,
+        item.y,
+        item.amplitude,
+        item.frequency,
+        item.settle_periods,
+        x=item.x,
+        w=item.w,
+        plant=item.plant,
+        metadata={"name": name, **item.metadata},
+    )
 
 
 def load_recordings(
@@ -128,7 +149,9 @@ def load_recordings(
     rate = _check_rate(sample_rate)
     out: list[Recording] = []
     for f in _files(paths):
-        for item in _read_file(f, cols, rate):
+        read = _read_file(f, cols, rate)
+        for b, item in enumerate(read):
+            item = _named(item, f.name if len(read) == 1 else f"{f.name}[{b}]")
             if not isinstance(item, Recording):
                 raise FileFormatError(
                     f"{f}: holds a measurement (no 'amplitude' and 'frequency' in its header), not a "
