@@ -44,9 +44,10 @@ class CleanValues:
     failed: bool = False
 
     def text(self, status: str, named: Sequence[NamedTerm]) -> str:
-        """The verdict's clause on where the named values come from ("" when every input is a sine or
-        nothing the refit replaced was named)."""
-        if not self.kept or status not in ("explained", "partly explained"):
+        """The verdict's clause on where the values it quotes (``named``: the named terms and those left
+        unnamed for a value outside their range) come from ("" when every input is a sine, the verdict is
+        "adequate", or nothing the refit replaced is quoted)."""
+        if not self.kept or status == "adequate":
             return ""
         names = {t.term for t in named}
         if self.failed:

@@ -815,7 +815,7 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
     judged = classify(plain_ok, bool(final.params.terms) or named_deg, adequate(final), share)
     status, named, partial, verdict = _judged(judged, final_sum, (before, after), fraction, fexps)
     verdict += (centre.text or _law_text(steps)) + beside.text(steps) + unphysical_places_text(steps, named)
-    verdict += clean_share.text(status, named, fraction, cshare, fsx) + cv.text(status, named)
+    verdict += clean_share.text(status, named, fraction, cshare, fsx) + cv.text(status, (*named, *partial))
     verdict += law_untested.text(named, fexps) + input_note.text(
         status, (*named, *partial), fexps, final_sum.outputs
     )
