@@ -67,9 +67,9 @@ class CleanValues:
         return (
             f"; the values named are fitted on the {len(self.kept)} experiments whose input is a sine "
             f"({_list(self.kept)}) alone: the {len(self.left)} whose input is not ({_list(self.left)}: a "
-            "clipped or distorted drive) are left out of them, since their input's harmonics reach the "
-            f"output through G where the model's sine input does not, and pull a value fitted on them "
-            f"(over all {len(self.kept) + len(self.left)}, pooled: {was})"
+            "clipped or distorted drive) are left out of them: their input's harmonics reach the output "
+            "through G where the model's sine input does not, and can pull a value fitted on them (over all "
+            f"{len(self.kept) + len(self.left)}, pooled: {was})"
         )
 
 
