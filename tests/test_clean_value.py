@@ -204,3 +204,21 @@ def test_a_failed_clean_refit_says_the_values_include_the_clipped_experiments(
     assert summ is pooled and where.failed
     said = where.text("explained", summ.terms)
     assert "fitted over all 5 experiments, those whose input is not a sine (x0, x3) included" in said
+
+
+def test_a_term_not_told_from_zero_on_the_clean_experiments_is_said() -> None:
+    """A named term whose clean value is within two standard errors of zero (this file's generator at 20x,
+    seed 1, named a Dahl element beside the damping, 0.00068 ± 0.0013 on the clean experiments): the verdict
+    says that what named it sits in the experiments whose input is not a sine; a term well away from zero is
+    not listed."""
+    from bouc_wen_id.diagnosis.clean_value import CleanValues
+    from bouc_wen_id.diagnosis.result import NamedTerm
+
+    pooled = (NamedTerm("viscous", "c", 0.0604, 3e-5, ""), NamedTerm("dahl", "Fc", 0.011, 2e-4, ""))
+    named = (NamedTerm("viscous", "c", 0.0531, 5e-5, ""), NamedTerm("dahl", "Fc", 0.00068, 0.0013, ""))
+    said = CleanValues(("a", "b", "c"), ("d",), pooled).text("partly explained", named)
+    assert "Fc = 0.00068 ± 0.0013) is not told from zero" in said
+    assert "c = 0.0531" not in said and "pooled: c = 0.0604, Fc = 0.011)" in said
+    assert "not told from zero" not in CleanValues(("a", "b", "c"), ("d",), pooled[:1]).text(
+        "explained", named
+    )

@@ -29,6 +29,10 @@ from .clean_share import clean
 from .fitting import Scale, fit_from, physical, subset
 from .result import ModelSummary, NamedTerm
 
+#: A replaced value within this many of its standard errors of zero is not told from zero on the clean
+#: experiments alone (said: what named the term sits in the others).
+WEAK_SE = 2.0
+
 
 @dataclass(frozen=True)
 class CleanValues:
@@ -69,8 +73,22 @@ class CleanValues:
             f"({_list(self.kept)}) alone: the {len(self.left)} whose input is not ({_list(self.left)}: a "
             "clipped or distorted drive) are left out of them: their input's harmonics reach the output "
             "through G where the model's sine input does not, and can pull a value fitted on them (over all "
-            f"{len(self.kept) + len(self.left)}, pooled: {was})"
+            f"{len(self.kept) + len(self.left)}, pooled: {was})" + _weak_text(named, pooled)
         )
+
+
+def _weak_text(named: Sequence[NamedTerm], pooled: Sequence[NamedTerm]) -> str:
+    """The clause on replaced terms whose clean value is within :data:`WEAK_SE` standard errors of zero."""
+    terms = {t.term for t in pooled}
+    weak = [t for t in named if t.term in terms and abs(t.value) < WEAK_SE * t.standard_error]
+    if not weak:
+        return ""
+    said = ", ".join(f"{t.label} ({t.symbol} = {t.value:.3g} ± {t.standard_error:.3g})" for t in weak)
+    one = len(weak) == 1
+    return (
+        f"; on them alone {said} {'is' if one else 'are'} not told from zero: what named "
+        f"{'it' if one else 'them'} sits in the experiments whose input is not a sine"
+    )
 
 
 def _list(names: Sequence[str]) -> str:
