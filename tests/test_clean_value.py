@@ -69,14 +69,14 @@ def _simulate(amp: np.ndarray, clip: np.ndarray) -> tuple[Any, Any, Any, Any]:
     return h, u.T, ud.T, ws.T
 
 
-def _recordings(seed: int, size: float) -> tuple[list[Any], float]:
+def _recordings(seed: int, size: float, clip: np.ndarray = CLIP) -> tuple[list[Any], float]:
     """The five experiments (clipped ones as measurements with the input's own small noise) and the true
     damping ``c``: ``size`` times the output noise sd, in RMS of ``c du/dt`` over the clean experiments."""
     rng = np.random.default_rng(seed)
     g = np.abs(WN**2 / (WN**2 - FREQS**2 + 2j * ZETA * WN * FREQS))
     wu = (ALPHA / (BETA + GAMMA)) ** (1 / MU)
     amp = 2.5 * wu / ALPHA / g  # a stroke of x of 2.5 yield displacements
-    h, u, ud, w = _simulate(amp, CLIP)
+    h, u, ud, w = _simulate(amp, clip)
     keep = slice(SETTLE * P, None)
     sd = 0.01 * float(np.sqrt(np.mean(w[:, keep] ** 2)))
     c = size * sd / float(np.sqrt(np.mean((amp * FREQS) ** 2 / 2)))
@@ -84,7 +84,7 @@ def _recordings(seed: int, size: float) -> tuple[list[Any], float]:
     for i in range(FREQS.size):
         y = w[i] + c * ud[i] + rng.normal(0.0, sd, w[i].size)
         t = np.arange(y.size) * h[i]
-        if CLIP[i]:
+        if clip[i]:
             ui = u[i] + rng.normal(0.0, 5e-4 * amp[i], u[i].size)
             out.append(
                 bw.Measurement(t[keep], ui[keep], y[keep], nominal_frequency=float(FREQS[i]), name=f"e{i}")
@@ -222,3 +222,35 @@ def test_a_term_not_told_from_zero_on_the_clean_experiments_is_said() -> None:
     assert "not told from zero" not in CleanValues(("a", "b", "c"), ("d",), pooled[:1]).text(
         "explained", named
     )
+
+
+# ------------------------------------------------------------------ an output with flat tops (output_clip.py)
+def _output_clipped(level: float) -> list[Any]:
+    """A null (nothing hidden, pure-sine inputs) whose experiments 3 and 4 have their output clipped at
+    ``level`` of its peak (0: none)."""
+    recs, _ = _recordings(1, 0.0, np.zeros(FREQS.size))
+    out = []
+    for i, r in enumerate(recs):
+        y = np.asarray(r.y, dtype=np.float64)
+        if level and i in (3, 4):
+            lim = level * float(np.max(np.abs(y)))
+            y = np.clip(y, -lim, lim)
+        out.append(
+            bw.Recording(r.t, r.u, y, amplitude=r.amplitude, frequency=r.frequency, settle_periods=SETTLE)
+        )
+    return out
+
+
+def test_a_clipped_output_is_said_and_a_clean_one_is_not() -> None:
+    """Before (main 266e6e4): outputs 3 and 4 clipped at 92 % of their peak (24 % of their samples on the
+    rail) were "unexplained structure ... not named: inertia on u, inertia on x", nothing said of the output
+    (``Measurement.check`` refuses such a channel, only when called). Now the verdict names the two clipped
+    outputs as a sensor or DAQ out of range; the same data unclipped get no such clause."""
+    from bouc_wen_id.diagnosis import output_clip
+
+    recs = _output_clipped(0.92)
+    assert output_clip.clipped(recs) == ["recording 3", "recording 4"]
+    assert output_clip.clipped(_output_clipped(0.0)) == []
+    d = _diagnose(recs)
+    assert "the measured output of recording 3, recording 4 looks clipped" in d.verdict, d.verdict
+    assert "not device physics" in d.verdict

@@ -33,6 +33,7 @@ from . import (
     law_untested,
     lines,
     loop_centre,
+    output_clip,
     pairs,
     resolution,
     revisit,
@@ -566,6 +567,7 @@ def _diagnose(
     wander = baseline.detect(experiments, level) or zero_drift.detect(experiments, level)
     args = (cands, float(alpha), held_out_test, units, report)
     d = _with_wander(experiments, *args, wander)
+    d = replace(d, verdict=d.verdict + output_clip.clause(_as_list(experiments)))  # output_clip.py
     if line_notes:
         d = replace(d, verdict=d.verdict + lines.clause(line_notes), notes=(*line_notes, *d.notes))
     if isinstance(wander, zero_drift.Drift) and wander.loop_trends:
