@@ -254,3 +254,50 @@ def test_a_clipped_output_is_said_and_a_clean_one_is_not() -> None:
     d = _diagnose(recs)
     assert "the measured output of recording 3, recording 4 looks clipped" in d.verdict, d.verdict
     assert "not device physics" in d.verdict
+
+
+def test_terms_the_clean_experiments_do_not_determine_are_said_with_their_pooled_values() -> None:
+    """This file's generator at 20x, seed 2: viscous damping and a Dahl element named; refitted on the clean
+    experiments the Dahl element went to its spring limit (sigma 4e16, every standard error NaN) and, before,
+    no value was replaced and nothing said (c = 0.0404 ± 4.2e-05 against a true 0.03545). The element is
+    refitted without, the damping's clean value quoted (0.03549 ± 5e-05), and the verdict says the element
+    is not determined on the clean experiments and that its values are the pooled ones."""
+    from bouc_wen_id.diagnosis.clean_value import CleanValues
+    from bouc_wen_id.diagnosis.result import NamedTerm
+
+    pooled = (NamedTerm("viscous", "c", 0.0404, 4e-5, ""),)
+    named: tuple[NamedTerm, ...] = (NamedTerm("viscous", "c", 0.0355, 5e-5, ""),)
+    named += (NamedTerm("dahl", "fc", 0.118, 0.0015, ""), NamedTerm("dahl_sigma", "sigma", 0.63, 0.004, ""))
+    cv = CleanValues(("a", "b", "c"), ("d", "e"), pooled, False, ("dahl", "dahl_sigma"))
+    said = cv.text("partly explained", named)
+    assert "pooled: c = 0.0404)" in said
+    assert f"on them alone {named[1].label}, {named[2].label} are not determined" in said
+    assert "their values above are pooled" in said
+
+
+def test_the_refit_leaves_out_an_element_at_its_limit(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A first clean refit whose two-term element sits at a limit: refitted once without both members, the
+    other terms' values from that second refit, the members listed as undetermined."""
+    from bouc_wen_id.diagnosis import clean_value
+
+    rng = np.random.default_rng(5)
+    exps = [_aug(i, 0.1, [0.05, 0.0] if i in (0, 3) else [], rng) for i in range(5)]
+    fit, _ = _pooled(exps)
+    calls: list[tuple[str, ...]] = []
+
+    def fake_fit(sub: Any, par: Any, substeps: int) -> Any:
+        calls.append(tuple(par.terms))
+        from bouc_wen_id.diagnosis import fitting
+
+        return fitting.fit_from(sub, par.only(["viscous"]), substeps)
+
+    par = fit.params.with_term("dahl", 0.01).with_term("dahl_sigma", 1.0)
+    final = type(fit)(par, fit.cost, 1, True, fit.fisher, fit.covariance, fit.outputs)
+    monkeypatch.setattr(clean_value, "fit_from", fake_fit)
+    monkeypatch.setattr(
+        clean_value, "_undetermined", lambda sub, f: {"dahl", "dahl_sigma"} if not calls[1:] else set()
+    )
+    got = clean_value.refit(exps, final, 8)
+    assert got is not None
+    assert calls == [("viscous", "dahl", "dahl_sigma"), ("viscous",)]
+    assert got[1] == ("dahl", "dahl_sigma") and got[0].params.terms == ("viscous",)

@@ -24,9 +24,9 @@ from dataclasses import dataclass, replace
 from typing import Optional
 
 from ..augmented import AugExperiment, AugFit
-from ..terms import Distortion
+from ..terms import TERMS, Distortion
 from .clean_share import clean
-from .fitting import Scale, fit_from, physical, subset
+from .fitting import Scale, at_a_limit, fit_from, physical, subset
 from .result import ModelSummary, NamedTerm
 
 #: A replaced value within this many of its standard errors of zero is not told from zero on the clean
@@ -40,12 +40,14 @@ class CleanValues:
 
     ``kept``: the clean experiments' sources (empty: every input a sine, nothing replaced); ``left``: the
     others'; ``pooled``: the pooled terms whose values were replaced; ``failed``: the refit on the clean
-    experiments failed (the pooled values stand)."""
+    experiments failed (the pooled values stand); ``undetermined``: terms the clean experiments do not
+    determine (their pooled values stand, said)."""
 
     kept: tuple[str, ...] = ()
     left: tuple[str, ...] = ()
     pooled: tuple[NamedTerm, ...] = ()
     failed: bool = False
+    undetermined: tuple[str, ...] = ()
 
     def text(self, status: str, named: Sequence[NamedTerm]) -> str:
         """The verdict's clause on where the values it quotes (``named``: the named terms and those left
@@ -60,20 +62,30 @@ class CleanValues:
             return (
                 f"; the values named are fitted over all {len(self.kept) + len(self.left)} experiments, "
                 f"those whose input is not a sine ({_list(self.left)}) included: the refit on the "
-                f"{len(self.kept)} whose input is a sine did not converge, and the harmonics of a clipped "
-                "or distorted drive, which the model does not carry, may pull the values beyond their "
-                "standard errors"
+                f"{len(self.kept)} whose input is a sine failed or did not determine them, and the "
+                "harmonics of a clipped or distorted drive, which the model does not carry, may pull the "
+                "values beyond their standard errors"
             )
         pooled = [t for t in self.pooled if t.term in names]
         if not pooled:
             return ""
+        loose = [t for t in named if t.term in self.undetermined]
+        one = len(loose) == 1
+        lost = (
+            f"; on them alone {', '.join(t.label for t in loose)} {'is' if one else 'are'} not determined "
+            f"(refitted without): what named {'it' if one else 'them'} sits in the experiments whose input "
+            f"is not a sine, and {'its value' if one else 'their values'} above {'is' if one else 'are'} "
+            "pooled"
+            if loose
+            else ""
+        )
         was = ", ".join(f"{t.symbol} = {t.value:.4g}" for t in pooled)
         return (
             f"; the values named are fitted on the {len(self.kept)} experiments whose input is a sine "
             f"({_list(self.kept)}) alone: the {len(self.left)} whose input is not ({_list(self.left)}: a "
             "clipped or distorted drive) are left out of them: their input's harmonics reach the output "
             "through G where the model's sine input does not, and can pull a value fitted on them (over all "
-            f"{len(self.kept) + len(self.left)}, pooled: {was})" + _weak_text(named, pooled)
+            f"{len(self.kept) + len(self.left)}, pooled: {was})" + _weak_text(named, pooled) + lost
         )
 
 
@@ -95,42 +107,65 @@ def _list(names: Sequence[str]) -> str:
     return ", ".join(names) if len(names) <= 6 else ", ".join(names[:5]) + f" and {len(names) - 5} more"
 
 
-def refit(fsx: Sequence[AugExperiment], final: AugFit, substeps: int) -> Optional[AugFit]:
+def _undetermined(sub: Sequence[AugExperiment], fit: AugFit) -> set[str]:
+    """The terms the clean experiments do not determine: a two-term element at one of its limits (both
+    members: :func:`.fitting.at_a_limit`), else every term whose standard error is not finite."""
+    par = fit.params
+    at_limit = {t for t in par.terms if TERMS[t].companion and at_a_limit(sub, fit, t)}
+    if at_limit:
+        return at_limit | {TERMS[t].companion for t in at_limit}
+    return {t for t in par.terms if not math.isfinite(fit.standard_error(t))}
+
+
+def refit(
+    fsx: Sequence[AugExperiment], final: AugFit, substeps: int
+) -> Optional[tuple[AugFit, tuple[str, ...]]]:
     """The final model refitted on the clean experiments (:func:`.clean_share.clean`) without the input's
-    own term; None when there is no such subset, no other term, or the refit fails."""
+    own term, and the terms left out because the clean experiments do not determine them
+    (:func:`_undetermined`: refitted once without them); None when there is no such subset, no term to
+    refit, or the refit fails or still leaves a term undetermined."""
     idx = clean(fsx)
     if not idx:
         return None
     sub, par = subset(fsx, final.params, idx)
     par = par.only(t for t in par.terms if t != Distortion.kind)
-    if not par.terms:
-        return None
-    fit = fit_from(sub, par, substeps)
-    return fit if fit is not None and math.isfinite(fit.cost) else None
+    out: tuple[str, ...] = ()
+    for _ in range(2):
+        if not par.terms:
+            return None
+        fit = fit_from(sub, par, substeps)
+        if fit is None or not math.isfinite(fit.cost):
+            return None
+        bad = _undetermined(sub, fit)
+        if not bad:
+            return fit, out
+        out += tuple(t for t in par.terms if t in bad)
+        par = par.only(t for t in par.terms if t not in bad)
+    return None
 
 
 def summary(
     pooled: ModelSummary, fsx: Sequence[AugExperiment], final: AugFit, s: Scale, substeps: int
 ) -> tuple[ModelSummary, CleanValues]:
     """``pooled`` with its terms' values and standard errors from :func:`refit` (the input's own term and
-    a term the refit left undetermined keep theirs), and where they come from."""
+    the terms the clean experiments do not determine keep theirs), and where they come from."""
     idx = clean(fsx)
     if not idx or not final.params.terms:
         return pooled, CleanValues()
     kept = tuple(fsx[i].source for i in idx)
     left = tuple(e.source for i, e in enumerate(fsx) if i not in idx)
-    fit = refit(fsx, final, substeps)
-    if fit is None:
+    got = refit(fsx, final, substeps)
+    if got is None:
         return pooled, CleanValues(kept, left, failed=True)
+    fit, undetermined = got
     terms, replaced = [], []
     for t in pooled.terms:
         if t.term in fit.params.terms:
             v, se = physical(fit, s, t.term)
-            if math.isfinite(v) and math.isfinite(se):
-                replaced.append(t)
-                t = replace(t, value=v, standard_error=se)
+            replaced.append(t)
+            t = replace(t, value=v, standard_error=se)
         terms.append(t)
-    return replace(pooled, terms=tuple(terms)), CleanValues(kept, left, tuple(replaced))
+    return replace(pooled, terms=tuple(terms)), CleanValues(kept, left, tuple(replaced), False, undetermined)
 
 
 __all__ = ["CleanValues", "refit", "summary"]
