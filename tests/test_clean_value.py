@@ -246,14 +246,14 @@ def test_a_clipped_output_is_said_and_a_clean_one_is_not() -> None:
     rail) were "unexplained structure ... not named: inertia on u, inertia on x", nothing said of the output
     (``Measurement.check`` refuses such a channel, only when called). Now the verdict names the two clipped
     outputs as a sensor or DAQ out of range; the same data unclipped get no such clause."""
-    from bouc_wen_id.diagnosis import output_clip
-
     recs = _output_clipped(0.92)
-    assert output_clip.clipped(recs) == ["recording 3", "recording 4"]
-    assert output_clip.clipped(_output_clipped(0.0)) == []
     d = _diagnose(recs)
     assert "the measured output of recording 3, recording 4 looks clipped" in d.verdict, d.verdict
     assert "not device physics" in d.verdict
+    from bouc_wen_id.diagnosis import output_clip
+
+    assert output_clip.clipped(recs) == ["recording 3", "recording 4"]
+    assert output_clip.clipped(_output_clipped(0.0)) == []
 
 
 def test_terms_the_clean_experiments_do_not_determine_are_said_with_their_pooled_values() -> None:
