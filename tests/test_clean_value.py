@@ -301,3 +301,25 @@ def test_the_refit_leaves_out_an_element_at_its_limit(monkeypatch: pytest.Monkey
     assert got is not None
     assert calls == [("viscous", "dahl", "dahl_sigma"), ("viscous",)]
     assert got[1] == ("dahl", "dahl_sigma") and got[0].params.terms == ("viscous",)
+
+
+def test_a_coarsely_quantised_output_is_not_judged() -> None:
+    """A saturating loop quantised coarsely with little noise holds its top level for runs that pass for a
+    clip (tests/test_diagnosis_across_gate.py's outputs: 3-4 of 8 flagged before the rule); an output whose
+    step is above 1e-3 of its range is not judged, one at 12 bits is, clipped or not."""
+    from bouc_wen_id.diagnosis import output_clip
+
+    def quantised(recs: list[Any], step: float) -> list[Any]:
+        out = []
+        for r in recs:
+            y = np.asarray(r.y, dtype=np.float64)
+            q = step * float(np.ptp(y))
+            out.append(bw.Recording(r.t, r.u, np.round(y / q) * q, r.amplitude, r.frequency, SETTLE))
+        return out
+
+    clean, clipped = _output_clipped(0.0), _output_clipped(0.92)
+    assert output_clip.clipped(quantised(clipped, 2.0**-12)) == ["recording 3", "recording 4"]
+    assert output_clip.clipped(quantised(clean, 2.0**-12)) == []
+    for r in quantised(clipped, 0.01):
+        assert output_clip.coarse(np.asarray(r.y, dtype=np.float64))
+    assert output_clip.clipped(quantised(clipped, 0.01)) == []
