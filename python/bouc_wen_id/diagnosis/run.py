@@ -23,6 +23,7 @@ from . import (
     beside,
     centre_decay,
     clean_share,
+    clean_value,
     drift_clause,
     free_dc,
     gate,
@@ -32,6 +33,7 @@ from . import (
     law_untested,
     lines,
     loop_centre,
+    output_clip,
     pairs,
     resolution,
     revisit,
@@ -566,6 +568,7 @@ def _diagnose(
     wander = baseline.detect(experiments, level) or zero_drift.detect(experiments, level)
     args = (cands, float(alpha), held_out_test, units, report)
     d = _with_wander(experiments, *args, wander)
+    d = replace(d, verdict=d.verdict + output_clip.clause(_as_list(experiments)))  # output_clip.py
     if line_notes:
         d = replace(d, verdict=d.verdict + lines.clause(line_notes), notes=(*line_notes, *d.notes))
     if isinstance(wander, zero_drift.Drift) and wander.loop_trends:
@@ -799,7 +802,7 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
     dexps = detrended(fexps, deg, s.y) if deg is not None and named_deg else fexps
     after = _drift_checked(_localise(dexps, fsx, final, s), dexps)
     plain_sum = _summary(exps, sx, plain, s, setup.units)
-    final_sum = _summary(fexps, fsx, final, s, setup.units)
+    final_sum, cv = clean_value.summary(_summary(fexps, fsx, final, s, setup.units), fsx, final, s, substeps)
     if deg is not None and named_deg:
         sym, unit = term_symbol_unit(deg.term, *setup.units)
         final_sum = replace(
@@ -815,7 +818,7 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
     judged = classify(plain_ok, bool(final.params.terms) or named_deg, adequate(final), share)
     status, named, partial, verdict = _judged(judged, final_sum, (before, after), fraction, fexps)
     verdict += (centre.text or _law_text(steps)) + beside.text(steps) + unphysical_places_text(steps, named)
-    verdict += clean_share.text(status, named, fraction, cshare, fsx)
+    verdict += clean_share.text(status, named, fraction, cshare, fsx) + cv.text(status, (*named, *partial))
     verdict += law_untested.text(named, fexps) + input_note.text(
         status, (*named, *partial), fexps, final_sum.outputs
     )
