@@ -21,11 +21,13 @@ enough for a quiet machine: ``nice -n 10 python studies/se_coverage.py --seeds 8
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import math
 import sys
 import time
 import warnings
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any, Optional
 
@@ -99,6 +101,25 @@ def review_draws(key: str, size: float, g: str, review_dir: str, seeds: int) -> 
     return value, (draw(k) for k in range(1, seeds + 1))
 
 
+@contextlib.contextmanager
+def _before_se(seen: list[float]) -> Iterator[None]:
+    """Record the drift term's se as quoted before session 34 (the blocks' or the refinement's, without the
+    steady fit's share, diagnosis/drift_se.py) while diagnosing: the value is the same, only the se grew."""
+    from bouc_wen_id.diagnosis import drift_se
+
+    original = drift_se.added
+
+    def spy(deg: Any, *args: Any) -> Any:
+        seen.append(float(deg.standard_error))
+        return original(deg, *args)
+
+    drift_se.added = spy
+    try:
+        yield
+    finally:
+        drift_se.added = original
+
+
 def study(label: str, gen_name: str, args: argparse.Namespace) -> Optional[dict[str, Any]]:
     """One row: the term's draws diagnosed, the named values and ses."""
     import bouc_wen_id as bw
@@ -113,9 +134,10 @@ def study(label: str, gen_name: str, args: argparse.Namespace) -> Optional[dict[
             return None
         truth, draws = review_draws(rkey, args.size, args.g, args.review_dir, args.seeds)
         where = f"review {args.g}"
-    vals, ses, missed = [], [], 0
+    vals, ses, before, missed = [], [], [], 0
     for recs in draws:
-        with warnings.catch_warnings():
+        seen: list[float] = []
+        with warnings.catch_warnings(), _before_se(seen):
             warnings.simplefilter("ignore")
             d = bw.diagnose(recs)
         got = [t for t in d.named if t.term == code]
@@ -124,11 +146,13 @@ def study(label: str, gen_name: str, args: argparse.Namespace) -> Optional[dict[
             continue
         vals.append(float(got[0].value))
         ses.append(float(got[0].standard_error))
+        before.append(seen[-1] if seen and code in ("degradation", "stiffness_degradation") else ses[-1])
     n = len(vals)
     v, s = np.array(vals), np.array(ses)
     ratio = float(np.std(v, ddof=1) / np.median(s)) if n >= 2 else math.nan
     cover = float(np.mean(np.abs(v - truth) < 2.0 * s)) if n else math.nan
     lo, hi = ratio_interval(n)
+    old = float(np.std(v, ddof=1) / np.median(before)) if n >= 2 else math.nan
     return dict(
         term=label,
         gen=where,
@@ -137,6 +161,7 @@ def study(label: str, gen_name: str, args: argparse.Namespace) -> Optional[dict[
         named=n,
         missed=missed,
         ratio=ratio,
+        ratio_before=old,
         lo=lo,
         hi=hi,
         cover=cover,
@@ -166,8 +191,8 @@ def main(argv: Optional[list[str]] = None) -> int:
     if unknown:
         ap.error(f"unknown terms {unknown}; known: {list(TERMS)}")
     print(
-        f"{'term':24s} {'generator':28s} {'named':>5s} {'ratio':>6s} {'95% if right':>12s} {'cover2se':>8s} "
-        f"{'mean/truth':>10s} {'median se':>10s}"
+        f"{'term':22s} {'generator':26s} {'named':>5s} {'ratio':>6s} {'before':>6s} {'95% if right':>12s} "
+        f"{'cover2se':>8s} {'mean/truth':>10s} {'median se':>10s}"
     )
     for gen_name in args.gens.split(","):
         for label in args.terms.split(","):
@@ -175,7 +200,8 @@ def main(argv: Optional[list[str]] = None) -> int:
             if row is None:
                 continue
             print(
-                f"{row['term']:24s} {row['gen']:28s} {row['named']:2d}/{args.seeds:<2d} {row['ratio']:6.2f} "
+                f"{row['term']:22s} {row['gen']:26s} {row['named']:2d}/{args.seeds:<2d} {row['ratio']:6.2f} "
+                f"{row['ratio_before']:6.2f} "
                 f"{row['lo']:5.2f}-{row['hi']:5.2f}  {row['cover']:8.2f} {row['mean'] / row['truth']:10.4f} "
                 f"{row['median_se']:10.3g}",
                 flush=True,

@@ -25,6 +25,7 @@ from typing import Any, Optional
 import numpy as np
 
 from ..augmented import AugExperiment, AugFit
+from ..errors import BoucWenIdError, BudgetExceededError
 from .data import DiagExperiment
 from .drift import DEGRADATION, DriftData, _sums, corrected, drift_data, strengths
 from .fitting import fit_from
@@ -55,7 +56,7 @@ def _shifted(fit: AugFit, delta: np.ndarray) -> Optional[AugFit]:
 
 
 def _estimate(data: Sequence[DriftData], regs: Sequence[DriftData], term: str) -> float:
-    """The drift-space ``d`` of ``data``'s deviations against the regressors of ``regs`` (same experiments)."""
+    """The drift-space ``d`` of ``data``'s deviations against ``regs``' regressors (same experiments)."""
     num = den = 0.0
     for dd, rr in zip(data, regs):
         moved = replace(rr, dev=dd.dev, t=dd.t, w=dd.w)
@@ -96,7 +97,12 @@ def regressor_variance(
             moved = _shifted(fit, sign * STEP_SD * axes[:, k])
             if moved is None:
                 break
-            regs = drift_data(exps, sx, moved, y_scale, substeps, strength=strength)
+            try:
+                regs = drift_data(exps, sx, moved, y_scale, substeps, strength=strength)
+            except BudgetExceededError:  # a limit the user set
+                raise
+            except BoucWenIdError:  # a moved loop the core cannot solve: this axis adds nothing
+                break
             if [dd.index for dd in regs] != index:
                 break
             got.append(_estimate(data, regs, term))
@@ -125,17 +131,23 @@ def feedback(
     the virgin fit re-estimated, the regressor formed at each loop's mean strength under d). The passes
     settle on ``d = F(d)``, so a noise moving F by ``e`` moves the settled d by ``e / (1 - F')``
     (measured on review 33's degr_2p: F' = 0.16, 0.16 on two draws). 0 for stiffness degradation (its d
-    is the plain fit's) or when a pass fails; clipped to :data:`FEEDBACK_MAX`."""
+    is the plain fit's) or when a pass fails (measured once: a refit at d + 3 % ran to mu = 1, beta = gamma
+    on a 30x bench case, whose loop the core could not solve); clipped to :data:`FEEDBACK_MAX`."""
     if deg.term != DEGRADATION or not deg.d > 0:
         return 0.0
     out = []
     for sign in (1.0, -1.0):
         dv = deg.d * (1.0 + sign * FEEDBACK_STEP)
-        _, fsx = corrected(exps, sx, fit, dv, y_scale, substeps, deg.term)
-        moved = fit_from(fsx, fit.params, substeps)
-        if moved is None:
+        try:
+            _, fsx = corrected(exps, sx, fit, dv, y_scale, substeps, deg.term)
+            moved = fit_from(fsx, fit.params, substeps)
+            if moved is None:
+                return 0.0
+            regs = drift_data(exps, sx, moved, y_scale, substeps, strength=strengths(len(exps), data, dv))
+        except BudgetExceededError:  # a limit the user set
+            raise
+        except BoucWenIdError:  # a pass the core cannot solve (a fit run to mu = 1, beta = gamma): no gain
             return 0.0
-        regs = drift_data(exps, sx, moved, y_scale, substeps, strength=strengths(len(exps), data, dv))
         if [dd.index for dd in regs] != [dd.index for dd in data]:
             return 0.0
         out.append(_estimate(data, regs, deg.term))
