@@ -66,7 +66,8 @@ def _drift_stage(recs: list[Any]) -> tuple[Any, ...]:
 
 def _coordinates(fit: Any) -> np.ndarray:
     p = fit.params
-    return np.r_[p.beta, p.gamma, p.mu, p.values, np.c_[p.gains, p.phases].ravel()]
+    out: np.ndarray = np.r_[p.beta, p.gamma, p.mu, p.values, np.c_[p.gains, p.phases].ravel()]
+    return out
 
 
 def test_regressor_variance_is_the_delta_method_over_every_fitted_parameter(clean: list[Any]) -> None:
@@ -131,7 +132,7 @@ def test_the_named_degradation_quotes_the_wider_se(clean: list[Any], monkeypatch
     from bouc_wen_id.diagnosis import run
 
     seen: list[float] = []
-    original = run.degradation_test
+    original = D.degradation_test  # run.py's own name for it
 
     def spy(*args: Any, **kwargs: Any) -> Any:
         out = original(*args, **kwargs)
