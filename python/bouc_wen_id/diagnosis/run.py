@@ -25,6 +25,7 @@ from . import (
     clean_share,
     clean_value,
     drift_clause,
+    drift_se,
     free_dc,
     gate,
     input_note,
@@ -394,8 +395,10 @@ def _degradation_stage(
         return deg, list(exps), list(sx), plain
     # The unrecorded age of each record (age.py): kept when its F-test passes, else the ages are 0.
     exps, fit, deg, data = _aged(exps, sx, fit, data, deg, s, substeps, alpha / family)
+    spread = drift_se.spread(exps, sx, fit if term == DEGRADATION else plain, data, deg, s.y, substeps)
     if deg.d > 0:
         deg, fit = _refine_degradation(exps, sx, fit, data, deg, s, substeps)
+    deg = drift_se.added(deg, *spread, s.y)
     fexps, fsx = corrected(exps, sx, fit, deg.d, s.y, substeps, term)
     # The steady selection starts from the plain model converged on the periods it runs on: the refinement's
     # fit is not (it was fitted before the last correction at the refined d), and a start left short of its
