@@ -129,7 +129,7 @@ def _found_text(b: Beyond, demoted: bool, fraction: float, kept: Sequence[NamedT
 
 def _mu_text(b: Beyond) -> str:
     shape = (
-        "a loop whose tangent falls faster after each reversal than mu = 1 draws (mu < 1)"
+        "a tangent that falls faster after each reversal than mu = 1 draws (mu < 1)"
         if b.mu_face == "lower"
         else "a sharper yield than the bracket's end draws"
     )
