@@ -14,12 +14,12 @@ headline rather than left to stand-ins.
   within the ranges, those are stand-ins for it and are not named (review 34 problem 1: k_u = -0.0447
   removed 95 % at p adj 1e-50; the verdict named sensor lag + Dahl on x at 65 %). The detection limits do not
   state ``|k| < limit`` for such a term (:mod:`.limits`): it was refused by its bound, not undetected.
-- **The hysteresis exponent at an end of its bracket** (:func:`mu_text`): the final fit held at mu's bracket
+- **The hysteresis exponent at an end of its bracket** (:func:`apply`): the final fit held at mu's bracket
   end (the core's ``mu=lower`` / ``mu=upper`` face) means the loops ask for a shape the model cannot draw
-  (the identification method assumes mu >= 1; the core's |w|^(mu - 1) has no bounded slope at w = 0 below
-  it, so the bracket is not extended); a misfit then is read against a misspecified hysteresis, and the
-  terms that fit part of it are conditional stand-ins, not named (review 34 problem 2: mu = 0.5 named viscous
-  + Coulomb + Dahl on x on a null).
+  (the identification assumes mu >= 1; the core's |w|^(mu - 1) has no bounded slope at w = 0 below it, so
+  the bracket is not extended); a misfit then is read against a misspecified hysteresis, and the verdict
+  says so first: the terms that fit part of it are conditional on it and may stand in for that shape
+  (review 34 problem 2: mu = 0.5 named viscous + Coulomb + Dahl on x on a null and never mentioned mu).
 """
 
 from __future__ import annotations
@@ -71,15 +71,29 @@ class Beyond:
     mu: float = math.nan
 
 
+def held_mu(fit: AugFit) -> Beyond:
+    """``fit``'s mu face (the core's ``mu=lower`` / ``mu=upper``; "" inside its bracket) and its mu."""
+    faces = [a.partition("=")[2] for a in getattr(fit, "active", ()) if a.startswith("mu=")]
+    mu = getattr(getattr(fit, "params", None), "mu", math.nan)  # a stub without params: inside
+    return Beyond(mu_face=faces[0] if faces else "", mu=float(mu))
+
+
+def across_text(groups: Sequence[Any], status: str) -> str:
+    """The clause on mu held at its bracket's end at the conditions of :func:`.across.diagnose_across`
+    (each condition's final fit, ``g.current``; ``""`` when none or the verdict is adequate)."""
+    if status == "adequate":
+        return ""
+    said = [(g.label, held_mu(g.current)) for g in groups]
+    return "".join(f"; at {label}: {_mu_text(b).rstrip('; ')}" for label, b in said if b.mu_face)
+
+
 def found(
     steps: Sequence[Step], alpha: float, final: AugFit, s: Scale, units: tuple[str, str], exps: Sequence[Any]
 ) -> Beyond:
     """The candidates of the first step refused only by their bound that remove most of the excess and no
     less than the final model (``final``, its cost on the steps' experiments ``exps``) within the tie
     margin, and ``final``'s mu face."""
-    faces = [a.partition("=")[2] for a in getattr(final, "active", ()) if a.startswith("mu=")]
-    face = faces[0] if faces else ""
-    mu = float(final.params.mu)
+    face, mu = held_mu(final).mu_face, float(final.params.mu)
     if not steps:
         return Beyond(mu_face=face, mu=mu)
     st = steps[0]
@@ -136,8 +150,8 @@ def _mu_text(b: Beyond) -> str:
     return (
         f"the hysteresis exponent is held at the {b.mu_face} end of its bracket (mu = {b.mu:.3g}): the loops "
         f"ask for {shape}, outside the model's validated range (the identification assumes mu >= 1), so the "
-        "misfit is read against a hysteresis shape the model cannot draw and a term that fits part of it is "
-        "a conditional stand-in for that shape, not named; "
+        "misfit is read against a hysteresis shape the model cannot draw: what follows is conditional on it, "
+        "and a term that fits part of the misfit may stand in for that shape; "
     )
 
 
@@ -151,10 +165,12 @@ def apply(
     """``(status, named, head, tail)``: the verdict's status and named terms after the values held at a
     bound, with the clause that leads the verdict (``head``) and the one that closes it (``tail``).
     "Unexplained", the named terms demoted to stand-ins, when a candidate beyond its range removes clearly
-    more than the final model's ``terms`` (which remove ``fraction`` of the excess), or when the final fit
-    holds mu at its bracket's end with a misfit left (not "explained": an adequate final model within the
-    bracket stands; its fit note says the face); a candidate beyond its range as good as the final model is
-    said after it."""
+    more than the final model's ``terms`` (which remove ``fraction`` of the excess); a candidate beyond its
+    range as good as the final model is said after it. A final fit holding mu at its bracket's end with a
+    misfit left (not "explained": an adequate final model within the bracket stands, its fit note says the
+    face) heads the verdict with that, the rest conditional on it; the named terms stay (real data: the MR
+    damper at 0.5 A holds mu at 1 beside a viscous damping on u that its physics has), said as conditional.
+    """
     named = tuple(named)
     if b is None or status == "adequate":
         return status, named, "", ""
@@ -162,9 +178,7 @@ def apply(
         head = _found_text(b, True, fraction, terms) + (_mu_text(b) if b.mu_face else "")
         return "unexplained", (), head, ""
     tail = _found_text(b, False, fraction, terms) if b.found else ""
-    if b.mu_face and status != "explained":
-        return ("unexplained" if named else status), (), _mu_text(b), tail
-    return status, named, "", tail
+    return status, named, (_mu_text(b) if b.mu_face and status != "explained" else ""), tail
 
 
-__all__ = ["Beyond", "apply", "found", "refused_by_bound", "MOST"]
+__all__ = ["Beyond", "across_text", "apply", "found", "held_mu", "refused_by_bound", "MOST"]
