@@ -16,7 +16,9 @@ headline rather than left to stand-ins.
   state ``|k| < limit`` for such a term (:mod:`.limits`): it was refused by its bound, not undetected.
 - **The hysteresis exponent at an end of its bracket** (:func:`apply`): the final fit held at mu's bracket
   end (the core's ``mu=lower`` / ``mu=upper`` face) means the loops ask for a shape the model cannot draw
-  (the identification assumes mu >= 1; the core's |w|^(mu - 1) has no bounded slope at w = 0 below it, so
+  (the identification assumes mu >= 1, ``identify``'s mu_bracket refuses lo < 1; the core's right-hand side
+  takes ``sgn(w) |w|^mu`` and is finite at w = 0 for any mu > 0, but its sensitivities carry
+  ``mu |w|^(mu - 1)`` (rust/steady.rs, rust/series_loop.rs), unbounded at every zero of w below mu = 1, so
   the bracket is not extended); a misfit then is read against a misspecified hysteresis, and the verdict
   says so first: the terms that fit part of it are conditional on it and may stand in for that shape
   (review 34 problem 2: mu = 0.5 named viscous + Coulomb + Dahl on x on a null and never mentioned mu).
