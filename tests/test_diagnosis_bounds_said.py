@@ -58,7 +58,7 @@ def test_a_final_fit_held_at_the_mu_bracket_heads_the_verdict() -> None:
     kept = (_named(T.ViscousX.kind), _named(T.CoulombX.kind))
     status, named, head, _ = bounds_said.apply(held, "partly explained", kept, kept, 0.6)
     assert status == "partly explained" and named == kept
-    assert head.startswith("the hysteresis exponent is held at the lower end of its bracket (mu = 1)")
+    assert head.startswith("the hysteresis exponent is held at the lower end of its bracket (mu = 1;")
     assert "conditional" in head
     assert bounds_said.apply(held, "unexplained", (), kept, 0.3)[2] == head
     # An adequate verdict and a final model that passes within the bracket stand as they were.

@@ -144,16 +144,12 @@ def _found_text(b: Beyond, demoted: bool, fraction: float, kept: Sequence[NamedT
 
 
 def _mu_text(b: Beyond) -> str:
-    shape = (
-        "a tangent that falls faster after each reversal than mu = 1 draws (mu < 1)"
-        if b.mu_face == "lower"
-        else "a sharper yield than the bracket's end draws"
-    )
+    asked = "mu < 1" if b.mu_face == "lower" else "a mu beyond it"
     return (
-        f"the hysteresis exponent is held at the {b.mu_face} end of its bracket (mu = {b.mu:.3g}): the loops "
-        f"ask for {shape}, outside the model's validated range (the identification assumes mu >= 1), so the "
-        "misfit is read against a hysteresis shape the model cannot draw: what follows is conditional on it, "
-        "and a term that fits part of the misfit may stand in for that shape; "
+        f"the hysteresis exponent is held at the {b.mu_face} end of its bracket (mu = {b.mu:.3g}; the loops "
+        f"ask for {asked}, outside the model's validated range, the identification's mu >= 1): what follows "
+        "is conditional on it, and a term that fits part of the misfit may stand in for the hysteresis shape "
+        "the model cannot draw; "
     )
 
 
