@@ -35,7 +35,7 @@ from dataclasses import replace
 from typing import Any
 
 from ..terms import TERMS, Play, StiffnessX, physical_value
-from . import beside, gate, law_untested
+from . import beside, bounds_said, gate, law_untested
 from .caveats import family_text, joint_separation, latent_levels, masing_separation, unphysical_places_text
 from .locate import adequacy_p
 from .result import NamedTerm, Status
@@ -184,7 +184,7 @@ def clauses(
     text = ""
     if status == "partly explained":
         text += partly_text(groups, alpha)
-    text += _unphysical_text(unphysical(partial))
+    text += bounds_said.across_text(groups, status) + _unphysical_text(unphysical(partial))
     text += _law_text(steps) + beside.text(steps)
     as_said = [NamedTerm(t.term, t.symbol, math.nan, math.nan, t.unit) for t in named if t.term in TERMS]
     text += unphysical_places_text(steps, as_said)  # another place that fits only non-physically

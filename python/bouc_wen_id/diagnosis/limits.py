@@ -31,6 +31,7 @@ import numpy as np
 from ..augmented import AugExperiment, AugFit, augmented_output
 from ..errors import BoucWenIdError, BudgetExceededError
 from . import free_dc
+from .bounds_said import refused_by_bound
 from .design_hint import DesignHint, design_hint
 from .fitting import Scale, fit_from, physical
 from .result import TERM_LABELS, term_symbol_unit
@@ -303,6 +304,11 @@ def detection_limits(
             lim, lim90 = _refined(profile, tr.term, lim, targets)
         factor = abs(s.factor(tr.term, base.params.mu))
         note = "" if math.isfinite(lim) else "not detectable within the term's admissible range"
+        if refused_by_bound(tr, level):  # detected, beyond its range: no |v| < limit (bounds_said.py)
+            lim = lim90 = math.inf
+            note = (
+                f"detected with {sym} = {v:.3g} {unit}".rstrip() + ", outside its physical range (not named)"
+            )
         out.append(
             DetectionLimit(
                 tr.term,

@@ -21,6 +21,7 @@ from . import (
     age,
     baseline,
     beside,
+    bounds_said,
     centre_decay,
     clean_share,
     clean_value,
@@ -819,7 +820,8 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
     cshare = clean_share.share(sx, plain, fsx, final)  # on the clean inputs alone (clean_share.py)
     share = clean_share.naming_share(_naming_share(fraction, deg, named_deg), cshare)
     judged = classify(plain_ok, bool(final.params.terms) or named_deg, adequate(final), share)
-    status, named, partial, verdict = _judged(judged, final_sum, (before, after), fraction, fexps)
+    held = bounds_said.found(steps, alpha, final, s, setup.units, fsx)  # values held at a bound
+    status, named, partial, verdict = _judged(judged, final_sum, (before, after), fraction, fexps, held)
     verdict += (centre.text or _law_text(steps)) + beside.text(steps) + unphysical_places_text(steps, named)
     verdict += clean_share.text(status, named, fraction, cshare, fsx) + cv.text(status, (*named, *partial))
     verdict += law_untested.text(named, fexps) + input_note.text(
@@ -901,6 +903,7 @@ def _judged(
     located: tuple[Localisation, Localisation],
     fraction: float,
     fexps: Sequence[DiagExperiment],
+    held: Optional[bounds_said.Beyond] = None,
 ) -> tuple[Status, tuple[NamedTerm, ...], tuple[NamedTerm, ...], str]:
     """``(status, named, partial, verdict)``: a term outside its physical range is never named (the rest is
     at most a partial explanation), and the verdict says what the non-physical value and a residual DC of
@@ -914,12 +917,13 @@ def _judged(
         named = tuple(t for t in final.terms if t not in unphysical)
     if not named and status != "adequate":
         status = "unexplained"
+    status, named, head, tail = bounds_said.apply(held, status, named, final.terms, fraction)
     partial = tuple(t for t in final.terms if t not in named)
     drift = drift_clause.clause(after, before, named)  # beyond a named drift term (drift_clause.py)
-    verdict = _verdict(
+    verdict = head + _verdict(
         status, named, tuple(t for t in partial if t not in unphysical), after, fraction, drift
     )
-    verdict += _unphysical_text(unphysical)
+    verdict += _unphysical_text(unphysical) + tail
     if status != "adequate":
         offset = any(t.term == Offset.kind for t in final.terms)  # said about it, not against it
         verdict += _centre_text(fexps, final.outputs, max(1.0, final.cost / max(final.dof, 1)), offset)

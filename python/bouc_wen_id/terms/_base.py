@@ -116,6 +116,10 @@ class Term:
     physical: ClassVar[tuple[float, float]] = UNBOUNDED
     #: What a fitted value outside :attr:`physical` would mean (said when the diagnosis declines to name it).
     unphysical: ClassVar[str] = ""
+    #: What a value beyond :attr:`physical` that fits most of a misfit suggests (the physics or the recording
+    #: error that gives such a value; said by the verdict, diagnosis/bounds_said.py); "" when nothing more
+    #: than :attr:`unphysical`.
+    beyond: ClassVar[str] = ""
     #: Why the lower bound holds (appended to the error message).
     bound_note: ClassVar[str] = ""
     #: Seen on the averaged steady period (False: only in the period-by-period record, design.md 10.6).

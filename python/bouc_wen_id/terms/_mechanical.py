@@ -56,6 +56,10 @@ class Stiffness(Term):
         "amplitude: the hysteresis' own saturation shape, a strength falling with amplitude, or |G| "
         "trading with it below saturation)"
     )
+    beyond: ClassVar[str] = (
+        "a negative stiffness in parallel: a geometric (P-Delta) or magnetic negative-stiffness mechanism, "
+        "or an input recorded with the wrong sign or scale"
+    )
 
 
 @dataclass(frozen=True)
@@ -74,6 +78,10 @@ class Viscous(Term):
     places: ClassVar[tuple[Place, ...]] = MECHANICAL_PLACES
     physical: ClassVar[tuple[float, float]] = NON_NEGATIVE
     unphysical: ClassVar[str] = "a negative damping (energy supplied, not dissipated)"
+    beyond: ClassVar[str] = (
+        "energy supplied each cycle: an active element (a controlled actuator in the loop), or a phase error "
+        "between the recorded channels (a lag of u against y, or a negative stiffness seen through G's phase)"
+    )
     linear: ClassVar[bool] = True
     scaling: ClassVar[tuple[float, float, float]] = (1.0, -1.0, 0.0)
 
@@ -96,6 +104,10 @@ class Inertia(Term):
     places: ClassVar[tuple[Place, ...]] = MECHANICAL_PLACES
     physical: ClassVar[tuple[float, float]] = NON_NEGATIVE
     unphysical: ClassVar[str] = "a negative mass"
+    beyond: ClassVar[str] = (
+        "a negative mass: at one frequency a stiffness of the same sign (-m w^2 acts as +k), or an input "
+        "recorded with the wrong sign or scale"
+    )
     linear: ClassVar[bool] = True
     scaling: ClassVar[tuple[float, float, float]] = (1.0, -1.0, 0.0)
 

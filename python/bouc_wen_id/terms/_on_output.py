@@ -46,6 +46,7 @@ class SensorLag(Term):
     bounds: ClassVar[tuple[float, float]] = NON_NEGATIVE
     physical: ClassVar[tuple[float, float]] = NON_NEGATIVE
     unphysical: ClassVar[str] = "a negative lag (an output ahead of its cause)"
+    beyond: ClassVar[str] = "a time offset between the recorded channels (y stamped ahead of u)"
 
     @classmethod
     def start(cls, context: StartContext) -> tuple[float, ...]:

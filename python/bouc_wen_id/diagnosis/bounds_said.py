@@ -1,0 +1,182 @@
+"""What the verdict says of values held at an admissible bound (issue 18: "a value outside its physical range
+is never named: fit within the admissible range, or report 'not physical' and what that suggests").
+
+Two cases, one job: a misfit whose best reading lies beyond a range the model keeps, said in the verdict's
+headline rather than left to stand-ins.
+
+- **A candidate beyond its physical range** (:func:`refused_by_bound`): a first-step candidate that passes
+  every test of the step (F test at the step's level, a material share, its value away from its null) but
+  whose value lies outside the term's physical range (a negative stiffness) is refused by the selection
+  (:func:`.select._admissible`). When it removes most of the excess (at least
+  :data:`.run.PARTLY_EXPLAINED_FRACTION`) and no less than the final model does (within the tie margin of
+  :func:`.select._tied`), the verdict says its value, the share it would remove and what such a value
+  suggests (the registry's ``beyond``); when it removes clearly more than the terms the selection kept
+  within the ranges, those are stand-ins for it and are not named (review 34 problem 1: k_u = -0.0447
+  removed 95 % at p adj 1e-50; the verdict named sensor lag + Dahl on x at 65 %). The detection limits do not
+  state ``|k| < limit`` for such a term (:mod:`.limits`): it was refused by its bound, not undetected.
+- **The hysteresis exponent at an end of its bracket** (:func:`apply`): the final fit held at mu's bracket
+  end (the core's ``mu=lower`` / ``mu=upper`` face) means the loops ask for a shape the model cannot draw
+  (the identification assumes mu >= 1, ``identify``'s mu_bracket refuses lo < 1; the core's right-hand side
+  takes ``sgn(w) |w|^mu`` and is finite at w = 0 for any mu > 0, but its sensitivities carry
+  ``mu |w|^(mu - 1)`` (rust/steady.rs, rust/series_loop.rs), unbounded at every zero of w below mu = 1, so
+  the bracket is not extended); a misfit then is read against a misspecified hysteresis, and the verdict
+  says so first: the terms that fit part of it are conditional on it and may stand in for that shape
+  (review 34 problem 2: mu = 0.5 named viscous + Coulomb + Dahl on x on a null and never mentioned mu).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any, Optional
+
+from ..augmented import AugFit
+from ..terms import TERMS
+from .fitting import Scale, physical
+from .result import NamedTerm, Status, term_symbol_unit
+from .select import MATERIAL_SHARE, TIE_SD, Step, Trial, _admissible, at_null, away_from_null, dof_of
+
+#: Share of the excess a candidate beyond its range must remove to be said ("most of the excess").
+MOST = 0.5
+
+
+def refused_by_bound(tr: Trial, level: float) -> bool:
+    """Whether ``tr`` passed its step's tests at ``level`` (F test, material share, away from its null) and
+    was refused only because its value lies outside the term's physical range."""
+    f = tr.fit
+    if f is None or not (math.isfinite(tr.p_adjusted) and tr.p_adjusted < level):
+        return False
+    if not (tr.share >= MATERIAL_SHARE) or _admissible(f, tr.term) or at_null(f, tr.term):
+        return False
+    return away_from_null(f, tr.term, level)
+
+
+def _tie(better: float, worse: float, cost: float, dof: int) -> bool:
+    """Whether improvements ``better`` >= ``worse`` (chi-square) are within :data:`.select.TIE_SD` of the
+    larger's noise (:func:`.select._tied`'s rule: sd ~ 2 sqrt(Delta C s2), s2 the residual variance)."""
+    s2 = max(1.0, cost / dof) if dof > 0 else 1.0
+    return better - worse <= TIE_SD * 2.0 * math.sqrt(max(better, 0.0) * s2)
+
+
+@dataclass(frozen=True)
+class Beyond:
+    """The out-of-range candidates the verdict says (best first), whether they remove clearly more than the
+    final model, and the final fit's mu face."""
+
+    #: (the term with its value in physical units, its trial), best first; empty when none is said.
+    found: tuple[tuple[NamedTerm, Trial], ...] = ()
+    #: The best of them removes clearly more than the final model (beyond the tie margin).
+    beats_final: bool = False
+    #: "lower" / "upper": the final fit held at that end of mu's bracket; "" inside.
+    mu_face: str = ""
+    mu: float = math.nan
+
+
+def held_mu(fit: AugFit) -> Beyond:
+    """``fit``'s mu face (the core's ``mu=lower`` / ``mu=upper``; "" inside its bracket) and its mu."""
+    faces = [a.partition("=")[2] for a in getattr(fit, "active", ()) if a.startswith("mu=")]
+    mu = getattr(getattr(fit, "params", None), "mu", math.nan)  # a stub without params: inside
+    return Beyond(mu_face=faces[0] if faces else "", mu=float(mu))
+
+
+def across_text(groups: Sequence[Any], status: str) -> str:
+    """The clause on mu held at its bracket's end at the conditions of :func:`.across.diagnose_across`
+    (each condition's final fit, ``g.current``; ``""`` when none or the verdict is adequate)."""
+    if status == "adequate":
+        return ""
+    said = [(g.label, held_mu(g.current)) for g in groups]
+    return "".join(f"; at {label}: {_mu_text(b).rstrip('; ')}" for label, b in said if b.mu_face)
+
+
+def found(
+    steps: Sequence[Step], alpha: float, final: AugFit, s: Scale, units: tuple[str, str], exps: Sequence[Any]
+) -> Beyond:
+    """The candidates of the first step refused only by their bound that remove most of the excess and no
+    less than the final model (``final``, its cost on the steps' experiments ``exps``) within the tie
+    margin, and ``final``'s mu face."""
+    face, mu = held_mu(final).mu_face, float(final.params.mu)
+    if not steps:
+        return Beyond(mu_face=face, mu=mu)
+    st = steps[0]
+    level = 0.5 * alpha if st.targeted else alpha
+    hits = sorted(
+        (tr for tr in st.trials if refused_by_bound(tr, level) and tr.share >= MOST), key=lambda t: t.cost
+    )
+    if not hits:
+        return Beyond(mu_face=face, mu=mu)
+    best, dof = hits[0], dof_of(exps, final)
+    imp_final = st.before_cost - final.cost
+    if best.improvement < imp_final and not _tie(imp_final, best.improvement, final.cost, dof):
+        return Beyond(mu_face=face, mu=mu)  # the final model removes clearly more: no reading of it
+    beats = bool(final.params.terms) and not _tie(best.improvement, imp_final, best.cost, dof)
+    keep = [tr for tr in hits if _tie(best.improvement, tr.improvement, best.cost, st.before_dof)]
+    out = []
+    for tr in keep:
+        assert tr.fit is not None
+        v, se = physical(tr.fit, s, tr.term)
+        sym, unit = term_symbol_unit(tr.term, *units)
+        out.append((NamedTerm(tr.term, sym, v, se, unit), tr))
+    return Beyond(tuple(out), beats and best.improvement > imp_final, face, mu)
+
+
+def _suggests(term: str) -> str:
+    cls = TERMS[term]
+    return cls.beyond or cls.unphysical or "a value outside its physical range"
+
+
+def _found_text(b: Beyond, demoted: bool, fraction: float, kept: Sequence[NamedTerm]) -> str:
+    what = "; ".join(
+        f"{t} would remove {100 * tr.share:.0f} % of the excess alone (p adj = {tr.p_adjusted:.2g}), beyond "
+        f"its physical range: {_suggests(t.term)}"
+        for t, tr in b.found
+    )
+    if not demoted:
+        return f"; also fits with a value outside its physical range, not named: {what}"
+    labels = ", ".join(t.label for t in kept)
+    instead = (
+        f"; the terms the selection kept within the ranges ({labels}) remove {100 * fraction:.0f} % of the "
+        "excess and stand in for it, not named"
+        if kept
+        else ""
+    )
+    return f"not explained within the terms' physical ranges: {what}{instead}; "
+
+
+def _mu_text(b: Beyond) -> str:
+    asked = "mu < 1" if b.mu_face == "lower" else "a mu beyond it"
+    return (
+        f"the hysteresis exponent is held at the {b.mu_face} end of its bracket (mu = {b.mu:.3g}; the loops "
+        f"ask for {asked}, outside the model's validated range, the identification's mu >= 1): what follows "
+        "is conditional on it, and a term that fits part of the misfit may stand in for the hysteresis shape "
+        "the model cannot draw; "
+    )
+
+
+def apply(
+    b: Optional[Beyond],
+    status: Status,
+    named: Sequence[NamedTerm],
+    terms: Sequence[NamedTerm],
+    fraction: float,
+) -> tuple[Status, tuple[NamedTerm, ...], str, str]:
+    """``(status, named, head, tail)``: the verdict's status and named terms after the values held at a
+    bound, with the clause that leads the verdict (``head``) and the one that closes it (``tail``).
+    "Unexplained", the named terms demoted to stand-ins, when a candidate beyond its range removes clearly
+    more than the final model's ``terms`` (which remove ``fraction`` of the excess); a candidate beyond its
+    range as good as the final model is said after it. A final fit holding mu at its bracket's end with a
+    misfit left (not "explained": an adequate final model within the bracket stands, its fit note says the
+    face) heads the verdict with that, the rest conditional on it; the named terms stay (real data: the MR
+    damper at 0.5 A holds mu at 1 beside a viscous damping on u that its physics has), said as conditional.
+    """
+    named = tuple(named)
+    if b is None or status == "adequate":
+        return status, named, "", ""
+    if b.found and (b.beats_final or not terms):
+        head = _found_text(b, True, fraction, terms) + (_mu_text(b) if b.mu_face else "")
+        return "unexplained", (), head, ""
+    tail = _found_text(b, False, fraction, terms) if b.found else ""
+    return status, named, (_mu_text(b) if b.mu_face and status != "explained" else ""), tail
+
+
+__all__ = ["Beyond", "across_text", "apply", "found", "held_mu", "refused_by_bound", "MOST"]
