@@ -13,14 +13,16 @@ import importlib
 import math
 import sys
 import warnings
+from dataclasses import replace
 from pathlib import Path
+from types import SimpleNamespace
 from typing import Any
 
 import bouc_wen_id as bw
 import numpy as np
 import pytest
 from bouc_wen_id import terms as T
-from bouc_wen_id.diagnosis import caveats, law_chance, masing, rate_rival, readings
+from bouc_wen_id.diagnosis import caveats, law_chance, masing, rate_rival, readings, revisit
 from bouc_wen_id.diagnosis.result import NamedTerm
 from bouc_wen_id.diagnosis.select import Alternative
 from bouc_wen_id.diagnosis.verdict_text import clauses, details, headline
@@ -104,10 +106,10 @@ def test_diagnose_across_says_the_rate_caveat_as_each_level_does(close: list[bw.
 
 def test_each_qualifying_clause_puts_its_words_in_the_headline_and_the_others_do_not() -> None:
     """Verdicts assembled from the modules' own clauses: the rival readings (rate, Dahl's family, play's
-    backlash, a spring on x's Masing loop, a rival the experiments cannot tell apart) and a limit of the
-    evidence (law untested) reach the headline; law_chance's clause (said only when nothing is named), a
-    place that fits only non-physically, and a verdict naming nothing do not. The clauses after the
-    headline are unchanged."""
+    backlash, a spring on x's Masing loop, a revisit's set, a rival the experiments cannot tell apart) and
+    a limit of the evidence (law untested) reach the headline; law_chance's clause (said only when nothing
+    is named), a place that fits only non-physically, and a verdict naming nothing do not. The clauses
+    after the headline are unchanged."""
     visc = NamedTerm(T.Viscous.kind, "c", 0.002, 0.0002, "s")
     dahl = NamedTerm(T.Dahl.kind, "fc", 0.05, 0.01, "")
     play = NamedTerm(T.Play.kind, "c", 0.05, 0.01, "")
@@ -134,6 +136,12 @@ def test_each_qualifying_clause_puts_its_words_in_the_headline_and_the_others_do
         assert readings.status_text("explained", rs) == (
             "explained" if kind == "law_untested" else f"explained ({readings.NOT_ONLY})"
         )
+    for by_rival in (False, True):  # a revisit's set: named in the term's place, or kept as its rival
+        for outcome, want in (("named", "or " + T.Play.place_label()), ("alternative (x)", " together")):
+            r = revisit.Revisit(T.Play.kind, (), (T.Viscous.kind, T.Play.kind), outcome, 1.0, 2.0, "wider")
+            clause = revisit.text([SimpleNamespace(pairs=(replace(r, by_rival=by_rival),))])
+            rs = readings.of_verdict(head + clause, [T.Play.kind], [])
+            assert [x.kind for x in rs] == ["revisit"] and want in rs[0].words, (clause, rs)
     alt = Alternative(T.Viscous.kind, T.ViscousX.kind, math.nan, "wider band")
     rs = readings.of_verdict(head + caveats.alternatives_text([alt], [visc]), [T.Viscous.kind], [alt])
     assert [r.words for r in rs] == [f"or {T.ViscousX.place_label()}"]

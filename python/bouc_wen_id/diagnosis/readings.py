@@ -96,8 +96,8 @@ def _of_clause(c: str) -> list[Reading]:
     )
     if both:
         out.append(Reading("revisit", f"or {both} together"))
-    if c.startswith("revisited: ") and " is the rival" in c:
-        one = c[c.rfind(". ", 0, c.find(" is the rival")) + 2 : c.find(" is the rival")]
+    one = _between(c, "named in its place. ", " is the rival")  # a revisit named a set: the single term
+    if one:
         out.append(Reading("revisit", f"or {one}"))
     if ": law untested" in c:
         out.append(Reading("law_untested", f"{c.split(': law untested')[0]}'s law untested", rival=False))
