@@ -145,6 +145,8 @@ def test_each_qualifying_clause_puts_its_words_in_the_headline_and_the_others_do
     alt = Alternative(T.Viscous.kind, T.ViscousX.kind, math.nan, "wider band")
     rs = readings.of_verdict(head + caveats.alternatives_text([alt], [visc]), [T.Viscous.kind], [alt])
     assert [r.words for r in rs] == [f"or {T.ViscousX.place_label()}"]
+    both = [T.Viscous.kind, T.ViscousX.kind]  # the rival named too: no other reading of the headline
+    assert readings.of_verdict(head + caveats.alternatives_text([alt], [visc]), both, [alt]) == ()
     quiet = head + caveats.unphysical_places_text([], [visc]) + "; not named: viscous (p = 0.004)"
     assert readings.of_verdict(quiet, [T.Viscous.kind], []) == ()
     assert readings.of_verdict(head + caveats.family_text([dahl]), [], []) == ()  # nothing named

@@ -119,8 +119,13 @@ def of_verdict(verdict: str, named: Sequence[str], alternatives: Sequence[Any]) 
     if not named:
         return ()
     rivals, by_law = rivals_of(alternatives, named)
-    out = [Reading("alternative", f"or {_label(r)}") for rs in rivals.values() for r in rs]
-    out += [Reading("alternative", f"or {_label(a.rival)} (law p = {a.law_p_value:.2g})") for a in by_law]
+    # a rival named itself (two named terms each the other's rival) is no other reading of the headline
+    out = [Reading("alternative", f"or {_label(r)}") for rs in rivals.values() for r in rs if r not in named]
+    out += [
+        Reading("alternative", f"or {_label(a.rival)} (law p = {a.law_p_value:.2g})")
+        for a in by_law
+        if a.rival not in named
+    ]
     for c in clauses(verdict)[1:]:
         out += _of_clause(c)
     once: dict[str, Reading] = {}
