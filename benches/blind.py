@@ -742,13 +742,18 @@ COLUMNS = (
     "error",
 )  # fmt: skip
 
-#: An outside effect, the term a library caveat ties to it, and the module and mark of that caveat: a
-#: verdict naming only that term, with the caveat that names the truth as the equivalent, is "family" (as
-#: benches/diagnosis.py scores the Dahl element with its family caveat). A diagnosis without the caveat
-#: (--report of an older run) has no such mark and scores as before.
-FAMILY = {
-    "output_backlash": ("play", "caveats", "PLAY_MARK"),
-    "prandtl_ishlinskii": ("stiffness@x", "masing", "MASING_MARK"),
+#: An outside effect, the terms a library caveat ties to it, and the module and mark of each caveat: a
+#: verdict naming only such terms, each with the caveat that names the truth as the equivalent IN ITS
+#: HEADLINE, is "family" (as benches/diagnosis.py scores the Dahl element with its family caveat). A
+#: diagnosis with the caveat only in its details (before diagnosis/readings.py) is "named".
+FAMILY: dict[str, dict[str, tuple[str, str]]] = {
+    "output_backlash": {"play": ("caveats", "PLAY_MARK")},
+    # a rate-independent loop: a viscous damping's rate caveat names it too (diagnosis/rate_rival.py)
+    "prandtl_ishlinskii": {
+        "stiffness@x": ("masing", "MASING_MARK"),
+        "viscous": ("rate_rival", "RATE_MARK"),
+        "viscous@x": ("rate_rival", "RATE_MARK"),
+    },
 }
 
 
@@ -770,14 +775,23 @@ def _input_said(verdict: str) -> bool:
 
 
 def _family(effect: str, named: list[str], verdict: str) -> bool:
-    if effect not in FAMILY:
+    """Every named term is one whose caveat names the outside ``effect`` (:data:`FAMILY`), with that caveat
+    in the verdict's HEADLINE (its first clause: diagnosis/readings.py); a caveat only in the details reads
+    as a confident name to a user who reads the headline."""
+    if effect not in FAMILY or not named:
         return False
-    term, module, attr = FAMILY[effect]
-    try:
-        mark = getattr(importlib.import_module(f"bouc_wen_id.diagnosis.{module}"), attr, None)
-    except ImportError:
-        mark = None
-    return bool(mark) and set(named) <= {term} and str(mark) in verdict
+    head = verdict.split("; ", 1)[0]  # the headline's qualifiers hold no "; " (verdict_text.clauses)
+    for term in named:
+        if term not in FAMILY[effect]:
+            return False
+        module, attr = FAMILY[effect][term]
+        try:
+            mark = getattr(importlib.import_module(f"bouc_wen_id.diagnosis.{module}"), attr, None)
+        except ImportError:
+            mark = None
+        if not (mark and str(mark) in head):
+            return False
+    return True
 
 
 def group(rec: dict[str, Any]) -> str:

@@ -62,10 +62,13 @@ What counts as right on an outside row of the Dahl element's family (``DAHL_FAMI
 exponent 2, the Prandtl-Ishlinskii operator on u): "unexplained", or a verdict that names ONLY the Dahl
 element with the family caveat (``diagnosis/caveats.py``: "a Dahl-like friction loop ... a distribution of
 stops (Iwan, Prandtl-Ishlinskii, Masing) or another Dahl exponent fits such loops too", with the experiment
-that separates them), column "fam". That verdict is true of these loops: a smooth parallel loop that turns
-after each reversal and saturates is there, and the caveat names the truth's family among what it could not
-exclude. Any other name, or the element with another term beside it, or without the caveat, is wrong; the
-caveat never excuses a name on the other outside rows. Target: unexpl + fam >= .90, wrong <= .10.
+that separates them), or a viscous damping with the rate caveat (``diagnosis/rate_rival.py``: it "may stand
+for a rate-independent loop outside the library", these loops are), column "fam". That verdict is true of
+these loops: the caveat names the truth's family among what it could not exclude. The caveat must be in the
+verdict's HEADLINE (``diagnosis/readings.py``): a user who reads only the headline was otherwise told a
+confident name. Any other name, or the element with another term beside it, or without the caveat in the
+headline, is wrong; the caveat never excuses a name on the other outside rows. Target: unexpl + fam >= .90,
+wrong <= .10.
 
 Degradation is a library term fitted in drift space (design.md 10.6): its held-out ratio is that of the
 block-resolved deviations from the mean period.
@@ -263,17 +266,33 @@ def scored_kind(kind: str, name: Optional[str]) -> str:
     return kind
 
 
-#: Outside rows whose truth is in the family the Dahl element's caveat names (module docstring).
+#: Outside rows whose truth is in the family the Dahl element's caveat names (module docstring); each is a
+#: rate-independent loop too, the rival the rate caveat of a named viscous damping names.
 DAHL_FAMILY = ("iwan", "dahl_n2", "pi_u")
 
 
-def _family(d: Any, names: list[str], effect: Optional[str]) -> bool:
-    """The verdict names only the Dahl element, with its family caveat, and the truth is of that family."""
-    from bouc_wen_id.diagnosis import caveats
+def _reading_marks() -> dict[str, Optional[str]]:
+    """Base term name -> the words its caveat puts in the HEADLINE when it names a rival reading of the
+    truth's family (module docstring): Dahl's family, a viscous damping's rate-independent loop. None: a
+    diagnosis before that caveat (``--table`` before/after)."""
+    from bouc_wen_id.diagnosis import caveats, rate_rival
 
-    mark = getattr(caveats, "FAMILY_MARK", None)  # None: a diagnosis before the caveat (--table before/after)
-    dahl = {"dahl", "dahl_sigma"}
-    return effect in DAHL_FAMILY and bool(names) and set(names) <= dahl and bool(mark and mark in d.verdict)
+    fam, rate = getattr(caveats, "FAMILY_MARK", None), getattr(rate_rival, "RATE_MARK", None)
+    return {"dahl": fam, "dahl_sigma": fam, "viscous": rate}
+
+
+def _family(d: Any, names: list[str], effect: Optional[str]) -> bool:
+    """The truth is of the Dahl family (a rate-independent loop) and every named term is one whose caveat
+    names that family as a rival reading: the Dahl element with its family caveat, a viscous damping with
+    its rate caveat, the caveat in the verdict's HEADLINE. A name whose caveat is only in the details reads
+    as a confident name to a user who reads the headline: wrong (as a bare name is)."""
+    marks = _reading_marks()
+    head = str(getattr(d, "headline", "") or "")
+    return (
+        effect in DAHL_FAMILY
+        and bool(names)
+        and all(bool(m := marks.get(n)) and str(m) in head for n in names)
+    )
 
 
 def _placed(kind: str, place: str) -> str:

@@ -170,20 +170,28 @@ def test_score_reads_name_place_and_alternatives() -> None:
 
 def test_score_counts_a_caveated_equivalent_as_family() -> None:
     """An outside loop named only as the term whose caveat names it (a PI loop as a spring on x with the
-    Masing clause, an output backlash as play with play's clause) is "family"; without the clause, or
-    with another term beside it, or for another effect, it is not."""
+    Masing clause or as a viscous damping with the rate clause, an output backlash as play with play's
+    clause) IN THE HEADLINE is "family"; with the clause only in the details, without it, with another term
+    beside it, or for another effect, it is not."""
     from bouc_wen_id.diagnosis.caveats import PLAY_MARK
     from bouc_wen_id.diagnosis.masing import MASING_MARK
+    from bouc_wen_id.diagnosis.rate_rival import RATE_MARK
 
     def d(named: list[str], verdict: str) -> Any:
         return SimpleNamespace(**vars(_diag("explained", named, [])), verdict=verdict)
 
     pi = blind.Case("prandtl_ishlinskii", 10.0, 0, 1)
-    assert blind.score(pi, d(["stiffness@x"], f"explained by: k; {MASING_MARK}"))[0] == "family"
+    assert blind.score(pi, d(["stiffness@x"], f"explained by: k or {MASING_MARK}; more"))[0] == "family"
+    # the caveat only in the details: a user who reads the headline was told a bare name
+    assert blind.score(pi, d(["stiffness@x"], f"explained by: k; {MASING_MARK}"))[0] == "named"
     assert blind.score(pi, d(["stiffness@x"], "explained by: k"))[0] == "named"
     assert blind.score(pi, d(["stiffness@x", "viscous"], MASING_MARK))[0] == "named"
+    # a PI loop is rate-independent: a viscous damping with the rate caveat in its headline names it too
+    assert blind.score(pi, d(["viscous@x"], f"explained by: c or {RATE_MARK}; more"))[0] == "family"
+    assert blind.score(pi, d(["viscous@x"], f"explained by: c; {RATE_MARK}"))[0] == "named"
     backlash = blind.Case("output_backlash", 10.0, 0, 1)
-    assert blind.score(backlash, d(["play"], f"play; {PLAY_MARK}"))[0] == "family"
+    assert blind.score(backlash, d(["play"], f"play or {PLAY_MARK}"))[0] == "family"
+    assert blind.score(backlash, d(["viscous"], f"c or {RATE_MARK}"))[0] == "named"  # not of that effect
     assert blind.score(backlash, d(["stiffness@x"], MASING_MARK))[0] == "named"
     stribeck = blind.Case("stribeck", 10.0, 0, 1)
     assert blind.score(stribeck, d(["stiffness@x"], MASING_MARK))[0] == "named"

@@ -20,7 +20,9 @@ from bouc_wen_id.augmented import AugExperiment, AugParams, augmented_output, fi
 from bouc_wen_id.diagnosis import caveats as C
 from bouc_wen_id.diagnosis import select as S
 from bouc_wen_id.diagnosis import shape as SH
+from bouc_wen_id.diagnosis.readings import headlined, of_verdict
 from bouc_wen_id.diagnosis.result import NamedTerm
+from bouc_wen_id.diagnosis.verdict_text import headline
 from bouc_wen_id.reference.dahl import dahl_loop
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benches"))
@@ -120,11 +122,14 @@ def test_the_family_caveat_names_what_it_could_not_exclude() -> None:
 class _D:
     def __init__(self, verdict: str) -> None:
         self.verdict = verdict
+        self.headline = headline(verdict)
 
 
 def test_the_bench_scores_the_caveat_only_on_the_family_rows() -> None:
-    caveated = _D("explained by Dahl friction" + C.family_text([NamedTerm(DAHL_X, "fc", 0.05, 0.01, "")]))
+    said = "explained by Dahl friction" + C.family_text([NamedTerm(DAHL_X, "fc", 0.05, 0.01, "")])
+    caveated = _D(headlined(said, of_verdict(said, [DAHL_X], [])))  # the caveat in the headline too
     assert bench._family(caveated, ["dahl", "dahl_sigma"], "iwan")
+    assert not bench._family(_D(said), ["dahl", "dahl_sigma"], "iwan")  # only in the details: a bare name
     assert not bench._family(caveated, ["dahl", "dahl_sigma"], "slack_gap")  # not of the family
     assert not bench._family(caveated, ["dahl", "dahl_sigma", "pinching"], "iwan")  # another name beside
     assert not bench._family(_D("explained by Dahl friction"), ["dahl", "dahl_sigma"], "pi_u")  # no caveat

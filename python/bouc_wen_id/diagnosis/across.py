@@ -63,6 +63,7 @@ from . import (
     after_named,
     fit_notes,
     inputs,
+    readings,
 )
 from .across_stable import ConditionResult
 from .beside import only_beside
@@ -299,6 +300,7 @@ class AcrossDiagnosis:
     #: What diagnose notes of its fits, per condition (fit_notes.condition_notes): a fit stopped at a
     #: bound, every experiment below saturation; and why the targeted step was not run (gate.py).
     notes: tuple[str, ...] = ()
+    readings: tuple[Any, ...] = ()  #: as :class:`Diagnosis`'s (diagnosis/readings.py)
 
     @property
     def named(self) -> tuple[str, ...]:
@@ -312,7 +314,9 @@ class AcrossDiagnosis:
         return {
             "format": "bouc_wen_id.diagnosis_across",
             "status": self.status,
+            "status_text": readings.status_text(self.status, self.readings),
             "verdict": self.verdict,
+            "readings": [r.to_dict() for r in self.readings],
             "terms": [t.to_dict() for t in self.terms],
             "partial": [t.to_dict() for t in self.partial],
             "conditions": [c.to_dict() for c in self.conditions],
@@ -920,11 +924,12 @@ def diagnose_across(
         "condition": [g.condition for g in prepared],
     }
     out = _finished(prepared, terms, conditions, steps, settings, alpha, time.perf_counter() - t0)
-    return replace(  # what was left out as not settled (across_settling.py), as diagnose says it
+    out = replace(  # what was left out as not settled (across_settling.py), as diagnose says it
         out,
         verdict=out.verdict + across_settling.clause(prepared, unsettled),
         notes=(*joined.notes, *out.notes, *across_settling.notes(prepared, unsettled)),
     )
+    return readings.qualified(out, out.named, out.alternatives)  # the headline's qualifiers
 
 
 def _finished(

@@ -17,6 +17,8 @@ through the same functions (no copies):
   final model sees them, as diagnose reads its final fit's), and a spring on x's **Masing caveat** with an
   experiment below saturation measured as diagnose measures it (:func:`.caveats.masing_separation` at each
   condition where the spring is present, :func:`.caveats.joint_separation` over them);
+- a viscous damping's **rate caveat** (:func:`.across_rate.text`: the per-level test of
+  :mod:`.rate_rival` at each condition where it is present);
 - **"law untested"** (:func:`.law_untested.across_text`): a named term carried by fewer than two of a
   condition's experiments where it is present;
 - **a rival within the uncertainty of the chosen term's improvement is a near-tied reading**
@@ -35,7 +37,7 @@ from dataclasses import replace
 from typing import Any
 
 from ..terms import TERMS, Play, StiffnessX, physical_value
-from . import beside, bounds_said, gate, law_untested
+from . import across_rate, beside, bounds_said, gate, law_untested
 from .caveats import family_text, joint_separation, latent_levels, masing_separation, unphysical_places_text
 from .locate import adequacy_p
 from .result import NamedTerm, Status
@@ -200,7 +202,8 @@ def clauses(
             text += family_text(one, _levels(groups, t.present or [True] * len(groups)), *masing)
     rest = [NamedTerm(t.term, t.symbol, math.nan, math.nan, t.unit) for t in named if t.term in TERMS]
     rest = [t for t in rest if t.term not in own]
-    return text + family_text(rest, _levels(groups, [True] * len(groups)))
+    text += family_text(rest, _levels(groups, [True] * len(groups)))
+    return text + across_rate.text(named, groups)  # a viscous damping's rate caveat (rate_rival.py)
 
 
 def _levels(groups: Sequence[Any], present: Sequence[bool]) -> list[float]:

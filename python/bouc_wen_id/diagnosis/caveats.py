@@ -53,14 +53,15 @@ def latent_levels(sx: Sequence[AugExperiment], fit: AugFit) -> list[float]:
     return [abs(float(g)) * e.amplitude / w_u for e, g in zip(sx, par.gains)]
 
 
-def alternatives_text(alternatives: Sequence[Alternative], named: Sequence[NamedTerm]) -> str:
-    """The verdict's word on a named term the data cannot tell from a rival (issue 18: "never one of them
-    silently"): a design with one amplitude per frequency, or G nearly flat over the band, cannot separate a
-    spring on x from one on u, and the one-line verdict named one place only."""
-    kinds = {t.term for t in named}
+def rivals_of(
+    alternatives: Sequence[Alternative], named: Sequence[str]
+) -> tuple[dict[str, list[str]], list[Alternative]]:
+    """The rivals of the ``named`` terms (code names) among ``alternatives``: ``({term: [rival, ...]},
+    by_law)``, ``by_law`` the alternatives passed over for their law only, though they fit at least as
+    well (select.preferred_by_fit: the law, not the fit, told them apart, so each gets its own clause with
+    the law's p)."""
+    kinds = set(named)
     rivals: dict[str, list[str]] = {}
-    # A rival passed over for its law only, though it fits at least as well (select.preferred_by_fit): the
-    # law, not the fit, told them apart, so it gets its own clause with the law's p.
     by_law: list[Alternative] = []
     for a in alternatives:
         if a.term not in kinds:
@@ -69,7 +70,14 @@ def alternatives_text(alternatives: Sequence[Alternative], named: Sequence[Named
             by_law.append(a)
         elif a.rival not in rivals.setdefault(a.term, []):
             rivals[a.term].append(a.rival)
-    rivals = {t: rs for t, rs in rivals.items() if rs}
+    return {t: rs for t, rs in rivals.items() if rs}, by_law
+
+
+def alternatives_text(alternatives: Sequence[Alternative], named: Sequence[NamedTerm]) -> str:
+    """The verdict's word on a named term the data cannot tell from a rival (issue 18: "never one of them
+    silently"): a design with one amplitude per frequency, or G nearly flat over the band, cannot separate a
+    spring on x from one on u, and the one-line verdict named one place only."""
+    rivals, by_law = rivals_of(alternatives, [t.term for t in named])
 
     def label(kind: str) -> str:
         return TERMS[kind].place_label() if kind in TERMS else kind

@@ -101,22 +101,36 @@ def rate_text(named: Sequence[NamedTerm], exps: Sequence[AugExperiment], fit: Au
     not exclude, and the experiment that would. Empty otherwise."""
     out = ""
     for t in named:
-        if t.term not in (Viscous.kind, ViscousX.kind) or t.term not in fit.params.terms:
-            continue
-        ps = rival_p_values(exps, fit, t.term, substeps)
-        if ps is None or not any(math.isfinite(p) and p >= LAW_ALPHA for p in ps):
-            continue
-        om = sorted({round(float(e.frequency), 6) for e in exps})
-        p = max(v for v in ps if math.isfinite(v))
-        out += (
-            f"; {TERMS[t.term].place_label()} may stand for {RATE_MARK} outside the library (a "
-            "Prandtl-Ishlinskii or Iwan distribution of stops, friction spread over travel): such a loop "
-            "dissipates alike at every frequency, so the damping value it needs falls as 1/frequency, and "
-            f"the values per experiment do not refuse that (p = {p:.2g}) over the frequencies tested "
-            f"({om[0]:.3g}-{om[-1]:.3g} rad/s); experiments over a wider frequency range (a factor 10 or "
-            "more) at one amplitude would separate them (a viscous value stays one, the loop's falls)"
-        )
+        p = not_refused(exps, fit, t.term, substeps)
+        if p is not None:
+            out += clause(t.term, p, [float(e.frequency) for e in exps])
     return out
 
 
-__all__ = ["RATE_MARK", "rate_text", "rival_p_values"]
+def not_refused(exps: Sequence[AugExperiment], fit: AugFit, term: str, substeps: int) -> Optional[float]:
+    """The larger p of :func:`rival_p_values` when ``term`` is a viscous damping of ``fit`` whose values do
+    not refuse the rate-independent law (either reading, at :data:`LAW_ALPHA`); None otherwise."""
+    if term not in (Viscous.kind, ViscousX.kind) or term not in fit.params.terms:
+        return None
+    ps = rival_p_values(exps, fit, term, substeps)
+    if ps is None or not any(math.isfinite(p) and p >= LAW_ALPHA for p in ps):
+        return None
+    return max(v for v in ps if math.isfinite(v))
+
+
+def clause(term: str, p: float, frequencies: Sequence[float], where: str = "") -> str:
+    """The verdict's clause on a viscous ``term`` whose values do not refuse the rival (:func:`not_refused`'s
+    ``p``) over the ``frequencies`` tested; ``where``: the conditions where they do not (across)."""
+    om = sorted({round(float(w), 6) for w in frequencies})
+    at = f" at {where}" if where else ""
+    return (
+        f"; {TERMS[term].place_label()} may stand for {RATE_MARK} outside the library (a "
+        "Prandtl-Ishlinskii or Iwan distribution of stops, friction spread over travel): such a loop "
+        "dissipates alike at every frequency, so the damping value it needs falls as 1/frequency, and "
+        f"the values per experiment{at} do not refuse that (p = {p:.2g}) over the frequencies tested "
+        f"({om[0]:.3g}-{om[-1]:.3g} rad/s); experiments over a wider frequency range (a factor 10 or "
+        "more) at one amplitude would separate them (a viscous value stays one, the loop's falls)"
+    )
+
+
+__all__ = ["RATE_MARK", "clause", "not_refused", "rate_text", "rival_p_values"]

@@ -265,7 +265,7 @@ def html_page(
 
 def _verdict_html(d: Diagnosis) -> list[str]:
     return [
-        f"<p class='verdict'><b>{html.escape(d.status)}</b>: {html.escape(d.headline)}</p>"
+        f"<p class='verdict'><b>{html.escape(d.status_text)}</b>: {html.escape(d.headline)}</p>"
         + (f"<ul>{''.join(f'<li>{html.escape(c)}</li>' for c in d.details)}</ul>" if d.details else ""),
         f"<p>Plain model: χ²/dof = {_g(d.plain.cost / max(d.plain.dof, 1))} "
         f"(p = {_g(d.plain.p_value, '.2g')}); "

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any, Literal, Optional
 
@@ -30,6 +31,18 @@ def term_symbol_unit(term: str, y_unit: str, u_unit: str) -> tuple[str, str]:
     """The parameter's symbol and its units with the output's and the input's units filled in."""
     cls = TERMS[term]
     return cls.symbol, cls.units(y_unit or "[y]", u_unit or "[u]")
+
+
+#: What the printed status adds when a named term has a rival reading the data do not refuse (readings.py).
+NOT_ONLY = "not the only reading"
+
+
+def status_text(status: str, readings: Sequence[Any]) -> str:
+    """The status as printed: ``status``, with :data:`NOT_ONLY` when one of ``readings``
+    (:class:`.readings.Reading`) is a rival reading of a named term (explained, in full or in part)."""
+    if status in ("explained", "partly explained") and any(getattr(r, "rival", False) for r in readings):
+        return f"{status} ({NOT_ONLY})"
+    return status
 
 
 @dataclass(frozen=True)
@@ -150,6 +163,15 @@ class Diagnosis:
     #: The candidate fits of its selections by the digest of their inputs (diagnosis/fit_share.py), for
     #: ``diagnose_across`` to reuse; not serialised, pickled empty.
     fits: Any = field(default=None, repr=False)
+    #: What qualifies the named terms (diagnosis/readings.py): rival readings the data do not refuse and
+    #: limits of the evidence, each also said in the headline in a few words; () when none.
+    readings: tuple[Any, ...] = ()
+
+    @property
+    def status_text(self) -> str:
+        """The status as printed: :attr:`status`, with "(not the only reading)" when a rival reading of a
+        named term is not refused (diagnosis/readings.py); :attr:`status` itself is unchanged."""
+        return status_text(self.status, self.readings)
 
     @property
     def named_terms(self) -> tuple[str, ...]:
@@ -256,7 +278,10 @@ class Diagnosis:
     def to_dict(self) -> dict[str, Any]:
         return {
             "status": self.status,
+            "status_text": self.status_text,
             "verdict": self.verdict,
+            "headline": self.headline,
+            "readings": [r.to_dict() for r in self.readings],
             "named": [t.to_dict() for t in self.named],
             "partial": [t.to_dict() for t in self.partial],
             "alternatives": [a.to_dict() for a in self.alternatives],

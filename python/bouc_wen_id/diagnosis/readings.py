@@ -1,0 +1,167 @@
+"""The headline never says more than the details allow (issue 18: a name users can trust blind).
+
+A verdict is read in two layers (:mod:`.verdict_text`): its headline (what is named, with value ± se and
+share, or what is left) and its details. Several details qualify what the headline names; a user who reads
+only the headline ("explained by: viscous damping across the hysteretic element (on x) c = ...") was told
+more than the data back (review 33 ``pi_u_10``: a Prandtl-Ishlinskii loop on u, outside the library, whose
+viscous value did not refuse a rate-independent loop's 1/omega law, said only in a detail clause).
+
+Each clause kind was audited (docs/diagnosis.md, "What the headline may claim"). Those that qualify the
+named terms put a few words into the headline (" — or a rate-independent loop outside the library (see
+details)") and are kept as :class:`Reading` s on the result (``Diagnosis.readings``):
+
+- **rival readings** the data do not refuse (``rival=True``; the status is then reported as "not the only
+  reading", :func:`status_text`): the rate caveat (:mod:`.rate_rival`); a rival the experiments cannot
+  tell from a named term, or one passed over for its law only (:func:`.caveats.rivals_of`, the clauses of
+  :func:`.caveats.alternatives_text`); a set of terms that holds its laws in a named term's place
+  (:mod:`.revisit`'s "not the only reading" and "alternative to"; a revisit that named the set says the
+  single term is the rival); Dahl friction's family (:func:`.caveats.family_text`), play's output backlash
+  (:func:`.caveats.play_text`) and a spring on x's Masing loop (:func:`.masing.masing_text`);
+- **limits of the evidence** (``rival=False``): a named term's law untested, or named without the held-out
+  test (:mod:`.law_untested`); a waveform's ``lam`` far from 1, no property of the device
+  (:mod:`.input_note`); across conditions, diagnose's revisit not run (:func:`.across_pairs.revisit_clause`).
+
+Clauses that do not change what the headline claims are left in the details: law_chance's "refused by chance"
+(said only when nothing is named: "unexplained structure remains" holds under either reading), the clean
+share on clipped sets (the headline's share is the pooled one, the smaller), a place that fits only with a
+non-physical value (it strengthens the name), stand-ins not named, and notes on the data (loop centres,
+baselines, hum, unsettled experiments, detection limits of an "adequate" verdict).
+
+The status values are unchanged (``d.status`` is what it was, the CLI's exit codes too): the readings are
+an attribute, and :func:`status_text` (:func:`.result.status_text`) is the status as printed (the HTML
+report's, ``Diagnosis.status_text``, ``to_dict()["status_text"]``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any, Protocol, TypeVar
+
+from ..terms import TERMS
+from .result import NOT_ONLY, status_text
+from .verdict_text import clauses
+
+#: Joins the headline's own first clause and its qualifiers.
+DASH = " — "
+#: Closes the headline's qualifiers.
+SEE = " (see details)"
+
+
+@dataclass(frozen=True)
+class Reading:
+    """A qualifier of what the headline names: its kind, the headline's words, and whether it is a rival
+    reading the data do not refuse (else a limit of the evidence behind the name)."""
+
+    kind: str
+    words: str
+    rival: bool = True
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"kind": self.kind, "words": self.words, "rival": self.rival}
+
+
+def _label(kind: str) -> str:
+    return TERMS[kind].place_label() if kind in TERMS else kind
+
+
+def _between(text: str, start: str, end: str) -> str:
+    """The part of ``text`` after ``start`` and before the next ``end`` ("" when either is missing)."""
+    i = text.find(start)
+    if i < 0:
+        return ""
+    j = text.find(end, i + len(start))
+    return text[i + len(start) : j] if j >= 0 else ""
+
+
+def _of_clause(c: str) -> list[Reading]:
+    """The readings one detail clause carries (module docstring), by the words its module writes."""
+    from .caveats import FAMILY_MARK, PLAY_MARK
+    from .masing import MASING_MARK
+    from .rate_rival import RATE_MARK
+
+    out: list[Reading] = []
+    if RATE_MARK in c and "may stand for" in c:
+        out.append(Reading("rate", f"or {RATE_MARK} outside the library"))
+    if FAMILY_MARK in c:
+        words = f"or a distribution of stops or another Dahl exponent (Dahl: {FAMILY_MARK})"
+        out.append(Reading("family", words))
+    if PLAY_MARK in c:
+        out.append(Reading("play", f"or a backlash on the measured output (play: {PLAY_MARK})"))
+    if MASING_MARK in c and "may be the elastic part" in c:
+        words = f"or the elastic part of {MASING_MARK} (a Prandtl-Ishlinskii loop on x)"
+        out.append(Reading("masing", words))
+    both = _between(c, "not the only reading: ", ", jointly") or (
+        _between(c, ": ", ", jointly") if c.startswith("alternative to ") else ""
+    )
+    if both:
+        out.append(Reading("revisit", f"or {both} together"))
+    one = _between(c, "named in its place. ", " is the rival")  # a revisit named a set: the single term
+    if one:
+        out.append(Reading("revisit", f"or {one}"))
+    if ": law untested" in c:
+        out.append(Reading("law_untested", f"{c.split(': law untested')[0]}'s law untested", rival=False))
+    if c.startswith("named without the held-out test"):
+        out.append(Reading("untested", "named without the held-out or the law test", rival=False))
+    if "is far from 1 (the measured waveform" in c:
+        out.append(Reading("not_device", f"{c.split(' = ')[0]} not a property of the device", rival=False))
+    if c.startswith("not run across conditions: diagnose's revisit"):
+        out.append(Reading("revisit_untried", "a level's revisit not run across", rival=False))
+    return out
+
+
+def of_verdict(verdict: str, named: Sequence[str], alternatives: Sequence[Any]) -> tuple[Reading, ...]:
+    """The readings of a verdict whose ``named`` terms (code names) have ``alternatives``
+    (:class:`.select.Alternative`): its detail clauses' (:func:`_of_clause`) and the named terms' rivals
+    (:func:`.caveats.rivals_of`), each said once; () when nothing is named."""
+    from .caveats import rivals_of
+
+    if not named:
+        return ()
+    rivals, by_law = rivals_of(alternatives, named)
+    # a rival named itself (two named terms each the other's rival) is no other reading of the headline
+    out = [Reading("alternative", f"or {_label(r)}") for rs in rivals.values() for r in rs if r not in named]
+    out += [
+        Reading("alternative", f"or {_label(a.rival)} (law p = {a.law_p_value:.2g})")
+        for a in by_law
+        if a.rival not in named
+    ]
+    for c in clauses(verdict)[1:]:
+        out += _of_clause(c)
+    once: dict[str, Reading] = {}
+    for r in out:
+        once.setdefault(r.words, r)
+    return tuple(once.values())
+
+
+def headlined(verdict: str, readings: Sequence[Reading]) -> str:
+    """``verdict`` with the readings' words in its headline (its first clause), rivals first; the clauses
+    after it unchanged, so the verdict splits into the same clauses (:func:`.verdict_text.clauses`)."""
+    if not readings:
+        return verdict
+    parts = clauses(verdict)
+    words = [r.words for r in readings if r.rival] + [r.words for r in readings if not r.rival]
+    head = parts[0] + DASH + ", ".join(words) + SEE
+    rest = verdict[verdict.find(parts[0]) + len(parts[0]) :]
+    return head + rest
+
+
+class _Verdict(Protocol):
+    @property
+    def verdict(self) -> str: ...
+
+
+_D = TypeVar("_D", bound=_Verdict)
+
+
+def qualified(d: _D, named: Sequence[str], alternatives: Sequence[Any]) -> _D:
+    """``d`` (a :class:`.result.Diagnosis` or :class:`.across.AcrossDiagnosis`) with its readings and the
+    headline that carries them."""
+    from dataclasses import replace
+
+    verdict = d.verdict
+    rs = of_verdict(verdict, named, alternatives)
+    return replace(d, verdict=headlined(verdict, rs), readings=rs)  # type: ignore[type-var]
+
+
+__all__ = ["DASH", "NOT_ONLY", "SEE", "Reading", "headlined", "of_verdict", "qualified", "status_text"]
