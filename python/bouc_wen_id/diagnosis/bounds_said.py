@@ -86,7 +86,7 @@ def across_text(groups: Sequence[Any], status: str) -> str:
     if status == "adequate":
         return ""
     said = [(g.label, held_mu(g.current)) for g in groups]
-    return "".join(f"; at {label}: {_mu_text(b).rstrip('; ')}" for label, b in said if b.mu_face)
+    return "".join(f"; at {label}: {_mu_text(b).removeprefix('; ')}" for label, b in said if b.mu_face)
 
 
 def found(
@@ -143,13 +143,16 @@ def _found_text(b: Beyond, demoted: bool, fraction: float, kept: Sequence[NamedT
     return f"not explained within the terms' physical ranges: {what}{instead}; "
 
 
+#: The words that open the mu clause (:func:`_mu_text`; :mod:`.readings` puts a qualifier in the headline).
+MU_MARK = "the hysteresis exponent is held at the"
+
+
 def _mu_text(b: Beyond) -> str:
     asked = "mu < 1" if b.mu_face == "lower" else "a mu beyond it"
     return (
-        f"the hysteresis exponent is held at the {b.mu_face} end of its bracket (mu = {b.mu:.3g}; the loops "
-        f"ask for {asked}, outside the model's validated range, the identification's mu >= 1): what follows "
-        "is conditional on it, and a term that fits part of the misfit may stand in for the hysteresis shape "
-        "the model cannot draw; "
+        f"; {MU_MARK} {b.mu_face} end of its bracket (mu = {b.mu:.3g}; the loops ask for {asked}, outside "
+        "the model's validated range, the identification's mu >= 1): the verdict is conditional on it, and a "
+        "term that fits part of the misfit may stand in for the hysteresis shape the model cannot draw"
     )
 
 
@@ -166,17 +169,19 @@ def apply(
     more than the final model's ``terms`` (which remove ``fraction`` of the excess); a candidate beyond its
     range as good as the final model is said after it. A final fit holding mu at its bracket's end with a
     misfit left (not "explained": an adequate final model within the bracket stands, its fit note says the
-    face) heads the verdict with that, the rest conditional on it; the named terms stay (real data: the MR
-    damper at 0.5 A holds mu at 1 beside a viscous damping on u that its physics has), said as conditional.
+    face) is said in a clause after the headline, whose qualifiers then say the verdict is conditional on
+    it; the named terms stay (real data: the MR damper at 0.5 A holds mu at 1 beside a viscous damping on u
+    that its physics has), said as conditional.
     """
     named = tuple(named)
     if b is None or status == "adequate":
         return status, named, "", ""
+    # After the headline, not before it: the headline keeps what is named (the MR damper's viscous damping
+    # and asymmetry), with "conditional on mu ..." among its qualifiers (readings.py).
+    mu = _mu_text(b) if b.mu_face and status != "explained" else ""
     if b.found and (b.beats_final or not terms):
-        head = _found_text(b, True, fraction, terms) + (_mu_text(b) if b.mu_face else "")
-        return "unexplained", (), head, ""
-    tail = _found_text(b, False, fraction, terms) if b.found else ""
-    return status, named, (_mu_text(b) if b.mu_face and status != "explained" else ""), tail
+        return "unexplained", (), _found_text(b, True, fraction, terms), mu
+    return status, named, "", (_found_text(b, False, fraction, terms) if b.found else "") + mu
 
 
 __all__ = ["Beyond", "across_text", "apply", "found", "held_mu", "refused_by_bound", "MOST"]

@@ -76,6 +76,7 @@ def _between(text: str, start: str, end: str) -> str:
 
 def _of_clause(c: str) -> list[Reading]:
     """The readings one detail clause carries (module docstring), by the words its module writes."""
+    from .bounds_said import MU_MARK
     from .caveats import FAMILY_MARK, PLAY_MARK
     from .masing import MASING_MARK
     from .rate_rival import RATE_MARK
@@ -105,6 +106,11 @@ def _of_clause(c: str) -> list[Reading]:
         out.append(Reading("untested", "named without the held-out or the law test", rival=False))
     if "is far from 1 (the measured waveform" in c:
         out.append(Reading("not_device", f"{c.split(' = ')[0]} not a property of the device", rival=False))
+    if c.startswith(MU_MARK):
+        face = c[len(MU_MARK) :].split(" end of")[0].strip()
+        out.append(
+            Reading("mu_bracket", f"conditional on mu held at the {face} end of its bracket", rival=False)
+        )
     if c.startswith("not run across conditions: diagnose's revisit"):
         out.append(Reading("revisit_untried", "a level's revisit not run across", rival=False))
     return out
