@@ -24,6 +24,7 @@ from . import (
     centre_decay,
     clean_share,
     drift_clause,
+    drift_pair,
     free_dc,
     gate,
     input_note,
@@ -310,6 +311,8 @@ def _correction_passes(
             rival_p_adjusted=deg.rival_p_adjusted,
             rival_alternative=deg.rival_alternative,
             correlation=deg.correlation,
+            joint=deg.joint,
+            joint_se=deg.joint_se,
         )
         settled = last_cost - fit.cost <= CORRECTION_CHI2 * max(1.0, fit.cost / max(dof_of(fsx, fit), 1))
         if k + 1 >= CORRECTION_PASSES and settled and abs(deg.d - last) <= CORRECTION_RTOL * abs(last):
@@ -730,12 +733,8 @@ def _degradation_first(
         notes.append(NO_BLOCKS)
         return None, exps, sx, plain
     deg, fexps, fsx, start = stage
-    named = _deg_named(deg, setup.held_out_test)
-    if deg is not None and named and deg.rival is not None and deg.rival_p_adjusted < setup.alpha:
-        notes.append(
-            f"the period record also needs {deg.rival.term} beside {deg.term} (partial F, adjusted p = "
-            f"{deg.rival_p_adjusted:.2g}): both may act, and only {deg.term} is modelled"
-        )
+    both = drift_pair.note(deg, _deg_named(deg, setup.held_out_test), setup.alpha, setup.units)
+    notes += [both] if both else []
     return deg, fexps, fsx, start
 
 
@@ -813,7 +812,8 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
     share = clean_share.naming_share(_naming_share(fraction, deg, named_deg), cshare)
     judged = classify(plain_ok, bool(final.params.terms) or named_deg, adequate(final), share)
     status, named, partial, verdict = _judged(judged, final_sum, (before, after), fraction, fexps)
-    verdict += (centre.text or _law_text(steps)) + beside.text(steps) + unphysical_places_text(steps, named)
+    verdict += drift_pair.text(deg, named_deg, alpha, setup.units) + (centre.text or _law_text(steps))
+    verdict += beside.text(steps) + unphysical_places_text(steps, named)
     verdict += clean_share.text(status, named, fraction, cshare, fsx)
     verdict += law_untested.text(named, fexps) + input_note.text(
         status, (*named, *partial), fexps, final_sum.outputs
