@@ -531,7 +531,7 @@ def compare(
 
 
 def _joint(
-    both: FloatArray, a: FloatArray, cost: float, dof: int, y_scale: float
+    both: Any, a: Any, cost: float, dof: int, y_scale: float
 ) -> tuple[tuple[float, ...], tuple[float, ...]]:
     """The two-column fit's values and standard errors in the output's units (``degradation_test``'s
     scaling: the residual variance per dof times the inverse normal matrix)."""

@@ -23,6 +23,7 @@ from . import (
     beside,
     centre_decay,
     clean_share,
+    design_twin,
     drift_clause,
     drift_pair,
     free_dc,
@@ -813,12 +814,13 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
     judged = classify(plain_ok, bool(final.params.terms) or named_deg, adequate(final), share)
     status, named, partial, verdict = _judged(judged, final_sum, (before, after), fraction, fexps)
     verdict += drift_pair.text(deg, named_deg, alpha, setup.units) + (centre.text or _law_text(steps))
-    verdict += beside.text(steps) + unphysical_places_text(steps, named)
+    tw = design_twin.Said.of(fsx, steps, named, s, substeps, setup.units)  # design twins (design_twin.py)
+    verdict += beside.text(steps) + unphysical_places_text(tw.steps, named) + tw.text
     verdict += clean_share.text(status, named, fraction, cshare, fsx)
     verdict += law_untested.text(named, fexps) + input_note.text(
         status, (*named, *partial), fexps, final_sum.outputs
     )
-    alternatives = tuple(a for st in steps for a in st.alternatives) + _drift_alternatives(deg, named_deg)
+    alternatives = tw.alternatives + _drift_alternatives(deg, named_deg)  # the steps' and the twins'
     verdict += alternatives_text(alternatives, named) + caveats_of(named, fsx, final, fexps, alpha, substeps)
     setup.report("held-out check of the final model", 0, 1)
     ho = held_out(fsx, start, final, substeps, cache) if final.params.terms else None
