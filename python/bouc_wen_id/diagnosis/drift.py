@@ -311,6 +311,10 @@ class DegradationTest:
     rival_alternative: bool = False
     #: Correlation of the two drift columns' estimates (the 2x2 normal matrix).
     correlation: float = math.nan
+    #: The two-column fit (this term, then the rival), in the output's units (``value``'s), with its
+    #: standard errors; () when it was not formed or left the admissible range (drift_pair.py says it).
+    joint: tuple[float, ...] = ()
+    joint_se: tuple[float, ...] = ()
     #: The unrecorded age (age.py) when adopted: per experiment, periods of its own drive before its
     #: record beyond the youngest one's, and the energy e dissipated in them (1/[y]^2 units' inverse:
     #: [y]^2); empty when the records are taken to start as declared.
@@ -371,6 +375,9 @@ class DegradationTest:
             out["rival_partial_p_adjusted"] = self.rival_p_adjusted
             out["rival_is_alternative"] = self.rival_alternative
             out["correlation"] = self.correlation
+            if self.joint:
+                out["joint"] = {t: v for t, v in zip((self.term, self.rival.term), self.joint)}
+                out["joint_standard_error"] = list(self.joint_se)
         return out
 
 
@@ -491,6 +498,8 @@ def compare(
                 a[m, n] += float(np.dot(dd.w, _inner(regs[m], regs[n], dd.hw)))
     corr = float(a[0, 1] / math.sqrt(a[0, 0] * a[1, 1])) if a[0, 0] > 0 and a[1, 1] > 0 else math.nan
     padj = math.nan
+    joint: tuple[float, ...] = ()
+    joint_se: tuple[float, ...] = ()
     try:
         both = np.linalg.solve(a, r)
     except np.linalg.LinAlgError:
@@ -499,6 +508,7 @@ def compare(
         c2 = best.cost0 - float(np.dot(both, r))
         stat, p = f_test(best.cost1, c2, best.dof0 - 2, boundary=True)
         padj = min(1.0, p * family) if math.isfinite(p) else math.nan
+        joint, joint_se = _joint(both, a, c2, best.dof0 - 2, y_scale)
     elif both is not None:
         padj = 1.0
     gain_best = best.cost0 - best.cost1
@@ -509,7 +519,32 @@ def compare(
         and gain_best > 0
         and (other.cost0 - other.cost1) >= RIVAL_SHARE * gain_best
     )
-    return replace(best, rival=other, rival_p_adjusted=padj, rival_alternative=alternative, correlation=corr)
+    return replace(
+        best,
+        rival=other,
+        rival_p_adjusted=padj,
+        rival_alternative=alternative,
+        correlation=corr,
+        joint=joint,
+        joint_se=joint_se,
+    )
+
+
+def _joint(
+    both: Any, a: Any, cost: float, dof: int, y_scale: float
+) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """The two-column fit's values and standard errors in the output's units (``degradation_test``'s
+    scaling: the residual variance per dof times the inverse normal matrix)."""
+    scale = cost / dof if dof > 0 else math.nan
+    try:
+        cov = np.linalg.inv(a) * scale
+    except np.linalg.LinAlgError:
+        return (), ()
+    se = np.sqrt(np.clip(np.diag(cov), 0.0, None))
+    return (
+        tuple(float(v) / y_scale**2 for v in both),
+        tuple(float(v) / y_scale**2 for v in se),
+    )
 
 
 def predicted_deviation(dd: DriftData, d: float, term: str = DEGRADATION) -> ComplexArray:

@@ -25,7 +25,10 @@ from . import (
     centre_decay,
     clean_share,
     clean_value,
+    design_twin,
     drift_clause,
+    drift_pair,
+    drift_passes,
     drift_se,
     free_dc,
     gate,
@@ -78,7 +81,7 @@ from .pinch_shape import is_pinching
 from .progress import Progress, ProgressCallback, reporter
 from .restarts import rebased_plain
 from .result import Diagnosis, ModelSummary, NamedTerm, Status, term_symbol_unit
-from .select import ALPHA, Alternative, FoldCache, Step, dof_of, held_out
+from .select import ALPHA, Alternative, FoldCache, Step, held_out
 from .settling import (  # noqa: F401 (quantisation_step: importable here as before)
     LEFT_OUT,
     LEFT_OUT_TAIL,
@@ -100,16 +103,6 @@ from .structure import with_structure
 PARTLY_EXPLAINED_FRACTION = 0.5
 #: Every candidate: the steady-loop terms, then degradation, tested in drift space (design.md 10.6).
 ALL_CANDIDATES: tuple[str, ...] = DIAGNOSIS_CANDIDATES
-#: Passes of the virgin-strength correction of the averaged periods once degradation is named: at least
-#: CORRECTION_PASSES, then until d moves by less than CORRECTION_RTOL and the virgin fit's chi-square by
-#: less than CORRECTION_CHI2 reduced chi-squares, at most MAX_CORRECTION_PASSES. The passes are a
-#: fixed-point iteration (each corrects the periods with the virgin fit of the pass before, the first with
-#: the plain fit at the mean strength) that settles in 5-7 passes: stopped after two, d was 3-9 % high at
-#: 30x on the bench's generator (steady chi2 1788 against 1282 settled, on 1257 dof).
-CORRECTION_PASSES = 2
-CORRECTION_RTOL = 0.01
-CORRECTION_CHI2 = 1.0
-MAX_CORRECTION_PASSES = 8
 #: Why degradation was not tested when the data hold no period-by-period record.
 NO_BLOCKS = (
     "degradation not tested: it is seen only in the period-by-period record (at least 2 blocks of periods "
@@ -222,106 +215,6 @@ def _verdict(
     return f"unexplained structure remains {where}{tail}"
 
 
-#: Bracket of the joint refinement of d around the drift-space estimate (relative), and its tolerance.
-REFINE_BRACKET = 0.3
-REFINE_XTOL = 1e-3
-
-
-def _refine_degradation(
-    exps: Sequence[DiagExperiment],
-    sx: Sequence[AugExperiment],
-    fit: AugFit,
-    data: Sequence[Any],
-    deg: DegradationTest,
-    s: Scale,
-    substeps: int,
-) -> tuple[DegradationTest, AugFit]:
-    """d refined on both spaces: the drift cost plus the steady cost of the virgin-strength data refitted.
-
-    The drift-space estimate is first order; the averaged periods carry d too (through the strength each
-    experiment has reached, design.md 10.6), so the value is refined by a bounded scalar search of
-    ``C_drift(d) + C_steady(d)`` within ``REFINE_BRACKET`` of it, and its standard error taken from the
-    curvature of that cost (``var = 2 / C''``). The tests stay those of the drift space.
-    """
-    from scipy.optimize import minimize_scalar  # type: ignore[import-untyped]
-
-    from .drift import _sums
-
-    sums = [_sums(dd, deg.term) for dd in data]
-    fits: dict[float, AugFit] = {}
-
-    def cost(dv: float) -> float:
-        _, fs = corrected(exps, sx, fit, dv, s.y, substeps, deg.term)
-        f = fit_from(fs, fit.params, substeps, max_iter=50)
-        if f is None:
-            return math.inf
-        fits[dv] = f
-        return f.cost + sum(c0 - 2.0 * dv * nm + dv * dv * dn for c0, nm, dn in sums)
-
-    d0 = deg.d
-    res = minimize_scalar(
-        cost,
-        bounds=((1 - REFINE_BRACKET) * d0, (1 + REFINE_BRACKET) * d0),
-        method="bounded",
-        options={"xatol": REFINE_XTOL * d0},
-    )
-    dv = float(res.x)
-    if not math.isfinite(float(res.fun)) or dv not in fits:
-        return deg, fit
-    h = 0.02 * dv
-    curv = (cost(dv + h) - 2.0 * float(res.fun) + cost(dv - h)) / (h * h)
-    se = math.sqrt(2.0 / curv) if curv > 0 else deg.standard_error * s.y**2
-    return replace(deg, d=dv, value=dv / s.y**2, standard_error=se / s.y**2), fits[dv]
-
-
-def _correction_passes(
-    exps: Sequence[DiagExperiment],
-    sx: Sequence[AugExperiment],
-    plain: AugFit,
-    data: Sequence[Any],
-    deg: DegradationTest,
-    s: Scale,
-    substeps: int,
-    tests: tuple[float, int, bool],
-) -> tuple[DegradationTest, AugFit, Sequence[Any]]:
-    """The averaged periods brought back to the virgin value and the virgin fit re-estimated, pass after pass
-    (:func:`_degradation_stage`); ``tests`` is ``(alpha, family, drift_seen)`` of the retests."""
-    fit, fsx = plain, list(sx)
-    alpha, family, drift_seen = tests
-    term = deg.term
-    for k in range(MAX_CORRECTION_PASSES):
-        last, last_cost = deg.d, fit.cost
-        _, fsx = corrected(exps, sx, fit, deg.d, s.y, substeps, term)
-        fit = best_of([fit_from(fsx, fit.params, substeps)]) or fit
-        if term != DEGRADATION:
-            # Each experiment's own gain holds its loop's mean stiffness (the loop at g / eta), so the
-            # plain fit's gain column already is the stiffness drift column at each loop's own stiffness,
-            # and its first-order d is the estimate. Re-formed at the virgin fit and 1 + d E age (the
-            # energy rate of the mean loop over the whole history), the loop sat at the wrong gain (eta
-            # 1.22 against the gains' 1.26 on a bench case) and d came out 3 % low.
-            if k + 1 >= CORRECTION_PASSES:
-                break
-            continue
-        # The averaged loops sit at their own mean strength, the fit at the virgin one.
-        means = strengths(len(exps), data, deg.d)
-        data = drift_data(exps, sx, fit, s.y, substeps, strength=means)
-        retest = degradation_test(data, s.y, alpha, family, term)
-        if retest is None:
-            break
-        retest = retest if drift_seen else with_drift_gate(retest, alpha)
-        deg = replace(
-            retest,
-            rival=deg.rival,
-            rival_p_adjusted=deg.rival_p_adjusted,
-            rival_alternative=deg.rival_alternative,
-            correlation=deg.correlation,
-        )
-        settled = last_cost - fit.cost <= CORRECTION_CHI2 * max(1.0, fit.cost / max(dof_of(fsx, fit), 1))
-        if k + 1 >= CORRECTION_PASSES and settled and abs(deg.d - last) <= CORRECTION_RTOL * abs(last):
-            break
-    return deg, fit, data
-
-
 def _aged(
     exps: Sequence[DiagExperiment],
     sx: Sequence[AugExperiment],
@@ -366,9 +259,9 @@ def _degradation_stage(
     as a steady term is tried only when the plain model is rejected. When it is named, the averaged periods
     are brought back to the virgin strength and re-estimated at each loop's own strength, pass after pass
     until d and the virgin fit settle (the first pass moves the fit from the plain model's average strength
-    to the virgin one; :data:`CORRECTION_PASSES`), then d is refined on both costs. Stiffness degradation
-    keeps the plain fit's estimate (each experiment's gain holds its own mean stiffness): its passes only
-    bring the periods back to the virgin stiffness.
+    to the virgin one; :data:`.drift_passes.CORRECTION_PASSES`), then d is refined on both costs. Stiffness
+    degradation keeps the plain fit's estimate (each experiment's gain holds its own mean stiffness): its
+    passes only bring the periods back to the virgin stiffness.
     """
     data: Sequence[Any] = drift_data(exps, sx, plain, s.y, substeps)
     if not data:
@@ -389,7 +282,7 @@ def _degradation_stage(
         deg = with_drift_gate(deg, alpha)
     if deg is None or not (deg.named if held_out_test else deg.passed):
         return deg, list(exps), list(sx), plain
-    deg, fit, data = _correction_passes(exps, sx, plain, data, deg, s, substeps, (alpha, family, drift_seen))
+    deg, fit, data = drift_passes.passes(exps, sx, plain, data, deg, s, substeps, (alpha, family, drift_seen))
     term = deg.term
     if not (deg.named if held_out_test else deg.passed):
         # The refined test no longer names it: the steady selection on the data as they are.
@@ -398,7 +291,7 @@ def _degradation_stage(
     exps, fit, deg, data = _aged(exps, sx, fit, data, deg, s, substeps, alpha / family)
     spread = drift_se.spread(exps, sx, fit if term == DEGRADATION else plain, data, deg, s.y, substeps)
     if deg.d > 0:
-        deg, fit = _refine_degradation(exps, sx, fit, data, deg, s, substeps)
+        deg, fit = drift_passes.refine(exps, sx, fit, data, deg, s, substeps)
     deg = drift_se.added(deg, *spread, s.y)
     fexps, fsx = corrected(exps, sx, fit, deg.d, s.y, substeps, term)
     # The steady selection starts from the plain model converged on the periods it runs on: the refinement's
@@ -738,12 +631,8 @@ def _degradation_first(
         notes.append(NO_BLOCKS)
         return None, exps, sx, plain
     deg, fexps, fsx, start = stage
-    named = _deg_named(deg, setup.held_out_test)
-    if deg is not None and named and deg.rival is not None and deg.rival_p_adjusted < setup.alpha:
-        notes.append(
-            f"the period record also needs {deg.rival.term} beside {deg.term} (partial F, adjusted p = "
-            f"{deg.rival_p_adjusted:.2g}): both may act, and only {deg.term} is modelled"
-        )
+    both = drift_pair.note(deg, _deg_named(deg, setup.held_out_test), setup.alpha, setup.units)
+    notes += [both] if both else []
     return deg, fexps, fsx, start
 
 
@@ -807,12 +696,7 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
     after = _drift_checked(_localise(dexps, fsx, final, s), dexps)
     plain_sum = _summary(exps, sx, plain, s, setup.units)
     final_sum, cv = clean_value.summary(_summary(fexps, fsx, final, s, setup.units), fsx, final, s, substeps)
-    if deg is not None and named_deg:
-        sym, unit = term_symbol_unit(deg.term, *setup.units)
-        final_sum = replace(
-            final_sum,
-            terms=(*final_sum.terms, NamedTerm(deg.term, sym, deg.value, deg.standard_error, unit)),
-        )
+    final_sum = _with_drift_term(final_sum, deg if named_deg else None, setup.units)
     fraction = _explained_fraction(plain_sum, final_sum, deg if named_deg else None)
     # A candidate whose law failed (select.law_test) is structure no term explains, unless only centres.
     centre = _centres_only(passes, bool(final.params.terms), steps, fexps, final_sum.outputs)
@@ -822,12 +706,14 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
     judged = classify(plain_ok, bool(final.params.terms) or named_deg, adequate(final), share)
     held = bounds_said.found(steps, alpha, final, s, setup.units, fsx)  # values held at a bound
     status, named, partial, verdict = _judged(judged, final_sum, (before, after), fraction, fexps, held)
-    verdict += (centre.text or _law_text(steps)) + beside.text(steps) + unphysical_places_text(steps, named)
+    verdict += drift_pair.text(deg, named_deg, alpha, setup.units) + (centre.text or _law_text(steps))
+    tw = design_twin.Said.of(fsx, steps, named, s, substeps, setup.units)  # design twins (design_twin.py)
+    verdict += beside.text(steps) + unphysical_places_text(tw.steps, named) + tw.text
     verdict += clean_share.text(status, named, fraction, cshare, fsx) + cv.text(status, (*named, *partial))
     verdict += law_untested.text(named, fexps) + input_note.text(
         status, (*named, *partial), fexps, final_sum.outputs
     )
-    alternatives = tuple(a for st in steps for a in st.alternatives) + _drift_alternatives(deg, named_deg)
+    alternatives = tw.alternatives + _drift_alternatives(deg, named_deg)  # the steps' and the twins'
     verdict += alternatives_text(alternatives, named) + caveats_of(named, fsx, final, fexps, alpha, substeps)
     setup.report("held-out check of the final model", 0, 1)
     ho = held_out(fsx, start, final, substeps, cache) if final.params.terms else None
@@ -854,6 +740,16 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
     )
     d = _with_limits(d, fsx, start, steps, s, substeps, setup)  # detection limits (limits.py)
     return _with_feedback(d, setup)
+
+
+def _with_drift_term(
+    final: ModelSummary, deg: Optional[DegradationTest], units: tuple[str, str]
+) -> ModelSummary:
+    """The final model's terms with the named drift term (``deg``, None when not named) among them."""
+    if deg is None:
+        return final
+    sym, unit = term_symbol_unit(deg.term, *units)
+    return replace(final, terms=(*final.terms, NamedTerm(deg.term, sym, deg.value, deg.standard_error, unit)))
 
 
 def _with_feedback(d: Diagnosis, setup: _Setup) -> Diagnosis:
