@@ -38,7 +38,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any, Protocol, TypeVar
 
-from ..terms import TERMS
+from ..terms import TERMS, Play
 from .result import NOT_ONLY, status_text
 from .verdict_text import clauses
 
@@ -88,7 +88,7 @@ def _of_clause(c: str) -> list[Reading]:
         words = f"or a distribution of stops or another Dahl exponent (Dahl: {FAMILY_MARK})"
         out.append(Reading("family", words))
     if PLAY_MARK in c:
-        out.append(Reading("play", f"or a backlash on the measured output (play: {PLAY_MARK})"))
+        out.append(Reading(Play.kind, f"or a backlash on the measured output (play: {PLAY_MARK})"))
     if MASING_MARK in c and "may be the elastic part" in c:
         words = f"or the elastic part of {MASING_MARK} (a Prandtl-Ishlinskii loop on x)"
         out.append(Reading("masing", words))
