@@ -49,7 +49,7 @@ from numpy.typing import NDArray
 
 from ..errors import InsufficientDataError, InvalidParameterError, ZeroAmplitudeError
 from ..signal._harmonic_ls import harmonic_basis
-from . import lab_colour
+from . import lab_colour, lab_settle
 
 FloatArray = NDArray[np.float64]
 ComplexArray = NDArray[np.complex128]
@@ -645,7 +645,7 @@ def prepare(items: Any) -> list[DiagExperiment]:
     """
     from ..measurement import Measurement
     from ..model import Recording
-    from ..signal import AveragedPeriod, average_measurement
+    from ..signal import AveragedPeriod
 
     seq: Sequence[Any] = items if isinstance(items, (list, tuple)) else [items]
     out: list[DiagExperiment] = []
@@ -653,7 +653,7 @@ def prepare(items: Any) -> list[DiagExperiment]:
         if isinstance(item, Recording):
             out.append(_from_recording(i, item))
         elif isinstance(item, Measurement):
-            for ap in average_measurement(item):
+            for ap in lab_settle.averaged(item):  # average_measurement, its start-up transient trimmed
                 e = _from_averaged(ap, np.asarray(item.t), np.asarray(item.y), np.asarray(item.u))
                 out.append(_lab_marked(e) if BASELINE_MARK in item.metadata else e)
         elif isinstance(item, AveragedPeriod):
