@@ -223,6 +223,8 @@ def test_a_lab_experiment_is_corrected_over_its_whole_periods() -> None:
 
 @pytest.mark.usefixtures("beside")
 @pytest.mark.parametrize("seed", [3, 4])
+@pytest.mark.filterwarnings("ignore::bouc_wen_id.errors.TransientWarning")  # virgin at the first sample:
+# the lab path trims its first periods (diagnosis/lab_settle.py), as the recording path trims a transient
 def test_a_lab_degradation_under_a_drifting_zero_is_named(seed: int) -> None:
     """The fixed-rate lab path (Measurements): main before this session said "not settled" on seeds 3 and 4
     (measured); now named (measured 4.87e-4 and 5.46e-4, se 1.7e-5), the zero's line taken out."""

@@ -31,7 +31,10 @@ is reduced to
   period's DC at a tenth of its variance (the bench's "ar1 slow" nulls were called "unexplained": an
   offset whose value differs between experiments, loops "not settled"). The lag-1 correlation of the
   period DCs inflates it (:func:`cross_period_inflation`); such a wander and a drift of the centre cannot
-  be told apart in one short record, and the notes say so.
+  be told apart in one short record, and the notes say so. With few periods (3 to 6: fewer than
+  :data:`FEW_COLOUR_DOF` degrees of freedom per harmonic; 3 periods about their mean, no trend) the DC joins
+  its neighbours' band and the check runs at :data:`FEW_COLOUR_ALPHA` (review 34: 3 periods under AR(0.5)
+  named terms on 4 of 20 null seeds, 0 of 20 after).
 """
 
 from __future__ import annotations
@@ -47,7 +50,7 @@ from numpy.typing import NDArray
 from .._text import item_label
 from ..errors import InsufficientDataError, InvalidParameterError, ZeroAmplitudeError
 from ..signal._harmonic_ls import harmonic_basis
-from . import lab_colour
+from . import lab_colour, lab_settle
 
 FloatArray = NDArray[np.float64]
 ComplexArray = NDArray[np.complex128]
@@ -219,12 +222,42 @@ def _recording_blocks(rows: FloatArray) -> tuple[ComplexArray, FloatArray, Float
     )
 
 
+#: Fewest periods whose spread measures the noise's colour (:func:`noise_colour`): 3 leave 2 degrees of
+#: freedom per harmonic about their mean. Without it a 3-period recording's floor was the per-sample level
+#: of white noise whatever the colour: AR(0.5) noise (3 times that level at the low harmonics) named terms
+#: in 3 of 8 null seeds (review 34, problem 3).
+MIN_COLOUR_PERIODS = 3
+
+
+#: Fewest degrees of freedom per harmonic (N - 3 about the quadratic trend, N - 1 about the mean) at
+#: which the DC's spread is a band of its own and the colour check keeps :data:`COLOUR_ALPHA`.
+FEW_COLOUR_DOF = 4
+
+#: The colour check's level with fewer (3 to 6 periods): a missed colour under-states the floor at the low
+#: harmonics, where the loop and the candidates live, and names terms on nothing (AR(0.5): 3 times the
+#: per-sample level there; at 1e-3 the check missed it in 4 of 10 noise-only 3-period records), while a
+#: false colour only raises the floor to a band's level; so the check errs towards colour with few periods.
+FEW_COLOUR_ALPHA = 0.05
+
+
+def _about_trend(raw: ComplexArray) -> tuple[ComplexArray, int]:
+    """``(residual, dof)``: the periods' harmonics ``raw`` (N, K + 1) about a quadratic trend in the period
+    index (a drift or a settling loop taken out; N - 3 degrees of freedom) when N >= 4, about their mean
+    (N - 1) with fewer (3 periods leave no spread about a quadratic; a drift then counts as noise, which
+    errs towards a larger floor, not towards named terms)."""
+    n = raw.shape[0]
+    idx = np.arange(n, dtype=np.float64)
+    trend = np.vander(idx - idx.mean(), 3 if n >= 4 else 1)
+    c = raw - trend @ np.linalg.lstsq(trend, raw, rcond=None)[0]
+    return c, n - trend.shape[1]
+
+
 def noise_colour(
     rows: FloatArray, white_var: float, white_dof: int, dc: bool = True
 ) -> tuple[float, int, tuple[int, int]]:
     """The noise's level at the low harmonics of periods ``rows`` (N, P), when measurably above
     ``white_var`` (the per-sample variance, ``white_dof`` degrees of freedom): ``(variance, dof, band)``;
-    ``(white_var, white_dof, (0, 0))`` when not (or when N < 4 leaves no spread about a quadratic trend).
+    ``(white_var, white_dof, (0, 0))`` when not (or when N < 3 leaves no spread; :func:`_about_trend`).
 
     Each period's harmonic ``c_k = sum_j y_j e^{-2 pi i jk/P} / P`` (``c_0`` the DC) has variance ``s2/P``
     (DC) or ``s2/(2P)`` per real and imaginary part for white noise of variance ``s2``; about a quadratic
@@ -244,22 +277,23 @@ def noise_colour(
 
     n, p = rows.shape
     k = _harmonics_of(p)
-    if n < 4 or k < 1 or not (white_var > 0 and math.isfinite(white_var)):
+    if n < MIN_COLOUR_PERIODS or k < 1 or not (white_var > 0 and math.isfinite(white_var)):
         return white_var, white_dof, (0, 0)
     raw = np.fft.rfft(rows, axis=1)[:, : k + 1] / p
-    idx = np.arange(n, dtype=np.float64)
-    trend = np.vander(idx - idx.mean(), 3)
-    c = raw - trend @ np.linalg.lstsq(trend, raw, rcond=None)[0]
+    c, free = _about_trend(raw)
     ss = np.empty(k + 1)
     ss[0] = p * float(np.sum(c[:, 0].real ** 2))
     ss[1:] = 2.0 * p * np.sum(np.abs(c[:, 1:]) ** 2, axis=0)  # c_k = rfft/P: E|c_k|^2 = s2/P per period
-    dof = np.full(k + 1, 2.0 * (n - 3))
-    dof[0] = n - 3 if dc else 0.0
+    dof = np.full(k + 1, 2.0 * free)
+    dof[0] = free if dc else 0.0
     half = COLOUR_BAND // 2
     first = 0 if dc else 1
     # Without the DC (period means taken out: a random walk's leak falls as 1/k^2 from the fundamental, and
     # the band 1-3 put the fundamental's level at 0.6 of its own) the fundamental is a band of its own.
-    bands = [(0, 0) if dc else (1, 1)] + [
+    # Few periods (FEW_COLOUR_DOF): the DC's spread alone is too noisy to be a band (2 dof at 3 periods:
+    # the largest level was then most often the DC's by chance, and its F(., 2) floor took the gate's power).
+    own_dc = dc and free >= FEW_COLOUR_DOF
+    bands = ([(0, 0)] if own_dc else [] if dc else [(1, 1)]) + [
         (max(first, lo - half), min(k, lo + half)) for lo in range(first, k + 1)
     ]
     levels = []
@@ -268,9 +302,10 @@ def noise_colour(
         v = float(np.sum(ss[a : b + 1])) / d
         levels.append((v, d, (a, b), float(fdtrc(d, max(white_dof, 1), v / white_var))))
     top = max(levels, key=lambda t: t[0])
-    if top[0] <= white_var or min(1.0, len(bands) * min(t[3] for t in levels)) >= COLOUR_ALPHA:
+    level = COLOUR_ALPHA if free >= FEW_COLOUR_DOF else FEW_COLOUR_ALPHA
+    if top[0] <= white_var or min(1.0, len(bands) * min(t[3] for t in levels)) >= level:
         return white_var, white_dof, (0, 0)
-    if not dc:
+    if not own_dc:
         return top[0], int(top[1]), top[2]
     # Coloured: the DC's level for its mean over the periods, the largest level the noise variance.
     infl = cross_period_inflation(raw[:, 0].real)
@@ -289,26 +324,28 @@ def harmonic_levels(rows: FloatArray, white_var: float, dc: bool = True) -> Floa
     a quadratic trend (as :func:`noise_colour`) pooled over the :data:`COLOUR_BAND` harmonics around it
     (the DC alone, inflated for the correlation of the period DCs, :func:`cross_period_inflation`), never
     below :data:`HARMONIC_FLOOR` times ``white_var`` (a red noise is below its per-sample level at the
-    higher harmonics). Empty when N < 4. ``dc=False`` (the period means taken out, ``baseline.py``): the DC's
+    higher harmonics). Empty when N < 3. ``dc=False`` (the period means taken out, ``baseline.py``): the DC's
     level is infinite (no weight in the drift test) and no band counts it.
     """
     n, p = rows.shape
     k = _harmonics_of(p)
-    if n < 4 or k < 1:
+    if n < MIN_COLOUR_PERIODS or k < 1:
         return np.zeros(0)
     raw = np.fft.rfft(rows, axis=1)[:, : k + 1] / p
-    idx = np.arange(n, dtype=np.float64)
-    trend = np.vander(idx - idx.mean(), 3)
-    c = raw - trend @ np.linalg.lstsq(trend, raw, rcond=None)[0]
+    c, free = _about_trend(raw)
     ss = 2.0 * p * np.sum(np.abs(c) ** 2, axis=0)
     half = COLOUR_BAND // 2
     out = np.empty(k + 1)
-    out[0] = p * float(np.sum(c[:, 0].real ** 2)) / (n - 3) * cross_period_inflation(raw[:, 0].real)
+    out[0] = p * float(np.sum(c[:, 0].real ** 2)) / free * cross_period_inflation(raw[:, 0].real)
+    if free < FEW_COLOUR_DOF:  # the DC pooled with its neighbours, as noise_colour's bands
+        out[0] = (p * float(np.sum(c[:, 0].real ** 2)) + float(np.sum(ss[1 : half + 1]))) / (
+            free * (1 + 2 * min(half, k))
+        )
     for j in range(1, k + 1):
         a, b = max(1, j - half), min(k, j + half)
-        out[j] = float(np.sum(ss[a : b + 1])) / (2.0 * (n - 3) * (b - a + 1))
+        out[j] = float(np.sum(ss[a : b + 1])) / (2.0 * free * (b - a + 1))
     if not dc:  # the fundamental alone, as noise_colour's band of its own
-        out[1] = float(ss[1]) / (2.0 * (n - 3))
+        out[1] = float(ss[1]) / (2.0 * free)
     out = np.maximum(out, HARMONIC_FLOOR * white_var)
     if not dc:
         out[0] = np.inf
@@ -610,7 +647,7 @@ def prepare(items: Any) -> list[DiagExperiment]:
     """
     from ..measurement import Measurement
     from ..model import Recording
-    from ..signal import AveragedPeriod, average_measurement
+    from ..signal import AveragedPeriod
 
     seq: Sequence[Any] = items if isinstance(items, (list, tuple)) else [items]
     out: list[DiagExperiment] = []
@@ -618,7 +655,7 @@ def prepare(items: Any) -> list[DiagExperiment]:
         if isinstance(item, Recording):
             out.append(_from_recording(i, item))
         elif isinstance(item, Measurement):
-            for ap in average_measurement(item):
+            for ap in lab_settle.averaged(item):  # average_measurement, its start-up transient trimmed
                 e = _from_averaged(ap, np.asarray(item.t), np.asarray(item.y), np.asarray(item.u))
                 out.append(_lab_marked(e) if BASELINE_MARK in item.metadata else e)
         elif isinstance(item, AveragedPeriod):
