@@ -86,3 +86,19 @@ def test_a_final_fit_held_at_the_mu_bracket_qualifies_the_verdict() -> None:
         "",
         "",
     )
+
+
+def test_a_candidate_beyond_its_range_that_only_ties_is_not_said() -> None:
+    """Review of the merge: a negative stiffness removing 56 % beside an inertia on x that explains 100 %
+    was said, with P-Delta "suggested"; only one that beats the final model is said (an exact tie is a
+    design twin's, said by design_twin.py)."""
+    kept = (_named(T.InertiaX.kind),)
+    tie = bounds_said.Beyond(found=((_named(T.StiffnessX.kind), None),), beats_final=False)  # type: ignore[arg-type]
+    assert bounds_said.apply(tie, "explained", kept, kept, 1.0) == ("explained", kept, "", "")
+    assert bounds_said.apply(tie, "partly explained", kept, kept, 0.6) == ("partly explained", kept, "", "")
+
+
+def test_the_mu_clause_does_not_claim_the_loops_ask_for_a_smaller_mu() -> None:
+    """A true mu = 1 (the classic Bouc-Wen) sits at the bracket's end whenever something else is missing."""
+    tail = bounds_said.apply(bounds_said.Beyond(mu_face="lower", mu=1.0), "unexplained", (), (), 0.3)[3]
+    assert "ask for" not in tail and "either the true exponent is there" in tail

@@ -172,3 +172,19 @@ def test_the_bench_scores_a_rate_caveated_name_honest_only_when_the_headline_car
     assert not bench._family(_D("explained by: viscous damping c = 0.0049"), ["viscous"], "pi_u")
     assert not bench._family(carried, ["viscous"], "rate_width")  # a rate-DEPENDENT loop: not its family
     assert not bench._family(carried, ["viscous", "stiffness"], "pi_u")  # another name beside it
+
+
+def test_a_rival_the_details_refuse_by_its_law_is_no_reading() -> None:
+    """Review of the merge (slack_10): "— or inertia on the measured input u" in the headline while the
+    details listed it as "not named: ... its law fails ... stands in for physics outside the library"."""
+    from bouc_wen_id import terms as T
+    from bouc_wen_id.diagnosis import readings
+    from bouc_wen_id.diagnosis.select import Alternative
+
+    label = T.TERMS[T.Inertia.kind].place_label()
+    alt = [Alternative(T.StiffnessX.kind, T.Inertia.kind, 0.99, "a second frequency")]
+    verdict = "explained in part by: stiffness on x k = 0.05 (63 % of the excess)"
+    kept = readings.of_verdict(verdict, [T.StiffnessX.kind], alt)
+    assert any(label in r.words for r in kept)  # a plain rival is a reading
+    refused = verdict + f"; not named: {label} (p = 0.001): each fits part of the misfit"
+    assert not any(label in r.words for r in readings.of_verdict(refused, [T.StiffnessX.kind], alt))

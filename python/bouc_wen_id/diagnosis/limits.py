@@ -306,9 +306,7 @@ def detection_limits(
         note = "" if math.isfinite(lim) else "not detectable within the term's admissible range"
         if refused_by_bound(tr, level):  # detected, beyond its range: no |v| < limit (bounds_said.py)
             lim = lim90 = math.inf
-            note = (
-                f"detected with {sym} = {v:.3g} {unit}".rstrip() + ", outside its physical range (not named)"
-            )
+            note = f"fits with {sym} = {v:.3g} {unit}".rstrip() + ", outside its physical range (not named)"
         out.append(
             DetectionLimit(
                 tr.term,

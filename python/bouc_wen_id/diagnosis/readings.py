@@ -132,6 +132,13 @@ def of_verdict(verdict: str, named: Sequence[str], alternatives: Sequence[Any]) 
         for a in by_law
         if a.rival not in named
     ]
+    # a rival the details list as "not named: ... its law fails" is refused by the data: no other reading
+    refused = " ".join(_between(c, "not named: ", ": each fits") for c in clauses(verdict)[1:])
+    out = [
+        r
+        for r in out
+        if not (r.kind == "alternative" and r.words.removeprefix("or ").split(" (law")[0] in refused)
+    ]
     for c in clauses(verdict)[1:]:
         out += _of_clause(c)
     once: dict[str, Reading] = {}
