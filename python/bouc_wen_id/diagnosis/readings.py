@@ -133,13 +133,14 @@ def of_verdict(verdict: str, named: Sequence[str], alternatives: Sequence[Any]) 
         if a.rival not in named
     ]
     # a rival the details list as "not named: ... its law fails" is refused by the data: no other reading
-    refused = " ".join(_between(c, "not named: ", ": each fits") for c in clauses(verdict)[1:])
+    details = clauses(verdict)[1:]
+    refused = " ".join(_between(c, "not named: ", ": each fits") for c in details)
     out = [
         r
         for r in out
         if not (r.kind == "alternative" and r.words.removeprefix("or ").split(" (law")[0] in refused)
     ]
-    for c in clauses(verdict)[1:]:
+    for c in details:
         out += _of_clause(c)
     once: dict[str, Reading] = {}
     for r in out:
