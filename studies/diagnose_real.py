@@ -151,9 +151,9 @@ INTRO = """\
 
 Every number on this page comes from one run of `{command}` on the code as it is
 (commit {commit}): the main run took {wall:.0f} s wall on the 2-core machine (the diagnoses {diag:.0f} s, the
-figures {figs:.0f} s; per group in its section), {stab}. The machine was shared with other jobs: load
-average {load0:.1f} at the start and {load:.1f} at the end (2 cores), so the times are those of a loaded
-machine. Each group is diagnosed jointly: one Bouc-Wen element and one set of candidate terms shared by its
+figures {figs:.0f} s; per group in its section), {stab}. Load average {load0:.1f} at the start and
+{load:.1f} at the end (2 cores; this run itself adds about 1): {machine}.
+Each group is diagnosed jointly: one Bouc-Wen element and one set of candidate terms shared by its
 experiments, one |G| and phase per experiment. A term is named only if it passes the nested F-test
 (Bonferroni over the candidates), removes at least 10 % of the excess misfit and lowers the held-out cost
 (each experiment left out in turn, physics fitted on the others). See `docs/diagnosis.md` for the method.
@@ -200,6 +200,15 @@ def _stability_lines(rows: list[dict[str, Any]]) -> list[str]:
     return lines
 
 
+def _machine_state(load_start: float) -> str:
+    """How loaded the machine was when the run started (before the run's own load)."""
+    if not math.isfinite(load_start):
+        return "the machine's load is unknown"
+    if load_start < 1.0:
+        return "a quiet machine, so the times are this code's own"
+    return "the machine was shared with other jobs, so the times are those of a loaded machine"
+
+
 def markdown(
     rows: list[dict[str, Any]], timing: dict[str, float], command: str = "", commit: str = ""
 ) -> str:
@@ -210,6 +219,7 @@ def markdown(
     )
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else math.nan
     intro = INTRO.format(
+        machine=_machine_state(timing.get("load_start", math.nan)),
         wall=timing["wall"],
         diag=timing["diagnoses"],
         figs=timing["figures"],
