@@ -876,7 +876,7 @@ def diagnose_across(
         Fewer than two groups, conditions that do not match the groups or repeat, unknown candidates.
     """
     from .. import _threads
-    from . import fit_share
+    from . import across_said, fit_share
     from .drift import DRIFT_TERMS
     from .run import ALL_CANDIDATES, _check_candidates
 
@@ -929,6 +929,7 @@ def diagnose_across(
         verdict=out.verdict + across_settling.clause(prepared, unsettled),
         notes=(*joined.notes, *out.notes, *across_settling.notes(prepared, unsettled)),
     )
+    out = across_said.said(out, prepared, dict(zip(names, gs)), y_unit, u_unit, joined.units)  # run.py's
     return readings.qualified(out, out.named, out.alternatives)  # the headline's qualifiers
 
 
