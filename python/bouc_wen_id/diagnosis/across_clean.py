@@ -24,6 +24,8 @@ from collections.abc import Sequence
 from dataclasses import replace
 from typing import Any
 
+import numpy as np
+
 from . import clean_value, input_note, output_clip
 from .clean_share import clean
 from .fitting import physical, subset
@@ -100,7 +102,8 @@ def inputs_text(groups: Sequence[Any], status: str, named: Sequence[Any]) -> str
     out = ""
     for k, g in enumerate(groups):
         as_named = [_as_named(t, k) for t in named]
-        clause = input_note.text(status, as_named, g.exps, getattr(g.current, "outputs", ()))
+        outputs = [np.asarray(y) * g.scale.y for y in g.current.outputs]  # in the data's units, as run.py's
+        clause = input_note.text(status, as_named, g.exps, outputs)
         out += clause.replace(input_note.MARK, f"{input_note.MARK} at {g.label}", 1)
     return out
 
