@@ -79,6 +79,9 @@ def run(sim: Any, cid: str) -> dict[str, Any]:
         "across": a.verdict,
         "across_named": list(a.named),
         "across_status": a.status,
+        "across_values": {
+            t.term: [[v, se] for v, se in zip(t.values, t.standard_errors)] for t in (*a.terms, *a.partial)
+        },
         "seconds": round(time.time() - t0, 1),
     }
 

@@ -64,7 +64,8 @@ def found(groups: Sequence[Any], steps: Sequence[Any]) -> BeyondAcross:
     if not steps or not groups:
         return BeyondAcross()
     st = steps[0]
-    level = st.level if math.isfinite(st.level) else 0.0
+    level = getattr(st, "level", math.nan)  # a step that records no level refuses nothing here
+    level = level if math.isfinite(level) else 0.0
     hits = sorted(
         (tr for tr in st.trials if refused_by_bound(groups, tr, level) and tr.share >= MOST),
         key=lambda tr: -_improvement(tr),

@@ -27,6 +27,7 @@ from typing import Any
 import numpy as np
 
 from . import clean_value, input_note, output_clip
+from .across_smooth import smoothness
 from .clean_share import clean
 from .fitting import physical, subset
 from .result import NamedTerm
@@ -67,8 +68,6 @@ def _refit(
 
 
 def _resmoothed(t: Any, groups: Sequence[Any], alpha: float) -> Any:
-    from .across import smoothness
-
     ps = smoothness([g.condition for g in groups], t.values, t.standard_errors)
     return replace(t, smooth_p=ps, smooth_degree=next((d for d, p in enumerate(ps) if p >= alpha), None))
 
