@@ -121,3 +121,28 @@ def test_a_clipped_output_at_one_condition_is_said_there() -> None:
     assert text.startswith("; at 1 A, the measured output of recording 3, recording 4 looks clipped"), text
     assert "at 0 A" not in text
     assert across_clean.outputs_text(["0 A"], [clean]) == ""
+
+
+def test_a_physical_twin_is_added_once_to_its_step_s_alternatives_and_a_non_physical_one_is_said() -> None:
+    """across_twin's bookkeeping: a twin with a physical value at every condition becomes its step's
+    alternative (once: not when the pair is already there, in either order); one outside its range is no
+    alternative but is said with its value at each condition and what separates them."""
+    from bouc_wen_id.diagnosis import across_twin
+    from bouc_wen_id.diagnosis.across import JointStep
+    from bouc_wen_id.diagnosis.select import Alternative
+
+    k, m, mx, kx = T.Stiffness.kind, T.Inertia.kind, T.InertiaX.kind, T.StiffnessX.kind
+    have = Alternative(kx, k, math.nan, "another amplitude")
+    steps = (JointStep((), k, alternatives=(have,)), JointStep((), None))
+
+    def twin(rival: str, ok: bool) -> Any:
+        return across_twin.TwinAcross(k, rival, 0.0, ok, (-0.001, -0.002), ("0 A", "1 A"), "at 0 A: at 2x")
+
+    found = [twin(m, False), twin(mx, True), twin(kx, True)]
+    out, added = across_twin.with_alternatives(steps, found)
+    assert [(a.term, a.rival) for a in added] == [(k, mx)]
+    assert out[0].alternatives == (have, added[0]) and out[1] is steps[1]
+    text = across_twin.text(found, ("N", "mm"))
+    assert T.TERMS[mx].place_label() + " with" not in text
+    assert f"as {T.TERMS[m].place_label()} with m = -0.001, -0.002 " in text, text
+    assert "at 0 A, 1 A (exactly;" in text and "to separate them: at 0 A: at 2x" in text, text
