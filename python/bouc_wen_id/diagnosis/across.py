@@ -46,7 +46,6 @@ from dataclasses import dataclass, field, replace
 from typing import Any, Optional
 
 import numpy as np
-from numpy.typing import ArrayLike
 
 from ..augmented import AugExperiment, AugFit
 from ..errors import InvalidParameterError
@@ -65,6 +64,7 @@ from . import (
     inputs,
     readings,
 )
+from .across_smooth import MAX_DEGREE, smoothness
 from .across_stable import ConditionResult
 from .beside import only_beside
 from .caveats import alternatives_text
@@ -95,8 +95,6 @@ from .verdict_text import details, headline
 #: A passed candidate whose summed improvement is at least this fraction of the chosen one's is a near-tied
 #: rival (select.ALTERNATIVE_IMPROVEMENT's threshold, on the summed improvements).
 RIVAL_IMPROVEMENT = ALTERNATIVE_IMPROVEMENT
-#: Highest polynomial degree in the condition tried by the smoothness check ("low order").
-MAX_DEGREE = 2
 
 
 @dataclass
@@ -630,30 +628,6 @@ def _select(
 # What the final structure says per term and per condition
 
 
-def smoothness(
-    conditions: ArrayLike, values: ArrayLike, ses: ArrayLike, max_degree: int = MAX_DEGREE
-) -> tuple[float, ...]:
-    """chi-square p-values of the weighted least-squares polynomials of degree 0 .. ``max_degree`` in the
-    condition through ``values`` (weights ``1 / se^2``): a degree with dof ``K - degree - 1 >= 1`` only.
-    A p above the level says the values move as that polynomial within their se."""
-    from scipy.special import chdtrc
-
-    c = np.asarray(conditions, dtype=np.float64)
-    v = np.asarray(values, dtype=np.float64)
-    s = np.asarray(ses, dtype=np.float64)
-    if not (np.all(np.isfinite(v)) and np.all(np.isfinite(s)) and np.all(s > 0)):
-        return ()
-    span = float(np.ptp(c)) or 1.0
-    z = (c - float(np.mean(c))) / span
-    out = []
-    for d in range(min(max_degree, c.size - 2) + 1):
-        a = np.vander(z, d + 1) / s[:, None]
-        coef, *_ = np.linalg.lstsq(a, v / s, rcond=None)
-        chi2 = float(np.sum((a @ coef - v / s) ** 2))
-        out.append(float(chdtrc(c.size - d - 1, chi2)))
-    return tuple(out)
-
-
 def _terms(
     groups: Sequence[_Group], steps: Sequence[JointStep], units: tuple[str, str], alpha: float
 ) -> tuple[TermAcross, ...]:
@@ -867,8 +841,7 @@ def diagnose_across(
         alternative there is not listed among the condition's terms but as an alternative.
     y_unit, u_unit : str
         Units of the output and the input, for the reported values.
-    progress : bool or callable, optional
-        As :func:`diagnose`'s.
+    progress : bool or callable, optional (as :func:`diagnose`'s)
 
     Raises
     ------
@@ -876,7 +849,7 @@ def diagnose_across(
         Fewer than two groups, conditions that do not match the groups or repeat, unknown candidates.
     """
     from .. import _threads
-    from . import fit_share
+    from . import across_said, fit_share
     from .drift import DRIFT_TERMS
     from .run import ALL_CANDIDATES, _check_candidates
 
@@ -929,6 +902,7 @@ def diagnose_across(
         verdict=out.verdict + across_settling.clause(prepared, unsettled),
         notes=(*joined.notes, *out.notes, *across_settling.notes(prepared, unsettled)),
     )
+    out = across_said.said(out, prepared, dict(zip(names, gs)), y_unit, u_unit, joined.units)  # run.py's
     return readings.qualified(out, out.named, out.alternatives)  # the headline's qualifiers
 
 

@@ -37,7 +37,7 @@ from dataclasses import replace
 from typing import Any
 
 from ..terms import TERMS, Play, StiffnessX, physical_value
-from . import across_rate, beside, bounds_said, gate, law_untested
+from . import across_bounds, across_rate, across_twin, beside, bounds_said, gate, law_untested
 from .caveats import family_text, joint_separation, latent_levels, masing_separation, unphysical_places_text
 from .locate import adequacy_p
 from .result import NamedTerm, Status
@@ -130,6 +130,8 @@ def judged(
     )
     if bad and status == "explained":
         status = "partly explained"
+    if status != "adequate" and across_bounds.demotes(across_bounds.found(groups, steps), bool(terms)):
+        status = "unexplained"  # a candidate beyond its range removes clearly more (across_bounds.py)
     named = [t for t in terms if t.term not in bad] if status in ("explained", "partly explained") else []
     if not named and status != "adequate":
         status = "unexplained"
@@ -189,7 +191,9 @@ def clauses(
     text += bounds_said.across_text(groups, status) + _unphysical_text(unphysical(partial))
     text += _law_text(steps) + beside.text(steps)
     as_said = [NamedTerm(t.term, t.symbol, math.nan, math.nan, t.unit) for t in named if t.term in TERMS]
-    text += unphysical_places_text(steps, as_said)  # another place that fits only non-physically
+    # another place that fits only non-physically, unless a physical twin stands for it (across_twin.py)
+    twins = across_twin.twins(groups, steps, [t.term for t in named], separate=False)
+    text += unphysical_places_text(across_twin.filtered(groups, steps, twins), as_said)
     text += law_untested.across_text(named, [(str(g.label), g.exps) for g in groups])
     # Play's and the spring on x's caveats hang on whether every experiment saturates where the term acts:
     # a condition where it is absent says nothing of it (a spring on x present only at a saturating
