@@ -132,3 +132,6 @@ def test_why_a_detected_candidate_was_not_named() -> None:
     assert "range" in named_limit.why_not_named(replace(tr, passed=False))
     law = replace(tr, held_out=None, law_p_value=1e-4)
     assert "law" in named_limit.why_not_named(law)
+    # review 34's seed 3: inertia on u named at the step, the spring on x never reached
+    instead = named_limit.why_not_named(replace(tr, held_out=None), "inertia")
+    assert TERM_LABELS["inertia"] + " was named at this step instead" == instead

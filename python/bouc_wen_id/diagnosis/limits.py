@@ -344,7 +344,7 @@ def detection_limits(
         if fit is not None:
             probes[tr.term] = (lim90, lim if math.isfinite(lim) else guess, targets[1], thr, s2)
         seen = tr.p_adjusted < level and tr.share >= MATERIAL_SHARE  # its threshold's two parts passed here
-        why = named_limit.why_not_named(tr) if seen and st.chosen != tr.term else ""
+        why = named_limit.why_not_named(tr, st.chosen or "") if seen and st.chosen != tr.term else ""
         note = "" if math.isfinite(lim) else "not detectable within the term's admissible range"
         if refused_by_bound(tr, level):  # detected, beyond its range: no |v| < limit (bounds_said.py)
             lim, lim90, why = math.inf, math.inf, ""

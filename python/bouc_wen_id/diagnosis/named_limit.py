@@ -63,9 +63,13 @@ class Separation:
         return self.share >= TWIN_SHARE
 
 
-def why_not_named(trial: Any) -> str:
+def why_not_named(trial: Any, chosen: str = "") -> str:
     """Why a first-step candidate whose own F-test passed was not named (select.py's gates after the F-test),
-    in a few words."""
+    in a few words; ``chosen``: the candidate the step named instead ("" for none)."""
+    from .result import TERM_LABELS
+
+    if chosen and chosen != trial.term and trial.held_out is None and trial.law_holds and trial.passed:
+        return f"{TERM_LABELS.get(chosen, chosen)} was named at this step instead"
     if not trial.passed:
         return "its value is outside its physical range or at its null value"
     if trial.held_out is not None and not trial.held_out.improves:
