@@ -108,16 +108,19 @@ def named_text(lim: DetectionLimit) -> str:
     if not (math.isfinite(lim.limit_90) and lim.rival) or math.isnan(lim.named_90):
         return ""
     rival = TERM_LABELS.get(lim.rival, lim.rival)
+    outside = (
+        " (at a value outside its physical range, which the verdict refuses)" if lim.rival_outside else ""
+    )
     if not math.isfinite(lim.named_90):
         return (
-            f"; detected but not separable from {rival} with these experiments (the same averaged periods: "
-            "either may be named)"
+            f"; detected but not separable from {rival}{outside} with these experiments (the same averaged "
+            "periods: either may take the fit)"
         )
     if lim.named_90 <= NAMED_SAID * lim.limit_90:
         return ""
     return (
         f"; named at its place with {100 * POWER:.0f} % only above {lim.named_90:.2g}: "
-        f"{rival} takes {100 * lim.rival_share:.2g} % of its trace"
+        f"{rival}{outside} takes {100 * lim.rival_share:.2g} % of its trace"
     )
 
 
@@ -129,7 +132,7 @@ def detected_text(lims: Sequence[DetectionLimit]) -> str:
         return ""
     parts = [
         f"{lim.label} {lim.symbol} = {lim.value:.3g} ± {lim.standard_error:.2g} {lim.unit}".rstrip()
-        + f" (p adj {lim.p_adjusted:.2g}; not named: {lim.not_named})"
+        + f" (p adj {lim.p_adjusted:.2g}; not named: {lim.not_named}{named_text(lim)})"
         for lim in seen
     ]
     return "; detected by its own test on these data but not named: " + ", ".join(parts)
