@@ -16,7 +16,10 @@ G that each experiment's phase absorbs beyond first order), the projection is co
 the plain model (:func:`_refined`); the diagnosis asks for that only when it named nothing (the limits are
 then the finding). It is the F-test's limit: naming also needs the held-out and the law tests
 (docs/diagnosis.md, "Detection limits", has the calibration by simulation). ``absorbed`` is the share of
-the term's raw trace the plain model takes up.
+the term's raw trace the plain model takes up. :attr:`DetectionLimit.named_90` is the value at which the term
+also fits better than every other candidate with 90 % probability (named_limit.py: a rival sharing its
+unabsorbed trace takes its place; inf for a twin), and ``not_named`` says why a candidate whose own test
+passed on these data was not named (docs/diagnosis.md, "Named at the stated size").
 """
 
 from __future__ import annotations
@@ -46,8 +49,8 @@ ABSORBED_SAID = 0.95
 #: taken whole by the DCs (an offset's: 1e-32-1e-28 measured); what is left is rounding, nothing seen. The
 #: smallest real leftover measured (a sensor lag at 1e-3) keeps 9e-5.
 ABSORBED_ROUNDING = 1e-20
-#: Candidates whose physical range is ``>= 0`` (a rival taking a trace only below 0 is refused, though it
-#: still takes the term's place: named_limit.py).
+#: Candidates whose physical range is ``>= 0`` (a rival taking a trace only below 0 is refused;
+#: named_limit.py).
 NON_NEGATIVE = frozenset(k for k, cls in TERMS.items() if cls.physical[0] == 0.0)
 #: Detection limits named in the verdict (the rest are in the JSON and the detailed report).
 VERDICT_LIMITS = 4
@@ -87,9 +90,6 @@ class DetectionLimit:
     #: The candidate whose unabsorbed trace shares most of this one's, and that share (0-1).
     rival: str = ""
     rival_share: float = math.nan
-    #: That rival takes the trace only with a value outside its physical range (refused, but its fit still
-    #: takes this one's place).
-    rival_outside: bool = False
     #: The candidate's own adjusted p at the first step, and why it was not named where that p passed its
     #: level ("" when it did not pass, or when it was named): the data detected it, the verdict did not.
     p_adjusted: float = math.nan
@@ -135,7 +135,6 @@ class DetectionLimit:
             "not_told_from": self.rival if self.named_90 == math.inf else "",
             "rival": self.rival,
             "rival_share": n(self.rival_share),
-            "rival_outside_its_range": self.rival_outside,
             "p_adjusted": n(self.p_adjusted),
             "not_named": self.not_named,
         }
@@ -406,15 +405,7 @@ def _with_separation(
         others = {k: r for k, r in rivals.items() if k != lim.term}
         sep = named_limit.separation(r_t, others, v90, t90, thr, s2, NON_NEGATIVE)
         named = sep.named_90 * lim.limit_90 / v90 if math.isfinite(sep.named_90) else math.inf
-        out.append(
-            replace(
-                lim,
-                named_90=max(named, lim.limit_90),
-                rival=sep.rival,
-                rival_share=sep.share,
-                rival_outside=sep.rival_outside,
-            )
-        )
+        out.append(replace(lim, named_90=max(named, lim.limit_90), rival=sep.rival, rival_share=sep.share))
     return out
 
 

@@ -22,10 +22,11 @@ says which rival it cannot be told from.
 
 What this leaves out: the held-out, share and law tests (each costs some power; the measured named rates
 are in docs/diagnosis.md, "Named at the stated size"), pairs of rivals taking the trace together, and the
-rival's physical range: one that takes the trace only with a value outside it (an inertia on x with a
-negative mass, the exact twin of a spring on x at one frequency) is refused, but its better fit takes the
-term's place all the same (review 34's seed 1: "not explained within the terms' physical ranges: inertia on x
-m = -0.0066 would remove 57 %"), so it counts as a rival; the text says it is outside its range.
+rival's value: one confined to ``>= 0`` that takes the trace only with a negative value fails its range
+check and is never in the step's order of passed candidates (select.py), so it is left out (an inertia on x
+with a negative mass, the exact twin of a spring on x at one frequency; one frequency, six amplitudes:
+stiffness on u, whose exact twin is a negative inertia on u, named in 6 of 10 draws at its 90 % value),
+though the verdict may then report it beyond its range when the term itself fails its held-out test.
 """
 
 from __future__ import annotations
@@ -57,9 +58,6 @@ class Separation:
     #: Scaled value (the term's own scale, as limits.py's) at which it is named with 90 %; inf: never (a
     #: twin, or beyond :data:`FACTOR_MAX` times the 90 % value).
     named_90: float
-    #: The rival takes the trace only with a value outside its physical range (``one_sided``: confined to
-    #: ``>= 0``, the term's trace drawn at a value in its own range).
-    rival_outside: bool = False
 
     @property
     def twin(self) -> bool:
@@ -101,18 +99,22 @@ def naming_probability(x: float, lam90: float, thr: float, s2: float, shares: Ma
     return p
 
 
-def shares_of(r_t: np.ndarray, rivals: Mapping[str, np.ndarray]) -> dict[str, float]:
-    """Each rival's share ``c2`` of ``r_t`` (rivals with no trace left out). A rival that takes the trace only
-    with a value outside its physical range counts too: it is refused, but its better fit takes the term's
-    place all the same (the verdict then says "not explained within the terms' physical ranges")."""
+def shares_of(
+    r_t: np.ndarray, rivals: Mapping[str, np.ndarray], one_sided: Collection[str] = ()
+) -> dict[str, float]:
+    """Each rival's share ``c2`` of ``r_t`` (each rival's trace drawn at a value in its range); rivals with
+    no trace, and those in ``one_sided`` (confined to ``>= 0``) that would take it only with a negative value
+    (refused by their bound: they do not take the term's place, select.py), left out."""
     nt = float(r_t @ r_t)
     out: dict[str, float] = {}
     if not nt > 0.0:
         return out
     for k, r in rivals.items():
         nr = float(r @ r)
-        if nr > 0.0 and math.isfinite(nr):
-            out[k] = min(float(r_t @ r) ** 2 / (nt * nr), 1.0)
+        dot = float(r_t @ r)
+        if not (nr > 0.0 and math.isfinite(nr)) or (k in one_sided and dot < 0.0):
+            continue
+        out[k] = min(dot * dot / (nt * nr), 1.0)
     return out
 
 
@@ -154,13 +156,12 @@ def separation(
 ) -> Separation:
     """:class:`Separation` of the term whose unabsorbed trace at its 90 % value ``v90`` is ``r_t`` (its
     unabsorbed size there ``lam90``, the target limits.py solved for) from the other candidates' traces
-    (:func:`shares_of`; ``one_sided``: the candidates confined to ``>= 0``)."""
-    shares = shares_of(r_t, rivals)
+    (:func:`shares_of`)."""
+    shares = shares_of(r_t, rivals, one_sided)
     if not shares:
         return Separation("", 0.0, v90)
     rival = max(shares, key=lambda k: shares[k])
-    outside = rival in one_sided and float(r_t @ rivals[rival]) < 0.0
-    return Separation(rival, shares[rival], named_size(abs(v90), lam90, thr, s2, shares), outside)
+    return Separation(rival, shares[rival], named_size(abs(v90), lam90, thr, s2, shares))
 
 
 __all__ = [

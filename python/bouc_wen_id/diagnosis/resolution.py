@@ -108,19 +108,16 @@ def named_text(lim: DetectionLimit) -> str:
     if not (math.isfinite(lim.limit_90) and lim.rival) or math.isnan(lim.named_90):
         return ""
     rival = TERM_LABELS.get(lim.rival, lim.rival)
-    outside = (
-        " (at a value outside its physical range, which the verdict refuses)" if lim.rival_outside else ""
-    )
     if not math.isfinite(lim.named_90):
         return (
-            f"; detected but not separable from {rival}{outside} with these experiments (the same averaged "
-            "periods: either may take the fit)"
+            f"; detected but not separable from {rival} with these experiments (the same averaged periods: "
+            "either may be named)"
         )
     if lim.named_90 <= NAMED_SAID * lim.limit_90:
         return ""
     return (
         f"; named at its place with {100 * POWER:.0f} % only above {lim.named_90:.2g}: "
-        f"{rival}{outside} takes {100 * lim.rival_share:.2g} % of its trace"
+        f"{rival} takes {100 * lim.rival_share:.2g} % of its trace"
     )
 
 
