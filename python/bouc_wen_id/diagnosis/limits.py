@@ -95,6 +95,15 @@ class DetectionLimit:
     p_adjusted: float = math.nan
     not_named: str = ""
 
+    def summary_tail(self) -> str:
+        """The summary's detection-limit line's tail: the value at which it is told from its rival
+        (named_limit.py), and its own test's pass on these data when it was not named."""
+        out = named_limit.named_text(self)
+        if self.detected_here:
+            out += f"; its own test passed on these data (p adj {self.p_adjusted:.2g}), not named: "
+            out += self.not_named
+        return out
+
     @property
     def detected_here(self) -> bool:
         """Its own test passed on these data (p adj below its step's level) but it was not named."""

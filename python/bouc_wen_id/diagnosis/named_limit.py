@@ -38,11 +38,15 @@ from typing import Any
 
 import numpy as np
 
+from .result import TERM_LABELS
+
 #: Probability of naming at which :attr:`Separation.named_90` is quoted.
 NAMED_POWER = 0.9
 #: Share of the term's unabsorbed trace a rival takes above which the two are twins of the design (exact
 #: ties only: a share of 1 - 1e-6 still separates at a thousand times the value).
 TWIN_SHARE = 1.0 - 1e-9
+#: The value :func:`named_text` quotes beside the 90 % one when it is this much larger.
+NAMED_SAID = 1.25
 #: Largest factor on the 90 % value searched for the named size (beyond it: inf).
 FACTOR_MAX = 1e4
 
@@ -64,11 +68,30 @@ class Separation:
         return self.share >= TWIN_SHARE
 
 
+def named_text(lim: Any) -> str:
+    """What the 90 % value does not promise (named_limit.py): the value at which the term passes its test and
+    fits better than every rival with 90 %, when a rival shares enough of its trace to need more; never, for
+    a twin. Not "named": the held-out and law tests come after (docs/diagnosis.md, "Named at the stated
+    size": inertia on x at two frequencies, 0 of 10 named at that value, its held-out worse)."""
+    if not (math.isfinite(lim.limit_90) and lim.rival) or math.isnan(lim.named_90):
+        return ""
+    rival = TERM_LABELS.get(lim.rival, lim.rival)
+    if not math.isfinite(lim.named_90):
+        return (
+            f"; detected but not separable from {rival} with these experiments (the same averaged periods: "
+            "either may take the fit)"
+        )
+    if lim.named_90 <= NAMED_SAID * lim.limit_90:
+        return ""
+    return (
+        f"; told from {rival} (which takes {100 * lim.rival_share:.2g} % of its trace) with "
+        f"{100 * NAMED_POWER:.0f} % only above {lim.named_90:.2g}"
+    )
+
+
 def why_not_named(trial: Any, chosen: str = "") -> str:
     """Why a first-step candidate whose own F-test passed was not named (select.py's gates after the F-test),
     in a few words; ``chosen``: the candidate the step named instead ("" for none)."""
-    from .result import TERM_LABELS
-
     if chosen and chosen != trial.term and trial.held_out is None and trial.law_holds and trial.passed:
         return f"{TERM_LABELS.get(chosen, chosen)} was named at this step instead"
     if not trial.passed:
@@ -169,6 +192,7 @@ __all__ = [
     "Separation",
     "naming_probability",
     "named_size",
+    "named_text",
     "separation",
     "shares_of",
     "why_not_named",

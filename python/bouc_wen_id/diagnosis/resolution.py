@@ -31,12 +31,10 @@ from typing import Any
 import numpy as np
 
 from .limits import ABSORBED_SAID, VERDICT_LIMITS, DetectionLimit, most_relevant
-from .result import TERM_LABELS
+from .named_limit import named_text
 
 #: Power at which an "adequate" verdict states what it could have missed.
 POWER = 0.9
-#: A named-at-its-place value (named_limit.py) said beside the 90 % one when it is this much larger.
-NAMED_SAID = 1.25
 #: What the quoted 90 % is about: each candidate's own F-test, not the verdict (the held-out and law tests,
 #: and the other candidates, cost more: docs/diagnosis.md, "Named at the stated size").
 HEADER = "the size its own test detects with 90 % power; being named also needs the held-out and law tests"
@@ -100,25 +98,6 @@ def limit_text(lim: DetectionLimit) -> str:
     ab = f"; {pct} % absorbed by the plain model" if lim.absorbed >= ABSORBED_SAID else ""
     head = str(replace(lim, limit=lim.limit_90, absorbed=0.0))
     return f"{head} (50 % power at {lim.limit:.2g}{ab}{named_text(lim)})"
-
-
-def named_text(lim: DetectionLimit) -> str:
-    """What the 90 % value does not promise (named_limit.py): the value at which the verdict names the term at
-    its place with 90 %, when a rival shares enough of its trace to need more; never, for a twin."""
-    if not (math.isfinite(lim.limit_90) and lim.rival) or math.isnan(lim.named_90):
-        return ""
-    rival = TERM_LABELS.get(lim.rival, lim.rival)
-    if not math.isfinite(lim.named_90):
-        return (
-            f"; detected but not separable from {rival} with these experiments (the same averaged periods: "
-            "either may be named)"
-        )
-    if lim.named_90 <= NAMED_SAID * lim.limit_90:
-        return ""
-    return (
-        f"; named at its place with {100 * POWER:.0f} % only above {lim.named_90:.2g}: "
-        f"{rival} takes {100 * lim.rival_share:.2g} % of its trace"
-    )
 
 
 def detected_text(lims: Sequence[DetectionLimit]) -> str:
@@ -219,7 +198,6 @@ __all__ = [
     "detected_text",
     "hint_text",
     "limit_text",
-    "named_text",
     "resolution_text",
     "unseen_lambda",
     "unseen_rms",

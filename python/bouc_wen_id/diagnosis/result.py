@@ -257,7 +257,7 @@ class Diagnosis:
         if self.limits:  # detection limits (diagnosis/limits.py)
             lines.append("")
             lines.append("detection limits (first step: the value detected with 50 % / 90 % power):")
-            lines += [f"  {lim}; 90 %: {lim.limit_90:.2g}{_named(lim)}" for lim in self.limits]
+            lines += [f"  {lim}; 90 %: {lim.limit_90:.2g}{lim.summary_tail()}" for lim in self.limits]
         if self.held_out is not None:
             lines.append("")
             lines.append("held-out NRMSE (one experiment left out, physics fitted on the others):")
@@ -304,17 +304,6 @@ class Diagnosis:
     def to_json(self, indent: int = 2) -> str:
         """Strict JSON (NaN and infinities become null)."""
         return json.dumps(clean(self.to_dict()), indent=indent, allow_nan=False)
-
-
-def _named(lim: Any) -> str:
-    """A summary's detection-limit line's tail: the value at which it is named at its place (resolution.py),
-    and its own test's pass on these data when it was not named."""
-    from .resolution import named_text
-
-    out = named_text(lim)
-    if getattr(lim, "detected_here", False):
-        out += f"; its own test passed on these data (p adj {lim.p_adjusted:.2g}), not named: {lim.not_named}"
-    return out
 
 
 def _targeted(st: Step) -> str:
