@@ -34,7 +34,7 @@ def compare(before: Path, after: Path) -> int:
     for k in diff:
         print(f"  differs {k}: {_key(a[k])} -> {_key(b[k])}")
     ad = [b[k] for k in common if b[k].get("status") == "adequate"]
-    q90 = sum("(90 % power)" in r["verdict"] for r in ad)
+    q90 = sum("90 % power" in r["verdict"] for r in ad)
     res = sum("goes unseen below an RMS" in r["verdict"] for r in ad)
     print(
         f"{after.stem}: {len(common) - len(diff)} of {len(common)} cases alike; adequate {len(ad)}, "

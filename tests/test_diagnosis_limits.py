@@ -57,6 +57,9 @@ def test_every_fitted_candidate_has_a_finite_positive_limit(null: Any) -> None:
         assert math.isfinite(lim.limit) and lim.limit > 0, lim
         assert lim.limit_90 > lim.limit
         assert 0.0 < lim.level < float(null.settings["alpha"])
+        # named at its place (named_limit.py): not below its test's own 90 % value; the rival, if any (one
+        # taking the trace only outside its physical range is none), is the other candidate
+        assert lim.named_90 >= lim.limit_90 and lim.rival in {""} | (set(CANDIDATES) - {term}), lim
 
 
 def test_to_dict_and_json_carry_the_limits(null: Any) -> None:

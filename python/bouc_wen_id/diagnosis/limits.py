@@ -16,7 +16,10 @@ G that each experiment's phase absorbs beyond first order), the projection is co
 the plain model (:func:`_refined`); the diagnosis asks for that only when it named nothing (the limits are
 then the finding). It is the F-test's limit: naming also needs the held-out and the law tests
 (docs/diagnosis.md, "Detection limits", has the calibration by simulation). ``absorbed`` is the share of
-the term's raw trace the plain model takes up.
+the term's raw trace the plain model takes up. :attr:`DetectionLimit.named_90` is the value at which the term
+also fits better than every other candidate with 90 % probability (named_limit.py: a rival sharing its
+unabsorbed trace takes its place; inf for a twin), and ``not_named`` says why a candidate whose own test
+passed on these data was not named (docs/diagnosis.md, "Named at the stated size").
 """
 
 from __future__ import annotations
@@ -30,7 +33,8 @@ import numpy as np
 
 from ..augmented import AugExperiment, AugFit, augmented_output
 from ..errors import BoucWenIdError, BudgetExceededError
-from . import free_dc
+from ..terms import TERMS
+from . import free_dc, named_limit
 from .bounds_said import refused_by_bound
 from .design_hint import DesignHint, design_hint
 from .fitting import Scale, fit_from, physical
@@ -45,6 +49,9 @@ ABSORBED_SAID = 0.95
 #: taken whole by the DCs (an offset's: 1e-32-1e-28 measured); what is left is rounding, nothing seen. The
 #: smallest real leftover measured (a sensor lag at 1e-3) keeps 9e-5.
 ABSORBED_ROUNDING = 1e-20
+#: Candidates whose physical range is ``>= 0`` (a rival taking a trace only below 0 is refused;
+#: named_limit.py).
+NON_NEGATIVE = frozenset(k for k, cls in TERMS.items() if cls.physical[0] == 0.0)
 #: Detection limits named in the verdict (the rest are in the JSON and the detailed report).
 VERDICT_LIMITS = 4
 
@@ -76,6 +83,31 @@ class DetectionLimit:
     #: What would see the 50 % limit with 90 % power (more periods; design_hint.py), for a term the plain
     #: model absorbs at least :data:`ABSORBED_SAID` of; None otherwise.
     hint: Optional[DesignHint] = None
+    #: Value at which the verdict names the term at its place with 90 % probability, its test passing and
+    #: its fit beating every other candidate's (named_limit.py; inf: a twin of ``rival``, never told from it;
+    #: NaN: not computed). At least :attr:`limit_90`.
+    named_90: float = math.nan
+    #: The candidate whose unabsorbed trace shares most of this one's, and that share (0-1).
+    rival: str = ""
+    rival_share: float = math.nan
+    #: The candidate's own adjusted p at the first step, and why it was not named where that p passed its
+    #: level ("" when it did not pass, or when it was named): the data detected it, the verdict did not.
+    p_adjusted: float = math.nan
+    not_named: str = ""
+
+    def summary_tail(self) -> str:
+        """The summary's detection-limit line's tail: the value at which it is told from its rival
+        (named_limit.py), and its own test's pass on these data when it was not named."""
+        out = named_limit.named_text(self)
+        if self.detected_here:
+            out += f"; its own test passed on these data (p adj {self.p_adjusted:.2g}), not named: "
+            out += self.not_named
+        return out
+
+    @property
+    def detected_here(self) -> bool:
+        """Its own test passed on these data (p adj below its step's level) but it was not named."""
+        return bool(self.not_named)
 
     @property
     def label(self) -> str:
@@ -108,6 +140,12 @@ class DetectionLimit:
             "note": self.note,
             "refined": self.refined,
             "design_hint": None if self.hint is None else self.hint.to_dict(),
+            "named_90": n(self.named_90),
+            "not_told_from": self.rival if self.named_90 == math.inf else "",
+            "rival": self.rival,
+            "rival_share": n(self.rival_share),
+            "p_adjusted": n(self.p_adjusted),
+            "not_named": self.not_named,
         }
 
 
@@ -122,6 +160,7 @@ class _Profile:
         m = len(exps)
         self.exps, self.base, self.substeps = exps, base, substeps
         self.seen: dict[tuple[str, float], tuple[float, float]] = {}
+        self.vectors: dict[tuple[str, float], np.ndarray] = {}
         blocks, self.y0, self.sw = [], [], []
         for i, e in enumerate(exps):
             out = augmented_output(e, base.params, i, substeps=substeps, jacobian=True)
@@ -159,9 +198,17 @@ class _Profile:
         c = self.q.T @ r
         kept = float(r @ r)
         lam = max(kept - float(c @ c), 0.0)
+        left = r - self.q @ c
         if free_dc.count(self.exps) and kept <= ABSORBED_ROUNDING * raw:
             lam = 0.0  # the free DCs took it all (an offset's trace): rounding, which would grow with v
+            left = np.zeros_like(r)
+        self.vectors[(term, v)] = left
         return lam, raw
+
+    def vector(self, term: str, v: float) -> np.ndarray:
+        """The unabsorbed trace (weighted, the plain model's Jacobian projected out) at scaled ``v``."""
+        self(term, v)
+        return self.vectors[(term, v)]
 
     def exact(self, term: str, v: float) -> float:
         """The unabsorbed size without linearising: the plain model refitted (from the base) to the noise-free
@@ -285,6 +332,9 @@ def detection_limits(
     excess = max(st.before_cost - st.before_dof, 0.0)
     profile = _Profile(exps, base, substeps)
     out = []
+    probes: dict[
+        str, tuple[float, float, float, float, float]
+    ] = {}  # term: scaled lim90, probe, t90, thr, s2
     for tr in st.trials:
         one = tr.term in BOUNDARY_TERMS
         z_c = float(ndtri(1.0 - (level / n if one else level / (2 * n))))
@@ -303,9 +353,13 @@ def detection_limits(
         if refine:
             lim, lim90 = _refined(profile, tr.term, lim, targets)
         factor = abs(s.factor(tr.term, base.params.mu))
+        if fit is not None:
+            probes[tr.term] = (lim90, lim if math.isfinite(lim) else guess, targets[1], thr, s2)
+        seen = tr.p_adjusted < level and tr.share >= MATERIAL_SHARE  # its threshold's two parts passed here
+        why = named_limit.why_not_named(tr, st.chosen or "") if seen and st.chosen != tr.term else ""
         note = "" if math.isfinite(lim) else "not detectable within the term's admissible range"
         if refused_by_bound(tr, level):  # detected, beyond its range: no |v| < limit (bounds_said.py)
-            lim = lim90 = math.inf
+            lim, lim90, why = math.inf, math.inf, ""
             note = f"fits with {sym} = {v:.3g} {unit}".rstrip() + ", outside its physical range (not named)"
         out.append(
             DetectionLimit(
@@ -322,9 +376,46 @@ def detection_limits(
                 note,
                 refine,
                 hint,
+                p_adjusted=tr.p_adjusted,
+                not_named=why,
             )
         )
-    return tuple(out)
+    return tuple(_with_separation(profile, out, probes))
+
+
+def _with_separation(
+    profile: _Profile,
+    lims: Sequence[DetectionLimit],
+    probes: dict[str, tuple[float, float, float, float, float]],
+) -> list[DetectionLimit]:
+    """Each limit with the value at which its term is named at its place (named_limit.py): its unabsorbed
+    trace at its 90 % value against every other fitted candidate's (at its own limit, or its test's size)."""
+    rivals: dict[str, np.ndarray] = {}
+    for term, (_, probe, _, _, _) in probes.items():
+        try:
+            rivals[term] = profile.vector(term, probe)
+        except BudgetExceededError:
+            raise
+        except (BoucWenIdError, ValueError, FloatingPointError):
+            continue
+    out = []
+    for lim in lims:
+        if lim.term not in probes or not math.isfinite(lim.limit_90) or lim.term not in rivals:
+            out.append(lim)
+            continue
+        v90, _, t90, thr, s2 = probes[lim.term]
+        try:
+            r_t = profile.vector(lim.term, v90)
+        except BudgetExceededError:
+            raise
+        except (BoucWenIdError, ValueError, FloatingPointError):
+            out.append(lim)
+            continue
+        others = {k: r for k, r in rivals.items() if k != lim.term}
+        sep = named_limit.separation(r_t, others, v90, t90, thr, s2, NON_NEGATIVE)
+        named = sep.named_90 * lim.limit_90 / v90 if math.isfinite(sep.named_90) else math.inf
+        out.append(replace(lim, named_90=max(named, lim.limit_90), rival=sep.rival, rival_share=sep.share))
+    return out
 
 
 def _hint(

@@ -257,7 +257,7 @@ class Diagnosis:
         if self.limits:  # detection limits (diagnosis/limits.py)
             lines.append("")
             lines.append("detection limits (first step: the value detected with 50 % / 90 % power):")
-            lines += [f"  {lim}; 90 %: {lim.limit_90:.2g}" for lim in self.limits]
+            lines += [f"  {lim}; 90 %: {lim.limit_90:.2g}{lim.summary_tail()}" for lim in self.limits]
         if self.held_out is not None:
             lines.append("")
             lines.append("held-out NRMSE (one experiment left out, physics fitted on the others):")
