@@ -51,12 +51,15 @@ counting those too. The target ("honest") is unchanged: "hon+a" is reported besi
 
 Library rows also run the true model's own likelihood-ratio test (``benches/oracle.py``: plain + the hidden
 term at its place fitted to the NOISY data, its chi2 gain put to the diagnosis's own first-step F test at the
-step's level): "lrdet", the share of cases that test detects (below it even an oracle that knew the term
-would keep the plain model, so "adequate" is the honest verdict), and "ok|lr", right at its place among
-those. The old "+place" keeps every case. A line "misses:" under the row counts each miss's cause:
-undetectable, law refused (the truth's own law p below ``LAW_ALPHA``), truth rejected (the true model fails
-its adequacy test: a high noise draw), local minimum (the step's fit of the truth above the oracle's), or
-search (none of these: the diagnosis had what it needed).
+step's level, after the Bonferroni over the step's candidates): "lrdet", the share of cases that test
+detects, and "ok|lr", right at its place among those. The old "+place" keeps every case. A line "misses:"
+under the row counts each miss's cause: undetectable (the truth's F test fails even alone, with no
+Bonferroni: an oracle that knew the term would keep the plain model), below search level (it passes alone,
+not after the Bonferroni: a search over the library cannot see it at that level), law refused (the truth's
+own law p below ``LAW_ALPHA``), truth rejected (the true model fails its adequacy test: a high noise draw),
+local minimum (the step's fit of the truth above the oracle's), or search (none of these: the diagnosis had
+what it needed); then the mean power of the search's test at each case's noise-free leftover
+(``oracle.powers``): the share of the row any test at the step's level and candidates could detect.
 
 What counts as right on an outside row of the Dahl element's family (``DAHL_FAMILY``: the Iwan loop, Dahl's
 exponent 2, the Prandtl-Ishlinskii operator on u): "unexplained", or a verdict that names ONLY the Dahl
@@ -514,6 +517,7 @@ def run_new_case(
         try:
             row.update(oracle.truth_lr(d, true_kind(truth, place if placed else "")))
             row["cause"] = oracle.cause(row, float(d.settings.get("alpha", 0.05)))
+            _add_powers(d, row, true_kind(truth, place if placed else ""))
         except Exception as exc:  # reported, never fatal
             row["oracle_error"] = f"{type(exc).__name__}: {exc}"
     fittable = skind not in ("outside", "structure")
@@ -523,6 +527,20 @@ def run_new_case(
     except Exception:
         row["ratio"] = math.nan
     return row
+
+
+def _add_powers(d: Any, row: dict[str, Any], truth: Optional[str]) -> None:
+    """The oracle's test's power at the case's noise-free leftover (``oracle.powers``), alone and at the
+    search's level: ``power_alone``, ``power_search``."""
+    import oracle
+    from bouc_wen_id.diagnosis.select import BOUNDARY_TERMS
+
+    unabs, level = row.get("unabsorbed", math.nan), row.get("lr_level", math.nan)
+    if not (math.isfinite(unabs) and math.isfinite(level)):
+        return
+    lam = sum(e.ybar.size for e in d.experiments) * unabs**2
+    got = oracle.powers(lam, level, int(row.get("lr_candidates", 1)), truth in BOUNDARY_TERMS)
+    row["power_alone"], row["power_search"] = got
 
 
 def new_jobs(args: argparse.Namespace) -> list[tuple[str, Optional[str], str, float, int]]:
@@ -733,7 +751,9 @@ def print_table(lines: list[dict[str, Any]], null_label: str = "null (plain, low
             f"{ln['target']}"
         )
         if ln.get("causes"):  # each miss's cause (oracle.py): undetectable, law refused, ...
-            print(f"{'':<34} misses: " + ", ".join(f"{k} {v}" for k, v in sorted(ln["causes"].items())))
+            ps = ln.get("power_search", math.nan)
+            cap = "" if not math.isfinite(ps) else f"; the search's power at the cases' leftover: {ps:.2f}"
+            print(f"{'':<34} misses: " + ", ".join(f"{k} {v}" for k, v in sorted(ln["causes"].items())) + cap)
 
 
 def main(argv: Optional[list[str]] = None) -> int:

@@ -4,10 +4,14 @@ A library row's miss is one of four things, and the bench should say which (issu
 right term at the right place in >= 95 % of cases at 10x and 30x):
 
 - **undetectable**: the true model (plain + the hidden term at its place), fitted to the NOISY data, gains
-  less chi2 over the plain model than the diagnosis's own first-step test needs (its F test, p times the
-  number of candidates against ``alpha / 2`` when the global test accepted the plain model, else
-  ``alpha``). Even an oracle that knew the term would not reject the plain model at that level:
-  "adequate" is the honest verdict;
+  too little chi2 over the plain model for its own F test to reject the plain model even ALONE, at the
+  first step's level (``alpha / 2`` when the global test accepted the plain model, else ``alpha``) with no
+  correction for the other candidates: even an oracle that knew the term would say "adequate";
+- **below the search's level**: that F test alone rejects the plain model at the step's level, but not
+  after the diagnosis's Bonferroni over the step's candidates (p times their number): a test told the term
+  sees it, a search over the library that keeps nulls quiet cannot. The price of the search, not of the
+  noise (session 35: the bench's "undetectable" 10x sensor lag and series dashpot misses were all of this
+  kind, raw p 0.0027-0.033);
 - **law refused**: the truth's own law test (one value for every experiment) fails at ``LAW_ALPHA``: the
   test refuses a true term in about that share of cases by construction (docs/diagnosis.md, "Calibration of
   the law test");
@@ -55,10 +59,11 @@ def truth_lr(d: Any, truth: Optional[str]) -> dict[str, Any]:
     """The oracle's numbers for diagnosis ``d`` of a case whose hidden term is ``truth`` (a code name with
     its place, e.g. ``viscous@x``; None or a term outside the diagnosis's candidates: ``{}``).
 
-    Keys: ``lr_gain`` (plain cost minus the truth's), ``lr_p_adj`` (the diagnosis's F test of that gain,
-    times the number of candidates), ``lr_level``, ``lr_detectable``, ``truth_p`` (the truth's adequacy p),
-    ``truth_law_p`` (``element_law_test``), ``trial_gap`` (the diagnosis's step-1 trial cost of the truth
-    minus the oracle's; NaN when the step did not fit it)."""
+    Keys: ``lr_gain`` (plain cost minus the truth's), ``lr_p`` (the diagnosis's F test of that gain, alone),
+    ``lr_p_adj`` (times ``lr_candidates``, the number of the step's candidates), ``lr_level``,
+    ``lr_detectable``, ``truth_p`` (the truth's adequacy p), ``truth_law_p`` (``element_law_test``),
+    ``trial_gap`` (the diagnosis's step-1 trial cost of the truth minus the oracle's; NaN when the step
+    did not fit it)."""
     from bouc_wen_id.diagnosis import free_dc
     from bouc_wen_id.diagnosis.candidates import step_candidates
     from bouc_wen_id.diagnosis.fitting import Scale, fit_with, scaled
@@ -91,7 +96,9 @@ def truth_lr(d: Any, truth: Optional[str]) -> dict[str, Any]:
     trial = next((t.cost for t in (d.steps[0].trials if d.steps else ()) if t.term == truth), math.nan)
     return {
         "lr_gain": float(plain.cost - f.cost),
+        "lr_p": float(p),
         "lr_p_adj": p_adj,
+        "lr_candidates": max(len(cands), 1),
         "lr_level": level,
         "lr_detectable": bool(math.isfinite(p_adj) and p_adj < level),
         "truth_p": adequacy_p(f.cost, dof, noise_dof),
@@ -100,13 +107,35 @@ def truth_lr(d: Any, truth: Optional[str]) -> dict[str, Any]:
     }
 
 
+def powers(lam: float, level: float, candidates: int, boundary: bool) -> tuple[float, float]:
+    """The first step's one-parameter test of the plain model against a term that takes up the plain model's
+    whole noise-free leftover ``lam`` (its non-centrality: the bench's unabsorbed RMS squared times the
+    samples): its power ``(alone, search)`` at ``level``, alone and after the Bonferroni over
+    ``candidates``; one-sided (half the p) for a term bounded at 0 (``select.f_test``'s ``boundary``). What
+    any test of that size could do with that noise: the ceiling of the row's detection."""
+    from scipy.stats import chi2, ncx2, norm  # type: ignore[import-untyped]
+
+    if not (math.isfinite(lam) and lam >= 0.0 and 0.0 < level < 1.0):
+        return math.nan, math.nan
+
+    def power(a: float) -> float:
+        if boundary:
+            return float(norm.sf(norm.isf(a) - math.sqrt(lam)))
+        return float(ncx2.sf(chi2.isf(a, 1), 1, lam)) if lam > 0 else a
+
+    return power(level), power(level / max(candidates, 1))
+
+
 def cause(row: dict[str, Any], alpha: float = 0.05, law_alpha: float = 0.01) -> str:
     """Why a library case that is not right at its place missed (``""`` when it is right or not scored):
-    "undetectable", "law refused", "truth rejected", "local minimum" or "search" (module docstring)."""
+    "undetectable", "below search level", "law refused", "truth rejected", "local minimum" or "search"
+    (module docstring)."""
     if row.get("right_place") or "lr_detectable" not in row:
         return ""
     if not row["lr_detectable"]:
-        return "undetectable"
+        raw, level = row.get("lr_p", math.nan), row.get("lr_level", math.nan)
+        alone = math.isfinite(raw) and math.isfinite(level) and raw < level
+        return "below search level" if alone else "undetectable"
     law = row.get("truth_law_p", math.nan)
     if math.isfinite(law) and law < law_alpha:
         return "law refused"
@@ -122,7 +151,9 @@ def cause(row: dict[str, Any], alpha: float = 0.05, law_alpha: float = 0.01) -> 
 def columns(rows: list[dict[str, Any]]) -> dict[str, Any]:
     """A row's oracle columns over its cases that have the oracle's numbers (library rows): ``lr_det``, the
     share detectable by the true model's LR test; ``right_lr``, right at its place among those (the old
-    ``right_place`` keeps every case); ``causes``, each miss's :func:`cause` counted."""
+    ``right_place`` keeps every case); ``causes``, each miss's :func:`cause` counted; ``power_search``, the
+    mean over the cases of the search's power (:func:`powers`, filled by the bench where it measured the
+    leftover): the share of the row ANY diagnosis at the step's level and candidates could detect."""
     has = [r for r in rows if "lr_detectable" in r]
     if not has:
         return {"lr_det": math.nan, "right_lr": math.nan, "causes": {}}
@@ -133,11 +164,13 @@ def columns(rows: list[dict[str, Any]]) -> dict[str, Any]:
         if c:
             causes[c] = causes.get(c, 0) + 1
     right = [bool(r.get("right_place")) for r in det]
+    pw = [float(r["power_search"]) for r in has if math.isfinite(r.get("power_search", math.nan))]
     return {
         "lr_det": len(det) / len(has),
         "right_lr": float(np.mean(right)) if right else math.nan,
         "causes": causes,
+        "power_search": float(np.mean(pw)) if pw else math.nan,
     }
 
 
-__all__ = ["LOCAL_TOL", "START_FACTORS", "cause", "columns", "truth_lr"]
+__all__ = ["LOCAL_TOL", "START_FACTORS", "cause", "columns", "powers", "truth_lr"]

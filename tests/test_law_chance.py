@@ -115,6 +115,45 @@ def test_the_oracle_sorts_a_miss_by_its_cause() -> None:
     assert got["causes"] == {"undetectable": 1, "law refused": 1}
 
 
+def test_a_miss_seen_by_the_truths_test_alone_is_below_the_search_level_not_undetectable() -> None:
+    """The bench's "undetectable" is kept for a truth whose own F test fails even alone (no Bonferroni);
+    one that passes alone at the step's level but not after the Bonferroni over the step's candidates is
+    "below search level" (sensor lag 10x seed 35014: raw p 0.0027 at level 0.025, 16 candidates). Without
+    the raw p (an old row) it stays "undetectable"."""
+    base = {"right_place": False, "lr_detectable": False, "truth_law_p": 0.5, "truth_p": 0.5}
+    base["lr_level"] = 0.025
+    assert oracle.cause({**base, "lr_p": 0.0027, "lr_p_adj": 0.043}) == "below search level"
+    assert oracle.cause({**base, "lr_p": 0.2, "lr_p_adj": 1.0}) == "undetectable"
+    assert oracle.cause(base) == "undetectable"
+    rows = [{**base, "lr_p": 0.0027, "power_search": 0.8}, {**base, "lr_p": 0.2, "power_search": 0.6}]
+    got = oracle.columns(rows)
+    assert got["causes"] == {"below search level": 1, "undetectable": 1}
+    assert got["power_search"] == pytest.approx(0.7)
+
+
+@pytest.mark.parametrize("boundary", [False, True])
+def test_the_oracle_power_is_the_rejection_rate_of_its_test(boundary: bool) -> None:
+    """``oracle.powers`` against the test it stands for, drawn: the step's statistic at non-centrality lam
+    (a unit normal shifted by sqrt(lam); squared and two-sided, or one-sided with half the p for a term
+    bounded at 0), rejected at the level alone and at the level over the candidates. At lam = 0 the power is
+    the level; it grows with lam; the search's is below the test alone's."""
+    from scipy.stats import chi2, norm  # type: ignore[import-untyped]
+
+    rng = np.random.default_rng(35)
+    level, cands, lam = 0.025, 16, 17.1
+    z = rng.standard_normal(200_000) + math.sqrt(lam)
+    if boundary:
+        drawn = [float(np.mean(z > norm.isf(a))) for a in (level, level / cands)]
+    else:
+        drawn = [float(np.mean(z**2 > chi2.isf(a, 1))) for a in (level, level / cands)]
+    alone, search = oracle.powers(lam, level, cands, boundary)
+    assert alone == pytest.approx(drawn[0], abs=0.005) and search == pytest.approx(drawn[1], abs=0.005)
+    assert search < alone < 1.0
+    assert oracle.powers(0.0, level, cands, boundary)[0] == pytest.approx(level)
+    assert oracle.powers(30.0, level, cands, boundary)[1] > search
+    assert all(math.isnan(v) for v in oracle.powers(math.nan, level, cands, boundary))
+
+
 def _diagnose(recordings: list[Any]) -> Any:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
