@@ -112,8 +112,8 @@ def blind_draws(code: str, size: float, seed: int, design: str, seeds: int, firs
     ours): its case ``seed`` with ``code`` at ``size``, white noise, the experiment ``design``
     (``first_order``: a first-order G; "" the seed's own); each draw adds fresh white noise at the case's
     level to the same noise-free outputs and reads the lab's CSV files back with ``bw.load``, as blind.py
-    does. The value is in blind's units (its element's alpha), not necessarily the library's: read
-    ``ratio``, not ``cover``, when ``mean/truth`` is not near 1."""
+    does. The value is in blind's units (its element's alpha), not necessarily the library's (play's is
+    converted: times alpha); read ``ratio``, not ``cover``, when ``mean/truth`` is not near 1."""
     import tempfile
 
     sys.path.insert(0, str(HERE.parent / "benches"))
@@ -145,7 +145,10 @@ def blind_draws(code: str, size: float, seed: int, design: str, seeds: int, firs
                 blind.write_csv(paths[-1], e, u, y)
             return list(bw.load(paths))
 
-    return float(made["info"]["value"]), (draw(k) for k in range(first, first + seeds))
+    value = float(made["info"]["value"])
+    if code == "play":  # blind's half-width is in its x; the library's x is alpha x (w's slope 1 at reversal)
+        value *= float(made["info"]["alpha"])
+    return value, (draw(k) for k in range(first, first + seeds))
 
 
 @contextlib.contextmanager
@@ -190,13 +193,14 @@ def study(label: str, gen_name: str, args: argparse.Namespace) -> Optional[dict[
             rkey, args.size, args.g, args.review_dir, args.seeds, args.first_seed, args.review_sub
         )
         where = f"review {args.g}" + (f" sub {args.review_sub}" if args.review_sub != 3 else "")
-    vals, ses, before, missed = [], [], [], 0
+    vals, ses, before, missed, sets = [], [], [], 0, []
     for recs in draws:
         seen: list[float] = []
         with warnings.catch_warnings(), _before_se(seen):
             warnings.simplefilter("ignore")
             d = bw.diagnose(recs)
         got = [t for t in d.named if t.term == code]
+        sets.append([t.term for t in d.named])  # what was named beside it (a set that moves the value)
         if not got:
             missed += 1
             continue
@@ -225,6 +229,7 @@ def study(label: str, gen_name: str, args: argparse.Namespace) -> Optional[dict[
         median_se=float(np.median(s)) if n else math.nan,
         values=vals,
         ses=ses,
+        named_sets=sets,
         seconds=round(time.time() - t0, 1),
     )
 
