@@ -198,7 +198,7 @@ def study(label: str, gen_name: str, args: argparse.Namespace) -> Optional[dict[
         seen: list[float] = []
         with warnings.catch_warnings(), _before_se(seen):
             warnings.simplefilter("ignore")
-            d = bw.diagnose(recs)
+            d = bw.diagnose(recs, candidates=[code] if args.only_term else None)
         got = [t for t in d.named if t.term == code]
         sets.append([t.term for t in d.named])  # what was named beside it (a set that moves the value)
         if not got:
@@ -248,6 +248,9 @@ def main(argv: Optional[list[str]] = None) -> int:
     ap.add_argument("--review-sub", type=int, default=3, help="review sim's RK4 steps per sample")
     ap.add_argument("--blind-seed", type=int, default=35, help="benches/blind.py's case seed")
     ap.add_argument("--blind-design", default="first_order", help="blind.py's design ('' the seed's own)")
+    ap.add_argument(
+        "--only-term", action="store_true", help="diagnose with the term as the only candidate (no other set)"
+    )
     ap.add_argument("--json", default="", help="append each row as a JSON line to this file")
     args = ap.parse_args(argv)
     if args.seeds < 3:
