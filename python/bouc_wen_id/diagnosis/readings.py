@@ -21,6 +21,10 @@ details)") and are kept as :class:`Reading` s on the result (``Diagnosis.reading
   test (:mod:`.law_untested`); a waveform's ``lam`` far from 1, no property of the device
   (:mod:`.input_note`); across conditions, diagnose's revisit not run (:func:`.across_pairs.revisit_clause`).
 
+With two or more named terms, each rival says which named term it stands in place of (``instead_of``, code
+names; the headline's "or output offset instead of asymmetry", :func:`_said_instead`): "— or Dahl friction
+on u, or output offset" beside a damping and an asymmetry did not say which each replaces (MR 0.5 A).
+
 Clauses that do not change what the headline claims are left in the details: law_chance's "refused by chance"
 (said only when nothing is named: "unexplained structure remains" holds under either reading), the clean
 share on clipped sets (the headline's share is the pooled one, the smaller), a place that fits only with a
