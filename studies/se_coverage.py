@@ -60,18 +60,24 @@ def ratio_interval(n: int, level: float = 0.95) -> tuple[float, float]:
     return math.sqrt(chi2.ppf(a, k) / k), math.sqrt(chi2.ppf(1.0 - a, k) / k)
 
 
-def bench_draws(name: str, place: str, size: float, plant_seed: int, shape: str, seeds: int) -> Any:
-    """(truth, [recordings per draw]) from benches/generator.py."""
+def bench_draws(
+    name: str, place: str, size: float, plant_seed: int, shape: str, seeds: int, first: int = 1
+) -> Any:
+    """(truth, [recordings per draw]) from benches/generator.py, draws ``first`` .. ``first + seeds - 1``."""
     sys.path.insert(0, str(HERE.parent / "benches"))
     import generator as gen
 
     p = gen.make_plant(plant_seed, shape=shape)
     value, _, y = gen._calibrate(p, name, place, size, gen.base(p))
-    return value, (gen.recordings(p, y, 1000 + k) for k in range(1, seeds + 1))
+    return value, (gen.recordings(p, y, 1000 + k) for k in range(first, first + seeds))
 
 
-def review_draws(key: str, size: float, g: str, review_dir: str, seeds: int) -> Any:
-    """(truth, [recordings per draw]) from the review-33 simulator (sim.py, run_case.py's G and design)."""
+def review_draws(
+    key: str, size: float, g: str, review_dir: str, seeds: int, first: int = 1, sub: int = 3
+) -> Any:
+    """(truth, [recordings per draw]) from the review-33 simulator (sim.py, run_case.py's G and design),
+    RK4 at ``sub`` steps per sample (its play switches at a step, so its width is wider by about the
+    distance x travels in half a step: ``--review-sub`` shows that bias shrink)."""
     sys.path.insert(0, review_dir)
     import bouc_wen_id as bw
     import run_case as rc
@@ -82,7 +88,7 @@ def review_draws(key: str, size: float, g: str, review_dir: str, seeds: int) -> 
     base = Plant(num, den, delay, 1.0, 0.3, 1.5, 1.0, {})
     value = calibrate(base, key, size, oms, amps, rc.SD, float(np.mean(pers)), rc.TRIAL[key])
     plant = Plant(num, den, delay, 1.0, 0.3, 1.5, 1.0, {key: value})
-    ts, us, ys, _ = simulate(plant, oms, amps, np.array(pers), 15, P=128, sub=3)
+    ts, us, ys, _ = simulate(plant, oms, amps, np.array(pers), 15, P=128, sub=sub)
 
     def draw(k: int) -> list[Any]:
         rng = np.random.default_rng([k, 33])
@@ -98,7 +104,51 @@ def review_draws(key: str, size: float, g: str, review_dir: str, seeds: int) -> 
             for i, (t, u, y) in enumerate(zip(ts, us, ys))
         ]
 
-    return value, (draw(k) for k in range(1, seeds + 1))
+    return value, (draw(k) for k in range(first, first + seeds))
+
+
+def blind_draws(code: str, size: float, seed: int, design: str, seeds: int, first: int = 1) -> Any:
+    """(the blind case's value, [items per draw]) from benches/blind.py's generator (written apart from
+    ours): its case ``seed`` with ``code`` at ``size``, white noise, the experiment ``design``
+    (``first_order``: a first-order G; "" the seed's own); each draw adds fresh white noise at the case's
+    level to the same noise-free outputs and reads the lab's CSV files back with ``bw.load``, as blind.py
+    does. The value is in blind's units (its element's alpha), not necessarily the library's (play's is
+    converted: times alpha); read ``ratio``, not ``cover``, when ``mean/truth`` is not near 1."""
+    import tempfile
+
+    sys.path.insert(0, str(HERE.parent / "benches"))
+    import blind
+    import bouc_wen_id as bw
+
+    seen: dict[str, Any] = {}
+    original = blind.add_noise
+
+    def spy(y: Any, kind: str, pct: float, rng: Any, drift: float = blind.DRIFT, periods: Any = None) -> Any:
+        seen.update(y=y, pct=pct, periods=periods)  # the last call: the outputs with the effect
+        return original(y, kind, pct, rng, drift, periods)
+
+    blind.add_noise = spy
+    try:
+        made = blind.make_case(blind.Case(code, size, 0, seed, "white", blind.DRIFT, design or None))
+    finally:
+        blind.add_noise = original
+    if made["info"]["design"] in ("fixed_rate", "clipped"):
+        raise SystemExit(f"blind seed {seed}: design {made['info']['design']} adds input noise; pick another")
+
+    def draw(k: int) -> list[Any]:
+        rng = np.random.default_rng([k, 35])
+        ym, _ = blind.add_noise(seen["y"], "white", seen["pct"], rng, periods=seen["periods"])
+        with tempfile.TemporaryDirectory() as tmp:
+            paths = []
+            for i, (e, u, y) in enumerate(zip(made["exps"], made["u"], ym)):
+                paths.append(Path(tmp) / f"run_{i:02d}.csv")
+                blind.write_csv(paths[-1], e, u, y)
+            return list(bw.load(paths))
+
+    value = float(made["info"]["value"])
+    if code == "play":  # blind's half-width is in its x; the library's x is alpha x (w's slope 1 at reversal)
+        value *= float(made["info"]["alpha"])
+    return value, (draw(k) for k in range(first, first + seeds))
 
 
 @contextlib.contextmanager
@@ -127,20 +177,30 @@ def study(label: str, gen_name: str, args: argparse.Namespace) -> Optional[dict[
     code, (bname, bplace), rkey = TERMS[label]
     t0 = time.time()
     if gen_name == "bench":
-        truth, draws = bench_draws(bname, bplace, args.size, args.plant_seed, args.shape, args.seeds)
+        truth, draws = bench_draws(
+            bname, bplace, args.size, args.plant_seed, args.shape, args.seeds, args.first_seed
+        )
         where = f"bench {args.shape} plant {args.plant_seed}"
+    elif gen_name == "blind":
+        truth, draws = blind_draws(
+            code, args.size, args.blind_seed, args.blind_design, args.seeds, args.first_seed
+        )
+        where = f"blind {args.blind_design or 'seed'} {args.blind_seed}"
     else:
         if rkey is None:
             return None
-        truth, draws = review_draws(rkey, args.size, args.g, args.review_dir, args.seeds)
-        where = f"review {args.g}"
-    vals, ses, before, missed = [], [], [], 0
+        truth, draws = review_draws(
+            rkey, args.size, args.g, args.review_dir, args.seeds, args.first_seed, args.review_sub
+        )
+        where = f"review {args.g}" + (f" sub {args.review_sub}" if args.review_sub != 3 else "")
+    vals, ses, before, missed, sets = [], [], [], 0, []
     for recs in draws:
         seen: list[float] = []
         with warnings.catch_warnings(), _before_se(seen):
             warnings.simplefilter("ignore")
-            d = bw.diagnose(recs)
+            d = bw.diagnose(recs, candidates=[code] if args.only_term else None)
         got = [t for t in d.named if t.term == code]
+        sets.append([t.term for t in d.named])  # what was named beside it (a set that moves the value)
         if not got:
             missed += 1
             continue
@@ -169,6 +229,7 @@ def study(label: str, gen_name: str, args: argparse.Namespace) -> Optional[dict[
         median_se=float(np.median(s)) if n else math.nan,
         values=vals,
         ses=ses,
+        named_sets=sets,
         seconds=round(time.time() - t0, 1),
     )
 
@@ -177,12 +238,19 @@ def main(argv: Optional[list[str]] = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", type=int, default=8, help="noise draws per term (>= 3)")
     ap.add_argument("--terms", default=",".join(TERMS), help="comma list of " + ",".join(TERMS))
-    ap.add_argument("--gens", default="bench,review", help="bench, review or both")
+    ap.add_argument("--gens", default="bench,review", help="comma list of bench, review, blind")
     ap.add_argument("--size", type=float, default=30.0, help="effect size in averaged-noise sd")
     ap.add_argument("--shape", default="resonant", help="bench G: first (with a delay), resonant, flat")
     ap.add_argument("--plant-seed", type=int, default=3303, help="the bench plant's seed")
     ap.add_argument("--g", default="two_pole", help="review G: two_pole, fo_delay, res_delay, ...")
     ap.add_argument("--review-dir", default="/work/review33", help="folder of the review-33 sim.py")
+    ap.add_argument("--first-seed", type=int, default=1, help="the first noise draw (more draws, run apart)")
+    ap.add_argument("--review-sub", type=int, default=3, help="review sim's RK4 steps per sample")
+    ap.add_argument("--blind-seed", type=int, default=35, help="benches/blind.py's case seed")
+    ap.add_argument("--blind-design", default="first_order", help="blind.py's design ('' the seed's own)")
+    ap.add_argument(
+        "--only-term", action="store_true", help="diagnose with the term as the only candidate (no other set)"
+    )
     ap.add_argument("--json", default="", help="append each row as a JSON line to this file")
     args = ap.parse_args(argv)
     if args.seeds < 3:

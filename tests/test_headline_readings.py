@@ -188,3 +188,54 @@ def test_a_rival_the_details_refuse_by_its_law_is_no_reading() -> None:
     assert any(label in r.words for r in kept)  # a plain rival is a reading
     refused = verdict + f"; not named: {label} (p = 0.001): each fits part of the misfit"
     assert not any(label in r.words for r in readings.of_verdict(refused, [T.StiffnessX.kind], alt))
+
+
+def test_with_two_named_terms_the_headline_says_which_each_rival_replaces() -> None:
+    """docs/real-data-diagnosis.md, MR damper 0.5 A: "explained in part by: viscous damping ..., asymmetry
+    ... — or Dahl friction on the measured input u, or output offset, or a rate-independent loop outside the
+    library" did not say that Dahl and the loop stand for the damping and the offset for the asymmetry. Now
+    each rival says the named term it replaces, in the headline and in ``readings`` (JSON ``instead_of``);
+    with one named term the words stay as they were (nothing to tell apart)."""
+    visc = NamedTerm(T.Viscous.kind, "c", 3.3, 0.01, "N s/mm")
+    asym = NamedTerm(T.Asymmetry.kind, "delta", -1e-4, 3e-6, "")
+    alts = [
+        Alternative(T.Viscous.kind, T.Dahl.kind, math.nan, "wider band"),
+        Alternative(T.Asymmetry.kind, T.Offset.kind, math.nan, "an offset-free reference"),
+    ]
+    verdict = "explained in part by: X (85 % of the excess)" + caveats.alternatives_text(alts, [visc, asym])
+    verdict += rate_rival.clause(T.Viscous.kind, 0.21, [1.6, 32.1])
+    named = [T.Viscous.kind, T.Asymmetry.kind]
+    rs = readings.of_verdict(verdict, named, alts)
+    by_kind = {r.words.split(" instead of ")[0]: r for r in rs}
+    dahl, offset = f"or {T.Dahl.place_label()}", f"or {T.Offset.place_label()}"
+    rate = f"or {rate_rival.RATE_MARK} outside the library"
+    assert set(by_kind) == {dahl, offset, rate}, rs
+    assert by_kind[dahl].instead_of == (T.Viscous.kind,) and by_kind[rate].instead_of == (T.Viscous.kind,)
+    assert by_kind[offset].instead_of == (T.Asymmetry.kind,)
+    head = headline(readings.headlined(verdict, rs))
+    assert f"{dahl} instead of {T.Viscous.label}" in head, head
+    assert f"{offset} instead of {T.Asymmetry.label}" in head, head
+    assert f"{rate} instead of {T.Viscous.label}" in head, head
+    assert all(r.words in head for r in rs)  # the readings are the headline's own words
+    js = [r.to_dict() for r in rs]
+    assert {tuple(j["instead_of"]) for j in js} == {(T.Viscous.kind,), (T.Asymmetry.kind,)}
+    one = readings.of_verdict(verdict, [T.Viscous.kind], alts[:1])  # one named term: no "instead of"
+    assert one and all(" instead of " not in r.words for r in one) and one[0].instead_of == (T.Viscous.kind,)
+
+
+def test_a_rival_said_for_two_named_terms_is_said_once_for_both() -> None:
+    """The same rival for two named terms (output offset for asymmetry and for sensor lag) is one reading
+    replacing both, and a term named twice in the family (viscous damping on u and on x) is told by its
+    place, not by the family's label both share."""
+    alts = [
+        Alternative(T.Asymmetry.kind, T.Offset.kind, math.nan, "x"),
+        Alternative(T.SensorLag.kind, T.Offset.kind, math.nan, "y"),
+    ]
+    named = [T.Asymmetry.kind, T.SensorLag.kind]
+    rs = readings.of_verdict("explained by: X", named, alts)
+    assert len(rs) == 1 and rs[0].instead_of == tuple(named), rs
+    assert rs[0].words.endswith(f"instead of {T.Asymmetry.label} and {T.SensorLag.label}"), rs
+    both = [T.Viscous.kind, T.ViscousX.kind]
+    v = "explained by: X" + rate_rival.clause(T.ViscousX.kind, 0.3, [1.0, 1.2])
+    (r,) = readings.of_verdict(v, both, [])
+    assert r.instead_of == (T.ViscousX.kind,) and r.words.endswith(f"instead of {T.ViscousX.place_label()}")

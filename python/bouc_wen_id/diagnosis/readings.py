@@ -21,6 +21,10 @@ details)") and are kept as :class:`Reading` s on the result (``Diagnosis.reading
   test (:mod:`.law_untested`); a waveform's ``lam`` far from 1, no property of the device
   (:mod:`.input_note`); across conditions, diagnose's revisit not run (:func:`.across_pairs.revisit_clause`).
 
+With two or more named terms, each rival says which named term it stands in place of (``instead_of``, code
+names; the headline's "or output offset instead of asymmetry", :func:`_said_instead`): "— or Dahl friction
+on u, or output offset" beside a damping and an asymmetry did not say which each replaces (MR 0.5 A).
+
 Clauses that do not change what the headline claims are left in the details: law_chance's "refused by chance"
 (said only when nothing is named: "unexplained structure remains" holds under either reading), the clean
 share on clipped sets (the headline's share is the pooled one, the smaller), a place that fits only with a
@@ -35,7 +39,7 @@ report's, ``Diagnosis.status_text``, ``to_dict()["status_text"]``).
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any, Protocol, TypeVar
 
 from ..terms import TERMS, Play
@@ -56,9 +60,18 @@ class Reading:
     kind: str
     words: str
     rival: bool = True
+    #: The named terms (code names) this rival reading stands in place of (() when the clause does not say
+    #: or when it is a limit of the evidence); with two or more named terms the headline says which
+    #: (":func:`of_verdict`: "or output offset instead of asymmetry").
+    instead_of: tuple[str, ...] = ()
 
     def to_dict(self) -> dict[str, Any]:
-        return {"kind": self.kind, "words": self.words, "rival": self.rival}
+        return {
+            "kind": self.kind,
+            "words": self.words,
+            "rival": self.rival,
+            "instead_of": list(self.instead_of),
+        }
 
 
 def _label(kind: str) -> str:
@@ -74,8 +87,20 @@ def _between(text: str, start: str, end: str) -> str:
     return text[i + len(start) : j] if j >= 0 else ""
 
 
-def _of_clause(c: str) -> list[Reading]:
-    """The readings one detail clause carries (module docstring), by the words its module writes."""
+def _kinds_in(text: str, named: Sequence[str]) -> tuple[str, ...]:
+    """The ``named`` terms (code names) whose labels ``text`` says, in the order ``named`` has them; the
+    longer labels first, so "degradation" is not read inside "stiffness degradation"."""
+    found: set[str] = set()
+    for kind in sorted(named, key=lambda k: -len(_label(k))):
+        if _label(kind) in text:
+            found.add(kind)
+            text = text.replace(_label(kind), "\0")
+    return tuple(k for k in named if k in found)
+
+
+def _of_clause(c: str, named: Sequence[str]) -> list[Reading]:
+    """The readings one detail clause carries (module docstring), by the words its module writes; a rival's
+    ``instead_of``: the ``named`` terms the clause says it stands in place of."""
     from .bounds_said import MU_MARK
     from .caveats import FAMILY_MARK, PLAY_MARK
     from .masing import MASING_MARK
@@ -83,23 +108,28 @@ def _of_clause(c: str) -> list[Reading]:
 
     out: list[Reading] = []
     if RATE_MARK in c and "may stand for" in c:
-        out.append(Reading("rate", f"or {RATE_MARK} outside the library"))
+        of = _kinds_in(c.split(" may stand for")[0], named)
+        out.append(Reading("rate", f"or {RATE_MARK} outside the library", instead_of=of))
     if FAMILY_MARK in c:
         words = f"or a distribution of stops or another Dahl exponent (Dahl: {FAMILY_MARK})"
-        out.append(Reading("family", words))
+        out.append(Reading("family", words, instead_of=_kinds_in(c.split(" names ")[0], named)))
     if PLAY_MARK in c:
-        out.append(Reading(Play.kind, f"or a backlash on the measured output (play: {PLAY_MARK})"))
+        words = f"or a backlash on the measured output (play: {PLAY_MARK})"
+        out.append(Reading(Play.kind, words, instead_of=_kinds_in(c.split(" names ")[0], named)))
     if MASING_MARK in c and "may be the elastic part" in c:
         words = f"or the elastic part of {MASING_MARK} (a Prandtl-Ishlinskii loop on x)"
-        out.append(Reading("masing", words))
-    both = _between(c, "not the only reading: ", ", jointly") or (
-        _between(c, ": ", ", jointly") if c.startswith("alternative to ") else ""
-    )
-    if both:
-        out.append(Reading("revisit", f"or {both} together"))
+        of = _kinds_in(c.split(" may be the elastic part")[0], named)
+        out.append(Reading("masing", words, instead_of=of))
+    both = _between(c, "not the only reading: ", ", jointly")
+    of = _kinds_in(c.split(" in place of ")[-1].split(" (not named")[0], named)
+    if not both and c.startswith("alternative to "):  # the set kept as the named term's rival
+        both = _between(c, ": ", ", jointly")
+        of = _kinds_in(_between(c, "alternative to ", ": "), named)
+    if both:  # a set that holds its laws in place of the named term(s)
+        out.append(Reading("revisit", f"or {both} together", instead_of=of))
     one = _between(c, "named in its place. ", " is the rival")  # a revisit named a set: the single term
     if one:
-        out.append(Reading("revisit", f"or {one}"))
+        out.append(Reading("revisit", f"or {one}", instead_of=_kinds_in(c.split(", jointly")[0], named)))
     if ": law untested" in c:
         out.append(Reading("law_untested", f"{c.split(': law untested')[0]}'s law untested", rival=False))
     if c.startswith("named without the held-out test"):
@@ -116,19 +146,59 @@ def _of_clause(c: str) -> list[Reading]:
     return out
 
 
+def _short(kind: str, named: Sequence[str]) -> str:
+    """A named term as the headline's "instead of" says it: its family's label ("viscous damping") when no
+    other named term shares the family, else its place label."""
+    if kind not in TERMS:
+        return kind
+    base = TERMS[kind].base_kind
+    same = [k for k in named if k in TERMS and TERMS[k].base_kind == base]
+    return TERMS[base].label if len(same) == 1 and base in TERMS else _label(kind)
+
+
+def _said_instead(rs: Sequence[Reading], named: Sequence[str]) -> list[Reading]:
+    """``rs`` with a rival's words saying which named term it stands in place of ("or output offset instead
+    of asymmetry") when two or more terms are named: a headline naming several terms and listing "or X"
+    did not say which one X replaces. The same words for several named terms are said once, for all."""
+    merged: dict[str, Reading] = {}
+    for r in rs:
+        was = merged.get(r.words)
+        if was is None:
+            merged[r.words] = r
+        elif r.instead_of:
+            of = tuple(k for k in named if k in set(was.instead_of) | set(r.instead_of))
+            merged[r.words] = replace(was, instead_of=of)
+    if len(set(named)) < 2:
+        return list(merged.values())
+    out = []
+    for r in merged.values():
+        if r.rival and r.instead_of:
+            r = replace(
+                r, words=f"{r.words} instead of {' and '.join(_short(k, named) for k in r.instead_of)}"
+            )
+        out.append(r)
+    return out
+
+
 def of_verdict(verdict: str, named: Sequence[str], alternatives: Sequence[Any]) -> tuple[Reading, ...]:
     """The readings of a verdict whose ``named`` terms (code names) have ``alternatives``
     (:class:`.select.Alternative`): its detail clauses' (:func:`_of_clause`) and the named terms' rivals
-    (:func:`.caveats.rivals_of`), each said once; () when nothing is named."""
+    (:func:`.caveats.rivals_of`), each said once (with the named terms it stands for, :func:`_said_instead`);
+    () when nothing is named."""
     from .caveats import rivals_of
 
     if not named:
         return ()
     rivals, by_law = rivals_of(alternatives, named)
     # a rival named itself (two named terms each the other's rival) is no other reading of the headline
-    out = [Reading("alternative", f"or {_label(r)}") for rs in rivals.values() for r in rs if r not in named]
+    out = [
+        Reading("alternative", f"or {_label(r)}", instead_of=(t,))
+        for t, rs in rivals.items()
+        for r in rs
+        if r not in named
+    ]
     out += [
-        Reading("alternative", f"or {_label(a.rival)} (law p = {a.law_p_value:.2g})")
+        Reading("alternative", f"or {_label(a.rival)} (law p = {a.law_p_value:.2g})", instead_of=(a.term,))
         for a in by_law
         if a.rival not in named
     ]
@@ -141,11 +211,8 @@ def of_verdict(verdict: str, named: Sequence[str], alternatives: Sequence[Any]) 
         if not (r.kind == "alternative" and r.words.removeprefix("or ").split(" (law")[0] in refused)
     ]
     for c in details:
-        out += _of_clause(c)
-    once: dict[str, Reading] = {}
-    for r in out:
-        once.setdefault(r.words, r)
-    return tuple(once.values())
+        out += _of_clause(c, named)
+    return tuple(_said_instead(out, named))
 
 
 def headlined(verdict: str, readings: Sequence[Reading]) -> str:
@@ -171,8 +238,6 @@ _D = TypeVar("_D", bound=_Verdict)
 def qualified(d: _D, named: Sequence[str], alternatives: Sequence[Any]) -> _D:
     """``d`` (a :class:`.result.Diagnosis` or :class:`.across.AcrossDiagnosis`) with its readings and the
     headline that carries them."""
-    from dataclasses import replace
-
     verdict = d.verdict
     rs = of_verdict(verdict, named, alternatives)
     return replace(d, verdict=headlined(verdict, rs), readings=rs)  # type: ignore[type-var]
