@@ -37,7 +37,10 @@ from .named_limit import named_text
 POWER = 0.9
 #: What the quoted 90 % is about: each candidate's own F-test, not the verdict (the held-out and law tests,
 #: and the other candidates, cost more: docs/diagnosis.md, "Named at the stated size").
-HEADER = "the size its own test detects with 90 % power; being named also needs the held-out and law tests"
+HEADER = (
+    "the size its own test detects with 90 % power by linearisation, which may overstate it (the plain model"
+    " can absorb more of a present term); being named also needs the held-out and law tests"
+)
 
 
 def _power(lam: float, dof: int, noise_dof: int, crit: float) -> float:
