@@ -15,7 +15,12 @@ its own mean strength and stiffness, as drift.compare formed them), ``C_steady``
 steady model refitted to the averaged periods corrected at ``(d_1, d_2)``. The covariance is ``2 H^-1``
 (``H`` the cost's Hessian by central differences), and the steady fit's own uncertainty is carried into
 both values through the regressors (drift_se.py: ``g' C g`` of each entry of the two-column estimate).
-The passes' feedback of drift_se.py is not applied: the pair is not found by correction passes.
+The passes' feedback of drift_se.py is not applied: the pair is not found by correction passes (tried: one
+pass re-forming the regressors at the pair's virgin fit, each loop at its own mean strength and stiffness,
+moved review 34's degr_both from delta_eta 0.0476, delta_nu 0.0837 to 0.0338, 0.0651, truth 0.05, 0.0854;
+the regressors stay the plain fit's, as drift.compare formed them). The records' unrecorded ages (age.py)
+are not fitted for the pair: age.py's test is one drift term's, and with the second term missing it took
+the rival's drift for ages (the library's own pair record from rest was given ages of 5-9 periods).
 
 Measured before this (review 34 degr_both: strength 0.0854 with stiffness 0.05): the verdict named only
 stiffness degradation, ``delta_eta = 0.0545 +- 0.0018`` (2.5 se off), the steady fit corrected for it alone,
@@ -101,30 +106,30 @@ def modelled(
     substeps: int,
     alpha: float,
     named: bool,
-) -> tuple[DegradationTest, AugFit]:
+) -> Optional[tuple[DegradationTest, AugFit]]:
     """``deg`` with its rival modelled beside it (``deg.second``) and both values from the pair, with the
-    steady fit of the periods corrected for both, when the record needs both (module docstring); else
-    ``(deg, fit)`` as they are. ``fit``: the steady fit corrected for ``deg`` alone."""
+    steady fit of the periods corrected for both, when the record needs both (module docstring); else None.
+    ``fit``: the steady fit corrected for ``deg`` alone (the pair's fits start from it)."""
     rival = deg.rival
     if not needs_both(deg, named, alpha) or rival is None or not rival.passed:
-        return deg, fit
+        return None
     data = drift_data(exps, sx, plain, s.y, substeps)
     terms = (deg.term, rival.term)
+    if not held_out_better([_normal(dd, terms) for dd in data]):
+        return None
     per = [_normal(dd, terms) for dd in data]
-    if not held_out_better(per):
-        return deg, fit
     a = np.sum([p[0] for p in per], axis=0)
     r = np.sum([p[1] for p in per], axis=0)
     c0 = float(sum(p[2] for p in per))
     try:
         start = np.linalg.solve(a, r)
     except np.linalg.LinAlgError:
-        return deg, fit
+        return None
     if not np.all(start > 0):
-        return deg, fit
+        return None
     got = _refined(exps, sx, fit, terms, (a, r, c0), start, s, substeps)
     if got is None:
-        return deg, fit
+        return None
     dv, cov, pair_fit = got
 
     def estimate(regs: Sequence[DriftData]) -> np.ndarray:

@@ -238,6 +238,27 @@ def _aged(
     return aged, fit, deg, data
 
 
+def _single(
+    exps: Sequence[DiagExperiment],
+    sx: Sequence[AugExperiment],
+    plain: AugFit,
+    fit: AugFit,
+    data: Sequence[Any],
+    deg: DegradationTest,
+    s: Scale,
+    substeps: int,
+    alpha: float,
+) -> tuple[list[DiagExperiment], AugFit, DegradationTest]:
+    """One named drift term's value: the unrecorded age of each record (age.py: kept when its F-test passes
+    at ``alpha``, else the ages are 0), d refined on both costs, its standard error with the steady fit's
+    uncertainty (drift_se.py)."""
+    aged, fit, deg, data = _aged(exps, sx, fit, data, deg, s, substeps, alpha)
+    spread = drift_se.spread(aged, sx, fit if deg.term == DEGRADATION else plain, data, deg, s.y, substeps)
+    if deg.d > 0:
+        deg, fit = drift_passes.refine(aged, sx, fit, data, deg, s, substeps)
+    return aged, fit, drift_se.added(deg, *spread, s.y)
+
+
 def _degradation_stage(
     exps: Sequence[DiagExperiment],
     sx: Sequence[AugExperiment],
@@ -288,16 +309,13 @@ def _degradation_stage(
     if not (deg.named if held_out_test else deg.passed):
         # The refined test no longer names it: the steady selection on the data as they are.
         return deg, list(exps), list(sx), plain
-    # The unrecorded age of each record (age.py): kept when its F-test passes, else the ages are 0.
-    exps, fit, deg, data = _aged(exps, sx, fit, data, deg, s, substeps, alpha / family)
-    spread = drift_se.spread(exps, sx, fit if term == DEGRADATION else plain, data, deg, s.y, substeps)
-    if deg.d > 0:
-        deg, fit = drift_passes.refine(exps, sx, fit, data, deg, s, substeps)
-    deg = drift_se.added(deg, *spread, s.y)
-    # The rival modelled beside it when the record needs both (drift_both.py): both values from the pair.
-    deg, fit = drift_both.modelled(
-        exps, sx, plain, fit, deg, s, substeps, alpha, _deg_named(deg, held_out_test)
-    )
+    # The rival modelled beside it when the record needs both (drift_both.py): both values from the pair,
+    # with the records' ages as declared (age.py's test is one drift term's).
+    pair = drift_both.modelled(exps, sx, plain, fit, deg, s, substeps, alpha, _deg_named(deg, held_out_test))
+    if pair is None:
+        exps, fit, deg = _single(exps, sx, plain, fit, data, deg, s, substeps, alpha / family)
+    else:
+        deg, fit = pair
     fexps, fsx = corrected(exps, sx, fit, deg.d, s.y, substeps, term, drift_both.beside(deg))
     # The steady selection starts from the plain model converged on the periods it runs on: the refinement's
     # fit is not (it was fitted before the last correction at the refined d), and a start left short of its
