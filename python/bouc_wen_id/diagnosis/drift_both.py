@@ -18,7 +18,12 @@ both values through the regressors (drift_se.py: ``g' C g`` of each entry of the
 The passes' feedback of drift_se.py is not applied: the pair is not found by correction passes (tried: one
 pass re-forming the regressors at the pair's virgin fit, each loop at its own mean strength and stiffness,
 moved review 34's degr_both from delta_eta 0.0476, delta_nu 0.0837 to 0.0338, 0.0651, truth 0.05, 0.0854;
-the regressors stay the plain fit's, as drift.compare formed them). The records' unrecorded ages (age.py)
+the regressors stay the plain fit's, as drift.compare formed them; with strength degradation's column
+re-formed alone, each loop at its own mean strength and stiffness, delta_nu went to 0.053-0.056).
+Each value's standard error is at least its move from the first-order two-column value to the refined
+one: the two estimate the same pair, and on review 34's simulator with a resonant G with delay (case
+dboth_res of /work/degpair35_rev/extra35.py: delta_nu 0.00112 with delta_eta 0.0017) the first-order
+delta_nu was 0.00147 +- 0.00003 and the refined 0.00175 +- 0.00002. The records' unrecorded ages (age.py)
 are not fitted for the pair: age.py's test is one drift term's, and with the second term missing it took
 the rival's drift for ages (the library's own pair record from rest was given ages of 5-9 periods).
 
@@ -138,7 +143,10 @@ def modelled(
         return np.linalg.solve(np.sum([p[0] for p in parts], axis=0), np.sum([p[1] for p in parts], axis=0))
 
     extra = variances(exps, sx, plain, data, estimate, s.y, substeps)
-    se = np.sqrt(np.clip(np.diag(cov), 0.0, None) + extra) / s.y**2
+    # The first-order two-column values and the refined ones are two estimates of the same pair: where
+    # they differ by more than the refined se, the difference is the model's own error, and the se is
+    # at least it (module docstring: review 34's resonant G with delay moved delta_nu 19 %).
+    se = np.maximum(np.sqrt(np.clip(np.diag(cov), 0.0, None) + extra), np.abs(dv - start)) / s.y**2
     c2 = _cost(a, r, c0, dv)
     out = []
     for k, test in enumerate((deg, rival)):
