@@ -77,7 +77,12 @@ def _blind_case(key: str, noise: str) -> list[Any]:
 
 def test_a_lab_null_with_ar1_noise_is_adequate(monkeypatch: pytest.MonkeyPatch) -> None:
     """The blind bench's ``null:0:7`` (seed 2026) with AR(1) noise: "unexplained structure at harmonics DC,
-    1-5" before (the check left out), adequate now, with the colour noted."""
+    1-5" before (the check left out), adequate now, with the colour noted.
+
+    Since the lab grid spans every harmonic below Nyquist (``lab_settle.full_band``, as a recording's), the
+    check left out no longer fails the global test (the AR(1)'s high harmonics, below its per-sample level,
+    offset its low ones over 1845 dof), but its first step's candidates read the noise at the low harmonics
+    as signal (viscous damping at p adj = 0.00055); with the check none comes near the level."""
     import warnings
 
     items = _blind_case("null:0:7", "ar1")
@@ -88,7 +93,8 @@ def test_a_lab_null_with_ar1_noise_is_adequate(monkeypatch: pytest.MonkeyPatch) 
         assert any("not white noise" in n for n in d.notes)
         monkeypatch.setattr(lab_colour, "levels", lambda *a: None)  # the code before: no colour check
         old = bw.diagnose(items)
-    assert old.status == "unexplained", old.summary()
+    assert min(t.p_adjusted for t in d.steps[0].trials) > 0.05, d.summary()
+    assert min(t.p_adjusted for t in old.steps[0].trials) < 0.05, old.summary()
 
 
 def test_a_settling_transient_is_not_taken_for_coloured_noise() -> None:
