@@ -17,7 +17,9 @@ details)") and are kept as :class:`Reading` s on the result (``Diagnosis.reading
   (:mod:`.revisit`'s "not the only reading" and "alternative to"; a revisit that named the set says the
   single term is the rival); Dahl friction's family (:func:`.caveats.family_text`), play's output backlash
   (:func:`.caveats.play_text`) and a spring on x's Masing loop (:func:`.masing.masing_text`);
-- **limits of the evidence** (``rival=False``): a named term's law untested, or named without the held-out
+- **limits of the evidence** (``rival=False``): what remains unexplained shown only by the adequacy test at a
+  modest p-value (:mod:`.borderline`: the only reading kept when nothing is named, said in the status too); a
+  named term's law untested, or named without the held-out
   test (:mod:`.law_untested`); a waveform's ``lam`` far from 1, no property of the device
   (:mod:`.input_note`); across conditions, diagnose's revisit not run (:func:`.across_pairs.revisit_clause`).
 
@@ -39,6 +41,7 @@ from dataclasses import dataclass
 from typing import Any, Protocol, TypeVar
 
 from ..terms import TERMS, Play
+from . import borderline
 from .result import NOT_ONLY, status_text
 from .verdict_text import clauses
 
@@ -122,8 +125,14 @@ def of_verdict(verdict: str, named: Sequence[str], alternatives: Sequence[Any]) 
     (:func:`.caveats.rivals_of`), each said once; () when nothing is named."""
     from .caveats import rivals_of
 
+    # weak evidence that structure remains (borderline.py): read whether or not a term is named
+    weak = [
+        Reading(borderline.KIND, borderline.reading_words(c), rival=False)
+        for c in clauses(verdict)[:2]
+        if borderline.reading_words(c)
+    ]
     if not named:
-        return ()
+        return tuple(weak)
     rivals, by_law = rivals_of(alternatives, named)
     # a rival named itself (two named terms each the other's rival) is no other reading of the headline
     out = [Reading("alternative", f"or {_label(r)}") for rs in rivals.values() for r in rs if r not in named]
@@ -142,6 +151,7 @@ def of_verdict(verdict: str, named: Sequence[str], alternatives: Sequence[Any]) 
     ]
     for c in details:
         out += _of_clause(c)
+    out += weak
     once: dict[str, Reading] = {}
     for r in out:
         once.setdefault(r.words, r)
@@ -154,6 +164,10 @@ def headlined(verdict: str, readings: Sequence[Reading]) -> str:
     if not readings:
         return verdict
     parts = clauses(verdict)
+    # a reading the headline already says in full (a weak remainder's p-value, borderline.py) is not repeated
+    readings = [r for r in readings if not (r.kind == borderline.KIND and borderline.MARK in parts[0])]
+    if not readings:
+        return verdict
     words = [r.words for r in readings if r.rival] + [r.words for r in readings if not r.rival]
     head = parts[0] + DASH + ", ".join(words) + SEE
     rest = verdict[verdict.find(parts[0]) + len(parts[0]) :]
