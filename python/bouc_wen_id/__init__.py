@@ -35,6 +35,7 @@ from .errors import (
     UnstableSystemError,
     ZeroAmplitudeError,
 )
+from .gaps import split_at_gaps
 from .identification import identify
 from .io import load, load_recordings, save, save_recordings
 from .measurement import Measurement
@@ -59,6 +60,7 @@ __all__ = [
     "SinePlan",
     "Recording",
     "Measurement",
+    "split_at_gaps",
     "simulate",
     "simulate_input",
     "identify",
