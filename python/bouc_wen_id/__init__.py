@@ -10,7 +10,7 @@ from __future__ import annotations
 from . import budget, diagnosis, errors, io, reference, signal
 from ._core import __version__
 from .demo import demo_plan, demo_plant
-from .diagnosis import Diagnosis, diagnose
+from .diagnosis import Diagnosis, SavedDiagnosis, diagnose, load_diagnosis
 from .errors import (
     BoucWenIdError,
     BudgetExceededError,
@@ -54,6 +54,8 @@ __all__ = [
     "diagnosis",
     "diagnose",
     "Diagnosis",
+    "SavedDiagnosis",
+    "load_diagnosis",
     "TransferFunction",
     "BoucWen",
     "WienerPlant",
