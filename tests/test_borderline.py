@@ -1,4 +1,4 @@
-"""A weak remainder is said with its p-value (diagnosis/borderline.py; review 35 ``null_hiq``, ``kx_mu2barely``).
+"""A weak remainder is said with its p-value (diagnosis/borderline.py; review 35 null_hiq, kx_mu2barely).
 
 A plain plant with a Q = 10 resonance was told "unexplained structure remains spread over the cycle" at
 p = 0.016 (1 of 5 seeds: the test's own false-alarm rate), and a right name was followed by "unexplained
@@ -18,6 +18,7 @@ import bouc_wen_id as bw
 import numpy as np
 import pytest
 from bouc_wen_id.diagnosis import borderline, readings
+from bouc_wen_id.diagnosis.result import Status
 from bouc_wen_id.diagnosis.run import diagnose as run_diagnose
 
 NULL = "unexplained structure remains spread over the cycle"
@@ -39,7 +40,7 @@ def plain() -> bw.Diagnosis:
         return run_diagnose(recs, candidates=[bw.terms.Stiffness.kind])
 
 
-def _said(d: bw.Diagnosis, status: str, verdict: str, p: float, alpha: float = 0.05) -> bw.Diagnosis:
+def _said(d: bw.Diagnosis, status: Status, verdict: str, p: float, alpha: float = 0.05) -> bw.Diagnosis:
     """``d`` as diagnose would return it with this status, verdict and final p-value."""
     d = replace(d, status=status, verdict=verdict, final=replace(d.final, p_value=p))
     d = borderline.qualified(d, alpha)
@@ -50,7 +51,9 @@ def test_a_modest_p_is_said_with_its_p_value_and_the_false_alarm_rate(plain: bw.
     assert plain.status == "adequate", plain.verdict
     d = _said(plain, "unexplained", NULL, 0.016)
     assert d.status == "unexplained"  # what the exit code and the benches read
-    assert d.headline.startswith("unexplained structure may remain (p = 0.016; a right model is flagged so in 5 %")
+    assert d.headline.startswith(
+        "unexplained structure may remain (p = 0.016; a right model is flagged so in 5 %"
+    )
     assert "remains" not in d.headline and d.headline.endswith("spread over the cycle"), d.headline
     assert [r.kind for r in d.readings] == [borderline.KIND] and not d.readings[0].rival
     assert d.status_text.startswith("unexplained (weak evidence of what remains: p = 0.016;")

@@ -71,7 +71,10 @@ def test_a_diagnosis_round_trips_through_its_json(named: bw.Diagnosis, tmp_path:
     _check(named, bw.SavedDiagnosis.from_json(s.to_json()))  # and again from its own JSON
     assert s.summary().startswith(f"Diagnosis: {named.headline}")
     # with readings (a rival and a limit of the evidence): the printed status follows them, and so do they
-    rs = (readings.Reading("rate", "or a rate-independent loop"), readings.Reading("law_untested", "x", False))
+    rs = (
+        readings.Reading("rate", "or a rate-independent loop"),
+        readings.Reading("law_untested", "x", False),
+    )
     q = replace(named, readings=rs)
     assert q.status_text == f"explained ({readings.NOT_ONLY})"
     _check(q, bw.SavedDiagnosis.from_json(q.to_json()))

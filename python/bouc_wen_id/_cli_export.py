@@ -58,7 +58,7 @@ def _read(path: Path) -> WienerPlant:
             )
         return load_model(path)
     if not isinstance(doc, dict) or not {"linear", "hysteresis"} <= set(doc):
-        from .diagnosis.saved import HINT, looks_like
+        from ._diagnosis_json import HINT, looks_like
 
         if looks_like(doc):
             raise FileFormatError(f"{path}: {HINT}")

@@ -46,6 +46,17 @@ def _fields(record: Any) -> tuple[Any, Any, Any, dict[str, Any]]:
     return record.t, record.u, record.y, kw
 
 
+def _arguments(t: Any, u: Any, y: Any, keywords: dict[str, Any]) -> tuple[Any, Any, Any, dict[str, Any]]:
+    """``(t, u, y, keywords given)``: from the arrays, or from one record (what is given here first)."""
+    given = {k: v for k, v in keywords.items() if v}
+    if u is None and y is None:
+        t, u, y, kw = _fields(t)
+        return t, u, y, {**kw, **given}
+    if u is None or y is None:
+        raise InvalidParameterError("split_at_gaps needs t, u and y (or one record holding them)")
+    return t, u, y, given
+
+
 def split_at_gaps(
     t: Any,
     u: Optional[ArrayLike] = None,
@@ -96,27 +107,15 @@ def split_at_gaps(
         Lengths differ, or no ``u`` and ``y`` and ``t`` is no record; a piece of a single sample between two
         gaps (it cannot be a Measurement: drop those samples).
     """
-    given: dict[str, Any] = {
-        k: v
-        for k, v in (
-            ("nominal_frequency", nominal_frequency),
-            ("units", units),
-            ("channels", channels),
-            ("name", name),
-            ("metadata", metadata),
-        )
-        if v
-    }
-    if u is None and y is None:
-        t, u, y, kw = _fields(t)
-        given = {**kw, **given}
-    elif u is None or y is None:
-        raise InvalidParameterError("split_at_gaps needs t, u and y (or one record holding them)")
+    keywords = {"nominal_frequency": nominal_frequency, "units": units, "channels": channels}
+    t, u, y, given = _arguments(t, u, y, {**keywords, "name": name, "metadata": metadata})
     if not (isinstance(rtol, (int, float)) and math.isfinite(rtol) and rtol > 0):
         raise InvalidParameterError(f"rtol = {rtol!r} must be a finite number > 0")
     tt, uu, yy = _frozen("t", t), _frozen("u", u), _frozen("y", y)
     if not tt.size == uu.size == yy.size:
-        raise InvalidParameterError(f"t, u and y must have equal lengths, got {tt.size}, {uu.size}, {yy.size}")
+        raise InvalidParameterError(
+            f"t, u and y must have equal lengths, got {tt.size}, {uu.size}, {yy.size}"
+        )
     check_time_axis(tt, gap_factor=1.0 + rtol, rtol=rtol)  # increasing; no step short of the median
     steps = np.diff(tt)
     dt = float(np.median(steps))
@@ -127,12 +126,12 @@ def split_at_gaps(
     meta = dict(given.pop("metadata", {}) or {})
     if not (isinstance(min_periods, (int, float)) and math.isfinite(min_periods) and min_periods >= 0):
         raise InvalidParameterError(f"min_periods = {min_periods!r} must be a finite number >= 0")
-    omega = given.get("nominal_frequency")
-    shortest = 2.0 * math.pi * min_periods / float(omega) if omega else 0.0
+    omega = float(given.get("nominal_frequency") or 0.0)
+    shortest = 2.0 * math.pi * min_periods / omega if omega > 0 else 0.0
     pieces, short = [], []
     for k, (a, b) in enumerate(zip(cuts[:-1], cuts[1:]), 1):
         if b - a >= 2 and (b - a) * dt < shortest:
-            short.append(f"{a}..{b - 1} ({(b - a) * dt * float(omega) / (2.0 * math.pi):.2g} periods)")
+            short.append(f"{a}..{b - 1} ({(b - a) * dt * omega / (2.0 * math.pi):.2g} periods)")
             continue
         if b - a < 2:
             raise InvalidParameterError(
@@ -149,5 +148,3 @@ def split_at_gaps(
             raise InsufficientDataError(said + "; nothing is left: record longer stretches without gaps")
         warnings.warn(said + " (min_periods=0 keeps them)", GapWarning, stacklevel=2)
     return pieces
-
-

@@ -18,9 +18,12 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import replace
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from .verdict_text import clauses
+
+if TYPE_CHECKING:
+    from .result import Diagnosis
 
 #: A p-value at or above ``alpha / FACTOR`` (and below the level) is weak evidence of structure.
 FACTOR = 10.0
@@ -36,7 +39,7 @@ def weak(p_value: float, alpha: float, drifting: bool = False) -> bool:
 
 
 def remains(p_value: float, alpha: float, drifting: bool = False) -> str:
-    """"remains", or, on weak evidence (:func:`weak`), "may remain (p = ...; a right model is flagged so in
+    """ "remains", or, on weak evidence (:func:`weak`), "may remain (p = ...; a right model is flagged so in
     ... % of cases)"."""
     if not weak(p_value, alpha, drifting):
         return "remains"
@@ -56,7 +59,7 @@ def of_headline(head: str) -> str:
 REMAINS = "unexplained structure remains"
 
 
-def qualified(d: Any, alpha: float) -> Any:
+def qualified(d: Diagnosis, alpha: float) -> Diagnosis:
     """``d`` (a :class:`.result.Diagnosis`) whose "unexplained structure remains" (its headline, or the
     clause after an "explained in part" headline) says "may remain (p = ...)" when the final model's failed
     adequacy test is the only evidence and weak (:func:`weak`); ``d`` itself otherwise. Other evidence keeps
@@ -90,5 +93,5 @@ def status_words(readings: Sequence[Any]) -> str:
     remains: p = 0.016; a right model is flagged so in 5 % of cases"."""
     for r in readings:
         if getattr(r, "kind", "") == KIND:
-            return f"{WORDS}: " + r.words[len(WORDS) + 2 : -1]
+            return f"{WORDS}: " + str(r.words)[len(WORDS) + 2 : -1]
     return ""

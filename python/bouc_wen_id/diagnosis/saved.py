@@ -20,27 +20,17 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any, Union
 
+from .._diagnosis_json import HINT, KEYS, looks_like
 from ..errors import FileFormatError
+from ..export._json import MODEL_FORMAT
 from .readings import Reading
 from .result import ModelSummary, NamedTerm, clean, status_text
 from .verdict_text import details, headline
 
 __all__ = ["HINT", "SavedDiagnosis", "load_diagnosis", "looks_like"]
 
-#: The keys every diagnosis JSON holds (``Diagnosis.to_dict``).
-KEYS = ("status", "verdict", "named", "partial", "plain", "final", "explained_fraction")
-#: What a reader that is not this one says of a diagnosis JSON.
-HINT = (
-    "a diagnosis (diagnose's diagnosis.json, Diagnosis.to_json) is read by bouc_wen_id.load_diagnosis; it "
-    "holds no G to load or export (fit_time_domain with the named terms builds a model)"
-)
 #: Largest file read (a diagnosis JSON of a hundred experiments is well under 10 MB).
 MAX_BYTES = 200_000_000
-
-
-def looks_like(doc: Any) -> bool:
-    """Whether a parsed JSON document is a diagnosis (:data:`KEYS`)."""
-    return isinstance(doc, Mapping) and all(k in doc for k in KEYS)
 
 
 def _num(v: Any, what: str) -> float:
@@ -88,8 +78,14 @@ def _model(d: Any, what: str) -> ModelSummary:
 
 
 def _reading(d: Any) -> Reading:
-    if not isinstance(d, Mapping) or not isinstance(d.get("kind"), str) or not isinstance(d.get("words"), str):
-        raise FileFormatError(f"diagnosis JSON: a reading must be an object with 'kind' and 'words', got {d!r}")
+    if (
+        not isinstance(d, Mapping)
+        or not isinstance(d.get("kind"), str)
+        or not isinstance(d.get("words"), str)
+    ):
+        raise FileFormatError(
+            f"diagnosis JSON: a reading must be an object with 'kind' and 'words', got {d!r}"
+        )
     return Reading(d["kind"], d["words"], bool(d.get("rival", True)))
 
 
@@ -189,7 +185,8 @@ class SavedDiagnosis:
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON object it was read from (a copy)."""
-        return json.loads(json.dumps(self.document))
+        copy: dict[str, Any] = json.loads(json.dumps(self.document))
+        return copy
 
     def to_json(self, indent: int = 2) -> str:
         return json.dumps(self.document, indent=indent, allow_nan=False)
@@ -220,8 +217,6 @@ def load_diagnosis(path: Union[str, os.PathLike[str]]) -> SavedDiagnosis:
     except ValueError as exc:
         raise FileFormatError(f"{p}: not JSON ({exc})") from None
     if isinstance(doc, Mapping) and not looks_like(doc):
-        from ..export._json import MODEL_FORMAT
-
         if doc.get("format") == MODEL_FORMAT:
             raise FileFormatError(f"{p}: a model document: read it with bouc_wen_id.export.load_model")
         if "conditions" in doc and "verdict" in doc:

@@ -139,7 +139,7 @@ def model_from_json(text: Union[str, bytes]) -> WienerPlant:
     except (ValueError, TypeError) as exc:
         raise FileFormatError(f"not a JSON document: {exc}") from None
     if not isinstance(doc, Mapping) or doc.get("format") != MODEL_FORMAT:
-        from ..diagnosis.saved import HINT, looks_like
+        from .._diagnosis_json import HINT, looks_like
 
         got = doc.get("format") if isinstance(doc, Mapping) else type(doc).__name__
         said = f"; {HINT}" if looks_like(doc) else ""

@@ -50,7 +50,7 @@ def _read_file(
 def _json_hint(p: Path) -> str:
     """What a JSON file given as a recording is read by: a diagnosis by load_diagnosis, a model by
     load_model (review 35: diagnosis.json was refused without naming a reader)."""
-    from ..diagnosis.saved import HINT, looks_like
+    from .._diagnosis_json import HINT, looks_like
 
     try:
         doc = json.loads(p.read_text(encoding="utf-8")) if p.stat().st_size < 200_000_000 else None
@@ -80,9 +80,11 @@ def _files(paths: PathLike | Iterable[PathLike]) -> list[Path]:
                 and (f.suffix.lower() not in (".txt", ".dat") or holds_numbers(f))
             )
             if not files:
-                said = f"; it holds diagnosis.json: {_json_hint(p / 'diagnosis.json')[2:]}" if (
-                    p / "diagnosis.json"
-                ).is_file() else ""
+                said = (
+                    f"; it holds diagnosis.json: {_json_hint(p / 'diagnosis.json')[2:]}"
+                    if (p / "diagnosis.json").is_file()
+                    else ""
+                )
                 raise FileFormatError(
                     f"{p}: the folder holds no .csv or .npz recordings (nor .txt, .dat, .mat, .tdms, .h5 or "
                     f".hdf5 files){said}"
