@@ -310,7 +310,8 @@ class Diagnosis:
         }
 
     def to_json(self, indent: int = 2) -> str:
-        """Strict JSON (NaN and infinities become null)."""
+        """Strict JSON (NaN and infinities become null); read back by :func:`bouc_wen_id.load_diagnosis`
+        (a file) or ``SavedDiagnosis.from_json`` (this text)."""
         return json.dumps(clean(self.to_dict()), indent=indent, allow_nan=False)
 
 
