@@ -678,6 +678,7 @@ def run_case(case: Case) -> dict[str, Any]:
         rec.update(status=d.status, verdict=d.verdict, final_p=float(d.final.p_value),
                    plain_p=float(d.plain.p_value))  # fmt: skip
         rec["bad_explained"] = d.status == "explained" and float(d.final.p_value) < 0.05
+        rec["weak_remainder"] = any(r.kind == "borderline" for r in d.readings)  # scored by status as before
         rec["input_named"] = any(t.term == "distortion" for t in d.named)
         rec["pair_step"] = [
             list(getattr(st, "pair", ())) or "tried" for st in d.steps if getattr(st, "pairs", ())

@@ -194,6 +194,8 @@ def run_old_case(job: tuple[str, Optional[str], float, int]) -> dict[str, Any]:
         "correct": bool(correct),
         "wrong": bool(wrong),
         "unexplained": d.status == "unexplained",
+        # said with its p-value (diagnosis/borderline.py); still counted as the status says, not excused
+        "weak_remainder": any(r.kind == "borderline" for r in d.readings),
         "ratio": ratio,
         "left": left,
         "seconds": secs,
@@ -348,6 +350,7 @@ def _score(
         "right_place": bool(right_place),
         "wrong": bool(wrong),
         "unexplained": d.status == "unexplained",
+        "weak_remainder": any(r.kind == "borderline" for r in d.readings),  # scored by status as before
         "family": bool(family),
         "bad_explained": d.status == "explained" and not (d.final.p_value >= alpha),
         "final_p": float(d.final.p_value),

@@ -10,7 +10,7 @@ from __future__ import annotations
 from . import budget, diagnosis, errors, io, reference, signal
 from ._core import __version__
 from .demo import demo_plan, demo_plant
-from .diagnosis import Diagnosis, diagnose
+from .diagnosis import Diagnosis, SavedDiagnosis, diagnose, load_diagnosis
 from .errors import (
     BoucWenIdError,
     BudgetExceededError,
@@ -35,6 +35,7 @@ from .errors import (
     UnstableSystemError,
     ZeroAmplitudeError,
 )
+from .gaps import split_at_gaps
 from .identification import identify
 from .io import load, load_recordings, save, save_recordings
 from .measurement import Measurement
@@ -53,12 +54,15 @@ __all__ = [
     "diagnosis",
     "diagnose",
     "Diagnosis",
+    "SavedDiagnosis",
+    "load_diagnosis",
     "TransferFunction",
     "BoucWen",
     "WienerPlant",
     "SinePlan",
     "Recording",
     "Measurement",
+    "split_at_gaps",
     "simulate",
     "simulate_input",
     "identify",

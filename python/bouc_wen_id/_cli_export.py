@@ -58,6 +58,10 @@ def _read(path: Path) -> WienerPlant:
             )
         return load_model(path)
     if not isinstance(doc, dict) or not {"linear", "hysteresis"} <= set(doc):
+        from ._diagnosis_json import HINT, looks_like
+
+        if looks_like(doc):
+            raise FileFormatError(f"{path}: {HINT}")
         raise FileFormatError(
             f"{path}: neither a model document (save_model) nor a plant JSON file with 'linear' and "
             "'hysteresis'"

@@ -292,7 +292,20 @@ def _add_diagnose_parser(sub: Any) -> None:
     p.add_argument("--alpha", type=_level, default=0.05, help="false-alarm level per step (default 0.05)")
     p.add_argument("--no-held-out", action="store_true", help="skip the held-out check (faster, weaker)")
     p.add_argument("--no-figures", action="store_true", help="write the JSON and a text-only HTML page")
-    p.add_argument("--out", type=Path, default=Path("bouc_wen_id_diagnosis"), help="report folder")
+    p.add_argument(
+        "--out",
+        type=Path,
+        default=None,
+        help="report folder (default bouc_wen_id_diagnosis; none with --json alone)",
+    )
+    p.add_argument(
+        "--json",
+        type=Path,
+        default=None,
+        metavar="PATH",
+        help="write the diagnosis JSON (bouc_wen_id.load_diagnosis reads it) to this new file, or '-' for "
+        "stdout (the summary then goes to stderr); without --out no report folder is written",
+    )
     _add_overwrite(p)
 
 

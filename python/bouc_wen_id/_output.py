@@ -102,7 +102,7 @@ def check_out(
     folders left beside ``out`` by runs that were killed.  Raises
     :class:`~bouc_wen_id.errors.InvalidParameterError` naming ``flag``.
     """
-    _check_spelling(out, flag)
+    check_spelling(out, flag)
     target = _target(out)
     try:
         mode: Optional[int] = target.lstat().st_mode
@@ -149,7 +149,7 @@ def write_file(out: Path, text: str, *, overwrite: bool, flag: str = "--out") ->
 MAX_DEPTH = 256
 
 
-def _check_spelling(out: Path, flag: str) -> None:
+def check_spelling(out: Path, flag: str) -> None:
     """Refuse, by name, an ``out`` no file system takes: a NUL byte, longer than the system's path limit,
     or deeper than :data:`MAX_DEPTH` folders (a raw ValueError and a RecursionError before)."""
     text = str(out)

@@ -468,7 +468,7 @@ def _cmd_diagnose(args: argparse.Namespace) -> int:
     from .diagnosis import diagnose
     from .diagnosis.report import identify_plain, write_report
 
-    _check_out(args, inputs=args.paths)
+    folder = _json_target(args)
     items = list(
         load(args.paths, columns=_columns(args.columns), sample_rate=args.sample_rate, skiprows=args.skiprows)
     )
@@ -485,7 +485,16 @@ def _cmd_diagnose(args: argparse.Namespace) -> int:
         u_unit=style["u_unit"],
         progress=True,
     )
-    print(d.summary())
+    to_stdout = args.json is not None and str(args.json) == "-"
+    print(d.summary(), file=sys.stderr if to_stdout else sys.stdout)
+    if args.json is not None:
+        if to_stdout:
+            sys.stdout.write(d.to_json() + "\n")
+        else:
+            _output.write_file(args.json, d.to_json() + "\n", overwrite=args.overwrite, flag="--json")
+            print(f"wrote {args.json}", file=sys.stderr)
+    if not folder:
+        return 0
     with _staged(args) as staged:
         written = write_report(
             d,
@@ -498,6 +507,27 @@ def _cmd_diagnose(args: argparse.Namespace) -> int:
         )
     _print_written(args, written)
     return 0
+
+
+def _json_target(args: argparse.Namespace) -> bool:
+    """Check ``diagnose``'s outputs before any work; whether a report folder is written (``--out``, or no
+    ``--json``). ``--json`` is refused when it names an input or an existing file without --overwrite."""
+    folder = args.out is not None or args.json is None
+    if args.out is None and folder:
+        args.out = Path("bouc_wen_id_diagnosis")
+    if folder:
+        _check_out(args, inputs=args.paths)
+    if args.json is not None and str(args.json) != "-":
+        _output.check_spelling(args.json, "--json")  # a NUL byte, too long or too deep: refused by name
+        try:
+            target = args.json.resolve()
+            inputs = [Path(p).resolve() for p in args.paths]
+        except (OSError, RuntimeError) as exc:
+            raise InvalidParameterError(f"--json {args.json}: cannot be resolved ({exc})") from None
+        if any(target == q or q in target.parents for q in inputs):
+            raise InvalidParameterError(f"--json {args.json} is one of the inputs (or inside one)")
+        _output.check_file(args.json, overwrite=args.overwrite, flag="--json")
+    return folder
 
 
 def _prior_from_args(args: argparse.Namespace) -> WienerPlant:

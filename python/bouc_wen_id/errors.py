@@ -33,6 +33,7 @@ __all__ = [
     "IdentifiabilityWarning",
     "ConvergenceWarning",
     "TransientWarning",
+    "GapWarning",
     "DistortedInputWarning",
     "PoorFitWarning",
     "UnreachableReferenceError",
@@ -112,6 +113,11 @@ class BudgetExceededError(InvalidParameterError):
 
 class TransientWarning(UserWarning):
     """Leading periods of a recording were still transient and were dropped (more settling periods)."""
+
+
+class GapWarning(UserWarning):
+    """Pieces of a record cut at its gaps were left out: each held fewer periods than an analysis needs
+    (:func:`bouc_wen_id.split_at_gaps`); the message names their samples."""
 
 
 class FileFormatError(BoucWenIdError):

@@ -303,10 +303,16 @@ def check_time_axis(
         quantum = printed_quantum(t)
         if quantum <= PRINTED_QUANTUM_SHARE * dt and dev[worst] <= rtol * dt + quantum:
             return dt  # a uniform grid whose times were printed with few digits (review 34: 9 digits)
-        gaps = "" if gap_factor is None else f"; steps over {gap_factor}x the median count as gaps"
+        gaps = "" if gap_factor is None else f"; steps over {gap_factor:.6g}x the median count as gaps"
+        route = (
+            "resample"
+            if gap_factor is not None or steps[worst] < dt
+            else "bouc_wen_id.split_at_gaps(t, u, y) cuts the record at its gaps (dropped samples, pauses) "
+            "into uniformly sampled Measurements, which diagnose and identify take (the pieces of one "
+            "experiment at its nominal frequency), or resample"
+        )
         raise TimeAxisError(
             f"{name} is not uniformly sampled: step {worst} is {steps[worst]:.9g} s against a median step of "
-            f"{dt:.9g} s (more than {rtol * 100:.3g} % apart{gaps}); a constant step is needed: resample, or "
-            "split the record at the gap"
+            f"{dt:.9g} s (more than {rtol * 100:.3g} % apart{gaps}); a constant step is needed: {route}"
         )
     return dt

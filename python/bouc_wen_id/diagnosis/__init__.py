@@ -17,6 +17,7 @@ from .data import DiagExperiment, prepare
 from .locate import Localisation, locate
 from .result import Diagnosis, NamedTerm
 from .run import diagnose
+from .saved import SavedDiagnosis, load_diagnosis
 from .stability import Stability, diagnose_stable
 
 __all__ = [
@@ -24,6 +25,8 @@ __all__ = [
     "diagnose_stable",
     "Stability",
     "Diagnosis",
+    "SavedDiagnosis",
+    "load_diagnosis",
     "NamedTerm",
     "Localisation",
     "DiagExperiment",

@@ -17,7 +17,9 @@ details)") and are kept as :class:`Reading` s on the result (``Diagnosis.reading
   (:mod:`.revisit`'s "not the only reading" and "alternative to"; a revisit that named the set says the
   single term is the rival); Dahl friction's family (:func:`.caveats.family_text`), play's output backlash
   (:func:`.caveats.play_text`) and a spring on x's Masing loop (:func:`.masing.masing_text`);
-- **limits of the evidence** (``rival=False``): a named term's law untested, or named without the held-out
+- **limits of the evidence** (``rival=False``): what remains unexplained shown only by the adequacy test at a
+  modest p-value (:mod:`.borderline`: the only reading kept when nothing is named, said in the status too); a
+  named term's law untested, or named without the held-out
   test (:mod:`.law_untested`); a waveform's ``lam`` far from 1, no property of the device
   (:mod:`.input_note`); across conditions, diagnose's revisit not run (:func:`.across_pairs.revisit_clause`).
 
@@ -43,6 +45,7 @@ from dataclasses import dataclass, replace
 from typing import Any, Protocol, TypeVar
 
 from ..terms import TERMS, Play
+from . import borderline
 from .result import NOT_ONLY, status_text
 from .verdict_text import clauses
 
@@ -187,8 +190,15 @@ def of_verdict(verdict: str, named: Sequence[str], alternatives: Sequence[Any]) 
     () when nothing is named."""
     from .caveats import rivals_of
 
+    said = clauses(verdict)
+    # weak evidence that structure remains (borderline.py): read whether or not a term is named
+    weak = [
+        Reading(borderline.KIND, borderline.reading_words(c), rival=False)
+        for c in said[:2]
+        if borderline.reading_words(c)
+    ]
     if not named:
-        return ()
+        return tuple(weak)
     rivals, by_law = rivals_of(alternatives, named)
     # a rival named itself (two named terms each the other's rival) is no other reading of the headline
     out = [
@@ -203,7 +213,7 @@ def of_verdict(verdict: str, named: Sequence[str], alternatives: Sequence[Any]) 
         if a.rival not in named
     ]
     # a rival the details list as "not named: ... its law fails" is refused by the data: no other reading
-    details = clauses(verdict)[1:]
+    details = said[1:]
     refused = " ".join(_between(c, "not named: ", ": each fits") for c in details)
     out = [
         r
@@ -212,6 +222,7 @@ def of_verdict(verdict: str, named: Sequence[str], alternatives: Sequence[Any]) 
     ]
     for c in details:
         out += _of_clause(c, named)
+    out += weak
     return tuple(_said_instead(out, named))
 
 
@@ -221,6 +232,10 @@ def headlined(verdict: str, readings: Sequence[Reading]) -> str:
     if not readings:
         return verdict
     parts = clauses(verdict)
+    # a reading the headline already says in full (a weak remainder's p-value, borderline.py) is not repeated
+    readings = [r for r in readings if not (r.kind == borderline.KIND and borderline.MARK in parts[0])]
+    if not readings:
+        return verdict
     words = [r.words for r in readings if r.rival] + [r.words for r in readings if not r.rival]
     head = parts[0] + DASH + ", ".join(words) + SEE
     rest = verdict[verdict.find(parts[0]) + len(parts[0]) :]

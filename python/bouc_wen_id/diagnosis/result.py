@@ -39,10 +39,18 @@ NOT_ONLY = "not the only reading"
 
 def status_text(status: str, readings: Sequence[Any]) -> str:
     """The status as printed: ``status``, with :data:`NOT_ONLY` when one of ``readings``
-    (:class:`.readings.Reading`) is a rival reading of a named term (explained, in full or in part)."""
+    (:class:`.readings.Reading`) is a rival reading of a named term (explained, in full or in part), and the
+    p-value of a weak remainder (:mod:`.borderline`: "unexplained (weak evidence of what remains: p =
+    0.016; a right model is flagged so in 5 % of cases)")."""
+    from .borderline import status_words
+
+    said = []
     if status in ("explained", "partly explained") and any(getattr(r, "rival", False) for r in readings):
-        return f"{status} ({NOT_ONLY})"
-    return status
+        said.append(NOT_ONLY)
+    weak = status_words(readings) if status in ("unexplained", "partly explained") else ""
+    if weak:
+        said.append(weak)
+    return f"{status} ({'; '.join(said)})" if said else status
 
 
 @dataclass(frozen=True)
@@ -306,7 +314,8 @@ class Diagnosis:
         }
 
     def to_json(self, indent: int = 2) -> str:
-        """Strict JSON (NaN and infinities become null)."""
+        """Strict JSON (NaN and infinities become null); read back by :func:`bouc_wen_id.load_diagnosis`
+        (a file) or ``SavedDiagnosis.from_json`` (this text)."""
         return json.dumps(clean(self.to_dict()), indent=indent, allow_nan=False)
 
 

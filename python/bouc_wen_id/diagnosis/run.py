@@ -449,7 +449,7 @@ def diagnose(
         Experiments whose units of one quantity no known scale relates (others converted: UnitWarning).
     """
     from .. import _threads
-    from . import fit_share, readings, speed
+    from . import borderline, fit_share, readings, speed
 
     with fit_share.scope() as fits:  # its candidate fits, kept for diagnose_across (fit_share.py)
         if not speed.ONE_BLAS_THREAD:
@@ -457,7 +457,8 @@ def diagnose(
         else:
             with _threads.one_blas_thread():  # issue 18 item 4: BLAS threads compete with the core's
                 d = _diagnose(experiments, candidates, alpha, held_out_test, (y_unit, u_unit), progress)
-    return readings.qualified(replace(d, fits=fits), d.named_terms, d.alternatives)  # the headline's words
+    d = borderline.qualified(replace(d, fits=fits), d.settings["alpha"])  # a weak remainder's p-value
+    return readings.qualified(d, d.named_terms, d.alternatives)  # the headline's words
 
 
 def _diagnose(

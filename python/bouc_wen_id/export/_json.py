@@ -139,8 +139,13 @@ def model_from_json(text: Union[str, bytes]) -> WienerPlant:
     except (ValueError, TypeError) as exc:
         raise FileFormatError(f"not a JSON document: {exc}") from None
     if not isinstance(doc, Mapping) or doc.get("format") != MODEL_FORMAT:
+        from .._diagnosis_json import HINT, looks_like
+
         got = doc.get("format") if isinstance(doc, Mapping) else type(doc).__name__
-        raise FileFormatError(f"not a bouc_wen_id model document: format {got!r}, expected {MODEL_FORMAT!r}")
+        said = f"; {HINT}" if looks_like(doc) else ""
+        raise FileFormatError(
+            f"not a bouc_wen_id model document: format {got!r}, expected {MODEL_FORMAT!r}{said}"
+        )
     version = doc.get("version")
     if isinstance(version, bool) or version != MODEL_VERSION:
         raise FileFormatError(

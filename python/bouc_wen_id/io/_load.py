@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import os
 from collections.abc import Iterable, Sequence
 from pathlib import Path
@@ -42,7 +43,24 @@ def _read_file(
         return read_hdf5(p, columns=cols, sample_rate=rate)
     raise FileFormatError(
         f"{p}: unknown recording format {p.suffix!r} (expected .csv, .txt, .dat, .npz, .mat, .tdms, .h5 or "
-        ".hdf5)"
+        f".hdf5){_json_hint(p) if suffix == '.json' else ''}"
+    )
+
+
+def _json_hint(p: Path) -> str:
+    """What a JSON file given as a recording is read by: a diagnosis by load_diagnosis, a model by
+    load_model (review 35: diagnosis.json was refused without naming a reader)."""
+    from .._diagnosis_json import HINT, looks_like
+
+    try:
+        doc = json.loads(p.read_text(encoding="utf-8")) if p.stat().st_size < 200_000_000 else None
+    except (OSError, ValueError):
+        doc = None
+    if looks_like(doc):
+        return f"; {HINT}"
+    return (
+        "; a JSON file is no recording: a diagnosis is read by bouc_wen_id.load_diagnosis, a model document "
+        "by bouc_wen_id.export.load_model"
     )
 
 
@@ -62,9 +80,14 @@ def _files(paths: PathLike | Iterable[PathLike]) -> list[Path]:
                 and (f.suffix.lower() not in (".txt", ".dat") or holds_numbers(f))
             )
             if not files:
+                said = (
+                    f"; it holds diagnosis.json: {_json_hint(p / 'diagnosis.json')[2:]}"
+                    if (p / "diagnosis.json").is_file()
+                    else ""
+                )
                 raise FileFormatError(
                     f"{p}: the folder holds no .csv or .npz recordings (nor .txt, .dat, .mat, .tdms, .h5 or "
-                    ".hdf5 files)"
+                    f".hdf5 files){said}"
                 )
             out.extend(files)
         elif not p.exists():
