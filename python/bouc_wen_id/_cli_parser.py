@@ -293,6 +293,12 @@ def _add_diagnose_parser(sub: Any) -> None:
     p.add_argument("--no-held-out", action="store_true", help="skip the held-out check (faster, weaker)")
     p.add_argument("--no-figures", action="store_true", help="write the JSON and a text-only HTML page")
     p.add_argument("--out", type=Path, default=Path("bouc_wen_id_diagnosis"), help="report folder")
+    p.add_argument(
+        "--model",
+        action="store_true",
+        help="also fit the model the diagnosis describes (G with the named terms: Diagnosis.to_model) and "
+        "write OUT/model.json, which export, validate and compensate take",
+    )
     _add_overwrite(p)
 
 

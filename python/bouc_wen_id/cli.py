@@ -496,8 +496,22 @@ def _cmd_diagnose(args: argparse.Namespace) -> int:
             u_unit=style["u_unit"],
             y_unit=style["y_unit"],
         )
+        if args.model:
+            written = [*written, _diagnosed_model(d, items, staged)]
     _print_written(args, written)
     return 0
+
+
+def _diagnosed_model(d: Any, items: Sequence[Any], out: Path) -> Path:
+    """OUT/model.json: the model the diagnosis describes (``Diagnosis.to_model``), saved by save_model."""
+    from .export import save_model
+
+    print("to_model: fitting G with the named terms to the same files", file=sys.stderr, flush=True)
+    fit = d.to_model(items)
+    print(fit.summary(), file=sys.stderr)
+    path = out / "model.json"
+    save_model(fit, path)
+    return path
 
 
 def _prior_from_args(args: argparse.Namespace) -> WienerPlant:

@@ -58,9 +58,10 @@ def sine_starts(
         if delay is not None:
             options["delay"] = delay
         with warnings.catch_warnings():
+            # a start's misfit to identify's points (which a term the cascade lacks bends) is what the
+            # screening and the time-domain fit's own whiteness test judge; no warning about the points
             warnings.simplefilter("ignore", IdentifiabilityWarning)
-            if shape is not None:  # a fixed order's misfit is what the screening measures; no warning
-                warnings.simplefilter("ignore", PoorFitWarning)
+            warnings.simplefilter("ignore", PoorFitWarning)
             try:
                 tf = result.fit_transfer_function(**options).transfer_function
             except UnstableSystemError:
@@ -120,11 +121,14 @@ def rank_starts(
 
     Raises
     ------
+    InsufficientDataError
+        The records are shorter than every start's memory.
     InvalidParameterError
         No start's G can be simulated on the records (each reason named).
     """
     usable: list[tuple[WienerPlant, str, Problem]] = []
     rows: list[tuple[str, float]] = []
+    short: list[InsufficientDataError] = []
     for plant, origin in candidates:
         problem = problem_of(structure_of(plant))
         why = unusable(plant.linear, problem.records, substeps)
@@ -133,10 +137,13 @@ def rank_starts(
                 check_records(problem.records, problem.lead, plant)
             except InsufficientDataError as exc:
                 why = str(exc)
+                short.append(exc)
         if why is None:
             usable.append((plant, origin, problem))
         else:
             rows.append((f"{origin} (dropped: {why})", math.inf))
+    if not usable and len(short) == len(rows):
+        raise short[0]  # the records are shorter than every start's memory: they are to blame
     if not usable:
         raise InvalidParameterError(
             "no start G can be simulated on these records: "
