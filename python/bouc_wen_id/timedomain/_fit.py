@@ -297,11 +297,9 @@ def fit_time_domain(
     multistart : bool
         Also screen the start with other values of mu at the same saturation level (:data:`ALTERNATIVE_MU`).
     noise_sd : float, optional
-        The known output noise (covariance ``noise_sd^2 (J^T J)^-1``, the Cramer-Rao bound's form); default
-        the residual RMS.
+        The known output noise (covariance ``noise_sd^2 (J^T J)^-1``, Cramer-Rao); default the residual RMS.
     should_stop : callable, optional
-        Polled once an iteration; True stops with the best so far (reason ``"cancelled"``).  Ctrl-C raises
-        ``KeyboardInterrupt`` as everywhere.
+        Polled once an iteration; True stops with the best so far (``"cancelled"``); Ctrl-C as everywhere.
 
     Raises
     ------
@@ -309,8 +307,7 @@ def fit_time_domain(
         Bad records (see :class:`TimeRecord`), a record shorter than the start model's memory, no start,
         bad options, or a fit above the step budget.
     """
-    # One unit per quantity (later records converted to the first's; unrelated units refused), and the
-    # fitted plant states them (validate converts or refuses records in others).
+    # One unit per quantity (later ones converted, unrelated refused); the fitted plant states them.
     recs = as_time_records(records)
     joined = harmonise(_raw_items(records), stacklevel=3)
     raw = joined.items
@@ -327,6 +324,8 @@ def fit_time_domain(
     given = _given_terms(terms)
     lead = lead_ins(recs, lead_in_s)
     scale = float(np.std(np.concatenate([r.y for r in recs]))) or 1.0
+    # the step budget before any work: the order screen, then one start's screening and its final run
+    check_work(recs, substeps, (len(candidates) * (SCREEN_ITER + 1) + (2 * SCREEN_ITER + 1) * 4) * 16)
     ranked, screened = rank_starts(
         candidates,
         lambda p: _structure(p, order, delay, estimate_w0, kinds, given),
@@ -334,31 +333,30 @@ def fit_time_domain(
         substeps,
         should_stop,
     )
-    check_work(recs, substeps, (len(candidates) * (SCREEN_ITER + 1) + (2 * SCREEN_ITER + 1) * 4) * 16)
+
+    def fit_one(plant: WienerPlant, origin: str) -> Union[TimeDomainFit, str]:
+        structure = _structure(plant, order, delay, estimate_w0, kinds, given)
+        return _fit_from(plant, origin, structure, recs, lead, scale, substeps, max_iter, multistart,
+                         backend, should_stop, sd, confidence)  # fmt: skip
+
+    fit = _first_stable(ranked, fit_one)
+    fit = replace(fit, starts=(*screened, *fit.starts))
+    if not joined.units:
+        return fit
+    return replace(fit, plant=fit.plant.with_units(joined.units), warnings=(*joined.notes, *fit.warnings))
+
+
+def _first_stable(
+    ranked: Sequence[tuple[WienerPlant, str]],
+    fit_one: Callable[[WienerPlant, str], Union[TimeDomainFit, str]],
+) -> TimeDomainFit:
+    """The fit from the first start (best first) whose G ends asymptotically stable."""
     failed: list[str] = []
     for plant, origin in ranked:
-        fit = _fit_from(
-            plant,
-            origin,
-            _structure(plant, order, delay, estimate_w0, kinds, given),
-            recs,
-            lead,
-            scale,
-            substeps,
-            max_iter,
-            multistart,
-            backend,
-            should_stop,
-            sd,
-            confidence,
-        )
-        if isinstance(fit, str):
-            failed.append(f"{origin}: {fit}")
-            continue
-        fit = replace(fit, starts=(*screened, *fit.starts))
-        if not joined.units:
+        fit = fit_one(plant, origin)
+        if not isinstance(fit, str):
             return fit
-        return replace(fit, plant=fit.plant.with_units(joined.units), warnings=(*joined.notes, *fit.warnings))
+        failed.append(f"{origin}: {fit}")
     raise NotConvergedError(
         "the time-domain fit ended with G not asymptotically stable from every start ("
         + "; ".join(failed)
