@@ -19,10 +19,11 @@ import bouc_wen_id as bw
 import numpy as np
 import pytest
 from bouc_wen_id.diagnosis.result import NamedTerm
-from bouc_wen_id.diagnosis.to_model import diagnosis_model, settling_lead_in
+from bouc_wen_id.diagnosis.to_model import diagnosis_model
 from bouc_wen_id.errors import NotConvergedError
 from bouc_wen_id.terms import Viscous
 from bouc_wen_id.timedomain import _fit
+from bouc_wen_id.timedomain._records import settling_lead_in
 from bouc_wen_id.timedomain._starts import unusable
 from scipy.integrate import solve_ivp  # type: ignore[import-untyped]
 

@@ -24,11 +24,12 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Any, Optional
+from typing import TYPE_CHECKING, Any
 
 from ..errors import InvalidParameterError
 from ..model import Recording
 from ..terms import Term
+from ..timedomain._records import settling_lead_in
 from ..timedomain._terms import term_bounds, term_class
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
@@ -49,16 +50,6 @@ def named_term_starts(diagnosis: Diagnosis) -> tuple[Term, ...]:
         except (InvalidParameterError, ValueError, TypeError):
             out.append(cls(0.0))  # type: ignore[call-arg]
     return tuple(out)
-
-
-def settling_lead_in(recordings: Sequence[Any]) -> Optional[float]:
-    """The shortest declared settling (s) among the sine recordings, None when there is none."""
-    times = [
-        r.settle_periods * 2.0 * math.pi / r.frequency
-        for r in recordings
-        if isinstance(r, Recording) and r.settle_periods > 0
-    ]
-    return min(times) if times else None
 
 
 def diagnosis_model(diagnosis: Diagnosis, recordings: Sequence[Any], **options: Any) -> TimeDomainFit:

@@ -29,7 +29,7 @@ from ..terms import Term
 from ..units import harmonise
 from ..validation import count, nonnegative_number, positive_number, z_value
 from ._lm import LMResult, StopReason, free_covariance, levenberg_marquardt
-from ._records import RecordLike, TimeRecord, as_time_records
+from ._records import RecordLike, TimeRecord, as_time_records, settling_lead_in
 from ._starts import rank_starts, sine_starts
 from ._terms import term_class
 from ._wiener import Problem, Structure, check_records, check_work, lead_ins
@@ -358,8 +358,6 @@ def _settling_note(fit: TimeDomainFit, raw: Sequence[Any], lead_in: Optional[flo
     leaves a start the model, simulated from rest, does not have, and G's order and the terms trade
     against it (reviewer 35: a viscous value half the true one). identify, diagnose and
     ``Diagnosis.to_model`` leave the settling out."""
-    from ..diagnosis.to_model import settling_lead_in
-
     settle = settling_lead_in(raw)
     if lead_in is not None or settle is None or not fit.adequacy.rejects(0.01):
         return fit
