@@ -126,6 +126,9 @@ def test_to_model_fits_the_named_term_from_its_diagnosed_value(tmp_path: Path) -
     assert bw.load_model(tmp_path / "m.json").to_dict() == fit.plant.to_dict()
     with pytest.raises(bw.errors.InvalidParameterError, match="named terms"):
         diagnosis_model(_diagnosis(C_U, 0.1), recs, terms=["viscous"])  # type: ignore[arg-type]
+    meas = bw.Measurement(recs[0].t, recs[0].u, recs[0].y)
+    with pytest.raises(bw.errors.InvalidParameterError, match="to_recording"):
+        diagnosis_model(_diagnosis(C_U, 0.1), [meas])  # type: ignore[arg-type]
 
 
 def test_cli_diagnose_model_writes_a_model_export_takes(tmp_path: Path) -> None:

@@ -29,7 +29,7 @@ from typing import TYPE_CHECKING, Any
 from ..errors import InvalidParameterError
 from ..model import Recording
 from ..terms import Term
-from ..timedomain._records import settling_lead_in
+from ..timedomain._records import TimeRecord, settling_lead_in
 from ..timedomain._terms import term_bounds, term_class
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
@@ -64,5 +64,12 @@ def diagnosis_model(diagnosis: Diagnosis, recordings: Sequence[Any], **options: 
     if "terms" in options:
         raise InvalidParameterError("to_model fits the named terms; call fit_time_domain for other terms")
     recs = list(recordings) if not isinstance(recordings, Recording) else [recordings]
+    for i, r in enumerate(recs):
+        if not isinstance(r, (Recording, TimeRecord, tuple)):
+            raise InvalidParameterError(
+                f"recordings[{i}] is a {type(r).__name__}: to_model fits the raw records (Recording, "
+                "TimeRecord or (t, u, y)); convert a Measurement with Measurement.to_recording(amplitude, "
+                "frequency, settle_periods) (averaged periods hold no time record to fit)"
+            )
     options.setdefault("lead_in", settling_lead_in(recs))
     return fit_time_domain(recs, terms=named_term_starts(diagnosis), **options)
