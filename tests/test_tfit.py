@@ -176,7 +176,7 @@ def test_interval_coverage_small_monte_carlo() -> None:
         ([1.0, 2.0, 3.0], [1.0, np.inf, 1.0], NonFiniteError),
         ([0.0, 2.0, 3.0], [1.0, 1.0, 1.0], InvalidParameterError),
         ([-1.0, 2.0, 3.0], [1.0, 1.0, 1.0], InvalidParameterError),
-        ([1.0, 2.0, 2.0], [1.0, 1.0, 1.0], InvalidParameterError),
+        ([2.0, 2.0], [1.0, 1.0], InsufficientDataError),  # one frequency twice: one pooled point
         ([1.0], [1.0], InsufficientDataError),
         ([1.0, 2.0], [1.0, 1.0, 1.0], InvalidParameterError),
         ([1.0, 2.0, 3.0], [1.0, 0.0, 1.0], InvalidParameterError),
@@ -185,6 +185,28 @@ def test_interval_coverage_small_monte_carlo() -> None:
 def test_bad_points_are_named_errors(omega: list[float], response: list[complex], error: type) -> None:
     with pytest.raises(error):
         bw.fit_transfer_function(omega=omega, response=response)
+
+
+def test_points_of_one_frequency_are_pooled() -> None:
+    """Two amplitudes of one frequency give two points of one G value: pooled by their information, the
+    same point twice with twice the covariance is the point once (on main: refused as duplicates)."""
+    tf = KNOWN["first"]
+    g, cov = _noisy(tf, OMEGA, 0.02, 3)
+    once = bw.fit_transfer_function(omega=OMEGA, response=g, covariance=cov, order=(0, 1))
+    twice = bw.fit_transfer_function(
+        omega=np.concatenate([OMEGA, OMEGA[::-1]]),
+        response=np.concatenate([g, g[::-1]]),
+        covariance=np.concatenate([2.0 * cov, 2.0 * cov[::-1]]),
+        order=(0, 1),
+    )
+    assert np.allclose(twice.transfer_function.num, once.transfer_function.num, rtol=1e-8)
+    assert np.allclose(twice.transfer_function.den, once.transfer_function.den, rtol=1e-8)
+    # two different points of one frequency: the pooled one lies between them, nearer the precise one
+    w = np.array([1.0, 1.0, 2.0, 3.0])
+    pts = np.array([1.0, 1.2, 0.8, 0.6], dtype=complex)
+    c = np.stack([np.diag([v, 1e-4]) for v in (1e-4, 9e-4, 1e-4, 1e-4)])
+    pooled = _points(None, w, pts, c)
+    assert pooled.omega.size == 3 and 1.0 < pooled.g[0].real < 1.1
 
 
 def test_bad_options_are_named_errors() -> None:

@@ -57,6 +57,12 @@ def _read(path: Path) -> WienerPlant:
                 f"{path}: format {doc['format']!r} is not a model document ({MODEL_FORMAT!r})"
             )
         return load_model(path)
+    if isinstance(doc, dict) and {"verdict", "named"} <= set(doc):
+        raise FileFormatError(
+            f"{path}: a diagnosis report, not a model: it holds no G (its fits have one gain and phase per "
+            "experiment); run `bouc-wen-id diagnose FILES --model` to also fit and write OUT/model.json (G "
+            "with the named terms), and export that"
+        )
     if not isinstance(doc, dict) or not {"linear", "hysteresis"} <= set(doc):
         from ._diagnosis_json import HINT, looks_like
 

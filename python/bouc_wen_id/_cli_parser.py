@@ -306,6 +306,12 @@ def _add_diagnose_parser(sub: Any) -> None:
         help="write the diagnosis JSON (bouc_wen_id.load_diagnosis reads it) to this new file, or '-' for "
         "stdout (the summary then goes to stderr); without --out no report folder is written",
     )
+    p.add_argument(
+        "--model",
+        action="store_true",
+        help="also fit the model the diagnosis describes (G with the named terms: Diagnosis.to_model) and "
+        "write OUT/model.json, which export, validate and compensate take",
+    )
     _add_overwrite(p)
 
 

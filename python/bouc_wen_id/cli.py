@@ -505,14 +505,17 @@ def _cmd_diagnose(args: argparse.Namespace) -> int:
             u_unit=style["u_unit"],
             y_unit=style["y_unit"],
         )
+        if args.model:
+            written = [*written, _diagnosed_model(d, items, staged)]
     _print_written(args, written)
     return 0
 
 
 def _json_target(args: argparse.Namespace) -> bool:
     """Check ``diagnose``'s outputs before any work; whether a report folder is written (``--out``, or no
-    ``--json``). ``--json`` is refused when it names an input or an existing file without --overwrite."""
-    folder = args.out is not None or args.json is None
+    ``--json``, or ``--model``, whose model.json goes in it). ``--json`` is refused when it names an input or
+    an existing file without --overwrite."""
+    folder = args.out is not None or args.json is None or bool(getattr(args, "model", False))
     if args.out is None and folder:
         args.out = Path("bouc_wen_id_diagnosis")
     if folder:
@@ -528,6 +531,18 @@ def _json_target(args: argparse.Namespace) -> bool:
             raise InvalidParameterError(f"--json {args.json} is one of the inputs (or inside one)")
         _output.check_file(args.json, overwrite=args.overwrite, flag="--json")
     return folder
+
+
+def _diagnosed_model(d: Any, items: Sequence[Any], out: Path) -> Path:
+    """OUT/model.json: the model the diagnosis describes (``Diagnosis.to_model``), saved by save_model."""
+    from .export import save_model
+
+    print("to_model: fitting G with the named terms to the same files", file=sys.stderr, flush=True)
+    fit = d.to_model(items)
+    print(fit.summary(), file=sys.stderr)
+    path = out / "model.json"
+    save_model(fit, path)
+    return path
 
 
 def _prior_from_args(args: argparse.Namespace) -> WienerPlant:

@@ -185,6 +185,21 @@ class Diagnosis:
     def named_terms(self) -> tuple[str, ...]:
         return tuple(t.term for t in self.named)
 
+    def to_model(self, recordings: Sequence[Any], **options: Any) -> Any:
+        """The model this diagnosis describes, with G, fitted to ``recordings`` (the ones diagnosed).
+
+        The Wiener cascade with the named terms (each starting at its diagnosed value), fitted by
+        :func:`~bouc_wen_id.fit_time_domain` with the sine recordings' declared settling left out of the
+        residuals (``lead_in``, as identify and diagnose leave it out). Returns a
+        :class:`~bouc_wen_id.TimeDomainFit`: its ``.plant`` goes to ``save_model``, ``export``,
+        ``validate`` and the compensator. ``options`` go to ``fit_time_domain`` (``order``, ``delay``,
+        ``lead_in``, ...). An adequate diagnosis gives the plain cascade; a named structure (feedback) is
+        refused by name (``fit_feedback`` fits it).
+        """
+        from .to_model import diagnosis_model
+
+        return diagnosis_model(self, recordings, **options)
+
     @property
     def headline(self) -> str:
         """The verdict's first clause: the named terms with their values and share, or what is left."""

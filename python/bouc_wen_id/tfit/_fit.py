@@ -49,7 +49,8 @@ def fit_transfer_function(
         the per-experiment ``gain_se``/``phase_se``.  Without either the points are weighted by their
         relative error and the parameter covariance comes from the residual scatter.
     omega, response, covariance : array_like, optional
-        The same given explicitly (instead of ``result``): frequencies in rad/s (> 0, distinct), complex
+        The same given explicitly (instead of ``result``): frequencies in rad/s (> 0; the points of one
+        frequency, e.g. two amplitudes, are pooled: G is linear, one value per frequency), complex
         ``G(j omega_i)`` with the library's convention ``G = |G| exp(-j phi)`` (that is, the ordinary
         complex frequency response), and optionally the ``(k, 2, 2)`` covariances of ``(|G_i|, phi_i)``.
     order : int or (int, int), optional
@@ -74,10 +75,10 @@ def fit_transfer_function(
     NonFiniteError
         NaN or infinity in the points or their covariance.
     InvalidParameterError
-        Non-positive or duplicate frequencies, a zero |G| point, a covariance that is not positive
+        Non-positive frequencies, a zero |G| point, a covariance that is not positive
         definite, a bad ``order``/``delay``/``criterion``.
     InsufficientDataError
-        Fewer than 2 points, or no candidate model with fewer parameters than real equations.
+        Fewer than 2 distinct frequencies, or no candidate model with fewer parameters than real equations.
 
     Warns
     -----

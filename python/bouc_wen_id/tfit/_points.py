@@ -17,7 +17,7 @@ if TYPE_CHECKING:  # pragma: no cover - typing only
 FloatArray = NDArray[np.float64]
 ComplexArray = NDArray[np.complex128]
 
-#: Two frequencies closer than this (relative) are one frequency tested twice: refused as duplicates.
+#: Two frequencies closer than this (relative) are one frequency tested twice: their points are pooled.
 DUPLICATE_RTOL = 1e-9
 
 
@@ -78,10 +78,6 @@ def _points(
         raise InvalidParameterError("every |G| point must be > 0")
     order = np.argsort(w)
     w, g = w[order], g[order]
-    if np.any(np.diff(w) <= DUPLICATE_RTOL * w[1:]):
-        raise InvalidParameterError("duplicate frequencies: average the points of one frequency first")
-    if w.size < 2:
-        raise InsufficientDataError(f"a transfer function needs at least 2 points, got {w.size}")
     white = np.empty((w.size, 2, 2))
     if cov is not None:
         cov = cov[order]
@@ -103,7 +99,35 @@ def _points(
     else:
         for i in range(w.size):
             white[i] = np.eye(2) / abs(g[i])  # relative error: each point counts alike
+    w, g, white = _pool(w, g, white)
+    if w.size < 2:
+        raise InsufficientDataError(
+            f"a transfer function needs at least 2 distinct frequencies, got {w.size}"
+        )
     return _Points(w, g, white, cov is not None)
+
+
+def _pool(w: FloatArray, g: ComplexArray, white: FloatArray) -> tuple[FloatArray, ComplexArray, FloatArray]:
+    """The points of one frequency (closer than :data:`DUPLICATE_RTOL`, e.g. two amplitudes of one design)
+    pooled into one: G is linear, so the model holds one value per frequency; the pooled point is their
+    inverse-covariance weighted mean in ``(Re, Im)`` and its information is the sum of theirs."""
+    groups: list[list[int]] = []
+    for i in range(w.size):
+        if groups and w[i] - w[groups[-1][0]] <= DUPLICATE_RTOL * w[i]:
+            groups[-1].append(i)
+        else:
+            groups.append([i])
+    if len(groups) == w.size:
+        return w, g, white
+    ws, gs, whites = [], [], []
+    for idx in groups:
+        info = sum((white[i].T @ white[i] for i in idx), np.zeros((2, 2)))
+        rhs = sum((white[i].T @ white[i] @ np.array([g[i].real, g[i].imag]) for i in idx), np.zeros(2))
+        re, im = np.linalg.solve(info, rhs)
+        ws.append(float(np.mean(w[idx])))
+        gs.append(complex(re, im))
+        whites.append(np.linalg.cholesky(info).T)
+    return np.array(ws), np.array(gs, dtype=np.complex128), np.array(whites)
 
 
 def _whiten(points: _Points, z: ComplexArray) -> FloatArray:

@@ -14,6 +14,7 @@ error (all :class:`~bouc_wen_id.errors.BoucWenIdError`):
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, Optional, Union
@@ -25,7 +26,7 @@ from ..errors import InsufficientDataError, InvalidParameterError
 from ..model import Recording
 from ..validation import TIME_JITTER_RTOL, check_time_axis, frozen_array
 
-__all__ = ["TimeRecord", "as_time_records", "check_memory", "MIN_SAMPLES"]
+__all__ = ["TimeRecord", "as_time_records", "check_memory", "settling_lead_in", "MIN_SAMPLES"]
 
 FloatArray = NDArray[np.float64]
 
@@ -166,3 +167,13 @@ def lead_in_samples(record: TimeRecord, lead_in: Optional[float]) -> int:
     if lead_in is None or lead_in <= 0.0:
         return 0
     return int(np.searchsorted(record.t - record.t[0], float(lead_in), side="left"))
+
+
+def settling_lead_in(recordings: Sequence[Any]) -> Optional[float]:
+    """The shortest declared settling (s) among the sine recordings, None when there is none."""
+    times = [
+        r.settle_periods * 2.0 * math.pi / r.frequency
+        for r in recordings
+        if isinstance(r, Recording) and r.settle_periods > 0
+    ]
+    return min(times) if times else None

@@ -127,7 +127,10 @@ class Structure:
             )
         b = np.concatenate([np.zeros(self.m + 1 - num.size), num])
         h = p.hysteresis
-        values = [next((t.value for t in p.terms if type(t) is cls), 0.0) for cls in self.terms]
+        # a term the start plant holds starts at its value, else at a given template's (a term instance
+        # given to the fit, e.g. the diagnosis's value), else at 0
+        held = (*p.terms, *self.templates)
+        values = [next((t.value for t in held if type(t) is cls), 0.0) for cls in self.terms]
         return np.concatenate([b, den[1:], [p.linear.delay, h.beta, h.gamma, h.mu, h.w0], values])
 
     def unpack(self, theta: FloatArray) -> WienerPlant:
