@@ -32,6 +32,7 @@ from . import (
     drift_se,
     free_dc,
     gate,
+    input_dc,
     input_note,
     inputs,
     law_chance,
@@ -819,7 +820,7 @@ def _judged(
     verdict = head + _verdict(
         status, named, tuple(t for t in partial if t not in unphysical), after, fraction, drift
     )
-    verdict += _unphysical_text(unphysical) + tail
+    verdict = input_dc.qualify(verdict + _unphysical_text(unphysical) + tail, named, fexps)  # a preload
     if status != "adequate":
         offset = any(t.term == Offset.kind for t in final.terms)  # said about it, not against it
         verdict += _centre_text(fexps, final.outputs, max(1.0, final.cost / max(final.dof, 1)), offset)
