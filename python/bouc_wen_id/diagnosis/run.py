@@ -26,6 +26,7 @@ from . import (
     clean_share,
     clean_value,
     design_twin,
+    distortion_law,
     drift_clause,
     drift_pair,
     drift_passes,
@@ -882,6 +883,8 @@ def _law_text(steps: Sequence[Step]) -> str:
     named = pairs.text(steps) + revisit.text(steps)  # sets named or kept as alternatives (pairs, revisit)
     if not failed:
         return named  # a pair named where each member's law failed alone (pairs.py)
+    if (drive := distortion_law.text(failed)) is not None:  # the drive's harmonics, not device physics
+        return named + drive
     what = ", ".join(f"{TERMS[t].place_label()} (p = {p:.2g})" for t, p in failed.items())
     shape = "; for Dahl friction, or a branch shape not its own" if any(map(has_branch, failed)) else ""
     shape += "; for pinching, or a band not its own" if any(map(is_pinching, failed)) else ""
