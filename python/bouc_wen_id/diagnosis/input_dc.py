@@ -1,15 +1,16 @@
 """A drive with a mean of its own (a preloaded actuator, a DC-biased coil) and a spring: whose offset it is.
 
-The augmented model's terms act on the input without its mean (``DiagExperiment.input``: ``u = U cos``, the
-fits never see the input's DC), so a parallel spring's share of that mean, ``k x mean(u)``, lands on the
-output's DC, where the offset term takes it. Review 35: input ``u = U (cos + 0.2)``, stiffness on u k = 0.041,
+The augmented model's terms acted on the input without its mean (``u = U cos``: the fits never saw the
+input's DC), so a parallel spring's share of that mean, ``k x mean(u)``, landed on the output's DC, where the
+offset term took it. Review 35: input ``u = U (cos + 0.2)``, stiffness on u k = 0.041,
 no sensor offset, was "explained by: output offset y0 = 0.008776 ± 0.000126, parallel stiffness ... k =
 0.04117": a sensor zero error 70 standard errors from 0 that does not exist (``y0 = k x 0.2 U``).
 
 By its law a spring acts on the whole of its displacement, the mean included:
 
-- on u, its share of the output's DC is ``k x u0`` with ``u0`` the measured input's mean; the offset is what
-  is left, and the verdict says which part is which (all of it the spring's: no offset is needed);
+- on u, its share of the output's DC is ``k x u0`` with ``u0`` the measured input's mean: the stiffness
+  on u sees it in the fits (``fitting.input_shape``), so an offset is named only for what is left, and the
+  verdict says so beside it;
 - on x, its share is ``k x G(0) x u0`` with ``G(0)`` untested (the experiments measure G at their own
   frequencies only): the recordings cannot tell a sensor offset from the preloaded spring, and the verdict
   says both, with the ``G(0)`` the spring reading needs.
@@ -32,20 +33,21 @@ MEASURED_SE = 5.0
 #: :data:`UNKNOWN_SE_RELATIVE` instead).
 MEASURED_RELATIVE = 1e-3
 UNKNOWN_SE_RELATIVE = 1e-2
-#: The offset is all the spring's when the rest, ``y0 - k u0``, is within this many standard errors of 0.
-AGREE_SE = 3.0
+
+
+def measured(e: DiagExperiment) -> bool:
+    """Whether the experiment's input mean is measured: :data:`MEASURED_SE` of its standard errors from 0
+    and above :data:`MEASURED_RELATIVE` of the amplitude (:data:`UNKNOWN_SE_RELATIVE` without an error)."""
+    dc, se, amp = float(e.input_dc), float(e.input_dc_se), abs(float(e.amplitude))
+    if not math.isfinite(se):
+        return abs(dc) > UNKNOWN_SE_RELATIVE * amp
+    return abs(dc) > MEASURED_RELATIVE * amp and abs(dc) > MEASURED_SE * se
 
 
 def drive_mean(exps: Sequence[DiagExperiment]) -> Optional[float]:
-    """The inputs' mean (units of u, averaged over the experiments) when some experiment's is measured
-    (:data:`MEASURED_SE`, :data:`MEASURED_RELATIVE`); None when every input is centred."""
-    seen = False
-    for e in exps:
-        dc, se, amp = float(e.input_dc), float(e.input_dc_se), abs(float(e.amplitude))
-        rel = UNKNOWN_SE_RELATIVE if not math.isfinite(se) else MEASURED_RELATIVE
-        if abs(dc) > rel * amp and (not math.isfinite(se) or abs(dc) > MEASURED_SE * se):
-            seen = True
-    if not seen:
+    """The inputs' mean (units of u, averaged over the experiments) when some experiment's is
+    :func:`measured`; None when every input is centred."""
+    if not any(measured(e) for e in exps):
         return None
     return sum(float(e.input_dc) for e in exps) / len(exps)
 
@@ -56,20 +58,12 @@ def _se(t: Any) -> float:
 
 
 def _on_u(off: Any, k: Any, u0: float) -> str:
+    # The stiffness on u carries its share of the drive's mean in the fit (fitting.input_shape): y0 is the
+    # rest, beyond it.
     share, sshare = float(k.value) * u0, abs(u0) * _se(k)
-    rest, srest = float(off.value) - share, math.hypot(_se(off), sshare)
-    head = (
-        f"the drive's own mean u0 = {u0:.4g} seen by the parallel stiffness on u gives k × u0 = {share:.4g} "
-        f"± {sshare:.2g}"
-    )
-    if abs(rest) <= AGREE_SE * max(srest, 1e-300):
-        return (
-            f" (not a sensor zero: {head}, and y0 − k × u0 = {rest:.2g} ± {srest:.2g}; the offset is the "
-            "spring acting on the preloaded drive, unless the input's own sensor has a zero error)"
-        )
     return (
-        f" (of it, {head}; the rest, y0 − k × u0 = {rest:.4g} ± {srest:.2g}, "
-        "is a sensor zero or another preload)"
+        f" (beyond the parallel stiffness's own share of the drive's mean u0 = {u0:.4g}, k × u0 = "
+        f"{share:.4g} ± {sshare:.2g}, which the model carries: a sensor zero or another preload)"
     )
 
 
