@@ -12,6 +12,7 @@ input U (cos + dc + h3 cos(3 theta + 0.4)).
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import bouc_wen_id as bw
 import numpy as np
@@ -146,3 +147,22 @@ def test_terms_on_u_see_the_measured_input_in_rust_and_in_the_reference() -> Non
     )  # the dashpot the harmonics' velocity, not the mean
     y0, j0, _ = _core.augmented_output(*args, 1.1, 0.4, 4, None, None)
     assert abs(float(np.mean(js[:, 3] - j0[:, 3])) - 0.2 * amp) < 1e-12
+
+
+def test_a_waveform_law_failing_alone_is_the_drive_not_outside_physics() -> None:
+    # Main said "it stands in for physics outside the library" of a plain plant behind a distorted drive
+    # and a resonant G (reviewer 35's null_h3r); other terms' words are unchanged.
+    from types import SimpleNamespace
+
+    from bouc_wen_id.diagnosis.run import _law_text
+    from bouc_wen_id.terms import Distortion, Viscous
+
+    def steps(*terms: str) -> list[Any]:
+        trials = [SimpleNamespace(term=t, law_p_value=1e-20) for t in terms]
+        return [SimpleNamespace(trials=trials, law_failed=terms, alternatives=())]
+
+    alone = _law_text(steps(Distortion.kind))
+    assert "outside the library" in alone and "rather than physics outside the library" in alone
+    assert "stands in for physics outside the library" not in alone
+    assert "stands in for physics outside the library" in _law_text(steps(Viscous.kind))
+    assert "stands in for physics outside the library" in _law_text(steps(Distortion.kind, Viscous.kind))
