@@ -109,10 +109,12 @@ def test_limits_on_a_failed_fit_are_void() -> None:
 
     lim = SimpleNamespace(limit_90=0.0067, __str__=lambda: "x")
     final = SimpleNamespace(cost=1400.0, dof=620, p_value=1e-30)
-    failed = SimpleNamespace(status="unexplained", limits=(lim,), final=final)
+    failed = SimpleNamespace(status="unexplained", limits=(lim,), final=final, settings={"alpha": 0.05})
     lines = limits_void.summary_lines(failed)
     assert limits_void.void(failed) and "void" in lines[-1] and "0.0067" not in "".join(lines)
-    fine = SimpleNamespace(status="explained", limits=(lim,), final=final)
+    # A final model that passes (explained, or in part with a non-physical term left out) keeps them.
+    passes = SimpleNamespace(cost=640.0, dof=620, p_value=0.24)
+    fine = SimpleNamespace(status="partly explained", limits=(lim,), final=passes, settings={"alpha": 0.05})
     assert not limits_void.void(fine) and "0.0067" in "".join(limits_void.summary_lines(fine))
 
 
