@@ -225,6 +225,7 @@ fn bench_augmented(c: &mut Criterion) {
             grid_phase: exc[i].grid_phase,
             weight: 1e6,
             waveform: &[],
+            input: Default::default(),
             substeps: None,
         })
         .collect();

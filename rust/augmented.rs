@@ -127,15 +127,56 @@ pub fn augmented_output(
     phase: f64,
     substeps: usize,
 ) -> Result<AugOutput> {
-    augmented_output_with(exc, &[], terms, shared, gain, phase, substeps)
+    augmented_output_with(
+        exc,
+        &[],
+        MeasuredInput::default(),
+        terms,
+        shared,
+        gain,
+        phase,
+        substeps,
+    )
+}
+
+/// The measured input beyond its fundamental, as the mechanical terms on u see it (review 35): its
+/// own harmonics `[Re c_2, Im c_2, ...]` relative to the fundamental (`u = U Re[e^{iz} + sum c_k
+/// e^{ikz}]`, `z = theta_j + psi`) and its mean relative to `U`, which only the stiffness sees (a
+/// spring acts on the whole displacement; a dashpot and a mass on its derivatives). Empty and 0: the
+/// pure sine.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct MeasuredInput<'a> {
+    pub harmonics: &'a [f64],
+    pub dc: f64,
+}
+
+impl MeasuredInput<'_> {
+    /// `(u, udot, uddot)` at phase `z` for amplitude `a` and frequency `omega`, harmonics included
+    /// (the mean in `u` only).
+    fn at(&self, z: f64, a: f64, omega: f64) -> (f64, f64, f64) {
+        let (s, c) = z.sin_cos();
+        let (mut u, mut ud, mut udd) = (c + self.dc, -s, -c);
+        for (i, h) in self.harmonics.chunks_exact(2).enumerate() {
+            let k = (i + 2) as f64;
+            let (sk, ck) = (k * z).sin_cos();
+            u += h[0] * ck - h[1] * sk;
+            ud -= k * (h[0] * sk + h[1] * ck);
+            udd -= k * k * (h[0] * ck - h[1] * sk);
+        }
+        (a * u, a * omega * ud, a * omega * omega * udd)
+    }
 }
 
 /// [`augmented_output`] of an experiment whose measured input waveform (design.md 9.5) is
 /// `waveform = [Re c_2, Im c_2, Re c_3, ...]` (relative to the fundamental; empty: a pure sine),
-/// used by the `distortion` term. The mechanical terms still see the fundamental of u.
+/// used by the `distortion` term (the waveform of x, carried through G). The mechanical terms on u
+/// see `input`: the measured u with its own harmonics (and its mean, the stiffness); on x they see
+/// the fundamental of x.
+#[allow(clippy::too_many_arguments)]
 pub fn augmented_output_with(
     exc: &Excitation,
     waveform: &[f64],
+    input: MeasuredInput<'_>,
     terms: &Terms,
     shared: &[f64],
     gain: f64,
@@ -174,10 +215,7 @@ pub fn augmented_output_with(
     let dahl = dahl_loops(terms, shared, exc, gain, phase)?;
     for j in 0..p {
         let th = step * j as f64 + exc.grid_phase;
-        let (s, c) = th.sin_cos();
-        let u = u_amp * c;
-        let udot = -u_amp * omega * s;
-        let uddot = -u_amp * omega * omega * c;
+        let (u, udot, uddot) = input.at(th, u_amp, omega);
         // The peak input velocity |U| omega: the smoothed sign follows sgn(udot) for either sign
         // of U.
         let fric = (udot / (COULOMB_SMOOTHING * u_amp.abs() * omega)).tanh();

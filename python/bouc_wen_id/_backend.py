@@ -296,6 +296,7 @@ class Augmented(Protocol):
         phase: float,
         substeps: int,
         waveform: _F | None = None,
+        input_shape: _F | None = None,
     ) -> tuple[_F, _F, _F]: ...
 
     def augmented_refine(
@@ -316,6 +317,7 @@ class Augmented(Protocol):
         mu_hi: float = ...,
         waveforms: Sequence[_F] | None = None,
         experiment_substeps: Sequence[int] | None = None,
+        input_shapes: Sequence[_F] | None = None,
     ) -> tuple[_F, _F, _F, float, int, bool, _F, list[_F], str, list[str]]: ...
 
 

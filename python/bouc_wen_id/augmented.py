@@ -27,7 +27,7 @@ import math
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from types import MappingProxyType
-from typing import Literal, Optional, Union, overload
+from typing import Any, Literal, Optional, Union, overload
 
 import numpy as np
 from numpy.typing import NDArray
@@ -107,6 +107,12 @@ class AugExperiment:
         place of the ``substeps`` a fit or an output call is given, so a coarse grid can take more steps
         per sample than the fine grids fitted with it (the diagnosis sets one per experiment). None (the
         default): the call's count.
+    input_shape : ndarray, shape (1 + 2 K,), optional
+        The measured input as the mechanical terms on u see it (review 35): ``[dc, Re c_2, Im c_2, ...]``,
+        its mean relative to ``U`` (seen by the stiffness alone: a spring acts on the whole displacement,
+        a dashpot and a mass on its derivatives) then its own harmonics as ``waveform``'s. Unlike
+        ``waveform`` (x's, carried through G, scaled by the ``distortion`` term) it is never carried:
+        the terms on u act on u. Empty (the default): the pure sine.
     """
 
     ybar: FloatArray
@@ -117,6 +123,7 @@ class AugExperiment:
     source: str = ""
     waveform: FloatArray = field(default_factory=lambda: np.zeros(0))
     substeps: Optional[int] = None
+    input_shape: FloatArray = field(default_factory=lambda: np.zeros(0))
 
     def __post_init__(self) -> None:
         ybar = frozen_array("ybar", self.ybar)
@@ -143,6 +150,14 @@ class AugExperiment:
             )
         wave.flags.writeable = False
         object.__setattr__(self, "waveform", wave)
+        shape = np.array(self.input_shape, dtype=np.float64).ravel()
+        if (shape.size and shape.size % 2 == 0) or not np.all(np.isfinite(shape)):
+            raise InvalidParameterError(
+                "input_shape must hold the input's finite mean relative to U, then (re, im) pairs of its "
+                "harmonics k = 2, 3, ... (an odd length), or nothing"
+            )
+        shape.flags.writeable = False
+        object.__setattr__(self, "input_shape", shape)
         if self.substeps is not None:
             object.__setattr__(self, "substeps", _count("substeps", self.substeps, 1))
 
@@ -396,6 +411,7 @@ def fit_augmented(
         mu_hi=mu_hi,
         waveforms=[e.waveform for e in exps],
         experiment_substeps=[steps if e.substeps is None else e.substeps for e in exps],
+        **_shapes(exps),
     )
     shared = np.asarray(shared, dtype=np.float64)
     params = AugParams(
@@ -438,6 +454,14 @@ class AugOutput:
     y: FloatArray
     jacobian: FloatArray
     own_jacobian: FloatArray
+
+
+def _shapes(exps: Sequence[AugExperiment]) -> dict[str, Any]:
+    """The refinement's ``input_shapes`` keyword when some experiment's input is not a pure sine (none
+    otherwise, so a backend without it still fits pure sines)."""
+    if not any(e.input_shape.size for e in exps):
+        return {}
+    return {"input_shapes": [e.input_shape for e in exps]}
 
 
 @overload
@@ -515,6 +539,7 @@ def augmented_output(
         float(params.phases[i]),
         steps,
         experiment.waveform,
+        **({"input_shape": experiment.input_shape} if experiment.input_shape.size else {}),
     )
     out = np.asarray(y, dtype=np.float64)
     if not jacobian:

@@ -1,7 +1,7 @@
 //! The joint Levenberg-Marquardt of the augmented model over every experiment (design.md 9.3): the
 //! experiments, the model's constraints and projection, and the checks of a start.
 
-use super::{augmented_output_with, check_shared, Excitation};
+use super::{augmented_output_with, check_shared, Excitation, MeasuredInput};
 use crate::error::{CoreError, Result};
 use crate::refine::{
     check_joint_start, check_start_point, hysteresis_admissible, hysteresis_constraints,
@@ -27,6 +27,8 @@ pub struct AugExperiment<'a> {
     /// The measured input's waveform beyond its fundamental, `[Re c_2, Im c_2, ...]` (design.md
     /// 9.5; empty for a pure sine), used by the `distortion` term.
     pub waveform: &'a [f64],
+    /// The measured input's own harmonics and mean as the terms on u see them ([`MeasuredInput`]).
+    pub input: MeasuredInput<'a>,
     /// RK4 steps per lattice interval / path segment for this experiment; `None`: the refinement's
     /// [`Options::substeps`]. A coarse grid needs more steps per sample than a fine one for the
     /// same step in phase, so one count for all would make every fine grid pay for the coarsest.
@@ -127,6 +129,7 @@ impl JointModel for AugModel<'_> {
         let out = augmented_output_with(
             &self.exps[i].excitation(),
             self.exps[i].waveform,
+            self.exps[i].input,
             self.terms,
             shared,
             own[0],

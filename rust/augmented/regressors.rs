@@ -53,7 +53,7 @@ pub(super) fn dahl_of(
 /// The regressor of a mechanical term acting across the hysteretic element, on its input
 /// `x = a cos(z)`, `z = theta_j - phi` (design.md 9.1, place x), with its derivatives in `a` and
 /// `phi`: `k x`, `c xdot`, `m xddot`, `f tanh(xdot / (eps |a| omega))`. The distortion term's
-/// harmonics are not seen here (as the on-u terms see the fundamental of u).
+/// harmonics are not seen here (the on-u terms see the measured u: `MeasuredInput`).
 pub(super) fn on_x_regressor(kind: TermKind, a: f64, omega: f64, z: f64) -> (f64, f64, f64) {
     let (s, c) = z.sin_cos();
     match kind {

@@ -201,6 +201,7 @@ fn refinement_is_bitwise_identical_across_thread_counts() {
             grid_phase: 0.3 * i as f64,
             weight: 1e6,
             waveform: &[],
+            input: Default::default(),
             substeps: None,
         })
         .collect();
@@ -266,6 +267,7 @@ fn each_experiment_is_evaluated_at_its_own_substep_count() {
                 grid_phase: excs[i].grid_phase,
                 weight: 1e6,
                 waveform: &[],
+                input: Default::default(),
                 substeps: counts[i],
             })
             .collect()
@@ -325,6 +327,7 @@ fn refinement_rejects_bad_input_by_name() {
         grid_phase: 0.0,
         weight: 1.0,
         waveform: &[],
+        input: Default::default(),
         substeps: None,
     }];
     let go = |shared: &[f64], opts: &Options| {

@@ -7,7 +7,7 @@ use pyo3::prelude::*;
 use super::convert::{arg, count, matrix, per_experiment, rows, slice, slices, square};
 use super::convert::{Matrix, Vector};
 use super::detach;
-use crate::augmented::{self as model, AugExperiment, Excitation};
+use crate::augmented::{self as model, AugExperiment, Excitation, MeasuredInput};
 use crate::budget::Work;
 use crate::error::CoreError;
 use crate::path_loop::{self as pathloop, PathLoop, Waveform};
@@ -109,7 +109,7 @@ type AugOutputPy<'py> = (Vector<'py>, Matrix<'py>, Matrix<'py>);
 /// period: `(y (P,), jac_shared (P, 3 + T), jac_own (P, 2))`, shared columns
 /// `[beta, gamma, mu, q_1 .. q_T]` in the order of `terms`, own columns `[g, phi]`.
 #[pyfunction]
-#[pyo3(signature = (ybar_len, amplitude, frequency, grid_phase, terms, shared, gain, phase, substeps, waveform=None))]
+#[pyo3(signature = (ybar_len, amplitude, frequency, grid_phase, terms, shared, gain, phase, substeps, waveform=None, input_shape=None))]
 #[allow(clippy::too_many_arguments)]
 fn augmented_output<'py>(
     py: Python<'py>,
@@ -123,12 +123,17 @@ fn augmented_output<'py>(
     #[pyo3(from_py_with = arg)] phase: f64,
     #[pyo3(from_py_with = arg)] substeps: i64,
     #[pyo3(from_py_with = arg)] waveform: Option<PyReadonlyArray1<'py, f64>>,
+    #[pyo3(from_py_with = arg)] input_shape: Option<PyReadonlyArray1<'py, f64>>,
 ) -> PyResult<AugOutputPy<'py>> {
     let terms = Terms::parse(&terms)?;
     let shared = slice("shared", &shared)?;
     let waveform = match &waveform {
         Some(a) => slice("waveform", a)?,
         None => &[],
+    };
+    let input = match &input_shape {
+        Some(a) => measured_input(slice("input_shape", a)?)?,
+        None => MeasuredInput::default(),
     };
     let exc = Excitation {
         samples: count("ybar_len", ybar_len, 0)?,
@@ -138,7 +143,7 @@ fn augmented_output<'py>(
     };
     let substeps = count("substeps", substeps, 1)?;
     let out = py.detach(|| {
-        model::augmented_output_with(&exc, waveform, &terms, shared, gain, phase, substeps)
+        model::augmented_output_with(&exc, waveform, input, &terms, shared, gain, phase, substeps)
     })?;
     let p = out.y.len();
     Ok((
@@ -165,16 +170,47 @@ type AugRefineOut<'py> = (
     Vec<String>,
 );
 
+/// The measured input as the terms on u see it from `[dc, Re c_2, Im c_2, ...]` (the input's mean
+/// relative to U, then its harmonics as `waveform`'s); empty: the pure sine.
+fn measured_input(a: &[f64]) -> PyResult<MeasuredInput<'_>> {
+    if a.is_empty() {
+        return Ok(MeasuredInput::default());
+    }
+    if a.len() % 2 == 0 || a.iter().any(|v| !v.is_finite()) {
+        return Err(CoreError::InvalidParameter(format!(
+            "input_shape must hold the input's finite mean relative to U, then (re, im) pairs of its \
+             harmonics 2, 3, ... (an odd length); got {} values",
+            a.len()
+        ))
+        .into());
+    }
+    Ok(MeasuredInput {
+        dc: a[0],
+        harmonics: &a[1..],
+    })
+}
+
 /// The experiments of the augmented fit: one amplitude, frequency, grid phase and weight per
-/// averaged period, and one waveform each or none.
+/// averaged period, and one waveform and one input shape each or none.
 fn aug_experiments<'a>(
     ybars: &[&'a [f64]],
     (amplitudes, frequencies): (&[f64], &[f64]),
     (grid_phases, weights): (&[f64], &[f64]),
-    waveforms: &[&'a [f64]],
+    (waveforms, shapes): (&[&'a [f64]], &[&'a [f64]]),
     substeps: &[Option<usize>],
 ) -> PyResult<Vec<AugExperiment<'a>>> {
     let m = ybars.len();
+    if !(shapes.is_empty() || shapes.len() == m) {
+        return Err(CoreError::InvalidParameter(format!(
+            "{m} experiments but {} input shapes (give one per experiment, or none)",
+            shapes.len()
+        ))
+        .into());
+    }
+    let inputs = shapes
+        .iter()
+        .map(|a| measured_input(a))
+        .collect::<PyResult<Vec<_>>>()?;
     if !(substeps.is_empty() || substeps.len() == m) {
         return Err(CoreError::InvalidParameter(format!(
             "{m} experiments but {} substep counts (give one per experiment, or none)",
@@ -206,6 +242,7 @@ fn aug_experiments<'a>(
             grid_phase: grid_phases[i],
             weight: weights[i],
             waveform: waveforms.get(i).copied().unwrap_or(&[]),
+            input: inputs.get(i).copied().unwrap_or_default(),
             substeps: substeps.get(i).copied().flatten(),
         })
         .collect())
@@ -216,7 +253,7 @@ fn aug_experiments<'a>(
 /// ended the search and `active` on which constraints it ended. `experiment_substeps`, one count
 /// per experiment, overrides `substeps` for each (the budget charges the largest).
 #[pyfunction]
-#[pyo3(signature = (ybars, amplitudes, frequencies, grid_phases, weights, terms, shared0, gains0, phases0, *, max_iter=200, substeps=4, mu_lo=1.0, mu_hi=f64::INFINITY, waveforms=None, experiment_substeps=None))]
+#[pyo3(signature = (ybars, amplitudes, frequencies, grid_phases, weights, terms, shared0, gains0, phases0, *, max_iter=200, substeps=4, mu_lo=1.0, mu_hi=f64::INFINITY, waveforms=None, experiment_substeps=None, input_shapes=None))]
 #[allow(clippy::too_many_arguments)]
 fn augmented_refine<'py>(
     py: Python<'py>,
@@ -235,16 +272,19 @@ fn augmented_refine<'py>(
     #[pyo3(from_py_with = arg)] mu_hi: f64,
     #[pyo3(from_py_with = arg)] waveforms: Option<Vec<PyReadonlyArray1<'py, f64>>>,
     #[pyo3(from_py_with = arg)] experiment_substeps: Option<Vec<i64>>,
+    #[pyo3(from_py_with = arg)] input_shapes: Option<Vec<PyReadonlyArray1<'py, f64>>>,
 ) -> PyResult<AugRefineOut<'py>> {
     let terms = Terms::parse(&terms)?;
     let waveforms = waveforms.unwrap_or_default();
     let waveforms = slices("waveforms", &waveforms)?;
+    let input_shapes = input_shapes.unwrap_or_default();
+    let input_shapes = slices("input_shapes", &input_shapes)?;
     let ybars = slices("ybars", &ybars)?;
     let exps = aug_experiments(
         &ybars,
         (&amplitudes, &frequencies),
         (&grid_phases, &weights),
-        &waveforms,
+        (&waveforms, &input_shapes),
         &experiment_substeps
             .unwrap_or_default()
             .into_iter()

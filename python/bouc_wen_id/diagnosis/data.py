@@ -151,6 +151,10 @@ class DiagExperiment:
     #: the level of :func:`harmonic_levels`, for the drift test's weights; empty when white (``noise_var``
     #: at every harmonic).
     harmonic_var: FloatArray = field(default_factory=lambda: np.zeros(0), repr=False)
+    #: The input's own mean over the averaged periods (units of u) and its standard error (0.0 when the input
+    #: is not at hand): the fits see ``u`` without it; ``input_dc.py`` reads it (a drive with a preload).
+    input_dc: float = 0.0
+    input_dc_se: float = 0.0
 
     @property
     def baseline_removed(self) -> bool:
@@ -446,6 +450,8 @@ def _from_recording(i: int, rec: Any) -> DiagExperiment:
         colour_band=band,
         cross_period=cross_period_correlation(dc) if var > diff and not flat else 0.0,
         harmonic_var=hvar,
+        input_dc=float(np.mean(urows)),
+        input_dc_se=math.sqrt(float(np.mean(np.diff(urows, axis=0) ** 2)) / 2.0 / (n * p)),
     )
 
 
@@ -580,6 +586,8 @@ def _from_averaged(
         colour=var / float(ap.noise_var) if band != (0, 0) or var > float(ap.noise_var) else 1.0,
         colour_band=band,
         harmonic_var=hvar,
+        input_dc=float(getattr(ap, "offset_u", 0.0)),
+        input_dc_se=math.nan,  # the averaging keeps no spread of u's mean: input_dc.py uses its size alone
     )
 
 

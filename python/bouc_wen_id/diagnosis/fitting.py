@@ -19,7 +19,7 @@ from numpy.typing import NDArray
 from ..augmented import AugExperiment, AugFit, AugParams, augmented_output, fit_augmented
 from ..errors import BoucWenIdError, BudgetExceededError, SearchAtBoundError
 from ..terms import TERMS, Distortion, Place, StartContext
-from . import free_dc, speed
+from . import free_dc, input_dc, speed
 from .data import DiagExperiment
 
 FloatArray = NDArray[np.float64]
@@ -62,9 +62,22 @@ def scaled(exps: Sequence[DiagExperiment], s: Scale) -> list[AugExperiment]:
             source=e.source,
             waveform=e.waveform,
             substeps=experiment_substeps(e.ybar.size, sizes),
+            input_shape=input_shape(e),
         )
         for e in exps
     ]
+
+
+def input_shape(e: DiagExperiment) -> FloatArray:
+    """The measured input as the terms on u see it (``AugExperiment.input_shape``): its mean relative to
+    U when measured (``input_dc.measured``), then its own harmonics; empty for a centred pure sine, so such
+    fits are the plain sine's. Review 35: the terms saw ``U cos`` alone, so a dashpot on u missed its
+    ``3 omega c_3`` at a distorted drive's third harmonic and a spring its share of a preloaded drive's
+    mean (which the offset took)."""
+    dc = float(e.input_dc) / float(e.amplitude) if input_dc.measured(e) else 0.0
+    if not e.waveform.size and dc == 0.0:
+        return np.zeros(0)
+    return np.concatenate([[dc], np.asarray(e.waveform, dtype=np.float64).ravel()])
 
 
 #: The gain extrapolated beyond the tested frequencies stays below e^this times the largest tested gain.

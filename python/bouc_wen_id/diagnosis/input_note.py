@@ -126,11 +126,7 @@ def text(
         "distorted drive, not device physics"
     )
     if status != "explained":  # a residual is left: where it may come from
-        out += (
-            ". Its harmonics reach the output through G at frequencies above the tested band, which these "
-            "experiments do not measure, so a residual at the input's harmonics can be the input's; a clean "
-            f"sine at those levels, or G measured up to {k} times the highest frequency, would tell"
-        )
+        out += band_text(exps, k)
     if lam is not None and _far(float(lam.value), float(lam.standard_error)):
         out += (
             f"; {lam.symbol} = {lam.value:.3g} is far from 1 (the measured waveform through the G carried "
@@ -147,3 +143,46 @@ def _far(value: float, se: float) -> bool:
 
 
 __all__ = ["MARK", "VISIBLE_SE", "LAM_FAR", "RESIDUAL_P", "SHARE", "largest", "visible", "accounts", "text"]
+
+
+def harmonic_frequencies(exps: Sequence[DiagExperiment]) -> tuple[list[str], list[str]]:
+    """The inputs' own harmonics (``"recording 0: harmonic 3 at 3 rad/s"``) inside the tested band (at most
+    its highest frequency) and above it."""
+    top = max(float(e.frequency) for e in exps)
+    inside: list[str] = []
+    above: list[str] = []
+    for e in exps:
+        if not e.waveform.size:
+            continue
+        c = np.asarray(e.waveform, dtype=np.float64).reshape(-1, 2)
+        for j in np.flatnonzero(np.hypot(c[:, 0], c[:, 1]) > 0):
+            w = (int(j) + 2) * float(e.frequency)
+            (inside if w <= top * (1.0 + 1e-9) else above).append(
+                f"{e.source}: harmonic {int(j) + 2} at {w:.3g} rad/s"
+            )
+    return inside, above
+
+
+def band_text(exps: Sequence[DiagExperiment], k: int) -> str:
+    """Where the inputs' harmonics meet G: above the tested band only when they are (review 35: a 1 rad/s
+    experiment's third harmonic at 3 rad/s lies inside a band tested up to 7 rad/s, and the note said "above
+    the tested band")."""
+    inside, above = harmonic_frequencies(exps)
+    if not inside:
+        return (
+            ". Its harmonics reach the output through G at frequencies above the tested band, which these "
+            "experiments do not measure, so a residual at the input's harmonics can be the input's; a clean "
+            f"sine at those levels, or G measured up to {k} times the highest frequency, would tell"
+        )
+    first = "; ".join(inside[:3]) + ("; ..." if len(inside) > 3 else "")
+    where = f"{len(inside)} inside the tested band ({first})" + (
+        f" and {len(above)} above it" if above else ""
+    )
+    return (
+        f". Its harmonics reach the output through G at frequencies {where}; the model carries them to the "
+        "hysteresis through the distortion term alone, with G interpolated between the tested frequencies"
+        + (" and extended above them" if above else "")
+        + " from fits that leave them out, and to its terms on u as measured, while its terms on x see x's "
+        "fundamental only; so a residual at the input's harmonics can be the input's through a G not pinned "
+        "at those frequencies; a clean sine at those levels would tell"
+    )

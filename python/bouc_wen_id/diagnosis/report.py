@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING, Any, Optional, Union
 
 import numpy as np
 
+from . import limits_void
 from .result import TERM_LABELS, Diagnosis, clean
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -375,6 +376,8 @@ def _limits_html(d: Diagnosis) -> list[str]:
     """Every first-step candidate's detection limit: what the design could not have seen."""
     if not d.limits:
         return []
+    if limits_void.void(d):
+        return [f"<h2>Detection limits</h2><p>{html.escape(limits_void.reason(d))}.</p>"]
     rows = [
         [
             lim.label,

@@ -12,6 +12,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..terms import TERMS, Degradation
+from . import limits_void
 from .data import DiagExperiment
 from .gate import AFTER_NAMED_SHARE
 from .locate import Localisation
@@ -281,10 +282,7 @@ class Diagnosis:
                 "feedback structure: "
                 + ", ".join(f"{k} = {v:.4g} ± {se:.2g}" for k, v, se in self.structure.parameters)
             )
-        if self.limits:  # detection limits (diagnosis/limits.py)
-            lines.append("")
-            lines.append("detection limits (first step: the value detected with 50 % / 90 % power):")
-            lines += [f"  {lim}; 90 %: {lim.limit_90:.2g}{lim.summary_tail()}" for lim in self.limits]
+        lines += limits_void.summary_lines(self)  # detection limits (limits.py), void on a failed fit
         if self.held_out is not None:
             lines.append("")
             lines.append("held-out NRMSE (one experiment left out, physics fitted on the others):")
@@ -326,6 +324,7 @@ class Diagnosis:
             "notes": list(self.notes),
             "structure": None if self.structure is None else self.structure.to_dict(),
             "detection_limits": [lim.to_dict() for lim in self.limits],
+            "detection_limits_void": limits_void.void(self),  # computed on a failed fit (limits_void.py)
         }
 
     def to_json(self, indent: int = 2) -> str:

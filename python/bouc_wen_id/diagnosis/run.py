@@ -26,6 +26,7 @@ from . import (
     clean_share,
     clean_value,
     design_twin,
+    distortion_law,
     drift_both,
     drift_clause,
     drift_pair,
@@ -33,6 +34,7 @@ from . import (
     drift_se,
     free_dc,
     gate,
+    input_dc,
     input_note,
     inputs,
     law_chance,
@@ -847,7 +849,7 @@ def _judged(
     verdict = head + _verdict(
         status, named, tuple(t for t in partial if t not in unphysical), after, fraction, drift
     )
-    verdict += _unphysical_text(unphysical) + tail
+    verdict = input_dc.qualify(verdict + _unphysical_text(unphysical) + tail, named, fexps)  # a preload
     if status != "adequate":
         offset = any(t.term == Offset.kind for t in final.terms)  # said about it, not against it
         verdict += _centre_text(fexps, final.outputs, max(1.0, final.cost / max(final.dof, 1)), offset)
@@ -909,6 +911,8 @@ def _law_text(steps: Sequence[Step]) -> str:
     named = pairs.text(steps) + revisit.text(steps)  # sets named or kept as alternatives (pairs, revisit)
     if not failed:
         return named  # a pair named where each member's law failed alone (pairs.py)
+    if (drive := distortion_law.text(failed)) is not None:  # the drive's harmonics, not device physics
+        return named + drive
     what = ", ".join(f"{TERMS[t].place_label()} (p = {p:.2g})" for t, p in failed.items())
     shape = "; for Dahl friction, or a branch shape not its own" if any(map(has_branch, failed)) else ""
     shape += "; for pinching, or a band not its own" if any(map(is_pinching, failed)) else ""

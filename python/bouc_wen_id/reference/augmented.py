@@ -267,6 +267,30 @@ def _series_hysteresis(
     return w, jac, jac7[:, 6] / omega
 
 
+def measured_input(
+    shape: Optional[ArrayLike], theta: FloatArray, amplitude: float, frequency: float
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """``(u, udot, uddot)`` on the grid as the terms on u see the measured input: ``shape = [dc, Re c_2, Im
+    c_2, ...]`` (its mean relative to U, in u only: a spring sees it, a dashpot and a mass do not; then its
+    harmonics as ``waveform``'s); None or empty: the pure sine (rust/augmented.rs ``MeasuredInput``)."""
+    a = np.zeros(1) if shape is None else np.asarray(shape, dtype=np.float64).ravel()
+    if a.size == 0:
+        a = np.zeros(1)
+    if a.size % 2 == 0 or not np.all(np.isfinite(a)):
+        raise InvalidParameterError(
+            "input_shape must hold the input's finite mean relative to U, then (re, im) pairs of its "
+            f"harmonics 2, 3, ... (an odd length); got {a.size} values"
+        )
+    u, ud, udd = np.cos(theta) + a[0], -np.sin(theta), -np.cos(theta)
+    for i, (re, im) in enumerate(a[1:].reshape(-1, 2)):
+        k = i + 2.0
+        ck, sk = np.cos(k * theta), np.sin(k * theta)
+        u = u + re * ck - im * sk
+        ud = ud - k * (re * sk + im * ck)
+        udd = udd - k * k * (re * ck - im * sk)
+    return amplitude * u, amplitude * frequency * ud, amplitude * frequency**2 * udd
+
+
 def augmented_output(
     ybar_len: int,
     amplitude: float,
@@ -278,6 +302,7 @@ def augmented_output(
     phase: float,
     substeps: int,
     waveform: Optional[ArrayLike] = None,
+    input_shape: Optional[ArrayLike] = None,
 ) -> tuple[FloatArray, FloatArray, FloatArray]:
     """The augmented model's output of one experiment (design.md 9.1) and its Jacobian.
 
@@ -304,9 +329,7 @@ def augmented_output(
     else:
         w, hj = _hysteresis(names, sh, amplitude * gain, phase, p, substeps, wave)
     theta = 2.0 * np.pi * np.arange(p) / p + grid_phase
-    u = amplitude * np.cos(theta)
-    udot = -amplitude * frequency * np.sin(theta)
-    uddot = -amplitude * frequency**2 * np.cos(theta)
+    u, udot, uddot = measured_input(input_shape, theta, amplitude, frequency)
     fric = np.tanh(udot / (COULOMB_SMOOTHING * abs(amplitude) * frequency))
     inputs = {STIFFNESS: u, VISCOUS: udot, INERTIA: uddot, COULOMB: fric}
     ns = 3 + len(names)
@@ -379,6 +402,7 @@ class _Problem(NamedTuple):
     mu_lo: float
     mu_hi: float
     waveforms: Optional[Sequence[ArrayLike]]
+    input_shapes: Optional[Sequence[ArrayLike]] = None
 
     @property
     def ns(self) -> int:
@@ -424,6 +448,7 @@ class _Problem(NamedTuple):
                 par[ns + 1 + 2 * i],
                 self.substeps[i],
                 None if self.waveforms is None else self.waveforms[i],
+                None if not self.input_shapes else self.input_shapes[i],
             )
             r = yi - y
             cost += self.wts[i] * float(np.sum(r * r))
@@ -486,6 +511,7 @@ def _check_refine(
     mu_hi: float,
     waveforms: Optional[Sequence[ArrayLike]],
     experiment_substeps: Optional[Sequence[int]] = None,
+    input_shapes: Optional[Sequence[ArrayLike]] = None,
 ) -> tuple[_Problem, FloatArray, FloatArray, FloatArray]:
     """The arguments of :func:`augmented_refine` checked in the core's order: the problem and the start
     ``(shared0, gains0, phases0)``."""
@@ -525,7 +551,9 @@ def _check_refine(
         raise InvalidParameterError(f"{m} experiments but {len(own)} substep counts")
     if any(k < 1 for k in own):
         raise InvalidParameterError(f"experiment_substeps = {own} must all be >= 1")
-    problem = _Problem(ys, amps, freqs, psis, wts, names, tuple(own), mu_lo, mu_hi, waveforms)
+    if input_shapes and len(input_shapes) != m:
+        raise InvalidParameterError(f"{m} experiments but {len(input_shapes)} input shapes")
+    problem = _Problem(ys, amps, freqs, psis, wts, names, tuple(own), mu_lo, mu_hi, waveforms, input_shapes)
     return problem, sh0, g0, p0
 
 
@@ -546,6 +574,7 @@ def augmented_refine(
     mu_hi: float = float("inf"),
     waveforms: Optional[Sequence[ArrayLike]] = None,
     experiment_substeps: Optional[Sequence[int]] = None,
+    input_shapes: Optional[Sequence[ArrayLike]] = None,
 ) -> tuple[
     FloatArray, FloatArray, FloatArray, float, int, bool, FloatArray, list[FloatArray], str, list[str]
 ]:
@@ -560,7 +589,17 @@ def augmented_refine(
     vectors = (amplitudes, frequencies, grid_phases, weights)
     start = (shared0, gains0, phases0)
     prob, sh0, g0, p0 = _check_refine(
-        ybars, vectors, terms, start, max_iter, substeps, mu_lo, mu_hi, waveforms, experiment_substeps
+        ybars,
+        vectors,
+        terms,
+        start,
+        max_iter,
+        substeps,
+        mu_lo,
+        mu_hi,
+        waveforms,
+        experiment_substeps,
+        input_shapes,
     )
     ns = prob.ns
     params = np.concatenate([sh0, np.column_stack([g0, p0]).ravel()])

@@ -1,0 +1,45 @@
+"""Detection limits on a model that fails its adequacy test are no limits (review 35, problem 2).
+
+The limits (limits.py) are each first-step candidate's value detected with 50 % / 90 % power, worked out on
+the step's starting model. When the final model still fails its adequacy test (p below alpha:
+"unexplained", or "partly explained" with a failing fit), the misfit that no tested term explains sits in
+that model's residual, and a term it hides is not excluded below any value: reviewer 35's cu_h3 (a drive
+with a 3 % third harmonic and a viscous term on u, c = 0.01) was "unexplained" while its summary printed
+"viscous damping on the measured input u |c| < 0.0049; 90 %: 0.0056". :func:`void` says when; the
+summary, the report and the JSON say the limits are void then, without their values as limits.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+#: The adequacy test's level when a diagnosis carries none in its settings (run.diagnose's default).
+DEFAULT_ALPHA = 0.05
+
+
+def void(d: Any) -> bool:
+    """Whether ``d``'s detection limits are void: its final model fails its adequacy test (p below the
+    diagnosis's alpha; a "partly explained" verdict whose final model passes, a term left out as not
+    physical, keeps them)."""
+    alpha = float(getattr(d, "settings", {}).get("alpha", DEFAULT_ALPHA))
+    return bool(d.limits) and float(d.final.p_value) < alpha
+
+
+def reason(d: Any) -> str:
+    """Why they are void (the final model's test), in words."""
+    f = d.final
+    return (
+        f"void: the model they are computed on fails its adequacy test (final chi2/dof = "
+        f"{f.cost / max(f.dof, 1):.3g}, p = {f.p_value:.2g}), so a term the misfit hides is not excluded "
+        "below any value"
+    )
+
+
+def summary_lines(d: Any) -> list[str]:
+    """The summary's lines on the detection limits (none without limits)."""
+    if not d.limits:
+        return []
+    if void(d):
+        return ["", f"detection limits: {reason(d)}"]
+    head = "detection limits (first step: the value detected with 50 % / 90 % power):"
+    return ["", head, *(f"  {lim}; 90 %: {lim.limit_90:.2g}{lim.summary_tail()}" for lim in d.limits)]
