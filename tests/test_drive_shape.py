@@ -107,7 +107,7 @@ def test_limits_on_a_failed_fit_are_void() -> None:
 
     from bouc_wen_id.diagnosis import limits_void
 
-    lim = SimpleNamespace(limit_90=0.0067, __str__=lambda: "x")
+    lim = SimpleNamespace(limit_90=0.0067, __str__=lambda: "x", summary_tail=lambda: "")
     final = SimpleNamespace(cost=1400.0, dof=620, p_value=1e-30)
     failed = SimpleNamespace(status="unexplained", limits=(lim,), final=final, settings={"alpha": 0.05})
     lines = limits_void.summary_lines(failed)
