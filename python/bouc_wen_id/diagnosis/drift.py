@@ -326,9 +326,6 @@ class DegradationTest:
     age_p_value: float = math.nan
     #: The verdict's clause of the adopted ages ('' when none; age.py).
     age_clause: str = ""
-    #: The rival modelled beside this term when the record needs both (drift_both.py): its test with the
-    #: pair's value, standard error, rate and column; this term's own value is then the pair's too.
-    second: Optional[DegradationTest] = None
 
     @property
     def held_out_improves(self) -> bool:
@@ -381,13 +378,6 @@ class DegradationTest:
             if self.joint:
                 out["joint"] = {t: v for t, v in zip((self.term, self.rival.term), self.joint)}
                 out["joint_standard_error"] = list(self.joint_se)
-        if self.second is not None:  # modelled beside this term (drift_both.py)
-            sec = self.second
-            out["modelled_beside"] = {
-                "term": sec.term,
-                TERMS[sec.term].symbol: sec.value,
-                "standard_error": sec.standard_error,
-            }
         return out
 
 
@@ -581,11 +571,9 @@ def corrected(
     y_scale: float,
     substeps: int,
     term: str = DEGRADATION,
-    beside: tuple[tuple[str, float], ...] = (),
 ) -> tuple[list[DiagExperiment], list[AugExperiment]]:
     """The averaged periods brought back to the virgin strength (design.md 10.6); ``term`` the drift term
-    simulated (strength degradation, or stiffness degradation: the virgin stiffness), ``beside`` the other
-    drift term with its value when both are modelled (drift_both.py: simulated together, on one energy).
+    simulated (strength degradation, or stiffness degradation: the virgin stiffness).
 
     Each experiment's averaged loop is not the steady loop at one strength: the strength differs between
     experiments (each dissipates at its own rate from the virgin state at the start of its record, so
@@ -610,11 +598,8 @@ def corrected(
         phi = float(np.mod(par.phases[i], TWO_PI))
         amp = float(a.amplitude * par.gains[i])
         plans = _plans(e, (om, 0, recorded_periods(e), a.ybar.size, max(substeps, SIM_SUBSTEPS)))
-        pair = tuple((t, max(v, 0.0)) for t, v in beside)
         jobs[i] = [
-            (hysteresis, terms, amp, phi, plan, term, dv, extra)
-            for plan, _ in plans
-            for dv, extra in ((max(d, 0.0), pair), (0.0, ()))
+            (hysteresis, terms, amp, phi, plan, term, dv) for plan, _ in plans for dv in (max(d, 0.0), 0.0)
         ]
     means = _run_all(sim, [job for js in jobs.values() for job in js])
     for i, js in jobs.items():
@@ -711,12 +696,10 @@ def simulated_periods(
     plan: tuple[float, int, int, int, int],
     term: str,
     dv: float,
-    beside: tuple[tuple[str, float], ...] = (),
 ) -> FloatArray:
     """The recorded periods, one row each (``(periods, samples per period)``), of the fitted hysteresis
-    (``(beta, gamma, mu)`` and ``terms``) at drift ``term = dv`` (and the drift terms ``beside``, with
-    their values), driven by ``x = amp cos(omega t - phi)`` from rest; ``plan`` is ``(omega, settle
-    periods, periods, samples per period, substeps)``."""
+    (``(beta, gamma, mu)`` and ``terms``) at drift ``term = dv``, driven by ``x = amp cos(omega t - phi)``
+    from rest; ``plan`` is ``(omega, settle periods, periods, samples per period, substeps)``."""
     from ..model import BoucWen, SinePlan, TransferFunction, WienerPlant
     from ..simulation import simulate
     from ..terms import term_from_dict
@@ -728,8 +711,8 @@ def simulated_periods(
         [om], [1.0], settle_periods=lead, periods=n, samples_per_period=p, substeps=sub, noise_sd=0.0
     )
     own = tuple(term_from_dict({"kind": t, TERMS[t].symbol: v}) for t, v in terms)
-    drift = tuple(term_from_dict({"kind": t, TERMS[t].symbol: v}) for t, v in ((term, dv), *beside))
-    (rec,) = simulate(WienerPlant(linear, BoucWen(*hysteresis), terms=(*own, *drift)), sine)
+    drift = term_from_dict({"kind": term, TERMS[term].symbol: dv})
+    (rec,) = simulate(WienerPlant(linear, BoucWen(*hysteresis), terms=(*own, drift)), sine)
     assert rec.w is not None
     out: FloatArray = np.asarray(rec.w, dtype=np.float64)[lead * p :].reshape(n, p)
     return out
@@ -744,23 +727,18 @@ def _mean_period(
     plan: tuple[float, int, int, int, int] | tuple[float, int, int, int, int, int],
     term: str,
     dv: float,
-    beside: tuple[tuple[str, float], ...] = (),
 ) -> FloatArray:
-    """The recorded periods' mean of :func:`simulated_periods` (``beside``: its other drift terms); with a
-    sixth entry ``extra`` in ``plan``,
+    """The recorded periods' mean of :func:`simulated_periods`; with a sixth entry ``extra`` in ``plan``,
     one row per lead ``lead, ..., lead + extra`` (shape ``(extra + 1, samples per period)``: the mean of the
     ``periods`` periods after each, from one simulation of ``extra`` more periods). Cached on these values
     (every input of the simulation, so a hit is the same simulation): :func:`corrected`'s d = 0 loop is
     the same at every d the refinement tries (docs/diagnosis-speed.md). Read-only."""
     om, lead, n, p, sub = plan[:5]
     if len(plan) == 5:
-        out: FloatArray = simulated_periods(hysteresis, terms, amp, phi, plan[:5], term, dv, beside).mean(
-            axis=0
-        )
+        out: FloatArray = simulated_periods(hysteresis, terms, amp, phi, plan[:5], term, dv).mean(axis=0)
     else:
         extra = int(plan[5])
-        sims = (om, lead, n + extra, p, sub)
-        rows = simulated_periods(hysteresis, terms, amp, phi, sims, term, dv, beside)
+        rows = simulated_periods(hysteresis, terms, amp, phi, (om, lead, n + extra, p, sub), term, dv)
         out = np.stack([rows[k : k + n].mean(axis=0) for k in range(extra + 1)])
     out.setflags(write=False)
     return out
@@ -769,15 +747,11 @@ def _mean_period(
 def detrended(exps: Sequence[DiagExperiment], test: DegradationTest, y_scale: float) -> list[DiagExperiment]:
     """The experiments with the fitted drift taken out of their per-period DC and fundamental.
 
-    For the "after" localisation: period p of experiment i moves by ``d E_i (p - p_bar) J_i`` (and by the
-    second drift term's own, when both are modelled: drift_both.py).
+    For the "after" localisation: period p of experiment i moves by ``d E_i (p - p_bar) J_i``.
     """
     out = list(exps)
-    moves = [*zip(test.experiments, test.rate, test.jac)]
-    if test.second is not None:
-        moves += [*zip(test.second.experiments, test.second.rate, test.second.jac)]
-    for i, rate, jac in moves:
-        e = out[i]  # the first term's move kept when the second adds its own
+    for i, rate, jac in zip(test.experiments, test.rate, test.jac):
+        e = exps[i]
         n = e.h1.size
         if n < 2:
             continue

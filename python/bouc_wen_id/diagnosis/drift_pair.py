@@ -5,10 +5,8 @@ degradation, and tests the other given it (a partial F on the two-column fit in 
 that test passes, the record needs both: the summary said so, the verdict did not (review 34, problem 4:
 strength 0.085 with stiffness 0.05 named only delta_eta = 0.0545 +- 0.0012, 3.8 se off, and blamed the rest
 on "physics outside the library"). Here both are said, in the summary's note and in the verdict, with the
-two-column fit's values (first order, in the period blocks). When drift_both.py models the pair (the rival
-also passes alone and the pair predicts each experiment's blocks better from the others), both are named
-with the pair's values and the verdict says so; otherwise the steady fit is corrected for the named term
-only, and the verdict says that the structure left may be the rival's.
+two-column fit's values (first order, in the period blocks); the steady fit is corrected for the named
+term only, so the verdict says that the structure left may be the rival's.
 """
 
 from __future__ import annotations
@@ -49,12 +47,6 @@ def note(deg: Optional[DegradationTest], named: bool, alpha: float, units: tuple
     if not needs_both(deg, named, alpha):
         return None
     assert deg is not None and deg.rival is not None
-    if deg.second is not None:  # both modelled (drift_both.py)
-        return (
-            f"the period record also needs {deg.rival.term} beside {deg.term} (partial F, adjusted p = "
-            f"{deg.rival_p_adjusted:.2g}){_joint_values(deg, units)}; both are modelled: the averaged "
-            "periods are corrected for both and the pair refined on the drift and steady costs together"
-        )
     return (
         f"the period record also needs {deg.rival.term} beside {deg.term} (partial F, adjusted p = "
         f"{deg.rival_p_adjusted:.2g}){_joint_values(deg, units)}; both may act, and only {deg.term} is "
@@ -68,11 +60,6 @@ def text(deg: Optional[DegradationTest], named: bool, alpha: float, units: tuple
         return ""
     assert deg is not None and deg.rival is not None
     rival, term = TERM_LABELS.get(deg.rival.term, deg.rival.term), TERM_LABELS.get(deg.term, deg.term)
-    if deg.second is not None:  # both named, with the pair's values (drift_both.py)
-        return (
-            f"; the period record needs both {term} and {rival} (the second's partial F given the first, "
-            f"adjusted p = {deg.rival_p_adjusted:.2g}): both are modelled, the steady fit corrected for both"
-        )
     return (
         f"; the period record needs {rival} beside {term}{_joint_values(deg, units)} (the second's partial F "
         f"given the first, adjusted p = {deg.rival_p_adjusted:.2g}); the steady fit is corrected for {term} "

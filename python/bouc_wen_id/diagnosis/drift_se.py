@@ -18,7 +18,7 @@ held at one draw's fit: the deviations' noise model was right; the regressor's u
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import replace
 from typing import Any, Optional
 
@@ -83,34 +83,14 @@ def regressor_variance(
     the averaged data do not fix: nothing can be added honestly, and the caller keeps the blocks' variance).
     """
     term = deg.term
-    got = variances(
-        exps, sx, fit, data, lambda regs: np.array([_estimate(data, regs, term)]), y_scale, substeps, strength
-    )
-    return float(got[0])
-
-
-def variances(
-    exps: Sequence[DiagExperiment],
-    sx: Sequence[AugExperiment],
-    fit: AugFit,
-    data: Sequence[DriftData],
-    estimate: Callable[[Sequence[DriftData]], np.ndarray],
-    y_scale: float,
-    substeps: int,
-    strength: Optional[Sequence[float]] = None,
-) -> np.ndarray:
-    """``g' C g`` of each entry of ``estimate(regs)`` (the drift-space estimates at the regressors
-    ``regs``, formed at ``fit`` moved along the covariance's axes): :func:`regressor_variance`'s sum for
-    one estimate or several at once (both drift terms' two-column fit, drift_both.py); 0 each when the
-    covariance is not finite."""
     cov = np.asarray(fit.covariance, dtype=np.float64)
     if not data or cov.size == 0 or not np.all(np.isfinite(cov)):
-        return np.zeros(1)
+        return 0.0
     lam, vec = np.linalg.eigh(0.5 * (cov + cov.T))
     keep = lam > 0
     axes = vec[:, keep] * np.sqrt(lam[keep])[None, :]
     index = [dd.index for dd in data]
-    total: np.ndarray = np.zeros(1)
+    total = 0.0
     for k in range(axes.shape[1]):
         got = []
         for sign in (1.0, -1.0):
@@ -125,9 +105,9 @@ def variances(
                 break
             if [dd.index for dd in regs] != index:
                 break
-            got.append(np.asarray(estimate(regs), dtype=np.float64))
-        if len(got) == 2 and all(np.all(np.isfinite(v)) for v in got):
-            total = total + ((got[0] - got[1]) / (2.0 * STEP_SD)) ** 2
+            got.append(_estimate(data, regs, term))
+        if len(got) == 2 and all(math.isfinite(v) for v in got):
+            total += ((got[0] - got[1]) / (2.0 * STEP_SD)) ** 2
     return total
 
 

@@ -28,7 +28,6 @@ import numpy as np
 
 from . import zero_drift
 from .drift import _HYSTERESIS_TERMS, DRIFT_TERMS, SIM_SUBSTEPS, recorded_periods, simulated_periods
-from .drift_both import beside
 from .result import Diagnosis
 
 TWO_PI = 2.0 * math.pi
@@ -98,7 +97,7 @@ def predicted_slopes(items: Sequence[Any], d: Diagnosis) -> Optional[tuple[list[
         plan = (float(e.frequency), max(int(round(e.lead_periods)), 0), n, p, sub)
         amp = float(e.amplitude) / su * float(par.gains[i])
         phi = float(np.mod(par.phases[i], TWO_PI))
-        means = _period_means(hysteresis, terms, amp, phi, plan, deg.term, float(deg.d), beside(deg)) * sy
+        means = _period_means(hysteresis, terms, amp, phi, plan, deg.term, float(deg.d)) * sy
         k = np.arange(n, dtype=np.float64) - (n - 1) / 2.0
         per_period = float(k @ (means - means.mean())) / float(k @ k)
         change = max(change, abs(per_period) * n)
@@ -117,11 +116,9 @@ def _period_means(
     plan: tuple[float, int, int, int, int],
     term: str,
     dv: float,
-    pair: tuple[tuple[str, float], ...] = (),
 ) -> Any:
-    """Each recorded period's mean of w (scaled units), from the simulation drift.py's correction runs
-    (``pair``: the second drift term modelled beside ``term``, drift_both.py)."""
-    return simulated_periods(hysteresis, terms, amp, phi, plan, term, dv, pair).mean(axis=1)
+    """Each recorded period's mean of w (scaled units), from the simulation drift.py's correction runs."""
+    return simulated_periods(hysteresis, terms, amp, phi, plan, term, dv).mean(axis=1)
 
 
 def less_trend(items: Sequence[Any], slopes: Sequence[float]) -> list[Any]:

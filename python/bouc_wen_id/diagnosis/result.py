@@ -271,10 +271,6 @@ class Diagnosis:
                     f"{rival.share:.2f}; given {deg.term}: p adj = {deg.rival_p_adjusted:.2g}; columns' "
                     f"correlation {deg.correlation:.2f}{' (an alternative)' if deg.rival_alternative else ''}"
                 )
-            if deg.second is not None:  # both modelled (drift_both.py)
-                lines.append(
-                    f"  both modelled: {deg.term} with {deg.second.term}, chi2 -> {deg.second.cost1:.6g}"
-                )
         for note in self.notes:
             lines.append(note)
         if self.structure is not None and self.structure.named:  # the feedback structure (structure.py)

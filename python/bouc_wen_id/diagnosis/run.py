@@ -27,7 +27,6 @@ from . import (
     clean_value,
     design_twin,
     distortion_law,
-    drift_both,
     drift_clause,
     drift_pair,
     drift_passes,
@@ -240,27 +239,6 @@ def _aged(
     return aged, fit, deg, data
 
 
-def _single(
-    exps: Sequence[DiagExperiment],
-    sx: Sequence[AugExperiment],
-    plain: AugFit,
-    fit: AugFit,
-    data: Sequence[Any],
-    deg: DegradationTest,
-    s: Scale,
-    substeps: int,
-    alpha: float,
-) -> tuple[list[DiagExperiment], AugFit, DegradationTest]:
-    """One named drift term's value: the unrecorded age of each record (age.py: kept when its F-test passes
-    at ``alpha``, else the ages are 0), d refined on both costs, its standard error with the steady fit's
-    uncertainty (drift_se.py)."""
-    aged, fit, deg, data = _aged(exps, sx, fit, data, deg, s, substeps, alpha)
-    spread = drift_se.spread(aged, sx, fit if deg.term == DEGRADATION else plain, data, deg, s.y, substeps)
-    if deg.d > 0:
-        deg, fit = drift_passes.refine(aged, sx, fit, data, deg, s, substeps)
-    return aged, fit, drift_se.added(deg, *spread, s.y)
-
-
 def _degradation_stage(
     exps: Sequence[DiagExperiment],
     sx: Sequence[AugExperiment],
@@ -311,14 +289,13 @@ def _degradation_stage(
     if not (deg.named if held_out_test else deg.passed):
         # The refined test no longer names it: the steady selection on the data as they are.
         return deg, list(exps), list(sx), plain
-    # The rival modelled beside it when the record needs both (drift_both.py): both values from the pair,
-    # with the records' ages as declared (age.py's test is one drift term's).
-    pair = drift_both.modelled(exps, sx, plain, fit, deg, s, substeps, alpha, _deg_named(deg, held_out_test))
-    if pair is None:
-        exps, fit, deg = _single(exps, sx, plain, fit, data, deg, s, substeps, alpha / family)
-    else:
-        deg, fit = pair
-    fexps, fsx = corrected(exps, sx, fit, deg.d, s.y, substeps, term, drift_both.beside(deg))
+    # The unrecorded age of each record (age.py): kept when its F-test passes, else the ages are 0.
+    exps, fit, deg, data = _aged(exps, sx, fit, data, deg, s, substeps, alpha / family)
+    spread = drift_se.spread(exps, sx, fit if term == DEGRADATION else plain, data, deg, s.y, substeps)
+    if deg.d > 0:
+        deg, fit = drift_passes.refine(exps, sx, fit, data, deg, s, substeps)
+    deg = drift_se.added(deg, *spread, s.y)
+    fexps, fsx = corrected(exps, sx, fit, deg.d, s.y, substeps, term)
     # The steady selection starts from the plain model converged on the periods it runs on: the refinement's
     # fit is not (it was fitted before the last correction at the refined d), and a start left short of its
     # optimum hands the first candidate the re-convergence as its own improvement (a spring named beside
@@ -771,15 +748,11 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
 def _with_drift_term(
     final: ModelSummary, deg: Optional[DegradationTest], units: tuple[str, str]
 ) -> ModelSummary:
-    """The final model's terms with the named drift term (``deg``, None when not named) among them, and the
-    second one modelled beside it (drift_both.py)."""
+    """The final model's terms with the named drift term (``deg``, None when not named) among them."""
     if deg is None:
         return final
-    out = []
-    for t in (deg, *([] if deg.second is None else [deg.second])):
-        sym, unit = term_symbol_unit(t.term, *units)
-        out.append(NamedTerm(t.term, sym, t.value, t.standard_error, unit))
-    return replace(final, terms=(*final.terms, *out))
+    sym, unit = term_symbol_unit(deg.term, *units)
+    return replace(final, terms=(*final.terms, NamedTerm(deg.term, sym, deg.value, deg.standard_error, unit)))
 
 
 def _with_feedback(d: Diagnosis, setup: _Setup) -> Diagnosis:
@@ -869,7 +842,7 @@ def _explained_fraction(plain: ModelSummary, final: ModelSummary, deg: Optional[
     """The share of the plain model's excess the final model removes (both spaces when degradation is
     named: the steady excess and the drift excess), capped at 1 (a model below the noise floor fitted some
     noise too)."""
-    drift = [] if deg is None else [(deg.cost0, deg.dof0, drift_both.drift_cost(deg))]
+    drift = [] if deg is None else [(deg.cost0, deg.dof0, deg.cost1)]
     return gate.explained_fraction([(plain.cost, plain.dof, final.cost), *drift])
 
 
@@ -882,7 +855,7 @@ def _naming_share(fraction: float, deg: Optional[DegradationTest], named_deg: bo
     verdict then says where the rest sits."""
     if deg is None or not named_deg:
         return fraction
-    return max(fraction, gate.explained_fraction([(deg.cost0, deg.dof0, drift_both.drift_cost(deg))]))
+    return max(fraction, gate.explained_fraction([(deg.cost0, deg.dof0, deg.cost1)]))
 
 
 def _unphysical_text(terms: Sequence[NamedTerm]) -> str:
