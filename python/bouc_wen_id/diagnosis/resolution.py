@@ -38,8 +38,9 @@ POWER = 0.9
 #: What the quoted 90 % is about: each candidate's own F-test, not the verdict (the held-out and law tests,
 #: and the other candidates, cost more: docs/diagnosis.md, "Named at the stated size").
 HEADER = (
-    "the size its own test detects with 90 % power by linearisation, which may overstate it (the plain model"
-    " can absorb more of a present term); being named also needs the held-out and law tests"
+    "the size its own test detects with 90 % power by linearisation, which may overstate the power: the size"
+    " the test needs can be larger, the plain model absorbing more of a present term; being named also needs"
+    " the held-out and law tests"
 )
 
 
