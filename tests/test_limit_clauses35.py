@@ -12,6 +12,7 @@ import pytest
 from bouc_wen_id.diagnosis import limits, limits_void, named_limit, resolution
 from bouc_wen_id.diagnosis.gate import ADEQUATE
 from bouc_wen_id.diagnosis.limits import DetectionLimit
+from bouc_wen_id.diagnosis.result import SEEN_NOT_NAMED, status_text
 
 
 def _lim(**kw: Any) -> DetectionLimit:
@@ -79,3 +80,10 @@ def test_several_detected_candidates_are_alternative_readings_and_a_null_value_i
     said = resolution.adequate_head(verdict, [one]) + resolution.adequate_tail([one], _D([one]), 0.05)
     assert said.startswith(resolution.ADEQUATE_SEEN) and "noise floor" not in said
     assert resolution.adequate_head(verdict, [replace(one, not_named="")]) == verdict
+
+
+def test_the_printed_status_says_a_candidate_was_seen_but_none_named() -> None:
+    """kx_f1a6: status "adequate" while the verdict's body said a spring was detected at p adj 4e-09."""
+    assert status_text("adequate", (), True) == f"adequate ({SEEN_NOT_NAMED})"
+    assert status_text("adequate", ()) == "adequate"
+    assert status_text("unexplained", (), True) == "unexplained"
