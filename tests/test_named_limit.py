@@ -103,9 +103,16 @@ def test_the_quoted_limit_says_it_is_the_tests_power_and_when_naming_needs_more(
     plain = resolution.adequate_tail([_lim()], _D(), 0.05)
     assert "its own test detects with 90 % power" in plain and "held-out" in plain
     # the 90 % is a linearisation: simulated at it, the test passed in 166 of 200 cases (docs/diagnosis.md)
-    assert "may overstate" in plain
+    # ... so the power is overstated and the size a test needs larger (review 35m, F3: "which may overstate
+    # it", the size, said the opposite direction); the report's HTML says the same
+    assert "may overstate the power" in plain and "can be larger" in plain
+    assert "overstate it" not in plain
     far = resolution.limit_text(_lim(named_90=0.12, rival="inertia", rival_share=0.63))
-    assert "told from " + TERM_LABELS["inertia"] in far and "with 90 % only above 0.12" in far
+    # a better fit, not the alternatives' separation (review 35m, F4: "told from X ... above 0.0059" beside a
+    # named 0.0063 the verdict said could not be told from X)
+    assert "fits better than " + TERM_LABELS["inertia"] in far
+    assert "with 90 % probability only above 0.12" in far
+    assert "told from" not in far.split("(a better fit")[0]
     twin = resolution.limit_text(_lim(named_90=math.inf, rival="inertia@x", rival_share=1.0))
     assert "not separable from " + TERM_LABELS["inertia@x"] in twin
     near = resolution.limit_text(_lim(named_90=0.057, rival="inertia", rival_share=0.1))
@@ -136,4 +143,6 @@ def test_why_a_detected_candidate_was_not_named() -> None:
     assert "law" in named_limit.why_not_named(law)
     # review 34's seed 3: inertia on u named at the step, the spring on x never reached
     instead = named_limit.why_not_named(replace(tr, held_out=None), "inertia")
-    assert TERM_LABELS["inertia"] + " was named at this step instead" == instead
+    # the step's choice, which later checks may drop: not "named" (review 35m, F2: negku's sensor lag)
+    assert "the first step chose " + TERM_LABELS["inertia"] + " instead" in instead
+    assert "named" not in instead.replace("final verdict", "")

@@ -56,6 +56,18 @@ NON_NEGATIVE = frozenset(k for k, cls in TERMS.items() if cls.physical[0] == 0.0
 VERDICT_LIMITS = 4
 
 
+def infinite_note(seen: bool) -> str:
+    """Why a candidate has no limit: not detectable within its range, or, when its own test passed on these
+    data (``seen``), that the linearised profile did not reach the target within the range: a method
+    failure, not a property of the data (review 35m, F1: "not detectable" beside "its own test passed")."""
+    if seen:
+        return (
+            "no limit could be computed: the linearised profile did not reach its target within the term's "
+            "admissible range"
+        )
+    return "not detectable within the term's admissible range"
+
+
 @dataclass(frozen=True)
 class DetectionLimit:
     """The smallest value of one candidate term (at its place) the design detects at the test's level."""
@@ -357,7 +369,7 @@ def detection_limits(
             probes[tr.term] = (lim90, lim if math.isfinite(lim) else guess, targets[1], thr, s2)
         seen = tr.p_adjusted < level and tr.share >= MATERIAL_SHARE  # its threshold's two parts passed here
         why = named_limit.why_not_named(tr, st.chosen or "") if seen and st.chosen != tr.term else ""
-        note = "" if math.isfinite(lim) else "not detectable within the term's admissible range"
+        note = infinite_note(seen) if not math.isfinite(lim) else ""
         if refused_by_bound(tr, level):  # detected, beyond its range: no |v| < limit (bounds_said.py)
             lim, lim90, why = math.inf, math.inf, ""
             note = f"fits with {sym} = {v:.3g} {unit}".rstrip() + ", outside its physical range (not named)"
@@ -443,4 +455,4 @@ def most_relevant(limits: Sequence[DetectionLimit], count: int = VERDICT_LIMITS)
     return sorted(limits, key=key)[:count]
 
 
-__all__ = ["DetectionLimit", "detection_limits", "most_relevant"]
+__all__ = ["DetectionLimit", "detection_limits", "infinite_note", "most_relevant"]

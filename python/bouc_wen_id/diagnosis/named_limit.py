@@ -47,6 +47,9 @@ NAMED_POWER = 0.9
 TWIN_SHARE = 1.0 - 1e-9
 #: The value :func:`named_text` quotes beside the 90 % one when it is this much larger.
 NAMED_SAID = 1.25
+#: Why a candidate whose F-test passed is not named when its value failed its range or null check: no
+#: detection of the term (resolution.detected_text says it apart).
+NOT_PASSED = "its value is outside its physical range or at its null value"
 #: Largest factor on the 90 % value searched for the named size (beyond it: inf).
 FACTOR_MAX = 1e4
 
@@ -84,18 +87,21 @@ def named_text(lim: Any) -> str:
     if lim.named_90 <= NAMED_SAID * lim.limit_90:
         return ""
     return (
-        f"; told from {rival} (which takes {100 * lim.rival_share:.2g} % of its trace) with "
-        f"{100 * NAMED_POWER:.0f} % only above {lim.named_90:.2g}"
+        f"; fits better than {rival} (which takes {100 * lim.rival_share:.2g} % of its trace) with "
+        f"{100 * NAMED_POWER:.0f} % probability only above {lim.named_90:.2g} (a better fit, not a "
+        "separation: the verdict's alternatives say whether the two are told apart)"
     )
 
 
 def why_not_named(trial: Any, chosen: str = "") -> str:
     """Why a first-step candidate whose own F-test passed was not named (select.py's gates after the F-test),
-    in a few words; ``chosen``: the candidate the step named instead ("" for none)."""
+    in a few words; ``chosen``: the candidate the step chose instead ("" for none), which later checks
+    (bounds_said, across_bounds) may drop: not said "named" (review 35m, F2)."""
     if chosen and chosen != trial.term and trial.held_out is None and trial.law_holds and trial.passed:
-        return f"{TERM_LABELS.get(chosen, chosen)} was named at this step instead"
+        who = TERM_LABELS.get(chosen, chosen)
+        return f"the first step chose {who} instead (which the final verdict may drop)"
     if not trial.passed:
-        return "its value is outside its physical range or at its null value"
+        return NOT_PASSED
     if trial.held_out is not None and not trial.held_out.improves:
         return "its held-out prediction was worse than the plain model's"
     if not trial.law_holds:
@@ -189,6 +195,7 @@ def separation(
 
 __all__ = [
     "NAMED_POWER",
+    "NOT_PASSED",
     "Separation",
     "naming_probability",
     "named_size",

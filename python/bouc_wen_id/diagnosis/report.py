@@ -401,8 +401,9 @@ def _limits_html(d: Diagnosis) -> list[str]:
     ]
     return [
         "<h2>Detection limits</h2><p>The value of each candidate the experiments detect with 50 % and 90 % "
-        "power at its test's level (by linearisation, which may overstate the power: the plain model can "
-        "absorb more of a present term); below it, a term is not excluded.</p>" + _table(rows, head)
+        "power at its test's level (by linearisation, which may overstate the power: the size the test needs "
+        "can be larger, the plain model absorbing more of a present term); below it, a term is not "
+        "excluded.</p>" + _table(rows, head)
     ]
 
 

@@ -30,16 +30,18 @@ from typing import Any
 
 import numpy as np
 
+from .gate import ADEQUATE
 from .limits import ABSORBED_SAID, VERDICT_LIMITS, DetectionLimit, most_relevant
-from .named_limit import named_text
+from .named_limit import NOT_PASSED, named_text
 
 #: Power at which an "adequate" verdict states what it could have missed.
 POWER = 0.9
 #: What the quoted 90 % is about: each candidate's own F-test, not the verdict (the held-out and law tests,
 #: and the other candidates, cost more: docs/diagnosis.md, "Named at the stated size").
 HEADER = (
-    "the size its own test detects with 90 % power by linearisation, which may overstate it (the plain model"
-    " can absorb more of a present term); being named also needs the held-out and law tests"
+    "the size its own test detects with 90 % power by linearisation, which may overstate the power: the size"
+    " the test needs can be larger, the plain model absorbing more of a present term; being named also needs"
+    " the held-out and law tests"
 )
 
 
@@ -103,18 +105,60 @@ def limit_text(lim: DetectionLimit) -> str:
     return f"{head} (50 % power at {lim.limit:.2g}{ab}{named_text(lim)})"
 
 
+#: A candidate's fitted value within this many standard errors of zero is not said as a detection, though
+#: its F-test passed (review 35m, F8: Dahl friction on u fc = 0.271 ± 3.2 listed as "detected").
+DETECTED_SE = 2.0
+#: The "adequate" verdict's first clause when some candidate's own test passed on these data: the plain
+#: model passes its adequacy test, but is not said to fit at the noise floor for them (review 35m, F8).
+ADEQUATE_SEEN = "adequate: the plain Wiener-Bouc-Wen model passes its adequacy test"
+
+
+def _a_reading(lim: DetectionLimit) -> bool:
+    """Whether a candidate whose test passed is said as a detection: its value passed its range and null
+    checks and lies at least :data:`DETECTED_SE` standard errors from zero."""
+    v, se = lim.value, lim.standard_error
+    far = math.isfinite(v) and (not math.isfinite(se) or abs(v) >= DETECTED_SE * se)
+    return lim.not_named != NOT_PASSED and far
+
+
 def detected_text(lims: Sequence[DetectionLimit]) -> str:
     """The candidates whose own test passed on these data but which the verdict did not name, and why
-    (limits.py's ``not_named``): the data saw them; "adequate" alone would hide it (review 34, problem 6)."""
+    (limits.py's ``not_named``): the data saw them; "adequate" alone would hide it (review 34, problem 6).
+    Several are alternative readings of one misfit, each tested alone on it, not several terms; one at its
+    null, outside its range or within :data:`DETECTED_SE` se of zero is said apart, without a value, as no
+    detection (review 35m, F8)."""
     seen = [lim for lim in lims if lim.detected_here]
     if not seen:
         return ""
+    read = [lim for lim in seen if _a_reading(lim)]
     parts = [
         f"{lim.label} {lim.symbol} = {lim.value:.3g} ± {lim.standard_error:.2g} {lim.unit}".rstrip()
         + f" (p adj {lim.p_adjusted:.2g}; not named: {lim.not_named}{named_text(lim)})"
-        for lim in seen
+        for lim in read
     ]
-    return "; detected by its own test on these data but not named: " + ", ".join(parts)
+    out = ""
+    if len(read) > 1:
+        out = (
+            f"; its own test on these data passed for {len(read)} candidates, alternative readings of one "
+            f"misfit (each tested alone on it, not {len(read)} terms found), none named: " + ", ".join(parts)
+        )
+    elif read:
+        out = "; detected by its own test on these data but not named: " + parts[0]
+    rest = [lim.label for lim in seen if lim not in read]
+    if rest:
+        out += (
+            f"; its test passed but no detection (a value at its null, outside its range or within "
+            f"{DETECTED_SE:.0f} se of zero): " + ", ".join(rest)
+        )
+    return out
+
+
+def adequate_head(verdict: str, lims: Sequence[DetectionLimit]) -> str:
+    """``verdict`` with its "fits at the noise floor" clause (gate.ADEQUATE) said as passing the adequacy
+    test when some candidate's own test passed on these data (:func:`detected_text` follows it)."""
+    if any(lim.detected_here for lim in lims) and verdict.startswith(ADEQUATE):
+        return ADEQUATE_SEEN + verdict[len(ADEQUATE) :]
+    return verdict
 
 
 def hint_text(lim: DetectionLimit, exps: Sequence[Any]) -> str:
@@ -196,7 +240,10 @@ def adequate_tail(lims: Sequence[DetectionLimit], d: Any, alpha: float, y_unit: 
 
 
 __all__ = [
+    "ADEQUATE_SEEN",
+    "DETECTED_SE",
     "POWER",
+    "adequate_head",
     "adequate_tail",
     "detected_text",
     "hint_text",

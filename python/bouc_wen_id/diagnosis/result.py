@@ -36,16 +36,20 @@ def term_symbol_unit(term: str, y_unit: str, u_unit: str) -> tuple[str, str]:
 
 #: What the printed status adds when a named term has a rival reading the data do not refuse (readings.py).
 NOT_ONLY = "not the only reading"
+#: What the printed status adds to "adequate" when a candidate's own test passed on these data but nothing
+#: was named (resolution.detected_text says which; review 35m, F8).
+SEEN_NOT_NAMED = "a candidate's own test passed on these data, none named"
 
 
-def status_text(status: str, readings: Sequence[Any]) -> str:
+def status_text(status: str, readings: Sequence[Any], seen: bool = False) -> str:
     """The status as printed: ``status``, with :data:`NOT_ONLY` when one of ``readings``
     (:class:`.readings.Reading`) is a rival reading of a named term (explained, in full or in part), and the
     p-value of a weak remainder (:mod:`.borderline`: "unexplained (weak evidence of what remains: p =
-    0.016; a right model is flagged so in 5 % of cases)")."""
+    0.016; a right model is flagged so in 5 % of cases)"); "adequate" with :data:`SEEN_NOT_NAMED` when
+    ``seen`` (a detection limit's own test passed on these data: ``DetectionLimit.detected_here``)."""
     from .borderline import status_words
 
-    said = []
+    said = [SEEN_NOT_NAMED] if seen and status == "adequate" else []
     if status in ("explained", "partly explained") and any(getattr(r, "rival", False) for r in readings):
         said.append(NOT_ONLY)
     weak = status_words(readings) if status in ("unexplained", "partly explained") else ""
@@ -180,7 +184,8 @@ class Diagnosis:
     def status_text(self) -> str:
         """The status as printed: :attr:`status`, with "(not the only reading)" when a rival reading of a
         named term is not refused (diagnosis/readings.py); :attr:`status` itself is unchanged."""
-        return status_text(self.status, self.readings)
+        seen = any(getattr(lim, "detected_here", False) for lim in self.limits)
+        return status_text(self.status, self.readings, seen)
 
     @property
     def named_terms(self) -> tuple[str, ...]:

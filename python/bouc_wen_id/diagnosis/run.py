@@ -780,7 +780,7 @@ def _with_limits(
     secs = [float(e.periods) * 2.0 * math.pi / float(e.frequency) for e in d.experiments]
     lims = detection_limits(sx, base, steps, s, setup.units, setup.alpha, substeps, refine, secs)
     tail = resolution.adequate_tail(lims, d, setup.alpha, setup.units[0]) if d.status == "adequate" else ""
-    return replace(d, limits=lims, verdict=d.verdict + tail)
+    return replace(d, limits=lims, verdict=resolution.adequate_head(d.verdict, lims) + tail)
 
 
 def _settings(setup: _Setup, s: Scale, substeps: int) -> dict[str, Any]:
