@@ -87,3 +87,30 @@ def test_the_printed_status_says_a_candidate_was_seen_but_none_named() -> None:
     assert status_text("adequate", (), True) == f"adequate ({SEEN_NOT_NAMED})"
     assert status_text("adequate", ()) == "adequate"
     assert status_text("unexplained", (), True) == "unexplained"
+
+
+def test_a_term_the_verdict_names_has_no_not_named_reason(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Review 35m F11: viscous on u named at step 2 was reported "not named: its value differs between
+    experiments" in the summary and JSON, because the limits read the first step only."""
+    from dataclasses import dataclass, field
+    from types import SimpleNamespace
+
+    from bouc_wen_id.diagnosis import run
+    from bouc_wen_id.diagnosis.result import NamedTerm
+
+    @dataclass(frozen=True)
+    class _Named:
+        status: str = "explained"
+        verdict: str = "explained by: viscous damping"
+        experiments: tuple[Any, ...] = ()
+        named: tuple[NamedTerm, ...] = ()
+        limits: tuple[DetectionLimit, ...] = field(default_factory=tuple)
+
+    named = (NamedTerm("viscous", "c", 0.00996, 8e-5, "s"),)
+    lims = (_lim(term="viscous", not_named="its value differs between experiments"), _lim())
+    monkeypatch.setattr(run, "detection_limits", lambda *a, **k: lims)
+    setup = SimpleNamespace(units=("", ""), alpha=0.05)
+    out = run._with_limits(_Named(named=named), [], None, [], None, 1, setup)  # type: ignore[arg-type]
+    by_term = {lim.term: lim for lim in out.limits}
+    assert by_term["viscous"].not_named == ""  # named: no reason why not
+    assert by_term["stiffness@x"].not_named  # not named: its reason kept

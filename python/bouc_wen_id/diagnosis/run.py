@@ -779,6 +779,9 @@ def _with_limits(
     refine = d.status in ("adequate", "unexplained")
     secs = [float(e.periods) * 2.0 * math.pi / float(e.frequency) for e in d.experiments]
     lims = detection_limits(sx, base, steps, s, setup.units, setup.alpha, substeps, refine, secs)
+    # a term the verdict names (at a later step) has no "not named" reason (review rv35m F11)
+    named = {n.term for n in d.named}
+    lims = tuple(replace(lim, not_named="") if lim.term in named else lim for lim in lims)
     tail = resolution.adequate_tail(lims, d, setup.alpha, setup.units[0]) if d.status == "adequate" else ""
     return replace(d, limits=lims, verdict=resolution.adequate_head(d.verdict, lims) + tail)
 
