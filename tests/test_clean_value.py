@@ -173,6 +173,10 @@ def test_the_value_comes_from_the_clean_experiments_when_the_others_were_made_an
     assert "fitted on the 3 experiments whose input is a sine (x1, x2, x4)" in said
     assert f"pooled: c = {pooled.terms[0].value:.4g})" in said
     assert where.text("adequate", summ.terms) == "" and where.text("unexplained", ()) == ""
+    # nothing named (review rv35m F10): the tested terms' values, said, not "the values named"
+    tested = where.text("unexplained", summ.terms)
+    assert "the values named" not in tested and "the tested terms' values (not named: " in tested
+    assert f"c = {t.value:.4g}" in tested
 
 
 def test_every_input_a_sine_leaves_the_summary_as_it_was() -> None:

@@ -56,11 +56,15 @@ class CleanValues:
         if not self.kept or status == "adequate":
             return ""
         names = {t.term for t in named}
+        # nothing named (unexplained): the values are the tested terms', which the verdict does not quote
+        what = (
+            "the values named" if status in ("explained", "partly explained") else "the tested terms' values"
+        )
         if self.failed:
             if not names - {Distortion.kind}:
                 return ""
             return (
-                f"; the values named are fitted over all {len(self.kept) + len(self.left)} experiments, "
+                f"; {what} are fitted over all {len(self.kept) + len(self.left)} experiments, "
                 f"those whose input is not a sine ({_list(self.left)}) included: the refit on the "
                 f"{len(self.kept)} whose input is a sine failed or did not determine them, and the "
                 "harmonics of a clipped or distorted drive, which the model does not carry, may pull the "
@@ -80,8 +84,19 @@ class CleanValues:
             else ""
         )
         was = ", ".join(f"{t.symbol} = {t.value:.4g}" for t in pooled)
+        if what != "the values named":  # say them: the verdict names none of them
+            clean = {t.term for t in pooled}
+            what += (
+                " (not named: "
+                + ", ".join(
+                    f"{t.label} {t.symbol} = {t.value:.4g} ± {t.standard_error:.2g}"
+                    for t in named
+                    if t.term in clean
+                )
+                + ")"
+            )
         return (
-            f"; the values named are fitted on the {len(self.kept)} experiments whose input is a sine "
+            f"; {what} are fitted on the {len(self.kept)} experiments whose input is a sine "
             f"({_list(self.kept)}) alone: the {len(self.left)} whose input is not ({_list(self.left)}: a "
             "clipped or distorted drive) are left out of them: their input's harmonics reach the output "
             "through G where the model's sine input does not, and can pull a value fitted on them (over all "
