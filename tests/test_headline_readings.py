@@ -224,9 +224,11 @@ def test_with_two_named_terms_the_headline_says_which_each_rival_replaces() -> N
 
 
 def test_a_rival_said_for_two_named_terms_is_said_once_for_both() -> None:
-    """The same rival for two named terms (output offset for asymmetry and for sensor lag) is one reading
-    replacing both, and a term named twice in the family (viscous damping on u and on x) is told by its
-    place, not by the family's label both share."""
+    """The same rival found for each of two named terms on its own (output offset for asymmetry, and for
+    sensor lag) is said once, "instead of A or of B": one term for either, not one replacing both (review
+    rv35m F13: "A and B" read as a one-term reading of the two-term verdict that no test made); a term named
+    twice in the family (viscous damping on u and on x) is told by its place, not by the family's label both
+    share."""
     alts = [
         Alternative(T.Asymmetry.kind, T.Offset.kind, math.nan, "x"),
         Alternative(T.SensorLag.kind, T.Offset.kind, math.nan, "y"),
@@ -234,7 +236,7 @@ def test_a_rival_said_for_two_named_terms_is_said_once_for_both() -> None:
     named = [T.Asymmetry.kind, T.SensorLag.kind]
     rs = readings.of_verdict("explained by: X", named, alts)
     assert len(rs) == 1 and rs[0].instead_of == tuple(named), rs
-    assert rs[0].words.endswith(f"instead of {T.Asymmetry.label} and {T.SensorLag.label}"), rs
+    assert rs[0].words.endswith(f"instead of {T.Asymmetry.label} or of {T.SensorLag.label}"), rs
     both = [T.Viscous.kind, T.ViscousX.kind]
     v = "explained by: X" + rate_rival.clause(T.ViscousX.kind, 0.3, [1.0, 1.2])
     (r,) = readings.of_verdict(v, both, [])

@@ -164,21 +164,23 @@ def _said_instead(rs: Sequence[Reading], named: Sequence[str]) -> list[Reading]:
     of asymmetry") when two or more terms are named: a headline naming several terms and listing "or X"
     did not say which one X replaces. The same words for several named terms are said once, for all."""
     merged: dict[str, Reading] = {}
+    apart: set[str] = set()  # words found as a rival of each named term on its own, not of them jointly
     for r in rs:
         was = merged.get(r.words)
         if was is None:
             merged[r.words] = r
         elif r.instead_of:
             of = tuple(k for k in named if k in set(was.instead_of) | set(r.instead_of))
+            if set(of) != set(was.instead_of):
+                apart.add(r.words)
             merged[r.words] = replace(was, instead_of=of)
     if len(set(named)) < 2:
         return list(merged.values())
     out = []
     for r in merged.values():
         if r.rival and r.instead_of:
-            r = replace(
-                r, words=f"{r.words} instead of {' and '.join(_short(k, named) for k in r.instead_of)}"
-            )
+            join = " or of " if r.words in apart else " and "  # one term for each, or one for both
+            r = replace(r, words=f"{r.words} instead of {join.join(_short(k, named) for k in r.instead_of)}")
         out.append(r)
     return out
 
