@@ -168,3 +168,19 @@ def test_a_waveform_law_failing_alone_is_the_drive_not_outside_physics() -> None
     assert "stands in for physics outside the library" not in alone
     assert "stands in for physics outside the library" in _law_text(steps(Viscous.kind))
     assert "stands in for physics outside the library" in _law_text(steps(Distortion.kind, Viscous.kind))
+
+
+def test_no_spring_reading_that_needs_a_negative_dc_gain_or_one_drive_level_for_several() -> None:
+    """The MR damper at 0 A: the spring-on-x reading of its offset needed G(0) = -919 (a G whose reported
+    gains are positive): no reading. Drives at different means give a spring on x a DC each, which one offset
+    does not: "cannot tell a sensor zero from a preloaded spring" would be false there."""
+    from dataclasses import replace as _replace
+
+    exps = prepare(_records(0.0, 0.25, 5))
+    off = _term("offset", "y0", -0.0151, 0.0002)  # the spring reading would need G(0) < 0
+    said = "explained by: " + str(off) + ", k"
+    assert input_dc.qualify(said, [off, _term("stiffness@x", "k", 0.06, 0.002)], exps) == said
+    spread = [_replace(e, input_dc=0.25 * (1 + 0.5 * i)) for i, e in enumerate(exps)]
+    pos = _term("offset", "y0", 0.0151, 0.0002)
+    said = "explained by: " + str(pos) + ", k"
+    assert input_dc.qualify(said, [pos, _term("stiffness@x", "k", 0.06, 0.002)], spread) == said

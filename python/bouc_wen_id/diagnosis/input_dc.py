@@ -33,6 +33,8 @@ MEASURED_SE = 5.0
 #: :data:`UNKNOWN_SE_RELATIVE` instead).
 MEASURED_RELATIVE = 1e-3
 UNKNOWN_SE_RELATIVE = 1e-2
+#: The experiments' drive means count as one level when they spread by less than this fraction of their mean.
+SAME_MEAN = 0.2
 
 
 def measured(e: DiagExperiment) -> bool:
@@ -70,6 +72,11 @@ def _on_u(off: Any, k: Any, u0: float) -> str:
 def _on_x(off: Any, k: Any, u0: float) -> str:
     y0, kv = float(off.value), float(k.value)
     g0 = y0 / (kv * u0) if kv * u0 != 0.0 else math.inf
+    if not g0 > 0.0:
+        # G's gains are reported positive (the sign convention of the identification) and a stable G's DC
+        # gain has the sign of its low-frequency gain: a spring reading that needs G(0) < 0 is no reading
+        # (the MR damper at 0 A needed G(0) = -919), so the offset is said alone
+        return ""
     rel = math.hypot(_se(off) / y0 if y0 else 0.0, _se(k) / kv if kv else 0.0)
     need = f"G(0) = {g0:.3g} ± {abs(g0) * rel:.2g} [y]/[u]" if math.isfinite(g0) else "an unbounded G(0)"
     return (
@@ -90,6 +97,11 @@ def qualify(verdict: str, named: Sequence[Any], exps: Sequence[DiagExperiment]) 
     u0 = drive_mean(exps)
     said = str(off)
     if u0 is None or said not in verdict:
+        return verdict
+    means = [float(e.input_dc) for e in exps]
+    if ku is None and max(means) - min(means) > SAME_MEAN * abs(u0):
+        # drives at different means: a spring on x would give each its own DC (k G(0) u0_i), which one
+        # offset for all does not; "cannot tell them apart" would be false, and the fit did not test it
         return verdict
     add = _on_u(off, ku, u0) if ku is not None else _on_x(off, kx, u0)
     at = verdict.index(said) + len(said)
