@@ -92,6 +92,26 @@ def demotes(b: BeyondAcross, has_terms: bool) -> bool:
     return bool(b.found) and (b.beats_final or not has_terms)
 
 
+def _outside(groups: Sequence[Any], tr: Any) -> list[int]:
+    """The conditions (indices) at which joint trial ``tr``'s value lies outside the term's physical range."""
+    return [i for i, f in enumerate(tr.fits[: len(groups)]) if f is not None and not _admissible(f, tr.term)]
+
+
+def _where(groups: Sequence[Any], tr: Any, values: Sequence[float]) -> str:
+    """'' when ``tr``'s value is beyond its range at every condition, else at which conditions only and that
+    its value crosses the range's edge (zero when it changes sign) between them (review 35m, F7: k_u =
+    -0.045, -0.015, +0.03 was said "beyond its physical range" at all three, +0.0305 being physical)."""
+    out = _outside(groups, tr)
+    if not out or len(out) == len(groups):
+        return ""
+    inside = [i for i in range(len(groups)) if i not in out]
+    edge = "zero" if min(values) < 0.0 < max(values) else "the range's edge"
+    return (
+        f" at {', '.join(str(groups[i].label) for i in out)} only (within it at "
+        f"{', '.join(str(groups[i].label) for i in inside)}: its value crosses {edge} between the conditions)"
+    )
+
+
 def text(
     b: BeyondAcross, groups: Sequence[Any], units: tuple[str, str], fraction: float, kept: Sequence[str]
 ) -> str:
@@ -104,15 +124,18 @@ def text(
     what = []
     for tr in b.found:
         sym, unit = term_symbol_unit(tr.term, *units)
-        vals = ", ".join(f"{physical(f, g.scale, tr.term)[0]:.4g}" for g, f in zip(groups, tr.fits))
+        values = [physical(f, g.scale, tr.term)[0] for g, f in zip(groups, tr.fits)]
+        vals = ", ".join(f"{v:.4g}" for v in values)
         what.append(
             f"{TERMS[tr.term].place_label()} {sym} = {vals} {unit} at {labels} would remove "
             f"{100 * tr.share:.0f} % of the summed excess alone (p adj = {tr.p_adjusted:.2g}), beyond its "
-            f"physical range: {_suggests(tr.term)}".replace("  ", " ")
+            f"physical range{_where(groups, tr, values)}: {_suggests(tr.term)}".replace("  ", " ")
         )
+    out = _outside(groups, b.found[0])
+    at = f" at {', '.join(str(groups[i].label) for i in out)}" if 0 < len(out) < len(groups) else ""
     instead = (
         f"; the terms the selection kept within the ranges ({', '.join(kept)}) remove {100 * fraction:.0f} % "
-        "of the summed excess and stand in for it, not named"
+        f"of the summed excess and stand in for it{at}, not named"
         if kept
         else ""
     )
