@@ -350,7 +350,7 @@ def _score(
         "right_place": bool(right_place),
         "wrong": bool(wrong),
         "unexplained": d.status == "unexplained",
-        "weak_remainder": any(r.kind == "borderline" for r in d.readings),  # scored by status as before
+        "weak_remainder": any(r.kind == "borderline" for r in getattr(d, "readings", ())),  # not scored
         "family": bool(family),
         "bad_explained": d.status == "explained" and not (d.final.p_value >= alpha),
         "final_p": float(d.final.p_value),
