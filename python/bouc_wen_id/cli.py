@@ -515,7 +515,7 @@ def _json_target(args: argparse.Namespace) -> bool:
     """Check ``diagnose``'s outputs before any work; whether a report folder is written (``--out``, or no
     ``--json``, or ``--model``, whose model.json goes in it). ``--json`` is refused when it names an input or
     an existing file without --overwrite."""
-    folder = args.out is not None or args.json is None or bool(getattr(args, "model", False))
+    folder = args.out is not None or args.json is None or args.model
     if args.out is None and folder:
         args.out = Path("bouc_wen_id_diagnosis")
     if folder:

@@ -27,9 +27,8 @@ from typing import Any
 
 from ..errors import BudgetExceededError
 from ..terms import TERMS
-from .design_twin import EXACT, distance
+from .design_twin import distance, rival_item, unphysical_by_term
 from .fitting import physical
-from .result import term_symbol_unit
 from .select import PLACE_CHI2, Alternative, _separating, at_null, dof_of, place_admissible
 
 
@@ -137,20 +136,9 @@ def _values(t: TwinAcross, unit: str) -> str:
 def text(found: Sequence[TwinAcross], units: tuple[str, str]) -> str:
     """The verdict's word on twins outside their physical range, as :func:`.design_twin.text` says it, with
     the rival's value at each condition (the physical ones are alternatives)."""
-    by: dict[str, list[TwinAcross]] = {}
-    for t in found:
-        if not t.physical:
-            by.setdefault(t.term, []).append(t)
     parts = []
-    for term, ts in by.items():
-        items = []
-        for t in sorted(ts, key=lambda t: t.distance):
-            sym, unit = term_symbol_unit(t.rival, *units)
-            why = (TERMS[t.rival].unphysical or "a value outside its physical range").split(":")[0]
-            how = "exactly" if t.distance <= EXACT else "within the noise"
-            sep = f"; to separate them: {t.separating_experiment}" if t.separating_experiment else ""
-            label = TERMS[t.rival].place_label()
-            items.append(f"{label} with {sym} = {_values(t, unit)} ({how}; {why}{sep})")
+    for term, ts in unphysical_by_term(found).items():
+        items = [rival_item(t, units, _values) for t in sorted(ts, key=lambda t: t.distance)]
         parts.append(
             f"; in this design {TERMS[term].place_label()} gives the same averaged periods at every "
             f"condition as {' and as '.join(items)}: the data cannot tell the named term from these "

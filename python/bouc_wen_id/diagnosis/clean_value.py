@@ -57,9 +57,8 @@ class CleanValues:
             return ""
         names = {t.term for t in named}
         # nothing named (unexplained): the values are the tested terms', which the verdict does not quote
-        what = (
-            "the values named" if status in ("explained", "partly explained") else "the tested terms' values"
-        )
+        quoted = status in ("explained", "partly explained")
+        what = "the values named" if quoted else "the tested terms' values"
         if self.failed:
             if not names - {Distortion.kind}:
                 return ""
@@ -84,7 +83,7 @@ class CleanValues:
             else ""
         )
         was = ", ".join(f"{t.symbol} = {t.value:.4g}" for t in pooled)
-        if what != "the values named":  # say them: the verdict names none of them
+        if not quoted:  # say them: the verdict names none of them
             clean = {t.term for t in pooled}
             what += (
                 " (not named: "

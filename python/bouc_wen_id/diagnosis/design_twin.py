@@ -23,7 +23,7 @@ What is said (issue 18: "both are reported as alternatives with the experiment t
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -126,7 +126,7 @@ def alternatives(found: Sequence[Twin], have: Sequence[Alternative]) -> tuple[Al
     )
 
 
-def _sep(t: Twin) -> str:
+def _sep(t: Any) -> str:
     return f"; to separate them: {t.separating_experiment}" if t.separating_experiment else ""
 
 
@@ -134,23 +134,33 @@ def _sep(t: Twin) -> str:
 EXACT = 1e-6
 
 
-def text(found: Sequence[Twin], units: tuple[str, str]) -> str:
-    """The verdict's word on twins outside their physical range (the physical ones are alternatives): one
-    clause per named term, each twin with its value, why it is not physical and what would separate it."""
-    by: dict[str, list[Twin]] = {}
+def unphysical_by_term(found: Sequence[Any]) -> dict[str, list[Any]]:
+    """The twins outside their physical range (:class:`Twin` or across_twin's), by the named term."""
+    by: dict[str, list[Any]] = {}
     for t in found:
         if not t.physical:
             by.setdefault(t.term, []).append(t)
+    return by
+
+
+def rival_item(t: Any, units: tuple[str, str], values: Callable[[Any, str], str]) -> str:
+    """One twin said: its place, ``sym = values(t, unit)``, how close, why not physical, what separates it."""
+    sym, unit = term_symbol_unit(t.rival, *units)
+    why = (TERMS[t.rival].unphysical or "a value outside its physical range").split(":")[0]
+    how = "exactly" if t.distance <= EXACT else "within the noise"
+    return f"{TERMS[t.rival].place_label()} with {sym} = {values(t, unit)} ({how}; {why}{_sep(t)})"
+
+
+def _value(t: Twin, unit: str) -> str:
+    return f"{t.value:.4g} {unit}"
+
+
+def text(found: Sequence[Twin], units: tuple[str, str]) -> str:
+    """The verdict's word on twins outside their physical range (the physical ones are alternatives): one
+    clause per named term, each twin with its value, why it is not physical and what would separate it."""
     parts = []
-    for term, ts in by.items():
-        items = []
-        for t in sorted(ts, key=lambda t: t.distance):
-            sym, unit = term_symbol_unit(t.rival, *units)
-            why = (TERMS[t.rival].unphysical or "a value outside its physical range").split(":")[0]
-            how = "exactly" if t.distance <= EXACT else "within the noise"
-            items.append(
-                f"{TERMS[t.rival].place_label()} with {sym} = {t.value:.4g} {unit} ({how}; {why}{_sep(t)})"
-            )
+    for term, ts in unphysical_by_term(found).items():
+        items = [rival_item(t, units, _value) for t in sorted(ts, key=lambda t: t.distance)]
         parts.append(
             f"; in this design {TERMS[term].place_label()} gives the same averaged periods as "
             f"{' and as '.join(items)}: the data cannot tell the named term from these readings, though "
