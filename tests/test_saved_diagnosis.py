@@ -120,3 +120,9 @@ def test_the_cli_writes_the_json_to_a_file_or_stdout(
         assert cli.main([*argv, "--json", str(data / "x.json")]) == 2  # inside the inputs: refused
         assert cli.main([*argv, "--json", "e.json", "--out", "rep", "--no-figures"]) == 0
     assert bw.load_diagnosis(tmp_path / "rep").headline == bw.load_diagnosis(tmp_path / "e.json").headline
+
+
+@pytest.mark.parametrize("bad", [3, None, 2.5, ["d.json"]])
+def test_a_non_path_is_refused_by_name(bad: object) -> None:
+    with pytest.raises(TypeError, match=r"load_diagnosis takes the path .* not " + type(bad).__name__):
+        bw.load_diagnosis(bad)  # type: ignore[arg-type]

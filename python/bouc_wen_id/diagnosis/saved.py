@@ -200,7 +200,14 @@ def load_diagnosis(path: Union[str, os.PathLike[str]]) -> SavedDiagnosis:
     ------
     FileFormatError
         No such file, not JSON, or JSON of something else (the message says what it holds).
+    TypeError
+        ``path`` is not a path (a str or an os.PathLike).
     """
+    if not isinstance(path, (str, os.PathLike)):
+        raise TypeError(
+            f"load_diagnosis takes the path of a diagnosis JSON file or of the folder holding diagnosis.json "
+            f"(a str or os.PathLike), not {type(path).__name__}"
+        )
     p = os.fspath(path)
     if os.path.isdir(p):
         p = os.path.join(p, "diagnosis.json")
