@@ -184,3 +184,22 @@ def test_no_spring_reading_that_needs_a_negative_dc_gain_or_one_drive_level_for_
     pos = _term("offset", "y0", 0.0151, 0.0002)
     said = "explained by: " + str(pos) + ", k"
     assert input_dc.qualify(said, [pos, _term("stiffness@x", "k", 0.06, 0.002)], spread) == said
+
+
+def test_limits_keep_the_level_that_decided_the_verdict() -> None:
+    """Review 36's null_spk: the plain model at p = 0.042 passes its global test (alpha / 2, gate.py) and
+    reads "adequate" with its limits; the summary then called them void at alpha."""
+    from types import SimpleNamespace
+
+    from bouc_wen_id.diagnosis import gate, limits_void
+
+    lim = SimpleNamespace(limit_90=0.0029, __str__=lambda: "x", summary_tail=lambda: "")
+    final = SimpleNamespace(cost=700.0, dof=620, p_value=0.042)
+    assert gate.plain_passes(final.p_value, 0.05)
+    plain = SimpleNamespace(status="adequate", named=(), limits=(lim,), final=final, settings={"alpha": 0.05})
+    assert not limits_void.void(plain) and "0.0029" in "".join(limits_void.summary_lines(plain))
+    # with a named term the final model's own test is at alpha: the same p voids them
+    named = SimpleNamespace(
+        status="partly explained", named=("t",), limits=(lim,), final=final, settings={"alpha": 0.05}
+    )
+    assert limits_void.void(named)
