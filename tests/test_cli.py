@@ -654,3 +654,18 @@ def test_out_that_is_the_current_folder_is_refused(
         assert cli.main(["simulate", "--out", out, *SMALL_SIM]) == 2
         _one_error_line(capsys.readouterr().err, "--out", "current folder")
     assert list(here.iterdir()) == [] and Path.cwd() == here
+
+
+def test_diagnose_help_keeps_every_candidate_name_whole(
+    capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Review 36: the candidates list wrapped inside words at 80 columns ("offset,s / tiffness",
+    "inertia / @x"); argparse breaks only at spaces, so the list is joined with ", "."""
+    from bouc_wen_id._cli_parser import DIAG_CANDIDATES
+
+    monkeypatch.setenv("COLUMNS", "80")
+    with pytest.raises(SystemExit):
+        cli.main(["diagnose", "--help"])
+    words = {w.strip(",()") for w in capsys.readouterr().out.split()}
+    missing = [c for c in DIAG_CANDIDATES if c not in words]
+    assert not missing, missing

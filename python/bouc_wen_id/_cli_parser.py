@@ -287,7 +287,7 @@ def _add_diagnose_parser(sub: Any) -> None:
         "--candidates",
         type=_candidates,
         default=None,
-        help="comma-separated terms to try (default: all of " + ",".join(DIAG_CANDIDATES) + ")",
+        help="comma-separated terms to try (default: all of " + ", ".join(DIAG_CANDIDATES) + ")",
     )
     p.add_argument("--alpha", type=_level, default=0.05, help="false-alarm level per step (default 0.05)")
     p.add_argument("--no-held-out", action="store_true", help="skip the held-out check (faster, weaker)")
