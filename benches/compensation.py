@@ -49,7 +49,7 @@ from typing import Any, Optional, Union
 import bouc_wen_id as bw
 import numpy as np
 from bouc_wen_id.augmented import AugExperiment, AugParams, fit_augmented
-from bouc_wen_id.terms import Offset, SensorLag, Stiffness, Term, Viscous
+from bouc_wen_id.terms import Offset, Place, SensorLag, Stiffness, Term, Viscous
 from numpy.typing import NDArray
 from scipy.interpolate import CubicSpline
 from scipy.signal import lsim
@@ -125,8 +125,13 @@ def plant_output(plant: bw.WienerPlant, t: FloatArray, u: FloatArray) -> FloatAr
     _, x, _ = lsim((lin.num, lin.den), ud, tf)
     w = _path_rk4(np.concatenate(([0.0], np.asarray(x))), plant.hysteresis)[1:]
     v = w + 0.0
+    xf = np.asarray(x)
     for term in plant.terms:
-        if isinstance(term, Stiffness):
+        if term.place == Place.X and isinstance(term, Stiffness):
+            v = v + term.k * xf
+        elif term.place == Place.X and isinstance(term, Viscous):
+            v = v + term.c * np.gradient(xf, tf, edge_order=2)
+        elif isinstance(term, Stiffness):
             v = v + term.k * spline(tf)
         elif isinstance(term, Viscous):
             v = v + term.c * spline(tf, 1)
