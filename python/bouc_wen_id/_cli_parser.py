@@ -310,7 +310,8 @@ def _add_diagnose_parser(sub: Any) -> None:
         "--model",
         action="store_true",
         help="also fit the model the diagnosis describes (G with the named terms: Diagnosis.to_model) and "
-        "write OUT/model.json, which export, validate and compensate take",
+        "write OUT/model.json, which export, validate and compensate take (compensate refuses by name the "
+        "terms its inverse does not handle: Dahl friction, inertia on x, the series dashpot, play, ...)",
     )
     _add_overwrite(p)
 
