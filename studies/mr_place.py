@@ -100,11 +100,13 @@ def across(levels: list[tuple[str, list[Any]]], candidates: list[str]) -> dict[s
         for st in a.steps
     ]
     ho = [c.held_out_joint for c in a.conditions]
+    unsettled = {str(k): v for k, v in dict(a.settings.get("not_settled", {})).items()}
     return {
         "verdict": a.verdict,
         "named": list(a.named),
         "steps": steps,
         "seconds": a.seconds,
+        "not_settled": unsettled,
         "held_out": ho,
     }
 
@@ -218,6 +220,7 @@ def print_tables(res: dict[str, Any]) -> None:
 def print_across(a: dict[str, Any]) -> None:
     print(f"\nAcross the levels (bw.diagnose_across): {a['verdict']}\n")
     print("held-out NRMSE of the joint structure (median): " + ", ".join(f"{h:.3f}" for h in a["held_out"]))
+    print(f"experiments left out as not settled, per level: {a['not_settled'] or 'none'}")
     for k, st in enumerate(a["steps"], 1):
         top = sorted(st["shares"].items(), key=lambda kv: -kv[1])[:4]
         shares = ", ".join(f"{t} {v:.3f}{'' if t in st['passed'] else ' (failed)'}" for t, v in top)
