@@ -28,6 +28,7 @@ from ..model import Recording, WienerPlant
 from ..terms import Term
 from ..units import harmonise
 from ..validation import count, nonnegative_number, positive_number, z_value
+from . import _coloured
 from ._lm import LMResult, StopReason, free_covariance, levenberg_marquardt
 from ._records import RecordLike, TimeRecord, as_time_records, settling_lead_in
 from ._starts import rank_starts, sine_starts
@@ -40,6 +41,8 @@ FloatArray = NDArray[np.float64]
 SCREEN_ITER = 8
 #: The shapes tried beside the start's own mu (the saturation level (beta + gamma)^(-1/mu) is kept).
 ALTERNATIVE_MU = (1.3, 2.0, 3.0)
+#: Below this whiteness p-value the standard errors are Newey-West's (:mod:`._coloured`).
+COLOURED_LEVEL = 0.05
 #: Lags of the residual whiteness test per record (at most a fifth of its samples).
 WHITENESS_LAGS = 20
 
@@ -513,6 +516,34 @@ def _search(
     return (problem.full(run.p, theta), run), tuple(tried)
 
 
+def _coloured_note(
+    cov: FloatArray,
+    jac: FloatArray,
+    resid: Sequence[FloatArray],
+    free: NDArray[np.bool_],
+    adequacy: Whiteness,
+    apply: bool,
+) -> str:
+    """Widen ``cov`` in place to the Newey-West standard errors when the residuals are not white
+    (:mod:`._coloured`); the note that says so, or "" (white residuals, a known noise level, a singular
+    J^T J: the covariance is kept)."""
+    if not apply or not adequacy.rejects(COLOURED_LEVEL) or not np.any(free):
+        return ""
+    sizes = np.cumsum([r.size for r in resid])[:-1]
+    blocks = np.split(jac[:, free], sizes)
+    lags = _coloured.bandwidth(resid)
+    hac = _coloured.hac_covariance(blocks, list(resid), lags)
+    sub = np.ix_(free, free)
+    before = np.sqrt(np.diag(cov[sub]))
+    cov[sub] = _coloured.widened(cov[sub], hac)
+    grow = float(np.max(np.sqrt(np.diag(cov[sub])) / before))
+    return (
+        f"the residuals are not white (p = {adequacy.p_value:.2g}): the standard errors count their "
+        f"correlation (Newey-West, {lags} lags; up to {grow:.3g}x the white-noise ones); coloured noise "
+        "leaves the estimates unbiased, a missing part of the model does not"
+    )
+
+
 def _result(
     problem: Problem,
     best: tuple[FloatArray, LMResult],
@@ -536,6 +567,8 @@ def _result(
     # The LM covariance is in units of the scaled residuals: rescale to sigma2 (J^T J)^-1 in y's units.
     jac = run.jacobian * problem.scale
     cov, singular = free_covariance(jac, ~run.at_bound, sigma2)
+    adequacy = whiteness(resid)
+    coloured = _coloured_note(cov, jac, resid, ~run.at_bound, adequacy, noise_sd is None and not singular)
     nrmse = tuple(
         float(np.linalg.norm(e) / max(np.linalg.norm(r.y[k:] - r.y[k:].mean()), np.finfo(float).tiny))
         for e, r, k in zip(resid, problem.records, problem.lead)
@@ -550,6 +583,8 @@ def _result(
         warnings.warn(f"the time-domain fit stopped: {run.reason}", ConvergenceWarning, stacklevel=3)
     for w in notes:
         warnings.warn(w, IdentifiabilityWarning, stacklevel=3)
+    if coloured:
+        notes.append(coloured)
     cov.setflags(write=False)
     params = theta[free].copy()
     params.setflags(write=False)
@@ -562,7 +597,7 @@ def _result(
         cost=float(allr @ allr),
         rmse=float(np.sqrt(np.mean(allr**2))),
         nrmse=nrmse,
-        adequacy=whiteness(resid),
+        adequacy=adequacy,
         iterations=run.iterations,
         reason=run.reason,
         at_bound=at_bound,
