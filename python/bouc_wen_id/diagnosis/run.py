@@ -22,6 +22,7 @@ from . import (
     baseline,
     beside,
     bounds_said,
+    carry_refresh,
     centre_decay,
     clean_share,
     clean_value,
@@ -69,7 +70,6 @@ from .fit_notes import fit_notes
 from .fitting import (
     Scale,
     best_of,
-    carry_through_g,
     fit_from,
     fit_plain,
     physical,
@@ -358,6 +358,9 @@ class _Setup:
     #: degradation explains it (:class:`_LeaveOut`): the diagnosis of the settled ones replaces this one,
     #: whose selection would only be thrown away (the wire rope's whole set was diagnosed for nothing).
     leave_out_early: bool = False
+    #: The device term beside which the drive's harmonics are carried through G (carry_refresh.py; None:
+    #: the plain model's G).
+    carry_beside: Optional[str] = None
 
 
 class _LeaveOut(Exception):
@@ -510,7 +513,12 @@ def _with_wander(
     common = None if wander is None else wander.kept
     setup = _Setup(cands, alpha, held_out_test, units, skipped, not qnotes, report=report, common_dc=common)
     try:
-        d = _diagnose_set(exps, replace(setup, leave_out_early=speed.LEAVE_OUT_EARLY), [*notes, *qnotes])
+        early = replace(setup, leave_out_early=speed.LEAVE_OUT_EARLY)
+        d = _diagnose_set(exps, early, [*notes, *qnotes])
+        # The drive's harmonics carried once more, beside a device term, when the first carry failed.
+        d = carry_refresh.again(
+            d, cands, lambda t: _beside(exps, replace(early, carry_beside=t), [*notes, *qnotes])
+        )
     except _LeaveOut as e:  # some loops still drift, no degradation explains it: the settled ones alone
         d = _without_unsettled(exps, e.drifting, setup, None, [*notes, *qnotes])
     else:
@@ -519,6 +527,15 @@ def _with_wander(
     if wander is None:  # short records: an offset that is a settling centre's transient (centre_decay.py)
         d = centre_decay.check(d, alpha)  # on both paths: LEAVE_OUT_EARLY gives the same verdict (review 32)
     return baseline.adjusted(d, wander, Offset.kind)
+
+
+def _beside(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -> Optional[Diagnosis]:
+    """The diagnosis with the harmonics carried beside ``setup.carry_beside`` (carry_refresh.py), or None
+    where some loops still drift (the first diagnosis's path handles that)."""
+    try:
+        return _diagnose_set(exps, setup, notes)
+    except _LeaveOut:
+        return None
 
 
 def _unless_unsettled(exps: list[DiagExperiment], d: Diagnosis, setup: _Setup, notes: list[str]) -> Diagnosis:
@@ -659,7 +676,7 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
     # The distortion term's waveforms through G at their own frequencies, as the plain fit sees G.
     if Distortion.kind in cands:
         setup.report("carrying the input's harmonics through G", 0, 1)
-        sx = carry_through_g(sx, plain, substeps)
+        sx = carry_refresh.carried(sx, plain, substeps, setup.carry_beside)
     before = _drift_checked(_localise(exps, sx, plain, s), exps)
     notes = list(notes)  # a copy: the stages below append to it
     setup.report("testing degradation (period blocks)", 0, 1)
