@@ -41,6 +41,7 @@ from . import (
     law_untested,
     lines,
     loop_centre,
+    null_named,
     output_clip,
     pairs,
     resolution,
@@ -725,7 +726,9 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
     share = clean_share.naming_share(_naming_share(fraction, deg, named_deg), cshare)
     judged = classify(plain_ok, bool(final.params.terms) or named_deg, adequate(final), share)
     held = bounds_said.found(steps, alpha, final, s, setup.units, fsx)  # values held at a bound
-    status, named, partial, verdict = _judged(judged, final_sum, (before, after), fraction, fexps, held)
+    status, named, partial, verdict = _judged(
+        judged, final_sum, (before, after), fraction, fexps, held, final
+    )
     verdict += drift_pair.text(deg, named_deg, alpha, setup.units) + (centre.text or _law_text(steps))
     tw = design_twin.Said.of(fsx, steps, named, s, substeps, setup.units)  # design twins (design_twin.py)
     verdict += beside.text(steps) + unphysical_places_text(tw.steps, named) + tw.text
@@ -823,26 +826,31 @@ def _judged(
     fraction: float,
     fexps: Sequence[DiagExperiment],
     held: Optional[bounds_said.Beyond] = None,
+    fit: Optional[AugFit] = None,
 ) -> tuple[Status, tuple[NamedTerm, ...], tuple[NamedTerm, ...], str]:
     """``(status, named, partial, verdict)``: a term outside its physical range is never named (the rest is
-    at most a partial explanation), and the verdict says what the non-physical value and a residual DC of
-    both signs suggest. ``located``: the plain model's localisation and the final's."""
+    at most a partial explanation), nor one at its null value in ``fit`` (null_named.py), and the verdict
+    says what the non-physical value and a residual DC of both signs suggest. ``located``: the plain
+    model's localisation and the final's."""
     before, after = located
-    unphysical = tuple(t for t in final.terms if not physical_value(t.term, t.value))
+    nulls = null_named.terms(fit)
+    gone = tuple(t for t in final.terms if t.term in nulls)
+    unphysical = tuple(t for t in final.terms if not physical_value(t.term, t.value) and t not in gone)
     if unphysical and status == "explained":
         status = "partly explained"
     named: tuple[NamedTerm, ...] = ()
     if status in ("explained", "partly explained"):
-        named = tuple(t for t in final.terms if t not in unphysical)
+        named = tuple(t for t in final.terms if t not in unphysical and t not in gone)
     if not named and status != "adequate":
         status = "unexplained"
     status, named, head, tail = bounds_said.apply(held, status, named, final.terms, fraction)
-    partial = tuple(t for t in final.terms if t not in named)
+    partial = tuple(t for t in final.terms if t not in named and t not in gone)
     drift = drift_clause.clause(after, before, named)  # beyond a named drift term (drift_clause.py)
     verdict = head + _verdict(
         status, named, tuple(t for t in partial if t not in unphysical), after, fraction, drift
     )
     verdict = input_dc.qualify(verdict + _unphysical_text(unphysical) + tail, named, fexps)  # a preload
+    verdict += null_named.text(gone)
     if status != "adequate":
         offset = any(t.term == Offset.kind for t in final.terms)  # said about it, not against it
         verdict += _centre_text(fexps, final.outputs, max(1.0, final.cost / max(final.dof, 1)), offset)
