@@ -164,14 +164,25 @@ def _diag(p: float, pair: tuple[str, ...] = ()) -> Any:
 def test_the_harmonics_are_carried_again_beside_a_device_term_only_where_that_fits_better(
     first: Any, second_p: float, kept: str
 ) -> None:
-    asked: list[str] = []
+    asked: list[tuple[str, ...]] = []
     second = _diag(second_p)
 
-    def rerun(term: str) -> Any:
-        asked.append(term)
+    def rerun(terms: tuple[str, ...]) -> Any:
+        asked.append(terms)
         return second
 
     got = carry_refresh.again(first, (Viscous.kind, Distortion.kind), rerun)
     assert got is (second if kept == "second" else first)
-    assert asked in ([], [Viscous.kind])
+    assert asked in ([], [(Viscous.kind,)])
     assert carry_refresh.again(first, (Viscous.kind,), rerun) is first  # the drive's term not a candidate
+
+
+def test_the_second_carry_sees_the_final_models_device_terms_when_it_holds_the_drives() -> None:
+    # The drive's term named alone at step 1, the dashpot at step 2 (no pair step ran): the carry beside the
+    # final model's device terms (the drive through a resonance with a 3 % second harmonic, offset and
+    # asymmetry standing in for the first carry's misfit).
+    d = _diag(1e-6)
+    d.final_fit = SimpleNamespace(params=SimpleNamespace(terms=(Distortion.kind, Viscous.kind, "offset")))
+    assert carry_refresh.beside_terms(d) == (Viscous.kind, "offset")
+    d.final_fit = SimpleNamespace(params=SimpleNamespace(terms=(Viscous.kind,)))
+    assert carry_refresh.beside_terms(d) == ()

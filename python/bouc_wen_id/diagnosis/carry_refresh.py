@@ -9,10 +9,11 @@ on u, c = 0.01, a 3 % third harmonic, ``36 / (s^2 + 1.2 s + 36)`` with a 0.03 s 
 that falls on the peak (6 rad/s, the 2 rad/s experiment's third) that is enough for every set holding the
 drive's term to fail its law, and the verdict was "unexplained" (final chi2/dof 68.5).
 
-So when a diagnosis's final model fails its adequacy test and some step fitted the drive's term beside a
-device term (the pair step's sets, pairs.py), the harmonics are carried once more, through the G of the
-plain model plus the best such device term (the lowest-cost set), and the whole diagnosis is run again on
-them. The second diagnosis replaces the first only when its final model fits better by the adequacy test
+So when a diagnosis's final model fails its adequacy test and it holds the drive's term beside device
+terms, or some step fitted the drive's term beside a device term (the pair step's sets, pairs.py), the
+harmonics are carried once more, through the G of the plain model plus those device terms (the final
+model's, else the lowest-cost set's), and the whole diagnosis is run again on them. The second diagnosis
+replaces the first only when its final model fits better by the adequacy test
 (a higher p-value: the test weighs the added parameters): nothing changes where the first carry served,
 and a set of experiments whose misfit is not the drive's keeps its first verdict. (A two-pole G without
 delay, below saturation, viscous on u: the first carry's G from the drive's term alone left the pair's
@@ -27,18 +28,37 @@ from collections.abc import Callable, Sequence
 from typing import Any, Optional
 
 from ..augmented import AugExperiment, AugFit
-from ..terms import Distortion
+from ..terms import TERMS, Distortion
 from .fitting import carry_through_g, fit_with
 from .limits_void import DEFAULT_ALPHA
 
 
 def carried(
-    sx: Sequence[AugExperiment], plain: AugFit, substeps: int, beside: Optional[str]
+    sx: Sequence[AugExperiment], plain: AugFit, substeps: int, beside: Sequence[str] = ()
 ) -> list[AugExperiment]:
     """The waveforms carried through G as :func:`.fitting.carry_through_g` does, seen by the plain model plus
-    ``beside`` when given (module docstring); the plain model's where that term does not fit."""
-    base = fit_with(sx, plain, beside, substeps) if beside else None
-    return carry_through_g(sx, base if base is not None else plain, substeps)
+    the terms ``beside``, added one by one (module docstring); a term that does not fit is left out."""
+    base = plain
+    for term in beside:
+        f = fit_with(sx, base, term, substeps)
+        base = f if f is not None else base
+    return carry_through_g(sx, base, substeps)
+
+
+def beside_terms(d: Any) -> tuple[str, ...]:
+    """The device terms beside which to carry the harmonics again: those of ``d``'s final model when it holds
+    the drive's term (a step named it alone, a later one the device term: review 35's drive through a
+    resonance with a 3 % second harmonic had the viscous damping named at step 2, and the offset and
+    asymmetry that stood in for the misfit of the first carry at steps 3-4), else the device term of the
+    lowest-cost set fitted with the drive's term by a pair step (:func:`beside_term`); () for none."""
+    final = getattr(getattr(d, "final_fit", None), "params", None)
+    terms = tuple(getattr(final, "terms", ()))
+    if Distortion.kind in terms:
+        own = tuple(t for t in terms if t != Distortion.kind and not TERMS[t].part_of)
+        if own:
+            return own
+    term = beside_term(d)
+    return () if term is None else (term,)
 
 
 def beside_term(d: Any) -> Optional[str]:
@@ -63,15 +83,16 @@ def _fails(d: Any) -> bool:
     return bool(math.isfinite(p) and p < alpha)
 
 
-def again(d: Any, cands: Sequence[str], rerun: Callable[[str], Any]) -> Any:
-    """``d``, or the diagnosis ``rerun(term)`` gives with the harmonics carried beside ``term`` when ``d``'s
-    final model fails its adequacy test and that one's fits better by it (module docstring)."""
+def again(d: Any, cands: Sequence[str], rerun: Callable[[tuple[str, ...]], Any]) -> Any:
+    """``d``, or the diagnosis ``rerun(terms)`` gives with the harmonics carried beside ``terms``
+    (:func:`beside_terms`) when ``d``'s final model fails its adequacy test and that one's fits better by it
+    (module docstring)."""
     if Distortion.kind not in cands or not _fails(d):
         return d
-    term = beside_term(d)
-    if term is None:
+    terms = beside_terms(d)
+    if not terms:
         return d
-    second = rerun(term)
+    second = rerun(terms)
     if second is None or not math.isfinite(float(second.final.p_value)):
         return d
     return second if float(second.final.p_value) > float(d.final.p_value) else d

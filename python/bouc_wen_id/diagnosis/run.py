@@ -359,9 +359,9 @@ class _Setup:
     #: degradation explains it (:class:`_LeaveOut`): the diagnosis of the settled ones replaces this one,
     #: whose selection would only be thrown away (the wire rope's whole set was diagnosed for nothing).
     leave_out_early: bool = False
-    #: The device term beside which the drive's harmonics are carried through G (carry_refresh.py; None:
+    #: The device terms beside which the drive's harmonics are carried through G (carry_refresh.py; none:
     #: the plain model's G).
-    carry_beside: Optional[str] = None
+    carry_beside: tuple[str, ...] = ()
 
 
 class _LeaveOut(Exception):
