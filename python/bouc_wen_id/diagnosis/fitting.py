@@ -19,7 +19,7 @@ from numpy.typing import NDArray
 from ..augmented import AugExperiment, AugFit, AugParams, augmented_output, fit_augmented
 from ..errors import BoucWenIdError, BudgetExceededError, SearchAtBoundError
 from ..terms import TERMS, Distortion, Place, StartContext
-from . import free_dc, input_dc, speed
+from . import free_dc, g_second, input_dc, speed
 from .data import DiagExperiment
 
 FloatArray = NDArray[np.float64]
@@ -189,8 +189,9 @@ def carry_waveforms(exps: Sequence[AugExperiment], fit: AugFit) -> list[AugExper
     when nothing else is known. G is known (up to the Bouc-Wen scale, which cancels) at the experiments'
     frequencies from ``fit``'s gains and phases, ``G(j w_i) ~ g_i e^{-i (phi_i + psi_i)}``; between them it is
     taken from a first-order lag with a delay when that reproduces the tested points (:func:`_fopdt`), else
-    interpolated between them and extended beyond (:func:`_g_of`). Experiments without a waveform are
-    returned as given.
+    from a second-order one with a delay when that does (:mod:`.g_second`: a resonance between two tested
+    frequencies), else interpolated between them and extended beyond (:func:`_g_of`). Experiments without
+    a waveform are returned as given.
     """
     if not any(e.waveform.size for e in exps):
         return list(exps)
@@ -206,8 +207,14 @@ def carry_waveforms(exps: Sequence[AugExperiment], fit: AugFit) -> list[AugExper
     # The phase lag of a causal G starts near 0 at low frequency: remove whole turns from the lowest one.
     lag = lag - 2.0 * math.pi * np.round(lag[0] / (2.0 * math.pi))
     model = _fopdt(freqs, logs, lag)
+    # A resonance between tested frequencies: the next model up before the interpolation (g_second.py).
+    second = (
+        None if model is not None else g_second.second_order(freqs, logs, lag, g_second.TOL, FOPDT_MIN_FREQS)
+    )
 
     def g_at(omega: float) -> complex:
+        if second is not None:
+            return g_second.at(second, omega)
         if model is None:
             return _g_of(freqs, logs, lag, omega)
         lk, tc, delay, th0 = model

@@ -22,6 +22,7 @@ from . import (
     baseline,
     beside,
     bounds_said,
+    carry_refresh,
     centre_decay,
     clean_share,
     clean_value,
@@ -40,6 +41,7 @@ from . import (
     law_untested,
     lines,
     loop_centre,
+    null_named,
     output_clip,
     pairs,
     resolution,
@@ -69,7 +71,6 @@ from .fit_notes import fit_notes
 from .fitting import (
     Scale,
     best_of,
-    carry_through_g,
     fit_from,
     fit_plain,
     physical,
@@ -358,6 +359,9 @@ class _Setup:
     #: degradation explains it (:class:`_LeaveOut`): the diagnosis of the settled ones replaces this one,
     #: whose selection would only be thrown away (the wire rope's whole set was diagnosed for nothing).
     leave_out_early: bool = False
+    #: The device terms beside which the drive's harmonics are carried through G (carry_refresh.py; none:
+    #: the plain model's G).
+    carry_beside: tuple[str, ...] = ()
 
 
 class _LeaveOut(Exception):
@@ -510,7 +514,12 @@ def _with_wander(
     common = None if wander is None else wander.kept
     setup = _Setup(cands, alpha, held_out_test, units, skipped, not qnotes, report=report, common_dc=common)
     try:
-        d = _diagnose_set(exps, replace(setup, leave_out_early=speed.LEAVE_OUT_EARLY), [*notes, *qnotes])
+        early = replace(setup, leave_out_early=speed.LEAVE_OUT_EARLY)
+        d = _diagnose_set(exps, early, [*notes, *qnotes])
+        # The drive's harmonics carried once more, beside a device term, when the first carry failed.
+        d = carry_refresh.again(
+            d, cands, lambda t: _beside(exps, replace(early, carry_beside=t), [*notes, *qnotes])
+        )
     except _LeaveOut as e:  # some loops still drift, no degradation explains it: the settled ones alone
         d = _without_unsettled(exps, e.drifting, setup, None, [*notes, *qnotes])
     else:
@@ -519,6 +528,15 @@ def _with_wander(
     if wander is None:  # short records: an offset that is a settling centre's transient (centre_decay.py)
         d = centre_decay.check(d, alpha)  # on both paths: LEAVE_OUT_EARLY gives the same verdict (review 32)
     return baseline.adjusted(d, wander, Offset.kind)
+
+
+def _beside(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -> Optional[Diagnosis]:
+    """The diagnosis with the harmonics carried beside ``setup.carry_beside`` (carry_refresh.py), or None
+    where some loops still drift (the first diagnosis's path handles that)."""
+    try:
+        return _diagnose_set(exps, setup, notes)
+    except _LeaveOut:
+        return None
 
 
 def _unless_unsettled(exps: list[DiagExperiment], d: Diagnosis, setup: _Setup, notes: list[str]) -> Diagnosis:
@@ -659,7 +677,7 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
     # The distortion term's waveforms through G at their own frequencies, as the plain fit sees G.
     if Distortion.kind in cands:
         setup.report("carrying the input's harmonics through G", 0, 1)
-        sx = carry_through_g(sx, plain, substeps)
+        sx = carry_refresh.carried(sx, plain, substeps, setup.carry_beside)
     before = _drift_checked(_localise(exps, sx, plain, s), exps)
     notes = list(notes)  # a copy: the stages below append to it
     setup.report("testing degradation (period blocks)", 0, 1)
@@ -708,7 +726,9 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
     share = clean_share.naming_share(_naming_share(fraction, deg, named_deg), cshare)
     judged = classify(plain_ok, bool(final.params.terms) or named_deg, adequate(final), share)
     held = bounds_said.found(steps, alpha, final, s, setup.units, fsx)  # values held at a bound
-    status, named, partial, verdict = _judged(judged, final_sum, (before, after), fraction, fexps, held)
+    status, named, partial, verdict = _judged(
+        judged, final_sum, (before, after), fraction, fexps, held, final
+    )
     verdict += drift_pair.text(deg, named_deg, alpha, setup.units) + (centre.text or _law_text(steps))
     tw = design_twin.Said.of(fsx, steps, named, s, substeps, setup.units)  # design twins (design_twin.py)
     verdict += beside.text(steps) + unphysical_places_text(tw.steps, named) + tw.text
@@ -806,26 +826,31 @@ def _judged(
     fraction: float,
     fexps: Sequence[DiagExperiment],
     held: Optional[bounds_said.Beyond] = None,
+    fit: Optional[AugFit] = None,
 ) -> tuple[Status, tuple[NamedTerm, ...], tuple[NamedTerm, ...], str]:
     """``(status, named, partial, verdict)``: a term outside its physical range is never named (the rest is
-    at most a partial explanation), and the verdict says what the non-physical value and a residual DC of
-    both signs suggest. ``located``: the plain model's localisation and the final's."""
+    at most a partial explanation), nor one at its null value in ``fit`` (null_named.py), and the verdict
+    says what the non-physical value and a residual DC of both signs suggest. ``located``: the plain
+    model's localisation and the final's."""
     before, after = located
-    unphysical = tuple(t for t in final.terms if not physical_value(t.term, t.value))
+    nulls = null_named.terms(fit)
+    gone = tuple(t for t in final.terms if t.term in nulls)
+    unphysical = tuple(t for t in final.terms if not physical_value(t.term, t.value) and t not in gone)
     if unphysical and status == "explained":
         status = "partly explained"
     named: tuple[NamedTerm, ...] = ()
     if status in ("explained", "partly explained"):
-        named = tuple(t for t in final.terms if t not in unphysical)
+        named = tuple(t for t in final.terms if t not in unphysical and t not in gone)
     if not named and status != "adequate":
         status = "unexplained"
     status, named, head, tail = bounds_said.apply(held, status, named, final.terms, fraction)
-    partial = tuple(t for t in final.terms if t not in named)
+    partial = tuple(t for t in final.terms if t not in named and t not in gone)
     drift = drift_clause.clause(after, before, named)  # beyond a named drift term (drift_clause.py)
     verdict = head + _verdict(
         status, named, tuple(t for t in partial if t not in unphysical), after, fraction, drift
     )
     verdict = input_dc.qualify(verdict + _unphysical_text(unphysical) + tail, named, fexps)  # a preload
+    verdict += null_named.text(gone)
     if status != "adequate":
         offset = any(t.term == Offset.kind for t in final.terms)  # said about it, not against it
         verdict += _centre_text(fexps, final.outputs, max(1.0, final.cost / max(final.dof, 1)), offset)
