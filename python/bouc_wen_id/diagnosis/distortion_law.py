@@ -24,8 +24,9 @@ def text(failed: Mapping[str, float]) -> Optional[str]:
     p = failed[Distortion.kind]
     return (
         f"; not named: {Distortion.label} (p = {p:.2g}): its scale, one value for all experiments, fails "
-        "(its law): G at the input's harmonics is not the G it carries there (interpolated between the "
-        "tested frequencies and extended beyond them; a resonance bends it), so the residual can be the "
-        "drive's own harmonics through a G these experiments do not measure rather than physics outside the "
-        "library; G measured at the harmonics' frequencies, or a clean sine, would tell"
+        "(its law): G at the input's harmonics is not the G it carries there (a low-order model of the "
+        "tested points, or interpolated between them and extended beyond; a resonance bends it), so the "
+        "residual can be the drive's own harmonics through a G these experiments do not measure rather "
+        "than physics outside the library; G measured at the harmonics' frequencies, or a clean sine, "
+        "would tell"
     )

@@ -180,9 +180,10 @@ def band_text(exps: Sequence[DiagExperiment], k: int) -> str:
     )
     return (
         f". Its harmonics reach the output through G at frequencies {where}; the model carries them to the "
-        "hysteresis through the distortion term alone, with G interpolated between the tested frequencies"
-        + (" and extended above them" if above else "")
-        + " from fits that leave them out, and to its terms on u as measured, while its terms on x see x's "
-        "fundamental only; so a residual at the input's harmonics can be the input's through a G not pinned "
-        "at those frequencies; a clean sine at those levels would tell"
+        "hysteresis through the distortion term alone, with G between the tested frequencies"
+        + (" and above them" if above else "")
+        + " from a first- or second-order model with a delay where one reproduces the tested points (else "
+        "interpolated) of fits that leave them out, and to its terms on u as measured, while its terms on x "
+        "see x's fundamental only; so a residual at the input's harmonics can be the input's through a G "
+        "not pinned at those frequencies; a clean sine at those levels would tell"
     )
