@@ -143,3 +143,20 @@ def test_a_negative_stiffness_with_an_exact_physical_twin_names_the_twin_first(
     # A far fit is no twin; with only it in the step there is none.
     alone = Step(738.261, 753, (k, far), None, targeted=True)
     assert bounds_clear.physical_twin(EXPS, alone, k, 0.005, None, ("[u]", "[y]"), 10) is None  # type: ignore[arg-type]
+
+
+def test_a_rival_reading_with_a_physical_twin_says_the_twin_first() -> None:
+    """One frequency, a Coulomb friction named: a negative stiffness on x fitting as well is said through its
+    physical twin (inertia on x), not as a P-Delta mechanism alone; a twin that is the named term is
+    design_twin.py's and not said here."""
+    k = _trial(K_X, 783.6, _Fit(783.6, _base(), (K_X,)), 812.8)
+    m = _trial(M_X, 783.6, _Fit(783.6, _base(), (M_X,)), 812.8)
+    twin = bounds_clear.PhysicalTwin(NamedTerm(M_X, "m", 0.00454, 0.0009, "s^2"), m, "", True, "")
+    stiff = NamedTerm(K_X, "k", -0.0409, 0.008, "")
+    held = bounds_said.Beyond(found=((stiff, k),), twins=(twin,), rivals_final=14.3)
+    coulomb = (NamedTerm(T.Coulomb.kind, "f", 0.001, 0.0003, ""),)
+    tail = bounds_said.apply(held, "explained", coulomb, coulomb, 1.0)[3]
+    assert tail.startswith(f"; {bounds_said.BEYOND_MARK}: inertia across the hysteretic element (on x) m = ")
+    assert tail.index("inertia across") < tail.index("parallel stiffness across") < tail.index("P-Delta")
+    named_twin = (twin.named,)
+    assert bounds_said.apply(held, "explained", named_twin, named_twin, 1.0)[3] == ""

@@ -192,7 +192,10 @@ def _rival_text(b: Beyond, named: Sequence[NamedTerm]) -> str:
             continue
         more = tr.improvement - b.rivals_final
         how = f"{more:.3g} chi-square more than they do" if more >= 0.05 else "as much as they do"
-        items.append(f"{t} (removes {how}, within chance; {_suggests(t.term)})")
+        if tw is not None:  # its physical twin first, the reading beyond its range as its alternative (F9)
+            items.append(f"{twin_text(tw, t, _suggests(t.term))}; it removes {how}, within chance")
+        else:
+            items.append(f"{t} (removes {how}, within chance; {_suggests(t.term)})")
     return f"; {BEYOND_MARK}: {'; '.join(items)}" if items else ""
 
 
