@@ -104,7 +104,7 @@ def _kinds_in(text: str, named: Sequence[str]) -> tuple[str, ...]:
 def _of_clause(c: str, named: Sequence[str]) -> list[Reading]:
     """The readings one detail clause carries (module docstring), by the words its module writes; a rival's
     ``instead_of``: the ``named`` terms the clause says it stands in place of."""
-    from .bounds_said import MU_MARK
+    from .bounds_said import BEYOND_MARK, MU_MARK
     from .caveats import FAMILY_MARK, PLAY_MARK
     from .masing import MASING_MARK
     from .rate_rival import RATE_MARK
@@ -144,6 +144,8 @@ def _of_clause(c: str, named: Sequence[str]) -> list[Reading]:
         out.append(
             Reading("mu_bracket", f"conditional on mu held at the {face} end of its bracket", rival=False)
         )
+    if c.startswith(BEYOND_MARK):
+        out.append(Reading("beyond", "or a reading beyond a term's physical range"))
     if c.startswith("not run across conditions: diagnose's revisit"):
         out.append(Reading("revisit_untried", "a level's revisit not run across", rival=False))
     return out
