@@ -7,8 +7,11 @@ the mean of ``F`` against ``(z_c + 1.28)^2 + 1`` says whether the stated noncent
 Data from reviewer 34's simulator (``sim.py``, written apart from the package; --sim) through
 studies/named_rate.py's designs. Prints one JSON line per case and a total line.
 
-Usage: ``python studies/limit_coverage.py DESIGN:TERM [DESIGN:TERM ...] [--seeds 8] [--sim /work/review34]``
-(designs f1a6, f1a3fo, f2res, f5res; terms k_x, k_u, c_u, c_x, f_x, f_u, m_u, m_x).
+Usage: ``python studies/limit_coverage.py DESIGN:TERM [DESIGN:TERM ...] [--seeds 8] [--first 0]
+[--sim /work/review34] [--refit]`` (designs f1a6, f1a3fo, f2res, f5res; terms k_x, k_u, c_u, c_x, f_x, f_u,
+m_u, m_x). ``--refit``: each row also holds the plain model and the plain model plus the term refitted
+(``fit_from``, ``fit_with``) on the diagnosis's own averaged experiments, and that F (``refit_F``), the plain
+chi2 and its dof: whether the selection's machinery reproduces its own statistic.
 """
 
 from __future__ import annotations
@@ -19,6 +22,7 @@ import math
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
@@ -29,8 +33,11 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("cells", nargs="+", help="DESIGN:TERM")
     ap.add_argument("--seeds", type=int, default=8)
+    ap.add_argument("--first", type=int, default=0, help="first noise seed")
     ap.add_argument("--sim", default="/work/review34", help="folder holding reviewer 34's sim.py")
+    ap.add_argument("--refit", action="store_true", help="refit on the diagnosis's own experiments")
     a = ap.parse_args()
+    seen = _capture() if a.refit else {}
     sys.path.insert(0, a.sim)
     passed = total = 0
     for cell in a.cells:
@@ -43,7 +50,8 @@ def main() -> None:
         if lim is None or not math.isfinite(lim.limit_90):
             print(json.dumps({"cell": cell, "limit_90": None}), flush=True)
             continue
-        for s in range(a.seeds):
+        for s in range(a.first, a.first + a.seeds):
+            seen.clear()
             d = named_rate.diagnose(named_rate.recordings(des, {term: lim.limit_90}, s))
             st = d.steps[0] if d.steps else None
             level = (0.5 if st is not None and st.targeted else 1.0) * float(d.settings["alpha"])
@@ -62,8 +70,40 @@ def main() -> None:
                 "z_c2": None if lim.level <= 0 else _zc2(lim.level, lim.one_sided),
                 "named": code in d.named_terms,
             }
+            if a.refit and st is not None:
+                row.update(_refit(seen, st, code))
             print(json.dumps(row), flush=True)
     print(json.dumps({"passed": passed, "total": total}), flush=True)
+
+
+def _capture() -> dict[str, Any]:
+    """The averaged experiments and substeps the diagnosis hands to its detection limits, kept per run."""
+    import bouc_wen_id.diagnosis.run as run
+
+    seen: dict[str, Any] = {}
+    orig = run.detection_limits
+
+    def keep(exps: Any, base: Any, steps: Any, *args: Any, **kw: Any) -> Any:
+        seen.update(exps=exps, substeps=args[3], base=base)
+        return orig(exps, base, steps, *args, **kw)
+
+    run.detection_limits = keep  # type: ignore[assignment]
+    return seen
+
+
+def _refit(seen: dict[str, Any], st: Any, code: str) -> dict[str, Any]:
+    from bouc_wen_id.diagnosis.fitting import fit_from, fit_with
+
+    if "exps" not in seen:
+        return {"refit_F": None}
+    exps, sub = seen["exps"], seen["substeps"]
+    base = st.base if st.base is not None else seen["base"]
+    plain = fit_from(exps, base.params, sub) or base
+    both = fit_with(exps, plain, code, sub)
+    if both is None:
+        return {"refit_F": None}
+    dof = sum(e.ybar.size for e in exps) - len(both.params.values) - 3 - 2 * len(exps)
+    return {"refit_F": (plain.cost - both.cost) / (both.cost / dof), "plain_chi2": plain.cost, "dof": dof + 1}
 
 
 def _zc2(level: float, one_sided: bool) -> float:
