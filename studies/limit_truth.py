@@ -5,6 +5,8 @@ recording's diagnosis (seed 1000), as studies/limit_coverage.py does; then, on t
 experiments (weights, grid) with the averaged period replaced by the simulator's noise-free output with the
 term at the stated 90 % value:
 
+- ``at_null_fit``: the plain model refitted to the null's fitted model plus the term at that value (what the
+  limit's own refits solve for ``t90``);
 - ``noise_free_lam``: the plain model refitted to it (from the null's fit): the noncentrality the term really
   gives, against the target ``t90`` the limit was solved for;
 - ``F``: Gaussian noise at each experiment's weight added to that averaged period (bypassing the recording's
@@ -58,9 +60,10 @@ def main() -> None:
     orig = limits._refined
 
     def keep(profile: Any, term: str, v1: float, targets: Any) -> tuple[float, float]:
+        out = orig(profile, term, v1, targets)
         if term == code:
-            seen.update(profile=profile, targets=targets)
-        return orig(profile, term, v1, targets)
+            seen.update(profile=profile, targets=targets, v90=out[1])
+        return out
 
     limits._refined = keep  # type: ignore[assignment]
     d0 = named_rate.diagnose(named_rate.recordings(a.design, {}, 1000))
@@ -92,6 +95,7 @@ def main() -> None:
         "limit_90": lim.limit_90,
         "t50": t50,
         "t90": t90,
+        "at_null_fit": profile.exact(code, seen["v90"]) if math.isfinite(seen["v90"]) else None,
         "noise_free_lam": None if free is None else free.cost,
         "F": [round(f, 2) for f in stats],
         "mean_F": float(np.mean(stats)) if stats else None,
