@@ -689,8 +689,9 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
         final, steps = start, list[Step]()
     else:
         # The targeted step after a named one (after_named.py), not on short records (centre_decay.py);
-        again = after_named.again(moved, setup.measured_noise, exps)
-        final, steps = after_named.select(fsx, start, steady, adequate, p_of, substeps, targeted, again, **kw)
+        again = after_named.again(moved, setup.measured_noise, exps)  # and after a named drift term:
+        t = targeted, again, after_named.drift_targeted(named_deg, setup.measured_noise, p_of(start), alpha)
+        final, steps = after_named.select(fsx, start, steady, adequate, p_of, substeps, *t, **kw)
         # then a named single term whose later lead (revisit.py) or rival (rival_revisit.py) failed its law.
         final, steps = rival_revisit.after(fsx, start, final, steps, adequate, substeps, **kw)
         plain, start = rebased_plain(plain, start, steps)  # a first step that refitted an unconverged start
