@@ -608,23 +608,25 @@ def _rejoint(
     at the steady terms' values; the trade between them is not in it (measured: 4 draws, docs)."""
     deg, _, _, final = got
     held = setup.held_out_test
-    # Not when the record needs the other drift term too (drift_pair.needs_both): a steady term named
-    # there may stand in for the uncorrected one (review rv35m F5), and re-estimating the named drift term
-    # beside it moved delta_eta from 0.053 to 0.012 (truth 0.05) on review 35m's degr_both_cx.
-    if not _deg_named(deg, held) or not final.params.terms or drift_pair.needs_both(deg, True, setup.alpha):
+    if not _deg_named(deg, held) or not final.params.terms:
         return got
     assert deg is not None  # (named)
     base = best_of([fit_from(sx, final.params, substeps)])
     if base is None:
         return got
     family, seen = len(setup.cands), before.drift_detected
-    stage = _degradation_stage(exps, sx, base, s, substeps, setup.alpha, family, held, seen, [], (deg.term,))
-    if stage is None or stage[0] is None or stage[0].term != deg.term or not _deg_named(stage[0], held):
+    terms = tuple(c for c in DRIFT_TERMS if c in setup.cands)
+    stage = _degradation_stage(exps, sx, base, s, substeps, setup.alpha, family, held, seen, [], terms)
+    new = None if stage is None else stage[0]
+    if new is None or new.term != deg.term or not _deg_named(new, held):
         return got
-    new, fexps, fsx, start = stage
-    assert new is not None  # (tested above)
-    new = replace(new, rival=deg.rival, rival_p_adjusted=deg.rival_p_adjusted)  # the pair's test as it was
-    return new, fexps, fsx, start
+    # Not when the re-run test still needs the other drift term (drift_pair.needs_both): a steady term named
+    # there may stand in for the uncorrected one (review rv35m F5); re-estimating the named drift term
+    # beside it moved delta_eta from 0.053 to 0.012 (truth 0.05) on review 35m's degr_both_cx.
+    if drift_pair.needs_both(new, True, setup.alpha):
+        return got
+    assert stage is not None
+    return stage[0], stage[1], stage[2], stage[3]
 
 
 def _drift_stage(
