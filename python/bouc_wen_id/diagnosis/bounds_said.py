@@ -21,7 +21,9 @@ headline rather than left to stand-ins.
   ``mu |w|^(mu - 1)`` (rust/steady.rs, rust/series_loop.rs), unbounded at every zero of w below mu = 1, so
   the bracket is not extended); a misfit then is read against a misspecified hysteresis, and the verdict
   says so first: the terms that fit part of it are conditional on it and may stand in for that shape
-  (review 34 problem 2: mu = 0.5 named viscous + Coulomb + Dahl on x on a null and never mentioned mu).
+  (review 34 problem 2: mu = 0.5 named viscous + Coulomb + Dahl on x on a null and never mentioned mu), so
+  they are not named: said as fitted with mu held there, their values without standard errors (review 36
+  problem 3).
 """
 
 from __future__ import annotations
@@ -214,6 +216,22 @@ def _mu_text(b: Beyond) -> str:
     )
 
 
+#: The words that open the clause on the terms fitted with mu held at its bracket's end (:func:`_held_text`).
+HELD_MARK = "fitted with mu held at the"
+
+
+def _held_text(named: Sequence[NamedTerm], face: str) -> str:
+    """The terms the selection kept beside mu held at its bracket's ``face``, said as stand-ins: their values
+    without their standard errors (those assume the hysteresis is right; review 36 problem 3: mu = 0.6 with
+    a spring on x named k at 2.6x the truth, 48 se, and a play and a viscous damping that are not there)."""
+    what = ", ".join(f"{t.label} {t.symbol} = {t.value:.4g} {t.unit}".rstrip() for t in named)
+    shape = "a loop sharper than mu = 1 allows" if face == "lower" else "a loop shape beyond mu's bracket"
+    return (
+        f"; {HELD_MARK} {face} end of its bracket, not named: {what} (values without their standard errors, "
+        f"which assume the hysteresis is right; they may stand in for {shape})"
+    )
+
+
 def apply(
     b: Optional[Beyond],
     status: Status,
@@ -228,8 +246,11 @@ def apply(
     is not said (a design twin's tie is design_twin.py's). A final fit holding mu at its bracket's end with a
     misfit left (not "explained": an adequate final model within the bracket stands, its fit note says the
     face) is said in a clause after the headline, whose qualifiers then say the verdict is conditional on it;
-    the named terms stay (real data: the MR damper at 0.5 A holds mu at 1 beside a viscous damping on u that
-    its physics has).
+    the terms the selection kept are then not named: the status is "unexplained" and a clause says them as
+    fitted with mu held there, their values without standard errors (review 36 problem 3: mu = 0.6 with a
+    spring on x named k at 2.6x the truth, 48 se, beside a play and a viscous damping on x that are not
+    there). This also demotes real data's terms when mu is held there (the MR damper at 0, 0.5, 0.75 A:
+    its viscous damping is then said as fitted with mu at 1, not as a finding).
     """
     named = tuple(named)
     if b is None or status == "adequate":
@@ -239,6 +260,8 @@ def apply(
     mu = _mu_text(b) if b.mu_face and status != "explained" else ""
     if b.found and (b.beats_final or not terms):
         return "unexplained", (), _found_text(b, fraction, terms), mu
+    if mu and named:  # review 36 problem 3: stand-ins for the loop's shape, not findings
+        return "unexplained", (), "", mu + _held_text(named, b.mu_face)
     # One that removes less than the final model is not said (review of the merge: a 56 % negative
     # stiffness beside an inertia that explains 100 %, P-Delta "suggested"; an exact tie is a design twin,
     # said by design_twin.py with the experiment that separates them); one that removes as much or more,
@@ -247,4 +270,14 @@ def apply(
     return status, named, "", rival + mu
 
 
-__all__ = ["BEYOND_MARK", "Beyond", "across_text", "apply", "found", "held_mu", "refused_by_bound", "MOST"]
+__all__ = [
+    "BEYOND_MARK",
+    "Beyond",
+    "across_text",
+    "apply",
+    "found",
+    "held_mu",
+    "refused_by_bound",
+    "HELD_MARK",
+    "MOST",
+]

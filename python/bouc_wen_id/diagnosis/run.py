@@ -41,6 +41,7 @@ from . import (
     law_untested,
     lines,
     loop_centre,
+    near_limit,
     null_named,
     output_clip,
     pairs,
@@ -845,6 +846,7 @@ def _with_limits(
     named = {n.term for n in d.named}
     lims = tuple(replace(lim, not_named="") if lim.term in named else lim for lim in lims)
     tail = resolution.adequate_tail(lims, d, setup.alpha, setup.units[0]) if d.status == "adequate" else ""
+    tail += near_limit.text(d.named, lims)  # a value named near its limit is biased high (near_limit.py)
     return replace(d, limits=lims, verdict=resolution.adequate_head(d.verdict, lims) + tail)
 
 
