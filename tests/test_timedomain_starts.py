@@ -126,9 +126,45 @@ def test_to_model_fits_the_named_term_from_its_diagnosed_value(tmp_path: Path) -
     assert bw.load_model(tmp_path / "m.json").to_dict() == fit.plant.to_dict()
     with pytest.raises(bw.errors.InvalidParameterError, match="named terms"):
         diagnosis_model(_diagnosis(C_U, 0.1), recs, terms=["viscous"])  # type: ignore[arg-type]
-    meas = bw.Measurement(recs[0].t, recs[0].u, recs[0].y)
-    with pytest.raises(bw.errors.InvalidParameterError, match="to_recording"):
-        diagnosis_model(_diagnosis(C_U, 0.1), [meas])  # type: ignore[arg-type]
+    with pytest.raises(bw.errors.InvalidParameterError, match="recordings\\[0\\] is a str"):
+        diagnosis_model(_diagnosis(C_U, 0.1), ["m.csv"])  # type: ignore[arg-type]
+
+
+def test_to_model_fits_lab_measurements_as_recorded() -> None:
+    """Review 36b: ``diagnose FILES --model`` on lab CSV files refused the Measurements (and lost the
+    report). A Measurement is a raw record from its first sample: fitted as such, from the plain model's
+    identification as its start (what the CLI passes)."""
+    recs = _records(ONE_AMPLITUDE, 7)
+    meas = [bw.Measurement(r.t, r.u, r.y, name=f"m{i}") for i, r in enumerate(recs)]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        fit = diagnosis_model(_diagnosis(1.2 * C_U, 0.1 * C_U), meas, start=bw.identify(recs))  # type: ignore[arg-type]
+    c, se = fit.value("c"), fit.standard_errors["c"]
+    assert abs(c - C_U) < 4 * se, (c, se)
+    assert fit.lead_in == (0,) * len(meas)  # from the first sample, as recorded
+
+
+def test_cli_keeps_the_report_when_the_model_cannot_be_fitted(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from bouc_wen_id import cli
+
+    recs = _records(ONE_AMPLITUDE, 11)
+    bw.save(tmp_path / "csv", recs)
+
+    def refuse(*_: object) -> Path:
+        raise bw.errors.NotConvergedError("no start converged")
+
+    monkeypatch.setattr(cli, "_diagnosed_model", refuse)
+    out = tmp_path / "out"
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        rc = cli.main(
+            ["diagnose", str(tmp_path / "csv"), "--out", str(out), "--no-figures", "--no-held-out", "--model"]
+        )
+    assert rc == 1
+    assert (out / "diagnosis.json").exists() and (out / "report.html").exists()
+    assert "model.json not written (NotConvergedError: no start converged)" in capsys.readouterr().err
 
 
 def test_cli_diagnose_model_writes_a_model_export_takes(tmp_path: Path) -> None:

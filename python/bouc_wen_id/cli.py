@@ -505,9 +505,16 @@ def _cmd_diagnose(args: argparse.Namespace) -> int:
             u_unit=style["u_unit"],
             y_unit=style["y_unit"],
         )
+        failed = ""
         if args.model:
-            written = [*written, _diagnosed_model(d, items, staged)]
+            try:
+                written = [*written, _diagnosed_model(d, items, staged, identified)]
+            except BoucWenIdError as exc:  # the report stands without it (review 36b: lost with it)
+                failed = f"{type(exc).__name__}: {exc}"
     _print_written(args, written)
+    if failed:
+        print(f"error: model.json not written ({failed}); the report above was written", file=sys.stderr)
+        return 1
     return 0
 
 
@@ -533,12 +540,19 @@ def _json_target(args: argparse.Namespace) -> bool:
     return folder
 
 
-def _diagnosed_model(d: Any, items: Sequence[Any], out: Path) -> Path:
-    """OUT/model.json: the model the diagnosis describes (``Diagnosis.to_model``), saved by save_model."""
+def _diagnosed_model(d: Any, items: Sequence[Any], out: Path, identified: Any = None) -> Path:
+    """OUT/model.json: the model the diagnosis describes (``Diagnosis.to_model``), saved by save_model.
+    Lab files (no sine Recording among them) start from the plain model identify fitted for the report."""
     from .export import save_model
+    from .model import Recording
+    from .result import IdentificationResult
 
     print("to_model: fitting G with the named terms to the same files", file=sys.stderr, flush=True)
-    fit = d.to_model(items)
+    sines = any(isinstance(r, Recording) for r in items)
+    if sines or not isinstance(identified, IdentificationResult):
+        fit = d.to_model(items)
+    else:
+        fit = d.to_model(items, start=identified)
     print(fit.summary(), file=sys.stderr)
     path = out / "model.json"
     save_model(fit, path)

@@ -63,13 +63,17 @@ def diagnosis_model(diagnosis: Diagnosis, recordings: Sequence[Any], **options: 
         )
     if "terms" in options:
         raise InvalidParameterError("to_model fits the named terms; call fit_time_domain for other terms")
-    recs = list(recordings) if not isinstance(recordings, Recording) else [recordings]
+    from ..measurement import Measurement
+
+    recs = list(recordings) if not isinstance(recordings, (Recording, Measurement)) else [recordings]
+    # A lab Measurement is a raw record from its first sample (review 36b: diagnose FILES --model on lab
+    # CSV files refused it and lost the report): fitted as it was recorded, its time in seconds.
+    recs = [TimeRecord(r.t, r.u, r.y, name=r.name) if isinstance(r, Measurement) else r for r in recs]
     for i, r in enumerate(recs):
         if not isinstance(r, (Recording, TimeRecord, tuple)):
             raise InvalidParameterError(
                 f"recordings[{i}] is a {type(r).__name__}: to_model fits the raw records (Recording, "
-                "TimeRecord or (t, u, y)); convert a Measurement with Measurement.to_recording(amplitude, "
-                "frequency, settle_periods) (averaged periods hold no time record to fit)"
+                "Measurement, TimeRecord or (t, u, y))"
             )
     options.setdefault("lead_in", settling_lead_in(recs))
     return fit_time_domain(recs, terms=named_term_starts(diagnosis), **options)
