@@ -24,7 +24,8 @@ from .data import quantisation_step as quantisation_step
 
 
 def _settled(experiments: Any) -> tuple[Any, list[str]]:
-    """The recordings with their start-up transient trimmed, as ``identify`` trims it (TransientWarning).
+    """The recordings with their start-up transient trimmed, as ``identify`` trims it (TransientWarning), on
+    departures clipped at a few robust sd (outliers.py: a spike is no transient); gross outliers are noted.
 
     A recording whose first periods differ from its steady ones beyond the noise (``transient_periods``)
     is trimmed when the rest then shows no trend (:func:`_trending`): a transient decays, a drift goes on.
@@ -33,7 +34,7 @@ def _settled(experiments: Any) -> tuple[Any, list[str]]:
     per-experiment drift test (:func:`_unsettled`), which keep physics from being named from it.
     """
     from ..model import Recording
-    from ..prepare import transient_periods
+    from .outliers import outlier_notes, transient_periods  # robust to spikes (review 36)
 
     seq = list(experiments) if isinstance(experiments, (list, tuple)) else [experiments]
     notes: list[str] = []
@@ -69,7 +70,7 @@ def _settled(experiments: Any) -> tuple[Any, list[str]]:
                 metadata=item.metadata,
             )
         out.append(item)
-    return out, notes
+    return out, [*notes, *outlier_notes(out)]
 
 
 #: Level of the trend test that keeps a drift (which goes on after the trimmed periods) from being trimmed
@@ -95,9 +96,10 @@ def _trending(y: Any, p: int, s: int, n: int) -> bool:
     period index, locate's t-test, at :data:`TREND_LEVEL`)."""
     from .data import _period_features
     from .locate import _t_sf2, _trend
+    from .outliers import clipped
 
     rows = np.asarray(y[s * p : (s + n) * p], dtype=np.float64).reshape(n, p)
-    dc, h1 = _period_features(rows)
+    dc, h1 = _period_features(clipped(rows, p))  # a spike moves one period's DC: no trend (review 36)
     amp = np.abs(h1)
     _, ht, dof = _trend(amp / (float(np.mean(amp)) or 1.0))
     _, dt, _ = _trend(dc)
