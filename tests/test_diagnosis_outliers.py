@@ -14,9 +14,8 @@ from typing import Any, Callable
 
 import bouc_wen_id as bw
 import numpy as np
-from scipy.stats import binom  # type: ignore[import-untyped]
-
 from bouc_wen_id.diagnosis import outliers, settling
+from scipy.stats import binom  # type: ignore[import-untyped]
 
 P, PERIODS, SETTLE, SD = 128, 8, 10, 0.01
 OMEGAS = (1.2, 2.8, 5.5, 1.2, 2.8, 5.5)

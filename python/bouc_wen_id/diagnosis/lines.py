@@ -347,7 +347,9 @@ def _name(seq: Sequence[Any], i: int) -> str:
 
 def _note(hz: float, seq: Sequence[Any], hits: Sequence[tuple[int, float]], vague: bool, odds: float) -> str:
     names = ", ".join(f"{_name(seq, i)} (amplitude {a:.3g} [y])" for i, a in hits)
-    names += f" (p = {min(odds, 1.0):.2g} that noise alone, searched over every recording, shows so strong a line)"
+    names += (
+        f" (p = {min(odds, 1.0):.2g} that noise alone, searched over every recording, shows so strong a line)"
+    )
     alias = " or one of its aliases: these sampling rates cannot tell them apart" if vague else ""
     return (
         f"a disturbance not locked to the input (a steady sinusoid at {hz:.4g} cycles per unit of t{alias}, "

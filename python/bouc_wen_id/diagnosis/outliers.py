@@ -47,8 +47,7 @@ MAD_SD = 1.4826
 
 def _floor(y: FloatArray, p: int) -> float:
     """The least robust sd that is noise: a simulated loop's numerical accuracy, or one quantisation step."""
-    from .data import quantisation_step
-    from .settling import numerical_rtol
+    from .data import numerical_rtol, quantisation_step
 
     peak = float(np.max(np.abs(y))) if y.size else 0.0
     return max(numerical_rtol(p) * peak, quantisation_step(y))
@@ -76,7 +75,9 @@ def transient_periods(y: Any, p: int, s: int, n: int) -> int:
     tail_dev = np.clip(tail - ref, -bound, bound)
     noise = float(np.mean(tail_dev**2)) * m / (m - 1.0)
     centred_power = float(np.mean((ref - ref.mean()) ** 2))
-    tol = noise * (1.0 + 1.0 / m) * (1.0 + TRANSIENT_CHI2_SD / math.sqrt(p)) + TRANSIENT_RTOL**2 * centred_power
+    tol = (
+        noise * (1.0 + 1.0 / m) * (1.0 + TRANSIENT_CHI2_SD / math.sqrt(p)) + TRANSIENT_RTOL**2 * centred_power
+    )
     dev = np.mean(np.clip(seg[: n // 2] - ref, -bound, bound) ** 2, axis=1)
     k = 0
     while k < dev.size and dev[k] > tol:
@@ -89,12 +90,12 @@ def clipped(rows: FloatArray, p: int) -> FloatArray:
     :data:`CLIP_SD` robust sd (a copy): per-period features (DC, fundamental) a spike does not move."""
     n = rows.shape[0]
     if n < 3:
-        return rows.copy()
+        return np.array(rows, dtype=np.float64)
     mean = rows.mean(axis=0)
     dev = rows - mean
     sd = _robust_sd(dev) * math.sqrt(n / (n - 1.0))
     if not sd > _floor(rows.ravel(), p):
-        return rows.copy()
+        return np.array(rows, dtype=np.float64)
     out: FloatArray = mean + np.clip(dev, -CLIP_SD * sd, CLIP_SD * sd)
     return out
 
@@ -132,7 +133,10 @@ def outlier_notes(items: Sequence[Any]) -> list[str]:
     from ..model import Recording
 
     recs = [(i, it) for i, it in enumerate(items) if isinstance(it, Recording)]
-    spans = [(i, it, it.samples_per_period, it.settle_periods, it.whole_periods - it.settle_periods) for i, it in recs]
+    spans = [
+        (i, it, it.samples_per_period, it.settle_periods, it.whole_periods - it.settle_periods)
+        for i, it in recs
+    ]
     total = sum(p * n for _i, _it, p, _s, n in spans if n >= 3)
     limit = threshold(total)
     notes = []
@@ -142,7 +146,7 @@ def outlier_notes(items: Sequence[Any]) -> list[str]:
             name = it.metadata.get("name", f"recording {i}")
             where = ", ".join(str(j + 1) for j in periods[:6]) + (", ..." if len(periods) > 6 else "")
             notes.append(
-                f"{name}: {count} sample{'s are' if count > 1 else ' is'} outlier{'s' if count > 1 else ''} "
+                f"{name}: {count} sample{'s are outliers' if count > 1 else ' is an outlier'} "
                 f"(> {limit:.2g} robust sd from the averaged period, the largest {top:.3g} sd; in analysed "
                 f"period{'s' if len(periods) > 1 else ''} {where} of {n}; Gaussian noise gives one in the "
                 f"whole diagnosis with a chance of {OUTLIER_ALPHA:.0%}): spikes or a heavy-tailed noise, not "
@@ -152,4 +156,12 @@ def outlier_notes(items: Sequence[Any]) -> list[str]:
     return notes
 
 
-__all__ = ["transient_periods", "clipped", "outlier_notes", "outliers", "threshold", "CLIP_SD", "OUTLIER_ALPHA"]
+__all__ = [
+    "transient_periods",
+    "clipped",
+    "outlier_notes",
+    "outliers",
+    "threshold",
+    "CLIP_SD",
+    "OUTLIER_ALPHA",
+]
