@@ -162,3 +162,56 @@ def test_a_tone_in_the_measured_input_is_the_plants_response_not_a_disturbance()
     clean = [Recording(r.t, a * np.cos(r.frequency * r.t), r.y, a, r.frequency, settle_periods=10)
              for r, a in zip(recs, [r.amplitude for r in recs])]  # fmt: skip
     assert not any(lines.input_carries_a_line(r) for r in clean)  # an exact sine's rounding is no line
+
+
+def _six(seed: int, hum_sd: float = 0.0, hum_hz: float = 50.33) -> list[Any]:
+    """Review 36's layout: six experiments (1.2, 2.8, 5.5 rad/s twice), 8 analysed periods after 10 settling
+    ones, 128 samples a period, white noise of sd 0.01 drawn in that order; a hum in the third one only."""
+    rng = np.random.default_rng(seed)
+    out = []
+    for i, om in enumerate((1.2, 2.8, 5.5, 1.2, 2.8, 5.5)):
+        t = np.arange(18 * 128) * (2 * math.pi / om / 128)
+        y = 0.5 * np.sin(om * t) + 0.01 * rng.standard_normal(t.size)
+        if i == 2:
+            y = y + hum_sd * 0.01 * np.sin(2 * math.pi * hum_hz * t + 0.3)
+        out.append(bw.Recording(t, np.cos(om * t), y, amplitude=1.0, frequency=om, settle_periods=10))
+    return out
+
+
+def test_review36_white_noise_draw_holds_no_line() -> None:
+    """Review 36 (null_mu06, seed 265): main took "a steady sinusoid at 21.52 ... (amplitude 0.00226)" out of
+    the third recording of white noise; its level was the median of about 12 bins, and the search's chance
+    was 40 times its design (2.3 % of white-noise diagnoses against 6e-4)."""
+    from bouc_wen_id.diagnosis import lines
+
+    recs = _six(265)
+    out, notes = lines.removed(recs)
+    assert notes == [] and out is recs
+
+
+def test_the_threshold_is_the_f_tail_of_a_bin_over_an_estimated_level() -> None:
+    """A bin over a level worth w bins is F(2, 2w): its tail at the limit is the chance asked for, far above
+    the exponential's at small w (the search's error before), and the same as w grows."""
+    from bouc_wen_id.diagnosis import lines
+    from scipy.stats import expon, f  # type: ignore[import-untyped]
+
+    for chance in (1e-2, 1e-4, 1e-7):
+        for worth in (6.0, 20.0, 1e6):
+            x = lines.limit(chance, worth) - lines.PAD_EXCESS
+            assert math.isclose(float(f.sf(x, 2, 2 * worth)), chance, rel_tol=1e-3)
+            assert math.isclose(lines.chance(x + lines.PAD_EXCESS, worth), chance, rel_tol=1e-6)
+        assert float(expon.sf(lines.limit(chance, 6.0) - lines.PAD_EXCESS)) < chance / 10
+
+
+def test_a_hum_of_two_noise_sd_in_one_of_six_recordings_is_found_with_its_chance() -> None:
+    from bouc_wen_id.diagnosis import lines
+
+    for seed in (1, 2):
+        out, notes = lines.removed(_six(seed, hum_sd=2.0))
+        assert len(notes) == 1 and "recording 2 (amplitude" in notes[0], notes
+        hz = float(notes[0].split("sinusoid at ")[1].split(" ")[0])
+        assert abs(hz - 50.33) < 0.05, notes
+        amp = float(notes[0].split("amplitude ")[1].split(" ")[0])
+        assert abs(amp - 0.02) < 0.004, notes
+        p = float(notes[0].split("(p = ")[1].split(" ")[0])
+        assert p < lines.LINE_ALPHA, notes

@@ -11,7 +11,8 @@ the hum's remainder at 2 rad/s (f = 0.08 per period, 10 periods) was 0.47 noise 
 A white or coloured noise model cannot describe it (it is deterministic), so it is modelled: each recording's
 steady periods minus their mean (what the input's harmonics leave) are searched for the strongest line at
 least :data:`GUARD_BINS` record bins from every harmonic of the input; it is kept when it stands out of the
-local periodogram level beyond chance (:data:`LINE_ALPHA`, Bonferroni over the bins), when the bin
+local periodogram level beyond chance (:data:`LINE_ALPHA` per diagnosis, Bonferroni over the recordings and
+the bins, corrected for the level's own error: :func:`limit`), when the bin
 mirrored about its nearest harmonic holds less than :data:`MIRROR_SHARE` of its power (a loop that drifts
 or settles modulates its harmonics: two sidebands of equal power; a line has one) and when its amplitude
 is the same in both halves of the record (a free oscillation decays). Its frequency, refined by least
@@ -34,8 +35,12 @@ from numpy.typing import NDArray
 
 FloatArray = NDArray[np.float64]
 
-#: False-alarm level of the line search per recording (Bonferroni over its periodogram's bins).
-LINE_ALPHA = 1e-4
+#: False-alarm level of the line search per diagnosis: Bonferroni over the recordings searched and each one's
+#: periodogram bins, with the chance that the estimated noise level is low (:func:`limit`). Measured on
+#: null draws (/tmp/noise36/lines_null.py of session 36: six recordings of 8 periods at 128 samples, 1000
+#: draws each): 0 in 1000 under white, AR(1) 0.8 and Student t3 noise; with the earlier per-recording 1e-4
+#: and an uncorrected level, 2.3 % of white-noise diagnoses reported a line (0.42 % of recordings).
+LINE_ALPHA = 1e-3
 #: Least distance of a searched line from every harmonic of the input, in bins of the whole record (a
 #: drifting loop's sidebands sit within a bin or two of its harmonics; the mirror test handles the rest).
 GUARD_BINS = 2.5
@@ -48,8 +53,14 @@ MAX_LINES = 3
 MIN_PERIODS = 5
 #: Lowest frequency searched or fitted, in harmonics of the input.
 MIN_HARMONIC = 2.0
-#: Half-width of the band whose median is a line's local noise level, in harmonics of the input.
+#: Half-width of the band whose median is a line's local noise level, in harmonics of the input ...
 LEVEL_HARMONICS = 2
+#: ... and at least this many record bins (a median of ~12 searched bins, as at 8 periods before, was low
+#: by a third often enough to make the search's chance 40 times its design).
+LEVEL_BINS = 48
+#: Efficiency of the median of exponential periodogram bins as a level estimate, relative to their mean
+#: (its variance ``1 / (K ln(2)^2)`` against ``1 / K``): K bins' median is worth ``MEDIAN_EFFICIENCY K``.
+MEDIAN_EFFICIENCY = math.log(2.0) ** 2
 #: Zero padding of the search periodogram.
 PAD = 4
 #: What the padded periodogram's maximum exceeds that of its independent bins by (in units of the level).
@@ -108,18 +119,39 @@ def _spectrum(
     return per, freq, harm, far
 
 
-def _level(per: FloatArray, far: NDArray[np.bool_], k: int, n: int) -> float:
+def _level(per: FloatArray, far: NDArray[np.bool_], k: int, n: int) -> tuple[float, float]:
     """The noise's periodogram level about bin ``k``: the median of the searched bins within
-    :data:`LEVEL_HARMONICS` harmonics (a coloured noise's level changes over the band), over ln 2."""
-    half = max(16, LEVEL_HARMONICS * n) * PAD
+    :data:`LEVEL_HARMONICS` harmonics or :data:`LEVEL_BINS` record bins (a coloured noise's level changes
+    over the band), over ln 2; and how many independent exponential bins' mean it is worth."""
+    half = max(LEVEL_BINS, LEVEL_HARMONICS * n) * PAD
     lo, hi = max(0, k - half), min(per.size, k + half + 1)
     near = per[lo:hi][far[lo:hi]]  # the bins the search sees (the drift's projection dips at harmonics)
-    return float(np.median(near)) / math.log(2.0) if near.size else 0.0
+    if not near.size:
+        return 0.0, 0.0
+    return float(np.median(near)) / math.log(2.0), MEDIAN_EFFICIENCY * near.size / PAD
 
 
-def _candidate(r: FloatArray, n: int, p: int, low: float = MIN_HARMONIC) -> Optional[float]:
-    """The strongest line of ``r`` that passes the search's tests, in cycles per sample, or None; searched
-    from ``low`` harmonics of the input up."""
+def limit(chance: float, worth: float) -> float:
+    """The ratio of a bin's periodogram to the estimated level that noise exceeds with ``chance``: for an
+    exponential bin over a level worth ``worth`` independent bins (F with 2 and ``2 worth`` degrees of
+    freedom) ``worth (chance^(-1/worth) - 1)``, the exponential's ``ln(1 / chance)`` as ``worth`` grows,
+    plus :data:`PAD_EXCESS` for the padded periodogram's maximum."""
+    w = max(worth, 1.0)
+    return w * math.expm1(-math.log(chance) / w) + PAD_EXCESS
+
+
+def chance(ratio: float, worth: float) -> float:
+    """The chance that one bin of noise reaches ``ratio`` times the estimated level (:func:`limit`'s
+    inverse)."""
+    w = max(worth, 1.0)
+    return math.exp(-w * math.log1p(max(ratio - PAD_EXCESS, 0.0) / w))
+
+
+def _candidate(
+    r: FloatArray, n: int, p: int, low: float = MIN_HARMONIC, alpha: float = LINE_ALPHA
+) -> Optional[float]:
+    """The strongest line of ``r`` that passes the search's tests at chance ``alpha`` (Bonferroni over the
+    bins searched), in cycles per sample, or None; searched from ``low`` harmonics of the input up."""
     from scipy.optimize import minimize_scalar  # type: ignore[import-untyped]
 
     m = r.size
@@ -128,9 +160,9 @@ def _candidate(r: FloatArray, n: int, p: int, low: float = MIN_HARMONIC) -> Opti
         return None
     size = PAD * m
     k = int(np.argmax(np.where(far, per, 0.0)))
-    level = _level(per, far, k, n)
+    level, worth = _level(per, far, k, n)
     bins = max(2.0, float(np.count_nonzero(far)) / PAD)  # independent bins searched
-    if not level > 0 or per[k] / level < math.log(bins / LINE_ALPHA) + PAD_EXCESS:
+    if not level > 0 or per[k] / level < limit(alpha / bins, worth):
         return None
     mirror = int(round((2 * harm[k] - freq[k]) * size))
     if 0 <= mirror < per.size and per[mirror] > MIRROR_SHARE * per[k]:
@@ -174,16 +206,16 @@ def input_carries_a_line(rec: Any) -> bool:
     return abs(_fit(ru, f, n, p)[0]) > INPUT_SHARE * float(np.max(np.abs(u)))
 
 
-def _lines(rec: Any) -> list[float]:
-    """Lines found in one recording, in cycles per sample (each its alias in [0, 1/2]); none where its input
-    carries a line (:func:`input_carries_a_line`)."""
+def _lines(rec: Any, alpha: float = LINE_ALPHA) -> list[float]:
+    """Lines found in one recording at chance ``alpha`` for the recording, in cycles per sample (each its
+    alias in [0, 1/2]); none where its input carries a line (:func:`input_carries_a_line`)."""
     y, p, n, _s, dt = _steady(rec)
     if n < MIN_PERIODS or not (dt > 0) or input_carries_a_line(rec):
         return []
     r = _orth(y, n, p)
     found: list[float] = []
     for _ in range(MAX_LINES):
-        f = _candidate(r, n, p)
+        f = _candidate(r, n, p, alpha=alpha)
         if f is None:
             break
         found.append(f)
@@ -251,13 +283,15 @@ def removed(items: Any) -> tuple[Any, list[str]]:
 
     seq = list(items) if isinstance(items, (list, tuple)) else [items]
     recs = [i for i, it in enumerate(seq) if isinstance(it, Recording)]
-    found = [(f, _steady(seq[i])[4], _steady(seq[i])[0].size) for i in recs for f in _lines(seq[i])]
+    each = LINE_ALPHA / max(1, len(recs))  # the search's chance per diagnosis, shared by the recordings
+    found = [(f, _steady(seq[i])[4], _steady(seq[i])[0].size) for i in recs for f in _lines(seq[i], each)]
     resolved = _resolved(found)
     freqs = [hz for hz, _ in resolved]
     if not freqs:
         return items, []
     out = list(seq)
     where: dict[float, list[tuple[int, float]]] = {f: [] for f in freqs}
+    odds = {f: 1.0 for f in freqs}  # the chance of the strongest fit under noise alone, searched everywhere
     level = LINE_ALPHA / max(1, len(freqs) * len(recs))
     for i in recs:
         rec = seq[i]
@@ -275,14 +309,16 @@ def removed(items: Any) -> tuple[Any, list[str]]:
             k = int(round(a * PAD * r.size))
             if coh > MAX_COHERENCE or a * p < MIN_HARMONIC or k >= per.size:
                 continue
-            lev = _level(per, far, k, n)  # the line against the noise's own level at its frequency
+            lev, worth = _level(per, far, k, n)  # the line against the noise's own level at its frequency
             top = float(np.max(per[max(0, k - PAD) : k + PAD + 1]))
-            if not lev > 0 or top / lev < math.log(1.0 / level) + PAD_EXCESS:
+            if not lev > 0 or top / lev < limit(level, worth):
                 continue
             j0 = np.arange(y_all.size, dtype=np.float64) - s * p  # the steady stretch's sample 0
             y_all = y_all - (amp * np.exp(2j * math.pi * f * j0)).real
             r = r - _line(r, f, n, p, drift=False)
             where[hz].append((i, abs(amp)))
+            searched = len(recs) * max(2.0, float(np.count_nonzero(far)) / PAD)
+            odds[hz] = min(odds[hz], searched * chance(top / lev, worth))
             changed = True
         if changed:
             out[i] = Recording(
@@ -298,7 +334,7 @@ def removed(items: Any) -> tuple[Any, list[str]]:
                 metadata=dict(rec.metadata),
             )
     vague = dict(resolved)
-    notes = [_note(hz, seq, hits, vague[hz]) for hz, hits in where.items() if hits]
+    notes = [_note(hz, seq, hits, vague[hz], odds[hz]) for hz, hits in where.items() if hits]
     if not notes:
         return items, []
     return (out if isinstance(items, (list, tuple)) else out[0]), notes
@@ -309,8 +345,11 @@ def _name(seq: Sequence[Any], i: int) -> str:
     return str(meta.get("name", f"recording {i}"))
 
 
-def _note(hz: float, seq: Sequence[Any], hits: Sequence[tuple[int, float]], vague: bool) -> str:
+def _note(hz: float, seq: Sequence[Any], hits: Sequence[tuple[int, float]], vague: bool, odds: float) -> str:
     names = ", ".join(f"{_name(seq, i)} (amplitude {a:.3g} [y])" for i, a in hits)
+    names += (
+        f" (p = {min(odds, 1.0):.2g} that noise alone, searched over every recording, shows so strong a line)"
+    )
     alias = " or one of its aliases: these sampling rates cannot tell them apart" if vague else ""
     return (
         f"a disturbance not locked to the input (a steady sinusoid at {hz:.4g} cycles per unit of t{alias}, "

@@ -16,15 +16,19 @@ from typing import Any
 import numpy as np
 
 from ..errors import TransientWarning
+from .data import NUMERICAL_RTOL as NUMERICAL_RTOL  # moved to data.py (outliers.py needs them); kept here
 from .data import (
     QUANTISED_LEVELS as QUANTISED_LEVELS,  # moved to data.py (data.prepare needs them); kept here
 )
+from .data import SIMULATION_ERROR_C as SIMULATION_ERROR_C
 from .data import DiagExperiment
+from .data import numerical_rtol as numerical_rtol
 from .data import quantisation_step as quantisation_step
 
 
 def _settled(experiments: Any) -> tuple[Any, list[str]]:
-    """The recordings with their start-up transient trimmed, as ``identify`` trims it (TransientWarning).
+    """The recordings with their start-up transient trimmed, as ``identify`` trims it (TransientWarning), on
+    departures clipped at a few robust sd (outliers.py: a spike is no transient); gross outliers are noted.
 
     A recording whose first periods differ from its steady ones beyond the noise (``transient_periods``)
     is trimmed when the rest then shows no trend (:func:`_trending`): a transient decays, a drift goes on.
@@ -33,7 +37,7 @@ def _settled(experiments: Any) -> tuple[Any, list[str]]:
     per-experiment drift test (:func:`_unsettled`), which keep physics from being named from it.
     """
     from ..model import Recording
-    from ..prepare import transient_periods
+    from .outliers import outlier_notes, transient_periods  # robust to spikes (review 36)
 
     seq = list(experiments) if isinstance(experiments, (list, tuple)) else [experiments]
     notes: list[str] = []
@@ -69,7 +73,7 @@ def _settled(experiments: Any) -> tuple[Any, list[str]]:
                 metadata=item.metadata,
             )
         out.append(item)
-    return out, notes
+    return out, [*notes, *outlier_notes(out)]
 
 
 #: Level of the trend test that keeps a drift (which goes on after the trimmed periods) from being trimmed
@@ -95,9 +99,10 @@ def _trending(y: Any, p: int, s: int, n: int) -> bool:
     period index, locate's t-test, at :data:`TREND_LEVEL`)."""
     from .data import _period_features
     from .locate import _t_sf2, _trend
+    from .outliers import clipped
 
     rows = np.asarray(y[s * p : (s + n) * p], dtype=np.float64).reshape(n, p)
-    dc, h1 = _period_features(rows)
+    dc, h1 = _period_features(clipped(rows, p))  # a spike moves one period's DC: no trend (review 36)
     amp = np.abs(h1)
     _, ht, dof = _trend(amp / (float(np.mean(amp)) or 1.0))
     _, dt, _ = _trend(dc)
@@ -146,27 +151,6 @@ def _check_experiments(exps: Sequence[DiagExperiment]) -> None:
                 )
         dc = float(np.mean(e.ybar))
         _check_response(e.ybar - dc, abs(dc), e.noise_var, e.periods, e.source)
-
-
-#: The numerical accuracy of a simulated loop relative to the output's peak: below it a noise floor is
-#: rounding, not noise. Noise-free data carry their generator's discretisation error (measured: 4e-8 of the
-#: peak for the demo plant at 1024 samples per period, 2e-6 for a resonant G with a delay at 64 samples and
-#: 8 substeps), which a floor of rounding (1e-15) turned into "unexplained structure remains". 1e-5 of the
-#: peak is below a 16-bit converter's own quantisation noise (4e-6 of its full range).
-NUMERICAL_RTOL = 1e-5
-#: ... and at least ``SIMULATION_ERROR_C / P^2`` of the peak at P samples per period: the rms error of a
-#: steady period simulated by RK4 with one step per sample (the coarsest a simulator on the grid uses).
-#: Measured (/tmp/ic_err2.py of review 31a item 6: 4096 samples and 8 steps per sample as the reference; the
-#: demo plant, a resonant G with a delay, a first-order G with mu = 1.2) at N = 32 ... 4096 RK4 steps per
-#: period: N^2 times the error is 0.8-2.05 (its order is 2, not 4: the loop's reversals are not smooth);
-#: at 128 samples per period and 2 steps per sample the demo plant's error is 1.2e-5 of its peak, above
-#: NUMERICAL_RTOL, and noise-free data from the library's own simulator read as "unexplained structure".
-SIMULATION_ERROR_C = 2.1
-
-
-def numerical_rtol(p: int) -> float:
-    """The relative noise floor of noise-free data at ``p`` samples per period (see the constants)."""
-    return max(NUMERICAL_RTOL, SIMULATION_ERROR_C / float(max(p, 1)) ** 2)
 
 
 def _noise_floors(items: Any, exps: list[DiagExperiment]) -> tuple[list[DiagExperiment], list[str]]:
