@@ -65,7 +65,9 @@ def diagnosis_model(diagnosis: Diagnosis, recordings: Sequence[Any], **options: 
         raise InvalidParameterError("to_model fits the named terms; call fit_time_domain for other terms")
     from ..measurement import Measurement
 
-    recs = list(recordings) if not isinstance(recordings, (Recording, Measurement)) else [recordings]
+    recs: list[Any] = (
+        list(recordings) if not isinstance(recordings, (Recording, Measurement)) else [recordings]
+    )
     # A lab Measurement is a raw record from its first sample (review 36b: diagnose FILES --model on lab
     # CSV files refused it and lost the report): fitted as it was recorded, its time in seconds.
     recs = [TimeRecord(r.t, r.u, r.y, name=r.name) if isinstance(r, Measurement) else r for r in recs]
