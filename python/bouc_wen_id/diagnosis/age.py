@@ -136,7 +136,9 @@ def estimate(
     strength degradation (its scaled ``d``).
     """
     keep = [i for i, e in enumerate(exps) if _eligible(e)]
-    if not ENABLED or deg.term != DEGRADATION or len(keep) < 2 or not deg.d > 0:
+    # A drifting output gain fits the drift as well (gain_drift.py): a gain that differs between records
+    # gives the strength differences the ages fit, so they are not read as ageing.
+    if not ENABLED or deg.term != DEGRADATION or len(keep) < 2 or not deg.d > 0 or deg.gain_alternative:
         return None
     ages = np.zeros(len(exps))
     sd = np.full(len(exps), math.inf)
