@@ -241,7 +241,10 @@ def clause(
         "; the specimen had aged before the first recorded period (an unrecorded age fitted per experiment, "
         f"F-test p = {p:.2g}), in periods of each experiment's own drive beyond {exps[young].source}'s: "
         f"{', '.join(parts) or 'none'}{vague}; {exps[young].source} is taken as the virgin state (a common "
-        "age cannot be told from the virgin strength): the values are those at its first recorded period"
+        "age cannot be told from the virgin strength): the values are those at its first recorded period; "
+        "an output gain that differed between the records (a sensor's calibration) shifts the loops' "
+        "strengths alike, which the averaged loops cannot tell from an age (the drift within each record is "
+        "degradation's beyond a drifting gain)"
     )
 
 

@@ -28,56 +28,96 @@ from dataclasses import replace
 from typing import Optional
 
 import numpy as np
+from numpy.typing import NDArray
 
 from .drift import DegradationTest, DriftData, _inner
 from .result import TERM_LABELS, Diagnosis
 from .select import f_test
 
+FloatArray = NDArray[np.float64]
+ComplexArray = NDArray[np.complex128]
+
 #: Kill switch (tests compare with and without).
 ENABLED = True
 
 
-def _sums(dd: DriftData, term: str) -> tuple[float, float, float, float, float, float]:
-    """``(c0, a, A, b, B, C)`` of one experiment: the deviations' chi-square, the gain column's and the
-    term's inner products with the deviations and each other (:func:`.drift._inner`, block-weighted)."""
-    assert dd.level is not None
-    gain = dd.t[:, None] * dd.level[None, :]
-    reg = dd.energy * dd.t[:, None] * dd.column(term)[None, :]
+def _normal(
+    data: Sequence[DriftData], terms: Sequence[str], clock: Sequence[float]
+) -> tuple[float, FloatArray, FloatArray]:
+    """``(c0, M, v)``: the deviations' chi-square and the normal equations of the shared gain column (first;
+    record i's at ``clock[i]`` per period: 1 for a rate per period, its period in seconds for a rate per
+    second) and ``terms``' shared columns (:func:`.drift._inner`, block-weighted)."""
+    k = 1 + len(terms)
+    c0, mat, vec = 0.0, np.zeros((k, k)), np.zeros(k)
+    for dd, tick in zip(data, clock):
+        assert dd.level is not None
+        cols = [tick * dd.t[:, None] * dd.level[None, :]]
+        cols += [dd.energy * dd.t[:, None] * dd.column(t)[None, :] for t in terms]
 
-    def dot(x: np.ndarray, y: np.ndarray) -> float:
-        return float(np.dot(dd.w, _inner(x, y, dd.hw)))
+        def dot(x: ComplexArray, y: ComplexArray, dd: DriftData = dd) -> float:
+            return float(np.dot(dd.w, _inner(x, y, dd.hw)))
 
-    return dot(dd.dev, dd.dev), dot(dd.dev, gain), dot(gain, gain), dot(dd.dev, reg), dot(reg, reg), dot(gain, reg)
+        c0 += dot(dd.dev, dd.dev)
+        vec += [dot(dd.dev, c) for c in cols]
+        mat += [[dot(c, q) for q in cols] for c in cols]
+    return c0, mat, vec
 
 
-def checked(deg: Optional[DegradationTest], data: Sequence[DriftData], alpha: float, family: int) -> Optional[
-    DegradationTest
-]:
+def _given_gain(
+    data: Sequence[DriftData], terms: Sequence[str], clock: Sequence[float]
+) -> tuple[float, float, FloatArray, float]:
+    """``(gain cost, joint cost, terms' values, gain rate)``: the drift chi-square with the shared gain
+    drift alone and with ``terms``' columns beside it; the rate alone, per period (or second) of ``clock``."""
+    c0, mat, vec = _normal(data, terms, clock)
+    if not mat[0, 0] > 0:
+        return c0, c0, np.zeros(len(terms)), 0.0
+    rate = vec[0] / mat[0, 0]
+    gain_cost = c0 - rate * vec[0]
+    try:
+        both = np.linalg.solve(mat, vec)
+    except np.linalg.LinAlgError:
+        return gain_cost, gain_cost, np.zeros(len(terms)), rate
+    return gain_cost, c0 - float(np.dot(both, vec)), both[1:], rate
+
+
+def checked(
+    deg: Optional[DegradationTest],
+    data: Sequence[DriftData],
+    alpha: float,
+    family: int,
+    seconds: Sequence[float] = (),
+) -> Optional[DegradationTest]:
     """``deg`` with its test against a drifting output gain (module docstring); as it is when it does not
-    pass its own test, or the blocks' mean loops were not formed."""
+    pass its own test, or the blocks' mean loops were not formed. ``seconds``: each record's period (by
+    :attr:`DriftData.index`) for the gain's rate per second; without it, only the rate per period.
+
+    For each clock of the gain (per period, per second), the named term alone given the gain drift (1 df)
+    and, when the other drift term was formed (``deg.rival``), both drift terms together given it (2 df,
+    both values >= 0: a record where both degrade, review 34's case, may fit neither alone beyond a gain
+    drift); the smaller p, doubled for the two looks, Bonferroni over the family. The term is not named
+    when it fails given either clock's gain drift (that gain drift fits the record as well).
+    """
     if not ENABLED or deg is None or not deg.passed or not data or any(dd.level is None for dd in data):
         return deg
-    sums = [_sums(dd, deg.term) for dd in data]
-    gain_cost, num, den, rates = 0.0, 0.0, 0.0, []
-    for c0, a, big_a, b, big_b, c in sums:
-        if big_a > 0:
-            gain_cost += c0 - a * a / big_a
-            num += b - a * c / big_a
-            den += big_b - c * c / big_a
-            rates.append(a / big_a)
-        else:
-            gain_cost += c0
-            num += b
-            den += big_b
-            rates.append(0.0)
-    d = num / den if den > 0 else 0.0
-    joint = gain_cost - d * num
-    dof = deg.dof0 - len(data) - 1
-    p = f_test(gain_cost, joint, dof, boundary=True)[1] if d > 0 else 1.0
-    padj = min(1.0, p * family) if math.isfinite(p) else math.nan
-    alternative = not (math.isfinite(padj) and padj < alpha)
+    sets = [(deg.term,)] + ([(deg.term, deg.rival.term)] if deg.rival is not None else [])
+    clocks = [[1.0] * len(data)]
+    if seconds:
+        clocks.append([float(seconds[dd.index]) for dd in data])
+    worst: tuple[float, float, float, list[float]] = (-1.0, math.nan, 0.0, clocks[0])
+    for clock in clocks:
+        ps = []
+        for terms in sets:
+            gain_cost, joint, values, rate = _given_gain(data, terms, clock)
+            if np.all(values >= 0) and np.any(values > 0):
+                ps.append(f_test(gain_cost, joint, deg.dof0 - 1 - len(terms), True, len(terms))[1])
+        ps = [p for p in ps if math.isfinite(p)]
+        padj = min(1.0, min(ps) * family * len(sets)) if ps else 1.0
+        if padj > worst[0]:
+            worst = (padj, gain_cost, rate, clock)
+    padj, gain_cost, rate, clock = worst
+    rates = tuple(rate * c for c in clock)  # per period of each record
     return replace(
-        deg, gain_p_adjusted=padj, gain_cost=gain_cost, gain_rates=tuple(rates), gain_alternative=alternative
+        deg, gain_p_adjusted=padj, gain_cost=gain_cost, gain_rates=rates, gain_alternative=not padj < alpha
     )
 
 

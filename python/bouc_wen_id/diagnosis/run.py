@@ -209,6 +209,7 @@ def _verdict(
             "explained in part by: "
             + ", ".join(str(t) for t in named)
             + f" ({100 * fraction:.0f} % of the excess); unexplained structure remains {where}"
+            + (drift if drift_clause.beyond(drift) else "")
         )
     tail = ""
     if partial:
@@ -284,7 +285,8 @@ def _degradation_stage(
     )
     if deg is not None and not drift_seen:
         deg = with_drift_gate(deg, alpha)
-    deg = gain_drift.checked(deg, data, alpha, family)  # not named when a drifting gain fits as well
+    periods = [2.0 * math.pi / e.frequency for e in exps]  # seconds: a gain drifting per second
+    deg = gain_drift.checked(deg, data, alpha, family, periods)  # not named when a drifting gain fits as well
     if deg is None or not deg.accepted(held_out_test):
         return deg, list(exps), list(sx), plain
     tested = deg
@@ -834,6 +836,8 @@ def _judged(
     status, named, head, tail = bounds_said.apply(held, status, named, final.terms, fraction)
     partial = tuple(t for t in final.terms if t not in named)
     drift = drift_clause.clause(after, before, named)  # beyond a named drift term (drift_clause.py)
+    if status == "explained" and drift_clause.beyond(drift):  # a drift left over is not explained
+        status = "partly explained"
     verdict = head + _verdict(
         status, named, tuple(t for t in partial if t not in unphysical), after, fraction, drift
     )
