@@ -1,11 +1,11 @@
 """A drifting output gain is not degradation, nor ageing, and a set that mostly drifts is not "adequate"
 (review 36, problem 2: y times ``1 + d t / t_end`` in every record, the plain plant otherwise).
 
-On main 164dc3a the reviewer's generator gave, by noise draw, "explained by: stiffness degradation", "explained
-by: degradation delta_nu" with "the specimen had aged before the first recorded period (F-test p = 3.8e-40)",
-or "adequate" on 2 of 6 recordings after 4 were left out. The records here are the library's simulator's
-(a resonant G with a delay, not the reviewer's Tustin-discretised one), the gain drift applied after it; the
-drift test's rival reading is checked on hand-made block deviations too.
+On main 164dc3a the reviewer's generator gave, by noise draw, "explained by: stiffness degradation",
+"explained by: degradation delta_nu" with "the specimen had aged before the first recorded period (F-test
+p = 3.8e-40)", or "adequate" on 2 of 6 recordings after 4 were left out. The records here are the
+library's simulator's (a resonant G with a delay, not the reviewer's Tustin-discretised one), the gain drift
+applied after it; the drift test's rival reading is checked on hand-made block deviations too.
 """
 
 from __future__ import annotations
@@ -45,7 +45,9 @@ def _records(drift: float, seed: int) -> list[bw.Recording]:
 
 
 @pytest.mark.parametrize(("drift", "seed"), [(-0.03, 2), (0.03, 1), (0.03, 2), (-0.03, 3)])
-def test_a_drifting_gain_names_no_degradation_no_age_and_no_verdict_on_a_minority(drift: float, seed: int) -> None:
+def test_a_drifting_gain_names_no_degradation_no_age_and_no_verdict_on_a_minority(
+    drift: float, seed: int
+) -> None:
     d = bw.diagnose(_records(drift, seed))
     assert not any(t in D.DRIFT_TERMS for t in d.named_terms), d.verdict
     assert "had aged" not in d.verdict, d.verdict
@@ -89,7 +91,8 @@ def test_the_rival_takes_a_gain_drift_and_leaves_a_degradation_named(seed: int) 
         test = D.degradation_test(data, 1.0, 0.05, 10)
         assert test is not None and test.passed  # both drifts pass the term's own test
         got = gain_drift.checked(test, data, 0.05, 10)
-        assert got is not None and got.gain_alternative is alternative, (kind, got.gain_p_adjusted)
+        assert got is not None
+        assert got.gain_alternative is alternative, (kind, got.gain_p_adjusted)
         assert got.named is (not alternative)
         if kind == "gain":  # the rate per period of each record's gain: -0.8 in these units
             assert got.gain_rates == pytest.approx((-0.8, -0.8, -0.8), rel=0.05)
@@ -111,7 +114,9 @@ def test_a_drift_left_beyond_a_named_degradation_is_explained_in_part_not_explai
     deg = NamedTerm(D.DEGRADATION, "delta_nu", 6.7e-4, 5.2e-5, "1/[y]^2")
     final = ModelSummary((deg,), 1.0, 0.3, 1.5, 250.0, 249, 0.5, (0.01,), ())
     before = loc(-0.0018, -17.0, 1e-12, True)
-    status, named, _, verdict = run._judged("explained", final, (before, loc(-0.0014, -13.8, 1e-10, True)), 1.0, [])
+    status, named, _, verdict = run._judged(
+        "explained", final, (before, loc(-0.0014, -13.8, 1e-10, True)), 1.0, []
+    )
     assert status == "partly explained" and verdict.startswith("explained in part by: degradation"), verdict
     assert "still drifts" in verdict and named == (deg,)
     # no drift left beyond it: explained, as before

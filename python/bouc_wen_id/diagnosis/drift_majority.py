@@ -53,7 +53,8 @@ def reading(deg: Optional[DegradationTest]) -> str:
     term = TERM_LABELS.get(deg.term, deg.term)
     return (
         f"; the drift fits an output gain drifting over each record (a sensor's gain, e.g. with temperature) "
-        f"as well as {term} does ({term}'s test given the gain drift: adjusted p = {deg.gain_p_adjusted:.2g}): "
+        f"as well as {term} does ({term}'s test given the gain drift: adjusted p = "
+        f"{deg.gain_p_adjusted:.2g}): "
         f"{term} is not named"
     )
 

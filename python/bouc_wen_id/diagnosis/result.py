@@ -276,7 +276,7 @@ class Diagnosis:
                     f"{rival.share:.2f}; given {deg.term}: p adj = {deg.rival_p_adjusted:.2g}; columns' "
                     f"correlation {deg.correlation:.2f}{' (an alternative)' if deg.rival_alternative else ''}"
                 )
-            if math.isfinite(deg.gain_p_adjusted):  # the rival reading: a drifting output gain (gain_drift.py)
+            if math.isfinite(deg.gain_p_adjusted):  # the rival reading: a drifting gain (gain_drift.py)
                 lines.append(
                     f"  rival output gain drifting in each record: chi2 -> {deg.gain_cost:.6g}; {deg.term} "
                     f"given it: p adj = {deg.gain_p_adjusted:.2g}"
