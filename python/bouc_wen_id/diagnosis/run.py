@@ -577,10 +577,10 @@ def _without_unsettled(
         )
     d = _diagnose_set([exps[i] for i in keep], setup, [*notes, why])
     d = replace(d, settings={**d.settings, LEFT_OUT: left_out})
-    if drift_majority.most(len(drifting), len(exps)):  # the verdict would rest on a minority
-        return drift_majority.verdict_of(d, exps, drifting, deg)
     if len(keep) == 1 and d.named:
         return _from_one(d, exps[keep[0]].source, names)
+    if drift_majority.most(len(drifting), len(exps)):  # the verdict would rest on a minority
+        return drift_majority.verdict_of(d, exps, drifting, deg)
     return replace(d, verdict=d.verdict + f"; {names} {LEFT_OUT_TAIL}")
 
 
