@@ -65,7 +65,7 @@ def names_degradation(d: Any) -> bool:
 
     deg = d.degradation  # a Diagnosis always has the field (None when the test was not formed)
     held_out = (d.settings or {}).get("held_out_test", True)
-    named = deg is not None and bool(deg.named if held_out else deg.passed)
+    named = deg is not None and deg.accepted(held_out)
     return named or any(t.term in DRIFT_TERMS for t in d.named)
 
 

@@ -136,7 +136,9 @@ def estimate(
     strength degradation (its scaled ``d``).
     """
     keep = [i for i, e in enumerate(exps) if _eligible(e)]
-    if not ENABLED or deg.term != DEGRADATION or len(keep) < 2 or not deg.d > 0:
+    # A drifting output gain fits the drift as well (gain_drift.py): a gain that differs between records
+    # gives the strength differences the ages fit, so they are not read as ageing.
+    if not ENABLED or deg.term != DEGRADATION or len(keep) < 2 or not deg.d > 0 or deg.gain_alternative:
         return None
     ages = np.zeros(len(exps))
     sd = np.full(len(exps), math.inf)
@@ -239,7 +241,10 @@ def clause(
         "; the specimen had aged before the first recorded period (an unrecorded age fitted per experiment, "
         f"F-test p = {p:.2g}), in periods of each experiment's own drive beyond {exps[young].source}'s: "
         f"{', '.join(parts) or 'none'}{vague}; {exps[young].source} is taken as the virgin state (a common "
-        "age cannot be told from the virgin strength): the values are those at its first recorded period"
+        "age cannot be told from the virgin strength): the values are those at its first recorded period; "
+        "an output gain that differed between the records (a sensor's calibration) shifts the loops' "
+        "strengths alike, which the averaged loops cannot tell from an age (the drift within each record is "
+        "degradation's beyond a drifting gain)"
     )
 
 

@@ -74,6 +74,9 @@ class DriftData:
     dropped: int = 0  # blocks left out: partial periods (see :func:`whole_blocks`)
     jac_eta: Optional[ComplexArray] = None  # (K + 1,) harmonics of dy/d ln eta = -g dy/dg (None: not formed)
     hw: Optional[FloatArray] = None  # (K + 1,) per-harmonic weight relative to w (None: white noise)
+    #: (K + 1,) the blocks' weighted mean harmonics (the loop as recorded, scaled): an output gain drifting
+    #: over the record moves block b by ``g t_b`` times it (gain_drift.py; None: not formed)
+    level: Optional[ComplexArray] = None
 
     def column(self, term: str) -> ComplexArray:
         """The harmonics of the drift regressor of ``term`` (J_i for degradation, K_i for stiffness)."""
@@ -232,6 +235,7 @@ def drift_data(
                 dropped=dropped,
                 jac_eta=harmonics(k_eta, k),
                 hw=harmonic_weights(e, k),
+                level=mean.astype(np.complex128),
             )
         )
     return out
@@ -326,6 +330,15 @@ class DegradationTest:
     age_p_value: float = math.nan
     #: The verdict's clause of the adopted ages ('' when none; age.py).
     age_clause: str = ""
+    #: The rival reading of the drift: the output's gain drifting over each record (gain_drift.py). The
+    #: term's partial F-test given a gain drift of each record (Bonferroni over the family; NaN: not
+    #: formed), the drift chi-square with the gain drift alone, and its rate per experiment (relative
+    #: change per period).
+    gain_p_adjusted: float = math.nan
+    gain_cost: float = math.nan
+    gain_rates: tuple[float, ...] = ()
+    #: True when that test fails: a drifting output gain fits the drift as well, and the term is not named.
+    gain_alternative: bool = False
 
     @property
     def held_out_improves(self) -> bool:
@@ -333,7 +346,12 @@ class DegradationTest:
 
     @property
     def named(self) -> bool:
-        return self.passed and self.drift_present and self.held_out_improves
+        return self.passed and self.drift_present and self.held_out_improves and not self.gain_alternative
+
+    def accepted(self, held_out_test: bool) -> bool:
+        """Named (held-out test on), or passing its own test (off); never when a drifting output gain fits
+        the drift as well (gain_drift.py)."""
+        return bool(self.named if held_out_test else self.passed and not self.gain_alternative)
 
     @property
     def held_out_nrmse_ratio(self) -> float:
@@ -368,6 +386,11 @@ class DegradationTest:
             out["unrecorded_age_periods"] = list(self.age_periods)
             out["unrecorded_age_energy"] = list(self.age_energy)
             out["unrecorded_age_determined"] = list(self.age_determined)
+        if math.isfinite(self.gain_p_adjusted):
+            out["gain_drift_p_adjusted"] = self.gain_p_adjusted
+            out["gain_drift_cost"] = self.gain_cost
+            out["gain_drift_rates"] = list(self.gain_rates)
+            out["gain_drift_alternative"] = self.gain_alternative
         if self.rival is not None:
             rival = self.rival.to_dict()
             rival.pop("rival", None)

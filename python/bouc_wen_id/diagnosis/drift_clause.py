@@ -35,6 +35,17 @@ def _moves(d: DriftFinding, before: dict[str, DriftFinding]) -> str:
     return f"{d.source}'s DC by {d.dc_slope:+.2g} per period (output units){was}, t = {d.dc_t:.1f}"
 
 
+#: How the clause on a drift left beyond a named drift term begins.
+BEYOND = "; beyond the named"
+
+
+def beyond(text: str) -> bool:
+    """Whether ``text`` (:func:`clause`'s) says a drift is left beyond a named drift term: the named terms
+    then do not explain the record, and the verdict is "explained in part" (review 36: "explained by:
+    degradation" beside "the loop still drifts ... t = -13.8; not explained by the named terms")."""
+    return text.startswith(BEYOND)
+
+
 def clause(after: Localisation, before: Localisation, named: Sequence[NamedTerm]) -> str:
     """The clause ('' when the after-record does not drift): "not modelled" without a named drift term;
     with one, the drift left beyond it, per experiment whose trend fires (module docstring)."""
@@ -46,9 +57,9 @@ def clause(after: Localisation, before: Localisation, named: Sequence[NamedTerm]
     was = {d.source: d for d in before.drift}
     where = "; ".join(_moves(d, was) for d in _fired(after.drift)) or "below each experiment's own test"
     return (
-        f"; beyond the named {' and '.join(drift_named)}, the loop still drifts from period to period once "
+        f"{BEYOND} {' and '.join(drift_named)}, the loop still drifts from period to period once "
         f"its drift is taken out ({where}; not explained by the named terms)"
     )
 
 
-__all__ = ["clause"]
+__all__ = ["BEYOND", "beyond", "clause"]

@@ -276,6 +276,12 @@ class Diagnosis:
                     f"{rival.share:.2f}; given {deg.term}: p adj = {deg.rival_p_adjusted:.2g}; columns' "
                     f"correlation {deg.correlation:.2f}{' (an alternative)' if deg.rival_alternative else ''}"
                 )
+            if math.isfinite(deg.gain_p_adjusted):  # the rival reading: a drifting gain (gain_drift.py)
+                lines.append(
+                    f"  rival output gain drifting in each record: chi2 -> {deg.gain_cost:.6g}; {deg.term} "
+                    f"given it: p adj = {deg.gain_p_adjusted:.2g}"
+                    f"{' (a drifting gain fits as well: not named)' if deg.gain_alternative else ''}"
+                )
         for note in self.notes:
             lines.append(note)
         if self.structure is not None and self.structure.named:  # the feedback structure (structure.py)

@@ -29,10 +29,12 @@ from . import (
     design_twin,
     distortion_law,
     drift_clause,
+    drift_majority,
     drift_pair,
     drift_passes,
     drift_se,
     free_dc,
+    gain_drift,
     gate,
     input_dc,
     input_note,
@@ -209,6 +211,7 @@ def _verdict(
             "explained in part by: "
             + ", ".join(str(t) for t in named)
             + f" ({100 * fraction:.0f} % of the excess); unexplained structure remains {where}"
+            + (drift if drift_clause.beyond(drift) else "")
         )
     tail = ""
     if partial:
@@ -284,11 +287,15 @@ def _degradation_stage(
     )
     if deg is not None and not drift_seen:
         deg = with_drift_gate(deg, alpha)
-    if deg is None or not (deg.named if held_out_test else deg.passed):
+    periods = [2.0 * math.pi / e.frequency for e in exps]  # seconds: a gain drifting per second
+    deg = gain_drift.checked(deg, data, alpha, family, periods)  # not named when a drifting gain fits as well
+    if deg is None or not deg.accepted(held_out_test):
         return deg, list(exps), list(sx), plain
+    tested = deg
     deg, fit, data = drift_passes.passes(exps, sx, plain, data, deg, s, substeps, (alpha, family, drift_seen))
+    deg = gain_drift.carried(deg, tested)
     term = deg.term
-    if not (deg.named if held_out_test else deg.passed):
+    if not deg.accepted(held_out_test):
         # The refined test no longer names it: the steady selection on the data as they are.
         return deg, list(exps), list(sx), plain
     # The unrecorded age of each record (age.py): kept when its F-test passes, else the ages are 0.
@@ -369,9 +376,10 @@ class _LeaveOut(Exception):
     """Raised by :func:`_drift_stage` under ``_Setup.leave_out_early``: these experiments' loops still drift
     (``drifting``, indices), the others settled; caught by :func:`_with_wander`."""
 
-    def __init__(self, drifting: list[int]) -> None:
+    def __init__(self, drifting: list[int], deg: Optional[DegradationTest] = None) -> None:
         super().__init__(drifting)
         self.drifting = drifting
+        self.deg = deg  # the whole set's drift test (its drifting-gain reading: drift_majority.py)
 
 
 def diagnose(
@@ -522,10 +530,11 @@ def _with_wander(
             d, cands, lambda t: _beside(exps, replace(early, carry_beside=t), [*notes, *qnotes])
         )
     except _LeaveOut as e:  # some loops still drift, no degradation explains it: the settled ones alone
-        d = _without_unsettled(exps, e.drifting, setup, None, [*notes, *qnotes])
+        d = _without_unsettled(exps, e.drifting, setup, None, [*notes, *qnotes], e.deg)
     else:
         d = _unless_unsettled(exps, d, setup, [*notes, *qnotes])
     d = age.with_clause(d)  # what the fit assumed of the specimen's history, when it fitted its age
+    d = gain_drift.with_clause(d)  # a drifting output gain fits the drift as well as degradation
     if wander is None:  # short records: an offset that is a settling centre's transient (centre_decay.py)
         d = centre_decay.check(d, alpha)  # on both paths: LEAVE_OUT_EARLY gives the same verdict (review 32)
     return baseline.adjusted(d, wander, Offset.kind)
@@ -557,10 +566,13 @@ def _without_unsettled(
     setup: _Setup,
     whole: Optional[Diagnosis],
     notes: list[str],
+    deg: Optional[DegradationTest] = None,
 ) -> Diagnosis:
     """The diagnosis of the settled experiments only, saying which were left out; when none is settled,
     the verdict says so and names nothing (a loop that has not settled is not physics). ``whole`` (the
-    diagnosis of them all) is read only then: None when some settled (:class:`_LeaveOut`)."""
+    diagnosis of them all) is read only then: None when some settled (:class:`_LeaveOut`). When most drift,
+    the drift leads the verdict (drift_majority.py); ``deg``: the whole set's drift test, when known."""
+    deg = deg if deg is not None or whole is None else whole.degradation
     names = ", ".join(exps[i].source for i in drifting)
     why = left_out_note(names)
     keep = [i for i in range(len(exps)) if i not in drifting]
@@ -572,7 +584,7 @@ def _without_unsettled(
             f"not settled: the loop of every experiment ({names}) still drifts from period to period, and "
             "no degradation explains it; nothing is named from a loop that has not settled (record more "
             "settling periods, or a longer record)"
-        )
+        ) + drift_majority.reading(deg)
         return replace(
             whole,
             status="unexplained",
@@ -586,6 +598,8 @@ def _without_unsettled(
     d = replace(d, settings={**d.settings, LEFT_OUT: left_out})
     if len(keep) == 1 and d.named:
         return _from_one(d, exps[keep[0]].source, names)
+    if drift_majority.most(len(drifting), len(exps)):  # the verdict would rest on a minority
+        return drift_majority.verdict_of(d, exps, drifting, deg)
     return replace(d, verdict=d.verdict + f"; {names} {LEFT_OUT_TAIL}")
 
 
@@ -605,7 +619,7 @@ def _from_one(d: Diagnosis, source: str, names: str) -> Diagnosis:
 
 def _deg_named(deg: Optional[DegradationTest], held_out_test: bool) -> bool:
     """Degradation is named: by its held-out test when that runs, else by its own test."""
-    return deg is not None and bool(deg.named if held_out_test else deg.passed)
+    return deg is not None and deg.accepted(held_out_test)
 
 
 def _rejoint(
@@ -667,7 +681,7 @@ def _drift_stage(
     named = _deg_named(deg, setup.held_out_test)
     drifting = settled_only(exps, named)[1] if setup.leave_out_early else []
     if drifting and len(drifting) < len(exps):  # _with_wander diagnoses the settled ones instead
-        raise _LeaveOut(drifting)
+        raise _LeaveOut(drifting, deg)
     return out
 
 
@@ -890,6 +904,8 @@ def _judged(
     status, named, head, tail = bounds_said.apply(held, status, named, final.terms, fraction)
     partial = tuple(t for t in final.terms if t not in named and t not in gone)
     drift = drift_clause.clause(after, before, named)  # beyond a named drift term (drift_clause.py)
+    if status == "explained" and drift_clause.beyond(drift):  # a drift left over is not explained
+        status = "partly explained"
     verdict = head + _verdict(
         status, named, tuple(t for t in partial if t not in unphysical), after, fraction, drift
     )
