@@ -203,3 +203,25 @@ def test_limits_keep_the_level_that_decided_the_verdict() -> None:
         status="partly explained", named=("t",), limits=(lim,), final=final, settings={"alpha": 0.05}
     )
     assert limits_void.void(named)
+
+
+def test_the_limit_line_of_a_named_term_gives_its_named_value() -> None:
+    """Review 36b: "viscous ... |c| < 0.0026" under a verdict naming c = 0.007918 ± 0.000119."""
+    from types import SimpleNamespace
+
+    from bouc_wen_id.diagnosis import limits_void
+    from bouc_wen_id.diagnosis.result import NamedTerm
+
+    lim = SimpleNamespace(term="viscous", limit_90=0.0036, __str__=lambda: "x", summary_tail=lambda: "")
+    other = SimpleNamespace(term="stiffness", limit_90=0.01, __str__=lambda: "x", summary_tail=lambda: "")
+    final = SimpleNamespace(cost=640.0, dof=620, p_value=0.3)
+    d = SimpleNamespace(
+        status="explained",
+        named=(NamedTerm("viscous", "c", 0.007918, 0.000119, "s"),),
+        limits=(lim, other),
+        final=final,
+        settings={"alpha": 0.05},
+    )
+    lines = limits_void.summary_lines(d)
+    assert "named in the verdict: c = 0.007918 ± 0.00012 s" in lines[2]
+    assert "named in the verdict" not in lines[3]

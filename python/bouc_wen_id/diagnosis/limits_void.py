@@ -45,4 +45,20 @@ def summary_lines(d: Any) -> list[str]:
     if void(d):
         return ["", f"detection limits: {reason(d)}"]
     head = "detection limits (first step: the value detected with 50 % / 90 % power):"
-    return ["", head, *(f"  {lim}; 90 %: {lim.limit_90:.2g}{lim.summary_tail()}" for lim in d.limits)]
+    named = {n.term: n for n in getattr(d, "named", ())}
+    lines = []
+    for lim in d.limits:
+        tail = lim.summary_tail() + (_named_tail(named.get(lim.term)) if named else "")
+        lines.append(f"  {lim}; 90 %: {lim.limit_90:.2g}{tail}")
+    return ["", head, *lines]
+
+
+def _named_tail(n: Any) -> str:
+    """Beside the limit of a term the verdict names: its value there (review 36b: "|c| < 0.0026" printed
+    under a named c = 0.007918 read as a bound on it)."""
+    if n is None:
+        return ""
+    return (
+        f"; named in the verdict: {n.symbol} = {n.value:.4g} ± {n.standard_error:.2g} {n.unit}".rstrip()
+        + " (the limit is what the plain model's first step could detect)"
+    )
