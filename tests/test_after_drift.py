@@ -87,3 +87,8 @@ def test_a_viscous_damping_beside_a_drift_term_is_named_and_the_drift_value_is_r
     truth = {ETA: eta, T.Viscous.kind: c}
     for n in d.named:
         assert abs(n.value - truth[n.term]) < 4 * n.standard_error, d.summary()
+    # The steps and the final model are of one data set, the periods the re-estimated drift corrects
+    # (review rv36m F1: after the re-estimate the steps still showed the old periods' costs)
+    (step,) = [st for st in d.steps if st.chosen == T.Viscous.kind]
+    (trial,) = [tr for tr in step.trials if tr.term == T.Viscous.kind]
+    assert trial.cost == pytest.approx(d.final.cost, rel=1e-3), d.summary()

@@ -49,8 +49,8 @@ from . import (
     pairs,
     resolution,
     revisit,
-    rival_revisit,
     speed,
+    steady_select,
     zero_drift,
 )
 from .candidates import step_candidates
@@ -630,36 +630,37 @@ def _rejoint(
     substeps: int,
     setup: _Setup,
     before: Localisation,
-) -> tuple[Optional[DegradationTest], list[DiagExperiment], list[AugExperiment], AugFit]:
-    """``got`` (the named drift test, the corrected records and the final fit) with the drift term
-    re-estimated beside the steady terms the selection named: the drift test was fitted on the plain model,
-    and a steady term it did not have leaked into the drift value (a 10x viscous damping on u beside a
-    stiffness degradation put delta_eta 3 se high on review 34's simulator, 13 se on ours). The drift stage
-    runs again from the final terms fitted on the recorded periods, and the steady model is refitted on the
-    periods it corrects; kept when it names the same term, else ``got`` as it was (``before``: the plain
-    model's localisation, its drift flag the drift stage's gate). The drift value's se is the re-run test's
-    at the steady terms' values; the trade between them is not in it (measured: 4 draws, docs)."""
+) -> Optional[tuple[Optional[DegradationTest], list[DiagExperiment], list[AugExperiment], AugFit]]:
+    """The named drift test re-estimated beside the steady terms the selection named (``got``: the drift
+    test, the corrected records and the final fit): the drift test was fitted on the plain model, and a
+    steady term it did not have leaked into the drift value (a 10x viscous damping on u beside a stiffness
+    degradation put delta_eta 3 se high on review 34's simulator, 13 se on ours). The drift stage runs again
+    from the final terms fitted on the recorded periods; returned with the corrected records and the plain
+    model refitted on them, from which the caller runs the steady selection again (the old steps, folds and
+    costs are of the old periods: review rv36m F1); None unless it names the same term (``before``: the
+    plain model's localisation, its drift flag the drift stage's gate). The drift value's se is the re-run
+    test's at the steady terms' values; the trade between them is not in it (measured: 4 draws, docs)."""
     deg, _, _, final = got
     held = setup.held_out_test
     if not _deg_named(deg, held) or not final.params.terms:
-        return got
+        return None
     assert deg is not None  # (named)
     base = best_of([fit_from(sx, final.params, substeps)])
     if base is None:
-        return got
+        return None
     family, seen = len(setup.cands), before.drift_detected
     terms = tuple(c for c in DRIFT_TERMS if c in setup.cands)
     stage = _degradation_stage(exps, sx, base, s, substeps, setup.alpha, family, held, seen, [], terms)
     new = None if stage is None else stage[0]
     if new is None or new.term != deg.term or not _deg_named(new, held):
-        return got
+        return None
     # Not when the re-run test still needs the other drift term (drift_pair.needs_both): a steady term named
     # there may stand in for the uncorrected one (review rv35m F5); re-estimating the named drift term
     # beside it moved delta_eta from 0.053 to 0.012 (truth 0.05) on review 35m's degr_both_cx.
     if drift_pair.needs_both(new, True, setup.alpha):
-        return got
+        return None
     assert stage is not None
-    return stage[0], stage[1], stage[2], stage[3]
+    return stage[0], stage[1], stage[2], fit_plain(stage[1], stage[2], s, substeps)
 
 
 def _drift_stage(
@@ -761,14 +762,14 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
         notes.append(NO_TARGETED_STEP)
         final, steps = start, list[Step]()
     else:
-        # The targeted step after a named one (after_named.py), not on short records (centre_decay.py);
-        again = after_named.again(moved, setup.measured_noise, exps)  # and after a named drift term:
+        again = after_named.again(moved, setup.measured_noise, exps)  # targeted: steady_select.py says when
         t = targeted, again, after_named.drift_targeted(named_deg, setup.measured_noise, p_of(start), alpha)
-        final, steps = after_named.select(fsx, start, steady, adequate, p_of, substeps, *t, **kw)
-        # then a named single term whose later lead (revisit.py) or rival (rival_revisit.py) failed its law.
-        final, steps = rival_revisit.after(fsx, start, final, steps, adequate, substeps, **kw)
+        final, steps = steady_select.select(fsx, start, steady, adequate, p_of, substeps, t, kw)
         plain, start = rebased_plain(plain, start, steps)  # a first step that refitted an unconverged start
-        deg, fexps, fsx, final = _rejoint(exps, sx, (deg, fexps, fsx, final), s, substeps, setup, before)
+        redo = _rejoint(exps, sx, (deg, fexps, fsx, final), s, substeps, setup, before)
+        if redo is not None:  # the drift re-estimated: select again on the periods it corrects, new folds
+            (deg, fexps, fsx, start), kw["cache"] = redo, {}  # (review rv36m F1)
+            final, steps = steady_select.select(fsx, start, steady, adequate, p_of, substeps, t, kw)
     notes += fit_notes(plain, final)  # a fit stopped on a face of its admissible range (issue 19, branch lm)
     dexps = detrended(fexps, deg, s.y) if deg is not None and named_deg else fexps
     after = _drift_checked(_localise(dexps, fsx, final, s), dexps)
@@ -796,7 +797,7 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
     alternatives = tw.alternatives + _drift_alternatives(deg, named_deg)  # the steps' and the twins'
     verdict += alternatives_text(alternatives, named) + caveats_of(named, fsx, final, fexps, alpha, substeps)
     setup.report("held-out check of the final model", 0, 1)
-    ho = held_out(fsx, start, final, substeps, cache) if final.params.terms else None
+    ho = held_out(fsx, start, final, substeps, kw["cache"]) if final.params.terms else None
     d = Diagnosis(
         status=status,
         verdict=verdict,
