@@ -861,9 +861,7 @@ def diagnose_across(
     alpha = real_number("alpha", alpha)
     if not 0.0 < alpha < 1.0:
         raise InvalidParameterError(f"alpha = {alpha!r} must lie in (0, 1)")
-    own, checks = across_stable.unpacked(per_condition, len(gs))
-    gs, own, clip_out = across_clip.unclipped(gs, own, names)  # clipped outputs left out (across_clip.py)
-    checks = [c if o is not None else None for c, o in zip(checks, own)]
+    gs, own, checks, cut = across_clip.unclipped(gs, *across_stable.unpacked(per_condition, len(gs)), names)
     seeds = [getattr(d, "fits", None) for d in own]  # their candidate fits, reused (fit_share.py)
     with _threads.one_blas_thread(), fit_share.scope(seeds):
         prepared, kept, kept_checks, unsettled = [], [], [], []
@@ -897,12 +895,11 @@ def diagnose_across(
         "alpha": alpha,
         "held_out_test": held_out_test,
         "condition": [g.condition for g in prepared],
-        "clipped_left_out": clip_out,
     }
     out = _finished(prepared, terms, conditions, steps, settings, alpha, time.perf_counter() - t0)
     out = replace(  # what was left out as not settled (across_settling.py), as diagnose says it
         out,
-        verdict=out.verdict + across_settling.clause(prepared, unsettled) + across_clip.text(clip_out),
+        verdict=out.verdict + across_settling.clause(prepared, unsettled) + across_clip.text(cut),
         notes=(*joined.notes, *out.notes, *across_settling.notes(prepared, unsettled)),
     )
     out = across_said.said(out, prepared, dict(zip(names, gs)), y_unit, u_unit, joined.units)  # run.py's

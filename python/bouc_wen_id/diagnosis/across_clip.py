@@ -27,12 +27,13 @@ def _name(item: Any, i: int) -> str:
 
 
 def unclipped(
-    groups: Sequence[Sequence[Any]], own: Sequence[Any], labels: Sequence[Any]
-) -> tuple[list[list[Any]], list[Any], dict[str, list[str]]]:
-    """``(groups, own, left)``: each condition's items without those whose output is clipped when at least
-    :data:`.law.MIN_CLEAN` remain; ``own`` (each condition's own diagnosis, reused when given) with None
-    where items were left out (its fits include them); ``left``: condition label -> names left out."""
-    out, owns, left = [], list(own), {}
+    groups: Sequence[Sequence[Any]], own: Sequence[Any], checks: Sequence[Any], labels: Sequence[Any]
+) -> tuple[list[list[Any]], list[Any], list[Any], dict[str, list[str]]]:
+    """``(groups, own, checks, left)``: each condition's items without those whose output is clipped when
+    at least :data:`.law.MIN_CLEAN` remain; ``own`` and ``checks`` (each condition's own diagnosis and its
+    stability check, reused when given) with None where items were left out (their fits include them);
+    ``left``: condition label -> names left out."""
+    out, owns, chks, left = [], list(own), list(checks), {}
     for k, (items, label) in enumerate(zip(groups, labels)):
         items = list(items)
         bad = set(clipped(items))
@@ -40,10 +41,10 @@ def unclipped(
         if bad and len(keep) >= MIN_CLEAN and len(keep) < len(items):
             left[str(label)] = [_name(it, i) for i, it in enumerate(items) if _name(it, i) in bad]
             out.append(keep)
-            owns[k] = None
+            owns[k] = chks[k] = None
         else:
             out.append(items)
-    return out, owns, left
+    return out, owns, chks, left
 
 
 def text(left: dict[str, list[str]]) -> str:
