@@ -849,7 +849,7 @@ def diagnose_across(
         Fewer than two groups, conditions that do not match the groups or repeat, unknown candidates.
     """
     from .. import _threads
-    from . import across_said, fit_share
+    from . import across_clip, across_said, fit_share
     from .drift import DRIFT_TERMS
     from .run import ALL_CANDIDATES, _check_candidates
 
@@ -861,7 +861,7 @@ def diagnose_across(
     alpha = real_number("alpha", alpha)
     if not 0.0 < alpha < 1.0:
         raise InvalidParameterError(f"alpha = {alpha!r} must lie in (0, 1)")
-    own, checks = across_stable.unpacked(per_condition, len(gs))
+    gs, own, checks, cut = across_clip.unclipped(gs, *across_stable.unpacked(per_condition, len(gs)), names)
     seeds = [getattr(d, "fits", None) for d in own]  # their candidate fits, reused (fit_share.py)
     with _threads.one_blas_thread(), fit_share.scope(seeds):
         prepared, kept, kept_checks, unsettled = [], [], [], []
@@ -899,7 +899,7 @@ def diagnose_across(
     out = _finished(prepared, terms, conditions, steps, settings, alpha, time.perf_counter() - t0)
     out = replace(  # what was left out as not settled (across_settling.py), as diagnose says it
         out,
-        verdict=out.verdict + across_settling.clause(prepared, unsettled),
+        verdict=out.verdict + across_settling.clause(prepared, unsettled) + across_clip.text(cut),
         notes=(*joined.notes, *out.notes, *across_settling.notes(prepared, unsettled)),
     )
     out = across_said.said(out, prepared, dict(zip(names, gs)), y_unit, u_unit, joined.units)  # run.py's

@@ -23,6 +23,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from ..terms import TERMS
+from . import across_moved
 from .bounds_said import MOST, _suggests, _tie
 from .fitting import physical
 from .result import term_symbol_unit
@@ -113,11 +114,18 @@ def _where(groups: Sequence[Any], tr: Any, values: Sequence[float]) -> str:
 
 
 def text(
-    b: BeyondAcross, groups: Sequence[Any], units: tuple[str, str], fraction: float, kept: Sequence[str]
+    b: BeyondAcross,
+    groups: Sequence[Any],
+    units: tuple[str, str],
+    fraction: float,
+    kept: Sequence[str],
+    steps: Sequence[Any] = (),
 ) -> str:
     """The verdict's opening on the candidates beyond their range, each with its value at every condition
     (``kept``: the labels of the terms the selection kept, said as stand-ins; ``fraction``: the share of
-    the summed excess they remove)."""
+    the summed excess they remove). When the best one is beyond its range at some conditions only and its
+    physics at its other place fits those with a physical value (``steps``: the joint selection's, whose
+    first step holds every candidate's trial), that reading opens instead (:mod:`.across_moved`)."""
     if not b.found:
         return ""
     labels = ", ".join(str(g.label) for g in groups)
@@ -139,6 +147,9 @@ def text(
         if kept
         else ""
     )
+    moved = across_moved.text(groups, steps, b.found[0], units)
+    if moved:
+        return f"{moved}{instead}; "
     return f"not explained within the terms' physical ranges: {'; '.join(what)}{instead}; "
 
 

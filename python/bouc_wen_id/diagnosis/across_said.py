@@ -53,7 +53,9 @@ def said(
         b = across_bounds.found(groups, out.steps)
         if across_bounds.demotes(b, bool(groups[0].current.params.terms)):
             kept = [t.label for t in (*out.terms, *out.partial)]
-            verdict = _opened(verdict, across_bounds.text(b, groups, un, explained_fraction(groups), kept))
+            verdict = _opened(
+                verdict, across_bounds.text(b, groups, un, explained_fraction(groups), kept, out.steps)
+            )
     as_named = [NamedTerm(t.term, t.symbol, math.nan, math.nan, t.unit) for t in out.terms]
     found = across_twin.twins(groups, out.steps, out.named)
     steps, added = across_twin.with_alternatives(out.steps, found)
