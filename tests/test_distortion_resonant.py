@@ -147,32 +147,51 @@ def test_a_term_at_its_null_value_is_not_named() -> None:
     assert "not named" in said and "fc = 1.5e-21" in said
 
 
-def _diag(p: float, pair: tuple[str, ...] = ()) -> Any:
+@dataclass
+class _Diag:
+    final: Any
+    settings: dict[str, Any]
+    steps: list[Any]
+    verdict: str = "verdict"
+
+
+def _diag(p: float, pair: tuple[str, ...] = (), per_dof: float = 1.0) -> Any:
     steps = [SimpleNamespace(pairs=[SimpleNamespace(terms=pair, cost=5.0, fit=object())])] if pair else []
-    return SimpleNamespace(final=SimpleNamespace(p_value=p), settings={"alpha": 0.05}, steps=steps)
+    final = SimpleNamespace(p_value=p, cost=per_dof * 600.0, dof=600)
+    return _Diag(final=final, settings={"alpha": 0.05}, steps=steps)
 
 
 @pytest.mark.parametrize(
-    ("first", "second_p", "kept"),
+    ("first", "second", "kept"),
     [
-        (_diag(1e-20, (Viscous.kind, Distortion.kind)), 0.3, "second"),
-        (_diag(1e-20, (Viscous.kind, Distortion.kind)), 1e-30, "first"),
-        (_diag(0.4, (Viscous.kind, Distortion.kind)), 0.9, "first"),  # the first carry served: not rerun
-        (_diag(1e-20), 0.3, "first"),  # no set held the drive's term beside a device term
+        (_diag(1e-20, (Viscous.kind, Distortion.kind), 1.4), _diag(0.3, per_dof=1.02), "second"),
+        (_diag(1e-20, (Viscous.kind, Distortion.kind), 1.4), _diag(1e-30, per_dof=1.5), "first"),
+        # review rv36m F3: both p underflow to 0; the far better fit is kept, the worse one refused
+        (_diag(0.0, (Viscous.kind, Distortion.kind), 68.5), _diag(0.0, per_dof=3.0), "second"),
+        (_diag(0.0, (Viscous.kind, Distortion.kind), 3.0), _diag(0.0, per_dof=13.75), "first"),
+        (
+            _diag(0.4, (Viscous.kind, Distortion.kind)),
+            _diag(0.9),
+            "first",
+        ),  # the first carry served: not rerun
+        (_diag(1e-20), _diag(0.3), "first"),  # no set held the drive's term beside a device term
     ],
 )
 def test_the_harmonics_are_carried_again_beside_a_device_term_only_where_that_fits_better(
-    first: Any, second_p: float, kept: str
+    first: Any, second: Any, kept: str
 ) -> None:
     asked: list[tuple[str, ...]] = []
-    second = _diag(second_p)
 
     def rerun(terms: tuple[str, ...]) -> Any:
         asked.append(terms)
         return second
 
     got = carry_refresh.again(first, (Viscous.kind, Distortion.kind), rerun)
-    assert got is (second if kept == "second" else first)
+    if kept == "second":  # and said (review rv36m F2: a kept second carry read as the first)
+        assert got.final is second.final and got.settings["carry_beside"] == [Viscous.kind]
+        assert "a second carry" in got.verdict and "viscous damping" in got.verdict
+    else:
+        assert got is first
     assert asked in ([], [(Viscous.kind,)])
     assert carry_refresh.again(first, (Viscous.kind,), rerun) is first  # the drive's term not a candidate
 
