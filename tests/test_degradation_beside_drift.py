@@ -155,7 +155,10 @@ def test_an_asymmetric_degrading_loop_is_no_drifting_zero(flag: bool) -> None:
     # Session 30 (loop_centre.py): on, the loop's own centre trend is predicted by the fitted model and
     # leaves no drift, so the records are diagnosed as they are; main named nothing here ("unexplained
     # ...; recording 1, recording 3, recording 5 left out (not settled)", measured).
-    assert T.Asymmetry.kind in d.named_terms and NU in d.named_terms, d.summary()
+    # Session 36 (bounds_said, review 36 problem 3): with mu held at its bracket's end and a misfit left,
+    # a steady term is said as fitted there, not named; the drift term, tested on the drift, stays named.
+    held = "fitted with mu held at the lower end of its bracket, not named: asymmetry" in d.verdict
+    assert NU in d.named_terms and (T.Asymmetry.kind in d.named_terms or held), d.summary()
     assert "not settled" not in d.verdict, d.verdict
     if flag:
         assert FIXED in d.verdict, d.verdict
@@ -187,7 +190,10 @@ def test_a_drifting_zero_beside_an_asymmetric_degrading_loop_is_found() -> None:
     recording 3, recording 5 left out (not settled); ... a drifting zero or a degrading loop's centre"
     (measured, seed 2)."""
     d = bw.diagnose(_records(2, RATE, 1.0, asym=0.4))
-    assert T.Asymmetry.kind in d.named_terms and NU in d.named_terms, d.summary()
+    # Session 36 (bounds_said, review 36 problem 3): with mu held at its bracket's end and a misfit left,
+    # a steady term is said as fitted there, not named; the drift term, tested on the drift, stays named.
+    held = "fitted with mu held at the lower end of its bracket, not named: asymmetry" in d.verdict
+    assert NU in d.named_terms and (T.Asymmetry.kind in d.named_terms or held), d.summary()
     assert "not settled" not in d.verdict, d.verdict
     assert any(c in d.verdict for c in DRIFTS) and FIXED not in d.verdict, d.verdict
     assert T.Offset.kind not in d.named_terms, d.summary()

@@ -69,11 +69,19 @@ def again(moved: bool, measured_noise: bool, exps: Sequence[Any]) -> bool:
     return not moved and measured_noise and all(e.dc.size >= MIN_PERIODS for e in exps)
 
 
+#: The targeted step on a drift-corrected start that passes the global test is OFF: on the independent
+#: generator of tests/test_degradation.py (stiffness degradation alone, seeds 42010 and 42017) it named a
+#: parallel stiffness on x at 8 se beside the drift term (k = 0.00128 ± 0.00016, none in the plant): the
+#: first-order drift correction leaves a residue the step reads as physics (review rv35m F5's mechanism).
+#: A steady term beside a drift term is still found where the corrected start fails the global test.
+DRIFT_TARGETED = False
+
+
 def drift_targeted(named_deg: bool, measured_noise: bool, p_start: float, alpha: float) -> bool:
     """Whether the targeted step runs on the drift-corrected start (module docstring, "After a drift
-    term"): a drift term named (``named_deg``), measured noise, and the corrected steady model passing the
-    global test at ``alpha / 2`` (``p_start`` its p-value)."""
-    return named_deg and measured_noise and plain_passes(p_start, alpha)
+    term"): :data:`DRIFT_TARGETED`, a drift term named (``named_deg``), measured noise, and the corrected
+    steady model passing the global test at ``alpha / 2`` (``p_start`` its p-value)."""
+    return DRIFT_TARGETED and named_deg and measured_noise and plain_passes(p_start, alpha)
 
 
 def joint_next(

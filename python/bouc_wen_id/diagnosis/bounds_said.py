@@ -36,6 +36,7 @@ from typing import Any, Optional
 from ..augmented import AugFit
 from ..terms import TERMS
 from .bounds_clear import PhysicalTwin, clearly_better, physical_twin, twin_text
+from .drift import DRIFT_TERMS
 from .fitting import Scale, physical
 from .result import NamedTerm, Status, term_symbol_unit
 from .select import MATERIAL_SHARE, TIE_SD, Step, Trial, _admissible, at_null, away_from_null, dof_of
@@ -260,8 +261,11 @@ def apply(
     mu = _mu_text(b) if b.mu_face and status != "explained" else ""
     if b.found and (b.beats_final or not terms):
         return "unexplained", (), _found_text(b, fraction, terms), mu
-    if mu and named:  # review 36 problem 3: stand-ins for the loop's shape, not findings
-        return "unexplained", (), "", mu + _held_text(named, b.mu_face)
+    steady = tuple(t for t in named if t.term not in DRIFT_TERMS)
+    if mu and steady:  # review 36 problem 3: stand-ins for the loop's shape, not findings
+        # a drift term stays: its test is on the period-to-period drift, not on the loop's shape
+        kept = tuple(t for t in named if t.term in DRIFT_TERMS)
+        return ("partly explained" if kept else "unexplained"), kept, "", mu + _held_text(steady, b.mu_face)
     # One that removes less than the final model is not said (review of the merge: a 56 % negative
     # stiffness beside an inertia that explains 100 %, P-Delta "suggested"; an exact tie is a design twin,
     # said by design_twin.py with the experiment that separates them); one that removes as much or more,
