@@ -85,8 +85,8 @@ def _slow(seed: int, size: float, periods: int = 20) -> Any:
 
 def test_a_slow_settling_of_the_centre_is_trimmed_so_the_dc_is_unbiased() -> None:
     # Each period's excess is near its noise: no single-period or trend test sees it. Main kept the mean
-    # 2.56 of its se off (12 seeds); the marginal-error trim 2.01: a part of the bias, not all, is removed
-    # (a DC-only rule reached 0.99 but dropped 1.5 of 21 periods of settled records, 42 % of them).
+    # 2.56 of its se off (12 seeds); the marginal-error trim 1.87: a part of the bias, not all, is removed
+    # (a DC-only rule without the 1 % test reached 0.99 but dropped 1.5 of 21 periods of settled records).
     z = []
     for seed in range(12):
         with warnings.catch_warnings():
