@@ -28,6 +28,9 @@ CASES: dict[str, tuple[str, str, str, dict[str, float], float]] = {
     "kx_f3a2": ("two_pole", "f3a2", "white", {"k_x": 10.0}, 128.0),
     "kx_f3a2_nonint": ("two_pole", "f3a2", "white", {"k_x": 10.0}, 100.37),
     "mx_res_f5": ("res_delay", "f5", "white", {"m_x": 10.0}, 128.0),
+    "kx_fo_nonint77": ("fo_delay", "f3a2", "white", {"k_x": 10.0}, 77.7),
+    "null_fo_nonint77": ("fo_delay", "f3a2", "white", {}, 77.7),
+    "cu_f5_nonint": ("fo_delay", "f5", "white", {"c_u": 10.0}, 100.37),
 }
 
 

@@ -67,3 +67,40 @@ def test_a_drift_that_goes_on_is_not_trimmed(drift: float) -> None:
     ap = bw.signal.average_measurement(m)[0]
     first, dc, h1, ns = lab_settle.period_fits(m.t, m.y, ap)
     assert lab_settle.leading_transient(dc, h1, ns, SD**2) == 0
+
+
+def _slow(seed: int, size: float, periods: int = 20) -> Any:
+    """A loop centre that settles slowly, by about one period's noise sd a period (``size`` times the
+    per-period DC se, decaying by 0.8 a period from the first), at 77.7 samples a period, with a third
+    harmonic (the period window holds 77 or 78 samples)."""
+    rng = np.random.default_rng(seed)
+    om, p_s = 3.0, 77.7
+    dt = 2.0 * math.pi / om / p_s
+    t = np.arange(int(periods * p_s)) * dt
+    k = t * om / (2.0 * math.pi)
+    se = SD / math.sqrt(p_s)
+    y = 0.5 * np.cos(om * t - 0.3) + 0.2 * np.cos(3.0 * om * t - 1.0) + size * se * 0.8**k
+    return bw.Measurement(t, np.cos(om * t), y + SD * rng.standard_normal(t.size), nominal_frequency=om)
+
+
+def test_a_slow_settling_of_the_centre_is_trimmed_so_the_dc_is_unbiased() -> None:
+    # Each period's excess is near its noise: no single-period or trend test sees it. Main kept the mean
+    # 2.56 of its se off (12 seeds); the marginal-error trim 1.87: a part of the bias, not all, is removed
+    # (a DC-only rule without the 1 % test reached 0.99 but dropped 1.5 of 21 periods of settled records).
+    z = []
+    for seed in range(12):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            (e,) = data.prepare([_slow(seed, 3.0)])
+        z.append(float(np.mean(e.ybar)) / math.sqrt(e.noise_var / (e.periods * e.samples_per_period)))
+    assert float(np.mean(z)) < 2.3
+
+
+def test_the_period_record_at_a_non_integer_rate_has_no_window_pattern() -> None:
+    # Noise-free, settled: each period's DC must be the same; a one-harmonic fit over 77 or 78 samples of
+    # a 77.7-sample period read the third harmonic into it.
+    om, t = 3.0, np.asarray(_slow(0, 0.0).t)
+    clean = 0.5 * np.cos(om * t - 0.3) + 0.2 * np.cos(3.0 * om * t - 1.0)
+    m = bw.Measurement(t, np.cos(om * t), clean + 1e-9 * np.sin(7.3 * t), nominal_frequency=om)
+    first, dc, h1, ns = lab_settle.period_fits(m.t, m.y, bw.signal.average_measurement(m)[0])
+    assert float(np.ptp(dc)) < 1e-3 * SD / math.sqrt(77.7)

@@ -20,6 +20,11 @@ from bouc_wen_id import terms as T
 from bouc_wen_id.errors import UnitMismatchError, UnitWarning
 from bouc_wen_id.units import harmonise, scale_between
 
+# The records hold their 6 settling periods from the virgin state: the lab path finds e2's first steady period
+# off the rest (DC 3.3 sd, p 0.001, lab_settle's marginal-error trim) and drops it with a TransientWarning,
+# a true transient this module of units does not test.
+pytestmark = pytest.mark.filterwarnings("ignore::bouc_wen_id.errors.TransientWarning")
+
 TWO_PI = 2.0 * math.pi
 _G = bw.TransferFunction([36.0], [1.0, 3.0, 36.0])
 
