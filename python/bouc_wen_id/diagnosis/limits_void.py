@@ -13,19 +13,17 @@ from __future__ import annotations
 
 from typing import Any
 
-#: The adequacy test's level when a diagnosis carries none in its settings (run.diagnose's default).
-DEFAULT_ALPHA = 0.05
+from . import adequacy
+from .adequacy import DEFAULT_ALPHA as DEFAULT_ALPHA  # carry_refresh reads it here
 
 
 def void(d: Any) -> bool:
-    """Whether ``d``'s detection limits are void: its final model fails its adequacy test at the level that
-    decided the verdict (a "partly explained" verdict whose final model passes, a term left out as not
-    physical, keeps them). With nothing named that is the plain model's global test, at ``alpha / 2``
-    (gate.plain_passes: the other half is the targeted step's); review 36's null_spk (p = 0.042) read
-    "adequate" with its limits and then called them void at ``alpha``."""
-    alpha = float(getattr(d, "settings", {}).get("alpha", DEFAULT_ALPHA))
-    level = alpha if getattr(d, "named", ()) else 0.5 * alpha
-    return bool(d.limits) and float(d.final.p_value) < level
+    """Whether ``d``'s detection limits are void: its final model fails its adequacy test by the one rule
+    every statement of adequacy follows (adequacy.final_passes: ``alpha`` with named terms, ``alpha / 2``
+    for the plain model's global test; a "partly explained" verdict whose final model passes, a term left
+    out as not physical, keeps them); review 36's null_spk (p = 0.042) read "adequate" with its limits and
+    then called them void at ``alpha``."""
+    return bool(d.limits) and not adequacy.final_passes(d)
 
 
 def reason(d: Any) -> str:

@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any, Optional, Union
 
 import numpy as np
 
-from . import limits_void
+from . import adequacy, limits_void
 from .result import TERM_LABELS, Diagnosis, clean
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -249,8 +249,8 @@ def html_page(
     parts += [*_terms_html(d), *_held_out_html(d)]
     parts.append("<h2>Where the models miss</h2>")
     parts.append(
-        f"<p>Plain: {html.escape(d.before.describe() or 'nowhere above the noise')}. "
-        f"Final: {html.escape(d.after.describe() or 'nowhere above the noise')}.</p>"
+        f"<p>Plain: {html.escape(adequacy.where(d, final=False))}. "  # one rule (adequacy.py)
+        f"Final: {html.escape(adequacy.where(d, final=True))}.</p>"
     )
     for name, title in _FIGURES:
         if name in images:

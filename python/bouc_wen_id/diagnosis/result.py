@@ -12,7 +12,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..terms import TERMS, Degradation
-from . import limits_void
+from . import adequacy, limits_void
 from .data import DiagExperiment
 from .gate import AFTER_NAMED_SHARE
 from .locate import Localisation
@@ -300,8 +300,8 @@ class Diagnosis:
                     f"  {src:<32} plain {nb:.4f}  final {na:.4f}  ratio {na / nb if nb else math.nan:.3f}"
                 )
         lines.append("")
-        lines.append(f"where the plain model misses: {self.before.describe() or 'nowhere above the noise'}")
-        lines.append(f"where the final model misses: {self.after.describe() or 'nowhere above the noise'}")
+        lines.append(f"where the plain model misses: {adequacy.where(self, final=False)}")  # adequacy.py
+        lines.append(f"where the final model misses: {adequacy.where(self, final=True)}")
         return "\n".join(lines)
 
     def __str__(self) -> str:
@@ -318,8 +318,8 @@ class Diagnosis:
             "partial": [t.to_dict() for t in self.partial],
             "alternatives": [a.to_dict() for a in self.alternatives],
             "explained_fraction": self.explained_fraction,
-            "before": self.before.to_dict(),
-            "after": self.after.to_dict(),
+            "before": adequacy.localisation_dict(self, final=False),  # adequate by one rule (adequacy.py)
+            "after": adequacy.localisation_dict(self, final=True),
             "steps": [s.to_dict() for s in self.steps],
             "held_out": None if self.held_out is None else self.held_out.to_dict(),
             "plain": self.plain.to_dict(),
