@@ -21,7 +21,7 @@ from bouc_wen_id.errors import UnitMismatchError, UnitWarning
 from bouc_wen_id.units import harmonise, scale_between
 
 # The records hold their 6 settling periods from the virgin state: the lab path finds e2's first steady period
-# off the rest (DC 3.3 sd, p 0.001, lab_settle's marginal-error trim) and drops it with a TransientWarning,
+# off the rest (its DC 3.3 sd off, lab_settle's trim) and drops it with a TransientWarning,
 # a true transient this module of units does not test.
 pytestmark = pytest.mark.filterwarnings("ignore::bouc_wen_id.errors.TransientWarning")
 

@@ -18,7 +18,8 @@ not a drift that goes on) up to the first after which the rest shows no trend (`
 rule) and whose own chi-square (3 dof) is within :data:`TRANSIENT_LEVEL`; at most half of them, and none
 when no such start exists (a drift that goes on, a degrading specimen, is the degradation test's). A
 settling that moves the DC by 1-4 noise sd a period over several periods passes any single period's test;
-the trend of the rest finds it.
+the trend of the rest finds it. A slower settling, about one period's noise sd a period, is not found
+(session 37 removed the marginal-standard-error trim built for it: docs/diagnosis.md says why).
 """
 
 from __future__ import annotations
@@ -40,14 +41,6 @@ TREND_LEVEL = 0.05
 #: Level of the test that the first period's DC lies off the record's straight line (a transient, not a
 #: drift): strict, since a settled record trims nothing only when this test does not fire by chance.
 LINE_LEVEL = 1e-3
-
-#: Level at which the periods the marginal-error rule would drop must differ from the rest: at 0.05 it
-#: trimmed a white lab record of the colour test (p 0.030; 2 of 12 below 0.03); at 0.01 it left review 34's
-#: two-pole k_x case (seed 4, one experiment's drop at p 0.0103) naming an output offset (docs/diagnosis.md).
-MSER_LEVEL = 0.02
-#: The marginal-standard-error trim is OFF: under AR(1) noise (rho 0.3 and 0.8) it trimmed settled lab
-#: nulls as transient (tests/test_drift_gate_colour.py), its level taken from white-noise seeds only.
-MSER_ENABLED = False
 
 #: Fewest whole periods left after a trim (the recording path's ``TRANSIENT_MIN_PERIODS``).
 MIN_LEFT = 4
@@ -145,48 +138,12 @@ def leading_transient(dc: Any, h1: Any, samples: Any, noise_var: float) -> int:
     m = int(dc.size)
     if m < 2 * MIN_LEFT or not (math.isfinite(noise_var) and noise_var > 0):
         return 0
-    slow = _mser(dc, h1, samples, noise_var) if MSER_ENABLED else 0
-    if slow and _trending(dc[slow:], h1[slow:]):
-        slow = 0  # the rest still trends: a drift that goes on (the degradation test's), not a settling
     if not _off_the_line(dc, samples, noise_var):
-        return slow  # no transient the first period shows alone (a drift goes on along the line)
+        return 0  # no transient the first period shows alone (a drift goes on along the line)
     for k in range(m // 2 + 1):
         if not _trending(dc[k:], h1[k:]) and not _deviates(dc, h1, samples, noise_var, k):
-            return max(k, slow)
-    return slow
-
-
-def _mser(dc: Any, h1: Any, samples: Any, noise_var: float) -> int:
-    """The leading periods (at most half, :data:`MIN_LEFT` kept) whose drop gives the kept periods' mean
-    DC and fundamental the least estimated error (White's marginal standard error rule, MSER: the spread
-    of the kept periods about their mean over their count squared, each component in its noise sd).
-
-    A loop centre that settles over many periods by about one period's noise sd each passes every test of
-    a single period or a trend, yet biases the mean of 20 periods by 1-2 of its standard errors, in the
-    same direction in every experiment (a two-pole plant from its virgin state: the lab path kept periods
-    from the second on, the recording path dropped 12, and the lab named an output offset at 4 se)."""
-    m = int(dc.size)
-    n = np.asarray(samples, dtype=np.float64)
-    sd0, sd1 = np.sqrt(noise_var / n), np.sqrt(2.0 * noise_var / n)
-    v = np.column_stack([np.asarray(dc) / sd0, np.asarray(h1).real / sd1, np.asarray(h1).imag / sd1])
-    # In the larger of the noise's sd and the last half's own spread (a coloured noise moves the periods
-    # more than the per-sample noise says), as :func:`_deviates` scales them.
-    v = v / np.maximum(1.0, np.std(v[m // 2 :], axis=0, ddof=1))
-    best, arg = math.inf, 0
-    for d in range(min(m // 2, m - MIN_LEFT) + 1):
-        rest = v[d:]
-        stat = float(np.sum((rest - rest.mean(axis=0)) ** 2)) / float(rest.shape[0]) ** 2
-        if stat < best:
-            best, arg = stat, d
-    if arg == 0:
-        return 0
-    from scipy.special import chdtrc
-
-    # Only a drop whose periods differ from the rest beyond the noise (a settled record's MSER minimum lies
-    # off 0 by chance in about 15 % of records: a warning and lost periods for nothing).
-    diff = v[:arg].mean(axis=0) - v[arg:].mean(axis=0)
-    chi2 = float(np.sum(diff**2)) / (1.0 / arg + 1.0 / (m - arg))
-    return arg if float(chdtrc(3, chi2)) < MSER_LEVEL else 0
+            return k
+    return 0
 
 
 def _trending(dc: Any, h1: Any) -> bool:
