@@ -12,10 +12,13 @@ period, against how much the record drifted before the named term was taken out.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 from .drift import DRIFT_TERMS
 from .locate import LEVEL, DriftFinding, Localisation
-from .result import NamedTerm
+
+if TYPE_CHECKING:  # a type only: result imports adequacy, which reads this module's clause
+    from .result import NamedTerm
 
 
 def _fired(drift: Sequence[DriftFinding]) -> list[DriftFinding]:
