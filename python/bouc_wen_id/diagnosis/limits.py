@@ -2,9 +2,10 @@
 
 When the diagnosis names nothing for a term, the user needs the size below which the design would not have
 named it. Each candidate of the first selection step is tested by an F-test (select.py) that rejects when
-its cost drop exceeds ``z_c^2 s2``: ``s2`` the test's own residual scale per dof, ``z_c`` the normal
-quantile of the level the step really runs at (``alpha`` or ``alpha / 2`` on the targeted step, Bonferroni
-over its candidates, one-sided for a term confined to ``>= 0`` whose p is halved, two-sided otherwise); the
+its cost drop exceeds ``F_c s2``: ``s2`` the test's own residual scale per dof, floored at the noise floor
+as the test floors it, ``F_c`` the F(1, dof) quantile of the level the step really runs at
+(:func:`test_targets`; ``alpha`` or ``alpha / 2`` on the targeted step, Bonferroni over its candidates,
+one-sided for a term confined to ``>= 0`` whose p is halved, two-sided otherwise); the
 step also requires the term to explain :data:`~.select.MATERIAL_SHARE` of the excess, so the threshold is
 the larger of the two. The cost drop a true value ``v`` produces on noise-free data is the part of the
 term's trace the plain model cannot absorb: the trace (plain model plus the term at ``v``, minus the plain
@@ -67,7 +68,7 @@ def test_targets(
     floored as the test floors it. Without that floor (before session 37) a residual below the noise floor
     (coloured noise: the weights are the floor at the low harmonics and the rest of the residual is far
     below it, chi2/dof 0.07-0.11 under AR(1) 0.8 noise) lowered the limits' threshold 10x below the test's
-    own, and the stated 90 % value passed its test in 0 of 64 draws (docs/diagnosis.md, "Coverage of the
+    own, and the stated 90 % value passed its test in 0 of 24 draws (docs/diagnosis.md, "Coverage of the
     90 % value")."""
     from scipy.special import fdtri  # type: ignore[import-untyped]
 
