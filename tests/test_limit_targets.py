@@ -3,7 +3,7 @@
 The candidate's own test (select.f_test) divides its cost drop by the residual variance per dof floored at
 the noise floor. Under coloured noise the residual away from the low harmonics is far below that floor
 (chi2/dof 0.07-0.11 under AR(1) 0.8 noise on reviewer 36's generator), and before session 37 the limits
-used the unfloored value: their 90 % value then passed its test in 0 of 24 draws. Here the drop at the
+used the unfloored value: their 90 % value then passed its test in 0 of 32 draws. Here the drop at the
 stated 90 % size is drawn by Monte-Carlo (a seeded noncentral chi2 with one dof, the noise at the term's
 harmonics at the floor) and put through select.f_test itself.
 """

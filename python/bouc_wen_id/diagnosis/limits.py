@@ -68,7 +68,7 @@ def test_targets(
     floored as the test floors it. Without that floor (before session 37) a residual below the noise floor
     (coloured noise: the weights are the floor at the low harmonics and the rest of the residual is far
     below it, chi2/dof 0.07-0.11 under AR(1) 0.8 noise) lowered the limits' threshold 10x below the test's
-    own, and the stated 90 % value passed its test in 0 of 24 draws (docs/diagnosis.md, "Coverage of the
+    own, and the stated 90 % value passed its test in 0 of 32 draws (docs/diagnosis.md, "Coverage of the
     90 % value")."""
     from scipy.special import fdtri  # type: ignore[import-untyped]
 
