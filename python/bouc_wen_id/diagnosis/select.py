@@ -94,6 +94,11 @@ LAW_ALPHA = ALPHA / 5
 BOUNDARY_TERMS = tuple(k for k, cls in TERMS.items() if cls.bounds[0] == 0.0)
 
 
+#: The F-test's residual variance per dof is never below this noise floor (:func:`f_test`); the detection
+#: limits (limits.py) use the same denominator.
+NOISE_FLOOR = 1.0
+
+
 def f_test(c0: float, c1: float, dof1: int, boundary: bool = False, q: int = 1) -> tuple[float, float]:
     """Nested F statistic and p-value for ``q`` added parameters (2 for a two-term element, Dahl friction:
     its level and its pre-sliding stiffness are both fitted, and F(1, dof) on their joint improvement was
@@ -106,7 +111,7 @@ def f_test(c0: float, c1: float, dof1: int, boundary: bool = False, q: int = 1) 
     # The residual variance per dof, never below the noise floor (1 in these units): below it the residual
     # is the floor's overestimate at other harmonics (a coloured noise whose low-harmonic level is the floor,
     # data.noise_colour), not a smaller noise at the harmonics the term fills.
-    f = max(c0 - c1, 0.0) / q / max(c1 / dof1, 1.0)
+    f = max(c0 - c1, 0.0) / q / max(c1 / dof1, NOISE_FLOOR)
     p = float(fdtrc(q, dof1, f)) if f > 0 else 1.0
     return f, (0.5 * p if boundary and f > 0 else p)
 
