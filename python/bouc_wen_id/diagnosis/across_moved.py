@@ -18,6 +18,7 @@ from collections.abc import Sequence
 from typing import Any
 
 from ..terms import TERMS
+from . import across_place
 from .fitting import physical
 from .result import term_symbol_unit
 from .select import _admissible, at_null, away_from_null, dof_of, siblings
@@ -77,6 +78,9 @@ def text(groups: Sequence[Any], steps: Sequence[Any], tr: Any, units: tuple[str,
 
     shared = ", ".join(f"{physical(tr.fits[i], groups[i].scale, tr.term)[0]:.4g}" for i in out)
     at_out = ", ".join(str(groups[i].label) for i in out)
+    _, pf = across_place.found(groups, steps, tr)  # the places fitted jointly, free per condition
+    if pf is not None:
+        return across_place.text(pf, groups, tr, s, sym, unit)
     name = TERMS[TERMS[tr.term].base_kind].label
     return (
         f"the place of {name} differs between the conditions: {at(sib, s.fits, out)}, "
