@@ -1,6 +1,6 @@
 """The place of a term chosen per condition, fitted and tested jointly (review 36b, problem 1).
 
-:mod:`.across_moved` finds that a term's physics sits at another place at the conditions where the joint
+:mod:`.across_moved` (``found``) finds a term's physics sits at another place at the conditions where the joint
 candidate (one place shared by every condition) is beyond its range. Here the two places are put
 together as one joint structure with the place free per condition (the sibling's fit where the shared
 place is beyond its range, the shared place's fit elsewhere; values per condition) and tested as the across
@@ -56,6 +56,16 @@ class PlaceFree:
     _level: float = 0.01
 
 
+def pooled_f(imp: Sequence[float], c1: Sequence[float], d1: Sequence[int], q: int) -> tuple[float, float]:
+    """:func:`.across_rules.pooled_f` (the combined F over the pooled residual variance, never below the
+    noise floor), here as across_rules reaches this module through across_verdict and across_bounds."""
+    from scipy.special import fdtrc  # type: ignore[import-untyped]
+
+    den = max(sum(c1) / max(sum(d1), 1), 1.0)
+    stat = max(sum(imp), 0.0) / (q * len(imp)) / den
+    return stat, (float(fdtrc(q * len(imp), max(sum(d1), 1), stat)) if stat > 0 else 1.0)
+
+
 def _base_cost(f: Any, imp: float) -> float:
     return float(f.cost) + float(imp)
 
@@ -68,8 +78,6 @@ def _against(
     two differ. Where ``single`` is physical and at the other place, the two fits are of the same size and
     not nested: their cost difference is held to the same statistic (a difference beyond its critical
     value), never below 0."""
-    from .across_rules import pooled_f  # across_rules imports this module's caller
-
     imp, c1, d1 = [], [], []
     for i, (g, f) in enumerate(zip(groups, mixed)):
         s = single.fits[i]
@@ -87,8 +95,6 @@ def _against(
 def fit(groups: Sequence[Any], tr: Any, sib: Any, out: Sequence[int], level: float) -> Optional[PlaceFree]:
     """The place-free joint structure of ``tr`` (shared place) and ``sib`` (its other place, at the
     conditions ``out``), tested; None when a fit is missing."""
-    from .across_rules import pooled_f
-
     k = len(groups)
     if len(tr.fits) < k or len(sib.fits) < k:
         return None
@@ -125,7 +131,7 @@ def fit(groups: Sequence[Any], tr: Any, sib: Any, out: Sequence[int], level: flo
 def _undecided(groups: Sequence[Any], tr: Any, sib: Any, level: float, q: int) -> tuple[int, ...]:
     """The conditions where both places fit with physical values away from their null and their costs
     differ by less than the F test's critical value (q parameters at ``level``)."""
-    from scipy.special import fdtri  # type: ignore[import-untyped]
+    from scipy.special import fdtri
 
     out = []
     for i, g in enumerate(groups):
@@ -141,29 +147,6 @@ def _undecided(groups: Sequence[Any], tr: Any, sib: Any, level: float, q: int) -
         if ok and abs(a.cost - b.cost) < q * s2 * float(fdtri(q, d, 1.0 - level)):
             out.append(i)
     return tuple(out)
-
-
-_MEMO: dict[tuple[int, int], tuple[Any, Any, Optional[PlaceFree]]] = {}
-
-
-def found(groups: Sequence[Any], steps: Sequence[Any], tr: Any) -> tuple[Any, Optional[PlaceFree]]:
-    """``(sibling trial, its place-free structure)`` for the joint trial ``tr`` beyond its range at some
-    conditions (:func:`.across_moved.elsewhere`); ``(None, None)`` when there is no such sibling or the
-    conditions are not prepared ones (no plain fit). Fitted once per trial pair."""
-    from .across_moved import elsewhere
-
-    sib_term, out = elsewhere(groups, steps, tr)
-    if not sib_term or not all(hasattr(g, "plain") for g in groups):
-        return None, None
-    sib = next(t for t in steps[0].trials if t.term == sib_term)
-    key = (id(tr), id(sib))
-    hit = _MEMO.get(key)
-    if hit is not None and hit[0] is tr and hit[1] is sib:
-        return sib, hit[2]
-    pf = fit(groups, tr, sib, out, float(getattr(steps[0], "level", 0.0) or 0.0))
-    _MEMO.clear()  # one run's pair at a time: no object kept past its run
-    _MEMO[key] = (tr, sib, pf)
-    return sib, pf
 
 
 def status(pf: PlaceFree, groups: Sequence[Any], alpha: float, sib: Any, tr: Any) -> str:
@@ -211,4 +194,4 @@ def text(pf: PlaceFree, groups: Sequence[Any], tr: Any, sib: Any, sym: str, unit
     return said
 
 
-__all__ = ["LAW_ALPHA", "PlaceFree", "fit", "found", "status", "text"]
+__all__ = ["LAW_ALPHA", "PlaceFree", "fit", "pooled_f", "status", "text"]

@@ -19,7 +19,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import replace
 from typing import Any, TypeVar
 
-from . import across_bounds, across_clean, across_place, across_twin
+from . import across_bounds, across_clean, across_moved, across_place, across_twin
 from .across_verdict import explained_fraction
 from .caveats import alternatives_text
 from .result import NamedTerm
@@ -59,7 +59,7 @@ def said(
             verdict = _opened(
                 verdict, across_bounds.text(b, groups, un, explained_fraction(groups), kept, out.steps)
             )
-            sib, pf = across_place.found(groups, out.steps, b.found[0])  # named with its place per condition
+            sib, pf = across_moved.found(groups, out.steps, b.found[0])  # named with its place per condition
             if pf is not None and pf.named:
                 status = across_place.status(pf, groups, out.settings["alpha"], sib, b.found[0])
                 verdict = verdict.replace(NOTHING, "")
