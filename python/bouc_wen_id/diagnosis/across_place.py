@@ -1,6 +1,6 @@
 """The place of a term chosen per condition, fitted and tested jointly (review 36b, problem 1).
 
-:mod:`.across_moved` (``found``) finds a term's physics sits at another place at the conditions where the joint
+:mod:`.across_moved` (``found``) finds a term at another place at the conditions where the joint
 candidate (one place shared by every condition) is beyond its range. Here the two places are put
 together as one joint structure with the place free per condition (the sibling's fit where the shared
 place is beyond its range, the shared place's fit elsewhere; values per condition) and tested as the across
