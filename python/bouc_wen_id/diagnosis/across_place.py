@@ -159,6 +159,23 @@ def status(pf: PlaceFree, groups: Sequence[Any], alpha: float, sib: Any, tr: Any
     return "explained" if ok else "partly explained"
 
 
+def conditions(pf: PlaceFree, groups: Sequence[Any], conds: Sequence[Any], sib: Any, tr: Any) -> list[Any]:
+    """Each condition's result (``conds``, :class:`.across_stable.ConditionResult`) with its final chi2/dof
+    and adequacy p those of the named place-free structure."""
+    from dataclasses import replace
+
+    from .locate import adequacy_p
+
+    out = []
+    for i, (g, c) in enumerate(zip(groups, conds)):
+        f = sib.fits[i] if pf.places[i] == sib.term else tr.fits[i]
+        d = dof_of(g.sx, f)
+        out.append(
+            replace(c, final_chi2_dof=f.cost / max(d, 1), final_p_value=adequacy_p(f.cost, d, g.noise_dof))
+        )
+    return out
+
+
 def text(pf: PlaceFree, groups: Sequence[Any], tr: Any, sib: Any, sym: str, unit: str) -> str:
     """The naming (or why not) of the place-free structure, with its tests."""
 
@@ -194,4 +211,4 @@ def text(pf: PlaceFree, groups: Sequence[Any], tr: Any, sib: Any, sym: str, unit
     return said
 
 
-__all__ = ["LAW_ALPHA", "PlaceFree", "fit", "pooled_f", "status", "text"]
+__all__ = ["LAW_ALPHA", "PlaceFree", "fit", "pooled_f", "conditions", "status", "text"]

@@ -63,6 +63,8 @@ def said(
             if pf is not None and pf.named:
                 status = across_place.status(pf, groups, out.settings["alpha"], sib, b.found[0])
                 verdict = verdict.replace(NOTHING, "")
+                conds = across_place.conditions(pf, groups, out.conditions, sib, b.found[0])
+                out = replace(out, conditions=tuple(conds))
     as_named = [NamedTerm(t.term, t.symbol, math.nan, math.nan, t.unit) for t in out.terms]
     found = across_twin.twins(groups, out.steps, out.named)
     steps, added = across_twin.with_alternatives(out.steps, found)
