@@ -15,9 +15,10 @@ the place free per condition, so the reading is said, not named.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Any
+from typing import Any, Optional
 
 from ..terms import TERMS
+from . import across_place
 from .fitting import physical
 from .result import term_symbol_unit
 from .select import _admissible, at_null, away_from_null, dof_of, siblings
@@ -59,6 +60,29 @@ def elsewhere(groups: Sequence[Any], steps: Sequence[Any], tr: Any) -> tuple[str
     return "", ()
 
 
+_MEMO: dict[tuple[int, int], tuple[Any, Any, Optional[across_place.PlaceFree]]] = {}
+
+
+def found(
+    groups: Sequence[Any], steps: Sequence[Any], tr: Any
+) -> tuple[Any, Optional[across_place.PlaceFree]]:
+    """``(sibling trial, its place-free structure)`` for the joint trial ``tr`` beyond its range at some
+    conditions (:func:`elsewhere`); ``(None, None)`` when there is no such sibling or the
+    conditions are not prepared ones (no plain fit). Fitted once per trial pair."""
+    sib_term, out = elsewhere(groups, steps, tr)
+    if not sib_term or not all(hasattr(g, "plain") for g in groups):
+        return None, None
+    sib = next(t for t in steps[0].trials if t.term == sib_term)
+    key = (id(tr), id(sib))
+    hit = _MEMO.get(key)
+    if hit is not None and hit[0] is tr and hit[1] is sib:
+        return sib, hit[2]
+    pf = across_place.fit(groups, tr, sib, out, float(getattr(steps[0], "level", 0.0) or 0.0))
+    _MEMO.clear()  # one run's pair at a time: no object kept past its run
+    _MEMO[key] = (tr, sib, pf)
+    return sib, pf
+
+
 def text(groups: Sequence[Any], steps: Sequence[Any], tr: Any, units: tuple[str, str]) -> str:
     """'' or the reading that ``tr``'s physics sits at its other place at the conditions where ``tr`` is
     beyond its range: "the place of viscous damping differs between the conditions: on the measured input u
@@ -77,6 +101,9 @@ def text(groups: Sequence[Any], steps: Sequence[Any], tr: Any, units: tuple[str,
 
     shared = ", ".join(f"{physical(tr.fits[i], groups[i].scale, tr.term)[0]:.4g}" for i in out)
     at_out = ", ".join(str(groups[i].label) for i in out)
+    _, pf = found(groups, steps, tr)  # the places fitted jointly, free per condition
+    if pf is not None:
+        return across_place.text(pf, groups, tr, s, sym, unit)
     name = TERMS[TERMS[tr.term].base_kind].label
     return (
         f"the place of {name} differs between the conditions: {at(sib, s.fits, out)}, "
@@ -86,4 +113,4 @@ def text(groups: Sequence[Any], steps: Sequence[Any], tr: Any, units: tuple[str,
     )
 
 
-__all__ = ["elsewhere", "text"]
+__all__ = ["elsewhere", "found", "text"]

@@ -19,10 +19,13 @@ from collections.abc import Mapping, Sequence
 from dataclasses import replace
 from typing import Any, TypeVar
 
-from . import across_bounds, across_clean, across_twin
+from . import across_bounds, across_clean, across_moved, across_place, across_twin
 from .across_verdict import explained_fraction
 from .caveats import alternatives_text
 from .result import NamedTerm
+
+#: The joint search's clause when it named nothing, dropped when the place-free structure is named.
+NOTHING = "; nothing named (no candidate passes all its tests jointly at every condition)"
 
 _A = TypeVar("_A", bound=Any)
 
@@ -48,7 +51,7 @@ def said(
     if not groups or len(groups) != len(out.conditions):
         return out
     un = (y_unit or units.get("y", ""), u_unit or units.get("u", ""))
-    verdict = out.verdict
+    verdict, status = out.verdict, out.status
     if out.status != "adequate":
         b = across_bounds.found(groups, out.steps)
         if across_bounds.demotes(b, bool(groups[0].current.params.terms)):
@@ -56,6 +59,12 @@ def said(
             verdict = _opened(
                 verdict, across_bounds.text(b, groups, un, explained_fraction(groups), kept, out.steps)
             )
+            sib, pf = across_moved.found(groups, out.steps, b.found[0])  # named with its place per condition
+            if pf is not None and pf.named:
+                status = across_place.status(pf, groups, out.settings["alpha"], sib, b.found[0])
+                verdict = verdict.replace(NOTHING, "")
+                conds = across_place.conditions(pf, groups, out.conditions, sib, b.found[0])
+                out = replace(out, conditions=tuple(conds))
     as_named = [NamedTerm(t.term, t.symbol, math.nan, math.nan, t.unit) for t in out.terms]
     found = across_twin.twins(groups, out.steps, out.named)
     steps, added = across_twin.with_alternatives(out.steps, found)
@@ -69,7 +78,7 @@ def said(
     verdict += clean + across_clean.inputs_text(groups, out.status, out.terms)
     labels = [g.label for g in groups]
     verdict += across_clean.outputs_text(labels, [items.get(str(lab), ()) for lab in labels])
-    return replace(out, verdict=verdict, steps=steps, terms=terms, partial=partial)
+    return replace(out, status=status, verdict=verdict, steps=steps, terms=terms, partial=partial)
 
 
 __all__ = ["said"]
