@@ -5,7 +5,7 @@ candidate (one place shared by every condition) is beyond its range. Here the tw
 together as one joint structure with the place free per condition (the sibling's fit where the shared
 place is beyond its range, the shared place's fit elsewhere; values per condition) and tested as the across
 path tests a candidate: the combined F test against the model it was fitted on
-(:func:`.across_rules.pooled_f`,
+(:func:`.select.pooled_f`,
 at the step's level), a physical value away from its null wherever it is present, the law test at each
 condition (Bonferroni), the held-out cost summed over the conditions, and against each single-place joint
 fit kept within the physical ranges (the shared place with the term at its null where its value is beyond
@@ -26,7 +26,7 @@ from typing import Any, Optional
 from ..terms import TERMS
 from .fitting import physical
 from .law import element_law_test
-from .select import _admissible, at_null, away_from_null, dof_of, held_out
+from .select import _admissible, at_null, away_from_null, dof_of, held_out, pooled_f
 
 #: The law test's level, as the across path's (across.LAW_ALPHA).
 LAW_ALPHA = 0.01
@@ -54,16 +54,6 @@ class PlaceFree:
         )
 
     _level: float = 0.01
-
-
-def pooled_f(imp: Sequence[float], c1: Sequence[float], d1: Sequence[int], q: int) -> tuple[float, float]:
-    """:func:`.across_rules.pooled_f` (the combined F over the pooled residual variance, never below the
-    noise floor), here as across_rules reaches this module through across_verdict and across_bounds."""
-    from scipy.special import fdtrc  # type: ignore[import-untyped]
-
-    den = max(sum(c1) / max(sum(d1), 1), 1.0)
-    stat = max(sum(imp), 0.0) / (q * len(imp)) / den
-    return stat, (float(fdtrc(q * len(imp), max(sum(d1), 1), stat)) if stat > 0 else 1.0)
 
 
 def _base_cost(f: Any, imp: float) -> float:
@@ -131,7 +121,7 @@ def fit(groups: Sequence[Any], tr: Any, sib: Any, out: Sequence[int], level: flo
 def _undecided(groups: Sequence[Any], tr: Any, sib: Any, level: float, q: int) -> tuple[int, ...]:
     """The conditions where both places fit with physical values away from their null and their costs
     differ by less than the F test's critical value (q parameters at ``level``)."""
-    from scipy.special import fdtri
+    from scipy.special import fdtri  # type: ignore[import-untyped]
 
     out = []
     for i, g in enumerate(groups):

@@ -46,23 +46,13 @@ from .select import (
     element_law_test,
     limit_first,
     place_admissible,
+    pooled_f,
     preferred_by_fit,
     siblings,
 )
 
 #: Tail probability of the place rule's chi-square point (select.PLACE_CHI2 is chi-square(1)'s).
 PLACE_LEVEL = 0.05
-
-
-def pooled_f(imp: Sequence[float], c1: Sequence[float], d1: Sequence[int], q: int) -> tuple[float, float]:
-    """``(F, p)`` of the combined F statistic: the improvements ``imp`` summed, over ``q K`` parameters,
-    over the pooled residual variance ``sum c1 / sum d1`` of the larger models (never below the noise
-    floor, as :func:`.select.f_test`), against ``F(q K, sum d1)``; p = 1 without improvement."""
-    from scipy.special import fdtrc  # type: ignore[import-untyped]
-
-    den = max(sum(c1) / max(sum(d1), 1), 1.0)
-    stat = max(sum(imp), 0.0) / (q * len(imp)) / den
-    return stat, (float(fdtrc(q * len(imp), max(sum(d1), 1), stat)) if stat > 0 else 1.0)
 
 
 def _fitted(tr: Any) -> bool:
@@ -135,7 +125,7 @@ def _places(
     sibling with a physical value, not its null, at every condition where the chosen term is present
     (:func:`.select.place_admissible`); one that would be an alternative but for a non-physical value is
     appended to ``unphysical`` (said in the verdict)."""
-    from scipy.special import chdtri
+    from scipy.special import chdtri  # type: ignore[import-untyped]
 
     present = chosen.present
     k = _first_present(groups, present)

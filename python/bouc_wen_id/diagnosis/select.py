@@ -116,6 +116,18 @@ def f_test(c0: float, c1: float, dof1: int, boundary: bool = False, q: int = 1) 
     return f, (0.5 * p if boundary and f > 0 else p)
 
 
+def pooled_f(imp: Sequence[float], c1: Sequence[float], d1: Sequence[int], q: int) -> tuple[float, float]:
+    """``(F, p)`` of the combined F statistic across conditions (diagnose-across): the improvements ``imp``
+    summed, over ``q K`` parameters, over the pooled residual variance ``sum c1 / sum d1`` of the larger
+    models (never below :data:`NOISE_FLOOR`, as :func:`f_test`), against ``F(q K, sum d1)``; p = 1 without
+    improvement."""
+    from scipy.special import fdtrc
+
+    den = max(sum(c1) / max(sum(d1), 1), NOISE_FLOOR)
+    stat = max(sum(imp), 0.0) / (q * len(imp)) / den
+    return stat, (float(fdtrc(q * len(imp), max(sum(d1), 1), stat)) if stat > 0 else 1.0)
+
+
 @dataclass(frozen=True)
 class HeldOut:
     """Leave-one-experiment-out costs and NRMSE of two nested models."""
@@ -874,6 +886,7 @@ def forward_select(
 
 
 __all__ = [
+    "pooled_f",
     "forward_select",
     "LAW_RCOND",
     "contrast_statistic",
