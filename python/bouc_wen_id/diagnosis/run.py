@@ -76,20 +76,20 @@ from .locate import Localisation, adequacy_p
 from .progress import Progress, ProgressCallback, reporter
 from .restarts import rebased_plain
 from .result import Diagnosis, ModelSummary, NamedTerm, term_symbol_unit
-from .run_words import (  # noqa: F401 (importable from run as before)
-    NOT_PHYSICAL_HINT,
-    PARTLY_EXPLAINED_FRACTION,
-    _explained_fraction,
-    _judged,
-    _law_text,
-    _localise,
-    _naming_share,
-    _summary,
-    _unphysical_text,
-    _unscaled,
-    _verdict,
-    classify,
-)
+
+# re-exported from run_words.py (moved there): importable from run as before
+from .run_words import NOT_PHYSICAL_HINT as NOT_PHYSICAL_HINT
+from .run_words import PARTLY_EXPLAINED_FRACTION as PARTLY_EXPLAINED_FRACTION
+from .run_words import _explained_fraction as _explained_fraction
+from .run_words import _judged as _judged
+from .run_words import _law_text as _law_text
+from .run_words import _localise as _localise
+from .run_words import _naming_share as _naming_share
+from .run_words import _summary as _summary
+from .run_words import _unphysical_text as _unphysical_text
+from .run_words import _unscaled as _unscaled
+from .run_words import _verdict as _verdict
+from .run_words import classify as classify
 from .select import ALPHA, Alternative, FoldCache, Step, held_out
 from .settling import (  # noqa: F401 (quantisation_step: importable here as before)
     LEFT_OUT,
