@@ -25,6 +25,8 @@ from typing import Optional
 import numpy as np
 from numpy.typing import NDArray
 
+from . import fitting  # its phase_line, read at call time (fitting imports this module)
+
 FloatArray = NDArray[np.float64]
 
 #: Points of the natural-frequency grid (spanning a decade beyond the tested band either side) and of the
@@ -69,14 +71,7 @@ def _solve(
     lh, ph = _shape(freqs, wn, zeta)
     lk = float(np.mean(logs - lh))
     rest = lag - ph
-    if th0 is None:
-        basis = np.column_stack([np.ones(freqs.size), freqs])
-        (t0, delay), *_ = np.linalg.lstsq(basis, rest, rcond=None)
-        if delay < 0.0:
-            t0, delay = float(np.mean(rest)), 0.0
-    else:
-        t0 = th0
-        delay = max(float(freqs @ (rest - t0)) / float(freqs @ freqs), 0.0)
+    t0, delay = fitting.phase_line(freqs, rest, th0)
     res = np.concatenate([logs - (lk + lh), rest - t0 - freqs * delay])
     return float(res @ res), lk, float(delay), float(t0), res
 
