@@ -92,6 +92,11 @@ from .select import (
     held_out,
     siblings,
 )
+
+# read by across_step._trial through this module (tests patch them here)
+from .select import _admissible as _admissible
+from .select import at_null as at_null
+from .select import away_from_null as away_from_null
 from .shared import shared_test
 
 # ------------------------------------------------------------------------------------------------------

@@ -21,9 +21,6 @@ from .select import (
     ALTERNATIVE_IMPROVEMENT,
     LAW_ALPHA,
     MATERIAL_SHARE,
-    _admissible,
-    at_null,
-    away_from_null,
     dof_of,
     held_out,
 )
@@ -37,6 +34,8 @@ def _trial(groups: Sequence[_Group], term: str, n_cands: int, alpha: float, leve
     """``term`` fitted at every condition on top of its current model, with the combined in-sample tests
     (the combined F at ``level``, Bonferroni over the ``n_cands`` candidates; presence at ``alpha / K``)."""
     from scipy.special import fdtrc  # type: ignore[import-untyped]
+
+    from . import across as ac  # its _admissible, at_null, away_from_null: the names tests patch there
 
     k = len(groups)
     fits = [g.fit_term(g.current, term) for g in groups]
@@ -63,7 +62,9 @@ def _trial(groups: Sequence[_Group], term: str, n_cands: int, alpha: float, leve
     # it "removed" is a refit from another start, select.at_null), wherever it is present.
     # And its value away from the null there (select.away_from_null: the Wald test beside the F test).
     physical = all(
-        _admissible(f, term) and not at_null(f, term) and away_from_null(f, term, level, f.cost / max(d, 1))
+        ac._admissible(f, term)
+        and not ac.at_null(f, term)
+        and ac.away_from_null(f, term, level, f.cost / max(d, 1))
         for f, d, pr in zip(done, d1, present)
         if pr
     )
