@@ -120,23 +120,6 @@ FOPDT_GRID = 400
 FOPDT_REFINE = 30
 
 
-def phase_line(
-    freqs: FloatArray, rest: FloatArray, th0: Optional[float], basis: Optional[FloatArray] = None
-) -> tuple[float, float]:
-    """``(theta0, T)`` of the lag line ``theta0 + w T`` closest in least squares to ``rest`` (the lags left
-    once G's own shape is taken off), ``T >= 0``: both free when ``th0`` is None (``T`` held at 0 and
-    ``theta0`` the mean when the free slope is negative), else ``theta0 = th0`` and ``T`` alone.
-    ``basis``: ``[1, freqs]`` when the caller has it. Shared by :func:`_fopdt` and g_second.py."""
-    if th0 is None:
-        if basis is None:
-            basis = np.column_stack([np.ones(freqs.size), freqs])
-        (t0, delay), *_ = np.linalg.lstsq(basis, rest, rcond=None)
-        if delay < 0.0:
-            return float(np.mean(rest)), 0.0
-        return float(t0), float(delay)
-    return th0, max(float(freqs @ (rest - th0)) / float(freqs @ freqs), 0.0)
-
-
 def _fopdt(
     freqs: FloatArray, logs: FloatArray, lag: FloatArray
 ) -> Optional[tuple[float, float, float, float]]:
@@ -160,7 +143,7 @@ def _fopdt(
         roll = 0.5 * np.log1p((freqs * tc) ** 2)
         lk = float(np.mean(logs + roll))
         rest = lag - np.arctan(freqs * tc)
-        t0, delay = phase_line(freqs, rest, th0, basis)
+        t0, delay = g_second.phase_line(freqs, rest, th0, basis)
         err = np.hypot(logs - (lk - roll), rest - t0 - freqs * delay)
         return float(err @ err), lk, float(delay), float(t0)
 
