@@ -38,6 +38,23 @@ from .result import NamedTerm, term_symbol_unit
 from .select import PLACE_CHI2, Alternative, Step, Trial, _separating, at_null, dof_of, place_admissible
 
 
+def separating_text(
+    exps: Sequence[AugExperiment],
+    a: AugFit,
+    b: AugFit,
+    substeps: int,
+    separating: Callable[[Sequence[AugExperiment], AugFit, AugFit, int], str] = _separating,
+) -> str:
+    """The design that separates ``a`` from ``b`` (:func:`.select._separating`, or ``separating`` given by a
+    caller that keeps its own patchable name), "" when it cannot be computed; a budget overrun raises."""
+    try:
+        return separating(exps, a, b, substeps)
+    except BudgetExceededError:
+        raise
+    except Exception:  # noqa: BLE001 - a design no model reaches separates nothing we can say
+        return ""
+
+
 @dataclass(frozen=True)
 class Twin:
     """A rival whose fit alone gives the named term's averaged periods (module docstring)."""
@@ -88,12 +105,7 @@ def _twins_of(exps: Sequence[AugExperiment], st: Step, chosen: Trial, s: Scale, 
         dist = distance(exps, chosen.fit, tr.fit)
         if not dist < limit:
             continue
-        try:
-            sep = _separating(exps, chosen.fit, tr.fit, substeps)
-        except BudgetExceededError:
-            raise
-        except Exception:  # noqa: BLE001 - a design no model reaches separates nothing we can say
-            sep = ""
+        sep = separating_text(exps, chosen.fit, tr.fit, substeps)
         v, se = physical(tr.fit, s, tr.term)
         ok = place_admissible([tr.fit], tr.term)
         out.append(Twin(chosen.term, tr.term, dist, ok, v, se, sep))

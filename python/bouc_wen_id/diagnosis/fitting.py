@@ -143,13 +143,7 @@ def _fopdt(
         roll = 0.5 * np.log1p((freqs * tc) ** 2)
         lk = float(np.mean(logs + roll))
         rest = lag - np.arctan(freqs * tc)
-        if th0 is None:
-            (t0, delay), *_ = np.linalg.lstsq(basis, rest, rcond=None)
-            if delay < 0.0:
-                t0, delay = float(np.mean(rest)), 0.0
-        else:
-            t0 = th0
-            delay = max(float(freqs @ (rest - t0)) / float(freqs @ freqs), 0.0)
+        t0, delay = g_second.phase_line(freqs, rest, th0, basis)
         err = np.hypot(logs - (lk - roll), rest - t0 - freqs * delay)
         return float(err @ err), lk, float(delay), float(t0)
 

@@ -61,6 +61,24 @@ def _shape(freqs: FloatArray, wn: float, zeta: float) -> tuple[FloatArray, Float
     return -0.5 * np.log(re * re + im * im), np.arctan2(im, re)
 
 
+def phase_line(
+    freqs: FloatArray, rest: FloatArray, th0: Optional[float], basis: Optional[FloatArray] = None
+) -> tuple[float, float]:
+    """``(theta0, T)`` of the lag line ``theta0 + w T`` closest in least squares to ``rest`` (the lags left
+    once G's own shape is taken off), ``T >= 0``: both free when ``th0`` is None (``T`` held at 0 and
+    ``theta0`` the mean when the free slope is negative), else ``theta0 = th0`` and ``T`` alone.
+    ``basis``: ``[1, freqs]`` when the caller has it. Shared with
+    :func:`.fitting._fopdt` (here: fitting imports this module)."""
+    if th0 is None:
+        if basis is None:
+            basis = np.column_stack([np.ones(freqs.size), freqs])
+        (t0, delay), *_ = np.linalg.lstsq(basis, rest, rcond=None)
+        if delay < 0.0:
+            return float(np.mean(rest)), 0.0
+        return float(t0), float(delay)
+    return th0, max(float(freqs @ (rest - th0)) / float(freqs @ freqs), 0.0)
+
+
 def _solve(
     freqs: FloatArray, logs: FloatArray, lag: FloatArray, wn: float, zeta: float, th0: Optional[float]
 ) -> tuple[float, float, float, float, FloatArray]:
@@ -69,14 +87,7 @@ def _solve(
     lh, ph = _shape(freqs, wn, zeta)
     lk = float(np.mean(logs - lh))
     rest = lag - ph
-    if th0 is None:
-        basis = np.column_stack([np.ones(freqs.size), freqs])
-        (t0, delay), *_ = np.linalg.lstsq(basis, rest, rcond=None)
-        if delay < 0.0:
-            t0, delay = float(np.mean(rest)), 0.0
-    else:
-        t0 = th0
-        delay = max(float(freqs @ (rest - t0)) / float(freqs @ freqs), 0.0)
+    t0, delay = phase_line(freqs, rest, th0)
     res = np.concatenate([logs - (lk + lh), rest - t0 - freqs * delay])
     return float(res @ res), lk, float(delay), float(t0), res
 
