@@ -180,7 +180,9 @@ def test_the_adequate_verdict_says_what_would_see_the_sensor_lag(null: Any) -> N
     assert lim.hint is not None
     z = float(ndtri(1 - lim.level))
     factor = ((z + float(ndtri(0.9))) / z) ** 2
-    assert lim.hint.periods_factor == pytest.approx(factor, rel=1e-6)
+    # The test's threshold is F(1, dof)'s quantile (limits.test_targets), the normal's squared at large dof:
+    # the two differ by O(1/dof), 0.07 % at this design's ~900 dof.
+    assert lim.hint.periods_factor == pytest.approx(factor, rel=3e-3)
     periods = math.ceil(factor * PERIODS)
     assert (
         f"[to see sensor lag |tau| = {lim.limit:.2g} s at 90 % power: record {periods} periods"
