@@ -1,5 +1,5 @@
 """After a named drift term (review rv35m F12 note). The targeted step on a drift-corrected start that passes
-the global test (after_named.drift_targeted) is built but OFF (after_named.DRIFT_TARGETED): it named a
+the global test (session 36's after_named.drift_targeted, built off) is removed (session 37): it named a
 parallel stiffness on x at 8 se beside a stiffness degradation alone on tests/test_degradation.py's
 independent generator. The drift value re-estimated beside a steady term the ordinary step named
 (run._rejoint) stands, with the selection rerun on the periods it corrects."""
@@ -21,39 +21,26 @@ START: Any = object()  # a stand-in fit (forward_select is stubbed)
 ALPHA = 0.05
 
 
-def test_the_gate_needs_a_named_drift_term_measured_noise_and_a_passing_start(
-    monkeypatch: pytest.MonkeyPatch,
-) -> None:
-    ok = 0.9  # a corrected start's global p well above alpha / 2
-    assert not after_named.drift_targeted(True, True, ok, ALPHA)  # off (module docstring)
-    monkeypatch.setattr(after_named, "DRIFT_TARGETED", True)
-    assert after_named.drift_targeted(True, True, ok, ALPHA)
-    assert not after_named.drift_targeted(False, True, ok, ALPHA)  # no drift term named: the plain gate's
-    assert not after_named.drift_targeted(True, False, ok, ALPHA)  # a floored noise: no targeted step
-    assert not after_named.drift_targeted(True, True, 0.4 * ALPHA, ALPHA)  # fails: an ordinary step runs
-    assert not after_named.drift_targeted(True, True, math.nan, ALPHA)
-    assert after_named.drift_targeted(True, True, 0.5 * ALPHA, ALPHA)  # the gate's own level, alpha / 2
+def test_the_drift_targeted_step_and_its_switch_are_gone() -> None:
+    # Session 36 left the step built but off behind a module flag; dead code that a flip would turn on.
+    assert not hasattr(after_named, "DRIFT_TARGETED")
+    assert not hasattr(after_named, "drift_targeted")
+    select: Any = after_named.select
+    with pytest.raises(TypeError):  # no after_drift flag any more: the steady selection takes two flags
+        select([], START, [], lambda f: True, lambda f: 1.0, 1, False, False, True)
 
 
-def test_after_a_drift_term_the_first_step_is_the_targeted_one_after_a_named_term(
-    monkeypatch: pytest.MonkeyPatch,
-) -> None:
+def test_without_again_the_selection_is_forward_select_as_it_was(monkeypatch: pytest.MonkeyPatch) -> None:
     calls: list[tuple[bool, bool]] = []
 
     def fake(exps: Any, start: Any, cands: Any, adequate: Any, substeps: int, **kw: Any) -> Any:
         calls.append((bool(kw["targeted"]), bool(kw.get("after_named", False))))
         return start, [Step(1.0, 1, (), None)]
 
-    def stop(fit: Any) -> bool:
-        return True
-
     monkeypatch.setattr(after_named, "forward_select", fake)
-    # again False (a named drift term moved the loop): before, one untargeted call that stopped at once.
-    after_named.select([], START, [], stop, lambda f: 1.0, 1, False, False, True, alpha=ALPHA)
-    assert calls == [(True, True)]  # its candidates at alpha / 10 (gate.targeted_level)
-    calls.clear()
-    after_named.select([], START, [], stop, lambda f: 1.0, 1, False, False, False, alpha=ALPHA)
-    assert calls == [(False, False)]  # no drift term named: unchanged
+    for targeted in (False, True):
+        after_named.select([], START, [], lambda f: True, lambda f: 1.0, 1, targeted, False, alpha=ALPHA)
+    assert calls == [(False, False), (True, False)]
 
 
 G = bw.TransferFunction([1.0], [0.1, 1.0])

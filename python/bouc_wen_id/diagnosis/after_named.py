@@ -42,12 +42,12 @@ joint step, the targeted step at ``alpha / 10`` when every condition's model pas
 viscous damping at one condition while the joint selection stopped after viscous damping).
 
 After a drift term (strength or stiffness degradation) is named, the steady fit starts from the periods
-brought back to the virgin loop, and that start often passes the global test at once. Before, selection then
-stopped with no step: no steady term beside the drift term was tested and no detection limit was given
-(review rv35m F12 note: a 10x viscous damping on u beside a stiffness degradation vanished without a word).
-A named drift term is a named term: its corrected start gets the same one targeted step at ``alpha / 10``
-(:func:`drift_targeted`), so a steady term beside it is named when its test passes, and the step's
-candidates carry their detection limits into the verdict.
+brought back to the virgin loop, and that start often passes the global test at once; selection then stops
+with no step. A targeted step there (session 36, built off, removed in session 37) named a parallel
+stiffness on x at 8 se beside a stiffness degradation alone on tests/test_degradation.py's independent
+generator (seeds 42010 and 42017; k = 0.00128 +- 0.00016, none in the plant): the first-order drift
+correction leaves a residue such a step reads as physics (review rv35m F5's mechanism). A steady term beside
+a drift term is found where the corrected start fails the global test (an ordinary step).
 """
 
 from __future__ import annotations
@@ -67,21 +67,6 @@ def again(moved: bool, measured_noise: bool, exps: Sequence[Any]) -> bool:
     loop not drifting and no degradation named (``moved`` False), measured noise, and every experiment with
     the :data:`.zero_drift.MIN_PERIODS` periods that tell a settling transient from a term."""
     return not moved and measured_noise and all(e.dc.size >= MIN_PERIODS for e in exps)
-
-
-#: The targeted step on a drift-corrected start that passes the global test is OFF: on the independent
-#: generator of tests/test_degradation.py (stiffness degradation alone, seeds 42010 and 42017) it named a
-#: parallel stiffness on x at 8 se beside the drift term (k = 0.00128 ± 0.00016, none in the plant): the
-#: first-order drift correction leaves a residue the step reads as physics (review rv35m F5's mechanism).
-#: A steady term beside a drift term is still found where the corrected start fails the global test.
-DRIFT_TARGETED = False
-
-
-def drift_targeted(named_deg: bool, measured_noise: bool, p_start: float, alpha: float) -> bool:
-    """Whether the targeted step runs on the drift-corrected start (module docstring, "After a drift
-    term"): :data:`DRIFT_TARGETED`, a drift term named (``named_deg``), measured noise, and the corrected
-    steady model passing the global test at ``alpha / 2`` (``p_start`` its p-value)."""
-    return DRIFT_TARGETED and named_deg and measured_noise and plain_passes(p_start, alpha)
 
 
 def joint_next(
@@ -109,25 +94,19 @@ def select(
     substeps: int,
     targeted: bool,
     again: bool,
-    after_drift: bool = False,
     **kw: Any,
 ) -> tuple[AugFit, list[Step]]:
     """The forward selection from ``start`` (:func:`.select.forward_select`, its keywords ``kw``) with the
     targeted step (at :func:`.gate.targeted_level`'s ``alpha / 10``) after each named step that leaves a model
     whose global p-value ``p_of(fit)`` passes the gate at ``alpha / 2`` (:func:`.gate.plain_passes`; module
-    docstring), when ``again``; else :func:`.select.forward_select` as it was, whose first step is the
-    targeted one after a named term when ``after_drift`` (:func:`drift_targeted`: a drift correction named
-    and the corrected model passing the global test)."""
+    docstring), when ``again``; else :func:`.select.forward_select` as it was."""
     alpha = kw.get("alpha", ALPHA)
 
     def passes(fit: AugFit) -> bool:
         return plain_passes(p_of(fit), alpha)
 
     if not again:
-        first = targeted or after_drift
-        return forward_select(
-            exps, start, candidates, adequate, substeps, targeted=first, after_named=after_drift, **kw
-        )
+        return forward_select(exps, start, candidates, adequate, substeps, targeted=targeted, **kw)
     on_trial = kw.pop("on_trial", None)
     steps: list[Step] = []
 
@@ -157,4 +136,4 @@ def select(
     return final, steps
 
 
-__all__ = ["select", "again", "drift_targeted", "joint_next"]
+__all__ = ["select", "again", "joint_next"]

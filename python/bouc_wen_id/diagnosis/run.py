@@ -666,7 +666,7 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
         final, steps = start, list[Step]()
     else:
         again = after_named.again(moved, setup.measured_noise, exps)  # targeted: steady_select.py says when
-        t = targeted, again, after_named.drift_targeted(named_deg, setup.measured_noise, p_of(start), alpha)
+        t = targeted, again
         final, steps = steady_select.select(fsx, start, steady, adequate, p_of, substeps, t, kw)
         plain, start = rebased_plain(plain, start, steps)  # a first step that refitted an unconverged start
         redo = _rejoint(exps, sx, (deg, fexps, fsx, final), s, substeps, setup, before)

@@ -22,10 +22,10 @@ def select(
     adequate: Callable[[AugFit], bool],
     p_of: Callable[[AugFit], float],
     substeps: int,
-    t: tuple[bool, bool, bool],
+    t: tuple[bool, bool],
     kw: dict[str, Any],
 ) -> tuple[AugFit, list[Step]]:
-    """``(final, steps)`` from ``start`` on ``fsx``; ``t`` after_named.select's (targeted, again,
-    drift-targeted) flags, ``kw`` its keywords (alpha, held-out, cache, pair step, progress)."""
+    """``(final, steps)`` from ``start`` on ``fsx``; ``t`` after_named.select's (targeted, again)
+    flags, ``kw`` its keywords (alpha, held-out, cache, pair step, progress)."""
     final, steps = after_named.select(fsx, start, steady, adequate, p_of, substeps, *t, **kw)
     return rival_revisit.after(fsx, start, final, steps, adequate, substeps, **kw)
