@@ -26,10 +26,7 @@ from typing import Any, Optional
 from ..terms import TERMS
 from .fitting import physical
 from .law import element_law_test
-from .select import _admissible, at_null, away_from_null, dof_of, held_out, pooled_f
-
-#: The law test's level, as the across path's (across.LAW_ALPHA).
-LAW_ALPHA = 0.01
+from .select import LAW_ALPHA, NOISE_FLOOR, _admissible, at_null, away_from_null, dof_of, held_out, pooled_f
 
 
 @dataclass(frozen=True)
@@ -54,6 +51,11 @@ class PlaceFree:
         )
 
     _level: float = 0.01
+
+
+def _chosen(places: Sequence[str], tr: Any, sib: Any) -> list[Any]:
+    """Each condition's fit at its place: ``sib``'s where the place is the sibling's, ``tr``'s elsewhere."""
+    return [sib.fits[i] if t == sib.term else tr.fits[i] for i, t in enumerate(places)]
 
 
 def _base_cost(f: Any, imp: float) -> float:
@@ -89,7 +91,7 @@ def fit(groups: Sequence[Any], tr: Any, sib: Any, out: Sequence[int], level: flo
     if len(tr.fits) < k or len(sib.fits) < k:
         return None
     places = tuple(sib.term if i in out else tr.term for i in range(k))
-    mixed = [sib.fits[i] if i in out else tr.fits[i] for i in range(k)]
+    mixed = _chosen(places, tr, sib)
     imps = [sib.improvements[i] if i in out else tr.improvements[i] for i in range(k)]
     if any(f is None for f in mixed):
         return None
@@ -97,7 +99,7 @@ def fit(groups: Sequence[Any], tr: Any, sib: Any, out: Sequence[int], level: flo
     q = 2 if TERMS[tr.term].companion else 1  # a two-term element adds two values
     d1 = [dof_of(g.sx, f) for g, f in zip(groups, mixed)]
     p = pooled_f(imps, [f.cost for f in mixed], d1, q)[1]
-    s2 = [max(f.cost / max(d, 1), 1.0) for f, d in zip(mixed, d1)]
+    s2 = [max(f.cost / max(d, 1), NOISE_FLOOR) for f, d in zip(mixed, d1)]
     phys = all(
         _admissible(f, t) and not at_null(f, t) and away_from_null(f, t, level, s)
         for f, t, s in zip(mixed, places, s2)
@@ -129,7 +131,7 @@ def _undecided(groups: Sequence[Any], tr: Any, sib: Any, level: float, q: int) -
         if a is None or b is None:
             continue
         d = max(dof_of(g.sx, a), 1)
-        s2 = max(a.cost / d, b.cost / d, 1.0)
+        s2 = max(a.cost / d, b.cost / d, NOISE_FLOOR)
         ok = all(
             _admissible(f, t) and not at_null(f, t) and away_from_null(f, t, level, s2)
             for f, t in ((a, tr.term), (b, sib.term))
@@ -144,7 +146,7 @@ def status(pf: PlaceFree, groups: Sequence[Any], alpha: float, sib: Any, tr: Any
     "partly explained" otherwise."""
     from .locate import adequacy_p
 
-    fits = [sib.fits[i] if t == sib.term else tr.fits[i] for i, t in enumerate(pf.places)]
+    fits = _chosen(pf.places, tr, sib)
     ok = all(adequacy_p(f.cost, dof_of(g.sx, f), g.noise_dof) >= alpha for g, f in zip(groups, fits))
     return "explained" if ok else "partly explained"
 
@@ -157,8 +159,7 @@ def conditions(pf: PlaceFree, groups: Sequence[Any], conds: Sequence[Any], sib: 
     from .locate import adequacy_p
 
     out = []
-    for i, (g, c) in enumerate(zip(groups, conds)):
-        f = sib.fits[i] if pf.places[i] == sib.term else tr.fits[i]
+    for g, c, f in zip(groups, conds, _chosen(pf.places, tr, sib)):
         d = dof_of(g.sx, f)
         out.append(
             replace(c, final_chi2_dof=f.cost / max(d, 1), final_p_value=adequacy_p(f.cost, d, g.noise_dof))
@@ -201,4 +202,4 @@ def text(pf: PlaceFree, groups: Sequence[Any], tr: Any, sib: Any, sym: str, unit
     return said
 
 
-__all__ = ["LAW_ALPHA", "PlaceFree", "fit", "pooled_f", "conditions", "status", "text"]
+__all__ = ["PlaceFree", "fit", "conditions", "status", "text"]

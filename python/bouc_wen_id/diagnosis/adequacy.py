@@ -23,6 +23,8 @@ from __future__ import annotations
 import math
 from typing import Any
 
+from . import gate
+
 #: The adequacy test's level when a diagnosis carries none in its settings (run.diagnose's default).
 DEFAULT_ALPHA = 0.05
 
@@ -42,8 +44,11 @@ def level(alpha: float, named: bool) -> float:
 
 
 def passes(p_value: float, alpha: float, named: bool, drifting: bool = False) -> bool:
-    """Whether a model at ``p_value`` passes its adequacy test (:func:`level`), not drifting."""
-    return bool(math.isfinite(p_value) and p_value >= level(alpha, named) and not drifting)
+    """Whether a model at ``p_value`` passes its adequacy test (:func:`level`), not drifting; the plain
+    model's is the status's own gate (:func:`.gate.plain_passes`)."""
+    if not named:
+        return gate.plain_passes(p_value, alpha, moved=drifting)
+    return bool(math.isfinite(p_value) and p_value >= alpha and not drifting)
 
 
 def final_passes(d: Any) -> bool:
