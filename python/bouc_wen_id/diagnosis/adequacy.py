@@ -57,7 +57,10 @@ def final_passes(d: Any) -> bool:
     which makes "explained" "explained in part"); with none, the plain model's loop drifting (its gate's
     ``moved``)."""
     from . import drift_clause  # here: drift_clause imports result, which imports this module
+    from .left_out import not_judged
 
+    if not_judged(d):
+        return False
     named = tuple(getattr(d, "named", ()))
     after, before = getattr(d, "after", None), getattr(d, "before", None)
     if named and after is not None and before is not None:
@@ -69,6 +72,10 @@ def final_passes(d: Any) -> bool:
 
 def plain_passes(d: Any) -> bool:
     """Whether ``d``'s plain model passes its global test (at ``alpha / 2``), not drifting."""
+    from .left_out import not_judged
+
+    if not_judged(d):
+        return False
     before = getattr(d, "before", None)
     drifting = bool(getattr(before, "drift_detected", False))
     return passes(float(d.plain.p_value), alpha_of(d), False, drifting)
@@ -77,22 +84,31 @@ def plain_passes(d: Any) -> bool:
 def where(d: Any, final: bool) -> str:
     """Where the final (``final``) or plain model misses, in words: :data:`NOWHERE` when it passes its
     adequacy test (:func:`final_passes` / :func:`plain_passes`), else its localisation's description."""
+    from .left_out import not_judged
+
     ok = final_passes(d) if final else plain_passes(d)
     loc = d.after if final else d.before
     if ok:
         return NOWHERE
+    if not_judged(d):
+        return f"not judged: {not_judged(d)}"
     return loc.describe() or "spread over the cycle"
 
 
 def localisation_dict(d: Any, final: bool) -> dict[str, Any]:
     """The localisation's JSON (``before`` / ``after``) with ``adequate`` by this module's rule, the level
-    it was tested at, and no harmonic flagged on a model that passes (closed testing, as locate.py)."""
+    it was tested at, the records it was judged on and why it was not judged (left_out.py; '' when it
+    was), and no harmonic flagged on a model that passes (closed testing, as locate.py)."""
+    from .left_out import judged_on, not_judged
+
     loc = d.after if final else d.before
     out: dict[str, Any] = dict(loc.to_dict())
     ok = final_passes(d) if final else plain_passes(d)
     out["adequate"] = ok
     out["adequacy_level"] = level(alpha_of(d), final and bool(getattr(d, "named", ())))
     out["adequacy_p_value"] = float((d.final if final else d.plain).p_value)
+    out["judged_on"] = list(judged_on(d))
+    out["not_judged"] = not_judged(d)
     if ok:
         out["harmonics"] = [{**h, "significant": False} for h in out["harmonics"]]
         out["where"] = NOWHERE

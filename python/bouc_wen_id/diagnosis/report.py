@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any, Optional, Union
 
 import numpy as np
 
-from . import adequacy, limits_void
+from . import adequacy, left_out, limits_void
 from .result import TERM_LABELS, Diagnosis, clean
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -247,6 +247,7 @@ def html_page(
     parts = [_HEAD, verdict, "<h1>Diagnosis</h1>", *evidence]
     parts += _identified_html(identified, identify_warnings)
     parts += [*_terms_html(d), *_held_out_html(d)]
+    parts += left_out.report_html(d)  # the records left out of its statistics, with why
     parts.append("<h2>Where the models miss</h2>")
     parts.append(
         f"<p>Plain: {html.escape(adequacy.where(d, final=False))}. "  # one rule (adequacy.py)

@@ -12,7 +12,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..terms import TERMS, Degradation
-from . import adequacy, limits_void
+from . import adequacy, left_out, limits_void
 from .data import DiagExperiment
 from .gate import AFTER_NAMED_SHARE
 from .locate import Localisation
@@ -300,6 +300,7 @@ class Diagnosis:
                     f"  {src:<32} plain {nb:.4f}  final {na:.4f}  ratio {na / nb if nb else math.nan:.3f}"
                 )
         lines.append("")
+        lines += left_out.summary_lines(self)  # the records left out, with why (left_out.py)
         lines.append(f"where the plain model misses: {adequacy.where(self, final=False)}")  # adequacy.py
         lines.append(f"where the final model misses: {adequacy.where(self, final=True)}")
         return "\n".join(lines)
@@ -332,6 +333,7 @@ class Diagnosis:
             "structure": None if self.structure is None else self.structure.to_dict(),
             "detection_limits": [lim.to_dict() for lim in self.limits],
             "detection_limits_void": limits_void.void(self),  # computed on a failed fit (limits_void.py)
+            **left_out.to_dict(self),  # the records left out of its statistics, with why (left_out.py)
         }
 
     def to_json(self, indent: int = 2) -> str:

@@ -35,6 +35,7 @@ from . import (
     input_note,
     inputs,
     law_untested,
+    left_out,
     lines,
     loop_centre,
     near_limit,
@@ -71,6 +72,7 @@ from .fitting import (
     scaled,
     substeps_for,
 )
+from .left_out import NOT_JUDGED
 from .limits import detection_limits
 from .locate import Localisation, adequacy_p
 from .progress import Progress, ProgressCallback, reporter
@@ -392,6 +394,7 @@ def _diagnose(
         d = loop_centre.resolved(
             _as_list(experiments), level, wander, d, lambda xs: _with_wander(list(xs), *args, None)
         )
+    d = left_out.qualified(d)  # the records it was judged on, and those left out, in the headline
     return replace(d, seconds=time.perf_counter() - t0, notes=(*joined.notes, *d.notes))
 
 
@@ -482,7 +485,8 @@ def _without_unsettled(
     left_out = [exps[i].source for i in drifting]
     if not keep:
         assert whole is not None  # _drift_stage leaves out early only when some experiment settled
-        whole = replace(whole, settings={**whole.settings, LEFT_OUT: left_out})
+        every = "every record is left out as not settled"
+        whole = replace(whole, settings={**whole.settings, LEFT_OUT: left_out, NOT_JUDGED: every})
         verdict = (
             f"not settled: the loop of every experiment ({names}) still drifts from period to period, and "
             "no degradation explains it; nothing is named from a loop that has not settled (record more "
@@ -499,10 +503,16 @@ def _without_unsettled(
         )
     d = _diagnose_set([exps[i] for i in keep], setup, [*notes, why])
     d = replace(d, settings={**d.settings, LEFT_OUT: left_out})
+    # The status is not decided on the settled records here (one record, or a minority): adequacy.py's
+    # rule reads NOT_JUDGED, so the JSON's adequacy agrees with the status (left_out.py).
     if len(keep) == 1 and d.named:
-        return _from_one(d, exps[keep[0]].source, names)
+        one = f"the verdict would rest on one settled record, {exps[keep[0]].source}"
+        return _from_one(replace(d, settings={**d.settings, NOT_JUDGED: one}), exps[keep[0]].source, names)
     if drift_majority.most(len(drifting), len(exps)):  # the verdict would rest on a minority
-        return drift_majority.verdict_of(d, exps, drifting, deg)
+        most = f"most records ({len(drifting)} of {len(exps)}) are left out as not settled"
+        return drift_majority.verdict_of(
+            replace(d, settings={**d.settings, NOT_JUDGED: most}), exps, drifting, deg
+        )
     return replace(d, verdict=d.verdict + f"; {names} {LEFT_OUT_TAIL}")
 
 
