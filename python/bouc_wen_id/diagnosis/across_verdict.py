@@ -36,8 +36,8 @@ from collections.abc import Sequence
 from dataclasses import replace
 from typing import Any
 
-from ..terms import TERMS, Play, StiffnessX, physical_value
-from . import across_bounds, across_rate, across_twin, beside, bounds_said, gate, law_untested
+from ..terms import TERMS, Play, StiffnessX
+from . import across_bounds, across_rate, across_twin, beside, beyond_range, bounds_said, gate, law_untested
 from .caveats import family_text, joint_separation, latent_levels, masing_separation, unphysical_places_text
 from .locate import adequacy_p
 from .result import NamedTerm, Status
@@ -101,15 +101,20 @@ def final_adequate(groups: Sequence[Any], alpha: float) -> bool:
     return all(math.isfinite(p) and p >= alpha for p in (p_of(g, g.current) for g in groups))
 
 
-def unphysical(terms: Sequence[Any]) -> list[NamedTerm]:
-    """Each term (a :class:`.across.TermAcross`) with a value outside its physical range where it is
-    present, as the :class:`NamedTerm` of its first such condition (for :func:`.run._unphysical_text`)."""
+def unphysical(terms: Sequence[Any], clearly: bool = True) -> list[NamedTerm]:
+    """Each term (a :class:`.across.TermAcross`) with a value outside its physical range by more than its
+    uncertainty (:func:`.beyond_range.clearly_outside`) where it is present, as the :class:`NamedTerm` of its
+    first such condition (for :func:`.run._unphysical_text`); ``clearly`` False: the terms outside their range
+    where present only within their uncertainty (:func:`.beyond_range.within`; for
+    :func:`.beyond_range.text`), not named either."""
     out = []
     for t in terms:
-        for v, se, pr in zip(t.values, t.standard_errors, t.present):
-            if pr and math.isfinite(v) and not physical_value(t.term, v):
-                out.append(NamedTerm(t.term, t.symbol, v, se, t.unit))
-                break
+        rows = [(v, se) for v, se, pr in zip(t.values, t.standard_errors, t.present) if pr]
+        beyond = [(v, se) for v, se in rows if beyond_range.clearly_outside(t.term, v, se)]
+        near = [(v, se) for v, se in rows if beyond_range.within(t.term, v, se)]
+        hit = beyond if clearly else ([] if beyond else near)
+        if hit:
+            out.append(NamedTerm(t.term, t.symbol, hit[0][0], hit[0][1], t.unit))
     return out
 
 
@@ -122,6 +127,7 @@ def judged(
     from .run import classify
 
     bad = {t.term for t in unphysical(terms)}
+    faint = {t.term for t in unphysical(terms, clearly=False)}  # not named, no demotion (beyond_range.py)
     status = classify(
         plain_adequate(groups, terms, steps, alpha),
         bool(terms),
@@ -132,7 +138,9 @@ def judged(
         status = "partly explained"
     if status != "adequate" and across_bounds.demotes(across_bounds.found(groups, steps), bool(terms)):
         status = "unexplained"  # a candidate beyond its range removes clearly more (across_bounds.py)
-    named = [t for t in terms if t.term not in bad] if status in ("explained", "partly explained") else []
+    named = (
+        [t for t in terms if t.term not in bad | faint] if status in ("explained", "partly explained") else []
+    )
     if not named and status != "adequate":
         status = "unexplained"
     return status, named, [t for t in terms if t not in named]
@@ -163,7 +171,7 @@ def head(status: Status, partial: Sequence[Any], n: int, fraction: float) -> str
     a non-physical one is said by its own clause, :func:`clauses`, not among the tested terms)."""
     if status == "adequate":
         return f"across {n} conditions: {gate.ADEQUATE} at every condition"
-    bad = {t.term for t in unphysical(partial)}
+    bad = {t.term for t in (*unphysical(partial), *unphysical(partial, clearly=False))}
     what = ", ".join(t.label for t in partial if t.term not in bad)
     tail = (
         f" (tested terms {what} remove {100 * fraction:.0f} % of the summed excess but leave structure the "
@@ -189,6 +197,7 @@ def clauses(
     if status == "partly explained":
         text += partly_text(groups, alpha)
     text += bounds_said.across_text(groups, status) + _unphysical_text(unphysical(partial))
+    text += beyond_range.text(unphysical(partial, clearly=False))
     text += _law_text(steps) + beside.text(steps)
     as_said = [NamedTerm(t.term, t.symbol, math.nan, math.nan, t.unit) for t in named if t.term in TERMS]
     # another place that fits only non-physically, unless a physical twin stands for it (across_twin.py)

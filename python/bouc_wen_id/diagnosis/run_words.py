@@ -13,6 +13,7 @@ import numpy as np
 from ..augmented import AugExperiment, AugFit
 from ..terms import TERMS, Distortion, Offset, physical_value
 from . import (
+    beyond_range,
     bounds_said,
     distortion_law,
     drift_clause,
@@ -153,7 +154,11 @@ def _judged(
     before, after = located
     nulls = null_named.terms(fit)
     gone = tuple(t for t in final.terms if t.term in nulls)
-    unphysical = tuple(t for t in final.terms if not physical_value(t.term, t.value) and t not in gone)
+    outside = tuple(t for t in final.terms if not physical_value(t.term, t.value) and t not in gone)
+    # Just outside, within its uncertainty: no evidence of an element beyond the range (beyond_range.py)
+    faint = tuple(t for t in outside if beyond_range.within(t.term, t.value, t.standard_error))
+    gone += faint
+    unphysical = tuple(t for t in outside if t not in faint)
     if unphysical and status == "explained":
         status = "partly explained"
     named: tuple[NamedTerm, ...] = ()
@@ -170,7 +175,7 @@ def _judged(
         status, named, tuple(t for t in partial if t not in unphysical), after, fraction, drift
     )
     verdict = input_dc.qualify(verdict + _unphysical_text(unphysical) + tail, named, fexps)  # a preload
-    verdict += null_named.text(gone)
+    verdict += null_named.text(tuple(t for t in gone if t not in faint)) + beyond_range.text(faint)
     if status != "adequate":
         offset = any(t.term == Offset.kind for t in final.terms)  # said about it, not against it
         verdict += _centre_text(fexps, final.outputs, max(1.0, final.cost / max(final.dof, 1)), offset)
