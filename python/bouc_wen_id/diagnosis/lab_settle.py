@@ -83,11 +83,13 @@ def _upper_harmonics(ap: Any, th: Any) -> Any:
     yb = np.asarray(getattr(ap, "ybar", ()), dtype=np.float64)
     if yb.size < 5:
         return np.zeros(np.shape(th))
+    from ..signal._harmonic_ls import harmonic_series
+
     c = np.fft.rfft(yb) / yb.size
-    out = np.zeros(np.shape(th))
-    for h in range(2, (yb.size - 1) // 2 + 1):
-        out += 2.0 * (c[h].real * np.cos(h * th) - c[h].imag * np.sin(h * th))
-    return out
+    top = (yb.size - 1) // 2
+    d = np.zeros(top + 1, dtype=np.complex128)
+    d[2:] = 2.0 * c[2 : top + 1]
+    return harmonic_series(th, d)
 
 
 def _deviates(dc: Any, h1: Any, samples: Any, noise_var: float, k: int) -> bool:

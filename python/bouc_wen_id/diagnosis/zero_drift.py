@@ -315,6 +315,7 @@ def _stretch(
     noise variance; None with fewer than :data:`MIN_PERIODS` whole periods."""
     from scipy.special import ndtr
 
+    from ..signal._harmonic_ls import harmonic_series
     from .data import TWO_PI
 
     omega = float(ap.frequency)
@@ -327,7 +328,7 @@ def _stretch(
     c[1:] *= 2.0
     if ybar.size % 2 == 0:
         c[-1] /= 2.0
-    resid = seg_y - (np.exp(1j * np.outer(th, np.arange(c.size))) @ c).real
+    resid = seg_y - harmonic_series(th, c)
     counts = np.bincount(k - k.min()) if k.size else np.zeros(0, np.int64)
     full = int(counts.max(initial=0))
     kept = [j + int(k.min()) for j in range(counts.size) if counts[j] >= max(full - 1, 8)]
