@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import re
 
 import bouc_wen_id as bw
 import numpy as np
@@ -10,12 +11,12 @@ import pytest
 from bouc_wen_id.diagnosis import final_terms
 from bouc_wen_id.diagnosis.result import NamedTerm
 from bouc_wen_id.diagnosis.select import Step
-from bouc_wen_id.terms import StiffnessX, ViscousX
+from bouc_wen_id.terms import Stiffness, StiffnessX, Term, ViscousX
 
 TWO_PI = 2.0 * math.pi
 
 
-def _isolator(seed: int) -> list[bw.Recording]:
+def _isolator(seed: int, terms: tuple[Term, ...] = (StiffnessX(0.5), ViscousX(0.02))) -> list[bw.Recording]:
     """Review 38's d1 isolator, made by the package's simulator: a spring and a damper on x, first-order G,
     0.5-4 Hz at two levels."""
     om = np.repeat(TWO_PI * np.array([0.5, 1.0, 2.0, 4.0]), 2)
@@ -30,7 +31,7 @@ def _isolator(seed: int) -> list[bw.Recording]:
         noise_sd=0.01,
         seed=seed,
     )
-    plant = bw.WienerPlant(lin, bw.BoucWen(0.6, 0.4, 1.5), terms=(StiffnessX(0.5), ViscousX(0.02)))
+    plant = bw.WienerPlant(lin, bw.BoucWen(0.6, 0.4, 1.5), terms=terms)
     return bw.simulate(plant, plan)
 
 
@@ -64,3 +65,24 @@ def test_the_level_is_the_step_s_own() -> None:
     assert final_terms.level_of(
         Step(1.0, 1, (), "offset", targeted=True, after_named=True), 0.05
     ) == pytest.approx(0.005)
+
+
+def test_the_other_named_values_under_an_alternative_are_given() -> None:
+    # Review 38 item 2b: with a first-order G, k u = k x + k tau xdot, so a spring on u beside a damper on x
+    # is the same model as a spring on x beside a damper larger by k tau. Truth: spring on u 0.5, damper on
+    # x 0.02, tau 0.02. The verdict names the spring on x (its damper then 0.02 + 0.5 * 0.02 = 0.03) with the
+    # spring on u as the alternative; before alt_values.py it gave the damper's 0.03 +- se alone.
+    d = bw.diagnose(_isolator(seed=1, terms=(Stiffness(0.5), ViscousX(0.02))))
+    assert set(d.named_terms) == {"viscous@x", "stiffness@x"}, d.summary()
+    assert ("stiffness@x", "stiffness") in [(a.term, a.rival) for a in d.alternatives], d.summary()
+    c = next(n for n in d.named if n.term == "viscous@x")
+    assert abs(c.value - 0.03) < 4 * c.standard_error, d.summary()
+    assert "the other named values depend on that choice" in d.verdict
+    m = re.search(
+        r"in place of parallel stiffness across the hysteretic element \(on x\): viscous damping across the "
+        r"hysteretic element \(on x\) c = ([0-9.e-]+) ± ([0-9.e-]+)",
+        d.verdict,
+    )
+    assert m is not None, d.verdict
+    value, se = float(m.group(1)), float(m.group(2))
+    assert abs(value - 0.02) < 4 * se and abs(value - c.value) > 10 * se  # the truth, under the alternative

@@ -17,6 +17,7 @@ from ..validation import real_number
 from . import (
     after_named,
     age,
+    alt_values,
     baseline,
     beside,
     bounds_said,
@@ -47,7 +48,7 @@ from . import (
     zero_drift,
 )
 from .candidates import step_candidates
-from .caveats import alternatives_text, below_saturation, caveats_of, unphysical_places_text
+from .caveats import below_saturation, caveats_of, unphysical_places_text
 from .centre_only import clause as _centres_only
 from .data import DiagExperiment, colour_notes, prepare
 from .drift import (
@@ -694,12 +695,12 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
     tw = design_twin.Said.of(fsx, steps, named, s, substeps, setup.units)  # design twins (design_twin.py)
     verdict += beside.text(steps) + final_terms.text(steps, named) + unphysical_places_text(tw.steps, named)
     verdict += tw.text
-    verdict += clean_share.text(status, named, fraction, cshare, fsx) + cv.text(status, (*named, *partial))
-    verdict += law_untested.text(named, fexps) + input_note.text(
-        status, (*named, *partial), fexps, final_sum.outputs
-    )
+    both = (*named, *partial)
+    verdict += clean_share.text(status, named, fraction, cshare, fsx) + cv.text(status, both)
+    verdict += law_untested.text(named, fexps) + input_note.text(status, both, fexps, final_sum.outputs)
     alternatives = tw.alternatives + _drift_alternatives(deg, named_deg)  # the steps' and the twins'
-    verdict += alternatives_text(alternatives, named) + caveats_of(named, fsx, final, fexps, alpha, substeps)
+    verdict += alt_values.said(alternatives, named, fsx, final, (s, substeps, setup.units))  # and values
+    verdict += caveats_of(named, fsx, final, fexps, alpha, substeps)
     setup.report("held-out check of the final model", 0, 1)
     ho = held_out(fsx, start, final, substeps, kw["cache"]) if final.params.terms else None
     d = Diagnosis(
