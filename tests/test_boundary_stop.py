@@ -125,3 +125,18 @@ def test_the_boundary_note_names_each_face() -> None:
     for part in ("beta = gamma", "lower end of its bracket", "play at its upper limit", "sensor_lag at 0"):
         assert part in note
     assert "step became negligible" in note
+
+
+def test_a_fit_held_at_mu_1_alone_is_said_a_valid_exponent() -> None:
+    # Review 38 (7a): a true mu = 1 piezo's plain fit ended on mu's lower end and was told "the data pull the
+    # model beyond what it can draw, so its intervals do not hold"; mu = 1 is a valid value there.
+    import math
+
+    from bouc_wen_id.estimators import boundary_note
+
+    note = boundary_note("ftol", ("mu=lower",), "the plain fit", 1.0) or ""
+    assert "valid exponent" in note and "one-sided" in note and "do not hold" not in note
+    assert note.startswith("the plain fit ended with mu = 1")
+    # Another face beside it, a lower end other than 1, or no mu given: the general warning as before.
+    for active, mu in ((("mu=lower", "beta=gamma"), 1.0), (("mu=lower",), 1.5), (("mu=lower",), math.nan)):
+        assert "do not hold" in (boundary_note("ftol", active, "the fit", mu) or "")

@@ -37,3 +37,15 @@ def test_a_value_within_twice_its_50_percent_limit_is_said_biased() -> None:
     assert near_limit.text([near], []) == ""
     # Each near term says its own clause.
     assert near_limit.text([near, neg], lims).count(near_limit.MARK) == 2
+
+
+def test_a_limit_many_se_from_the_value_is_not_its_test_s_threshold() -> None:
+    # Review 38 (d1): a parallel stiffness on u k = 0.4806 +- 0.0131 beside its 50 % limit 0.91, the value
+    # the plain model hides (33 se away): it was said "biased away from zero"; selection cannot bias it there.
+    k = T.Stiffness.kind
+    lims = [_lim(k, 0.91)]
+    assert near_limit.text([NamedTerm(k, "k", 0.4806, 0.0131, "")], lims) == ""
+    # Within SPAN_SE of its se of the limit, the note stays; without a finite se, the factor alone decides.
+    close = NamedTerm(k, "k", 0.91 - 0.9 * near_limit.SPAN_SE * 0.1, 0.1, "")
+    assert near_limit.MARK in near_limit.text([close], lims)
+    assert near_limit.MARK in near_limit.text([NamedTerm(k, "k", 0.4806, math.nan, "")], lims)

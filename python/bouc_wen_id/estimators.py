@@ -382,11 +382,27 @@ _STOPS = {
 }
 
 
-def boundary_note(stop: Optional[str], active: Sequence[str], what: str = "the joint fit") -> Optional[str]:
+#: What a fit held at mu = 1 alone means (review 38, 7a: a true mu = 1 piezo was told its intervals do not
+#: hold): mu = 1 is a valid exponent at the bracket's end, not data pulling the model beyond what it draws.
+MU_ONE_NOTE = (
+    "{what} ended with mu = 1, the lower end of its bracket ({rule}): a valid exponent (a loop that "
+    "approaches saturation exponentially, common for piezoelectric stacks); the estimate sits on the "
+    "bracket's end, so the intervals of the parameters tied to mu (mu, beta, gamma) are one-sided there "
+    "(read them as conservative), as expected when the device's exponent is 1 (an exponent below 1, "
+    "outside the model, would also stop there: the adequacy test tells them apart)"
+)
+
+
+def boundary_note(
+    stop: Optional[str], active: Sequence[str], what: str = "the joint fit", mu: float = math.nan
+) -> Optional[str]:
     """A plain-language warning when a Levenberg-Marquardt run ended on faces of the admissible range
-    (``active``, as the core names them), or None when it ended inside."""
+    (``active``, as the core names them), or None when it ended inside. ``mu``: the fit's exponent; held
+    at mu = 1 alone it is said as a valid value on the bracket's end (:data:`MU_ONE_NOTE`)."""
     if not active:
         return None
+    if tuple(active) == ("mu=lower",) and math.isclose(mu, 1.0, rel_tol=1e-6):
+        return MU_ONE_NOTE.format(what=what, rule=_STOPS.get(stop or "", stop or "unknown"))
     faces = []
     for a in active:
         name, _, side = a.partition("=")

@@ -173,8 +173,8 @@ def identify(
     fitted = fit(scaled, parts, method, reference, lo, hi, tol, phase_grid, max_iter)
     est = _unscale(fitted, scales)
     experiments = _experiment_estimates(prepared, fitted, est, scales)
-    notes = _notes(method, est, experiments, confidence, boundary_note(fitted.stop, fitted.active))
-    notes = _warn(notes, fitted, unit_notes)
+    note = boundary_note(fitted.stop, fitted.active, mu=fitted.mu)  # mu = 1 alone: a valid exponent
+    notes = _warn(_notes(method, est, experiments, confidence, note), fitted, unit_notes)
     settings = {
         "settle_periods": settle_periods,
         "periods": periods,

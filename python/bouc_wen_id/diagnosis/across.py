@@ -454,7 +454,9 @@ def _verdict(
     if not terms:
         why = "no candidate passes all its tests jointly at every condition"
         why = why if any(st.trials for st in steps) else "no candidate tested"
-        return f"across {n} conditions: nothing named ({why})"
+        # Nothing named and not adequate (judged's rule: the status is "unexplained"): said so first, as
+        # diagnose does (review 38: the MR damper at chi2/dof 1830-3280 read "nothing named" alone).
+        return across_verdict.head("unexplained", (), n, math.nan) + f"; nothing named ({why})"
     parts = []
     for t in terms:
         where = (

@@ -20,7 +20,7 @@ from dataclasses import replace
 from typing import Any, TypeVar
 
 from . import across_bounds, across_clean, across_moved, across_place, across_twin
-from .across_verdict import explained_fraction
+from .across_verdict import UNEXPLAINED, explained_fraction
 from .caveats import alternatives_text
 from .result import NamedTerm
 
@@ -62,7 +62,7 @@ def said(
             sib, pf = across_moved.found(groups, out.steps, b.found[0])  # named with its place per condition
             if pf is not None and pf.named:
                 status = across_place.status(pf, groups, out.settings["alpha"], sib, b.found[0])
-                verdict = verdict.replace(NOTHING, "")
+                verdict = verdict.replace(UNEXPLAINED + NOTHING, "").replace(NOTHING, "")
                 conds = across_place.conditions(pf, groups, out.conditions, sib, b.found[0])
                 out = replace(out, conditions=tuple(conds))
     as_named = [NamedTerm(t.term, t.symbol, math.nan, math.nan, t.unit) for t in out.terms]

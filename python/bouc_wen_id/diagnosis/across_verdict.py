@@ -165,6 +165,10 @@ def tied(groups: Sequence[Any], chosen: Any, rival: Any) -> bool:
     return _tied(summed(chosen), summed(rival), dof)
 
 
+#: The status words when the joint structure leaves structure unexplained (as :func:`.run._verdict` says it).
+UNEXPLAINED = "unexplained structure remains"
+
+
 def head(status: Status, partial: Sequence[Any], n: int, fraction: float) -> str:
     """The verdict's opening when nothing is named: "adequate" as :func:`.run._verdict` says it, or the
     structure "unexplained" with the tested terms that lie in their physical range (as :func:`.run._judged`:
@@ -179,7 +183,7 @@ def head(status: Status, partial: Sequence[Any], n: int, fraction: float) -> str
         if what
         else ""
     )
-    return f"across {n} conditions: unexplained structure remains{tail}"
+    return f"across {n} conditions: {UNEXPLAINED}{tail}"
 
 
 def clauses(

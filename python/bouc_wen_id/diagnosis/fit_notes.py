@@ -33,7 +33,9 @@ def fit_notes(plain: AugFit, final: AugFit) -> list[str]:
     fits = (
         ((plain, "the plain fit"), (final, "the final fit")) if final is not plain else ((plain, "the fit"),)
     )
-    return [n for f, w in fits for n in (boundary_note(f.stop, f.active, w), free_dc.note(f, w)) if n]
+    return [
+        n for f, w in fits for n in (boundary_note(f.stop, f.active, w, f.params.mu), free_dc.note(f, w)) if n
+    ]
 
 
 def condition_notes(groups: Sequence[Any]) -> tuple[str, ...]:

@@ -17,6 +17,7 @@ from ..validation import real_number
 from . import (
     after_named,
     age,
+    alt_values,
     baseline,
     beside,
     bounds_said,
@@ -29,6 +30,7 @@ from . import (
     drift_pair,
     drift_passes,
     drift_se,
+    final_terms,
     free_dc,
     gain_drift,
     gate,
@@ -47,7 +49,7 @@ from . import (
     zero_drift,
 )
 from .candidates import step_candidates
-from .caveats import alternatives_text, below_saturation, caveats_of, unphysical_places_text
+from .caveats import below_saturation, caveats_of, unphysical_places_text
 from .centre_only import clause as _centres_only
 from .data import DiagExperiment, colour_notes, prepare
 from .drift import (
@@ -92,7 +94,7 @@ from .run_words import _unphysical_text as _unphysical_text
 from .run_words import _unscaled as _unscaled
 from .run_words import _verdict as _verdict
 from .run_words import classify as classify
-from .select import ALPHA, Alternative, FoldCache, Step, held_out
+from .select import ALPHA, Alternative, Step, held_out
 from .settling import (  # noqa: F401 (quantisation_step: importable here as before)
     LEFT_OUT,
     LEFT_OUT_TAIL,
@@ -666,9 +668,8 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
     # the other alpha / 2, only on measured noise (select.py's docstring; design.md 10.3; gate.plain_gate).
     moved = named_deg or before.drift_detected
     passes, targeted = gate.plain_gate([p_of(start)], alpha, [moved], [setup.measured_noise])
-    cache: FoldCache = {}
     steady = step_candidates(cands, pure_sines=False)  # the planner's family too (candidates.py)
-    kw: dict[str, Any] = {"alpha": alpha, "use_held_out": setup.held_out_test, "cache": cache}
+    kw: dict[str, Any] = {"alpha": alpha, "use_held_out": setup.held_out_test, "cache": {}}
     kw["pair_step"] = pairs.pair_step if pairs.ENABLED else None  # two large terms at once (pairs.py)
     kw["on_trial"] = lambda k, t, i, n: setup.report(f"step {k}: fitting candidate {t}", i, n)
     if passes and not targeted:
@@ -702,13 +703,14 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
     )
     verdict += drift_pair.text(deg, named_deg, alpha, setup.units) + (centre.text or _law_text(steps))
     tw = design_twin.Said.of(fsx, steps, named, s, substeps, setup.units)  # design twins (design_twin.py)
-    verdict += beside.text(steps) + unphysical_places_text(tw.steps, named) + tw.text
-    verdict += clean_share.text(status, named, fraction, cshare, fsx) + cv.text(status, (*named, *partial))
-    verdict += law_untested.text(named, fexps) + input_note.text(
-        status, (*named, *partial), fexps, final_sum.outputs
-    )
+    verdict += beside.text(steps) + final_terms.text(steps, named) + unphysical_places_text(tw.steps, named)
+    verdict += tw.text
+    both = (*named, *partial)
+    verdict += clean_share.text(status, named, fraction, cshare, fsx) + cv.text(status, both)
+    verdict += law_untested.text(named, fexps) + input_note.text(status, both, fexps, final_sum.outputs)
     alternatives = tw.alternatives + _drift_alternatives(deg, named_deg)  # the steps' and the twins'
-    verdict += alternatives_text(alternatives, named) + caveats_of(named, fsx, final, fexps, alpha, substeps)
+    verdict += alt_values.said(alternatives, named, fsx, final, (s, substeps, setup.units))  # and values
+    verdict += caveats_of(named, fsx, final, fexps, alpha, substeps)
     setup.report("held-out check of the final model", 0, 1)
     ho = held_out(fsx, start, final, substeps, kw["cache"]) if final.params.terms else None
     d = Diagnosis(

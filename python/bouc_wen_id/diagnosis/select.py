@@ -244,6 +244,9 @@ class Step:
     pairs: tuple[Any, ...] = ()
     #: The targeted step after a named one (after_named.py): its candidates at ``gate.targeted_level``.
     after_named: bool = False
+    #: Named terms dropped by the final check (:mod:`.final_terms`: each fails its own test in the final
+    #: model), with their p adj; on the last step only.
+    unneeded: tuple[tuple[str, float], ...] = ()
 
     def to_dict(self) -> dict[str, Any]:
         out = {
@@ -266,6 +269,8 @@ class Step:
         if self.pairs:  # likewise: the pair step ran (pairs.py)
             out["pair"] = list(self.pair)
             out["pairs"] = [p.to_dict() for p in self.pairs]
+        if self.unneeded:  # likewise: the final check dropped a named term (final_terms.py)
+            out["unneeded"] = [{"term": t, "p_adjusted": p} for t, p in self.unneeded]
         return out
 
 
