@@ -109,9 +109,13 @@ def test_augmented_sensor_lag_stops_at_zero_as_the_reference_does() -> None:
     got = _core.augmented_refine(*args, *own, substeps=3)
     want = ref_augmented.augmented_refine(*args, *own, substeps=3)
     assert got[5] and want[5] and "max_iter" not in (got[8], want[8])
-    assert list(got[9]) == list(want[9])
-    assert "sensor_lag=0" in got[9]
+    assert list(got[9]) == ["sensor_lag=0"]
     assert got[0][3] == 0.0
+    # The oracle lands on the face to its own solver's roundoff: with NumPy 2.4's LAPACK its face step leaves
+    # tau = 4e-27 (> 0, so its relative face test does not list it), with earlier ones exactly 0. Either way
+    # it is the same stop: on the face to within 1e-20 s (10^-18 of the sample time), listed when exactly on it.
+    assert 0.0 <= want[0][3] <= 1e-20
+    assert list(want[9]) == (["sensor_lag=0"] if want[0][3] == 0.0 else [])
     assert got[3] == pytest.approx(want[3], rel=1e-8)
     assert_allclose(got[0], want[0], rtol=1e-6, atol=1e-8)
 
