@@ -78,3 +78,14 @@ def test_a_condition_that_cannot_separate_the_places_says_both(monkeypatch: pyte
     said = _said(monkeypatch, imp_u=[6716.0, 9760.0, 1967.0])
     assert "at 0.5 the two places fit alike" in said and "either, as alternatives" in said, said
     assert "at 1 the two places" not in said, said
+
+
+def test_each_place_says_its_value_in_its_own_unit(monkeypatch: pytest.MonkeyPatch) -> None:
+    # c on u is in [y] s/[u], across the element (on x) in s: one unit for both places was wrong at one.
+    said = _said(monkeypatch, imp_u=[6716.0, 9760.0, 1967.0])
+    on_u, on_x = T.TERMS[ON_U], T.TERMS[ON_X]
+    u_unit, x_unit = on_u.units("[y]", "[u]"), on_x.units("[y]", "[u]")
+    assert u_unit != x_unit
+    assert f"{on_u.acts_on.label} at 0 (c = 0.0099 {u_unit})" in said, said
+    assert f"{on_x.acts_on.label} at 0.5, 1 (c = 0.01012, 0.009991 {x_unit})" in said, said
+    assert f"{on_x.acts_on.label} c = 0.01012 {x_unit}, {on_u.acts_on.label} c = 0.001 {u_unit}" in said, said

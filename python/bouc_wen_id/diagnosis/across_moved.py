@@ -103,7 +103,7 @@ def text(groups: Sequence[Any], steps: Sequence[Any], tr: Any, units: tuple[str,
     at_out = ", ".join(str(groups[i].label) for i in out)
     _, pf = found(groups, steps, tr)  # the places fitted jointly, free per condition
     if pf is not None:
-        return across_place.text(pf, groups, tr, s, sym, unit)
+        return across_place.text(pf, groups, tr, s, units)
     name = TERMS[TERMS[tr.term].base_kind].label
     return (
         f"the place of {name} differs between the conditions: {at(sib, s.fits, out)}, "

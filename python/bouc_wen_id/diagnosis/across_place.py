@@ -26,6 +26,7 @@ from typing import Any, Optional
 from ..terms import TERMS
 from .fitting import physical
 from .law import element_law_test
+from .result import term_symbol_unit
 from .select import LAW_ALPHA, NOISE_FLOOR, _admissible, at_null, away_from_null, dof_of, held_out, pooled_f
 
 
@@ -167,10 +168,16 @@ def conditions(pf: PlaceFree, groups: Sequence[Any], conds: Sequence[Any], sib: 
     return out
 
 
-def text(pf: PlaceFree, groups: Sequence[Any], tr: Any, sib: Any, sym: str, unit: str) -> str:
-    """The naming (or why not) of the place-free structure, with its tests."""
+def text(pf: PlaceFree, groups: Sequence[Any], tr: Any, sib: Any, units: tuple[str, str]) -> str:
+    """The naming (or why not) of the place-free structure, with its tests; each place's value in its own
+    unit (``units``: the output's and the input's, :func:`.result.term_symbol_unit`: a term on u has u's)."""
+
+    def one(term: str, v: float) -> str:
+        sym, unit = term_symbol_unit(term, *units)
+        return f"{TERMS[term].acts_on.label} {sym} = {v:.4g} {unit}".rstrip()
 
     def vals(term: str, fits: Sequence[Any]) -> str:
+        sym, unit = term_symbol_unit(term, *units)
         idx = [i for i, t in enumerate(pf.places) if t == term]
         labels = ", ".join(str(groups[i].label) for i in idx)
         v = ", ".join(f"{physical(fits[i], groups[i].scale, term)[0]:.4g}" for i in idx)
@@ -195,8 +202,7 @@ def text(pf: PlaceFree, groups: Sequence[Any], tr: Any, sib: Any, sym: str, unit
         b = physical(sib.fits[i], groups[i].scale, sib.term)[0]
         said += (
             f"; at {groups[i].label} the two places fit alike "
-            f"({TERMS[tr.term].acts_on.label} {sym} = {a:.4g}, "
-            f"{TERMS[sib.term].acts_on.label} {sym} = {b:.4g}): either, as alternatives - a drive above G's "
+            f"({one(tr.term, a)}, {one(sib.term, b)}): either, as alternatives - a drive above G's "
             f"band (where G's gain and phase change) or beyond the loop's saturation separates them"
         )
     return said
