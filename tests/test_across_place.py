@@ -36,13 +36,23 @@ def _trial(term: str, values: list[float], imp: list[float]) -> Any:
 
 
 def _said(
-    monkeypatch: pytest.MonkeyPatch, law: float = 0.5, after: float = 50.0, imp_u: list[float] | None = None
+    monkeypatch: pytest.MonkeyPatch,
+    law: float = 0.5,
+    after: float = 50.0,
+    imp_u: list[float] | None = None,
+    held: bool = True,
 ) -> str:
     for mod in (across_moved, across_place):
         monkeypatch.setattr(mod, "dof_of", lambda sx, f: 10000)
     monkeypatch.setattr(across_place, "element_law_test", lambda *a: law)
     ho = SimpleNamespace(cost_before=[100.0], cost_after=[after])
-    monkeypatch.setattr(across_place, "held_out", lambda *a: ho)
+    calls: list[int] = []
+
+    def held_out(*a: Any) -> Any:
+        calls.append(1)
+        return ho
+
+    monkeypatch.setattr(across_place, "held_out", held_out)
     scale = SimpleNamespace(factor=lambda term, mu: 1.0, y=1.0)
     groups = [
         SimpleNamespace(label=lab, scale=scale, sx=(), plain=None, substeps=1, cache=None)
@@ -52,7 +62,9 @@ def _said(
     sib = _trial(ON_U, [0.0099, 0.001, 0.002], imp_u or [6716.0, 1753.0, 1967.0])
     steps = [SimpleNamespace(trials=(sib, tr), level=0.01)]
     b = across_bounds.BeyondAcross((tr,), False)
-    return across_bounds.text(b, groups, ("[y]", "[u]"), 0.0, [], steps)
+    said = across_bounds.text(b, groups, ("[y]", "[u]"), 0.0, [], steps, held)
+    assert bool(calls) == held  # the held-out cost computed only when the user kept the test
+    return said
 
 
 def test_the_place_free_structure_is_named_with_its_place_per_condition(
@@ -89,3 +101,12 @@ def test_each_place_says_its_value_in_its_own_unit(monkeypatch: pytest.MonkeyPat
     assert f"{on_u.acts_on.label} at 0 (c = 0.0099 {u_unit})" in said, said
     assert f"{on_x.acts_on.label} at 0.5, 1 (c = 0.01012, 0.009991 {x_unit})" in said, said
     assert f"{on_x.acts_on.label} c = 0.01012 {x_unit}, {on_u.acts_on.label} c = 0.001 {u_unit}" in said, said
+
+
+def test_the_held_out_test_turned_off_is_neither_run_nor_required(monkeypatch: pytest.MonkeyPatch) -> None:
+    # A held-out cost that worsens (100 -> 150) refuses the name with the test on; off, it is not computed
+    # (the user's --no-held-out, as the joint selection's) and the words say it was not tested.
+    assert "not named" in _said(monkeypatch, after=150.0)
+    said = _said(monkeypatch, after=150.0, held=False)
+    assert said.startswith("named: viscous damping"), said
+    assert "held-out cost not tested" in said and "held-out cost 100" not in said, said

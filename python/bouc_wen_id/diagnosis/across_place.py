@@ -52,6 +52,7 @@ class PlaceFree:
         )
 
     _level: float = 0.01
+    held_tested: bool = True  # False when the user turned the held-out test off (``held_out_test``)
 
 
 def _chosen(places: Sequence[str], tr: Any, sib: Any) -> list[Any]:
@@ -85,9 +86,12 @@ def _against(
     return pooled_f(imp, c1, d1, q)[1]
 
 
-def fit(groups: Sequence[Any], tr: Any, sib: Any, out: Sequence[int], level: float) -> Optional[PlaceFree]:
+def fit(
+    groups: Sequence[Any], tr: Any, sib: Any, out: Sequence[int], level: float, held: bool = True
+) -> Optional[PlaceFree]:
     """The place-free joint structure of ``tr`` (shared place) and ``sib`` (its other place, at the
-    conditions ``out``), tested; None when a fit is missing."""
+    conditions ``out``), tested; None when a fit is missing. Without ``held`` (the user's ``held_out_test``
+    off) no held-out cost is computed nor required, as the joint selection's (across_step._accepts)."""
     k = len(groups)
     if len(tr.fits) < k or len(sib.fits) < k:
         return None
@@ -109,7 +113,7 @@ def fit(groups: Sequence[Any], tr: Any, sib: Any, out: Sequence[int], level: flo
     laws = [v for v in laws if math.isfinite(v)]
     law_p = min(1.0, min(laws) * len(laws)) if laws else math.nan
     before = after = 0.0
-    for g, f in zip(groups, mixed):
+    for g, f in zip(groups, mixed) if held else ():
         ho = held_out(g.sx, g.plain, f, g.substeps, g.cache)
         if ho is not None:
             before += sum(ho.cost_before)
@@ -117,7 +121,7 @@ def fit(groups: Sequence[Any], tr: Any, sib: Any, out: Sequence[int], level: flo
     against = tuple(_against(groups, mixed, t, base, q) for t in (tr, sib))
     undecided = _undecided(groups, tr, sib, level, q)
     return PlaceFree(
-        places, p, against, law_p, before if before > 0 else math.nan, after, phys, undecided, level
+        places, p, against, law_p, before if before > 0 else math.nan, after, phys, undecided, level, held
     )
 
 
@@ -187,7 +191,7 @@ def text(pf: PlaceFree, groups: Sequence[Any], tr: Any, sib: Any, units: tuple[s
     ho = (
         f", held-out cost {pf.held_out_before:.4g} -> {pf.held_out_after:.4g}"
         if math.isfinite(pf.held_out_before)
-        else ""
+        else ("" if pf.held_tested else "; held-out cost not tested (the held-out test turned off)")
     )
     tests = (
         f"fitted jointly with the place free per condition: p = {pf.p_value:.2g}; against one place shared "
