@@ -110,3 +110,27 @@ def test_the_held_out_test_turned_off_is_neither_run_nor_required(monkeypatch: p
     said = _said(monkeypatch, after=150.0, held=False)
     assert said.startswith("named: viscous damping"), said
     assert "held-out cost not tested" in said and "held-out cost 100" not in said, said
+
+
+@pytest.mark.parametrize(
+    ("alpha", "moved", "status"),
+    [(0.1, False, "explained"), (0.2, False, "partly explained"), (0.1, True, "partly explained")],
+)
+def test_the_status_is_adequacy_s_one_rule(
+    monkeypatch: pytest.MonkeyPatch, alpha: float, moved: bool, status: str
+) -> None:
+    # Each condition's place-free fit at p = 0.15: it passes at alpha = 0.1 (a named model's level), not at
+    # 0.2, and a loop drifting from period to period at a condition is not adequate whatever its p-value.
+    import importlib
+
+    from bouc_wen_id.diagnosis import adequacy
+
+    locate = importlib.import_module("bouc_wen_id.diagnosis.locate")  # the package's ``locate`` is a function
+    monkeypatch.setattr(across_place, "dof_of", lambda sx, f: 10000)
+    monkeypatch.setattr(locate, "adequacy_p", lambda cost, dof, noise_dof: 0.15)
+    tr = _trial(ON_X, [-0.00097, 0.01012, 0.009991], [53.0, 9760.0, 9547.0])
+    sib = _trial(ON_U, [0.0099, 0.001, 0.002], [6716.0, 1753.0, 1967.0])
+    pf = across_place.PlaceFree((ON_U, ON_X, ON_X), 0.0, (0.0, 0.0), 0.5, 100.0, 50.0, True, ())
+    groups = [SimpleNamespace(sx=(), noise_dof=1000, moved=moved and i == 2) for i in range(3)]
+    assert across_place.status(pf, groups, alpha, sib, tr) == status
+    assert (status == "explained") == adequacy.passes(0.15, alpha, True, moved)
