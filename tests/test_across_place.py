@@ -45,7 +45,7 @@ def _said(
     for mod in (across_moved, across_place):
         monkeypatch.setattr(mod, "dof_of", lambda sx, f: 10000)
     monkeypatch.setattr(across_place, "element_law_test", lambda *a: law)
-    ho = SimpleNamespace(cost_before=[100.0], cost_after=[after])
+    ho = SimpleNamespace(cost_before=[100.0], cost_after=[after], nrmse_after=[0.01])
     calls: list[int] = []
 
     def held_out(*a: Any) -> Any:
@@ -134,3 +134,34 @@ def test_the_status_is_adequacy_s_one_rule(
     groups = [SimpleNamespace(sx=(), noise_dof=1000, moved=moved and i == 2) for i in range(3)]
     assert across_place.status(pf, groups, alpha, sib, tr) == status
     assert (status == "explained") == adequacy.passes(0.15, alpha, True, moved)
+
+
+def test_the_conditions_table_holds_the_place_free_held_out_error(monkeypatch: pytest.MonkeyPatch) -> None:
+    # The table's joint held-out NRMSE is the place-free structure's (its own held-out fit per condition),
+    # not the shared place's it no longer names.
+    from bouc_wen_id.diagnosis.across_stable import ConditionResult
+
+    for mod in (across_moved, across_place):
+        monkeypatch.setattr(mod, "dof_of", lambda sx, f: 10000)
+    monkeypatch.setattr(across_place, "element_law_test", lambda *a: 0.5)
+    tr = _trial(ON_X, [-0.00097, 0.01012, 0.009991], [53.0, 9760.0, 9547.0])
+    sib = _trial(ON_U, [0.0099, 0.001, 0.002], [6716.0, 1753.0, 1967.0])
+    nrmse = {id(sib.fits[0]): 0.011, id(tr.fits[1]): 0.012, id(tr.fits[2]): 0.013}
+    monkeypatch.setattr(
+        across_place,
+        "held_out",
+        lambda sx, pl, f, *a: SimpleNamespace(
+            cost_before=[100.0], cost_after=[50.0], nrmse_after=[nrmse[id(f)]]
+        ),
+    )
+    groups = [
+        SimpleNamespace(label=lab, sx=(), plain=None, substeps=1, cache=None, noise_dof=1000) for lab in "abc"
+    ]
+    pf = across_place.fit(groups, tr, sib, (0,), 0.01)
+    assert pf is not None and pf.held_out_nrmse == (0.011, 0.012, 0.013)
+    conds = [
+        ConditionResult(g.label, float(i), 1, 1.0, 1.0, 0.5, 0.2, 0.1, None) for i, g in enumerate(groups)
+    ]
+    out = across_place.conditions(pf, groups, conds, sib, tr)
+    assert [c.held_out_joint for c in out] == [0.011, 0.012, 0.013]
+    assert [c.final_chi2_dof for c in out] == [f.cost / 10000 for f in (sib.fits[0], tr.fits[1], tr.fits[2])]

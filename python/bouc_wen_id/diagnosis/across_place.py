@@ -24,6 +24,7 @@ from dataclasses import dataclass
 from typing import Any, Optional
 
 from ..terms import TERMS
+from .across_types import _median
 from .fitting import physical
 from .law import element_law_test
 from .result import term_symbol_unit
@@ -53,6 +54,7 @@ class PlaceFree:
 
     _level: float = 0.01
     held_tested: bool = True  # False when the user turned the held-out test off (``held_out_test``)
+    held_out_nrmse: tuple[float, ...] = ()  # each condition's median held-out NRMSE (its table's column)
 
 
 def _chosen(places: Sequence[str], tr: Any, sib: Any) -> list[Any]:
@@ -113,15 +115,27 @@ def fit(
     laws = [v for v in laws if math.isfinite(v)]
     law_p = min(1.0, min(laws) * len(laws)) if laws else math.nan
     before = after = 0.0
+    nrmse: list[float] = []
     for g, f in zip(groups, mixed) if held else ():
         ho = held_out(g.sx, g.plain, f, g.substeps, g.cache)
+        nrmse.append(math.nan if ho is None else _median(ho.nrmse_after))
         if ho is not None:
             before += sum(ho.cost_before)
             after += sum(ho.cost_after)
     against = tuple(_against(groups, mixed, t, base, q) for t in (tr, sib))
     undecided = _undecided(groups, tr, sib, level, q)
     return PlaceFree(
-        places, p, against, law_p, before if before > 0 else math.nan, after, phys, undecided, level, held
+        places,
+        p,
+        against,
+        law_p,
+        before if before > 0 else math.nan,
+        after,
+        phys,
+        undecided,
+        level,
+        held,
+        tuple(nrmse),
     )
 
 
@@ -165,17 +179,23 @@ def status(pf: PlaceFree, groups: Sequence[Any], alpha: float, sib: Any, tr: Any
 
 
 def conditions(pf: PlaceFree, groups: Sequence[Any], conds: Sequence[Any], sib: Any, tr: Any) -> list[Any]:
-    """Each condition's result (``conds``, :class:`.across_stable.ConditionResult`) with its final chi2/dof
-    and adequacy p those of the named place-free structure."""
+    """Each condition's result (``conds``, :class:`.across_stable.ConditionResult`) with its final chi2/dof,
+    adequacy p and held-out NRMSE (when tested) those of the named place-free structure."""
     from dataclasses import replace
 
     from .locate import adequacy_p
 
     out = []
-    for g, c, f in zip(groups, conds, _chosen(pf.places, tr, sib)):
+    for i, (g, c, f) in enumerate(zip(groups, conds, _chosen(pf.places, tr, sib))):
         d = dof_of(g.sx, f)
+        hj = pf.held_out_nrmse[i] if i < len(pf.held_out_nrmse) else c.held_out_joint
         out.append(
-            replace(c, final_chi2_dof=f.cost / max(d, 1), final_p_value=adequacy_p(f.cost, d, g.noise_dof))
+            replace(
+                c,
+                final_chi2_dof=f.cost / max(d, 1),
+                final_p_value=adequacy_p(f.cost, d, g.noise_dof),
+                held_out_joint=hj,
+            )
         )
     return out
 
