@@ -36,13 +36,23 @@ def _trial(term: str, values: list[float], imp: list[float]) -> Any:
 
 
 def _said(
-    monkeypatch: pytest.MonkeyPatch, law: float = 0.5, after: float = 50.0, imp_u: list[float] | None = None
+    monkeypatch: pytest.MonkeyPatch,
+    law: float = 0.5,
+    after: float = 50.0,
+    imp_u: list[float] | None = None,
+    held: bool = True,
 ) -> str:
     for mod in (across_moved, across_place):
         monkeypatch.setattr(mod, "dof_of", lambda sx, f: 10000)
     monkeypatch.setattr(across_place, "element_law_test", lambda *a: law)
-    ho = SimpleNamespace(cost_before=[100.0], cost_after=[after])
-    monkeypatch.setattr(across_place, "held_out", lambda *a: ho)
+    ho = SimpleNamespace(cost_before=[100.0], cost_after=[after], nrmse_after=[0.01])
+    calls: list[int] = []
+
+    def held_out(*a: Any) -> Any:
+        calls.append(1)
+        return ho
+
+    monkeypatch.setattr(across_place, "held_out", held_out)
     scale = SimpleNamespace(factor=lambda term, mu: 1.0, y=1.0)
     groups = [
         SimpleNamespace(label=lab, scale=scale, sx=(), plain=None, substeps=1, cache=None)
@@ -52,7 +62,9 @@ def _said(
     sib = _trial(ON_U, [0.0099, 0.001, 0.002], imp_u or [6716.0, 1753.0, 1967.0])
     steps = [SimpleNamespace(trials=(sib, tr), level=0.01)]
     b = across_bounds.BeyondAcross((tr,), False)
-    return across_bounds.text(b, groups, ("[y]", "[u]"), 0.0, [], steps)
+    said = across_bounds.text(b, groups, ("[y]", "[u]"), 0.0, [], steps, held)
+    assert bool(calls) == held  # the held-out cost computed only when the user kept the test
+    return said
 
 
 def test_the_place_free_structure_is_named_with_its_place_per_condition(
@@ -78,3 +90,78 @@ def test_a_condition_that_cannot_separate_the_places_says_both(monkeypatch: pyte
     said = _said(monkeypatch, imp_u=[6716.0, 9760.0, 1967.0])
     assert "at 0.5 the two places fit alike" in said and "either, as alternatives" in said, said
     assert "at 1 the two places" not in said, said
+
+
+def test_each_place_says_its_value_in_its_own_unit(monkeypatch: pytest.MonkeyPatch) -> None:
+    # c on u is in [y] s/[u], across the element (on x) in s: one unit for both places was wrong at one.
+    said = _said(monkeypatch, imp_u=[6716.0, 9760.0, 1967.0])
+    on_u, on_x = T.TERMS[ON_U], T.TERMS[ON_X]
+    u_unit, x_unit = on_u.units("[y]", "[u]"), on_x.units("[y]", "[u]")
+    assert u_unit != x_unit
+    assert f"{on_u.acts_on.label} at 0 (c = 0.0099 {u_unit})" in said, said
+    assert f"{on_x.acts_on.label} at 0.5, 1 (c = 0.01012, 0.009991 {x_unit})" in said, said
+    assert f"{on_x.acts_on.label} c = 0.01012 {x_unit}, {on_u.acts_on.label} c = 0.001 {u_unit}" in said, said
+
+
+def test_the_held_out_test_turned_off_is_neither_run_nor_required(monkeypatch: pytest.MonkeyPatch) -> None:
+    # A held-out cost that worsens (100 -> 150) refuses the name with the test on; off, it is not computed
+    # (the user's --no-held-out, as the joint selection's) and the words say it was not tested.
+    assert "not named" in _said(monkeypatch, after=150.0)
+    said = _said(monkeypatch, after=150.0, held=False)
+    assert said.startswith("named: viscous damping"), said
+    assert "held-out cost not tested" in said and "held-out cost 100" not in said, said
+
+
+@pytest.mark.parametrize(
+    ("alpha", "moved", "status"),
+    [(0.1, False, "explained"), (0.2, False, "partly explained"), (0.1, True, "partly explained")],
+)
+def test_the_status_is_adequacy_s_one_rule(
+    monkeypatch: pytest.MonkeyPatch, alpha: float, moved: bool, status: str
+) -> None:
+    # Each condition's place-free fit at p = 0.15: it passes at alpha = 0.1 (a named model's level), not at
+    # 0.2, and a loop drifting from period to period at a condition is not adequate whatever its p-value.
+    import importlib
+
+    from bouc_wen_id.diagnosis import adequacy
+
+    locate = importlib.import_module("bouc_wen_id.diagnosis.locate")  # the package's ``locate`` is a function
+    monkeypatch.setattr(across_place, "dof_of", lambda sx, f: 10000)
+    monkeypatch.setattr(locate, "adequacy_p", lambda cost, dof, noise_dof: 0.15)
+    tr = _trial(ON_X, [-0.00097, 0.01012, 0.009991], [53.0, 9760.0, 9547.0])
+    sib = _trial(ON_U, [0.0099, 0.001, 0.002], [6716.0, 1753.0, 1967.0])
+    pf = across_place.PlaceFree((ON_U, ON_X, ON_X), 0.0, (0.0, 0.0), 0.5, 100.0, 50.0, True, ())
+    groups = [SimpleNamespace(sx=(), noise_dof=1000, moved=moved and i == 2) for i in range(3)]
+    assert across_place.status(pf, groups, alpha, sib, tr) == status
+    assert (status == "explained") == adequacy.passes(0.15, alpha, True, moved)
+
+
+def test_the_conditions_table_holds_the_place_free_held_out_error(monkeypatch: pytest.MonkeyPatch) -> None:
+    # The table's joint held-out NRMSE is the place-free structure's (its own held-out fit per condition),
+    # not the shared place's it no longer names.
+    from bouc_wen_id.diagnosis.across_stable import ConditionResult
+
+    for mod in (across_moved, across_place):
+        monkeypatch.setattr(mod, "dof_of", lambda sx, f: 10000)
+    monkeypatch.setattr(across_place, "element_law_test", lambda *a: 0.5)
+    tr = _trial(ON_X, [-0.00097, 0.01012, 0.009991], [53.0, 9760.0, 9547.0])
+    sib = _trial(ON_U, [0.0099, 0.001, 0.002], [6716.0, 1753.0, 1967.0])
+    nrmse = {id(sib.fits[0]): 0.011, id(tr.fits[1]): 0.012, id(tr.fits[2]): 0.013}
+    monkeypatch.setattr(
+        across_place,
+        "held_out",
+        lambda sx, pl, f, *a: SimpleNamespace(
+            cost_before=[100.0], cost_after=[50.0], nrmse_after=[nrmse[id(f)]]
+        ),
+    )
+    groups = [
+        SimpleNamespace(label=lab, sx=(), plain=None, substeps=1, cache=None, noise_dof=1000) for lab in "abc"
+    ]
+    pf = across_place.fit(groups, tr, sib, (0,), 0.01)
+    assert pf is not None and pf.held_out_nrmse == (0.011, 0.012, 0.013)
+    conds = [
+        ConditionResult(g.label, float(i), 1, 1.0, 1.0, 0.5, 0.2, 0.1, None) for i, g in enumerate(groups)
+    ]
+    out = across_place.conditions(pf, groups, conds, sib, tr)
+    assert [c.held_out_joint for c in out] == [0.011, 0.012, 0.013]
+    assert [c.final_chi2_dof for c in out] == [f.cost / 10000 for f in (sib.fits[0], tr.fits[1], tr.fits[2])]

@@ -120,12 +120,14 @@ def text(
     fraction: float,
     kept: Sequence[str],
     steps: Sequence[Any] = (),
+    held: bool = True,
 ) -> str:
     """The verdict's opening on the candidates beyond their range, each with its value at every condition
     (``kept``: the labels of the terms the selection kept, said as stand-ins; ``fraction``: the share of
     the summed excess they remove). When the best one is beyond its range at some conditions only and its
     physics at its other place fits those with a physical value (``steps``: the joint selection's, whose
-    first step holds every candidate's trial), that reading opens instead (:mod:`.across_moved`)."""
+    first step holds every candidate's trial), that reading opens instead (:mod:`.across_moved`; ``held``: the
+    user's ``held_out_test``)."""
     if not b.found:
         return ""
     labels = ", ".join(str(g.label) for g in groups)
@@ -147,7 +149,7 @@ def text(
         if kept
         else ""
     )
-    moved = across_moved.text(groups, steps, b.found[0], units)
+    moved = across_moved.text(groups, steps, b.found[0], units, held)
     if moved:
         return f"{moved}{instead}; "
     return f"not explained within the terms' physical ranges: {'; '.join(what)}{instead}; "

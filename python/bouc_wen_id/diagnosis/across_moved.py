@@ -60,30 +60,33 @@ def elsewhere(groups: Sequence[Any], steps: Sequence[Any], tr: Any) -> tuple[str
     return "", ()
 
 
-_MEMO: dict[tuple[int, int], tuple[Any, Any, Optional[across_place.PlaceFree]]] = {}
+_MEMO: dict[tuple[int, int, bool], tuple[Any, Any, Optional[across_place.PlaceFree]]] = {}
 
 
 def found(
-    groups: Sequence[Any], steps: Sequence[Any], tr: Any
+    groups: Sequence[Any], steps: Sequence[Any], tr: Any, held: bool = True
 ) -> tuple[Any, Optional[across_place.PlaceFree]]:
     """``(sibling trial, its place-free structure)`` for the joint trial ``tr`` beyond its range at some
     conditions (:func:`elsewhere`); ``(None, None)`` when there is no such sibling or the
-    conditions are not prepared ones (no plain fit). Fitted once per trial pair."""
+    conditions are not prepared ones (no plain fit). Fitted once per trial pair and ``held`` (the user's
+    ``held_out_test``: without it no held-out cost, :func:`.across_place.fit`)."""
     sib_term, out = elsewhere(groups, steps, tr)
     if not sib_term or not all(hasattr(g, "plain") for g in groups):
         return None, None
     sib = next(t for t in steps[0].trials if t.term == sib_term)
-    key = (id(tr), id(sib))
+    key = (id(tr), id(sib), held)
     hit = _MEMO.get(key)
     if hit is not None and hit[0] is tr and hit[1] is sib:
         return sib, hit[2]
-    pf = across_place.fit(groups, tr, sib, out, float(getattr(steps[0], "level", 0.0) or 0.0))
+    pf = across_place.fit(groups, tr, sib, out, float(getattr(steps[0], "level", 0.0) or 0.0), held)
     _MEMO.clear()  # one run's pair at a time: no object kept past its run
     _MEMO[key] = (tr, sib, pf)
     return sib, pf
 
 
-def text(groups: Sequence[Any], steps: Sequence[Any], tr: Any, units: tuple[str, str]) -> str:
+def text(
+    groups: Sequence[Any], steps: Sequence[Any], tr: Any, units: tuple[str, str], held: bool = True
+) -> str:
     """'' or the reading that ``tr``'s physics sits at its other place at the conditions where ``tr`` is
     beyond its range: "the place of viscous damping differs between the conditions: on the measured input u
     at 0 (c = 0.0099 s), across the hysteretic element (on x) at 0.5, 1 (c = 0.0101, 0.00999 s) ..."."""
@@ -101,9 +104,9 @@ def text(groups: Sequence[Any], steps: Sequence[Any], tr: Any, units: tuple[str,
 
     shared = ", ".join(f"{physical(tr.fits[i], groups[i].scale, tr.term)[0]:.4g}" for i in out)
     at_out = ", ".join(str(groups[i].label) for i in out)
-    _, pf = found(groups, steps, tr)  # the places fitted jointly, free per condition
+    _, pf = found(groups, steps, tr, held)  # the places fitted jointly, free per condition
     if pf is not None:
-        return across_place.text(pf, groups, tr, s, sym, unit)
+        return across_place.text(pf, groups, tr, s, units)
     name = TERMS[TERMS[tr.term].base_kind].label
     return (
         f"the place of {name} differs between the conditions: {at(sib, s.fits, out)}, "

@@ -24,8 +24,10 @@ from dataclasses import dataclass
 from typing import Any, Optional
 
 from ..terms import TERMS
+from .across_types import _median
 from .fitting import physical
 from .law import element_law_test
+from .result import term_symbol_unit
 from .select import LAW_ALPHA, NOISE_FLOOR, _admissible, at_null, away_from_null, dof_of, held_out, pooled_f
 
 
@@ -51,6 +53,8 @@ class PlaceFree:
         )
 
     _level: float = 0.01
+    held_tested: bool = True  # False when the user turned the held-out test off (``held_out_test``)
+    held_out_nrmse: tuple[float, ...] = ()  # each condition's median held-out NRMSE (its table's column)
 
 
 def _chosen(places: Sequence[str], tr: Any, sib: Any) -> list[Any]:
@@ -84,9 +88,12 @@ def _against(
     return pooled_f(imp, c1, d1, q)[1]
 
 
-def fit(groups: Sequence[Any], tr: Any, sib: Any, out: Sequence[int], level: float) -> Optional[PlaceFree]:
+def fit(
+    groups: Sequence[Any], tr: Any, sib: Any, out: Sequence[int], level: float, held: bool = True
+) -> Optional[PlaceFree]:
     """The place-free joint structure of ``tr`` (shared place) and ``sib`` (its other place, at the
-    conditions ``out``), tested; None when a fit is missing."""
+    conditions ``out``), tested; None when a fit is missing. Without ``held`` (the user's ``held_out_test``
+    off) no held-out cost is computed nor required, as the joint selection's (across_step._accepts)."""
     k = len(groups)
     if len(tr.fits) < k or len(sib.fits) < k:
         return None
@@ -108,15 +115,27 @@ def fit(groups: Sequence[Any], tr: Any, sib: Any, out: Sequence[int], level: flo
     laws = [v for v in laws if math.isfinite(v)]
     law_p = min(1.0, min(laws) * len(laws)) if laws else math.nan
     before = after = 0.0
-    for g, f in zip(groups, mixed):
+    nrmse: list[float] = []
+    for g, f in zip(groups, mixed) if held else ():
         ho = held_out(g.sx, g.plain, f, g.substeps, g.cache)
+        nrmse.append(math.nan if ho is None else _median(ho.nrmse_after))
         if ho is not None:
             before += sum(ho.cost_before)
             after += sum(ho.cost_after)
     against = tuple(_against(groups, mixed, t, base, q) for t in (tr, sib))
     undecided = _undecided(groups, tr, sib, level, q)
     return PlaceFree(
-        places, p, against, law_p, before if before > 0 else math.nan, after, phys, undecided, level
+        places,
+        p,
+        against,
+        law_p,
+        before if before > 0 else math.nan,
+        after,
+        phys,
+        undecided,
+        level,
+        held,
+        tuple(nrmse),
     )
 
 
@@ -142,35 +161,55 @@ def _undecided(groups: Sequence[Any], tr: Any, sib: Any, level: float, q: int) -
 
 
 def status(pf: PlaceFree, groups: Sequence[Any], alpha: float, sib: Any, tr: Any) -> str:
-    """ "explained" when the named place-free structure passes its adequacy test at every condition,
-    "partly explained" otherwise."""
+    """ "explained" when the named place-free structure passes its adequacy test at every condition by
+    :mod:`.adequacy`'s one rule (:func:`.adequacy.passes`: a named model at ``alpha``, not drifting; a loop
+    drifting from period to period there, ``moved``, is left beyond the steady terms named across), "partly
+    explained" otherwise."""
+    from .adequacy import passes
     from .locate import adequacy_p
 
     fits = _chosen(pf.places, tr, sib)
-    ok = all(adequacy_p(f.cost, dof_of(g.sx, f), g.noise_dof) >= alpha for g, f in zip(groups, fits))
+    ok = all(
+        passes(
+            adequacy_p(f.cost, dof_of(g.sx, f), g.noise_dof), alpha, True, bool(getattr(g, "moved", False))
+        )
+        for g, f in zip(groups, fits)
+    )
     return "explained" if ok else "partly explained"
 
 
 def conditions(pf: PlaceFree, groups: Sequence[Any], conds: Sequence[Any], sib: Any, tr: Any) -> list[Any]:
-    """Each condition's result (``conds``, :class:`.across_stable.ConditionResult`) with its final chi2/dof
-    and adequacy p those of the named place-free structure."""
+    """Each condition's result (``conds``, :class:`.across_stable.ConditionResult`) with its final chi2/dof,
+    adequacy p and held-out NRMSE (when tested) those of the named place-free structure."""
     from dataclasses import replace
 
     from .locate import adequacy_p
 
     out = []
-    for g, c, f in zip(groups, conds, _chosen(pf.places, tr, sib)):
+    for i, (g, c, f) in enumerate(zip(groups, conds, _chosen(pf.places, tr, sib))):
         d = dof_of(g.sx, f)
+        hj = pf.held_out_nrmse[i] if i < len(pf.held_out_nrmse) else c.held_out_joint
         out.append(
-            replace(c, final_chi2_dof=f.cost / max(d, 1), final_p_value=adequacy_p(f.cost, d, g.noise_dof))
+            replace(
+                c,
+                final_chi2_dof=f.cost / max(d, 1),
+                final_p_value=adequacy_p(f.cost, d, g.noise_dof),
+                held_out_joint=hj,
+            )
         )
     return out
 
 
-def text(pf: PlaceFree, groups: Sequence[Any], tr: Any, sib: Any, sym: str, unit: str) -> str:
-    """The naming (or why not) of the place-free structure, with its tests."""
+def text(pf: PlaceFree, groups: Sequence[Any], tr: Any, sib: Any, units: tuple[str, str]) -> str:
+    """The naming (or why not) of the place-free structure, with its tests; each place's value in its own
+    unit (``units``: the output's and the input's, :func:`.result.term_symbol_unit`: a term on u has u's)."""
+
+    def one(term: str, v: float) -> str:
+        sym, unit = term_symbol_unit(term, *units)
+        return f"{TERMS[term].acts_on.label} {sym} = {v:.4g} {unit}".rstrip()
 
     def vals(term: str, fits: Sequence[Any]) -> str:
+        sym, unit = term_symbol_unit(term, *units)
         idx = [i for i, t in enumerate(pf.places) if t == term]
         labels = ", ".join(str(groups[i].label) for i in idx)
         v = ", ".join(f"{physical(fits[i], groups[i].scale, term)[0]:.4g}" for i in idx)
@@ -180,7 +219,7 @@ def text(pf: PlaceFree, groups: Sequence[Any], tr: Any, sib: Any, sym: str, unit
     ho = (
         f", held-out cost {pf.held_out_before:.4g} -> {pf.held_out_after:.4g}"
         if math.isfinite(pf.held_out_before)
-        else ""
+        else ("" if pf.held_tested else "; held-out cost not tested (the held-out test turned off)")
     )
     tests = (
         f"fitted jointly with the place free per condition: p = {pf.p_value:.2g}; against one place shared "
@@ -195,8 +234,7 @@ def text(pf: PlaceFree, groups: Sequence[Any], tr: Any, sib: Any, sym: str, unit
         b = physical(sib.fits[i], groups[i].scale, sib.term)[0]
         said += (
             f"; at {groups[i].label} the two places fit alike "
-            f"({TERMS[tr.term].acts_on.label} {sym} = {a:.4g}, "
-            f"{TERMS[sib.term].acts_on.label} {sym} = {b:.4g}): either, as alternatives - a drive above G's "
+            f"({one(tr.term, a)}, {one(sib.term, b)}): either, as alternatives - a drive above G's "
             f"band (where G's gain and phase change) or beyond the loop's saturation separates them"
         )
     return said

@@ -52,14 +52,16 @@ def said(
         return out
     un = (y_unit or units.get("y", ""), u_unit or units.get("u", ""))
     verdict, status = out.verdict, out.status
+    held = bool(out.settings.get("held_out_test", True))  # the user's --no-held-out
     if out.status != "adequate":
         b = across_bounds.found(groups, out.steps)
         if across_bounds.demotes(b, bool(groups[0].current.params.terms)):
             kept = [t.label for t in (*out.terms, *out.partial)]
             verdict = _opened(
-                verdict, across_bounds.text(b, groups, un, explained_fraction(groups), kept, out.steps)
+                verdict, across_bounds.text(b, groups, un, explained_fraction(groups), kept, out.steps, held)
             )
-            sib, pf = across_moved.found(groups, out.steps, b.found[0])  # named with its place per condition
+            # named with its place per condition
+            sib, pf = across_moved.found(groups, out.steps, b.found[0], held)
             if pf is not None and pf.named:
                 status = across_place.status(pf, groups, out.settings["alpha"], sib, b.found[0])
                 verdict = verdict.replace(UNEXPLAINED + NOTHING, "").replace(NOTHING, "")
