@@ -113,7 +113,7 @@ def test_augmented_sensor_lag_stops_at_zero_as_the_reference_does() -> None:
     assert got[0][3] == 0.0
     # The oracle lands on the face to its own solver's roundoff: with NumPy 2.4's LAPACK its face step leaves
     # tau = 4e-27 (> 0, so its relative face test does not list it), with earlier ones exactly 0. Either way
-    # it is the same stop: on the face to within 1e-20 s (10^-18 of the sample time), listed when exactly on it.
+    # it is the same stop: on the face to within 1e-20 s, listed when exactly on it.
     assert 0.0 <= want[0][3] <= 1e-20
     assert list(want[9]) == (["sensor_lag=0"] if want[0][3] == 0.0 else [])
     assert got[3] == pytest.approx(want[3], rel=1e-8)
