@@ -99,3 +99,21 @@ def test_degradation_is_still_named_and_nothing_left_out() -> None:
     assert d.headline.startswith("explained by: ") and "degradation" in d.headline
     assert j["left_out_records"] == [] and len(j["judged_on"]) == 4
     assert j["after"]["adequate"] and not j["after"]["not_judged"]
+
+
+def test_the_records_judged_on_never_split_the_status_phrase() -> None:
+    # The wire rope read "unexplained on 16Hz_A2 segment 0, ... structure remains at harmonics ...".
+    from bouc_wen_id.diagnosis.left_out import _on
+
+    kept = "rec 0, rec 1"
+    assert _on("unexplained structure remains at harmonics 1, 3", "unexplained", kept) == (
+        "unexplained structure remains at harmonics 1, 3 (judged on rec 0, rec 1)"
+    )
+    assert (
+        _on("adequate: the plain model fits", "adequate", kept)
+        == "adequate on rec 0, rec 1: the plain model fits"
+    )
+    assert _on("explained by: viscous", "explained", kept) == "explained on rec 0, rec 1 by: viscous"
+    assert (
+        _on("explained in part by: x", "partly explained", kept) == "explained in part on rec 0, rec 1 by: x"
+    )

@@ -88,9 +88,11 @@ def _tail(names: tuple[str, ...]) -> str:
 def _on(head: str, status: str, kept: str) -> str:
     """``head`` (the verdict's first clause) with the records it was judged on after its status word."""
     word = {"partly explained": "explained in part"}.get(status, status)
-    if head.startswith(word):
-        return f"{word} on {kept}{head[len(word) :]}"
-    return f"{head} (on {kept})"
+    after = head[len(word) :]
+    if head.startswith(word) and (after[:1] in (":", "") or after.startswith(" by")):
+        return f"{word} on {kept}{after}"
+    # "unexplained structure remains at ...": the records go after the whole clause, not inside the phrase
+    return f"{head} (judged on {kept})"
 
 
 def qualified(d: _D) -> _D:
