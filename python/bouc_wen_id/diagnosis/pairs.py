@@ -43,16 +43,6 @@ stiffness and viscous damping on x, the stiffness removing 0.4 % alone: the near
 with a sensor lag) and 96-97 % (the README's plants); the revisit (:mod:`.revisit`) keeps every candidate,
 its own gate already asking a lead of half the excess.
 
-**A lead held on a face.** Where the lead's own fit still sits on a face of its admissible range (``active``:
-mu at its bound, ``beta = |gamma|``) with a reduced chi-square above :data:`HELD_CHI2`, its share is no
-measure of what it leaves hidden: the range holds the hysteresis where the missing term would let it go,
-and the failed-alone candidates are fitted beside it whatever its share (:func:`held_lead`). Review 38's
-isolator past saturation (Bouc-Wen with stiffness 0.5 and viscous damping 0.02 on x, first-order G, U 1.5
-and 3): the plain fit and viscous damping's sat on mu = 1, the damping removed 49 % of the excess and the
-stiffness 0.1 % (every start, wide or at the true hysteresis, returned to the same face: not a start
-problem), so no set was fitted and the verdict was "unexplained"; the stiffness fitted beside the damping
-reaches k 0.4986, c 0.01996, beta/gamma 0.6/0.4, mu 1.50, chi2/dof 0.97.
-
 The same rules run once more, from an earlier model, in :mod:`.revisit`: where a single term was named and
 a later step's best candidate, removing most of what is left, fails its law (stiffness and viscous damping
 on u through a G without delay were named viscous damping on x), sets that could replace the named term
@@ -109,20 +99,6 @@ TRIPLES = True
 #: The candidates that did not pass alone are paired with the lead (and tried as a third term) only where
 #: the lead alone removes at least this share of the excess (module docstring, "Where it runs").
 OTHERS_SHARE = 0.5
-
-
-#: A lead whose fit stays on a face of its admissible range (``fit.active``) with a reduced chi-square above
-#: this is held there by a misfit it cannot draw alone: its share understates what a second term can free
-#: (module docstring, "Where it runs").
-HELD_CHI2 = 10.0
-
-
-def held_lead(rules: Any, fit: Any) -> bool:
-    """Whether the lead's ``fit`` is held on a face of its range far from adequate (:data:`HELD_CHI2`): then
-    the candidates that failed alone are fitted beside it whatever its share (module docstring)."""
-    active = getattr(fit, "active", ())
-    cost = getattr(fit, "cost", math.nan)
-    return bool(active) and math.isfinite(cost) and cost / max(rules.dof(fit), 1) > HELD_CHI2
 
 
 class Rules:
@@ -500,8 +476,6 @@ def pair_step(
     passed = {tr.term for tr in order}
     others = [tr for tr in tested if tr.term not in passed and tr.fit is not None and math.isfinite(tr.cost)]
     least = OTHERS_SHARE if others_share is None else others_share
-    if pool and held_lead(exps, pool[0].fit):
-        least = 0.0
     if not (pool and pool[0].share >= least):  # a lead too small to hide a second term (docstring)
         others = []
     tried = fit_pairs(exps, current, pool, others, fit_term, level, n_cands, drive_pairs(order, refused))
