@@ -23,9 +23,9 @@ M, N = 4, 100  # experiments, samples per averaged period
 A, B, C = "viscous", "play", "sensor_lag"
 
 
-def _fit(terms: tuple[str, ...], cost: float) -> Any:
+def _fit(terms: tuple[str, ...], cost: float, active: tuple[str, ...] = ()) -> Any:
     par = SimpleNamespace(terms=terms, values=np.full(len(terms), 0.01), gains=np.ones(M), phases=np.zeros(M))
-    return SimpleNamespace(params=par, cost=cost)
+    return SimpleNamespace(params=par, cost=cost, active=active)
 
 
 Law = Callable[[frozenset[str], str], float]
@@ -37,15 +37,19 @@ def _select(
     law: Law,
     pair_step: Optional[Any] = pairs.pair_step,
     targeted: bool = False,
+    plain: float = 500.0,
+    held: frozenset[frozenset[str]] = frozenset(),
 ) -> tuple[Any, list[select.Step]]:
     """forward_select from a plain fit of cost 500 (dof 389) over the candidates A, B, C; a model's cost from
     ``costs`` by its set of terms (1000 when absent); ``law(terms, t)`` the law p of t in that model; a
-    model is adequate below cost 420."""
+    model is adequate below cost 420. ``plain``: the plain fit's cost; ``held``: the sets of terms whose fit
+    stays on a face of its admissible range (``active``)."""
     monkeypatch.setattr(speed, "MEMO_FITS", False)
 
     def fit_with(exps: Any, base: Any, t: str, sub: int) -> Any:
         terms = (*base.params.terms, t)
-        return _fit(terms, costs.get(frozenset(terms), 1000.0))
+        face = ("mu=lower",) if frozenset(terms) in held else ()
+        return _fit(terms, costs.get(frozenset(terms), 1000.0), face)
 
     def law_test(exps: Any, fit: Any, t: str, sub: int) -> float:
         return law(frozenset(fit.params.terms), t)
@@ -61,7 +65,7 @@ def _select(
     exps = [SimpleNamespace(ybar=np.zeros(N), grid_phase=0.0, source=f"e{i}") for i in range(M)]
     return select.forward_select(
         cast(Any, exps),
-        _fit((), 500.0),
+        _fit((), plain, ("mu=lower",) if frozenset() in held else ()),
         [A, B, C],
         lambda f: f.cost < 420.0,
         2,
@@ -199,6 +203,37 @@ def test_a_lead_that_removes_less_than_half_the_excess_is_not_paired_with_the_fa
     monkeypatch.setattr(pairs, "OTHERS_SHARE", 0.0)
     final, steps = _select(monkeypatch, _hidden(450.0), _law_pair(frozenset({A, C})))
     assert steps[0].pair == (A, C)
+
+
+def test_a_small_lead_held_on_a_face_far_from_adequate_is_paired_with_the_failed_candidates(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Review 38's isolator past saturation: the plain fit (chi2/dof 26 here) and the lead A's fit sit on a
+    face of the range (mu at its bound); A removes 45 % of the excess and C nothing alone, yet A and C
+    jointly reach the noise floor. A lead held on a face far from adequate has its C fitted beside it
+    whatever its share (main: no set fitted beside it, "unexplained"); off the face the 50 % rule holds; a
+    pair whose fit stays on the lead's face is refused (pairs.off_face)."""
+    plain = 10000.0
+    costs = {
+        frozenset({A}): plain - 0.45 * (plain - 389.0),
+        frozenset({B}): 9990.0,
+        frozenset({C}): 9995.0,
+        frozenset({A, B}): 5600.0,
+        frozenset({A, C}): 395.0,
+        frozenset({B, C}): 9985.0,
+    }
+    held = frozenset({frozenset(), frozenset({A}), frozenset({B}), frozenset({C})})
+    final, steps = _select(monkeypatch, costs, _law_pair(frozenset({A, C})), plain=plain, held=held)
+    assert steps[0].trials[0].term == A and steps[0].trials[0].share < pairs.OTHERS_SHARE
+    assert steps[0].pair == (A, C) and set(final.params.terms) == {A, C}
+    # the same costs with A's fit off the face: C is not fitted beside it
+    final, steps = _select(monkeypatch, costs, _law_pair(frozenset({A, C})), plain=plain)
+    assert steps[0].pair == () and not any(C in p.terms for p in steps[0].pairs)
+    # the pair's own fit still on A's face (the real-data microwire's stand-ins): C freed nothing, refused
+    on_face = held | {frozenset({A, C})}
+    final, steps = _select(monkeypatch, costs, _law_pair(frozenset({A, C})), plain=plain, held=on_face)
+    refused = {p.terms: p.refused for p in steps[0].pairs}
+    assert steps[0].pair == () and "stays on the face (mu = lower)" in refused[(A, C)], refused
 
 
 def test_a_step_whose_lead_is_small_and_alone_says_the_pair_step_fitted_no_set(
