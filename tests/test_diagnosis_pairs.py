@@ -233,7 +233,7 @@ def test_a_small_lead_held_on_a_face_far_from_adequate_is_paired_with_the_failed
     on_face = held | {frozenset({A, C})}
     final, steps = _select(monkeypatch, costs, _law_pair(frozenset({A, C})), plain=plain, held=on_face)
     refused = {p.terms: p.refused for p in steps[0].pairs}
-    assert steps[0].pair == () and "stays on the face (mu = lower)" in refused[(A, C)], refused
+    assert steps[0].pair == () and "stays on a face of its range (mu = lower)" in refused[(A, C)], refused
 
 
 def test_a_step_whose_lead_is_small_and_alone_says_the_pair_step_fitted_no_set(

@@ -52,12 +52,15 @@ and 3): the plain fit and viscous damping's sat on mu = 1, the damping removed 4
 stiffness 0.1 % (every start, wide or at the true hysteresis, returned to the same face: not a start
 problem), so no set was fitted and the verdict was "unexplained"; the stiffness fitted beside the damping
 reaches k 0.4986, c 0.01996, beta/gamma 0.6/0.4, mu 1.50, chi2/dof 0.97. Such a candidate is admitted as the
-term that frees the hysteresis from the face, so a set holding it is kept only where its own fit leaves the
-lead's face (:func:`off_face`): the isolator's pair left mu = 1 (no face active, chi2/dof 0.97), while on the
-real-data microwire (a Jiles-Atherton core, outside the library) the lead, stiffness on x, was held on
-beta = |gamma| (34-38 % of the excess, chi2/dof 837-2292 under the "early" and "half harmonics" variants) and
-every set beside it stayed there (the named triple with Coulomb friction and inertia on x at chi2/dof 391):
-named without the check, refused with it; review 38's Jiles-Atherton core (d3, d3ar) likewise.
+term that frees the hysteresis from the face, so a set holding it is kept only where its own fit is interior,
+no face of the hysteresis' range active (:func:`off_face`): the isolator's pair is (chi2/dof 0.97, law p
+0.80/0.73), while on the real-data microwire (a Jiles-Atherton core, outside the library) the lead, stiffness
+on x, was held on beta = |gamma| (34-38 % of the excess, chi2/dof 837-2292 under the "early" and "half
+harmonics" variants) and every set beside it stayed there (the triple with Coulomb friction and inertia on x
+named at chi2/dof 391 without the check); review 38's Jiles-Atherton core (d3, d3ar, lead play on
+beta = |gamma|) likewise. On the MR damper's 0.5 A level (lead 12 %) the check refuses the Dahl friction on x
+that moved the hysteresis from mu = 1 to beta = |gamma|, and with it the triples built on it: the rule costs
+9 s of CPU there (21 -> 30 s); with that set kept and its 12 triples fitted it cost 51 s.
 
 The same rules run once more, from an earlier model, in :mod:`.revisit`: where a single term was named and
 a later step's best candidate, removing most of what is left, fails its law (stiffness and viscous damping
@@ -117,34 +120,41 @@ TRIPLES = True
 OTHERS_SHARE = 0.5
 
 
-#: A lead whose fit stays on a face of its admissible range (``fit.active``) with a reduced chi-square above
-#: this is held there by a misfit it cannot draw alone: its share understates what a second term can free
-#: (module docstring, "Where it runs").
+#: The faces of the hysteresis' admissible range (the core's ``Constraint`` names, ``fit.active``); a term's
+#: own null (``"play=0"``) is not one of them.
+SHAPE_FACES = frozenset({"beta=gamma", "mu=lower", "mu=upper"})
+
+#: A lead whose fit stays on a face of :data:`SHAPE_FACES` with a reduced chi-square above this is held there
+#: by a misfit it cannot draw alone: its share understates what a second term can free (module docstring,
+#: "A lead held on a face").
 HELD_CHI2 = 10.0
 
 
+def _faces(fit: Any) -> list[str]:
+    return sorted(SHAPE_FACES.intersection(getattr(fit, "active", ())))
+
+
 def held_lead(rules: Any, fit: Any) -> bool:
-    """Whether the lead's ``fit`` is held on a face of its range far from adequate (:data:`HELD_CHI2`): then
-    the candidates that failed alone are fitted beside it whatever its share (module docstring)."""
-    active = getattr(fit, "active", ())
+    """Whether the lead's ``fit`` is held on a face of the hysteresis' range far from adequate
+    (:data:`HELD_CHI2`): then the candidates that failed alone are fitted beside it whatever its share,
+    kept only where their set leaves every face (:func:`off_face`; module docstring)."""
     cost = getattr(fit, "cost", math.nan)
-    return bool(active) and math.isfinite(cost) and cost / max(rules.dof(fit), 1) > HELD_CHI2
+    return bool(_faces(fit)) and math.isfinite(cost) and cost / max(rules.dof(fit), 1) > HELD_CHI2
 
 
-def off_face(lead: Trial, extra: set[str], sets: Sequence[PairTrial]) -> list[PairTrial]:
-    """``sets`` with those holding a member of ``extra`` (candidates fitted only because the ``lead`` is held
-    on a face, :func:`held_lead`) refused where their fit stays on one of the lead's faces: such a member
-    was admitted as the term that frees the hysteresis from the face, and a set that does not free it
-    holds no evidence for it (module docstring, "A lead held on a face")."""
-    faces = set(getattr(lead.fit, "active", ()))
+def off_face(extra: set[str], sets: Sequence[PairTrial]) -> list[PairTrial]:
+    """``sets`` with those holding a member of ``extra`` (candidates fitted only because the lead is held on
+    a face, :func:`held_lead`) refused where their fit is not interior (any face of :data:`SHAPE_FACES`
+    active): such a member was admitted as the term that frees the hysteresis from the face, and a set that
+    leaves it held, there or on another face, holds no evidence for it (module docstring)."""
     out = []
     for p in sets:
-        kept = sorted(faces & set(getattr(p.fit, "active", ()))) if p.fit is not None else []
+        kept = _faces(p.fit) if p.fit is not None else []
         if p.refused or not kept or not extra & set(p.terms):
             out.append(p)
             continue
         on = ", ".join(k.replace("=", " = ") for k in kept)
-        out.append(replace(p, refused=f"the hysteresis stays on the face ({on}) the lead alone was held on"))
+        out.append(replace(p, refused=f"the hysteresis stays on a face of its range ({on})"))
     return out
 
 
@@ -528,14 +538,14 @@ def pair_step(
         others = []
     extra = {tr.term for tr in others} if held else set()
     tried = fit_pairs(exps, current, pool, others, fit_term, level, n_cands, drive_pairs(order, refused))
-    tried = off_face(pool[0], extra, tried) if extra else tried
+    tried = off_face(extra, tried) if extra else tried
     ranked = sorted((p for p in tried if not p.refused), key=lambda p: p.cost)
     done: dict[tuple[str, ...], PairTrial] = {p.terms: p for p in tried}
     chosen = _pick(exps, current, ranked, done, substeps, held_out_test, cache)
     if chosen is None and TRIPLES and ranked:  # the best pair's laws failed: a third large term beside it
         fits = {frozenset(p.terms): p for p in tried if p.fit is not None}
         tri = fit_triples(exps, current, ranked[0], [*pool, *others], fits, fit_term, level, n_cands)
-        tri = off_face(pool[0], extra, tri) if extra else tri
+        tri = off_face(extra, tri) if extra else tri
         done.update({p.terms: p for p in tri})
         ranked = sorted((p for p in tri if not p.refused), key=lambda p: p.cost)
         chosen = _pick(exps, current, ranked, done, substeps, held_out_test, cache)
