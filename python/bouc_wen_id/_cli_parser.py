@@ -291,6 +291,13 @@ def _add_diagnose_parser(sub: Any) -> None:
     )
     p.add_argument("--alpha", type=_level, default=0.05, help="false-alarm level per step (default 0.05)")
     p.add_argument("--no-held-out", action="store_true", help="skip the held-out check (faster, weaker)")
+    p.add_argument(
+        "--no-stability",
+        action="store_true",
+        help="skip refitting the final model on preprocessing variants (early/late stretch) to check that "
+        "named values do not move (two final-model refits, about 0.2 s or 1-3 %% of a diagnosis; a moved "
+        "value is then not said)",
+    )
     p.add_argument("--no-figures", action="store_true", help="write the JSON and a text-only HTML page")
     p.add_argument(
         "--out",

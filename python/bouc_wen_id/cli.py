@@ -484,6 +484,7 @@ def _cmd_diagnose(args: argparse.Namespace) -> int:
         y_unit=style["y_unit"],
         u_unit=style["u_unit"],
         progress=True,
+        value_stability=not args.no_stability,
     )
     to_stdout = args.json is not None and str(args.json) == "-"
     print(d.summary(), file=sys.stderr if to_stdout else sys.stdout)

@@ -298,6 +298,7 @@ def diagnose(
     y_unit: str = "",
     u_unit: str = "",
     progress: Progress = None,
+    value_stability: bool = True,
 ) -> Diagnosis:
     """Diagnose what the Wiener-Bouc-Wen model leaves out of sine experiments.
 
@@ -327,6 +328,9 @@ def diagnose(
     progress : bool or callable, optional
         Report the stages: True on stderr (a bar on a terminal, else a line per stage), a callable
         ``progress(stage, done, total)`` receives each report; quiet by default.
+    value_stability : bool
+        Refit the final model on preprocessing variants of the records and say a named value that moves
+        beyond its noise (value_stability.py); costs a few final-model fits. False skips it.
 
     Returns
     -------
@@ -357,7 +361,25 @@ def diagnose(
             with _threads.one_blas_thread():  # issue 18 item 4: BLAS threads compete with the core's
                 d = _diagnose(experiments, candidates, alpha, held_out_test, (y_unit, u_unit), progress)
     d = borderline.qualified(replace(d, fits=fits), d.settings["alpha"])  # a weak remainder's p-value
+    if value_stability:  # a named value that moves under preprocessing is not a finding (value_stability.py)
+        d = _value_checked(d, experiments, (y_unit, u_unit))
     return readings.qualified(d, d.named_terms, d.alternatives)  # the headline's words
+
+
+def _value_checked(d: Diagnosis, experiments: Any, units: tuple[str, str]) -> Diagnosis:
+    """``d`` with its named values checked across preprocessing variants, in the units it reports."""
+    import warnings
+
+    from . import value_stability
+
+    if not d.named:
+        return d
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        joined = harmonise(_as_list(experiments), stacklevel=4)
+    units = (units[0] or joined.units.get("y", ""), units[1] or joined.units.get("u", ""))
+    d = value_stability.checked(d, joined.items, units)
+    return replace(d, seconds=d.seconds + float(value_stability.seconds(d) or 0.0))
 
 
 def _diagnose(
