@@ -66,7 +66,10 @@ exponent 2, the Prandtl-Ishlinskii operator on u): "unexplained", or a verdict t
 element with the family caveat (``diagnosis/caveats.py``: "a Dahl-like friction loop ... a distribution of
 stops (Iwan, Prandtl-Ishlinskii, Masing) or another Dahl exponent fits such loops too", with the experiment
 that separates them), or a viscous damping with the rate caveat (``diagnosis/rate_rival.py``: it "may stand
-for a rate-independent loop outside the library", these loops are), column "fam". That verdict is true of
+for a rate-independent loop outside the library", these loops are), or a loop-shape term (pinching, dry
+friction, play) named from one amplitude per frequency with its caveat (``diagnosis/one_amplitude.py``: "a
+loop of another family (distributed stops, Prandtl-Ishlinskii) would look the same on one amplitude",
+with the second amplitude that separates them), column "fam". That verdict is true of
 these loops: the caveat names the truth's family among what it could not exclude. The caveat must be in the
 verdict's HEADLINE (``diagnosis/readings.py``): a user who reads only the headline was otherwise told a
 confident name. Any other name, or the element with another term beside it, or without the caveat in the
@@ -283,7 +286,12 @@ def _reading_marks() -> dict[str, Optional[str]]:
     from bouc_wen_id.diagnosis import caveats, rate_rival
 
     fam, rate = getattr(caveats, "FAMILY_MARK", None), getattr(rate_rival, "RATE_MARK", None)
-    return {"dahl": fam, "dahl_sigma": fam, "viscous": rate}
+    marks = {"dahl": fam, "dahl_sigma": fam, "viscous": rate}
+    try:  # a loop-shape term named from one amplitude per frequency (diagnosis/one_amplitude.py)
+        from bouc_wen_id.diagnosis import one_amplitude
+    except ImportError:  # a diagnosis before that caveat
+        return marks
+    return marks | {_base_name(k): one_amplitude.ONE_AMPLITUDE_MARK for k in one_amplitude.LOOP_SHAPE}
 
 
 def _family(d: Any, names: list[str], effect: Optional[str]) -> bool:

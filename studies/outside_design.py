@@ -2,7 +2,8 @@
 bench's default: three frequencies (0.5, 1, 2 x the corner) at ONE amplitude (latent |x| 3), G forced to one
 shape (``first`` order, or ``resonant`` with its delay), and AR(1) output noise (``PHI``, marginal sd the
 bench's ``NOISE_SD``; ``PHI`` 0 is white noise of its own draw). Prints each case's status, named terms,
-final chi2/dof, adequacy p and headline.
+final chi2/dof, adequacy p, the bench's score (``benches/diagnosis.py``: "WRONG" a confident wrong name, "fam"
+a name with its family caveat in the headline) and headline; then the count of wrong names.
 
 Usage: ``PYTHONPATH=python python studies/outside_design.py PHI ROWS SHAPES`` (e.g. ``0.7 iwan,pi_u
 first,resonant``); seeds 3801 and 3802, sizes 10x and 30x.
@@ -20,6 +21,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benches"))
 
 import bouc_wen_id as bw  # noqa: E402
+import diagnosis as bench  # noqa: E402
 import generator as gen  # noqa: E402
 
 
@@ -63,6 +65,7 @@ def main() -> None:
     gen.X_LEVELS = (3.0,)
     gen.recordings = ar1_recordings(phi)
     plant = gen.make_plant
+    wrong = total = 0
     for name in rows:
         for shape in shapes:
             gen.make_plant = lambda seed, _s=None, low_amplitude=False, s=shape: plant(seed, s, low_amplitude)
@@ -73,11 +76,16 @@ def main() -> None:
                         warnings.simplefilter("ignore")
                         d = bw.diagnose(case.recordings)
                     f = d.final
+                    sc = bench._score(d, "outside", None, "", name)
+                    wrong, total = wrong + sc["wrong"], total + 1
+                    mark = "WRONG" if sc["wrong"] else "fam" if sc["family"] else "-"
                     print(
-                        f"{name} {shape} {size:g}x seed {seed}: {d.status}; {[t.term for t in f.terms]}; "
-                        f"final chi2/dof {f.cost / f.dof:.3f} p {f.p_value:.3g} | {d.headline[:300]}",
+                        f"{name} {shape} {size:g}x seed {seed}: {d.status_text} [{mark}]; "
+                        f"{[t.term for t in f.terms]}; final chi2/dof {f.cost / f.dof:.3f} p {f.p_value:.3g} "
+                        f"| {d.headline[:400]}",
                         flush=True,
                     )
+    print(f"wrong confident names: {wrong} of {total}")
 
 
 if __name__ == "__main__":

@@ -107,6 +107,7 @@ def _of_clause(c: str, named: Sequence[str]) -> list[Reading]:
     from .bounds_said import BEYOND_MARK, MU_MARK
     from .caveats import FAMILY_MARK, PLAY_MARK
     from .masing import MASING_MARK
+    from .one_amplitude import ONE_AMPLITUDE_MARK, reading_words
     from .rate_rival import RATE_MARK
 
     out: list[Reading] = []
@@ -116,6 +117,9 @@ def _of_clause(c: str, named: Sequence[str]) -> list[Reading]:
     if FAMILY_MARK in c:
         words = f"or a distribution of stops or another Dahl exponent (Dahl: {FAMILY_MARK})"
         out.append(Reading("family", words, instead_of=_kinds_in(c.split(" names ")[0], named)))
+    if ONE_AMPLITUDE_MARK in c:  # a loop-shape term from one amplitude per frequency (one_amplitude.py)
+        of = _kinds_in(c.split(": a loop of another family")[0], named)
+        out.append(Reading("one_amplitude", reading_words(c), instead_of=of))
     if PLAY_MARK in c:
         words = f"or a backlash on the measured output (play: {PLAY_MARK})"
         out.append(Reading(Play.kind, words, instead_of=_kinds_in(c.split(" names ")[0], named)))

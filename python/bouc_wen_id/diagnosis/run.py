@@ -41,6 +41,7 @@ from . import (
     lines,
     loop_centre,
     near_limit,
+    one_amplitude,
     output_clip,
     pairs,
     resolution,
@@ -733,6 +734,7 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
     alternatives = tw.alternatives + _drift_alternatives(deg, named_deg)  # the steps' and the twins'
     verdict += alt_values.said(alternatives, named, fsx, final, (s, substeps, setup.units))  # and values
     verdict += caveats_of(named, fsx, final, fexps, alpha, substeps)
+    verdict += one_amplitude.text(named, fexps)  # a loop-shape term's amplitude law untested
     setup.report("held-out check of the final model", 0, 1)
     ho = held_out(fsx, start, final, substeps, kw["cache"]) if final.params.terms else None
     d = Diagnosis(
