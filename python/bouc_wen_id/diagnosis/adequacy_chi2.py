@@ -43,7 +43,7 @@ def relative_weights(exps: Sequence[DiagExperiment]) -> list[Optional[FloatArray
     for e in exps:
         lv = e.adequacy_var
         ok = lv.size == e.samples_per_period // 2 + 1 and e.noise_var > 0
-        w = e.noise_var / lv if ok and bool(np.all(np.isfinite(lv) & (lv > 0))) else None
+        w = e.noise_var / lv if ok and bool(np.all(lv > 0) and np.all(np.isfinite(lv[1:]))) else None
         if w is None and e.baseline_removed:
             w = np.ones(
                 e.samples_per_period // 2 + 1

@@ -456,10 +456,23 @@ def _from_recording(i: int, rec: Any) -> DiagExperiment:
         colour_band=band,
         cross_period=cross_period_correlation(dc) if var > diff and not flat else 0.0,
         harmonic_var=hvar,
-        adequacy_var=harmonic_levels(rows, diff, k=p // 2) if var > diff and not flat else np.zeros(0),
+        adequacy_var=_adequacy_levels(rows, diff, var, walk),
         input_dc=float(np.mean(urows)),
         input_dc_se=math.sqrt(float(np.mean(np.diff(urows, axis=0) ** 2)) / 2.0 / (n * p)),
     )
+
+
+def _adequacy_levels(rows: FloatArray, white: float, var: float, walk: Any) -> FloatArray:
+    """``DiagExperiment.adequacy_var`` of a recording: each harmonic 0..P/2's level when the noise is
+    coloured (empty when white); with the period means taken out (``walk`` not None) the DC's is infinite and
+    no level is below the walk's own leak, as ``harmonic_var``."""
+    if not var > white:
+        return np.zeros(0)
+    p = rows.shape[1]
+    out = harmonic_levels(rows, white, dc=walk is None, k=p // 2)
+    if walk is not None and out.size > 1:
+        out = np.maximum(out, white + walk_levels(float(str(walk)), p, out.size - 1))
+    return out
 
 
 def walk_levels(s2: float, p: int, k: int) -> np.ndarray:
