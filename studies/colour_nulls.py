@@ -39,7 +39,8 @@ def main() -> None:
             warnings.simplefilter("ignore")
             d = bw.diagnose(case.recordings)
         named = [t.term for t in d.final.terms]
-        hit = (d.status != "adequate") if term is None else (term in named)
+        label = term if place in ("", "u") else f"{term}@{place}"
+        hit = (d.status != "adequate") if term is None else (label in named)
         hits += hit
         c = float(getattr(d.plain, "chi2_dof", d.plain.cost / max(d.plain.dof, 1)))
         rows.append(c)
