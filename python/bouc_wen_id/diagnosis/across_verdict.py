@@ -37,7 +37,17 @@ from dataclasses import replace
 from typing import Any
 
 from ..terms import TERMS, Play, StiffnessX
-from . import across_bounds, across_rate, across_twin, beside, beyond_range, bounds_said, gate, law_untested
+from . import (
+    across_bounds,
+    across_rate,
+    across_twin,
+    adequacy,
+    beside,
+    beyond_range,
+    bounds_said,
+    gate,
+    law_untested,
+)
 from .caveats import family_text, joint_separation, latent_levels, masing_separation, unphysical_places_text
 from .locate import adequacy_p
 from .result import NamedTerm, Status
@@ -97,8 +107,9 @@ def plain_adequate(groups: Sequence[Any], terms: Sequence[Any], steps: Sequence[
 
 
 def final_adequate(groups: Sequence[Any], alpha: float) -> bool:
-    """Whether the final model passes its adequacy test (at ``alpha``, as diagnose's) at every condition."""
-    return all(math.isfinite(p) and p >= alpha for p in (p_of(g, g.current) for g in groups))
+    """Whether the final model (named terms) passes its adequacy test (:func:`.adequacy.passes`, the one rule
+    diagnose's status uses) at every condition."""
+    return all(adequacy.passes(p_of(g, g.current), alpha, named=True) for g in groups)
 
 
 def unphysical(terms: Sequence[Any], clearly: bool = True) -> list[NamedTerm]:
