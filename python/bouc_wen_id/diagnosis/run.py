@@ -357,29 +357,28 @@ def diagnose(
 
     with fit_share.scope() as fits:  # its candidate fits, kept for diagnose_across (fit_share.py)
         if not speed.ONE_BLAS_THREAD:
-            d = _diagnose(experiments, candidates, alpha, held_out_test, (y_unit, u_unit), progress)
+            d, items, units = _diagnose(
+                experiments, candidates, alpha, held_out_test, (y_unit, u_unit), progress
+            )
         else:
             with _threads.one_blas_thread():  # issue 18 item 4: BLAS threads compete with the core's
-                d = _diagnose(experiments, candidates, alpha, held_out_test, (y_unit, u_unit), progress)
+                d, items, units = _diagnose(
+                    experiments, candidates, alpha, held_out_test, (y_unit, u_unit), progress
+                )
     d = borderline.qualified(replace(d, fits=fits), d.settings["alpha"])  # a weak remainder's p-value
     if value_stability:  # a named value that moves under preprocessing is not a finding (value_stability.py)
-        d = _value_checked(d, experiments, (y_unit, u_unit))
+        d = _value_checked(d, items, units)
     return readings.qualified(d, d.named_terms, d.alternatives)  # the headline's words
 
 
-def _value_checked(d: Diagnosis, experiments: Any, units: tuple[str, str]) -> Diagnosis:
-    """``d`` with its named values checked across preprocessing variants, in the units it reports."""
-    import warnings
-
+def _value_checked(d: Diagnosis, items: list[Any], units: tuple[str, str]) -> Diagnosis:
+    """``d`` with its named values checked across preprocessing variants of ``items`` (the experiments as
+    :func:`_diagnose` harmonised them), in the units it reports."""
     from . import value_stability
 
     if not d.named:
         return d
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        joined = harmonise(_as_list(experiments), stacklevel=4)
-    units = (units[0] or joined.units.get("y", ""), units[1] or joined.units.get("u", ""))
-    d = value_stability.checked(d, joined.items, units)
+    d = value_stability.checked(d, items, units)
     return replace(d, seconds=d.seconds + float(value_stability.seconds(d) or 0.0))
 
 
@@ -390,8 +389,9 @@ def _diagnose(
     held_out_test: bool,
     units: tuple[str, str],
     progress: Progress,
-) -> Diagnosis:
-    """:func:`diagnose` itself (its arguments as given)."""
+) -> tuple[Diagnosis, list[Any], tuple[str, str]]:
+    """:func:`diagnose` itself (its arguments as given), with the experiments in one unit per quantity
+    (:func:`harmonise`'s items, before any preprocessing) and the units the diagnosis reports."""
     t0 = time.perf_counter()
     report = reporter(progress)
     cands = _check_candidates(candidates)
@@ -420,7 +420,8 @@ def _diagnose(
             _as_list(experiments), level, wander, d, lambda xs: _with_wander(list(xs), *args, None)
         )
     d = left_out.qualified(d)  # the records it was judged on, and those left out, in the headline
-    return replace(d, seconds=time.perf_counter() - t0, notes=(*joined.notes, *d.notes))
+    d = replace(d, seconds=time.perf_counter() - t0, notes=(*joined.notes, *d.notes))
+    return d, list(joined.items), units
 
 
 def _as_list(experiments: Any) -> list[Any]:
