@@ -21,6 +21,8 @@ through the same functions (no copies):
   :mod:`.rate_rival` at each condition where it is present);
 - **"law untested"** (:func:`.law_untested.across_text`): a named term carried by fewer than two of a
   condition's experiments where it is present;
+- a loop-shape term's **one-amplitude caveat** (:func:`.one_amplitude.across_text`): named when at no
+  condition a frequency carries two distinct amplitudes;
 - **a rival within the uncertainty of the chosen term's improvement is a near-tied reading**
   (:func:`tied`, through :func:`.select._tied` on the improvements and costs summed over the conditions).
 
@@ -47,6 +49,7 @@ from . import (
     bounds_said,
     gate,
     law_untested,
+    one_amplitude,
 )
 from .caveats import family_text, joint_separation, latent_levels, masing_separation, unphysical_places_text
 from .locate import adequacy_p
@@ -219,6 +222,7 @@ def clauses(
     twins = across_twin.twins(groups, steps, [t.term for t in named], separate=False)
     text += unphysical_places_text(across_twin.filtered(groups, steps, twins), as_said)
     text += law_untested.across_text(named, [(str(g.label), g.exps) for g in groups])
+    text += one_amplitude.across_text(named, [g.exps for g in groups])  # a loop-shape term, one amplitude
     # Play's and the spring on x's caveats hang on whether every experiment saturates where the term acts:
     # a condition where it is absent says nothing of it (a spring on x present only at a saturating
     # condition lost its Masing caveat to the other condition's levels below saturation).
