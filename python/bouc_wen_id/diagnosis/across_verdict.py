@@ -47,6 +47,7 @@ from . import (
     beside,
     beyond_range,
     bounds_said,
+    final_terms,
     gate,
     law_untested,
     one_amplitude,
@@ -216,7 +217,9 @@ def clauses(
         text += partly_text(groups, alpha)
     text += bounds_said.across_text(groups, status) + _unphysical_text(unphysical(partial))
     text += beyond_range.text(unphysical(partial, clearly=False))
-    text += _law_text(steps) + beside.text(steps)
+    text += (
+        _law_text(steps) + beside.text(steps) + final_terms.text(steps, named)
+    )  # dropped (across_final.py)
     as_said = [NamedTerm(t.term, t.symbol, math.nan, math.nan, t.unit) for t in named if t.term in TERMS]
     # another place that fits only non-physically, unless a physical twin stands for it (across_twin.py)
     twins = across_twin.twins(groups, steps, [t.term for t in named], separate=False)
