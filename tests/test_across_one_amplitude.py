@@ -68,3 +68,25 @@ def test_a_second_amplitude_at_a_condition_lifts_the_caveat_across(monkeypatch: 
     a = _across(_groups((1.5, 3.0), (4003, 4004), monkeypatch))
     assert T.Pinching.kind in a.named, a.verdict
     assert O.ONE_AMPLITUDE_MARK not in a.verdict, a.verdict
+
+
+def test_an_iwan_loop_named_pinching_across_carries_the_caveat(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Data made another way: the bench's outside Iwan loop (distributed stops) through a first-order G with
+    AR(1) output noise (phi 0.7, studies/outside_design.py's), three frequencies at one amplitude, 30x, two
+    conditions (seeds 3801, 3802). Before across40: "explained" by pinching, no rival reading."""
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "studies"))
+    od: Any = importlib.import_module("outside_design")
+    monkeypatch.setattr(gen, "FREQ_FACTORS", (0.5, 1.0, 2.0))
+    monkeypatch.setattr(gen, "X_LEVELS", (3.0,))
+    monkeypatch.setattr(gen, "recordings", od.ar1_recordings(0.7))
+    plant = gen.make_plant
+    monkeypatch.setattr(
+        gen, "make_plant", lambda seed, _s=None, low_amplitude=False: plant(seed, "first", low_amplitude)
+    )
+    groups = [gen.make_case("outside", "iwan", "", 30.0, s).recordings for s in (3801, 3802)]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        a = bw.diagnose_across(groups, [0.0, 1.0])
+    assert T.Pinching.kind in a.named, a.verdict
+    assert O.ONE_AMPLITUDE_MARK in headline(a.verdict), a.verdict
+    assert "not the only reading" in readings.status_text(a.status, a.readings), a.verdict
