@@ -21,6 +21,7 @@ import pytest
 from bouc_wen_id import terms as T
 from bouc_wen_id.diagnosis import (
     across,
+    across_final,
     across_pairs,
     across_rules,
     across_verdict,
@@ -77,6 +78,10 @@ def _select(
     monkeypatch.setattr(speed, "MEMO_FITS", False)
     monkeypatch.setattr(select, "fit_with", lambda exps, base, t, sub: _fit((*base.params.terms, t), costs))
     monkeypatch.setattr(select, "wide_fit", lambda exps, base, t, sub, first: first)
+    # The final check's refits without a named term (across_final.py), from the same cost table.
+    drop = lambda par, t: SimpleNamespace(terms=tuple(x for x in par.terms if x != t))  # noqa: E731
+    monkeypatch.setattr(across_final, "without", drop)
+    monkeypatch.setattr(across_final, "fit_from", lambda exps, par, sub: _fit(par.terms, costs))
     law = _law(holds, alone)
     for mod in (select, pairs, across_rules):
         monkeypatch.setattr(mod, "element_law_test", law)

@@ -51,6 +51,7 @@ from ..terms import TERMS, Distortion
 from ..units import harmonise_groups
 from ..validation import real_number
 from . import (
+    across_final,
     across_pairs,
     across_revisit,
     across_rules,
@@ -315,7 +316,8 @@ def _select(
         for g, f in zip(groups, chosen.fits):
             assert f is not None
             g.current = f
-    return across_revisit.after(groups, steps, alpha, held, JointTrial)  # diagnose's revisits, across
+    steps = across_revisit.after(groups, steps, alpha, held, JointTrial)  # diagnose's revisits, across
+    return across_final.check(groups, steps, alpha)  # each named term still needed (final_terms.py)
 
 
 # ------------------------------------------------------------------------------------------------------

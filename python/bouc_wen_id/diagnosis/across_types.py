@@ -137,6 +137,9 @@ class JointStep:
     pairs: tuple[Any, ...] = ()
     #: The model the step started from at every condition (an across_pairs.JointFit: the revisits' base).
     base: Any = field(default=None, repr=False, compare=False)
+    #: Named terms dropped by the final check (across_final.py: each fails its own joint test in the final
+    #: model), with their p adj; on the last step.
+    unneeded: tuple[tuple[str, float], ...] = ()
 
     def to_dict(self) -> dict[str, Any]:
         out: dict[str, Any] = {
@@ -156,6 +159,8 @@ class JointStep:
         )
         if self.pairs:
             out["pairs"] = [p.to_dict() for p in self.pairs]
+        if self.unneeded:  # the final check dropped a named term (across_final.py)
+            out["unneeded"] = [{"term": t, "p_adjusted": p} for t, p in self.unneeded]
         return out
 
 

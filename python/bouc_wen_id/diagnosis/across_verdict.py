@@ -21,6 +21,8 @@ through the same functions (no copies):
   :mod:`.rate_rival` at each condition where it is present);
 - **"law untested"** (:func:`.law_untested.across_text`): a named term carried by fewer than two of a
   condition's experiments where it is present;
+- a loop-shape term's **one-amplitude caveat** (:func:`.one_amplitude.across_text`): named when at no
+  condition a frequency carries two distinct amplitudes;
 - **a rival within the uncertainty of the chosen term's improvement is a near-tied reading**
   (:func:`tied`, through :func:`.select._tied` on the improvements and costs summed over the conditions).
 
@@ -45,8 +47,10 @@ from . import (
     beside,
     beyond_range,
     bounds_said,
+    final_terms,
     gate,
     law_untested,
+    one_amplitude,
 )
 from .caveats import family_text, joint_separation, latent_levels, masing_separation, unphysical_places_text
 from .locate import adequacy_p
@@ -213,12 +217,15 @@ def clauses(
         text += partly_text(groups, alpha)
     text += bounds_said.across_text(groups, status) + _unphysical_text(unphysical(partial))
     text += beyond_range.text(unphysical(partial, clearly=False))
-    text += _law_text(steps) + beside.text(steps)
+    text += (
+        _law_text(steps) + beside.text(steps) + final_terms.text(steps, named)
+    )  # dropped (across_final.py)
     as_said = [NamedTerm(t.term, t.symbol, math.nan, math.nan, t.unit) for t in named if t.term in TERMS]
     # another place that fits only non-physically, unless a physical twin stands for it (across_twin.py)
     twins = across_twin.twins(groups, steps, [t.term for t in named], separate=False)
     text += unphysical_places_text(across_twin.filtered(groups, steps, twins), as_said)
     text += law_untested.across_text(named, [(str(g.label), g.exps) for g in groups])
+    text += one_amplitude.across_text(named, [g.exps for g in groups])  # a loop-shape term, one amplitude
     # Play's and the spring on x's caveats hang on whether every experiment saturates where the term acts:
     # a condition where it is absent says nothing of it (a spring on x present only at a saturating
     # condition lost its Masing caveat to the other condition's levels below saturation).

@@ -60,8 +60,24 @@ def untested(exps: Sequence[Any]) -> bool:
 def text(named: Sequence[Any], exps: Sequence[Any]) -> str:
     """The verdict's clause for the loop-shape terms among ``named`` when ``exps`` cannot test their
     amplitude law (:func:`untested`); empty otherwise."""
+    return _clause(named, exps) if untested(exps) else ""
+
+
+def across_text(named: Sequence[Any], by_condition: Sequence[Sequence[Any]]) -> str:
+    """:func:`text` for the diagnosis across conditions (:mod:`.across_verdict`): the clause when at no
+    condition a frequency carries two distinct amplitudes (``by_condition``: each condition's experiments).
+    Two amplitudes at two conditions do not test the law: the term's value is free per condition, so the
+    condition may have moved it."""
+    if not by_condition or not all(untested(exps) for exps in by_condition):
+        return ""
+    return _clause(named, [e for exps in by_condition for e in exps])
+
+
+def _clause(named: Sequence[Any], exps: Sequence[Any]) -> str:
+    """The clause of :func:`text` for the loop-shape terms among ``named``, its amplitude law untested on
+    ``exps`` (the caller's check); empty when none is named."""
     shape = [t for t in named if t.term in LOOP_SHAPE]
-    if not shape or not untested(exps):
+    if not shape or not exps:
         return ""
     labels = " and ".join(TERMS[t.term].place_label() for t in shape)
     top = max(abs(float(e.amplitude)) for e in exps)
