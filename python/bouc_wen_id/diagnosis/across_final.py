@@ -19,54 +19,44 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import replace
 from typing import Any, Optional
 
-from .final_terms import _named_at
+from .final_terms import prune
 from .fitting import fit_from
 from .restarts import without
 from .select import dof_of, pooled_f
 
 
-def drop_p(groups: Sequence[Any], term: str, n_trials: int) -> tuple[float, Optional[list[Any]]]:
-    """``(p adj, refits)``: the combined F test of dropping ``term`` from every condition's current model,
-    Bonferroni over ``n_trials`` (its step's candidates), with the refits without it (None, and p 0, when
-    one fails: the term stays)."""
-    fits = [fit_from(g.sx, without(g.current.params, term), g.substeps) for g in groups]
-    reduced = [r for r in fits if r is not None and math.isfinite(r.cost)]
+def drop_p(
+    groups: Sequence[Any], fits: Sequence[Any], term: str, n_trials: int
+) -> tuple[float, Optional[list[Any]]]:
+    """``(p adj, refits)``: the combined F test of dropping ``term`` from every condition's model (``fits``,
+    one per group), Bonferroni over ``n_trials`` (its step's candidates), with the refits without it (None,
+    and p 0, when one fails: the term stays)."""
+    refits = [fit_from(g.sx, without(f.params, term), g.substeps) for g, f in zip(groups, fits)]
+    reduced = [r for r in refits if r is not None and math.isfinite(r.cost)]
     if len(reduced) < len(groups):
         return 0.0, None
-    q = max(len(groups[0].current.params.terms) - len(reduced[0].params.terms), 1)
-    imp = [r.cost - g.current.cost for r, g in zip(reduced, groups)]
-    d1 = [dof_of(g.sx, g.current) for g in groups]
-    _, p = pooled_f(imp, [g.current.cost for g in groups], d1, q)
-    p = p if math.isfinite(p) else 1.0
+    q = max(len(fits[0].params.terms) - len(reduced[0].params.terms), 1)
+    imp = [r.cost - f.cost for r, f in zip(reduced, fits)]
+    d1 = [dof_of(g.sx, f) for g, f in zip(groups, fits)]
+    _, p = pooled_f(imp, [f.cost for f in fits], d1, q)
+    p = p if math.isfinite(p) else 1.0  # a refit at least as good: the term adds nothing (final_terms.drop_p)
     return min(1.0, p * max(n_trials, 1)), reduced
 
 
 def check(groups: Sequence[Any], steps: list[Any], alpha: float) -> list[Any]:
     """``steps`` with every named term that fails its own joint test in the final model dropped (module
-    docstring); the groups' current models refitted without it; the dropped terms on the last step."""
-    at: dict[str, Any] = dict(_named_at(steps))  # joint steps: chosen, pair, trials and level read
-    dropped: list[tuple[str, float]] = []
-    while True:
-        tested = [t for t in groups[0].current.params.terms if t in at]
-        if len(tested) < 2:  # a single named term was tested on this very model at its step
-            break
-        worst: Optional[tuple[float, str, list[Any]]] = None
-        for t in tested:
-            st = at[t]
-            p, reduced = drop_p(groups, t, len(st.trials))
-            level = st.level if math.isfinite(st.level) else alpha
-            if reduced is not None and p >= level and (worst is None or p > worst[0]):
-                worst = (p, t, reduced)
-        if worst is None:
-            break
-        dropped.append((worst[1], worst[0]))
-        for g, f in zip(groups, worst[2]):
-            g.current = f
-    if dropped:
-        steps = [*steps[:-1], replace(steps[-1], unneeded=tuple(dropped))]
+    docstring, :func:`.final_terms.prune`'s loop); the groups' current models refitted without it; the
+    dropped terms on the last step."""
+
+    def drop(fits: list[Any], term: str, step: Any) -> tuple[float, float, Optional[list[Any]]]:
+        p, reduced = drop_p(groups, fits, term, len(step.trials))
+        return p, (step.level if math.isfinite(step.level) else alpha), reduced
+
+    fits, steps = prune([g.current for g in groups], steps, lambda fs: fs[0].params.terms, drop)
+    for g, f in zip(groups, fits):
+        g.current = f
     return steps
 
 

@@ -217,9 +217,8 @@ def clauses(
         text += partly_text(groups, alpha)
     text += bounds_said.across_text(groups, status) + _unphysical_text(unphysical(partial))
     text += beyond_range.text(unphysical(partial, clearly=False))
-    text += (
-        _law_text(steps) + beside.text(steps) + final_terms.text(steps, named)
-    )  # dropped (across_final.py)
+    text += _law_text(steps) + beside.text(steps)
+    text += final_terms.text(steps, named)  # terms the final check dropped (across_final.py)
     as_said = [NamedTerm(t.term, t.symbol, math.nan, math.nan, t.unit) for t in named if t.term in TERMS]
     # another place that fits only non-physically, unless a physical twin stands for it (across_twin.py)
     twins = across_twin.twins(groups, steps, [t.term for t in named], separate=False)

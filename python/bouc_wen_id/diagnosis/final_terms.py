@@ -20,7 +20,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import replace
-from typing import Optional
+from typing import Any, Callable, Optional, TypeVar
 
 from ..augmented import AugExperiment, AugFit
 from ..terms import TERMS
@@ -29,10 +29,14 @@ from .gate import targeted_level
 from .restarts import without
 from .select import ALPHA, BOUNDARY_TERMS, Step, dof_of, f_test
 
+#: The model the check prunes: one group's fit, or every condition's (across_final.py).
+S = TypeVar("S")
 
-def _named_at(steps: Sequence[Step]) -> dict[str, Step]:
-    """Each term a step named (alone or in a pair), with the step (the last that named it)."""
-    out: dict[str, Step] = {}
+
+def _named_at(steps: Sequence[Any]) -> dict[str, Any]:
+    """Each term a step named (alone or in a pair), with the step (the last that named it); steps of one
+    group (:class:`.select.Step`) or joint ones (``across_types.JointStep``)."""
+    out: dict[str, Any] = {}
     for st in steps:
         for t in (st.chosen, *st.pair):
             if t:
@@ -64,24 +68,43 @@ def check(
 ) -> tuple[AugFit, list[Step]]:
     """``(final, steps)`` with every named term that fails its own test in the final model dropped (module
     docstring), the model refitted without it; the dropped terms and their p adj on the last step."""
+
+    def drop(fit: AugFit, term: str, step: Step) -> tuple[float, float, Optional[AugFit]]:
+        p, reduced = drop_p(exps, fit, term, step, substeps)
+        return p, level_of(step, alpha), reduced
+
+    return prune(final, steps, lambda f: f.params.terms, drop)
+
+
+def prune(
+    state: S,
+    steps: list[Any],
+    terms_of: Callable[[S], Sequence[str]],
+    drop: Callable[[S, str, Any], tuple[float, float, Optional[S]]],
+) -> tuple[S, list[Any]]:
+    """The check's loop (module docstring), for one group's fit (:func:`check`) or every condition's
+    (across_final.py): ``state`` the model, ``terms_of`` its terms, ``drop(state, term, step)`` the p adj of
+    dropping a named ``term``, the level its ``step`` tested it at, and the model without it (None: the term
+    stays). The worst failing term is dropped and the rest tested again; ``(state, steps)`` with the dropped
+    terms and their p adj on the last step."""
     at = _named_at(steps)
     dropped: list[tuple[str, float]] = []
     while True:
-        tested = [t for t in final.params.terms if t in at]
+        tested = [t for t in terms_of(state) if t in at]
         if len(tested) < 2:  # a single named term was tested on this very model at its step
             break
-        worst: Optional[tuple[float, str, AugFit]] = None
+        worst: Optional[tuple[float, str, S]] = None
         for t in tested:
-            p, reduced = drop_p(exps, final, t, at[t], substeps)
-            if reduced is not None and p >= level_of(at[t], alpha) and (worst is None or p > worst[0]):
+            p, level, reduced = drop(state, t, at[t])
+            if reduced is not None and p >= level and (worst is None or p > worst[0]):
                 worst = (p, t, reduced)
         if worst is None:
             break
         dropped.append((worst[1], worst[0]))
-        final = worst[2]
+        state = worst[2]
     if dropped:
         steps = [*steps[:-1], replace(steps[-1], unneeded=tuple(dropped))]
-    return final, steps
+    return state, steps
 
 
 def text(steps: Sequence[Step], named: Sequence[object]) -> str:
@@ -98,4 +121,4 @@ def text(steps: Sequence[Step], named: Sequence[object]) -> str:
     )
 
 
-__all__ = ["check", "text", "drop_p", "level_of"]
+__all__ = ["check", "text", "drop_p", "level_of", "prune"]
