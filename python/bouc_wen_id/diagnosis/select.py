@@ -824,6 +824,10 @@ def forward_select(
         c0 = current.cost
         d0 = dof_of(exps, current)
         excess = max(c0 - d0, 0.0)
+        # No excess in the fit's own cost: the targeted step, or a model the adequacy test fails on a statistic
+        # the cost does not show (a coloured noise weighed harmonic by harmonic, adequacy_chi2.py): a term that
+        # removes cost explains all there is. A refitted base that passes has nothing to explain.
+        no_excess = 1.0 if first or (excess == 0.0 and not adequate(current)) else 0.0
         trials = []
         for k, t in enumerate(remaining):
             if on_trial is not None:  # progress: on_trial(step, term, index, count)
@@ -838,7 +842,7 @@ def forward_select(
             padj = min(1.0, p * len(remaining)) if math.isfinite(p) else math.nan
             # No excess at all (the targeted step): a term that removes cost explains all there is; a term
             # cannot explain more than all of it (capped: the rest of its improvement is noise).
-            share = min((c0 - f.cost) / excess, 1.0) if excess > 0 else (1.0 if first else 0.0)
+            share = min((c0 - f.cost) / excess, 1.0) if excess > 0 else no_excess
             ok = bool(math.isfinite(padj) and padj < level and share >= MATERIAL_SHARE) and _admissible(f, t)
             ok = ok and not at_null(f, t) and away_from_null(f, t, level, f.cost / max(d1, 1))
             trials.append(Trial(t, f.cost, c0 - f.cost, stat, p, padj, share, ok, fit=f))
