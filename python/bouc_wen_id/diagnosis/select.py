@@ -824,9 +824,9 @@ def forward_select(
         c0 = current.cost
         d0 = dof_of(exps, current)
         excess = max(c0 - d0, 0.0)
-        # No excess in the fit's own cost: the targeted step, or a model the adequacy test fails on a statistic
-        # the cost does not show (a coloured noise weighed harmonic by harmonic, adequacy_chi2.py): a term that
-        # removes cost explains all there is. A refitted base that passes has nothing to explain.
+        # No excess in the fit's own cost: the targeted step, or a model the adequacy test fails on a
+        # statistic the cost does not show (a coloured noise weighed harmonic by harmonic, adequacy_chi2.py):
+        # a term that removes cost explains all there is. A refitted base that passes has nothing to explain.
         no_excess = 1.0 if first or (excess == 0.0 and not adequate(current)) else 0.0
         trials = []
         for k, t in enumerate(remaining):
