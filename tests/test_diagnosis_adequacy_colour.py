@@ -89,3 +89,32 @@ def test_the_plain_model_of_a_simulated_plant_under_ar1_noise_is_near_one() -> N
     assert 0.6 < d.plain.chi2_dof < 1.6, d.summary()
     assert d.plain.cost / d.plain.dof < 0.5, d.summary()  # the fit's own one-weight cost stays as it was
     assert d.named_terms == (), d.summary()
+
+
+@pytest.mark.parametrize("periods", [10, 20])
+def test_the_weights_are_unbiased_on_white_noise(periods: int) -> None:
+    """``data.adequacy_levels``: on white noise of variance 1 the weights ``1 / level_k`` at the narrow bands
+    (harmonics 1-7: 5 harmonics, ``nu = 10 (N - 3)``) average 1 over 300 records within their sampling
+    spread. Without the band's ``nu / (nu - 2)`` they average ``nu / (nu - 2)``: 1.03 at 10 periods, 1.25 at
+    5 (session 40's first try, whose false alarms this guards against)."""
+    from bouc_wen_id.diagnosis.data import adequacy_levels
+
+    rng = np.random.default_rng([periods, 41])
+    means = []
+    for _ in range(300):
+        lv = adequacy_levels(rng.normal(0.0, 1.0, (periods, P)), 1.0)
+        assert lv.size == P // 2 + 1
+        means.append(float(np.mean(1.0 / lv[1:8])))
+    m, se = float(np.mean(means)), float(np.std(means, ddof=1)) / math.sqrt(len(means))
+    nu = 10.0 * (periods - 3)
+    assert abs(m - 1.0) < 3.0 * se, (m, se)
+    assert abs(m * nu / (nu - 2.0) - 1.0) > 3.0 * se or periods > 10, (m, se)  # the test sees the bias
+
+
+def test_too_few_periods_keep_the_fits_one_weight() -> None:
+    """Below ``MIN_ADEQUACY_PERIODS`` the levels are not estimated (the fit's one weight stays)."""
+    from bouc_wen_id.diagnosis.data import MIN_ADEQUACY_PERIODS, adequacy_levels
+
+    rows = np.random.default_rng(5).normal(0.0, 1.0, (MIN_ADEQUACY_PERIODS - 1, P))
+    assert adequacy_levels(rows, 1.0).size == 0
+    assert adequacy_levels(np.vstack([rows, rows[:1]]), 1.0).size == P // 2 + 1
