@@ -45,6 +45,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
+from functools import partial
 from typing import Any, Optional, Protocol, TypeVar
 
 import numpy as np
@@ -53,7 +54,7 @@ from numpy.typing import NDArray
 from ..augmented import AugExperiment, AugFit, augmented_output
 from ..errors import BudgetExceededError
 from ..terms import TERMS, Stiffness, physical_value
-from . import fit_share, fitting, free_dc, speed
+from . import fit_share, fitting, free_dc, prefetch, speed
 from .beside import only_beside
 from .fitting import best_of, fit_from, fit_own, fit_with, subset
 from .gate import targeted_level
@@ -825,10 +826,10 @@ def forward_select(
         d0 = dof_of(exps, current)
         excess = max(c0 - d0, 0.0)
         trials = []
-        for k, t in enumerate(remaining):
+        fits = prefetch.in_order(partial(fit_term, current), remaining)  # on threads (prefetch.py)
+        for k, (f, t) in enumerate(zip(fits, remaining)):
             if on_trial is not None:  # progress: on_trial(step, term, index, count)
                 on_trial(len(steps) + 1, t, k, len(remaining))
-            f = fit_term(current, t)
             if f is None:
                 trials.append(Trial(t, math.nan, math.nan, math.nan, math.nan, math.nan, math.nan, False))
                 continue
