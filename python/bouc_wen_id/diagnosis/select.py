@@ -705,6 +705,10 @@ def memo_fit_with(exps: Sequence[AugExperiment], substeps: int) -> Callable[[Aug
     return fit_term
 
 
+def _said(on_trial: Callable[[int, str, int, int], None], step: int, count: int, k: int, t: str) -> None:
+    on_trial(step, t, k, count)
+
+
 def step_alternatives(
     exps: Sequence[AugExperiment],
     chosen: Optional[Trial],
@@ -826,10 +830,10 @@ def forward_select(
         d0 = dof_of(exps, current)
         excess = max(c0 - d0, 0.0)
         trials = []
-        fits = prefetch.in_order(partial(fit_term, current), remaining)  # on threads (prefetch.py)
-        for k, (f, t) in enumerate(zip(fits, remaining)):
-            if on_trial is not None:  # progress: on_trial(step, term, index, count)
-                on_trial(len(steps) + 1, t, k, len(remaining))
+        # On threads (prefetch.py); progress: on_trial(step, term, index, count) before each result.
+        said = None if on_trial is None else partial(_said, on_trial, len(steps) + 1, len(remaining))
+        fits = prefetch.in_order(partial(fit_term, current), remaining, said)
+        for t, f in zip(remaining, fits):
             if f is None:
                 trials.append(Trial(t, math.nan, math.nan, math.nan, math.nan, math.nan, math.nan, False))
                 continue
