@@ -58,16 +58,18 @@ def test_the_callers_warning_filters_survive_threads_that_silence_their_own(
     barrier = threading.Barrier(4)
 
     def fit(t: str) -> str:
+        k = "abcd".index(t)
+        time.sleep(0.02 * k)  # enter in order a, b, c, d ...
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            barrier.wait(timeout=5)  # all four inside at once: their exits interleave
-            time.sleep(0.01 * "abcd".index(t))
+            barrier.wait(timeout=5)
+            time.sleep(0.02 * k)  # ... and leave in the same order: b, c, d restore lists a put in place
         return t
 
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         before = list(warnings.filters)
-        assert prefetch.in_order(fit, ["d", "c", "b", "a"]) == ["d", "c", "b", "a"]
+        assert prefetch.in_order(fit, ["a", "b", "c", "d"]) == ["a", "b", "c", "d"]
         assert warnings.filters == before
         with pytest.raises(UserWarning):
             warnings.warn("still raised", UserWarning, stacklevel=1)
