@@ -45,6 +45,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
+from functools import partial
 from typing import Any, Optional, Protocol, TypeVar
 
 import numpy as np
@@ -53,7 +54,7 @@ from numpy.typing import NDArray
 from ..augmented import AugExperiment, AugFit, augmented_output
 from ..errors import BudgetExceededError
 from ..terms import TERMS, Stiffness, physical_value
-from . import fit_share, fitting, free_dc, speed
+from . import fit_share, fitting, free_dc, prefetch, speed
 from .beside import only_beside
 from .fitting import best_of, fit_from, fit_own, fit_with, subset
 from .gate import targeted_level
@@ -704,6 +705,10 @@ def memo_fit_with(exps: Sequence[AugExperiment], substeps: int) -> Callable[[Aug
     return fit_term
 
 
+def _said(on_trial: Callable[[int, str, int, int], None], step: int, count: int, k: int, t: str) -> None:
+    on_trial(step, t, k, count)
+
+
 def step_alternatives(
     exps: Sequence[AugExperiment],
     chosen: Optional[Trial],
@@ -829,10 +834,10 @@ def forward_select(
         # a term that removes cost explains all there is. A refitted base that passes has nothing to explain.
         no_excess = 1.0 if first or (excess == 0.0 and not adequate(current)) else 0.0
         trials = []
-        for k, t in enumerate(remaining):
-            if on_trial is not None:  # progress: on_trial(step, term, index, count)
-                on_trial(len(steps) + 1, t, k, len(remaining))
-            f = fit_term(current, t)
+        # On threads (prefetch.py); progress: on_trial(step, term, index, count) before each result.
+        said = None if on_trial is None else partial(_said, on_trial, len(steps) + 1, len(remaining))
+        fits = prefetch.in_order(partial(fit_term, current), remaining, said)
+        for t, f in zip(remaining, fits):
             if f is None:
                 trials.append(Trial(t, math.nan, math.nan, math.nan, math.nan, math.nan, math.nan, False))
                 continue
