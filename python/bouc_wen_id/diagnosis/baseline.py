@@ -187,7 +187,7 @@ def removed(items: Any, wander: Any) -> Any:
     from ..model import Recording
     from .zero_drift import detrended, lab_detrended
 
-    if wander is None:
+    if wander is None or getattr(wander, "per_record", False):  # record_zeros.py: the records as they are
         return items
     seq = list(items) if isinstance(items, (list, tuple)) else [items]
     slopes = getattr(wander, "slopes", None)  # a zero drifting in a straight line (zero_drift.py)

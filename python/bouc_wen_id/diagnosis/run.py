@@ -45,6 +45,7 @@ from . import (
     one_amplitude,
     output_clip,
     pairs,
+    record_zeros,
     resolution,
     speed,
     steady_select,
@@ -412,6 +413,8 @@ def _diagnose(
     wander = baseline.detect(experiments, level) or zero_drift.detect(experiments, level)
     args = (cands, float(alpha), held_out_test, units, report)
     d = _with_wander(experiments, *args, wander)
+    if wander is None:  # one offset refused for its law: each recording's own zero (record_zeros.py)
+        d = record_zeros.resolved(d, level, lambda z: _with_wander(experiments, *args, z))
     d = replace(d, verdict=d.verdict + output_clip.clause(_as_list(experiments)))  # output_clip.py
     if line_notes:
         d = replace(d, verdict=d.verdict + lines.clause(line_notes), notes=(*line_notes, *d.notes))
@@ -441,6 +444,7 @@ def _with_wander(
     """The diagnosis with ``wander`` (a wandering or drifting zero, or None) taken out of the records."""
     items, notes = _settled(baseline.removed(experiments, wander))
     exps, qnotes = _noise_floors(items, prepare(items))
+    exps = record_zeros.freed(exps) if getattr(wander, "per_record", False) else exps
     # Coloured noise (data.py) and the wander's note, or why a short record's wander was not tested.
     short = None if wander else baseline.short_note(experiments)
     notes = [*notes, *colour_notes(exps), *([wander.note()] if wander else [short] if short else [])]
