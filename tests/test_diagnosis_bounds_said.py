@@ -101,3 +101,52 @@ def test_the_mu_clause_does_not_claim_the_loops_ask_for_a_smaller_mu() -> None:
     """A true mu = 1 (the classic Bouc-Wen) sits at the bracket's end whenever something else is missing."""
     tail = bounds_said.apply(bounds_said.Beyond(mu_face="lower", mu=1.0), "unexplained", (), (), 0.3)[3]
     assert "ask for" not in tail and "either the true exponent is there" in tail
+
+
+def test_a_soft_loop_leads_with_its_shape_not_with_a_negative_mass() -> None:
+    """Review 40 item 2 (mu41): a mu = 0.7 loop through a resonant G and a delay led the verdict with "inertia
+    ... m = -5.8e-05 ... a negative mass ... or an input recorded with the wrong sign or scale" (48 se). With
+    mu held at the lower end of its bracket the loop's shape leads; the out-of-range value follows as what
+    may stand in for it. Data: the tests' own simulator (wiener_sim.py), white noise 1 %, two amplitudes."""
+    import numpy as np
+    from wiener_sim import SETTLE, simulate
+
+    freqs, amps = np.array([1.0, 2.0, 4.0, 1.0, 2.0, 4.0]), np.array([0.6, 0.6, 0.6, 1.5, 1.5, 1.5])
+    h, u, w = simulate(freqs, amps, mu=0.7)
+    rng = np.random.default_rng(21)
+    recs = []
+    for i, f in enumerate(freqs):
+        t = np.arange(w[i].size) * h[i]
+        y = w[i] + rng.normal(0.0, 0.01 * float(np.sqrt(np.mean(w[i] ** 2))), t.size)
+        recs.append(
+            bw.Recording(
+                t, u[i], y, amplitude=float(amps[i]), frequency=2 * math.pi * float(f), settle_periods=SETTLE
+            )
+        )
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        d = bw.diagnose(recs)
+    assert d.status != "explained" and not d.named, d.verdict
+    head = d.verdict.split("; ")[0]
+    assert "negative" not in head and "wrong sign" not in head, d.verdict
+    assert head.startswith(bounds_said.SOFT_HEAD), d.verdict  # before: the negative mass led
+    assert "a negative mass" in d.verdict.split(bounds_said.MU_MARK)[1], d.verdict  # said after, as stand-in
+    assert "softer than mu = 1 allows" in d.verdict and "sharper" not in d.verdict, d.verdict
+
+
+def test_the_soft_head_puts_an_out_of_range_candidate_after_the_mu_clause() -> None:
+    """The rule: mu held at its lower end and a candidate beyond its range that beats the final model."""
+
+    class _Trial:
+        share, p_adjusted = 0.3, 1e-20
+
+    found = ((NamedTerm(T.InertiaX.kind, "m", -5.8e-5, 1.2e-6, "s^2"), _Trial()),)
+    b = bounds_said.Beyond(found=found, beats_final=True, mu_face="lower", mu=1.0)  # type: ignore[arg-type]
+    status, named, head, tail = bounds_said.apply(b, "partly explained", (), (), 0.2)
+    assert status == "unexplained" and named == ()
+    assert head.startswith(bounds_said.SOFT_HEAD) and "negative" not in head
+    assert tail.index(bounds_said.MU_MARK) < tail.index("a negative mass"), tail
+    # Inside the bracket the out-of-range candidate leads, as before.
+    inside = bounds_said.Beyond(found=found, beats_final=True, mu=1.4)  # type: ignore[arg-type]
+    head2 = bounds_said.apply(inside, "partly explained", (), (), 0.2)[2]
+    assert head2.startswith("not explained within the terms' physical ranges") and "a negative mass" in head2

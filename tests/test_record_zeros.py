@@ -19,41 +19,7 @@ from typing import Any
 import bouc_wen_id as bw
 import numpy as np
 import pytest
-
-P = 128
-WN, ZETA, DELAY = 2 * math.pi * 6.0, 0.25, 0.004  # G = WN^2 / (s^2 + 2 ZETA WN s + WN^2) e^{-s DELAY}
-BETA, GAMMA, MU = 0.5, 0.3, 1.5
-SETTLE, PERIODS = 8, 24
-
-
-def _simulate(freqs: np.ndarray, amps: np.ndarray, delta: float) -> tuple[Any, Any, Any]:
-    """(h, u, w) per experiment: ``P`` samples a period, four RK4 steps a sample; ``delta`` the asymmetry
-    (Song & Der Kiureghian's ``delta sgn(xdot w)`` term added to beta, as the library's asymmetry term)."""
-    om = 2 * math.pi * freqs
-    h = 2 * math.pi / om / P
-    n = (SETTLE + PERIODS) * P
-
-    def rate(t: np.ndarray, s: np.ndarray) -> np.ndarray:
-        x, v, w = s
-        aw = np.abs(w)
-        u = amps * np.cos(om * (t - DELAY))
-        dw = v - (
-            BETA * np.abs(v) * aw ** (MU - 1) * w + GAMMA * v * aw**MU + delta * v * aw**MU * np.sign(w)
-        )
-        return np.array([v, WN**2 * (u - x) - 2 * ZETA * WN * v, dw])
-
-    s, t, ws = np.zeros((3, om.size)), np.zeros(om.size), np.zeros((n, om.size))
-    for k in range(n):
-        ws[k] = s[2]
-        hh = h / 4
-        for _ in range(4):
-            k1 = rate(t, s)
-            k2 = rate(t + hh / 2, s + hh / 2 * k1)
-            k3 = rate(t + hh / 2, s + hh / 2 * k2)
-            k4 = rate(t + hh, s + hh * k3)
-            s, t = s + hh / 6 * (k1 + 2 * k2 + 2 * k3 + k4), t + hh
-    tt = np.arange(n)[:, None] * h[None, :]
-    return h, (amps * np.cos(om * tt)).T, ws.T
+from wiener_sim import SETTLE, simulate
 
 
 def _recordings(
@@ -61,7 +27,7 @@ def _recordings(
 ) -> list[Any]:
     freqs = np.array([2.0, 4.0, 6.0, 8.0])
     a = np.full(freqs.size, 1.5) if amps is None else np.asarray(amps, dtype=np.float64)
-    h, u, w = _simulate(freqs, a, delta)
+    h, u, w = simulate(freqs, a, delta)
     rng = np.random.default_rng(seed)
     out = []
     for i, f in enumerate(freqs):

@@ -157,6 +157,30 @@ def _suggests(term: str) -> str:
 
 
 def _found_text(b: Beyond, fraction: float, kept: Sequence[NamedTerm]) -> str:
+    ranges, what, instead = _found_parts(b, fraction, kept)
+    return f"not explained{ranges}: {what}{instead}; "
+
+
+#: The words that open the verdict when mu is held at the lower end of its bracket beside a candidate beyond
+#: its range (:func:`apply`): the loop's shape leads, the out-of-range value follows as its possible stand-in.
+SOFT_HEAD = "not explained: the loops may be"
+
+
+def _soft_head(b: Beyond) -> str:
+    """The headline when the final fit holds mu at the lower end of its bracket and a candidate beyond its
+    range is what would explain most (mu41; review 40 item 2: a mu = 0.7 loop through a resonant G led with
+    a 48-se negative mass and "an input recorded with the wrong sign or scale")."""
+    return f"{SOFT_HEAD} {SOFTER}, a shape outside the model (mu held at {b.mu:.3g}, its lower end); "
+
+
+def _stand_in_text(b: Beyond, fraction: float, kept: Sequence[NamedTerm]) -> str:
+    """The out-of-range candidates said after the mu clause, as what may stand in for the loop's shape."""
+    _, what, instead = _found_parts(b, fraction, kept)
+    return f"; beyond a term's physical range, what may stand in for that shape: {what}{instead}"
+
+
+def _found_parts(b: Beyond, fraction: float, kept: Sequence[NamedTerm]) -> tuple[str, str, str]:
+    """(" within the terms' physical ranges" or "", the candidates said, the kept terms' clause or "")."""
     twins = (*b.twins, *(None,) * (len(b.found) - len(b.twins)))
     what = "; ".join(
         twin_text(tw, t, _suggests(t.term))
@@ -174,7 +198,7 @@ def _found_text(b: Beyond, fraction: float, kept: Sequence[NamedTerm]) -> str:
     )
     # A physical reading fits as well (review 35m F9): the misfit is not beyond the ranges, only not named.
     ranges = "" if all(tw is not None for tw in twins) else " within the terms' physical ranges"
-    return f"not explained{ranges}: {what}{instead}; "
+    return ranges, what, instead
 
 
 #: The words that open the clause on a reading beyond its range that fits as well as the named terms
@@ -266,6 +290,8 @@ def apply(
     # and asymmetry), with "conditional on mu ..." among its qualifiers (readings.py).
     mu = _mu_text(b) if b.mu_face and status != "explained" else ""
     if b.found and (b.beats_final or not terms):
+        if mu and b.mu_face == "lower":  # the loop's shape leads, the out-of-range value is its stand-in
+            return "unexplained", (), _soft_head(b), mu + _stand_in_text(b, fraction, terms)
         return "unexplained", (), _found_text(b, fraction, terms), mu
     steady = tuple(t for t in named if t.term not in DRIFT_TERMS)
     if mu and steady:  # review 36 problem 3: stand-ins for the loop's shape, not findings
@@ -290,4 +316,5 @@ __all__ = [
     "refused_by_bound",
     "HELD_MARK",
     "MOST",
+    "SOFT_HEAD",
 ]

@@ -1,0 +1,47 @@
+"""A Wiener-Bouc-Wen simulator written for the tests, apart from the library's and the benches' generators.
+
+RK4 on a resonant G's two states and the Bouc-Wen state together, a pure delay on the sine drive (exact for a
+sine), four steps a sample. Used by test_record_zeros.py and test_diagnosis_bounds_said.py.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+P = 128
+WN, ZETA, DELAY = 2 * math.pi * 6.0, 0.25, 0.004  # G = WN^2 / (s^2 + 2 ZETA WN s + WN^2) e^{-s DELAY}
+BETA, GAMMA, MU = 0.5, 0.3, 1.5
+SETTLE, PERIODS = 8, 24
+
+
+def simulate(freqs: np.ndarray, amps: np.ndarray, delta: float = 0.0, mu: float = MU) -> tuple[Any, Any, Any]:
+    """(h, u, w) per experiment: ``P`` samples a period, four RK4 steps a sample; ``delta`` the asymmetry
+    (the library's asymmetry term: ``delta |w|^mu sgn(w)`` beside gamma); ``mu`` may be below 1 (a loop
+    softer than the library's bracket allows)."""
+    om = 2 * math.pi * freqs
+    h = 2 * math.pi / om / P
+    n = (SETTLE + PERIODS) * P
+
+    def rate(t: np.ndarray, s: np.ndarray) -> np.ndarray:
+        x, v, w = s
+        aw = np.abs(w)
+        u = amps * np.cos(om * (t - DELAY))
+        pw = aw**mu  # |w|^(mu - 1) w written as |w|^mu sgn(w): finite at w = 0 for mu < 1 too
+        dw = v - (BETA * np.abs(v) * pw * np.sign(w) + GAMMA * v * pw + delta * v * pw * np.sign(w))
+        return np.array([v, WN**2 * (u - x) - 2 * ZETA * WN * v, dw])
+
+    s, t, ws = np.zeros((3, om.size)), np.zeros(om.size), np.zeros((n, om.size))
+    for k in range(n):
+        ws[k] = s[2]
+        hh = h / 4
+        for _ in range(4):
+            k1 = rate(t, s)
+            k2 = rate(t + hh / 2, s + hh / 2 * k1)
+            k3 = rate(t + hh / 2, s + hh / 2 * k2)
+            k4 = rate(t + hh, s + hh * k3)
+            s, t = s + hh / 6 * (k1 + 2 * k2 + 2 * k3 + k4), t + hh
+    tt = np.arange(n)[:, None] * h[None, :]
+    return h, (amps * np.cos(om * tt)).T, ws.T
