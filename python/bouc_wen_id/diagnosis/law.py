@@ -153,9 +153,10 @@ def contrast_statistic(
             continue
         ref = seen[int(np.argmax(scale[seen]))]
         for c in seen[seen != ref]:
+            # (1/s_c, -1/s_ref) normalised, written as (s_ref, -s_c) / hypot: no overflow at a tiny s_c
             row = np.zeros(beta.size)
-            row[c], row[ref] = 1.0 / scale[c], -1.0 / scale[ref]
-            rows.append(row / np.linalg.norm(row))
+            row[c], row[ref] = scale[ref], -scale[c]
+            rows.append(row / math.hypot(float(scale[ref]), float(scale[c])))
     if not rows:
         return None
     contrast = np.array(rows)

@@ -31,6 +31,7 @@ from typing import Any
 import numpy as np
 
 from .data import DiagExperiment, common_centre
+from .drift import DRIFT_TERMS
 from .result import Diagnosis
 
 #: The offset candidate's kind (terms registry; imported late would cycle).
@@ -79,6 +80,10 @@ def triggered(d: Diagnosis) -> bool:
     if d.status in ("adequate", "explained") or not d.steps or len(d.experiments) < 2:
         return False
     if d.settings.get("common_dc") is not None:  # already freed (a wander, or this module's own run)
+        return False
+    if any(t.term in DRIFT_TERMS for t in (*d.named, *d.partial)):
+        # A degrading loop moves its own centre within and between records (loop_centre.py): its DCs are
+        # the loop's, not the zeros'.
         return False
     for step in d.steps:
         if OFFSET not in step.law_failed:
