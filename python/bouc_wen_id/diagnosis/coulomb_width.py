@@ -11,7 +11,8 @@ model's dry friction, at either place: ``AugParams.smoothing``, which later fits
 is one more estimated parameter: the candidate's F test counts it (:func:`extra_dof`).
 
 Below about ``pi / (2 P)`` (a quarter of a sample's phase step at ``P`` samples per period) the turn falls
-between two samples and the width is not measured: the report says "below the sampling's resolution" (:func:`width_text`).
+between two samples and the width is not measured: the report says "below the sampling's resolution"
+(:func:`width_text`).
 """
 
 from __future__ import annotations
