@@ -65,7 +65,12 @@ def test_a_final_fit_held_at_the_mu_bracket_qualifies_the_verdict() -> None:
     assert "conditional" in tail
     said = tail.split(bounds_said.HELD_MARK)[1]
     assert all(f"{t.label} c = 0.01" in said for t in kept), said
-    assert "±" not in tail and "0.001" not in said and "sharper than mu = 1 allows" in said
+    assert (
+        "±" not in tail
+        and "0.001" not in said
+        and "softer than mu = 1 allows" in said
+        and "sharper" not in said
+    )
     # Nothing named, nothing to demote: the mu clause alone.
     bare = bounds_said.apply(held, "unexplained", (), kept, 0.3)[3]
     assert bare.startswith("; the hysteresis exponent") and bounds_said.HELD_MARK not in bare

@@ -202,6 +202,9 @@ def _rival_text(b: Beyond, named: Sequence[NamedTerm]) -> str:
     return f"; {BEYOND_MARK}: {'; '.join(items)}" if items else ""
 
 
+#: The loop shape the lower end of mu's bracket stands for: mu < 1 turns more gradually after a reversal.
+SOFTER = "softer than mu = 1 allows (mu < 1: turning more gradually after a reversal)"
+
 #: The words that open the mu clause (:func:`_mu_text`; :mod:`.readings` puts a qualifier in the headline).
 MU_MARK = "the hysteresis exponent is held at the"
 
@@ -209,7 +212,10 @@ MU_MARK = "the hysteresis exponent is held at the"
 def _mu_text(b: Beyond) -> str:
     # Not "the loops ask for mu < 1": a true mu = 1 (the classic Bouc-Wen) sits at the same end whenever
     # something else is missing (review of the merge: slack and a rate-dependent loop at mu = 1).
-    beyond = "sharper than mu = 1 allows" if b.mu_face == "lower" else "beyond what its bracket allows"
+    # The lower end is where the fit is pulled toward mu < 1: a loop that turns more gradually after a
+    # reversal, i.e. softer, not sharper (a larger mu sharpens the knee; review 40 item 2: mu = 0.7 was said
+    # "sharper").
+    beyond = SOFTER if b.mu_face == "lower" else "beyond what its bracket allows"
     return (
         f"; {MU_MARK} {b.mu_face} end of its bracket (mu = {b.mu:.3g}; the identification's range is "
         f"mu >= 1): either the true exponent is there, or the loops are {beyond} and a term that fits part "
@@ -226,7 +232,7 @@ def _held_text(named: Sequence[NamedTerm], face: str) -> str:
     without their standard errors (those assume the hysteresis is right; review 36 problem 3: mu = 0.6 with
     a spring on x named k at 2.6x the truth, 48 se, and a play and a viscous damping that are not there)."""
     what = ", ".join(f"{t.label} {t.symbol} = {t.value:.4g} {t.unit}".rstrip() for t in named)
-    shape = "a loop sharper than mu = 1 allows" if face == "lower" else "a loop shape beyond mu's bracket"
+    shape = f"a loop {SOFTER}" if face == "lower" else "a loop shape beyond mu's bracket"
     return (
         f"; {HELD_MARK} {face} end of its bracket, not named: {what} (values without their standard errors, "
         f"which assume the hysteresis is right; they may stand in for {shape})"

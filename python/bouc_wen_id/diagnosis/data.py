@@ -42,7 +42,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
-from typing import Any
+from typing import Any, Optional
 
 import numpy as np
 from numpy.typing import NDArray
@@ -151,6 +151,9 @@ class DiagExperiment:
     #: the level of :func:`harmonic_levels`, for the drift test's weights; empty when white (``noise_var``
     #: at every harmonic).
     harmonic_var: FloatArray = field(default_factory=lambda: np.zeros(0), repr=False)
+    #: Each harmonic 0..P/2's own noise level (per-sample units) when the noise is measurably coloured: the
+    #: adequacy test's weights (adequacy_chi2.py); empty when white (``noise_var`` at every harmonic).
+    adequacy_var: FloatArray = field(default_factory=lambda: np.zeros(0), repr=False)
     #: The input's own mean over the averaged periods (units of u) and its standard error (0.0 when the input
     #: is not at hand): the fits see ``u`` without it; ``input_dc.py`` reads it (a drive with a preload).
     input_dc: float = 0.0
@@ -323,16 +326,19 @@ def noise_colour(
 HARMONIC_FLOOR = 0.01
 
 
-def harmonic_levels(rows: FloatArray, white_var: float, dc: bool = True) -> FloatArray:
+def harmonic_levels(
+    rows: FloatArray, white_var: float, dc: bool = True, k: Optional[int] = None
+) -> FloatArray:
     """Each harmonic 0..K's noise level of periods ``rows`` (N, P), in per-sample units: the spread about
     a quadratic trend (as :func:`noise_colour`) pooled over the :data:`COLOUR_BAND` harmonics around it
     (the DC alone, inflated for the correlation of the period DCs, :func:`cross_period_inflation`), never
     below :data:`HARMONIC_FLOOR` times ``white_var`` (a red noise is below its per-sample level at the
     higher harmonics). Empty when N < 3. ``dc=False`` (the period means taken out, ``baseline.py``): the DC's
-    level is infinite (no weight in the drift test) and no band counts it.
+    level is infinite (no weight in the drift test) and no band counts it. ``k``: the last harmonic
+    (default the drift test's, ``MAX_DRIFT_HARMONIC`` at most; ``P // 2`` for the adequacy test's weights).
     """
     n, p = rows.shape
-    k = _harmonics_of(p)
+    k = _harmonics_of(p) if k is None else min(int(k), p // 2)
     if n < MIN_COLOUR_PERIODS or k < 1:
         return np.zeros(0)
     raw = np.fft.rfft(rows, axis=1)[:, : k + 1] / p
@@ -450,9 +456,57 @@ def _from_recording(i: int, rec: Any) -> DiagExperiment:
         colour_band=band,
         cross_period=cross_period_correlation(dc) if var > diff and not flat else 0.0,
         harmonic_var=hvar,
+        adequacy_var=_adequacy_levels(rows, diff, var, walk),
         input_dc=float(np.mean(urows)),
         input_dc_se=math.sqrt(float(np.mean(np.diff(urows, axis=0) ** 2)) / 2.0 / (n * p)),
     )
+
+
+#: Fewest periods whose spread sets the adequacy test's per-harmonic weights (adequacy_chi2.py): below it the
+#: levels rest on too few degrees of freedom (N - 3 per harmonic about the quadratic trend) and the test
+#: keeps the fit's one weight. At 5 periods the weights' estimation noise alone read chi2/dof 1.2-1.3 on
+#: white noise (p 1e-8) - a false alarm, not a colour.
+MIN_ADEQUACY_PERIODS = 10
+
+
+def adequacy_levels(rows: FloatArray, white_var: float, dc: bool = True) -> FloatArray:
+    """Each harmonic 0..P/2's noise level of periods ``rows`` (N, P) for the adequacy test's weights, in
+    per-sample units: the spread about the quadratic trend (as :func:`harmonic_levels`) pooled over a band
+    that widens with the harmonic (``COLOUR_BAND`` harmonics, or a quarter of the harmonic's number either
+    side: a red spectrum is smooth in log frequency, and the higher harmonics, where the weights are largest,
+    get the most degrees of freedom), scaled by ``nu / (nu - 2)`` for the band's ``nu`` degrees of freedom
+    so that ``1 / level`` is unbiased (``E[nu / chi2_nu] = nu / (nu - 2)``), never below
+    :data:`HARMONIC_FLOOR` times ``white_var``. The DC as :func:`harmonic_levels` (infinite when ``dc`` is
+    False). Empty with fewer than :data:`MIN_ADEQUACY_PERIODS` periods."""
+    n, p = rows.shape
+    k = p // 2
+    if n < MIN_ADEQUACY_PERIODS or k < 1:
+        return np.zeros(0)
+    dc_level = harmonic_levels(rows, white_var, dc=dc, k=1)
+    raw = np.fft.rfft(rows, axis=1)[:, : k + 1] / p
+    c, free = _about_trend(raw)
+    ss = 2.0 * p * np.sum(np.abs(c) ** 2, axis=0)
+    out = np.empty(k + 1)
+    out[0] = dc_level[0] if dc_level.size else np.inf
+    for j in range(1, k + 1):
+        half = max(COLOUR_BAND // 2, j // 4)
+        a, b = max(1, j - half), min(k, j + half)
+        nu = 2.0 * free * (b - a + 1)
+        out[j] = float(np.sum(ss[a : b + 1])) / nu * nu / (nu - 2.0)
+    return np.maximum(out, HARMONIC_FLOOR * white_var)
+
+
+def _adequacy_levels(rows: FloatArray, white: float, var: float, walk: Any) -> FloatArray:
+    """``DiagExperiment.adequacy_var`` of a recording: :func:`adequacy_levels` when the noise is coloured
+    (empty when white); with the period means taken out (``walk`` not None) the DC's is infinite and no level
+    is below the walk's own leak, as ``harmonic_var``."""
+    if not var > white:
+        return np.zeros(0)
+    p = rows.shape[1]
+    out = adequacy_levels(rows, white, dc=walk is None)
+    if walk is not None and out.size > 1:
+        out = np.maximum(out, white + walk_levels(float(str(walk)), p, out.size - 1))
+    return out
 
 
 def walk_levels(s2: float, p: int, k: int) -> np.ndarray:

@@ -27,6 +27,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from . import adequacy_chi2
 from .data import DiagExperiment
 
 FloatArray = NDArray[np.float64]
@@ -203,13 +204,14 @@ def _harmonics(
     kmax = min(REPORT_HARMONICS, min((e.samples_per_period - 1) // 2 for e in exps))
     stats = np.zeros(kmax + 1)
     dofs = np.zeros(kmax + 1, dtype=int)
-    for e, r in zip(exps, resid):
+    for e, r, w in zip(exps, resid, adequacy_chi2.relative_weights(exps)):
         p = r.size
         v = e.noise_var / e.periods
         c = np.fft.rfft(r)[: kmax + 1] / p
-        stats[0] += p * c[0].real ** 2 / v
+        hw = np.ones(kmax + 1) if w is None else w[: kmax + 1]  # each harmonic's own level when coloured
+        stats[0] += p * c[0].real ** 2 / v * hw[0]
         dofs[0] += 1
-        stats[1:] += 2.0 * p * np.abs(c[1:]) ** 2 / v
+        stats[1:] += 2.0 * p * np.abs(c[1:]) ** 2 / v * hw[1:]
         dofs[1:] += 2
     pv = [_chi2_sf(float(s), float(d)) for s, d in zip(stats, dofs)]
     # Closed testing: harmonics are only flagged under a rejected global test, so a model at the noise
@@ -347,6 +349,8 @@ def locate(
     """
     resid = [np.asarray(e.ybar - y, dtype=np.float64) for e, y in zip(exps, outputs)]
     statistic = float(sum(e.weight * float(np.dot(r, r)) for e, r in zip(exps, resid)))
+    # A coloured noise weighed harmonic by harmonic, as the status's test (adequacy_chi2.py).
+    statistic = adequacy_chi2.statistic(adequacy_chi2.relative_weights(exps), exps, outputs, statistic)
     dof = sum(e.samples_per_period for e in exps) - n_params
     noise_dof = sum(e.noise_dof for e in exps)
     rms, fexp, aexp = _growth(exps, resid)

@@ -269,9 +269,9 @@ def _verdict_html(d: Diagnosis) -> list[str]:
     return [
         f"<p class='verdict'><b>{html.escape(d.status_text)}</b>: {html.escape(d.headline)}</p>"
         + (f"<ul>{''.join(f'<li>{html.escape(c)}</li>' for c in d.details)}</ul>" if d.details else ""),
-        f"<p>Plain model: χ²/dof = {_g(d.plain.cost / max(d.plain.dof, 1))} "
+        f"<p>Plain model: χ²/dof = {_g(d.plain.chi2_dof)} "
         f"(p = {_g(d.plain.p_value, '.2g')}); "
-        f"final model: χ²/dof = {_g(d.final.cost / max(d.final.dof, 1))} (p = {_g(d.final.p_value, '.2g')}); "
+        f"final model: χ²/dof = {_g(d.final.chi2_dof)} (p = {_g(d.final.p_value, '.2g')}); "
         f"{100 * d.explained_fraction:.1f} % of the plain model's excess explained. "
         f"{len(d.experiments)} experiments, {d.seconds:.1f} s.</p>",
     ]

@@ -100,6 +100,14 @@ class ModelSummary:
     p_value: float
     nrmse: tuple[float, ...]
     outputs: tuple[FloatArray, ...] = field(repr=False)
+    #: The adequacy test's chi-square (adequacy_chi2.py: a coloured noise weighed harmonic by harmonic; NaN
+    #: when not kept, then ``cost`` is it).
+    chi2: float = math.nan
+
+    @property
+    def chi2_dof(self) -> float:
+        """The adequacy statistic per degree of freedom (``cost``'s when the statistic was not kept)."""
+        return (self.chi2 if math.isfinite(self.chi2) else self.cost) / max(self.dof, 1)
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -110,6 +118,7 @@ class ModelSummary:
             "cost": self.cost,
             "dof": self.dof,
             "p_value": self.p_value,
+            "chi2_dof": self.chi2_dof,
             "nrmse": list(self.nrmse),
         }
 
@@ -221,7 +230,7 @@ class Diagnosis:
         table, the held-out comparison and where the models miss."""
         lines = [f"Diagnosis: {self.headline}", *(f"  - {c}" for c in self.details), ""]
         for label, m in (("plain", self.plain), ("final", self.final)):
-            lines.append(f"{label} model: chi2/dof = {m.cost / max(m.dof, 1):.3g} (p = {m.p_value:.2g})")
+            lines.append(f"{label} model: chi2/dof = {m.chi2_dof:.3g} (p = {m.p_value:.2g})")
         lines.append(f"share of the plain model's excess explained: {100 * self.explained_fraction:.1f} %")
         for term, why in dict(self.settings.get("skipped", {})).items():
             lines.append(f"{TERM_LABELS.get(term, term)}: {why}")

@@ -15,6 +15,7 @@ from ..terms import DIAGNOSIS_CANDIDATES, Distortion, Offset
 from ..units import harmonise
 from ..validation import real_number
 from . import (
+    adequacy_chi2,
     after_named,
     age,
     alt_values,
@@ -679,11 +680,11 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
     setup.report("testing degradation (period blocks)", 0, 1)
     deg, fexps, fsx, start = _drift_stage(exps, sx, plain, s, substeps, setup, before.drift_detected, notes)
     named_deg = _deg_named(deg, setup.held_out_test)
-    noise_dof = sum(e.noise_dof for e in exps)
+    noise_dof, weights = sum(e.noise_dof for e in exps), adequacy_chi2.relative_weights(exps)  # (colour)
 
     def p_of(fit: AugFit) -> float:
         dof = sum(a.ybar.size for a in sx) - free_dc.spent(sx) - (3 + len(fit.params.terms) + 2 * len(sx))
-        return adequacy_p(fit.cost, dof, noise_dof)
+        return adequacy_p(adequacy_chi2.statistic(weights, fsx, fit.outputs, fit.cost), dof, noise_dof)
 
     def adequate(fit: AugFit) -> bool:
         p = p_of(fit)

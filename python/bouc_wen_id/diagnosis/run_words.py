@@ -13,6 +13,7 @@ import numpy as np
 from ..augmented import AugExperiment, AugFit
 from ..terms import TERMS, Distortion, Offset, physical_value
 from . import (
+    adequacy_chi2,
     beyond_range,
     bounds_said,
     distortion_law,
@@ -61,6 +62,7 @@ def _summary(
         terms.append(NamedTerm(t, sym, v, se, unit))
     dof = sum(a.ybar.size for a in sx) - free_dc.spent(sx) - (3 + len(par.terms) + 2 * len(sx))
     noise_dof = sum(e.noise_dof for e in exps)
+    chi2 = adequacy_chi2.statistic(adequacy_chi2.relative_weights(exps), sx, fit.outputs, fit.cost)
     nr = []
     for e, y in zip(sx, fit.outputs):
         spread = float(np.linalg.norm(e.ybar - e.ybar.mean()))
@@ -72,7 +74,8 @@ def _summary(
         mu=par.mu,
         cost=fit.cost,
         dof=dof,
-        p_value=adequacy_p(fit.cost, dof, noise_dof),
+        p_value=adequacy_p(chi2, dof, noise_dof),
+        chi2=chi2,
         nrmse=tuple(nr),
         outputs=tuple(np.asarray(y) * s.y for y in fit.outputs),
     )

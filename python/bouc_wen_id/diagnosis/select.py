@@ -45,6 +45,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
+from functools import partial
 from typing import Any, Optional, Protocol, TypeVar
 
 import numpy as np
@@ -53,7 +54,7 @@ from numpy.typing import NDArray
 from ..augmented import AugExperiment, AugFit, augmented_output
 from ..errors import BudgetExceededError
 from ..terms import TERMS, Stiffness, physical_value
-from . import coulomb_width, fit_share, fitting, free_dc, speed
+from . import coulomb_width, fit_share, fitting, free_dc, prefetch, speed
 from .beside import only_beside
 from .fitting import best_of, fit_from, fit_own, fit_with, subset
 from .gate import targeted_level
@@ -704,6 +705,10 @@ def memo_fit_with(exps: Sequence[AugExperiment], substeps: int) -> Callable[[Aug
     return fit_term
 
 
+def _said(on_trial: Callable[[int, str, int, int], None], step: int, count: int, k: int, t: str) -> None:
+    on_trial(step, t, k, count)
+
+
 def step_alternatives(
     exps: Sequence[AugExperiment],
     chosen: Optional[Trial],
@@ -824,11 +829,15 @@ def forward_select(
         c0 = current.cost
         d0 = dof_of(exps, current)
         excess = max(c0 - d0, 0.0)
+        # No excess in the fit's own cost: the targeted step, or a model the adequacy test fails on a
+        # statistic the cost does not show (a coloured noise weighed harmonic by harmonic, adequacy_chi2.py):
+        # a term that removes cost explains all there is. A refitted base that passes has nothing to explain.
+        no_excess = 1.0 if first or (excess == 0.0 and not adequate(current)) else 0.0
         trials = []
-        for k, t in enumerate(remaining):
-            if on_trial is not None:  # progress: on_trial(step, term, index, count)
-                on_trial(len(steps) + 1, t, k, len(remaining))
-            f = fit_term(current, t)
+        # On threads (prefetch.py); progress: on_trial(step, term, index, count) before each result.
+        said = None if on_trial is None else partial(_said, on_trial, len(steps) + 1, len(remaining))
+        fits = prefetch.in_order(partial(fit_term, current), remaining, said)
+        for t, f in zip(remaining, fits):
             if f is None:
                 trials.append(Trial(t, math.nan, math.nan, math.nan, math.nan, math.nan, math.nan, False))
                 continue
@@ -839,7 +848,7 @@ def forward_select(
             padj = min(1.0, p * len(remaining)) if math.isfinite(p) else math.nan
             # No excess at all (the targeted step): a term that removes cost explains all there is; a term
             # cannot explain more than all of it (capped: the rest of its improvement is noise).
-            share = min((c0 - f.cost) / excess, 1.0) if excess > 0 else (1.0 if first else 0.0)
+            share = min((c0 - f.cost) / excess, 1.0) if excess > 0 else no_excess
             ok = bool(math.isfinite(padj) and padj < level and share >= MATERIAL_SHARE) and _admissible(f, t)
             ok = ok and not at_null(f, t) and away_from_null(f, t, level, f.cost / max(d1, 1))
             trials.append(Trial(t, f.cost, c0 - f.cost, stat, p, padj, share, ok, fit=f))

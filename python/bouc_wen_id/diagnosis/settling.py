@@ -187,7 +187,10 @@ def _noise_floors(items: Any, exps: list[DiagExperiment]) -> tuple[list[DiagExpe
                 "compare the model with its own precision, not with a measured noise)"
             )
             notes.append(f"{e.source}: the period-to-period noise (variance {e.noise_var:.3g}) is {what}")
-            e = replace(e, noise_var=floor, spread_var=max(e.spread_var, floor))
+            # No harmonic's level below the floor either: the adequacy test's weights (adequacy_chi2.py)
+            # would otherwise weigh rounding at the quiet harmonics by up to 1e18 (noise-free data).
+            lv = np.maximum(e.adequacy_var, floor) if e.adequacy_var.size else e.adequacy_var
+            e = replace(e, noise_var=floor, spread_var=max(e.spread_var, floor), adequacy_var=lv)
         out.append(e)
     return out, notes
 
