@@ -69,6 +69,28 @@ def test_the_profile_finds_the_width_of_the_smallest_cost() -> None:
     assert coulomb_width.profile(cast(Any, start), refit) is cast(Any, start)  # nothing better: itself
 
 
+def test_a_cost_still_falling_at_the_widest_width_keeps_the_fit_given() -> None:
+    """Session 42: a cost that falls all the way to the widest width (no turn found) keeps the fit given,
+    not the search's edge; a minimum inside the range near it (10 %) is still found within 25 %."""
+
+    class _Fit:
+        def __init__(self, eps: float, low: float) -> None:
+            self.params = AugParams(0.5, 0.1, 1.5, ("coulomb@x",), np.r_[0.1], np.ones(1), np.zeros(1), eps)
+            self.cost = (math.log(eps) - math.log(low)) ** 2
+
+    for low, kept in ((1.0, False), (0.1, True)):
+        start = _Fit(0.01, low)
+
+        def refit(st: AugParams, low: float = low) -> Any:
+            return _Fit(st.smoothing, low)
+
+        best = coulomb_width.profile(cast(Any, start), refit)
+        if kept:
+            assert abs(math.log(best.params.smoothing / low)) < math.log(1.25), best.params.smoothing
+        else:
+            assert best is cast(Any, start)
+
+
 _WN, _ZETA, _DELAY, _TAU = 2 * math.pi * 6.0, 0.3, 0.004, 0.02
 
 
@@ -148,3 +170,19 @@ def test_dry_friction_at_another_width_is_named_at_its_place(
     assert abs(t.value - 0.02) < 3 * t.standard_error, (t.value, t.standard_error)
     assert "the dry friction's turn: smoothing eps = " in d.verdict
     assert "coulomb_smoothing" in d.settings
+
+
+@pytest.mark.parametrize(("eps", "named"), [(0.1, True), (0.25, False)])
+def test_a_wide_turn_is_fitted_inside_the_search_and_no_stand_in_beyond_it(eps: float, named: bool) -> None:
+    """Resonant G with its delay, dry friction f = 0.02 on x: at 10 % (inside the search) named, its width
+    said between 5 and 16 %; at 25 % (the cost still falling at the search's 16 % edge) the width is not
+    freed and nothing false is named beside it. Measured before session 42's rule: 25 % was "explained in
+    part" by coulomb@x (f = 0.013), coulomb on u, stiffness on x and sensor lag (three terms the plant lacks);
+    now "unexplained"; 10 %: explained, f = 0.0191 +- 0.00024, eps 9.4 %."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        d = bw.diagnose(_records("resonant", "x", 0.02, eps, 7))
+    assert set(d.named_terms) <= {"coulomb@x"}, d.verdict
+    if named:
+        assert "coulomb@x" in d.named_terms, d.verdict
+        assert 0.05 < d.settings["coulomb_smoothing"] < coulomb_width.WIDTHS[-1], d.settings

@@ -55,7 +55,16 @@ def profile(fit: AugFit, refit: Callable[[AugParams], Optional[AugFit]]) -> AugF
     ``fit``'s estimate (``refit(start)``): each of :data:`WIDTHS`, then a golden-section search on
     ``log eps`` between the best one's neighbours; ``fit`` itself when no width does better. Searched
     whole again for every model that holds the friction: the width that fits it alone can be a factor 10
-    from the one that fits it beside a damper (review 40's joint: 4 % alone, 0.1 % with the damper)."""
+    from the one that fits it beside a damper (review 40's joint: 4 % alone, 0.1 % with the damper).
+
+    ``fit`` itself, too, when the smallest cost is at the widest width (:data:`WIDTHS`' last, the search's
+    upper edge): the cost still falls as the turn widens, so no width of a dry friction is found - the term
+    stands in for a smooth force (a loop shape the model lacks) and a free width only lets it stand in
+    better. Measured (session 42, tests/test_degradation_beside_drift.py's asymmetric degrading loop, no
+    friction, records as they are): coulomb@x's cost fell monotonically to 16 % in every model holding it,
+    and beside it a false output offset with Dahl friction on x passed its law (p 0.67 and 0.98; at the
+    default width, 1.7e-9 and 2.2e-17): the offset took the loop's own centre, its predicted trend fell
+    3x short and the fixed zero was said to drift."""
     tried: dict[float, Optional[AugFit]] = {fit.params.smoothing: fit}
 
     def at(eps: float) -> float:
@@ -70,6 +79,8 @@ def profile(fit: AugFit, refit: Callable[[AugParams], Optional[AugFit]]) -> AugF
     lo, hi = math.log(WIDTHS[max(k - 1, 0)]), math.log(WIDTHS[min(k + 1, len(WIDTHS) - 1)])
     _golden(lambda s: at(math.exp(s)), lo, min(hi, math.log(COULOMB_SMOOTHING_MAX)), REFINE_STEPS)
     best = min((f for f in tried.values() if f is not None and math.isfinite(f.cost)), key=lambda f: f.cost)
+    if best.params.smoothing >= WIDTHS[-1]:  # the cost still falls at the widest width: no turn found
+        return fit
     return best if best.cost < fit.cost else fit
 
 
