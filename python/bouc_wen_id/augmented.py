@@ -356,6 +356,23 @@ def _smoothing(params: AugParams) -> dict[str, Any]:
     return {} if params.smoothing == COULOMB_SMOOTHING else {"coulomb_smoothing": params.smoothing}
 
 
+def _fit_inputs(experiments: Sequence[AugExperiment], start: AugParams) -> tuple[AugExperiment, ...]:
+    """:func:`fit_augmented`'s experiments as a tuple, checked against ``start`` (named errors)."""
+    exps = tuple(experiments)
+    if not exps:
+        raise InsufficientDataError("fit_augmented needs at least one experiment")
+    for i, e in enumerate(exps):
+        if not isinstance(e, AugExperiment):
+            raise InvalidParameterError(f"experiments[{i}] is a {type(e).__name__}, not an AugExperiment")
+    if not isinstance(start, AugParams):
+        raise InvalidParameterError(f"start is a {type(start).__name__}, not an AugParams")
+    if start.gains.size != len(exps):
+        raise InvalidParameterError(
+            f"{len(exps)} experiments but the start has {start.gains.size} gains and phases"
+        )
+    return exps
+
+
 def fit_augmented(
     experiments: Sequence[AugExperiment],
     start: AugParams,
@@ -395,18 +412,7 @@ def fit_augmented(
     InsufficientDataError
         No experiment.
     """
-    exps = tuple(experiments)
-    if not exps:
-        raise InsufficientDataError("fit_augmented needs at least one experiment")
-    for i, e in enumerate(exps):
-        if not isinstance(e, AugExperiment):
-            raise InvalidParameterError(f"experiments[{i}] is a {type(e).__name__}, not an AugExperiment")
-    if not isinstance(start, AugParams):
-        raise InvalidParameterError(f"start is a {type(start).__name__}, not an AugParams")
-    if start.gains.size != len(exps):
-        raise InvalidParameterError(
-            f"{len(exps)} experiments but the start has {start.gains.size} gains and phases"
-        )
+    exps = _fit_inputs(experiments, start)
     max_iter = _count("max_iter", max_iter, 1)
     steps = _fit_substeps(exps, substeps)
     mu_lo, mu_hi = float(mu_lo), float(mu_hi)

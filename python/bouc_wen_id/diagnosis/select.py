@@ -826,8 +826,7 @@ def forward_select(
         remaining = [t for t in candidates if t not in current.params.terms]
         if not remaining:
             break
-        c0 = current.cost
-        d0 = dof_of(exps, current)
+        c0, d0 = current.cost, dof_of(exps, current)
         excess = max(c0 - d0, 0.0)
         # No excess in the fit's own cost: the targeted step, or a model the adequacy test fails on a
         # statistic the cost does not show (a coloured noise weighed harmonic by harmonic, adequacy_chi2.py):
