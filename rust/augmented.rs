@@ -4,6 +4,7 @@
 //!
 //! Per sine experiment, on the averaged period's grid `theta_j = 2 pi j / P`:
 //! `y_j = y0 + H_tau[w_j + k u_j + c udot_j + m uddot_j + f tanh(udot_j / (eps U omega))]_j`
+//! (`eps` the terms' Coulomb smoothing, [`Terms::smoothing`])
 //! with the measured input `u_j = U cos(theta_j + psi)` and the hysteresis `w` of the latent
 //! `x_j = A cos(theta_j - phi)`, `A = U g`. The mechanical terms act on u, in parallel with the
 //! Wiener system, as the spring and dashpot of Spencer's phenomenological MR-damper model act on
@@ -28,7 +29,7 @@ use crate::error::{all_finite, finite, CoreError, Result};
 use crate::path_loop::{
     PD_AMPLITUDE, PD_BETA, PD_DELTA, PD_DISTORT, PD_GAMMA, PD_MU, PD_PHI, PD_PINCH, PD_PLAY,
 };
-use crate::terms::{check_asymmetry, Place, TermKind, Terms, COULOMB_SMOOTHING, N_HYSTERESIS};
+use crate::terms::{check_asymmetry, Place, TermKind, Terms, N_HYSTERESIS};
 
 mod hysteresis;
 mod lag;
@@ -218,7 +219,7 @@ pub fn augmented_output_with(
         let (u, udot, uddot) = input.at(th, u_amp, omega);
         // The peak input velocity |U| omega: the smoothed sign follows sgn(udot) for either sign
         // of U.
-        let fric = (udot / (COULOMB_SMOOTHING * u_amp.abs() * omega)).tanh();
+        let fric = (udot / (terms.smoothing() * u_amp.abs() * omega)).tanh();
         let h = &hjac[j];
         let mut f = w[j];
         // The on-x terms' share of the own columns d/dg and d/dphi.
@@ -245,8 +246,13 @@ pub fn augmented_output_with(
                 continue;
             }
             if terms.place(t) == Place::X {
-                let (v, dv_da, dv_dphi) =
-                    on_x_regressor(kind, u_amp * gain, omega, step * j as f64 - phase);
+                let (v, dv_da, dv_dphi) = on_x_regressor(
+                    kind,
+                    u_amp * gain,
+                    omega,
+                    step * j as f64 - phase,
+                    terms.smoothing(),
+                );
                 f += q * v;
                 col[j] = v;
                 dg += q * u_amp * dv_da;

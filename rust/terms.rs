@@ -290,11 +290,25 @@ pub const COULOMB_SMOOTHING_KEY: &str = "coulomb_smoothing";
 
 /// The active terms of the augmented model, in the order their parameters follow
 /// `beta, gamma, mu` in the shared vector.
-#[derive(Debug, Clone, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct Terms {
     kinds: Vec<TermKind>,
     /// The place of each term, parallel to `kinds`.
     places: Vec<Place>,
+    /// The dry friction's smoothing width `eps` (a fraction of the peak velocity at its place),
+    /// a setting of the Coulomb terms, not a parameter the refinement moves:
+    /// [`COULOMB_SMOOTHING`] unless [`Terms::with_smoothing`] sets it.
+    smoothing: f64,
+}
+
+impl Default for Terms {
+    fn default() -> Self {
+        Self {
+            kinds: Vec::new(),
+            places: Vec::new(),
+            smoothing: COULOMB_SMOOTHING,
+        }
+    }
 }
 
 /// Splits a caller's term name `"<code name>[@<place tag>]"` into its kind and place; an unknown
@@ -353,9 +367,25 @@ impl Terms {
             kinds.push(k);
             places.push(place);
         }
-        let t = Self { kinds, places };
+        let t = Self {
+            kinds,
+            places,
+            smoothing: COULOMB_SMOOTHING,
+        };
         t.check_pairs()?;
         Ok(t)
+    }
+
+    /// The same terms with the Coulomb smoothing width `eps` ([`check_coulomb_smoothing`]).
+    pub fn with_smoothing(mut self, eps: f64) -> Result<Self> {
+        check_coulomb_smoothing(eps)?;
+        self.smoothing = eps;
+        Ok(self)
+    }
+
+    /// The Coulomb terms' smoothing width `eps`: `f tanh(v / (eps Vmax))`.
+    pub fn smoothing(&self) -> f64 {
+        self.smoothing
     }
 
     /// Checks that Dahl friction's two parameters come together: [`TermKind::Dahl`] and

@@ -297,6 +297,7 @@ class Augmented(Protocol):
         substeps: int,
         waveform: _F | None = None,
         input_shape: _F | None = None,
+        coulomb_smoothing: float = 0.01,
     ) -> tuple[_F, _F, _F]: ...
 
     def augmented_refine(
@@ -318,6 +319,7 @@ class Augmented(Protocol):
         waveforms: Sequence[_F] | None = None,
         experiment_substeps: Sequence[int] | None = None,
         input_shapes: Sequence[_F] | None = None,
+        coulomb_smoothing: float = 0.01,
     ) -> tuple[_F, _F, _F, float, int, bool, _F, list[_F], str, list[str]]: ...
 
 

@@ -34,7 +34,7 @@ from numpy.typing import NDArray
 
 from ._backend import get_backend
 from .errors import InsufficientDataError, InvalidParameterError, ZeroAmplitudeError
-from .terms import STEADY_TERM_NAMES, TERMS, parse_terms
+from .terms import COULOMB_SMOOTHING, COULOMB_SMOOTHING_MAX, STEADY_TERM_NAMES, TERMS, parse_terms
 from .validation import frozen_array, real_number
 
 __all__ = [
@@ -178,6 +178,10 @@ class AugParams:
         Signed ``g_i`` with ``x_i = U_i g_i cos(theta_j - phi_i)``.
     phases : ndarray, shape (m,)
         ``phi_i`` (rad, grid frame).
+    smoothing : float
+        The dry friction's smoothing ``eps`` (``f tanh(v / (eps Vmax))``, at either place): a setting
+        of the Coulomb terms that the refinement does not move (the diagnosis profiles it:
+        ``diagnosis/coulomb_width.py``); in ``(0, 0.5]``, default 1 %.
     """
 
     beta: float
@@ -187,8 +191,13 @@ class AugParams:
     values: FloatArray
     gains: FloatArray
     phases: FloatArray
+    smoothing: float = COULOMB_SMOOTHING
 
     def __post_init__(self) -> None:
+        eps = real_number("smoothing", self.smoothing)
+        if not 0.0 < eps <= COULOMB_SMOOTHING_MAX:
+            raise InvalidParameterError(f"smoothing eps = {eps} must be in (0, {COULOMB_SMOOTHING_MAX}]")
+        object.__setattr__(self, "smoothing", eps)
         for name in HYSTERESIS_NAMES:
             object.__setattr__(self, name, real_number(name, getattr(self, name)))
         terms = parse_terms(self.terms, TERM_NAMES)
@@ -233,6 +242,7 @@ class AugParams:
             np.append(self.values, real_number(name, value)),
             self.gains,
             self.phases,
+            self.smoothing,
         )
 
     def only(self, names: Iterable[str]) -> AugParams:
@@ -336,6 +346,33 @@ def _count(name: str, value: int, minimum: int) -> int:
     return int(value)
 
 
+def _input_shape(experiment: AugExperiment) -> dict[str, Any]:
+    """The core's ``input_shape`` keyword when the experiment's measured input is not a pure sine."""
+    return {"input_shape": experiment.input_shape} if experiment.input_shape.size else {}
+
+
+def _smoothing(params: AugParams) -> dict[str, Any]:
+    """The core's ``coulomb_smoothing`` keyword when ``params`` sets another width than the default."""
+    return {} if params.smoothing == COULOMB_SMOOTHING else {"coulomb_smoothing": params.smoothing}
+
+
+def _fit_inputs(experiments: Sequence[AugExperiment], start: AugParams) -> tuple[AugExperiment, ...]:
+    """:func:`fit_augmented`'s experiments as a tuple, checked against ``start`` (named errors)."""
+    exps = tuple(experiments)
+    if not exps:
+        raise InsufficientDataError("fit_augmented needs at least one experiment")
+    for i, e in enumerate(exps):
+        if not isinstance(e, AugExperiment):
+            raise InvalidParameterError(f"experiments[{i}] is a {type(e).__name__}, not an AugExperiment")
+    if not isinstance(start, AugParams):
+        raise InvalidParameterError(f"start is a {type(start).__name__}, not an AugParams")
+    if start.gains.size != len(exps):
+        raise InvalidParameterError(
+            f"{len(exps)} experiments but the start has {start.gains.size} gains and phases"
+        )
+    return exps
+
+
 def fit_augmented(
     experiments: Sequence[AugExperiment],
     start: AugParams,
@@ -375,18 +412,7 @@ def fit_augmented(
     InsufficientDataError
         No experiment.
     """
-    exps = tuple(experiments)
-    if not exps:
-        raise InsufficientDataError("fit_augmented needs at least one experiment")
-    for i, e in enumerate(exps):
-        if not isinstance(e, AugExperiment):
-            raise InvalidParameterError(f"experiments[{i}] is a {type(e).__name__}, not an AugExperiment")
-    if not isinstance(start, AugParams):
-        raise InvalidParameterError(f"start is a {type(start).__name__}, not an AugParams")
-    if start.gains.size != len(exps):
-        raise InvalidParameterError(
-            f"{len(exps)} experiments but the start has {start.gains.size} gains and phases"
-        )
+    exps = _fit_inputs(experiments, start)
     max_iter = _count("max_iter", max_iter, 1)
     steps = _fit_substeps(exps, substeps)
     mu_lo, mu_hi = float(mu_lo), float(mu_hi)
@@ -412,10 +438,18 @@ def fit_augmented(
         waveforms=[e.waveform for e in exps],
         experiment_substeps=[steps if e.substeps is None else e.substeps for e in exps],
         **_shapes(exps),
+        **_smoothing(start),
     )
     shared = np.asarray(shared, dtype=np.float64)
     params = AugParams(
-        float(shared[0]), float(shared[1]), float(shared[2]), start.terms, shared[3:], gains, phases
+        float(shared[0]),
+        float(shared[1]),
+        float(shared[2]),
+        start.terms,
+        shared[3:],
+        gains,
+        phases,
+        start.smoothing,
     )
     fisher = np.asarray(fisher, dtype=np.float64)
     fisher.flags.writeable = False
@@ -539,7 +573,8 @@ def augmented_output(
         float(params.phases[i]),
         steps,
         experiment.waveform,
-        **({"input_shape": experiment.input_shape} if experiment.input_shape.size else {}),
+        **_input_shape(experiment),
+        **_smoothing(params),
     )
     out = np.asarray(y, dtype=np.float64)
     if not jacobian:

@@ -43,7 +43,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Optional, Union
 
 import numpy as np
@@ -267,7 +267,7 @@ def refit_own(experiment: AugExperiment, params: AugParams, i: int) -> AugParams
     def model(x: FloatArray) -> AugParams:
         gains, phases = params.gains.copy(), params.phases.copy()
         gains[i], phases[i] = x
-        return AugParams(params.beta, params.gamma, params.mu, params.terms, params.values, gains, phases)
+        return replace(params, gains=gains, phases=phases)
 
     def res(x: FloatArray) -> FloatArray:
         return np.asarray(augmented_output(experiment, model(x), i) - experiment.ybar)

@@ -4,7 +4,7 @@
 use super::Excitation;
 use crate::dahl::{dahl_loop, DahlLoop};
 use crate::error::Result;
-use crate::terms::{Place, TermKind, Terms, COULOMB_SMOOTHING};
+use crate::terms::{Place, TermKind, Terms};
 
 /// The steady Dahl loops of the active Dahl friction, `(on u, on x)` (rust/dahl.rs): on u driven
 /// by `u_j = U cos(theta_j + psi)`, on x by `x_j = U g cos(theta_j - phi)`.
@@ -52,9 +52,15 @@ pub(super) fn dahl_of(
 
 /// The regressor of a mechanical term acting across the hysteretic element, on its input
 /// `x = a cos(z)`, `z = theta_j - phi` (design.md 9.1, place x), with its derivatives in `a` and
-/// `phi`: `k x`, `c xdot`, `m xddot`, `f tanh(xdot / (eps |a| omega))`. The distortion term's
+/// `phi`: `k x`, `c xdot`, `m xddot`, `f tanh(xdot / (eps |a| omega))` (`eps` the smoothing). The distortion term's
 /// harmonics are not seen here (the on-u terms see the measured u: `MeasuredInput`).
-pub(super) fn on_x_regressor(kind: TermKind, a: f64, omega: f64, z: f64) -> (f64, f64, f64) {
+pub(super) fn on_x_regressor(
+    kind: TermKind,
+    a: f64,
+    omega: f64,
+    z: f64,
+    eps: f64,
+) -> (f64, f64, f64) {
     let (s, c) = z.sin_cos();
     match kind {
         TermKind::Stiffness => (a * c, c, a * s),
@@ -67,8 +73,8 @@ pub(super) fn on_x_regressor(kind: TermKind, a: f64, omega: f64, z: f64) -> (f64
         TermKind::Coulomb => {
             // xdot / (eps |a| omega) = -sgn(a) sin z / eps: independent of |a|.
             let sg = a.signum();
-            let v = (-sg * s / COULOMB_SMOOTHING).tanh();
-            (v, 0.0, (1.0 - v * v) * sg * c / COULOMB_SMOOTHING)
+            let v = (-sg * s / eps).tanh();
+            (v, 0.0, (1.0 - v * v) * sg * c / eps)
         }
         // Refused by `Terms::parse` (`TermKind::acts_at`).
         _ => (0.0, 0.0, 0.0),

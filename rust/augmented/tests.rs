@@ -3,6 +3,7 @@
 use super::lag::apply_lag;
 use super::*;
 use crate::refine::Options;
+use crate::terms::COULOMB_SMOOTHING;
 use TermKind::*;
 
 /// The terms of `kinds`, through their code names as a caller gives them.
@@ -164,6 +165,40 @@ fn on_x_terms_jacobian_matches_central_differences() {
     let terms = Terms::parse(&names).unwrap();
     let shared = [0.8, 0.2, 1.6, 0.3, 0.05, 0.002, 0.1, 0.02, 0.01];
     check_jacobian_at(&terms, &shared, &EXC, 256, 0.9);
+}
+
+#[test]
+fn coulomb_smoothing_sets_the_width_at_both_places() {
+    // Another width than the default: the Jacobian still matches (the on-x friction's phase column
+    // carries 1 / eps), and the friction's column is tanh(udot / (eps U omega)) at that eps.
+    let names = [
+        on_x_name(Coulomb),
+        Coulomb.name().to_string(),
+        on_x_name(Viscous),
+    ];
+    let terms = Terms::parse(&names).unwrap().with_smoothing(0.04).unwrap();
+    let shared = [0.8, 0.2, 1.6, 0.1, 0.05, 0.02];
+    check_jacobian_at(&terms, &shared, &EXC, 256, 0.9);
+    let sharp = Terms::parse(&[Coulomb.name()]).unwrap();
+    let wide = sharp.clone().with_smoothing(0.3).unwrap();
+    let sh = [0.8, 0.2, 1.6, 0.1];
+    let a = augmented_output(&EXC, &sharp, &sh, 0.9, 0.3, 16).unwrap();
+    let b = augmented_output(&EXC, &wide, &sh, 0.9, 0.3, 16).unwrap();
+    let step = 2.0 * std::f64::consts::PI / EXC.samples as f64;
+    for j in 0..EXC.samples {
+        let th = step * j as f64 + EXC.grid_phase;
+        let v = -th.sin(); // udot / (U omega)
+        let want = (v / 0.3).tanh() - (v / COULOMB_SMOOTHING).tanh();
+        assert!((b.y[j] - a.y[j] - 0.1 * want).abs() < 1e-12, "sample {j}");
+    }
+    assert!(Terms::parse(&[Coulomb.name()])
+        .unwrap()
+        .with_smoothing(0.0)
+        .is_err());
+    assert!(Terms::parse(&[Coulomb.name()])
+        .unwrap()
+        .with_smoothing(0.6)
+        .is_err());
 }
 
 /// `y` of experiment `i` with a deterministic pseudo-noise, so that a fit does not end at zero cost.

@@ -12,7 +12,7 @@ use crate::budget::Work;
 use crate::error::CoreError;
 use crate::path_loop::{self as pathloop, PathLoop, Waveform};
 use crate::refine::Options;
-use crate::terms::Terms;
+use crate::terms::{Terms, COULOMB_SMOOTHING};
 
 pub(super) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(path_loop, m)?)?;
@@ -109,7 +109,7 @@ type AugOutputPy<'py> = (Vector<'py>, Matrix<'py>, Matrix<'py>);
 /// period: `(y (P,), jac_shared (P, 3 + T), jac_own (P, 2))`, shared columns
 /// `[beta, gamma, mu, q_1 .. q_T]` in the order of `terms`, own columns `[g, phi]`.
 #[pyfunction]
-#[pyo3(signature = (ybar_len, amplitude, frequency, grid_phase, terms, shared, gain, phase, substeps, waveform=None, input_shape=None))]
+#[pyo3(signature = (ybar_len, amplitude, frequency, grid_phase, terms, shared, gain, phase, substeps, waveform=None, input_shape=None, coulomb_smoothing=COULOMB_SMOOTHING))]
 #[allow(clippy::too_many_arguments)]
 fn augmented_output<'py>(
     py: Python<'py>,
@@ -124,8 +124,9 @@ fn augmented_output<'py>(
     #[pyo3(from_py_with = arg)] substeps: i64,
     #[pyo3(from_py_with = arg)] waveform: Option<PyReadonlyArray1<'py, f64>>,
     #[pyo3(from_py_with = arg)] input_shape: Option<PyReadonlyArray1<'py, f64>>,
+    #[pyo3(from_py_with = arg)] coulomb_smoothing: f64,
 ) -> PyResult<AugOutputPy<'py>> {
-    let terms = Terms::parse(&terms)?;
+    let terms = Terms::parse(&terms)?.with_smoothing(coulomb_smoothing)?;
     let shared = slice("shared", &shared)?;
     let waveform = match &waveform {
         Some(a) => slice("waveform", a)?,
@@ -253,7 +254,7 @@ fn aug_experiments<'a>(
 /// ended the search and `active` on which constraints it ended. `experiment_substeps`, one count
 /// per experiment, overrides `substeps` for each (the budget charges the largest).
 #[pyfunction]
-#[pyo3(signature = (ybars, amplitudes, frequencies, grid_phases, weights, terms, shared0, gains0, phases0, *, max_iter=200, substeps=4, mu_lo=1.0, mu_hi=f64::INFINITY, waveforms=None, experiment_substeps=None, input_shapes=None))]
+#[pyo3(signature = (ybars, amplitudes, frequencies, grid_phases, weights, terms, shared0, gains0, phases0, *, max_iter=200, substeps=4, mu_lo=1.0, mu_hi=f64::INFINITY, waveforms=None, experiment_substeps=None, input_shapes=None, coulomb_smoothing=COULOMB_SMOOTHING))]
 #[allow(clippy::too_many_arguments)]
 fn augmented_refine<'py>(
     py: Python<'py>,
@@ -273,8 +274,9 @@ fn augmented_refine<'py>(
     #[pyo3(from_py_with = arg)] waveforms: Option<Vec<PyReadonlyArray1<'py, f64>>>,
     #[pyo3(from_py_with = arg)] experiment_substeps: Option<Vec<i64>>,
     #[pyo3(from_py_with = arg)] input_shapes: Option<Vec<PyReadonlyArray1<'py, f64>>>,
+    #[pyo3(from_py_with = arg)] coulomb_smoothing: f64,
 ) -> PyResult<AugRefineOut<'py>> {
-    let terms = Terms::parse(&terms)?;
+    let terms = Terms::parse(&terms)?.with_smoothing(coulomb_smoothing)?;
     let waveforms = waveforms.unwrap_or_default();
     let waveforms = slices("waveforms", &waveforms)?;
     let input_shapes = input_shapes.unwrap_or_default();

@@ -19,7 +19,7 @@ from numpy.typing import NDArray
 from ..augmented import AugExperiment, AugFit, AugParams, augmented_output, fit_augmented
 from ..errors import BoucWenIdError, BudgetExceededError, SearchAtBoundError
 from ..terms import TERMS, Distortion, Place, StartContext
-from . import free_dc, g_second, input_dc, speed
+from . import coulomb_width, free_dc, g_second, input_dc, speed
 from .data import DiagExperiment
 
 FloatArray = NDArray[np.float64]
@@ -620,8 +620,20 @@ def fit_with(exps: Sequence[AugExperiment], fit: AugFit, term: str, substeps: in
 
     The first start that converges to a valid model is kept for a linear output term (its informed start
     is the least-squares value on the current residual); for the others every start is screened with
-    ``SCREEN_ITER`` iterations and the best is finished.
+    ``SCREEN_ITER`` iterations and the best is finished. A model with a dry friction has its smoothing
+    width profiled (coulomb_width.py): the width that fits the friction alone is not the one that fits it
+    beside the term that joins it (a damper's share of the turn).
     """
+    out = _fit_with(exps, fit, term, substeps)
+    if out is None or not coulomb_width.has_dry_friction(out.params):
+        return out
+    return coulomb_width.profile(
+        out, lambda st: fit_from(exps, st, substeps, max_iter=coulomb_width.REFIT_ITER)
+    )
+
+
+def _fit_with(exps: Sequence[AugExperiment], fit: AugFit, term: str, substeps: int) -> Optional[AugFit]:
+    """:func:`fit_with` without the width's profile."""
     starts = candidate_starts(exps, fit, term, substeps)
     if TERMS[term].phase_screen:
         return _fit_phase_screened(exps, starts, substeps)

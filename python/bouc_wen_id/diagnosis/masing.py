@@ -129,7 +129,7 @@ def _stop_traces(
     j = par.terms.index(StiffnessX.kind)
     k = float(par.values[j])
     vals = np.where(np.arange(par.values.size) == j, 0.0, par.values)
-    off = AugParams(par.beta, par.gamma, par.mu, par.terms, vals, par.gains, par.phases)
+    off = replace(par, values=vals)
     xs = [
         (
             np.asarray(augmented_output(e, par, i, substeps=substeps))
@@ -224,7 +224,7 @@ def _probe(
     if not (g > 0 and math.isfinite(p_ref)):
         return ""
     gains, phases = np.append(par.gains, par.gains[i]), np.append(par.phases, par.phases[i])
-    pp = AugParams(par.beta, par.gamma, par.mu, par.terms, par.values, gains, phases)
+    pp = replace(par, gains=gains, phases=phases)
     base = _Direction(exps, par, substeps).sizes(_stop_traces(exps, par, substeps, [reach])[0])[0] / s2
     best: Optional[tuple[float, float, float]] = None
     for level in PROBE_LEVELS:

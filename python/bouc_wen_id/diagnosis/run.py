@@ -26,6 +26,7 @@ from . import (
     centre_decay,
     clean_share,
     clean_value,
+    coulomb_width,
     design_twin,
     drift_majority,
     drift_pair,
@@ -739,8 +740,8 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
     verdict += law_untested.text(named, fexps) + input_note.text(status, both, fexps, final_sum.outputs)
     alternatives = tw.alternatives + _drift_alternatives(deg, named_deg)  # the steps' and the twins'
     verdict += alt_values.said(alternatives, named, fsx, final, (s, substeps, setup.units))  # and values
-    verdict += caveats_of(named, fsx, final, fexps, alpha, substeps)
-    verdict += one_amplitude.text(named, fexps)  # a loop-shape term's amplitude law untested
+    verdict += caveats_of(named, fsx, final, fexps, alpha, substeps) + one_amplitude.text(named, fexps)
+    verdict += coulomb_width.text(named, final, fsx)  # a named dry friction's fitted width
     setup.report("held-out check of the final model", 0, 1)
     ho = held_out(fsx, start, final, substeps, kw["cache"]) if final.params.terms else None
     d = Diagnosis(
@@ -757,7 +758,7 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
         final=final_sum,
         experiments=tuple(exps),
         explained_fraction=float(fraction),
-        settings=_settings(setup, s, substeps),
+        settings={**_settings(setup, s, substeps), **coulomb_width.settings(final)},
         seconds=0.0,
         plain_fit=plain,
         final_fit=final,

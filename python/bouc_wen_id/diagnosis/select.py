@@ -54,7 +54,7 @@ from numpy.typing import NDArray
 from ..augmented import AugExperiment, AugFit, augmented_output
 from ..errors import BudgetExceededError
 from ..terms import TERMS, Stiffness, physical_value
-from . import fit_share, fitting, free_dc, prefetch, speed
+from . import coulomb_width, fit_share, fitting, free_dc, prefetch, speed
 from .beside import only_beside
 from .fitting import best_of, fit_from, fit_own, fit_with, subset
 from .gate import targeted_level
@@ -826,8 +826,7 @@ def forward_select(
         remaining = [t for t in candidates if t not in current.params.terms]
         if not remaining:
             break
-        c0 = current.cost
-        d0 = dof_of(exps, current)
+        c0, d0 = current.cost, dof_of(exps, current)
         excess = max(c0 - d0, 0.0)
         # No excess in the fit's own cost: the targeted step, or a model the adequacy test fails on a
         # statistic the cost does not show (a coloured noise weighed harmonic by harmonic, adequacy_chi2.py):
@@ -843,6 +842,7 @@ def forward_select(
                 continue
             d1 = dof_of(exps, f)
             q = max(len(f.params.terms) - len(current.params.terms), 1)  # 2 for a two-term element
+            q += coulomb_width.extra_dof(current.params, f.params)  # a dry friction's width, profiled
             stat, p = f_test(c0, f.cost, d1, boundary=t in BOUNDARY_TERMS, q=q)
             padj = min(1.0, p * len(remaining)) if math.isfinite(p) else math.nan
             # No excess at all (the targeted step): a term that removes cost explains all there is; a term

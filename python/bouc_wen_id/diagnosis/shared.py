@@ -110,7 +110,9 @@ def _unpack(term: str, conds: Sequence[_Cond], x: np.ndarray) -> list[AugParams]
         others = own[3 : 3 + nt - 1]
         values = np.insert(others, i, v / _factor(term, c.scale, mu)[0])
         gp = own[3 + nt - 1 :]
-        out.append(AugParams(beta, gamma, mu, par.terms, values, gp[0::2].copy(), gp[1::2].copy()))
+        out.append(
+            AugParams(beta, gamma, mu, par.terms, values, gp[0::2].copy(), gp[1::2].copy(), par.smoothing)
+        )
     return out
 
 

@@ -36,6 +36,7 @@ from .terms import (
     ASYMMETRY,
     COULOMB,
     COULOMB_SMOOTHING,
+    COULOMB_SMOOTHING_MAX,
     DAHL,
     DAHL_SIGMA,
     DISTORTION,
@@ -115,11 +116,21 @@ def _check_pairs(names: tuple[str, ...]) -> None:
 _DAHL_NAMES = (DAHL, DAHL_SIGMA, _placed(DAHL, PLACE_X), _placed(DAHL_SIGMA, PLACE_X))
 
 
+def check_smoothing(eps: float) -> float:
+    """The Coulomb smoothing ``eps`` checked as the core checks it: finite, in ``(0, 0.5]``."""
+    eps = _finite_scalar("coulomb_smoothing", eps)
+    if not 0.0 < eps <= COULOMB_SMOOTHING_MAX:
+        raise InvalidParameterError(f"coulomb_smoothing eps = {eps} must be in (0, {COULOMB_SMOOTHING_MAX}]")
+    return eps
+
+
 def _value(terms: tuple[str, ...], shared: FloatArray, name: str) -> float:
     return float(shared[3 + terms.index(name)]) if name in terms else 0.0
 
 
-def _on_x_regressors(a: float, omega: float, z: FloatArray) -> dict[str, tuple[FloatArray, ...]]:
+def _on_x_regressors(
+    a: float, omega: float, z: FloatArray, eps: float = COULOMB_SMOOTHING
+) -> dict[str, tuple[FloatArray, ...]]:
     """Each mechanical term on ``x = a cos z`` (``z = theta_j - phi``): its regressor and d/da, d/dphi.
 
     Written from the formulas: ``x``, ``xdot = -a omega sin z``, ``xddot = -a omega^2 cos z`` and
@@ -127,10 +138,10 @@ def _on_x_regressors(a: float, omega: float, z: FloatArray) -> dict[str, tuple[F
     """
     s, c = np.sin(z), np.cos(z)
     x, xdot, xddot = a * c, -a * omega * s, -a * omega**2 * c
-    arg = xdot / (COULOMB_SMOOTHING * abs(a) * omega)
+    arg = xdot / (eps * abs(a) * omega)
     fric = np.tanh(arg)
     # d arg/dphi: d(-a omega sin(theta - phi))/dphi = a omega cos z.
-    dfric_dphi = (1.0 - fric**2) * (a * omega * c) / (COULOMB_SMOOTHING * abs(a) * omega)
+    dfric_dphi = (1.0 - fric**2) * (a * omega * c) / (eps * abs(a) * omega)
     return {
         STIFFNESS: (x, c, a * s),
         VISCOUS: (xdot, -omega * s, a * omega * c),
@@ -303,11 +314,13 @@ def augmented_output(
     substeps: int,
     waveform: Optional[ArrayLike] = None,
     input_shape: Optional[ArrayLike] = None,
+    coulomb_smoothing: float = COULOMB_SMOOTHING,
 ) -> tuple[FloatArray, FloatArray, FloatArray]:
     """The augmented model's output of one experiment (design.md 9.1) and its Jacobian.
 
     ``waveform``: the measured input's harmonics ``[Re c_2, Im c_2, ...]`` for the ``distortion`` term
-    (design.md 9.5); None or empty for a pure sine.
+    (design.md 9.5); None or empty for a pure sine. ``coulomb_smoothing``: the dry friction's ``eps``,
+    ``f tanh(v / (eps Vmax))`` at either place.
 
     Returns ``(y (P,), jac_shared (P, 3 + T), jac_own (P, 2))``: shared columns
     ``[beta, gamma, mu, q_1 .. q_T]`` in the order of ``terms``, own columns ``[g, phi]``.
@@ -322,6 +335,7 @@ def augmented_output(
     _check_shared(names, sh)
     _finite_scalar("gain", gain)
     _finite_scalar("phase", phase)
+    eps = check_smoothing(coulomb_smoothing)
     p = int(ybar_len)
     wave = np.zeros(0) if waveform is None else np.asarray(waveform, dtype=np.float64).ravel()
     if SERIES_DASHPOT in names:
@@ -330,14 +344,14 @@ def augmented_output(
         w, hj = _hysteresis(names, sh, amplitude * gain, phase, p, substeps, wave)
     theta = 2.0 * np.pi * np.arange(p) / p + grid_phase
     u, udot, uddot = measured_input(input_shape, theta, amplitude, frequency)
-    fric = np.tanh(udot / (COULOMB_SMOOTHING * abs(amplitude) * frequency))
+    fric = np.tanh(udot / (eps * abs(amplitude) * frequency))
     inputs = {STIFFNESS: u, VISCOUS: udot, INERTIA: uddot, COULOMB: fric}
     ns = 3 + len(names)
     f = w.copy()
     jac_shared = np.zeros((p, ns))
     jac_shared[:, :3] = hj[:, :3]
     jac_own = np.column_stack([amplitude * hj[:, 3], hj[:, 4]])
-    on_x = _on_x_regressors(amplitude * gain, frequency, 2.0 * np.pi * np.arange(p) / p - phase)
+    on_x = _on_x_regressors(amplitude * gain, frequency, 2.0 * np.pi * np.arange(p) / p - phase, eps)
     dahl = {
         tag: dahl_loop(
             a, psi0, _value(names, sh, _placed(DAHL, tag)), _value(names, sh, _placed(DAHL_SIGMA, tag)), p
@@ -403,6 +417,7 @@ class _Problem(NamedTuple):
     mu_hi: float
     waveforms: Optional[Sequence[ArrayLike]]
     input_shapes: Optional[Sequence[ArrayLike]] = None
+    smoothing: float = COULOMB_SMOOTHING
 
     @property
     def ns(self) -> int:
@@ -449,6 +464,7 @@ class _Problem(NamedTuple):
                 self.substeps[i],
                 None if self.waveforms is None else self.waveforms[i],
                 None if not self.input_shapes else self.input_shapes[i],
+                self.smoothing,
             )
             r = yi - y
             cost += self.wts[i] * float(np.sum(r * r))
@@ -512,6 +528,7 @@ def _check_refine(
     waveforms: Optional[Sequence[ArrayLike]],
     experiment_substeps: Optional[Sequence[int]] = None,
     input_shapes: Optional[Sequence[ArrayLike]] = None,
+    smoothing: float = COULOMB_SMOOTHING,
 ) -> tuple[_Problem, FloatArray, FloatArray, FloatArray]:
     """The arguments of :func:`augmented_refine` checked in the core's order: the problem and the start
     ``(shared0, gains0, phases0)``."""
@@ -553,7 +570,9 @@ def _check_refine(
         raise InvalidParameterError(f"experiment_substeps = {own} must all be >= 1")
     if input_shapes and len(input_shapes) != m:
         raise InvalidParameterError(f"{m} experiments but {len(input_shapes)} input shapes")
-    problem = _Problem(ys, amps, freqs, psis, wts, names, tuple(own), mu_lo, mu_hi, waveforms, input_shapes)
+    problem = _Problem(
+        ys, amps, freqs, psis, wts, names, tuple(own), mu_lo, mu_hi, waveforms, input_shapes, smoothing
+    )
     return problem, sh0, g0, p0
 
 
@@ -575,6 +594,7 @@ def augmented_refine(
     waveforms: Optional[Sequence[ArrayLike]] = None,
     experiment_substeps: Optional[Sequence[int]] = None,
     input_shapes: Optional[Sequence[ArrayLike]] = None,
+    coulomb_smoothing: float = COULOMB_SMOOTHING,
 ) -> tuple[
     FloatArray, FloatArray, FloatArray, float, int, bool, FloatArray, list[FloatArray], str, list[str]
 ]:
@@ -600,6 +620,7 @@ def augmented_refine(
         waveforms,
         experiment_substeps,
         input_shapes,
+        check_smoothing(coulomb_smoothing),
     )
     ns = prob.ns
     params = np.concatenate([sh0, np.column_stack([g0, p0]).ravel()])
