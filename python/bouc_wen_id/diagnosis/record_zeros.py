@@ -30,12 +30,13 @@ from typing import Any
 
 import numpy as np
 
+from ..terms import Offset
 from .data import DiagExperiment, common_centre
 from .drift import DRIFT_TERMS
 from .result import Diagnosis
 
-#: The offset candidate's kind (terms registry; imported late would cycle).
-OFFSET = "offset"
+#: The output offset's kind (the terms registry's).
+OFFSET = Offset.kind
 
 
 @dataclass(frozen=True)
