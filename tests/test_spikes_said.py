@@ -59,9 +59,10 @@ def _ar1(rng: np.random.Generator, n: int) -> Any:
     return SD * out
 
 
-def _records(seed: int, spikes: str, offset: float = 0.0) -> tuple[list[Any], list[int]]:
+def _records(seed: int, spikes: str, offset: float = 0.0, step: float = 0.0) -> tuple[list[Any], list[int]]:
     """The records and, per record, how many spikes fall in its analysed periods. ``spikes``: "none",
-    "random" (positions drawn per record) or "same" (one draw for every record)."""
+    "random" (positions drawn per record) or "same" (one draw for every record); ``step``: the output
+    rounded to that step before the spikes are added."""
     rng = np.random.default_rng(seed)
     shared = rng.choice(PERIODS * P, SPIKES, replace=False)
     recs: list[Any] = []
@@ -69,6 +70,7 @@ def _records(seed: int, spikes: str, offset: float = 0.0) -> tuple[list[Any], li
     for amp, om in DESIGN:
         t, u, y = _loop(amp, om)
         y = y + offset + _ar1(rng, y.size)
+        y = np.round(y / step) * step if step else y
         pos = shared if spikes == "same" else rng.choice(y.size, SPIKES, replace=False)
         if spikes != "none":
             y[pos] += rng.choice([-1.0, 1.0], SPIKES) * 0.2 * np.max(np.abs(y))
@@ -116,3 +118,17 @@ def test_the_same_records_without_spikes_give_no_outlier_note() -> None:
         recs, _ = _records(seed, "none")
         status, notes, json_notes = _said(recs)
         assert notes == json_notes == {}, (seed, status, notes)
+
+
+def test_spikes_added_after_a_coarse_quantiser_are_counted_and_no_transient() -> None:
+    """A step of 8 noise sd is not dithered by the noise; spikes of 0.2 x a peak on the grid, added after the
+    converter, put a few samples off its grid and on one 5 times finer. The step is still found, and the
+    spikes are counted (the step was a floor below which nothing was tested), not read as a transient
+    (a TransientWarning fails the test)."""
+    from bouc_wen_id.diagnosis.data import quantisation_step
+
+    recs, counts = _records(14, "random", step=8 * SD)
+    assert all(abs(quantisation_step(r.y) - 8 * SD) < 1e-9 for r in recs)
+    status, notes, json_notes = _said(recs)
+    want = {f"rec{i}": c for i, c in enumerate(counts) if c}
+    assert notes == json_notes == want, (status, notes, counts)

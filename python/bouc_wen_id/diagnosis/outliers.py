@@ -48,12 +48,17 @@ OUTLIER_ALPHA = 0.01
 MAD_SD = 1.4826
 
 
-def _floor(y: FloatArray, p: int) -> float:
-    """The least robust sd that is noise: a simulated loop's numerical accuracy, or one quantisation step."""
+def _noise_sd(sd: float, y: FloatArray, p: int) -> float:
+    """``sd`` raised to the rounding error's sd, q / sqrt(12), of an output quantised with step q (its robust
+    sd can be 0 when the noise does not dither it; a spike stays many steps out, and a departure of one step
+    stays below the threshold, ~5 sd), or 0 at a simulated loop's numerical accuracy (no noise: nothing is
+    clipped or counted). The quantisation step was once a floor below which nothing was tested: with spikes
+    put in after the converter the step was not found (review 41); once found, it hid the spikes."""
     from .data import numerical_rtol, quantisation_step
 
     peak = float(np.max(np.abs(y))) if y.size else 0.0
-    return max(numerical_rtol(p) * peak, quantisation_step(y))
+    sd = max(sd, quantisation_step(y) / math.sqrt(12.0))
+    return sd if sd > numerical_rtol(p) * peak else 0.0
 
 
 def _robust_sd(dev: FloatArray) -> float:
@@ -74,7 +79,8 @@ def transient_periods(y: Any, p: int, s: int, n: int) -> int:
     m = tail.shape[0]
     ref = tail.mean(axis=0)
     sd = _robust_sd(tail - ref) * math.sqrt(m / (m - 1.0))  # the departure from a mean of m holds 1/m of it
-    bound = CLIP_SD * sd if sd > _floor(seg.ravel(), p) else math.inf
+    sd = _noise_sd(sd, seg.ravel(), p)
+    bound = CLIP_SD * sd if sd > 0.0 else math.inf
     tail_dev = np.clip(tail - ref, -bound, bound)
     noise = float(np.mean(tail_dev**2)) * m / (m - 1.0)
     centred_power = float(np.mean((ref - ref.mean()) ** 2))
@@ -96,8 +102,8 @@ def clipped(rows: FloatArray, p: int) -> FloatArray:
         return np.array(rows, dtype=np.float64)
     mean = rows.mean(axis=0)
     dev = rows - mean
-    sd = _robust_sd(dev) * math.sqrt(n / (n - 1.0))
-    if not sd > _floor(rows.ravel(), p):
+    sd = _noise_sd(_robust_sd(dev) * math.sqrt(n / (n - 1.0)), rows.ravel(), p)
+    if not sd > 0.0:
         return np.array(rows, dtype=np.float64)
     out: FloatArray = mean + np.clip(dev, -CLIP_SD * sd, CLIP_SD * sd)
     return out
@@ -121,8 +127,8 @@ def outliers(y: Any, p: int, s: int, n: int, limit: float) -> tuple[int, float, 
     hit = np.zeros(rows.shape, dtype=bool)
     for _ in range(n):
         dev = _from_others(rows, hit)
-        sd = _robust_sd(dev)
-        if not sd > _floor(rows.ravel(), p):
+        sd = _noise_sd(_robust_sd(dev), rows.ravel(), p)
+        if not sd > 0.0:
             return 0, 0.0, []
         # ... and not shared by its neighbours in time (a drift or a transient moves whole stretches).
         flat = np.pad(dev.ravel(), 1, mode="reflect")
