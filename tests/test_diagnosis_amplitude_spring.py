@@ -63,7 +63,8 @@ def test_a_cubic_spring_on_x_is_not_named_one_linear_spring(shape: str) -> None:
     assert CLAUSE in d.verdict, d.verdict
 
 
-def test_a_linear_spring_on_x_keeps_its_name_without_the_clause() -> None:
-    d = bw.diagnose(_records(42, "linear", "resonant"))
+@pytest.mark.parametrize("shape", ["first", "resonant"])
+def test_a_linear_spring_on_x_keeps_its_name_without_the_clause(shape: str) -> None:
+    d = bw.diagnose(_records(42, "linear", shape))
     assert StiffnessX.kind in {t.term for t in d.named}, d.verdict
     assert CLAUSE not in d.verdict
