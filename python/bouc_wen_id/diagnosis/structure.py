@@ -37,6 +37,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import InsufficientDataError, InvalidParameterError, NonFiniteError, NotConvergedError
+from ..terms import Stiffness, StiffnessX
 from ..timedomain import FeedbackFit, FeedbackModel, fit_feedback_sines, steady_period
 from .data import DiagExperiment
 from .locate import adequacy_p
@@ -352,6 +353,31 @@ def feedback_test(
     return replace(res, named=True, reason="named", seconds=time.perf_counter() - t0), fit
 
 
+#: The library's linear springs: one k at every amplitude (a cascade with one leaves one G per frequency).
+LINEAR_SPRINGS = (Stiffness.kind, StiffnessX.kind)
+
+
+def spring_caveat(d: Diagnosis, test: StructureTest, alpha: float) -> str:
+    """The verdict's clause for a linear spring named (or named in part) while the apparent |G| moves with
+    the amplitude at a fixed frequency (:func:`gain_test` below ``alpha``, the feedback's own gate): "" else.
+
+    A linear spring cannot make the gain move, a stiffness that changes with the amplitude can (review 41:
+    a Duffing spring k3 x^3 on x was named ``stiffness@x`` k = 0.2968 +- 0.001 with its law passed at
+    p = 0.75). Its law cannot see it: below saturation a spring on x and the experiment's own |G| are one
+    column, so the low-amplitude experiments' k is undetermined (0.096 +- 0.23, the high ones' 0.301 +- 0.019;
+    ``studies/law_power_by_amplitude.py``) while their |G| takes the amplitude's change (0.95 and 1.42 at
+    one frequency)."""
+    springs = [t for t in (*d.named, *d.partial) if t.term in LINEAR_SPRINGS]
+    if not springs or not (math.isfinite(test.gain_p) and test.gain_p < alpha):
+        return ""
+    return (
+        f"; {springs[0].label} is not one linear spring: the apparent |G| moves with the amplitude at a "
+        f"fixed frequency (gains up to {test.gain_ratio:.3g}x apart, p = {test.gain_p:.2g}), which one k at "
+        "every amplitude cannot make; its k is an average over the amplitudes, and a stiffness that changes "
+        "with the amplitude (a hardening or softening spring, outside the library) may stand behind it"
+    )
+
+
 def with_structure(d: Diagnosis, alpha: float, held_out_test: bool) -> Diagnosis:
     """``d`` with the feedback candidate's test; when it is named, the verdict, status, final model and
     held-out comparison are the feedback's (the cascade's terms, stand-ins for it, become partial)."""
@@ -359,7 +385,12 @@ def with_structure(d: Diagnosis, alpha: float, held_out_test: bool) -> Diagnosis
     if test is None:
         return d
     if not test.named or fit is None:
-        return replace(d, structure=test, notes=(*d.notes, test.describe()))
+        return replace(
+            d,
+            verdict=d.verdict + spring_caveat(d, test, alpha),
+            structure=test,
+            notes=(*d.notes, test.describe()),
+        )
     exps = list(d.experiments)
     _, outs = _chi2(exps, fit.model)
     outputs = tuple(on_grid(e, y) for e, y in zip(exps, outs))
