@@ -212,7 +212,7 @@ def augmented_output(
     substeps: int,
     waveform: _F | None = None,
     input_shape: _F | None = None,
-    coulomb_smoothing: float = 0.01,
+    coulomb_smoothing: float = ...,
 ) -> tuple[_F, _F, _F]: ...
 
 # Bouc-Wen in feedback (rust/bindings/feedback.rs, issue #20)
@@ -253,7 +253,7 @@ def augmented_refine(
     waveforms: Sequence[_F] | None = None,
     experiment_substeps: Sequence[int] | None = None,
     input_shapes: Sequence[_F] | None = None,
-    coulomb_smoothing: float = 0.01,
+    coulomb_smoothing: float = ...,
 ) -> tuple[_F, _F, _F, float, int, bool, _F, list[_F], str, list[str]]: ...
 def get_budget() -> tuple[int, int, int]: ...
 def set_budget(max_samples: int, max_steps: int, max_bytes: int) -> tuple[int, int, int]: ...
