@@ -49,7 +49,9 @@ class RecordZeros:
     centre: float
     centre_se: float
     centre_p: float
-    kept: bool = True  # the common DC is fitted (an offset can be named); only the DCs about it are free
+    #: the common zero stands out of the recordings' spread (:func:`.data.common_centre`'s t-test): only then
+    #: is the set diagnosed with the zeros free (the common DC fitted, the DCs about it free)
+    kept: bool = True
     per_record: bool = True  # read by baseline.removed: the records are left as they are
 
     def note(self) -> str:
@@ -103,8 +105,8 @@ def zeros_of(d: Diagnosis, level: float) -> RecordZeros:
     for e, out in zip(d.experiments, d.plain.outputs):
         centres.append(float(np.mean(e.ybar - np.asarray(out))))
         noise.append(math.sqrt(e.noise_var / (e.periods * e.ybar.size)))
-    c, se, p, _ = common_centre(centres, level)
-    return RecordZeros(tuple(centres), float(np.mean(noise)), c, se, p)
+    c, se, p, kept = common_centre(centres, level)
+    return RecordZeros(tuple(centres), float(np.mean(noise)), c, se, p, kept)
 
 
 def freed(exps: Sequence[DiagExperiment]) -> list[DiagExperiment]:
@@ -132,6 +134,11 @@ def resolved(d: Diagnosis, level: float, rerun: Callable[[Any], Diagnosis]) -> D
     if not triggered(d):
         return d
     zeros = zeros_of(d, level)
+    if not zeros.kept:
+        # No common zero stands out of the recordings' spread (resets of both signs about ~0): that is the
+        # loop centres' case (fit_notes.centre_text, centre_only.py), said as centres that differ, with a
+        # common DC that cannot be told from a device offset - not one offset whose value moved.
+        return d
     return chosen(d, rerun(zeros))
 
 
