@@ -86,7 +86,9 @@ PI_STOPS = 64
 DAHL_EXPONENT = {"dahl": 1.0, "dahl_n2": 2.0}
 #: Effects whose contribution is linear in their parameter (sized in one shot).
 LINEAR = (*MECHANICAL, "offset", "dahl", "iwan", *FAMILY)
-COULOMB_EPS = 0.01  # tanh smoothing as a fraction of the peak velocity
+#: The Coulomb row's tanh smoothing, a fraction of the peak velocity: drawn per plant, log-uniform over this
+#: range (real dry friction has no fixed width; a fixed 1 % only ever met the library's own width).
+COULOMB_EPS_RANGE = (0.002, 0.05)
 MAX_INCREMENT = 0.05  # largest path increment of one RK4 step of the hysteresis (x ~ 1)
 
 
@@ -361,6 +363,13 @@ def _rk4(
     return wf
 
 
+def coulomb_width(seed: int) -> float:
+    """The plant's Coulomb smoothing width (fraction of peak velocity), from its own stream of the seed."""
+    lo, hi = COULOMB_EPS_RANGE
+    rng = np.random.default_rng([seed, 41])
+    return float(np.exp(rng.uniform(math.log(lo), math.log(hi))))
+
+
 def _parallel(
     p: Plant,
     eff: Effect,
@@ -389,7 +398,7 @@ def _parallel(
             "stiffness": sig0,
             "viscous": sig1,
             "inertia": sig2,
-            "coulomb": np.tanh(sig1 / (COULOMB_EPS * vmax)),
+            "coulomb": np.tanh(sig1 / (coulomb_width(p.seed) * vmax)),
         }[name]
         return val[..., None] * sig[None]
     if name in DAHL_EXPONENT:  # dF/dxi = sigma (1 - s F)^n along travel xi in direction s: exact per step

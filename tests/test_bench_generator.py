@@ -94,6 +94,8 @@ def test_generator_and_library_agree_on_the_library_terms(name: str, term: Any) 
     # The generator's own integration of each library term (on u) gives the library's steady loop: the
     # conventions (sign, smoothing, play from rest, the lag) are the same, the integrators are not.
     p = gen.make_plant(1, "resonant")
+    if name == "coulomb":  # the plant's own drawn smoothing width, carried by the library's term
+        term = bw.terms.Coulomb(term.f, smoothing=gen.coulomb_width(p.seed))
     value = float(getattr(term, term.symbol))
     y = gen.run(p, gen.Effect(name, "u", np.array([value])), total=TOTAL)[0]
     y_lib = np.stack([np.asarray(r.y) for r in _library(p, (term,))])
@@ -102,6 +104,19 @@ def test_generator_and_library_agree_on_the_library_terms(name: str, term: Any) 
     effect = np.max(np.abs(y[:, steady] - plain[:, steady]))
     assert effect > 1e-2  # the term is visible ...
     assert np.max(np.abs(y[:, steady] - y_lib[:, steady])) < TOL  # ... and the same in both
+
+
+def test_the_coulomb_width_is_drawn_per_seed_over_its_range() -> None:
+    # The bench must not meet only the library's default 1 % width: widths spread log-uniformly over the
+    # range, the same for a seed every time, and both sides of 1 % occur.
+    widths = np.array([gen.coulomb_width(seed) for seed in range(200)])
+    lo, hi = gen.COULOMB_EPS_RANGE
+    assert np.all((widths >= lo) & (widths <= hi))
+    assert gen.coulomb_width(7) == gen.coulomb_width(7)
+    below = np.mean(widths < bw.terms.Coulomb(1.0).smoothing)
+    expected = np.log(0.01 / lo) / np.log(hi / lo)
+    assert abs(below - expected) < 0.12  # binomial sd at n = 200 is < 0.036
+    assert np.ptp(np.log(widths)) > 0.8 * np.log(hi / lo)
 
 
 #: Every effect the generator hides (the feedback structure has its own integrator, tested apart).
