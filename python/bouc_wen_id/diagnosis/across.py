@@ -425,7 +425,13 @@ def _how(t: TermAcross) -> str:
             f"shared: {t.symbol} = {sf.value:.4g} +- {sf.standard_error:.2g} {t.unit} (one value refitted "
             f"at every condition fits as well as one per condition, p {_p(sf.p_value)})"
         ).replace(" )", ")")
-    if t.smooth_degree is None:
+    top = len(t.smooth_p) - 1  # the highest degree tested: one with a dof left (across_smooth.smoothness)
+    if t.smooth_degree is None and top < MAX_DEGREE:  # review 43: 3 conditions said "up to degree 2"
+        how = (
+            f"its values on no polynomial up to degree {top} in the condition within their se (a degree-"
+            f"{top + 1} curve passes through any {top + 2} values: nothing higher can be tested)"
+        )
+    elif t.smooth_degree is None:
         how = "its values not smooth in the condition (no polynomial up to degree "
         how += f"{MAX_DEGREE} fits them within their se)"
     elif t.shared:

@@ -111,7 +111,22 @@ def physical_twin(
     return PhysicalTwin(NamedTerm(o.term, sym, v, se, unit), o, _reason(o), dist <= EXACT, sep)
 
 
-def twin_text(twin: PhysicalTwin, beyond: Any, suggests: str) -> str:
+def removes(tr: Any, no_excess: bool) -> str:
+    """What a candidate would remove alone, its parenthesis left open after the adjusted p: its share of the
+    excess, or, when the step's cost shows no excess over its dof (``no_excess``: the model fails the
+    adequacy test on a coloured noise's statistic, adequacy_chi2.py, and every term's share reads 1), the
+    chi-square it removes - review 43 d6r: a negative damping "would remove 100 % of the excess" while the
+    model it would give stayed at chi2/dof 1.44 on the adequacy test."""
+    what = (
+        f"would lower the fit's chi2 by {tr.improvement:.3g} alone, where that chi2 shows no excess over its "
+        "dof (the misfit is in the adequacy test's statistic, which weighs the noise harmonic by harmonic)"
+        if no_excess
+        else f"would remove {100 * tr.share:.0f} % of the excess alone"
+    )
+    return f"{what} (p adj = {tr.p_adjusted:.2g}"
+
+
+def twin_text(twin: PhysicalTwin, beyond: Any, suggests: str, no_excess: bool = False) -> str:
     """The physical twin said first (its value, share, p and why it is not named), the reading beyond its
     range (``beyond``: a NamedTerm) as its alternative with what such a value suggests."""
     tr = twin.trial
@@ -119,10 +134,10 @@ def twin_text(twin: PhysicalTwin, beyond: Any, suggests: str) -> str:
     how = "exactly" if twin.exact else "within the noise"
     sep = f"; to separate them: {twin.separating_experiment}" if twin.separating_experiment else ""
     return (
-        f"{twin.named} would remove {100 * tr.share:.0f} % of the excess alone (p adj = {tr.p_adjusted:.2g}"
+        f"{twin.named} {removes(tr, no_excess)}"
         f"{why}); in this design it gives the same averaged periods ({how}) as {beyond}, beyond its "
         f"physical range ({suggests}){sep}"
     )
 
 
-__all__ = ["PhysicalTwin", "clearly_better", "physical_twin", "twin_text"]
+__all__ = ["PhysicalTwin", "clearly_better", "physical_twin", "removes", "twin_text"]

@@ -35,7 +35,7 @@ from typing import Any, Optional
 
 from ..augmented import AugFit
 from ..terms import TERMS
-from .bounds_clear import PhysicalTwin, clearly_better, physical_twin, twin_text
+from .bounds_clear import PhysicalTwin, clearly_better, physical_twin, removes, twin_text
 from .drift import DRIFT_TERMS
 from .fitting import Scale, physical
 from .result import NamedTerm, Status, term_symbol_unit
@@ -80,6 +80,8 @@ class Beyond:
     #: The final model's improvement when the best removes at least as much, but not clearly more (NaN
     #: otherwise): those that do are rival readings of what is named (:data:`BEYOND_MARK`).
     rivals_final: float = math.nan
+    #: The first step's cost showed no excess over its dof (:func:`.bounds_clear.removes`): no share said.
+    no_excess: bool = False
 
 
 def held_mu(fit: AugFit) -> Beyond:
@@ -148,7 +150,8 @@ def found(
         twins.append(physical_twin(exps, st, tr, level, s, units, substeps))
     beats = beats and best.improvement > imp_final
     rivals = bool(final.params.terms) and not beats and best.improvement >= imp_final
-    return Beyond(tuple(out), beats, face, mu, tuple(twins), imp_final if rivals else math.nan)
+    rival = imp_final if rivals else math.nan
+    return Beyond(tuple(out), beats, face, mu, tuple(twins), rival, st.before_cost <= st.before_dof)
 
 
 def _suggests(term: str) -> str:
@@ -183,10 +186,9 @@ def _found_parts(b: Beyond, fraction: float, kept: Sequence[NamedTerm]) -> tuple
     """(" within the terms' physical ranges" or "", the candidates said, the kept terms' clause or "")."""
     twins = (*b.twins, *(None,) * (len(b.found) - len(b.twins)))
     what = "; ".join(
-        twin_text(tw, t, _suggests(t.term))
+        twin_text(tw, t, _suggests(t.term), b.no_excess)
         if tw is not None
-        else f"{t} would remove {100 * tr.share:.0f} % of the excess alone (p adj = {tr.p_adjusted:.2g}), "
-        f"beyond its physical range: {_suggests(t.term)}"
+        else f"{t} {removes(tr, b.no_excess)}), beyond its physical range: {_suggests(t.term)}"
         for (t, tr), tw in zip(b.found, twins)
     )
     labels = ", ".join(t.label for t in kept)
@@ -220,7 +222,9 @@ def _rival_text(b: Beyond, named: Sequence[NamedTerm]) -> str:
         more = tr.improvement - b.rivals_final
         how = f"{more:.3g} chi-square more than they do" if more >= 0.05 else "as much as they do"
         if tw is not None:  # its physical twin first, the reading beyond its range as its alternative (F9)
-            items.append(f"{twin_text(tw, t, _suggests(t.term))}; it removes {how}, within chance")
+            items.append(
+                f"{twin_text(tw, t, _suggests(t.term), b.no_excess)}; it removes {how}, within chance"
+            )
         else:
             items.append(f"{t} (removes {how}, within chance; {_suggests(t.term)})")
     return f"; {BEYOND_MARK}: {'; '.join(items)}" if items else ""

@@ -100,9 +100,9 @@ class StructureTest:
             return f"feedback structure: {self.reason}"
         return (
             f"{FEEDBACK_WORDS}: the apparent |G| moves with the amplitude at a fixed frequency (gains up "
-            f"to {self.gain_ratio:.3g}x apart, p = {self.gain_p:.2g}); the feedback model fits at the noise "
-            f"floor (chi2/dof = {self.cost / max(self.dof, 1):.3g}, p = {self.p_value:.2g}) where the "
-            f"cascade fails, AIC {self.aic:.6g} against {self.aic_rival:.6g}"
+            f"to {ratio_apart(self.gain_ratio)} apart, p = {self.gain_p:.2g}); the feedback model fits at "
+            f"the noise floor (chi2/dof = {self.cost / max(self.dof, 1):.3g}, p = {self.p_value:.2g}) where "
+            f"the cascade fails, AIC {self.aic:.6g} against {self.aic_rival:.6g}"
             + ("" if self.held_out is None else ", and it predicts left-out experiments better")
         )
 
@@ -129,6 +129,12 @@ class StructureTest:
             "parameters": {k: {"value": v, "standard_error": n(se)} for k, v, se in self.parameters},
             "seconds": self.seconds,
         }
+
+
+def ratio_apart(ratio: float) -> str:
+    """Two gains' ratio said as how far apart they are: "0.46 %" under 1.1x (review 43: 1.0046 printed
+    "1x apart"), else "1.55x"."""
+    return f"{100 * (ratio - 1):.2g} %" if ratio < 1.1 else f"{ratio:.3g}x"
 
 
 def amplitude_groups(exps: Sequence[DiagExperiment]) -> list[list[int]]:
@@ -307,7 +313,8 @@ def feedback_test(
     if not (math.isfinite(gain_p) and gain_p < alpha):
         why = (
             f"not tried: the apparent |G| does not move with the amplitude at a fixed frequency beyond the "
-            f"fit's uncertainty (p = {gain_p:.2g}, gains up to {ratio:.3g}x apart), the feedback's signature"
+            f"fit's uncertainty (p = {gain_p:.2g}, gains up to {ratio_apart(ratio)} apart), the feedback's "
+            "signature"
         )
         return StructureTest(
             FEEDBACK, False, False, why, gain_p, ratio, seconds=time.perf_counter() - t0
@@ -372,9 +379,10 @@ def spring_caveat(d: Diagnosis, test: StructureTest, alpha: float) -> str:
         return ""
     return (
         f"; {springs[0].label} is not one linear spring: the apparent |G| moves with the amplitude at a "
-        f"fixed frequency (gains up to {test.gain_ratio:.3g}x apart, p = {test.gain_p:.2g}), which one k at "
-        "every amplitude cannot make; its k is an average over the amplitudes, and a stiffness that changes "
-        "with the amplitude (a hardening or softening spring, outside the library) may stand behind it"
+        f"fixed frequency (gains up to {ratio_apart(test.gain_ratio)} apart, p = {test.gain_p:.2g}), which "
+        "one k at every amplitude cannot make; its k is an average over the amplitudes, and a stiffness that "
+        "changes with the amplitude (a hardening or softening spring, outside the library) may stand behind "
+        "it"
     )
 
 

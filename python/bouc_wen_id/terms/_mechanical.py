@@ -80,7 +80,8 @@ class Viscous(Term):
     unphysical: ClassVar[str] = "a negative damping (energy supplied, not dissipated)"
     beyond: ClassVar[str] = (
         "energy supplied each cycle: an active element (a controlled actuator in the loop), or a phase error "
-        "between the recorded channels (a lag of u against y, or a negative stiffness seen through G's phase)"
+        "between the recorded channels (a lag of u against y, or a negative stiffness seen through G's "
+        "phase), or a loop whose shape changes with the rate (outside the model)"
     )
     linear: ClassVar[bool] = True
     scaling: ClassVar[tuple[float, float, float]] = (1.0, -1.0, 0.0)
