@@ -150,3 +150,17 @@ def test_the_soft_head_puts_an_out_of_range_candidate_after_the_mu_clause() -> N
     inside = bounds_said.Beyond(found=found, beats_final=True, mu=1.4)  # type: ignore[arg-type]
     head2 = bounds_said.apply(inside, "partly explained", (), (), 0.2)[2]
     assert head2.startswith("not explained within the terms' physical ranges") and "a negative mass" in head2
+
+
+def test_nothing_named_with_mu_at_its_lower_end_leads_with_the_soft_loop() -> None:
+    """Review 43 d5 (a plain mu = 0.8 device, resonant G, 8 ms delay, six frequencies): nothing named, the
+    headline read "unexplained structure remains ..." and the reason (mu held at 1) only in a later clause."""
+    status, named, head, tail = bounds_said.apply(
+        bounds_said.Beyond(mu_face="lower", mu=1.0), "unexplained", (), (), 0.3
+    )
+    assert status == "unexplained" and named == () and head.startswith(bounds_said.SOFT_HEAD), head
+    assert bounds_said.MU_MARK in tail  # the clause with both readings stays
+    inside = bounds_said.apply(bounds_said.Beyond(mu_face="", mu=1.3), "unexplained", (), (), 0.3)
+    assert inside[2] == ""  # mu inside its bracket: no such lead
+    upper = bounds_said.apply(bounds_said.Beyond(mu_face="upper", mu=5.0), "unexplained", (), (), 0.3)
+    assert upper[2] == ""  # the upper end is not a softer loop

@@ -307,6 +307,8 @@ def apply(
     # said by design_twin.py with the experiment that separates them); one that removes as much or more,
     # within chance, is a rival reading of what is named.
     rival = _rival_text(b, named) if b.found and named and math.isfinite(b.rivals_final) else ""
+    if mu and b.mu_face == "lower" and not named:  # review 43 d5: a mu = 0.8 null led "unexplained
+        return status, named, _soft_head(b), rival + mu  # structure remains", the reason in a later bullet
     return status, named, "", rival + mu
 
 
