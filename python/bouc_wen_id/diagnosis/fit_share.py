@@ -134,9 +134,9 @@ def refit(
     """``fit()`` (one fit of ``start`` on ``exps``, :func:`.fitting.fit_from`), or the stored result of the
     same inputs inside a :func:`scope` when :data:`speed.MEMO_REFITS`. The inputs the fit reads are the key
     (the waveforms only when ``start`` holds the distortion term), so only a fit run again from the very
-    same start on the same periods is taken from the store (session 43: 91 of the 607 refinements of MR
-    0.5 A, the detection limits', the second carry's and the plain fit's, repeated earlier ones). ``tag``: the
-    fitting functions in use, as in :func:`shared`."""
+    same start on the same periods is taken from the store (session 43: about 55 of the 607 refinements of
+    MR 0.5 A, the detection limits', the second carry's and the plain fit's, repeated earlier ones).
+    ``tag``: the fitting functions in use, as in :func:`shared`."""
     store = _active.get()
     if store is None or not speed.MEMO_REFITS:
         return fit()

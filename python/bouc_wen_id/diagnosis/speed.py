@@ -52,5 +52,5 @@ THREAD_CANDIDATE_FITS = True
 
 #: Fit a model from a start once per diagnosis (:func:`bouc_wen_id.diagnosis.fit_share.refit`): the same
 #: start on the same periods was refined again by the detection limits, the second carry and the plain fit
-#: (session 43: 91 of MR 0.5 A's 607 refinements).
+#: (session 43: about 55 of MR 0.5 A's 607 refinements).
 MEMO_REFITS = True
