@@ -84,6 +84,7 @@ def test_diagnosis_is_the_same_with_the_speed_switches_off(monkeypatch: pytest.M
     fast = bw.diagnose(case.recordings, candidates=cands)
     monkeypatch.setattr(speed, "ONE_BLAS_THREAD", False)
     monkeypatch.setattr(speed, "SCREEN_ONCE", False)
+    monkeypatch.setattr(speed, "MEMO_REFITS", False)
     slow = bw.diagnose(case.recordings, candidates=cands)
     assert fast.status == slow.status
     assert fast.verdict == slow.verdict

@@ -57,27 +57,38 @@ def scope(seeds: Iterable[Optional[Store]] = ()) -> Iterator[Store]:
 def _key(exps: Sequence[Any], base: Any, term: str, substeps: int, tag: Sequence[Any]) -> Optional[bytes]:
     """The digest of a fit's inputs (``tag``: the fitting functions in use, by name and identity, so a
     replaced one is another key), or None when they cannot be pickled (then nothing is shared)."""
+    terms = (*getattr(getattr(base, "params", None), "terms", ()), term)
+    return _digest((_plain_unless_distortion(exps, terms), base, term, int(substeps)), tag)
+
+
+def _plain_unless_distortion(exps: Sequence[Any], terms: Sequence[str]) -> list[Any]:
+    """``exps``, their waveforms emptied when ``terms`` (the fitted model's) lack the distortion term."""
     from dataclasses import replace
 
     import numpy as np
 
-    from .. import budget
     from ..terms import Distortion
 
+    if Distortion.kind in terms:
+        return list(exps)
+    # The input's waveform enters a fit only through the distortion term (rust/augmented/hysteresis.rs:
+    # its column scales the waveform; fitting.py reads it only to carry it through G): without the term
+    # two experiments that differ only there give the same fit. diagnose carries the waveforms through
+    # G (carry_through_g) and diagnose_across, without the distortion candidate, does not; the second
+    # carry (carry_refresh.py) refits the plain model on periods whose waveforms alone differ.
+    plain = np.zeros(0)
+    return [replace(e, waveform=plain) if getattr(e, "waveform", None) is not None else e for e in exps]
+
+
+def _digest(inputs: tuple[Any, ...], tag: Sequence[Any]) -> Optional[bytes]:
+    """The digest of ``inputs`` with the speed switches, the budget and the fitting functions ``tag`` (by
+    name and identity), or None when they cannot be pickled."""
+    from .. import budget
+
     switches = tuple(sorted((k, v) for k, v in vars(speed).items() if k.isupper()))
-    if Distortion.kind not in (*getattr(getattr(base, "params", None), "terms", ()), term):
-        # The input's waveform enters a fit only through the distortion term (rust/augmented/hysteresis.rs:
-        # its column scales the waveform; fitting.py reads it only to carry it through G): without the term
-        # two experiments that differ only there give the same fit. diagnose carries the waveforms through
-        # G (carry_through_g) and diagnose_across, without the distortion candidate, does not.
-        plain = np.zeros(0)
-        exps = [replace(e, waveform=plain) if getattr(e, "waveform", None) is not None else e for e in exps]
     names = tuple((getattr(f, "__module__", ""), getattr(f, "__qualname__", ""), id(f)) for f in tag)
     try:
-        raw = pickle.dumps(
-            (list(exps), base, term, int(substeps), switches, budget.get_budget(), names),
-            protocol=pickle.HIGHEST_PROTOCOL,
-        )
+        raw = pickle.dumps((*inputs, switches, budget.get_budget(), names), protocol=pickle.HIGHEST_PROTOCOL)
     except Exception:  # noqa: BLE001 - an input that does not pickle is fitted, not shared
         return None
     return hashlib.blake2b(raw, digest_size=32).digest()
@@ -96,7 +107,11 @@ def shared(
     store = _active.get()
     if store is None or not speed.SHARE_FITS:
         return fit()
-    key = _key(exps, base, term, substeps, tag)
+    return _stored(store, _key(exps, base, term, substeps, tag), fit)
+
+
+def _stored(store: Store, key: Optional[bytes], fit: Callable[[], Optional[Any]]) -> Optional[Any]:
+    """``store[key]``, else ``fit()`` stored there (and not stored when ``key`` is None)."""
     if key is None:
         return fit()
     if key in store:
@@ -106,3 +121,30 @@ def shared(
     out = fit()
     store[key] = out
     return out
+
+
+def refit(
+    exps: Sequence[Any],
+    start: Any,
+    substeps: int,
+    max_iter: int,
+    fit: Callable[[], Optional[Any]],
+    tag: Sequence[Any] = (),
+) -> Optional[Any]:
+    """``fit()`` (one fit of ``start`` on ``exps``, :func:`.fitting.fit_from`), or the stored result of the
+    same inputs inside a :func:`scope` when :data:`speed.MEMO_REFITS`. The inputs the fit reads are the key
+    (the waveforms only when ``start`` holds the distortion term), so only a fit run again from the very
+    same start on the same periods is taken from the store (session 43: about 55 of the 607 refinements of
+    MR 0.5 A, the detection limits', the second carry's and the plain fit's, repeated earlier ones).
+    ``tag``: the fitting functions in use, as in :func:`shared`."""
+    store = _active.get()
+    if store is None or not speed.MEMO_REFITS:
+        return fit()
+    return _stored(
+        store,
+        _digest(
+            ("fit_from", _plain_unless_distortion(exps, start.terms), start, int(substeps), int(max_iter)),
+            tag,
+        ),
+        fit,
+    )

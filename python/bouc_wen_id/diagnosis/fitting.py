@@ -19,7 +19,7 @@ from numpy.typing import NDArray
 from ..augmented import AugExperiment, AugFit, AugParams, augmented_output, fit_augmented
 from ..errors import BoucWenIdError, BudgetExceededError, SearchAtBoundError
 from ..terms import TERMS, Distortion, Place, StartContext
-from . import coulomb_width, free_dc, g_second, input_dc, speed
+from . import coulomb_width, fit_share, free_dc, g_second, input_dc, speed
 from .data import DiagExperiment
 
 FloatArray = NDArray[np.float64]
@@ -320,7 +320,14 @@ def fit_from(
     """One augmented fit of at most ``max_iter`` iterations, ended early once it stalls (:data:`STALL_CHI2`);
     None when the start leads nowhere (no steady loop, a rejected constraint). An experiment whose period
     means were taken out (a :class:`.free_dc.FreeDC`) has its DC free (``free_dc.py``)."""
-    return free_dc.fit(exps, start, substeps, max_iter, _fit_from)
+    return fit_share.refit(
+        exps,
+        start,
+        substeps,
+        max_iter,
+        lambda: free_dc.fit(exps, start, substeps, max_iter, _fit_from),
+        (free_dc.fit, _fit_from, fit_augmented),
+    )
 
 
 def _fit_from(

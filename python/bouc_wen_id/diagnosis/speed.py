@@ -49,3 +49,8 @@ LEAVE_OUT_EARLY = True
 #: in_order`): each is independent, in the Rust core without the interpreter's lock. One MR current level's
 #: candidate fits used 1.1 of the machine's 2 cores (review 40).
 THREAD_CANDIDATE_FITS = True
+
+#: Fit a model from a start once per diagnosis (:func:`bouc_wen_id.diagnosis.fit_share.refit`): the same
+#: start on the same periods was refined again by the detection limits, the second carry and the plain fit
+#: (session 43: about 55 of MR 0.5 A's 607 refinements).
+MEMO_REFITS = True
