@@ -3,55 +3,25 @@
 Session 42's record_zeros.py hooks into diagnose alone; diagnose-across's conditions never reached it. Three
 conditions, viscous damping on u growing with the condition, each recording's offset a few % apart from
 the others (a sensor re-zeroed between recordings): before (a5d6e90) "partly explained" by viscous damping
-and "asymmetry delta = -0.03052" (measured on these data), the offset refused for its law. A control with
+and "asymmetry delta = -0.03048" (measured on these data), the offset refused for its law. A control with
 ONE common offset is read as before.
 
-Data: tests/wiener_sim.py (RK4 on a resonant G's two states and w together, a pure delay on the drive),
-not the benches' generator; white noise 1 % of the RMS, or AR(1) noise (phi 0.8) of the same sd.
+Data: tests/wiener_sim.py's recordings (RK4 on a resonant G's two states and w together, a pure delay on the
+drive), not the benches' generator; white noise 1 % of the RMS, or AR(1) noise (phi 0.8) of the same sd.
 """
 
 from __future__ import annotations
 
-import math
 import warnings
 from typing import Any
 
 import bouc_wen_id as bw
-import numpy as np
 import pytest
-from wiener_sim import SETTLE, simulate
+from wiener_sim import recordings
 
 CANDS = ["offset", "viscous", "viscous@x", "asymmetry", "stiffness"]
 #: the damper's value per condition (y units per unit of u's rate)
 DAMPING = (0.002, 0.004, 0.006)
-
-
-def _noise(rng: np.random.Generator, n: int, sd: float, phi: float) -> Any:
-    """White (``phi`` 0) or AR(1) noise of standard deviation ``sd``."""
-    e = rng.normal(0.0, sd * math.sqrt(1.0 - phi**2), n)
-    out = np.empty(n)
-    prev = rng.normal(0.0, sd)
-    for k in range(n):
-        prev = phi * prev + e[k]
-        out[k] = prev
-    return out
-
-
-def _condition(
-    seed: int, offsets: list[float], c: float, phi: float, delta: float = 0.0, amps: Any = None
-) -> list[Any]:
-    freqs = np.array([2.0, 4.0, 6.0, 8.0])
-    a = np.full(freqs.size, 1.5) if amps is None else np.asarray(amps, dtype=np.float64)
-    h, u, w = simulate(freqs, a, delta)
-    rng = np.random.default_rng(seed)
-    out = []
-    for i, f in enumerate(freqs):
-        t = np.arange(w[i].size) * h[i]
-        du = -a[i] * 2 * math.pi * f * np.sin(2 * math.pi * f * t)
-        sd = 0.01 * float(np.sqrt(np.mean(w[i] ** 2)))
-        y = w[i] + c * du + offsets[i] + _noise(rng, t.size, sd, phi)
-        out.append(bw.Recording(t, u[i], y, float(a[i]), 2 * math.pi * float(f), settle_periods=SETTLE))
-    return out
 
 
 def _across(offsets: list[list[float]], phi: float = 0.0, spread: float = 1.0) -> Any:
@@ -59,7 +29,7 @@ def _across(offsets: list[list[float]], phi: float = 0.0, spread: float = 1.0) -
     groups = []
     for k, c in enumerate(DAMPING):
         zeros = [0.0198 + spread * (z - 0.0198) for z in offsets[k]]
-        groups.append(_condition(70 + k, zeros, c, phi))
+        groups.append(recordings(70 + k, zeros, c, phi=phi))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         return bw.diagnose_across(groups, list(DAMPING), candidates=CANDS)
@@ -101,7 +71,7 @@ def test_an_asymmetric_loop_beside_one_offset_keeps_its_asymmetry() -> None:
     """A real asymmetry (delta = 0.15, amplitudes 0.6 and 1.5) beside ONE offset 0.01 at every condition:
     its DCs follow the loop's law, the asymmetry is named (measured 0.1499 +- 0.0002), the zeros not said."""
     groups = [
-        _condition(80 + k, [0.01] * 4, c, 0.0, delta=0.15, amps=[0.6, 1.5, 0.6, 1.5])
+        recordings(80 + k, [0.01] * 4, c, delta=0.15, amps=[0.6, 1.5, 0.6, 1.5])
         for k, c in enumerate(DAMPING)
     ]
     with warnings.catch_warnings():
