@@ -109,6 +109,16 @@ BESIDE = "the period means trend in a straight line while the loop trends"
 FIXED = "the output's zero is taken as fixed"
 #: the clauses when a drift remains after it: the line taken out with the period means, or alone
 DRIFTS = ("the output's zero drifts (taken out", "the output's zero drifts beyond the degrading loop")
+#: ... said only when the model that predicted the loop's centre fits (status "explained"); else the line left
+#: may be that model's misfit (session 43, loop_centre.CentreCheck.text)
+UNSURE = "the fitted model does not fit well enough to say whether the zero drifts beyond it"
+
+
+def _drift_said(d: Any) -> bool:
+    """The drift beyond the loop's centre said as the zero's on a model that fits, else the qualified one."""
+    if d.status == "explained":
+        return any(c in d.verdict for c in DRIFTS) and UNSURE not in d.verdict
+    return UNSURE in d.verdict and not any(c in d.verdict for c in DRIFTS)
 
 
 @pytest.fixture
@@ -175,8 +185,9 @@ def test_a_degradation_under_a_drifting_zero_is_named(seed: int) -> None:
     assert BESIDE in d.verdict, d.verdict  # taken out, said so
     assert "differs in sign" not in d.verdict, d.verdict  # no loop centres read from the drift
     # Session 30: the degrading loop's own centre trend (the fitted model simulated) is taken off the period
-    # means and a drift remains: the zero's, said so (main: "a drifting zero or a degrading loop's centre").
-    assert any(c in d.verdict for c in DRIFTS) and FIXED not in d.verdict, d.verdict
+    # means and a drift remains: the zero's, said so (main: "a drifting zero or a degrading loop's centre"),
+    # when that model fits (session 43).
+    assert _drift_said(d) and FIXED not in d.verdict, d.verdict
     got = next(t for t in d.named if t.term == NU)
     assert abs(got.value - RATE) < 0.1 * RATE, d.summary()
 
@@ -195,7 +206,9 @@ def test_a_drifting_zero_beside_an_asymmetric_degrading_loop_is_found() -> None:
     held = "fitted with mu held at the lower end of its bracket, not named: asymmetry" in d.verdict
     assert NU in d.named_terms and (T.Asymmetry.kind in d.named_terms or held), d.summary()
     assert "not settled" not in d.verdict, d.verdict
-    assert any(c in d.verdict for c in DRIFTS) and FIXED not in d.verdict, d.verdict
+    # Session 43: the model fits in part here (asymmetry and degradation, "42 % of the excess", measured):
+    # the line left beyond its centre is not called the zero's drift, the clause says it cannot tell.
+    assert _drift_said(d) and FIXED not in d.verdict, d.verdict
     assert T.Offset.kind not in d.named_terms, d.summary()
 
 

@@ -4,6 +4,7 @@ taken off a record (the user's records unmodified) and no prediction without a n
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from types import SimpleNamespace
 from typing import Any, cast
 
@@ -61,3 +62,57 @@ def test_a_fixed_zero_is_qualified_when_the_predicting_model_fits_in_part(monkey
         and "fits the records only in part" in texts["partly explained"]
     ), texts
     assert "taken as fixed" in texts["explained"] and "only in part" not in texts["explained"], texts
+
+
+def test_a_drift_beyond_an_unfit_model_is_not_called_the_zeros(monkeypatch: Any) -> None:
+    """Session 43 (eps42): "the output's zero drifts" was said whenever a line was left beyond the predicted
+    centre, even when the model that predicted it failed its adequacy test; then the clause says the
+    loop's centre moves and that model does not fit well enough to say whether the zero drifts."""
+    recs = _recs(2e-5)  # a line the zero-drift test reads (the predicted centre flat: all of it is left)
+    monkeypatch.setattr(loop_centre, "predicted_slopes", lambda items, d: ([0.0] * len(items), 0.01))
+    texts = {}
+    for status in ("partly explained", "explained"):
+        got = loop_centre.check(recs, cast(Any, SimpleNamespace(status=status)), 0.05 / 20)
+        assert got is not None and got.remaining is not None
+        texts[status] = got.text()
+    assert "the output's zero drifts" not in texts["partly explained"], texts
+    assert "does not fit well enough to say whether the zero drifts" in texts["partly explained"], texts
+    assert "the output's zero drifts" in texts["explained"], texts
+
+
+@dataclass(frozen=True)
+class _Said:
+    """The fields of a diagnosis that :func:`loop_centre.resolved` reads and replaces."""
+
+    verdict: str
+    status: str
+    notes: tuple[str, ...] = ()
+    named: tuple[Any, ...] = ()
+    degradation: Any = None
+
+
+def test_an_unfit_model_sends_no_line_out_as_the_zeros(monkeypatch: Any) -> None:
+    """The third branch of :func:`loop_centre.resolved`: ``beside`` names no drift term, the records' own
+    model leaves a line and fails its adequacy test; that line is not taken out as the zero's (no third
+    diagnosis), and ``beside``'s undecided clause becomes the qualified one."""
+    recs = _recs(2e-5)
+    wander = zero_drift.detect(recs, 0.05 / 20)
+    assert wander is not None
+    # only the records' own model (status "partly explained") predicts a centre; ``beside`` names no drift
+    monkeypatch.setattr(
+        loop_centre,
+        "predicted_slopes",
+        lambda items, d: None if d.status == "beside" else ([0.0] * len(items), 0.01),
+    )
+    beside = _Said("explained in part by: x" + wander.clause(), "beside")
+    runs: list[int] = []
+
+    def run(items: Any) -> Any:
+        runs.append(len(items))
+        return _Said("explained in part by: y", "partly explained")
+
+    got = cast(Any, loop_centre.resolved(recs, 0.05 / 20, wander, cast(Any, beside), run))
+    assert len(runs) == 1, runs  # the records as they are only; no line taken out as the zero's
+    assert got.verdict.startswith("explained in part by: x"), got.verdict
+    assert "the output's zero drifts" not in got.verdict and wander.clause() not in got.verdict, got.verdict
+    assert "does not fit well enough to say whether the zero drifts" in got.verdict, got.verdict

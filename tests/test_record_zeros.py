@@ -12,35 +12,19 @@ delay on the sine drive, exact), not the benches' or the reviewer's generator; w
 
 from __future__ import annotations
 
-import math
 import warnings
 from typing import Any
 
 import bouc_wen_id as bw
 import numpy as np
 import pytest
-from wiener_sim import SETTLE, simulate
+from wiener_sim import recordings
 
 
 def _recordings(
     seed: int, offsets: list[float], c: float = 0.0, delta: float = 0.0, amps: Any = None
 ) -> list[Any]:
-    freqs = np.array([2.0, 4.0, 6.0, 8.0])
-    a = np.full(freqs.size, 1.5) if amps is None else np.asarray(amps, dtype=np.float64)
-    h, u, w = simulate(freqs, a, delta)
-    rng = np.random.default_rng(seed)
-    out = []
-    for i, f in enumerate(freqs):
-        t = np.arange(w[i].size) * h[i]
-        du = -a[i] * 2 * math.pi * f * np.sin(2 * math.pi * f * t)
-        clean = w[i] + c * du + offsets[i]
-        y = clean + rng.normal(0.0, 0.01 * float(np.sqrt(np.mean(w[i] ** 2))), t.size)
-        out.append(
-            bw.Recording(
-                t, u[i], y, amplitude=float(a[i]), frequency=2 * math.pi * float(f), settle_periods=SETTLE
-            )
-        )
-    return out
+    return recordings(seed, offsets, c, delta, amps)
 
 
 def _diagnose(recs: list[Any]) -> Any:

@@ -45,3 +45,41 @@ def simulate(freqs: np.ndarray, amps: np.ndarray, delta: float = 0.0, mu: float 
             s, t = s + hh / 6 * (k1 + 2 * k2 + 2 * k3 + k4), t + hh
     tt = np.arange(n)[:, None] * h[None, :]
     return h, (amps * np.cos(om * tt)).T, ws.T
+
+
+def recordings(
+    seed: int,
+    offsets: list[float],
+    c: float = 0.0,
+    delta: float = 0.0,
+    amps: Any = None,
+    phi: float = 0.0,
+) -> list[Any]:
+    """Recordings at 2, 4, 6 and 8 Hz (amplitude 1.5 unless ``amps``): :func:`simulate`'s w, viscous damping
+    on u (``c`` times u's rate), each one's output zero ``offsets[i]`` and noise of 1 % of w's RMS from
+    ``seed``, white or AR(1) with coefficient ``phi`` (the same sd)."""
+    import bouc_wen_id as bw
+
+    freqs = np.array([2.0, 4.0, 6.0, 8.0])
+    a = np.full(freqs.size, 1.5) if amps is None else np.asarray(amps, dtype=np.float64)
+    h, u, w = simulate(freqs, a, delta)
+    rng = np.random.default_rng(seed)
+    out = []
+    for i, f in enumerate(freqs):
+        t = np.arange(w[i].size) * h[i]
+        du = -a[i] * 2 * math.pi * f * np.sin(2 * math.pi * f * t)
+        sd = 0.01 * float(np.sqrt(np.mean(w[i] ** 2)))
+        y = w[i] + c * du + offsets[i] + (_ar1(rng, t.size, sd, phi) if phi else rng.normal(0.0, sd, t.size))
+        out.append(bw.Recording(t, u[i], y, float(a[i]), 2 * math.pi * float(f), settle_periods=SETTLE))
+    return out
+
+
+def _ar1(rng: np.random.Generator, n: int, sd: float, phi: float) -> Any:
+    """AR(1) noise of standard deviation ``sd``, started from its stationary law."""
+    e = rng.normal(0.0, sd * math.sqrt(1.0 - phi**2), n)
+    out = np.empty(n)
+    prev = rng.normal(0.0, sd)
+    for k in range(n):
+        prev = phi * prev + e[k]
+        out[k] = prev
+    return out

@@ -42,8 +42,8 @@ import math
 import time
 import warnings
 from collections.abc import Sequence
-from dataclasses import replace
-from typing import Any, Optional
+from dataclasses import dataclass, replace
+from typing import Any, Optional, cast
 
 from ..augmented import AugFit
 from ..errors import InvalidParameterError
@@ -115,24 +115,31 @@ def _group(
     own: Optional[Diagnosis],
     alpha: float = ALPHA,
     judged: tuple[Sequence[str], bool] = ((), True),
+    zeros: Any = None,
 ) -> _Group:
     """One condition's experiments prepared, checked and plain-fitted as :func:`diagnose` does; from its own
     diagnosis (``own``) when given (its experiments and plain fit, so nothing is fitted twice) unless it
     names degradation; ``judged``: the candidates and held-out rule of the condition's own judgement of a
-    drift (across_settling.degrades)."""
-    from . import baseline, free_dc, zero_drift
+    drift (across_settling.degrades); ``zeros``: the recordings' zeros differ, each one's DC left free about
+    their common one (across_zeros.py; the condition's own diagnosis not reused)."""
+    from . import baseline, free_dc, record_zeros, zero_drift
     from .data import prepare
     from .drift import DRIFT_TERMS
     from .run import _drift_checked, _localise
     from .settling import _check_experiments, _noise_floors, _settled
 
     level = alpha / max(len(cands), 1)  # a wandering zero (baseline.py) or a drifting one, as diagnose
-    wander = baseline.detect(items, level) or zero_drift.detect(items, level)
+    wander = zeros or baseline.detect(items, level) or zero_drift.detect(items, level)
     left = across_settling.from_own(own, label) if own is not None else ()  # its unsettled stay out
     degraded = own is not None and across_settling.names_degradation(own)  # not modelled across
     why = across_settling.why_own(own) if left else ""
+    # Its own diagnosis freed each recording's DC (record_zeros.py, no wander here): its experiments and plain
+    # fit are not this condition's as prepared below; prepared afresh, the joint steps decide (across_zeros)
+    freed = own is not None and wander is None and own.settings.get("common_dc") is not None
     if (
         own is not None
+        and zeros is None
+        and not freed
         and not degraded
         and own.plain_fit is not None
         and len(own.plain_fit.params.gains) == len(own.experiments)
@@ -151,6 +158,7 @@ def _group(
             warnings.simplefilter("ignore")  # the transient trim's warning is diagnose's to give
             settled, _ = _settled(baseline.removed(items, wander))
         exps, qnotes = _noise_floors(settled, prepare(settled))
+        exps = record_zeros.freed(exps) if zeros is not None else exps
         measured = not qnotes
         _check_experiments(exps)
         judge = lambda: True if degraded else across_settling.degrades(items, judged[0], alpha, judged[1])  # noqa: E731
@@ -184,6 +192,7 @@ def _group(
         moved=bool(moved),
         left_out=left,
         left_why=why,
+        zeros=zeros,
     )
 
 
@@ -552,8 +561,7 @@ def diagnose_across(
     InvalidParameterError
         Fewer than two groups, conditions that do not match the groups or repeat, unknown candidates.
     """
-    from .. import _threads
-    from . import across_clip, across_said, fit_share
+    from . import across_clip, across_said, across_zeros
     from .drift import DRIFT_TERMS
     from .run import ALL_CANDIDATES, _check_candidates
 
@@ -566,32 +574,13 @@ def diagnose_across(
     if not 0.0 < alpha < 1.0:
         raise InvalidParameterError(f"alpha = {alpha!r} must lie in (0, 1)")
     gs, own, checks, cut = across_clip.unclipped(gs, *across_stable.unpacked(per_condition, len(gs)), names)
-    seeds = [getattr(d, "fits", None) for d in own]  # their candidate fits, reused (fit_share.py)
-    with _threads.one_blas_thread(), fit_share.scope(seeds):
-        prepared, kept, kept_checks, unsettled = [], [], [], []
-        for i, (items, c, name) in enumerate(zip(gs, conds, names)):
-            report(f"preparing condition {name}", i, len(gs))
-            inputs.check_items(items, f"condition {name}")  # as diagnose checks them (inputs.py)
-            try:
-                judged = (_check_candidates(candidates), held_out_test)  # the drift's own judgement
-                prepared.append(_group(items, name, c, cands, own[i], alpha, judged))
-                kept.append(own[i])
-                kept_checks.append(checks[i])
-            except across_settling.NotSettled as e:  # no experiment settled there (across_settling.py)
-                unsettled.append(e)
-        settings: dict[str, Any] = {"not_settled": {u.label: list(u.names) for u in unsettled}}
-        few = across_settling.too_few(prepared, unsettled)  # one structure needs two settled conditions
-        if few is not None:
-            left = across_settling.notes(prepared, unsettled)
-            return AcrossDiagnosis(few, (), (), (), settings, time.perf_counter() - t0, notes=left)
-        if Distortion.kind in cands and not any(e.waveform.size for g in prepared for e in g.sx):
-            cands = tuple(c for c in cands if c != Distortion.kind)
-        steps = _select(prepared, cands, alpha, held_out_test, report)
-        report("held-out check of the joint structure", 0, 1)
-        terms = _terms(
-            prepared, steps, (y_unit or joined.units.get("y", ""), u_unit or joined.units.get("u", "")), alpha
-        )
-        conditions = _conditions(prepared, kept, held_out_test, kept_checks)
+    units = (y_unit or joined.units.get("y", ""), u_unit or joined.units.get("u", ""))
+    run = _Run(gs, conds, names, own, checks, cands, alpha, held_out_test, candidates, units, report)
+    got = _joint(run, [None] * len(gs))
+    if isinstance(got, AcrossDiagnosis):  # fewer than two settled conditions
+        return replace(got, seconds=time.perf_counter() - t0)
+    got = _zeros_resolved(run, got)  # the recordings' zeros differ inside a condition (across_zeros.py)
+    prepared, terms, conditions, steps, settings, unsettled = got
     report("done", 1, 1)
     settings |= {
         "candidates": list(cands),
@@ -603,11 +592,101 @@ def diagnose_across(
     out = _finished(prepared, terms, conditions, steps, settings, alpha, time.perf_counter() - t0)
     out = replace(  # what was left out as not settled (across_settling.py), as diagnose says it
         out,
-        verdict=out.verdict + across_settling.clause(prepared, unsettled) + across_clip.text(cut),
-        notes=(*joined.notes, *out.notes, *across_settling.notes(prepared, unsettled)),
+        verdict=out.verdict
+        + across_zeros.clause(prepared)  # the recordings' zeros freed (across_zeros.py)
+        + across_settling.clause(prepared, unsettled)
+        + across_clip.text(cut),
+        notes=(
+            *joined.notes,
+            *out.notes,
+            *across_zeros.notes(prepared),
+            *across_settling.notes(prepared, unsettled),
+        ),
     )
     out = across_said.said(out, prepared, dict(zip(names, gs)), y_unit, u_unit, joined.units)  # run.py's
     return readings.qualified(out, out.named, out.alternatives)  # the headline's qualifiers
+
+
+@dataclass(frozen=True)
+class _Run:
+    """What :func:`diagnose_across` was asked, checked: the joint selection's inputs (:func:`_joint`)."""
+
+    gs: Sequence[Any]
+    conds: Sequence[float]
+    names: Sequence[str]
+    own: Sequence[Optional[Diagnosis]]
+    checks: Sequence[Any]
+    cands: tuple[str, ...]
+    alpha: float
+    held_out_test: bool
+    candidates: Optional[Sequence[str]]
+    units: tuple[str, str]
+    report: ProgressCallback
+
+
+_Joint = tuple[
+    list[_Group],
+    tuple[TermAcross, ...],
+    tuple[ConditionResult, ...],
+    list[JointStep],
+    dict[str, Any],
+    list[Any],
+]
+
+
+def _joint(run: _Run, zeros: Sequence[Any]) -> Any:
+    """The conditions prepared (``zeros``: per condition, its recordings' zeros to free, or None) and the
+    joint selection run: ``(prepared, terms, conditions, steps, settings, unsettled)``, or the result
+    when fewer than two conditions settled."""
+    from .. import _threads
+    from . import fit_share
+    from .run import _check_candidates
+
+    cands, alpha, report = run.cands, run.alpha, run.report
+    seeds = [getattr(d, "fits", None) for d in run.own]  # their candidate fits, reused (fit_share.py)
+    with _threads.one_blas_thread(), fit_share.scope(seeds):
+        prepared, kept, kept_checks, unsettled = [], [], [], []
+        for i, (items, c, name) in enumerate(zip(run.gs, run.conds, run.names)):
+            report(f"preparing condition {name}", i, len(run.gs))
+            inputs.check_items(items, f"condition {name}")  # as diagnose checks them (inputs.py)
+            try:
+                judged = (_check_candidates(run.candidates), run.held_out_test)  # the drift's own judgement
+                prepared.append(_group(items, name, c, cands, run.own[i], alpha, judged, zeros[i]))
+                kept.append(run.own[i])
+                kept_checks.append(run.checks[i])
+            except across_settling.NotSettled as e:  # no experiment settled there (across_settling.py)
+                unsettled.append(e)
+        settings: dict[str, Any] = {"not_settled": {u.label: list(u.names) for u in unsettled}}
+        few = across_settling.too_few(prepared, unsettled)  # one structure needs two settled conditions
+        if few is not None:
+            left = across_settling.notes(prepared, unsettled)
+            return AcrossDiagnosis(few, (), (), (), settings, 0.0, notes=left)
+        if Distortion.kind in cands and not any(e.waveform.size for g in prepared for e in g.sx):
+            cands = tuple(c for c in cands if c != Distortion.kind)
+        steps = _select(prepared, cands, alpha, run.held_out_test, report)
+        report("held-out check of the joint structure", 0, 1)
+        terms = _terms(prepared, steps, run.units, alpha)
+        conditions = _conditions(prepared, kept, run.held_out_test, kept_checks)
+    return prepared, terms, conditions, steps, settings, unsettled
+
+
+def _zeros_resolved(run: _Run, got: _Joint) -> _Joint:
+    """``got``, or the joint selection again with each recording's DC free about its condition's common one
+    where the recordings' zeros differ (across_zeros.py, record_zeros.py's rule) when that fits better."""
+    from . import across_zeros
+
+    prepared, terms, _, steps, _, _ = got
+    status = across_verdict.judged(prepared, terms, run.alpha, steps)[0]
+    if not across_zeros.triggered(prepared, steps, status):
+        return got
+    zeros = across_zeros.found(prepared, run.alpha / max(len(run.cands), 1))  # diagnose's level
+    if zeros is None:
+        return got
+    by_label = {g.label: z for g, z in zip(prepared, zeros)}
+    again = _joint(run, [by_label.get(name) for name in run.names])
+    if isinstance(again, AcrossDiagnosis) or not across_zeros.chosen(prepared, again[0]):
+        return got
+    return cast(_Joint, again)
 
 
 def _finished(

@@ -59,6 +59,8 @@ class _Group:
     left_out: tuple[str, ...] = ()
     #: ... or why else (across_settling.DEGRADES: degradation explains their drift; UNTESTED: not tested)
     left_why: str = ""
+    #: The recordings' zeros differ: each experiment's DC free about their common one (across_zeros.py)
+    zeros: Any = None
     #: ``fit_with`` on this condition, once per (model, term) (select.memo_fit_with): an alternative's
     #: two-term fit is the next step's trial of that term.
     fit_term: Callable[[AugFit, str], Optional[AugFit]] = field(init=False, repr=False)

@@ -42,7 +42,8 @@ class CentreCheck:
     change: float  # the predicted centre's largest change over a record (units of y)
     remaining: Optional[zero_drift.Drift]
     #: the model that predicted the centre passed its adequacy test (the diagnosis "explained"); else it
-    #: fits only in part, and the zero is said fixed with that qualification (review of session 30)
+    #: fits only in part: the zero is said fixed with that qualification (review of session 30), and a line
+    #: left beyond it is not called the zero's drift (session 43)
     fits: bool = True
 
     def text(self) -> str:
@@ -56,6 +57,16 @@ class CentreCheck:
                 f"for the period means' trend{but}"
             )
         r = self.remaining
+        if not self.fits:
+            # The rest is measured against a model that fails its adequacy test: its line may be that
+            # model's misfit, not the zero's (session 42, eps42: said of a loop neither model fitted).
+            return (
+                "; the period means trend in a straight line while the loop trends (taken out, the DC not "
+                f"used): the loop's centre moves from period to period (the fitted model simulated: up to "
+                f"{self.change:.3g} over a record; the rest still trends, p = {r.p_value:.2g}); the fitted "
+                "model does not fit well enough to say whether the zero drifts beyond it; an output offset "
+                "or each experiment's own DC cannot be told from it"
+            )
         return (
             "; the period means trend in a straight line while the loop trends, beyond the degrading loop's "
             f"own centre (the fitted model simulated, up to {self.change:.3g} over a record, taken off: the "
@@ -174,7 +185,10 @@ def resolved(
     * the records as they are (``run(items)``): when its model's centre trend leaves no drift, it is
       reported (the zero fixed, the DC used: an asymmetry and an offset can be named);
     * else, when ``beside`` names a drift term: ``beside``, saying whether its model's centre trend
-      explains the line or the zero drifts beyond it;
+      explains the line or the zero drifts beyond it (only when that model passed its adequacy test; else
+      that the loop's centre moves and the model does not fit well enough to say: :meth:`CentreCheck.text`);
+    * else, when the records' own model leaves a drift and fails its adequacy test: ``beside``, saying the
+      loop's centre moves and that model does not fit well enough to tell whether the zero drifts beyond it;
     * else, when the records' own model leaves a drift: that remaining line alone is taken out of the
       records (each period's mean kept, so the loop's own centre and its trend stay in the DC) and they are
       diagnosed again; reported when a drift term is named there, else ``beside`` saying the zero drifts;
@@ -192,6 +206,10 @@ def resolved(
         return _said(beside, wander, first)
     if second is None or second.remaining is None:
         return beside
+    if not second.fits:
+        # The remaining line is measured against a model that fails its adequacy test: not taken for the
+        # zero's (it may be that model's misfit), said so on ``beside``.
+        return _said(beside, wander, second)
     zero = second.remaining
     third = run(less_trend(items, zero.slopes))
     if not _named_drift(third):

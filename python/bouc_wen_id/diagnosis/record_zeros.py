@@ -101,8 +101,14 @@ def triggered(d: Diagnosis) -> bool:
 def zeros_of(d: Diagnosis, level: float) -> RecordZeros:
     """The recordings' zeros read off ``d``'s plain model (each experiment's residual DC) and their common
     part's t-test at ``level``."""
+    return zeros_from(d.experiments, d.plain.outputs, level)
+
+
+def zeros_from(exps: Sequence[DiagExperiment], outputs: Sequence[Any], level: float) -> RecordZeros:
+    """The recordings' zeros: each experiment's residual DC under its plain model's ``outputs`` (units of
+    y) and their common part's t-test at ``level`` (:func:`zeros_of`; diagnose-across per condition)."""
     centres, noise = [], []
-    for e, out in zip(d.experiments, d.plain.outputs):
+    for e, out in zip(exps, outputs):
         centres.append(float(np.mean(e.ybar - np.asarray(out))))
         noise.append(math.sqrt(e.noise_var / (e.periods * e.ybar.size)))
     c, se, p, kept = common_centre(centres, level)
@@ -142,4 +148,4 @@ def resolved(d: Diagnosis, level: float, rerun: Callable[[Any], Diagnosis]) -> D
     return chosen(d, rerun(zeros))
 
 
-__all__ = ["RecordZeros", "triggered", "zeros_of", "freed", "chosen", "resolved"]
+__all__ = ["RecordZeros", "triggered", "zeros_of", "zeros_from", "freed", "chosen", "resolved"]
