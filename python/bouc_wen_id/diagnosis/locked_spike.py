@@ -64,7 +64,7 @@ class Spike:
             f"{self.source} (experiment {self.index + 1}): {where} "
             f"{abs(self.size):.3g} se off every model (beyond {limit:.2g} se, which Gaussian noise "
             f"passes once in the diagnosis with a chance of {OUTLIER_ALPHA:.0%}), alone and away from the "
-            "reversals of u and x: a disturbance locked to the excitation? (a spike at the same phase of "
+            "reversals of u: a disturbance locked to the excitation? (a spike at the same phase of "
             "every period: the drive's EMI, a switching transient, a glitch triggered by the encoder)"
         )
 
@@ -94,17 +94,28 @@ def _runs(mask: NDArray[np.bool_]) -> list[tuple[int, int]]:
     return out
 
 
-def _reversals(e: Any, phase: Optional[float]) -> NDArray[np.int64]:
-    """Samples of the averaged grid at the reversals of the input (its slope changes sign) and of the latent
-    ``x = A cos(2 pi j / P - phase)`` (when the fit gives its phase)."""
+def _reversals(e: Any, phase: Optional[float]) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+    """Samples of the averaged grid at the reversals of the input (its slope changes sign), and of the latent
+    ``x = A cos(2 pi j / P - phase)`` (none when the fit gives no phase)."""
     p = int(e.ybar.size)
     u = np.asarray(e.input(), dtype=np.float64)
     du = np.roll(u, -1) - u
-    at: list[int] = [int(a) for a in np.nonzero(np.sign(du) != np.sign(np.roll(du, 1)))[0]]
+    at_u = np.nonzero(np.sign(du) != np.sign(np.roll(du, 1)))[0].astype(np.int64)
+    at_x: list[int] = []
     if phase is not None and math.isfinite(phase):
         j0 = phase * p / (2.0 * math.pi)
-        at += [int(round(j0)) % p, int(round(j0 + p / 2.0)) % p]
-    return np.asarray(sorted(set(int(a) for a in at)), dtype=np.int64)
+        at_x = [int(round(j0)) % p, int(round(j0 + p / 2.0)) % p]
+    return at_u, np.asarray(at_x, dtype=np.int64)
+
+
+def _input_phase(e: Any, j: int) -> float:
+    """Sample ``j``'s phase of the input's cycle, as a fraction of the period."""
+    p = int(e.ybar.size)
+    return float(np.mod(j / p + float(e.grid_phase) / (2.0 * math.pi), 1.0))
+
+
+def _same_phase(a: float, b: float, p: int) -> bool:
+    return abs((a - b + 0.5) % 1.0 - 0.5) <= 1.5 / p
 
 
 def _near(first: int, n: int, at: NDArray[np.int64], p: int, width: int) -> bool:
@@ -132,7 +143,9 @@ def _z(e: Any, out: Any) -> FloatArray:
 
 def found(d: Any, rows: Sequence[Optional[FloatArray]] = ()) -> tuple[list[Spike], float]:
     """The locked spikes of diagnosis ``d`` (at most one run per experiment: its largest), and the threshold
-    in se. ``rows``: per experiment, its analysed raw periods (periods by samples) or None."""
+    in se. ``rows``: per experiment, its analysed raw periods (periods by samples) or None. A run near a
+    reversal of ``x`` (not of u) is kept when a run away from every reversal stands at the same phase of the
+    input in another experiment: G moves x's reversals from one frequency to another, not the disturbance."""
     exps = list(d.experiments)
     models = [m for m in (d.plain, d.final) if m is not None and len(m.outputs) == len(exps)]
     if (
@@ -146,35 +159,49 @@ def found(d: Any, rows: Sequence[Optional[FloatArray]] = ()) -> tuple[list[Spike
     limit = threshold(sum(int(e.ybar.size) for e in exps))
     fit = getattr(d, "final_fit", None)
     phases = list(getattr(getattr(fit, "params", None), "phases", ())) if fit is not None else []
-    spikes = []
+    clear: dict[int, Spike] = {}
+    at_x: list[Spike] = []
     for i, e in enumerate(exps):
-        zs = np.array([_z(e, m.outputs[i]) for m in models])
-        z = zs[np.argmin(np.abs(zs), axis=0), np.arange(zs.shape[1])]  # the smallest over the models
-        p = z.size
-        scale = max(1.0, 1.4826 * float(np.median(np.abs(z))))
-        bar = limit * scale
-        best: Optional[Spike] = None
-        for first, n in _runs(np.abs(z) > bar):
-            side = [(first - k) % p for k in range(1, SIDE + 1)] + [
-                (first + n - 1 + k) % p for k in range(1, SIDE + 1)
-            ]
-            if n > MAX_RUN or float(np.mean(np.abs(z[side]))) > 0.5 * bar:
+        raw = rows[i] if i < len(rows) else None
+        for sp in _candidates(i, e, [m.outputs[i] for m in models], raw, limit):
+            at_u, at_xs = _reversals(e, float(phases[i]) if i < len(phases) else None)
+            n, w = (sp.last - sp.first) % sp.samples + 1, reversal_window(sp.samples)
+            if _near(sp.first, n, at_u, sp.samples, w):
                 continue
-            phase = float(phases[i]) if i < len(phases) else None
-            if _near(first, n, _reversals(e, phase), p, reversal_window(p)):
-                continue
-            run = [(first + k) % p for k in range(n)]
-            top = run[int(np.argmax(np.abs(z[run])))]
-            raw = rows[i] if i < len(rows) else None
-            med = _median_residual(raw, np.asarray(models[-1].outputs[i], dtype=np.float64), first, n)
-            mean = abs(float(e.ybar[top]) - float(np.asarray(models[-1].outputs[i])[top]))
-            if med is not None and med < LOCKED_SHARE * mean:
-                continue  # one period's spike: outlier_notes says it
-            if best is None or abs(z[top]) > abs(best.size):
-                best = Spike(i, str(e.source), first, (first + n - 1) % p, p, float(z[top]))
-        if best is not None:
-            spikes.append(best)
-    return spikes, limit
+            if _near(sp.first, n, at_xs, sp.samples, w):
+                at_x.append(sp)
+            elif i not in clear or abs(sp.size) > abs(clear[i].size):
+                clear[i] = sp
+    for sp in at_x:
+        ph = _input_phase(exps[sp.index], sp.first)
+        seen = any(_same_phase(ph, _input_phase(exps[c.index], c.first), sp.samples) for c in clear.values())
+        if sp.index not in clear and seen:
+            clear[sp.index] = sp
+    return [clear[i] for i in sorted(clear)], limit
+
+
+def _candidates(i: int, e: Any, outs: Sequence[Any], raw: Optional[FloatArray], limit: float) -> list[Spike]:
+    """Experiment ``i``'s narrow runs beyond the threshold in every model (``outs``), alone, and standing in
+    the median over the periods when ``raw`` gives them."""
+    zs = np.array([_z(e, o) for o in outs])
+    z = zs[np.argmin(np.abs(zs), axis=0), np.arange(zs.shape[1])]  # the smallest over the models
+    p = z.size
+    bar = limit * max(1.0, 1.4826 * float(np.median(np.abs(z))))  # a broad misfit raises the bar
+    model = np.asarray(outs[-1], dtype=np.float64)
+    out = []
+    for first, n in _runs(np.abs(z) > bar):
+        side = [(first - k) % p for k in range(1, SIDE + 1)] + [
+            (first + n - 1 + k) % p for k in range(1, SIDE + 1)
+        ]
+        if n > MAX_RUN or float(np.mean(np.abs(z[side]))) > 0.5 * bar:
+            continue
+        run = [(first + k) % p for k in range(n)]
+        top = run[int(np.argmax(np.abs(z[run])))]
+        med = _median_residual(raw, model, first, n)
+        if med is not None and med < LOCKED_SHARE * abs(float(e.ybar[top]) - float(model[top])):
+            continue  # one period's spike: outlier_notes says it
+        out.append(Spike(i, str(e.source), first, (first + n - 1) % p, p, float(z[top])))
+    return out
 
 
 def matched(items: Sequence[Any], d: Any) -> list[Optional[int]]:
