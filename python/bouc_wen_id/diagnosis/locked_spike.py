@@ -12,12 +12,15 @@ standard errors of the averaged period (``sqrt(spread_var / periods)``), and kee
 :data:`MAX_RUN` adjacent samples (circular) that stands beyond the Bonferroni threshold of
 :func:`.outliers.threshold` (over every sample of every experiment, at :data:`.outliers.OUTLIER_ALPHA`) in
 both models, times the residual's own robust scale when it is above the noise (a broad misfit raises the
-bar), while its :data:`SIDE` neighbours on each side stay below half that threshold on average (a spike stands
-alone). A sharp residual at a reversal of the input or of the latent ``x`` is physics (Coulomb friction's
-step, play, the loop's corner), not interference: a run within :func:`reversal_window` samples of one is
-not said. With the raw periods of a Recording, the run must also stand in the median over the periods (at
-least half its size in the mean): one period's spike moves the mean by 1/N of its size and not the median
-(that is :func:`.outliers.outlier_notes`'s case), a locked one moves both.
+bar), while its :data:`SIDE` neighbours on each side lie on a straight line within half the threshold (rms)
+and the peak stands beyond the bar above that line (a spike stands alone; a rough misfit is structure).
+
+A sharp residual at a reversal of the input or of the latent ``x`` is physics (Coulomb friction's step,
+play, the loop's corner), not interference: a run within :func:`reversal_window` samples of one is not
+said; one at x's is, when a clear run stands at the same input phase in another experiment (:func:`found`).
+With the raw periods of a Recording, the run must also stand in the median over the periods (at least half
+its size in the mean): one period's spike moves the mean by 1/N of its size and not the median (that is
+:func:`.outliers.outlier_notes`'s case), a locked one moves both.
 
 :func:`bridged` replaces, in every period of the records, the run's samples by the straight line between
 their neighbours, so the diagnosis can be read again without them (run.py says both verdicts).
@@ -180,6 +183,22 @@ def found(d: Any, rows: Sequence[Optional[FloatArray]] = ()) -> tuple[list[Spike
     return [clear[i] for i in sorted(clear)], limit
 
 
+def _alone(z: FloatArray, first: int, n: int, peak: float, limit: float, bar: float) -> bool:
+    """Whether a run stands alone: its :data:`SIDE` neighbours each side lie on a straight line within half
+    the threshold (rms; a smooth misfit may carry the run, a rough one is structure: the real friction
+    damper's residual peaks 20-40 se among neighbours of 15-30), and the peak stands above that line beyond
+    ``bar``."""
+    p = z.size
+    offs = np.array(
+        [-k for k in range(SIDE, 0, -1)] + [n - 1 + k for k in range(1, SIDE + 1)], dtype=np.float64
+    )
+    side = z[(first + offs.astype(np.int64)) % p]
+    coef = np.polyfit(offs, side, 1)
+    off = float(np.sqrt(np.mean((side - np.polyval(coef, offs)) ** 2)))
+    j = float(np.argmax(np.abs(z[[(first + k) % p for k in range(n)]])))
+    return off < 0.5 * limit and abs(peak - float(np.polyval(coef, j))) > bar
+
+
 def _candidates(i: int, e: Any, outs: Sequence[Any], raw: Optional[FloatArray], limit: float) -> list[Spike]:
     """Experiment ``i``'s narrow runs beyond the threshold in every model (``outs``), alone, and standing in
     the median over the periods when ``raw`` gives them."""
@@ -190,13 +209,12 @@ def _candidates(i: int, e: Any, outs: Sequence[Any], raw: Optional[FloatArray], 
     model = np.asarray(outs[-1], dtype=np.float64)
     out = []
     for first, n in _runs(np.abs(z) > bar):
-        side = [(first - k) % p for k in range(1, SIDE + 1)] + [
-            (first + n - 1 + k) % p for k in range(1, SIDE + 1)
-        ]
-        if n > MAX_RUN or float(np.mean(np.abs(z[side]))) > 0.5 * bar:
+        if n > MAX_RUN:
             continue
         run = [(first + k) % p for k in range(n)]
         top = run[int(np.argmax(np.abs(z[run])))]
+        if not _alone(z, first, n, float(z[top]), limit, bar):
+            continue
         med = _median_residual(raw, model, first, n)
         if med is not None and med < LOCKED_SHARE * abs(float(e.ybar[top]) - float(model[top])):
             continue  # one period's spike: outlier_notes says it
