@@ -41,6 +41,7 @@ from . import (
     law_untested,
     left_out,
     lines,
+    locked_said,
     loop_centre,
     near_limit,
     one_amplitude,
@@ -392,6 +393,7 @@ def _diagnose(
     held_out_test: bool,
     units: tuple[str, str],
     progress: Progress,
+    spikes_checked: bool = True,
 ) -> tuple[Diagnosis, list[Any], tuple[str, str]]:
     """:func:`diagnose` itself (its arguments as given), with the experiments in one unit per quantity
     (:func:`harmonise`'s items, before any preprocessing) and the units the diagnosis reports."""
@@ -425,6 +427,14 @@ def _diagnose(
             _as_list(experiments), level, wander, d, lambda xs: _with_wander(list(xs), *args, None)
         )
     d = left_out.qualified(d)  # the records it was judged on, and those left out, in the headline
+    if spikes_checked:  # a spike at the same phase of every period: said, and read again bridged
+        d = locked_said.said(
+            d,
+            experiments,
+            lambda xs: _diagnose(xs, candidates, alpha, held_out_test, units, progress, spikes_checked=False)[
+                0
+            ],
+        )
     d = replace(d, seconds=time.perf_counter() - t0, notes=(*joined.notes, *d.notes))
     return d, list(joined.items), units
 
