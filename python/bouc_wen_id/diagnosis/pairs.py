@@ -62,6 +62,28 @@ beta = |gamma|) likewise. On the MR damper's 0.5 A level (lead 12 %) the check r
 that moved the hysteresis from mu = 1 to beta = |gamma|, and with it the triples built on it: the rule costs
 9 s of CPU there (21 -> 30 s); with that set kept and its 12 triples fitted it cost 51 s.
 
+**A member at its limit.** A two-term member (Dahl friction) refused beside its partner at its spring or
+dry-friction limit, or with its level not told from its null (a Dahl near its spring limit: its friction
+level runs off with a se to match), stands for the simpler term its fit leans to
+(:func:`.fitting.nearer_limit`: the spring where ``sigma A / Fc`` is below 1, dry friction above), and that
+pair is fitted in its place, at the same place, and judged by the same rules (:func:`_in_place`; only for
+that refusal of that member, so a Dahl refused for a small share does not bring a spring in). Review 43's
+Kelvin element on x (d2: stiffness 0.03 and viscous damping 0.0002 s on x, resonant G with a delay): the
+lead, Dahl friction on x, took the spring (sigma 0.0299) beside the damping and was refused for its null;
+the spring beside the damping was never fitted and the verdict was "unexplained".
+
+**A partner refused alone.** A member's share is what it removes of the excess its partner alone leaves
+above the degrees of freedom. Where that partner alone was refused (its law failed, or its value left its
+range) its cost explains nothing: a single value bent to the misfit can fall below the dof (review 43's
+d2fw, viscous damping on x alone at 2524 over 2536 dof while a spring on x was missing, its law p 6e-18),
+and the member beside it, a drop of 106 for one parameter, had a share of 0 and could never be named: the
+pair was refused because the term that needed it fits too well when its law is ignored. There the excess
+the partner leaves is counted as at least the chi-square's own spread ``sqrt(2 dof)``: the noise floor is
+known to no better, so a cost below it is not an excess explained. The 10 % rule then asks the member to
+move the cost by a tenth of that spread at least (7 on 2500 dof), still material against what a noise
+floor can tell, while the member's F test (Bonferroni over the candidates) carries the significance; where
+the partner alone leaves more than the spread the rule is unchanged.
+
 The same rules run once more, from an earlier model, in :mod:`.revisit`: where a single term was named and
 a later step's best candidate, removing most of what is left, fails its law (stiffness and viscous damping
 on u through a G without delay were named viscous damping on x), sets that could replace the named term
