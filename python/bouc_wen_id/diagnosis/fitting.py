@@ -662,18 +662,35 @@ def _fit_with(exps: Sequence[AugExperiment], fit: AugFit, term: str, substeps: i
 LIMIT_SHAPES = (0.05, 200.0)
 
 
-def at_a_limit(exps: Sequence[AugExperiment], fit: AugFit, term: str) -> bool:
-    """Whether ``fit``'s two-term element ``term`` sits at one of its limits (:data:`LIMIT_SHAPES`)."""
+def _shapes(exps: Sequence[AugExperiment], fit: AugFit, term: str) -> list[float]:
+    """``fit``'s shapes ``sigma A / Fc`` of the two-term element ``term`` per experiment (empty: not such an
+    element in ``fit``, or no friction, its null)."""
     cls, par = TERMS[term], fit.params
     if not cls.companion or term not in par.terms or cls.companion not in par.terms:
-        return False
+        return []
     fc = float(par.values[par.terms.index(term)])
     sigma = float(par.values[par.terms.index(cls.companion)])
     if fc <= 0.0:
-        return False  # no friction: the null, not a limit
+        return []  # no friction: the null, not a limit
     on_x = cls.acts_on == Place.X
-    shapes = [sigma * abs(e.amplitude * (g if on_x else 1.0)) / fc for e, g in zip(exps, par.gains)]
-    return max(shapes) < LIMIT_SHAPES[0] or min(shapes) > LIMIT_SHAPES[1]
+    return [sigma * abs(e.amplitude * (g if on_x else 1.0)) / fc for e, g in zip(exps, par.gains)]
+
+
+def at_a_limit(exps: Sequence[AugExperiment], fit: AugFit, term: str) -> bool:
+    """Whether ``fit``'s two-term element ``term`` sits at one of its limits (:data:`LIMIT_SHAPES`)."""
+    shapes = _shapes(exps, fit, term)
+    return bool(shapes) and (max(shapes) < LIMIT_SHAPES[0] or min(shapes) > LIMIT_SHAPES[1])
+
+
+def nearer_limit(exps: Sequence[AugExperiment], fit: AugFit, term: str) -> str:
+    """The simpler term (of ``term``'s ``limits``: the spring, ``Fc -> inf``, then dry friction,
+    ``sigma -> inf``) that ``fit``'s element leans to: the spring where the shapes' geometric mean is below 1
+    (the pre-sliding stiffness spans the travel), dry friction above; "" for a term without limits."""
+    shapes = _shapes(exps, fit, term)
+    limits: tuple[str, ...] = getattr(TERMS[term], "limits", ())
+    if len(limits) < 2 or not shapes or min(shapes) <= 0.0:
+        return ""
+    return str(limits[0] if sum(math.log(v) for v in shapes) < 0.0 else limits[1])
 
 
 def _fit_phase_screened(

@@ -62,6 +62,28 @@ beta = |gamma|) likewise. On the MR damper's 0.5 A level (lead 12 %) the check r
 that moved the hysteresis from mu = 1 to beta = |gamma|, and with it the triples built on it: the rule costs
 9 s of CPU there (21 -> 30 s); with that set kept and its 12 triples fitted it cost 51 s.
 
+**A member at its limit.** A two-term member (Dahl friction) refused beside its partner at its spring or
+dry-friction limit, or with its level not told from its null (a Dahl near its spring limit: its friction
+level runs off with a se to match), stands for the simpler term its fit leans to
+(:func:`.fitting.nearer_limit`: the spring where ``sigma A / Fc`` is below 1, dry friction above), and that
+pair is fitted in its place, at the same place, and judged by the same rules (:func:`_in_place`; only for
+that refusal of that member, so a Dahl refused for a small share does not bring a spring in). Review 43's
+Kelvin element on x (d2: stiffness 0.03 and viscous damping 0.0002 s on x, resonant G with a delay): the
+lead, Dahl friction on x, took the spring (sigma 0.0299) beside the damping and was refused for its null;
+the spring beside the damping was never fitted and the verdict was "unexplained".
+
+**A partner refused alone.** A member's share is what it removes of the excess its partner alone leaves
+above the degrees of freedom. Where that partner alone was refused (its law failed, or its value left its
+range) its cost explains nothing: a single value bent to the misfit can fall below the dof (review 43's
+d2fw, viscous damping on x alone at 2524 over 2536 dof while a spring on x was missing, its law p 6e-18),
+and the member beside it, a drop of 106 for one parameter, had a share of 0 and could never be named: the
+pair was refused because the term that needed it fits too well when its law is ignored. There the excess
+the partner leaves is counted as at least the chi-square's own spread ``sqrt(2 dof)``: the noise floor is
+known to no better, so a cost below it is not an excess explained. The 10 % rule then asks the member to
+move the cost by a tenth of that spread at least (7 on 2500 dof), still material against what a noise
+floor can tell, while the member's F test (Bonferroni over the candidates) carries the significance; where
+the partner alone leaves more than the spread the rule is unchanged.
+
 The same rules run once more, from an earlier model, in :mod:`.revisit`: where a single term was named and
 a later step's best candidate, removing most of what is left, fails its law (stiffness and viscous damping
 on u through a G without delay were named viscous damping on x), sets that could replace the named term
@@ -79,13 +101,13 @@ either a set of experiments (one set: :func:`.run.diagnose`) or a :class:`Rules`
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Collection, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from typing import Any, Optional
 
 from ..augmented import AugExperiment, AugFit
 from ..terms import TERMS, Distortion
-from .fitting import at_a_limit
+from .fitting import at_a_limit, nearer_limit
 from .select import (
     BOUNDARY_TERMS,
     LAW_ALPHA,
@@ -118,6 +140,12 @@ TRIPLES = True
 #: The candidates that did not pass alone are paired with the lead (and tried as a third term) only where
 #: the lead alone removes at least this share of the excess (module docstring, "Where it runs").
 OTHERS_SHARE = 0.5
+
+
+#: Why a member at its limit, or with its level not told from its null, is refused (after its label): the
+#: refusals :func:`_in_place` answers with the simpler term.
+AT_LIMIT = "sits at its spring or dry-friction limit, which the simpler term states"
+NOT_AWAY = "'s value is not told from its null beside"
 
 
 #: The faces of the hysteresis' admissible range (the core's ``Constraint`` names, ``fit.active``); a term's
@@ -186,6 +214,10 @@ class Rules:
 
     def away(self, fit: Any, term: str, level: float, s2: float) -> bool:
         return away_from_null(fit, term, level, s2)
+
+    def limit_of(self, fit: Any, term: str) -> str:
+        """The simpler term a two-term element's fit leans to (:func:`.fitting.nearer_limit`)."""
+        return nearer_limit(self.exps, fit, term)
 
     def law(self, fit: Any, term: str) -> float:
         return element_law_test(self.exps, fit, term, self.substeps)
@@ -265,9 +297,12 @@ def _member_tests(
     level: float,
     n_cands: int,
     members: Sequence[str] = (),
+    partner_refused: Collection[str] = (),
 ) -> tuple[tuple[float, ...], str]:
     """Each member's test given the others (rule 1 of the module docstring), ``without[m]`` the model of the
-    others: (adjusted p's, why refused)."""
+    others: (adjusted p's, why refused). ``partner_refused``: the members whose ``without`` model is a
+    partner refused alone (its law, or its range): the excess it leaves is counted as at least the
+    chi-square's own spread (module docstring, "A partner refused alone")."""
     r = _rules(exps)
     d1 = r.dof(fit)
     s2 = fit.cost / max(d1, 1)
@@ -279,7 +314,8 @@ def _member_tests(
         padj = min(1.0, p * n_cands) if math.isfinite(p) else math.nan
         ps.append(padj)
         # Its share of the excess the others leave (what the next single step would ask of it).
-        left = max(c_other - r.dof(f_other), 0.0)
+        d_other = r.dof(f_other)
+        left = max(c_other - d_other, math.sqrt(2.0 * d_other) if m in partner_refused else 0.0)
         share = min((c_other - fit.cost) / left, 1.0) if left > 0 else 0.0
         given = " and ".join(_label(t) for t in (members or without) if t != m)
         if why:
@@ -288,7 +324,7 @@ def _member_tests(
         if not r.physical(fit, m):
             why = f"{who} came out at its null or outside its physical range"
         elif r.at_limit(fit, m):
-            why = f"{who} sits at its spring or dry-friction limit, which the simpler term states"
+            why = f"{who} {AT_LIMIT}"
         elif not (math.isfinite(padj) and padj < level):
             why = f"{who} does not improve the fit significantly beside {given} (adjusted p = {padj:.2g})"
         elif share < MATERIAL_SHARE:
@@ -297,7 +333,7 @@ def _member_tests(
                 f"term must remove at least {100 * MATERIAL_SHARE:g} %)"
             )
         elif not r.away(fit, m, level, s2):
-            why = f"{who}'s value is not told from its null beside {given}"
+            why = f"{who}{NOT_AWAY} {given}"
     return tuple(ps), why
 
 
@@ -331,10 +367,13 @@ def fit_pairs(
     level: float,
     n_cands: int,
     drive: Sequence[tuple[Trial, Trial]] = (),
+    alone: Optional[Mapping[str, Trial]] = None,
 ) -> list[PairTrial]:
     """The pool's pairs, then the best with every other candidate (a second term too small to pass alone
     while the first absorbs part of it: the README plant's play beside its viscous damping), then the
-    ``drive`` pairs (:func:`drive_pairs`) not among them, fitted and given rule 1 (module docstring)."""
+    ``drive`` pairs (:func:`drive_pairs`) not among them, fitted and given rule 1 (module docstring). A
+    member refused at its limit is replaced by that limit (:func:`_in_place`; ``alone``: every candidate's
+    trial alone, by term)."""
     pairs = [(a, b) for i, a in enumerate(pool) for b in pool[i + 1 :]]
     pairs += [(pool[0], b) for b in others] if pool else []
     seen = {frozenset((a.term, b.term)) for a, b in pairs}
@@ -348,11 +387,68 @@ def fit_pairs(
         if f is None or not math.isfinite(f.cost):
             out.append(_no_fit((a.term, b.term)))
             continue
-        without = {a.term: (b.cost, b.fit), b.term: (a.cost, a.fit)}
-        ps, why = _member_tests(exps, f, without, level, n_cands)
-        why = why or _joint(exps, current, f, 2, n_cands, level)
-        out.append(PairTrial((a.term, b.term), f.cost, current.cost - f.cost, ps, refused=why, fit=f))
+        out.append(_pair_trial(exps, current, a, b, f, level, n_cands, alone or {}))
+        simpler = _in_place(exps, out[-1], a, b, alone or {})
+        if simpler is not None and frozenset(t.term for t in simpler) not in seen:
+            keep, limit = simpler
+            seen.add(frozenset((keep.term, limit.term)))
+            assert keep.fit is not None
+            g = fit_term(keep.fit, limit.term)  # the simpler term in the refused member's place
+            if g is None or not math.isfinite(g.cost):
+                out.append(_no_fit((keep.term, limit.term)))
+            else:
+                out.append(_pair_trial(exps, current, keep, limit, g, level, n_cands, alone or {}))
     return out
+
+
+def _refused_alone(exps: Any, tr: Trial, alone: Mapping[str, Trial]) -> bool:
+    """Whether a candidate fitted alone was refused by its law or its range (its cost explains nothing)."""
+    tr = alone.get(tr.term, tr)  # the step's trial, its law run (the order's copy may predate it)
+    return not tr.law_holds or (tr.fit is not None and not _rules(exps).physical(tr.fit, tr.term))
+
+
+def _pair_trial(
+    exps: Any,
+    current: AugFit,
+    a: Trial,
+    b: Trial,
+    f: AugFit,
+    level: float,
+    n_cands: int,
+    alone: Mapping[str, Trial],
+) -> PairTrial:
+    """The pair ``a``, ``b`` fitted as ``f`` with rule 1 (each member given the other alone, then jointly)."""
+    assert a.fit is not None and b.fit is not None
+    without = {a.term: (b.cost, b.fit), b.term: (a.cost, a.fit)}
+    refused = [m.term for m, o in ((a, b), (b, a)) if _refused_alone(exps, o, alone)]
+    ps, why = _member_tests(exps, f, without, level, n_cands, partner_refused=refused)
+    why = why or _joint(exps, current, f, 2, n_cands, level)
+    return PairTrial((a.term, b.term), f.cost, current.cost - f.cost, ps, refused=why, fit=f)
+
+
+def _in_place(
+    exps: Any, p: PairTrial, a: Trial, b: Trial, alone: Mapping[str, Trial]
+) -> Optional[tuple[Trial, Trial]]:
+    """(the kept member, the simpler term's trial alone) where ``p`` was refused for a two-term member (Dahl
+    friction) at its limit or with its level not told from its null, and the simpler term its fit leans to
+    (:func:`.fitting.nearer_limit`) was fitted alone and does not clash with the kept member; else None
+    (module docstring, "A member at its limit")."""
+    if not p.refused or p.fit is None:
+        return None
+    r = _rules(exps)
+    for m, keep in ((a, b), (b, a)):
+        why = p.refused.removeprefix(_label(m.term))
+        if why == p.refused or not (why.startswith(NOT_AWAY) or why == f" {AT_LIMIT}"):
+            continue  # refused for another reason, or for the other member
+        limit_of = getattr(r, "limit_of", None)  # one set of experiments only (not across.py's rules)
+        limit = alone.get(limit_of(p.fit, m.term)) if limit_of is not None else None
+        if limit is None or limit.fit is None or not math.isfinite(limit.cost):
+            continue
+        assert keep.fit is not None
+        if _clash(limit.term, [keep.term], [keep.fit]) or keep.term in limit.fit.params.terms:
+            continue
+        return keep, limit
+    return None
 
 
 def fit_triples(
@@ -537,7 +633,10 @@ def pair_step(
     if not (pool and (pool[0].share >= least or held)):  # a lead too small to hide a second term (docstring)
         others = []
     extra = {tr.term for tr in others} if held else set()
-    tried = fit_pairs(exps, current, pool, others, fit_term, level, n_cands, drive_pairs(order, refused))
+    alone = {tr.term: tr for tr in tested if tr.fit is not None}
+    tried = fit_pairs(
+        exps, current, pool, others, fit_term, level, n_cands, drive_pairs(order, refused), alone
+    )
     tried = off_face(extra, tried) if extra else tried
     ranked = sorted((p for p in tried if not p.refused), key=lambda p: p.cost)
     done: dict[tuple[str, ...], PairTrial] = {p.terms: p for p in tried}
