@@ -393,7 +393,7 @@ def _diagnose(
     held_out_test: bool,
     units: tuple[str, str],
     progress: Progress,
-    spikes_checked: bool = True,
+    check_spikes: bool = True,
 ) -> tuple[Diagnosis, list[Any], tuple[str, str]]:
     """:func:`diagnose` itself (its arguments as given), with the experiments in one unit per quantity
     (:func:`harmonise`'s items, before any preprocessing) and the units the diagnosis reports."""
@@ -427,11 +427,11 @@ def _diagnose(
             _as_list(experiments), level, wander, d, lambda xs: _with_wander(list(xs), *args, None)
         )
     d = left_out.qualified(d)  # the records it was judged on, and those left out, in the headline
-    if spikes_checked:  # a spike at the same phase of every period: said, and read again bridged
+    if check_spikes:  # a spike at the same phase of every period: said, and read again bridged
         d = locked_said.said(
             d,
             experiments,
-            lambda xs: _diagnose(xs, candidates, alpha, held_out_test, units, progress, spikes_checked=False)[
+            lambda xs: _diagnose(xs, candidates, alpha, held_out_test, units, progress, check_spikes=False)[
                 0
             ],
         )
