@@ -207,20 +207,7 @@ def removed(items: Any, wander: Any) -> Any:
         walk = step_variance(rec) if slopes is None else 0.0  # a straight line is no walk
         meta = {**dict(rec.metadata), MARK: repr(walk)}  # metadata holds strings
         new = y - shift + wander.centre
-        out.append(
-            Recording(
-                rec.t,
-                rec.u,
-                new,
-                rec.amplitude,
-                rec.frequency,
-                settle_periods=rec.settle_periods,
-                x=rec.x,
-                w=rec.w,
-                plant=rec.plant,
-                metadata=meta,
-            )
-        )
+        out.append(replace(rec, y=new, metadata=meta))
     return out
 
 

@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from dataclasses import replace
 from typing import Any, Optional
 
 import numpy as np
@@ -321,18 +322,7 @@ def removed(items: Any) -> tuple[Any, list[str]]:
             odds[hz] = min(odds[hz], searched * chance(top / lev, worth))
             changed = True
         if changed:
-            out[i] = Recording(
-                rec.t,
-                rec.u,
-                y_all,
-                rec.amplitude,
-                rec.frequency,
-                settle_periods=rec.settle_periods,
-                x=rec.x,
-                w=rec.w,
-                plant=rec.plant,
-                metadata=dict(rec.metadata),
-            )
+            out[i] = replace(rec, y=y_all)
     vague = dict(resolved)
     notes = [_note(hz, seq, hits, vague[hz], odds[hz]) for hz, hits in where.items() if hits]
     if not notes:

@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any, Optional
 
 import numpy as np
@@ -252,7 +252,6 @@ def analysed_rows(items: Sequence[Any], d: Any) -> list[Optional[FloatArray]]:
 def bridged(items: Sequence[Any], d: Any, spikes: Sequence[Spike]) -> Optional[list[Any]]:
     """``items`` with each spike's samples, in every period of its Recording, on the straight line between
     their neighbours; None when a spike's experiment has no Recording among ``items``."""
-    from ..model import Recording
 
     out = list(items)
     where = matched(items, d)
@@ -274,18 +273,7 @@ def bridged(items: Sequence[Any], d: Any, spikes: Sequence[Spike]) -> Optional[l
                 continue
             frac = (np.arange(1, n + 1)) / (n + 1.0)
             y[idx] = y[lo] + frac * (y[hi] - y[lo])
-        out[k] = Recording(
-            rec.t,
-            rec.u,
-            y,
-            rec.amplitude,
-            rec.frequency,
-            settle_periods=rec.settle_periods,
-            x=rec.x,
-            w=rec.w,
-            plant=rec.plant,
-            metadata=dict(rec.metadata),
-        )
+        out[k] = replace(rec, y=y)
     return out
 
 

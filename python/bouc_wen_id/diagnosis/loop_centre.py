@@ -141,12 +141,7 @@ def less_trend(items: Sequence[Any], slopes: Sequence[float]) -> list[Any]:
     for rec, b in zip(items, slopes):
         if isinstance(rec, Recording):
             y = zero_drift.detrended(rec, b)
-            out.append(
-                Recording(
-                    rec.t, rec.u, y, rec.amplitude, rec.frequency, settle_periods=rec.settle_periods,
-                    metadata=dict(rec.metadata),
-                )
-            )  # fmt: skip
+            out.append(replace(rec, y=y))
         elif isinstance(rec, Measurement):
             t = np.asarray(rec.t, dtype=np.float64)
             y = np.asarray(rec.y, dtype=np.float64) - b * (t - float(np.mean(t)))

@@ -60,18 +60,7 @@ def _settled(experiments: Any) -> tuple[Any, list[str]]:
             )
             warnings.warn(msg + ". Pass recordings with more settle_periods to choose", TransientWarning, 3)
             notes.append(msg)
-            item = Recording(
-                item.t,
-                item.u,
-                item.y,
-                item.amplitude,
-                item.frequency,
-                settle_periods=s + extra,
-                x=item.x,
-                w=item.w,
-                plant=item.plant,
-                metadata=item.metadata,
-            )
+            item = replace(item, settle_periods=s + extra)
         out.append(item)
     return out, [*notes, *outlier_notes(out)]
 
