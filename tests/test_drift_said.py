@@ -67,7 +67,9 @@ def _loc(p: float, detected: bool) -> Localisation:
 def test_the_trend_clause_says_may_drift_short_of_the_strong_level() -> None:
     # One experiment, its trend test at p = 0.006: past its level (0.025), short of FIRM.
     said = drift_clause.clause(_loc(0.006, True), _loc(0.006, True), ())
-    assert said == "; the loop may drift from period to period (trend test: adjusted p = 0.006) (not modelled)"
+    assert said == (
+        "; the loop may drift from period to period (trend test: adjusted p = 0.006) (not modelled)"
+    )
     strong = drift_clause.clause(_loc(1e-6, True), _loc(1e-6, True), ())
     assert strong == "; the loop drifts from period to period (not modelled)"
     assert drift_clause.clause(_loc(0.3, False), _loc(0.3, False), ()) == ""
