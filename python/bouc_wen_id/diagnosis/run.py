@@ -696,9 +696,12 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
     named_deg = _deg_named(deg, setup.held_out_test)
     noise_dof, weights = sum(e.noise_dof for e in exps), adequacy_chi2.relative_weights(exps)  # (colour)
 
+    def statistic(fit: AugFit) -> float:  # the adequacy test's chi-square (a coloured noise weighed)
+        return adequacy_chi2.statistic(weights, fsx, fit.outputs, fit.cost)
+
     def p_of(fit: AugFit) -> float:
         dof = sum(a.ybar.size for a in sx) - free_dc.spent(sx) - (3 + len(fit.params.terms) + 2 * len(sx))
-        return adequacy_p(adequacy_chi2.statistic(weights, fsx, fit.outputs, fit.cost), dof, noise_dof)
+        return adequacy_p(statistic(fit), dof, noise_dof)
 
     def adequate(fit: AugFit) -> bool:
         p = p_of(fit)
@@ -710,6 +713,7 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
     passes, targeted = gate.plain_gate([p_of(start)], alpha, [moved], [setup.measured_noise])
     steady = step_candidates(cands, pure_sines=False)  # the planner's family too (candidates.py)
     kw: dict[str, Any] = {"alpha": alpha, "use_held_out": setup.held_out_test, "cache": {}}
+    kw["statistic"] = statistic  # a term's share where the cost shows no excess (excess_share.py)
     kw["pair_step"] = pairs.pair_step if pairs.ENABLED else None  # two large terms at once (pairs.py)
     kw["on_trial"] = lambda k, t, i, n: setup.report(f"step {k}: fitting candidate {t}", i, n)
     if passes and not targeted:
