@@ -22,7 +22,8 @@ share: its term, where the cost shows no excess, explains all there is (1), as b
 from __future__ import annotations
 
 import math
-from typing import Optional
+from collections.abc import Callable
+from typing import Any, Optional
 
 
 def share(
@@ -59,4 +60,17 @@ def share(
     return 0.0
 
 
-__all__ = ["share"]
+def reader(
+    statistic: Optional[Callable[[Any], float]], base: Any, fails: bool
+) -> Callable[[Any], Optional[tuple[float, float]]]:
+    """``fit -> (statistic(base), statistic(fit))``, :func:`share`'s ``read`` for the fits of a step from
+    ``base`` (the base's statistic computed once), or ``fit -> None`` when ``statistic`` is None or the base
+    does not need it (``fails``: its cost shows no excess while it fails the adequacy test; a refitted base
+    that passes has nothing to explain)."""
+    if statistic is None or not fails:
+        return lambda fit: None
+    a0 = statistic(base)
+    return lambda fit: (a0, statistic(fit))
+
+
+__all__ = ["reader", "share"]

@@ -819,8 +819,7 @@ def forward_select(
     (:func:`.pairs.pair_step`), when given, runs where a step named nothing while some candidate's law failed
     (never the targeted first step): a pair it names joins the model at that step. ``after_named``: that
     targeted first step follows a named term (after_named.py), its level ``gate.targeted_level``'s.
-    ``statistic(fit)``: the adequacy test's chi-square (adequacy_chi2.py), which a term's share is read on
-    where the fit's cost shows no excess (excess_share.py); without it, such a share is 0."""
+    ``statistic(fit)``: the adequacy test's chi-square, for the shares (:func:`.excess_share.reader`)."""
     memo: FoldCache = {} if cache is None else cache
     fit_term = memo_fit_with(exps, substeps)
     current, steps, first, refitted_from = plain, list[Step](), targeted, math.nan
@@ -831,12 +830,8 @@ def forward_select(
             break
         c0, d0 = current.cost, dof_of(exps, current)
         excess = max(c0 - d0, 0.0)
-        # No excess in the fit's own cost while the adequacy test fails (a coloured noise weighed by
-        # harmonic, adequacy_chi2.py): the share is read on the statistic that test reads (excess_share.py).
-        # A refitted base that passes has nothing to explain.
-        read0 = None
-        if statistic is not None and not first and excess == 0.0 and not adequate(current):
-            read0 = statistic(current)
+        # No excess in the cost while the adequacy test fails: the shares read its statistic (excess_share.py)
+        read = excess_share.reader(statistic, current, not first and excess == 0.0 and not adequate(current))
         trials = []
         # On threads (prefetch.py); progress: on_trial(step, term, index, count) before each result.
         said = None if on_trial is None else partial(_said, on_trial, len(steps) + 1, len(remaining))
@@ -851,8 +846,7 @@ def forward_select(
             stat, p = f_test(c0, f.cost, d1, boundary=t in BOUNDARY_TERMS, q=q)
             padj = min(1.0, p * len(remaining)) if math.isfinite(p) else math.nan
             # Capped at 1: a term cannot explain more than all of the excess (the rest of its drop is noise).
-            read = None if read0 is None else (read0, statistic(f) if statistic is not None else math.nan)
-            share = excess_share.share(c0, f.cost, d0, read, targeted=first)
+            share = excess_share.share(c0, f.cost, d0, read(f), targeted=first)
             ok = bool(math.isfinite(padj) and padj < level and share >= MATERIAL_SHARE) and _admissible(f, t)
             ok = ok and not at_null(f, t) and away_from_null(f, t, level, f.cost / max(d1, 1))
             trials.append(Trial(t, f.cost, c0 - f.cost, stat, p, padj, share, ok, fit=f))
