@@ -114,9 +114,9 @@ def physical_twin(
 def removes(tr: Any, no_excess: bool) -> str:
     """What a candidate would remove alone, its parenthesis left open after the adjusted p: its share of the
     excess, or, when the step's cost shows no excess over its dof (``no_excess``: the model fails the
-    adequacy test on a coloured noise's statistic, adequacy_chi2.py, and every term's share reads 1), the
-    chi-square it removes - review 43 d6r: a negative damping "would remove 100 % of the excess" while the
-    model it would give stayed at chi2/dof 1.44 on the adequacy test."""
+    adequacy test on a coloured noise's statistic, adequacy_chi2.py, and the share is read on that
+    statistic, excess_share.py), the chi-square it removes - review 43 d6r: a negative damping "would remove
+    100 % of the excess" while the model it would give stayed at chi2/dof 1.44 on the adequacy test."""
     what = (
         f"would lower the fit's chi2 by {tr.improvement:.3g} alone, where that chi2 shows no excess over its "
         "dof (the misfit is in the adequacy test's statistic, which weighs the noise harmonic by harmonic)"

@@ -15,6 +15,7 @@ from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 from .drift import DRIFT_TERMS
+from .drift_said import drifts
 from .locate import LEVEL, DriftFinding, Localisation
 
 if TYPE_CHECKING:  # a type only: result imports adequacy, which reads this module's clause
@@ -50,13 +51,16 @@ def beyond(text: str) -> bool:
 
 
 def clause(after: Localisation, before: Localisation, named: Sequence[NamedTerm]) -> str:
-    """The clause ('' when the after-record does not drift): "not modelled" without a named drift term;
+    """The clause ('' when the after-record does not drift): "not modelled" without a named drift term
+    (the loop "may drift", with the trend test's p, short of :data:`.drift_said.FIRM`);
     with one, the drift left beyond it, per experiment whose trend fires (module docstring)."""
     if not after.drift_detected:
         return ""
     drift_named = [t.term for t in named if t.term in DRIFT_TERMS]
     if not drift_named:
-        return "; the loop drifts from period to period (not modelled)"
+        # Said as a fact only at a strong level (drift_said.py): the trend test fires at 2.5 % (Bonferroni).
+        p = min(1.0, min(d.p_value for d in after.drift) * len(after.drift)) if after.drift else 0.0
+        return f"; {drifts('the loop', p, 'trend test', ' from period to period')} (not modelled)"
     was = {d.source: d for d in before.drift}
     where = "; ".join(_moves(d, was) for d in _fired(after.drift)) or "below each experiment's own test"
     return (

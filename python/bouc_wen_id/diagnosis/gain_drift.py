@@ -37,6 +37,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .drift import DegradationTest, DriftData, _inner
+from .drift_said import drifts
 from .result import TERM_LABELS, Diagnosis
 from .select import f_test
 
@@ -148,15 +149,17 @@ SEPARATING = (
 
 
 def text(deg: Optional[DegradationTest]) -> str:
-    """The verdict's clause when a drifting gain fits the drift as well as the degradation term ('' else)."""
+    """The verdict's clause when a drifting gain fits the drift as well as the degradation term ('' else);
+    the drift itself said as a fact only at :data:`.drift_said.FIRM` (drift_said.py)."""
     if deg is None or not deg.gain_alternative or not deg.gain_rates:
         return ""
     term = TERM_LABELS.get(deg.term, deg.term)
     rates = [100.0 * r for r in deg.gain_rates]
     span = f"{min(rates):+.2g} to {max(rates):+.2g}" if len(rates) > 1 else f"{rates[0]:+.2g}"
+    said = drifts("the period record", deg.p_adjusted, f"{term}'s test")  # "may drift" at a marginal p
     return (
-        f"; the period record drifts, and an output gain drifting over each record ({span} % per period: a "
-        f"sensor's gain, e.g. with temperature) fits the drift as well as {term} does ({term}'s test given "
+        f"; {said}, and an output gain drifting over each record ({span} % per period: a "
+        f"sensor's gain, e.g. with temperature) fits it as well as {term} does ({term}'s test given "
         f"the gain drift: adjusted p = {deg.gain_p_adjusted:.2g}): {term} or a drifting gain, neither named; "
         f"{SEPARATING} would tell"
     )

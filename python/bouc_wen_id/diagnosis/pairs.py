@@ -107,6 +107,7 @@ from typing import Any, Optional
 
 from ..augmented import AugExperiment, AugFit
 from ..terms import TERMS, Distortion
+from . import excess_share
 from .fitting import at_a_limit, nearer_limit
 from .select import (
     BOUNDARY_TERMS,
@@ -192,11 +193,18 @@ class Rules:
     ``per_set``: how many parameter sets one added term brings (1 here; the number of conditions across)."""
 
     per_set = 1
+    #: The adequacy test's chi-square of a fit (adequacy_chi2.py), which a member's share is read on where
+    #: the cost shows no excess (excess_share.py); None: such a share is 0.
+    statistic: Optional[Callable[[Any], float]] = None
 
     def __init__(
-        self, exps: Sequence[AugExperiment], substeps: int = 1, cache: Optional[FoldCache] = None
+        self,
+        exps: Sequence[AugExperiment],
+        substeps: int = 1,
+        cache: Optional[FoldCache] = None,
+        statistic: Optional[Callable[[Any], float]] = None,
     ) -> None:
-        self.exps, self.substeps, self.cache = exps, substeps, cache
+        self.exps, self.substeps, self.cache, self.statistic = exps, substeps, cache, statistic
 
     def dof(self, fit: Any) -> int:
         return dof_of(self.exps, fit)
@@ -233,8 +241,13 @@ class Rules:
         return memo_fit_with(self.exps, self.substeps)
 
 
-def _rules(exps: Any, substeps: int = 1, cache: Optional[FoldCache] = None) -> Rules:
-    return exps if isinstance(exps, Rules) else Rules(exps, substeps, cache)
+def _rules(
+    exps: Any,
+    substeps: int = 1,
+    cache: Optional[FoldCache] = None,
+    statistic: Optional[Callable[[Any], float]] = None,
+) -> Rules:
+    return exps if isinstance(exps, Rules) else Rules(exps, substeps, cache, statistic)
 
 
 @dataclass(frozen=True)
@@ -315,8 +328,9 @@ def _member_tests(
         ps.append(padj)
         # Its share of the excess the others leave (what the next single step would ask of it).
         d_other = r.dof(f_other)
-        left = max(c_other - d_other, math.sqrt(2.0 * d_other) if m in partner_refused else 0.0)
-        share = min((c_other - fit.cost) / left, 1.0) if left > 0 else 0.0
+        floor = math.sqrt(2.0 * d_other) if m in partner_refused else 0.0
+        read = None if r.statistic is None else (r.statistic(f_other), r.statistic(fit))
+        share = excess_share.share(c_other, fit.cost, d_other, read, floor)  # the one convention
         given = " and ".join(_label(t) for t in (members or without) if t != m)
         if why:
             continue
@@ -617,14 +631,15 @@ def pair_step(
     cache: Optional[FoldCache] = None,
     pool_size: int = POOL,
     others_share: Optional[float] = None,
+    statistic: Optional[Callable[[Any], float]] = None,
 ) -> tuple[Optional[PairChoice], tuple[PairTrial, ...]]:
     """The pair (or triple) named at a step whose candidates (``order``: those that passed their own tests,
     best first) all failed their laws, or None; with every set tried (module docstring). The best
     ``pool_size`` of ``order`` are paired with each other (the revisit pairs more: revisit.py); the
     candidates of ``tested`` that did not pass alone only where the lead's share is ``others_share``
     (:data:`OTHERS_SHARE` when None) or more. ``exps``: the experiments, or the :class:`Rules` the sets
-    are tested by (across_pairs.py)."""
-    exps = _rules(exps, substeps, cache)
+    are tested by (across_pairs.py). ``statistic``: :attr:`Rules.statistic`."""
+    exps = _rules(exps, substeps, cache, statistic)
     pool = [tr for tr in order if tr.fit is not None and tr.term not in refused][:pool_size]
     passed = {tr.term for tr in order}
     others = [tr for tr in tested if tr.term not in passed and tr.fit is not None and math.isfinite(tr.cost)]

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from typing import Any, Optional
 
@@ -677,6 +677,15 @@ def _scaled(exps: list[DiagExperiment], s: Scale, setup: _Setup) -> list[AugExpe
     return free_dc.marked(sx, [e.baseline_removed for e in exps], setup.common_dc)
 
 
+def _keywords(setup: _Setup, statistic: Callable[[AugFit], float]) -> dict[str, Any]:
+    """The steady selection's keywords (:func:`.select.forward_select`'s)."""
+    kw: dict[str, Any] = {"alpha": setup.alpha, "use_held_out": setup.held_out_test, "cache": {}}
+    kw["statistic"] = statistic  # a term's share where the cost shows no excess (excess_share.py)
+    kw["pair_step"] = pairs.pair_step if pairs.ENABLED else None  # two large terms at once (pairs.py)
+    kw["on_trial"] = lambda k, t, i, n: setup.report(f"step {k}: fitting candidate {t}", i, n)
+    return kw
+
+
 def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -> Diagnosis:
     """One diagnosis of checked experiments: the plain fit, degradation, the steady selection, the verdict."""
     cands, alpha = setup.cands, setup.alpha
@@ -696,22 +705,22 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
     named_deg = _deg_named(deg, setup.held_out_test)
     noise_dof, weights = sum(e.noise_dof for e in exps), adequacy_chi2.relative_weights(exps)  # (colour)
 
+    def statistic(fit: AugFit) -> float:  # the adequacy test's chi-square (a coloured noise weighed)
+        return adequacy_chi2.statistic(weights, fsx, fit.outputs, fit.cost)
+
     def p_of(fit: AugFit) -> float:
         dof = sum(a.ybar.size for a in sx) - free_dc.spent(sx) - (3 + len(fit.params.terms) + 2 * len(sx))
-        return adequacy_p(adequacy_chi2.statistic(weights, fsx, fit.outputs, fit.cost), dof, noise_dof)
+        return adequacy_p(statistic(fit), dof, noise_dof)
 
     def adequate(fit: AugFit) -> bool:
-        p = p_of(fit)
-        return bool(math.isfinite(p) and p >= alpha)
+        return bool(p_of(fit) >= alpha)  # (a NaN p: False)
 
     # The plain model's gate: the global test at alpha / 2, and when it accepts, the targeted step's tests at
     # the other alpha / 2, only on measured noise (select.py's docstring; design.md 10.3; gate.plain_gate).
     moved = named_deg or before.drift_detected
     passes, targeted = gate.plain_gate([p_of(start)], alpha, [moved], [setup.measured_noise])
     steady = step_candidates(cands, pure_sines=False)  # the planner's family too (candidates.py)
-    kw: dict[str, Any] = {"alpha": alpha, "use_held_out": setup.held_out_test, "cache": {}}
-    kw["pair_step"] = pairs.pair_step if pairs.ENABLED else None  # two large terms at once (pairs.py)
-    kw["on_trial"] = lambda k, t, i, n: setup.report(f"step {k}: fitting candidate {t}", i, n)
+    kw = _keywords(setup, statistic)
     if passes and not targeted:
         notes.append(NO_TARGETED_STEP)
         final, steps = start, list[Step]()

@@ -54,7 +54,7 @@ from numpy.typing import NDArray
 from ..augmented import AugExperiment, AugFit, augmented_output
 from ..errors import BudgetExceededError
 from ..terms import TERMS, Stiffness, physical_value
-from . import coulomb_width, fit_share, fitting, free_dc, prefetch, speed
+from . import coulomb_width, excess_share, fit_share, fitting, free_dc, prefetch, speed
 from .beside import only_beside
 from .fitting import best_of, fit_from, fit_own, fit_with, subset
 from .gate import targeted_level
@@ -810,6 +810,7 @@ def forward_select(
     on_trial: Optional[Any] = None,
     pair_step: Optional[Callable[..., tuple[Any, tuple[Any, ...]]]] = None,
     after_named: bool = False,
+    statistic: Optional[Callable[[AugFit], float]] = None,
 ) -> tuple[AugFit, list[Step]]:
     """Forward selection from ``plain``; ``adequate(fit) -> bool`` is the stopping test. ``targeted``: the
     global test accepted ``plain`` at ``alpha / 2``; the first step is the targeted one (module docstring),
@@ -817,7 +818,8 @@ def forward_select(
     term, index, count)``, when given, is called before each candidate's fit (progress). ``pair_step``
     (:func:`.pairs.pair_step`), when given, runs where a step named nothing while some candidate's law failed
     (never the targeted first step): a pair it names joins the model at that step. ``after_named``: that
-    targeted first step follows a named term (after_named.py), its level ``gate.targeted_level``'s."""
+    targeted first step follows a named term (after_named.py), its level ``gate.targeted_level``'s.
+    ``statistic(fit)``: the adequacy test's chi-square, for the shares (:func:`.excess_share.reader`)."""
     memo: FoldCache = {} if cache is None else cache
     fit_term = memo_fit_with(exps, substeps)
     current, steps, first, refitted_from = plain, list[Step](), targeted, math.nan
@@ -828,10 +830,8 @@ def forward_select(
             break
         c0, d0 = current.cost, dof_of(exps, current)
         excess = max(c0 - d0, 0.0)
-        # No excess in the fit's own cost: the targeted step, or a model the adequacy test fails on a
-        # statistic the cost does not show (a coloured noise weighed harmonic by harmonic, adequacy_chi2.py):
-        # a term that removes cost explains all there is. A refitted base that passes has nothing to explain.
-        no_excess = 1.0 if first or (excess == 0.0 and not adequate(current)) else 0.0
+        # No excess in the cost while the adequacy test fails: the shares read its statistic (excess_share.py)
+        read = excess_share.reader(statistic, current, not first and excess == 0.0 and not adequate(current))
         trials = []
         # On threads (prefetch.py); progress: on_trial(step, term, index, count) before each result.
         said = None if on_trial is None else partial(_said, on_trial, len(steps) + 1, len(remaining))
@@ -845,9 +845,8 @@ def forward_select(
             q += coulomb_width.extra_dof(current.params, f.params)  # a dry friction's width, profiled
             stat, p = f_test(c0, f.cost, d1, boundary=t in BOUNDARY_TERMS, q=q)
             padj = min(1.0, p * len(remaining)) if math.isfinite(p) else math.nan
-            # No excess at all (the targeted step): a term that removes cost explains all there is; a term
-            # cannot explain more than all of it (capped: the rest of its improvement is noise).
-            share = min((c0 - f.cost) / excess, 1.0) if excess > 0 else no_excess
+            # Capped at 1: a term cannot explain more than all of the excess (the rest of its drop is noise).
+            share = excess_share.share(c0, f.cost, d0, read(f), targeted=first)
             ok = bool(math.isfinite(padj) and padj < level and share >= MATERIAL_SHARE) and _admissible(f, t)
             ok = ok and not at_null(f, t) and away_from_null(f, t, level, f.cost / max(d1, 1))
             trials.append(Trial(t, f.cost, c0 - f.cost, stat, p, padj, share, ok, fit=f))
@@ -870,7 +869,7 @@ def forward_select(
         pair, tried = (
             (None, ())
             if pair_step is None or chosen is not None or first or not law_failed
-            else (pair_step(exps, current, order, tested, refused, fit_term, *ctx))
+            else (pair_step(exps, current, order, tested, refused, fit_term, *ctx, statistic=statistic))
         )
         if pair is not None:  # every candidate's law failed alone; two of them hold jointly (pairs.py)
             chosen, alternatives, law_failed = pair.trial, list(pair.alternatives), pair.unnamed(law_failed)
