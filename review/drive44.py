@@ -89,7 +89,6 @@ TRUTH_TERM = {
     "pinch": "pinching",
     "dahl": "dahl",
 }
-OUTSIDE = ("slack", "rate", "iwan")
 EFFECTS = (
     "inertia_u",
     "inertia_x",

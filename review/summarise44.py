@@ -10,15 +10,9 @@ import sys
 from pathlib import Path
 from typing import Any
 
-LIBRARY = {
-    "inertia_u": "inertia",
-    "inertia_x": "inertia@x",
-    "play": "play",
-    "nu": "degradation",
-    "eta": "stiffness_degradation",
-    "pinch": "pinching",
-    "dahl": "dahl",
-}
+sys.path.insert(0, str(Path(__file__).parent))
+from drive44 import TRUTH_TERM as LIBRARY  # noqa: E402  (the effects the library has a term for)
+
 ALPHA = 0.05
 
 
