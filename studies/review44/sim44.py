@@ -414,7 +414,7 @@ def recordings(p: Plant, d: Design, nz: Noise, seed: int, truth: Optional[dict[s
                 d.amps[i],
                 d.omegas[i],
                 settle_periods=d.settle,
-                metadata={"name": f"e{i}_w{d.omegas[i]:g}_U{d.amps[i]:g}", "source": "review/sim44.py"},
+                metadata={"name": f"e{i}_w{d.omegas[i]:g}_U{d.amps[i]:g}", "source": "review44/sim44.py"},
             )
         )
     return out

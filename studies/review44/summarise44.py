@@ -1,6 +1,6 @@
 """Review 44: classify each case of results44.jsonl and print the FINDINGS table (markdown) and a JSON digest.
 
-python review/summarise44.py review/results44.jsonl review/results44.json
+python studies/review44/summarise44.py studies/review44/results44.jsonl studies/review44/results44.json
 """
 
 from __future__ import annotations

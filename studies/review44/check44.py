@@ -1,6 +1,6 @@
 """Review 44's checks of its own simulator and of the quantiser's locked error (numbers in FINDINGS.md).
 
-PYTHONPATH=python python review/check44.py
+PYTHONPATH=python python studies/review44/check44.py
 """
 
 from __future__ import annotations

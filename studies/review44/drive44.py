@@ -1,8 +1,8 @@
-"""Review 44's driver: build each case with review/sim44.py, run ``bw.diagnose``, append one JSON line.
+"""Review 44's driver: build each case with sim44.py, run ``bw.diagnose``, append one JSON line.
 
-    PYTHONPATH=python python review/drive44.py review/results44.jsonl [first [last]]
-    PYTHONPATH=python python review/drive44.py --one CASE_ID      # reproduce one case, print the verdict
-    PYTHONPATH=python python review/drive44.py --trace CASE_ID    # the same, an exception raised
+    PYTHONPATH=python python studies/review44/drive44.py studies/review44/results44.jsonl [first [last]]
+    PYTHONPATH=python python studies/review44/drive44.py --one CASE_ID    # one case: print the verdict
+    PYTHONPATH=python python studies/review44/drive44.py --trace CASE_ID  # the same, an exception raised
 
 A case's id is ``effect-size-config-seed``; the seed drives the noise only (the design is fixed per config).
 """
