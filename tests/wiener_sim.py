@@ -69,12 +69,12 @@ def recordings(
         t = np.arange(w[i].size) * h[i]
         du = -a[i] * 2 * math.pi * f * np.sin(2 * math.pi * f * t)
         sd = 0.01 * float(np.sqrt(np.mean(w[i] ** 2)))
-        y = w[i] + c * du + offsets[i] + (_ar1(rng, t.size, sd, phi) if phi else rng.normal(0.0, sd, t.size))
+        y = w[i] + c * du + offsets[i] + (ar1(rng, t.size, sd, phi) if phi else rng.normal(0.0, sd, t.size))
         out.append(bw.Recording(t, u[i], y, float(a[i]), 2 * math.pi * float(f), settle_periods=SETTLE))
     return out
 
 
-def _ar1(rng: np.random.Generator, n: int, sd: float, phi: float) -> Any:
+def ar1(rng: np.random.Generator, n: int, sd: float, phi: float) -> Any:
     """AR(1) noise of standard deviation ``sd``, started from its stationary law."""
     e = rng.normal(0.0, sd * math.sqrt(1.0 - phi**2), n)
     out = np.empty(n)
