@@ -803,6 +803,16 @@ def _choose(
     return chosen, final_trials, law_failed, refused
 
 
+def _ordered(
+    exps: Sequence[AugExperiment], passed: list[Trial], alpha: float, current: AugFit
+) -> list[Trial]:
+    """The step's passed candidates in the order they are tried: a simpler limit of the best first unless
+    the best beats it at ``alpha`` (:func:`simpler_first`), then a tied candidate at the place the named
+    terms of ``current`` act at (:func:`.place_tie.named_place_first`)."""
+    order = simpler_first(exps, passed, alpha)
+    return named_place_first(order, current.params.terms, partial(_tied_at, exps))
+
+
 def forward_select(
     exps: Sequence[AugExperiment],
     plain: AugFit,
@@ -862,8 +872,7 @@ def forward_select(
             current, refitted_from = better, c0  # refitted, once per step, and the step redone
             continue
         passed = sorted((tr for tr in trials if tr.passed), key=lambda tr: tr.cost)
-        order = simpler_first(exps, passed, level / len(remaining))  # Bonferroni, as the candidates' tests
-        order = named_place_first(order, current.params.terms, partial(_tied_at, exps))
+        order = _ordered(exps, passed, level / len(remaining), current)  # Bonferroni, as their tests
         alone = {t.term: t.p_value for t in steps[0].trials} if steps else {}
         ctx = (substeps, level, len(remaining), use_held_out, memo)
         chosen, final_trials, law_failed, refused = _choose(
