@@ -5,12 +5,14 @@ Prandtl-Ishlinskii loop beside it).
 RK4 on G's states (first order: a corner; second order: a resonance) and the Bouc-Wen state together, a pure
 delay on the sine drive (exact for a sine), four steps a sample. :func:`simulate` returns x, its rate and w
 per sample; the caller builds the output from them (``w + k x + c xdot``, or ``w + play_sum(x, ...)``).
-Used by test_pairs_kelvin_x.py and test_place_coloured.py.
+Used by test_pairs_kelvin_x.py, test_place_tie.py and test_masing_pi_on_x.py; :func:`sample_step` by
+wiener_sim.py too.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -43,6 +45,18 @@ class Run:
     w: Any
 
 
+def sample_step(rate: Callable[[Any, Any], Any], s: Any, t: Any, h: Any) -> tuple[Any, Any]:
+    """(state, time) one sample ``h`` later: :data:`SUBSTEPS` classical RK4 steps of ds/dt = rate(t, s)."""
+    hh = h / SUBSTEPS
+    for _ in range(SUBSTEPS):
+        k1 = rate(t, s)
+        k2 = rate(t + hh / 2, s + hh / 2 * k1)
+        k3 = rate(t + hh / 2, s + hh / 2 * k2)
+        k4 = rate(t + hh, s + hh * k3)
+        s, t = s + hh / 6 * (k1 + 2 * k2 + 2 * k3 + k4), t + hh
+    return s, t
+
+
 def simulate(g: Lin, freqs: Any, amps: Any, p: int, settle: int, periods: int) -> Run:
     """The noise-free runs at ``freqs`` (Hz) and ``amps`` (the sine's amplitude at u), ``p`` samples a
     period, ``settle + periods`` periods, started at rest."""
@@ -68,13 +82,7 @@ def simulate(g: Lin, freqs: Any, amps: Any, p: int, settle: int, periods: int) -
     xs, vs, ws = (np.zeros((n, om.size)) for _ in range(3))
     for i in range(n):
         xs[i], vs[i], ws[i] = s[0], lin(t, s[0], s[1])[0], s[2]
-        hh = h / SUBSTEPS
-        for _ in range(SUBSTEPS):
-            k1 = rate(t, s)
-            k2 = rate(t + hh / 2, s + hh / 2 * k1)
-            k3 = rate(t + hh / 2, s + hh / 2 * k2)
-            k4 = rate(t + hh, s + hh * k3)
-            s, t = s + hh / 6 * (k1 + 2 * k2 + 2 * k3 + k4), t + hh
+        s, t = sample_step(rate, s, t, h)
     tt = np.arange(n)[:, None] * h[None, :]
     return Run(h, (amps * np.cos(om * tt)).T, xs.T, vs.T, ws.T)
 

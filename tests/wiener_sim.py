@@ -10,6 +10,7 @@ import math
 from typing import Any
 
 import numpy as np
+from on_x_sim import sample_step
 
 P = 128
 WN, ZETA, DELAY = 2 * math.pi * 6.0, 0.25, 0.004  # G = WN^2 / (s^2 + 2 ZETA WN s + WN^2) e^{-s DELAY}
@@ -36,13 +37,7 @@ def simulate(freqs: np.ndarray, amps: np.ndarray, delta: float = 0.0, mu: float 
     s, t, ws = np.zeros((3, om.size)), np.zeros(om.size), np.zeros((n, om.size))
     for k in range(n):
         ws[k] = s[2]
-        hh = h / 4
-        for _ in range(4):
-            k1 = rate(t, s)
-            k2 = rate(t + hh / 2, s + hh / 2 * k1)
-            k3 = rate(t + hh / 2, s + hh / 2 * k2)
-            k4 = rate(t + hh, s + hh * k3)
-            s, t = s + hh / 6 * (k1 + 2 * k2 + 2 * k3 + k4), t + hh
+        s, t = sample_step(rate, s, t, h)  # four RK4 steps a sample
     tt = np.arange(n)[:, None] * h[None, :]
     return h, (amps * np.cos(om * tt)).T, ws.T
 
