@@ -1,5 +1,5 @@
 """A Kelvin element on x (a spring and a dashpot across the hysteresis, review 43 finding 1), on data made
-here: a resonant G with a delay and Bouc-Wen, RK4 in this file (not the library's, the benches' or
+here: a resonant G with a delay and Bouc-Wen, RK4 in on_x_sim.py (not the library's, the benches' or
 wiener_sim's generator), 1 % white noise from a seeded generator.
 
 main named neither: the pair step either never fitted the pair (a Dahl friction beside the damping was
@@ -14,39 +14,19 @@ import math
 
 import bouc_wen_id as bw
 import numpy as np
+from on_x_sim import Lin, simulate
 
 P, SETTLE, PERIODS = 128, 8, 16
-WN, ZETA, DELAY = 2 * math.pi * 10.0, 0.2, 0.005  # G = WN^2 e^{-s DELAY} / (s^2 + 2 ZETA WN s + WN^2)
-BETA, GAMMA, MU = 0.5, 0.3, 1.5
 K, C = 0.035, 0.00025  # y = w + K x + C xdot (review 43 d2: 0.03, 0.0002)
 
 
+G = Lin(2, 10.0, zeta=0.2, delay=0.005)  # G = WN^2 e^{-s DELAY} / (s^2 + 2 ZETA WN s + WN^2), WN = 2 pi 10
+
+
 def _simulate(freqs: np.ndarray, amps: np.ndarray, k: float, c: float) -> tuple[np.ndarray, ...]:
-    """(h, u, y) per experiment, noise-free: four RK4 steps a sample on (x, xdot, w)."""
-    om = 2 * math.pi * freqs
-    h = 2 * math.pi / om / P
-    n = (SETTLE + PERIODS) * P
-
-    def rate(t: np.ndarray, s: np.ndarray) -> np.ndarray:
-        x, v, w = s
-        a = WN**2 * (amps * np.cos(om * (t - DELAY)) - x) - 2 * ZETA * WN * v
-        pw = np.abs(w) ** MU
-        return np.array([v, a, v - BETA * np.abs(v) * pw * np.sign(w) - GAMMA * v * pw])
-
-    s, t = np.zeros((3, om.size)), np.zeros(om.size)
-    ys = np.zeros((n, om.size))
-    for i in range(n):
-        x, v, w = s
-        ys[i] = w + k * x + c * v
-        hh = h / 4
-        for _ in range(4):
-            k1 = rate(t, s)
-            k2 = rate(t + hh / 2, s + hh / 2 * k1)
-            k3 = rate(t + hh / 2, s + hh / 2 * k2)
-            k4 = rate(t + hh, s + hh * k3)
-            s, t = s + hh / 6 * (k1 + 2 * k2 + 2 * k3 + k4), t + hh
-    tt = np.arange(n)[:, None] * h[None, :]
-    return h, (amps * np.cos(om * tt)).T, ys.T
+    """(h, u, y) per experiment, noise-free: on_x_sim's RK4 on (x, xdot, w), four steps a sample."""
+    r = simulate(G, freqs, amps, P, SETTLE, PERIODS)
+    return r.h, r.u, r.w + k * r.x + c * r.v
 
 
 FREQS = np.repeat([6.0, 8.0, 10.0, 12.0, 14.0], 2)

@@ -10,6 +10,7 @@ import math
 from typing import Any
 
 import numpy as np
+from on_x_sim import sample_step
 
 P = 128
 WN, ZETA, DELAY = 2 * math.pi * 6.0, 0.25, 0.004  # G = WN^2 / (s^2 + 2 ZETA WN s + WN^2) e^{-s DELAY}
@@ -36,13 +37,7 @@ def simulate(freqs: np.ndarray, amps: np.ndarray, delta: float = 0.0, mu: float 
     s, t, ws = np.zeros((3, om.size)), np.zeros(om.size), np.zeros((n, om.size))
     for k in range(n):
         ws[k] = s[2]
-        hh = h / 4
-        for _ in range(4):
-            k1 = rate(t, s)
-            k2 = rate(t + hh / 2, s + hh / 2 * k1)
-            k3 = rate(t + hh / 2, s + hh / 2 * k2)
-            k4 = rate(t + hh, s + hh * k3)
-            s, t = s + hh / 6 * (k1 + 2 * k2 + 2 * k3 + k4), t + hh
+        s, t = sample_step(rate, s, t, h)  # four RK4 steps a sample
     tt = np.arange(n)[:, None] * h[None, :]
     return h, (amps * np.cos(om * tt)).T, ws.T
 
@@ -69,12 +64,12 @@ def recordings(
         t = np.arange(w[i].size) * h[i]
         du = -a[i] * 2 * math.pi * f * np.sin(2 * math.pi * f * t)
         sd = 0.01 * float(np.sqrt(np.mean(w[i] ** 2)))
-        y = w[i] + c * du + offsets[i] + (_ar1(rng, t.size, sd, phi) if phi else rng.normal(0.0, sd, t.size))
+        y = w[i] + c * du + offsets[i] + (ar1(rng, t.size, sd, phi) if phi else rng.normal(0.0, sd, t.size))
         out.append(bw.Recording(t, u[i], y, float(a[i]), 2 * math.pi * float(f), settle_periods=SETTLE))
     return out
 
 
-def _ar1(rng: np.random.Generator, n: int, sd: float, phi: float) -> Any:
+def ar1(rng: np.random.Generator, n: int, sd: float, phi: float) -> Any:
     """AR(1) noise of standard deviation ``sd``, started from its stationary law."""
     e = rng.normal(0.0, sd * math.sqrt(1.0 - phi**2), n)
     out = np.empty(n)

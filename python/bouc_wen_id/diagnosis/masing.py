@@ -24,14 +24,16 @@ still named a spring on x at 30x, and refused by the spring's law only at 100x; 
 of 2 cases. So the caveat is kept unless the design has the power to see such a loop and the data do not
 show it. The reference loops: the fitted spring ``k x`` made a Prandtl-Ishlinskii operator of the same
 elastic stiffness whose stops carry :data:`SHARE` of it, ``k (x - SHARE mean_j stop_rj(x))``, half-widths
-uniform over (0, reach], for each reach in :data:`REACHES` (of the saturation level in x), x the spring's
-own trace. Each reference loop's trace is projected off the final model's Jacobian (Bouc-Wen parameters,
-its terms, each experiment's |G| and phi, the free DCs), as limits.py does for a detection limit: what is
+over (0, reach] of each density in :data:`DENSITIES` (uniform, and falling to zero at the reach: a PI loop
+of mostly narrow stops, which the Bouc-Wen branch absorbs further), for each reach in :data:`REACHES` (of
+the saturation level in x), x the spring's own trace. Each reference loop's trace is projected off the final
+model's Jacobian (Bouc-Wen parameters, its terms, each experiment's |G| and phi, the free DCs), as limits.py
+does for a detection limit: what is
 left is what no move of the fitted structure absorbs (linear in the trace: measured, the refitted cost is
 4.0 times as large at SHARE 1 as at 0.5 on every case tried). Its squared size over the final fit's
 residual variance per dof is the noncentrality ``lam`` of the one-sided test of that direction on the
 final residual, ``z = <t, r> / sqrt(<t, t> s2)`` (stops have positive weights), at level alpha Bonferroni
-over the reaches. The design separates them when the weakest reference loop's ``lam`` reaches
+over the reference loops. The design separates them when the weakest reference loop's ``lam`` reaches
 ``(z_c + z_90)^2`` (90 % power); then the caveat is left out if no reach's z exceeds ``z_c``, and said with
 "the data point to one" if one does. When the design is too weak, the clause names the separating
 experiment: one added at :data:`PROBE_LEVELS` of saturation at the tested middle frequency (its ``lam``
@@ -66,8 +68,12 @@ REACHES = (0.1, 0.25, 0.5, 1.0)
 #: zero): the materiality standard of the caveat. A PI loop whose stops carry less is a spring on x to within
 #: a loop this design is not asked to see; one whose stops carry this share or more is what the caveat is for.
 SHARE = 0.5
-#: Stops per reference loop (midpoint rule over the uniform density of half-widths).
+#: Stops per reference loop (midpoint rule over the density of half-widths).
 STOPS = 8
+#: The reference loops' densities of stop half-widths over (0, reach]: uniform, and falling linearly to zero
+#: at the reach (most of the stops narrow, as a Prandtl-Ishlinskii loop whose weights decrease with the
+#: threshold: review 43's d6pir), each at every reach of :data:`REACHES`.
+DENSITIES = ("uniform", "falling")
 #: Latent levels (of saturation) of the candidate separating experiment, at the tested middle frequency.
 PROBE_LEVELS = (0.3, 0.6)
 #: Normal quantile of the power the separation is required to have (90 %).
@@ -93,6 +99,8 @@ class Separation:
     z_c: float = math.nan
     reach: float = math.nan
     hint: str = ""
+    #: The weakest loop's density of stop half-widths (:data:`DENSITIES`).
+    density: str = "uniform"
 
     @property
     def separable(self) -> bool:
@@ -104,9 +112,9 @@ class Separation:
         return bool(math.isfinite(self.z) and self.z > self.z_c)
 
 
-def _stops(x: np.ndarray, radii: np.ndarray) -> np.ndarray:
-    """Mean of stop operators of half-widths ``radii`` along the periodic path ``x`` (one period, steady:
-    the second pass of two)."""
+def _stops(x: np.ndarray, radii: np.ndarray, weights: np.ndarray) -> np.ndarray:
+    """Weighted mean (``weights`` summing to 1) of stop operators of half-widths ``radii`` along the periodic
+    path ``x`` (one period, steady: the second pass of two)."""
     z = np.zeros(radii.size)
     out = np.empty(x.size)
     for rep in range(2):
@@ -115,17 +123,24 @@ def _stops(x: np.ndarray, radii: np.ndarray) -> np.ndarray:
             z = np.clip(z + (x[k] - prev), -radii, radii)
             prev = x[k]
             if rep:
-                out[k] = float(z.mean())
+                out[k] = float(z @ weights)
     return out
 
 
+def _density(kind: str) -> np.ndarray:
+    """The weights of the :data:`STOPS` midpoints of (0, 1] under density ``kind`` (:data:`DENSITIES`)."""
+    mid = (np.arange(STOPS) + 0.5) / STOPS
+    w = np.ones(STOPS) if kind == "uniform" else 1.0 - mid
+    return np.asarray(w / w.sum())
+
+
 def _stop_traces(
-    exps: Sequence[AugExperiment], par: AugParams, substeps: int, reaches: Sequence[float]
+    exps: Sequence[AugExperiment], par: AugParams, substeps: int, reaches: Sequence[tuple[float, str]]
 ) -> list[list[np.ndarray]]:
-    """Per reach (x's units), each experiment's change of output when the spring on x, ``k x``, becomes a
-    Prandtl-Ishlinskii operator of the same elastic stiffness, ``k (x - SHARE mean stop_r(x))`` (a play of
-    width zero with weight ``1 - SHARE`` and plays of half-widths uniform over (0, reach]); x is the
-    spring's own trace over k."""
+    """Per reference (its reach in x's units, its density), each experiment's change of output when the
+    spring on x, ``k x``, becomes a Prandtl-Ishlinskii operator of the same elastic stiffness,
+    ``k (x - SHARE mean stop_r(x))`` (a play of width zero with weight ``1 - SHARE`` and plays of half-widths
+    over (0, reach] under the density, :func:`_density`); x is the spring's own trace over k."""
     j = par.terms.index(StiffnessX.kind)
     k = float(par.values[j])
     vals = np.where(np.arange(par.values.size) == j, 0.0, par.values)
@@ -138,7 +153,8 @@ def _stop_traces(
         / k
         for i, e in enumerate(exps)
     ]
-    return [[-SHARE * k * _stops(x, (np.arange(STOPS) + 0.5) / STOPS * r) for x in xs] for r in reaches]
+    mid = (np.arange(STOPS) + 0.5) / STOPS
+    return [[-SHARE * k * _stops(x, mid * r, _density(kind)) for x in xs] for r, kind in reaches]
 
 
 class _Direction:
@@ -183,11 +199,12 @@ def separation(
     w_u = float((par.beta + par.gamma) ** (-1.0 / par.mu))
     dof = dof_of(exps, fit)
     s2 = max(float(fit.cost) / dof, 1e-300) if dof > 0 else 1.0
-    z_c = float(ndtri(1.0 - alpha / len(REACHES)))
+    refs = [(r, kind) for kind in DENSITIES for r in REACHES]
+    z_c = float(ndtri(1.0 - alpha / len(refs)))
     thr = (z_c + Z_POWER) ** 2
     try:
         d = _Direction(exps, par, substeps)
-        traces = _stop_traces(exps, par, substeps, [r * w_u for r in REACHES])
+        traces = _stop_traces(exps, par, substeps, [(r * w_u, kind) for r, kind in refs])
     except (BoucWenIdError, ValueError, FloatingPointError, np.linalg.LinAlgError):
         return Separation(math.nan, thr)
     lams, zs = [], []
@@ -197,10 +214,10 @@ def separation(
         zs.append(tr_r / math.sqrt(tt * s2) if tt > 0 else math.nan)  # > 0: the stops' sign, one-sided
     i = int(np.argmin(lams))
     z = max((v for v in zs if math.isfinite(v)), default=math.nan)
-    sep = Separation(lams[i], thr, z, z_c, REACHES[i])
+    sep = Separation(lams[i], thr, z, z_c, refs[i][0], density=refs[i][1])
     if sep.separable or sep.refused:
         return sep
-    return replace(sep, hint=_probe(exps, fit, periods, substeps, REACHES[i] * w_u, s2, thr))
+    return replace(sep, hint=_probe(exps, fit, periods, substeps, (refs[i][0] * w_u, refs[i][1]), s2, thr))
 
 
 def _probe(
@@ -208,13 +225,14 @@ def _probe(
     fit: AugFit,
     periods: Sequence[float],
     substeps: int,
-    reach: float,
+    ref: tuple[float, str],
     s2: float,
     thr: float,
 ) -> str:
     """The separating experiment: one added at a below-saturation latent level (:data:`PROBE_LEVELS`) at
     the tested middle frequency, with its reference experiment's weight (periods); the periods it needs for
-    the weakest reference loop's noncentrality to reach ``thr`` (the added part grows with its weight)."""
+    the weakest reference loop's (``ref``: its reach in x's units, its density) noncentrality to reach
+    ``thr`` (the added part grows with its weight)."""
     par = fit.params
     order = sorted(range(len(exps)), key=lambda i: exps[i].frequency)
     i = order[len(order) // 2]
@@ -225,14 +243,14 @@ def _probe(
         return ""
     gains, phases = np.append(par.gains, par.gains[i]), np.append(par.phases, par.phases[i])
     pp = replace(par, gains=gains, phases=phases)
-    base = _Direction(exps, par, substeps).sizes(_stop_traces(exps, par, substeps, [reach])[0])[0] / s2
+    base = _Direction(exps, par, substeps).sizes(_stop_traces(exps, par, substeps, [ref])[0])[0] / s2
     best: Optional[tuple[float, float, float]] = None
     for level in PROBE_LEVELS:
         new = replace(e, amplitude=level * w_u / g, source="probe")
         new = replace(new, ybar=np.asarray(augmented_output(new, pp, len(exps), substeps=substeps)))
         both = [*exps, new]
         try:
-            lam = _Direction(both, pp, substeps).sizes(_stop_traces(both, pp, substeps, [reach])[0])[0] / s2
+            lam = _Direction(both, pp, substeps).sizes(_stop_traces(both, pp, substeps, [ref])[0])[0] / s2
         except (BoucWenIdError, ValueError, FloatingPointError, np.linalg.LinAlgError):
             continue
         if not lam > base:
@@ -270,7 +288,7 @@ def masing_text(
     else:
         ref = (
             f"a reference such loop (stops carrying {SHARE:g} of this stiffness, half-widths up to "
-            f"{sep.reach:g} of saturation)"
+            f"{sep.reach:g} of saturation{', most of them narrow' if sep.density != 'uniform' else ''})"
         )
         why = (
             f"and the data point to one: the test of {ref} rejects the spring (z = {sep.z:.3g} over "

@@ -59,6 +59,7 @@ from .beside import only_beside
 from .fitting import best_of, fit_from, fit_own, fit_with, subset
 from .gate import targeted_level
 from .law import LAW_RCOND, contrast_statistic, element_law_test, law_rows, law_test
+from .place_tie import named_place_first
 from .restarts import rebase, wide_fit
 from .shape import LAW_WINDOW
 
@@ -491,6 +492,11 @@ def _tied(chosen: Trial, rival: Trial, dof: int) -> bool:
     return chosen.improvement - rival.improvement <= TIE_SD * sd
 
 
+def _tied_at(exps: Sequence[AugExperiment], chosen: Trial, rival: Trial) -> bool:
+    """:func:`_tied` with the chosen fit's degrees of freedom on ``exps``."""
+    return chosen.fit is not None and _tied(chosen, rival, dof_of(exps, chosen.fit))
+
+
 #: Chi-square by which one place of a term must beat its other place to be named alone (two non-nested
 #: fits with the same number of parameters: a cost difference below the 5 % point of chi-square(1) is
 #: within what noise makes, so the data do not tell the places apart). In units of the residual variance:
@@ -797,6 +803,16 @@ def _choose(
     return chosen, final_trials, law_failed, refused
 
 
+def _ordered(
+    exps: Sequence[AugExperiment], passed: list[Trial], alpha: float, current: AugFit
+) -> list[Trial]:
+    """The step's passed candidates in the order they are tried: a simpler limit of the best first unless
+    the best beats it at ``alpha`` (:func:`simpler_first`), then a tied candidate at the place the named
+    terms of ``current`` act at (:func:`.place_tie.named_place_first`)."""
+    order = simpler_first(exps, passed, alpha)
+    return named_place_first(order, current.params.terms, partial(_tied_at, exps))
+
+
 def forward_select(
     exps: Sequence[AugExperiment],
     plain: AugFit,
@@ -855,7 +871,7 @@ def forward_select(
             current, refitted_from = better, c0  # refitted, once per step, and the step redone
             continue
         passed = sorted((tr for tr in trials if tr.passed), key=lambda tr: tr.cost)
-        order = simpler_first(exps, passed, level / len(remaining))  # Bonferroni, as the candidates' tests
+        order = _ordered(exps, passed, level / len(remaining), current)  # Bonferroni, as their tests
         alone = {t.term: t.p_value for t in steps[0].trials} if steps else {}
         ctx = (substeps, level, len(remaining), use_held_out, memo)
         chosen, final_trials, law_failed, refused = _choose(
