@@ -83,7 +83,6 @@ from .across_types import _ps as _ps
 from .beside import only_beside
 from .caveats import alternatives_text
 from .fitting import carry_through_g, fit_plain, physical, scale_of, scaled, substeps_for
-from .locate import adequacy_p
 from .progress import Progress, ProgressCallback, reporter
 from .restarts import rebase_groups
 from .result import Diagnosis, NamedTerm, term_symbol_unit
@@ -413,9 +412,9 @@ def _conditions(
                 g.label,
                 g.condition,
                 len(g.sx),
-                pl.cost / max(dof0, 1),
-                fin.cost / max(dof1, 1),
-                adequacy_p(fin.cost, dof1, g.noise_dof),
+                across_verdict.chi2(g, pl) / max(dof0, 1),  # diagnose's statistic (colour: harmonic-wise)
+                across_verdict.chi2(g, fin) / max(dof1, 1),
+                across_verdict.p_of(g, fin),
                 hp,
                 hj,
                 terms,
