@@ -47,7 +47,7 @@ from typing import Any, Optional, cast
 
 from ..augmented import AugFit
 from ..errors import InvalidParameterError
-from ..terms import TERMS, Distortion
+from ..terms import TERMS, Distortion, Offset
 from ..units import harmonise_groups
 from ..validation import real_number
 from . import (
@@ -58,6 +58,7 @@ from . import (
     across_settling,
     across_stable,
     across_verdict,
+    baseline,
     fit_notes,
     inputs,
     readings,
@@ -121,7 +122,7 @@ def _group(
     names degradation; ``judged``: the candidates and held-out rule of the condition's own judgement of a
     drift (across_settling.degrades); ``zeros``: the recordings' zeros differ, each one's DC left free about
     their common one (across_zeros.py; the condition's own diagnosis not reused)."""
-    from . import baseline, free_dc, record_zeros, zero_drift
+    from . import free_dc, record_zeros, zero_drift
     from .data import prepare
     from .drift import DRIFT_TERMS
     from .run import _drift_checked, _localise
@@ -192,6 +193,7 @@ def _group(
         left_out=left,
         left_why=why,
         zeros=zeros,
+        centres=wander,
     )
 
 
@@ -353,7 +355,10 @@ def _terms(
                 v, se = physical(g.current, g.scale, term)
                 inflate = math.sqrt(max(1.0, g.current.cost / max(dof_of(g.sx, g.current), 1)))
                 vals.append(v)
-                ses.append(se * inflate)
+                # an output offset where the zeros moved between records: their centres' spread, as diagnose
+                ses.append(
+                    baseline.offset_se(g.centres, se * inflate) if term == Offset.kind else se * inflate
+                )
             ps = smoothness(conds, vals, ses)
             degree = next((d for d, p in enumerate(ps) if p >= alpha), None)
             one = shared_test(
