@@ -51,6 +51,7 @@ from ..terms import TERMS, Distortion, Offset
 from ..units import harmonise_groups
 from ..validation import real_number
 from . import (
+    across_adequacy,
     across_final,
     across_pairs,
     across_revisit,
@@ -417,9 +418,9 @@ def _conditions(
                 g.label,
                 g.condition,
                 len(g.sx),
-                across_verdict.chi2(g, pl) / max(dof0, 1),  # diagnose's statistic (colour: harmonic-wise)
-                across_verdict.chi2(g, fin) / max(dof1, 1),
-                across_verdict.p_of(g, fin),
+                across_adequacy.chi2(g, pl) / max(dof0, 1),  # diagnose's statistic (colour: harmonic-wise)
+                across_adequacy.chi2(g, fin) / max(dof1, 1),
+                across_adequacy.p_of(g, fin),
                 hp,
                 hj,
                 terms,

@@ -165,7 +165,7 @@ def status(pf: PlaceFree, groups: Sequence[Any], alpha: float, sib: Any, tr: Any
     :mod:`.adequacy`'s one rule (:func:`.adequacy.passes`: a named model at ``alpha``, not drifting; a loop
     drifting from period to period there, ``moved``, is left beyond the steady terms named across), "partly
     explained" otherwise."""
-    from .across_verdict import p_of
+    from .across_adequacy import p_of
     from .adequacy import passes
 
     fits = _chosen(pf.places, tr, sib)
@@ -178,7 +178,8 @@ def conditions(pf: PlaceFree, groups: Sequence[Any], conds: Sequence[Any], sib: 
     adequacy p and held-out NRMSE (when tested) those of the named place-free structure."""
     from dataclasses import replace
 
-    from .across_verdict import chi2, p_of
+    from .across_adequacy import chi2
+    from .locate import adequacy_p
 
     out = []
     for i, (g, c, f) in enumerate(zip(groups, conds, _chosen(pf.places, tr, sib))):
@@ -188,7 +189,7 @@ def conditions(pf: PlaceFree, groups: Sequence[Any], conds: Sequence[Any], sib: 
             replace(
                 c,
                 final_chi2_dof=chi2(g, f) / max(d, 1),
-                final_p_value=p_of(g, f),
+                final_p_value=adequacy_p(chi2(g, f), d, g.noise_dof),  # diagnose's statistic (colour)
                 held_out_joint=hj,
             )
         )

@@ -44,7 +44,6 @@ from . import (
     across_rate,
     across_twin,
     adequacy,
-    adequacy_chi2,
     beside,
     beyond_range,
     bounds_said,
@@ -53,8 +52,9 @@ from . import (
     law_untested,
     one_amplitude,
 )
+from .across_adequacy import chi2 as chi2
+from .across_adequacy import p_of as p_of
 from .caveats import family_text, joint_separation, latent_levels, masing_separation, unphysical_places_text
-from .locate import adequacy_p
 from .result import NamedTerm, Status
 from .select import ALPHA, Trial, _tied, dof_of
 
@@ -86,20 +86,6 @@ def partly_text(groups: Sequence[Any], alpha: float) -> str:
         f"; explained in part: the joint structure removes {100 * share:.0f} % of the "
         f"plain models' excess over the noise floor, summed over the conditions{left}"
     )
-
-
-def chi2(g: Any, fit: Any) -> float:
-    """The adequacy test's chi-square of ``fit`` at condition ``g``: diagnose's statistic
-    (:func:`.adequacy_chi2.statistic`, each harmonic weighed by its own noise level where the condition's
-    noise is coloured; the fit's own cost where it is white). The fit's cost alone divided every harmonic
-    by the largest band's level: under AR(1) noise (phi 0.5) the joint fit read chi2/dof 0.22-0.27 at every
-    condition and its plain model passed the gate where diagnose's failed (review 43)."""
-    return adequacy_chi2.statistic(adequacy_chi2.relative_weights(g.exps), g.sx, fit.outputs, fit.cost)
-
-
-def p_of(g: Any, fit: Any) -> float:
-    """The adequacy p of ``fit`` at condition ``g`` (:func:`chi2`, its dof and noise dof), as diagnose's."""
-    return adequacy_p(chi2(g, fit), dof_of(g.sx, fit), g.noise_dof)
 
 
 def plain_gate(groups: Sequence[Any], alpha: float) -> tuple[bool, bool]:
