@@ -121,13 +121,11 @@ def test_the_status_is_adequacy_s_one_rule(
 ) -> None:
     # Each condition's place-free fit at p = 0.15: it passes at alpha = 0.1 (a named model's level), not at
     # 0.2, and a loop drifting from period to period at a condition is not adequate whatever its p-value.
-    import importlib
+    from bouc_wen_id.diagnosis import across_adequacy, adequacy
 
-    from bouc_wen_id.diagnosis import adequacy
-
-    locate = importlib.import_module("bouc_wen_id.diagnosis.locate")  # the package's ``locate`` is a function
     monkeypatch.setattr(across_place, "dof_of", lambda sx, f: 10000)
-    monkeypatch.setattr(locate, "adequacy_p", lambda cost, dof, noise_dof: 0.15)
+    # the p-value as diagnose's adequacy test reads it (across_adequacy.p_of, its statistic under colour too)
+    monkeypatch.setattr(across_adequacy, "p_of", lambda g, f: 0.15)
     tr = _trial(ON_X, [-0.00097, 0.01012, 0.009991], [53.0, 9760.0, 9547.0])
     sib = _trial(ON_U, [0.0099, 0.001, 0.002], [6716.0, 1753.0, 1967.0])
     pf = across_place.PlaceFree((ON_U, ON_X, ON_X), 0.0, (0.0, 0.0), 0.5, 100.0, 50.0, True, ())

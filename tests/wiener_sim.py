@@ -1,7 +1,9 @@
 """A Wiener-Bouc-Wen simulator written for the tests, apart from the library's and the benches' generators.
 
 RK4 on a resonant G's two states and the Bouc-Wen state together, a pure delay on the sine drive (exact for a
-sine), four steps a sample. Used by test_record_zeros.py and test_diagnosis_bounds_said.py.
+sine), four steps a sample; Spencer's series dashpot (``rho``: the element driven by its own travel,
+``ddot = xdot - rho w``) optional. Used by test_record_zeros.py, test_diagnosis_bounds_said.py and
+test_across_colour.py.
 """
 
 from __future__ import annotations
@@ -18,10 +20,12 @@ BETA, GAMMA, MU = 0.5, 0.3, 1.5
 SETTLE, PERIODS = 8, 24
 
 
-def simulate(freqs: np.ndarray, amps: np.ndarray, delta: float = 0.0, mu: float = MU) -> tuple[Any, Any, Any]:
+def simulate(
+    freqs: np.ndarray, amps: np.ndarray, delta: float = 0.0, mu: float = MU, rho: float = 0.0
+) -> tuple[Any, Any, Any]:
     """(h, u, w) per experiment: ``P`` samples a period, four RK4 steps a sample; ``delta`` the asymmetry
     (the library's asymmetry term: ``delta |w|^mu sgn(w)`` beside gamma); ``mu`` may be below 1 (a loop
-    softer than the library's bracket allows)."""
+    softer than the library's bracket allows); ``rho`` a series dashpot (w driven by ``x' - rho w``)."""
     om = 2 * math.pi * freqs
     h = 2 * math.pi / om / P
     n = (SETTLE + PERIODS) * P
@@ -31,7 +35,8 @@ def simulate(freqs: np.ndarray, amps: np.ndarray, delta: float = 0.0, mu: float 
         aw = np.abs(w)
         u = amps * np.cos(om * (t - DELAY))
         pw = aw**mu  # |w|^(mu - 1) w written as |w|^mu sgn(w): finite at w = 0 for mu < 1 too
-        dw = v - (BETA * np.abs(v) * pw * np.sign(w) + GAMMA * v * pw + delta * v * pw * np.sign(w))
+        d = v - rho * w  # the element's own travel rate behind a series dashpot (v itself when rho = 0)
+        dw = d - (BETA * np.abs(d) * pw * np.sign(w) + GAMMA * d * pw + delta * d * pw * np.sign(w))
         return np.array([v, WN**2 * (u - x) - 2 * ZETA * WN * v, dw])
 
     s, t, ws = np.zeros((3, om.size)), np.zeros(om.size), np.zeros((n, om.size))
@@ -49,15 +54,16 @@ def recordings(
     delta: float = 0.0,
     amps: Any = None,
     phi: float = 0.0,
+    rho: float = 0.0,
 ) -> list[Any]:
     """Recordings at 2, 4, 6 and 8 Hz (amplitude 1.5 unless ``amps``): :func:`simulate`'s w, viscous damping
     on u (``c`` times u's rate), each one's output zero ``offsets[i]`` and noise of 1 % of w's RMS from
-    ``seed``, white or AR(1) with coefficient ``phi`` (the same sd)."""
+    ``seed``, white or AR(1) with coefficient ``phi`` (the same sd); ``rho`` a series dashpot."""
     import bouc_wen_id as bw
 
     freqs = np.array([2.0, 4.0, 6.0, 8.0])
     a = np.full(freqs.size, 1.5) if amps is None else np.asarray(amps, dtype=np.float64)
-    h, u, w = simulate(freqs, a, delta)
+    h, u, w = simulate(freqs, a, delta, rho=rho)
     rng = np.random.default_rng(seed)
     out = []
     for i, f in enumerate(freqs):

@@ -47,10 +47,11 @@ from typing import Any, Optional, cast
 
 from ..augmented import AugFit
 from ..errors import InvalidParameterError
-from ..terms import TERMS, Distortion
+from ..terms import TERMS, Distortion, Offset
 from ..units import harmonise_groups
 from ..validation import real_number
 from . import (
+    across_adequacy,
     across_final,
     across_pairs,
     across_revisit,
@@ -58,6 +59,7 @@ from . import (
     across_settling,
     across_stable,
     across_verdict,
+    baseline,
     fit_notes,
     inputs,
     readings,
@@ -83,7 +85,6 @@ from .across_types import _ps as _ps
 from .beside import only_beside
 from .caveats import alternatives_text
 from .fitting import carry_through_g, fit_plain, physical, scale_of, scaled, substeps_for
-from .locate import adequacy_p
 from .progress import Progress, ProgressCallback, reporter
 from .restarts import rebase_groups
 from .result import Diagnosis, NamedTerm, term_symbol_unit
@@ -122,7 +123,7 @@ def _group(
     names degradation; ``judged``: the candidates and held-out rule of the condition's own judgement of a
     drift (across_settling.degrades); ``zeros``: the recordings' zeros differ, each one's DC left free about
     their common one (across_zeros.py; the condition's own diagnosis not reused)."""
-    from . import baseline, free_dc, record_zeros, zero_drift
+    from . import free_dc, record_zeros, zero_drift
     from .data import prepare
     from .drift import DRIFT_TERMS
     from .run import _drift_checked, _localise
@@ -193,6 +194,7 @@ def _group(
         left_out=left,
         left_why=why,
         zeros=zeros,
+        centres=wander,
     )
 
 
@@ -354,7 +356,10 @@ def _terms(
                 v, se = physical(g.current, g.scale, term)
                 inflate = math.sqrt(max(1.0, g.current.cost / max(dof_of(g.sx, g.current), 1)))
                 vals.append(v)
-                ses.append(se * inflate)
+                # an output offset where the zeros moved between records: their centres' spread, as diagnose
+                ses.append(
+                    baseline.offset_se(g.centres, se * inflate) if term == Offset.kind else se * inflate
+                )
             ps = smoothness(conds, vals, ses)
             degree = next((d for d, p in enumerate(ps) if p >= alpha), None)
             one = shared_test(
@@ -413,9 +418,9 @@ def _conditions(
                 g.label,
                 g.condition,
                 len(g.sx),
-                pl.cost / max(dof0, 1),
-                fin.cost / max(dof1, 1),
-                adequacy_p(fin.cost, dof1, g.noise_dof),
+                across_adequacy.chi2(g, pl) / max(dof0, 1),  # diagnose's statistic (colour: harmonic-wise)
+                across_adequacy.chi2(g, fin) / max(dof1, 1),
+                across_adequacy.p_of(g, fin),
                 hp,
                 hj,
                 terms,

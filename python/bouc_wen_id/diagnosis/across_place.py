@@ -165,16 +165,11 @@ def status(pf: PlaceFree, groups: Sequence[Any], alpha: float, sib: Any, tr: Any
     :mod:`.adequacy`'s one rule (:func:`.adequacy.passes`: a named model at ``alpha``, not drifting; a loop
     drifting from period to period there, ``moved``, is left beyond the steady terms named across), "partly
     explained" otherwise."""
+    from .across_adequacy import p_of
     from .adequacy import passes
-    from .locate import adequacy_p
 
     fits = _chosen(pf.places, tr, sib)
-    ok = all(
-        passes(
-            adequacy_p(f.cost, dof_of(g.sx, f), g.noise_dof), alpha, True, bool(getattr(g, "moved", False))
-        )
-        for g, f in zip(groups, fits)
-    )
+    ok = all(passes(p_of(g, f), alpha, True, bool(getattr(g, "moved", False))) for g, f in zip(groups, fits))
     return "explained" if ok else "partly explained"
 
 
@@ -183,6 +178,7 @@ def conditions(pf: PlaceFree, groups: Sequence[Any], conds: Sequence[Any], sib: 
     adequacy p and held-out NRMSE (when tested) those of the named place-free structure."""
     from dataclasses import replace
 
+    from .across_adequacy import chi2
     from .locate import adequacy_p
 
     out = []
@@ -192,8 +188,8 @@ def conditions(pf: PlaceFree, groups: Sequence[Any], conds: Sequence[Any], sib: 
         out.append(
             replace(
                 c,
-                final_chi2_dof=f.cost / max(d, 1),
-                final_p_value=adequacy_p(f.cost, d, g.noise_dof),
+                final_chi2_dof=chi2(g, f) / max(d, 1),
+                final_p_value=adequacy_p(chi2(g, f), d, g.noise_dof),  # diagnose's statistic (colour)
                 held_out_joint=hj,
             )
         )

@@ -61,6 +61,9 @@ class _Group:
     left_why: str = ""
     #: The recordings' zeros differ: each experiment's DC free about their common one (across_zeros.py)
     zeros: Any = None
+    #: What was taken out of the recordings' zeros (a baseline.Wander, a zero_drift.Drift or the zeros above),
+    #: or None: a named output offset's standard error is their centres' spread (baseline.offset_se)
+    centres: Any = None
     #: ``fit_with`` on this condition, once per (model, term) (select.memo_fit_with): an alternative's
     #: two-term fit is the next step's trial of that term.
     fit_term: Callable[[AugFit, str], Optional[AugFit]] = field(init=False, repr=False)

@@ -52,8 +52,9 @@ from . import (
     law_untested,
     one_amplitude,
 )
+from .across_adequacy import chi2 as chi2
+from .across_adequacy import p_of as p_of
 from .caveats import family_text, joint_separation, latent_levels, masing_separation, unphysical_places_text
-from .locate import adequacy_p
 from .result import NamedTerm, Status
 from .select import ALPHA, Trial, _tied, dof_of
 
@@ -85,11 +86,6 @@ def partly_text(groups: Sequence[Any], alpha: float) -> str:
         f"; explained in part: the joint structure removes {100 * share:.0f} % of the "
         f"plain models' excess over the noise floor, summed over the conditions{left}"
     )
-
-
-def p_of(g: Any, fit: Any) -> float:
-    """The adequacy p of ``fit`` at condition ``g`` (its dof and noise dof)."""
-    return adequacy_p(fit.cost, dof_of(g.sx, fit), g.noise_dof)
 
 
 def plain_gate(groups: Sequence[Any], alpha: float) -> tuple[bool, bool]:
@@ -277,6 +273,7 @@ def gate_notes(prepared: Sequence[Any], alpha: float) -> tuple[str, ...]:
 __all__ = [
     "gate_notes",
     "p_of",
+    "chi2",
     "final_adequate",
     "summed",
     "explained_fraction",

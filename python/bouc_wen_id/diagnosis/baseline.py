@@ -231,9 +231,20 @@ def marked(rec: Any) -> bool:
     return bool(getattr(rec, "metadata", {}).get(MARK, False))
 
 
+def offset_se(wander: Any, se: float) -> float:
+    """A named output offset's standard error under ``wander`` (a :class:`Wander`, a zero's drift or the
+    recordings' own zeros, ``record_zeros.RecordZeros``; or None): the spread of the recordings' centres over
+    sqrt(m) when their common centre was kept, else ``se`` (the fit's own, from the noise, which does not see
+    a zero that moves between records). :func:`adjusted` and the diagnosis across conditions read it."""
+    if wander is None or not getattr(wander, "kept", False) or not math.isfinite(wander.centre_se):
+        return se
+    return float(wander.centre_se)
+
+
 def adjusted(d: Diagnosis, wander: Any, offset_kind: str) -> Diagnosis:
     """The diagnosis ``d`` with the wander's clause, and a named output offset's standard error the spread of
-    the recordings' centres (the fit's own, from the white noise, does not see the wander)."""
+    the recordings' centres (:func:`offset_se`: the fit's own, from the white noise, does not see the
+    wander)."""
     if wander is None:
         return d
 
@@ -243,8 +254,9 @@ def adjusted(d: Diagnosis, wander: Any, offset_kind: str) -> Diagnosis:
         nonlocal verdict
         out = []
         for t in terms:
-            if t.term == offset_kind and wander.kept and math.isfinite(wander.centre_se):
-                new = replace(t, standard_error=wander.centre_se)
+            se = offset_se(wander, t.standard_error)
+            if t.term == offset_kind and se != t.standard_error:
+                new = replace(t, standard_error=se)
                 verdict = verdict.replace(str(t), str(new))  # the verdict names it with that error too
                 t = new
             out.append(t)
@@ -260,6 +272,7 @@ __all__ = [
     "removed",
     "marked",
     "adjusted",
+    "offset_se",
     "short_note",
     "WANDER_ALPHA",
     "WANDER_CORRELATION",
