@@ -1,7 +1,7 @@
 //! The joint Levenberg-Marquardt of the augmented model over every experiment (design.md 9.3): the
 //! experiments, the model's constraints and projection, and the checks of a start.
 
-use super::{augmented_output_with, check_shared, Excitation, MeasuredInput};
+use super::{check_shared, output_on, Excitation, InputColumns, MeasuredInput};
 use crate::error::{CoreError, Result};
 use crate::refine::{
     check_joint_start, check_start_point, hysteresis_admissible, hysteresis_constraints,
@@ -80,9 +80,24 @@ struct AugModel<'a> {
     exps: &'a [AugExperiment<'a>],
     terms: &'a Terms,
     opts: &'a Options,
+    /// Each experiment's measured-input columns ([`InputColumns`]), computed once per refinement.
+    inputs: Vec<InputColumns>,
 }
 
-impl AugModel<'_> {
+impl<'a> AugModel<'a> {
+    fn new(exps: &'a [AugExperiment<'a>], terms: &'a Terms, opts: &'a Options) -> Self {
+        let inputs = exps
+            .iter()
+            .map(|e| InputColumns::new(&e.excitation(), &e.input, terms))
+            .collect();
+        Self {
+            exps,
+            terms,
+            opts,
+            inputs,
+        }
+    }
+
     /// The columns of Dahl friction's two parameters (>= 0) at every place, with their names.
     fn dahl_columns(&self) -> Vec<(usize, String)> {
         let mut out = Vec::new();
@@ -126,14 +141,13 @@ impl JointModel for AugModel<'_> {
     }
 
     fn evaluate(&self, i: usize, shared: &[f64], own: [f64; 2]) -> Result<ModelEval> {
-        let out = augmented_output_with(
+        let out = output_on(
             &self.exps[i].excitation(),
             self.exps[i].waveform,
-            self.exps[i].input,
+            &self.inputs[i],
             self.terms,
             shared,
-            own[0],
-            own[1],
+            (own[0], own[1]),
             self.exps[i].substeps.unwrap_or(self.opts.substeps),
         )?;
         Ok(ModelEval {
@@ -235,7 +249,12 @@ fn validate_refine(
     phases: &[f64],
     opts: &Options,
 ) -> Result<()> {
-    let model = AugModel { exps, terms, opts };
+    let model = AugModel {
+        exps,
+        terms,
+        opts,
+        inputs: Vec::new(),
+    };
     let excitation = |i: usize| exps[i].excitation().validate();
     check_joint_start(&model, excitation, (gains, phases), opts)?;
     if !opts.mu_lo.is_finite()
@@ -281,7 +300,7 @@ pub fn augmented_refine(
     opts: &Options,
 ) -> Result<AugFit> {
     validate_refine(exps, terms, shared0, gains0, phases0, opts)?;
-    let model = AugModel { exps, terms, opts };
+    let model = AugModel::new(exps, terms, opts);
     let own: Vec<[f64; 2]> = gains0.iter().zip(phases0).map(|(&g, &p)| [g, p]).collect();
     let fit = levenberg_marquardt(&model, shared0, &own, opts)?;
     Ok(AugFit {

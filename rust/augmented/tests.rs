@@ -352,6 +352,84 @@ fn each_experiment_is_evaluated_at_its_own_substep_count() {
 }
 
 #[test]
+fn refinement_reads_the_input_columns_it_computed_once() {
+    // The refinement computes each experiment's measured-input columns once (`InputColumns`); its
+    // outputs at the minimiser are `augmented_output_with`'s, which computes them afresh, bit for
+    // bit, for every term that reads them on a distorted input with a mean, and for a model with
+    // none of them (the columns then not computed at all).
+    let harmonics = [0.08, -0.03, 0.02, 0.01, -0.015, 0.004];
+    let input = MeasuredInput {
+        harmonics: &harmonics,
+        dc: 0.1,
+    };
+    for (kinds, truth, start) in [
+        (
+            vec![Stiffness, Viscous, Inertia, Coulomb],
+            vec![0.8, 0.2, 1.6, 0.3, 0.05, 0.01, 0.1],
+            vec![0.7, 0.25, 1.8, 0.2, 0.06, 0.02, 0.05],
+        ),
+        (
+            vec![Offset],
+            vec![0.8, 0.2, 1.6, 0.3],
+            vec![0.7, 0.25, 1.8, 0.2],
+        ),
+    ] {
+        let terms = terms_of(&kinds);
+        let excs: Vec<Excitation> = (0..3)
+            .map(|i| Excitation {
+                samples: 48 + 16 * i,
+                amplitude: 1.0 + 0.5 * i as f64,
+                frequency: 1.0 + i as f64,
+                grid_phase: 0.3 * i as f64,
+            })
+            .collect();
+        let ys: Vec<Vec<f64>> = excs
+            .iter()
+            .enumerate()
+            .map(|(i, exc)| {
+                let y = augmented_output_with(exc, &[], input, &terms, &truth, 1.1, 0.5, 4)
+                    .unwrap()
+                    .y;
+                with_noise(&y, i)
+            })
+            .collect();
+        let exps: Vec<AugExperiment> = excs
+            .iter()
+            .zip(&ys)
+            .map(|(exc, y)| AugExperiment {
+                ybar: y,
+                amplitude: exc.amplitude,
+                frequency: exc.frequency,
+                grid_phase: exc.grid_phase,
+                weight: 1e6,
+                waveform: &[],
+                input,
+                substeps: None,
+            })
+            .collect();
+        let opts = Options::default();
+        let fit = augmented_refine(&exps, &terms, &start, &[1.0; 3], &[0.45; 3], &opts).unwrap();
+        assert!(fit.iterations > 3, "{kinds:?}");
+        for (i, exc) in excs.iter().enumerate() {
+            let y = augmented_output_with(
+                exc,
+                &[],
+                input,
+                &terms,
+                &fit.shared,
+                fit.gains[i],
+                fit.phases[i],
+                opts.substeps,
+            )
+            .unwrap()
+            .y;
+            let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&y), bits(&fit.outputs[i]), "{kinds:?}, experiment {i}");
+        }
+    }
+}
+
+#[test]
 fn refinement_rejects_bad_input_by_name() {
     let y = vec![0.0; 16];
     let terms = terms_of(&[SensorLag]);
