@@ -74,8 +74,8 @@ def correction_void(exc: BoucWenIdError, term: str) -> str:
     """The note when the correction of the averaged periods cannot be simulated."""
     return (
         f"the averaged periods are used as recorded, not brought back to the {virgin(term)}: the drift "
-        f"correction could not be simulated at the fitted drift ({why(exc)}), so the {term}'s value is the "
-        "first-order estimate of the block record, not refined"
+        f"correction could not be simulated at the fitted drift ({why(exc)}), so the {term} rests on the "
+        "block record's first-order test alone (its value not refined)"
     )
 
 
