@@ -32,6 +32,7 @@ from . import (
     drift_pair,
     drift_passes,
     drift_se,
+    drift_void,
     final_terms,
     free_dc,
     gain_drift,
@@ -148,11 +149,15 @@ def _aged(
     s: Scale,
     substeps: int,
     alpha: float,
+    notes: list[str],
 ) -> tuple[list[DiagExperiment], AugFit, DegradationTest, Sequence[Any]]:
     """The experiments with their unrecorded ages when age.py's F-test keeps them at ``alpha`` (Bonferroni
     over the candidates, as the drift term's own test; the drift data re-formed at each loop's mean
-    strength, now older), else as they are."""
-    got = age.estimate(exps, sx, fit, deg, s.y, substeps, alpha)
+    strength, now older), else as they are; as they are, with a note, when the ages cannot be simulated
+    (drift_void.py)."""
+    got = drift_void.attempt(
+        lambda: age.estimate(exps, sx, fit, deg, s.y, substeps, alpha), drift_void.ages_void, notes
+    )
     if got is None:
         return list(exps), fit, deg, data
     aged, fit, deg = got
@@ -208,15 +213,42 @@ def _degradation_stage(
     deg = gain_drift.checked(deg, data, alpha, family, periods)  # not named when a drifting gain fits as well
     if deg is None or not deg.accepted(held_out_test):
         return deg, list(exps), list(sx), plain
-    tested = deg
-    deg, fit, data = drift_passes.passes(exps, sx, plain, data, deg, s, substeps, (alpha, family, drift_seen))
+    tests = (alpha, family, drift_seen)
+    term = deg.term
+    got = drift_void.attempt(
+        lambda: _corrected_stage(exps, sx, plain, data, deg, s, substeps, tests, held_out_test, notes),
+        lambda exc: drift_void.correction_void(exc, term),
+        notes,
+    )
+    # A correction the library cannot simulate (a degenerate fit): the drift-space test stands, the periods
+    # are used as recorded (drift_void.py).
+    return got if got is not None else (deg, list(exps), list(sx), plain)
+
+
+def _corrected_stage(
+    exps: Sequence[DiagExperiment],
+    sx: Sequence[AugExperiment],
+    plain: AugFit,
+    data: Sequence[Any],
+    tested: DegradationTest,
+    s: Scale,
+    substeps: int,
+    tests: tuple[float, int, bool],
+    held_out_test: bool,
+    notes: list[str],
+) -> tuple[Optional[DegradationTest], list[DiagExperiment], list[AugExperiment], AugFit]:
+    """:func:`_degradation_stage` once the drift term is named: the correction passes, the ages, the
+    refinement and the steady start on the corrected periods (``tests`` is ``(alpha, family,
+    drift_seen)``)."""
+    alpha, family, _ = tests
+    deg, fit, data = drift_passes.passes(exps, sx, plain, data, tested, s, substeps, tests)
     deg = gain_drift.carried(deg, tested)
     term = deg.term
     if not deg.accepted(held_out_test):
         # The refined test no longer names it: the steady selection on the data as they are.
         return deg, list(exps), list(sx), plain
     # The unrecorded age of each record (age.py): kept when its F-test passes, else the ages are 0.
-    exps, fit, deg, data = _aged(exps, sx, fit, data, deg, s, substeps, alpha / family)
+    exps, fit, deg, data = _aged(exps, sx, fit, data, deg, s, substeps, alpha / family, notes)
     spread = drift_se.spread(exps, sx, fit if term == DEGRADATION else plain, data, deg, s.y, substeps)
     if deg.d > 0:
         deg, fit = drift_passes.refine(exps, sx, fit, data, deg, s, substeps)
@@ -231,11 +263,10 @@ def _degradation_stage(
     # match the record's beyond first order, and the selection runs on the periods as recorded.
     final = best_of([fit_from(fsx, fit.params, substeps)]) or fit
     if final.cost > plain.cost:
-        virgin = "virgin strength" if term == DEGRADATION else "virgin stiffness"
         notes.append(
-            f"the averaged periods are used as recorded, not brought back to the {virgin}: the steady "
-            f"model fits the corrected periods worse (chi2 {final.cost:.6g} against {plain.cost:.6g}), so "
-            "the simulated drift does not match the record's beyond first order"
+            f"the averaged periods are used as recorded, not brought back to the {drift_void.virgin(term)}: "
+            f"the steady model fits the corrected periods worse (chi2 {final.cost:.6g} against "
+            f"{plain.cost:.6g}), so the simulated drift does not match the record's beyond first order"
         )
         return deg, list(exps), list(sx), plain
     return deg, fexps, fsx, final
