@@ -14,6 +14,7 @@ import warnings
 from typing import Any
 
 import numpy as np
+from wiener_sim import _ar1
 
 P = 128
 WN, ZETA = 6.0, 0.05
@@ -56,14 +57,9 @@ def _recordings(seed: int) -> list[Any]:
     out = []
     for i, om in enumerate(OMEGAS):
         t = np.arange(w[i].size) * h[i]
-        e = rng.normal(0.0, 0.01 * math.sqrt(1.0 - 0.81), t.size)
-        noise = np.empty(t.size)
-        prev = rng.normal(0.0, 0.01)
-        for k in range(t.size):
-            prev = 0.9 * prev + e[k]
-            noise[k] = prev
         u = AMPS[i] * np.cos(om * t)
-        out.append(bw.Recording(t, u, w[i] + noise, float(AMPS[i]), float(om), settle_periods=SETTLE))
+        y = w[i] + _ar1(rng, t.size, 0.01, 0.9)
+        out.append(bw.Recording(t, u, y, float(AMPS[i]), float(om), settle_periods=SETTLE))
     return out
 
 

@@ -16,8 +16,11 @@ ring-down when it falls significantly (one-sided p below :data:`LEVEL`) and by a
 window: noise about a settled or a degrading loop gives a level line (the log of an RMS over hundreds of
 samples scatters by about 0.1, so a fall of 2 over 8 periods is far outside it).
 
-An experiment found ringing is not diagnosed (:func:`.run._with_wander` leaves it out; when every one rings,
-the verdict says that the loop has not settled and names nothing, :func:`not_settled`).
+An experiment found ringing is not diagnosed (:func:`.run._with_wander` leaves it out, as a drift no
+degradation explains); when most or all ring, the verdict says that the loop has not settled, names nothing,
+and says how many more settle periods would let the ring-down die out (:func:`said`). A ring-down that dies out
+within the first half of the averaged periods is trimmed as before (``settling._settled``: the rest is
+steady); one still falling in the record's last periods is in every averaged period, and no trim helps.
 """
 
 from __future__ import annotations
@@ -35,9 +38,9 @@ from ..errors import TransientWarning
 WINDOW = 8
 
 #: One-sided level of the test that the change falls. The fall (:data:`FALL`) is the main guard: on review
-#: 44's settled records (designs A, B, E and D with 60 settle periods) the fitted fall over the window was
-#: 0.83-1.5, with one-sided p down to 3e-3 for a rise; a ring-down beating with the drive (G's 6 rad/s
-#: against a 7 rad/s drive) scatters about its fall (0.17-0.22, p 3e-3 to 1e-2).
+#: 44's settled records (its designs A, B, E and D with 60 settle periods, nulls and degradation) the fitted
+#: ratio over the window was 0.83-1.51; its ring-downs gave 0.10-0.33, those beating with the drive (G's
+#: 6 rad/s against a 7 rad/s drive) scattered about their fall (0.17-0.22 at p 3e-3 to 1e-2).
 LEVEL = 0.02
 
 #: Least fall of the fitted change over the window for a ring-down (a level line's scatter gives ~0.9).
