@@ -3,8 +3,8 @@
 The plant has no term beyond the plain Wiener-Bouc-Wen model: G = wn^2 / (s^2 + 2 zeta wn s + wn^2) with
 zeta 0.05 at 6 rad/s, started from rest, 10 settle periods and 4 averaged ones, AR(1) noise (review 44's
 design D). Before ring_down.py the diagnosis read the ring-down left in the averaged periods as a drift of
-the loop and said "explained by: stiffness degradation". The data come from this file's own RK4 (G's two
-states and the Bouc-Wen state together), not from the library's simulator.
+the loop and said "explained by: stiffness degradation". The data come from this file's own plant (G's two
+states and the Bouc-Wen state, integrated together by wiener_sim's RK4), not from the library's simulator.
 """
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ import warnings
 from typing import Any
 
 import numpy as np
-from wiener_sim import _ar1
+from wiener_sim import _ar1, hysteretic_states
 
 P = 128
 WN, ZETA = 6.0, 0.05
@@ -35,17 +35,7 @@ def _simulate() -> tuple[Any, Any]:
         dw = v - (BETA * np.abs(v) * pw * np.sign(w) + GAMMA * v * pw)
         return np.array([v, WN**2 * (AMPS * np.cos(OMEGAS * t) - x) - 2 * ZETA * WN * v, dw])
 
-    s, t, ws = np.zeros((3, OMEGAS.size)), np.zeros(OMEGAS.size), np.zeros((n, OMEGAS.size))
-    hh = h / 4
-    for k in range(n):
-        ws[k] = s[2]
-        for _ in range(4):
-            k1 = rate(t, s)
-            k2 = rate(t + hh / 2, s + hh / 2 * k1)
-            k3 = rate(t + hh / 2, s + hh / 2 * k2)
-            k4 = rate(t + hh, s + hh * k3)
-            s, t = s + hh / 6 * (k1 + 2 * k2 + 2 * k3 + k4), t + hh
-    return h, ws.T
+    return h, hysteretic_states(rate, h, n).T
 
 
 def _recordings(seed: int) -> list[Any]:

@@ -1,12 +1,14 @@
 """A Wiener-Bouc-Wen simulator written for the tests, apart from the library's and the benches' generators.
 
 RK4 on a resonant G's two states and the Bouc-Wen state together, a pure delay on the sine drive (exact for a
-sine), four steps a sample. Used by test_record_zeros.py and test_diagnosis_bounds_said.py.
+sine), four steps a sample. Used by test_record_zeros.py and test_diagnosis_bounds_said.py;
+test_ring_down.py uses its integrator and AR(1) noise.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -33,18 +35,25 @@ def simulate(freqs: np.ndarray, amps: np.ndarray, delta: float = 0.0, mu: float 
         dw = v - (BETA * np.abs(v) * pw * np.sign(w) + GAMMA * v * pw + delta * v * pw * np.sign(w))
         return np.array([v, WN**2 * (u - x) - 2 * ZETA * WN * v, dw])
 
-    s, t, ws = np.zeros((3, om.size)), np.zeros(om.size), np.zeros((n, om.size))
+    ws = hysteretic_states(rate, h, n)
+    tt = np.arange(n)[:, None] * h[None, :]
+    return h, (amps * np.cos(om * tt)).T, ws.T
+
+
+def hysteretic_states(rate: Callable[[Any, Any], Any], h: Any, n: int) -> Any:
+    """``n`` samples (rows) of the third state (the Bouc-Wen w) of the ODE ``rate(t, s)`` on the states
+    ``(x, v, w)`` of each experiment (columns, step ``h[i]``), from rest, four RK4 steps a sample."""
+    s, t, ws = np.zeros((3, h.size)), np.zeros(h.size), np.zeros((n, h.size))
+    hh = h / 4
     for k in range(n):
         ws[k] = s[2]
-        hh = h / 4
         for _ in range(4):
             k1 = rate(t, s)
             k2 = rate(t + hh / 2, s + hh / 2 * k1)
             k3 = rate(t + hh / 2, s + hh / 2 * k2)
             k4 = rate(t + hh, s + hh * k3)
             s, t = s + hh / 6 * (k1 + 2 * k2 + 2 * k3 + k4), t + hh
-    tt = np.arange(n)[:, None] * h[None, :]
-    return h, (amps * np.cos(om * tt)).T, ws.T
+    return ws
 
 
 def recordings(
