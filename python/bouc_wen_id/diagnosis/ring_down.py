@@ -17,10 +17,11 @@ window: noise about a settled or a degrading loop gives a level line (the log of
 samples scatters by about 0.1, so a fall of 2 over 8 periods is far outside it).
 
 An experiment found ringing is not diagnosed (:func:`.run._with_wander` leaves it out, as a drift no
-degradation explains); when most or all ring, the verdict says that the loop has not settled, names nothing,
-and says how many more settle periods would let the ring-down die out (:func:`said`). A ring-down that dies out
-within the first half of the averaged periods is trimmed as before (``settling._settled``: the rest is
-steady); one still falling in the record's last periods is in every averaged period, and no trim helps.
+degradation explains); when most or all ring, the verdict says that the loop has not settled, names
+nothing, and says how many more settle periods would let the ring-down die out (:func:`said`). A
+ring-down that dies out within the first half of the averaged periods is trimmed as before
+(``settling._settled``: the rest is steady); one still falling in the record's last periods is in every
+averaged period, and no trim helps.
 """
 
 from __future__ import annotations
