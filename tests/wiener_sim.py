@@ -3,12 +3,13 @@
 RK4 on a resonant G's two states and the Bouc-Wen state together, a pure delay on the sine drive (exact for a
 sine), four steps a sample; Spencer's series dashpot (``rho``: the element driven by its own travel,
 ``ddot = xdot - rho w``) optional. Used by test_record_zeros.py, test_diagnosis_bounds_said.py and
-test_across_colour.py.
+test_across_colour.py; test_ring_down.py uses its integrator and AR(1) noise.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -39,12 +40,19 @@ def simulate(
         dw = d - (BETA * np.abs(d) * pw * np.sign(w) + GAMMA * d * pw + delta * d * pw * np.sign(w))
         return np.array([v, WN**2 * (u - x) - 2 * ZETA * WN * v, dw])
 
-    s, t, ws = np.zeros((3, om.size)), np.zeros(om.size), np.zeros((n, om.size))
+    ws = hysteretic_states(rate, h, n)
+    tt = np.arange(n)[:, None] * h[None, :]
+    return h, (amps * np.cos(om * tt)).T, ws.T
+
+
+def hysteretic_states(rate: Callable[[Any, Any], Any], h: Any, n: int) -> Any:
+    """``n`` samples (rows) of the third state (the Bouc-Wen w) of the ODE ``rate(t, s)`` on the states
+    ``(x, v, w)`` of each experiment (columns, step ``h[i]``), from rest, four RK4 steps a sample."""
+    s, t, ws = np.zeros((3, h.size)), np.zeros(h.size), np.zeros((n, h.size))
     for k in range(n):
         ws[k] = s[2]
         s, t = sample_step(rate, s, t, h)  # four RK4 steps a sample
-    tt = np.arange(n)[:, None] * h[None, :]
-    return h, (amps * np.cos(om * tt)).T, ws.T
+    return ws
 
 
 def recordings(

@@ -50,6 +50,7 @@ from . import (
     pairs,
     record_zeros,
     resolution,
+    ring_down,
     speed,
     steady_select,
     zero_drift,
@@ -501,7 +502,11 @@ def _with_wander(
         )
     common = None if wander is None else wander.kept
     setup = _Setup(cands, alpha, held_out_test, units, skipped, not qnotes, report=report, common_dc=common)
+    ring, rnotes = ring_down.rings(items)  # a free ring-down of G still in the averaged periods
+    notes, ringing = [*notes, *rnotes], ring_down.left_out(ring, [e.source for e in exps])
     try:
+        if 0 < len(ringing) < len(exps):  # left out, as a drift no degradation explains
+            raise _LeaveOut(ringing, None)
         early = replace(setup, leave_out_early=speed.LEAVE_OUT_EARLY)
         d = _diagnose_set(exps, early, [*notes, *qnotes])
         # The drive's harmonics carried once more, beside a device term, when the first carry failed.
@@ -512,6 +517,7 @@ def _with_wander(
         d = _without_unsettled(exps, e.drifting, setup, None, [*notes, *qnotes], e.deg)
     else:
         d = _unless_unsettled(exps, d, setup, [*notes, *qnotes])
+    d = ring_down.said(d, ring, len(exps))  # most or all still ring: nothing named
     d = age.with_clause(d)  # what the fit assumed of the specimen's history, when it fitted its age
     d = gain_drift.with_clause(d)  # a drifting output gain fits the drift as well as degradation
     if wander is None:  # short records: an offset that is a settling centre's transient (centre_decay.py)

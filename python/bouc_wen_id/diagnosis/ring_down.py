@@ -1,0 +1,135 @@
+"""A free ring-down of G still in the averaged periods (review 44, failure 1): no physics is named from it.
+
+A lightly damped G (zeta 0.05 at 6 rad/s) started from rest rings at its own damped frequency, not the
+drive's, and that free oscillation falls geometrically from period to period. With 10 settle periods and 4
+averaged ones (review 44's design D) it was still there: the transient test (``outliers.transient_periods``)
+may not trim 2 of 4 periods (``n - extra >= 4`` in ``settling._settled``) and, its reference being the last
+half of the same ringing periods, often did not see it at all; the drift it left was fitted as stiffness
+degradation, "explained" on null plants.
+
+What tells the two apart is how the loop changes from period to period over the whole record (settle
+periods included): a degradation moves it by about the same amount each period (it grows with the energy
+dissipated, which a steady drive dissipates at a steady rate), so the RMS change between consecutive periods
+stays level; a ring-down's change falls by a constant factor each period. :func:`ringing` fits the log of
+that RMS change over the record's last :data:`WINDOW` changes against the period index and calls it a
+ring-down when it falls significantly (one-sided p below :data:`LEVEL`) and by at least :data:`FALL` over the
+window: noise about a settled or a degrading loop gives a level line (the log of an RMS over hundreds of
+samples scatters by about 0.1, so a fall of 2 over 8 periods is far outside it).
+
+An experiment found ringing is not diagnosed (:func:`.run._with_wander` leaves it out, as a drift no
+degradation explains); when most or all ring, the verdict says that the loop has not settled, names
+nothing, and says how many more settle periods would let the ring-down die out (:func:`said`). A
+ring-down that dies out within the first half of the averaged periods is trimmed as before
+(``settling._settled``: the rest is steady); one still falling in the record's last periods is in every
+averaged period, and no trim helps.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+
+from ..errors import TransientWarning
+
+#: How many of the last period-to-period changes are read.
+WINDOW = 8
+
+#: One-sided level of the test that the change falls. The fall (:data:`FALL`) is the main guard: on review
+#: 44's settled records (its designs A, B, E and D with 60 settle periods, nulls and degradation) the fitted
+#: ratio over the window was 0.83-1.51; its ring-downs gave 0.10-0.33, those beating with the drive (G's
+#: 6 rad/s against a 7 rad/s drive) scattered about their fall (0.17-0.22 at p 3e-3 to 1e-2).
+LEVEL = 0.02
+
+#: Least fall of the fitted change over the window for a ring-down (a level line's scatter gives ~0.9).
+FALL = 0.5
+
+#: The ring-down's size, relative to its size in the first averaged period, that enough settling reaches.
+TARGET = 0.01
+
+
+@dataclass(frozen=True)
+class Ring:
+    """A ring-down found in one recording: ``rate`` its fall per period, ``more`` the settle periods more
+    that would bring it to :data:`TARGET` of its size in the first averaged period."""
+
+    source: str
+    rate: float
+    more: int
+
+    def note(self, settle: int, averaged: int) -> str:
+        return (
+            f"{self.source}: the loop has not settled: after {settle} settle periods the change from one "
+            f"period to the next still falls by a factor {self.rate:.2f} a period through the {averaged} "
+            "averaged ones (a free ring-down of the dynamics before the hysteresis, at their own frequency, "
+            "not a change of the loop); about "
+            f"{self.more} more settle periods would bring it to {TARGET:.0%} of its size; nothing is named "
+            "from this experiment"
+        )
+
+
+def ringing(y: Any, p: int, periods: int) -> float:
+    """The fall per period of the RMS change between consecutive periods of ``y`` (its first ``periods``
+    whole periods of ``p`` samples) when it falls as a ring-down does (see the module's docstring), else 0."""
+    from .locate import _t_sf2, _trend
+
+    rows = np.asarray(y[: periods * p], dtype=np.float64).reshape(periods, p)
+    change = np.sqrt(np.mean(np.diff(rows, axis=0) ** 2, axis=1))[2:]  # the first two: the virgin loading
+    if change.size < WINDOW or not np.all(change > 0.0):
+        return 0.0
+    slope, t, dof = _trend(np.log(change[-WINDOW:]))
+    if not (math.isfinite(t) and slope < 0.0 and 0.5 * _t_sf2(t, dof) < LEVEL):
+        return 0.0
+    rate = math.exp(slope)
+    return rate if rate ** (WINDOW - 1) < FALL else 0.0
+
+
+def rings(items: Any) -> tuple[list[Ring], list[str]]:
+    """``(rings, notes)`` of the recordings in ``items`` whose averaged periods still hold a ring-down
+    (:func:`ringing`); a TransientWarning says which."""
+    from ..model import Recording
+
+    seq = list(items) if isinstance(items, (list, tuple)) else [items]
+    found, notes = [], []
+    for i, item in enumerate(seq):
+        if not isinstance(item, Recording):
+            continue
+        rate = ringing(item.y, item.samples_per_period, item.whole_periods)
+        if rate <= 0.0:
+            continue
+        s = item.settle_periods
+        more = math.ceil(math.log(TARGET) / math.log(rate))
+        ring = Ring(item.metadata.get("name", f"recording {i}"), rate, more)
+        msg = ring.note(s, item.whole_periods - s)
+        warnings.warn(msg, TransientWarning, 3)
+        found.append(ring)
+        notes.append(msg)
+    return found, notes
+
+
+def left_out(found: list[Ring], sources: list[str]) -> list[int]:
+    """Indices of ``sources`` (the experiments' names) that ring (``found``)."""
+    names = {r.source for r in found}
+    return [i for i, s in enumerate(sources) if s in names]
+
+
+def said(d: Any, found: list[Ring], total: int) -> Any:
+    """``d``, or, when most of the ``total`` experiments still ring (the verdict would rest on a minority, or
+    on none), ``d`` with nothing named: the verdict says that the loop has not settled, in which
+    experiments, and how many more settle periods would help (each one's note says more)."""
+    from .drift_majority import most
+
+    if not found or not (len(found) == total or most(len(found), total)):
+        return d
+    names = ", ".join(r.source for r in found)
+    more = max(r.more for r in found)
+    verdict = (
+        f"not settled: {len(found)} of {total} experiments ({names}) still hold the free ring-down of the "
+        "dynamics from the start of the record (a change from period to period that falls geometrically, "
+        f"not a change of the loop); nothing is named from a loop that has not settled: about {more} more "
+        "settle periods would let it die out"
+    )
+    return replace(d, status="unexplained", verdict=verdict, named=(), partial=(), alternatives=())
