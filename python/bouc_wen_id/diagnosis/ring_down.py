@@ -74,11 +74,17 @@ class Ring:
 def ringing(y: Any, p: int, periods: int) -> float:
     """The fall per period of the RMS change between consecutive periods of ``y`` (its first ``periods``
     whole periods of ``p`` samples) when it falls as a ring-down does (see the module's docstring), else 0."""
+    from .data import numerical_rtol
     from .locate import _t_sf2, _trend
 
     rows = np.asarray(y[: periods * p], dtype=np.float64).reshape(periods, p)
     change = np.sqrt(np.mean(np.diff(rows, axis=0) ** 2, axis=1))[2:]  # the first two: the virgin loading
     if change.size < WINDOW or not np.all(change > 0.0):
+        return 0.0
+    if float(np.max(change[-WINDOW:])) < numerical_rtol(p) * float(np.max(np.abs(rows))):
+        # Below a simulated loop's numerical accuracy (data.numerical_rtol, the floor noise-free data get):
+        # the arithmetic's, not a ring-down that a test could see (a start-up transient of 1e-6 of the peak
+        # in noise-free data falls geometrically too; tests/test_diagnosis.py's noise-free plant).
         return 0.0
     slope, t, dof = _trend(np.log(change[-WINDOW:]))
     if not (math.isfinite(t) and slope < 0.0 and 0.5 * _t_sf2(t, dof) < LEVEL):
@@ -118,12 +124,13 @@ def left_out(found: list[Ring], sources: list[str]) -> list[int]:
 
 def said(d: Any, found: list[Ring], total: int) -> Any:
     """``d``, or, when most of the ``total`` experiments still ring (the verdict would rest on a minority, or
-    on none), ``d`` with nothing named: the verdict says that the loop has not settled, in which
-    experiments, and how many more settle periods would help (each one's note says more)."""
+    on none) and ``d`` is not "adequate", ``d`` with nothing named: the verdict says that the loop has not
+    settled, in which experiments, and how many more settle periods would help (each one's note says
+    more). An adequate ``d`` stands: it names nothing, and its notes say which experiments ring."""
     from .drift_majority import most
 
-    if not found or not (len(found) == total or most(len(found), total)):
-        return d
+    if not found or not (len(found) == total or most(len(found), total)) or d.status == "adequate":
+        return d  # an adequate verdict names nothing and claims no physics: the notes say the ring-down
     names = ", ".join(r.source for r in found)
     more = max(r.more for r in found)
     verdict = (
