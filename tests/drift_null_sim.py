@@ -2,7 +2,8 @@
 honest45): a Bouc-Wen element (beta 0.6, gamma 0.2, mu 1.5, unit A) behind a first-order G = 1 / (1 + tau s)
 with a pure delay, RK4 on (x, w) four steps a sample for every experiment at once, y = w + 0.4 x plus white
 or AR(1) noise; optionally a decaying offset on the output's centre or an output gain drifting over each
-record (the positive controls). Used by test_drift_left_out.py and studies/honest45/nulls45.py."""
+record (the positive controls).
+Used by test_drift_left_out.py and studies/honest45 (nulls45.py, scan45.py); the noise is wiener_sim.ar1."""
 
 from __future__ import annotations
 
@@ -10,10 +11,13 @@ import math
 from typing import Any
 
 import numpy as np
+from wiener_sim import ar1
 
 BETA, GAMMA, MU, ALPHA_X = 0.6, 0.2, 1.5, 0.4
 SUB = 4
 TAU, DELAY = 0.03, 0.004
+#: The noise's sd, the periods recorded after the settling ones, and the samples per period.
+SD, PERIODS, SETTLE, SAMPLES = 0.01, 20, 4, 128
 
 
 def loops(omega: Any, amp: Any, n: int, samples: int) -> Any:
@@ -42,25 +46,10 @@ def loops(omega: Any, amp: Any, n: int, samples: int) -> Any:
     return out
 
 
-def noise(rng: np.random.Generator, n: int, sd: float, phi: float) -> Any:
-    """White (``phi`` 0) or AR(1) noise of marginal sd ``sd``."""
-    e = rng.normal(0.0, sd * math.sqrt(1.0 - phi * phi), n)
-    out = np.empty(n)
-    prev = rng.normal(0.0, sd)
-    for i in range(n):
-        prev = phi * prev + e[i]
-        out[i] = prev
-    return out
-
-
 def recordings(
     seed: int,
     n_exp: int = 10,
     phi: float = 0.0,
-    sd: float = 0.01,
-    periods: int = 20,
-    settle: int = 4,
-    samples: int = 128,
     offset: tuple[float, tuple[int, ...]] = (0.0, ()),
     gain: tuple[float, tuple[int, ...]] = (0.0, ()),
 ) -> list[Any]:
@@ -73,21 +62,21 @@ def recordings(
     wu = (1.0 / (BETA + GAMMA)) ** (1.0 / MU)
     freqs = np.geomspace(0.5, 4.0, n_exp)
     amps = wu * np.resize([0.8, 1.5, 2.5], n_exp)
-    n = (settle + periods) * samples
-    ys = loops(2.0 * math.pi * freqs, amps, n, samples)
+    n = (SETTLE + PERIODS) * SAMPLES
+    ys = loops(2.0 * math.pi * freqs, amps, n, SAMPLES)
     out = []
     for i, (f, a) in enumerate(zip(freqs, amps)):
-        t = np.arange(n) / f / samples
-        rec = np.clip(t - settle / f, 0.0, None) * f / periods  # 0 .. 1 over the record
+        t = np.arange(n) / f / SAMPLES
+        rec = np.clip(t - SETTLE / f, 0.0, None) * f / PERIODS  # 0 .. 1 over the record
         y = ys[i]
         if i in offset[1]:
             y = y + offset[0] * np.exp(-rec)
         if i in gain[1]:
             y = y * (1.0 + gain[0] * rec)
-        y = y + noise(rng, n, sd, phi)
+        y = y + ar1(rng, n, SD, phi)  # white at phi 0
         u = a * np.cos(2.0 * math.pi * f * t)
         name = f"r{i}_f{f:.2g}"
         out.append(
-            bw.Recording(t, u, y, float(a), 2.0 * math.pi * f, settle_periods=settle, metadata={"name": name})
+            bw.Recording(t, u, y, float(a), 2.0 * math.pi * f, settle_periods=SETTLE, metadata={"name": name})
         )
     return out

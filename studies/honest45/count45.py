@@ -23,7 +23,9 @@ def main(path: str) -> None:
         said = sum(bool(r["drift_said"]) for r in rows)
         fact = sum(bool(r["drifts_as_fact"]) for r in rows)
         off = sum(r["status"] not in ("adequate", "explained") for r in rows)
-        print(f"{kind:7s} n={n:2d} left_out={left} drift_clause={said} drifts_as_fact={fact} status_other={off}")
+        print(
+            f"{kind:7s} n={n:2d} left_out={left} drift_clause={said} drifts_as_fact={fact} status_other={off}"
+        )
 
 
 if __name__ == "__main__":
