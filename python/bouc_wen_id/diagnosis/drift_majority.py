@@ -25,6 +25,7 @@ import numpy as np
 
 from .data import DiagExperiment
 from .drift import DegradationTest
+from .drift_said import firm
 from .locate import _trend
 from .result import TERM_LABELS, Diagnosis
 
@@ -59,24 +60,33 @@ def reading(deg: Optional[DegradationTest]) -> str:
     )
 
 
-def head(exps: Sequence[DiagExperiment], drifting: Sequence[int]) -> str:
-    """The verdict's first clause: the recordings drift, k of n, each by how much per period."""
+def head(exps: Sequence[DiagExperiment], drifting: Sequence[int], ps: Sequence[float] = ()) -> str:
+    """The verdict's first clause: the recordings drift, k of n, each by how much per period; "may drift"
+    with each one's adjusted p (``ps``, settling.drift_p) when some is not firm (drift_said.FIRM)."""
     moves = ", ".join(f"{exps[i].source} {100 * rate(exps[i]):+.2g} %" for i in drifting)
+    verb = "may drift" if any(not firm(p) for p in ps) else "drift"
+    evidence = (
+        f"; trend test, Holm over the records: adjusted p = {', '.join(f'{p:.2g}' for p in ps)}" if ps else ""
+    )
     return (
-        f"the recordings drift from period to period, {len(drifting)} of {len(exps)} (the fundamental per "
-        f"period: {moves}): a transient not yet settled, an output gain or zero drifting over the record (a "
-        "sensor's calibration, e.g. with temperature), or degradation the drift test does not name; nothing "
-        "is named from the few settled ones"
+        f"the recordings {verb} from period to period, {len(drifting)} of {len(exps)} (the fundamental per "
+        f"period: {moves}{evidence}): a transient not yet settled, an output gain or zero drifting over the "
+        "record (a sensor's calibration, e.g. with temperature), or degradation the drift test does not "
+        "name; nothing is named from the few settled ones"
     )
 
 
 def verdict_of(
-    d: Diagnosis, exps: Sequence[DiagExperiment], drifting: Sequence[int], deg: Optional[DegradationTest]
+    d: Diagnosis,
+    exps: Sequence[DiagExperiment],
+    drifting: Sequence[int],
+    deg: Optional[DegradationTest],
+    ps: Sequence[float] = (),
 ) -> Diagnosis:
     """``d`` (the diagnosis of the settled experiments) restated with the drift first: status "unexplained",
     its named terms kept as partial (a hint), its verdict after the drift's clause."""
     kept = [e.source for i, e in enumerate(exps) if i not in drifting]
-    verdict = head(exps, drifting) + reading(deg) + f"; on {', '.join(kept)} alone: {d.verdict}"
+    verdict = head(exps, drifting, ps) + reading(deg) + f"; on {', '.join(kept)} alone: {d.verdict}"
     return replace(d, status="unexplained", verdict=verdict, named=(), partial=(*d.named, *d.partial))
 
 

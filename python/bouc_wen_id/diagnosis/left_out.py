@@ -26,7 +26,8 @@ import html
 from dataclasses import replace
 from typing import Any, TypeVar
 
-from .settling import LEFT_OUT, LEFT_OUT_TAIL
+from .drift_said import firm
+from .settling import LEFT_OUT, LEFT_OUT_P, left_out_tail
 from .verdict_text import clauses
 
 #: Where run._without_unsettled says why the status was not decided on the settled records (settings key).
@@ -36,6 +37,11 @@ UNSETTLED = "unsettled"
 #: What the reason means (the drift test cannot tell the two readings apart: settling.left_out_note).
 UNSETTLED_DETAIL = (
     "the loop still drifts from period to period and no degradation explains it: a transient not yet "
+    "settled, or a sensor whose gain or zero drifts over the record"
+)
+#: The same when the record's adjusted p is not below drift_said.FIRM: a drift is evidence, not a fact.
+UNSETTLED_MAY = (
+    "the loop may drift from period to period and no degradation explains it: a transient not yet "
     "settled, or a sensor whose gain or zero drifts over the record"
 )
 #: The statistics such a record is left out of (it took part only in the drift tests that left it out).
@@ -61,6 +67,13 @@ def left(d: Any) -> tuple[str, ...]:
     return tuple(str(s) for s in (getattr(d, "settings", None) or {}).get(LEFT_OUT, ()))
 
 
+def p_adjusted(d: Any) -> tuple[float, ...]:
+    """Each left-out record's adjusted p of the trend test (``settings["left_out_p"]``, settling.drift_p),
+    in :func:`left`'s order; () when unknown (a ring-down, a diagnosis from before session 45)."""
+    ps = tuple(float(p) for p in (getattr(d, "settings", None) or {}).get(LEFT_OUT_P, ()))
+    return ps if len(ps) == len(left(d)) else ()
+
+
 def judged_on(d: Any) -> tuple[str, ...]:
     """The records ``d``'s statistics were computed on: its experiments less those left out."""
     out = left(d)
@@ -73,16 +86,22 @@ def not_judged(d: Any) -> str:
 
 
 def records(d: Any) -> list[dict[str, Any]]:
-    """Each record left out of a statistic: its name, the reason, what that means and the statistics."""
-    return [
-        {"record": s, "reason": UNSETTLED, "detail": UNSETTLED_DETAIL, "left_out_of": list(UNSETTLED_OF)}
-        for s in left(d)
-    ]
+    """Each record left out of a statistic: its name, the reason, what that means, the statistics, and
+    the trend test's adjusted p when known (the detail says "may drift" when it is not firm)."""
+    ps = p_adjusted(d)
+    out: list[dict[str, Any]] = []
+    for i, s in enumerate(left(d)):
+        row: dict[str, Any] = {"record": s, "reason": UNSETTLED, "detail": UNSETTLED_DETAIL}
+        if ps:
+            row["p_adjusted"] = ps[i]
+            row["detail"] = UNSETTLED_DETAIL if firm(ps[i]) else UNSETTLED_MAY
+        out.append({**row, "left_out_of": list(UNSETTLED_OF)})
+    return out
 
 
-def _tail(names: tuple[str, ...]) -> str:
+def _tail(names: tuple[str, ...], ps: tuple[float, ...] = ()) -> str:
     """The clause the verdict ended with (run._without_unsettled, centre_decay.check)."""
-    return f"{', '.join(names)} {LEFT_OUT_TAIL}"
+    return f"{', '.join(names)} {left_out_tail(ps)}"
 
 
 def _on(head: str, status: str, kept: str) -> str:
@@ -105,9 +124,10 @@ def qualified(d: _D) -> _D:
     parts = clauses(str(getattr(d, "verdict", "")))
     if not parts:
         return d
-    rest = [c for c in parts[1:] if c != _tail(out)]
+    tail = _tail(out, p_adjusted(d))
+    rest = [c for c in parts[1:] if c not in (tail, _tail(out))]
     head = _on(parts[0], status, ", ".join(kept))
-    verdict = "; ".join([head, f"{_tail(out)}: {WHAT_TO_DO}", *rest])
+    verdict = "; ".join([head, f"{tail}: {WHAT_TO_DO}", *rest])
     return replace(d, verdict=verdict)  # type: ignore[type-var]
 
 
@@ -119,7 +139,8 @@ def to_dict(d: Any) -> dict[str, Any]:
 def summary_lines(d: Any) -> list[str]:
     """The summary's lines on the records left out ([] when none)."""
     lines = [
-        f"left out: {r['record']} ({r['reason']}: {r['detail']}; left out of: {', '.join(r['left_out_of'])})"
+        f"left out: {r['record']} ({r['reason']}: {r['detail']}{_p_text(r)}; left out of: "
+        f"{', '.join(r['left_out_of'])})"
         for r in records(d)
     ]
     if lines:
@@ -127,11 +148,17 @@ def summary_lines(d: Any) -> list[str]:
     return lines
 
 
+def _p_text(r: dict[str, Any]) -> str:
+    """ ", trend test adjusted p = ..." for a record with its p, else ''."""
+    return f", trend test adjusted p = {r['p_adjusted']:.2g}" if "p_adjusted" in r else ""
+
+
 def report_html(d: Any) -> list[str]:
     """The report's section on the records left out ([] when none)."""
     rows = "".join(
-        f"<li>{html.escape(r['record'])}: {html.escape(r['reason'])} ({html.escape(r['detail'])}); left out "
-        f"of: {html.escape(', '.join(r['left_out_of']))}</li>"
+        f"<li>{html.escape(r['record'])}: {html.escape(r['reason'])} "
+        f"({html.escape(r['detail'] + _p_text(r))}); left out of: "
+        f"{html.escape(', '.join(r['left_out_of']))}</li>"
         for r in records(d)
     )
     if not rows:
@@ -144,11 +171,13 @@ __all__ = [
     "NOT_JUDGED",
     "UNSETTLED",
     "UNSETTLED_DETAIL",
+    "UNSETTLED_MAY",
     "UNSETTLED_OF",
     "WHAT_TO_DO",
     "judged_on",
     "left",
     "not_judged",
+    "p_adjusted",
     "qualified",
     "records",
     "report_html",

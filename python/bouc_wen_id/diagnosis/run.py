@@ -71,6 +71,7 @@ from .drift import (
     strengths,
     with_drift_gate,
 )
+from .drift_said import firm, records_drift
 from .fit_notes import fit_notes
 from .fitting import (
     Scale,
@@ -104,13 +105,16 @@ from .run_words import classify as classify
 from .select import ALPHA, Alternative, Step, held_out
 from .settling import (  # noqa: F401 (quantisation_step: importable here as before)
     LEFT_OUT,
+    LEFT_OUT_P,
     LEFT_OUT_TAIL,
     _check_experiments,
     _check_sizes,
     _noise_floors,
     _settled,
     _unsettled,
+    drift_p,
     left_out_note,
+    left_out_tail,
     quantisation_step,
     settled_only,
 )
@@ -320,10 +324,13 @@ class _LeaveOut(Exception):
     """Raised by :func:`_drift_stage` under ``_Setup.leave_out_early``: these experiments' loops still drift
     (``drifting``, indices), the others settled; caught by :func:`_with_wander`."""
 
-    def __init__(self, drifting: list[int], deg: Optional[DegradationTest] = None) -> None:
+    def __init__(
+        self, drifting: list[int], deg: Optional[DegradationTest] = None, by_trend: bool = True
+    ) -> None:
         super().__init__(drifting)
         self.drifting = drifting
         self.deg = deg  # the whole set's drift test (its drifting-gain reading: drift_majority.py)
+        self.by_trend = by_trend  # left out by the trend test (settling.drift_p), not as ringing
 
 
 def diagnose(
@@ -506,7 +513,7 @@ def _with_wander(
     notes, ringing = [*notes, *rnotes], ring_down.left_out(ring, [e.source for e in exps])
     try:
         if 0 < len(ringing) < len(exps):  # left out, as a drift no degradation explains
-            raise _LeaveOut(ringing, None)
+            raise _LeaveOut(ringing, None, by_trend=False)
         early = replace(setup, leave_out_early=speed.LEAVE_OUT_EARLY)
         d = _diagnose_set(exps, early, [*notes, *qnotes])
         # The drive's harmonics carried once more, beside a device term, when the first carry failed.
@@ -514,7 +521,7 @@ def _with_wander(
             d, cands, lambda t: _beside(exps, replace(early, carry_beside=t), [*notes, *qnotes])
         )
     except _LeaveOut as e:  # some loops still drift, no degradation explains it: the settled ones alone
-        d = _without_unsettled(exps, e.drifting, setup, None, [*notes, *qnotes], e.deg)
+        d = _without_unsettled(exps, e.drifting, setup, None, [*notes, *qnotes], e.deg, e.by_trend)
     else:
         d = _unless_unsettled(exps, d, setup, [*notes, *qnotes])
     d = ring_down.said(d, ring, len(exps))  # most or all still ring: nothing named
@@ -552,24 +559,31 @@ def _without_unsettled(
     whole: Optional[Diagnosis],
     notes: list[str],
     deg: Optional[DegradationTest] = None,
+    by_trend: bool = True,
 ) -> Diagnosis:
     """The diagnosis of the settled experiments only, saying which were left out; when none is settled,
     the verdict says so and names nothing (a loop that has not settled is not physics). ``whole`` (the
     diagnosis of them all) is read only then: None when some settled (:class:`_LeaveOut`). When most drift,
-    the drift leads the verdict (drift_majority.py); ``deg``: the whole set's drift test, when known."""
+    the drift leads the verdict (drift_majority.py); ``deg``: the whole set's drift test, when known.
+    ``by_trend``: left out by the trend test, whose adjusted p each record keeps in the settings and the
+    words (settling.drift_p, drift_said.records_drift); not so for a ring-down (ring_down.py)."""
     deg = deg if deg is not None or whole is None else whole.degradation
     names = ", ".join(exps[i].source for i in drifting)
-    why = left_out_note(names)
-    keep = [i for i in range(len(exps)) if i not in drifting]
     left_out = [exps[i].source for i in drifting]
+    all_p = drift_p(exps) if by_trend else []
+    ps = [all_p[i] for i in drifting] if by_trend else []
+    why = left_out_note(names, left_out, ps)
+    keep = [i for i in range(len(exps)) if i not in drifting]
+    evidence = {LEFT_OUT: left_out, LEFT_OUT_P: ps}
     if not keep:
         assert whole is not None  # _drift_stage leaves out early only when some experiment settled
         every = "every record is left out as not settled"
-        whole = replace(whole, settings={**whole.settings, LEFT_OUT: left_out, NOT_JUDGED: every})
+        whole = replace(whole, settings={**whole.settings, **evidence, NOT_JUDGED: every})
+        said = records_drift(left_out, ps) if ps else "the loop still drifts from period to period"
         verdict = (
-            f"not settled: the loop of every experiment ({names}) still drifts from period to period, and "
-            "no degradation explains it; nothing is named from a loop that has not settled (record more "
-            "settling periods, or a longer record)"
+            f"{'may not be' if ps and not all(firm(p) for p in ps) else 'not'} settled: in every experiment, "
+            f"{said}, and no degradation explains it; nothing is named from a loop that may not have "
+            "settled (record more settling periods, or a longer record)"
         ) + drift_majority.reading(deg)
         return replace(
             whole,
@@ -581,7 +595,7 @@ def _without_unsettled(
             notes=(*whole.notes, why),
         )
     d = _diagnose_set([exps[i] for i in keep], setup, [*notes, why])
-    d = replace(d, settings={**d.settings, LEFT_OUT: left_out})
+    d = replace(d, settings={**d.settings, **evidence})
     # The status is not decided on the settled records here (one record, or a minority): adequacy.py's
     # rule reads NOT_JUDGED, so the JSON's adequacy agrees with the status (left_out.py).
     if len(keep) == 1 and d.named:
@@ -590,9 +604,9 @@ def _without_unsettled(
     if drift_majority.most(len(drifting), len(exps)):  # the verdict would rest on a minority
         most = f"most records ({len(drifting)} of {len(exps)}) are left out as not settled"
         return drift_majority.verdict_of(
-            replace(d, settings={**d.settings, NOT_JUDGED: most}), exps, drifting, deg
+            replace(d, settings={**d.settings, NOT_JUDGED: most}), exps, drifting, deg, ps
         )
-    return replace(d, verdict=d.verdict + f"; {names} {LEFT_OUT_TAIL}")
+    return replace(d, verdict=d.verdict + f"; {names} {left_out_tail(ps)}")
 
 
 def _from_one(d: Diagnosis, source: str, names: str) -> Diagnosis:

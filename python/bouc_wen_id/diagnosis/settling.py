@@ -184,34 +184,51 @@ def _noise_floors(items: Any, exps: list[DiagExperiment]) -> tuple[list[DiagExpe
     return out, notes
 
 
-def _unsettled(exps: Sequence[DiagExperiment]) -> list[int]:
-    """Indices of the experiments whose loop drifts from period to period: locate's trend test of the
-    per-period DC and fundamental amplitude, per experiment, Bonferroni over them at half the level, with
-    each slope's standard error at least what the noise floor gives (rounding in noise-free data trends
-    "significantly" against its own scatter)."""
-    from .locate import LEVEL, _t_sf2, _trend
+def trend_p(e: DiagExperiment) -> float:
+    """The p of the trend test of ``e``'s per-period DC and fundamental amplitude (locate's t-test, the
+    smaller of the two doubled: Bonferroni over them), each slope's standard error at least what the noise
+    floor gives (rounding in noise-free data trends "significantly" against its own scatter); NaN under 4
+    periods."""
+    from .locate import _t_sf2, _trend
 
-    tested = [i for i, e in enumerate(exps) if e.h1.size >= 4]
-    level = 0.5 * LEVEL / max(len(tested), 1)
-    out = []
-    for i in tested:
-        e = exps[i]
-        n, p = e.h1.size, e.samples_per_period
-        k2 = float(n * (n * n - 1) / 12.0)  # sum of the centred period indices squared
-        amp = np.abs(e.h1)
-        ref = float(np.mean(amp)) or 1.0
-        pvals = []
-        for values, sd in (
-            (amp / ref, math.sqrt(2.0 * e.noise_var / p) / ref),
-            (e.dc, math.sqrt(e.noise_var / p)),
-        ):
-            slope, t, dof = _trend(np.asarray(values, dtype=np.float64))
-            se = abs(slope / t) if t and math.isfinite(t) else 0.0
-            se = max(se, sd / math.sqrt(k2))
-            pvals.append(_t_sf2(slope / se, dof) if se > 0 else 1.0)
-        if min(1.0, 2.0 * min(pvals)) < level:
-            out.append(i)
+    n, p = e.h1.size, e.samples_per_period
+    if n < 4:
+        return float("nan")
+    k2 = float(n * (n * n - 1) / 12.0)  # sum of the centred period indices squared
+    amp = np.abs(e.h1)
+    ref = float(np.mean(amp)) or 1.0
+    pvals = []
+    for values, sd in (
+        (amp / ref, math.sqrt(2.0 * e.noise_var / p) / ref),
+        (e.dc, math.sqrt(e.noise_var / p)),
+    ):
+        slope, t, dof = _trend(np.asarray(values, dtype=np.float64))
+        se = abs(slope / t) if t and math.isfinite(t) else 0.0
+        se = max(se, sd / math.sqrt(k2))
+        pvals.append(_t_sf2(slope / se, dof) if se > 0 else 1.0)
+    return min(1.0, 2.0 * min(pvals))
+
+
+def drift_p(exps: Sequence[DiagExperiment]) -> list[float]:
+    """Each experiment's :func:`trend_p` adjusted over the tested ones by Holm (drift_said.holm); NaN for
+    one too short to test."""
+    from .drift_said import holm
+
+    raw = [trend_p(e) for e in exps]
+    tested = [i for i, v in enumerate(raw) if math.isfinite(v)]
+    out = [float("nan")] * len(exps)
+    for i, v in zip(tested, holm([raw[i] for i in tested])):
+        out[i] = v
     return out
+
+
+def _unsettled(exps: Sequence[DiagExperiment]) -> list[int]:
+    """Indices of the experiments whose loop drifts from period to period: :func:`drift_p` (the trend
+    test, Holm over the experiments) below half the level (locate.LEVEL / 2, as before session 45's Holm:
+    Bonferroni at the same family-wise level)."""
+    from .locate import LEVEL
+
+    return [i for i, v in enumerate(drift_p(exps)) if math.isfinite(v) and v < 0.5 * LEVEL]
 
 
 #: Where :func:`.run.diagnose` records the experiments it left out as not settled (its ``settings``), so that
@@ -219,16 +236,34 @@ def _unsettled(exps: Sequence[DiagExperiment]) -> list[int]:
 LEFT_OUT = "left_out"
 
 
+#: Where :func:`.run.diagnose` records each left-out experiment's adjusted p (:func:`drift_p`; settings).
+LEFT_OUT_P = "left_out_p"
+
 #: How a verdict ends when experiments were left out as still drifting (:func:`left_out_note` says more).
 LEFT_OUT_TAIL = "left out (not settled, or a drifting sensor)"
+#: The same when some left-out record's drift is not firm (drift_said.FIRM): it may drift.
+LEFT_OUT_MAY = "left out (may drift: not settled, or a drifting sensor)"
 
 
-def left_out_note(names: str) -> str:
+def left_out_tail(p_adjusted: Sequence[float]) -> str:
+    """:data:`LEFT_OUT_TAIL` when every record's drift is firm (or no p is known), else
+    :data:`LEFT_OUT_MAY`."""
+    from .drift_said import firm
+
+    return LEFT_OUT_MAY if any(not firm(p) for p in p_adjusted) else LEFT_OUT_TAIL
+
+
+def left_out_note(names: str, records: Sequence[str] = (), p_adjusted: Sequence[float] = ()) -> str:
     """The note on experiments left out of a diagnosis as not settled (:func:`_unsettled`), one wording for
     :func:`.run.diagnose` and ``diagnose_across``.  A sensor whose gain or zero drifts over the record looks
-    the same to the drift test (review 34: a 2 % gain drift), so both readings are said."""
+    the same to the drift test (review 34: a 2 % gain drift), so both readings are said; with the records'
+    adjusted p (:func:`drift_p`, in ``records``' order) the drift is said at drift_said's standard, each
+    record with its p."""
+    from .drift_said import records_drift
+
+    said = records_drift(records, p_adjusted) if p_adjusted else "the loop still drifts from period to period"
     return (
-        f"left out of the diagnosis: {names} (the loop still drifts from period to period and no "
+        f"left out of the diagnosis: {names} ({said} and no "
         "degradation explains it: a transient not yet settled, or a sensor whose gain or zero drifts over "
         "the record); record more settling periods, or check the sensor's calibration over the record"
     )
