@@ -207,7 +207,7 @@ def _locked_floors(seq: list[Any], exps: list[DiagExperiment], q: float) -> tupl
     recorded = [it for it in seq if hasattr(it, "y")]
     offset = dither.grid_offset(np.concatenate([np.ravel(it.y) for it in recorded]), q)
     rows = [_steady_rows(it) for it in recorded]
-    spread = [float(np.mean(np.var(r, axis=0, ddof=1))) for r in rows if r.shape[0] > 1]
+    spread = [float(np.mean(np.diff(r, axis=0) ** 2)) / 2.0 for r in rows if r.shape[0] > 1]  # drift-free
     if not spread or float(np.mean(spread)) >= (SCREEN_RATIO**2 + 1.0 / 12.0) * q * q:
         return none, []  # a dither this wide locks nothing (and the level count would be long to fit)
     sigma = dither.fit_sigma_counts(rows, q, offset)
@@ -219,11 +219,15 @@ def _locked_floors(seq: list[Any], exps: list[DiagExperiment], q: float) -> tupl
         m = dither.mean_error(y, q, sigma, offset)
         out.append((e.periods * float(np.mean(m * m)), e.periods * dither.harmonic_power(m)))
         rms.append(math.sqrt(float(np.mean(m * m))))
+    below = (
+        f"noise of sd about {sigma / q:.2f} q before the converter dithers it only in part"
+        if sigma >= 0.005 * q
+        else "no noise before the converter dithers it"
+    )
     note = (
-        f"the output is quantised with step q = {q:.3g} and the noise below the converter has an sd of "
-        f"about {sigma / q:.2f} q: part of the rounding error repeats every period and does not average out "
-        f"(r.m.s. {min(rms):.2g}-{max(rms):.2g} in the averaged periods); it is taken into the noise floor, "
-        "so the tests are conservative"
+        f"the output's quantisation step is q = {q:.3g}, and {below}: part of the rounding error repeats "
+        f"every period and does not average out (r.m.s. {min(rms):.2g}-{max(rms):.2g} in the averaged "
+        "periods); it is taken into the noise floor, so the tests are conservative"
     )
     return out, [note]
 
