@@ -144,8 +144,9 @@ def _check_experiments(exps: Sequence[DiagExperiment]) -> None:
 
 def _noise_floors(items: Any, exps: list[DiagExperiment]) -> tuple[list[DiagExperiment], list[str]]:
     """Every experiment's noise variance at least a simulated loop's numerical accuracy,
-    ``(numerical_rtol(P) max |ybar|)^2``, and, when it is below the output's quantisation step q, at least
-    ``N q^2 / 12`` (the averaged period's error is then the repeated quantisation error, q^2/12).
+    ``(numerical_rtol(P) max |ybar|)^2``, and, on a quantised output (step q), raised by the rounding error
+    that repeats every period (:func:`_locked_floors`); when it is below q^2/12, at least ``N q^2 / 12`` (the
+    averaged period's error is then the repeated quantisation error, q^2/12).
 
     Quantised outputs can repeat a period exactly: the variance from neighbouring periods is then 0 (or far
     below a step) and a weight ``N / sigma^2`` absurd (a degradation chi-square of 1.4e26 on the MR damper's
@@ -155,8 +156,9 @@ def _noise_floors(items: Any, exps: list[DiagExperiment]) -> tuple[list[DiagExpe
     """
     seq = list(items) if isinstance(items, (list, tuple)) else [items]
     q = max((quantisation_step(it.y) for it in seq if hasattr(it, "y")), default=0.0)
+    locked, lnote = _locked_floors(seq, exps, q)
     out, notes = [], []
-    for e in exps:
+    for e, lk in zip(exps, locked, strict=True):
         rtol = numerical_rtol(e.samples_per_period)
         numerical = (rtol * float(np.max(np.abs(e.ybar)))) ** 2
         floor = numerical
@@ -164,7 +166,14 @@ def _noise_floors(items: Any, exps: list[DiagExperiment]) -> tuple[list[DiagExpe
             # Without noise to dither it, the quantisation error repeats every period: the averaged period
             # keeps all of it (variance q^2/12), so its weight is at most 12 / q^2.
             floor = max(floor, e.periods * q * q / 12.0)
-        if e.noise_var < floor:
+        if lk is not None:  # the locked part of the rounding error, harmonic by harmonic (dither.py)
+            raised = e.noise_var + lk[0]
+            base = e.adequacy_var if e.adequacy_var.size == lk[1].size else np.full(lk[1].size, e.noise_var)
+            lv = np.maximum(base + lk[1], floor)
+            e = replace(
+                e, noise_var=max(raised, floor), spread_var=max(e.spread_var, raised, floor), adequacy_var=lv
+            )
+        elif e.noise_var < floor:
             what = (
                 f"below the output's quantisation step q = {q:.3g}: the quantisation error repeats every "
                 "period and does not average out, so the averaged period's error is taken as q^2/12 (noise "
@@ -181,7 +190,70 @@ def _noise_floors(items: Any, exps: list[DiagExperiment]) -> tuple[list[DiagExpe
             lv = np.maximum(e.adequacy_var, floor) if e.adequacy_var.size else e.adequacy_var
             e = replace(e, noise_var=floor, spread_var=max(e.spread_var, floor), adequacy_var=lv)
         out.append(e)
-    return out, notes
+    return out, [*lnote, *notes]
+
+
+def _locked_floors(seq: list[Any], exps: list[DiagExperiment], q: float) -> tuple[list[Any], list[str]]:
+    """Each experiment's locked rounding error ``m`` as ``(N mean(m^2), N P |M_k|^2 at harmonics 0..P/2)``,
+    what its ``noise_var`` and ``adequacy_var`` gain (per-sample units, N its periods), or None where
+    nothing is locked; and the note that says it. One dither sd for the output, fitted from how every
+    recording's periods fall on the levels (dither.fit_sigma_counts); nothing when there is no quantisation
+    step or the dither is q/2 or more."""
+    from . import dither
+
+    none: list[Any] = [None] * len(exps)
+    if q <= 0.0 or not exps:
+        return none, []
+    recorded = [it for it in seq if hasattr(it, "y")]
+    offset = dither.grid_offset(np.concatenate([np.ravel(it.y) for it in recorded]), q)
+    rows = [_steady_rows(it) for it in recorded]
+    spread = [float(np.mean(np.diff(r, axis=0) ** 2)) / 2.0 for r in rows if r.shape[0] > 1]  # drift-free
+    if not spread or float(np.mean(spread)) >= (SCREEN_RATIO**2 + 1.0 / 12.0) * q * q:
+        return none, []  # a dither this wide locks nothing (and the level count would be long to fit)
+    sigma = dither.fit_sigma_counts(rows, q, offset)
+    if sigma >= dither.NO_LOCK_RATIO * q:
+        return none, []
+    smooth = [dither.smooth_part(e.ybar, e.spread_var / max(e.periods, 1.0)) for e in exps]
+    out, rms = [], []
+    for e, y in zip(exps, smooth, strict=True):
+        m = dither.mean_error(y, q, sigma, offset)
+        out.append((e.periods * float(np.mean(m * m)), e.periods * dither.harmonic_power(m)))
+        rms.append(math.sqrt(float(np.mean(m * m))))
+    if max(lk[0] / max(e.noise_var, 1e-300) for lk, e in zip(out, exps)) < LOCKED_SAID:
+        return (
+            out,
+            [],
+        )  # raised, but by too little to change a test: no note, and the noise counts as measured
+    below = (
+        f"noise of sd about {sigma / q:.2f} q before the converter dithers it only in part"
+        if sigma >= 0.005 * q
+        else "no noise before the converter dithers it"
+    )
+    note = (
+        f"the output's quantisation step is q = {q:.3g}, and {below}: part of the rounding error repeats "
+        f"every period and does not average out (r.m.s. {min(rms):.2g}-{max(rms):.2g} in the averaged "
+        "periods); it is taken into the noise floor, so the tests are conservative"
+    )
+    return out, [note]
+
+
+#: Share of an experiment's noise variance the locked rounding error must add for the note to say it (and for
+#: the noise floor to count as not measured: gate.plain_gate then skips the targeted step). At N = 20 periods
+#: the share is about 0.6 at a dither of q/4, 0.04 at 0.35 q and 0.008 at 0.4 q.
+LOCKED_SAID = 0.05
+
+#: A quantised output's period-to-period variance per sample at or above ``(SCREEN_RATIO^2 + 1/12) q^2``
+#: (a dither of about this many steps) locks nothing: the dither is not fitted.
+SCREEN_RATIO = 0.75
+
+
+def _steady_rows(item: Any) -> Any:
+    """A recording's averaged periods as rows (N, P) after its settling ones (one row when it has none)."""
+    y = np.asarray(item.y, dtype=np.float64).ravel()
+    p = int(getattr(item, "samples_per_period", y.size))
+    s = int(getattr(item, "settle_periods", 0))
+    n = int(getattr(item, "whole_periods", y.size // max(p, 1))) - s
+    return y[s * p : (s + n) * p].reshape(max(n, 0), p) if n > 0 else y[None, :]
 
 
 def trend_p(e: DiagExperiment) -> float:
