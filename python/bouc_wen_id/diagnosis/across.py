@@ -16,14 +16,16 @@ a candidate term is added to EVERY condition at once, its value free per conditi
   hold its law (one value for a condition's experiments, :func:`.select.law_test`, Bonferroni over the
   conditions where it is present) and lower the held-out cost summed over the conditions;
 - as in :func:`~bouc_wen_id.diagnosis.diagnose` (across_rules.py): a two-term element's simpler limit goes
-  first unless the element beats it; the chosen term's other place, a rival within its uncertainty and one
+  first unless the element beats it; a candidate tied with the best at the place the named terms act at
+  goes first (place_tie.py); the chosen term's other place, a rival within its uncertainty and one
   whose value trades with its are reported as alternatives with the separating experiment; selection stops
   when no candidate passes or once the structure passes its adequacy test at every condition (the first
   step at ``alpha / 2`` when every condition's plain model passes the gate, the targeted step, and none
   where the gate passes on a noise floor that is not measured noise: :func:`.gate.plain_gate`, diagnose's);
-  experiments whose loop has not settled are left out per condition, as diagnose leaves them out
-  (across_settling.py), and the verdict's clauses are diagnose's (across_verdict.py); its pair step and its
-  two revisits of a named single term run on the joint steps (across_pairs.py, across_revisit.py).
+  experiments whose loop has not settled, or that still hold G's free ring-down (across_ring.py: when most
+  do, nothing is named), are left out per condition, as diagnose leaves them out (across_settling.py),
+  and the verdict's clauses are diagnose's (across_verdict.py); its pair step and its two revisits of a
+  named single term run on the joint steps (across_pairs.py, across_revisit.py).
 
 Per condition the result reports each term's value with its standard error (inflated by the final fit's
 ``sqrt(chi2/dof)`` when above 1: a misfit elsewhere makes the noise-based one too small), whether the term
