@@ -16,14 +16,16 @@ a candidate term is added to EVERY condition at once, its value free per conditi
   hold its law (one value for a condition's experiments, :func:`.select.law_test`, Bonferroni over the
   conditions where it is present) and lower the held-out cost summed over the conditions;
 - as in :func:`~bouc_wen_id.diagnosis.diagnose` (across_rules.py): a two-term element's simpler limit goes
-  first unless the element beats it; the chosen term's other place, a rival within its uncertainty and one
+  first unless the element beats it; a candidate tied with the best at the place the named terms act at
+  goes first (place_tie.py); the chosen term's other place, a rival within its uncertainty and one
   whose value trades with its are reported as alternatives with the separating experiment; selection stops
   when no candidate passes or once the structure passes its adequacy test at every condition (the first
   step at ``alpha / 2`` when every condition's plain model passes the gate, the targeted step, and none
   where the gate passes on a noise floor that is not measured noise: :func:`.gate.plain_gate`, diagnose's);
-  experiments whose loop has not settled are left out per condition, as diagnose leaves them out
-  (across_settling.py), and the verdict's clauses are diagnose's (across_verdict.py); its pair step and its
-  two revisits of a named single term run on the joint steps (across_pairs.py, across_revisit.py).
+  experiments whose loop has not settled, or that still hold G's free ring-down (across_ring.py: when most
+  do, nothing is named), are left out per condition, as diagnose leaves them out (across_settling.py),
+  and the verdict's clauses are diagnose's (across_verdict.py); its pair step and its two revisits of a
+  named single term run on the joint steps (across_pairs.py, across_revisit.py).
 
 Per condition the result reports each term's value with its standard error (inflated by the final fit's
 ``sqrt(chi2/dof)`` when above 1: a misfit elsewhere makes the noise-based one too small), whether the term
@@ -43,6 +45,7 @@ import time
 import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
+from functools import partial
 from typing import Any, Optional, cast
 
 from ..augmented import AugFit
@@ -85,6 +88,7 @@ from .across_types import _ps as _ps
 from .beside import only_beside
 from .caveats import alternatives_text
 from .fitting import carry_through_g, fit_plain, physical, scale_of, scaled, substeps_for
+from .place_tie import named_place_first
 from .progress import Progress, ProgressCallback, reporter
 from .restarts import rebase_groups
 from .result import Diagnosis, NamedTerm, term_symbol_unit
@@ -117,12 +121,14 @@ def _group(
     alpha: float = ALPHA,
     judged: tuple[Sequence[str], bool] = ((), True),
     zeros: Any = None,
+    ringing: frozenset[str] = frozenset(),
 ) -> _Group:
     """One condition's experiments prepared, checked and plain-fitted as :func:`diagnose` does; from its own
     diagnosis (``own``) when given (its experiments and plain fit, so nothing is fitted twice) unless it
     names degradation; ``judged``: the candidates and held-out rule of the condition's own judgement of a
     drift (across_settling.degrades); ``zeros``: the recordings' zeros differ, each one's DC left free about
-    their common one (across_zeros.py; the condition's own diagnosis not reused)."""
+    their common one (across_zeros.py; the condition's own diagnosis not reused); ``ringing``: the names of
+    its recordings that still ring (across_ring.py), left out as diagnose leaves them out."""
     from . import free_dc, record_zeros, zero_drift
     from .data import prepare
     from .drift import DRIFT_TERMS
@@ -142,6 +148,7 @@ def _group(
         and zeros is None
         and not freed
         and not degraded
+        and not ringing & {e.source for e in own.experiments}  # its ringing records: left out below
         and own.plain_fit is not None
         and len(own.plain_fit.params.gains) == len(own.experiments)
     ):
@@ -163,7 +170,7 @@ def _group(
         measured = not qnotes
         _check_experiments(exps)
         judge = lambda: True if degraded else across_settling.degrades(items, judged[0], alpha, judged[1])  # noqa: E731
-        exps, left, why = across_settling.drop(exps, label, judge)  # loops that have not settled, as diagnose
+        exps, left, why = across_settling.drop(exps, label, judge, ringing)  # not settled, as diagnose
         s = scale_of(exps)
         sx = scaled(exps, s)
         if wander is not None:
@@ -255,9 +262,12 @@ def _step(
     alone: dict[str, float],
 ) -> JointStep:
     """One joint step's choice from its ``trials`` (module docstring): the simpler limit first
-    (across_rules.simpler_first), the beside-Dahl rule, the law and held-out tests, the alternatives."""
+    (across_rules.simpler_first), a tied candidate at the named terms' place first (place_tie.py), the
+    beside-Dahl rule, the law and held-out tests, the alternatives."""
     passed = sorted((tr for tr in trials if tr.passed), key=lambda tr: -sum(tr.improvements))
     order = across_rules.simpler_first(groups, passed, level / len(trials))
+    # A tied candidate at the place the named terms act at goes first, as in diagnose (place_tie.py).
+    order = named_place_first(order, groups[0].current.params.terms, partial(across_verdict.tied, groups))
     chosen: Optional[JointTrial] = None
     final = {tr.term: tr for tr in trials}
     refused: list[str] = []
@@ -566,7 +576,7 @@ def diagnose_across(
     InvalidParameterError
         Fewer than two groups, conditions that do not match the groups or repeat, unknown candidates.
     """
-    from . import across_clip, across_said, across_zeros
+    from . import across_clip, across_ring, across_said, across_zeros
     from .drift import DRIFT_TERMS
     from .run import ALL_CANDIDATES, _check_candidates
 
@@ -580,9 +590,12 @@ def diagnose_across(
         raise InvalidParameterError(f"alpha = {alpha!r} must lie in (0, 1)")
     gs, own, checks, cut = across_clip.unclipped(gs, *across_stable.unpacked(per_condition, len(gs)), names)
     units = (y_unit or joined.units.get("y", ""), u_unit or joined.units.get("u", ""))
-    run = _Run(gs, conds, names, own, checks, cands, alpha, held_out_test, candidates, units, report)
+    ringing, rings, ring_notes = across_ring.found(gs, names)  # G's free ring-down (ring_down.py)
+    run = _Run(gs, conds, names, own, checks, cands, alpha, held_out_test, candidates, units, report, ringing)
+    total = sum(len(g) for g in gs)
     got = _joint(run, [None] * len(gs))
     if isinstance(got, AcrossDiagnosis):  # fewer than two settled conditions
+        got = across_ring.said(got, rings, ring_notes, total, len(gs), any(ringing))
         return replace(got, seconds=time.perf_counter() - t0)
     got = _zeros_resolved(run, got)  # the recordings' zeros differ inside a condition (across_zeros.py)
     prepared, terms, conditions, steps, settings, unsettled = got
@@ -609,6 +622,9 @@ def diagnose_across(
         ),
     )
     out = across_said.said(out, prepared, dict(zip(names, gs)), y_unit, u_unit, joined.units)  # run.py's
+    out = across_ring.said(
+        out, rings, ring_notes, total, len(gs), any(ringing)
+    )  # most ring: nothing named, as diagnose
     return readings.qualified(out, out.named, out.alternatives)  # the headline's qualifiers
 
 
@@ -627,6 +643,8 @@ class _Run:
     candidates: Optional[Sequence[str]]
     units: tuple[str, str]
     report: ProgressCallback
+    #: Per condition, the names of its recordings that still ring (across_ring.py).
+    ringing: Sequence[frozenset[str]] = ()
 
 
 _Joint = tuple[
@@ -656,7 +674,8 @@ def _joint(run: _Run, zeros: Sequence[Any]) -> Any:
             inputs.check_items(items, f"condition {name}")  # as diagnose checks them (inputs.py)
             try:
                 judged = (_check_candidates(run.candidates), run.held_out_test)  # the drift's own judgement
-                prepared.append(_group(items, name, c, cands, run.own[i], alpha, judged, zeros[i]))
+                ring = run.ringing[i] if run.ringing else frozenset()
+                prepared.append(_group(items, name, c, cands, run.own[i], alpha, judged, zeros[i], ring))
                 kept.append(run.own[i])
                 kept_checks.append(run.checks[i])
             except across_settling.NotSettled as e:  # no experiment settled there (across_settling.py)

@@ -94,16 +94,22 @@ def from_own(own: Any, label: str) -> tuple[str, ...]:
 
 
 def drop(
-    exps: Sequence[DiagExperiment], label: str, judge: Callable[[], Optional[bool]]
+    exps: Sequence[DiagExperiment],
+    label: str,
+    judge: Callable[[], Optional[bool]],
+    ringing: frozenset[str] = frozenset(),
 ) -> tuple[list[DiagExperiment], tuple[str, ...], str]:
-    """``exps`` without those whose loop still drifts (:func:`.settling.settled_only`), their names and why
-    (:data:`DEGRADES` when ``judge``, the condition's own judgement run only when some drift, names
-    degradation; :data:`UNTESTED` when it did not test it; else ""); raises :class:`NotSettled` when none
-    is left."""
+    """``exps`` without those whose loop still drifts (:func:`.settling.settled_only`) or still rings (their
+    names in ``ringing``: a free ring-down of G, which diagnose leaves out as a drift no degradation
+    explains, ring_down.py), their names and why (:data:`DEGRADES` when ``judge``, the condition's own
+    judgement run only when some drift, names degradation; :data:`UNTESTED` when it did not test it; else
+    ""); raises :class:`NotSettled` when none is left."""
     keep, drifting = settled_only(exps, False)
-    names = tuple(exps[i].source for i in drifting)
+    rung = [i for i, e in enumerate(exps) if e.source in ringing]
+    keep = [i for i in keep if i not in rung]
+    names = tuple(exps[i].source for i in sorted({*drifting, *rung}))
     why = ""
-    if drifting:
+    if set(drifting) - set(rung):  # a drift beside the rings: the condition's own judgement of it
         verdict = judge()
         why = UNTESTED if verdict is None else DEGRADES if verdict else ""
     if not keep:

@@ -22,6 +22,13 @@ nothing, and says how many more settle periods would let the ring-down die out (
 ring-down that dies out within the first half of the averaged periods is trimmed as before
 (``settling._settled``: the rest is steady); one still falling in the record's last periods is in every
 averaged period, and no trim helps.
+
+A lab :class:`~bouc_wen_id.measurement.Measurement` carries its samples, not whole periods: each steady
+segment its averaging finds is read from its first phase zero, interpolated to a whole number of samples a
+period (:func:`lab_records`), over its first :data:`LEAST_PERIODS` periods (all of them averaged: a ring-down
+is largest there). A segment shorter than that is not checked, and a note says which (the steady-segment
+test of the signal analysis refuses a stretch still ringing strongly: review 44's design D as measurements,
+14 periods, had none steady). diagnose_across runs the same check per condition (across_ring.py).
 """
 
 from __future__ import annotations
@@ -62,8 +69,19 @@ class Ring:
     source: str
     rate: float
     more: int
+    #: A lab measurement's steady segment (:func:`lab_records`): its periods are not "settle" and "averaged".
+    lab: bool = False
 
     def note(self, settle: int, averaged: int) -> str:
+        if self.lab:
+            return (
+                f"{self.source}: the loop has not settled: {settle} periods into the record the change "
+                f"from one period to the next still falls by a factor {self.rate:.2f} a period through the "
+                f"first {averaged} whole periods of the steady segment averaged (a free ring-down of the "
+                "dynamics before the hysteresis, not a change of the loop); about "
+                f"{self.more} more periods of drive before the segment would bring it to {TARGET:.0%} of "
+                "its size; nothing is named from this experiment"
+            )
         return (
             f"{self.source}: the loop has not settled: after {settle} settle periods the change from one "
             f"period to the next still falls by a factor {self.rate:.2f} a period through the {averaged} "
@@ -100,26 +118,76 @@ def ringing(y: Any, p: int, periods: int) -> float:
     return rate if rate ** (WINDOW - 1) < FALL else 0.0
 
 
-def rings(items: Any) -> tuple[list[Ring], list[str]]:
-    """``(rings, notes)`` of the recordings in ``items`` whose averaged periods still hold a ring-down
-    (:func:`ringing`); a TransientWarning says which."""
+def lab_records(item: Any) -> list[tuple[str, Any, int, int, int]]:
+    """``(source, y, p, periods, lead)`` of each steady segment of the Measurement ``item`` (its averaging's
+    segments, :func:`bouc_wen_id.signal.average_segments`): the output from the segment's first phase zero
+    of the input, linearly interpolated to ``p`` samples a period (the nearest whole number to the
+    sampling's: a lab period holds 100.37 samples, not a whole number), its ``periods`` whole periods, and
+    ``lead`` the whole periods of the record before them. What :func:`ringing` reads of a recording."""
+    from ..signal import average_segments
+
+    t, y = np.asarray(item.t, dtype=np.float64), np.asarray(item.y, dtype=np.float64)
+    dt = (float(t[-1]) - float(t[0])) / max(t.size - 1, 1)
+    out = []
+    for ap in average_segments(item).periods:
+        period = 2.0 * math.pi / float(ap.frequency)
+        p = int(round(period / dt))
+        m = int((float(t[ap.stop - 1]) - float(ap.time_origin)) // period)
+        if p < 8 or m < 1:
+            continue
+        tt = float(ap.time_origin) + np.arange(m * p) * (period / p)
+        lead = int((float(ap.time_origin) - float(t[0])) // period)
+        out.append((str(ap.source), np.interp(tt, t, y), p, m, lead))
+    return out
+
+
+#: Fewest whole periods :func:`ringing` reads: the two of the virgin loading and :data:`WINDOW` changes.
+LEAST_PERIODS = WINDOW + 3
+
+
+def _records(i: int, item: Any) -> list[tuple[str, Any, int, int, int, bool]]:
+    """``(source, y, p, periods, settle, lab)`` of what ``item`` (the i-th) holds period by period: a
+    recording's whole record, each steady segment of a measurement (:func:`lab_records`); none of an
+    averaged period."""
+    from ..measurement import Measurement
     from ..model import Recording
 
+    if isinstance(item, Recording):
+        name = item.metadata.get("name", f"recording {i}")
+        return [(name, item.y, item.samples_per_period, item.whole_periods, item.settle_periods, False)]
+    if isinstance(item, Measurement):
+        # A segment's first periods (all averaged): a ring-down in them is largest there, and its last ones
+        # may be at the noise long before the segment ends (a recording's window ends in the few averaged).
+        return [(src, y, p, min(m, LEAST_PERIODS), lead, True) for src, y, p, m, lead in lab_records(item)]
+    return []
+
+
+def rings(items: Any) -> tuple[list[Ring], list[str]]:
+    """``(rings, notes)`` of the recordings and measurement segments in ``items`` whose averaged periods
+    still hold a ring-down (:func:`ringing`); a TransientWarning says which. A measurement's segment too
+    short for the test is said in a note (the ring-down not checked there)."""
     seq = list(items) if isinstance(items, (list, tuple)) else [items]
-    found, notes = [], []
+    found, notes, short = [], [], []
     for i, item in enumerate(seq):
-        if not isinstance(item, Recording):
-            continue
-        rate = ringing(item.y, item.samples_per_period, item.whole_periods)
-        if rate <= 0.0:
-            continue
-        s = item.settle_periods
-        more = math.ceil(math.log(TARGET) / math.log(rate))
-        ring = Ring(item.metadata.get("name", f"recording {i}"), rate, more)
-        msg = ring.note(s, item.whole_periods - s)
-        warnings.warn(msg, TransientWarning, 3)
-        found.append(ring)
-        notes.append(msg)
+        for source, y, p, periods, s, lab in _records(i, item):
+            if lab and periods < LEAST_PERIODS:
+                short.append(f"{source} ({periods})")
+                continue
+            rate = ringing(y, p, periods)
+            if rate <= 0.0:
+                continue
+            more = math.ceil(math.log(TARGET) / math.log(rate))
+            ring = Ring(source, rate, more, lab)
+            msg = ring.note(s, periods if lab else periods - s)
+            warnings.warn(msg, TransientWarning, 3)
+            found.append(ring)
+            notes.append(msg)
+    if short:
+        notes.append(
+            "a free ring-down of the dynamics before the hysteresis was not checked in the steady segments "
+            f"shorter than the {LEAST_PERIODS} whole periods its test reads: {', '.join(short)}; there only "
+            "the signal analysis's steady-segment test looks for a transient"
+        )
     return found, notes
 
 
@@ -129,21 +197,31 @@ def left_out(found: list[Ring], sources: list[str]) -> list[int]:
     return [i for i, s in enumerate(sources) if s in names]
 
 
-def said(d: Any, found: list[Ring], total: int) -> Any:
-    """``d``, or, when most of the ``total`` experiments still ring (the verdict would rest on a minority, or
-    on none) and ``d`` is not "adequate", ``d`` with nothing named: the verdict says that the loop has not
-    settled, in which experiments, and how many more settle periods would help (each one's note says
-    more). An adequate ``d`` stands: it names nothing, and its notes say which experiments ring."""
+def not_settled(found: list[Ring], total: int) -> str:
+    """The verdict's words when most of the ``total`` experiments still ring (the verdict would rest on a
+    minority, or on none): the loop has not settled, in which experiments (``found``), and how many more
+    settle periods would help; "" when fewer ring. Shared by :func:`said` and diagnose_across
+    (across_ring.py), so that every entry point says the same."""
     from .drift_majority import most
 
-    if not found or not (len(found) == total or most(len(found), total)) or d.status == "adequate":
-        return d  # an adequate verdict names nothing and claims no physics: the notes say the ring-down
+    if not found or not (len(found) == total or most(len(found), total)):
+        return ""
     names = ", ".join(r.source for r in found)
     more = max(r.more for r in found)
-    verdict = (
+    return (
         f"not settled: {len(found)} of {total} experiments ({names}) still hold the free ring-down of the "
         "dynamics from the start of the record (a change from period to period that falls geometrically, "
         f"not a change of the loop); nothing is named from a loop that has not settled: about {more} more "
         "settle periods would let it die out"
     )
+
+
+def said(d: Any, found: list[Ring], total: int) -> Any:
+    """``d``, or, when most of the ``total`` experiments still ring (:func:`not_settled`) and ``d`` is not
+    "adequate", ``d`` with nothing named: the verdict says that the loop has not settled, in which
+    experiments, and how many more settle periods would help (each one's note says more). An adequate ``d``
+    stands: it names nothing, and its notes say which experiments ring."""
+    verdict = not_settled(found, total)
+    if not verdict or d.status == "adequate":
+        return d  # an adequate verdict names nothing and claims no physics: the notes say the ring-down
     return replace(d, status="unexplained", verdict=verdict, named=(), partial=(), alternatives=())

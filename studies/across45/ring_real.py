@@ -1,0 +1,41 @@
+"""The ring-down check (ring_down.rings) on the real lab measurements: does it fire, and where? (session 45,
+across45; the lab path reads each steady segment's first periods.)
+
+Run: BOUC_WEN_ID_REAL_DATA=/work/shared/data/real PYTHONPATH=python python studies/across45/ring_real.py
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import os
+import sys
+import time
+import warnings
+from pathlib import Path
+
+from bouc_wen_id.diagnosis import ring_down
+
+HERE = Path(__file__).resolve().parents[1]
+spec = importlib.util.spec_from_file_location("_adapters", HERE / "_adapters.py")
+assert spec is not None and spec.loader is not None
+ad = importlib.util.module_from_spec(spec)
+sys.modules["_adapters"] = ad  # (its dataclasses look their module up)
+spec.loader.exec_module(ad)
+
+if __name__ == "__main__":
+    root = Path(os.environ["BOUC_WEN_ID_REAL_DATA"])
+    sets = {
+        "mr": [m for f in ad.MR_FILES for m in ad.load_mr_damper(root / ad.DATASETS["mr-damper"] / f)],
+        "friction": [
+            ad.load_friction_damper(root / ad.DATASETS["friction-damper"] / f) for f in ad.FRICTION_FILES
+        ],
+        "wire": [ad.load_wire_rope(root / ad.DATASETS["wire-rope"] / f) for f in ad.WIRE_ROPE_FILES],
+    }
+    for name, ms in sets.items():
+        t0 = time.process_time()
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            found, notes = ring_down.rings(ms)
+        print(f"{name}: {len(ms)} measurements, {len(found)} ringing; cpu {time.process_time() - t0:.1f} s")
+        for n in notes:
+            print("   ", n[:300])
