@@ -24,10 +24,9 @@ from typing import Any
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent.parent / "review44"))
+import bouc_wen_id as bw  # noqa: E402
 import drive44 as dr  # noqa: E402
 import sim44 as s  # noqa: E402
-
-import bouc_wen_id as bw  # noqa: E402
 from bouc_wen_id.terms import Degradation, StiffnessDegradation  # noqa: E402
 
 TERM = {"eta": "stiffness_degradation", "nu": "degradation"}
