@@ -44,16 +44,7 @@ def lib_recs(p: Any, d: Any, effect: str, truth: float, nz: Any, seed: int) -> l
     rng = np.random.default_rng([44, seed])
     out = []
     for w, a in zip(d.omegas, d.amps):
-        plan = bw.SinePlan(
-            frequencies=[w],
-            amplitudes=a,
-            settle_periods=d.settle,
-            periods=d.periods,
-            samples_per_period=d.samples,
-            noise_sd=0.0,
-            seed=1,
-        )
-        (r,) = bw.simulate(plant, plan)
+        (r,) = bw.simulate(plant, bw.SinePlan([w], a, d.settle, d.periods, d.samples, noise_sd=0.0, seed=1))
         y = s.noisy(np.asarray(r.y), nz, rng)
         out.append(bw.Recording(np.asarray(r.t), np.asarray(r.u), y, a, w, settle_periods=d.settle))
     return out
