@@ -55,8 +55,8 @@ def test_mean_period_cache_equals_a_fresh_simulation_and_is_never_stale(seed: in
 
 
 def test_corrected_with_a_warm_cache_equals_a_cold_one() -> None:
-    """A sequence of d at one fit (d = 0 from the cache after the first; drift_se.feedback's two) gives the
-    periods a cold cache gives at each d, and each d its own correction."""
+    """The refinement's sequence of d at one fit (d = 0 from the cache after the first) gives the periods a
+    cold cache gives at each d, and each d its own correction."""
     exps, sx, plain, substeps = _case(31)
     ds = [0.02, 0.05, 0.035]
     drift._mean_period.cache_clear()

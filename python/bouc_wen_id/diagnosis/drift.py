@@ -755,7 +755,7 @@ def _mean_period(
     one row per lead ``lead, ..., lead + extra`` (shape ``(extra + 1, samples per period)``: the mean of the
     ``periods`` periods after each, from one simulation of ``extra`` more periods). Cached on these values
     (every input of the simulation, so a hit is the same simulation): :func:`corrected`'s d = 0 loop is
-    the same at both d of drift_se.feedback (docs/diagnosis-speed.md). Read-only."""
+    the same at every d the refinement tries (docs/diagnosis-speed.md). Read-only."""
     om, lead, n, p, sub = plan[:5]
     if len(plan) == 5:
         out: FloatArray = simulated_periods(hysteresis, terms, amp, phi, plan[:5], term, dv).mean(axis=0)

@@ -1,12 +1,10 @@
-"""Degradation's value after it is named: the correction passes that bring the averaged periods back to the
-virgin strength or stiffness (moved out of run.py, whose job is the order of the stages, not their numerics).
-
-Session 45 removed the refinement of d on the drift cost plus the steady cost of the corrected periods: at
-each trial d that cost corrected the periods at the fit made at the drift-space d, so its minimum sat at
-that d and its curvature gave a standard error 10x too small (studies/review44/CAUSES.md section 1)."""
+"""Degradation's value after it is named: the virgin-strength correction passes of the averaged periods and
+the refinement of d on both the drift and the steady costs (moved out of run.py, whose job is the order of
+the stages, not their numerics)."""
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import replace
 from typing import Any
@@ -40,6 +38,58 @@ CORRECTION_CHI2 = 1.0
 #: Stiffness degradation's passes also wait for every experiment's gain to move by less than this.
 GAIN_RTOL = 0.003
 MAX_CORRECTION_PASSES = 8
+
+#: Bracket of the joint refinement of d around the drift-space estimate (relative), and its tolerance.
+REFINE_BRACKET = 0.3
+REFINE_XTOL = 1e-3
+
+
+def refine(
+    exps: Sequence[DiagExperiment],
+    sx: Sequence[AugExperiment],
+    fit: AugFit,
+    data: Sequence[Any],
+    deg: DegradationTest,
+    s: Scale,
+    substeps: int,
+) -> tuple[DegradationTest, AugFit]:
+    """d refined on both spaces: the drift cost plus the steady cost of the virgin-strength data refitted
+    (strength degradation only: stiffness degradation's value stays the drift space's, run.py).
+
+    The drift-space estimate is first order; the averaged periods carry d too (through the strength each
+    experiment has reached, design.md 10.6), so the value is refined by a bounded scalar search of
+    ``C_drift(d) + C_steady(d)`` within ``REFINE_BRACKET`` of it, and its standard error taken from the
+    curvature of that cost (``var = 2 / C''``). The tests stay those of the drift space.
+    """
+    from scipy.optimize import minimize_scalar  # type: ignore[import-untyped]
+
+    from .drift import _sums
+
+    sums = [_sums(dd, deg.term) for dd in data]
+    fits: dict[float, AugFit] = {}
+
+    def cost(dv: float) -> float:
+        _, fs = corrected(exps, sx, fit, dv, s.y, substeps, deg.term)
+        f = fit_from(fs, fit.params, substeps, max_iter=50)
+        if f is None:
+            return math.inf
+        fits[dv] = f
+        return f.cost + sum(c0 - 2.0 * dv * nm + dv * dv * dn for c0, nm, dn in sums)
+
+    d0 = deg.d
+    res = minimize_scalar(
+        cost,
+        bounds=((1 - REFINE_BRACKET) * d0, (1 + REFINE_BRACKET) * d0),
+        method="bounded",
+        options={"xatol": REFINE_XTOL * d0},
+    )
+    dv = float(res.x)
+    if not math.isfinite(float(res.fun)) or dv not in fits:
+        return deg, fit
+    h = 0.02 * dv
+    curv = (cost(dv + h) - 2.0 * float(res.fun) + cost(dv - h)) / (h * h)
+    se = math.sqrt(2.0 / curv) if curv > 0 else deg.standard_error * s.y**2
+    return replace(deg, d=dv, value=dv / s.y**2, standard_error=se / s.y**2), fits[dv]
 
 
 def virgin_start(plain: AugFit, data: Sequence[Any], d: float, m: int) -> AugFit:
@@ -107,9 +157,7 @@ def passes(
     tests: tuple[float, int, bool],
 ) -> tuple[DegradationTest, AugFit, Sequence[Any]]:
     """The averaged periods brought back to the virgin value and the virgin fit re-estimated, pass after pass
-    (:func:`.run._degradation_stage`); ``tests`` is ``(alpha, family, drift_seen)`` of the retests.
-    Strength degradation re-forms d at each pass; stiffness degradation keeps it
-    (:func:`stiffness_passes`)."""
+    (:func:`.run._degradation_stage`); ``tests`` is ``(alpha, family, drift_seen)`` of the retests."""
     if deg.term != DEGRADATION:
         return deg, stiffness_passes(exps, sx, plain, data, deg.d, s, substeps), data
     fit, fsx = plain, list(sx)
@@ -147,4 +195,5 @@ __all__ = [
     "CORRECTION_RTOL",
     "MAX_CORRECTION_PASSES",
     "passes",
+    "refine",
 ]

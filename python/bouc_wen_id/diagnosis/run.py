@@ -189,9 +189,9 @@ def _degradation_stage(
     as a steady term is tried only when the plain model is rejected. When it is named, the averaged periods
     are brought back to the virgin strength and re-estimated at each loop's own strength, pass after pass
     until d and the virgin fit settle (the first pass moves the fit from the plain model's average strength
-    to the virgin one; :data:`.drift_passes.CORRECTION_PASSES`). Stiffness degradation keeps the plain
-    fit's estimate (each experiment's gain holds its own mean stiffness): its passes only bring the periods
-    back to the virgin stiffness. d is the drift space's, its se with the steady fit's part added.
+    to the virgin one; :data:`.drift_passes.CORRECTION_PASSES`), then strength degradation's d is refined on
+    both costs. Stiffness degradation keeps the plain fit's estimate (each experiment's gain holds its own
+    mean stiffness), unrefined: its passes only bring the periods back to the virgin stiffness.
     """
     data: Sequence[Any] = drift_data(exps, sx, plain, s.y, substeps)
     if not data:
@@ -239,7 +239,7 @@ def _corrected_stage(
     notes: list[str],
 ) -> tuple[Optional[DegradationTest], list[DiagExperiment], list[AugExperiment], AugFit]:
     """:func:`_degradation_stage` once the drift term is named: the correction passes, the ages, the
-    standard error and the steady start on the corrected periods (``tests`` is ``(alpha, family,
+    refinement and the steady start on the corrected periods (``tests`` is ``(alpha, family,
     drift_seen)``)."""
     alpha, family, _ = tests
     deg, fit, data = drift_passes.passes(exps, sx, plain, data, tested, s, substeps, tests)
@@ -251,15 +251,19 @@ def _corrected_stage(
     # The unrecorded age of each record (age.py): kept when its F-test passes, else the ages are 0.
     exps, fit, deg, data = _aged(exps, sx, fit, data, deg, s, substeps, alpha / family, notes)
     spread = drift_se.spread(exps, sx, fit if term == DEGRADATION else plain, data, deg, s.y, substeps)
-    # The drift space's d (strength: the passes' fixed point; stiffness: the plain fit's), with its
-    # regressor's variance: no refinement on the steady cost. That cost, formed at the fit made at this d,
-    # has its minimum at it and a curvature 10x too sharp (review 44: stiffness degradation at rms z 13-30,
-    # its value at the 0.7 d bracket edge on AR(0.9) noise; strength degradation 1.3 % low at rms z 2.9 on
-    # nu-10-A, the drift space's d 0.6 % low; studies/review44/CAUSES.md section 1, studies/eta45).
-    deg = drift_se.added(deg, *spread, s.y)
+    first = drift_se.added(deg, *spread, s.y)
+    if deg.d > 0 and term == DEGRADATION:
+        deg, fit = drift_passes.refine(exps, sx, fit, data, deg, s, substeps)
+        deg = drift_se.added(deg, *spread, s.y)
+    else:
+        # Stiffness degradation keeps the drift space's first-order d: its averaged periods hold next to
+        # nothing on d (each experiment's free gain takes its loop's mean stiffness), and the steady cost of
+        # drift_passes.refine, at the gains fitted at that d, had its minimum there and a curvature 10x too
+        # sharp (review 44: rms z 13-30 on 8-12 seeds; studies/review44/CAUSES.md section 1).
+        deg = first
     fexps, fsx = corrected(exps, sx, fit, deg.d, s.y, substeps, term)
-    # The steady selection starts from the plain model converged on the periods it runs on: the passes'
-    # fit is not (it was fitted before the last correction at the final d), and a start left short of its
+    # The steady selection starts from the plain model converged on the periods it runs on: the refinement's
+    # fit is not (it was fitted before the last correction at the refined d), and a start left short of its
     # optimum hands the first candidate the re-convergence as its own improvement (a spring named beside
     # stiffness degradation in 16 of 20 bench cases at 30x: chi2 1540 at the start, 1288 re-converged,
     # 1192 with the spring). And the correction must not add misfit: where the converged fit of the
@@ -273,7 +277,7 @@ def _corrected_stage(
             f"{plain.cost:.6g}), so the simulated drift does not match the record's beyond first order; "
             f"the value of {term} is the drift space's first-order estimate"
         )
-        return deg, list(exps), list(sx), plain
+        return first, list(exps), list(sx), plain
     return deg, fexps, fsx, final
 
 
