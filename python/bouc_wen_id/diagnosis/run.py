@@ -193,9 +193,9 @@ def _degradation_stage(
     as a steady term is tried only when the plain model is rejected. When it is named, the averaged periods
     are brought back to the virgin strength and re-estimated at each loop's own strength, pass after pass
     until d and the virgin fit settle (the first pass moves the fit from the plain model's average strength
-    to the virgin one; :data:`.drift_passes.CORRECTION_PASSES`), then d is refined on both costs. Stiffness
-    degradation keeps the plain fit's estimate (each experiment's gain holds its own mean stiffness): its
-    passes only bring the periods back to the virgin stiffness.
+    to the virgin one; :data:`.drift_passes.CORRECTION_PASSES`), then strength degradation's d is refined on
+    both costs. Stiffness degradation keeps the plain fit's estimate (each experiment's gain holds its own
+    mean stiffness), unrefined: its passes only bring the periods back to the virgin stiffness.
     """
     data: Sequence[Any] = drift_data(exps, sx, plain, s.y, substeps)
     if not data:
@@ -255,9 +255,16 @@ def _corrected_stage(
     # The unrecorded age of each record (age.py): kept when its F-test passes, else the ages are 0.
     exps, fit, deg, data = _aged(exps, sx, fit, data, deg, s, substeps, alpha / family, notes)
     spread = drift_se.spread(exps, sx, fit if term == DEGRADATION else plain, data, deg, s.y, substeps)
-    if deg.d > 0:
+    first = drift_se.added(deg, *spread, s.y)
+    if deg.d > 0 and term == DEGRADATION:
         deg, fit = drift_passes.refine(exps, sx, fit, data, deg, s, substeps)
-    deg = drift_se.added(deg, *spread, s.y)
+        deg = drift_se.added(deg, *spread, s.y)
+    else:
+        # Stiffness degradation keeps the drift space's first-order d: its averaged periods hold next to
+        # nothing on d (each experiment's free gain takes its loop's mean stiffness), and the steady cost of
+        # drift_passes.refine, at the gains fitted at that d, had its minimum there and a curvature 10x too
+        # sharp (review 44: rms z 13-30 on 8-12 seeds; studies/review44/CAUSES.md section 1).
+        deg = first
     fexps, fsx = corrected(exps, sx, fit, deg.d, s.y, substeps, term)
     # The steady selection starts from the plain model converged on the periods it runs on: the refinement's
     # fit is not (it was fitted before the last correction at the refined d), and a start left short of its
@@ -271,9 +278,10 @@ def _corrected_stage(
         notes.append(
             f"the averaged periods are used as recorded, not brought back to the {drift_void.virgin(term)}: "
             f"the steady model fits the corrected periods worse (chi2 {final.cost:.6g} against "
-            f"{plain.cost:.6g}), so the simulated drift does not match the record's beyond first order"
+            f"{plain.cost:.6g}), so the simulated drift does not match the record's beyond first order; "
+            f"the value of {term} is the drift space's first-order estimate"
         )
-        return deg, list(exps), list(sx), plain
+        return first, list(exps), list(sx), plain
     return deg, fexps, fsx, final
 
 
