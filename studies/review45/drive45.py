@@ -35,7 +35,10 @@ SD = 0.01
 DESIGNS = {
     "1f6a": s.Design((5.0,) * 6, tuple(np.geomspace(0.3, 3.0, 6)), (20,) * 6, label="1 f x 6 U, 20 periods"),
     "12f": s.Design(
-        tuple(float(w) for w in np.round(np.geomspace(1.0, 15.0, 12), 3)), (1.0,) * 12, (8,) * 12, label="12 f, 8 periods"
+        tuple(float(w) for w in np.round(np.geomspace(1.0, 15.0, 12), 3)),
+        (1.0,) * 12,
+        (8,) * 12,
+        label="12 f, 8 periods",
     ),
     "uneq": s.Design(
         (2.0, 4.0, 7.0, 12.0) * 2,
@@ -43,7 +46,14 @@ DESIGNS = {
         (6, 30, 6, 30, 30, 6, 30, 6),
         label="4 f x 2 U, 6 or 30 periods",
     ),
-    "p50": s.Design((2.0, 5.0, 10.0) * 2, (0.5,) * 3 + (1.0,) * 3, (20,) * 6, settle=10, samples=50, label="3 f x 2 U, P = 50"),
+    "p50": s.Design(
+        (2.0, 5.0, 10.0) * 2,
+        (0.5,) * 3 + (1.0,) * 3,
+        (20,) * 6,
+        settle=10,
+        samples=50,
+        label="3 f x 2 U, P = 50",
+    ),
 }
 GS = {
     "2modes": s.two_modes(3.0, 11.0, 0.15, 0.7),
@@ -91,7 +101,17 @@ TRUTH_TERM: dict[str, str | None] = {
     "slack": None,
     "rate": None,
 }
-DIRECT = ("stiffness", "stiffness_x", "viscous", "viscous_x", "coulomb", "coulomb_x", "inertia", "inertia_x", "offset")
+DIRECT = (
+    "stiffness",
+    "stiffness_x",
+    "viscous",
+    "viscous_x",
+    "coulomb",
+    "coulomb_x",
+    "inertia",
+    "inertia_x",
+    "offset",
+)
 SCALED = ("dahl_x", "pi_u")  # linear in the value, but with a state: one run at a unit value
 
 
@@ -120,7 +140,9 @@ def probe(eff: str, p: s.Plant, d: s.Design) -> tuple[float, float]:
     }[eff]
 
 
-def build(eff: str, target: float, cfg: str) -> tuple[list[tuple[np.ndarray, ...]], s.Design, s.Noise, dict[str, float], float]:
+def build(
+    eff: str, target: float, cfg: str
+) -> tuple[list[tuple[np.ndarray, ...]], s.Design, s.Noise, dict[str, float], float]:
     p, d, nz = scaled(cfg)
     plain = s.run(p, d)
     if eff == "null":
@@ -175,17 +197,39 @@ def build(eff: str, target: float, cfg: str) -> tuple[list[tuple[np.ndarray, ...
     return runs, d, nz, {TRUTH_TERM[eff] or eff: v}, got
 
 
+ORDER = (
+    "stiffness",
+    "play",
+    "slack",
+    "nu",
+    "eta",
+    "stiffness_x",
+    "pinch",
+    "dahl_x",
+    "pi_u",
+    "rate",
+    "offset",
+    "delta",
+    "lag",
+    "viscous",
+    "viscous_x",
+    "coulomb",
+    "coulomb_x",
+    "inertia",
+    "inertia_x",
+)
+
+
 def case_ids() -> list[str]:
-    """Every effect at 10x and 30x, the config cycling; nulls on every config between the rounds."""
-    effs = list(TRUTH_TERM)
+    """Every effect at 10x and 30x, the config cycling; 4 nulls (one per config) after every 4 effects, so
+    that a run cut short still covers nulls, outside physics and library terms."""
     cfgs = list("ABCD")
     out: list[str] = []
-    for j, eff in enumerate(effs):
+    for j, eff in enumerate(ORDER):
         for k, sz in enumerate((10, 30)):
             out.append(f"{eff}-{sz}-{cfgs[(j + 2 * k) % 4]}-1")
-        if j % 5 == 4:
+        if j % 4 == 3:
             out += [f"null-0-{c}-{j + 1}" for c in cfgs]
-    out += [f"null-0-{c}-99" for c in cfgs]
     return out + FOLLOW_UPS
 
 
@@ -245,7 +289,11 @@ def run_case(cid: str, in_process: bool = False) -> dict[str, Any]:
             try:
                 cp = subprocess.run(cmd, capture_output=True, text=True, timeout=TIMEOUT, env=env)
                 lines = cp.stdout.strip().splitlines()
-                r = json.loads(lines[-1]) if cp.returncode == 0 and lines else {"error": "crash: " + cp.stderr[-400:]}
+                r = (
+                    json.loads(lines[-1])
+                    if cp.returncode == 0 and lines
+                    else {"error": "crash: " + cp.stderr[-400:]}
+                )
             except subprocess.TimeoutExpired:
                 r = {"error": f"timeout {TIMEOUT:g} s", "seconds": TIMEOUT}
     finally:
@@ -280,7 +328,13 @@ def main(argv: list[str]) -> None:
         r = run_case(cid)
         with out.open("a") as f:
             f.write(json.dumps(r, default=str) + "\n")
-        print(cid, r.get("status"), round(r.get("seconds") or 0), (r.get("headline") or r.get("error", ""))[:150], flush=True)
+        print(
+            cid,
+            r.get("status"),
+            round(r.get("seconds") or 0),
+            (r.get("headline") or r.get("error", ""))[:150],
+            flush=True,
+        )
 
 
 if __name__ == "__main__":

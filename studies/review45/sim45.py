@@ -3,7 +3,7 @@
 Nothing from bouc_wen_id but ``bw.Recording`` (in :func:`recordings`). Unlike review 44's sim44 (closed-form
 G, RK4 in the travel), every state is integrated together by DOP853 (rtol 1e-9, atol 1e-12):
 
-    u = U cos(w t) (t >= 0) -> pure delay d (closed form: the delayed input is U cos(w (t - d)), zero before d)
+    u = U cos(w t) (t >= 0) -> pure delay d (closed form: the delayed input U cos(w (t - d)), zero before d)
       -> G(s) in state space (scipy.signal.tf2ss; or a pure gain) -> x
       -> [slack dead zone] -> [play: xp' = x' when engaged] -> Bouc-Wen z (alpha = 1) with Baber-Noori
          nu, eta (e' = z xp'), Foliente pinching (q = 0.1, zeta2 = 0.2 w_u), Song-Der Kiureghian asymmetry
@@ -324,7 +324,9 @@ def steady(runs: list[tuple[np.ndarray, np.ndarray, np.ndarray]], d: Design) -> 
     return [r[2][d.settle * d.samples :] for r in runs]
 
 
-def size(runs: list[tuple[np.ndarray, ...]], plain: list[tuple[np.ndarray, ...]], d: Design, sd: float) -> float:
+def size(
+    runs: list[tuple[np.ndarray, ...]], plain: list[tuple[np.ndarray, ...]], d: Design, sd: float
+) -> float:
     """RMS of (effect minus plain) over the steady samples / (sd / sqrt(N)), N the median periods."""
     diff = np.concatenate([a - b for a, b in zip(steady(runs, d), steady(plain, d))])
     return float(np.sqrt(np.mean(diff**2)) / (sd / math.sqrt(float(np.median(d.periods)))))
@@ -416,4 +418,3 @@ def with_value(p: Plant, effect: str, v: float) -> Plant:
 
 def latent(p: Plant, d: Design) -> np.ndarray:
     return np.array([abs(p.g.response(w)) * a for w, a in zip(d.omegas, d.amps)])
-
