@@ -66,6 +66,7 @@ HYSTS = {
     "mu2.5": s.Hyst(1.2, 0.4, 2.5),
     "g<0": s.Hyst(1.0, -0.4, 1.3),
     "g~b": s.Hyst(0.6, 0.55, 1.6),
+    "mu1.2": s.Hyst(1.0, 0.3, 1.2),  # follow-up: A's element with an exponent inside the library's range
 }
 # config: design, G, noise, Bouc-Wen
 CONFIGS = {
@@ -78,6 +79,8 @@ CONFIGS = {
     "Bw": ("12f", "nmp", "white", "mu2.5"),
     "Cw": ("uneq", "fo+d", "white", "g<0"),
     "Dw": ("p50", "gain+d", "white", "g~b"),
+    # and A with mu = 1.2 (is A's miss the exponent mu = 0.7, below the library's mu >= 1?)
+    "Am": ("1f6a", "2modes", "t3", "mu1.2"),
 }
 #: effect -> (the library's term, or None for physics outside the library)
 TRUTH_TERM: dict[str, str | None] = {

@@ -344,7 +344,7 @@ def noise(nz: Noise, n: int, dt: float, rng: np.random.Generator) -> np.ndarray:
         e = np.fft.irfft(spec, n)
         return nz.sd * e / float(np.std(e))
     if nz.kind == "wander":
-        # white sd plus a baseline of RMS sd made of 3 sines slower than 1/20 of the record
+        # white sd plus a baseline of RMS sd: 3 sines of 0.2 to 1 cycle over the record, random phases
         tt = np.arange(n) * dt
         base = np.zeros(n)
         for _ in range(3):

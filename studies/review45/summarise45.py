@@ -21,10 +21,21 @@ def caveated(r: dict[str, Any]) -> bool:
     return r["status_text"] != r["status"] or bool(r["details"]) or bool(r["alternatives"])
 
 
+def mu_said(r: dict[str, Any]) -> bool:
+    """The verdict says the loops may be softer than mu = 1 allows (true on the mu = 0.7 plants)."""
+    return r.get("bw") == "mu.7" and any("softer than mu = 1" in x for x in [r["headline"], *r["details"]])
+
+
 def outcome(r: dict[str, Any]) -> str:
-    """right / right (value off) / right + extra / missed / WRONG / false alarm / ok-null / unexplained ..."""
+    """right / right (value off) / right + extra / missed / WRONG / false alarm / ok-null / unexplained ...;
+    a miss or an alarm on a mu = 0.7 plant whose verdict says "softer than mu = 1" gets " (mu < 1 said)"."""
     if "error" in r:
         return "timeout" if r["error"].startswith("timeout") else "error"
+    oc = _outcome(r)
+    return oc + " (mu < 1 said)" if mu_said(r) and not oc.startswith(("right", "ok")) else oc
+
+
+def _outcome(r: dict[str, Any]) -> str:
     eff, st = r["effect"], r["status"]
     names = [n["term"] for n in r["named"]]
     if eff == "null":
@@ -97,7 +108,7 @@ def main(src: str, dst: str) -> None:
             if n.get("z") is not None and n["term"] == TRUTH_TERM[r["effect"]]
         ]
         within = sum(abs(n["z"]) <= 3 for n in hits)
-        wrong = sum(ocs[r["id"]] in ("WRONG", "FALSE NAME") for r in rs)
+        wrong = sum(ocs[r["id"]].startswith(("WRONG", "FALSE NAME")) for r in rs)
         outs = ", ".join(f"{r['effect']} {ocs[r['id']]}" for r in out) or "-"
         ok = sum(ocs[r["id"]] == "ok-null" for r in nul)
         bad = sum(ocs[r["id"]] in ("error", "timeout") for r in rs)
