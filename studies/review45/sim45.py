@@ -102,14 +102,14 @@ class Hyst:
 class Plant:
     g: Linear
     hy: Hyst
-    # parallel terms, on u and on x
+    # parallel terms, each on u and on x (_x)
     stiffness: float = 0.0
-    viscous: float = 0.0
-    coulomb: float = 0.0
-    inertia: float = 0.0
     stiffness_x: float = 0.0
+    viscous: float = 0.0
     viscous_x: float = 0.0
+    coulomb: float = 0.0
     coulomb_x: float = 0.0
+    inertia: float = 0.0
     inertia_x: float = 0.0
     offset: float = 0.0
     lag: float = 0.0  # sensor lag tau

@@ -48,16 +48,12 @@ def _outcome(r: dict[str, Any]) -> str:
             return "WRONG" if not caveated(r) else "named with caveat"
         return "partly" if names else st
     if want in names or want in r["alternatives"]:
-        hit = next((n for n in r["named"] if n["term"] == want), None)
-        tag = "right" if hit is not None else "right as alternative"
-        if hit is not None and hit.get("z") is not None and abs(hit["z"]) > 3:
-            tag += " (value off)"
-        if st != "explained":
-            tag += f" [{st}]"
-        extra = [n for n in names if n not in (want, SIBLING.get(eff))]
-        if extra:
-            tag += " + extra " + ",".join(extra)
-        return tag
+        zs = [n.get("z") for n in r["named"] if n["term"] == want]
+        parts = ["right" if zs else "right as alternative"]
+        parts += [" (value off)"] if zs and zs[0] is not None and abs(zs[0]) > 3 else []
+        parts += [] if st == "explained" else [f" [{st}]"]
+        extra = ",".join(n for n in names if n not in (want, SIBLING.get(eff)))
+        return "".join(parts) + (f" + extra {extra}" if extra else "")
     if names:
         return "WRONG" if st == "explained" and not caveated(r) else "wrong (caveated)"
     return "missed"
