@@ -138,3 +138,14 @@ def test_report_of_a_named_structure_is_written(feedback_diagnosis: Any, tmp_pat
     js = json.loads((tmp_path / "diag" / "diagnosis.json").read_text())
     assert js["status"] == "explained" and js["structure"]["named"]
     assert "acts back on the dynamics" in (tmp_path / "diag" / "report.html").read_text()
+
+
+def test_one_frequency_cannot_be_tested_and_gives_no_fitter_advice(feedback_case: Any) -> None:
+    """Review 45: a one-frequency design read "could not be fitted (...; give theta0)", advice for an
+    argument diagnose does not have."""
+    recs = feedback_case.recordings[:2]  # the generator's first frequency, at its two amplitudes
+    assert len({r.frequency for r in recs}) == 1 and len({r.amplitude for r in recs}) == 2
+    d = _diagnose(recs)
+    assert d.structure is not None and not d.structure.tested and not d.structure.named
+    assert d.structure.reason == S.ONE_FREQUENCY
+    assert not any("theta0" in n for n in d.notes) and "theta0" not in d.summary()

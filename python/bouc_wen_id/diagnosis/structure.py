@@ -285,6 +285,14 @@ def _held_out(d: Diagnosis, fit: FeedbackFit, cache: FoldCache) -> Optional[Held
     return HeldOut(tuple(used), tuple(cb), tuple(ca), tuple(nb), tuple(na))
 
 
+#: Why a one-frequency design cannot test the feedback (the fit's start needs two frequencies; review 45
+#: found the fitter's "give theta0" advice in 13 of 14 one-frequency diagnoses, an argument diagnose has not).
+ONE_FREQUENCY = (
+    "cannot be tested: every experiment is at one frequency, and the feedback model's mass and stiffness are "
+    "read from the response at two frequencies at least (record a second frequency)"
+)
+
+
 def feedback_test(
     d: Diagnosis, alpha: float, held_out_test: bool
 ) -> tuple[Optional[StructureTest], Optional[FeedbackFit]]:
@@ -304,6 +312,8 @@ def feedback_test(
             "apart by the apparent |G| moving with the amplitude at a fixed frequency (record two amplitudes "
             "at one frequency at least)",
         ), None
+    if len({e.frequency for e in exps}) < 2:  # the feedback fit's start reads m and k off two frequencies
+        return StructureTest(FEEDBACK, False, False, ONE_FREQUENCY), None
     fin = d.final_fit
     m, nt = len(exps), len(fin.params.terms)
     gi = [3 + nt + 2 * i for i in range(m)]
@@ -331,7 +341,9 @@ def feedback_test(
         fit = fit_feedback_sines(sines, starts=STARTS, seed=0, max_step=max_step(exps))
         cost, _ = _chi2(exps, fit.model, sx)
     except FIT_ERRORS as exc:
-        why = f"tested, not named: the feedback model could not be fitted ({type(exc).__name__}: {exc})"
+        # The fitter's own advice ("give theta0") is for its callers, not for diagnose's user.
+        msg = str(exc).split("; give theta0")[0]
+        why = f"tested, not named: the feedback model could not be fitted ({type(exc).__name__}: {msg})"
         return replace(base, reason=why, seconds=time.perf_counter() - t0), None
     from . import free_dc
 
