@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 import os
+import sys
 from pathlib import Path
 from types import ModuleType, SimpleNamespace
 from typing import Any, Callable
@@ -20,6 +21,12 @@ import bouc_wen_id as bw
 import numpy as np
 import pytest
 from bouc_wen_id import _core, reference
+
+# The tests' shared simulators (wiener_sim, on_x_sim, drift_null_sim, ...) import by name from any test
+# module, whatever the collection order: under --import-mode=importlib nothing else puts tests/ on the path
+# (before session 45 a test module that happened to sort first did, and a new one sorting before it failed).
+if str(Path(__file__).resolve().parent) not in sys.path:
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 #: Both implementations of the core routines, by the names ``identify(backend=...)`` uses.
 BACKENDS: dict[str, ModuleType] = {"rust": _core, "numpy": reference}
