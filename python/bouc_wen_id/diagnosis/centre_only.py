@@ -65,6 +65,35 @@ def common_z(exps: Sequence[DiagExperiment], outputs: Sequence[Any], scale: floa
     return float(np.dot(w, dc) / math.sqrt(float(np.sum(w))))
 
 
+def _centre_failures(passes: bool, has_terms: bool, steps: Sequence[Any]) -> dict[str, float]:
+    """The law-failed candidates with their law p when the plain model passed its global test, nothing was
+    named, no non-centre candidate passed its test, and every law-failed candidate is a centre term
+    (:data:`CENTRE_TERMS`); empty when not."""
+    if not passes or has_terms:
+        return {}
+    if any(tr.passed and tr.term not in CENTRE_TERMS for st in steps for tr in st.trials):
+        return {}  # a passing non-centre candidate, never law-tested: not the centres only
+    failed: dict[str, float] = {}
+    for st in steps:
+        for tr in st.trials:
+            if tr.term in st.law_failed:
+                failed.setdefault(tr.term, float(tr.law_p_value))
+    return failed if set(failed) <= CENTRE_TERMS else {}
+
+
+#: Where the verdict says the structure remains when its only evidence is the experiments' DCs
+#: (:func:`dc_only`), instead of the empty localisation's "spread over the cycle" (review 45, failure 1: pink
+#: noise's slow content moved each experiment's DC, and the headline read as physics missing across the loop).
+DC_ONLY_WHERE = "at the DC only (each experiment's loop centre, not across the cycle)"
+
+
+def dc_only(passes: bool, has_terms: bool, steps: Sequence[Any]) -> bool:
+    """Whether the only structure beyond the plain model is the experiments' DCs: the plain model passed its
+    global test, nothing was named, and the candidates whose law failed are all terms of the loop centre
+    (no non-centre candidate passed its test)."""
+    return bool(_centre_failures(passes, has_terms, steps))
+
+
 def clause(
     passes: bool,
     has_terms: bool,
@@ -78,16 +107,8 @@ def clause(
     sign beyond the noise). With a common DC beyond the noise (:func:`common_z`) the clause says so and is
     not adequate."""
     none = Centres("", False)
-    if not passes or has_terms:
-        return none
-    if any(tr.passed and tr.term not in CENTRE_TERMS for st in steps for tr in st.trials):
-        return none  # a passing non-centre candidate, never law-tested: not the centres only
-    failed: dict[str, float] = {}
-    for st in steps:
-        for tr in st.trials:
-            if tr.term in st.law_failed:
-                failed.setdefault(tr.term, float(tr.law_p_value))
-    if not failed or not set(failed) <= CENTRE_TERMS:
+    failed = _centre_failures(passes, has_terms, steps)
+    if not failed:
         return none
     centres = centre_clause(exps, outputs, 1.0)
     if not centres:
@@ -112,4 +133,4 @@ def clause(
     )
 
 
-__all__ = ["CENTRE_TERMS", "COMMON_Z", "Centres", "common_z", "clause"]
+__all__ = ["CENTRE_TERMS", "COMMON_Z", "DC_ONLY_WHERE", "Centres", "clause", "common_z", "dc_only"]
