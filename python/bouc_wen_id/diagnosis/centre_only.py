@@ -110,13 +110,15 @@ def clause(
     failed = _centre_failures(passes, has_terms, steps)
     if not failed:
         return none
-    centres = centre_clause(exps, outputs, 1.0)
-    if not centres:
-        return none
     what = ", ".join(
         f"{TERMS[t].place_label()}" + (f" (law p = {p:.2g})" if math.isfinite(p) else "")
         for t, p in failed.items()
     )
+    if slow_dc(exps):
+        return _between(exps, outputs, what)
+    centres = centre_clause(exps, outputs, 1.0)
+    if not centres:
+        return none
     z = common_z(exps, outputs)
     if abs(z) > COMMON_Z:
         return Centres(  # the centres themselves are said by the verdict when it is not "adequate"
@@ -133,4 +135,59 @@ def clause(
     )
 
 
-__all__ = ["CENTRE_TERMS", "COMMON_Z", "DC_ONLY_WHERE", "Centres", "clause", "common_z", "dc_only"]
+#: Fewest experiments whose residual DCs' spread is the DC's yardstick under a noise coloured at the DC
+#: (:func:`slow_dc`): 3 leave the t-test of their mean 2 degrees of freedom.
+MIN_BETWEEN = 3
+#: Level of that t-test (two-sided; the common DC's one test, as :data:`COMMON_Z`).
+BETWEEN_LEVEL = 0.05
+
+
+def slow_dc(exps: Sequence[DiagExperiment]) -> bool:
+    """Whether every experiment's noise is measurably coloured with its largest level at a band that holds
+    the DC (data.noise_colour), and there are :data:`MIN_BETWEEN` experiments at least: a noise whose slow
+    content moves each record's mean (review 45: pink noise), which no spread inside a record measures (the
+    period DCs' spread, even inflated for their correlation, put the 8-period mean's variance at 0.4 of its
+    own under 1/f noise; studies/pink45)."""
+    return len(exps) >= MIN_BETWEEN and all(e.colour > 1.0 and e.colour_band[0] == 0 for e in exps)
+
+
+def _between(exps: Sequence[DiagExperiment], outputs: Sequence[Any], what: str) -> Centres:
+    """The clause under a noise coloured at the DC (:func:`slow_dc`): the experiments' residual DCs are
+    judged against their own spread between experiments (independent records: the t-test of their mean,
+    data.common_centre, exact for Gaussian DCs whatever the noise's memory), not against a level measured
+    inside each record. Their differences between experiments are then not read as device physics (a noise
+    that wanders makes them); a common DC that stands out of their spread is said, and is not adequate."""
+    from .data import common_centre
+
+    dcs = [float(np.mean(e.ybar - np.asarray(y))) for e, y in zip(exps, outputs)]
+    c, se, p, kept = common_centre(dcs, BETWEEN_LEVEL)
+    if kept:
+        return Centres(
+            f"; the DC's terms ({what}) fit it only with a value that differs between experiments, but a "
+            f"common DC remains ({c:.3g}, {abs(c) / se:.1f} times the standard error of the experiments' "
+            f"spread, p = {p:.2g}): a DC of the device (an offset, an asymmetric element) or a zero that "
+            "moved more one way than the other, which these experiments cannot tell apart",
+            False,
+        )
+    return Centres(
+        f"; the loop centre differs between experiments (DCs of sd {se * math.sqrt(len(dcs)):.3g} about "
+        f"their mean {c:.3g}, which stands within that spread, p = {p:.2g}), and the DC's terms ({what}) fit "
+        "it only with a value that differs between experiments; the noise is coloured at the DC (its slow "
+        "content moves each record's mean by more than the spread inside the record says), so the centres "
+        "are not read as device physics",
+        True,
+    )
+
+
+__all__ = [
+    "BETWEEN_LEVEL",
+    "CENTRE_TERMS",
+    "COMMON_Z",
+    "DC_ONLY_WHERE",
+    "MIN_BETWEEN",
+    "Centres",
+    "clause",
+    "common_z",
+    "dc_only",
+    "slow_dc",
+]
