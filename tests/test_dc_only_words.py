@@ -120,3 +120,33 @@ def test_the_dcs_alone_are_said_at_the_dc_not_spread_over_the_cycle() -> None:
     placed = cast(Any, SimpleNamespace(describe=lambda: "at harmonics 3, 5"))
     kept = run_words._verdict("unexplained", (), (), placed, 0.0, "", centre_only.DC_ONLY_WHERE)
     assert kept.endswith("at harmonics 3, 5")  # a place found is said as found
+
+
+def _coloured(dcs: list[float]) -> list[Any]:
+    """Stand-ins for DiagExperiment with residual DC ``dcs[i]`` in-record standard errors (noise 1, 4 periods
+    of 25 samples: 0.1) and a noise coloured at the DC (its largest level at the DC)."""
+    return [
+        SimpleNamespace(
+            ybar=np.full(25, 0.1 * v),
+            noise_var=1.0,
+            periods=4.0,
+            samples_per_period=25,
+            source=f"e{i}",
+            colour=40.0,
+            colour_band=(0, 0),
+        )
+        for i, v in enumerate(dcs)
+    ]
+
+
+def test_coloured_dcs_are_judged_against_their_spread_between_experiments() -> None:
+    zeros = [np.zeros(25)] * 4
+    offset = [_step([("offset", True)], ("offset",))]
+    wide = _coloured([30.0, 25.0, -20.0, -5.0])  # a common part of 7.5 in-record se, 0.6 of their spread's
+    assert centre_only.slow_dc(wide)
+    said = centre_only.clause(True, False, offset, wide, zeros)
+    assert said.adequate and "coloured at the DC" in said.text, said  # main: "a common DC remains"
+    common = _coloured([8.0, 9.0, 7.0, 10.0])  # one sign, tight: stands out of its own spread
+    kept = centre_only.clause(True, False, offset, common, zeros)
+    assert not kept.adequate and "a common DC remains" in kept.text, kept  # main: no clause at all
+    assert not centre_only.slow_dc(_coloured([30.0, -20.0]))  # too few experiments for their spread
