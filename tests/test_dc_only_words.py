@@ -29,22 +29,10 @@ import bouc_wen_id as bw
 import numpy as np
 import pytest
 from bouc_wen_id.diagnosis import centre_only, run_words
+from pink_noise import sum_of_ar1
+from test_diagnosis_clipped_input import _exps
 
 PERIODS = 8
-
-
-def _pink(n: int, rng: np.random.Generator, k: int = 12) -> np.ndarray:
-    """Unit-variance 1/f noise: equal-variance AR(1)s with time constants 1, 2, 4, .. 2^(k-1) samples."""
-    out = np.zeros(n)
-    for j in range(k):
-        a = math.exp(-1.0 / 2.0**j)
-        e = rng.normal(size=n) * math.sqrt(1.0 - a * a)
-        x = np.empty(n)
-        x[0] = rng.normal()
-        for i in range(1, n):
-            x[i] = a * x[i - 1] + e[i]
-        out += x
-    return out / float(np.std(out))
 
 
 @pytest.fixture(scope="module")
@@ -72,7 +60,7 @@ def _diagnosed(clean: list[bw.Recording], seed: int, offset_sds: float = 0.0) ->
     sd = 0.01 * float(np.max(np.abs(clean[0].y)))
     rng = np.random.default_rng([45, seed])
     off = offset_sds * sd / math.sqrt(PERIODS)
-    recs = [replace(r, y=r.y + sd * _pink(r.y.size, rng) + off) for r in clean]
+    recs = [replace(r, y=r.y + sd * sum_of_ar1(r.y.size, rng) + off) for r in clean]
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         return bw.diagnose(recs)
@@ -123,20 +111,12 @@ def test_the_dcs_alone_are_said_at_the_dc_not_spread_over_the_cycle() -> None:
 
 
 def _coloured(dcs: list[float]) -> list[Any]:
-    """Stand-ins for DiagExperiment with residual DC ``dcs[i]`` in-record standard errors (noise 1, 4 periods
-    of 25 samples: 0.1) and a noise coloured at the DC (its largest level at the DC)."""
-    return [
-        SimpleNamespace(
-            ybar=np.full(25, 0.1 * v),
-            noise_var=1.0,
-            periods=4.0,
-            samples_per_period=25,
-            source=f"e{i}",
-            colour=40.0,
-            colour_band=(0, 0),
-        )
-        for i, v in enumerate(dcs)
-    ]
+    """test_diagnosis_clipped_input's stand-ins (residual DC ``dcs[i]`` in-record standard errors), the
+    noise coloured at the DC (its largest level at the DC)."""
+    exps = _exps(dcs)
+    for e in exps:
+        e.colour = 40.0
+    return exps
 
 
 def test_coloured_dcs_are_judged_against_their_spread_between_experiments() -> None:

@@ -29,23 +29,11 @@ from bouc_wen_id.diagnosis.outliers import transient_periods
 from bouc_wen_id.diagnosis.settling import _trending
 
 sys.path.insert(0, str(Path(__file__).parents[1] / "review45"))
+sys.path.insert(0, str(Path(__file__).parents[2] / "tests"))
 import sim45  # noqa: E402
+from pink_noise import sum_of_ar1  # noqa: E402
 
 P, S, DRAWS = 200, 15, 300
-
-
-def sum_of_ar1(n: int, rng: np.random.Generator, k: int = 12) -> np.ndarray:
-    """Unit-variance 1/f noise: equal-variance AR(1)s with time constants 1, 2, .. 2^(k-1) samples."""
-    out = np.zeros(n)
-    for j in range(k):
-        a = math.exp(-1.0 / 2.0**j)
-        e = rng.normal(size=n) * math.sqrt(1.0 - a * a)
-        x = np.empty(n)
-        x[0] = rng.normal()
-        for i in range(1, n):
-            x[i] = a * x[i - 1] + e[i]
-        out += x
-    return out / float(np.std(out))
 
 
 def ar1(n: int, rng: np.random.Generator, phi: float = 0.9) -> np.ndarray:

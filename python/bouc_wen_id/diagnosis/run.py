@@ -808,8 +808,7 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
     share = clean_share.naming_share(_naming_share(fraction, deg, named_deg), cshare)
     judged = classify(plain_ok, bool(final.params.terms) or named_deg, adequate(final), share)
     held = bounds_said.found(steps, alpha, final, s, setup.units, fsx, substeps)  # held at a bound
-    dc_only = _centres.dc_only(passes, bool(final.params.terms), steps)  # the experiments' DCs alone
-    empty = _centres.DC_ONLY_WHERE if dc_only else SPREAD
+    empty = _centres.DC_ONLY_WHERE if _centres.dc_only(passes, bool(final.params.terms), steps) else SPREAD
     status, named, partial, verdict = _judged(
         judged, final_sum, (before, after), fraction, fexps, held, final, empty
     )
@@ -847,8 +846,7 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
         degradation=deg,
         notes=(*notes, *below_saturation(fsx, final)),  # the levels as the named structure sees them
     )
-    d = _with_limits(d, fsx, start, steps, s, substeps, setup)  # detection limits (limits.py)
-    return _with_feedback(d, setup)
+    return _with_feedback(_with_limits(d, fsx, start, steps, s, substeps, setup), setup)  # limits.py's limits
 
 
 def _with_drift_term(
