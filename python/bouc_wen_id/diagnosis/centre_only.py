@@ -24,6 +24,13 @@ noise (:data:`COMMON_Z`), the clause says the centres differ *and* a common part
 experiments cannot tell from device physics, and the verdict is not "adequate". The blind nulls above
 (``null:0:2``, ``null:0:4`` at seed 2026) had dry friction and sensor lag pass their tests beside the DC's
 terms: with (a) they are "unexplained" again (benches/README.md, "Review 31c").
+
+Under a noise coloured at the DC in every experiment (:func:`slow_dc`; review 45: pink, 1/f noise) the level
+measured inside each record understates the record mean's variance (2.9 to 7.7 times at 8 periods, and no
+in-record estimate tried recovered it: studies/pink45/README.md), so the DCs "differed beyond the noise" on
+nulls, and "unexplained structure remains spread over the cycle" was said at a plain p of 1.0. There the DCs
+are judged against their own spread between experiments (:func:`_between`), whatever their signs. The headline
+of a remainder that is the DCs alone says so (:data:`DC_ONLY_WHERE`, :func:`dc_only`).
 """
 
 from __future__ import annotations
@@ -105,7 +112,7 @@ def clause(
     not adequate when not: the global test failed, a term was named, no candidate failed its law, one that
     did is not a centre term, a non-centre candidate passed its test, or the residual DCs do not differ in
     sign beyond the noise). With a common DC beyond the noise (:func:`common_z`) the clause says so and is
-    not adequate."""
+    not adequate. Under a noise coloured at the DC (:func:`slow_dc`) :func:`_between` judges the DCs."""
     none = Centres("", False)
     failed = _centre_failures(passes, has_terms, steps)
     if not failed:
