@@ -201,7 +201,13 @@ def _exps(dcs: list[float]) -> list[Any]:
     25 samples: standard error 0.1), with outputs of zero."""
     return [
         SimpleNamespace(
-            ybar=np.full(25, 0.1 * v), noise_var=1.0, periods=4.0, samples_per_period=25, source=f"e{i}"
+            ybar=np.full(25, 0.1 * v),
+            noise_var=1.0,
+            periods=4.0,
+            samples_per_period=25,
+            source=f"e{i}",
+            colour=1.0,  # white (DiagExperiment's defaults): the in-record level is the DC's yardstick
+            colour_band=(0, 0),
         )
         for i, v in enumerate(dcs)
     ]

@@ -55,6 +55,7 @@ from . import (
     steady_select,
     zero_drift,
 )
+from . import centre_only as _centres
 from .candidates import step_candidates
 from .caveats import below_saturation, caveats_of, unphysical_places_text
 from .centre_only import clause as _centres_only
@@ -92,6 +93,7 @@ from .result import Diagnosis, ModelSummary, NamedTerm, term_symbol_unit
 # re-exported from run_words.py (moved there): importable from run as before
 from .run_words import NOT_PHYSICAL_HINT as NOT_PHYSICAL_HINT
 from .run_words import PARTLY_EXPLAINED_FRACTION as PARTLY_EXPLAINED_FRACTION
+from .run_words import SPREAD
 from .run_words import _explained_fraction as _explained_fraction
 from .run_words import _judged as _judged
 from .run_words import _law_text as _law_text
@@ -806,8 +808,9 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
     share = clean_share.naming_share(_naming_share(fraction, deg, named_deg), cshare)
     judged = classify(plain_ok, bool(final.params.terms) or named_deg, adequate(final), share)
     held = bounds_said.found(steps, alpha, final, s, setup.units, fsx, substeps)  # held at a bound
+    empty = _centres.DC_ONLY_WHERE if _centres.dc_only(passes, bool(final.params.terms), steps) else SPREAD
     status, named, partial, verdict = _judged(
-        judged, final_sum, (before, after), fraction, fexps, held, final
+        judged, final_sum, (before, after), fraction, fexps, held, final, empty
     )
     verdict += drift_pair.text(deg, named_deg, alpha, setup.units) + (centre.text or _law_text(steps))
     tw = design_twin.Said.of(fsx, steps, named, s, substeps, setup.units)  # design twins (design_twin.py)
@@ -843,8 +846,7 @@ def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -
         degradation=deg,
         notes=(*notes, *below_saturation(fsx, final)),  # the levels as the named structure sees them
     )
-    d = _with_limits(d, fsx, start, steps, s, substeps, setup)  # detection limits (limits.py)
-    return _with_feedback(d, setup)
+    return _with_feedback(_with_limits(d, fsx, start, steps, s, substeps, setup), setup)  # limits.py's limits
 
 
 def _with_drift_term(

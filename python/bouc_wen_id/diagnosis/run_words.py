@@ -104,6 +104,10 @@ def classify(plain_adequate: bool, has_terms: bool, final_adequate: bool, fracti
     return "unexplained"
 
 
+#: The localisation's word when no harmonic or region of the cycle stands out (locate.Localisation.where).
+SPREAD = "spread over the cycle"
+
+
 def _verdict(
     status: Status,
     named: Sequence[NamedTerm],
@@ -111,11 +115,16 @@ def _verdict(
     after: Localisation,
     fraction: float,
     drift: str = "",
+    empty: str = SPREAD,
 ) -> str:
-    """The verdict's words; ``drift``: the clause on a loop still drifting (:func:`.drift_clause.clause`)."""
+    """The verdict's words; ``drift``: the clause on a loop still drifting (:func:`.drift_clause.clause`);
+    ``empty``: where the structure remains when the localisation found no place (none, or only
+    :data:`SPREAD`): ``centre_only.DC_ONLY_WHERE`` when the only structure is the experiments' DCs."""
     if status == "adequate":
         return gate.ADEQUATE
-    where = after.describe() or "spread over the cycle"
+    where = after.describe()
+    if where in ("", SPREAD):  # no place found: the caller's word for that (the DCs alone, or SPREAD)
+        where = empty
     if status == "explained":
         return "explained by: " + ", ".join(str(t) for t in named) + drift
     if status == "partly explained":
@@ -149,11 +158,13 @@ def _judged(
     fexps: Sequence[DiagExperiment],
     held: Optional[bounds_said.Beyond] = None,
     fit: Optional[AugFit] = None,
+    empty: str = SPREAD,
 ) -> tuple[Status, tuple[NamedTerm, ...], tuple[NamedTerm, ...], str]:
     """``(status, named, partial, verdict)``: a term outside its physical range is never named (the rest is
     at most a partial explanation), nor one at its null value in ``fit`` (null_named.py), and the verdict
     says what the non-physical value and a residual DC of both signs suggest. ``located``: the plain
-    model's localisation and the final's."""
+    model's localisation and the final's; ``empty``: where structure remains when the final's is empty
+    (:func:`_verdict`)."""
     before, after = located
     nulls = null_named.terms(fit)
     gone = tuple(t for t in final.terms if t.term in nulls)
@@ -175,7 +186,7 @@ def _judged(
     if status == "explained" and drift_clause.beyond(drift):  # a drift left over is not explained
         status = "partly explained"
     verdict = head + _verdict(
-        status, named, tuple(t for t in partial if t not in unphysical), after, fraction, drift
+        status, named, tuple(t for t in partial if t not in unphysical), after, fraction, drift, empty
     )
     verdict = input_dc.qualify(verdict + _unphysical_text(unphysical) + tail, named, fexps)  # a preload
     verdict += null_named.text(tuple(t for t in gone if t not in faint)) + beyond_range.text(faint)
