@@ -8,8 +8,9 @@ frequencies and amplitudes, every experiment 6 or 30 periods: the equal-periods 
 by review 45's sim45 with seeds SEED0..SEED1-1 (``default_rng([45, seed, experiment])``). One JSON line per
 seed: the plain model's p, its statistic over dof, and per experiment the residual's chi-square against the
 true noise variance (sd 0.01 / periods) and against the diagnosis' own ``noise_var``. The candidates are
-``offset`` alone unless ``all`` is given (the plain model's p is the same; the status is then not the
-default diagnosis').
+``offset`` alone unless ``all`` is given: on white noise the plain model's p is the same (seeds 100-107 run
+both ways), the status is not the default diagnosis'; under a wander the common centre's level (alpha over
+the candidates) changes the path, so the wander runs use ``all``.
 """
 
 from __future__ import annotations
