@@ -27,6 +27,7 @@ from . import (
     clean_share,
     clean_value,
     coulomb_width,
+    dc_untested,
     design_twin,
     drift_majority,
     drift_pair,
@@ -539,7 +540,8 @@ def _with_wander(
     d = gain_drift.with_clause(d)  # a drifting output gain fits the drift as well as degradation
     if wander is None:  # short records: an offset that is a settling centre's transient (centre_decay.py)
         d = centre_decay.check(d, alpha)  # on both paths: LEAVE_OUT_EARLY gives the same verdict (review 32)
-    return baseline.adjusted(d, wander, Offset.kind)
+    # "adequate" with the DC taken out says in its headline that an offset was not tested (dc_untested.py)
+    return dc_untested.headlined(baseline.adjusted(d, wander, Offset.kind), wander)
 
 
 def _beside(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -> Optional[Diagnosis]:
