@@ -581,7 +581,7 @@ def diagnose_across(
     InvalidParameterError
         Fewer than two groups, conditions that do not match the groups or repeat, unknown candidates.
     """
-    from . import across_clip, across_ring, across_said, across_zeros, ring_unchecked
+    from . import across_checks, across_clip, across_ring, across_said, across_zeros, ring_unchecked
     from .drift import DRIFT_TERMS
     from .run import ALL_CANDIDATES, _check_candidates
 
@@ -595,6 +595,7 @@ def diagnose_across(
         raise InvalidParameterError(f"alpha = {alpha!r} must lie in (0, 1)")
     gs, own, checks, cut = across_clip.unclipped(gs, *across_stable.unpacked(per_condition, len(gs)), names)
     units = (y_unit or joined.units.get("y", ""), u_unit or joined.units.get("u", ""))
+    gs, line_notes = across_checks.lines_removed(gs, names)  # a line not locked to the input, as diagnose
     ring = across_ring.found(gs, names)  # G's free ring-down (ring_down.py)
     run = _Run(
         gs, conds, names, own, checks, cands, alpha, held_out_test, candidates, units, report, ring.sources
@@ -605,6 +606,7 @@ def diagnose_across(
         why = got.settings.get("not_settled_why", {})
         left = [across_settling.NotSettled(k, (), w) for k, w in why.items()]
         got = ring_unchecked.said(got, ring.short, across_ring.drift_read([], left))
+        got = across_checks.lines_said(got, line_notes)
         return replace(got, seconds=time.perf_counter() - t0)
     got = _zeros_resolved(run, got)  # the recordings' zeros differ inside a condition (across_zeros.py)
     prepared, terms, conditions, steps, settings, unsettled = got
@@ -633,6 +635,8 @@ def diagnose_across(
     out = across_said.said(out, prepared, dict(zip(names, gs)), y_unit, u_unit, joined.units)  # run.py's
     out = across_ring.said(out, ring, len(gs), False)  # the rings' notes
     out = ring_unchecked.said(out, ring.short, across_ring.drift_read(prepared, unsettled))  # as diagnose
+    out = across_checks.lines_said(out, line_notes)  # diagnose's clause on the lines taken out
+    out = across_checks.borderline_said(out, prepared, alpha)  # a weak remainder's p, as diagnose says it
     return readings.qualified(out, out.named, out.alternatives)  # the headline's qualifiers
 
 
