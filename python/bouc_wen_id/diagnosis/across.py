@@ -603,8 +603,7 @@ def diagnose_across(
     got = _joint(run, [None] * len(gs))
     if isinstance(got, AcrossDiagnosis):  # fewer than two settled conditions
         got = across_ring.said(got, ring, len(gs), True)
-        why = got.settings.get("not_settled_why", {})
-        left = [across_settling.NotSettled(k, (), w) for k, w in why.items()]
+        left = [across_settling.NotSettled(k, (), w) for k, w in got.settings["not_settled_why"].items()]
         got = ring_unchecked.said(got, ring.short, across_ring.drift_read([], left))
         got = across_checks.lines_said(got, line_notes)
         return replace(got, seconds=time.perf_counter() - t0)
@@ -635,8 +634,8 @@ def diagnose_across(
     out = across_said.said(out, prepared, dict(zip(names, gs)), y_unit, u_unit, joined.units)  # run.py's
     out = across_ring.said(out, ring, len(gs), False)  # the rings' notes
     out = ring_unchecked.said(out, ring.short, across_ring.drift_read(prepared, unsettled))  # as diagnose
-    out = across_checks.lines_said(out, line_notes)  # diagnose's clause on the lines taken out
-    out = across_checks.borderline_said(out, prepared, alpha)  # a weak remainder's p, as diagnose says it
+    # diagnose's clause on the lines taken out; a weak remainder's p, as diagnose says it (across_checks.py)
+    out = across_checks.borderline_said(across_checks.lines_said(out, line_notes), prepared, alpha)
     return readings.qualified(out, out.named, out.alternatives)  # the headline's qualifiers
 
 
