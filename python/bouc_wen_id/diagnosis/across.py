@@ -171,9 +171,8 @@ def _group(
         measured = not qnotes
         _check_experiments(exps)
         judge = lambda: True if degraded else across_settling.degrades(items, judged[0], alpha, judged[1])  # noqa: E731
-        exps, left, why, left_p = across_settling.drop(
-            exps, label, judge, ringing
-        )  # not settled, as diagnose
+        # not settled, as diagnose: each left out with its p (across_settling.py)
+        exps, left, why, left_p = across_settling.drop(exps, label, judge, ringing)
         s = scale_of(exps)
         sx = scaled(exps, s)
         if wander is not None:
