@@ -55,7 +55,7 @@ def drift_read(d: Any, rung: Sequence[Any] = ()) -> str:
     if named or (deg is not None and deg.accepted((d.settings or {}).get("held_out_test", True))):
         return (
             "the diagnosis names a drift of the loop from period to period ("
-            + (", ".join(named) or "degradation")
+            + (", ".join(named) or "its degradation test")
             + ")"
         )
     ringing = {r.source for r in rung}
