@@ -81,7 +81,7 @@ def test_a_minority_that_rings_is_left_out_across(monkeypatch: pytest.MonkeyPatc
 
     monkeypatch.setattr(across_settling, "settled_only", lambda e, named: (list(range(len(e))), []))
     exps: Any = [SimpleNamespace(source=s) for s in ("a", "b", "c")]
-    kept, names, why = across_settling.drop(exps, "1", lambda: None, frozenset({"b"}))
+    kept, names, why, _ = across_settling.drop(exps, "1", lambda: None, frozenset({"b"}))
     assert [e.source for e in kept] == ["a", "c"] and names == ("b",) and why == ""
 
 

@@ -138,6 +138,7 @@ def _group(
     level = alpha / max(len(cands), 1)  # a wandering zero (baseline.py) or a drifting one, as diagnose
     wander = zeros or baseline.detect(items, level) or zero_drift.detect(items, level)
     left = across_settling.from_own(own, label) if own is not None else ()  # its unsettled stay out
+    left_p = across_settling.own_p(own, left) if own is not None else ()  # their p, as its diagnosis kept
     degraded = own is not None and across_settling.names_degradation(own)  # not modelled across
     why = across_settling.why_own(own) if left else ""
     # Its own diagnosis freed each recording's DC (record_zeros.py, no wander here): its experiments and plain
@@ -170,7 +171,8 @@ def _group(
         measured = not qnotes
         _check_experiments(exps)
         judge = lambda: True if degraded else across_settling.degrades(items, judged[0], alpha, judged[1])  # noqa: E731
-        exps, left, why = across_settling.drop(exps, label, judge, ringing)  # not settled, as diagnose
+        # not settled, as diagnose: each left out with its p (across_settling.py)
+        exps, left, why, left_p = across_settling.drop(exps, label, judge, ringing)
         s = scale_of(exps)
         sx = scaled(exps, s)
         if wander is not None:
@@ -200,6 +202,8 @@ def _group(
         moved=bool(moved),
         left_out=left,
         left_why=why,
+        left_p=left_p,
+        rung=tuple(n for n in left if n in ringing),
         zeros=zeros,
         centres=wander,
     )
@@ -576,7 +580,7 @@ def diagnose_across(
     InvalidParameterError
         Fewer than two groups, conditions that do not match the groups or repeat, unknown candidates.
     """
-    from . import across_clip, across_ring, across_said, across_zeros
+    from . import across_checks, across_clip, across_ring, across_said, across_zeros, ring_unchecked
     from .drift import DRIFT_TERMS
     from .run import ALL_CANDIDATES, _check_candidates
 
@@ -590,12 +594,17 @@ def diagnose_across(
         raise InvalidParameterError(f"alpha = {alpha!r} must lie in (0, 1)")
     gs, own, checks, cut = across_clip.unclipped(gs, *across_stable.unpacked(per_condition, len(gs)), names)
     units = (y_unit or joined.units.get("y", ""), u_unit or joined.units.get("u", ""))
-    ringing, rings, ring_notes = across_ring.found(gs, names)  # G's free ring-down (ring_down.py)
-    run = _Run(gs, conds, names, own, checks, cands, alpha, held_out_test, candidates, units, report, ringing)
-    total = sum(len(g) for g in gs)
+    gs, line_notes = across_checks.lines_removed(gs, names)  # a line not locked to the input, as diagnose
+    ring = across_ring.found(gs, names)  # G's free ring-down (ring_down.py)
+    run = _Run(
+        gs, conds, names, own, checks, cands, alpha, held_out_test, candidates, units, report, ring.sources
+    )
     got = _joint(run, [None] * len(gs))
     if isinstance(got, AcrossDiagnosis):  # fewer than two settled conditions
-        got = across_ring.said(got, rings, ring_notes, total, len(gs), any(ringing))
+        got = across_ring.said(got, ring, len(gs), True)
+        left = [across_settling.NotSettled(k, (), w) for k, w in got.settings["not_settled_why"].items()]
+        got = ring_unchecked.said(got, ring.short, across_ring.drift_read([], left))
+        got = across_checks.lines_said(got, line_notes)
         return replace(got, seconds=time.perf_counter() - t0)
     got = _zeros_resolved(run, got)  # the recordings' zeros differ inside a condition (across_zeros.py)
     prepared, terms, conditions, steps, settings, unsettled = got
@@ -622,9 +631,10 @@ def diagnose_across(
         ),
     )
     out = across_said.said(out, prepared, dict(zip(names, gs)), y_unit, u_unit, joined.units)  # run.py's
-    out = across_ring.said(
-        out, rings, ring_notes, total, len(gs), any(ringing)
-    )  # most ring: nothing named, as diagnose
+    out = across_ring.said(out, ring, len(gs), False)  # the rings' notes
+    out = ring_unchecked.said(out, ring.short, across_ring.drift_read(prepared, unsettled))  # as diagnose
+    # diagnose's clause on the lines taken out; a weak remainder's p, as diagnose says it (across_checks.py)
+    out = across_checks.borderline_said(across_checks.lines_said(out, line_notes), prepared, alpha)
     return readings.qualified(out, out.named, out.alternatives)  # the headline's qualifiers
 
 
@@ -680,7 +690,10 @@ def _joint(run: _Run, zeros: Sequence[Any]) -> Any:
                 kept_checks.append(run.checks[i])
             except across_settling.NotSettled as e:  # no experiment settled there (across_settling.py)
                 unsettled.append(e)
-        settings: dict[str, Any] = {"not_settled": {u.label: list(u.names) for u in unsettled}}
+        settings: dict[str, Any] = {
+            "not_settled": {u.label: list(u.names) for u in unsettled},
+            "not_settled_why": {u.label: u.left_why for u in unsettled},  # (across_settling.RINGS: rings)
+        }
         few = across_settling.too_few(prepared, unsettled)  # one structure needs two settled conditions
         if few is not None:
             left = across_settling.notes(prepared, unsettled)

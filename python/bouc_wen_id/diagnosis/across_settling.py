@@ -22,31 +22,48 @@ structure. Here the same rule per condition:
   with fewer than two conditions left nothing is named (:func:`too_few`'s verdict).
 
 The verdict says which experiments and conditions were left out (:func:`clause`), and the notes why
-(:func:`.settling.left_out_note`, prefixed by the condition).
+(:func:`.settling.left_out_note`, prefixed by the condition). A drift is said at diagnose's standard
+(drift_said.records_drift, session 46): "still drifts" only when every record's trend test, Holm over the
+condition's records (:func:`.settling.drift_p`), is below drift_said.FIRM, else "may drift" with each
+record's adjusted p; the records that still ring (ring_down.py) are said as ringing, not drifting, and a
+condition where most of the experiments ring is left out whole (:data:`RINGS`: diagnose names nothing from
+such a set, ring_down.not_settled; counted per condition over its experiments, a measurement's segments
+each one).
 """
 
 from __future__ import annotations
 
+import math
 import warnings
 from collections.abc import Callable, Sequence
 from typing import Any, Optional
 
 from .data import DiagExperiment
-from .settling import LEFT_OUT, left_out_note, settled_only
+from .settling import LEFT_OUT, LEFT_OUT_P, drift_p, left_out_note, settled_only
 
 #: Why experiments were left out (``_Group.left_why``, :class:`NotSettled`): degradation explains their
-#: drift at the condition, or it was not tested (no drift term among the candidates).
-DEGRADES, UNTESTED = "degrades", "untested"
+#: drift at the condition, or it was not tested (no drift term among the candidates); a whole condition:
+#: most of its experiments still ring (ring_down.py).
+DEGRADES, UNTESTED, RINGS = "degrades", "untested", "rings"
+
+#: What a record that still rings holds (ring_down.not_settled's words).
+RING = (
+    "the free ring-down of the dynamics from the start of the record (a change from period to period that "
+    "falls geometrically)"
+)
 
 
 class NotSettled(Exception):
-    """No experiment of a condition has settled: the condition is left out of the joint structure."""
+    """No experiment of a condition has settled (or most still ring): the condition is left out of the joint
+    structure. ``p``: each one's adjusted p of the trend test (NaN: not known, or left out as ringing)."""
 
-    def __init__(self, label: str, names: Sequence[str], why: str = "") -> None:
+    def __init__(self, label: str, names: Sequence[str], why: str = "", p: Sequence[float] = ()) -> None:
         super().__init__(f"{label}: not settled ({', '.join(names)})")
         self.label = label
         self.names = tuple(names)
         self.left_why = why
+        self.p = tuple(p)
+        self.total = len(names)
 
 
 def why_own(own: Any) -> str:
@@ -89,8 +106,15 @@ def from_own(own: Any, label: str) -> tuple[str, ...]:
     settled ones); raises :class:`NotSettled` when it left out every one."""
     left = tuple(str(s) for s in (own.settings or {}).get(LEFT_OUT, ()))
     if left and {e.source for e in own.experiments} <= set(left):
-        raise NotSettled(label, left)
+        raise NotSettled(label, left, p=own_p(own, left))
     return left
+
+
+def own_p(own: Any, left: Sequence[str]) -> tuple[float, ...]:
+    """Each of ``left``'s adjusted p as the condition's own diagnosis recorded it (settling.LEFT_OUT_P), NaN
+    when it did not (a ring-down left out, or a diagnosis from before the p was kept)."""
+    ps = list((own.settings or {}).get(LEFT_OUT_P, ()) or ())
+    return tuple(float(v) for v in ps) if len(ps) == len(left) else (math.nan,) * len(left)
 
 
 def drop(
@@ -98,27 +122,57 @@ def drop(
     label: str,
     judge: Callable[[], Optional[bool]],
     ringing: frozenset[str] = frozenset(),
-) -> tuple[list[DiagExperiment], tuple[str, ...], str]:
+) -> tuple[list[DiagExperiment], tuple[str, ...], str, tuple[float, ...]]:
     """``exps`` without those whose loop still drifts (:func:`.settling.settled_only`) or still rings (their
     names in ``ringing``: a free ring-down of G, which diagnose leaves out as a drift no degradation
-    explains, ring_down.py), their names and why (:data:`DEGRADES` when ``judge``, the condition's own
+    explains, ring_down.py), their names, why (:data:`DEGRADES` when ``judge``, the condition's own
     judgement run only when some drift, names degradation; :data:`UNTESTED` when it did not test it; else
-    ""); raises :class:`NotSettled` when none is left."""
-    keep, drifting = settled_only(exps, False)
+    "") and each one's adjusted p of the trend test (:func:`.settling.drift_p`; NaN for one that rings);
+    raises :class:`NotSettled` when none is left, or when most ring (:data:`RINGS`: counted over this
+    condition's experiments, as diagnose counts over the set it is given)."""
+    from .drift_majority import most
+
     rung = [i for i, e in enumerate(exps) if e.source in ringing]
+    if rung and (len(rung) == len(exps) or most(len(rung), len(exps))):
+        err = NotSettled(label, [exps[i].source for i in rung], RINGS, [math.nan] * len(rung))
+        err.total = len(exps)
+        raise err
+    keep, drifting = settled_only(exps, False)
     keep = [i for i in keep if i not in rung]
-    names = tuple(exps[i].source for i in sorted({*drifting, *rung}))
+    left = sorted({*drifting, *rung})
+    ps = drift_p(exps) if drifting else [math.nan] * len(exps)
+    names = tuple(exps[i].source for i in left)
+    p = tuple(math.nan if i in rung else ps[i] for i in left)
     why = ""
     if set(drifting) - set(rung):  # a drift beside the rings: the condition's own judgement of it
         verdict = judge()
         why = UNTESTED if verdict is None else DEGRADES if verdict else ""
     if not keep:
-        raise NotSettled(label, names, why)
-    return [exps[i] for i in keep], names, why
+        raise NotSettled(label, names, why, p)
+    return [exps[i] for i in keep], names, why, p
 
 
-def _reason(why: str) -> str:
-    """The words on why experiments were left out, after their names."""
+def said(names: Sequence[str], p: Sequence[float], rung: Sequence[str] = ()) -> str:
+    """Why ``names`` were left out: the drifting ones at drift_said's standard (:func:`.drift_said.
+    records_drift`: "still drifts" only when every adjusted ``p`` is firm, else "may drift", each record's p
+    said), those in ``rung`` as still ringing."""
+    from .drift_said import records_drift
+
+    ps = list(p) if len(p) == len(names) else [math.nan] * len(names)
+    drift = [(n, v) for n, v in zip(names, ps) if n not in rung]
+    parts = []
+    if drift and all(math.isfinite(v) for _, v in drift):
+        parts.append(records_drift([n for n, _ in drift], [v for _, v in drift]))
+    elif drift:  # no p known (a diagnosis that did not record it): its own words, not a fact of ours
+        parts.append("the loop may not have settled (left out by the condition's own diagnosis)")
+    ring = [n for n in names if n in rung]
+    if ring:
+        parts.append(f"{', '.join(ring)} still hold{'s' if len(ring) == 1 else ''} {RING}")
+    return "; ".join(parts)
+
+
+def _reason(why: str, names: Sequence[str] = (), p: Sequence[float] = (), rung: Sequence[str] = ()) -> str:
+    """The words on why ``names`` were left out, after their names (:func:`said`'s on a drift)."""
     if why == DEGRADES:
         return (
             "the loop degrades: diagnose of that condition alone names degradation, which the structure "
@@ -126,45 +180,72 @@ def _reason(why: str) -> str:
         )
     if why == UNTESTED:
         return (
-            "the loop still drifts from period to period: not settled; degradation was not tested (no drift "
-            "term among the candidates); record more settling periods"
+            f"{said(names, p, rung)}: not settled; degradation was not tested (no drift term among the "
+            "candidates); record more settling periods"
         )
-    return "the loop still drifts from period to period"
+    return said(names, p, rung)
 
 
-def _note(label: str, names: Sequence[str], why: str) -> str:
-    """A condition's note on what was left out: diagnose's wording (:func:`.settling.left_out_note`) when
-    the drift was tested and is no degradation's, else :func:`_reason`'s."""
-    if not why:
-        return f"{label}: {left_out_note(', '.join(names))}"
-    return f"{label}: left out of the diagnosis: {', '.join(names)} ({_reason(why)})"
+def _note(
+    label: str, names: Sequence[str], why: str, p: Sequence[float] = (), rung: Sequence[str] = ()
+) -> str:
+    """A condition's note on what was left out for a drift: diagnose's wording (:func:`.settling.
+    left_out_note`, with each record's p) when the drift was tested and is no degradation's, else
+    :func:`_reason`'s; "" when only ringing records were left out (ring_down's note says each)."""
+    ps = list(p) if len(p) == len(names) else [math.nan] * len(names)
+    drift = [(n, v) for n, v in zip(names, ps) if n not in rung]
+    if not drift:
+        return ""
+    dn, dp = [n for n, _ in drift], [v for _, v in drift]
+    if not why and all(math.isfinite(v) for v in dp):
+        return f"{label}: {left_out_note(', '.join(dn), dn, dp)}"
+    return f"{label}: left out of the diagnosis: {', '.join(dn)} ({_reason(why, dn, dp)})"
+
+
+def _not_settled(u: NotSettled) -> str:
+    """The verdict's word on a condition left out whole (:class:`NotSettled`)."""
+    if u.left_why == DEGRADES:
+        return f"; condition {u.label} left out ({_reason(DEGRADES)})"
+    if u.left_why == RINGS:
+        return (
+            f"; condition {u.label} left out: {len(u.names)} of its {u.total} experiments "
+            f"({', '.join(u.names)}) still hold {RING}; nothing is named from a loop that has not settled"
+        )
+    from .drift_said import firm
+
+    sure = len(u.p) == len(u.names) and all(firm(v) for v in u.p)
+    why = _reason(u.left_why, u.names, u.p)
+    return (
+        f"; condition {u.label} left out: no experiment there has settled ({why}); "
+        f"nothing is named from a loop that {'has not' if sure else 'may not have'} settled"
+    )
 
 
 def clause(groups: Sequence[Any], unsettled: Sequence[NotSettled]) -> str:
-    """The verdict's word on what was left out as not settled: experiments per condition, whole
-    conditions."""
+    """The verdict's word on what was left out as not settled: experiments per condition (each drift at
+    drift_said's standard, :func:`said`), whole conditions."""
     text = ""
     untested = " (degradation not tested: no drift term among the candidates)"
     parts = [
-        f"{', '.join(g.left_out)} at {g.label}" + (untested if _why(g) == UNTESTED else "")
+        f"{', '.join(g.left_out)} at {g.label} ({said(g.left_out, _p(g), _rung(g))})"
+        + (untested if _why(g) == UNTESTED else "")
         for g in groups
         if g.left_out and _why(g) != DEGRADES
     ]
     if parts:
-        text += f"; left out as not settled (the loop still drifts from period to period): {'; '.join(parts)}"
+        text += f"; left out as not settled: {'; '.join(parts)}"
     for g in groups:
         if g.left_out and _why(g) == DEGRADES:
             text += f"; left out at {g.label}: {', '.join(g.left_out)} ({_reason(DEGRADES)})"
-    plain = [u.label for u in unsettled if u.left_why != DEGRADES]
-    if plain:
-        text += (
-            f"; condition {', '.join(plain)} left out: no experiment there has settled (every loop still "
-            "drifts from period to period); nothing is named from a loop that has not settled"
-        )
-    for u in unsettled:
-        if u.left_why == DEGRADES:
-            text += f"; condition {u.label} left out ({_reason(DEGRADES)})"
-    return text
+    return text + "".join(_not_settled(u) for u in unsettled)
+
+
+def _p(g: Any) -> tuple[float, ...]:
+    return tuple(getattr(g, "left_p", ()) or ())
+
+
+def _rung(g: Any) -> tuple[str, ...]:
+    return tuple(getattr(g, "rung", ()) or ())
 
 
 def _why(g: Any) -> str:
@@ -172,10 +253,11 @@ def _why(g: Any) -> str:
 
 
 def notes(groups: Sequence[Any], unsettled: Sequence[NotSettled]) -> tuple[str, ...]:
-    """Each condition's left-out note, as diagnose words it (:func:`.settling.left_out_note`)."""
-    out = [_note(g.label, g.left_out, _why(g)) for g in groups if g.left_out]
-    out += [_note(u.label, u.names, u.left_why) for u in unsettled]
-    return tuple(out)
+    """Each condition's left-out note, as diagnose words it (:func:`.settling.left_out_note`); a condition
+    left out because most of it rings has its rings' notes (across_ring.py) and the verdict's clause."""
+    out = [_note(g.label, g.left_out, _why(g), _p(g), _rung(g)) for g in groups if g.left_out]
+    out += [_note(u.label, u.names, u.left_why, u.p) for u in unsettled if u.left_why != RINGS]
+    return tuple(n for n in out if n)
 
 
 def too_few(groups: Sequence[Any], unsettled: Sequence[NotSettled]) -> Optional[str]:

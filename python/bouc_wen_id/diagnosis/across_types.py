@@ -59,6 +59,10 @@ class _Group:
     left_out: tuple[str, ...] = ()
     #: ... or why else (across_settling.DEGRADES: degradation explains their drift; UNTESTED: not tested)
     left_why: str = ""
+    #: Each left-out experiment's adjusted p of the trend test (settling.drift_p; NaN: not known), in
+    #: ``left_out``'s order, and those left out because they still ring (ring_down.py), not for a drift
+    left_p: tuple[float, ...] = ()
+    rung: tuple[str, ...] = ()
     #: The recordings' zeros differ: each experiment's DC free about their common one (across_zeros.py)
     zeros: Any = None
     #: What was taken out of the recordings' zeros (a baseline.Wander, a zero_drift.Drift or the zeros above),

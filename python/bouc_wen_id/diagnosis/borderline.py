@@ -38,12 +38,20 @@ def weak(p_value: float, alpha: float, drifting: bool = False) -> bool:
     return bool(math.isfinite(p_value) and alpha / FACTOR <= p_value < alpha and not drifting)
 
 
-def remains(p_value: float, alpha: float, drifting: bool = False) -> str:
+def remains(p_value: float, alpha: float, drifting: bool = False, rate: float = math.nan) -> str:
     """ "remains", or, on weak evidence (:func:`weak`), "may remain (p = ...; a right model is flagged so in
-    ... % of cases)"."""
+    ... % of cases)": in ``alpha`` of them (``rate``: another share, when a model is tested more than once:
+    at each of several conditions, :func:`across_rate`)."""
     if not weak(p_value, alpha, drifting):
         return "remains"
-    return f"{MARK}{p_value:.2g}; a right model is flagged so in {100 * alpha:.3g} % of cases)"
+    rate = alpha if not math.isfinite(rate) else rate
+    return f"{MARK}{p_value:.2g}; a right model is flagged so in {100 * rate:.3g} % of cases)"
+
+
+def across_rate(alpha: float, k: int) -> float:
+    """How often a right model fails its adequacy test at one condition or more of ``k``, each tested at
+    ``alpha`` (diagnose_across's status: adequate only when it passes at every one)."""
+    return 1.0 - (1.0 - alpha) ** max(k, 1)
 
 
 def of_headline(head: str) -> str:
@@ -69,13 +77,22 @@ def qualified(d: Diagnosis, alpha: float) -> Diagnosis:
     other = d.before.drift_detected or d.after.drift_detected or any(st.law_failed for st in d.steps)
     if not weak(float(d.final.p_value), alpha, other):
         return d
-    parts = clauses(d.verdict)
-    for c in parts[:2]:
-        if c.startswith(REMAINS):
-            said = c.replace(REMAINS, "unexplained structure " + remains(float(d.final.p_value), alpha), 1)
-            i = d.verdict.find(c)
-            return replace(d, verdict=d.verdict[:i] + said + d.verdict[i + len(c) :])
-    return d
+    said = qualified_text(d.verdict, float(d.final.p_value), alpha)
+    return d if said == d.verdict else replace(d, verdict=said)
+
+
+def qualified_text(
+    verdict: str, p_value: float, alpha: float, rate: float = math.nan, prefix: str = ""
+) -> str:
+    """``verdict`` whose "unexplained structure remains" (its headline or the clause after it, after
+    ``prefix``) says "may remain (p = ...)" (:func:`remains`; the caller has found the evidence weak,
+    :func:`weak`). One wording for diagnose (:func:`qualified`) and diagnose_across (across_checks.py)."""
+    for c in clauses(verdict)[:2]:
+        if c.startswith(prefix + REMAINS):
+            said = c.replace(REMAINS, "unexplained structure " + remains(p_value, alpha, rate=rate), 1)
+            i = verdict.find(c)
+            return verdict[:i] + said + verdict[i + len(c) :]
+    return verdict
 
 
 #: The reading's words before the p-value (its parentheses keep the verdict's clauses whole).

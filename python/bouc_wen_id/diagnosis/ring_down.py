@@ -26,7 +26,8 @@ averaged period, and no trim helps.
 A lab :class:`~bouc_wen_id.measurement.Measurement` carries its samples, not whole periods: each steady
 segment its averaging finds is read from its first phase zero, interpolated to a whole number of samples a
 period (:func:`lab_records`), over its first :data:`LEAST_PERIODS` periods (all of them averaged: a ring-down
-is largest there). A segment shorter than that is not checked, and a note says which (the steady-segment
+is largest there). A segment shorter than that is not checked (:func:`checked` lists it; ring_unchecked.py
+says where that matters: not on every lab record of 1-7 periods, session 46) (the steady-segment
 test of the signal analysis refuses a stretch still ringing strongly: review 44's design D as measurements,
 14 periods, had none steady). diagnose_across runs the same check per condition (across_ring.py).
 """
@@ -162,14 +163,17 @@ def _records(i: int, item: Any) -> list[tuple[str, Any, int, int, int, bool]]:
     return []
 
 
-def rings(items: Any) -> tuple[list[Ring], list[str]]:
-    """``(rings, notes)`` of the recordings and measurement segments in ``items`` whose averaged periods
-    still hold a ring-down (:func:`ringing`); a TransientWarning says which. A measurement's segment too
-    short for the test is said in a note (the ring-down not checked there)."""
+def checked(items: Any) -> tuple[list[Ring], list[str], list[str], int]:
+    """``(rings, notes, short, n)`` of the recordings and measurement segments in ``items`` whose averaged
+    periods still hold a ring-down (:func:`ringing`), a note and a TransientWarning on each; ``short``: the
+    measurement segments too short for the test, "name (periods)" (the ring-down not checked there; said
+    where it matters by ring_unchecked.py); ``n``: how many records were read (a measurement's segments
+    each one, as the diagnosis counts its experiments)."""
     seq = list(items) if isinstance(items, (list, tuple)) else [items]
-    found, notes, short = [], [], []
+    found, notes, short, n = [], [], [], 0
     for i, item in enumerate(seq):
         for source, y, p, periods, s, lab in _records(i, item):
+            n += 1
             if lab and periods < LEAST_PERIODS:
                 short.append(f"{source} ({periods})")
                 continue
@@ -182,12 +186,12 @@ def rings(items: Any) -> tuple[list[Ring], list[str]]:
             warnings.warn(msg, TransientWarning, 3)
             found.append(ring)
             notes.append(msg)
-    if short:
-        notes.append(
-            "a free ring-down of the dynamics before the hysteresis was not checked in the steady segments "
-            f"shorter than the {LEAST_PERIODS} whole periods its test reads: {', '.join(short)}; there only "
-            "the signal analysis's steady-segment test looks for a transient"
-        )
+    return found, notes, short, n
+
+
+def rings(items: Any) -> tuple[list[Ring], list[str]]:
+    """``(rings, notes)`` of :func:`checked` (the segments too short for the test not said)."""
+    found, notes, _, _ = checked(items)
     return found, notes
 
 

@@ -52,6 +52,7 @@ from . import (
     record_zeros,
     resolution,
     ring_down,
+    ring_unchecked,
     speed,
     steady_select,
     zero_drift,
@@ -520,7 +521,8 @@ def _with_wander(
         )
     common = None if wander is None else wander.kept
     setup = _Setup(cands, alpha, held_out_test, units, skipped, not qnotes, report=report, common_dc=common)
-    ring, rnotes = ring_down.rings(items)  # a free ring-down of G still in the averaged periods
+    # A free ring-down of G still in the averaged periods; the lab segments too short for its test.
+    ring, rnotes, unchecked, _ = ring_down.checked(items)
     notes, ringing = [*notes, *rnotes], ring_down.left_out(ring, [e.source for e in exps])
     try:
         if 0 < len(ringing) < len(exps):  # left out, as a drift no degradation explains
@@ -536,6 +538,7 @@ def _with_wander(
     else:
         d = _unless_unsettled(exps, d, setup, [*notes, *qnotes])
     d = ring_down.said(d, ring, len(exps))  # most or all still ring: nothing named
+    d = ring_unchecked.said(d, unchecked, ring_unchecked.drift_read(d, ring))  # noted where a drift was read
     d = age.with_clause(d)  # what the fit assumed of the specimen's history, when it fitted its age
     d = gain_drift.with_clause(d)  # a drifting output gain fits the drift as well as degradation
     if wander is None:  # short records: an offset that is a settling centre's transient (centre_decay.py)
