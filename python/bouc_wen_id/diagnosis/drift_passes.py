@@ -7,7 +7,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import replace
-from typing import Any, Optional
+from typing import Any
 
 import numpy as np
 
@@ -42,43 +42,6 @@ MAX_CORRECTION_PASSES = 8
 #: Bracket of the joint refinement of d around the drift-space estimate (relative), and its tolerance.
 REFINE_BRACKET = 0.3
 REFINE_XTOL = 1e-3
-#: The refinement's fixed points settle to this many reduced chi-squares (the cost's curvature is taken
-#: over steps of a few se, where the cost moves by tens).
-REFINE_CHI2 = 0.1
-
-
-def fixed_point(
-    exps: Sequence[DiagExperiment],
-    sx: Sequence[AugExperiment],
-    start: AugFit,
-    d: float,
-    s: Scale,
-    substeps: int,
-) -> Optional[AugFit]:
-    """The virgin fit of the averaged periods corrected at ``d`` with that fit itself: from ``start``, each
-    pass corrects the periods at the fit before and refits them (``max_iter`` 50), until the fit's
-    chi-square moves by less than ``REFINE_CHI2`` reduced chi-squares and every gain by less than
-    ``GAIN_RTOL`` (at most ``MAX_CORRECTION_PASSES``); None when a refit fails.
-
-    Its chi-square is the steady cost of d profiled over the steady model: at the fixed point the
-    corrected periods are the recorded ones less the fit's own simulated drift, so the cost is that of the
-    recorded averaged periods against the fitted hysteresis simulated at d. One pass from a fit made at
-    another d (main before session 46) left the misfit of two loops at different strengths, which grew
-    with |d - d0| and put the cost's minimum at d0 with a curvature several times too sharp (nu-10-A: rms z
-    2.9 on 8 seeds).
-    """
-    fit = start
-    for k in range(MAX_CORRECTION_PASSES):
-        _, fsx = corrected(exps, sx, fit, d, s.y, substeps, DEGRADATION)
-        new = fit_from(fsx, fit.params, substeps, max_iter=50)
-        if new is None:
-            return None
-        moved = np.max(np.abs(np.asarray(new.params.gains) / np.asarray(fit.params.gains) - 1.0))
-        settled = abs(fit.cost - new.cost) <= REFINE_CHI2 * max(1.0, new.cost / max(dof_of(fsx, new), 1))
-        fit = new
-        if k > 0 and settled and moved <= GAIN_RTOL:
-            break
-    return fit
 
 
 def refine(
@@ -91,15 +54,12 @@ def refine(
     substeps: int,
 ) -> tuple[DegradationTest, AugFit]:
     """d refined on both spaces: the drift cost plus the steady cost of the virgin-strength data refitted
-    to its fixed point at each trial d (strength degradation only: stiffness degradation's value stays the
-    drift space's, run.py).
+    (strength degradation only: stiffness degradation's value stays the drift space's, run.py).
 
     The drift-space estimate is first order; the averaged periods carry d too (through the strength each
     experiment has reached, design.md 10.6), so the value is refined by a bounded scalar search of
     ``C_drift(d) + C_steady(d)`` within ``REFINE_BRACKET`` of it, and its standard error taken from the
-    curvature of that cost (``var = 2 / C''``). ``C_steady(d)`` is :func:`fixed_point`'s chi-square, each
-    trial started from the fixed point of the nearest d tried before. The tests stay those of the drift
-    space.
+    curvature of that cost (``var = 2 / C''``). The tests stay those of the drift space.
     """
     from scipy.optimize import minimize_scalar  # type: ignore[import-untyped]
 
@@ -109,8 +69,8 @@ def refine(
     fits: dict[float, AugFit] = {}
 
     def cost(dv: float) -> float:
-        near = min(fits, key=lambda x: abs(x - dv)) if fits else None
-        f = fixed_point(exps, sx, fit if near is None else fits[near], dv, s, substeps)
+        _, fs = corrected(exps, sx, fit, dv, s.y, substeps, deg.term)
+        f = fit_from(fs, fit.params, substeps, max_iter=50)
         if f is None:
             return math.inf
         fits[dv] = f
@@ -129,27 +89,7 @@ def refine(
     h = 0.02 * dv
     curv = (cost(dv + h) - 2.0 * float(res.fun) + cost(dv - h)) / (h * h)
     se = math.sqrt(2.0 / curv) if curv > 0 else deg.standard_error * s.y**2
-    se *= math.sqrt(max(1.0, tension(dv, se**2, sum(x[1] for x in sums), sum(x[2] for x in sums))))
     return replace(deg, d=dv, value=dv / s.y**2, standard_error=se / s.y**2), fits[dv]
-
-
-def tension(d: float, var: float, num: float, den: float) -> float:
-    """The chi-square (1 dof) of the disagreement between the two spaces' own estimates of d, given the
-    joint minimum ``d`` with variance ``var`` and the drift cost's sums (``C_drift = c0 - 2 d num + d^2
-    den``: its own estimate ``num / den`` with variance ``1 / den``); 0 when the steady cost alone has no
-    curvature left. The steady space's estimate and variance follow from the joint one as a weighted
-    mean's. :func:`refine` scales its se by ``sqrt(chi2)`` when above 1 (the scale factor of two
-    measurements that disagree): the averaged periods pulled d 1.5 % below the drift space's at 10x on
-    review 44's config A and 1.2 % above it at 30x, each 3-5 of its own se from the truth.
-    """
-    if not (den > 0 and var > 0):
-        return 0.0
-    info_s = 1.0 / var - den
-    if info_s <= 0:
-        return 0.0
-    d_drift = num / den
-    d_steady = (d / var - num) / info_s
-    return (d_drift - d_steady) ** 2 / (1.0 / den + 1.0 / info_s)
 
 
 def virgin_start(plain: AugFit, data: Sequence[Any], d: float, m: int) -> AugFit:
