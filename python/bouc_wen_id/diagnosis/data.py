@@ -333,10 +333,11 @@ def harmonic_levels(
     a quadratic trend (as :func:`noise_colour`) pooled over the :data:`COLOUR_BAND` harmonics around it
     (the DC alone, inflated for the correlation of the period DCs, :func:`cross_period_inflation`), times
     ``nu / (nu - 2)`` for its ``nu`` degrees of freedom (:func:`unbiased_inverse`: the drift test weighs by
-    the inverse), never below :data:`HARMONIC_FLOOR` times ``white_var`` (a red noise is below its per-sample level at the
-    higher harmonics). Empty when N < 3. ``dc=False`` (the period means taken out, ``baseline.py``): the DC's
-    level is infinite (no weight in the drift test) and no band counts it. ``k``: the last harmonic
-    (default the drift test's, ``MAX_DRIFT_HARMONIC`` at most; ``P // 2`` for the adequacy test's weights).
+    the inverse), never below :data:`HARMONIC_FLOOR` times ``white_var`` (a red noise is below its
+    per-sample level at the higher harmonics). Empty when N < 3. ``dc=False`` (the period means taken out,
+    ``baseline.py``): the DC's level is infinite (no weight in the drift test) and no band counts it.
+    ``k``: the last harmonic (default the drift test's, ``MAX_DRIFT_HARMONIC`` at most; ``P // 2`` for the
+    adequacy test's weights).
     """
     n, p = rows.shape
     k = _harmonics_of(p) if k is None else min(int(k), p // 2)
