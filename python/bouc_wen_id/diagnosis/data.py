@@ -331,13 +331,11 @@ def harmonic_levels(
 ) -> FloatArray:
     """Each harmonic 0..K's noise level of periods ``rows`` (N, P), in per-sample units: the spread about
     a quadratic trend (as :func:`noise_colour`) pooled over the :data:`COLOUR_BAND` harmonics around it
-    (the DC alone, inflated for the correlation of the period DCs, :func:`cross_period_inflation`), times
-    ``nu / (nu - 2)`` for its ``nu`` degrees of freedom (:func:`unbiased_inverse`: the drift test weighs by
-    the inverse), never below :data:`HARMONIC_FLOOR` times ``white_var`` (a red noise is below its
-    per-sample level at the higher harmonics). Empty when N < 3. ``dc=False`` (the period means taken out,
-    ``baseline.py``): the DC's level is infinite (no weight in the drift test) and no band counts it.
-    ``k``: the last harmonic (default the drift test's, ``MAX_DRIFT_HARMONIC`` at most; ``P // 2`` for the
-    adequacy test's weights).
+    (the DC alone, inflated for the correlation of the period DCs, :func:`cross_period_inflation`), never
+    below :data:`HARMONIC_FLOOR` times ``white_var`` (a red noise is below its per-sample level at the
+    higher harmonics). Empty when N < 3. ``dc=False`` (the period means taken out, ``baseline.py``): the DC's
+    level is infinite (no weight in the drift test) and no band counts it. ``k``: the last harmonic
+    (default the drift test's, ``MAX_DRIFT_HARMONIC`` at most; ``P // 2`` for the adequacy test's weights).
     """
     n, p = rows.shape
     k = _harmonics_of(p) if k is None else min(int(k), p // 2)
@@ -349,33 +347,19 @@ def harmonic_levels(
     half = COLOUR_BAND // 2
     out = np.empty(k + 1)
     out[0] = p * float(np.sum(c[:, 0].real ** 2)) / free * cross_period_inflation(raw[:, 0].real)
-    out[0] *= unbiased_inverse(free)
     if free < FEW_COLOUR_DOF:  # the DC pooled with its neighbours, as noise_colour's bands
-        nu0 = free * (1 + 2 * min(half, k))
-        out[0] = (p * float(np.sum(c[:, 0].real ** 2)) + float(np.sum(ss[1 : half + 1]))) / nu0
-        out[0] *= unbiased_inverse(nu0)
+        out[0] = (p * float(np.sum(c[:, 0].real ** 2)) + float(np.sum(ss[1 : half + 1]))) / (
+            free * (1 + 2 * min(half, k))
+        )
     for j in range(1, k + 1):
         a, b = max(1, j - half), min(k, j + half)
-        nu = 2.0 * free * (b - a + 1)
-        out[j] = float(np.sum(ss[a : b + 1])) / nu * unbiased_inverse(nu)
+        out[j] = float(np.sum(ss[a : b + 1])) / (2.0 * free * (b - a + 1))
     if not dc:  # the fundamental alone, as noise_colour's band of its own
-        out[1] = float(ss[1]) / (2.0 * free) * unbiased_inverse(2.0 * free)
+        out[1] = float(ss[1]) / (2.0 * free)
     out = np.maximum(out, HARMONIC_FLOOR * white_var)
     if not dc:
         out[0] = np.inf
     return out
-
-
-def unbiased_inverse(nu: float) -> float:
-    """``nu / (nu - 2)``: a level estimated with ``nu`` degrees of freedom times this has an unbiased
-    inverse (``E[nu / chi2_nu] = nu / (nu - 2)``), as :func:`adequacy_levels` takes it; 2 at ``nu <= 4``
-    (the inverse's mean is infinite at 2 and the factor's own scatter large below 4).
-
-    Without it (main before session 46) the drift test's weights ``noise_var / level`` were 1.5 times too
-    large on average at the fundamental of four one-period blocks (6 dof about the quadratic trend), and
-    the drift-space se about 1.2 times too small (studies/nu46/README.md).
-    """
-    return nu / (nu - 2.0) if nu > 4.0 else 2.0
 
 
 #: Largest cross-period lag-1 correlation :func:`cross_period_inflation` allows (an inflation of 9).
