@@ -13,6 +13,7 @@ import math
 
 import bouc_wen_id as bw
 import numpy as np
+from rk4 import rk4_step
 
 TWO_PI = 2.0 * math.pi
 BETA, GAMMA, MU = 1.2, 0.3, 1.5
@@ -38,12 +39,7 @@ def records(noise: float, seed: int, delta_nu: float = 0.0, delta_eta: float = 0
     for k in range(n):
         out[:, k] = w
         for _ in range(SUBSTEPS):
-            a1, b1 = rate(t, w, e)
-            a2, b2 = rate(t + h / 2, w + h / 2 * a1, e + h / 2 * b1)
-            a3, b3 = rate(t + h / 2, w + h / 2 * a2, e + h / 2 * b2)
-            a4, b4 = rate(t + h, w + h * a3, e + h * b3)
-            w = w + h / 6 * (a1 + 2 * a2 + 2 * a3 + a4)
-            e = e + h / 6 * (b1 + 2 * b2 + 2 * b3 + b4)
+            w, e = rk4_step(rate, t, w, e, h)
             t = t + h
     rng = np.random.default_rng([45, seed])
     recs = []
