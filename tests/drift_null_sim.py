@@ -11,6 +11,7 @@ import math
 from typing import Any
 
 import numpy as np
+from rk4 import rk4_step
 from wiener_sim import ar1
 
 BETA, GAMMA, MU, ALPHA_X = 0.6, 0.2, 1.5, 0.4
@@ -36,13 +37,7 @@ def loops(omega: Any, amp: Any, n: int, samples: int) -> Any:
     for i in range(n):
         out[:, i] = w + ALPHA_X * x
         for j in range(SUB):
-            t = (i * SUB + j) * h
-            a1, b1 = rate(t, x, w)
-            a2, b2 = rate(t + h / 2, x + h / 2 * a1, w + h / 2 * b1)
-            a3, b3 = rate(t + h / 2, x + h / 2 * a2, w + h / 2 * b2)
-            a4, b4 = rate(t + h, x + h * a3, w + h * b3)
-            x = x + h / 6 * (a1 + 2 * a2 + 2 * a3 + a4)
-            w = w + h / 6 * (b1 + 2 * b2 + 2 * b3 + b4)
+            x, w = rk4_step(rate, (i * SUB + j) * h, x, w, h)
     return out
 
 
