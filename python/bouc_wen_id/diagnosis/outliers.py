@@ -42,6 +42,9 @@ FloatArray = NDArray[np.float64]
 
 #: Departures from the steady reference are clipped at this many robust sd in the transient test.
 CLIP_SD = 4.0
+#: Under a noise coloured at the DC, an early period's DC departs from the steady periods' beyond this many
+#: standard errors of the DC's own level (:func:`_dc_level`) to count as transient.
+TRANSIENT_DC_Z = 4.0
 #: Chance, under Gaussian noise, that a diagnosis reports any outlier (Bonferroni over all analysed samples).
 OUTLIER_ALPHA = 0.01
 #: Robust sd of a Gaussian from its median absolute deviation.
@@ -87,11 +90,40 @@ def transient_periods(y: Any, p: int, s: int, n: int) -> int:
     tol = (
         noise * (1.0 + 1.0 / m) * (1.0 + TRANSIENT_CHI2_SD / math.sqrt(p)) + TRANSIENT_RTOL**2 * centred_power
     )
-    dev = np.mean(np.clip(seg[: n // 2] - ref, -bound, bound) ** 2, axis=1)
+    early = np.clip(seg[: n // 2] - ref, -bound, bound)
+    dev = np.mean(early**2, axis=1)
+    levels = _dc_level(seg, p)
+    if levels is not None:  # coloured at the DC: the DC against its own level, the shape with its colour
+        dc_var, excess = levels
+        dc = early.mean(axis=1)
+        dc_tol = TRANSIENT_DC_Z**2 * dc_var * (1.0 + 1.0 / m) / p
+        shape_tol = tol + excess * (1.0 + 1.0 / m) * (1.0 + TRANSIENT_CHI2_SD / math.sqrt(p))
+        dev = np.where((dev - dc**2 > shape_tol) | (dc**2 > dc_tol), np.inf, 0.0)
     k = 0
     while k < dev.size and dev[k] > tol:
         k += 1
     return k
+
+
+def _dc_level(rows: FloatArray, p: int) -> tuple[float, float] | None:
+    """``(dc, excess)`` when the noise of periods ``rows`` is measurably coloured with its largest level at a
+    band that holds the DC (data.noise_colour on the departures clipped at :data:`CLIP_SD` robust sd,
+    :func:`clipped`; 1/f noise, an AR(1) over many samples), else None. ``dc``: the per-sample level of a
+    period's DC, the larger of the period DCs' spread about a quadratic trend (a settling centre taken out)
+    and the noise's level at its largest band of harmonics >= 1; ``excess``: what that band adds to a
+    period's mean square beyond white noise of the per-sample variance."""
+    from .data import _about_trend, noise_colour
+
+    n = rows.shape[0]
+    kept = clipped(rows, p)
+    white = float(np.mean(np.diff(kept, axis=0) ** 2)) / 2.0
+    var, _, band = noise_colour(kept, white, p * (n - 1))
+    if not (var > white and band[0] == 0):
+        return None
+    dcs = kept.mean(axis=1)[:, None].astype(np.complex128)
+    own = float(np.sum(_about_trend(dcs)[0].real ** 2)) * p / (n - 3)
+    low, _, (a, b) = noise_colour(kept, white, p * (n - 1), dc=False)
+    return max(own, low), 2.0 * (b - a + 1) * max(low - white, 0.0) / p if b else 0.0
 
 
 def clipped(rows: FloatArray, p: int) -> FloatArray:
