@@ -29,7 +29,7 @@ sys.path.insert(0, str(Path(__file__).parents[1] / "pink45"))
 sys.path.insert(0, str(Path(__file__).parents[2] / "tests"))
 from dc_level45 import draw  # noqa: E402
 
-P, S, DRAWS = 200, 15, 300
+P, S, DRAWS = 200, 15, 200
 KINDS = ("white", "ar1 0.9", "pink (sim45)", "pink (sum of AR(1)s)")
 
 
