@@ -60,7 +60,7 @@ def one(recs: list[bw.Recording], seed: int, offset_sds: float) -> dict[str, obj
         "seed": seed,
         "offset": off,
         "status": d.status,
-        "named": [t for t in d.named],
+        "named": [t.term for t in d.named],
         "dc_only": "at the DC only" in d.verdict,
         "transient": transient,
         "cpu": round(time.process_time() - t0, 1),
