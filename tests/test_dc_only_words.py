@@ -37,7 +37,12 @@ PERIODS = 8
 
 @pytest.fixture(scope="module")
 def clean() -> list[bw.Recording]:
-    """A plain plant (second-order G, mu = 2.5), 8 frequencies, 8 periods after 15, noise-free."""
+    return plain_plant()
+
+
+def plain_plant() -> list[bw.Recording]:
+    """A plain plant (second-order G, mu = 2.5), 8 frequencies, 8 periods after 15, noise-free (also read by
+    tests/test_pink_transient.py and studies/pink46/offset46.py)."""
     lin = bw.TransferFunction([36.0], [1.0, 3.6, 36.0])
     om = np.geomspace(1.0, 8.0, 8)
     g, _ = lin.gain_phase(om)

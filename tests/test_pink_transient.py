@@ -64,15 +64,9 @@ def test_a_pink_null_is_diagnosed_without_a_transient_warning() -> None:
     import math
 
     from pink_noise import sum_of_ar1
-    from test_dc_only_words import PERIODS as N
+    from test_dc_only_words import plain_plant
 
-    lin = bw.TransferFunction([36.0], [1.0, 3.6, 36.0])
-    om = np.geomspace(1.0, 8.0, 8)
-    g, _ = lin.gain_phase(om)
-    plan = bw.SinePlan(
-        om, 1.5 / g, settle_periods=15, periods=N, samples_per_period=100, substeps=8, noise_sd=0.0, seed=1
-    )
-    clean = bw.simulate(bw.WienerPlant(lin, bw.BoucWen(1.2, 0.4, 2.5)), plan)
+    clean = plain_plant()
     sd = 0.01 * float(np.max(np.abs(clean[0].y)))
     rng = np.random.default_rng([46, 100])
     recs = [replace(r, y=r.y + sd * sum_of_ar1(r.y.size, rng)) for r in clean]

@@ -25,25 +25,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parents[2] / "tests"))
 from pink_noise import sum_of_ar1  # noqa: E402
-
-PERIODS = 8
-
-
-def clean() -> list[bw.Recording]:
-    lin = bw.TransferFunction([36.0], [1.0, 3.6, 36.0])
-    om = np.geomspace(1.0, 8.0, 8)
-    g, _ = lin.gain_phase(om)
-    plan = bw.SinePlan(
-        om,
-        1.5 / g,
-        settle_periods=15,
-        periods=PERIODS,
-        samples_per_period=100,
-        substeps=8,
-        noise_sd=0.0,
-        seed=1,
-    )
-    return list(bw.simulate(bw.WienerPlant(lin, bw.BoucWen(1.2, 0.4, 2.5)), plan))
+from test_dc_only_words import PERIODS, plain_plant  # noqa: E402
 
 
 def one(recs: list[bw.Recording], seed: int, offset_sds: float) -> dict[str, object]:
@@ -72,7 +54,7 @@ def main(argv: list[str]) -> None:
     nums = [int(a) for a in argv if not a.startswith("--")]
     first, last = (nums[0], nums[1]) if len(nums) == 2 else (100, 130)
     offset_sds = 10.0 if "--offset" in argv else 0.0
-    recs = clean()
+    recs = plain_plant()
     rows = []
     for seed in range(first, last):
         row = one(recs, seed, offset_sds)
