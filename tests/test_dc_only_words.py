@@ -37,7 +37,12 @@ PERIODS = 8
 
 @pytest.fixture(scope="module")
 def clean() -> list[bw.Recording]:
-    """A plain plant (second-order G, mu = 2.5), 8 frequencies, 8 periods after 15, noise-free."""
+    return plain_plant()
+
+
+def plain_plant() -> list[bw.Recording]:
+    """A plain plant (second-order G, mu = 2.5), 8 frequencies, 8 periods after 15, noise-free (also read by
+    tests/test_pink_transient.py and studies/pink46/offset46.py)."""
     lin = bw.TransferFunction([36.0], [1.0, 3.6, 36.0])
     om = np.geomspace(1.0, 8.0, 8)
     g, _ = lin.gain_phase(om)
@@ -68,10 +73,13 @@ def _diagnosed(clean: list[bw.Recording], seed: int, offset_sds: float = 0.0) ->
 
 @pytest.mark.parametrize("seed", [3, 4])
 def test_a_pink_null_whose_only_structure_is_the_dc_is_adequate(clean: list[bw.Recording], seed: int) -> None:
+    """Seed 4's DCs no longer stand out once its pink records keep their first periods (session 46: pink
+    noise is no longer read as a start-up transient, studies/pink46): adequate without the DC rule."""
     d = _diagnosed(clean, seed)
     assert d.plain.p_value >= 0.05 and not d.named  # the plain model fits everything but the DCs
     assert d.status == "adequate", d.verdict  # main: "unexplained structure remains spread over the cycle"
-    assert any("coloured at the DC" in x for x in d.details), d.details
+    if seed == 3:
+        assert any("coloured at the DC" in x for x in d.details), d.details
 
 
 def test_an_offset_at_10x_under_pink_noise_is_not_called_adequate(clean: list[bw.Recording]) -> None:
