@@ -1,0 +1,73 @@
+"""Review 46: classify each case of results46.jsonl (review 45's outcome words) and print the tables.
+
+python studies/review46/summarise46.py studies/review46/results46.jsonl
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+from typing import Any
+
+sys.path.insert(0, str(Path(__file__).parent))
+sys.path.insert(0, str(Path(__file__).parent.parent / "review45"))
+from drive46 import CONFIGS, TRUTH_TERM  # noqa: E402
+from summarise45 import cell, outcome  # noqa: E402
+
+
+def per_case(rows: list[dict[str, Any]]) -> None:
+    print("| case | size | outcome | verdict (first line, cut) | named: value ± se (truth, z) | s (cpu) |")
+    print("|---|---|---|---|---|---|")
+    for r in rows:
+        head = (r.get("headline") or r.get("error", "")).replace("|", "/").replace("\n", " ")
+        head = head if len(head) <= 110 else head[:107] + "..."
+        secs = f"{r.get('seconds', 0):.0f} ({r.get('cpu_seconds', 0):.0f})"
+        print(f"| {r['id']} | {r.get('size', 0):.0f} | {outcome(r)} | {head} | {cell(r)} | {secs} |")
+
+
+def per_config(rows: list[dict[str, Any]]) -> None:
+    print(
+        "| config | library terms right | value within 3 se | wrong confident names | outside physics "
+        "| nulls adequate | errors / timeouts | s median, max |"
+    )
+    print("|---|---|---|---|---|---|---|---|")
+    for cfg in CONFIGS:
+        rs = [r for r in rows if r["config"] == cfg]
+        if not rs:
+            continue
+        oc = {r["id"]: outcome(r) for r in rs}
+        lib = [r for r in rs if r["effect"] != "null" and TRUTH_TERM[r["effect"]]]
+        out = [r for r in rs if r["effect"] != "null" and not TRUTH_TERM[r["effect"]]]
+        nul = [r for r in rs if r["effect"] == "null"]
+        right = [r for r in lib if oc[r["id"]].startswith("right")]
+        zs = [
+            n["z"]
+            for r in right
+            for n in r["named"]
+            if n["term"] == TRUTH_TERM[r["effect"]] and n.get("z") is not None
+        ]
+        wrong = sum(oc[r["id"]].startswith(("WRONG", "FALSE NAME")) for r in rs)
+        outs = ", ".join(f"{r['effect']} {oc[r['id']]}" for r in out) or "-"
+        ok = sum(oc[r["id"]] == "ok-null" for r in nul)
+        bad = sum(oc[r["id"]] in ("error", "timeout") for r in rs)
+        secs = sorted(r.get("seconds") or 0 for r in rs)
+        print(
+            f"| {cfg} {'/'.join(CONFIGS[cfg])} | {len(right)} / {len(lib)} | {sum(abs(z) <= 3 for z in zs)} / {len(zs)} "
+            f"| {wrong} | {outs} | {ok} / {len(nul)} | {bad} | {secs[len(secs) // 2]:.0f}, {secs[-1]:.0f} |"
+        )
+    counts: dict[str, int] = {}
+    for r in rows:
+        counts[outcome(r)] = counts.get(outcome(r), 0) + 1
+    print("\noutcomes:", ", ".join(f"{k} {v}" for k, v in sorted(counts.items())))
+
+
+def main(src: str) -> None:
+    rows = [json.loads(x) for x in Path(src).read_text().splitlines() if x.strip()]
+    per_case(rows)
+    print()
+    per_config(rows)
+
+
+if __name__ == "__main__":
+    main(sys.argv[1])
