@@ -13,7 +13,26 @@ from typing import Any
 sys.path.insert(0, str(Path(__file__).parent))
 sys.path.insert(0, str(Path(__file__).parent.parent / "review45"))
 from drive46 import CONFIGS, TRUTH_TERM  # noqa: E402
-from summarise45 import cell, outcome  # noqa: E402
+from summarise45 import cell  # noqa: E402
+from summarise45 import outcome as outcome45  # noqa: E402
+
+
+def twin(term: str) -> str:
+    return term[:-2] if term.endswith("@x") else term + "@x"
+
+
+def outcome(r: dict[str, Any]) -> str:
+    """Review 45's words; on a pure gain without delay (u = x) a term named at the other place is right."""
+    oc = outcome45(r)
+    want = TRUTH_TERM.get(r["effect"])
+    if (
+        r.get("g") == "gain"
+        and want
+        and oc.startswith("wrong")
+        and twin(want) in [n["term"] for n in r["named"]]
+    ):
+        return "right at its twin (u = x)" + ("" if r["status"] == "explained" else f" [{r['status']}]")
+    return oc
 
 
 def per_case(rows: list[dict[str, Any]]) -> None:
