@@ -1,6 +1,6 @@
 """Review 46: ``bw.diagnose_across`` on two amplitude levels made by sim46 (config H's G, element and noise).
 
-    PYTHONPATH=python python studies/review46/across46.py kelvin|null [SEED] >> studies/review46/across46.jsonl
+    PYTHONPATH=python python studies/review46/across46.py kelvin|null [SEED] >> across46.jsonl
 
 The same Kelvin element on x (stiffness@x and viscous@x, each about 20x on its own) at both levels, or
 none (``null``). The groups are H's experiments at the lower and the higher amplitude (4 frequencies each).

@@ -19,17 +19,10 @@ sys.path.insert(0, str(Path(__file__).parent))
 import drive46 as dv  # noqa: E402
 import sim46 as s  # noqa: E402
 
-EFFECTS: dict[str, dict[str, float]] = {
-    "plain": {},
-    "play": {"play": 0.2},
-    "slack": {"slack": 0.2},
-    "nu+eta": {"nu": 0.05, "eta": 0.05},
-    "pinch": {"pinch": 0.6},
-    "delta": {"delta": 0.2},
-    "rate": {"rate": 1.0},
-    "lag": {"lag": 0.02},
-    "pi_u": {"pi_u": 0.05},
-}
+#: (label, the effect set, its value: play and slack in units of w_u); nu and eta are set together.
+EFFECTS = [("plain", "", 0.0), ("play", "play", 0.2), ("slack", "slack", 0.2), ("nu+eta", "nu eta", 0.05)]
+EFFECTS += [("pinch", "pinch", 0.6), ("delta", "delta", 0.2), ("rate", "rate", 1.0), ("lag", "lag", 0.02)]
+EFFECTS += [("pi_u", "pi_u", 0.05)]
 
 
 def main() -> None:
@@ -37,9 +30,9 @@ def main() -> None:
         sy, pl, _ = dv.base(cfg)
         pl = replace(pl, omegas=pl.omegas[:2], amps=pl.amps[:2], periods=2, settle=3)
         wu = sy.el.w_u
-        for name, kv in EFFECTS.items():
+        for name, keys, v in EFFECTS:
             q = sy
-            for k, v in kv.items():
+            for k in keys.split():
                 q = s.with_effect(q, k, v * (wu if k in ("play", "slack") else 1.0))
             errs, c0 = [], time.process_time()
             for i in range(2):

@@ -29,6 +29,7 @@ HERE = Path(__file__).parent
 sys.path.insert(0, str(HERE))
 sys.path.insert(0, str(HERE.parent / "review45"))
 import sim46 as s  # noqa: E402
+from drive45 import TRUTH_TERM as TRUTH_TERM45  # noqa: E402
 from drive45 import diagnose_child  # noqa: E402
 
 TIMEOUT = 180.0
@@ -52,56 +53,22 @@ ELEMENTS = {
     "mu3g/b.1": s.Element(0.9, 0.1, 3.0),
     "mu2": s.Element(0.6, 0.4, 2.0),  # follow-up: G's element with mu = 2
 }
-CONFIGS = {  # plan, G, noise, element
-    "E": ("2f5a", "iso", "ar2", "g/b.1"),
-    "F": ("5per", "act", "quant", "mu3.5"),
-    "G": ("p1000", "gain", "hum", "mu4"),
-    "H": ("p40", "iso5", "ar2", "mu3g/b.1"),
-    # follow-ups (FINDINGS.md says why): white noise instead, or G's element with mu = 2
-    "Gw": ("p1000", "gain", "white", "mu4"),
-    "Gm": ("p1000", "gain", "hum", "mu2"),
-    "Hw": ("p40", "iso5", "white", "mu3g/b.1"),
-    "Ew": ("2f5a", "iso", "white", "g/b.1"),
+#: config -> plan, G, noise, element; Gw, Gm, Hw, Ew are follow-ups (FINDINGS.md says why): white noise
+#: instead, or G's element with mu = 2.
+CONFIGS: dict[str, tuple[str, ...]] = {
+    row.split(":")[0]: tuple(row.split(":")[1].split())
+    for row in (
+        "E: 2f5a iso ar2 g/b.1; F: 5per act quant mu3.5; G: p1000 gain hum mu4; H: p40 iso5 ar2 mu3g/b.1; "
+        "Gw: p1000 gain white mu4; Gm: p1000 gain hum mu2; Hw: p40 iso5 white mu3g/b.1; "
+        "Ew: 2f5a iso white g/b.1"
+    ).split("; ")
 }
-TRUTH_TERM: dict[str, str | None] = {
-    "stiffness": "stiffness",
-    "stiffness_x": "stiffness@x",
-    "viscous": "viscous",
-    "viscous_x": "viscous@x",
-    "coulomb": "coulomb",
-    "coulomb_x": "coulomb@x",
-    "inertia": "inertia",
-    "inertia_x": "inertia@x",
-    "offset": "offset",
-    "play": "play",
-    "nu": "degradation",
-    "eta": "stiffness_degradation",
-    "pinch": "pinching",
-    "delta": "asymmetry",
-    "lag": "sensor_lag",
-    "pi_u": None,
-    "slack": None,
-    "rate": None,
-}
-ORDER = (
-    "stiffness_x",
-    "play",
-    "slack",
-    "nu",
-    "coulomb",
-    "eta",
-    "pi_u",
-    "lag",
-    "viscous_x",
-    "delta",
-    "rate",
-    "inertia",
-    "offset",
-    "pinch",
-    "stiffness",
-    "coulomb_x",
-    "viscous",
-    "inertia_x",
+#: effect -> the library's term (None: physics outside the library), review 45's without Dahl on x
+TRUTH_TERM: dict[str, str | None] = {k: v for k, v in TRUTH_TERM45.items() if k != "dahl_x"}
+#: The effects in the order they are run (the config cycles with it).
+ORDER = tuple(
+    "stiffness_x play slack nu coulomb eta pi_u lag viscous_x delta rate inertia offset pinch stiffness"
+    " coulomb_x viscous inertia_x".split()
 )
 
 
@@ -151,7 +118,7 @@ def build(
     name = TRUTH_TERM[eff] or eff
     if eff == "rate":
         vmax = max(abs(sy.g.at(w)) * a * w for w, a in zip(pl.omegas, pl.amps))
-        sy = replace(sy, el=replace(sy.el, vref=float(vmax)))
+        sy = s.with_effect(sy, "vref", float(vmax))
     key = name if eff.split("_")[0] in LINEAR[:5] else eff
     v = start(eff, sy, pl)
     runs = s.simulate(s.with_effect(sy, key, v), pl)
@@ -175,30 +142,23 @@ def build(
     return runs, pl, nn, {name: v}, got
 
 
+#: Added after the first results, each to separate a cause (FINDINGS.md says which): the two G cases first
+#: run on an earlier, larger G plan (3 f x 2 U, settle 10), again on this one; G's null false alarm: the hum
+#: (white instead), mu = 4 (mu = 2 instead), or the seed?; H's nu miss (records left out as drifting): the
+#: AR(2) noise?, and H's "disturbance" lines on a null.
+FOLLOW_UPS = (
+    "stiffness_x-30-G-1 slack-10-G-1 null-0-Gw-4 null-0-Gm-4 null-0-G-5 nu-10-Hw-1 null-0-Hw-4".split()
+)
+
+
 def case_ids() -> list[str]:
     """Every effect at 10x and 30x, the config cycling; 4 nulls after every 4 effects."""
-    cfgs = list("EFGH")
-    out: list[str] = []
+    cfgs = "EFGH"
+    out = []
     for j, eff in enumerate(ORDER):
-        out += [f"{eff}-{sz}-{cfgs[(j + 2 * k) % 4]}-1" for k, sz in enumerate((10, 30))]
-        if j % 4 == 3:
-            out += [f"null-0-{c}-{j + 1}" for c in cfgs]
+        out += [f"{eff}-10-{cfgs[j % 4]}-1", f"{eff}-30-{cfgs[(j + 2) % 4]}-1"]
+        out += [f"null-0-{c}-{j + 1}" for c in cfgs] if j % 4 == 3 else []
     return out + FOLLOW_UPS
-
-
-#: Added after the first results, each to separate a cause (FINDINGS.md says which).
-FOLLOW_UPS: list[str] = [
-    # the two G cases first run on an earlier, larger G plan (3 f x 2 U, settle 10), again on this one
-    "stiffness_x-30-G-1",
-    "slack-10-G-1",
-    # G's null false alarm: the hum (white instead), mu = 4 (mu = 2 instead), or the seed?
-    "null-0-Gw-4",
-    "null-0-Gm-4",
-    "null-0-G-5",
-    # H's nu miss (records left out as drifting): the AR(2) noise? and H's "disturbance" lines on a null
-    "nu-10-Hw-1",
-    "null-0-Hw-4",
-]
 
 
 def prepare(cid: str) -> tuple[list[Any], dict[str, Any]]:
@@ -212,73 +172,74 @@ def prepare(cid: str) -> tuple[list[Any], dict[str, Any]]:
     return recs, head | {"sim_cpu": time.process_time() - c0}
 
 
+def diagnosed(path: str, in_process: bool) -> dict[str, Any]:
+    """Review 45's child on the pickled recordings: here, or in a process of its own (nice 15, 180 s)."""
+    if in_process:
+        return diagnose_child(path)
+    cmd = ["nice", "-n", "15", sys.executable, __file__, "--child", path]
+    env = os.environ | {"OMP_NUM_THREADS": "1"}
+    try:
+        cp = subprocess.run(cmd, capture_output=True, text=True, timeout=TIMEOUT, env=env)
+    except subprocess.TimeoutExpired:
+        return {"error": f"timeout {TIMEOUT:g} s", "seconds": TIMEOUT}
+    last = (cp.stdout.strip().splitlines() or [""])[-1]
+    return json.loads(last) if cp.returncode == 0 and last else {"error": "crash: " + cp.stderr[-400:]}
+
+
+def scored(r: dict[str, Any], truth: dict[str, float]) -> dict[str, Any]:
+    """Each named or partial term that is a true one gets its truth and z = (value - truth) / se."""
+    for n in r.get("named", []) + r.get("partial", []):
+        t = truth.get(n["term"])
+        if t is not None:
+            usable = bool(n["se"]) and math.isfinite(n["se"])
+            n |= {"truth": t, "z": (n["value"] - t) / n["se"] if usable else None}
+    return r
+
+
 def run_case(cid: str, in_process: bool = False) -> dict[str, Any]:
     recs, head = prepare(cid)
-    with tempfile.NamedTemporaryFile(suffix=".pkl", delete=False) as f:
+    fd, path = tempfile.mkstemp(suffix=".pkl")
+    with os.fdopen(fd, "wb") as f:
         pickle.dump(recs, f)
-        path = f.name
     try:
-        if in_process:
-            r = diagnose_child(path)
-        else:
-            env = dict(os.environ, OMP_NUM_THREADS="1")
-            cmd = ["nice", "-n", "15", sys.executable, __file__, "--child", path]
-            try:
-                cp = subprocess.run(cmd, capture_output=True, text=True, timeout=TIMEOUT, env=env)
-                lines = cp.stdout.strip().splitlines()
-                ok = cp.returncode == 0 and lines
-                r = json.loads(lines[-1]) if ok else {"error": "crash: " + cp.stderr[-400:]}
-            except subprocess.TimeoutExpired:
-                r = {"error": f"timeout {TIMEOUT:g} s", "seconds": TIMEOUT}
+        r = diagnosed(path, in_process)
     finally:
         os.unlink(path)
-    truth = head["truth"]
-    for n in r.get("named", []) + r.get("partial", []):
-        if n["term"] in truth:
-            n["truth"] = truth[n["term"]]
-            se = n["se"]
-            n["z"] = (n["value"] - truth[n["term"]]) / se if se and math.isfinite(se) else None
-    return head | r
+    return head | scored(r, head["truth"])
 
 
-def write(cid: str, folder: str) -> None:
-    """The case's recordings as CSV files (t, u, y), for the command line."""
-    recs, _ = prepare(cid)
+def write_csv(recs: list[Any], folder: str) -> None:
+    """Recordings as CSV files (t, u, y), one per experiment, as a lab would hand them to the command line."""
     Path(folder).mkdir(parents=True, exist_ok=True)
     for r in recs:
-        name = r.metadata["name"]
-        np.savetxt(
-            f"{folder}/{name}.csv",
-            np.column_stack([r.t, r.u, r.y]),
-            delimiter=",",
-            header="t,u,y",
-            comments="",
-        )
+        table = np.column_stack([r.t, r.u, r.y])
+        np.savetxt(f"{folder}/{r.metadata['name']}.csv", table, delimiter=",", header="t,u,y", comments="")
+
+
+def run_all(out: Path, ids: list[str]) -> None:
+    """Each case not yet in ``out``, one JSON line each, appended as it goes."""
+    old = out.read_text().splitlines() if out.exists() else []
+    done = {json.loads(x)["id"] for x in old if x.strip()}
+    for cid in [c for c in ids if c not in done]:
+        r = run_case(cid)
+        with out.open("a") as f:
+            f.write(json.dumps(r, default=str) + "\n")
+        said = (r.get("headline") or r.get("error", ""))[:150]
+        print(f"{cid} {r.get('status')} {r.get('seconds') or 0:.0f} s: {said}", flush=True)
 
 
 def main(argv: list[str]) -> None:
-    if argv[1] == "--child":
+    what = argv[1]
+    if what == "--child":
         print(json.dumps(diagnose_child(argv[2]), default=str))
-    elif argv[1] == "--list":
+    elif what == "--list":
         print("\n".join(case_ids()))
-    elif argv[1] == "--one":
+    elif what == "--one":
         print(json.dumps(run_case(argv[2], in_process=True), indent=1, default=str))
-    elif argv[1] == "--write":
-        write(argv[2], argv[3])
+    elif what == "--write":
+        write_csv(prepare(argv[2])[0], argv[3])
     else:
-        out = Path(argv[2])
-        ids = argv[3:] or case_ids()
-        done = (
-            {json.loads(x)["id"] for x in out.read_text().splitlines() if x.strip()}
-            if out.exists()
-            else set()
-        )
-        for cid in (c for c in ids if c not in done):
-            r = run_case(cid)
-            with out.open("a") as f:
-                f.write(json.dumps(r, default=str) + "\n")
-            said = r.get("headline") or r.get("error", "")
-            print(f"{cid} {r.get('status')} {r.get('seconds') or 0:.0f} s: {said[:150]}", flush=True)
+        run_all(Path(argv[2]), argv[3:] or case_ids())
 
 
 if __name__ == "__main__":

@@ -58,14 +58,7 @@ def main(seed: int) -> None:
         [bw.Recording(r.t, r.u, r.y, r.amplitude, r.frequency) for r in recs],
     )
     with tempfile.TemporaryDirectory() as d:  # as the command line reads them
-        for r in recs:
-            np.savetxt(
-                f"{d}/{r.metadata['name']}.csv",
-                np.column_stack([r.t, r.u, r.y]),
-                delimiter=",",
-                header="t,u,y",
-                comments="",
-            )
+        dv.write_csv(recs, d)
         one("all four, the CSV files through bw.load", bw.load(d))
     one("w 2 only", [r for r, w in zip(recs, pl.omegas) if w == 2.0])
     one("w 8 only", [r for r, w in zip(recs, pl.omegas) if w == 8.0])
@@ -75,8 +68,6 @@ def main(seed: int) -> None:
         w = rng.normal(0.0, dv.SD, t.size)
         hum = dv.SD * math.sqrt(2.0) * np.sin(2 * math.pi * 47.3 * t + rng.uniform(0.0, 2.0 * math.pi))
         moved.append((t, u, y + w + hum))
-    import bouc_wen_id as bw
-
     one(
         "hum at 47.3 Hz",
         [

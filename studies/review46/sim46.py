@@ -32,8 +32,8 @@ from scipy.signal import lfilter
 NSTOP = 8
 RTOL = 1e-9
 ATOL = 1e-12
-TOL = 1e-7  # a play or stop counts as engaged within TOL of its edge: the integrator's drift must not release it
-HYST_KEYS = ("play", "slack", "nu", "eta", "pinch", "rate", "delta")
+#: A play or stop counts as engaged within TOL of its edge: the integrator's drift must not release it.
+TOL = 1e-7
 
 
 @dataclass(frozen=True)
@@ -77,19 +77,33 @@ def _canon(g: Gs) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return a, num.copy(), c
 
 
+#: The element's further parameters, in the order of ``_f``'s ``par[3:11]``, and their default values.
+MORE = {
+    "play": 0.0,
+    "slack": 0.0,
+    "nu": 0.0,
+    "eta": 0.0,
+    "pinch": 0.0,
+    "rate": 0.0,
+    "vref": 1.0,
+    "delta": 0.0,
+}
+
+
 @dataclass(frozen=True)
 class Element:
+    """Bouc-Wen beta, gamma, mu and any of :data:`MORE` given as (name, value) pairs."""
+
     beta: float
     gamma: float
     mu: float
-    play: float = 0.0
-    slack: float = 0.0
-    nu: float = 0.0
-    eta: float = 0.0
-    pinch: float = 0.0
-    rate: float = 0.0
-    vref: float = 1.0
-    delta: float = 0.0
+    more: tuple[tuple[str, float], ...] = ()
+
+    def get(self, name: str) -> float:
+        return dict(self.more).get(name, MORE[name])
+
+    def with_(self, name: str, value: float) -> Element:
+        return replace(self, more=(*((k, v) for k, v in self.more if k != name), (name, value)))
 
     @property
     def w_u(self) -> float:
@@ -175,8 +189,7 @@ def _inputs(sy: System, amp: float, om: float, umin: float) -> tuple[Any, ...]:
     a, b, c = _canon(sy.g)
     el = sy.el
     par = np.array(
-        [el.beta, el.gamma, el.mu, el.play, el.slack, el.nu, el.eta, el.pinch, el.rate, el.vref, el.delta]
-        + [el.w_u, sy.lag, 1.0 if sy.pi_u > 0 else 0.0]
+        [el.beta, el.gamma, el.mu, *map(el.get, MORE), el.w_u, sy.lag, 1.0 if sy.pi_u > 0 else 0.0]
     )
     radii = umin * 0.06 * np.arange(1, NSTOP + 1)
     return a, b, c, float(sy.g.gain), float(amp), float(om), float(sy.g.delay), par, radii
@@ -264,8 +277,8 @@ def simulate(sy: System, pl: Plan) -> list[tuple[np.ndarray, np.ndarray, np.ndar
 
 
 def with_effect(sy: System, name: str, v: float) -> System:
-    if name in HYST_KEYS:
-        return replace(sy, el=replace(sy.el, **{name: v}))
+    if name in MORE:
+        return replace(sy, el=sy.el.with_(name, v))
     if name in ("lag", "pi_u"):
         return replace(sy, **{name: v})
     return replace(sy, terms=(*sy.terms, (name, v)))

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import sys
+from collections import Counter
 from pathlib import Path
 from typing import Any
 
@@ -45,39 +46,44 @@ def per_case(rows: list[dict[str, Any]]) -> None:
         print(f"| {r['id']} | {r.get('size', 0):.0f} | {outcome(r)} | {head} | {cell(r)} | {secs} |")
 
 
+def group_cells(rs: list[dict[str, Any]]) -> list[str]:
+    """One config's row: library terms right, values within 3 se, wrong names, outside physics, nulls,
+    errors, seconds."""
+    oc = {r["id"]: outcome(r) for r in rs}
+    kind = {
+        r["id"]: "null" if r["effect"] == "null" else ("lib" if TRUTH_TERM[r["effect"]] else "out")
+        for r in rs
+    }
+    lib_right = [r for r in rs if kind[r["id"]] == "lib" and oc[r["id"]].startswith("right")]
+    zs = [
+        n["z"]
+        for r in lib_right
+        for n in r["named"]
+        if n["term"] == TRUTH_TERM[r["effect"]] and n.get("z") is not None
+    ]
+    outs = ", ".join(f"{r['effect']} {oc[r['id']]}" for r in rs if kind[r["id"]] == "out") or "-"
+    nulls = [oc[r["id"]] for r in rs if kind[r["id"]] == "null"]
+    secs = sorted(r.get("seconds") or 0 for r in rs)
+    return [
+        f"{len(lib_right)} / {list(kind.values()).count('lib')}",
+        f"{sum(abs(z) <= 3 for z in zs)} / {len(zs)}",
+        str(sum(o.startswith(("WRONG", "FALSE NAME")) for o in oc.values())),
+        outs,
+        f"{nulls.count('ok-null')} / {len(nulls)}",
+        str(sum(o in ("error", "timeout") for o in oc.values())),
+        f"{secs[len(secs) // 2]:.0f}, {secs[-1]:.0f}",
+    ]
+
+
 def per_config(rows: list[dict[str, Any]]) -> None:
-    print(
-        "| config | library terms right | value within 3 se | wrong confident names | outside physics "
-        "| nulls adequate | errors / timeouts | s median, max |"
-    )
-    print("|---|---|---|---|---|---|---|---|")
-    for cfg in CONFIGS:
+    head = ["config", "library terms right", "value within 3 se", "wrong confident names", "outside physics"]
+    head += ["nulls adequate", "errors / timeouts", "s median, max"]
+    print("| " + " | ".join(head) + " |\n" + "|---" * len(head) + "|")
+    for cfg, parts in CONFIGS.items():
         rs = [r for r in rows if r["config"] == cfg]
-        if not rs:
-            continue
-        oc = {r["id"]: outcome(r) for r in rs}
-        lib = [r for r in rs if r["effect"] != "null" and TRUTH_TERM[r["effect"]]]
-        out = [r for r in rs if r["effect"] != "null" and not TRUTH_TERM[r["effect"]]]
-        nul = [r for r in rs if r["effect"] == "null"]
-        right = [r for r in lib if oc[r["id"]].startswith("right")]
-        zs = [
-            n["z"]
-            for r in right
-            for n in r["named"]
-            if n["term"] == TRUTH_TERM[r["effect"]] and n.get("z") is not None
-        ]
-        wrong = sum(oc[r["id"]].startswith(("WRONG", "FALSE NAME")) for r in rs)
-        outs = ", ".join(f"{r['effect']} {oc[r['id']]}" for r in out) or "-"
-        ok = sum(oc[r["id"]] == "ok-null" for r in nul)
-        bad = sum(oc[r["id"]] in ("error", "timeout") for r in rs)
-        secs = sorted(r.get("seconds") or 0 for r in rs)
-        print(
-            f"| {cfg} {'/'.join(CONFIGS[cfg])} | {len(right)} / {len(lib)} | {sum(abs(z) <= 3 for z in zs)} / {len(zs)} "
-            f"| {wrong} | {outs} | {ok} / {len(nul)} | {bad} | {secs[len(secs) // 2]:.0f}, {secs[-1]:.0f} |"
-        )
-    counts: dict[str, int] = {}
-    for r in rows:
-        counts[outcome(r)] = counts.get(outcome(r), 0) + 1
+        if rs:
+            print("| " + " | ".join([f"{cfg} {'/'.join(parts)}", *group_cells(rs)]) + " |")
+    counts = Counter(outcome(r) for r in rows)
     print("\noutcomes:", ", ".join(f"{k} {v}" for k, v in sorted(counts.items())))
 
 

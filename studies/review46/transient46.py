@@ -1,4 +1,4 @@
-"""Review 46: is the diagnosis's "still transient" true? The noise-free sim46 output of a config, per experiment.
+"""Review 46: is the diagnosis's "still transient" true? The noise-free sim46 output, per experiment.
 
     PYTHONPATH=python python studies/review46/transient46.py E H
 
@@ -32,7 +32,8 @@ def main(cfgs: list[str]) -> None:
             decay = math.exp(-zeta * wn * 2 * math.pi / pl.omegas[i])
             cells = ", ".join(f"{r / dv.SD:.3f} sd ({r / (dv.SD / math.sqrt(pl.samples)):.1f})" for r in rms)
             print(
-                f"{cfg} x{i} w {pl.omegas[i]:g} U {pl.amps[i]:.3g}: period 1-3 minus last: {cells}; mode decay/period {decay:.2f}"
+                f"{cfg} x{i} w {pl.omegas[i]:g} U {pl.amps[i]:.3g}: period 1-3 minus last: {cells}; "
+                f"mode decay/period {decay:.2f}"
             )
 
 
