@@ -53,14 +53,13 @@ ELEMENTS = {
     "mu3g/b.1": s.Element(0.9, 0.1, 3.0),
     "mu2": s.Element(0.6, 0.4, 2.0),  # follow-up: G's element with mu = 2
 }
-#: config -> plan, G, noise, element; Gw, Gm, Hw, Ew are follow-ups (FINDINGS.md says why): white noise
+#: config -> plan, G, noise, element; Gw, Gm, Hw are follow-ups (FINDINGS.md says why): white noise
 #: instead, or G's element with mu = 2.
 CONFIGS: dict[str, tuple[str, ...]] = {
     row.split(":")[0]: tuple(row.split(":")[1].split())
     for row in (
         "E: 2f5a iso ar2 g/b.1; F: 5per act quant mu3.5; G: p1000 gain hum mu4; H: p40 iso5 ar2 mu3g/b.1; "
-        "Gw: p1000 gain white mu4; Gm: p1000 gain hum mu2; Hw: p40 iso5 white mu3g/b.1; "
-        "Ew: 2f5a iso white g/b.1"
+        "Gw: p1000 gain white mu4; Gm: p1000 gain hum mu2; Hw: p40 iso5 white mu3g/b.1"
     ).split("; ")
 }
 #: effect -> the library's term (None: physics outside the library), review 45's without Dahl on x
