@@ -136,11 +136,15 @@ class Localisation:
         return [h.harmonic for h in self.harmonics if h.significant]
 
     def where(self) -> str:
-        """One phrase: the region that holds the largest share of the excess, when one stands out."""
+        """One phrase: the region that holds the largest share of the excess, when one stands out: its own
+        test at :data:`LEVEL` over the number of regions (Bonferroni: the region is chosen as the largest of
+        four; unadjusted, white noise was placed in a region in 20 % of 400 seeds, and a 10x sensor lag's
+        half-wave-symmetric leftover "along the unloading branch" at p = 0.02 while the loading branch
+        had none of it: benches/diagnosis.py seed 35004, session 46)."""
         if not self.regions:
             return ""
         best = max(self.regions, key=lambda r: r.share)
-        if best.share < 0.4 or best.p_value >= LEVEL:
+        if best.share < 0.4 or best.p_value >= LEVEL / len(self.regions):
             return "spread over the cycle"
         return best.region
 
