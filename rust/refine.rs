@@ -115,6 +115,14 @@ pub struct Options {
     pub mu_lo: f64,
     /// Upper end of the admissible mu (inclusive).
     pub mu_hi: f64,
+    /// Iterations of the stall window (0: no stall rule). From the second window on, the search stops
+    /// at a window's end when the window lowered the cost by at most `stall_rtol` times the cost: the
+    /// rule the diagnosis once applied between separate runs of this many iterations, with the damping
+    /// carried across the windows instead of restarted at [`LAMBDA_START`] (docs/diagnosis-speed.md,
+    /// session 46).
+    pub stall_window: usize,
+    /// The stall window's relative cost decrease (see `stall_window`).
+    pub stall_rtol: f64,
 }
 
 impl Default for Options {
@@ -126,6 +134,8 @@ impl Default for Options {
             xtol: 1e-10,
             mu_lo: 1.0,
             mu_hi: f64::INFINITY,
+            stall_window: 0,
+            stall_rtol: 0.0,
         }
     }
 }
@@ -162,6 +172,8 @@ pub enum StopReason {
     NoDecrease,
     /// The iteration cap `max_iter` (not converged).
     IterationCap,
+    /// A stall window (`Options::stall_window`) lowered the cost by at most `stall_rtol` of it.
+    Stall,
 }
 
 impl StopReason {
@@ -172,6 +184,7 @@ impl StopReason {
             StopReason::SmallStep => "xtol",
             StopReason::NoDecrease => "no_decrease",
             StopReason::IterationCap => "max_iter",
+            StopReason::Stall => "stall",
         }
     }
 }
@@ -568,8 +581,16 @@ pub fn levenberg_marquardt<M: JointModel>(
     let mut lambda = LAMBDA_START;
     let mut iterations = 0;
     let mut stop = StopReason::IterationCap;
+    let mut window_cost = st.cost;
     while iterations < opts.max_iter {
         crate::cancel::checkpoint()?;
+        if opts.stall_window > 0 && iterations > 0 && iterations % opts.stall_window == 0 {
+            if iterations > opts.stall_window && window_cost - st.cost <= opts.stall_rtol * st.cost {
+                stop = StopReason::Stall;
+                break;
+            }
+            window_cost = st.cost;
+        }
         iterations += 1;
         let cons = model.constraints(&own);
         let Some((ds, dl, _)) = constrained_step(&st, lambda, &shared, &cons) else {
@@ -871,6 +892,59 @@ mod tests {
 
     fn data(a: f64, beta: f64, gamma: f64, mu: f64, phi: f64, p: usize) -> Vec<f64> {
         steady_loop(a, beta, gamma, mu, phi, p, 8).unwrap().w
+    }
+
+    #[test]
+    fn a_stall_window_stops_where_one_uninterrupted_run_would_be() {
+        let (beta, gamma, mu) = (0.8, 0.2, 1.6);
+        let amps = [2.0, 1.0];
+        let ys: Vec<Vec<f64>> = (0..2)
+            .map(|i| {
+                let w = data(amps[i] * 0.9, beta, gamma, mu, 1.1 + i as f64, 64);
+                // a loop the model cannot draw exactly: the fit crawls instead of converging
+                w.iter()
+                    .enumerate()
+                    .map(|(j, v)| v + 0.05 * ((3 * j) as f64 * 0.0981).sin())
+                    .collect()
+            })
+            .collect();
+        let exps: Vec<Experiment> = (0..2)
+            .map(|i| Experiment {
+                ybar: &ys[i],
+                amplitude: amps[i],
+                weight: 1.0,
+            })
+            .collect();
+        let start = Params {
+            beta: 0.6,
+            gamma: 0.1,
+            mu: 2.2,
+            gains: vec![0.8, 1.0],
+            phases: vec![1.3, 1.9],
+        };
+        let capped = |max_iter, stall_window, stall_rtol| {
+            let opts = Options {
+                max_iter,
+                substeps: 4,
+                stall_window,
+                stall_rtol,
+                ..Options::default()
+            };
+            refine(&exps, &start, &opts).unwrap()
+        };
+        // rtol 1: the second window's end always stops the fit, at one 8-iteration run's point
+        let stalled = capped(40, 4, 1.0);
+        let whole = capped(8, 0, 0.0);
+        assert_eq!(stalled.stop, StopReason::Stall);
+        assert!(stalled.converged);
+        assert_eq!(stalled.iterations, 8);
+        assert_eq!(whole.stop, StopReason::IterationCap);
+        assert_eq!(stalled.params, whole.params);
+        assert_eq!(stalled.cost, whole.cost);
+        // rtol 0: a window that lowers the cost at all goes on
+        let on = capped(12, 4, 0.0);
+        assert_eq!(on.stop, StopReason::IterationCap);
+        assert_eq!(on.params, capped(12, 0, 0.0).params);
     }
 
     #[test]

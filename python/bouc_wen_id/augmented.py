@@ -382,6 +382,7 @@ def fit_augmented(
     mu_lo: float = 1.0,
     mu_hi: float = float("inf"),
     backend: Literal["rust", "numpy"] = "rust",
+    stall: tuple[int, float] = (0, 0.0),
 ) -> AugFit:
     """Joint Levenberg-Marquardt of the augmented model over every experiment (design.md 9.3).
 
@@ -400,6 +401,8 @@ def fit_augmented(
         The admissible mu bracket ``(mu_lo, mu_hi]``, ``mu_lo >= 1``.
     backend : {"rust", "numpy"}
         The Rust core or the NumPy reference.
+    stall : (int, float)
+        ``(window, rtol)``, window > 0: stop (``"stall"``) once a later window lowers the cost <= rtol of it.
 
     Returns
     -------
@@ -439,6 +442,7 @@ def fit_augmented(
         experiment_substeps=[steps if e.substeps is None else e.substeps for e in exps],
         **_shapes(exps),
         **_smoothing(start),
+        **_stall(stall),
     )
     shared = np.asarray(shared, dtype=np.float64)
     params = AugParams(
@@ -488,6 +492,12 @@ class AugOutput:
     y: FloatArray
     jacobian: FloatArray
     own_jacobian: FloatArray
+
+
+def _stall(stall: tuple[int, float]) -> dict[str, Any]:
+    """The refinement's stall keywords when the rule is on (none otherwise)."""
+    window, rtol = stall
+    return {"stall_window": int(window), "stall_rtol": float(rtol)} if window else {}
 
 
 def _shapes(exps: Sequence[AugExperiment]) -> dict[str, Any]:

@@ -165,6 +165,7 @@ def levenberg_marquardt(
     ftol: float,
     xtol: float,
     constraints: Callable[[FloatArray], list[Constraint]] = lambda par: [],
+    stall: tuple[int, float] = (0, 0.0),
 ) -> tuple[FloatArray, float, int, bool, FloatArray, Any, str, list[str]]:
     """The one Levenberg-Marquardt of the reference (design.md 7.4), for the plain and the augmented model.
 
@@ -175,17 +176,25 @@ def levenberg_marquardt(
     x10 on failure, stop above 1e12 ("no_decrease"); stop on a relative decrease below ``ftol`` ("ftol") or a
     step below ``xtol (|p| + xtol)`` ("xtol"), or at ``max_iter`` ("max_iter"). Returns ``(params, cost,
     iterations, converged, J'WJ, state, stop, active)``, ``active`` the names of the faces that hold the end.
+    ``stall = (window, rtol)``, window > 0: from the second window of ``window`` iterations on, stop at a
+    window's end when it lowered the cost by at most ``rtol`` of it ("stall"; the core's ``Options``).
     """
     cost, state = cost_of(params)
     fisher, grad = linearize(state)
     lam = LM_LAMBDA_START
     it = 0
     stop = "max_iter"
+    window, window_cost = stall[0], cost
 
     def damped(lam: float) -> FloatArray:
         return fisher + lam * np.diag(np.maximum(np.diag(fisher), np.finfo(float).tiny))
 
     while it < max_iter:
+        if window > 0 and it > 0 and it % window == 0:
+            if it > window and window_cost - cost <= stall[1] * cost:
+                stop = "stall"
+                break
+            window_cost = cost
         it += 1
         cons = constraints(params)
         try:
