@@ -123,6 +123,10 @@ pub struct Options {
     pub stall_window: usize,
     /// The stall window's relative cost decrease (see `stall_window`).
     pub stall_rtol: f64,
+    /// Stop after an accepted step that lowered the cost by at most this fraction of it when the
+    /// Gauss-Newton step from the new point predicts no larger decrease either (0: no such rule;
+    /// [`StopReason::Stall`]).
+    pub step_rtol: f64,
 }
 
 impl Default for Options {
@@ -136,6 +140,7 @@ impl Default for Options {
             mu_hi: f64::INFINITY,
             stall_window: 0,
             stall_rtol: 0.0,
+            step_rtol: 0.0,
         }
     }
 }
@@ -172,7 +177,8 @@ pub enum StopReason {
     NoDecrease,
     /// The iteration cap `max_iter` (not converged).
     IterationCap,
-    /// A stall window (`Options::stall_window`) lowered the cost by at most `stall_rtol` of it.
+    /// A stall window (`Options::stall_window`) lowered the cost by at most `stall_rtol` of it, or a
+    /// step and the Gauss-Newton prediction from its end by at most `step_rtol` of it.
     Stall,
 }
 
@@ -557,6 +563,17 @@ fn fisher(st: &State) -> DMatrix<f64> {
     f
 }
 
+/// Damping of the Gauss-Newton step whose predicted decrease [`predicted_decrease`] reads.
+const GN_LAMBDA: f64 = 1e-12;
+
+/// The decrease of the cost that the (barely damped) Gauss-Newton step from `st` predicts, `d . J'Wr`
+/// on the faces that hold the point; infinite where that step cannot be solved.
+fn predicted_decrease(st: &State, shared: &[f64], cons: &[Constraint]) -> f64 {
+    constrained_step(st, GN_LAMBDA, shared, cons).map_or(f64::INFINITY, |(ds, dl, _)| {
+        ds.dot(&st.gs) + dl.iter().zip(&st.exps).map(|(d, e)| d.dot(&e.gi)).sum::<f64>()
+    })
+}
+
 /// Levenberg-Marquardt with Marquardt scaling over every experiment of `model` (design.md 7.4,
 /// 9.3): damping `lambda diag(J'WJ)` from [`LAMBDA_START`], times [`LAMBDA_DOWN`] on success and
 /// [`LAMBDA_UP`] on failure, a minimum once it exceeds [`LAMBDA_MAX`]. The steps respect the model's
@@ -622,6 +639,7 @@ pub fn levenberg_marquardt<M: JointModel>(
         match trial {
             Some(tst) if tst.cost <= st.cost => {
                 let decrease = (st.cost - tst.cost) / st.cost.max(f64::MIN_POSITIVE);
+                let lowered = st.cost - tst.cost;
                 shared = t_shared;
                 own = t_own;
                 st = tst;
@@ -632,6 +650,13 @@ pub fn levenberg_marquardt<M: JointModel>(
                     } else {
                         StopReason::CostDecrease
                     };
+                    break;
+                }
+                let bound = opts.step_rtol * st.cost;
+                if lowered <= bound
+                    && predicted_decrease(&st, &shared, &model.constraints(&own)) <= bound
+                {
+                    stop = StopReason::Stall;
                     break;
                 }
             }

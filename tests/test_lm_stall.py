@@ -80,8 +80,8 @@ def test_the_core_and_the_reference_stall_alike() -> None:
 
 
 @pytest.mark.parametrize("backend", ["rust", "numpy"])
-@pytest.mark.parametrize("stall", [(-1, 0.1), (5, -0.1), (5, float("nan"))])
-def test_a_bad_stall_rule_is_a_named_error(backend: Backend, stall: tuple[int, float]) -> None:
+@pytest.mark.parametrize("stall", [(-1, 0.1), (5, -0.1), (5, float("nan")), (0, 0.0, -1.0)])
+def test_a_bad_stall_rule_is_a_named_error(backend: Backend, stall: tuple[float, ...]) -> None:
     exps, start = _misfit(6)
     with pytest.raises(InvalidParameterError, match="stall"):
         fit_augmented(exps, start, max_iter=5, substeps=4, backend=backend, stall=stall)
@@ -92,7 +92,34 @@ def test_the_diagnosis_fit_is_one_refinement_with_the_stall_rule() -> None:
     got = fitting._fit_from(exps, start, 4, 200)
     dof = sum(e.ybar.size for e in exps) - 3 - 2 * len(exps)
     want = fit_augmented(
-        exps, start, max_iter=200, substeps=4, stall=(fitting.FIT_CHUNK, fitting.STALL_CHI2 / dof)
+        exps,
+        start,
+        max_iter=200,
+        substeps=4,
+        stall=(fitting.FIT_CHUNK, fitting.STALL_CHI2 / dof, fitting.STEP_CHI2 / dof),
     )
     assert got is not None
     _same(got, want)
+
+
+@pytest.mark.parametrize("backend", ["rust", "numpy"])
+def test_a_step_that_gains_little_where_gauss_newton_predicts_little_stops_the_fit(backend: Backend) -> None:
+    exps, start = _misfit(5)
+    free = fit_augmented(exps, start, max_iter=200, substeps=4, backend=backend)
+    # step_rtol 1: every accepted step and every prediction is below the whole cost: the first one stops it
+    first = fit_augmented(exps, start, max_iter=200, substeps=4, backend=backend, stall=(0, 0.0, 1.0))
+    assert first.stop == "stall" and first.iterations < free.iterations
+    capped = fit_augmented(exps, start, max_iter=first.iterations, substeps=4, backend=backend)
+    np.testing.assert_array_equal(first.params.shared, capped.params.shared)
+    # a small one stops it short of the minimum by no more than that fraction of the cost
+    fit = fit_augmented(exps, start, max_iter=200, substeps=4, backend=backend, stall=(0, 0.0, 1e-5))
+    assert fit.stop == "stall" and first.iterations < fit.iterations < free.iterations
+    assert free.cost <= fit.cost <= free.cost * (1 + 1e-5)
+
+
+def test_the_core_and_the_reference_stop_a_step_alike() -> None:
+    exps, start = _misfit(5)
+    r = fit_augmented(exps, start, max_iter=200, substeps=4, stall=(0, 0.0, 1e-5))
+    n = fit_augmented(exps, start, max_iter=200, substeps=4, backend="numpy", stall=(0, 0.0, 1e-5))
+    assert r.stop == n.stop == "stall" and r.iterations == n.iterations
+    np.testing.assert_allclose(r.params.shared, n.params.shared, rtol=1e-7)

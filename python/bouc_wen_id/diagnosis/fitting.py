@@ -312,6 +312,11 @@ FIT_CHUNK = 25
 #: at 0.1 the MR damper's verdicts at 0-0.75 A are those of the full 200 iterations (values within 0.1 %),
 #: at 1 A the fourth term (inertia) is no longer named: a term that hangs on where a fit stops.
 STALL_CHI2 = 0.1
+#: A fit also stops after an accepted step that lowered the cost by at most this many reduced chi-squares when
+#: the Gauss-Newton step from its end predicts no more (the quadratic model's whole remaining decrease): an F
+#: statistic ``(delta cost / k) / (cost / dof)`` moves by at most this, 0.01, which moves no test's p visibly
+#: (docs/diagnosis-speed.md, session 46). 0: no such rule.
+STEP_CHI2 = 0.01
 #: The rule runs inside the core's one refinement (``fit_augmented``'s ``stall``), its damping carried
 #: across the windows; until session 46 each window was a refinement of its own, restarting the damping at
 #: 1e-3 (docs/diagnosis-speed.md, session 46). False: those separate refinements.
@@ -345,7 +350,7 @@ def _fit_from(
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             if STALL_IN_CORE:
-                stall = (FIT_CHUNK, STALL_CHI2 / dof)
+                stall = (FIT_CHUNK, STALL_CHI2 / dof, STEP_CHI2 / dof)
                 return fit_augmented(exps, start, max_iter=max_iter, substeps=substeps, stall=stall)
             while done < max_iter:
                 n = min(FIT_CHUNK, max_iter - done)
