@@ -314,9 +314,9 @@ FIT_CHUNK = 25
 STALL_CHI2 = 0.1
 #: A fit also stops after an accepted step that lowered the cost by at most this many reduced chi-squares when
 #: the Gauss-Newton step from its end predicts no more (the quadratic model's whole remaining decrease): an F
-#: statistic ``(delta cost / k) / (cost / dof)`` moves by at most this, 0.01, which moves no test's p visibly
+#: statistic ``(delta cost / k) / (cost / dof)`` moves by at most this, 0.001, which moves no test's p visibly
 #: (docs/diagnosis-speed.md, session 46). 0: no such rule.
-STEP_CHI2 = 0.01
+STEP_CHI2 = 0.001
 #: The rule runs inside the core's one refinement (``fit_augmented``'s ``stall``), its damping carried
 #: across the windows; until session 46 each window was a refinement of its own, restarting the damping at
 #: 1e-3 (docs/diagnosis-speed.md, session 46). False: those separate refinements.
