@@ -570,7 +570,11 @@ const GN_LAMBDA: f64 = 1e-12;
 /// on the faces that hold the point; infinite where that step cannot be solved.
 fn predicted_decrease(st: &State, shared: &[f64], cons: &[Constraint]) -> f64 {
     constrained_step(st, GN_LAMBDA, shared, cons).map_or(f64::INFINITY, |(ds, dl, _)| {
-        ds.dot(&st.gs) + dl.iter().zip(&st.exps).map(|(d, e)| d.dot(&e.gi)).sum::<f64>()
+        ds.dot(&st.gs)
+            + dl.iter()
+                .zip(&st.exps)
+                .map(|(d, e)| d.dot(&e.gi))
+                .sum::<f64>()
     })
 }
 
@@ -602,7 +606,8 @@ pub fn levenberg_marquardt<M: JointModel>(
     while iterations < opts.max_iter {
         crate::cancel::checkpoint()?;
         if opts.stall_window > 0 && iterations > 0 && iterations % opts.stall_window == 0 {
-            if iterations > opts.stall_window && window_cost - st.cost <= opts.stall_rtol * st.cost {
+            if iterations > opts.stall_window && window_cost - st.cost <= opts.stall_rtol * st.cost
+            {
                 stop = StopReason::Stall;
                 break;
             }
@@ -911,6 +916,19 @@ pub fn refine(exps: &[Experiment], start: &Params, opts: &Options) -> Result<Fit
     })
 }
 
+/// Unit-weight experiments of the loops `ys` at the input amplitudes `amps` (the tests' problems).
+#[cfg(test)]
+pub(crate) fn unit_experiments<'a>(ys: &'a [Vec<f64>], amps: &[f64]) -> Vec<Experiment<'a>> {
+    ys.iter()
+        .zip(amps)
+        .map(|(y, &amplitude)| Experiment {
+            ybar: y,
+            amplitude,
+            weight: 1.0,
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -933,20 +951,9 @@ mod tests {
                     .collect()
             })
             .collect();
-        let exps: Vec<Experiment> = (0..2)
-            .map(|i| Experiment {
-                ybar: &ys[i],
-                amplitude: amps[i],
-                weight: 1.0,
-            })
-            .collect();
-        let start = Params {
-            beta: 0.6,
-            gamma: 0.1,
-            mu: 2.2,
-            gains: vec![0.8, 1.0],
-            phases: vec![1.3, 1.9],
-        };
+        let exps = unit_experiments(&ys, &amps);
+        // [beta, gamma, mu, g_0, phi_0, g_1, phi_1]
+        let start = Params::from_flat("start", &[0.6, 0.1, 2.2, 0.8, 1.3, 1.0, 1.9], 2).unwrap();
         let capped = |max_iter, stall_window, stall_rtol| {
             let opts = Options {
                 max_iter,

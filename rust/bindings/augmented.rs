@@ -176,7 +176,10 @@ fn checked_stall_rtol(v: f64) -> PyResult<f64> {
     if v.is_finite() && v >= 0.0 {
         return Ok(v);
     }
-    Err(CoreError::InvalidParameter(format!("the stall rules' rtol must be finite and >= 0; got {v}")).into())
+    Err(CoreError::InvalidParameter(format!(
+        "the stall rules' rtol must be finite and >= 0; got {v}"
+    ))
+    .into())
 }
 
 /// The measured input as the terms on u see it from `[dc, Re c_2, Im c_2, ...]` (the input's mean
