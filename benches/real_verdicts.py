@@ -111,7 +111,7 @@ def identical(before: dict[str, Any], after: dict[str, Any], group: str) -> bool
 
     def timeless(v: Any) -> Any:
         if isinstance(v, dict):
-            return {k: timeless(x) for k, x in v.items() if k not in ("seconds", "wall")}
+            return {k: timeless(x) for k, x in v.items() if k not in ("seconds", "wall", "cpu")}
         if isinstance(v, list):
             return [timeless(x) for x in v]
         return v
@@ -158,6 +158,7 @@ def main(argv: list[str] | None = None) -> int:
         if want and name not in want:
             continue
         t = time.perf_counter()
+        c = time.process_time()
         if prof is not None:
             prof.enable()
         try:
@@ -169,10 +170,19 @@ def main(argv: list[str] | None = None) -> int:
             if prof is not None:
                 prof.disable()
         wall = time.perf_counter() - t
+        cpu = time.process_time() - c
         if dataset == "mr-damper":
             mr.append((label, ms, d))
-        out["groups"][name] = {"seconds": d.seconds, "wall": wall, "diagnosis": S.clean(d.to_dict())}
-        print(f"{name}: {d.status} {[t.term for t in d.named]} {d.seconds:.1f} s", file=sys.stderr)
+        out["groups"][name] = {
+            "seconds": d.seconds,
+            "wall": wall,
+            "cpu": cpu,
+            "diagnosis": S.clean(d.to_dict()),
+        }
+        print(
+            f"{name}: {d.status} {[t.term for t in d.named]} {d.seconds:.1f} s, CPU {cpu:.1f} s",
+            file=sys.stderr,
+        )
     if args.across and len(mr) >= 2:
         out["across"] = _across(S, mr)
     out["total"] = time.perf_counter() - t0

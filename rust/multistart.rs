@@ -187,14 +187,7 @@ mod tests {
     }
 
     fn exps<'a>(ys: &'a [Vec<f64>], amps: &[f64]) -> Vec<Experiment<'a>> {
-        ys.iter()
-            .zip(amps)
-            .map(|(y, &amplitude)| Experiment {
-                ybar: y,
-                amplitude,
-                weight: 1.0,
-            })
-            .collect()
+        crate::refine::unit_experiments(ys, amps)
     }
 
     #[test]

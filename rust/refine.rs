@@ -115,6 +115,18 @@ pub struct Options {
     pub mu_lo: f64,
     /// Upper end of the admissible mu (inclusive).
     pub mu_hi: f64,
+    /// Iterations of the stall window (0: no stall rule). From the second window on, the search stops
+    /// at a window's end when the window lowered the cost by at most `stall_rtol` times the cost: the
+    /// rule the diagnosis once applied between separate runs of this many iterations, with the damping
+    /// carried across the windows instead of restarted at [`LAMBDA_START`] (docs/diagnosis-speed.md,
+    /// session 46).
+    pub stall_window: usize,
+    /// The stall window's relative cost decrease (see `stall_window`).
+    pub stall_rtol: f64,
+    /// Stop after an accepted step that lowered the cost by at most this fraction of it when the
+    /// Gauss-Newton step from the new point predicts no larger decrease either (0: no such rule;
+    /// [`StopReason::Stall`]).
+    pub step_rtol: f64,
 }
 
 impl Default for Options {
@@ -126,6 +138,9 @@ impl Default for Options {
             xtol: 1e-10,
             mu_lo: 1.0,
             mu_hi: f64::INFINITY,
+            stall_window: 0,
+            stall_rtol: 0.0,
+            step_rtol: 0.0,
         }
     }
 }
@@ -162,6 +177,9 @@ pub enum StopReason {
     NoDecrease,
     /// The iteration cap `max_iter` (not converged).
     IterationCap,
+    /// A stall window (`Options::stall_window`) lowered the cost by at most `stall_rtol` of it, or a
+    /// step and the Gauss-Newton prediction from its end by at most `step_rtol` of it.
+    Stall,
 }
 
 impl StopReason {
@@ -172,6 +190,7 @@ impl StopReason {
             StopReason::SmallStep => "xtol",
             StopReason::NoDecrease => "no_decrease",
             StopReason::IterationCap => "max_iter",
+            StopReason::Stall => "stall",
         }
     }
 }
@@ -544,6 +563,21 @@ fn fisher(st: &State) -> DMatrix<f64> {
     f
 }
 
+/// Damping of the Gauss-Newton step whose predicted decrease [`predicted_decrease`] reads.
+const GN_LAMBDA: f64 = 1e-12;
+
+/// The decrease of the cost that the (barely damped) Gauss-Newton step from `st` predicts, `d . J'Wr`
+/// on the faces that hold the point; infinite where that step cannot be solved.
+fn predicted_decrease(st: &State, shared: &[f64], cons: &[Constraint]) -> f64 {
+    constrained_step(st, GN_LAMBDA, shared, cons).map_or(f64::INFINITY, |(ds, dl, _)| {
+        ds.dot(&st.gs)
+            + dl.iter()
+                .zip(&st.exps)
+                .map(|(d, e)| d.dot(&e.gi))
+                .sum::<f64>()
+    })
+}
+
 /// Levenberg-Marquardt with Marquardt scaling over every experiment of `model` (design.md 7.4,
 /// 9.3): damping `lambda diag(J'WJ)` from [`LAMBDA_START`], times [`LAMBDA_DOWN`] on success and
 /// [`LAMBDA_UP`] on failure, a minimum once it exceeds [`LAMBDA_MAX`]. The steps respect the model's
@@ -568,8 +602,17 @@ pub fn levenberg_marquardt<M: JointModel>(
     let mut lambda = LAMBDA_START;
     let mut iterations = 0;
     let mut stop = StopReason::IterationCap;
+    let mut window_cost = st.cost;
     while iterations < opts.max_iter {
         crate::cancel::checkpoint()?;
+        if opts.stall_window > 0 && iterations > 0 && iterations % opts.stall_window == 0 {
+            if iterations > opts.stall_window && window_cost - st.cost <= opts.stall_rtol * st.cost
+            {
+                stop = StopReason::Stall;
+                break;
+            }
+            window_cost = st.cost;
+        }
         iterations += 1;
         let cons = model.constraints(&own);
         let Some((ds, dl, _)) = constrained_step(&st, lambda, &shared, &cons) else {
@@ -601,6 +644,7 @@ pub fn levenberg_marquardt<M: JointModel>(
         match trial {
             Some(tst) if tst.cost <= st.cost => {
                 let decrease = (st.cost - tst.cost) / st.cost.max(f64::MIN_POSITIVE);
+                let lowered = st.cost - tst.cost;
                 shared = t_shared;
                 own = t_own;
                 st = tst;
@@ -611,6 +655,13 @@ pub fn levenberg_marquardt<M: JointModel>(
                     } else {
                         StopReason::CostDecrease
                     };
+                    break;
+                }
+                let bound = opts.step_rtol * st.cost;
+                if lowered <= bound
+                    && predicted_decrease(&st, &shared, &model.constraints(&own)) <= bound
+                {
+                    stop = StopReason::Stall;
                     break;
                 }
             }
@@ -865,12 +916,67 @@ pub fn refine(exps: &[Experiment], start: &Params, opts: &Options) -> Result<Fit
     })
 }
 
+/// Unit-weight experiments of the loops `ys` at the input amplitudes `amps` (the tests' problems).
+#[cfg(test)]
+pub(crate) fn unit_experiments<'a>(ys: &'a [Vec<f64>], amps: &[f64]) -> Vec<Experiment<'a>> {
+    ys.iter()
+        .zip(amps)
+        .map(|(y, &amplitude)| Experiment {
+            ybar: y,
+            amplitude,
+            weight: 1.0,
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
     fn data(a: f64, beta: f64, gamma: f64, mu: f64, phi: f64, p: usize) -> Vec<f64> {
         steady_loop(a, beta, gamma, mu, phi, p, 8).unwrap().w
+    }
+
+    #[test]
+    fn a_stall_window_stops_where_one_uninterrupted_run_would_be() {
+        let (beta, gamma, mu) = (0.8, 0.2, 1.6);
+        let amps = [2.0, 1.0];
+        let ys: Vec<Vec<f64>> = (0..2)
+            .map(|i| {
+                let w = data(amps[i] * 0.9, beta, gamma, mu, 1.1 + i as f64, 64);
+                // a loop the model cannot draw exactly: the fit crawls instead of converging
+                w.iter()
+                    .enumerate()
+                    .map(|(j, v)| v + 0.05 * ((3 * j) as f64 * 0.0981).sin())
+                    .collect()
+            })
+            .collect();
+        let exps = unit_experiments(&ys, &amps);
+        // [beta, gamma, mu, g_0, phi_0, g_1, phi_1]
+        let start = Params::from_flat("start", &[0.6, 0.1, 2.2, 0.8, 1.3, 1.0, 1.9], 2).unwrap();
+        let capped = |max_iter, stall_window, stall_rtol| {
+            let opts = Options {
+                max_iter,
+                substeps: 4,
+                stall_window,
+                stall_rtol,
+                ..Options::default()
+            };
+            refine(&exps, &start, &opts).unwrap()
+        };
+        // rtol 1: the second window's end always stops the fit, at one 8-iteration run's point
+        let stalled = capped(40, 4, 1.0);
+        let whole = capped(8, 0, 0.0);
+        assert_eq!(stalled.stop, StopReason::Stall);
+        assert!(stalled.converged);
+        assert_eq!(stalled.iterations, 8);
+        assert_eq!(whole.stop, StopReason::IterationCap);
+        assert_eq!(stalled.params, whole.params);
+        assert_eq!(stalled.cost, whole.cost);
+        // rtol 0: a window that lowers the cost at all goes on
+        let on = capped(12, 4, 0.0);
+        assert_eq!(on.stop, StopReason::IterationCap);
+        assert_eq!(on.params, capped(12, 0, 0.0).params);
     }
 
     #[test]

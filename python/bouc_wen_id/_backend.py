@@ -320,6 +320,9 @@ class Augmented(Protocol):
         experiment_substeps: Sequence[int] | None = None,
         input_shapes: Sequence[_F] | None = None,
         coulomb_smoothing: float = 0.01,
+        stall_window: int = 0,
+        stall_rtol: float = 0.0,
+        step_rtol: float = 0.0,
     ) -> tuple[_F, _F, _F, float, int, bool, _F, list[_F], str, list[str]]: ...
 
 

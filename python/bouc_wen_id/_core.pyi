@@ -254,6 +254,9 @@ def augmented_refine(
     experiment_substeps: Sequence[int] | None = None,
     input_shapes: Sequence[_F] | None = None,
     coulomb_smoothing: float = ...,
+    stall_window: int = 0,
+    stall_rtol: float = 0.0,
+    step_rtol: float = 0.0,
 ) -> tuple[_F, _F, _F, float, int, bool, _F, list[_F], str, list[str]]: ...
 def get_budget() -> tuple[int, int, int]: ...
 def set_budget(max_samples: int, max_steps: int, max_bytes: int) -> tuple[int, int, int]: ...

@@ -382,6 +382,7 @@ def fit_augmented(
     mu_lo: float = 1.0,
     mu_hi: float = float("inf"),
     backend: Literal["rust", "numpy"] = "rust",
+    stall: tuple[float, ...] = (0, 0.0),
 ) -> AugFit:
     """Joint Levenberg-Marquardt of the augmented model over every experiment (design.md 9.3).
 
@@ -400,6 +401,8 @@ def fit_augmented(
         The admissible mu bracket ``(mu_lo, mu_hi]``, ``mu_lo >= 1``.
     backend : {"rust", "numpy"}
         The Rust core or the NumPy reference.
+    stall : tuple
+        ``(window, rtol[, step_rtol])``: the core's stall rules (stop ``"stall"``; :func:`_stall`), 0: off.
 
     Returns
     -------
@@ -439,6 +442,7 @@ def fit_augmented(
         experiment_substeps=[steps if e.substeps is None else e.substeps for e in exps],
         **_shapes(exps),
         **_smoothing(start),
+        **_stall(stall),
     )
     shared = np.asarray(shared, dtype=np.float64)
     params = AugParams(
@@ -488,6 +492,17 @@ class AugOutput:
     y: FloatArray
     jacobian: FloatArray
     own_jacobian: FloatArray
+
+
+def _stall(stall: tuple[float, ...]) -> dict[str, Any]:
+    """The refinement's stall keywords of the rules that are on (none otherwise): ``window > 0``, from the
+    second window of that many iterations on, stop at a window's end when it lowered the cost by at most
+    ``rtol`` of it (the damping runs on across the windows); ``step_rtol > 0``, stop after an accepted step
+    that lowered the cost by at most that fraction of it when the Gauss-Newton step from its end predicts no
+    larger decrease (``rust/refine.rs`` ``Options``)."""
+    window, rtol, step = (*stall, 0.0)[:3]
+    out: dict[str, Any] = {"stall_window": int(window), "stall_rtol": float(rtol)} if window else {}
+    return {**out, "step_rtol": float(step)} if step else out
 
 
 def _shapes(exps: Sequence[AugExperiment]) -> dict[str, Any]:

@@ -377,6 +377,7 @@ _STOPS = {
     "xtol": "the step became negligible",
     "no_decrease": "no admissible step decreases the cost",
     "max_iter": "the iteration cap",
+    "stall": "the cost stopped falling by enough to move a test",
     # diagnosis/free_dc.NOT_CONVERGED: the fit around the core's, not a core stop (its own note says more)
     "dc_not_converged": "the free DCs of a wandering baseline did not settle",
 }

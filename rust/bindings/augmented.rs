@@ -171,6 +171,17 @@ type AugRefineOut<'py> = (
     Vec<String>,
 );
 
+/// A stall rule's relative decrease (`Options::stall_rtol`, `step_rtol`): finite and not negative.
+fn checked_stall_rtol(v: f64) -> PyResult<f64> {
+    if v.is_finite() && v >= 0.0 {
+        return Ok(v);
+    }
+    Err(CoreError::InvalidParameter(format!(
+        "the stall rules' rtol must be finite and >= 0; got {v}"
+    ))
+    .into())
+}
+
 /// The measured input as the terms on u see it from `[dc, Re c_2, Im c_2, ...]` (the input's mean
 /// relative to U, then its harmonics as `waveform`'s); empty: the pure sine.
 fn measured_input(a: &[f64]) -> PyResult<MeasuredInput<'_>> {
@@ -252,9 +263,10 @@ fn aug_experiments<'a>(
 /// Joint Levenberg-Marquardt of the augmented model (design.md 9.3). `fisher` is `J^T W J`
 /// ordered `[beta, gamma, mu, q_1 .. q_T, g_0, phi_0, g_1, phi_1, ...]`; `stop` says which rule
 /// ended the search and `active` on which constraints it ended. `experiment_substeps`, one count
-/// per experiment, overrides `substeps` for each (the budget charges the largest).
+/// per experiment, overrides `substeps` for each (the budget charges the largest). `stall_window`,
+/// `stall_rtol`, `step_rtol`: the stall rules (`Options::stall_window`, `Options::step_rtol`; 0, off).
 #[pyfunction]
-#[pyo3(signature = (ybars, amplitudes, frequencies, grid_phases, weights, terms, shared0, gains0, phases0, *, max_iter=200, substeps=4, mu_lo=1.0, mu_hi=f64::INFINITY, waveforms=None, experiment_substeps=None, input_shapes=None, coulomb_smoothing=COULOMB_SMOOTHING))]
+#[pyo3(signature = (ybars, amplitudes, frequencies, grid_phases, weights, terms, shared0, gains0, phases0, *, max_iter=200, substeps=4, mu_lo=1.0, mu_hi=f64::INFINITY, waveforms=None, experiment_substeps=None, input_shapes=None, coulomb_smoothing=COULOMB_SMOOTHING, stall_window=0, stall_rtol=0.0, step_rtol=0.0))]
 #[allow(clippy::too_many_arguments)]
 fn augmented_refine<'py>(
     py: Python<'py>,
@@ -275,6 +287,9 @@ fn augmented_refine<'py>(
     #[pyo3(from_py_with = arg)] experiment_substeps: Option<Vec<i64>>,
     #[pyo3(from_py_with = arg)] input_shapes: Option<Vec<PyReadonlyArray1<'py, f64>>>,
     #[pyo3(from_py_with = arg)] coulomb_smoothing: f64,
+    #[pyo3(from_py_with = arg)] stall_window: i64,
+    #[pyo3(from_py_with = arg)] stall_rtol: f64,
+    #[pyo3(from_py_with = arg)] step_rtol: f64,
 ) -> PyResult<AugRefineOut<'py>> {
     let terms = Terms::parse(&terms)?.with_smoothing(coulomb_smoothing)?;
     let waveforms = waveforms.unwrap_or_default();
@@ -298,6 +313,9 @@ fn augmented_refine<'py>(
         substeps: count("substeps", substeps, 1)?,
         mu_lo,
         mu_hi,
+        stall_window: count("stall_window", stall_window, 0)?,
+        stall_rtol: checked_stall_rtol(stall_rtol)?,
+        step_rtol: checked_stall_rtol(step_rtol)?,
         ..Options::default()
     };
     let steps = Work::AugmentedRefinement {

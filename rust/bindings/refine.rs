@@ -50,6 +50,7 @@ fn options(
         xtol,
         mu_lo,
         mu_hi,
+        ..Options::default()
     })
 }
 

@@ -303,15 +303,24 @@ def experiment_substeps(p: int, sizes: Sequence[int]) -> int:
     return max(2, math.ceil(512 / max(sizes)), math.ceil(128 / p))
 
 
-#: The diagnosis's fits run in chunks of this many LM iterations...
+#: The diagnosis's fits are judged in windows of this many LM iterations...
 FIT_CHUNK = 25
-#: ... and stop once a chunk lowers the cost by less than this many reduced chi-squares (``cost / dof``): a
+#: ... and stop once a window lowers the cost by less than this many reduced chi-squares (``cost / dof``): a
 #: change of the F statistic of any test by less than this, of a share of the excess by less than this over
 #: the excess in reduced chi-squares. The core's own rule (a relative decrease of 1e-12 per step) never ends
 #: a fit that crawls along a bound (mu at 1 with gamma = beta on the MR damper: 200 iterations, every fit);
 #: at 0.1 the MR damper's verdicts at 0-0.75 A are those of the full 200 iterations (values within 0.1 %),
 #: at 1 A the fourth term (inertia) is no longer named: a term that hangs on where a fit stops.
 STALL_CHI2 = 0.1
+#: A fit also stops after an accepted step that lowered the cost by at most this many reduced chi-squares when
+#: the Gauss-Newton step from its end predicts no more (the quadratic model's whole remaining decrease): an F
+#: statistic ``(delta cost / k) / (cost / dof)`` moves by at most this, 0.001, which moves no test's p visibly
+#: (docs/diagnosis-speed.md, session 46). 0: no such rule.
+STEP_CHI2 = 0.001
+#: The rule runs inside the core's one refinement (``fit_augmented``'s ``stall``), its damping carried
+#: across the windows; until session 46 each window was a refinement of its own, restarting the damping at
+#: 1e-3 (docs/diagnosis-speed.md, session 46). False: those separate refinements.
+STALL_IN_CORE = True
 
 
 def fit_from(
@@ -340,6 +349,9 @@ def _fit_from(
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
+            if STALL_IN_CORE:
+                stall = (FIT_CHUNK, STALL_CHI2 / dof, STEP_CHI2 / dof)
+                return fit_augmented(exps, start, max_iter=max_iter, substeps=substeps, stall=stall)
             while done < max_iter:
                 n = min(FIT_CHUNK, max_iter - done)
                 new = fit_augmented(exps, start if fit is None else fit.params, max_iter=n, substeps=substeps)

@@ -595,6 +595,9 @@ def augmented_refine(
     experiment_substeps: Optional[Sequence[int]] = None,
     input_shapes: Optional[Sequence[ArrayLike]] = None,
     coulomb_smoothing: float = COULOMB_SMOOTHING,
+    stall_window: int = 0,
+    stall_rtol: float = 0.0,
+    step_rtol: float = 0.0,
 ) -> tuple[
     FloatArray, FloatArray, FloatArray, float, int, bool, FloatArray, list[FloatArray], str, list[str]
 ]:
@@ -603,9 +606,15 @@ def augmented_refine(
     Returns ``(shared, gains, phases, cost, iterations, converged, fisher, outputs, stop, active)`` with
     ``fisher`` ordered ``[beta, gamma, mu, q_1 .. q_T, g_0, phi_0, g_1, phi_1, ...]``, ``stop`` the stopping
     rule and ``active`` the constraints the fit ends on (:func:`.refine.levenberg_marquardt`).
-    ``experiment_substeps``, one count per experiment, overrides ``substeps`` for each.
+    ``experiment_substeps``, one count per experiment, overrides ``substeps`` for each. ``stall_window``,
+    ``stall_rtol``, ``step_rtol``: the stall rules (0: off; :func:`.refine.levenberg_marquardt`'s ``stall``).
     """
     ftol, xtol = 1e-12, 1e-10
+    if stall_window < 0 or not all(np.isfinite(v) and v >= 0.0 for v in (stall_rtol, step_rtol)):
+        raise InvalidParameterError(
+            f"stall_window = {stall_window} must be >= 0 and the stall rules' rtol ({stall_rtol}, "
+            f"{step_rtol}) finite and >= 0"
+        )
     vectors = (amplitudes, frequencies, grid_phases, weights)
     start = (shared0, gains0, phases0)
     prob, sh0, g0, p0 = _check_refine(
@@ -644,6 +653,7 @@ def augmented_refine(
         ftol=ftol,
         xtol=xtol,
         constraints=prob.constraints,
+        stall=(int(stall_window), float(stall_rtol), float(step_rtol)),
     )
     return (
         params[:ns].copy(),

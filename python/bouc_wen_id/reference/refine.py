@@ -154,6 +154,17 @@ def project_bouc_wen(trial: FloatArray, mu_lo: float, mu_hi: float) -> None:
         trial[2] = min(max(trial[2], mu_min), max(mu_hi, mu_min))
 
 
+def _predicted(
+    h: FloatArray, grad: FloatArray, params: FloatArray, constraints: Callable[[FloatArray], list[Constraint]]
+) -> float:
+    """The decrease the barely damped Gauss-Newton step ``h`` predicts, ``d . J'Wr`` (inf: no step)."""
+    try:
+        delta, _ = constrained_step(h, grad, params, constraints(params))
+    except np.linalg.LinAlgError:
+        return float("inf")
+    return float(delta @ grad)
+
+
 def levenberg_marquardt(
     params: FloatArray,
     cost_of: Callable[[FloatArray], tuple[float, Any]],
@@ -165,6 +176,7 @@ def levenberg_marquardt(
     ftol: float,
     xtol: float,
     constraints: Callable[[FloatArray], list[Constraint]] = lambda par: [],
+    stall: tuple[int, float, float] = (0, 0.0, 0.0),
 ) -> tuple[FloatArray, float, int, bool, FloatArray, Any, str, list[str]]:
     """The one Levenberg-Marquardt of the reference (design.md 7.4), for the plain and the augmented model.
 
@@ -175,17 +187,27 @@ def levenberg_marquardt(
     x10 on failure, stop above 1e12 ("no_decrease"); stop on a relative decrease below ``ftol`` ("ftol") or a
     step below ``xtol (|p| + xtol)`` ("xtol"), or at ``max_iter`` ("max_iter"). Returns ``(params, cost,
     iterations, converged, J'WJ, state, stop, active)``, ``active`` the names of the faces that hold the end.
+    ``stall = (window, rtol, step_rtol)``, window > 0: from the second window of ``window`` iterations on,
+    stop at a window's end when it lowered the cost by at most ``rtol`` of it; step_rtol > 0: stop after an
+    accepted step that lowered it by at most that fraction when the Gauss-Newton step (damping 1e-12) from
+    its end predicts no more ("stall" both; the core's ``Options``).
     """
     cost, state = cost_of(params)
     fisher, grad = linearize(state)
     lam = LM_LAMBDA_START
     it = 0
     stop = "max_iter"
+    window, window_cost = stall[0], cost
 
     def damped(lam: float) -> FloatArray:
         return fisher + lam * np.diag(np.maximum(np.diag(fisher), np.finfo(float).tiny))
 
     while it < max_iter:
+        if window > 0 and it > 0 and it % window == 0:
+            if it > window and window_cost - cost <= stall[1] * cost:
+                stop = "stall"
+                break
+            window_cost = cost
         it += 1
         cons = constraints(params)
         try:
@@ -207,12 +229,19 @@ def levenberg_marquardt(
                 out = None
         if out is not None and out[0] <= cost:
             decrease = (cost - out[0]) / max(cost, np.finfo(float).tiny)
+            lowered = cost - out[0]
             params = trial
             cost, state = out
             fisher, grad = linearize(state)
             lam = max(lam * LM_LAMBDA_DOWN, 1e-15)
             if decrease < ftol or small:
                 stop = "xtol" if small else "ftol"
+                break
+            if (
+                lowered <= stall[2] * cost
+                and _predicted(damped(1e-12), grad, params, constraints) <= stall[2] * cost
+            ):
+                stop = "stall"
                 break
         else:
             if small:
