@@ -213,14 +213,19 @@ def _lines(rec: Any, alpha: float = LINE_ALPHA) -> list[float]:
     y, p, n, _s, dt = _steady(rec)
     if n < MIN_PERIODS or not (dt > 0) or input_carries_a_line(rec):
         return []
+    from .lines_near import near_candidate, without
+
     r = _orth(y, n, p)
     found: list[float] = []
     for _ in range(MAX_LINES):
         f = _candidate(r, n, p, alpha=alpha)
+        if f is None:  # a line nearly locked to a harmonic, which the search above skips
+            f = near_candidate(y, n, p, alpha)
         if f is None:
             break
         found.append(f)
         r = r - _line(r, f, n, p)
+        y = without(y, f, n, p)
     return found
 
 
