@@ -1,6 +1,6 @@
 """Review 46's G null (50 Hz hum, 2 and 8 rad/s, P = 1000) diagnosed from Recordings, per seed.
 
-    PYTHONPATH=python python studies/hum46/seeds.py [FIRST LAST]
+PYTHONPATH=python python studies/hum46/seeds.py [FIRST LAST]
 """
 
 from __future__ import annotations
@@ -12,10 +12,9 @@ import warnings
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).parents[1] / "review46"))
+import bouc_wen_id as bw  # noqa: E402
 import drive46 as dv  # noqa: E402
 import sim46 as s  # noqa: E402
-
-import bouc_wen_id as bw  # noqa: E402
 
 
 def main(first: int, last: int) -> None:

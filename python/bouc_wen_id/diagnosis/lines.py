@@ -19,9 +19,10 @@ is the same in both halves of the record (a free oscillation decays). Its freque
 squares, is then fitted in every recording (jointly with the periodic mean: the line's own average over the
 periods is not separable from the loop and stays in the regressors' complement) and taken out of the
 whole record when significant there (a line too close to a harmonic to be found alone in one experiment is
-found in another). A recording whose measured input holds a line of its own is neither searched nor
-cleaned: its output's lines are the response to that input. The recordings handed to the diagnosis are
-copies; the user's are not modified.
+found in another). Bins within the guard are searched too when the rest holds no line, about the periodic
+mean alone (:func:`near_candidate`: a hum 0.08 cycle a period off a harmonic, review 46). A recording
+whose measured input holds a line of its own is neither searched nor cleaned: its output's lines are the
+response to that input. The recordings handed to the diagnosis are copies; the user's are not modified.
 """
 
 from __future__ import annotations
@@ -360,7 +361,6 @@ def clause(notes: Sequence[str]) -> str:
     return "; " + "; ".join(n.split(": fitted")[0] + " was taken out before the test" for n in notes)
 
 
-# A line nearly locked to the input (review 46 failure 1).
 # A line nearly locked to the input: a steady sinusoid within :data:`~.lines.GUARD_BINS` record bins of a
 # harmonic of the input, which the search of :mod:`.lines` skips.
 #
@@ -375,7 +375,9 @@ def clause(notes: Sequence[str]) -> str:
 # level beyond chance (Bonferroni over the guarded bins and the far ones) and when the loop's own harmonic
 # next to it (the periodic mean after the line is taken out) is smaller than the line: a drifting or
 # settling loop makes sidebands only at harmonics it has, and at most as large as them; and when the line
-# mirrored about its harmonic (fitted jointly) holds under :data:`~.lines.MIRROR_SHARE` of its power.
+# mirrored about its harmonic (fitted jointly) holds under :data:`~.lines.MIRROR_SHARE` of its power, and
+# when its amplitude and phase agree in both halves of the record (AR(2) noise in a narrow band near
+# harmonic 2 passed the rest in 7 of review 46's 8 H nulls).
 
 #: Least distance of a searched near-harmonic line from its harmonic, in record bins (closer, its fit and
 #: the periodic mean cannot be told apart: :data:`~.lines.MAX_COHERENCE`).
