@@ -78,7 +78,7 @@ def test_a_pink_null_whose_only_structure_is_the_dc_is_adequate(clean: list[bw.R
     d = _diagnosed(clean, seed)
     assert d.plain.p_value >= 0.05 and not d.named  # the plain model fits everything but the DCs
     assert d.status == "adequate", d.verdict  # main: "unexplained structure remains spread over the cycle"
-    if seed == 3:
+    if seed == 3:  # the offset's DCs within their spread between experiments (dc_between.py) are said
         assert any("coloured at the DC" in x for x in d.details), d.details
 
 
