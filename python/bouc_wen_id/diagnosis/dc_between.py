@@ -69,7 +69,7 @@ def centre_stands_out(
     centre_only._between judges the plain model's DCs. Experiments whose DC is already free (free_dc.py: a
     wandering baseline, judged by the common centre there) are left as before, as is a model the core
     cannot evaluate."""
-    from scipy.special import stdtr
+    from scipy.special import stdtr  # type: ignore[import-untyped]
 
     if not (_SLOW.get() and term in CENTRE_TERMS and term in fit.params.terms):
         return True
