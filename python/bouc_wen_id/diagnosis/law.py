@@ -15,8 +15,9 @@ import numpy as np
 
 from ..augmented import AugExperiment, AugFit, augmented_output
 from ..errors import BudgetExceededError
-from ..terms import TERMS, Distortion
+from ..terms import TERMS, Distortion, Offset
 from . import free_dc
+from .dc_between import slow_dc_now
 from .pinch_shape import band_test, is_pinching
 from .shape import shape_test, spectral_meat
 
@@ -45,6 +46,8 @@ def law_test(exps: Sequence[AugExperiment], fit: AugFit, term: str, substeps: in
     """
     from scipy.special import chdtrc  # type: ignore[import-untyped]
 
+    if term == Offset.kind and slow_dc_now():  # a DC's law under a noise coloured at the DC (dc_between)
+        return math.nan
     step = freed_step(exps, fit, term, substeps)
     if step is None:
         return math.nan
@@ -73,7 +76,7 @@ def freed_step(
     ks = [3 + par.terms.index(t) for t in (term, comp) if t and t in par.terms]
     nk = len(ks)
     nsh = 3 + len(par.terms) - nk
-    xs, res = [], []
+    xs, res, slow = [], [], slow_dc_now()
     try:
         for i, e in enumerate(exps):
             out = augmented_output(e, par, i, substeps=substeps, jacobian=True)
@@ -83,8 +86,8 @@ def freed_step(
             for j, k in enumerate(ks):
                 x[:, nsh + 2 * m + j * m + i] = out.jacobian[:, k]
             sw = math.sqrt(e.weight)
-            xs.append(sw * free_dc.centred(e, x))  # a free DC (free_dc.py): no weight on the mean
-            res.append(sw * free_dc.centred(e, e.ybar - out.y))
+            xs.append(sw * _centred(e, x, slow))  # a free DC (free_dc.py): no weight on the mean
+            res.append(sw * _centred(e, e.ybar - out.y, slow))
     except BudgetExceededError:
         raise  # the user's budget is theirs: never turned into "the law is not tested"
     except Exception:  # noqa: BLE001 - a model the core cannot differentiate: the law is not tested
@@ -95,7 +98,7 @@ def freed_step(
     scale = np.linalg.norm(xa, axis=0) + 1e-300
     xa = xa / scale
     sv = np.linalg.svd(xa, compute_uv=False)
-    rank = int(np.sum(sv > 1e-10 * sv[0])) + free_dc.count(exps)  # + the centred DCs' dof
+    rank = int(np.sum(sv > 1e-10 * sv[0])) + (m if slow else free_dc.count(exps))  # + the centred DCs' dof
     beta = np.linalg.lstsq(xa, r, rcond=1e-10)[0]
     if r.size - rank < 1:
         return None
@@ -109,6 +112,12 @@ def freed_step(
         start += n_i
     cov = bread @ meat @ bread
     return beta, cov, scale, [nsh + 2 * m + q * m + np.arange(m) for q in range(nk)]
+
+
+def _centred(e: AugExperiment, a: np.ndarray, slow: bool) -> np.ndarray:
+    """``a`` less its mean under a noise coloured at the DC (``slow``: dc_between.py), else
+    free_dc.centred's."""
+    return np.asarray(a - np.mean(a, axis=0), dtype=np.float64) if slow else free_dc.centred(e, a)
 
 
 #: Clean-input experiments the law test needs before it compares them alone (:func:`law_rows`).

@@ -30,6 +30,7 @@ from typing import Any
 
 import numpy as np
 
+from .dc_between import slow_dc_now
 from .gate import ADEQUATE
 from .limits import ABSORBED_SAID, VERDICT_LIMITS, DetectionLimit, most_relevant
 from .named_limit import NOT_PASSED, named_text
@@ -146,9 +147,15 @@ def detected_text(lims: Sequence[DetectionLimit]) -> str:
         out = "; detected by its own test on these data but not named: " + parts[0]
     rest = [lim.label for lim in seen if lim not in read]
     if rest:
+        slow = (
+            ", or a centre term whose DCs stand within their spread between experiments: the noise is "
+            "coloured at the DC"
+            if slow_dc_now()
+            else ""
+        )
         out += (
             f"; its test passed but no detection (a value at its null, outside its range or within "
-            f"{DETECTED_SE:.0f} se of zero): " + ", ".join(rest)
+            f"{DETECTED_SE:.0f} se of zero{slow}): " + ", ".join(rest)
         )
     return out
 

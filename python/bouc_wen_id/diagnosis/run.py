@@ -62,6 +62,7 @@ from .candidates import step_candidates
 from .caveats import below_saturation, caveats_of, unphysical_places_text
 from .centre_only import clause as _centres_only
 from .data import DiagExperiment, colour_notes, prepare
+from .dc_between import dc_between
 from .drift import (
     DEGRADATION,
     DRIFT_TERMS,
@@ -753,7 +754,15 @@ def _keywords(setup: _Setup, statistic: Callable[[AugFit], float]) -> dict[str, 
 
 
 def _diagnose_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -> Diagnosis:
-    """One diagnosis of checked experiments: the plain fit, degradation, the steady selection, the verdict."""
+    """One diagnosis of checked experiments: the plain fit, degradation, the steady selection, the verdict;
+    the centre terms' DC judged between experiments under a noise coloured at the DC in every experiment
+    (dc_between.py)."""
+    with dc_between(_centres.slow_dc(exps)):
+        return _diagnosed_set(exps, setup, notes)
+
+
+def _diagnosed_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) -> Diagnosis:
+    """:func:`_diagnose_set`'s body."""
     cands, alpha = setup.cands, setup.alpha
     s = scale_of(exps)
     sx = _scaled(exps, s, setup)

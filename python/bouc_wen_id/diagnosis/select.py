@@ -56,6 +56,7 @@ from ..errors import BudgetExceededError
 from ..terms import TERMS, Stiffness, physical_value
 from . import coulomb_width, excess_share, fit_share, fitting, free_dc, prefetch, speed
 from .beside import only_beside
+from .dc_between import centre_stands_out
 from .fitting import best_of, fit_from, fit_own, fit_with, subset
 from .gate import targeted_level
 from .law import LAW_RCOND, contrast_statistic, element_law_test, law_rows, law_test
@@ -865,6 +866,7 @@ def forward_select(
             share = excess_share.share(c0, f.cost, d0, read(f), targeted=first)
             ok = bool(math.isfinite(padj) and padj < level and share >= MATERIAL_SHARE) and _admissible(f, t)
             ok = ok and not at_null(f, t) and away_from_null(f, t, level, f.cost / max(d1, 1))
+            ok = ok and centre_stands_out(exps, f, t, level, substeps)  # under a noise coloured at the DC
             trials.append(Trial(t, f.cost, c0 - f.cost, stat, p, padj, share, ok, fit=f))
         better = rebase(exps, current, [(tr.term, tr.fit) for tr in trials], substeps, _pairs(remaining))
         if better is not None and not math.isfinite(refitted_from):  # base not converged (restarts.py):
