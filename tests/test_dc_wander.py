@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import math
 import warnings
+from dataclasses import replace
 from typing import Any
 
 import bouc_wen_id as bw
@@ -34,24 +35,23 @@ def _with(seed: int, kind: str, size: float = 1.5) -> list[Any]:
     decaying exponentially over a third of the record), or "fading" (the wander, and the loop shrinking by
     ``size`` % over the record)."""
     rng = np.random.default_rng([seed, 4646])
-    out = []
-    for r in recordings(seed, [0.0] * 4):
-        y = np.asarray(r.y, dtype=np.float64)
-        sd = 0.01 * float(np.sqrt(np.mean(y**2)))
-        k = np.arange(y.size) / y.size
-        if kind == "settling":
-            extra = size * sd * np.exp(-k / (1.0 / 3.0))
-        else:
-            extra = np.zeros(y.size)
-            for _ in range(2):
-                extra += np.sin(TWO_PI * rng.uniform(0.2, 0.6) * k + rng.uniform(0, TWO_PI))
-            extra = extra * size * sd / float(np.std(extra))
-            if kind == "fading":
-                y = y * (1.0 - 0.01 * size * k)
-        out.append(
-            bw.Recording(r.t, r.u, y + extra, r.amplitude, r.frequency, settle_periods=r.settle_periods)
-        )
-    return out
+    return [
+        replace(r, y=_changed(np.asarray(r.y, dtype=np.float64), kind, size, rng))
+        for r in recordings(seed, [0.0] * 4)
+    ]
+
+
+def _changed(y: Any, kind: str, size: float, rng: np.random.Generator) -> Any:
+    """One recording's output with :func:`_with`'s change."""
+    sd = 0.01 * float(np.sqrt(np.mean(y**2)))
+    k = np.arange(y.size) / y.size
+    if kind == "settling":
+        return y + size * sd * np.exp(-3.0 * k)
+    extra = np.zeros(y.size)
+    for _ in range(2):
+        extra += np.sin(TWO_PI * rng.uniform(0.2, 0.6) * k + rng.uniform(0, TWO_PI))
+    extra *= size * sd / float(np.std(extra))
+    return (y * (1.0 - 0.01 * size * k) if kind == "fading" else y) + extra
 
 
 def _diagnose(recs: list[Any]) -> Any:
