@@ -2,6 +2,7 @@
 
     PYTHONPATH=python python studies/wander46/probe46.py SEED0 SEED1
     PYTHONPATH=python python studies/wander46/probe46.py bench SEED0 SEED1
+    PYTHONPATH=python:tests python studies/wander46/probe46.py tests
 
 Per seed (review 45's C, sim45's ``wander`` noise, seeds as calib46.py's): whether ``baseline.detect`` or
 ``zero_drift.detect`` fires, and ``dc_wander._statistics`` (the period means' roughness about each
@@ -62,8 +63,24 @@ def bench_nulls(s0: int, s1: int) -> None:
         print(line, flush=True)
 
 
+def zero_drift_sets() -> None:
+    """tests/test_diagnosis_zero_drift.py's sets (a settling centre, white, AR(1), a fading loop, a line; the
+    slow settling sets), seeds 0-4: whether dc_wander fires (``probe46.py tests``)."""
+    sys.path.insert(0, str(Path(__file__).parents[2] / "tests"))
+    from bouc_wen_id.diagnosis import dc_wander
+    from test_diagnosis_zero_drift import _recs, _settling
+
+    for kind in ("settling", "white", "ar1", "ar1 slow", "fading", "drift"):
+        print(kind, [dc_wander.detect(_recs(kind, s), 0.05 / 20) is not None for s in range(5)])
+    for size, tau in ((5.0, 2.0), (4.0, 1.5)):
+        got = [dc_wander.detect(_settling(s, size, tau), 0.05 / 20) is not None for s in range(5)]
+        print("settling set", size, tau, got)
+
+
 if __name__ == "__main__":
-    if sys.argv[1] == "bench":
+    if sys.argv[1] == "tests":
+        zero_drift_sets()
+    elif sys.argv[1] == "bench":
         bench_nulls(int(sys.argv[2]), int(sys.argv[3]))
     else:
         main(int(sys.argv[1]), int(sys.argv[2]))
