@@ -63,8 +63,22 @@ class Wander:
     centre_p: float  # the t-test of the common centre (NaN: fewer than 2 recordings)
     kept: bool
     level: float = math.nan  # the t-test's level (alpha over the candidates: one candidate's share)
+    #: a smooth wander of the zero alone (``dc_wander.py``): the chi-square about each recording's best
+    #: settling transient, its dof and p, and the fundamental's trend p; None: this module's test took it
+    smooth: Optional[tuple[float, int, float, float]] = None
 
     def note(self) -> str:
+        if self.smooth is not None:
+            sx2, sdof, sp, loop_p = self.smooth
+            return (
+                "the baseline wanders: the period means move from period to period (lag-1 correlation "
+                f"{self.correlation:.2g}) beyond a settling transient (a level and an exponential approach "
+                f"per recording: chi-square {sx2:.3g} on {sdof} dof, p = {sp:.2g}), while the "
+                f"loop itself does not trend (fundamental amplitude p = {loop_p:.2g}): a zero that wanders "
+                "smoothly over the record (a drifting sensor zero, for example); each period's mean was "
+                "taken as baseline and removed before averaging (one degree of freedom per period, from the "
+                "noise floor), the harmonics of every period kept as measured"
+            )
         return (
             "the baseline wanders: the period means trend beyond a quadratic (chi-square "
             f"{self.chi2:.3g} on {self.dof} dof, p = {self.p_value:.2g}) with a lag-1 correlation of "

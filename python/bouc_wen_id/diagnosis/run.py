@@ -28,6 +28,7 @@ from . import (
     clean_value,
     coulomb_width,
     dc_untested,
+    dc_wander,
     design_twin,
     drift_majority,
     drift_pair,
@@ -466,6 +467,7 @@ def _diagnose(
     report("preparing the averaged periods", 0, 1)
     level = alpha / max(len(cands), 1)  # a wandering zero (baseline.py), or one drifting (zero_drift.py)
     wander = baseline.detect(experiments, level) or zero_drift.detect(experiments, level)
+    wander = wander or dc_wander.detect(experiments, level)  # a smooth wander of the zero alone
     args = (cands, float(alpha), held_out_test, units, report)
     d = _with_wander(experiments, *args, wander)
     if wander is None:  # one offset refused for its law: each recording's own zero (record_zeros.py)
