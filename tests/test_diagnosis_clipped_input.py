@@ -163,11 +163,14 @@ def test_clean_sines_get_no_input_clause() -> None:
 
 
 def test_short_records_with_zero_resets_and_a_common_dc_are_not_called_adequate() -> None:
-    """5 recorded periods, each experiment's zero moved by 6 standard errors of its DC with its own sign
+    """5 recorded periods, each experiment's zero moved by 7 standard errors of its DC with its own sign
     (4 up, 2 down among the large ones). The offset passes its test (the DCs' common part) and its law fails
     (they differ). Before (faccd96): "adequate ... the loop centres are not read as device physics". The
-    resets' common part cannot be told from an offset of the device: not adequate, and said so."""
-    d = _diagnose(_recordings(1, 0.0, 4, 5, zero_shift=6.0))
+    resets' common part cannot be told from an offset of the device: not adequate, and said so.
+    (Was 6 standard errors: the 5 rad/s records still hold G's ring-down after 4 settling periods, which the
+    transient test reads since session 46 and drops a period of; without it the common part of 6 se resets
+    stays below the offset's own test, "adequate" with its limit, and 7 se resets are needed.)"""
+    d = _diagnose(_recordings(1, 0.0, 4, 5, zero_shift=7.0))
     assert d.status != "adequate", d.verdict
     assert not d.named
     assert "the loop centre differs in sign between experiments" in d.verdict

@@ -18,6 +18,7 @@ from bouc_wen_id.diagnosis.caveats import family_text, latent_levels
 from bouc_wen_id.diagnosis.fitting import Scale, scaled
 from bouc_wen_id.diagnosis.masing import MASING_MARK, masing_text
 from bouc_wen_id.diagnosis.result import NamedTerm
+from bouc_wen_id.errors import TransientWarning
 from bouc_wen_id.terms import Stiffness, StiffnessX
 
 P = 200  # samples per period
@@ -133,7 +134,10 @@ def test_a_spring_on_x_on_a_design_that_separates_it_gets_no_caveat() -> None:
     reference loop's test has its power and is quiet, and no Masing clause. (At 30x the reference loops of
     mostly narrow stops, masing.DENSITIES, leave a noncentrality of 8.8 below the 14.3 their test needs: that
     design cannot tell the spring from such a loop, and the clause says so.)"""
-    d = bw.diagnose(_records(8, (0.3, 0.6, 1.4, 3.0), "spring", 50.0, periods=100))
+    # The below-saturation loops start from w = 0 and their centres are still settling after 4 periods: the
+    # transient test reads it in recording 8 (15 rad/s, level 0.3) since session 46 and drops 2 periods.
+    with pytest.warns(TransientWarning, match="recording 8"):
+        d = bw.diagnose(_records(8, (0.3, 0.6, 1.4, 3.0), "spring", 50.0, periods=100))
     assert StiffnessX.kind in {t.term for t in d.named}
     assert MASING_MARK not in d.verdict
 
