@@ -41,12 +41,11 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from ..terms import TERMS, Asymmetry, Offset
+from ..terms import TERMS
 from .data import DiagExperiment
+from .dc_between import CENTRE_TERMS  # the terms whose evidence on a steady loop is the loop centre
 from .fit_notes import centre_clause
 
-#: The terms whose evidence on a steady loop is the loop centre (the DC of each experiment).
-CENTRE_TERMS = frozenset({Offset.kind, Asymmetry.kind})
 #: The common DC (noise-weighted mean of the residual DCs) is significant beyond this many standard errors
 #: (two-sided 5 %: one test).
 COMMON_Z = 1.96

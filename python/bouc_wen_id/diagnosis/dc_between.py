@@ -33,8 +33,8 @@ from ..errors import BudgetExceededError
 from ..terms import Asymmetry, Offset
 from .free_dc import FreeDC
 
-#: The terms whose evidence is mostly the loop centre (centre_only.CENTRE_TERMS's; not imported from there,
-#: which imports the verdict's modules).
+#: The terms whose evidence on a steady loop is the loop centre (the DC of each experiment); centre_only
+#: takes them from here (it imports the verdict's modules, so the definition lives on this side).
 CENTRE_TERMS = frozenset({Offset.kind, Asymmetry.kind})
 
 _SLOW: ContextVar[bool] = ContextVar("slow_dc", default=False)
