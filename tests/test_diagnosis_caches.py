@@ -109,8 +109,8 @@ def test_limits_profile_evaluates_each_value_once_and_returns_the_fresh_sizes() 
 def test_limits_profile_takes_a_linear_terms_trace_from_one_evaluation(
     term: str, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    """A linear term's trace is its value times its regressor (limits._Profile._trace): one core evaluation per
-    experiment for the whole search instead of one per value, sizes as the model's output differences give
+    """A linear term's trace is its value times its regressor (limits._Profile._trace): one core evaluation
+    per experiment for the whole search instead of one per value, sizes as the model's output differences give
     them (the reference: the same profile with no term taken as linear). A nonlinear term (the sensor lag)
     is still evaluated at every value."""
     from bouc_wen_id.diagnosis import limits
