@@ -105,6 +105,45 @@ def test_limits_profile_evaluates_each_value_once_and_returns_the_fresh_sizes() 
     assert profile("stiffness", vs[0]) == profile._sizes("stiffness", vs[0]) != first[0]  # keyed by term too
 
 
+@pytest.mark.parametrize("term", ["viscous", "stiffness@x", "coulomb", "sensor_lag"])
+def test_limits_profile_takes_a_linear_terms_trace_from_one_evaluation(
+    term: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A linear term's trace is its value times its regressor (limits._Profile._trace): one core evaluation
+    per experiment for the whole search instead of one per value, sizes as the model's output differences give
+    them (the reference: the same profile with no term taken as linear). A nonlinear term (the sensor lag)
+    is still evaluated at every value."""
+    from bouc_wen_id.diagnosis import limits
+
+    _, sx, plain, substeps = _case(61)
+    rng = np.random.default_rng(61)
+    vs = [float(v) for v in rng.uniform(0.001, 0.3, 4)]
+    calls: list[str] = []
+
+    def counted(real: Any) -> Any:
+        def call(*a: Any, **k: Any) -> Any:
+            calls.append(term)
+            return real(*a, **k)
+
+        return call
+
+    for mod in (limits, fitting):
+        monkeypatch.setattr(mod, "augmented_output", counted(mod.augmented_output))
+    profile = limits._Profile(sx, plain, substeps)
+    calls.clear()
+    fast = [profile(term, v) for v in vs]
+    linear = term in fitting.LINEAR_TERMS
+    assert len(calls) == (len(sx) if linear else len(sx) * len(vs))
+    monkeypatch.setattr(limits, "LINEAR_TERMS", (), raising=False)
+    reference = limits._Profile(sx, plain, substeps)
+    calls.clear()
+    slow = [reference(term, v) for v in vs]
+    assert len(calls) == len(sx) * len(vs)  # the reference evaluates the model at every value
+    for (lam, raw), (lam_ref, raw_ref) in zip(fast, slow):
+        assert raw == pytest.approx(raw_ref, rel=1e-9) and lam == pytest.approx(lam_ref, rel=1e-6)
+    assert len({f[1] for f in fast}) == len(vs) and min(f[0] for f in fast) > 0.0
+
+
 @pytest.mark.parametrize("ages", [(0.0, 2.5, 7.25), (1.0, 0.0, 3.75)])
 def test_corrected_with_shared_leads_and_threads_equals_one_simulation_per_lead(
     ages: tuple[float, ...],

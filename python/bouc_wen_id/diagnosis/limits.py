@@ -38,7 +38,7 @@ from ..terms import TERMS
 from . import free_dc, named_limit
 from .bounds_said import refused_by_bound
 from .design_hint import DesignHint, design_hint
-from .fitting import Scale, fit_from, physical
+from .fitting import LINEAR_TERMS, Scale, fit_from, physical, regressor
 from .result import TERM_LABELS, term_symbol_unit
 from .select import BOUNDARY_TERMS, MATERIAL_SHARE, NOISE_FLOOR, Step, dof_of
 
@@ -196,6 +196,7 @@ class _Profile:
         self.exps, self.base, self.substeps = exps, base, substeps
         self.seen: dict[tuple[str, float], tuple[float, float]] = {}
         self.vectors: dict[tuple[str, float], np.ndarray] = {}
+        self.unit: dict[str, list[np.ndarray]] = {}  # a linear term's regressors (:meth:`_trace`)
         blocks, self.y0, self.sw = [], [], []
         for i, e in enumerate(exps):
             out = augmented_output(e, base.params, i, substeps=substeps, jacobian=True)
@@ -221,12 +222,25 @@ class _Profile:
             self.seen[(term, v)] = self._sizes(term, v)
         return self.seen[(term, v)]
 
+    def _trace(self, term: str, v: float) -> list[np.ndarray]:
+        """Each experiment's trace of ``term`` at scaled ``v``: the model's output with the term minus the
+        plain model's; for a linear term (:data:`.fitting.LINEAR_TERMS`: its output is ``v`` times its
+        regressor, the model's loop untouched) ``v`` times the regressor, evaluated once per term instead of
+        once per value (the search asks for 10-20 values a term; the two agree to 1e-11 of the trace)."""
+        if term not in LINEAR_TERMS:
+            par = self.base.params.with_term(term, v)
+            return [
+                np.asarray(augmented_output(e, par, i, substeps=self.substeps)) - y0
+                for i, (e, y0) in enumerate(zip(self.exps, self.y0))
+            ]
+        if term not in self.unit:
+            self.unit[term] = [
+                regressor(term, e, self.base.params, i, self.substeps) for i, e in enumerate(self.exps)
+            ]
+        return [v * g for g in self.unit[term]]
+
     def _sizes(self, term: str, v: float) -> tuple[float, float]:
-        par = self.base.params.with_term(term, v)
-        diffs = [
-            np.asarray(augmented_output(e, par, i, substeps=self.substeps)) - y0
-            for i, (e, y0) in enumerate(zip(self.exps, self.y0))
-        ]
+        diffs = self._trace(term, v)
         r = np.concatenate([sw * d for sw, d in zip(self.sw, diffs)])
         raw = float(r @ r)  # as drawn: what the free DCs take (free_dc.py) counts as absorbed
         r = np.concatenate([sw * d for sw, d in zip(self.sw, free_dc.project(self.exps, diffs)[0])])
