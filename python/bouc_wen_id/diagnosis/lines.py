@@ -12,17 +12,18 @@ A white or coloured noise model cannot describe it (it is deterministic), so it 
 steady periods minus their mean (what the input's harmonics leave) are searched for the strongest line at
 least :data:`GUARD_BINS` record bins from every harmonic of the input; it is kept when it stands out of the
 local periodogram level beyond chance (:data:`LINE_ALPHA` per diagnosis, Bonferroni over the recordings and
-the bins, corrected for the level's own error: :func:`limit`), when the bin
-mirrored about its nearest harmonic holds less than :data:`MIRROR_SHARE` of its power (a loop that drifts
-or settles modulates its harmonics: two sidebands of equal power; a line has one) and when its amplitude
-is the same in both halves of the record (a free oscillation decays). Its frequency, refined by least
-squares, is then fitted in every recording (jointly with the periodic mean: the line's own average over the
-periods is not separable from the loop and stays in the regressors' complement) and taken out of the
-whole record when significant there (a line too close to a harmonic to be found alone in one experiment is
-found in another). Bins within the guard are searched too when the rest holds no line, about the periodic
-mean alone (:func:`near_candidate`: a hum 0.08 cycle a period off a harmonic, review 46). A recording
-whose measured input holds a line of its own is neither searched nor cleaned: its output's lines are the
-response to that input. The recordings handed to the diagnosis are copies; the user's are not modified.
+the bins, corrected for the level's own error: :func:`limit`), when the bin mirrored about its nearest
+harmonic holds less than :data:`MIRROR_SHARE` of its power (a loop that drifts or settles modulates its
+harmonics: two sidebands of equal power; a line has one) and when its amplitude is the same in both halves of
+the record (a free oscillation decays) and it stands out of its own scatter between segments of the record
+(:mod:`.line_coherence`: a narrow noise band's phase wanders). Its frequency, refined by least squares, is
+then fitted in every recording (jointly with the periodic mean: the line's own average over the periods is not
+separable from the loop and stays in the regressors' complement) and taken out of the whole record when
+significant there (a line too close to a harmonic to be found alone in one experiment is found in another).
+Bins within the guard are searched too when the rest holds no line, about the periodic mean alone
+(:func:`near_candidate`: a hum 0.08 cycle a period off a harmonic, review 46). A recording whose measured
+input holds a line of its own is neither searched nor cleaned: its output's lines are the response to that
+input. The recordings handed to the diagnosis are copies; the user's are not modified.
 """
 
 from __future__ import annotations
@@ -145,8 +146,27 @@ def limit(chance: float, worth: float) -> float:
 def chance(ratio: float, worth: float) -> float:
     """The chance that one bin of noise reaches ``ratio`` times the estimated level (:func:`limit`'s
     inverse)."""
+    return f_tail(ratio - PAD_EXCESS, worth)
+
+
+def f_tail(x: float, worth: float) -> float:
+    """The chance that F with 2 and ``2 worth`` degrees of freedom exceeds ``x``: ``(1 + x / w)^-w``."""
     w = max(worth, 1.0)
-    return math.exp(-w * math.log1p(max(ratio - PAD_EXCESS, 0.0) / w))
+    return math.exp(-w * math.log1p(max(x, 0.0) / w))
+
+
+def wanders(r: FloatArray, f: float, n: int, p: int, chance_: float, drift: bool = True) -> bool:
+    """Whether the line at ``f`` fails to stand out, at ``chance_``, of its own scatter between segments of
+    the record (:func:`.line_coherence.segment_f`): a narrow noise band, not a steady line. The segments see
+    the whole line (fitted jointly with the periodic mean) and the fit's residual: the residual ``r`` about
+    the mean alone holds the line less its own average over the periods, which near a harmonic is most of it
+    and turns with the period index."""
+    from .line_coherence import segment_f
+
+    amp = _fit(r, f, n, p, drift)[0]
+    whole = (amp * np.exp(2j * math.pi * f * np.arange(r.size, dtype=np.float64))).real
+    ratio, dof = segment_f(r - _line(r, f, n, p, drift) + whole, f, n, p)
+    return dof > 0 and f_tail(ratio, dof) > chance_
 
 
 def _candidate(
@@ -181,6 +201,8 @@ def _candidate(
         a2 = _fit(r[mid : n * p], f0, n - n // 2, p)[0]
         if a1 is not None and abs(a1 - a2 * off) > 0.5 * max(abs(a1), abs(a2)):
             return None
+    if wanders(r, f0, n, p, alpha / bins):  # a narrow noise band: its phase wanders between segments
+        return None
     return f0
 
 
@@ -432,6 +454,8 @@ def near_candidate(y: FloatArray, n: int, p: int, alpha: float) -> Optional[floa
     if _mirror_share(r, f0, n, p) > MIRROR_SHARE:  # two sidebands: a drifting loop or a narrow noise band
         return None
     if not _steady_halves(r, f0, n, p):  # a free oscillation decays, a narrow noise band wanders
+        return None
+    if wanders(r, f0, n, p, alpha / bins, drift=False):
         return None
     return f0
 
