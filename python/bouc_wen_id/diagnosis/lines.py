@@ -73,15 +73,6 @@ PAD_EXCESS = 1.0
 MAX_COHERENCE = 0.95
 
 
-def _steady(rec: Any) -> tuple[FloatArray, int, int, int, float]:
-    p, s = int(rec.samples_per_period), int(rec.settle_periods)
-    n = int(rec.whole_periods) - s
-    t = np.asarray(rec.t, dtype=np.float64)
-    dt = float(t[1] - t[0]) if t.size > 1 else math.nan
-    y = np.asarray(rec.y, dtype=np.float64)[s * p : (s + n) * p] if n > 0 else np.zeros(0)
-    return y, p, n, s, dt
-
-
 def _orth(sig: FloatArray, n: int, p: int, drift: bool = True) -> FloatArray:
     """``sig`` (n whole periods) less what the periodic mean and a quadratic drift of it in the period
     index can take (each sample of the period a series over the periods, as the colour check's trend): a
@@ -217,9 +208,12 @@ def input_carries_a_line(rec: Any) -> bool:
     """Whether the recording's measured input holds a line of its own (the search's tests on its steady
     periods): then the output's lines are the plant's response to it (and, through the loop, its products
     with the input's harmonics), not a disturbance; nothing is taken out of that recording (review 33: a
-    3 % tone at 1.7 Hz in u was removed from y as "mains hum", y then no longer the response to u)."""
-    _y, p, n, s, _dt = _steady(rec)
-    u = np.asarray(rec.u, dtype=np.float64)[s * p : (s + n) * p]
+    3 % tone at 1.7 Hz in u was removed from y as "mains hum", y then no longer the response to u).
+    ``rec``: a Recording or one :class:`.line_stretch.Stretch` of a record."""
+    from .line_stretch import Stretch, stretches
+
+    st = rec if isinstance(rec, Stretch) else stretches(rec)[0]
+    u, n, p = st.u, st.n, st.p
     if n < 3 or u.size != n * p:
         return False
     ru = _orth(u, n, p)
@@ -230,11 +224,12 @@ def input_carries_a_line(rec: Any) -> bool:
     return abs(_fit(ru, f, n, p)[0]) > INPUT_SHARE * float(np.max(np.abs(u)))
 
 
-def _lines(rec: Any, alpha: float = LINE_ALPHA) -> list[float]:
-    """Lines found in one recording at chance ``alpha`` for the recording, in cycles per sample (each its
-    alias in [0, 1/2]); none where its input carries a line (:func:`input_carries_a_line`)."""
-    y, p, n, _s, dt = _steady(rec)
-    if n < MIN_PERIODS or not (dt > 0) or input_carries_a_line(rec):
+def _lines(st: Any, alpha: float = LINE_ALPHA) -> list[float]:
+    """Lines found in one steady stretch (:class:`.line_stretch.Stretch`) at chance ``alpha`` for it, in
+    cycles per sample (each its alias in [0, 1/2]); none where its input carries a line
+    (:func:`input_carries_a_line`)."""
+    y, p, n = st.y, st.p, st.n
+    if n < MIN_PERIODS or not (st.dt > 0) or input_carries_a_line(st):
         return []
     r = _orth(y, n, p)
     found: list[float] = []
@@ -303,36 +298,36 @@ def _merged(freqs: Sequence[float]) -> list[float]:
 
 
 def removed(items: Any) -> tuple[Any, list[str]]:
-    """``(items, notes)``: copies of the Recordings in ``items`` with the lines found taken out of their
-    outputs, and one note per line (what, where, how large); ``items`` as given when none is found.
-    Measurements and averaged periods are passed on unchanged."""
-    from ..model import Recording
+    """``(items, notes)``: copies of the Recordings and Measurements in ``items`` with the lines found taken
+    out of their outputs, and one note per line (what, where, how large); ``items`` as given when none is
+    found. A Measurement is searched in each of its steady segments (:mod:`.line_stretch`) and the line
+    taken out of that segment's samples. Averaged periods are passed on unchanged."""
+    from .line_stretch import stretches
 
     seq = list(items) if isinstance(items, (list, tuple)) else [items]
-    recs = [i for i, it in enumerate(seq) if isinstance(it, Recording)]
-    each = LINE_ALPHA / max(1, len(recs))  # the search's chance per diagnosis, shared by the recordings
-    found = [(f, _steady(seq[i])[4], _steady(seq[i])[0].size) for i in recs for f in _lines(seq[i], each)]
+    parts = [(i, st) for i, it in enumerate(seq) for st in stretches(it)]
+    each = LINE_ALPHA / max(1, len(parts))  # the search's chance per diagnosis, shared by the stretches
+    found = [(f, st.dt, st.y.size) for _i, st in parts for f in _lines(st, each)]
     resolved = _resolved(found)
     freqs = [hz for hz, _ in resolved]
     if not freqs:
         return items, []
     out = list(seq)
+    ys = {i: np.array(seq[i].y, dtype=np.float64) for i, _st in parts}
     where: dict[float, list[tuple[int, float]]] = {f: [] for f in freqs}
     odds = {f: 1.0 for f in freqs}  # the chance of the strongest fit under noise alone, searched everywhere
-    level = LINE_ALPHA / max(1, len(freqs) * len(recs))
-    for i in recs:
-        rec = seq[i]
-        y_all = np.array(rec.y, dtype=np.float64)
-        ys, p, n, s, dt = _steady(rec)
-        if n < 3 or not (dt > 0) or input_carries_a_line(rec):
+    level = LINE_ALPHA / max(1, len(freqs) * len(parts))
+    for i, st in parts:
+        p, n, dt = st.p, st.n, st.dt
+        if n < 3 or not (dt > 0) or input_carries_a_line(st):
             continue
-        r = _orth(ys, n, p, drift=False)
-        changed = False
+        r = _orth(st.y, n, p, drift=False)
+        per, _freq, _h, far = _spectrum(r, n, p)
+        searched = len(parts) * max(2.0, float(np.count_nonzero(far)) / PAD)
+        t = np.asarray(seq[i].t, dtype=np.float64)[st.span[0] : st.span[1]]
         for hz in freqs:
-            f = hz * dt
-            amp, power, coh = _fit(r, f, n, p, drift=False)
-            per, freq, _h, far = _spectrum(r, n, p)
-            a = _alias(hz, dt)
+            f, a = hz * dt, _alias(hz, dt)
+            amp, _power, coh = _fit(r, f, n, p, drift=False)
             k = int(round(a * PAD * r.size))
             if coh > MAX_COHERENCE or a * p < MIN_HARMONIC or k >= per.size:
                 continue
@@ -340,15 +335,13 @@ def removed(items: Any) -> tuple[Any, list[str]]:
             top = float(np.max(per[max(0, k - PAD) : k + PAD + 1]))
             if not lev > 0 or top / lev < limit(level, worth):
                 continue
-            j0 = np.arange(y_all.size, dtype=np.float64) - s * p  # the steady stretch's sample 0
-            y_all = y_all - (amp * np.exp(2j * math.pi * f * j0)).real
+            ys[i][st.span[0] : st.span[1]] -= (amp * np.exp(2j * math.pi * hz * (t - st.t0))).real
             r = r - _line(r, f, n, p, drift=False)
+            per, _freq, _h, far = _spectrum(r, n, p)
             where[hz].append((i, abs(amp)))
-            searched = len(recs) * max(2.0, float(np.count_nonzero(far)) / PAD)
             odds[hz] = min(odds[hz], searched * chance(top / lev, worth))
-            changed = True
-        if changed:
-            out[i] = replace(rec, y=y_all)
+    for i in {i for hits in where.values() for i, _a in hits}:
+        out[i] = _with_output(seq[i], ys[i])
     vague = dict(resolved)
     notes = [_note(hz, seq, hits, vague[hz], odds[hz]) for hz, hits in where.items() if hits]
     if not notes:
@@ -356,9 +349,21 @@ def removed(items: Any) -> tuple[Any, list[str]]:
     return (out if isinstance(items, (list, tuple)) else out[0]), notes
 
 
+def _with_output(item: Any, y: FloatArray) -> Any:
+    """A copy of the Recording or Measurement ``item`` with the output ``y``."""
+    from ..measurement import Measurement
+
+    if not isinstance(item, Measurement):
+        return replace(item, y=y)
+    return Measurement(
+        item.t, item.u, y, nominal_frequency=item.nominal_frequency, units=item.units,
+        channels=item.channels, name=item.name, metadata=dict(item.metadata),
+    )  # fmt: skip
+
+
 def _name(seq: Sequence[Any], i: int) -> str:
     meta = getattr(seq[i], "metadata", {})
-    return str(meta.get("name", f"recording {i}"))
+    return str(meta.get("name", getattr(seq[i], "name", "") or f"recording {i}"))
 
 
 def _note(hz: float, seq: Sequence[Any], hits: Sequence[tuple[int, float]], vague: bool, odds: float) -> str:
