@@ -12,17 +12,18 @@ A white or coloured noise model cannot describe it (it is deterministic), so it 
 steady periods minus their mean (what the input's harmonics leave) are searched for the strongest line at
 least :data:`GUARD_BINS` record bins from every harmonic of the input; it is kept when it stands out of the
 local periodogram level beyond chance (:data:`LINE_ALPHA` per diagnosis, Bonferroni over the recordings and
-the bins, corrected for the level's own error: :func:`limit`), when the bin
-mirrored about its nearest harmonic holds less than :data:`MIRROR_SHARE` of its power (a loop that drifts
-or settles modulates its harmonics: two sidebands of equal power; a line has one) and when its amplitude
-is the same in both halves of the record (a free oscillation decays). Its frequency, refined by least
-squares, is then fitted in every recording (jointly with the periodic mean: the line's own average over the
-periods is not separable from the loop and stays in the regressors' complement) and taken out of the
-whole record when significant there (a line too close to a harmonic to be found alone in one experiment is
-found in another). Bins within the guard are searched too when the rest holds no line, about the periodic
-mean alone (:func:`near_candidate`: a hum 0.08 cycle a period off a harmonic, review 46). A recording
-whose measured input holds a line of its own is neither searched nor cleaned: its output's lines are the
-response to that input. The recordings handed to the diagnosis are copies; the user's are not modified.
+the bins, corrected for the level's own error: :func:`limit`), when the bin mirrored about its nearest
+harmonic holds less than :data:`MIRROR_SHARE` of its power (a loop that drifts or settles modulates its
+harmonics: two sidebands of equal power; a line has one) and when its amplitude is the same in both halves of
+the record (a free oscillation decays) and it stands out of its own scatter between segments of the record
+(:mod:`.line_coherence`: a narrow noise band's phase wanders). Its frequency, refined by least squares, is
+then fitted in every recording (jointly with the periodic mean: the line's own average over the periods is not
+separable from the loop and stays in the regressors' complement) and taken out of the whole record when
+significant there (a line too close to a harmonic to be found alone in one experiment is found in another).
+Bins within the guard are searched too when the rest holds no line, about the periodic mean alone
+(:func:`near_candidate`: a hum 0.08 cycle a period off a harmonic, review 46). A recording whose measured
+input holds a line of its own is neither searched nor cleaned: its output's lines are the response to that
+input. The recordings handed to the diagnosis are copies; the user's are not modified.
 """
 
 from __future__ import annotations
@@ -70,15 +71,6 @@ PAD_EXCESS = 1.0
 #: Largest coherence of a line with the periodic mean (its average over the periods, relative to itself)
 #: at which it is still fitted: above, the line and the loop cannot be told apart in the record.
 MAX_COHERENCE = 0.95
-
-
-def _steady(rec: Any) -> tuple[FloatArray, int, int, int, float]:
-    p, s = int(rec.samples_per_period), int(rec.settle_periods)
-    n = int(rec.whole_periods) - s
-    t = np.asarray(rec.t, dtype=np.float64)
-    dt = float(t[1] - t[0]) if t.size > 1 else math.nan
-    y = np.asarray(rec.y, dtype=np.float64)[s * p : (s + n) * p] if n > 0 else np.zeros(0)
-    return y, p, n, s, dt
 
 
 def _orth(sig: FloatArray, n: int, p: int, drift: bool = True) -> FloatArray:
@@ -145,8 +137,27 @@ def limit(chance: float, worth: float) -> float:
 def chance(ratio: float, worth: float) -> float:
     """The chance that one bin of noise reaches ``ratio`` times the estimated level (:func:`limit`'s
     inverse)."""
+    return f_tail(ratio - PAD_EXCESS, worth)
+
+
+def f_tail(x: float, worth: float) -> float:
+    """The chance that F with 2 and ``2 worth`` degrees of freedom exceeds ``x``: ``(1 + x / w)^-w``."""
     w = max(worth, 1.0)
-    return math.exp(-w * math.log1p(max(ratio - PAD_EXCESS, 0.0) / w))
+    return math.exp(-w * math.log1p(max(x, 0.0) / w))
+
+
+def wanders(r: FloatArray, f: float, n: int, p: int, chance_: float, drift: bool = True) -> bool:
+    """Whether the line at ``f`` fails to stand out, at ``chance_``, of its own scatter between segments of
+    the record (:func:`.line_coherence.segment_f`): a narrow noise band, not a steady line. The segments see
+    the whole line (fitted jointly with the periodic mean) and the fit's residual: the residual ``r`` about
+    the mean alone holds the line less its own average over the periods, which near a harmonic is most of it
+    and turns with the period index."""
+    from .line_coherence import segment_f
+
+    amp = _fit(r, f, n, p, drift)[0]
+    whole = (amp * np.exp(2j * math.pi * f * np.arange(r.size, dtype=np.float64))).real
+    ratio, dof = segment_f(r - _line(r, f, n, p, drift) + whole, f, n, p)
+    return dof > 0 and f_tail(ratio, dof) > chance_
 
 
 def _candidate(
@@ -181,6 +192,8 @@ def _candidate(
         a2 = _fit(r[mid : n * p], f0, n - n // 2, p)[0]
         if a1 is not None and abs(a1 - a2 * off) > 0.5 * max(abs(a1), abs(a2)):
             return None
+    if wanders(r, f0, n, p, alpha / bins):  # a narrow noise band: its phase wanders between segments
+        return None
     return f0
 
 
@@ -195,9 +208,12 @@ def input_carries_a_line(rec: Any) -> bool:
     """Whether the recording's measured input holds a line of its own (the search's tests on its steady
     periods): then the output's lines are the plant's response to it (and, through the loop, its products
     with the input's harmonics), not a disturbance; nothing is taken out of that recording (review 33: a
-    3 % tone at 1.7 Hz in u was removed from y as "mains hum", y then no longer the response to u)."""
-    _y, p, n, s, _dt = _steady(rec)
-    u = np.asarray(rec.u, dtype=np.float64)[s * p : (s + n) * p]
+    3 % tone at 1.7 Hz in u was removed from y as "mains hum", y then no longer the response to u).
+    ``rec``: a Recording or one :class:`.line_stretch.Stretch` of a record."""
+    from .line_stretch import Stretch, stretches
+
+    st = rec if isinstance(rec, Stretch) else stretches(rec)[0]
+    u, n, p = st.u, st.n, st.p
     if n < 3 or u.size != n * p:
         return False
     ru = _orth(u, n, p)
@@ -208,11 +224,12 @@ def input_carries_a_line(rec: Any) -> bool:
     return abs(_fit(ru, f, n, p)[0]) > INPUT_SHARE * float(np.max(np.abs(u)))
 
 
-def _lines(rec: Any, alpha: float = LINE_ALPHA) -> list[float]:
-    """Lines found in one recording at chance ``alpha`` for the recording, in cycles per sample (each its
-    alias in [0, 1/2]); none where its input carries a line (:func:`input_carries_a_line`)."""
-    y, p, n, _s, dt = _steady(rec)
-    if n < MIN_PERIODS or not (dt > 0) or input_carries_a_line(rec):
+def _lines(st: Any, alpha: float = LINE_ALPHA) -> list[float]:
+    """Lines found in one steady stretch (:class:`.line_stretch.Stretch`) at chance ``alpha`` for it, in
+    cycles per sample (each its alias in [0, 1/2]); none where its input carries a line
+    (:func:`input_carries_a_line`)."""
+    y, p, n = st.y, st.p, st.n
+    if n < MIN_PERIODS or not (st.dt > 0) or input_carries_a_line(st):
         return []
     r = _orth(y, n, p)
     found: list[float] = []
@@ -281,36 +298,37 @@ def _merged(freqs: Sequence[float]) -> list[float]:
 
 
 def removed(items: Any) -> tuple[Any, list[str]]:
-    """``(items, notes)``: copies of the Recordings in ``items`` with the lines found taken out of their
-    outputs, and one note per line (what, where, how large); ``items`` as given when none is found.
-    Measurements and averaged periods are passed on unchanged."""
+    """``(items, notes)``: copies of the Recordings and Measurements in ``items`` with the lines found taken
+    out of their outputs, and one note per line (what, where, how large); ``items`` as given when none is
+    found. A Measurement is searched in each of its steady segments (:mod:`.line_stretch`) and the line
+    taken out of that segment's samples. Averaged periods are passed on unchanged."""
     from ..model import Recording
+    from .line_stretch import raw_amplitude, stretches
 
     seq = list(items) if isinstance(items, (list, tuple)) else [items]
-    recs = [i for i, it in enumerate(seq) if isinstance(it, Recording)]
-    each = LINE_ALPHA / max(1, len(recs))  # the search's chance per diagnosis, shared by the recordings
-    found = [(f, _steady(seq[i])[4], _steady(seq[i])[0].size) for i in recs for f in _lines(seq[i], each)]
-    resolved = _resolved(found)
+    parts = [(i, st) for i, it in enumerate(seq) for st in stretches(it)]
+    each = LINE_ALPHA / max(1, len(parts))  # the search's chance per diagnosis, shared by the stretches
+    found = [(f, st.dt, st.y.size) for _i, st in parts for f in _lines(st, each)]
+    resolved = [(_refined(hz, [st for _i, st in parts]), vague) for hz, vague in _resolved(found)]
     freqs = [hz for hz, _ in resolved]
     if not freqs:
         return items, []
     out = list(seq)
+    ys = {i: np.array(seq[i].y, dtype=np.float64) for i, _st in parts}
     where: dict[float, list[tuple[int, float]]] = {f: [] for f in freqs}
     odds = {f: 1.0 for f in freqs}  # the chance of the strongest fit under noise alone, searched everywhere
-    level = LINE_ALPHA / max(1, len(freqs) * len(recs))
-    for i in recs:
-        rec = seq[i]
-        y_all = np.array(rec.y, dtype=np.float64)
-        ys, p, n, s, dt = _steady(rec)
-        if n < 3 or not (dt > 0) or input_carries_a_line(rec):
+    level = LINE_ALPHA / max(1, len(freqs) * len(parts))
+    for i, st in parts:
+        p, n, dt = st.p, st.n, st.dt
+        if n < 3 or not (dt > 0) or input_carries_a_line(st):
             continue
-        r = _orth(ys, n, p, drift=False)
-        changed = False
+        r = _orth(st.y, n, p, drift=False)
+        per, _freq, _h, far = _spectrum(r, n, p)
+        searched = len(parts) * max(2.0, float(np.count_nonzero(far)) / PAD)
+        t = np.asarray(seq[i].t, dtype=np.float64)[st.span[0] : st.span[1]]
         for hz in freqs:
-            f = hz * dt
-            amp, power, coh = _fit(r, f, n, p, drift=False)
-            per, freq, _h, far = _spectrum(r, n, p)
-            a = _alias(hz, dt)
+            f, a = hz * dt, _alias(hz, dt)
+            amp, _power, coh = _fit(r, f, n, p, drift=False)
             k = int(round(a * PAD * r.size))
             if coh > MAX_COHERENCE or a * p < MIN_HARMONIC or k >= per.size:
                 continue
@@ -318,15 +336,15 @@ def removed(items: Any) -> tuple[Any, list[str]]:
             top = float(np.max(per[max(0, k - PAD) : k + PAD + 1]))
             if not lev > 0 or top / lev < limit(level, worth):
                 continue
-            j0 = np.arange(y_all.size, dtype=np.float64) - s * p  # the steady stretch's sample 0
-            y_all = y_all - (amp * np.exp(2j * math.pi * f * j0)).real
+            if not isinstance(seq[i], Recording):  # a lab segment's grid is interpolated: its own samples
+                amp = raw_amplitude(seq[i], st, hz)
+            ys[i][st.span[0] : st.span[1]] -= (amp * np.exp(2j * math.pi * hz * (t - st.t0))).real
             r = r - _line(r, f, n, p, drift=False)
+            per, _freq, _h, far = _spectrum(r, n, p)
             where[hz].append((i, abs(amp)))
-            searched = len(recs) * max(2.0, float(np.count_nonzero(far)) / PAD)
             odds[hz] = min(odds[hz], searched * chance(top / lev, worth))
-            changed = True
-        if changed:
-            out[i] = replace(rec, y=y_all)
+    for i in {i for hits in where.values() for i, _a in hits}:
+        out[i] = _with_output(seq[i], ys[i])
     vague = dict(resolved)
     notes = [_note(hz, seq, hits, vague[hz], odds[hz]) for hz, hits in where.items() if hits]
     if not notes:
@@ -334,9 +352,43 @@ def removed(items: Any) -> tuple[Any, list[str]]:
     return (out if isinstance(items, (list, tuple)) else out[0]), notes
 
 
+def _with_output(item: Any, y: FloatArray) -> Any:
+    """A copy of the Recording or Measurement ``item`` with the output ``y``."""
+    from ..measurement import Measurement
+
+    if not isinstance(item, Measurement):
+        return replace(item, y=y)
+    return Measurement(
+        item.t, item.u, y, nominal_frequency=item.nominal_frequency, units=item.units,
+        channels=item.channels, name=item.name, metadata=dict(item.metadata),
+    )  # fmt: skip
+
+
+def _refined(hz: float, parts: Sequence[Any]) -> float:
+    """The frequency near ``hz`` (cycles per unit of t) at which a line explains most of the stretches'
+    ``parts`` power together, within half a bin of the longest. One detection's own estimate (what
+    :func:`_resolved` returns) put review 46's hum 0.002 Hz off: over a lab record's 28 s, 0.35 rad of phase,
+    and a tenth of the hum was left in (its average then "unexplained structure" at p ~ 1e-14)."""
+    from scipy.optimize import minimize_scalar
+
+    use = [(st, _orth(st.y, st.n, st.p, drift=False)) for st in parts if st.n >= 3 and st.dt > 0]
+    use = [(st, r) for st, r in use if _alias(hz, st.dt) * st.p >= MIN_HARMONIC]
+    if not use:
+        return hz
+    half = 0.5 / max(st.y.size * st.dt for st, _r in use)
+
+    def power(h: float) -> float:
+        return -sum(_fit(r, h * st.dt, st.n, st.p, drift=False)[1] for st, r in use)
+
+    best = minimize_scalar(
+        power, bounds=(hz - half, hz + half), method="bounded", options={"xatol": half * 1e-4}
+    )
+    return float(best.x) if power(float(best.x)) <= power(hz) else hz
+
+
 def _name(seq: Sequence[Any], i: int) -> str:
     meta = getattr(seq[i], "metadata", {})
-    return str(meta.get("name", f"recording {i}"))
+    return str(meta.get("name", getattr(seq[i], "name", "") or f"recording {i}"))
 
 
 def _note(hz: float, seq: Sequence[Any], hits: Sequence[tuple[int, float]], vague: bool, odds: float) -> str:
@@ -432,6 +484,8 @@ def near_candidate(y: FloatArray, n: int, p: int, alpha: float) -> Optional[floa
     if _mirror_share(r, f0, n, p) > MIRROR_SHARE:  # two sidebands: a drifting loop or a narrow noise band
         return None
     if not _steady_halves(r, f0, n, p):  # a free oscillation decays, a narrow noise band wanders
+        return None
+    if wanders(r, f0, n, p, alpha / bins, drift=False):
         return None
     return f0
 

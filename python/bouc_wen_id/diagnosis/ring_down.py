@@ -125,21 +125,9 @@ def lab_records(item: Any) -> list[tuple[str, Any, int, int, int]]:
     of the input, linearly interpolated to ``p`` samples a period (the nearest whole number to the
     sampling's: a lab period holds 100.37 samples, not a whole number), its ``periods`` whole periods, and
     ``lead`` the whole periods of the record before them. What :func:`ringing` reads of a recording."""
-    from ..signal import average_segments
+    from .line_stretch import stretches
 
-    t, y = np.asarray(item.t, dtype=np.float64), np.asarray(item.y, dtype=np.float64)
-    dt = (float(t[-1]) - float(t[0])) / max(t.size - 1, 1)
-    out = []
-    for ap in average_segments(item).periods:
-        period = 2.0 * math.pi / float(ap.frequency)
-        p = int(round(period / dt))
-        m = int((float(t[ap.stop - 1]) - float(ap.time_origin)) // period)
-        if p < 8 or m < 1:
-            continue
-        tt = float(ap.time_origin) + np.arange(m * p) * (period / p)
-        lead = int((float(ap.time_origin) - float(t[0])) // period)
-        out.append((str(ap.source), np.interp(tt, t, y), p, m, lead))
-    return out
+    return [(st.source, st.y, st.p, st.n, st.lead) for st in stretches(item)]
 
 
 #: Fewest whole periods :func:`ringing` reads: the two of the virgin loading and :data:`WINDOW` changes.
