@@ -50,7 +50,7 @@ from numpy.typing import NDArray
 from .._text import item_label
 from ..errors import InsufficientDataError, InvalidParameterError, ZeroAmplitudeError
 from ..signal._harmonic_ls import harmonic_basis
-from . import lab_colour, lab_settle
+from . import lab_colour, lab_settle, level_bands
 
 FloatArray = NDArray[np.float64]
 ComplexArray = NDArray[np.complex128]
@@ -329,9 +329,11 @@ HARMONIC_FLOOR = 0.01
 def harmonic_levels(
     rows: FloatArray, white_var: float, dc: bool = True, k: Optional[int] = None
 ) -> FloatArray:
-    """Each harmonic 0..K's noise level of periods ``rows`` (N, P), in per-sample units: the spread about
-    a quadratic trend (as :func:`noise_colour`) pooled over the :data:`COLOUR_BAND` harmonics around it
-    (the DC alone, inflated for the correlation of the period DCs, :func:`cross_period_inflation`), never
+    """Each harmonic 0..K's noise level of periods ``rows`` (N, P), in per-sample units: the spread of the
+    drift test's blocks about a quadratic trend pooled over at most the :data:`COLOUR_BAND` harmonics
+    around it whose single-period spreads agree (:func:`level_bands.band_levels`: a narrow-band peak is not
+    smeared into its neighbours; the DC alone, its single periods' spread inflated for the correlation of
+    the period DCs, :func:`cross_period_inflation`), never
     below :data:`HARMONIC_FLOOR` times ``white_var`` (a red noise is below its per-sample level at the
     higher harmonics). Empty when N < 3. ``dc=False`` (the period means taken out, ``baseline.py``): the DC's
     level is infinite (no weight in the drift test) and no band counts it. ``k``: the last harmonic
@@ -351,11 +353,9 @@ def harmonic_levels(
         out[0] = (p * float(np.sum(c[:, 0].real ** 2)) + float(np.sum(ss[1 : half + 1]))) / (
             free * (1 + 2 * min(half, k))
         )
-    for j in range(1, k + 1):
-        a, b = max(1, j - half), min(k, j + half)
-        out[j] = float(np.sum(ss[a : b + 1])) / (2.0 * free * (b - a + 1))
-    if not dc:  # the fundamental alone, as noise_colour's band of its own
-        out[1] = float(ss[1]) / (2.0 * free)
+    # Harmonics 1..K at the blocks' length, pooled only over neighbours that agree (level_bands.py); without
+    # the DC the fundamental is a band of its own, as noise_colour's.
+    out[1:] = level_bands.band_levels(c, raw, free, p, (COLOUR_BAND, MAX_BLOCKS, not dc))[1:]
     out = np.maximum(out, HARMONIC_FLOOR * white_var)
     if not dc:
         out[0] = np.inf

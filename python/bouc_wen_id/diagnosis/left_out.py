@@ -26,6 +26,7 @@ import html
 from dataclasses import replace
 from typing import Any, TypeVar
 
+from . import deg_unnamed
 from .drift_said import firm
 from .settling import LEFT_OUT, LEFT_OUT_P, left_out_tail
 from .verdict_text import clauses
@@ -95,6 +96,7 @@ def records(d: Any) -> list[dict[str, Any]]:
         if ps:
             row["p_adjusted"] = ps[i]
             row["detail"] = UNSETTLED_DETAIL if firm(ps[i]) else UNSETTLED_MAY
+        row["detail"] = deg_unnamed.detail(row["detail"], getattr(d, "settings", None))
         out.append({**row, "left_out_of": list(UNSETTLED_OF)})
     return out
 

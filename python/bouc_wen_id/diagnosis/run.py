@@ -29,6 +29,7 @@ from . import (
     coulomb_width,
     dc_untested,
     dc_wander,
+    deg_unnamed,
     design_twin,
     drift_majority,
     drift_pair,
@@ -590,9 +591,10 @@ def _without_unsettled(
     left_out = [exps[i].source for i in drifting]
     all_p = drift_p(exps) if by_trend else []
     ps = [all_p[i] for i in drifting] if by_trend else []
-    why = left_out_note(names, left_out, ps)
+    why_not = deg_unnamed.clause(deg, setup.alpha)
+    why = left_out_note(names, left_out, ps, why_not)
     keep = [i for i in range(len(exps)) if i not in drifting]
-    evidence = {LEFT_OUT: left_out, LEFT_OUT_P: ps}
+    evidence = {LEFT_OUT: left_out, LEFT_OUT_P: ps, **deg_unnamed.evidence(why_not)}
     if not keep:
         assert whole is not None  # _drift_stage leaves out early only when some experiment settled
         every = "every record is left out as not settled"
@@ -600,7 +602,7 @@ def _without_unsettled(
         said = records_drift(left_out, ps) if ps else "the loop still drifts from period to period"
         verdict = (
             f"{'may not be' if ps and not all(firm(p) for p in ps) else 'not'} settled: in every experiment, "
-            f"{said}, and no degradation explains it; nothing is named from a loop that may not have "
+            f"{said}, and {why_not}; nothing is named from a loop that may not have "
             "settled (record more settling periods, or a longer record)"
         ) + drift_majority.reading(deg)
         return replace(

@@ -325,19 +325,25 @@ def left_out_tail(p_adjusted: Sequence[float]) -> str:
     return LEFT_OUT_MAY if any(not firm(p) for p in p_adjusted) else LEFT_OUT_TAIL
 
 
-def left_out_note(names: str, records: Sequence[str] = (), p_adjusted: Sequence[float] = ()) -> str:
+def left_out_note(
+    names: str, records: Sequence[str] = (), p_adjusted: Sequence[float] = (), why_not: str = ""
+) -> str:
     """The note on experiments left out of a diagnosis as not settled (:func:`_unsettled`), one wording for
     :func:`.run.diagnose` and ``diagnose_across``.  A sensor whose gain or zero drifts over the record looks
     the same to the drift test (review 34: a 2 % gain drift), so both readings are said; with the records'
     adjusted p (:func:`drift_p`, in ``records``' order) the drift is said at drift_said's standard, each
-    record with its p."""
+    record with its p. ``why_not``: what degradation's test found (deg_unnamed.clause; "no degradation
+    explains it" when empty)."""
+    from .deg_unnamed import NONE_EXPLAINS
     from .drift_said import records_drift
 
     said = records_drift(records, p_adjusted) if p_adjusted else "the loop still drifts from period to period"
+    deg = why_not or NONE_EXPLAINS
+    tail = "" if deg == NONE_EXPLAINS else ", or that degradation"
     return (
-        f"left out of the diagnosis: {names} ({said} and no "
-        "degradation explains it: a transient not yet settled, or a sensor whose gain or zero drifts over "
-        "the record); record more settling periods, or check the sensor's calibration over the record"
+        f"left out of the diagnosis: {names} ({said} and {deg}: a transient not yet settled, or a sensor "
+        f"whose gain or zero drifts over the record{tail}); record more settling periods, or check the "
+        "sensor's calibration over the record"
     )
 
 
