@@ -1,6 +1,6 @@
 """Per recording, the smooth curve wander_curve.py would fit to the period means (wander47 README).
 
-    PYTHONPATH=python python studies/wander47/probe47.py SEED0 SEED1        # design C, sim45's wander
+    PYTHONPATH=python python studies/wander47/probe47.py SEED0 SEED1 [NOISE]  # design C, sim45's wander
     PYTHONPATH=python:tests python studies/wander47/probe47.py walk SEED0 SEED1  # test_diagnosis_baseline's
 
 Per seed: which wander path fires, and per recording the curve's degree, its chi-square / dof and p (a
@@ -38,12 +38,12 @@ def line(tag: str, recs: list[Any]) -> None:
     print(tag, path, " ".join(cells), flush=True)
 
 
-def main(s0: int, s1: int) -> None:
+def main(s0: int, s1: int, kind: str = "wander") -> None:
     p, d, _ = dv.scaled("C")
     d = replace(d, periods=PERIODS)
     runs = s.run(p, d)
     for seed in range(s0, s1):
-        line(str(seed), s.recordings(runs, d, s.Noise("wander", dv.SD), seed))
+        line(str(seed), s.recordings(runs, d, s.Noise(kind, dv.SD), seed))
 
 
 def walks(s0: int, s1: int) -> None:
@@ -58,4 +58,4 @@ if __name__ == "__main__":
     if sys.argv[1] == "walk":
         walks(int(sys.argv[2]), int(sys.argv[3]))
     else:
-        main(int(sys.argv[1]), int(sys.argv[2]))
+        main(int(sys.argv[1]), int(sys.argv[2]), *sys.argv[3:4])
