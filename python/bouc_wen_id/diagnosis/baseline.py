@@ -66,6 +66,9 @@ class Wander:
     #: a smooth wander of the zero alone (``dc_wander.py``): the chi-square about each recording's best
     #: settling transient, its dof and p, and the fundamental's trend p; None: this module's test took it
     smooth: Optional[tuple[float, int, float, float]] = None
+    #: per item of the set, the degree of the smooth curve taken out of its period means
+    #: (``wander_curve.py``), or None: taken out period by period with a random walk's leak
+    curves: tuple[Optional[int], ...] = ()
 
     def note(self) -> str:
         if self.smooth is not None:
@@ -75,9 +78,7 @@ class Wander:
                 f"{self.correlation:.2g}) beyond a settling transient (a level and an exponential approach "
                 f"per recording: chi-square {sx2:.3g} on {sdof} dof, p = {sp:.2g}), while the "
                 f"loop itself does not trend (fundamental amplitude p = {loop_p:.2g}): a zero that wanders "
-                "smoothly over the record (a drifting sensor zero, for example); each period's mean was "
-                "taken as baseline and removed before averaging (one degree of freedom per period, from the "
-                "noise floor), the harmonics of every period kept as measured"
+                f"smoothly over the record (a drifting sensor zero, for example); {self._taken()}"
             )
         return (
             "the baseline wanders: the period means trend beyond a quadratic (chi-square "
@@ -87,6 +88,23 @@ class Wander:
             "for example); each period's mean was "
             "taken as baseline and removed before averaging (one degree of freedom per period, from the "
             "noise floor), the harmonics of every period kept as measured"
+        )
+
+    def _taken(self) -> str:
+        """How a smooth wander was taken out (``curves``)."""
+        degrees = [d for d in self.curves if d is not None]
+        steps = "each period's mean was taken as baseline and removed before averaging (one degree of "
+        steps += "freedom per period, from the noise floor)"
+        if not degrees:
+            return f"{steps}, the harmonics of every period kept as measured"
+        rest = len(self.curves) - len(degrees)
+        head = "in every recording" if rest == 0 else f"in {len(degrees)} of {len(self.curves)} recordings"
+        tail = "" if rest == 0 else f"; in the others (their period means are not smooth) {steps}"
+        return (
+            f"{head} a smooth curve through the period means (a polynomial in time of degree "
+            f"{min(degrees)}-{max(degrees)}, chosen by AIC) was taken out sample by sample, its ramp within "
+            "each period too, then what was left of each period's mean (one degree of freedom per period, "
+            f"from the noise floor){tail}"
         )
 
     def clause(self) -> str:
@@ -199,12 +217,14 @@ def removed(items: Any, wander: Any) -> Any:
     ``items`` as they are when the set does not wander. ``wander`` is a :class:`Wander` or a
     ``zero_drift.Drift`` (each recording's straight line is then taken out first, and no walk is left)."""
     from ..model import Recording
+    from . import wander_curve
     from .zero_drift import detrended, lab_detrended
 
     if wander is None or getattr(wander, "per_record", False):  # record_zeros.py: the records as they are
         return items
     seq = list(items) if isinstance(items, (list, tuple)) else [items]
     slopes = getattr(wander, "slopes", None)  # a zero drifting in a straight line (zero_drift.py)
+    curves = getattr(wander, "curves", ())  # a smooth wander's curves (wander_curve.py)
     out = []
     lab = getattr(wander, "lab", ())
     for j, rec in enumerate(seq):
@@ -213,6 +233,9 @@ def removed(items: Any, wander: Any) -> Any:
             continue
         if not isinstance(rec, Recording):
             out.append(rec)
+            continue
+        if j < len(curves) and curves[j] is not None:  # a smooth wander: its curve, no walk
+            out.append(wander_curve.removed(rec, int(curves[j]), wander.centre))
             continue
         p, n = int(rec.samples_per_period), int(rec.whole_periods)
         y = np.array(rec.y, dtype=np.float64) if slopes is None else detrended(rec, slopes[j])

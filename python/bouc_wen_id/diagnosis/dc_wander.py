@@ -23,8 +23,10 @@ the zero wandering when, pooled over those recordings,
 * the loop itself does not trend (the fundamental's amplitude, ``zero_drift``'s loop test, p at least
   ``DRIFT_ALPHA``): a degradation moves the loop's shape and is left to the drift tests as before.
 
-Then each period's mean is taken out as the baseline's (``baseline.removed``); the harmonics 1.. are
-untouched and the verdict says the zero wanders (and that an output offset cannot be tested, when no
+Then the wander is taken out (``baseline.removed``): in each recording whose period means sit on a smooth
+curve within the noise, that curve, its ramp within each period included, and no random walk's leak on the
+noise floor (``wander_curve.py``, session 47); in the others each period's mean with the walk's leak, as
+before. The verdict says the zero wanders (and that an output offset cannot be tested, when no
 common centre stands out: ``dc_untested.py``).
 """
 
@@ -35,6 +37,8 @@ from typing import Any, Optional
 
 import numpy as np
 
+from ..model import Recording
+from . import wander_curve
 from .baseline import WANDER_CORRELATION, Wander, _statistics
 from .data import common_centre
 from .zero_drift import DRIFT_ALPHA, _recording, _rows
@@ -65,8 +69,6 @@ def _statistics_dc(items: Any) -> Optional[tuple[float, int, float, float]]:
     """The settling-transient chi-square, its dof and p, and the fundamental's pooled trend p, over the
     Recordings of ``zero_drift.MIN_PERIODS`` periods or more after settling; None when there are none."""
     from scipy.special import chdtrc  # type: ignore[import-untyped]
-
-    from ..model import Recording
 
     seq = list(items) if isinstance(items, (list, tuple)) else [items]
     chi2, dof, loop, m = 0.0, 0, 0.0, 0
@@ -103,7 +105,10 @@ def detect(items: Any, level: float) -> Optional[Wander]:
     if not (sp < SETTLE_ALPHA and loop_p >= DRIFT_ALPHA):
         return None
     c, se, cp, kept = common_centre(centres, level)
-    return Wander(r, pl, chi2, dof, pval, c if kept else 0.0, se, cp, kept, level, (sx2, sdof, sp, loop_p))
+    seq = list(items) if isinstance(items, (list, tuple)) else [items]
+    curves = tuple(wander_curve.degree(rec) if isinstance(rec, Recording) else None for rec in seq)
+    numbers = (sx2, sdof, sp, loop_p)
+    return Wander(r, pl, chi2, dof, pval, c if kept else 0.0, se, cp, kept, level, numbers, curves)
 
 
 __all__ = ["detect", "settle_rough", "SETTLE_ALPHA"]
