@@ -252,6 +252,12 @@ def play(x: np.ndarray, r: float) -> np.ndarray:
     return out
 
 
+def sgn(v: np.ndarray) -> np.ndarray:
+    """sign(v), 0 within 1e-9 of max |v|: a sample on a reversal (sin(w t) = 1e-16 at t = T/2) is 0, not a
+    rounding error's +-1 (that made +-f spikes at every half period, which the diagnosis flagged as outliers)."""
+    return np.where(np.abs(v) > 1e-9 * float(np.max(np.abs(v))), np.sign(v), 0.0)
+
+
 def measured(sy: System, pl: Plan, i: int, st: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """t, u and the noise-free y of experiment i from its states (rows: time)."""
     t = grid(pl, i)
@@ -266,8 +272,8 @@ def measured(sy: System, pl: Plan, i: int, st: np.ndarray) -> tuple[np.ndarray, 
     else:
         x, xv, xa = sy.g.gain * u, sy.g.gain * uv, sy.g.gain * ua
     y = st[:, n] + st[:, n + 2]
-    vec = {"stiffness": u, "viscous": uv, "inertia": ua, "coulomb": np.sign(uv), "offset": np.ones_like(t)}
-    vec |= {"stiffness@x": x, "viscous@x": xv, "inertia@x": xa, "coulomb@x": np.sign(xv)}
+    vec = {"stiffness": u, "viscous": uv, "inertia": ua, "coulomb": sgn(uv), "offset": np.ones_like(t)}
+    vec |= {"stiffness@x": x, "viscous@x": xv, "inertia@x": xa, "coulomb@x": sgn(xv)}
     for name, val in sy.terms:
         y = y + val * vec[name]
     if sy.pi_x > 0:
