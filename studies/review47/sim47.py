@@ -254,7 +254,7 @@ def play(x: np.ndarray, r: float) -> np.ndarray:
 
 def sgn(v: np.ndarray) -> np.ndarray:
     """sign(v), 0 within 1e-9 of max |v|: a sample on a reversal (sin(w t) = 1e-16 at t = T/2) is 0, not a
-    rounding error's +-1 (that made +-f spikes at every half period, which the diagnosis flagged as outliers)."""
+    rounding error's +-1 (it made +-f spikes each half period: the diagnosis flagged them as outliers)."""
     return np.where(np.abs(v) > 1e-9 * float(np.max(np.abs(v))), np.sign(v), 0.0)
 
 
