@@ -67,7 +67,8 @@ CONFIGS: dict[str, tuple[str, ...]] = {
     row.split(":")[0]: tuple(row.split(":")[1].split())
     for row in (
         "J: A3 2mode hetero b.7g.3mu2; K: SW12 nmp outliers soft; L: U8 integ drift mu1a4; "
-        "M: U8 lp ar1 mu.75; N: NP 2mode ar1 b.7g.3mu2"
+        "M: U8 lp ar1 mu.75; N: NP 2mode ar1 b.7g.3mu2; "
+        "Lw: U8 integ white mu1a4; Mw: U8 lp white mu.75; Mm: U8 lp ar1 b.7g.3mu2"
     ).split("; ")
 }
 #: effect -> the library's term (None: physics outside the library)
@@ -177,7 +178,9 @@ def build(
     return runs, pl, nn, {name: library_truth(name, v, sy.el)}, got
 
 
-FOLLOW_UPS: tuple[str, ...] = ()
+#: Added after the first results (FINDINGS.md says why): L without its gain drift (white noise); M's nulls
+#: named stiffness@x: with white noise instead of AR(1), or with J's element (mu = 2) instead of mu = 0.75.
+FOLLOW_UPS = tuple("null-0-Lw-4 stiffness_x-30-Lw-1 null-0-Mw-4 null-0-Mm-4 stiffness_x-30-Mm-1".split())
 
 
 def case_ids() -> list[str]:
