@@ -53,11 +53,17 @@ def main(kind: str, seed: int) -> None:
         warnings.simplefilter("always")
         c0 = time.process_time()
         ad = bw.diagnose_across(groups, [0.0, 1.0, 2.0], labels=["c=0", "c=1", "c=2"])
-        cpu = time.process_time() - c0
-    rec: dict[str, Any] = {"id": f"across-{kind}-J-{seed}", "truth": truths, "cpu_seconds": cpu}
-    rec |= {"warnings": sorted({type(w.message).__name__ for w in caught})}
-    rec |= {"status": ad.status, "verdict": ad.verdict, "notes": list(ad.notes)}
-    rec |= {"terms": [t.to_dict() for t in ad.terms], "partial": [t.to_dict() for t in ad.partial]}
+        rec: dict[str, Any] = {
+            "id": f"across-{kind}-J-{seed}",
+            "truth": truths,
+            "cpu_seconds": time.process_time() - c0,
+            "warnings": sorted({type(w.message).__name__ for w in caught}),
+            "status": ad.status,
+            "verdict": ad.verdict,
+            "notes": list(ad.notes),
+            "terms": [t.to_dict() for t in ad.terms],
+            "partial": [t.to_dict() for t in ad.partial],
+        }
     print(json.dumps(rec, default=str))
 
 

@@ -2,8 +2,9 @@
 
     PYTHONPATH=python python studies/review47/check47.py > studies/review47/check47.txt
 
-Per config and a few effects (at the values the driver sizes for 30x): max |dy| / w_u over every sample of
-every experiment (noise-free), and the largest x error against |G(jw)| U in the last period.
+Per config and a few effects (10 times the driver's first value; pinching 0.5): max |dy| / w_u over every
+sample of every experiment (noise-free, settling included), and the RMS of dy over the recorded samples in the
+driver's size units (sd / sqrt(periods)): what the integration error would weigh as an effect.
 """
 
 from __future__ import annotations
@@ -31,12 +32,14 @@ def one(cfg: str, eff: str) -> str:
         if eff == "dahl2":
             sy = s.with_effect(sy, "dahl_fc", 0.05 * sy.el.w_u)
     c0 = time.process_time()
-    worst = 0.0
-    for i in range(len(pl.omegas)):
-        a = s.measured(sy, pl, i, s.trajectory(sy, pl, i))[2]
-        b = s.measured(sy, pl, i, s.trajectory(sy, pl, i, check=True, sub=64))[2]
-        worst = max(worst, float(np.max(np.abs(a - b))))
-    return f"{cfg} {eff:6s} max|dy|/w_u {worst / sy.el.w_u:.2e}  ({time.process_time() - c0:.1f} s cpu)"
+    trap = s.simulate(sy, pl)
+    fine = [s.measured(sy, pl, i, s.trajectory(sy, pl, i, check=True, sub=64)) for i in range(len(pl.omegas))]
+    worst = max(float(np.max(np.abs(a[2] - b[2]))) for a, b in zip(trap, fine))
+    as_size = dv.size(trap, fine, pl, dv.SD * sy.el.w_u)
+    return (
+        f"{cfg} {eff:6s} max|dy|/w_u {worst / sy.el.w_u:.2e}, RMS over the recorded samples in size units "
+        f"{as_size:.2f}  ({time.process_time() - c0:.1f} s cpu)"
+    )
 
 
 def main() -> None:

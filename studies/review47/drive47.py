@@ -1,21 +1,20 @@
-"""Review 47's driver: build a case with sim47.py, run ``bw.diagnose`` (defaults) in a process of its own.
+"""Review 47's driver: a case built by sim47.py, then ``bw.diagnose`` (its defaults) in a process of its own.
 
-    PYTHONPATH=python python studies/review47/drive47.py run studies/review47/results47.jsonl [ID ...]
-    PYTHONPATH=python python studies/review47/drive47.py --one CASE_ID    # one case, in process: the record
-    PYTHONPATH=python python studies/review47/drive47.py --list           # the planned case ids
-    PYTHONPATH=python python studies/review47/drive47.py --write CASE_ID DIR   # its recordings as CSV files
+Run from the repository root with PYTHONPATH=python; the first argument says what:
 
-A case id is ``effect-size-config-seed``; the seed drives the noise only. The child (``nice -n 15``,
-OMP_NUM_THREADS=1, 180 s) is review 45's ``diagnose_child`` (the same record fields).
+* ``run OUT [ID ...]``: every planned case (or the ids given) not yet in the JSON-lines file OUT;
+* ``--one ID``: one case in this process, its record printed;
+* ``--list``: the planned ids;  ``--write ID DIR``: the case's recordings as CSV files (t, u, y).
+
+An id is ``effect-size-config-seed`` (the seed drives the noise only). The child (``nice -n 15``,
+OMP_NUM_THREADS=1, 180 s) is review 46's runner of review 45's ``diagnose_child`` (the same record fields).
 """
 
 from __future__ import annotations
 
 import json
 import math
-import os
 import pickle
-import subprocess
 import sys
 import tempfile
 import time
@@ -27,11 +26,10 @@ import numpy as np
 
 HERE = Path(__file__).parent
 sys.path.insert(0, str(HERE))
-sys.path.insert(0, str(HERE.parent / "review45"))
+sys.path.insert(0, str(HERE.parent / "review46"))
+import drive46 as dv46  # noqa: E402
 import sim47 as s  # noqa: E402
-from drive45 import diagnose_child  # noqa: E402
 
-TIMEOUT = 180.0
 SD = 0.01  # times w_u: the noise is sized to the element's saturation level
 G2 = s.two_mode(2.2, 0.08, 7.0, 0.06)
 SWEEP = tuple(float(w) for w in np.geomspace(0.7, 11.0, 12))
@@ -164,15 +162,14 @@ def build(
     key, v = start(eff, sy, pl)
     runs = s.simulate(s.with_effect(sy, key, v), pl)
     got = size(runs, plain, pl, sd)
-    prev = None
-    for _ in range(4):  # log-log secant
-        if abs(got / target - 1.0) < 0.1:
-            break
-        slope = 1.0 if prev is None else math.log(got / prev[1]) / math.log(v / prev[0])
-        slope = min(max(slope, 0.3), 3.0)
-        prev = (v, got)
-        v = v * (target / got) ** (1.0 / slope)
-        v = min(v, 0.95) if eff == "pinch" else v
+    tried: list[tuple[float, float]] = []  # (value, size) so far: a log-log secant to within 10 %
+    while abs(got / target - 1.0) >= 0.1 and len(tried) < 4:
+        last = tried[-1] if tried else None
+        slope = math.log(got / last[1]) / math.log(v / last[0]) if last else 1.0
+        tried.append((v, got))
+        v *= (target / got) ** (1.0 / min(max(slope, 0.3), 3.0))
+        if eff == "pinch":
+            v = min(v, 0.95)
         runs = s.simulate(s.with_effect(sy, key, v), pl)
         got = size(runs, plain, pl, sd)
     return runs, pl, nn, {name: library_truth(name, v, sy.el)}, got
@@ -206,75 +203,47 @@ def prepare(cid: str) -> tuple[list[Any], dict[str, Any]]:
     return recs, head | {"sim_cpu": time.process_time() - c0}
 
 
-def diagnosed(path: str, in_process: bool) -> dict[str, Any]:
-    """Review 45's child on the pickled recordings: here, or in a process of its own (nice 15, 180 s)."""
-    if in_process:
-        return diagnose_child(path)
-    cmd = ["nice", "-n", "15", sys.executable, __file__, "--child", path]
-    env = os.environ | {"OMP_NUM_THREADS": "1"}
-    try:
-        cp = subprocess.run(cmd, capture_output=True, text=True, timeout=TIMEOUT, env=env)
-    except subprocess.TimeoutExpired:
-        return {"error": f"timeout {TIMEOUT:g} s", "seconds": TIMEOUT}
-    last = (cp.stdout.strip().splitlines() or [""])[-1]
-    return json.loads(last) if cp.returncode == 0 and last else {"error": "crash: " + cp.stderr[-400:]}
-
-
-def scored(r: dict[str, Any], truth: dict[str, float]) -> dict[str, Any]:
-    """Each named or partial term that is a true one gets its truth and z = (value - truth) / se."""
-    for n in r.get("named", []) + r.get("partial", []):
-        t = truth.get(n["term"])
-        if t is not None:
-            usable = bool(n["se"]) and math.isfinite(n["se"])
-            n |= {"truth": t, "z": (n["value"] - t) / n["se"] if usable else None}
-    return r
-
-
 def run_case(cid: str, in_process: bool = False) -> dict[str, Any]:
+    """Review 46's child runner (review 45's ``diagnose_child``, nice 15, 180 s) on this case's recordings."""
     recs, head = prepare(cid)
-    fd, path = tempfile.mkstemp(suffix=".pkl")
-    with os.fdopen(fd, "wb") as f:
-        pickle.dump(recs, f)
-    try:
-        r = diagnosed(path, in_process)
-    finally:
-        os.unlink(path)
-    return head | scored(r, head["truth"])
+    with tempfile.TemporaryDirectory() as tmp:
+        path = str(Path(tmp) / "recs.pkl")
+        Path(path).write_bytes(pickle.dumps(recs))
+        return head | dv46.scored(dv46.diagnosed(path, in_process), head["truth"])
 
 
 def write_csv(recs: list[Any], folder: str) -> None:
     """Recordings as CSV files (t, u, y), one per experiment, as a lab would hand them to the command line."""
     Path(folder).mkdir(parents=True, exist_ok=True)
     for r in recs:
-        name = r.metadata["name"] if "name" in r.metadata else r.name
-        table = np.column_stack([r.t, r.u, r.y])
-        np.savetxt(f"{folder}/{name}.csv", table, delimiter=",", header="t,u,y", comments="")
-
-
-def run_all(out: Path, ids: list[str]) -> None:
-    """Each case not yet in ``out``, one JSON line each, appended as it goes."""
-    old = out.read_text().splitlines() if out.exists() else []
-    done = {json.loads(x)["id"] for x in old if x.strip()}
-    for cid in [c for c in ids if c not in done]:
-        r = run_case(cid)
-        with out.open("a") as f:
-            f.write(json.dumps(r, default=str) + "\n")
-        said = (r.get("headline") or r.get("error", ""))[:150]
-        print(f"{cid} {r.get('status')} {r.get('seconds') or 0:.0f} s: {said}", flush=True)
+        name = r.metadata.get("name", getattr(r, "name", "x"))
+        np.savetxt(f"{folder}/{name}.csv", np.c_[r.t, r.u, r.y], delimiter=",", header="t,u,y", comments="")
 
 
 def main(argv: list[str]) -> None:
-    what = argv[1]
-    if what == "--child":
-        print(json.dumps(diagnose_child(argv[2]), default=str))
-    elif what == "--list":
+    """run OUT [IDS]: each case not yet in OUT, appended as one JSON line as it goes."""
+    what, rest = argv[1], argv[2:]
+    if what == "--list":
         print("\n".join(case_ids()))
-    elif what == "--one":
-        print(json.dumps(run_case(argv[2], in_process=True), indent=1, default=str))
-    elif what == "--write":
-        write_csv(prepare(argv[2])[0], argv[3])
-    else:
-        run_all(Path(argv[2]), argv[3:] or case_ids())
+        return
+    if what in ("--one", "--write"):
+        if what == "--one":
+            print(json.dumps(run_case(rest[0], in_process=True), indent=1, default=str))
+        else:
+            write_csv(prepare(rest[0])[0], rest[1])
+        return
+    out = Path(rest[0])
+    seen = {json.loads(x)["id"] for x in (out.read_text() if out.exists() else "").splitlines() if x.strip()}
+    for cid in (c for c in (rest[1:] or case_ids()) if c not in seen):
+        r = run_case(cid)
+        with out.open("a") as f:
+            print(json.dumps(r, default=str), file=f)
+        print(
+            cid,
+            r.get("status"),
+            f"{r.get('seconds') or 0:.0f} s:",
+            (r.get("headline") or r.get("error", ""))[:150],
+        )
 
 
 if __name__ == "__main__":

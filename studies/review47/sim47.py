@@ -87,20 +87,14 @@ def _ctrl(g: Gs) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return a, b, num[::-1].copy()
 
 
-MORE = {
-    "nu": 0.0,
-    "eta": 0.0,
-    "pinch": 0.0,
-    "rate": 0.0,
-    "vref": 1.0,
-    "delta": 0.0,
-    "dahl_fc": 0.0,
-    "dahl_sigma": 0.0,
-}
+#: The element's further parameters (``_f``'s ``par[4:12]`` in this order) and their defaults.
+MORE = dict(nu=0.0, eta=0.0, pinch=0.0, rate=0.0, vref=1.0, delta=0.0, dahl_fc=0.0, dahl_sigma=0.0)
 
 
 @dataclass(frozen=True)
 class Element:
+    """alpha, beta, gamma, mu and any of :data:`MORE` as sorted (name, value) pairs."""
+
     alpha: float
     beta: float
     gamma: float
@@ -108,10 +102,10 @@ class Element:
     more: tuple[tuple[str, float], ...] = ()
 
     def get(self, name: str) -> float:
-        return dict(self.more).get(name, MORE[name])
+        return {**MORE, **dict(self.more)}[name]
 
     def with_(self, name: str, value: float) -> Element:
-        return replace(self, more=(*((k, v) for k, v in self.more if k != name), (name, value)))
+        return replace(self, more=tuple(sorted({**dict(self.more), name: value}.items())))
 
     @property
     def w_u(self) -> float:
@@ -137,6 +131,11 @@ class Plan:
 
 
 @numba.njit(cache=True)
+def _sign(v: float) -> float:
+    return 1.0 if v > 0.0 else (-1.0 if v < 0.0 else 0.0)
+
+
+@numba.njit(cache=True)
 def _f(s, t, a, b, c, gain, amp, om, par):  # noqa: PLR0913
     """par = alpha, beta, gamma, mu, nu, eta, pinch, rate, vref, delta, dahl_fc, dahl_sigma, w_u."""
     n = a.shape[0]
@@ -144,30 +143,25 @@ def _f(s, t, a, b, c, gain, amp, om, par):  # noqa: PLR0913
     u = amp * math.cos(om * t)
     uv = -amp * om * math.sin(om * t)
     if n > 0:
+        ds[:n] = b * u
+        for j in range(n):  # column by column: each row summed in the order b u + a_i0 s_0 + a_i1 s_1 ...
+            ds[:n] += a[:, j] * s[j]
         xv = 0.0
         for i in range(n):
-            r = b[i] * u
-            for j in range(n):
-                r += a[i, j] * s[j]
-            ds[i] = r
-            xv += c[i] * r
+            xv += c[i] * ds[i]
     else:
         xv = gain * uv
-    z = s[n]
-    v = xv
-    sz = 1.0 if z > 0.0 else (-1.0 if z < 0.0 else 0.0)
-    zm = abs(z) ** par[3]
-    core = par[1] * abs(v) * zm * sz + par[2] * v * zm + par[9] * v * zm * sz
-    dz = par[0] * v - (1.0 + par[4] * s[n + 1]) * (1.0 + par[7] * abs(v) / par[8]) * core
-    if par[6] > 0.0:
-        sv = 1.0 if v > 0.0 else (-1.0 if v < 0.0 else 0.0)
-        q = (z * sv - 0.1 * par[12]) / (0.2 * par[12])
-        dz = dz * (1.0 - par[6] * math.exp(-q * q))
+    z, v = s[n], xv
+    shape = par[1] * abs(v) * _sign(z) + par[2] * v + par[9] * v * _sign(z)
+    widen = (1.0 + par[4] * s[n + 1]) * (1.0 + par[7] * abs(v) / par[8])
+    dz = par[0] * v - widen * shape * abs(z) ** par[3]
+    if par[6] > 0.0:  # Foliente: q = 0.1, zeta2 = 0.2 of w_u
+        q = (z * _sign(v) / par[12] - 0.1) / 0.2
+        dz *= 1.0 - par[6] * math.exp(-q * q)
     ds[n] = dz / (1.0 + par[5] * s[n + 1])
     ds[n + 1] = z * v
     if par[10] > 0.0:
-        su = 1.0 if uv > 0.0 else (-1.0 if uv < 0.0 else 0.0)
-        m = 1.0 - su * s[n + 2] / par[10]
+        m = 1.0 - _sign(uv) * s[n + 2] / par[10]
         ds[n + 2] = par[11] * uv * m * abs(m)
     return ds
 
@@ -214,11 +208,12 @@ def _rk4(s0, tgrid, sub, a, b, c, gain, amp, om, par):  # noqa: PLR0913
     for k in range(tgrid.size - 1):
         t = tgrid[0] + k * (tgrid[1] - tgrid[0])
         for _ in range(sub):
-            k1 = _f(s, t, a, b, c, gain, amp, om, par)
-            k2 = _f(s + 0.5 * h * k1, t + 0.5 * h, a, b, c, gain, amp, om, par)
-            k3 = _f(s + 0.5 * h * k2, t + 0.5 * h, a, b, c, gain, amp, om, par)
-            k4 = _f(s + h * k3, t + h, a, b, c, gain, amp, om, par)
-            s = s + h * (k1 + 2.0 * k2 + 2.0 * k3 + k4) / 6.0
+            k = _f(s, t, a, b, c, gain, amp, om, par)
+            acc = k.copy()
+            for frac, weight in ((0.5, 2.0), (0.5, 2.0), (1.0, 1.0)):
+                k = _f(s + frac * h * k, t + frac * h, a, b, c, gain, amp, om, par)
+                acc += weight * k
+            s = s + h * acc / 6.0
             t += h
         out[k + 1] = s
     return out

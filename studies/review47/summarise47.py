@@ -29,9 +29,9 @@ def _outcome(r: dict[str, Any]) -> str:
     eff, st = r["effect"], r["status"]
     names = [n["term"] for n in r["named"]]
     if eff == "null":
-        if names:
-            return "FALSE NAME" if st == "explained" and not caveated(r) else "false name (caveated)"
-        return "ok-null" if st == "adequate" else "false alarm"
+        quiet = {"adequate": "ok-null"}.get(st, "false alarm")
+        loud = "FALSE NAME" if st == "explained" and not caveated(r) else "false name (caveated)"
+        return loud if names else quiet
     want = TRUTH_TERM[eff]
     if want is None:
         if names and set(names) <= set(NEAR.get(eff, ())):
@@ -39,13 +39,13 @@ def _outcome(r: dict[str, Any]) -> str:
         if names and st == "explained":
             return "WRONG" if not caveated(r) else "named with caveat"
         return "partly" if names else st
-    if want in names or want in r["alternatives"]:
-        zs = [n.get("z") for n in r["named"] if n["term"] == want]
-        parts = ["right" if zs else "right as alternative"]
-        parts += [" (value off)"] if zs and zs[0] is not None and abs(zs[0]) > 3 else []
-        parts += [] if st == "explained" else [f" [{st}]"]
-        extra = ",".join(n for n in names if n != want)
-        return "".join(parts) + (f" + extra {extra}" if extra else "")
+    if want in names + r["alternatives"]:
+        z = next((n.get("z") for n in r["named"] if n["term"] == want), "absent")
+        word = "right as alternative" if z == "absent" else "right"
+        word += " (value off)" if isinstance(z, float) and abs(z) > 3 else ""
+        word += "" if st == "explained" else f" [{st}]"
+        others = [n for n in names if n != want]
+        return word + (" + extra " + ",".join(others) if others else "")
     if names:
         return "WRONG" if st == "explained" and not caveated(r) else "wrong (caveated)"
     return "missed"
@@ -62,56 +62,47 @@ def per_case(rows: list[dict[str, Any]]) -> None:
     print("| case | size | outcome | verdict (first line, cut) | named: value ± se (truth, z) | s (cpu) |")
     print("|---|---|---|---|---|---|")
     for r in rows:
-        head = (r.get("headline") or r.get("error", "")).replace("|", "/").replace("\n", " ")
-        head = head if len(head) <= 110 else head[:107] + "..."
-        secs = f"{r.get('seconds', 0):.0f} ({r.get('cpu_seconds', 0):.0f})"
-        print(f"| {r['id']} | {r.get('size', 0):.0f} | {outcome(r)} | {head} | {cell(r)} | {secs} |")
+        said = " ".join((r.get("headline") or r.get("error", "")).replace("|", "/").split())
+        said = said[:107] + "..." if len(said) > 110 else said
+        cells = [r["id"], f"{r.get('size', 0):.0f}", outcome(r), said, cell(r)]
+        cells.append(f"{r.get('seconds', 0):.0f} ({r.get('cpu_seconds', 0):.0f})")
+        print("| " + " | ".join(cells) + " |")
 
 
-def group_cells(rs: list[dict[str, Any]]) -> list[str]:
-    oc = {r["id"]: outcome(r) for r in rs}
-    kind = {
-        r["id"]: "null" if r["effect"] == "null" else ("lib" if TRUTH_TERM[r["effect"]] else "out")
-        for r in rs
-    }
-    lib_right = [r for r in rs if kind[r["id"]] == "lib" and oc[r["id"]].startswith("right")]
-    zs = [
-        n["z"]
-        for r in lib_right
-        for n in r["named"]
-        if n["term"] == TRUTH_TERM[r["effect"]] and n.get("z") is not None
-    ]
-    outs = ", ".join(f"{r['effect']} {oc[r['id']]}" for r in rs if kind[r["id"]] == "out") or "-"
-    nulls = [oc[r["id"]] for r in rs if kind[r["id"]] == "null"]
-    secs = sorted(r.get("seconds") or 0 for r in rs)
+def kind(r: dict[str, Any]) -> str:
+    return "null" if r["effect"] == "null" else ("lib" if TRUTH_TERM[r["effect"]] else "out")
+
+
+def row(rs: list[dict[str, Any]]) -> list[str]:
+    """A config's cells: library terms right, within 3 se, wrong confident names, outside physics, nulls
+    adequate, errors, seconds (median, max)."""
+    got = [(r, outcome(r), kind(r)) for r in rs]
+    right = [r for r, o, k in got if k == "lib" and o.startswith("right")]
+    z = [n.get("z") for r in right for n in r["named"] if n["term"] == TRUTH_TERM[r["effect"]]]
+    z = [v for v in z if v is not None]
+    nulls = [o for _, o, k in got if k == "null"]
+    wall = sorted(r.get("seconds") or 0.0 for r in rs)
     return [
-        f"{len(lib_right)} / {list(kind.values()).count('lib')}",
-        f"{sum(abs(z) <= 3 for z in zs)} / {len(zs)}",
-        str(sum(o.startswith(("WRONG", "FALSE NAME")) for o in oc.values())),
-        outs,
+        f"{len(right)} / {sum(k == 'lib' for _, _, k in got)}",
+        f"{sum(abs(v) <= 3 for v in z)} / {len(z)}",
+        str(sum(o.startswith(("WRONG", "FALSE NAME")) for _, o, _ in got)),
+        ", ".join(f"{r['effect']} {o}" for r, o, k in got if k == "out") or "-",
         f"{sum(o.startswith('ok-null') for o in nulls)} / {len(nulls)}",
-        str(sum(o in ("error", "timeout") for o in oc.values())),
-        f"{secs[len(secs) // 2]:.0f}, {secs[-1]:.0f}",
+        str(sum(o in ("error", "timeout") for _, o, _ in got)),
+        f"{wall[len(wall) // 2]:.0f}, {wall[-1]:.0f}",
     ]
-
-
-def per_config(rows: list[dict[str, Any]]) -> None:
-    head = ["config", "library terms right", "value within 3 se", "wrong confident names", "outside physics"]
-    head += ["nulls adequate", "errors / timeouts", "s median, max"]
-    print("| " + " | ".join(head) + " |\n" + "|---" * len(head) + "|")
-    for cfg, parts in CONFIGS.items():
-        rs = [r for r in rows if r["config"] == cfg]
-        if rs:
-            print("| " + " | ".join([f"{cfg} {'/'.join(parts)}", *group_cells(rs)]) + " |")
-    counts = Counter(outcome(r) for r in rows)
-    print("\noutcomes:", ", ".join(f"{k} {v}" for k, v in sorted(counts.items())))
 
 
 def main(src: str) -> None:
     rows = [json.loads(x) for x in Path(src).read_text().splitlines() if x.strip()]
     per_case(rows)
-    print()
-    per_config(rows)
+    cols = "config|library terms right|value within 3 se|wrong confident names|outside physics|nulls adequate"
+    print(f"\n| {cols.replace('|', ' | ')} | errors / timeouts | s median, max |\n" + "|---" * 8 + "|")
+    for cfg, parts in CONFIGS.items():
+        if rs := [r for r in rows if r["config"] == cfg]:
+            print(f"| {cfg} {'/'.join(parts)} | " + " | ".join(row(rs)) + " |")
+    tally = Counter(outcome(r) for r in rows)
+    print("\noutcomes:", ", ".join(f"{k} {n}" for k, n in sorted(tally.items())))
 
 
 if __name__ == "__main__":
