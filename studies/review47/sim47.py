@@ -208,11 +208,11 @@ def _rk4(s0, tgrid, sub, a, b, c, gain, amp, om, par):  # noqa: PLR0913
     for k in range(tgrid.size - 1):
         t = tgrid[0] + k * (tgrid[1] - tgrid[0])
         for _ in range(sub):
-            k = _f(s, t, a, b, c, gain, amp, om, par)
-            acc = k.copy()
+            stage = _f(s, t, a, b, c, gain, amp, om, par)
+            acc = stage.copy()
             for frac, weight in ((0.5, 2.0), (0.5, 2.0), (1.0, 1.0)):
-                k = _f(s + frac * h * k, t + frac * h, a, b, c, gain, amp, om, par)
-                acc += weight * k
+                stage = _f(s + frac * h * stage, t + frac * h, a, b, c, gain, amp, om, par)
+                acc += weight * stage
             s = s + h * acc / 6.0
             t += h
         out[k + 1] = s
