@@ -280,15 +280,17 @@ def _merged(freqs: Sequence[float]) -> list[float]:
     return out
 
 
-def removed(items: Any) -> tuple[Any, list[str]]:
+def removed(items: Any, alpha: float = LINE_ALPHA) -> tuple[Any, list[str]]:
     """``(items, notes)``: copies of the Recordings in ``items`` with the lines found taken out of their
     outputs, and one note per line (what, where, how large); ``items`` as given when none is found.
-    Measurements and averaged periods are passed on unchanged."""
+    Measurements and averaged periods are passed on unchanged. ``alpha``: the search's false-alarm level
+    for these items (:data:`LINE_ALPHA` for one diagnosis; a share of it when several sets are searched
+    for one verdict, as diagnose_across's conditions)."""
     from ..model import Recording
 
     seq = list(items) if isinstance(items, (list, tuple)) else [items]
     recs = [i for i, it in enumerate(seq) if isinstance(it, Recording)]
-    each = LINE_ALPHA / max(1, len(recs))  # the search's chance per diagnosis, shared by the recordings
+    each = alpha / max(1, len(recs))  # the search's chance per diagnosis, shared by the recordings
     found = [(f, _steady(seq[i])[4], _steady(seq[i])[0].size) for i in recs for f in _lines(seq[i], each)]
     resolved = _resolved(found)
     freqs = [hz for hz, _ in resolved]
@@ -297,7 +299,7 @@ def removed(items: Any) -> tuple[Any, list[str]]:
     out = list(seq)
     where: dict[float, list[tuple[int, float]]] = {f: [] for f in freqs}
     odds = {f: 1.0 for f in freqs}  # the chance of the strongest fit under noise alone, searched everywhere
-    level = LINE_ALPHA / max(1, len(freqs) * len(recs))
+    level = alpha / max(1, len(freqs) * len(recs))
     for i in recs:
         rec = seq[i]
         y_all = np.array(rec.y, dtype=np.float64)
