@@ -580,10 +580,41 @@ def diagnose_across(
     InvalidParameterError
         Fewer than two groups, conditions that do not match the groups or repeat, unknown candidates.
     """
+    from . import across_locked
+
+    args = (condition, labels, candidates, alpha, held_out_test)
+    out, seen = _across(groups, *args, per_condition, (y_unit, u_unit), progress)
+    if seen is None:  # fewer than two settled conditions
+        return out
+    prepared, names, gs = seen
+
+    def again(fixed: dict[str, list[Any]]) -> AcrossDiagnosis:  # the bridged records read again
+        bridged = [fixed.get(n, g) for n, g in zip(names, gs)]
+        own = across_locked.without(per_condition, names, set(fixed))
+        return _across(bridged, *args, own, (y_unit, u_unit), progress)[0]
+
+    out = across_locked.said(out, prepared, dict(zip(names, gs)), again)  # a locked spike, as diagnose
+    return readings.qualified(out, out.named, out.alternatives)  # the headline's qualifiers
+
+
+def _across(
+    groups: Sequence[Any],
+    condition: Optional[Sequence[float]],
+    labels: Optional[Sequence[str]],
+    candidates: Optional[Sequence[str]],
+    alpha: float,
+    held_out_test: bool,
+    per_condition: Optional[Sequence[Optional[Diagnosis]]],
+    unit: tuple[str, str],
+    progress: Progress,
+) -> tuple[AcrossDiagnosis, Any]:
+    """:func:`diagnose_across`'s reading, before its headline's qualifiers, and ``(prepared groups, labels,
+    each condition's records as read)`` for the locked spike's check (None: fewer than two settled)."""
     from . import across_checks, across_clip, across_ring, across_said, across_zeros, ring_unchecked
     from .drift import DRIFT_TERMS
     from .run import ALL_CANDIDATES, _check_candidates
 
+    y_unit, u_unit = unit
     t0 = time.perf_counter()
     report = reporter(progress)
     gs, conds, names = _check(groups, condition, labels, per_condition)
@@ -605,7 +636,7 @@ def diagnose_across(
         left = [across_settling.NotSettled(k, (), w) for k, w in got.settings["not_settled_why"].items()]
         got = ring_unchecked.said(got, ring.short, across_ring.drift_read([], left))
         got = across_checks.lines_said(got, line_notes)
-        return replace(got, seconds=time.perf_counter() - t0)
+        return replace(got, seconds=time.perf_counter() - t0), None
     got = _zeros_resolved(run, got)  # the recordings' zeros differ inside a condition (across_zeros.py)
     prepared, terms, conditions, steps, settings, unsettled = got
     report("done", 1, 1)
@@ -635,7 +666,7 @@ def diagnose_across(
     out = ring_unchecked.said(out, ring.short, across_ring.drift_read(prepared, unsettled))  # as diagnose
     # diagnose's clause on the lines taken out; a weak remainder's p, as diagnose says it (across_checks.py)
     out = across_checks.borderline_said(across_checks.lines_said(out, line_notes), prepared, alpha)
-    return readings.qualified(out, out.named, out.alternatives)  # the headline's qualifiers
+    return out, (prepared, names, gs)
 
 
 @dataclass(frozen=True)
