@@ -55,6 +55,7 @@ from ..units import harmonise_groups
 from ..validation import real_number
 from . import (
     across_adequacy,
+    across_dc,
     across_final,
     across_pairs,
     across_revisit,
@@ -130,6 +131,7 @@ def _group(
     their common one (across_zeros.py; the condition's own diagnosis not reused); ``ringing``: the names of
     its recordings that still ring (across_ring.py), left out as diagnose leaves them out."""
     from . import free_dc, record_zeros, zero_drift
+    from .centre_only import slow_dc
     from .data import prepare
     from .drift import DRIFT_TERMS
     from .run import _drift_checked, _localise
@@ -206,6 +208,7 @@ def _group(
         rung=tuple(n for n in left if n in ringing),
         zeros=zeros,
         centres=wander,
+        slow_dc=bool(exps) and slow_dc(exps),  # a noise coloured at the DC (dc_between.py), as diagnose
     )
 
 
@@ -247,9 +250,13 @@ def _trial(groups: Sequence[_Group], term: str, n_cands: int, alpha: float, leve
     # As the single-group selection: a physical value, and not the null value (the model without it: what
     # it "removed" is a refit from another start, select.at_null), wherever it is present.
     # And its value away from the null there (select.away_from_null: the Wald test beside the F test).
+    # And, as diagnose, a centre term's DCs out of their spread under a noise coloured at the DC (across_dc).
     physical = all(
-        _admissible(f, term) and not at_null(f, term) and away_from_null(f, term, level, f.cost / max(d, 1))
-        for f, d, pr in zip(done, d1, present)
+        _admissible(f, term)
+        and not at_null(f, term)
+        and away_from_null(f, term, level, f.cost / max(d, 1))
+        and across_dc.stands_out(g, f, term, level)
+        for g, f, d, pr in zip(groups, done, d1, present)
         if pr
     )
     ok = padj < level and share >= MATERIAL_SHARE and physical and any(present)
@@ -661,6 +668,7 @@ def _across(
             *across_settling.notes(prepared, unsettled),
         ),
     )
+    out = across_dc.untested(out, prepared)  # an "adequate" whose DC was taken out says so (dc_untested.py)
     out = across_said.said(out, prepared, dict(zip(names, gs)), y_unit, u_unit, joined.units)  # run.py's
     out = across_ring.said(out, ring, len(gs), False)  # the rings' notes
     out = ring_unchecked.said(out, ring.short, across_ring.drift_read(prepared, unsettled))  # as diagnose
