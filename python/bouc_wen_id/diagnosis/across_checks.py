@@ -19,9 +19,9 @@ failed test that remains is at p = 0.015 at one condition, weak evidence, and sa
   and the rate at which a right model fails at one of the ``K`` conditions or more
   (:func:`.borderline.across_rate`: each is tested at ``alpha``).
 
-Not run across yet (diagnose's, left alone here): the locked spike's second reading (locked_said.py: it
-reruns the whole diagnosis on bridged records), centre_decay.py (short records' settling centre) and
-value_stability.py (a named value refitted on preprocessing variants).
+The locked spike's second reading runs across in across_locked.py, dc_between's and dc_untested's rules in
+across_dc.py (session 47). Not run across yet (diagnose's, left alone here): centre_decay.py (short records'
+settling centre) and value_stability.py (a named value refitted on preprocessing variants).
 """
 
 from __future__ import annotations
