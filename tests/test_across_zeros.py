@@ -46,11 +46,16 @@ ZEROS = [
 @pytest.mark.parametrize("phi,spread", [(0.0, 1.0), (0.8, 3.0)])
 def test_zeros_that_differ_inside_a_condition_are_no_asymmetry(phi: float, spread: float) -> None:
     """Zeros 2-6 % apart under white noise; under AR(1) noise (its DC 3x noisier) 6-18 % apart (at 2-6 % the
-    offset's law passes there: one offset named, no rerun, measured)."""
+    offset's law passes there: one offset named, no rerun, measured; since session 47 the offset's law is
+    not tested under it, as diagnose's: one offset named)."""
     d = _across(ZEROS, phi, spread)
     assert "asymmetry" not in d.named and "asymmetry" not in {t.term for t in d.partial}, d.verdict
     assert set(d.named) == {"viscous", "offset"}, d.verdict
-    assert d.verdict.count("the recordings' output zeros differ") == len(DAMPING), d.verdict
+    # Under AR(1) 0.8 (its noise coloured at the DC) the DC is judged between experiments, as diagnose judges
+    # it (dc_between.py, across_dc.py since session 47): the offset's law is not tested, so no zeros rerun;
+    # diagnose of each condition names viscous and one offset alike, with the loop centres' caveat.
+    zeros_said = d.verdict.count("the recordings' output zeros differ")
+    assert zeros_said == (len(DAMPING) if phi == 0.0 else 0), d.verdict
     v = next(t for t in d.terms if t.term == "viscous")
     for got, se, true in zip(v.values, v.standard_errors, DAMPING):
         assert abs(got - true) < max(4 * se, 0.05 * true), d.verdict

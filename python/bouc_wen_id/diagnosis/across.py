@@ -55,6 +55,7 @@ from ..units import harmonise_groups
 from ..validation import real_number
 from . import (
     across_adequacy,
+    across_dc,
     across_final,
     across_pairs,
     across_revisit,
@@ -130,6 +131,7 @@ def _group(
     their common one (across_zeros.py; the condition's own diagnosis not reused); ``ringing``: the names of
     its recordings that still ring (across_ring.py), left out as diagnose leaves them out."""
     from . import free_dc, record_zeros, zero_drift
+    from .centre_only import slow_dc
     from .data import prepare
     from .drift import DRIFT_TERMS
     from .run import _drift_checked, _localise
@@ -206,6 +208,7 @@ def _group(
         rung=tuple(n for n in left if n in ringing),
         zeros=zeros,
         centres=wander,
+        slow_dc=bool(exps) and slow_dc(exps),  # a noise coloured at the DC (dc_between.py), as diagnose
     )
 
 
@@ -247,9 +250,13 @@ def _trial(groups: Sequence[_Group], term: str, n_cands: int, alpha: float, leve
     # As the single-group selection: a physical value, and not the null value (the model without it: what
     # it "removed" is a refit from another start, select.at_null), wherever it is present.
     # And its value away from the null there (select.away_from_null: the Wald test beside the F test).
+    # And, as diagnose, a centre term's DCs out of their spread under a noise coloured at the DC (across_dc).
     physical = all(
-        _admissible(f, term) and not at_null(f, term) and away_from_null(f, term, level, f.cost / max(d, 1))
-        for f, d, pr in zip(done, d1, present)
+        _admissible(f, term)
+        and not at_null(f, term)
+        and away_from_null(f, term, level, f.cost / max(d, 1))
+        and across_dc.stands_out(g, f, term, level)
+        for g, f, d, pr in zip(groups, done, d1, present)
         if pr
     )
     ok = padj < level and share >= MATERIAL_SHARE and physical and any(present)
@@ -580,10 +587,41 @@ def diagnose_across(
     InvalidParameterError
         Fewer than two groups, conditions that do not match the groups or repeat, unknown candidates.
     """
+    from . import across_locked
+
+    args = (condition, labels, candidates, alpha, held_out_test)
+    out, seen = _across(groups, *args, per_condition, (y_unit, u_unit), progress)
+    if seen is None:  # fewer than two settled conditions
+        return out
+    prepared, names, gs = seen
+
+    def again(fixed: dict[str, list[Any]]) -> AcrossDiagnosis:  # the bridged records read again
+        bridged = [fixed.get(n, g) for n, g in zip(names, gs)]
+        own = across_locked.without(per_condition, names, set(fixed))
+        return _across(bridged, *args, own, (y_unit, u_unit), progress)[0]
+
+    out = across_locked.said(out, prepared, dict(zip(names, gs)), again)  # a locked spike, as diagnose
+    return readings.qualified(out, out.named, out.alternatives)  # the headline's qualifiers
+
+
+def _across(
+    groups: Sequence[Any],
+    condition: Optional[Sequence[float]],
+    labels: Optional[Sequence[str]],
+    candidates: Optional[Sequence[str]],
+    alpha: float,
+    held_out_test: bool,
+    per_condition: Optional[Sequence[Optional[Diagnosis]]],
+    unit: tuple[str, str],
+    progress: Progress,
+) -> tuple[AcrossDiagnosis, Any]:
+    """:func:`diagnose_across`'s reading, before its headline's qualifiers, and ``(prepared groups, labels,
+    each condition's records as read)`` for the locked spike's check (None: fewer than two settled)."""
     from . import across_checks, across_clip, across_ring, across_said, across_zeros, ring_unchecked
     from .drift import DRIFT_TERMS
     from .run import ALL_CANDIDATES, _check_candidates
 
+    y_unit, u_unit = unit
     t0 = time.perf_counter()
     report = reporter(progress)
     gs, conds, names = _check(groups, condition, labels, per_condition)
@@ -605,7 +643,7 @@ def diagnose_across(
         left = [across_settling.NotSettled(k, (), w) for k, w in got.settings["not_settled_why"].items()]
         got = ring_unchecked.said(got, ring.short, across_ring.drift_read([], left))
         got = across_checks.lines_said(got, line_notes)
-        return replace(got, seconds=time.perf_counter() - t0)
+        return replace(got, seconds=time.perf_counter() - t0), None
     got = _zeros_resolved(run, got)  # the recordings' zeros differ inside a condition (across_zeros.py)
     prepared, terms, conditions, steps, settings, unsettled = got
     report("done", 1, 1)
@@ -630,12 +668,13 @@ def diagnose_across(
             *across_settling.notes(prepared, unsettled),
         ),
     )
+    out = across_dc.untested(out, prepared)  # an "adequate" whose DC was taken out says so (dc_untested.py)
     out = across_said.said(out, prepared, dict(zip(names, gs)), y_unit, u_unit, joined.units)  # run.py's
     out = across_ring.said(out, ring, len(gs), False)  # the rings' notes
     out = ring_unchecked.said(out, ring.short, across_ring.drift_read(prepared, unsettled))  # as diagnose
     # diagnose's clause on the lines taken out; a weak remainder's p, as diagnose says it (across_checks.py)
     out = across_checks.borderline_said(across_checks.lines_said(out, line_notes), prepared, alpha)
-    return readings.qualified(out, out.named, out.alternatives)  # the headline's qualifiers
+    return out, (prepared, names, gs)
 
 
 @dataclass(frozen=True)

@@ -9,18 +9,19 @@ two conditions it said "unexplained structure remains" with the hum left in the 
 failed test that remains is at p = 0.015 at one condition, weak evidence, and said so
 (tests/test_across_checks46.py). Here, the same functions and words:
 
-- :func:`lines_removed`: each condition's records with their lines taken out (:func:`.lines.removed`, its
-  search at its own level per condition, as diagnose of each condition would run it), and the notes
-  prefixed by the condition;
+- :func:`lines_removed`: each condition's records with their lines taken out (:func:`.lines.removed`, one
+  search per condition at :data:`.lines.LINE_ALPHA` over ``K``: the search's false-alarm budget is the one
+  verdict's, as diagnose's is its one set's; session 47, across47), and the notes prefixed by the
+  condition;
 - :func:`borderline_said`: when nothing but a failed adequacy test stands for what remains (no condition's
   loop drifting on its plain model, no law-failed candidate: :func:`.borderline.weak`'s ``drifting``) and
   every failing condition's p is weak, the verdict's "remains" says "may remain" with the smallest failing p
   and the rate at which a right model fails at one of the ``K`` conditions or more
   (:func:`.borderline.across_rate`: each is tested at ``alpha``).
 
-Not run across yet (diagnose's, left alone here): the locked spike's second reading (locked_said.py: it
-reruns the whole diagnosis on bridged records), centre_decay.py (short records' settling centre) and
-value_stability.py (a named value refitted on preprocessing variants).
+The locked spike's second reading runs across in across_locked.py, dc_between's and dc_untested's rules in
+across_dc.py (session 47). Not run across yet (diagnose's, left alone here): centre_decay.py (short records'
+settling centre) and value_stability.py (a named value refitted on preprocessing variants).
 """
 
 from __future__ import annotations
@@ -36,11 +37,13 @@ _A = TypeVar("_A", bound=Any)
 
 
 def lines_removed(groups: Sequence[Sequence[Any]], labels: Sequence[str]) -> tuple[list[Any], list[str]]:
-    """``(groups, notes)``: each condition's items with the lines :func:`.lines.removed` finds taken out, and
-    its notes, each prefixed by the condition's label."""
+    """``(groups, notes)``: each condition's items with the lines :func:`.lines.removed` finds taken out (at
+    :data:`.lines.LINE_ALPHA` shared by the ``K`` conditions), and its notes, each prefixed by the
+    condition's label."""
     out, notes = [], []
+    each = lines.LINE_ALPHA / max(1, len(groups))  # one verdict's budget, as diagnose's for one set
     for items, label in zip(groups, labels):
-        kept, found = lines.removed(list(items))
+        kept, found = lines.removed(list(items), each)
         out.append(kept)
         notes += [f"{label}: {n}" for n in found]
     return out, notes

@@ -32,6 +32,7 @@ import math
 from collections.abc import Sequence
 from typing import Any, Optional
 
+from . import across_dc
 from .across_verdict import summed, tied
 from .select import (
     ALTERNATIVE_CORRELATION,
@@ -79,11 +80,11 @@ def simpler_first(groups: Sequence[Any], order: list[Any], level: float) -> list
 def law_p(groups: Sequence[Any], tr: Any, present: Sequence[bool]) -> float:
     """The law p of ``tr`` (:func:`.select.element_law_test`) at each condition where it is ``present``,
     Bonferroni over them; NaN where none could be tested."""
-    laws = [
-        element_law_test(g.sx, f, tr.term, g.substeps)
-        for g, f, pr in zip(groups, tr.fits, present)
-        if pr and f is not None
-    ]
+    laws = []
+    for g, f, pr in zip(groups, tr.fits, present):
+        if pr and f is not None:
+            with across_dc.between(g):  # each experiment's DC free under a noise coloured at the DC
+                laws.append(element_law_test(g.sx, f, tr.term, g.substeps))
     laws = [v for v in laws if math.isfinite(v)]
     return min(1.0, min(laws) * len(laws)) if laws else math.nan
 

@@ -68,6 +68,9 @@ class _Group:
     #: What was taken out of the recordings' zeros (a baseline.Wander, a zero_drift.Drift or the zeros above),
     #: or None: a named output offset's standard error is their centres' spread (baseline.offset_se)
     centres: Any = None
+    #: Its noise is coloured at the DC in every experiment: its centre terms' DC judged between experiments
+    #: (dc_between.py, across_dc.py), as diagnose judges it
+    slow_dc: bool = False
     #: ``fit_with`` on this condition, once per (model, term) (select.memo_fit_with): an alternative's
     #: two-term fit is the next step's trial of that term.
     fit_term: Callable[[AugFit, str], Optional[AugFit]] = field(init=False, repr=False)

@@ -13,10 +13,9 @@ an offset is still named against the centres' spread) keeps its headline as befo
 from __future__ import annotations
 
 from dataclasses import replace
-from typing import Any
+from typing import Any, TypeVar
 
 from .baseline import Wander
-from .result import Diagnosis
 from .verdict_text import clauses
 from .zero_drift import Drift
 
@@ -35,14 +34,18 @@ def why(wander: Any) -> str:
     return "the output's zero drifts over the record"
 
 
-def headlined(d: Diagnosis, wander: Any) -> Diagnosis:
-    """``d`` with the caveat in its headline (the verdict's first clause) when it is "adequate" and the DC
-    was taken out (:func:`why`); ``d`` unchanged otherwise."""
+_D = TypeVar("_D", bound=Any)
+
+
+def headlined(d: _D, wander: Any, where: str = "") -> _D:
+    """``d`` (a Diagnosis, or an AcrossDiagnosis with ``where`` the conditions, " at 1 A, 2 A") with the
+    caveat in its headline (the verdict's first clause) when it is "adequate" and the DC was taken out
+    (:func:`why`); ``d`` unchanged otherwise."""
     cause = why(wander)
     if d.status != "adequate" or not cause:
         return d
     head = clauses(d.verdict)[0]
-    words = f" (an output offset cannot be tested: {cause}, so its DC was taken out)"
+    words = f" (an output offset cannot be tested{where}: {cause}, so its DC was taken out)"
     at = d.verdict.find(head) + len(head)
     return replace(d, verdict=d.verdict[:at] + words + d.verdict[at:])
 

@@ -297,17 +297,19 @@ def _merged(freqs: Sequence[float]) -> list[float]:
     return out
 
 
-def removed(items: Any) -> tuple[Any, list[str]]:
+def removed(items: Any, alpha: float = LINE_ALPHA) -> tuple[Any, list[str]]:
     """``(items, notes)``: copies of the Recordings and Measurements in ``items`` with the lines found taken
     out of their outputs, and one note per line (what, where, how large); ``items`` as given when none is
     found. A Measurement is searched in each of its steady segments (:mod:`.line_stretch`) and the line
-    taken out of that segment's samples. Averaged periods are passed on unchanged."""
+    taken out of that segment's samples. Averaged periods are passed on unchanged. ``alpha``: the search's
+    false-alarm level for these items (:data:`LINE_ALPHA` for one diagnosis; a share of it when several
+    sets are searched for one verdict, as diagnose_across's conditions)."""
     from ..model import Recording
     from .line_stretch import raw_amplitude, stretches
 
     seq = list(items) if isinstance(items, (list, tuple)) else [items]
     parts = [(i, st) for i, it in enumerate(seq) for st in stretches(it)]
-    each = LINE_ALPHA / max(1, len(parts))  # the search's chance per diagnosis, shared by the stretches
+    each = alpha / max(1, len(parts))  # the search's chance per diagnosis, shared by the stretches
     found = [(f, st.dt, st.y.size) for _i, st in parts for f in _lines(st, each)]
     resolved = [(_refined(hz, [st for _i, st in parts]), vague) for hz, vague in _resolved(found)]
     freqs = [hz for hz, _ in resolved]
@@ -317,7 +319,7 @@ def removed(items: Any) -> tuple[Any, list[str]]:
     ys = {i: np.array(seq[i].y, dtype=np.float64) for i, _st in parts}
     where: dict[float, list[tuple[int, float]]] = {f: [] for f in freqs}
     odds = {f: 1.0 for f in freqs}  # the chance of the strongest fit under noise alone, searched everywhere
-    level = LINE_ALPHA / max(1, len(freqs) * len(parts))
+    level = alpha / max(1, len(freqs) * len(parts))
     for i, st in parts:
         p, n, dt = st.p, st.n, st.dt
         if n < 3 or not (dt > 0) or input_carries_a_line(st):

@@ -17,7 +17,8 @@ from typing import Any
 from . import locked_spike
 
 
-def _where(spikes: Sequence[locked_spike.Spike]) -> str:
+def where(spikes: Sequence[locked_spike.Spike]) -> str:
+    """Where the spikes are, in words: each run's samples and its record's averaged period."""
     parts = []
     for s in spikes:
         run = f"sample {s.first}" if s.first == s.last else f"samples {s.first}..{s.last}"
@@ -31,19 +32,29 @@ def said(d: Any, items: Sequence[Any], again: Callable[[list[Any]], Any]) -> Any
     if not spikes:
         return d
     notes = tuple(s.note(limit) for s in spikes)
-    where = _where(spikes)
+    at = where(spikes)
     fixed = locked_spike.bridged(items, d, spikes)
     if fixed is None:
-        clause = f"; read with {where} in (off every model: a disturbance locked to the excitation?)"
-        return replace(d, verdict=d.verdict + clause, notes=(*notes, *d.notes))
+        return replace(d, verdict=d.verdict + clause(at, False), notes=(*notes, *d.notes))
     d2 = again(fixed)
-    first = (
-        f"with {where} left in, the diagnosis read: {d.status}: {d.headline} (final model's chi2/dof "
-        f"{d.final.chi2_dof:.3g}); with them bridged (each period's samples on the line between their "
-        f"neighbours): {d2.status} (chi2/dof {d2.final.chi2_dof:.3g})"
+    first = first_reading(at, (d.status, d.headline, d.final.chi2_dof), (d2.status, d2.final.chi2_dof))
+    return replace(d2, verdict=d2.verdict + clause(at, True), notes=(*notes, first, *d2.notes))
+
+
+def clause(at: str, bridged: bool) -> str:
+    """The verdict's clause on the spikes ``at`` (:func:`where`): read with them bridged, or left in."""
+    how = "bridged" if bridged else "in"
+    return f"; read with {at} {how} (off every model: a disturbance locked to the excitation?)"
+
+
+def first_reading(at: str, first: tuple[str, str, float], second: tuple[str, float]) -> str:
+    """The note on the first reading: ``first`` (status, headline, chi2/dof) with the spikes ``at`` left in,
+    ``second`` (status, chi2/dof) with them bridged."""
+    return (
+        f"with {at} left in, the diagnosis read: {first[0]}: {first[1]} (final model's chi2/dof "
+        f"{first[2]:.3g}); with them bridged (each period's samples on the line between their "
+        f"neighbours): {second[0]} (chi2/dof {second[1]:.3g})"
     )
-    clause = f"; read with {where} bridged (off every model: a disturbance locked to the excitation?)"
-    return replace(d2, verdict=d2.verdict + clause, notes=(*notes, first, *d2.notes))
 
 
-__all__ = ["said"]
+__all__ = ["clause", "first_reading", "said", "where"]
