@@ -734,7 +734,8 @@ def _mean(v: list[Any]) -> float:
 def print_table(lines: list[dict[str, Any]], null_label: str = "null (plain, low-amp settling)") -> None:
     head = (
         f"{'case':<34} {'n':>3} {'detect':>6} {'name':>5} {'+place':>6} {'wrong':>5} {'unexpl':>6} "
-        f"{'fam':>4} {'bad':>4} {'HO':>6} {'s/diag':>6} {'cpu/d':>6} {'size':>5} {'<lim':>5} {'<l90':>5} {'ok>90':>5} "
+        f"{'fam':>4} {'bad':>4} {'HO':>6} {'s/diag':>6} {'cpu/d':>6} "
+        f"{'size':>5} {'<lim':>5} {'<l90':>5} {'ok>90':>5} "
         f"{'unabs':>5} {'<det':>4} {'<glob':>5} {'hon|d':>5} {'pwG':>4} {'ad<g':>4} {'hon+a':>5} "
         f"{'lrdet':>5} {'ok|lr':>5} {'err':>3} {'meets':>5}  "
         "target"
@@ -752,7 +753,8 @@ def print_table(lines: list[dict[str, Any]], null_label: str = "null (plain, low
             f"{label:<34} {ln['n']:>3} {ln['detect']:6.2f} {ln['right']:5.2f} {ln['right_place']:6.2f} "
             f"{ln['wrong']:5.2f} {ln['unexplained']:6.2f} {ln.get('family', 0.0):4.2f} {ln['bad']:4.2f} "
             f"{ln['ho_ratio']:6.3f} "
-            f"{ln['seconds']:6.2f} {ln.get('cpu_seconds', math.nan):6.2f} {ln['achieved']:5.1f} {ln.get('below_lim', math.nan):5.2f} "
+            f"{ln['seconds']:6.2f} {ln.get('cpu_seconds', math.nan):6.2f} "
+            f"{ln['achieved']:5.1f} {ln.get('below_lim', math.nan):5.2f} "
             f"{ln.get('below_lim90', math.nan):5.2f} {ln.get('right_above_l90', math.nan):5.2f} "
             f"{ln.get('unabsorbed', math.nan):5.2f} {ln.get('below_det', math.nan):4.2f} "
             f"{ln.get('below_global', math.nan):5.2f} {ln.get('honest_det', math.nan):5.2f} "
