@@ -316,6 +316,15 @@ def _placed(kind: str, place: str) -> str:
         return kind
 
 
+def _element_of(name: str) -> str:
+    """A two-term element's second term (Dahl's pre-sliding stiffness, ``part_of`` its level) read as the
+    element: named with it, it is one name, not a second one of its own."""
+    from bouc_wen_id.terms import TERMS
+
+    cls = TERMS.get(name)
+    return str(getattr(cls, "part_of", "") or name) if cls is not None else name
+
+
 def _score(
     d: Any, kind: str, truth: Optional[str], place: str, effect: Optional[str] = None
 ) -> dict[str, Any]:
@@ -329,7 +338,7 @@ def _score(
     for a in js["alternatives"]:
         alts |= {_base_name(str(a.get("term", ""))), _base_name(str(a.get("rival", "")))}
     ok = _accepted(truth if kind in ("library", "structure") else None)
-    names = [n for n, _ in named]
+    names = [_element_of(n) for n, _ in named]
     hit = [n in ok for n in names]
     via_alt = any(o in alts for o in ok) and any(n in alts for n in names)
     right = any(hit) or via_alt
