@@ -26,7 +26,8 @@ defensively from the named term's JSON: a ``place`` key, else the registry's ``a
 named term that is not the hidden one, nor its listed alternative), "unexplained", bad: "explained" while
 the final model fails its adequacy test, the held-out NRMSE of the chosen model over the true structure's
 (median; where the truth is a fittable library term, at its place: ``viscous`` on x is ``viscous@x``),
-seconds per diagnosis, the achieved size, and "<lim": the share of cases whose true value is below the
+seconds per diagnosis (wall; "cpu/d" its CPU seconds, ``time.process_time``, the figure that holds on a
+loaded machine), the achieved size, and "<lim": the share of cases whose true value is below the
 diagnosis's own detection limit for the true term at its place (docs/diagnosis.md, "Detection limits"), for
 the effects whose generator units are the library's (``SAME_UNITS``); "<l90" the same against the 90 %-power
 limit (the design's power there is below 90 %, so a miss is the design's: the plain model absorbs all but
