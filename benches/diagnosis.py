@@ -26,7 +26,8 @@ defensively from the named term's JSON: a ``place`` key, else the registry's ``a
 named term that is not the hidden one, nor its listed alternative), "unexplained", bad: "explained" while
 the final model fails its adequacy test, the held-out NRMSE of the chosen model over the true structure's
 (median; where the truth is a fittable library term, at its place: ``viscous`` on x is ``viscous@x``),
-seconds per diagnosis, the achieved size, and "<lim": the share of cases whose true value is below the
+seconds per diagnosis (wall; "cpu/d" its CPU seconds, ``time.process_time``, the figure that holds on a
+loaded machine), the achieved size, and "<lim": the share of cases whose true value is below the
 diagnosis's own detection limit for the true term at its place (docs/diagnosis.md, "Detection limits"), for
 the effects whose generator units are the library's (``SAME_UNITS``); "<l90" the same against the 90 %-power
 limit (the design's power there is below 90 %, so a miss is the design's: the plain model absorbs all but
@@ -316,6 +317,15 @@ def _placed(kind: str, place: str) -> str:
         return kind
 
 
+def _element_of(name: str) -> str:
+    """A two-term element's second term (Dahl's pre-sliding stiffness, ``part_of`` its level) read as the
+    element: named with it, it is one name, not a second one of its own."""
+    from bouc_wen_id.terms import TERMS
+
+    cls = TERMS.get(name)
+    return str(getattr(cls, "part_of", "") or name) if cls is not None else name
+
+
 def _score(
     d: Any, kind: str, truth: Optional[str], place: str, effect: Optional[str] = None
 ) -> dict[str, Any]:
@@ -329,7 +339,7 @@ def _score(
     for a in js["alternatives"]:
         alts |= {_base_name(str(a.get("term", ""))), _base_name(str(a.get("rival", "")))}
     ok = _accepted(truth if kind in ("library", "structure") else None)
-    names = [n for n, _ in named]
+    names = [_element_of(n) for n, _ in named]
     hit = [n in ok for n in names]
     via_alt = any(o in alts for o in ok) and any(n in alts for n in names)
     right = any(hit) or via_alt
@@ -489,7 +499,7 @@ def run_new_case(
     )
     skind = scored_kind(kind, name)
     row["scored_as"] = skind
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         try:
@@ -498,6 +508,7 @@ def run_new_case(
             row["error"] = f"{type(exc).__name__}: {exc}"
             return row
     row["seconds"] = time.perf_counter() - t0
+    row["cpu_seconds"] = time.process_time() - c0  # this process's CPU: a speed figure on a loaded machine
     # The pair step (diagnosis/pairs.py): the set named where every single law failed, or "tried".
     row["pair_step"] = [
         list(getattr(st, "pair", ())) or "tried" for st in d.steps if getattr(st, "pairs", ())
@@ -649,6 +660,7 @@ def summarise(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
             "bad": rate("bad_explained"),
             "ho_ratio": med("ratio"),
             "seconds": med("seconds"),
+            "cpu_seconds": med("cpu_seconds"),
             "achieved": med("achieved"),
             # Share of the cases whose true value is below the diagnosis's own detection limit.
             "below_lim": _mean(
@@ -732,7 +744,8 @@ def _mean(v: list[Any]) -> float:
 def print_table(lines: list[dict[str, Any]], null_label: str = "null (plain, low-amp settling)") -> None:
     head = (
         f"{'case':<34} {'n':>3} {'detect':>6} {'name':>5} {'+place':>6} {'wrong':>5} {'unexpl':>6} "
-        f"{'fam':>4} {'bad':>4} {'HO':>6} {'s/diag':>6} {'size':>5} {'<lim':>5} {'<l90':>5} {'ok>90':>5} "
+        f"{'fam':>4} {'bad':>4} {'HO':>6} {'s/diag':>6} {'cpu/d':>6} "
+        f"{'size':>5} {'<lim':>5} {'<l90':>5} {'ok>90':>5} "
         f"{'unabs':>5} {'<det':>4} {'<glob':>5} {'hon|d':>5} {'pwG':>4} {'ad<g':>4} {'hon+a':>5} "
         f"{'lrdet':>5} {'ok|lr':>5} {'err':>3} {'meets':>5}  "
         "target"
@@ -750,7 +763,8 @@ def print_table(lines: list[dict[str, Any]], null_label: str = "null (plain, low
             f"{label:<34} {ln['n']:>3} {ln['detect']:6.2f} {ln['right']:5.2f} {ln['right_place']:6.2f} "
             f"{ln['wrong']:5.2f} {ln['unexplained']:6.2f} {ln.get('family', 0.0):4.2f} {ln['bad']:4.2f} "
             f"{ln['ho_ratio']:6.3f} "
-            f"{ln['seconds']:6.2f} {ln['achieved']:5.1f} {ln.get('below_lim', math.nan):5.2f} "
+            f"{ln['seconds']:6.2f} {ln.get('cpu_seconds', math.nan):6.2f} "
+            f"{ln['achieved']:5.1f} {ln.get('below_lim', math.nan):5.2f} "
             f"{ln.get('below_lim90', math.nan):5.2f} {ln.get('right_above_l90', math.nan):5.2f} "
             f"{ln.get('unabsorbed', math.nan):5.2f} {ln.get('below_det', math.nan):4.2f} "
             f"{ln.get('below_global', math.nan):5.2f} {ln.get('honest_det', math.nan):5.2f} "

@@ -143,6 +143,27 @@ def test_the_bench_credits_the_truth_at_its_place_listed_as_the_alternative() ->
     assert fr_u["right"] and not fr_u["right_place"]
 
 
+def test_the_bench_reads_a_two_term_element_named_beside_its_alternative_as_one_name() -> None:
+    """Dahl friction is two registry terms (its level and its pre-sliding stiffness, ``part_of`` the
+    first). Named with the truth as its listed alternative (bench47: series dashpot 10x seed 56018, "Dahl
+    friction on x ... or series dashpot instead"), the element is right and its second term is not a wrong
+    name of its own; a term named beside it that is not the element is still wrong."""
+    import importlib
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benches"))
+    bench: Any = importlib.import_module("diagnosis")
+    dahl_x = ["dahl@x", "dahl_sigma@x"]
+    alts = [("dahl@x", "dahl"), ("dahl@x", "series_dashpot")]
+    got = bench._score(_Diag(dahl_x, alts), "library", "series_dashpot", "")
+    assert got["right"] and got["right_place"] and not got["wrong"]
+    beside = bench._score(_Diag([*dahl_x, "stiffness@x"], alts), "library", "series_dashpot", "")
+    assert beside["right"] and beside["wrong"]
+    alone = bench._score(_Diag(dahl_x, [("dahl@x", "dahl")]), "library", "series_dashpot", "")
+    assert not alone["right"] and alone["wrong"]
+
+
 def test_a_law_failed_rival_listed_as_an_alternative_is_not_also_called_a_stand_in() -> None:
     """The verdict says a passed-over candidate once: as the alternative with its law p, not also under
     "not named: ... stands in for physics outside the library"; one not listed keeps that clause."""
