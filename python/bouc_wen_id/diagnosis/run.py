@@ -32,6 +32,7 @@ from . import (
     design_twin,
     drift_majority,
     drift_pair,
+    drift_joint,
     drift_passes,
     drift_se,
     drift_void,
@@ -263,7 +264,10 @@ def _corrected_stage(
     spread = drift_se.spread(exps, sx, fit if term == DEGRADATION else plain, data, deg, s.y, substeps)
     first = drift_se.added(deg, *spread, s.y)
     if deg.d > 0 and term == DEGRADATION:
-        deg, fit = drift_passes.refine(exps, sx, fit, data, deg, s, substeps)
+        # The joint fit of the averaged periods and d (drift_joint.py); the scalar refinement where it
+        # cannot be formed.
+        got = drift_joint.joint(exps, sx, fit, data, deg, s.y, substeps)
+        deg, fit = got if got is not None else drift_passes.refine(exps, sx, fit, data, deg, s, substeps)
         deg = drift_se.added(deg, *spread, s.y)
     else:
         # Stiffness degradation keeps the drift space's first-order d: its averaged periods hold next to
