@@ -48,7 +48,8 @@ def main(argv: list[str]) -> None:
     deg2, fit2 = CAP["out"]
     m = len(sx)
     dof = sum(a.ybar.size for a in sx) - 4 - 2 * m
-    print(f"library: {dg.status}, d/truth {deg2.value / truth:.4f}, final chi2 {dg.final.cost:.1f} dof {dg.final.dof}")
+    f = dg.final
+    print(f"library: {dg.status}, d/truth {deg2.value / truth:.4f}, final chi2 {f.cost:.1f} dof {f.dof}")
     p0 = fit2.params
     sy2 = s.y**2
 
@@ -61,7 +62,8 @@ def main(argv: list[str]) -> None:
     sums = [_sums(dd, deg.term) for dd in data]
     num, den = sum(c[1] for c in sums), sum(c[2] for c in sums)
     with_drift = len(argv) > 3 and argv[3] == "drift"
-    print(f"drift-space d/truth (passes' data) {num / den / sy2 / truth:.4f}, se/truth {1 / np.sqrt(den) / sy2 / truth:.4f}")
+    se0 = 1 / np.sqrt(den) / sy2 / truth
+    print(f"drift-space d/truth (passes' data) {num / den / sy2 / truth:.4f}, se/truth {se0:.4f}")
 
     def fun(x: np.ndarray) -> np.ndarray:
         par, d = unpack(x)
@@ -77,7 +79,7 @@ def main(argv: list[str]) -> None:
     print(f"cpu per evaluation (18 sims + 9 steady) {(time.process_time() - t1) / 5:.3f}")
     for k in range(m):
         n = sx[k].ybar.size
-        print(f"  exp {k}: {r0[k * n:(k + 1) * n] @ r0[k * n:(k + 1) * n]:.1f}", end="")
+        print(f"  exp {k}: {r0[k * n : (k + 1) * n] @ r0[k * n : (k + 1) * n]:.1f}", end="")
     print()
     t0 = time.process_time()
     res = least_squares(fun, x0, diff_step=1e-6, x_scale="jac", max_nfev=60)
@@ -94,7 +96,7 @@ def main(argv: list[str]) -> None:
     rr = res.fun
     for k in range(m):
         n = sx[k].ybar.size
-        print(f"  exp {k}: {rr[k * n:(k + 1) * n] @ rr[k * n:(k + 1) * n]:.1f}", end="")
+        print(f"  exp {k}: {rr[k * n : (k + 1) * n] @ rr[k * n : (k + 1) * n]:.1f}", end="")
     print()
 
 

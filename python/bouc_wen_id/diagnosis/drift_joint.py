@@ -20,8 +20,7 @@ from the passes' fit. Its cost is the averaged periods' chi-square plus the drif
 from __future__ import annotations
 
 import math
-import os
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import replace
 from typing import Any, Optional
 
@@ -36,7 +35,7 @@ from .drift import DegradationTest, _sums, corrected
 MAX_ITER = 12
 COST_ATOL = 1.0
 #: Forward-difference step of the shift's derivatives, relative to each parameter (absolute for phases).
-STEP = 1e-5
+STEP = 1e-3
 
 
 def _params(par: AugParams, x: np.ndarray, t: int, m: int) -> AugParams:
@@ -49,6 +48,45 @@ def _params(par: AugParams, x: np.ndarray, t: int, m: int) -> AugParams:
         gains=np.array(x[3 + t : 3 + t + m]),
         phases=np.array(x[3 + t + m : 3 + t + 2 * m]),
     )
+
+
+Evaluate = Callable[[np.ndarray, bool], tuple[np.ndarray, Optional[np.ndarray]]]
+
+
+def _levenberg(
+    evaluate: Evaluate, x: np.ndarray, r: np.ndarray, j: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Levenberg-Marquardt (Marquardt's diagonal scaling) from ``x`` with its residuals ``r`` and Jacobian
+    ``j``, until a step lowers the cost by at most :data:`COST_ATOL` or :data:`MAX_ITER` steps; the point
+    reached with its residuals and Jacobian."""
+    cost, lam = float(r @ r), 1e-3
+    for _ in range(MAX_ITER):
+        jtj, g = j.T @ j, j.T @ r
+        diag = np.diag(jtj).copy()
+        while lam < 1e8:
+            try:
+                step = -np.linalg.solve(jtj + lam * np.diag(np.maximum(diag, 1e-30)), g)
+                trial = x + step
+                rt, _ = evaluate(trial, False)
+            except BudgetExceededError:
+                raise
+            except (BoucWenIdError, ValueError, FloatingPointError, np.linalg.LinAlgError):
+                lam *= 10.0
+                continue
+            ct = float(rt @ rt)
+            if math.isfinite(ct) and ct < cost:
+                break
+            lam *= 10.0
+        else:
+            break
+        done = cost - ct <= COST_ATOL
+        x, cost, lam = trial, ct, max(lam / 10.0, 1e-9)
+        r, jn = evaluate(x, True)
+        assert jn is not None
+        j = jn
+        if done:
+            break
+    return x, r, j
 
 
 def joint(
@@ -67,13 +105,16 @@ def joint(
     num, den = sum(c[1] for c in sums), sum(c[2] for c in sums)
     if den <= 0:
         return None
+    root = math.sqrt(den)
     par0 = fit.params
     m, t = len(sx), len(par0.terms)
     w = [math.sqrt(a.weight) for a in sx]
     sizes = [a.ybar.size for a in sx]
 
     def shifts(x: np.ndarray, d: float) -> list[np.ndarray]:
-        _, cs = corrected(exps, sx, replace(fit, params=_params(par0, x, t, m)), d, y_scale, substeps, deg.term)
+        _, cs = corrected(
+            exps, sx, replace(fit, params=_params(par0, x, t, m)), d, y_scale, substeps, deg.term
+        )
         return [a.ybar - c.ybar for a, c in zip(sx, cs)]
 
     frozen: list[np.ndarray] = []
@@ -82,20 +123,28 @@ def joint(
         par = _params(par0, x, t, m)
         d = float(x[-1])
         sh = shifts(x, d)
-        outs = [augmented_output(a, par, i, substeps=substeps, jacobian=jac) for i, a in enumerate(sx)]
-        ys = [o.y if jac else o for o in outs]  # type: ignore[union-attr]
+        outs = (
+            [augmented_output(a, par, i, substeps=substeps, jacobian=True) for i, a in enumerate(sx)]
+            if jac
+            else []
+        )
+        ys = (
+            [o.y for o in outs]
+            if jac
+            else [augmented_output(a, par, i, substeps=substeps) for i, a in enumerate(sx)]
+        )
         r = np.concatenate([wi * (a.ybar - y - s) for wi, a, y, s in zip(w, sx, ys, sh)])
-        r = np.append(r, math.sqrt(den) * (d - num / den))
+        r = np.append(r, root * (d - num / den))
         if not jac:
             return r, None
         j = np.zeros((r.size, x.size))
         row = 0
         for i, (o, n) in enumerate(zip(outs, sizes)):
-            j[row : row + n, : 3 + t] = -w[i] * o.jacobian  # type: ignore[union-attr]
-            j[row : row + n, 3 + t + i] = -w[i] * o.own_jacobian[:, 0]  # type: ignore[union-attr]
-            j[row : row + n, 3 + t + m + i] = -w[i] * o.own_jacobian[:, 1]  # type: ignore[union-attr]
+            j[row : row + n, : 3 + t] = -w[i] * o.jacobian
+            j[row : row + n, 3 + t + i] = -w[i] * o.own_jacobian[:, 0]
+            j[row : row + n, 3 + t + m + i] = -w[i] * o.own_jacobian[:, 1]
             row += n
-        j[-1, -1] = math.sqrt(den)
+        j[-1, -1] = root
         if frozen:
             return r, j + frozen[0]
         ds = np.zeros_like(j)
@@ -117,40 +166,12 @@ def joint(
     x = np.concatenate([[par0.beta, par0.gamma, par0.mu], par0.values, par0.gains, par0.phases, [deg.d]])
     try:
         r, j = evaluate(x, True)
+        assert j is not None
+        x, r, j = _levenberg(evaluate, x, r, j)
     except BudgetExceededError:
         raise
     except (BoucWenIdError, ValueError, FloatingPointError):
         return None
-    assert j is not None
-    cost, lam = float(r @ r), 1e-3
-    for _ in range(MAX_ITER):
-        jtj, g = j.T @ j, j.T @ r
-        diag = np.diag(jtj).copy()
-        step = None
-        while lam < 1e8:
-            try:
-                step = -np.linalg.solve(jtj + lam * np.diag(np.maximum(diag, 1e-30)), g)
-                trial = x + step
-                rt, _ = evaluate(trial, False)
-            except BudgetExceededError:
-                raise
-            except (BoucWenIdError, ValueError, FloatingPointError, np.linalg.LinAlgError):
-                lam *= 10.0
-                continue
-            ct = float(rt @ rt)
-            if math.isfinite(ct) and ct < cost:
-                break
-            lam *= 10.0
-        else:
-            break
-        done = cost - ct <= COST_ATOL
-        x, cost, lam = trial, ct, max(lam / 10.0, 1e-9)
-        if os.environ.get("NU47_LOG"):
-            print(f"    it cost {cost:.2f} lam {lam:.1e} d {x[-1]:.5g}", flush=True)
-        r, j = evaluate(x, True)
-        assert j is not None
-        if done:
-            break
     try:
         cov = np.linalg.inv(j.T @ j)
     except np.linalg.LinAlgError:
@@ -159,8 +180,6 @@ def joint(
     if not (d > 0 and var > 0):
         return None
     se = math.sqrt(var)
-    if os.environ.get("NU47_LOG"):
-        print(f"  joint: cost {cost:.1f} d {d:.5g} se {se:.3g} start d {deg.d:.5g}", flush=True)
     out = replace(deg, d=d, value=d / y_scale**2, standard_error=se / y_scale**2)
     return out, replace(fit, params=_params(par0, x, t, m))
 

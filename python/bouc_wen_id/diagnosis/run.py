@@ -30,9 +30,9 @@ from . import (
     dc_untested,
     dc_wander,
     design_twin,
+    drift_joint,
     drift_majority,
     drift_pair,
-    drift_joint,
     drift_passes,
     drift_se,
     drift_void,
@@ -200,9 +200,10 @@ def _degradation_stage(
     as a steady term is tried only when the plain model is rejected. When it is named, the averaged periods
     are brought back to the virgin strength and re-estimated at each loop's own strength, pass after pass
     until d and the virgin fit settle (the first pass moves the fit from the plain model's average strength
-    to the virgin one; :data:`.drift_passes.CORRECTION_PASSES`), then strength degradation's d is refined on
-    both costs. Stiffness degradation keeps the plain fit's estimate (each experiment's gain holds its own
-    mean stiffness), unrefined: its passes only bring the periods back to the virgin stiffness.
+    to the virgin one; :data:`.drift_passes.CORRECTION_PASSES`), then strength degradation's d and the
+    virgin fit are fitted jointly to the averaged periods and the drift cost (drift_joint.py). Stiffness
+    degradation keeps the plain fit's estimate (each experiment's gain holds its own mean stiffness),
+    unrefined: its passes only bring the periods back to the virgin stiffness.
     """
     data: Sequence[Any] = drift_data(exps, sx, plain, s.y, substeps)
     if not data:
