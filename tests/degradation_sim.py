@@ -10,6 +10,7 @@ experiment at once; white noise from ``default_rng([45, seed])``.
 from __future__ import annotations
 
 import math
+import warnings
 
 import bouc_wen_id as bw
 import numpy as np
@@ -49,3 +50,14 @@ def records(noise: float, seed: int, delta_nu: float = 0.0, delta_eta: float = 0
         y = out[i] + noise * rng.standard_normal(n)
         recs.append(bw.Recording(tt, u, y, float(AMPS[i]), float(OMEGAS[i]), settle_periods=SETTLE))
     return recs
+
+
+def named_z(noise: float, seed: int, term: str, truth: float, **delta: float) -> tuple[bw.Diagnosis, float]:
+    """``bw.diagnose`` on :func:`records` with ``candidates=[term]`` (its warnings silenced), and the z of
+    ``term``'s named value against ``truth`` (NaN when it is not named)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        d = bw.diagnose(records(noise, seed, **delta), candidates=[term])
+    named = [t for t in d.named if t.term == term]
+    z = (named[0].value - truth) / named[0].standard_error if named else math.nan
+    return d, z

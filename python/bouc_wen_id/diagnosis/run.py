@@ -31,6 +31,7 @@ from . import (
     dc_wander,
     deg_unnamed,
     design_twin,
+    drift_joint,
     drift_majority,
     drift_pair,
     drift_passes,
@@ -200,9 +201,10 @@ def _degradation_stage(
     as a steady term is tried only when the plain model is rejected. When it is named, the averaged periods
     are brought back to the virgin strength and re-estimated at each loop's own strength, pass after pass
     until d and the virgin fit settle (the first pass moves the fit from the plain model's average strength
-    to the virgin one; :data:`.drift_passes.CORRECTION_PASSES`), then strength degradation's d is refined on
-    both costs. Stiffness degradation keeps the plain fit's estimate (each experiment's gain holds its own
-    mean stiffness), unrefined: its passes only bring the periods back to the virgin stiffness.
+    to the virgin one; :data:`.drift_passes.CORRECTION_PASSES`), then strength degradation's d and the
+    virgin fit are fitted jointly to the averaged periods and the drift cost (drift_joint.py). Stiffness
+    degradation keeps the plain fit's estimate (each experiment's gain holds its own mean stiffness),
+    unrefined: its passes only bring the periods back to the virgin stiffness.
     """
     data: Sequence[Any] = drift_data(exps, sx, plain, s.y, substeps)
     if not data:
@@ -264,7 +266,10 @@ def _corrected_stage(
     spread = drift_se.spread(exps, sx, fit if term == DEGRADATION else plain, data, deg, s.y, substeps)
     first = drift_se.added(deg, *spread, s.y)
     if deg.d > 0 and term == DEGRADATION:
-        deg, fit = drift_passes.refine(exps, sx, fit, data, deg, s, substeps)
+        # The joint fit of the averaged periods and d (drift_joint.py); the scalar refinement where it
+        # cannot be formed.
+        got = drift_joint.joint(exps, sx, fit, data, deg, s.y, substeps)
+        deg, fit = got if got is not None else drift_passes.refine(exps, sx, fit, data, deg, s, substeps)
         deg = drift_se.added(deg, *spread, s.y)
     else:
         # Stiffness degradation keeps the drift space's first-order d: its averaged periods hold next to
