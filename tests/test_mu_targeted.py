@@ -14,6 +14,7 @@ from typing import Any
 import bouc_wen_id as bw
 import numpy as np
 from bouc_wen_id.diagnosis import bounds_said
+from bouc_wen_id.diagnosis.result import NamedTerm
 from on_x_sim import BETA, GAMMA, Lin, simulate
 from wiener_sim import ar1
 
@@ -55,3 +56,16 @@ def test_a_true_spring_on_x_with_mu_inside_its_bracket_is_still_named() -> None:
     t = d.named[0]
     assert abs(t.value - k) < 3.0 * t.standard_error, (t.value, t.standard_error)
     assert bounds_said.MU_MARK not in d.verdict and bounds_said.SOFT_HEAD not in d.verdict, d.verdict
+
+
+def test_an_adequate_final_model_is_demoted_only_on_the_targeted_path() -> None:
+    """:func:`.bounds_said.apply` on an "explained" verdict with mu held at the lower end: the terms stand
+    only when they did not come from the targeted step (an adequate final model after a failed plain one)."""
+    kept = (NamedTerm("stiffness@x", "k", 0.014, 0.002, ""),)
+    held = bounds_said.Beyond(mu_face="lower", mu=1.0)
+    assert bounds_said.apply(held, "explained", kept, kept, 1.0) == ("explained", kept, "", "")
+    soft = bounds_said.apply(
+        bounds_said.Beyond(mu_face="lower", mu=1.0, targeted_soft=True), "explained", kept, kept, 1.0
+    )
+    assert soft[0] == "unexplained" and soft[1] == () and soft[2].startswith(bounds_said.SOFT_HEAD), soft
+    assert bounds_said.HELD_MARK in soft[3] and "k = 0.014" in soft[3], soft

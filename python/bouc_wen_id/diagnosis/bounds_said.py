@@ -112,33 +112,15 @@ def found(
     units: tuple[str, str],
     exps: Sequence[Any],
     substeps: int = 0,
-    plain: Optional[AugFit] = None,
 ) -> Beyond:
     """The candidates of the first step refused only by their bound that remove most of the excess and no
     less than the final model (``final``, its cost on the steps' experiments ``exps``) within the tie
     margin, each with its physical twin if any, and ``final``'s mu face. The best beats the final model
     when it removes more beyond the tie margin or beyond the noise of the two fits' difference
-    (:func:`.bounds_clear.clearly_better`, review 35m F6). ``plain``: the plain fit, whose mu at the lower
-    end with a targeted first step marks the terms as possible stand-ins (:attr:`Beyond.targeted_soft`)."""
+    (:func:`.bounds_clear.clearly_better`, review 35m F6)."""
     face, mu = held_mu(final).mu_face, float(final.params.mu)
     if not steps:
         return Beyond(mu_face=face, mu=mu)
-    if steps[0].targeted and face == "lower" and plain is not None and held_mu(plain).mu_face == "lower":
-        return replace(_found(steps, alpha, final, s, units, exps, substeps), targeted_soft=True)
-    return _found(steps, alpha, final, s, units, exps, substeps)
-
-
-def _found(
-    steps: Sequence[Step],
-    alpha: float,
-    final: AugFit,
-    s: Scale,
-    units: tuple[str, str],
-    exps: Sequence[Any],
-    substeps: int,
-) -> Beyond:
-    """:func:`found` on non-empty ``steps``, without the targeted step's mark."""
-    face, mu = held_mu(final).mu_face, float(final.params.mu)
     st = steps[0]
     level = 0.5 * alpha if st.targeted else alpha
     imp_final = st.before_cost - final.cost
@@ -174,6 +156,13 @@ def _found(
     rivals = bool(final.params.terms) and not beats and best.improvement >= imp_final
     rival = imp_final if rivals else math.nan
     return Beyond(tuple(out), beats, face, mu, tuple(twins), rival, st.before_cost <= st.before_dof)
+
+
+def targeted(b: Beyond, steps: Sequence[Step], plain: AugFit) -> Beyond:
+    """``b`` marked :attr:`Beyond.targeted_soft` when the first step was the targeted one (the plain model
+    passed its global test) and both the plain fit (``plain``) and the final one hold mu at its lower end."""
+    soft = bool(steps) and steps[0].targeted and b.mu_face == "lower" and held_mu(plain).mu_face == "lower"
+    return replace(b, targeted_soft=True) if soft else b
 
 
 def _suggests(term: str) -> str:
@@ -354,5 +343,6 @@ __all__ = [
     "HELD_MARK",
     "MOST",
     "SOFT_HEAD",
+    "targeted",
     "TARGETED_BODY",
 ]
