@@ -112,12 +112,16 @@ def found(
     units: tuple[str, str],
     exps: Sequence[Any],
     substeps: int = 0,
+    plain: Optional[AugFit] = None,
 ) -> Beyond:
     """The candidates of the first step refused only by their bound that remove most of the excess and no
     less than the final model (``final``, its cost on the steps' experiments ``exps``) within the tie
     margin, each with its physical twin if any, and ``final``'s mu face. The best beats the final model
     when it removes more beyond the tie margin or beyond the noise of the two fits' difference
-    (:func:`.bounds_clear.clearly_better`, review 35m F6)."""
+    (:func:`.bounds_clear.clearly_better`, review 35m F6). ``plain``: the plain fit, for :func:`targeted`'s
+    mark (review 47: mu held at its lower end on the targeted path)."""
+    if plain is not None:
+        return targeted(found(steps, alpha, final, s, units, exps, substeps), steps, plain)
     face, mu = held_mu(final).mu_face, float(final.params.mu)
     if not steps:
         return Beyond(mu_face=face, mu=mu)
