@@ -23,9 +23,9 @@ FREQS = np.array([0.2, 0.4, 0.8, 1.6] * 2)
 P, SETTLE, PERIODS = 160, 10, 8
 
 
-def _diagnose(mu: float, k: float, seed: int) -> Any:
-    """``bw.diagnose`` of ``w + k x`` (``k``: a spring across the element, on x) with AR(1) noise (0.95) of
-    1 % of the element's saturation level, the drive 1.2 and 2.4 times it."""
+def _recordings(mu: float, k: float, seed: int) -> list[Any]:
+    """``w + k x`` (``k``: a spring across the element, on x) with AR(1) noise (0.95) of 1 % of the
+    element's saturation level, the drive 1.2 and 2.4 times it."""
     wu = (1.0 / (BETA + GAMMA)) ** (1.0 / mu)
     amps = np.array([1.2] * 4 + [2.4] * 4) * wu
     r = simulate(G, FREQS, amps, P, SETTLE, PERIODS, mu=mu)
@@ -35,9 +35,20 @@ def _diagnose(mu: float, k: float, seed: int) -> Any:
         t = np.arange(r.w[i].size) * r.h[i]
         y = r.w[i] + k * r.x[i] + ar1(rng, t.size, 0.01 * wu, 0.95)
         recs.append(bw.Recording(t, r.u[i], y, float(amps[i]), 2 * math.pi * float(f), settle_periods=SETTLE))
+    return recs
+
+
+def _diagnose(mu: float, k: float, seed: int) -> Any:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        return bw.diagnose(recs)
+        return bw.diagnose(_recordings(mu, k, seed))
+
+
+def _across(mu: float, k: float) -> Any:
+    """``diagnose_across`` on two conditions, the same device, the noise from seeds 1 and 2."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return bw.diagnose_across([_recordings(mu, k, 1), _recordings(mu, k, 2)], [0.0, 1.0])
 
 
 def test_a_soft_loop_under_ar1_noise_names_no_term_on_the_targeted_path() -> None:
@@ -69,3 +80,14 @@ def test_an_adequate_final_model_is_demoted_only_on_the_targeted_path() -> None:
     )
     assert soft[0] == "unexplained" and soft[1] == () and soft[2].startswith(bounds_said.SOFT_HEAD), soft
     assert bounds_said.HELD_MARK in soft[3] and "k = 0.014" in soft[3], soft
+
+
+def test_diagnose_across_takes_the_same_guard() -> None:
+    d = _across(0.75, 0.0)
+    assert d.steps and d.steps[0].targeted, d.verdict
+    assert not d.named and d.status == "unexplained", d.verdict  # on main: Dahl on x named at both
+    assert bounds_said.SOFT_HEAD in d.verdict.split("; ")[0], d.verdict
+    assert "fitted with mu held there, not named" in d.verdict and "0 % of the summed excess" not in d.verdict
+    control = _across(1.5, 0.05)
+    assert control.status == "explained" and "stiffness@x" in control.named, control.verdict
+    assert bounds_said.SOFT_HEAD not in control.verdict, control.verdict

@@ -104,6 +104,14 @@ def across_text(groups: Sequence[Any], status: str) -> str:
     return "".join(f"; at {label}: {_mu_text(b).removeprefix('; ')}" for label, b in said if b.mu_face)
 
 
+def targeted_across(groups: Sequence[Any], steps: Sequence[Any]) -> bool:
+    """:func:`targeted`'s mark at the conditions of :func:`.across.diagnose_across`: the joint first step was
+    the targeted one and every condition's plain fit (``g.plain``) and final fit (``g.current``) hold mu at
+    its lower end; the joint structure is then said as stand-ins, not named (review 47 failure 1)."""
+    lower = all(held_mu(g.plain).mu_face == "lower" == held_mu(g.current).mu_face for g in groups)
+    return bool(steps) and bool(steps[0].targeted) and bool(groups) and lower
+
+
 def found(
     steps: Sequence[Step],
     alpha: float,
@@ -347,6 +355,8 @@ __all__ = [
     "HELD_MARK",
     "MOST",
     "SOFT_HEAD",
+    "SOFTER",
     "targeted",
+    "targeted_across",
     "TARGETED_BODY",
 ]
