@@ -23,7 +23,10 @@ headline rather than left to stand-ins.
   says so first: the terms that fit part of it are conditional on it and may stand in for that shape
   (review 34 problem 2: mu = 0.5 named viscous + Coulomb + Dahl on x on a null and never mentioned mu), so
   they are not named: said as fitted with mu held there, their values without standard errors (review 36
-  problem 3).
+  problem 3). On the targeted path too (:func:`targeted`, :func:`targeted_across`): when the plain model
+  passed its global test (a coloured noise's larger level) and the targeted step found the terms with the
+  plain and final fits' mu at the lower end, an adequate final model is no finding either (review 47 failure
+  1: mu = 0.75 under AR(1) noise of 0.95 named stiffness@x + play "explained", no word of mu).
 """
 
 from __future__ import annotations
