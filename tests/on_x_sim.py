@@ -57,9 +57,9 @@ def sample_step(rate: Callable[[Any, Any], Any], s: Any, t: Any, h: Any) -> tupl
     return s, t
 
 
-def simulate(g: Lin, freqs: Any, amps: Any, p: int, settle: int, periods: int) -> Run:
+def simulate(g: Lin, freqs: Any, amps: Any, p: int, settle: int, periods: int, mu: float = MU) -> Run:
     """The noise-free runs at ``freqs`` (Hz) and ``amps`` (the sine's amplitude at u), ``p`` samples a
-    period, ``settle + periods`` periods, started at rest."""
+    period, ``settle + periods`` periods, started at rest; ``mu`` may be below 1 (outside the library)."""
     freqs, amps = np.asarray(freqs, dtype=np.float64), np.asarray(amps, dtype=np.float64)
     om, wg = 2 * math.pi * freqs, 2 * math.pi * g.f
     h = 2 * math.pi / om / p
@@ -75,7 +75,7 @@ def simulate(g: Lin, freqs: Any, amps: Any, p: int, settle: int, periods: int) -
     def rate(t: Any, s: Any) -> Any:
         x, v, w = s
         dx, dv = lin(t, x, v)
-        pw = np.abs(w) ** MU
+        pw = np.abs(w) ** mu  # |w|^mu sgn(w) as below: finite at w = 0 for mu < 1 too
         return np.array([dx, dv, dx - BETA * np.abs(dx) * pw * np.sign(w) - GAMMA * dx * pw])
 
     s, t = np.zeros((3, om.size)), np.zeros(om.size)

@@ -64,6 +64,7 @@ from . import (
     across_stable,
     across_verdict,
     baseline,
+    bounds_said,
     fit_notes,
     inputs,
     readings,
@@ -798,8 +799,9 @@ def _finished(
             "free: an offset or each experiment's own DC there cannot be told from it)"
         )
     status, named, partial = across_verdict.judged(prepared, terms, alpha, steps)
+    soft = status != "adequate" and bounds_said.targeted_across(prepared, steps)  # mu held (bounds_said.py)
     verdict = (
-        across_verdict.head(status, partial, len(prepared), across_verdict.explained_fraction(prepared))
+        across_verdict.head(status, partial, len(prepared), across_verdict.explained_fraction(prepared), soft)
         if status == "adequate" or (partial and not named)
         else _verdict(named, conditions, steps, alpha)
     )

@@ -149,6 +149,8 @@ def judged(
         status = "partly explained"
     if status != "adequate" and across_bounds.demotes(across_bounds.found(groups, steps), bool(terms)):
         status = "unexplained"  # a candidate beyond its range removes clearly more (across_bounds.py)
+    if status != "adequate" and bounds_said.targeted_across(groups, steps):  # mu held at its lower end
+        status = "unexplained"  # on the targeted path: stand-ins for a softer loop (bounds_said.py)
     named = (
         [t for t in terms if t.term not in bad | faint] if status in ("explained", "partly explained") else []
     )
@@ -180,7 +182,11 @@ def tied(groups: Sequence[Any], chosen: Any, rival: Any) -> bool:
 UNEXPLAINED = "unexplained structure remains"
 
 
-def head(status: Status, partial: Sequence[Any], n: int, fraction: float) -> str:
+#: Where the misfit was found when the targeted step's terms are stand-ins (:func:`head`'s ``soft``).
+_FOUND = bounds_said.TARGETED_BODY.removesuffix(" (the terms below)")
+
+
+def head(status: Status, partial: Sequence[Any], n: int, fraction: float, soft: bool = False) -> str:
     """The verdict's opening when nothing is named: "adequate" as :func:`.run._verdict` says it, or the
     structure "unexplained" with the tested terms that lie in their physical range (as :func:`.run._judged`:
     a non-physical one is said by its own clause, :func:`clauses`, not among the tested terms)."""
@@ -188,6 +194,12 @@ def head(status: Status, partial: Sequence[Any], n: int, fraction: float) -> str
         return f"across {n} conditions: {gate.ADEQUATE} at every condition"
     bad = {t.term for t in (*unphysical(partial), *unphysical(partial, clearly=False))}
     what = ", ".join(t.label for t in partial if t.term not in bad)
+    if soft:  # bounds_said.targeted_across: no excess to share out, the loop's shape leads
+        return (
+            f"across {n} conditions: {bounds_said.SOFT_HEAD} {bounds_said.SOFTER}, a shape outside the model "
+            f"(mu held at the lower end of its bracket at every condition); {_FOUND}"
+            + (f" (tested terms {what}: fitted with mu held there, not named)" if what else "")
+        )
     tail = (
         f" (tested terms {what} remove {100 * fraction:.0f} % of the summed excess but leave structure the "
         "library does not model; not named)"

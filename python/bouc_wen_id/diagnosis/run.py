@@ -830,7 +830,7 @@ def _diagnosed_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) 
     cshare = clean_share.share(sx, plain, fsx, final)  # on the clean inputs alone (clean_share.py)
     share = clean_share.naming_share(_naming_share(fraction, deg, named_deg), cshare)
     judged = classify(plain_ok, bool(final.params.terms) or named_deg, adequate(final), share)
-    held = bounds_said.found(steps, alpha, final, s, setup.units, fsx, substeps)  # held at a bound
+    held = bounds_said.found(steps, alpha, final, s, setup.units, fsx, substeps, start)  # held at a bound
     empty = _centres.DC_ONLY_WHERE if _centres.dc_only(passes, bool(final.params.terms), steps) else SPREAD
     status, named, partial, verdict = _judged(
         judged, final_sum, (before, after), fraction, fexps, held, final, empty

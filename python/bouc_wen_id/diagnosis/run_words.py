@@ -185,9 +185,12 @@ def _judged(
     drift = drift_clause.clause(after, before, named)  # beyond a named drift term (drift_clause.py)
     if status == "explained" and drift_clause.beyond(drift):  # a drift left over is not explained
         status = "partly explained"
-    verdict = head + _verdict(
-        status, named, tuple(t for t in partial if t not in unphysical), after, fraction, drift, empty
-    )
+    if head and held is not None and held.targeted_soft:  # no excess to share out (bounds_said.py)
+        verdict = head + bounds_said.TARGETED_BODY
+    else:
+        verdict = head + _verdict(
+            status, named, tuple(t for t in partial if t not in unphysical), after, fraction, drift, empty
+        )
     verdict = input_dc.qualify(verdict + _unphysical_text(unphysical) + tail, named, fexps)  # a preload
     verdict += null_named.text(tuple(t for t in gone if t not in faint)) + beyond_range.text(faint)
     if status != "adequate":
