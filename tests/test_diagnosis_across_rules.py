@@ -176,8 +176,8 @@ def test_a_law_failed_candidate_keeps_the_plain_model_from_adequate_across() -> 
     model."""
     cost = _plain_at(0.3)
     g = _groups(cost, cost, ())
-    failed = SimpleNamespace(trials=(), chosen=None, law_failed=(DAHL_X.kind,), beside=())
-    clean = SimpleNamespace(trials=(), chosen=None, law_failed=(), beside=())
+    failed = SimpleNamespace(trials=(), chosen=None, law_failed=(DAHL_X.kind,), beside=(), targeted=False)
+    clean = SimpleNamespace(trials=(), chosen=None, law_failed=(), beside=(), targeted=False)
     assert V.judged(g, [], 0.05, [clean])[0] == "adequate"
     assert V.judged(g, [], 0.05, [clean, failed])[0] == "unexplained"
 
