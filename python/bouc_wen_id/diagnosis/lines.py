@@ -360,10 +360,7 @@ def _with_output(item: Any, y: FloatArray) -> Any:
 
     if not isinstance(item, Measurement):
         return replace(item, y=y)
-    return Measurement(
-        item.t, item.u, y, nominal_frequency=item.nominal_frequency, units=item.units,
-        channels=item.channels, name=item.name, metadata=dict(item.metadata),
-    )  # fmt: skip
+    return item._replace(item.t, item.u, y)  # the Measurement's own copy (its checks, its fields)
 
 
 def _refined(hz: float, parts: Sequence[Any]) -> float:
