@@ -596,6 +596,13 @@ def new_jobs(args: argparse.Namespace) -> list[tuple[str, Optional[str], str, fl
     return jobs
 
 
+def kept(jobs: list[tuple[str, Optional[str], str, float, int]], only: str) -> list[Any]:
+    """The jobs ``--only`` keeps: a comma-separated list of effect names (``null`` for the nulls), each
+    keeping every place of its effect, or ``name@place`` keeping one place (``viscous@x``)."""
+    keep = set(only.split(","))
+    return [j for j in jobs if (j[1] or "null") in keep or f"{j[1]}@{j[2]}" in keep]
+
+
 def _target(kind: str, size: float) -> tuple[str, dict[str, tuple[str, float]]]:
     """The issue's targets for a row: text, and {metric: (">=" or "<=", bound)} where measurable."""
     if kind == "library":
@@ -790,7 +797,11 @@ def main(argv: Optional[list[str]] = None) -> int:
     ap.add_argument("--null", type=int, default=None)
     ap.add_argument("--seed", type=int, default=0, help="added to every case's seed")
     ap.add_argument("--workers", type=int, default=2)
-    ap.add_argument("--only", default="", help="comma-separated effect names to keep (new generator)")
+    ap.add_argument(
+        "--only",
+        default="",
+        help="comma-separated effect names to keep, name@place one place (new generator)",
+    )
     ap.add_argument("--sizes", default="", help="comma-separated sizes to keep, e.g. 10,30 (new generator)")
     ap.add_argument(
         "--terms",
@@ -816,8 +827,7 @@ def main(argv: Optional[list[str]] = None) -> int:
         return old_main(args)
     jobs = new_jobs(args)
     if args.only:
-        keep = set(args.only.split(","))
-        jobs = [j for j in jobs if (j[1] or "null") in keep]
+        jobs = kept(jobs, args.only)
     if args.sizes:
         sizes = {float(v) for v in args.sizes.split(",")}
         jobs = [j for j in jobs if j[3] in sizes or j[0] in ("null", "outside") and j[3] == 0.0]
