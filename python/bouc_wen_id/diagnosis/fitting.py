@@ -321,28 +321,56 @@ STEP_CHI2 = 0.001
 #: across the windows; until session 46 each window was a refinement of its own, restarting the damping at
 #: 1e-3 (docs/diagnosis-speed.md, session 46). False: those separate refinements.
 STALL_IN_CORE = True
+#: The per-step stop (:data:`STEP_CHI2`'s rule) of a screen: a fit of ``SCREEN_ITER`` iterations whose result
+#: only ranks its starts, the best of which is then finished under :data:`STEP_CHI2` (:func:`screen`). At
+#: :data:`STALL_CHI2`: a step that lowered the cost by at most what ends a whole window, with the quadratic
+#: model predicting no more, leaves the screen where the window test would call it stalled. MR 0.25 A's
+#: screens 3703 -> 3011 iterations (docs/diagnosis-speed.md, session 48). STEP_CHI2: the screens as before.
+SCREEN_STEP_CHI2 = 0.1
 
 
 def fit_from(
-    exps: Sequence[AugExperiment], start: AugParams, substeps: int, max_iter: int = 200
+    exps: Sequence[AugExperiment],
+    start: AugParams,
+    substeps: int,
+    max_iter: int = 200,
+    step_chi2: Optional[float] = None,
 ) -> Optional[AugFit]:
-    """One augmented fit of at most ``max_iter`` iterations, ended early once it stalls (:data:`STALL_CHI2`);
-    None when the start leads nowhere (no steady loop, a rejected constraint). An experiment whose period
-    means were taken out (a :class:`.free_dc.FreeDC`) has its DC free (``free_dc.py``)."""
+    """One augmented fit of at most ``max_iter`` iterations, ended early once it stalls (:data:`STALL_CHI2`,
+    and the per-step rule at ``step_chi2`` reduced chi-squares, :data:`STEP_CHI2` when None); None when the
+    start leads nowhere (no steady loop, a rejected constraint). An experiment whose period means were taken
+    out (a :class:`.free_dc.FreeDC`) has its DC free (``free_dc.py``)."""
+    rule = STEP_CHI2 if step_chi2 is None else float(step_chi2)
+
+    def inner(xs: Sequence[AugExperiment], st: AugParams, sub: int, n: int) -> Optional[AugFit]:
+        return _fit_from(xs, st, sub, n, rule)
+
     return fit_share.refit(
         exps,
         start,
         substeps,
         max_iter,
-        lambda: free_dc.fit(exps, start, substeps, max_iter, _fit_from),
+        lambda: free_dc.fit(exps, start, substeps, max_iter, inner),
         (free_dc.fit, _fit_from, fit_augmented),
+        rule,
     )
 
 
+def screen(exps: Sequence[AugExperiment], start: AugParams, substeps: int) -> Optional[AugFit]:
+    """A screen of ``start``: :data:`SCREEN_ITER` iterations under the per-step stop at
+    :data:`SCREEN_STEP_CHI2` (its cost only ranks the starts; the best is finished by :func:`fit_from`)."""
+    return fit_from(exps, start, substeps, max_iter=SCREEN_ITER, step_chi2=SCREEN_STEP_CHI2)
+
+
 def _fit_from(
-    exps: Sequence[AugExperiment], start: AugParams, substeps: int, max_iter: int
+    exps: Sequence[AugExperiment],
+    start: AugParams,
+    substeps: int,
+    max_iter: int,
+    step_chi2: Optional[float] = None,
 ) -> Optional[AugFit]:
     """:func:`fit_from` without free DCs."""
+    step_chi2 = STEP_CHI2 if step_chi2 is None else step_chi2
     dof = max(sum(e.ybar.size for e in exps) - (3 + len(start.terms) + 2 * len(exps)), 1)
     fit: Optional[AugFit] = None
     done = 0
@@ -350,7 +378,7 @@ def _fit_from(
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             if STALL_IN_CORE:
-                stall = (FIT_CHUNK, STALL_CHI2 / dof, STEP_CHI2 / dof)
+                stall = (FIT_CHUNK, STALL_CHI2 / dof, step_chi2 / dof)
                 return fit_augmented(exps, start, max_iter=max_iter, substeps=substeps, stall=stall)
             while done < max_iter:
                 n = min(FIT_CHUNK, max_iter - done)
@@ -662,7 +690,7 @@ def _fit_with(exps: Sequence[AugExperiment], fit: AugFit, term: str, substeps: i
             if f is not None:
                 return f
         return None
-    screened = best_of([fit_from(exps, st, substeps, max_iter=SCREEN_ITER) for st in starts])
+    screened = best_of([screen(exps, st, substeps) for st in starts])
     if screened is None:
         return None
     best = best_of([screened, fit_from(exps, screened.params, substeps)])
@@ -722,7 +750,7 @@ def _fit_phase_screened(
         screened_starts = [par for par, _ in screen_phases_linear(exps, at, substeps)]
     else:
         screened_starts = [screen_phases(exps, par, substeps)[0] for par in at]
-    fits = [fit_from(exps, par, substeps, max_iter=SCREEN_ITER) for par in screened_starts]
+    fits = [screen(exps, par, substeps) for par in screened_starts]
     screened = best_of(fits)
     if screened is None:
         return None
