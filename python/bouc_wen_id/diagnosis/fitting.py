@@ -321,11 +321,12 @@ STEP_CHI2 = 0.001
 #: across the windows; until session 46 each window was a refinement of its own, restarting the damping at
 #: 1e-3 (docs/diagnosis-speed.md, session 46). False: those separate refinements.
 STALL_IN_CORE = True
-#: The per-step stop (:data:`STEP_CHI2`'s rule) of a screen: a fit of ``SCREEN_ITER`` iterations whose result
-#: only ranks its starts, the best of which is then finished under :data:`STEP_CHI2` (:func:`screen`). At
-#: :data:`STALL_CHI2`: a step that lowered the cost by at most what ends a whole window, with the quadratic
-#: model predicting no more, leaves the screen where the window test would call it stalled. MR 0.25 A's
-#: screens 3703 -> 3011 iterations (docs/diagnosis-speed.md, session 48). STEP_CHI2: the screens as before.
+#: The per-step stop (:data:`STEP_CHI2`'s rule) of a wide restart's screen (:func:`screen`,
+#: ``restarts.wide_fit``): a fit of ``SCREEN_ITER`` iterations whose cost only says whether a wide start
+#: beats the term's own fit, the best then finished under :data:`STEP_CHI2`. At :data:`STALL_CHI2`: a step
+#: that lowered the cost by at most what ends a whole window, with the quadratic model predicting no more.
+#: Not for the candidates' own screens: there it moved MR 0.5 A's partial viscous value by 0.06 se (0.11 se
+#: at 0.01; docs/diagnosis-speed.md, session 48). STEP_CHI2: the wide screens as before.
 SCREEN_STEP_CHI2 = 0.1
 
 
@@ -357,7 +358,7 @@ def fit_from(
 
 
 def screen(exps: Sequence[AugExperiment], start: AugParams, substeps: int) -> Optional[AugFit]:
-    """A screen of ``start``: :data:`SCREEN_ITER` iterations under the per-step stop at
+    """A wide restart's screen of ``start``: :data:`SCREEN_ITER` iterations under the per-step stop at
     :data:`SCREEN_STEP_CHI2` (its cost only ranks the starts; the best is finished by :func:`fit_from`)."""
     return fit_from(exps, start, substeps, max_iter=SCREEN_ITER, step_chi2=SCREEN_STEP_CHI2)
 
@@ -690,7 +691,7 @@ def _fit_with(exps: Sequence[AugExperiment], fit: AugFit, term: str, substeps: i
             if f is not None:
                 return f
         return None
-    screened = best_of([screen(exps, st, substeps) for st in starts])
+    screened = best_of([fit_from(exps, st, substeps, max_iter=SCREEN_ITER) for st in starts])
     if screened is None:
         return None
     best = best_of([screened, fit_from(exps, screened.params, substeps)])
@@ -750,7 +751,7 @@ def _fit_phase_screened(
         screened_starts = [par for par, _ in screen_phases_linear(exps, at, substeps)]
     else:
         screened_starts = [screen_phases(exps, par, substeps)[0] for par in at]
-    fits = [screen(exps, par, substeps) for par in screened_starts]
+    fits = [fit_from(exps, par, substeps, max_iter=SCREEN_ITER) for par in screened_starts]
     screened = best_of(fits)
     if screened is None:
         return None
