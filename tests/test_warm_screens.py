@@ -1,6 +1,6 @@
-"""Session 48's cuts of the LM iterations (docs/diagnosis-speed.md): a screen (a fit whose cost only ranks
-its starts) stops under the looser per-step rule ``SCREEN_STEP_CHI2``, a finish under ``STEP_CHI2``; the dry
-friction's width refits start from the fit at the nearest width already tried."""
+"""Session 48's cuts of the LM iterations (docs/diagnosis-speed.md): a wide restart's screen (a fit whose cost
+only ranks its starts) stops under the looser per-step rule ``SCREEN_STEP_CHI2``, a finish under
+``STEP_CHI2``; the dry friction's width refits start from the fit at the nearest width already tried."""
 
 from __future__ import annotations
 
