@@ -8,24 +8,9 @@ import math
 from typing import Any, cast
 
 import numpy as np
-from bouc_wen_id import _core
 from bouc_wen_id.augmented import AugExperiment, AugParams, fit_augmented
 from bouc_wen_id.diagnosis import coulomb_width, fit_share, fitting
-
-
-def _misfit(seed: int) -> tuple[list[AugExperiment], AugParams]:
-    """Loops with a dashpot that the fitted plain model lacks, from a start away from its best."""
-    rng = np.random.default_rng(seed)
-    exps, gains, phases = [], [], []
-    for om in (1.0, 3.0):
-        psi = float(rng.uniform(0.0, 2.0 * np.pi))
-        y, _, _ = _core.augmented_output(
-            32, 1.0, om, psi, ["viscous"], np.array([0.8, 0.2, 1.6, 0.05]), 0.9, 0.3, 8
-        )
-        exps.append(AugExperiment(y + 1e-3 * rng.standard_normal(32), 1.0, om, psi, 1e6))
-        gains.append(rng.uniform(0.7, 1.1))
-        phases.append(rng.uniform(0.1, 0.5))
-    return exps, AugParams(0.6, 0.1, 2.2, (), np.zeros(0), np.array(gains), np.array(phases))
+from test_lm_stall import _misfit  # loops with a dashpot the plain model lacks, from a start off its best
 
 
 def _rule(exps: list[AugExperiment], step_chi2: float) -> tuple[float, float, float]:
