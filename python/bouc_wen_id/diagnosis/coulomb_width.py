@@ -34,6 +34,11 @@ REFINE_STEPS = 4
 #: Iterations of each width's refit from the candidate's estimate (a warm start).
 REFIT_ITER = 30
 
+#: Each width's refit starts from the fit of the nearest width already tried (on ``log eps``) rather than
+#: from the candidate's own estimate at its width (docs/diagnosis-speed.md, session 48). False: always
+#: from the candidate's estimate.
+WARM_START = True
+
 
 def is_dry_friction(term: str) -> bool:
     """Whether ``term`` is a Coulomb term (on u or on x)."""
@@ -70,7 +75,7 @@ def profile(fit: AugFit, refit: Callable[[AugParams], Optional[AugFit]]) -> AugF
     def at(eps: float) -> float:
         eps = float(eps)
         if eps not in tried:
-            tried[eps] = refit(replace(fit.params, smoothing=eps))
+            tried[eps] = refit(replace(_nearest(tried, eps, fit).params, smoothing=eps))
         f = tried[eps]
         return f.cost if f is not None and math.isfinite(f.cost) else math.inf
 
@@ -82,6 +87,15 @@ def profile(fit: AugFit, refit: Callable[[AugParams], Optional[AugFit]]) -> AugF
     if best.params.smoothing >= WIDTHS[-1]:  # the cost still falls at the widest width: no turn found
         return fit
     return best if best.cost < fit.cost else fit
+
+
+def _nearest(tried: dict[float, Optional[AugFit]], eps: float, fit: AugFit) -> AugFit:
+    """The fit of the tried width nearest ``eps`` on ``log eps`` (``fit`` when none did fit): the warm start
+    of the refit at ``eps`` (WARM_START; else ``fit`` itself)."""
+    done = [(w, f) for w, f in tried.items() if f is not None and math.isfinite(f.cost) and w > 0.0]
+    if not WARM_START or not done:
+        return fit
+    return min(done, key=lambda wf: abs(math.log(wf[0] / eps)))[1]
 
 
 def _golden(f: Callable[[float], float], lo: float, hi: float, steps: int) -> None:

@@ -14,6 +14,7 @@ difference in them is another key, a new fit. Outside a :func:`scope` nothing is
 from __future__ import annotations
 
 import hashlib
+import math
 import pickle
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from contextlib import contextmanager
@@ -130,12 +131,14 @@ def refit(
     max_iter: int,
     fit: Callable[[], Optional[Any]],
     tag: Sequence[Any] = (),
+    rule: float = math.nan,
 ) -> Optional[Any]:
-    """``fit()`` (one fit of ``start`` on ``exps``, :func:`.fitting.fit_from`), or the stored result of the
-    same inputs inside a :func:`scope` when :data:`speed.MEMO_REFITS`. The inputs the fit reads are the key
-    (the waveforms only when ``start`` holds the distortion term), so only a fit run again from the very
-    same start on the same periods is taken from the store (session 43: about 55 of the 607 refinements of
-    MR 0.5 A, the detection limits', the second carry's and the plain fit's, repeated earlier ones).
+    """``fit()`` (one fit of ``start`` on ``exps``, :func:`.fitting.fit_from`, its per-step stop at ``rule``),
+    or the stored result of the same inputs inside a :func:`scope` when :data:`speed.MEMO_REFITS`. The inputs
+    the fit reads are the key (the waveforms only when ``start`` holds the distortion term), so only a fit
+    run again from the very same start on the same periods under the same stop is taken from the store
+    (session 43: about 55 of the 607 refinements of MR 0.5 A, the detection limits', the second carry's and
+    the plain fit's, repeated earlier ones).
     ``tag``: the fitting functions in use, as in :func:`shared`."""
     store = _active.get()
     if store is None or not speed.MEMO_REFITS:
@@ -143,7 +146,14 @@ def refit(
     return _stored(
         store,
         _digest(
-            ("fit_from", _plain_unless_distortion(exps, start.terms), start, int(substeps), int(max_iter)),
+            (
+                "fit_from",
+                _plain_unless_distortion(exps, start.terms),
+                start,
+                int(substeps),
+                int(max_iter),
+                float(rule),
+            ),
             tag,
         ),
         fit,

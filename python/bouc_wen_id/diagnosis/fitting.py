@@ -321,28 +321,57 @@ STEP_CHI2 = 0.001
 #: across the windows; until session 46 each window was a refinement of its own, restarting the damping at
 #: 1e-3 (docs/diagnosis-speed.md, session 46). False: those separate refinements.
 STALL_IN_CORE = True
+#: The per-step stop (:data:`STEP_CHI2`'s rule) of a wide restart's screen (:func:`screen`,
+#: ``restarts.wide_fit``): a fit of ``SCREEN_ITER`` iterations whose cost only says whether a wide start
+#: beats the term's own fit, the best then finished under :data:`STEP_CHI2`. At :data:`STALL_CHI2`: a step
+#: that lowered the cost by at most what ends a whole window, with the quadratic model predicting no more.
+#: Not for the candidates' own screens: there it moved MR 0.5 A's partial viscous value by 0.06 se (0.11 se
+#: at 0.01; docs/diagnosis-speed.md, session 48). STEP_CHI2: the wide screens as before.
+SCREEN_STEP_CHI2 = 0.1
 
 
 def fit_from(
-    exps: Sequence[AugExperiment], start: AugParams, substeps: int, max_iter: int = 200
+    exps: Sequence[AugExperiment],
+    start: AugParams,
+    substeps: int,
+    max_iter: int = 200,
+    step_chi2: Optional[float] = None,
 ) -> Optional[AugFit]:
-    """One augmented fit of at most ``max_iter`` iterations, ended early once it stalls (:data:`STALL_CHI2`);
-    None when the start leads nowhere (no steady loop, a rejected constraint). An experiment whose period
-    means were taken out (a :class:`.free_dc.FreeDC`) has its DC free (``free_dc.py``)."""
+    """One augmented fit of at most ``max_iter`` iterations, ended early once it stalls (:data:`STALL_CHI2`,
+    and the per-step rule at ``step_chi2`` reduced chi-squares, :data:`STEP_CHI2` when None); None when the
+    start leads nowhere (no steady loop, a rejected constraint). An experiment whose period means were taken
+    out (a :class:`.free_dc.FreeDC`) has its DC free (``free_dc.py``)."""
+    rule = STEP_CHI2 if step_chi2 is None else float(step_chi2)
+
+    def inner(xs: Sequence[AugExperiment], st: AugParams, sub: int, n: int) -> Optional[AugFit]:
+        return _fit_from(xs, st, sub, n, rule)
+
     return fit_share.refit(
         exps,
         start,
         substeps,
         max_iter,
-        lambda: free_dc.fit(exps, start, substeps, max_iter, _fit_from),
+        lambda: free_dc.fit(exps, start, substeps, max_iter, inner),
         (free_dc.fit, _fit_from, fit_augmented),
+        rule,
     )
 
 
+def screen(exps: Sequence[AugExperiment], start: AugParams, substeps: int) -> Optional[AugFit]:
+    """A wide restart's screen of ``start``: :data:`SCREEN_ITER` iterations under the per-step stop at
+    :data:`SCREEN_STEP_CHI2` (its cost only ranks the starts; the best is finished by :func:`fit_from`)."""
+    return fit_from(exps, start, substeps, max_iter=SCREEN_ITER, step_chi2=SCREEN_STEP_CHI2)
+
+
 def _fit_from(
-    exps: Sequence[AugExperiment], start: AugParams, substeps: int, max_iter: int
+    exps: Sequence[AugExperiment],
+    start: AugParams,
+    substeps: int,
+    max_iter: int,
+    step_chi2: Optional[float] = None,
 ) -> Optional[AugFit]:
     """:func:`fit_from` without free DCs."""
+    step_chi2 = STEP_CHI2 if step_chi2 is None else step_chi2
     dof = max(sum(e.ybar.size for e in exps) - (3 + len(start.terms) + 2 * len(exps)), 1)
     fit: Optional[AugFit] = None
     done = 0
@@ -350,7 +379,7 @@ def _fit_from(
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             if STALL_IN_CORE:
-                stall = (FIT_CHUNK, STALL_CHI2 / dof, STEP_CHI2 / dof)
+                stall = (FIT_CHUNK, STALL_CHI2 / dof, step_chi2 / dof)
                 return fit_augmented(exps, start, max_iter=max_iter, substeps=substeps, stall=stall)
             while done < max_iter:
                 n = min(FIT_CHUNK, max_iter - done)

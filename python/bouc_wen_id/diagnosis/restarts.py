@@ -32,7 +32,7 @@ import numpy as np
 
 from ..augmented import AugExperiment, AugFit, AugParams
 from ..terms import TERMS
-from .fitting import PROFILE_MU_BRACKET, SCREEN_ITER, best_of, fit_from, regressor
+from .fitting import PROFILE_MU_BRACKET, best_of, fit_from, regressor, screen
 
 #: A fit whose reduced chi-square (cost over its dof) exceeds this is "far from adequate": the level at
 #: which a fit ending on a face of its range is taken for a local minimum rather than the data's pull.
@@ -108,13 +108,13 @@ def wide_fit(
     exps: Sequence[AugExperiment], base: AugFit, term: str, substeps: int, first: Optional[AugFit]
 ) -> Optional[AugFit]:
     """``first`` (the term's own fit) or, when it is :func:`suspicious`, the best of it and the
-    :func:`wide_starts` (each screened for ``SCREEN_ITER`` iterations, the best finished)."""
+    :func:`wide_starts` (each screened, :func:`.fitting.screen`, the best finished)."""
     if not suspicious(exps, base, first):
         return first
     starts = wide_starts(exps, base, term, substeps)
     if not starts:
         return first
-    screened = best_of([fit_from(exps, st, substeps, max_iter=SCREEN_ITER) for st in starts])
+    screened = best_of([screen(exps, st, substeps) for st in starts])
     if screened is None or (first is not None and screened.cost >= first.cost):
         return first
     return best_of([first, screened, fit_from(exps, screened.params, substeps)])
