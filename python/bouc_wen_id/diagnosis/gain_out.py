@@ -1,0 +1,233 @@
+"""A drifting output gain said and divided out of the records, every record kept (session 48, review 47).
+
+The drift test (settling.py) leaves out a record whose loop drifts from period to period when no
+degradation explains it: "a transient not yet settled, or a sensor whose gain or zero drifts". A zero that
+drifts is taken out before (zero_drift.py); a gain that drifts was not. Review 47 (failure 5: a 2 % linear
+sensor gain drift over each record, config L) lost 7 of 9 effects to it: 5 of 8 records left out, the
+effects named from the 3 left only as alternatives, and the advice "record more settling periods", which
+would not help.
+
+A gain drifting over a record (``y`` times ``1 + g t``: a load cell warming up, an amplifier's gain with
+temperature) moves every period by ``g t`` times the recorded loop, its DC and every harmonic alike, in a
+straight line over the periods. :func:`read` tells it from what else drifts, on each record's periods after
+settling (harmonics 0..:data:`HARMONICS`, each period regressed on a constant, the period index ``t`` and
+its square):
+
+* the drift along the mean loop (``g``, one per record) is significant in every record the drift test left
+  out (:data:`GAIN_LEVEL`): what moves them is a scale;
+* no record drifts beyond its gain (the slope less ``g`` times the mean loop, an F-test on the harmonics'
+  remaining directions): a loop centre settling, a degradation past saturation or a transient changes the
+  loop's shape, which no gain does;
+* no record's periods curve (the quadratic's F-test on every direction): a transient decays with periods,
+  a gain drifting in a line does not.
+
+Both refusals are tested at :data:`SHAPE_LEVEL`, Bonferroni over the records and the two tests; a refusal
+(or too few periods to tell, under :data:`MIN_PERIODS`) leaves the diagnosis as it was. The noise is
+pooled over the harmonics as white: under coloured noise the low harmonics' larger scatter makes both
+refusal tests fire more, never less (a false correction is the harm to avoid; a refused one is the drift
+test's verdict as before).
+
+When it reads a gain drift, each record is divided by its own ``1 + g t`` (``t`` in periods from the middle
+of its periods after settling: the averaged period keeps the record's mean gain) on copies, the diagnosis
+runs again on them (:func:`rediagnosed`) and is kept when it leaves none of those records out; its verdict
+says the gain drift and what to do about it (:func:`clause`), its notes each record's rate and standard
+error. ``g``'s error ``dg`` leaves ``dg t`` times the loop in each period, zero on average (``t`` centred):
+the averaged period is unbiased and its scatter carries that error as noise (one fitted direction of the
+``(n - 1) P`` samples' spread, a negligible share), so the values' standard errors need no widening.
+Recordings only: a lab Measurement (no whole number of samples per period) is left as it was.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, replace
+from typing import Any, Optional
+
+import numpy as np
+from scipy import stats
+
+from .result import Diagnosis
+from .verdict_text import clauses
+
+#: Kill switch (tests compare with and without).
+ENABLED = True
+#: Harmonics of each period read (0..HARMONICS; fewer when the period has fewer samples).
+HARMONICS = 15
+#: Fewest periods after settling for a record to be read (three coefficients and a spread).
+MIN_PERIODS = 6
+#: Level of each left-out record's gain slope (two-sided): the drift there is a scale.
+GAIN_LEVEL = 0.01
+#: Family level of the refusals (a shape beyond the gain, a curvature), Bonferroni over records and tests.
+SHAPE_LEVEL = 0.05
+#: Where the diagnosis's settings keep the reading (JSON).
+SETTING = "gain_drift"
+
+
+@dataclass(frozen=True)
+class Record:
+    """One record's reading: the gain's rate per period (fraction), its standard error, the periods after
+    settling and in the whole record, and the p-values of the gain, shape and curvature tests."""
+
+    source: str
+    rate: float
+    se: float
+    periods: int
+    record_periods: int
+    gain_p: float
+    shape_p: float
+    curve_p: float
+
+
+@dataclass(frozen=True)
+class GainDrift:
+    """A gain drift read on the set: each read record (by item index) and the corrected items."""
+
+    records: dict[int, Record]
+    items: tuple[Any, ...]
+
+    def note(self) -> str:
+        rows = ", ".join(
+            f"{r.source} {100 * r.rate:+.3g} ± {100 * r.se:.2g} % a period (gain p = {r.gain_p:.2g}; beyond "
+            f"the gain p = {r.shape_p:.2g}, curving p = {r.curve_p:.2g})"
+            for r in self.records.values()
+        )
+        return (
+            "the output's gain drifts over each record, its loop scaled period by period in a straight line "
+            f"with no change of its shape and no decay: {rows}; each record was divided by its own 1 + g t "
+            "(t in periods from the middle of its periods after settling) on copies, and every record kept; "
+            "g's error leaves its share in the periods' scatter, zero in the averaged period"
+        )
+
+
+def _source(item: Any, i: int) -> str:
+    return str(getattr(item, "metadata", {}).get("name", f"recording {i}"))
+
+
+def _columns(rows: np.ndarray, k: int) -> np.ndarray:
+    """Each period's harmonics 0..k as real columns of equal white-noise variance (the DC's over sqrt 2)."""
+    h = np.fft.rfft(rows, axis=1)[:, : k + 1] / rows.shape[1]
+    return np.hstack([h[:, :1].real / math.sqrt(2.0), h[:, 1:].real, h[:, 1:].imag])
+
+
+def _f_p(stat: float, dof1: int, dof2: int) -> float:
+    return float(stats.f.sf(stat / dof1, dof1, dof2)) if dof1 > 0 and dof2 > 0 else 1.0
+
+
+def _record(item: Any, i: int) -> Optional[Record]:
+    """:class:`Record` of a Recording with enough periods after settling, else None."""
+    from ..model import Recording
+
+    if not isinstance(item, Recording):
+        return None
+    p, s = int(item.samples_per_period), int(item.settle_periods)
+    n = int(item.whole_periods) - s
+    if n < MIN_PERIODS or p < 8:
+        return None
+    z = _columns(np.asarray(item.y, dtype=np.float64)[s * p : (s + n) * p].reshape(n, p), min(HARMONICS, p // 2 - 1))
+    t = np.arange(n) - 0.5 * (n - 1)
+    q = t**2 - np.mean(t**2)
+    x = np.column_stack([np.ones(n), t, q])
+    coef, *_ = np.linalg.lstsq(x, z, rcond=None)
+    dof = (n - 3) * z.shape[1]
+    s2 = float(np.sum((z - x @ coef) ** 2)) / dof
+    mean, slope, curve = coef
+    mm, t2, q2 = float(mean @ mean), float(t @ t), float(q @ q)
+    if not (s2 > 0 and mm > 0):
+        return None
+    rate = float(slope @ mean) / mm
+    se = math.sqrt(s2 / (t2 * mm))
+    beyond = float(np.sum((slope - rate * mean) ** 2)) * t2 / s2
+    curving = float(np.sum(curve**2)) * q2 / s2
+    return Record(
+        source=_source(item, i),
+        rate=rate,
+        se=se,
+        periods=n,
+        record_periods=int(item.whole_periods),
+        gain_p=float(2.0 * stats.t.sf(abs(rate) / se, dof)),
+        shape_p=_f_p(beyond, z.shape[1] - 1, dof),
+        curve_p=_f_p(curving, z.shape[1], dof),
+    )
+
+
+def _divided(item: Any, r: Record) -> Any:
+    """A copy of the Recording ``item`` divided by ``1 + g t`` (t in periods from its steady middle)."""
+    p, s = int(item.samples_per_period), int(item.settle_periods)
+    y = np.asarray(item.y, dtype=np.float64)
+    t = np.arange(y.size) / p - (s + 0.5 * r.periods)
+    return replace(item, y=y / (1.0 + r.rate * t))
+
+
+def read(experiments: Sequence[Any], left_out: Sequence[str]) -> Optional[GainDrift]:
+    """The gain drift of the records when it explains the drift of those ``left_out`` (module docstring),
+    with the corrected copies; None when it does not, or a left-out record cannot be read."""
+    if not ENABLED or not left_out:
+        return None
+    got = {i: _record(item, i) for i, item in enumerate(experiments)}
+    read_ = {i: r for i, r in got.items() if r is not None}
+    if not read_ or any(s not in {r.source for r in read_.values()} for s in left_out):
+        return None
+    level = SHAPE_LEVEL / (2 * len(read_))
+    if any(min(r.shape_p, r.curve_p) < level for r in read_.values()):
+        return None
+    if any(r.gain_p >= GAIN_LEVEL for r in read_.values() if r.source in left_out):
+        return None
+    items = tuple(_divided(item, read_[i]) if i in read_ else item for i, item in enumerate(experiments))
+    return GainDrift(read_, items)
+
+
+def _span(values: Sequence[float], unit: str) -> str:
+    lo, hi = min(values), max(values)
+    return f"{lo:+.2g} % {unit}" if f"{lo:+.2g}" == f"{hi:+.2g}" else f"{lo:+.2g} to {hi:+.2g} % {unit}"
+
+
+#: What to do about a drifting sensor gain.
+WHAT_TO_DO = "calibrate the sensor, or record shorter or at a steady temperature"
+
+
+def clause(g: GainDrift) -> str:
+    """The verdict's clause on the gain drift (said second, after the headline)."""
+    rs = [r for r in g.records.values() if r.gain_p < GAIN_LEVEL] or list(g.records.values())
+    per = _span([100 * r.rate for r in rs], "a period")
+    whole = _span([100 * r.rate * r.record_periods for r in rs], "over each record")
+    return (
+        f"; the output's gain drifts {per} ({whole}): a sensor or amplifier drift, not settling (the "
+        "periods' drift is the loop scaled, its shape unchanged, no decay), divided out of every record and "
+        f"each kept ({WHAT_TO_DO})"
+    )
+
+
+def _after_headline(verdict: str, words: str) -> str:
+    """``verdict`` with ``words`` (a clause, "; ..." ) right after its headline."""
+    head = clauses(verdict)[0] if clauses(verdict) else verdict
+    at = verdict.find(head) + len(head)
+    return verdict[:at] + words + verdict[at:]
+
+
+def rediagnosed(
+    experiments: Sequence[Any],
+    left: Sequence[str],
+    again: Callable[[list[Any]], tuple[Diagnosis, list[Any], tuple[str, str]]],
+) -> Optional[tuple[Diagnosis, list[Any], tuple[str, str]]]:
+    """``again`` (the diagnosis) on the gain-corrected copies of ``experiments`` with the gain drift said,
+    when :func:`read` reads one and the corrected diagnosis leaves none of ``left`` out; else None."""
+    from .left_out import left as left_of
+
+    g = read(experiments, left)
+    if g is None:
+        return None
+    d2, items, units = again(list(g.items))
+    if set(left_of(d2)) & set(left):
+        return None
+    rates = {r.source: {"rate_per_period": r.rate, "se": r.se, "p": r.gain_p} for r in g.records.values()}
+    d2 = replace(
+        d2,
+        verdict=_after_headline(d2.verdict, clause(g)),
+        notes=(g.note(), *d2.notes),
+        settings={**d2.settings, SETTING: rates},
+    )
+    return d2, items, units
+
+
+__all__ = ["ENABLED", "SETTING", "WHAT_TO_DO", "GainDrift", "Record", "clause", "read", "rediagnosed"]
