@@ -77,6 +77,8 @@ class Record:
     gain_p: float
     shape_p: float
     curve_p: float
+    middle: float  # the steady stretch's middle (s)
+    period: float  # s
 
 
 @dataclass(frozen=True)
@@ -100,63 +102,99 @@ class GainDrift:
         )
 
 
-def _source(item: Any, i: int) -> str:
-    return str(getattr(item, "metadata", {}).get("name", f"recording {i}"))
+def _basis(phase: np.ndarray, k: int) -> np.ndarray:
+    """The periodic columns at ``phase`` (rad): 1, cos, sin of harmonics 1..k."""
+    ks = np.arange(1, k + 1)[None, :] * phase[:, None]
+    return np.hstack([np.ones((phase.size, 1)), np.cos(ks), np.sin(ks)])
 
 
-def _columns(rows: np.ndarray, k: int) -> np.ndarray:
-    """Each period's harmonics 0..k as real columns of equal white-noise variance (the DC's over sqrt 2)."""
-    h = np.fft.rfft(rows, axis=1)[:, : k + 1] / rows.shape[1]
-    return np.hstack([h[:, :1].real / math.sqrt(2.0), h[:, 1:].real, h[:, 1:].imag])
+def _rss(x: np.ndarray, y: np.ndarray) -> tuple[float, np.ndarray]:
+    coef, *_ = np.linalg.lstsq(x, y, rcond=None)
+    return float(np.sum((y - x @ coef) ** 2)), coef
 
 
-def _f_p(stat: float, dof1: int, dof2: int) -> float:
-    return float(stats.f.sf(stat / dof1, dof1, dof2)) if dof1 > 0 and dof2 > 0 else 1.0
+def _f_p(more: float, less: float, dof1: int, dof2: int) -> float:
+    """The F-test's p of ``dof1`` columns that took the residual sum of squares from ``less`` to ``more``."""
+    if not (dof1 > 0 and dof2 > 0 and more > 0):
+        return 1.0
+    return float(stats.f.sf(max(less - more, 0.0) / dof1 / (more / dof2), dof1, dof2))
 
 
-def _record(item: Any, i: int) -> Optional[Record]:
-    """:class:`Record` of a Recording with enough periods after settling, else None."""
-    from ..model import Recording
-
-    if not isinstance(item, Recording):
+def _read(
+    source: str, t: np.ndarray, y: np.ndarray, omega: float, periods: float, record_periods: float
+) -> Optional[Record]:
+    """:class:`Record` of a steady stretch (``t``, ``y``; ``omega`` rad/s, ``periods`` of it) by least
+    squares on the periodic columns, the same times ``tau`` (periods from its middle) and ``tau^2``."""
+    n = int(periods)
+    k = min(HARMONICS, int(t.size / max(periods, 1.0)) // 2 - 1)
+    if n < MIN_PERIODS or k < 1:
         return None
-    p, s = int(item.samples_per_period), int(item.settle_periods)
-    n = int(item.whole_periods) - s
-    if n < MIN_PERIODS or p < 8:
+    tau = (t - 0.5 * (t[0] + t[-1])) * omega / (2.0 * math.pi)
+    b = _basis(omega * t, k)
+    curve = (tau**2 - np.mean(tau**2))[:, None] * b
+    full, coef = _rss(np.hstack([b, tau[:, None] * b, curve]), y)
+    dof = y.size - 3 * b.shape[1]
+    mean = b @ coef[: b.shape[1]]
+    if not (full > 0 and float(mean @ mean) > 0 and dof > 0):
         return None
-    z = _columns(np.asarray(item.y, dtype=np.float64)[s * p : (s + n) * p].reshape(n, p), min(HARMONICS, p // 2 - 1))
-    t = np.arange(n) - 0.5 * (n - 1)
-    q = t**2 - np.mean(t**2)
-    x = np.column_stack([np.ones(n), t, q])
-    coef, *_ = np.linalg.lstsq(x, z, rcond=None)
-    dof = (n - 3) * z.shape[1]
-    s2 = float(np.sum((z - x @ coef) ** 2)) / dof
-    mean, slope, curve = coef
-    mm, t2, q2 = float(mean @ mean), float(t @ t), float(q @ q)
-    if not (s2 > 0 and mm > 0):
-        return None
-    rate = float(slope @ mean) / mm
-    se = math.sqrt(s2 / (t2 * mm))
-    beyond = float(np.sum((slope - rate * mean) ** 2)) * t2 / s2
-    curving = float(np.sum(curve**2)) * q2 / s2
+    gain_only, _ = _rss(np.hstack([b, (tau * mean)[:, None], curve]), y)  # the slope along the loop alone
+    straight, _ = _rss(np.hstack([b, tau[:, None] * b]), y)
+    x = np.hstack([b, (tau * mean)[:, None]])
+    rest, cg = _rss(x, y)
+    cov = np.linalg.pinv(x.T @ x) * rest / (y.size - x.shape[1])
+    rate, se = float(cg[-1]), math.sqrt(max(float(cov[-1, -1]), 0.0))
     return Record(
-        source=_source(item, i),
+        source=source,
         rate=rate,
         se=se,
         periods=n,
-        record_periods=int(item.whole_periods),
-        gain_p=float(2.0 * stats.t.sf(abs(rate) / se, dof)),
-        shape_p=_f_p(beyond, z.shape[1] - 1, dof),
-        curve_p=_f_p(curving, z.shape[1], dof),
+        record_periods=int(round(record_periods)),
+        gain_p=float(2.0 * stats.t.sf(abs(rate) / se, y.size - x.shape[1])) if se > 0 else 1.0,
+        shape_p=_f_p(full, gain_only, b.shape[1] - 1, dof),
+        curve_p=_f_p(full, straight, b.shape[1], dof),
+        middle=float(0.5 * (t[0] + t[-1])),
+        period=2.0 * math.pi / omega,
     )
 
 
+def _records(item: Any, i: int) -> list[Record]:
+    """The :class:`Record` of a Recording (its periods after settling), or of a lab Measurement with one
+    steady segment (its own, by the library's segmenting); [] for anything else or too short a stretch."""
+    from ..measurement import Measurement
+    from ..model import Recording
+
+    if isinstance(item, Recording):
+        p, s = int(item.samples_per_period), int(item.settle_periods)
+        n = int(item.whole_periods) - s
+        t, y = (np.asarray(a, dtype=np.float64)[s * p : (s + n) * p] for a in (item.t, item.y))
+        name = str(item.metadata.get("name", f"recording {i}"))
+        got = _read(name, t, y, float(item.frequency), n, item.whole_periods) if n > 0 and p >= 8 else None
+        return [got] if got else []
+    if not isinstance(item, Measurement):
+        return []
+    from ..signal import average_segments
+
+    try:
+        seg = average_segments(item)
+    except Exception:  # a measurement the segmenting refuses: not read here (the diagnosis says why)
+        return []
+    if len(seg.report.kept) != 1:
+        return []
+    kept, fit, ap = seg.report.kept[0], seg.report.fits[0], seg.periods[0]
+    t, y = (np.asarray(a, dtype=np.float64)[kept.start : kept.stop] for a in (item.t, item.y))
+    w = float(fit.frequency)
+    whole = (float(item.t[-1]) - float(item.t[0])) * w / (2.0 * math.pi)
+    got = _read(str(ap.source), t, y, w, (t[-1] - t[0]) * w / (2.0 * math.pi), whole)
+    return [got] if got else []
+
+
 def _divided(item: Any, r: Record) -> Any:
-    """A copy of the Recording ``item`` divided by ``1 + g t`` (t in periods from its steady middle)."""
-    p, s = int(item.samples_per_period), int(item.settle_periods)
-    y = np.asarray(item.y, dtype=np.float64)
-    t = np.arange(y.size) / p - (s + 0.5 * r.periods)
-    return replace(item, y=y / (1.0 + r.rate * t))
+    """A copy of ``item`` divided by ``1 + g tau`` (``tau`` in periods from its steady stretch's middle)."""
+    from ..measurement import Measurement
+
+    t, y = np.asarray(item.t, dtype=np.float64), np.asarray(item.y, dtype=np.float64)
+    y = y / (1.0 + r.rate * (t - r.middle) / r.period)
+    return item._replace(item.t, item.u, y) if isinstance(item, Measurement) else replace(item, y=y)
 
 
 def read(experiments: Sequence[Any], left_out: Sequence[str]) -> Optional[GainDrift]:
@@ -164,8 +202,7 @@ def read(experiments: Sequence[Any], left_out: Sequence[str]) -> Optional[GainDr
     with the corrected copies; None when it does not, or a left-out record cannot be read."""
     if not ENABLED or not left_out:
         return None
-    got = {i: _record(item, i) for i, item in enumerate(experiments)}
-    read_ = {i: r for i, r in got.items() if r is not None}
+    read_ = {i: rs[0] for i, item in enumerate(experiments) for rs in [_records(item, i)] if rs}
     if not read_ or any(s not in {r.source for r in read_.values()} for s in left_out):
         return None
     level = SHAPE_LEVEL / (2 * len(read_))
