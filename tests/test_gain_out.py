@@ -11,10 +11,9 @@ from __future__ import annotations
 import math
 from typing import Any
 
+import bouc_wen_id as bw
 import numpy as np
 import pytest
-
-import bouc_wen_id as bw
 from bouc_wen_id.diagnosis import gain_out
 
 FREQS, AMPS = (0.5, 1.0, 0.5, 1.0), (0.8, 0.8, 1.6, 1.6)  # Hz, the drive's amplitude

@@ -45,7 +45,6 @@ from dataclasses import dataclass, replace
 from typing import Any, Optional
 
 import numpy as np
-from scipy import stats
 
 from .result import Diagnosis
 from .verdict_text import clauses
@@ -115,9 +114,11 @@ def _rss(x: np.ndarray, y: np.ndarray) -> tuple[float, np.ndarray]:
 
 def _f_p(more: float, less: float, dof1: int, dof2: int) -> float:
     """The F-test's p of ``dof1`` columns that took the residual sum of squares from ``less`` to ``more``."""
+    from scipy.special import fdtrc  # type: ignore[import-untyped]
+
     if not (dof1 > 0 and dof2 > 0 and more > 0):
         return 1.0
-    return float(stats.f.sf(max(less - more, 0.0) / dof1 / (more / dof2), dof1, dof2))
+    return float(fdtrc(dof1, dof2, max(less - more, 0.0) / dof1 / (more / dof2)))
 
 
 def _read(
@@ -125,6 +126,8 @@ def _read(
 ) -> Optional[Record]:
     """:class:`Record` of a steady stretch (``t``, ``y``; ``omega`` rad/s, ``periods`` of it) by least
     squares on the periodic columns, the same times ``tau`` (periods from its middle) and ``tau^2``."""
+    from scipy.special import stdtr
+
     n = int(periods)
     k = min(HARMONICS, int(t.size / max(periods, 1.0)) // 2 - 1)
     if n < MIN_PERIODS or k < 1:
@@ -149,7 +152,7 @@ def _read(
         se=se,
         periods=n,
         record_periods=int(round(record_periods)),
-        gain_p=float(2.0 * stats.t.sf(abs(rate) / se, y.size - x.shape[1])) if se > 0 else 1.0,
+        gain_p=float(2.0 * stdtr(y.size - x.shape[1], -abs(rate) / se)) if se > 0 else 1.0,
         shape_p=_f_p(full, gain_only, b.shape[1] - 1, dof),
         curve_p=_f_p(full, straight, b.shape[1], dof),
         middle=float(0.5 * (t[0] + t[-1])),
