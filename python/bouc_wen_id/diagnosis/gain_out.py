@@ -246,15 +246,19 @@ def _after_headline(verdict: str, words: str) -> str:
 
 
 def rediagnosed(
+    d: Diagnosis,
     experiments: Sequence[Any],
     left: Sequence[str],
     again: Callable[[list[Any]], tuple[Diagnosis, list[Any], tuple[str, str]]],
 ) -> Optional[tuple[Diagnosis, list[Any], tuple[str, str]]]:
     """``again`` (the diagnosis) on the gain-corrected copies of ``experiments`` with the gain drift said,
-    when :func:`read` reads one and the corrected diagnosis leaves none of ``left`` out; else None."""
+    when :func:`read` reads one and the corrected diagnosis leaves none of ``left`` out; else None. Not
+    when degradation's test fitted the drift of the whole set (``d``'s left-out note says so): the drift
+    then has a physical reading the gain's does not rule out."""
+    from .deg_unnamed import KEY
     from .left_out import left as left_of
 
-    g = read(experiments, left)
+    g = None if d.settings.get(KEY) else read(experiments, left)
     if g is None:
         return None
     d2, items, units = again(list(g.items))

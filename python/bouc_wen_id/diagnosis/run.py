@@ -491,6 +491,7 @@ def _diagnose(
     d = left_out.qualified(d)  # the records it was judged on, and those left out, in the headline
     if check_gain and left_out.left(d):  # left out as drifting: a sensor's gain drift, divided out?
         redo = gain_out.rediagnosed(
+            d,
             experiments,
             left_out.left(d),
             lambda xs: _diagnose(xs, candidates, alpha, held_out_test, units, progress, check_spikes, False),
