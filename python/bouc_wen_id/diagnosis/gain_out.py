@@ -65,8 +65,9 @@ SETTING = "gain_drift"
 
 @dataclass(frozen=True)
 class Record:
-    """One record's reading: the gain's rate per period (fraction), its standard error, the periods after
-    settling and in the whole record, and the p-values of the gain, shape and curvature tests."""
+    """One record's reading: the gain's rate per period (a fraction of the gain at the record's start), its
+    standard error, the periods after settling and in the whole record, and the p-values of the gain,
+    shape and curvature tests."""
 
     source: str
     rate: float
@@ -76,7 +77,7 @@ class Record:
     gain_p: float
     shape_p: float
     curve_p: float
-    middle: float  # the steady stretch's middle (s)
+    start: float  # the record's first sample (s): the rate is relative to the gain there
     period: float  # s
 
 
@@ -122,10 +123,12 @@ def _f_p(more: float, less: float, dof1: int, dof2: int) -> float:
 
 
 def _read(
-    source: str, t: np.ndarray, y: np.ndarray, omega: float, periods: float, record_periods: float
+    source: str, t: np.ndarray, y: np.ndarray, omega: float, periods: float, record: tuple[float, float]
 ) -> Optional[Record]:
     """:class:`Record` of a steady stretch (``t``, ``y``; ``omega`` rad/s, ``periods`` of it) by least
-    squares on the periodic columns, the same times ``tau`` (periods from its middle) and ``tau^2``."""
+    squares on the periodic columns, the same times ``tau`` (periods from its middle) and ``tau^2``;
+    ``record``: the whole record's first sample's time and its length in periods. The gain's rate is
+    read relative to the stretch's mean gain and said relative to the gain at the record's start."""
     from scipy.special import stdtr
 
     n = int(periods)
@@ -146,17 +149,21 @@ def _read(
     rest, cg = _rss(x, y)
     cov = np.linalg.pinv(x.T @ x) * rest / (y.size - x.shape[1])
     rate, se = float(cg[-1]), math.sqrt(max(float(cov[-1, -1]), 0.0))
+    period = 2.0 * math.pi / omega
+    back = 1.0 - rate * (0.5 * (t[0] + t[-1]) - record[0]) / period  # the start's gain over the mean's
+    if not back > 0:
+        return None
     return Record(
         source=source,
-        rate=rate,
-        se=se,
+        rate=rate / back,
+        se=se / back**2,
         periods=n,
-        record_periods=int(round(record_periods)),
+        record_periods=int(round(record[1])),
         gain_p=float(2.0 * stdtr(y.size - x.shape[1], -abs(rate) / se)) if se > 0 else 1.0,
         shape_p=_f_p(full, gain_only, b.shape[1] - 1, dof),
         curve_p=_f_p(full, straight, b.shape[1], dof),
-        middle=float(0.5 * (t[0] + t[-1])),
-        period=2.0 * math.pi / omega,
+        start=record[0],
+        period=period,
     )
 
 
@@ -171,7 +178,8 @@ def _records(item: Any, i: int) -> list[Record]:
         n = int(item.whole_periods) - s
         t, y = (np.asarray(a, dtype=np.float64)[s * p : (s + n) * p] for a in (item.t, item.y))
         name = str(item.metadata.get("name", f"recording {i}"))
-        got = _read(name, t, y, float(item.frequency), n, item.whole_periods) if n > 0 and p >= 8 else None
+        whole = (float(item.t[0]), float(item.whole_periods))
+        got = _read(name, t, y, float(item.frequency), n, whole) if n > 0 and p >= 8 else None
         return [got] if got else []
     if not isinstance(item, Measurement):
         return []
@@ -186,17 +194,20 @@ def _records(item: Any, i: int) -> list[Record]:
     kept, fit, ap = seg.report.kept[0], seg.report.fits[0], seg.periods[0]
     t, y = (np.asarray(a, dtype=np.float64)[kept.start : kept.stop] for a in (item.t, item.y))
     w = float(fit.frequency)
-    whole = (float(item.t[-1]) - float(item.t[0])) * w / (2.0 * math.pi)
+    whole = (float(item.t[0]), (float(item.t[-1]) - float(item.t[0])) * w / (2.0 * math.pi))
     got = _read(str(ap.source), t, y, w, (t[-1] - t[0]) * w / (2.0 * math.pi), whole)
     return [got] if got else []
 
 
 def _divided(item: Any, r: Record) -> Any:
-    """A copy of ``item`` divided by ``1 + g tau`` (``tau`` in periods from its steady stretch's middle)."""
+    """A copy of ``item`` divided by ``1 + g tau`` (``tau`` in periods from the record's first sample): each
+    record at the gain of its start, where a sensor is zeroed and calibrated (a gain left different
+    between records, each at its own mean, is a misfit the plain model cannot take: review 47's L had
+    viscous damping and a sensor lag named beside an inertia on x that way)."""
     from ..measurement import Measurement
 
     t, y = np.asarray(item.t, dtype=np.float64), np.asarray(item.y, dtype=np.float64)
-    y = y / (1.0 + r.rate * (t - r.middle) / r.period)
+    y = y / (1.0 + r.rate * (t - r.start) / r.period)
     return item._replace(item.t, item.u, y) if isinstance(item, Measurement) else replace(item, y=y)
 
 
