@@ -61,9 +61,8 @@ def _records(settle: int, drift: float, seed: int, lab: bool = False) -> list[An
 
 
 def _true_rate(drift: float, settle: int) -> float:
-    """The gain's rate per period relative to its mean over the periods after settling."""
-    n = settle + PERIODS
-    return drift / n / (1 + drift * (settle + 0.5 * PERIODS) / n)
+    """The gain's rate per period relative to the gain at the record's first sample."""
+    return drift * P / ((settle + PERIODS) * P - 1)
 
 
 @pytest.fixture(scope="module")
