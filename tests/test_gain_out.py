@@ -130,3 +130,21 @@ def test_a_lab_measurement_of_the_whole_record_is_read_too() -> None:
     assert "record more settling periods" not in d.verdict
     assert not d.settings.get("left_out")
     assert math.isfinite(max(r["se"] for r in d.settings[gain_out.SETTING].values()))
+
+
+def test_records_of_different_lengths_share_one_drift_over_each_record() -> None:
+    """A 3 % drift over each record, the records 18 to 32 periods long: one rate on that clock (each record's
+    rate per period is 3 % over its own length), where one per period or per second would not fit."""
+    h, ys = _rk4(20)
+    rng = np.random.default_rng(5)
+    recs = []
+    for i, settle in enumerate((6, 10, 14, 20)):
+        y0 = ys[i][: (settle + PERIODS) * P]
+        t = np.arange(y0.size) * h[i]
+        y = y0 * (1 + 0.03 * t / t[-1]) + SD * rng.normal(size=t.size)
+        u, om = AMPS[i] * np.cos(2 * np.pi * FREQS[i] * t), 2 * np.pi * FREQS[i]
+        recs.append(bw.Recording(t, u, y, AMPS[i], om, settle, metadata={"name": f"r{i}"}))
+    got = gain_out.read(recs, ["r0"])
+    assert got is not None and got.clock == "over each record"
+    for r, settle in zip(got.records.values(), (6, 10, 14, 20)):
+        assert abs(r.rate - _true_rate(0.03, settle)) < 4 * r.se
