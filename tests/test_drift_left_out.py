@@ -14,7 +14,8 @@ from typing import Any
 import bouc_wen_id as bw
 import drift_null_sim as sim
 import numpy as np
-from bouc_wen_id.diagnosis import drift_said
+import pytest
+from bouc_wen_id.diagnosis import drift_said, gain_out
 from bouc_wen_id.diagnosis.locate import LEVEL
 
 WEAK = 0.004  # a 0.4 % output gain drift over one record: its adjusted p falls between FIRM and LEVEL / 2
@@ -42,10 +43,13 @@ def _diagnosed(recs: list[Any]) -> tuple[Any, dict[str, Any]]:
     return d, json.loads(d.to_json())
 
 
-def test_a_weak_drift_left_out_is_said_as_may_drift_with_its_p() -> None:
+def test_a_weak_drift_left_out_is_said_as_may_drift_with_its_p(monkeypatch: pytest.MonkeyPatch) -> None:
     """One of eight records with a 0.4 % gain drift: adjusted p between FIRM and the leave-out level. Main
     said "the loop still drifts from period to period" and "(not settled, or a drifting sensor)" as facts,
-    with no p anywhere; here "may drift", the record's adjusted p in the note and the JSON."""
+    with no p anywhere; here "may drift", the record's adjusted p in the note and the JSON. The gain's own
+    reading (gain_out.py, session 48: divided out, every record kept) is switched off: the subject here is
+    the left-out wording."""
+    monkeypatch.setattr(gain_out, "ENABLED", False)
     recs = sim.recordings(1, n_exp=8, gain=(WEAK, (3,)))
     d, j = _diagnosed(recs)
     name = recs[3].metadata["name"]
@@ -61,10 +65,15 @@ def test_a_weak_drift_left_out_is_said_as_may_drift_with_its_p() -> None:
     assert f"trend test adjusted p = {p:.2g}" in d.summary()
 
 
-def test_a_decaying_centre_and_a_drifting_gain_are_still_left_out_as_drifting() -> None:
+def test_a_decaying_centre_and_a_drifting_gain_are_still_left_out_as_drifting(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
     """Positive controls: a centre decaying over the record (0.02, time constant the record) and a 1 %
-    output gain drift, each on three of ten records: those three left out, said as a fact (firm p)."""
+    output gain drift, each on three of ten records: those three left out, said as a fact (firm p). The
+    centre with the gain's own reading on (gain_out.py, session 48: not read as a gain), the gain with it
+    off (it reads and divides out that drift)."""
     for kw in ({"offset": (0.02, (1, 4, 7))}, {"gain": (0.01, (1, 4, 7))}):
+        monkeypatch.setattr(gain_out, "ENABLED", "gain" not in kw)
         recs = sim.recordings(7, n_exp=10, **kw)  # type: ignore[arg-type]
         d, j = _diagnosed(recs)
         names = [recs[i].metadata["name"] for i in (1, 4, 7)]

@@ -40,6 +40,7 @@ from . import (
     final_terms,
     free_dc,
     gain_drift,
+    gain_out,
     gate,
     input_note,
     inputs,
@@ -453,6 +454,7 @@ def _diagnose(
     units: tuple[str, str],
     progress: Progress,
     check_spikes: bool = True,
+    check_gain: bool = True,
 ) -> tuple[Diagnosis, list[Any], tuple[str, str]]:
     """:func:`diagnose` itself (its arguments as given), with the experiments in one unit per quantity
     (:func:`harmonise`'s items, before any preprocessing) and the units the diagnosis reports."""
@@ -487,6 +489,15 @@ def _diagnose(
             _as_list(experiments), level, wander, d, lambda xs: _with_wander(list(xs), *args, None)
         )
     d = left_out.qualified(d)  # the records it was judged on, and those left out, in the headline
+    if check_gain and left_out.left(d):  # left out as drifting: a sensor's gain drift, divided out?
+        redo = gain_out.rediagnosed(
+            d,
+            experiments,
+            left_out.left(d),
+            lambda xs: _diagnose(xs, candidates, alpha, held_out_test, units, progress, check_spikes, False),
+        )
+        if redo is not None:
+            return redo  # the corrected items: value_stability refits on them
     if check_spikes:  # a spike at the same phase of every period: said, and read again bridged
         d = locked_said.said(
             d,
