@@ -67,3 +67,38 @@ pub(super) fn output_play(cols: &mut [Vec<f64>], c: f64, c_col: usize) {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::output_play;
+
+    /// The steady play of a sampled cosine: two periods of the plain operator from rest, the second
+    /// kept, against the periodic construction; `dy/dc` and a column moved with their sources.
+    #[test]
+    fn periodic_play_matches_two_periods_of_the_operator() {
+        let p = 40;
+        let c = 0.3;
+        let f: Vec<f64> = (0..p)
+            .map(|j| (2.0 * std::f64::consts::PI * j as f64 / p as f64 + 0.4).cos())
+            .collect();
+        let col: Vec<f64> = (0..p).map(|j| j as f64).collect();
+        let mut cols = vec![f.clone(), col, vec![0.0; p]];
+        output_play(&mut cols, c, 2);
+        let mut state = 0.0f64.clamp(f[0] - c, f[0] + c);
+        for k in 0..2 * p {
+            state = state.clamp(f[k % p] - c, f[k % p] + c);
+            if k >= p {
+                assert!((cols[0][k - p] - state).abs() < 1e-15, "sample {}", k - p);
+            }
+        }
+        for j in 0..p {
+            let s = cols[1][j] as usize;
+            assert!((cols[0][j] - (f[s] + cols[2][j] * c)).abs() < 1e-15);
+            assert!(cols[2][j] == 1.0 || cols[2][j] == -1.0);
+        }
+        // A dead band wider than the range: the mid-range, which no parameter moves.
+        let mut flat = vec![f.clone(), vec![1.0; p], vec![0.0; p]];
+        output_play(&mut flat, 1.5, 2);
+        assert!(flat[0].iter().all(|v| v.abs() < 1e-12) && flat[2].iter().all(|v| *v == 0.0));
+    }
+}

@@ -395,10 +395,24 @@ def augmented_output(
             jac_shared[:, 3 + t] = hj[:, 8]
         elif name == SERIES_DASHPOT:
             jac_shared[:, 3 + t] = d_rho
+    y, jac_shared, jac_own = _output_stage(names, sh, frequency, f, jac_shared, jac_own)
+    _finite_array("model output", y)
+    return y, jac_shared, jac_own
+
+
+def _output_stage(
+    names: tuple[str, ...],
+    sh: FloatArray,
+    frequency: float,
+    f: FloatArray,
+    jac_shared: FloatArray,
+    jac_own: FloatArray,
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """The terms on the measured output, in their order: the sensor lag, the offset, then the play."""
     y = f
     if SENSOR_LAG in names:
         col = 3 + names.index(SENSOR_LAG)
-        h, dh = lag_filter(p, frequency, sh[col])
+        h, dh = lag_filter(f.size, frequency, sh[col])
         y = _apply(h, f[:, None])[:, 0]
         jac_shared = _apply(h, jac_shared)
         jac_own = _apply(h, jac_own)
@@ -410,7 +424,6 @@ def augmented_output(
     if PLAY_OUTPUT in names:
         col = 3 + names.index(PLAY_OUTPUT)
         y, jac_shared, jac_own = output_play(y, jac_shared, jac_own, float(sh[col]), col)
-    _finite_array("model output", y)
     return y, jac_shared, jac_own
 
 
