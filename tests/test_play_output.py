@@ -18,7 +18,7 @@ import pytest
 from bouc_wen_id import _core
 from bouc_wen_id.errors import InvalidParameterError
 from bouc_wen_id.model import BoucWen, SinePlan, TransferFunction, WienerPlant
-from bouc_wen_id.terms import TERMS, Offset, Place, Play, SensorLag
+from bouc_wen_id.terms import TERMS, Offset, Place, Play, PlayOutput, SensorLag
 
 KIND = Play.at(Place.OUTPUT).kind
 
@@ -34,7 +34,8 @@ def _played(y: np.ndarray, c: float) -> np.ndarray:
 
 
 def test_the_term_is_the_play_at_the_output_place() -> None:
-    cls = Play.at(Place.OUTPUT)
+    cls = PlayOutput
+    assert Play.at(Place.OUTPUT) is cls and Play(0.2).at(Place.OUTPUT) == cls(0.2)
     assert KIND in TERMS and cls.acts_on is Place.OUTPUT and cls.base_kind == Play.kind
     assert Place.OUTPUT in Play.places and "output" in cls.place_label()
     # Its half-width is in units of y at every alpha (G -> alpha G leaves the output alone); play on x scales.
@@ -69,7 +70,7 @@ def test_rust_matches_the_oracle_with_the_play_on_the_output(
 def test_the_last_period_of_a_long_sine_is_the_steady_model_with_the_play_on_the_output(omega: float) -> None:
     beta, gamma, mu, c, y0 = 0.8, 0.2, 1.6, 0.12, 0.3
     g_tf = TransferFunction([9.0], [1.0, 0.9, 9.0], 0.05)
-    plant = WienerPlant(g_tf, BoucWen(beta, gamma, mu), (Offset(y0), Play.at(Place.OUTPUT)(c)))
+    plant = WienerPlant(g_tf, BoucWen(beta, gamma, mu), (Offset(y0), PlayOutput(c)))
     p, amp = 128, 1.4
     plan = SinePlan(
         [omega], [amp], settle_periods=40, periods=1, samples_per_period=p, substeps=8, noise_sd=0.0
@@ -147,3 +148,21 @@ def test_the_output_terms_compose_in_the_order_offset_lag_then_play() -> None:
     y = _core.augmented_output(64, 1.2, 3.0, 0.4, [SensorLag.kind, KIND], shared, 0.9, 0.3, 4)[0]
     f = _core.augmented_output(64, 1.2, 3.0, 0.4, [SensorLag.kind], shared[:4], 0.9, 0.3, 4)[0]
     np.testing.assert_allclose(y, _played(np.concatenate([f, f]), 0.1)[64:], rtol=0, atol=1e-13)
+
+
+def test_one_play_named_from_saturating_loops_names_the_other_place_as_its_alternative() -> None:
+    from bouc_wen_id.diagnosis import caveats as C
+    from bouc_wen_id.diagnosis import readings
+    from bouc_wen_id.diagnosis.result import NamedTerm
+
+    on_y = NamedTerm(KIND, "b", 0.7, 0.02, "")
+    on_x = NamedTerm(Play.kind, "b", 0.1, 0.01, "")
+    for named, other in ((on_y, Play), (on_x, Play.at(Place.OUTPUT))):
+        text = C.family_text([named], [1.2, 2.5])
+        assert C.PLAY_MARK in text and f"{other.place_label()} ({other.kind})" in text
+        (r,) = readings.of_verdict("explained by: X" + text, [named.term], [])
+        assert other.place_label() in r.words and r.instead_of == (named.term,)
+    # Below saturation the selection compared them (the law refuses one b at every amplitude): not said;
+    # both named: nothing to offer in their place.
+    assert C.PLAY_MARK not in C.family_text([on_y], [0.6, 2.5])
+    assert C.PLAY_MARK not in C.family_text([on_y, on_x], [1.2, 2.5])
