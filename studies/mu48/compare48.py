@@ -17,7 +17,8 @@ def _row(path: Path) -> str:
         return "(not run)"
     d = json.loads(path.read_text())
     named = ", ".join(
-        f"{n['term']} {n['value']:.4g}±{n['se']:.2g}" + (f" (z {n['z']:.1f})" if n.get("z") is not None else "")
+        f"{n['term']} {n['value']:.4g}±{n['se']:.2g}"
+        + (f" (z {n['z']:.1f})" if n.get("z") is not None else "")
         for n in d["named"]
     )
     text = " ".join([d["headline"], *d["details"]])
@@ -26,7 +27,9 @@ def _row(path: Path) -> str:
         if mark in text:
             said = text[text.index(mark) :]
             extra = " | " + said.split("conditional on mu: ")[-1][:330]
-    return f"{d['status']} | {d['headline'][:150]} | named: {named or '-'} | cpu {d['cpu_seconds']:.1f}{extra}"
+    return (
+        f"{d['status']} | {d['headline'][:150]} | named: {named or '-'} | cpu {d['cpu_seconds']:.1f}{extra}"
+    )
 
 
 def main(argv: list[str]) -> None:
