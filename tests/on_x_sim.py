@@ -6,7 +6,7 @@ RK4 on G's states (first order: a corner; second order: a resonance) and the Bou
 delay on the sine drive (exact for a sine), four steps a sample. :func:`simulate` returns x, its rate and w
 per sample; the caller builds the output from them (``w + k x + c xdot``, or ``w + play_sum(x, ...)``).
 Used by test_pairs_kelvin_x.py, test_place_tie.py and test_masing_pi_on_x.py; :func:`sample_step` by
-wiener_sim.py too.
+wiener_sim.py, test_soft_value.py and test_soft_rate.py too.
 """
 
 from __future__ import annotations

@@ -89,6 +89,9 @@ class Beyond:
     #: fit's mu, and the final's, at the lower end: an adequate final model is then no finding (review 47
     #: failure 1: mu = 0.75 under AR(1) noise named stiffness@x + play "explained").
     targeted_soft: bool = False
+    #: The halves of the frequencies, fitted apart, each hold mu inside its bracket (:mod:`.soft_rate`'s
+    #: clause; "" otherwise): the lower end is a loop changing with the rate, not a softer exponent.
+    rate: str = ""
 
 
 def held_mu(fit: AugFit) -> Beyond:
@@ -199,6 +202,8 @@ def _soft_head(b: Beyond) -> str:
     """The headline when the final fit holds mu at the lower end of its bracket and a candidate beyond its
     range is what would explain most (mu41; review 40 item 2: a mu = 0.7 loop through a resonant G led with
     a 48-se negative mass and "an input recorded with the wrong sign or scale")."""
+    if b.rate:  # review 47 failure 4: the structure is the rate's (soft_rate.py)
+        return f"not explained: {b.rate}; "
     return f"{SOFT_HEAD} {SOFTER}, a shape outside the model (mu held at {b.mu:.3g}, its lower end); "
 
 
@@ -269,6 +274,12 @@ def _mu_text(b: Beyond) -> str:
     # The lower end is where the fit is pulled toward mu < 1: a loop that turns more gradually after a
     # reversal, i.e. softer, not sharper (a larger mu sharpens the knee; review 40 item 2: mu = 0.7 was said
     # "sharper").
+    if b.rate:  # the halves fitted apart hold mu inside: a rate-dependent loop (soft_rate.py)
+        return (
+            f"; {MU_MARK} {b.mu_face} end of its bracket (mu = {b.mu:.3g}) by the frequencies fitted "
+            "together: a term that fits part of the misfit may stand in for a loop that changes with the "
+            "rate; the verdict is conditional on it"
+        )
     beyond = SOFTER if b.mu_face == "lower" else "beyond what its bracket allows"
     return (
         f"; {MU_MARK} {b.mu_face} end of its bracket (mu = {b.mu:.3g}; the identification's range is "
@@ -285,12 +296,13 @@ TARGETED_BODY = "a misfit the global test did not flag, found by the targeted st
 HELD_MARK = "fitted with mu held at the"
 
 
-def _held_text(named: Sequence[NamedTerm], face: str) -> str:
+def _held_text(named: Sequence[NamedTerm], face: str, rate: bool = False) -> str:
     """The terms the selection kept beside mu held at its bracket's ``face``, said as stand-ins: their values
     without their standard errors (those assume the hysteresis is right; review 36 problem 3: mu = 0.6 with
     a spring on x named k at 2.6x the truth, 48 se, and a play and a viscous damping that are not there)."""
     what = ", ".join(f"{t.label} {t.symbol} = {t.value:.4g} {t.unit}".rstrip() for t in named)
     shape = f"a loop {SOFTER}" if face == "lower" else "a loop shape beyond mu's bracket"
+    shape = "a loop that changes with the rate" if rate else shape
     return (
         f"; {HELD_MARK} {face} end of its bracket, not named: {what} (values without their standard errors, "
         f"which assume the hysteresis is right; they may stand in for {shape})"
@@ -336,7 +348,12 @@ def apply(
         head = (
             _soft_head(b) if b.targeted_soft and not kept else ""
         )  # the loop's shape leads (no misfit left)
-        return ("partly explained" if kept else "unexplained"), kept, head, mu + _held_text(steady, b.mu_face)
+        return (
+            ("partly explained" if kept else "unexplained"),
+            kept,
+            head,
+            mu + _held_text(steady, b.mu_face, bool(b.rate)),
+        )
     # One that removes less than the final model is not said (review of the merge: a 56 % negative
     # stiffness beside an inertia that explains 100 %, P-Delta "suggested"; an exact tie is a design twin,
     # said by design_twin.py with the experiment that separates them); one that removes as much or more,

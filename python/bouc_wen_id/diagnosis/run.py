@@ -57,6 +57,8 @@ from . import (
     resolution,
     ring_down,
     ring_unchecked,
+    soft_rate,
+    soft_value,
     speed,
     steady_select,
     zero_drift,
@@ -789,8 +791,7 @@ def _diagnosed_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) 
     substeps = substeps_for([e.ybar.size for e in sx])
     setup.report("fitting the plain model", 0, 1)
     plain = fit_plain(exps, sx, s, substeps)
-    # The distortion term's waveforms through G at their own frequencies, as the plain fit sees G.
-    if Distortion.kind in cands:
+    if Distortion.kind in cands:  # the distortion term's waveforms through G, as the plain fit sees G
         setup.report("carrying the input's harmonics through G", 0, 1)
         sx = carry_refresh.carried(sx, plain, substeps, setup.carry_beside)
     before = _drift_checked(_localise(exps, sx, plain, s), exps)
@@ -820,8 +821,7 @@ def _diagnosed_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) 
         notes.append(NO_TARGETED_STEP)
         final, steps = start, list[Step]()
     else:
-        again = after_named.again(moved, setup.measured_noise, exps)  # targeted: steady_select.py says when
-        t = targeted, again
+        t = targeted, after_named.again(moved, setup.measured_noise, exps)  # steady_select.py says when
         final, steps = steady_select.select(fsx, start, steady, adequate, p_of, substeps, t, kw)
         plain, start = rebased_plain(plain, start, steps)  # a first step that refitted an unconverged start
         redo = _rejoint(exps, sx, (deg, fexps, fsx, final), s, substeps, setup, before)
@@ -842,6 +842,7 @@ def _diagnosed_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) 
     share = clean_share.naming_share(_naming_share(fraction, deg, named_deg), cshare)
     judged = classify(plain_ok, bool(final.params.terms) or named_deg, adequate(final), share)
     held = bounds_said.found(steps, alpha, final, s, setup.units, fsx, substeps, start)  # held at a bound
+    held = soft_rate.mark(held, judged, fsx, final, substeps)  # mu at 1 from a rate dependence (soft_rate.py)
     empty = _centres.DC_ONLY_WHERE if _centres.dc_only(passes, bool(final.params.terms), steps) else SPREAD
     status, named, partial, verdict = _judged(
         judged, final_sum, (before, after), fraction, fexps, held, final, empty
@@ -857,6 +858,7 @@ def _diagnosed_set(exps: list[DiagExperiment], setup: _Setup, notes: list[str]) 
     verdict += alt_values.said(alternatives, named, fsx, final, (s, substeps, setup.units))  # and values
     verdict += caveats_of(named, fsx, final, fexps, alpha, substeps) + one_amplitude.text(named, fexps)
     verdict += coulomb_width.text(named, final, fsx)  # a named dry friction's fitted width
+    verdict += soft_value.text(held, status, named, fsx, final, s, substeps)  # mu at 1: values lean on it
     setup.report("held-out check of the final model", 0, 1)
     ho = held_out(fsx, start, final, substeps, kw["cache"]) if final.params.terms else None
     d = Diagnosis(
