@@ -23,7 +23,6 @@
 //! columns); `augmented/` holds one job per file: `hysteresis.rs` (the loop behind the terms, plain,
 //! along the input path or behind the series dashpot), `regressors.rs` (Dahl friction's loops and
 //! the mechanical terms on x), `lag.rs` (the sensor lag on the period's DFT and the offset),
-//! `backlash.rs` (the play on the measured output, after the lag and the offset),
 //! `refine.rs` (the joint refinement) and `tests.rs`.
 
 use crate::error::{all_finite, finite, CoreError, Result};
@@ -32,7 +31,6 @@ use crate::path_loop::{
 };
 use crate::terms::{check_asymmetry, Place, TermKind, Terms, N_HYSTERESIS};
 
-mod backlash;
 mod hysteresis;
 mod lag;
 mod refine;
@@ -40,7 +38,6 @@ mod regressors;
 #[cfg(test)]
 mod tests;
 
-use backlash::output_play;
 use hysteresis::{hysteresis, series_hysteresis};
 use lag::lag_and_offset;
 pub use refine::{augmented_refine, AugExperiment, AugFit, PLAY_MAX_FRACTION};
@@ -296,9 +293,6 @@ pub(crate) fn output_on(
     let step = 2.0 * std::f64::consts::PI / p as f64;
     let mut lag_col = None;
     let mut offset_col = None;
-    let play_col = terms
-        .column_at(TermKind::Play, Place::Output)
-        .map(|c| c + 1);
     let dahl = dahl_loops(terms, shared, exc, gain, phase)?;
     for j in 0..p {
         let h = &hjac[j];
@@ -324,10 +318,6 @@ pub(crate) fn output_on(
                 } else {
                     col[j] = l.d_sigma[j];
                 }
-                continue;
-            }
-            if terms.place(t) == Place::Output {
-                // The play on the output: applied after the lag and the offset, below.
                 continue;
             }
             if terms.place(t) == Place::X {
@@ -381,9 +371,6 @@ pub(crate) fn output_on(
         cols[2 + ns][j] = h[PD_PHI] + dphi;
     }
     lag_and_offset(&mut cols, shared, omega, lag_col, offset_col);
-    if let Some(pc) = play_col {
-        output_play(&mut cols, shared[pc - 1], pc);
-    }
     let mut jac_shared = vec![0.0; p * ns];
     for (c, col) in cols[1..=ns].iter().enumerate() {
         for (j, v) in col.iter().enumerate() {

@@ -34,21 +34,17 @@ pub enum Place {
     Usual,
     /// Across the hysteretic element, on its input `x = G u` (in parallel with it).
     X,
-    /// On the measured output y, after every other term: the play (backlash) of the output's
-    /// linkage, `y = Play_c[y_model]` (the measured output follows the model's through a dead band).
-    Output,
 }
 
 impl Place {
     /// Every place other than [`Place::Usual`], which has no tag.
-    pub const OTHERS: [Place; 2] = [Place::X, Place::Output];
+    pub const OTHERS: [Place; 1] = [Place::X];
 
     /// The tag after `@` in a placed term's name (`""` for the usual place).
     pub fn tag(self) -> &'static str {
         match self {
             Place::Usual => "",
             Place::X => "x",
-            Place::Output => "output",
         }
     }
 }
@@ -188,7 +184,6 @@ impl TermKind {
                     | TermKind::Dahl
                     | TermKind::DahlSigma
             ),
-            Place::Output => self == TermKind::Play,
         }
     }
 
@@ -336,8 +331,7 @@ pub fn parse_placed(name: &str) -> Result<(TermKind, Place)> {
     if !kind.acts_at(place) {
         return Err(CoreError::InvalidParameter(format!(
             "term {:?} cannot act at place {tag:?}: only the mechanical terms (stiffness, \
-             viscous, inertia, Coulomb, Dahl) act across the hysteretic element (x), only the \
-             play on the measured output (output)",
+             viscous, inertia, Coulomb, Dahl) act across the hysteretic element",
             kind.name()
         )));
     }
@@ -462,11 +456,7 @@ impl Terms {
 
     /// Whether the hysteresis needs the path loop of 9.2 (a term acting on the path is active).
     pub fn needs_path_loop(&self) -> bool {
-        // The play on the output acts after the loop, not on its path.
-        self.kinds
-            .iter()
-            .zip(&self.places)
-            .any(|(k, &p)| k.acts_on_path() && p != Place::Output)
+        self.kinds.iter().any(|k| k.acts_on_path())
     }
 
     /// `kind`'s value in `shared`, 0 when inactive (every term vanishes at 0).

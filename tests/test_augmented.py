@@ -40,8 +40,6 @@ TERM_VALUES = {
     "asymmetry": 0.3,
     "play": 0.15,
     "pinching": 0.4,
-    # The play on the measured output (its dead band a tenth of the output's range).
-    "play@output": 0.1,
     # The mechanical terms across the hysteretic element, on x (|A| ~ 1): tests/test_place.py.
     **{f"{k}@x": v for k, v in (("stiffness", 0.2), ("viscous", 0.03), ("inertia", 0.003), ("coulomb", 0.1))},
 }
@@ -338,7 +336,6 @@ def test_names_symbols_and_units() -> None:
         "dahl_sigma",
         "dahl@x",
         "dahl_sigma@x",
-        "play@output",
     )
     assert set(TERM_SYMBOLS) == set(TERM_UNITS) == set(TERM_NAMES)
     assert TERM_SYMBOLS["viscous"] == "c" and TERM_UNITS["viscous"] == "{y} s/{u}"

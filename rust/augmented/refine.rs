@@ -98,18 +98,6 @@ impl<'a> AugModel<'a> {
         }
     }
 
-    /// The column of the play on the output (>= 0), with its name.
-    fn output_play_column(&self) -> Option<(usize, String)> {
-        self.terms
-            .column_at(TermKind::Play, Place::Output)
-            .map(|c| {
-                (
-                    c,
-                    format!("{}@{}", TermKind::Play.name(), Place::Output.tag()),
-                )
-            })
-    }
-
     /// The columns of Dahl friction's two parameters (>= 0) at every place, with their names.
     fn dahl_columns(&self) -> Vec<(usize, String)> {
         let mut out = Vec::new();
@@ -192,11 +180,7 @@ impl JointModel for AugModel<'_> {
         bound(TermKind::Play, Some(self.play_max(own)));
         bound(TermKind::Pinching, Some(PINCHING_MAX));
         bound(TermKind::SeriesDashpot, None);
-        for (c, name) in self
-            .dahl_columns()
-            .into_iter()
-            .chain(self.output_play_column())
-        {
+        for (c, name) in self.dahl_columns() {
             cons.push(Constraint {
                 name: format!("{name}=0"),
                 normal: vec![(c, 1.0)],
@@ -220,11 +204,7 @@ impl JointModel for AugModel<'_> {
         if let Some(c) = self.terms.column(TermKind::SeriesDashpot) {
             shared[c] = shared[c].max(0.0);
         }
-        for (c, _) in self
-            .dahl_columns()
-            .into_iter()
-            .chain(self.output_play_column())
-        {
+        for (c, _) in self.dahl_columns() {
             shared[c] = shared[c].max(0.0);
         }
     }
@@ -250,11 +230,7 @@ impl JointModel for AugModel<'_> {
             .terms
             .column(TermKind::SeriesDashpot)
             .is_none_or(|c| shared[c] >= 0.0);
-        let dahl_ok = self
-            .dahl_columns()
-            .into_iter()
-            .chain(self.output_play_column())
-            .all(|(c, _)| shared[c] >= 0.0);
+        let dahl_ok = self.dahl_columns().iter().all(|&(c, _)| shared[c] >= 0.0);
         hysteresis_admissible(shared, self.opts.mu_lo, self.opts.mu_hi)
             && dahl_ok
             && series_ok

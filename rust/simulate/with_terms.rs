@@ -132,7 +132,7 @@ pub fn simulate_with_terms(
         )));
     }
     terms.validate(bw)?;
-    let mut out = match input {
+    match input {
         Input::Sine { amplitude, omega } => {
             let src = Sine {
                 amplitude,
@@ -145,24 +145,6 @@ pub fn simulate_with_terms(
             let src = Hermite::new(u, dt);
             run(tf, bw, terms, input, &src, dt, n_samples, substeps)
         }
-    }?;
-    if terms.play_output > 0.0 {
-        play_samples(&mut out.y, terms.play_output);
-    }
-    Ok(out)
-}
-
-/// The play of half-width `c` on sampled values in place, `y_k = clamp(y_{k-1}, v_k - c, v_k + c)`
-/// from `clamp(0, v_0 - c, v_0 + c)` (the play on x's start, `xp(0)`): the measured output seen
-/// through the output's backlash (`play@output`), exact for an output monotone between samples.
-pub(crate) fn play_samples(y: &mut [f64], c: f64) {
-    let Some(&first) = y.first() else {
-        return;
-    };
-    let mut p = 0.0f64.clamp(first - c, first + c);
-    for v in y.iter_mut() {
-        p = p.clamp(*v - c, *v + c);
-        *v = p;
     }
 }
 

@@ -38,7 +38,7 @@ from collections.abc import Sequence
 from dataclasses import replace
 from typing import Any
 
-from ..terms import TERMS, Place, Play, StiffnessX
+from ..terms import TERMS, Play, StiffnessX
 from . import (
     across_bounds,
     across_rate,
@@ -236,7 +236,7 @@ def clauses(
     # Play's and the spring on x's caveats hang on whether every experiment saturates where the term acts:
     # a condition where it is absent says nothing of it (a spring on x present only at a saturating
     # condition lost its Masing caveat to the other condition's levels below saturation).
-    own = {Play.kind, Play.at(Place.OUTPUT).kind, StiffnessX.kind}
+    own = {Play.kind, StiffnessX.kind}
     for t in named:
         if t.term in own:
             one = [NamedTerm(t.term, t.symbol, math.nan, math.nan, t.unit)]

@@ -15,7 +15,7 @@ from collections.abc import Sequence
 from typing import Any, Optional
 
 from ..augmented import AugExperiment, AugFit
-from ..terms import TERMS, Play, PlayOutput, StiffnessX
+from ..terms import TERMS, Play, StiffnessX
 from .masing import Separation, masing_text, separation
 from .result import NamedTerm
 from .select import LAW_ALPHA, Alternative
@@ -202,26 +202,22 @@ PLAY_MARK = "a dwell after each reversal"
 
 
 def play_text(named: Sequence[NamedTerm], saturated: bool = True) -> str:
-    """The verdict's word when one play is named: the play at its other place draws the same loop.
+    """The verdict's word when play is named: a backlash on the measured output draws the same loop.
 
     After a reversal from saturation the element's branch leaves with one slope at every experiment, so a
-    backlash of half-width c on the output (``play@output``) dwells as a play of half-width c / slope on x:
-    at saturating amplitudes no test of the dwell's shape tells them apart (session 28: a flat, sharply
-    resolved dwell at x's turn, dwell slope -0.0017 +- 0.0036, on the blind bench's output backlash), and
-    the hysteresis' free saturation level takes up the c the output backlash cuts off it. Only reversals
-    from different levels of w (amplitudes around and below saturation) separate them: there the slope at
-    the turn differs between experiments, so the one play's value would change with the amplitude and its
-    law test would refuse it. Both are candidates, so the selection compares them where the design can; the
-    clause is said only when ``saturated`` (every experiment's latent amplitude at or past the saturation
-    level, :func:`latent_levels`) and only one of the two is named: it names the other, the confounded
-    reading, with the experiment that would separate them."""
-    other = {Play.kind: PlayOutput.kind, PlayOutput.kind: Play.kind}
-    kinds = [t.term for t in named if t.term in other]
-    if not saturated or len(kinds) != 1:
+    backlash of half-width c on the output dwells exactly as a play of half-width c / slope on x: at
+    saturating amplitudes no test of the dwell's shape tells them apart (session 28: a flat, sharply
+    resolved dwell at x's turn, dwell slope -0.0017 +- 0.0036, on the blind bench's output backlash). Only
+    reversals from different levels of w (amplitudes around and below saturation) separate them, where
+    the equivalent play would change with the amplitude and its law test would refuse it. So the clause
+    is said only when ``saturated`` (every experiment's latent amplitude at or past the saturation level,
+    :func:`latent_levels`): with an experiment below it, the separating experiment has been run."""
+    if not saturated or not any(t.term == Play.kind for t in named):
         return ""
-    this, alt = TERMS[kinds[0]], TERMS[other[kinds[0]]]
+    label = Play.place_label()
     return (
-        f"; {this.place_label()} names {PLAY_MARK}: {alt.place_label()} ({alt.kind}) dwells alike when "
-        "every reversal starts from saturation; what separates them is experiments at amplitudes around and "
-        "below saturation (a play on x keeps its width in x, a backlash on the output its height in y)"
+        f"; {label} names {PLAY_MARK}: a backlash on the measured output (a dead band in the sensor or "
+        "its linkage) dwells alike when every reversal starts from saturation; what separates them is "
+        "experiments at amplitudes around and below saturation (a play keeps its width in x, an output "
+        "backlash in y)"
     )

@@ -25,7 +25,7 @@ from typing import Any
 from ..terms import TERMS, Coulomb, Pinching, Place, Play
 
 #: The loop-shape terms (code names) whose identification rests on the amplitude law.
-LOOP_SHAPE = (Pinching.kind, Coulomb.kind, Coulomb.at(Place.X).kind, Play.kind, Play.at(Place.OUTPUT).kind)
+LOOP_SHAPE = (Pinching.kind, Coulomb.kind, Coulomb.at(Place.X).kind, Play.kind)
 #: The words that mark the caveat in a verdict and its headline (the bench reads them: benches/diagnosis.py).
 ONE_AMPLITUDE_MARK = "would look the same on one amplitude"
 #: Two amplitudes at one frequency are distinct when they differ by more than this fraction of the larger.

@@ -120,9 +120,8 @@ def _of_clause(c: str, named: Sequence[str]) -> list[Reading]:
     if ONE_AMPLITUDE_MARK in c:  # a loop-shape term from one amplitude per frequency (one_amplitude.py)
         of = _kinds_in(c.split(": a loop of another family")[0], named)
         out.append(Reading("one_amplitude", reading_words(c), instead_of=of))
-    if PLAY_MARK in c:  # one play named, the other place's (caveats.play_text): "<label> (<kind>) dwells"
-        alt = _between(c, f"{PLAY_MARK}: ", " dwells alike")
-        words = f"or {alt.rsplit(' (', 1)[0]} ({PLAY_MARK})"
+    if PLAY_MARK in c:
+        words = f"or a backlash on the measured output (play: {PLAY_MARK})"
         out.append(Reading(Play.kind, words, instead_of=_kinds_in(c.split(" names ")[0], named)))
     if MASING_MARK in c and "may be the elastic part" in c:
         words = f"or the elastic part of {MASING_MARK} (a Prandtl-Ishlinskii loop on x)"

@@ -45,10 +45,8 @@ from .terms import (
     ON_X_TERMS,
     PINCHING,
     PINCHING_MAX,
-    PLACE_OUTPUT,
     PLACE_X,
     PLAY,
-    PLAY_OUTPUT,
     SENSOR_LAG,
     SERIES_DASHPOT,
     STEADY_TERM_NAMES,
@@ -83,13 +81,9 @@ def parse_terms(terms: Sequence[str]) -> tuple[str, ...]:
         base, tag = split_place(name)
         if base not in TERM_NAMES:
             raise InvalidParameterError(f"unknown term {name!r}; the terms are {', '.join(TERM_NAMES)}")
-        if tag and tag not in (PLACE_X, PLACE_OUTPUT):
-            raise InvalidParameterError(
-                f"unknown place {tag!r} in term {name!r}; the places are {PLACE_X}, {PLACE_OUTPUT}"
-            )
-        if tag == PLACE_OUTPUT and base != PLAY:
-            raise InvalidParameterError(f"term {base!r} cannot act at place {tag!r}: only the play does")
-        if tag == PLACE_X and base not in ON_X_TERMS:
+        if tag and tag != PLACE_X:
+            raise InvalidParameterError(f"unknown place {tag!r} in term {name!r}; the places are {PLACE_X}")
+        if tag and base not in ON_X_TERMS:
             raise InvalidParameterError(
                 f"term {base!r} cannot act at place {tag!r}: only the mechanical terms do"
             )
@@ -120,8 +114,6 @@ def _check_pairs(names: tuple[str, ...]) -> None:
 
 #: Dahl friction's parameters at each place, in the order of the core's constraints.
 _DAHL_NAMES = (DAHL, DAHL_SIGMA, _placed(DAHL, PLACE_X), _placed(DAHL_SIGMA, PLACE_X))
-#: The parameters whose only bound is ``>= 0`` in the core's constraints, in their order there.
-_NON_NEGATIVE_NAMES = (*_DAHL_NAMES, PLAY_OUTPUT)
 
 
 def check_smoothing(eps: float) -> float:
@@ -177,7 +169,7 @@ def _check_shared(terms: tuple[str, ...], shared: FloatArray) -> None:
     rho = _value(terms, shared, SERIES_DASHPOT)
     if rho < 0.0:
         raise InvalidParameterError(f"series_dashpot rho = {rho} must be >= 0")
-    for name in _NON_NEGATIVE_NAMES:
+    for name in _DAHL_NAMES:
         if _value(terms, shared, name) < 0.0:
             raise InvalidParameterError(f"{name} = {_value(terms, shared, name)} must be >= 0")
     delta = _value(terms, shared, ASYMMETRY)
@@ -395,24 +387,10 @@ def augmented_output(
             jac_shared[:, 3 + t] = hj[:, 8]
         elif name == SERIES_DASHPOT:
             jac_shared[:, 3 + t] = d_rho
-    y, jac_shared, jac_own = _output_stage(names, sh, frequency, f, jac_shared, jac_own)
-    _finite_array("model output", y)
-    return y, jac_shared, jac_own
-
-
-def _output_stage(
-    names: tuple[str, ...],
-    sh: FloatArray,
-    frequency: float,
-    f: FloatArray,
-    jac_shared: FloatArray,
-    jac_own: FloatArray,
-) -> tuple[FloatArray, FloatArray, FloatArray]:
-    """The terms on the measured output, in their order: the sensor lag, the offset, then the play."""
     y = f
     if SENSOR_LAG in names:
         col = 3 + names.index(SENSOR_LAG)
-        h, dh = lag_filter(f.size, frequency, sh[col])
+        h, dh = lag_filter(p, frequency, sh[col])
         y = _apply(h, f[:, None])[:, 0]
         jac_shared = _apply(h, jac_shared)
         jac_own = _apply(h, jac_own)
@@ -421,44 +399,8 @@ def _output_stage(
         col = 3 + names.index(OFFSET)
         y = y + sh[col]
         jac_shared[:, col] = 1.0
-    if PLAY_OUTPUT in names:
-        col = 3 + names.index(PLAY_OUTPUT)
-        y, jac_shared, jac_own = output_play(y, jac_shared, jac_own, float(sh[col]), col)
+    _finite_array("model output", y)
     return y, jac_shared, jac_own
-
-
-def output_play(
-    f: FloatArray, jac_shared: FloatArray, jac_own: FloatArray, c: float, col: int
-) -> tuple[FloatArray, FloatArray, FloatArray]:
-    """The play of half-width ``c`` on the periodic output ``f`` (``play@output``) and its Jacobian.
-
-    Two periods of the sampled play from the first sample, keeping the second (after one period the play's
-    state no longer depends on its start, once ``f`` has spanned more than ``2 c``), with the sample each
-    output comes from (its own, or the reversal's while it dwells) and the sign of ``c`` in it; a period
-    within ``2 c`` stays in the dead band: the mid-range, moved by no sample.
-    """
-    p = f.size
-    if p == 0:
-        return f, jac_shared, jac_own
-    hi, lo = int(np.argmax(f)), int(np.argmin(f))
-    if f[hi] - f[lo] <= 2.0 * c:
-        js = np.tile(0.5 * (jac_shared[hi] + jac_shared[lo]), (p, 1))
-        js[:, col] = 0.0
-        jo = np.tile(0.5 * (jac_own[hi] + jac_own[lo]), (p, 1))
-        return np.full(p, 0.5 * (f[hi] + f[lo])), js, jo
-    state, src, sign = float(np.clip(0.0, f[0] - c, f[0] + c)), 0, 0.0
-    srcs = np.zeros(p, dtype=np.intp)
-    signs = np.zeros(p)
-    for k in range(2 * p):
-        j = k % p
-        if state < f[j] - c:
-            state, src, sign = f[j] - c, j, -1.0
-        elif state > f[j] + c:
-            state, src, sign = f[j] + c, j, 1.0
-        srcs[j], signs[j] = src, sign
-    js = jac_shared[srcs].copy()
-    js[:, col] = signs
-    return f[srcs] + signs * c, js, jac_own[srcs].copy()
 
 
 class _Problem(NamedTuple):
@@ -500,7 +442,7 @@ class _Problem(NamedTuple):
             ok = ok and 0.0 <= par[self.col(PINCHING)] <= PINCHING_MAX
         if SERIES_DASHPOT in self.names:
             ok = ok and par[self.col(SERIES_DASHPOT)] >= 0.0
-        return ok and all(par[self.col(n)] >= 0.0 for n in _NON_NEGATIVE_NAMES if n in self.names)
+        return ok and all(par[self.col(n)] >= 0.0 for n in _DAHL_NAMES if n in self.names)
 
     def evaluate(self, par: FloatArray) -> tuple[float, tuple[list[FloatArray], FloatArray, FloatArray]]:
         """``(cost, (outputs, J'WJ, J'Wr))`` at ``par``."""
@@ -551,7 +493,7 @@ class _Problem(NamedTuple):
                 cons.append((f"{name}=0", e, 0.0))
                 if upper is not None:
                     cons.append((f"{name}=upper", -e, -upper))
-        for name in _NON_NEGATIVE_NAMES:
+        for name in _DAHL_NAMES:
             if name in self.names:
                 e = np.zeros(par.size)
                 e[self.col(name)] = 1.0
@@ -569,7 +511,7 @@ class _Problem(NamedTuple):
             trial[self.col(PINCHING)] = min(max(trial[self.col(PINCHING)], 0.0), PINCHING_MAX)
         if SERIES_DASHPOT in self.names:
             trial[self.col(SERIES_DASHPOT)] = max(trial[self.col(SERIES_DASHPOT)], 0.0)
-        for name in _NON_NEGATIVE_NAMES:
+        for name in _DAHL_NAMES:
             if name in self.names:
                 trial[self.col(name)] = max(trial[self.col(name)], 0.0)
 

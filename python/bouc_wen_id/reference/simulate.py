@@ -20,7 +20,6 @@ from ..validation import finite_array as _finite_array
 from ..validation import finite_scalar as _finite_scalar
 from . import on_x, with_terms
 from .linear import realize
-from .terms import PLAY_OUTPUT
 
 __all__ = ["simulate_sine", "simulate_sampled"]
 
@@ -149,8 +148,6 @@ def _with_terms(
         x_out, w_out = _simulate(num, den, delay, bw, inp.source, dt, n_samples, substeps)
         out = x_out, w_out, with_terms.outputs(model, w_out, inp, dt, substeps)
     _check_blow_up_terms(out, bw, checked, dt)
-    if checked[PLAY_OUTPUT] > 0.0:
-        out = out[0], out[1], with_terms.played(out[2], checked[PLAY_OUTPUT])
     return out
 
 

@@ -34,8 +34,6 @@ __all__ = [
     "SIMULATION_KEYS",
     "PLACE_X",
     "ON_X_TERMS",
-    "PLACE_OUTPUT",
-    "PLAY_OUTPUT",
     "split_place",
 ]
 
@@ -104,10 +102,6 @@ SIMULATION_KEYS: tuple[str, ...] = (
 PLACE_X = "x"
 #: The terms that can act on x: the mechanical ones.
 ON_X_TERMS: tuple[str, ...] = (STIFFNESS, VISCOUS, INERTIA, COULOMB, DAHL, DAHL_SIGMA)
-#: The tag of the place on the measured output (``Place::Output``): only the play acts there, after every
-#: other term, as the backlash of the output's linkage.
-PLACE_OUTPUT = "output"
-PLAY_OUTPUT = f"{PLAY}@{PLACE_OUTPUT}"
 
 
 def split_place(name: str) -> tuple[str, str]:

@@ -54,7 +54,6 @@ from .terms import (
     PINCHING_WIDTH,
     PLACE_X,
     PLAY,
-    PLAY_OUTPUT,
     SENSOR_LAG,
     SERIES_DASHPOT,
     SIMULATION_KEYS,
@@ -93,7 +92,6 @@ def check_terms(terms: Mapping[str, float], beta: float, gamma: float) -> dict[s
     out = {name: 0.0 for name in TERM_NAMES}
     out[COULOMB_SMOOTHING_KEY] = COULOMB_SMOOTHING
     out.update({name: 0.0 for name in DAHL_KEYS})
-    out[PLAY_OUTPUT] = 0.0
     for name, value in terms.items():
         if name not in out and name not in _on_x.ON_X_KEYS:
             raise InvalidParameterError(f"unknown term {name!r}; the terms are {', '.join(TERM_NAMES)}")
@@ -106,10 +104,8 @@ def check_terms(terms: Mapping[str, float], beta: float, gamma: float) -> dict[s
             raise InvalidParameterError(f"Dahl friction's {name} = {out[name]} must be >= 0")
     if out[SENSOR_LAG] < 0.0:
         raise InvalidParameterError(f"sensor_lag tau = {out[SENSOR_LAG]} s must be >= 0")
-    for name in (PLAY, PLAY_OUTPUT):
-        finite_scalar(name, out[name])
-        if out[name] < 0.0:
-            raise InvalidParameterError(f"{name} b = {out[name]} must be >= 0 (it is a half-width)")
+    if out[PLAY] < 0.0:
+        raise InvalidParameterError(f"play b = {out[PLAY]} must be >= 0 (it is a half-width)")
     if not 0.0 < out[COULOMB_SMOOTHING_KEY] <= COULOMB_SMOOTHING_MAX:
         raise InvalidParameterError(
             f"coulomb_smoothing eps = {out[COULOMB_SMOOTHING_KEY]} must be in (0, {COULOMB_SMOOTHING_MAX}]"
@@ -487,17 +483,6 @@ def integrate(
                 f1 = _with_dahl(has_dahl, forcing(w, te, xs), fu, fx)
                 ys = decay * ys + (l0 * f0 + lm * fm + l1 * f1)
     return x_out, w_out, y_out
-
-
-def played(y: FloatArray, c: float) -> FloatArray:
-    """The play of half-width ``c`` on the sampled output (``play@output``): ``clamp(prev, y_k - c, y_k + c)``
-    from ``clamp(0, y_0 - c, y_0 + c)``."""
-    out = np.empty_like(y)
-    p = 0.0
-    for k, v in enumerate(y):
-        p = min(max(p, v - c), v + c)
-        out[k] = p
-    return out
 
 
 def sine_input(amplitude: float, omega: float) -> Input:

@@ -18,11 +18,10 @@ and one line in :data:`TERMS` (plus its Rust match arm, its oracle and its tests
 
 This package is the one import for users and the library (``from bouc_wen_id import terms as T``); its modules
 hold one job each: ``_base`` the protocol (:class:`Place`, :class:`StartContext`, :class:`Term`), then the
-terms by where they act, ``_on_output`` (offset, sensor lag, play on the output), ``_mechanical`` (stiffness,
-viscous, inertia, Coulomb and Dahl friction, on u and on x) and ``_hysteretic`` (asymmetry, play,
-degradations, pinching, distortion, series dashpot); this file is the registry itself. Every class is
-published here as ``bouc_wen_id.terms.<Name>`` (its ``__module__``), so pickles name the same path as before
-the split.
+terms by where they act, ``_on_output`` (offset, sensor lag), ``_mechanical`` (stiffness, viscous, inertia,
+Coulomb and Dahl friction, on u and on x) and ``_hysteretic`` (asymmetry, play, degradations, pinching,
+distortion, series dashpot); this file is the registry itself. Every class is published here as
+``bouc_wen_id.terms.<Name>`` (its ``__module__``), so pickles name the same path as before the split.
 
 The units are templates in ``{y}`` (the output's unit) and ``{u}`` (the input's); fill them with
 :meth:`Term.units`.  ``x`` has the units of ``y`` in the identified (alpha = 1) model, so play is in
@@ -73,7 +72,7 @@ from ._mechanical import (
 from ._mechanical import (
     COULOMB_SMOOTHING_MAX as COULOMB_SMOOTHING_MAX,
 )
-from ._on_output import Offset, PlayOutput, SensorLag
+from ._on_output import Offset, SensorLag
 
 __all__ = [
     "Place",
@@ -87,7 +86,6 @@ __all__ = [
     "SensorLag",
     "Asymmetry",
     "Play",
-    "PlayOutput",
     "Degradation",
     "StiffnessDegradation",
     "Pinching",
@@ -142,7 +140,6 @@ TERMS: dict[str, type[Term]] = {
         DahlSigma,
         DahlX,
         DahlSigmaX,
-        PlayOutput,
     )
 }
 

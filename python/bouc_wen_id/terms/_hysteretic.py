@@ -66,8 +66,6 @@ class Play(Term):
     )
     label: ClassVar[str] = "play (backlash)"
     acts_on: ClassVar[Place] = Place.HYSTERESIS
-    # Also on the measured output (terms/_on_output.py, PlayOutput): the backlash of the output's linkage.
-    places: ClassVar[tuple[Place, ...]] = (Place.HYSTERESIS, Place.OUTPUT)
     bounds: ClassVar[tuple[float, float]] = NON_NEGATIVE
     physical: ClassVar[tuple[float, float]] = NON_NEGATIVE
     unphysical: ClassVar[str] = "a negative play"

@@ -1,17 +1,15 @@
-"""The terms on the measured output y (:attr:`Place.OUTPUT`): what the sensor adds to the output (an offset),
-how it filters it (a first-order lag) or the dead band it is seen through (a play on the output).
+"""The terms on the measured output y (:attr:`Place.OUTPUT`): what the sensor adds to the output (an offset)
+or how it filters it (a first-order lag).
 
 Part of the registry :mod:`bouc_wen_id.terms` (import from there).
 """
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import ClassVar
 
-from ._base import NON_NEGATIVE, Place, StartContext, Term
-from ._hysteretic import Play
+from ._base import NON_NEGATIVE, StartContext, Term
 
 
 @dataclass(frozen=True)
@@ -54,36 +52,3 @@ class SensorLag(Term):
     def start(cls, context: StartContext) -> tuple[float, ...]:
         # 1 % and 10 % of a radian of lag at the highest frequency.
         return tuple(f / context.max_frequency for f in (0.01, 0.1))
-
-
-@dataclass(frozen=True)
-class PlayOutput(Play):
-    """Play (backlash) of half-width ``c`` on the measured output: ``y = Play_c[F]``, ``F`` the model's output
-    (after the lag and the offset). The measured output follows the element's force through a dead band of
-    ``2 c``, as a loose linkage between the element and the force sensor does; code name ``"play@output"``.
-
-    ``c`` is in units of ``y`` at every alpha (the output's terms do not change with ``G -> alpha G``). Where
-    the loop's slope at a reversal is ``s``, a play of ``b`` on x dwells as this one of ``c = s b``
-    (``diagnosis/caveats.py``): the two are told apart by the slopes at the reversals changing with amplitude.
-    """
-
-    acts_on: ClassVar[Place] = Place.OUTPUT
-    description: ClassVar[str] = (
-        "backlash between the element and the output sensor: the output dwells for 2c after each reversal"
-    )
-    signature: ClassVar[str] = (
-        "flat stretches after each reversal of y, 2c of output tall at every amplitude (a play on x dwells "
-        "2b of x long, as tall as the loop's slope at the reversal makes it)"
-    )
-    unphysical: ClassVar[str] = "a negative backlash"
-
-    @classmethod
-    def start(cls, context: StartContext) -> tuple[float, ...]:
-        # The residual it leaves is about c at the reversals: the plain fit's RMS, and 1 and 10 % of the
-        # smallest latent amplitude (the output's size in the alpha = 1 model).
-        a = min(context.latent_amplitudes)
-        rms = context.residual_rms
-        return ((rms,) if math.isfinite(rms) and rms > 0.0 else ()) + (0.01 * a, 0.1 * a)
-
-    def normalized(self, alpha: float) -> Term:
-        return self

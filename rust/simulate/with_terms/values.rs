@@ -52,9 +52,6 @@ pub struct TermValues {
     pub dahl_x: f64,
     /// Dahl friction on x: pre-sliding stiffness `sigma` ([y]/[x]), `>= 0`.
     pub dahl_sigma_x: f64,
-    /// Play on the measured output (`play@output`): half-width `c` ([y]), `>= 0`, of the dead band
-    /// through which the measured output follows the model's, `y = Play_c[F]` at the samples.
-    pub play_output: f64,
 }
 
 impl Default for TermValues {
@@ -78,7 +75,6 @@ impl Default for TermValues {
             dahl_sigma: 0.0,
             dahl_x: 0.0,
             dahl_sigma_x: 0.0,
-            play_output: 0.0,
         }
     }
 }
@@ -105,8 +101,6 @@ impl TermValues {
                     Place::Usual => t.slot(kind),
                     // `parse_placed` admits only the mechanical terms on x.
                     Place::X => t.slot_on_x(kind),
-                    // `parse_placed` admits only the play on the output.
-                    Place::Output => Some(&mut t.play_output),
                 };
                 slot.ok_or_else(|| {
                     CoreError::InvalidParameter(format!(
@@ -187,8 +181,6 @@ impl TermValues {
             finite(&super::super::on_x::placed_name(kind), v)?;
             kind.check_value(v)?;
         }
-        finite(&output_play_name(), self.play_output)?;
-        TermKind::Play.check_value(self.play_output)?;
         self.on_x.validate()?;
         check_asymmetry(self.asymmetry, bw.beta(), bw.gamma())
     }
@@ -218,11 +210,9 @@ impl TermValues {
             .into_iter()
             .filter(|&(_, v)| v != 0.0)
             .map(|(k, v)| (super::super::on_x::placed_name(k), v));
-        let on_output = (self.play_output != 0.0).then(|| (output_play_name(), self.play_output));
         let all: Vec<String> = usual
             .chain(placed)
             .chain(dahl_x)
-            .chain(on_output)
             .map(|(name, v)| format!("{name} = {v:e}"))
             .collect();
         if all.is_empty() {
@@ -249,9 +239,4 @@ impl TermValues {
     pub fn dahl_active(&self) -> bool {
         (self.dahl > 0.0 && self.dahl_sigma > 0.0) || (self.dahl_x > 0.0 && self.dahl_sigma_x > 0.0)
     }
-}
-
-/// The play on the output's code name, `"play@output"`.
-pub(super) fn output_play_name() -> String {
-    format!("{}@{}", TermKind::Play.name(), Place::Output.tag())
 }
