@@ -336,11 +336,12 @@ def pink(n: int, rng: np.random.Generator) -> np.ndarray:
 def noise(
     kind: str, sd: float, t: np.ndarray, y: np.ndarray, adc: float, rng: np.random.Generator
 ) -> np.ndarray:
-    """q10 / q12: an ADC of 10 / 12 bits over the range +-adc (nothing else: q12 adds white sd); hum: white
-    plus a 2 sd hum at 37.7 rad/s (not a harmonic); t3: Student-t with 3 dof scaled to sd; pink; white."""
+    """q10 / q12: an ADC of 10 / 12 bits over the range +-adc, after white noise sd (the driver: 0.3 LSB, 0);
+    hum: white plus a 2 sd hum at 37.7 rad/s (not a harmonic); t3: Student-t with 3 dof scaled to sd; pink;
+    white."""
     if kind in ("q10", "q12"):
         step = 2.0 * adc / 2 ** int(kind[1:])
-        base = y + (sd * rng.normal(size=t.size) if kind == "q12" else 0.0)
+        base = y + sd * rng.normal(size=t.size)  # sd: 0.3 LSB on q10, 0 on q12 (drive48.noise_sd)
         return step * np.round(np.clip(base, -adc, adc) / step)
     if kind == "hum":
         return y + sd * rng.normal(size=t.size) + 2.0 * sd * np.sin(37.7 * t + rng.uniform(0, 2 * np.pi))
