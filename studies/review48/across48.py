@@ -23,7 +23,6 @@ import sim48 as s  # noqa: E402
 
 
 def main(kind: str, seed: int) -> None:
-    import bouc_wen_id as bw
 
     p, d, _ = dv.base("E")
     d = replace(d, dc=0.0)
@@ -39,22 +38,23 @@ def main(kind: str, seed: int) -> None:
             q = q.with_(name, v)
         groups.append(s.recordings(s.simulate(q, d), d, "white", sd, 1.0, 100 * seed + int(c)))
         truths.append(truth)
+    print(json.dumps(judged(groups) | {"id": f"across-{kind}-E-{seed}", "truth": truths}, default=str))
+
+
+def judged(groups: list[list[Any]]) -> dict[str, Any]:
+    """diagnose_across on the three groups: its status, verdict, notes, terms (shared and partial), the
+    warning classes it raised and its CPU seconds."""
+    import bouc_wen_id as bw
+
+    c0 = time.process_time()
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        c0 = time.process_time()
         ad = bw.diagnose_across(groups, [0.0, 1.0, 2.0], labels=["c=0", "c=1", "c=2"])
-        rec: dict[str, Any] = {
-            "id": f"across-{kind}-E-{seed}",
-            "truth": truths,
-            "cpu_seconds": time.process_time() - c0,
-            "warnings": sorted({type(w.message).__name__ for w in caught}),
-            "status": ad.status,
-            "verdict": ad.verdict,
-            "notes": list(ad.notes),
-            "terms": [t.to_dict() for t in ad.terms],
-            "partial": [t.to_dict() for t in ad.partial],
-        }
-    print(json.dumps(rec, default=str))
+    out: dict[str, Any] = dict(status=ad.status, verdict=ad.verdict, notes=list(ad.notes))
+    out |= {key: [t.to_dict() for t in getattr(ad, key)] for key in ("terms", "partial")}
+    return out | dict(
+        warnings=sorted({type(w.message).__name__ for w in caught}), cpu=time.process_time() - c0
+    )
 
 
 if __name__ == "__main__":

@@ -1,20 +1,25 @@
-"""Review 48's driver: a case built by sim48.py, then ``bw.diagnose`` (its defaults) in a process of its own.
+"""Review 48's driver. Each case: sim48.py makes the recordings, and ``bw.diagnose`` (defaults) judges them
+in a child process (review 45's ``diagnose_child`` through review 46's runner: ``nice -n 15``,
+OMP_NUM_THREADS=1, a 180 s limit), so a case's record has review 45's fields.
 
-Run from the repository root with PYTHONPATH=python; the first argument says what:
+From the repository root, with PYTHONPATH=python:
 
-* ``run OUT [ID ...]``: every planned case (or the ids given) not yet in the JSON-lines file OUT;
-* ``--one ID``: one case in this process, its record printed;
-* ``--list``: the planned ids;  ``--write ID DIR``: the case's recordings as CSV files (t, u, y).
+    drive48.py run OUT [ID ...]   each planned case (or those named) missing from OUT, one JSON line each
+    drive48.py --one ID           one case here, in this process; the record printed (a reproduction)
+    drive48.py --list             the planned ids
+    drive48.py --write ID DIR     the case's recordings as CSV (t, u, y), one file an experiment
+    drive48.py --cli ID           the command line ``bouc-wen-id diagnose`` on those files: cli48_ID.txt
 
-An id is ``effect-size-config-seed`` (the seed drives the noise only). The child (``nice -n 15``,
-OMP_NUM_THREADS=1, 180 s) is review 46's runner of review 45's ``diagnose_child`` (the same record fields).
+An id reads ``effect-size-config-seed``; the seed changes the noise draw and nothing else.
 """
 
 from __future__ import annotations
 
 import json
 import math
+import os
 import pickle
+import subprocess
 import sys
 import tempfile
 import time
@@ -25,10 +30,11 @@ from typing import Any
 import numpy as np
 
 HERE = Path(__file__).parent
-sys.path.insert(0, str(HERE))
-sys.path.insert(0, str(HERE.parent / "review46"))
+for extra_path in (HERE, HERE.parent / "review46", HERE.parent / "review45"):
+    sys.path.insert(0, str(extra_path))
 import drive46 as dv46  # noqa: E402
 import sim48 as s  # noqa: E402
+from drive45 import TRUTH_TERM as TRUTH45  # noqa: E402
 
 SD = 0.01  # times w_u (the white part; the ADC configs add or are their quantisation)
 LOW3 = ((20.0,), (1.0, 20.0))  # 1 / (0.05 s + 1)
@@ -53,35 +59,24 @@ DESIGNS = {
     "DC": s.Design(F3 * 2, (0.7,) * 3 + (1.4,) * 3, (8,) * 6, (10,) * 6, 128, dc=0.3),  # DC offset 0.3 U
     "UNEQ": s.Design((1.0, 2.0, 4.0, 8.0, 12.0), (1.0,) * 5, (4, 16, 6, 24, 10), (8,) * 5, 96),
 }
-CONFIGS: dict[str, tuple[str, ...]] = {
-    row.split(":")[0]: tuple(row.split(":")[1].split())
-    for row in (
-        "A: F4A delay3 q10 e1; B: P3 third t3 mu5; C: P40 lead hum e2; D: THD delay10 pink e1; "
-        "E: DC lead white e1; F: UNEQ third q12 mu5"
-    ).split("; ")
-}
+#: config -> (design, G, noise, element)
+CONFIGS: dict[str, tuple[str, ...]] = dict(
+    A=("F4A", "delay3", "q10", "e1"),
+    B=("P3", "third", "t3", "mu5"),
+    C=("P40", "lead", "hum", "e2"),
+    D=("THD", "delay10", "pink", "e1"),
+    E=("DC", "lead", "white", "e1"),
+    F=("UNEQ", "third", "q12", "mu5"),
+)
 #: effect -> the library's term (None: physics outside the library); the simulator's key is in KEY.
-TRUTH_TERM: dict[str, str | None] = {
-    "stiffness": "stiffness",
-    "stiffness_x": "stiffness@x",
-    "viscous": "viscous",
-    "viscous_x": "viscous@x",
-    "coulomb": "coulomb",
-    "coulomb_x": "coulomb@x",
-    "inertia_x": "inertia@x",
-    "offset": "offset",
-    "play": "play",
-    "lag": "sensor_lag",
-    "delta": "asymmetry",
-    "pinch": "pinching",
-    "nu": "degradation",
-    "eta": "stiffness_degradation",
-    "rho": "series_dashpot",
-    "bw2": None,  # a second Bouc-Wen element in parallel (beta 2, gamma -1, mu 1)
-    "drift": None,  # beta and gamma grow linearly over each record (temperature)
-    "dahl_half": None,  # Dahl on u with exponent 0.5
-    "preisach": None,  # five relays on x
-}
+_SAME = (
+    "stiffness stiffness_x viscous viscous_x coulomb coulomb_x inertia_x offset play lag delta pinch nu eta"
+)
+TRUTH_TERM: dict[str, str | None] = {k: TRUTH45[k] for k in _SAME.split()}
+TRUTH_TERM |= {"rho": "series_dashpot"}
+# outside the library: a second Bouc-Wen element in parallel (beta 2, gamma -1, mu 1); beta and gamma growing
+# linearly over each record (temperature); Dahl on u with exponent 0.5; a Preisach operator of five relays
+TRUTH_TERM |= dict.fromkeys(("bw2", "drift", "dahl_half", "preisach"))
 KEY = {"lag": "lag", "delta": "delta", "pinch": "pinch", "nu": "nu", "eta": "eta", "rho": "rho"}
 KEY |= {"play": "play", "drift": "drift", "dahl_half": "dahl_half"}
 LINEAR = {k: v or k for k, v in TRUTH_TERM.items() if k not in KEY}  # y linear in the value: scaled exactly
@@ -199,19 +194,46 @@ def prepare(cid: str) -> tuple[list[Any], dict[str, Any]]:
     p, d, nn = base(cfg)
     white, adc, sd = noise_sd(nn, plain_of(cfg), p.w_u)
     recs = s.recordings(runs, d, nn, white, adc, int(seed))
-    dn, gn, _, en = CONFIGS[cfg]
-    head = {"id": cid, "effect": eff, "size_target": float(sz), "size": got, "config": cfg, "design": dn}
-    head |= {"g": gn, "noise": nn, "bw": en, "seed": int(seed), "truth": truth, "sd": sd}
-    return recs, head | {"sim_cpu": time.process_time() - c0}
+    keys = ("design", "g", "noise", "bw")
+    head = dict(id=cid, effect=eff, size_target=float(sz), size=got, config=cfg, seed=int(seed), truth=truth)
+    return recs, head | dict(zip(keys, CONFIGS[cfg])) | {"sd": sd, "sim_cpu": time.process_time() - c0}
 
 
 def run_case(cid: str, in_process: bool = False) -> dict[str, Any]:
-    """Review 46's child runner (review 45's ``diagnose_child``, nice 15, 180 s) on this case's recordings."""
+    """The case's recordings pickled for review 46's runner of review 45's child; its answer scored."""
     recs, head = prepare(cid)
+    fd, path = tempfile.mkstemp(suffix=".pkl")
+    try:
+        with os.fdopen(fd, "wb") as f:
+            pickle.dump(recs, f)
+        answer = dv46.diagnosed(path, in_process)
+    finally:
+        os.unlink(path)
+    return head | dv46.scored(answer, head["truth"])
+
+
+def write_csv(cid: str, folder: str) -> None:
+    Path(folder).mkdir(parents=True, exist_ok=True)
+    for r in prepare(cid)[0]:
+        table = np.column_stack([r.t, r.u, r.y])
+        np.savetxt(
+            Path(folder) / f"{r.metadata['name']}.csv", table, delimiter=",", header="t,u,y", comments=""
+        )
+
+
+def cli(cid: str) -> None:
+    """The command line on the case's CSV files (no amplitude, no frequency given): its output, the
+    temporary folder's name masked, into cli48_ID.txt beside this file."""
+    bin_ = os.environ.get("BIN", str(Path(sys.executable).with_name("bouc-wen-id")))
     with tempfile.TemporaryDirectory() as tmp:
-        path = str(Path(tmp) / "recs.pkl")
-        Path(path).write_bytes(pickle.dumps(recs))
-        return head | dv46.scored(dv46.diagnosed(path, in_process), head["truth"])
+        write_csv(cid, f"{tmp}/data")
+        files = sorted(str(f) for f in Path(f"{tmp}/data").glob("*.csv"))
+        cmd = ["nice", "-n", "15", bin_, "diagnose", *files, "--no-figures", "--out", f"{tmp}/out"]
+        env = os.environ | {"OMP_NUM_THREADS": "1"}
+        cp = subprocess.run(cmd, capture_output=True, text=True, timeout=300, env=env)
+        said = (cp.stdout + cp.stderr).replace(tmp, "TMP")
+    head = f"$ bouc-wen-id diagnose DATA/*.csv --no-figures --out OUT    # DATA: drive48.py --write {cid}\n"
+    (HERE / f"cli48_{cid}.txt").write_text(head + said + f"(exit {cp.returncode})\n")
 
 
 def main(argv: list[str]) -> None:
@@ -223,13 +245,10 @@ def main(argv: list[str]) -> None:
         print(json.dumps(run_case(rest[0], in_process=True), indent=1, default=str))
         return
     if what == "--write":
-        recs = prepare(rest[0])[0]
-        Path(rest[1]).mkdir(parents=True, exist_ok=True)
-        for r in recs:
-            rows = np.c_[r.t, r.u, r.y]
-            np.savetxt(
-                f"{rest[1]}/{r.metadata['name']}.csv", rows, delimiter=",", header="t,u,y", comments=""
-            )
+        write_csv(rest[0], rest[1])
+        return
+    if what == "--cli":
+        cli(rest[0])
         return
     out = Path(rest[0])
     seen = {json.loads(x)["id"] for x in (out.read_text() if out.exists() else "").splitlines() if x.strip()}

@@ -87,12 +87,11 @@ def by_config(rows: list[dict[str, Any]]) -> None:
         ]
         nulls = [o for _, o, g in w if g == "null"]
         secs = sorted(r.get("seconds") or 0.0 for r in rs)
-        cells = [
-            f"{len(good)} / {len(lib)}",
-            f"{sum(abs(z) <= 3 for z in zs)} / {len(zs)}",
-            str(sum(o.startswith(("WRONG", "FALSE NAME")) for _, o, _ in w)),
-            ", ".join(f"{r['effect']}-{r['size_target']:.0f}: {o}" for r, o, g in w if g == "out") or "-",
-            f"{nulls.count('ok-null')} / {len(nulls)}",
+        wrong = [o for _, o, _ in w if o.startswith(("WRONG", "FALSE NAME"))]
+        outside = [f"{r['effect']}-{r['size_target']:.0f}: {o}" for r, o, g in w if g == "out"]
+        cells = [f"{len(good)} / {len(lib)}", f"{sum(abs(z) <= 3 for z in zs)} / {len(zs)}", str(len(wrong))]
+        cells += [", ".join(outside) or "-", f"{nulls.count('ok-null')} / {len(nulls)}"]
+        cells += [
             str(sum(o in ("error", "timeout") for _, o, _ in w)),
             f"{secs[len(secs) // 2]:.0f}, {secs[-1]:.0f}",
         ]
