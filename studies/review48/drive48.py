@@ -57,6 +57,7 @@ DESIGNS = {
     "P40": s.Design(F3, (1.0,) * 3, (40,) * 3, (10,) * 3, 64),  # 40 periods a record
     "THD": s.Design(F3 * 2, (0.7,) * 3 + (1.4,) * 3, (8,) * 6, (10,) * 6, 128, h3=0.02),  # 2 % 3rd harmonic
     "DC": s.Design(F3 * 2, (0.7,) * 3 + (1.4,) * 3, (8,) * 6, (10,) * 6, 128, dc=0.3),  # DC offset 0.3 U
+    "S6": s.Design(F3 * 2, (0.7,) * 3 + (1.4,) * 3, (8,) * 6, (10,) * 6, 128),  # THD with a pure sine
     "UNEQ": s.Design((1.0, 2.0, 4.0, 8.0, 12.0), (1.0,) * 5, (4, 16, 6, 24, 10), (8,) * 5, 96),
 }
 #: config -> (design, G, noise, element)
@@ -67,6 +68,7 @@ CONFIGS: dict[str, tuple[str, ...]] = dict(
     D=("THD", "delay10", "pink", "e1"),
     E=("DC", "lead", "white", "e1"),
     F=("UNEQ", "third", "q12", "mu5"),
+    Dn=("S6", "delay10", "pink", "e1"),  # follow-up: D without the input's third harmonic
 )
 #: effect -> the library's term (None: physics outside the library); the simulator's key is in KEY.
 _SAME = (

@@ -286,9 +286,9 @@ def output(p: Plant, d: Design, i: int, st: np.ndarray) -> tuple[np.ndarray, np.
     n = a.shape[0]
     amp, om = d.amps[i], d.omegas[i]
 
-    def wave(tt: np.ndarray, k: int) -> np.ndarray:  # k-th derivative of u's wave
+    def wave(tt: np.ndarray, k: int) -> np.ndarray:  # k-th derivative of u's wave: (m om)^k cos(. + k pi/2)
         ph = (om * tt)[:, None] * np.array([1.0, 3.0]) + k * math.pi / 2
-        return amp * (np.cos(ph) @ (np.array([1.0, d.h3]) * np.array([1.0, 3.0]) ** k))
+        return amp * (np.cos(ph) @ (np.array([1.0, d.h3]) * (om * np.array([1.0, 3.0])) ** k))
 
     u, uv, ua = wave(t, 0) + amp * d.dc, wave(t, 1), wave(t, 2)
     tg, on = t - p.delay, t >= p.delay

@@ -16,8 +16,10 @@ sys.path.insert(0, str(Path(__file__).parent.parent / "review45"))
 from drive48 import CONFIGS, TRUTH_TERM  # noqa: E402
 from summarise45 import caveated, cell  # noqa: E402
 
-#: Outside physics and the library relative that is a fair reading of it.
-NEAR = {"dahl_half": {"dahl", "dahl_sigma"}}
+#: Outside physics and the library relative that is a fair reading of it: Dahl of exponent 0.5 read as the
+#: library's Dahl (exponent 1); a second Bouc-Wen element with mu = 1 read as Dahl on x (Dahl is Bouc-Wen with
+#: mu = 1, gamma = 0).
+NEAR = {"dahl_half": {"dahl", "dahl_sigma"}, "bw2": {"dahl@x", "dahl_sigma@x"}}
 
 
 def word(r: dict[str, Any]) -> str:
