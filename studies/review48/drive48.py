@@ -69,6 +69,7 @@ CONFIGS: dict[str, tuple[str, ...]] = dict(
     E=("DC", "lead", "white", "e1"),
     F=("UNEQ", "third", "q12", "mu5"),
     Dn=("S6", "delay10", "pink", "e1"),  # follow-up: D without the input's third harmonic
+    Fe=("UNEQ", "third", "q12", "e1"),  # follow-up: F's pure 12-bit ADC on a mu = 1.5 element
 )
 #: effect -> the library's term (None: physics outside the library); the simulator's key is in KEY.
 _SAME = (
