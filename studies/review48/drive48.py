@@ -253,18 +253,24 @@ def main(argv: list[str]) -> None:
     if what == "--cli":
         cli(rest[0])
         return
-    out = Path(rest[0])
-    seen = {json.loads(x)["id"] for x in (out.read_text() if out.exists() else "").splitlines() if x.strip()}
-    for cid in (c for c in (rest[1:] or case_ids()) if c not in seen):
-        r = run_case(cid)
-        with out.open("a") as f:
-            print(json.dumps(r, default=str), file=f)
-        said = r.get("headline") or r.get("error", "")
+    run_all(Path(rest[0]), rest[1:] or case_ids())
+
+
+def done(out: Path) -> set[str]:
+    return {json.loads(x)["id"] for x in (out.read_text() if out.exists() else "").splitlines() if x.strip()}
+
+
+def run_all(out: Path, ids: list[str]) -> None:
+    """Each id not yet in OUT (read again before each case: an id listed twice runs once), one JSON line
+    appended as it finishes and one line of progress printed."""
+    for cid in ids:
+        if cid in done(out):
+            continue
+        rec = run_case(cid)
+        out.open("a").write(json.dumps(rec, default=str) + "\n")
+        said = (rec.get("headline") or rec.get("error", ""))[:150]
         print(
-            cid,
-            r.get("status"),
-            f"{r.get('seconds') or 0:.0f} s, sim {r['sim_cpu']:.0f} s:",
-            said[:150],
+            f"{cid} {rec.get('status')} {rec.get('seconds') or 0:.0f} s, sim {rec['sim_cpu']:.0f} s: {said}",
             flush=True,
         )
 

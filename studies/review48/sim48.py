@@ -68,6 +68,8 @@ class Plant:
 
 @dataclass(frozen=True)
 class Design:
+    """Per experiment: frequency, amplitude U, recorded and settling periods; samples a period (all)."""
+
     omegas: tuple[float, ...]
     amps: tuple[float, ...]
     periods: tuple[int, ...]
