@@ -16,7 +16,7 @@ from dataclasses import replace
 from typing import Any, TypeVar
 
 from .baseline import Wander
-from .verdict_text import clauses
+from .verdict_text import after_headline
 from .zero_drift import Drift
 
 
@@ -44,10 +44,8 @@ def headlined(d: _D, wander: Any, where: str = "") -> _D:
     cause = why(wander)
     if d.status != "adequate" or not cause:
         return d
-    head = clauses(d.verdict)[0]
     words = f" (an output offset cannot be tested{where}: {cause}, so its DC was taken out)"
-    at = d.verdict.find(head) + len(head)
-    return replace(d, verdict=d.verdict[:at] + words + d.verdict[at:])
+    return replace(d, verdict=after_headline(d.verdict, words))
 
 
 __all__ = ["headlined", "why"]

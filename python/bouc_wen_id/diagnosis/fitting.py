@@ -363,6 +363,21 @@ def screen(exps: Sequence[AugExperiment], start: AugParams, substeps: int) -> Op
     return fit_from(exps, start, substeps, max_iter=SCREEN_ITER, step_chi2=SCREEN_STEP_CHI2)
 
 
+def fit_dof(exps: Sequence[AugExperiment], start: AugParams) -> int:
+    """The degrees of freedom of a fit of ``start`` on ``exps`` (the steady parameters, the terms, each
+    experiment's gain and phase), at least 1."""
+    return max(sum(e.ybar.size for e in exps) - (3 + len(start.terms) + 2 * len(exps)), 1)
+
+
+def stall_rules(
+    exps: Sequence[AugExperiment], start: AugParams, step_chi2: Optional[float] = None
+) -> tuple[int, float, float]:
+    """The core's stall rules of a fit of ``start`` on ``exps``: its window, the stall over a window
+    (:data:`STALL_CHI2`) and the per-step stop (``step_chi2``, :data:`STEP_CHI2` when None), per dof."""
+    dof = fit_dof(exps, start)
+    return FIT_CHUNK, STALL_CHI2 / dof, (STEP_CHI2 if step_chi2 is None else step_chi2) / dof
+
+
 def _fit_from(
     exps: Sequence[AugExperiment],
     start: AugParams,
@@ -371,15 +386,14 @@ def _fit_from(
     step_chi2: Optional[float] = None,
 ) -> Optional[AugFit]:
     """:func:`fit_from` without free DCs."""
-    step_chi2 = STEP_CHI2 if step_chi2 is None else step_chi2
-    dof = max(sum(e.ybar.size for e in exps) - (3 + len(start.terms) + 2 * len(exps)), 1)
+    dof = fit_dof(exps, start)
     fit: Optional[AugFit] = None
     done = 0
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             if STALL_IN_CORE:
-                stall = (FIT_CHUNK, STALL_CHI2 / dof, step_chi2 / dof)
+                stall = stall_rules(exps, start, step_chi2)
                 return fit_augmented(exps, start, max_iter=max_iter, substeps=substeps, stall=stall)
             while done < max_iter:
                 n = min(FIT_CHUNK, max_iter - done)

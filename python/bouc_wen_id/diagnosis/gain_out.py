@@ -48,8 +48,9 @@ from typing import Any, Optional
 
 import numpy as np
 
+from ..signal._harmonic_ls import harmonic_basis
 from .result import Diagnosis
-from .verdict_text import clauses
+from .verdict_text import after_headline
 
 #: Kill switch (tests compare with and without).
 ENABLED = True
@@ -120,12 +121,6 @@ class GainDrift:
         )
 
 
-def _basis(phase: np.ndarray, k: int) -> np.ndarray:
-    """The periodic columns at ``phase`` (rad): 1, cos, sin of harmonics 1..k."""
-    ks = np.arange(1, k + 1)[None, :] * phase[:, None]
-    return np.hstack([np.ones((phase.size, 1)), np.cos(ks), np.sin(ks)])
-
-
 def _rss(x: np.ndarray, y: np.ndarray) -> tuple[float, np.ndarray]:
     coef, *_ = np.linalg.lstsq(x, y, rcond=None)
     return float(np.sum((y - x @ coef) ** 2)), coef
@@ -154,7 +149,7 @@ def _read(
     if n < MIN_PERIODS or k < 1:
         return None
     tau = (t - 0.5 * (t[0] + t[-1])) * omega / (2.0 * math.pi)
-    b = _basis(omega * t, k)
+    b = harmonic_basis(omega * t, k)  # the periodic columns: 1, cos and sin of harmonics 1..k
     curve = (tau**2 - np.mean(tau**2))[:, None] * b
     full, coef = _rss(np.hstack([b, tau[:, None] * b, curve]), y)
     dof = y.size - 3 * b.shape[1]
@@ -307,13 +302,6 @@ def clause(g: GainDrift) -> str:
     )
 
 
-def _after_headline(verdict: str, words: str) -> str:
-    """``verdict`` with ``words`` (a clause, "; ..." ) right after its headline."""
-    head = clauses(verdict)[0] if clauses(verdict) else verdict
-    at = verdict.find(head) + len(head)
-    return verdict[:at] + words + verdict[at:]
-
-
 def rediagnosed(
     d: Diagnosis,
     experiments: Sequence[Any],
@@ -336,7 +324,7 @@ def rediagnosed(
     rates = {r.source: {"rate_per_period": r.rate, "se": r.se, "p": r.gain_p} for r in g.records.values()}
     d2 = replace(
         d2,
-        verdict=_after_headline(d2.verdict, clause(g)),
+        verdict=after_headline(d2.verdict, clause(g)),
         notes=(g.note(), *d2.notes),
         settings={**d2.settings, SETTING: rates},
     )

@@ -32,7 +32,7 @@ import numpy as np
 
 from ..augmented import AugExperiment, AugFit, AugParams
 from ..terms import TERMS
-from .fitting import PROFILE_MU_BRACKET, best_of, fit_from, regressor, screen
+from .fitting import PROFILE_MU_BRACKET, best_of, fit_dof, fit_from, regressor, screen
 
 #: A fit whose reduced chi-square (cost over its dof) exceeds this is "far from adequate": the level at
 #: which a fit ending on a face of its range is taken for a local minimum rather than the data's pull.
@@ -58,7 +58,7 @@ REBASE_SEEDS = 2
 
 def reduced_chi2(exps: Sequence[AugExperiment], fit: AugFit) -> float:
     """``cost / dof`` (the dof as :func:`.select.dof_of` counts it)."""
-    dof = max(sum(e.ybar.size for e in exps) - (3 + len(fit.params.terms) + 2 * len(exps)), 1)
+    dof = fit_dof(exps, fit.params)
     return fit.cost / dof
 
 

@@ -29,7 +29,7 @@ from ..errors import BoucWenIdError, BudgetExceededError
 from . import free_dc
 from .bounds_said import SOFTER
 from .drift import DRIFT_TERMS
-from .fitting import FIT_CHUNK, STALL_CHI2, STEP_CHI2, Scale, physical
+from .fitting import Scale, physical, stall_rules
 from .result import NamedTerm
 
 #: mu's lower end for the refit: one step inside the bracket (a quarter of the way from 1 to the classic 2).
@@ -51,8 +51,7 @@ def refit(
     def inner(e: Sequence[AugExperiment], start: AugParams, n: int, m: int) -> Optional[AugFit]:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            dof = max(sum(x.ybar.size for x in e) - (3 + len(start.terms) + 2 * len(e)), 1)
-            stall = (FIT_CHUNK, STALL_CHI2 / dof, STEP_CHI2 / dof)  # fitting._fit_from's stall rules
+            stall = stall_rules(e, start)  # fitting._fit_from's, with mu held at mu_lo
             return fit_augmented(e, start, max_iter=m, substeps=n, mu_lo=mu_lo, stall=stall)
 
     start = replace(final.params, mu=max(float(final.params.mu), mu_lo * (1.0 + 1e-6)))

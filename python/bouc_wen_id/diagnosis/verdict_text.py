@@ -7,7 +7,7 @@ parentheses (e.g. what the pair step did at each step), which stays with its cla
 
 from __future__ import annotations
 
-__all__ = ["clauses", "headline", "details"]
+__all__ = ["after_headline", "clauses", "headline", "details"]
 
 
 def clauses(verdict: str) -> list[str]:
@@ -33,6 +33,12 @@ def headline(verdict: str) -> str:
     """The verdict's first clause: the named terms with their values and share, or what is left."""
     parts = clauses(verdict)
     return parts[0] if parts else verdict
+
+
+def after_headline(verdict: str, words: str) -> str:
+    """``verdict`` with ``words`` (a caveat, or a clause "; ...") right after its headline."""
+    at = verdict.find(headline(verdict)) + len(headline(verdict))
+    return verdict[:at] + words + verdict[at:]
 
 
 def details(verdict: str) -> list[str]:
