@@ -603,6 +603,12 @@ def kept(jobs: list[tuple[str, Optional[str], str, float, int]], only: str) -> l
     return [j for j in jobs if (j[1] or "null") in keep or f"{j[1]}@{j[2]}" in keep]
 
 
+def unmatched(jobs: list[tuple[str, Optional[str], str, float, int]], only: str) -> list[str]:
+    """The ``--only`` entries that keep no job (a misspelt name or place): the bench refuses them rather
+    than run nothing and print an empty table."""
+    return [name for name in only.split(",") if not kept(jobs, name)]
+
+
 def _target(kind: str, size: float) -> tuple[str, dict[str, tuple[str, float]]]:
     """The issue's targets for a row: text, and {metric: (">=" or "<=", bound)} where measurable."""
     if kind == "library":
@@ -827,6 +833,8 @@ def main(argv: Optional[list[str]] = None) -> int:
         return old_main(args)
     jobs = new_jobs(args)
     if args.only:
+        if bad := unmatched(jobs, args.only):
+            ap.error(f"--only: no row {', '.join(bad)} (an effect name, name@place as in viscous@x, or null)")
         jobs = kept(jobs, args.only)
     if args.sizes:
         sizes = {float(v) for v in args.sizes.split(",")}

@@ -33,3 +33,9 @@ def test_names_and_nulls_combine() -> None:
     assert {j[0] for j in got if j[1] is None} == {"null"} and sum(j[1] is None for j in got) == 2
     assert {(j[1], j[2]) for j in got if j[1] is not None} == {("stiffness", "u"), ("sensor_lag", "")}
     assert bench.kept(jobs, "nothing_by_that_name") == []
+
+
+def test_an_entry_that_keeps_no_row_is_named() -> None:
+    jobs = _jobs()
+    assert bench.unmatched(jobs, "viscous@x,bogus@nowhere,viscous@q,null") == ["bogus@nowhere", "viscous@q"]
+    assert bench.unmatched(jobs, "viscous,stiffness@u,null") == []
